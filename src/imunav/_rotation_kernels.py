@@ -1,0 +1,270 @@
+"""Numba kernels behind :mod:`imunav.rotation` (private).
+
+Scalar kernels (``*_1``) work on one quaternion / vector and can be called
+from other ``@njit`` code (attitude filters, strapdown).  Batch kernels work
+on ``(N, 4)`` / ``(N, 3)`` / ``(N, 3, 3)`` arrays.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+# Below this angle (rad) the series expansions are used; the truncation error
+# of sin(x/2)/x ~ 1/2 - x^2/48 + x^4/3840 is then < 1e-20.
+_SMALL = 1e-4
+
+
+@njit(cache=True, fastmath=False)
+def qmul_1(p, q):
+    """Hamilton product p ⊗ q of two scalar-first quaternions."""
+    out = np.empty(4)
+    out[0] = p[0] * q[0] - p[1] * q[1] - p[2] * q[2] - p[3] * q[3]
+    out[1] = p[0] * q[1] + p[1] * q[0] + p[2] * q[3] - p[3] * q[2]
+    out[2] = p[0] * q[2] - p[1] * q[3] + p[2] * q[0] + p[3] * q[1]
+    out[3] = p[0] * q[3] + p[1] * q[2] - p[2] * q[1] + p[3] * q[0]
+    return out
+
+
+@njit(cache=True)
+def qrot_1(q, v):
+    """Rotate v by unit q: q ⊗ [0, v] ⊗ q* (body -> nav for q = q_nb)."""
+    w, x, y, z = q[0], q[1], q[2], q[3]
+    # t = 2 (q_v x v); v' = v + w t + q_v x t
+    tx = 2.0 * (y * v[2] - z * v[1])
+    ty = 2.0 * (z * v[0] - x * v[2])
+    tz = 2.0 * (x * v[1] - y * v[0])
+    out = np.empty(3)
+    out[0] = v[0] + w * tx + (y * tz - z * ty)
+    out[1] = v[1] + w * ty + (z * tx - x * tz)
+    out[2] = v[2] + w * tz + (x * ty - y * tx)
+    return out
+
+
+@njit(cache=True)
+def qexp_1(r):
+    """Quaternion of rotation vector r (rad): [cos(|r|/2), sin(|r|/2) r/|r|]."""
+    th2 = r[0] * r[0] + r[1] * r[1] + r[2] * r[2]
+    th = math.sqrt(th2)
+    out = np.empty(4)
+    if th < _SMALL:
+        c = 1.0 - th2 / 8.0 + th2 * th2 / 384.0
+        s = 0.5 - th2 / 48.0 + th2 * th2 / 3840.0
+    else:
+        c = math.cos(0.5 * th)
+        s = math.sin(0.5 * th) / th
+    out[0] = c
+    out[1] = s * r[0]
+    out[2] = s * r[1]
+    out[3] = s * r[2]
+    return out
+
+
+@njit(cache=True)
+def qlog_1(q):
+    """Rotation vector (rad) of unit q, angle in [0, pi] (q and -q give the same)."""
+    w, x, y, z = q[0], q[1], q[2], q[3]
+    if w < 0.0:
+        w, x, y, z = -w, -x, -y, -z
+    nv = math.sqrt(x * x + y * y + z * z)
+    out = np.empty(3)
+    if nv < _SMALL * 0.5:
+        # theta = 2 atan2(nv, w) ~ 2 nv / w (1 - nv^2 / (3 w^2))
+        k = 2.0 / w * (1.0 - nv * nv / (3.0 * w * w))
+    else:
+        k = 2.0 * math.atan2(nv, w) / nv
+    out[0] = k * x
+    out[1] = k * y
+    out[2] = k * z
+    return out
+
+
+@njit(cache=True)
+def dcm_from_quat_1(q):
+    w, x, y, z = q[0], q[1], q[2], q[3]
+    C = np.empty((3, 3))
+    C[0, 0] = 1.0 - 2.0 * (y * y + z * z)
+    C[0, 1] = 2.0 * (x * y - w * z)
+    C[0, 2] = 2.0 * (x * z + w * y)
+    C[1, 0] = 2.0 * (x * y + w * z)
+    C[1, 1] = 1.0 - 2.0 * (x * x + z * z)
+    C[1, 2] = 2.0 * (y * z - w * x)
+    C[2, 0] = 2.0 * (x * z - w * y)
+    C[2, 1] = 2.0 * (y * z + w * x)
+    C[2, 2] = 1.0 - 2.0 * (x * x + y * y)
+    return C
+
+
+@njit(cache=True)
+def quat_from_dcm_1(C):
+    """Shepperd's method: pick the largest of 4w^2, 4x^2, 4y^2, 4z^2."""
+    tr = C[0, 0] + C[1, 1] + C[2, 2]
+    out = np.empty(4)
+    a = np.array([tr, C[0, 0], C[1, 1], C[2, 2]])
+    i = np.argmax(a)
+    if i == 0:
+        s = 2.0 * math.sqrt(1.0 + tr)
+        out[0] = 0.25 * s
+        out[1] = (C[2, 1] - C[1, 2]) / s
+        out[2] = (C[0, 2] - C[2, 0]) / s
+        out[3] = (C[1, 0] - C[0, 1]) / s
+    elif i == 1:
+        s = 2.0 * math.sqrt(max(1.0 + C[0, 0] - C[1, 1] - C[2, 2], 0.0))
+        out[0] = (C[2, 1] - C[1, 2]) / s
+        out[1] = 0.25 * s
+        out[2] = (C[0, 1] + C[1, 0]) / s
+        out[3] = (C[0, 2] + C[2, 0]) / s
+    elif i == 2:
+        s = 2.0 * math.sqrt(max(1.0 - C[0, 0] + C[1, 1] - C[2, 2], 0.0))
+        out[0] = (C[0, 2] - C[2, 0]) / s
+        out[1] = (C[0, 1] + C[1, 0]) / s
+        out[2] = 0.25 * s
+        out[3] = (C[1, 2] + C[2, 1]) / s
+    else:
+        s = 2.0 * math.sqrt(max(1.0 - C[0, 0] - C[1, 1] + C[2, 2], 0.0))
+        out[0] = (C[1, 0] - C[0, 1]) / s
+        out[1] = (C[0, 2] + C[2, 0]) / s
+        out[2] = (C[1, 2] + C[2, 1]) / s
+        out[3] = 0.25 * s
+    if out[0] < 0.0:
+        out = -out
+    n = math.sqrt(out[0] ** 2 + out[1] ** 2 + out[2] ** 2 + out[3] ** 2)
+    return out / n
+
+
+@njit(cache=True)
+def quat_from_euler_1(roll, pitch, yaw):
+    """ZYX: q = qz(yaw) ⊗ qy(pitch) ⊗ qx(roll)."""
+    cr, sr = math.cos(0.5 * roll), math.sin(0.5 * roll)
+    cp, sp = math.cos(0.5 * pitch), math.sin(0.5 * pitch)
+    cy, sy = math.cos(0.5 * yaw), math.sin(0.5 * yaw)
+    out = np.empty(4)
+    out[0] = cr * cp * cy + sr * sp * sy
+    out[1] = sr * cp * cy - cr * sp * sy
+    out[2] = cr * sp * cy + sr * cp * sy
+    out[3] = cr * cp * sy - sr * sp * cy
+    return out
+
+
+@njit(cache=True)
+def euler_from_dcm_1(C):
+    """(roll, pitch, yaw) of C_nb = Rz(yaw) Ry(pitch) Rx(roll).
+
+    Pitch from atan2 (accurate near +-90 deg).  At gimbal lock
+    (|cos pitch| < 1e-10) roll is set to 0 and the whole rotation about the
+    vertical is put into yaw.
+    """
+    out = np.empty(3)
+    cp = math.sqrt(C[0, 0] * C[0, 0] + C[1, 0] * C[1, 0])
+    out[1] = math.atan2(-C[2, 0], cp)
+    if cp > 1e-10:
+        out[0] = math.atan2(C[2, 1], C[2, 2])
+        out[2] = math.atan2(C[1, 0], C[0, 0])
+    else:
+        out[0] = 0.0
+        # C = Rz(yaw) Ry(+-90): C[0,1] = -sin(yaw), C[1,1] = cos(yaw)
+        out[2] = math.atan2(-C[0, 1], C[1, 1])
+    return out
+
+
+# ---- batch kernels --------------------------------------------------------
+@njit(cache=True)
+def qmul_n(p, q):
+    n = max(p.shape[0], q.shape[0])
+    out = np.empty((n, 4))
+    for i in range(n):
+        out[i] = qmul_1(p[i if p.shape[0] > 1 else 0], q[i if q.shape[0] > 1 else 0])
+    return out
+
+
+@njit(cache=True)
+def qrot_n(q, v):
+    n = max(q.shape[0], v.shape[0])
+    out = np.empty((n, 3))
+    for i in range(n):
+        out[i] = qrot_1(q[i if q.shape[0] > 1 else 0], v[i if v.shape[0] > 1 else 0])
+    return out
+
+
+@njit(cache=True)
+def qexp_n(r):
+    out = np.empty((r.shape[0], 4))
+    for i in range(r.shape[0]):
+        out[i] = qexp_1(r[i])
+    return out
+
+
+@njit(cache=True)
+def qlog_n(q):
+    out = np.empty((q.shape[0], 3))
+    for i in range(q.shape[0]):
+        out[i] = qlog_1(q[i])
+    return out
+
+
+@njit(cache=True)
+def dcm_from_quat_n(q):
+    out = np.empty((q.shape[0], 3, 3))
+    for i in range(q.shape[0]):
+        out[i] = dcm_from_quat_1(q[i])
+    return out
+
+
+@njit(cache=True)
+def quat_from_dcm_n(C):
+    out = np.empty((C.shape[0], 4))
+    for i in range(C.shape[0]):
+        out[i] = quat_from_dcm_1(C[i])
+    return out
+
+
+@njit(cache=True)
+def quat_from_euler_n(e):
+    out = np.empty((e.shape[0], 4))
+    for i in range(e.shape[0]):
+        out[i] = quat_from_euler_1(e[i, 0], e[i, 1], e[i, 2])
+    return out
+
+
+@njit(cache=True)
+def euler_from_dcm_n(C):
+    out = np.empty((C.shape[0], 3))
+    for i in range(C.shape[0]):
+        out[i] = euler_from_dcm_1(C[i])
+    return out
+
+
+@njit(cache=True)
+def integrate_rate_kernel(q0, w, dt, method):
+    """Attitude from body rates.
+
+    q_{k+1} = q_k ⊗ exp(phi_k), with phi_k = w_k dt_k (method 0, rate held
+    over the step, exact for piecewise-constant rates) or
+    phi_k = (w_k + w_{k+1})/2 dt_k + (w_k x w_{k+1}) dt_k^2 / 12 (method 1,
+    trapezoid plus the second-order coning correction for rates that vary
+    linearly over the step).
+    """
+    n = w.shape[0]
+    out = np.empty((n, 4))
+    out[0] = q0
+    phi = np.empty(3)
+    for k in range(n - 1):
+        h = dt[k]
+        if method == 0:
+            for j in range(3):
+                phi[j] = w[k, j] * h
+        else:
+            a = w[k]
+            b = w[k + 1]
+            cx = a[1] * b[2] - a[2] * b[1]
+            cy = a[2] * b[0] - a[0] * b[2]
+            cz = a[0] * b[1] - a[1] * b[0]
+            phi[0] = 0.5 * (a[0] + b[0]) * h + cx * h * h / 12.0
+            phi[1] = 0.5 * (a[1] + b[1]) * h + cy * h * h / 12.0
+            phi[2] = 0.5 * (a[2] + b[2]) * h + cz * h * h / 12.0
+        qn = qmul_1(out[k], qexp_1(phi))
+        nn = math.sqrt(qn[0] ** 2 + qn[1] ** 2 + qn[2] ** 2 + qn[3] ** 2)
+        out[k + 1] = qn / nn
+    return out

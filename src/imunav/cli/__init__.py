@@ -1,0 +1,1 @@
+"""The ``imunav`` command line (typer): one module per command group."""

@@ -1,0 +1,49 @@
+"""Entry point of the ``imunav`` command.
+
+Each command module in :mod:`imunav.cli` exposes ``register(app)``, which adds
+its command or command group to the Typer app.  Keep the modules thin: they
+parse options, call the library and print / write results.
+"""
+
+from __future__ import annotations
+
+import importlib
+
+import typer
+
+app = typer.Typer(
+    name="imunav",
+    help=(
+        "Inertial sensors end to end: simulate, characterize, calibrate IMUs and "
+        "magnetometers; attitude and navigation filters.\n\n"
+        "Example: imunav lab --out lab-report"
+    ),
+    no_args_is_help=True,
+    add_completion=False,
+    pretty_exceptions_show_locals=False,
+)
+
+# One entry per command module (imunav.cli.<name> with a register(app) function).
+_COMMAND_MODULES: list[str] = [
+    "simulate",
+    "info",
+    "lab",
+]
+
+for _name in _COMMAND_MODULES:
+    importlib.import_module(f"imunav.cli.{_name}").register(app)
+
+
+@app.callback()
+def _main(
+    version: bool = typer.Option(False, "--version", help="Print the version and exit.", is_eager=True),
+) -> None:
+    if version:
+        from imunav import __version__
+
+        typer.echo(__version__)
+        raise typer.Exit()
+
+
+if __name__ == "__main__":  # pragma: no cover
+    app()

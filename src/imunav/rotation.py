@@ -1,0 +1,348 @@
+"""Rotation maths: quaternions, direction-cosine matrices, ZYX Euler angles,
+rotation vectors.
+
+Conventions (``docs/conventions.md``):
+
+* Quaternions are Hamilton, scalar first ``[w, x, y, z]``.  ``q_nb``
+  rotates body vectors into the navigation frame: ``v_n = q ⊗ [0, v_b] ⊗ q*``,
+  equivalently ``v_n = C_nb v_b`` with ``C_nb = dcm_from_quat(q_nb)``.
+* Euler angles are ZYX: ``C_nb = Rz(yaw) Ry(pitch) Rx(roll)``, returned and
+  accepted as ``(roll, pitch, yaw)`` in radians.
+* Rotation vectors ``r`` (rad) map to ``q = exp(r) = [cos(|r|/2), sin(|r|/2) r/|r|]``.
+* Composition: ``q_ac = q_ab ⊗ q_bc``; attitude propagation with body rates
+  ``q_nb(t+dt) = q_nb(t) ⊗ exp(w_b dt)``.
+
+Every function takes a single item (``(4,)``, ``(3,)``, ``(3, 3)``) or a batch
+(``(N, 4)``, ``(N, 3)``, ``(N, 3, 3)``) and returns the same kind.  The loops
+run in numba kernels (:mod:`imunav._rotation_kernels`), whose scalar forms
+(``qmul_1``, ``qrot_1``, ``qexp_1``, ...) other kernels may call directly.
+
+References
+----------
+J. Solà, "Quaternion kinematics for the error-state Kalman filter",
+arXiv:1711.02508, 2017 (Hamilton convention, exp / log maps).
+P. D. Groves, *Principles of GNSS, Inertial, and Multisensor Integrated
+Navigation Systems*, 2nd ed., Artech House, 2013, §2.2 (DCM, Euler).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from imunav import _rotation_kernels as _k
+from imunav.errors import NonFiniteError, ShapeError
+
+__all__ = [
+    "quat_multiply",
+    "quat_conjugate",
+    "quat_inverse",
+    "quat_normalize",
+    "quat_canonical",
+    "quat_rotate",
+    "quat_identity",
+    "dcm_from_quat",
+    "quat_from_dcm",
+    "quat_from_euler",
+    "euler_from_quat",
+    "dcm_from_euler",
+    "euler_from_dcm",
+    "quat_from_rotvec",
+    "rotvec_from_quat",
+    "dcm_from_rotvec",
+    "rotvec_from_dcm",
+    "quat_exp",
+    "quat_log",
+    "quat_slerp",
+    "quat_interp",
+    "quat_angle",
+    "quat_error_angle",
+    "skew",
+    "integrate_rate",
+    "C_ENU_NED",
+    "Q_ENU_NED",
+    "C_FLU_FRD",
+    "Q_FRD_FLU",
+]
+
+Array = NDArray[np.float64]
+
+
+def _as(x: ArrayLike, last: tuple[int, ...], name: str) -> tuple[Array, bool]:
+    """Return x as a C-contiguous float64 batch and whether it was a single item."""
+    a = np.ascontiguousarray(x, dtype=np.float64)
+    k = len(last)
+    if a.shape == last:
+        return a.reshape((1,) + last), True
+    if a.ndim == k + 1 and a.shape[1:] == last:
+        return a, False
+    raise ShapeError(
+        f"{name} must have shape {last} or (N, {', '.join(map(str, last))}); got {a.shape}"
+    )
+
+
+def _finite(a: Array, name: str) -> None:
+    if not np.all(np.isfinite(a)):
+        bad = np.flatnonzero(~np.all(np.isfinite(a.reshape(a.shape[0], -1)), axis=1))
+        raise NonFiniteError(
+            f"{name} has non-finite values at rows {bad[:10].tolist()}"
+            f"{' ...' if bad.size > 10 else ''}; remove or interpolate them first"
+        )
+
+
+def _out(a: Array, single: bool) -> Array:
+    return a[0] if single else a
+
+
+def _broadcast_pair(a: Array, b: Array, na: str, nb: str) -> None:
+    if a.shape[0] != b.shape[0] and a.shape[0] != 1 and b.shape[0] != 1:
+        raise ShapeError(f"{na} has {a.shape[0]} rows and {nb} has {b.shape[0]}; they must match (or one be single)")
+
+
+def quat_identity(n: int | None = None) -> Array:
+    """Identity quaternion ``[1, 0, 0, 0]`` (or ``(n, 4)`` of them)."""
+    q = np.zeros(4 if n is None else (n, 4))
+    q[..., 0] = 1.0
+    return q
+
+
+def quat_multiply(p: ArrayLike, q: ArrayLike) -> Array:
+    """Hamilton product ``p ⊗ q`` (single or batch; a single one broadcasts)."""
+    pa, sp = _as(p, (4,), "p")
+    qa, sq = _as(q, (4,), "q")
+    _broadcast_pair(pa, qa, "p", "q")
+    return _out(_k.qmul_n(pa, qa), sp and sq)
+
+
+def quat_conjugate(q: ArrayLike) -> Array:
+    """Conjugate ``[w, -x, -y, -z]``; the inverse of a unit quaternion."""
+    a = np.array(q, dtype=float)
+    _as(a, (4,), "q")
+    a[..., 1:] *= -1.0
+    return a
+
+
+def quat_inverse(q: ArrayLike) -> Array:
+    """Inverse ``q* / |q|^2`` (valid for non-unit quaternions)."""
+    a = quat_conjugate(q)
+    return a / np.sum(a * a, axis=-1, keepdims=True)
+
+
+def quat_normalize(q: ArrayLike) -> Array:
+    """Unit quaternion(s); raises for zero or non-finite input."""
+    a, s = _as(q, (4,), "q")
+    _finite(a, "q")
+    n = np.linalg.norm(a, axis=1, keepdims=True)
+    if np.any(n < 1e-12):
+        raise NonFiniteError(f"cannot normalise zero quaternion(s) at rows {np.flatnonzero(n[:, 0] < 1e-12)[:10].tolist()}")
+    return _out(a / n, s)
+
+
+def quat_canonical(q: ArrayLike) -> Array:
+    """Representative with ``w >= 0`` (``q`` and ``-q`` are the same rotation)."""
+    a = np.array(q, dtype=float)
+    sign = np.where(a[..., :1] < 0, -1.0, 1.0)
+    return a * sign
+
+
+def quat_rotate(q: ArrayLike, v: ArrayLike) -> Array:
+    """Rotate vector(s): ``v_n = q ⊗ [0, v_b] ⊗ q*`` (= ``C(q) v_b``).
+
+    For ``q = q_nb`` this maps body-frame vectors to the navigation frame; use
+    ``quat_rotate(quat_conjugate(q), v_n)`` for the reverse.
+    """
+    qa, sq = _as(q, (4,), "q")
+    va, sv = _as(v, (3,), "v")
+    _broadcast_pair(qa, va, "q", "v")
+    return _out(_k.qrot_n(qa, va), sq and sv)
+
+
+def dcm_from_quat(q: ArrayLike) -> Array:
+    """``C_nb`` of a unit quaternion ``q_nb``."""
+    a, s = _as(q, (4,), "q")
+    return _out(_k.dcm_from_quat_n(a), s)
+
+
+def quat_from_dcm(C: ArrayLike) -> Array:
+    """Unit quaternion (``w >= 0``) of a rotation matrix (Shepperd's method)."""
+    a, s = _as(C, (3, 3), "C")
+    _finite(a, "C")
+    return _out(_k.quat_from_dcm_n(a), s)
+
+
+def _euler_args(roll: ArrayLike, pitch: ArrayLike | None, yaw: ArrayLike | None) -> tuple[Array, bool]:
+    if pitch is None and yaw is None:
+        return _as(roll, (3,), "euler (roll, pitch, yaw)")
+    if pitch is None or yaw is None:
+        raise ShapeError("give either one (…, 3) array of (roll, pitch, yaw) or all three angles")
+    r, p, y = np.broadcast_arrays(np.asarray(roll, float), np.asarray(pitch, float), np.asarray(yaw, float))
+    single = r.ndim == 0
+    e = np.ascontiguousarray(np.stack([np.atleast_1d(r), np.atleast_1d(p), np.atleast_1d(y)], axis=-1))
+    return e, single
+
+
+def quat_from_euler(roll: ArrayLike, pitch: ArrayLike | None = None, yaw: ArrayLike | None = None) -> Array:
+    """Quaternion ``q_nb`` of ZYX Euler angles (rad).
+
+    Call as ``quat_from_euler(roll, pitch, yaw)`` or with one ``(…, 3)`` array
+    of ``(roll, pitch, yaw)``.  ``q = qz(yaw) ⊗ qy(pitch) ⊗ qx(roll)``.
+    """
+    e, s = _euler_args(roll, pitch, yaw)
+    return _out(_k.quat_from_euler_n(e), s)
+
+
+def euler_from_dcm(C: ArrayLike) -> Array:
+    """ZYX Euler angles ``(roll, pitch, yaw)`` (rad) of ``C_nb``.
+
+    roll, yaw in (-pi, pi], pitch in [-pi/2, pi/2].  At gimbal lock roll is set
+    to 0 and yaw carries the rotation about the vertical.
+    """
+    a, s = _as(C, (3, 3), "C")
+    return _out(_k.euler_from_dcm_n(a), s)
+
+
+def euler_from_quat(q: ArrayLike) -> Array:
+    """ZYX Euler angles ``(roll, pitch, yaw)`` (rad) of ``q_nb``."""
+    return euler_from_dcm(dcm_from_quat(quat_normalize(q)))
+
+
+def dcm_from_euler(roll: ArrayLike, pitch: ArrayLike | None = None, yaw: ArrayLike | None = None) -> Array:
+    """``C_nb = Rz(yaw) Ry(pitch) Rx(roll)``."""
+    return dcm_from_quat(quat_from_euler(roll, pitch, yaw))
+
+
+def quat_from_rotvec(r: ArrayLike) -> Array:
+    """``exp`` map: quaternion of rotation vector ``r`` (rad)."""
+    a, s = _as(r, (3,), "rotation vector")
+    _finite(a, "rotation vector")
+    return _out(_k.qexp_n(a), s)
+
+
+def rotvec_from_quat(q: ArrayLike) -> Array:
+    """``log`` map: rotation vector (rad, angle in [0, pi]) of unit ``q``."""
+    a, s = _as(q, (4,), "q")
+    _finite(a, "q")
+    return _out(_k.qlog_n(a), s)
+
+
+quat_exp = quat_from_rotvec
+quat_log = rotvec_from_quat
+
+
+def dcm_from_rotvec(r: ArrayLike) -> Array:
+    """Rotation matrix of a rotation vector (Rodrigues)."""
+    return dcm_from_quat(quat_from_rotvec(r))
+
+
+def rotvec_from_dcm(C: ArrayLike) -> Array:
+    """Rotation vector of a rotation matrix."""
+    return rotvec_from_quat(quat_from_dcm(C))
+
+
+def quat_angle(q1: ArrayLike, q2: ArrayLike) -> Array | float:
+    """Angle (rad, in [0, pi]) of the rotation between ``q1`` and ``q2``."""
+    d = np.abs(np.sum(quat_normalize(q1) * quat_normalize(q2), axis=-1))
+    out = 2.0 * np.arccos(np.clip(d, 0.0, 1.0))
+    return float(out) if np.ndim(out) == 0 else out
+
+
+def quat_error_angle(q_est: ArrayLike, q_ref: ArrayLike) -> Array | float:
+    """Alias of :func:`quat_angle` for estimation errors."""
+    return quat_angle(q_est, q_ref)
+
+
+def quat_slerp(q0: ArrayLike, q1: ArrayLike, s: ArrayLike) -> Array:
+    """Spherical linear interpolation ``q0 ⊗ exp(s · log(q0* ⊗ q1))``.
+
+    Takes the short way (``q1`` is flipped when ``q0·q1 < 0``).  ``s`` may be a
+    scalar or an array broadcasting with the batch.
+    """
+    a0 = quat_normalize(q0)
+    a1 = quat_normalize(q1)
+    d = quat_multiply(quat_conjugate(a0), a1)
+    r = rotvec_from_quat(d)  # canonical: short way
+    sa = np.asarray(s, dtype=float)
+    rs = r * (sa[..., None] if sa.ndim else sa)
+    return quat_multiply(a0, quat_from_rotvec(rs))
+
+
+def quat_interp(t: ArrayLike, q: ArrayLike, t_new: ArrayLike) -> Array:
+    """Interpolate an attitude time series by slerp between neighbours.
+
+    ``t`` strictly increasing, ``q`` of shape ``(N, 4)``; ``t_new`` inside
+    ``[t[0], t[-1]]`` (outside raises).
+    """
+    from imunav.errors import InvalidInputError, TimeOrderError
+
+    ta = np.asarray(t, dtype=float)
+    qa, _ = _as(q, (4,), "q")
+    tn = np.atleast_1d(np.asarray(t_new, dtype=float))
+    if ta.ndim != 1 or ta.shape[0] != qa.shape[0]:
+        raise ShapeError(f"t must be 1-D with one entry per quaternion; got {ta.shape} and {qa.shape}")
+    if ta.size < 2 or np.any(np.diff(ta) <= 0):
+        raise TimeOrderError("t must have at least two strictly increasing entries")
+    if tn.min() < ta[0] or tn.max() > ta[-1]:
+        raise InvalidInputError(
+            f"t_new spans [{tn.min()}, {tn.max()}] outside the data [{ta[0]}, {ta[-1]}]; extrapolation is not done"
+        )
+    i = np.clip(np.searchsorted(ta, tn, side="right") - 1, 0, ta.size - 2)
+    s = (tn - ta[i]) / (ta[i + 1] - ta[i])
+    out = quat_slerp(qa[i], qa[i + 1], s)
+    return out[0] if np.ndim(t_new) == 0 else out
+
+
+def skew(v: ArrayLike) -> Array:
+    """Cross-product matrix ``[v]x`` with ``[v]x u = v x u`` (single or batch)."""
+    a, s = _as(v, (3,), "v")
+    S = np.zeros((a.shape[0], 3, 3))
+    S[:, 0, 1], S[:, 0, 2] = -a[:, 2], a[:, 1]
+    S[:, 1, 0], S[:, 1, 2] = a[:, 2], -a[:, 0]
+    S[:, 2, 0], S[:, 2, 1] = -a[:, 1], a[:, 0]
+    return _out(S, s)
+
+
+def integrate_rate(
+    q0: ArrayLike, t: ArrayLike, gyro: ArrayLike, *, method: str = "zoh"
+) -> Array:
+    """Integrate body angular rates to attitude ``q_nb`` at every sample.
+
+    ``q_{k+1} = q_k ⊗ exp(phi_k)`` with, for ``method="zoh"``,
+    ``phi_k = w_k (t_{k+1} - t_k)`` (exact for a rate held constant over each
+    step), or for ``method="trapezoid"`` the mean rate plus the second-order
+    coning term ``(w_k × w_{k+1}) dt² / 12`` (Savage 1998).
+
+    Parameters
+    ----------
+    q0 : (4,) initial attitude at ``t[0]``.
+    t : (N,) strictly increasing time, s.
+    gyro : (N, 3) body rates, rad/s.
+
+    Returns
+    -------
+    (N, 4) attitude at each ``t``.
+    """
+    from imunav.errors import InvalidInputError, TimeOrderError
+
+    ta = np.ascontiguousarray(t, dtype=float)
+    w, _ = _as(gyro, (3,), "gyro")
+    if ta.ndim != 1 or ta.shape[0] != w.shape[0]:
+        raise ShapeError(f"t {ta.shape} and gyro {w.shape} must have the same number of rows")
+    _finite(w, "gyro")
+    dt = np.diff(ta)
+    if np.any(dt <= 0):
+        raise TimeOrderError(f"t is not strictly increasing at rows {np.flatnonzero(dt <= 0)[:10].tolist()}")
+    m = {"zoh": 0, "trapezoid": 1}.get(method)
+    if m is None:
+        raise InvalidInputError(f"method must be 'zoh' or 'trapezoid', not {method!r}")
+    return _k.integrate_rate_kernel(quat_normalize(q0), w, dt, m)
+
+
+# ---- frame-convention constants -------------------------------------------
+#: ``v_enu = C_ENU_NED @ v_ned`` (swap north/east, negate down).
+C_ENU_NED = np.array([[0.0, 1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, -1.0]])
+#: quaternion of ``C_ENU_NED``.
+Q_ENU_NED = _k.quat_from_dcm_1(C_ENU_NED)
+#: ``v_flu = C_FLU_FRD @ v_frd`` (forward-left-up from forward-right-down).
+C_FLU_FRD = np.diag([1.0, -1.0, -1.0])
+#: quaternion ``q_frd_flu`` (rotation of pi about x; its own inverse up to sign).
+Q_FRD_FLU = _k.quat_from_dcm_1(C_FLU_FRD.T)
