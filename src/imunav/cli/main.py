@@ -25,9 +25,6 @@ app = typer.Typer(
 
 # One entry per command module (imunav.cli.<name> with a register(app) function).
 _COMMAND_MODULES: list[str] = [
-    "simulate",
-    "info",
-    "lab",
 ]
 
 for _name in _COMMAND_MODULES:
