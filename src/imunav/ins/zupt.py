@@ -205,7 +205,8 @@ def _arrays(data: Any) -> tuple[Array, Array, Array]:
 
 
 def run_zupt(data: Any, zv: ArrayLike, config: ZuptConfig | None = None, *,
-             initial_position: ArrayLike = (0.0, 0.0, 0.0)) -> ZuptResult:
+             initial_position: ArrayLike = (0.0, 0.0, 0.0),
+             initial_quaternion: ArrayLike | None = None) -> ZuptResult:
     """Run the ZUPT-aided INS over a recording.
 
     Parameters
@@ -214,6 +215,8 @@ def run_zupt(data: Any, zv: ArrayLike, config: ZuptConfig | None = None, *,
     zv : (N,) bool stance flags (a detector's ``zv`` or stored labels).
     config : :class:`ZuptConfig` (default: 9 states, pyshoe noise values).
     initial_position : (3,) m.
+    initial_quaternion : (4,) ``q_nb`` overriding the alignment (gravity
+        ``g`` is still taken from the config / alignment samples).
     """
     cfg = ZuptConfig() if config is None else config
     t, a, w = _arrays(data)
@@ -227,7 +230,12 @@ def run_zupt(data: Any, zv: ArrayLike, config: ZuptConfig | None = None, *,
         i0, i1 = first_stance(z)
         i1 = min(i1, i0 + cfg.align_samples_max)
     fmean = a[i0:i1].mean(axis=0)
-    q0 = align_from_accel(fmean, cfg.initial_yaw)
+    if initial_quaternion is None:
+        q0 = align_from_accel(fmean, cfg.initial_yaw)
+    else:
+        q0 = np.asarray(initial_quaternion, dtype=float)
+        if q0.shape != (4,) or abs(np.linalg.norm(q0) - 1.0) > 1e-6:
+            raise InvalidInputError(f"initial_quaternion must be a unit quaternion [w, x, y, z]; got {q0!r}")
     g = float(np.linalg.norm(fmean)) if cfg.g is None else float(cfg.g)
     nx = cfg.states
     p0 = [cfg.p0_pos] * 3 + [cfg.p0_vel] * 3 + [cfg.p0_att] * 3
