@@ -139,10 +139,14 @@ def quat_normalize(q: ArrayLike) -> Array:
 
 
 def quat_canonical(q: ArrayLike) -> Array:
-    """Representative with ``w >= 0`` (``q`` and ``-q`` are the same rotation)."""
-    a = np.array(q, dtype=float)
-    sign = np.where(a[..., :1] < 0, -1.0, 1.0)
-    return a * sign
+    """Representative with ``w > 0`` (at ``w == 0``: first non-zero vector part > 0);
+    ``q`` and ``-q`` are the same rotation."""
+    a, single = _as(q, (4,), "q")
+    a = a.copy()
+    for i in range(a.shape[0]):
+        if _k._needs_flip(a[i, 0], a[i, 1], a[i, 2], a[i, 3]):
+            a[i] = -a[i]
+    return _out(a, single)
 
 
 def quat_rotate(q: ArrayLike, v: ArrayLike) -> Array:
@@ -241,8 +245,10 @@ def rotvec_from_dcm(C: ArrayLike) -> Array:
 
 def quat_angle(q1: ArrayLike, q2: ArrayLike) -> Array | float:
     """Angle (rad, in [0, pi]) of the rotation between ``q1`` and ``q2``."""
-    d = np.abs(np.sum(quat_normalize(q1) * quat_normalize(q2), axis=-1))
-    out = 2.0 * np.arccos(np.clip(d, 0.0, 1.0))
+    # 2 atan2(|v|, |w|) of the relative rotation q1* ⊗ q2 is accurate for
+    # small angles, unlike 2 acos(|q1·q2|) (error ~ sqrt(eps) ~ 1e-8 rad).
+    d = quat_multiply(quat_conjugate(quat_normalize(q1)), quat_normalize(q2))
+    out = 2.0 * np.arctan2(np.linalg.norm(d[..., 1:], axis=-1), np.abs(d[..., 0]))
     return float(out) if np.ndim(out) == 0 else out
 
 
