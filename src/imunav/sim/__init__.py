@@ -1,0 +1,2 @@
+"""Virtual sensors and trajectories."""
+from imunav.sim.trajectory import Trajectory, ideal_imu
