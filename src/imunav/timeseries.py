@@ -33,6 +33,8 @@ __all__ = [
     "moving_variance",
     "Saturation",
     "detect_saturation",
+    "RecordingSummary",
+    "describe",
 ]
 
 NanPolicy = Literal["raise", "drop", "interpolate"]
@@ -699,3 +701,105 @@ def detect_saturation(
                 mask[:, 3 * k + j] = _extreme_runs(x, min_run)
     counts = {c: int(mask[:, i].sum()) for i, c in enumerate(_SAT_CHANNELS)}
     return Saturation(mask=mask, counts=counts, method=method)
+
+
+# -- summary (imunav info) --------------------------------------------------------
+
+
+@dataclass(frozen=True, eq=False)
+class RecordingSummary:
+    """What ``imunav info`` reports about a recording.
+
+    ``channels`` rows hold per-channel statistics in display units (gyro
+    °/s, accel m/s², mag in ``mag_unit``, temp °C).
+    """
+
+    n: int
+    duration_s: float
+    fs_hz: float
+    dt_min_s: float
+    dt_max_s: float
+    dt_std_s: float
+    gaps: list[Gap]
+    saturation: Saturation
+    static: StaticIntervals | None
+    channels: list[dict[str, Any]]
+    mag_unit: str | None
+    meta: dict[str, Any]
+
+    def to_dict(self) -> dict[str, Any]:
+        return {
+            "n": self.n,
+            "duration_s": self.duration_s,
+            "fs_hz": self.fs_hz,
+            "dt_min_s": self.dt_min_s,
+            "dt_max_s": self.dt_max_s,
+            "dt_std_s": self.dt_std_s,
+            "gaps": [dataclasses.asdict(g) for g in self.gaps],
+            "missing_samples": int(sum(g.missing_samples for g in self.gaps)),
+            "saturation": self.saturation.to_dict(),
+            "static_intervals": None if self.static is None else self.static.to_dict(),
+            "channels": self.channels,
+            "mag_unit": self.mag_unit,
+            "meta": self.meta,
+        }
+
+
+def describe(
+    data: ImuData,
+    *,
+    window_s: float = 1.0,
+    min_duration_s: float | None = None,
+    gyro_full_scale: float | None = None,
+    accel_full_scale: float | None = None,
+) -> RecordingSummary:
+    """Rate, duration, gaps, saturation, static intervals and channel statistics.
+
+    Static intervals are skipped (``None``) when the record is shorter than
+    one window.  Full scales are SI (rad/s, m/s²); without them saturation
+    is detected from runs at the channels' extreme values.
+    """
+    from imunav.units import DEG as _DEG
+
+    n = data.n
+    dt = data.dt
+    static = None
+    if n >= 2 and n >= max(int(round(window_s * data.fs)), 2):
+        static = static_intervals(data, window_s=window_s, min_duration_s=min_duration_s)
+    channels: list[dict[str, Any]] = []
+
+    def add(group: str, arr: NDArray[np.float64] | None, unit: str, factor: float) -> None:
+        if arr is None:
+            return
+        cols = [arr] if arr.ndim == 1 else [arr[:, j] for j in range(arr.shape[1])]
+        for j, c in enumerate(cols):
+            x = c * factor
+            channels.append(
+                {
+                    "channel": group if arr.ndim == 1 else f"{group}_{'xyz'[j]}",
+                    "unit": unit,
+                    "mean": float(x.mean()),
+                    "std": float(x.std()),
+                    "min": float(x.min()),
+                    "max": float(x.max()),
+                }
+            )
+
+    add("gyro", data.gyro, "deg/s", 1.0 / _DEG)
+    add("accel", data.accel, "m/s^2", 1.0)
+    add("mag", data.mag, data.mag_unit, 1.0)
+    add("temp", data.temp, "degC", 1.0)
+    return RecordingSummary(
+        n=n,
+        duration_s=data.duration,
+        fs_hz=data.fs if n >= 2 else float("nan"),
+        dt_min_s=float(dt.min()) if n >= 2 else float("nan"),
+        dt_max_s=float(dt.max()) if n >= 2 else float("nan"),
+        dt_std_s=float(dt.std()) if n >= 2 else float("nan"),
+        gaps=data.gaps(),
+        saturation=detect_saturation(data, gyro_full_scale, accel_full_scale),
+        static=static,
+        channels=channels,
+        mag_unit=data.mag_unit if data.mag is not None else None,
+        meta=dict(data.meta),
+    )
