@@ -180,8 +180,9 @@ def _normalize4(q):
 def increments(t, gyr, acc, corrected):
     """Angle and velocity increments over [t_{k-1}, t_k] for k = 1..N-1.
 
-    Rates are held over each interval (sample k closes interval k).  With
-    ``corrected`` the two-sample coning and sculling corrections (Savage,
+    Without ``corrected`` the rate of sample k is held over interval k (first
+    order, the thesis / pyshoe convention); with ``corrected`` the point
+    samples are integrated by the trapezoid rule and the two-sample coning and sculling corrections (Savage,
     *Strapdown Analytics* §7; Groves 2013 §5.5.4) use the previous interval:
     dth_k += dth_{k-1} x dth_k / 12,
     dv_k  += dth_k x dv_k / 2 + (dth_{k-1} x dv_k + dv_{k-1} x dth_k) / 12.
@@ -193,8 +194,13 @@ def increments(t, gyr, acc, corrected):
     for k in range(1, n):
         h = t[k] - t[k - 1]
         for j in range(3):
-            dth[k, j] = gyr[k, j] * h
-            dv[k, j] = acc[k, j] * h
+            if corrected:
+                # point samples: trapezoid over the interval (second order)
+                dth[k, j] = 0.5 * (gyr[k - 1, j] + gyr[k, j]) * h
+                dv[k, j] = 0.5 * (acc[k - 1, j] + acc[k, j]) * h
+            else:
+                dth[k, j] = gyr[k, j] * h
+                dv[k, j] = acc[k, j] * h
     if not corrected:
         return dth, dv
     out_th = dth.copy()
@@ -219,10 +225,12 @@ def increments(t, gyr, acc, corrected):
 
 
 @njit(cache=True)
-def strapdown_local_kernel(dth, dv, dt, q0, v0, p0, g):
+def strapdown_local_kernel(dth, dv, dt, q0, v0, p0, g, compensated):
     """Integrate increments in a fixed local-level NED frame (gravity (0,0,g)).
 
-    q_k = q_{k-1} ⊗ exp(dth_k); v_k = v_{k-1} + C(q_{k-1}⊗exp(dth_k/2)) dv_k + g dt_k;
+    q_k = q_{k-1} ⊗ exp(dth_k); v_k = v_{k-1} + C dv_k + g dt_k with C the
+    attitude at the start of the interval when ``dv`` already carries the
+    rotation compensation (``compensated``), else at mid interval;
     p_k = p_{k-1} + (v_{k-1} + v_k) dt_k / 2.
     """
     n = dth.shape[0]
@@ -235,7 +243,7 @@ def strapdown_local_kernel(dth, dv, dt, q0, v0, p0, g):
     half = np.empty(3)
     for k in range(1, n):
         for j in range(3):
-            half[j] = 0.5 * dth[k, j]
+            half[j] = 0.0 if compensated else 0.5 * dth[k, j]
         qm = qmul_1(q[k - 1], qexp_1(half))
         dvn = qrot_1(qm, dv[k])
         q[k] = _normalize4(qmul_1(q[k - 1], qexp_1(dth[k])))
@@ -267,7 +275,7 @@ def _wgs84(lat, h):
 
 
 @njit(cache=True)
-def strapdown_ned_kernel(dth, dv, dt, q0, v0, lat0, lon0, h0, omega_e):
+def strapdown_ned_kernel(dth, dv, dt, q0, v0, lat0, lon0, h0, omega_e, compensated):
     """NED mechanization with Earth rate, transport rate and Coriolis.
 
     q_k = exp(-w_in^n dt) ⊗ q_{k-1} ⊗ exp(dth_k)  (Groves 2013 eq. 5.44 form);
@@ -299,9 +307,9 @@ def strapdown_ned_kernel(dth, dv, dt, q0, v0, lat0, lon0, h0, omega_e):
         w_in[0] = w_ie0 + w_en0
         w_in[1] = w_en1
         w_in[2] = w_ie2 + w_en2
-        # attitude at mid interval for the velocity increment
+        # attitude for the velocity increment: start (compensated dv) or mid interval
         for j in range(3):
-            half[j] = 0.5 * dth[k, j]
+            half[j] = 0.0 if compensated else 0.5 * dth[k, j]
         qm = qmul_1(q[k - 1], qexp_1(half))
         for j in range(3):
             half[j] = -0.5 * w_in[j] * h
@@ -511,8 +519,12 @@ def zupt_ekf_kernel(
         for j in range(3):
             w[j] = gyr[k, j] - bg[k - 1, j]
             f[j] = acc[k, j] - ba[k - 1, j]
-            dth[j] = w[j] * h
-            dvb[j] = f[j] * h
+            if coning:
+                dth[j] = (0.5 * (gyr[k, j] + gyr[k - 1, j]) - bg[k - 1, j]) * h
+                dvb[j] = (0.5 * (acc[k, j] + acc[k - 1, j]) - ba[k - 1, j]) * h
+            else:
+                dth[j] = w[j] * h
+                dvb[j] = f[j] * h
         qprev = q[k - 1]
         if coning:
             rot = _cross(dth, dvb)

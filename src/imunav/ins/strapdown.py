@@ -5,7 +5,8 @@
   eqs. 3.1-3.2)::
 
       q_k = q_{k-1} ⊗ exp(Δθ_k)
-      v_k = v_{k-1} + C(q_{k-1} ⊗ exp(Δθ_k / 2)) Δv_k + g Δt_k
+      v_k = v_{k-1} + C(q_{k-1}) Δv_k + g Δt_k   (Δv_k rotation-compensated;
+                                                 C at mid interval otherwise)
       p_k = p_{k-1} + (v_{k-1} + v_k) Δt_k / 2
 
 * :func:`strapdown_ned`: NED with Earth rate, transport rate, Coriolis and
@@ -98,7 +99,7 @@ def strapdown_local(data: Any, q0: ArrayLike, *, v0: ArrayLike = (0, 0, 0), p0: 
         raise InvalidInputError(f"q0 must be a unit quaternion [w, x, y, z]; got {q!r}")
     dth, dv = coning_sculling_increments(data, corrected)
     dt = np.concatenate([[0.0], np.diff(t)])
-    qq, v, p = _k.strapdown_local_kernel(dth, dv, dt, q, _v3(v0, "v0"), _v3(p0, "p0"), float(g))
+    qq, v, p = _k.strapdown_local_kernel(dth, dv, dt, q, _v3(v0, "v0"), _v3(p0, "p0"), float(g), bool(corrected))
     return StrapdownResult(t, qq, v, position=p)
 
 
@@ -118,5 +119,6 @@ def strapdown_ned(data: Any, q0: ArrayLike, lla0: ArrayLike, *, v0: ArrayLike = 
         raise InvalidInputError(f"latitude {lla[0]} rad is at or beyond a pole; the NED frame is singular there")
     dth, dv = coning_sculling_increments(data, corrected)
     dt = np.concatenate([[0.0], np.diff(t)])
-    qq, v, out = _k.strapdown_ned_kernel(dth, dv, dt, q, _v3(v0, "v0"), lla[0], lla[1], lla[2], float(omega_e))
+    qq, v, out = _k.strapdown_ned_kernel(dth, dv, dt, q, _v3(v0, "v0"), lla[0], lla[1], lla[2], float(omega_e),
+                                       bool(corrected))
     return StrapdownResult(t, qq, v, lla=out)
