@@ -245,6 +245,10 @@ def run_zupt(data: Any, zv: ArrayLike, config: ZuptConfig | None = None, *,
     pos0 = np.asarray(initial_position, dtype=float)
     if pos0.shape != (3,):
         raise ShapeError(f"initial_position must be a 3-vector; got shape {pos0.shape}")
+    # fresh, writable, contiguous float64 arrays: one compiled signature for every caller
+    q0 = np.array(q0, dtype=np.float64)
+    pos0 = np.array(pos0, dtype=np.float64)
+    t, a, w = (np.array(x, dtype=np.float64, order="C") for x in (t, a, w))
     q, v, p, ba, bg, Pd, innov, svar, P = _k.zupt_ekf_kernel(
         t, a, w, z, q0, pos0, np.zeros(3), np.zeros(3), np.zeros(3), P0, nx, g,
         cfg.sigma_acc, cfg.sigma_gyro, cfg.sigma_acc_bias_rw, cfg.sigma_gyro_bias_rw, cfg.sigma_v,
