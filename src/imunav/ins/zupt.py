@@ -69,8 +69,9 @@ class ZuptConfig:
     zaru : zero angular-rate update during stance (needs 15 states).
     sigma_zaru : its noise, rad/s.
     heading_hold : hold the yaw during each stance; ``sigma_heading`` rad.
-    integration : ``"euler"`` (first order, the thesis) or ``"coning"``
-        (coning / sculling-corrected increments).
+    integration : ``"euler"`` (first order, the thesis and pyshoe: rate of sample k held
+        over interval k) or ``"coning"`` (trapezoid increments of the point samples with
+        the two-sample coning / sculling corrections).
     """
 
     states: int = 9
