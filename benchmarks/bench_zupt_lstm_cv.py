@@ -29,7 +29,7 @@ GRIDS = {
 
 
 #: decision variants evaluated with the same trained models (not the acceptance figure)
-VARIANTS = {"thr0.5": {"threshold": 0.5}, "gap1.5": {"max_gap_s": 1.5}, "gap1.0_thr0.3": {"max_gap_s": 1.0, "fallback_threshold": 0.3}}
+VARIANTS = {"thesis rule only (no gait prior)": {"max_gap_s": None}, "threshold 0.5, no prior": {"threshold": 0.5, "max_gap_s": None}}
 
 
 def main() -> None:

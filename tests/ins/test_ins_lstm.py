@@ -53,6 +53,10 @@ def test_train_save_load_detect(tmp_path):
     assert p1.shape == (sims[0].imu.n,) and np.all((p1 >= 0) & (p1 <= 1))
     det = m2.detect(sims[0].imu)
     assert det.zv.dtype == bool and det.detector == "lstm"
+    # the gait prior only adds stance samples, and only where P > fallback threshold
+    plain = m2.detect(sims[0].imu, max_gap_s=None).zv
+    assert np.all(det.zv >= plain)
+    assert np.all(p1[det.zv & ~plain] > 0.5 - 1e-5)
     with pytest.raises(ShapeError, match="labels of trial 0"):
         train_lstm([sims[0].imu], [sims[0].stance[:10]], cfg)
     with pytest.raises(InvalidInputError, match="probability"):
@@ -65,6 +69,8 @@ def test_config_and_file_errors(tmp_path):
     with pytest.raises(ConfigError, match="threshold"):
         LstmConfig(threshold=1.0)
     assert LstmConfig.thesis().layers == 6 and LstmConfig.thesis().hidden == 80
+    with pytest.raises(ConfigError, match="max_gap_s"):
+        LstmConfig(max_gap_s=0.0)
     with pytest.raises(FileFormatError, match="not found"):
         LstmDetector.load(tmp_path / "none.npz")
     bad = tmp_path / "bad.npz"

@@ -28,7 +28,9 @@ tolerance; ``max_rotation_deg=180`` gives the thesis's arbitrary rotation) and
 gyro noise 0.01 rad/s (the thesis's σ = 0.075 on every channel is 4.3 °/s on
 the gyros, larger than the stance signal); inference runs the network over windows of ``window`` samples
 every ``window - burn_in`` samples and keeps the outputs that had at least
-``burn_in`` samples of context, which matches the training exactly.
+``burn_in`` samples of context, which matches the training exactly; a gait
+prior (:meth:`LstmDetector.detect`, ``max_gap_s``) accepts P > 0.5 inside
+stance-free stretches longer than 1.5 s.
 """
 
 from __future__ import annotations
@@ -96,6 +98,8 @@ class LstmConfig:
     seed: int = 0
     features: str = "raw+log"
     stance_weight: float = 6.0
+    max_gap_s: float | None = 1.5
+    fallback_threshold: float = 0.5
 
     def __post_init__(self) -> None:
         if self.layers < 1 or self.hidden < 1:
@@ -106,6 +110,10 @@ class LstmConfig:
             raise ConfigError(f"threshold must be in (0, 1); got {self.threshold}")
         if self.scale[0] <= 0 or self.scale[1] < self.scale[0]:
             raise ConfigError(f"scale must be (low, high) with 0 < low <= high; got {self.scale}")
+        if self.max_gap_s is not None and not self.max_gap_s > 0:
+            raise ConfigError(f"max_gap_s must be > 0 s or None; got {self.max_gap_s}")
+        if not 0.0 < self.fallback_threshold < 1.0:
+            raise ConfigError(f"fallback_threshold must be in (0, 1); got {self.fallback_threshold}")
         if self.features not in ("raw", "raw+log"):
             raise ConfigError(f"features must be 'raw' (thesis) or 'raw+log'; got {self.features!r}")
         if self.batch_size < 1 or self.epochs < 1 or self.windows_per_trial < 1:
@@ -237,16 +245,22 @@ class LstmDetector:
             out[s + burn:s + W] = probs[j, burn:]
         return out
 
-    def detect(self, data: Any, threshold: float | None = None, *, max_gap_s: float | None = None,
-               fallback_threshold: float = 0.5) -> Any:
-        """Zero-velocity flags ``P(stationary) > threshold`` as a :class:`~imunav.ins.DetectorResult`.
+    def detect(self, data: Any, threshold: float | None = None, *, max_gap_s: Any = "config",
+               fallback_threshold: float | None = None) -> Any:
+        """Zero-velocity flags ``P(stationary) > threshold`` (0.85) as a :class:`~imunav.ins.DetectorResult`.
 
-        ``max_gap_s`` (optional gait prior): inside any run longer than this
-        without a stance, samples with ``P > fallback_threshold`` are declared
-        stationary too (a walking foot stands still at least once per gait cycle).
+        Gait prior ``max_gap_s`` (default from the config: 1.5 s; None turns
+        it off): inside any run longer than this without a stance, samples with
+        ``P > fallback_threshold`` (0.5) are declared stationary too -- a
+        walking foot stands still at least once per gait cycle, and a missed
+        stance makes the INS drift without bound.
         """
         from imunav.ins.detectors import DetectorResult
 
+        if isinstance(max_gap_s, str):
+            max_gap_s = self.config.max_gap_s
+        if fallback_threshold is None:
+            fallback_threshold = self.config.fallback_threshold
         thr = self.config.threshold if threshold is None else float(threshold)
         if not 0.0 < thr < 1.0:
             raise InvalidInputError(f"threshold must be a probability in (0, 1); got {thr}")
