@@ -62,6 +62,7 @@ __all__ = [
     "detect_faults",
     "latch",
     "first_alarm",
+    "detector_statistics",
     "isolate_faulty_channels",
     "Fault",
     "inject_faults",
@@ -197,6 +198,31 @@ def cusum_statistics(normalized: ArrayLike, rho: float = 4.0, k: float = 0.5) ->
     return cusum_stats(_check_nv(normalized), float(rho), float(k))
 
 
+def detector_statistics(normalized: ArrayLike, M: int = 20, *, cusum_rho: float = 4.0, cusum_k: float = 0.5
+                        ) -> dict[str, Array]:
+    """All detector statistics for one run (N, s) or a batch of runs (R, N, s).
+
+    Returns {name: (…, N)} for the names in :data:`DETECTORS` (window ones NaN
+    before the window is full).  Compare with the thresholds of
+    :func:`calibrated_thresholds` / :func:`thesis_thresholds`.
+    """
+    from imunav.filters._kernels import cusum_stats
+
+    nv = _check_nv(normalized, batch=True)
+    single = nv.ndim == 2
+    b = nv[None] if single else nv
+    if not cusum_rho > 1 or not cusum_k >= 0:
+        raise InvalidInputError(f"cusum_rho must be > 1 and cusum_k >= 0, got {cusum_rho}, {cusum_k}")
+    l1, l2, a3 = window_statistics(b, M)
+    gv = np.empty(b.shape[:2])
+    gm = np.empty(b.shape[:2])
+    for r in range(b.shape[0]):
+        gv[r], gm[r] = cusum_stats(np.ascontiguousarray(b[r]), float(cusum_rho), float(cusum_k))
+    out = {"alg1": l1, "alg2": l2, "alg3": a3, "nis": np.einsum("...i,...i->...", b, b), "cusum_var": gv,
+           "cusum_mean": gm}
+    return {k: v[0] for k, v in out.items()} if single else out
+
+
 def latch(alarm: ArrayLike) -> NDArray[np.bool_]:
     """Latched alarm: true from the first alarm on (cumulative OR along the last axis)."""
     a = np.asarray(alarm, dtype=bool)
@@ -299,10 +325,7 @@ def detect_faults(
         if unknown:
             raise InvalidInputError(f"unknown detector(s) {sorted(unknown)}; known: {DETECTORS}")
         thr.update({k: float(v) for k, v in thresholds.items()})
-    l1, l2, a3 = window_statistics(nv, M)
-    gv, gm = cusum_statistics(nv, cusum_rho, cusum_k)
-    stats = {"alg1": l1, "alg2": l2, "alg3": a3, "nis": np.einsum("ij,ij->i", nv, nv), "cusum_var": gv,
-             "cusum_mean": gm}
+    stats = detector_statistics(nv, M, cusum_rho=cusum_rho, cusum_k=cusum_k)
     dets = {}
     earliest = -1
     for name in DETECTORS:
