@@ -236,13 +236,18 @@ def first_alarm(alarm: ArrayLike, start: int = 0) -> int:
     return int(idx[0] + start) if idx.size else -1
 
 
-def isolate_faulty_channels(normalized: ArrayLike, M: int = 20, p_false_alarm: float = 0.01, start: int = 0
+def isolate_faulty_channels(normalized: ArrayLike, M: int = 20, p_false_alarm: float = 1e-3, start: int = 0,
+                            during: ArrayLike | None = None, min_count: int = 3
                             ) -> tuple[NDArray[np.bool_], Array]:
-    """Channels whose own windowed statistics show a fault at or after ``start``.
+    """Channels whose own windowed statistics show a fault.
 
     Per channel i: ``Σ ν̃_i²`` over the window (χ²(M) under H0) and the window
     mean test ``|Σ ν̃_i| / √M`` (N(0, 1)); both at level p / (2s) (Bonferroni).
-    Returns (isolated flags (s,), first step each channel was flagged, -1 if not).
+    A channel is isolated when it is flagged on at least ``min_count`` steps
+    at or after ``start`` on which ``during`` (e.g. the system alarm) is True
+    (all steps if None): a persistent fault keeps flagging its channel, a
+    chance flag does not repeat.  Returns (isolated flags (s,), first flagged
+    step per channel, -1 if none).
     """
     nv = _check_nv(normalized)
     N, s = nv.shape
@@ -258,8 +263,10 @@ def isolate_faulty_channels(normalized: ArrayLike, M: int = 20, p_false_alarm: f
     mu[M - 1:] = np.abs(c1[M:] - c1[:-M]) / np.sqrt(M)
     flag = (sq > thr_sq) | (mu > thr_mu)
     flag[:start] = False
+    if during is not None:
+        flag &= np.asarray(during, dtype=bool).reshape(N, 1)
     first = np.array([first_alarm(flag[:, i]) for i in range(s)], dtype=np.int64)
-    return first >= 0, first.astype(np.float64)
+    return flag.sum(axis=0) >= min_count, first.astype(np.float64)
 
 
 @dataclass(frozen=True)
@@ -303,6 +310,7 @@ def detect_faults(
     cusum_rho: float = 4.0,
     cusum_k: float = 0.5,
     thresholds: dict[str, float] | None = None,
+    p_isolation: float = 1e-3,
 ) -> FaultDetectionResult:
     """Run Alg. 1-3, NIS and both CUSUMs on normalised innovations (N, s).
 
@@ -310,6 +318,8 @@ def detect_faults(
         ``p_false_alarm``) or ``"thesis"`` (χ² points of the thesis for
         Alg. 1-3; calibrated for the others).  ``thresholds`` overrides.
     start : alarms before this step are ignored (e.g. filter transient).
+    p_isolation : per-step level of the per-channel isolation tests (a channel
+        is isolated when flagged on >= 3 steps with a system alarm).
     """
     nv = _check_nv(normalized)
     N, s = nv.shape
@@ -337,7 +347,10 @@ def detect_faults(
         if fa >= 0 and (earliest < 0 or fa < earliest):
             earliest = fa
     if earliest >= 0:
-        iso, cf = isolate_faulty_channels(nv, M, p_false_alarm, start=max(start, earliest - M + 1))
+        any_alarm = np.zeros(N, dtype=bool)
+        for d in dets.values():
+            any_alarm |= d.alarm
+        iso, cf = isolate_faulty_channels(nv, M, p_isolation, start=start, during=any_alarm)
     else:
         iso, cf = np.zeros(s, dtype=bool), np.full(s, -1.0)
     return FaultDetectionResult(dets, iso, cf, int(M), float(p_false_alarm), threshold_mode)
