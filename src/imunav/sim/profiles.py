@@ -25,7 +25,10 @@ full turn about each axis; Ferraris et al., Sensors and Actuators A 46-47,
 
 from __future__ import annotations
 
+import csv
+import os
 from dataclasses import dataclass, fields
+from pathlib import Path
 from typing import Iterator
 
 import numpy as np
@@ -116,6 +119,26 @@ class Segments:
     def to_dict(self) -> dict:
         """Column lists for JSON."""
         return {f.name: getattr(self, f.name).tolist() for f in fields(self)}
+
+    def write_csv(self, path: str | os.PathLike[str]) -> Path:
+        """Write the table as CSV (atomically): one row per segment, rates and
+        angles in degrees, ``up``/``axis``/``q`` split into columns."""
+        from imunav.io._atomic import atomic_path
+
+        cols = ["kind", "step", "t_start", "t_stop", "i_start", "i_stop", "up_x", "up_y", "up_z",
+                "axis_x", "axis_y", "axis_z", "rate_dps", "angle_deg", "qw", "qx", "qy", "qz"]
+        p = Path(path)
+        with atomic_path(p) as tmp, open(tmp, "w", newline="") as fh:
+            w = csv.writer(fh)
+            w.writerow(cols)
+            for k in range(len(self)):
+                w.writerow([
+                    self.kind[k], int(self.step[k]), repr(float(self.t_start[k])), repr(float(self.t_stop[k])),
+                    int(self.i_start[k]), int(self.i_stop[k]), *(repr(float(x)) for x in self.up_b[k]),
+                    *(repr(float(x)) for x in self.axis_b[k]), repr(float(np.rad2deg(self.rate[k]))),
+                    repr(float(np.rad2deg(self.angle[k]))), *(repr(float(x)) for x in self.q_nb[k]),
+                ])
+        return p
 
     def to_records(self) -> list[dict]:
         """One dict per segment (for tables / CSV)."""
