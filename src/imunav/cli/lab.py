@@ -32,6 +32,7 @@ def register(app: typer.Typer) -> None:
         json_out: Optional[Path] = typer.Option(None, "--json", help="Also copy summary.json here."),
     ) -> None:
         from rich.console import Console
+        from rich.markup import escape
         from rich.table import Table
 
         from imunav.errors import InvalidInputError
@@ -44,7 +45,7 @@ def register(app: typer.Typer) -> None:
                 progress=not quiet, console=console,
             )
         except InvalidInputError as exc:
-            console.print(f"[red]error:[/red] {exc}")
+            console.print(f"[red]error:[/red] {escape(str(exc))}", soft_wrap=True)
             raise typer.Exit(2) from exc
         table = Table(title=f"imunav lab → {out}")
         table.add_column("step")
@@ -56,7 +57,7 @@ def register(app: typer.Typer) -> None:
         Console().print(table)
         for s in result.steps:
             if s.error:
-                console.print(f"[red]{s.name} failed:[/red]\n{s.error}")
+                console.print(f"[red]{s.name} failed:[/red]\n{escape(s.error)}", soft_wrap=True, highlight=False)
         if json_out is not None:
             from imunav.io._atomic import atomic_path
 

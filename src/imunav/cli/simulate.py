@@ -44,6 +44,7 @@ def register(app: typer.Typer) -> None:
         json_out: Optional[Path] = typer.Option(None, "--json", help="Also write a JSON summary here."),
     ) -> None:
         from rich.console import Console
+        from rich.markup import escape
 
         from imunav.errors import InvalidInputError
 
@@ -55,7 +56,7 @@ def register(app: typer.Typer) -> None:
                 segments=segments, console=console,
             )
         except InvalidInputError as exc:
-            console.print(f"[red]error:[/red] {exc}")
+            console.print(f"[red]error:[/red] {escape(str(exc))}", soft_wrap=True)
             raise typer.Exit(2) from exc
         if json_out is not None:
             from imunav.io._atomic import atomic_path
