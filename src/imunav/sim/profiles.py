@@ -299,6 +299,10 @@ class _Builder:
             i0, i1 = idx_edges[j], idx_edges[j + 1]
             if i1 <= i0:
                 continue
+            if p.kind == "static":
+                q[i0:i1] = p.q0
+                w[i0:i1] = 0.0
+                continue
             tau = tau_all[i0:i1] - edges[j]
             th, rt = p.theta(tau)
             q[i0:i1] = quat_multiply(p.q0, quat_from_rotvec(p.axis[None, :] * th[:, None]))
