@@ -132,3 +132,31 @@ def test_config_errors(tmp_path):
     res = runner.invoke(app, ["lab", "--out", str(tmp_path / "p"), "--config", str(opt), "--quiet"])
     assert res.exit_code == 1 and "fs must be a positive number" in res.output
     assert (tmp_path / "p" / "index.html").is_file()
+
+
+def test_simulate_tests_options_earth_rate_and_format(tmp_path, monkeypatch):
+    from imunav import earth
+    from imunav.units import DEG
+
+    cfg = load_lab_config(_cfg(tmp_path))
+    cfg["simulate_tests"].update(earth_rate=True, gravity="normal", lat_deg=45.0, h_m=100.0, format="parquet",
+                                 tests=["static_long"], preset="navigation")
+    captured = {}
+
+    def probe(ctx):
+        captured.update(ctx.artifacts)
+        return StepResult({})
+
+    mod = types.ModuleType("imunav.labsteps.zz_probe2")
+    mod.TITLE, mod.run = "probe", probe
+    monkeypatch.setitem(sys.modules, "imunav.labsteps.zz_probe2", mod)
+    monkeypatch.setattr(lab_mod, "available_steps", lambda: ["simulate_tests", "zz_probe2"])
+    res = run_lab(tmp_path / "e", cfg, steps=["simulate_tests", "zz_probe2"], progress=False)
+    assert not res.failed_steps
+    assert (tmp_path / "e" / "data" / "static_long.parquet").is_file()
+    assert set(captured["recordings"]) == {"static_long"}
+    assert captured["sim"]["g"] == pytest.approx(earth.normal_gravity(45 * DEG, 100.0), abs=1e-12)
+    rec = captured["recordings"]["static_long"]
+    # navigation preset: ARW 5.8e-7 rad/sqrt(s) -> sigma of a 20 s mean 1.3e-7 rad/s, bias < 2e-8:
+    # the mean is the Earth rate within ~4 sigma
+    np.testing.assert_allclose(rec.gyro.mean(axis=0), earth.earth_rate_ned(45 * DEG), atol=5e-7)
