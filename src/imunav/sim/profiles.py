@@ -116,6 +116,30 @@ class Segments:
         m = self.kind == kind
         return Segments(**{f.name: getattr(self, f.name)[m] for f in fields(self)})
 
+    def trim(self, start_s: float, stop_s: float | None = None) -> "Segments":
+        """Segments shortened by ``start_s`` at the start and ``stop_s`` (default
+        ``start_s``) at the end, e.g. to skip settling after a move.  Sample
+        spans are recomputed from the profile's uniform rate; segments that
+        would become empty raise."""
+        stop_s = start_s if stop_s is None else stop_s
+        if start_s < 0 or stop_s < 0:
+            raise InvalidInputError(f"trim times must be non-negative; got {start_s}, {stop_s}")
+        dur = self.t_stop - self.t_start
+        short = np.flatnonzero(dur <= start_s + stop_s)
+        if short.size:
+            raise InvalidInputError(
+                f"trimming {start_s} + {stop_s} s empties segments {short[:10].tolist()} "
+                f"(shortest lasts {dur.min():g} s); trim less"
+            )
+        n = self.i_stop - self.i_start
+        fs = float(np.median(n[n > 1] / dur[n > 1])) if np.any(n > 1) else 1.0
+        d = {f.name: getattr(self, f.name).copy() for f in fields(self)}
+        d["t_start"] = self.t_start + start_s
+        d["t_stop"] = self.t_stop - stop_s
+        d["i_start"] = self.i_start + int(np.ceil(start_s * fs - 1e-6))
+        d["i_stop"] = self.i_stop - int(np.ceil(stop_s * fs - 1e-6))
+        return Segments(**d)
+
     def to_dict(self) -> dict:
         """Column lists for JSON."""
         return {f.name: getattr(self, f.name).tolist() for f in fields(self)}
