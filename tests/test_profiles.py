@@ -142,7 +142,7 @@ def test_static_and_generic_multiposition():
     np.testing.assert_array_equal(tr.i_start - st.i_start, 25)
     np.testing.assert_array_equal(st.i_stop - tr.i_stop, 25)
     np.testing.assert_allclose(prof.trajectory.t[tr.i_start], tr.t_start)
-    with pytest.raises(InvalidInputError, match="empties segments \[0\]"):
+    with pytest.raises(InvalidInputError, match=r"empties segments \[0\]"):
         st.trim(1.0)
 
 
