@@ -37,6 +37,7 @@ import pkgutil
 import time
 import tomllib
 import traceback
+import zlib
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Iterator, Mapping
@@ -147,7 +148,7 @@ class LabContext:
 def _word(k: int | str) -> int:
     if isinstance(k, (int, np.integer)):
         return int(k) & 0xFFFFFFFF
-    return int.from_bytes(str(k).encode()[:8].ljust(8, b"\0"), "little") & 0xFFFFFFFF
+    return zlib.crc32(str(k).encode("utf-8"))  # stable across runs (unlike hash())
 
 
 @dataclass(frozen=True)
