@@ -10,12 +10,7 @@ import typer
 
 _HELP = """Run the lab and write a report folder (index.html, summary.md, summary.json, data/).
 
-With no arguments it runs every step on the built-in virtual IMU (preset thesis_sim):
-the 100-position static test, the 120-step rate-table test and a 1 h static record
-are simulated, then analysed by the steps that follow.  A TOML file (--config) sets
-the options of each step (a table named after the step, e.g. simulate_tests) and the
-lab table's seed and steps.
-Exit status 1 when a step fails with an error.
+With no arguments it runs every step on the built-in virtual IMU (preset thesis_sim): the 100-position static test, the 120-step rate-table test and a 1 h static record are simulated, then analysed by the steps that follow.  A TOML file (--config) sets the options of each step (a table named after the step, e.g. simulate_tests) and the lab table's seed and steps. Exit status 1 when a step fails with an error.
 
 Example: imunav lab --out lab-report --seed 0
 """
