@@ -160,3 +160,13 @@ def test_simulate_tests_options_earth_rate_and_format(tmp_path, monkeypatch):
     # navigation preset: ARW 5.8e-7 rad/sqrt(s) -> sigma of a 20 s mean 1.3e-7 rad/s, bias < 2e-8:
     # the mean is the Earth rate within ~4 sigma
     np.testing.assert_allclose(rec.gyro.mean(axis=0), earth.earth_rate_ned(45 * DEG), atol=5e-7)
+
+
+def test_example_lab_configs_are_valid():
+    from conftest import ROOT
+
+    files = sorted((ROOT / "examples").glob("lab*.toml"))
+    assert files
+    for f in files:
+        cfg = load_lab_config(f)
+        assert "simulate_tests" in cfg
