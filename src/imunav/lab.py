@@ -423,13 +423,8 @@ def _markdown(result: LabResult) -> str:
 
 
 def embed_png(section: Any, path: str | os.PathLike[str], caption: str | None = None) -> None:
-    """Embed a PNG file in a report section (base64, like ``Section.figure``)."""
-    import html as _html
-
-    data = base64.b64encode(Path(path).read_bytes()).decode("ascii")
-    cap = _html.escape(caption or Path(path).stem)
-    # imunav.report.Section has no image-from-file method yet; same markup as Section.figure
-    section._parts.append(f'<figure><img alt="{cap}" src="data:image/png;base64,{data}"><figcaption>{cap}</figcaption></figure>')
+    """Embed a PNG file in a report section (thin alias of ``Section.image``)."""
+    section.image(path, caption or Path(path).stem)
 
 
 def _write_html(result: LabResult, ctx: LabContext, title: str) -> None:
