@@ -182,6 +182,15 @@ def test_truncated_file(tmp_path, fmt):
         read_imu(cut)
 
 
+def test_csv_written_by_imunav_cut_inside_last_number(tmp_path):
+    p = _good_file(tmp_path, "csv", n=50)
+    raw = p.read_bytes()
+    cut = tmp_path / "cut.csv"
+    cut.write_bytes(raw[:-3])  # the last row keeps all its fields but loses digits
+    with pytest.raises(FileFormatError, match="does not end with a newline; it looks truncated"):
+        read_imu(cut)
+
+
 def test_csv_header_only_and_comments_only(tmp_path):
     p = tmp_path / "h.csv"
     p.write_text("t,gyro_x,gyro_y,gyro_z,accel_x,accel_y,accel_z\n")

@@ -106,6 +106,21 @@ def test_raw_counts_with_scale_and_offset():
     np.testing.assert_allclose(d.t, [0, 0.01, 0.02])
 
 
+def test_per_axis_count_scales_and_offsets():
+    # MPU-6050 README: a_cal = K (a_raw + b) with per-axis scale K and bias b (counts)
+    b = np.array([-711.5, 358.5, 1840.1])
+    k = np.array([6.02e-4, 5.97e-4, 5.86e-4])
+    raw = np.array([[711.5, -358.5, -1840.1 - 16735.0]] * 2)
+    d = ImuData.from_arrays(None, np.zeros((2, 3)), raw, fs=100.0, accel_unit="counts", accel_scale=k, accel_offset=-b)
+    np.testing.assert_allclose(d.accel[0], [0, 0, -16735.0 * 5.86e-4], atol=1e-12)
+    with pytest.raises(ShapeError, match="scalars or 3 values"):
+        ImuData.from_arrays(None, np.zeros((2, 3)), raw, fs=1.0, accel_unit="counts", accel_scale=k[:2])
+    with pytest.raises(UnitError, match="need accel_unit='counts'"):
+        ImuData.from_arrays(None, np.zeros((2, 3)), raw, fs=1.0, accel_scale=k)
+    with pytest.raises(UnitError, match="needs accel_scale"):
+        ImuData.from_arrays(None, np.zeros((2, 3)), raw, fs=1.0, accel_unit="counts", accel_offset=b)
+
+
 def test_unknown_unit_and_missing_scale():
     with pytest.raises(UnitError, match=r"unknown unit 'furlong/s'.*accepted"):
         ImuData.from_arrays([0, 1], np.zeros((2, 3)), np.zeros((2, 3)), gyro_unit="furlong/s")

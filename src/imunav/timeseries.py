@@ -165,10 +165,10 @@ class ImuData:
         time_unit: str = "s",
         gyro_unit: str = "rad/s",
         accel_unit: str = "m/s^2",
-        gyro_scale: float | None = None,
-        accel_scale: float | None = None,
-        gyro_offset: float = 0.0,
-        accel_offset: float = 0.0,
+        gyro_scale: float | ArrayLike | None = None,
+        accel_scale: float | ArrayLike | None = None,
+        gyro_offset: float | ArrayLike = 0.0,
+        accel_offset: float | ArrayLike = 0.0,
         mag_unit: str = "uT",
         nan_policy: NanPolicy = "raise",
         meta: dict[str, Any] | None = None,
@@ -180,7 +180,9 @@ class ImuData:
         ``gyro_unit`` may be ``"rad/s"``, ``"deg/s"``, ``"rpm"`` or
         ``"counts"`` (then ``gyro_scale`` in rad/s per count is required);
         ``accel_unit`` ``"m/s^2"``, ``"g"``, ``"mg"`` or ``"counts"`` (with
-        ``accel_scale`` in m/s² per count).  ``nan_policy``: ``"raise"``
+        ``accel_scale`` in m/s² per count); with counts, ``value_si =
+        (counts - offset) * scale`` where scale and offset are scalars or
+        per-axis (3,) arrays.  ``nan_policy``: ``"raise"``
         (default) names the offending rows; ``"drop"`` removes rows with any
         NaN; ``"interpolate"`` fills NaN samples linearly in time.  What was
         done is recorded in ``meta["nan_policy"]`` (policy, affected rows and
@@ -202,8 +204,8 @@ class ImuData:
         elif fs is not None:
             raise InvalidInputError("give either t or fs, not both")
         ts = to_si(t, time_unit, "time")
-        g = to_si(gyro, gyro_unit, "angular_rate", scale=gyro_scale, offset=gyro_offset)
-        a = to_si(accel, accel_unit, "acceleration", scale=accel_scale, offset=accel_offset)
+        g = _vector_to_si(gyro, gyro_unit, "angular_rate", gyro_scale, gyro_offset, "gyro")
+        a = _vector_to_si(accel, accel_unit, "acceleration", accel_scale, accel_offset, "accel")
         m = None if mag is None else np.asarray(mag, dtype=float)
         tp = None if temp is None else np.asarray(temp, dtype=float)
         meta = dict(meta or {})
@@ -342,6 +344,25 @@ class ImuData:
             d["temp"] = self.temp.tolist()
         d["meta"] = self.meta
         return d
+
+
+def _vector_to_si(x, unit, quantity, scale, offset, name):
+    """``to_si`` for a triad, accepting per-axis (3,) count scales and offsets."""
+    if np.ndim(scale) == 0 and np.ndim(offset) == 0:
+        return to_si(x, unit, quantity, scale=scale, offset=float(offset))
+    from imunav.errors import UnitError
+
+    if unit.strip().lower() not in ("counts", "count", "lsb", "raw"):
+        raise UnitError(f"per-axis {name}_scale / {name}_offset need {name}_unit='counts', not {unit!r}")
+    if scale is None:
+        raise UnitError(f"{name} declared in raw counts needs {name}_scale (SI units per count)")
+    sc = np.asarray(scale, dtype=float)
+    of = np.asarray(offset, dtype=float)
+    if sc.shape not in ((), (3,)) or of.shape not in ((), (3,)):
+        raise ShapeError(f"{name}_scale and {name}_offset must be scalars or 3 values (x, y, z); got shapes {sc.shape}, {of.shape}")
+    if not np.all(np.isfinite(sc)) or np.any(sc == 0):
+        raise UnitError(f"{name}_scale must be finite and non-zero, got {sc.tolist()}")
+    return (np.asarray(x, dtype=float) - of) * sc
 
 
 def _apply_nan_policy(t, g, a, m, tp, policy):

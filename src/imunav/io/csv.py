@@ -285,9 +285,19 @@ def read_csv(
     if len(df) == 0:
         raise FileFormatError(f"{source}: header {list(df.columns)} but no data rows")
     last = _split(_last_line(source).strip(), sep)
+    with open(source, "rb") as fh:
+        fh.seek(-1, os.SEEK_END)
+        ends_with_newline = fh.read(1) in (b"\n", b"\r")
     if len(last) < df.shape[1]:
         raise FileFormatError(
             f"{source}: the last row has {len(last)} of {df.shape[1]} fields; the file looks truncated "
+            f"(cut while writing?). Remove the incomplete last line (data row {len(df) - 1}) and read again"
+        )
+    if stored and not ends_with_newline:
+        # imunav always ends its files with a newline: a missing one means the
+        # write was cut, possibly inside the last number
+        raise FileFormatError(
+            f"{source}: the file written by imunav does not end with a newline; it looks truncated "
             f"(cut while writing?). Remove the incomplete last line (data row {len(df) - 1}) and read again"
         )
     cols = resolve_columns(list(df.columns), columns, source)
