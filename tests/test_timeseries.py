@@ -72,6 +72,7 @@ def test_time_order(t, match):
         (dict(t=np.zeros((4, 1)), gyro=np.zeros((4, 3)), accel=np.zeros((4, 3))), r"t must be 1-D"),
         (dict(t=np.arange(4.0), gyro=np.zeros((4, 2)), accel=np.zeros((4, 3))), r"gyro must have shape \(N, 3\)"),
         (dict(t=np.arange(4.0), gyro=np.zeros((4, 3)), accel=np.zeros((3, 3))), r"accel has 3 rows but t has 4"),
+        (dict(t=np.arange(5.0), gyro=np.zeros((3, 5)), accel=np.zeros((5, 3))), r"looks transposed: pass gyro\.T"),
         (dict(t=np.arange(4.0), gyro=np.zeros((4, 3)), accel=np.zeros((4, 3)), temp=np.zeros(3)), r"temp must have shape"),
         (dict(t=np.zeros(0), gyro=np.zeros((0, 3)), accel=np.zeros((0, 3))), r"empty"),
     ],

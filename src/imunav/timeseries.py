@@ -96,7 +96,8 @@ class ImuData:
                 continue
             a = np.array(v, dtype=np.float64, copy=True)
             if a.ndim != 2 or a.shape[1] != 3:
-                raise ShapeError(f"{name} must have shape (N, 3) = ({n}, 3), got {a.shape}")
+                hint = f"; it looks transposed: pass {name}.T" if a.shape == (3, n) else ""
+                raise ShapeError(f"{name} must have shape (N, 3) = ({n}, 3), got {a.shape}{hint}")
             if a.shape[0] != n:
                 raise ShapeError(f"{name} has {a.shape[0]} rows but t has {n}; every channel needs one row per time stamp")
             object.__setattr__(self, name, a)
