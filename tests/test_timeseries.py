@@ -263,6 +263,21 @@ def test_static_intervals_synthetic(rng, use_gyro, method):
     json.dumps(si.to_dict())
 
 
+def test_static_intervals_noise_free_simulation():
+    # ideal (noise-free) data: rest, 2 s rotation about x at 1 rad/s, rest
+    fs = 100.0
+    n = 1000
+    t = np.arange(n) / fs
+    ang = np.clip(t - 3.0, 0.0, 2.0)  # rad
+    rate = np.where((t >= 3.0) & (t < 5.0), 1.0, 0.0)
+    gyro = np.column_stack([rate, 0 * t, 0 * t])
+    accel = np.column_stack([0 * t, G0 * np.sin(ang), -G0 * np.cos(ang)])  # gravity seen rotating
+    d = ImuData(t, gyro, accel)
+    # the rotation starts at sample 300 (gyro) and tilts the accelerometer from sample 301
+    assert list(static_intervals(d, window_s=0.5, use_gyro=True)) == [(0, 300), (500, 1000)]
+    assert list(static_intervals(d, window_s=0.5)) == [(0, 301), (500, 1000)]
+
+
 def test_static_intervals_explicit_threshold_and_min_duration(rng):
     d, truth = _synthetic_session(rng)
     si = static_intervals(d, window_s=0.5, threshold=(0.05, 1e-4), use_gyro=True)

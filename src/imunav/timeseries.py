@@ -504,6 +504,13 @@ def _statistic(x: NDArray[np.float64], w: int, method: str) -> NDArray[np.float6
     return moving_variance(x, w)
 
 
+#: Lowest automatic thresholds: variances far below any real sensor's noise
+#: (σ = 1 µm/s² ≈ 0.1 µg and σ = 1e-7 rad/s ≈ 0.02 °/h per sample) but above
+#: the rounding residue of the moving variance, so that noise-free simulated
+#: records are still split into rest and motion.
+_AUTO_FLOOR = {"accel": 1e-12, "gyro": 1e-14}
+
+
 def _quietest(stat: NDArray[np.float64], w: int) -> float:
     """Variance of the quietest of the non-overlapping windows (floored above 0)."""
     blocks = stat[::w]
@@ -550,7 +557,9 @@ def static_intervals(
         ``λ_a`` in (m/s²)², or ``(λ_a, λ_g)`` with ``λ_g`` in (rad/s)².  With
         a single value ``λ_g`` is automatic.  ``None``: both automatic,
         ``λ = factor ×`` the statistic of the quietest non-overlapping window
-        (this assumes the record has at least one window at rest).
+        (this assumes the record has at least one window at rest), but at
+        least 1e-12 (m/s²)² and 1e-14 (rad/s)² so that noise-free simulated
+        data work too.
     min_duration_s : float, optional
         Shortest interval kept (s); default ``window_s``.
     factor : float
@@ -597,12 +606,12 @@ def static_intervals(
 
     s_a = _statistic(data.accel, w, method)
     if thr_a is None:
-        thr_a = factor * _quietest(s_a, w)
+        thr_a = max(factor * _quietest(s_a, w), _AUTO_FLOOR["accel"])
     quiet = s_a <= thr_a
     if use_gyro:
         s_g = _statistic(data.gyro, w, method)
         if thr_g is None:
-            thr_g = factor * _quietest(s_g, w)
+            thr_g = max(factor * _quietest(s_g, w), _AUTO_FLOOR["gyro"])
         quiet &= s_g <= thr_g
     else:
         thr_g = float("nan")
