@@ -37,6 +37,7 @@ def test_properties_and_immutability():
     assert d.dt.shape == (200,)
     with pytest.raises(ValueError):
         d.gyro[0, 0] = 1.0  # read-only arrays
+    assert repr(d) == "ImuData(n=201, fs=200 Hz, duration=1 s, channels=gyro,accel)"
 
 
 def test_nan_raises_naming_rows_and_columns():

@@ -244,6 +244,17 @@ class ImuData:
     def __len__(self) -> int:
         return self.n
 
+    def __repr__(self) -> str:
+        parts = [f"n={self.n}"]
+        if self.n >= 2:
+            parts += [f"fs={self.fs:.6g} Hz", f"duration={self.duration:.6g} s"]
+        parts.append("channels=gyro,accel" + (",mag" if self.mag is not None else "") + (",temp" if self.temp is not None else ""))
+        if self.mag is not None:
+            parts.append(f"mag_unit={self.mag_unit!r}")
+        if self.meta:
+            parts.append(f"meta_keys={sorted(self.meta)}")
+        return f"ImuData({', '.join(parts)})"
+
     def gaps(self, factor: float = 1.5) -> list[Gap]:
         """Intervals longer than ``factor`` × the median interval."""
         if self.n < 3:
