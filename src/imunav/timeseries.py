@@ -6,7 +6,14 @@ strictly increasing), angular rate ``gyro`` (rad/s, body FRD), specific force
 magnetic field ``mag`` (kept in ``mag_unit``) and the temperature ``temp``
 (°C).  The constructor validates everything and raises an
 :mod:`imunav.errors` exception naming the rows and columns at fault.  Units
-other than SI are declared only at the edge, in :meth:`ImuData.from_arrays`.
+other than SI are declared only at the edge, in :meth:`ImuData.from_arrays`
+(deg/s, g, raw counts with per-axis scale and offset, ms time stamps ...).
+
+Also here: :meth:`ImuData.gaps` (intervals longer than 1.5 × the median),
+:func:`static_intervals` (moving-variance rest detector, numba kernel, 1e7
+samples in seconds), :func:`detect_saturation` (samples at a full scale or
+stuck at a rail value) and :func:`describe` (the summary behind
+``imunav info``).  Files are read and written by :mod:`imunav.io`.
 """
 
 from __future__ import annotations
