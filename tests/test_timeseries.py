@@ -356,3 +356,14 @@ def test_static_intervals_imucal_ferraris_sections():
             assert frac < 0.1, (name, frac)
         else:
             assert frac == 1.0, (name, frac)
+
+
+def test_static_intervals_vqf_sample_rest_motion_rest():
+    from imunav.io import read_imu
+
+    d = read_imu(data_path("vqf_sample", "imu_data.npz"))  # float32 gyr/acc/mag + sampling_rate
+    si = static_intervals(d, window_s=1.0)
+    # README: rest at the start, motion from ≈9.3 s to ≈41.6 s, rest again at the end
+    assert len(si) == 2
+    assert si.t_start[0] == 0.0 and si.t_stop[0] == pytest.approx(9.3, abs=1.0)
+    assert si.t_start[1] == pytest.approx(41.6, abs=1.0) and si.stops[1] == d.n
