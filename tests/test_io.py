@@ -326,3 +326,19 @@ def test_read_adis16405_npz():
     d = read_imu(data_path("adis16405", "adis16405_imu2.npz"), units={"gyro": "deg/s", "accel": "g"})
     assert d.n == 1_000_000 and d.fs == pytest.approx(100.0)
     assert d.accel[:, 2].mean() / G0 == pytest.approx(-1.018, abs=0.005)
+
+
+def test_csv_iso_datetime_time_column(tmp_path):
+    p = tmp_path / "logger.csv"
+    p.write_text(
+        "timestamp,gx,gy,gz,ax,ay,az\n"
+        "2024-05-01T12:00:00.000Z,0,0,0,0,0,-9.8\n"
+        "2024-05-01T12:00:00.010Z,0,0,0,0,0,-9.8\n"
+        "2024-05-01T12:00:00.025Z,0,0,0,0,0,-9.8\n"
+    )
+    d = read_imu(p)
+    np.testing.assert_allclose(d.t, [0.0, 0.010, 0.025], rtol=0, atol=1e-15)
+    assert d.meta["t_origin"].startswith("2024-05-01T12:00:00")
+    p.write_text("timestamp,gx,gy,gz,ax,ay,az\n2024-05-01T12:00:00Z,0,0,0,0,0,0\nyesterday,0,0,0,0,0,0\n")
+    with pytest.raises(FileFormatError, match=r"time column 'timestamp' holds date-times but data row 1 \('yesterday'\)"):
+        read_imu(p)

@@ -162,6 +162,8 @@ def build_imu(
             raise InvalidInputError(f"{source}: the sampling rate must be positive and finite, got fs={rate}")
         t = t0 + np.arange(n_rows or 0, dtype=np.float64) / rate
         time_unit = "s"
+    elif arrays.get("t_origin") is not None:
+        time_unit = "s"  # date-time column, already seconds since its first sample
     else:
         time_unit = u.get("t", "s")
     mag = arrays.get("mag")
@@ -177,6 +179,8 @@ def build_imu(
     if tp is not None and u.get("temp") not in (None, "degC", "degc", "C", "°C", "c"):
         raise UnitError(f"{source}: temperature must be in degC (°C); got units['temp']={u['temp']!r}")
     out_meta = dict(stored.get("meta") or {})
+    if arrays.get("t_origin") is not None:
+        out_meta.setdefault("t_origin", arrays["t_origin"])
     if meta:
         out_meta.update(meta)
     declared = {"gyro": u.get("gyro", "rad/s"), "accel": u.get("accel", "m/s^2")}
