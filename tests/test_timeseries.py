@@ -9,7 +9,15 @@ import numpy as np
 import pytest
 
 from conftest import data_path
-from imunav.errors import InsufficientDataError, InvalidInputError, NonFiniteError, ShapeError, TimeOrderError, UnitError
+from imunav.errors import (
+    InsufficientDataError,
+    InvalidInputError,
+    NonFiniteError,
+    SaturationError,
+    ShapeError,
+    TimeOrderError,
+    UnitError,
+)
 from imunav.timeseries import ImuData, StaticIntervals, detect_saturation, moving_variance, static_intervals
 from imunav.units import DEG, G0
 
@@ -183,6 +191,21 @@ def test_slice_time_slice_with():
         d.with_(gyro=np.zeros((5, 3)))
 
 
+def test_interp_and_resample_linear_signals_exactly():
+    t = np.array([0.0, 0.1, 0.25, 0.3, 0.5])
+    g = np.column_stack([2 * t, -t, t + 1])  # linear in t: interpolation is exact
+    d = ImuData(t, g, np.column_stack([t, t, t]), temp=20 + t)
+    r = d.resample(20.0)
+    np.testing.assert_allclose(r.t, np.arange(11) / 20.0, atol=1e-15)
+    np.testing.assert_allclose(r.gyro, np.column_stack([2 * r.t, -r.t, r.t + 1]), atol=1e-14)
+    np.testing.assert_allclose(r.temp, 20 + r.t, atol=1e-13)
+    assert r.meta["resampled_from_hz"] == pytest.approx(1 / 0.125)  # median interval
+    with pytest.raises(InvalidInputError, match="does not extrapolate"):
+        d.interp([0.0, 0.6])
+    with pytest.raises(TimeOrderError):
+        d.interp([0.2, 0.1])
+
+
 def test_dataframe_round_trip_exact():
     d = make(50, mag=True, temp=True).with_(meta={"sensor": "unit"}, mag_unit="nT")
     df = d.to_dataframe()
@@ -212,6 +235,9 @@ def test_saturation_full_scale_and_runs():
     assert s.rows.tolist() == [50, 51, 52, 53, 80, 81, 120, 121, 122]
     r = detect_saturation(d.with_(gyro=g, accel=a))
     assert r.method == "runs" and r.counts == s.counts
+    with pytest.raises(SaturationError, match=r"rows 50, 51, 52, 53, 80, 81, 120, 121, 122: gyro_x \(4\), gyro_z \(3\), accel_y \(2\)"):
+        r.check()
+    detect_saturation(d).check()  # nothing saturated: no error
     # quantised static data: repeated extremes near the median are not saturation
     q = np.round(d.gyro / 1e-3) * 1e-3
     assert not detect_saturation(d.with_(gyro=q)).any

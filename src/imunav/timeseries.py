@@ -26,7 +26,14 @@ from typing import TYPE_CHECKING, Any, Literal
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from imunav.errors import InsufficientDataError, InvalidInputError, NonFiniteError, ShapeError, TimeOrderError
+from imunav.errors import (
+    InsufficientDataError,
+    InvalidInputError,
+    NonFiniteError,
+    SaturationError,
+    ShapeError,
+    TimeOrderError,
+)
 from imunav.units import to_si
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -299,6 +306,45 @@ class ImuData:
         if i1 <= i0:
             raise InvalidInputError(f"no samples in [{t0}, {t1}); the recording spans [{self.t[0]}, {self.t[-1]}]")
         return self.slice(i0, i1)
+
+    def interp(self, t_new: ArrayLike) -> "ImuData":
+        """Linear interpolation of every channel at the times ``t_new`` (s).
+
+        ``t_new`` must be strictly increasing and inside ``[t[0], t[-1]]``;
+        no extrapolation.  Interpolating across a gap (see :meth:`gaps`)
+        bridges it linearly: check ``gaps()`` first if that matters.
+        """
+        tn = np.asarray(t_new, dtype=np.float64)
+        if tn.ndim != 1 or tn.size == 0:
+            raise ShapeError(f"t_new must be a non-empty 1-D array, got shape {tn.shape}")
+        if tn[0] < self.t[0] or tn[-1] > self.t[-1]:
+            raise InvalidInputError(
+                f"t_new spans [{tn[0]}, {tn[-1]}] s, outside the recording [{self.t[0]}, {self.t[-1]}] s; "
+                "interp does not extrapolate"
+            )
+
+        def f(a: NDArray[np.float64] | None) -> NDArray[np.float64] | None:
+            if a is None:
+                return None
+            if a.ndim == 1:
+                return np.interp(tn, self.t, a)
+            return np.column_stack([np.interp(tn, self.t, a[:, j]) for j in range(a.shape[1])])
+
+        return ImuData(tn, f(self.gyro), f(self.accel), f(self.mag), f(self.temp), mag_unit=self.mag_unit, meta=dict(self.meta))
+
+    def resample(self, fs: float) -> "ImuData":
+        """Uniform samples at ``fs`` Hz from ``t[0]`` to ``t[-1]`` (linear, see :meth:`interp`).
+
+        Resampling to a lower rate without low-pass filtering aliases
+        noise; decimate with an anti-alias filter first if noise statistics
+        matter.  ``meta["resampled_from_hz"]`` records the original rate.
+        """
+        if not (np.isfinite(fs) and fs > 0):
+            raise InvalidInputError(f"fs must be positive and finite, got {fs}")
+        k = int(np.floor(self.duration * fs + 1e-9))
+        out = self.interp(self.t[0] + np.arange(k + 1) / fs)
+        out.meta["resampled_from_hz"] = self.fs if self.n >= 2 else None
+        return out
 
     def to_dataframe(self) -> "pd.DataFrame":
         """pandas DataFrame, one column per channel (``t, gyro_x ... temp``), SI.
@@ -690,6 +736,16 @@ class Saturation:
 
     def to_dict(self) -> dict[str, Any]:
         return {"method": self.method, "counts": dict(self.counts), "n_rows": int(self.rows.size)}
+
+    def check(self, where: str = "the recording") -> None:
+        """Raise :class:`~imunav.errors.SaturationError` if any sample is saturated."""
+        if not self.any:
+            return
+        chans = ", ".join(f"{k} ({v})" for k, v in self.counts.items() if v)
+        raise SaturationError(
+            f"{where} has saturated samples at rows {_rows(self.mask.any(axis=1))}: {chans}. "
+            "Exclude them (e.g. data.slice) or use a sensor range that covers the motion"
+        )
 
 
 def _extreme_runs(x: NDArray[np.float64], min_run: int) -> NDArray[np.bool_]:
