@@ -17,7 +17,7 @@ from typing import Any
 
 import numpy as np
 
-from imunav.errors import FileFormatError, InvalidInputError, ShapeError, UnitError
+from imunav.errors import FileFormatError, InvalidInputError, UnitError
 from imunav.timeseries import ImuData
 
 __all__ = [
@@ -29,6 +29,7 @@ __all__ = [
     "build_imu",
     "find_array_names",
     "wrap_read_errors",
+    "check_nonempty",
 ]
 
 #: The channel groups of an :class:`ImuData`, in file order.
@@ -295,7 +296,3 @@ def check_nonempty(path: os.PathLike[str] | str) -> str:
         raise FileFormatError(f"{p}: the file is empty (0 bytes)")
     return p
 
-
-def check_shape(a: np.ndarray, name: str, source: str) -> None:
-    if a.ndim == 0:
-        raise ShapeError(f"{source}: {name} is a scalar; expected an array with one row per sample")
