@@ -141,6 +141,10 @@ def test_csv_column_mapping_units_counts_and_delimiters(tmp_path):
     d2 = read_imu(p2, units={"gyro": "deg/s", "accel": "g", "mag": "nT"})
     assert d2.mag_unit == "nT" and d2.mag[0].tolist() == [7, 8, 9]
     assert d2.accel[0, 0] == pytest.approx(4 * G0)
+    # spreadsheet export with a byte-order mark and CRLF line ends
+    p4 = tmp_path / "excel.csv"
+    p4.write_bytes("\ufefftime,gx,gy,gz,ax,ay,az\r\n0,1,2,3,4,5,6\r\n1,1,2,3,4,5,6\r\n".encode("utf-8"))
+    assert read_imu(p4).t.tolist() == [0.0, 1.0]
     # no header: positional mapping, no time column: fs
     p3 = tmp_path / "raw.csv"
     p3.write_text("1,2,3,4,5,6\n1,2,3,4,5,6\n1,2,3,4,5,6\n")

@@ -275,7 +275,8 @@ def read_csv(
     stored: dict[str, Any] = {}
     n_skip = 0
     header_line = None
-    with open(source, encoding="utf-8", errors="replace") as fh:
+    # utf-8-sig: spreadsheet exports often start with a byte-order mark
+    with open(source, encoding="utf-8-sig", errors="replace") as fh:
         for i, line in enumerate(fh):
             s = line.strip()
             if i < skiprows:
@@ -310,6 +311,7 @@ def read_csv(
             skip_blank_lines=True,
             skipinitialspace=True,
             engine="c",
+            encoding="utf-8-sig",
         )
     if has_header:
         df.columns = [str(c).strip() for c in df.columns]
