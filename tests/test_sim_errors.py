@@ -447,3 +447,29 @@ def test_simulate_imu_uses_ideal_imu():
     out = simulate_imu(traj, model, rng=0, earth_rate=False, transport_rate=False, gravity="constant")
     ideal = traj_mod.ideal_imu(traj, earth_rate=False, transport_rate=False, gravity="constant")
     np.testing.assert_allclose(out.accel, ideal.accel + [0.1, 0.2, 0.3], atol=1e-12)
+
+
+def test_stream_normals_are_standard_normal():
+    # In-kernel xoshiro256++ / ziggurat generator: KS test, moments, both tails
+    # and the tail region beyond the ziggurat base r = 3.654 (Marsaglia's tail method).
+    from scipy import stats
+
+    from imunav.sim._kernels import _ZIG_R
+    from imunav.sim.error_model import normals, seed_sequence
+
+    n = 2_000_000
+    z = normals(seed_sequence(123), (0, 0, 0, 0), n)
+    assert stats.kstest(z[:200_000], "norm").pvalue > 1e-3
+    assert abs(z.mean()) < 5 / math.sqrt(n)
+    assert z.var() == pytest.approx(1.0, abs=5 * math.sqrt(2 / n))
+    assert abs(stats.skew(z)) < 5 * math.sqrt(6 / n)
+    assert abs(stats.kurtosis(z)) < 5 * math.sqrt(24 / n)
+    for x0 in (1.0, 2.5, _ZIG_R, 4.2):
+        p = 2 * stats.norm.sf(x0)
+        cnt = np.sum(np.abs(z) > x0)
+        assert abs(cnt - n * p) < 5 * math.sqrt(n * p) + 2
+    assert np.sum(z > _ZIG_R) > 0 and np.sum(z < -_ZIG_R) > 0
+    # streams with different keys are different; the same key repeats
+    z2 = normals(seed_sequence(123), (0, 0, 1, 0), 1000)
+    assert abs(np.corrcoef(z[:1000], z2)[0, 1]) < 0.15
+    np.testing.assert_array_equal(normals(seed_sequence(123), (0, 0, 0, 0), 1000), z[:1000])
