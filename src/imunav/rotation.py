@@ -404,6 +404,7 @@ def to_convention(q_nb: ArrayLike, convention: str, *, body: str = "same") -> Ar
         from imunav.errors import InvalidInputError
 
         raise InvalidInputError(f"body must be 'same' or 'flu', not {body!r}")
+    q = quat_canonical(q)
     return q[..., [1, 2, 3, 0]] if scalar_last else q
 
 
