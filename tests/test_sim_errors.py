@@ -473,3 +473,17 @@ def test_stream_normals_are_standard_normal():
     z2 = normals(seed_sequence(123), (0, 0, 1, 0), 1000)
     assert abs(np.corrcoef(z[:1000], z2)[0, 1]) < 0.15
     np.testing.assert_array_equal(normals(seed_sequence(123), (0, 0, 0, 0), 1000), z[:1000])
+
+
+def test_non_uniform_time_steps():
+    # jittered time stamps: white noise scales with 1/sqrt(dt_k), GM stays stationary
+    r = np.random.default_rng(2)
+    n = 200_000
+    t = np.cumsum(r.uniform(0.005, 0.015, n))
+    ideal = ImuData(t, np.zeros((n, 3)), np.zeros((n, 3)))
+    nd, sigma = 1e-3, 0.2
+    model = ImuErrorModel(gyro=TriadErrors(noise_density=nd), accel=TriadErrors(bias_instability=GaussMarkov(sigma, 0.05)))
+    out = apply_errors(ideal, model, rng=1)
+    dt = np.diff(t, prepend=t[0] - (t[1] - t[0]))
+    np.testing.assert_allclose((out.gyro * np.sqrt(dt)[:, None] / nd).std(axis=0), 1.0, rtol=0.01)
+    np.testing.assert_allclose(out.accel.std(axis=0), sigma, rtol=0.03)
