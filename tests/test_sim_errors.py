@@ -96,7 +96,9 @@ def test_gauss_markov_matches_closed_form_allan(seed):
     # tau <= T_c the estimator behaves at worst like random-walk FM
     # (alpha = -2); its edf at tau = T_c (m = 50) gives a relative sigma of
     # 1.04 %, so 5 % is > 4.5 sigma (asserted below), and tau >= 10 samples
-    # keeps sample averages within 0.5 % of continuous averages.
+    # keeps sample averages within ~0.6 % of continuous averages.  Observed
+    # over 24 realisations: relative std 0.4 / 0.7 / 1.0 % at m = 10 / 25 / 50,
+    # largest deviation 2.7 %.
     fs, n, sigma, tc = 50.0, 1_000_000, 1e-3, 1.0
     model = gyro_only(bias_instability=GaussMarkov([sigma, 0.0, 0.0], tc))
     y = apply_errors(static(n, fs), model, rng=seed).gyro[:, 0]
