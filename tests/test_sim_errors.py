@@ -489,3 +489,12 @@ def test_non_uniform_time_steps():
     dt = np.diff(t, prepend=t[0] - (t[1] - t[0]))
     np.testing.assert_allclose((out.gyro * np.sqrt(dt)[:, None] / nd).std(axis=0), 1.0, rtol=0.01)
     np.testing.assert_allclose(out.accel.std(axis=0), sigma, rtol=0.03)
+
+
+def test_common_axis_noise_option_reproduces_shared_realisation():
+    te = TriadErrors(noise_density=[1e-3, 2e-3, 3e-3], bias_instability=GaussMarkov(1e-3, 1.0))
+    _, tr = apply_errors(static(2000, 100.0), ImuErrorModel(gyro=te), rng=5, return_truth=True, common_axis_noise=True)
+    w = tr.gyro.white_noise
+    np.testing.assert_allclose(w[:, 1], 2 * w[:, 0], rtol=1e-12)
+    np.testing.assert_allclose(w[:, 2], 3 * w[:, 0], rtol=1e-12)
+    np.testing.assert_allclose(tr.gyro.bias_instability[:, 2], tr.gyro.bias_instability[:, 0], rtol=1e-12)

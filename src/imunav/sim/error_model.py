@@ -972,15 +972,19 @@ def _f64(a: Any) -> NDArray[np.float64]:
     return np.array(a, dtype=np.float64, order="C", copy=True)
 
 
-def _states(root: np.random.SeedSequence, sensor: int, te: TriadErrors) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Stream states (3, 2 + M, 4) and GM parameters (3, M) of one triad."""
+def _states(
+    root: np.random.SeedSequence, sensor: int, te: TriadErrors, common: bool = False
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Stream states (3, 2 + M, 4) and GM parameters (3, M) of one triad
+    (``common``: the three axes share the x-axis streams)."""
     if te.bias_instability is not None:
         sig, tc = te.bias_instability.components()
     else:
         sig, tc = np.zeros((1, 3)), np.ones((1, 3))
     m = sig.shape[0]
     procs = [(_PROC_WHITE, 0), (_PROC_RANDOM_WALK, 0)] + [(_PROC_BIAS_INSTABILITY, j) for j in range(m)]
-    states = np.stack([np.stack([stream_state(root, sensor, p, i, j) for p, j in procs]) for i in range(3)])
+    axes = [0, 0, 0] if common else [0, 1, 2]
+    states = np.stack([np.stack([stream_state(root, sensor, p, i, j) for p, j in procs]) for i in axes])
     return states, _f64(sig.T), _f64(tc.T)
 
 
@@ -993,6 +997,7 @@ def _apply_arrays(
     dtemp: NDArray[np.float64] | None,
     return_truth: bool,
     threads: int | None = None,
+    common_axis_noise: bool = False,
 ) -> tuple[NDArray[np.float64], NDArray[np.float64], ImuErrorTruth | None]:
     n = t.size
     root = seed_sequence(rng)
@@ -1013,7 +1018,7 @@ def _apply_arrays(
         tr = np.zeros((4, n, 3)) if return_truth else np.zeros((4, 0, 3))
         is_gyro = nm == "gyro"
         g = model.g_sensitivity if is_gyro else np.zeros((3, 3))
-        states, sig, tc = _states(root, _SENSOR_KEY[nm], te)
+        states, sig, tc = _states(root, _SENSOR_KEY[nm], te, common_axis_noise)
         fs = te.full_scale if te.full_scale is not None else np.zeros(3)
         nsat[nm] = _k.simulate_triad(
             t, dt_const, x, accel,
@@ -1086,6 +1091,7 @@ def apply_errors(
     *,
     return_truth: bool = False,
     threads: int | None = None,
+    common_axis_noise: bool = False,
 ) -> ImuData | tuple[ImuData, ImuErrorTruth]:
     """Apply an IMU error model to an ideal recording.
 
@@ -1104,7 +1110,13 @@ def apply_errors(
         Also return an :class:`ImuErrorTruth` with the realised bias tracks
         and white noise.
     threads : int, optional
-        Worker threads (default: CPU count, at most 6); results do not depend on it.
+        Worker threads (default: CPU count; gyro and accelerometer run in
+        parallel); results do not depend on it.
+    common_axis_noise : bool
+        Use the x-axis random streams on all three axes of a triad (same
+        normalised realisation, scaled per axis).  Only for reproducing the
+        thesis's simulation, whose estimation errors show this pattern
+        (imu-error-calibration.md §8.3); physically the axes are independent.
 
     Returns
     -------
@@ -1121,7 +1133,7 @@ def apply_errors(
     accel = _as_n3(ideal.accel, n, "ideal.accel")
     temp = _temperature(temp_c, ideal, n)
     dtemp = None if temp is None else temp - model.temp_ref_c
-    g, a, truth = _apply_arrays(t, gyro, accel, model, rng, dtemp, return_truth, threads)
+    g, a, truth = _apply_arrays(t, gyro, accel, model, rng, dtemp, return_truth, threads, common_axis_noise)
     meta = dict(getattr(ideal, "meta", {}) or {})
     meta["error_model"] = model.name or "custom"
     changes: dict[str, Any] = {"gyro": g, "accel": a, "meta": meta}
@@ -1138,11 +1150,21 @@ def simulate_imu(
     *,
     temp_c: ArrayLike | None = None,
     return_truth: bool = False,
+    common_axis_noise: bool = False,
     **ideal_kw: Any,
 ) -> ImuData | tuple[ImuData, ImuErrorTruth]:
     """Virtual IMU: ideal outputs of ``trajectory`` (:func:`imunav.sim.trajectory.ideal_imu`
-    with ``ideal_kw``) with the errors of ``error_model`` applied (:func:`apply_errors`)."""
+    with ``ideal_kw``: earth_rate, transport_rate, gravity, lat, h) with the
+    errors of ``error_model`` applied (:func:`apply_errors`; same ``rng``,
+    ``temp_c``, ``return_truth`` and ``common_axis_noise``)."""
     from imunav.sim.trajectory import ideal_imu  # lazy: owned by the trajectory module
 
+    if not isinstance(error_model, ImuErrorModel):
+        raise InvalidInputError(
+            f"simulate_imu: error_model must be an ImuErrorModel (e.g. imunav.sim.presets.get('tactical')), "
+            f"got {type(error_model).__name__}"
+        )
     ideal = ideal_imu(trajectory, **ideal_kw)
-    return apply_errors(ideal, error_model, rng, temp_c, return_truth=return_truth)
+    return apply_errors(
+        ideal, error_model, rng, temp_c, return_truth=return_truth, common_axis_noise=common_axis_noise
+    )
