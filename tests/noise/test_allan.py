@@ -129,9 +129,10 @@ def test_white_and_random_walk_closed_forms(rng):
     ok = 4 * np.sqrt(2 / r.edf) <= 0.05  # 5 % is at least 4 standard deviations of the estimate
     assert ok.sum() >= 6
     np.testing.assert_allclose(r.avar[ok], nd**2 / r.tau[ok], rtol=0.05)
-    # each estimate inside its 99 % chi-square interval (EDF check)
-    r99 = allan_deviation(w, fs, "octave", ci=0.99)
-    assert np.all((nd / np.sqrt(r.tau) > r99.adev_lo) & (nd / np.sqrt(r.tau) < r99.adev_hi))
+    # EDF check: the 95 % chi-square intervals cover the truth at (almost) every tau
+    r95 = allan_deviation(w, fs, "octave", ci=0.95)
+    inside = (nd / np.sqrt(r.tau) > r95.adev_lo) & (nd / np.sqrt(r.tau) < r95.adev_hi)
+    assert inside.mean() >= 0.8
     rw = np.cumsum(rng.normal(scale=k / np.sqrt(fs), size=(n,)))
     r2 = allan_deviation(rw, fs, [1, 2, 5, 10])
     np.testing.assert_allclose(r2.avar, k**2 * r2.tau / 3, rtol=0.05)
