@@ -181,3 +181,64 @@ def tot_sums(x, ms):  # pragma: no cover - numba
     for j in range(nt):
         out[j] = _pairwise_sum(part[:, j].copy())
     return out
+
+
+@njit(cache=True)
+def _gac1(code, h, T):  # pragma: no cover - numba
+    # generalized autocovariance of the phase per unit coefficient (see fit.py)
+    a = abs(h)
+    if code == 0:  # Q: white phase
+        return 1.0 if a < 1e-12 else 0.0
+    if code == 1:  # N: white rate
+        return -0.5 * a
+    if code == 2:  # B: flicker rate
+        return (h * h * np.log(a)) / (2.0 * np.pi) if a > 0 else 0.0
+    if code == 3:  # K: random-walk rate
+        return a * a * a / 12.0
+    if code == 4:  # Gauss-Markov rate
+        u = a / T
+        return -(T * T) * (u + np.expm1(-u))
+    return 0.0
+
+
+@njit(parallel=True, cache=True)
+def oavar_cov(tau, m, n_phase, codes, Ts, theta, dt, max_ratio, max_lags):  # pragma: no cover - numba
+    """Covariance of overlapping AVAR estimates for a model (sum of terms)."""
+    nt = tau.size
+    cov = np.zeros((nt, nt))
+    a = np.array([1.0, -2.0, 1.0])
+    for i in prange(nt):
+        for j in range(i, nt):
+            m1 = m[i]
+            m2 = m[j]
+            if max(m1, m2) > max_ratio * min(m1, m2):
+                continue
+            n1 = n_phase - 2 * m1
+            n2 = n_phase - 2 * m2
+            if n1 <= 0 or n2 <= 0:
+                continue
+            w = 4 * max(m1, m2)
+            lo = -2 * m2 - w
+            hi = 2 * m1 + w
+            span = hi - lo + 1
+            step = max(1, (span + max_lags - 1) // max_lags)
+            acc = 0.0
+            h = lo
+            while h <= hi:
+                cnt = min(n1, n2 - h) - max(0, -h)
+                if cnt > 0:
+                    c12 = 0.0
+                    for t in range(codes.size):
+                        if theta[t] <= 0.0:
+                            continue
+                        g = 0.0
+                        for k in range(3):
+                            for l in range(3):
+                                g += a[k] * a[l] * _gac1(codes[t], (h + l * m2 - k * m1) * dt, Ts[t])
+                        c12 += theta[t] * g
+                    acc += cnt * c12 * c12
+                h += step
+            s = 2.0 * step * acc / (4.0 * tau[i] ** 2 * tau[j] ** 2 * n1 * n2)
+            cov[i, j] = s
+            cov[j, i] = s
+    return cov

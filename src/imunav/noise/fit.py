@@ -54,6 +54,7 @@ from numpy.typing import ArrayLike, NDArray
 from scipy.optimize import minimize_scalar, nnls
 
 from imunav.errors import InsufficientDataError, InvalidInputError
+from imunav.noise import _allan_kernels as _ak
 from imunav.noise.allan import AllanResult
 from imunav.units import to_display
 
@@ -140,38 +141,19 @@ def _gac(name: str, h: np.ndarray, T: float | None = None) -> np.ndarray:
     return np.zeros_like(h)  # R: deterministic ramp, no variance
 
 
+_CODES = {"Q": 0, "N": 1, "B": 2, "K": 3, "GM": 4, "R": 5}
+
+
 def _overlapping_cov(tau: np.ndarray, m: np.ndarray, n_phase: int, names: list[str], Ts: list[float | None],
                      theta: np.ndarray, fs: float, max_ratio: float = 64.0, max_lags: int = 4096) -> np.ndarray:
-    """Covariance matrix of overlapping AVAR estimates under the model theta."""
-    nt = tau.size
-    cov = np.zeros((nt, nt))
-    a = np.array([1.0, -2.0, 1.0])
-    dt = 1.0 / fs
-    active = [(nm, T, th) for nm, T, th in zip(names, Ts, theta) if th > 0 and nm != "R"]
-    for i in range(nt):
-        for j in range(i, nt):
-            m1, m2 = int(m[i]), int(m[j])
-            if max(m1, m2) / min(m1, m2) > max_ratio:
-                continue
-            n1, n2 = n_phase - 2 * m1, n_phase - 2 * m2
-            if n1 <= 0 or n2 <= 0:
-                continue
-            w = 4 * max(m1, m2)
-            lo, hi = -2 * m2 - w, 2 * m1 + w
-            span = hi - lo + 1
-            step = max(1, int(math.ceil(span / max_lags)))
-            h = np.arange(lo, hi + 1, step, dtype=float)
-            cnt = np.clip(np.minimum(n1, n2 - h) - np.maximum(0, -h), 0, None)
-            c12 = np.zeros_like(h)
-            for nm, T, th in active:
-                g = np.zeros_like(h)
-                for k in range(3):
-                    for l in range(3):
-                        g += a[k] * a[l] * _gac(nm, (h + l * m2 - k * m1) * dt, T)
-                c12 += th * g
-            s = 2.0 * step * float(np.sum(cnt * c12**2)) / (4.0 * tau[i] ** 2 * tau[j] ** 2 * n1 * n2)
-            cov[i, j] = cov[j, i] = s
-    return cov
+    """Covariance matrix of overlapping AVAR estimates under the model theta.
+
+    Pairs of cluster sizes further apart than ``max_ratio`` are taken as
+    uncorrelated; lag sums longer than ``max_lags`` are sampled (Riemann sum)."""
+    codes = np.array([_CODES["GM" if nm.startswith("GM") else nm] for nm in names], dtype=np.int64)
+    Tv = np.array([T if T is not None else 1.0 for T in Ts], dtype=float)
+    return _ak.oavar_cov(np.asarray(tau, float), np.asarray(m, np.int64), int(n_phase), codes, Tv,
+                         np.asarray(theta, float), 1.0 / fs, float(max_ratio), int(max_lags))
 
 
 # --------------------------------------------------------------------------- results
