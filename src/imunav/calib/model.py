@@ -186,7 +186,7 @@ class ImuCalibration:
         object.__setattr__(self, "gyro_matrix", _mat3(self.gyro_matrix, "gyro_matrix"))
         object.__setattr__(self, "g_sensitivity", _mat3(self.g_sensitivity, "g_sensitivity"))
         for name in ("accel_matrix", "gyro_matrix"):
-            if abs(np.linalg.det(getattr(self, name))) < 1e-12 * np.abs(getattr(self, name)).max() ** 3:
+            if not np.linalg.cond(getattr(self, name)) < 1e12:
                 raise InvalidInputError(f"{name} is singular; a calibration matrix must be invertible")
         for k, v in self.thermal.items():
             if k not in _THERMAL_KEYS:
