@@ -172,7 +172,9 @@ class ImuData:
         m = None if mag is None else np.asarray(mag, dtype=float)
         tp = None if temp is None else np.asarray(temp, dtype=float)
         meta = dict(meta or {})
-        meta.setdefault("units_in", {"time": time_unit, "gyro": gyro_unit, "accel": accel_unit})
+        declared = {"time": time_unit, "gyro": gyro_unit, "accel": accel_unit}
+        if declared != {"time": "s", "gyro": "rad/s", "accel": "m/s^2"}:
+            meta.setdefault("units_in", declared)
         if nan_policy != "raise":
             ts, g, a, m, tp, info = _apply_nan_policy(ts, g, a, m, tp, nan_policy)
             meta["nan_policy"] = info
