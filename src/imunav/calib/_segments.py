@@ -50,8 +50,8 @@ def steady_segments(
     n = max(int(round(window_s * fs)), 2)
     v = moving_variance(x, n)
     if threshold is None:
-        thr = factor * np.median(v, axis=0)
-        thr = np.where(thr > 0, thr, np.finfo(float).tiny)
+        # floor: noise-free (simulated) data have a rounding-level variance only
+        thr = np.maximum(factor * np.median(v, axis=0), 1e-9 * np.mean(x**2, axis=0) + np.finfo(float).tiny)
     else:
         thr = np.broadcast_to(np.asarray(threshold, float), (x.shape[1],))
     mask = np.all(v <= thr, axis=1)

@@ -24,7 +24,8 @@ from imunav.calib._lsq import linear_fit
 from imunav.calib._segments import as_time, assign_to_windows, check_saturation, segment_means, steady_segments
 from imunav.calib.model import ImuCalibration
 from imunav.calib.result import CalibrationResult
-from imunav.calib.static import OMEGA_E, _gravity
+from imunav.calib.static import _gravity
+from imunav.earth import OMEGA_E
 from imunav.errors import InsufficientDataError, ShapeError
 
 __all__ = ["ratetable_from_means", "ratetable", "combine"]
@@ -92,7 +93,7 @@ def ratetable_from_means(
 def ratetable(
     data: Any,
     rates: ArrayLike,
-    up: ArrayLike,
+    up: ArrayLike | None = None,
     *,
     windows: ArrayLike | None = None,
     base: ImuCalibration | None = None,
@@ -107,11 +108,18 @@ def ratetable(
 ) -> CalibrationResult:
     """Rate-table calibration of a recording (e.g. the thesis 120-step test).
 
-    ``rates`` (K, 3): body-frame table rate of each step (rad/s) in time order;
+    ``rates`` (K, 3): body-frame table rate of each step (rad/s) in time order,
+    or an :class:`imunav.sim.Segments` table (its rate rows give rates, up and windows);
     ``up`` (K, 3): body up vector during each step (gives ``f = g u``);
     ``windows`` (K, 2): nominal step times (a hint; the constant-rate samples
     inside are found from the data).
     """
+    if hasattr(rates, "kind") and hasattr(rates, "axis_b"):  # an imunav.sim Segments table
+        st = rates.select("rate")
+        rates, up = st.rate[:, None] * st.axis_b, st.up_b
+        windows = np.stack([st.t_start, st.t_stop], axis=1) if windows is None else windows
+    if up is None:
+        raise InsufficientDataError("rate-table calibration needs the body up vector of every step (up=...)")
     gyro = np.asarray(data.gyro, float)
     accel = np.asarray(data.accel, float)
     t, fs_ = as_time(getattr(data, "t", None), gyro.shape[0], fs)
@@ -137,17 +145,34 @@ def ratetable(
 
 
 def combine(static: CalibrationResult, rate: CalibrationResult) -> CalibrationResult:
-    """Merge a static (accelerometer, gyro bias, G) and a rate-table result."""
+    """Merge a static (accelerometer, gyro bias, G) and a rate-table result.
+
+    When the static fit removed the Earth rate, it is seen through the gyro
+    matrix (``ω̃ = T_g ω_ie + b_g + G f``), unknown until the rate table; the
+    static gyro fit is then repeated with ``T_g ω_ie``.
+    """
+    from imunav.calib.static import fit_gyro_static
+
     stderr = {**static.stderr, **{k: v for k, v in rate.stderr.items() if k in ("gyro_matrix",)}}
+    residuals = {**static.residuals, **rate.residuals}
+    inputs = static.info.get("_gyro_static_inputs")
+    scal = static.calibration
+    if inputs is not None and inputs[2] is not None:
+        f, Gm, er, mode = inputs
+        Tg = rate.calibration.gyro_matrix
+        gb, G, segb, seG, gres, _ = fit_gyro_static(f, Gm, g_sensitivity=mode, earth_rate_b=er @ Tg.T)
+        scal = scal.with_(gyro_bias=gb, g_sensitivity=G)
+        stderr.update(gyro_bias=segb, g_sensitivity=seG)
+        residuals["gyro_static"] = gres
     if rate.info.get("intercept"):
         stderr["gyro_bias"] = rate.stderr["gyro_bias"]
-    cal = static.calibration.with_(
+    cal = scal.with_(
         gyro_matrix=rate.calibration.gyro_matrix,
-        gyro_bias=rate.calibration.gyro_bias if rate.info.get("intercept") else static.calibration.gyro_bias,
+        gyro_bias=rate.calibration.gyro_bias if rate.info.get("intercept") else scal.gyro_bias,
         stderr=stderr,
         meta={"method": "multiposition+ratetable"},
     )
     return CalibrationResult(
-        cal, stderr, {**static.residuals, **rate.residuals}, {**static.condition, **rate.condition},
+        cal, stderr, residuals, {**static.condition, **rate.condition},
         {**static.segments, **rate.segments}, "multiposition+ratetable", {**static.info, **rate.info},
     )

@@ -48,7 +48,7 @@ class CalibrationResult:
             "residual_rms": {k: np.sqrt(np.mean(np.asarray(v) ** 2, axis=0)).tolist() for k, v in self.residuals.items()},
             "condition": dict(self.condition),
             "segments": {k: np.asarray(v).tolist() for k, v in self.segments.items()},
-            "info": self.info,
+            "info": {k: v for k, v in self.info.items() if not k.startswith("_")},
         }
 
     def parameter_stderr(self) -> dict[str, Array]:

@@ -33,6 +33,7 @@ from imunav.calib._segments import (
 from imunav.calib.model import ImuCalibration
 from imunav.calib.result import CalibrationResult
 from imunav.errors import DegenerateGeometryError, InsufficientDataError, InvalidInputError, ShapeError
+from imunav.earth import OMEGA_E
 from imunav.units import G0
 
 __all__ = [
@@ -46,7 +47,6 @@ __all__ = [
 ]
 
 Array = NDArray[np.float64]
-OMEGA_E = 7.2921150e-5  # WGS84 Earth rotation rate, rad/s
 
 
 def _gravity(gravity: float | None, latitude: float | None, height: float = 0.0) -> float:
@@ -183,6 +183,8 @@ def multiposition_from_means(
         stderr.update(gyro_bias=segb, g_sensitivity=seG)
         residuals["gyro_static"] = gres
         cond["gyro_static"] = gcond
+        # kept for combine(): the Earth rate is seen through T_g, known only after the rate table
+        info["_gyro_static_inputs"] = (f, Gm, er, g_sensitivity)
     cal = ImuCalibration(
         accel_bias=b, accel_matrix=T, gyro_bias=gb, g_sensitivity=G, stderr=stderr,
         meta={"method": "multiposition", "n_positions": int(f.shape[0])},
@@ -240,7 +242,8 @@ def multiposition(
     Parameters
     ----------
     data : ``ImuData`` (or any object with ``t``, ``accel``, ``gyro`` (N, 3)).
-    orientations : (K, 3) body up vectors or (K, 4) ``q_nb``, one per position in time order.
+    orientations : (K, 3) body up vectors or (K, 4) ``q_nb``, one per position in time order,
+        or an :class:`imunav.sim.Segments` table (its static rows give ``q_nb`` and ``windows``).
     windows : (K, 2) nominal start/stop times of the positions (a hint: the
         static samples inside each window are found from the data); without
         it, exactly K static segments must be detected.
@@ -250,6 +253,10 @@ def multiposition(
     window_s, min_duration_s, trim_s : static detector settings.
     full_scale : (accel, gyro) ranges in raw units; segments touching them are refused.
     """
+    if hasattr(orientations, "kind") and hasattr(orientations, "q_nb"):  # an imunav.sim Segments table
+        st = orientations.select("static")
+        orientations = st.q_nb
+        windows = np.stack([st.t_start, st.t_stop], axis=1) if windows is None else windows
     o = np.asarray(orientations, float)
     g = _gravity(gravity, latitude)
     f_ref = reference_specific_force(o, g)
