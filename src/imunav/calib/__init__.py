@@ -20,6 +20,15 @@ from imunav.calib.static import (
 )
 from imunav.calib.ratetable import combine, ratetable, ratetable_from_means
 from imunav.calib.ferraris import FERRARIS_SECTIONS, ferraris, ferraris_from_session
+from imunav.calib.multipose import multipose
+from imunav.calib.temperature import TemperatureFit, ThermalResult, fit_temperature_curve, thermal_calibration
+from imunav.calib.magnetometer import (
+    MagCalibration,
+    fit_ellipsoid,
+    hard_iron_minmax,
+    soft_iron_rotation_scale,
+    sphere_coverage,
+)
 
 __all__ = [
     "FORMAT_VERSION",
@@ -40,4 +49,14 @@ __all__ = [
     "FERRARIS_SECTIONS",
     "ferraris",
     "ferraris_from_session",
+    "multipose",
+    "TemperatureFit",
+    "ThermalResult",
+    "fit_temperature_curve",
+    "thermal_calibration",
+    "MagCalibration",
+    "fit_ellipsoid",
+    "hard_iron_minmax",
+    "soft_iron_rotation_scale",
+    "sphere_coverage",
 ]

@@ -25,6 +25,8 @@ app = typer.Typer(
 
 # One entry per command module (imunav.cli.<name> with a register(app) function).
 _COMMAND_MODULES: list[str] = [
+    "calibrate",
+    "compensate",
 ]
 
 for _name in _COMMAND_MODULES:
