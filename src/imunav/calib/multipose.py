@@ -60,12 +60,23 @@ def _intervals(mask: NDArray[np.bool_]) -> NDArray[np.int64]:
     return np.stack([np.flatnonzero(d == 1), np.flatnonzero(d == -1)], axis=1)
 
 
-def _accel_fit(means: Array, gravity: float, x0: Array) -> tuple[Any, Array]:
-    def fun(p: Array) -> Array:
+def _accel_fit(means: Array, gravity: float, x0: Array, misalignment: bool = True) -> tuple[Any, Array]:
+    """LM fit of the 9 (or, without misalignment, 6) accelerometer parameters; returns 9-vector solution."""
+    free = np.arange(9) if misalignment else np.arange(3, 9)
+
+    def full(q: Array) -> Array:
+        p = np.zeros(9)
+        p[free] = q
+        return p
+
+    def fun(q: Array) -> Array:
+        p = full(q)
         a = (means + p[6:9]) @ accel_tedaldi_matrix(p).T
         return np.linalg.norm(a, axis=1) - gravity
 
-    sol = least_squares(fun, x0, method="lm", x_scale="jac", max_nfev=2000)
+    sol = least_squares(fun, x0[free], method="lm", x_scale="jac", max_nfev=2000)
+    sol.x_full = full(sol.x)
+    sol.free = free
     return sol, fun(sol.x)
 
 
@@ -97,6 +108,7 @@ def multipose(
     raw_gyro_unit: str = "counts",
     max_misalignment_stderr: float = 0.02,
     strict: bool = True,
+    accel_misalignment: bool = True,
 ) -> CalibrationResult:
     """Tedaldi multi-pose calibration of raw accelerometer + gyro samples.
 
@@ -120,6 +132,9 @@ def multipose(
     strict : refuse such a session (DegenerateGeometryError); with False the
         result is returned and the weak parameters are listed in
         ``info["weak_parameters"]``.
+    accel_misalignment : estimate the 3 accelerometer misalignments (False:
+        fix them at 0 and fit scales and biases only, for sessions whose
+        poses cannot separate them).
 
     Returns
     -------
@@ -162,7 +177,7 @@ def multipose(
         means = np.array([a[s0:s1].mean(0) for s0, s1 in segs])
         s0g = gravity / np.median(np.linalg.norm(means, axis=1)) if accel_scale_guess is None else accel_scale_guess
         x0 = np.array([0, 0, 0, s0g, s0g, s0g, 0, 0, 0], float)
-        sol, r = _accel_fit(means, gravity, x0)
+        sol, r = _accel_fit(means, gravity, x0, accel_misalignment)
         cost = float(np.mean(r**2))
         if best is None or cost < best["cost"]:
             best = {"k": float(k), "segs": segs, "means": means, "sol": sol, "res": r, "cost": cost}
@@ -189,8 +204,11 @@ def multipose(
             "up and down"
         )
     K = len(segs)
-    cov_a, s2_a = _cov(sol, K, 9)
-    pa = sol.x
+    nfree = len(sol.free)
+    cov_free, s2_a = _cov(sol, K, nfree)
+    cov_a = np.zeros((9, 9))
+    cov_a[np.ix_(sol.free, sol.free)] = cov_free
+    pa = sol.x_full
     TaKa = accel_tedaldi_matrix(pa)
 
     # ---------------- gyro: integrate between consecutive poses
@@ -270,8 +288,9 @@ def multipose(
     if weak and strict:
         raise DegenerateGeometryError(
             f"multi-pose calibration: the {K} poses do not determine {', '.join(weak)} (limit "
-            f"{max_misalignment_stderr} rad); add poses tilted between the axes (36-50 poses recommended) "
-            "or pass strict=False to get the estimate anyway"
+            f"{max_misalignment_stderr} rad); add poses tilted between the axes (36-50 poses recommended), "
+            "fit without accelerometer misalignment (accel_misalignment=False) or pass strict=False to get "
+            "the estimate anyway"
         )
     cond = {"accel": float(np.linalg.cond(sol.jac)), "gyro": float(np.linalg.cond(solg.jac))}
     return CalibrationResult(
