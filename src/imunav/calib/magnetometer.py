@@ -195,22 +195,26 @@ def _li_griffiths(h: Array) -> tuple[Array, Array, float]:
     cond = float(sv[0] / sv[-1]) if sv[-1] > 0 else float("inf")
     S = D @ D.T
     S11, S12, S22 = S[:6, :6], S[:6, 6:], S[6:, 6:]
-    k = 4.0
-    C1 = np.zeros((6, 6))
-    C1[:3, :3] = k / 2 - 1
-    np.fill_diagonal(C1[:3, :3], -1.0)
-    C1[3:, 3:] = -k * np.eye(3)
     try:
         S22i_S21 = np.linalg.solve(S22, S12.T)
-        Mred = np.linalg.solve(C1, S11 - S12 @ S22i_S21)
     except np.linalg.LinAlgError:
         raise DegenerateGeometryError("ellipsoid fit: singular scatter matrix; the data do not span 3-D") from None
-    ev, evec = np.linalg.eig(Mred)
-    ev = np.real(ev)
-    evec = np.real(evec)
-    if not np.any(ev > 0):
+    Sred = S11 - S12 @ S22i_S21
+    # k = 4 guarantees an ellipsoid when its shortest axis is at least half the longest;
+    # for more elongated shapes Li & Griffiths lower k towards 3 (the constraint still forces an ellipsoid)
+    u1 = None
+    for k in (4.0, 3.8, 3.6, 3.4, 3.2, 3.1, 3.05, 3.01):
+        C1 = np.zeros((6, 6))
+        C1[:3, :3] = k / 2 - 1
+        np.fill_diagonal(C1[:3, :3], -1.0)
+        C1[3:, 3:] = -k * np.eye(3)
+        ev, evec = np.linalg.eig(np.linalg.solve(C1, Sred))
+        ev, evec = np.real(ev), np.real(evec)
+        if np.any(ev > 0):
+            u1 = evec[:, int(np.argmax(ev))]
+            break
+    if u1 is None:
         raise DegenerateGeometryError("ellipsoid fit: no ellipsoid solution (Li-Griffiths eigenvalue not positive)")
-    u1 = evec[:, int(np.argmax(ev))]
     u2 = -S22i_S21 @ u1
     a, bb, c, f, g, hh = u1
     p, q, r, d = u2
@@ -234,6 +238,14 @@ def _sym(v: Array) -> Array:
     L = np.zeros((3, 3))
     L[_IU] = v
     return L + np.triu(L, 1).T
+
+
+def _raise_coverage(cov: float, min_coverage: float) -> None:
+    raise DegenerateGeometryError(
+        f"magnetometer data cover only {100 * cov:.0f} % of the sphere (minimum {100 * min_coverage:.0f} %): "
+        "partial coverage leaves the ellipsoid undetermined; rotate the sensor through all orientations "
+        "(or lower min_coverage at your own risk)"
+    )
 
 
 def fit_ellipsoid(
@@ -269,6 +281,9 @@ def fit_ellipsoid(
     _check_planar(a, planar_tol)
     c0, M, cond = _li_griffiths(a)
     L0 = _sqrtm_spd(M)  # |L0 (h - c0)| = 1
+    cov0 = sphere_coverage((a - c0) @ L0.T)
+    if cov0 < min_coverage:
+        _raise_coverage(cov0, min_coverage)
     stderr: dict[str, Array] = {}
     b, L = c0, L0
     if refine:
@@ -312,9 +327,5 @@ def fit_ellipsoid(
             stderr["field_norm"] = np.array(np.sqrt(gF @ cov @ gF))
     q = _quality(a, b, A, F, cond)
     if q["coverage"] < min_coverage:
-        raise DegenerateGeometryError(
-            f"magnetometer data cover only {100 * q['coverage']:.0f} % of the sphere (minimum "
-            f"{100 * min_coverage:.0f} %): partial coverage leaves the ellipsoid undetermined; rotate the sensor "
-            "through all orientations (or lower min_coverage at your own risk)"
-        )
+        _raise_coverage(q["coverage"], min_coverage)
     return MagCalibration(b, A, F, "ellipsoid_li_griffiths", stderr, q, {})

@@ -167,6 +167,7 @@ def multipose(
     mv = np.sum(moving_variance(a, nwin) ** 2, axis=1)
     min_len = max(int(round((0.25 if min_static_s is None else min_static_s) * fs)), 2)
     best: dict[str, Any] | None = None
+    poor: float | None = None
     tried = []
     for k in factors:
         segs = _intervals(mv < k * zeta)
@@ -175,12 +176,23 @@ def multipose(
         if len(segs) < min_poses:
             continue
         means = np.array([a[s0:s1].mean(0) for s0, s1 in segs])
+        u = means / np.linalg.norm(means, axis=1)[:, None]
+        cover = float(np.linalg.eigvalsh(u.T @ u / len(u))[0])
+        if cover < 0.02:
+            poor = max(poor, cover) if poor is not None else cover
+            continue
         s0g = gravity / np.median(np.linalg.norm(means, axis=1)) if accel_scale_guess is None else accel_scale_guess
         x0 = np.array([0, 0, 0, s0g, s0g, s0g, 0, 0, 0], float)
         sol, r = _accel_fit(means, gravity, x0, accel_misalignment)
         cost = float(np.mean(r**2))
         if best is None or cost < best["cost"]:
             best = {"k": float(k), "segs": segs, "means": means, "sol": sol, "res": r, "cost": cost}
+    if best is None and poor is not None:
+        raise DegenerateGeometryError(
+            f"multi-pose calibration: the poses do not cover the orientations (smallest eigenvalue of the "
+            f"gravity-direction scatter {poor:.3f} < 0.02, 1/3 for full coverage); add poses with every axis "
+            "up and down"
+        )
     if best is None:
         most = max(n for _, n in tried)
         raise InsufficientDataError(
@@ -195,14 +207,6 @@ def multipose(
                     f"multi-pose calibration: accelerometer saturated in static pose {j} (samples {s0}..{s1}); "
                     "the range is too small for gravity - use a larger range"
                 )
-    u = means / np.linalg.norm(means, axis=1)[:, None]
-    ev = np.linalg.eigvalsh(u.T @ u / len(u))
-    if ev[0] < 0.02:
-        raise DegenerateGeometryError(
-            f"multi-pose calibration: the {len(u)} poses do not cover the orientations (smallest eigenvalue of "
-            f"the gravity-direction scatter {ev[0]:.3f} < 0.02, 1/3 for full coverage); add poses with every axis "
-            "up and down"
-        )
     K = len(segs)
     nfree = len(sol.free)
     cov_free, s2_a = _cov(sol, K, nfree)
