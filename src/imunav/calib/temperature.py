@@ -170,7 +170,7 @@ def fit_temperature_curve(
     cc = float((t.max() + t.min()) / 2) if center_c is None else float(center_c)
     sc = float((t.max() - t.min()) / 2) if scale_c is None else float(scale_c)
     if sc <= 0:
-        raise InsufficientDataError("all calibration temperatures are equal; a temperature model needs a range")
+        raise InvalidInputError(f"scale_c must be positive, got {sc}")
     fits = []
     for o in orders:
         sc_ = None
