@@ -80,8 +80,9 @@ OMEGA_E: Final[float] = 7.292115e-5
 #: Normal gravity at the equator and at the poles, m/s^2 (TR8350.2 Table 3.4).
 GAMMA_E: Final[float] = 9.7803253359
 GAMMA_P: Final[float] = 9.8321849379
-#: Somigliana's constant k = b*gamma_p / (a*gamma_e) - 1.
-_K_SOMIGLIANA: Final[float] = B * GAMMA_P / (A * GAMMA_E) - 1.0
+#: Somigliana's constant k = b*gamma_p / (a*gamma_e) - 1 as published in
+#: TR8350.2 Table 3.4 (computing it from the rounded gamma values differs by 4e-12).
+_K_SOMIGLIANA: Final[float] = 0.00193185265241
 #: m = omega^2 a^2 b / GM (TR8350.2 eq. 4-3).
 _M: Final[float] = OMEGA_E**2 * A**2 * B / GM
 # extended-precision copies for the ECEF conversions

@@ -65,6 +65,9 @@ for _g, _prefixes in _PREFIXES.items():
         _CHANNEL_ALIASES[f"{_g}{_ax}"] = {f"{p}{_ax}" for p in _prefixes}
 
 _SNIFF = (",", ";", "\t", "|")
+# pandas < 3 parses floats fast but inexactly unless asked for round-trip
+# precision; pandas 3 is exact by default and deprecates the option.
+_PRECISION = {"float_precision": "round_trip"} if int(pd.__version__.split(".")[0]) < 3 else {}
 
 
 def _norm(name: str) -> str:
@@ -272,7 +275,7 @@ def read_csv(
             sep=r"\s+" if sep is None else sep,
             skiprows=n_skip,
             header=0 if has_header else None,
-            float_precision="round_trip",
+            **_PRECISION,
             skip_blank_lines=True,
             skipinitialspace=True,
             engine="c",

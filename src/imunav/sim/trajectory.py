@@ -21,13 +21,14 @@ Builders: :func:`trajectory_from_attitude` (sampled attitude),
 from __future__ import annotations
 
 from dataclasses import dataclass, fields
-from typing import Any, Callable
+from typing import Callable
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from imunav import earth
 from imunav.errors import InvalidInputError, NonFiniteError, ShapeError, TimeOrderError
+from imunav.timeseries import ImuData
 from imunav.rotation import (
     dcm_from_quat,
     quat_conjugate,
@@ -48,40 +49,6 @@ __all__ = [
 ]
 
 Array = NDArray[np.float64]
-
-try:  # the recordings branch provides the real class
-    from imunav.timeseries import ImuData
-except ImportError:  # pragma: no cover - until imunav.timeseries lands
-
-    @dataclass(frozen=True)
-    class ImuData:  # type: ignore[no-redef]
-        """Minimal stand-in for :class:`imunav.timeseries.ImuData`."""
-
-        t: Array
-        gyro: Array
-        accel: Array
-        mag: Array | None = None
-        temp: Array | None = None
-        mag_unit: str = "uT"
-        meta: dict | None = None
-
-        @property
-        def n(self) -> int:
-            return int(self.t.shape[0])
-
-        @property
-        def fs(self) -> float:
-            return float(1.0 / np.median(np.diff(self.t)))
-
-        @property
-        def duration(self) -> float:
-            return float(self.t[-1] - self.t[0])
-
-        def with_(self, **changes: Any) -> "ImuData":
-            from dataclasses import replace
-
-            return replace(self, **changes)
-
 
 def _vec(x: ArrayLike | None, n: int, name: str) -> Array | None:
     if x is None:
