@@ -34,6 +34,7 @@ class LinearFit:
     sigma: Array  # (m,) residual standard deviation per output
     cond: float  # condition number of the column-scaled design
     dof: int
+    rho: Array | None = None  # lag-1 residual autocorrelation used (serial fits)
 
 
 def design_condition(X: Array) -> float:
@@ -48,8 +49,23 @@ def design_condition(X: Array) -> float:
     return float(s[0] / s[-1]) if s[-1] > 0 else float("inf")
 
 
-def linear_fit(X: Array, Y: Array, *, what: str, max_cond: float = 1e8) -> LinearFit:
+def linear_fit(
+    X: Array, Y: Array, *, what: str, max_cond: float = 1e8, serial: bool = False, covs: list[Array] | None = None
+) -> LinearFit:
     """Least-squares fit of ``Y ≈ X Θ`` with residual-based covariance.
+
+    ``serial=True`` (rows in time order) accounts for the correlation that a
+    slowly drifting bias leaves between consecutive positions: the lag-1
+    autocorrelation ρ of the OLS residuals is estimated per output and, when
+    positive, the fit is repeated as feasible GLS with an AR(1) error model
+    (Prais & Winsten 1954: ``y*_1 = √(1−ρ²) y_1``, ``y*_k = y_k − ρ y_{k−1}``,
+    same for ``X``); its covariance ``s*² (X*ᵀX*)⁻¹`` then includes the
+    correlation instead of treating the positions as independent.
+
+    ``covs`` (one (K, K) matrix per output, e.g. from a characterised noise
+    model, see ``_noisecov``) gives generalised least squares with that error
+    covariance: ``cov(θ) = (XᵀΣ⁻¹X)⁻¹ · max(1, χ²/dof)`` (never smaller than
+    the model says, inflated when the residuals scatter more).
 
     Raises
     ------
@@ -80,5 +96,36 @@ def linear_fit(X: Array, Y: Array, *, what: str, max_cond: float = 1e8) -> Linea
     s2 = np.sum(res**2, axis=0) / dof
     xtx_inv = np.linalg.inv(X.T @ X)
     cov = s2[:, None, None] * xtx_inv[None]
+    rho = np.zeros(Y.shape[1])
+    if covs is not None:
+        for j in range(Y.shape[1]):
+            Lc = np.linalg.cholesky(covs[j])
+            Xw = np.linalg.solve(Lc, X)
+            yw = np.linalg.solve(Lc, Y[:, j])
+            th, *_ = np.linalg.lstsq(Xw, yw, rcond=None)
+            rw = yw - Xw @ th
+            theta[:, j] = th
+            res[:, j] = Y[:, j] - X @ th
+            chi2 = float(rw @ rw) / dof
+            cov[j] = np.linalg.inv(Xw.T @ Xw) * max(1.0, chi2)
+            s2[j] = float(res[:, j] @ res[:, j]) / dof
+        serial = False
+    if serial and k >= 3 * p + 10:
+        for j in range(Y.shape[1]):
+            r = res[:, j]
+            den = float(r @ r)
+            rj = float(r[1:] @ r[:-1]) / den if den > 0 else 0.0
+            rj = min(max(rj, 0.0), 0.95)
+            if rj <= 0.0:
+                continue
+            rho[j] = rj
+            Xs = np.vstack([np.sqrt(1 - rj**2) * X[:1], X[1:] - rj * X[:-1]])
+            ys = np.concatenate([np.sqrt(1 - rj**2) * Y[:1, j], Y[1:, j] - rj * Y[:-1, j]])
+            th, *_ = np.linalg.lstsq(Xs, ys, rcond=None)
+            rs = ys - Xs @ th
+            theta[:, j] = th
+            res[:, j] = Y[:, j] - X @ th
+            s2[j] = float(rs @ rs) / dof
+            cov[j] = s2[j] * np.linalg.inv(Xs.T @ Xs)
     stderr = np.sqrt(np.einsum("mii->im", cov))
-    return LinearFit(theta, stderr, cov, res, np.sqrt(s2), cond, dof)
+    return LinearFit(theta, stderr, cov, res, np.sqrt(s2), cond, dof, rho)

@@ -19,16 +19,9 @@ Array = NDArray[np.float64]
 
 def moving_variance(x: Array, n: int) -> Array:
     """Centred moving variance of each column over ``n`` samples (edges use shorter windows)."""
-    x = np.asarray(x, dtype=float)
-    N = x.shape[0]
-    c1 = np.vstack([np.zeros((1, x.shape[1])), np.cumsum(x - x.mean(0), axis=0)])
-    c2 = np.vstack([np.zeros((1, x.shape[1])), np.cumsum((x - x.mean(0)) ** 2, axis=0)])
-    h = n // 2
-    i0 = np.clip(np.arange(N) - h, 0, N)
-    i1 = np.clip(np.arange(N) - h + n, 0, N)
-    cnt = (i1 - i0)[:, None].astype(float)
-    m = (c1[i1] - c1[i0]) / cnt
-    return np.maximum((c2[i1] - c2[i0]) / cnt - m**2, 0.0)
+    from imunav.calib._kernels import moving_variance_kernel
+
+    return moving_variance_kernel(np.ascontiguousarray(x, dtype=float), int(n))
 
 
 def steady_segments(

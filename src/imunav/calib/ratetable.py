@@ -43,6 +43,8 @@ def ratetable_from_means(
     latitude: float | None = None,
     up: ArrayLike | None = None,
     segments: Array | None = None,
+    serial: bool = True,
+    gyro_covs: list[Array] | None = None,
 ) -> CalibrationResult:
     """Least-squares gyro matrix from per-step means.
 
@@ -76,7 +78,7 @@ def ratetable_from_means(
         u = np.asarray(up, float)
         Wt = Wt + OMEGA_E * np.sin(latitude) * u / np.linalg.norm(u, axis=1)[:, None]
     X = np.hstack([Wt, np.ones((K, 1))]) if intercept else Wt
-    fit = linear_fit(X, Y, what="rate-table fit")
+    fit = linear_fit(X, Y, what="rate-table fit", serial=serial, covs=gyro_covs)
     T = fit.theta[:3].T
     stderr = dict(base.stderr)
     stderr["gyro_matrix"] = fit.stderr[:3].T
@@ -105,6 +107,8 @@ def ratetable(
     trim_s: float = 0.5,
     full_scale: float | None = None,
     fs: float | None = None,
+    serial: bool = True,
+    noise_model: Any = None,
 ) -> CalibrationResult:
     """Rate-table calibration of a recording (e.g. the thesis 120-step test).
 
@@ -112,7 +116,8 @@ def ratetable(
     or an :class:`imunav.sim.Segments` table (its rate rows give rates, up and windows);
     ``up`` (K, 3): body up vector during each step (gives ``f = g u``);
     ``windows`` (K, 2): nominal step times (a hint; the constant-rate samples
-    inside are found from the data).
+    inside are found from the data).  ``noise_model``: characterised gyro
+    noise for generalised least squares (see :func:`imunav.calib.multiposition`).
     """
     if hasattr(rates, "kind") and hasattr(rates, "axis_b"):  # an imunav.sim Segments table
         st = rates.select("rate")
@@ -141,7 +146,17 @@ def ratetable(
     gm, _, _ = segment_means(gyro, segs)
     g = _gravity(gravity, latitude)
     f = g * u / np.linalg.norm(u, axis=1)[:, None]
-    return ratetable_from_means(W, gm, f, base=base, intercept=intercept, latitude=latitude, up=u, segments=segs)
+    gc = None
+    if noise_model is not None:
+        from imunav.calib._noisecov import segment_mean_covariances
+
+        gc = segment_mean_covariances(
+            noise_model.gyro, t[segs[:, 0]], t[segs[:, 1] - 1] + 1.0 / fs_, segs[:, 1] - segs[:, 0], fs_
+        )
+    return ratetable_from_means(
+        W, gm, f, base=base, intercept=intercept, latitude=latitude, up=u, segments=segs, serial=serial,
+        gyro_covs=gc,
+    )
 
 
 def combine(static: CalibrationResult, rate: CalibrationResult) -> CalibrationResult:
@@ -158,9 +173,11 @@ def combine(static: CalibrationResult, rate: CalibrationResult) -> CalibrationRe
     inputs = static.info.get("_gyro_static_inputs")
     scal = static.calibration
     if inputs is not None and inputs[2] is not None:
-        f, Gm, er, mode = inputs
+        f, Gm, er, mode, serial, covs = inputs
         Tg = rate.calibration.gyro_matrix
-        gb, G, segb, seG, gres, _ = fit_gyro_static(f, Gm, g_sensitivity=mode, earth_rate_b=er @ Tg.T)
+        gb, G, segb, seG, gres, _ = fit_gyro_static(
+            f, Gm, g_sensitivity=mode, earth_rate_b=er @ Tg.T, serial=serial, covs=covs
+        )
         scal = scal.with_(gyro_bias=gb, g_sensitivity=G)
         stderr.update(gyro_bias=segb, g_sensitivity=seG)
         residuals["gyro_static"] = gres

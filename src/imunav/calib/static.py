@@ -98,11 +98,13 @@ def earth_rate_body(orientations: ArrayLike, latitude: float | None) -> Array | 
     return OMEGA_E * np.sin(latitude) * u
 
 
-def fit_accel_positions(f_ref: Array, accel_means: Array) -> tuple[Array, Array, Array, Array, Any]:
+def fit_accel_positions(
+    f_ref: Array, accel_means: Array, serial: bool = True, covs: list[Array] | None = None
+) -> tuple[Array, Array, Array, Array, Any]:
     """LS of ``ã = T f + b`` (eq. 18).  Returns T, b, their stderr and the fit."""
     K = f_ref.shape[0]
     X = np.hstack([f_ref, np.ones((K, 1))])
-    fit = linear_fit(X, accel_means, what="accelerometer multi-position fit")
+    fit = linear_fit(X, accel_means, what="accelerometer multi-position fit", serial=serial, covs=covs)
     T = fit.theta[:3].T
     b = fit.theta[3]
     return T, b, fit.stderr[:3].T, fit.stderr[3], fit
@@ -114,6 +116,8 @@ def fit_gyro_static(
     *,
     g_sensitivity: str = "diagonal",
     earth_rate_b: Array | None = None,
+    serial: bool = True,
+    covs: list[Array] | None = None,
 ) -> tuple[Array, Array, Array, Array, Array, float]:
     """Static gyro fit (eq. 19): bias and g-sensitivity.
 
@@ -128,22 +132,22 @@ def fit_gyro_static(
     res = np.zeros_like(y)
     cond = 1.0
     if g_sensitivity == "none":
-        if K < 2:
-            raise InsufficientDataError("static gyro fit needs at least 2 positions")
-        b = y.mean(0)
-        res = y - b
-        seb = res.std(0, ddof=1) / np.sqrt(K)
+        fit = linear_fit(np.ones((K, 1)), y, what="gyro static fit (bias only)", serial=serial, covs=covs)
+        b, seb, res = fit.theta[0], fit.stderr[0], fit.residuals
     elif g_sensitivity == "diagonal":
         for i in range(3):
             X = np.stack([f_ref[:, i], np.ones(K)], axis=1)
-            fit = linear_fit(X, y[:, i], what=f"gyro static fit, axis {'xyz'[i]}")
+            fit = linear_fit(
+                X, y[:, i], what=f"gyro static fit, axis {'xyz'[i]}", serial=serial,
+                covs=None if covs is None else [covs[i]],
+            )
             G[i, i], b[i] = fit.theta[:, 0]
             seG[i, i], seb[i] = fit.stderr[:, 0]
             res[:, i] = fit.residuals[:, 0]
             cond = max(cond, fit.cond)
     elif g_sensitivity == "full":
         X = np.hstack([f_ref, np.ones((K, 1))])
-        fit = linear_fit(X, y, what="gyro static fit (full g-sensitivity)")
+        fit = linear_fit(X, y, what="gyro static fit (full g-sensitivity)", serial=serial, covs=covs)
         G, b, seG, seb, res, cond = fit.theta[:3].T, fit.theta[3], fit.stderr[:3].T, fit.stderr[3], fit.residuals, fit.cond
     else:
         raise InvalidInputError(f"g_sensitivity must be 'diagonal', 'full' or 'none', not {g_sensitivity!r}")
@@ -158,33 +162,48 @@ def multiposition_from_means(
     earth_rate_b: ArrayLike | None = None,
     g_sensitivity: str = "diagonal",
     segments: Array | None = None,
+    serial: bool = True,
+    accel_covs: list[Array] | None = None,
+    gyro_covs: list[Array] | None = None,
 ) -> CalibrationResult:
     """Multi-position least squares on per-position means (any K ≥ 5 positions).
 
     The gyro matrix stays identity (a static test cannot excite it); combine
     with :func:`imunav.calib.ratetable.ratetable` for the full model.
+    ``serial=True`` treats the positions as a time sequence and allows for the
+    correlation a drifting bias leaves between neighbours (AR(1) feasible GLS,
+    see ``_lsq.linear_fit``); use False for positions recorded independently.
+    ``accel_covs`` / ``gyro_covs``: per-axis (K, K) covariance of the position
+    means from a characterised noise model (white noise + Gauss-Markov drift):
+    generalised least squares with exact standard errors (see ``multiposition``).
     """
     f = np.asarray(f_ref, float)
     A = np.asarray(accel_means, float)
     if f.shape != A.shape or f.ndim != 2 or f.shape[1] != 3:
         raise ShapeError(f"f_ref {f.shape} and accel_means {A.shape} must both be (K, 3)")
-    T, b, seT, seb, fit = fit_accel_positions(f, A)
+    T, b, seT, seb, fit = fit_accel_positions(f, A, serial, accel_covs)
     stderr: dict[str, Array] = {"accel_matrix": seT, "accel_bias": seb}
     residuals = {"accel": fit.residuals}
     cond = {"accel": fit.cond}
-    info: dict[str, Any] = {"n_positions": int(f.shape[0]), "accel_residual_sigma": fit.sigma.tolist()}
+    info: dict[str, Any] = {
+        "n_positions": int(f.shape[0]),
+        "accel_residual_sigma": fit.sigma.tolist(),
+        "accel_residual_rho": None if fit.rho is None else fit.rho.tolist(),
+    }
     gb, G = np.zeros(3), np.zeros((3, 3))
     if gyro_means is not None:
         Gm = np.asarray(gyro_means, float)
         if Gm.shape != f.shape:
             raise ShapeError(f"gyro_means {Gm.shape} must match f_ref {f.shape}")
         er = None if earth_rate_b is None else np.asarray(earth_rate_b, float)
-        gb, G, segb, seG, gres, gcond = fit_gyro_static(f, Gm, g_sensitivity=g_sensitivity, earth_rate_b=er)
+        gb, G, segb, seG, gres, gcond = fit_gyro_static(
+            f, Gm, g_sensitivity=g_sensitivity, earth_rate_b=er, serial=serial, covs=gyro_covs
+        )
         stderr.update(gyro_bias=segb, g_sensitivity=seG)
         residuals["gyro_static"] = gres
         cond["gyro_static"] = gcond
         # kept for combine(): the Earth rate is seen through T_g, known only after the rate table
-        info["_gyro_static_inputs"] = (f, Gm, er, g_sensitivity)
+        info["_gyro_static_inputs"] = (f, Gm, er, g_sensitivity, serial, gyro_covs)
     cal = ImuCalibration(
         accel_bias=b, accel_matrix=T, gyro_bias=gb, g_sensitivity=G, stderr=stderr,
         meta={"method": "multiposition", "n_positions": int(f.shape[0])},
@@ -196,7 +215,7 @@ def multiposition_from_means(
 def _static_means(
     data: Any, orientations: Array, windows: ArrayLike | None, *, window_s: float, min_duration_s: float,
     trim_s: float, full_scale: tuple[float | None, float | None], fs: float | None,
-) -> tuple[Array, Array, NDArray[np.int64], Array]:
+) -> tuple[Array, Array, NDArray[np.int64], Array, float]:
     accel = np.asarray(data.accel, float)
     gyro = np.asarray(data.gyro, float)
     t, fs_ = as_time(getattr(data, "t", None), accel.shape[0], fs)
@@ -220,7 +239,7 @@ def _static_means(
     check_saturation(gyro, full_scale[1], segs, what="gyroscope")
     am, _, _ = segment_means(accel, segs)
     gm, _, _ = segment_means(gyro, segs)
-    return am, gm, segs, t
+    return am, gm, segs, t, fs_
 
 
 def multiposition(
@@ -236,6 +255,8 @@ def multiposition(
     trim_s: float = 0.5,
     full_scale: tuple[float | None, float | None] = (None, None),
     fs: float | None = None,
+    serial: bool = True,
+    noise_model: Any = None,
 ) -> CalibrationResult:
     """Multi-position static calibration of a recording (e.g. the 100-position test).
 
@@ -252,6 +273,13 @@ def multiposition(
     g_sensitivity : ``"diagonal"`` (thesis), ``"full"`` or ``"none"``.
     window_s, min_duration_s, trim_s : static detector settings.
     full_scale : (accel, gyro) ranges in raw units; segments touching them are refused.
+    serial : allow for correlation between consecutive positions (AR(1) GLS).
+    noise_model : characterised noise (e.g. an :class:`imunav.sim.ImuErrorModel`
+        or any object with ``accel`` / ``gyro`` carrying ``noise_density`` and
+        ``bias_instability``, as found by Allan analysis): the exact covariance
+        of the position means (white noise + Gauss-Markov drift across the
+        session's timing) is used for generalised least squares, so standard
+        errors account for the time-correlated bias.
     """
     if hasattr(orientations, "kind") and hasattr(orientations, "q_nb"):  # an imunav.sim Segments table
         st = orientations.select("static")
@@ -260,12 +288,20 @@ def multiposition(
     o = np.asarray(orientations, float)
     g = _gravity(gravity, latitude)
     f_ref = reference_specific_force(o, g)
-    am, gm, segs, _ = _static_means(
+    am, gm, segs, t, fs_ = _static_means(
         data, o, windows, window_s=window_s, min_duration_s=min_duration_s, trim_s=trim_s,
         full_scale=full_scale, fs=fs,
     )
+    ac = gc = None
+    if noise_model is not None:
+        from imunav.calib._noisecov import segment_mean_covariances
+
+        t0, t1, n = t[segs[:, 0]], t[segs[:, 1] - 1] + 1.0 / fs_, segs[:, 1] - segs[:, 0]
+        ac = segment_mean_covariances(noise_model.accel, t0, t1, n, fs_)
+        gc = segment_mean_covariances(noise_model.gyro, t0, t1, n, fs_)
     res = multiposition_from_means(
-        f_ref, am, gm, earth_rate_b=earth_rate_body(o, latitude), g_sensitivity=g_sensitivity, segments=segs
+        f_ref, am, gm, earth_rate_b=earth_rate_body(o, latitude), g_sensitivity=g_sensitivity, segments=segs,
+        serial=serial, accel_covs=ac, gyro_covs=gc,
     )
     res.info["gravity"] = g
     return res
