@@ -28,6 +28,8 @@ _COMMAND_MODULES: list[str] = [
     "info",
     "simulate",
     "lab",
+    "calibrate",
+    "compensate",
 ]
 
 for _name in _COMMAND_MODULES:
