@@ -338,15 +338,29 @@ N_PARAMS = 19
 
 
 @njit(cache=True)
-def _ekf_update(P, x_corr, H, r, nu):
-    """Scalar-row sequential update with Joseph form; returns NIS term."""
-    # H (6,), r scalar variance, nu scalar innovation
-    PH = P @ H
-    s = H @ PH + r
-    K = PH / s
-    x_corr += K * nu
-    IKH = np.eye(6) - np.outer(K, H)
-    P[:, :] = IKH @ P @ IKH.T + r * np.outer(K, K)
+def _ekf_update(P, dx, H, r, nu, PH):
+    """Scalar measurement update of the 6-state error (in place).
+
+    s = H P Hᵀ + r, K = P Hᵀ / s, dx += K (ν − H dx), P −= K s Kᵀ (the
+    symmetric form of (I − K H) P for a scalar update; P stays symmetric).
+    Returns the NIS term ν'² / s.
+    """
+    for i in range(6):
+        acc = 0.0
+        for j in range(6):
+            acc += P[i, j] * H[j]
+        PH[i] = acc
+    s = r
+    hdx = 0.0
+    for i in range(6):
+        s += H[i] * PH[i]
+        hdx += H[i] * dx[i]
+    nu = nu - hdx
+    for i in range(6):
+        dx[i] += PH[i] * nu / s
+    for i in range(6):
+        for j in range(6):
+            P[i, j] -= PH[i] * PH[j] / s
     return nu * nu / s
 
 
@@ -358,55 +372,108 @@ def _apply_correction(q, b, dx):
 
 
 @njit(cache=True)
+def _mekf_predict(P, R, dt, sg2, sb2):
+    """P ← Φ P Φᵀ + Q with Φ = [[R, −dt I], [0, I]] (block form, in place)."""
+    A = P[0:3, 0:3].copy()
+    B = P[0:3, 3:6].copy()
+    C = P[3:6, 3:6].copy()
+    RB = R @ B
+    An = R @ A @ R.T
+    for i in range(3):
+        for j in range(3):
+            An[i, j] += -dt * (RB[i, j] + RB[j, i]) + dt * dt * C[i, j]
+        An[i, i] += sg2
+    Bn = RB - dt * C
+    for i in range(3):
+        for j in range(3):
+            P[i, j] = An[i, j]
+            P[i, 3 + j] = Bn[i, j]
+            P[3 + j, i] = Bn[i, j]
+        P[3 + i, 3 + i] += sb2
+
+
+@njit(cache=True)
 def mekf_step(q, b, P, st, gyr, acc, mag, dt, p, out_phi):
     """One MEKF step.  ``st`` (float64 array, len 12) is the adaptive state:
     [0] rest timer, [1] mag ref norm, [2] mag ref dip, [3] disturbed timer,
-    [4] ref valid flag, [5:8] low-passed nav specific force, [8] flags bits,
-    [9] NIS sum, [10] NIS dof.
+    [4] ref valid flag, [8] flag bits, [9] NIS sum, [10] NIS dof.
     Returns (q, b).  ``out_phi`` receives the 6x6 transition matrix.
     """
     g = p[13]
     use_mag = p[17] > 0.5
     # ---- predict
     w = gyr - b
-    phi = np.eye(6)
     R = _rodrigues(-w * dt)  # δθ_k+1 = exp(-[ω]dt) δθ_k - dt δb
-    phi[0:3, 0:3] = R
     for i in range(3):
-        phi[i, 3 + i] = -dt
+        for j in range(3):
+            out_phi[i, j] = R[i, j]
+            out_phi[i, 3 + j] = -dt if i == j else 0.0
+            out_phi[3 + i, j] = 0.0
+            out_phi[3 + i, 3 + j] = 1.0 if i == j else 0.0
     q = _qnorm(qmul_1(q, qexp_1(w * dt)))
-    Q = np.zeros((6, 6))
-    sg2 = p[0] * p[0] * dt
-    sb2 = p[1] * p[1] * dt
-    for i in range(3):
-        Q[i, i] = sg2
-        Q[3 + i, 3 + i] = sb2
-    P[:, :] = phi @ P @ phi.T + Q
-    out_phi[:, :] = phi
+    _mekf_predict(P, R, dt, p[0] * p[0] * dt, p[1] * p[1] * dt)
     flags = 0
     dx = np.zeros(6)
+    H = np.zeros(6)
+    PH = np.zeros(6)
     nis = 0.0
     ndof = 0.0
     # ---- accelerometer (direction only)
     an = _norm3(acc)
     dev = abs(an - g) / g
-    # rest detection (bias estimation at rest)
-    if p[9] > 0.0 and _norm3(w) < p[9] and abs(an - g) < p[10]:
+    wn = _norm3(w)
+    if p[9] > 0.0 and wn < p[9] and abs(an - g) < p[10]:
         st[0] += dt
     else:
         st[0] = 0.0
+    am = acc
+    if p[18] > 0.0:
+        # low-pass of the specific force in the nav frame (the past samples are
+        # rotated with every correction below, so this is the low-pass in the
+        # gyro-integrated frame; translational accelerations average out
+        # because velocity stays bounded; cf. Laidig & Seel 2023, §4.1)
+        fn = qrot_1(q, acc)
+        if st[11] < 0.5:
+            st[5] = fn[0]
+            st[6] = fn[1]
+            st[7] = fn[2]
+            st[11] = 1.0
+        c = 1.0 - math.exp(-dt / p[18])
+        st[5] += c * (fn[0] - st[5])
+        st[6] += c * (fn[1] - st[6])
+        st[7] += c * (fn[2] - st[7])
+        lp = np.empty(3)
+        lp[0] = st[5]
+        lp[1] = st[6]
+        lp[2] = st[7]
+        am = _qrot_inv(q, lp)
+        an = _norm3(am)
+        dev = abs(an - g) / g
+    q_before = q.copy()
     if an > 0.0 and dev < p[4]:
-        a = acc / an
-        dg = np.zeros(3)
-        dg[2] = -1.0
-        h = _qrot_inv(q, dg)
-        r = p[2] * p[2] * (1.0 + p[3] * (dev / 0.01) ** 2) + (p[15] * _norm3(w)) ** 2
-        # H = [h]x for the body error (h(q̂⊗exp δθ) ≈ ĥ + [ĥ]x δθ)
-        S = _skew(h)
+        # predicted up-direction in body axes: h = q* (0,0,-1) q = -(C_nb row 3)
+        w0, x0, y0, z0 = q[0], q[1], q[2], q[3]
+        h0 = -2.0 * (x0 * z0 - w0 * y0)
+        h1 = -2.0 * (y0 * z0 + w0 * x0)
+        h2 = -(1.0 - 2.0 * (x0 * x0 + y0 * y0))
+        r = p[2] * p[2] * (1.0 + p[3] * (dev / 0.01) ** 2) + (p[15] * wn) ** 2
+        # H = [h]x rows for the body error (h(q̂⊗exp δθ) ≈ ĥ + [ĥ]x δθ)
         for i in range(3):
-            H = np.zeros(6)
-            H[0:3] = S[i]
-            nis += _ekf_update(P, dx, H, r, a[i] - h[i] - H @ dx)
+            for j in range(6):
+                H[j] = 0.0
+            if i == 0:
+                H[1] = -h2
+                H[2] = h1
+                nu = am[0] / an - h0
+            elif i == 1:
+                H[0] = h2
+                H[2] = -h0
+                nu = am[1] / an - h1
+            else:
+                H[0] = -h1
+                H[1] = h0
+                nu = am[2] / an - h2
+            nis += _ekf_update(P, dx, H, r, nu, PH)
             ndof += 1.0
     else:
         flags |= 1
@@ -415,9 +482,10 @@ def mekf_step(q, b, P, st, gyr, acc, mag, dt, p, out_phi):
         flags |= 4
         r = p[12] * p[12]
         for i in range(3):
-            H = np.zeros(6)
+            for j in range(6):
+                H[j] = 0.0
             H[3 + i] = 1.0
-            nis += _ekf_update(P, dx, H, r, gyr[i] - b[i] - dx[3 + i])
+            nis += _ekf_update(P, dx, H, r, gyr[i] - b[i], PH)
             ndof += 1.0
     # apply the tilt / bias correction before the heading update
     q, b = _apply_correction(q, b, dx)
@@ -450,15 +518,30 @@ def mekf_step(q, b, P, st, gyr, acc, mag, dt, p, out_phi):
                     st[2] += c * (dip - st[2])
             if not disturbed and hh > 1e-9 * mn:
                 psi = math.atan2(hn[1], hn[0])
-                C = _dcm(q)
-                H = np.zeros(6)
-                # measured field yaw ≈ -(C δθ)_z  (nav yaw error of the estimate)
-                H[0:3] = -C[2, :]
+                w0, x0, y0, z0 = q[0], q[1], q[2], q[3]
+                # measured field yaw ≈ −(C δθ)_z  (nav yaw error of the estimate)
+                H[0] = -2.0 * (x0 * z0 - w0 * y0)
+                H[1] = -2.0 * (y0 * z0 + w0 * x0)
+                H[2] = -(1.0 - 2.0 * (x0 * x0 + y0 * y0))
+                H[3] = 0.0
+                H[4] = 0.0
+                H[5] = 0.0
                 r = (p[5] * mn / hh) ** 2 * (1.0 + p[8] * ((dn / p[6]) ** 2 + (dd / p[7]) ** 2))
                 dx2 = np.zeros(6)
-                nis += _ekf_update(P, dx2, H, r, psi)
+                nis += _ekf_update(P, dx2, H, r, psi, PH)
                 ndof += 1.0
                 q, b = _apply_correction(q, b, dx2)
+    if p[18] > 0.0:
+        # rotate the low-passed nav-frame vector with the total correction
+        dq = qmul_1(q, _qconj(q_before))
+        lp = np.empty(3)
+        lp[0] = st[5]
+        lp[1] = st[6]
+        lp[2] = st[7]
+        lp = qrot_1(dq, lp)
+        st[5] = lp[0]
+        st[6] = lp[1]
+        st[7] = lp[2]
     st[8] = flags
     st[9] = nis
     st[10] = ndof
