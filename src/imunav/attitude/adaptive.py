@@ -25,13 +25,13 @@ from imunav.attitude.mekf import MEKF, MekfParams
 __all__ = ["AdaptiveMEKF", "ADAPTIVE_DEFAULTS"]
 
 ADAPTIVE_DEFAULTS = MekfParams(
-    sigma_gyro=0.005,
+    sigma_gyro=0.003,
     sigma_bias=2e-5,
-    sigma_acc=0.1,
+    sigma_acc=0.15,
     k_acc=0.0,
     acc_reject=1e9,
     acc_lpf_tau=3.0,
-    sigma_mag=0.2,
+    sigma_mag=0.3,
     mag_norm_tol=0.1,
     mag_dip_tol=0.07,
     k_mag=0.0,

@@ -25,6 +25,7 @@ app = typer.Typer(
 
 # One entry per command module (imunav.cli.<name> with a register(app) function).
 _COMMAND_MODULES: list[str] = [
+    "attitude",
 ]
 
 for _name in _COMMAND_MODULES:
