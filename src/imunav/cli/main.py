@@ -30,6 +30,7 @@ _COMMAND_MODULES: list[str] = [
     "lab",
     "calibrate",
     "compensate",
+    "attitude",
 ]
 
 for _name in _COMMAND_MODULES:
