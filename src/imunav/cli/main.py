@@ -31,6 +31,7 @@ _COMMAND_MODULES: list[str] = [
     "calibrate",
     "compensate",
     "attitude",
+    "zupt",
 ]
 
 for _name in _COMMAND_MODULES:
