@@ -3,6 +3,7 @@
 import json
 
 import numpy as np
+import pytest
 from typer.testing import CliRunner
 
 from imunav.cli.main import app
@@ -48,3 +49,25 @@ def test_cli_bad_inputs(tmp_path):
     assert res.exit_code == 2 and "within 0..2" in res.output
     res = runner.invoke(app, ["airdata", "simulate", "cruise", "--wind", "1,2", "--out", str(tmp_path / "x.npz")])
     assert res.exit_code == 2 and "three comma-separated" in res.output
+
+
+def test_toml_config(tmp_path):
+    from imunav.airdata.scenario import ThesisScenario, load_config
+    from imunav.errors import ConfigError
+    from imunav.sim.flight import FlightConfig
+
+    root = __import__("pathlib").Path(__file__).resolve().parents[2]
+    fc = load_config(root / "examples" / "airdata_flight.toml")
+    assert isinstance(fc, FlightConfig) and fc.over_water == ((100.0, 200.0),) and fc.doppler.scale == 0.002
+    tc = load_config(root / "examples" / "airdata_thesis_bias.toml")
+    assert isinstance(tc, ThesisScenario) and tc.channels == (0,) and tc.kind == "bias"
+    bad = tmp_path / "bad.toml"
+    bad.write_text("[thesis]\nkind = 'bias'\nbias_mps = 3\n")
+    with pytest.raises(ConfigError, match=r"unknown key\(s\) \['bias_mps'\]"):
+        load_config(bad)
+    bad.write_text("[thesis]\nkind = 'icing'\n")
+    with pytest.raises(ConfigError, match="kind must be one of"):
+        load_config(bad)
+    bad.write_text("[other]\n")
+    with pytest.raises(ConfigError, match="exactly one"):
+        load_config(bad)

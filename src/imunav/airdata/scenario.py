@@ -53,6 +53,7 @@ __all__ = [
     "ThesisMonteCarlo",
     "monte_carlo_thesis",
     "thesis_report",
+    "load_config",
 ]
 
 Array = NDArray[np.float64]
@@ -407,3 +408,53 @@ def thesis_report(n_runs: int = 200, rng: int = 0, **kw) -> dict:
                         "thesis_detection_step": {"variance": {"alg1": 152, "alg2": 160, "alg3": 153},
                                                   "bias": {"alg3": 152}}[kind]}
     return {"covariance_sequence": cov, "monte_carlo": mc.to_dict(), "single_run_detection": single}
+
+
+def load_config(path) -> "ThesisScenario | object":
+    """Read a TOML scenario: a ``[thesis]`` table → :class:`ThesisScenario`, a ``[flight]`` table →
+    :class:`imunav.sim.flight.FlightConfig` (tuples given as arrays; ``doppler`` as a sub-table of
+    :class:`~imunav.airdata.doppler.DopplerErrors` fields).  Unknown keys raise :class:`ConfigError`.
+    """
+    import dataclasses
+    import tomllib
+    from pathlib import Path
+
+    from imunav.errors import ConfigError
+
+    p = Path(path)
+    try:
+        doc = tomllib.loads(p.read_text())
+    except FileNotFoundError as exc:
+        raise ConfigError(f"{p}: no such file") from exc
+    except tomllib.TOMLDecodeError as exc:
+        raise ConfigError(f"{p}: not valid TOML ({exc})") from exc
+    keys = [k for k in ("thesis", "flight") if k in doc]
+    if len(keys) != 1:
+        raise ConfigError(f"{p}: needs exactly one [thesis] or [flight] table, found {list(doc) or 'none'}")
+    table = dict(doc[keys[0]])
+    if keys[0] == "thesis":
+        cls = ThesisScenario
+    else:
+        from imunav.airdata.doppler import DopplerErrors
+        from imunav.sim.flight import FlightConfig
+
+        cls = FlightConfig
+        if "doppler" in table:
+            sub = table.pop("doppler")
+            known = {f.name for f in dataclasses.fields(DopplerErrors)}
+            bad = set(sub) - known
+            if bad:
+                raise ConfigError(f"{p}: [flight.doppler] unknown key(s) {sorted(bad)}; known: {sorted(known)}")
+            table["doppler"] = DopplerErrors(**{k: tuple(v) if isinstance(v, list) else v for k, v in sub.items()})
+    known = {f.name for f in dataclasses.fields(cls)} - {"filter"}
+    bad = set(table) - known
+    if bad:
+        raise ConfigError(f"{p}: [{keys[0]}] unknown key(s) {sorted(bad)}; known: {sorted(known)}")
+    conv = {k: (tuple(tuple(x) if isinstance(x, list) else x for x in v) if isinstance(v, list) else v)
+            for k, v in table.items()}
+    try:
+        return cls(**conv)
+    except InvalidInputError as exc:
+        raise ConfigError(f"{p}: {exc}") from exc
+    except TypeError as exc:
+        raise ConfigError(f"{p}: {exc}") from exc

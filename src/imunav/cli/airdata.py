@@ -81,6 +81,7 @@ def register(app: typer.Typer) -> None:
 
 PROFILE is cruise, turns or manoeuvre (constant wind + Dryden turbulence, each sensor at its own rate),
 or thesis (the thesis's 0.5 s / 1 kHz scenario; --kind nominal|outliers|variance|bias|drift|stuck).
+--config reads a TOML scenario instead (see examples/airdata_flight.toml).
 
 Example: imunav airdata simulate turns --duration 120 --wind 8,-12,0 --turbulence light --seed 1 --out flight.npz
 """)
@@ -95,6 +96,8 @@ Example: imunav airdata simulate turns --duration 120 --wind 8,-12,0 --turbulenc
         rate_ads: float = typer.Option(50.0, "--rate-ads", help="Air-data rate, Hz."),
         rate_doppler: float = typer.Option(10.0, "--rate-doppler", help="Doppler rate, Hz."),
         kind: str = typer.Option("nominal", "--kind", help="Thesis scenario kind (profile thesis only)."),
+        config: Optional[Path] = typer.Option(None, "--config", help="TOML file with a [flight] or [thesis] table "
+                                              "(replaces the other scenario options)."),
         seed: int = typer.Option(0, "--seed", help="Random seed."),
         json_out: Optional[Path] = typer.Option(None, "--json", help="Also write a JSON summary here."),
     ) -> None:
@@ -103,10 +106,18 @@ Example: imunav airdata simulate turns --duration 120 --wind 8,-12,0 --turbulenc
         from imunav.errors import InvalidInputError
 
         try:
+            loaded = None
+            if config is not None:
+                from imunav.airdata.scenario import ThesisScenario, load_config
+
+                loaded = load_config(config)
+                profile = "thesis" if isinstance(loaded, ThesisScenario) else loaded.profile
             if profile == "thesis":
                 from imunav.airdata.scenario import ThesisScenario, simulate_thesis
 
-                d = simulate_thesis(ThesisScenario(kind=kind), rng=seed)
+                sc = loaded if loaded is not None else ThesisScenario(kind=kind)
+                kind = sc.kind
+                d = simulate_thesis(sc, rng=seed)
                 arrays = {k: getattr(d, k) for k in ("t", "x_true", "wind_true", "v_true", "v_ads", "v_doppler", "z",
                                                      "ads_noise", "anomaly")}
                 meta = {"type": "thesis", "scenario": d.scenario.to_dict(), "seed": seed}
@@ -114,13 +125,13 @@ Example: imunav airdata simulate turns --duration 120 --wind 8,-12,0 --turbulenc
             else:
                 from imunav.sim.flight import FlightConfig, simulate_flight
 
-                cfg = FlightConfig(profile=profile, duration=duration, tas=tas, altitude=altitude,
-                                   wind_ned=_vec3(wind, "--wind"), turbulence=turbulence, rate_ads=rate_ads,
-                                   rate_doppler=rate_doppler)
+                cfg = loaded if loaded is not None else FlightConfig(
+                    profile=profile, duration=duration, tas=tas, altitude=altitude, wind_ned=_vec3(wind, "--wind"),
+                    turbulence=turbulence, rate_ads=rate_ads, rate_doppler=rate_doppler)
                 f = simulate_flight(cfg, rng=seed)
                 arrays = {k: v for k, v in f.__dict__.items() if isinstance(v, np.ndarray)}
                 meta = {"type": "flight", "config": cfg.to_dict(), "seed": seed}
-                summary = {"file": str(out), "type": "flight", "profile": profile, "duration_s": duration,
+                summary = {"file": str(out), "type": "flight", "profile": cfg.profile, "duration_s": cfg.duration,
                            "ads_samples": int(f.t_ads.size), "doppler_samples": int(f.t_doppler.size), "seed": seed}
         except InvalidInputError as exc:
             _fail(exc)
