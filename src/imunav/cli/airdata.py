@@ -254,6 +254,7 @@ Example: imunav airdata faults --kind variance --magnitude 3.5 --runs 100 --seed
         from imunav.errors import InvalidInputError
         from imunav.filters.faults import (
             DETECTORS,
+            alarms,
             calibrated_thresholds,
             detection_delays,
             detector_statistics,
@@ -302,11 +303,11 @@ Example: imunav airdata faults --kind variance --magnitude 3.5 --runs 100 --seed
             for label, t in (("calibrated", thr[d]), ("thesis", th.get(d))):
                 if t is None:
                     continue
-                a = np.nan_to_num(sf, nan=-np.inf) > t
+                a = alarms(d, sf, t)
                 delays, missed = detection_delays(a, o)
                 _, missed_h = detection_delays(a, o, horizon)
                 ok = delays[np.isfinite(delays)]
-                fa_step, fa_run = false_alarm_rates(np.nan_to_num(sn, nan=-np.inf) > t)
+                fa_step, fa_run = false_alarm_rates(alarms(d, sn, t))
                 rows.append({"detector": d, "threshold_mode": label, "threshold": float(t),
                              "median_delay": float(np.median(ok)) if ok.size else None,
                              "p90_delay": float(np.percentile(ok, 90)) if ok.size else None,
