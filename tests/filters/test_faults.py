@@ -79,6 +79,8 @@ def test_noise_fault_detected_quickly_and_isolated(rng):
     assert res.detectors["alg1"].latched[fa:].all()
     d = res.to_dict()
     assert d["detectors"]["alg3"]["threshold"] == pytest.approx(chi2.isf(0.01, 60))
+    assert d["detectors"]["nis"]["thesis_threshold"] is None  # NaN -> null: valid JSON
+    __import__("json").dumps(d, allow_nan=False)
 
 
 def test_injection_kinds():

@@ -197,7 +197,6 @@ def batch_filter(
 def _batch_plain(x: Array, P0: Array, F: Array, Qn: Array, H: Array, R: Array, z: Array, out: dict) -> dict:
     """Optimal filter on complete data: P and K are the same for every run (computed once per step)."""
     n = P0.shape[0]
-    m = H.shape[0]
     P = P0.copy()
     I = np.eye(n)
     for k in range(z.shape[1]):
@@ -215,7 +214,6 @@ def _batch_plain(x: Array, P0: Array, F: Array, Qn: Array, H: Array, R: Array, z
         out["x"][:, k] = x
         out["P_diag"][:, k] = np.diag(P)
     out["weights"][:] = 1.0
-    del m
     return out
 
 
