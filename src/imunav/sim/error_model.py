@@ -42,6 +42,7 @@ axes are independent.
 from __future__ import annotations
 
 import math
+import numbers
 import os
 import tomllib
 from collections.abc import Mapping
@@ -327,7 +328,7 @@ class Flicker:
         object.__setattr__(self, "b", _vec3(self.b, "Flicker.b (bias instability B)", nonneg=True))
         for name in ("tau_min", "tau_max"):
             v = getattr(self, name)
-            if not (isinstance(v, (int, float)) and math.isfinite(v) and v > 0):
+            if not (isinstance(v, numbers.Real) and not isinstance(v, bool) and math.isfinite(v) and v > 0):
                 raise InvalidInputError(f"Flicker.{name}: expected a finite time > 0 s, got {v!r}")
             object.__setattr__(self, name, float(v))
         if self.tau_max <= self.tau_min:
@@ -336,8 +337,9 @@ class Flicker:
             )
         if self.tau_max / self.tau_min > 1e8:
             raise InvalidInputError("Flicker: the band tau_max / tau_min is limited to 1e8 (8 decades)")
-        if not (isinstance(self.per_decade, int) and 1 <= self.per_decade <= 10):
+        if not (isinstance(self.per_decade, numbers.Integral) and 1 <= self.per_decade <= 10):
             raise InvalidInputError(f"Flicker.per_decade: expected an integer in 1..10, got {self.per_decade!r}")
+        object.__setattr__(self, "per_decade", int(self.per_decade))
 
     @property
     def floor_ripple(self) -> float:
@@ -733,7 +735,7 @@ class ImuErrorModel:
             g = np.diag(np.broadcast_to(g, (3,)))
         object.__setattr__(self, "g_sensitivity", _mat3(g, "ImuErrorModel.g_sensitivity (rad/s per m/s^2)"))
         t = self.temp_ref_c
-        if not (isinstance(t, (int, float)) and math.isfinite(t)):
+        if not (isinstance(t, numbers.Real) and not isinstance(t, bool) and math.isfinite(t)):
             raise InvalidInputError(f"ImuErrorModel.temp_ref_c: expected a finite temperature in degC, got {t!r}")
         object.__setattr__(self, "temp_ref_c", float(t))
 
