@@ -513,6 +513,10 @@ class TriadErrors:
             or (self.bias_instability is not None and np.any(self.bias_instability.components()[0] > 0))
         )
 
+    def replace(self, **changes: Any) -> TriadErrors:
+        """Copy with some fields changed (validated again)."""
+        return replace(self, **changes)
+
     def deterministic(self) -> TriadErrors:
         """Copy with only bias, T and the temperature polynomials (no noise, ramp, LSB, saturation)."""
         return TriadErrors(
@@ -960,11 +964,10 @@ def _as_n3(a: Any, n: int, where: str) -> NDArray[np.float64]:
     return a
 
 
-def _uniform_step(t: NDArray[np.float64]) -> float:
+def _uniform_step(t: NDArray[np.float64], d: NDArray[np.float64]) -> float:
     """The sampling step when t is uniform to 1e-9 relative, else 0 (per-sample steps)."""
     if t.size < 2:
         return 1.0
-    d = np.diff(t)
     step = (t[-1] - t[0]) / (t.size - 1)
     return float(step) if float(np.max(np.abs(d - step))) <= 1e-9 * step else 0.0
 
@@ -1003,13 +1006,15 @@ def _apply_arrays(
 ) -> tuple[NDArray[np.float64], NDArray[np.float64], ImuErrorTruth | None]:
     n = t.size
     root = seed_sequence(rng)
-    if n > 1 and not np.all(np.diff(t) > 0):
-        i = int(np.argmax(~(np.diff(t) > 0))) + 1
+    d = np.diff(t)
+    if n > 1 and not np.all(d > 0):
+        i = int(np.argmax(~(d > 0))) + 1
         raise InvalidInputError(f"apply_errors: time must be strictly increasing (row {i})")
     triads = (("gyro", model.gyro, gyro), ("accel", model.accel, accel))
     if n < 2 and any(te.has_noise for _, te, _ in triads):
         raise InsufficientDataError("apply_errors: stochastic errors need at least 2 samples (to know the rate)")
-    dt_const = _uniform_step(t)
+    dt_const = _uniform_step(t, d)
+    del d
     dtemp_arr = np.zeros(0) if dtemp is None else _f64(dtemp)
     outs: dict[str, np.ndarray] = {}
     nsat: dict[str, np.ndarray] = {}
