@@ -965,11 +965,15 @@ def _as_n3(a: Any, n: int, where: str) -> NDArray[np.float64]:
 
 
 def _uniform_step(t: NDArray[np.float64], d: NDArray[np.float64]) -> float:
-    """The sampling step when t is uniform to 1e-9 relative, else 0 (per-sample steps)."""
+    """The sampling step when t is uniform to 1e-6 relative, else 0 (per-sample steps).
+
+    1e-6 tolerates the rounding of t = k / f_s at large t (relative jitter of
+    the differences ~ eps t / dt) and changes the noise scaling by < 1 ppm.
+    """
     if t.size < 2:
         return 1.0
     step = (t[-1] - t[0]) / (t.size - 1)
-    return float(step) if float(np.max(np.abs(d - step))) <= 1e-9 * step else 0.0
+    return float(step) if float(np.max(np.abs(d - step))) <= 1e-6 * step else 0.0
 
 
 def _f64(a: Any) -> NDArray[np.float64]:
