@@ -134,10 +134,12 @@ def main() -> None:
         del out
     wall, cpu = min(runs)
     print("timed runs (wall s / CPU s): " + ", ".join(f"{w:.2f}/{c:.2f}" for w, c in runs))
-    ok = wall < 10.0
+    scaled = wall * 1e7 / args.n  # the acceptance is stated for 1e7 samples
+    ok = scaled < 10.0
     load = os.getloadavg()[0] if hasattr(os, "getloadavg") else float("nan")
     print(f"imunav apply_errors, all terms on:        {wall:.2f} s wall ({cpu:.2f} s CPU, "
-          f"{1e9 * cpu / args.n:.0f} ns CPU per 6-axis sample)  -> {'PASS' if ok else 'FAIL'} (< 10 s for 1e7 samples)")
+          f"{1e9 * cpu / args.n:.0f} ns CPU per 6-axis sample)  -> {'PASS' if ok else 'FAIL'} "
+          f"(< 10 s for 1e7 samples; {scaled:.2f} s scaled to 1e7)")
     print(f"machine load average during the run: {load:.1f} on {os.cpu_count()} cores "
           "(other processes inflate the wall time; the CPU time is this process's own work)")
     if not args.no_peer and not args.flicker:
