@@ -27,6 +27,12 @@ app = typer.Typer(
 _COMMAND_MODULES: list[str] = [
     "info",
     "noise",
+    "simulate",
+    "lab",
+    "calibrate",
+    "compensate",
+    "attitude",
+    "zupt",
 ]
 
 for _name in _COMMAND_MODULES:

@@ -22,6 +22,7 @@ MODE_NONE = 0  # optimal filter, every channel used
 MODE_GATE = 1  # per-channel normalised-innovation gate |ν̃_i| < m (Akgün 2002, eq. 4.17)
 MODE_ISOLATE = 2  # NIS χ² test + sequential isolation of the worst channel (w-test)
 MODE_HUBER = 3  # Huber M-estimation of the measurement channels by IRLS
+MODE_NIS = 4  # vector χ² gate: the whole measurement is rejected when its NIS fails the test
 
 
 def sym(P: Array) -> Array:
@@ -167,6 +168,9 @@ def batch_filter(
                 acc = valid & (np.abs(nn) < gate_m)
             elif mode == MODE_ISOLATE:
                 acc = valid & isolate_batch(nu, S, iso_thr)
+            elif mode == MODE_NIS:
+                q = np.einsum("bi,bi->b", nn, nn)
+                acc = valid & (q <= iso_thr[m - 1])[:, None]
             elif mode == MODE_HUBER:
                 acc = None
             else:

@@ -62,6 +62,7 @@ __all__ = [
     "detect_faults",
     "latch",
     "first_alarm",
+    "detector_statistics",
     "isolate_faulty_channels",
     "Fault",
     "inject_faults",
@@ -197,6 +198,31 @@ def cusum_statistics(normalized: ArrayLike, rho: float = 4.0, k: float = 0.5) ->
     return cusum_stats(_check_nv(normalized), float(rho), float(k))
 
 
+def detector_statistics(normalized: ArrayLike, M: int = 20, *, cusum_rho: float = 4.0, cusum_k: float = 0.5
+                        ) -> dict[str, Array]:
+    """All detector statistics for one run (N, s) or a batch of runs (R, N, s).
+
+    Returns {name: (…, N)} for the names in :data:`DETECTORS` (window ones NaN
+    before the window is full).  Compare with the thresholds of
+    :func:`calibrated_thresholds` / :func:`thesis_thresholds`.
+    """
+    from imunav.filters._kernels import cusum_stats
+
+    nv = _check_nv(normalized, batch=True)
+    single = nv.ndim == 2
+    b = nv[None] if single else nv
+    if not cusum_rho > 1 or not cusum_k >= 0:
+        raise InvalidInputError(f"cusum_rho must be > 1 and cusum_k >= 0, got {cusum_rho}, {cusum_k}")
+    l1, l2, a3 = window_statistics(b, M)
+    gv = np.empty(b.shape[:2])
+    gm = np.empty(b.shape[:2])
+    for r in range(b.shape[0]):
+        gv[r], gm[r] = cusum_stats(np.ascontiguousarray(b[r]), float(cusum_rho), float(cusum_k))
+    out = {"alg1": l1, "alg2": l2, "alg3": a3, "nis": np.einsum("...i,...i->...", b, b), "cusum_var": gv,
+           "cusum_mean": gm}
+    return {k: v[0] for k, v in out.items()} if single else out
+
+
 def latch(alarm: ArrayLike) -> NDArray[np.bool_]:
     """Latched alarm: true from the first alarm on (cumulative OR along the last axis)."""
     a = np.asarray(alarm, dtype=bool)
@@ -210,13 +236,18 @@ def first_alarm(alarm: ArrayLike, start: int = 0) -> int:
     return int(idx[0] + start) if idx.size else -1
 
 
-def isolate_faulty_channels(normalized: ArrayLike, M: int = 20, p_false_alarm: float = 0.01, start: int = 0
+def isolate_faulty_channels(normalized: ArrayLike, M: int = 20, p_false_alarm: float = 1e-3, start: int = 0,
+                            during: ArrayLike | None = None, min_count: int = 3
                             ) -> tuple[NDArray[np.bool_], Array]:
-    """Channels whose own windowed statistics show a fault at or after ``start``.
+    """Channels whose own windowed statistics show a fault.
 
     Per channel i: ``Σ ν̃_i²`` over the window (χ²(M) under H0) and the window
     mean test ``|Σ ν̃_i| / √M`` (N(0, 1)); both at level p / (2s) (Bonferroni).
-    Returns (isolated flags (s,), first step each channel was flagged, -1 if not).
+    A channel is isolated when it is flagged on at least ``min_count`` steps
+    at or after ``start`` on which ``during`` (e.g. the system alarm) is True
+    (all steps if None): a persistent fault keeps flagging its channel, a
+    chance flag does not repeat.  Returns (isolated flags (s,), first flagged
+    step per channel, -1 if none).
     """
     nv = _check_nv(normalized)
     N, s = nv.shape
@@ -232,8 +263,10 @@ def isolate_faulty_channels(normalized: ArrayLike, M: int = 20, p_false_alarm: f
     mu[M - 1:] = np.abs(c1[M:] - c1[:-M]) / np.sqrt(M)
     flag = (sq > thr_sq) | (mu > thr_mu)
     flag[:start] = False
+    if during is not None:
+        flag &= np.asarray(during, dtype=bool).reshape(N, 1)
     first = np.array([first_alarm(flag[:, i]) for i in range(s)], dtype=np.int64)
-    return first >= 0, first.astype(np.float64)
+    return flag.sum(axis=0) >= min_count, first.astype(np.float64)
 
 
 @dataclass(frozen=True)
@@ -277,6 +310,7 @@ def detect_faults(
     cusum_rho: float = 4.0,
     cusum_k: float = 0.5,
     thresholds: dict[str, float] | None = None,
+    p_isolation: float = 1e-3,
 ) -> FaultDetectionResult:
     """Run Alg. 1-3, NIS and both CUSUMs on normalised innovations (N, s).
 
@@ -284,6 +318,8 @@ def detect_faults(
         ``p_false_alarm``) or ``"thesis"`` (χ² points of the thesis for
         Alg. 1-3; calibrated for the others).  ``thresholds`` overrides.
     start : alarms before this step are ignored (e.g. filter transient).
+    p_isolation : per-step level of the per-channel isolation tests (a channel
+        is isolated when flagged on >= 3 steps with a system alarm).
     """
     nv = _check_nv(normalized)
     N, s = nv.shape
@@ -299,10 +335,7 @@ def detect_faults(
         if unknown:
             raise InvalidInputError(f"unknown detector(s) {sorted(unknown)}; known: {DETECTORS}")
         thr.update({k: float(v) for k, v in thresholds.items()})
-    l1, l2, a3 = window_statistics(nv, M)
-    gv, gm = cusum_statistics(nv, cusum_rho, cusum_k)
-    stats = {"alg1": l1, "alg2": l2, "alg3": a3, "nis": np.einsum("ij,ij->i", nv, nv), "cusum_var": gv,
-             "cusum_mean": gm}
+    stats = detector_statistics(nv, M, cusum_rho=cusum_rho, cusum_k=cusum_k)
     dets = {}
     earliest = -1
     for name in DETECTORS:
@@ -314,7 +347,10 @@ def detect_faults(
         if fa >= 0 and (earliest < 0 or fa < earliest):
             earliest = fa
     if earliest >= 0:
-        iso, cf = isolate_faulty_channels(nv, M, p_false_alarm, start=max(start, earliest - M + 1))
+        any_alarm = np.zeros(N, dtype=bool)
+        for d in dets.values():
+            any_alarm |= d.alarm
+        iso, cf = isolate_faulty_channels(nv, M, p_isolation, start=start, during=any_alarm)
     else:
         iso, cf = np.zeros(s, dtype=bool), np.full(s, -1.0)
     return FaultDetectionResult(dets, iso, cf, int(M), float(p_false_alarm), threshold_mode)

@@ -166,6 +166,14 @@ class Section:
         self._parts.append(f'<figure><img alt="{alt}" src="data:image/png;base64,{data}">{cap}</figure>')
         return self
 
+    def image(self, path: str | Path, caption: str | None = None) -> "Section":
+        """Embed a PNG file (e.g. a figure a step already saved)."""
+        data = base64.b64encode(Path(path).read_bytes()).decode("ascii")
+        cap = f"<figcaption>{html.escape(caption)}</figcaption>" if caption else ""
+        alt = html.escape(caption or Path(path).stem)
+        self._parts.append(f'<figure><img alt="{alt}" src="data:image/png;base64,{data}">{cap}</figure>')
+        return self
+
     def html(self, anchor: str) -> str:
         return f'<section id="{anchor}"><h2>{html.escape(self.title)}{_verdict(self.passed) if self.passed is not None else ""}</h2>{"".join(self._parts)}</section>'
 
