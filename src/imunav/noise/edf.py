@@ -191,7 +191,7 @@ def _lag1(z: np.ndarray) -> float:
     return float(np.dot(z[:-1], z[1:])) / den
 
 
-def noise_id_lag1(x: np.ndarray, m: int, dmax: int = 2, max_points: int = 1 << 16) -> int | None:
+def noise_id_lag1(x: np.ndarray, m: int, dmax: int = 2, max_points: int = 1 << 14) -> int | None:
     """Dominant power-law noise at cluster size m from phase data (Riley & Greenhall 2004).
 
     The phase is decimated by m, a quadratic trend removed, and it is
