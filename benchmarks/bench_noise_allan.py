@@ -46,14 +46,15 @@ def peer_comparison() -> None:
     t0 = time.perf_counter()
     t_at, dev_at, _, _ = allantools.oadev(y, rate=fs, data_type="freq", taus=taus)
     t_peer = time.perf_counter() - t0
-    assert np.allclose(t_at, r.tau)
-    rel = float(np.max(np.abs(r.adev / dev_at - 1)))
+    common, ia, ib = np.intersect1d(np.round(r.tau * fs), np.round(t_at * fs), return_indices=True)
+    rel = float(np.max(np.abs(r.adev[ia] / dev_at[ib] - 1)))
     print(f"OADEV, {N_PEER:.0e} samples, {taus.size} log-spaced tau ({os.cpu_count()} CPUs, load "
           f"{os.getloadavg()[0]:.1f})")
     print(f"  allantools.oadev            {t_peer:8.2f} s")
     print(f"  imunav (full, with CIs)     {t_full:8.2f} s   speed-up {t_peer / t_full:6.1f}x")
     print(f"  imunav (alpha fixed)        {t_fixed:8.2f} s   speed-up {t_peer / t_fixed:6.1f}x")
-    print(f"  max |rel diff| of deviations {rel:.2e} (target 1e-9): {'MET' if rel < 1e-9 else 'NOT MET'}")
+    print(f"  max |rel diff| of deviations {rel:.2e} over {common.size} common tau "
+          f"(imunav {r.tau.size}, allantools {t_at.size}) (target 1e-9): {'MET' if rel < 1e-9 else 'NOT MET'}")
     print(f"  speed target >= 10x: {'MET' if t_peer / t_full >= 10 else 'NOT MET'}")
 
 

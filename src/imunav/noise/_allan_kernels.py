@@ -74,21 +74,27 @@ def diff_sums(x, ms, order, overlapping):  # pragma: no cover - numba
             iend = min(i1, n - order * m)
             if iend <= i0:
                 continue
+            s = 0.0
             if overlapping:
-                start = i0
-                step = 1
+                # unit stride, constant step: lets LLVM vectorize the reduction
+                if order == 2:
+                    for i in range(i0, iend):
+                        v = x[i + 2 * m] - 2.0 * x[i + m] + x[i]
+                        s += v * v
+                else:
+                    for i in range(i0, iend):
+                        v = x[i + 3 * m] - 3.0 * x[i + 2 * m] + 3.0 * x[i + m] - x[i]
+                        s += v * v
             else:
                 start = ((i0 + m - 1) // m) * m
-                step = m
-            s = 0.0
-            if order == 2:
-                for i in range(start, iend, step):
-                    v = x[i + 2 * m] - 2.0 * x[i + m] + x[i]
-                    s += v * v
-            else:
-                for i in range(start, iend, step):
-                    v = x[i + 3 * m] - 3.0 * x[i + 2 * m] + 3.0 * x[i + m] - x[i]
-                    s += v * v
+                if order == 2:
+                    for i in range(start, iend, m):
+                        v = x[i + 2 * m] - 2.0 * x[i + m] + x[i]
+                        s += v * v
+                else:
+                    for i in range(start, iend, m):
+                        v = x[i + 3 * m] - 3.0 * x[i + 2 * m] + 3.0 * x[i + m] - x[i]
+                        s += v * v
             part[b, j] = s
     out = np.zeros(nt)
     # pairwise-ish reduction over blocks (each partial is already O(BLOCK) terms)
@@ -244,3 +250,52 @@ def oavar_cov(tau, m, n_phase, codes, Ts, theta, dt, max_ratio, max_lags):  # pr
             cov[i, j] = s
             cov[j, i] = s
     return cov
+
+
+@njit(cache=True)
+def lag1_acf(z):  # pragma: no cover - numba
+    """Lag-1 autocorrelation of z about its mean (serial: tiny inputs)."""
+    n = z.size
+    mu = 0.0
+    for i in range(n):
+        mu += z[i]
+    mu /= n
+    num = 0.0
+    den = 0.0
+    for i in range(n):
+        d = z[i] - mu
+        den += d * d
+        if i + 1 < n:
+            num += d * (z[i + 1] - mu)
+    return num / den if den > 0 else 0.0
+
+
+@njit(cache=True)
+def detrend_quadratic(z):  # pragma: no cover - numba
+    """z minus its least-squares quadratic in the (centred, scaled) index."""
+    n = z.size
+    c = (n - 1) / 2.0
+    s = max(c, 1.0)
+    A = np.zeros((3, 3))
+    b = np.zeros(3)
+    for i in range(n):
+        t = (i - c) / s
+        p0, p1, p2 = 1.0, t, t * t
+        A[0, 0] += 1.0
+        A[0, 1] += p1
+        A[0, 2] += p2
+        A[1, 2] += p1 * p2
+        A[2, 2] += p2 * p2
+        b[0] += z[i]
+        b[1] += p1 * z[i]
+        b[2] += p2 * z[i]
+    A[1, 0] = A[0, 1]
+    A[1, 1] = A[0, 2]
+    A[2, 0] = A[0, 2]
+    A[2, 1] = A[1, 2]
+    coef = np.linalg.solve(A, b)
+    out = np.empty(n)
+    for i in range(n):
+        t = (i - c) / s
+        out[i] = z[i] - (coef[0] + coef[1] * t + coef[2] * t * t)
+    return out

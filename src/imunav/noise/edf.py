@@ -184,11 +184,9 @@ def edf_totdev(n: int, m: int, alpha: int) -> float:
 
 
 def _lag1(z: np.ndarray) -> float:
-    z = z - z.mean()
-    den = float(np.dot(z, z))
-    if den == 0.0:
-        return 0.0
-    return float(np.dot(z[:-1], z[1:])) / den
+    from imunav.noise._allan_kernels import lag1_acf
+
+    return float(lag1_acf(np.ascontiguousarray(z, dtype=np.float64)))
 
 
 def noise_id_lag1(x: np.ndarray, m: int, dmax: int = 2, max_points: int = 1 << 14) -> int | None:
@@ -200,12 +198,12 @@ def noise_id_lag1(x: np.ndarray, m: int, dmax: int = 2, max_points: int = 1 << 1
     at most ``max_points`` decimated points (the start of the record).
     Returns None when fewer than 30 points are available.
     """
-    z = np.asarray(x[::m][:max_points], dtype=float)
+    from imunav.noise._allan_kernels import detrend_quadratic
+
+    z = np.ascontiguousarray(x[::m][:max_points], dtype=np.float64)
     if z.size < 30:
         return None
-    k = np.arange(z.size, dtype=float)
-    k = (k - k.mean()) / max(k.std(), 1.0)
-    z = z - np.polyval(np.polyfit(k, z, 2), k)
+    z = detrend_quadratic(z)
     d = 0
     while True:
         r1 = _lag1(z)
