@@ -28,6 +28,23 @@ def _fmt(v: float, se: float) -> str:
     return f"{v:.4g} ± {se:.2g}" if se == se else f"{v:.4g}"
 
 
+def _curve_fits(r: Any) -> dict[str, Any]:
+    """Thesis-style smooth fits of each channel's Allan curve (reported beside the term fit)."""
+    from imunav.errors import InvalidInputError
+    from imunav.noise.curvefit import compare_curve_fits
+
+    out: dict[str, Any] = {}
+    for c, name in enumerate(r.channels):
+        a = r.channel(c)
+        try:
+            fits = compare_curve_fits(a.tau, a.adev)
+            out[name] = {k: {"rms_log10": v.rms_log10, "max_log10": v.max_log10, "has_pole": v.has_pole,
+                             "readout": v.readout()} for k, v in fits.items()}
+        except (InvalidInputError, ValueError, RuntimeError) as e:  # too few tau points, LM failure
+            out[name] = {"error": str(e)}
+    return out
+
+
 def noise(
     file: Path = typer.Argument(..., help="Static recording: .csv/.txt, .parquet, .h5, .mat, .npz."),
     channels: str = typer.Option(",".join(_CH), "--channels", help="Comma-separated subset of gx,gy,gz,ax,ay,az."),
@@ -143,7 +160,8 @@ def noise(
     if json_out is not None:
         out = {"file": str(file), "fs": rate, "n_samples": int(data.n)}
         for sensor, (r, f, p, pa, pf, cmp) in results.items():
-            out[sensor] = {"allan": r.to_dict(), "fit": f.to_dict(), "psd_fit": pf.to_dict(), "psd_vs_allan": cmp}
+            out[sensor] = {"allan": r.to_dict(), "fit": f.to_dict(), "psd_fit": pf.to_dict(), "psd_vs_allan": cmp,
+                           "curve_fits": _curve_fits(r)}
         with atomic_path(json_out) as tmp:
             tmp.write_text(json.dumps(out, indent=1, default=lambda o: None if o != o else str(o)))
         console.print(f"results written to {json_out}")
