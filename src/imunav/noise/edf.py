@@ -173,8 +173,9 @@ def edf_greenhall(alpha: int, d: int, m: int, n: int, overlapping: bool, modifie
 
 def edf_totdev(n: int, m: int, alpha: int) -> float:
     """EDF of the total deviation, NIST SP 1065 Table 7 (b T/tau - c), for
-    white, flicker and random-walk rate noise; the simple white-noise bound
-    (n - 1)/m... otherwise (SP 1065 eq. 49 family)."""
+    white, flicker and random-walk rate noise; for white / flicker phase
+    noise (not tabulated) the overlapping-Allan EDF is used, which is
+    conservative since TOTDEV has at least its degrees of freedom."""
     table = {0: (1.50, 0.0), -1: (1.17, 0.22), -2: (0.93, 0.36)}
     if alpha in table:
         b, c = table[alpha]
