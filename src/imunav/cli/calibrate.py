@@ -223,6 +223,7 @@ def temperature(
     orders: str = typer.Option("1,2,3,4,5", help="Polynomial orders to try."),
     order: Optional[int] = typer.Option(None, help="Force this order (default: leave-one-out choice)."),
     model: str = typer.Option("poly", help="poly or piecewise (polynomial + one step)."),
+    params: str = typer.Option("accel_bias,accel_scale,gyro_bias,gyro_scale", help="Parameters to model."),
     report: Optional[Path] = _REP,
 ) -> None:
     """Bias and scale factor as polynomials of temperature (order by leave-one-out CV).
@@ -244,7 +245,10 @@ def temperature(
         f, t = item.rsplit("@", 1)
         cals.append(ImuCalibration.load(f))
         temps.append(float(t))
-    res = thermal_calibration(temps, cals, orders=[int(o) for o in orders.split(",")], order=order, model=model)
+    res = thermal_calibration(
+        temps, cals, params=[p.strip() for p in params.split(",")], orders=[int(o) for o in orders.split(",")],
+        order=order, model=model,
+    )
     res.calibration.save(out)
     tab = Table(title="temperature fits: MSE per order (chosen order marked *)")
     tab.add_column("parameter")
