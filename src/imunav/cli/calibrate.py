@@ -197,6 +197,7 @@ def multipose(
     wait_s: float = typer.Option(3.0, help="Static detector window / time per pose, s."),
     gravity: float = typer.Option(9.80665, help="Local gravity magnitude, m/s^2."),
     strict: bool = typer.Option(True, help="Refuse sessions whose poses leave a misalignment undetermined."),
+    accel_misalignment: bool = typer.Option(True, help="Estimate the accelerometer misalignments (else fix at 0)."),
     report: Optional[Path] = _REP,
     fs: Optional[float] = _FS, accel_unit: Optional[str] = _AU, gyro_unit: Optional[str] = _GU,
     accel_scale: Optional[float] = _AS, gyro_scale: Optional[float] = _GS, skiprows: Optional[int] = _SK,
@@ -204,13 +205,13 @@ def multipose(
 ) -> None:
     """Tedaldi et al. (2014) multi-pose calibration without a rate table.
 
-    Example: imunav calibrate multipose session.csv --fs 100 --init-s 36.5 --no-strict --out cal.json
+    Example: imunav calibrate multipose session.csv --fs 100 --init-s 36.5 --no-accel-misalignment --out cal.json
     """
     from imunav.calib import multipose as fit
 
     data = _read(recording, fs, accel_unit, gyro_unit, accel_scale, gyro_scale, skiprows, columns)
     res = fit(data.accel, data.gyro, data.fs, init_s=init_s, wait_s=wait_s, gravity=gravity, strict=strict,
-              raw_accel_unit="m/s^2", raw_gyro_unit="rad/s")
+              accel_misalignment=accel_misalignment, raw_accel_unit="m/s^2", raw_gyro_unit="rad/s")
     _finish(res, out, report)
     if res.info["weak_parameters"]:
         typer.echo("weakly determined: " + "; ".join(res.info["weak_parameters"]), err=True)
