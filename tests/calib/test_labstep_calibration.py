@@ -6,7 +6,7 @@ from imunav.lab import run_lab
 
 
 def test_calibration_step(tmp_path):
-    cfg = {"simulate_tests": {"fs": 5.0, "dwell_s": 10.0, "tests": ["hundred_position", "rate_table"], "figures": False},
+    cfg = {"simulate_tests": {"fs": 5.0, "dwell_s": 30.0, "tests": ["hundred_position", "rate_table"], "figures": False},
            "calibration": {"figures": False}}
     run_lab(tmp_path, config=cfg, rng=1, steps=["simulate_tests", "calibration"], progress=False)
     s = json.loads((tmp_path / "summary.json").read_text())
