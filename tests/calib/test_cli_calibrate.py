@@ -34,10 +34,15 @@ def test_ratetable_with_static_and_compensate(demo):
     out = demo / "cal.json"
     _run("calibrate", "ratetable", demo / "rate.npz", "--segments", demo / "rate_segments.json",
          "--static", demo / "static.npz", "--static-segments", demo / "static_segments.json",
-         "--latitude-deg", 40, "--out", out, "--report", demo / "rep")
+         "--latitude-deg", 40, "--noise-model", demo / "noise_model.toml", "--out", out, "--report", demo / "rep")
+    from imunav.calib import calibration_parameters, parameter_stderr
+
     cal, truth = ImuCalibration.load(out), ImuCalibration.load(demo / "truth.json")
     s = success_percentages(cal, truth)
-    assert s["accel_mean"] > 99.0 and s["gyro_mean"] > 99.0
+    assert s["accel_mean"] > 96.0 and s["gyro_mean"] > 97.0  # 6-s dwells: worse than the thesis's 30 s
+    pe, pt, se = calibration_parameters(cal), calibration_parameters(truth), parameter_stderr(cal.stderr)
+    z = np.concatenate([(pe[k] - pt[k]) / se[k] for k in pt])
+    assert np.mean(np.abs(z) <= 3) >= 0.9, z
     assert (demo / "rep" / "residuals.png").stat().st_size > 1000
     rep = json.loads((demo / "rep" / "report.json").read_text())
     assert rep["method"] == "multiposition+ratetable" and "accel" in rep["condition"]

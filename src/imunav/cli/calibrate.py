@@ -93,6 +93,16 @@ _GS = typer.Option(None, help="Scale applied to raw gyro values.")
 _SK = typer.Option(None, help="Lines to skip before the CSV header.")
 _COL = typer.Option(None, help='Column mapping as JSON, e.g. \'{"gyro": ["gx","gy","gz"]}\'.')
 _OUT = typer.Option(..., "--out", "-o", help="Calibration JSON to write.")
+_NM = typer.Option(None, help="Characterised noise (ImuErrorModel TOML: noise densities, bias instability) "
+                   "for generalised least squares; default: AR(1) from the residuals.")
+
+
+def _noise_model(path: Optional[Path]) -> Any:
+    if path is None:
+        return None
+    from imunav.sim import ImuErrorModel
+
+    return ImuErrorModel.from_toml(path)
 _REP = typer.Option(None, help="Folder for report.json and residual plots.")
 
 
@@ -106,6 +116,7 @@ def multiposition(
     latitude_deg: Optional[float] = typer.Option(None, help="Latitude, deg: normal gravity and Earth-rate removal."),
     gravity: Optional[float] = typer.Option(None, help="Local gravity, m/s^2 (default normal gravity / 9.80665)."),
     g_sensitivity: str = typer.Option("diagonal", help="Gyro g-sensitivity: diagonal, full or none."),
+    noise_model: Optional[Path] = _NM,
     fs: Optional[float] = _FS, accel_unit: Optional[str] = _AU, gyro_unit: Optional[str] = _GU,
     accel_scale: Optional[float] = _AS, gyro_scale: Optional[float] = _GS, skiprows: Optional[int] = _SK,
     columns: Optional[str] = _COL,
@@ -118,7 +129,8 @@ def multiposition(
 
     data = _read(recording, fs, accel_unit, gyro_unit, accel_scale, gyro_scale, skiprows, columns)
     lat = None if latitude_deg is None else np.deg2rad(latitude_deg)
-    res = fit(data, _segments(segments), latitude=lat, gravity=gravity, g_sensitivity=g_sensitivity)
+    res = fit(data, _segments(segments), latitude=lat, gravity=gravity, g_sensitivity=g_sensitivity,
+              noise_model=_noise_model(noise_model))
     _finish(res, out, report)
 
 
@@ -133,6 +145,7 @@ def ratetable(
     intercept: bool = typer.Option(False, help="Estimate a separate gyro bias in the rate fit."),
     report: Optional[Path] = _REP,
     latitude_deg: Optional[float] = typer.Option(None, help="Latitude, deg (Earth rate, normal gravity)."),
+    noise_model: Optional[Path] = _NM,
     fs: Optional[float] = _FS, accel_unit: Optional[str] = _AU, gyro_unit: Optional[str] = _GU,
     accel_scale: Optional[float] = _AS, gyro_scale: Optional[float] = _GS, skiprows: Optional[int] = _SK,
     columns: Optional[str] = _COL,
@@ -147,14 +160,15 @@ def ratetable(
     lat = None if latitude_deg is None else np.deg2rad(latitude_deg)
     rd = (fs, accel_unit, gyro_unit, accel_scale, gyro_scale, skiprows, columns)
     st = None
+    nm = _noise_model(noise_model)
     if static is not None:
         if static_segments is None:
             raise typer.BadParameter("--static needs --static-segments")
-        st = multiposition(_read(static, *rd), _segments(static_segments), latitude=lat)
+        st = multiposition(_read(static, *rd), _segments(static_segments), latitude=lat, noise_model=nm)
         b = st.calibration
     else:
         b = ImuCalibration.load(base) if base is not None else None
-    res = fit(_read(recording, *rd), _segments(segments), base=b, latitude=lat, intercept=intercept)
+    res = fit(_read(recording, *rd), _segments(segments), base=b, latitude=lat, intercept=intercept, noise_model=nm)
     if st is not None:
         res = combine(st, res)
     _finish(res, out, report)
