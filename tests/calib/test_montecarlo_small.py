@@ -68,5 +68,6 @@ def test_compensated_imu_errors_consistent_with_reported_uncertainty():
         z.append(ea / np.hypot(sa, na))
         z.append(eg / np.hypot(sg, ng))
     z = np.concatenate([x.ravel() for x in z])
+    print(f"compensated-output errors: mean z^2 = {np.mean(z**2):.3f}, within 3 sigma {np.mean(np.abs(z) <= 3):.3f}")
     assert 0.6 < np.mean(z**2) < 1.5, np.mean(z**2)
     assert np.mean(np.abs(z) <= 3) >= 0.98
