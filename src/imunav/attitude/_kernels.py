@@ -705,7 +705,7 @@ def rts_smooth(qf, bf, Pu, Pp, Ph, gyr, dt, P0, q0, b0):
         e = np.empty(6)
         e[0:3] = qlog_1(qmul_1(_qconj(qp), qs[k + 1]))
         e[3:6] = bs[k + 1] - bf[k]
-        C = Pu[k] @ Ph[k + 1].T @ np.linalg.inv(Pp[k + 1])
+        C = Pu[k] @ Ph[k + 1].T @ _inv_spd(Pp[k + 1])
         dx = C @ e
         qs[k] = _qnorm(qmul_1(qf[k], qexp_1(dx[0:3])))
         bs[k] = bf[k] + dx[3:6]
@@ -734,6 +734,30 @@ def _chol(A):
             else:
                 L[i, j] = s / L[j, j]
     return L
+
+
+@njit(cache=True)
+def _inv_spd(A):
+    """Inverse of a symmetric positive-definite matrix via Cholesky (no LAPACK)."""
+    n = A.shape[0]
+    L = _chol(A)
+    Li = np.zeros((n, n))
+    for j in range(n):
+        Li[j, j] = 1.0 / L[j, j]
+        for i in range(j + 1, n):
+            acc = 0.0
+            for k in range(j, i):
+                acc -= L[i, k] * Li[k, j]
+            Li[i, j] = acc / L[i, i]
+    out = np.zeros((n, n))
+    for i in range(n):
+        for j in range(i + 1):
+            acc = 0.0
+            for k in range(i, n):
+                acc += Li[k, i] * Li[k, j]
+            out[i, j] = acc
+            out[j, i] = acc
+    return out
 
 
 @njit(cache=True)
@@ -819,7 +843,7 @@ def ukf_step(q, b, P, gyr, acc, mag, dt, p, alpha, beta_u, kappa, mag_ref):
             z[j:j + 3] = mag / _norm3(mag)
             for i in range(3):
                 Pzz[j + i, j + i] += p[5] * p[5]
-        Si = np.linalg.inv(Pzz)
+        Si = _inv_spd(Pzz)
         K = Pxz @ Si
         nu = z - zm
         dx = K @ nu
@@ -957,7 +981,7 @@ def gravity_kf_run(kind, x0, P0, gyr, ya, dt, gp):
         SM = M.copy()
         for i in range(3):
             SM[i, :] *= S[i]  # diag(S) M (M diagonal)
-        K = g * P @ np.linalg.inv(HPH + SM)  # eq. 27, H = g I
+        K = g * P @ _inv_spd(HPH + SM)  # eq. 27, H = g I
         x = x + K @ nu
         IKH = I3 - g * K
         P = IKH @ P @ IKH.T + K @ SM @ K.T
@@ -975,7 +999,7 @@ def gravity_kf_run(kind, x0, P0, gyr, ya, dt, gp):
                 Hb = -_skew(xprev)
                 Pb = Pb + np.eye(3) * gp[10] * gp[10] * h * acc_n
                 Sb = Hb @ Pb @ Hb.T + np.eye(3) * gp[11] * gp[11] / acc_n
-                Kb = Pb @ Hb.T @ np.linalg.inv(Sb)
+                Kb = Pb @ Hb.T @ _inv_spd(Sb)
                 bh = bh + Kb @ (zb - Hb @ bh)
                 IK = np.eye(3) - Kb @ Hb
                 Pb = IK @ Pb @ IK.T + Kb @ (np.eye(3) * gp[11] * gp[11] / acc_n) @ Kb.T
