@@ -63,10 +63,23 @@ def qexp_1(r):
 
 
 @njit(cache=True)
+def _needs_flip(w, x, y, z):
+    """True if -q is the canonical representative: w > 0, or at w == 0 the
+    first non-zero vector component positive (makes log(q) == log(-q) at pi)."""
+    if w != 0.0:
+        return w < 0.0
+    if x != 0.0:
+        return x < 0.0
+    if y != 0.0:
+        return y < 0.0
+    return z < 0.0
+
+
+@njit(cache=True)
 def qlog_1(q):
     """Rotation vector (rad) of unit q, angle in [0, pi] (q and -q give the same)."""
     w, x, y, z = q[0], q[1], q[2], q[3]
-    if w < 0.0:
+    if _needs_flip(w, x, y, z):
         w, x, y, z = -w, -x, -y, -z
     nv = math.sqrt(x * x + y * y + z * z)
     out = np.empty(3)
@@ -128,7 +141,7 @@ def quat_from_dcm_1(C):
         out[1] = (C[0, 2] + C[2, 0]) / s
         out[2] = (C[1, 2] + C[2, 1]) / s
         out[3] = 0.25 * s
-    if out[0] < 0.0:
+    if _needs_flip(out[0], out[1], out[2], out[3]):
         out = -out
     n = math.sqrt(out[0] ** 2 + out[1] ** 2 + out[2] ** 2 + out[3] ** 2)
     return out / n
@@ -152,20 +165,26 @@ def quat_from_euler_1(roll, pitch, yaw):
 def euler_from_dcm_1(C):
     """(roll, pitch, yaw) of C_nb = Rz(yaw) Ry(pitch) Rx(roll).
 
-    Pitch from atan2 (accurate near +-90 deg).  At gimbal lock
-    (|cos pitch| < 1e-10) roll is set to 0 and the whole rotation about the
-    vertical is put into yaw.
+    Pitch and yaw come from the first column (body x axis in nav).  Roll is
+    then taken from the body y axis after removing yaw,
+    (cos r, -sin r) = (-sin y C01 + cos y C11, -(sin y C02 - cos y C12)) with
+    sign as below, which stays well conditioned near gimbal lock: whatever
+    split of the rotation about the vertical the rounding gives yaw, roll
+    absorbs the rest, so the angles always rebuild C to rounding error.  At
+    exact gimbal lock (cos pitch < 1e-12) yaw carries the whole rotation
+    about the vertical and roll is 0.
     """
     out = np.empty(3)
     cp = math.sqrt(C[0, 0] * C[0, 0] + C[1, 0] * C[1, 0])
     out[1] = math.atan2(-C[2, 0], cp)
-    if cp > 1e-10:
-        out[0] = math.atan2(C[2, 1], C[2, 2])
-        out[2] = math.atan2(C[1, 0], C[0, 0])
+    if cp > 1e-12:
+        y = math.atan2(C[1, 0], C[0, 0])
     else:
-        out[0] = 0.0
-        # C = Rz(yaw) Ry(+-90): C[0,1] = -sin(yaw), C[1,1] = cos(yaw)
-        out[2] = math.atan2(-C[0, 1], C[1, 1])
+        # C = Rz(yaw) Ry(+-90 deg): C[0,1] = -sin(yaw), C[1,1] = cos(yaw) when roll = 0
+        y = math.atan2(-C[0, 1], C[1, 1])
+    sy, cy = math.sin(y), math.cos(y)
+    out[2] = y
+    out[0] = math.atan2(sy * C[0, 2] - cy * C[1, 2], -sy * C[0, 1] + cy * C[1, 1])
     return out
 
 

@@ -27,6 +27,8 @@ Navigation Systems*, 2nd ed., Artech House, 2013, §2.2 (DCM, Euler).
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
@@ -63,6 +65,12 @@ __all__ = [
     "Q_ENU_NED",
     "C_FLU_FRD",
     "Q_FRD_FLU",
+    "C_NED_NWU",
+    "EXTERNAL_CONVENTIONS",
+    "to_convention",
+    "from_convention",
+    "find_convention",
+    "ConventionMatch",
 ]
 
 Array = NDArray[np.float64]
@@ -139,10 +147,14 @@ def quat_normalize(q: ArrayLike) -> Array:
 
 
 def quat_canonical(q: ArrayLike) -> Array:
-    """Representative with ``w >= 0`` (``q`` and ``-q`` are the same rotation)."""
-    a = np.array(q, dtype=float)
-    sign = np.where(a[..., :1] < 0, -1.0, 1.0)
-    return a * sign
+    """Representative with ``w > 0`` (at ``w == 0``: first non-zero vector part > 0);
+    ``q`` and ``-q`` are the same rotation."""
+    a, single = _as(q, (4,), "q")
+    a = a.copy()
+    for i in range(a.shape[0]):
+        if _k._needs_flip(a[i, 0], a[i, 1], a[i, 2], a[i, 3]):
+            a[i] = -a[i]
+    return _out(a, single)
 
 
 def quat_rotate(q: ArrayLike, v: ArrayLike) -> Array:
@@ -241,8 +253,10 @@ def rotvec_from_dcm(C: ArrayLike) -> Array:
 
 def quat_angle(q1: ArrayLike, q2: ArrayLike) -> Array | float:
     """Angle (rad, in [0, pi]) of the rotation between ``q1`` and ``q2``."""
-    d = np.abs(np.sum(quat_normalize(q1) * quat_normalize(q2), axis=-1))
-    out = 2.0 * np.arccos(np.clip(d, 0.0, 1.0))
+    # 2 atan2(|v|, |w|) of the relative rotation q1* ⊗ q2 is accurate for
+    # small angles, unlike 2 acos(|q1·q2|) (error ~ sqrt(eps) ~ 1e-8 rad).
+    d = quat_multiply(quat_conjugate(quat_normalize(q1)), quat_normalize(q2))
+    out = 2.0 * np.arctan2(np.linalg.norm(d[..., 1:], axis=-1), np.abs(d[..., 0]))
     return float(out) if np.ndim(out) == 0 else out
 
 
@@ -346,3 +360,163 @@ Q_ENU_NED = _k.quat_from_dcm_1(C_ENU_NED)
 C_FLU_FRD = np.diag([1.0, -1.0, -1.0])
 #: quaternion ``q_frd_flu`` (rotation of pi about x; its own inverse up to sign).
 Q_FRD_FLU = _k.quat_from_dcm_1(C_FLU_FRD.T)
+
+
+# ---- converters to other conventions ----------------------------------------
+#: ``v_ned = C_NED_NWU @ v_nwu`` (north-west-up, used by the ``ahrs`` package).
+C_NED_NWU = np.diag([1.0, -1.0, -1.0])
+
+#: Known external conventions: name -> (C_ned_ext nav-frame change, scalar_last).
+#: All of them express body (sensor) -> navigation quaternions; what differs is
+#: the navigation frame and the component order.
+EXTERNAL_CONVENTIONS: dict[str, tuple[np.ndarray, bool]] = {
+    "ned": (np.eye(3), False),  # imunav itself
+    "enu": (C_ENU_NED.T, False),  # q_enu_b, scalar first
+    "broad": (C_ENU_NED.T, False),  # BROAD opt_quat: sensor -> ENU, scalar first (Laidig et al. 2021)
+    "vqf": (C_ENU_NED.T, False),  # vqf quat6D / quat9D: sensor -> ENU, scalar first
+    "ahrs": (C_NED_NWU, False),  # ahrs package (Madgwick, Mahony, ...): sensor -> NWU, scalar first
+    "scipy": (np.eye(3), True),  # scipy Rotation.as_quat(): [x, y, z, w], same frames
+}
+
+
+def _conv(name: str) -> tuple[Array, bool]:
+    from imunav.errors import InvalidInputError
+
+    key = name.lower()
+    if key not in EXTERNAL_CONVENTIONS:
+        raise InvalidInputError(f"unknown convention {name!r}; known: {sorted(EXTERNAL_CONVENTIONS)}")
+    return EXTERNAL_CONVENTIONS[key]
+
+
+def to_convention(q_nb: ArrayLike, convention: str, *, body: str = "same") -> Array:
+    """Express imunav quaternions ``q_nb`` (NED, scalar first) in another convention.
+
+    ``q_ext = q_ext_ned ⊗ q_nb [⊗ q_frd_flu]`` reordered as the convention
+    wants.  ``body="flu"`` also re-expresses the body frame from FRD to FLU
+    (for estimators whose sensor frame is forward-left-up); the default keeps
+    the sensor axes as they are.
+    """
+    C, scalar_last = _conv(convention)
+    q = quat_multiply(quat_from_dcm(C.T), q_nb)
+    if body == "flu":
+        q = quat_multiply(q, Q_FRD_FLU)
+    elif body != "same":
+        from imunav.errors import InvalidInputError
+
+        raise InvalidInputError(f"body must be 'same' or 'flu', not {body!r}")
+    q = quat_canonical(q)
+    return q[..., [1, 2, 3, 0]] if scalar_last else q
+
+
+def from_convention(q_ext: ArrayLike, convention: str, *, body: str = "same") -> Array:
+    """Inverse of :func:`to_convention`: external quaternions to imunav ``q_nb``.
+
+    Examples
+    --------
+    A BROAD / vqf quaternion (sensor -> ENU) becomes sensor -> NED with
+    ``from_convention(q, "vqf")``; an ``ahrs`` quaternion (sensor -> NWU) with
+    ``from_convention(q, "ahrs")``.
+    """
+    C, scalar_last = _conv(convention)
+    q = np.asarray(q_ext, dtype=float)
+    if scalar_last:
+        q = q[..., [3, 0, 1, 2]]
+    q = quat_multiply(quat_from_dcm(C), quat_normalize(q))
+    if body == "flu":
+        q = quat_multiply(q, quat_conjugate(Q_FRD_FLU))
+    elif body != "same":
+        from imunav.errors import InvalidInputError
+
+        raise InvalidInputError(f"body must be 'same' or 'flu', not {body!r}")
+    return q
+
+
+def _axis_rotations() -> list[Array]:
+    import itertools
+
+    out = []
+    for p in itertools.permutations(range(3)):
+        for s in itertools.product((1.0, -1.0), repeat=3):
+            M = np.zeros((3, 3))
+            for i in range(3):
+                M[i, p[i]] = s[i]
+            if np.linalg.det(M) > 0:
+                out.append(M)
+    return out
+
+
+@dataclass(frozen=True)
+class ConventionMatch:
+    """Result of :func:`find_convention`: ``q_ref ≈ L ⊗ f(q_ext) ⊗ B``.
+
+    ``nav_dcm`` is the DCM of L (reference nav frame from external nav
+    frame), ``body_dcm`` of B (external body frame from reference body
+    frame), ``scalar_last`` and ``conjugate`` describe f, and
+    ``median_error_rad`` the fit.
+    """
+
+    nav_dcm: Array
+    body_dcm: Array
+    scalar_last: bool
+    conjugate: bool
+    median_error_rad: float
+
+    def apply(self, q_ext: ArrayLike) -> Array:
+        """Convert external quaternions to the reference convention."""
+        q = np.asarray(q_ext, dtype=float)
+        if self.scalar_last:
+            q = q[..., [3, 0, 1, 2]]
+        q = quat_normalize(q)
+        if self.conjugate:
+            q = quat_conjugate(q)
+        return quat_multiply(quat_multiply(quat_from_dcm(self.nav_dcm), q), quat_from_dcm(self.body_dcm))
+
+    def to_dict(self) -> dict:
+        return {
+            "nav_dcm": self.nav_dcm.tolist(),
+            "body_dcm": self.body_dcm.tolist(),
+            "scalar_last": self.scalar_last,
+            "conjugate": self.conjugate,
+            "median_error_rad": self.median_error_rad,
+        }
+
+
+def find_convention(q_ext: ArrayLike, q_ref: ArrayLike, *, max_samples: int = 200) -> ConventionMatch:
+    """Find the convention of an external attitude estimate by comparing it with a reference.
+
+    Searches the component order (scalar first / last), conjugation, and the
+    24 axis-aligned frame changes on each side, ``q_ref ≈ L ⊗ f(q_ext) ⊗ B``,
+    and returns the combination with the smallest median angle error over up
+    to ``max_samples`` evenly spaced samples.  ``q_ref`` is in imunav's
+    convention (e.g. a simulated truth).
+    """
+    qe = np.asarray(q_ext, dtype=float)
+    qr = quat_normalize(q_ref)
+    if qe.ndim != 2 or qe.shape != qr.shape:
+        raise ShapeError(f"q_ext {qe.shape} and q_ref {qr.shape} must both be (N, 4) with the same N")
+    idx = np.linspace(0, qe.shape[0] - 1, min(max_samples, qe.shape[0])).astype(int)
+    qe, qr = qe[idx], qr[idx]
+    rots = _axis_rotations()
+    qrots = [quat_from_dcm(M) for M in rots]
+    cands: list[tuple[float, int, int, bool, bool]] = []
+    for scalar_last in (False, True):
+        qa = quat_normalize(qe[:, [3, 0, 1, 2]] if scalar_last else qe)
+        for conj in (False, True):
+            qb = quat_conjugate(qa) if conj else qa
+            for i, L in enumerate(qrots):
+                lq = quat_multiply(L, qb)
+                # best right factor in closed form: B ≈ (L q)^-1 ⊗ q_ref, then snap to the nearest axis rotation
+                d = quat_multiply(quat_conjugate(lq), qr)
+                d = d * np.where(d[:, :1] < 0, -1.0, 1.0)
+                Bm = dcm_from_quat(quat_normalize(np.mean(d, axis=0)))
+                j = int(np.argmax([np.trace(M.T @ Bm) for M in rots]))
+                err = float(np.median(quat_angle(quat_multiply(lq, qrots[j]), qr)))
+                cands.append((err, i, j, scalar_last, conj))
+    # Component permutations of a quaternion equal products with constant unit
+    # quaternions on both sides, so several descriptions fit equally well;
+    # among those within 5 % of the best, report the simplest one.
+    e_min = min(c[0] for c in cands)
+    ident = int(np.argmax([np.trace(M) for M in rots]))
+    ok = [c for c in cands if c[0] <= 1.05 * e_min + 1e-12]
+    best = min(ok, key=lambda c: (c[3], c[4], c[2] != ident, c[1] != ident, c[0]))
+    return ConventionMatch(rots[best[1]], rots[best[2]], best[3], best[4], best[0])

@@ -6,22 +6,50 @@ strictly increasing), angular rate ``gyro`` (rad/s, body FRD), specific force
 magnetic field ``mag`` (kept in ``mag_unit``) and the temperature ``temp``
 (°C).  The constructor validates everything and raises an
 :mod:`imunav.errors` exception naming the rows and columns at fault.  Units
-other than SI are declared only at the edge, in :meth:`ImuData.from_arrays`.
+other than SI are declared only at the edge, in :meth:`ImuData.from_arrays`
+(deg/s, g, raw counts with per-axis scale and offset, ms time stamps ...).
+
+Also here: :meth:`ImuData.gaps` (intervals longer than 1.5 × the median),
+:func:`static_intervals` (moving-variance rest detector, numba kernel, 1e7
+samples in seconds), :func:`detect_saturation` (samples at a full scale or
+stuck at a rail value) and :func:`describe` (the summary behind
+``imunav info``).  Files are read and written by :mod:`imunav.io`.
 """
 
 from __future__ import annotations
 
 import dataclasses
+import functools
 from dataclasses import dataclass, field
-from typing import Any, Literal
+from typing import TYPE_CHECKING, Any, Literal
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from imunav.errors import InvalidInputError, NonFiniteError, ShapeError, TimeOrderError
+from imunav.errors import (
+    InsufficientDataError,
+    InvalidInputError,
+    NonFiniteError,
+    SaturationError,
+    ShapeError,
+    TimeOrderError,
+)
 from imunav.units import to_si
 
-__all__ = ["ImuData", "Gap"]
+if TYPE_CHECKING:  # pragma: no cover
+    import pandas as pd
+
+__all__ = [
+    "ImuData",
+    "Gap",
+    "StaticIntervals",
+    "static_intervals",
+    "moving_variance",
+    "Saturation",
+    "detect_saturation",
+    "RecordingSummary",
+    "describe",
+]
 
 NanPolicy = Literal["raise", "drop", "interpolate"]
 _VECTOR_FIELDS = ("gyro", "accel", "mag")
@@ -82,7 +110,8 @@ class ImuData:
                 continue
             a = np.array(v, dtype=np.float64, copy=True)
             if a.ndim != 2 or a.shape[1] != 3:
-                raise ShapeError(f"{name} must have shape (N, 3) = ({n}, 3), got {a.shape}")
+                hint = f"; it looks transposed: pass {name}.T" if a.shape == (3, n) else ""
+                raise ShapeError(f"{name} must have shape (N, 3) = ({n}, 3), got {a.shape}{hint}")
             if a.shape[0] != n:
                 raise ShapeError(f"{name} has {a.shape[0]} rows but t has {n}; every channel needs one row per time stamp")
             object.__setattr__(self, name, a)
@@ -114,9 +143,12 @@ class ImuData:
             bad = ~np.isfinite(a)
             if bad.any():
                 rows = bad if bad.ndim == 1 else bad.any(axis=1)
-                cols = "" if bad.ndim == 1 else f", columns {sorted(set(np.nonzero(bad)[1].tolist()))}"
+                if bad.ndim == 1:
+                    cols = f"column {name}"
+                else:
+                    cols = "columns " + ", ".join(f"{name}_{'xyz'[j]}" for j in np.flatnonzero(bad.any(axis=0)))
                 raise NonFiniteError(
-                    f"{name} has NaN/inf at rows {_rows(rows)}{cols}. Pass nan_policy='drop' or "
+                    f"{name} has NaN/inf at rows {_rows(rows)} ({cols}). Pass nan_policy='drop' or "
                     "'interpolate' to ImuData.from_arrays / read_imu to handle them explicitly"
                 )
 
@@ -139,7 +171,7 @@ class ImuData:
     @classmethod
     def from_arrays(
         cls,
-        t: ArrayLike,
+        t: ArrayLike | None,
         gyro: ArrayLike,
         accel: ArrayLike,
         mag: ArrayLike | None = None,
@@ -148,31 +180,53 @@ class ImuData:
         time_unit: str = "s",
         gyro_unit: str = "rad/s",
         accel_unit: str = "m/s^2",
-        gyro_scale: float | None = None,
-        accel_scale: float | None = None,
-        gyro_offset: float = 0.0,
-        accel_offset: float = 0.0,
+        gyro_scale: float | ArrayLike | None = None,
+        accel_scale: float | ArrayLike | None = None,
+        gyro_offset: float | ArrayLike = 0.0,
+        accel_offset: float | ArrayLike = 0.0,
         mag_unit: str = "uT",
         nan_policy: NanPolicy = "raise",
         meta: dict[str, Any] | None = None,
+        fs: float | None = None,
+        t0: float = 0.0,
     ) -> "ImuData":
         """Build from arrays in declared units, converting to SI.
 
         ``gyro_unit`` may be ``"rad/s"``, ``"deg/s"``, ``"rpm"`` or
         ``"counts"`` (then ``gyro_scale`` in rad/s per count is required);
         ``accel_unit`` ``"m/s^2"``, ``"g"``, ``"mg"`` or ``"counts"`` (with
-        ``accel_scale`` in m/s² per count).  ``nan_policy``: ``"raise"``
+        ``accel_scale`` in m/s² per count); with counts, ``value_si =
+        (counts - offset) * scale`` where scale and offset are scalars or
+        per-axis (3,) arrays.  ``nan_policy``: ``"raise"``
         (default) names the offending rows; ``"drop"`` removes rows with any
         NaN; ``"interpolate"`` fills NaN samples linearly in time.  What was
-        done is recorded in ``meta["nan_policy"]``.
+        done is recorded in ``meta["nan_policy"]`` (policy, affected rows and
+        columns).  With ``t=None`` the samples are at ``t0 + k / fs``.
+
+        Examples
+        --------
+        >>> d = ImuData.from_arrays(None, [[0, 0, 1.0]] * 4, [[0, 0, -1.0]] * 4,
+        ...                         fs=100.0, gyro_unit="deg/s", accel_unit="g")
+        >>> round(float(d.accel[0, 2]), 5), d.fs
+        (-9.80665, 100.0)
         """
+        if nan_policy not in ("raise", "drop", "interpolate"):
+            raise InvalidInputError(f"nan_policy must be 'raise', 'drop' or 'interpolate', not {nan_policy!r}")
+        if t is None:
+            if fs is None or not np.isfinite(fs) or fs <= 0:
+                raise InvalidInputError("t is None: give the sampling rate fs (Hz, > 0) so that t = t0 + k / fs")
+            t = t0 + np.arange(np.shape(gyro)[0], dtype=np.float64) / float(fs)
+        elif fs is not None:
+            raise InvalidInputError("give either t or fs, not both")
         ts = to_si(t, time_unit, "time")
-        g = to_si(gyro, gyro_unit, "angular_rate", scale=gyro_scale, offset=gyro_offset)
-        a = to_si(accel, accel_unit, "acceleration", scale=accel_scale, offset=accel_offset)
+        g = _vector_to_si(gyro, gyro_unit, "angular_rate", gyro_scale, gyro_offset, "gyro")
+        a = _vector_to_si(accel, accel_unit, "acceleration", accel_scale, accel_offset, "accel")
         m = None if mag is None else np.asarray(mag, dtype=float)
         tp = None if temp is None else np.asarray(temp, dtype=float)
         meta = dict(meta or {})
-        meta.setdefault("units_in", {"time": time_unit, "gyro": gyro_unit, "accel": accel_unit})
+        declared = {"time": time_unit, "gyro": gyro_unit, "accel": accel_unit}
+        if declared != {"time": "s", "gyro": "rad/s", "accel": "m/s^2"}:
+            meta.setdefault("units_in", declared)
         if nan_policy != "raise":
             ts, g, a, m, tp, info = _apply_nan_policy(ts, g, a, m, tp, nan_policy)
             meta["nan_policy"] = info
@@ -189,7 +243,7 @@ class ImuData:
         """Sample intervals ``t[i+1] - t[i]`` (N-1,)."""
         return np.diff(self.t)
 
-    @property
+    @functools.cached_property
     def fs(self) -> float:
         """Nominal sample rate (Hz): 1 / median interval."""
         if self.n < 2:
@@ -203,6 +257,17 @@ class ImuData:
 
     def __len__(self) -> int:
         return self.n
+
+    def __repr__(self) -> str:
+        parts = [f"n={self.n}"]
+        if self.n >= 2:
+            parts += [f"fs={self.fs:.6g} Hz", f"duration={self.duration:.6g} s"]
+        parts.append("channels=gyro,accel" + (",mag" if self.mag is not None else "") + (",temp" if self.temp is not None else ""))
+        if self.mag is not None:
+            parts.append(f"mag_unit={self.mag_unit!r}")
+        if self.meta:
+            parts.append(f"meta_keys={sorted(self.meta)}")
+        return f"ImuData({', '.join(parts)})"
 
     def gaps(self, factor: float = 1.5) -> list[Gap]:
         """Intervals longer than ``factor`` × the median interval."""
@@ -242,6 +307,98 @@ class ImuData:
             raise InvalidInputError(f"no samples in [{t0}, {t1}); the recording spans [{self.t[0]}, {self.t[-1]}]")
         return self.slice(i0, i1)
 
+    def interp(self, t_new: ArrayLike) -> "ImuData":
+        """Linear interpolation of every channel at the times ``t_new`` (s).
+
+        ``t_new`` must be strictly increasing and inside ``[t[0], t[-1]]``;
+        no extrapolation.  Interpolating across a gap (see :meth:`gaps`)
+        bridges it linearly: check ``gaps()`` first if that matters.
+        """
+        tn = np.asarray(t_new, dtype=np.float64)
+        if tn.ndim != 1 or tn.size == 0:
+            raise ShapeError(f"t_new must be a non-empty 1-D array, got shape {tn.shape}")
+        if tn[0] < self.t[0] or tn[-1] > self.t[-1]:
+            raise InvalidInputError(
+                f"t_new spans [{tn[0]}, {tn[-1]}] s, outside the recording [{self.t[0]}, {self.t[-1]}] s; "
+                "interp does not extrapolate"
+            )
+
+        def f(a: NDArray[np.float64] | None) -> NDArray[np.float64] | None:
+            if a is None:
+                return None
+            if a.ndim == 1:
+                return np.interp(tn, self.t, a)
+            return np.column_stack([np.interp(tn, self.t, a[:, j]) for j in range(a.shape[1])])
+
+        return ImuData(tn, f(self.gyro), f(self.accel), f(self.mag), f(self.temp), mag_unit=self.mag_unit, meta=dict(self.meta))
+
+    def resample(self, fs: float) -> "ImuData":
+        """Uniform samples at ``fs`` Hz from ``t[0]`` to ``t[-1]`` (linear, see :meth:`interp`).
+
+        Resampling to a lower rate without low-pass filtering aliases
+        noise; decimate with an anti-alias filter first if noise statistics
+        matter.  ``meta["resampled_from_hz"]`` records the original rate.
+        """
+        if not (np.isfinite(fs) and fs > 0):
+            raise InvalidInputError(f"fs must be positive and finite, got {fs}")
+        k = int(np.floor(self.duration * fs + 1e-9))
+        out = self.interp(self.t[0] + np.arange(k + 1) / fs)
+        out.meta["resampled_from_hz"] = self.fs if self.n >= 2 else None
+        return out
+
+    def to_dataframe(self) -> "pd.DataFrame":
+        """pandas DataFrame, one column per channel (``t, gyro_x ... temp``), SI.
+
+        ``mag_unit`` and ``meta`` go to ``DataFrame.attrs``.
+        """
+        import pandas as pd
+
+        from imunav.io.csv import imu_to_table
+
+        names, block = imu_to_table(self)
+        df = pd.DataFrame(block, columns=names)
+        df.attrs["mag_unit"] = self.mag_unit
+        df.attrs["meta"] = dict(self.meta)
+        return df
+
+    @classmethod
+    def from_dataframe(
+        cls,
+        df: "pd.DataFrame",
+        *,
+        columns: dict[str, Any] | None = None,
+        units: dict[str, str] | None = None,
+        scales: dict[str, float] | None = None,
+        offsets: dict[str, float] | None = None,
+        fs: float | None = None,
+        t0: float = 0.0,
+        nan_policy: NanPolicy = "raise",
+        mag_unit: str | None = None,
+        meta: dict[str, Any] | None = None,
+    ) -> "ImuData":
+        """Build from a DataFrame; columns found by name or ``columns`` mapping.
+
+        Column names, ``units``/``scales``/``offsets`` work as in
+        :func:`imunav.io.csv.read_csv` (e.g. ``columns={"t": "time_s",
+        "gx": "GyrX", ...}``, ``units={"gyro": "deg/s"}``).  Inverse of
+        :meth:`to_dataframe` (``attrs`` give back ``mag_unit`` and ``meta``).
+        """
+        from imunav.io._common import build_imu
+        from imunav.io.csv import resolve_columns, table_to_arrays
+
+        source = "DataFrame"
+        cols = resolve_columns(list(df.columns), columns, source)
+        arrays = table_to_arrays(df, cols, source)
+        stored = {"mag_unit": df.attrs.get("mag_unit"), "meta": df.attrs.get("meta") or {}}
+        return build_imu(
+            arrays, source, stored=stored, units=units, scales=scales, offsets=offsets, fs=fs, t0=t0,
+            nan_policy=nan_policy, mag_unit=mag_unit, meta=meta,
+        )  # fmt: skip
+
+    def static_intervals(self, window_s: float = 1.0, **kwargs: Any) -> "StaticIntervals":
+        """Shortcut for :func:`static_intervals` on this recording."""
+        return static_intervals(self, window_s=window_s, **kwargs)
+
     def to_dict(self) -> dict[str, Any]:
         """Plain dict of lists (JSON-friendly)."""
         d: dict[str, Any] = {"t": self.t.tolist(), "gyro": self.gyro.tolist(), "accel": self.accel.tolist()}
@@ -252,6 +409,25 @@ class ImuData:
             d["temp"] = self.temp.tolist()
         d["meta"] = self.meta
         return d
+
+
+def _vector_to_si(x, unit, quantity, scale, offset, name):
+    """``to_si`` for a triad, accepting per-axis (3,) count scales and offsets."""
+    if np.ndim(scale) == 0 and np.ndim(offset) == 0:
+        return to_si(x, unit, quantity, scale=scale, offset=float(offset))
+    from imunav.errors import UnitError
+
+    if unit.strip().lower() not in ("counts", "count", "lsb", "raw"):
+        raise UnitError(f"per-axis {name}_scale / {name}_offset need {name}_unit='counts', not {unit!r}")
+    if scale is None:
+        raise UnitError(f"{name} declared in raw counts needs {name}_scale (SI units per count)")
+    sc = np.asarray(scale, dtype=float)
+    of = np.asarray(offset, dtype=float)
+    if sc.shape not in ((), (3,)) or of.shape not in ((), (3,)):
+        raise ShapeError(f"{name}_scale and {name}_offset must be scalars or 3 values (x, y, z); got shapes {sc.shape}, {of.shape}")
+    if not np.all(np.isfinite(sc)) or np.any(sc == 0):
+        raise UnitError(f"{name}_scale must be finite and non-zero, got {sc.tolist()}")
+    return (np.asarray(x, dtype=float) - of) * sc
 
 
 def _apply_nan_policy(t, g, a, m, tp, policy):
@@ -266,7 +442,15 @@ def _apply_nan_policy(t, g, a, m, tp, policy):
         if c2.shape[0] != t.shape[0]:
             raise ShapeError(f"channel has {c2.shape[0]} rows but t has {t.shape[0]}")
         bad |= ~np.isfinite(c2).all(axis=1)
-    info = {"policy": policy, "rows": np.flatnonzero(bad).tolist()}
+    cols: list[str] = []
+    for name, c in chans:
+        c2 = ~np.isfinite(c.reshape(c.shape[0], -1))
+        if c2.shape[1] == 1:
+            cols += [name] if c2.any() else []
+        else:
+            cols += [f"{name}_{'xyz'[j]}" for j in np.flatnonzero(c2.any(axis=0))]
+    action = {"drop": "rows removed", "interpolate": "values linearly interpolated in time"}.get(policy, "")
+    info = {"policy": policy, "rows": np.flatnonzero(bad).tolist(), "columns": cols, "n_rows": int(bad.sum()), "action": action}
     if not bad.any():
         return t, g, a, m, tp, info
     if policy == "drop":
@@ -300,3 +484,427 @@ def _apply_nan_policy(t, g, a, m, tp, policy):
             tp2 = out[k]
         return t, g2, a2, m2, tp2, info
     raise InvalidInputError(f"nan_policy must be 'raise', 'drop' or 'interpolate', not {policy!r}")
+
+
+# -- moving variance and static intervals --------------------------------------
+
+
+def moving_variance(x: ArrayLike, window: int) -> NDArray[np.float64]:
+    """Population variance of each window ``x[j:j+window]`` (j = 0 .. N-window).
+
+    For (N, k) input the per-column variances are summed (``sum_k var(x_k)``).
+    numba kernel with a sliding Welford update; O(N).
+    """
+    from imunav._timeseries_kernels import moving_var_cols
+
+    a = np.asarray(x, dtype=np.float64)
+    w = int(window)
+    if w < 2:
+        raise InvalidInputError(f"the window must hold at least 2 samples, got {w}")
+    if a.shape[0] < w:
+        raise InvalidInputError(f"{a.shape[0]} samples are fewer than one window of {w} samples")
+    return moving_var_cols(a.reshape(a.shape[0], -1), w)
+
+
+@dataclass(frozen=True, eq=False)
+class StaticIntervals:
+    """Static (at rest) intervals of a recording.
+
+    Attributes
+    ----------
+    starts, stops : (K,) int64
+        Half-open sample index ranges ``[starts[k], stops[k])``.
+    t_start, t_stop : (K,) float
+        ``t[starts]`` and ``t[stops - 1]`` (time of the first / last static sample).
+    mask : (N,) bool
+        True on static samples (only those in the returned intervals).
+    accel_threshold, gyro_threshold : float
+        Thresholds applied to the moving-variance statistics, (m/s²)² and
+        (rad/s)² (``nan`` when a sensor was not used).
+    window : int
+        Window length in samples.
+    method : str
+        ``"axes"`` (sum of per-axis variances) or ``"norm"`` (variance of the norm).
+    """
+
+    starts: NDArray[np.int64]
+    stops: NDArray[np.int64]
+    t_start: NDArray[np.float64]
+    t_stop: NDArray[np.float64]
+    mask: NDArray[np.bool_]
+    accel_threshold: float
+    gyro_threshold: float
+    window: int
+    method: str
+
+    def __len__(self) -> int:
+        return int(self.starts.shape[0])
+
+    def __iter__(self):
+        return iter(zip(self.starts.tolist(), self.stops.tolist(), strict=True))
+
+    @property
+    def durations(self) -> NDArray[np.float64]:
+        """``t_stop - t_start`` of each interval (s)."""
+        return self.t_stop - self.t_start
+
+    def to_dict(self) -> dict[str, Any]:
+        return {
+            "starts": self.starts.tolist(),
+            "stops": self.stops.tolist(),
+            "t_start": self.t_start.tolist(),
+            "t_stop": self.t_stop.tolist(),
+            "n_static_samples": int(self.mask.sum()),
+            "accel_threshold": self.accel_threshold,
+            "gyro_threshold": self.gyro_threshold,
+            "window": self.window,
+            "method": self.method,
+        }
+
+
+def _statistic(x: NDArray[np.float64], w: int, method: str) -> NDArray[np.float64]:
+    if method == "norm":
+        return moving_variance(np.sqrt(np.einsum("ij,ij->i", x, x)), w)
+    return moving_variance(x, w)
+
+
+#: Lowest automatic thresholds: variances far below any real sensor's noise
+#: (σ = 1 µm/s² ≈ 0.1 µg and σ = 1e-7 rad/s ≈ 0.02 °/h per sample) but above
+#: the rounding residue of the moving variance, so that noise-free simulated
+#: records are still split into rest and motion.
+_AUTO_FLOOR = {"accel": 1e-12, "gyro": 1e-14}
+
+
+def _quietest(stat: NDArray[np.float64], w: int) -> float:
+    """Variance of the quietest of the non-overlapping windows (floored above 0)."""
+    blocks = stat[::w]
+    pos = blocks[blocks > 0]
+    # a window of identical (quantised) samples has variance 0: take the
+    # quietest window that moved at all instead
+    return float(pos.min()) if pos.size else float(np.finfo(float).tiny)
+
+
+def static_intervals(
+    data: ImuData,
+    window_s: float = 1.0,
+    threshold: float | tuple[float, float] | None = None,
+    min_duration_s: float | None = None,
+    *,
+    factor: float = 6.0,
+    use_gyro: bool = False,
+    method: Literal["axes", "norm"] = "axes",
+) -> StaticIntervals:
+    """Find the static intervals of a recording by a moving-variance test.
+
+    For every window of ``w = round(window_s * fs)`` samples, the statistic
+    ``s_a = Σ_k var(a_k)`` (``method="axes"``, sum of the per-axis
+    variances) or ``s_a = var(‖a‖)`` (``method="norm"``) of the specific
+    force is computed, and the same ``s_g`` for the angular rate.  A window
+    is static when ``s_a ≤ λ_a`` and (if ``use_gyro``) ``s_g ≤ λ_g``; a
+    sample is static when it lies in at least one static window, so that a
+    static segment is recovered to its edges rather than shrunk by half a
+    window.  Runs shorter than ``min_duration_s`` (default ``window_s``)
+    are discarded.  This is the detector of Tedaldi et al. (ICRA 2014, §IV-A:
+    variance of the accelerometer over a sliding window against a multiple
+    of its value in an initial static period), extended to the gyroscope.
+
+    ``"axes"`` is the default because the norm of the specific force barely
+    changes during a slow rotation (gravity only changes direction), whereas
+    the per-axis variance sees it.
+
+    Parameters
+    ----------
+    data : ImuData
+    window_s : float
+        Window length (s).
+    threshold : float or (float, float), optional
+        ``λ_a`` in (m/s²)², or ``(λ_a, λ_g)`` with ``λ_g`` in (rad/s)².  With
+        a single value ``λ_g`` is automatic.  ``None``: both automatic,
+        ``λ = factor ×`` the statistic of the quietest non-overlapping window
+        (this assumes the record has at least one window at rest), but at
+        least 1e-12 (m/s²)² and 1e-14 (rad/s)² so that noise-free simulated
+        data work too.
+    min_duration_s : float, optional
+        Shortest interval kept (s); default ``window_s``.
+    factor : float
+        Multiple of the quietest-window variance for automatic thresholds.
+        For white noise, a window variance estimate has relative spread
+        ``sqrt(2 / (w - 1))``; the default 6 leaves room for that and for
+        slow drift while still rejecting hand motion.
+    use_gyro : bool
+        Also require a quiet gyroscope.
+    method : ``"axes"`` or ``"norm"``.
+
+    Returns
+    -------
+    StaticIntervals
+    """
+    if not isinstance(data, ImuData):
+        raise InvalidInputError(f"static_intervals needs an ImuData, got {type(data).__name__}")
+    if method not in ("axes", "norm"):
+        raise InvalidInputError(f"method must be 'axes' or 'norm', not {method!r}")
+    if not (np.isfinite(window_s) and window_s > 0):
+        raise InvalidInputError(f"window_s must be positive, got {window_s}")
+    if not (np.isfinite(factor) and factor > 0):
+        raise InvalidInputError(f"factor must be positive, got {factor}")
+    n = data.n
+    w = max(int(round(window_s * data.fs)), 2)
+    if n < w:
+        raise InsufficientDataError(
+            f"the recording has {n} samples, fewer than one window of {w} samples ({window_s} s); use a shorter window_s"
+        )
+    if min_duration_s is None:
+        min_duration_s = window_s
+    if threshold is None:
+        thr_a, thr_g = None, None
+    elif np.ndim(threshold) == 0:
+        thr_a, thr_g = float(threshold), None  # type: ignore[arg-type]
+    else:
+        thr = tuple(float(v) for v in threshold)  # type: ignore[union-attr]
+        if len(thr) != 2:
+            raise InvalidInputError(f"threshold must be a float or (accel, gyro), got {threshold!r}")
+        thr_a, thr_g = thr
+    for name, v in (("accel", thr_a), ("gyro", thr_g)):
+        if v is not None and not (np.isfinite(v) and v >= 0):
+            raise InvalidInputError(f"the {name} threshold must be finite and >= 0, got {v}")
+
+    s_a = _statistic(data.accel, w, method)
+    if thr_a is None:
+        thr_a = max(factor * _quietest(s_a, w), _AUTO_FLOOR["accel"])
+    quiet = s_a <= thr_a
+    if use_gyro:
+        s_g = _statistic(data.gyro, w, method)
+        if thr_g is None:
+            thr_g = max(factor * _quietest(s_g, w), _AUTO_FLOOR["gyro"])
+        quiet &= s_g <= thr_g
+    else:
+        thr_g = float("nan")
+    # sample i is static if a static window starts in [i - w + 1, i]
+    from imunav._timeseries_kernels import covered, runs
+
+    starts, stops = runs(covered(quiet, n, w))
+    # duration of a run of samples = its count times the sample interval
+    keep = (data.t[stops - 1] - data.t[starts]) + 1.0 / data.fs >= min_duration_s - 1e-9
+    starts, stops = starts[keep], stops[keep]
+    mask = np.zeros(n, dtype=bool)
+    for a, b in zip(starts.tolist(), stops.tolist(), strict=True):
+        mask[a:b] = True
+    return StaticIntervals(
+        starts=starts.astype(np.int64),
+        stops=stops.astype(np.int64),
+        t_start=data.t[starts].copy(),
+        t_stop=data.t[stops - 1].copy() if stops.size else np.empty(0),
+        mask=mask,
+        accel_threshold=float(thr_a),
+        gyro_threshold=float(thr_g),
+        window=w,
+        method=method,
+    )
+
+
+# -- saturation ----------------------------------------------------------------
+
+_SAT_CHANNELS = ("gyro_x", "gyro_y", "gyro_z", "accel_x", "accel_y", "accel_z")
+
+
+@dataclass(frozen=True, eq=False)
+class Saturation:
+    """Samples at (or stuck at) a sensor's range limit.
+
+    Attributes
+    ----------
+    mask : (N, 6) bool
+        Saturated samples of ``gyro_x … accel_z``.
+    counts : dict[str, int]
+        Saturated samples per channel.
+    method : str
+        ``"full_scale"`` or ``"runs"`` (runs of identical extreme values).
+    """
+
+    mask: NDArray[np.bool_]
+    counts: dict[str, int]
+    method: str
+
+    @property
+    def any(self) -> bool:
+        return bool(self.mask.any())
+
+    @property
+    def rows(self) -> NDArray[np.int64]:
+        """Indices of samples with at least one saturated channel."""
+        return np.flatnonzero(self.mask.any(axis=1))
+
+    def to_dict(self) -> dict[str, Any]:
+        return {"method": self.method, "counts": dict(self.counts), "n_rows": int(self.rows.size)}
+
+    def check(self, where: str = "the recording") -> None:
+        """Raise :class:`~imunav.errors.SaturationError` if any sample is saturated."""
+        if not self.any:
+            return
+        chans = ", ".join(f"{k} ({v})" for k, v in self.counts.items() if v)
+        raise SaturationError(
+            f"{where} has saturated samples at rows {_rows(self.mask.any(axis=1))}: {chans}. "
+            "Exclude them (e.g. data.slice) or use a sensor range that covers the motion"
+        )
+
+
+def _extreme_runs(x: NDArray[np.float64], min_run: int) -> NDArray[np.bool_]:
+    from imunav._timeseries_kernels import runs
+
+    out = np.zeros(x.shape[0], dtype=bool)
+    med = float(np.median(x))
+    mad = float(np.median(np.abs(x - med))) * 1.4826
+    for ext in (x.max(), x.min()):
+        at = x == ext
+        # an extreme is a plausible clip only if it is far from the bulk of the data
+        if abs(ext - med) <= 10.0 * mad or at.sum() < min_run:
+            continue
+        s, e = runs(at)
+        for a, b in zip(s.tolist(), e.tolist(), strict=True):
+            if b - a >= min_run:
+                out[a:b] = True
+    return out
+
+
+def detect_saturation(
+    data: ImuData,
+    gyro_full_scale: float | None = None,
+    accel_full_scale: float | None = None,
+    *,
+    rtol: float = 1e-3,
+    min_run: int = 2,
+) -> Saturation:
+    """Find saturated samples.
+
+    With a full scale (SI: rad/s, m/s²), samples with ``|x| ≥ FS·(1 − rtol)``
+    are saturated.  Without one, a channel is saturated where it sits at
+    its own maximum or minimum value for at least ``min_run`` consecutive
+    samples and that value lies more than 10 robust standard deviations
+    (1.4826·MAD) from the median (a clipped sensor repeats its rail value;
+    a quantised static signal's extremes are near its median).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> g = np.zeros((6, 3)); g[2:4, 0] = 4.36   # a ±250 °/s gyro clipped on x
+    >>> d = ImuData(np.arange(6) / 100, g, np.zeros((6, 3)))
+    >>> detect_saturation(d, gyro_full_scale=np.deg2rad(250)).counts["gyro_x"]
+    2
+    """
+    mask = np.zeros((data.n, 6), dtype=bool)
+    method = "full_scale" if (gyro_full_scale is not None or accel_full_scale is not None) else "runs"
+    for k, (arr, fs_) in enumerate(((data.gyro, gyro_full_scale), (data.accel, accel_full_scale))):
+        for j in range(3):
+            x = arr[:, j]
+            if method == "full_scale":
+                if fs_ is None:
+                    continue
+                if not (np.isfinite(fs_) and fs_ > 0):
+                    raise InvalidInputError(f"full scale must be positive, got {fs_}")
+                mask[:, 3 * k + j] = np.abs(x) >= fs_ * (1.0 - rtol)
+            else:
+                mask[:, 3 * k + j] = _extreme_runs(x, min_run)
+    counts = {c: int(mask[:, i].sum()) for i, c in enumerate(_SAT_CHANNELS)}
+    return Saturation(mask=mask, counts=counts, method=method)
+
+
+# -- summary (imunav info) --------------------------------------------------------
+
+
+@dataclass(frozen=True, eq=False)
+class RecordingSummary:
+    """What ``imunav info`` reports about a recording.
+
+    ``channels`` rows hold per-channel statistics in display units (gyro
+    °/s, accel m/s², mag in ``mag_unit``, temp °C).
+    """
+
+    n: int
+    duration_s: float
+    fs_hz: float
+    dt_min_s: float
+    dt_max_s: float
+    dt_std_s: float
+    gaps: list[Gap]
+    saturation: Saturation
+    static: StaticIntervals | None
+    channels: list[dict[str, Any]]
+    mag_unit: str | None
+    meta: dict[str, Any]
+
+    def to_dict(self) -> dict[str, Any]:
+        return {
+            "n": self.n,
+            "duration_s": self.duration_s,
+            "fs_hz": self.fs_hz,
+            "dt_min_s": self.dt_min_s,
+            "dt_max_s": self.dt_max_s,
+            "dt_std_s": self.dt_std_s,
+            "gaps": [dataclasses.asdict(g) for g in self.gaps],
+            "missing_samples": int(sum(g.missing_samples for g in self.gaps)),
+            "saturation": self.saturation.to_dict(),
+            "static_intervals": None if self.static is None else self.static.to_dict(),
+            "channels": self.channels,
+            "mag_unit": self.mag_unit,
+            "meta": self.meta,
+        }
+
+
+def describe(
+    data: ImuData,
+    *,
+    window_s: float = 1.0,
+    min_duration_s: float | None = None,
+    gyro_full_scale: float | None = None,
+    accel_full_scale: float | None = None,
+) -> RecordingSummary:
+    """Rate, duration, gaps, saturation, static intervals and channel statistics.
+
+    Static intervals are skipped (``None``) when the record is shorter than
+    one window.  Full scales are SI (rad/s, m/s²); without them saturation
+    is detected from runs at the channels' extreme values.
+    """
+    from imunav.units import DEG as _DEG
+
+    n = data.n
+    dt = data.dt
+    static = None
+    if n >= 2 and n >= max(int(round(window_s * data.fs)), 2):
+        static = static_intervals(data, window_s=window_s, min_duration_s=min_duration_s)
+    channels: list[dict[str, Any]] = []
+
+    def add(group: str, arr: NDArray[np.float64] | None, unit: str, factor: float) -> None:
+        if arr is None:
+            return
+        cols = [arr] if arr.ndim == 1 else [arr[:, j] for j in range(arr.shape[1])]
+        for j, c in enumerate(cols):
+            x = c * factor
+            channels.append(
+                {
+                    "channel": group if arr.ndim == 1 else f"{group}_{'xyz'[j]}",
+                    "unit": unit,
+                    "mean": float(x.mean()),
+                    "std": float(x.std()),
+                    "min": float(x.min()),
+                    "max": float(x.max()),
+                }
+            )
+
+    add("gyro", data.gyro, "deg/s", 1.0 / _DEG)
+    add("accel", data.accel, "m/s^2", 1.0)
+    add("mag", data.mag, data.mag_unit, 1.0)
+    add("temp", data.temp, "degC", 1.0)
+    return RecordingSummary(
+        n=n,
+        duration_s=data.duration,
+        fs_hz=data.fs if n >= 2 else float("nan"),
+        dt_min_s=float(dt.min()) if n >= 2 else float("nan"),
+        dt_max_s=float(dt.max()) if n >= 2 else float("nan"),
+        dt_std_s=float(dt.std()) if n >= 2 else float("nan"),
+        gaps=data.gaps(),
+        saturation=detect_saturation(data, gyro_full_scale, accel_full_scale),
+        static=static,
+        channels=channels,
+        mag_unit=data.mag_unit if data.mag is not None else None,
+        meta=dict(data.meta),
+    )

@@ -25,7 +25,13 @@ app = typer.Typer(
 
 # One entry per command module (imunav.cli.<name> with a register(app) function).
 _COMMAND_MODULES: list[str] = [
+    "info",
+    "simulate",
+    "lab",
+    "calibrate",
+    "compensate",
     "attitude",
+    "zupt",
 ]
 
 for _name in _COMMAND_MODULES:

@@ -1,0 +1,96 @@
+"""numba kernels for :mod:`imunav.timeseries` (moving statistics)."""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+
+@njit(cache=True)
+def moving_var(x: np.ndarray, w: int) -> np.ndarray:
+    """1-D wrapper of :func:`moving_var_cols`."""
+    return moving_var_cols(x.reshape(x.shape[0], 1), w)
+
+
+@njit(cache=True)
+def moving_var_cols(x: np.ndarray, w: int) -> np.ndarray:
+    """Population variance of every window ``x[j:j+w]``, j = 0 .. N-w.
+
+    For an (N, k) array the variances of the k columns are summed.
+    Sliding Welford update (add the new sample, remove the old one), with
+    the sums recomputed from scratch every ``64 w`` steps so that rounding
+    errors cannot accumulate over long records (1e7 samples).
+    """
+    n = x.shape[0]
+    m = n - w + 1
+    out = np.zeros(max(m, 0))
+    if m <= 0:
+        return out
+    for c in range(x.shape[1]):
+        _moving_var_add(x[:, c], w, out)
+    return out
+
+
+@njit(cache=True)
+def _moving_var_add(x: np.ndarray, w: int, out: np.ndarray) -> None:
+    m = out.shape[0]
+    refresh = 64 * w
+    mean = 0.0
+    m2 = 0.0
+    for j in range(m):
+        if j % refresh == 0:
+            # exact two-pass restart on the window starting at j
+            s = 0.0
+            for k in range(j, j + w):
+                s += x[k]
+            mean = s / w
+            m2 = 0.0
+            for k in range(j, j + w):
+                d = x[k] - mean
+                m2 += d * d
+        else:
+            new = x[j + w - 1]
+            old = x[j - 1]
+            # replace `old` by `new` in a window of constant size w
+            delta = new - old
+            new_mean = mean + delta / w
+            m2 += delta * (new - new_mean + old - mean)
+            mean = new_mean
+        v = m2 / w
+        out[j] += v if v > 0.0 else 0.0
+    return out
+
+
+@njit(cache=True)
+def runs(mask: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Half-open [start, stop) index pairs of the True runs of ``mask``."""
+    n = mask.shape[0]
+    starts = np.empty(n // 2 + 1, dtype=np.int64)
+    stops = np.empty(n // 2 + 1, dtype=np.int64)
+    k = 0
+    i = 0
+    while i < n:
+        if mask[i]:
+            j = i
+            while j < n and mask[j]:
+                j += 1
+            starts[k] = i
+            stops[k] = j
+            k += 1
+            i = j
+        else:
+            i += 1
+    return starts[:k], stops[:k]
+
+
+@njit(cache=True)
+def covered(quiet: np.ndarray, n: int, w: int) -> np.ndarray:
+    """Sample i is True if a True window start lies in [i - w + 1, i]."""
+    out = np.zeros(n, dtype=np.bool_)
+    last = -(10**18)
+    m = quiet.shape[0]
+    for i in range(n):
+        if i < m and quiet[i]:
+            last = i
+        out[i] = i - last < w
+    return out

@@ -1,0 +1,152 @@
+"""``imunav info``: what is in a recording (rate, gaps, saturation, static intervals)."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+from typing import Any
+
+import typer
+
+_EXAMPLE = (
+    "Example:\n\n"
+    "  python -c \"import numpy as np; from imunav.io import write_imu; from imunav.timeseries import ImuData; "
+    "r = np.random.default_rng(0); write_imu(ImuData.from_arrays(None, r.normal(0, 0.1, (3000, 3)), "
+    "r.normal([0, 0, -1], 0.01, (3000, 3)), fs=100, gyro_unit='deg/s', accel_unit='g'), 'rec.csv')\"\n\n"
+    "  imunav info rec.csv --json info.json\n\n"
+    "  imunav info ../shared/data/mpu6050_tedaldi/example_data_calibration.csv --skiprows 4 --fs 100 "
+    "--gyro-unit counts --gyro-scale 1.3323e-4 --accel-unit counts --accel-scale 5.9855e-4 --gyro-full-scale-dps 250"
+)
+
+
+def _parse_columns(items: list[str]) -> dict[str, Any]:
+    from imunav.errors import InvalidInputError
+
+    out: dict[str, Any] = {}
+    for it in items:
+        if "=" not in it:
+            raise InvalidInputError(f"--column expects KEY=NAME (e.g. gx=GyroX), got {it!r}")
+        k, v = it.split("=", 1)
+        out[k.strip()] = int(v) if v.strip().isdigit() else v.strip()
+    return out
+
+
+def info(
+    file: Path = typer.Argument(..., help="Recording: .csv/.txt, .parquet, .h5, .mat (v5 or v7.3), .npz."),
+    format: str | None = typer.Option(None, "--format", help="csv, parquet, hdf5, mat, npz (default: from the suffix)."),
+    json_out: Path | None = typer.Option(None, "--json", help="Also write the summary as JSON to this file."),
+    window_s: float = typer.Option(1.0, "--window", help="Static detector window (s)."),
+    min_static_s: float | None = typer.Option(None, "--min-static", help="Shortest static interval kept (s); default = window."),
+    gyro_fs_dps: float | None = typer.Option(None, "--gyro-full-scale-dps", help="Gyro range (°/s) for saturation."),
+    accel_fs_g: float | None = typer.Option(None, "--accel-full-scale-g", help="Accelerometer range (g) for saturation."),
+    fs: float | None = typer.Option(None, "--fs", help="Sampling rate (Hz) when the file has no time column."),
+    time_unit: str | None = typer.Option(None, "--time-unit", help="Unit of the time column (s, ms, us, ns)."),
+    gyro_unit: str | None = typer.Option(None, "--gyro-unit", help="rad/s, deg/s, rpm or counts."),
+    accel_unit: str | None = typer.Option(None, "--accel-unit", help="m/s^2, g, mg or counts."),
+    gyro_scale: float | None = typer.Option(None, "--gyro-scale", help="rad/s per count (with --gyro-unit counts)."),
+    accel_scale: float | None = typer.Option(None, "--accel-scale", help="m/s² per count (with --accel-unit counts)."),
+    skiprows: int | None = typer.Option(None, "--skiprows", help="CSV: lines to skip before the header."),
+    column: list[str] = typer.Option([], "--column", help="Column mapping KEY=NAME, repeatable (keys t gx gy gz ax ay az mx my mz temp)."),
+    nan_policy: str = typer.Option("raise", "--nan-policy", help="raise, drop or interpolate."),
+    max_rows: int = typer.Option(10, "--max-rows", help="Rows shown per table of gaps / static intervals."),
+) -> None:
+    """Rate, duration, gaps, saturation, static intervals and per-channel mean/std of a recording."""
+    from rich.console import Console
+    from rich.table import Table
+
+    from imunav.errors import InvalidInputError
+    from imunav.io import read_imu
+    from imunav.io._atomic import atomic_path
+    from imunav.timeseries import describe
+    from imunav.units import DEG, G0
+
+    console = Console()
+    err = Console(stderr=True)
+    try:
+        opts: dict[str, Any] = {"nan_policy": nan_policy}
+        units = {k: v for k, v in (("t", time_unit), ("gyro", gyro_unit), ("accel", accel_unit)) if v}
+        scales = {k: v for k, v in (("gyro", gyro_scale), ("accel", accel_scale)) if v is not None}
+        if units:
+            opts["units"] = units
+        if scales:
+            opts["scales"] = scales
+        if fs is not None:
+            opts["fs"] = fs
+        if skiprows is not None:
+            opts["skiprows"] = skiprows
+        if column:
+            opts["columns"] = _parse_columns(column)
+        data = read_imu(file, format=format, **opts)
+        s = describe(
+            data,
+            window_s=window_s,
+            min_duration_s=min_static_s,
+            gyro_full_scale=None if gyro_fs_dps is None else gyro_fs_dps * DEG,
+            accel_full_scale=None if accel_fs_g is None else accel_fs_g * G0,
+        )
+    except (InvalidInputError, FileNotFoundError) as e:
+        err.print(f"[red]error:[/red] {e}", highlight=False, markup=True)
+        raise typer.Exit(code=2) from None
+
+    d = s.to_dict()
+    head = Table(title=f"{file}", show_header=False, title_justify="left")
+    head.add_column("", style="bold")
+    head.add_column("")
+    head.add_row("samples", f"{s.n:,}")
+    head.add_row("duration", f"{s.duration_s:.6g} s")
+    head.add_row("rate", f"{s.fs_hz:.6g} Hz (dt {s.dt_min_s:.4g} … {s.dt_max_s:.4g} s, std {s.dt_std_s:.3g} s)")
+    head.add_row("gaps (dt > 1.5× median)", f"{len(s.gaps)} ({d['missing_samples']} missing samples)")
+    sat = s.saturation
+    sat_txt = ", ".join(f"{k} {v}" for k, v in sat.counts.items() if v) or "none"
+    head.add_row(f"saturation ({sat.method})", sat_txt)
+    if s.static is None:
+        head.add_row("static intervals", f"not computed (record shorter than the {window_s} s window)")
+    else:
+        tot = float(s.static.mask.sum()) / s.fs_hz
+        head.add_row("static intervals", f"{len(s.static)} ({tot:.4g} s in all, window {s.static.window} samples)")
+    if s.mag_unit:
+        head.add_row("magnetometer unit", s.mag_unit)
+    for k, v in s.meta.items():
+        head.add_row(f"meta.{k}", str(v)[:80])
+    console.print(head)
+
+    ch = Table(title="channels", title_justify="left")
+    for c, j in (("channel", "left"), ("unit", "left"), ("mean", "right"), ("std", "right"), ("min", "right"), ("max", "right")):
+        ch.add_column(c, justify=j)  # type: ignore[arg-type]
+    for row in s.channels:
+        ch.add_row(row["channel"], row["unit"], *(f"{row[k]:.6g}" for k in ("mean", "std", "min", "max")))
+    console.print(ch)
+
+    if s.static is not None and len(s.static):
+        st = Table(title="static intervals", title_justify="left")
+        for c in ("#", "start", "stop", "t_start (s)", "duration (s)"):
+            st.add_column(c, justify="right")
+        for k, (a, b) in enumerate(s.static):
+            if k >= max_rows:
+                st.add_row("…", "", "", "", f"{len(s.static) - max_rows} more")
+                break
+            st.add_row(str(k), str(a), str(b), f"{s.static.t_start[k]:.6g}", f"{(b - a) / s.fs_hz:.4g}")
+        console.print(st)
+    if s.gaps:
+        gt = Table(title="gaps", title_justify="left")
+        for c in ("after row", "t (s)", "length (s)", "missing samples"):
+            gt.add_column(c, justify="right")
+        for k, g in enumerate(s.gaps):
+            if k >= max_rows:
+                gt.add_row("…", "", "", f"{len(s.gaps) - max_rows} more")
+                break
+            gt.add_row(str(g.index), f"{g.t_start:.6g}", f"{g.length_s:.4g}", str(g.missing_samples))
+        console.print(gt)
+
+    if json_out is not None:
+        with atomic_path(json_out) as tmp:
+            tmp.write_text(json.dumps(d, indent=2, default=str))
+        console.print(f"summary written to {json_out}")
+
+
+info.__doc__ = (info.__doc__ or "") + "\n\n" + _EXAMPLE
+
+
+def register(app: typer.Typer) -> None:
+    """Add ``imunav info`` to the app."""
+    app.command("info", help=info.__doc__)(info)

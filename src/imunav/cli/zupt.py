@@ -1,0 +1,220 @@
+"""``imunav zupt``: foot-mounted ZUPT-aided INS, detectors and the LSTM detector."""
+
+from __future__ import annotations
+
+import json
+import os
+import tempfile
+from pathlib import Path
+from typing import Any, Optional
+
+import typer
+
+zupt_app = typer.Typer(
+    help="Foot-mounted INS with zero-velocity updates.\n\nExample: imunav zupt run trial.mat --detector shoe",
+    no_args_is_help=True,
+)
+
+
+def register(app: typer.Typer) -> None:
+    app.add_typer(zupt_app, name="zupt")
+
+
+def _write_json(path: Path, obj: Any) -> None:
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(dir=path.parent, suffix=".tmp")
+    with os.fdopen(fd, "w") as fh:
+        json.dump(obj, fh, indent=1)
+    os.replace(tmp, path)
+
+
+def load_foot_file(path: Path) -> Any:
+    """Read a foot recording by its format: pyshoe ``.mat``, x-io or FGO ``.csv``."""
+    from imunav.errors import FileFormatError
+    from imunav.io import foot
+
+    if path.suffix.lower() == ".mat":
+        return foot.read_pyshoe_mat(path)
+    if path.suffix.lower() == ".csv":
+        with open(path) as fh:
+            header = fh.readline()
+        if "Gyroscope X (deg/s)" in header:
+            return foot.read_xio_gait_csv(path)
+        if "time_index" in header and "acc_x" in header:
+            gt = path.with_name("positionGt.csv")
+            return foot.read_fgo_csv(path, gt if gt.is_file() else None)
+    raise FileFormatError(f"{path}: unknown foot-recording format (pyshoe .mat, x-io Gait-Tracking .csv or "
+                          "Constrained-ZUPT-FGO imuMeas*.csv)")
+
+
+def _fail(exc: Exception) -> None:
+    typer.secho(f"error: {exc}", fg="red", err=True)
+    raise typer.Exit(2)
+
+
+@zupt_app.command("run")
+def run_cmd(
+    file: Path = typer.Argument(..., exists=True, dir_okay=False, help="Foot recording (.mat pyshoe, .csv x-io / FGO)."),
+    detector: str = typer.Option("shoe", "--detector", "-d", help="shoe, ared, amvd, mbgtd, adaptive, lstm, or 'labels:NAME' for stored labels."),
+    threshold: Optional[float] = typer.Option(None, help="Detector threshold (default: the library default)."),
+    states: int = typer.Option(9, help="9 (thesis) or 15 (with biases)."),
+    zaru: bool = typer.Option(False, help="Zero angular-rate updates (needs --states 15)."),
+    heading_hold: bool = typer.Option(False, help="Hold the yaw during each stance."),
+    model: Optional[Path] = typer.Option(None, help="LSTM model file (default: the shipped one)."),
+    out: Optional[Path] = typer.Option(None, help="Write the trajectory (t, position, velocity, quaternion, zv) to .npz."),
+    json_out: Optional[Path] = typer.Option(None, "--json", help="Write the summary as JSON."),
+) -> None:
+    """Run the ZUPT-aided INS on one recording and print its errors.
+
+    Example: imunav zupt run ../shared/data/foot/pyshoe_vicon/2017-11-22-11-22-03.mat --detector shoe
+    """
+    import numpy as np
+
+    from imunav.errors import ImunavError
+    from imunav.ins import ZuptConfig, detect_zero_velocity, error_2d, loop_closure_error, run_zupt
+
+    try:
+        trial = load_foot_file(file)
+        if detector.startswith("labels:"):
+            key = detector.split(":", 1)[1]
+            if key not in trial.labels:
+                raise typer.BadParameter(f"the file has no stored labels {key!r}; it has {sorted(trial.labels)}")
+            zv = trial.labels[key]
+        else:
+            m = None
+            if model is not None:
+                from imunav.learn import LstmDetector
+
+                m = LstmDetector.load(model)
+            zv = detect_zero_velocity(trial.imu, detector, threshold, model=m).zv
+        xio_like = trial.position is None
+        cfg = ZuptConfig(states=states, zaru=zaru, heading_hold=heading_hold,
+                         alignment="first_stance" if xio_like else "samples", g=None if xio_like else 9.8029)
+        res = run_zupt(trial.imu, zv, cfg)
+    except ImunavError as exc:
+        _fail(exc)
+    lc = loop_closure_error(res.position)
+    summary: dict[str, Any] = {"file": str(file), "detector": detector, "samples": int(trial.imu.n),
+                               "stance_fraction": float(np.mean(zv)), "distance_m": lc.distance_travelled,
+                               "loop_closure_m": lc.error_3d, "loop_closure_horizontal_m": lc.horizontal}
+    if trial.position is not None:
+        summary["error_2d_m"] = error_2d(res.position, trial.position)
+    for k, v in summary.items():
+        typer.echo(f"{k:28s} {v:.4f}" if isinstance(v, float) else f"{k:28s} {v}")
+    if out is not None:
+        fd, tmp = tempfile.mkstemp(dir=out.parent if str(out.parent) else ".", suffix=".npz.tmp")
+        os.close(fd)
+        with open(tmp, "wb") as fh:
+            np.savez_compressed(fh, t=res.t, position=res.position, velocity=res.velocity,
+                                quaternion=res.quaternion, zv=res.zv)
+        os.replace(tmp, out)
+    if json_out is not None:
+        _write_json(json_out, summary)
+
+
+@zupt_app.command("train")
+def train_cmd(
+    directory: Path = typer.Argument(..., exists=True, file_okay=False, help="Folder of pyshoe-format *.mat trials."),
+    out: Path = typer.Option(Path("zupt_lstm.npz"), help="Model file to write."),
+    windows_per_trial: Optional[int] = typer.Option(None, help="Training windows drawn per trial."),
+    epochs: Optional[int] = typer.Option(None, help="Epochs."),
+    layers: Optional[int] = typer.Option(None, help="Stacked LSTM layers (thesis: 6)."),
+    hidden: Optional[int] = typer.Option(None, help="Units per layer (thesis: 80)."),
+    budget_s: Optional[float] = typer.Option(None, help="Stop training after this many seconds."),
+    seed: int = typer.Option(0, help="Random seed."),
+    threads: int = typer.Option(1, help="Torch CPU threads."),
+) -> None:
+    """Train the LSTM zero-velocity detector on labelled trials (labels: best stored classical detector per trial).
+
+    Example: imunav zupt train ../shared/data/foot/pyshoe_vicon --out zupt_lstm.npz
+    """
+    from rich.progress import Progress
+
+    from imunav.errors import ImunavError
+    from imunav.io.foot import read_pyshoe_mat
+    from imunav.learn import LstmConfig, best_labels, train_lstm
+
+    files = sorted(directory.glob("*.mat"))
+    if not files:
+        _fail(FileNotFoundError(f"no *.mat trials in {directory}"))
+    kw: dict[str, Any] = {"seed": seed}
+    for k, v in (("windows_per_trial", windows_per_trial), ("epochs", epochs), ("layers", layers),
+                 ("hidden", hidden), ("time_budget_s", budget_s)):
+        if v is not None:
+            kw[k] = v
+    try:
+        cfg = LstmConfig(**kw)
+        trials = [read_pyshoe_mat(f) for f in files]
+        labels = []
+        audit = []
+        for tr in trials:
+            y, det, err = best_labels(tr)
+            labels.append(y)
+            audit.append({"trial": tr.name, "detector": det, "error_2d_m": err})
+        with Progress() as prog:
+            task = prog.add_task("training", total=None)
+
+            def cb(done: int, total: int, loss: float) -> None:
+                prog.update(task, completed=done, total=total, description=f"training (loss {loss:.3f})")
+
+            model, rep = train_lstm([t.imu for t in trials], labels, cfg, progress=cb, threads=threads)
+        model.info["label_audit"] = audit
+        model.save(out)
+    except ImunavError as exc:
+        _fail(exc)
+    typer.echo(f"trained on {len(trials)} trials, {rep.n_windows} windows in {rep.seconds:.0f} s "
+               f"(training accuracy {rep.train_accuracy:.3f}); model written to {out}")
+
+
+@zupt_app.command("benchmark")
+def benchmark_cmd(
+    directory: Path = typer.Argument(..., exists=True, file_okay=False, help="Folder of pyshoe-format *.mat trials."),
+    json_out: Optional[Path] = typer.Option(None, "--json", help="Write per-trial 2-D errors as JSON."),
+    model: Optional[Path] = typer.Option(None, help="LSTM model file (default: the shipped one)."),
+    limit: Optional[int] = typer.Option(None, help="Only the first N trials (sorted by name)."),
+) -> None:
+    """Every detector (fixed thresholds) and the LSTM on every trial: per-trial 2-D error.
+
+    Example: imunav zupt benchmark ../shared/data/foot/pyshoe_vicon --limit 3 --json zupt-bench.json
+    """
+    import numpy as np
+    from rich.console import Console
+    from rich.progress import track
+    from rich.table import Table
+
+    from imunav.errors import ImunavError
+    from imunav.ins import DEFAULT_THRESHOLDS, DETECTORS, detect_zero_velocity, error_2d, run_zupt
+    from imunav.io.foot import read_pyshoe_mat
+    from imunav.learn import LstmDetector
+
+    files = sorted(directory.glob("*.mat"))[:limit]
+    if not files:
+        _fail(FileNotFoundError(f"no *.mat trials in {directory}"))
+    try:
+        lstm = LstmDetector.load(model)
+        names = list(DETECTORS) + ["lstm"]
+        rows = []
+        for f in track(files, description="trials"):
+            tr = read_pyshoe_mat(f)
+            if tr.position is None:
+                raise ImunavError(f"{f}: no ground truth 'gt'; the benchmark needs it")
+            row: dict[str, Any] = {"trial": tr.name}
+            for name in names:
+                zv = (lstm.detect(tr.imu).zv if name == "lstm"
+                      else detect_zero_velocity(tr.imu, name, DEFAULT_THRESHOLDS[name]).zv)
+                row[name] = error_2d(run_zupt(tr.imu, zv).position, tr.position)
+            rows.append(row)
+    except ImunavError as exc:
+        _fail(exc)
+    table = Table(title="2-D error (m), fixed thresholds")
+    table.add_column("trial")
+    for n in names:
+        table.add_column(n, justify="right")
+    for r in rows:
+        table.add_row(r["trial"], *[f"{r[n]:.3f}" for n in names])
+    means = {n: float(np.mean([r[n] for r in rows])) for n in names}
+    table.add_row("mean", *[f"{means[n]:.3f}" for n in names])
+    Console().print(table)
+    if json_out is not None:
+        _write_json(json_out, {"thresholds": {k: DEFAULT_THRESHOLDS[k] for k in DETECTORS}, "trials": rows,
+                               "mean": means})

@@ -1,0 +1,392 @@
+"""Linear discrete Kalman filter.
+
+Model (Gelb 1974, §4.2; Akgün 2002, eqs. 4.1-4.10)::
+
+    x(k+1) = F x(k) + B u(k) + G w(k),   w ~ N(0, Q)
+    z(k)   = H x(k) + v(k),              v ~ N(0, R)
+
+Predict:  ``x⁻ = F x + B u``,  ``P⁻ = F P Fᵀ + G Q Gᵀ``.
+Update:   ``ν = z − H x⁻``,  ``S = H P⁻ Hᵀ + R``,  ``K = P⁻ Hᵀ S⁻¹``,
+``x = x⁻ + K ν`` and, in Joseph form (Bucy & Joseph 1968),
+``P = (I − K H) P⁻ (I − K H)ᵀ + K R Kᵀ``, which stays symmetric positive
+semi-definite for any gain; the "standard" form ``P = (I − K H) P⁻`` is
+algebraically equal for the optimal gain.  P is re-symmetrised after every
+step.
+
+A measurement may be used partially: ``accept`` (one flag per channel) keeps
+only the accepted rows of H, R and z, which is how the robust gates of
+:mod:`imunav.filters.robust` reject single channels.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from imunav.errors import InvalidInputError
+from imunav.filters._common import (
+    ResultMixin,
+    as_covariance,
+    as_matrix,
+    as_vector,
+    inv_sqrt_spd,
+    symmetrize,
+)
+
+__all__ = [
+    "KalmanFilter",
+    "UpdateResult",
+    "KalmanRun",
+    "kalman_filter",
+    "batch_kalman_filter",
+    "BatchRun",
+    "joseph_update",
+    "riccati_steady_state",
+]
+
+Array = NDArray[np.float64]
+
+
+@dataclass(frozen=True)
+class UpdateResult(ResultMixin):
+    """What one measurement update did.
+
+    Attributes
+    ----------
+    innovation : (m,) ``ν = z − h(x⁻)``
+    S : (m, m) innovation covariance
+    K : (n, m) gain actually applied (zero columns for rejected channels)
+    normalized : (m,) ``S^{-1/2} ν`` (≈ N(0, I) when the filter is consistent)
+    nis : float, ``νᵀ S⁻¹ ν`` over all channels
+    accepted : (m,) bool, channels used in the update
+    weights : (m,) measurement weights (1 = plain update; Huber weights < 1)
+    """
+
+    innovation: Array
+    S: Array
+    K: Array
+    normalized: Array
+    nis: float
+    accepted: NDArray[np.bool_]
+    weights: Array
+
+
+def joseph_update(P_pred: Array, K: Array, H: Array, R: Array) -> Array:
+    """Joseph-form covariance update ``(I−KH)P(I−KH)ᵀ + K R Kᵀ`` (symmetrised)."""
+    n = P_pred.shape[0]
+    A = np.eye(n) - K @ H
+    return symmetrize(A @ P_pred @ A.T + K @ R @ K.T)
+
+
+def riccati_steady_state(F: ArrayLike, Q: ArrayLike, H: ArrayLike, R: ArrayLike, G: ArrayLike | None = None) -> Array:
+    """Steady-state *a-posteriori* covariance of the time-invariant filter.
+
+    Solves the discrete algebraic Riccati equation for the prior covariance
+    ``P⁻ = F P⁻ Fᵀ − F P⁻ Hᵀ (H P⁻ Hᵀ + R)⁻¹ H P⁻ Fᵀ + G Q Gᵀ``
+    (:func:`scipy.linalg.solve_discrete_are` on the dual system) and returns
+    ``P = P⁻ − P⁻ Hᵀ S⁻¹ H P⁻``.  For a scalar random walk (F = H = 1) this is
+    ``P = (−Q + √(Q² + 4 Q R)) / 2``.
+    """
+    from scipy.linalg import solve_discrete_are
+
+    F = as_matrix(F, "F")
+    n = F.shape[0]
+    H = as_matrix(H, "H", None, n)
+    Gm = np.eye(n) if G is None else as_matrix(G, "G", n)
+    Qn = Gm @ as_covariance(Q, "Q", Gm.shape[1]) @ Gm.T
+    R = as_covariance(R, "R", H.shape[0])
+    Pp = solve_discrete_are(F.T, H.T, Qn, R)
+    S = H @ Pp @ H.T + R
+    return symmetrize(Pp - Pp @ H.T @ np.linalg.solve(S, H @ Pp))
+
+
+class KalmanFilter:
+    """Linear Kalman filter with state ``x`` and covariance ``P``.
+
+    Parameters
+    ----------
+    x0, P0 : initial state (n,) and covariance (n, n) (a vector is a diagonal)
+    F, Q, H, R : default model matrices; each call of :meth:`predict` /
+        :meth:`update` may override them (time-varying models).
+    B : optional control matrix (n, p); ``u`` is then passed to :meth:`predict`.
+    G : optional noise-input matrix (n, q); Q is then (q, q) and the process
+        noise covariance is ``G Q Gᵀ``.
+
+    Examples
+    --------
+    >>> kf = KalmanFilter([0.0], [[1.0]], F=[[1.0]], Q=[[0.01]], H=[[1.0]], R=[[0.5]])
+    >>> kf.predict(); r = kf.update([0.3])
+    """
+
+    def __init__(
+        self,
+        x0: ArrayLike,
+        P0: ArrayLike,
+        F: ArrayLike | None = None,
+        Q: ArrayLike | None = None,
+        H: ArrayLike | None = None,
+        R: ArrayLike | None = None,
+        B: ArrayLike | None = None,
+        G: ArrayLike | None = None,
+    ) -> None:
+        self.x = as_vector(x0, "x0")
+        n = self.x.shape[0]
+        self.P = as_covariance(P0, "P0", n)
+        self.F = None if F is None else as_matrix(F, "F", n, n)
+        self.G = None if G is None else as_matrix(G, "G", n)
+        q = n if self.G is None else self.G.shape[1]
+        self.Q = None if Q is None else as_covariance(Q, "Q", q)
+        self.H = None if H is None else as_matrix(H, "H", None, n)
+        self.R = None if R is None else as_covariance(R, "R", None if self.H is None else self.H.shape[0])
+        self.B = None if B is None else as_matrix(B, "B", n)
+
+    @property
+    def n(self) -> int:
+        return int(self.x.shape[0])
+
+    def predict(
+        self,
+        u: ArrayLike | None = None,
+        *,
+        F: ArrayLike | None = None,
+        Q: ArrayLike | None = None,
+        B: ArrayLike | None = None,
+        G: ArrayLike | None = None,
+    ) -> tuple[Array, Array]:
+        """Time update ``x⁻ = F x + B u``, ``P⁻ = F P Fᵀ + G Q Gᵀ``; returns (x, P)."""
+        n = self.n
+        Fm = self.F if F is None else as_matrix(F, "F", n, n)
+        if Fm is None:
+            raise InvalidInputError("predict needs F: pass F= here or to the constructor")
+        Gm = self.G if G is None else as_matrix(G, "G", n)
+        q = n if Gm is None else Gm.shape[1]
+        Qm = self.Q if Q is None else as_covariance(Q, "Q", q)
+        if Qm is None:
+            raise InvalidInputError("predict needs Q: pass Q= here or to the constructor")
+        x = Fm @ self.x
+        if u is not None:
+            Bm = self.B if B is None else as_matrix(B, "B", n)
+            if Bm is None:
+                raise InvalidInputError("a control input u was given but no B: pass B=")
+            x = x + Bm @ as_vector(u, "u", Bm.shape[1])
+        Qn = Qm if Gm is None else Gm @ Qm @ Gm.T
+        self.x = x
+        self.P = symmetrize(Fm @ self.P @ Fm.T + Qn)
+        return self.x, self.P
+
+    def innovation(self, z: ArrayLike, *, H: ArrayLike | None = None, R: ArrayLike | None = None
+                   ) -> tuple[Array, Array, Array, Array]:
+        """``(ν, S, H, R)`` for measurement ``z`` without changing the filter."""
+        Hm = self.H if H is None else as_matrix(H, "H", None, self.n)
+        if Hm is None:
+            raise InvalidInputError("update needs H: pass H= here or to the constructor")
+        Rm = self.R if R is None else as_covariance(R, "R", Hm.shape[0])
+        if Rm is None:
+            raise InvalidInputError("update needs R: pass R= here or to the constructor")
+        if Rm.shape[0] != Hm.shape[0]:
+            raise InvalidInputError(f"R is {Rm.shape} but H has {Hm.shape[0]} rows")
+        zv = as_vector(z, "z", Hm.shape[0])
+        nu = zv - Hm @ self.x
+        S = symmetrize(Hm @ self.P @ Hm.T + Rm)
+        return nu, S, Hm, Rm
+
+    def update(
+        self,
+        z: ArrayLike,
+        *,
+        H: ArrayLike | None = None,
+        R: ArrayLike | None = None,
+        form: str = "joseph",
+        accept: ArrayLike | None = None,
+    ) -> UpdateResult:
+        """Measurement update; returns an :class:`UpdateResult`.
+
+        Parameters
+        ----------
+        form : ``"joseph"`` (default) or ``"standard"`` covariance update.
+        accept : optional (m,) bool; channels set False are not used (their
+            gain column is zero).  All False leaves x and P at the prediction.
+        """
+        if form not in ("joseph", "standard"):
+            raise InvalidInputError(f"form must be 'joseph' or 'standard', got {form!r}")
+        nu, S, Hm, Rm = self.innovation(z, H=H, R=R)
+        m = nu.shape[0]
+        acc = np.ones(m, dtype=bool) if accept is None else np.asarray(accept, dtype=bool).reshape(-1)
+        if acc.shape[0] != m:
+            raise InvalidInputError(f"accept must have {m} flags (one per channel), got {acc.shape[0]}")
+        normalized = inv_sqrt_spd(S) @ nu
+        nis = float(nu @ np.linalg.solve(S, nu))
+        K = np.zeros((self.n, m))
+        if acc.any():
+            idx = np.flatnonzero(acc)
+            Ha, Ra, Sa = Hm[idx], Rm[np.ix_(idx, idx)], S[np.ix_(idx, idx)]
+            Ka = np.linalg.solve(Sa, Ha @ self.P).T  # P Hᵀ S⁻¹ (S symmetric)
+            self.x = self.x + Ka @ nu[idx]
+            if form == "joseph":
+                self.P = joseph_update(self.P, Ka, Ha, Ra)
+            else:
+                self.P = symmetrize((np.eye(self.n) - Ka @ Ha) @ self.P)
+            K[:, idx] = Ka
+        return UpdateResult(nu, S, K, normalized, nis, acc, acc.astype(np.float64))
+
+
+@dataclass(frozen=True)
+class KalmanRun(ResultMixin):
+    """A whole-sequence linear Kalman filter run (see :func:`kalman_filter`).
+
+    ``x_pred``/``P_pred`` are the priors at each step, ``x``/``P`` the
+    posteriors; ``innovation``, ``S`` and ``nis`` are NaN at steps without a
+    measurement.
+    """
+
+    x_pred: Array
+    P_pred: Array
+    x: Array
+    P: Array
+    innovation: Array
+    S: Array
+    nis: Array
+
+
+def kalman_filter(
+    x0: ArrayLike,
+    P0: ArrayLike,
+    F: ArrayLike,
+    Q: ArrayLike,
+    H: ArrayLike,
+    R: ArrayLike,
+    z: ArrayLike,
+    *,
+    G: ArrayLike | None = None,
+    B: ArrayLike | None = None,
+    u: ArrayLike | None = None,
+) -> KalmanRun:
+    """Run a time-invariant linear filter over measurements ``z`` (N, m).
+
+    Each step is predict then update (the first measurement is at step 1, one
+    prediction after ``x0``).  Rows of ``z`` that are all NaN are skipped
+    (prediction only), which is how slower sensors are handled.  Many runs at
+    once: :func:`imunav.filters._batch.batch_filter` (leading batch axis).
+    """
+    from imunav.filters._batch import batch_filter
+
+    x0v = as_vector(x0, "x0")
+    n = x0v.shape[0]
+    P0m = as_covariance(P0, "P0", n)
+    Fm = as_matrix(F, "F", n, n)
+    Gm = np.eye(n) if G is None else as_matrix(G, "G", n)
+    Qn = Gm @ as_covariance(Q, "Q", Gm.shape[1]) @ Gm.T
+    Hm = as_matrix(H, "H", None, n)
+    m = Hm.shape[0]
+    Rm = as_covariance(R, "R", m)
+    zz = np.array(z, dtype=np.float64)
+    if zz.ndim == 1 and m == 1:
+        zz = zz[:, None]
+    if zz.ndim != 2 or zz.shape[1] != m:
+        raise InvalidInputError(f"z must have shape (N, {m}), got {zz.shape}")
+    if np.any(np.isinf(zz)):
+        raise InvalidInputError(f"z contains inf at row {int(np.argwhere(np.isinf(zz))[0, 0])}; use NaN for missing rows")
+    part = np.isnan(zz).any(axis=1) & ~np.isnan(zz).all(axis=1)
+    if part.any():
+        raise InvalidInputError(f"z row {int(np.flatnonzero(part)[0])} is partly NaN; a missing measurement must be all NaN")
+    Bu = np.zeros((zz.shape[0], n))
+    if u is not None:
+        if B is None:
+            raise InvalidInputError("u was given without B")
+        Bm = as_matrix(B, "B", n)
+        uu = np.array(u, dtype=np.float64).reshape(zz.shape[0], Bm.shape[1])
+        Bu = uu @ Bm.T
+    if u is not None:
+        # control input: step by step with the class (B u changes every step)
+        kf = KalmanFilter(x0v, P0m, F=Fm, Q=Qn, H=Hm, R=Rm, B=np.eye(n))
+        res = {k: [] for k in ("x_pred", "P_pred", "x", "P", "innovation", "S", "nis")}
+        for k in range(zz.shape[0]):
+            kf.predict(Bu[k])
+            res["x_pred"].append(kf.x.copy())
+            res["P_pred"].append(kf.P.copy())
+            if np.isnan(zz[k, 0]):
+                res["innovation"].append(np.full(m, np.nan))
+                res["S"].append(np.full((m, m), np.nan))
+                res["nis"].append(np.nan)
+            else:
+                r = kf.update(zz[k])
+                res["innovation"].append(r.innovation)
+                res["S"].append(r.S)
+                res["nis"].append(r.nis)
+            res["x"].append(kf.x.copy())
+            res["P"].append(kf.P.copy())
+        return KalmanRun(*(np.asarray(res[k]) for k in ("x_pred", "P_pred", "x", "P", "innovation", "S", "nis")))
+    o = batch_filter(x0v, P0m, Fm, Qn, Hm, Rm, zz[None], store_full=True)
+    nu = o["innovation"][0]
+    S = o["S"][0]
+    nis = np.full(zz.shape[0], np.nan)
+    ok = ~np.isnan(nu[:, 0])
+    nis[ok] = np.einsum("ki,ki->k", nu[ok], np.linalg.solve(S[ok], nu[ok][..., None])[..., 0])
+    return KalmanRun(o["x_pred"][0], o["P_pred"][0], o["x"][0], o["P"][0], nu, S, nis)
+
+
+@dataclass(frozen=True)
+class BatchRun(ResultMixin):
+    """Many independent runs of one linear filter (leading axis = run).
+
+    x, P_diag (R, N, n) posteriors; innovation, normalized (R, N, m) (NaN
+    without measurement); weights (R, N, m): 1 used, 0 rejected, Huber
+    weight in between.
+    """
+
+    x: Array
+    P_diag: Array
+    innovation: Array
+    normalized: Array
+    weights: Array
+
+
+def batch_kalman_filter(
+    x0: ArrayLike,
+    P0: ArrayLike,
+    F: ArrayLike,
+    Q: ArrayLike,
+    H: ArrayLike,
+    R: ArrayLike,
+    z: ArrayLike,
+    *,
+    G: ArrayLike | None = None,
+    robust: str | None = None,
+    gate_m: float = 2.0,
+    alpha: float = 1e-3,
+    huber_c: float = 1.345,
+) -> BatchRun:
+    """Run a time-invariant filter over a batch of measurement sequences z (R, N, m).
+
+    ``robust``: None (optimal), ``"gate"`` (per-channel ``|ν̃_i| < gate_m``),
+    ``"isolate"`` (χ² + w-test isolation at level ``alpha``), ``"nis"``
+    (the whole measurement rejected when its NIS exceeds χ²_{1−alpha}(m)) or
+    ``"huber"`` (see :mod:`imunav.filters.robust`).  x0 may be (n,) or per run (R, n).
+    """
+    from imunav.filters._batch import MODE_GATE, MODE_HUBER, MODE_ISOLATE, MODE_NIS, MODE_NONE, batch_filter
+    from imunav.filters.robust import isolation_thresholds
+
+    modes = {None: MODE_NONE, "gate": MODE_GATE, "isolate": MODE_ISOLATE, "huber": MODE_HUBER, "nis": MODE_NIS}
+    if robust not in modes:
+        raise InvalidInputError(f"robust must be None, 'gate', 'isolate', 'nis' or 'huber', got {robust!r}")
+    P0m = as_covariance(P0, "P0")
+    n = P0m.shape[0]
+    x0a = np.asarray(x0, dtype=np.float64)
+    if x0a.shape[-1:] != (n,) or x0a.ndim > 2 or not np.all(np.isfinite(x0a)):
+        raise InvalidInputError(f"x0 must be finite with shape ({n},) or (runs, {n}), got {x0a.shape}")
+    Fm = as_matrix(F, "F", n, n)
+    Gm = np.eye(n) if G is None else as_matrix(G, "G", n)
+    Qn = Gm @ as_covariance(Q, "Q", Gm.shape[1]) @ Gm.T
+    Hm = as_matrix(H, "H", None, n)
+    m = Hm.shape[0]
+    Rm = as_covariance(R, "R", m)
+    zz = np.asarray(z, dtype=np.float64)
+    if zz.ndim != 3 or zz.shape[2] != m:
+        raise InvalidInputError(f"z must have shape (runs, N, {m}), got {zz.shape}")
+    if x0a.ndim == 2 and x0a.shape[0] != zz.shape[0]:
+        raise InvalidInputError(f"x0 has {x0a.shape[0]} runs but z has {zz.shape[0]}")
+    o = batch_filter(x0a, P0m, Fm, Qn, Hm, Rm, zz, modes[robust], float(gate_m),
+                     isolation_thresholds(m, alpha), float(huber_c))
+    return BatchRun(o["x"], o["P_diag"], o["innovation"], o["normalized"], o["weights"])

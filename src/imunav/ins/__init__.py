@@ -1,0 +1,38 @@
+"""Inertial navigation: strapdown mechanization, zero-velocity detectors and
+the ZUPT-aided pedestrian INS (error-state EKF), with position metrics.
+
+Quick use::
+
+    from imunav.io.foot import read_pyshoe_mat
+    from imunav.ins import detect_zero_velocity, run_zupt, error_2d
+    trial = read_pyshoe_mat("trial.mat")
+    zv = detect_zero_velocity(trial.imu, "shoe", 8.5e7)
+    res = run_zupt(trial.imu, zv.zv)
+    print(error_2d(res.position, trial.position))
+"""
+
+from imunav.ins.detectors import (
+    DEFAULT_THRESHOLDS,
+    DETECTORS,
+    DetectorResult,
+    ThresholdSearch,
+    amvd,
+    ared,
+    detect_zero_velocity,
+    detector_statistic,
+    mbgtd,
+    motion_adaptive,
+    optimize_threshold,
+    shoe,
+)
+from imunav.ins.metrics import LoopClosure, align_heading, error_2d, loop_closure_error, position_rmse, vertical_error
+from imunav.ins.strapdown import StrapdownResult, coning_sculling_increments, strapdown_local, strapdown_ned
+from imunav.ins.zupt import ZuptConfig, ZuptResult, align_from_accel, first_stance, run_zupt
+
+__all__ = [
+    "DEFAULT_THRESHOLDS", "DETECTORS", "DetectorResult", "ThresholdSearch", "amvd", "ared",
+    "detect_zero_velocity", "detector_statistic", "mbgtd", "motion_adaptive", "optimize_threshold", "shoe",
+    "LoopClosure", "align_heading", "error_2d", "loop_closure_error", "position_rmse", "vertical_error",
+    "StrapdownResult", "coning_sculling_increments", "strapdown_local", "strapdown_ned",
+    "ZuptConfig", "ZuptResult", "align_from_accel", "first_stance", "run_zupt",
+]

@@ -1,0 +1,307 @@
+"""Zero-velocity (stance) detectors for foot-mounted IMUs.
+
+Four generalised likelihood-ratio tests (GLRT) compare a statistic ``T[k]``
+with a threshold ``gamma``: the foot is declared stationary when
+``T[k] < gamma`` (strictly).  The conventions are those of the published
+pyshoe evaluation (Wagstaff, Peretroukhin & Kelly, IEEE Sensors J. 20(2),
+2020), which the stored labels of the University of Toronto foot dataset use:
+
+* **SHOE** (stance hypothesis optimal estimator; Skog et al., IEEE TBME
+  57(11), 2010, eq. 16)::
+
+      T_n = 1/W sum_{k in block} |y_a,k - g ybar_a/|ybar_a||^2 / sigma_a^2
+                                 + |y_w,k|^2 / sigma_w^2
+
+* **ARED** (angular-rate energy): ``T_n = 1/W sum |y_w,k|^2`` (rad²/s²).
+* **AMVD** (acceleration moving variance): ``T_n = 1/W sum |y_a,k - ybar_a|^2``.
+* **MBGTD** (memory-based graph-theoretic, Olivares et al., Sensors 2012):
+  maximum over split pairs of the normalised mean distance between the
+  accelerometer samples before and after the split.
+
+SHOE, ARED and AMVD are evaluated on **non-overlapping blocks** of ``W``
+samples and the block value is held over the block; samples after the last
+full block get ``T = 0`` (stationary).  MBGTD slides one sample at a time; its
+last ``W - 1`` samples get ``T = 1``.  Thresholds scale with ``sigma_a``,
+``sigma_w``: a threshold is only meaningful together with them, so the
+defaults are the published ones (``sigma_a = 0.00098`` m/s²,
+``sigma_w = 8.7266463e-5`` rad/s, ``g = 9.8029`` m/s², ``W = 5``).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from imunav.errors import InvalidInputError, ShapeError
+from imunav.ins import _kernels as _k
+
+__all__ = [
+    "DETECTORS",
+    "DEFAULT_THRESHOLDS",
+    "THRESHOLD_GRIDS",
+    "DetectorResult",
+    "ThresholdSearch",
+    "detector_statistic",
+    "detect_zero_velocity",
+    "shoe",
+    "ared",
+    "amvd",
+    "mbgtd",
+    "motion_adaptive",
+    "optimize_threshold",
+]
+
+Array = NDArray[np.float64]
+
+#: Names of the classical detectors.
+DETECTORS: tuple[str, ...] = ("shoe", "ared", "amvd", "mbgtd")
+
+#: Fixed thresholds for walking at 200 Hz with the default sigmas
+#: (pyshoe's "standard" values for SHOE / ARED; AMVD / MBGTD medians of the
+#: per-trial optima of the Toronto VICON trials).
+DEFAULT_THRESHOLDS: dict[str, float] = {"shoe": 8.5e7, "ared": 0.55, "amvd": 0.1, "mbgtd": 0.25}
+
+#: Threshold grids of the published per-trial optimisation (pyshoe
+#: ``run_threshold_optimization.py``), per detector.
+THRESHOLD_GRIDS: dict[str, Array] = {
+    "shoe": np.concatenate([
+        np.arange(1e5, 1e6, 0.25e5), np.arange(1e6, 1e7, 0.25e6),
+        np.arange(1e7, 1e8, 0.25e7), np.arange(1e8, 1e9, 0.25e8)]),
+    "ared": np.concatenate([
+        np.arange(1e-2, 1e-1, 0.25e-2), np.arange(1e-1, 1, 0.25e-1), np.arange(1, 3, 0.05)]),
+    "amvd": np.concatenate([
+        np.arange(1e-4, 1e-3, 0.25e-4), np.arange(1e-3, 1e-2, 0.25e-2),
+        np.arange(1e-2, 1e-1, 0.25e-2), np.arange(1e-1, 2, 0.25e-1)]),
+    "mbgtd": np.concatenate([
+        np.arange(1e-3, 1e-2, 0.25e-3), np.arange(1e-2, 1e-1, 0.25e-2), np.arange(1e-1, 1, 0.25e-1)]),
+}
+
+SIGMA_A = 0.00098
+SIGMA_W = 8.7266463e-5
+G_PYSHOE = 9.8029
+
+
+def _vec(x: ArrayLike, name: str) -> Array:
+    a = np.ascontiguousarray(x, dtype=np.float64)
+    if a.ndim != 2 or a.shape[1] != 3:
+        raise ShapeError(f"{name} must have shape (N, 3); got {a.shape}")
+    if not np.all(np.isfinite(a)):
+        rows = np.flatnonzero(~np.all(np.isfinite(a), axis=1))
+        raise InvalidInputError(f"{name} has non-finite values at rows {rows[:10].tolist()}; remove or interpolate them")
+    return a
+
+
+def _window(W: int, n: int) -> int:
+    if int(W) != W or W < 2:
+        raise InvalidInputError(f"window must be an integer >= 2 samples; got {W!r}")
+    if n < W:
+        raise InvalidInputError(f"the recording has {n} samples, fewer than the window W={W}; use a shorter window")
+    return int(W)
+
+
+def shoe(accel: ArrayLike, gyro: ArrayLike, window: int = 5, *, sigma_a: float = SIGMA_A,
+         sigma_w: float = SIGMA_W, g: float = G_PYSHOE) -> Array:
+    """SHOE statistic (N,) on non-overlapping blocks (see module docstring)."""
+    a = _vec(accel, "accel")
+    w = _vec(gyro, "gyro")
+    if a.shape != w.shape:
+        raise ShapeError(f"accel {a.shape} and gyro {w.shape} must have the same shape")
+    if sigma_a <= 0 or sigma_w <= 0 or g <= 0:
+        raise InvalidInputError(f"sigma_a, sigma_w and g must be > 0; got {sigma_a}, {sigma_w}, {g}")
+    W = _window(window, a.shape[0])
+    if np.any(np.linalg.norm(a, axis=1) == 0):
+        raise InvalidInputError("accel has all-zero rows; SHOE needs the gravity direction (check the units/columns)")
+    return _k.shoe_blocks(a, w, W, float(sigma_a), float(sigma_w), float(g))
+
+
+def ared(gyro: ArrayLike, window: int = 5) -> Array:
+    """ARED statistic (N,), rad²/s², on non-overlapping blocks."""
+    w = _vec(gyro, "gyro")
+    return _k.ared_blocks(w, _window(window, w.shape[0]))
+
+
+def amvd(accel: ArrayLike, window: int = 5) -> Array:
+    """AMVD statistic (N,), (m/s²)², on non-overlapping blocks."""
+    a = _vec(accel, "accel")
+    return _k.amvd_blocks(a, _window(window, a.shape[0]))
+
+
+def mbgtd(accel: ArrayLike, window: int = 5, *, tail: float = 1.0) -> Array:
+    """MBGTD statistic (N,), m/s², on a per-sample sliding window.
+
+    The last ``window - 1`` samples get ``tail`` (published convention: 1).
+    """
+    a = _vec(accel, "accel")
+    return _k.mbgtd_sliding(a, _window(window, a.shape[0]), float(tail))
+
+
+def _accel_gyro(data: Any) -> tuple[Array, Array]:
+    try:
+        return _vec(data.accel, "data.accel"), _vec(data.gyro, "data.gyro")
+    except AttributeError as exc:
+        raise InvalidInputError(
+            "data must be an ImuData (or have .accel and .gyro arrays (N, 3)); "
+            f"got {type(data).__name__}") from exc
+
+
+def detector_statistic(data: Any, detector: str = "shoe", *, window: int = 5, sigma_a: float = SIGMA_A,
+                       sigma_w: float = SIGMA_W, g: float = G_PYSHOE) -> Array:
+    """Statistic ``T`` (N,) of a named detector on an :class:`~imunav.timeseries.ImuData`."""
+    name = detector.lower()
+    a, w = _accel_gyro(data)
+    if name == "shoe":
+        return shoe(a, w, window, sigma_a=sigma_a, sigma_w=sigma_w, g=g)
+    if name == "ared":
+        return ared(w, window)
+    if name == "amvd":
+        return amvd(a, window)
+    if name == "mbgtd":
+        return mbgtd(a, window)
+    raise InvalidInputError(f"unknown detector {detector!r}; choose one of {', '.join(DETECTORS)}")
+
+
+@dataclass(frozen=True)
+class DetectorResult:
+    """Output of a zero-velocity detector.
+
+    Attributes
+    ----------
+    zv : (N,) bool, True where the foot is declared stationary.
+    statistic : (N,) float, test statistic ``T`` (NaN for learned detectors).
+    threshold : (N,) float, threshold applied at each sample.
+    detector : name; ``params`` the settings used.
+    """
+
+    zv: NDArray[np.bool_]
+    statistic: Array
+    threshold: Array
+    detector: str
+    params: dict[str, Any] = field(default_factory=dict)
+
+    @property
+    def stance_fraction(self) -> float:
+        """Fraction of samples declared stationary."""
+        return float(np.mean(self.zv))
+
+    def to_dict(self) -> dict[str, Any]:
+        return {"detector": self.detector, "params": self.params, "zv": self.zv.astype(int).tolist(),
+                "statistic": self.statistic.tolist(), "threshold": self.threshold.tolist()}
+
+
+def detect_zero_velocity(data: Any, detector: str = "shoe", threshold: float | ArrayLike | None = None, *,
+                         window: int = 5, sigma_a: float = SIGMA_A, sigma_w: float = SIGMA_W,
+                         g: float = G_PYSHOE, model: Any = None) -> DetectorResult:
+    """Run a zero-velocity detector: ``zv[k] = T[k] < threshold``.
+
+    Parameters
+    ----------
+    data : ImuData
+    detector : ``"shoe"``, ``"ared"``, ``"amvd"``, ``"mbgtd"``, ``"adaptive"``
+        (:func:`motion_adaptive`) or ``"lstm"`` (the shipped
+        :class:`imunav.learn.LstmDetector`, or ``model`` when given).
+    threshold : scalar or (N,) per-sample thresholds; default
+        :data:`DEFAULT_THRESHOLDS`.  For ``"lstm"`` the probability threshold
+        (default 0.85).
+    """
+    name = detector.lower()
+    if name == "adaptive":
+        return motion_adaptive(data, window=window, sigma_a=sigma_a, sigma_w=sigma_w, g=g)
+    if name == "lstm":
+        from imunav.learn import LstmDetector
+
+        det = model if model is not None else LstmDetector.load()
+        return det.detect(data, threshold=0.85 if threshold is None else float(threshold))
+    T = detector_statistic(data, name, window=window, sigma_a=sigma_a, sigma_w=sigma_w, g=g)
+    gam = DEFAULT_THRESHOLDS[name] if threshold is None else threshold
+    gam_arr = np.broadcast_to(np.asarray(gam, dtype=float), T.shape).copy() if np.ndim(gam) == 0 else np.asarray(gam, dtype=float)
+    if gam_arr.shape != T.shape:
+        raise ShapeError(f"threshold must be a scalar or have shape {T.shape}; got {gam_arr.shape}")
+    params = {"window": int(window)}
+    if name == "shoe":
+        params.update(sigma_a=sigma_a, sigma_w=sigma_w, g=g)
+    if np.ndim(gam) == 0:
+        params["threshold"] = float(gam)
+    return DetectorResult(T < gam_arr, T, gam_arr, name, params)
+
+
+def motion_adaptive(data: Any, *, thresholds: tuple[float, float] = (1.0e7, 3.5e8),
+                    split_rate: float = 4.0, intensity_window_s: float = 1.0, smooth_s: float = 1.0,
+                    window: int = 5, sigma_a: float = SIGMA_A, sigma_w: float = SIGMA_W,
+                    g: float = G_PYSHOE) -> DetectorResult:
+    """Motion-adaptive SHOE: the threshold follows the gait intensity.
+
+    The intensity is the moving RMS of the angular-rate norm over
+    ``intensity_window_s``; where it exceeds ``split_rate`` (rad/s, running
+    and brisk gait) the threshold is ``thresholds[1]``, else ``thresholds[0]``
+    (walking).  The per-sample threshold is then smoothed with a
+    ``smooth_s`` moving average, as in the motion-classification adaptive
+    detector of Wagstaff et al. (IPIN 2017), with a rule in place of the SVM.
+    """
+    a, w = _accel_gyro(data)
+    t = np.asarray(data.t, dtype=float)
+    if len(thresholds) != 2 or min(thresholds) <= 0:
+        raise InvalidInputError(f"thresholds must be two positive values (walk, run); got {thresholds!r}")
+    fs = 1.0 / float(np.median(np.diff(t))) if t.size > 1 else 1.0
+    L = max(1, int(round(intensity_window_s * fs)))
+    intensity = np.sqrt(_k.moving_average(np.sum(w * w, axis=1), L))
+    gam = np.where(intensity > split_rate, thresholds[1], thresholds[0]).astype(float)
+    gam = _k.moving_average(gam, max(1, int(round(smooth_s * fs))))
+    T = shoe(a, w, window, sigma_a=sigma_a, sigma_w=sigma_w, g=g)
+    params = {"window": int(window), "thresholds": list(thresholds), "split_rate": split_rate,
+              "intensity_window_s": intensity_window_s, "smooth_s": smooth_s}
+    return DetectorResult(T < gam, T, gam, "adaptive", params)
+
+
+@dataclass(frozen=True)
+class ThresholdSearch:
+    """Result of :func:`optimize_threshold`: error per grid threshold and the best one."""
+
+    detector: str
+    thresholds: Array
+    errors: Array
+    best_threshold: float
+    best_error: float
+    zv: NDArray[np.bool_]
+
+    def to_dict(self) -> dict[str, Any]:
+        return {"detector": self.detector, "thresholds": self.thresholds.tolist(), "errors": self.errors.tolist(),
+                "best_threshold": self.best_threshold, "best_error": self.best_error}
+
+
+def optimize_threshold(data: Any, reference: ArrayLike, detector: str = "shoe",
+                       thresholds: Sequence[float] | None = None, *, window: int = 5,
+                       metric: Callable[[Array, Array], float] | None = None,
+                       config: Any = None) -> ThresholdSearch:
+    """Grid-search the detector threshold that minimises the position error.
+
+    For each threshold the ZUPT INS (:func:`imunav.ins.zupt.run_zupt`, with
+    ``config``) runs with the detector output and ``metric(estimate,
+    reference)`` (default :func:`imunav.ins.metrics.error_2d`) scores it; ties
+    go to the larger threshold (as in the published search).  ``reference``
+    is the (N, 3) reference position, one row per IMU sample.
+    """
+    from imunav.ins.metrics import error_2d
+    from imunav.ins.zupt import run_zupt
+
+    name = detector.lower()
+    grid = THRESHOLD_GRIDS[name] if thresholds is None else np.asarray(thresholds, dtype=float)
+    if grid.ndim != 1 or grid.size == 0:
+        raise InvalidInputError("thresholds must be a non-empty 1-D sequence")
+    ref = np.asarray(reference, dtype=float)
+    if ref.ndim != 2 or ref.shape[0] != len(data.t) or ref.shape[1] < 2:
+        raise ShapeError(f"reference must be (N, 2|3) with N={len(data.t)} rows (one per IMU sample); got {ref.shape}")
+    metric = error_2d if metric is None else metric
+    T = detector_statistic(data, name, window=window)
+    errs = np.empty(grid.size)
+    best = (np.inf, 0.0, None)
+    for i, gam in enumerate(grid):
+        zv = T < gam
+        res = run_zupt(data, zv, config)
+        errs[i] = metric(res.position, ref)
+        if errs[i] <= best[0]:
+            best = (errs[i], float(gam), zv)
+    return ThresholdSearch(name, grid, errs, best[1], float(best[0]), best[2])

@@ -1,0 +1,124 @@
+"""Strapdown mechanization over whole recordings.
+
+* :func:`strapdown_local`: local-level NED frame fixed at the start, no Earth
+  rate, constant gravity ``(0, 0, g)`` (pedestrian / short runs; Şahin 2022
+  eqs. 3.1-3.2)::
+
+      q_k = q_{k-1} ⊗ exp(Δθ_k)
+      v_k = v_{k-1} + C(q_{k-1}) Δv_k + g Δt_k   (Δv_k rotation-compensated;
+                                                 C at mid interval otherwise)
+      p_k = p_{k-1} + (v_{k-1} + v_k) Δt_k / 2
+
+* :func:`strapdown_ned`: NED with Earth rate, transport rate, Coriolis and
+  WGS84 normal gravity (Groves 2013 §5.4; spec eqs. 2.3 and 4.1)::
+
+      q_k = exp(-ω_in^n Δt) ⊗ q_{k-1} ⊗ exp(Δθ_k)
+      v_k = v_{k-1} + C_mid Δv_k + (g^n - (2 ω_ie^n + ω_en^n) × v) Δt
+      lat, lon, h from the mean velocity and the radii R_N, R_E.
+
+The increments ``Δθ_k, Δv_k`` over ``[t_{k-1}, t_k]`` come from the rates held
+over each interval, optionally with the two-sample coning and sculling
+corrections (:func:`coning_sculling_increments`).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from imunav.errors import InvalidInputError, ShapeError
+from imunav.ins import _kernels as _k
+
+__all__ = ["StrapdownResult", "coning_sculling_increments", "strapdown_local", "strapdown_ned", "OMEGA_E"]
+
+Array = NDArray[np.float64]
+#: Earth rotation rate (WGS84), rad/s.
+OMEGA_E = 7.292115e-5
+
+
+@dataclass(frozen=True)
+class StrapdownResult:
+    """Integrated trajectory: ``position`` (N, 3) m in the local frame, or
+    ``lla`` (N, 3) (lat rad, lon rad, h m) for the NED mechanization."""
+
+    t: Array
+    quaternion: Array
+    velocity: Array
+    position: Array | None = None
+    lla: Array | None = None
+
+    def to_dict(self) -> dict[str, Any]:
+        d = {"t": self.t.tolist(), "quaternion": self.quaternion.tolist(), "velocity": self.velocity.tolist()}
+        if self.position is not None:
+            d["position"] = self.position.tolist()
+        if self.lla is not None:
+            d["lla"] = self.lla.tolist()
+        return d
+
+
+def _arrays(data: Any) -> tuple[Array, Array, Array]:
+    try:
+        t = np.ascontiguousarray(data.t, dtype=float)
+        w = np.ascontiguousarray(data.gyro, dtype=float)
+        a = np.ascontiguousarray(data.accel, dtype=float)
+    except AttributeError as exc:
+        raise InvalidInputError(f"data must be an ImuData (t, gyro, accel); got {type(data).__name__}") from exc
+    if w.shape != (t.size, 3) or a.shape != (t.size, 3):
+        raise ShapeError(f"gyro {w.shape} and accel {a.shape} must be ({t.size}, 3)")
+    return t, w, a
+
+
+def _v3(x: ArrayLike, name: str) -> Array:
+    v = np.asarray(x, dtype=float)
+    if v.shape != (3,):
+        raise ShapeError(f"{name} must be a 3-vector; got shape {v.shape}")
+    return v
+
+
+def coning_sculling_increments(data: Any, corrected: bool = True) -> tuple[Array, Array]:
+    """Angle (rad) and velocity (m/s) increments, row k over ``[t_{k-1}, t_k]``.
+
+    With ``corrected`` the two-sample coning term ``Δθ_{k-1} × Δθ_k / 12``,
+    the rotation term ``Δθ_k × Δv_k / 2`` and the sculling term
+    ``(Δθ_{k-1} × Δv_k + Δv_{k-1} × Δθ_k) / 12`` are added (Savage 1998;
+    Groves 2013 eqs. 5.97-5.98).  Row 0 is zero.
+    """
+    t, w, a = _arrays(data)
+    return _k.increments(t, w, a, bool(corrected))
+
+
+def strapdown_local(data: Any, q0: ArrayLike, *, v0: ArrayLike = (0, 0, 0), p0: ArrayLike = (0, 0, 0),
+                    g: float = 9.80665, corrected: bool = True) -> StrapdownResult:
+    """Free-inertial integration in a local-level NED frame (no Earth rate)."""
+    t, _, _ = _arrays(data)
+    q = np.asarray(q0, dtype=float)
+    if q.shape != (4,) or abs(np.linalg.norm(q) - 1) > 1e-6:
+        raise InvalidInputError(f"q0 must be a unit quaternion [w, x, y, z]; got {q!r}")
+    dth, dv = coning_sculling_increments(data, corrected)
+    dt = np.concatenate([[0.0], np.diff(t)])
+    qq, v, p = _k.strapdown_local_kernel(dth, dv, dt, q, _v3(v0, "v0"), _v3(p0, "p0"), float(g), bool(corrected))
+    return StrapdownResult(t, qq, v, position=p)
+
+
+def strapdown_ned(data: Any, q0: ArrayLike, lla0: ArrayLike, *, v0: ArrayLike = (0, 0, 0),
+                  corrected: bool = True, omega_e: float = OMEGA_E) -> StrapdownResult:
+    """Free-inertial NED mechanization with Earth and transport rate.
+
+    ``lla0`` = (lat rad, lon rad, h m).  The IMU measures rates with respect
+    to inertial space (include the Earth rate in ``gyro``).
+    """
+    t, _, _ = _arrays(data)
+    q = np.asarray(q0, dtype=float)
+    if q.shape != (4,) or abs(np.linalg.norm(q) - 1) > 1e-6:
+        raise InvalidInputError(f"q0 must be a unit quaternion [w, x, y, z]; got {q!r}")
+    lla = _v3(lla0, "lla0")
+    if abs(lla[0]) >= np.pi / 2:
+        raise InvalidInputError(f"latitude {lla[0]} rad is at or beyond a pole; the NED frame is singular there")
+    dth, dv = coning_sculling_increments(data, corrected)
+    dt = np.concatenate([[0.0], np.diff(t)])
+    qq, v, out = _k.strapdown_ned_kernel(dth, dv, dt, q, _v3(v0, "v0"), lla[0], lla[1], lla[2], float(omega_e),
+                                       bool(corrected))
+    return StrapdownResult(t, qq, v, lla=out)

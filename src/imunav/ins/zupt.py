@@ -1,0 +1,252 @@
+"""Zero-velocity-aided pedestrian INS: error-state EKF (9 or 15 states).
+
+Nominal state: position ``p``, velocity ``v`` (local-level NED frame fixed at
+the start, no Earth rate, constant gravity ``(0, 0, g)``), attitude ``q_nb``
+and, with 15 states, accelerometer / gyro biases.  Error state
+``dx = [dp, dv, dphi, (dba, dbg)]`` with ``p = p̂ + dp``, ``v = v̂ + dv``,
+``C_nb = exp([dphi×]) Ĉ_nb`` and ``b = b̂ + db``.  Discrete model
+(Şahin 2022 §3.1 with the corrections of the spec; Solà 2017 §6; Foxlin
+2005)::
+
+    Phi = [[I, dt I, 0,              0,        0       ],
+           [0, I,   -dt [f^n ×],    -dt Ĉ,    0       ],
+           [0, 0,    I,              0,       -dt Ĉ    ],
+           [0, 0,    0,              I,        0       ],
+           [0, 0,    0,              0,        I       ]]
+    Q_d = diag(0, sigma_acc² dt², sigma_gyro² dt², sigma_ba² dt, sigma_bg² dt)
+
+``sigma_acc`` / ``sigma_gyro`` are per-sample noise standard deviations (the
+OpenShoe / pyshoe convention).  When the detector declares the foot
+stationary the ZUPT pseudo-measurement ``z = 0 - v̂ = H dx + nu``,
+``H = [0 I 0 ...]``, ``R = sigma_v² I`` is applied in Joseph form, the error
+is injected into the nominal state and reset.  Options: zero angular-rate
+update (ZARU, 15 states: ``z = ω̃ - b̂_g``) and heading hold (the yaw is held
+at its value at the first sample of each stance).
+
+The initial roll and pitch come from the mean specific force of the first
+stance (or of the first ``align_samples`` samples), yaw = ``initial_yaw``:
+``roll = atan2(-f_y, -f_z)``, ``pitch = atan2(f_x, sqrt(f_y² + f_z²))``.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import asdict, dataclass, field
+from typing import Any, Literal
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from imunav.errors import ConfigError, InsufficientDataError, InvalidInputError, ShapeError
+from imunav.ins import _kernels as _k
+from imunav.rotation import euler_from_quat, quat_from_euler
+
+__all__ = ["ZuptConfig", "ZuptResult", "run_zupt", "align_from_accel", "first_stance"]
+
+Array = NDArray[np.float64]
+
+
+@dataclass(frozen=True)
+class ZuptConfig:
+    """Settings of the ZUPT-aided INS (defaults: the published pyshoe set).
+
+    Attributes
+    ----------
+    states : 9 (thesis: p, v, attitude) or 15 (+ accel and gyro biases).
+    sigma_acc : accelerometer noise per sample, m/s² (default 0.5).
+    sigma_gyro : gyro noise per sample, rad/s (default 0.5 °/s).
+    sigma_v : ZUPT velocity-measurement noise, m/s (default 0.01).
+    sigma_acc_bias_rw, sigma_gyro_bias_rw : bias random walks (15 states),
+        m/s²/√s and rad/s/√s.
+    p0_pos, p0_vel, p0_att : initial error std (m, m/s, rad).
+    p0_acc_bias, p0_gyro_bias : initial bias std (15 states; m/s², rad/s).
+    g : gravity, m/s²; ``None`` uses the norm of the mean specific force of
+        the alignment samples.
+    alignment : ``"samples"`` (first ``align_samples`` samples) or
+        ``"first_stance"`` (the first detected stance, at most
+        ``align_samples_max`` samples).
+    initial_yaw : rad.
+    zaru : zero angular-rate update during stance (needs 15 states).
+    sigma_zaru : its noise, rad/s.
+    heading_hold : hold the yaw during each stance; ``sigma_heading`` rad.
+    integration : ``"euler"`` (first order, the thesis) or ``"coning"``
+        (coning / sculling-corrected increments).
+    """
+
+    states: int = 9
+    sigma_acc: float = 0.5
+    sigma_gyro: float = 0.5 * math.pi / 180.0
+    sigma_v: float = 0.01
+    sigma_acc_bias_rw: float = 1e-3
+    sigma_gyro_bias_rw: float = 1e-5
+    p0_pos: float = 1e-5
+    p0_vel: float = 1e-5
+    p0_att: float = 0.1 * math.pi / 180.0
+    p0_acc_bias: float = 0.1
+    p0_gyro_bias: float = 0.01
+    g: float | None = 9.8029
+    alignment: Literal["samples", "first_stance"] = "samples"
+    align_samples: int = 20
+    align_samples_max: int = 400
+    initial_yaw: float = 0.0
+    zaru: bool = False
+    sigma_zaru: float = 0.01
+    heading_hold: bool = False
+    sigma_heading: float = 0.5 * math.pi / 180.0
+    integration: Literal["euler", "coning"] = "euler"
+
+    def __post_init__(self) -> None:
+        if self.states not in (9, 15):
+            raise ConfigError(f"states must be 9 or 15; got {self.states}")
+        for name in ("sigma_acc", "sigma_gyro", "sigma_v", "p0_pos", "p0_vel", "p0_att", "sigma_zaru",
+                     "sigma_heading", "p0_acc_bias", "p0_gyro_bias"):
+            val = getattr(self, name)
+            if not (val > 0 and math.isfinite(val)):
+                raise ConfigError(f"{name} must be finite and > 0; got {val!r}")
+        for name in ("sigma_acc_bias_rw", "sigma_gyro_bias_rw"):
+            if not getattr(self, name) >= 0:
+                raise ConfigError(f"{name} must be >= 0; got {getattr(self, name)!r}")
+        if self.g is not None and not self.g > 0:
+            raise ConfigError(f"g must be > 0 or None (estimate from the alignment samples); got {self.g!r}")
+        if self.alignment not in ("samples", "first_stance"):
+            raise ConfigError(f"alignment must be 'samples' or 'first_stance'; got {self.alignment!r}")
+        if self.integration not in ("euler", "coning"):
+            raise ConfigError(f"integration must be 'euler' or 'coning'; got {self.integration!r}")
+        if self.zaru and self.states != 15:
+            raise ConfigError("zaru=True needs the gyro-bias states: set states=15")
+        if self.align_samples < 1:
+            raise ConfigError(f"align_samples must be >= 1; got {self.align_samples}")
+
+    def to_dict(self) -> dict[str, Any]:
+        return asdict(self)
+
+
+@dataclass(frozen=True)
+class ZuptResult:
+    """Output of :func:`run_zupt` (arrays one row per sample).
+
+    ``innovation`` / ``innovation_var`` hold the ZUPT innovation ``-v̂`` and
+    the diagonal of its covariance ``S`` at the updated samples (NaN
+    elsewhere); ``cov_diag`` is the diagonal of P after each step, ``P`` the
+    final full covariance.
+    """
+
+    t: Array
+    position: Array
+    velocity: Array
+    quaternion: Array
+    accel_bias: Array
+    gyro_bias: Array
+    cov_diag: Array
+    innovation: Array
+    innovation_var: Array
+    P: Array
+    zv: NDArray[np.bool_]
+    config: ZuptConfig = field(default_factory=ZuptConfig)
+
+    @property
+    def euler(self) -> Array:
+        """(N, 3) roll, pitch, yaw in rad."""
+        return euler_from_quat(self.quaternion)
+
+    @property
+    def position_std(self) -> Array:
+        return np.sqrt(self.cov_diag[:, 0:3])
+
+    def to_dict(self) -> dict[str, Any]:
+        d = {k: getattr(self, k).tolist() for k in ("t", "position", "velocity", "quaternion", "cov_diag")}
+        d["zv"] = self.zv.astype(int).tolist()
+        if self.config.states == 15:
+            d["accel_bias"] = self.accel_bias.tolist()
+            d["gyro_bias"] = self.gyro_bias.tolist()
+        d["config"] = self.config.to_dict()
+        return d
+
+
+def align_from_accel(accel_mean: ArrayLike, yaw: float = 0.0) -> Array:
+    """Quaternion ``q_nb`` levelled from a mean specific force (body FRD)."""
+    f = np.asarray(accel_mean, dtype=float)
+    if f.shape != (3,) or not np.all(np.isfinite(f)) or np.linalg.norm(f) == 0:
+        raise InvalidInputError(f"accel_mean must be a finite non-zero 3-vector; got {f!r}")
+    roll = math.atan2(-f[1], -f[2])
+    pitch = math.atan2(f[0], math.hypot(f[1], f[2]))
+    return np.asarray(quat_from_euler(roll, pitch, yaw), dtype=float)
+
+
+def first_stance(zv: ArrayLike) -> tuple[int, int]:
+    """Half-open index range of the first run of True in ``zv``."""
+    z = np.asarray(zv, dtype=bool)
+    on = np.flatnonzero(z)
+    if on.size == 0:
+        raise InsufficientDataError("the detector found no stationary sample; cannot align from a stance "
+                                    "(raise the threshold or use alignment='samples')")
+    i0 = int(on[0])
+    off = np.flatnonzero(~z[i0:])
+    return i0, (i0 + int(off[0])) if off.size else z.size
+
+
+def _arrays(data: Any) -> tuple[Array, Array, Array]:
+    try:
+        t = np.ascontiguousarray(data.t, dtype=np.float64)
+        a = np.ascontiguousarray(data.accel, dtype=np.float64)
+        w = np.ascontiguousarray(data.gyro, dtype=np.float64)
+    except AttributeError as exc:
+        raise InvalidInputError(f"data must be an ImuData (t, gyro, accel); got {type(data).__name__}") from exc
+    if a.shape != (t.size, 3) or w.shape != (t.size, 3):
+        raise ShapeError(f"accel {a.shape} and gyro {w.shape} must be ({t.size}, 3)")
+    if t.size < 2:
+        raise InsufficientDataError("the recording needs at least 2 samples")
+    if np.any(np.diff(t) <= 0):
+        from imunav.errors import TimeOrderError
+
+        bad = np.flatnonzero(np.diff(t) <= 0)
+        raise TimeOrderError(f"time stamps not strictly increasing at rows {(bad + 1)[:10].tolist()}")
+    return t, a, w
+
+
+def run_zupt(data: Any, zv: ArrayLike, config: ZuptConfig | None = None, *,
+             initial_position: ArrayLike = (0.0, 0.0, 0.0),
+             initial_quaternion: ArrayLike | None = None) -> ZuptResult:
+    """Run the ZUPT-aided INS over a recording.
+
+    Parameters
+    ----------
+    data : ImuData (t, gyro rad/s, accel m/s², body FRD).
+    zv : (N,) bool stance flags (a detector's ``zv`` or stored labels).
+    config : :class:`ZuptConfig` (default: 9 states, pyshoe noise values).
+    initial_position : (3,) m.
+    initial_quaternion : (4,) ``q_nb`` overriding the alignment (gravity
+        ``g`` is still taken from the config / alignment samples).
+    """
+    cfg = ZuptConfig() if config is None else config
+    t, a, w = _arrays(data)
+    z = np.asarray(getattr(zv, "zv", zv))
+    if z.shape != t.shape:
+        raise ShapeError(f"zv must have shape ({t.size},) like the recording; got {z.shape}")
+    z = np.ascontiguousarray(z.astype(bool))
+    if cfg.alignment == "samples":
+        i0, i1 = 0, min(cfg.align_samples, t.size)
+    else:
+        i0, i1 = first_stance(z)
+        i1 = min(i1, i0 + cfg.align_samples_max)
+    fmean = a[i0:i1].mean(axis=0)
+    if initial_quaternion is None:
+        q0 = align_from_accel(fmean, cfg.initial_yaw)
+    else:
+        q0 = np.asarray(initial_quaternion, dtype=float)
+        if q0.shape != (4,) or abs(np.linalg.norm(q0) - 1.0) > 1e-6:
+            raise InvalidInputError(f"initial_quaternion must be a unit quaternion [w, x, y, z]; got {q0!r}")
+    g = float(np.linalg.norm(fmean)) if cfg.g is None else float(cfg.g)
+    nx = cfg.states
+    p0 = [cfg.p0_pos] * 3 + [cfg.p0_vel] * 3 + [cfg.p0_att] * 3
+    if nx == 15:
+        p0 += [cfg.p0_acc_bias] * 3 + [cfg.p0_gyro_bias] * 3
+    P0 = np.diag(np.square(p0))
+    pos0 = np.asarray(initial_position, dtype=float)
+    if pos0.shape != (3,):
+        raise ShapeError(f"initial_position must be a 3-vector; got shape {pos0.shape}")
+    q, v, p, ba, bg, Pd, innov, svar, P = _k.zupt_ekf_kernel(
+        t, a, w, z, q0, pos0, np.zeros(3), np.zeros(3), np.zeros(3), P0, nx, g,
+        cfg.sigma_acc, cfg.sigma_gyro, cfg.sigma_acc_bias_rw, cfg.sigma_gyro_bias_rw, cfg.sigma_v,
+        bool(cfg.zaru), cfg.sigma_zaru, bool(cfg.heading_hold), cfg.sigma_heading, cfg.integration == "coning")
+    return ZuptResult(t, p, v, q, ba, bg, Pd, innov, svar, P, z, cfg)

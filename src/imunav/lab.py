@@ -1,0 +1,453 @@
+"""The lab: imunav's main job, a sequence of steps writing one report folder.
+
+``run_lab(out_dir)`` runs the steps named in :data:`STEPS` in order.  A step
+is a module ``imunav.labsteps.<name>`` with
+
+* ``TITLE: str`` and
+* ``run(ctx: LabContext) -> StepResult``,
+* optionally ``report(section, result, ctx)`` to add its own tables and
+  figures to the HTML report (default: the summary as a table, figures
+  embedded).
+
+Steps share objects through ``ctx.artifacts`` (a dict); the keys written by
+each step are listed in its module docstring.  Each step's options come from
+the TOML table named after it (``ctx.options``); ``[lab]`` holds
+``seed`` and ``steps`` (a subset / order of :data:`STEPS`).
+
+Outputs in ``out_dir`` (each written atomically): ``summary.json`` (machine
+readable: every step's summary, timing, verdict, error), ``summary.md`` and
+``index.html`` (the report), plus whatever the steps write (``data/``,
+``figures/``).  A step that raises is recorded with its traceback and the
+remaining steps still run.
+
+Example
+-------
+>>> from imunav.lab import run_lab                                # doctest: +SKIP
+>>> result = run_lab("lab-report", rng=0)                         # doctest: +SKIP
+"""
+
+from __future__ import annotations
+
+import base64
+import contextlib
+import importlib
+import json
+import os
+import pkgutil
+import time
+import tomllib
+import traceback
+import zlib
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Iterator, Mapping
+
+import numpy as np
+
+from imunav.errors import ConfigError
+
+__all__ = ["STEPS", "LabContext", "StepResult", "StepRecord", "LabResult", "run_lab", "load_lab_config", "available_steps", "embed_png"]
+
+#: Step modules (``imunav.labsteps.<name>``) run by default, in order.
+STEPS: list[str] = [
+    "simulate_tests",
+]
+
+
+@dataclass(frozen=True)
+class StepResult:
+    """What a lab step returns.
+
+    Attributes
+    ----------
+    summary : JSON-able dict of the step's key figures.
+    figures : PNG files written by the step (embedded in the HTML report).
+    passed : verdict against the step's acceptance, or None when it has none.
+    tables : optional ``(caption, rows)`` pairs (rows: list of dicts) for the report.
+    notes : optional paragraphs for the report.
+    """
+
+    summary: dict
+    figures: list[Path] = field(default_factory=list)
+    passed: bool | None = None
+    tables: list[tuple[str, list[dict]]] = field(default_factory=list)
+    notes: list[str] = field(default_factory=list)
+
+    def to_dict(self) -> dict:
+        return {
+            "summary": _jsonable(self.summary),
+            "figures": [str(p) for p in self.figures],
+            "passed": self.passed,
+        }
+
+
+class _NullProgress:
+    """Stand-in for :class:`rich.progress.Progress` when output is off."""
+
+    def add_task(self, description: str, total: float | None = None, **kw: Any) -> int:
+        return 0
+
+    def update(self, task: int, **kw: Any) -> None:
+        pass
+
+    def advance(self, task: int, advance: float = 1) -> None:
+        pass
+
+    def remove_task(self, task: int) -> None:
+        pass
+
+
+@dataclass
+class LabContext:
+    """What every step gets.
+
+    Attributes
+    ----------
+    out_dir : the report folder (exists).
+    seed : the lab's root seed; use :meth:`rng` for a step's own stream.
+    progress : a :class:`rich.progress.Progress` (or a silent stand-in) for
+        progress bars: ``task = ctx.progress.add_task("…", total=n)``.
+    artifacts : shared objects between steps (recordings, true models, …).
+    config : the whole lab configuration (parsed TOML).
+    """
+
+    out_dir: Path
+    seed: int
+    progress: Any
+    artifacts: dict = field(default_factory=dict)
+    config: dict = field(default_factory=dict)
+    step: str = ""
+
+    @property
+    def options(self) -> dict:
+        """The TOML table of the running step (``[<step name>]``), or {}."""
+        return dict(self.config.get(self.step, {}))
+
+    def rng(self, *key: int | str) -> np.random.Generator:
+        """Independent, reproducible generator for ``(seed, step, *key)``."""
+        words = [self.seed] + [_word(k) for k in (self.step, *key)]
+        return np.random.default_rng(np.random.SeedSequence(words))
+
+    def path(self, *parts: str) -> Path:
+        """A path inside ``out_dir`` (parent folders created)."""
+        p = self.out_dir.joinpath(*parts)
+        p.parent.mkdir(parents=True, exist_ok=True)
+        return p
+
+    @contextlib.contextmanager
+    def task(self, description: str, total: float | None = None) -> Iterator[Any]:
+        """Progress task as a context manager; yields ``advance(n=1)``."""
+        tid = self.progress.add_task(description, total=total)
+        try:
+            yield lambda n=1: self.progress.advance(tid, n)
+        finally:
+            if total is not None:
+                self.progress.update(tid, completed=total)
+
+
+def _word(k: int | str) -> int:
+    if isinstance(k, (int, np.integer)):
+        return int(k) & 0xFFFFFFFF
+    return zlib.crc32(str(k).encode("utf-8"))  # stable across runs (unlike hash())
+
+
+@dataclass(frozen=True)
+class StepRecord:
+    """One step's outcome inside a lab run."""
+
+    name: str
+    title: str
+    result: StepResult | None
+    seconds: float
+    error: str | None = None
+
+    @property
+    def passed(self) -> bool | None:
+        return False if self.error else (self.result.passed if self.result else None)
+
+    def to_dict(self) -> dict:
+        d = {"name": self.name, "title": self.title, "seconds": round(self.seconds, 3), "passed": self.passed}
+        if self.result is not None:
+            d.update(self.result.to_dict())
+            d["passed"] = self.passed
+        if self.error:
+            d["error"] = self.error
+        return d
+
+
+@dataclass(frozen=True)
+class LabResult:
+    """A lab run: its folder, step records and overall verdict."""
+
+    out_dir: Path
+    seed: int
+    steps: list[StepRecord]
+    seconds: float
+
+    @property
+    def passed(self) -> bool | None:
+        v = [s.passed for s in self.steps if s.passed is not None]
+        return None if not v else all(v)
+
+    @property
+    def failed_steps(self) -> list[str]:
+        return [s.name for s in self.steps if s.error]
+
+    def to_dict(self) -> dict:
+        from imunav import __version__
+
+        return {
+            "imunav_version": __version__,
+            "seed": self.seed,
+            "seconds": round(self.seconds, 3),
+            "passed": self.passed,
+            "steps": [s.to_dict() for s in self.steps],
+        }
+
+
+# ---------------------------------------------------------------------------
+# configuration
+# ---------------------------------------------------------------------------
+
+
+def available_steps() -> list[str]:
+    """Names of the step modules present in :mod:`imunav.labsteps`."""
+    import imunav.labsteps as pkg
+
+    return sorted(m.name for m in pkgutil.iter_modules(pkg.__path__) if not m.name.startswith("_"))
+
+
+def load_lab_config(config: str | os.PathLike[str] | Mapping[str, Any] | None) -> dict:
+    """Parse and check a lab configuration (TOML file or dict).
+
+    Top-level tables: ``[lab]`` (``seed`` int, ``steps`` list of step names)
+    and one table per step (``[simulate_tests]``, …).  Unknown tables or
+    ``[lab]`` keys raise :class:`~imunav.errors.ConfigError`.
+    """
+    if config is None:
+        return {}
+    where = "lab configuration"
+    if isinstance(config, Mapping):
+        cfg = dict(config)
+    else:
+        p = Path(config)
+        where = str(p)
+        if not p.is_file():
+            raise ConfigError(f"lab configuration file not found: {p}")
+        try:
+            cfg = tomllib.loads(p.read_text(encoding="utf-8"))
+        except tomllib.TOMLDecodeError as exc:
+            raise ConfigError(f"{p} is not valid TOML: {exc}") from exc
+    steps = available_steps()
+    for key, value in cfg.items():
+        if key != "lab" and key not in steps:
+            raise ConfigError(f"{where}: unknown table [{key}]; valid tables are [lab] and {', '.join(f'[{s}]' for s in steps)}")
+        if not isinstance(value, Mapping):
+            raise ConfigError(f"{where}: '{key}' must be a table ([{key}]), not {type(value).__name__}")
+    lab = cfg.get("lab", {})
+    unknown = set(lab) - {"seed", "steps", "title"}
+    if unknown:
+        raise ConfigError(f"{where}: unknown key(s) {sorted(unknown)} in [lab]; allowed: seed, steps, title")
+    if "seed" in lab and not isinstance(lab["seed"], int):
+        raise ConfigError(f"{where}: [lab] seed must be an integer, got {lab['seed']!r}")
+    if "steps" in lab:
+        if not isinstance(lab["steps"], list) or not all(isinstance(s, str) for s in lab["steps"]):
+            raise ConfigError(f"{where}: [lab] steps must be a list of step names")
+        bad = [s for s in lab["steps"] if s not in steps]
+        if bad:
+            raise ConfigError(f"{where}: unknown step(s) {bad} in [lab] steps; available: {steps}")
+    return cfg
+
+
+# ---------------------------------------------------------------------------
+# running
+# ---------------------------------------------------------------------------
+
+
+def _jsonable(x: Any) -> Any:
+    if isinstance(x, Mapping):
+        return {str(k): _jsonable(v) for k, v in x.items()}
+    if isinstance(x, (list, tuple)):
+        return [_jsonable(v) for v in x]
+    if isinstance(x, np.ndarray):
+        return _jsonable(x.tolist())
+    if isinstance(x, np.generic):
+        return _jsonable(x.item())
+    if isinstance(x, float) and not np.isfinite(x):
+        return None
+    if isinstance(x, Path):
+        return str(x)
+    if hasattr(x, "to_dict"):
+        return _jsonable(x.to_dict())
+    return x
+
+
+def _write_text(path: Path, text: str) -> None:
+    from imunav.io._atomic import atomic_path
+
+    with atomic_path(path) as tmp:
+        tmp.write_text(text, encoding="utf-8")
+
+
+def _seed_of(rng: Any) -> int:
+    if rng is None:
+        return 0
+    if isinstance(rng, (int, np.integer)):
+        if int(rng) < 0:
+            raise ConfigError(f"the lab seed must be a non-negative integer, got {rng}")
+        return int(rng)
+    if isinstance(rng, np.random.Generator):
+        return int(rng.integers(0, 2**31 - 1))
+    raise ConfigError(f"rng must be an integer seed or a numpy Generator, not {type(rng).__name__}")
+
+
+def run_lab(
+    out_dir: str | os.PathLike[str],
+    config: str | os.PathLike[str] | Mapping[str, Any] | None = None,
+    rng: Any = 0,
+    *,
+    steps: list[str] | None = None,
+    progress: bool = True,
+    console: Any = None,
+) -> LabResult:
+    """Run the lab steps and write the report folder.
+
+    Parameters
+    ----------
+    out_dir : report folder (created).
+    config : TOML file or dict (see :func:`load_lab_config`); None = defaults
+        (the built-in virtual IMU).
+    rng : root seed (int) or Generator; ``[lab] seed`` in the config wins.
+    steps : step names to run (default ``[lab] steps`` or :data:`STEPS`).
+    progress : show rich progress bars.
+    console : a :class:`rich.console.Console` to draw on.
+
+    Returns
+    -------
+    LabResult (also written as ``summary.json``).
+    """
+    cfg = load_lab_config(config)
+    lab_cfg = cfg.get("lab", {})
+    seed = int(lab_cfg["seed"]) if "seed" in lab_cfg else _seed_of(rng)
+    names = list(steps if steps is not None else lab_cfg.get("steps", STEPS))
+    known = available_steps()
+    bad = [s for s in names if s not in known]
+    if bad:
+        raise ConfigError(f"unknown lab step(s) {bad}; available: {known}")
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+
+    if progress:
+        from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
+
+        prog_cm: Any = Progress(
+            TextColumn("{task.description}"), BarColumn(), TextColumn("{task.percentage:>3.0f}%"),
+            TimeElapsedColumn(), console=console, transient=False,
+        )
+    else:
+        prog_cm = contextlib.nullcontext(_NullProgress())
+
+    records: list[StepRecord] = []
+    t_lab = time.perf_counter()
+    with prog_cm as prog:
+        ctx = LabContext(out_dir=out, seed=seed, progress=prog, config=cfg)
+        overall = prog.add_task(f"lab ({len(names)} steps)", total=len(names))
+        for name in names:
+            mod = importlib.import_module(f"imunav.labsteps.{name}")
+            title = getattr(mod, "TITLE", name)
+            ctx.step = name
+            prog.update(overall, description=f"lab: {title}")
+            t0 = time.perf_counter()
+            try:
+                res = mod.run(ctx)
+                if not isinstance(res, StepResult):
+                    raise TypeError(f"step {name}.run returned {type(res).__name__}, not StepResult")
+                records.append(StepRecord(name, title, res, time.perf_counter() - t0))
+            except Exception:  # a failing step is reported; the others still run
+                records.append(StepRecord(name, title, None, time.perf_counter() - t0, traceback.format_exc()))
+            prog.advance(overall)
+        prog.update(overall, description="lab: done")
+    result = LabResult(out, seed, records, time.perf_counter() - t_lab)
+    _write_text(out / "summary.json", json.dumps(_jsonable(result.to_dict()), indent=2) + "\n")
+    _write_text(out / "summary.md", _markdown(result))
+    _write_html(result, ctx, lab_cfg.get("title", "imunav lab"))
+    return result
+
+
+# ---------------------------------------------------------------------------
+# report
+# ---------------------------------------------------------------------------
+
+
+def _verdict_word(p: bool | None) -> str:
+    return "n/a" if p is None else ("PASS" if p else "FAIL")
+
+
+def _flat(d: Mapping[str, Any], prefix: str = "") -> list[tuple[str, Any]]:
+    rows: list[tuple[str, Any]] = []
+    for k, v in d.items():
+        key = f"{prefix}{k}"
+        if isinstance(v, Mapping):
+            rows += _flat(v, key + ".")
+        elif isinstance(v, (list, tuple)) and len(v) > 6:
+            rows.append((key, f"[{len(v)} values]"))
+        else:
+            rows.append((key, v))
+    return rows
+
+
+def _markdown(result: LabResult) -> str:
+    lines = [
+        "# imunav lab",
+        "",
+        f"seed {result.seed} · {result.seconds:.1f} s · overall: **{_verdict_word(result.passed)}**",
+        "",
+        "| step | verdict | time (s) |",
+        "|---|---|---|",
+    ]
+    for s in result.steps:
+        lines.append(f"| {s.title} (`{s.name}`) | {_verdict_word(s.passed)} | {s.seconds:.1f} |")
+    for s in result.steps:
+        lines += ["", f"## {s.title}", ""]
+        if s.error:
+            lines += ["Step failed:", "", "```", s.error.rstrip(), "```"]
+            continue
+        assert s.result is not None
+        lines += ["| key | value |", "|---|---|"]
+        for k, v in _flat(_jsonable(s.result.summary)):
+            lines.append(f"| {k} | {v} |")
+        for f in s.result.figures:
+            rel = os.path.relpath(f, result.out_dir)
+            lines += ["", f"![{Path(f).stem}]({rel})"]
+    return "\n".join(lines) + "\n"
+
+
+def embed_png(section: Any, path: str | os.PathLike[str], caption: str | None = None) -> None:
+    """Embed a PNG file in a report section (thin alias of ``Section.image``)."""
+    section.image(path, caption or Path(path).stem)
+
+
+def _write_html(result: LabResult, ctx: LabContext, title: str) -> None:
+    from imunav.report import Report
+
+    rep = Report(title, f"seed {result.seed} · {len(result.steps)} steps · {result.seconds:.1f} s")
+    for s in result.steps:
+        sec = rep.section(s.title, s.passed)
+        if s.error:
+            sec.text("This step failed; its traceback follows.")
+            sec.code(s.error)
+            continue
+        assert s.result is not None
+        mod = importlib.import_module(f"imunav.labsteps.{s.name}")
+        for para in s.result.notes:
+            sec.text(para)
+        custom = getattr(mod, "report", None)
+        if custom is not None:
+            custom(sec, s.result, ctx)
+        else:
+            sec.table([{"key": k, "value": v} for k, v in _flat(_jsonable(s.result.summary))], "summary")
+            for caption, rows in s.result.tables:
+                sec.table(rows, caption)
+            for f in s.result.figures:
+                embed_png(sec, f)
+    rep.write(result.out_dir / "index.html")

@@ -1,0 +1,410 @@
+"""Seeded Monte Carlo and batch runs on local processes or a Dask cluster.
+
+A *scenario* is a module-level function (so that it can be sent to worker
+processes) that takes a :class:`numpy.random.Generator` and keyword
+arguments and returns a mapping of named results: scalars (metrics such as
+an RMSE) or arrays (time series such as NEES).  :func:`run_montecarlo` gives
+run ``i`` the generator built from child ``i`` of
+``numpy.random.SeedSequence(seed)``, whatever the executor, the number of
+workers or the chunking, so the same seed gives the same numbers everywhere.
+
+A *batched* scenario (``batched=True``) takes a list of generators and returns
+a list of result mappings; it lets a vectorised or numba-batched scenario run
+many Monte Carlo runs in one call.  Runs are cut into chunks of fixed size
+(``chunk_size``), each chunk is one task.
+
+Executors
+---------
+``"serial"``
+    In this process (debugging, tiny jobs).
+``"processes"`` (default)
+    A local process pool (``concurrent.futures``, forkserver start method)
+    with ``n_workers`` processes (default: all cores).
+``"dask"``
+    A Dask distributed cluster: an existing one by ``address``
+    (``"tcp://host:8786"``), or a ``LocalCluster`` on loopback with
+    ``n_workers`` single-threaded worker processes.  Needs ``imunav[dask]``.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass, field
+from typing import Any, Literal
+
+import numpy as np
+import pandas as pd
+from numpy.typing import NDArray
+
+from imunav.errors import InvalidInputError, MissingDependencyError
+
+__all__ = [
+    "run_montecarlo",
+    "run_batch",
+    "MonteCarloResult",
+    "ConsistencyResult",
+    "nees_consistency",
+    "spawn_generators",
+]
+
+Executor = Literal["serial", "processes", "dask"]
+
+
+def spawn_generators(seed: int | np.random.SeedSequence, n: int, start: int = 0) -> list[np.random.Generator]:
+    """Generators of runs ``start .. start+n-1`` of a Monte Carlo seeded with ``seed``.
+
+    Run ``i`` always gets ``Generator(PCG64(SeedSequence(seed).spawn(...)[i]))``.
+    """
+    ss = seed if isinstance(seed, np.random.SeedSequence) else np.random.SeedSequence(int(seed))
+    # SeedSequence.spawn is stateful; derive children explicitly so that any
+    # subset of runs can be regenerated independently.
+    return [
+        np.random.Generator(np.random.PCG64(np.random.SeedSequence(ss.entropy, spawn_key=(*ss.spawn_key, i))))
+        for i in range(start, start + n)
+    ]
+
+
+def _run_chunk(
+    fn: Callable[..., Any], seed: int, start: int, stop: int, batched: bool, kwargs: Mapping[str, Any]
+) -> list[Mapping[str, Any]]:
+    gens = spawn_generators(seed, stop - start, start)
+    if batched:
+        out = list(fn(gens, **kwargs))
+        if len(out) != len(gens):
+            raise InvalidInputError(
+                f"batched scenario {getattr(fn, '__name__', fn)!r} returned {len(out)} results for {len(gens)} runs"
+            )
+        return out
+    return [fn(g, **kwargs) for g in gens]
+
+
+@dataclass(frozen=True)
+class ConsistencyResult:
+    """Average NEES / NIS with its two-sided χ² acceptance band.
+
+    For ``n`` runs of a consistent filter with ``dof``-dimensional errors, the
+    run-average ``ε̄_k = (1/n) Σ ε_k,i`` satisfies ``n ε̄_k ~ χ²(n·dof)``
+    (Bar-Shalom, Li & Kirubarajan 2001, §5.4.2), so the band is
+    ``[χ²_{α/2}(n·dof), χ²_{1-α/2}(n·dof)] / n``.
+    """
+
+    average: NDArray[np.float64]
+    lower: float
+    upper: float
+    dof: int
+    n_runs: int
+    fraction_inside: float
+    confidence: float
+
+    def to_dict(self) -> dict[str, Any]:
+        return {
+            "average": self.average.tolist(),
+            "lower": self.lower,
+            "upper": self.upper,
+            "dof": self.dof,
+            "n_runs": self.n_runs,
+            "fraction_inside": self.fraction_inside,
+            "confidence": self.confidence,
+        }
+
+
+def nees_consistency(values: NDArray[np.float64], dof: int, confidence: float = 0.95) -> ConsistencyResult:
+    """Monte Carlo NEES / NIS consistency test.
+
+    Parameters
+    ----------
+    values : (n_runs, T) normalised squared errors per run and time step.
+    dof : dimension of the error (state for NEES, measurement for NIS).
+    """
+    from scipy.stats import chi2
+
+    v = np.asarray(values, dtype=float)
+    if v.ndim == 1:
+        v = v[:, None]
+    if v.ndim != 2 or v.shape[0] < 1:
+        raise InvalidInputError(f"values must be (n_runs, T); got shape {v.shape}")
+    if dof < 1:
+        raise InvalidInputError(f"dof must be >= 1, got {dof}")
+    n = v.shape[0]
+    avg = v.mean(axis=0)
+    a = 1.0 - confidence
+    lo = chi2.ppf(a / 2, n * dof) / n
+    hi = chi2.ppf(1 - a / 2, n * dof) / n
+    inside = float(np.mean((avg >= lo) & (avg <= hi)))
+    return ConsistencyResult(avg, float(lo), float(hi), int(dof), n, inside, confidence)
+
+
+@dataclass(frozen=True)
+class MonteCarloResult:
+    """Results of a Monte Carlo: one row per run.
+
+    Attributes
+    ----------
+    metrics : DataFrame with one row per run (index ``run``) and one column per
+        scalar result.
+    arrays : name -> array stacked over runs, shape ``(n_runs, ...)``.
+    seed, n_runs, executor : how it was run.
+    """
+
+    metrics: pd.DataFrame
+    arrays: dict[str, NDArray[np.float64]]
+    seed: int
+    n_runs: int
+    executor: str
+    meta: dict[str, Any] = field(default_factory=dict)
+
+    def summary(self, percentiles: Sequence[float] = (5, 50, 95)) -> pd.DataFrame:
+        """Mean, standard deviation, min / max and percentiles of every scalar metric."""
+        m = self.metrics
+        rows = {
+            "mean": m.mean(),
+            "std": m.std(ddof=1) if len(m) > 1 else m.mean() * np.nan,
+            "min": m.min(),
+            "max": m.max(),
+        }
+        for p in percentiles:
+            rows[f"p{p:g}"] = m.quantile(p / 100.0)
+        return pd.DataFrame(rows).T
+
+    def consistency(self, name: str, dof: int, confidence: float = 0.95) -> ConsistencyResult:
+        """:func:`nees_consistency` of the stacked array ``name``."""
+        if name not in self.arrays:
+            raise InvalidInputError(f"no array result {name!r}; available: {sorted(self.arrays)}")
+        return nees_consistency(self.arrays[name], dof, confidence)
+
+    def to_dict(self) -> dict[str, Any]:
+        return {
+            "seed": self.seed,
+            "n_runs": self.n_runs,
+            "executor": self.executor,
+            "metrics": {k: self.metrics[k].tolist() for k in self.metrics.columns},
+            "summary": self.summary().to_dict(),
+            "arrays": {k: v.tolist() for k, v in self.arrays.items()},
+            "meta": self.meta,
+        }
+
+
+def _gather(results: list[Mapping[str, Any]]) -> tuple[pd.DataFrame, dict[str, NDArray[np.float64]]]:
+    if not results:
+        return pd.DataFrame(), {}
+    scalars: dict[str, list[float]] = {}
+    arrays: dict[str, list[NDArray[np.float64]]] = {}
+    keys = list(results[0].keys())
+    for i, r in enumerate(results):
+        if list(r.keys()) != keys:
+            raise InvalidInputError(f"run {i} returned keys {sorted(r)} but run 0 returned {sorted(keys)}")
+        for k, v in r.items():
+            a = np.asarray(v)
+            if a.ndim == 0:
+                scalars.setdefault(k, []).append(float(a))
+            else:
+                arrays.setdefault(k, []).append(a)
+    df = pd.DataFrame(scalars)
+    df.index.name = "run"
+    stacked: dict[str, NDArray[np.float64]] = {}
+    for k, lst in arrays.items():
+        shapes = {a.shape for a in lst}
+        if len(shapes) != 1:
+            raise InvalidInputError(f"array result {k!r} has different shapes across runs: {sorted(shapes)}")
+        stacked[k] = np.stack(lst)
+    return df, stacked
+
+
+def _chunks(n_runs: int, chunk_size: int) -> list[tuple[int, int]]:
+    return [(s, min(s + chunk_size, n_runs)) for s in range(0, n_runs, chunk_size)]
+
+
+def _progress(enabled: bool, total: int, description: str):
+    from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
+
+    prog = Progress(
+        TextColumn("{task.description}"),
+        BarColumn(),
+        MofNCompleteColumn(),
+        TimeElapsedColumn(),
+        disable=not enabled,
+        transient=True,
+    )
+    return prog
+
+
+def run_montecarlo(
+    scenario: Callable[..., Any],
+    n_runs: int,
+    *,
+    seed: int = 0,
+    executor: Executor = "processes",
+    n_workers: int | None = None,
+    address: str | None = None,
+    batched: bool = False,
+    chunk_size: int | None = None,
+    progress: bool = False,
+    description: str = "Monte Carlo",
+    **kwargs: Any,
+) -> MonteCarloResult:
+    """Run ``n_runs`` seeded runs of ``scenario`` and gather the results.
+
+    Parameters
+    ----------
+    scenario : module-level function ``f(rng, **kwargs) -> {name: scalar | array}``,
+        or with ``batched=True`` ``f([rng, ...], **kwargs) -> [{...}, ...]``.
+    n_runs : number of runs.
+    seed : master seed; run ``i`` uses :func:`spawn_generators` ``(seed, ...)[i]``.
+    executor : ``"serial"``, ``"processes"`` or ``"dask"`` (see module docstring).
+    n_workers : worker processes (default: number of cores).
+    address : Dask scheduler address; if None with ``executor="dask"`` a
+        LocalCluster is started on 127.0.0.1 and closed afterwards.
+    chunk_size : runs per task (default: ``ceil(n_runs / (4 n_workers))``).
+        Chunking does not change the numbers.
+    progress : show a rich progress bar.
+    **kwargs : passed to ``scenario``.
+
+    Returns
+    -------
+    MonteCarloResult
+    """
+    if n_runs < 1:
+        raise InvalidInputError(f"n_runs must be >= 1, got {n_runs}")
+    if not callable(scenario):
+        raise InvalidInputError("scenario must be a callable")
+    workers = n_workers or os.cpu_count() or 1
+    cs = chunk_size or max(1, math.ceil(n_runs / (4 * workers)))
+    chunks = _chunks(n_runs, cs)
+    per_chunk: dict[int, list[Mapping[str, Any]]] = {}
+
+    if executor == "serial":
+        with _progress(progress, n_runs, description) as prog:
+            task = prog.add_task(description, total=n_runs)
+            for ci, (a, b) in enumerate(chunks):
+                per_chunk[ci] = _run_chunk(scenario, seed, a, b, batched, kwargs)
+                prog.advance(task, b - a)
+    elif executor == "processes":
+        import multiprocessing as mp
+        from concurrent.futures import ProcessPoolExecutor, as_completed
+
+        ctx = mp.get_context("forkserver")
+        with ProcessPoolExecutor(max_workers=workers, mp_context=ctx) as pool:
+            futs = {
+                pool.submit(_run_chunk, scenario, seed, a, b, batched, dict(kwargs)): ci
+                for ci, (a, b) in enumerate(chunks)
+            }
+            with _progress(progress, n_runs, description) as prog:
+                task = prog.add_task(description, total=n_runs)
+                for f in as_completed(futs):
+                    ci = futs[f]
+                    per_chunk[ci] = f.result()
+                    prog.advance(task, chunks[ci][1] - chunks[ci][0])
+    elif executor == "dask":
+        try:
+            from dask.distributed import Client, LocalCluster, as_completed as das_completed
+        except ImportError as e:  # pragma: no cover - depends on the extra
+            raise MissingDependencyError("dask[distributed]", "dask", "The Dask executor") from e
+        cluster = None
+        if address is None:
+            cluster = LocalCluster(
+                n_workers=workers,
+                threads_per_worker=1,
+                processes=True,
+                host="127.0.0.1",
+                dashboard_address=None,
+            )
+            client = Client(cluster)
+        else:
+            client = Client(address)
+        try:
+            futs = [
+                client.submit(_run_chunk, scenario, seed, a, b, batched, dict(kwargs), pure=False)
+                for (a, b) in chunks
+            ]
+            index = {f.key: ci for ci, f in enumerate(futs)}
+            with _progress(progress, n_runs, description) as prog:
+                task = prog.add_task(description, total=n_runs)
+                for f in das_completed(futs):
+                    ci = index[f.key]
+                    per_chunk[ci] = f.result()
+                    prog.advance(task, chunks[ci][1] - chunks[ci][0])
+        finally:
+            client.close()
+            if cluster is not None:
+                cluster.close()
+    else:
+        raise InvalidInputError(f"executor must be 'serial', 'processes' or 'dask', not {executor!r}")
+
+    results = [r for ci in range(len(chunks)) for r in per_chunk[ci]]
+    metrics, arrays = _gather(results)
+    return MonteCarloResult(
+        metrics,
+        arrays,
+        seed=int(seed),
+        n_runs=n_runs,
+        executor=executor,
+        meta={"scenario": getattr(scenario, "__qualname__", str(scenario)), "chunk_size": cs, "kwargs": {k: repr(v) for k, v in kwargs.items()}},
+    )
+
+
+def run_batch(
+    fn: Callable[..., Mapping[str, Any]],
+    items: Sequence[Any],
+    *,
+    executor: Executor = "processes",
+    n_workers: int | None = None,
+    address: str | None = None,
+    progress: bool = False,
+    description: str = "batch",
+    **kwargs: Any,
+) -> list[Mapping[str, Any] | BaseException]:
+    """Apply ``fn(item, **kwargs)`` to every item (e.g. every recording of a
+    production batch) in parallel, keeping the input order.
+
+    A failing item does not stop the others: its entry is the exception, so
+    the caller can report which unit failed and why.
+    """
+    items = list(items)
+    if not items:
+        raise InvalidInputError("run_batch needs at least one item")
+    out: list[Any] = [None] * len(items)
+    if executor == "serial":
+        for i, it in enumerate(items):
+            out[i] = _safe_call(fn, it, kwargs)
+        return out
+    workers = n_workers or os.cpu_count() or 1
+    if executor == "processes":
+        import multiprocessing as mp
+        from concurrent.futures import ProcessPoolExecutor, as_completed
+
+        with ProcessPoolExecutor(max_workers=workers, mp_context=mp.get_context("forkserver")) as pool:
+            futs = {pool.submit(_safe_call, fn, it, dict(kwargs)): i for i, it in enumerate(items)}
+            with _progress(progress, len(items), description) as prog:
+                task = prog.add_task(description, total=len(items))
+                for f in as_completed(futs):
+                    out[futs[f]] = f.result()
+                    prog.advance(task)
+        return out
+    if executor == "dask":
+        try:
+            from dask.distributed import Client, LocalCluster
+        except ImportError as e:  # pragma: no cover
+            raise MissingDependencyError("dask[distributed]", "dask", "The Dask executor") from e
+        cluster = None
+        if address is None:
+            cluster = LocalCluster(n_workers=workers, threads_per_worker=1, host="127.0.0.1", dashboard_address=None)
+            client = Client(cluster)
+        else:
+            client = Client(address)
+        try:
+            futs = [client.submit(_safe_call, fn, it, dict(kwargs), pure=False) for it in items]
+            return list(client.gather(futs))
+        finally:
+            client.close()
+            if cluster is not None:
+                cluster.close()
+    raise InvalidInputError(f"executor must be 'serial', 'processes' or 'dask', not {executor!r}")
+
+
+def _safe_call(fn: Callable[..., Any], item: Any, kwargs: Mapping[str, Any]) -> Any:
+    try:
+        return fn(item, **kwargs)
+    except Exception as e:  # reported per item, never swallowed: the caller gets the exception object
+        return e

@@ -1,0 +1,85 @@
+"""Virtual sensors: trajectories, test profiles, ideal and erroneous IMU outputs.
+
+* :class:`Trajectory`, :func:`ideal_imu` and trajectory builders
+  (:mod:`imunav.sim.trajectory`).
+* Calibration test profiles (:mod:`imunav.sim.profiles`): multi-position
+  static tests, rate tables, six-position and Ferraris-style tests, each with
+  its segment table.
+* Sensor error models (:mod:`imunav.sim.error_model`), presets
+  (:mod:`imunav.sim.presets`) and the magnetometer model
+  (:mod:`imunav.sim.magnetometer`).
+"""
+
+from __future__ import annotations
+
+from imunav.sim import presets, profiles
+from imunav.sim.error_model import (
+    Flicker,
+    GaussMarkov,
+    ImuErrorModel,
+    TriadErrors,
+    apply_errors,
+    simulate_imu,
+)
+from imunav.sim.magnetometer import MagnetometerModel, simulate_magnetometer
+from imunav.sim.profiles import (
+    Profile,
+    Segments,
+    ferraris_profile,
+    hundred_position_orientations,
+    hundred_position_profile,
+    hundred_position_up_vectors,
+    multiposition_profile,
+    orientations_from_up,
+    rate_table_profile,
+    six_position_orientations,
+    six_position_profile,
+    six_position_up_vectors,
+    static_profile,
+    thesis_rate_steps,
+    thesis_rate_table_profile,
+    up_from_orientations,
+)
+from imunav.sim.trajectory import (
+    Trajectory,
+    body_rate_from_attitude,
+    ideal_imu,
+    trajectory_from_attitude,
+    trajectory_from_functions,
+    trajectory_from_waypoints,
+)
+
+__all__ = [
+    "Trajectory",
+    "ideal_imu",
+    "body_rate_from_attitude",
+    "trajectory_from_attitude",
+    "trajectory_from_functions",
+    "trajectory_from_waypoints",
+    "profiles",
+    "Profile",
+    "Segments",
+    "static_profile",
+    "multiposition_profile",
+    "orientations_from_up",
+    "up_from_orientations",
+    "hundred_position_up_vectors",
+    "hundred_position_orientations",
+    "hundred_position_profile",
+    "six_position_up_vectors",
+    "six_position_orientations",
+    "six_position_profile",
+    "rate_table_profile",
+    "thesis_rate_steps",
+    "thesis_rate_table_profile",
+    "ferraris_profile",
+    "GaussMarkov",
+    "Flicker",
+    "TriadErrors",
+    "ImuErrorModel",
+    "apply_errors",
+    "simulate_imu",
+    "presets",
+    "MagnetometerModel",
+    "simulate_magnetometer",
+]

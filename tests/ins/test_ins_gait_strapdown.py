@@ -1,0 +1,88 @@
+"""Gait simulator truth, 15-state bias recovery, strapdown convergence and NED static oracle."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from imunav.errors import InvalidInputError
+from imunav.ins import ZuptConfig, coning_sculling_increments, run_zupt, strapdown_local, strapdown_ned
+from imunav.ins import _kernels as _k
+from imunav.sim.gait import simulate_gait
+from imunav.timeseries import ImuData
+
+
+def test_fifteen_state_biases_inside_3sigma():
+    """Simulated walk/run/stairs with MEMS errors: estimated biases within 3 sigma of the truth."""
+    for seed in (0, 1):
+        sim = simulate_gait(["walk", "run", "stairs"], 30, error_model="foot_mems", rng=seed, turn_deg=12)
+        res = run_zupt(sim.imu, sim.stance, ZuptConfig(g=9.80665, states=15, zaru=True, integration="coning"))
+        sd = np.sqrt(res.cov_diag[-1])
+        np.testing.assert_array_less(np.abs(res.gyro_bias[-1] - sim.gyro_bias[-1]), 3 * sd[12:15])
+        np.testing.assert_array_less(np.abs(res.accel_bias[-1] - sim.accel_bias[-1]), 3 * sd[9:12])
+        # the position is good to a few cm over ~40 m
+        assert np.linalg.norm(res.position[-1] - sim.position[-1]) < 0.05
+
+
+def test_ideal_gait_zupt_exact_and_stairs_height():
+    sim = simulate_gait("stairs", 10, error_model=None, rng=3)
+    assert sim.position[-1, 2] == pytest.approx(-10 * 0.34)  # NED: up is negative
+    assert np.all(np.linalg.norm(sim.velocity[sim.stance], axis=1) == 0)
+    res = run_zupt(sim.imu, sim.stance, ZuptConfig(g=9.80665, integration="coning"))
+    np.testing.assert_allclose(res.position[-1], sim.position[-1], atol=5e-3)
+    with pytest.raises(InvalidInputError, match="gait mode"):
+        simulate_gait("crawl")
+
+
+def test_strapdown_second_order_convergence():
+    """Free inertial integration of the ideal run: error / 25 when the rate x5 (trapezoid + corrections)."""
+    errs = []
+    for fs in (200.0, 1000.0):
+        sim = simulate_gait("run", 4, error_model=None, rng=1, fs=fs)
+        st = strapdown_local(sim.imu, sim.quaternion[0], g=9.80665)
+        errs.append(np.linalg.norm(st.velocity[-1] - sim.velocity[-1]))
+    assert errs[0] < 0.1
+    assert errs[1] < errs[0] / 10
+
+
+def test_coning_correction_closed_form():
+    """Two-sample coning/sculling terms equal the cross-product formulas."""
+    n = 4
+    t = np.arange(n) * 0.01
+    w = np.array([[0.0, 0, 0], [1.0, 0, 0], [0.0, 1.0, 0], [0, 0, 1.0]])
+    a = np.array([[0.0, 0, -9.8], [0, 1.0, -9.8], [1.0, 0, -9.8], [0, 0, -9.8]])
+    data = ImuData(t, w, a)
+    th0, v0 = coning_sculling_increments(data, corrected=False)
+    np.testing.assert_allclose(th0[2], w[2] * 0.01)
+    th, v = coning_sculling_increments(data, corrected=True)
+    a1 = 0.5 * (w[1] + w[2]) * 0.01
+    a0 = 0.5 * (w[0] + w[1]) * 0.01
+    np.testing.assert_allclose(th[2], a1 + np.cross(a0, a1) / 12)
+    b1 = 0.5 * (a[1] + a[2]) * 0.01
+    b0 = 0.5 * (a[0] + a[1]) * 0.01
+    np.testing.assert_allclose(v[2], b1 + 0.5 * np.cross(a1, b1) + (np.cross(a0, b1) + np.cross(b0, a1)) / 12)
+
+
+def test_ned_static_on_rotating_earth():
+    """A static IMU measuring Earth rate and normal gravity stays put for 10 min (Coriolis/transport consistent)."""
+    lat, h = math.radians(45.0), 100.0
+    RN, RE, g = _k._wgs84(lat, h)
+    # Somigliana normal gravity at 45 deg, sea level: 9.806199 m/s^2 (WGS84 closed form); free-air -3.086e-6/m
+    assert _k._wgs84(lat, 0.0)[2] == pytest.approx(9.806199, abs=2e-6)
+    assert g == pytest.approx(9.806199 - 3.086e-4, abs=2e-6)
+    we = 7.292115e-5
+    n = 6001
+    t = np.arange(n) * 0.1
+    gyro = np.tile([we * math.cos(lat), 0.0, -we * math.sin(lat)], (n, 1))
+    accel = np.tile([0.0, 0.0, -g], (n, 1))
+    st = strapdown_ned(ImuData(t, gyro, accel), [1, 0, 0, 0], [lat, 0.3, h])
+    dn = (st.lla[-1, 0] - lat) * (RN + h)
+    de = (st.lla[-1, 1] - 0.3) * (RE + h) * math.cos(lat)
+    assert abs(dn) < 1e-3 and abs(de) < 1e-3 and abs(st.lla[-1, 2] - h) < 1e-3
+    np.testing.assert_allclose(st.quaternion[-1], [1, 0, 0, 0], atol=1e-9)
+    with pytest.raises(InvalidInputError, match="pole"):
+        strapdown_ned(ImuData(t[:5], gyro[:5], accel[:5]), [1, 0, 0, 0], [math.pi / 2, 0, 0])
+    with pytest.raises(InvalidInputError, match="unit quaternion"):
+        strapdown_local(ImuData(t[:5], gyro[:5], accel[:5]), [1, 1, 0, 0])
