@@ -51,6 +51,7 @@ __all__ = ["STEPS", "LabContext", "StepResult", "StepRecord", "LabResult", "run_
 #: Step modules (``imunav.labsteps.<name>``) run by default, in order.
 STEPS: list[str] = [
     "simulate_tests",
+    "attitude",
 ]
 
 
