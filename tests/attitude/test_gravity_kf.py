@@ -77,3 +77,15 @@ def test_bad_config():
         GravityKF("foo")
     with pytest.raises(ConfigError, match="gyro_noise_unit"):
         PaperScenario(gyro_noise_unit="rad")
+
+
+def test_step_matches_run():
+    scn = PaperScenario(duration=40.0)
+    data, _ = simulate(scn, 2)
+    for kind in ("lee", "javed", "proposed"):
+        f = GravityKF(kind, scn.filter_params(bias_window=10))
+        e = f.run(data).euler()
+        f.reset()
+        for k in range(data.n):
+            rp = f.step(data.gyro[k], data.accel[k], 0.01)
+        assert np.allclose(rp, e[-1, :2], atol=1e-12), kind

@@ -902,6 +902,101 @@ def ukf_run(q0, b0, P0, gyr, acc, mag, dt, p, alpha, beta_u, kappa, mag_ref):
 
 
 @njit(cache=True)
+def gravity_kf_step(kind, x, P, sv, Pb, yg_prev, ya, h, gp):
+    """One step t-1 -> t of the paper's filters (in place on x, P, sv, Pb).
+
+    sv: [0:3] a⁺_{t-1}, [3] detector hold timer, [4:7] Javed bias estimate,
+    [7:10] bias pseudo-measurement sum, [10] its count.  Returns (α_t, S diag).
+    """
+    sg2 = gp[0] * gp[0]
+    sa2 = gp[1] * gp[1]
+    g = gp[3]
+    I3 = np.eye(3)
+    a_plus = sv[0:3].copy()
+    bh = sv[4:7].copy()
+    yg = yg_prev - bh
+    if gp[9] > 0.5:
+        F = _rodrigues(-yg * h)
+    else:
+        F = I3 - h * _skew(yg)
+    xprev = x.copy()
+    Xs = _skew(xprev)
+    Q = -h * h * sg2 * (Xs @ Xs)  # eq. 14 with Σ_g = σ_g² I
+    xp = F @ xprev
+    Pp = F @ P @ F.T + Q
+    # detector D1 with hold time
+    det = abs(_norm3(ya) - g) > gp[4]
+    if det:
+        sv[3] = gp[7]
+    elif sv[3] > 0.0:
+        sv[3] -= h
+        det = True
+    if kind == 0:
+        ca = gp[2]
+    elif kind == 1:
+        ca = gp[2] if det else 0.5 * gp[2]
+    else:
+        ca = 1.0 if det else 0.0
+    z = ya - ca * a_plus
+    M = np.zeros((3, 3))
+    if kind == 1:
+        # eqs. 29-30 (reconstruction): (c² |a⁺|² + | |y|² - g² |) W
+        aa = np.abs(a_plus)
+        sw = aa[0] + aa[1] + aa[2]
+        mag2 = ca * ca * (a_plus @ a_plus) + abs(ya @ ya - g * g)
+        for i in range(3):
+            wgt = aa[i] / sw if sw > 1e-12 else 1.0 / 3.0
+            M[i, i] = mag2 * wgt + sa2
+    else:
+        sacc = ca * ca * (a_plus @ a_plus) / 3.0  # eq. 25
+        for i in range(3):
+            M[i, i] = sacc + sa2
+    nu = z - g * xp
+    HPH = g * g * Pp
+    S = np.ones(3)
+    if kind == 2 and det:
+        if gp[5] < 0.5:
+            S[:] = gp[6]
+        elif gp[5] < 1.5:
+            for i in range(3):
+                S[i] = max(1.0, (nu[i] * nu[i] - HPH[i, i]) / M[i, i])
+    SM = M.copy()
+    for i in range(3):
+        SM[i, :] *= S[i]  # diag(S) M (M diagonal)
+    K = g * Pp @ _inv_spd(HPH + SM)  # eq. 27, H = g I
+    xn = xp + K @ nu
+    IKH = I3 - g * K
+    Pn = IKH @ Pp @ IKH.T + K @ SM @ K.T
+    P[:, :] = 0.5 * (Pn + Pn.T)
+    if gp[8] > 0.5:
+        xn = xn / _norm3(xn)
+    x[:] = xn
+    sv[0:3] = ya - g * xn
+    if kind == 1 and not det:
+        # cascaded bias KF (digest §5.2 [EXT]): z_b = (x_t - x_{t-1})/dt - x̃_{t-1} y_g = -x̃ b
+        zb = (xn - xprev) / h - Xs @ yg_prev
+        sv[7:10] += zb
+        sv[10] += 1.0
+        nb = sv[10]
+        if nb >= gp[12]:
+            zb = sv[7:10] / nb
+            Hb = -Xs
+            Pb[:, :] = Pb + np.eye(3) * gp[10] * gp[10] * h * nb
+            Rb = np.eye(3) * gp[11] * gp[11] / nb
+            Sb = Hb @ Pb @ Hb.T + Rb
+            Kb = Pb @ Hb.T @ _inv_spd(Sb)
+            sv[4:7] = bh + Kb @ (zb - Hb @ bh)
+            IK = np.eye(3) - Kb @ Hb
+            Pb[:, :] = IK @ Pb @ IK.T + Kb @ Rb @ Kb.T
+            sv[7:10] = 0.0
+            sv[10] = 0.0
+    elif kind == 1:
+        sv[7:10] = 0.0
+        sv[10] = 0.0
+    return det, S
+
+
+@njit(cache=True)
 def gravity_kf_run(kind, x0, P0, gyr, ya, dt, gp):
     """kind: 0 Lee 2012, 1 Javed 2020 (reconstruction, "Javed-like"), 2 proposed.
 
@@ -917,100 +1012,14 @@ def gravity_kf_run(kind, x0, P0, gyr, ya, dt, gp):
     bb = np.zeros((n, 3))
     x = x0.copy()
     P = P0.copy()
-    a_plus = np.zeros(3)
-    sg2 = gp[0] * gp[0]
-    sa2 = gp[1] * gp[1]
-    g = gp[3]
-    I3 = np.eye(3)
-    hold = 0.0
-    # Javed bias KF
-    bh = np.zeros(3)
+    sv = np.zeros(11)
     Pb = np.eye(3) * (1e-3) ** 2
-    acc_z = np.zeros(3)
-    acc_n = 0
     xs[0] = x
     for t in range(1, n):
-        yg = gyr[t - 1] - bh
-        h = dt[t]
-        if gp[9] > 0.5:
-            F = _rodrigues(-yg * h)
-        else:
-            F = I3 - h * _skew(yg)
-        xprev = x.copy()
-        Xs = _skew(x)
-        Q = -h * h * sg2 * (Xs @ Xs)  # eq. 14 with Σ_g = σ_g² I
-        x = F @ x
-        P = F @ P @ F.T + Q
-        # detector D1 with hold time
-        det = abs(_norm3(ya[t]) - g) > gp[4]
-        if det:
-            hold = gp[7]
-        elif hold > 0.0:
-            hold -= h
-            det = True
-        if kind == 0:
-            ca = gp[2]
-        elif kind == 1:
-            ca = gp[2] if det else 0.5 * gp[2]
-        else:
-            ca = 1.0 if det else 0.0
+        det, S = gravity_kf_step(kind, x, P, sv, Pb, gyr[t - 1], ya[t], dt[t], gp)
         al[t] = 1.0 if det else 0.0
-        z = ya[t] - ca * a_plus
-        M = np.zeros((3, 3))
-        if kind == 1:
-            # eqs. 29-30 (reconstruction): (c² |a⁺|² + | |y|² - g² |) W
-            aa = np.abs(a_plus)
-            sw = aa[0] + aa[1] + aa[2]
-            mag2 = ca * ca * (a_plus @ a_plus) + abs(ya[t] @ ya[t] - g * g)
-            for i in range(3):
-                wgt = aa[i] / sw if sw > 1e-12 else 1.0 / 3.0
-                M[i, i] = mag2 * wgt + sa2
-        else:
-            sacc = ca * ca * (a_plus @ a_plus) / 3.0  # eq. 25
-            for i in range(3):
-                M[i, i] = sacc + sa2
-        nu = z - g * x
-        HPH = g * g * P
-        S = np.ones(3)
-        if kind == 2 and det:
-            if gp[5] < 0.5:
-                S[:] = gp[6]
-            elif gp[5] < 1.5:
-                for i in range(3):
-                    S[i] = max(1.0, (nu[i] * nu[i] - HPH[i, i]) / M[i, i])
-        SM = M.copy()
-        for i in range(3):
-            SM[i, :] *= S[i]  # diag(S) M (M diagonal)
-        K = g * P @ _inv_spd(HPH + SM)  # eq. 27, H = g I
-        x = x + K @ nu
-        IKH = I3 - g * K
-        P = IKH @ P @ IKH.T + K @ SM @ K.T
-        P = 0.5 * (P + P.T)
-        if gp[8] > 0.5:
-            x = x / _norm3(x)
-        a_plus = ya[t] - g * x
-        if kind == 1 and not det:
-            # cascaded bias KF (digest §5.2 [EXT]): z_b = (x_t - x_{t-1})/dt - x̃_{t-1} y_g = -x̃ b
-            zb = (x - xprev) / h - _skew(xprev) @ (gyr[t - 1])
-            acc_z += zb
-            acc_n += 1
-            if acc_n >= int(gp[12]):
-                zb = acc_z / acc_n
-                Hb = -_skew(xprev)
-                Pb = Pb + np.eye(3) * gp[10] * gp[10] * h * acc_n
-                Sb = Hb @ Pb @ Hb.T + np.eye(3) * gp[11] * gp[11] / acc_n
-                Kb = Pb @ Hb.T @ _inv_spd(Sb)
-                bh = bh + Kb @ (zb - Hb @ bh)
-                IK = np.eye(3) - Kb @ Hb
-                Pb = IK @ Pb @ IK.T + Kb @ (np.eye(3) * gp[11] * gp[11] / acc_n) @ Kb.T
-                acc_z[:] = 0.0
-                acc_n = 0
-        elif kind == 1:
-            acc_z[:] = 0.0
-            acc_n = 0
         xs[t] = x
-        for i in range(3):
-            Sd[t, i] = S[i]
-        ap[t] = a_plus
-        bb[t] = bh
+        Sd[t] = S
+        ap[t] = sv[0:3]
+        bb[t] = sv[4:7]
     return xs, al, Sd, ap, bb
