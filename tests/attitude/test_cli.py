@@ -49,3 +49,23 @@ def test_bad_filter_name(tmp_path):
     r = runner.invoke(app, ["attitude", "montecarlo", "--runs", "0"])
     assert r.exit_code != 0
     assert "n_runs" in str(r.exception)
+
+
+def test_grid_search_cli(tmp_path):
+    src = data_path("broad", "05_undisturbed_slow_rotation_with_breaks_B.mat")
+    folder = tmp_path / "broad"
+    folder.mkdir()
+    (folder / src.name).symlink_to(src)
+    out = tmp_path / "grid.json"
+    r = runner.invoke(app, ["attitude", "benchmark", str(folder), "-f", "madgwick", "--grid", "beta=0.02,0.5",
+                            "-j", "1", "--json", str(out)])
+    assert r.exit_code == 0, r.output
+    g = json.loads(out.read_text())["grid"]
+    assert len(g) == 2
+    assert g[0]["mean"]["total_rmse_deg"] <= g[1]["mean"]["total_rmse_deg"]  # sorted best first
+    assert {x["params"]["beta"] for x in g} == {0.02, 0.5}
+
+
+def test_bad_param_syntax():
+    r = runner.invoke(app, ["attitude", "benchmark", "broad", "--param", "oops"])
+    assert r.exit_code != 0
