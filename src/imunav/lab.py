@@ -53,6 +53,7 @@ STEPS: list[str] = [
     "simulate_tests",
     "calibration",
     "noise",
+    "attitude",
 ]
 
 
