@@ -33,6 +33,7 @@ _COMMAND_MODULES: list[str] = [
     "compensate",
     "attitude",
     "zupt",
+    "airdata",
 ]
 
 for _name in _COMMAND_MODULES:
