@@ -32,6 +32,7 @@ _COMMAND_MODULES: list[str] = [
     "compensate",
     "attitude",
     "zupt",
+    "batch",
 ]
 
 for _name in _COMMAND_MODULES:
