@@ -116,7 +116,7 @@ def test_config_errors(tmp_path):
         load_lab_config({"noise_typo": {}})
     with pytest.raises(ConfigError, match="unknown step"):
         load_lab_config({"lab": {"steps": ["nope"]}})
-    with pytest.raises(ConfigError, match="seed must be an integer"):
+    with pytest.raises(ConfigError, match="seed must be a non-negative integer"):
         load_lab_config({"lab": {"seed": "x"}})
     with pytest.raises(ConfigError, match="not found"):
         load_lab_config(tmp_path / "missing.toml")
