@@ -110,8 +110,11 @@ def estimate_calibration(ctx: LabContext) -> tuple[Any, dict, str]:
         sp = specs.get("multipose")
         res = calib.multipose(d.accel, d.gyro, d.fs, init_s=getattr(sp, "init_s", 30.0), wait_s=getattr(sp, "wait_s", 3.0),
                               gravity=(getattr(sp, "gravity", None) or G0), raw_accel_unit="m/s^2",
-                              raw_gyro_unit="rad/s")
-        return res.calibration, dict(res.stderr), "Tedaldi multi-pose (no reference)"
+                              raw_gyro_unit="rad/s", strict=False)
+        n = res.info.get("n_poses", res.info.get("poses", "?"))
+        return res.calibration, dict(res.stderr), (
+            f"Tedaldi multi-pose (no reference), {n} poses; weakly determined parameters keep their large "
+            "standard errors")
     raise ConfigError(
         "compensation needs a calibration: run the calibration step first, or give a multiposition test "
         "(with its segments) or a multipose session in [recordings]"
@@ -340,13 +343,13 @@ def report(section: Any, result: StepResult, ctx: LabContext) -> None:
              "residual RMS": f"{s['gyro']['rms_error_deg_h']:.3g} deg/h", "RMS(error/σ)": s["gyro"]["rms_z"],
              "max |error/σ|": s["gyro"]["max_abs_z"]},
         ], "Residual errors vs reported uncertainty (" + s["acceptance"] + ")")
+    if result.parameters:
+        truth = ctx.artifacts.get("compensation", {}).get("truth")
+        section.parameters(display_parameters(result.parameters, getattr(ctx.lab, "spec", None), truth),
+                           "Calibration parameters estimated for the compensation (display units, ±1σ"
+                           + (", truth of the virtual IMU)" if truth else ")"))
     for f in result.figures:
         embed_png(section, f, "Residual error of each validation segment divided by its predicted σ (≈ N(0, 1) when "
                               "the reported uncertainty is right)")
     for caption, rows in result.tables:
         section.table(rows, caption)
-    if result.parameters:
-        truth = ctx.artifacts.get("compensation", {}).get("truth")
-        section.parameters(display_parameters(result.parameters, getattr(ctx.lab, "spec", None), truth),
-                           "Calibration parameters estimated for the compensation (display units, ±1σ, truth of the "
-                           "virtual IMU)")

@@ -158,9 +158,9 @@ def run(ctx: LabContext) -> StepResult:
             name = f"{p}_tempco_{a}"
             params[name] = (c1, s1)
             rows.append({
-                "parameter": f"{p} {a}", "unit": f"{unit}/°C", "chosen order": fit.chosen_order,
+                "parameter": f"{p} {a}", "slope unit": f"{unit}/°C", "curve unit": unit, "chosen order": fit.chosen_order,
                 f"slope at {tc:g} °C": c1 * fac, "±1σ": s1 * fac, "true slope": true_slope * fac,
-                f"max |fit − truth| ({unit})": float(dev.max() * fac), "σ per temperature": sigma * fac,
+                "max |fit − truth|": float(dev.max() * fac), "σ per temperature": sigma * fac,
                 "max dev / σ": z, "verdict": bool(z <= 4.0),
             })
     figs = _figures(ctx, thermal, model, temps, tt)
