@@ -163,7 +163,7 @@ def test_simulate_tests_options_earth_rate_and_format(tmp_path, monkeypatch):
 
 
 def test_example_lab_configs_are_valid():
-    from conftest import ROOT
+    from shared_data import ROOT
 
     files = sorted((ROOT / "examples").glob("lab*.toml"))
     assert files

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from conftest import data_path
+from shared_data import data_path
 
 from imunav.errors import InsufficientDataError, InvalidInputError, NonFiniteError
 from imunav.noise import allan_deviation, compare_psd_allan, fit_noise, fit_psd, frequency_average, log_average, psd
