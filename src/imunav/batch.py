@@ -600,6 +600,7 @@ def noise_batch(
     out_dir: str | os.PathLike[str] | None = None,
     spec: Any = None,
     read_options: Mapping[str, Any] | None = None,
+    terms: Sequence[str] = ("Q", "N", "B", "K", "R"),
     executor: Executor = "processes",
     n_workers: int | None = None,
     address: str | None = None,
@@ -618,7 +619,8 @@ def noise_batch(
     od.mkdir(parents=True, exist_ok=True)
     t0 = time.perf_counter()
     res = run_batch(noise_unit, [str(u) for u in units], executor=executor, n_workers=n_workers, address=address,
-                    progress=progress, description="noise", out_dir=str(od), read_options=dict(read_options or {}))
+                    progress=progress, description="noise", out_dir=str(od), read_options=dict(read_options or {}),
+                    terms=tuple(terms))
     summary = _summarise("noise", [u.stem for u in units], res, limits, od, time.perf_counter() - t0)
     write_summary(summary, od, f"Batch noise identification of {Path(folder).name}")
     return summary

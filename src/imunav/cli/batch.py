@@ -173,6 +173,7 @@ def noise_cmd(
     json_out: Optional[Path] = _JSON,
     fs: Optional[float] = _FS, accel_unit: Optional[str] = _AU, gyro_unit: Optional[str] = _GU,
     columns: Optional[str] = _COLS,
+    terms: str = typer.Option("Q,N,B,K,R", "--terms", help="Candidate IEEE-952 terms (BIC selects among them)."),
     executor: str = _EXEC, workers: Optional[int] = _WORKERS, address: Optional[str] = _ADDR, quiet: bool = _QUIET,
 ) -> None:
     """Allan-variance noise identification (ARW / VRW, bias instability, random walk) of every unit, in parallel.
@@ -186,7 +187,7 @@ def noise_cmd(
 
     try:
         s = noise_batch(folder, out_dir=out, spec=spec, read_options=_read_options(fs, accel_unit, gyro_unit, columns),
-                        executor=executor, n_workers=workers, address=address, progress=not quiet)  # type: ignore[arg-type]
+                        terms=tuple(t.strip() for t in terms.split(",") if t.strip()), executor=executor, n_workers=workers, address=address, progress=not quiet)  # type: ignore[arg-type]
     except InvalidInputError as exc:
         _fail(exc)
     cols = ["gyro_arw", "gyro_bias_instability", "accel_vrw", "accel_bias_instability"]
