@@ -147,18 +147,19 @@ def _spread_model(model: Any, rng: np.random.Generator, spread: float, name: str
 
 
 def _simulate_unit(item: tuple[int, str], *, out_dir: str, preset: str, spread: float, seed: int, n_units: int,
-                   fs: float, dwell_s: float, transition_s: float, rate_table: bool, fmt: str) -> dict[str, Any]:
+                   fs: float, dwell_s: float, transition_s: float, rate_table: bool, fmt: str,
+                   static_s: float | None = None) -> dict[str, Any]:
     from imunav.io import write_imu
-    from imunav.sim import hundred_position_profile, presets, simulate_imu, thesis_rate_table_profile
+    from imunav.sim import hundred_position_profile, presets, simulate_imu, static_profile, thesis_rate_table_profile
 
     k, name = item
     rng = spawn_generators(seed, 1, k)[0]
     model = _spread_model(presets.get(preset), rng, spread, name)
     out = Path(out_dir)
-    prof = hundred_position_profile(fs, dwell_s, transition_s)
+    prof = static_profile(static_s, fs) if static_s else hundred_position_profile(fs, dwell_s, transition_s)
     data = simulate_imu(prof.trajectory, model, rng, earth_rate=False, transport_rate=False, gravity="constant")
     files = [write_imu(data.with_(meta={"unit": name, "preset": preset, "seed": seed}), out / f"{name}.{fmt}")]
-    if rate_table:
+    if rate_table and not static_s:
         rp = thesis_rate_table_profile(fs, dwell_s, transition_s)
         rd = simulate_imu(rp.trajectory, model, rng, earth_rate=False, transport_rate=False, gravity="constant")
         files.append(write_imu(rd.with_(meta={"unit": name}), out / f"{name}_rate.{fmt}"))
@@ -179,6 +180,7 @@ def simulate_batch(
     transition_s: float = 1.0,
     rate_table: bool = True,
     format: str = "npz",
+    static_s: float | None = None,
     executor: Executor = "processes",
     n_workers: int | None = None,
     progress: bool = False,
@@ -190,7 +192,9 @@ def simulate_batch(
     g-sensitivities are the preset's, each multiplied by ``1 + spread·z``
     with ``z ~ N(0, 1)`` (the noise parameters stay the preset's).  Each unit
     runs the 100-position static test (and the thesis's 120-step rate-table
-    test when ``rate_table``) at ``fs`` with ``dwell_s`` per position/step.
+    test when ``rate_table``) at ``fs`` with ``dwell_s`` per position/step;
+    with ``static_s`` each unit instead records one level static test of that
+    length (for noise identification).
 
     Returns the unit recordings (static tests) written to ``out_dir``.
     """
@@ -207,17 +211,21 @@ def simulate_batch(
     out.mkdir(parents=True, exist_ok=True)
     width = max(3, len(str(n_units)))
     names = [f"unit_{k + 1:0{width}d}" for k in range(n_units)]
-    _write_json(hundred_position_profile(fs, dwell_s, transition_s).to_dict(), out / "segments.json")
-    if rate_table:
+    if static_s is not None and not (static_s > 0):
+        raise InvalidInputError(f"static_s must be a positive duration in seconds, got {static_s!r}")
+    if not static_s:
+        _write_json(hundred_position_profile(fs, dwell_s, transition_s).to_dict(), out / "segments.json")
+    if rate_table and not static_s:
         _write_json(thesis_rate_table_profile(fs, dwell_s, transition_s).to_dict(), out / "rate_segments.json")
     _write_json({"n_units": n_units, "preset": preset, "spread": spread, "seed": int(rng), "fs": fs,
-                 "dwell_s": dwell_s, "transition_s": transition_s, "rate_table": rate_table, "units": names},
+                 "dwell_s": dwell_s, "transition_s": transition_s, "rate_table": rate_table and not static_s,
+                 "static_s": static_s, "units": names},
                 out / "batch.json")
     res = run_batch(
         _simulate_unit, list(enumerate(names)), executor=executor, n_workers=n_workers, progress=progress,
         description="simulate units", out_dir=str(out), preset=preset, spread=float(spread), seed=int(rng),
         n_units=n_units, fs=float(fs), dwell_s=float(dwell_s), transition_s=float(transition_s),
-        rate_table=bool(rate_table), fmt=format,
+        rate_table=bool(rate_table), fmt=format, static_s=None if not static_s else float(static_s),
     )
     for name, r in zip(names, res):
         if isinstance(r, BaseException):

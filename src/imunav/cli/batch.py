@@ -59,6 +59,7 @@ def _print_summary(summary: Any, families: list[str], title: str) -> None:
 
     import numpy as np
     from rich.console import Console
+    from rich.markup import escape
     from rich.table import Table
 
     from imunav.report.catalog import display_unit
@@ -70,7 +71,7 @@ def _print_summary(summary: Any, families: list[str], title: str) -> None:
     tab.add_column("unit")
     tab.add_column("verdict")
     for f in fams:
-        tab.add_column(f"{f} x, y, z [{display_unit(f)}]", justify="right")
+        tab.add_column(escape(f"{f} x, y, z [{display_unit(f)}]"), justify="right")
     if errs:
         tab.add_column("max |err|/σ", justify="right")
     for r in t.to_dict(orient="records"):
@@ -109,6 +110,7 @@ def simulate_cmd(
     transition: float = typer.Option(1.0, "--transition", help="Seconds per move / rate ramp."),
     rate_table: bool = typer.Option(True, "--rate-table/--no-rate-table", help="Also simulate the 120-step rate-table test."),
     fmt: str = typer.Option("npz", "--format", help="Recording format: npz, csv, parquet, hdf5, mat."),
+    static: Optional[float] = typer.Option(None, "--static", help="Instead: one level static record of this many seconds per unit (for noise)."),
     executor: str = _EXEC, workers: Optional[int] = _WORKERS, quiet: bool = _QUIET,
 ) -> None:
     """Simulate a production batch of IMUs: 100-position (and rate-table) tests of N units with unit-to-unit spread.
@@ -122,7 +124,7 @@ def simulate_cmd(
 
     try:
         files = simulate_batch(n_units, out, preset=preset, spread=spread, rng=seed, fs=fs, dwell_s=dwell,
-                               transition_s=transition, rate_table=rate_table, format=fmt,
+                               transition_s=transition, rate_table=rate_table, format=fmt, static_s=static,
                                executor=executor, n_workers=workers, progress=not quiet)  # type: ignore[arg-type]
     except InvalidInputError as exc:
         _fail(exc)
@@ -180,7 +182,7 @@ def noise_cmd(
 
     Writes <unit>_noise.json per unit, summary.csv, summary.json and index.html.
 
-    Example: imunav batch noise batch --out batch_noise --json batch_noise.json
+    Example: imunav batch simulate 3 --static 600 --out static_batch && imunav batch noise static_batch --terms N,B,K
     """
     from imunav.batch import noise_batch
     from imunav.errors import InvalidInputError
