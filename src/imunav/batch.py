@@ -350,9 +350,31 @@ def write_summary(summary: BatchSummary, out_dir: Path, title: str) -> dict[str,
     sec.text("One row per unit: processing status and the verdict against the specification "
              "(every parameter with a limit must lie inside it). Values in display units; "
              "the per-unit JSON files hold every parameter with its standard error.")
-    short = [{"unit": r["unit"], "status": r["status"], "verdict": r["passed"],
-              **({"error": r["error"]} if r.get("error") else {})} for r in tab.to_dict(orient="records")]
-    sec.table(short, "Units")
+    from imunav.report.catalog import base_name
+
+    fams: list[str] = []
+    for p in params:
+        if base_name(p) not in fams and not base_name(p).endswith("misalignment"):
+            fams.append(base_name(p))
+    errs_cols = [c for c in tab.columns if c.endswith("_err")]
+    short = []
+    for r in tab.to_dict(orient="records"):
+        row: dict[str, Any] = {"unit": r["unit"], "status": r["status"], "verdict": r["passed"]}
+        for f in fams:
+            vals = [r.get(f"{f}_{a}") for a in "xyz"]
+            row[f"{f} x, y, z ({display_unit(f)})"] = ", ".join(
+                "–" if v is None or (isinstance(v, float) and not np.isfinite(v)) else f"{v:.5g}" for v in vals)
+        if errs_cols:
+            z = [abs(r[c] / r[c[:-4] + "_se"]) for c in errs_cols
+                 if isinstance(r.get(c), float) and isinstance(r.get(c[:-4] + "_se"), float) and r[c[:-4] + "_se"] > 0]
+            row["max |error|/σ vs truth"] = max(z) if z else None
+        if r.get("error"):
+            row["error"] = r["error"]
+        short.append(row)
+    cols: list[str] = []
+    for r in short:
+        cols += [k for k in r if k not in cols]
+    sec.table([{**{c: None for c in cols}, **r} for r in short], "Units (misalignments in the per-unit files and below)", cols)
     if params:
         stats = summary.statistics().loc[[p for p in params if p in summary.statistics().index]]
         stats.insert(0, "unit of measure", [display_unit(p) for p in stats.index])
