@@ -34,6 +34,7 @@ _COMMAND_MODULES: list[str] = [
     "attitude",
     "zupt",
     "airdata",
+    "batch",
 ]
 
 for _name in _COMMAND_MODULES:
