@@ -54,9 +54,9 @@ STEPS: list[str] = [
     "simulate_tests",
     "calibration",
     "noise",
-    "attitude",
     "temperature",
     "compensation",
+    "attitude",
 ]
 
 
