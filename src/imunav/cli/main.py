@@ -26,6 +26,7 @@ app = typer.Typer(
 # One entry per command module (imunav.cli.<name> with a register(app) function).
 _COMMAND_MODULES: list[str] = [
     "info",
+    "noise",
     "simulate",
     "lab",
     "calibrate",
@@ -33,6 +34,7 @@ _COMMAND_MODULES: list[str] = [
     "attitude",
     "zupt",
     "airdata",
+    "batch",
 ]
 
 for _name in _COMMAND_MODULES:
