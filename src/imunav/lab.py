@@ -57,6 +57,7 @@ STEPS: list[str] = [
     "temperature",
     "compensation",
     "attitude",
+    "airdata",
 ]
 
 
