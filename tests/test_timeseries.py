@@ -8,7 +8,7 @@ import json
 import numpy as np
 import pytest
 
-from conftest import data_path
+from shared_data import data_path
 from imunav.errors import (
     InsufficientDataError,
     InvalidInputError,
@@ -329,7 +329,8 @@ def test_static_intervals_long_record_is_fast():
     static_intervals(d.slice(0, 5000), window_s=0.5)  # compile
     t0 = time.perf_counter()
     si = static_intervals(d, window_s=1.0, use_gyro=True)
-    assert time.perf_counter() - t0 < 3.0
+    # ~0.3 s on an idle core; generous bound so a loaded CI machine does not flake
+    assert time.perf_counter() - t0 < 10.0
     assert list(si) == [(0, n)]
 
 

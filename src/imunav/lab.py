@@ -46,12 +46,18 @@ import numpy as np
 
 from imunav.errors import ConfigError
 
-__all__ = ["STEPS", "LabContext", "StepResult", "StepRecord", "LabResult", "run_lab", "load_lab_config", "available_steps", "embed_png"]
+__all__ = ["STEPS", "SIMULATION_ONLY", "LabConfig", "LabContext", "StepResult", "StepRecord", "LabResult", "run_lab",
+           "load_lab_config", "parse_lab_config", "available_steps", "embed_png"]
 
 #: Step modules (``imunav.labsteps.<name>``) run by default, in order.
 STEPS: list[str] = [
     "simulate_tests",
+    "calibration",
+    "noise",
+    "temperature",
+    "compensation",
     "attitude",
+    "airdata",
 ]
 
 
@@ -66,6 +72,9 @@ class StepResult:
     passed : verdict against the step's acceptance, or None when it has none.
     tables : optional ``(caption, rows)`` pairs (rows: list of dicts) for the report.
     notes : optional paragraphs for the report.
+    parameters : estimated parameters checked against the lab's ``[spec]``:
+        ``{name: (value_si, sigma_si)}`` with the names of
+        :mod:`imunav.report.catalog` (``gyro_bias_x``, ``accel_vrw_z``, ...).
     """
 
     summary: dict
@@ -73,13 +82,17 @@ class StepResult:
     passed: bool | None = None
     tables: list[tuple[str, list[dict]]] = field(default_factory=list)
     notes: list[str] = field(default_factory=list)
+    parameters: dict[str, tuple[float, float | None]] = field(default_factory=dict)
 
     def to_dict(self) -> dict:
-        return {
+        d = {
             "summary": _jsonable(self.summary),
             "figures": [str(p) for p in self.figures],
             "passed": self.passed,
         }
+        if self.parameters:
+            d["parameters"] = {k: {"value_si": v, "sigma_si": s} for k, (v, s) in self.parameters.items()}
+        return _jsonable(d)
 
 
 class _NullProgress:
@@ -118,6 +131,12 @@ class LabContext:
     artifacts: dict = field(default_factory=dict)
     config: dict = field(default_factory=dict)
     step: str = ""
+    lab: Any = None
+
+    @property
+    def mode(self) -> str:
+        """``"recordings"`` when the lab runs on real recordings, else ``"virtual"``."""
+        return getattr(self.lab, "mode", "virtual")
 
     @property
     def options(self) -> dict:
@@ -184,10 +203,19 @@ class LabResult:
     seed: int
     steps: list[StepRecord]
     seconds: float
+    spec_checks: list[Any] = field(default_factory=list)
+
+    @property
+    def spec_passed(self) -> bool | None:
+        """All limits of the ``[spec]`` met (None without a spec)."""
+        v = [c.passed for c in self.spec_checks if c.passed is not None]
+        return None if not v else all(v)
 
     @property
     def passed(self) -> bool | None:
         v = [s.passed for s in self.steps if s.passed is not None]
+        if self.spec_passed is not None:
+            v.append(self.spec_passed)
         return None if not v else all(v)
 
     @property
@@ -202,6 +230,8 @@ class LabResult:
             "seed": self.seed,
             "seconds": round(self.seconds, 3),
             "passed": self.passed,
+            "spec_passed": self.spec_passed,
+            "spec_checks": [c.to_dict() for c in self.spec_checks],
             "steps": [s.to_dict() for s in self.steps],
         }
 
@@ -218,45 +248,135 @@ def available_steps() -> list[str]:
     return sorted(m.name for m in pkgutil.iter_modules(pkg.__path__) if not m.name.startswith("_"))
 
 
-def load_lab_config(config: str | os.PathLike[str] | Mapping[str, Any] | None) -> dict:
-    """Parse and check a lab configuration (TOML file or dict).
+#: Steps that only make sense on the built-in virtual IMU (left out of the
+#: default step list when the configuration has ``[recordings]``).
+SIMULATION_ONLY: frozenset[str] = frozenset({"simulate_tests", "temperature"})
 
-    Top-level tables: ``[lab]`` (``seed`` int, ``steps`` list of step names)
-    and one table per step (``[simulate_tests]``, …).  Unknown tables or
-    ``[lab]`` keys raise :class:`~imunav.errors.ConfigError`.
+_TOP_LEVEL = ("lab", "recordings", "spec")
+
+
+@dataclass(frozen=True)
+class LabConfig:
+    """A validated lab definition (see :func:`parse_lab_config`).
+
+    Attributes
+    ----------
+    seed : root seed (None: the caller's).
+    title : report title.
+    steps : step names in order (None: the default for the mode).
+    recordings : name -> :class:`imunav.labsteps.recordings.RecordingSpec`
+        (empty: the built-in virtual IMU).
+    spec : parameter name -> :class:`imunav.report.SpecLimit` (datasheet limits).
+    options : step name -> its option table.
+    source : the TOML file (None for a dict).
+    """
+
+    seed: int | None = None
+    title: str = "imunav lab"
+    steps: tuple[str, ...] | None = None
+    recordings: dict[str, Any] = field(default_factory=dict)
+    spec: dict[str, Any] = field(default_factory=dict)
+    options: dict[str, dict] = field(default_factory=dict)
+    source: Path | None = None
+
+    @property
+    def mode(self) -> str:
+        """``"recordings"`` (real data) or ``"virtual"`` (built-in virtual IMU)."""
+        return "recordings" if self.recordings else "virtual"
+
+    def default_steps(self) -> list[str]:
+        if self.steps is not None:
+            return list(self.steps)
+        if self.recordings:
+            return ["recordings"] + [s for s in STEPS if s not in SIMULATION_ONLY and s != "recordings"]
+        return list(STEPS)
+
+
+def _read_toml(config: str | os.PathLike[str] | Mapping[str, Any]) -> tuple[dict, str, Path | None]:
+    if isinstance(config, Mapping):
+        return dict(config), "lab configuration", None
+    p = Path(config)
+    if not p.is_file():
+        raise ConfigError(f"lab configuration file not found: {p}")
+    try:
+        return tomllib.loads(p.read_text(encoding="utf-8")), str(p), p
+    except tomllib.TOMLDecodeError as exc:
+        raise ConfigError(f"{p} is not valid TOML: {exc}") from exc
+
+
+def parse_lab_config(config: str | os.PathLike[str] | Mapping[str, Any] | None) -> LabConfig:
+    """Validate a lab definition (TOML file or dict) into a :class:`LabConfig`.
+
+    Schema (every table optional)::
+
+        [lab]                    seed = 0, title = "...", steps = ["recordings", ...]
+        [recordings.<name>]      a real recording (see imunav.labsteps.recordings)
+        [spec.<parameter>]       datasheet limit: min / max, unit, description
+        [<step>]                 options of a step (e.g. [simulate_tests], [temperature])
+
+    Raises :class:`~imunav.errors.ConfigError` naming the file, table and key.
     """
     if config is None:
-        return {}
-    where = "lab configuration"
-    if isinstance(config, Mapping):
-        cfg = dict(config)
-    else:
-        p = Path(config)
-        where = str(p)
-        if not p.is_file():
-            raise ConfigError(f"lab configuration file not found: {p}")
-        try:
-            cfg = tomllib.loads(p.read_text(encoding="utf-8"))
-        except tomllib.TOMLDecodeError as exc:
-            raise ConfigError(f"{p} is not valid TOML: {exc}") from exc
+        return LabConfig()
+    cfg, where, path = _read_toml(config)
+    base_dir = path.parent if path is not None else Path(str(cfg.pop("_base_dir", ".")))
+    cfg.pop("_base_dir", None)
     steps = available_steps()
     for key, value in cfg.items():
-        if key != "lab" and key not in steps:
-            raise ConfigError(f"{where}: unknown table [{key}]; valid tables are [lab] and {', '.join(f'[{s}]' for s in steps)}")
+        if key not in _TOP_LEVEL and key not in steps:
+            raise ConfigError(
+                f"{where}: unknown table [{key}]; valid tables are [lab], [recordings.<name>], [spec.<parameter>] "
+                f"and the step tables {', '.join(f'[{s}]' for s in steps if s != 'recordings')}"
+            )
         if not isinstance(value, Mapping):
             raise ConfigError(f"{where}: '{key}' must be a table ([{key}]), not {type(value).__name__}")
     lab = cfg.get("lab", {})
     unknown = set(lab) - {"seed", "steps", "title"}
     if unknown:
         raise ConfigError(f"{where}: unknown key(s) {sorted(unknown)} in [lab]; allowed: seed, steps, title")
-    if "seed" in lab and not isinstance(lab["seed"], int):
-        raise ConfigError(f"{where}: [lab] seed must be an integer, got {lab['seed']!r}")
+    if "seed" in lab and (not isinstance(lab["seed"], int) or isinstance(lab["seed"], bool) or lab["seed"] < 0):
+        raise ConfigError(f"{where}: [lab] seed must be a non-negative integer, got {lab['seed']!r}")
+    if "title" in lab and not isinstance(lab["title"], str):
+        raise ConfigError(f"{where}: [lab] title must be a string, got {lab['title']!r}")
     if "steps" in lab:
         if not isinstance(lab["steps"], list) or not all(isinstance(s, str) for s in lab["steps"]):
             raise ConfigError(f"{where}: [lab] steps must be a list of step names")
         bad = [s for s in lab["steps"] if s not in steps]
         if bad:
             raise ConfigError(f"{where}: unknown step(s) {bad} in [lab] steps; available: {steps}")
+    recs: dict[str, Any] = {}
+    if "recordings" in cfg:
+        from imunav.labsteps.recordings import parse_recordings
+
+        recs = parse_recordings(cfg["recordings"], base_dir, where)
+    spec: dict[str, Any] = {}
+    if "spec" in cfg:
+        from imunav.report import load_spec
+
+        try:
+            spec = load_spec({"spec": cfg["spec"]})
+        except ConfigError as exc:
+            raise ConfigError(f"{where}: {exc}") from exc
+    return LabConfig(
+        seed=lab.get("seed"), title=lab.get("title", "imunav lab"),
+        steps=tuple(lab["steps"]) if "steps" in lab else None, recordings=recs, spec=spec,
+        options={k: dict(v) for k, v in cfg.items() if k not in ("lab", "spec", "recordings")},
+        source=path,
+    )
+
+
+def load_lab_config(config: str | os.PathLike[str] | Mapping[str, Any] | None) -> dict:
+    """Parse and check a lab configuration (TOML file or dict); returns the tables as a dict.
+
+    The checks are those of :func:`parse_lab_config` (which gives the typed
+    form); unknown tables or ``[lab]`` keys raise :class:`~imunav.errors.ConfigError`.
+    """
+    if config is None:
+        return {}
+    parse_lab_config(config)
+    cfg, _, path = _read_toml(config)
+    if path is not None:
+        cfg["_base_dir"] = str(path.parent)
     return cfg
 
 
@@ -327,10 +447,10 @@ def run_lab(
     -------
     LabResult (also written as ``summary.json``).
     """
+    typed = parse_lab_config(config)
     cfg = load_lab_config(config)
-    lab_cfg = cfg.get("lab", {})
-    seed = int(lab_cfg["seed"]) if "seed" in lab_cfg else _seed_of(rng)
-    names = list(steps if steps is not None else lab_cfg.get("steps", STEPS))
+    seed = typed.seed if typed.seed is not None else _seed_of(rng)
+    names = list(steps if steps is not None else typed.default_steps())
     known = available_steps()
     bad = [s for s in names if s not in known]
     if bad:
@@ -351,7 +471,7 @@ def run_lab(
     records: list[StepRecord] = []
     t_lab = time.perf_counter()
     with prog_cm as prog:
-        ctx = LabContext(out_dir=out, seed=seed, progress=prog, config=cfg)
+        ctx = LabContext(out_dir=out, seed=seed, progress=prog, config=cfg, lab=typed)
         overall = prog.add_task(f"lab ({len(names)} steps)", total=len(names))
         for name in names:
             mod = importlib.import_module(f"imunav.labsteps.{name}")
@@ -368,11 +488,26 @@ def run_lab(
                 records.append(StepRecord(name, title, None, time.perf_counter() - t0, traceback.format_exc()))
             prog.advance(overall)
         prog.update(overall, description="lab: done")
-    result = LabResult(out, seed, records, time.perf_counter() - t_lab)
+    checks = _spec_checks(records, typed.spec)
+    result = LabResult(out, seed, records, time.perf_counter() - t_lab, checks)
     _write_text(out / "summary.json", json.dumps(_jsonable(result.to_dict()), indent=2) + "\n")
     _write_text(out / "summary.md", _markdown(result))
-    _write_html(result, ctx, lab_cfg.get("title", "imunav lab"))
+    _write_html(result, ctx, typed.title)
     return result
+
+
+def _spec_checks(records: list[StepRecord], spec: Mapping[str, Any]) -> list[Any]:
+    """Every parameter the steps estimated, checked against the ``[spec]`` limits."""
+    from imunav.report import check_spec
+    from imunav.report.catalog import expand_spec
+
+    est: dict[str, tuple[float, float | None]] = {}
+    for r in records:
+        if r.result is not None:
+            est.update(r.result.parameters)
+    if not spec:
+        return []
+    return check_spec(est, expand_spec(spec, list(est)))
 
 
 # ---------------------------------------------------------------------------
@@ -428,10 +563,63 @@ def embed_png(section: Any, path: str | os.PathLike[str], caption: str | None = 
     section.image(path, caption or Path(path).stem)
 
 
+def display_parameters(
+    params: Mapping[str, tuple[float, float | None]],
+    spec: Mapping[str, Any] | None = None,
+    truth: Mapping[str, float] | None = None,
+) -> list[Any]:
+    """:class:`imunav.report.Parameter` rows in display units, with limit and verdict from ``spec``.
+
+    ``params``: ``{name: (value_si, sigma_si)}`` (names of :mod:`imunav.report.catalog`);
+    ``truth``: ``{name: value_si}`` (simulations).
+    """
+    from imunav.report import Parameter, check_spec
+    from imunav.report.catalog import display_unit, expand_spec, to_display_value
+
+    lim = expand_spec(spec or {}, list(params)) if spec else {}
+    checks = {c.name: c for c in check_spec(params, lim)} if lim else {}
+    rows = []
+    for name, (v, s) in params.items():
+        c = checks.get(name)
+        t = None if truth is None or name not in truth else to_display_value(name, truth[name])
+        rows.append(Parameter(
+            name=name, value=to_display_value(name, v), sigma=to_display_value(name, s), unit=display_unit(name),
+            truth=t, limit=None if c is None or c.limit is None else c.limit.describe(),
+            passed=None if c is None else c.passed,
+        ))
+    return rows
+
+
 def _write_html(result: LabResult, ctx: LabContext, title: str) -> None:
     from imunav.report import Report
+    from imunav.report.catalog import display_unit, to_display_value
 
-    rep = Report(title, f"seed {result.seed} · {len(result.steps)} steps · {result.seconds:.1f} s")
+    mode = "real recordings" if ctx.mode == "recordings" else "built-in virtual IMU"
+    rep = Report(title, f"{mode} · seed {result.seed} · {len(result.steps)} steps · {result.seconds:.1f} s")
+    ov = rep.section("Overview", result.passed)
+    ov.text(
+        "Each step below has its own section with tables and figures; every estimated parameter is given "
+        "with its 1σ uncertainty" + (" and checked against the datasheet specification of the lab definition."
+                                     if result.spec_checks else ".")
+    )
+    ov.table([{"step": s.title, "name": s.name, "verdict": s.passed, "time (s)": round(s.seconds, 1),
+               "parameters": len(s.result.parameters) if s.result else 0,
+               "note": "error: see section" if s.error else ""} for s in result.steps], "Steps")
+    if result.spec_checks:
+        checks = sorted((c for c in result.spec_checks if c.limit is not None),
+                        key=lambda c: (c.passed is not False, c.name))
+        sec = rep.section("Specification (datasheet limits)", result.spec_passed)
+        n_fail = sum(1 for c in checks if c.passed is False)
+        sec.text(f"{len(checks)} parameters checked, {n_fail} outside the limits (failed checks first). "
+                 "A limit with only a maximum applies to the magnitude; a spec item that no step measured fails.")
+        sec.table([{"parameter": c.name,
+                    "value": to_display_value(c.name, c.value_si) if c.limit is None or not c.limit.unit
+                    else _to_unit(c.value_si, c.limit.unit),
+                    "±1σ": None if c.sigma_si is None else (_to_unit(c.sigma_si, c.limit.unit) if c.limit and c.limit.unit
+                                                             else to_display_value(c.name, c.sigma_si)),
+                    "unit": (c.limit.unit if c.limit and c.limit.unit else display_unit(c.name)),
+                    "limit": c.limit.describe() if c.limit else "", "verdict": c.passed} for c in checks],
+                  "Parameters against the specification")
     for s in result.steps:
         sec = rep.section(s.title, s.passed)
         if s.error:
@@ -449,6 +637,19 @@ def _write_html(result: LabResult, ctx: LabContext, title: str) -> None:
             sec.table([{"key": k, "value": v} for k, v in _flat(_jsonable(s.result.summary))], "summary")
             for caption, rows in s.result.tables:
                 sec.table(rows, caption)
+            if s.result.parameters:
+                sec.parameters(display_parameters(s.result.parameters, ctx.lab.spec if ctx.lab else None),
+                               "Estimated parameters (display units, ±1σ)")
             for f in s.result.figures:
                 embed_png(sec, f)
     rep.write(result.out_dir / "index.html")
+
+
+def _to_unit(x: float | None, unit: str) -> float | None:
+    from imunav.units import to_display
+
+    if x is None or not np.isfinite(x):
+        return x
+    if unit == "abs_ppm":
+        return x * 1e6
+    return float(to_display(x, unit))

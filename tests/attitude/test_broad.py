@@ -7,7 +7,7 @@ import json
 import numpy as np
 import pytest
 
-from conftest import data_path
+from shared_data import data_path
 from imunav.attitude.alignment import broad_reference_start
 from imunav.attitude.madgwick import Madgwick
 from imunav.attitude.mahony import Mahony

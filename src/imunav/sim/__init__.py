@@ -14,11 +14,17 @@ from __future__ import annotations
 
 from imunav.sim import presets, profiles
 from imunav.sim.error_model import (
+    BIAS_INSTABILITY_FLOOR,
     Flicker,
     GaussMarkov,
     ImuErrorModel,
+    ImuErrorTruth,
     TriadErrors,
+    TriadTruth,
+    allan_variance_gauss_markov,
+    allan_variance_ieee952,
     apply_errors,
+    scale_misalignment_matrix,
     simulate_imu,
 )
 from imunav.sim.magnetometer import MagnetometerModel, simulate_magnetometer
@@ -82,4 +88,10 @@ __all__ = [
     "presets",
     "MagnetometerModel",
     "simulate_magnetometer",
+    "TriadTruth",
+    "ImuErrorTruth",
+    "scale_misalignment_matrix",
+    "allan_variance_gauss_markov",
+    "allan_variance_ieee952",
+    "BIAS_INSTABILITY_FLOOR",
 ]

@@ -45,6 +45,7 @@ def _ziggurat_tables() -> tuple[np.ndarray, np.ndarray]:
 
 ZIG_X, ZIG_F = _ziggurat_tables()
 _TWO_M53 = 1.0 / 9007199254740992.0  # 2^-53
+ZIG_XS = ZIG_X * _TWO_M53  # layer widths per unit of the 53-bit integer (exact: power-of-2 scaling)
 _U8 = np.uint64(255)
 _U1 = np.uint64(1)
 
@@ -89,7 +90,7 @@ def next_normal(s):  # pragma: no cover - compiled
         u = next_u64(s)
         i = np.int64(u & _U8)
         neg = ((u >> np.uint64(8)) & _U1) == _U1
-        x = float(u >> np.uint64(11)) * _TWO_M53 * ZIG_X[i]
+        x = float(u >> np.uint64(11)) * ZIG_XS[i]
         if x < ZIG_X[i + 1]:  # inside the layer's core rectangle: accept (~99 %)
             return -x if neg else x
         if i == 0:  # tail beyond r (Marsaglia 1964)

@@ -42,6 +42,7 @@ axes are independent.
 from __future__ import annotations
 
 import math
+import numbers
 import os
 import tomllib
 from collections.abc import Mapping
@@ -327,7 +328,7 @@ class Flicker:
         object.__setattr__(self, "b", _vec3(self.b, "Flicker.b (bias instability B)", nonneg=True))
         for name in ("tau_min", "tau_max"):
             v = getattr(self, name)
-            if not (isinstance(v, (int, float)) and math.isfinite(v) and v > 0):
+            if not (isinstance(v, numbers.Real) and not isinstance(v, bool) and math.isfinite(v) and v > 0):
                 raise InvalidInputError(f"Flicker.{name}: expected a finite time > 0 s, got {v!r}")
             object.__setattr__(self, name, float(v))
         if self.tau_max <= self.tau_min:
@@ -336,8 +337,9 @@ class Flicker:
             )
         if self.tau_max / self.tau_min > 1e8:
             raise InvalidInputError("Flicker: the band tau_max / tau_min is limited to 1e8 (8 decades)")
-        if not (isinstance(self.per_decade, int) and 1 <= self.per_decade <= 10):
+        if not (isinstance(self.per_decade, numbers.Integral) and 1 <= self.per_decade <= 10):
             raise InvalidInputError(f"Flicker.per_decade: expected an integer in 1..10, got {self.per_decade!r}")
+        object.__setattr__(self, "per_decade", int(self.per_decade))
 
     @property
     def floor_ripple(self) -> float:
@@ -510,6 +512,10 @@ class TriadErrors:
             or np.any(self.random_walk > 0)
             or (self.bias_instability is not None and np.any(self.bias_instability.components()[0] > 0))
         )
+
+    def replace(self, **changes: Any) -> TriadErrors:
+        """Copy with some fields changed (validated again)."""
+        return replace(self, **changes)
 
     def deterministic(self) -> TriadErrors:
         """Copy with only bias, T and the temperature polynomials (no noise, ramp, LSB, saturation)."""
@@ -733,7 +739,7 @@ class ImuErrorModel:
             g = np.diag(np.broadcast_to(g, (3,)))
         object.__setattr__(self, "g_sensitivity", _mat3(g, "ImuErrorModel.g_sensitivity (rad/s per m/s^2)"))
         t = self.temp_ref_c
-        if not (isinstance(t, (int, float)) and math.isfinite(t)):
+        if not (isinstance(t, numbers.Real) and not isinstance(t, bool) and math.isfinite(t)):
             raise InvalidInputError(f"ImuErrorModel.temp_ref_c: expected a finite temperature in degC, got {t!r}")
         object.__setattr__(self, "temp_ref_c", float(t))
 
@@ -958,13 +964,16 @@ def _as_n3(a: Any, n: int, where: str) -> NDArray[np.float64]:
     return a
 
 
-def _uniform_step(t: NDArray[np.float64]) -> float:
-    """The sampling step when t is uniform to 1e-9 relative, else 0 (per-sample steps)."""
+def _uniform_step(t: NDArray[np.float64], d: NDArray[np.float64]) -> float:
+    """The sampling step when t is uniform to 1e-6 relative, else 0 (per-sample steps).
+
+    1e-6 tolerates the rounding of t = k / f_s at large t (relative jitter of
+    the differences ~ eps t / dt) and changes the noise scaling by < 1 ppm.
+    """
     if t.size < 2:
         return 1.0
-    d = np.diff(t)
     step = (t[-1] - t[0]) / (t.size - 1)
-    return float(step) if float(np.max(np.abs(d - step))) <= 1e-9 * step else 0.0
+    return float(step) if float(np.max(np.abs(d - step))) <= 1e-6 * step else 0.0
 
 
 def _f64(a: Any) -> NDArray[np.float64]:
@@ -1001,13 +1010,15 @@ def _apply_arrays(
 ) -> tuple[NDArray[np.float64], NDArray[np.float64], ImuErrorTruth | None]:
     n = t.size
     root = seed_sequence(rng)
-    if n > 1 and not np.all(np.diff(t) > 0):
-        i = int(np.argmax(~(np.diff(t) > 0))) + 1
+    d = np.diff(t)
+    if n > 1 and not np.all(d > 0):
+        i = int(np.argmax(~(d > 0))) + 1
         raise InvalidInputError(f"apply_errors: time must be strictly increasing (row {i})")
     triads = (("gyro", model.gyro, gyro), ("accel", model.accel, accel))
     if n < 2 and any(te.has_noise for _, te, _ in triads):
         raise InsufficientDataError("apply_errors: stochastic errors need at least 2 samples (to know the rate)")
-    dt_const = _uniform_step(t)
+    dt_const = _uniform_step(t, d)
+    del d
     dtemp_arr = np.zeros(0) if dtemp is None else _f64(dtemp)
     outs: dict[str, np.ndarray] = {}
     nsat: dict[str, np.ndarray] = {}
