@@ -15,7 +15,7 @@ runner = CliRunner()
 
 def test_montecarlo_json(tmp_path):
     out = tmp_path / "mc.json"
-    r = runner.invoke(app, ["attitude", "montecarlo", "--runs", "2", "--json", str(out)])
+    r = runner.invoke(app, ["attitude", "montecarlo", "--runs", "2", "--duration", "60", "--json", str(out)])
     assert r.exit_code == 0, r.output
     d = json.loads(out.read_text())
     assert d["table"]["proposed"]["pitch_mean"] < 0.05
