@@ -69,8 +69,12 @@ __all__ = ["STEPS", "SIMULATION_ONLY", "LabConfig", "LabContext", "StepResult", 
 #: Step modules (``imunav.labsteps.<name>``) run by default, in order.
 STEPS: list[str] = [
     "simulate_tests",
+    "calibration",
+    "noise",
     "temperature",
     "compensation",
+    "attitude",
+    "airdata",
 ]
 
 

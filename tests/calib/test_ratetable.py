@@ -3,11 +3,11 @@
 import numpy as np
 import pytest
 
-from imunav.calib import combine, multiposition, multiposition_from_means, ratetable, ratetable_from_means
+from imunav.calib import combine, multiposition, ratetable, ratetable_from_means
 from imunav.calib import success_percentages
 from imunav.errors import DegenerateGeometryError, InsufficientDataError
 
-from _simulate import G, hundred_positions, thesis_rate_steps, thesis_truth
+from _simulate import G, thesis_rate_steps, thesis_truth
 
 
 def test_rate_steps_noise_free_exact():

@@ -95,3 +95,17 @@ def test_bad_inputs():
         fit_temperature_curve(np.full(10, 20.0), np.ones(10), orders=[0])
     with pytest.raises(InvalidInputError, match="scale_c"):
         fit_temperature_curve(T10, np.ones(10), scale_c=0.0)
+
+
+def test_plots_render(tmp_path):
+    from imunav.calib import multiposition_from_means
+    from imunav.calib.plot import plot_residuals, plot_temperature_fit, save_figure
+
+    rng = np.random.default_rng(9)
+    f = fit_temperature_curve(T10, rng.normal(size=10), orders=[1, 2])
+    p = save_figure(plot_temperature_fit(f), tmp_path / "t.png")
+    u = rng.normal(size=(12, 3))
+    u /= np.linalg.norm(u, axis=1)[:, None]
+    r = multiposition_from_means(9.8 * u, 9.8 * u + rng.normal(scale=1e-3, size=u.shape), serial=False)
+    q = save_figure(plot_residuals(r), tmp_path / "r.png")
+    assert p.stat().st_size > 1000 and q.stat().st_size > 1000

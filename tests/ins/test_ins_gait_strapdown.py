@@ -86,3 +86,19 @@ def test_ned_static_on_rotating_earth():
         strapdown_ned(ImuData(t[:5], gyro[:5], accel[:5]), [1, 0, 0, 0], [math.pi / 2, 0, 0])
     with pytest.raises(InvalidInputError, match="unit quaternion"):
         strapdown_local(ImuData(t[:5], gyro[:5], accel[:5]), [1, 1, 0, 0])
+
+
+def test_plots_run(tmp_path):
+    import matplotlib
+
+    matplotlib.use("Agg")
+    from imunav.ins import detect_zero_velocity
+    from imunav.ins.plot import plot_trajectory, plot_zero_velocity
+
+    sim = simulate_gait("walk", 4, error_model=None, rng=0)
+    res = run_zupt(sim.imu, sim.stance)
+    ax = plot_trajectory(res, sim.position)
+    assert len(ax.lines) == 3
+    ax = plot_zero_velocity(sim.imu, {"truth": sim.stance, "shoe": detect_zero_velocity(sim.imu, "shoe")})
+    ax.figure.savefig(tmp_path / "zv.png")
+    assert (tmp_path / "zv.png").stat().st_size > 0

@@ -217,7 +217,7 @@ class LongHorizonConfig(ResultMixin):
     turbulence_sigma: float = 1.5
     turbulence_tau: float = 2.7
     sigma_ads: tuple[float, float, float] = (0.3, 0.4, 0.4)
-    sigma_doppler: tuple[float, float, float] = (0.1, 0.1, 0.1)
+    sigma_doppler: tuple[float, float, float] = (0.17, 0.17, 0.06)  # 4-beam LS, 0.1 m/s per beam, 65° depression
     p0_wind: float = 400.0
     p0_position: float = 1.0
     robust: str | None = "isolate"

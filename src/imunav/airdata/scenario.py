@@ -35,6 +35,7 @@ from imunav.filters import Fault, inject_faults
 from imunav.filters._common import ResultMixin
 from imunav.filters.faults import (
     DETECTORS,
+    alarms,
     calibrated_thresholds,
     detection_delays,
     detector_statistics,
@@ -53,6 +54,8 @@ __all__ = [
     "ThesisMonteCarlo",
     "monte_carlo_thesis",
     "thesis_report",
+    "load_config",
+    "thesis_tables",
 ]
 
 Array = NDArray[np.float64]
@@ -156,17 +159,19 @@ def simulate_thesis_batch(sc: ThesisScenario | None = None, n_runs: int = 100,
     s = ThesisScenario() if sc is None else sc
     if n_runs < 1:
         raise InvalidInputError(f"n_runs must be >= 1, got {n_runs}")
+    from imunav.sim.flight import simulate_thesis_aircraft
+
     gen = np.random.default_rng(rng)
     xt = _truth(s)
     N = s.n_steps
+    v = simulate_thesis_aircraft(N, s.dt).velocity  # same deterministic flight for every run
     na = s.sigma_ads * gen.standard_normal((n_runs, N, 3))
     nd = s.sigma_doppler * gen.standard_normal((n_runs, N, 3))
-    # V cancels: V_D - V_A = W + n_D - n_A; faults act on the ADS output
-    va = -xt[None, :, 3:] + na  # V_A - V
+    va = v[None] - xt[None, :, 3:] + na  # eq. 5.9; faults act on the ADS output
     faults = s.faults()
     if faults:
         va = np.stack([inject_faults(va[r], faults, noise=na[r], dt=s.dt) for r in range(n_runs)])
-    z = nd - va
+    z = v[None] + nd - va
     return z, xt, na
 
 
@@ -350,11 +355,11 @@ def monte_carlo_thesis(
     valid[M - 1:] = True
     fa = {}
     for d in DETECTORS:
-        a = np.nan_to_num(stats_n[d], nan=-np.inf) > thr[d]
+        a = alarms(d, stats_n[d], thr[d])
         ps, pr = false_alarm_rates(a[:, valid])
         fa[d] = {"threshold": thr[d], "per_step": ps, "per_run": pr}
         if d in th:
-            at = np.nan_to_num(stats_n[d], nan=-np.inf) > th[d]
+            at = alarms(d, stats_n[d], th[d])
             pst, prt = false_alarm_rates(at[:, valid])
             fa[d].update(thesis_threshold=th[d], per_step_thesis=pst, per_run_thesis=prt)
 
@@ -372,7 +377,7 @@ def monte_carlo_thesis(
             for label, t in (("calibrated", thr[d]), ("thesis", th.get(d))):
                 if t is None:
                     continue
-                a = np.nan_to_num(st[d], nan=-np.inf) > t
+                a = alarms(d, st[d], t)
                 delays, _ = detection_delays(a, o)
                 _, missed_h = detection_delays(a, o, horizon)
                 ok = delays[np.isfinite(delays)]
@@ -406,4 +411,84 @@ def thesis_report(n_runs: int = 200, rng: int = 0, **kw) -> dict:
         single[kind] = {"fault_step": d.scenario.fault_step, "detection_step": out,
                         "thesis_detection_step": {"variance": {"alg1": 152, "alg2": 160, "alg3": 153},
                                                   "bias": {"alg3": 152}}[kind]}
-    return {"covariance_sequence": cov, "monte_carlo": mc.to_dict(), "single_run_detection": single}
+    return {"covariance_sequence": cov, "monte_carlo": mc.to_dict(), "single_run_detection": single,
+            "thesis_tables": thesis_tables(rng)}
+
+
+def thesis_tables(rng: int = 0) -> dict:
+    """One seeded run laid out like the thesis's Tables 6.1 and 6.3 (x axis).
+
+    Table 6.1: wind x error of the difference loop and of the KF at iterations
+    50…500.  Table 6.3: x wind error and P44 of the optimal and the robust
+    filter (thesis gate ±2 and vector χ² gate) with outliers at steps
+    100/200/300/400, at iterations 50, 100, 101, …, 500.  Errors are
+    estimate − truth; iteration n is row n − 2.
+    """
+    its1 = list(range(50, 501, 50))
+    d = simulate_thesis(ThesisScenario(), rng)
+    r = run_thesis_filter(d.z)
+    rows = thesis_row(np.asarray(its1))
+    t61 = [{"iteration": i, "difference_loop": float(d.z[k, 0] - d.wind_true[k, 0]),
+            "kf": float(r.wind[k, 0] - d.wind_true[k, 0])} for i, k in zip(its1, rows)]
+    its3 = [50, 100, 101, 150, 200, 201, 250, 300, 301, 350, 400, 401, 450, 500]
+    do = simulate_thesis(ThesisScenario(kind="outliers"), rng)
+    runs = {"optimal": run_thesis_filter(do.z), "gate2": run_thesis_filter(do.z, robust="gate", gate_m=2.0),
+            "nis": run_thesis_filter(do.z, robust="nis")}
+    t63 = []
+    for i, k in zip(its3, thesis_row(np.asarray(its3))):
+        row = {"iteration": i}
+        for name, rr in runs.items():
+            row[f"{name}_err"] = float(rr.wind[k, 0] - do.wind_true[k, 0])
+            row[f"{name}_P44"] = float(rr.P_diag[k, 3])
+        t63.append(row)
+    return {"table_6_1": t61, "table_6_3": t63, "seed": int(rng)}
+
+
+def load_config(path) -> "ThesisScenario | object":
+    """Read a TOML scenario: a ``[thesis]`` table → :class:`ThesisScenario`, a ``[flight]`` table →
+    :class:`imunav.sim.flight.FlightConfig` (tuples given as arrays; ``doppler`` as a sub-table of
+    :class:`~imunav.airdata.doppler.DopplerErrors` fields).  Unknown keys raise :class:`ConfigError`.
+    """
+    import dataclasses
+    import tomllib
+    from pathlib import Path
+
+    from imunav.errors import ConfigError
+
+    p = Path(path)
+    try:
+        doc = tomllib.loads(p.read_text())
+    except FileNotFoundError as exc:
+        raise ConfigError(f"{p}: no such file") from exc
+    except tomllib.TOMLDecodeError as exc:
+        raise ConfigError(f"{p}: not valid TOML ({exc})") from exc
+    keys = [k for k in ("thesis", "flight") if k in doc]
+    if len(keys) != 1:
+        raise ConfigError(f"{p}: needs exactly one [thesis] or [flight] table, found {list(doc) or 'none'}")
+    table = dict(doc[keys[0]])
+    if keys[0] == "thesis":
+        cls = ThesisScenario
+    else:
+        from imunav.airdata.doppler import DopplerErrors
+        from imunav.sim.flight import FlightConfig
+
+        cls = FlightConfig
+        if "doppler" in table:
+            sub = table.pop("doppler")
+            known = {f.name for f in dataclasses.fields(DopplerErrors)}
+            bad = set(sub) - known
+            if bad:
+                raise ConfigError(f"{p}: [flight.doppler] unknown key(s) {sorted(bad)}; known: {sorted(known)}")
+            table["doppler"] = DopplerErrors(**{k: tuple(v) if isinstance(v, list) else v for k, v in sub.items()})
+    known = {f.name for f in dataclasses.fields(cls)} - {"filter"}
+    bad = set(table) - known
+    if bad:
+        raise ConfigError(f"{p}: [{keys[0]}] unknown key(s) {sorted(bad)}; known: {sorted(known)}")
+    conv = {k: (tuple(tuple(x) if isinstance(x, list) else x for x in v) if isinstance(v, list) else v)
+            for k, v in table.items()}
+    try:
+        return cls(**conv)
+    except InvalidInputError as exc:
+        raise ConfigError(f"{p}: {exc}") from exc
+    except TypeError as exc:
+        raise ConfigError(f"{p}: {exc}") from exc

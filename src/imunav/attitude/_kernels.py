@@ -92,6 +92,65 @@ def _rodrigues(r):
     return I3 + a * S + b * (S @ S)
 
 
+@njit(cache=True, inline="always")
+def _tmul(a0, a1, a2, a3, b0, b1, b2, b3):
+    """Hamilton product on scalars (no allocation)."""
+    return (a0 * b0 - a1 * b1 - a2 * b2 - a3 * b3,
+            a0 * b1 + a1 * b0 + a2 * b3 - a3 * b2,
+            a0 * b2 - a1 * b3 + a2 * b0 + a3 * b1,
+            a0 * b3 + a1 * b2 - a2 * b1 + a3 * b0)
+
+
+@njit(cache=True, inline="always")
+def _texp(r0, r1, r2):
+    th2 = r0 * r0 + r1 * r1 + r2 * r2
+    if th2 < 1e-8:
+        c = 1.0 - th2 / 8.0 + th2 * th2 / 384.0
+        sk = 0.5 - th2 / 48.0 + th2 * th2 / 3840.0
+    else:
+        th = math.sqrt(th2)
+        c = math.cos(0.5 * th)
+        sk = math.sin(0.5 * th) / th
+    return c, sk * r0, sk * r1, sk * r2
+
+
+@njit(cache=True, inline="always")
+def _tnorm(a0, a1, a2, a3):
+    n = 1.0 / math.sqrt(a0 * a0 + a1 * a1 + a2 * a2 + a3 * a3)
+    return a0 * n, a1 * n, a2 * n, a3 * n
+
+
+@njit(cache=True, inline="always")
+def _trot(w, x, y, z, v0, v1, v2):
+    """q ⊗ v ⊗ q* on scalars."""
+    tx = 2.0 * (y * v2 - z * v1)
+    ty = 2.0 * (z * v0 - x * v2)
+    tz = 2.0 * (x * v1 - y * v0)
+    return (v0 + w * tx + (y * tz - z * ty), v1 + w * ty + (z * tx - x * tz), v2 + w * tz + (x * ty - y * tx))
+
+
+@njit(cache=True)
+def _rodrigues_into(R, r0, r1, r2):
+    """R = exp([r]x) written in place."""
+    th2 = r0 * r0 + r1 * r1 + r2 * r2
+    if th2 < 1e-12:
+        a = 1.0 - th2 / 6.0
+        b = 0.5 - th2 / 24.0
+    else:
+        th = math.sqrt(th2)
+        a = math.sin(th) / th
+        b = (1.0 - math.cos(th)) / th2
+    R[0, 0] = 1.0 - b * (r1 * r1 + r2 * r2)
+    R[1, 1] = 1.0 - b * (r0 * r0 + r2 * r2)
+    R[2, 2] = 1.0 - b * (r0 * r0 + r1 * r1)
+    R[0, 1] = -a * r2 + b * r0 * r1
+    R[1, 0] = a * r2 + b * r0 * r1
+    R[0, 2] = a * r1 + b * r0 * r2
+    R[2, 0] = -a * r1 + b * r0 * r2
+    R[1, 2] = -a * r0 + b * r1 * r2
+    R[2, 1] = a * r0 + b * r1 * r2
+
+
 # ---------------------------------------------------------------------------
 # Madgwick gradient-descent filter
 
@@ -217,36 +276,44 @@ def mahony_step(q, bint, gyr, acc, mag, dt, kp, ki, use_mag):
     (Mahony, Hamel, Pflimlin 2008, eq. 32; magnetometer term with the
     horizontal/vertical reference of the measured field).
     """
-    e = np.zeros(3)
-    an = _norm3(acc)
+    qw, qx, qy, qz = q[0], q[1], q[2], q[3]
+    ex = 0.0
+    ey = 0.0
+    ez = 0.0
+    bo = bint.copy()
+    an = math.sqrt(acc[0] * acc[0] + acc[1] * acc[1] + acc[2] * acc[2])
     if an > 0.0:
-        a = acc / an
-        dg = np.zeros(3)
-        dg[2] = -1.0
-        v = _qrot_inv(q, dg)
-        e += np.cross(a, v)
-        if use_mag:
-            mn = _norm3(mag)
-            if mn > 0.0:
-                m = mag / mn
-                h = qrot_1(q, m)
-                b = np.zeros(3)
-                b[0] = math.sqrt(h[0] * h[0] + h[1] * h[1])
-                b[2] = h[2]
-                wv = _qrot_inv(q, b)
-                e += np.cross(m, wv)
+        ax, ay, az = acc[0] / an, acc[1] / an, acc[2] / an
+        # predicted up direction in body: -(row 3 of C_nb)
+        vx = -2.0 * (qx * qz - qw * qy)
+        vy = -2.0 * (qy * qz + qw * qx)
+        vz = -(1.0 - 2.0 * (qx * qx + qy * qy))
+        ex += ay * vz - az * vy
+        ey += az * vx - ax * vz
+        ez += ax * vy - ay * vx
+        mn = math.sqrt(mag[0] * mag[0] + mag[1] * mag[1] + mag[2] * mag[2])
+        if use_mag and mn > 0.0:
+            mx, my, mz = mag[0] / mn, mag[1] / mn, mag[2] / mn
+            h0, h1, h2 = _trot(qw, qx, qy, qz, mx, my, mz)
+            bx = math.sqrt(h0 * h0 + h1 * h1)
+            wx, wy, wz = _trot(qw, -qx, -qy, -qz, bx, 0.0, h2)
+            ex += my * wz - mz * wy
+            ey += mz * wx - mx * wz
+            ez += mx * wy - my * wx
         if ki > 0.0:
-            bint = bint + ki * e * dt
+            bo[0] += ki * ex * dt
+            bo[1] += ki * ey * dt
+            bo[2] += ki * ez * dt
         else:
-            bint = np.zeros(3)
-    wc = gyr + kp * e + bint
-    wq = np.empty(4)
-    wq[0] = 0.0
-    wq[1] = wc[0]
-    wq[2] = wc[1]
-    wq[3] = wc[2]
-    q = _qnorm(q + 0.5 * qmul_1(q, wq) * dt)
-    return q, bint
+            bo[:] = 0.0
+    gx = gyr[0] + kp * ex + bo[0]
+    gy = gyr[1] + kp * ey + bo[1]
+    gz = gyr[2] + kp * ez + bo[2]
+    d0, d1, d2, d3 = _tmul(qw, qx, qy, qz, 0.0, gx, gy, gz)
+    h = 0.5 * dt
+    out = np.empty(4)
+    out[0], out[1], out[2], out[3] = _tnorm(qw + h * d0, qx + h * d1, qy + h * d2, qz + h * d3)
+    return out, bo
 
 
 @njit(cache=True)
@@ -372,23 +439,28 @@ def _apply_correction(q, b, dx):
 
 
 @njit(cache=True)
-def _mekf_predict(P, R, dt, sg2, sb2):
-    """P ← Φ P Φᵀ + Q with Φ = [[R, −dt I], [0, I]] (block form, in place)."""
-    A = P[0:3, 0:3].copy()
-    B = P[0:3, 3:6].copy()
-    C = P[3:6, 3:6].copy()
-    RB = R @ B
-    An = R @ A @ R.T
+def _mekf_predict(P, R, dt, sg2, sb2, W):
+    """P ← Φ P Φᵀ + Q with Φ = [[R, −dt I], [0, I]] (block form, in place; W 6x6 scratch)."""
+    # W[0:3, :] = Φ[0:3, :] P  (rows of the attitude block)
+    for i in range(3):
+        for j in range(6):
+            acc = -dt * P[3 + i, j]
+            for k in range(3):
+                acc += R[i, k] * P[k, j]
+            W[i, j] = acc
+    # new A = W[0:3,:] Φ[0:3,:]ᵀ ; new B = W[0:3, 3:6]
     for i in range(3):
         for j in range(3):
-            An[i, j] += -dt * (RB[i, j] + RB[j, i]) + dt * dt * C[i, j]
-        An[i, i] += sg2
-    Bn = RB - dt * C
+            acc = -dt * W[i, 3 + j]
+            for k in range(3):
+                acc += W[i, k] * R[j, k]
+            W[3 + i, j] = acc  # temporarily store new A in W rows 3..5
     for i in range(3):
         for j in range(3):
-            P[i, j] = An[i, j]
-            P[i, 3 + j] = Bn[i, j]
-            P[3 + j, i] = Bn[i, j]
+            P[i, j] = 0.5 * (W[3 + i, j] + W[3 + j, i])
+            P[i, 3 + j] = W[i, 3 + j]
+            P[3 + j, i] = W[i, 3 + j]
+        P[i, i] += sg2
         P[3 + i, 3 + i] += sb2
 
 
@@ -396,66 +468,67 @@ def _mekf_predict(P, R, dt, sg2, sb2):
 def mekf_step(q, b, P, st, gyr, acc, mag, dt, p, out_phi):
     """One MEKF step.  ``st`` (float64 array, len 12) is the adaptive state:
     [0] rest timer, [1] mag ref norm, [2] mag ref dip, [3] disturbed timer,
-    [4] ref valid flag, [8] flag bits, [9] NIS sum, [10] NIS dof.
+    [4] ref valid flag, [5:8] low-passed nav specific force, [8] flag bits,
+    [9] NIS sum, [10] NIS dof, [11] low-pass initialised.
     Returns (q, b).  ``out_phi`` receives the 6x6 transition matrix.
     """
     g = p[13]
     use_mag = p[17] > 0.5
+    W = np.empty((6, 6))
+    dx = np.zeros(6)
+    H = np.zeros(6)
+    PH = np.empty(6)
     # ---- predict
-    w = gyr - b
-    R = _rodrigues(-w * dt)  # δθ_k+1 = exp(-[ω]dt) δθ_k - dt δb
+    w0 = gyr[0] - b[0]
+    w1 = gyr[1] - b[1]
+    w2 = gyr[2] - b[2]
+    _rodrigues_into(W, -w0 * dt, -w1 * dt, -w2 * dt)  # δθ_k+1 = exp(-[ω]dt) δθ_k - dt δb
+    R = W[0:3, 0:3].copy()
     for i in range(3):
         for j in range(3):
             out_phi[i, j] = R[i, j]
             out_phi[i, 3 + j] = -dt if i == j else 0.0
             out_phi[3 + i, j] = 0.0
             out_phi[3 + i, 3 + j] = 1.0 if i == j else 0.0
-    q = _qnorm(qmul_1(q, qexp_1(w * dt)))
-    _mekf_predict(P, R, dt, p[0] * p[0] * dt, p[1] * p[1] * dt)
+    e0, e1, e2, e3 = _texp(w0 * dt, w1 * dt, w2 * dt)
+    t0, t1, t2, t3 = _tmul(q[0], q[1], q[2], q[3], e0, e1, e2, e3)
+    qw, qx, qy, qz = _tnorm(t0, t1, t2, t3)
+    _mekf_predict(P, R, dt, p[0] * p[0] * dt, p[1] * p[1] * dt, W)
     flags = 0
-    dx = np.zeros(6)
-    H = np.zeros(6)
-    PH = np.zeros(6)
     nis = 0.0
     ndof = 0.0
+    qbw, qbx, qby, qbz = qw, qx, qy, qz
     # ---- accelerometer (direction only)
-    an = _norm3(acc)
-    dev = abs(an - g) / g
-    wn = _norm3(w)
+    a0, a1, a2 = acc[0], acc[1], acc[2]
+    an = math.sqrt(a0 * a0 + a1 * a1 + a2 * a2)
+    wn = math.sqrt(w0 * w0 + w1 * w1 + w2 * w2)
     if p[9] > 0.0 and wn < p[9] and abs(an - g) < p[10]:
         st[0] += dt
     else:
         st[0] = 0.0
-    am = acc
     if p[18] > 0.0:
-        # low-pass of the specific force in the nav frame (the past samples are
+        # low-pass of the specific force in the nav frame; the stored vector is
         # rotated with every correction below, so this is the low-pass in the
-        # gyro-integrated frame; translational accelerations average out
-        # because velocity stays bounded; cf. Laidig & Seel 2023, §4.1)
-        fn = qrot_1(q, acc)
+        # gyro-integrated frame: translational accelerations average out
+        # because velocity stays bounded (cf. Laidig & Seel 2023, §4.1)
+        f0, f1, f2 = _trot(qw, qx, qy, qz, a0, a1, a2)
         if st[11] < 0.5:
-            st[5] = fn[0]
-            st[6] = fn[1]
-            st[7] = fn[2]
+            st[5] = f0
+            st[6] = f1
+            st[7] = f2
             st[11] = 1.0
         c = 1.0 - math.exp(-dt / p[18])
-        st[5] += c * (fn[0] - st[5])
-        st[6] += c * (fn[1] - st[6])
-        st[7] += c * (fn[2] - st[7])
-        lp = np.empty(3)
-        lp[0] = st[5]
-        lp[1] = st[6]
-        lp[2] = st[7]
-        am = _qrot_inv(q, lp)
-        an = _norm3(am)
-        dev = abs(an - g) / g
-    q_before = q.copy()
+        st[5] += c * (f0 - st[5])
+        st[6] += c * (f1 - st[6])
+        st[7] += c * (f2 - st[7])
+        a0, a1, a2 = _trot(qw, -qx, -qy, -qz, st[5], st[6], st[7])
+        an = math.sqrt(a0 * a0 + a1 * a1 + a2 * a2)
+    dev = abs(an - g) / g
     if an > 0.0 and dev < p[4]:
         # predicted up-direction in body axes: h = q* (0,0,-1) q = -(C_nb row 3)
-        w0, x0, y0, z0 = q[0], q[1], q[2], q[3]
-        h0 = -2.0 * (x0 * z0 - w0 * y0)
-        h1 = -2.0 * (y0 * z0 + w0 * x0)
-        h2 = -(1.0 - 2.0 * (x0 * x0 + y0 * y0))
+        h0 = -2.0 * (qx * qz - qw * qy)
+        h1 = -2.0 * (qy * qz + qw * qx)
+        h2 = -(1.0 - 2.0 * (qx * qx + qy * qy))
         r = p[2] * p[2] * (1.0 + p[3] * (dev / 0.01) ** 2) + (p[15] * wn) ** 2
         # H = [h]x rows for the body error (h(q̂⊗exp δθ) ≈ ĥ + [ĥ]x δθ)
         for i in range(3):
@@ -464,15 +537,15 @@ def mekf_step(q, b, P, st, gyr, acc, mag, dt, p, out_phi):
             if i == 0:
                 H[1] = -h2
                 H[2] = h1
-                nu = am[0] / an - h0
+                nu = a0 / an - h0
             elif i == 1:
                 H[0] = h2
                 H[2] = -h0
-                nu = am[1] / an - h1
+                nu = a1 / an - h1
             else:
                 H[0] = -h1
                 H[1] = h0
-                nu = am[2] / an - h2
+                nu = a2 / an - h2
             nis += _ekf_update(P, dx, H, r, nu, PH)
             ndof += 1.0
     else:
@@ -488,14 +561,20 @@ def mekf_step(q, b, P, st, gyr, acc, mag, dt, p, out_phi):
             nis += _ekf_update(P, dx, H, r, gyr[i] - b[i], PH)
             ndof += 1.0
     # apply the tilt / bias correction before the heading update
-    q, b = _apply_correction(q, b, dx)
+    e0, e1, e2, e3 = _texp(dx[0], dx[1], dx[2])
+    t0, t1, t2, t3 = _tmul(qw, qx, qy, qz, e0, e1, e2, e3)
+    qw, qx, qy, qz = _tnorm(t0, t1, t2, t3)
+    bo = np.empty(3)
+    bo[0] = b[0] + dx[3]
+    bo[1] = b[1] + dx[4]
+    bo[2] = b[2] + dx[5]
     # ---- magnetometer: heading only
     if use_mag:
-        mn = _norm3(mag)
+        mn = math.sqrt(mag[0] * mag[0] + mag[1] * mag[1] + mag[2] * mag[2])
         if mn > 0.0:
-            hn = qrot_1(q, mag)
-            hh = math.sqrt(hn[0] * hn[0] + hn[1] * hn[1])
-            dip = math.atan2(hn[2], hh)
+            n0, n1, n2 = _trot(qw, qx, qy, qz, mag[0], mag[1], mag[2])
+            hh = math.sqrt(n0 * n0 + n1 * n1)
+            dip = math.atan2(n2, hh)
             if st[4] < 0.5:
                 st[1] = mn
                 st[2] = dip
@@ -517,35 +596,38 @@ def mekf_step(q, b, P, st, gyr, acc, mag, dt, p, out_phi):
                     st[1] += c * (mn - st[1])
                     st[2] += c * (dip - st[2])
             if not disturbed and hh > 1e-9 * mn:
-                psi = math.atan2(hn[1], hn[0])
-                w0, x0, y0, z0 = q[0], q[1], q[2], q[3]
+                psi = math.atan2(n1, n0)
                 # measured field yaw ≈ −(C δθ)_z  (nav yaw error of the estimate)
-                H[0] = -2.0 * (x0 * z0 - w0 * y0)
-                H[1] = -2.0 * (y0 * z0 + w0 * x0)
-                H[2] = -(1.0 - 2.0 * (x0 * x0 + y0 * y0))
+                H[0] = -2.0 * (qx * qz - qw * qy)
+                H[1] = -2.0 * (qy * qz + qw * qx)
+                H[2] = -(1.0 - 2.0 * (qx * qx + qy * qy))
                 H[3] = 0.0
                 H[4] = 0.0
                 H[5] = 0.0
                 r = (p[5] * mn / hh) ** 2 * (1.0 + p[8] * ((dn / p[6]) ** 2 + (dd / p[7]) ** 2))
-                dx2 = np.zeros(6)
-                nis += _ekf_update(P, dx2, H, r, psi, PH)
+                for j in range(6):
+                    dx[j] = 0.0
+                nis += _ekf_update(P, dx, H, r, psi, PH)
                 ndof += 1.0
-                q, b = _apply_correction(q, b, dx2)
+                e0, e1, e2, e3 = _texp(dx[0], dx[1], dx[2])
+                t0, t1, t2, t3 = _tmul(qw, qx, qy, qz, e0, e1, e2, e3)
+                qw, qx, qy, qz = _tnorm(t0, t1, t2, t3)
+                bo[0] += dx[3]
+                bo[1] += dx[4]
+                bo[2] += dx[5]
     if p[18] > 0.0:
-        # rotate the low-passed nav-frame vector with the total correction
-        dq = qmul_1(q, _qconj(q_before))
-        lp = np.empty(3)
-        lp[0] = st[5]
-        lp[1] = st[6]
-        lp[2] = st[7]
-        lp = qrot_1(dq, lp)
-        st[5] = lp[0]
-        st[6] = lp[1]
-        st[7] = lp[2]
+        # rotate the low-passed nav-frame vector with the total correction q ⊗ q_before*
+        d0, d1, d2, d3 = _tmul(qw, qx, qy, qz, qbw, -qbx, -qby, -qbz)
+        st[5], st[6], st[7] = _trot(d0, d1, d2, d3, st[5], st[6], st[7])
     st[8] = flags
     st[9] = nis
     st[10] = ndof
-    return q, b
+    qo = np.empty(4)
+    qo[0] = qw
+    qo[1] = qx
+    qo[2] = qy
+    qo[3] = qz
+    return qo, bo
 
 
 @njit(cache=True)
@@ -623,7 +705,7 @@ def rts_smooth(qf, bf, Pu, Pp, Ph, gyr, dt, P0, q0, b0):
         e = np.empty(6)
         e[0:3] = qlog_1(qmul_1(_qconj(qp), qs[k + 1]))
         e[3:6] = bs[k + 1] - bf[k]
-        C = Pu[k] @ Ph[k + 1].T @ np.linalg.inv(Pp[k + 1])
+        C = Pu[k] @ Ph[k + 1].T @ _inv_spd(Pp[k + 1])
         dx = C @ e
         qs[k] = _qnorm(qmul_1(qf[k], qexp_1(dx[0:3])))
         bs[k] = bf[k] + dx[3:6]
@@ -652,6 +734,30 @@ def _chol(A):
             else:
                 L[i, j] = s / L[j, j]
     return L
+
+
+@njit(cache=True)
+def _inv_spd(A):
+    """Inverse of a symmetric positive-definite matrix via Cholesky (no LAPACK)."""
+    n = A.shape[0]
+    L = _chol(A)
+    Li = np.zeros((n, n))
+    for j in range(n):
+        Li[j, j] = 1.0 / L[j, j]
+        for i in range(j + 1, n):
+            acc = 0.0
+            for k in range(j, i):
+                acc -= L[i, k] * Li[k, j]
+            Li[i, j] = acc / L[i, i]
+    out = np.zeros((n, n))
+    for i in range(n):
+        for j in range(i + 1):
+            acc = 0.0
+            for k in range(i, n):
+                acc += Li[k, i] * Li[k, j]
+            out[i, j] = acc
+            out[j, i] = acc
+    return out
 
 
 @njit(cache=True)
@@ -737,7 +843,7 @@ def ukf_step(q, b, P, gyr, acc, mag, dt, p, alpha, beta_u, kappa, mag_ref):
             z[j:j + 3] = mag / _norm3(mag)
             for i in range(3):
                 Pzz[j + i, j + i] += p[5] * p[5]
-        Si = np.linalg.inv(Pzz)
+        Si = _inv_spd(Pzz)
         K = Pxz @ Si
         nu = z - zm
         dx = K @ nu
@@ -796,6 +902,101 @@ def ukf_run(q0, b0, P0, gyr, acc, mag, dt, p, alpha, beta_u, kappa, mag_ref):
 
 
 @njit(cache=True)
+def gravity_kf_step(kind, x, P, sv, Pb, yg_prev, ya, h, gp):
+    """One step t-1 -> t of the paper's filters (in place on x, P, sv, Pb).
+
+    sv: [0:3] a⁺_{t-1}, [3] detector hold timer, [4:7] Javed bias estimate,
+    [7:10] bias pseudo-measurement sum, [10] its count.  Returns (α_t, S diag).
+    """
+    sg2 = gp[0] * gp[0]
+    sa2 = gp[1] * gp[1]
+    g = gp[3]
+    I3 = np.eye(3)
+    a_plus = sv[0:3].copy()
+    bh = sv[4:7].copy()
+    yg = yg_prev - bh
+    if gp[9] > 0.5:
+        F = _rodrigues(-yg * h)
+    else:
+        F = I3 - h * _skew(yg)
+    xprev = x.copy()
+    Xs = _skew(xprev)
+    Q = -h * h * sg2 * (Xs @ Xs)  # eq. 14 with Σ_g = σ_g² I
+    xp = F @ xprev
+    Pp = F @ P @ F.T + Q
+    # detector D1 with hold time
+    det = abs(_norm3(ya) - g) > gp[4]
+    if det:
+        sv[3] = gp[7]
+    elif sv[3] > 0.0:
+        sv[3] -= h
+        det = True
+    if kind == 0:
+        ca = gp[2]
+    elif kind == 1:
+        ca = gp[2] if det else 0.5 * gp[2]
+    else:
+        ca = 1.0 if det else 0.0
+    z = ya - ca * a_plus
+    M = np.zeros((3, 3))
+    if kind == 1:
+        # eqs. 29-30 (reconstruction): (c² |a⁺|² + | |y|² - g² |) W
+        aa = np.abs(a_plus)
+        sw = aa[0] + aa[1] + aa[2]
+        mag2 = ca * ca * (a_plus @ a_plus) + abs(ya @ ya - g * g)
+        for i in range(3):
+            wgt = aa[i] / sw if sw > 1e-12 else 1.0 / 3.0
+            M[i, i] = mag2 * wgt + sa2
+    else:
+        sacc = ca * ca * (a_plus @ a_plus) / 3.0  # eq. 25
+        for i in range(3):
+            M[i, i] = sacc + sa2
+    nu = z - g * xp
+    HPH = g * g * Pp
+    S = np.ones(3)
+    if kind == 2 and det:
+        if gp[5] < 0.5:
+            S[:] = gp[6]
+        elif gp[5] < 1.5:
+            for i in range(3):
+                S[i] = max(1.0, (nu[i] * nu[i] - HPH[i, i]) / M[i, i])
+    SM = M.copy()
+    for i in range(3):
+        SM[i, :] *= S[i]  # diag(S) M (M diagonal)
+    K = g * Pp @ _inv_spd(HPH + SM)  # eq. 27, H = g I
+    xn = xp + K @ nu
+    IKH = I3 - g * K
+    Pn = IKH @ Pp @ IKH.T + K @ SM @ K.T
+    P[:, :] = 0.5 * (Pn + Pn.T)
+    if gp[8] > 0.5:
+        xn = xn / _norm3(xn)
+    x[:] = xn
+    sv[0:3] = ya - g * xn
+    if kind == 1 and not det:
+        # cascaded bias KF (digest §5.2 [EXT]): z_b = (x_t - x_{t-1})/dt - x̃_{t-1} y_g = -x̃ b
+        zb = (xn - xprev) / h - Xs @ yg_prev
+        sv[7:10] += zb
+        sv[10] += 1.0
+        nb = sv[10]
+        if nb >= gp[12]:
+            zb = sv[7:10] / nb
+            Hb = -Xs
+            Pb[:, :] = Pb + np.eye(3) * gp[10] * gp[10] * h * nb
+            Rb = np.eye(3) * gp[11] * gp[11] / nb
+            Sb = Hb @ Pb @ Hb.T + Rb
+            Kb = Pb @ Hb.T @ _inv_spd(Sb)
+            sv[4:7] = bh + Kb @ (zb - Hb @ bh)
+            IK = np.eye(3) - Kb @ Hb
+            Pb[:, :] = IK @ Pb @ IK.T + Kb @ Rb @ Kb.T
+            sv[7:10] = 0.0
+            sv[10] = 0.0
+    elif kind == 1:
+        sv[7:10] = 0.0
+        sv[10] = 0.0
+    return det, S
+
+
+@njit(cache=True)
 def gravity_kf_run(kind, x0, P0, gyr, ya, dt, gp):
     """kind: 0 Lee 2012, 1 Javed 2020 (reconstruction, "Javed-like"), 2 proposed.
 
@@ -811,100 +1012,14 @@ def gravity_kf_run(kind, x0, P0, gyr, ya, dt, gp):
     bb = np.zeros((n, 3))
     x = x0.copy()
     P = P0.copy()
-    a_plus = np.zeros(3)
-    sg2 = gp[0] * gp[0]
-    sa2 = gp[1] * gp[1]
-    g = gp[3]
-    I3 = np.eye(3)
-    hold = 0.0
-    # Javed bias KF
-    bh = np.zeros(3)
+    sv = np.zeros(11)
     Pb = np.eye(3) * (1e-3) ** 2
-    acc_z = np.zeros(3)
-    acc_n = 0
     xs[0] = x
     for t in range(1, n):
-        yg = gyr[t - 1] - bh
-        h = dt[t]
-        if gp[9] > 0.5:
-            F = _rodrigues(-yg * h)
-        else:
-            F = I3 - h * _skew(yg)
-        xprev = x.copy()
-        Xs = _skew(x)
-        Q = -h * h * sg2 * (Xs @ Xs)  # eq. 14 with Σ_g = σ_g² I
-        x = F @ x
-        P = F @ P @ F.T + Q
-        # detector D1 with hold time
-        det = abs(_norm3(ya[t]) - g) > gp[4]
-        if det:
-            hold = gp[7]
-        elif hold > 0.0:
-            hold -= h
-            det = True
-        if kind == 0:
-            ca = gp[2]
-        elif kind == 1:
-            ca = gp[2] if det else 0.5 * gp[2]
-        else:
-            ca = 1.0 if det else 0.0
+        det, S = gravity_kf_step(kind, x, P, sv, Pb, gyr[t - 1], ya[t], dt[t], gp)
         al[t] = 1.0 if det else 0.0
-        z = ya[t] - ca * a_plus
-        M = np.zeros((3, 3))
-        if kind == 1:
-            # eqs. 29-30 (reconstruction): (c² |a⁺|² + | |y|² - g² |) W
-            aa = np.abs(a_plus)
-            sw = aa[0] + aa[1] + aa[2]
-            mag2 = ca * ca * (a_plus @ a_plus) + abs(ya[t] @ ya[t] - g * g)
-            for i in range(3):
-                wgt = aa[i] / sw if sw > 1e-12 else 1.0 / 3.0
-                M[i, i] = mag2 * wgt + sa2
-        else:
-            sacc = ca * ca * (a_plus @ a_plus) / 3.0  # eq. 25
-            for i in range(3):
-                M[i, i] = sacc + sa2
-        nu = z - g * x
-        HPH = g * g * P
-        S = np.ones(3)
-        if kind == 2 and det:
-            if gp[5] < 0.5:
-                S[:] = gp[6]
-            elif gp[5] < 1.5:
-                for i in range(3):
-                    S[i] = max(1.0, (nu[i] * nu[i] - HPH[i, i]) / M[i, i])
-        SM = M.copy()
-        for i in range(3):
-            SM[i, :] *= S[i]  # diag(S) M (M diagonal)
-        K = g * P @ np.linalg.inv(HPH + SM)  # eq. 27, H = g I
-        x = x + K @ nu
-        IKH = I3 - g * K
-        P = IKH @ P @ IKH.T + K @ SM @ K.T
-        P = 0.5 * (P + P.T)
-        if gp[8] > 0.5:
-            x = x / _norm3(x)
-        a_plus = ya[t] - g * x
-        if kind == 1 and not det:
-            # cascaded bias KF (digest §5.2 [EXT]): z_b = (x_t - x_{t-1})/dt - x̃_{t-1} y_g = -x̃ b
-            zb = (x - xprev) / h - _skew(xprev) @ (gyr[t - 1])
-            acc_z += zb
-            acc_n += 1
-            if acc_n >= int(gp[12]):
-                zb = acc_z / acc_n
-                Hb = -_skew(xprev)
-                Pb = Pb + np.eye(3) * gp[10] * gp[10] * h * acc_n
-                Sb = Hb @ Pb @ Hb.T + np.eye(3) * gp[11] * gp[11] / acc_n
-                Kb = Pb @ Hb.T @ np.linalg.inv(Sb)
-                bh = bh + Kb @ (zb - Hb @ bh)
-                IK = np.eye(3) - Kb @ Hb
-                Pb = IK @ Pb @ IK.T + Kb @ (np.eye(3) * gp[11] * gp[11] / acc_n) @ Kb.T
-                acc_z[:] = 0.0
-                acc_n = 0
-        elif kind == 1:
-            acc_z[:] = 0.0
-            acc_n = 0
         xs[t] = x
-        for i in range(3):
-            Sd[t, i] = S[i]
-        ap[t] = a_plus
-        bb[t] = bh
+        Sd[t] = S
+        ap[t] = sv[0:3]
+        bb[t] = sv[4:7]
     return xs, al, Sd, ap, bb

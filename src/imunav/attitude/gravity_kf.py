@@ -119,6 +119,29 @@ class GravityKF:
     def name(self) -> str:
         return f"gravity_{self.kind}"
 
+    def reset(self, x0: ArrayLike | None = None) -> None:
+        """Start the per-sample API from ``x0`` (default level [0, 0, 1])."""
+        self.x = np.array([0.0, 0.0, 1.0]) if x0 is None else np.asarray(x0, float).reshape(3).copy()
+        self.P = np.eye(3) * self.params.p0**2
+        self._sv = np.zeros(11)
+        self._Pb = np.eye(3) * 1e-6
+        self._gprev: np.ndarray | None = None
+
+    def step(self, gyro: ArrayLike, accel: ArrayLike, dt: float) -> np.ndarray:
+        """Process one sample (gyro and accelerometer at t; the gyro of t−1 drives
+        the propagation, eq. 11); returns (roll, pitch) [rad].  The first call
+        after :meth:`reset` only stores the gyro sample."""
+        if not hasattr(self, "x"):
+            self.reset()
+        g = np.asarray(gyro, float).reshape(3)
+        a = np.asarray(accel, float).reshape(3)
+        ya = -a if self.accel_convention == "specific_force" else a
+        if self._gprev is not None:
+            _k.gravity_kf_step(_KINDS[self.kind], self.x, self.P, self._sv, self._Pb, self._gprev, ya, float(dt),
+                               self.params.vector())
+        self._gprev = g.copy()
+        return roll_pitch_from_x(self.x[None, :])[0]
+
     def run(self, data: ImuData, *, x0: ArrayLike | None = None) -> AttitudeResult:
         """Filter a recording; q_nb has the estimated roll / pitch and yaw = 0.
 

@@ -40,7 +40,7 @@ def steady_segments(
     variance, which is the steady-state noise variance when most of the
     session is steady (true of calibration sessions).
     """
-    n = max(int(round(window_s * fs)), 2)
+    n = max(int(round(window_s * fs)), 8)  # a few samples at least: the variance of 2 samples is too noisy
     v = moving_variance(x, n)
     if threshold is None:
         # floor: noise-free (simulated) data have a rounding-level variance only

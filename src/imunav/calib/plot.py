@@ -46,6 +46,7 @@ def plot_residuals(result: Any) -> Any:
         cond = result.condition.get(k.replace("_norm", "").replace("_direction", ""), None)
         ax.set_title(f"{result.method}: {k} residuals" + (f" (design condition {cond:.3g})" if cond else ""), fontsize=9)
         ax.set_xlabel("position / step / pair")
+        ax.set_ylabel("raw units")
         if r.shape[1] == 3:
             ax.legend(fontsize=7, ncol=3)
     fig.tight_layout()

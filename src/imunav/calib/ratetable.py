@@ -87,7 +87,9 @@ def ratetable_from_means(
         gb = fit.theta[3]
         stderr["gyro_bias"] = fit.stderr[3]
     cal = base.with_(gyro_matrix=T, gyro_bias=gb, stderr=stderr, meta={**base.meta, "method_rate": "ratetable"})
-    info: dict[str, Any] = {"n_steps": K, "gyro_residual_sigma": fit.sigma.tolist(), "intercept": intercept}
+    info: dict[str, Any] = {
+        "n_steps": K, "gyro_residual_sigma": fit.sigma.tolist(), "intercept": intercept, "_cov_gyro_rate": fit.cov,
+    }
     segs = {} if segments is None else {"rate": np.asarray(segments)}
     return CalibrationResult(cal, stderr, {"gyro_rate": fit.residuals}, {"gyro_rate": fit.cond}, segs, "ratetable", info)
 
@@ -171,16 +173,18 @@ def combine(static: CalibrationResult, rate: CalibrationResult) -> CalibrationRe
     stderr = {**static.stderr, **{k: v for k, v in rate.stderr.items() if k in ("gyro_matrix",)}}
     residuals = {**static.residuals, **rate.residuals}
     inputs = static.info.get("_gyro_static_inputs")
+    extra: dict[str, Any] = {}
     scal = static.calibration
     if inputs is not None and inputs[2] is not None:
         f, Gm, er, mode, serial, covs = inputs
         Tg = rate.calibration.gyro_matrix
-        gb, G, segb, seG, gres, _ = fit_gyro_static(
+        gb, G, segb, seG, gres, _, gcov = fit_gyro_static(
             f, Gm, g_sensitivity=mode, earth_rate_b=er @ Tg.T, serial=serial, covs=covs
         )
         scal = scal.with_(gyro_bias=gb, g_sensitivity=G)
         stderr.update(gyro_bias=segb, g_sensitivity=seG)
         residuals["gyro_static"] = gres
+        extra["_cov_gyro_static"] = (mode, gcov)
     if rate.info.get("intercept"):
         stderr["gyro_bias"] = rate.stderr["gyro_bias"]
     cal = scal.with_(
@@ -191,5 +195,5 @@ def combine(static: CalibrationResult, rate: CalibrationResult) -> CalibrationRe
     )
     return CalibrationResult(
         cal, stderr, residuals, {**static.condition, **rate.condition},
-        {**static.segments, **rate.segments}, "multiposition+ratetable", {**static.info, **rate.info},
+        {**static.segments, **rate.segments}, "multiposition+ratetable", {**static.info, **rate.info, **extra},
     )

@@ -54,6 +54,46 @@ class CalibrationResult:
     def parameter_stderr(self) -> dict[str, Array]:
         return parameter_stderr(self.stderr)
 
+    def compensation_stderr(self, f_true: Array, w_true: Array | None = None) -> tuple[Array, Array | None]:
+        """Standard deviation (N, 3) of the compensated outputs due to the parameter uncertainty.
+
+        First order: ``δf̂ = −T_a⁻¹ (δT_a f + δb_a)`` and
+        ``δω̂ = −T_g⁻¹ (δT_g ω + δb_g + δG f)``, each output row of the fits
+        being independent (separate regressions).  Needs a multi-position
+        (+ rate-table) result.
+        """
+        from imunav.errors import InvalidInputError
+
+        ca = self.info.get("_cov_accel")
+        if ca is None:
+            raise InvalidInputError("compensation_stderr needs a multiposition / combined result")
+        f = np.atleast_2d(np.asarray(f_true, float))
+        x = np.hstack([f, np.ones((len(f), 1))])
+        va = np.einsum("np,ipq,nq->ni", x, ca, x)  # variance of (δT f + δb)_i
+        Ti = np.linalg.inv(self.calibration.accel_matrix)
+        sa = np.sqrt(np.einsum("ij,nj,ij->ni", Ti, va, Ti))
+        if w_true is None:
+            return sa, None
+        w = np.atleast_2d(np.asarray(w_true, float))
+        vg = np.zeros_like(w)
+        cr = self.info.get("_cov_gyro_rate")
+        if cr is not None:
+            xr = w if cr.shape[1] == 3 else np.hstack([w, np.ones((len(w), 1))])
+            vg = vg + np.einsum("np,ipq,nq->ni", xr, cr, xr)
+        cs = self.info.get("_cov_gyro_static")
+        if cs is not None:
+            mode, C = cs
+            for i in range(3):
+                if mode == "diagonal":
+                    xs = np.stack([f[:, i], np.ones(len(f))], axis=1)
+                elif mode == "full":
+                    xs = np.hstack([f, np.ones((len(f), 1))])
+                else:
+                    xs = np.ones((len(f), 1))
+                vg[:, i] += np.einsum("np,pq,nq->n", xs, C[i], xs)
+        Tg = np.linalg.inv(self.calibration.gyro_matrix)
+        return sa, np.sqrt(np.einsum("ij,nj,ij->ni", Tg, vg, Tg))
+
 
 def parameter_stderr(stderr: dict[str, Array]) -> dict[str, Array]:
     """Standard errors in the thesis parameterisation (see ``calibration_parameters``)."""

@@ -118,10 +118,12 @@ def fit_gyro_static(
     earth_rate_b: Array | None = None,
     serial: bool = True,
     covs: list[Array] | None = None,
-) -> tuple[Array, Array, Array, Array, Array, float]:
+) -> tuple[Array, Array, Array, Array, Array, float, Array]:
     """Static gyro fit (eq. 19): bias and g-sensitivity.
 
-    Returns ``b, G, se_b, se_G, residuals (K, 3), condition``.
+    Returns ``b, G, se_b, se_G, residuals (K, 3), condition, cov`` with ``cov``
+    the per-axis parameter covariance ((3, 2, 2) of ``[G_ii, b_i]`` for
+    "diagonal", (3, 4, 4) of ``[G_i:, b_i]`` for "full", (3, 1, 1) for "none").
     """
     y = gyro_means - (earth_rate_b if earth_rate_b is not None else 0.0)
     K = f_ref.shape[0]
@@ -133,8 +135,9 @@ def fit_gyro_static(
     cond = 1.0
     if g_sensitivity == "none":
         fit = linear_fit(np.ones((K, 1)), y, what="gyro static fit (bias only)", serial=serial, covs=covs)
-        b, seb, res = fit.theta[0], fit.stderr[0], fit.residuals
+        b, seb, res, pcov = fit.theta[0], fit.stderr[0], fit.residuals, fit.cov
     elif g_sensitivity == "diagonal":
+        pcov = np.zeros((3, 2, 2))
         for i in range(3):
             X = np.stack([f_ref[:, i], np.ones(K)], axis=1)
             fit = linear_fit(
@@ -144,14 +147,16 @@ def fit_gyro_static(
             G[i, i], b[i] = fit.theta[:, 0]
             seG[i, i], seb[i] = fit.stderr[:, 0]
             res[:, i] = fit.residuals[:, 0]
+            pcov[i] = fit.cov[0]
             cond = max(cond, fit.cond)
     elif g_sensitivity == "full":
         X = np.hstack([f_ref, np.ones((K, 1))])
         fit = linear_fit(X, y, what="gyro static fit (full g-sensitivity)", serial=serial, covs=covs)
         G, b, seG, seb, res, cond = fit.theta[:3].T, fit.theta[3], fit.stderr[:3].T, fit.stderr[3], fit.residuals, fit.cond
+        pcov = fit.cov
     else:
         raise InvalidInputError(f"g_sensitivity must be 'diagonal', 'full' or 'none', not {g_sensitivity!r}")
-    return b, G, seb, seG, res, cond
+    return b, G, seb, seG, res, cond, pcov
 
 
 def multiposition_from_means(
@@ -189,6 +194,7 @@ def multiposition_from_means(
         "n_positions": int(f.shape[0]),
         "accel_residual_sigma": fit.sigma.tolist(),
         "accel_residual_rho": None if fit.rho is None else fit.rho.tolist(),
+        "_cov_accel": fit.cov,
     }
     gb, G = np.zeros(3), np.zeros((3, 3))
     if gyro_means is not None:
@@ -196,12 +202,13 @@ def multiposition_from_means(
         if Gm.shape != f.shape:
             raise ShapeError(f"gyro_means {Gm.shape} must match f_ref {f.shape}")
         er = None if earth_rate_b is None else np.asarray(earth_rate_b, float)
-        gb, G, segb, seG, gres, gcond = fit_gyro_static(
+        gb, G, segb, seG, gres, gcond, gcov = fit_gyro_static(
             f, Gm, g_sensitivity=g_sensitivity, earth_rate_b=er, serial=serial, covs=gyro_covs
         )
         stderr.update(gyro_bias=segb, g_sensitivity=seG)
         residuals["gyro_static"] = gres
         cond["gyro_static"] = gcond
+        info["_cov_gyro_static"] = (g_sensitivity, gcov)
         # kept for combine(): the Earth rate is seen through T_g, known only after the rate table
         info["_gyro_static_inputs"] = (f, Gm, er, g_sensitivity, serial, gyro_covs)
     cal = ImuCalibration(
@@ -220,7 +227,7 @@ def _static_means(
     gyro = np.asarray(data.gyro, float)
     t, fs_ = as_time(getattr(data, "t", None), accel.shape[0], fs)
     steady, thr = steady_segments(
-        np.hstack([accel, gyro]), fs_, window_s=window_s, min_duration_s=min(min_duration_s, 1e9), trim_s=trim_s
+        np.hstack([accel, gyro]), fs_, window_s=window_s, min_duration_s=min_duration_s, trim_s=trim_s
     )
     K = orientations.shape[0]
     if windows is not None:

@@ -92,7 +92,15 @@ def run_cmd(
         if not hasattr(iio, "read_imu"):
             raise ConfigError(f"{file}: only BROAD .mat trials are supported in this build")
         data = iio.read_imu(file)
-    res = f.run(data, use_mag=False if no_mag else None)
+    kw: dict[str, Any] = {"use_mag": False if no_mag else None}
+    from imunav.attitude.benchmark import reference_start
+
+    if ref is not None and reference_start(filter) and not no_mag:
+        # start like the BROAD reference runs (first accelerometer / magnetometer sample)
+        from imunav.attitude.alignment import broad_reference_start
+
+        kw["q0"] = broad_reference_start(data.accel[0], data.mag[0])
+    res = f.run(data, **kw)
     import numpy as np
 
     e = np.degrees(res.euler()[-1])

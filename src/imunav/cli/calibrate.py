@@ -93,6 +93,16 @@ _GS = typer.Option(None, help="Scale applied to raw gyro values.")
 _SK = typer.Option(None, help="Lines to skip before the CSV header.")
 _COL = typer.Option(None, help='Column mapping as JSON, e.g. \'{"gyro": ["gx","gy","gz"]}\'.')
 _OUT = typer.Option(..., "--out", "-o", help="Calibration JSON to write.")
+_NM = typer.Option(None, help="Characterised noise (ImuErrorModel TOML: noise densities, bias instability) "
+                   "for generalised least squares; default: AR(1) from the residuals.")
+
+
+def _noise_model(path: Optional[Path]) -> Any:
+    if path is None:
+        return None
+    from imunav.sim import ImuErrorModel
+
+    return ImuErrorModel.from_toml(path)
 _REP = typer.Option(None, help="Folder for report.json and residual plots.")
 
 
@@ -106,6 +116,7 @@ def multiposition(
     latitude_deg: Optional[float] = typer.Option(None, help="Latitude, deg: normal gravity and Earth-rate removal."),
     gravity: Optional[float] = typer.Option(None, help="Local gravity, m/s^2 (default normal gravity / 9.80665)."),
     g_sensitivity: str = typer.Option("diagonal", help="Gyro g-sensitivity: diagonal, full or none."),
+    noise_model: Optional[Path] = _NM,
     fs: Optional[float] = _FS, accel_unit: Optional[str] = _AU, gyro_unit: Optional[str] = _GU,
     accel_scale: Optional[float] = _AS, gyro_scale: Optional[float] = _GS, skiprows: Optional[int] = _SK,
     columns: Optional[str] = _COL,
@@ -118,7 +129,8 @@ def multiposition(
 
     data = _read(recording, fs, accel_unit, gyro_unit, accel_scale, gyro_scale, skiprows, columns)
     lat = None if latitude_deg is None else np.deg2rad(latitude_deg)
-    res = fit(data, _segments(segments), latitude=lat, gravity=gravity, g_sensitivity=g_sensitivity)
+    res = fit(data, _segments(segments), latitude=lat, gravity=gravity, g_sensitivity=g_sensitivity,
+              noise_model=_noise_model(noise_model))
     _finish(res, out, report)
 
 
@@ -133,6 +145,7 @@ def ratetable(
     intercept: bool = typer.Option(False, help="Estimate a separate gyro bias in the rate fit."),
     report: Optional[Path] = _REP,
     latitude_deg: Optional[float] = typer.Option(None, help="Latitude, deg (Earth rate, normal gravity)."),
+    noise_model: Optional[Path] = _NM,
     fs: Optional[float] = _FS, accel_unit: Optional[str] = _AU, gyro_unit: Optional[str] = _GU,
     accel_scale: Optional[float] = _AS, gyro_scale: Optional[float] = _GS, skiprows: Optional[int] = _SK,
     columns: Optional[str] = _COL,
@@ -147,14 +160,15 @@ def ratetable(
     lat = None if latitude_deg is None else np.deg2rad(latitude_deg)
     rd = (fs, accel_unit, gyro_unit, accel_scale, gyro_scale, skiprows, columns)
     st = None
+    nm = _noise_model(noise_model)
     if static is not None:
         if static_segments is None:
             raise typer.BadParameter("--static needs --static-segments")
-        st = multiposition(_read(static, *rd), _segments(static_segments), latitude=lat)
+        st = multiposition(_read(static, *rd), _segments(static_segments), latitude=lat, noise_model=nm)
         b = st.calibration
     else:
         b = ImuCalibration.load(base) if base is not None else None
-    res = fit(_read(recording, *rd), _segments(segments), base=b, latitude=lat, intercept=intercept)
+    res = fit(_read(recording, *rd), _segments(segments), base=b, latitude=lat, intercept=intercept, noise_model=nm)
     if st is not None:
         res = combine(st, res)
     _finish(res, out, report)
@@ -197,6 +211,7 @@ def multipose(
     wait_s: float = typer.Option(3.0, help="Static detector window / time per pose, s."),
     gravity: float = typer.Option(9.80665, help="Local gravity magnitude, m/s^2."),
     strict: bool = typer.Option(True, help="Refuse sessions whose poses leave a misalignment undetermined."),
+    accel_misalignment: bool = typer.Option(True, help="Estimate the accelerometer misalignments (else fix at 0)."),
     report: Optional[Path] = _REP,
     fs: Optional[float] = _FS, accel_unit: Optional[str] = _AU, gyro_unit: Optional[str] = _GU,
     accel_scale: Optional[float] = _AS, gyro_scale: Optional[float] = _GS, skiprows: Optional[int] = _SK,
@@ -204,13 +219,13 @@ def multipose(
 ) -> None:
     """Tedaldi et al. (2014) multi-pose calibration without a rate table.
 
-    Example: imunav calibrate multipose session.csv --fs 100 --init-s 36.5 --no-strict --out cal.json
+    Example: imunav calibrate multipose session.csv --fs 100 --init-s 36.5 --no-accel-misalignment --out cal.json
     """
     from imunav.calib import multipose as fit
 
     data = _read(recording, fs, accel_unit, gyro_unit, accel_scale, gyro_scale, skiprows, columns)
     res = fit(data.accel, data.gyro, data.fs, init_s=init_s, wait_s=wait_s, gravity=gravity, strict=strict,
-              raw_accel_unit="m/s^2", raw_gyro_unit="rad/s")
+              accel_misalignment=accel_misalignment, raw_accel_unit="m/s^2", raw_gyro_unit="rad/s")
     _finish(res, out, report)
     if res.info["weak_parameters"]:
         typer.echo("weakly determined: " + "; ".join(res.info["weak_parameters"]), err=True)
@@ -223,6 +238,7 @@ def temperature(
     orders: str = typer.Option("1,2,3,4,5", help="Polynomial orders to try."),
     order: Optional[int] = typer.Option(None, help="Force this order (default: leave-one-out choice)."),
     model: str = typer.Option("poly", help="poly or piecewise (polynomial + one step)."),
+    params: str = typer.Option("accel_bias,accel_scale,gyro_bias,gyro_scale", help="Parameters to model."),
     report: Optional[Path] = _REP,
 ) -> None:
     """Bias and scale factor as polynomials of temperature (order by leave-one-out CV).
@@ -244,7 +260,10 @@ def temperature(
         f, t = item.rsplit("@", 1)
         cals.append(ImuCalibration.load(f))
         temps.append(float(t))
-    res = thermal_calibration(temps, cals, orders=[int(o) for o in orders.split(",")], order=order, model=model)
+    res = thermal_calibration(
+        temps, cals, params=[p.strip() for p in params.split(",")], orders=[int(o) for o in orders.split(",")],
+        order=order, model=model,
+    )
     res.calibration.save(out)
     tab = Table(title="temperature fits: MSE per order (chosen order marked *)")
     tab.add_column("parameter")

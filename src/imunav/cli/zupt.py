@@ -60,6 +60,8 @@ def run_cmd(
     states: int = typer.Option(9, help="9 (thesis) or 15 (with biases)."),
     zaru: bool = typer.Option(False, help="Zero angular-rate updates (needs --states 15)."),
     heading_hold: bool = typer.Option(False, help="Hold the yaw during each stance."),
+    margin_s: float = typer.Option(0.0, help="Shrink each detected stance by this many seconds at both ends."),
+    sigma_acc: float = typer.Option(0.5, help="Accelerometer noise per sample, m/s^2."),
     model: Optional[Path] = typer.Option(None, help="LSTM model file (default: the shipped one)."),
     out: Optional[Path] = typer.Option(None, help="Write the trajectory (t, position, velocity, quaternion, zv) to .npz."),
     json_out: Optional[Path] = typer.Option(None, "--json", help="Write the summary as JSON."),
@@ -86,9 +88,9 @@ def run_cmd(
                 from imunav.learn import LstmDetector
 
                 m = LstmDetector.load(model)
-            zv = detect_zero_velocity(trial.imu, detector, threshold, model=m).zv
+            zv = detect_zero_velocity(trial.imu, detector, threshold, model=m, margin_s=margin_s).zv
         xio_like = trial.position is None
-        cfg = ZuptConfig(states=states, zaru=zaru, heading_hold=heading_hold,
+        cfg = ZuptConfig(states=states, zaru=zaru, heading_hold=heading_hold, sigma_acc=sigma_acc,
                          alignment="first_stance" if xio_like else "samples", g=None if xio_like else 9.8029)
         res = run_zupt(trial.imu, zv, cfg)
     except ImunavError as exc:
@@ -120,7 +122,7 @@ def train_cmd(
     epochs: Optional[int] = typer.Option(None, help="Epochs."),
     layers: Optional[int] = typer.Option(None, help="Stacked LSTM layers (thesis: 6)."),
     hidden: Optional[int] = typer.Option(None, help="Units per layer (thesis: 80)."),
-    budget_s: Optional[float] = typer.Option(None, help="Stop training after this many seconds."),
+    budget_s: Optional[float] = typer.Option(None, help="Stop training after this many seconds (result then depends on machine speed)."),
     seed: int = typer.Option(0, help="Random seed."),
     threads: int = typer.Option(1, help="Torch CPU threads."),
 ) -> None:

@@ -6,7 +6,7 @@ Quick use::
     from imunav.io.foot import read_pyshoe_mat
     from imunav.ins import detect_zero_velocity, run_zupt, error_2d
     trial = read_pyshoe_mat("trial.mat")
-    zv = detect_zero_velocity(trial.imu, "shoe", 8.5e7)
+    zv = detect_zero_velocity(trial.imu, "shoe", 1e8)
     res = run_zupt(trial.imu, zv.zv)
     print(error_2d(res.position, trial.position))
 """

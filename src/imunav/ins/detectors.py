@@ -53,6 +53,7 @@ __all__ = [
     "mbgtd",
     "motion_adaptive",
     "optimize_threshold",
+    "shrink_stances",
 ]
 
 Array = NDArray[np.float64]
@@ -60,10 +61,11 @@ Array = NDArray[np.float64]
 #: Names of the classical detectors.
 DETECTORS: tuple[str, ...] = ("shoe", "ared", "amvd", "mbgtd")
 
-#: Fixed thresholds for walking at 200 Hz with the default sigmas
-#: (pyshoe's "standard" values for SHOE / ARED; AMVD / MBGTD medians of the
-#: per-trial optima of the Toronto VICON trials).
-DEFAULT_THRESHOLDS: dict[str, float] = {"shoe": 8.5e7, "ared": 0.55, "amvd": 0.1, "mbgtd": 0.25}
+#: Fixed thresholds at 200 Hz with the default sigmas and W = 5: the single
+#: threshold per detector with the smallest mean 2-D error over the 42 shared
+#: Toronto VICON trials (31-point log grids, ``benchmarks/bench_zupt_lstm_cv.py``:
+#: SHOE 0.281 m, ARED 0.307 m, AMVD 0.91 m, MBGTD 2.47 m).
+DEFAULT_THRESHOLDS: dict[str, float] = {"shoe": 1.0e8, "ared": 0.79, "amvd": 2.0, "mbgtd": 1.0}
 
 #: Threshold grids of the published per-trial optimisation (pyshoe
 #: ``run_threshold_optimization.py``), per detector.
@@ -192,9 +194,32 @@ class DetectorResult:
                 "statistic": self.statistic.tolist(), "threshold": self.threshold.tolist()}
 
 
+def shrink_stances(zv: ArrayLike, margin: int) -> NDArray[np.bool_]:
+    """Remove ``margin`` samples at both ends of every stance (run of True).
+
+    Detectors tend to fire while the foot still rolls at heel strike and toe
+    off; a ZUPT there loses real motion.  Runs shorter than ``2 margin + 1``
+    vanish.
+    """
+    z = np.asarray(zv, dtype=bool).copy()
+    m = int(margin)
+    if m < 0:
+        raise InvalidInputError(f"margin must be >= 0 samples; got {margin}")
+    if m == 0 or z.size == 0:
+        return z
+    d = np.diff(np.concatenate([[0], z.astype(np.int8), [0]]))
+    starts = np.flatnonzero(d == 1)
+    stops = np.flatnonzero(d == -1)
+    out = np.zeros_like(z)
+    for a, b in zip(starts, stops):
+        if b - a > 2 * m:
+            out[a + m:b - m] = True
+    return out
+
+
 def detect_zero_velocity(data: Any, detector: str = "shoe", threshold: float | ArrayLike | None = None, *,
                          window: int = 5, sigma_a: float = SIGMA_A, sigma_w: float = SIGMA_W,
-                         g: float = G_PYSHOE, model: Any = None) -> DetectorResult:
+                         g: float = G_PYSHOE, model: Any = None, margin_s: float = 0.0) -> DetectorResult:
     """Run a zero-velocity detector: ``zv[k] = T[k] < threshold``.
 
     Parameters
@@ -206,7 +231,22 @@ def detect_zero_velocity(data: Any, detector: str = "shoe", threshold: float | A
     threshold : scalar or (N,) per-sample thresholds; default
         :data:`DEFAULT_THRESHOLDS`.  For ``"lstm"`` the probability threshold
         (default 0.85).
+    margin_s : shrink every detected stance by this much at both ends
+        (:func:`shrink_stances`; 0 = the published detector output).
     """
+    res = _detect(data, detector, threshold, window, sigma_a, sigma_w, g, model)
+    if margin_s < 0:
+        raise InvalidInputError(f"margin_s must be >= 0; got {margin_s}")
+    if margin_s > 0:
+        fs = 1.0 / float(np.median(np.diff(np.asarray(data.t, dtype=float))))
+        m = int(round(margin_s * fs))
+        res = DetectorResult(shrink_stances(res.zv, m), res.statistic, res.threshold, res.detector,
+                             {**res.params, "margin_s": margin_s})
+    return res
+
+
+def _detect(data: Any, detector: str, threshold: Any, window: int, sigma_a: float, sigma_w: float, g: float,
+            model: Any) -> DetectorResult:
     name = detector.lower()
     if name == "adaptive":
         return motion_adaptive(data, window=window, sigma_a=sigma_a, sigma_w=sigma_w, g=g)

@@ -69,8 +69,9 @@ class ZuptConfig:
     zaru : zero angular-rate update during stance (needs 15 states).
     sigma_zaru : its noise, rad/s.
     heading_hold : hold the yaw during each stance; ``sigma_heading`` rad.
-    integration : ``"euler"`` (first order, the thesis) or ``"coning"``
-        (coning / sculling-corrected increments).
+    integration : ``"euler"`` (first order, the thesis and pyshoe: rate of sample k held
+        over interval k) or ``"coning"`` (trapezoid increments of the point samples with
+        the two-sample coning / sculling corrections).
     """
 
     states: int = 9
@@ -245,6 +246,10 @@ def run_zupt(data: Any, zv: ArrayLike, config: ZuptConfig | None = None, *,
     pos0 = np.asarray(initial_position, dtype=float)
     if pos0.shape != (3,):
         raise ShapeError(f"initial_position must be a 3-vector; got shape {pos0.shape}")
+    # fresh, writable, contiguous float64 arrays: one compiled signature for every caller
+    q0 = np.array(q0, dtype=np.float64)
+    pos0 = np.array(pos0, dtype=np.float64)
+    t, a, w = (np.array(x, dtype=np.float64, order="C") for x in (t, a, w))
     q, v, p, ba, bg, Pd, innov, svar, P = _k.zupt_ekf_kernel(
         t, a, w, z, q0, pos0, np.zeros(3), np.zeros(3), np.zeros(3), P0, nx, g,
         cfg.sigma_acc, cfg.sigma_gyro, cfg.sigma_acc_bias_rw, cfg.sigma_gyro_bias_rw, cfg.sigma_v,

@@ -173,8 +173,9 @@ def edf_greenhall(alpha: int, d: int, m: int, n: int, overlapping: bool, modifie
 
 def edf_totdev(n: int, m: int, alpha: int) -> float:
     """EDF of the total deviation, NIST SP 1065 Table 7 (b T/tau - c), for
-    white, flicker and random-walk rate noise; the simple white-noise bound
-    (n - 1)/m... otherwise (SP 1065 eq. 49 family)."""
+    white, flicker and random-walk rate noise; for white / flicker phase
+    noise (not tabulated) the overlapping-Allan EDF is used, which is
+    conservative since TOTDEV has at least its degrees of freedom."""
     table = {0: (1.50, 0.0), -1: (1.17, 0.22), -2: (0.93, 0.36)}
     if alpha in table:
         b, c = table[alpha]
@@ -184,14 +185,12 @@ def edf_totdev(n: int, m: int, alpha: int) -> float:
 
 
 def _lag1(z: np.ndarray) -> float:
-    z = z - z.mean()
-    den = float(np.dot(z, z))
-    if den == 0.0:
-        return 0.0
-    return float(np.dot(z[:-1], z[1:])) / den
+    from imunav.noise._allan_kernels import lag1_acf
+
+    return float(lag1_acf(np.ascontiguousarray(z, dtype=np.float64)))
 
 
-def noise_id_lag1(x: np.ndarray, m: int, dmax: int = 2, max_points: int = 1 << 16) -> int | None:
+def noise_id_lag1(x: np.ndarray, m: int, dmax: int = 2, max_points: int = 1 << 14) -> int | None:
     """Dominant power-law noise at cluster size m from phase data (Riley & Greenhall 2004).
 
     The phase is decimated by m, a quadratic trend removed, and it is
@@ -200,12 +199,12 @@ def noise_id_lag1(x: np.ndarray, m: int, dmax: int = 2, max_points: int = 1 << 1
     at most ``max_points`` decimated points (the start of the record).
     Returns None when fewer than 30 points are available.
     """
-    z = np.asarray(x[::m][:max_points], dtype=float)
+    from imunav.noise._allan_kernels import detrend_quadratic
+
+    z = np.ascontiguousarray(x[::m][:max_points], dtype=np.float64)
     if z.size < 30:
         return None
-    k = np.arange(z.size, dtype=float)
-    k = (k - k.mean()) / max(k.std(), 1.0)
-    z = z - np.polyval(np.polyfit(k, z, 2), k)
+    z = detrend_quadratic(z)
     d = 0
     while True:
         r1 = _lag1(z)

@@ -163,7 +163,7 @@ class PsdFit:
     value: NDArray[np.float64]  # (P, C)
     se: NDArray[np.float64]
     channels: tuple[str, ...]
-    f_range: tuple[float, float]
+    f_range: tuple[tuple[float, float], ...]  # per channel
 
     def get(self, name: str, channel: int = 0) -> float:
         return float(self.value[self.names.index(name), channel])
@@ -181,32 +181,40 @@ class PsdFit:
                 "channels": list(self.channels), "f_range": list(self.f_range)}
 
 
-def fit_psd(res: PsdResult, terms: Sequence[str] = ("N", "B", "K"), f_range: tuple[float, float] | None = None,
-            ) -> PsdFit:
+def fit_psd(res: PsdResult, terms: Sequence[str] = ("N", "B", "K"), f_range: Any = None) -> PsdFit:
     """Weighted NNLS fit of the two-sided PSD model sum of the terms' shapes
     (table in the module docstring) to an (averaged) PSD; each point's
     relative variance is 1/count, and the residuals are weighted by the
-    model (iterated), like the Allan fit.  ``f_range`` defaults to
-    [f_min, 0.4 fs] to stay clear of anti-alias filtering near Nyquist."""
+    model (iterated), like the Allan fit.  ``f_range`` (lo, hi) defaults to
+    [f_min, 0.4 fs] to stay clear of anti-alias filtering near Nyquist; a
+    list of (lo, hi), one per channel, sets each channel's band."""
     allowed = ("Q", "N", "B", "K")
     if any(t not in allowed for t in terms) or not terms:
         raise InvalidInputError(f"terms must be a non-empty subset of {allowed}")
-    lo, hi = f_range if f_range is not None else (res.f[0], 0.4 * res.fs)
-    ok = (res.f >= lo) & (res.f <= hi)
-    if ok.sum() < len(terms) + 1:
-        raise InsufficientDataError(f"only {int(ok.sum())} PSD points in f_range=({lo:g}, {hi:g}) Hz")
-    f = res.f[ok]
-    w = 2 * np.pi * f
-    tau0 = 1.0 / res.fs
-    shapes = {"Q": w**2 * tau0, "N": np.ones_like(f), "B": 1.0 / w, "K": 1.0 / w**2}
-    G = np.column_stack([shapes[t] for t in terms])
-    p2 = (res.psd if res.psd.ndim == 2 else res.psd[:, None])[ok] / 2.0
-    cnt = res.counts[ok]
-    n_ch = p2.shape[1]
+    p_all = (res.psd if res.psd.ndim == 2 else res.psd[:, None]) / 2.0
+    n_ch = p_all.shape[1]
+    if f_range is None:
+        ranges = [(res.f[0], 0.4 * res.fs)] * n_ch
+    elif np.ndim(f_range) == 1:
+        ranges = [tuple(f_range)] * n_ch
+    else:
+        ranges = [tuple(r) for r in f_range]
+        if len(ranges) != n_ch:
+            raise InvalidInputError(f"{len(ranges)} f_range entries for {n_ch} channels")
     val = np.zeros((len(terms), n_ch))
     se = np.full((len(terms), n_ch), np.nan)
+    tau0 = 1.0 / res.fs
     for c in range(n_ch):
-        y = p2[:, c]
+        lo, hi = ranges[c]
+        ok = (res.f >= lo) & (res.f <= hi)
+        if ok.sum() < len(terms) + 1:
+            raise InsufficientDataError(f"only {int(ok.sum())} PSD points in f_range=({lo:g}, {hi:g}) Hz")
+        f = res.f[ok]
+        w = 2 * np.pi * f
+        shapes = {"Q": w**2 * tau0, "N": np.ones_like(f), "B": 1.0 / w, "K": 1.0 / w**2}
+        G = np.column_stack([shapes[t] for t in terms])
+        cnt = res.counts[ok]
+        y = p_all[ok, c]
         model = y.copy()
         for _ in range(4):
             sw = np.sqrt(cnt) / np.maximum(model, 1e-300)
@@ -222,7 +230,8 @@ def fit_psd(res: PsdResult, terms: Sequence[str] = ("N", "B", "K"), f_range: tup
             cov = np.linalg.pinv(Gw[:, keep].T @ Gw[:, keep])
             se[keep, c] = np.sqrt(np.diag(cov)) / (2 * np.sqrt(th[keep]))
         val[:, c] = np.sqrt(th)
-    return PsdFit(names=tuple(terms), value=val, se=se, channels=res.channels, f_range=(float(lo), float(hi)))
+    return PsdFit(names=tuple(terms), value=val, se=se, channels=res.channels,
+                  f_range=tuple((float(a), float(b)) for a, b in ranges))
 
 
 def psd_readout(res: PsdResult, term: str, f_band: tuple[float, float]) -> NDArray[np.float64]:

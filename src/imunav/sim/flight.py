@@ -14,7 +14,7 @@ Two families:
   rows), position its running sum; φ₀ = 5° (the thesis's "5" read as degrees).
   The true velocity cancels in the filter measurement.
 * **General flights** (:func:`simulate_flight`, not in the thesis): cruise,
-  turns (standard-rate coordinated turns) and manoeuvring profiles (turns,
+  turns (coordinated 90° turns at half standard rate) and manoeuvring profiles (turns,
   climbs, descents, speed changes) with a constant NED wind plus Dryden
   turbulence (MIL-F-8785C forms, L_u = 2L_v = 2L_w = 533 m above 2000 ft),
   each sensor at its own rate: air data (static / total pressure, TAT,
@@ -186,7 +186,7 @@ def dryden_gusts(n: int, dt: float, airspeed: float, sigma: float | tuple[float,
 class FlightConfig(ResultMixin):
     """A simulated flight (SI; angles in degrees where named so).
 
-    profile : "cruise", "turns" (alternating 90° standard-rate turns) or
+    profile : "cruise", "turns" (alternating 90° turns at 1.5°/s) or
         "manoeuvre" (turns + climbs/descents + speed changes).
     wind_ned : constant mean wind (velocity of the air mass, m/s, NED).
     turbulence : "none", "light", "moderate", "severe" (Dryden σ 0/1.5/3/6.5 m/s).
@@ -281,11 +281,12 @@ def _profiles(cfg: FlightConfig, t: Array) -> tuple[Array, Array, Array]:
     V = np.full(n, cfg.tas)
     std = np.deg2rad(3.0)  # standard-rate turn
     if cfg.profile in ("turns", "manoeuvre"):
-        # 30 s turn (90°) every 120 s, alternating direction, smoothed entry/exit (5 s)
+        # 90° turn at half standard rate (1.5°/s, 60 s) every 120 s, alternating direction,
+        # smoothed entry/exit (5 s ramps)
         ph = np.mod(t, 120.0)
         sgn = np.where(np.mod(np.floor(t / 120.0), 2) == 0, 1.0, -1.0)
-        ramp = np.clip(np.minimum(ph - 60.0, 95.0 - ph) / 5.0, 0.0, 1.0)
-        psidot = sgn * std * ramp * 90.0 / (3.0 * 30.0)
+        ramp = np.clip(np.minimum(ph - 50.0, 115.0 - ph) / 5.0, 0.0, 1.0)
+        psidot = sgn * 0.5 * std * ramp
     if cfg.profile == "manoeuvre":
         ph2 = np.mod(t + 30.0, 240.0)
         gamma = np.deg2rad(3.0) * (np.clip(np.minimum(ph2, 60 - ph2) / 5.0, 0, 1)

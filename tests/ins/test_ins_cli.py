@@ -1,0 +1,42 @@
+"""`imunav zupt` commands on the shared data."""
+
+from __future__ import annotations
+
+import json
+
+import pytest
+from typer.testing import CliRunner
+
+from conftest import data_path
+from imunav.cli.main import app
+from imunav.learn.lstm import DEFAULT_MODEL_PATH
+
+runner = CliRunner()
+
+
+def test_zupt_run_reproduces_published_error(tmp_path):
+    f = data_path("foot", "pyshoe_vicon", "2017-11-22-11-22-03.mat")
+    out = tmp_path / "run.json"
+    r = runner.invoke(app, ["zupt", "run", str(f), "--detector", "labels:shoe", "--json", str(out),
+                            "--out", str(tmp_path / "traj.npz")])
+    assert r.exit_code == 0, r.output
+    summary = json.loads(out.read_text())
+    assert summary["error_2d_m"] == pytest.approx(0.032, abs=0.02)  # trial_error[0] of the file
+    assert (tmp_path / "traj.npz").stat().st_size > 0
+    r = runner.invoke(app, ["zupt", "run", str(f), "--detector", "labels:nothing"])
+    assert r.exit_code != 0
+    r = runner.invoke(app, ["zupt", "run", str(f), "--detector", "magic"])
+    assert r.exit_code == 2 and "unknown detector" in r.output
+
+
+def test_zupt_benchmark_json(tmp_path):
+    if not DEFAULT_MODEL_PATH.is_file():
+        pytest.skip("shipped model not built yet")
+    d = data_path("foot", "pyshoe_vicon")
+    out = tmp_path / "bench.json"
+    r = runner.invoke(app, ["zupt", "benchmark", str(d), "--limit", "1", "--json", str(out)])
+    assert r.exit_code == 0, r.output
+    res = json.loads(out.read_text())
+    row = res["trials"][0]
+    assert set(row) == {"trial", "shoe", "ared", "amvd", "mbgtd", "lstm"}
+    assert row["lstm"] < 0.5
