@@ -12,7 +12,23 @@ is a module ``imunav.labsteps.<name>`` with
 Steps share objects through ``ctx.artifacts`` (a dict); the keys written by
 each step are listed in its module docstring.  Each step's options come from
 the TOML table named after it (``ctx.options``); ``[lab]`` holds
-``seed`` and ``steps`` (a subset / order of :data:`STEPS`).
+``seed``, ``title`` and ``steps`` (a subset / order of :data:`STEPS`).
+
+Two modes (:func:`parse_lab_config` validates the TOML into a
+:class:`LabConfig`):
+
+* **virtual IMU** (no ``[recordings]``): ``simulate_tests`` makes the test
+  recordings with the built-in virtual IMU, the other steps analyse them;
+* **real recordings**: ``[recordings.<name>]`` tables name files, their format,
+  column mapping and units, and which test each one is (see
+  :mod:`imunav.labsteps.recordings`); the ``recordings`` step loads them into
+  the same artifacts and the simulation-only steps (:data:`SIMULATION_ONLY`)
+  are left out of the default step list.
+
+A ``[spec.<parameter>]`` table (min / max, unit; names of
+:mod:`imunav.report.catalog`) is a datasheet-style specification: every
+parameter the steps report in ``StepResult.parameters`` is checked against
+it and the report opens with the pass / fail table.
 
 Outputs in ``out_dir`` (each written atomically): ``summary.json`` (machine
 readable: every step's summary, timing, verdict, error), ``summary.md`` and
@@ -38,7 +54,7 @@ import time
 import tomllib
 import traceback
 import zlib
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any, Iterator, Mapping
 
@@ -47,7 +63,8 @@ import numpy as np
 from imunav.errors import ConfigError
 
 __all__ = ["STEPS", "SIMULATION_ONLY", "LabConfig", "LabContext", "StepResult", "StepRecord", "LabResult", "run_lab",
-           "load_lab_config", "parse_lab_config", "available_steps", "embed_png"]
+           "load_lab_config", "parse_lab_config", "available_steps", "embed_png", "display_parameters",
+           "harvest_parameters"]
 
 #: Step modules (``imunav.labsteps.<name>``) run by default, in order.
 STEPS: list[str] = [
@@ -57,6 +74,7 @@ STEPS: list[str] = [
     "temperature",
     "compensation",
     "attitude",
+    "airdata",
 ]
 
 
@@ -478,10 +496,15 @@ def run_lab(
             ctx.step = name
             prog.update(overall, description=f"lab: {title}")
             t0 = time.perf_counter()
+            before = {k: id(v) for k, v in ctx.artifacts.items()}
             try:
                 res = mod.run(ctx)
                 if not isinstance(res, StepResult):
                     raise TypeError(f"step {name}.run returned {type(res).__name__}, not StepResult")
+                if not res.parameters:
+                    found = harvest_parameters({k: v for k, v in ctx.artifacts.items() if before.get(k) != id(v)})
+                    if found:
+                        res = replace(res, parameters=found)
                 records.append(StepRecord(name, title, res, time.perf_counter() - t0))
             except Exception:  # a failing step is reported; the others still run
                 records.append(StepRecord(name, title, None, time.perf_counter() - t0, traceback.format_exc()))
@@ -493,6 +516,43 @@ def run_lab(
     _write_text(out / "summary.md", _markdown(result))
     _write_html(result, ctx, typed.title)
     return result
+
+
+def harvest_parameters(objects: Mapping[str, Any]) -> dict[str, tuple[float, float | None]]:
+    """Spec-checkable parameters of the results a step left in the artifacts.
+
+    Recognises calibrations (:class:`imunav.calib.CalibrationResult` /
+    :class:`imunav.calib.ImuCalibration` with standard errors) and noise fits
+    (:class:`imunav.noise.NoiseFit` of a gyro or accelerometer triad), also
+    inside dicts, lists and tuples one level down; names as in
+    :mod:`imunav.report.catalog`.  Steps that fill ``StepResult.parameters``
+    themselves are not harvested.
+    """
+    from imunav.report.catalog import calibration_estimates, noise_estimates
+
+    out: dict[str, tuple[float, float | None]] = {}
+
+    def visit(o: Any, depth: int) -> None:
+        cls = type(o).__name__
+        if cls == "CalibrationResult":
+            out.update(calibration_estimates(o.calibration, o.stderr))
+        elif cls == "ImuCalibration" and getattr(o, "stderr", None):
+            out.update(calibration_estimates(o, o.stderr))
+        elif cls == "NoiseFit" and getattr(o, "quantity", None) in ("gyro", "accel") and len(o.channels) == 3:
+            out.update(noise_estimates(o, o.quantity))
+        elif depth < 2 and isinstance(o, Mapping):
+            for v in o.values():
+                visit(v, depth + 1)
+        elif depth < 2 and isinstance(o, (list, tuple)):
+            for v in o:
+                visit(v, depth + 1)
+
+    for v in objects.values():
+        try:
+            visit(v, 0)
+        except Exception:  # noqa: BLE001 - harvesting is best effort; the step's own report is unaffected
+            continue
+    return out
 
 
 def _spec_checks(records: list[StepRecord], spec: Mapping[str, Any]) -> list[Any]:
@@ -542,6 +602,12 @@ def _markdown(result: LabResult) -> str:
     ]
     for s in result.steps:
         lines.append(f"| {s.title} (`{s.name}`) | {_verdict_word(s.passed)} | {s.seconds:.1f} |")
+    checks = [c for c in result.spec_checks if c.limit is not None]
+    if checks:
+        lines += ["", "## Specification", "", "| parameter | value (SI) | ±1σ (SI) | limit | verdict |", "|---|---|---|---|---|"]
+        for c in sorted(checks, key=lambda c: (c.passed is not False, c.name)):
+            lines.append(f"| {c.name} | {c.value_si:.6g} | {'' if c.sigma_si is None else f'{c.sigma_si:.3g}'} | "
+                         f"{c.limit.describe()} | {_verdict_word(c.passed)} |")
     for s in result.steps:
         lines += ["", f"## {s.title}", ""]
         if s.error:
@@ -632,6 +698,9 @@ def _write_html(result: LabResult, ctx: LabContext, title: str) -> None:
         custom = getattr(mod, "report", None)
         if custom is not None:
             custom(sec, s.result, ctx)
+            if s.result.parameters and not getattr(mod, "RENDERS_PARAMETERS", False):
+                sec.parameters(display_parameters(s.result.parameters, ctx.lab.spec if ctx.lab else None),
+                               "Estimated parameters (display units, ±1σ)")
         else:
             sec.table([{"key": k, "value": v} for k, v in _flat(_jsonable(s.result.summary))], "summary")
             for caption, rows in s.result.tables:

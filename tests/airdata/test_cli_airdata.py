@@ -13,7 +13,7 @@ runner = CliRunner()
 
 def test_thesis_command_writes_covariance_sequence(tmp_path):
     out = tmp_path / "thesis.json"
-    res = runner.invoke(app, ["airdata", "thesis", "--runs", "8", "--json", str(out)])
+    res = runner.invoke(app, ["airdata", "thesis", "--runs", "8", "--robust-methods", "gate2,nis", "--json", str(out)])
     assert res.exit_code == 0, res.output
     rep = json.loads(out.read_text())
     np.testing.assert_allclose(rep["covariance_sequence"]["P44"], rep["covariance_sequence"]["P44_thesis"], atol=1e-4)
@@ -33,8 +33,10 @@ def test_simulate_run_and_faults(tmp_path):
     fl = tmp_path / "flight.npz"
     res = runner.invoke(app, ["airdata", "simulate", "cruise", "--duration", "30", "--out", str(fl)])
     assert res.exit_code == 0, res.output
-    res = runner.invoke(app, ["airdata", "run", str(fl), "--json", str(tmp_path / "r2.json")])
+    png = tmp_path / "lh.png"
+    res = runner.invoke(app, ["airdata", "run", str(fl), "--json", str(tmp_path / "r2.json"), "--plot", str(png)])
     assert res.exit_code == 0, res.output
+    assert png.stat().st_size > 5000
     fj = tmp_path / "f.json"
     res = runner.invoke(app, ["airdata", "faults", "--kind", "bias", "--channels", "0", "--runs", "5", "--json", str(fj)])
     assert res.exit_code == 0, res.output

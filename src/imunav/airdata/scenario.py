@@ -55,6 +55,7 @@ __all__ = [
     "monte_carlo_thesis",
     "thesis_report",
     "load_config",
+    "thesis_tables",
 ]
 
 Array = NDArray[np.float64]
@@ -410,7 +411,37 @@ def thesis_report(n_runs: int = 200, rng: int = 0, **kw) -> dict:
         single[kind] = {"fault_step": d.scenario.fault_step, "detection_step": out,
                         "thesis_detection_step": {"variance": {"alg1": 152, "alg2": 160, "alg3": 153},
                                                   "bias": {"alg3": 152}}[kind]}
-    return {"covariance_sequence": cov, "monte_carlo": mc.to_dict(), "single_run_detection": single}
+    return {"covariance_sequence": cov, "monte_carlo": mc.to_dict(), "single_run_detection": single,
+            "thesis_tables": thesis_tables(rng)}
+
+
+def thesis_tables(rng: int = 0) -> dict:
+    """One seeded run laid out like the thesis's Tables 6.1 and 6.3 (x axis).
+
+    Table 6.1: wind x error of the difference loop and of the KF at iterations
+    50…500.  Table 6.3: x wind error and P44 of the optimal and the robust
+    filter (thesis gate ±2 and vector χ² gate) with outliers at steps
+    100/200/300/400, at iterations 50, 100, 101, …, 500.  Errors are
+    estimate − truth; iteration n is row n − 2.
+    """
+    its1 = list(range(50, 501, 50))
+    d = simulate_thesis(ThesisScenario(), rng)
+    r = run_thesis_filter(d.z)
+    rows = thesis_row(np.asarray(its1))
+    t61 = [{"iteration": i, "difference_loop": float(d.z[k, 0] - d.wind_true[k, 0]),
+            "kf": float(r.wind[k, 0] - d.wind_true[k, 0])} for i, k in zip(its1, rows)]
+    its3 = [50, 100, 101, 150, 200, 201, 250, 300, 301, 350, 400, 401, 450, 500]
+    do = simulate_thesis(ThesisScenario(kind="outliers"), rng)
+    runs = {"optimal": run_thesis_filter(do.z), "gate2": run_thesis_filter(do.z, robust="gate", gate_m=2.0),
+            "nis": run_thesis_filter(do.z, robust="nis")}
+    t63 = []
+    for i, k in zip(its3, thesis_row(np.asarray(its3))):
+        row = {"iteration": i}
+        for name, rr in runs.items():
+            row[f"{name}_err"] = float(rr.wind[k, 0] - do.wind_true[k, 0])
+            row[f"{name}_P44"] = float(rr.P_diag[k, 3])
+        t63.append(row)
+    return {"table_6_1": t61, "table_6_3": t63, "seed": int(rng)}
 
 
 def load_config(path) -> "ThesisScenario | object":

@@ -339,6 +339,9 @@ Example: imunav airdata thesis --runs 50 --json thesis.json
         runs: int = typer.Option(200, "--runs", help="Monte Carlo runs."),
         seed: int = typer.Option(0, "--seed", help="Random seed."),
         pfa: float = typer.Option(0.01, "--pfa", help="Per-step false-alarm rate of the calibrated thresholds."),
+        robust_methods: str = typer.Option("gate2,gate3,nis,isolate,huber", "--robust-methods",
+                                           help="Robust filters to compare (gate<m>, nis, isolate, huber); "
+                                                "gate2 and nis are required."),
     ) -> None:
         from rich.console import Console
 
@@ -348,8 +351,11 @@ Example: imunav airdata thesis --runs 50 --json thesis.json
         try:
             if runs < 2:
                 raise InvalidInputError(f"--runs must be >= 2, got {runs}")
+            methods = tuple(m.strip() for m in robust_methods.split(",") if m.strip())
+            if "gate2" not in methods or "nis" not in methods:
+                raise InvalidInputError("--robust-methods must include gate2 and nis (the thesis gate and the χ² gate)")
             with Console(stderr=True).status(f"thesis scenarios, {runs} Monte Carlo runs"):
-                rep = thesis_report(runs, seed, p_false_alarm=pfa)
+                rep = thesis_report(runs, seed, p_false_alarm=pfa, robust_methods=methods)
         except InvalidInputError as exc:
             _fail(exc)
             return

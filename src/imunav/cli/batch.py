@@ -11,7 +11,7 @@ import typer
 app = typer.Typer(
     help="Process a folder of recordings (one per unit of a production batch) in parallel, "
     "with a summary table and per-unit result files.\n\n"
-    "Example: imunav batch simulate 4 --out batch --fs 20 --dwell 2 && imunav batch calibrate batch",
+    "Example: imunav batch simulate 4 --out batch --fs 20 --dwell 4 && imunav batch calibrate batch",
     no_args_is_help=True,
 )
 
@@ -117,7 +117,7 @@ def simulate_cmd(
 
     Writes <unit>.<format>, <unit>_rate.<format>, segments.json, rate_segments.json, truth/<unit>.json and batch.json.
 
-    Example: imunav batch simulate 4 --out batch --fs 20 --dwell 2
+    Example: imunav batch simulate 4 --out batch --fs 20 --dwell 4
     """
     from imunav.batch import simulate_batch
     from imunav.errors import InvalidInputError

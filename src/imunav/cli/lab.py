@@ -8,9 +8,11 @@ from typing import Optional
 
 import typer
 
-_HELP = """Run the lab and write a report folder (index.html, summary.md, summary.json, data/).
+_HELP = """Run the lab and write a report folder (index.html, summary.md, summary.json, data/, figures/).
 
-With no arguments it runs every step on the built-in virtual IMU (preset thesis_sim): the 100-position static test, the 120-step rate-table test and a 1 h static record are simulated, then analysed by the steps that follow.  A TOML file (--config) sets the options of each step (a table named after the step, e.g. simulate_tests) and the lab table's seed and steps. Exit status 1 when a step fails with an error.
+With no arguments it runs every step on the built-in virtual IMU (preset thesis_sim): the 100-position static test, the 120-step rate-table test and a 1 h static record are simulated and analysed, a thermal test gives B(T) and S(T), and the calibration is applied to a fresh recording to check the residual errors against the reported uncertainty.
+
+With a TOML lab definition (--config) that has [recordings.<name>] tables it runs on real recordings instead (path, format, column mapping, units, which test). A [spec.<parameter>] table gives datasheet limits (pass / fail in the report); a table named after a step sets its options; [lab] sets seed, title and steps. See examples/lab_real.toml and examples/lab_spec.toml. Exit status 1 when a step fails with an error, 2 for a bad lab definition.
 
 Example: imunav lab --out lab-report --seed 0
 """
@@ -50,6 +52,12 @@ def register(app: typer.Typer) -> None:
             verdict = "ERROR" if s.error else {None: "n/a", True: "PASS", False: "FAIL"}[s.passed]
             table.add_row(s.title, verdict, f"{s.seconds:.1f}")
         Console().print(table)
+        checks = [c for c in result.spec_checks if c.limit is not None]
+        if checks:
+            failed = [c.name for c in checks if c.passed is False]
+            Console().print(f"specification: {len(checks)} checks, {len(failed)} failed"
+                            + (f" ({escape(', '.join(failed[:8]))}{' …' if len(failed) > 8 else ''})" if failed else ""),
+                            soft_wrap=True, highlight=False)
         for s in result.steps:
             if s.error:
                 console.print(f"[red]{s.name} failed:[/red]\n{escape(s.error)}", soft_wrap=True, highlight=False)

@@ -23,7 +23,8 @@ passes when the normalised errors ``z = error / σ`` have an RMS between 0.5
 and 2 for both sensors (the reported uncertainty is realistic) and the
 residual errors are at least 10× below the raw ones.
 
-Real recordings: the calibration is applied to every recording; on each
+Real recordings: the calibration is applied to every recording of the same
+unit (``unit`` in ``[recordings.<name>]``); on each
 static interval the magnitude of the compensated specific force must equal
 local gravity and the gyro mean the (negligible) Earth rate.  The table
 shows both before and after compensation.
@@ -45,6 +46,8 @@ from imunav.errors import ConfigError
 from imunav.lab import LabContext, StepResult
 from imunav.units import DEG, G0
 
+#: The report hook shows the parameters itself.
+RENDERS_PARAMETERS = True
 TITLE = "Compensation: calibration applied, residual errors vs reported uncertainty"
 
 _DEFAULTS = {"positions": 12, "dwell_s": 10.0, "rate_steps": 6, "rate_dps": 100.0, "fs": None, "trim_s": 1.0}
@@ -218,18 +221,30 @@ def _virtual(ctx: LabContext, cal: Any, stderr: dict, opts: dict) -> dict[str, A
     return segs_out
 
 
+def _calibrated_unit(ctx: LabContext) -> str | None:
+    """The device whose tests gave the calibration (None: unknown, apply to all)."""
+    specs = ctx.artifacts.get("recording_specs", {})
+    for test in ("hundred_position", "multipose", "rate_table"):
+        if test in specs:
+            return specs[test].unit
+    return None
+
+
 def _rms(x: np.ndarray) -> float:
     x = np.asarray(x, float)
     x = x[np.isfinite(x)]
     return float(np.sqrt(np.mean(x**2))) if x.size else float("nan")
 
 
-def _real(ctx: LabContext, cal: Any) -> dict[str, Any]:
+def _real(ctx: LabContext, cal: Any, unit: str | None) -> dict[str, Any]:
     from imunav.timeseries import static_intervals
 
     g = ctx.artifacts.get("sim", {}).get("g") or G0
+    specs = ctx.artifacts.get("recording_specs", {})
     rows = []
     for name, d in ctx.artifacts.get("recordings", {}).items():
+        if unit is not None and name in specs and specs[name].unit != unit:
+            continue  # another device: its own calibration would be needed
         try:
             st = static_intervals(d, window_s=1.0, min_duration_s=2.0)
         except Exception:  # noqa: BLE001 - a recording without static parts is simply not checked
@@ -286,12 +301,13 @@ def run(ctx: LabContext) -> StepResult:
                 truth = {k: val for k, (val, _) in calibration_estimates(tc, full).items()}
             ctx.artifacts["compensation"] = {"rows": v["rows"], "truth": truth}
         else:
-            r = _real(ctx, cal)
+            unit = _calibrated_unit(ctx)
+            r = _real(ctx, cal, unit)
             rows = r["rows"]
             comp = np.array([abs(x["|f| − g compensated (mg)"]) for x in rows]) if rows else np.array([])
             raw = np.array([abs(x["|f| − g raw (mg)"]) for x in rows]) if rows else np.array([])
             passed = None if not rows else bool(np.median(comp) <= np.median(raw))
-            summary = {"calibration": how, "static_intervals": len(rows),
+            summary = {"calibration": how, "unit": unit, "static_intervals": len(rows),
                        "median_abs_norm_error_mg": {"raw": float(np.median(raw)) if rows else None,
                                                     "compensated": float(np.median(comp)) if rows else None}}
             tables = [("Static intervals of the recordings: specific-force magnitude vs local gravity and gyro "

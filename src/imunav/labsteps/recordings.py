@@ -7,6 +7,8 @@ Each table describes one recording file and which test it is::
                                                    # (IMUNAV_DATA, else ../shared/data);
                                                    # other paths: relative to the TOML file
     test = "static"            # static | multiposition | rate_table | multipose
+    unit = "ADIS16405 #2"      # optional: the device (default "imu"); a calibration is
+                               # applied only to recordings of the same unit
     format = "npz"             # optional: from the suffix
     units = { gyro = "deg/s", accel = "g" }        # units in the file (SI by default)
     fs = 100.0                 # when the file has no time column
@@ -47,7 +49,7 @@ TESTS = {"static": "static_long", "multiposition": "hundred_position", "rate_tab
 
 _READ_KEYS = ("format", "columns", "units", "scales", "offsets", "fs", "t0", "delimiter", "skiprows", "nan_policy",
               "mag_unit")
-_LAB_KEYS = ("path", "test", "segments", "max_duration_s", "t_start_s", "init_s", "wait_s", "gravity",
+_LAB_KEYS = ("path", "test", "unit", "segments", "max_duration_s", "t_start_s", "init_s", "wait_s", "gravity",
              "latitude_deg", "description")
 
 
@@ -80,6 +82,7 @@ class RecordingSpec:
     gravity: float | None = None
     latitude_deg: float | None = None
     description: str = ""
+    unit: str = "imu"
 
     @property
     def artifact(self) -> str:
@@ -162,6 +165,7 @@ def parse_recordings(table: Mapping[str, Any], base_dir: Path, where: str = "lab
             t_start_s=_num(tab, "t_start_s", w, positive=False) or 0.0, max_duration_s=_num(tab, "max_duration_s", w),
             init_s=_num(tab, "init_s", w) or 30.0, wait_s=_num(tab, "wait_s", w) or 3.0,
             gravity=_num(tab, "gravity", w), latitude_deg=lat, description=str(tab.get("description", "")),
+            unit=str(tab.get("unit", "imu")),
         )
     return out
 
@@ -197,7 +201,7 @@ def run(ctx: LabContext) -> StepResult:
                 sim["lat"] = np.deg2rad(sp.latitude_deg)
             gaps = data.gaps()
             rows.append({
-                "recording": name, "test": sp.test, "file": sp.path.name, "samples": int(data.n),
+                "recording": name, "unit": sp.unit, "test": sp.test, "file": sp.path.name, "samples": int(data.n),
                 "rate (Hz)": round(float(data.fs), 6), "duration (s)": round(float(data.duration), 3),
                 "gaps": len(gaps),
                 "gyro mean (deg/s)": ", ".join(f"{v:.4g}" for v in np.rad2deg(data.gyro.mean(axis=0))),

@@ -38,6 +38,8 @@ from imunav.errors import ConfigError
 from imunav.lab import LabContext, StepResult
 from imunav.units import DEG, G0
 
+#: The report hook shows the parameters itself.
+RENDERS_PARAMETERS = True
 TITLE = "Temperature model: bias and scale factor vs temperature (thermal test on the virtual IMU)"
 
 _DEFAULTS: dict[str, Any] = {
