@@ -140,3 +140,27 @@ def test_bad_inputs():
         earth.normal_gravity(np.nan)
     with pytest.raises(ShapeError, match="ref_lla must be one point"):
         earth.lla_to_ned([0, 0, 0], [[0, 0, 0]])
+
+
+from hypothesis import given, settings  # noqa: E402
+from hypothesis import strategies as st  # noqa: E402
+
+
+@settings(max_examples=200, deadline=None)
+@given(
+    lat=st.floats(-np.pi / 2, np.pi / 2),
+    lon=st.floats(-np.pi, np.pi),
+    h=st.floats(-1e4, 1e6),
+    dn=st.floats(-1e5, 1e5),
+    de=st.floats(-1e5, 1e5),
+    dd=st.floats(-1e4, 1e4),
+)
+def test_round_trips_property(lat, lon, h, dn, de, dd):
+    lla = np.array([lat, lon, h])
+    back = earth.ecef_to_lla(earth.lla_to_ecef(lla))
+    assert abs(back[0] - lat) < 1e-12
+    if abs(lat) < np.pi / 2 - 1e-6:  # longitude is undefined at the poles
+        assert abs((back[1] - lon + np.pi) % (2 * np.pi) - np.pi) < 1e-12
+    assert abs(back[2] - h) < 1e-8  # 1e-8 m up to 1000 km altitude (ulp of ECEF there is 1.9e-9 m)
+    ned = np.array([dn, de, dd])
+    np.testing.assert_allclose(earth.lla_to_ned(earth.ned_to_lla(ned, lla), lla), ned, rtol=0, atol=1e-7)

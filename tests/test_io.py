@@ -12,7 +12,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 from hypothesis.extra import numpy as hnp
 
-from conftest import data_path
+from shared_data import data_path
 from imunav.errors import FileFormatError, InvalidInputError, NonFiniteError, ShapeError, TimeOrderError, UnitError
 from imunav.io import FORMATS, read_imu, write_imu
 from imunav.timeseries import ImuData
@@ -141,6 +141,10 @@ def test_csv_column_mapping_units_counts_and_delimiters(tmp_path):
     d2 = read_imu(p2, units={"gyro": "deg/s", "accel": "g", "mag": "nT"})
     assert d2.mag_unit == "nT" and d2.mag[0].tolist() == [7, 8, 9]
     assert d2.accel[0, 0] == pytest.approx(4 * G0)
+    # spreadsheet export with a byte-order mark and CRLF line ends
+    p4 = tmp_path / "excel.csv"
+    p4.write_bytes("\ufefftime,gx,gy,gz,ax,ay,az\r\n0,1,2,3,4,5,6\r\n1,1,2,3,4,5,6\r\n".encode("utf-8"))
+    assert read_imu(p4).t.tolist() == [0.0, 1.0]
     # no header: positional mapping, no time column: fs
     p3 = tmp_path / "raw.csv"
     p3.write_text("1,2,3,4,5,6\n1,2,3,4,5,6\n1,2,3,4,5,6\n")
@@ -179,6 +183,15 @@ def test_truncated_file(tmp_path, fmt):
         cut.write_bytes(raw[: len(raw) // 2])
         match = "cannot read|truncated|too short"
     with pytest.raises(FileFormatError, match=match):
+        read_imu(cut)
+
+
+def test_csv_written_by_imunav_cut_inside_last_number(tmp_path):
+    p = _good_file(tmp_path, "csv", n=50)
+    raw = p.read_bytes()
+    cut = tmp_path / "cut.csv"
+    cut.write_bytes(raw[:-3])  # the last row keeps all its fields but loses digits
+    with pytest.raises(FileFormatError, match="does not end with a newline; it looks truncated"):
         read_imu(cut)
 
 
@@ -317,3 +330,19 @@ def test_read_adis16405_npz():
     d = read_imu(data_path("adis16405", "adis16405_imu2.npz"), units={"gyro": "deg/s", "accel": "g"})
     assert d.n == 1_000_000 and d.fs == pytest.approx(100.0)
     assert d.accel[:, 2].mean() / G0 == pytest.approx(-1.018, abs=0.005)
+
+
+def test_csv_iso_datetime_time_column(tmp_path):
+    p = tmp_path / "logger.csv"
+    p.write_text(
+        "timestamp,gx,gy,gz,ax,ay,az\n"
+        "2024-05-01T12:00:00.000Z,0,0,0,0,0,-9.8\n"
+        "2024-05-01T12:00:00.010Z,0,0,0,0,0,-9.8\n"
+        "2024-05-01T12:00:00.025Z,0,0,0,0,0,-9.8\n"
+    )
+    d = read_imu(p)
+    np.testing.assert_allclose(d.t, [0.0, 0.010, 0.025], rtol=0, atol=1e-15)
+    assert d.meta["t_origin"].startswith("2024-05-01T12:00:00")
+    p.write_text("timestamp,gx,gy,gz,ax,ay,az\n2024-05-01T12:00:00Z,0,0,0,0,0,0\nyesterday,0,0,0,0,0,0\n")
+    with pytest.raises(FileFormatError, match=r"time column 'timestamp' holds date-times but data row 1 \('yesterday'\)"):
+        read_imu(p)

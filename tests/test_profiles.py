@@ -138,6 +138,12 @@ def test_static_and_generic_multiposition():
     np.testing.assert_allclose(st.t_stop - st.t_start, [2, 3, 4])
     np.testing.assert_allclose(st.up_b, up / np.linalg.norm(up, axis=1)[:, None], atol=1e-12)
     assert prof.to_dict()["segment_table"]["kind"][1] == "transition"
+    tr = st.trim(0.5)
+    np.testing.assert_array_equal(tr.i_start - st.i_start, 25)
+    np.testing.assert_array_equal(st.i_stop - tr.i_stop, 25)
+    np.testing.assert_allclose(prof.trajectory.t[tr.i_start], tr.t_start)
+    with pytest.raises(InvalidInputError, match=r"empties segments \[0\]"):
+        st.trim(1.0)
 
 
 def test_bad_inputs():

@@ -102,3 +102,23 @@ def test_unknown_preset():
     with pytest.raises(InvalidInputError, match="unknown IMU preset 'hg1700'.*thesis_sim"):
         presets.get("hg1700")
     assert presets.get("Thesis-Sim").name == "thesis_sim"
+
+
+def test_example_toml_loads_with_display_units():
+    from pathlib import Path
+
+    from imunav.units import from_display
+
+    p = Path(__file__).resolve().parents[1] / "examples" / "imu_error_model.toml"
+    m = ImuErrorModel.from_toml(p)
+    assert m.name == "example_mems"
+    assert m.gyro.noise_density[0] == pytest.approx(from_display(0.15, "deg/sqrt(h)"))
+    assert m.gyro.random_walk[0] == pytest.approx(from_display(3.0, "deg/h/sqrt(h)"))
+    assert m.gyro.bias_instability.b[0] == pytest.approx(from_display(5.0, "deg/h"))
+    assert m.gyro.misalignment[0, 2] == pytest.approx(-0.5e-3)
+    assert m.gyro.full_scale[0] == pytest.approx(250 * DEG)
+    assert m.accel.full_scale[0] == pytest.approx(16 * G0)
+    assert m.accel.bias[2] == pytest.approx(20e-3 * G0)
+    assert m.accel.bias_instability.tau[0] == pytest.approx(120.0)
+    assert m.g_sensitivity[2, 2] == pytest.approx(0.02 * DEG / G0)
+    assert m.gyro.bias_temp_poly[0, 2] == pytest.approx(0.02 * DEG)

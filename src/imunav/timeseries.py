@@ -6,7 +6,14 @@ strictly increasing), angular rate ``gyro`` (rad/s, body FRD), specific force
 magnetic field ``mag`` (kept in ``mag_unit``) and the temperature ``temp``
 (°C).  The constructor validates everything and raises an
 :mod:`imunav.errors` exception naming the rows and columns at fault.  Units
-other than SI are declared only at the edge, in :meth:`ImuData.from_arrays`.
+other than SI are declared only at the edge, in :meth:`ImuData.from_arrays`
+(deg/s, g, raw counts with per-axis scale and offset, ms time stamps ...).
+
+Also here: :meth:`ImuData.gaps` (intervals longer than 1.5 × the median),
+:func:`static_intervals` (moving-variance rest detector, numba kernel, 1e7
+samples in seconds), :func:`detect_saturation` (samples at a full scale or
+stuck at a rail value) and :func:`describe` (the summary behind
+``imunav info``).  Files are read and written by :mod:`imunav.io`.
 """
 
 from __future__ import annotations
@@ -19,7 +26,14 @@ from typing import TYPE_CHECKING, Any, Literal
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from imunav.errors import InsufficientDataError, InvalidInputError, NonFiniteError, ShapeError, TimeOrderError
+from imunav.errors import (
+    InsufficientDataError,
+    InvalidInputError,
+    NonFiniteError,
+    SaturationError,
+    ShapeError,
+    TimeOrderError,
+)
 from imunav.units import to_si
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -96,7 +110,8 @@ class ImuData:
                 continue
             a = np.array(v, dtype=np.float64, copy=True)
             if a.ndim != 2 or a.shape[1] != 3:
-                raise ShapeError(f"{name} must have shape (N, 3) = ({n}, 3), got {a.shape}")
+                hint = f"; it looks transposed: pass {name}.T" if a.shape == (3, n) else ""
+                raise ShapeError(f"{name} must have shape (N, 3) = ({n}, 3), got {a.shape}{hint}")
             if a.shape[0] != n:
                 raise ShapeError(f"{name} has {a.shape[0]} rows but t has {n}; every channel needs one row per time stamp")
             object.__setattr__(self, name, a)
@@ -165,10 +180,10 @@ class ImuData:
         time_unit: str = "s",
         gyro_unit: str = "rad/s",
         accel_unit: str = "m/s^2",
-        gyro_scale: float | None = None,
-        accel_scale: float | None = None,
-        gyro_offset: float = 0.0,
-        accel_offset: float = 0.0,
+        gyro_scale: float | ArrayLike | None = None,
+        accel_scale: float | ArrayLike | None = None,
+        gyro_offset: float | ArrayLike = 0.0,
+        accel_offset: float | ArrayLike = 0.0,
         mag_unit: str = "uT",
         nan_policy: NanPolicy = "raise",
         meta: dict[str, Any] | None = None,
@@ -180,7 +195,9 @@ class ImuData:
         ``gyro_unit`` may be ``"rad/s"``, ``"deg/s"``, ``"rpm"`` or
         ``"counts"`` (then ``gyro_scale`` in rad/s per count is required);
         ``accel_unit`` ``"m/s^2"``, ``"g"``, ``"mg"`` or ``"counts"`` (with
-        ``accel_scale`` in m/s² per count).  ``nan_policy``: ``"raise"``
+        ``accel_scale`` in m/s² per count); with counts, ``value_si =
+        (counts - offset) * scale`` where scale and offset are scalars or
+        per-axis (3,) arrays.  ``nan_policy``: ``"raise"``
         (default) names the offending rows; ``"drop"`` removes rows with any
         NaN; ``"interpolate"`` fills NaN samples linearly in time.  What was
         done is recorded in ``meta["nan_policy"]`` (policy, affected rows and
@@ -202,8 +219,8 @@ class ImuData:
         elif fs is not None:
             raise InvalidInputError("give either t or fs, not both")
         ts = to_si(t, time_unit, "time")
-        g = to_si(gyro, gyro_unit, "angular_rate", scale=gyro_scale, offset=gyro_offset)
-        a = to_si(accel, accel_unit, "acceleration", scale=accel_scale, offset=accel_offset)
+        g = _vector_to_si(gyro, gyro_unit, "angular_rate", gyro_scale, gyro_offset, "gyro")
+        a = _vector_to_si(accel, accel_unit, "acceleration", accel_scale, accel_offset, "accel")
         m = None if mag is None else np.asarray(mag, dtype=float)
         tp = None if temp is None else np.asarray(temp, dtype=float)
         meta = dict(meta or {})
@@ -240,6 +257,17 @@ class ImuData:
 
     def __len__(self) -> int:
         return self.n
+
+    def __repr__(self) -> str:
+        parts = [f"n={self.n}"]
+        if self.n >= 2:
+            parts += [f"fs={self.fs:.6g} Hz", f"duration={self.duration:.6g} s"]
+        parts.append("channels=gyro,accel" + (",mag" if self.mag is not None else "") + (",temp" if self.temp is not None else ""))
+        if self.mag is not None:
+            parts.append(f"mag_unit={self.mag_unit!r}")
+        if self.meta:
+            parts.append(f"meta_keys={sorted(self.meta)}")
+        return f"ImuData({', '.join(parts)})"
 
     def gaps(self, factor: float = 1.5) -> list[Gap]:
         """Intervals longer than ``factor`` × the median interval."""
@@ -278,6 +306,45 @@ class ImuData:
         if i1 <= i0:
             raise InvalidInputError(f"no samples in [{t0}, {t1}); the recording spans [{self.t[0]}, {self.t[-1]}]")
         return self.slice(i0, i1)
+
+    def interp(self, t_new: ArrayLike) -> "ImuData":
+        """Linear interpolation of every channel at the times ``t_new`` (s).
+
+        ``t_new`` must be strictly increasing and inside ``[t[0], t[-1]]``;
+        no extrapolation.  Interpolating across a gap (see :meth:`gaps`)
+        bridges it linearly: check ``gaps()`` first if that matters.
+        """
+        tn = np.asarray(t_new, dtype=np.float64)
+        if tn.ndim != 1 or tn.size == 0:
+            raise ShapeError(f"t_new must be a non-empty 1-D array, got shape {tn.shape}")
+        if tn[0] < self.t[0] or tn[-1] > self.t[-1]:
+            raise InvalidInputError(
+                f"t_new spans [{tn[0]}, {tn[-1]}] s, outside the recording [{self.t[0]}, {self.t[-1]}] s; "
+                "interp does not extrapolate"
+            )
+
+        def f(a: NDArray[np.float64] | None) -> NDArray[np.float64] | None:
+            if a is None:
+                return None
+            if a.ndim == 1:
+                return np.interp(tn, self.t, a)
+            return np.column_stack([np.interp(tn, self.t, a[:, j]) for j in range(a.shape[1])])
+
+        return ImuData(tn, f(self.gyro), f(self.accel), f(self.mag), f(self.temp), mag_unit=self.mag_unit, meta=dict(self.meta))
+
+    def resample(self, fs: float) -> "ImuData":
+        """Uniform samples at ``fs`` Hz from ``t[0]`` to ``t[-1]`` (linear, see :meth:`interp`).
+
+        Resampling to a lower rate without low-pass filtering aliases
+        noise; decimate with an anti-alias filter first if noise statistics
+        matter.  ``meta["resampled_from_hz"]`` records the original rate.
+        """
+        if not (np.isfinite(fs) and fs > 0):
+            raise InvalidInputError(f"fs must be positive and finite, got {fs}")
+        k = int(np.floor(self.duration * fs + 1e-9))
+        out = self.interp(self.t[0] + np.arange(k + 1) / fs)
+        out.meta["resampled_from_hz"] = self.fs if self.n >= 2 else None
+        return out
 
     def to_dataframe(self) -> "pd.DataFrame":
         """pandas DataFrame, one column per channel (``t, gyro_x ... temp``), SI.
@@ -342,6 +409,25 @@ class ImuData:
             d["temp"] = self.temp.tolist()
         d["meta"] = self.meta
         return d
+
+
+def _vector_to_si(x, unit, quantity, scale, offset, name):
+    """``to_si`` for a triad, accepting per-axis (3,) count scales and offsets."""
+    if np.ndim(scale) == 0 and np.ndim(offset) == 0:
+        return to_si(x, unit, quantity, scale=scale, offset=float(offset))
+    from imunav.errors import UnitError
+
+    if unit.strip().lower() not in ("counts", "count", "lsb", "raw"):
+        raise UnitError(f"per-axis {name}_scale / {name}_offset need {name}_unit='counts', not {unit!r}")
+    if scale is None:
+        raise UnitError(f"{name} declared in raw counts needs {name}_scale (SI units per count)")
+    sc = np.asarray(scale, dtype=float)
+    of = np.asarray(offset, dtype=float)
+    if sc.shape not in ((), (3,)) or of.shape not in ((), (3,)):
+        raise ShapeError(f"{name}_scale and {name}_offset must be scalars or 3 values (x, y, z); got shapes {sc.shape}, {of.shape}")
+    if not np.all(np.isfinite(sc)) or np.any(sc == 0):
+        raise UnitError(f"{name}_scale must be finite and non-zero, got {sc.tolist()}")
+    return (np.asarray(x, dtype=float) - of) * sc
 
 
 def _apply_nan_policy(t, g, a, m, tp, policy):
@@ -482,6 +568,13 @@ def _statistic(x: NDArray[np.float64], w: int, method: str) -> NDArray[np.float6
     return moving_variance(x, w)
 
 
+#: Lowest automatic thresholds: variances far below any real sensor's noise
+#: (σ = 1 µm/s² ≈ 0.1 µg and σ = 1e-7 rad/s ≈ 0.02 °/h per sample) but above
+#: the rounding residue of the moving variance, so that noise-free simulated
+#: records are still split into rest and motion.
+_AUTO_FLOOR = {"accel": 1e-12, "gyro": 1e-14}
+
+
 def _quietest(stat: NDArray[np.float64], w: int) -> float:
     """Variance of the quietest of the non-overlapping windows (floored above 0)."""
     blocks = stat[::w]
@@ -528,7 +621,9 @@ def static_intervals(
         ``λ_a`` in (m/s²)², or ``(λ_a, λ_g)`` with ``λ_g`` in (rad/s)².  With
         a single value ``λ_g`` is automatic.  ``None``: both automatic,
         ``λ = factor ×`` the statistic of the quietest non-overlapping window
-        (this assumes the record has at least one window at rest).
+        (this assumes the record has at least one window at rest), but at
+        least 1e-12 (m/s²)² and 1e-14 (rad/s)² so that noise-free simulated
+        data work too.
     min_duration_s : float, optional
         Shortest interval kept (s); default ``window_s``.
     factor : float
@@ -575,12 +670,12 @@ def static_intervals(
 
     s_a = _statistic(data.accel, w, method)
     if thr_a is None:
-        thr_a = factor * _quietest(s_a, w)
+        thr_a = max(factor * _quietest(s_a, w), _AUTO_FLOOR["accel"])
     quiet = s_a <= thr_a
     if use_gyro:
         s_g = _statistic(data.gyro, w, method)
         if thr_g is None:
-            thr_g = factor * _quietest(s_g, w)
+            thr_g = max(factor * _quietest(s_g, w), _AUTO_FLOOR["gyro"])
         quiet &= s_g <= thr_g
     else:
         thr_g = float("nan")
@@ -641,6 +736,16 @@ class Saturation:
 
     def to_dict(self) -> dict[str, Any]:
         return {"method": self.method, "counts": dict(self.counts), "n_rows": int(self.rows.size)}
+
+    def check(self, where: str = "the recording") -> None:
+        """Raise :class:`~imunav.errors.SaturationError` if any sample is saturated."""
+        if not self.any:
+            return
+        chans = ", ".join(f"{k} ({v})" for k, v in self.counts.items() if v)
+        raise SaturationError(
+            f"{where} has saturated samples at rows {_rows(self.mask.any(axis=1))}: {chans}. "
+            "Exclude them (e.g. data.slice) or use a sensor range that covers the motion"
+        )
 
 
 def _extreme_runs(x: NDArray[np.float64], min_run: int) -> NDArray[np.bool_]:

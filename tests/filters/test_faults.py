@@ -53,7 +53,7 @@ def test_false_alarm_rates_of_calibrated_thresholds_on_white_noise():
     thesis_alg1 = []
     for r in range(6):  # the full detector on a few runs
         res = detect_faults(nv[r], 20, p_false_alarm=p, start=100)
-        for k in ("nis", "cusum_var", "cusum_mean"):
+        for k in ("nis", "cusum_var", "cusum_mean", "low_variance"):
             alarms[k].append(res.detectors[k].alarm[100:])
     l1, l2, a3 = window_statistics(nv, 20)  # window detectors batched over all runs
     for k, st in (("alg1", l1), ("alg2", l2), ("alg3", a3)):
@@ -79,6 +79,8 @@ def test_noise_fault_detected_quickly_and_isolated(rng):
     assert res.detectors["alg1"].latched[fa:].all()
     d = res.to_dict()
     assert d["detectors"]["alg3"]["threshold"] == pytest.approx(chi2.isf(0.01, 60))
+    assert d["detectors"]["nis"]["thesis_threshold"] is None  # NaN -> null: valid JSON
+    __import__("json").dumps(d, allow_nan=False)
 
 
 def test_injection_kinds():

@@ -26,7 +26,15 @@ app = typer.Typer(
 # One entry per command module (imunav.cli.<name> with a register(app) function).
 _COMMAND_MODULES: list[str] = [
     "info",
+    "noise",
+    "simulate",
+    "lab",
+    "calibrate",
+    "compensate",
+    "attitude",
     "zupt",
+    "airdata",
+    "batch",
 ]
 
 for _name in _COMMAND_MODULES:

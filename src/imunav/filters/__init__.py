@@ -19,9 +19,11 @@ from imunav.filters.faults import (
     DetectorResult,
     Fault,
     FaultDetectionResult,
+    alarms,
     calibrated_thresholds,
     detect_faults,
     detection_delays,
+    detector_statistics,
     false_alarm_rates,
     inject_faults,
     latch,
@@ -38,7 +40,7 @@ from imunav.filters.kalman import (
     kalman_filter,
     riccati_steady_state,
 )
-from imunav.filters.robust import gate_channels, huber_update, isolate_channels, robust_update
+from imunav.filters.robust import gate_channels, huber_update, isolate_channels, nis_gate, robust_update
 from imunav.filters.ukf import UnscentedKalmanFilter, sigma_points
 
 __all__ = [
@@ -61,11 +63,14 @@ __all__ = [
     "ConsistencyResult",
     "gate_channels",
     "isolate_channels",
+    "nis_gate",
     "huber_update",
     "robust_update",
     "Fault",
     "inject_faults",
     "detect_faults",
+    "alarms",
+    "detector_statistics",
     "DetectorResult",
     "FaultDetectionResult",
     "calibrated_thresholds",

@@ -22,6 +22,7 @@ MODE_NONE = 0  # optimal filter, every channel used
 MODE_GATE = 1  # per-channel normalised-innovation gate |ν̃_i| < m (Akgün 2002, eq. 4.17)
 MODE_ISOLATE = 2  # NIS χ² test + sequential isolation of the worst channel (w-test)
 MODE_HUBER = 3  # Huber M-estimation of the measurement channels by IRLS
+MODE_NIS = 4  # vector χ² gate: the whole measurement is rejected when its NIS fails the test
 
 
 def sym(P: Array) -> Array:
@@ -147,6 +148,8 @@ def batch_filter(
         out.update(x_pred=np.empty((B, N, n)), P_pred=np.empty((B, N, n, n)), P=np.empty((B, N, n, n)),
                    S=np.full((B, N, m, m), np.nan))
     Ft = F.T
+    if mode == MODE_NONE and not store_full and not np.isnan(z[:, :, 0]).any():
+        return _batch_plain(x, P0, F, Qn, H, R, z, out)
     for k in range(N):
         x = x @ Ft
         P = sym(F @ P @ Ft + Qn)
@@ -167,12 +170,15 @@ def batch_filter(
                 acc = valid & (np.abs(nn) < gate_m)
             elif mode == MODE_ISOLATE:
                 acc = valid & isolate_batch(nu, S, iso_thr)
+            elif mode == MODE_NIS:
+                q = np.einsum("bi,bi->b", nn, nn)
+                acc = valid & (q <= iso_thr[m - 1])[:, None]
             elif mode == MODE_HUBER:
                 acc = None
             else:
                 raise ValueError(f"unknown robust mode {mode}")
             if acc is None:
-                x, P, w, _ = huber_batch(x, P, zz, H, R, huber_c, valid)
+                x, P, w, _ = huber_batch(x, P, zz, H, R, huber_c, valid, 30, 1e-9)
             else:
                 x, P, _ = masked_update(x, P, nu, H, R, acc)
                 w = acc.astype(np.float64)
@@ -185,6 +191,29 @@ def batch_filter(
         out["P_diag"][:, k] = np.einsum("bii->bi", P)
         if store_full:
             out["P"][:, k] = P
+    return out
+
+
+def _batch_plain(x: Array, P0: Array, F: Array, Qn: Array, H: Array, R: Array, z: Array, out: dict) -> dict:
+    """Optimal filter on complete data: P and K are the same for every run (computed once per step)."""
+    n = P0.shape[0]
+    P = P0.copy()
+    I = np.eye(n)
+    for k in range(z.shape[1]):
+        x = x @ F.T
+        P = sym(F @ P @ F.T + Qn)
+        S = sym(H @ P @ H.T + R)
+        K = np.linalg.solve(S, H @ P).T
+        nu = z[:, k] - x @ H.T
+        x = x + nu @ K.T
+        A = I - K @ H
+        P = sym(A @ P @ A.T + K @ R @ K.T)
+        w, V = np.linalg.eigh(S)
+        out["innovation"][:, k] = nu
+        out["normalized"][:, k] = nu @ ((V / np.sqrt(w)) @ V.T).T
+        out["x"][:, k] = x
+        out["P_diag"][:, k] = np.diag(P)
+    out["weights"][:] = 1.0
     return out
 
 

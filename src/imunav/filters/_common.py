@@ -84,7 +84,7 @@ def to_jsonable(v: Any) -> Any:
             return np.where(np.isfinite(v), v, None).tolist()
         return v.tolist()
     if isinstance(v, (np.floating, np.integer, np.bool_)):
-        return v.item()
+        v = v.item()
     if dataclasses.is_dataclass(v) and not isinstance(v, type):
         return {f.name: to_jsonable(getattr(v, f.name)) for f in dataclasses.fields(v)}
     if isinstance(v, dict):
@@ -92,7 +92,7 @@ def to_jsonable(v: Any) -> Any:
     if isinstance(v, (list, tuple)):
         return [to_jsonable(x) for x in v]
     if isinstance(v, float) and not np.isfinite(v):
-        return None if np.isnan(v) else v
+        return None  # JSON has no NaN / inf
     return v
 
 

@@ -65,7 +65,10 @@ class ConsistencyResult(ResultMixin):
     for that average; ``fraction_inside`` is the share of steps inside;
     ``time_average`` and ``time_bounds`` pool all runs and steps;
     ``passed`` is ``time_bounds[0] <= time_average <= time_bounds[1]`` and
-    ``fraction_inside >= confidence - 3 sd`` of the binomial count.
+    ``fraction_inside >= confidence - 3 sd`` of the binomial count.  The pooled
+    ``time_bounds`` assume independent steps, which holds for NIS (white
+    innovations) but not for NEES (errors are correlated in time): judge NEES
+    by ``fraction_inside`` and the per-step bounds.
     """
 
     dof: int

@@ -13,6 +13,12 @@ detectors here run over a whole sequence ``ν̃`` of shape (N, s):
 * **NIS**: ``ν̃ᵀ ν̃`` ~ χ²(s) each step.
 * **CUSUM** (Page 1954): variance CUSUM with the log-likelihood ratio of
   N(0, ρI) against N(0, I) and a two-sided per-channel mean CUSUM.
+* **Low variance** (stuck output, not in the thesis): the smallest
+  per-channel windowed sum of squared first differences
+  ``Σ (ν̃_{i,j} − ν̃_{i,j−1})²`` over a short window (5 differences) falls
+  below its lower quantile.  A frozen sensor removes its own noise from the
+  innovation, which the variance-increase tests cannot see; differencing
+  removes the constant offset the frozen noise sample leaves behind.
 
 Thresholds (the thesis's are wrong, see the digest §2.7):
 
@@ -28,6 +34,8 @@ Alg. 3     χ²_{0.95}(M s) = 79.08         χ²_{1−p}(M s)
 NIS        —                              χ²_{1−p}(s)
 CUSUM      —                              (1−p) quantile of the stationary H0
                                           distribution (seeded Monte Carlo)
+low var.   —                              p quantile (lower tail) of the min over s
+                                          channels, seeded Monte Carlo under H0
 =========  =============================  =======================================
 
 Because the windows overlap, the per-step false-alarm rate of a detector at
@@ -62,6 +70,9 @@ __all__ = [
     "detect_faults",
     "latch",
     "first_alarm",
+    "detector_statistics",
+    "alarms",
+    "LOWER_TAIL",
     "isolate_faulty_channels",
     "Fault",
     "inject_faults",
@@ -70,7 +81,8 @@ __all__ = [
 ]
 
 Array = NDArray[np.float64]
-DETECTORS = ("alg1", "alg2", "alg3", "nis", "cusum_var", "cusum_mean")
+DETECTORS = ("alg1", "alg2", "alg3", "nis", "cusum_var", "cusum_mean", "low_variance")
+LOWER_TAIL = frozenset({"low_variance"})  # detectors that alarm when the statistic falls *below* the threshold
 
 
 def _check_nv(normalized: ArrayLike, batch: bool = False) -> Array:
@@ -135,18 +147,16 @@ def _cusum_quantiles(s: int, rho: float, k_mean: float, p: float, n_runs: int, n
                      ) -> tuple[float, float]:
     from imunav.filters._kernels import cusum_stats
 
+    # one long H0 sequence (the CUSUMs are ergodic Markov chains), burn-in dropped
     rng = np.random.default_rng(seed)
-    burn = n_steps // 4
-    gv_all, gm_all = [], []
-    for _ in range(n_runs):
-        gv, gm = cusum_stats(rng.standard_normal((n_steps, s)), rho, k_mean)
-        gv_all.append(gv[burn:])
-        gm_all.append(gm[burn:])
-    return float(np.quantile(np.concatenate(gv_all), 1 - p)), float(np.quantile(np.concatenate(gm_all), 1 - p))
+    burn = 2000
+    gv, gm = cusum_stats(rng.standard_normal((n_runs * n_steps + burn, s)), rho, k_mean)
+    return float(np.quantile(gv[burn:], 1 - p)), float(np.quantile(gm[burn:], 1 - p))
 
 
 def calibrated_thresholds(M: int = 20, s: int = 3, p_false_alarm: float = 0.01, *, cusum_rho: float = 4.0,
-                          cusum_k: float = 0.5, n_mc: int = 100_000, seed: int = 0) -> dict[str, float]:
+                          cusum_k: float = 0.5, n_mc: int = 100_000, seed: int = 0, low_window: int = 5
+                          ) -> dict[str, float]:
     """Thresholds giving a per-step false-alarm rate ``p_false_alarm`` under H0.
 
     Alg. 2, Alg. 3 and NIS are exact χ² points; Alg. 1 and the CUSUMs are
@@ -155,7 +165,7 @@ def calibrated_thresholds(M: int = 20, s: int = 3, p_false_alarm: float = 0.01, 
     if not 0 < p_false_alarm < 0.5:
         raise InvalidInputError(f"p_false_alarm must be in (0, 0.5), got {p_false_alarm}")
     _check_window(M, s)
-    cv, cm = _cusum_quantiles(s, float(cusum_rho), float(cusum_k), float(p_false_alarm), 100, 4000, seed)
+    cv, cm = _cusum_quantiles(s, float(cusum_rho), float(cusum_k), float(p_false_alarm), 50, 4000, seed)
     return {
         "alg1": wishart_largest_root_quantile(1 - p_false_alarm, M, s, n_mc, seed),
         "alg2": float(chi2.isf(p_false_alarm, M - s)),
@@ -163,7 +173,33 @@ def calibrated_thresholds(M: int = 20, s: int = 3, p_false_alarm: float = 0.01, 
         "nis": float(chi2.isf(p_false_alarm, s)),
         "cusum_var": cv,
         "cusum_mean": cm,
+        "low_variance": _low_variance_quantile(s, low_window, float(p_false_alarm), 200_000, seed),
     }
+
+
+def _low_variance_stat(b: Array, w: int) -> Array:
+    """min over channels of the windowed sum of w squared first differences; b (R, N, s) → (R, N)."""
+    d2 = np.zeros_like(b)
+    d2[:, 1:] = np.diff(b, axis=1) ** 2
+    c = np.concatenate([np.zeros((b.shape[0], 1, b.shape[2])), np.cumsum(d2, axis=1)], axis=1)
+    out = np.full(b.shape[:2], np.nan)
+    out[:, w:] = (c[:, w + 1:] - c[:, 1:-w]).min(axis=2)
+    return out
+
+
+@lru_cache(maxsize=32)
+def _low_variance_quantile(s: int, w: int, p: float, n: int, seed: int) -> float:
+    rng = np.random.default_rng(seed)
+    st = _low_variance_stat(rng.standard_normal((1, n, s)), w)[0, w:]
+    return float(np.quantile(st, p))
+
+
+def alarms(name: str, statistic: ArrayLike, threshold: float) -> NDArray[np.bool_]:
+    """Raw alarms of detector ``name``: statistic above (below, for :data:`LOWER_TAIL`) the threshold; NaN → no alarm."""
+    st = np.asarray(statistic, dtype=np.float64)
+    if name in LOWER_TAIL:
+        return np.nan_to_num(st, nan=np.inf) < threshold
+    return np.nan_to_num(st, nan=-np.inf) > threshold
 
 
 def window_statistics(normalized: ArrayLike, M: int = 20, P: ArrayLike | None = None, L: ArrayLike | None = None
@@ -197,6 +233,32 @@ def cusum_statistics(normalized: ArrayLike, rho: float = 4.0, k: float = 0.5) ->
     return cusum_stats(_check_nv(normalized), float(rho), float(k))
 
 
+def detector_statistics(normalized: ArrayLike, M: int = 20, *, cusum_rho: float = 4.0, cusum_k: float = 0.5,
+                        low_window: int = 5) -> dict[str, Array]:
+    """All detector statistics for one run (N, s) or a batch of runs (R, N, s).
+
+    Returns {name: (…, N)} for the names in :data:`DETECTORS` (window ones NaN
+    before the window is full).  Compare with the thresholds of
+    :func:`calibrated_thresholds` / :func:`thesis_thresholds`.
+    """
+    from imunav.filters._kernels import cusum_stats
+
+    nv = _check_nv(normalized, batch=True)
+    single = nv.ndim == 2
+    b = nv[None] if single else nv
+    if not cusum_rho > 1 or not cusum_k >= 0:
+        raise InvalidInputError(f"cusum_rho must be > 1 and cusum_k >= 0, got {cusum_rho}, {cusum_k}")
+    l1, l2, a3 = window_statistics(b, M)
+    gv = np.empty(b.shape[:2])
+    gm = np.empty(b.shape[:2])
+    for r in range(b.shape[0]):
+        gv[r], gm[r] = cusum_stats(np.ascontiguousarray(b[r]), float(cusum_rho), float(cusum_k))
+    low = _low_variance_stat(b, low_window)  # stuck output; NaN until the short window is full
+    out = {"alg1": l1, "alg2": l2, "alg3": a3, "nis": np.einsum("...i,...i->...", b, b), "cusum_var": gv,
+           "cusum_mean": gm, "low_variance": low}
+    return {k: v[0] for k, v in out.items()} if single else out
+
+
 def latch(alarm: ArrayLike) -> NDArray[np.bool_]:
     """Latched alarm: true from the first alarm on (cumulative OR along the last axis)."""
     a = np.asarray(alarm, dtype=bool)
@@ -210,13 +272,18 @@ def first_alarm(alarm: ArrayLike, start: int = 0) -> int:
     return int(idx[0] + start) if idx.size else -1
 
 
-def isolate_faulty_channels(normalized: ArrayLike, M: int = 20, p_false_alarm: float = 0.01, start: int = 0
+def isolate_faulty_channels(normalized: ArrayLike, M: int = 20, p_false_alarm: float = 1e-3, start: int = 0,
+                            during: ArrayLike | None = None, min_count: int = 3
                             ) -> tuple[NDArray[np.bool_], Array]:
-    """Channels whose own windowed statistics show a fault at or after ``start``.
+    """Channels whose own windowed statistics show a fault.
 
     Per channel i: ``Σ ν̃_i²`` over the window (χ²(M) under H0) and the window
     mean test ``|Σ ν̃_i| / √M`` (N(0, 1)); both at level p / (2s) (Bonferroni).
-    Returns (isolated flags (s,), first step each channel was flagged, -1 if not).
+    A channel is isolated when it is flagged on at least ``min_count`` steps
+    at or after ``start`` on which ``during`` (e.g. the system alarm) is True
+    (all steps if None): a persistent fault keeps flagging its channel, a
+    chance flag does not repeat.  Returns (isolated flags (s,), first flagged
+    step per channel, -1 if none).
     """
     nv = _check_nv(normalized)
     N, s = nv.shape
@@ -232,8 +299,10 @@ def isolate_faulty_channels(normalized: ArrayLike, M: int = 20, p_false_alarm: f
     mu[M - 1:] = np.abs(c1[M:] - c1[:-M]) / np.sqrt(M)
     flag = (sq > thr_sq) | (mu > thr_mu)
     flag[:start] = False
+    if during is not None:
+        flag &= np.asarray(during, dtype=bool).reshape(N, 1)
     first = np.array([first_alarm(flag[:, i]) for i in range(s)], dtype=np.int64)
-    return first >= 0, first.astype(np.float64)
+    return flag.sum(axis=0) >= min_count, first.astype(np.float64)
 
 
 @dataclass(frozen=True)
@@ -277,6 +346,7 @@ def detect_faults(
     cusum_rho: float = 4.0,
     cusum_k: float = 0.5,
     thresholds: dict[str, float] | None = None,
+    p_isolation: float = 1e-3,
 ) -> FaultDetectionResult:
     """Run Alg. 1-3, NIS and both CUSUMs on normalised innovations (N, s).
 
@@ -284,6 +354,8 @@ def detect_faults(
         ``p_false_alarm``) or ``"thesis"`` (χ² points of the thesis for
         Alg. 1-3; calibrated for the others).  ``thresholds`` overrides.
     start : alarms before this step are ignored (e.g. filter transient).
+    p_isolation : per-step level of the per-channel isolation tests (a channel
+        is isolated when flagged on >= 3 steps with a system alarm).
     """
     nv = _check_nv(normalized)
     N, s = nv.shape
@@ -299,22 +371,22 @@ def detect_faults(
         if unknown:
             raise InvalidInputError(f"unknown detector(s) {sorted(unknown)}; known: {DETECTORS}")
         thr.update({k: float(v) for k, v in thresholds.items()})
-    l1, l2, a3 = window_statistics(nv, M)
-    gv, gm = cusum_statistics(nv, cusum_rho, cusum_k)
-    stats = {"alg1": l1, "alg2": l2, "alg3": a3, "nis": np.einsum("ij,ij->i", nv, nv), "cusum_var": gv,
-             "cusum_mean": gm}
+    stats = detector_statistics(nv, M, cusum_rho=cusum_rho, cusum_k=cusum_k)
     dets = {}
     earliest = -1
     for name in DETECTORS:
         st = stats[name]
-        alarm = np.nan_to_num(st, nan=-np.inf) > thr[name]
+        alarm = alarms(name, st, thr[name])
         alarm[:start] = False
         fa = first_alarm(alarm)
         dets[name] = DetectorResult(name, st, thr[name], th.get(name, np.nan), alarm, latch(alarm), fa)
         if fa >= 0 and (earliest < 0 or fa < earliest):
             earliest = fa
     if earliest >= 0:
-        iso, cf = isolate_faulty_channels(nv, M, p_false_alarm, start=max(start, earliest - M + 1))
+        any_alarm = np.zeros(N, dtype=bool)
+        for d in dets.values():
+            any_alarm |= d.alarm
+        iso, cf = isolate_faulty_channels(nv, M, p_isolation, start=start, during=any_alarm)
     else:
         iso, cf = np.zeros(s, dtype=bool), np.full(s, -1.0)
     return FaultDetectionResult(dets, iso, cf, int(M), float(p_false_alarm), threshold_mode)

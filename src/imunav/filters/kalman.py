@@ -361,15 +361,16 @@ def batch_kalman_filter(
     """Run a time-invariant filter over a batch of measurement sequences z (R, N, m).
 
     ``robust``: None (optimal), ``"gate"`` (per-channel ``|ν̃_i| < gate_m``),
-    ``"isolate"`` (χ² + w-test isolation at level ``alpha``) or ``"huber"``
-    (see :mod:`imunav.filters.robust`).  x0 may be (n,) or per run (R, n).
+    ``"isolate"`` (χ² + w-test isolation at level ``alpha``), ``"nis"``
+    (the whole measurement rejected when its NIS exceeds χ²_{1−alpha}(m)) or
+    ``"huber"`` (see :mod:`imunav.filters.robust`).  x0 may be (n,) or per run (R, n).
     """
-    from imunav.filters._batch import MODE_GATE, MODE_HUBER, MODE_ISOLATE, MODE_NONE, batch_filter
+    from imunav.filters._batch import MODE_GATE, MODE_HUBER, MODE_ISOLATE, MODE_NIS, MODE_NONE, batch_filter
     from imunav.filters.robust import isolation_thresholds
 
-    modes = {None: MODE_NONE, "gate": MODE_GATE, "isolate": MODE_ISOLATE, "huber": MODE_HUBER}
+    modes = {None: MODE_NONE, "gate": MODE_GATE, "isolate": MODE_ISOLATE, "huber": MODE_HUBER, "nis": MODE_NIS}
     if robust not in modes:
-        raise InvalidInputError(f"robust must be None, 'gate', 'isolate' or 'huber', got {robust!r}")
+        raise InvalidInputError(f"robust must be None, 'gate', 'isolate', 'nis' or 'huber', got {robust!r}")
     P0m = as_covariance(P0, "P0")
     n = P0m.shape[0]
     x0a = np.asarray(x0, dtype=np.float64)

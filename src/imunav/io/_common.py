@@ -17,7 +17,7 @@ from typing import Any
 
 import numpy as np
 
-from imunav.errors import FileFormatError, InvalidInputError, ShapeError, UnitError
+from imunav.errors import FileFormatError, InvalidInputError, UnitError
 from imunav.timeseries import ImuData
 
 __all__ = [
@@ -29,6 +29,7 @@ __all__ = [
     "build_imu",
     "find_array_names",
     "wrap_read_errors",
+    "check_nonempty",
 ]
 
 #: The channel groups of an :class:`ImuData`, in file order.
@@ -162,6 +163,8 @@ def build_imu(
             raise InvalidInputError(f"{source}: the sampling rate must be positive and finite, got fs={rate}")
         t = t0 + np.arange(n_rows or 0, dtype=np.float64) / rate
         time_unit = "s"
+    elif arrays.get("t_origin") is not None:
+        time_unit = "s"  # date-time column, already seconds since its first sample
     else:
         time_unit = u.get("t", "s")
     mag = arrays.get("mag")
@@ -177,6 +180,8 @@ def build_imu(
     if tp is not None and u.get("temp") not in (None, "degC", "degc", "C", "°C", "c"):
         raise UnitError(f"{source}: temperature must be in degC (°C); got units['temp']={u['temp']!r}")
     out_meta = dict(stored.get("meta") or {})
+    if arrays.get("t_origin") is not None:
+        out_meta.setdefault("t_origin", arrays["t_origin"])
     if meta:
         out_meta.update(meta)
     declared = {"gyro": u.get("gyro", "rad/s"), "accel": u.get("accel", "m/s^2")}
@@ -291,7 +296,3 @@ def check_nonempty(path: os.PathLike[str] | str) -> str:
         raise FileFormatError(f"{p}: the file is empty (0 bytes)")
     return p
 
-
-def check_shape(a: np.ndarray, name: str, source: str) -> None:
-    if a.ndim == 0:
-        raise ShapeError(f"{source}: {name} is a scalar; expected an array with one row per sample")

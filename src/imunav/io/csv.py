@@ -9,7 +9,9 @@ unit annotations such as ``[deg/s]``): ``t``/``time``/``timestamp``,
 explicitly with ``columns={"t": "time_s", "gx": "GyrX", ...}`` (channel keys
 ``t gx gy gz ax ay az mx my mz temp``, or group keys ``gyro``/``accel``/``mag``
 with a list of three names; integer positions work for header-less files).
-Units, raw-count scales and offsets are declared per group
+Time may also be an ISO 8601 date-time column (seconds since the first sample;
+the first date-time goes to ``meta["t_origin"]``).  Units, raw-count scales
+and offsets are declared per group
 (``units={"gyro": "deg/s", "accel": "g", "t": "ms"}``,
 ``scales={"accel": 9.80665 / 16384}``) and converted to SI.  The delimiter
 (``,`` ``;`` tab ``|`` or whitespace) is detected from the header line.
@@ -159,7 +161,36 @@ def table_to_arrays(df: pd.DataFrame, cols: Mapping[str, Any], source: str) -> d
             )
         return s.to_numpy(dtype=np.float64)
 
-    arrays: dict[str, np.ndarray | None] = {"t": col("t") if "t" in cols else None}
+    arrays: dict[str, Any] = {"t": None}
+    if "t" in cols:
+        s_t = df[cols["t"]]
+        dt_kind = pd.api.types.is_datetime64_any_dtype(s_t) or pd.api.types.is_timedelta64_dtype(s_t)
+        if not dt_kind and not pd.api.types.is_numeric_dtype(s_t):
+            # ISO 8601 date-time strings ("2024-05-01T12:00:00.010Z") are common in logger files
+            try:
+                s_t = pd.to_datetime(s_t, format="ISO8601")
+                dt_kind = True
+            except (ValueError, TypeError):
+                parsed = pd.to_datetime(s_t, format="ISO8601", errors="coerce")
+                if parsed.notna().iloc[0]:  # a date-time column with a bad entry
+                    row = int(np.flatnonzero(parsed.isna().to_numpy())[0])
+                    raise FileFormatError(
+                        f"{source}: time column {cols['t']!r} holds date-times but data row {row} "
+                        f"({s_t.iloc[row]!r}) is not an ISO 8601 date-time"
+                    ) from None
+        if dt_kind:
+            if s_t.isna().any():
+                row = int(np.flatnonzero(s_t.isna().to_numpy())[0])
+                raise FileFormatError(f"{source}: time column {cols['t']!r} has a missing value at data row {row}")
+            if isinstance(s_t.dtype, pd.DatetimeTZDtype):
+                s_t = s_t.dt.tz_convert(None)  # to UTC, naive
+            ns = s_t.to_numpy().astype("datetime64[ns]" if pd.api.types.is_datetime64_any_dtype(s_t) else "timedelta64[ns]")
+            ticks = ns.view(np.int64)
+            # seconds since the first sample (exact to the ns for 104 days); the origin goes to meta
+            arrays["t"] = (ticks - ticks[0]).astype(np.float64) * 1e-9
+            arrays["t_origin"] = str(s_t.iloc[0].isoformat()) if hasattr(s_t.iloc[0], "isoformat") else str(s_t.iloc[0])
+        else:
+            arrays["t"] = col("t")
     for g, chans in _GROUP_CHANNELS.items():
         arrays[g] = np.column_stack([col(c) for c in chans]) if all(c in cols for c in chans) else None
     arrays["temp"] = col("temp") if "temp" in cols else None
@@ -244,7 +275,8 @@ def read_csv(
     stored: dict[str, Any] = {}
     n_skip = 0
     header_line = None
-    with open(source, encoding="utf-8", errors="replace") as fh:
+    # utf-8-sig: spreadsheet exports often start with a byte-order mark
+    with open(source, encoding="utf-8-sig", errors="replace") as fh:
         for i, line in enumerate(fh):
             s = line.strip()
             if i < skiprows:
@@ -279,15 +311,26 @@ def read_csv(
             skip_blank_lines=True,
             skipinitialspace=True,
             engine="c",
+            encoding="utf-8-sig",
         )
     if has_header:
         df.columns = [str(c).strip() for c in df.columns]
     if len(df) == 0:
         raise FileFormatError(f"{source}: header {list(df.columns)} but no data rows")
     last = _split(_last_line(source).strip(), sep)
+    with open(source, "rb") as fh:
+        fh.seek(-1, os.SEEK_END)
+        ends_with_newline = fh.read(1) in (b"\n", b"\r")
     if len(last) < df.shape[1]:
         raise FileFormatError(
             f"{source}: the last row has {len(last)} of {df.shape[1]} fields; the file looks truncated "
+            f"(cut while writing?). Remove the incomplete last line (data row {len(df) - 1}) and read again"
+        )
+    if stored and not ends_with_newline:
+        # imunav always ends its files with a newline: a missing one means the
+        # write was cut, possibly inside the last number
+        raise FileFormatError(
+            f"{source}: the file written by imunav does not end with a newline; it looks truncated "
             f"(cut while writing?). Remove the incomplete last line (data row {len(df) - 1}) and read again"
         )
     cols = resolve_columns(list(df.columns), columns, source)

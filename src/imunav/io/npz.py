@@ -40,8 +40,9 @@ def read_npz(
 ) -> ImuData:
     """Read an ``.npz`` recording (see module doc)."""
     source = check_nonempty(path)
-    with wrap_read_errors(source, "NPZ (zip of .npy arrays)"):
-        with np.load(source, allow_pickle=False) as z:
+    # open the file ourselves: np.load leaks its handle when the zip is damaged
+    with wrap_read_errors(source, "NPZ (zip of .npy arrays)"), open(source, "rb") as fh:
+        with np.load(fh, allow_pickle=False) as z:
             names = list(z.files)
             found = find_array_names(names, columns, source, kind="array")
             arrays: dict[str, Any] = {k: z[v] for k, v in found.items()}

@@ -19,6 +19,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+import numpy as np
+
 __all__ = ["Report", "Section", "Parameter"]
 
 _CSS = """
@@ -54,6 +56,10 @@ def _fmt(x: Any, digits: int = 5) -> str:
     if 1e-3 <= abs(v) < 1e5:
         return f"{v:.{digits}g}"
     return f"{v:.{max(digits - 1, 1)}e}"
+
+
+#: Table columns whose boolean / None cells are drawn as PASS / FAIL / n/a badges.
+_VERDICT_COLUMNS = ("verdict", "passed", "pass")
 
 
 def _verdict(passed: bool | None) -> str:
@@ -118,6 +124,9 @@ class Section:
             for i, c in enumerate(cols):
                 v = r.get(c)
                 cls = ' class="l"' if i == 0 or isinstance(v, str) else ""
+                if str(c).lower() in _VERDICT_COLUMNS and (v is None or isinstance(v, (bool, np.bool_))):
+                    cells.append(f"<td>{_verdict(None if v is None else bool(v))}</td>")
+                    continue
                 cells.append(f"<td{cls}>{_fmt(v, digits)}</td>")
             body.append("<tr>" + "".join(cells) + "</tr>")
         cap = f"<caption>{html.escape(caption)}</caption>" if caption else ""
@@ -163,6 +172,14 @@ class Section:
         data = base64.b64encode(buf.getvalue()).decode("ascii")
         cap = f"<figcaption>{html.escape(caption)}</figcaption>" if caption else ""
         alt = html.escape(caption or self.title)
+        self._parts.append(f'<figure><img alt="{alt}" src="data:image/png;base64,{data}">{cap}</figure>')
+        return self
+
+    def image(self, path: str | Path, caption: str | None = None) -> "Section":
+        """Embed a PNG file (e.g. a figure a step already saved)."""
+        data = base64.b64encode(Path(path).read_bytes()).decode("ascii")
+        cap = f"<figcaption>{html.escape(caption)}</figcaption>" if caption else ""
+        alt = html.escape(caption or Path(path).stem)
         self._parts.append(f'<figure><img alt="{alt}" src="data:image/png;base64,{data}">{cap}</figure>')
         return self
 

@@ -12,7 +12,22 @@
 
 from __future__ import annotations
 
-from imunav.sim import profiles
+from imunav.sim import presets, profiles
+from imunav.sim.error_model import (
+    BIAS_INSTABILITY_FLOOR,
+    Flicker,
+    GaussMarkov,
+    ImuErrorModel,
+    ImuErrorTruth,
+    TriadErrors,
+    TriadTruth,
+    allan_variance_gauss_markov,
+    allan_variance_ieee952,
+    apply_errors,
+    scale_misalignment_matrix,
+    simulate_imu,
+)
+from imunav.sim.magnetometer import MagnetometerModel, simulate_magnetometer
 from imunav.sim.profiles import (
     Profile,
     Segments,
@@ -64,32 +79,19 @@ __all__ = [
     "thesis_rate_steps",
     "thesis_rate_table_profile",
     "ferraris_profile",
+    "GaussMarkov",
+    "Flicker",
+    "TriadErrors",
+    "ImuErrorModel",
+    "apply_errors",
+    "simulate_imu",
+    "presets",
+    "MagnetometerModel",
+    "simulate_magnetometer",
+    "TriadTruth",
+    "ImuErrorTruth",
+    "scale_misalignment_matrix",
+    "allan_variance_gauss_markov",
+    "allan_variance_ieee952",
+    "BIAS_INSTABILITY_FLOOR",
 ]
-
-# Error model, presets and magnetometer (the "simerrors" part).  Imported
-# guarded only until that branch lands on main.
-try:
-    from imunav.sim import presets
-    from imunav.sim.error_model import (
-        Flicker,
-        GaussMarkov,
-        ImuErrorModel,
-        TriadErrors,
-        apply_errors,
-        simulate_imu,
-    )
-    from imunav.sim.magnetometer import MagnetometerModel, simulate_magnetometer
-except ImportError:  # pragma: no cover - transitional
-    pass
-else:
-    __all__ += [
-        "GaussMarkov",
-        "Flicker",
-        "TriadErrors",
-        "ImuErrorModel",
-        "apply_errors",
-        "simulate_imu",
-        "presets",
-        "MagnetometerModel",
-        "simulate_magnetometer",
-    ]

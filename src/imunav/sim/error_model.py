@@ -31,9 +31,10 @@ The Gauss-Markov process is discretised exactly: x_k = phi x_(k-1) +
 sigma sqrt(1 - phi^2) w_k with phi = exp(-dt / T) (the thesis's eq. 7 lacks
 the factor 2 in 1 - exp(-2 dt / T); digest §12 item 1).
 
-Random streams: one numpy ``Generator`` per (sensor, process, axis,
-component), each from ``SeedSequence(seed).spawn_key + (sensor, process,
-axis, component)``.  A stream therefore depends only on the seed and on its
+Random streams: one xoshiro256++ stream per (sensor, process, axis,
+component), seeded by ``SeedSequence(seed)`` with the spawn key extended by
+(sensor, process, axis, component); normals by a 256-layer ziggurat
+(:mod:`imunav.sim._kernels`).  A stream therefore depends only on the seed and on its
 own key: switching a process on or off does not change the others, and the
 axes are independent.
 """
@@ -41,6 +42,7 @@ axes are independent.
 from __future__ import annotations
 
 import math
+import numbers
 import os
 import tomllib
 from collections.abc import Mapping
@@ -81,7 +83,8 @@ __all__ = [
     "allan_variance_gauss_markov",
     "allan_variance_ieee952",
     "seed_sequence",
-    "stream",
+    "stream_state",
+    "normals",
     "BIAS_INSTABILITY_FLOOR",
 ]
 
@@ -325,7 +328,7 @@ class Flicker:
         object.__setattr__(self, "b", _vec3(self.b, "Flicker.b (bias instability B)", nonneg=True))
         for name in ("tau_min", "tau_max"):
             v = getattr(self, name)
-            if not (isinstance(v, (int, float)) and math.isfinite(v) and v > 0):
+            if not (isinstance(v, numbers.Real) and not isinstance(v, bool) and math.isfinite(v) and v > 0):
                 raise InvalidInputError(f"Flicker.{name}: expected a finite time > 0 s, got {v!r}")
             object.__setattr__(self, name, float(v))
         if self.tau_max <= self.tau_min:
@@ -334,8 +337,9 @@ class Flicker:
             )
         if self.tau_max / self.tau_min > 1e8:
             raise InvalidInputError("Flicker: the band tau_max / tau_min is limited to 1e8 (8 decades)")
-        if not (isinstance(self.per_decade, int) and 1 <= self.per_decade <= 10):
+        if not (isinstance(self.per_decade, numbers.Integral) and 1 <= self.per_decade <= 10):
             raise InvalidInputError(f"Flicker.per_decade: expected an integer in 1..10, got {self.per_decade!r}")
+        object.__setattr__(self, "per_decade", int(self.per_decade))
 
     @property
     def floor_ripple(self) -> float:
@@ -508,6 +512,10 @@ class TriadErrors:
             or np.any(self.random_walk > 0)
             or (self.bias_instability is not None and np.any(self.bias_instability.components()[0] > 0))
         )
+
+    def replace(self, **changes: Any) -> TriadErrors:
+        """Copy with some fields changed (validated again)."""
+        return replace(self, **changes)
 
     def deterministic(self) -> TriadErrors:
         """Copy with only bias, T and the temperature polynomials (no noise, ramp, LSB, saturation)."""
@@ -731,7 +739,7 @@ class ImuErrorModel:
             g = np.diag(np.broadcast_to(g, (3,)))
         object.__setattr__(self, "g_sensitivity", _mat3(g, "ImuErrorModel.g_sensitivity (rad/s per m/s^2)"))
         t = self.temp_ref_c
-        if not (isinstance(t, (int, float)) and math.isfinite(t)):
+        if not (isinstance(t, numbers.Real) and not isinstance(t, bool) and math.isfinite(t)):
             raise InvalidInputError(f"ImuErrorModel.temp_ref_c: expected a finite temperature in degC, got {t!r}")
         object.__setattr__(self, "temp_ref_c", float(t))
 
@@ -868,10 +876,24 @@ def seed_sequence(rng: Any) -> np.random.SeedSequence:
     )
 
 
-def stream(root: np.random.SeedSequence, *key: int) -> np.random.Generator:
-    """Independent generator for the stream ``key`` under ``root`` (SFC64)."""
+def stream_state(root: np.random.SeedSequence, *key: int) -> NDArray[np.uint64]:
+    """256-bit xoshiro256++ state of the stream ``key`` under ``root``.
+
+    The stream depends only on the root entropy and on ``key`` =
+    (sensor, process, axis, component), never on which other streams exist.
+    """
     ss = np.random.SeedSequence(entropy=root.entropy, spawn_key=tuple(root.spawn_key) + tuple(key))
-    return np.random.Generator(np.random.SFC64(ss))
+    st = ss.generate_state(4, np.uint64)
+    if not np.any(st):  # the all-zero state is the one invalid state
+        st[0] = np.uint64(1)
+    return st
+
+
+def normals(root: np.random.SeedSequence, key: tuple[int, ...], n: int) -> NDArray[np.float64]:
+    """n standard normals of the stream ``key`` (same generator as the IMU kernels)."""
+    out = np.empty(n)
+    _k.fill_normal(stream_state(root, *key), out)
+    return out
 
 
 # --------------------------------------------------------------------------
@@ -927,52 +949,52 @@ def _time_steps(t: NDArray[np.float64]) -> NDArray[np.float64]:
     return dt
 
 
+def _readonly(a: Any) -> NDArray[np.float64]:
+    """C-contiguous float64 read-only view (ImuData arrays are read-only; one
+    numba signature whichever array the caller passes)."""
+    v = np.ascontiguousarray(a, dtype=float).view()
+    v.setflags(write=False)
+    return v
+
+
 def _as_n3(a: Any, n: int, where: str) -> NDArray[np.float64]:
-    a = np.ascontiguousarray(a, dtype=float)
+    a = _readonly(a)
     if a.shape != (n, 3):
         raise ShapeError(f"{where}: expected shape ({n}, 3), got {a.shape}")
     return a
 
 
-def _stochastic_axis(
-    te: TriadErrors,
-    sensor: int,
-    axis: int,
-    root: np.random.SeedSequence,
-    t: NDArray[np.float64],
-    dt: NDArray[np.float64],
-    total_row: NDArray[np.float64],
-    truth_rows: tuple[NDArray[np.float64], ...] | None,
-) -> None:
-    """Add one axis's stochastic terms into ``total_row`` (runs in a worker thread).
+def _uniform_step(t: NDArray[np.float64], d: NDArray[np.float64]) -> float:
+    """The sampling step when t is uniform to 1e-6 relative, else 0 (per-sample steps).
 
-    With ``truth_rows`` = (bias_instability, random_walk, rate_ramp, white)
-    each term is kept separately and summed into ``total_row`` at the end.
+    1e-6 tolerates the rounding of t = k / f_s at large t (relative jitter of
+    the differences ~ eps t / dt) and changes the noise scaling by < 1 ppm.
     """
-    n = t.size
-    buf = np.empty(n)
-    bi_row, rw_row, ramp_row, white_row = truth_rows if truth_rows is not None else (total_row,) * 4
-    nd = float(te.noise_density[axis])
-    if nd > 0:
-        stream(root, sensor, _PROC_WHITE, axis, 0).standard_normal(out=buf)
-        _k.white_add(white_row, buf, dt, nd)
+    if t.size < 2:
+        return 1.0
+    step = (t[-1] - t[0]) / (t.size - 1)
+    return float(step) if float(np.max(np.abs(d - step))) <= 1e-6 * step else 0.0
+
+
+def _f64(a: Any) -> NDArray[np.float64]:
+    """Writable C-contiguous float64 copy (one numba signature for every call)."""
+    return np.array(a, dtype=np.float64, order="C", copy=True)
+
+
+def _states(
+    root: np.random.SeedSequence, sensor: int, te: TriadErrors, common: bool = False
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Stream states (3, 2 + M, 4) and GM parameters (3, M) of one triad
+    (``common``: the three axes share the x-axis streams)."""
     if te.bias_instability is not None:
         sig, tc = te.bias_instability.components()
-        for j in range(sig.shape[0]):
-            if sig[j, axis] > 0:
-                stream(root, sensor, _PROC_BIAS_INSTABILITY, axis, j).standard_normal(out=buf)
-                _k.gauss_markov_add(bi_row, buf, dt, float(sig[j, axis]), float(tc[j, axis]))
-    k_rw = float(te.random_walk[axis])
-    if k_rw > 0:
-        stream(root, sensor, _PROC_RANDOM_WALK, axis, 0).standard_normal(out=buf)
-        _k.random_walk_add(rw_row, buf, dt, k_rw)
-    r = float(te.rate_ramp[axis])
-    if r != 0.0:
-        ramp_row += r * (t - t[0])
-    if truth_rows is not None:
-        np.add(bi_row, rw_row, out=total_row)
-        total_row += ramp_row
-        total_row += white_row
+    else:
+        sig, tc = np.zeros((1, 3)), np.ones((1, 3))
+    m = sig.shape[0]
+    procs = [(_PROC_WHITE, 0), (_PROC_RANDOM_WALK, 0)] + [(_PROC_BIAS_INSTABILITY, j) for j in range(m)]
+    axes = [0, 0, 0] if common else [0, 1, 2]
+    states = np.stack([np.stack([stream_state(root, sensor, p, i, j) for p, j in procs]) for i in axes])
+    return states, _f64(sig.T), _f64(tc.T)
 
 
 def _apply_arrays(
@@ -984,79 +1006,57 @@ def _apply_arrays(
     dtemp: NDArray[np.float64] | None,
     return_truth: bool,
     threads: int | None = None,
+    common_axis_noise: bool = False,
 ) -> tuple[NDArray[np.float64], NDArray[np.float64], ImuErrorTruth | None]:
     n = t.size
     root = seed_sequence(rng)
-    dt = _time_steps(t)
-    if n > 1 and not np.all(dt[1:] > 0):
-        i = int(np.argmax(~(dt[1:] > 0))) + 1
+    d = np.diff(t)
+    if n > 1 and not np.all(d > 0):
+        i = int(np.argmax(~(d > 0))) + 1
         raise InvalidInputError(f"apply_errors: time must be strictly increasing (row {i})")
-    triads = (("gyro", model.gyro), ("accel", model.accel))
-    if n < 2 and any(te.has_noise for _, te in triads):
+    triads = (("gyro", model.gyro, gyro), ("accel", model.accel, accel))
+    if n < 2 and any(te.has_noise for _, te, _ in triads):
         raise InsufficientDataError("apply_errors: stochastic errors need at least 2 samples (to know the rate)")
-
-    total = {nm: np.zeros((3, n)) for nm, _ in triads}
-    parts: dict[str, tuple[np.ndarray, ...]] = {}
-    if return_truth:
-        parts = {nm: tuple(np.zeros((3, n)) for _ in range(4)) for nm, _ in triads}
-
-    jobs = []
-    for nm, te in triads:
-        for ax in range(3):
-            rows = tuple(a[ax] for a in parts[nm]) if return_truth else None
-            jobs.append((te, _SENSOR_KEY[nm], ax, root, t, dt, total[nm][ax], rows))
-    nthreads = threads if threads is not None else (os.cpu_count() or 1)
-    nthreads = max(1, min(nthreads, 6))
-    parallel = nthreads > 1 and n >= _PARALLEL_MIN_SAMPLES
-    if parallel:
-        with ThreadPoolExecutor(max_workers=nthreads) as ex:
-            for fut in [ex.submit(_stochastic_axis, *job) for job in jobs]:
-                fut.result()
-    else:
-        for job in jobs:
-            _stochastic_axis(*job)
-
-    dtemp_arr = np.zeros(0) if dtemp is None else np.ascontiguousarray(dtemp, dtype=float)
+    dt_const = _uniform_step(t, d)
+    del d
+    dtemp_arr = np.zeros(0) if dtemp is None else _f64(dtemp)
     outs: dict[str, np.ndarray] = {}
     nsat: dict[str, np.ndarray] = {}
+    truth_arr: dict[str, np.ndarray] = {}
 
-    def measure(nm: str, te: TriadErrors, x: np.ndarray) -> None:
+    def run(nm: str, te: TriadErrors, x: np.ndarray) -> None:
         out = np.empty((n, 3))
+        tr = np.zeros((4, n, 3)) if return_truth else np.zeros((4, 0, 3))
         is_gyro = nm == "gyro"
         g = model.g_sensitivity if is_gyro else np.zeros((3, 3))
+        states, sig, tc = _states(root, _SENSOR_KEY[nm], te, common_axis_noise)
         fs = te.full_scale if te.full_scale is not None else np.zeros(3)
-        nsat[nm] = _k.measure_triad(
-            x,
-            accel,
-            np.ascontiguousarray(te.scale_misalignment),
-            np.ascontiguousarray(g),
+        nsat[nm] = _k.simulate_triad(
+            t, dt_const, x, accel,
             bool(is_gyro and np.any(g != 0)),
-            np.ascontiguousarray(te.bias),
-            dtemp_arr,
-            np.ascontiguousarray(te.bias_temp_poly),
-            np.ascontiguousarray(te.scale_temp_poly),
-            total[nm],
-            np.ascontiguousarray(te.quantization),
-            te.quantization_mode == "integrated",
-            np.ascontiguousarray(fs, dtype=float),
-            out,
-        )
+            _f64(te.scale_misalignment), _f64(g), _f64(te.bias), dtemp_arr,
+            _f64(te.bias_temp_poly), _f64(te.scale_temp_poly),
+            _f64(te.noise_density), sig, tc, _f64(te.random_walk), _f64(te.rate_ramp),
+            _f64(te.quantization), te.quantization_mode == "integrated", _f64(fs),
+            states, out, tr, return_truth,
+        )  # fmt: skip
         outs[nm] = out
+        truth_arr[nm] = tr
 
-    if parallel:
+    nthreads = threads if threads is not None else (os.cpu_count() or 1)
+    if nthreads > 1 and n >= _PARALLEL_MIN_SAMPLES:
         with ThreadPoolExecutor(max_workers=2) as ex:
-            futs = [ex.submit(measure, "gyro", model.gyro, gyro), ex.submit(measure, "accel", model.accel, accel)]
-            for fut in futs:
+            for fut in [ex.submit(run, nm, te, x) for nm, te, x in triads]:
                 fut.result()
     else:
-        measure("gyro", model.gyro, gyro)
-        measure("accel", model.accel, accel)
+        for nm, te, x in triads:
+            run(nm, te, x)
 
     truth = None
     if return_truth:
         tt = {}
-        for nm, te in triads:
-            bi, rw, ramp, wh = parts[nm]
+        for nm, te, _ in triads:
+            bi, rw, ramp, wh = truth_arr[nm]
             const = np.broadcast_to(te.bias, (n, 3)).copy()
             if dtemp is not None and te.bias_temp_poly.shape[0] > 0:
                 p = np.ones(n)
@@ -1064,11 +1064,11 @@ def _apply_arrays(
                     p = p * dtemp
                     const += p[:, None] * row[None, :]
             tt[nm] = TriadTruth(
-                bias=const + (bi + rw + ramp).T,
-                bias_instability=bi.T.copy(),
-                random_walk=rw.T.copy(),
-                rate_ramp=ramp.T.copy(),
-                white_noise=wh.T.copy(),
+                bias=const + bi + rw + ramp,
+                bias_instability=bi,
+                random_walk=rw,
+                rate_ramp=ramp,
+                white_noise=wh,
                 n_saturated=nsat[nm],
             )
         truth = ImuErrorTruth(gyro=tt["gyro"], accel=tt["accel"], model=model)
@@ -1102,6 +1102,7 @@ def apply_errors(
     *,
     return_truth: bool = False,
     threads: int | None = None,
+    common_axis_noise: bool = False,
 ) -> ImuData | tuple[ImuData, ImuErrorTruth]:
     """Apply an IMU error model to an ideal recording.
 
@@ -1120,7 +1121,13 @@ def apply_errors(
         Also return an :class:`ImuErrorTruth` with the realised bias tracks
         and white noise.
     threads : int, optional
-        Worker threads (default: CPU count, at most 6); results do not depend on it.
+        Worker threads (default: CPU count; gyro and accelerometer run in
+        parallel); results do not depend on it.
+    common_axis_noise : bool
+        Use the x-axis random streams on all three axes of a triad (same
+        normalised realisation, scaled per axis).  Only for reproducing the
+        thesis's simulation, whose estimation errors show this pattern
+        (imu-error-calibration.md §8.3); physically the axes are independent.
 
     Returns
     -------
@@ -1131,13 +1138,13 @@ def apply_errors(
     for attr in ("t", "gyro", "accel"):
         if not hasattr(ideal, attr):
             raise InvalidInputError(f"apply_errors: ideal must be an ImuData (missing .{attr})")
-    t = np.ascontiguousarray(ideal.t, dtype=float)
+    t = _readonly(ideal.t)
     n = t.size
     gyro = _as_n3(ideal.gyro, n, "ideal.gyro")
     accel = _as_n3(ideal.accel, n, "ideal.accel")
     temp = _temperature(temp_c, ideal, n)
     dtemp = None if temp is None else temp - model.temp_ref_c
-    g, a, truth = _apply_arrays(t, gyro, accel, model, rng, dtemp, return_truth, threads)
+    g, a, truth = _apply_arrays(t, gyro, accel, model, rng, dtemp, return_truth, threads, common_axis_noise)
     meta = dict(getattr(ideal, "meta", {}) or {})
     meta["error_model"] = model.name or "custom"
     changes: dict[str, Any] = {"gyro": g, "accel": a, "meta": meta}
@@ -1154,11 +1161,21 @@ def simulate_imu(
     *,
     temp_c: ArrayLike | None = None,
     return_truth: bool = False,
+    common_axis_noise: bool = False,
     **ideal_kw: Any,
 ) -> ImuData | tuple[ImuData, ImuErrorTruth]:
     """Virtual IMU: ideal outputs of ``trajectory`` (:func:`imunav.sim.trajectory.ideal_imu`
-    with ``ideal_kw``) with the errors of ``error_model`` applied (:func:`apply_errors`)."""
+    with ``ideal_kw``: earth_rate, transport_rate, gravity, lat, h) with the
+    errors of ``error_model`` applied (:func:`apply_errors`; same ``rng``,
+    ``temp_c``, ``return_truth`` and ``common_axis_noise``)."""
     from imunav.sim.trajectory import ideal_imu  # lazy: owned by the trajectory module
 
+    if not isinstance(error_model, ImuErrorModel):
+        raise InvalidInputError(
+            f"simulate_imu: error_model must be an ImuErrorModel (e.g. imunav.sim.presets.get('tactical')), "
+            f"got {type(error_model).__name__}"
+        )
     ideal = ideal_imu(trajectory, **ideal_kw)
-    return apply_errors(ideal, error_model, rng, temp_c, return_truth=return_truth)
+    return apply_errors(
+        ideal, error_model, rng, temp_c, return_truth=return_truth, common_axis_noise=common_axis_noise
+    )

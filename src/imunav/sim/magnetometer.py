@@ -27,7 +27,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from imunav.errors import DegenerateGeometryError, InvalidInputError, NonFiniteError, ShapeError
 from imunav.rotation import quat_conjugate, quat_rotate
-from imunav.sim.error_model import _mat3, _vec3, seed_sequence, stream
+from imunav.sim.error_model import _mat3, _vec3, normals, seed_sequence
 
 __all__ = ["MagnetometerModel", "simulate_magnetometer"]
 
@@ -128,5 +128,5 @@ def simulate_magnetometer(
         root = seed_sequence(rng)
         for i in range(3):
             if model.noise[i] > 0:
-                out[:, i] += model.noise[i] * stream(root, _MAG_SENSOR, 0, i, 0).standard_normal(n)
+                out[:, i] += model.noise[i] * normals(root, (_MAG_SENSOR, 0, i, 0), n)
     return (out, h_body) if return_truth else out

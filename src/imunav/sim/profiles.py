@@ -25,7 +25,10 @@ full turn about each axis; Ferraris et al., Sensors and Actuators A 46-47,
 
 from __future__ import annotations
 
+import csv
+import os
 from dataclasses import dataclass, fields
+from pathlib import Path
 from typing import Iterator
 
 import numpy as np
@@ -113,9 +116,53 @@ class Segments:
         m = self.kind == kind
         return Segments(**{f.name: getattr(self, f.name)[m] for f in fields(self)})
 
+    def trim(self, start_s: float, stop_s: float | None = None) -> "Segments":
+        """Segments shortened by ``start_s`` at the start and ``stop_s`` (default
+        ``start_s``) at the end, e.g. to skip settling after a move.  Sample
+        spans are recomputed from the profile's uniform rate; segments that
+        would become empty raise."""
+        stop_s = start_s if stop_s is None else stop_s
+        if start_s < 0 or stop_s < 0:
+            raise InvalidInputError(f"trim times must be non-negative; got {start_s}, {stop_s}")
+        dur = self.t_stop - self.t_start
+        short = np.flatnonzero(dur <= start_s + stop_s)
+        if short.size:
+            raise InvalidInputError(
+                f"trimming {start_s} + {stop_s} s empties segments {short[:10].tolist()} "
+                f"(shortest lasts {dur.min():g} s); trim less"
+            )
+        n = self.i_stop - self.i_start
+        fs = float(np.median(n[n > 1] / dur[n > 1])) if np.any(n > 1) else 1.0
+        d = {f.name: getattr(self, f.name).copy() for f in fields(self)}
+        d["t_start"] = self.t_start + start_s
+        d["t_stop"] = self.t_stop - stop_s
+        d["i_start"] = self.i_start + int(np.ceil(start_s * fs - 1e-6))
+        d["i_stop"] = self.i_stop - int(np.ceil(stop_s * fs - 1e-6))
+        return Segments(**d)
+
     def to_dict(self) -> dict:
         """Column lists for JSON."""
         return {f.name: getattr(self, f.name).tolist() for f in fields(self)}
+
+    def write_csv(self, path: str | os.PathLike[str]) -> Path:
+        """Write the table as CSV (atomically): one row per segment, rates and
+        angles in degrees, ``up``/``axis``/``q`` split into columns."""
+        from imunav.io._atomic import atomic_path
+
+        cols = ["kind", "step", "t_start", "t_stop", "i_start", "i_stop", "up_x", "up_y", "up_z",
+                "axis_x", "axis_y", "axis_z", "rate_dps", "angle_deg", "qw", "qx", "qy", "qz"]
+        p = Path(path)
+        with atomic_path(p) as tmp, open(tmp, "w", newline="") as fh:
+            w = csv.writer(fh)
+            w.writerow(cols)
+            for k in range(len(self)):
+                w.writerow([
+                    self.kind[k], int(self.step[k]), repr(float(self.t_start[k])), repr(float(self.t_stop[k])),
+                    int(self.i_start[k]), int(self.i_stop[k]), *(repr(float(x)) for x in self.up_b[k]),
+                    *(repr(float(x)) for x in self.axis_b[k]), repr(float(np.rad2deg(self.rate[k]))),
+                    repr(float(np.rad2deg(self.angle[k]))), *(repr(float(x)) for x in self.q_nb[k]),
+                ])
+        return p
 
     def to_records(self) -> list[dict]:
         """One dict per segment (for tables / CSV)."""
@@ -275,6 +322,10 @@ class _Builder:
         for j, p in enumerate(self.pieces):
             i0, i1 = idx_edges[j], idx_edges[j + 1]
             if i1 <= i0:
+                continue
+            if p.kind == "static":
+                q[i0:i1] = p.q0
+                w[i0:i1] = 0.0
                 continue
             tau = tau_all[i0:i1] - edges[j]
             th, rt = p.theta(tau)

@@ -253,9 +253,11 @@ def ideal_imu(
         )
 
     # --- gravity ---------------------------------------------------------
+    # a fixed place (the usual lab case): evaluate the Earth model once
+    fixed = lat_v is not None and np.ptp(lat_v) == 0 and np.ptp(h_v) == 0
     if isinstance(gravity, str):
         if gravity == "normal":
-            g = np.asarray(earth.normal_gravity(lat_v, h_v)) * np.ones(n)
+            g = np.full(n, earth.normal_gravity(lat_v[0], h_v[0])) if fixed else np.asarray(earth.normal_gravity(lat_v, h_v))
         elif gravity == "constant":
             g = np.full(n, G0)
         else:
@@ -279,7 +281,7 @@ def ideal_imu(
     f_n = acc.copy()
     f_n[:, 2] -= g
     if earth_rate:
-        w_ie = earth.earth_rate_ned(lat_v)
+        w_ie = np.broadcast_to(earth.earth_rate_ned(lat_v[0]), (n, 3)) if fixed else earth.earth_rate_ned(lat_v)
         w_in += w_ie
         if vel is not None:
             f_n += 2.0 * np.cross(w_ie, vel)

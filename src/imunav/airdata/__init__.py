@@ -1,0 +1,99 @@
+"""Air data, Doppler radar and wind estimation.
+
+* :mod:`~imunav.airdata.atmosphere` - ISA (0-47 km), pressure altitude.
+* :mod:`~imunav.airdata.airdata` - air-data computer: Mach (subsonic and
+  Rayleigh supersonic pitot), CAS, TAS, SAT, density, α/β, TAS into body axes.
+* :mod:`~imunav.airdata.doppler` - 3/4-beam Janus geometry, Doppler shifts,
+  least-squares velocity, bias / scale / noise / over-water errors.
+* :mod:`~imunav.airdata.wind` - the wind triangle.
+* :mod:`~imunav.airdata.filter` - the thesis's 6-state wind filter (Akgün
+  2002) with a fixed sign convention (``V_G = V_A + W``, ``z = V_D − V_A``)
+  and a long-horizon navigation-frame variant for real flights.
+* :mod:`~imunav.airdata.scenario` - the thesis scenarios and Monte Carlo.
+* :mod:`~imunav.airdata.plot` - figures (compute code never plots).
+"""
+
+from __future__ import annotations
+
+from imunav.airdata.airdata import (
+    AirData,
+    air_data,
+    aoa_sideslip,
+    calibrated_airspeed,
+    mach_from_pressures,
+    pitot_ratio,
+    static_temperature,
+    tas_to_body,
+    total_temperature,
+    true_airspeed,
+)
+from imunav.airdata.atmosphere import IsaState, isa, pressure_altitude
+from imunav.airdata.doppler import (
+    DopplerErrors,
+    DopplerMeasurement,
+    janus_beams,
+    simulate_doppler,
+    velocity_from_beams,
+)
+from imunav.airdata.filter import (
+    LongHorizonConfig,
+    LongHorizonResult,
+    ThesisFilterConfig,
+    WindFilterResult,
+    run_long_horizon,
+    run_thesis_filter,
+    run_thesis_filter_batch,
+    thesis_matrices,
+    thesis_row,
+)
+from imunav.airdata.scenario import (
+    ThesisData,
+    ThesisMonteCarlo,
+    ThesisScenario,
+    covariance_sequence,
+    monte_carlo_thesis,
+    simulate_thesis,
+    thesis_report,
+)
+from imunav.airdata.wind import heading_for_course, wind_from_speeds, wind_from_velocities, wind_speed_direction
+
+__all__ = [
+    "isa",
+    "IsaState",
+    "pressure_altitude",
+    "air_data",
+    "AirData",
+    "mach_from_pressures",
+    "pitot_ratio",
+    "calibrated_airspeed",
+    "static_temperature",
+    "total_temperature",
+    "true_airspeed",
+    "aoa_sideslip",
+    "tas_to_body",
+    "janus_beams",
+    "velocity_from_beams",
+    "simulate_doppler",
+    "DopplerErrors",
+    "DopplerMeasurement",
+    "wind_from_velocities",
+    "wind_from_speeds",
+    "wind_speed_direction",
+    "heading_for_course",
+    "ThesisFilterConfig",
+    "thesis_matrices",
+    "thesis_row",
+    "run_thesis_filter",
+    "run_thesis_filter_batch",
+    "WindFilterResult",
+    "LongHorizonConfig",
+    "LongHorizonResult",
+    "run_long_horizon",
+    "ThesisScenario",
+    "ThesisData",
+    "simulate_thesis",
+    "covariance_sequence",
+    "monte_carlo_thesis",
+    "ThesisMonteCarlo",
+    "thesis_report",
+]

@@ -1,0 +1,365 @@
+"""Wind-estimating air-data / Doppler Kalman filters.
+
+Thesis filter (Akgün 2002, §5.2-5.3, 6.2a; digest §2.5)
+-------------------------------------------------------
+Indirect, open-loop, body-axis filter with state (6)::
+
+    x = [δX, δY, δZ, W_x, W_y, W_z]
+
+**Sign convention (fixed here; the thesis's eqs. 5.3/5.7 and 5.9 disagree,
+digest §2.3 choice B):** ``W`` is the wind in body axes, defined by the wind
+triangle ``V_G = V_A + W`` (ground velocity = air velocity + wind), and
+``δX = X_G − X_A`` is the correction of the ADS dead-reckoning position
+``X_A = Σ V_A T``.  The measurement is the Doppler minus ADS velocity::
+
+    z = V_D − V_A = W + n_D − n_A,      R = (σ_A² + σ_D²) I = 4.01 I
+
+and the outputs are ``V̂_G = V_A + Ŵ`` and ``X̂ = X_A + δX̂`` (thesis eqs.
+5.7/5.8 with this sign).  With the thesis simulation ``V_A = V − W + n_A``
+(eq. 5.9 as printed) the wind estimate converges to +W, as in its figures.
+
+Model: ``Φ = [[I, T I], [0, (1 − T/τ) I]]`` (eq. 5.2, τ = 600 s; the printed
+Φ rounds the diagonal to 1, which changes P by < 1e-6 over 500 steps),
+``G = [0; I]``, ``Q = 0.001 I`` applied directly (the (βT − β²T²/2) factor of
+eq. 5.2 is *not* used), ``H = [0 I]``, ``P₀ = diag(100, 100, 100, 10, 10, 10)``,
+``x̂₀ = [0.1, 0.1, 0.1, 12, 7, 5]``, T = 1 ms.  Steady state
+``P₄₄ = (−Q + √(Q² + 4QR))/2 = 0.06283``, gains 0.0157 / 0.00098.
+
+Index convention: row k of every per-step array is the estimate after k + 1
+updates; the thesis's "iteration n" is row ``n − 2`` (MATLAB stores the
+initial condition at index 1), so its table values at iterations
+50/100/101/150/200/≥300 are rows 48/98/99/148/198/≥298
+(:func:`thesis_row`).  The thesis's measurement step s is row s − 1.
+
+Long-horizon variant (:func:`run_long_horizon`)
+-----------------------------------------------
+For real flights: the wind in the *navigation* frame (it does not rotate
+with the aircraft in turns) as first-order Gauss-Markov (σ_w, τ_w; discrete
+``φ = e^{−Δt/τ}``, ``q = σ_w²(1 − φ²)``), NED dead-reckoning position
+correction, exact discretisation (Van Loan), Doppler at its own low rate with
+the ADS interpolated to the Doppler epochs, ``z = C_nb (V_D − V_A)``,
+``R = C_nb (R_D + R_A) C_nbᵀ + σ_turb² I`` (turbulence as measurement noise of
+the mean-wind filter), optional robust update.  The position states stay
+unobservable (only their correlation with the wind helps): the reported
+position σ grows and is reported honestly.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from imunav.errors import InvalidInputError, ShapeError
+from imunav.filters import BatchRun, KalmanFilter, batch_kalman_filter
+from imunav.filters._common import ResultMixin
+from imunav.filters.robust import robust_update
+
+__all__ = [
+    "ThesisFilterConfig",
+    "thesis_matrices",
+    "thesis_row",
+    "THESIS_ITERATIONS",
+    "THESIS_P44",
+    "WindFilterResult",
+    "run_thesis_filter",
+    "run_thesis_filter_batch",
+    "LongHorizonConfig",
+    "LongHorizonResult",
+    "run_long_horizon",
+]
+
+Array = NDArray[np.float64]
+
+# Akgün 2002, Table 6.3 (P(4/4) column, optimal filter) - digest §2.5
+THESIS_ITERATIONS = (50, 100, 101, 150, 200, 300, 500)
+THESIS_P44 = (0.0965, 0.0686, 0.0684, 0.0640, 0.0631, 0.0628, 0.0628)
+
+
+def thesis_row(iteration: int | ArrayLike) -> int | Array:
+    """Row of the per-step arrays that matches the thesis's table iteration n (row = n − 2)."""
+    it = np.asarray(iteration)
+    if np.any(it < 2):
+        raise InvalidInputError("thesis iterations start at 2 (iteration 1 is the initial condition)")
+    r = it - 2
+    return int(r) if r.ndim == 0 else r
+
+
+@dataclass(frozen=True)
+class ThesisFilterConfig(ResultMixin):
+    """Parameters of the thesis filter (defaults: the thesis's values, digest §3)."""
+
+    dt: float = 0.001
+    tau: float = 600.0
+    q: float = 0.001
+    sigma_ads: float = 2.0
+    sigma_doppler: float = 0.1
+    p0: tuple[float, ...] = (100.0, 100.0, 100.0, 10.0, 10.0, 10.0)
+    x0: tuple[float, ...] = (0.1, 0.1, 0.1, 12.0, 7.0, 5.0)
+    velocity_decay: bool = True
+
+    def __post_init__(self) -> None:
+        if not (self.dt > 0 and self.tau > 0 and self.q >= 0 and self.sigma_ads > 0 and self.sigma_doppler >= 0):
+            raise InvalidInputError(f"invalid filter parameters: dt={self.dt}, tau={self.tau}, q={self.q}, "
+                                    f"sigma_ads={self.sigma_ads}, sigma_doppler={self.sigma_doppler} (need > 0)")
+        if len(self.p0) != 6 or len(self.x0) != 6:
+            raise InvalidInputError("p0 and x0 must have 6 entries (δX, δY, δZ, W_x, W_y, W_z)")
+
+
+def thesis_matrices(cfg: ThesisFilterConfig | None = None) -> dict[str, Array]:
+    """F (Φ), G, Q, H, R, P0, x0 of the thesis filter."""
+    c = ThesisFilterConfig() if cfg is None else cfg
+    I3 = np.eye(3)
+    F = np.eye(6)
+    F[:3, 3:] = c.dt * I3
+    if c.velocity_decay:
+        F[3:, 3:] = (1.0 - c.dt / c.tau) * I3
+    G = np.vstack([np.zeros((3, 3)), I3])
+    H = np.hstack([np.zeros((3, 3)), I3])
+    return {"F": F, "G": G, "Q": c.q * I3, "H": H, "R": (c.sigma_ads**2 + c.sigma_doppler**2) * I3,
+            "P0": np.diag(np.asarray(c.p0, dtype=np.float64)), "x0": np.asarray(c.x0, dtype=np.float64)}
+
+
+@dataclass(frozen=True)
+class WindFilterResult(ResultMixin):
+    """One run of the thesis filter.
+
+    x (N, 6) state estimates, P_diag (N, 6), innovation / normalized (N, 3),
+    weights (N, 3) (1 used, 0 rejected), wind (N, 3) = x[:, 3:],
+    velocity (N, 3) = V_A + Ŵ, position (N, 3) = X_A + δX̂ (when V_A given),
+    difference_loop (N, 3) = z (the raw wind of the difference loop).
+    """
+
+    x: Array
+    P_diag: Array
+    innovation: Array
+    normalized: Array
+    weights: Array
+    wind: Array
+    difference_loop: Array
+    velocity: Array | None = None
+    position: Array | None = None
+    robust: str | None = None
+
+
+def _check_z(z: ArrayLike, batch: bool) -> Array:
+    zz = np.asarray(z, dtype=np.float64)
+    want = 3 if batch else 2
+    if zz.ndim != want or zz.shape[-1] != 3:
+        raise ShapeError(f"z must have shape {'(runs, N, 3)' if batch else '(N, 3)'}, got {zz.shape}")
+    if np.any(np.isinf(zz)):
+        raise InvalidInputError("z contains inf; use NaN rows for missing measurements")
+    return zz
+
+
+def run_thesis_filter_batch(z: ArrayLike, cfg: ThesisFilterConfig | None = None, *, robust: str | None = None,
+                            gate_m: float = 2.0, alpha: float = 1e-3, huber_c: float = 1.345) -> BatchRun:
+    """The thesis filter over a batch of difference measurements ``z = V_D − V_A`` (runs, N, 3)."""
+    m = thesis_matrices(cfg)
+    return batch_kalman_filter(m["x0"], m["P0"], m["F"], m["Q"], m["H"], m["R"], _check_z(z, True), G=m["G"],
+                               robust=robust, gate_m=gate_m, alpha=alpha, huber_c=huber_c)
+
+
+def run_thesis_filter(
+    z: ArrayLike,
+    cfg: ThesisFilterConfig | None = None,
+    *,
+    v_ads: ArrayLike | None = None,
+    robust: str | None = None,
+    gate_m: float = 2.0,
+    alpha: float = 1e-3,
+    huber_c: float = 1.345,
+) -> WindFilterResult:
+    """Run the thesis filter on ``z = V_D − V_A`` (N, 3).
+
+    robust : None (optimal), ``"gate"`` (thesis, per channel |ν̃| < gate_m),
+        ``"nis"`` (vector χ² gate at level alpha: rejects whole-sensor
+        outliers, recommended for the ADS), ``"isolate"`` (χ² test + w-test
+        isolation of single channels) or ``"huber"``.
+    v_ads : ADS body velocity (N, 3); gives the corrected ground velocity and
+        position ``X_A + δX̂`` with ``X_A(k) = X_A(0) + T Σ_{j≤k} V_A(j)``,
+        ``X_A(0) = δX̂₀``-consistent zero (positions are relative to the start).
+    """
+    c = ThesisFilterConfig() if cfg is None else cfg
+    zz = _check_z(z, False)
+    r = run_thesis_filter_batch(zz[None], c, robust=robust, gate_m=gate_m, alpha=alpha, huber_c=huber_c)
+    x = r.x[0]
+    vel = pos = None
+    if v_ads is not None:
+        va = np.asarray(v_ads, dtype=np.float64)
+        if va.shape != zz.shape:
+            raise ShapeError(f"v_ads must have the shape of z {zz.shape}, got {va.shape}")
+        vel = va + x[:, 3:]
+        pos = c.dt * np.cumsum(va, axis=0) + x[:, :3]
+    return WindFilterResult(x, r.P_diag[0], r.innovation[0], r.normalized[0], r.weights[0], x[:, 3:].copy(), zz,
+                            vel, pos, robust)
+
+
+# ----------------------------------------------------------------------------------------------
+# long-horizon variant
+
+
+@dataclass(frozen=True)
+class LongHorizonConfig(ResultMixin):
+    """Navigation-frame wind filter for real flights (see module docstring).
+
+    wind_sigma, wind_tau : Gauss-Markov mean-wind std (m/s) and correlation time (s)
+    turbulence_sigma, turbulence_tau : Gauss-Markov gust std (m/s) and correlation
+        time (s, ≈ L_u / V = 533 m / 200 m/s for Dryden at altitude)
+    sigma_ads, sigma_doppler : body-axis velocity noise std (m/s) per axis
+    p0_wind, p0_position : initial variances (m²/s², m²)
+    robust : None, "gate", "isolate" (default) or "huber"; alpha its test level
+    """
+
+    wind_sigma: float = 10.0
+    wind_tau: float = 1800.0
+    turbulence_sigma: float = 1.5
+    turbulence_tau: float = 2.7
+    sigma_ads: tuple[float, float, float] = (0.3, 0.4, 0.4)
+    sigma_doppler: tuple[float, float, float] = (0.17, 0.17, 0.06)  # 4-beam LS, 0.1 m/s per beam, 65° depression
+    p0_wind: float = 400.0
+    p0_position: float = 1.0
+    robust: str | None = "isolate"
+    alpha: float = 1e-3
+    gate_m: float = 3.0
+
+    def __post_init__(self) -> None:
+        if not (self.wind_sigma > 0 and self.wind_tau > 0 and self.turbulence_sigma >= 0 and self.turbulence_tau > 0):
+            raise InvalidInputError("wind_sigma, wind_tau, turbulence_tau must be > 0 and turbulence_sigma >= 0")
+        if self.robust not in (None, "gate", "isolate", "nis", "huber"):
+            raise InvalidInputError(f"robust must be None, 'gate', 'isolate', 'nis' or 'huber', got {self.robust!r}")
+
+
+@dataclass(frozen=True)
+class LongHorizonResult(ResultMixin):
+    """Long-horizon run: estimates at the Doppler epochs ``t``.
+
+    wind (N, 3) NED total-wind estimate (mean + gust) and its std,
+    mean_wind (N, 3) the slowly varying part, position (N, 3) corrected NED
+    position relative to the start and its std, normalized (N, 3) normalised
+    innovations, weights (N, 3) (1 used, 0 rejected).
+    """
+
+    t: Array
+    wind: Array
+    wind_std: Array
+    mean_wind: Array
+    position: Array
+    position_std: Array
+    normalized: Array
+    weights: Array
+    config: LongHorizonConfig = field(default_factory=LongHorizonConfig)
+
+
+def _van_loan(dt: float, c: LongHorizonConfig) -> tuple[Array, Array]:
+    """Exact discrete (Φ, Q) per axis of ``δṗ = W + g``, ``Ẇ = −W/τ_w + w₁``, ``ġ = −g/τ_g + w₂``."""
+    from scipy.linalg import expm
+
+    A = np.array([[0.0, 1.0, 1.0], [0.0, -1.0 / c.wind_tau, 0.0], [0.0, 0.0, -1.0 / c.turbulence_tau]])
+    Qc = np.diag([0.0, 2.0 * c.wind_sigma**2 / c.wind_tau, 2.0 * c.turbulence_sigma**2 / c.turbulence_tau])
+    M = np.zeros((6, 6))
+    M[:3, :3] = -A
+    M[:3, 3:] = Qc
+    M[3:, 3:] = A.T
+    E = expm(M * dt)
+    Phi = E[3:, 3:].T
+    Qd = Phi @ E[:3, 3:]
+    return Phi, 0.5 * (Qd + Qd.T)
+
+
+def run_long_horizon(
+    t_ads: ArrayLike,
+    v_ads_body: ArrayLike,
+    t_doppler: ArrayLike,
+    v_doppler_body: ArrayLike,
+    C_nb_doppler: ArrayLike,
+    C_nb_ads: ArrayLike,
+    cfg: LongHorizonConfig | None = None,
+) -> LongHorizonResult:
+    """Long-horizon wind filter on multi-rate ADS and Doppler data.
+
+    State per NED axis: DR position correction δp, mean wind W, gust g
+    (9 states).  The ADS NED air velocity ``C_nb V_A`` is integrated on its
+    own time grid (trapezoidal dead reckoning) and interpolated to the
+    Doppler epochs; each Doppler sample gives
+    ``z = C_nb V_D − C_nb V_A = W + g + noise`` with
+    ``R = C_nb (R_D + R_A) C_nbᵀ``.
+    """
+    from imunav.filters._batch import huber_batch, isolate_batch
+    from imunav.filters._batch import inv_sqrt_batch, masked_update, sym
+    from imunav.filters.robust import isolation_thresholds
+
+    c = LongHorizonConfig() if cfg is None else cfg
+    ta = np.asarray(t_ads, dtype=np.float64)
+    td = np.asarray(t_doppler, dtype=np.float64)
+    va = np.asarray(v_ads_body, dtype=np.float64)
+    vd = np.asarray(v_doppler_body, dtype=np.float64)
+    Cd = np.asarray(C_nb_doppler, dtype=np.float64)
+    Ca = np.asarray(C_nb_ads, dtype=np.float64)
+    if va.shape != (ta.size, 3) or Ca.shape != (ta.size, 3, 3):
+        raise ShapeError(f"ADS arrays must be (N, 3) and (N, 3, 3) for {ta.size} times; got {va.shape}, {Ca.shape}")
+    if vd.shape != (td.size, 3) or Cd.shape != (td.size, 3, 3):
+        raise ShapeError(f"Doppler arrays must be (M, 3) and (M, 3, 3) for {td.size} times; got {vd.shape}, {Cd.shape}")
+    for name, tt in (("t_ads", ta), ("t_doppler", td)):
+        if tt.size < 2 or np.any(np.diff(tt) <= 0):
+            raise InvalidInputError(f"{name} must be strictly increasing with >= 2 samples")
+    if td[0] < ta[0] or td[-1] > ta[-1]:
+        raise InvalidInputError("Doppler epochs must lie within the ADS time span (the ADS is interpolated)")
+    for name, a in (("v_ads_body", va), ("v_doppler_body", vd), ("C_nb_ads", Ca), ("C_nb_doppler", Cd)):
+        if not np.all(np.isfinite(a)):
+            raise InvalidInputError(f"{name} contains NaN or inf at row {int(np.argwhere(~np.isfinite(a))[0, 0])}")
+    va_n = np.einsum("kij,kj->ki", Ca, va)
+    pa = np.concatenate([np.zeros((1, 3)), np.cumsum(0.5 * (va_n[1:] + va_n[:-1]) * np.diff(ta)[:, None], axis=0)])
+    va_d = np.stack([np.interp(td, ta, va_n[:, i]) for i in range(3)], axis=1)
+    pa_d = np.stack([np.interp(td, ta, pa[:, i]) for i in range(3)], axis=1)
+    z = np.einsum("kij,kj->ki", Cd, vd) - va_d
+    Rb = np.diag(np.asarray(c.sigma_ads, dtype=np.float64) ** 2 + np.asarray(c.sigma_doppler, dtype=np.float64) ** 2)
+    R_all = np.einsum("kij,jl,kml->kim", Cd, Rb, Cd)
+    I3 = np.eye(3)
+    H = np.hstack([np.zeros((3, 3)), I3, I3])
+    x = np.zeros((1, 9))
+    P = np.diag([c.p0_position] * 3 + [c.p0_wind] * 3 + [max(c.turbulence_sigma, 1e-3) ** 2] * 3)[None]
+    thr = isolation_thresholds(3, c.alpha)
+    N = td.size
+    xs = np.empty((N, 9))
+    pd = np.empty((N, 9))
+    wv = np.empty((N, 3))
+    nn = np.full((N, 3), np.nan)
+    w = np.zeros((N, 3))
+    cache: dict[float, tuple[Array, Array]] = {}
+    ones = np.ones((1, 3), dtype=bool)
+    for k in range(N):
+        if k > 0:
+            dt = round(float(td[k] - td[k - 1]), 9)
+            if dt not in cache:
+                Phi3, Q3 = _van_loan(dt, c)
+                cache[dt] = (np.kron(Phi3, I3), np.kron(Q3, I3))
+            F, Q = cache[dt]
+            x = x @ F.T
+            P = sym(F @ P @ F.T + Q)
+        R = R_all[k]
+        nu = z[k][None] - x @ H.T
+        S = sym(H @ P @ H.T + R)
+        nn[k] = (inv_sqrt_batch(S) @ nu[0])[0]
+        mode = None if k == 0 else c.robust  # the first difference initialises the wind
+        if mode == "huber":
+            x, P, wk, _ = huber_batch(x, P, z[k][None], H, R, 1.345, ones)
+        else:
+            if mode == "gate":
+                acc = np.abs(nn[k][None]) < c.gate_m
+            elif mode == "isolate":
+                acc = isolate_batch(nu, S, thr)
+            elif mode == "nis":
+                acc = np.full((1, 3), float(nn[k] @ nn[k]) <= thr[-1])
+            else:
+                acc = ones
+            x, P, _ = masked_update(x, P, nu, H, R, acc)
+            wk = acc.astype(np.float64)
+        w[k] = wk[0]
+        xs[k] = x[0]
+        pd[k] = np.diag(P[0])
+        wv[k] = np.diag(H @ P[0] @ H.T)  # variance of W + g (includes their covariance)
+    wind = xs[:, 3:6] + xs[:, 6:9]
+    return LongHorizonResult(td, wind, np.sqrt(wv), xs[:, 3:6].copy(), pa_d + xs[:, :3],
+                             np.sqrt(pd[:, :3]), nn, w, c)

@@ -1,0 +1,494 @@
+"""The thesis scenarios and their Monte Carlo evaluation (Akgün 2002, ch. 6; digest §3-4).
+
+Scenario (digest §3): T = 1 ms, 500 steps, ADS noise σ = 2 m/s and Doppler
+σ = 0.1 m/s per body axis at every step, true wind (Gauss-Markov truth with
+no process noise, eq. 5.5) from ``x_g(0) = [0.1, 0.1, 0.1, 7, 5, 1.7]``,
+true aircraft velocity from the Charlie model (it cancels in z).  Sensors,
+with the sign convention of :mod:`imunav.airdata.filter`::
+
+    V_A = V − W + n_A   (eq. 5.9),    V_D = V + n_D   (eq. 5.10),    z = V_D − V_A
+
+Kinds: ``nominal``; ``outliers`` (ADS noise ×15 at thesis steps 100, 200,
+300, 400 on all channels); ``variance`` (ADS noise ×3.5 from thesis step 151
+on); ``bias`` (+10 m/s on the ADS from step 151); ``drift``; ``stuck``.
+Thesis step s is row s − 1 of the arrays.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field, replace
+
+import numpy as np
+from numpy.typing import NDArray
+
+from imunav.airdata.filter import (
+    THESIS_ITERATIONS,
+    THESIS_P44,
+    ThesisFilterConfig,
+    run_thesis_filter,
+    run_thesis_filter_batch,
+    thesis_matrices,
+    thesis_row,
+)
+from imunav.errors import InvalidInputError
+from imunav.filters import Fault, inject_faults
+from imunav.filters._common import ResultMixin
+from imunav.filters.faults import (
+    DETECTORS,
+    alarms,
+    calibrated_thresholds,
+    detection_delays,
+    detector_statistics,
+    false_alarm_rates,
+    thesis_thresholds,
+)
+
+__all__ = [
+    "KINDS",
+    "ThesisScenario",
+    "ThesisData",
+    "simulate_thesis",
+    "simulate_thesis_batch",
+    "covariance_sequence",
+    "actual_error_covariance",
+    "ThesisMonteCarlo",
+    "monte_carlo_thesis",
+    "thesis_report",
+    "load_config",
+    "thesis_tables",
+]
+
+Array = NDArray[np.float64]
+KINDS = ("nominal", "outliers", "variance", "bias", "drift", "stuck")
+
+
+@dataclass(frozen=True)
+class ThesisScenario(ResultMixin):
+    """Thesis scenario parameters (defaults from the thesis; steps are the thesis's 1-based steps)."""
+
+    kind: str = "nominal"
+    n_steps: int = 500
+    dt: float = 0.001
+    sigma_ads: float = 2.0
+    sigma_doppler: float = 0.1
+    tau: float = 600.0
+    x_true0: tuple[float, ...] = (0.1, 0.1, 0.1, 7.0, 5.0, 1.7)
+    outlier_steps: tuple[int, ...] = (100, 200, 300, 400)
+    outlier_factor: float = 15.0
+    fault_step: int = 151
+    variance_factor: float = 3.5
+    bias: float = 10.0
+    drift_rate: float = 200.0  # m/s per s (0.2 m/s per 1 ms step)
+    channels: tuple[int, ...] | None = None
+    filter: ThesisFilterConfig = field(default_factory=ThesisFilterConfig)
+
+    def __post_init__(self) -> None:
+        if self.kind not in KINDS:
+            raise InvalidInputError(f"kind must be one of {KINDS}, got {self.kind!r}")
+        if self.n_steps < 25:
+            raise InvalidInputError(f"n_steps must be >= 25 (detector window), got {self.n_steps}")
+        if not 1 <= self.fault_step <= self.n_steps:
+            raise InvalidInputError(f"fault_step must be within 1..{self.n_steps}, got {self.fault_step}")
+        if any(not 1 <= s <= self.n_steps for s in self.outlier_steps):
+            raise InvalidInputError(f"outlier_steps must be within 1..{self.n_steps}")
+
+    @property
+    def onset_row(self) -> int:
+        return self.fault_step - 1
+
+    def faults(self) -> list[Fault]:
+        ch = self.channels
+        o = self.onset_row
+        return {
+            "nominal": [],
+            "outliers": [Fault("outlier", magnitude=self.outlier_factor, channels=ch,
+                               steps=tuple(s - 1 for s in self.outlier_steps))],
+            "variance": [Fault("noise", o, self.variance_factor, ch)],
+            "bias": [Fault("bias", o, self.bias, ch)],
+            "drift": [Fault("drift", o, self.drift_rate, ch)],
+            "stuck": [Fault("stuck", o, 0.0, ch)],
+        }[self.kind]
+
+    def anomaly_mask(self) -> NDArray[np.bool_]:
+        """(N, 3) True where the injected fault / outlier affects a sample."""
+        m = np.zeros((self.n_steps, 3), dtype=bool)
+        ch = slice(None) if self.channels is None else list(self.channels)
+        if self.kind == "outliers":
+            rows = [s - 1 for s in self.outlier_steps]
+            for r in rows:
+                m[r, ch] = True
+        elif self.kind != "nominal":
+            m[self.onset_row:, ch] = True
+        return m
+
+
+@dataclass(frozen=True)
+class ThesisData(ResultMixin):
+    """One simulated thesis run: truth and sensors, (N, 3) per body axis unless noted.
+
+    x_true (N, 6) true error state (δX, W), wind_true = x_true[:, 3:],
+    v_true body velocity, v_ads, v_doppler, z = V_D − V_A, ads_noise.
+    """
+
+    t: Array
+    x_true: Array
+    wind_true: Array
+    v_true: Array
+    v_ads: Array
+    v_doppler: Array
+    z: Array
+    ads_noise: Array
+    anomaly: NDArray[np.bool_]
+    scenario: ThesisScenario
+
+
+def _truth(sc: ThesisScenario) -> Array:
+    cfg = replace(sc.filter, dt=sc.dt, tau=sc.tau)
+    F = thesis_matrices(cfg)["F"]
+    x = np.asarray(sc.x_true0, dtype=np.float64)
+    out = np.empty((sc.n_steps, 6))
+    for k in range(sc.n_steps):
+        x = F @ x
+        out[k] = x
+    return out
+
+
+def simulate_thesis_batch(sc: ThesisScenario | None = None, n_runs: int = 100,
+                          rng: np.random.Generator | int | None = None) -> tuple[Array, Array, Array]:
+    """(z (runs, N, 3), x_true (N, 6), ADS noise (runs, N, 3)) for Monte Carlo."""
+    s = ThesisScenario() if sc is None else sc
+    if n_runs < 1:
+        raise InvalidInputError(f"n_runs must be >= 1, got {n_runs}")
+    from imunav.sim.flight import simulate_thesis_aircraft
+
+    gen = np.random.default_rng(rng)
+    xt = _truth(s)
+    N = s.n_steps
+    v = simulate_thesis_aircraft(N, s.dt).velocity  # same deterministic flight for every run
+    na = s.sigma_ads * gen.standard_normal((n_runs, N, 3))
+    nd = s.sigma_doppler * gen.standard_normal((n_runs, N, 3))
+    va = v[None] - xt[None, :, 3:] + na  # eq. 5.9; faults act on the ADS output
+    faults = s.faults()
+    if faults:
+        va = np.stack([inject_faults(va[r], faults, noise=na[r], dt=s.dt) for r in range(n_runs)])
+    z = v[None] + nd - va
+    return z, xt, na
+
+
+def simulate_thesis(sc: ThesisScenario | None = None, rng: np.random.Generator | int | None = None) -> ThesisData:
+    """One thesis run with the aircraft truth (Charlie model) and both sensors."""
+    from imunav.sim.flight import simulate_thesis_aircraft
+
+    s = ThesisScenario() if sc is None else sc
+    gen = np.random.default_rng(rng)
+    xt = _truth(s)
+    v = simulate_thesis_aircraft(s.n_steps, s.dt).velocity
+    na = s.sigma_ads * gen.standard_normal((s.n_steps, 3))
+    nd = s.sigma_doppler * gen.standard_normal((s.n_steps, 3))
+    va = v - xt[:, 3:] + na
+    faults = s.faults()
+    if faults:
+        va = inject_faults(va, faults, noise=na, dt=s.dt)
+    vd = v + nd
+    return ThesisData(s.dt * np.arange(1, s.n_steps + 1), xt, xt[:, 3:].copy(), v, va, vd, vd - va, na,
+                      s.anomaly_mask(), s)
+
+
+def covariance_sequence(cfg: ThesisFilterConfig | None = None, n_steps: int = 500) -> dict[str, list[float]]:
+    """P44 and P11 at the thesis's table iterations, beside the thesis's P44 values."""
+    r = run_thesis_filter(np.zeros((n_steps, 3)), cfg)
+    rows = thesis_row(np.asarray(THESIS_ITERATIONS))
+    return {"iteration": list(THESIS_ITERATIONS), "P44": [float(r.P_diag[k, 3]) for k in rows],
+            "P11": [float(r.P_diag[k, 0]) for k in rows], "P44_thesis": list(THESIS_P44)}
+
+
+def actual_error_covariance(cfg: ThesisFilterConfig | None = None, n_steps: int = 500,
+                            x_error0: tuple[float, ...] = (0.0, 0.0, 0.0, 5.0, 2.0, 3.3),
+                            sigma_ads: float = 2.0, sigma_doppler: float = 0.1) -> tuple[Array, Array]:
+    """Exact mean and covariance of the estimation error when the truth has no process noise.
+
+    The thesis's truth (eq. 5.5) has no process noise while the filter assumes
+    Q = 0.001, so the actual error ``e = x̂ − x`` evolves as
+    ``e⁺ = (I − K H) F e⁻ + K v`` with the filter's own gains K:
+    ``E⁺ = (I−KH) F E Fᵀ (I−KH)ᵀ + K R_true Kᵀ`` and mean ``(I−KH) F μ``
+    (initial error = x̂₀ − x_g(0)).  Returns (mean (N, 6), covariance diag (N, 6)).
+    """
+    m = thesis_matrices(cfg)
+    F, H, G, Q, R = m["F"], m["H"], m["G"], m["Q"], m["R"]
+    Rt = (sigma_ads**2 + sigma_doppler**2) * np.eye(3)
+    P = m["P0"].copy()
+    E = np.zeros((6, 6))
+    mu = np.asarray(x_error0, dtype=np.float64)
+    mus = np.empty((n_steps, 6))
+    Es = np.empty((n_steps, 6))
+    I6 = np.eye(6)
+    for k in range(n_steps):
+        P = F @ P @ F.T + G @ Q @ G.T
+        K = P @ H.T @ np.linalg.inv(H @ P @ H.T + R)
+        A = (I6 - K @ H)
+        P = A @ P @ A.T + K @ R @ K.T
+        E = A @ F @ E @ F.T @ A.T + K @ Rt @ K.T
+        mu = A @ F @ mu
+        mus[k] = mu
+        Es[k] = np.diag(E)
+    return mus, Es
+
+
+@dataclass(frozen=True)
+class ThesisMonteCarlo(ResultMixin):
+    """Monte Carlo figures of the thesis scenarios (see :func:`monte_carlo_thesis`)."""
+
+    n_runs: int
+    seed: int
+    wind: dict
+    robust: dict
+    false_alarms: dict
+    detection: dict
+    thresholds: dict
+
+
+def _rms_theory(cfg: ThesisFilterConfig, n_steps: int, k0: int) -> float:
+    mu, E = actual_error_covariance(cfg, n_steps)
+    return float(np.sqrt(np.mean(mu[k0:, 3:] ** 2 + E[k0:, 3:])))
+
+
+def _rms(e: Array, axis=None) -> Array:
+    return np.sqrt(np.mean(e**2, axis=axis))
+
+
+def monte_carlo_thesis(
+    n_runs: int = 200,
+    rng: int = 0,
+    *,
+    p_false_alarm: float = 0.01,
+    window: int = 20,
+    robust_methods: tuple[str, ...] = ("gate2", "gate3", "nis", "isolate", "huber"),
+    horizon: int = 10,
+) -> ThesisMonteCarlo:
+    """Seeded Monte Carlo of all thesis scenarios.
+
+    * wind: per-axis RMS wind error of the KF over thesis iterations ≥ 100
+      (rows ≥ 98) and of the difference loop, variance ratio, RMS position
+      error at the last step.
+    * robust: for each method, the share of injected anomalous channel-samples
+      rejected (weight 0; Huber: weight < 0.1), false rejections on nominal
+      data, nominal RMS relative to the optimal filter, and RMS over the 50
+      steps after each outlier.
+    * false_alarms: per-step and per-run false-alarm rates of every detector
+      under nominal data (rows where the window is full), with the calibrated
+      and the thesis thresholds.
+    * detection: variance and bias faults: detection delay (onset sample =
+      delay 1) median / p90 / max, share detected within ``horizon`` steps,
+      missed by the end of the run.
+    """
+    seed = int(rng)
+    ss = np.random.SeedSequence(seed)
+    seeds = {k: int(s.generate_state(1)[0]) for k, s in zip(KINDS, ss.spawn(len(KINDS)))}
+    base = ThesisScenario()
+    cfg = base.filter
+    k0 = thesis_row(100)
+
+    # ---- nominal: optimal filter accuracy
+    z, xt, _ = simulate_thesis_batch(base, n_runs, seeds["nominal"])
+    opt = run_thesis_filter_batch(z, cfg)
+    ew = opt.x[:, k0:, 3:] - xt[None, k0:, 3:]
+    ed = z[:, k0:] - xt[None, k0:, 3:]
+    ep = opt.x[:, -1, :3] - xt[None, -1, :3]
+    wind = {
+        "kf_rms_per_axis": _rms(ew, (0, 1)).tolist(),
+        "kf_rms_theory": _rms_theory(cfg, base.n_steps, k0),
+        "kf_rms": float(_rms(ew)),
+        "difference_loop_rms": float(_rms(ed)),
+        "variance_ratio": float(np.var(ed) / np.var(ew)),
+        "kf_mean_error": float(np.mean(ew)),
+        "P44_steady": float(opt.P_diag[0, -1, 3]),
+        "empirical_error_variance": float(np.var(ew)),
+        "position_state_rms_end": float(_rms(ep)),
+        "rows": [int(k0), int(base.n_steps - 1)],
+    }
+    nominal_rms = float(_rms(ew))
+
+    # ---- robust filters
+    zo, xto, _ = simulate_thesis_batch(replace(base, kind="outliers"), n_runs, seeds["outliers"])
+    mask = replace(base, kind="outliers").anomaly_mask()
+    opt_o = run_thesis_filter_batch(zo, cfg)
+    after = np.zeros(base.n_steps, dtype=bool)
+    for s in base.outlier_steps:
+        after[s - 1:s - 1 + 50] = True
+
+    def _after_rms(x: Array) -> float:
+        return float(_rms(x[:, after, 3:] - xto[None, after, 3:]))
+
+    robust = {"optimal": {"rms_with_outliers": float(_rms(opt_o.x[:, k0:, 3:] - xto[None, k0:, 3:])),
+                          "rms_50_steps_after_outliers": _after_rms(opt_o.x), "nominal_rms": nominal_rms,
+                          "n_anomalous_samples_per_run": int(mask.sum())}}
+    for meth in robust_methods:
+        kw: dict = {}
+        if meth.startswith("gate"):
+            kw = {"robust": "gate", "gate_m": float(meth[4:])}
+        elif meth in ("isolate", "nis"):
+            kw = {"robust": meth}
+        elif meth == "huber":
+            kw = {"robust": "huber"}
+        else:
+            raise InvalidInputError(f"unknown robust method {meth!r}: use gate<m>, nis, isolate or huber")
+        ro = run_thesis_filter_batch(zo, cfg, **kw)
+        rn = run_thesis_filter_batch(z, cfg, **kw)
+        rej = ro.weights < (0.1 if meth == "huber" else 0.5)
+        rejn = rn.weights < (0.1 if meth == "huber" else 0.5)
+        nom_rms = float(_rms(rn.x[:, k0:, 3:] - xt[None, k0:, 3:]))
+        robust[meth] = {
+            "rejected_anomalous": float(rej[:, mask].mean()),
+            "rejected_nominal": float(rejn.mean()),
+            "nominal_rms": nom_rms,
+            "nominal_rms_ratio_to_optimal": nom_rms / nominal_rms,
+            "rms_with_outliers": float(_rms(ro.x[:, k0:, 3:] - xto[None, k0:, 3:])),
+            "rms_50_steps_after_outliers": _after_rms(ro.x),
+        }
+
+    # ---- detectors: thresholds, false alarms on nominal data
+    M = window
+    thr = calibrated_thresholds(M, 3, p_false_alarm)
+    th = thesis_thresholds(M, 3)
+    stats_n = detector_statistics(opt.normalized, M)
+    valid = np.zeros(base.n_steps, dtype=bool)
+    valid[M - 1:] = True
+    fa = {}
+    for d in DETECTORS:
+        a = alarms(d, stats_n[d], thr[d])
+        ps, pr = false_alarm_rates(a[:, valid])
+        fa[d] = {"threshold": thr[d], "per_step": ps, "per_run": pr}
+        if d in th:
+            at = alarms(d, stats_n[d], th[d])
+            pst, prt = false_alarm_rates(at[:, valid])
+            fa[d].update(thesis_threshold=th[d], per_step_thesis=pst, per_run_thesis=prt)
+
+    # ---- detection of variance and bias faults
+    det = {}
+    for kind in ("variance", "bias", "drift", "stuck"):
+        sc = replace(base, kind=kind)
+        zf, _, _ = simulate_thesis_batch(sc, n_runs, seeds[kind])
+        rf = run_thesis_filter_batch(zf, cfg)
+        st = detector_statistics(rf.normalized, M)
+        o = sc.onset_row
+        det[kind] = {"onset_row": o}
+        for d in DETECTORS:
+            entry = {}
+            for label, t in (("calibrated", thr[d]), ("thesis", th.get(d))):
+                if t is None:
+                    continue
+                a = alarms(d, st[d], t)
+                delays, _ = detection_delays(a, o)
+                _, missed_h = detection_delays(a, o, horizon)
+                ok = delays[np.isfinite(delays)]
+                entry[label] = {
+                    "median_delay": float(np.median(ok)) if ok.size else None,
+                    "p90_delay": float(np.percentile(ok, 90)) if ok.size else None,
+                    "max_delay": float(ok.max()) if ok.size else None,
+                    f"detected_within_{horizon}": 1.0 - missed_h,
+                    "missed": float(np.mean(~np.isfinite(delays))),
+                }
+            det[kind][d] = entry
+    thr_out = {"calibrated": thr, "thesis": th, "p_false_alarm": p_false_alarm, "window": M}
+    return ThesisMonteCarlo(n_runs, seed, wind, robust, fa, det, thr_out)
+
+
+def thesis_report(n_runs: int = 200, rng: int = 0, **kw) -> dict:
+    """Everything ``imunav airdata thesis`` writes: covariance sequence, Monte Carlo, one seeded run's detection steps."""
+    from imunav.filters.faults import detect_faults
+
+    cov = covariance_sequence()
+    mc = monte_carlo_thesis(n_runs, rng, **kw)
+    single = {}
+    for kind in ("variance", "bias"):
+        d = simulate_thesis(ThesisScenario(kind=kind), rng)
+        r = run_thesis_filter(d.z)
+        out = {}
+        for mode in ("calibrated", "thesis"):
+            res = detect_faults(r.normalized, 20, threshold_mode=mode, start=d.scenario.onset_row)
+            # thesis step of the detection: row + 1
+            out[mode] = {k: (v.first_alarm + 1 if v.first_alarm >= 0 else None) for k, v in res.detectors.items()}
+        single[kind] = {"fault_step": d.scenario.fault_step, "detection_step": out,
+                        "thesis_detection_step": {"variance": {"alg1": 152, "alg2": 160, "alg3": 153},
+                                                  "bias": {"alg3": 152}}[kind]}
+    return {"covariance_sequence": cov, "monte_carlo": mc.to_dict(), "single_run_detection": single,
+            "thesis_tables": thesis_tables(rng)}
+
+
+def thesis_tables(rng: int = 0) -> dict:
+    """One seeded run laid out like the thesis's Tables 6.1 and 6.3 (x axis).
+
+    Table 6.1: wind x error of the difference loop and of the KF at iterations
+    50…500.  Table 6.3: x wind error and P44 of the optimal and the robust
+    filter (thesis gate ±2 and vector χ² gate) with outliers at steps
+    100/200/300/400, at iterations 50, 100, 101, …, 500.  Errors are
+    estimate − truth; iteration n is row n − 2.
+    """
+    its1 = list(range(50, 501, 50))
+    d = simulate_thesis(ThesisScenario(), rng)
+    r = run_thesis_filter(d.z)
+    rows = thesis_row(np.asarray(its1))
+    t61 = [{"iteration": i, "difference_loop": float(d.z[k, 0] - d.wind_true[k, 0]),
+            "kf": float(r.wind[k, 0] - d.wind_true[k, 0])} for i, k in zip(its1, rows)]
+    its3 = [50, 100, 101, 150, 200, 201, 250, 300, 301, 350, 400, 401, 450, 500]
+    do = simulate_thesis(ThesisScenario(kind="outliers"), rng)
+    runs = {"optimal": run_thesis_filter(do.z), "gate2": run_thesis_filter(do.z, robust="gate", gate_m=2.0),
+            "nis": run_thesis_filter(do.z, robust="nis")}
+    t63 = []
+    for i, k in zip(its3, thesis_row(np.asarray(its3))):
+        row = {"iteration": i}
+        for name, rr in runs.items():
+            row[f"{name}_err"] = float(rr.wind[k, 0] - do.wind_true[k, 0])
+            row[f"{name}_P44"] = float(rr.P_diag[k, 3])
+        t63.append(row)
+    return {"table_6_1": t61, "table_6_3": t63, "seed": int(rng)}
+
+
+def load_config(path) -> "ThesisScenario | object":
+    """Read a TOML scenario: a ``[thesis]`` table → :class:`ThesisScenario`, a ``[flight]`` table →
+    :class:`imunav.sim.flight.FlightConfig` (tuples given as arrays; ``doppler`` as a sub-table of
+    :class:`~imunav.airdata.doppler.DopplerErrors` fields).  Unknown keys raise :class:`ConfigError`.
+    """
+    import dataclasses
+    import tomllib
+    from pathlib import Path
+
+    from imunav.errors import ConfigError
+
+    p = Path(path)
+    try:
+        doc = tomllib.loads(p.read_text())
+    except FileNotFoundError as exc:
+        raise ConfigError(f"{p}: no such file") from exc
+    except tomllib.TOMLDecodeError as exc:
+        raise ConfigError(f"{p}: not valid TOML ({exc})") from exc
+    keys = [k for k in ("thesis", "flight") if k in doc]
+    if len(keys) != 1:
+        raise ConfigError(f"{p}: needs exactly one [thesis] or [flight] table, found {list(doc) or 'none'}")
+    table = dict(doc[keys[0]])
+    if keys[0] == "thesis":
+        cls = ThesisScenario
+    else:
+        from imunav.airdata.doppler import DopplerErrors
+        from imunav.sim.flight import FlightConfig
+
+        cls = FlightConfig
+        if "doppler" in table:
+            sub = table.pop("doppler")
+            known = {f.name for f in dataclasses.fields(DopplerErrors)}
+            bad = set(sub) - known
+            if bad:
+                raise ConfigError(f"{p}: [flight.doppler] unknown key(s) {sorted(bad)}; known: {sorted(known)}")
+            table["doppler"] = DopplerErrors(**{k: tuple(v) if isinstance(v, list) else v for k, v in sub.items()})
+    known = {f.name for f in dataclasses.fields(cls)} - {"filter"}
+    bad = set(table) - known
+    if bad:
+        raise ConfigError(f"{p}: [{keys[0]}] unknown key(s) {sorted(bad)}; known: {sorted(known)}")
+    conv = {k: (tuple(tuple(x) if isinstance(x, list) else x for x in v) if isinstance(v, list) else v)
+            for k, v in table.items()}
+    try:
+        return cls(**conv)
+    except InvalidInputError as exc:
+        raise ConfigError(f"{p}: {exc}") from exc
+    except TypeError as exc:
+        raise ConfigError(f"{p}: {exc}") from exc

@@ -1,0 +1,84 @@
+"""Shared plumbing of the attitude filters (private)."""
+
+from __future__ import annotations
+
+from dataclasses import asdict, fields
+from typing import Any
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from imunav.errors import InvalidInputError, NonFiniteError, ShapeError
+from imunav.timeseries import ImuData
+
+Array = NDArray[np.float64]
+
+
+def prepare(data: ImuData, use_mag: bool | None) -> tuple[Array, Array, Array, Array, Array, bool]:
+    """(t, gyro, accel, mag, dt, use_mag) as contiguous float64 arrays.
+
+    ``dt[k] = t[k] - t[k-1]`` (``dt[0] = t[1] - t[0]``); the mag array is zeros
+    when the recording has none.
+    """
+    if not isinstance(data, ImuData):
+        raise InvalidInputError(
+            f"data must be an imunav.timeseries.ImuData, got {type(data).__name__}; "
+            "build one with ImuData(t, gyro, accel, mag)"
+        )
+    if data.n < 2:
+        raise InvalidInputError("the recording has fewer than 2 samples; attitude filters need a time step")
+    t = np.ascontiguousarray(data.t, dtype=np.float64)
+    g = np.ascontiguousarray(data.gyro, dtype=np.float64)
+    a = np.ascontiguousarray(data.accel, dtype=np.float64)
+    has_mag = data.mag is not None
+    if use_mag is None:
+        use_mag = has_mag
+    if use_mag and not has_mag:
+        raise InvalidInputError("use_mag=True but the recording has no magnetometer; pass use_mag=False (6D)")
+    m = np.ascontiguousarray(data.mag, dtype=np.float64) if has_mag else np.zeros_like(a)
+    dt = np.empty_like(t)
+    dt[1:] = np.diff(t)
+    dt[0] = dt[1]
+    return t, g, a, m, dt, bool(use_mag)
+
+
+def check_q0(q0: ArrayLike) -> Array:
+    q = np.asarray(q0, dtype=np.float64).reshape(-1)
+    if q.shape != (4,):
+        raise ShapeError(f"q0 must be a (4,) quaternion [w, x, y, z], got shape {np.shape(q0)}")
+    n = np.linalg.norm(q)
+    if not np.isfinite(n) or n == 0.0:
+        raise NonFiniteError("q0 must be a finite, non-zero quaternion")
+    return q / n
+
+
+def vec3(v: ArrayLike | None, name: str) -> Array:
+    if v is None:
+        return np.zeros(3)
+    a = np.asarray(v, dtype=np.float64).reshape(-1)
+    if a.shape != (3,):
+        raise ShapeError(f"{name} must be a 3-vector, got shape {np.shape(v)}")
+    if not np.all(np.isfinite(a)):
+        raise NonFiniteError(f"{name} contains NaN/inf")
+    return a
+
+
+def check_positive(**kw: float) -> None:
+    for k, v in kw.items():
+        if not (np.isfinite(v) and v >= 0.0):
+            raise InvalidInputError(f"{k} must be a finite number >= 0, got {v}")
+
+
+def initial_q(acc: Array, mag: Array, use_mag: bool, q0: ArrayLike | None) -> Array:
+    from imunav.attitude.alignment import align
+
+    if q0 is not None:
+        return check_q0(q0)
+    return align(acc[0], mag[0] if use_mag else None)
+
+
+def params_dict(obj: Any) -> dict[str, Any]:
+    try:
+        return {f.name: getattr(obj, f.name) for f in fields(obj)}
+    except TypeError:
+        return asdict(obj)

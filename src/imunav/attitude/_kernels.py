@@ -1,0 +1,1025 @@
+"""Numba kernels of the attitude filters (private).
+
+Conventions: ``q`` is ``q_nb`` (body -> NED), Hamilton, scalar first; the
+accelerometer gives specific force ``f_b`` (level at rest: ``(0, 0, -g)``);
+the body frame is any right-handed sensor frame.  Sample ``k`` moves the state
+from ``t_{k-1}`` to ``t_k`` with the gyro sample ``k`` held over ``dt[k]`` and
+then applies the aiding measurements of sample ``k``; output row ``k`` is the
+state after sample ``k``.
+
+Error-state filters use a body-frame attitude error ``q = q̂ ⊗ exp(δθ)``
+(Solà 2017, §7, "local" error) and a gyro-bias error ``b = b̂ + δb``.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+from imunav._rotation_kernels import qexp_1, qlog_1, qmul_1, qrot_1
+
+# ---------------------------------------------------------------------------
+# small helpers
+
+
+@njit(cache=True)
+def _qconj(q):
+    out = np.empty(4)
+    out[0] = q[0]
+    out[1] = -q[1]
+    out[2] = -q[2]
+    out[3] = -q[3]
+    return out
+
+
+@njit(cache=True)
+def _qnorm(q):
+    n = math.sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3])
+    return q / n
+
+
+@njit(cache=True)
+def _qrot_inv(q, v):
+    """q* ⊗ v ⊗ q: nav vector -> body."""
+    return qrot_1(_qconj(q), v)
+
+
+@njit(cache=True)
+def _skew(v):
+    S = np.zeros((3, 3))
+    S[0, 1] = -v[2]
+    S[0, 2] = v[1]
+    S[1, 0] = v[2]
+    S[1, 2] = -v[0]
+    S[2, 0] = -v[1]
+    S[2, 1] = v[0]
+    return S
+
+
+@njit(cache=True)
+def _dcm(q):
+    w, x, y, z = q[0], q[1], q[2], q[3]
+    C = np.empty((3, 3))
+    C[0, 0] = 1.0 - 2.0 * (y * y + z * z)
+    C[0, 1] = 2.0 * (x * y - w * z)
+    C[0, 2] = 2.0 * (x * z + w * y)
+    C[1, 0] = 2.0 * (x * y + w * z)
+    C[1, 1] = 1.0 - 2.0 * (x * x + z * z)
+    C[1, 2] = 2.0 * (y * z - w * x)
+    C[2, 0] = 2.0 * (x * z - w * y)
+    C[2, 1] = 2.0 * (y * z + w * x)
+    C[2, 2] = 1.0 - 2.0 * (x * x + y * y)
+    return C
+
+
+@njit(cache=True)
+def _norm3(v):
+    return math.sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2])
+
+
+@njit(cache=True)
+def _rodrigues(r):
+    """DCM exp([r]x) (exact)."""
+    th = _norm3(r)
+    S = _skew(r)
+    I3 = np.eye(3)
+    if th < 1e-8:
+        return I3 + S + 0.5 * S @ S
+    a = math.sin(th) / th
+    b = (1.0 - math.cos(th)) / (th * th)
+    return I3 + a * S + b * (S @ S)
+
+
+@njit(cache=True, inline="always")
+def _tmul(a0, a1, a2, a3, b0, b1, b2, b3):
+    """Hamilton product on scalars (no allocation)."""
+    return (a0 * b0 - a1 * b1 - a2 * b2 - a3 * b3,
+            a0 * b1 + a1 * b0 + a2 * b3 - a3 * b2,
+            a0 * b2 - a1 * b3 + a2 * b0 + a3 * b1,
+            a0 * b3 + a1 * b2 - a2 * b1 + a3 * b0)
+
+
+@njit(cache=True, inline="always")
+def _texp(r0, r1, r2):
+    th2 = r0 * r0 + r1 * r1 + r2 * r2
+    if th2 < 1e-8:
+        c = 1.0 - th2 / 8.0 + th2 * th2 / 384.0
+        sk = 0.5 - th2 / 48.0 + th2 * th2 / 3840.0
+    else:
+        th = math.sqrt(th2)
+        c = math.cos(0.5 * th)
+        sk = math.sin(0.5 * th) / th
+    return c, sk * r0, sk * r1, sk * r2
+
+
+@njit(cache=True, inline="always")
+def _tnorm(a0, a1, a2, a3):
+    n = 1.0 / math.sqrt(a0 * a0 + a1 * a1 + a2 * a2 + a3 * a3)
+    return a0 * n, a1 * n, a2 * n, a3 * n
+
+
+@njit(cache=True, inline="always")
+def _trot(w, x, y, z, v0, v1, v2):
+    """q ⊗ v ⊗ q* on scalars."""
+    tx = 2.0 * (y * v2 - z * v1)
+    ty = 2.0 * (z * v0 - x * v2)
+    tz = 2.0 * (x * v1 - y * v0)
+    return (v0 + w * tx + (y * tz - z * ty), v1 + w * ty + (z * tx - x * tz), v2 + w * tz + (x * ty - y * tx))
+
+
+@njit(cache=True)
+def _rodrigues_into(R, r0, r1, r2):
+    """R = exp([r]x) written in place."""
+    th2 = r0 * r0 + r1 * r1 + r2 * r2
+    if th2 < 1e-12:
+        a = 1.0 - th2 / 6.0
+        b = 0.5 - th2 / 24.0
+    else:
+        th = math.sqrt(th2)
+        a = math.sin(th) / th
+        b = (1.0 - math.cos(th)) / th2
+    R[0, 0] = 1.0 - b * (r1 * r1 + r2 * r2)
+    R[1, 1] = 1.0 - b * (r0 * r0 + r2 * r2)
+    R[2, 2] = 1.0 - b * (r0 * r0 + r1 * r1)
+    R[0, 1] = -a * r2 + b * r0 * r1
+    R[1, 0] = a * r2 + b * r0 * r1
+    R[0, 2] = a * r1 + b * r0 * r2
+    R[2, 0] = -a * r1 + b * r0 * r2
+    R[1, 2] = -a * r0 + b * r1 * r2
+    R[2, 1] = a * r0 + b * r1 * r2
+
+
+# ---------------------------------------------------------------------------
+# Madgwick gradient-descent filter
+
+
+@njit(cache=True)
+def _grad_term(q, d, s):
+    """Gradient of 0.5 |q* ⊗ d ⊗ q - s|^2 w.r.t. the 4 quaternion components.
+
+    With e = q* d q - s (pure): grad = -2 d ⊗ q ⊗ e  (d, e pure quaternions).
+    Equivalent to Madgwick's J^T f (Madgwick 2010, eqs. 20-34) for any
+    reference direction d.
+    """
+    v = _qrot_inv(q, d)
+    e = np.empty(4)
+    e[0] = 0.0
+    e[1] = v[0] - s[0]
+    e[2] = v[1] - s[1]
+    e[3] = v[2] - s[2]
+    dq = np.empty(4)
+    dq[0] = 0.0
+    dq[1] = d[0]
+    dq[2] = d[1]
+    dq[3] = d[2]
+    return -2.0 * qmul_1(qmul_1(dq, q), e)
+
+
+@njit(cache=True)
+def madgwick_step(q, gyr, acc, mag, dt, beta, use_mag, mag_scale):
+    """One Madgwick update.  ``q`` is body -> NWU here (Madgwick's Earth frame:
+    x magnetic north, z up); the public wrappers convert from/to NED.
+
+    Residuals and Jacobians are those of Madgwick (2010), eqs. 25-34, with the
+    field reference b = [b_x, 0, b_z] = mag_scale [|h_xy|, 0, h_z] and
+    h = q ⊗ m ⊗ q*.  ``mag_scale = 1`` is the derivation; ``0.5`` reproduces the
+    C code, whose ``_2bx = sqrt(hx² + hy²)`` should be ``2 sqrt(...)``
+    (references.md §3).  The 6D branch uses the same residual without the field.
+    """
+    q0, q1, q2, q3 = q[0], q[1], q[2], q[3]
+    gx, gy, gz = gyr[0], gyr[1], gyr[2]
+    qd0 = 0.5 * (-q1 * gx - q2 * gy - q3 * gz)
+    qd1 = 0.5 * (q0 * gx + q2 * gz - q3 * gy)
+    qd2 = 0.5 * (q0 * gy - q1 * gz + q3 * gx)
+    qd3 = 0.5 * (q0 * gz + q1 * gy - q2 * gx)
+    an = _norm3(acc)
+    if an > 0.0:
+        ax, ay, az = acc[0] / an, acc[1] / an, acc[2] / an
+        # gravity residual f_g (eq. 25) and J_g^T f_g
+        f1 = 2.0 * (q1 * q3 - q0 * q2) - ax
+        f2 = 2.0 * (q0 * q1 + q2 * q3) - ay
+        f3 = 2.0 * (0.5 - q1 * q1 - q2 * q2) - az
+        s0 = -2.0 * q2 * f1 + 2.0 * q1 * f2
+        s1 = 2.0 * q3 * f1 + 2.0 * q0 * f2 - 4.0 * q1 * f3
+        s2 = -2.0 * q0 * f1 + 2.0 * q3 * f2 - 4.0 * q2 * f3
+        s3 = 2.0 * q1 * f1 + 2.0 * q2 * f2
+        mn = _norm3(mag)
+        if use_mag and mn > 0.0:
+            mx, my, mz = mag[0] / mn, mag[1] / mn, mag[2] / mn
+            hx = (mx * (q0 * q0 + q1 * q1 - q2 * q2 - q3 * q3) + 2.0 * my * (q1 * q2 - q0 * q3)
+                  + 2.0 * mz * (q0 * q2 + q1 * q3))
+            hy = (2.0 * mx * (q0 * q3 + q1 * q2) + my * (q0 * q0 - q1 * q1 + q2 * q2 - q3 * q3)
+                  + 2.0 * mz * (q2 * q3 - q0 * q1))
+            hz = (2.0 * mx * (q1 * q3 - q0 * q2) + 2.0 * my * (q0 * q1 + q2 * q3)
+                  + mz * (q0 * q0 - q1 * q1 - q2 * q2 + q3 * q3))
+            bx = mag_scale * math.sqrt(hx * hx + hy * hy)
+            bz = mag_scale * hz
+            # field residual f_b (eq. 29) and J_b^T f_b (eq. 30)
+            e1 = 2.0 * bx * (0.5 - q2 * q2 - q3 * q3) + 2.0 * bz * (q1 * q3 - q0 * q2) - mx
+            e2 = 2.0 * bx * (q1 * q2 - q0 * q3) + 2.0 * bz * (q0 * q1 + q2 * q3) - my
+            e3 = 2.0 * bx * (q0 * q2 + q1 * q3) + 2.0 * bz * (0.5 - q1 * q1 - q2 * q2) - mz
+            s0 += -2.0 * bz * q2 * e1 + (-2.0 * bx * q3 + 2.0 * bz * q1) * e2 + 2.0 * bx * q2 * e3
+            s1 += 2.0 * bz * q3 * e1 + (2.0 * bx * q2 + 2.0 * bz * q0) * e2 + (2.0 * bx * q3 - 4.0 * bz * q1) * e3
+            s2 += ((-4.0 * bx * q2 - 2.0 * bz * q0) * e1 + (2.0 * bx * q1 + 2.0 * bz * q3) * e2
+                   + (2.0 * bx * q0 - 4.0 * bz * q2) * e3)
+            s3 += (-4.0 * bx * q3 + 2.0 * bz * q1) * e1 + (-2.0 * bx * q0 + 2.0 * bz * q2) * e2 + 2.0 * bx * q1 * e3
+        sn = math.sqrt(s0 * s0 + s1 * s1 + s2 * s2 + s3 * s3)
+        if sn > 0.0:
+            qd0 -= beta * s0 / sn
+            qd1 -= beta * s1 / sn
+            qd2 -= beta * s2 / sn
+            qd3 -= beta * s3 / sn
+    out = np.empty(4)
+    out[0] = q0 + qd0 * dt
+    out[1] = q1 + qd1 * dt
+    out[2] = q2 + qd2 * dt
+    out[3] = q3 + qd3 * dt
+    return _qnorm(out)
+
+
+@njit(cache=True)
+def _ned_nwu(q):
+    """X ⊗ q with X = [0, 1, 0, 0] (π about north): NED <-> NWU, sign-normalised."""
+    out = np.empty(4)
+    out[0] = -q[1]
+    out[1] = q[0]
+    out[2] = -q[3]
+    out[3] = q[2]
+    if out[0] < 0.0:
+        out = -out
+    return out
+
+
+@njit(cache=True)
+def madgwick_run(q0, gyr, acc, mag, dt, beta, use_mag, mag_scale):
+    """q0 and the output are body -> NED."""
+    n = gyr.shape[0]
+    out = np.empty((n, 4))
+    q = _ned_nwu(q0)
+    for k in range(n):
+        q = madgwick_step(q, gyr[k], acc[k], mag[k], dt[k], beta, use_mag, mag_scale)
+        out[k] = _ned_nwu(q)
+    return out
+
+
+# ---------------------------------------------------------------------------
+# Mahony explicit complementary filter
+
+
+@njit(cache=True)
+def mahony_step(q, bint, gyr, acc, mag, dt, kp, ki, use_mag):
+    """One Mahony update; returns (q, integral term).
+
+    e = a_meas × v̂ + m_meas × ŵ (unit vectors, body frame), ω' = ω + kp e + ∫ ki e dt
+    (Mahony, Hamel, Pflimlin 2008, eq. 32; magnetometer term with the
+    horizontal/vertical reference of the measured field).
+    """
+    qw, qx, qy, qz = q[0], q[1], q[2], q[3]
+    ex = 0.0
+    ey = 0.0
+    ez = 0.0
+    bo = bint.copy()
+    an = math.sqrt(acc[0] * acc[0] + acc[1] * acc[1] + acc[2] * acc[2])
+    if an > 0.0:
+        ax, ay, az = acc[0] / an, acc[1] / an, acc[2] / an
+        # predicted up direction in body: -(row 3 of C_nb)
+        vx = -2.0 * (qx * qz - qw * qy)
+        vy = -2.0 * (qy * qz + qw * qx)
+        vz = -(1.0 - 2.0 * (qx * qx + qy * qy))
+        ex += ay * vz - az * vy
+        ey += az * vx - ax * vz
+        ez += ax * vy - ay * vx
+        mn = math.sqrt(mag[0] * mag[0] + mag[1] * mag[1] + mag[2] * mag[2])
+        if use_mag and mn > 0.0:
+            mx, my, mz = mag[0] / mn, mag[1] / mn, mag[2] / mn
+            h0, h1, h2 = _trot(qw, qx, qy, qz, mx, my, mz)
+            bx = math.sqrt(h0 * h0 + h1 * h1)
+            wx, wy, wz = _trot(qw, -qx, -qy, -qz, bx, 0.0, h2)
+            ex += my * wz - mz * wy
+            ey += mz * wx - mx * wz
+            ez += mx * wy - my * wx
+        if ki > 0.0:
+            bo[0] += ki * ex * dt
+            bo[1] += ki * ey * dt
+            bo[2] += ki * ez * dt
+        else:
+            bo[:] = 0.0
+    gx = gyr[0] + kp * ex + bo[0]
+    gy = gyr[1] + kp * ey + bo[1]
+    gz = gyr[2] + kp * ez + bo[2]
+    d0, d1, d2, d3 = _tmul(qw, qx, qy, qz, 0.0, gx, gy, gz)
+    h = 0.5 * dt
+    out = np.empty(4)
+    out[0], out[1], out[2], out[3] = _tnorm(qw + h * d0, qx + h * d1, qy + h * d2, qz + h * d3)
+    return out, bo
+
+
+@njit(cache=True)
+def mahony_run(q0, b0, gyr, acc, mag, dt, kp, ki, use_mag):
+    n = gyr.shape[0]
+    out = np.empty((n, 4))
+    bias = np.empty((n, 3))
+    q = q0.copy()
+    bint = b0.copy()
+    for k in range(n):
+        q, bint = mahony_step(q, bint, gyr[k], acc[k], mag[k], dt[k], kp, ki, use_mag)
+        out[k] = q
+        bias[k] = -bint  # the integral term compensates the bias: b̂ = -∫
+    return out, bias
+
+
+# ---------------------------------------------------------------------------
+# Basic complementary filter (gyro strapdown + first-order tilt / heading pull)
+
+
+@njit(cache=True)
+def complementary_step(q, gyr, acc, mag, dt, k_acc, k_mag, use_mag):
+    """q ⊗ exp(ω dt), then rotate the estimate by a fraction of the tilt error
+    (accelerometer in nav frame vs. up) and of the heading error (horizontal
+    field vs. north).  Gains are first-order time constants: fraction = k dt.
+    """
+    q = _qnorm(qmul_1(q, qexp_1(gyr * dt)))
+    an = _norm3(acc)
+    if an > 0.0 and k_acc > 0.0:
+        fn = qrot_1(q, acc / an)  # should be (0, 0, -1)
+        # rotation that takes fn to -e3: axis fn × (-e3), angle acos(-fn_z)
+        ax = np.empty(3)
+        ax[0] = -fn[1]
+        ax[1] = fn[0]
+        ax[2] = 0.0
+        s = _norm3(ax)
+        if s > 1e-12:
+            ang = math.atan2(s, -fn[2])
+            frac = min(k_acc * dt, 1.0)
+            q = _qnorm(qmul_1(qexp_1(ax / s * ang * frac), q))
+    if use_mag and k_mag > 0.0:
+        mn = _norm3(mag)
+        if mn > 0.0:
+            h = qrot_1(q, mag / mn)
+            psi = math.atan2(h[1], h[0])  # should be 0 (magnetic north)
+            r = np.zeros(3)
+            r[2] = -psi * min(k_mag * dt, 1.0)
+            q = _qnorm(qmul_1(qexp_1(r), q))
+    return q
+
+
+@njit(cache=True)
+def complementary_run(q0, gyr, acc, mag, dt, k_acc, k_mag, use_mag):
+    n = gyr.shape[0]
+    out = np.empty((n, 4))
+    q = q0.copy()
+    for k in range(n):
+        q = complementary_step(q, gyr[k], acc[k], mag[k], dt[k], k_acc, k_mag, use_mag)
+        out[k] = q
+    return out
+
+
+# ---------------------------------------------------------------------------
+# Multiplicative EKF with gyro-bias states, adaptive R, disturbance rejection
+#
+# params (float64 array):
+#  0 sigma_gyro        gyro white noise [rad/s/sqrt(Hz)]
+#  1 sigma_bias        gyro bias random walk [rad/s/sqrt(s)]
+#  2 sigma_acc         accelerometer direction noise [unitless, per sample]
+#  3 k_acc             R_acc inflation per (| |f| - g | / g)^2   (adaptive R)
+#  4 acc_reject        reject accelerometer when | |f| - g | / g > acc_reject
+#  5 sigma_mag         heading noise from the magnetometer [rad, per sample]
+#  6 mag_norm_tol      relative field-norm tolerance for disturbance detection
+#  7 mag_dip_tol       dip-angle tolerance [rad]
+#  8 k_mag             R_mag inflation per normalised (norm, dip) deviation^2
+#  9 rest_gyro         rest detection: max |ω - b̂| [rad/s] (<= 0 disables)
+# 10 rest_acc          rest detection: max | |f| - g | [m/s^2]
+# 11 rest_time         rest detection: minimum duration [s]
+# 12 sigma_rest        zero-rate pseudo-measurement noise [rad/s]
+# 13 g                 gravity magnitude [m/s^2]
+# 14 mag_ref_time      after this long continuously disturbed [s], accept the
+#                      current field as the new reference (<= 0: never)
+# 15 sigma_acc_rate    extra accelerometer noise per rad/s of |ω| (centripetal)
+# 16 ref_tau           time constant [s] of the slow field-reference update
+# 17 use_mag (>0.5)
+# 18 acc_lpf_tau       [s] low-pass of the nav-frame specific force (0: off)
+
+N_PARAMS = 19
+
+
+@njit(cache=True)
+def _ekf_update(P, dx, H, r, nu, PH):
+    """Scalar measurement update of the 6-state error (in place).
+
+    s = H P Hᵀ + r, K = P Hᵀ / s, dx += K (ν − H dx), P −= K s Kᵀ (the
+    symmetric form of (I − K H) P for a scalar update; P stays symmetric).
+    Returns the NIS term ν'² / s.
+    """
+    for i in range(6):
+        acc = 0.0
+        for j in range(6):
+            acc += P[i, j] * H[j]
+        PH[i] = acc
+    s = r
+    hdx = 0.0
+    for i in range(6):
+        s += H[i] * PH[i]
+        hdx += H[i] * dx[i]
+    nu = nu - hdx
+    for i in range(6):
+        dx[i] += PH[i] * nu / s
+    for i in range(6):
+        for j in range(6):
+            P[i, j] -= PH[i] * PH[j] / s
+    return nu * nu / s
+
+
+@njit(cache=True)
+def _apply_correction(q, b, dx):
+    q = _qnorm(qmul_1(q, qexp_1(dx[0:3])))
+    b = b + dx[3:6]
+    return q, b
+
+
+@njit(cache=True)
+def _mekf_predict(P, R, dt, sg2, sb2, W):
+    """P ← Φ P Φᵀ + Q with Φ = [[R, −dt I], [0, I]] (block form, in place; W 6x6 scratch)."""
+    # W[0:3, :] = Φ[0:3, :] P  (rows of the attitude block)
+    for i in range(3):
+        for j in range(6):
+            acc = -dt * P[3 + i, j]
+            for k in range(3):
+                acc += R[i, k] * P[k, j]
+            W[i, j] = acc
+    # new A = W[0:3,:] Φ[0:3,:]ᵀ ; new B = W[0:3, 3:6]
+    for i in range(3):
+        for j in range(3):
+            acc = -dt * W[i, 3 + j]
+            for k in range(3):
+                acc += W[i, k] * R[j, k]
+            W[3 + i, j] = acc  # temporarily store new A in W rows 3..5
+    for i in range(3):
+        for j in range(3):
+            P[i, j] = 0.5 * (W[3 + i, j] + W[3 + j, i])
+            P[i, 3 + j] = W[i, 3 + j]
+            P[3 + j, i] = W[i, 3 + j]
+        P[i, i] += sg2
+        P[3 + i, 3 + i] += sb2
+
+
+@njit(cache=True)
+def mekf_step(q, b, P, st, gyr, acc, mag, dt, p, out_phi):
+    """One MEKF step.  ``st`` (float64 array, len 12) is the adaptive state:
+    [0] rest timer, [1] mag ref norm, [2] mag ref dip, [3] disturbed timer,
+    [4] ref valid flag, [5:8] low-passed nav specific force, [8] flag bits,
+    [9] NIS sum, [10] NIS dof, [11] low-pass initialised.
+    Returns (q, b).  ``out_phi`` receives the 6x6 transition matrix.
+    """
+    g = p[13]
+    use_mag = p[17] > 0.5
+    W = np.empty((6, 6))
+    dx = np.zeros(6)
+    H = np.zeros(6)
+    PH = np.empty(6)
+    # ---- predict
+    w0 = gyr[0] - b[0]
+    w1 = gyr[1] - b[1]
+    w2 = gyr[2] - b[2]
+    _rodrigues_into(W, -w0 * dt, -w1 * dt, -w2 * dt)  # δθ_k+1 = exp(-[ω]dt) δθ_k - dt δb
+    R = W[0:3, 0:3].copy()
+    for i in range(3):
+        for j in range(3):
+            out_phi[i, j] = R[i, j]
+            out_phi[i, 3 + j] = -dt if i == j else 0.0
+            out_phi[3 + i, j] = 0.0
+            out_phi[3 + i, 3 + j] = 1.0 if i == j else 0.0
+    e0, e1, e2, e3 = _texp(w0 * dt, w1 * dt, w2 * dt)
+    t0, t1, t2, t3 = _tmul(q[0], q[1], q[2], q[3], e0, e1, e2, e3)
+    qw, qx, qy, qz = _tnorm(t0, t1, t2, t3)
+    _mekf_predict(P, R, dt, p[0] * p[0] * dt, p[1] * p[1] * dt, W)
+    flags = 0
+    nis = 0.0
+    ndof = 0.0
+    qbw, qbx, qby, qbz = qw, qx, qy, qz
+    # ---- accelerometer (direction only)
+    a0, a1, a2 = acc[0], acc[1], acc[2]
+    an = math.sqrt(a0 * a0 + a1 * a1 + a2 * a2)
+    wn = math.sqrt(w0 * w0 + w1 * w1 + w2 * w2)
+    if p[9] > 0.0 and wn < p[9] and abs(an - g) < p[10]:
+        st[0] += dt
+    else:
+        st[0] = 0.0
+    if p[18] > 0.0:
+        # low-pass of the specific force in the nav frame; the stored vector is
+        # rotated with every correction below, so this is the low-pass in the
+        # gyro-integrated frame: translational accelerations average out
+        # because velocity stays bounded (cf. Laidig & Seel 2023, §4.1)
+        f0, f1, f2 = _trot(qw, qx, qy, qz, a0, a1, a2)
+        if st[11] < 0.5:
+            st[5] = f0
+            st[6] = f1
+            st[7] = f2
+            st[11] = 1.0
+        c = 1.0 - math.exp(-dt / p[18])
+        st[5] += c * (f0 - st[5])
+        st[6] += c * (f1 - st[6])
+        st[7] += c * (f2 - st[7])
+        a0, a1, a2 = _trot(qw, -qx, -qy, -qz, st[5], st[6], st[7])
+        an = math.sqrt(a0 * a0 + a1 * a1 + a2 * a2)
+    dev = abs(an - g) / g
+    if an > 0.0 and dev < p[4]:
+        # predicted up-direction in body axes: h = q* (0,0,-1) q = -(C_nb row 3)
+        h0 = -2.0 * (qx * qz - qw * qy)
+        h1 = -2.0 * (qy * qz + qw * qx)
+        h2 = -(1.0 - 2.0 * (qx * qx + qy * qy))
+        r = p[2] * p[2] * (1.0 + p[3] * (dev / 0.01) ** 2) + (p[15] * wn) ** 2
+        # H = [h]x rows for the body error (h(q̂⊗exp δθ) ≈ ĥ + [ĥ]x δθ)
+        for i in range(3):
+            for j in range(6):
+                H[j] = 0.0
+            if i == 0:
+                H[1] = -h2
+                H[2] = h1
+                nu = a0 / an - h0
+            elif i == 1:
+                H[0] = h2
+                H[2] = -h0
+                nu = a1 / an - h1
+            else:
+                H[0] = -h1
+                H[1] = h0
+                nu = a2 / an - h2
+            nis += _ekf_update(P, dx, H, r, nu, PH)
+            ndof += 1.0
+    else:
+        flags |= 1
+    # ---- rest: zero-rate pseudo measurement ω_meas - b = 0 (+ noise)
+    if p[9] > 0.0 and st[0] >= p[11]:
+        flags |= 4
+        r = p[12] * p[12]
+        for i in range(3):
+            for j in range(6):
+                H[j] = 0.0
+            H[3 + i] = 1.0
+            nis += _ekf_update(P, dx, H, r, gyr[i] - b[i], PH)
+            ndof += 1.0
+    # apply the tilt / bias correction before the heading update
+    e0, e1, e2, e3 = _texp(dx[0], dx[1], dx[2])
+    t0, t1, t2, t3 = _tmul(qw, qx, qy, qz, e0, e1, e2, e3)
+    qw, qx, qy, qz = _tnorm(t0, t1, t2, t3)
+    bo = np.empty(3)
+    bo[0] = b[0] + dx[3]
+    bo[1] = b[1] + dx[4]
+    bo[2] = b[2] + dx[5]
+    # ---- magnetometer: heading only
+    if use_mag:
+        mn = math.sqrt(mag[0] * mag[0] + mag[1] * mag[1] + mag[2] * mag[2])
+        if mn > 0.0:
+            n0, n1, n2 = _trot(qw, qx, qy, qz, mag[0], mag[1], mag[2])
+            hh = math.sqrt(n0 * n0 + n1 * n1)
+            dip = math.atan2(n2, hh)
+            if st[4] < 0.5:
+                st[1] = mn
+                st[2] = dip
+                st[4] = 1.0
+            dn = (mn - st[1]) / st[1]
+            dd = dip - st[2]
+            disturbed = abs(dn) > p[6] or abs(dd) > p[7]
+            if disturbed:
+                st[3] += dt
+                flags |= 2
+                if p[14] > 0.0 and st[3] > p[14]:
+                    st[1] = mn
+                    st[2] = dip
+                    st[3] = 0.0
+            else:
+                st[3] = 0.0
+                if p[16] > 0.0:
+                    c = dt / p[16]
+                    st[1] += c * (mn - st[1])
+                    st[2] += c * (dip - st[2])
+            if not disturbed and hh > 1e-9 * mn:
+                psi = math.atan2(n1, n0)
+                # measured field yaw ≈ −(C δθ)_z  (nav yaw error of the estimate)
+                H[0] = -2.0 * (qx * qz - qw * qy)
+                H[1] = -2.0 * (qy * qz + qw * qx)
+                H[2] = -(1.0 - 2.0 * (qx * qx + qy * qy))
+                H[3] = 0.0
+                H[4] = 0.0
+                H[5] = 0.0
+                r = (p[5] * mn / hh) ** 2 * (1.0 + p[8] * ((dn / p[6]) ** 2 + (dd / p[7]) ** 2))
+                for j in range(6):
+                    dx[j] = 0.0
+                nis += _ekf_update(P, dx, H, r, psi, PH)
+                ndof += 1.0
+                e0, e1, e2, e3 = _texp(dx[0], dx[1], dx[2])
+                t0, t1, t2, t3 = _tmul(qw, qx, qy, qz, e0, e1, e2, e3)
+                qw, qx, qy, qz = _tnorm(t0, t1, t2, t3)
+                bo[0] += dx[3]
+                bo[1] += dx[4]
+                bo[2] += dx[5]
+    if p[18] > 0.0:
+        # rotate the low-passed nav-frame vector with the total correction q ⊗ q_before*
+        d0, d1, d2, d3 = _tmul(qw, qx, qy, qz, qbw, -qbx, -qby, -qbz)
+        st[5], st[6], st[7] = _trot(d0, d1, d2, d3, st[5], st[6], st[7])
+    st[8] = flags
+    st[9] = nis
+    st[10] = ndof
+    qo = np.empty(4)
+    qo[0] = qw
+    qo[1] = qx
+    qo[2] = qy
+    qo[3] = qz
+    return qo, bo
+
+
+@njit(cache=True)
+def mekf_run(q0, b0, P0, gyr, acc, mag, dt, p, store):
+    """Run the MEKF over a recording.
+
+    Returns q (N,4), b (N,3), Pdiag (N,6), flags (N,), nis (N,), dof (N,), and
+    when ``store``: P after update (N,6,6), P predicted (N,6,6), Φ (N,6,6).
+    """
+    n = gyr.shape[0]
+    qs = np.empty((n, 4))
+    bs = np.empty((n, 3))
+    pd = np.empty((n, 6))
+    flags = np.zeros(n, np.int64)
+    nis = np.zeros(n)
+    dof = np.zeros(n)
+    m = n if store else 1
+    Pu = np.empty((m, 6, 6))
+    Pp = np.empty((m, 6, 6))
+    Ph = np.empty((m, 6, 6))
+    q = q0.copy()
+    b = b0.copy()
+    P = P0.copy()
+    st = np.zeros(12)
+    phi = np.empty((6, 6))
+    for k in range(n):
+        if store:
+            # predicted covariance is recomputed inside; keep a copy
+            pass
+        q, b = mekf_step(q, b, P, st, gyr[k], acc[k], mag[k], dt[k], p, phi)
+        if store:
+            Ph[k] = phi
+            # P predicted = Φ P_{k-1} Φ^T + Q (recompute cheaply)
+            Pprev = P0 if k == 0 else Pu[k - 1]
+            Q = np.zeros((6, 6))
+            for i in range(3):
+                Q[i, i] = p[0] * p[0] * dt[k]
+                Q[3 + i, 3 + i] = p[1] * p[1] * dt[k]
+            Pp[k] = phi @ Pprev @ phi.T + Q
+            Pu[k] = P
+        qs[k] = q
+        bs[k] = b
+        for i in range(6):
+            pd[k, i] = P[i, i]
+        flags[k] = int(st[8])
+        nis[k] = st[9]
+        dof[k] = st[10]
+    return qs, bs, pd, flags, nis, dof, Pu, Pp, Ph
+
+
+@njit(cache=True)
+def rts_smooth(qf, bf, Pu, Pp, Ph, gyr, dt, P0, q0, b0):
+    """Rauch-Tung-Striebel smoother on the error state of the MEKF.
+
+    Backward recursion (Rauch, Tung, Striebel 1965) with the nominal state
+    re-linearised at the filtered estimate:
+        C_k = P_k Φ_{k+1}^T (P⁻_{k+1})^-1
+        δx^s_k = C_k (x^s_{k+1} ⊟ x̂⁻_{k+1}),   x^s_k = x̂_k ⊞ δx^s_k
+        P^s_k = P_k + C_k (P^s_{k+1} - P⁻_{k+1}) C_k^T
+    where x̂⁻_{k+1} = f(x̂_k, ω_{k+1}) is the filter's prediction.
+    """
+    n = qf.shape[0]
+    qs = np.empty((n, 4))
+    bs = np.empty((n, 3))
+    pd = np.empty((n, 6))
+    qs[n - 1] = qf[n - 1]
+    bs[n - 1] = bf[n - 1]
+    Ps = Pu[n - 1].copy()
+    for i in range(6):
+        pd[n - 1, i] = Ps[i, i]
+    for k in range(n - 2, -1, -1):
+        # prediction from the filtered state at k to k+1
+        w = gyr[k + 1] - bf[k]
+        qp = _qnorm(qmul_1(qf[k], qexp_1(w * dt[k + 1])))
+        e = np.empty(6)
+        e[0:3] = qlog_1(qmul_1(_qconj(qp), qs[k + 1]))
+        e[3:6] = bs[k + 1] - bf[k]
+        C = Pu[k] @ Ph[k + 1].T @ _inv_spd(Pp[k + 1])
+        dx = C @ e
+        qs[k] = _qnorm(qmul_1(qf[k], qexp_1(dx[0:3])))
+        bs[k] = bf[k] + dx[3:6]
+        Ps = Pu[k] + C @ (Ps - Pp[k + 1]) @ C.T
+        for i in range(6):
+            pd[k, i] = Ps[i, i]
+    return qs, bs, pd
+
+
+# ---------------------------------------------------------------------------
+# Unscented (error-state, USQUE-like) filter, 6 error states, same aiding as
+# the MEKF without the adaptive parts (fixed R, accelerometer gate only).
+
+
+@njit(cache=True)
+def _chol(A):
+    n = A.shape[0]
+    L = np.zeros((n, n))
+    for i in range(n):
+        for j in range(i + 1):
+            s = A[i, j]
+            for k in range(j):
+                s -= L[i, k] * L[j, k]
+            if i == j:
+                L[i, i] = math.sqrt(max(s, 1e-300))
+            else:
+                L[i, j] = s / L[j, j]
+    return L
+
+
+@njit(cache=True)
+def _inv_spd(A):
+    """Inverse of a symmetric positive-definite matrix via Cholesky (no LAPACK)."""
+    n = A.shape[0]
+    L = _chol(A)
+    Li = np.zeros((n, n))
+    for j in range(n):
+        Li[j, j] = 1.0 / L[j, j]
+        for i in range(j + 1, n):
+            acc = 0.0
+            for k in range(j, i):
+                acc -= L[i, k] * Li[k, j]
+            Li[i, j] = acc / L[i, i]
+    out = np.zeros((n, n))
+    for i in range(n):
+        for j in range(i + 1):
+            acc = 0.0
+            for k in range(i, n):
+                acc += Li[k, i] * Li[k, j]
+            out[i, j] = acc
+            out[j, i] = acc
+    return out
+
+
+@njit(cache=True)
+def ukf_step(q, b, P, gyr, acc, mag, dt, p, alpha, beta_u, kappa, mag_ref):
+    """One error-state UKF step (Crassidis & Markley 2003, USQUE, with the
+    Hamilton body-error convention).  Returns (q, b, nis, dof)."""
+    nx = 6
+    lam = alpha * alpha * (nx + kappa) - nx
+    wm0 = lam / (nx + lam)
+    wc0 = wm0 + (1.0 - alpha * alpha + beta_u)
+    wi = 0.5 / (nx + lam)
+    g = p[13]
+    # ---- predict: sigma points of the error around (q, b)
+    L = _chol((nx + lam) * P)
+    ns = 2 * nx + 1
+    X = np.zeros((ns, nx))
+    for i in range(nx):
+        X[1 + i] = L[:, i]
+        X[1 + nx + i] = -L[:, i]
+    qp0 = _qnorm(qmul_1(q, qexp_1((gyr - b) * dt)))
+    Y = np.zeros((ns, nx))
+    for s in range(ns):
+        qs_ = qmul_1(q, qexp_1(X[s, 0:3]))
+        bs_ = b + X[s, 3:6]
+        qps = qmul_1(qs_, qexp_1((gyr - bs_) * dt))
+        Y[s, 0:3] = qlog_1(qmul_1(_qconj(qp0), qps))
+        Y[s, 3:6] = bs_ - b
+    ym = wm0 * Y[0]
+    for s in range(1, ns):
+        ym += wi * Y[s]
+    Pn = np.zeros((nx, nx))
+    for s in range(ns):
+        d = Y[s] - ym
+        Pn += (wc0 if s == 0 else wi) * np.outer(d, d)
+    for i in range(3):
+        Pn[i, i] += p[0] * p[0] * dt
+        Pn[3 + i, 3 + i] += p[1] * p[1] * dt
+    q = _qnorm(qmul_1(qp0, qexp_1(ym[0:3])))
+    b = b + ym[3:6]
+    P = Pn
+    nis = 0.0
+    dof = 0.0
+    # ---- update: stacked accelerometer direction (+ field direction)
+    an = _norm3(acc)
+    use_acc = an > 0.0 and abs(an - g) / g < p[4]
+    use_mag = p[17] > 0.5 and _norm3(mag) > 0.0
+    nz = (3 if use_acc else 0) + (3 if use_mag else 0)
+    if nz > 0:
+        L = _chol((nx + lam) * P)
+        X = np.zeros((ns, nx))
+        for i in range(nx):
+            X[1 + i] = L[:, i]
+            X[1 + nx + i] = -L[:, i]
+        Z = np.zeros((ns, nz))
+        dg = np.zeros(3)
+        dg[2] = -1.0
+        for s in range(ns):
+            qs_ = qmul_1(q, qexp_1(X[s, 0:3]))
+            j = 0
+            if use_acc:
+                Z[s, 0:3] = _qrot_inv(qs_, dg)
+                j = 3
+            if use_mag:
+                Z[s, j:j + 3] = _qrot_inv(qs_, mag_ref)
+        zm = wm0 * Z[0]
+        for s in range(1, ns):
+            zm += wi * Z[s]
+        Pzz = np.zeros((nz, nz))
+        Pxz = np.zeros((nx, nz))
+        for s in range(ns):
+            dz = Z[s] - zm
+            wgt = wc0 if s == 0 else wi
+            Pzz += wgt * np.outer(dz, dz)
+            Pxz += wgt * np.outer(X[s], dz)
+        z = np.zeros(nz)
+        j = 0
+        if use_acc:
+            z[0:3] = acc / an
+            for i in range(3):
+                Pzz[i, i] += p[2] * p[2]
+            j = 3
+        if use_mag:
+            z[j:j + 3] = mag / _norm3(mag)
+            for i in range(3):
+                Pzz[j + i, j + i] += p[5] * p[5]
+        Si = _inv_spd(Pzz)
+        K = Pxz @ Si
+        nu = z - zm
+        dx = K @ nu
+        P = P - K @ Pzz @ K.T
+        P = 0.5 * (P + P.T)
+        nis = nu @ Si @ nu
+        dof = nz
+        q = _qnorm(qmul_1(q, qexp_1(dx[0:3])))
+        b = b + dx[3:6]
+    return q, b, P, nis, dof
+
+
+@njit(cache=True)
+def ukf_run(q0, b0, P0, gyr, acc, mag, dt, p, alpha, beta_u, kappa, mag_ref):
+    n = gyr.shape[0]
+    qs = np.empty((n, 4))
+    bs = np.empty((n, 3))
+    pd = np.empty((n, 6))
+    Pa = np.empty((n, 6, 6))
+    nis = np.zeros(n)
+    dof = np.zeros(n)
+    q = q0.copy()
+    b = b0.copy()
+    P = P0.copy()
+    for k in range(n):
+        q, b, P, nis[k], dof[k] = ukf_step(q, b, P, gyr[k], acc[k], mag[k], dt[k], p, alpha, beta_u, kappa, mag_ref)
+        qs[k] = q
+        bs[k] = b
+        Pa[k] = P
+        for i in range(6):
+            pd[k, i] = P[i, i]
+    return qs, bs, pd, Pa, nis, dof
+
+
+# ---------------------------------------------------------------------------
+# The paper's gravity-vector filters (Candan & Söken, UHUK-2020-173)
+#
+# State x = third row of C_nb (gravity direction in body axes).  The paper's
+# accelerometer convention y_a = g x + a (+g on z at rest) is obtained from a
+# specific-force accelerometer as y_a := -f (digest §3.1, option a).
+#
+# gp (float64 array):
+#  0 sigma_g   per-sample gyro noise std [rad/s]  (Σ_g = σ_g² I)
+#  1 sigma_a   per-sample accelerometer noise std [m/s²]
+#  2 c_a       Lee / Javed constant
+#  3 g
+#  4 tau       detector threshold on | |y_a| - g | [m/s²] (D1)
+#  5 s_mode    0: A (fixed S), 1: B (diagonal S eq. 26 floored at 1, gated), 2: C (no S)
+#  6 s_fixed   S during detected external acceleration for mode A (1e4)
+#  7 hold      detector hold time [s]
+#  8 normalize (>0.5: renormalise x after each update)
+#  9 exact     (>0.5: F = exp(-dt [y_g]x) instead of I - dt [y_g]x)
+# 10 sigma_b   Javed bias KF random-walk [rad/s/sqrt(s)]
+# 11 r_b       Javed bias KF pseudo-measurement noise [rad/s]
+# 12 bias_win  Javed bias KF averaging window [samples]
+
+
+@njit(cache=True)
+def gravity_kf_step(kind, x, P, sv, Pb, yg_prev, ya, h, gp):
+    """One step t-1 -> t of the paper's filters (in place on x, P, sv, Pb).
+
+    sv: [0:3] a⁺_{t-1}, [3] detector hold timer, [4:7] Javed bias estimate,
+    [7:10] bias pseudo-measurement sum, [10] its count.  Returns (α_t, S diag).
+    """
+    sg2 = gp[0] * gp[0]
+    sa2 = gp[1] * gp[1]
+    g = gp[3]
+    I3 = np.eye(3)
+    a_plus = sv[0:3].copy()
+    bh = sv[4:7].copy()
+    yg = yg_prev - bh
+    if gp[9] > 0.5:
+        F = _rodrigues(-yg * h)
+    else:
+        F = I3 - h * _skew(yg)
+    xprev = x.copy()
+    Xs = _skew(xprev)
+    Q = -h * h * sg2 * (Xs @ Xs)  # eq. 14 with Σ_g = σ_g² I
+    xp = F @ xprev
+    Pp = F @ P @ F.T + Q
+    # detector D1 with hold time
+    det = abs(_norm3(ya) - g) > gp[4]
+    if det:
+        sv[3] = gp[7]
+    elif sv[3] > 0.0:
+        sv[3] -= h
+        det = True
+    if kind == 0:
+        ca = gp[2]
+    elif kind == 1:
+        ca = gp[2] if det else 0.5 * gp[2]
+    else:
+        ca = 1.0 if det else 0.0
+    z = ya - ca * a_plus
+    M = np.zeros((3, 3))
+    if kind == 1:
+        # eqs. 29-30 (reconstruction): (c² |a⁺|² + | |y|² - g² |) W
+        aa = np.abs(a_plus)
+        sw = aa[0] + aa[1] + aa[2]
+        mag2 = ca * ca * (a_plus @ a_plus) + abs(ya @ ya - g * g)
+        for i in range(3):
+            wgt = aa[i] / sw if sw > 1e-12 else 1.0 / 3.0
+            M[i, i] = mag2 * wgt + sa2
+    else:
+        sacc = ca * ca * (a_plus @ a_plus) / 3.0  # eq. 25
+        for i in range(3):
+            M[i, i] = sacc + sa2
+    nu = z - g * xp
+    HPH = g * g * Pp
+    S = np.ones(3)
+    if kind == 2 and det:
+        if gp[5] < 0.5:
+            S[:] = gp[6]
+        elif gp[5] < 1.5:
+            for i in range(3):
+                S[i] = max(1.0, (nu[i] * nu[i] - HPH[i, i]) / M[i, i])
+    SM = M.copy()
+    for i in range(3):
+        SM[i, :] *= S[i]  # diag(S) M (M diagonal)
+    K = g * Pp @ _inv_spd(HPH + SM)  # eq. 27, H = g I
+    xn = xp + K @ nu
+    IKH = I3 - g * K
+    Pn = IKH @ Pp @ IKH.T + K @ SM @ K.T
+    P[:, :] = 0.5 * (Pn + Pn.T)
+    if gp[8] > 0.5:
+        xn = xn / _norm3(xn)
+    x[:] = xn
+    sv[0:3] = ya - g * xn
+    if kind == 1 and not det:
+        # cascaded bias KF (digest §5.2 [EXT]): z_b = (x_t - x_{t-1})/dt - x̃_{t-1} y_g = -x̃ b
+        zb = (xn - xprev) / h - Xs @ yg_prev
+        sv[7:10] += zb
+        sv[10] += 1.0
+        nb = sv[10]
+        if nb >= gp[12]:
+            zb = sv[7:10] / nb
+            Hb = -Xs
+            Pb[:, :] = Pb + np.eye(3) * gp[10] * gp[10] * h * nb
+            Rb = np.eye(3) * gp[11] * gp[11] / nb
+            Sb = Hb @ Pb @ Hb.T + Rb
+            Kb = Pb @ Hb.T @ _inv_spd(Sb)
+            sv[4:7] = bh + Kb @ (zb - Hb @ bh)
+            IK = np.eye(3) - Kb @ Hb
+            Pb[:, :] = IK @ Pb @ IK.T + Kb @ Rb @ Kb.T
+            sv[7:10] = 0.0
+            sv[10] = 0.0
+    elif kind == 1:
+        sv[7:10] = 0.0
+        sv[10] = 0.0
+    return det, S
+
+
+@njit(cache=True)
+def gravity_kf_run(kind, x0, P0, gyr, ya, dt, gp):
+    """kind: 0 Lee 2012, 1 Javed 2020 (reconstruction, "Javed-like"), 2 proposed.
+
+    Returns x (N,3), alpha (N,), S diag (N,3), a_plus (N,3), bias (N,3).
+    Index convention: F_{t-1} from y_g[t-1] (paper eqs. 11-12); sample 0 is the
+    initial state.
+    """
+    n = gyr.shape[0]
+    xs = np.empty((n, 3))
+    al = np.zeros(n)
+    Sd = np.ones((n, 3))
+    ap = np.zeros((n, 3))
+    bb = np.zeros((n, 3))
+    x = x0.copy()
+    P = P0.copy()
+    sv = np.zeros(11)
+    Pb = np.eye(3) * (1e-3) ** 2
+    xs[0] = x
+    for t in range(1, n):
+        det, S = gravity_kf_step(kind, x, P, sv, Pb, gyr[t - 1], ya[t], dt[t], gp)
+        al[t] = 1.0 if det else 0.0
+        xs[t] = x
+        Sd[t] = S
+        ap[t] = sv[0:3]
+        bb[t] = sv[4:7]
+    return xs, al, Sd, ap, bb

@@ -1,0 +1,158 @@
+"""BROAD benchmark runner and parameter grid search (processes on all cores).
+
+``evaluate`` runs one filter with one parameter set on every trial and
+returns the BROAD per-trial RMSE (:mod:`imunav.attitude.metrics`);
+``grid_search`` evaluates the Cartesian product of parameter values, one
+parameter set per task, in a process pool whose workers load the trials once.
+The trial-agnostic best set (TAGP, Laidig et al. 2021) minimises the mean total
+RMSE over the trials.
+"""
+
+from __future__ import annotations
+
+import itertools
+import os
+from concurrent.futures import ProcessPoolExecutor
+from dataclasses import dataclass, replace
+from pathlib import Path
+from typing import Any, Callable, Iterable
+
+import numpy as np
+
+from imunav.errors import ConfigError
+
+__all__ = ["FILTERS", "REALTIME", "make_filter", "evaluate", "grid_search", "TrialScore", "BenchResult",
+           "reference_start"]
+
+REALTIME = ("madgwick", "madgwick_c", "mahony", "complementary", "mekf", "adaptive", "ukf")
+FILTERS = (*REALTIME, "smoother")
+
+
+def make_filter(name: str, params: dict[str, Any] | None = None) -> Any:
+    """Filter object by name with parameter overrides."""
+    from imunav.attitude import adaptive, complementary, madgwick, mahony, mekf, smoother, ukf
+
+    p = dict(params or {})
+    try:
+        if name == "madgwick":
+            return madgwick.Madgwick(**{"beta": 0.1, **p})
+        if name == "madgwick_c":
+            return madgwick.Madgwick(**{"beta": 0.12, **p}, original_c=True)
+        if name == "mahony":
+            return mahony.Mahony(**{"kp": 0.74, "ki": 0.0012, **p})
+        if name == "complementary":
+            return complementary.Complementary(**p)
+        if name == "mekf":
+            return mekf.MEKF(replace(mekf.MekfParams(), **p))
+        if name == "adaptive":
+            return adaptive.AdaptiveMEKF(replace(adaptive.ADAPTIVE_DEFAULTS, **p))
+        if name == "smoother":
+            return smoother.Smoother(replace(adaptive.ADAPTIVE_DEFAULTS, **p))
+        if name == "ukf":
+            return ukf.UKF(replace(ukf.UkfParams(), **p))
+    except TypeError as exc:
+        raise ConfigError(f"bad parameter for filter {name!r}: {exc}") from exc
+    raise ConfigError(f"unknown filter {name!r}; choose one of {', '.join(FILTERS)}")
+
+
+def reference_start(name: str) -> bool:
+    """Madgwick/Mahony are started like the BROAD reference runs."""
+    return name in ("madgwick_c", "mahony")
+
+
+@dataclass(frozen=True)
+class TrialScore:
+    trial: str
+    total_rmse_deg: float
+    heading_rmse_deg: float
+    inclination_rmse_deg: float
+    seconds: float
+
+
+@dataclass(frozen=True)
+class BenchResult:
+    filter: str
+    params: dict[str, Any]
+    trials: list[TrialScore]
+
+    @property
+    def mean_total(self) -> float:
+        return float(np.mean([t.total_rmse_deg for t in self.trials]))
+
+    def means(self) -> dict[str, float]:
+        return {k: float(np.mean([getattr(t, k) for t in self.trials]))
+                for k in ("total_rmse_deg", "heading_rmse_deg", "inclination_rmse_deg")}
+
+    def to_dict(self) -> dict[str, Any]:
+        return {"filter": self.filter, "params": self.params, "mean": self.means(),
+                "trials": {t.trial: {"total_rmse_deg": t.total_rmse_deg, "heading_rmse_deg": t.heading_rmse_deg,
+                                     "inclination_rmse_deg": t.inclination_rmse_deg, "seconds": t.seconds}
+                           for t in self.trials}}
+
+
+_CACHE: dict[str, Any] = {}
+
+
+def _load(path: str):
+    from imunav.io.broad import load_broad
+
+    if path not in _CACHE:
+        _CACHE[path] = load_broad(path)
+    return _CACHE[path]
+
+
+def _score_trial(name: str, params: dict[str, Any], path: str) -> TrialScore:
+    import time
+
+    from imunav.attitude.alignment import broad_reference_start
+    from imunav.attitude.metrics import attitude_rmse
+
+    tr = _load(path)
+    f = make_filter(name, params)
+    q0 = broad_reference_start(tr.imu.accel[0], tr.imu.mag[0]) if reference_start(name) else None
+    t0 = time.perf_counter()
+    r = f.run(tr.imu, q0=q0)
+    sec = time.perf_counter() - t0
+    e = attitude_rmse(r.q_nb, tr.q_ref_nb, tr.movement)
+    return TrialScore(tr.name, e.total_rmse_deg, e.heading_rmse_deg, e.inclination_rmse_deg, sec)
+
+
+def evaluate(name: str, params: dict[str, Any] | None, trials: Iterable[str | Path]) -> BenchResult:
+    """Run filter ``name`` with one parameter set on every trial file."""
+    p = dict(params or {})
+    return BenchResult(name, p, [_score_trial(name, p, str(t)) for t in trials])
+
+
+def _task(args: tuple[str, dict[str, Any], list[str]]) -> BenchResult:
+    name, params, trials = args
+    return evaluate(name, params, trials)
+
+
+def grid_search(name: str, grid: dict[str, list[Any]], trials: Iterable[str | Path], *,
+                workers: int | None = None, progress: Callable[[int, int], None] | None = None
+                ) -> list[BenchResult]:
+    """Evaluate every parameter combination of ``grid``; sorted by mean total RMSE.
+
+    ``workers`` processes (default: all cores); each task is one parameter set
+    over all trials, so a worker's trial cache is reused across tasks.
+    """
+    if not grid:
+        raise ConfigError("empty parameter grid; give at least one parameter with a list of values")
+    keys = list(grid)
+    combos = [dict(zip(keys, vals)) for vals in itertools.product(*(grid[k] for k in keys))]
+    tl = [str(t) for t in trials]
+    make_filter(name, combos[0])  # validate names early
+    n = workers or os.cpu_count() or 1
+    out: list[BenchResult] = []
+    if n == 1:
+        for i, c in enumerate(combos):
+            out.append(evaluate(name, c, tl))
+            if progress:
+                progress(i + 1, len(combos))
+    else:
+        with ProcessPoolExecutor(max_workers=n) as ex:
+            for i, r in enumerate(ex.map(_task, [(name, c, tl) for c in combos])):
+                out.append(r)
+                if progress:
+                    progress(i + 1, len(combos))
+    return sorted(out, key=lambda r: r.mean_total)

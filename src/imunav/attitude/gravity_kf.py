@@ -1,0 +1,176 @@
+"""The three roll / pitch Kalman filters compared by Candan & Söken
+(UHUK-2020-173): Lee et al. 2012, Javed et al. 2020 (cascaded, reconstructed)
+and the proposed adaptive KF.  Digest: ``specs/attitude-kf-external-acceleration.md``.
+
+State x = third row of C_nb (gravity direction in body axes, eq. 7); process
+x_t = (I − Δt [y_g]×) x_{t−1} (eqs. 11-12), Q = −Δt² [x]× Σ_g [x]× (eq. 14);
+measurement z = y_a − c_a a⁺_{t−1} = g x + v (eqs. 20-23); M = Σ_acc + σ_a² I
+with Σ_acc = c_a² ‖a⁺‖² / 3 I (eq. 25, Lee / proposed) or the Javed per-axis
+form (eqs. 29-30, reconstruction); gain K = P⁻Hᵀ(HP⁻Hᵀ + S M)⁻¹ (eq. 27).
+
+Fixes of the source made explicit (digest §11, Appendix A):
+
+* **Accelerometer sign** (§3.1, §11.1): the paper's y_a = g + a reads +g on z
+  at rest; a specific-force accelerometer reads −g.  The filter is fed
+  y_a := −f (option a), so the paper's equations stay unchanged;
+  ``accel_convention="paper"`` accepts data already in the paper convention.
+* **Roll / pitch** (eqs. 4-5, garbled): φ = atan2(x₂, x₃),
+  θ = atan2(−x₁, hypot(x₂, x₃)).
+* **"propagation of F"** reads R; "(25)…(26)" reads (26)…(27); **a** is the
+  external acceleration, not the "ideal accelerometer output".
+* **Scale factor S** (eq. 26, §4.5): diagonal Söken-Hajiyev form
+  s_i = max{1, ([ν νᵀ]_ii − [H P⁻ Hᵀ]_ii)/M_ii} (mode "B", default), or the
+  literal ×10⁴ during detected acceleration (mode "A"), or none (mode "C",
+  ablation).  S = 1 whenever no external acceleration is detected (10⁰).
+* **Javed's c_a** (eq. 28): c_a when detected, 0.5 c_a otherwise; the cascaded
+  gyro-bias KF is the digest's [EXT] design (pseudo-measurement
+  z_b = (x_t − x_{t−1})/Δt − [x_{t−1}]× y_g = −[x_{t−1}]× b, averaged over a
+  window, updated only without detected acceleration).  Flagged "Javed-like".
+* **Gyro-noise unit** (§11.2): see :mod:`imunav.attitude.scenario`.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field, fields
+from typing import Literal
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from imunav.attitude import _kernels as _k
+from imunav.attitude._base import prepare
+from imunav.attitude.result import AttitudeResult
+from imunav.errors import ConfigError, ShapeError
+from imunav.rotation import quat_from_euler
+from imunav.timeseries import ImuData
+
+__all__ = ["GravityKfParams", "GravityKF", "LeeKF", "JavedKF", "ProposedKF", "roll_pitch_from_x",
+           "process_noise"]
+
+_KINDS = {"lee": 0, "javed": 1, "proposed": 2}
+_SMODES = {"A": 0, "B": 1, "C": 2}
+
+
+@dataclass(frozen=True)
+class GravityKfParams:
+    """Filter-side settings (SI, per-sample standard deviations)."""
+
+    sigma_g: float = 8.7266e-4  # rad/s per sample (0.05 °/s: reading (ii) at 100 Hz)
+    sigma_a: float = 4.4145e-3  # m/s² per sample (45 µg/√Hz at 100 Hz)
+    c_a: float = 0.1  # Lee / Javed constant
+    g: float = 9.81
+    tau: float = 0.02  # detector D1 threshold on | |y_a| − g | [m/s²]
+    s_mode: Literal["A", "B", "C"] = "B"
+    s_fixed: float = 1e4
+    hold_s: float = 0.0
+    normalize: bool = False
+    exact: bool = False
+    sigma_b: float = 1e-6  # Javed bias KF random walk [rad/s/√s]
+    r_b: float = 5e-3  # Javed bias pseudo-measurement noise [rad/s]
+    bias_window: int = 50
+    p0: float = 1e-3  # initial std of each state (P0 = p0² I; digest default 1e-6 I)
+
+    def __post_init__(self) -> None:
+        if self.s_mode not in _SMODES:
+            raise ConfigError(f"s_mode must be one of {sorted(_SMODES)}, got {self.s_mode!r}")
+        for f in fields(self):
+            v = getattr(self, f.name)
+            if isinstance(v, (int, float)) and not isinstance(v, bool) and not (np.isfinite(v) and v >= 0):
+                raise ConfigError(f"GravityKfParams.{f.name} must be finite and >= 0, got {v}")
+        if self.bias_window < 1:
+            raise ConfigError("bias_window must be >= 1 sample")
+
+    def vector(self) -> np.ndarray:
+        return np.array([self.sigma_g, self.sigma_a, self.c_a, self.g, self.tau, float(_SMODES[self.s_mode]),
+                         self.s_fixed, self.hold_s, float(self.normalize), float(self.exact), self.sigma_b,
+                         self.r_b, float(self.bias_window)])
+
+
+def roll_pitch_from_x(x: ArrayLike) -> NDArray[np.float64]:
+    """(N, 2) roll, pitch [rad] from the gravity-direction state (eqs. 4-5 fixed)."""
+    a = np.asarray(x, float)
+    if a.ndim != 2 or a.shape[1] != 3:
+        raise ShapeError(f"x must have shape (N, 3), got {a.shape}")
+    return np.column_stack([np.arctan2(a[:, 1], a[:, 2]), np.arctan2(-a[:, 0], np.hypot(a[:, 1], a[:, 2]))])
+
+
+def process_noise(x: ArrayLike, sigma_g: float, dt: float) -> NDArray[np.float64]:
+    """Q = −Δt² [x]× Σ_g [x]× with Σ_g = σ_g² I (eq. 14)."""
+    v = np.asarray(x, float).reshape(3)
+    S = np.array([[0, -v[2], v[1]], [v[2], 0, -v[0]], [-v[1], v[0], 0]])
+    return -dt * dt * sigma_g**2 * S @ S
+
+
+@dataclass
+class GravityKF:
+    """One of the paper's filters; ``kind`` in {"lee", "javed", "proposed"}."""
+
+    kind: Literal["lee", "javed", "proposed"] = "proposed"
+    params: GravityKfParams = field(default_factory=GravityKfParams)
+    accel_convention: Literal["specific_force", "paper"] = "specific_force"
+
+    def __post_init__(self) -> None:
+        if self.kind not in _KINDS:
+            raise ConfigError(f"kind must be one of {sorted(_KINDS)}, got {self.kind!r}")
+        if self.accel_convention not in ("specific_force", "paper"):
+            raise ConfigError("accel_convention must be 'specific_force' (f = a - g) or 'paper' (y_a = -f)")
+
+    @property
+    def name(self) -> str:
+        return f"gravity_{self.kind}"
+
+    def reset(self, x0: ArrayLike | None = None) -> None:
+        """Start the per-sample API from ``x0`` (default level [0, 0, 1])."""
+        self.x = np.array([0.0, 0.0, 1.0]) if x0 is None else np.asarray(x0, float).reshape(3).copy()
+        self.P = np.eye(3) * self.params.p0**2
+        self._sv = np.zeros(11)
+        self._Pb = np.eye(3) * 1e-6
+        self._gprev: np.ndarray | None = None
+
+    def step(self, gyro: ArrayLike, accel: ArrayLike, dt: float) -> np.ndarray:
+        """Process one sample (gyro and accelerometer at t; the gyro of t−1 drives
+        the propagation, eq. 11); returns (roll, pitch) [rad].  The first call
+        after :meth:`reset` only stores the gyro sample."""
+        if not hasattr(self, "x"):
+            self.reset()
+        g = np.asarray(gyro, float).reshape(3)
+        a = np.asarray(accel, float).reshape(3)
+        ya = -a if self.accel_convention == "specific_force" else a
+        if self._gprev is not None:
+            _k.gravity_kf_step(_KINDS[self.kind], self.x, self.P, self._sv, self._Pb, self._gprev, ya, float(dt),
+                               self.params.vector())
+        self._gprev = g.copy()
+        return roll_pitch_from_x(self.x[None, :])[0]
+
+    def run(self, data: ImuData, *, x0: ArrayLike | None = None) -> AttitudeResult:
+        """Filter a recording; q_nb has the estimated roll / pitch and yaw = 0.
+
+        ``x0`` defaults to the level state [0, 0, 1] (digest §10.1).
+        """
+        t, g, a, _, dt, _ = prepare(data, False)
+        ya = -a if self.accel_convention == "specific_force" else a
+        x_init = np.array([0.0, 0.0, 1.0]) if x0 is None else np.asarray(x0, float).reshape(3)
+        P0 = np.eye(3) * self.params.p0**2
+        xs, al, S, ap, bb = _k.gravity_kf_run(_KINDS[self.kind], x_init, P0, g, np.ascontiguousarray(ya), dt,
+                                             self.params.vector())
+        rp = roll_pitch_from_x(xs)
+        q = quat_from_euler(rp[:, 0], rp[:, 1], np.zeros(len(rp)))
+        return AttitudeResult(t=t, q_nb=q, bias=bb if self.kind == "javed" else None, name=self.name,
+                              flags={"x": xs, "alpha": al.astype(bool), "S": S, "a_plus": ap},
+                              params={"kind": self.kind, **{f.name: getattr(self.params, f.name)
+                                                            for f in fields(self.params)}})
+
+
+def LeeKF(params: GravityKfParams | None = None, **kw) -> GravityKF:  # noqa: N802
+    """Lee et al. 2012: constant c_a, equal-axis Σ_acc, S = 1."""
+    return GravityKF("lee", params or GravityKfParams(), **kw)
+
+
+def JavedKF(params: GravityKfParams | None = None, **kw) -> GravityKF:  # noqa: N802
+    """Javed et al. 2020 ("Javed-like" reconstruction, digest §5.2)."""
+    return GravityKF("javed", params or GravityKfParams(), **kw)
+
+
+def ProposedKF(params: GravityKfParams | None = None, **kw) -> GravityKF:  # noqa: N802
+    """Candan & Söken 2020: detector-switched c_a ∈ {0, 1}, diagonal S (mode B)."""
+    return GravityKF("proposed", params or GravityKfParams(), **kw)

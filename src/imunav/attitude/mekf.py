@@ -1,0 +1,152 @@
+"""Multiplicative extended Kalman filter (MEKF) with gyro-bias states, 6D / 9D.
+
+Error state δx = [δθ, δb] (6): body-frame attitude error q = q̂ ⊗ exp(δθ) and
+gyro-bias error b = b̂ + δb (Markley, "Attitude error representations for
+Kalman filtering", JGCD 26(2), 2003; Solà 2017 §7).
+
+Prediction over Δt with ω̄ = ω − b̂:
+    q̂ ← q̂ ⊗ exp(ω̄ Δt),  Φ = [[exp(−[ω̄]× Δt), −I Δt], [0, I]],
+    Q = diag(σ_g² Δt I, σ_b² Δt I).
+Accelerometer (gravity direction, unit vectors): h = q̂* ⊗ (0,0,−1) ⊗ q̂,
+H = [[h]×, 0], three sequential scalar updates, Joseph form.  Adaptive R:
+R_acc = σ_a² (1 + k_acc (| |f| − g | / 0.01 g)²) + (k_ω |ω̄|)², and the sample
+is rejected when | |f| − g | / g exceeds ``acc_reject``.
+Magnetometer: heading only (the horizontal field in the nav frame, yaw
+ψ_m = atan2(h_E, h_N), H = [−(C_nb)_{3,:}, 0]), so field disturbances never
+tilt the estimate; it is rejected when the field norm or dip deviate from a
+reference (learned at start, tracked slowly, re-acquired after a long
+disturbance).  Rest detection adds a zero-rate pseudo-measurement
+ω_meas − b = 0 for gyro-bias estimation at rest.
+
+With the adaptive features switched off (the defaults of :class:`MEKF`) it is
+the textbook MEKF; :class:`imunav.attitude.adaptive.AdaptiveMEKF` turns them on.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field, fields, replace
+
+import numpy as np
+from numpy.typing import ArrayLike
+
+from imunav.attitude import _kernels as _k
+from imunav.attitude._base import check_q0, initial_q, prepare, vec3
+from imunav.attitude.result import AttitudeResult
+from imunav.errors import ConfigError
+from imunav.timeseries import ImuData
+
+__all__ = ["MekfParams", "MEKF"]
+
+
+@dataclass(frozen=True)
+class MekfParams:
+    """MEKF tuning (SI; see the module docstring for the equations)."""
+
+    sigma_gyro: float = 0.005  # rad/s/√Hz
+    sigma_bias: float = 1e-5  # rad/s/√s
+    sigma_acc: float = 0.02  # unit-vector noise per sample
+    k_acc: float = 0.0
+    acc_reject: float = 1e9
+    sigma_mag: float = 0.05  # rad per sample (at a horizontal field of |m|)
+    mag_norm_tol: float = 1e9
+    mag_dip_tol: float = 1e9
+    k_mag: float = 0.0
+    rest_gyro: float = 0.0  # rad/s, 0 disables rest detection
+    rest_acc: float = 0.2
+    rest_time: float = 1.0
+    sigma_rest: float = 0.002
+    g: float = 9.81
+    mag_ref_time: float = 0.0
+    k_rate: float = 0.0
+    ref_tau: float = 0.0
+    use_mag: bool = True
+    acc_lpf_tau: float = 0.0
+    p0_att: float = 0.1  # rad (initial attitude std)
+    p0_bias: float = 0.01  # rad/s (initial bias std)
+
+    def __post_init__(self) -> None:
+        for f in fields(self):
+            v = getattr(self, f.name)
+            if f.name != "use_mag" and not (np.isfinite(v) and v >= 0):
+                raise ConfigError(f"MekfParams.{f.name} must be finite and >= 0, got {v}")
+        if self.g <= 0:
+            raise ConfigError(f"MekfParams.g must be > 0, got {self.g}")
+
+    def vector(self) -> np.ndarray:
+        """Packed parameter array of the kernel (order of ``_kernels`` params)."""
+        return np.array([
+            self.sigma_gyro, self.sigma_bias, self.sigma_acc, self.k_acc, self.acc_reject,
+            self.sigma_mag, self.mag_norm_tol, self.mag_dip_tol, self.k_mag, self.rest_gyro,
+            self.rest_acc, self.rest_time, self.sigma_rest, self.g, self.mag_ref_time, self.k_rate,
+            self.ref_tau, 1.0 if self.use_mag else 0.0, self.acc_lpf_tau,
+        ], dtype=np.float64)
+
+    def P0(self) -> np.ndarray:
+        return np.diag([self.p0_att**2] * 3 + [self.p0_bias**2] * 3)
+
+
+FLAG_NAMES = {"acc_rejected": 1, "mag_disturbed": 2, "rest": 4}
+
+
+@dataclass
+class MEKF:
+    """Multiplicative EKF; ``params`` a :class:`MekfParams` (keyword overrides allowed)."""
+
+    params: MekfParams = field(default_factory=MekfParams)
+
+    name = "mekf"
+
+    def __post_init__(self) -> None:
+        self.q = np.array([1.0, 0.0, 0.0, 0.0])
+        self.b = np.zeros(3)
+        self.P = self.params.P0()
+        self._st = np.zeros(12)
+        self._phi = np.eye(6)
+
+    @classmethod
+    def with_params(cls, **kw: float) -> "MEKF":
+        base = cls().params
+        try:
+            return cls(replace(base, **kw))
+        except TypeError as exc:
+            raise ConfigError(f"unknown MEKF parameter in {sorted(kw)}: {exc}") from exc
+
+    def reset(self, q0: ArrayLike, bias: ArrayLike | None = None) -> None:
+        self.q = check_q0(q0)
+        self.b = vec3(bias, "bias")
+        self.P = self.params.P0()
+        self._st = np.zeros(12)
+
+    def step(self, gyro: ArrayLike, accel: ArrayLike, mag: ArrayLike | None, dt: float) -> np.ndarray:
+        """Process one sample; returns q_nb.  ``self.P``, ``self.b`` are updated in place."""
+        p = self.params.vector()
+        if mag is None:
+            p[17] = 0.0
+        self.q, self.b = _k.mekf_step(self.q, self.b, self.P, self._st, vec3(gyro, "gyro"), vec3(accel, "accel"),
+                                      vec3(mag, "mag"), float(dt), p, self._phi)
+        return self.q.copy()
+
+    def _run(self, data: ImuData, q0: ArrayLike | None, bias0: ArrayLike | None, use_mag: bool | None,
+             store: bool):
+        prm = self.params
+        um_req = prm.use_mag if use_mag is None else use_mag
+        t, g, a, m, dt, um = prepare(data, um_req and data.mag is not None if use_mag is None else use_mag)
+        p = prm.vector()
+        p[17] = 1.0 if um else 0.0
+        q_init = initial_q(a, m, um, q0)
+        P0 = prm.P0()
+        b0 = vec3(bias0, "bias0")
+        out = _k.mekf_run(q_init, b0, P0, g, a, m, dt, p, store)
+        return t, g, dt, um, q_init, b0, P0, out
+
+    def run(self, data: ImuData, *, q0: ArrayLike | None = None, bias0: ArrayLike | None = None,
+            use_mag: bool | None = None) -> AttitudeResult:
+        """Filter a whole recording (numba kernel)."""
+        t, _, _, um, _, _, _, (q, b, pd, fl, nis, dof, *_rest) = self._run(data, q0, bias0, use_mag, False)
+        self.q, self.b = q[-1].copy(), b[-1].copy()
+        flags = {k: (fl & v) > 0 for k, v in FLAG_NAMES.items()}
+        flags["nis"] = nis
+        flags["nis_dof"] = dof
+        return AttitudeResult(t=t, q_nb=q, bias=b, cov_diag=pd, flags=flags, name=self.name,
+                              params={**{f.name: getattr(self.params, f.name) for f in fields(self.params)},
+                                      "use_mag": um})

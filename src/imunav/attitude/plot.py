@@ -1,0 +1,78 @@
+"""Figures for attitude results (matplotlib; compute code never plots)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from imunav.attitude.result import AttitudeResult
+
+__all__ = ["plot_euler", "plot_errors", "plot_montecarlo_box", "save"]
+
+
+def _plt():
+    import matplotlib
+
+    matplotlib.use("Agg", force=False)
+    import matplotlib.pyplot as plt
+
+    return plt
+
+
+def plot_euler(result: AttitudeResult, reference: AttitudeResult | None = None):
+    """Roll, pitch, yaw [deg] against time (with a reference if given)."""
+    plt = _plt()
+    fig, axs = plt.subplots(3, 1, sharex=True, figsize=(8, 6))
+    e = np.degrees(result.euler())
+    for i, lab in enumerate(("roll", "pitch", "yaw")):
+        axs[i].plot(result.t, e[:, i], lw=0.8, label=result.name or "estimate")
+        if reference is not None:
+            axs[i].plot(reference.t, np.degrees(reference.euler())[:, i], "k--", lw=0.8, label="reference")
+        axs[i].set_ylabel(f"{lab} [deg]")
+    axs[0].legend(loc="upper right")
+    axs[-1].set_xlabel("time [s]")
+    fig.tight_layout()
+    return fig
+
+
+def plot_errors(t: np.ndarray, angles: Any, title: str = ""):
+    """BROAD error angles (an :class:`~imunav.attitude.metrics.ErrorAngles`) [deg]."""
+    plt = _plt()
+    fig, ax = plt.subplots(figsize=(8, 3.5))
+    for k in ("total", "heading", "inclination"):
+        ax.plot(t, np.degrees(getattr(angles, k)), lw=0.7, label=k)
+    ax.set_xlabel("time [s]")
+    ax.set_ylabel("error [deg]")
+    ax.set_title(title)
+    ax.legend()
+    fig.tight_layout()
+    return fig
+
+
+def plot_montecarlo_box(mc: Any):
+    """Box plots of the per-run pitch and roll RMSE of each filter (log scale)."""
+    plt = _plt()
+    fig, axs = plt.subplots(1, 2, figsize=(9, 4))
+    names = list(mc.rmse)
+    for j, lab in enumerate(("pitch", "roll")):
+        axs[j].boxplot([mc.rmse[n][:, j] for n in names])
+        axs[j].set_xticks(range(1, len(names) + 1), names)
+        axs[j].set_yscale("log")
+        axs[j].set_ylabel(f"{lab} RMSE [deg]")
+    fig.tight_layout()
+    return fig
+
+
+def save(fig: Any, path: str | Path) -> Path:
+    """Save atomically (temp file in the same folder, then rename)."""
+    import os
+    import tempfile
+
+    p = Path(path)
+    fd, tmp = tempfile.mkstemp(dir=p.parent if str(p.parent) else ".", suffix=p.suffix)
+    os.close(fd)
+    fig.savefig(tmp, dpi=120)
+    os.replace(tmp, p)
+    return p

@@ -1,0 +1,63 @@
+"""Result type shared by every attitude filter."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from imunav.rotation import euler_from_quat
+
+Array = NDArray[np.float64]
+
+__all__ = ["AttitudeResult"]
+
+
+@dataclass(frozen=True)
+class AttitudeResult:
+    """Attitude estimate over a recording.
+
+    Attributes
+    ----------
+    t : (N,) time [s].
+    q_nb : (N, 4) body -> NED quaternion, Hamilton, scalar first.
+    bias : (N, 3) gyro-bias estimate [rad/s] or None.
+    cov_diag : (N, k) diagonal of the error-state covariance (attitude error
+        [rad²] first, then bias [(rad/s)²]) or None.
+    flags : dict of (N,) arrays (e.g. ``acc_rejected``, ``mag_disturbed``,
+        ``rest``), filter-specific.
+    name : filter name; ``params`` the parameters used.
+    """
+
+    t: Array
+    q_nb: Array
+    bias: Array | None = None
+    cov_diag: Array | None = None
+    flags: dict[str, np.ndarray] = field(default_factory=dict)
+    name: str = ""
+    params: dict[str, Any] = field(default_factory=dict)
+
+    @property
+    def n(self) -> int:
+        return int(self.q_nb.shape[0])
+
+    def euler(self) -> Array:
+        """(N, 3) ZYX Euler angles (roll, pitch, yaw) [rad]."""
+        return euler_from_quat(self.q_nb)
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-ready dictionary (lists of floats)."""
+        d: dict[str, Any] = {
+            "name": self.name,
+            "params": {k: (v.tolist() if isinstance(v, np.ndarray) else v) for k, v in self.params.items()},
+            "t": self.t.tolist(),
+            "q_nb": self.q_nb.tolist(),
+        }
+        if self.bias is not None:
+            d["bias"] = self.bias.tolist()
+        if self.cov_diag is not None:
+            d["cov_diag"] = self.cov_diag.tolist()
+        d["flags"] = {k: np.asarray(v).tolist() for k, v in self.flags.items()}
+        return d

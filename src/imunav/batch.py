@@ -1,0 +1,656 @@
+"""Production-batch processing: many IMUs, one command, one summary table.
+
+A *batch folder* holds one recording per unit (any :func:`imunav.io.read_imu`
+format), named after the unit::
+
+    batch/
+      unit_001.npz            static multi-position test of unit 001
+      unit_001_rate.npz       (optional) its rate-table test
+      segments.json           segment table of the static test (shared by all units,
+                              or <unit>_segments.json per unit)
+      rate_segments.json      segment table of the rate-table test (or <unit>_rate_segments.json)
+      truth/unit_001.json     (simulated batches) the true error model
+
+:func:`simulate_batch` writes such a folder for N virtual IMUs whose
+parameters spread from unit to unit around a preset; :func:`calibrate_batch`
+and :func:`noise_batch` process every unit in parallel with
+:func:`imunav.montecarlo.run_batch`, write one result file per unit and
+return a :class:`BatchSummary` (one row per unit: every parameter with its
+standard error, its error against the truth when known, pass / fail against
+an optional datasheet spec).
+
+Methods of :func:`calibrate_batch`:
+
+``multiposition``
+    static multi-position least squares (accelerometer T and b, gyro bias and
+    g-sensitivity), :func:`imunav.calib.multiposition`;
+``thesis``
+    ``multiposition`` combined with the rate-table fit of the gyro matrix
+    (needs ``<unit>_rate.<ext>``), the full model of imu-error-calibration.md;
+``multipose``
+    hand-placed poses without a reference (Tedaldi-style), :func:`imunav.calib.multipose`.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+from dataclasses import dataclass, field, replace
+from pathlib import Path
+from typing import Any, Mapping, Sequence
+
+import numpy as np
+import pandas as pd
+
+from imunav.errors import ConfigError, FileFormatError, InvalidInputError
+from imunav.montecarlo import Executor, run_batch, spawn_generators
+
+__all__ = [
+    "RECORDING_SUFFIXES",
+    "BatchSummary",
+    "find_units",
+    "simulate_batch",
+    "calibrate_unit",
+    "calibrate_batch",
+    "noise_unit",
+    "noise_batch",
+    "CALIBRATION_METHODS",
+]
+
+RECORDING_SUFFIXES = (".npz", ".csv", ".parquet", ".h5", ".hdf5", ".mat")
+CALIBRATION_METHODS = ("multiposition", "thesis", "multipose")
+
+
+# ---------------------------------------------------------------------------
+# folder layout
+# ---------------------------------------------------------------------------
+
+
+def find_units(folder: str | os.PathLike[str]) -> list[Path]:
+    """Recordings of the units in ``folder`` (sorted; ``*_rate.*`` companions excluded)."""
+    d = Path(folder)
+    if not d.is_dir():
+        raise InvalidInputError(f"batch folder {d} does not exist or is not a folder")
+    units = sorted(
+        p for p in d.iterdir()
+        if p.is_file() and p.suffix.lower() in RECORDING_SUFFIXES and not p.stem.endswith("_rate")
+    )
+    if not units:
+        raise InvalidInputError(
+            f"batch folder {d} has no recordings (files ending in {', '.join(RECORDING_SUFFIXES)}); "
+            "put one recording per unit there"
+        )
+    return units
+
+
+def _sidecar(rec: Path, suffix: str, shared: str) -> Path | None:
+    own = rec.with_name(f"{rec.stem}{suffix}.json")
+    if own.is_file():
+        return own
+    common = rec.parent / shared
+    return common if common.is_file() else None
+
+
+def _read_segments(path: Path) -> Any:
+    from imunav.sim import Segments
+
+    try:
+        d = json.loads(path.read_text(encoding="utf-8"))
+    except json.JSONDecodeError as e:
+        raise FileFormatError(f"{path}: not valid JSON ({e})") from e
+    d = d.get("segment_table", d)
+    try:
+        return Segments(**{k: np.asarray(d[k]) for k in Segments.__dataclass_fields__})
+    except KeyError as e:
+        raise FileFormatError(f"{path}: segment table lacks the column {e} (write it with Profile.to_dict())") from None
+
+
+def _write_json(obj: Any, path: Path) -> Path:
+    from imunav.io._atomic import atomic_path
+
+    with atomic_path(path) as tmp:
+        tmp.write_text(json.dumps(obj, indent=2, default=_json_default) + "\n", encoding="utf-8")
+    return path
+
+
+def _json_default(o: Any) -> Any:
+    if isinstance(o, np.ndarray):
+        return o.tolist()
+    if isinstance(o, np.generic):
+        return o.item()
+    if hasattr(o, "to_dict"):
+        return o.to_dict()
+    if isinstance(o, Path):
+        return str(o)
+    raise TypeError(f"not JSON serialisable: {type(o).__name__}")
+
+
+# ---------------------------------------------------------------------------
+# simulation of a production batch
+# ---------------------------------------------------------------------------
+
+
+def _spread_model(model: Any, rng: np.random.Generator, spread: float, name: str) -> Any:
+    """One unit: every deterministic parameter p -> p (1 + spread z), z ~ N(0, 1)."""
+
+    def jitter(x: Any) -> np.ndarray:
+        a = np.asarray(x, float)
+        return a * (1.0 + spread * rng.standard_normal(a.shape))
+
+    def triad(tri: Any) -> Any:
+        T = np.asarray(tri.scale_misalignment, float)
+        E = T - np.eye(3)  # S on the diagonal, M off it
+        return replace(tri, bias=jitter(tri.bias), scale_misalignment=np.eye(3) + jitter(E))
+
+    return model.replace(gyro=triad(model.gyro), accel=triad(model.accel),
+                         g_sensitivity=jitter(model.g_sensitivity), name=name)
+
+
+def _simulate_unit(item: tuple[int, str], *, out_dir: str, preset: str, spread: float, seed: int, n_units: int,
+                   fs: float, dwell_s: float, transition_s: float, rate_table: bool, fmt: str,
+                   static_s: float | None = None) -> dict[str, Any]:
+    from imunav.io import write_imu
+    from imunav.sim import hundred_position_profile, presets, simulate_imu, static_profile, thesis_rate_table_profile
+
+    k, name = item
+    rng = spawn_generators(seed, 1, k)[0]
+    model = _spread_model(presets.get(preset), rng, spread, name)
+    out = Path(out_dir)
+    prof = static_profile(static_s, fs) if static_s else hundred_position_profile(fs, dwell_s, transition_s)
+    data = simulate_imu(prof.trajectory, model, rng, earth_rate=False, transport_rate=False, gravity="constant")
+    files = [write_imu(data.with_(meta={"unit": name, "preset": preset, "seed": seed}), out / f"{name}.{fmt}")]
+    if rate_table and not static_s:
+        rp = thesis_rate_table_profile(fs, dwell_s, transition_s)
+        rd = simulate_imu(rp.trajectory, model, rng, earth_rate=False, transport_rate=False, gravity="constant")
+        files.append(write_imu(rd.with_(meta={"unit": name}), out / f"{name}_rate.{fmt}"))
+    (out / "truth").mkdir(exist_ok=True)
+    _write_json(model.to_dict(), out / "truth" / f"{name}.json")
+    return {"unit": name, "files": [str(f) for f in files], "samples": int(data.n)}
+
+
+def simulate_batch(
+    n_units: int,
+    out_dir: str | os.PathLike[str],
+    *,
+    preset: str = "thesis_sim",
+    spread: float = 0.2,
+    rng: int = 0,
+    fs: float = 50.0,
+    dwell_s: float = 5.0,
+    transition_s: float = 1.0,
+    rate_table: bool = True,
+    format: str = "npz",
+    static_s: float | None = None,
+    executor: Executor = "processes",
+    n_workers: int | None = None,
+    progress: bool = False,
+) -> list[Path]:
+    """Simulate a production batch of ``n_units`` IMUs (seeded, unit-to-unit spread).
+
+    Unit ``k`` gets the generator :func:`imunav.montecarlo.spawn_generators`
+    ``(rng, ...)[k]``; its biases, scale factors, misalignments and
+    g-sensitivities are the preset's, each multiplied by ``1 + spread·z``
+    with ``z ~ N(0, 1)`` (the noise parameters stay the preset's).  Each unit
+    runs the 100-position static test (and the thesis's 120-step rate-table
+    test when ``rate_table``) at ``fs`` with ``dwell_s`` per position/step;
+    with ``static_s`` each unit instead records one level static test of that
+    length (for noise identification).
+
+    Returns the unit recordings (static tests) written to ``out_dir``.
+    """
+    from imunav.sim import hundred_position_profile, presets, thesis_rate_table_profile
+
+    if not isinstance(n_units, (int, np.integer)) or n_units < 1:
+        raise InvalidInputError(f"n_units must be a positive integer, got {n_units!r}")
+    if not (spread >= 0 and np.isfinite(spread)):
+        raise InvalidInputError(f"spread must be a non-negative number, got {spread!r}")
+    if format not in ("npz", "csv", "parquet", "hdf5", "mat"):
+        raise InvalidInputError(f"format must be one of npz, csv, parquet, hdf5, mat; got {format!r}")
+    presets.get(preset)  # fails early with the list of presets
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    width = max(3, len(str(n_units)))
+    names = [f"unit_{k + 1:0{width}d}" for k in range(n_units)]
+    if static_s is not None and not (static_s > 0):
+        raise InvalidInputError(f"static_s must be a positive duration in seconds, got {static_s!r}")
+    if not static_s:
+        _write_json(hundred_position_profile(fs, dwell_s, transition_s).to_dict(), out / "segments.json")
+    if rate_table and not static_s:
+        _write_json(thesis_rate_table_profile(fs, dwell_s, transition_s).to_dict(), out / "rate_segments.json")
+    _write_json({"n_units": n_units, "preset": preset, "spread": spread, "seed": int(rng), "fs": fs,
+                 "dwell_s": dwell_s, "transition_s": transition_s, "rate_table": rate_table and not static_s,
+                 "static_s": static_s, "units": names},
+                out / "batch.json")
+    res = run_batch(
+        _simulate_unit, list(enumerate(names)), executor=executor, n_workers=n_workers, progress=progress,
+        description="simulate units", out_dir=str(out), preset=preset, spread=float(spread), seed=int(rng),
+        n_units=n_units, fs=float(fs), dwell_s=float(dwell_s), transition_s=float(transition_s),
+        rate_table=bool(rate_table), fmt=format, static_s=None if not static_s else float(static_s),
+    )
+    for name, r in zip(names, res):
+        if isinstance(r, BaseException):
+            raise r
+    return [out / f"{n}.{format}" for n in names]
+
+
+# ---------------------------------------------------------------------------
+# summary
+# ---------------------------------------------------------------------------
+
+
+@dataclass(frozen=True)
+class BatchSummary:
+    """Per-unit results of a batch run.
+
+    Attributes
+    ----------
+    table : one row per unit: ``unit``, ``status`` (ok / error), ``passed``
+        (spec verdict, None without a spec) and per parameter the value
+        (display unit), ``<name>_se`` and ``<name>_err`` (estimate − truth,
+        when the truth is known).
+    units : per unit the full result dict (or the error message).
+    spec_checks : per unit the list of :class:`imunav.report.SpecCheck` dicts.
+    out_dir : folder with the per-unit files and the summary.
+    """
+
+    kind: str
+    table: pd.DataFrame
+    units: dict[str, dict[str, Any]]
+    spec_checks: dict[str, list[dict[str, Any]]] = field(default_factory=dict)
+    out_dir: Path | None = None
+    seconds: float = 0.0
+
+    @property
+    def n_failed(self) -> int:
+        return int((self.table["status"] != "ok").sum())
+
+    @property
+    def passed(self) -> bool | None:
+        v = [p for p in self.table["passed"].tolist() if p is not None and not (isinstance(p, float) and np.isnan(p))]
+        if self.n_failed:
+            return False
+        return None if not v else bool(all(v))
+
+    def statistics(self) -> pd.DataFrame:
+        """Mean, standard deviation, min and max over the units of every parameter column."""
+        num = self.table.drop(columns=[c for c in ("unit", "status", "passed", "error") if c in self.table])
+        num = num[[c for c in num.columns if not c.endswith("_se")]].apply(pd.to_numeric, errors="coerce")
+        return pd.DataFrame({"mean": num.mean(), "std": num.std(ddof=1), "min": num.min(), "max": num.max()})
+
+    def to_dict(self) -> dict[str, Any]:
+        return {
+            "kind": self.kind,
+            "n_units": int(len(self.table)),
+            "n_failed": self.n_failed,
+            "passed": self.passed,
+            "seconds": round(self.seconds, 3),
+            "table": json.loads(self.table.to_json(orient="records")),
+            "spec_checks": self.spec_checks,
+        }
+
+
+def _spec_rows(estimates: Mapping[str, tuple[float, float | None]], spec: Any) -> tuple[list[dict], bool | None]:
+    from imunav.report import check_spec
+    from imunav.report.catalog import expand_spec
+
+    if not spec:
+        return [], None
+    checks = check_spec(estimates, expand_spec(spec, list(estimates)))
+    rows = [c.to_dict() for c in checks if c.limit is not None]
+    verdicts = [c.passed for c in checks if c.passed is not None]
+    return rows, (None if not verdicts else all(verdicts))
+
+
+def _summarise(kind: str, names: list[str], results: list[Any], spec: Any, out_dir: Path | None,
+               seconds: float) -> BatchSummary:
+    from imunav.report.catalog import to_display_value
+
+    rows, units, checks = [], {}, {}
+    for name, r in zip(names, results):
+        if isinstance(r, BaseException):
+            rows.append({"unit": name, "status": "error", "passed": False, "error": f"{type(r).__name__}: {r}"})
+            units[name] = {"error": f"{type(r).__name__}: {r}"}
+            continue
+        est = r["estimates"]
+        truth = r.get("truth") or {}
+        spec_rows, verdict = _spec_rows({k: (v[0], v[1]) for k, v in est.items()}, spec)
+        checks[name] = spec_rows
+        row: dict[str, Any] = {"unit": name, "status": "ok", "passed": verdict}
+        for k, (v, s) in est.items():
+            row[k] = to_display_value(k, v)
+            row[f"{k}_se"] = to_display_value(k, s)
+            if k in truth:
+                row[f"{k}_err"] = to_display_value(k, v - truth[k])
+        rows.append(row)
+        units[name] = r
+    table = pd.DataFrame(rows)
+    if "error" not in table:
+        table["error"] = None
+    return BatchSummary(kind, table, units, checks, out_dir, seconds)
+
+
+def write_summary(summary: BatchSummary, out_dir: Path, title: str) -> dict[str, Path]:
+    """``summary.csv``, ``summary.json`` and ``index.html`` (spread figures, pass / fail table)."""
+    from imunav.io._atomic import atomic_path
+    from imunav.report import Report
+    from imunav.report.catalog import display_unit
+
+    paths = {}
+    with atomic_path(out_dir / "summary.csv") as tmp:
+        summary.table.to_csv(tmp, index=False)
+    paths["csv"] = out_dir / "summary.csv"
+    paths["json"] = _write_json(summary.to_dict(), out_dir / "summary.json")
+
+    n = len(summary.table)
+    rep = Report(title, f"{n} units · {summary.n_failed} failed to process · {summary.seconds:.1f} s")
+    sec = rep.section("Units", summary.passed)
+    tab = summary.table
+    params = [c for c in tab.columns if c not in ("unit", "status", "passed", "error")
+              and not c.endswith("_se") and not c.endswith("_err")]
+    sec.text("One row per unit: processing status and the verdict against the specification "
+             "(every parameter with a limit must lie inside it). Values in display units; "
+             "the per-unit JSON files hold every parameter with its standard error.")
+    from imunav.report.catalog import base_name
+
+    fams: list[str] = []
+    for p in params:
+        if base_name(p) not in fams and not base_name(p).endswith("misalignment"):
+            fams.append(base_name(p))
+    errs_cols = [c for c in tab.columns if c.endswith("_err")]
+    short = []
+    for r in tab.to_dict(orient="records"):
+        row: dict[str, Any] = {"unit": r["unit"], "status": r["status"], "verdict": r["passed"]}
+        for f in fams:
+            vals = [r.get(f"{f}_{a}") for a in "xyz"]
+            row[f"{f} x, y, z ({display_unit(f)})"] = ", ".join(
+                "–" if v is None or (isinstance(v, float) and not np.isfinite(v)) else f"{v:.5g}" for v in vals)
+        if errs_cols:
+            z = [abs(r[c] / r[c[:-4] + "_se"]) for c in errs_cols
+                 if isinstance(r.get(c), float) and isinstance(r.get(c[:-4] + "_se"), float) and r[c[:-4] + "_se"] > 0]
+            row["max |error|/σ vs truth"] = max(z) if z else None
+        if r.get("error"):
+            row["error"] = r["error"]
+        short.append(row)
+    cols: list[str] = []
+    for r in short:
+        cols += [k for k in r if k not in cols]
+    sec.table([{**{c: None for c in cols}, **r} for r in short], "Units (misalignments in the per-unit files and below)", cols)
+    if params:
+        stats = summary.statistics().loc[[p for p in params if p in summary.statistics().index]]
+        stats.insert(0, "unit of measure", [display_unit(p) for p in stats.index])
+        stats.index.name = "parameter"
+        sec2 = rep.section("Unit-to-unit spread")
+        sec2.text("Statistics of each estimated parameter over the batch (display units).")
+        sec2.table(stats, "Parameter statistics over the units")
+        errs = [c for c in tab.columns if c.endswith("_err")]
+        if errs:
+            e = tab[errs].apply(pd.to_numeric, errors="coerce")
+            se = tab[[c[:-4] + "_se" for c in errs]].apply(pd.to_numeric, errors="coerce").to_numpy()
+            with np.errstate(invalid="ignore", divide="ignore"):
+                z = np.abs(e.to_numpy() / se)
+            rows = [{"parameter": c[:-4], "unit of measure": display_unit(c[:-4]),
+                     "RMS error": float(np.sqrt(np.nanmean(e[c].to_numpy() ** 2))),
+                     "RMS standard error": float(np.sqrt(np.nanmean(se[:, i] ** 2))),
+                     "max |error|/σ": float(np.nanmax(z[:, i])) if np.isfinite(z[:, i]).any() else None}
+                    for i, c in enumerate(errs)]
+            sec2.table(rows, "Estimate − truth over the units (simulated batch): errors vs reported uncertainty")
+        try:
+            sec2.figure(_spread_figure(tab, params), "Each parameter over the units (value ± 1σ)")
+        except Exception as exc:  # a figure problem must not lose the summary
+            sec2.text(f"(figure not drawn: {exc})")
+    if summary.spec_checks and any(summary.spec_checks.values()):
+        sec3 = rep.section("Specification checks", summary.passed)
+        rows = []
+        for u, lst in summary.spec_checks.items():
+            for c in lst:
+                rows.append({"unit": u, "parameter": c["name"],
+                             "value": _disp(c["name"], c["value_si"]), "±1σ": _disp(c["name"], c["sigma_si"]),
+                             "unit of measure": display_unit(c["name"]), "limit": c["limit"], "verdict": c["passed"]})
+        failed = [r for r in rows if r["verdict"] is False]
+        sec3.text(f"{len(rows)} checks, {len(failed)} failed." + (" Failed checks first." if failed else ""))
+        sec3.table(failed + [r for r in rows if r["verdict"] is not False], "Checks per unit")
+    paths["html"] = rep.write(out_dir / "index.html")
+    return paths
+
+
+def _disp(name: str, v: float | None) -> float | None:
+    from imunav.report.catalog import to_display_value
+
+    return to_display_value(name, v)
+
+
+def _spread_figure(tab: pd.DataFrame, params: list[str]) -> Any:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from imunav.report.catalog import base_name, display_unit
+
+    fams: dict[str, list[str]] = {}
+    for p in params:
+        fams.setdefault(base_name(p), []).append(p)
+    n = len(fams)
+    cols = min(3, n)
+    rows = (n + cols - 1) // cols
+    fig, axes = plt.subplots(rows, cols, figsize=(4.2 * cols, 2.8 * rows), squeeze=False)
+    x = np.arange(len(tab))
+    for ax, (fam, ps) in zip(axes.flat, fams.items()):
+        for j, p in enumerate(ps):
+            v = pd.to_numeric(tab[p], errors="coerce").to_numpy()
+            s = pd.to_numeric(tab.get(f"{p}_se"), errors="coerce").to_numpy() if f"{p}_se" in tab else None
+            ax.errorbar(x + 0.08 * (j - (len(ps) - 1) / 2), v, yerr=s, fmt="o", ms=3, capsize=2,
+                        label=p[len(fam) + 1:] or p)
+        ax.set_title(f"{fam} [{display_unit(ps[0])}]", fontsize=9)
+        ax.set_xlabel("unit #", fontsize=8)
+        ax.tick_params(labelsize=7)
+        if len(ps) <= 6:
+            ax.legend(fontsize=6, ncol=3)
+    for ax in list(axes.flat)[n:]:
+        ax.axis("off")
+    fig.tight_layout()
+    return fig
+
+
+# ---------------------------------------------------------------------------
+# calibration of a batch
+# ---------------------------------------------------------------------------
+
+
+def _truth_estimates(rec: Path) -> dict[str, float]:
+    """True parameters of a simulated unit (``truth/<unit>.json``), flat names, SI."""
+    from imunav.calib import ImuCalibration
+    from imunav.report.catalog import calibration_estimates
+    from imunav.sim import ImuErrorModel
+
+    p = rec.parent / "truth" / f"{rec.stem}.json"
+    if not p.is_file():
+        return {}
+    model = ImuErrorModel.from_dict(json.loads(p.read_text(encoding="utf-8")))
+    cal = ImuCalibration.from_error_model(model)
+    full = {k: np.ones((3, 3)) for k in ("accel_matrix", "gyro_matrix", "g_sensitivity")}
+    full.update(accel_bias=np.ones(3), gyro_bias=np.ones(3))
+    return {k: v for k, (v, _) in calibration_estimates(cal, full).items()}
+
+
+def calibrate_unit(
+    recording: str | os.PathLike[str],
+    *,
+    method: str = "multiposition",
+    out_dir: str | os.PathLike[str] | None = None,
+    read_options: Mapping[str, Any] | None = None,
+    latitude: float | None = None,
+    gravity: float | None = None,
+) -> dict[str, Any]:
+    """Calibrate one unit of a batch folder; writes ``<out_dir>/<unit>.json`` (the calibration).
+
+    Returns ``{"unit", "method", "estimates": {name: (value_si, se_si)},
+    "truth": {name: value_si} (simulated batches), "files", "residual_rms",
+    "condition"}``.
+    """
+    from imunav import calib
+    from imunav.io import read_imu
+    from imunav.report.catalog import calibration_estimates
+
+    rec = Path(recording)
+    if method not in CALIBRATION_METHODS:
+        raise ConfigError(f"unknown calibration method {method!r}; choose from {', '.join(CALIBRATION_METHODS)}")
+    opts = dict(read_options or {})
+    data = read_imu(rec, **opts)
+    if method in ("multiposition", "thesis"):
+        seg = _sidecar(rec, "_segments", "segments.json")
+        if seg is None:
+            raise InvalidInputError(
+                f"{rec}: no segment table for the multi-position test; put {rec.stem}_segments.json or "
+                "segments.json (Profile.to_dict() format) next to the recordings"
+            )
+        res = calib.multiposition(data, _read_segments(seg), latitude=latitude, gravity=gravity)
+        if method == "thesis":
+            rate = next((p for p in rec.parent.glob(f"{rec.stem}_rate.*") if p.suffix.lower() in RECORDING_SUFFIXES), None)
+            rseg = _sidecar(rec.with_name(f"{rec.stem}_rate{rec.suffix}"), "_segments", "rate_segments.json")
+            if rate is None or rseg is None:
+                raise InvalidInputError(
+                    f"{rec}: method 'thesis' needs the rate-table test {rec.stem}_rate.<ext> and its segment table "
+                    "rate_segments.json (or use --method multiposition)"
+                )
+            rres = calib.ratetable(read_imu(rate, **opts), _read_segments(rseg), base=res.calibration,
+                                   latitude=latitude, gravity=gravity)
+            res = calib.combine(res, rres)
+    else:
+        res = calib.multipose(data.accel, data.gyro, data.fs, gravity=gravity or 9.80665,
+                              raw_accel_unit="m/s^2", raw_gyro_unit="rad/s")
+    cal = res.calibration
+    files = {}
+    if out_dir is not None:
+        od = Path(out_dir)
+        od.mkdir(parents=True, exist_ok=True)
+        files["calibration"] = str(cal.save(od / f"{rec.stem}.json"))
+        files["report"] = str(_write_json(res.to_dict(), od / f"{rec.stem}_report.json"))
+    return {
+        "unit": rec.stem,
+        "method": res.method or method,
+        "estimates": calibration_estimates(cal, res.stderr),
+        "truth": _truth_estimates(rec),
+        "files": files,
+        "residual_rms": {k: np.sqrt(np.mean(np.asarray(v, float) ** 2, axis=0)).tolist() for k, v in res.residuals.items()},
+        "condition": {k: float(v) for k, v in res.condition.items()},
+    }
+
+
+def _load_spec(spec: Any) -> Any:
+    from imunav.report import load_spec
+
+    if spec is None:
+        return None
+    return spec if isinstance(spec, Mapping) and all(hasattr(v, "max_si") for v in spec.values()) else load_spec(spec)
+
+
+def calibrate_batch(
+    folder: str | os.PathLike[str],
+    *,
+    method: str = "multiposition",
+    out_dir: str | os.PathLike[str] | None = None,
+    spec: Any = None,
+    read_options: Mapping[str, Any] | None = None,
+    latitude: float | None = None,
+    gravity: float | None = None,
+    executor: Executor = "processes",
+    n_workers: int | None = None,
+    address: str | None = None,
+    progress: bool = False,
+) -> BatchSummary:
+    """Calibrate every unit of a batch folder in parallel.
+
+    Writes ``<unit>.json`` (calibration), ``<unit>_report.json`` (parameters,
+    standard errors, residuals), ``summary.csv``, ``summary.json`` and
+    ``index.html`` to ``out_dir`` (default ``<folder>/calibration``).  A unit
+    that fails (bad file, missing segments, degenerate design) is reported in
+    the table with its error; the others are still processed.
+    """
+    import time
+
+    if method not in CALIBRATION_METHODS:
+        raise ConfigError(f"unknown calibration method {method!r}; choose from {', '.join(CALIBRATION_METHODS)}")
+    limits = _load_spec(spec)
+    units = find_units(folder)
+    od = Path(out_dir) if out_dir is not None else Path(folder) / "calibration"
+    od.mkdir(parents=True, exist_ok=True)
+    t0 = time.perf_counter()
+    res = run_batch(calibrate_unit, [str(u) for u in units], executor=executor, n_workers=n_workers, address=address,
+                    progress=progress, description=f"calibrate ({method})", method=method, out_dir=str(od),
+                    read_options=dict(read_options or {}), latitude=latitude, gravity=gravity)
+    summary = _summarise("calibration", [u.stem for u in units], res, limits, od, time.perf_counter() - t0)
+    write_summary(summary, od, f"Batch calibration ({method}) of {Path(folder).name}")
+    return summary
+
+
+# ---------------------------------------------------------------------------
+# noise identification of a batch
+# ---------------------------------------------------------------------------
+
+
+def noise_unit(
+    recording: str | os.PathLike[str],
+    *,
+    out_dir: str | os.PathLike[str] | None = None,
+    read_options: Mapping[str, Any] | None = None,
+    terms: Sequence[str] = ("Q", "N", "B", "K", "R"),
+) -> dict[str, Any]:
+    """Allan-variance noise identification of one static recording (gyro and accelerometer).
+
+    Writes ``<out_dir>/<unit>_noise.json`` (both :class:`imunav.noise.NoiseFit`) and
+    returns ``{"unit", "estimates": {name: (value_si, se_si)}, "files"}``.
+    """
+    from imunav.io import read_imu
+    from imunav.noise.allan import allan_deviation
+    from imunav.noise.fit import fit_noise
+    from imunav.report.catalog import noise_estimates
+
+    rec = Path(recording)
+    data = read_imu(rec, **dict(read_options or {}))
+    est: dict[str, tuple[float, float | None]] = {}
+    fits = {}
+    for sensor, x in (("gyro", data.gyro), ("accel", data.accel)):
+        ad = allan_deviation(x, data.fs, units="rad/s" if sensor == "gyro" else "m/s^2")
+        fit = fit_noise(ad, tuple(terms), quantity=sensor)
+        fits[sensor] = fit.to_dict()
+        est.update(noise_estimates(fit, sensor))
+    files = {}
+    if out_dir is not None:
+        od = Path(out_dir)
+        od.mkdir(parents=True, exist_ok=True)
+        files["noise"] = str(_write_json({"unit": rec.stem, "fs_hz": data.fs, "duration_s": data.duration, **fits},
+                                         od / f"{rec.stem}_noise.json"))
+    return {"unit": rec.stem, "estimates": est, "truth": {}, "files": files}
+
+
+def noise_batch(
+    folder: str | os.PathLike[str],
+    *,
+    out_dir: str | os.PathLike[str] | None = None,
+    spec: Any = None,
+    read_options: Mapping[str, Any] | None = None,
+    terms: Sequence[str] = ("Q", "N", "B", "K", "R"),
+    executor: Executor = "processes",
+    n_workers: int | None = None,
+    address: str | None = None,
+    progress: bool = False,
+) -> BatchSummary:
+    """Noise identification (Allan variance + GLS term fit) of every unit's static recording, in parallel.
+
+    Writes ``<unit>_noise.json``, ``summary.csv``, ``summary.json`` and
+    ``index.html`` to ``out_dir`` (default ``<folder>/noise``).
+    """
+    import time
+
+    limits = _load_spec(spec)
+    units = find_units(folder)
+    od = Path(out_dir) if out_dir is not None else Path(folder) / "noise"
+    od.mkdir(parents=True, exist_ok=True)
+    t0 = time.perf_counter()
+    res = run_batch(noise_unit, [str(u) for u in units], executor=executor, n_workers=n_workers, address=address,
+                    progress=progress, description="noise", out_dir=str(od), read_options=dict(read_options or {}),
+                    terms=tuple(terms))
+    summary = _summarise("noise", [u.stem for u in units], res, limits, od, time.perf_counter() - t0)
+    write_summary(summary, od, f"Batch noise identification of {Path(folder).name}")
+    return summary

@@ -1,0 +1,491 @@
+"""The deterministic IMU calibration model and its (de)serialisation.
+
+Measurement model (imu-error-calibration.md eqs. 2 and 4; ahrs-sensor-errors.md
+§3.2, with the full 3×3 g-sensitivity allowed)::
+
+    ã = T_a f + b_a                    (accelerometer, raw units)
+    ω̃ = T_g ω + b_g + G f              (gyroscope, raw units)
+
+``T = I + diag(S) + M`` when raw units are SI (``M`` zero diagonal, element
+``M_ij`` = response of axis i to an input along axis j).  Compensation
+(eqs. 21/22, ahrs-sensor-errors §3.4), accelerometer first because the gyro
+uses the *compensated* specific force::
+
+    f̂ = T_a⁻¹ (ã − b_a)
+    ω̂ = T_g⁻¹ (ω̃ − b_g − G f̂)
+
+Optionally each bias component and each diagonal element of ``T`` is a
+function of temperature (:class:`TempCurve`, fitted by
+:mod:`imunav.calib.temperature`); it then replaces the constant.
+
+Compensated values are SI (m/s², rad/s).  Raw values are in
+``raw_accel_unit`` / ``raw_gyro_unit`` (SI by default, or e.g. ``"counts"``),
+so ``T`` carries raw units per SI unit.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from imunav.errors import FileFormatError, InvalidInputError, NonFiniteError, ShapeError, UnitError
+from imunav.units import DEG
+
+__all__ = [
+    "TempCurve",
+    "ImuCalibration",
+    "FORMAT_VERSION",
+    "success_percentages",
+    "calibration_parameters",
+    "write_json_atomic",
+]
+
+Array = NDArray[np.float64]
+FORMAT_VERSION = 1
+_FORMAT = "imunav.imu-calibration"
+_SI_ACCEL = "m/s^2"
+_SI_GYRO = "rad/s"
+
+
+def write_json_atomic(obj: Any, path: str | os.PathLike[str]) -> Path:
+    """Write ``obj`` as JSON to ``path`` atomically (temp file + ``os.replace``)."""
+    from imunav.io._atomic import atomic_path
+
+    with atomic_path(path) as tmp:
+        tmp.write_text(json.dumps(obj, indent=2, default=_json_default) + "\n")
+    return Path(path)
+
+
+def _json_default(o: Any) -> Any:
+    if isinstance(o, np.ndarray):
+        return o.tolist()
+    if isinstance(o, (np.floating, np.integer)):
+        return o.item()
+    if isinstance(o, np.bool_):
+        return bool(o)
+    if hasattr(o, "to_dict"):
+        return o.to_dict()
+    raise TypeError(f"not JSON serialisable: {type(o)}")
+
+
+@dataclass(frozen=True)
+class TempCurve:
+    """One parameter as a function of temperature.
+
+    ``p(T) = Σ_k c_k x^k (+ step_height·[T ≥ step_c])`` with the centred and
+    scaled temperature ``x = (T − center_c) / scale_c`` (centring keeps a
+    5th-order fit well conditioned; imu-error-calibration §7).
+    """
+
+    coeffs: Array  # (order+1,), lowest power first
+    center_c: float
+    scale_c: float
+    step_c: float | None = None
+    step_height: float = 0.0
+
+    @property
+    def order(self) -> int:
+        return len(self.coeffs) - 1
+
+    def __call__(self, temp_c: ArrayLike) -> Array:
+        t = np.asarray(temp_c, dtype=float)
+        x = (t - self.center_c) / self.scale_c
+        y = np.polynomial.polynomial.polyval(x, np.asarray(self.coeffs, dtype=float))
+        if self.step_c is not None:
+            y = y + self.step_height * (t >= self.step_c)
+        return y
+
+    def to_dict(self) -> dict[str, Any]:
+        return {
+            "coeffs": np.asarray(self.coeffs).tolist(),
+            "center_c": self.center_c,
+            "scale_c": self.scale_c,
+            "step_c": self.step_c,
+            "step_height": self.step_height,
+        }
+
+    @classmethod
+    def from_dict(cls, d: dict[str, Any]) -> "TempCurve":
+        return cls(
+            np.asarray(d["coeffs"], dtype=float),
+            float(d["center_c"]),
+            float(d["scale_c"]),
+            None if d.get("step_c") is None else float(d["step_c"]),
+            float(d.get("step_height", 0.0)),
+        )
+
+
+_THERMAL_KEYS = ("accel_bias", "accel_scale", "gyro_bias", "gyro_scale")
+
+
+def _vec3(x: ArrayLike, name: str) -> Array:
+    a = np.asarray(x, dtype=float)
+    if a.shape != (3,):
+        raise ShapeError(f"{name} must have shape (3,), got {a.shape}")
+    if not np.all(np.isfinite(a)):
+        raise NonFiniteError(f"{name} has non-finite values")
+    return a
+
+
+def _mat3(x: ArrayLike, name: str) -> Array:
+    a = np.asarray(x, dtype=float)
+    if a.shape != (3, 3):
+        raise ShapeError(f"{name} must have shape (3, 3), got {a.shape}")
+    if not np.all(np.isfinite(a)):
+        raise NonFiniteError(f"{name} has non-finite values")
+    return a
+
+
+@dataclass(frozen=True)
+class ImuCalibration:
+    """Deterministic calibration of an accelerometer + gyroscope triad pair.
+
+    Attributes
+    ----------
+    accel_bias, gyro_bias : (3,) raw units.
+    accel_matrix, gyro_matrix : (3, 3) ``T`` (raw units per SI unit).
+    g_sensitivity : (3, 3) ``G`` (raw gyro units per m/s²); diagonal in the theses.
+    thermal : ``{"accel_bias": [TempCurve]*3, ...}``; keys among
+        ``accel_bias, accel_scale, gyro_bias, gyro_scale``; a ``*_scale`` curve
+        gives the diagonal element ``T_ii(T)``.
+    raw_accel_unit, raw_gyro_unit : units of the raw data.
+    stderr : standard errors with the same keys/shapes as the parameters.
+    meta : free-form provenance (method, session, design condition...).
+    """
+
+    accel_bias: Array = field(default_factory=lambda: np.zeros(3))
+    accel_matrix: Array = field(default_factory=lambda: np.eye(3))
+    gyro_bias: Array = field(default_factory=lambda: np.zeros(3))
+    gyro_matrix: Array = field(default_factory=lambda: np.eye(3))
+    g_sensitivity: Array = field(default_factory=lambda: np.zeros((3, 3)))
+    thermal: dict[str, tuple[TempCurve, TempCurve, TempCurve]] = field(default_factory=dict)
+    raw_accel_unit: str = _SI_ACCEL
+    raw_gyro_unit: str = _SI_GYRO
+    stderr: dict[str, Array] = field(default_factory=dict)
+    meta: dict[str, Any] = field(default_factory=dict)
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "accel_bias", _vec3(self.accel_bias, "accel_bias"))
+        object.__setattr__(self, "gyro_bias", _vec3(self.gyro_bias, "gyro_bias"))
+        object.__setattr__(self, "accel_matrix", _mat3(self.accel_matrix, "accel_matrix"))
+        object.__setattr__(self, "gyro_matrix", _mat3(self.gyro_matrix, "gyro_matrix"))
+        object.__setattr__(self, "g_sensitivity", _mat3(self.g_sensitivity, "g_sensitivity"))
+        for name in ("accel_matrix", "gyro_matrix"):
+            if not np.linalg.cond(getattr(self, name)) < 1e12:
+                raise InvalidInputError(f"{name} is singular; a calibration matrix must be invertible")
+        for k, v in self.thermal.items():
+            if k not in _THERMAL_KEYS:
+                raise InvalidInputError(f"thermal key {k!r} unknown; use one of {_THERMAL_KEYS}")
+            if len(v) != 3:
+                raise ShapeError(f"thermal[{k!r}] needs one TempCurve per axis (3), got {len(v)}")
+
+    # ------------------------------------------------------------------ views
+    def _params_at(self, temp_c: ArrayLike | None, n: int) -> tuple[Array, Array, Array, Array]:
+        """Biases (n,3) and matrices (n,3,3) at the given temperatures."""
+        ba = np.broadcast_to(self.accel_bias, (n, 3)).copy()
+        bg = np.broadcast_to(self.gyro_bias, (n, 3)).copy()
+        ta = np.broadcast_to(self.accel_matrix, (n, 3, 3)).copy()
+        tg = np.broadcast_to(self.gyro_matrix, (n, 3, 3)).copy()
+        if self.thermal:
+            if temp_c is None:
+                raise InvalidInputError(
+                    "this calibration is temperature dependent: pass temp_c (or an ImuData with temp)"
+                )
+            t = np.broadcast_to(np.asarray(temp_c, dtype=float), (n,))
+            if not np.all(np.isfinite(t)):
+                raise NonFiniteError("temp_c has non-finite values")
+            for key, target in (("accel_bias", ba), ("gyro_bias", bg)):
+                if key in self.thermal:
+                    for i, c in enumerate(self.thermal[key]):
+                        target[:, i] = c(t)
+            for key, target in (("accel_scale", ta), ("gyro_scale", tg)):
+                if key in self.thermal:
+                    for i, c in enumerate(self.thermal[key]):
+                        target[:, i, i] = c(t)
+        return ba, ta, bg, tg
+
+    # ------------------------------------------------------------ apply/invert
+    def apply_arrays(
+        self, accel: ArrayLike, gyro: ArrayLike, temp_c: ArrayLike | None = None
+    ) -> tuple[Array, Array]:
+        """Compensate raw ``accel`` / ``gyro`` (N, 3), raw units → SI (eqs. 21/22)."""
+        a, g = _pair(accel, gyro)
+        n = a.shape[0]
+        if not self.thermal:
+            f = np.linalg.solve(self.accel_matrix, (a - self.accel_bias).T).T
+            w = np.linalg.solve(self.gyro_matrix, (g - self.gyro_bias - f @ self.g_sensitivity.T).T).T
+            return f, w
+        ba, ta, bg, tg = self._params_at(temp_c, n)
+        f = np.linalg.solve(ta, (a - ba)[..., None])[..., 0]
+        w = np.linalg.solve(tg, (g - bg - f @ self.g_sensitivity.T)[..., None])[..., 0]
+        return f, w
+
+    def invert_arrays(
+        self, accel: ArrayLike, gyro: ArrayLike, temp_c: ArrayLike | None = None
+    ) -> tuple[Array, Array]:
+        """Corrupt true specific force / rate (SI, (N, 3)) into raw outputs (eqs. 2/4)."""
+        f, w = _pair(accel, gyro)
+        n = f.shape[0]
+        if not self.thermal:
+            a = f @ self.accel_matrix.T + self.accel_bias
+            g = w @ self.gyro_matrix.T + self.gyro_bias + f @ self.g_sensitivity.T
+            return a, g
+        ba, ta, bg, tg = self._params_at(temp_c, n)
+        a = np.einsum("nij,nj->ni", ta, f) + ba
+        g = np.einsum("nij,nj->ni", tg, w) + bg + f @ self.g_sensitivity.T
+        return a, g
+
+    def apply(self, data: Any, temp_c: ArrayLike | None = None) -> Any:
+        """Compensate an :class:`imunav.timeseries.ImuData` (or ``(accel, gyro)``)."""
+        if isinstance(data, tuple):
+            return self.apply_arrays(data[0], data[1], temp_c)
+        self._require_si("apply")
+        t = temp_c if temp_c is not None else getattr(data, "temp", None)
+        f, w = self.apply_arrays(data.accel, data.gyro, t)
+        return data.with_(accel=f, gyro=w)
+
+    def invert(self, data: Any, temp_c: ArrayLike | None = None) -> Any:
+        """Corrupt ideal :class:`ImuData` (or ``(accel, gyro)``) with this model."""
+        if isinstance(data, tuple):
+            return self.invert_arrays(data[0], data[1], temp_c)
+        self._require_si("invert")
+        t = temp_c if temp_c is not None else getattr(data, "temp", None)
+        a, g = self.invert_arrays(data.accel, data.gyro, t)
+        return data.with_(accel=a, gyro=g)
+
+    def _require_si(self, what: str) -> None:
+        if (self.raw_accel_unit, self.raw_gyro_unit) != (_SI_ACCEL, _SI_GYRO):
+            raise UnitError(
+                f"{what}: this calibration maps raw {self.raw_accel_unit}/{self.raw_gyro_unit} data, while "
+                "ImuData holds SI values; use apply_arrays/invert_arrays on the raw arrays"
+            )
+
+    # ------------------------------------------------------------ thesis view
+    def thesis_parameters(self) -> dict[str, Array]:
+        """Parameters in the thesis parameterisation (SI raw units required).
+
+        ``S_i = T_ii − 1``, ``M_ij = T_ij`` (i ≠ j), ``B``, ``B_G = diag(G)``.
+        """
+        self._require_si("thesis_parameters")
+        return calibration_parameters(self)
+
+    # --------------------------------------------------------------- JSON I/O
+    def to_dict(self) -> dict[str, Any]:
+        return {
+            "format": _FORMAT,
+            "format_version": FORMAT_VERSION,
+            "units": {
+                "raw_accel": self.raw_accel_unit,
+                "raw_gyro": self.raw_gyro_unit,
+                "accel_out": _SI_ACCEL,
+                "gyro_out": _SI_GYRO,
+                "accel_matrix": f"{self.raw_accel_unit} per {_SI_ACCEL}",
+                "gyro_matrix": f"{self.raw_gyro_unit} per {_SI_GYRO}",
+                "g_sensitivity": f"{self.raw_gyro_unit} per {_SI_ACCEL}",
+                "temperature": "degC",
+            },
+            "model": "a_raw = Ta f + ba; w_raw = Tg w + bg + G f",
+            "accel": {"bias": self.accel_bias, "matrix": self.accel_matrix},
+            "gyro": {"bias": self.gyro_bias, "matrix": self.gyro_matrix, "g_sensitivity": self.g_sensitivity},
+            "thermal": {k: [c.to_dict() for c in v] for k, v in self.thermal.items()},
+            "stderr": {k: np.asarray(v) for k, v in self.stderr.items()},
+            "meta": self.meta,
+        }
+
+    @classmethod
+    def from_dict(cls, d: dict[str, Any], *, source: str = "<dict>") -> "ImuCalibration":
+        if d.get("format") != _FORMAT:
+            raise FileFormatError(f"{source}: not an imunav calibration (field 'format' is {d.get('format')!r})")
+        v = d.get("format_version")
+        if v != FORMAT_VERSION:
+            raise FileFormatError(
+                f"{source}: calibration format_version {v!r} is not supported (this imunav reads {FORMAT_VERSION})"
+            )
+        try:
+            u = d["units"]
+            return cls(
+                accel_bias=d["accel"]["bias"],
+                accel_matrix=d["accel"]["matrix"],
+                gyro_bias=d["gyro"]["bias"],
+                gyro_matrix=d["gyro"]["matrix"],
+                g_sensitivity=d["gyro"]["g_sensitivity"],
+                thermal={
+                    k: tuple(TempCurve.from_dict(c) for c in v) for k, v in d.get("thermal", {}).items()
+                },
+                raw_accel_unit=u["raw_accel"],
+                raw_gyro_unit=u["raw_gyro"],
+                stderr={k: np.asarray(v, dtype=float) for k, v in d.get("stderr", {}).items()},
+                meta=dict(d.get("meta", {})),
+            )
+        except KeyError as e:
+            raise FileFormatError(f"{source}: calibration JSON lacks the field {e}") from None
+
+    def save(self, path: str | os.PathLike[str]) -> Path:
+        """Write the calibration as JSON (atomic)."""
+        return write_json_atomic(self.to_dict(), path)
+
+    @classmethod
+    def load(cls, path: str | os.PathLike[str]) -> "ImuCalibration":
+        p = Path(path)
+        try:
+            d = json.loads(p.read_text())
+        except FileNotFoundError:
+            raise FileFormatError(f"calibration file {p} does not exist") from None
+        except json.JSONDecodeError as e:
+            raise FileFormatError(f"{p}: invalid JSON at line {e.lineno}: {e.msg}") from None
+        if isinstance(d, dict) and d.get("cal_type") == "Ferraris":
+            return cls.from_imucal(d)
+        return cls.from_dict(d, source=str(p))
+
+    # ----------------------------------------------------- imucal (Ferraris)
+    def to_imucal(self, *, acc_unit: str = "m/s^2", gyr_unit: str = "deg/s") -> dict[str, Any]:
+        """The imucal ``FerrarisCalibrationInfo`` JSON (format 2.0).
+
+        imucal: ``a_c = R_a⁻¹ K_a⁻¹ (a_r − b_a)``,
+        ``ω_c = R_g⁻¹ K_g⁻¹ (ω_r − K_ga a_c − b_g)``; hence ``T_a = K_a R_a``
+        with ``K_a`` the row norms of ``T_a`` and unit-norm rows in ``R_a``.
+        """
+        if self.thermal:
+            raise InvalidInputError("imucal has no temperature model; drop the thermal part first")
+        ga = {"m/s^2": 1.0}.get(acc_unit)
+        gg = {"deg/s": DEG, "rad/s": 1.0}.get(gyr_unit)
+        if ga is None or gg is None:
+            raise UnitError(f"to_imucal: acc_unit must be 'm/s^2' and gyr_unit 'deg/s' or 'rad/s'")
+        ta = self.accel_matrix * ga
+        tg = self.gyro_matrix * gg
+        ka = np.linalg.norm(ta, axis=1)
+        kg = np.linalg.norm(tg, axis=1)
+        return {
+            "acc_unit": acc_unit,
+            "gyr_unit": gyr_unit,
+            "from_acc_unit": _imucal_unit(self.raw_accel_unit),
+            "from_gyr_unit": _imucal_unit(self.raw_gyro_unit),
+            "comment": self.meta.get("comment"),
+            "K_a": np.diag(ka).tolist(),
+            "R_a": (ta / ka[:, None]).tolist(),
+            "b_a": self.accel_bias.tolist(),
+            "K_g": np.diag(kg).tolist(),
+            "R_g": (tg / kg[:, None]).tolist(),
+            "K_ga": self.g_sensitivity.tolist(),
+            "b_g": self.gyro_bias.tolist(),
+            "cal_type": "Ferraris",
+            "_format_version": "2.0",
+        }
+
+    @classmethod
+    def from_imucal(cls, d: dict[str, Any] | str | os.PathLike[str]) -> "ImuCalibration":
+        """Build from an imucal Ferraris JSON (dict or path)."""
+        if not isinstance(d, dict):
+            d = json.loads(Path(d).read_text())
+        if d.get("cal_type") not in ("Ferraris", "Turntable"):
+            raise FileFormatError(f"imucal calibration of type {d.get('cal_type')!r} is not supported")
+        if d.get("acc_unit") != "m/s^2" or d.get("gyr_unit") not in ("deg/s", "rad/s"):
+            raise UnitError(
+                f"imucal output units {d.get('acc_unit')!r}/{d.get('gyr_unit')!r} unsupported (need m/s^2, deg/s)"
+            )
+        gg = DEG if d["gyr_unit"] == "deg/s" else 1.0
+        ta = np.asarray(d["K_a"], float) @ np.asarray(d["R_a"], float)
+        tg = np.asarray(d["K_g"], float) @ np.asarray(d["R_g"], float) / gg
+        return cls(
+            accel_bias=d["b_a"],
+            accel_matrix=ta,
+            gyro_bias=d["b_g"],
+            gyro_matrix=tg,
+            g_sensitivity=d["K_ga"],
+            raw_accel_unit=_from_imucal_unit(d.get("from_acc_unit"), _SI_ACCEL),
+            raw_gyro_unit=_from_imucal_unit(d.get("from_gyr_unit"), _SI_GYRO),
+            meta={"source": "imucal", "comment": d.get("comment")},
+        )
+
+    @classmethod
+    def from_error_model(cls, model: Any) -> "ImuCalibration":
+        """The calibration that a :class:`imunav.sim.ImuErrorModel` implies (truth for tests)."""
+        return cls(
+            accel_bias=np.asarray(model.accel.bias, float),
+            accel_matrix=np.asarray(model.accel.scale_misalignment, float),
+            gyro_bias=np.asarray(model.gyro.bias, float),
+            gyro_matrix=np.asarray(model.gyro.scale_misalignment, float),
+            g_sensitivity=np.asarray(model.g_sensitivity, float),
+            meta={"source": f"error model {getattr(model, 'name', '')}".strip()},
+        )
+
+    def with_(self, **changes: Any) -> "ImuCalibration":
+        from dataclasses import replace
+
+        return replace(self, **changes)
+
+
+def _imucal_unit(u: str) -> str:
+    return {"counts": "a.u.", _SI_GYRO: "rad/s", _SI_ACCEL: "m/s^2"}.get(u, u)
+
+
+def _from_imucal_unit(u: str | None, si: str) -> str:
+    if u is None:
+        return si
+    return {"a.u.": "counts"}.get(u, u)
+
+
+def _pair(a: ArrayLike, g: ArrayLike) -> tuple[Array, Array]:
+    a = np.asarray(a, dtype=float)
+    g = np.asarray(g, dtype=float)
+    one = a.ndim == 1
+    a2 = np.atleast_2d(a)
+    g2 = np.atleast_2d(g)
+    if a2.shape[-1] != 3 or g2.shape != a2.shape or a2.ndim != 2:
+        raise ShapeError(f"accel {a.shape} and gyro {g.shape} must both be (N, 3)")
+    if not (np.all(np.isfinite(a2)) and np.all(np.isfinite(g2))):
+        bad = np.flatnonzero(~(np.isfinite(a2).all(1) & np.isfinite(g2).all(1)))
+        raise NonFiniteError(f"non-finite accel/gyro at rows {bad[:10].tolist()}")
+    return a2, g2
+
+
+_OFF = [(0, 1), (0, 2), (1, 0), (1, 2), (2, 0), (2, 1)]
+_AX = "xyz"
+
+
+def calibration_parameters(cal: ImuCalibration) -> dict[str, Array]:
+    """Thesis parameters as flat arrays (SI): accel ``S, B, M``; gyro ``S, B, B_G, M``.
+
+    Keys: ``accel_S`` (3,), ``accel_B`` (3,), ``accel_M`` (6,) ordered
+    xy, xz, yx, yz, zx, zy; ``gyro_S``, ``gyro_B``, ``gyro_BG`` (3,), ``gyro_M`` (6,).
+    """
+    out: dict[str, Array] = {}
+    for s, T, B in (("accel", cal.accel_matrix, cal.accel_bias), ("gyro", cal.gyro_matrix, cal.gyro_bias)):
+        out[f"{s}_S"] = np.diag(T) - 1.0
+        out[f"{s}_B"] = B.copy()
+        out[f"{s}_M"] = np.array([T[i, j] for i, j in _OFF])
+    out["gyro_BG"] = np.diag(cal.g_sensitivity).copy()
+    return out
+
+
+def parameter_names() -> dict[str, list[str]]:
+    """Names matching :func:`calibration_parameters` (for tables)."""
+    m = [f"M_{_AX[i]}{_AX[j]}" for i, j in _OFF]
+    s = [f"S_{a}" for a in _AX]
+    b = [f"B_{a}" for a in _AX]
+    return {
+        "accel_S": s, "accel_B": b, "accel_M": m,
+        "gyro_S": s, "gyro_B": b, "gyro_M": m, "gyro_BG": [f"B_G{a}" for a in _AX],
+    }
+
+
+def success_percentages(estimate: ImuCalibration, truth: ImuCalibration) -> dict[str, Any]:
+    """The thesis "success" metric, ``100 (1 − |p̂ − p| / |p|)`` (imu-error-calibration §5.6).
+
+    Returns per-parameter percentages and the means over the 12 accelerometer
+    parameters (S, B, M) and the 15 gyro parameters (S, B, B_G, M).
+    """
+    pe, pt = calibration_parameters(estimate), calibration_parameters(truth)
+    per: dict[str, Array] = {}
+    for k in pt:
+        with np.errstate(divide="ignore", invalid="ignore"):
+            per[k] = 100.0 * (1.0 - np.abs(pe[k] - pt[k]) / np.abs(pt[k]))
+    acc = np.concatenate([per["accel_S"], per["accel_B"], per["accel_M"]])
+    gyr = np.concatenate([per["gyro_S"], per["gyro_B"], per["gyro_BG"], per["gyro_M"]])
+    return {"per_parameter": per, "accel_mean": float(np.mean(acc)), "gyro_mean": float(np.mean(gyr))}

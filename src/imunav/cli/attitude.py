@@ -1,0 +1,237 @@
+"""``imunav attitude``: run attitude filters, the BROAD benchmark, the paper's Monte Carlo."""
+
+from __future__ import annotations
+
+import json
+import os
+import tempfile
+from pathlib import Path
+from typing import Any, Optional
+
+import typer
+
+from imunav.errors import ConfigError
+
+app = typer.Typer(help="Attitude filters (Madgwick, Mahony, MEKF, UKF, adaptive, smoother, paper KFs).",
+                  no_args_is_help=True)
+
+
+def _parse_params(items: list[str] | None) -> dict[str, Any]:
+    out: dict[str, Any] = {}
+    for it in items or []:
+        if "=" not in it:
+            raise ConfigError(f"--param {it!r}: expected NAME=VALUE, e.g. --param beta=0.1")
+        k, v = it.split("=", 1)
+        out[k.strip()] = _value(v)
+    return out
+
+
+def _value(v: str) -> Any:
+    s = v.strip()
+    if s.lower() in ("true", "false"):
+        return s.lower() == "true"
+    try:
+        return int(s)
+    except ValueError:
+        pass
+    try:
+        return float(s)
+    except ValueError:
+        return s
+
+
+def _resolve(path: Path, is_dir: bool) -> Path:
+    """The path as given, else the same name inside the shared BROAD folder."""
+    if path.exists():
+        return path
+    from imunav.io.datasets import shared_data_path
+
+    cand = shared_data_path("broad") if is_dir and path.name == "broad" else shared_data_path("broad", path.name)
+    if cand is not None and cand.exists():
+        return cand
+    raise ConfigError(f"{path} not found (nor in the shared BROAD folder); set IMUNAV_DATA or pass an existing path")
+
+
+def _write_json(obj: Any, path: Path) -> None:
+    path = Path(path)
+    fd, tmp = tempfile.mkstemp(dir=path.parent if str(path.parent) else ".", suffix=".json")
+    with os.fdopen(fd, "w") as f:
+        json.dump(obj, f, indent=1)
+    os.replace(tmp, path)
+
+
+@app.command("run")
+def run_cmd(
+    file: Path = typer.Argument(..., help="Recording: a BROAD trial (*.mat) or any file imunav.io can read."),
+    filter: str = typer.Option("adaptive", "--filter", "-f", help="Filter name (see `benchmark --help`)."),
+    param: Optional[list[str]] = typer.Option(None, "--param", "-p", help="Parameter override NAME=VALUE."),
+    no_mag: bool = typer.Option(False, "--no-mag", help="6D: ignore the magnetometer."),
+    json_out: Optional[Path] = typer.Option(None, "--json", help="Write the result (quaternions, flags) as JSON."),
+) -> None:
+    """Run one filter over a whole recording and print a summary (BROAD RMSE when a reference exists).
+
+    Example: imunav attitude run 05_undisturbed_slow_rotation_with_breaks_B.mat --filter madgwick_c
+    """
+    from rich.console import Console
+
+    from imunav.attitude.benchmark import make_filter
+    from imunav.attitude.metrics import attitude_rmse
+
+    con = Console()
+    file = _resolve(file, False)
+    f = make_filter(filter, _parse_params(param))
+    ref = None
+    if file.suffix.lower() == ".mat":
+        from imunav.io.broad import load_broad
+
+        tr = load_broad(file)
+        data, ref, mask = tr.imu, tr.q_ref_nb, tr.movement
+    else:
+        import imunav.io as iio
+
+        if not hasattr(iio, "read_imu"):
+            raise ConfigError(f"{file}: only BROAD .mat trials are supported in this build")
+        data = iio.read_imu(file)
+    kw: dict[str, Any] = {"use_mag": False if no_mag else None}
+    from imunav.attitude.benchmark import reference_start
+
+    if ref is not None and reference_start(filter) and not no_mag:
+        # start like the BROAD reference runs (first accelerometer / magnetometer sample)
+        from imunav.attitude.alignment import broad_reference_start
+
+        kw["q0"] = broad_reference_start(data.accel[0], data.mag[0])
+    res = f.run(data, **kw)
+    import numpy as np
+
+    e = np.degrees(res.euler()[-1])
+    con.print(f"[bold]{res.name}[/bold]: {res.n} samples, final roll/pitch/yaw = "
+              f"{e[0]:.2f} / {e[1]:.2f} / {e[2]:.2f} deg")
+    summary: dict[str, Any] = {"filter": res.name, "params": res.params}
+    if ref is not None:
+        r = attitude_rmse(res.q_nb, ref, mask)
+        con.print(f"BROAD RMSE over movement: total {r.total_rmse_deg:.3f}, heading {r.heading_rmse_deg:.3f}, "
+                  f"inclination {r.inclination_rmse_deg:.3f} deg")
+        summary["rmse"] = r.to_dict()
+    if json_out:
+        _write_json({**summary, "result": res.to_dict()}, json_out)
+        con.print(f"wrote {json_out}")
+
+
+@app.command("benchmark")
+def benchmark_cmd(
+    directory: Path = typer.Argument(Path("broad"), help="Folder with BROAD trial files (*.mat); default: the shared BROAD folder."),
+    filter: Optional[list[str]] = typer.Option(None, "--filter", "-f", help="Filter(s); default adaptive + smoother."),
+    param: Optional[list[str]] = typer.Option(None, "--param", "-p", help="Override NAME=VALUE (all filters)."),
+    grid: Optional[list[str]] = typer.Option(None, "--grid", "-g",
+                                             help="Grid search NAME=v1,v2,... (first --filter only)."),
+    workers: int = typer.Option(0, "--workers", "-j", help="Processes for the grid (0 = all cores)."),
+    json_out: Optional[Path] = typer.Option(None, "--json", help="Write per-trial RMSE per filter as JSON."),
+) -> None:
+    """Run filters with ONE parameter set on every trial; per-trial total / heading / inclination RMSE.
+
+    Example: imunav attitude benchmark broad --filter madgwick_c --filter adaptive --json bench.json
+    """
+    from rich.console import Console
+    from rich.progress import Progress
+    from rich.table import Table
+
+    from imunav.attitude.benchmark import FILTERS, evaluate, grid_search
+    from imunav.io.broad import broad_trials
+
+    con = Console()
+    files = broad_trials(_resolve(directory, True))
+    names = filter or ["adaptive", "smoother"]
+    for n in names:
+        if n not in FILTERS:
+            raise ConfigError(f"unknown filter {n!r}; choose from {', '.join(FILTERS)}")
+    params = _parse_params(param)
+    out: dict[str, Any] = {"trials": [f.stem for f in files], "filters": {}}
+    if grid:
+        g: dict[str, list[Any]] = {}
+        for it in grid:
+            if "=" not in it:
+                raise ConfigError(f"--grid {it!r}: expected NAME=v1,v2,...")
+            k, v = it.split("=", 1)
+            g[k] = [_value(x) for x in v.split(",")]
+        g = {**{k: [v] for k, v in params.items()}, **g}
+        with Progress(console=con) as prog:
+            task = prog.add_task(f"grid {names[0]}", total=None)
+            res = grid_search(names[0], g, files, workers=workers or None,
+                              progress=lambda i, n: prog.update(task, completed=i, total=n))
+        t = Table(title=f"grid search {names[0]} (best first)")
+        for c in ("params", "total", "heading", "inclination"):
+            t.add_column(c)
+        for r in res[:10]:
+            m = r.means()
+            t.add_row(json.dumps(r.params), f"{m['total_rmse_deg']:.3f}", f"{m['heading_rmse_deg']:.3f}",
+                      f"{m['inclination_rmse_deg']:.3f}")
+        con.print(t)
+        out["grid"] = [r.to_dict() for r in res]
+        results = [res[0]]
+    else:
+        results = []
+        with Progress(console=con) as prog:
+            task = prog.add_task("filters", total=len(names))
+            for n in names:
+                results.append(evaluate(n, params, files))
+                prog.advance(task)
+    t = Table(title="BROAD RMSE [deg] (total / heading / inclination)")
+    t.add_column("trial")
+    for r in results:
+        t.add_column(r.filter)
+    for i, f in enumerate(files):
+        t.add_row(f.stem, *[f"{r.trials[i].total_rmse_deg:.2f} / {r.trials[i].heading_rmse_deg:.2f} / "
+                            f"{r.trials[i].inclination_rmse_deg:.2f}" for r in results])
+    t.add_row("[bold]mean[/bold]", *[" / ".join(f"{v:.2f}" for v in r.means().values()) for r in results])
+    con.print(t)
+    for r in results:
+        out["filters"][r.filter] = r.to_dict()
+    if json_out:
+        _write_json(out, json_out)
+        con.print(f"wrote {json_out}")
+
+
+@app.command("montecarlo")
+def montecarlo_cmd(
+    runs: int = typer.Option(100, "--runs", "-n", help="Number of seeded runs."),
+    seed: int = typer.Option(0, "--seed", help="Root seed (run i uses SeedSequence(seed).spawn #i)."),
+    gyro_noise_unit: str = typer.Option("deg/s/sqrt(Hz)", "--gyro-noise-unit",
+                                        help="Reading of the paper's 0.005 gyro noise: deg/s/sqrt(Hz) or deg/sqrt(h)."),
+    workers: int = typer.Option(1, "--workers", "-j", help="Processes."),
+    duration: float = typer.Option(245.0, "--duration", help="Scenario length [s] (paper: about 245 s)."),
+    json_out: Optional[Path] = typer.Option(None, "--json", help="Write the RMSE table and per-run values."),
+    plot: Optional[Path] = typer.Option(None, "--plot", help="Write RMSE box plots (PNG)."),
+) -> None:
+    """The Candan & Söken scenario (245 s, 100 Hz, external-acceleration windows): Table 2 of the paper.
+
+    Example: imunav attitude montecarlo --runs 5 --json mc.json
+    """
+    from rich.console import Console
+    from rich.table import Table
+
+    from imunav.attitude.scenario import PAPER_TABLE2, PaperScenario, run_montecarlo
+
+    con = Console()
+    scn = PaperScenario(gyro_noise_unit=gyro_noise_unit, duration=duration)  # type: ignore[arg-type]
+    with con.status(f"{runs} runs ..."):
+        mc = run_montecarlo(scn, n_runs=runs, rng=seed, workers=workers)
+    t = Table(title=f"RMSE [deg] over {runs} runs (mean ± std); paper Table 2 in brackets")
+    for c in ("filter", "pitch", "roll"):
+        t.add_column(c)
+    for k, v in mc.table().items():
+        p = PAPER_TABLE2.get(k, (float("nan"),) * 2)
+        t.add_row(k, f"{v['pitch_mean']:.4f} ± {v['pitch_std']:.4f} [{p[0]}]",
+                  f"{v['roll_mean']:.4f} ± {v['roll_std']:.4f} [{p[1]}]")
+    con.print(t)
+    if json_out:
+        _write_json(mc.to_dict(), json_out)
+        con.print(f"wrote {json_out}")
+    if plot:
+        from imunav.attitude.plot import plot_montecarlo_box, save
+
+        save(plot_montecarlo_box(mc), plot)
+        con.print(f"wrote {plot}")
+
+
+def register(root: typer.Typer) -> None:
+    root.add_typer(app, name="attitude")

@@ -1,0 +1,208 @@
+"""``imunav batch ...``: a production batch of IMUs (simulate, calibrate, noise) in parallel."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+from typing import Any, Optional
+
+import typer
+
+app = typer.Typer(
+    help="Process a folder of recordings (one per unit of a production batch) in parallel, "
+    "with a summary table and per-unit result files.\n\n"
+    "Example: imunav batch simulate 4 --out batch --fs 20 --dwell 4 && imunav batch calibrate batch",
+    no_args_is_help=True,
+)
+
+
+def register(root: typer.Typer) -> None:
+    root.add_typer(app, name="batch")
+
+
+_EXEC = typer.Option("processes", "--executor", help="processes, dask or serial.")
+_WORKERS = typer.Option(None, "--workers", "-j", help="Worker processes (default: all cores).")
+_ADDR = typer.Option(None, "--address", help="Dask scheduler address (tcp://host:8786) for --executor dask.")
+_QUIET = typer.Option(False, "--quiet", "-q", help="No progress bar.")
+_SPEC = typer.Option(None, "--spec", help="Datasheet spec (TOML with a [spec] table) for pass / fail per unit.")
+_JSON = typer.Option(None, "--json", help="Also write the summary (JSON) here.")
+_COLS = typer.Option(None, "--columns", help='CSV column mapping as JSON, e.g. \'{"gyro": ["gx","gy","gz"]}\'.')
+_FS = typer.Option(None, "--fs", help="Sampling rate, Hz (files without a time column).")
+_AU = typer.Option(None, "--accel-unit", help="Accelerometer unit in the files (e.g. g).")
+_GU = typer.Option(None, "--gyro-unit", help="Gyro unit in the files (e.g. deg/s).")
+
+
+def _read_options(fs: Optional[float], accel_unit: Optional[str], gyro_unit: Optional[str],
+                  columns: Optional[str]) -> dict[str, Any]:
+    opts: dict[str, Any] = {}
+    if fs:
+        opts["fs"] = fs
+    units = {k: v for k, v in (("accel", accel_unit), ("gyro", gyro_unit)) if v}
+    if units:
+        opts["units"] = units
+    if columns:
+        opts["columns"] = json.loads(columns)
+    return opts
+
+
+def _fail(exc: Exception) -> None:
+    from rich.console import Console
+    from rich.markup import escape
+
+    Console(stderr=True).print(f"[red]error:[/red] {escape(str(exc))}", soft_wrap=True)
+    raise typer.Exit(2) from exc
+
+
+def _print_summary(summary: Any, families: list[str], title: str) -> None:
+    """Rich table: one row per unit, one column per parameter family (x, y, z in one cell)."""
+    import math
+
+    import numpy as np
+    from rich.console import Console
+    from rich.markup import escape
+    from rich.table import Table
+
+    from imunav.report.catalog import display_unit
+
+    t = summary.table
+    fams = [f for f in families if any(c.startswith(f + "_") and not c.endswith(("_se", "_err")) for c in t.columns)]
+    errs = [c for c in t.columns if c.endswith("_err")]
+    tab = Table(title=title)
+    tab.add_column("unit")
+    tab.add_column("verdict")
+    for f in fams:
+        tab.add_column(escape(f"{f} x, y, z [{display_unit(f)}]"), justify="right")
+    if errs:
+        tab.add_column("max |err|/σ", justify="right")
+    for r in t.to_dict(orient="records"):
+        p = r.get("passed")
+        if r["status"] != "ok":
+            verdict = "[red]ERROR[/red]"
+        else:
+            verdict = "n/a" if p is None or (isinstance(p, float) and math.isnan(p)) else ("PASS" if p else "[red]FAIL[/red]")
+        cells = []
+        for f in fams:
+            vals = [r.get(f"{f}_{a}") for a in "xyz"]
+            cells.append(", ".join("–" if v is None or (isinstance(v, float) and math.isnan(v)) else f"{v:.5g}"
+                                   for v in vals))
+        if errs:
+            z = [abs(r[c] / r[c[:-4] + "_se"]) for c in errs
+                 if isinstance(r.get(c), float) and isinstance(r.get(c[:-4] + "_se"), float) and r[c[:-4] + "_se"] > 0]
+            cells.append(f"{np.nanmax(z):.2f}" if z else "–")
+        tab.add_row(r["unit"], verdict, *cells)
+    con = Console()
+    con.width = max(con.width, 150)  # a wide table reads better wrapped by the terminal than squeezed
+    con.print(tab)
+    for r in t.to_dict(orient="records"):
+        if r["status"] != "ok":
+            con.print(f"[red]{r['unit']}:[/red] {r.get('error')}", soft_wrap=True, highlight=False)
+
+
+@app.command("simulate")
+def simulate_cmd(
+    n_units: int = typer.Argument(..., help="Number of IMUs in the batch."),
+    out: Path = typer.Option(Path("batch"), "--out", "-o", help="Batch folder to write."),
+    preset: str = typer.Option("thesis_sim", help="Error-model preset the units spread around."),
+    spread: float = typer.Option(0.2, help="Relative unit-to-unit spread of bias, scale, misalignment, g-sensitivity."),
+    seed: int = typer.Option(0, "--seed", help="Seed (unit k uses child k of the seed sequence)."),
+    fs: float = typer.Option(50.0, "--fs", help="Sampling rate, Hz."),
+    dwell: float = typer.Option(5.0, "--dwell", help="Seconds per position / rate step."),
+    transition: float = typer.Option(1.0, "--transition", help="Seconds per move / rate ramp."),
+    rate_table: bool = typer.Option(True, "--rate-table/--no-rate-table", help="Also simulate the 120-step rate-table test."),
+    fmt: str = typer.Option("npz", "--format", help="Recording format: npz, csv, parquet, hdf5, mat."),
+    static: Optional[float] = typer.Option(None, "--static", help="Instead: one level static record of this many seconds per unit (for noise)."),
+    executor: str = _EXEC, workers: Optional[int] = _WORKERS, quiet: bool = _QUIET,
+) -> None:
+    """Simulate a production batch of IMUs: 100-position (and rate-table) tests of N units with unit-to-unit spread.
+
+    Writes <unit>.<format>, <unit>_rate.<format>, segments.json, rate_segments.json, truth/<unit>.json and batch.json.
+
+    Example: imunav batch simulate 4 --out batch --fs 20 --dwell 4
+    """
+    from imunav.batch import simulate_batch
+    from imunav.errors import InvalidInputError
+
+    try:
+        files = simulate_batch(n_units, out, preset=preset, spread=spread, rng=seed, fs=fs, dwell_s=dwell,
+                               transition_s=transition, rate_table=rate_table, format=fmt, static_s=static,
+                               executor=executor, n_workers=workers, progress=not quiet)  # type: ignore[arg-type]
+    except InvalidInputError as exc:
+        _fail(exc)
+    typer.echo(f"{len(files)} units written to {out}")
+
+
+@app.command("calibrate")
+def calibrate_cmd(
+    folder: Path = typer.Argument(..., help="Batch folder: one recording per unit (+ segments.json)."),
+    method: str = typer.Option("multiposition", "--method", "-m", help="multiposition, thesis (static + rate table) or multipose."),
+    out: Optional[Path] = typer.Option(None, "--out", "-o", help="Result folder (default FOLDER/calibration)."),
+    spec: Optional[Path] = _SPEC,
+    json_out: Optional[Path] = _JSON,
+    latitude_deg: Optional[float] = typer.Option(None, help="Latitude, deg (normal gravity, Earth-rate removal)."),
+    gravity: Optional[float] = typer.Option(None, help="Local gravity, m/s^2."),
+    fs: Optional[float] = _FS, accel_unit: Optional[str] = _AU, gyro_unit: Optional[str] = _GU,
+    columns: Optional[str] = _COLS,
+    executor: str = _EXEC, workers: Optional[int] = _WORKERS, address: Optional[str] = _ADDR, quiet: bool = _QUIET,
+) -> None:
+    """Calibrate every unit of a batch folder in parallel; prints the summary table.
+
+    Writes per unit <unit>.json (calibration) and <unit>_report.json, plus summary.csv, summary.json and index.html. Exit status 1 when a unit fails to process or fails the spec.
+
+    Example: imunav batch calibrate batch --method thesis --spec examples/lab_spec.toml --json batch_cal.json
+    """
+    import math
+
+    from imunav.batch import calibrate_batch
+    from imunav.errors import InvalidInputError
+
+    try:
+        s = calibrate_batch(folder, method=method, out_dir=out, spec=spec,
+                            read_options=_read_options(fs, accel_unit, gyro_unit, columns),
+                            latitude=None if latitude_deg is None else math.radians(latitude_deg), gravity=gravity,
+                            executor=executor, n_workers=workers, address=address, progress=not quiet)  # type: ignore[arg-type]
+    except InvalidInputError as exc:
+        _fail(exc)
+    cols = ["accel_bias", "accel_scale", "gyro_bias", "gyro_scale", "gyro_g_sensitivity"]
+    _print_summary(s, cols, f"batch calibration ({method}): {len(s.table)} units, {s.seconds:.1f} s")
+    _finish(s, json_out)
+
+
+@app.command("noise")
+def noise_cmd(
+    folder: Path = typer.Argument(..., help="Folder of static recordings, one per unit."),
+    out: Optional[Path] = typer.Option(None, "--out", "-o", help="Result folder (default FOLDER/noise)."),
+    spec: Optional[Path] = _SPEC,
+    json_out: Optional[Path] = _JSON,
+    fs: Optional[float] = _FS, accel_unit: Optional[str] = _AU, gyro_unit: Optional[str] = _GU,
+    columns: Optional[str] = _COLS,
+    terms: str = typer.Option("Q,N,B,K,R", "--terms", help="Candidate IEEE-952 terms (BIC selects among them)."),
+    executor: str = _EXEC, workers: Optional[int] = _WORKERS, address: Optional[str] = _ADDR, quiet: bool = _QUIET,
+) -> None:
+    """Allan-variance noise identification (ARW / VRW, bias instability, random walk) of every unit, in parallel.
+
+    Writes <unit>_noise.json per unit, summary.csv, summary.json and index.html.
+
+    Example: imunav batch simulate 3 --static 600 --out static_batch && imunav batch noise static_batch --terms N,B,K
+    """
+    from imunav.batch import noise_batch
+    from imunav.errors import InvalidInputError
+
+    try:
+        s = noise_batch(folder, out_dir=out, spec=spec, read_options=_read_options(fs, accel_unit, gyro_unit, columns),
+                        terms=tuple(t.strip() for t in terms.split(",") if t.strip()), executor=executor, n_workers=workers, address=address, progress=not quiet)  # type: ignore[arg-type]
+    except InvalidInputError as exc:
+        _fail(exc)
+    cols = ["gyro_arw", "gyro_bias_instability", "accel_vrw", "accel_bias_instability"]
+    _print_summary(s, cols, f"batch noise: {len(s.table)} units, {s.seconds:.1f} s")
+    _finish(s, json_out)
+
+
+def _finish(summary: Any, json_out: Optional[Path]) -> None:
+    from imunav.io._atomic import atomic_path
+
+    if json_out is not None:
+        with atomic_path(json_out) as tmp:
+            tmp.write_text(json.dumps(summary.to_dict(), indent=2, default=str) + "\n")
+    typer.echo(f"summary: {summary.out_dir / 'summary.csv'}, report: {summary.out_dir / 'index.html'}")
+    if summary.n_failed or summary.passed is False:
+        raise typer.Exit(1)

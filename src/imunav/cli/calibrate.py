@@ -1,0 +1,346 @@
+"""``imunav calibrate ...``: deterministic IMU and magnetometer calibration.
+
+Each sub-command writes the calibration JSON (``--out``) and, with
+``--report DIR``, a ``report.json`` (parameters, standard errors, residuals,
+design condition) and residual plots.
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+from typing import Any, Optional
+
+import numpy as np
+import typer
+
+app = typer.Typer(
+    help="Calibrate an IMU or magnetometer from a recording; writes the calibration JSON.\n\n"
+    "Example: imunav calibrate multiposition rec.npz --segments segments.json --out cal.json",
+    no_args_is_help=True,
+)
+
+
+def register(root: typer.Typer) -> None:
+    root.add_typer(app, name="calibrate")
+
+
+# ---------------------------------------------------------------- helpers
+def _read(path: Path, fs: Optional[float], accel_unit: Optional[str], gyro_unit: Optional[str],
+          accel_scale: Optional[float], gyro_scale: Optional[float], skiprows: Optional[int],
+          columns: Optional[str]) -> Any:
+    from imunav.io import read_imu
+
+    opts: dict[str, Any] = {}
+    if fs:
+        opts["fs"] = fs
+    units = {k: v for k, v in (("accel", accel_unit), ("gyro", gyro_unit)) if v}
+    if units:
+        opts["units"] = units
+    scales = {k: v for k, v in (("accel", accel_scale), ("gyro", gyro_scale)) if v}
+    if scales:
+        opts["scales"] = scales
+    if skiprows is not None:
+        opts["skiprows"] = skiprows
+    if columns:
+        opts["columns"] = json.loads(columns)
+    return read_imu(path, **opts)
+
+
+def _segments(path: Path) -> Any:
+    from imunav.errors import FileFormatError
+    from imunav.sim import Segments
+
+    d = json.loads(Path(path).read_text())
+    d = d.get("segment_table", d)
+    try:
+        return Segments(**{k: np.asarray(d[k]) for k in Segments.__dataclass_fields__})
+    except KeyError as e:
+        raise FileFormatError(f"{path}: segment table lacks the column {e} (write it with Profile.to_dict())") from None
+
+
+def _finish(result: Any, out: Path, report: Optional[Path], *, save: Any = None) -> None:
+    from rich.console import Console
+    from rich.table import Table
+
+    from imunav.calib.model import write_json_atomic
+
+    (save or result.calibration.save)(out)
+    con = Console()
+    if report is not None:
+        from imunav.calib.plot import plot_residuals, save_figure
+
+        report.mkdir(parents=True, exist_ok=True)
+        write_json_atomic(result.to_dict(), report / "report.json")
+        save_figure(plot_residuals(result), report / "residuals.png")
+    tab = Table(title=f"{result.method}: residual RMS and design condition")
+    tab.add_column("fit")
+    tab.add_column("residual RMS (x, y, z)")
+    tab.add_column("condition")
+    for k, r in result.residuals.items():
+        rms = np.sqrt(np.mean(np.asarray(r, float) ** 2, axis=0))
+        c = result.condition.get(k, result.condition.get(k.split("_")[0], float("nan")))
+        tab.add_row(k, np.array2string(np.atleast_1d(rms), precision=4), f"{c:.3g}")
+    con.print(tab)
+    con.print(f"calibration written to {out}" + (f", report in {report}" if report else ""))
+
+
+_FS = typer.Option(None, help="Sampling rate, Hz (files without a time column).")
+_AU = typer.Option(None, help="Accelerometer unit in the file (e.g. g); default m/s^2.")
+_GU = typer.Option(None, help="Gyro unit in the file (e.g. deg/s); default rad/s.")
+_AS = typer.Option(None, help="Scale applied to raw accelerometer values (e.g. counts to g).")
+_GS = typer.Option(None, help="Scale applied to raw gyro values.")
+_SK = typer.Option(None, help="Lines to skip before the CSV header.")
+_COL = typer.Option(None, help='Column mapping as JSON, e.g. \'{"gyro": ["gx","gy","gz"]}\'.')
+_OUT = typer.Option(..., "--out", "-o", help="Calibration JSON to write.")
+_NM = typer.Option(None, help="Characterised noise (ImuErrorModel TOML: noise densities, bias instability) "
+                   "for generalised least squares; default: AR(1) from the residuals.")
+
+
+def _noise_model(path: Optional[Path]) -> Any:
+    if path is None:
+        return None
+    from imunav.sim import ImuErrorModel
+
+    return ImuErrorModel.from_toml(path)
+_REP = typer.Option(None, help="Folder for report.json and residual plots.")
+
+
+# ---------------------------------------------------------------- commands
+@app.command()
+def multiposition(
+    recording: Path = typer.Argument(..., help="Static multi-position recording (any read_imu format)."),
+    segments: Path = typer.Option(..., help="Segment table JSON (Profile.to_dict() / Segments.to_dict())."),
+    out: Path = _OUT,
+    report: Optional[Path] = _REP,
+    latitude_deg: Optional[float] = typer.Option(None, help="Latitude, deg: normal gravity and Earth-rate removal."),
+    gravity: Optional[float] = typer.Option(None, help="Local gravity, m/s^2 (default normal gravity / 9.80665)."),
+    g_sensitivity: str = typer.Option("diagonal", help="Gyro g-sensitivity: diagonal, full or none."),
+    noise_model: Optional[Path] = _NM,
+    fs: Optional[float] = _FS, accel_unit: Optional[str] = _AU, gyro_unit: Optional[str] = _GU,
+    accel_scale: Optional[float] = _AS, gyro_scale: Optional[float] = _GS, skiprows: Optional[int] = _SK,
+    columns: Optional[str] = _COL,
+) -> None:
+    """Multi-position least squares (accelerometer T, b; gyro bias and g-sensitivity).
+
+    Example: imunav calibrate multiposition static.npz --segments static_segments.json --out static_cal.json --report rep
+    """
+    from imunav.calib import multiposition as fit
+
+    data = _read(recording, fs, accel_unit, gyro_unit, accel_scale, gyro_scale, skiprows, columns)
+    lat = None if latitude_deg is None else np.deg2rad(latitude_deg)
+    res = fit(data, _segments(segments), latitude=lat, gravity=gravity, g_sensitivity=g_sensitivity,
+              noise_model=_noise_model(noise_model))
+    _finish(res, out, report)
+
+
+@app.command()
+def ratetable(
+    recording: Path = typer.Argument(..., help="Rate-table recording."),
+    segments: Path = typer.Option(..., help="Segment table JSON of the rate-table run."),
+    out: Path = _OUT,
+    static: Optional[Path] = typer.Option(None, help="Static multi-position recording (gives bias and g-sensitivity)."),
+    static_segments: Optional[Path] = typer.Option(None, help="Segment table JSON of the static recording."),
+    base: Optional[Path] = typer.Option(None, help="Existing calibration JSON to take bias / g-sensitivity from."),
+    intercept: bool = typer.Option(False, help="Estimate a separate gyro bias in the rate fit."),
+    report: Optional[Path] = _REP,
+    latitude_deg: Optional[float] = typer.Option(None, help="Latitude, deg (Earth rate, normal gravity)."),
+    noise_model: Optional[Path] = _NM,
+    fs: Optional[float] = _FS, accel_unit: Optional[str] = _AU, gyro_unit: Optional[str] = _GU,
+    accel_scale: Optional[float] = _AS, gyro_scale: Optional[float] = _GS, skiprows: Optional[int] = _SK,
+    columns: Optional[str] = _COL,
+) -> None:
+    """Rate-table least squares for the gyro matrix (with the static test: the full thesis model).
+
+    Example: imunav calibrate ratetable rate.npz --segments rate_segments.json --static static.npz --static-segments static_segments.json --out cal.json
+    """
+    from imunav.calib import ImuCalibration, combine, multiposition
+    from imunav.calib import ratetable as fit
+
+    lat = None if latitude_deg is None else np.deg2rad(latitude_deg)
+    rd = (fs, accel_unit, gyro_unit, accel_scale, gyro_scale, skiprows, columns)
+    st = None
+    nm = _noise_model(noise_model)
+    if static is not None:
+        if static_segments is None:
+            raise typer.BadParameter("--static needs --static-segments")
+        st = multiposition(_read(static, *rd), _segments(static_segments), latitude=lat, noise_model=nm)
+        b = st.calibration
+    else:
+        b = ImuCalibration.load(base) if base is not None else None
+    res = fit(_read(recording, *rd), _segments(segments), base=b, latitude=lat, intercept=intercept, noise_model=nm)
+    if st is not None:
+        res = combine(st, res)
+    _finish(res, out, report)
+
+
+@app.command()
+def ferraris(
+    recording: Path = typer.Argument(..., help="Continuous Ferraris session (6 poses + 3 turns)."),
+    sections: Path = typer.Option(..., help='imucal section list JSON: {"x_p": {"start": i0, "end": i1}, ...}.'),
+    out: Path = _OUT,
+    imucal_out: Optional[Path] = typer.Option(None, help="Also write the imucal FerrarisCalibrationInfo JSON."),
+    gravity: float = typer.Option(9.81, help="Gravity used by the method (imucal default 9.81)."),
+    expected_angle_deg: float = typer.Option(-360.0, help="Angle measured per turn (imucal default -360)."),
+    report: Optional[Path] = _REP,
+    fs: Optional[float] = _FS, accel_unit: Optional[str] = _AU, gyro_unit: Optional[str] = _GU,
+    accel_scale: Optional[float] = _AS, gyro_scale: Optional[float] = _GS, skiprows: Optional[int] = _SK,
+    columns: Optional[str] = _COL,
+) -> None:
+    """Ferraris six-pose + three-turn calibration (imucal-compatible).
+
+    Example: imunav calibrate ferraris session.csv --sections sections.json --fs 102.4 --gyro-unit deg/s --out cal.json
+    """
+    from imunav.calib import ferraris_from_session
+    from imunav.calib.model import write_json_atomic
+
+    data = _read(recording, fs, accel_unit, gyro_unit, accel_scale, gyro_scale, skiprows, columns)
+    secs = json.loads(Path(sections).read_text())
+    res = ferraris_from_session(data.accel, data.gyro, secs, data.fs, gravity=gravity,
+                                expected_angle_deg=expected_angle_deg)
+    _finish(res, out, report)
+    if imucal_out is not None:
+        write_json_atomic(res.calibration.to_imucal(), imucal_out)
+
+
+@app.command()
+def multipose(
+    recording: Path = typer.Argument(..., help="Multi-pose session: initial rest, then hand-placed static poses."),
+    out: Path = _OUT,
+    init_s: float = typer.Option(30.0, help="Initial rest period, s."),
+    wait_s: float = typer.Option(3.0, help="Static detector window / time per pose, s."),
+    gravity: float = typer.Option(9.80665, help="Local gravity magnitude, m/s^2."),
+    strict: bool = typer.Option(True, help="Refuse sessions whose poses leave a misalignment undetermined."),
+    accel_misalignment: bool = typer.Option(True, help="Estimate the accelerometer misalignments (else fix at 0)."),
+    report: Optional[Path] = _REP,
+    fs: Optional[float] = _FS, accel_unit: Optional[str] = _AU, gyro_unit: Optional[str] = _GU,
+    accel_scale: Optional[float] = _AS, gyro_scale: Optional[float] = _GS, skiprows: Optional[int] = _SK,
+    columns: Optional[str] = _COL,
+) -> None:
+    """Tedaldi et al. (2014) multi-pose calibration without a rate table.
+
+    Example: imunav calibrate multipose session.csv --fs 100 --init-s 36.5 --no-accel-misalignment --out cal.json
+    """
+    from imunav.calib import multipose as fit
+
+    data = _read(recording, fs, accel_unit, gyro_unit, accel_scale, gyro_scale, skiprows, columns)
+    res = fit(data.accel, data.gyro, data.fs, init_s=init_s, wait_s=wait_s, gravity=gravity, strict=strict,
+              accel_misalignment=accel_misalignment, raw_accel_unit="m/s^2", raw_gyro_unit="rad/s")
+    _finish(res, out, report)
+    if res.info["weak_parameters"]:
+        typer.echo("weakly determined: " + "; ".join(res.info["weak_parameters"]), err=True)
+
+
+@app.command()
+def temperature(
+    calibrations: list[str] = typer.Argument(..., help="Calibration JSON files as FILE@TEMP_C (one per temperature)."),
+    out: Path = _OUT,
+    orders: str = typer.Option("1,2,3,4,5", help="Polynomial orders to try."),
+    order: Optional[int] = typer.Option(None, help="Force this order (default: leave-one-out choice)."),
+    model: str = typer.Option("poly", help="poly or piecewise (polynomial + one step)."),
+    params: str = typer.Option("accel_bias,accel_scale,gyro_bias,gyro_scale", help="Parameters to model."),
+    report: Optional[Path] = _REP,
+) -> None:
+    """Bias and scale factor as polynomials of temperature (order by leave-one-out CV).
+
+    Example: imunav calibrate temperature cal_m30.json@-30 cal_0.json@0 cal_20.json@20 cal_50.json@50 --orders 1,2 --out thermal_cal.json
+    """
+    from rich.console import Console
+    from rich.table import Table
+
+    from imunav.calib import ImuCalibration
+    from imunav.calib.model import write_json_atomic
+    from imunav.calib.temperature import thermal_calibration
+    from imunav.errors import InvalidInputError
+
+    temps, cals = [], []
+    for item in calibrations:
+        if "@" not in item:
+            raise InvalidInputError(f"argument {item!r}: write each calibration as FILE@TEMP_C, e.g. cal.json@25")
+        f, t = item.rsplit("@", 1)
+        cals.append(ImuCalibration.load(f))
+        temps.append(float(t))
+    res = thermal_calibration(
+        temps, cals, params=[p.strip() for p in params.split(",")], orders=[int(o) for o in orders.split(",")],
+        order=order, model=model,
+    )
+    res.calibration.save(out)
+    tab = Table(title="temperature fits: MSE per order (chosen order marked *)")
+    tab.add_column("parameter")
+    ords = [f.order for f in next(iter(res.fits.values()))[0].fits]
+    for o in ords:
+        tab.add_column(f"order {o}")
+    for k, fits in res.fits.items():
+        for i, f in enumerate(fits):
+            tab.add_row(f"{k}[{'xyz'[i]}]", *[f"{m.mse:.3g}" + ("*" if m.order == f.chosen_order else "") for m in f.fits])
+    Console().print(tab)
+    if report is not None:
+        from imunav.calib.plot import plot_temperature_fit, save_figure
+
+        report.mkdir(parents=True, exist_ok=True)
+        write_json_atomic(res.to_dict(), report / "report.json")
+        for k, fits in res.fits.items():
+            for i, f in enumerate(fits):
+                save_figure(plot_temperature_fit(f, f"{k} {'xyz'[i]}"), report / f"{k}_{'xyz'[i]}.png")
+    typer.echo(f"calibration with temperature model written to {out}")
+
+
+@app.command()
+def mag(
+    recording: Path = typer.Argument(..., help="Magnetometer samples: CSV/NPZ with mag_x, mag_y, mag_z (or mx..)."),
+    out: Path = _OUT,
+    method: str = typer.Option("ellipsoid", help="ellipsoid (Li & Griffiths), rotation-scale (thesis) or minmax."),
+    field_norm: Optional[float] = typer.Option(None, help="Known field magnitude (data unit); default det(A) = 1."),
+    min_coverage: float = typer.Option(0.3, help="Smallest accepted sphere coverage (ellipsoid)."),
+    report: Optional[Path] = _REP,
+) -> None:
+    """Hard- and soft-iron magnetometer calibration: h_cal = A (h - b).
+
+    Example: imunav calibrate mag mag.csv --out mag_cal.json --report mag_report
+    """
+    from rich.console import Console
+
+    from imunav.calib.magnetometer import MagCalibration, fit_ellipsoid, hard_iron_minmax, soft_iron_rotation_scale
+    from imunav.calib.model import write_json_atomic
+    from imunav.errors import InvalidInputError
+
+    h = _read_mag(recording)
+    if method == "ellipsoid":
+        cal = fit_ellipsoid(h, field_norm, min_coverage=min_coverage)
+    elif method == "rotation-scale":
+        cal = soft_iron_rotation_scale(h)
+    elif method == "minmax":
+        b = hard_iron_minmax(h)
+        n = np.linalg.norm(h - b, axis=1)
+        cal = MagCalibration(b, np.eye(3), float(np.mean(n)), "minmax", {}, {"norm_spread_after": float(np.std(n) / np.mean(n))})
+    else:
+        raise InvalidInputError(f"--method must be ellipsoid, rotation-scale or minmax, not {method!r}")
+    write_json_atomic(cal.to_dict(), out)
+    if report is not None:
+        from imunav.calib.plot import plot_magnetometer, save_figure
+
+        report.mkdir(parents=True, exist_ok=True)
+        write_json_atomic(cal.to_dict(), report / "report.json")
+        save_figure(plot_magnetometer(h, cal), report / "projections.png")
+    Console().print({"b": cal.b.round(6).tolist(), "field_norm": round(cal.field_norm, 6), "quality": cal.quality})
+    typer.echo(f"magnetometer calibration written to {out}")
+
+
+def _read_mag(path: Path) -> np.ndarray:
+    from imunav.errors import FileFormatError
+
+    p = Path(path)
+    if p.suffix == ".npz":
+        with np.load(p) as z:
+            for k in ("mag", "h", "m"):
+                if k in z:
+                    return np.asarray(z[k], float)
+        raise FileFormatError(f"{p}: no 'mag' array (found {list(np.load(p).keys())})")
+    import pandas as pd
+
+    df = pd.read_csv(p, comment="#")
+    low = {c.lower().replace("_", ""): c for c in df.columns}
+    for names in (("magx", "magy", "magz"), ("mx", "my", "mz"), ("hx", "hy", "hz")):
+        if all(n in low for n in names):
+            return df[[low[n] for n in names]].to_numpy(float)
+    raise FileFormatError(f"{p}: needs columns mag_x, mag_y, mag_z (or mx, my, mz); found {list(df.columns)}")

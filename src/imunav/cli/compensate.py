@@ -1,0 +1,38 @@
+"""``imunav compensate``: apply a calibration to a recording."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Optional
+
+import typer
+
+
+def register(root: typer.Typer) -> None:
+    root.command(name="compensate")(compensate)
+
+
+def compensate(
+    recording: Path = typer.Argument(..., help="Raw recording (any read_imu format)."),
+    cal: Path = typer.Option(..., "--cal", help="Calibration JSON (imunav or imucal Ferraris)."),
+    out: Path = typer.Option(..., "--out", "-o", help="Compensated recording to write (format from suffix)."),
+    fs: Optional[float] = typer.Option(None, help="Sampling rate, Hz (files without a time column)."),
+    accel_unit: Optional[str] = typer.Option(None, help="Accelerometer unit in the file."),
+    gyro_unit: Optional[str] = typer.Option(None, help="Gyro unit in the file."),
+    temp_c: Optional[float] = typer.Option(None, help="Constant temperature, °C, when the file has none."),
+) -> None:
+    """Compensate a recording with a calibration (accelerometer first, then gyro).
+
+    Example: imunav compensate static.npz --cal cal.json --out static_compensated.npz
+    """
+    import numpy as np
+
+    from imunav.calib import ImuCalibration
+    from imunav.cli.calibrate import _read
+    from imunav.io import write_imu
+
+    data = _read(recording, fs, accel_unit, gyro_unit, None, None, None, None)
+    c = ImuCalibration.load(cal)
+    t = None if temp_c is None else np.full(data.n, temp_c)
+    write_imu(c.apply(data, temp_c=t), out)
+    typer.echo(f"compensated {data.n} samples -> {out}")

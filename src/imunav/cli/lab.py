@@ -1,0 +1,71 @@
+"""``imunav lab``: the main job (simulated calibration tests and the steps that follow)."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+from typing import Optional
+
+import typer
+
+_HELP = """Run the lab and write a report folder (index.html, summary.md, summary.json, data/, figures/).
+
+With no arguments it runs every step on the built-in virtual IMU (preset thesis_sim): the 100-position static test, the 120-step rate-table test and a 1 h static record are simulated and analysed, a thermal test gives B(T) and S(T), and the calibration is applied to a fresh recording to check the residual errors against the reported uncertainty.
+
+With a TOML lab definition (--config) that has [recordings.<name>] tables it runs on real recordings instead (path, format, column mapping, units, which test). A [spec.<parameter>] table gives datasheet limits (pass / fail in the report); a table named after a step sets its options; [lab] sets seed, title and steps. See examples/lab_real.toml and examples/lab_spec.toml. Exit status 1 when a step fails with an error, 2 for a bad lab definition.
+
+Example: imunav lab --out lab-report --seed 0
+"""
+
+
+def register(app: typer.Typer) -> None:
+    @app.command("lab", help=_HELP)
+    def lab(
+        out: Path = typer.Option(Path("lab-report"), "--out", "-o", help="Report folder to write."),
+        config: Optional[Path] = typer.Option(None, "--config", "-c", help="Lab definition (TOML)."),
+        seed: int = typer.Option(0, "--seed", help="Root random seed (the seed in --config wins)."),
+        steps: Optional[str] = typer.Option(None, "--steps", help="Comma-separated step names to run (default: all)."),
+        quiet: bool = typer.Option(False, "--quiet", "-q", help="No progress bars."),
+        json_out: Optional[Path] = typer.Option(None, "--json", help="Also copy summary.json here."),
+    ) -> None:
+        from rich.console import Console
+        from rich.markup import escape
+        from rich.table import Table
+
+        from imunav.errors import InvalidInputError
+        from imunav.lab import run_lab
+
+        console = Console(stderr=True)
+        try:
+            result = run_lab(
+                out, config, seed, steps=None if steps is None else [s.strip() for s in steps.split(",") if s.strip()],
+                progress=not quiet, console=console,
+            )
+        except InvalidInputError as exc:
+            console.print(f"[red]error:[/red] {escape(str(exc))}", soft_wrap=True)
+            raise typer.Exit(2) from exc
+        table = Table(title=f"imunav lab → {out}")
+        table.add_column("step")
+        table.add_column("verdict")
+        table.add_column("time (s)", justify="right")
+        for s in result.steps:
+            verdict = "ERROR" if s.error else {None: "n/a", True: "PASS", False: "FAIL"}[s.passed]
+            table.add_row(s.title, verdict, f"{s.seconds:.1f}")
+        Console().print(table)
+        checks = [c for c in result.spec_checks if c.limit is not None]
+        if checks:
+            failed = [c.name for c in checks if c.passed is False]
+            Console().print(f"specification: {len(checks)} checks, {len(failed)} failed"
+                            + (f" ({escape(', '.join(failed[:8]))}{' …' if len(failed) > 8 else ''})" if failed else ""),
+                            soft_wrap=True, highlight=False)
+        for s in result.steps:
+            if s.error:
+                console.print(f"[red]{s.name} failed:[/red]\n{escape(s.error)}", soft_wrap=True, highlight=False)
+        if json_out is not None:
+            from imunav.io._atomic import atomic_path
+
+            with atomic_path(json_out) as tmp:
+                tmp.write_text(json.dumps(json.loads((Path(out) / "summary.json").read_text()), indent=2) + "\n")
+        typer.echo(f"report: {Path(out) / 'index.html'}")
+        if result.failed_steps:
+            raise typer.Exit(1)

@@ -1,0 +1,192 @@
+"""``imunav noise``: Allan deviation, noise-term fit, PSD cross-check of a static recording."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+from typing import Any
+
+import typer
+
+_EXAMPLE = (
+    "Example:\n\n"
+    "  imunav noise ../shared/data/adis16405/adis16405_imu2.npz --gyro-unit deg/s --accel-unit g "
+    "--json noise.json --plot allan.png --psd-plot psd.png --yaml imu.yaml"
+)
+_CH = ("gx", "gy", "gz", "ax", "ay", "az")
+
+
+def _taus(spec: str) -> Any:
+    if spec.startswith("log:"):
+        return ("log", int(spec.split(":", 1)[1]))
+    return spec
+
+
+def _fmt(v: float, se: float) -> str:
+    if v == 0:
+        return "-"
+    return f"{v:.4g} ± {se:.2g}" if se == se else f"{v:.4g}"
+
+
+def _curve_fits(r: Any) -> dict[str, Any]:
+    """Thesis-style smooth fits of each channel's Allan curve (reported beside the term fit)."""
+    from imunav.errors import InvalidInputError
+    from imunav.noise.curvefit import compare_curve_fits
+
+    out: dict[str, Any] = {}
+    for c, name in enumerate(r.channels):
+        a = r.channel(c)
+        try:
+            fits = compare_curve_fits(a.tau, a.adev)
+            out[name] = {k: {"rms_log10": v.rms_log10, "max_log10": v.max_log10, "has_pole": v.has_pole,
+                             "readout": v.readout()} for k, v in fits.items()}
+        except (InvalidInputError, ValueError, RuntimeError) as e:  # too few tau points, LM failure
+            out[name] = {"error": str(e)}
+    return out
+
+
+def noise(
+    file: Path = typer.Argument(..., help="Static recording: .csv/.txt, .parquet, .h5, .mat, .npz."),
+    channels: str = typer.Option(",".join(_CH), "--channels", help="Comma-separated subset of gx,gy,gz,ax,ay,az."),
+    json_out: Path | None = typer.Option(None, "--json", help="Write Allan curves, fitted terms and PSD terms as JSON."),
+    plot: Path | None = typer.Option(None, "--plot", help="Allan-deviation figure with fit and CIs (.png/.pdf/.svg)."),
+    psd_plot: Path | None = typer.Option(None, "--psd-plot", help="PSD figure with the fitted model."),
+    yaml_out: Path | None = typer.Option(None, "--yaml", help="Kalibr-style imu.yaml (needs gyro and accel channels)."),
+    kind: str = typer.Option("overlapping", "--kind", help="overlapping, standard or total (the fit needs these)."),
+    taus: str = typer.Option("octave", "--taus", help="octave, decade, all, or log:N."),
+    terms: str = typer.Option("N,B,K,R", "--terms", help="Candidate terms among Q,N,B,K,R (Q, angle/velocity "
+                              "quantization, belongs to increment outputs; add it for those)."),
+    gm: int = typer.Option(0, "--gm", help="Number of Gauss-Markov terms to add to the fit."),
+    select: str = typer.Option("bic", "--select", help="Term selection: bic, aic or none."),
+    fs: float | None = typer.Option(None, "--fs", help="Sampling rate (Hz) when the file has no time column."),
+    gyro_unit: str | None = typer.Option(None, "--gyro-unit", help="Unit of the gyro columns (rad/s, deg/s, ...)."),
+    accel_unit: str | None = typer.Option(None, "--accel-unit", help="Unit of the accel columns (m/s^2, g, mg, ...)."),
+    format: str | None = typer.Option(None, "--format", help="csv, parquet, hdf5, mat, npz (default: suffix)."),
+    skiprows: int | None = typer.Option(None, "--skiprows", help="CSV: lines to skip before the header."),
+) -> None:
+    """Identify the stochastic errors of a static IMU recording: overlapping Allan
+    deviation with confidence intervals, GLS fit of quantization Q, white noise N,
+    bias instability B, random walk K and ramp R (with standard errors), the
+    IEEE-952 slope read-outs, and the PSD estimate of N as a cross-check."""
+    from rich.console import Console
+    from rich.progress import Progress
+    from rich.table import Table
+
+    from imunav.errors import InvalidInputError
+    from imunav.io import read_imu
+    from imunav.io._atomic import atomic_path
+    from imunav.noise import allan_deviation, compare_psd_allan, fit_noise, fit_psd, log_average, psd
+    from imunav.noise.fit import write_kalibr_yaml
+    from imunav.units import to_display
+
+    console = Console()
+    err = Console(stderr=True)
+    try:
+        chans = [c.strip() for c in channels.split(",") if c.strip()]
+        bad = [c for c in chans if c not in _CH]
+        if bad or not chans:
+            raise InvalidInputError(f"--channels: unknown {bad}; choose from {','.join(_CH)}")
+        term_list = tuple(t.strip().upper() for t in terms.split(",") if t.strip())
+        if select not in ("bic", "aic", "none"):
+            raise InvalidInputError(f"--select {select!r}: use bic, aic or none")
+        opts: dict[str, Any] = {}
+        units = {k: v for k, v in (("gyro", gyro_unit), ("accel", accel_unit)) if v}
+        if units:
+            opts["units"] = units
+        if fs is not None:
+            opts["fs"] = fs
+        if skiprows is not None:
+            opts["skiprows"] = skiprows
+        data = read_imu(file, format=format, **opts)
+        rate = float(data.fs)
+        if fs is None and abs(rate - round(rate)) < 1e-6 * rate:
+            rate = float(round(rate))  # time stamps built from an integer rate
+        if data.gaps():
+            raise InvalidInputError(f"{file}: the record has {len(data.gaps())} time gap(s); the noise analysis "
+                                    "needs one gap-free static record (split it, or use imunav.noise.allan_deviation "
+                                    "with nan_policy='segments')")
+        groups = []
+        for sensor, arr, unit, names in (("gyro", data.gyro, "rad/s", _CH[:3]), ("accel", data.accel, "m/s^2", _CH[3:])):
+            idx = [i for i, n in enumerate(names) if n in chans]
+            if idx:
+                groups.append((sensor, arr[:, idx], unit, tuple(names[i] for i in idx)))
+        results: dict[str, Any] = {}
+        with Progress(console=console, transient=True) as prog:
+            task = prog.add_task("noise analysis", total=3 * len(groups))
+            for sensor, arr, unit, names in groups:
+                r = allan_deviation(arr, rate, _taus(taus), kind, units=unit, channels=names)
+                prog.advance(task)
+                f = fit_noise(r, terms=term_list, gauss_markov=gm, select=None if select == "none" else select,
+                              quantity=sensor)
+                prog.advance(task)
+                p = psd(arr, rate, "welch", nperseg=min(arr.shape[0], 2**14), units=unit, channels=names)
+                pa = log_average(p, 10)
+                # same band as the Allan fit: below 1/(2 tau_min), clear of the sensor's own filter
+                pf = fit_psd(pa, f_range=[(pa.f[0], min(0.4 * rate, 0.5 / float(tm))) for tm in f.tau_min])
+                prog.advance(task)
+                results[sensor] = (r, f, p, pa, pf, compare_psd_allan(pf, f))
+        if yaml_out is not None and not ("gyro" in results and "accel" in results):
+            raise InvalidInputError("--yaml needs both gyro and accel channels")
+    except (InvalidInputError, FileNotFoundError) as e:
+        err.print(f"[red]error:[/red] {e}", highlight=False)
+        raise typer.Exit(code=2) from None
+
+    console.print(f"[bold]{file}[/bold]: {data.n:,} samples at {rate:g} Hz ({data.n / rate:.6g} s), "
+                  f"kind={kind}, taus={taus}")
+    for sensor, (r, f, p, pa, pf, cmp) in results.items():
+        t = Table(title=f"{sensor} noise terms (GLS fit ± standard error; display units)", title_justify="left")
+        t.add_column("channel")
+        shown = [i for i, nm in enumerate(f.names) if f.selected[i].any() or nm in ("N", "B", "K")]
+        for i in shown:
+            t.add_column(f"{f.names[i]} [{f.display_units[i]}]", justify="right")
+        t.add_column("N (PSD) / N (Allan) - 1", justify="right")
+        t.add_column(f"slope read-out N [{f.display_units[f.names.index('N')]}]", justify="right")
+        t.add_column("fit from tau (s)", justify="right")
+        for c, name in enumerate(r.channels):
+            row = [name]
+            for i in shown:
+                d = f.display(f.names[i])[c]
+                scale = d / f.value[i, c] if f.value[i, c] else 1.0
+                row.append(_fmt(d, f.se[i, c] * scale) if f.selected[i, c] else "-")
+            row.append(f"{cmp['N'][c]:+.1%}")
+            iN = f.names.index("N")
+            du = f.display_units[iN]
+            sN = f.slopes.value[1, c] if du == f.units[iN] else to_display(f.slopes.value[1, c], du)
+            row.append(f"{sN:.4g}")
+            row.append(f"{f.tau_min[c]:.3g}")
+            t.add_row(*row)
+        console.print(t)
+    if json_out is not None:
+        out = {"file": str(file), "fs": rate, "n_samples": int(data.n)}
+        for sensor, (r, f, p, pa, pf, cmp) in results.items():
+            out[sensor] = {"allan": r.to_dict(), "fit": f.to_dict(), "psd_fit": pf.to_dict(), "psd_vs_allan": cmp,
+                           "curve_fits": _curve_fits(r)}
+        with atomic_path(json_out) as tmp:
+            tmp.write_text(json.dumps(out, indent=1, default=lambda o: None if o != o else str(o)))
+        console.print(f"results written to {json_out}")
+    if plot is not None or psd_plot is not None:
+        from imunav.noise.plot import plot_allan, plot_psd
+
+        for path, which in ((plot, "allan"), (psd_plot, "psd")):
+            if path is None:
+                continue
+            figs = []
+            for sensor, (r, f, p, pa, pf, _) in results.items():
+                figs.append(plot_allan(r, f, title=sensor) if which == "allan" else plot_psd(p, pf, pa, title=sensor))
+            for k, fig in enumerate(figs):
+                target = Path(path) if len(figs) == 1 else Path(path).with_name(
+                    f"{Path(path).stem}_{list(results)[k]}{Path(path).suffix}")
+                with atomic_path(target) as tmp:
+                    fig.savefig(tmp, dpi=110, format=target.suffix.lstrip(".") or "png")
+                console.print(f"figure written to {target}")
+    if yaml_out is not None:
+        write_kalibr_yaml(yaml_out, results["gyro"][1], results["accel"][1], update_rate=rate)
+        console.print(f"Kalibr imu.yaml written to {yaml_out}")
+
+
+noise.__doc__ = (noise.__doc__ or "") + "\n\n" + _EXAMPLE
+
+
+def register(app: typer.Typer) -> None:
+    """Add ``imunav noise`` to the app."""
+    app.command("noise", help=noise.__doc__)(noise)

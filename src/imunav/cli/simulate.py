@@ -1,0 +1,161 @@
+"""``imunav simulate``: a calibration test profile through the virtual IMU → recording file."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+from typing import Optional
+
+import typer
+
+PROFILES = ("static", "multiposition", "ratetable", "sixposition", "ferraris")
+
+_HELP = f"""Simulate a test PROFILE ({", ".join(PROFILES)}) with a virtual IMU and write the recording.
+
+multiposition is the 100-position static test, ratetable the 120-step +-250 deg/s rate-table test (imu-error-calibration.md section 5), sixposition each axis up then down, ferraris six poses plus a full turn about each axis, static one level position for --duration seconds.  The error model is a preset (--preset, 'ideal' = no errors) or a TOML file (--model).  The format follows the suffix of --out (.csv .parquet .h5 .mat .npz); the segment table goes next to it as <name>_segments.csv.  Earth rate and normal gravity are used when --lat-deg is given (else constant 9.80665 m/s^2).
+
+Example: imunav simulate multiposition --preset thesis_sim --fs 100 --seed 1 --out hundred.npz
+"""
+
+
+def register(app: typer.Typer) -> None:
+    @app.command("simulate", help=_HELP)
+    def simulate(
+        profile: str = typer.Argument(..., help=f"Test profile: {' | '.join(PROFILES)}."),
+        out: Path = typer.Option(..., "--out", "-o", help="Recording file to write (format from the suffix)."),
+        preset: Optional[str] = typer.Option(None, "--preset", help="Error-model preset (default thesis_sim; 'ideal' = none)."),
+        model: Optional[Path] = typer.Option(None, "--model", help="Error model TOML file (instead of --preset)."),
+        fs: float = typer.Option(100.0, "--fs", help="Sample rate, Hz."),
+        seed: int = typer.Option(0, "--seed", help="Random seed (same seed, same numbers)."),
+        dwell: float = typer.Option(30.0, "--dwell", help="Seconds per position / rate step."),
+        transition: float = typer.Option(2.0, "--transition", help="Seconds per move / rate ramp."),
+        duration: float = typer.Option(600.0, "--duration", help="Duration of the 'static' profile, s."),
+        lat_deg: Optional[float] = typer.Option(None, "--lat-deg", help="Latitude, deg (turns on Earth rate and normal gravity)."),
+        h_m: float = typer.Option(0.0, "--h-m", help="Height above the ellipsoid, m."),
+        earth_rate: Optional[bool] = typer.Option(None, "--earth-rate/--no-earth-rate", help="Earth rate in the gyros (default: on iff --lat-deg)."),
+        gravity: Optional[str] = typer.Option(None, "--gravity", help="'normal', 'constant' or m/s^2 (default: normal iff --lat-deg)."),
+        segments: Optional[Path] = typer.Option(None, "--segments", help="Segment-table CSV (default <out stem>_segments.csv)."),
+        json_out: Optional[Path] = typer.Option(None, "--json", help="Also write a JSON summary here."),
+    ) -> None:
+        from rich.console import Console
+        from rich.markup import escape
+
+        from imunav.errors import InvalidInputError
+
+        console = Console(stderr=True)
+        try:
+            summary = run_simulate(
+                profile, out, preset=preset, model=model, fs=fs, seed=seed, dwell=dwell, transition=transition,
+                duration=duration, lat_deg=lat_deg, h_m=h_m, earth_rate=earth_rate, gravity=gravity,
+                segments=segments, console=console,
+            )
+        except InvalidInputError as exc:
+            console.print(f"[red]error:[/red] {escape(str(exc))}", soft_wrap=True)
+            raise typer.Exit(2) from exc
+        if json_out is not None:
+            from imunav.io._atomic import atomic_path
+
+            with atomic_path(json_out) as tmp:
+                tmp.write_text(json.dumps(summary, indent=2) + "\n")
+        typer.echo(
+            f"wrote {summary['file']}: {summary['samples']} samples, {summary['duration_s']:.1f} s at "
+            f"{summary['fs_hz']:g} Hz, {summary['segments']} ({summary['error_model']})"
+        )
+
+
+def run_simulate(
+    profile: str,
+    out: Path,
+    *,
+    preset: str | None = None,
+    model: Path | None = None,
+    fs: float = 100.0,
+    seed: int = 0,
+    dwell: float = 30.0,
+    transition: float = 2.0,
+    duration: float = 600.0,
+    lat_deg: float | None = None,
+    h_m: float = 0.0,
+    earth_rate: bool | None = None,
+    gravity: str | None = None,
+    segments: Path | None = None,
+    console: object | None = None,
+) -> dict:
+    """What ``imunav simulate`` does, callable from Python; returns the summary dict."""
+    from rich.progress import Progress
+
+    from imunav.errors import ConfigError, InvalidInputError
+    from imunav.io import write_imu
+    from imunav.sim import ferraris_profile, hundred_position_profile, ideal_imu, six_position_profile
+    from imunav.sim import static_profile, thesis_rate_table_profile
+    from imunav.units import DEG
+
+    if profile not in PROFILES:
+        raise InvalidInputError(f"unknown profile {profile!r}; choose one of {', '.join(PROFILES)}")
+    if preset is not None and model is not None:
+        raise ConfigError("give either --preset or --model, not both")
+    lat = None if lat_deg is None else lat_deg * DEG
+    if earth_rate is None:
+        earth_rate = lat is not None
+    if gravity is None:
+        gravity = "normal" if lat is not None else "constant"
+    g: str | float = gravity
+    if gravity not in ("normal", "constant"):
+        try:
+            g = float(gravity)
+        except ValueError as exc:
+            raise InvalidInputError(f"--gravity must be 'normal', 'constant' or a number in m/s^2, not {gravity!r}") from exc
+    if (earth_rate or g == "normal") and lat is None:
+        raise InvalidInputError("Earth rate and normal gravity need --lat-deg (or use --no-earth-rate --gravity constant)")
+    kw = {"lat": lat, "h": h_m}
+    builders = {
+        "static": lambda: static_profile(duration, fs, **kw),
+        "multiposition": lambda: hundred_position_profile(fs, dwell, transition, **kw),
+        "ratetable": lambda: thesis_rate_table_profile(fs, dwell, transition, **kw),
+        "sixposition": lambda: six_position_profile(fs, dwell, transition, **kw),
+        "ferraris": lambda: ferraris_profile(fs, dwell, transition, **kw),
+    }
+    ideal_kw = {"earth_rate": bool(earth_rate), "transport_rate": False, "gravity": g}
+    with Progress(console=console, transient=True) as prog:
+        task = prog.add_task(f"simulate {profile}", total=3)
+        prof = builders[profile]()
+        prog.advance(task)
+        name = preset or "thesis_sim"
+        if model is not None:
+            from imunav.sim import ImuErrorModel
+
+            em = ImuErrorModel.from_toml(model)
+            data = _simulate(prof, em, seed, ideal_kw)
+            name = em.name or Path(model).stem
+        elif name == "ideal":
+            data = ideal_imu(prof.trajectory, **ideal_kw)
+        else:
+            from imunav.sim import presets
+
+            data = _simulate(prof, presets.get(name), seed, ideal_kw)
+        prog.advance(task)
+        data = data.with_(meta={**dict(data.meta or {}), "profile": profile, "error_model": name, "seed": seed})
+        path = write_imu(data, out)
+        seg_path = segments if segments is not None else Path(out).with_name(Path(out).stem + "_segments.csv")
+        prof.segments.write_csv(seg_path)
+        prog.advance(task)
+    s = prof.summary()
+    return {
+        "file": str(path),
+        "segments_file": str(seg_path),
+        "profile": profile,
+        "error_model": name,
+        "seed": seed,
+        "samples": s["samples"],
+        "fs_hz": s["fs_hz"],
+        "duration_s": s["duration_s"],
+        "segments": s["segments"],
+        "earth_rate": bool(earth_rate),
+        "gravity": g,
+    }
+
+
+def _simulate(prof, model, seed, ideal_kw):
+    from imunav.sim import simulate_imu
+
+    return simulate_imu(prof.trajectory, model, seed, **ideal_kw)

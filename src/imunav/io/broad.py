@@ -1,0 +1,115 @@
+"""Loader for BROAD trials (Berlin Robust Orientation Estimation Assessment Dataset).
+
+Laidig, Caruso, Cereatti, Seel, "BROAD — A Benchmark for Robust Inertial
+Orientation Estimation", Data 6(7):72, 2021 (data CC BY 4.0).
+
+Frames (explicit adapter, tested in ``tests/attitude/test_broad.py``):
+
+* The **body frame** of the returned recording is the IMU sensor frame as
+  recorded (myon aktos-t board).  It is *not* FRD, and nothing in imunav's
+  attitude filters needs it to be: they only assume a right-handed body frame
+  and a specific-force accelerometer (at rest the accelerometer reads +g along
+  the axis pointing up, which is the specific-force convention f = a − g).
+* The file's reference ``opt_quat`` is the sensor orientation relative to an
+  **ENU** Earth frame whose y axis points to *magnetic* north
+  (v_ENU = q ⊗ v_S ⊗ q*).  imunav uses NED, so the loader returns
+  ``q_ref_nb = Q_NED_ENU ⊗ opt_quat`` (north = magnetic north, down), where
+  ``Q_NED_ENU`` is the rotation of π about (1, 1, 0)/√2 (x↔y, z → −z).
+  ``to_enu(q_nb)`` is the inverse adapter for exporting estimates.
+* The BROAD error metric is invariant to this Earth-frame change (see
+  :mod:`imunav.attitude.metrics`), so RMSEs computed in NED equal the ENU ones.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from imunav.errors import FileFormatError, InvalidInputError
+from imunav.rotation import C_ENU_NED, quat_from_dcm, quat_multiply
+from imunav.timeseries import ImuData
+
+Array = NDArray[np.float64]
+
+__all__ = ["BroadTrial", "load_broad", "broad_trials", "Q_NED_ENU", "to_enu", "from_enu"]
+
+#: q_ned_enu: v_ned = q ⊗ v_enu ⊗ q* (swap x/y, negate z); its own inverse up to sign.
+Q_NED_ENU = quat_from_dcm(C_ENU_NED.T)
+
+_KEYS = ("imu_gyr", "imu_acc", "imu_mag", "opt_quat", "movement", "sampling_rate")
+
+
+def to_enu(q_nb: Array) -> Array:
+    """Body->NED quaternions to body->ENU (for BROAD-style output)."""
+    return quat_multiply(Q_NED_ENU * np.array([1.0, -1.0, -1.0, -1.0]), np.asarray(q_nb, float))
+
+
+def from_enu(q_enu: Array) -> Array:
+    """Body->ENU quaternions to body->NED (NaN rows stay NaN)."""
+    return quat_multiply(Q_NED_ENU, np.asarray(q_enu, float))
+
+
+@dataclass(frozen=True)
+class BroadTrial:
+    """One BROAD trial: IMU recording, reference in NED, scored-sample mask."""
+
+    name: str
+    imu: ImuData
+    q_ref_nb: Array  # (N, 4) NED reference, NaN rows where the OMC had no data
+    movement: NDArray[np.bool_]
+    fs: float
+    path: Path
+    meta: dict[str, Any] = field(default_factory=dict)
+
+
+def load_broad(path: str | Path) -> BroadTrial:
+    """Read a BROAD ``.mat`` trial (MATLAB v5, as in the dataset's ``data_mat/``).
+
+    Time is ``t = k / sampling_rate``.  Gyro rad/s, accelerometer m/s² (specific
+    force), magnetometer µT, all in the sensor frame (see module docstring).
+    """
+    from scipy.io import loadmat
+
+    p = Path(path)
+    if not p.is_file():
+        raise InvalidInputError(f"BROAD trial file not found: {p}; pass the path of a *.mat trial file")
+    try:
+        mat = loadmat(p)
+    except Exception as exc:  # scipy raises several types for bad files
+        raise FileFormatError(f"{p}: not a readable MATLAB v5 file ({exc}); expected a BROAD data_mat/*.mat trial") from exc
+    missing = [k for k in _KEYS if k not in mat]
+    if missing:
+        raise FileFormatError(f"{p}: missing BROAD variables {missing}; expected {list(_KEYS)}")
+    fs = float(np.squeeze(mat["sampling_rate"]))
+    gyr = np.ascontiguousarray(mat["imu_gyr"], dtype=np.float64)
+    acc = np.ascontiguousarray(mat["imu_acc"], dtype=np.float64)
+    mag = np.ascontiguousarray(mat["imu_mag"], dtype=np.float64)
+    n = gyr.shape[0]
+    for k, a in (("imu_acc", acc), ("imu_mag", mag), ("opt_quat", mat["opt_quat"])):
+        if a.shape[0] != n:
+            raise FileFormatError(f"{p}: {k} has {a.shape[0]} rows, imu_gyr {n}; the file is inconsistent")
+    t = np.arange(n, dtype=np.float64) / fs
+    info = mat.get("info")
+    meta: dict[str, Any] = {"source": "BROAD", "file": p.name}
+    if info is not None:
+        meta["info"] = str(np.squeeze(info))
+    imu = ImuData(t=t, gyro=gyr, accel=acc, mag=mag, mag_unit="uT", meta=meta)
+    q_enu = np.asarray(mat["opt_quat"], dtype=np.float64)
+    q_ned = from_enu(q_enu)
+    mv = np.asarray(mat["movement"]).reshape(-1).astype(bool)
+    return BroadTrial(name=p.stem, imu=imu, q_ref_nb=q_ned, movement=mv, fs=fs, path=p, meta=meta)
+
+
+def broad_trials(directory: str | Path) -> list[Path]:
+    """Sorted ``*.mat`` trial files in ``directory`` (raises if there are none)."""
+    d = Path(directory)
+    if not d.is_dir():
+        raise InvalidInputError(f"BROAD folder not found: {d}; pass the folder holding the *.mat trials")
+    files = sorted(d.glob("*.mat"))
+    if not files:
+        raise InvalidInputError(f"no *.mat trial files in {d}; pass the BROAD data_mat folder")
+    return files

@@ -1,0 +1,226 @@
+"""Lab step: load real recordings named in the lab definition (``[recordings.<name>]``).
+
+Each table describes one recording file and which test it is::
+
+    [recordings.adis_static]
+    path = "shared:adis16405/adis16405_imu2.npz"   # "shared:" = the shared data folder
+                                                   # (IMUNAV_DATA, else ../shared/data);
+                                                   # other paths: relative to the TOML file
+    test = "static"            # static | multiposition | rate_table | multipose
+    unit = "ADIS16405 #2"      # optional: the device (default "imu"); a calibration is
+                               # applied only to recordings of the same unit
+    format = "npz"             # optional: from the suffix
+    units = { gyro = "deg/s", accel = "g" }        # units in the file (SI by default)
+    fs = 100.0                 # when the file has no time column
+    max_duration_s = 3600.0    # optional: keep only the first hour
+    # CSV / raw counts:
+    # columns = { accel = ["ax", "ay", "az"], gyro = ["gx", "gy", "gz"] }
+    # scales = { accel = 5.9855e-4, gyro = 1.3323e-4 }   # SI per count (with units = "counts")
+    # skiprows = 4 ; delimiter = "," ; offsets = { ... } ; nan_policy = "raise"
+    # segments = "static_segments.json"   # multiposition / rate_table: the segment table
+    # init_s = 36.5 ; wait_s = 3.0        # multipose: initial rest and time per pose
+    # gravity = 9.80665 ; latitude_deg = 45.0
+
+Artifacts set (the same keys as :mod:`imunav.labsteps.simulate_tests`, so the
+analysis steps work on either): ``recordings`` (test name -> ImuData, test
+names ``static_long`` for ``static``, ``hundred_position`` for
+``multiposition``, ``rate_table``, ``multipose``), ``profiles`` (test name ->
+Segments table, when given), ``recording_specs`` (test name ->
+:class:`RecordingSpec`), ``files``; ``sim`` holds ``g`` and ``lat`` when given.
+"""
+
+from __future__ import annotations
+
+import json
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Mapping
+
+import numpy as np
+
+from imunav.errors import ConfigError
+from imunav.lab import LabContext, StepResult
+
+TITLE = "Recordings (real data)"
+
+#: ``test`` value -> artifact name used by the analysis steps.
+TESTS = {"static": "static_long", "multiposition": "hundred_position", "rate_table": "rate_table",
+         "multipose": "multipose"}
+
+_READ_KEYS = ("format", "columns", "units", "scales", "offsets", "fs", "t0", "delimiter", "skiprows", "nan_policy",
+              "mag_unit")
+_LAB_KEYS = ("path", "test", "unit", "segments", "max_duration_s", "t_start_s", "init_s", "wait_s", "gravity",
+             "latitude_deg", "description")
+
+
+@dataclass(frozen=True)
+class RecordingSpec:
+    """One recording of a lab definition, validated.
+
+    Attributes
+    ----------
+    name : the table name.
+    path : resolved file path.
+    test : ``static``, ``multiposition``, ``rate_table`` or ``multipose``.
+    read : options for :func:`imunav.io.read_imu` (format, columns, units, scales, ...).
+    segments : segment table JSON (multiposition / rate_table), resolved.
+    t_start_s, max_duration_s : the part of the file to use.
+    init_s, wait_s : multi-pose session timing.
+    gravity : local gravity, m/s² (None: the method's default).
+    latitude_deg : latitude (Earth rate, normal gravity), or None.
+    """
+
+    name: str
+    path: Path
+    test: str
+    read: dict[str, Any] = field(default_factory=dict)
+    segments: Path | None = None
+    t_start_s: float = 0.0
+    max_duration_s: float | None = None
+    init_s: float = 30.0
+    wait_s: float = 3.0
+    gravity: float | None = None
+    latitude_deg: float | None = None
+    description: str = ""
+    unit: str = "imu"
+
+    @property
+    def artifact(self) -> str:
+        return TESTS[self.test]
+
+
+def resolve_path(value: str, base_dir: Path, where: str) -> Path:
+    """``shared:<sub/path>`` -> the shared data folder; relative paths -> relative to ``base_dir``."""
+    if value.startswith("shared:"):
+        from imunav.io.datasets import shared_data_dir
+
+        root = shared_data_dir()
+        if root is None:
+            raise ConfigError(
+                f"{where}: path {value!r} is in the shared data folder, which was not found; set IMUNAV_DATA to the "
+                "folder that holds the data sets (or put them in ../shared/data next to the project)"
+            )
+        p = root / value[len("shared:"):]
+    else:
+        p = Path(value).expanduser()
+        if not p.is_absolute():
+            p = base_dir / p
+    if not p.is_file():
+        raise ConfigError(f"{where}: recording file {p} does not exist")
+    return p
+
+
+def _num(tab: Mapping[str, Any], key: str, where: str, *, positive: bool = True) -> float | None:
+    if key not in tab:
+        return None
+    v = tab[key]
+    if isinstance(v, bool) or not isinstance(v, (int, float)) or (positive and v <= 0) or not np.isfinite(v):
+        raise ConfigError(f"{where}: {key} must be a {'positive ' if positive else ''}number, got {v!r}")
+    return float(v)
+
+
+def parse_recordings(table: Mapping[str, Any], base_dir: Path, where: str = "lab configuration") -> dict[str, RecordingSpec]:
+    """Validate ``[recordings.<name>]`` tables into :class:`RecordingSpec` objects."""
+    if not table:
+        raise ConfigError(f"{where}: [recordings] is empty; add at least one [recordings.<name>] table")
+    out: dict[str, RecordingSpec] = {}
+    seen_tests: dict[str, str] = {}
+    for name, tab in table.items():
+        w = f"{where}: [recordings.{name}]"
+        if not isinstance(tab, Mapping):
+            raise ConfigError(f"{w} must be a table with path = ... and test = ...")
+        unknown = set(tab) - set(_READ_KEYS) - set(_LAB_KEYS)
+        if unknown:
+            raise ConfigError(f"{w}: unknown key(s) {sorted(unknown)}; allowed: {', '.join(_LAB_KEYS + _READ_KEYS)}")
+        if "path" not in tab or not isinstance(tab["path"], str):
+            raise ConfigError(f"{w}: path is required (a file path, or shared:<folder>/<file>)")
+        test = tab.get("test")
+        if test not in TESTS:
+            raise ConfigError(f"{w}: test must be one of {', '.join(TESTS)}; got {test!r}")
+        if test in seen_tests:
+            raise ConfigError(f"{w}: test {test!r} is already given by [recordings.{seen_tests[test]}]; one recording per test")
+        seen_tests[test] = name
+        for k in ("columns", "units", "scales", "offsets"):
+            if k in tab and not isinstance(tab[k], Mapping):
+                raise ConfigError(f"{w}: {k} must be a table, e.g. {k} = {{ gyro = ..., accel = ... }}")
+        if "format" in tab and tab["format"] not in ("csv", "parquet", "hdf5", "mat", "npz"):
+            raise ConfigError(f"{w}: format must be csv, parquet, hdf5, mat or npz; got {tab['format']!r}")
+        if "skiprows" in tab and (not isinstance(tab["skiprows"], int) or tab["skiprows"] < 0):
+            raise ConfigError(f"{w}: skiprows must be a non-negative integer, got {tab['skiprows']!r}")
+        read = {k: (dict(tab[k]) if isinstance(tab[k], Mapping) else tab[k]) for k in _READ_KEYS if k in tab}
+        if "fs" in read:
+            read["fs"] = _num(tab, "fs", w)
+        seg = None
+        if test in ("multiposition", "rate_table"):
+            if "segments" not in tab:
+                raise ConfigError(f"{w}: a {test} test needs segments = \"<segment table JSON>\" (Profile.to_dict() format)")
+            seg = resolve_path(str(tab["segments"]), base_dir, w)
+        elif "segments" in tab:
+            raise ConfigError(f"{w}: segments applies to multiposition and rate_table tests only")
+        lat = _num(tab, "latitude_deg", w, positive=False)
+        if lat is not None and not -90 <= lat <= 90:
+            raise ConfigError(f"{w}: latitude_deg must lie in [-90, 90], got {lat}")
+        out[name] = RecordingSpec(
+            name=name, path=resolve_path(tab["path"], base_dir, w), test=test, read=read, segments=seg,
+            t_start_s=_num(tab, "t_start_s", w, positive=False) or 0.0, max_duration_s=_num(tab, "max_duration_s", w),
+            init_s=_num(tab, "init_s", w) or 30.0, wait_s=_num(tab, "wait_s", w) or 3.0,
+            gravity=_num(tab, "gravity", w), latitude_deg=lat, description=str(tab.get("description", "")),
+            unit=str(tab.get("unit", "imu")),
+        )
+    return out
+
+
+def _segments(path: Path) -> Any:
+    from imunav.batch import _read_segments
+
+    return _read_segments(path)
+
+
+def run(ctx: LabContext) -> StepResult:
+    from imunav.io import read_imu
+
+    specs: dict[str, RecordingSpec] = dict(getattr(ctx.lab, "recordings", {}) or {})
+    if not specs:
+        raise ConfigError("the recordings step needs [recordings.<name>] tables in the lab definition")
+    recs, profs, files, rows = {}, {}, {}, []
+    sim: dict[str, Any] = {}
+    with ctx.task("read recordings", total=len(specs)) as advance:
+        for name, sp in specs.items():
+            data = read_imu(sp.path, **sp.read)
+            if sp.t_start_s or sp.max_duration_s:
+                t0 = data.t[0] + sp.t_start_s
+                t1 = t0 + sp.max_duration_s if sp.max_duration_s else data.t[-1] + 1.0
+                data = data.time_slice(t0, t1)
+            recs[sp.artifact] = data
+            files[sp.artifact] = sp.path
+            if sp.segments is not None:
+                profs[sp.artifact] = _segments(sp.segments)
+            if sp.gravity is not None:
+                sim["g"] = sp.gravity
+            if sp.latitude_deg is not None:
+                sim["lat"] = np.deg2rad(sp.latitude_deg)
+            gaps = data.gaps()
+            rows.append({
+                "recording": name, "unit": sp.unit, "test": sp.test, "file": sp.path.name, "samples": int(data.n),
+                "rate (Hz)": round(float(data.fs), 6), "duration (s)": round(float(data.duration), 3),
+                "gaps": len(gaps),
+                "gyro mean (deg/s)": ", ".join(f"{v:.4g}" for v in np.rad2deg(data.gyro.mean(axis=0))),
+                "|f| mean (m/s²)": round(float(np.linalg.norm(data.accel, axis=1).mean()), 5),
+            })
+            advance()
+    ctx.artifacts.update(recordings=recs, profiles=profs, files=files, recording_specs={s.artifact: s for s in specs.values()})
+    ctx.artifacts.setdefault("sim", {}).update(sim)
+    summary = {"recordings": {r["recording"]: {k: v for k, v in r.items() if k != "recording"} for r in rows}}
+    return StepResult(
+        summary=summary, passed=True, tables=[("Recordings", rows)],
+        notes=[f"{len(rows)} recording(s) read and converted to SI at the edge (units and column mapping from the "
+               "lab definition)."] + [f"{s.name}: {s.description}" for s in specs.values() if s.description],
+    )
+
+
+def report(section: Any, result: StepResult, ctx: LabContext) -> None:
+    for caption, rows in result.tables:
+        section.table(rows, caption)
+    specs = getattr(ctx.lab, "recordings", {}) or {}
+    section.code("\n".join(f"{s.name}: {s.path}  (test {s.test}; read options {json.dumps(s.read)})"
+                           for s in specs.values()))

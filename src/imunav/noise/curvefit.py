@@ -1,0 +1,140 @@
+"""Smooth curve fits of the Allan deviation curve (ahrs-sensor-errors.md §3.9).
+
+The thesis's "proposed method": ordinary polynomials (degrees 5, 10, 20) and a
+rational polynomial (numerator degree 4, denominator degree 2) fitted to the
+(tau, sigma) curve.  They are smoothers, not physical models; they are
+reported beside the physical-term fit (:func:`imunav.noise.fit_noise`).
+
+Both are fitted in log-log space, x = (log10 tau - centre)/scale, y =
+log10 sigma (a degree-20 polynomial in linear tau over decades is numerically
+meaningless).  The rational model uses a monic denominator (MATLAB ``rat42``
+form) ``(p1 x^4 + ... + p5)/(x^2 + q1 x + q2)``, initialised from the
+linearised problem ``p(x) - y (q1 x + q2) = y x^2`` and refined by
+Levenberg-Marquardt; a real denominator root inside the fitted range is
+reported as a pole.  Metrics: RMS and max error in log10 sigma.  Thesis-style
+read-outs from the smooth curve (sigma at tau = 1 s, min / 0.6643, sigma at
+tau = 3 s) are offered, flagged as such.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+from scipy.optimize import least_squares
+
+from imunav.errors import InsufficientDataError, InvalidInputError
+from imunav.noise.fit import BI_FACTOR
+
+__all__ = ["CurveFit", "fit_polynomial", "fit_rational", "compare_curve_fits"]
+
+
+@dataclass(frozen=True)
+class CurveFit:
+    """A smooth fit of log10 sigma against normalised log10 tau."""
+
+    kind: str  # "poly<n>" or "rational<n>/<m>"
+    num: NDArray[np.float64]  # numerator coefficients, highest power first
+    den: NDArray[np.float64]  # denominator coefficients (monic), [1.0] for polynomials
+    centre: float
+    scale: float
+    rms_log10: float
+    max_log10: float
+    has_pole: bool
+    tau_range: tuple[float, float]
+
+    def __call__(self, tau: ArrayLike) -> NDArray[np.float64]:
+        """Fitted deviation at tau."""
+        x = (np.log10(np.asarray(tau, dtype=float)) - self.centre) / self.scale
+        return 10 ** (np.polyval(self.num, x) / np.polyval(self.den, x))
+
+    def readout(self) -> dict[str, float]:
+        """Thesis-style values from the smooth curve: sigma(1 s) (N if the -1/2
+        region reaches 1 s), min sigma / 0.6643 (B), sigma(3 s) (K if the +1/2
+        region covers 3 s).  Only meaningful where those slopes hold."""
+        t = np.logspace(np.log10(self.tau_range[0]), np.log10(self.tau_range[1]), 400)
+        s = self(t)
+        out = {"B": float(s.min() / BI_FACTOR)}
+        if self.tau_range[0] <= 1.0 <= self.tau_range[1]:
+            out["N_at_1s"] = float(self(1.0))
+        if self.tau_range[0] <= 3.0 <= self.tau_range[1]:
+            out["sigma_at_3s"] = float(self(3.0))
+        return out
+
+    def to_dict(self) -> dict[str, Any]:
+        return {"kind": self.kind, "num": self.num.tolist(), "den": self.den.tolist(), "centre": self.centre,
+                "scale": self.scale, "rms_log10": self.rms_log10, "max_log10": self.max_log10,
+                "has_pole": self.has_pole, "tau_range": list(self.tau_range)}
+
+
+def _prep(tau: ArrayLike, adev: ArrayLike) -> tuple[np.ndarray, np.ndarray, float, float]:
+    t = np.asarray(tau, dtype=float)
+    s = np.asarray(adev, dtype=float)
+    if t.shape != s.shape or t.ndim != 1:
+        raise InvalidInputError("tau and adev must be 1-D arrays of the same length (one channel)")
+    ok = np.isfinite(t) & np.isfinite(s) & (t > 0) & (s > 0)
+    t, s = t[ok], s[ok]
+    lt = np.log10(t)
+    c = float(lt.mean())
+    sc = float(max(lt.std(), 1e-12))
+    return (lt - c) / sc, np.log10(s), c, sc
+
+
+def fit_polynomial(tau: ArrayLike, adev: ArrayLike, degree: int) -> CurveFit:
+    """Least-squares polynomial of ``degree`` in log-log space (eq. 5.33)."""
+    x, y, c, sc = _prep(tau, adev)
+    if degree < 0 or x.size <= degree:
+        raise InsufficientDataError(f"degree {degree} needs more than {degree} points, got {x.size}")
+    # Chebyshev-conditioned solve, converted to power form
+    cheb = np.polynomial.chebyshev.Chebyshev.fit(x, y, degree, domain=[-1, 1], window=[-1, 1])
+    num = cheb.convert(kind=np.polynomial.Polynomial).coef[::-1]
+    r = np.polyval(num, x) - y
+    t = np.asarray(tau, dtype=float)
+    return CurveFit(kind=f"poly{degree}", num=num, den=np.array([1.0]), centre=c, scale=sc,
+                    rms_log10=float(np.sqrt(np.mean(r**2))), max_log10=float(np.max(np.abs(r))), has_pole=False,
+                    tau_range=(float(t.min()), float(t.max())))
+
+
+def fit_rational(tau: ArrayLike, adev: ArrayLike, num_degree: int = 4, den_degree: int = 2) -> CurveFit:
+    """Rational fit with monic denominator (eq. 5.34, ``rat42`` by default)."""
+    x, y, c, sc = _prep(tau, adev)
+    npar = num_degree + 1 + den_degree
+    if x.size <= npar:
+        raise InsufficientDataError(f"rational {num_degree}/{den_degree} needs more than {npar} points, got {x.size}")
+    # linearised start: p(x) - y * (q_1 x^{m-1} + ... + q_m) = y x^m
+    V = np.column_stack([x**k for k in range(num_degree, -1, -1)]
+                        + [-y * x**k for k in range(den_degree - 1, -1, -1)])
+    z0, *_ = np.linalg.lstsq(V, y * x**den_degree, rcond=None)
+
+    def split(z):
+        return z[: num_degree + 1], np.concatenate(([1.0], z[num_degree + 1 :]))
+
+    def resid(z):
+        p, q = split(z)
+        return np.polyval(p, x) / np.polyval(q, x) - y
+
+    sol = least_squares(resid, z0, method="lm", max_nfev=2000 * npar)
+    p, q = split(sol.x)
+    roots = np.roots(q)
+    real = roots[np.abs(roots.imag) < 1e-9].real
+    pole = bool(np.any((real >= x.min()) & (real <= x.max())))
+    r = resid(sol.x)
+    t = np.asarray(tau, dtype=float)
+    return CurveFit(kind=f"rational{num_degree}/{den_degree}", num=p, den=q, centre=c, scale=sc,
+                    rms_log10=float(np.sqrt(np.mean(r**2))), max_log10=float(np.max(np.abs(r))), has_pole=pole,
+                    tau_range=(float(t.min()), float(t.max())))
+
+
+def compare_curve_fits(tau: ArrayLike, adev: ArrayLike, degrees: tuple[int, ...] = (5, 10, 20),
+                       rational: tuple[int, int] = (4, 2)) -> dict[str, CurveFit]:
+    """The thesis's comparison: polynomials of the given degrees (skipped when
+    there are too few points) and the rational fit."""
+    out: dict[str, CurveFit] = {}
+    n = np.count_nonzero(np.isfinite(np.asarray(adev, dtype=float)))
+    for d in degrees:
+        if n > d:
+            out[f"poly{d}"] = fit_polynomial(tau, adev, d)
+    out[f"rational{rational[0]}/{rational[1]}"] = fit_rational(tau, adev, *rational)
+    return out

@@ -1,0 +1,71 @@
+"""``imunav attitude`` commands (the examples in their help run)."""
+
+from __future__ import annotations
+
+import json
+
+import pytest
+from typer.testing import CliRunner
+
+from shared_data import data_path
+from imunav.cli.main import app
+
+runner = CliRunner()
+
+
+def test_montecarlo_json(tmp_path):
+    out = tmp_path / "mc.json"
+    r = runner.invoke(app, ["attitude", "montecarlo", "--runs", "2", "--duration", "60", "--json", str(out)])
+    assert r.exit_code == 0, r.output
+    d = json.loads(out.read_text())
+    assert d["table"]["proposed"]["pitch_mean"] < 0.05
+    assert len(d["rmse"]["lee"]) == 2
+
+
+def test_run_and_benchmark(tmp_path):
+    src = data_path("broad", "02_undisturbed_slow_rotation_B.mat")
+    out = tmp_path / "run.json"
+    r = runner.invoke(app, ["attitude", "run", str(src), "--filter", "madgwick_c", "--json", str(out)])
+    assert r.exit_code == 0, r.output
+    d = json.loads(out.read_text())
+    pub = json.loads(data_path("broad", "published_rmse.json").read_text())
+    want = pub["madgwick"]["trials"]["02_undisturbed_slow_rotation_B"]["total_rmse_deg"]
+    assert d["rmse"]["total_rmse_deg"] == pytest.approx(want, abs=0.1)
+    # benchmark over a folder holding one trial (a symlink, outside the repository)
+    folder = tmp_path / "broad"
+    folder.mkdir()
+    (folder / src.name).symlink_to(src)
+    bj = tmp_path / "bench.json"
+    r = runner.invoke(app, ["attitude", "benchmark", str(folder), "-f", "mahony", "-f", "madgwick_c",
+                            "--json", str(bj)])
+    assert r.exit_code == 0, r.output
+    b = json.loads(bj.read_text())
+    assert set(b["filters"]) == {"mahony", "madgwick_c"}
+    assert b["filters"]["mahony"]["trials"]["02_undisturbed_slow_rotation_B"]["total_rmse_deg"] == pytest.approx(
+        pub["mahony"]["trials"]["02_undisturbed_slow_rotation_B"]["total_rmse_deg"], abs=0.1)
+
+
+def test_bad_filter_name(tmp_path):
+    r = runner.invoke(app, ["attitude", "montecarlo", "--runs", "0"])
+    assert r.exit_code != 0
+    assert "n_runs" in str(r.exception)
+
+
+def test_grid_search_cli(tmp_path):
+    src = data_path("broad", "05_undisturbed_slow_rotation_with_breaks_B.mat")
+    folder = tmp_path / "broad"
+    folder.mkdir()
+    (folder / src.name).symlink_to(src)
+    out = tmp_path / "grid.json"
+    r = runner.invoke(app, ["attitude", "benchmark", str(folder), "-f", "madgwick", "--grid", "beta=0.02,0.5",
+                            "-j", "1", "--json", str(out)])
+    assert r.exit_code == 0, r.output
+    g = json.loads(out.read_text())["grid"]
+    assert len(g) == 2
+    assert g[0]["mean"]["total_rmse_deg"] <= g[1]["mean"]["total_rmse_deg"]  # sorted best first
+    assert {x["params"]["beta"] for x in g} == {0.02, 0.5}
+
+
+def test_bad_param_syntax():
+    r = runner.invoke(app, ["attitude", "benchmark", "broad", "--param", "oops"])
+    assert r.exit_code != 0
