@@ -187,7 +187,7 @@ def test_lab_shared_path_needs_the_data_folder(tmp_path, monkeypatch):
 
 
 def test_example_real_lab_resolves_shared_data(monkeypatch):
-    from conftest import ROOT, data_path
+    from shared_data import ROOT, data_path
 
     data = data_path("adis16405", "adis16405_imu2.npz").parents[1]
     data_path("mpu6050_tedaldi", "example_data_calibration.csv")

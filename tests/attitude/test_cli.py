@@ -7,7 +7,7 @@ import json
 import pytest
 from typer.testing import CliRunner
 
-from conftest import data_path
+from shared_data import data_path
 from imunav.cli.main import app
 
 runner = CliRunner()
@@ -15,7 +15,7 @@ runner = CliRunner()
 
 def test_montecarlo_json(tmp_path):
     out = tmp_path / "mc.json"
-    r = runner.invoke(app, ["attitude", "montecarlo", "--runs", "2", "--json", str(out)])
+    r = runner.invoke(app, ["attitude", "montecarlo", "--runs", "2", "--duration", "60", "--json", str(out)])
     assert r.exit_code == 0, r.output
     d = json.loads(out.read_text())
     assert d["table"]["proposed"]["pitch_mean"] < 0.05

@@ -7,7 +7,7 @@ import json
 import pytest
 from typer.testing import CliRunner
 
-from conftest import data_path
+from shared_data import data_path
 from imunav.cli.main import app
 from imunav.learn.lstm import DEFAULT_MODEL_PATH
 

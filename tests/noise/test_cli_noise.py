@@ -6,7 +6,7 @@ import json
 
 import numpy as np
 import pytest
-from conftest import data_path
+from shared_data import data_path
 from typer.testing import CliRunner
 
 from imunav.cli.main import app

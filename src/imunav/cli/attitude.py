@@ -198,6 +198,7 @@ def montecarlo_cmd(
     gyro_noise_unit: str = typer.Option("deg/s/sqrt(Hz)", "--gyro-noise-unit",
                                         help="Reading of the paper's 0.005 gyro noise: deg/s/sqrt(Hz) or deg/sqrt(h)."),
     workers: int = typer.Option(1, "--workers", "-j", help="Processes."),
+    duration: float = typer.Option(245.0, "--duration", help="Scenario length [s] (paper: about 245 s)."),
     json_out: Optional[Path] = typer.Option(None, "--json", help="Write the RMSE table and per-run values."),
     plot: Optional[Path] = typer.Option(None, "--plot", help="Write RMSE box plots (PNG)."),
 ) -> None:
@@ -211,7 +212,7 @@ def montecarlo_cmd(
     from imunav.attitude.scenario import PAPER_TABLE2, PaperScenario, run_montecarlo
 
     con = Console()
-    scn = PaperScenario(gyro_noise_unit=gyro_noise_unit)  # type: ignore[arg-type]
+    scn = PaperScenario(gyro_noise_unit=gyro_noise_unit, duration=duration)  # type: ignore[arg-type]
     with con.status(f"{runs} runs ..."):
         mc = run_montecarlo(scn, n_runs=runs, rng=seed, workers=workers)
     t = Table(title=f"RMSE [deg] over {runs} runs (mean ± std); paper Table 2 in brackets")

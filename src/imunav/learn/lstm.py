@@ -93,6 +93,7 @@ class LstmConfig:
     time_budget_s: float | None = None
     seed: int = 0
     features: str = "raw+log"
+    stance_weight: float = 1.0
 
     def __post_init__(self) -> None:
         if self.layers < 1 or self.hidden < 1:
@@ -233,16 +234,38 @@ class LstmDetector:
             out[s + burn:s + W] = probs[j, burn:]
         return out
 
-    def detect(self, data: Any, threshold: float | None = None) -> Any:
-        """Zero-velocity flags ``P(stationary) > threshold`` as a :class:`~imunav.ins.DetectorResult`."""
+    def detect(self, data: Any, threshold: float | None = None, *, max_gap_s: float | None = None,
+               fallback_threshold: float = 0.5) -> Any:
+        """Zero-velocity flags ``P(stationary) > threshold`` as a :class:`~imunav.ins.DetectorResult`.
+
+        ``max_gap_s`` (optional gait prior): inside any run longer than this
+        without a stance, samples with ``P > fallback_threshold`` are declared
+        stationary too (a walking foot stands still at least once per gait cycle).
+        """
         from imunav.ins.detectors import DetectorResult
 
         thr = self.config.threshold if threshold is None else float(threshold)
         if not 0.0 < thr < 1.0:
             raise InvalidInputError(f"threshold must be a probability in (0, 1); got {thr}")
         p = self.probability(data)
-        return DetectorResult(p > thr, p, np.full(p.shape, thr), "lstm",
-                              {"threshold": thr, "layers": self.config.layers, "hidden": self.config.hidden})
+        zv = p > thr
+        if max_gap_s is not None:
+            fs = 1.0 / float(np.median(np.diff(np.asarray(data.t, dtype=float))))
+            zv = _fill_gaps(zv, p, int(round(max_gap_s * fs)), fallback_threshold)
+        return DetectorResult(zv, p, np.full(p.shape, thr), "lstm",
+                              {"threshold": thr, "layers": self.config.layers, "hidden": self.config.hidden,
+                               "max_gap_s": max_gap_s})
+
+
+def _fill_gaps(zv: NDArray[np.bool_], p: Array, max_gap: int, thr: float) -> NDArray[np.bool_]:
+    out = zv.copy()
+    d = np.diff(np.concatenate([[1], zv.astype(np.int8), [1]]))
+    starts = np.flatnonzero(d == -1)
+    stops = np.flatnonzero(d == 1)
+    for a, b in zip(starts, stops):
+        if b - a > max_gap:
+            out[a:b] = p[a:b] > thr
+    return out
 
 
 def _features(data: Any) -> Array:
@@ -367,6 +390,9 @@ def train_lstm(trials: Sequence[Any], labels: Sequence[Any], config: LstmConfig 
     per_epoch = cfg.windows_per_trial * len(X)
     total_batches = cfg.epochs * int(np.ceil(per_epoch / cfg.batch_size))
     sched = torch.optim.lr_scheduler.OneCycleLR(opt, max_lr=cfg.lr, total_steps=max(total_batches, 2))
+    # class weights (moving, stationary): > 1 favours recall of the stance, whose misses are
+    # the costly error of a ZUPT INS (unbounded drift)
+    cw = torch.tensor([1.0, float(cfg.stance_weight)])
     t0 = time.perf_counter()
     losses = []
     done = 0
@@ -387,7 +413,7 @@ def train_lstm(trials: Sequence[Any], labels: Sequence[Any], config: LstmConfig 
             yt = torch.as_tensor(yb[:, cfg.burn_in:].astype(np.int64))
             out, _ = net(xt)
             logits = fc(out[:, cfg.burn_in:])
-            loss = torch.nn.functional.cross_entropy(logits.reshape(-1, 2), yt.reshape(-1))
+            loss = torch.nn.functional.cross_entropy(logits.reshape(-1, 2), yt.reshape(-1), weight=cw)
             opt.zero_grad()
             loss.backward()
             torch.nn.utils.clip_grad_norm_(params, 1.0)
