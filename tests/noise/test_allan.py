@@ -169,7 +169,7 @@ def test_tau_grids():
     assert np.array_equal(tau_grid(1000, 1.0, "octave"), [1, 2, 4, 8, 16, 32, 64, 128, 256])
     assert np.array_equal(tau_grid(1000, 1.0, "decade"), [1, 2, 4, 10, 20, 40, 100, 200, 400])
     g = tau_grid(100_000, 10.0, ("log", 30))
-    assert g[0] == 0.1 and np.all(np.diff(g) > 0) and g.size <= 30
+    assert g[0] == 0.1 and np.all(np.diff(g) > 0) and 20 <= g.size <= 40  # about n, doubling-closed
     assert np.array_equal(tau_grid(100, 2.0, [0.5, 1.0, 1.0]), [0.5, 1.0])
 
 

@@ -30,7 +30,7 @@ def test_lab_noise_step(tmp_path):
     rec = {s.name: s for s in res.steps}["noise"]
     assert rec.error is None, rec.error
     assert rec.result.passed, rec.result.tables
-    assert rec.result.summary["N_true_inside_95ci"] == "6/6"
+    assert rec.result.summary["N_true_inside_familywise_95ci"] == "6/6"
     d = json.loads((tmp_path / "out" / "data" / "noise_fit.json").read_text())
     assert set(d) == {"gyro", "accel"}
     assert all(p.exists() for p in rec.result.figures)

@@ -68,7 +68,6 @@ def noise(
     deviation with confidence intervals, GLS fit of quantization Q, white noise N,
     bias instability B, random walk K and ramp R (with standard errors), the
     IEEE-952 slope read-outs, and the PSD estimate of N as a cross-check."""
-    import numpy as np
     from rich.console import Console
     from rich.progress import Progress
     from rich.table import Table

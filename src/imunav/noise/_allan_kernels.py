@@ -76,14 +76,20 @@ def diff_sums(x, ms, order, overlapping):  # pragma: no cover - numba
                 continue
             s = 0.0
             if overlapping:
-                # unit stride, constant step: lets LLVM vectorize the reduction
+                # unit stride over slices indexed by the loop variable itself: no
+                # negative-index wraparound checks, so LLVM vectorizes the reduction
+                L = iend - i0
+                c0 = x[i0 : i0 + L]
+                c1 = x[i0 + m : i0 + m + L]
+                c2 = x[i0 + 2 * m : i0 + 2 * m + L]
                 if order == 2:
-                    for i in range(i0, iend):
-                        v = x[i + 2 * m] - 2.0 * x[i + m] + x[i]
+                    for i in range(L):
+                        v = c2[i] - 2.0 * c1[i] + c0[i]
                         s += v * v
                 else:
-                    for i in range(i0, iend):
-                        v = x[i + 3 * m] - 3.0 * x[i + 2 * m] + 3.0 * x[i + m] - x[i]
+                    c3 = x[i0 + 3 * m : i0 + 3 * m + L]
+                    for i in range(L):
+                        v = c3[i] - 3.0 * c2[i] + 3.0 * c1[i] - c0[i]
                         s += v * v
             else:
                 start = ((i0 + m - 1) // m) * m

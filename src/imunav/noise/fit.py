@@ -123,24 +123,6 @@ def avar_model(tau: ArrayLike, Q: float = 0.0, N: float = 0.0, B: float = 0.0, K
     return out
 
 
-def _gac(name: str, h: np.ndarray, T: float | None = None) -> np.ndarray:
-    """Generalized autocovariance of the phase per unit coefficient, lag h in s."""
-    a = np.abs(h)
-    if name == "Q":
-        return np.where(a < 1e-12, 1.0, 0.0)
-    if name == "N":
-        return -0.5 * a
-    if name == "K":
-        return a**3 / 12.0
-    if name == "B":
-        with np.errstate(divide="ignore", invalid="ignore"):
-            return np.where(a > 0, h * h * np.log(np.where(a > 0, a, 1.0)), 0.0) / (2.0 * math.pi)
-    if name == "GM":
-        u = a / T
-        return -(T * T) * (u + np.expm1(-u))
-    return np.zeros_like(h)  # R: deterministic ramp, no variance
-
-
 _CODES = {"Q": 0, "N": 1, "B": 2, "K": 3, "GM": 4, "R": 5}
 
 

@@ -23,7 +23,6 @@ the amplitude spectrum).
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 from typing import Any, Literal, Sequence
 
