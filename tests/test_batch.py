@@ -51,7 +51,8 @@ def test_simulate_batch_is_seeded(tmp_path):
 
 def test_batch_calibrate_three_units_summary_and_truth(tiny_batch, tmp_path):
     spec = tmp_path / "spec.toml"
-    spec.write_text("[spec.accel_bias]\nmax = 600\nunit = 'mg'\n[spec.gyro_bias]\nmax = 1.0\nunit = 'deg/s'\n")
+    spec.write_text("[spec.accel_bias]\nmax = 600\nunit = 'mg'\n[spec.gyro_bias]\nmax = 1.0\nunit = 'deg/s'\n"
+                    "[spec.gyro_arw]\nmax = 0.001\nunit = 'deg/sqrt(h)'\n")  # a noise line: not a calibration item
     out = tmp_path / "cal"
     res = runner.invoke(app, ["batch", "calibrate", str(tiny_batch), "--method", "thesis", "--out", str(out),
                               "--spec", str(spec), "--json", str(tmp_path / "s.json"), "--executor", "serial", "-q"])
@@ -73,6 +74,7 @@ def test_batch_calibrate_three_units_summary_and_truth(tiny_batch, tmp_path):
     checks = s["spec_checks"]["unit_001"]
     by = {c["name"]: c["passed"] for c in checks}
     assert by["accel_bias_x"] is True and by["gyro_bias_z"] is False
+    assert not any(n.startswith("gyro_arw") for n in by)  # families the batch does not measure are not checked
     # the saved calibration compensates the unit's own data
     from imunav.calib import ImuCalibration
 

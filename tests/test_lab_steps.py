@@ -21,6 +21,7 @@ REDUCED = """
 [lab]
 seed = 3
 title = "reduced lab"
+steps = ["simulate_tests", "calibration", "temperature", "compensation"]
 
 [simulate_tests]
 fs = 20.0
@@ -64,19 +65,22 @@ def test_lab_end_to_end_reduced_renders_in_chromium(tmp_path):
     assert res.exit_code == 0, res.output  # no step errors (a failed spec is a verdict, not an error)
     s = json.loads((out / "summary.json").read_text())
     steps = {st["name"]: st for st in s["steps"]}
-    assert list(steps) == ["simulate_tests", "temperature", "compensation"]
+    assert list(steps) == ["simulate_tests", "calibration", "temperature", "compensation"]
     assert all("error" not in st for st in steps.values())
     # temperature: the fitted curves follow the true B(T), S(T) (the step's 4-sigma acceptance)
     assert steps["temperature"]["passed"] is True
     assert steps["temperature"]["summary"]["max_dev_over_sigma"] <= 4.0
-    # compensation: residuals consistent with the reported uncertainty, far below the raw errors
+    # compensation: the calibration step's estimate applied to a fresh recording; residuals consistent
+    # with the reported uncertainty, far below the raw errors
     comp = steps["compensation"]["summary"]
+    assert comp["calibration"] == "the calibration step's estimate"
     assert steps["compensation"]["passed"] is True
     for sensor in ("accel", "gyro"):
         assert 0.5 <= comp[sensor]["rms_z"] <= 2.0
     assert comp["accel"]["rms_error_ug"] < 0.01 * comp["accel"]["rms_raw_error_mg"] * 1e3
-    # parameters carry their uncertainty; the spec checks every axis of an axis-less limit
-    p = steps["compensation"]["parameters"]
+    # parameters (harvested from the calibration step's result) carry their uncertainty;
+    # the spec checks every axis of an axis-less limit
+    p = steps["calibration"]["parameters"]
     assert p["gyro_scale_y"]["sigma_si"] > 0
     checks = {c["name"]: c for c in s["spec_checks"] if c["limit"]}
     assert checks["accel_bias_x"]["passed"] is True
@@ -84,7 +88,8 @@ def test_lab_end_to_end_reduced_renders_in_chromium(tmp_path):
     assert checks["gyro_arw"]["passed"] is False  # specified, not measured
     assert s["spec_passed"] is False and s["passed"] is False
     html = (out / "index.html").read_text()
-    for title in ("Overview", "Specification", "Simulated calibration tests", "Temperature model", "Compensation"):
+    for title in ("Overview", "Specification", "Simulated calibration tests", "Deterministic calibration",
+                  "Temperature model", "Compensation"):
         assert title in html
     assert html.count("data:image/png;base64") >= 5  # 3 test recordings, thermal curves, compensation z-scores
     console = browser.render(out / "index.html", tmp_path / "lab.png", height=4000)

@@ -265,9 +265,13 @@ def available_steps() -> list[str]:
     return sorted(m.name for m in pkgutil.iter_modules(pkg.__path__) if not m.name.startswith("_"))
 
 
-#: Steps that only make sense on the built-in virtual IMU (left out of the
-#: default step list when the configuration has ``[recordings]``).
-SIMULATION_ONLY: frozenset[str] = frozenset({"simulate_tests", "temperature"})
+#: Steps that need the built-in virtual IMU (its truth or its simulation) and
+#: are left out of the default step list when the configuration has
+#: ``[recordings]``: on real data the ``recordings`` step characterises the
+#: static record's noise and ``compensation`` calibrates and checks.
+SIMULATION_ONLY: frozenset[str] = frozenset(
+    {"simulate_tests", "temperature", "calibration", "noise", "attitude", "airdata"}
+)
 
 _TOP_LEVEL = ("lab", "recordings", "spec")
 

@@ -1,8 +1,8 @@
 """Lab step: apply the calibration to a fresh recording and check the residual errors.
 
 The calibration is the one the calibration step left in ``ctx.artifacts``
-(``"calibration"``: an :class:`imunav.calib.ImuCalibration` or a
-:class:`imunav.calib.CalibrationResult`); without one this step estimates it
+(``"calibration_result"``, a :class:`imunav.calib.CalibrationResult`, or
+``"calibration"``, an :class:`imunav.calib.ImuCalibration` with standard errors); without one this step estimates it
 itself: the thesis method (100-position static test + 120-step rate table,
 :func:`imunav.calib.multiposition`, :func:`imunav.calib.ratetable`,
 :func:`imunav.calib.combine`) on the virtual IMU, or the method that fits the
@@ -50,6 +50,7 @@ from imunav.units import DEG, G0
 RENDERS_PARAMETERS = True
 TITLE = "Compensation: calibration applied, residual errors vs reported uncertainty"
 
+_FROM_STEP = "the calibration step's estimate"
 _DEFAULTS = {"positions": 12, "dwell_s": 10.0, "rate_steps": 6, "rate_dps": 100.0, "fs": None, "trim_s": 1.0}
 
 
@@ -77,7 +78,8 @@ def _options(ctx: LabContext) -> dict[str, Any]:
 
 
 def _from_artifacts(ctx: LabContext) -> tuple[Any, dict] | None:
-    c = ctx.artifacts.get("calibration")
+    # the calibration step leaves both the model and the full result (with standard errors)
+    c = ctx.artifacts.get("calibration_result") or ctx.artifacts.get("calibration")
     if c is None:
         return None
     if hasattr(c, "calibration"):  # CalibrationResult
@@ -91,7 +93,7 @@ def estimate_calibration(ctx: LabContext) -> tuple[Any, dict, str]:
 
     got = _from_artifacts(ctx)
     if got is not None:
-        return got[0], got[1], "calibration step"
+        return got[0], got[1], _FROM_STEP
     recs, profs = ctx.artifacts.get("recordings", {}), ctx.artifacts.get("profiles", {})
     sim = ctx.artifacts.get("sim", {})
     g, lat = sim.get("g"), (sim.get("lat") if sim.get("earth_rate", True) else None)
@@ -266,7 +268,7 @@ def run(ctx: LabContext) -> StepResult:
     opts = _options(ctx)
     with ctx.task("compensation", total=2) as advance:
         cal, stderr, how = estimate_calibration(ctx)
-        own = how != "calibration step"
+        own = how != _FROM_STEP
         if own:
             ctx.artifacts["calibration"] = cal.with_(stderr=stderr) if not getattr(cal, "stderr", None) else cal
         advance()

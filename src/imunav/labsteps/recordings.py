@@ -21,6 +21,11 @@ Each table describes one recording file and which test it is::
     # init_s = 36.5 ; wait_s = 3.0        # multipose: initial rest and time per pose
     # gravity = 9.80665 ; latitude_deg = 45.0
 
+A ``static`` recording is also characterised here: overlapping Allan
+deviation and the IEEE-952 terms N, B, K of both triads with their 95 %
+intervals, checked against the ``[spec]`` (the virtual IMU's ``noise`` step
+does the same with the comparison against the injected truth).
+
 Artifacts set (the same keys as :mod:`imunav.labsteps.simulate_tests`, so the
 analysis steps work on either): ``recordings`` (test name -> ImuData, test
 names ``static_long`` for ``static``, ``hundred_position`` for
@@ -41,7 +46,9 @@ import numpy as np
 from imunav.errors import ConfigError
 from imunav.lab import LabContext, StepResult
 
-TITLE = "Recordings (real data)"
+#: The report hook shows the parameters itself.
+RENDERS_PARAMETERS = True
+TITLE = "Recordings (real data) and noise of the static record"
 
 #: ``test`` value -> artifact name used by the analysis steps.
 TESTS = {"static": "static_long", "multiposition": "hundred_position", "rate_table": "rate_table",
@@ -208,19 +215,90 @@ def run(ctx: LabContext) -> StepResult:
                 "|f| mean (m/s²)": round(float(np.linalg.norm(data.accel, axis=1).mean()), 5),
             })
             advance()
+    params: dict[str, tuple[float, float | None]] = {}
+    figures, noise_rows = [], []
+    notes_extra = []
+    if "static_long" in recs:
+        from imunav.errors import InvalidInputError
+
+        try:
+            params, figures, noise_rows = _characterise_static(ctx, recs["static_long"], specs)
+        except InvalidInputError as exc:  # e.g. a record too short for an Allan fit: say so, keep the rest
+            notes_extra.append(f"Noise terms of the static record not identified: {exc}")
     ctx.artifacts.update(recordings=recs, profiles=profs, files=files, recording_specs={s.artifact: s for s in specs.values()})
     ctx.artifacts.setdefault("sim", {}).update(sim)
     summary = {"recordings": {r["recording"]: {k: v for k, v in r.items() if k != "recording"} for r in rows}}
+    if noise_rows:
+        summary["static_noise"] = {r["term"] + " " + r["sensor"]: r for r in noise_rows}
+    tables = [("Recordings", rows)]
+    if noise_rows:
+        tables.append(("Noise terms of the static record (overlapping Allan variance, GLS fit of N, B, K with "
+                       "BIC term selection; 95 % intervals)", noise_rows))
     return StepResult(
-        summary=summary, passed=True, tables=[("Recordings", rows)],
+        summary=summary, passed=True, tables=tables, figures=figures, parameters=params,
         notes=[f"{len(rows)} recording(s) read and converted to SI at the edge (units and column mapping from the "
-               "lab definition)."] + [f"{s.name}: {s.description}" for s in specs.values() if s.description],
+               "lab definition)."] + [f"{s.name}: {s.description}" for s in specs.values() if s.description] + notes_extra,
     )
 
 
+def _characterise_static(ctx: LabContext, data: Any, specs: Mapping[str, RecordingSpec]) -> tuple[dict, list, list]:
+    """Allan deviation and IEEE-952 noise terms (N, B, K) of the static record, both triads.
+
+    The real-data counterpart of the virtual IMU's noise step (which also
+    compares with the injected truth): white noise N (ARW / VRW), bias
+    instability B and random walk K by generalised least squares on the
+    overlapping Allan variance (:func:`imunav.noise.fit_noise`).
+    """
+    from imunav.noise import allan_deviation, fit_noise
+    from imunav.noise.plot import plot_allan
+    from imunav.report.catalog import noise_estimates
+    from imunav.units import to_display
+
+    params: dict[str, tuple[float, float | None]] = {}
+    figs, rows = [], []
+    name = next((s.name for s in specs.values() if s.artifact == "static_long"), "static")
+    disp = {"gyro": {"N": "deg/sqrt(h)", "B": "deg/h", "K": "deg/h/sqrt(h)"},
+            "accel": {"N": "m/s/sqrt(h)", "B": "ug", "K": "m/s/h/sqrt(h)"}}
+    with ctx.task("noise of the static record", total=2) as advance:
+        for sensor, x, unit in (("gyro", data.gyro, "rad/s"), ("accel", data.accel, "m/s^2")):
+            ad = allan_deviation(x, data.fs, units=unit, channels=["x", "y", "z"])
+            fit = fit_noise(ad, ("N", "B", "K"), quantity=sensor)
+            params.update(noise_estimates(fit, sensor))
+            for term, du in disp[sensor].items():
+                i = fit.names.index(term)
+                for c, a in enumerate("xyz"):
+                    sel = bool(fit.selected[i, c])
+                    rows.append({
+                        "sensor": sensor, "term": term, "axis": a, "unit": du,
+                        "value": float(to_display(fit.value[i, c], du)) if sel else None,
+                        "95 % low": float(to_display(fit.ci_lo[i, c], du)) if sel else None,
+                        "95 % high": float(to_display(fit.ci_hi[i, c], du)) if sel else None,
+                        "selected": "yes" if sel else "no (BIC)",
+                    })
+            fig = plot_allan(ad, fit, title=f"{sensor}: {name}")
+            path = ctx.path("figures", f"recordings_allan_{sensor}.png")
+            from imunav.io._atomic import atomic_path
+
+            with atomic_path(path) as tmp:
+                fig.savefig(tmp, format="png", dpi=80)
+            figs.append(path)
+            advance()
+    return params, figs, rows
+
+
 def report(section: Any, result: StepResult, ctx: LabContext) -> None:
-    for caption, rows in result.tables:
+    from imunav.lab import display_parameters, embed_png
+
+    for caption, rows in result.tables[:1]:
         section.table(rows, caption)
+    for f in result.figures:
+        embed_png(section, f, f"Allan deviation of the static record with its confidence band and the fitted terms "
+                              f"({Path(f).stem.rsplit('_', 1)[-1]})")
+    for caption, rows in result.tables[1:]:
+        section.table(rows, caption)
+    if result.parameters:
+        section.parameters(display_parameters(result.parameters, getattr(ctx.lab, "spec", None)),
+                           "Noise parameters checked against the specification (display units, ±1σ)")
     specs = getattr(ctx.lab, "recordings", {}) or {}
     section.code("\n".join(f"{s.name}: {s.path}  (test {s.test}; read options {json.dumps(s.read)})"
                            for s in specs.values()))

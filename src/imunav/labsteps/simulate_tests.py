@@ -9,7 +9,7 @@ Tests (``imu-error-calibration.md`` §5, §8.2):
 * ``static_long``: a long level static record for the noise work (1 h).
 
 All three use the same virtual IMU (preset ``thesis_sim`` by default: Tables
-5.1 / 5.2, bias instability a Gauss–Markov process with T_c = 10 s) with
+5.1 / 5.2, bias instability a Gauss–Markov process with T_c = 5 s, presets.THESIS_TC_S) with
 independent random streams per test.  As in the thesis simulation, Earth rate
 is off and gravity is the constant 9.80665 m/s² unless configured otherwise.
 

@@ -46,9 +46,13 @@ MG = 1e-3 * G0
 UG = 1e-6 * G0
 VRW = 1.0 / 60.0  # m/s/sqrt(h) -> m/s/sqrt(s)
 
-#: Correlation time assumed for the thesis's bias instability (not given in
-#: the thesis; 10 s reproduces its 99.2 % / 99.3 % results, digest §9).
-THESIS_TC_S = 10.0
+#: Correlation time assumed for the thesis's bias instability.  The thesis
+#: gives none.  Digest §9 Monte Carlo: T_c = 5 s gives mean success 99.21 % /
+#: 99.62 % (accel / gyro), 10 s gives 98.92 % / 99.51 %; the thesis's single
+#: run (99.15 % / 99.24 %) lies between the two.  5 s is the reading under
+#: which the thesis's headline 99.2 % / 99.3 % hold on average
+#: (benchmarks/bench_calib_montecarlo.py), so it is the preset's value.
+THESIS_TC_S = 5.0
 
 
 def _thesis_sim() -> ImuErrorModel:
