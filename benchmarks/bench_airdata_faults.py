@@ -18,29 +18,8 @@ from dataclasses import replace
 
 import numpy as np
 
-from imunav.airdata.filter import run_thesis_filter_batch
-from imunav.airdata.scenario import ThesisScenario, simulate_thesis_batch
-from imunav.filters.faults import (
-    DETECTORS,
-    alarms,
-    calibrated_thresholds,
-    detection_delays,
-    detector_statistics,
-    false_alarm_rates,
-    thesis_thresholds,
-)
-
-
-def stats_for(sc: ThesisScenario, runs: int, seed: int, M: int) -> dict[str, np.ndarray]:
-    out: dict[str, list] = {d: [] for d in DETECTORS}
-    g = np.random.default_rng(seed)
-    for i in range(0, runs, 250):
-        n = min(250, runs - i)
-        z, _, _ = simulate_thesis_batch(sc, n, g)
-        st = detector_statistics(run_thesis_filter_batch(z).normalized, M)
-        for d in DETECTORS:
-            out[d].append(st[d])
-    return {d: np.concatenate(v) for d, v in out.items()}
+from imunav.airdata.scenario import ThesisScenario, delay_summary, simulate_detector_statistics
+from imunav.filters.faults import DETECTORS, alarms, calibrated_thresholds, false_alarm_rates, thesis_thresholds
 
 
 def main() -> None:
@@ -54,7 +33,7 @@ def main() -> None:
     thr = calibrated_thresholds(M, 3, a.pfa)
     th = thesis_thresholds(M, 3)
     base = ThesisScenario()
-    nominal = stats_for(base, a.runs, a.seed, M)
+    nominal = simulate_detector_statistics(base, a.runs, a.seed, M)
     print(f"false alarms under nominal data, {a.runs} runs × {base.n_steps - M + 1} steps (window full):")
     print(f"  {'detector':10s} {'threshold':>9s} {'per step':>9s} {'per run':>8s}   {'thesis thr':>10s} "
           f"{'per step':>9s} {'per run':>8s}")
@@ -79,19 +58,17 @@ def main() -> None:
         "stuck (all)": replace(base, kind="stuck"),
     }
     for ci, (name, sc) in enumerate(cases.items()):
-        st = stats_for(sc, a.runs, a.seed + 1 + ci, M)
+        st = simulate_detector_statistics(sc, a.runs, a.seed + 1 + ci, M)
         print(f"\n{name}, onset thesis step {sc.fault_step} (row {sc.onset_row}):")
         print(f"  {'detector':10s} {'thr':>10s} {'median':>6s} {'p90':>6s} {'p99':>6s} {'<=10':>6s} {'missed':>7s}")
         for d in DETECTORS:
             for label, t in (("calibrated", thr[d]), ("thesis", th.get(d))):
                 if t is None:
                     continue
-                al = alarms(d, st[d], t)
-                dl, missed = detection_delays(al, sc.onset_row)
-                _, m10 = detection_delays(al, sc.onset_row, 10)
-                ok = dl[np.isfinite(dl)]
-                q = np.percentile(ok, [50, 90, 99]) if ok.size else [np.nan] * 3
-                print(f"  {d:10s} {label:>10s} {q[0]:6.0f} {q[1]:6.0f} {q[2]:6.0f} {1 - m10:6.3f} {missed:7.3f}")
+                s = delay_summary(alarms(d, st[d], t), sc.onset_row, 10)
+                q = [np.nan if s[k] is None else s[k] for k in ("median_delay", "p90_delay", "p99_delay")]
+                print(f"  {d:10s} {label:>10s} {q[0]:6.0f} {q[1]:6.0f} {q[2]:6.0f} "
+                      f"{s['detected_within_10']:6.3f} {s['missed']:7.3f}")
     print(f"\n(total {time.perf_counter() - t0:.1f} s)")
 
 

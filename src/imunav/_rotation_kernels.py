@@ -1,8 +1,11 @@
 """Numba kernels behind :mod:`imunav.rotation` (private).
 
 Scalar kernels (``*_1``) work on one quaternion / vector and can be called
-from other ``@njit`` code (attitude filters, strapdown).  Batch kernels work
-on ``(N, 4)`` / ``(N, 3)`` / ``(N, 3, 3)`` arrays.
+from other ``@njit`` code (attitude filters, strapdown).  Their
+allocation-free forms (``*_t``) take and return plain floats (tuples) and are
+inlined into the caller: hot filter loops use them to avoid a heap array per
+operation.  Batch kernels work on ``(N, 4)`` / ``(N, 3)`` / ``(N, 3, 3)``
+arrays.
 """
 
 from __future__ import annotations
@@ -17,49 +20,75 @@ from numba import njit
 _SMALL = 1e-4
 
 
+@njit(cache=True, fastmath=False, inline="always")
+def qmul_t(a0, a1, a2, a3, b0, b1, b2, b3):
+    """Hamilton product a ⊗ b on scalars (no allocation)."""
+    return (a0 * b0 - a1 * b1 - a2 * b2 - a3 * b3,
+            a0 * b1 + a1 * b0 + a2 * b3 - a3 * b2,
+            a0 * b2 - a1 * b3 + a2 * b0 + a3 * b1,
+            a0 * b3 + a1 * b2 - a2 * b1 + a3 * b0)  # fmt: skip
+
+
 @njit(cache=True, fastmath=False)
 def qmul_1(p, q):
     """Hamilton product p ⊗ q of two scalar-first quaternions."""
     out = np.empty(4)
-    out[0] = p[0] * q[0] - p[1] * q[1] - p[2] * q[2] - p[3] * q[3]
-    out[1] = p[0] * q[1] + p[1] * q[0] + p[2] * q[3] - p[3] * q[2]
-    out[2] = p[0] * q[2] - p[1] * q[3] + p[2] * q[0] + p[3] * q[1]
-    out[3] = p[0] * q[3] + p[1] * q[2] - p[2] * q[1] + p[3] * q[0]
+    out[0], out[1], out[2], out[3] = qmul_t(p[0], p[1], p[2], p[3], q[0], q[1], q[2], q[3])
     return out
+
+
+@njit(cache=True, inline="always")
+def qrot_t(w, x, y, z, v0, v1, v2):
+    """Rotate (v0, v1, v2) by unit (w, x, y, z): q ⊗ [0, v] ⊗ q* on scalars."""
+    # t = 2 (q_v x v); v' = v + w t + q_v x t
+    tx = 2.0 * (y * v2 - z * v1)
+    ty = 2.0 * (z * v0 - x * v2)
+    tz = 2.0 * (x * v1 - y * v0)
+    return (v0 + w * tx + (y * tz - z * ty), v1 + w * ty + (z * tx - x * tz), v2 + w * tz + (x * ty - y * tx))
 
 
 @njit(cache=True)
 def qrot_1(q, v):
     """Rotate v by unit q: q ⊗ [0, v] ⊗ q* (body -> nav for q = q_nb)."""
-    w, x, y, z = q[0], q[1], q[2], q[3]
-    # t = 2 (q_v x v); v' = v + w t + q_v x t
-    tx = 2.0 * (y * v[2] - z * v[1])
-    ty = 2.0 * (z * v[0] - x * v[2])
-    tz = 2.0 * (x * v[1] - y * v[0])
     out = np.empty(3)
-    out[0] = v[0] + w * tx + (y * tz - z * ty)
-    out[1] = v[1] + w * ty + (z * tx - x * tz)
-    out[2] = v[2] + w * tz + (x * ty - y * tx)
+    out[0], out[1], out[2] = qrot_t(q[0], q[1], q[2], q[3], v[0], v[1], v[2])
     return out
 
 
-@njit(cache=True)
-def qexp_1(r):
-    """Quaternion of rotation vector r (rad): [cos(|r|/2), sin(|r|/2) r/|r|]."""
-    th2 = r[0] * r[0] + r[1] * r[1] + r[2] * r[2]
+@njit(cache=True, inline="always")
+def qexp_t(r0, r1, r2):
+    """Quaternion of rotation vector (r0, r1, r2) (rad) on scalars:
+    [cos(|r|/2), sin(|r|/2) r/|r|], series below ``_SMALL``."""
+    th2 = r0 * r0 + r1 * r1 + r2 * r2
     th = math.sqrt(th2)
-    out = np.empty(4)
     if th < _SMALL:
         c = 1.0 - th2 / 8.0 + th2 * th2 / 384.0
         s = 0.5 - th2 / 48.0 + th2 * th2 / 3840.0
     else:
         c = math.cos(0.5 * th)
         s = math.sin(0.5 * th) / th
-    out[0] = c
-    out[1] = s * r[0]
-    out[2] = s * r[1]
-    out[3] = s * r[2]
+    return c, s * r0, s * r1, s * r2
+
+
+@njit(cache=True)
+def qexp_1(r):
+    """Quaternion of rotation vector r (rad): [cos(|r|/2), sin(|r|/2) r/|r|]."""
+    out = np.empty(4)
+    out[0], out[1], out[2], out[3] = qexp_t(r[0], r[1], r[2])
     return out
+
+
+@njit(cache=True)
+def skew_1(v):
+    """Cross-product matrix [v]x, so that [v]x u = v x u."""
+    S = np.zeros((3, 3))
+    S[0, 1] = -v[2]
+    S[0, 2] = v[1]
+    S[1, 0] = v[2]
+    S[1, 2] = -v[0]
+    S[2, 0] = -v[1]
+    S[2, 1] = v[0]
+    return S
 
 
 @njit(cache=True)

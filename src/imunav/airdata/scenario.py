@@ -16,6 +16,7 @@ Thesis step s is row s − 1 of the arrays.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass, field, replace
 
 import numpy as np
@@ -49,6 +50,8 @@ __all__ = [
     "ThesisData",
     "simulate_thesis",
     "simulate_thesis_batch",
+    "simulate_detector_statistics",
+    "delay_summary",
     "covariance_sequence",
     "actual_error_covariance",
     "ThesisMonteCarlo",
@@ -153,12 +156,8 @@ def _truth(sc: ThesisScenario) -> Array:
     return out
 
 
-def simulate_thesis_batch(sc: ThesisScenario | None = None, n_runs: int = 100,
-                          rng: np.random.Generator | int | None = None) -> tuple[Array, Array, Array]:
-    """(z (runs, N, 3), x_true (N, 6), ADS noise (runs, N, 3)) for Monte Carlo."""
-    s = ThesisScenario() if sc is None else sc
-    if n_runs < 1:
-        raise InvalidInputError(f"n_runs must be >= 1, got {n_runs}")
+def _simulate(s: ThesisScenario, n_runs: int, rng: np.random.Generator | int | None) -> tuple[Array, ...]:
+    """Truth x (N, 6), aircraft velocity v (N, 3), ADS va, Doppler vd and ADS noise (runs, N, 3)."""
     from imunav.sim.flight import simulate_thesis_aircraft
 
     gen = np.random.default_rng(rng)
@@ -171,27 +170,73 @@ def simulate_thesis_batch(sc: ThesisScenario | None = None, n_runs: int = 100,
     faults = s.faults()
     if faults:
         va = np.stack([inject_faults(va[r], faults, noise=na[r], dt=s.dt) for r in range(n_runs)])
-    z = v[None] + nd - va
-    return z, xt, na
+    return xt, v, va, v[None] + nd, na
+
+
+def simulate_thesis_batch(sc: ThesisScenario | None = None, n_runs: int = 100,
+                          rng: np.random.Generator | int | None = None) -> tuple[Array, Array, Array]:
+    """(z (runs, N, 3), x_true (N, 6), ADS noise (runs, N, 3)) for Monte Carlo."""
+    s = ThesisScenario() if sc is None else sc
+    if n_runs < 1:
+        raise InvalidInputError(f"n_runs must be >= 1, got {n_runs}")
+    xt, _, va, vd, na = _simulate(s, n_runs, rng)
+    return vd - va, xt, na
 
 
 def simulate_thesis(sc: ThesisScenario | None = None, rng: np.random.Generator | int | None = None) -> ThesisData:
     """One thesis run with the aircraft truth (Charlie model) and both sensors."""
-    from imunav.sim.flight import simulate_thesis_aircraft
-
     s = ThesisScenario() if sc is None else sc
-    gen = np.random.default_rng(rng)
-    xt = _truth(s)
-    v = simulate_thesis_aircraft(s.n_steps, s.dt).velocity
-    na = s.sigma_ads * gen.standard_normal((s.n_steps, 3))
-    nd = s.sigma_doppler * gen.standard_normal((s.n_steps, 3))
-    va = v - xt[:, 3:] + na
-    faults = s.faults()
-    if faults:
-        va = inject_faults(va, faults, noise=na, dt=s.dt)
-    vd = v + nd
-    return ThesisData(s.dt * np.arange(1, s.n_steps + 1), xt, xt[:, 3:].copy(), v, va, vd, vd - va, na,
+    xt, v, va, vd, na = _simulate(s, 1, rng)
+    return ThesisData(s.dt * np.arange(1, s.n_steps + 1), xt, xt[:, 3:].copy(), v, va[0], vd[0], vd[0] - va[0], na[0],
                       s.anomaly_mask(), s)
+
+
+def simulate_detector_statistics(
+    sc: ThesisScenario,
+    n_runs: int,
+    rng: np.random.Generator | int | None,
+    window: int,
+    *,
+    chunk: int = 250,
+    cfg: ThesisFilterConfig | None = None,
+    on_chunk: Callable[[int], None] | None = None,
+) -> dict[str, Array]:
+    """Detector statistics (:func:`imunav.filters.faults.detector_statistics`,
+    window ``window``) of ``n_runs`` simulated runs of ``sc`` through the
+    thesis filter, simulated ``chunk`` runs at a time (bounded memory);
+    ``on_chunk(n)`` is called after each chunk of ``n`` runs (progress)."""
+    if n_runs < 1:
+        raise InvalidInputError(f"n_runs must be >= 1, got {n_runs}")
+    gen = np.random.default_rng(rng)
+    out: dict[str, list[Array]] = {d: [] for d in DETECTORS}
+    for i in range(0, n_runs, chunk):
+        n = min(chunk, n_runs - i)
+        z, _, _ = simulate_thesis_batch(sc, n, gen)
+        st = detector_statistics(run_thesis_filter_batch(z, cfg).normalized, window)
+        for d in DETECTORS:
+            out[d].append(st[d])
+        if on_chunk is not None:
+            on_chunk(n)
+    return {d: np.concatenate(v) for d, v in out.items()}
+
+
+def delay_summary(alarm: NDArray[np.bool_], onset_row: int, horizon: int = 10) -> dict[str, float | None]:
+    """Detection-delay figures of an alarm matrix (runs, steps) for a fault at
+    ``onset_row`` (:func:`imunav.filters.faults.detection_delays`; the onset
+    sample is delay 1): ``median_delay``, ``p90_delay``, ``p99_delay``,
+    ``max_delay`` (None when no run detects), ``detected_within_<horizon>``
+    and ``missed`` (share of runs never detected)."""
+    delays, missed = detection_delays(alarm, onset_row)
+    _, missed_h = detection_delays(alarm, onset_row, horizon)
+    ok = delays[np.isfinite(delays)]
+    return {
+        "median_delay": float(np.median(ok)) if ok.size else None,
+        "p90_delay": float(np.percentile(ok, 90)) if ok.size else None,
+        "p99_delay": float(np.percentile(ok, 99)) if ok.size else None,
+        "max_delay": float(ok.max()) if ok.size else None,
+        f"detected_within_{horizon}": 1.0 - missed_h,
+        "missed": missed,
+    }
 
 
 def covariance_sequence(cfg: ThesisFilterConfig | None = None, n_steps: int = 500) -> dict[str, list[float]]:
@@ -377,17 +422,9 @@ def monte_carlo_thesis(
             for label, t in (("calibrated", thr[d]), ("thesis", th.get(d))):
                 if t is None:
                     continue
-                a = alarms(d, st[d], t)
-                delays, _ = detection_delays(a, o)
-                _, missed_h = detection_delays(a, o, horizon)
-                ok = delays[np.isfinite(delays)]
-                entry[label] = {
-                    "median_delay": float(np.median(ok)) if ok.size else None,
-                    "p90_delay": float(np.percentile(ok, 90)) if ok.size else None,
-                    "max_delay": float(ok.max()) if ok.size else None,
-                    f"detected_within_{horizon}": 1.0 - missed_h,
-                    "missed": float(np.mean(~np.isfinite(delays))),
-                }
+                summary = delay_summary(alarms(d, st[d], t), o, horizon)
+                entry[label] = {k: summary[k] for k in
+                                ("median_delay", "p90_delay", "max_delay", f"detected_within_{horizon}", "missed")}
             det[kind][d] = entry
     thr_out = {"calibrated": thr, "thesis": th, "p_false_alarm": p_false_alarm, "window": M}
     return ThesisMonteCarlo(n_runs, seed, wind, robust, fa, det, thr_out)

@@ -18,7 +18,7 @@ import math
 import numpy as np
 from numba import njit
 
-from imunav._rotation_kernels import qexp_1, qlog_1, qmul_1, qrot_1
+from imunav._rotation_kernels import qexp_1, qexp_t, qlog_1, qmul_1, qmul_t, qrot_1, qrot_t, skew_1
 
 # ---------------------------------------------------------------------------
 # small helpers
@@ -47,86 +47,22 @@ def _qrot_inv(q, v):
 
 
 @njit(cache=True)
-def _skew(v):
-    S = np.zeros((3, 3))
-    S[0, 1] = -v[2]
-    S[0, 2] = v[1]
-    S[1, 0] = v[2]
-    S[1, 2] = -v[0]
-    S[2, 0] = -v[1]
-    S[2, 1] = v[0]
-    return S
-
-
-@njit(cache=True)
-def _dcm(q):
-    w, x, y, z = q[0], q[1], q[2], q[3]
-    C = np.empty((3, 3))
-    C[0, 0] = 1.0 - 2.0 * (y * y + z * z)
-    C[0, 1] = 2.0 * (x * y - w * z)
-    C[0, 2] = 2.0 * (x * z + w * y)
-    C[1, 0] = 2.0 * (x * y + w * z)
-    C[1, 1] = 1.0 - 2.0 * (x * x + z * z)
-    C[1, 2] = 2.0 * (y * z - w * x)
-    C[2, 0] = 2.0 * (x * z - w * y)
-    C[2, 1] = 2.0 * (y * z + w * x)
-    C[2, 2] = 1.0 - 2.0 * (x * x + y * y)
-    return C
-
-
-@njit(cache=True)
 def _norm3(v):
     return math.sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2])
 
 
 @njit(cache=True)
 def _rodrigues(r):
-    """DCM exp([r]x) (exact)."""
-    th = _norm3(r)
-    S = _skew(r)
-    I3 = np.eye(3)
-    if th < 1e-8:
-        return I3 + S + 0.5 * S @ S
-    a = math.sin(th) / th
-    b = (1.0 - math.cos(th)) / (th * th)
-    return I3 + a * S + b * (S @ S)
-
-
-@njit(cache=True, inline="always")
-def _tmul(a0, a1, a2, a3, b0, b1, b2, b3):
-    """Hamilton product on scalars (no allocation)."""
-    return (a0 * b0 - a1 * b1 - a2 * b2 - a3 * b3,
-            a0 * b1 + a1 * b0 + a2 * b3 - a3 * b2,
-            a0 * b2 - a1 * b3 + a2 * b0 + a3 * b1,
-            a0 * b3 + a1 * b2 - a2 * b1 + a3 * b0)
-
-
-@njit(cache=True, inline="always")
-def _texp(r0, r1, r2):
-    th2 = r0 * r0 + r1 * r1 + r2 * r2
-    if th2 < 1e-8:
-        c = 1.0 - th2 / 8.0 + th2 * th2 / 384.0
-        sk = 0.5 - th2 / 48.0 + th2 * th2 / 3840.0
-    else:
-        th = math.sqrt(th2)
-        c = math.cos(0.5 * th)
-        sk = math.sin(0.5 * th) / th
-    return c, sk * r0, sk * r1, sk * r2
+    """DCM exp([r]x) (exact; series for small angles)."""
+    R = np.empty((3, 3))
+    _rodrigues_into(R, r[0], r[1], r[2])
+    return R
 
 
 @njit(cache=True, inline="always")
 def _tnorm(a0, a1, a2, a3):
     n = 1.0 / math.sqrt(a0 * a0 + a1 * a1 + a2 * a2 + a3 * a3)
     return a0 * n, a1 * n, a2 * n, a3 * n
-
-
-@njit(cache=True, inline="always")
-def _trot(w, x, y, z, v0, v1, v2):
-    """q ⊗ v ⊗ q* on scalars."""
-    tx = 2.0 * (y * v2 - z * v1)
-    ty = 2.0 * (z * v0 - x * v2)
-    tz = 2.0 * (x * v1 - y * v0)
-    return (v0 + w * tx + (y * tz - z * ty), v1 + w * ty + (z * tx - x * tz), v2 + w * tz + (x * ty - y * tx))
 
 
 @njit(cache=True)
@@ -294,9 +230,9 @@ def mahony_step(q, bint, gyr, acc, mag, dt, kp, ki, use_mag):
         mn = math.sqrt(mag[0] * mag[0] + mag[1] * mag[1] + mag[2] * mag[2])
         if use_mag and mn > 0.0:
             mx, my, mz = mag[0] / mn, mag[1] / mn, mag[2] / mn
-            h0, h1, h2 = _trot(qw, qx, qy, qz, mx, my, mz)
+            h0, h1, h2 = qrot_t(qw, qx, qy, qz, mx, my, mz)
             bx = math.sqrt(h0 * h0 + h1 * h1)
-            wx, wy, wz = _trot(qw, -qx, -qy, -qz, bx, 0.0, h2)
+            wx, wy, wz = qrot_t(qw, -qx, -qy, -qz, bx, 0.0, h2)
             ex += my * wz - mz * wy
             ey += mz * wx - mx * wz
             ez += mx * wy - my * wx
@@ -309,7 +245,7 @@ def mahony_step(q, bint, gyr, acc, mag, dt, kp, ki, use_mag):
     gx = gyr[0] + kp * ex + bo[0]
     gy = gyr[1] + kp * ey + bo[1]
     gz = gyr[2] + kp * ez + bo[2]
-    d0, d1, d2, d3 = _tmul(qw, qx, qy, qz, 0.0, gx, gy, gz)
+    d0, d1, d2, d3 = qmul_t(qw, qx, qy, qz, 0.0, gx, gy, gz)
     h = 0.5 * dt
     out = np.empty(4)
     out[0], out[1], out[2], out[3] = _tnorm(qw + h * d0, qx + h * d1, qy + h * d2, qz + h * d3)
@@ -490,8 +426,8 @@ def mekf_step(q, b, P, st, gyr, acc, mag, dt, p, out_phi):
             out_phi[i, 3 + j] = -dt if i == j else 0.0
             out_phi[3 + i, j] = 0.0
             out_phi[3 + i, 3 + j] = 1.0 if i == j else 0.0
-    e0, e1, e2, e3 = _texp(w0 * dt, w1 * dt, w2 * dt)
-    t0, t1, t2, t3 = _tmul(q[0], q[1], q[2], q[3], e0, e1, e2, e3)
+    e0, e1, e2, e3 = qexp_t(w0 * dt, w1 * dt, w2 * dt)
+    t0, t1, t2, t3 = qmul_t(q[0], q[1], q[2], q[3], e0, e1, e2, e3)
     qw, qx, qy, qz = _tnorm(t0, t1, t2, t3)
     _mekf_predict(P, R, dt, p[0] * p[0] * dt, p[1] * p[1] * dt, W)
     flags = 0
@@ -511,7 +447,7 @@ def mekf_step(q, b, P, st, gyr, acc, mag, dt, p, out_phi):
         # rotated with every correction below, so this is the low-pass in the
         # gyro-integrated frame: translational accelerations average out
         # because velocity stays bounded (cf. Laidig & Seel 2023, §4.1)
-        f0, f1, f2 = _trot(qw, qx, qy, qz, a0, a1, a2)
+        f0, f1, f2 = qrot_t(qw, qx, qy, qz, a0, a1, a2)
         if st[11] < 0.5:
             st[5] = f0
             st[6] = f1
@@ -521,7 +457,7 @@ def mekf_step(q, b, P, st, gyr, acc, mag, dt, p, out_phi):
         st[5] += c * (f0 - st[5])
         st[6] += c * (f1 - st[6])
         st[7] += c * (f2 - st[7])
-        a0, a1, a2 = _trot(qw, -qx, -qy, -qz, st[5], st[6], st[7])
+        a0, a1, a2 = qrot_t(qw, -qx, -qy, -qz, st[5], st[6], st[7])
         an = math.sqrt(a0 * a0 + a1 * a1 + a2 * a2)
     dev = abs(an - g) / g
     if an > 0.0 and dev < p[4]:
@@ -561,8 +497,8 @@ def mekf_step(q, b, P, st, gyr, acc, mag, dt, p, out_phi):
             nis += _ekf_update(P, dx, H, r, gyr[i] - b[i], PH)
             ndof += 1.0
     # apply the tilt / bias correction before the heading update
-    e0, e1, e2, e3 = _texp(dx[0], dx[1], dx[2])
-    t0, t1, t2, t3 = _tmul(qw, qx, qy, qz, e0, e1, e2, e3)
+    e0, e1, e2, e3 = qexp_t(dx[0], dx[1], dx[2])
+    t0, t1, t2, t3 = qmul_t(qw, qx, qy, qz, e0, e1, e2, e3)
     qw, qx, qy, qz = _tnorm(t0, t1, t2, t3)
     bo = np.empty(3)
     bo[0] = b[0] + dx[3]
@@ -572,7 +508,7 @@ def mekf_step(q, b, P, st, gyr, acc, mag, dt, p, out_phi):
     if use_mag:
         mn = math.sqrt(mag[0] * mag[0] + mag[1] * mag[1] + mag[2] * mag[2])
         if mn > 0.0:
-            n0, n1, n2 = _trot(qw, qx, qy, qz, mag[0], mag[1], mag[2])
+            n0, n1, n2 = qrot_t(qw, qx, qy, qz, mag[0], mag[1], mag[2])
             hh = math.sqrt(n0 * n0 + n1 * n1)
             dip = math.atan2(n2, hh)
             if st[4] < 0.5:
@@ -609,16 +545,16 @@ def mekf_step(q, b, P, st, gyr, acc, mag, dt, p, out_phi):
                     dx[j] = 0.0
                 nis += _ekf_update(P, dx, H, r, psi, PH)
                 ndof += 1.0
-                e0, e1, e2, e3 = _texp(dx[0], dx[1], dx[2])
-                t0, t1, t2, t3 = _tmul(qw, qx, qy, qz, e0, e1, e2, e3)
+                e0, e1, e2, e3 = qexp_t(dx[0], dx[1], dx[2])
+                t0, t1, t2, t3 = qmul_t(qw, qx, qy, qz, e0, e1, e2, e3)
                 qw, qx, qy, qz = _tnorm(t0, t1, t2, t3)
                 bo[0] += dx[3]
                 bo[1] += dx[4]
                 bo[2] += dx[5]
     if p[18] > 0.0:
         # rotate the low-passed nav-frame vector with the total correction q ⊗ q_before*
-        d0, d1, d2, d3 = _tmul(qw, qx, qy, qz, qbw, -qbx, -qby, -qbz)
-        st[5], st[6], st[7] = _trot(d0, d1, d2, d3, st[5], st[6], st[7])
+        d0, d1, d2, d3 = qmul_t(qw, qx, qy, qz, qbw, -qbx, -qby, -qbz)
+        st[5], st[6], st[7] = qrot_t(d0, d1, d2, d3, st[5], st[6], st[7])
     st[8] = flags
     st[9] = nis
     st[10] = ndof
@@ -918,9 +854,9 @@ def gravity_kf_step(kind, x, P, sv, Pb, yg_prev, ya, h, gp):
     if gp[9] > 0.5:
         F = _rodrigues(-yg * h)
     else:
-        F = I3 - h * _skew(yg)
+        F = I3 - h * skew_1(yg)
     xprev = x.copy()
-    Xs = _skew(xprev)
+    Xs = skew_1(xprev)
     Q = -h * h * sg2 * (Xs @ Xs)  # eq. 14 with Σ_g = σ_g² I
     xp = F @ xprev
     Pp = F @ P @ F.T + Q

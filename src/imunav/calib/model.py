@@ -243,20 +243,20 @@ class ImuCalibration:
 
     def apply(self, data: Any, temp_c: ArrayLike | None = None) -> Any:
         """Compensate an :class:`imunav.timeseries.ImuData` (or ``(accel, gyro)``)."""
-        if isinstance(data, tuple):
-            return self.apply_arrays(data[0], data[1], temp_c)
-        self._require_si("apply")
-        t = temp_c if temp_c is not None else getattr(data, "temp", None)
-        f, w = self.apply_arrays(data.accel, data.gyro, t)
-        return data.with_(accel=f, gyro=w)
+        return self._on_data(data, temp_c, self.apply_arrays, "apply")
 
     def invert(self, data: Any, temp_c: ArrayLike | None = None) -> Any:
         """Corrupt ideal :class:`ImuData` (or ``(accel, gyro)``) with this model."""
+        return self._on_data(data, temp_c, self.invert_arrays, "invert")
+
+    def _on_data(self, data: Any, temp_c: ArrayLike | None, arrays_fn: Any, what: str) -> Any:
+        """``arrays_fn(accel, gyro, temp_c)`` on an ``(accel, gyro)`` tuple, or on
+        an SI :class:`ImuData` (temperature from the data unless ``temp_c`` is given)."""
         if isinstance(data, tuple):
-            return self.invert_arrays(data[0], data[1], temp_c)
-        self._require_si("invert")
+            return arrays_fn(data[0], data[1], temp_c)
+        self._require_si(what)
         t = temp_c if temp_c is not None else getattr(data, "temp", None)
-        a, g = self.invert_arrays(data.accel, data.gyro, t)
+        a, g = arrays_fn(data.accel, data.gyro, t)
         return data.with_(accel=a, gyro=g)
 
     def _require_si(self, what: str) -> None:

@@ -249,18 +249,9 @@ Example: imunav airdata faults --kind variance --magnitude 3.5 --runs 100 --seed
         from rich.progress import Progress
         from rich.table import Table
 
-        from imunav.airdata.filter import run_thesis_filter_batch
-        from imunav.airdata.scenario import ThesisScenario, simulate_thesis_batch
+        from imunav.airdata.scenario import ThesisScenario, delay_summary, simulate_detector_statistics
         from imunav.errors import InvalidInputError
-        from imunav.filters.faults import (
-            DETECTORS,
-            alarms,
-            calibrated_thresholds,
-            detection_delays,
-            detector_statistics,
-            false_alarm_rates,
-            thesis_thresholds,
-        )
+        from imunav.filters.faults import DETECTORS, alarms, calibrated_thresholds, false_alarm_rates, thesis_thresholds
 
         try:
             kw = {"kind": kind, "fault_step": onset, "channels": _channels(channels)}
@@ -277,41 +268,30 @@ Example: imunav airdata faults --kind variance --magnitude 3.5 --runs 100 --seed
             th = thesis_thresholds(window, 3)
             ss = np.random.SeedSequence(seed).spawn(2)
             chunk = max(1, min(50, runs))
-            stats_f: dict[str, list] = {d: [] for d in DETECTORS}
-            stats_n: dict[str, list] = {d: [] for d in DETECTORS}
-            g_f, g_n = np.random.default_rng(ss[0]), np.random.default_rng(ss[1])
             with Progress(console=Console(stderr=True), transient=True) as prog:
-                task = prog.add_task("Monte Carlo", total=runs)
-                done = 0
-                while done < runs:
-                    n = min(chunk, runs - done)
-                    for scen, g, store in ((sc, g_f, stats_f), (ThesisScenario(kind="nominal"), g_n, stats_n)):
-                        z, _, _ = simulate_thesis_batch(scen, n, g)
-                        st = detector_statistics(run_thesis_filter_batch(z).normalized, window)
-                        for d in DETECTORS:
-                            store[d].append(st[d])
-                    done += n
+                task = prog.add_task("Monte Carlo", total=2 * runs)
+
+                def tick(n: int) -> None:
                     prog.update(task, advance=n)
+
+                stats_f = simulate_detector_statistics(sc, runs, np.random.default_rng(ss[0]), window,
+                                                       chunk=chunk, on_chunk=tick)
+                stats_n = simulate_detector_statistics(ThesisScenario(kind="nominal"), runs,
+                                                       np.random.default_rng(ss[1]), window, chunk=chunk, on_chunk=tick)
         except InvalidInputError as exc:
             _fail(exc)
             return
         o = sc.onset_row
         rows = []
         for d in DETECTORS:
-            sf = np.concatenate(stats_f[d])
-            sn = np.concatenate(stats_n[d])[:, window - 1:]
+            sn = stats_n[d][:, window - 1:]
             for label, t in (("calibrated", thr[d]), ("thesis", th.get(d))):
                 if t is None:
                     continue
-                a = alarms(d, sf, t)
-                delays, missed = detection_delays(a, o)
-                _, missed_h = detection_delays(a, o, horizon)
-                ok = delays[np.isfinite(delays)]
+                summary = delay_summary(alarms(d, stats_f[d], t), o, horizon)
                 fa_step, fa_run = false_alarm_rates(alarms(d, sn, t))
                 rows.append({"detector": d, "threshold_mode": label, "threshold": float(t),
-                             "median_delay": float(np.median(ok)) if ok.size else None,
-                             "p90_delay": float(np.percentile(ok, 90)) if ok.size else None,
-                             f"detected_within_{horizon}": 1.0 - missed_h, "missed": missed,
+                             **{k: summary[k] for k in ("median_delay", "p90_delay", f"detected_within_{horizon}", "missed")},
                              "false_alarm_per_step": fa_step, "false_alarm_per_run": fa_run})
         result = {"scenario": sc.to_dict(), "runs": runs, "seed": seed, "window": window, "pfa": pfa, "rows": rows}
         table = Table(title=f"{kind} fault at thesis step {onset}, {runs} runs")

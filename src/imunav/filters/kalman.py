@@ -250,6 +250,20 @@ class KalmanRun(ResultMixin):
     nis: Array
 
 
+def _lti_model(
+    n: int, F: ArrayLike, Q: ArrayLike, H: ArrayLike, R: ArrayLike, G: ArrayLike | None
+) -> tuple[Array, Array, Array, Array]:
+    """Validated matrices of a time-invariant model with ``n`` states:
+    ``F`` (n, n), process noise in the state space ``G Q Gᵀ`` (n, n),
+    ``H`` (m, n) and ``R`` (m, m)."""
+    Fm = as_matrix(F, "F", n, n)
+    Gm = np.eye(n) if G is None else as_matrix(G, "G", n)
+    Qn = Gm @ as_covariance(Q, "Q", Gm.shape[1]) @ Gm.T
+    Hm = as_matrix(H, "H", None, n)
+    Rm = as_covariance(R, "R", Hm.shape[0])
+    return Fm, Qn, Hm, Rm
+
+
 def kalman_filter(
     x0: ArrayLike,
     P0: ArrayLike,
@@ -275,12 +289,8 @@ def kalman_filter(
     x0v = as_vector(x0, "x0")
     n = x0v.shape[0]
     P0m = as_covariance(P0, "P0", n)
-    Fm = as_matrix(F, "F", n, n)
-    Gm = np.eye(n) if G is None else as_matrix(G, "G", n)
-    Qn = Gm @ as_covariance(Q, "Q", Gm.shape[1]) @ Gm.T
-    Hm = as_matrix(H, "H", None, n)
+    Fm, Qn, Hm, Rm = _lti_model(n, F, Q, H, R, G)
     m = Hm.shape[0]
-    Rm = as_covariance(R, "R", m)
     zz = np.array(z, dtype=np.float64)
     if zz.ndim == 1 and m == 1:
         zz = zz[:, None]
@@ -376,12 +386,8 @@ def batch_kalman_filter(
     x0a = np.asarray(x0, dtype=np.float64)
     if x0a.shape[-1:] != (n,) or x0a.ndim > 2 or not np.all(np.isfinite(x0a)):
         raise InvalidInputError(f"x0 must be finite with shape ({n},) or (runs, {n}), got {x0a.shape}")
-    Fm = as_matrix(F, "F", n, n)
-    Gm = np.eye(n) if G is None else as_matrix(G, "G", n)
-    Qn = Gm @ as_covariance(Q, "Q", Gm.shape[1]) @ Gm.T
-    Hm = as_matrix(H, "H", None, n)
+    Fm, Qn, Hm, Rm = _lti_model(n, F, Q, H, R, G)
     m = Hm.shape[0]
-    Rm = as_covariance(R, "R", m)
     zz = np.asarray(z, dtype=np.float64)
     if zz.ndim != 3 or zz.shape[2] != m:
         raise InvalidInputError(f"z must have shape (runs, N, {m}), got {zz.shape}")
