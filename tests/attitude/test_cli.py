@@ -22,6 +22,22 @@ def test_montecarlo_json(tmp_path):
     assert len(d["rmse"]["lee"]) == 2
 
 
+def test_montecarlo_executors_identical(tmp_path):
+    """Same seed, same numbers whatever the executor (serial vs a 2-process pool)."""
+    out = {}
+    for ex in ("serial", "processes"):
+        out[ex] = tmp_path / f"{ex}.json"
+        r = runner.invoke(app, ["attitude", "montecarlo", "--runs", "3", "--duration", "40", "-f", "proposed",
+                                "--executor", ex, "-j", "2", "--json", str(out[ex])])
+        assert r.exit_code == 0, r.output
+    a, b = (json.loads(out[k].read_text()) for k in ("serial", "processes"))
+    assert a["rmse"] == b["rmse"] and len(a["rmse"]["proposed"]) == 3
+    r = runner.invoke(app, ["attitude", "montecarlo", "--runs", "2", "--executor", "gpu"])
+    assert r.exit_code != 0 and "executor" in str(r.exception)
+    r = runner.invoke(app, ["attitude", "montecarlo", "--runs", "2", "-f", "kalman"])
+    assert r.exit_code != 0 and "unknown filter" in str(r.exception)
+
+
 def test_run_and_benchmark(tmp_path):
     src = data_path("broad", "02_undisturbed_slow_rotation_B.mat")
     out = tmp_path / "run.json"

@@ -37,7 +37,7 @@ from typing import Literal
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from imunav.attitude import _kernels as _k
+from imunav.attitude import _gravity_kernels as _gk
 from imunav.attitude._base import prepare
 from imunav.attitude.result import AttitudeResult
 from imunav.errors import ConfigError, ShapeError
@@ -126,6 +126,8 @@ class GravityKF:
         self._sv = np.zeros(11)
         self._Pb = np.eye(3) * 1e-6
         self._gprev: np.ndarray | None = None
+        self._S = np.ones(3)
+        self._work = [np.empty((3, 3)) for _ in range(6)]
 
     def step(self, gyro: ArrayLike, accel: ArrayLike, dt: float) -> np.ndarray:
         """Process one sample (gyro and accelerometer at t; the gyro of t−1 drives
@@ -137,8 +139,9 @@ class GravityKF:
         a = np.asarray(accel, float).reshape(3)
         ya = -a if self.accel_convention == "specific_force" else a
         if self._gprev is not None:
-            _k.gravity_kf_step(_KINDS[self.kind], self.x, self.P, self._sv, self._Pb, self._gprev, ya, float(dt),
-                               self.params.vector())
+            gp = self._gprev
+            _gk.gravity_step(_KINDS[self.kind], self.x, self.P, self._sv, self._Pb, gp[0], gp[1], gp[2],
+                             ya[0], ya[1], ya[2], float(dt), self.params.vector(), self._S, *self._work)
         self._gprev = g.copy()
         return roll_pitch_from_x(self.x[None, :])[0]
 
@@ -151,8 +154,8 @@ class GravityKF:
         ya = -a if self.accel_convention == "specific_force" else a
         x_init = np.array([0.0, 0.0, 1.0]) if x0 is None else np.asarray(x0, float).reshape(3)
         P0 = np.eye(3) * self.params.p0**2
-        xs, al, S, ap, bb = _k.gravity_kf_run(_KINDS[self.kind], x_init, P0, g, np.ascontiguousarray(ya), dt,
-                                             self.params.vector())
+        xs, al, S, ap, bb = _gk.gravity_run(_KINDS[self.kind], x_init, P0, np.ascontiguousarray(g), np.ascontiguousarray(ya),
+                                            np.ascontiguousarray(dt), self.params.vector())
         rp = roll_pitch_from_x(xs)
         q = quat_from_euler(rp[:, 0], rp[:, 1], np.zeros(len(rp)))
         return AttitudeResult(t=t, q_nb=q, bias=bb if self.kind == "javed" else None, name=self.name,

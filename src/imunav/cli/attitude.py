@@ -194,27 +194,53 @@ def benchmark_cmd(
 @app.command("montecarlo")
 def montecarlo_cmd(
     runs: int = typer.Option(100, "--runs", "-n", help="Number of seeded runs."),
-    seed: int = typer.Option(0, "--seed", help="Root seed (run i uses SeedSequence(seed).spawn #i)."),
+    seed: int = typer.Option(0, "--seed", help="Root seed (run i uses imunav.montecarlo.spawn_generators(seed)[i])."),
     gyro_noise_unit: str = typer.Option("deg/s/sqrt(Hz)", "--gyro-noise-unit",
                                         help="Reading of the paper's 0.005 gyro noise: deg/s/sqrt(Hz) or deg/sqrt(h)."),
-    workers: int = typer.Option(1, "--workers", "-j", help="Processes."),
+    filters: str = typer.Option("lee,javed,proposed", "--filters", "-f",
+                                help="Comma list of the paper's filters: lee, javed, proposed."),
+    executor: str = typer.Option("processes", "--executor", "-e",
+                                 help="processes (local pool), dask (LocalCluster, or --address) or serial. "
+                                      "All give identical numbers for the same seed."),
+    workers: Optional[int] = typer.Option(None, "--workers", "-j", help="Worker processes (default: all cores)."),
+    address: Optional[str] = typer.Option(None, "--address",
+                                          help="Dask scheduler address (tcp://host:port); default: a local cluster."),
     duration: float = typer.Option(245.0, "--duration", help="Scenario length [s] (paper: about 245 s)."),
     json_out: Optional[Path] = typer.Option(None, "--json", help="Write the RMSE table and per-run values."),
     plot: Optional[Path] = typer.Option(None, "--plot", help="Write RMSE box plots (PNG)."),
 ) -> None:
     """The Candan & Söken scenario (245 s, 100 Hz, external-acceleration windows): Table 2 of the paper.
 
-    Example: imunav attitude montecarlo --runs 5 --json mc.json
+    Runs are batched (:func:`imunav.scenarios.attitude_paper`) and spread over
+    :func:`imunav.montecarlo.run_montecarlo`'s executor.
+
+    Example: imunav attitude montecarlo --runs 5 --executor serial --json mc.json
     """
+    import numpy as np
     from rich.console import Console
     from rich.table import Table
 
-    from imunav.attitude.scenario import PAPER_TABLE2, PaperScenario, run_montecarlo
+    from imunav.attitude.scenario import PAPER_TABLE2, MonteCarloResult, PaperScenario, default_filters
+    from imunav.montecarlo import run_montecarlo
+    from imunav.scenarios import attitude_paper
 
     con = Console()
+    names = tuple(f.strip() for f in filters.split(",") if f.strip())
     scn = PaperScenario(gyro_noise_unit=gyro_noise_unit, duration=duration)  # type: ignore[arg-type]
-    with con.status(f"{runs} runs ..."):
-        mc = run_montecarlo(scn, n_runs=runs, rng=seed, workers=workers)
+    every = default_filters(scn)
+    unknown = [f for f in names if f not in every]
+    if unknown or not names:
+        raise ConfigError(f"--filters {filters!r}: unknown filter(s) {unknown}; choose from {sorted(every)}")
+    res = run_montecarlo(attitude_paper, runs, seed=seed, batched=True, executor=executor,  # type: ignore[arg-type]
+                         n_workers=workers, address=address, progress=True,
+                         description="attitude Monte Carlo", filters=names, duration=duration,
+                         gyro_noise_unit=gyro_noise_unit)
+    m = res.metrics
+    mc = MonteCarloResult(
+        rmse={k: np.column_stack([m[f"{k}_pitch_rmse_deg"].to_numpy(), m[f"{k}_roll_rmse_deg"].to_numpy()])
+              for k in names},
+        scenario=scn,
+        params={k: every[k].params.__dict__ | {"kind": every[k].kind} for k in names})
     t = Table(title=f"RMSE [deg] over {runs} runs (mean ± std); paper Table 2 in brackets")
     for c in ("filter", "pitch", "roll"):
         t.add_column(c)
