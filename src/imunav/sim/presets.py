@@ -60,7 +60,7 @@ def _thesis_sim() -> ImuErrorModel:
 
     Readings of the unstated parts (digest §8.2, §12 items 5-7): the bias
     instability dB (0.001 g, 0.01 deg/s) is the 1-sigma of a first-order
-    Gauss-Markov process with T_c = 10 s; the noise densities (0.00043 g/sqrt(Hz),
+    Gauss-Markov process with T_c = 5 s (THESIS_TC_S); the noise densities (0.00043 g/sqrt(Hz),
     0.0057 deg/s/sqrt(Hz); the OCR's "%" is "deg") are white-noise densities,
     sigma = n sqrt(f_s); misalignment M_ij multiplies input j in output i;
     the gyro g-dependent bias B_G is diagonal; no scale-factor instability,
@@ -93,7 +93,7 @@ def _thesis_sim() -> ImuErrorModel:
         source=(
             "Günhan, Y., 'Ataletsel Ölçüm Birimi Hatalarının Belirlenmesi ve Düzeltilmesi', MSc thesis, "
             "Hacettepe University, 2014, Tables 5.1/5.2 (digest imu-error-calibration.md §8.2). Assumed: "
-            "bias instability = GM 1-sigma with T_c = 10 s; noise density n with sigma = n*sqrt(fs); g = 9.80665."
+            "bias instability = GM 1-sigma with T_c = 5 s; noise density n with sigma = n*sqrt(fs); g = 9.80665."
         ),
     )
 
@@ -132,7 +132,7 @@ def _thesis_real() -> ImuErrorModel:
         source=(
             "Günhan (2014), Tables 5.5/5.6: parameters estimated for the real ROKETSAN-supplied MEMS IMU "
             "(digest §8.4); noise and bias instability not published for it, taken from Tables 5.1/5.2 "
-            "(GM, T_c = 10 s)."
+            "(GM, T_c = 5 s)."
         ),
     )
 
