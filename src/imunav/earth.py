@@ -29,9 +29,11 @@ Example
 
 from __future__ import annotations
 
+import math
 from typing import Final
 
 import numpy as np
+from numba import njit
 from numpy.typing import ArrayLike, NDArray
 
 from imunav.errors import NonFiniteError, ShapeError
@@ -50,6 +52,7 @@ __all__ = [
     "gravity_ned",
     "earth_rate_ned",
     "radii",
+    "radii_gravity_1",
     "transport_rate_ned",
     "dcm_en",
     "lla_to_ecef",
@@ -136,12 +139,36 @@ def normal_gravity(lat: ArrayLike, h: ArrayLike = 0.0) -> Array | float:
     lat : geodetic latitude, rad (scalar or array).
     h : ellipsoidal height, m (broadcasts with ``lat``).
     """
-    lat = _f(lat)
-    h = _f(h)
-    s2 = np.sin(lat) ** 2
-    g0 = GAMMA_E * (1.0 + _K_SOMIGLIANA * s2) / np.sqrt(1.0 - E2 * s2)
+    return _radii_gravity(lat, h)[2]
+
+
+@njit(cache=True)
+def radii_gravity_1(lat: float, h: float) -> tuple[float, float, float]:
+    """``(R_N, R_E, γ(φ, h))`` at one point: the formulas of :func:`radii` and
+    :func:`normal_gravity`, as a numba kernel that strapdown kernels call."""
+    s2 = math.sin(lat) ** 2
+    d = 1.0 - E2 * s2
+    rn = A * (1.0 - E2) / d**1.5
+    re = A / math.sqrt(d)
+    g0 = GAMMA_E * (1.0 + _K_SOMIGLIANA * s2) / math.sqrt(d)
     g = g0 * (1.0 - 2.0 / A * (1.0 + F + _M - 2.0 * F * s2) * h + 3.0 * h * h / (A * A))
-    return float(g) if np.ndim(g) == 0 else g
+    return rn, re, g
+
+
+@njit(cache=True)
+def _radii_gravity_n(lat, h):
+    out = np.empty((3, lat.shape[0]))
+    for i in range(lat.shape[0]):
+        out[0, i], out[1, i], out[2, i] = radii_gravity_1(lat[i], h[i])
+    return out
+
+
+def _radii_gravity(lat: ArrayLike, h: ArrayLike) -> tuple[Array | float, Array | float, Array | float]:
+    la, ha = np.broadcast_arrays(np.asarray(_f(lat), dtype=float), np.asarray(_f(h), dtype=float))
+    res = _radii_gravity_n(np.ascontiguousarray(la.ravel()), np.ascontiguousarray(ha.ravel()))
+    if la.ndim == 0:
+        return float(res[0, 0]), float(res[1, 0]), float(res[2, 0])
+    return res[0].reshape(la.shape), res[1].reshape(la.shape), res[2].reshape(la.shape)
 
 
 def gravity_ned(lat: ArrayLike, h: ArrayLike = 0.0) -> Array:
@@ -170,12 +197,7 @@ def radii(lat: ArrayLike) -> tuple[Array | float, Array | float]:
 
     R_N = a (1 − e²) / (1 − e² sin²φ)^{3/2},   R_E = a / √(1 − e² sin²φ).
     """
-    lat = _f(lat)
-    d = 1.0 - E2 * np.sin(lat) ** 2
-    rn = A * (1.0 - E2) / d**1.5
-    re = A / np.sqrt(d)
-    if np.ndim(rn) == 0:
-        return float(rn), float(re)
+    rn, re, _ = _radii_gravity(lat, 0.0)
     return rn, re
 
 

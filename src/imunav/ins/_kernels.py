@@ -14,6 +14,7 @@ import numpy as np
 from numba import njit
 
 from imunav._rotation_kernels import dcm_from_quat_1, qexp_1, qmul_1, qrot_1
+from imunav.earth import radii_gravity_1
 
 # --------------------------------------------------------------------------
 # Zero-velocity detector statistics
@@ -257,24 +258,6 @@ def strapdown_local_kernel(dth, dv, dt, q0, v0, p0, g, compensated):
 
 
 @njit(cache=True)
-def _wgs84(lat, h):
-    a = 6378137.0
-    f = 1.0 / 298.257223563
-    e2 = f * (2.0 - f)
-    s = math.sin(lat)
-    den = 1.0 - e2 * s * s
-    RN = a * (1.0 - e2) / den ** 1.5  # meridian
-    RE = a / math.sqrt(den)  # prime vertical
-    # Somigliana normal gravity with the free-air height term
-    ge = 9.7803253359
-    k = 0.00193185265241
-    g0 = ge * (1.0 + k * s * s) / math.sqrt(den)
-    m = 0.00344978650684
-    gh = g0 * (1.0 - 2.0 / a * (1.0 + f + m - 2.0 * f * s * s) * h + 3.0 * h * h / (a * a))
-    return RN, RE, gh
-
-
-@njit(cache=True)
 def strapdown_ned_kernel(dth, dv, dt, q0, v0, lat0, lon0, h0, omega_e, compensated):
     """NED mechanization with Earth rate, transport rate and Coriolis.
 
@@ -297,7 +280,7 @@ def strapdown_ned_kernel(dth, dv, dt, q0, v0, lat0, lon0, h0, omega_e, compensat
         h = dt[k]
         lat = lla[k - 1, 0]
         alt = lla[k - 1, 2]
-        RN, RE, g = _wgs84(lat, alt)
+        RN, RE, g = radii_gravity_1(lat, alt)
         vn = v[k - 1]
         w_ie0 = omega_e * math.cos(lat)
         w_ie2 = -omega_e * math.sin(lat)
