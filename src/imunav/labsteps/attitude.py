@@ -42,19 +42,15 @@ _DEFAULTS: dict[str, Any] = {"duration_s": 60.0, "fs": 100.0, "mag_noise_ut": 0.
 
 
 def _truth(rng: np.random.Generator, n: int, fs: float):
-    from imunav.rotation import quat_exp, quat_from_euler, quat_multiply
+    from imunav.rotation import integrate_rate, quat_from_euler
 
     t = np.arange(n) / fs
     f = rng.uniform(0.05, 0.3, 3)
     ph = rng.uniform(0, 2 * np.pi, 3)
     w = 0.8 * np.sin(2 * np.pi * f[None, :] * t[:, None] + ph[None, :])
-    q = np.empty((n, 4))
-    qk = quat_from_euler(0.1, -0.2, 0.5)
-    dq = quat_exp(w / fs)
-    for k in range(n):
-        if k:
-            qk = quat_multiply(qk, dq[k])
-        q[k] = qk
+    # q_k = q_{k-1} ⊗ exp(w_k / fs): the rate of sample k drives the step into k
+    w_step = np.vstack([w[1:], w[-1:]])
+    q = integrate_rate(quat_from_euler(0.1, -0.2, 0.5), t, w_step, method="zoh")
     return t, w, q
 
 

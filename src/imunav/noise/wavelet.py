@@ -48,8 +48,12 @@ def mad_sigma(x: ArrayLike, wavelet: str = "db4") -> float:
     a = np.asarray(x, dtype=float)
     if a.ndim != 1 or a.size < 4:
         raise ShapeError("mad_sigma needs a 1-D series of at least 4 samples")
-    cd1 = pywt.dwt(a, wavelet, mode="periodization")[1]
-    return float(np.median(np.abs(cd1)) / 0.6745)
+    return _mad_of_details(pywt.dwt(a, wavelet, mode="periodization")[1])
+
+
+def _mad_of_details(d: np.ndarray) -> float:
+    """Donoho–Johnstone noise scale median(|d|) / 0.6745 of detail coefficients."""
+    return float(np.median(np.abs(d)) / 0.6745)
 
 
 def default_level(n: int, fs: float | None, wavelet: str = "db4", band_hz: float = 1.0) -> int:
@@ -90,7 +94,7 @@ def wavelet_denoise(x: ArrayLike, fs: float | None = None, *, wavelet: str = "db
         if mode == "zero":
             coeffs = [coeffs[0]] + [np.zeros_like(d) for d in coeffs[1:]]
         else:
-            s = float(np.median(np.abs(coeffs[-1])) / 0.6745) if sigma is None else float(sigma)
+            s = _mad_of_details(coeffs[-1]) if sigma is None else float(sigma)
             lam = s * math.sqrt(2.0 * math.log(n))
             coeffs = [coeffs[0]] + [pywt.threshold(d, lam, mode=mode) for d in coeffs[1:]]
         out[:, c] = pywt.waverec(coeffs, wavelet, mode="symmetric")[:n]
