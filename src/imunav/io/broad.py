@@ -30,7 +30,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from imunav.errors import FileFormatError, InvalidInputError
-from imunav.rotation import C_ENU_NED, quat_from_dcm, quat_multiply
+from imunav.rotation import C_ENU_NED, from_convention, quat_from_dcm, to_convention
 from imunav.timeseries import ImuData
 
 Array = NDArray[np.float64]
@@ -43,14 +43,26 @@ Q_NED_ENU = quat_from_dcm(C_ENU_NED.T)
 _KEYS = ("imu_gyr", "imu_acc", "imu_mag", "opt_quat", "movement", "sampling_rate")
 
 
+def _finite_rows(q: Array, convert) -> Array:
+    """Apply ``convert`` to the finite rows of (N, 4) ``q``; NaN rows stay NaN."""
+    q = np.asarray(q, float)
+    if q.ndim == 1:
+        return convert(q)
+    out = np.full(q.shape, np.nan)
+    ok = np.all(np.isfinite(q), axis=1)
+    if ok.any():
+        out[ok] = convert(q[ok])
+    return out
+
+
 def to_enu(q_nb: Array) -> Array:
-    """Body->NED quaternions to body->ENU (for BROAD-style output)."""
-    return quat_multiply(Q_NED_ENU * np.array([1.0, -1.0, -1.0, -1.0]), np.asarray(q_nb, float))
+    """Body->NED quaternions to body->ENU (for BROAD-style output); NaN rows stay NaN."""
+    return _finite_rows(q_nb, lambda q: to_convention(q, "broad"))
 
 
 def from_enu(q_enu: Array) -> Array:
-    """Body->ENU quaternions to body->NED (NaN rows stay NaN)."""
-    return quat_multiply(Q_NED_ENU, np.asarray(q_enu, float))
+    """Body->ENU quaternions (BROAD ``opt_quat``) to body->NED; NaN rows stay NaN."""
+    return _finite_rows(q_enu, lambda q: from_convention(q, "broad"))
 
 
 @dataclass(frozen=True)
