@@ -55,11 +55,13 @@ def _fail(exc: Exception) -> None:
 @zupt_app.command("run")
 def run_cmd(
     file: Path = typer.Argument(..., exists=True, dir_okay=False, help="Foot recording (.mat pyshoe, .csv x-io / FGO)."),
-    detector: str = typer.Option("shoe", "--detector", "-d", help="shoe, ared, amvd, mbgtd, adaptive, lstm, or 'labels:NAME' for stored labels."),
+    detector: str = typer.Option("shoe", "--detector", "-d", help="shoe, ared, amvd, mbgtd, adaptive, freeacc, lstm, or 'labels:NAME' for stored labels."),
     threshold: Optional[float] = typer.Option(None, help="Detector threshold (default: the library default)."),
     states: int = typer.Option(9, help="9 (thesis) or 15 (with biases)."),
     zaru: bool = typer.Option(False, help="Zero angular-rate updates (needs --states 15)."),
-    heading_hold: bool = typer.Option(False, help="Hold the yaw during each stance."),
+    zaru_min_s: float = typer.Option(0.0, help="Apply the ZARU only in stances at least this long, s (e.g. 1: standing still only)."),
+    heading_hold: bool = typer.Option(False, help="No rotation about the vertical during each stance."),
+    level_floor: bool = typer.Option(False, help="Flat-floor constraint: every stance at the initial height (not for stairs or ramps)."),
     margin_s: float = typer.Option(0.0, help="Shrink each detected stance by this many seconds at both ends."),
     sigma_acc: float = typer.Option(0.5, help="Accelerometer noise per sample, m/s^2."),
     model: Optional[Path] = typer.Option(None, help="LSTM model file (default: the shipped one)."),
@@ -90,7 +92,8 @@ def run_cmd(
                 m = LstmDetector.load(model)
             zv = detect_zero_velocity(trial.imu, detector, threshold, model=m, margin_s=margin_s).zv
         xio_like = trial.position is None
-        cfg = ZuptConfig(states=states, zaru=zaru, heading_hold=heading_hold, sigma_acc=sigma_acc,
+        cfg = ZuptConfig(states=states, zaru=zaru, zaru_min_s=zaru_min_s, heading_hold=heading_hold,
+                         level_floor=level_floor, sigma_acc=sigma_acc,
                          alignment="first_stance" if xio_like else "samples", g=None if xio_like else 9.8029)
         res = run_zupt(trial.imu, zv, cfg)
     except ImunavError as exc:

@@ -20,6 +20,7 @@ from imunav.ins.detectors import (
     ared,
     detect_zero_velocity,
     detector_statistic,
+    free_acceleration,
     mbgtd,
     motion_adaptive,
     optimize_threshold,
@@ -27,12 +28,12 @@ from imunav.ins.detectors import (
 )
 from imunav.ins.metrics import LoopClosure, align_heading, error_2d, loop_closure_error, position_rmse, vertical_error
 from imunav.ins.strapdown import StrapdownResult, coning_sculling_increments, strapdown_local, strapdown_ned
-from imunav.ins.zupt import ZuptConfig, ZuptResult, align_from_accel, first_stance, run_zupt
+from imunav.ins.zupt import ZuptConfig, ZuptResult, align_from_accel, first_stance, long_stances, run_zupt
 
 __all__ = [
     "DEFAULT_THRESHOLDS", "DETECTORS", "DetectorResult", "ThresholdSearch", "amvd", "ared",
-    "detect_zero_velocity", "detector_statistic", "mbgtd", "motion_adaptive", "optimize_threshold", "shoe",
+    "detect_zero_velocity", "detector_statistic", "free_acceleration", "mbgtd", "motion_adaptive", "optimize_threshold", "shoe",
     "LoopClosure", "align_heading", "error_2d", "loop_closure_error", "position_rmse", "vertical_error",
     "StrapdownResult", "coning_sculling_increments", "strapdown_local", "strapdown_ned",
-    "ZuptConfig", "ZuptResult", "align_from_accel", "first_stance", "run_zupt",
+    "ZuptConfig", "ZuptResult", "align_from_accel", "first_stance", "long_stances", "run_zupt",
 ]

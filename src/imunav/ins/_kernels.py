@@ -13,7 +13,7 @@ import math
 import numpy as np
 from numba import njit
 
-from imunav._rotation_kernels import dcm_from_quat_1, qexp_1, qmul_1, qrot_1
+from imunav._rotation_kernels import dcm_from_quat_1, qexp_1, qlog_1, qmul_1, qrot_1
 from imunav.earth import radii_gravity_1
 
 # --------------------------------------------------------------------------
@@ -436,14 +436,25 @@ def _sandwich(Phi, P, Qd, M, nzc, nzn):
 
 
 @njit(cache=True)
-def _yaw(q):
-    return math.atan2(2.0 * (q[0] * q[3] + q[1] * q[2]), 1.0 - 2.0 * (q[2] * q[2] + q[3] * q[3]))
+def _heading_change(q, q_ref):
+    """Vertical (nav z) component of the rotation vector of ``C(q) C(q_ref)^T``.
+
+    This is the rotation about the local vertical since ``q_ref``, whatever
+    the sensor's mounting.  (The difference of ZYX yaw angles is not: the yaw
+    of a tilted sensor changes when the foot only pitches, heel to toe.)
+    """
+    qc = np.empty(4)
+    qc[0] = q_ref[0]
+    for j in range(3):
+        qc[1 + j] = -q_ref[1 + j]
+    return qlog_1(qmul_1(q, qc))[2]
 
 
 @njit(cache=True)
 def zupt_ekf_kernel(
     t, acc, gyr, zv, q0, p0, v0, ba0, bg0, P0, nx, g,
     sig_a, sig_g, sig_ba, sig_bg, sig_v, zaru, sig_zaru, heading, sig_psi, coning,
+    floor, sig_floor,
 ):
     """Run the error-state ZUPT EKF over a whole recording.
 
@@ -451,7 +462,13 @@ def zupt_ekf_kernel(
     propagated with sample k over t_k - t_{k-1}, the covariance with
     Phi = I + F dt, Q_d = G diag(sig_a^2, sig_g^2) G^T dt^2 (per-sample noise
     std, as in OpenShoe / pyshoe) plus bias random walks sig_b^2 dt; then, if
-    zv[k], the ZUPT (and optionally ZARU and heading-hold) updates apply.
+    zv[k], the ZUPT (and optionally heading-hold) updates apply, and the ZARU
+    where the boolean mask zaru[k] is set (a subset of zv).
+
+    Heading hold: from the second sample of a stance on, the rotation about
+    the nav vertical since its first sample is measured as 0 (std sig_psi).
+    Level floor (``floor``): each stance sample measures the height as the
+    initial height p0[2] (std sig_floor).
     """
     n = t.shape[0]
     q = np.empty((n, 4))
@@ -482,6 +499,8 @@ def zupt_ekf_kernel(
     idx_v = np.array([3, 4, 5])
     idx_b = np.array([12, 13, 14])
     idx_psi = np.array([8])
+    idx_z = np.array([2])
+    rz = np.full(1, sig_floor * sig_floor)
     rv = np.full(3, sig_v * sig_v)
     rb = np.full(3, sig_zaru * sig_zaru)
     rpsi = np.full(1, sig_psi * sig_psi)
@@ -496,7 +515,7 @@ def zupt_ekf_kernel(
     dth = np.empty(3)
     dvb = np.empty(3)
     in_stance = False
-    psi_ref = 0.0
+    q_ref = q0.copy()
     for k in range(1, n):
         h = t[k] - t[k - 1]
         for j in range(3):
@@ -576,20 +595,24 @@ def zupt_ekf_kernel(
                 innov[k, j] = tmp3[j]
                 svar[k, j] = s3[j]
             _inject(dx, k, p, v, q, ba, bg, nx)
-            if zaru and nx == 15:
+            if zaru[k] and nx == 15:
                 for j in range(3):
                     z3[j] = gyr[k, j] - bg[k, j]
                 _joseph_update(P, dx, idx_b, z3, rb, tmp3, s3)
                 _inject(dx, k, p, v, q, ba, bg, nx)
             if heading:
                 if not in_stance:
-                    psi_ref = _yaw(q[k])
+                    for j in range(4):
+                        q_ref[j] = q[k, j]
                 else:
-                    d = psi_ref - _yaw(q[k])
-                    d = (d + math.pi) % (2.0 * math.pi) - math.pi
-                    z1[0] = d
+                    # C = exp([dphi x]) C_hat  =>  measured change 0 = change_hat + dphi_z
+                    z1[0] = -_heading_change(q[k], q_ref)
                     _joseph_update(P, dx, idx_psi, z1, rpsi, tmp1, s1_)
                     _inject(dx, k, p, v, q, ba, bg, nx)
+            if floor:
+                z1[0] = p0[2] - p[k, 2]
+                _joseph_update(P, dx, idx_z, z1, rz, tmp1, s1_)
+                _inject(dx, k, p, v, q, ba, bg, nx)
             in_stance = True
         else:
             in_stance = False

@@ -18,6 +18,9 @@ pyshoe evaluation (Wagstaff, Peretroukhin & Kelly, IEEE Sensors J. 20(2),
   maximum over split pairs of the normalised mean distance between the
   accelerometer samples before and after the split.
 
+Also: a motion-adaptive SHOE (:func:`motion_adaptive`) and the
+free-acceleration rule of x-io's Gait-Tracking (:func:`free_acceleration`).
+
 SHOE, ARED and AMVD are evaluated on **non-overlapping blocks** of ``W``
 samples and the block value is held over the block; samples after the last
 full block get ``T = 0`` (stationary).  MBGTD slides one sample at a time; its
@@ -52,6 +55,7 @@ __all__ = [
     "amvd",
     "mbgtd",
     "motion_adaptive",
+    "free_acceleration",
     "optimize_threshold",
     "shrink_stances",
 ]
@@ -226,7 +230,7 @@ def detect_zero_velocity(data: Any, detector: str = "shoe", threshold: float | A
     ----------
     data : ImuData
     detector : ``"shoe"``, ``"ared"``, ``"amvd"``, ``"mbgtd"``, ``"adaptive"``
-        (:func:`motion_adaptive`) or ``"lstm"`` (the shipped
+        (:func:`motion_adaptive`), ``"freeacc"`` (:func:`free_acceleration`) or ``"lstm"`` (the shipped
         :class:`imunav.learn.LstmDetector`, or ``model`` when given).
     threshold : scalar or (N,) per-sample thresholds; default
         :data:`DEFAULT_THRESHOLDS`.  For ``"lstm"`` the probability threshold
@@ -250,6 +254,8 @@ def _detect(data: Any, detector: str, threshold: Any, window: int, sigma_a: floa
     name = detector.lower()
     if name == "adaptive":
         return motion_adaptive(data, window=window, sigma_a=sigma_a, sigma_w=sigma_w, g=g)
+    if name == "freeacc":
+        return free_acceleration(data, threshold=3.0 if threshold is None else float(threshold), g=g)
     if name == "lstm":
         from imunav.learn import LstmDetector
 
@@ -294,6 +300,28 @@ def motion_adaptive(data: Any, *, thresholds: tuple[float, float] = (1.0e7, 3.5e
     params = {"window": int(window), "thresholds": list(thresholds), "split_rate": split_rate,
               "intensity_window_s": intensity_window_s, "smooth_s": smooth_s}
     return DetectorResult(T < gam, T, gam, "adaptive", params)
+
+
+def free_acceleration(data: Any, *, threshold: float = 3.0, g: float = G_PYSHOE, kp: float = 1.0) -> DetectorResult:
+    """Free-acceleration stance rule (x-io Gait-Tracking): ``T = |C_nb f + g^n|``.
+
+    The foot is stationary while the specific force, rotated to the nav frame
+    with an AHRS attitude and with gravity removed, is below ``threshold``
+    (m/s², x-io: 3).  The attitude comes from :class:`imunav.attitude.Mahony`
+    (gain ``kp`` rad/s, no integral term, no magnetometer); only its tilt
+    matters, since ``|.|`` ignores the heading.  x-io widens each moving period
+    by 0.1 s on both sides: ``detect_zero_velocity(..., margin_s=0.1)``.
+    """
+    from imunav.attitude import Mahony
+    from imunav.rotation import quat_rotate
+
+    if not (threshold > 0 and np.isfinite(threshold)):
+        raise InvalidInputError(f"threshold must be a finite free acceleration > 0 m/s^2; got {threshold!r}")
+    a, _ = _accel_gyro(data)
+    q = Mahony(kp=kp, ki=0.0).run(data, use_mag=False).q_nb
+    T = np.linalg.norm(quat_rotate(q, a) + np.array([0.0, 0.0, g]), axis=1)
+    gam = np.full(T.shape, float(threshold))
+    return DetectorResult(T < gam, T, gam, "freeacc", {"threshold": float(threshold), "g": g, "kp": kp})
 
 
 @dataclass(frozen=True)

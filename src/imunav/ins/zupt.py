@@ -41,7 +41,7 @@ from imunav.errors import ConfigError, InsufficientDataError, InvalidInputError,
 from imunav.ins import _kernels as _k
 from imunav.rotation import euler_from_quat, quat_from_euler
 
-__all__ = ["ZuptConfig", "ZuptResult", "run_zupt", "align_from_accel", "first_stance"]
+__all__ = ["ZuptConfig", "ZuptResult", "run_zupt", "align_from_accel", "first_stance", "long_stances"]
 
 Array = NDArray[np.float64]
 
@@ -68,7 +68,16 @@ class ZuptConfig:
     initial_yaw : rad.
     zaru : zero angular-rate update during stance (needs 15 states).
     sigma_zaru : its noise, rad/s.
-    heading_hold : hold the yaw during each stance; ``sigma_heading`` rad.
+    zaru_min_s : apply the ZARU only in stances lasting at least this long, s.
+        A walking foot rolls during its short stances (heel to toe), so a
+        ZARU there biases the gyro estimate; with e.g. 1 s only the truly
+        still periods (standing before, between and after walks) calibrate it.
+    heading_hold : no rotation about the vertical during each stance (the nav-frame
+        rotation since the stance's first sample, not a yaw-angle difference,
+        so it holds for a tilted mounting); ``sigma_heading`` rad.
+    level_floor : the walk stays on one level: each stance measures the height
+        as the initial height, std ``sigma_floor`` m (a flat-floor constraint;
+        wrong on stairs or ramps).
     integration : ``"euler"`` (first order, the thesis and pyshoe: rate of sample k held
         over interval k) or ``"coning"`` (trapezoid increments of the point samples with
         the two-sample coning / sculling corrections).
@@ -92,15 +101,18 @@ class ZuptConfig:
     initial_yaw: float = 0.0
     zaru: bool = False
     sigma_zaru: float = 0.01
+    zaru_min_s: float = 0.0
     heading_hold: bool = False
     sigma_heading: float = 0.5 * math.pi / 180.0
+    level_floor: bool = False
+    sigma_floor: float = 0.01
     integration: Literal["euler", "coning"] = "euler"
 
     def __post_init__(self) -> None:
         if self.states not in (9, 15):
             raise ConfigError(f"states must be 9 or 15; got {self.states}")
         for name in ("sigma_acc", "sigma_gyro", "sigma_v", "p0_pos", "p0_vel", "p0_att", "sigma_zaru",
-                     "sigma_heading", "p0_acc_bias", "p0_gyro_bias"):
+                     "sigma_heading", "sigma_floor", "p0_acc_bias", "p0_gyro_bias"):
             val = getattr(self, name)
             if not (val > 0 and math.isfinite(val)):
                 raise ConfigError(f"{name} must be finite and > 0; got {val!r}")
@@ -115,6 +127,8 @@ class ZuptConfig:
             raise ConfigError(f"integration must be 'euler' or 'coning'; got {self.integration!r}")
         if self.zaru and self.states != 15:
             raise ConfigError("zaru=True needs the gyro-bias states: set states=15")
+        if not (self.zaru_min_s >= 0 and math.isfinite(self.zaru_min_s)):
+            raise ConfigError(f"zaru_min_s must be finite and >= 0; got {self.zaru_min_s!r}")
         if self.align_samples < 1:
             raise ConfigError(f"align_samples must be >= 1; got {self.align_samples}")
 
@@ -186,6 +200,18 @@ def first_stance(zv: ArrayLike) -> tuple[int, int]:
     return i0, (i0 + int(off[0])) if off.size else z.size
 
 
+def long_stances(t: ArrayLike, zv: ArrayLike, min_s: float) -> NDArray[np.bool_]:
+    """Mask of the samples of ``zv`` that belong to a stance lasting at least ``min_s`` seconds."""
+    tt = np.asarray(t, dtype=float)
+    z = np.asarray(zv, dtype=bool)
+    out = np.zeros(z.shape, dtype=bool)
+    edges = np.diff(np.concatenate(([0], z.astype(np.int8), [0])))
+    for i0, i1 in zip(np.flatnonzero(edges == 1), np.flatnonzero(edges == -1)):
+        if tt[i1 - 1] - tt[i0] >= min_s:
+            out[i0:i1] = True
+    return out
+
+
 def _arrays(data: Any) -> tuple[Array, Array, Array]:
     try:
         t = np.ascontiguousarray(data.t, dtype=np.float64)
@@ -250,8 +276,10 @@ def run_zupt(data: Any, zv: ArrayLike, config: ZuptConfig | None = None, *,
     q0 = np.array(q0, dtype=np.float64)
     pos0 = np.array(pos0, dtype=np.float64)
     t, a, w = (np.array(x, dtype=np.float64, order="C") for x in (t, a, w))
+    zaru_mask = long_stances(t, z, cfg.zaru_min_s) if cfg.zaru else np.zeros(t.size, dtype=bool)
     q, v, p, ba, bg, Pd, innov, svar, P = _k.zupt_ekf_kernel(
         t, a, w, z, q0, pos0, np.zeros(3), np.zeros(3), np.zeros(3), P0, nx, g,
         cfg.sigma_acc, cfg.sigma_gyro, cfg.sigma_acc_bias_rw, cfg.sigma_gyro_bias_rw, cfg.sigma_v,
-        bool(cfg.zaru), cfg.sigma_zaru, bool(cfg.heading_hold), cfg.sigma_heading, cfg.integration == "coning")
+        zaru_mask, cfg.sigma_zaru, bool(cfg.heading_hold), cfg.sigma_heading, cfg.integration == "coning",
+        bool(cfg.level_floor), cfg.sigma_floor)
     return ZuptResult(t, p, v, q, ba, bg, Pd, innov, svar, P, z, cfg)
