@@ -40,3 +40,20 @@ def test_zupt_benchmark_json(tmp_path):
     row = res["trials"][0]
     assert set(row) == {"trial", "shoe", "ared", "amvd", "mbgtd", "lstm"}
     assert row["lstm"] < 0.5
+
+
+def test_zupt_run_xio_with_aids(tmp_path):
+    """The README's x-io command: x-io's stance rule + level floor, loop closure below x-io's 82 mm."""
+    f = data_path("foot", "xio_gait", "short_walk.csv")
+    out = tmp_path / "xio.json"
+    r = runner.invoke(app, ["zupt", "run", str(f), "--detector", "freeacc", "--margin-s", "0.1", "--level-floor",
+                            "--json", str(out)])
+    assert r.exit_code == 0, r.output
+    s = json.loads(out.read_text())
+    assert s["loop_closure_m"] < 0.082
+    assert s["loop_closure_vertical_m"] < 0.005
+    assert s["distance_m"] == pytest.approx(25.0, abs=1.5)  # x-io: a ~25 m walk
+    r = runner.invoke(app, ["zupt", "run", str(f), "--states", "15", "--zaru", "--zaru-min-s", "1",
+                            "--heading-hold"])
+    assert r.exit_code == 0, r.output
+    assert "loop_closure_m" in r.output

@@ -101,7 +101,8 @@ def run_cmd(
     lc = loop_closure_error(res.position)
     summary: dict[str, Any] = {"file": str(file), "detector": detector, "samples": int(trial.imu.n),
                                "stance_fraction": float(np.mean(zv)), "distance_m": lc.distance_travelled,
-                               "loop_closure_m": lc.error_3d, "loop_closure_horizontal_m": lc.horizontal}
+                               "loop_closure_m": lc.error_3d, "loop_closure_horizontal_m": lc.horizontal,
+                               "loop_closure_vertical_m": lc.vertical}
     if trial.position is not None:
         summary["error_2d_m"] = error_2d(res.position, trial.position)
     for k, v in summary.items():
