@@ -19,9 +19,16 @@ and, with 15 states, accelerometer / gyro biases.  Error state
 OpenShoe / pyshoe convention).  When the detector declares the foot
 stationary the ZUPT pseudo-measurement ``z = 0 - v̂ = H dx + nu``,
 ``H = [0 I 0 ...]``, ``R = sigma_v² I`` is applied in Joseph form, the error
-is injected into the nominal state and reset.  Options: zero angular-rate
-update (ZARU, 15 states: ``z = ω̃ - b̂_g``) and heading hold (the yaw is held
-at its value at the first sample of each stance).
+is injected into the nominal state and reset.  Options, each a stance
+pseudo-measurement with unit-row H:
+
+* ZARU (15 states): ``z = ω̃ - b̂_g = δb_g + ν``, optionally only in stances
+  of at least ``zaru_min_s`` (standing still, not a rolling walking stance);
+* heading hold: the rotation about the nav vertical since the stance's first
+  sample is 0: with ``C = exp([δφ×]) Ĉ``, ``z = -[log(Ĉ_k Ĉ_ref^T)]_z = δφ_z + ν``
+  (Foxlin 2005's heading constraint, written so that a tilted mounting, whose
+  ZYX yaw changes when the foot only pitches, does not break it);
+* level floor: ``z = p_z0 - p̂_z = δp_z + ν`` (every stance at the start height).
 
 The initial roll and pitch come from the mean specific force of the first
 stance (or of the first ``align_samples`` samples), yaw = ``initial_yaw``:
@@ -204,6 +211,8 @@ def long_stances(t: ArrayLike, zv: ArrayLike, min_s: float) -> NDArray[np.bool_]
     """Mask of the samples of ``zv`` that belong to a stance lasting at least ``min_s`` seconds."""
     tt = np.asarray(t, dtype=float)
     z = np.asarray(zv, dtype=bool)
+    if tt.ndim != 1 or z.shape != tt.shape:
+        raise ShapeError(f"t and zv must be 1-D of the same length; got {tt.shape} and {z.shape}")
     out = np.zeros(z.shape, dtype=bool)
     edges = np.diff(np.concatenate(([0], z.astype(np.int8), [0])))
     for i0, i1 in zip(np.flatnonzero(edges == 1), np.flatnonzero(edges == -1)):
