@@ -26,7 +26,7 @@ pseudo-measurement with unit-row H:
   of at least ``zaru_min_s`` (standing still, not a rolling walking stance);
 * heading hold: the rotation about the nav vertical since the stance's first
   sample is 0: with ``C = exp([δφ×]) Ĉ``, ``z = -[log(Ĉ_k Ĉ_ref^T)]_z = δφ_z + ν``
-  (Foxlin 2005's heading constraint, written so that a tilted mounting, whose
+  (a zero heading-change constraint, written so that a tilted mounting, whose
   ZYX yaw changes when the foot only pitches, does not break it);
 * level floor: ``z = p_z0 - p̂_z = δp_z + ν`` (every stance at the start height).
 
