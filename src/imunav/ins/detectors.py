@@ -39,6 +39,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from imunav._timeseries_kernels import runs
 from imunav.errors import InvalidInputError, ShapeError
 from imunav.ins import _kernels as _k
 
@@ -211,11 +212,8 @@ def shrink_stances(zv: ArrayLike, margin: int) -> NDArray[np.bool_]:
         raise InvalidInputError(f"margin must be >= 0 samples; got {margin}")
     if m == 0 or z.size == 0:
         return z
-    d = np.diff(np.concatenate([[0], z.astype(np.int8), [0]]))
-    starts = np.flatnonzero(d == 1)
-    stops = np.flatnonzero(d == -1)
     out = np.zeros_like(z)
-    for a, b in zip(starts, stops):
+    for a, b in zip(*runs(np.ascontiguousarray(z))):
         if b - a > 2 * m:
             out[a + m:b - m] = True
     return out

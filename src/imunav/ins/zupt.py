@@ -44,6 +44,7 @@ from typing import Any, Literal
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from imunav._timeseries_kernels import runs
 from imunav.errors import ConfigError, InsufficientDataError, InvalidInputError, ShapeError
 from imunav.ins import _kernels as _k
 from imunav.rotation import euler_from_quat, quat_from_euler
@@ -197,14 +198,11 @@ def align_from_accel(accel_mean: ArrayLike, yaw: float = 0.0) -> Array:
 
 def first_stance(zv: ArrayLike) -> tuple[int, int]:
     """Half-open index range of the first run of True in ``zv``."""
-    z = np.asarray(zv, dtype=bool)
-    on = np.flatnonzero(z)
-    if on.size == 0:
+    starts, stops = runs(np.ascontiguousarray(np.asarray(zv, dtype=bool)))
+    if starts.size == 0:
         raise InsufficientDataError("the detector found no stationary sample; cannot align from a stance "
                                     "(raise the threshold or use alignment='samples')")
-    i0 = int(on[0])
-    off = np.flatnonzero(~z[i0:])
-    return i0, (i0 + int(off[0])) if off.size else z.size
+    return int(starts[0]), int(stops[0])
 
 
 def long_stances(t: ArrayLike, zv: ArrayLike, min_s: float) -> NDArray[np.bool_]:
@@ -214,8 +212,7 @@ def long_stances(t: ArrayLike, zv: ArrayLike, min_s: float) -> NDArray[np.bool_]
     if tt.ndim != 1 or z.shape != tt.shape:
         raise ShapeError(f"t and zv must be 1-D of the same length; got {tt.shape} and {z.shape}")
     out = np.zeros(z.shape, dtype=bool)
-    edges = np.diff(np.concatenate(([0], z.astype(np.int8), [0])))
-    for i0, i1 in zip(np.flatnonzero(edges == 1), np.flatnonzero(edges == -1)):
+    for i0, i1 in zip(*runs(np.ascontiguousarray(z))):
         if tt[i1 - 1] - tt[i0] >= min_s:
             out[i0:i1] = True
     return out
