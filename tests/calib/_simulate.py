@@ -4,7 +4,13 @@ from __future__ import annotations
 
 import numpy as np
 
-from imunav.rotation import dcm_from_quat, quat_from_rotvec, quat_multiply, rotvec_from_quat, quat_inverse
+from imunav.rotation import (
+    dcm_from_quat,
+    quat_from_rotvec,
+    quat_inverse,
+    quat_multiply,
+    rotvec_from_quat,
+)
 
 G = 9.80665
 
@@ -21,7 +27,7 @@ def multipose_session(poses, fs, *, rest_s=30.0, static_s=3.0, move_s=1.5):
     g_n = np.array([0.0, 0.0, -G])
 
     def static(q, dur):
-        n = int(round(dur * fs))
+        n = int(np.rint(dur * fs))
         C = dcm_from_quat(q)
         fs_list.append(np.tile(C.T @ g_n, (n, 1)))
         ws_list.append(np.zeros((n, 3)))
@@ -30,7 +36,7 @@ def multipose_session(poses, fs, *, rest_s=30.0, static_s=3.0, move_s=1.5):
     for k in range(1, len(poses)):
         dq = quat_multiply(quat_inverse(poses[k - 1]), poses[k])
         rv = rotvec_from_quat(dq)
-        n = int(round(move_s * fs))
+        n = int(np.rint(move_s * fs))
         w = rv / move_s
         s = (np.arange(n) + 1) / n
         qs = quat_multiply(np.tile(poses[k - 1], (n, 1)), quat_from_rotvec(s[:, None] * rv[None, :]))
@@ -97,3 +103,45 @@ def thesis_rate_steps() -> tuple[np.ndarray, np.ndarray]:
             W.append(np.deg2rad(r) * e)
             U.append(e)
     return np.array(W), np.array(U)
+
+
+def hand_session(poses, fs, rng, *, rest_s=50.0, static_s=(7.0, 10.0), move_s=(2.5, 4.0), wobble=0.3):
+    """Ideal specific force and body rate of a hand-rotated multi-pose session.
+
+    Rest, then the poses; each turn takes a random time in ``move_s`` along the
+    minimum-jerk profile of hand movements (``s(τ) = 10τ³ − 15τ⁴ + 6τ⁵``,
+    ``τ = t/T``, of the rotation vector between the poses) and a detour ``exp(sin²(πt/T) δ)``, ``|δ| ≤ wobble`` rad,
+    so the axis wanders as a hand's would (the rate is continuous and 0 at both ends); each pose is held for a random time in
+    ``static_s``.  The rate is the exact body rate at each sample (central
+    difference over 1e-4 s), the specific force ``Cᵀ g_n`` (turns are pure rotations).
+    """
+    g_n = np.array([0.0, 0.0, -G])
+    f_list, w_list = [], []
+
+    def static(q, dur):
+        n = int(np.rint(dur * fs))
+        f_list.append(np.tile(dcm_from_quat(q).T @ g_n, (n, 1)))
+        w_list.append(np.zeros((n, 3)))
+
+    static(poses[0], rest_s)
+    for k in range(1, len(poses)):
+        rv = rotvec_from_quat(quat_multiply(quat_inverse(poses[k - 1]), poses[k]))
+        n = int(np.rint(rng.uniform(*move_s) * fs))
+        T = n / fs
+        delta = rng.uniform(-1, 1, 3) * wobble / np.sqrt(3)
+
+        def q_at(t, q0=poses[k - 1], rv=rv, T=T, delta=delta):
+            t = np.clip(t, 0.0, T)
+            tau = t / T
+            s = tau**3 * (10 - 15 * tau + 6 * tau**2)
+            q = quat_multiply(np.tile(q0, (len(t), 1)), quat_from_rotvec(s[:, None] * rv[None, :]))
+            return quat_multiply(q, quat_from_rotvec(np.sin(np.pi * t / T)[:, None] ** 2 * delta[None, :]))
+
+        t = (np.arange(n) + 1) / fs
+        h = 1e-4
+        w = rotvec_from_quat(quat_multiply(quat_inverse(q_at(t - h)), q_at(t + h))) / (2 * h)
+        w[t >= T] = 0.0
+        f_list.append(np.einsum("nji,j->ni", dcm_from_quat(q_at(t)), g_n))
+        w_list.append(w)
+        static(poses[k], rng.uniform(*static_s))
+    return np.vstack(f_list), np.vstack(w_list)

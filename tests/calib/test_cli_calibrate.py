@@ -92,3 +92,21 @@ def test_ferraris_command_on_imucal_session(tmp_path):
 def test_bad_temperature_argument(tmp_path):
     r = CliRunner().invoke(app, ["calibrate", "temperature", "nofile.json", "--out", str(tmp_path / "x.json")])
     assert r.exit_code != 0 and "FILE@TEMP_C" in str(r.exception)
+
+
+def test_multipose_command_on_unsigned_counts_with_defaults(tmp_path):
+    """A raw unsigned-count session (zero near 32768) calibrates with only --fs and --init-s."""
+    from test_multipose import PA_U, PG_U, _unsigned_session
+
+    from imunav.calib import ImuCalibration
+    from imunav.calib.multipose import accel_tedaldi_matrix, gyro_tedaldi_matrix
+
+    a, g = _unsigned_session(21)
+    csv = tmp_path / "session.csv"
+    np.savetxt(csv, np.c_[a, g], delimiter=",", fmt="%d", header="ax,ay,az,gx,gy,gz", comments="")
+    _run("calibrate", "multipose", csv, "--fs", 100, "--init-s", 50, "--out", tmp_path / "cal.json")
+    cal = ImuCalibration.load(tmp_path / "cal.json")
+    # raw = accel_matrix @ f + accel_bias: the inverse of T_a K_a, scales within 0.3 %
+    np.testing.assert_allclose(np.diag(cal.accel_matrix), np.diag(np.linalg.inv(accel_tedaldi_matrix(PA_U))), rtol=3e-3)
+    np.testing.assert_allclose(np.diag(cal.gyro_matrix), np.diag(np.linalg.inv(gyro_tedaldi_matrix(PG_U))), rtol=3e-3)
+    np.testing.assert_allclose(cal.accel_bias, -PA_U[6:], atol=5.0)
