@@ -337,7 +337,8 @@ def complementary_run(q0, gyr, acc, mag, dt, k_acc, k_mag, use_mag):
 # 17 use_mag (>0.5)
 # 18 acc_lpf_tau       [s] low-pass of the nav-frame specific force (0: off)
 
-N_PARAMS = 19
+N_PARAMS = 25
+N_STATE = 24
 
 
 @njit(cache=True)
@@ -364,6 +365,37 @@ def _ekf_update(P, dx, H, r, nu, PH):
     for i in range(6):
         for j in range(6):
             P[i, j] -= PH[i] * PH[j] / s
+    return nu * nu / s
+
+
+@njit(cache=True)
+def _ekf_update_consider(P, dx, H, r, nu, PH, n_est):
+    """Scalar update of the first ``n_est`` states only; the rest are consider
+    states (Schmidt-Kalman: their gain is zero, Simon, *Optimal State
+    Estimation*, 2006, §7.5).
+
+    With K = [P Hᵀ / s for i < n_est, 0 otherwise] the Joseph form
+    (I − K H) P (I − K H)ᵀ + K r Kᵀ reduces to the optimal update on every
+    block except the consider-consider block, which is left unchanged.
+    Returns the NIS term ν'² / s.
+    """
+    for i in range(6):
+        acc = 0.0
+        for j in range(6):
+            acc += P[i, j] * H[j]
+        PH[i] = acc
+    s = r
+    hdx = 0.0
+    for i in range(6):
+        s += H[i] * PH[i]
+        hdx += H[i] * dx[i]
+    nu = nu - hdx
+    for i in range(n_est):
+        dx[i] += PH[i] * nu / s
+    for i in range(6):
+        for j in range(6):
+            if i < n_est or j < n_est:
+                P[i, j] -= PH[i] * PH[j] / s
     return nu * nu / s
 
 
@@ -402,10 +434,13 @@ def _mekf_predict(P, R, dt, sg2, sb2, W):
 
 @njit(cache=True)
 def mekf_step(q, b, P, st, gyr, acc, mag, dt, p, out_phi):
-    """One MEKF step.  ``st`` (float64 array, len 12) is the adaptive state:
+    """One MEKF step.  ``st`` (float64 array, len N_STATE) is the adaptive state:
     [0] rest timer, [1] mag ref norm, [2] mag ref dip, [3] disturbed timer,
     [4] ref valid flag, [5:8] low-passed nav specific force, [8] flag bits,
-    [9] NIS sum, [10] NIS dof, [11] low-pass initialised.
+    [9] NIS sum, [10] NIS dof, [11] low-pass initialised, [12:15] low-passed
+    gyro and [15:18] accelerometer of the rest test, [18] their init flag,
+    [19] low-passed field norm, [20] dip, [21] their init flag, [22] time
+    since the field was last disturbed, [23] attitude process variance of the step.
     Returns (q, b).  ``out_phi`` receives the 6x6 transition matrix.
     """
     g = p[13]
@@ -429,7 +464,12 @@ def mekf_step(q, b, P, st, gyr, acc, mag, dt, p, out_phi):
     e0, e1, e2, e3 = qexp_t(w0 * dt, w1 * dt, w2 * dt)
     t0, t1, t2, t3 = qmul_t(q[0], q[1], q[2], q[3], e0, e1, e2, e3)
     qw, qx, qy, qz = _tnorm(t0, t1, t2, t3)
-    _mekf_predict(P, R, dt, p[0] * p[0] * dt, p[1] * p[1] * dt, W)
+    # gyro noise grows with the rate (scale-factor and misalignment errors of an
+    # uncalibrated gyro act in proportion to |ω|): σ² = σ_g² + (k_ω |ω̄|)²
+    wn2 = w0 * w0 + w1 * w1 + w2 * w2
+    sg2 = (p[0] * p[0] + p[24] * p[24] * wn2) * dt
+    st[23] = sg2
+    _mekf_predict(P, R, dt, sg2, p[1] * p[1] * dt, W)
     flags = 0
     nis = 0.0
     ndof = 0.0
@@ -438,7 +478,32 @@ def mekf_step(q, b, P, st, gyr, acc, mag, dt, p, out_phi):
     a0, a1, a2 = acc[0], acc[1], acc[2]
     an = math.sqrt(a0 * a0 + a1 * a1 + a2 * a2)
     wn = math.sqrt(w0 * w0 + w1 * w1 + w2 * w2)
-    if p[9] > 0.0 and wn < p[9] and abs(an - g) < p[10]:
+    if p[19] > 0.0:
+        # rest from the deviation of gyro and accelerometer from their low-pass
+        # (time constant p[19]) plus a bias-size bound on the low-passed rate
+        # (Laidig & Seel 2023, §4.2): independent of the accelerometer's
+        # scale and of the current bias estimate, robust to per-sample noise
+        if st[18] < 0.5:
+            for i in range(3):
+                st[12 + i] = gyr[i]
+                st[15 + i] = acc[i]
+            st[18] = 1.0
+        c = 1.0 - math.exp(-dt / p[19])
+        dg = 0.0
+        da = 0.0
+        big = False
+        for i in range(3):
+            st[12 + i] += c * (gyr[i] - st[12 + i])
+            st[15 + i] += c * (acc[i] - st[15 + i])
+            dg += (gyr[i] - st[12 + i]) ** 2
+            da += (acc[i] - st[15 + i]) ** 2
+            if abs(st[12 + i]) > p[23]:
+                big = True
+        if p[9] > 0.0 and dg < p[9] * p[9] and da < p[10] * p[10] and not big:
+            st[0] += dt
+        else:
+            st[0] = 0.0
+    elif p[9] > 0.0 and wn < p[9] and abs(an - g) < p[10]:
         st[0] += dt
     else:
         st[0] = 0.0
@@ -511,13 +576,31 @@ def mekf_step(q, b, P, st, gyr, acc, mag, dt, p, out_phi):
             n0, n1, n2 = qrot_t(qw, qx, qy, qz, mag[0], mag[1], mag[2])
             hh = math.sqrt(n0 * n0 + n1 * n1)
             dip = math.atan2(n2, hh)
+            if p[20] > 0.0:
+                # norm and dip low-passed (time constant p[20]) before the disturbance test
+                if st[21] < 0.5:
+                    st[19] = mn
+                    st[20] = dip
+                    st[21] = 1.0
+                c = 1.0 - math.exp(-dt / p[20])
+                st[19] += c * (mn - st[19])
+                st[20] += c * (dip - st[20])
+                mn_t = st[19]
+                dip_t = st[20]
+            else:
+                mn_t = mn
+                dip_t = dip
             if st[4] < 0.5:
-                st[1] = mn
-                st[2] = dip
+                st[1] = mn_t
+                st[2] = dip_t
                 st[4] = 1.0
-            dn = (mn - st[1]) / st[1]
-            dd = dip - st[2]
+            dn = (mn_t - st[1]) / st[1]
+            dd = dip_t - st[2]
             disturbed = abs(dn) > p[6] or abs(dd) > p[7]
+            if disturbed:
+                st[22] = 0.0
+            else:
+                st[22] += dt
             if disturbed:
                 st[3] += dt
                 flags |= 2
@@ -529,9 +612,11 @@ def mekf_step(q, b, P, st, gyr, acc, mag, dt, p, out_phi):
                 st[3] = 0.0
                 if p[16] > 0.0:
                     c = dt / p[16]
-                    st[1] += c * (mn - st[1])
-                    st[2] += c * (dip - st[2])
-            if not disturbed and hh > 1e-9 * mn:
+                    st[1] += c * (mn_t - st[1])
+                    st[2] += c * (dip_t - st[2])
+            # used only after p[21] s of continuous undisturbed field: the few
+            # samples of a disturbance that happen to pass the test are not used
+            if not disturbed and st[22] >= p[21] and hh > 1e-9 * mn:
                 psi = math.atan2(n1, n0)
                 # measured field yaw ≈ −(C δθ)_z  (nav yaw error of the estimate)
                 H[0] = -2.0 * (qx * qz - qw * qy)
@@ -543,7 +628,10 @@ def mekf_step(q, b, P, st, gyr, acc, mag, dt, p, out_phi):
                 r = (p[5] * mn / hh) ** 2 * (1.0 + p[8] * ((dn / p[6]) ** 2 + (dd / p[7]) ** 2))
                 for j in range(6):
                     dx[j] = 0.0
-                nis += _ekf_update(P, dx, H, r, psi, PH)
+                if p[22] > 0.5:
+                    nis += _ekf_update(P, dx, H, r, psi, PH)
+                else:
+                    nis += _ekf_update_consider(P, dx, H, r, psi, PH, 3)
                 ndof += 1.0
                 e0, e1, e2, e3 = qexp_t(dx[0], dx[1], dx[2])
                 t0, t1, t2, t3 = qmul_t(qw, qx, qy, qz, e0, e1, e2, e3)
@@ -587,7 +675,7 @@ def mekf_run(q0, b0, P0, gyr, acc, mag, dt, p, store):
     q = q0.copy()
     b = b0.copy()
     P = P0.copy()
-    st = np.zeros(12)
+    st = np.zeros(N_STATE)
     phi = np.empty((6, 6))
     for k in range(n):
         if store:
@@ -600,7 +688,7 @@ def mekf_run(q0, b0, P0, gyr, acc, mag, dt, p, store):
             Pprev = P0 if k == 0 else Pu[k - 1]
             Q = np.zeros((6, 6))
             for i in range(3):
-                Q[i, i] = p[0] * p[0] * dt[k]
+                Q[i, i] = st[23]
                 Q[3 + i, 3 + i] = p[1] * p[1] * dt[k]
             Pp[k] = phi @ Pprev @ phi.T + Q
             Pu[k] = P

@@ -5,7 +5,9 @@ returns the BROAD per-trial RMSE (:mod:`imunav.attitude.metrics`);
 ``grid_search`` evaluates the Cartesian product of parameter values, one
 parameter set per task, in a process pool whose workers load the trials once.
 The trial-agnostic best set (TAGP, Laidig et al. 2021) minimises the mean total
-RMSE over the trials.
+RMSE over the trials; that mean is an in-sample figure.  ``cv_grid_search``
+scores the same choice out of fold (leave one trial out, :mod:`imunav.crossval`):
+the figure to expect on trials the parameters never saw.
 """
 
 from __future__ import annotations
@@ -19,10 +21,11 @@ from typing import Any, Callable, Iterable
 
 import numpy as np
 
+from imunav.crossval import CvResult, select_by_cv
 from imunav.errors import ConfigError
 
-__all__ = ["FILTERS", "REALTIME", "make_filter", "evaluate", "grid_search", "TrialScore", "BenchResult",
-           "reference_start"]
+__all__ = ["FILTERS", "REALTIME", "make_filter", "evaluate", "grid_search", "cv_grid_search", "TrialScore",
+           "BenchResult", "reference_start"]
 
 REALTIME = ("madgwick", "madgwick_c", "mahony", "complementary", "mekf", "adaptive", "ukf")
 FILTERS = (*REALTIME, "smoother")
@@ -156,3 +159,32 @@ def grid_search(name: str, grid: dict[str, list[Any]], trials: Iterable[str | Pa
                 if progress:
                     progress(i + 1, len(combos))
     return sorted(out, key=lambda r: r.mean_total)
+
+
+def cv_grid_search(name: str, grid: dict[str, list[Any]], trials: Iterable[str | Path], *,
+                   workers: int | None = None, progress: Callable[[int, int], None] | None = None,
+                   results: list[BenchResult] | None = None) -> tuple[CvResult, list[BenchResult]]:
+    """Grid search scored by leave-one-trial-out cross-validation.
+
+    Each trial is scored with the parameter set that minimises the mean total
+    RMSE over the *other* trials (:func:`imunav.crossval.select_by_cv`).
+
+    Parameters
+    ----------
+    name, grid, trials, workers, progress : as :func:`grid_search`.
+    results : the grid's results when already computed (skips the runs).
+
+    Returns
+    -------
+    (CvResult, results)
+        ``CvResult.oof`` per trial total RMSE out of fold, ``in_sample`` that of
+        the overall best set; ``fold_choice`` / ``in_sample_choice`` are
+        parameter dicts.  ``results`` as :func:`grid_search` (best first).
+    """
+    tl = [str(t) for t in trials]
+    res = results if results is not None else grid_search(name, grid, tl, workers=workers, progress=progress)
+    S = np.array([[t.total_rmse_deg for t in r.trials] for r in res])
+    names = [t.trial for t in res[0].trials]
+    cv = select_by_cv(S, names, items=names)
+    return replace(cv, fold_choice={g: res[j].params for g, j in cv.fold_choice.items()},
+                   in_sample_choice=res[cv.in_sample_choice].params), res

@@ -6,7 +6,12 @@ Kalman filtering", JGCD 26(2), 2003; Solà 2017 §7).
 
 Prediction over Δt with ω̄ = ω − b̂:
     q̂ ← q̂ ⊗ exp(ω̄ Δt),  Φ = [[exp(−[ω̄]× Δt), −I Δt], [0, I]],
-    Q = diag(σ_g² Δt I, σ_b² Δt I).
+    Q = diag((σ_g² + k_ω² |ω̄|²) Δt I, σ_b² Δt I).
+The rate term (``k_gyro_rate``, default 0) stands for the scale-factor and
+misalignment errors of an uncalibrated gyro, whose angle error grows with the
+angle turned (Groves, *Principles of GNSS, Inertial, and Multisensor
+Integrated Navigation Systems*, 2nd ed., §4.4.3): fast rotations then trust
+the gyro less and the references more.
 Accelerometer (gravity direction, unit vectors): h = q̂* ⊗ (0,0,−1) ⊗ q̂,
 H = [[h]×, 0], three sequential scalar updates, Joseph form.  Adaptive R:
 R_acc = σ_a² (1 + k_acc (| |f| − g | / 0.01 g)²) + (k_ω |ω̄|)², and the sample
@@ -17,6 +22,21 @@ tilt the estimate; it is rejected when the field norm or dip deviate from a
 reference (learned at start, tracked slowly, re-acquired after a long
 disturbance).  Rest detection adds a zero-rate pseudo-measurement
 ω_meas − b = 0 for gyro-bias estimation at rest.
+
+Two rest tests exist.  The plain one needs |ω − b̂| < ``rest_gyro`` and
+| |f| − g | < ``rest_acc`` on every sample for ``rest_time``.  With
+``rest_lpf_tau`` > 0 it uses instead the deviations from first-order low-passes
+of the raw signals, |ω − ω̄|² < ``rest_gyro``² and |f − f̄|² < ``rest_acc``²,
+plus |ω̄_i| < ``bias_clip`` (Laidig & Seel, "VQF", Information Fusion 91,
+2023, §4.2): it does not depend on the accelerometer's scale factor or on the
+current bias estimate, and one noisy sample does not reset it.
+
+The field norm and dip can be low-passed (``mag_lpf_tau``) before the
+disturbance test, and the field is used only after ``mag_min_undisturbed`` s of
+continuous undisturbed field, so that the samples of a disturbance that pass
+the test by chance are not used.  With ``mag_bias=False`` the heading update
+treats the gyro bias as consider states (Schmidt-Kalman; zero gain on the bias):
+heading errors from a distorted field then do not leak into the bias.
 
 With the adaptive features switched off (the defaults of :class:`MEKF`) it is
 the textbook MEKF; :class:`imunav.attitude.adaptive.AdaptiveMEKF` turns them on.
@@ -63,11 +83,17 @@ class MekfParams:
     acc_lpf_tau: float = 0.0
     p0_att: float = 0.1  # rad (initial attitude std)
     p0_bias: float = 0.01  # rad/s (initial bias std)
+    rest_lpf_tau: float = 0.0  # s; > 0: rest test on deviations from a low-pass (see module docstring)
+    mag_lpf_tau: float = 0.0  # s; low-pass of field norm and dip before the disturbance test
+    mag_min_undisturbed: float = 0.0  # s of continuous undisturbed field before the field is used again
+    mag_bias: bool = True  # False: the heading update corrects the attitude only (bias as consider states)
+    bias_clip: float = 1e9  # rad/s; no rest while a low-passed gyro axis exceeds it
+    k_gyro_rate: float = 0.0  # √s; gyro noise density grows as sqrt(σ_g² + (k |ω|)²)
 
     def __post_init__(self) -> None:
         for f in fields(self):
             v = getattr(self, f.name)
-            if f.name != "use_mag" and not (np.isfinite(v) and v >= 0):
+            if f.name not in ("use_mag", "mag_bias") and not (np.isfinite(v) and v >= 0):
                 raise ConfigError(f"MekfParams.{f.name} must be finite and >= 0, got {v}")
         if self.g <= 0:
             raise ConfigError(f"MekfParams.g must be > 0, got {self.g}")
@@ -78,7 +104,9 @@ class MekfParams:
             self.sigma_gyro, self.sigma_bias, self.sigma_acc, self.k_acc, self.acc_reject,
             self.sigma_mag, self.mag_norm_tol, self.mag_dip_tol, self.k_mag, self.rest_gyro,
             self.rest_acc, self.rest_time, self.sigma_rest, self.g, self.mag_ref_time, self.k_rate,
-            self.ref_tau, 1.0 if self.use_mag else 0.0, self.acc_lpf_tau,
+            self.ref_tau, 1.0 if self.use_mag else 0.0, self.acc_lpf_tau, self.rest_lpf_tau,
+            self.mag_lpf_tau, self.mag_min_undisturbed, 1.0 if self.mag_bias else 0.0, self.bias_clip,
+            self.k_gyro_rate,
         ], dtype=np.float64)
 
     def P0(self) -> np.ndarray:
@@ -100,7 +128,7 @@ class MEKF:
         self.q = np.array([1.0, 0.0, 0.0, 0.0])
         self.b = np.zeros(3)
         self.P = self.params.P0()
-        self._st = np.zeros(12)
+        self._st = np.zeros(_k.N_STATE)
         self._phi = np.eye(6)
 
     @classmethod
@@ -115,7 +143,7 @@ class MEKF:
         self.q = check_q0(q0)
         self.b = vec3(bias, "bias")
         self.P = self.params.P0()
-        self._st = np.zeros(12)
+        self._st = np.zeros(_k.N_STATE)
 
     def step(self, gyro: ArrayLike, accel: ArrayLike, mag: ArrayLike | None, dt: float) -> np.ndarray:
         """Process one sample; returns q_nb.  ``self.P``, ``self.b`` are updated in place."""
