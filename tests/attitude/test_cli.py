@@ -85,3 +85,24 @@ def test_grid_search_cli(tmp_path):
 def test_bad_param_syntax():
     r = runner.invoke(app, ["attitude", "benchmark", "broad", "--param", "oops"])
     assert r.exit_code != 0
+
+
+def test_grid_search_cli_reports_leave_one_trial_out(tmp_path):
+    """With two trials, each is scored with the beta that is best on the other one."""
+    folder = tmp_path / "broad"
+    folder.mkdir()
+    for name in ("05_undisturbed_slow_rotation_with_breaks_B.mat", "18_undisturbed_fast_translation_with_breaks_B.mat"):
+        (folder / name).symlink_to(data_path("broad", name))
+    out = tmp_path / "grid.json"
+    r = runner.invoke(app, ["attitude", "benchmark", str(folder), "-f", "madgwick", "--grid", "beta=0.005,0.05,0.5",
+                            "-j", "1", "--json", str(out)])
+    assert r.exit_code == 0, r.output
+    assert "leave-one-trial-out" in r.output
+    d = json.loads(out.read_text())
+    score = {(x["params"]["beta"], t): v["total_rmse_deg"] for x in d["grid"] for t, v in x["trials"].items()}
+    trials = list(d["grid"][0]["trials"])
+    for item in d["cv"]["items"]:
+        other = next(t for t in trials if t != item["item"])
+        beta = min({b for b, _ in score}, key=lambda b: score[(b, other)])
+        assert item["oof"] == pytest.approx(score[(beta, item["item"])], abs=1e-12)
+    assert d["cv"]["oof_mean"] >= d["cv"]["in_sample_mean"] - 1e-12

@@ -135,7 +135,7 @@ def benchmark_cmd(
     from rich.progress import Progress
     from rich.table import Table
 
-    from imunav.attitude.benchmark import FILTERS, evaluate, grid_search
+    from imunav.attitude.benchmark import FILTERS, cv_grid_search, evaluate, grid_search
     from imunav.io.broad import broad_trials
 
     con = Console()
@@ -167,6 +167,11 @@ def benchmark_cmd(
                       f"{m['inclination_rmse_deg']:.3f}")
         con.print(t)
         out["grid"] = [r.to_dict() for r in res]
+        if len(files) >= 2:
+            cv, _ = cv_grid_search(names[0], g, files, results=res)
+            con.print(f"best set in sample {cv.in_sample_mean:.3f} deg; leave-one-trial-out (each trial scored with "
+                      f"the set best on the others) {cv.oof_mean:.3f} deg: expect the latter on new recordings")
+            out["cv"] = cv.to_dict()
         results = [res[0]]
     else:
         results = []
