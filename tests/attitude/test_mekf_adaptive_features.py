@@ -81,22 +81,23 @@ def test_lowpass_rest_test_ignores_accel_scale_and_noise():
 
 
 def _flicker_disturbance(n, fs, seed):
-    """Still sensor; from 10 s to 40 s the field is disturbed (norm x 1.6), except that every 40th sample is a
-    field of the right norm and dip turned 40° in heading: it passes the norm / dip test by chance."""
+    """Still sensor; from 10 s to 40 s the field is disturbed (norm x 1.6), except for 0.2 s in every second, when it
+    is a field of the right norm and dip turned 40° in heading: it passes the norm / dip test by chance."""
     data, q = _static(n, fs, sg=0.002, sa=0.02, sm=0.1, seed=seed)
     m = data.mag.copy()
     qc = quat_conjugate(q)
     turned = quat_rotate(qc, quat_rotate(quat_exp(np.array([0, 0, np.radians(40.0)])), MAG_NED))
     i0, i1 = int(10 * fs), int(40 * fs)
     m[i0:i1] *= 1.6
-    m[i0:i1:40] = turned
+    for k in range(i0 + int(0.5 * fs), i1, int(fs)):
+        m[k:k + int(0.2 * fs)] = turned
     return replace(data, mag=m), q
 
 
 def test_min_undisturbed_time_rejects_chance_passes():
     fs, n = 100.0, 5000
     data, q = _flicker_disturbance(n, fs, 1)
-    base = replace(ADAPTIVE_DEFAULTS, mag_min_undisturbed=0.0)
+    base = replace(ADAPTIVE_DEFAULTS, mag_min_undisturbed=0.0, tau_mag=2.0)  # a fast heading shows it best
     e0 = angle_err_deg(AdaptiveMEKF(base).run(data).q_nb, np.tile(q, (n, 1)))
     e1 = angle_err_deg(AdaptiveMEKF(replace(base, mag_min_undisturbed=0.5)).run(data).q_nb, np.tile(q, (n, 1)))
     seg = slice(int(15 * fs), int(40 * fs))
@@ -133,3 +134,21 @@ def test_defaults_track_a_moving_sensor():
     data, q = simulate(5, duration=60.0, fs=100.0)
     e = angle_err_deg(AdaptiveMEKF().run(data).q_nb, q)
     assert np.sqrt(np.mean(e[2000:] ** 2)) < 1.5
+
+
+@pytest.mark.parametrize("fs", [50.0, 400.0])
+def test_time_constants_give_rate_independent_steady_state(fs):
+    """Random walk of density σ_g seen through white noise of density τ σ_g: P_ss = σ_g² τ (continuous Riccati),
+    whatever the sampling rate and, for the heading, whatever the dip."""
+    sg, ta, tm = 0.003, 2.0, 10.0
+    prm = MekfParams(sigma_gyro=sg, tau_acc=ta, tau_mag=tm, sigma_bias=0.0, p0_bias=1e-12)
+    n = int(12 * tm * fs)
+    for dip_deg in (30.0, 70.0):
+        d = np.radians(dip_deg)
+        mag = np.array([np.cos(d), 0.0, np.sin(d)]) * 50.0
+        data = ImuData(t=np.arange(n) / fs, gyro=np.zeros((n, 3)), accel=np.tile([0.0, 0.0, -9.81], (n, 1)),
+                       mag=np.tile(mag, (n, 1)))
+        P = MEKF(prm).run(data, q0=[1.0, 0, 0, 0]).cov_diag[-1]
+        # discrete steady state differs from the continuous one by O(Δt/τ)
+        np.testing.assert_allclose(P[:2], sg**2 * ta, rtol=2.0 / (fs * ta) + 1e-3)
+        np.testing.assert_allclose(P[2], sg**2 * tm, rtol=2.0 / (fs * tm) + 1e-3)

@@ -337,7 +337,7 @@ def complementary_run(q0, gyr, acc, mag, dt, k_acc, k_mag, use_mag):
 # 17 use_mag (>0.5)
 # 18 acc_lpf_tau       [s] low-pass of the nav-frame specific force (0: off)
 
-N_PARAMS = 25
+N_PARAMS = 27
 N_STATE = 24
 
 
@@ -530,7 +530,11 @@ def mekf_step(q, b, P, st, gyr, acc, mag, dt, p, out_phi):
         h0 = -2.0 * (qx * qz - qw * qy)
         h1 = -2.0 * (qy * qz + qw * qx)
         h2 = -(1.0 - 2.0 * (qx * qx + qy * qy))
-        r = p[2] * p[2] * (1.0 + p[3] * (dev / 0.01) ** 2) + (p[15] * wn) ** 2
+        # per-sample variance: σ_a², or from the time constant τ_a of the tilt
+        # correction, (τ_a σ_g)² / Δt (steady state of a random walk of density
+        # σ_g seen through white noise of density τ_a σ_g: gain 1/τ_a)
+        sa2 = (p[25] * p[0]) ** 2 / dt if p[25] > 0.0 else p[2] * p[2]
+        r = sa2 * (1.0 + p[3] * (dev / 0.01) ** 2) + (p[15] * wn) ** 2
         # H = [h]x rows for the body error (h(q̂⊗exp δθ) ≈ ĥ + [ĥ]x δθ)
         for i in range(3):
             for j in range(6):
@@ -625,7 +629,10 @@ def mekf_step(q, b, P, st, gyr, acc, mag, dt, p, out_phi):
                 H[3] = 0.0
                 H[4] = 0.0
                 H[5] = 0.0
-                r = (p[5] * mn / hh) ** 2 * (1.0 + p[8] * ((dn / p[6]) ** 2 + (dd / p[7]) ** 2))
+                # σ_mag is field-vector noise, so the heading noise is σ_mag |m| / |m_h|;
+                # τ_mag is the time constant of the heading itself (whatever the dip)
+                sm2 = (p[26] * p[0]) ** 2 / dt if p[26] > 0.0 else (p[5] * mn / hh) ** 2
+                r = sm2 * (1.0 + p[8] * ((dn / p[6]) ** 2 + (dd / p[7]) ** 2))
                 for j in range(6):
                     dx[j] = 0.0
                 if p[22] > 0.5:

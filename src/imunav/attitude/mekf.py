@@ -7,6 +7,14 @@ Kalman filtering", JGCD 26(2), 2003; Solà 2017 §7).
 Prediction over Δt with ω̄ = ω − b̂:
     q̂ ← q̂ ⊗ exp(ω̄ Δt),  Φ = [[exp(−[ω̄]× Δt), −I Δt], [0, I]],
     Q = diag((σ_g² + k_ω² |ω̄|²) Δt I, σ_b² Δt I).
+The accelerometer and magnetometer noise can be given per sample
+(``sigma_acc``, ``sigma_mag``) or, independent of the sampling rate, as the
+time constants of the corrections they make: with ``tau_acc`` > 0 the
+per-sample variance is (τ_a σ_g)² / Δt, the white measurement noise whose
+steady-state Kalman gain on a random walk of density σ_g is 1/τ_a (likewise
+``tau_mag`` for the heading).  These are the time constants of VQF (Laidig &
+Seel 2023), which hold across sensors and rates.
+
 The rate term (``k_gyro_rate``, default 0) stands for the scale-factor and
 misalignment errors of an uncalibrated gyro, whose angle error grows with the
 angle turned (Groves, *Principles of GNSS, Inertial, and Multisensor
@@ -89,6 +97,8 @@ class MekfParams:
     mag_bias: bool = True  # False: the heading update corrects the attitude only (bias as consider states)
     bias_clip: float = 1e9  # rad/s; no rest while a low-passed gyro axis exceeds it
     k_gyro_rate: float = 0.0  # √s; gyro noise density grows as sqrt(σ_g² + (k |ω|)²)
+    tau_acc: float = 0.0  # s; > 0: tilt-correction time constant, replaces sigma_acc (rate-independent)
+    tau_mag: float = 0.0  # s; > 0: heading-correction time constant, replaces sigma_mag (rate-independent)
 
     def __post_init__(self) -> None:
         for f in fields(self):
@@ -106,7 +116,7 @@ class MekfParams:
             self.rest_acc, self.rest_time, self.sigma_rest, self.g, self.mag_ref_time, self.k_rate,
             self.ref_tau, 1.0 if self.use_mag else 0.0, self.acc_lpf_tau, self.rest_lpf_tau,
             self.mag_lpf_tau, self.mag_min_undisturbed, 1.0 if self.mag_bias else 0.0, self.bias_clip,
-            self.k_gyro_rate,
+            self.k_gyro_rate, self.tau_acc, self.tau_mag,
         ], dtype=np.float64)
 
     def P0(self) -> np.ndarray:
