@@ -10,13 +10,14 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from _sim import MAG_NED, angle_err_deg, simulate
 from imunav.attitude import AdaptiveMEKF
 from imunav.attitude.adaptive import ADAPTIVE_DEFAULTS
 from imunav.attitude.mekf import MEKF, MekfParams
 from imunav.errors import ConfigError
 from imunav.rotation import quat_conjugate, quat_exp, quat_from_euler, quat_multiply, quat_rotate
 from imunav.timeseries import ImuData
+
+from ._sim import MAG_NED, angle_err_deg, simulate
 
 
 def _static(n, fs, *, q=None, bias=(0.0, 0.0, 0.0), sg=0.0, sa=0.0, sm=0.0, acc_scale=1.0, seed=0):
