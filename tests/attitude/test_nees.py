@@ -94,3 +94,30 @@ def test_mekf_public_covariance_calibrated_static():
         zb.append(z_scores(BIAS, res.bias[-1], sd[3:]))
     assert_rms_calibrated(np.concatenate(za), "MEKF attitude")
     assert_rms_calibrated(np.concatenate(zb), "MEKF gyro bias")
+
+
+def test_mekf_public_covariance_is_the_kalman_recursion():
+    """Static level sensor, noise-free data, accelerometer only: ``cov_diag`` equals an independent
+    6-state Kalman recursion (predict P <- F P F' + Q, F = [[I, -dt I], [0, I]], Q = diag(sg^2 dt, sb^2 dt),
+    then the gravity-direction update with H = [[h]x, 0], h = (0, 0, -1), R = sigma_acc^2 I) to 1e-12."""
+    from imunav.attitude import MEKF
+    from imunav.timeseries import ImuData
+
+    n, dt, g = 400, 0.01, 9.81
+    data = ImuData(t=dt * np.arange(n), gyro=np.zeros((n, 3)), accel=np.tile([0.0, 0.0, -g], (n, 1)), mag=None)
+    sg, sb, sa, pa, pb = 2e-4, 1e-4, 0.05 / g, 0.02, 0.03
+    res = MEKF.with_params(sigma_gyro=sg, sigma_bias=sb, sigma_acc=sa, p0_att=pa, p0_bias=pb).run(
+        data, q0=[1.0, 0.0, 0.0, 0.0], bias0=np.zeros(3), use_mag=False)
+    P = np.diag([pa**2] * 3 + [pb**2] * 3)
+    F = np.eye(6)
+    F[:3, 3:] = -dt * np.eye(3)
+    Q = np.diag([sg**2 * dt] * 3 + [sb**2 * dt] * 3)
+    H = np.zeros((3, 6))
+    H[0, 1], H[1, 0] = 1.0, -1.0  # rows of [h]x for h = (0, 0, -1); the third row is zero
+    ref = np.empty((n, 6))
+    for k in range(n):
+        P = F @ P @ F.T + Q
+        K = P @ H.T @ np.linalg.inv(H @ P @ H.T + sa**2 * np.eye(3))
+        P = (np.eye(6) - K @ H) @ P
+        ref[k] = np.diag(P)
+    np.testing.assert_allclose(res.cov_diag, ref, rtol=1e-12)

@@ -90,7 +90,7 @@ def test_ratetable_stderr_calibrated():
     _check(zs, "ratetable")
 
 
-def _ferraris_sections(truth, rng, fs, g0, n_static=300, n_rot=1000, sa=0.02, sg=0.005):
+def _ferraris_sections(truth, rng, fs, g0, n_static=100, n_rot=1000, sa=0.02, sg=0.005):
     secs = {}
     for i, ax in enumerate("xyz"):
         for sgn, tag in ((1, "p"), (-1, "a")):
