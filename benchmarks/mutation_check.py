@@ -127,7 +127,7 @@ def run_mutant(m: Mutant, python: str, timeout: float) -> tuple[str, float]:
         env.pop("IMUNAV_SIGMA_SCALE", None)
         cmd = [python, "-m", "pytest", "-x", "-q", "-p", "no:cacheprovider", *m.tests]
         try:
-            r = subprocess.run(cmd, cwd=ROOT, env=env, capture_output=True, text=True, timeout=timeout)
+            r = subprocess.run(cmd, cwd=ROOT, env=env, capture_output=True, text=True, timeout=timeout, check=False)
         except subprocess.TimeoutExpired:
             return "killed (timeout)", time.time() - t0
         if r.returncode == 0:

@@ -15,10 +15,15 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from _calibration import assert_rms_calibrated, sigma_scale, z_scores
 from scipy.signal import lfilter
 
-from _calibration import assert_rms_calibrated, sigma_scale, z_scores
-from imunav.airdata.filter import LongHorizonConfig, ThesisFilterConfig, run_long_horizon, thesis_matrices
+from imunav.airdata.filter import (
+    LongHorizonConfig,
+    ThesisFilterConfig,
+    run_long_horizon,
+    thesis_matrices,
+)
 
 CFG = LongHorizonConfig(wind_sigma=3.0, wind_tau=300.0, turbulence_sigma=1.5, turbulence_tau=2.7,
                         sigma_ads=(0.05, 0.05, 0.05), sigma_doppler=(0.17, 0.17, 0.06), p0_wind=9.0,
@@ -35,7 +40,7 @@ def _gm(rng, sigma, tau, x0, n):
 
 def _run(seed, cfg=CFG):
     rng = np.random.default_rng(seed)
-    n = int(round(DUR / DT_FINE)) + 1
+    n = round(DUR / DT_FINE) + 1
     t = DT_FINE * np.arange(n)
     W = _gm(rng, cfg.wind_sigma, cfg.wind_tau, rng.normal(scale=np.sqrt(cfg.p0_wind), size=3), n)
     g = _gm(rng, cfg.turbulence_sigma, cfg.turbulence_tau, rng.normal(scale=cfg.turbulence_sigma, size=3), n)

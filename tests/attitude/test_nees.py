@@ -6,7 +6,6 @@ import numpy as np
 from scipy.stats import chi2
 
 from imunav.attitude import _kernels as _k
-from imunav.attitude.alignment import align
 from imunav.attitude.mekf import MekfParams
 from imunav.attitude.ukf import UkfParams
 from imunav.rotation import quat_conjugate, quat_multiply, rotvec_from_quat
@@ -76,6 +75,7 @@ def test_mekf_public_covariance_calibrated_static():
     ~1.2-1.4: reported, not asserted here.)
     """
     from _calibration import assert_rms_calibrated, z_scores
+
     from imunav.attitude import MEKF
     from imunav.rotation import quat_exp
 
