@@ -62,6 +62,14 @@ def test_run_and_benchmark(tmp_path):
 
 
 def test_bad_filter_name(tmp_path):
+    from imunav.errors import ConfigError
+
+    r = runner.invoke(app, ["attitude", "montecarlo", "--runs", "1", "-f", "lee,nosuch"])
+    assert r.exit_code != 0
+    assert isinstance(r.exception, ConfigError) and "nosuch" in str(r.exception)
+
+
+def test_zero_runs_refused():
     r = runner.invoke(app, ["attitude", "montecarlo", "--runs", "0"])
     assert r.exit_code != 0
     assert "n_runs" in str(r.exception)

@@ -21,14 +21,15 @@ are optimistic when the bias drifts during the session.
 
 from __future__ import annotations
 
-from typing import Any, Mapping
+from collections.abc import Mapping
+from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from imunav.calib._lsq import design_condition
 from imunav.calib.model import ImuCalibration
 from imunav.calib.result import CalibrationResult
-from imunav.calib._lsq import design_condition
 from imunav.errors import InsufficientDataError, InvalidInputError, SaturationError
 from imunav.units import DEG
 
@@ -93,7 +94,10 @@ def ferraris(
     se_Ta = np.sqrt(Sp**2 + Sa**2) / (2.0 * gravity)
     all_static_g = np.vstack([gyr[k] for k in static])
     b_g = all_static_g.mean(0)
-    sig_g = all_static_g.std(0, ddof=1)
+    # gyro noise: pooled within-pose standard deviation (the pose-to-pose
+    # differences G f are signal, not noise)
+    ss = sum(((gyr[k] - mean_g[k]) ** 2).sum(0) for k in static)
+    sig_g = np.sqrt(ss / (len(all_static_g) - len(static)))
     se_bg = sig_g / np.sqrt(len(all_static_g))
     Gp = np.stack([mean_g[f"{a}_p"] for a in "xyz"], axis=1)
     Ga = np.stack([mean_g[f"{a}_a"] for a in "xyz"], axis=1)
@@ -108,7 +112,12 @@ def ferraris(
         f_cal = (acc[k] - b_a) @ T_a_inv.T
         w = gyr[k] - b_g - f_cal @ G.T
         T_g[:, j] = w.sum(0) / fs / angle
-        se_Tg[:, j] = sig_g * np.sqrt(len(w)) / fs / abs(angle)
+        # sum_t w_t carries the rotation's own noise (n sig^2), the bias estimate
+        # removed n times (n^2 se_bg^2) and the G estimate times sum_t f_t
+        # (sum_k S_k^2 se_G[:, k]^2); b_g and G are uncorrelated for equal pose lengths
+        n_rot, S = len(w), f_cal.sum(0)
+        var_sum = n_rot * sig_g**2 + n_rot**2 * se_bg**2 + (se_G**2) @ (S**2)
+        se_Tg[:, j] = np.sqrt(var_sum) / fs / abs(angle)
     stderr = {
         "accel_bias": se_ba, "accel_matrix": se_Ta, "gyro_bias": se_bg,
         "g_sensitivity": se_G, "gyro_matrix": se_Tg,
@@ -123,7 +132,7 @@ def ferraris(
     X6 = np.vstack([np.hstack([gravity * s * np.eye(3)[i], 1.0]) for s in (1, -1) for i in range(3)])
     return CalibrationResult(
         cal, stderr, {"accel_norm": res_a}, {"accel": design_condition(X6)}, {}, "ferraris",
-        {"n_static_samples": int(len(all_static_g)), "fs": fs},
+        {"n_static_samples": len(all_static_g), "fs": fs},
     )
 
 

@@ -45,33 +45,35 @@ import json
 import math
 import os
 import tempfile
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Sequence
+from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy.optimize import minimize_scalar, nnls
 
+from imunav import allan_models as _am
 from imunav.errors import InsufficientDataError, InvalidInputError
 from imunav.noise import _allan_kernels as _ak
 from imunav.noise.allan import AllanResult
 from imunav.units import to_display
 
 __all__ = [
+    "BI_FACTOR",
     "NoiseFit",
     "SlopeReadout",
-    "fit_noise",
-    "slope_readout",
     "avar_model",
     "avar_term",
+    "fit_noise",
+    "slope_readout",
     "write_kalibr_yaml",
-    "BI_FACTOR",
 ]
 
-TERMS = ("Q", "N", "B", "K", "R")
+TERMS = _am.IEEE952_TERMS
 #: sqrt(2 ln2 / pi): flat Allan deviation of flicker (bias-instability) noise per unit B
-BI_FACTOR = math.sqrt(2.0 * math.log(2.0) / math.pi)
+BI_FACTOR = _am.BI_FACTOR
 
 _SI_UNITS = {
     "gyro": {"Q": "rad", "N": "rad/s/sqrt(Hz)", "B": "rad/s", "K": "rad/s^2/sqrt(Hz)", "R": "rad/s^2",
@@ -88,36 +90,23 @@ _DISPLAY = {
 
 # --------------------------------------------------------------------------- model
 def avar_term(name: str, tau: ArrayLike, T: float | None = None) -> NDArray[np.float64]:
-    """AVAR of one term per unit coefficient (theta = Q^2, N^2, B^2, K^2, R^2 or s^2)."""
-    tau = np.asarray(tau, dtype=float)
-    if name == "Q":
-        return 3.0 / tau**2
-    if name == "N":
-        return 1.0 / tau
-    if name == "B":
-        return np.full_like(tau, 2.0 * math.log(2.0) / math.pi)
-    if name == "K":
-        return tau / 3.0
-    if name == "R":
-        return tau**2 / 2.0
+    """AVAR of one term per unit coefficient (theta = Q^2, N^2, B^2, K^2, R^2 or s^2).
+
+    The closed forms are those of :mod:`imunav.allan_models` (shared with
+    :mod:`imunav.sim`); ``"GM"`` needs the correlation time ``T``."""
     if name == "GM":
         if T is None or not T > 0:
             raise InvalidInputError("a Gauss-Markov term needs a positive correlation time T")
-        u = tau / T
-        # 1 - (3 - 4e^-u + e^-2u)/(2u), written to stay accurate for small u
-        # 3 - 4e^-u + e^-2u = -4 expm1(-u) + expm1(-2u)
-        inner = 1.0 - (-4.0 * np.expm1(-u) + np.expm1(-2 * u)) / (2.0 * u)
-        small = u < 1e-3
-        inner = np.where(small, u / 3.0 - u**2 / 4.0, inner)
-        return 2.0 * T / tau * inner
-    raise InvalidInputError(f"unknown noise term {name!r}; terms are {TERMS} and 'GM'")
+        return _am.gauss_markov_unit(tau, T)
+    if name not in TERMS:
+        raise InvalidInputError(f"unknown noise term {name!r}; terms are {TERMS} and 'GM'")
+    return _am.ieee952_term(name, tau)
 
 
 def avar_model(tau: ArrayLike, Q: float = 0.0, N: float = 0.0, B: float = 0.0, K: float = 0.0, R: float = 0.0,
                gm: Sequence[tuple[float, float]] = ()) -> NDArray[np.float64]:
     """Closed-form AVAR of the IEEE-952 terms plus Gauss-Markov terms ``gm = [(sigma, T), ...]``."""
-    tau = np.asarray(tau, dtype=float)
-    out = (3 * Q**2 / tau**2 + N**2 / tau + 2 * math.log(2) / math.pi * B**2 + K**2 * tau / 3 + R**2 * tau**2 / 2)
+    out = _am.ieee952(tau, Q=Q, N=N, B=B, K=K, R=R)
     for s, T in gm:
         out = out + s**2 * avar_term("GM", tau, T)
     return out
@@ -332,7 +321,7 @@ def _fit_channel(tau, m, A, edf, n_phase, fs, names, Ts0, select, overlapping, n
         Crel = _cov_rel(tau, m, n_phase, names, Ts, th, fs, model, edf, overlapping)
         # Gauss-Markov correlation times: 1-D searches on log T, others fixed
         for gi in gm_idx:
-            def obj(lt, gi=gi):
+            def obj(lt, gi=gi, Crel=Crel, model=model):
                 T2 = list(Ts)
                 T2[gi] = math.exp(lt)
                 return solve(range(len(names)), T2, Crel, model)[1]

@@ -55,6 +55,7 @@ from typing import TYPE_CHECKING, Any, Literal
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from imunav import allan_models as _am
 from imunav import units as _units
 from imunav.errors import (
     ConfigError,
@@ -71,26 +72,26 @@ if TYPE_CHECKING:  # pragma: no cover
     from imunav.timeseries import ImuData
 
 __all__ = [
-    "GaussMarkov",
+    "BIAS_INSTABILITY_FLOOR",
     "Flicker",
-    "TriadErrors",
+    "GaussMarkov",
     "ImuErrorModel",
-    "TriadTruth",
     "ImuErrorTruth",
-    "apply_errors",
-    "simulate_imu",
-    "scale_misalignment_matrix",
+    "TriadErrors",
+    "TriadTruth",
     "allan_variance_gauss_markov",
     "allan_variance_ieee952",
-    "seed_sequence",
-    "stream_state",
+    "apply_errors",
     "normals",
-    "BIAS_INSTABILITY_FLOOR",
+    "scale_misalignment_matrix",
+    "seed_sequence",
+    "simulate_imu",
+    "stream_state",
 ]
 
 #: sigma_A at the flat bias-instability floor is BIAS_INSTABILITY_FLOOR * B,
 #: sqrt(2 ln 2 / pi) = 0.6643 (IEEE Std 952-1997, C.3).
-BIAS_INSTABILITY_FLOOR = math.sqrt(2.0 * math.log(2.0) / math.pi)
+BIAS_INSTABILITY_FLOOR = _am.BI_FACTOR
 
 # stream keys (sensor, process): never renumber, streams depend on them
 _SENSOR_KEY = {"gyro": 0, "accel": 1, "mag": 2}
@@ -200,33 +201,19 @@ def allan_variance_gauss_markov(tau: ArrayLike, sigma: float, corr_time: float) 
 
     sigma_A^2(tau) = (2 sigma^2 T / tau) [1 - (T / 2 tau)(3 - 4 e^(-tau/T) + e^(-2 tau/T))]
 
-    evaluated with a series for tau / T < 1e-2 (the bracket is
-    x^2/3 - x^3/4 + 7 x^4/60 - ..., x = tau / T) to avoid cancellation.
+    evaluated by :func:`imunav.allan_models.gauss_markov` (exact series below
+    tau / T = 1/2, shared with :mod:`imunav.noise`).
     """
-    tau = np.asarray(tau, dtype=float)
-    x = tau / corr_time
-    small = x < 1e-2
-    xs = np.where(small, 1.0, x)  # placeholder where the series is used
-    bracket_big = 1.0 - (-4.0 * np.expm1(-xs) + np.expm1(-2.0 * xs)) / (2.0 * xs)
-    xt = np.where(small, x, 0.0)
-    bracket_small = xt**2 / 3.0 - xt**3 / 4.0 + 7.0 * xt**4 / 60.0 - 31.0 * xt**5 / 360.0
-    bracket = np.where(small, bracket_small, bracket_big)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        return 2.0 * sigma**2 * corr_time / tau * bracket
+    return _am.gauss_markov(tau, sigma, corr_time)
 
 
 def allan_variance_ieee952(
     tau: ArrayLike, *, Q: float = 0.0, N: float = 0.0, B: float = 0.0, K: float = 0.0, R: float = 0.0
 ) -> NDArray[np.float64]:
-    """IEEE-952 sum sigma^2 = 3Q^2/tau^2 + N^2/tau + (2 ln2/pi) B^2 + K^2 tau/3 + R^2 tau^2/2."""
-    tau = np.asarray(tau, dtype=float)
-    return (
-        3.0 * Q**2 / tau**2
-        + N**2 / tau
-        + BIAS_INSTABILITY_FLOOR**2 * B**2
-        + K**2 * tau / 3.0
-        + R**2 * tau**2 / 2.0
-    )
+    """IEEE-952 sum sigma^2 = 3Q^2/tau^2 + N^2/tau + (2 ln2/pi) B^2 + K^2 tau/3 + R^2 tau^2/2.
+
+    Evaluated by :func:`imunav.allan_models.ieee952` (shared with :mod:`imunav.noise`)."""
+    return _am.ieee952(tau, Q=Q, N=N, B=B, K=K, R=R)
 
 
 # --------------------------------------------------------------------------
@@ -281,7 +268,7 @@ def _flicker_weights(tau_min: float, tau_max: float, per_decade: int) -> tuple[n
 
     lo = math.log10(tau_min) - 0.6  # a little beyond the band so its edges stay flat
     hi = math.log10(tau_max) + 0.3
-    n = max(2, int(math.ceil((hi - lo) * per_decade)) + 1)
+    n = max(2, math.ceil((hi - lo) * per_decade) + 1)
     t_c = np.logspace(lo, hi, n)
     taus = np.logspace(math.log10(tau_min), math.log10(tau_max), 80)
     target = BIAS_INSTABILITY_FLOOR**2

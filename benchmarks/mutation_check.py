@@ -1,0 +1,162 @@
+"""Mutation check: do the tests catch small deliberate bugs?
+
+Each mutant is one exact string replacement in one source file.  The source
+tree is copied to a temporary directory, the mutant applied there (the working
+tree is never modified, so Ctrl-C leaves nothing behind), and the mutant's
+test selection is run with ``-x -q`` and PYTHONPATH pointing at the mutated
+copy.  A mutant is *killed* when the tests fail, *survived* when they pass.
+A replacement that does not match exactly once is reported as ``no-match``
+(the list is stale), which also fails the check.
+
+Usage::
+
+    python benchmarks/mutation_check.py            # all mutants
+    python benchmarks/mutation_check.py -k wind    # names containing "wind"
+
+Not part of CI (a few minutes on 2 cores).  Exit status 0 only when every
+selected mutant is killed.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import shutil
+import subprocess
+import sys
+import tempfile
+import time
+from dataclasses import dataclass
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+@dataclass(frozen=True)
+class Mutant:
+    name: str
+    area: str
+    path: str  # relative to src/imunav
+    old: str
+    new: str
+    tests: tuple[str, ...]
+
+
+MUTANTS = [
+    # ---- the six mutants of issue 13
+    Mutant("li-griffiths cross terms lose factor 2", "calibration", "calib/magnetometer.py",
+           "D = np.stack([x * x, y * y, z * z, 2 * y * z, 2 * x * z, 2 * x * y, 2 * x, 2 * y, 2 * z, np.ones_like(x)])",
+           "D = np.stack([x * x, y * y, z * z, y * z, x * z, x * y, 2 * x, 2 * y, 2 * z, np.ones_like(x)])",
+           ("tests/calib/test_uncertainty_calibration.py",)),
+    Mutant("magnetometer A stderr x sqrt(2)", "calibration", "calib/magnetometer.py",
+           '"A": np.sqrt(np.maximum(np.diag(covA), 0)).reshape(3, 3)',
+           '"A": np.sqrt(2.0 * np.maximum(np.diag(covA), 0)).reshape(3, 3)',
+           ("tests/calib/test_uncertainty_calibration.py",)),
+    Mutant("MEKF covariance update halved", "attitude", "attitude/_kernels.py",
+           "P[i, j] -= PH[i] * PH[j] / s",
+           "P[i, j] -= 0.5 * PH[i] * PH[j] / s",
+           ("tests/attitude/test_nees.py::test_mekf_public_covariance_is_the_kalman_recursion", "tests/attitude/test_nees.py::test_mekf_public_covariance_calibrated_static")),
+    Mutant("long-horizon position ignores the gust (A[0,2] = 0)", "air data", "airdata/filter.py",
+           "A = np.array([[0.0, 1.0, 1.0], [0.0, -1.0 / c.wind_tau, 0.0]",
+           "A = np.array([[0.0, 1.0, 0.0], [0.0, -1.0 / c.wind_tau, 0.0]",
+           ("tests/airdata/test_wind_calibration.py",)),
+    Mutant("long-horizon gust process noise / 4", "air data", "airdata/filter.py",
+           "2.0 * c.turbulence_sigma**2 / c.turbulence_tau",
+           "0.5 * c.turbulence_sigma**2 / c.turbulence_tau",
+           ("tests/airdata/test_wind_calibration.py",)),
+    Mutant("thesis wind decay 1 - T/tau -> 1 + T/tau", "air data", "airdata/filter.py",
+           "F[3:, 3:] = (1.0 - c.dt / c.tau) * I3",
+           "F[3:, 3:] = (1.0 + c.dt / c.tau) * I3",
+           ("tests/airdata/test_wind_calibration.py",)),
+    # ---- two more per area
+    Mutant("GM Allan series coefficient", "noise", "allan_models.py",
+           "(2.0**k - 4.0) / (2.0 * math.factorial(k))",
+           "(2.0**k - 3.0) / (2.0 * math.factorial(k))",
+           ("tests/noise/test_allan_models.py",)),
+    Mutant("flicker Allan level B instead of B^2", "noise", "allan_models.py",
+           "return np.full_like(tau, BI_FACTOR**2)",
+           "return np.full_like(tau, BI_FACTOR)",
+           ("tests/noise/test_allan_models.py", "tests/noise/test_fit.py")),
+    Mutant("Ferraris gyro-matrix stderr drops the bias term", "calibration", "calib/ferraris.py",
+           "var_sum = n_rot * sig_g**2 + n_rot**2 * se_bg**2 + (se_G**2) @ (S**2)",
+           "var_sum = n_rot * sig_g**2 + (se_G**2) @ (S**2)",
+           ("tests/calib/test_uncertainty_calibration.py",)),
+    Mutant("rate-table gyro-matrix stderr x 1.5", "calibration", "calib/ratetable.py",
+           'stderr["gyro_matrix"] = fit.stderr[:3].T',
+           'stderr["gyro_matrix"] = 1.5 * fit.stderr[:3].T',
+           ("tests/calib/test_uncertainty_calibration.py",)),
+    Mutant("MEKF gyro process noise doubled", "attitude", "attitude/_kernels.py",
+           "        P[i, i] += sg2\n",
+           "        P[i, i] += 2.0 * sg2\n",
+           ("tests/attitude/test_nees.py::test_mekf_public_covariance_is_the_kalman_recursion", "tests/attitude/test_nees.py::test_mekf_public_covariance_calibrated_static")),
+    Mutant("MEKF state correction halved", "attitude", "attitude/_kernels.py",
+           "dx[i] += PH[i] * nu / s",
+           "dx[i] += 0.5 * PH[i] * nu / s",
+           ("tests/attitude/test_nees.py::test_mekf_public_covariance_calibrated_static", "tests/attitude/test_filters_sim.py")),
+    Mutant("ZUPT Joseph update without K R K^T", "ZUPT", "ins/_kernels.py",
+           "acc += -X[i, idx[l]] * K[j, l] + K[i, l] * r[l] * K[j, l]",
+           "acc += -X[i, idx[l]] * K[j, l]",
+           ("tests/ins/test_ins_zupt.py", "tests/ins/test_ins_zupt_aids.py")),
+    Mutant("ZUPT innovation covariance without R", "ZUPT", "ins/_kernels.py",
+           "        S[i, i] += r[i]\n    _inv_small(S, Si)",
+           "        S[i, i] += 0.0 * r[i]\n    _inv_small(S, Si)",
+           ("tests/ins/test_ins_zupt.py", "tests/ins/test_ins_zupt_aids.py")),
+    Mutant("sim GM drive 1 - phi instead of 1 - phi^2", "simulation", "sim/_kernels.py",
+           "math.sqrt(-math.expm1(-2.0 * d / gm_tau[i, j]))",
+           "math.sqrt(-math.expm1(-1.0 * d / gm_tau[i, j]))",
+           ("tests/test_sim_errors.py",)),
+    Mutant("sim white noise N sqrt(dt) instead of N / sqrt(dt)", "simulation", "sim/_kernels.py",
+           "white_s[i] = nd[i] / math.sqrt(d)",
+           "white_s[i] = nd[i] * math.sqrt(d)",
+           ("tests/test_sim_errors.py",)),
+]
+
+
+def run_mutant(m: Mutant, python: str, timeout: float) -> tuple[str, float]:
+    t0 = time.time()
+    with tempfile.TemporaryDirectory(prefix="imunav-mutant-") as tmp:
+        src = Path(tmp) / "src"
+        shutil.copytree(ROOT / "src", src, ignore=shutil.ignore_patterns("__pycache__", "*.nbc", "*.nbi"))
+        f = src / "imunav" / m.path
+        text = f.read_text()
+        if text.count(m.old) != 1:
+            return "no-match", time.time() - t0
+        f.write_text(text.replace(m.old, m.new))
+        env = {**os.environ, "PYTHONPATH": str(src), "NUMBA_CACHE_DIR": str(Path(tmp) / "numba"),
+               "PYTHONDONTWRITEBYTECODE": "1"}
+        env.pop("IMUNAV_SIGMA_SCALE", None)
+        cmd = [python, "-m", "pytest", "-x", "-q", "-p", "no:cacheprovider", *m.tests]
+        try:
+            r = subprocess.run(cmd, cwd=ROOT, env=env, capture_output=True, text=True, timeout=timeout, check=False)
+        except subprocess.TimeoutExpired:
+            return "killed (timeout)", time.time() - t0
+        if r.returncode == 0:
+            return "SURVIVED", time.time() - t0
+        if r.returncode == 1:
+            return "killed", time.time() - t0
+        return f"error (pytest rc {r.returncode})", time.time() - t0
+
+
+def main(argv: list[str] | None = None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("-k", default="", help="run only mutants whose name contains this text")
+    ap.add_argument("--timeout", type=float, default=600.0, help="seconds per mutant")
+    a = ap.parse_args(argv)
+    sel = [m for m in MUTANTS if a.k.lower() in m.name.lower()]
+    rows = []
+    for m in sel:
+        status, sec = run_mutant(m, sys.executable, a.timeout)
+        rows.append((m.area, m.name, status, sec))
+        print(f"{m.area:12s} {m.name:55s} {status:10s} {sec:6.1f} s", flush=True)
+    print()
+    print("| area | mutant | result | time |")
+    print("|---|---|---|---|")
+    for area, name, status, sec in rows:
+        print(f"| {area} | {name} | {status} | {sec:.0f} s |")
+    ok = all(s.startswith("killed") for _, _, s, _ in rows)
+    print(f"\n{sum(s.startswith('killed') for _, _, s, _ in rows)}/{len(rows)} killed")
+    return 0 if ok else 1
+
+
+if __name__ == "__main__":
+    sys.exit(main())
