@@ -178,8 +178,6 @@ BG = np.array([-427, 148, -80.0])
 
 
 @pytest.mark.slow
-@pytest.mark.xfail(strict=True, reason="multipose gyro stderr is optimistic by ~1.45 (RMS z 1.45 over 96 values; "
-                   "misalignments and scales): reported to the multipose owner, not fixed here")
 def test_multipose_stderr_calibrated():
     """Tedaldi multi-pose on simulated sessions (30 poses): z of the 9 accel and 12 gyro parameters."""
     from imunav.calib import ImuCalibration

@@ -390,12 +390,13 @@ def _ekf_update_consider(P, dx, H, r, nu, PH, n_est):
         s += H[i] * PH[i]
         hdx += H[i] * dx[i]
     nu = nu - hdx
+    g = nu / s
     for i in range(n_est):
-        dx[i] += PH[i] * nu / s
+        dx[i] = dx[i] + PH[i] * g
     for i in range(6):
         for j in range(6):
             if i < n_est or j < n_est:
-                P[i, j] -= PH[i] * PH[j] / s
+                P[i, j] = P[i, j] - PH[i] * PH[j] / s
     return nu * nu / s
 
 
