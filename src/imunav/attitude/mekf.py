@@ -21,7 +21,8 @@ angle turned (Groves, *Principles of GNSS, Inertial, and Multisensor
 Integrated Navigation Systems*, 2nd ed., §4.4.3): fast rotations then trust
 the gyro less and the references more.
 Accelerometer (gravity direction, unit vectors): h = q̂* ⊗ (0,0,−1) ⊗ q̂,
-H = [[h]×, 0], three sequential scalar updates, Joseph form.  Adaptive R:
+H = [[h]×, 0], three sequential scalar updates, P ← P − K s Kᵀ (the symmetric form of
+(I − K H) P for a scalar update; not the Joseph form).  Adaptive R:
 R_acc = σ_a² (1 + k_acc (| |f| − g | / 0.01 g)²) + (k_ω |ω̄|)², and the sample
 is rejected when | |f| − g | / g exceeds ``acc_reject``.
 Magnetometer: heading only (the horizontal field in the nav frame, yaw
