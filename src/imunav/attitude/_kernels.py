@@ -349,30 +349,14 @@ def _ekf_update(P, dx, H, r, nu, PH):
     symmetric form of (I − K H) P for a scalar update; P stays symmetric).
     Returns the NIS term ν'² / s.
     """
-    for i in range(6):
-        acc = 0.0
-        for j in range(6):
-            acc += P[i, j] * H[j]
-        PH[i] = acc
-    s = r
-    hdx = 0.0
-    for i in range(6):
-        s += H[i] * PH[i]
-        hdx += H[i] * dx[i]
-    nu = nu - hdx
-    for i in range(6):
-        dx[i] += PH[i] * nu / s
-    for i in range(6):
-        for j in range(6):
-            P[i, j] -= PH[i] * PH[j] / s
-    return nu * nu / s
+    return _ekf_update_consider(P, dx, H, r, nu, PH, 6)
 
 
 @njit(cache=True)
 def _ekf_update_consider(P, dx, H, r, nu, PH, n_est):
     """Scalar update of the first ``n_est`` states only; the rest are consider
     states (Schmidt-Kalman: their gain is zero, Simon, *Optimal State
-    Estimation*, 2006, §7.5).
+    Estimation*, 2006, §7.5).  ``n_est = 6`` is the plain update.
 
     With K = [P Hᵀ / s for i < n_est, 0 otherwise] the Joseph form
     (I − K H) P (I − K H)ᵀ + K r Kᵀ reduces to the optimal update on every
@@ -390,13 +374,12 @@ def _ekf_update_consider(P, dx, H, r, nu, PH, n_est):
         s += H[i] * PH[i]
         hdx += H[i] * dx[i]
     nu = nu - hdx
-    g = nu / s
     for i in range(n_est):
-        dx[i] = dx[i] + PH[i] * g
+        dx[i] += PH[i] * nu / s
     for i in range(6):
         for j in range(6):
             if i < n_est or j < n_est:
-                P[i, j] = P[i, j] - PH[i] * PH[j] / s
+                P[i, j] -= PH[i] * PH[j] / s
     return nu * nu / s
 
 
