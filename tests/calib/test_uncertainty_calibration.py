@@ -137,15 +137,19 @@ def test_temperature_curve_stderr_calibrated():
     _check(zs, "temperature")
 
 
+def _random_ellipsoid(rng, shortest):
+    """Soft-iron inverse A⁻¹ (random axes, semi-axes shortest..1.3 x 50) and hard iron b."""
+    q, _r = np.linalg.qr(rng.normal(size=(3, 3)))
+    R = q * np.sign(np.linalg.det(q))
+    return R @ np.diag(rng.uniform(shortest, 1.3, 3)) @ R.T * 50.0, rng.uniform(-80, 80, 3)
+
+
 def test_magnetometer_b_and_A_stderr_calibrated():
     """Random ellipsoids with noise, 60 runs: b (3) and A (9) against MagCalibration.stderr."""
     rng = np.random.default_rng(42)
     zs: dict = {}
     for _ in range(60):
-        q, _r = np.linalg.qr(rng.normal(size=(3, 3)))
-        R = q * np.sign(np.linalg.det(q))
-        Ainv = R @ np.diag(rng.uniform(0.7, 1.3, 3)) @ R.T * 50.0
-        b = rng.uniform(-80, 80, 3)
+        Ainv, b = _random_ellipsoid(rng, 0.7)
         u = rng.normal(size=(300, 3))
         u /= np.linalg.norm(u, axis=1)[:, None]
         h = u @ Ainv.T + b + rng.normal(scale=0.5, size=(300, 3))
@@ -160,10 +164,7 @@ def test_li_griffiths_algebraic_fit_exact_without_refinement():
     shortest axis is at least half the longest (where the k = 4 constraint holds for the true quadric)."""
     rng = np.random.default_rng(5)
     for _ in range(3):
-        q, _r = np.linalg.qr(rng.normal(size=(3, 3)))
-        R = q * np.sign(np.linalg.det(q))
-        Ainv = R @ np.diag(rng.uniform(0.75, 1.3, 3)) @ R.T * 50.0
-        b = rng.uniform(-80, 80, 3)
+        Ainv, b = _random_ellipsoid(rng, 0.75)
         u = rng.normal(size=(400, 3))
         h = (u / np.linalg.norm(u, axis=1)[:, None]) @ Ainv.T + b
         c = fit_ellipsoid(h, field_norm=1.0, refine=False)

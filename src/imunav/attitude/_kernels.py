@@ -342,6 +342,12 @@ N_STATE = 24
 
 
 @njit(cache=True)
+def _lowpass(st, k, x, c, first):
+    """First-order low-pass of ``x`` held in ``st[k]`` with factor c = 1 − exp(−Δt/τ); ``first`` starts it at x."""
+    st[k] = x if first else st[k] + c * (x - st[k])
+
+
+@njit(cache=True)
 def _ekf_update(P, dx, H, r, nu, PH):
     """Scalar measurement update of the 6-state error (in place).
 
@@ -467,18 +473,15 @@ def mekf_step(q, b, P, st, gyr, acc, mag, dt, p, out_phi):
         # (time constant p[19]) plus a bias-size bound on the low-passed rate
         # (Laidig & Seel 2023, §4.2): independent of the accelerometer's
         # scale and of the current bias estimate, robust to per-sample noise
-        if st[18] < 0.5:
-            for i in range(3):
-                st[12 + i] = gyr[i]
-                st[15 + i] = acc[i]
-            st[18] = 1.0
+        first = st[18] < 0.5
+        st[18] = 1.0
         c = 1.0 - math.exp(-dt / p[19])
         dg = 0.0
         da = 0.0
         big = False
         for i in range(3):
-            st[12 + i] += c * (gyr[i] - st[12 + i])
-            st[15 + i] += c * (acc[i] - st[15 + i])
+            _lowpass(st, 12 + i, gyr[i], c, first)
+            _lowpass(st, 15 + i, acc[i], c, first)
             dg += (gyr[i] - st[12 + i]) ** 2
             da += (acc[i] - st[15 + i]) ** 2
             if abs(st[12 + i]) > p[23]:
@@ -497,15 +500,12 @@ def mekf_step(q, b, P, st, gyr, acc, mag, dt, p, out_phi):
         # gyro-integrated frame: translational accelerations average out
         # because velocity stays bounded (cf. Laidig & Seel 2023, §4.1)
         f0, f1, f2 = qrot_t(qw, qx, qy, qz, a0, a1, a2)
-        if st[11] < 0.5:
-            st[5] = f0
-            st[6] = f1
-            st[7] = f2
-            st[11] = 1.0
+        first = st[11] < 0.5
+        st[11] = 1.0
         c = 1.0 - math.exp(-dt / p[18])
-        st[5] += c * (f0 - st[5])
-        st[6] += c * (f1 - st[6])
-        st[7] += c * (f2 - st[7])
+        _lowpass(st, 5, f0, c, first)
+        _lowpass(st, 6, f1, c, first)
+        _lowpass(st, 7, f2, c, first)
         a0, a1, a2 = qrot_t(qw, -qx, -qy, -qz, st[5], st[6], st[7])
         an = math.sqrt(a0 * a0 + a1 * a1 + a2 * a2)
     dev = abs(an - g) / g
@@ -566,13 +566,11 @@ def mekf_step(q, b, P, st, gyr, acc, mag, dt, p, out_phi):
             dip = math.atan2(n2, hh)
             if p[20] > 0.0:
                 # norm and dip low-passed (time constant p[20]) before the disturbance test
-                if st[21] < 0.5:
-                    st[19] = mn
-                    st[20] = dip
-                    st[21] = 1.0
+                first = st[21] < 0.5
+                st[21] = 1.0
                 c = 1.0 - math.exp(-dt / p[20])
-                st[19] += c * (mn - st[19])
-                st[20] += c * (dip - st[20])
+                _lowpass(st, 19, mn, c, first)
+                _lowpass(st, 20, dip, c, first)
                 mn_t = st[19]
                 dip_t = st[20]
             else:
