@@ -11,10 +11,25 @@ from imunav.learn.lstm import (
     TrainingReport,
     augment,
     best_labels,
+    gravity_in_body,
+    guard_stances,
     lstm_forward,
     random_rotations,
+    time_warp,
     train_lstm,
 )
 
-__all__ = ["DEFAULT_MODEL_PATH", "LstmConfig", "LstmDetector", "TrainingReport", "augment", "best_labels",
-           "lstm_forward", "random_rotations", "train_lstm"]
+__all__ = [
+    "DEFAULT_MODEL_PATH",
+    "LstmConfig",
+    "LstmDetector",
+    "TrainingReport",
+    "augment",
+    "best_labels",
+    "gravity_in_body",
+    "guard_stances",
+    "lstm_forward",
+    "random_rotations",
+    "time_warp",
+    "train_lstm",
+]
