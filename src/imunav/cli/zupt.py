@@ -129,8 +129,12 @@ def train_cmd(
     budget_s: Optional[float] = typer.Option(None, help="Stop training after this many seconds (result then depends on machine speed)."),
     seed: int = typer.Option(0, help="Random seed."),
     threads: int = typer.Option(1, help="Torch CPU threads."),
+    shoe_threshold: float | None = typer.Option(None, help="SHOE threshold of the stance guard (default: the SHOE grid value with the smallest mean 2-D error over these trials)."),
 ) -> None:
     """Train the LSTM zero-velocity detector on labelled trials (labels: best stored classical detector per trial).
+
+    The stance guard's SHOE threshold is chosen on the same training trials
+    (the protocol of benchmarks/bench_zupt_lstm_cv.py, applied to all of them).
 
     Example: imunav zupt train ../shared/data/foot/pyshoe_vicon --out zupt_lstm.npz
     """
@@ -138,7 +142,7 @@ def train_cmd(
 
     from imunav.errors import ImunavError
     from imunav.io.foot import read_pyshoe_mat
-    from imunav.learn import LstmConfig, best_labels, train_lstm
+    from imunav.learn import LstmConfig, best_labels, select_shoe_threshold, train_lstm
 
     files = sorted(directory.glob("*.mat"))
     if not files:
@@ -149,8 +153,12 @@ def train_cmd(
         if v is not None:
             kw[k] = v
     try:
-        cfg = LstmConfig(**kw)
+        LstmConfig(**kw)  # validate the options before the slow part
         trials = [read_pyshoe_mat(f) for f in files]
+        if shoe_threshold is None:
+            shoe_threshold, _ = select_shoe_threshold(trials)
+            typer.echo(f"guard: SHOE threshold {shoe_threshold:.4g} (smallest mean 2-D error over the {len(trials)} trials)")
+        cfg = LstmConfig(**kw, shoe_threshold=shoe_threshold)
         labels = []
         audit = []
         for tr in trials:

@@ -6,6 +6,7 @@ inference (:class:`LstmDetector`) is numpy only.
 
 from imunav.learn.lstm import (
     DEFAULT_MODEL_PATH,
+    SHOE_GUARD_GRID,
     LstmConfig,
     LstmDetector,
     TrainingReport,
@@ -15,12 +16,14 @@ from imunav.learn.lstm import (
     guard_stances,
     lstm_forward,
     random_rotations,
+    select_shoe_threshold,
     time_warp,
     train_lstm,
 )
 
 __all__ = [
     "DEFAULT_MODEL_PATH",
+    "SHOE_GUARD_GRID",
     "LstmConfig",
     "LstmDetector",
     "TrainingReport",
@@ -30,6 +33,7 @@ __all__ = [
     "guard_stances",
     "lstm_forward",
     "random_rotations",
+    "select_shoe_threshold",
     "time_warp",
     "train_lstm",
 ]

@@ -57,6 +57,7 @@ from imunav.errors import (
 
 __all__ = [
     "DEFAULT_MODEL_PATH",
+    "SHOE_GUARD_GRID",
     "LstmConfig",
     "LstmDetector",
     "TrainingReport",
@@ -67,6 +68,7 @@ __all__ = [
     "input_features",
     "lstm_forward",
     "random_rotations",
+    "select_shoe_threshold",
     "time_warp",
     "train_lstm",
 ]
@@ -642,6 +644,37 @@ def train_lstm(trials: Sequence[Any], labels: Sequence[Any], config: LstmConfig 
     rep = TrainingReport(np.array(losses), done * cfg.batch_size, time.perf_counter() - t0,
                          correct / max(counted, 1), stopped)
     return det, rep
+
+
+#: SHOE thresholds searched for the guard's reference (:func:`select_shoe_threshold`).
+SHOE_GUARD_GRID: Array = np.geomspace(1e6, 1e9, 31)
+
+
+def select_shoe_threshold(trials: Sequence[Any], grid: Any = None, config: Any = None) -> tuple[float, Array]:
+    """The single SHOE threshold with the smallest mean 2-D error over ``trials`` (the training trials).
+
+    Each trial (a :class:`imunav.io.foot.FootTrial` with a reference
+    ``position``) runs through the ZUPT INS (``config``) with SHOE at every
+    ``grid`` value (default :data:`SHOE_GUARD_GRID`) and is scored with
+    :func:`imunav.ins.error_2d`.  Returns ``(threshold, mean error per grid value)``.
+    """
+    from imunav.ins.detectors import detector_statistic
+    from imunav.ins.metrics import error_2d
+    from imunav.ins.zupt import run_zupt
+
+    g = SHOE_GUARD_GRID if grid is None else np.asarray(grid, dtype=float)
+    if g.ndim != 1 or g.size == 0 or not np.all(g > 0):
+        raise InvalidInputError("grid must be a non-empty 1-D sequence of SHOE thresholds > 0")
+    if len(trials) == 0:
+        raise InvalidInputError("need at least one trial to choose a SHOE threshold")
+    E = np.zeros(g.size)
+    for tr in trials:
+        if tr.position is None:
+            raise InvalidInputError(f"trial {tr.name!r} has no reference position to score SHOE thresholds")
+        T = detector_statistic(tr.imu, "shoe")
+        E += [error_2d(run_zupt(tr.imu, T < x, config).position, tr.position) for x in g]
+    E /= len(trials)
+    return float(g[int(np.argmin(E))]), E
 
 
 def best_labels(trial: Any, detectors: Sequence[str] = ("shoe", "ared", "amvd", "mbgtd"),
