@@ -28,8 +28,10 @@ Run:  PYTHONPATH=src python benchmarks/bench_zupt_lstm_cv.py [--json out.json] [
 from __future__ import annotations
 
 import argparse
+import hashlib
 import json
 import time
+from pathlib import Path
 
 import numpy as np
 
@@ -37,7 +39,14 @@ from imunav.crossval import cross_validate, pyshoe_session, select_by_cv
 from imunav.ins import ZuptConfig, detector_statistic, error_2d, run_zupt
 from imunav.io.datasets import shared_data_path
 from imunav.io.foot import read_pyshoe_mat
-from imunav.learn import LstmConfig, best_labels, gravity_in_body, time_warp, train_lstm
+from imunav.learn import (
+    LstmConfig,
+    LstmDetector,
+    best_labels,
+    gravity_in_body,
+    time_warp,
+    train_lstm,
+)
 
 GRIDS = {
     "shoe": np.geomspace(1e6, 1e9, 31),
@@ -50,6 +59,12 @@ SPEEDS = (1.5, 2.0)
 
 def _err(tr, zv, cfg) -> float:
     return error_2d(run_zupt(tr.imu, zv, cfg).position, tr.position)
+
+
+def _train_key(train_names, cfg) -> str:
+    """Cache key of a training run: the training trials and the settings that affect training."""
+    d = {k: v for k, v in cfg.to_dict().items() if not k.startswith("guard") and k != "shoe_threshold"}
+    return hashlib.sha1(json.dumps([list(train_names), d]).encode()).hexdigest()[:16]
 
 
 def _warped(tr, factor: float):
@@ -69,6 +84,8 @@ def main() -> None:
     ap.add_argument("--save-model", default=None, help="write the in-sample model (all trials) here")
     ap.add_argument("--set", action="append", default=[], help="LstmConfig override key=value (experiments only)")
     ap.add_argument("--no-fast", action="store_true", help="skip the time-compressed replays")
+    ap.add_argument("--cache", default=None, help="folder for the trained models: reused when present "
+                    "(same training trials and settings), written otherwise")
     args = ap.parse_args()
     import torch
 
@@ -122,7 +139,14 @@ def main() -> None:
         j = int(np.argmin(S[:n_shoe][:, train].mean(axis=1)))
         cfg = LstmConfig(**{**over, "shoe_threshold": float(GRIDS["shoe"][j])})
         t1 = time.perf_counter()
-        model, _ = train_lstm([trials[i].imu for i in train], [labels[i] for i in train], cfg, threads=1)
+        path = Path(args.cache) / f"lstm-{_train_key([names[i] for i in train], cfg)}.npz" if args.cache else None
+        if path is not None and path.is_file():
+            model = LstmDetector.load(path)
+            model.config = cfg  # the decision settings (guard) are not part of training
+        else:
+            model, _ = train_lstm([trials[i].imu for i in train], [labels[i] for i in train], cfg, threads=1)
+            if path is not None:
+                model.save(path)
         times.append(time.perf_counter() - t1)
         models.append(model)
         return model

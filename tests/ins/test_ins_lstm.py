@@ -150,6 +150,11 @@ def test_guard_falls_back_on_fragmented_stances_and_never_removes_stance():
     out, info = guard_stances(longer, ref, FS)
     np.testing.assert_array_equal(out, longer)
     assert info == {**info, "filled_stances": 0, "bridged_gaps": 0, "fallback": False}
+    # every check can be turned off: then nothing changes
+    out, info = guard_stances(frag, ref, FS, block_s=5.0, min_ratio=0.0, max_count_ratio=None, min_stance_s=None,
+                              max_bridge_s=None)
+    np.testing.assert_array_equal(out, frag)
+    assert not info["fallback"]
     with pytest.raises(ShapeError, match="one length"):
         guard_stances(ref[:-1], ref, FS)
     with pytest.raises(InvalidInputError, match="fs"):
@@ -222,6 +227,10 @@ def test_new_config_checks():
         LstmConfig(shoe_threshold=-1.0)
     with pytest.raises(ConfigError, match="warp_fraction"):
         LstmConfig(warp_fraction=1.5)
+    with pytest.raises(ConfigError, match="guard_fill_s"):
+        LstmConfig(guard_fill_s=-0.1)
+    with pytest.raises(ConfigError, match="guard_max_count_ratio"):
+        LstmConfig(guard_max_count_ratio=0.5)
 
 
 # --- the shipped detector on fast gait and on real trials -------------------------------------------------------

@@ -115,8 +115,10 @@ class LstmConfig:
     warp_fraction: float = 0.5
     guard: bool = True
     shoe_threshold: float = 1.0e8
+    guard_fill_s: float | None = 0.1
+    guard_bridge_s: float | None = 0.1
     guard_min_ratio: float = 0.5
-    guard_max_count_ratio: float = 1.5
+    guard_max_count_ratio: float | None = 1.5
     guard_block_s: float = 10.0
 
     def __post_init__(self) -> None:
@@ -142,9 +144,14 @@ class LstmConfig:
             raise ConfigError(f"warp_fraction must be in [0, 1]; got {self.warp_fraction}")
         if not (self.shoe_threshold > 0 and np.isfinite(self.shoe_threshold)):
             raise ConfigError(f"shoe_threshold must be a finite SHOE threshold > 0; got {self.shoe_threshold}")
-        if not 0.0 <= self.guard_min_ratio <= 1.0 or not self.guard_max_count_ratio >= 1.0:
-            raise ConfigError("guard_min_ratio must be in [0, 1] and guard_max_count_ratio >= 1; got "
+        if not 0.0 <= self.guard_min_ratio <= 1.0 or not (self.guard_max_count_ratio is None
+                                                           or self.guard_max_count_ratio >= 1.0):
+            raise ConfigError("guard_min_ratio must be in [0, 1] and guard_max_count_ratio >= 1 or None; got "
                               f"{self.guard_min_ratio}, {self.guard_max_count_ratio}")
+        for name in ("guard_fill_s", "guard_bridge_s"):
+            v = getattr(self, name)
+            if v is not None and not v >= 0:
+                raise ConfigError(f"{name} must be >= 0 s or None (off); got {v}")
         if not self.guard_block_s > 0:
             raise ConfigError(f"guard_block_s must be > 0 s; got {self.guard_block_s}")
 
@@ -321,9 +328,10 @@ class LstmDetector:
                                   "max_gap_s": max_gap_s}
         if use_guard:
             ref = detector_statistic(data, "shoe") < self.config.shoe_threshold
-            zv, info = guard_stances(zv, ref, fs, min_ratio=self.config.guard_min_ratio,
-                                     max_count_ratio=self.config.guard_max_count_ratio,
-                                     block_s=self.config.guard_block_s)
+            c = self.config
+            zv, info = guard_stances(zv, ref, fs, min_ratio=c.guard_min_ratio, max_count_ratio=c.guard_max_count_ratio,
+                                     block_s=c.guard_block_s, min_stance_s=c.guard_fill_s,
+                                     max_bridge_s=c.guard_bridge_s)
             params["guard"] = {"shoe_threshold": self.config.shoe_threshold, **info}
         return DetectorResult(zv, p, np.full(p.shape, thr), "lstm", params)
 
@@ -338,8 +346,9 @@ def _rate(data: Any) -> float:
     return 1.0 / dt
 
 
-def guard_stances(zv: Any, reference: Any, fs: float, *, min_ratio: float = 0.5, max_count_ratio: float = 1.5,
-                  block_s: float = 10.0, min_stance_s: float = 0.1, max_bridge_s: float = 0.1) -> tuple[NDArray[np.bool_], dict[str, Any]]:
+def guard_stances(zv: Any, reference: Any, fs: float, *, min_ratio: float = 0.5,
+                  max_count_ratio: float | None = 1.5, block_s: float = 10.0, min_stance_s: float | None = 0.1,
+                  max_bridge_s: float | None = 0.1) -> tuple[NDArray[np.bool_], dict[str, Any]]:
     """Check learned stance flags ``zv`` against a classical detector's ``reference`` flags.
 
     A walking foot stands still once per gait cycle, and a missed stance makes
@@ -357,6 +366,9 @@ def guard_stances(zv: Any, reference: Any, fs: float, *, min_ratio: float = 0.5,
        stationary samples, or starts more than ``max_count_ratio`` times as many
        stances (and at least 3), takes the reference flags (fallback).
 
+    ``min_stance_s`` / ``max_bridge_s`` None turn checks 1 / 2 off;
+    ``min_ratio`` 0 and ``max_count_ratio`` None turn off the two tests of 3.
+
     Returns ``(flags, info)`` with ``info``: ``filled_stances``,
     ``bridged_gaps``, ``fallback_blocks``, ``blocks``, ``fallback_fraction``
     (share of samples that took the reference) and ``fallback`` (bool).
@@ -369,15 +381,20 @@ def guard_stances(zv: Any, reference: Any, fs: float, *, min_ratio: float = 0.5,
         raise ShapeError(f"zv and reference must be 1-D flags of one length; got {z.shape} and {r.shape}")
     if not (fs > 0 and np.isfinite(fs)):
         raise InvalidInputError(f"fs must be a finite rate > 0 Hz; got {fs}")
-    if (not 0.0 <= min_ratio <= 1.0 or not max_count_ratio >= 1.0 or not block_s > 0 or min_stance_s < 0
-            or max_bridge_s < 0):
-        raise InvalidInputError("need 0 <= min_ratio <= 1, max_count_ratio >= 1, block_s > 0, min_stance_s >= 0 and "
-                                f"max_bridge_s >= 0; got {min_ratio}, {max_count_ratio}, {block_s}, {min_stance_s}, "
-                                f"{max_bridge_s}")
-    out, filled = _lk.fill_missed(z, r, max(1, round(min_stance_s * fs)))
-    out, bridged = _lk.bridge_gaps(out, r, round(max_bridge_s * fs))
+    if (not 0.0 <= min_ratio <= 1.0 or not (max_count_ratio is None or max_count_ratio >= 1.0) or not block_s > 0
+            or (min_stance_s is not None and min_stance_s < 0) or (max_bridge_s is not None and max_bridge_s < 0)):
+        raise InvalidInputError("need 0 <= min_ratio <= 1, max_count_ratio >= 1 (or None), block_s > 0, "
+                                "min_stance_s >= 0 and max_bridge_s >= 0 (or None); got "
+                                f"{min_ratio}, {max_count_ratio}, {block_s}, {min_stance_s}, {max_bridge_s}")
+    out, filled = z.copy(), 0
+    if min_stance_s is not None:
+        out, filled = _lk.fill_missed(out, r, max(1, round(min_stance_s * fs)))
+    bridged = 0
+    if max_bridge_s is not None:
+        out, bridged = _lk.bridge_gaps(out, r, round(max_bridge_s * fs))
     block = max(1, round(block_s * fs))
-    bad = _lk.block_gate(out, r, block, float(min_ratio), float(max_count_ratio))
+    mcr = np.inf if max_count_ratio is None else float(max_count_ratio)
+    bad = _lk.block_gate(out, r, block, float(min_ratio), mcr)
     n_fb = 0
     for b in np.flatnonzero(bad):
         a, e = b * block, min(z.size, (b + 1) * block)
