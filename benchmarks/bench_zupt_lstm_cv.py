@@ -10,10 +10,16 @@ Protocol (issue 12, items 1 and 3), all through :mod:`imunav.crossval`:
 * LSTM: :func:`cross_validate` trains on the training sessions only: labels =
   the best stored classical labels of each training trial, the guard's SHOE
   threshold = the SHOE grid value with the smallest mean error over the
-  training trials; every other setting is the :class:`LstmConfig` default,
-  fixed before the CV (see README).  The held-out session is scored through
-  the public ``LstmDetector.detect`` (guard on: the shipped behaviour).  One
+  training trials (:func:`imunav.learn.select_shoe_threshold`); the network
+  settings are the :class:`LstmConfig` defaults, fixed before the CV.  One
   more fit on all trials gives the in-sample figure, printed beside.
+* decision rule (which checks of the SHOE guard to apply, ``RULES``): every
+  rule is scored on every trial with its out-of-fold probability, and
+  :func:`select_by_cv` picks the rule of each fold on the other sessions.
+  This is nested CV up to one shortcut: the other sessions' probabilities come
+  from models whose training included the held-out session.  The figure
+  reported for the LSTM is this selection's out-of-fold error; the in-sample
+  choice is the shipped default.
 * fast gait: every held-out trial is also replayed 1.5x and 2x faster
   (:func:`imunav.learn.time_warp`, attitude from the INS with the trial's
   SHOE flags) and scored with the fold's model and the fold's SHOE.
@@ -31,6 +37,7 @@ import argparse
 import hashlib
 import json
 import time
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -55,6 +62,18 @@ GRIDS = {
     "mbgtd": np.geomspace(0.01, 1.0, 31),
 }
 SPEEDS = (1.5, 2.0)
+
+#: decision rules on the LSTM probability (LstmConfig overrides): the guard's checks one at a time and together.
+#: Chosen per fold by select_by_cv on the out-of-fold probabilities; the shipped default is the in-sample choice.
+RULES = {
+    "no guard": {"guard": False},
+    "ratio gate 0.5 (default)": {},
+    "ratio gate 0.25": {"guard_min_ratio": 0.25},
+    "fill missed": {"guard_min_ratio": 0.0, "guard_fill_s": 0.1},
+    "bridge split": {"guard_min_ratio": 0.0, "guard_bridge_s": 0.1},
+    "count gate": {"guard_min_ratio": 0.0, "guard_max_count_ratio": 1.5},
+    "all checks": {"guard_fill_s": 0.1, "guard_bridge_s": 0.1, "guard_max_count_ratio": 1.5},
+}
 
 
 def _err(tr, zv, cfg) -> float:
@@ -125,6 +144,8 @@ def main() -> None:
         cur = getattr(LstmConfig(), k)
         over[k] = tuple(float(x) for x in v.split(",")) if isinstance(cur, tuple) else (
             v.lower() in ("1", "true") if isinstance(cur, bool) else type(cur)(v))
+    rule_scores = np.full((len(RULES), len(trials)), np.nan)
+    rule_scores_ins = np.full((len(RULES), len(trials)), np.nan)
     extra: dict = {"raw": np.full(len(trials), np.nan), "fallback_fraction": np.full(len(trials), np.nan),
                    "stance_lstm": np.full(len(trials), np.nan), "stance_shoe": np.full(len(trials), np.nan)}
     for f in SPEEDS:
@@ -158,8 +179,14 @@ def main() -> None:
             p = model.probability(tr.imu)
             res = model.detect(tr.imu, probability=p)
             errs.append(_err(tr, res.zv, cfg_ins))
+            into = rule_scores_ins if len(test) == len(trials) else rule_scores
+            base_cfg = model.config
+            for r, kw in enumerate(RULES.values()):
+                model.config = replace(base_cfg, **kw)
+                into[r, i] = _err(tr, model.detect(tr.imu, probability=p).zv, cfg_ins)
+            model.config = base_cfg
             if len(test) == len(trials):
-                continue  # the in-sample fit: main figure only
+                continue  # the in-sample fit: no diagnostics
             extra["raw"][i] = _err(tr, model.detect(tr.imu, probability=p, guard=False).zv, cfg_ins)
             extra["fallback_fraction"][i] = res.params["guard"]["fallback_fraction"]
             extra["stance_lstm"][i] = res.stance_fraction
@@ -182,31 +209,43 @@ def main() -> None:
         return {"shoe_threshold": model.config.shoe_threshold, "train_seconds": round(times[-1], 1)}
 
     cv = cross_validate(fit, evaluate, groups, items=names, describe=describe, in_sample=True, progress=progress)
-    shipped = cv.in_sample_choice
+
+    # --- the decision rule, chosen per fold on the other sessions' out-of-fold probabilities
+    rules = select_by_cv(rule_scores, groups, items=names)
+    rule_names = list(RULES)
+    rule_choice = {str(k): rule_names[v] for k, v in rules.fold_choice.items()}
+    shipped_rule = rule_names[rules.in_sample_choice]
 
     # --- report
-    b_oof, l_oof, l_ins = base.oof, cv.oof, cv.in_sample
-    print("\nper trial, 2-D error (m): LSTM+guard out-of-fold | in-sample | raw LSTM out-of-fold | "
-          "classical out-of-fold | stance fraction LSTM / SHOE | share taken from SHOE")
+    sel, b_oof, l_ins = rules.oof, base.oof, cv.in_sample
+    print("\nper trial, 2-D error (m): LSTM out-of-fold (rule chosen per fold) | in-sample (shipped model and rule) | "
+          "no guard out-of-fold | best fixed classical out-of-fold | stance fraction shipped rule / SHOE | "
+          "share taken from SHOE")
     for i, n in enumerate(names):
-        print(f"  {n} {groups[i]}  {l_oof[i]:7.3f} | {l_ins[i]:7.3f} | {extra['raw'][i]:7.3f} | {b_oof[i]:7.3f} | "
+        print(f"  {n} {groups[i]}  {sel[i]:7.3f} | {l_ins[i]:7.3f} | {extra['raw'][i]:7.3f} | {b_oof[i]:7.3f} | "
               f"{extra['stance_lstm'][i]:.2f} / {extra['stance_shoe'][i]:.2f} | {extra['fallback_fraction'][i]:.2f}")
-    print("\nper session (out of fold): LSTM+guard | raw LSTM | classical")
-    gl = cv.per_group()
-    gb = base.per_group()
+    print("\nper session, mean 2-D error (m): LSTM out-of-fold | in-sample | no guard out-of-fold | classical "
+          "out-of-fold | classical in-sample")
+    gl, gb = rules.per_group(), base.per_group()
     for g in gl:
         m = np.array([x == g for x in groups])
-        print(f"  {g} ({m.sum():2d} trials)  {gl[g]:.3f} | {np.mean(extra['raw'][m]):.3f} | {gb[g]:.3f}")
-    ratio = cv.oof_mean / base.oof_mean
-    print("\nmean 2-D error        out-of-fold   in-sample")
-    print(f"  LSTM + guard        {cv.oof_mean:8.3f} m  {cv.in_sample_mean:8.3f} m")
-    print(f"  raw LSTM (no guard) {np.mean(extra['raw']):8.3f} m")
-    print(f"  best fixed classical {base.oof_mean:7.3f} m  {base.in_sample_mean:8.3f} m")
-    print(f"worst trial           {l_oof.max():8.3f} m ({names[int(np.argmax(l_oof))]})  "
-          f"classical {b_oof.max():.3f} m ({names[int(np.argmax(b_oof))]}); in-sample LSTM {l_ins.max():.3f} m")
+        print(f"  {g} ({m.sum():2d} trials)  {gl[g]:.3f} | {np.mean(l_ins[m]):.3f} | {np.mean(extra['raw'][m]):.3f} | "
+              f"{gb[g]:.3f} | {np.mean(base.in_sample[m]):.3f}")
+    print("\ndecision rules, mean 2-D error (m) over the 42 trials: out-of-fold | in-sample (model on all trials)")
+    for r, name in enumerate(rule_names):
+        print(f"  {name:22s} {rule_scores[r].mean():.3f} (worst {rule_scores[r].max():.3f}) | "
+              f"{rule_scores_ins[r].mean():.3f} (worst {rule_scores_ins[r].max():.3f})")
+    print(f"rule chosen per fold: {rule_choice}; on all trials: {shipped_rule}"
+          + ("" if RULES[shipped_rule] == {} else "  (WARNING: not the LstmConfig default the model ships with)"))
+    ratio = rules.oof_mean / base.oof_mean
+    print("\nmean 2-D error              out-of-fold   in-sample")
+    print(f"  LSTM (shipped protocol)   {rules.oof_mean:8.3f} m  {cv.in_sample_mean:8.3f} m")
+    print(f"  best fixed classical      {base.oof_mean:8.3f} m  {base.in_sample_mean:8.3f} m")
+    print(f"worst trial: LSTM {sel.max():.3f} m ({names[int(np.argmax(sel))]}), classical {b_oof.max():.3f} m "
+          f"({names[int(np.argmax(b_oof))]}); in-sample LSTM {l_ins.max():.3f} m, classical {base.in_sample.max():.3f} m")
     print(f"ratio LSTM / classical (out of fold): {ratio:.3f} -> reduction {100 * (1 - ratio):.1f} % "
           f"(>= 25 %: {'met' if ratio <= 0.75 else 'NOT met'}); worst trial "
-          f"{'met' if l_oof.max() <= b_oof.max() else 'NOT met'}")
+          f"{'met' if sel.max() <= b_oof.max() else 'NOT met'}")
     if warped:
         print("\nfast gait (held-out trials replayed faster; fold models), mean 2-D error / mean stance fraction:")
         for f in SPEEDS:
@@ -215,13 +254,17 @@ def main() -> None:
             print(f"  x{f}: {row}")
     print(f"training time per fit: {', '.join(f'{t:.0f}' for t in times)} s (CPU, 1 thread); "
           f"total {time.perf_counter() - t0:.0f} s")
-    out["lstm"] = {**cv.to_dict(), "config": LstmConfig(**over).to_dict(), "train_seconds": times}
-    out["lstm_raw_oof"] = extra["raw"].tolist()
+    out["lstm"] = {**rules.to_dict(), "fold_choice": rule_choice, "in_sample_choice": shipped_rule,
+                   "in_sample_mean": cv.in_sample_mean,
+                   "items": [{**it, "in_sample": float(l_ins[k])} for k, it in enumerate(rules.to_dict()["items"])],
+                   "shoe_threshold_per_fold": {str(k): v for k, v in cv.fold_choice.items()},
+                   "config": LstmConfig(**over).to_dict(), "train_seconds": times}
+    out["rules"] = {name: {"oof": rule_scores[r].tolist(), "in_sample": rule_scores_ins[r].tolist(),
+                           "settings": RULES[name]} for r, name in enumerate(rule_names)}
     out["extra"] = {k: v.tolist() for k, v in extra.items()}
     out["ratio_oof"] = ratio
     out["reduction_oof"] = 1 - ratio
-    out["worst_oof"] = {"lstm": float(l_oof.max()), "classical": float(b_oof.max())}
-    out["shipped"] = shipped
+    out["worst_oof"] = {"lstm": float(sel.max()), "classical": float(b_oof.max())}
     if args.save_model:
         # the in-sample fit (the last one) is the model to ship: the same protocol on all trials
         model = models[-1]
