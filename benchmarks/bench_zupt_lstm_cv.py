@@ -252,7 +252,7 @@ def main() -> None:
             row = "  ".join(f"{k} {np.mean(extra[f'fast{f}_{k}']):.3f} m / {np.mean(extra[f'fast{f}_stance_{k}']):.2f}"
                             f" (worst {np.max(extra[f'fast{f}_{k}']):.2f})" for k in ("lstm", "raw", "shoe"))
             print(f"  x{f}: {row}")
-    print(f"training time per fit: {', '.join(f'{t:.0f}' for t in times)} s (CPU, 1 thread); "
+    print(f"training time per fit: {', '.join(f'{t:.0f}' for t in times)} s (CPU, 1 thread; ~0 = from --cache); "
           f"total {time.perf_counter() - t0:.0f} s")
     out["lstm"] = {**rules.to_dict(), "fold_choice": rule_choice, "in_sample_choice": shipped_rule,
                    "in_sample_mean": cv.in_sample_mean,

@@ -6,7 +6,14 @@ import numpy as np
 import pytest
 
 from imunav.errors import ConfigError, FileFormatError, InvalidInputError, ShapeError
-from imunav.learn import LstmConfig, LstmDetector, augment, lstm_forward, random_rotations, train_lstm
+from imunav.learn import (
+    LstmConfig,
+    LstmDetector,
+    augment,
+    lstm_forward,
+    random_rotations,
+    train_lstm,
+)
 from imunav.learn.lstm import DEFAULT_MODEL_PATH
 from imunav.sim.gait import simulate_gait
 
@@ -276,20 +283,22 @@ def _replay(trial, factor):
     return ImuData(trial.imu.t[:w.shape[0]], w[:, 3:], w[:, :3]), ref
 
 
-@pytest.mark.parametrize("factor", [1.0, 2.0])
-def test_shipped_detector_on_a_real_trial_played_faster(factor):
-    """A shared trial at its own pace and replayed twice as fast (stances ~0.3 s): the detector a user gets
-    keeps a stance fraction near SHOE's and a bounded error.  (The shipped model saw this trial at its own
-    pace in training; the out-of-fold figures are in benchmarks/bench_zupt_lstm_cv.py.)"""
+@pytest.mark.parametrize(("name", "factor", "bound"), [("2017-11-22-11-22-03", 1.0, 0.15),
+                                                      ("2017-11-27-11-18-11", 2.0, 0.3)])
+def test_shipped_detector_on_a_real_trial_played_faster(name, factor, bound):
+    """A shared trial at its own pace, and one replayed twice as fast (stances ~0.3 s): the detector a user
+    gets keeps a stance fraction near SHOE's and a bounded error (the model shipped before the speed
+    augmentation and the guard: 1.05 m on the second; SHOE at 1e8: 4.0 m).  The shipped model saw these
+    trials, at their own pace, in training; the out-of-fold figures are in benchmarks/bench_zupt_lstm_cv.py."""
     from shared_data import data_path
 
     from imunav.ins import detector_statistic, error_2d, run_zupt
     from imunav.io.foot import read_pyshoe_mat
 
     model = _shipped()
-    trial = read_pyshoe_mat(data_path("foot", "pyshoe_vicon", "2017-11-22-11-22-03.mat"))
+    trial = read_pyshoe_mat(data_path("foot", "pyshoe_vicon", f"{name}.mat"))
     imu, ref = _replay(trial, factor)
     res = model.detect(imu)
     shoe = detector_statistic(imu, "shoe") < model.config.shoe_threshold
     assert abs(res.stance_fraction - shoe.mean()) < 0.1
-    assert error_2d(run_zupt(imu, res.zv).position, ref) < 0.15
+    assert error_2d(run_zupt(imu, res.zv).position, ref) < bound
