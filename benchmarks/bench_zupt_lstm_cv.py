@@ -63,7 +63,8 @@ GRIDS = {
 }
 SPEEDS = (1.5, 2.0)
 
-#: decision rules on the LSTM probability (LstmConfig overrides): the guard's checks one at a time and together.
+#: decision rules on the LSTM probability (LstmConfig overrides): the guard's checks one at a time and together,
+#: with and without the gait prior.
 #: Chosen per fold by select_by_cv on the out-of-fold probabilities; the shipped default is the in-sample choice.
 RULES = {
     "no guard": {"guard": False},
@@ -73,6 +74,8 @@ RULES = {
     "bridge split": {"guard_min_ratio": 0.0, "guard_bridge_s": 0.1},
     "count gate": {"guard_min_ratio": 0.0, "guard_max_count_ratio": 1.5},
     "all checks": {"guard_fill_s": 0.1, "guard_bridge_s": 0.1, "guard_max_count_ratio": 1.5},
+    "ratio gate 0.5, no gait prior": {"max_gap_s": None},
+    "no guard, no gait prior": {"guard": False, "max_gap_s": None},
 }
 
 

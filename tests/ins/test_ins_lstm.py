@@ -302,3 +302,23 @@ def test_shipped_detector_on_a_real_trial_played_faster(name, factor, bound):
     shoe = detector_statistic(imu, "shoe") < model.config.shoe_threshold
     assert abs(res.stance_fraction - shoe.mean()) < 0.1
     assert error_2d(run_zupt(imu, res.zv).position, ref) < bound
+
+
+def test_select_shoe_threshold_is_the_argmin_of_the_mean_error():
+    from shared_data import data_path
+
+    from imunav.ins import detector_statistic, error_2d, run_zupt
+    from imunav.io.foot import read_pyshoe_mat
+    from imunav.learn import select_shoe_threshold
+
+    trial = read_pyshoe_mat(data_path("foot", "pyshoe_vicon", "2017-11-22-11-22-03.mat"))
+    grid = [1e6, 1e8, 1e9]
+    best, E = select_shoe_threshold([trial], grid)
+    T = detector_statistic(trial.imu, "shoe")
+    ref = [error_2d(run_zupt(trial.imu, T < g).position, trial.position) for g in grid]
+    np.testing.assert_allclose(E, ref)
+    assert best == grid[int(np.argmin(ref))]
+    with pytest.raises(InvalidInputError, match="at least one trial"):
+        select_shoe_threshold([], grid)
+    with pytest.raises(InvalidInputError, match="grid"):
+        select_shoe_threshold([trial], [-1.0])

@@ -31,6 +31,14 @@ every ``window - burn_in`` samples and keeps the outputs that had at least
 ``burn_in`` samples of context, which matches the training exactly; a gait
 prior (:meth:`LstmDetector.detect`, ``max_gap_s``) accepts P > 0.5 inside
 stance-free stretches longer than 1.5 s.
+
+Additions for recordings unlike the training set (issue 12): half of the
+training windows are replayed 1-2x faster (:func:`time_warp`, ``speed``), so
+that the short stances of a fast gait are seen; and the detector is checked
+by SHOE (:func:`guard_stances`): a 10 s block where the LSTM marks fewer than
+half of SHOE's stationary samples takes SHOE's flags, and the result says so.
+The SHOE threshold is chosen on the training trials
+(:func:`select_shoe_threshold`) and stored in the model.
 """
 
 from __future__ import annotations
