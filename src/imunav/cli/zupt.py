@@ -79,6 +79,7 @@ def run_cmd(
 
     try:
         trial = load_foot_file(file)
+        guard = None
         if detector.startswith("labels:"):
             key = detector.split(":", 1)[1]
             if key not in trial.labels:
@@ -90,7 +91,9 @@ def run_cmd(
                 from imunav.learn import LstmDetector
 
                 m = LstmDetector.load(model)
-            zv = detect_zero_velocity(trial.imu, detector, threshold, model=m, margin_s=margin_s).zv
+            det_res = detect_zero_velocity(trial.imu, detector, threshold, model=m, margin_s=margin_s)
+            zv = det_res.zv
+            guard = det_res.params.get("guard")
         xio_like = trial.position is None
         cfg = ZuptConfig(states=states, zaru=zaru, zaru_min_s=zaru_min_s, heading_hold=heading_hold,
                          level_floor=level_floor, sigma_acc=sigma_acc,
@@ -105,6 +108,8 @@ def run_cmd(
                                "loop_closure_vertical_m": lc.vertical}
     if trial.position is not None:
         summary["error_2d_m"] = error_2d(res.position, trial.position)
+    if guard is not None:  # the LSTM's SHOE guard: share of samples that took SHOE's flags
+        summary["guard_fallback_fraction"] = float(guard["fallback_fraction"])
     for k, v in summary.items():
         typer.echo(f"{k:28s} {v:.4f}" if isinstance(v, float) else f"{k:28s} {v}")
     if out is not None:
