@@ -57,3 +57,14 @@ def test_zupt_run_xio_with_aids(tmp_path):
                             "--heading-hold"])
     assert r.exit_code == 0, r.output
     assert "loop_closure_m" in r.output
+
+
+def test_zupt_run_lstm_reports_its_guard(tmp_path):
+    if not DEFAULT_MODEL_PATH.is_file():
+        pytest.skip("shipped model not built yet")
+    f = data_path("foot", "pyshoe_vicon", "2017-11-22-11-22-03.mat")
+    out = tmp_path / "lstm.json"
+    r = runner.invoke(app, ["zupt", "run", str(f), "--detector", "lstm", "--json", str(out)])
+    assert r.exit_code == 0, r.output
+    s = json.loads(out.read_text())
+    assert 0.0 <= s["guard_fallback_fraction"] <= 1.0 and s["error_2d_m"] < 0.1

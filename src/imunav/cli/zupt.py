@@ -79,6 +79,7 @@ def run_cmd(
 
     try:
         trial = load_foot_file(file)
+        guard = None
         if detector.startswith("labels:"):
             key = detector.split(":", 1)[1]
             if key not in trial.labels:
@@ -90,7 +91,9 @@ def run_cmd(
                 from imunav.learn import LstmDetector
 
                 m = LstmDetector.load(model)
-            zv = detect_zero_velocity(trial.imu, detector, threshold, model=m, margin_s=margin_s).zv
+            det_res = detect_zero_velocity(trial.imu, detector, threshold, model=m, margin_s=margin_s)
+            zv = det_res.zv
+            guard = det_res.params.get("guard")
         xio_like = trial.position is None
         cfg = ZuptConfig(states=states, zaru=zaru, zaru_min_s=zaru_min_s, heading_hold=heading_hold,
                          level_floor=level_floor, sigma_acc=sigma_acc,
@@ -105,6 +108,8 @@ def run_cmd(
                                "loop_closure_vertical_m": lc.vertical}
     if trial.position is not None:
         summary["error_2d_m"] = error_2d(res.position, trial.position)
+    if guard is not None:  # the LSTM's SHOE guard: share of samples that took SHOE's flags
+        summary["guard_fallback_fraction"] = float(guard["fallback_fraction"])
     for k, v in summary.items():
         typer.echo(f"{k:28s} {v:.4f}" if isinstance(v, float) else f"{k:28s} {v}")
     if out is not None:
@@ -129,8 +134,12 @@ def train_cmd(
     budget_s: Optional[float] = typer.Option(None, help="Stop training after this many seconds (result then depends on machine speed)."),
     seed: int = typer.Option(0, help="Random seed."),
     threads: int = typer.Option(1, help="Torch CPU threads."),
+    shoe_threshold: float | None = typer.Option(None, help="SHOE threshold of the stance guard (default: the SHOE grid value with the smallest mean 2-D error over these trials)."),
 ) -> None:
     """Train the LSTM zero-velocity detector on labelled trials (labels: best stored classical detector per trial).
+
+    The stance guard's SHOE threshold is chosen on the same training trials
+    (the protocol of benchmarks/bench_zupt_lstm_cv.py, applied to all of them).
 
     Example: imunav zupt train ../shared/data/foot/pyshoe_vicon --out zupt_lstm.npz
     """
@@ -138,7 +147,7 @@ def train_cmd(
 
     from imunav.errors import ImunavError
     from imunav.io.foot import read_pyshoe_mat
-    from imunav.learn import LstmConfig, best_labels, train_lstm
+    from imunav.learn import LstmConfig, best_labels, select_shoe_threshold, train_lstm
 
     files = sorted(directory.glob("*.mat"))
     if not files:
@@ -149,8 +158,12 @@ def train_cmd(
         if v is not None:
             kw[k] = v
     try:
-        cfg = LstmConfig(**kw)
+        LstmConfig(**kw)  # validate the options before the slow part
         trials = [read_pyshoe_mat(f) for f in files]
+        if shoe_threshold is None:
+            shoe_threshold, _ = select_shoe_threshold(trials)
+            typer.echo(f"guard: SHOE threshold {shoe_threshold:.4g} (smallest mean 2-D error over the {len(trials)} trials)")
+        cfg = LstmConfig(**kw, shoe_threshold=shoe_threshold)
         labels = []
         audit = []
         for tr in trials:

@@ -31,6 +31,14 @@ every ``window - burn_in`` samples and keeps the outputs that had at least
 ``burn_in`` samples of context, which matches the training exactly; a gait
 prior (:meth:`LstmDetector.detect`, ``max_gap_s``) accepts P > 0.5 inside
 stance-free stretches longer than 1.5 s.
+
+Additions for recordings unlike the training set (issue 12): half of the
+training windows are replayed 1-2x faster (:func:`time_warp`, ``speed``), so
+that the short stances of a fast gait are seen; and the detector is checked
+by SHOE (:func:`guard_stances`): a 10 s block where the LSTM marks fewer than
+half of SHOE's stationary samples takes SHOE's flags, and the result says so.
+The SHOE threshold is chosen on the training trials
+(:func:`select_shoe_threshold`) and stored in the model.
 """
 
 from __future__ import annotations
@@ -47,19 +55,30 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from imunav.errors import ConfigError, FileFormatError, InvalidInputError, MissingDependencyError, ShapeError
+from imunav.errors import (
+    ConfigError,
+    FileFormatError,
+    InvalidInputError,
+    MissingDependencyError,
+    ShapeError,
+)
 
 __all__ = [
+    "DEFAULT_MODEL_PATH",
+    "SHOE_GUARD_GRID",
     "LstmConfig",
     "LstmDetector",
     "TrainingReport",
-    "train_lstm",
+    "augment",
+    "best_labels",
+    "gravity_in_body",
+    "guard_stances",
+    "input_features",
     "lstm_forward",
     "random_rotations",
-    "augment",
-    "DEFAULT_MODEL_PATH",
-    "best_labels",
-    "input_features",
+    "select_shoe_threshold",
+    "time_warp",
+    "train_lstm",
 ]
 
 Array = NDArray[np.float64]
@@ -100,6 +119,15 @@ class LstmConfig:
     stance_weight: float = 6.0
     max_gap_s: float | None = 1.5
     fallback_threshold: float = 0.5
+    speed: tuple[float, float] = (1.0, 2.0)
+    warp_fraction: float = 0.5
+    guard: bool = True
+    shoe_threshold: float = 1.0e8
+    guard_fill_s: float | None = None
+    guard_bridge_s: float | None = None
+    guard_min_ratio: float = 0.5
+    guard_max_count_ratio: float | None = None
+    guard_block_s: float = 10.0
 
     def __post_init__(self) -> None:
         if self.layers < 1 or self.hidden < 1:
@@ -118,12 +146,28 @@ class LstmConfig:
             raise ConfigError(f"features must be 'raw' (thesis) or 'raw+log'; got {self.features!r}")
         if self.batch_size < 1 or self.epochs < 1 or self.windows_per_trial < 1:
             raise ConfigError("batch_size, epochs and windows_per_trial must be >= 1")
+        if not 0 < self.speed[0] <= self.speed[1]:
+            raise ConfigError(f"speed must be (low, high) time-warp factors with 0 < low <= high; got {self.speed}")
+        if not 0.0 <= self.warp_fraction <= 1.0:
+            raise ConfigError(f"warp_fraction must be in [0, 1]; got {self.warp_fraction}")
+        if not (self.shoe_threshold > 0 and np.isfinite(self.shoe_threshold)):
+            raise ConfigError(f"shoe_threshold must be a finite SHOE threshold > 0; got {self.shoe_threshold}")
+        if not 0.0 <= self.guard_min_ratio <= 1.0 or not (self.guard_max_count_ratio is None
+                                                           or self.guard_max_count_ratio >= 1.0):
+            raise ConfigError("guard_min_ratio must be in [0, 1] and guard_max_count_ratio >= 1 or None; got "
+                              f"{self.guard_min_ratio}, {self.guard_max_count_ratio}")
+        for name in ("guard_fill_s", "guard_bridge_s"):
+            v = getattr(self, name)
+            if v is not None and not v >= 0:
+                raise ConfigError(f"{name} must be >= 0 s or None (off); got {v}")
+        if not self.guard_block_s > 0:
+            raise ConfigError(f"guard_block_s must be > 0 s; got {self.guard_block_s}")
 
     def to_dict(self) -> dict[str, Any]:
         return asdict(self)
 
     @classmethod
-    def thesis(cls, **changes: Any) -> "LstmConfig":
+    def thesis(cls, **changes: Any) -> LstmConfig:
         """The thesis's 6 × 80 network (Şahin 2022 §4.2), other defaults unchanged."""
         return cls(**{"layers": 6, "hidden": 80, **changes})
 
@@ -202,7 +246,7 @@ class LstmDetector:
         return p
 
     @classmethod
-    def load(cls, path: str | Path | None = None) -> "LstmDetector":
+    def load(cls, path: str | Path | None = None) -> LstmDetector:
         """Load a model file (default: the shipped model)."""
         p = DEFAULT_MODEL_PATH if path is None else Path(path)
         if not p.is_file():
@@ -211,7 +255,9 @@ class LstmDetector:
             with np.load(p, allow_pickle=False) as z:
                 meta = json.loads(str(z["meta"]))
                 cfgd = meta["config"]
-                cfgd["scale"] = tuple(cfgd["scale"])
+                for key in ("scale", "speed"):
+                    if key in cfgd:
+                        cfgd[key] = tuple(cfgd[key])
                 cfg = LstmConfig(**cfgd)
                 weights = [(z[f"w_ih_{l}"].astype(float), z[f"w_hh_{l}"].astype(float), z[f"b_{l}"].astype(float))
                            for l in range(cfg.layers)]
@@ -246,32 +292,127 @@ class LstmDetector:
         return out
 
     def detect(self, data: Any, threshold: float | None = None, *, max_gap_s: Any = "config",
-               fallback_threshold: float | None = None) -> Any:
-        """Zero-velocity flags ``P(stationary) > threshold`` (0.85) as a :class:`~imunav.ins.DetectorResult`.
+               fallback_threshold: float | None = None, guard: bool | None = None,
+               probability: Any = None) -> Any:
+        """Zero-velocity flags as a :class:`~imunav.ins.DetectorResult`: the LSTM, checked by SHOE.
 
-        Gait prior ``max_gap_s`` (default from the config: 1.5 s; None turns
-        it off): inside any run longer than this without a stance, samples with
-        ``P > fallback_threshold`` (0.5) are declared stationary too -- a
-        walking foot stands still at least once per gait cycle, and a missed
-        stance makes the INS drift without bound.
+        1. LSTM: ``P(stationary) > threshold`` (0.85).
+        2. Gait prior ``max_gap_s`` (default from the config: 1.5 s; None turns
+           it off): inside any run longer than this without a stance, samples
+           with ``P > fallback_threshold`` (0.5) are declared stationary too.
+        3. Stance guard (``guard``, default from the config: on), against SHOE
+           at ``config.shoe_threshold`` (:func:`guard_stances`): every
+           ``guard_block_s`` (10 s) block in which the LSTM marks fewer than
+           ``guard_min_ratio`` (0.5) times SHOE's stationary samples takes
+           SHOE's flags (a missed stance makes a ZUPT INS drift without bound;
+           an unseen fast gait is where the LSTM misses them).  The other checks
+           of :func:`guard_stances` (``guard_fill_s``, ``guard_bridge_s``,
+           ``guard_max_count_ratio``) are off by default: the leave-one-session-out
+           selection in ``benchmarks/bench_zupt_lstm_cv.py`` did not keep them.
+
+        ``params["guard"]`` reports what the guard did (``fallback_fraction``:
+        share of samples that took SHOE's flags; ``fallback``: any block did).
+        ``probability``: ``self.probability(data)`` if already computed (skips the network).
         """
-        from imunav.ins.detectors import DetectorResult
+        from imunav.ins.detectors import DetectorResult, detector_statistic
 
         if isinstance(max_gap_s, str):
             max_gap_s = self.config.max_gap_s
         if fallback_threshold is None:
             fallback_threshold = self.config.fallback_threshold
+        use_guard = self.config.guard if guard is None else bool(guard)
         thr = self.config.threshold if threshold is None else float(threshold)
         if not 0.0 < thr < 1.0:
             raise InvalidInputError(f"threshold must be a probability in (0, 1); got {thr}")
-        p = self.probability(data)
+        if probability is None:
+            p = self.probability(data)
+        else:
+            p = np.asarray(probability, dtype=float)
+            if p.shape != (len(data.t),):
+                raise ShapeError(f"probability must have one value per sample ({len(data.t)}); got {p.shape}")
         zv = p > thr
+        fs = _rate(data)
         if max_gap_s is not None:
-            fs = 1.0 / float(np.median(np.diff(np.asarray(data.t, dtype=float))))
-            zv = _fill_gaps(zv, p, int(round(max_gap_s * fs)), fallback_threshold)
-        return DetectorResult(zv, p, np.full(p.shape, thr), "lstm",
-                              {"threshold": thr, "layers": self.config.layers, "hidden": self.config.hidden,
-                               "max_gap_s": max_gap_s})
+            zv = _fill_gaps(zv, p, round(max_gap_s * fs), fallback_threshold)
+        params: dict[str, Any] = {"threshold": thr, "layers": self.config.layers, "hidden": self.config.hidden,
+                                  "max_gap_s": max_gap_s}
+        if use_guard:
+            ref = detector_statistic(data, "shoe") < self.config.shoe_threshold
+            c = self.config
+            zv, info = guard_stances(zv, ref, fs, min_ratio=c.guard_min_ratio, max_count_ratio=c.guard_max_count_ratio,
+                                     block_s=c.guard_block_s, min_stance_s=c.guard_fill_s,
+                                     max_bridge_s=c.guard_bridge_s)
+            params["guard"] = {"shoe_threshold": self.config.shoe_threshold, **info}
+        return DetectorResult(zv, p, np.full(p.shape, thr), "lstm", params)
+
+
+def _rate(data: Any) -> float:
+    t = np.asarray(data.t, dtype=float)
+    if t.ndim != 1 or t.size < 2:
+        raise InvalidInputError(f"data.t must be 1-D with >= 2 samples; got shape {t.shape}")
+    dt = float(np.median(np.diff(t)))
+    if not dt > 0:
+        raise InvalidInputError(f"data.t must increase; median step {dt}")
+    return 1.0 / dt
+
+
+def guard_stances(zv: Any, reference: Any, fs: float, *, min_ratio: float = 0.5,
+                  max_count_ratio: float | None = 1.5, block_s: float = 10.0, min_stance_s: float | None = 0.1,
+                  max_bridge_s: float | None = 0.1) -> tuple[NDArray[np.bool_], dict[str, Any]]:
+    """Check learned stance flags ``zv`` against a classical detector's ``reference`` flags.
+
+    A walking foot stands still once per gait cycle, and a missed stance makes
+    a ZUPT INS drift without bound while a split one costs little, so the
+    checks only ever add stance or hand a block to the reference:
+
+    1. every reference stance of at least ``min_stance_s`` (0.1 s: a foot's
+       ground contact lasts longer even in a sprint) that holds no stationary
+       sample of ``zv`` is added (a missed stance);
+    2. every gap of at most ``max_bridge_s`` (0.1 s: shorter than any swing)
+       between two stances of ``zv`` in which the reference is stationary
+       throughout is closed (a split stance);
+    3. the record is cut into blocks of ``block_s``; a block in which ``zv``
+       (after 1-2) marks fewer than ``min_ratio`` times the reference's
+       stationary samples, or starts more than ``max_count_ratio`` times as many
+       stances (and at least 3), takes the reference flags (fallback).
+
+    ``min_stance_s`` / ``max_bridge_s`` None turn checks 1 / 2 off;
+    ``min_ratio`` 0 and ``max_count_ratio`` None turn off the two tests of 3.
+
+    Returns ``(flags, info)`` with ``info``: ``filled_stances``,
+    ``bridged_gaps``, ``fallback_blocks``, ``blocks``, ``fallback_fraction``
+    (share of samples that took the reference) and ``fallback`` (bool).
+    """
+    from imunav.learn import _kernels as _lk
+
+    z = np.ascontiguousarray(np.asarray(zv, dtype=bool))
+    r = np.ascontiguousarray(np.asarray(reference, dtype=bool))
+    if z.ndim != 1 or r.shape != z.shape:
+        raise ShapeError(f"zv and reference must be 1-D flags of one length; got {z.shape} and {r.shape}")
+    if not (fs > 0 and np.isfinite(fs)):
+        raise InvalidInputError(f"fs must be a finite rate > 0 Hz; got {fs}")
+    if (not 0.0 <= min_ratio <= 1.0 or not (max_count_ratio is None or max_count_ratio >= 1.0) or not block_s > 0
+            or (min_stance_s is not None and min_stance_s < 0) or (max_bridge_s is not None and max_bridge_s < 0)):
+        raise InvalidInputError("need 0 <= min_ratio <= 1, max_count_ratio >= 1 (or None), block_s > 0, "
+                                "min_stance_s >= 0 and max_bridge_s >= 0 (or None); got "
+                                f"{min_ratio}, {max_count_ratio}, {block_s}, {min_stance_s}, {max_bridge_s}")
+    out, filled = z.copy(), 0
+    if min_stance_s is not None:
+        out, filled = _lk.fill_missed(out, r, max(1, round(min_stance_s * fs)))
+    bridged = 0
+    if max_bridge_s is not None:
+        out, bridged = _lk.bridge_gaps(out, r, round(max_bridge_s * fs))
+    block = max(1, round(block_s * fs))
+    mcr = np.inf if max_count_ratio is None else float(max_count_ratio)
+    bad = _lk.block_gate(out, r, block, float(min_ratio), mcr)
+    n_fb = 0
+    for b in np.flatnonzero(bad):
+        a, e = b * block, min(z.size, (b + 1) * block)
+        out[a:e] = r[a:e]
+        n_fb += e - a
+    info = {"filled_stances": int(filled), "bridged_gaps": int(bridged), "fallback_blocks": int(bad.sum()),
+            "blocks": int(bad.size), "fallback_fraction": n_fb / max(z.size, 1), "fallback": bool(bad.any())}
+    return out, info
 
 
 def _fill_gaps(zv: NDArray[np.bool_], p: Array, max_gap: int, thr: float) -> NDArray[np.bool_]:
@@ -340,6 +481,62 @@ def augment(x: Array, cfg: LstmConfig, rng: np.random.Generator) -> Array:
     return out
 
 
+def time_warp(x: Array, gravity_body: Array, factor: float, start: float = 0.0,
+              length: int | None = None) -> tuple[Array, Array]:
+    """Play raw IMU samples ``factor`` times faster at the same sample rate.
+
+    If the foot's motion ``p(t)``, ``R(t)`` is replayed as ``p(s t)``, ``R(s t)``,
+    the angular rate scales by ``s`` and the kinematic acceleration by ``s²``,
+    while gravity stays: ``ω' = s ω`` and ``f' = s² (f − f_g) + f_g`` with
+    ``f_g = −Rᵀ g`` the accelerometer reading at rest (``gravity_body``).
+    Samples are taken at ``u = start + s k`` by linear interpolation.
+
+    Parameters
+    ----------
+    x : (N, 6) accel (m/s²) then gyro (rad/s).
+    gravity_body : (N, 3) ``f_g`` of each sample (e.g. from the ZUPT INS attitude).
+    factor : ``s`` > 0 (2 = twice as fast: a 0.6 s stance lasts 0.3 s).
+    start : first (fractional) sample; ``length``: samples out (default: as many as fit).
+
+    Returns
+    -------
+    (warped (L, 6), u (L,)): the samples and the source positions (to resample labels
+    or a reference track).
+    """
+    xa = np.asarray(x, dtype=float)
+    fg = np.asarray(gravity_body, dtype=float)
+    if xa.ndim != 2 or xa.shape[1] != 6 or fg.shape != (xa.shape[0], 3):
+        raise ShapeError(f"x must be (N, 6) and gravity_body (N, 3); got {xa.shape} and {fg.shape}")
+    s = float(factor)
+    if not (s > 0 and np.isfinite(s)):
+        raise InvalidInputError(f"factor must be a finite speed-up > 0; got {factor}")
+    n = xa.shape[0]
+    fit = int(np.floor((n - 1 - start) / s)) + 1
+    L = fit if length is None else int(length)
+    if start < 0 or L < 1 or L > fit:
+        raise InvalidInputError(f"{L} samples from {start} at factor {s} do not fit in {n} samples")
+    u = start + s * np.arange(L)
+    i0 = np.minimum(np.floor(u).astype(np.int64), n - 2) if n > 1 else np.zeros(L, np.int64)
+    fr = (u - i0)[:, None] if n > 1 else np.zeros((L, 1))
+    i1 = np.minimum(i0 + 1, n - 1)
+    xi = xa[i0] * (1 - fr) + xa[i1] * fr
+    gi = fg[i0] * (1 - fr) + fg[i1] * fr
+    out = np.empty_like(xi)
+    out[:, :3] = s * s * (xi[:, :3] - gi) + gi
+    out[:, 3:] = s * xi[:, 3:]
+    return out, u
+
+
+def gravity_in_body(data: Any, stance: Any, g: float = 9.80665) -> Array:
+    """Accelerometer reading at rest ``f_g = −Rᵀ (0, 0, g)`` per sample (N, 3), ``R`` from the ZUPT INS
+    (:func:`imunav.ins.run_zupt`) run with the stance flags ``stance``."""
+    from imunav.ins.zupt import run_zupt
+    from imunav.rotation import quat_conjugate, quat_rotate
+
+    q = run_zupt(data, np.asarray(stance, dtype=bool)).quaternion
+    return quat_rotate(quat_conjugate(q), np.broadcast_to(np.array([0.0, 0.0, -g]), (q.shape[0], 3)))
+
+
 @dataclass(frozen=True)
 class TrainingReport:
     """What :func:`train_lstm` did: loss per batch, accuracy on the training windows, time."""
@@ -393,6 +590,8 @@ def train_lstm(trials: Sequence[Any], labels: Sequence[Any], config: LstmConfig 
         if x.shape[0] < cfg.window:
             raise InvalidInputError(f"trial {i} has {x.shape[0]} samples, fewer than the window {cfg.window}")
         Y.append(yy)
+    warp = cfg.warp_fraction > 0 and cfg.speed != (1.0, 1.0)
+    G = [gravity_in_body(d, y) for d, y in zip(trials, Y)] if warp else []
     allx = _derived(np.concatenate(X), cfg.features)
     mean = allx.mean(axis=0)
     std = allx.std(axis=0) + 1e-9
@@ -422,9 +621,22 @@ def train_lstm(trials: Sequence[Any], labels: Sequence[Any], config: LstmConfig 
         rng.shuffle(trial_idx)
         for b0 in range(0, trial_idx.size, cfg.batch_size):
             ti = trial_idx[b0:b0 + cfg.batch_size]
-            starts = rng.integers(0, lens[ti] - cfg.window + 1)
-            xb = np.stack([X[i][s:s + cfg.window] for i, s in zip(ti, starts)])
-            yb = np.stack([Y[i][s:s + cfg.window] for i, s in zip(ti, starts)])
+            if warp:
+                sp = np.where(rng.random(ti.size) < cfg.warp_fraction,
+                              rng.uniform(cfg.speed[0], cfg.speed[1], ti.size), 1.0)
+                # a warped window needs (window - 1) * speed + 1 source samples
+                sp = np.minimum(sp, (lens[ti] - 1) / (cfg.window - 1))
+                span = (cfg.window - 1) * sp
+                starts = rng.uniform(0.0, 1.0, ti.size) * (lens[ti] - 1 - span)
+                xb = np.empty((ti.size, cfg.window, 6))
+                yb = np.empty((ti.size, cfg.window), bool)
+                for k, (i, s0, f) in enumerate(zip(ti, starts, sp)):
+                    xb[k], u = time_warp(X[i], G[i], f, s0, cfg.window)
+                    yb[k] = Y[i][np.minimum(np.rint(u).astype(np.int64), lens[i] - 1)]
+            else:
+                starts = rng.integers(0, lens[ti] - cfg.window + 1)
+                xb = np.stack([X[i][s:s + cfg.window] for i, s in zip(ti, starts)])
+                yb = np.stack([Y[i][s:s + cfg.window] for i, s in zip(ti, starts)])
             xb = (_derived(augment(xb, cfg, rng), cfg.features) - mean) / std
             xt = torch.as_tensor(xb, dtype=torch.float32)
             yt = torch.as_tensor(yb[:, cfg.burn_in:].astype(np.int64))
@@ -459,6 +671,37 @@ def train_lstm(trials: Sequence[Any], labels: Sequence[Any], config: LstmConfig 
     rep = TrainingReport(np.array(losses), done * cfg.batch_size, time.perf_counter() - t0,
                          correct / max(counted, 1), stopped)
     return det, rep
+
+
+#: SHOE thresholds searched for the guard's reference (:func:`select_shoe_threshold`).
+SHOE_GUARD_GRID: Array = np.geomspace(1e6, 1e9, 31)
+
+
+def select_shoe_threshold(trials: Sequence[Any], grid: Any = None, config: Any = None) -> tuple[float, Array]:
+    """The single SHOE threshold with the smallest mean 2-D error over ``trials`` (the training trials).
+
+    Each trial (a :class:`imunav.io.foot.FootTrial` with a reference
+    ``position``) runs through the ZUPT INS (``config``) with SHOE at every
+    ``grid`` value (default :data:`SHOE_GUARD_GRID`) and is scored with
+    :func:`imunav.ins.error_2d`.  Returns ``(threshold, mean error per grid value)``.
+    """
+    from imunav.ins.detectors import detector_statistic
+    from imunav.ins.metrics import error_2d
+    from imunav.ins.zupt import run_zupt
+
+    g = SHOE_GUARD_GRID if grid is None else np.asarray(grid, dtype=float)
+    if g.ndim != 1 or g.size == 0 or not np.all(g > 0):
+        raise InvalidInputError("grid must be a non-empty 1-D sequence of SHOE thresholds > 0")
+    if len(trials) == 0:
+        raise InvalidInputError("need at least one trial to choose a SHOE threshold")
+    E = np.zeros(g.size)
+    for tr in trials:
+        if tr.position is None:
+            raise InvalidInputError(f"trial {tr.name!r} has no reference position to score SHOE thresholds")
+        T = detector_statistic(tr.imu, "shoe")
+        E += [error_2d(run_zupt(tr.imu, T < x, config).position, tr.position) for x in g]
+    E /= len(trials)
+    return float(g[int(np.argmin(E))]), E
 
 
 def best_labels(trial: Any, detectors: Sequence[str] = ("shoe", "ared", "amvd", "mbgtd"),
