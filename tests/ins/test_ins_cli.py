@@ -37,6 +37,8 @@ def test_zupt_benchmark_json(tmp_path):
     r = runner.invoke(app, ["zupt", "benchmark", str(d), "--limit", "1", "--json", str(out)])
     assert r.exit_code == 0, r.output
     res = json.loads(out.read_text())
+    # the JSON shape users' scripts rely on (issue 12): thresholds, trials as a list of rows, mean
+    assert {"thresholds", "trials", "mean"} <= set(res) and isinstance(res["trials"], list)
     row = res["trials"][0]
     assert set(row) == {"trial", "shoe", "ared", "amvd", "mbgtd", "lstm"}
     assert row["lstm"] < 0.5
