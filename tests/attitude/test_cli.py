@@ -5,9 +5,9 @@ from __future__ import annotations
 import json
 
 import pytest
+from shared_data import data_path
 from typer.testing import CliRunner
 
-from shared_data import data_path
 from imunav.cli.main import app
 
 runner = CliRunner()

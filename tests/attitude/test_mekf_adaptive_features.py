@@ -14,7 +14,7 @@ from imunav.attitude import AdaptiveMEKF
 from imunav.attitude.adaptive import ADAPTIVE_DEFAULTS
 from imunav.attitude.mekf import MEKF, MekfParams
 from imunav.errors import ConfigError
-from imunav.rotation import quat_conjugate, quat_exp, quat_from_euler, quat_multiply, quat_rotate
+from imunav.rotation import quat_conjugate, quat_exp, quat_from_euler, quat_rotate
 from imunav.timeseries import ImuData
 
 from ._sim import MAG_NED, angle_err_deg, simulate

@@ -23,6 +23,7 @@ import math
 import numpy as np
 from numba import njit
 
+
 @njit(cache=True)
 def _inv3(A, out):
     """out = A⁻¹ for a 3×3 matrix by the adjugate (A = adj(A) / det A)."""

@@ -18,7 +18,7 @@ import math
 import numpy as np
 from numba import njit
 
-from imunav._rotation_kernels import qexp_1, qexp_t, qlog_1, qmul_1, qmul_t, qrot_1, qrot_t, skew_1
+from imunav._rotation_kernels import qexp_1, qexp_t, qlog_1, qmul_1, qmul_t, qrot_1, qrot_t
 
 # ---------------------------------------------------------------------------
 # small helpers
