@@ -66,11 +66,9 @@ def _vec3(text: str, name: str) -> tuple[float, float, float]:
 
 
 def _fail(exc: Exception) -> None:
-    from rich.console import Console
-    from rich.markup import escape
+    from imunav.cli._errors import fail
 
-    Console(stderr=True).print(f"[red]error:[/red] {escape(str(exc))}", soft_wrap=True)
-    raise typer.Exit(2) from exc
+    fail(exc)
 
 
 def register(app: typer.Typer) -> None:
@@ -171,7 +169,10 @@ Example: imunav airdata run flight.npz --robust nis --json run.json
         try:
             if not path.exists():
                 raise FileFormatError(f"{path}: no such file; create one with `imunav airdata simulate`")
-            with np.load(path, allow_pickle=False) as z:
+            from imunav.io._common import wrap_read_errors
+
+            with wrap_read_errors(str(path), "an `imunav airdata simulate` .npz file"), open(path, "rb") as fh, \
+                    np.load(fh, allow_pickle=False) as z:
                 if "meta" not in z:
                     raise FileFormatError(f"{path}: not an `imunav airdata simulate` file (no 'meta' entry)")
                 meta = json.loads(str(z["meta"]))

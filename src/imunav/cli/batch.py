@@ -46,11 +46,9 @@ def _read_options(fs: Optional[float], accel_unit: Optional[str], gyro_unit: Opt
 
 
 def _fail(exc: Exception) -> None:
-    from rich.console import Console
-    from rich.markup import escape
+    from imunav.cli._errors import fail
 
-    Console(stderr=True).print(f"[red]error:[/red] {escape(str(exc))}", soft_wrap=True)
-    raise typer.Exit(2) from exc
+    fail(exc)
 
 
 def _print_summary(summary: Any, families: list[str], title: str) -> None:

@@ -43,15 +43,29 @@ def _read(path: Path, fs: Optional[float], accel_unit: Optional[str], gyro_unit:
     if skiprows is not None:
         opts["skiprows"] = skiprows
     if columns:
-        opts["columns"] = json.loads(columns)
+        opts["columns"] = _columns(columns)
     return read_imu(path, **opts)
+
+
+def _columns(text: str) -> Any:
+    from imunav.errors import InvalidInputError
+
+    try:
+        return json.loads(text)
+    except json.JSONDecodeError as exc:
+        raise InvalidInputError(f"--columns {text!r}: not valid JSON ({exc.msg}); write e.g. "
+                                '\'{"gyro": ["gx","gy","gz"]}\'') from None
 
 
 def _segments(path: Path) -> Any:
     from imunav.errors import FileFormatError
     from imunav.sim import Segments
 
-    d = json.loads(Path(path).read_text())
+    from imunav.io._atomic import read_json
+
+    d = read_json(path, "segment table JSON (write it with Profile.to_dict() / Segments.to_dict())")
+    if not isinstance(d, dict):
+        raise FileFormatError(f"{path}: a segment table JSON is an object with the columns of Segments")
     d = d.get("segment_table", d)
     try:
         return Segments(**{k: np.asarray(d[k]) for k in Segments.__dataclass_fields__})
@@ -195,7 +209,9 @@ def ferraris(
     from imunav.calib.model import write_json_atomic
 
     data = _read(recording, fs, accel_unit, gyro_unit, accel_scale, gyro_scale, skiprows, columns)
-    secs = json.loads(Path(sections).read_text())
+    from imunav.io._atomic import read_json
+
+    secs = read_json(sections, "imucal section list JSON")
     res = ferraris_from_session(data.accel, data.gyro, secs, data.fs, gravity=gravity,
                                 expected_angle_deg=expected_angle_deg)
     _finish(res, out, report)
@@ -330,12 +346,16 @@ def _read_mag(path: Path) -> np.ndarray:
     from imunav.errors import FileFormatError
 
     p = Path(path)
+    from imunav.io._common import check_nonempty, wrap_read_errors
+
+    check_nonempty(p)
     if p.suffix == ".npz":
-        with np.load(p) as z:
+        with wrap_read_errors(str(p), "NPZ"), open(p, "rb") as fh, np.load(fh, allow_pickle=False) as z:
             for k in ("mag", "h", "m"):
                 if k in z:
                     return np.asarray(z[k], float)
-        raise FileFormatError(f"{p}: no 'mag' array (found {list(np.load(p).keys())})")
+            names = list(z.files)
+        raise FileFormatError(f"{p}: no 'mag' array (found {names})")
     import pandas as pd
 
     df = pd.read_csv(p, comment="#")

@@ -42,8 +42,9 @@ def register(app: typer.Typer) -> None:
                 progress=not quiet, console=console,
             )
         except InvalidInputError as exc:
-            console.print(f"[red]error:[/red] {escape(str(exc))}", soft_wrap=True)
-            raise typer.Exit(2) from exc
+            from imunav.cli._errors import fail
+
+            fail(exc)
         table = Table(title=f"imunav lab → {out}")
         table.add_column("step")
         table.add_column("verdict")

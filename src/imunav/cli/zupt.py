@@ -48,8 +48,9 @@ def load_foot_file(path: Path) -> Any:
 
 
 def _fail(exc: Exception) -> None:
-    typer.secho(f"error: {exc}", fg="red", err=True)
-    raise typer.Exit(2)
+    from imunav.cli._errors import fail
+
+    fail(exc)
 
 
 @zupt_app.command("run")
