@@ -18,13 +18,14 @@ from __future__ import annotations
 import os
 import sys
 import traceback
+from pathlib import Path
 from typing import Any, NoReturn
 
 import click
 import typer
 from typer.core import TyperGroup
 
-__all__ = ["ImunavGroup", "fail", "one_line"]
+__all__ = ["ImunavGroup", "check_figure_path", "fail", "one_line"]
 
 REPORT_TO = "the imunav issue tracker"
 
@@ -62,6 +63,18 @@ def fail(exc: BaseException) -> NoReturn:
         traceback.print_exception(type(exc), exc, exc.__traceback__, file=sys.stderr)
     typer.echo(f"error: {_message(exc)}", err=True)
     raise typer.Exit(2)
+
+
+_FIG_SUFFIXES = (".png", ".pdf", ".svg", ".svgz", ".jpg", ".jpeg", ".eps", ".ps", ".tif", ".tiff", ".webp")
+
+
+def check_figure_path(path: Path | None, option: str) -> None:
+    """Refuse a figure path whose suffix matplotlib cannot write."""
+    from imunav.errors import InvalidInputError
+
+    if path is not None and Path(path).suffix.lower() not in _FIG_SUFFIXES:
+        raise InvalidInputError(f"{option} {path}: unknown figure type {Path(path).suffix or '(no suffix)'!r}; "
+                                f"use one of {', '.join(_FIG_SUFFIXES)}")
 
 
 class ImunavGroup(TyperGroup):

@@ -3,8 +3,6 @@
 from __future__ import annotations
 
 import json
-import os
-import tempfile
 from pathlib import Path
 from typing import Optional
 
@@ -17,26 +15,16 @@ Example: imunav airdata thesis --runs 50 --json thesis.json
 
 
 def _write_atomic(path: Path, write) -> None:
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=path.suffix)
-    os.close(fd)
-    try:
-        write(tmp)
-        os.replace(tmp, path)
-    except BaseException:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
-        raise
+    from imunav.io._atomic import atomic_path
+
+    with atomic_path(path) as tmp:
+        write(str(tmp))
 
 
 def _write_json(path: Path, obj: dict) -> None:
-    def w(tmp: str) -> None:
-        with open(tmp, "w") as f:
-            json.dump(obj, f, indent=2, allow_nan=False)
-            f.write("\n")
+    from imunav.io._atomic import write_json
 
-    _write_atomic(path, w)
+    write_json(path, obj)
 
 
 def _channels(text: Optional[str]) -> tuple[int, ...] | None:
@@ -99,6 +87,10 @@ Example: imunav airdata simulate turns --duration 120 --wind 8,-12,0 --turbulenc
         seed: int = typer.Option(0, "--seed", help="Random seed."),
         json_out: Optional[Path] = typer.Option(None, "--json", help="Also write a JSON summary here."),
     ) -> None:
+        from imunav.io._atomic import check_outputs
+
+        check_outputs([config], [out, json_out])
+
         import numpy as np
 
         from imunav.errors import InvalidInputError
@@ -161,6 +153,13 @@ Example: imunav airdata run flight.npz --robust nis --json run.json
         out: Optional[Path] = typer.Option(None, "--out", help="Write the estimates as .npz here."),
         plot: Optional[Path] = typer.Option(None, "--plot", help="Write a wind figure (.png) here."),
     ) -> None:
+        from imunav.io._atomic import check_outputs
+
+        check_outputs([path], [json_out, out, plot])
+        from imunav.cli._errors import check_figure_path
+
+        check_figure_path(plot, "--plot")
+
         import numpy as np
 
         from imunav.errors import FileFormatError, InvalidInputError
@@ -215,7 +214,10 @@ Example: imunav airdata run flight.npz --robust nis --json run.json
             _fail(exc if isinstance(exc, InvalidInputError) else FileFormatError(f"{path}: missing entry {exc}"))
             return
         if out is not None:
-            _write_atomic(out, lambda tmp: np.savez_compressed(open(tmp, "wb"), **arrays))
+            from imunav.io._atomic import atomic_path
+
+            with atomic_path(out) as tmp, open(tmp, "wb") as fh:
+                np.savez_compressed(fh, **arrays)
         if plot is not None:
             from imunav.airdata import plot as P
 

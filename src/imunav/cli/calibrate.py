@@ -59,9 +59,8 @@ def _columns(text: str) -> Any:
 
 def _segments(path: Path) -> Any:
     from imunav.errors import FileFormatError
-    from imunav.sim import Segments
-
     from imunav.io._atomic import read_json
+    from imunav.sim import Segments
 
     d = read_json(path, "segment table JSON (write it with Profile.to_dict() / Segments.to_dict())")
     if not isinstance(d, dict):
@@ -139,6 +138,10 @@ def multiposition(
 
     Example: imunav calibrate multiposition static.npz --segments static_segments.json --out static_cal.json --report rep
     """
+    from imunav.io._atomic import check_outputs
+
+    check_outputs([recording, segments, noise_model], [out])
+
     from imunav.calib import multiposition as fit
 
     data = _read(recording, fs, accel_unit, gyro_unit, accel_scale, gyro_scale, skiprows, columns)
@@ -168,6 +171,10 @@ def ratetable(
 
     Example: imunav calibrate ratetable rate.npz --segments rate_segments.json --static static.npz --static-segments static_segments.json --out cal.json
     """
+    from imunav.io._atomic import check_outputs
+
+    check_outputs([recording, segments, static, static_segments, base, noise_model], [out])
+
     from imunav.calib import ImuCalibration, combine, multiposition
     from imunav.calib import ratetable as fit
 
@@ -205,6 +212,10 @@ def ferraris(
 
     Example: imunav calibrate ferraris session.csv --sections sections.json --fs 102.4 --gyro-unit deg/s --out cal.json
     """
+    from imunav.io._atomic import check_outputs
+
+    check_outputs([recording, sections], [out, imucal_out])
+
     from imunav.calib import ferraris_from_session
     from imunav.calib.model import write_json_atomic
 
@@ -237,6 +248,10 @@ def multipose(
 
     Example: imunav calibrate multipose session.csv --fs 100 --init-s 36.5 --no-accel-misalignment --out cal.json
     """
+    from imunav.io._atomic import check_outputs
+
+    check_outputs([recording], [out])
+
     from imunav.calib import multipose as fit
 
     data = _read(recording, fs, accel_unit, gyro_unit, accel_scale, gyro_scale, skiprows, columns)
@@ -261,6 +276,10 @@ def temperature(
 
     Example: imunav calibrate temperature cal_m30.json@-30 cal_0.json@0 cal_20.json@20 cal_50.json@50 --orders 1,2 --out thermal_cal.json
     """
+    from imunav.io._atomic import check_outputs
+
+    check_outputs([c.rsplit("@", 1)[0] for c in calibrations if "@" in c], [out])
+
     from rich.console import Console
     from rich.table import Table
 
@@ -314,9 +333,18 @@ def mag(
 
     Example: imunav calibrate mag mag.csv --out mag_cal.json --report mag_report
     """
+    from imunav.io._atomic import check_outputs
+
+    check_outputs([recording], [out])
+
     from rich.console import Console
 
-    from imunav.calib.magnetometer import MagCalibration, fit_ellipsoid, hard_iron_minmax, soft_iron_rotation_scale
+    from imunav.calib.magnetometer import (
+        MagCalibration,
+        fit_ellipsoid,
+        hard_iron_minmax,
+        soft_iron_rotation_scale,
+    )
     from imunav.calib.model import write_json_atomic
     from imunav.errors import InvalidInputError
 

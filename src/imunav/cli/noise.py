@@ -28,18 +28,6 @@ def _taus(spec: str) -> Any:
     return spec
 
 
-_FIG_SUFFIXES = (".png", ".pdf", ".svg", ".svgz", ".jpg", ".jpeg", ".eps", ".ps", ".tif", ".tiff", ".webp")
-
-
-def check_figure_path(path: Path | None, option: str) -> None:
-    """Refuse a figure path whose suffix matplotlib cannot write."""
-    from imunav.errors import InvalidInputError
-
-    if path is not None and Path(path).suffix.lower() not in _FIG_SUFFIXES:
-        raise InvalidInputError(f"{option} {path}: unknown figure type {Path(path).suffix or '(no suffix)'!r}; "
-                                f"use one of {', '.join(_FIG_SUFFIXES)}")
-
-
 def _fmt(v: float, se: float) -> str:
     if v == 0:
         return "-"
@@ -92,6 +80,7 @@ def noise(
 
     from imunav.errors import InvalidInputError
     from imunav.io import read_imu
+    from imunav.cli._errors import check_figure_path
     from imunav.io._atomic import atomic_path, check_outputs, write_json
     from imunav.noise import allan_deviation, compare_psd_allan, fit_noise, fit_psd, log_average, psd
     from imunav.noise.fit import write_kalibr_yaml

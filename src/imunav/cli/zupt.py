@@ -2,9 +2,6 @@
 
 from __future__ import annotations
 
-import json
-import os
-import tempfile
 from pathlib import Path
 from typing import Any, Optional
 
@@ -21,11 +18,9 @@ def register(app: typer.Typer) -> None:
 
 
 def _write_json(path: Path, obj: Any) -> None:
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(dir=path.parent, suffix=".tmp")
-    with os.fdopen(fd, "w") as fh:
-        json.dump(obj, fh, indent=1)
-    os.replace(tmp, path)
+    from imunav.io._atomic import write_json
+
+    write_json(path, obj, indent=1)
 
 
 def load_foot_file(path: Path) -> Any:
@@ -73,6 +68,10 @@ def run_cmd(
 
     Example: imunav zupt run ../shared/data/foot/pyshoe_vicon/2017-11-22-11-22-03.mat --detector shoe
     """
+    from imunav.io._atomic import check_outputs
+
+    check_outputs([file, model], [out, json_out])
+
     import numpy as np
 
     from imunav.errors import ImunavError
@@ -114,12 +113,11 @@ def run_cmd(
     for k, v in summary.items():
         typer.echo(f"{k:28s} {v:.4f}" if isinstance(v, float) else f"{k:28s} {v}")
     if out is not None:
-        fd, tmp = tempfile.mkstemp(dir=out.parent if str(out.parent) else ".", suffix=".npz.tmp")
-        os.close(fd)
-        with open(tmp, "wb") as fh:
+        from imunav.io._atomic import atomic_path
+
+        with atomic_path(out) as tmp, open(tmp, "wb") as fh:  # a failed write leaves no temp file
             np.savez_compressed(fh, t=res.t, position=res.position, velocity=res.velocity,
                                 quaternion=res.quaternion, zv=res.zv)
-        os.replace(tmp, out)
     if json_out is not None:
         _write_json(json_out, summary)
 
@@ -197,6 +195,10 @@ def benchmark_cmd(
 
     Example: imunav zupt benchmark ../shared/data/foot/pyshoe_vicon --limit 3 --json zupt-bench.json
     """
+    from imunav.io._atomic import check_outputs
+
+    check_outputs([model], [json_out])
+
     import numpy as np
     from rich.console import Console
     from rich.progress import track

@@ -137,7 +137,8 @@ def read_json(path: str | os.PathLike[str], what: str = "JSON file") -> Any:
 
 def check_outputs(inputs: Iterable[str | os.PathLike[str] | None],
                   outputs: Iterable[str | os.PathLike[str] | None]) -> None:
-    """Refuse an output path that resolves to an input file (it would replace the input).
+    """Refuse an output path that resolves to an input file (it would replace the input),
+    and two outputs that resolve to the same file.
 
     ``None`` entries are skipped.  Raises :class:`~imunav.errors.InvalidInputError`.
     """
@@ -146,6 +147,15 @@ def check_outputs(inputs: Iterable[str | os.PathLike[str] | None],
     def key(p: str | os.PathLike[str]) -> Path:
         return Path(p).expanduser().resolve()
 
+    seen: dict[Path, str | os.PathLike[str]] = {}
+    outputs = list(outputs)
+    for o in outputs:
+        if o is None:
+            continue
+        k = key(o)
+        if k in seen:
+            raise InvalidInputError(f"two outputs are the same file ({seen[k]} and {o}); give each its own path")
+        seen[k] = o
     ins = {}
     for p in inputs:
         if p is not None:
