@@ -46,10 +46,10 @@ def _message(exc: BaseException) -> str:
     return one_line(msg)
 
 
-def _debug_wanted() -> bool:
+def _debug_wanted(ctx: click.Context | None = None) -> bool:
     if os.environ.get("IMUNAV_DEBUG", "").strip().lower() in ("1", "true", "yes", "on"):
         return True
-    ctx = click.get_current_context(silent=True)
+    ctx = ctx or click.get_current_context(silent=True)
     while ctx is not None:
         if ctx.params.get("debug"):
             return True
@@ -57,9 +57,9 @@ def _debug_wanted() -> bool:
     return False
 
 
-def fail(exc: BaseException) -> NoReturn:
+def fail(exc: BaseException, ctx: click.Context | None = None) -> NoReturn:
     """Report a user error (one line on stderr) and exit with status 2."""
-    if _debug_wanted():
+    if _debug_wanted(ctx):
         traceback.print_exception(type(exc), exc, exc.__traceback__, file=sys.stderr)
     typer.echo(f"error: {_message(exc)}", err=True)
     raise typer.Exit(2)
@@ -89,9 +89,12 @@ class ImunavGroup(TyperGroup):
                 KeyboardInterrupt, SystemExit):
             raise
         except (ImunavError, OSError) as exc:
-            fail(exc)
+            fail(exc, ctx)
+        except UnicodeDecodeError as exc:  # a text input (TOML, JSON, CSV) that is not text
+            fail(ValueError(f"an input file is not UTF-8 text ({exc.reason} at byte {exc.start}); "
+                            "check the file given for each option"), ctx)
         except Exception as exc:  # noqa: BLE001  (a bug: say how to report it)
-            debug = _debug_wanted()
+            debug = _debug_wanted(ctx)
             if debug:
                 traceback.print_exception(type(exc), exc, exc.__traceback__, file=sys.stderr)
             typer.echo(

@@ -27,7 +27,9 @@ def load_foot_file(path: Path) -> Any:
     """Read a foot recording by its format: pyshoe ``.mat``, x-io or FGO ``.csv``."""
     from imunav.errors import FileFormatError
     from imunav.io import foot
+    from imunav.io._common import check_nonempty
 
+    check_nonempty(path)
     if path.suffix.lower() == ".mat":
         return foot.read_pyshoe_mat(path)
     if path.suffix.lower() == ".csv":
@@ -50,7 +52,7 @@ def _fail(exc: Exception) -> None:
 
 @zupt_app.command("run")
 def run_cmd(
-    file: Path = typer.Argument(..., exists=True, dir_okay=False, help="Foot recording (.mat pyshoe, .csv x-io / FGO)."),
+    file: Path = typer.Argument(..., help="Foot recording (.mat pyshoe, .csv x-io / FGO)."),
     detector: str = typer.Option("shoe", "--detector", "-d", help="shoe, ared, amvd, mbgtd, adaptive, freeacc, lstm, or 'labels:NAME' for stored labels."),
     threshold: Optional[float] = typer.Option(None, help="Detector threshold (default: the library default)."),
     states: int = typer.Option(9, help="9 (thesis) or 15 (with biases)."),
@@ -124,7 +126,7 @@ def run_cmd(
 
 @zupt_app.command("train")
 def train_cmd(
-    directory: Path = typer.Argument(..., exists=True, file_okay=False, help="Folder of pyshoe-format *.mat trials."),
+    directory: Path = typer.Argument(..., help="Folder of pyshoe-format *.mat trials."),
     out: Path = typer.Option(Path("zupt_lstm.npz"), help="Model file to write."),
     windows_per_trial: Optional[int] = typer.Option(None, help="Training windows drawn per trial."),
     epochs: Optional[int] = typer.Option(None, help="Epochs."),
@@ -186,7 +188,7 @@ def train_cmd(
 
 @zupt_app.command("benchmark")
 def benchmark_cmd(
-    directory: Path = typer.Argument(..., exists=True, file_okay=False, help="Folder of pyshoe-format *.mat trials."),
+    directory: Path = typer.Argument(..., help="Folder of pyshoe-format *.mat trials."),
     json_out: Optional[Path] = typer.Option(None, "--json", help="Write per-trial 2-D errors as JSON."),
     model: Optional[Path] = typer.Option(None, help="LSTM model file (default: the shipped one)."),
     limit: Optional[int] = typer.Option(None, help="Only the first N trials (sorted by name)."),

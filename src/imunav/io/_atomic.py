@@ -18,7 +18,7 @@ from collections.abc import Iterable, Iterator
 from pathlib import Path
 from typing import Any
 
-__all__ = ["atomic_path", "check_outputs", "json_text", "jsonable", "read_json", "write_json"]
+__all__ = ["atomic_path", "check_outputs", "check_writable", "json_text", "jsonable", "read_json", "write_json"]
 
 
 @contextlib.contextmanager
@@ -135,6 +135,31 @@ def read_json(path: str | os.PathLike[str], what: str = "JSON file") -> Any:
                               "fix or regenerate the file") from None
 
 
+def check_writable(path: str | os.PathLike[str]) -> None:
+    """Raise an :class:`OSError` naming ``path`` if a file cannot be written there.
+
+    Checked before any work is done: the path is not a folder, no existing
+    ancestor is a file, and a file can be created in the nearest existing
+    ancestor folder (a probe file, removed at once).
+    """
+    target = Path(path)
+    if target.is_dir():
+        raise IsADirectoryError(errno.EISDIR, "the output is a folder; give a file name", str(target))
+    directory = target.parent if str(target.parent) else Path(".")
+    for parent in (directory, *directory.parents):
+        if parent.exists():
+            if not parent.is_dir():
+                raise NotADirectoryError(errno.ENOTDIR, f"cannot write the output: {parent} is a file, not a folder",
+                                         str(target))
+            try:
+                with tempfile.TemporaryFile(dir=parent):
+                    pass
+            except OSError as exc:
+                raise type(exc)(exc.errno, f"cannot write the output in {parent} ({exc.strerror})",
+                                str(target)) from None
+            return
+
+
 def check_outputs(inputs: Iterable[str | os.PathLike[str] | None],
                   outputs: Iterable[str | os.PathLike[str] | None]) -> None:
     """Refuse an output path that resolves to an input file (it would replace the input),
@@ -156,6 +181,9 @@ def check_outputs(inputs: Iterable[str | os.PathLike[str] | None],
         if k in seen:
             raise InvalidInputError(f"two outputs are the same file ({seen[k]} and {o}); give each its own path")
         seen[k] = o
+    for o in outputs:
+        if o is not None:
+            check_writable(o)
     ins = {}
     for p in inputs:
         if p is not None:
