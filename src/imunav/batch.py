@@ -106,10 +106,9 @@ def _read_segments(path: Path) -> Any:
 
 
 def _write_json(obj: Any, path: Path) -> Path:
-    from imunav.io._atomic import atomic_path
+    from imunav.io._atomic import write_json
 
-    with atomic_path(path) as tmp:
-        tmp.write_text(json.dumps(obj, indent=2, default=_json_default) + "\n", encoding="utf-8")
+    write_json(path, obj)  # standard JSON: null for NaN / inf
     return path
 
 

@@ -36,7 +36,7 @@ import numpy as np
 from numba import njit
 from numpy.typing import ArrayLike, NDArray
 
-from imunav.errors import NonFiniteError, ShapeError
+from imunav.errors import InvalidInputError, NonFiniteError, ShapeError
 
 __all__ = [
     "A",
@@ -163,8 +163,25 @@ def _radii_gravity_n(lat, h):
     return out
 
 
+#: Valid ellipsoidal heights of the normal-gravity model, m: 10 km below the ellipsoid to 100 km above
+#: (the height series is only accurate to ~20 km; far outside it the gravity it gives is meaningless).
+H_RANGE_M: Final = (-1.0e4, 1.0e5)
+
+
+def _check_lat_h(lat: Array, h: Array) -> None:
+    if np.any(np.abs(lat) > np.pi / 2 + 1e-12):
+        bad = float(np.ravel(lat)[np.argmax(np.abs(np.ravel(lat)))])
+        raise InvalidInputError(f"latitude {np.degrees(bad):.6g} deg ({bad:.6g} rad) is outside [-90, 90] deg; "
+                                "latitudes are geodetic, in radians in the library (--lat-deg in degrees on the CLI)")
+    if np.any((h < H_RANGE_M[0]) | (h > H_RANGE_M[1])):
+        bad = float(np.ravel(h)[np.argmax(np.maximum(H_RANGE_M[0] - np.ravel(h), np.ravel(h) - H_RANGE_M[1]))])
+        raise InvalidInputError(f"height {bad:.6g} m is outside the normal-gravity model's range "
+                                f"[{H_RANGE_M[0]:g}, {H_RANGE_M[1]:g}] m (ellipsoidal height, metres)")
+
+
 def _radii_gravity(lat: ArrayLike, h: ArrayLike) -> tuple[Array | float, Array | float, Array | float]:
     la, ha = np.broadcast_arrays(np.asarray(_f(lat), dtype=float), np.asarray(_f(h), dtype=float))
+    _check_lat_h(la, ha)
     res = _radii_gravity_n(np.ascontiguousarray(la.ravel()), np.ascontiguousarray(ha.ravel()))
     if la.ndim == 0:
         return float(res[0, 0]), float(res[1, 0]), float(res[2, 0])
@@ -186,6 +203,7 @@ def gravity_ned(lat: ArrayLike, h: ArrayLike = 0.0) -> Array:
 def earth_rate_ned(lat: ArrayLike) -> Array:
     """Earth rotation rate resolved in NED, ``ω_ie^n = Ω (cos φ, 0, −sin φ)`` rad/s (Groves 2.123)."""
     lat = np.asarray(_f(lat))
+    _check_lat_h(lat, np.zeros(()))
     out = np.zeros(lat.shape + (3,))
     out[..., 0] = OMEGA_E * np.cos(lat)
     out[..., 2] = -OMEGA_E * np.sin(lat)

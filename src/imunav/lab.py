@@ -47,7 +47,6 @@ from __future__ import annotations
 import base64
 import contextlib
 import importlib
-import json
 import os
 import pkgutil
 import time
@@ -61,6 +60,7 @@ from typing import Any, Iterator, Mapping
 import numpy as np
 
 from imunav.errors import ConfigError
+from imunav.io._atomic import json_text
 
 __all__ = ["STEPS", "SIMULATION_ONLY", "LabConfig", "LabContext", "StepResult", "StepRecord", "LabResult", "run_lab",
            "load_lab_config", "parse_lab_config", "available_steps", "embed_png", "display_parameters",
@@ -516,7 +516,7 @@ def run_lab(
         prog.update(overall, description="lab: done")
     checks = _spec_checks(records, typed.spec)
     result = LabResult(out, seed, records, time.perf_counter() - t_lab, checks)
-    _write_text(out / "summary.json", json.dumps(_jsonable(result.to_dict()), indent=2) + "\n")
+    _write_text(out / "summary.json", json_text(result.to_dict()))
     _write_text(out / "summary.md", _markdown(result))
     _write_html(result, ctx, typed.title)
     return result

@@ -91,7 +91,7 @@ def test_ferraris_command_on_imucal_session(tmp_path):
 
 def test_bad_temperature_argument(tmp_path):
     r = CliRunner().invoke(app, ["calibrate", "temperature", "nofile.json", "--out", str(tmp_path / "x.json")])
-    assert r.exit_code != 0 and "FILE@TEMP_C" in str(r.exception)
+    assert r.exit_code == 2 and "FILE@TEMP_C" in r.stderr
 
 
 def test_multipose_command_on_unsigned_counts_with_defaults(tmp_path):

@@ -131,6 +131,11 @@ def _quality(h: Array, b: Array, A: Array, F: float, cond: float) -> dict[str, f
 
 def _check_planar(h: Array, tol: float) -> None:
     s = np.linalg.svd(h - h.mean(0), compute_uv=False)
+    if not s[0] > 1e-12 * max(1.0, float(np.abs(h).max())):
+        raise DegenerateGeometryError(
+            "magnetometer data are a single repeated point: no rotation was recorded; "
+            "rotate the sensor about more than one axis (cover the whole sphere)"
+        )
     if s[-1] < tol * s[0]:
         raise DegenerateGeometryError(
             f"magnetometer data are (nearly) planar: thickness/span = {s[-1] / s[0]:.2g} < {tol}; "
@@ -139,8 +144,14 @@ def _check_planar(h: Array, tol: float) -> None:
 
 
 def hard_iron_minmax(h: ArrayLike) -> Array:
-    """Hard iron as the per-axis mid-range ``(max + min)/2`` (thesis eqs. 6.1-6.3)."""
+    """Hard iron as the per-axis mid-range ``(max + min)/2`` (thesis eqs. 6.1-6.3).
+
+    Raises :class:`~imunav.errors.DegenerateGeometryError` for a single repeated
+    point, a line or a plane: the mid-range of an axis that was not swept is not
+    the hard iron.
+    """
     a = _points(h, minimum=2)
+    _check_planar(a, 0.02)
     return (a.max(0) + a.min(0)) / 2.0
 
 

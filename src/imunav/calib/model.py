@@ -55,11 +55,9 @@ _SI_GYRO = "rad/s"
 
 def write_json_atomic(obj: Any, path: str | os.PathLike[str]) -> Path:
     """Write ``obj`` as JSON to ``path`` atomically (temp file + ``os.replace``)."""
-    from imunav.io._atomic import atomic_path
+    from imunav.io._atomic import write_json
 
-    with atomic_path(path) as tmp:
-        tmp.write_text(json.dumps(obj, indent=2, default=_json_default) + "\n")
-    return Path(path)
+    return write_json(path, obj)
 
 
 def _json_default(o: Any) -> Any:
@@ -356,7 +354,7 @@ class ImuCalibration:
         ga = {"m/s^2": 1.0}.get(acc_unit)
         gg = {"deg/s": DEG, "rad/s": 1.0}.get(gyr_unit)
         if ga is None or gg is None:
-            raise UnitError(f"to_imucal: acc_unit must be 'm/s^2' and gyr_unit 'deg/s' or 'rad/s'")
+            raise UnitError("to_imucal: acc_unit must be 'm/s^2' and gyr_unit 'deg/s' or 'rad/s'")
         ta = self.accel_matrix * ga
         tg = self.gyro_matrix * gg
         ka = np.linalg.norm(ta, axis=1)

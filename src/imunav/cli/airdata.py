@@ -3,8 +3,6 @@
 from __future__ import annotations
 
 import json
-import os
-import tempfile
 from pathlib import Path
 from typing import Optional
 
@@ -17,26 +15,16 @@ Example: imunav airdata thesis --runs 50 --json thesis.json
 
 
 def _write_atomic(path: Path, write) -> None:
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=path.suffix)
-    os.close(fd)
-    try:
-        write(tmp)
-        os.replace(tmp, path)
-    except BaseException:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
-        raise
+    from imunav.io._atomic import atomic_path
+
+    with atomic_path(path) as tmp:
+        write(str(tmp))
 
 
 def _write_json(path: Path, obj: dict) -> None:
-    def w(tmp: str) -> None:
-        with open(tmp, "w") as f:
-            json.dump(obj, f, indent=2, allow_nan=False)
-            f.write("\n")
+    from imunav.io._atomic import write_json
 
-    _write_atomic(path, w)
+    write_json(path, obj)
 
 
 def _channels(text: Optional[str]) -> tuple[int, ...] | None:
@@ -66,11 +54,9 @@ def _vec3(text: str, name: str) -> tuple[float, float, float]:
 
 
 def _fail(exc: Exception) -> None:
-    from rich.console import Console
-    from rich.markup import escape
+    from imunav.cli._errors import fail
 
-    Console(stderr=True).print(f"[red]error:[/red] {escape(str(exc))}", soft_wrap=True)
-    raise typer.Exit(2) from exc
+    fail(exc)
 
 
 def register(app: typer.Typer) -> None:
@@ -101,6 +87,10 @@ Example: imunav airdata simulate turns --duration 120 --wind 8,-12,0 --turbulenc
         seed: int = typer.Option(0, "--seed", help="Random seed."),
         json_out: Optional[Path] = typer.Option(None, "--json", help="Also write a JSON summary here."),
     ) -> None:
+        from imunav.io._atomic import check_outputs
+
+        check_outputs([config], [out, json_out])
+
         import numpy as np
 
         from imunav.errors import InvalidInputError
@@ -163,6 +153,13 @@ Example: imunav airdata run flight.npz --robust nis --json run.json
         out: Optional[Path] = typer.Option(None, "--out", help="Write the estimates as .npz here."),
         plot: Optional[Path] = typer.Option(None, "--plot", help="Write a wind figure (.png) here."),
     ) -> None:
+        from imunav.io._atomic import check_outputs
+
+        check_outputs([path], [json_out, out, plot])
+        from imunav.cli._errors import check_figure_path
+
+        check_figure_path(plot, "--plot")
+
         import numpy as np
 
         from imunav.errors import FileFormatError, InvalidInputError
@@ -171,7 +168,10 @@ Example: imunav airdata run flight.npz --robust nis --json run.json
         try:
             if not path.exists():
                 raise FileFormatError(f"{path}: no such file; create one with `imunav airdata simulate`")
-            with np.load(path, allow_pickle=False) as z:
+            from imunav.io._common import wrap_read_errors
+
+            with wrap_read_errors(str(path), "an `imunav airdata simulate` .npz file"), open(path, "rb") as fh, \
+                    np.load(fh, allow_pickle=False) as z:
                 if "meta" not in z:
                     raise FileFormatError(f"{path}: not an `imunav airdata simulate` file (no 'meta' entry)")
                 meta = json.loads(str(z["meta"]))
@@ -214,7 +214,10 @@ Example: imunav airdata run flight.npz --robust nis --json run.json
             _fail(exc if isinstance(exc, InvalidInputError) else FileFormatError(f"{path}: missing entry {exc}"))
             return
         if out is not None:
-            _write_atomic(out, lambda tmp: np.savez_compressed(open(tmp, "wb"), **arrays))
+            from imunav.io._atomic import atomic_path
+
+            with atomic_path(out) as tmp, open(tmp, "wb") as fh:
+                np.savez_compressed(fh, **arrays)
         if plot is not None:
             from imunav.airdata import plot as P
 

@@ -3,8 +3,6 @@
 from __future__ import annotations
 
 import json
-import os
-import tempfile
 from pathlib import Path
 from typing import Any, Optional
 
@@ -53,11 +51,9 @@ def _resolve(path: Path, is_dir: bool) -> Path:
 
 
 def _write_json(obj: Any, path: Path) -> None:
-    path = Path(path)
-    fd, tmp = tempfile.mkstemp(dir=path.parent if str(path.parent) else ".", suffix=".json")
-    with os.fdopen(fd, "w") as f:
-        json.dump(obj, f, indent=1)
-    os.replace(tmp, path)
+    from imunav.io._atomic import write_json
+
+    write_json(path, obj, indent=1)
 
 
 @app.command("run")
@@ -72,6 +68,10 @@ def run_cmd(
 
     Example: imunav attitude run 05_undisturbed_slow_rotation_with_breaks_B.mat --filter madgwick_c
     """
+    from imunav.io._atomic import check_outputs
+
+    check_outputs([file], [json_out])
+
     from rich.console import Console
 
     from imunav.attitude.benchmark import make_filter
@@ -221,6 +221,11 @@ def montecarlo_cmd(
 
     Example: imunav attitude montecarlo --runs 5 --executor serial --json mc.json
     """
+    from imunav.cli._errors import check_figure_path
+    from imunav.io._atomic import check_outputs
+
+    check_outputs([], [json_out, plot])
+    check_figure_path(plot, "--plot")
     import numpy as np
     from rich.console import Console
     from rich.table import Table

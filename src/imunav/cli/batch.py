@@ -46,11 +46,9 @@ def _read_options(fs: Optional[float], accel_unit: Optional[str], gyro_unit: Opt
 
 
 def _fail(exc: Exception) -> None:
-    from rich.console import Console
-    from rich.markup import escape
+    from imunav.cli._errors import fail
 
-    Console(stderr=True).print(f"[red]error:[/red] {escape(str(exc))}", soft_wrap=True)
-    raise typer.Exit(2) from exc
+    fail(exc)
 
 
 def _print_summary(summary: Any, families: list[str], title: str) -> None:
@@ -150,6 +148,10 @@ def calibrate_cmd(
 
     Example: imunav batch calibrate batch --method thesis --spec examples/lab_spec.toml --json batch_cal.json
     """
+    from imunav.io._atomic import check_outputs
+
+    check_outputs([spec], [json_out])
+
     import math
 
     from imunav.batch import calibrate_batch
@@ -184,6 +186,10 @@ def noise_cmd(
 
     Example: imunav batch simulate 3 --static 600 --out static_batch && imunav batch noise static_batch --terms N,B,K
     """
+    from imunav.io._atomic import check_outputs
+
+    check_outputs([spec], [json_out])
+
     from imunav.batch import noise_batch
     from imunav.errors import InvalidInputError
 
@@ -198,11 +204,10 @@ def noise_cmd(
 
 
 def _finish(summary: Any, json_out: Optional[Path]) -> None:
-    from imunav.io._atomic import atomic_path
+    from imunav.io._atomic import write_json
 
     if json_out is not None:
-        with atomic_path(json_out) as tmp:
-            tmp.write_text(json.dumps(summary.to_dict(), indent=2, default=str) + "\n")
+        write_json(json_out, summary.to_dict())
     typer.echo(f"summary: {summary.out_dir / 'summary.csv'}, report: {summary.out_dir / 'index.html'}")
     if summary.n_failed or summary.passed is False:
         raise typer.Exit(1)

@@ -43,15 +43,28 @@ def _read(path: Path, fs: Optional[float], accel_unit: Optional[str], gyro_unit:
     if skiprows is not None:
         opts["skiprows"] = skiprows
     if columns:
-        opts["columns"] = json.loads(columns)
+        opts["columns"] = _columns(columns)
     return read_imu(path, **opts)
+
+
+def _columns(text: str) -> Any:
+    from imunav.errors import InvalidInputError
+
+    try:
+        return json.loads(text)
+    except json.JSONDecodeError as exc:
+        raise InvalidInputError(f"--columns {text!r}: not valid JSON ({exc.msg}); write e.g. "
+                                '\'{"gyro": ["gx","gy","gz"]}\'') from None
 
 
 def _segments(path: Path) -> Any:
     from imunav.errors import FileFormatError
+    from imunav.io._atomic import read_json
     from imunav.sim import Segments
 
-    d = json.loads(Path(path).read_text())
+    d = read_json(path, "segment table JSON (write it with Profile.to_dict() / Segments.to_dict())")
+    if not isinstance(d, dict):
+        raise FileFormatError(f"{path}: a segment table JSON is an object with the columns of Segments")
     d = d.get("segment_table", d)
     try:
         return Segments(**{k: np.asarray(d[k]) for k in Segments.__dataclass_fields__})
@@ -125,6 +138,10 @@ def multiposition(
 
     Example: imunav calibrate multiposition static.npz --segments static_segments.json --out static_cal.json --report rep
     """
+    from imunav.io._atomic import check_outputs
+
+    check_outputs([recording, segments, noise_model], [out])
+
     from imunav.calib import multiposition as fit
 
     data = _read(recording, fs, accel_unit, gyro_unit, accel_scale, gyro_scale, skiprows, columns)
@@ -154,6 +171,10 @@ def ratetable(
 
     Example: imunav calibrate ratetable rate.npz --segments rate_segments.json --static static.npz --static-segments static_segments.json --out cal.json
     """
+    from imunav.io._atomic import check_outputs
+
+    check_outputs([recording, segments, static, static_segments, base, noise_model], [out])
+
     from imunav.calib import ImuCalibration, combine, multiposition
     from imunav.calib import ratetable as fit
 
@@ -191,11 +212,17 @@ def ferraris(
 
     Example: imunav calibrate ferraris session.csv --sections sections.json --fs 102.4 --gyro-unit deg/s --out cal.json
     """
+    from imunav.io._atomic import check_outputs
+
+    check_outputs([recording, sections], [out, imucal_out])
+
     from imunav.calib import ferraris_from_session
     from imunav.calib.model import write_json_atomic
 
     data = _read(recording, fs, accel_unit, gyro_unit, accel_scale, gyro_scale, skiprows, columns)
-    secs = json.loads(Path(sections).read_text())
+    from imunav.io._atomic import read_json
+
+    secs = read_json(sections, "imucal section list JSON")
     res = ferraris_from_session(data.accel, data.gyro, secs, data.fs, gravity=gravity,
                                 expected_angle_deg=expected_angle_deg)
     _finish(res, out, report)
@@ -221,6 +248,10 @@ def multipose(
 
     Example: imunav calibrate multipose session.csv --fs 100 --init-s 36.5 --no-accel-misalignment --out cal.json
     """
+    from imunav.io._atomic import check_outputs
+
+    check_outputs([recording], [out])
+
     from imunav.calib import multipose as fit
 
     data = _read(recording, fs, accel_unit, gyro_unit, accel_scale, gyro_scale, skiprows, columns)
@@ -245,6 +276,10 @@ def temperature(
 
     Example: imunav calibrate temperature cal_m30.json@-30 cal_0.json@0 cal_20.json@20 cal_50.json@50 --orders 1,2 --out thermal_cal.json
     """
+    from imunav.io._atomic import check_outputs
+
+    check_outputs([c.rsplit("@", 1)[0] for c in calibrations if "@" in c], [out])
+
     from rich.console import Console
     from rich.table import Table
 
@@ -298,9 +333,18 @@ def mag(
 
     Example: imunav calibrate mag mag.csv --out mag_cal.json --report mag_report
     """
+    from imunav.io._atomic import check_outputs
+
+    check_outputs([recording], [out])
+
     from rich.console import Console
 
-    from imunav.calib.magnetometer import MagCalibration, fit_ellipsoid, hard_iron_minmax, soft_iron_rotation_scale
+    from imunav.calib.magnetometer import (
+        MagCalibration,
+        fit_ellipsoid,
+        hard_iron_minmax,
+        soft_iron_rotation_scale,
+    )
     from imunav.calib.model import write_json_atomic
     from imunav.errors import InvalidInputError
 
@@ -330,12 +374,16 @@ def _read_mag(path: Path) -> np.ndarray:
     from imunav.errors import FileFormatError
 
     p = Path(path)
+    from imunav.io._common import check_nonempty, wrap_read_errors
+
+    check_nonempty(p)
     if p.suffix == ".npz":
-        with np.load(p) as z:
+        with wrap_read_errors(str(p), "NPZ"), open(p, "rb") as fh, np.load(fh, allow_pickle=False) as z:
             for k in ("mag", "h", "m"):
                 if k in z:
                     return np.asarray(z[k], float)
-        raise FileFormatError(f"{p}: no 'mag' array (found {list(np.load(p).keys())})")
+            names = list(z.files)
+        raise FileFormatError(f"{p}: no 'mag' array (found {names})")
     import pandas as pd
 
     df = pd.read_csv(p, comment="#")

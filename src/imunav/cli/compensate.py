@@ -25,6 +25,10 @@ def compensate(
 
     Example: imunav compensate static.npz --cal cal.json --out static_compensated.npz
     """
+    from imunav.io._atomic import check_outputs
+
+    check_outputs([recording, cal], [out])
+
     import numpy as np
 
     from imunav.calib import ImuCalibration

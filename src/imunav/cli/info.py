@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-import json
+import math
 from pathlib import Path
 from typing import Any
 
@@ -56,37 +56,37 @@ def info(
 
     from imunav.errors import InvalidInputError
     from imunav.io import read_imu
-    from imunav.io._atomic import atomic_path
+    from imunav.io._atomic import check_outputs, write_json
     from imunav.timeseries import describe
     from imunav.units import DEG, G0
 
     console = Console()
-    err = Console(stderr=True)
-    try:
-        opts: dict[str, Any] = {"nan_policy": nan_policy}
-        units = {k: v for k, v in (("t", time_unit), ("gyro", gyro_unit), ("accel", accel_unit)) if v}
-        scales = {k: v for k, v in (("gyro", gyro_scale), ("accel", accel_scale)) if v is not None}
-        if units:
-            opts["units"] = units
-        if scales:
-            opts["scales"] = scales
-        if fs is not None:
-            opts["fs"] = fs
-        if skiprows is not None:
-            opts["skiprows"] = skiprows
-        if column:
-            opts["columns"] = _parse_columns(column)
-        data = read_imu(file, format=format, **opts)
-        s = describe(
-            data,
-            window_s=window_s,
-            min_duration_s=min_static_s,
-            gyro_full_scale=None if gyro_fs_dps is None else gyro_fs_dps * DEG,
-            accel_full_scale=None if accel_fs_g is None else accel_fs_g * G0,
-        )
-    except (InvalidInputError, FileNotFoundError) as e:
-        err.print(f"[red]error:[/red] {e}", highlight=False, markup=True)
-        raise typer.Exit(code=2) from None
+    check_outputs([file], [json_out])
+    if not (math.isfinite(window_s) and window_s > 0):
+        raise InvalidInputError(f"--window {window_s}: the static-detector window must be a finite number of seconds > 0")
+    if min_static_s is not None and not (math.isfinite(min_static_s) and min_static_s > 0):
+        raise InvalidInputError(f"--min-static {min_static_s}: must be a finite number of seconds > 0")
+    opts: dict[str, Any] = {"nan_policy": nan_policy}
+    units = {k: v for k, v in (("t", time_unit), ("gyro", gyro_unit), ("accel", accel_unit)) if v}
+    scales = {k: v for k, v in (("gyro", gyro_scale), ("accel", accel_scale)) if v is not None}
+    if units:
+        opts["units"] = units
+    if scales:
+        opts["scales"] = scales
+    if fs is not None:
+        opts["fs"] = fs
+    if skiprows is not None:
+        opts["skiprows"] = skiprows
+    if column:
+        opts["columns"] = _parse_columns(column)
+    data = read_imu(file, format=format, **opts)
+    s = describe(
+        data,
+        window_s=window_s,
+        min_duration_s=min_static_s,
+        gyro_full_scale=None if gyro_fs_dps is None else gyro_fs_dps * DEG,
+        accel_full_scale=None if accel_fs_g is None else accel_fs_g * G0,
+    )
 
     d = s.to_dict()
     head = Table(title=f"{file}", show_header=False, title_justify="left")
@@ -139,8 +139,7 @@ def info(
         console.print(gt)
 
     if json_out is not None:
-        with atomic_path(json_out) as tmp:
-            tmp.write_text(json.dumps(d, indent=2, default=str))
+        write_json(json_out, d)
         console.print(f"summary written to {json_out}")
 
 

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import json
 from pathlib import Path
 from typing import Optional
 
@@ -28,6 +27,10 @@ def register(app: typer.Typer) -> None:
         quiet: bool = typer.Option(False, "--quiet", "-q", help="No progress bars."),
         json_out: Optional[Path] = typer.Option(None, "--json", help="Also copy summary.json here."),
     ) -> None:
+        from imunav.io._atomic import check_outputs
+
+        check_outputs([config], [json_out])
+
         from rich.console import Console
         from rich.markup import escape
         from rich.table import Table
@@ -42,8 +45,9 @@ def register(app: typer.Typer) -> None:
                 progress=not quiet, console=console,
             )
         except InvalidInputError as exc:
-            console.print(f"[red]error:[/red] {escape(str(exc))}", soft_wrap=True)
-            raise typer.Exit(2) from exc
+            from imunav.cli._errors import fail
+
+            fail(exc)
         table = Table(title=f"imunav lab → {out}")
         table.add_column("step")
         table.add_column("verdict")
@@ -62,10 +66,9 @@ def register(app: typer.Typer) -> None:
             if s.error:
                 console.print(f"[red]{s.name} failed:[/red]\n{escape(s.error)}", soft_wrap=True, highlight=False)
         if json_out is not None:
-            from imunav.io._atomic import atomic_path
+            from imunav.io._atomic import read_json, write_json
 
-            with atomic_path(json_out) as tmp:
-                tmp.write_text(json.dumps(json.loads((Path(out) / "summary.json").read_text()), indent=2) + "\n")
+            write_json(json_out, read_json(Path(out) / "summary.json"))
         typer.echo(f"report: {Path(out) / 'index.html'}")
         if result.failed_steps:
             raise typer.Exit(1)

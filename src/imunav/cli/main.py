@@ -2,7 +2,10 @@
 
 Each command module in :mod:`imunav.cli` exposes ``register(app)``, which adds
 its command or command group to the Typer app.  Keep the modules thin: they
-parse options, call the library and print / write results.
+parse options, call the library and print / write results.  They do not catch
+errors: :class:`imunav.cli._errors.ImunavGroup` turns every imunav error and
+every OS error into one line on stderr and exit status 2 (a traceback only
+with ``--debug``), and any other exception into exit status 1.
 """
 
 from __future__ import annotations
@@ -11,7 +14,10 @@ import importlib
 
 import typer
 
+from imunav.cli._errors import ImunavGroup
+
 app = typer.Typer(
+    cls=ImunavGroup,
     name="imunav",
     help=(
         "Inertial sensors end to end: simulate, characterize, calibrate IMUs and "
@@ -45,6 +51,7 @@ for _name in _COMMAND_MODULES:
 def _main(
     ctx: typer.Context,
     version: bool = typer.Option(False, "--version", help="Print the version and exit.", is_eager=True),
+    debug: bool = typer.Option(False, "--debug", help="On an error, also print the Python traceback."),
 ) -> None:
     if version:
         from imunav import __version__

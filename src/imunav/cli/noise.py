@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import json
 from pathlib import Path
 from typing import Any
 
@@ -17,8 +16,15 @@ _CH = ("gx", "gy", "gz", "ax", "ay", "az")
 
 
 def _taus(spec: str) -> Any:
+    from imunav.errors import InvalidInputError
+
     if spec.startswith("log:"):
-        return ("log", int(spec.split(":", 1)[1]))
+        n = spec.split(":", 1)[1].strip()
+        if not n.isdigit() or int(n) < 2:
+            raise InvalidInputError(f"--taus {spec!r}: log:N needs an integer N >= 2 (e.g. log:50)")
+        return ("log", int(n))
+    if spec not in ("octave", "decade", "all"):
+        raise InvalidInputError(f"--taus {spec!r}: use octave, decade, all or log:N")
     return spec
 
 
@@ -74,62 +80,62 @@ def noise(
 
     from imunav.errors import InvalidInputError
     from imunav.io import read_imu
-    from imunav.io._atomic import atomic_path
+    from imunav.cli._errors import check_figure_path
+    from imunav.io._atomic import atomic_path, check_outputs, write_json
     from imunav.noise import allan_deviation, compare_psd_allan, fit_noise, fit_psd, log_average, psd
     from imunav.noise.fit import write_kalibr_yaml
     from imunav.units import to_display
 
     console = Console()
-    err = Console(stderr=True)
-    try:
-        chans = [c.strip() for c in channels.split(",") if c.strip()]
-        bad = [c for c in chans if c not in _CH]
-        if bad or not chans:
-            raise InvalidInputError(f"--channels: unknown {bad}; choose from {','.join(_CH)}")
-        term_list = tuple(t.strip().upper() for t in terms.split(",") if t.strip())
-        if select not in ("bic", "aic", "none"):
-            raise InvalidInputError(f"--select {select!r}: use bic, aic or none")
-        opts: dict[str, Any] = {}
-        units = {k: v for k, v in (("gyro", gyro_unit), ("accel", accel_unit)) if v}
-        if units:
-            opts["units"] = units
-        if fs is not None:
-            opts["fs"] = fs
-        if skiprows is not None:
-            opts["skiprows"] = skiprows
-        data = read_imu(file, format=format, **opts)
-        rate = float(data.fs)
-        if fs is None and abs(rate - round(rate)) < 1e-6 * rate:
-            rate = float(round(rate))  # time stamps built from an integer rate
-        if data.gaps():
-            raise InvalidInputError(f"{file}: the record has {len(data.gaps())} time gap(s); the noise analysis "
-                                    "needs one gap-free static record (split it, or use imunav.noise.allan_deviation "
-                                    "with nan_policy='segments')")
-        groups = []
-        for sensor, arr, unit, names in (("gyro", data.gyro, "rad/s", _CH[:3]), ("accel", data.accel, "m/s^2", _CH[3:])):
-            idx = [i for i, n in enumerate(names) if n in chans]
-            if idx:
-                groups.append((sensor, arr[:, idx], unit, tuple(names[i] for i in idx)))
-        results: dict[str, Any] = {}
-        with Progress(console=console, transient=True) as prog:
-            task = prog.add_task("noise analysis", total=3 * len(groups))
-            for sensor, arr, unit, names in groups:
-                r = allan_deviation(arr, rate, _taus(taus), kind, units=unit, channels=names)
-                prog.advance(task)
-                f = fit_noise(r, terms=term_list, gauss_markov=gm, select=None if select == "none" else select,
-                              quantity=sensor)
-                prog.advance(task)
-                p = psd(arr, rate, "welch", nperseg=min(arr.shape[0], 2**14), units=unit, channels=names)
-                pa = log_average(p, 10)
-                # same band as the Allan fit: below 1/(2 tau_min), clear of the sensor's own filter
-                pf = fit_psd(pa, f_range=[(pa.f[0], min(0.4 * rate, 0.5 / float(tm))) for tm in f.tau_min])
-                prog.advance(task)
-                results[sensor] = (r, f, p, pa, pf, compare_psd_allan(pf, f))
-        if yaml_out is not None and not ("gyro" in results and "accel" in results):
-            raise InvalidInputError("--yaml needs both gyro and accel channels")
-    except (InvalidInputError, FileNotFoundError) as e:
-        err.print(f"[red]error:[/red] {e}", highlight=False)
-        raise typer.Exit(code=2) from None
+    check_outputs([file], [json_out, plot, psd_plot, yaml_out])
+    check_figure_path(plot, "--plot")
+    check_figure_path(psd_plot, "--psd-plot")
+    tau_spec = _taus(taus)
+    chans = [c.strip() for c in channels.split(",") if c.strip()]
+    bad = [c for c in chans if c not in _CH]
+    if bad or not chans:
+        raise InvalidInputError(f"--channels: unknown {bad}; choose from {','.join(_CH)}")
+    term_list = tuple(t.strip().upper() for t in terms.split(",") if t.strip())
+    if select not in ("bic", "aic", "none"):
+        raise InvalidInputError(f"--select {select!r}: use bic, aic or none")
+    opts: dict[str, Any] = {}
+    units = {k: v for k, v in (("gyro", gyro_unit), ("accel", accel_unit)) if v}
+    if units:
+        opts["units"] = units
+    if fs is not None:
+        opts["fs"] = fs
+    if skiprows is not None:
+        opts["skiprows"] = skiprows
+    data = read_imu(file, format=format, **opts)
+    rate = float(data.fs)
+    if fs is None and abs(rate - round(rate)) < 1e-6 * rate:
+        rate = float(round(rate))  # time stamps built from an integer rate
+    if data.gaps():
+        raise InvalidInputError(f"{file}: the record has {len(data.gaps())} time gap(s); the noise analysis "
+                                "needs one gap-free static record (split it, or use imunav.noise.allan_deviation "
+                                "with nan_policy='segments')")
+    groups = []
+    for sensor, arr, unit, names in (("gyro", data.gyro, "rad/s", _CH[:3]), ("accel", data.accel, "m/s^2", _CH[3:])):
+        idx = [i for i, n in enumerate(names) if n in chans]
+        if idx:
+            groups.append((sensor, arr[:, idx], unit, tuple(names[i] for i in idx)))
+    results: dict[str, Any] = {}
+    with Progress(console=console, transient=True) as prog:
+        task = prog.add_task("noise analysis", total=3 * len(groups))
+        for sensor, arr, unit, names in groups:
+            r = allan_deviation(arr, rate, tau_spec, kind, units=unit, channels=names)
+            prog.advance(task)
+            f = fit_noise(r, terms=term_list, gauss_markov=gm, select=None if select == "none" else select,
+                          quantity=sensor)
+            prog.advance(task)
+            p = psd(arr, rate, "welch", nperseg=min(arr.shape[0], 2**14), units=unit, channels=names)
+            pa = log_average(p, 10)
+            # same band as the Allan fit: below 1/(2 tau_min), clear of the sensor's own filter
+            pf = fit_psd(pa, f_range=[(pa.f[0], min(0.4 * rate, 0.5 / float(tm))) for tm in f.tau_min])
+            prog.advance(task)
+            results[sensor] = (r, f, p, pa, pf, compare_psd_allan(pf, f))
+    if yaml_out is not None and not ("gyro" in results and "accel" in results):
+        raise InvalidInputError("--yaml needs both gyro and accel channels")
 
     console.print(f"[bold]{file}[/bold]: {data.n:,} samples at {rate:g} Hz ({data.n / rate:.6g} s), "
                   f"kind={kind}, taus={taus}")
@@ -161,8 +167,7 @@ def noise(
         for sensor, (r, f, p, pa, pf, cmp) in results.items():
             out[sensor] = {"allan": r.to_dict(), "fit": f.to_dict(), "psd_fit": pf.to_dict(), "psd_vs_allan": cmp,
                            "curve_fits": _curve_fits(r)}
-        with atomic_path(json_out) as tmp:
-            tmp.write_text(json.dumps(out, indent=1, default=lambda o: None if o != o else str(o)))
+        write_json(json_out, out, indent=1)
         console.print(f"results written to {json_out}")
     if plot is not None or psd_plot is not None:
         from imunav.noise.plot import plot_allan, plot_psd

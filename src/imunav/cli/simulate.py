@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import json
 from pathlib import Path
 from typing import Optional
 
@@ -37,6 +36,10 @@ def register(app: typer.Typer) -> None:
         segments: Optional[Path] = typer.Option(None, "--segments", help="Segment-table CSV (default <out stem>_segments.csv)."),
         json_out: Optional[Path] = typer.Option(None, "--json", help="Also write a JSON summary here."),
     ) -> None:
+        from imunav.io._atomic import check_outputs
+
+        check_outputs([model], [out, segments, json_out])
+
         from rich.console import Console
         from rich.markup import escape
 
@@ -53,10 +56,9 @@ def register(app: typer.Typer) -> None:
             console.print(f"[red]error:[/red] {escape(str(exc))}", soft_wrap=True)
             raise typer.Exit(2) from exc
         if json_out is not None:
-            from imunav.io._atomic import atomic_path
+            from imunav.io._atomic import write_json
 
-            with atomic_path(json_out) as tmp:
-                tmp.write_text(json.dumps(summary, indent=2) + "\n")
+            write_json(json_out, summary)
         typer.echo(
             f"wrote {summary['file']}: {summary['samples']} samples, {summary['duration_s']:.1f} s at "
             f"{summary['fs_hz']:g} Hz, {summary['segments']} ({summary['error_model']})"

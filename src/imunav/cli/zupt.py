@@ -2,9 +2,6 @@
 
 from __future__ import annotations
 
-import json
-import os
-import tempfile
 from pathlib import Path
 from typing import Any, Optional
 
@@ -21,18 +18,18 @@ def register(app: typer.Typer) -> None:
 
 
 def _write_json(path: Path, obj: Any) -> None:
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(dir=path.parent, suffix=".tmp")
-    with os.fdopen(fd, "w") as fh:
-        json.dump(obj, fh, indent=1)
-    os.replace(tmp, path)
+    from imunav.io._atomic import write_json
+
+    write_json(path, obj, indent=1)
 
 
 def load_foot_file(path: Path) -> Any:
     """Read a foot recording by its format: pyshoe ``.mat``, x-io or FGO ``.csv``."""
     from imunav.errors import FileFormatError
     from imunav.io import foot
+    from imunav.io._common import check_nonempty
 
+    check_nonempty(path)
     if path.suffix.lower() == ".mat":
         return foot.read_pyshoe_mat(path)
     if path.suffix.lower() == ".csv":
@@ -48,13 +45,14 @@ def load_foot_file(path: Path) -> Any:
 
 
 def _fail(exc: Exception) -> None:
-    typer.secho(f"error: {exc}", fg="red", err=True)
-    raise typer.Exit(2)
+    from imunav.cli._errors import fail
+
+    fail(exc)
 
 
 @zupt_app.command("run")
 def run_cmd(
-    file: Path = typer.Argument(..., exists=True, dir_okay=False, help="Foot recording (.mat pyshoe, .csv x-io / FGO)."),
+    file: Path = typer.Argument(..., help="Foot recording (.mat pyshoe, .csv x-io / FGO)."),
     detector: str = typer.Option("shoe", "--detector", "-d", help="shoe, ared, amvd, mbgtd, adaptive, freeacc, lstm, or 'labels:NAME' for stored labels."),
     threshold: Optional[float] = typer.Option(None, help="Detector threshold (default: the library default)."),
     states: int = typer.Option(9, help="9 (thesis) or 15 (with biases)."),
@@ -72,6 +70,10 @@ def run_cmd(
 
     Example: imunav zupt run ../shared/data/foot/pyshoe_vicon/2017-11-22-11-22-03.mat --detector shoe
     """
+    from imunav.io._atomic import check_outputs
+
+    check_outputs([file, model], [out, json_out])
+
     import numpy as np
 
     from imunav.errors import ImunavError
@@ -113,19 +115,18 @@ def run_cmd(
     for k, v in summary.items():
         typer.echo(f"{k:28s} {v:.4f}" if isinstance(v, float) else f"{k:28s} {v}")
     if out is not None:
-        fd, tmp = tempfile.mkstemp(dir=out.parent if str(out.parent) else ".", suffix=".npz.tmp")
-        os.close(fd)
-        with open(tmp, "wb") as fh:
+        from imunav.io._atomic import atomic_path
+
+        with atomic_path(out) as tmp, open(tmp, "wb") as fh:  # a failed write leaves no temp file
             np.savez_compressed(fh, t=res.t, position=res.position, velocity=res.velocity,
                                 quaternion=res.quaternion, zv=res.zv)
-        os.replace(tmp, out)
     if json_out is not None:
         _write_json(json_out, summary)
 
 
 @zupt_app.command("train")
 def train_cmd(
-    directory: Path = typer.Argument(..., exists=True, file_okay=False, help="Folder of pyshoe-format *.mat trials."),
+    directory: Path = typer.Argument(..., help="Folder of pyshoe-format *.mat trials."),
     out: Path = typer.Option(Path("zupt_lstm.npz"), help="Model file to write."),
     windows_per_trial: Optional[int] = typer.Option(None, help="Training windows drawn per trial."),
     epochs: Optional[int] = typer.Option(None, help="Epochs."),
@@ -187,7 +188,7 @@ def train_cmd(
 
 @zupt_app.command("benchmark")
 def benchmark_cmd(
-    directory: Path = typer.Argument(..., exists=True, file_okay=False, help="Folder of pyshoe-format *.mat trials."),
+    directory: Path = typer.Argument(..., help="Folder of pyshoe-format *.mat trials."),
     json_out: Optional[Path] = typer.Option(None, "--json", help="Write per-trial 2-D errors as JSON."),
     model: Optional[Path] = typer.Option(None, help="LSTM model file (default: the shipped one)."),
     limit: Optional[int] = typer.Option(None, help="Only the first N trials (sorted by name)."),
@@ -196,6 +197,10 @@ def benchmark_cmd(
 
     Example: imunav zupt benchmark ../shared/data/foot/pyshoe_vicon --limit 3 --json zupt-bench.json
     """
+    from imunav.io._atomic import check_outputs
+
+    check_outputs([model], [json_out])
+
     import numpy as np
     from rich.console import Console
     from rich.progress import track

@@ -9,12 +9,16 @@ error the temporary file is removed and the target is left untouched.
 from __future__ import annotations
 
 import contextlib
+import errno
+import json
+import math
 import os
 import tempfile
-from collections.abc import Iterator
+from collections.abc import Iterable, Iterator
 from pathlib import Path
+from typing import Any
 
-__all__ = ["atomic_path"]
+__all__ = ["atomic_path", "check_outputs", "check_writable", "json_text", "jsonable", "read_json", "write_json"]
 
 
 @contextlib.contextmanager
@@ -34,9 +38,21 @@ def atomic_path(path: str | os.PathLike[str]) -> Iterator[Path]:
     'hello'
     """
     target = Path(path)
+    if target.is_dir():
+        raise IsADirectoryError(errno.EISDIR, "the output is a folder; give a file name", str(target))
     directory = target.parent if str(target.parent) else Path(".")
-    directory.mkdir(parents=True, exist_ok=True)
-    fd, tmp_name = tempfile.mkstemp(prefix=f".{target.name}.", suffix=f".tmp{target.suffix}", dir=directory)
+    for parent in (directory, *directory.parents):
+        if parent.exists():
+            if not parent.is_dir():
+                raise NotADirectoryError(errno.ENOTDIR, f"cannot write the output: {parent} is a file, not a folder",
+                                         str(target))
+            break
+    try:
+        directory.mkdir(parents=True, exist_ok=True)
+        fd, tmp_name = tempfile.mkstemp(prefix=f".{target.name}.", suffix=f".tmp{target.suffix}", dir=directory)
+    except OSError as exc:
+        # Name the target, not the temporary file, in the message.
+        raise type(exc)(exc.errno, f"cannot write the output ({exc.strerror})", str(target)) from None
     os.close(fd)
     tmp = Path(tmp_name)
     try:
@@ -53,3 +69,129 @@ def atomic_path(path: str | os.PathLike[str]) -> Iterator[Path]:
         with contextlib.suppress(OSError):
             tmp.unlink()
         raise
+
+
+def jsonable(obj: Any) -> Any:
+    """``obj`` as plain JSON types, with ``None`` (JSON null) for NaN / ±inf.
+
+    NumPy arrays and scalars become lists and numbers, objects with a
+    ``to_dict()`` method their dictionary, paths and anything else their text.
+    """
+    if obj is None or isinstance(obj, (bool, str)):
+        return obj
+    if isinstance(obj, int):
+        return int(obj)
+    if isinstance(obj, float):
+        return obj if math.isfinite(obj) else None
+    if isinstance(obj, dict):
+        return {str(k): jsonable(v) for k, v in obj.items()}
+    if isinstance(obj, (list, tuple, set, frozenset)):
+        return [jsonable(v) for v in obj]
+    try:
+        import numpy as np
+    except ImportError:  # pragma: no cover
+        np = None  # type: ignore[assignment]
+    if np is not None:
+        if isinstance(obj, np.ndarray):
+            return jsonable(obj.tolist())
+        if isinstance(obj, np.bool_):
+            return bool(obj)
+        if isinstance(obj, np.integer):
+            return int(obj)
+        if isinstance(obj, np.floating):
+            return jsonable(float(obj))
+        if isinstance(obj, np.complexfloating):
+            return str(obj)
+    if hasattr(obj, "to_dict") and callable(obj.to_dict):
+        return jsonable(obj.to_dict())
+    return str(obj)
+
+
+def json_text(obj: Any, indent: int | None = 2) -> str:
+    """Standard JSON text of ``obj`` (no ``NaN`` / ``Infinity`` tokens: those are null)."""
+    return json.dumps(jsonable(obj), indent=indent, allow_nan=False) + "\n"
+
+
+def write_json(path: str | os.PathLike[str], obj: Any, indent: int | None = 2) -> Path:
+    """Write ``obj`` as standard JSON (see :func:`json_text`) to ``path`` atomically.
+
+    Every JSON file the command line writes goes through here.
+    """
+    text = json_text(obj, indent)
+    with atomic_path(path) as tmp:
+        tmp.write_text(text, encoding="utf-8")
+    return Path(path)
+
+
+def read_json(path: str | os.PathLike[str], what: str = "JSON file") -> Any:
+    """Load a JSON file; a syntax error becomes a :class:`~imunav.errors.FileFormatError` naming the file."""
+    from imunav.errors import FileFormatError
+
+    text = Path(path).read_text(encoding="utf-8")
+    try:
+        return json.loads(text)
+    except json.JSONDecodeError as exc:
+        raise FileFormatError(f"{path}: not a valid {what} ({exc.msg} at line {exc.lineno}, column {exc.colno}); "
+                              "fix or regenerate the file") from None
+
+
+def check_writable(path: str | os.PathLike[str]) -> None:
+    """Raise an :class:`OSError` naming ``path`` if a file cannot be written there.
+
+    Checked before any work is done: the path is not a folder, no existing
+    ancestor is a file, and a file can be created in the nearest existing
+    ancestor folder (a probe file, removed at once).
+    """
+    target = Path(path)
+    if target.is_dir():
+        raise IsADirectoryError(errno.EISDIR, "the output is a folder; give a file name", str(target))
+    directory = target.parent if str(target.parent) else Path(".")
+    for parent in (directory, *directory.parents):
+        if parent.exists():
+            if not parent.is_dir():
+                raise NotADirectoryError(errno.ENOTDIR, f"cannot write the output: {parent} is a file, not a folder",
+                                         str(target))
+            try:
+                with tempfile.TemporaryFile(dir=parent):
+                    pass
+            except OSError as exc:
+                raise type(exc)(exc.errno, f"cannot write the output in {parent} ({exc.strerror})",
+                                str(target)) from None
+            return
+
+
+def check_outputs(inputs: Iterable[str | os.PathLike[str] | None],
+                  outputs: Iterable[str | os.PathLike[str] | None]) -> None:
+    """Refuse an output path that resolves to an input file (it would replace the input),
+    and two outputs that resolve to the same file.
+
+    ``None`` entries are skipped.  Raises :class:`~imunav.errors.InvalidInputError`.
+    """
+    from imunav.errors import InvalidInputError
+
+    def key(p: str | os.PathLike[str]) -> Path:
+        return Path(p).expanduser().resolve()
+
+    seen: dict[Path, str | os.PathLike[str]] = {}
+    outputs = list(outputs)
+    for o in outputs:
+        if o is None:
+            continue
+        k = key(o)
+        if k in seen:
+            raise InvalidInputError(f"two outputs are the same file ({seen[k]} and {o}); give each its own path")
+        seen[k] = o
+    for o in outputs:
+        if o is not None:
+            check_writable(o)
+    ins = {}
+    for p in inputs:
+        if p is not None:
+            ins.setdefault(key(p), p)
+    for o in outputs:
+        if o is None:
+            continue
+        k = key(o)
+        if k in ins:
+            raise InvalidInputError(f"output {o} is the input file {ins[k]}: writing it would destroy the input; "
+                                    "choose another output path")

@@ -47,6 +47,7 @@ import json
 import os
 import tempfile
 import time
+import zipfile
 from collections.abc import Callable, Sequence
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
@@ -252,7 +253,7 @@ class LstmDetector:
         if not p.is_file():
             raise FileFormatError(f"LSTM model file not found: {p}; train one with `imunav zupt train DIR`")
         try:
-            with np.load(p, allow_pickle=False) as z:
+            with open(p, "rb") as fh, np.load(fh, allow_pickle=False) as z:
                 meta = json.loads(str(z["meta"]))
                 cfgd = meta["config"]
                 for key in ("scale", "speed"):
@@ -263,8 +264,9 @@ class LstmDetector:
                            for l in range(cfg.layers)]
                 return cls(weights, z["fc_w"].astype(float), z["fc_b"].astype(float), z["mean"].astype(float),
                            z["std"].astype(float), cfg, meta.get("info"))
-        except (KeyError, ValueError, TypeError) as exc:
-            raise FileFormatError(f"{p}: not an imunav LSTM model file ({exc})") from exc
+        except (KeyError, ValueError, TypeError, EOFError, zipfile.BadZipFile) as exc:
+            raise FileFormatError(f"{p}: not an imunav LSTM model file, or a truncated one "
+                                  f"({type(exc).__name__}: {exc}); train one with `imunav zupt train DIR`") from exc
 
     # -- inference -----------------------------------------------------------
     def probability(self, data: Any) -> Array:

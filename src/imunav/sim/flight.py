@@ -225,6 +225,11 @@ class FlightConfig(ResultMixin):
             raise InvalidInputError(f"turbulence must be one of {list(TURBULENCE_SIGMA)}, got {self.turbulence!r}")
         if not (self.duration > 0 and self.tas > 30 and self.rate_truth > 0):
             raise InvalidInputError("duration must be > 0, tas > 30 m/s, rates > 0")
+        for name in ("duration", "tas", "altitude", "rate_truth", "rate_ads", "rate_doppler"):
+            v = getattr(self, name)
+            if not np.isfinite(v) or (name != "altitude" and v <= 0):
+                raise InvalidInputError(f"{name} = {v}: must be a finite number" + ("" if name == "altitude" else " > 0")
+                                        + " (--rate-ads / --rate-doppler are in Hz)")
         for name in ("rate_ads", "rate_doppler"):
             ratio = self.rate_truth / getattr(self, name)
             if abs(ratio - round(ratio)) > 1e-9 or ratio < 1:
