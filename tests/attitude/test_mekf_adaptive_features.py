@@ -13,7 +13,7 @@ import pytest
 from imunav.attitude import AdaptiveMEKF
 from imunav.attitude.adaptive import ADAPTIVE_DEFAULTS
 from imunav.attitude.mekf import MEKF, MekfParams
-from imunav.errors import ConfigError
+from imunav.errors import ConfigError, InvalidInputError
 from imunav.rotation import quat_conjugate, quat_exp, quat_from_euler, quat_rotate
 from imunav.timeseries import ImuData
 
@@ -153,3 +153,31 @@ def test_time_constants_give_rate_independent_steady_state(fs):
         # discrete steady state differs from the continuous one by O(Δt/τ)
         np.testing.assert_allclose(P[:2], sg**2 * ta, rtol=2.0 / (fs * ta) + 1e-3)
         np.testing.assert_allclose(P[2], sg**2 * tm, rtol=2.0 / (fs * tm) + 1e-3)
+
+
+@pytest.mark.parametrize("make", [
+    lambda: MEKF(), lambda: AdaptiveMEKF(),
+])
+@pytest.mark.parametrize("dt", [float("nan"), -0.01, 0.0, float("inf"), "x"])
+def test_step_refuses_a_bad_time_step(make, dt):
+    f = make()
+    f.step([0.0, 0.0, 0.1], [0.0, 0.0, -9.81], [20.0, 0.0, 40.0], 0.01)
+    q = f.q.copy()
+    with pytest.raises(InvalidInputError, match="dt"):
+        f.step([0.0, 0.0, 0.1], [0.0, 0.0, -9.81], [20.0, 0.0, 40.0], dt)
+    np.testing.assert_array_equal(f.q, q)  # the state is untouched: later samples stay valid
+
+
+def test_impossible_rates_refused_in_step_and_run():
+    from imunav.attitude import Complementary, GravityKF, Madgwick, Mahony, UKF
+
+    for f in (MEKF(), Madgwick(), Mahony(), Complementary(), UKF()):
+        with pytest.raises(InvalidInputError, match="exceeds"):
+            f.step([1e300, 0.0, 0.0], [0.0, 0.0, -9.81], None, 0.01)
+    with pytest.raises(InvalidInputError, match="exceeds"):
+        GravityKF().step([1e300, 0.0, 0.0], [0.0, 0.0, -9.81], 0.01)
+    data, _ = _static(200, 100.0)
+    g = data.gyro.copy()
+    g[57] = [0.0, 2e4, 0.0]
+    with pytest.raises(InvalidInputError, match="sample 57"):
+        AdaptiveMEKF().run(replace(data, gyro=g))

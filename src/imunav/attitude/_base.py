@@ -36,6 +36,14 @@ def prepare(data: ImuData, use_mag: bool | None) -> tuple[Array, Array, Array, A
     if use_mag and not has_mag:
         raise InvalidInputError("use_mag=True but the recording has no magnetometer; pass use_mag=False (6D)")
     m = np.ascontiguousarray(data.mag, dtype=np.float64) if has_mag else np.zeros_like(a)
+    wn = np.abs(g).max(axis=1)
+    wn = np.where(wn <= MAX_RATE, np.linalg.norm(np.minimum(np.abs(g), MAX_RATE), axis=1), wn)
+    if np.any(wn > MAX_RATE):
+        k = int(np.argmax(wn > MAX_RATE))
+        raise InvalidInputError(
+            f"gyro rate |ω| = {wn[k]:.3g} rad/s at sample {k} (t = {t[k]:.6g} s) exceeds {MAX_RATE:g} rad/s, beyond "
+            "any gyro; the samples are not in rad/s (give the file's unit) or are corrupt"
+        )
     dt = np.empty_like(t)
     dt[1:] = np.diff(t)
     dt[0] = dt[1]
@@ -61,6 +69,37 @@ def vec3(v: ArrayLike | None, name: str) -> Array:
     if not np.all(np.isfinite(a)):
         raise NonFiniteError(f"{name} contains NaN/inf")
     return a
+
+
+#: largest angular rate accepted, rad/s (about 570 000 °/s: beyond any gyro's range)
+MAX_RATE = 1e4
+
+
+def step_dt(dt: float) -> float:
+    """The time step of a ``step()`` call: finite and > 0, else InvalidInputError.
+
+    Policy: a per-sample ``step`` raises on a bad sample rather than skipping it,
+    so that a NaN or negative Δt never corrupts every later attitude silently.
+    """
+    try:
+        d = float(dt)
+    except (TypeError, ValueError):
+        raise InvalidInputError(f"dt must be a number of seconds, got {dt!r}") from None
+    if not (np.isfinite(d) and d > 0.0):
+        raise InvalidInputError(f"dt must be finite and > 0 s, got {dt}; pass the time since the previous sample")
+    return d
+
+
+def gyro3(gyro: ArrayLike) -> Array:
+    """A gyro sample as a finite 3-vector whose norm is at most :data:`MAX_RATE`."""
+    g = vec3(gyro, "gyro")
+    n = float(np.linalg.norm(g)) if np.abs(g).max() <= MAX_RATE else float(np.abs(g).max())
+    if n > MAX_RATE:
+        raise InvalidInputError(
+            f"gyro rate |ω| = {n:.3g} rad/s exceeds {MAX_RATE:g} rad/s, beyond any gyro; the samples are not in rad/s "
+            "(convert deg/s with imunav.units) or are corrupt"
+        )
+    return g
 
 
 def check_positive(**kw: float) -> None:

@@ -18,7 +18,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from imunav.attitude import _kernels as _k
-from imunav.attitude._base import check_positive, check_q0, initial_q, prepare, vec3
+from imunav.attitude._base import check_positive, check_q0, gyro3, initial_q, prepare, step_dt, vec3
 from imunav.attitude.result import AttitudeResult
 from imunav.timeseries import ImuData
 
@@ -42,8 +42,8 @@ class Complementary:
         self.q = check_q0(q0)
 
     def step(self, gyro: ArrayLike, accel: ArrayLike, mag: ArrayLike | None, dt: float) -> np.ndarray:
-        self.q = _k.complementary_step(self.q, vec3(gyro, "gyro"), vec3(accel, "accel"), vec3(mag, "mag"),
-                                       float(dt), float(self.k_acc), float(self.k_mag), mag is not None)
+        self.q = _k.complementary_step(self.q, gyro3(gyro), vec3(accel, "accel"), vec3(mag, "mag"),
+                                       step_dt(dt), float(self.k_acc), float(self.k_mag), mag is not None)
         return self.q.copy()
 
     def run(self, data: ImuData, *, q0: ArrayLike | None = None, use_mag: bool | None = None) -> AttitudeResult:

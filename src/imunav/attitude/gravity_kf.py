@@ -38,7 +38,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from imunav.attitude import _gravity_kernels as _gk
-from imunav.attitude._base import prepare
+from imunav.attitude._base import gyro3, prepare, step_dt, vec3
 from imunav.attitude.result import AttitudeResult
 from imunav.errors import ConfigError, ShapeError
 from imunav.rotation import quat_from_euler
@@ -135,13 +135,14 @@ class GravityKF:
         after :meth:`reset` only stores the gyro sample."""
         if not hasattr(self, "x"):
             self.reset()
-        g = np.asarray(gyro, float).reshape(3)
-        a = np.asarray(accel, float).reshape(3)
+        g = gyro3(gyro)
+        a = vec3(accel, "accel")
+        dt = step_dt(dt)
         ya = -a if self.accel_convention == "specific_force" else a
         if self._gprev is not None:
             gp = self._gprev
             _gk.gravity_step(_KINDS[self.kind], self.x, self.P, self._sv, self._Pb, gp[0], gp[1], gp[2],
-                             ya[0], ya[1], ya[2], float(dt), self.params.vector(), self._S, *self._work)
+                             ya[0], ya[1], ya[2], dt, self.params.vector(), self._S, *self._work)
         self._gprev = g.copy()
         return roll_pitch_from_x(self.x[None, :])[0]
 

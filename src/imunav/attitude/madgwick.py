@@ -25,7 +25,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from imunav.attitude import _kernels as _k
-from imunav.attitude._base import check_positive, check_q0, initial_q, prepare, vec3
+from imunav.attitude._base import check_positive, check_q0, gyro3, initial_q, prepare, step_dt, vec3
 from imunav.attitude.result import AttitudeResult
 from imunav.timeseries import ImuData
 
@@ -54,7 +54,7 @@ class Madgwick:
         """Process one sample; returns the new q_nb."""
         use_mag = mag is not None
         q = _k.madgwick_step(
-            _k._ned_nwu(self.q), vec3(gyro, "gyro"), vec3(accel, "accel"), vec3(mag, "mag"), float(dt),
+            _k._ned_nwu(self.q), gyro3(gyro), vec3(accel, "accel"), vec3(mag, "mag"), step_dt(dt),
             float(self.beta), use_mag, 0.5 if self.original_c else 1.0,
         )
         self.q = _k._ned_nwu(q)

@@ -17,7 +17,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from imunav.attitude import _kernels as _k
-from imunav.attitude._base import check_positive, check_q0, initial_q, prepare, vec3
+from imunav.attitude._base import check_positive, check_q0, gyro3, initial_q, prepare, step_dt, vec3
 from imunav.attitude.result import AttitudeResult
 from imunav.timeseries import ImuData
 
@@ -44,8 +44,8 @@ class Mahony:
 
     def step(self, gyro: ArrayLike, accel: ArrayLike, mag: ArrayLike | None, dt: float) -> np.ndarray:
         self.q, self.integral = _k.mahony_step(
-            self.q, self.integral, vec3(gyro, "gyro"), vec3(accel, "accel"), vec3(mag, "mag"),
-            float(dt), float(self.kp), float(self.ki), mag is not None,
+            self.q, self.integral, gyro3(gyro), vec3(accel, "accel"), vec3(mag, "mag"),
+            step_dt(dt), float(self.kp), float(self.ki), mag is not None,
         )
         return self.q.copy()
 

@@ -59,7 +59,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from imunav.attitude import _kernels as _k
-from imunav.attitude._base import check_q0, initial_q, prepare, vec3
+from imunav.attitude._base import check_q0, gyro3, initial_q, prepare, step_dt, vec3
 from imunav.attitude.result import AttitudeResult
 from imunav.errors import ConfigError
 from imunav.timeseries import ImuData
@@ -161,8 +161,8 @@ class MEKF:
         p = self.params.vector()
         if mag is None:
             p[17] = 0.0
-        self.q, self.b = _k.mekf_step(self.q, self.b, self.P, self._st, vec3(gyro, "gyro"), vec3(accel, "accel"),
-                                      vec3(mag, "mag"), float(dt), p, self._phi)
+        self.q, self.b = _k.mekf_step(self.q, self.b, self.P, self._st, gyro3(gyro), vec3(accel, "accel"),
+                                      vec3(mag, "mag"), step_dt(dt), p, self._phi)
         return self.q.copy()
 
     def _run(self, data: ImuData, q0: ArrayLike | None, bias0: ArrayLike | None, use_mag: bool | None,

@@ -21,7 +21,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from imunav.attitude import _kernels as _k
-from imunav.attitude._base import check_q0, initial_q, prepare, vec3
+from imunav.attitude._base import check_q0, gyro3, initial_q, prepare, step_dt, vec3
 from imunav.attitude.result import AttitudeResult
 from imunav.errors import ConfigError
 from imunav.rotation import quat_rotate
@@ -91,7 +91,7 @@ class UKF:
     def step(self, gyro: ArrayLike, accel: ArrayLike, mag: ArrayLike | None, dt: float) -> np.ndarray:
         pr = self.params
         self.q, self.b, self.P, _, _ = _k.ukf_step(
-            self.q, self.b, self.P, vec3(gyro, "gyro"), vec3(accel, "accel"), vec3(mag, "mag"), float(dt),
+            self.q, self.b, self.P, gyro3(gyro), vec3(accel, "accel"), vec3(mag, "mag"), step_dt(dt),
             pr.vector(mag is not None), pr.alpha, pr.beta, pr.kappa, self._ref())
         return self.q.copy()
 
