@@ -130,3 +130,13 @@ def test_optimize_threshold_finds_stored_optimum_region():
     assert res.best_error == pytest.approx(tr.published_error["ared"], abs=0.02)
     with pytest.raises(ShapeError, match="reference"):
         optimize_threshold(tr.imu, tr.position[:10], "ared", grid)
+
+
+@pytest.mark.parametrize("bad", [float("nan"), 0.0, -1e8, float("inf")])
+def test_bad_thresholds_refused(bad):
+    n = 400
+    data = ImuData(t=np.arange(n) / 200.0, gyro=np.zeros((n, 3)), accel=np.tile([0.0, 0.0, -9.81], (n, 1)))
+    with pytest.raises(InvalidInputError, match="threshold"):
+        detect_zero_velocity(data, "shoe", bad)
+    with pytest.raises(InvalidInputError, match="margin_s"):
+        detect_zero_velocity(data, "shoe", 1e8, margin_s=float("nan"))

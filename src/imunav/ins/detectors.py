@@ -238,9 +238,16 @@ def detect_zero_velocity(data: Any, detector: str = "shoe", threshold: float | A
     margin_s : shrink every detected stance by this much at both ends
         (:func:`shrink_stances`; 0 = the published detector output).
     """
+    if threshold is not None:
+        th = np.asarray(threshold, dtype=float)
+        if not np.all(np.isfinite(th) & (th > 0)):
+            raise InvalidInputError(
+                f"detector threshold must be finite and > 0 (a statistic below it marks a stance); got {threshold!r}"
+                if th.ndim == 0 else "detector thresholds must all be finite and > 0"
+            )
+    if not (np.isfinite(margin_s) and margin_s >= 0):
+        raise InvalidInputError(f"margin_s must be finite and >= 0; got {margin_s}")
     res = _detect(data, detector, threshold, window, sigma_a, sigma_w, g, model)
-    if margin_s < 0:
-        raise InvalidInputError(f"margin_s must be >= 0; got {margin_s}")
     if margin_s > 0:
         fs = 1.0 / float(np.median(np.diff(np.asarray(data.t, dtype=float))))
         m = int(round(margin_s * fs))
