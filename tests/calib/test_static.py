@@ -126,3 +126,19 @@ def test_refusals():
     f, a, g = _means(truth, u4)
     with pytest.raises(InsufficientDataError, match="4 positions/steps for 4 unknowns"):
         multiposition_from_means(f, a)
+
+
+def test_six_position_refuses_reversed_poses_and_bad_gravity():
+    """Poses in the wrong order or with negative gravity used to return T = -I silently (issue 16)."""
+    from imunav.errors import DegenerateGeometryError, InvalidInputError
+
+    truth = thesis_truth()
+    u = np.array([[1, 0, 0], [-1, 0, 0], [0, 1, 0], [0, -1, 0], [0, 0, 1], [0, 0, -1]], float)
+    _, a, g = _means(truth, u)
+    swapped = a[[1, 0, 3, 2, 5, 4]]  # each axis' down pose given as its up pose
+    with pytest.raises(DegenerateGeometryError, match="order"):
+        six_position(swapped, g, gravity=G)
+    with pytest.raises(DegenerateGeometryError, match="x axis"):
+        six_position(a[[1, 0, 2, 3, 4, 5]], g, gravity=G)
+    with pytest.raises(InvalidInputError, match="gravity"):
+        six_position(a, g, gravity=-G)

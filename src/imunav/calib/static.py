@@ -32,7 +32,7 @@ from imunav.calib._segments import (
 )
 from imunav.calib.model import ImuCalibration
 from imunav.calib.result import CalibrationResult
-from imunav.errors import DegenerateGeometryError, InsufficientDataError, InvalidInputError, ShapeError
+from imunav.errors import DegenerateGeometryError, InsufficientDataError, InvalidInputError, NonFiniteError, ShapeError
 from imunav.earth import OMEGA_E
 from imunav.units import G0
 
@@ -337,6 +337,10 @@ def six_position(
     A = np.asarray(accel_means, float)
     if A.shape != (6, 3):
         raise ShapeError(f"six_position needs accel_means of shape (6, 3), got {A.shape}")
+    if not (np.isfinite(gravity) and gravity > 0):
+        raise InvalidInputError(f"gravity must be finite and > 0 m/s^2, got {gravity}")
+    if not np.all(np.isfinite(A)):
+        raise NonFiniteError("six_position: accel_means contains NaN/inf")
     if f_ref is None:
         u = np.array([[1, 0, 0], [-1, 0, 0], [0, 1, 0], [0, -1, 0], [0, 0, 1], [0, 0, -1]], float)
     else:
@@ -355,6 +359,15 @@ def six_position(
     T = np.zeros((3, 3))
     for j in range(3):
         T[:, j] = (A[up[j]] - A[dn[j]]) / (2 * gravity)
+    # the sensor reads its own axis with the sign of the pose: a negative diagonal means the poses are given in
+    # another order (or the accelerometer measures -f), not an axis that points backwards
+    flipped = [("xyz"[i], float(T[i, i])) for i in range(3) if not T[i, i] > 0]
+    if flipped:
+        raise DegenerateGeometryError(
+            f"six_position: the {', '.join(a for a, _ in flipped)} axis reads the opposite sign of its pose (scale "
+            f"{', '.join(f'{v:.3g}' for _, v in flipped)}); give the poses in the order +x up, -x up, +y up, -y up, "
+            "+z up, -z up (or pass f_ref), with accel_means as specific force (+g on the axis pointing up)"
+        )
     b = np.array([(A[up[i], i] + A[dn[i], i]) / 2 for i in range(3)])
     # residual scatter of the equivalent LS model for honest standard errors
     X = np.hstack([gravity * u, np.ones((6, 1))])
