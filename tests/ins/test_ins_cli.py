@@ -21,7 +21,9 @@ def test_zupt_run_reproduces_published_error(tmp_path):
                             "--out", str(tmp_path / "traj.npz")])
     assert r.exit_code == 0, r.output
     summary = json.loads(out.read_text())
-    assert summary["error_2d_m"] == pytest.approx(0.032, abs=0.02)  # trial_error[0] of the file
+    # trial_error[0] of the file (published, pyshoe's own EKF, rounded to 1 mm): imunav gives 0.0290 m, -9.4 %;
+    # over all 42 trials the ratio has median 0.973 (test_ins_zupt_reference.py)
+    assert summary["error_2d_m"] == pytest.approx(0.032, rel=0.10)
     assert (tmp_path / "traj.npz").stat().st_size > 0
     r = runner.invoke(app, ["zupt", "run", str(f), "--detector", "labels:nothing"])
     assert r.exit_code != 0

@@ -10,6 +10,22 @@ from shared_data import data_path
 from typer.testing import CliRunner
 
 from imunav.cli.main import app
+from imunav.noise import allan_deviation, fit_noise
+
+
+def adis_welch_arw(path) -> np.ndarray:
+    """Gyro white-noise density of the ADIS16405 record, deg/sqrt(h), from scipy's Welch PSD.
+
+    Independent of imunav: the median one-sided PSD over 0.3-10 Hz, where it is flat within 1.5 % (below,
+    bias instability lifts it; above 10 Hz the sensor's filter lowers it), and N = sqrt(PSD / 2).  The
+    median over ~1460 bins of 122-segment averages has a relative error below 0.3 %."""
+    from scipy.signal import welch
+
+    d = np.load(path)
+    g = np.deg2rad(d["gyro"])
+    f, psd = welch(g - g.mean(axis=0), fs=float(d["fs"]), nperseg=2**14, axis=0)
+    band = (f >= 0.3) & (f <= 10.0)
+    return np.rad2deg(np.sqrt(np.median(psd[band], axis=0) / 2.0)) * 60.0
 
 
 def _write_npz(path, rng, n=60_000, fs=100.0):
@@ -46,8 +62,23 @@ def test_cli_noise_adis16405(tmp_path):
     r = CliRunner().invoke(app, ["noise", str(p), "--gyro-unit", "deg/s", "--accel-unit", "g", "--json", str(out)])
     assert r.exit_code == 0, r.output
     d = json.loads(out.read_text())
-    # datasheet ARW of the ADIS16405 is 2.0 deg/sqrt(h) (typ.); PSD and Allan N within 10 %
+    # ARW against an independent reference: the white-noise plateau of a scipy Welch PSD of the same record
+    # (adis_welch_arw).  The CLI's default fit gives -1.2, -1.1 and -6.8 % (x, y, z): on z its automatic
+    # tau_min keeps the 80 ms point, which the sensor's internal low-pass pulls down (chi^2 558 on 13 dof);
+    # with tau >= 0.15 s the fit is within 1.3 % (test_adis16405_arw_against_welch_psd).  Deterministic: the
+    # margin only covers numerics.
     arw = np.array(d["gyro"]["fit"]["terms"]["N"]["display_value"])
-    assert np.all((arw > 1.5) & (arw < 3.0))
+    np.testing.assert_allclose(arw, adis_welch_arw(p), rtol=0.08)
     for s in ("gyro", "accel"):
         assert np.all(np.abs(d[s]["psd_vs_allan"]["N"]) < 0.10)
+
+
+@pytest.mark.data
+def test_adis16405_arw_against_welch_psd():
+    """fit_noise's N on the ADIS16405 record within 3 % of the Welch-PSD plateau on every axis (achieved
+    -0.3, -0.4, +1.3 %), fitting tau >= 0.15 s (past the sensor's internal low-pass)."""
+    p = data_path("adis16405", "adis16405_imu2.npz")
+    d = np.load(p)
+    f = fit_noise(allan_deviation(np.deg2rad(d["gyro"]), float(d["fs"]), units="rad/s"), tau_range=(0.15, 1e5))
+    ref = adis_welch_arw(p)
+    np.testing.assert_allclose(f.display("N"), ref, rtol=0.03)

@@ -495,7 +495,6 @@ def zupt_ekf_kernel(
     dx = np.zeros(nx)
     w = np.empty(3)
     f = np.empty(3)
-    half = np.empty(3)
     idx_v = np.array([3, 4, 5])
     idx_b = np.array([12, 13, 14])
     idx_psi = np.array([8])
@@ -555,20 +554,22 @@ def zupt_ekf_kernel(
             bg[k, j] = bg[k - 1, j]
         # ---- covariance propagation
         C = dcm_from_quat_1(qprev)
-        fn = C @ f
         for i in range(nx):
             for j in range(nx):
                 Phi[i, j] = 1.0 if i == j else 0.0
                 Qd[i, j] = 0.0
         for i in range(3):
             Phi[i, 3 + i] = h
-        # -[f^n x] dt
-        Phi[3, 7] = fn[2] * h
-        Phi[3, 8] = -fn[1] * h
-        Phi[4, 6] = -fn[2] * h
-        Phi[4, 8] = fn[0] * h
-        Phi[5, 6] = fn[1] * h
-        Phi[5, 7] = -fn[0] * h
+        # -[dv^n x]: the Jacobian of v_k = v_{k-1} + dv^n + g h w.r.t. the nav-frame attitude error
+        # (C = exp([dphi x]) C_hat  =>  d(dv^n) = dphi x dv^n) uses the very increment dv^n that the
+        # nominal integration added, so that over a swing sum(dv^n) is the estimated velocity change
+        # (~0 horizontally) and the yaw stays unobservable, as it is.
+        Phi[3, 7] = dvn[2]
+        Phi[3, 8] = -dvn[1]
+        Phi[4, 6] = -dvn[2]
+        Phi[4, 8] = dvn[0]
+        Phi[5, 6] = dvn[1]
+        Phi[5, 7] = -dvn[0]
         if nx == 15:
             for i in range(3):
                 for j in range(3):

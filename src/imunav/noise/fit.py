@@ -25,8 +25,12 @@ B^2 h^2 ln|h| / (2 pi); white phase: Q^2 delta(h); Gauss-Markov:
 (3 passes) keeps the weights independent of the noise in A (weighting by the
 measured values biases the fit low).  Other estimators use the diagonal
 variance 2 A^2 / edf.  Standard errors come from the GLS normal equations
-(G^T W G)^-1 restricted to the selected terms; 95 % intervals are formed on
-log(theta) (delta method) and mapped to the parameters.
+(J^T W J)^-1 restricted to the selected terms, where J holds the design
+columns and, for each Gauss-Markov term, the derivative of the model with
+respect to log T_j (the correlation times are estimated too, so the
+covariance of theta is the joint one, not the one conditional on T_j);
+95 % intervals are formed on log(theta) and log(T) (delta method) and mapped
+to the parameters.
 
 Automatic term selection (``select="bic"`` default, or ``"aic"``, or
 ``None``): every subset of the candidate terms is fitted and the one with
@@ -361,26 +365,33 @@ def _fit_channel(tau, m, A, edf, n_phase, fs, names, Ts0, select, overlapping, n
     thf[cols] = t_
     keep = [c for c in cols if thf[c] > 0]
     covth = np.full((len(names), len(names)), np.nan)
-    if keep:
-        Gs = _design(tau, [names[c] for c in keep], [Ts[c] for c in keep]) / model[:, None]
-        Gw = np.linalg.solve(L, Gs)
-        try:
-            ck = np.linalg.inv(Gw.T @ Gw)
-        except np.linalg.LinAlgError:
-            ck = np.linalg.pinv(Gw.T @ Gw)
-        covth[np.ix_(keep, keep)] = ck
-    # standard error of log T for GM terms from the curvature of chi2 (profile)
     se_logT = {}
-    for gi in gm_idx:
-        if thf[gi] > 0:
-            h = 0.05
-            f = []
-            for dl in (-h, 0.0, h):
-                T2 = list(Ts)
-                T2[gi] = Ts[gi] * math.exp(dl)
-                f.append(solve(cols, T2, Crel, model)[1])
-            curv = (f[0] - 2 * f[1] + f[2]) / h**2
-            se_logT[gi] = math.sqrt(2.0 / curv) if curv > 0 else float("nan")
+    if keep:
+        # Jacobian of the whitened model w.r.t. (theta_keep, log T of each kept GM term): the GM
+        # correlation times are estimated too, and s_j^2 trades off against T_j, so the standard
+        # errors of theta must come from the joint covariance (the theta block of (J^T J)^-1), not
+        # from the GLS normal equations with T held fixed (that is the conditional covariance and
+        # under-states se(GM sigma) by ~1.7 x).  The log T diagonal equals 2 / (chi2 curvature of
+        # the profile over log T).
+        Gs = _design(tau, [names[c] for c in keep], [Ts[c] for c in keep]) / model[:, None]
+        cols_T = []
+        for c in keep:
+            if names[c].startswith("GM"):
+                h = 1e-4
+                d = (avar_term("GM", tau, Ts[c] * math.exp(h)) - avar_term("GM", tau, Ts[c] * math.exp(-h))) / (2 * h)
+                cols_T.append(thf[c] * d / model)
+        J = np.column_stack([Gs, *cols_T]) if cols_T else Gs
+        Jw = np.linalg.solve(L, J)
+        try:
+            cj = np.linalg.inv(Jw.T @ Jw)
+        except np.linalg.LinAlgError:
+            cj = np.linalg.pinv(Jw.T @ Jw)
+        nk = len(keep)
+        covth[np.ix_(keep, keep)] = cj[:nk, :nk]
+        gk = [c for c in keep if names[c].startswith("GM")]
+        for j, gi in enumerate(gk):
+            v = cj[nk + j, nk + j]
+            se_logT[gi] = math.sqrt(v) if v > 0 else float("nan")
     return thf, covth, np.array([c in keep for c in range(len(names))]), Ts, chi, se_logT
 
 
