@@ -37,6 +37,22 @@ def test_reproduces_imucal_example_cal():
     np.testing.assert_allclose(back.gyro_matrix, r.calibration.gyro_matrix, rtol=1e-9)
 
 
+def test_matches_imucal_run_on_the_same_input():
+    """The peer run live on the same annotated session (imucal, test extra): every matrix agrees to 1e-12 relative."""
+    imucal = pytest.importorskip("imucal")
+    import pandas as pd
+
+    d = pd.read_csv(data_path("imucal", "annotated_session.csv")).set_index("part")
+    peer = imucal.FerrarisCalibration().compute(imucal.ferraris_regions_from_df(d), sampling_rate_hz=204.8,
+                                               from_acc_unit="a.u.", from_gyr_unit="a.u.")
+    got = ferraris(_annotated(), 204.8, raw_accel_unit="counts", raw_gyro_unit="counts").calibration.to_imucal()
+    for k in ("K_a", "R_a", "b_a", "K_g", "R_g", "K_ga", "b_g"):
+        a, b = np.asarray(got[k]), np.asarray(getattr(peer, k))
+        rel = np.max(np.abs(a - b)) / np.max(np.abs(b))
+        print(f"{k}: max relative difference to imucal {rel:.1e}")
+        assert rel <= 1e-12, k
+
+
 def test_continuous_session_matches_imucal_output():
     """Calibrating the continuous session and applying it gives ferraris_example.csv (rtol 1e-5 upstream)."""
     import pandas as pd
