@@ -137,6 +137,35 @@ def test_temperature_curve_stderr_calibrated():
     _check(zs, "temperature")
 
 
+def test_thermal_calibration_stderr_calibrated():
+    """thermal_calibration from calibrations repeated at 41 temperatures (39 residual dof, so Student-t z have RMS
+    1.03): every parameter's linear drift curve (order fixed at 1) against its ThermalResult stderr, 30 runs x 4
+    parameters x 3 axes x 2 coefficients."""
+    from imunav.calib import ImuCalibration
+    from imunav.calib.temperature import thermal_calibration
+
+    temp = np.linspace(-20.0, 60.0, 41)
+    slope = {"accel_bias": 2e-3, "gyro_bias": -1e-5, "accel_scale": 4e-5, "gyro_scale": -6e-5}
+    noise = {"accel_bias": 5e-3, "gyro_bias": 2e-5, "accel_scale": 1e-4, "gyro_scale": 1e-4}
+    zs: dict = {}
+    for seed in range(30):
+        rng = np.random.default_rng(700 + seed)
+        true = {k: (rng.normal(scale=0.1, size=3) if "bias" in k else 1 + rng.normal(scale=0.01, size=3),
+                    slope[k] * (1 + 0.5 * rng.random(3))) for k in slope}
+        cals = []
+        for t in temp:
+            v = {k: c0 + c1 * t + rng.normal(scale=noise[k], size=3) for k, (c0, c1) in true.items()}
+            cals.append(ImuCalibration(accel_bias=v["accel_bias"], accel_matrix=np.diag(v["accel_scale"]),
+                                       gyro_bias=v["gyro_bias"], gyro_matrix=np.diag(v["gyro_scale"])))
+        res = thermal_calibration(temp, cals, order=1)
+        for k, (c0, c1) in true.items():
+            for i in range(3):
+                fit = res.fits[k][i]
+                c, sc = fit.curve.center_c, fit.curve.scale_c
+                _collect(zs, k, fit.curve.coeffs, np.array([c0[i] + c1[i] * c, c1[i] * sc]), fit.best.stderr)
+    _check(zs, "thermal_calibration")
+
+
 def _random_ellipsoid(rng, shortest):
     """Soft-iron inverse A⁻¹ (random axes, semi-axes shortest..1.3 x 50) and hard iron b."""
     q, _r = np.linalg.qr(rng.normal(size=(3, 3)))
