@@ -374,7 +374,9 @@ EXTERNAL_CONVENTIONS: dict[str, tuple[np.ndarray, bool]] = {
     "enu": (C_ENU_NED.T, False),  # q_enu_b, scalar first
     "broad": (C_ENU_NED.T, False),  # BROAD opt_quat: sensor -> ENU, scalar first (Laidig et al. 2021)
     "vqf": (C_ENU_NED.T, False),  # vqf quat6D / quat9D: sensor -> ENU, scalar first
-    "ahrs": (C_NED_NWU, False),  # ahrs package (Madgwick, Mahony, ...): sensor -> NWU, scalar first
+    # ahrs package: sensor -> NWU, scalar first, for Madgwick, Mahony without magnetometer, ...; but ahrs's
+    # Mahony WITH a magnetometer references north on its y axis: use "enu" for it (tests/attitude/test_ahrs_peer.py)
+    "ahrs": (C_NED_NWU, False),
     "scipy": (np.eye(3), True),  # scipy Rotation.as_quat(): [x, y, z, w], same frames
 }
 
