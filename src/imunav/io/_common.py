@@ -113,6 +113,42 @@ def _group_option(opt: Mapping[str, Any] | None, name: str) -> dict[str, Any]:
     return out
 
 
+_QUANTITY_OF = {"t": "time", "gyro": "angular_rate", "accel": "acceleration", "mag": "magnetic_field",
+                "temp": "temperature"}
+
+
+def _same_unit(a: str, b: str, group: str) -> bool:
+    from imunav.units import normalize_unit, unit_factor
+
+    q = _QUANTITY_OF.get(group)
+    raw = normalize_unit(b) in ("counts", "count", "lsb", "raw")
+    fb = unit_factor(b, q) if q is not None and not raw else None  # an unknown unit option is reported as such
+    if normalize_unit(a) == normalize_unit(b):
+        return True
+    if fb is None:
+        return False
+    try:
+        return unit_factor(a, q) == fb
+    except UnitError:
+        return False
+
+
+def _check_declared_units(declared: Any, given: Mapping[str, str], source: str) -> None:
+    """Units declared in the file win: an option that contradicts them is an error naming both.
+
+    An option may only fill in the unit of a group the file does not declare.
+    """
+    if not isinstance(declared, Mapping):
+        return
+    for k, v in given.items():
+        d = declared.get(k)
+        if isinstance(d, str) and not _same_unit(d, v, k):
+            raise UnitError(
+                f"{source}: the file declares {k} in {d!r}, but the option says {v!r}; the file's declaration "
+                f"wins - drop the {k} unit option (the values are read as {d!r})"
+            )
+
+
 def build_imu(
     arrays: Mapping[str, Any],
     source: str,
@@ -142,6 +178,7 @@ def build_imu(
     for k, v in u.items():
         if not isinstance(v, str):
             raise UnitError(f"units[{k!r}] must be a unit string such as 'deg/s', got {v!r}")
+    _check_declared_units(stored.get("units"), u, source)
     for k in sc:
         if k == "t":
             raise InvalidInputError("scales['t'] is not supported; declare the time unit with units={'t': 'ms'}")
