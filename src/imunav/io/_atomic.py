@@ -21,6 +21,22 @@ from typing import Any
 __all__ = ["atomic_path", "check_outputs", "check_writable", "json_text", "jsonable", "read_json", "write_json"]
 
 
+def _output_target(path: str | os.PathLike[str]) -> tuple[Path, Path, Path | None]:
+    """(target, its folder, the nearest existing ancestor folder or None); raises an OSError naming the target
+    when the target is a folder or an existing ancestor is a file."""
+    target = Path(path)
+    if target.is_dir():
+        raise IsADirectoryError(errno.EISDIR, "the output is a folder; give a file name", str(target))
+    directory = target.parent if str(target.parent) else Path(".")
+    for parent in (directory, *directory.parents):
+        if parent.exists():
+            if not parent.is_dir():
+                raise NotADirectoryError(errno.ENOTDIR, f"cannot write the output: {parent} is a file, not a folder",
+                                         str(target))
+            return target, directory, parent
+    return target, directory, None
+
+
 @contextlib.contextmanager
 def atomic_path(path: str | os.PathLike[str]) -> Iterator[Path]:
     """Yield a temporary path beside ``path``; rename it onto ``path`` on success.
@@ -37,16 +53,7 @@ def atomic_path(path: str | os.PathLike[str]) -> Iterator[Path]:
     >>> (d / "x.txt").read_text()
     'hello'
     """
-    target = Path(path)
-    if target.is_dir():
-        raise IsADirectoryError(errno.EISDIR, "the output is a folder; give a file name", str(target))
-    directory = target.parent if str(target.parent) else Path(".")
-    for parent in (directory, *directory.parents):
-        if parent.exists():
-            if not parent.is_dir():
-                raise NotADirectoryError(errno.ENOTDIR, f"cannot write the output: {parent} is a file, not a folder",
-                                         str(target))
-            break
+    target, directory, _ = _output_target(path)
     try:
         directory.mkdir(parents=True, exist_ok=True)
         fd, tmp_name = tempfile.mkstemp(prefix=f".{target.name}.", suffix=f".tmp{target.suffix}", dir=directory)
@@ -142,22 +149,14 @@ def check_writable(path: str | os.PathLike[str]) -> None:
     ancestor is a file, and a file can be created in the nearest existing
     ancestor folder (a probe file, removed at once).
     """
-    target = Path(path)
-    if target.is_dir():
-        raise IsADirectoryError(errno.EISDIR, "the output is a folder; give a file name", str(target))
-    directory = target.parent if str(target.parent) else Path(".")
-    for parent in (directory, *directory.parents):
-        if parent.exists():
-            if not parent.is_dir():
-                raise NotADirectoryError(errno.ENOTDIR, f"cannot write the output: {parent} is a file, not a folder",
-                                         str(target))
-            try:
-                with tempfile.TemporaryFile(dir=parent):
-                    pass
-            except OSError as exc:
-                raise type(exc)(exc.errno, f"cannot write the output in {parent} ({exc.strerror})",
-                                str(target)) from None
-            return
+    target, _, parent = _output_target(path)
+    if parent is None:
+        return
+    try:
+        with tempfile.TemporaryFile(dir=parent):
+            pass
+    except OSError as exc:
+        raise type(exc)(exc.errno, f"cannot write the output in {parent} ({exc.strerror})", str(target)) from None
 
 
 def check_outputs(inputs: Iterable[str | os.PathLike[str] | None],
