@@ -336,6 +336,14 @@ def complementary_run(q0, gyr, acc, mag, dt, k_acc, k_mag, use_mag):
 # 16 ref_tau           time constant [s] of the slow field-reference update
 # 17 use_mag (>0.5)
 # 18 acc_lpf_tau       [s] low-pass of the nav-frame specific force (0: off)
+# 19 rest_lpf_tau      [s] > 0: rest test on deviations from low-passes (9, 10 are then deviation bounds)
+# 20 mag_lpf_tau       [s] low-pass of field norm and dip before the disturbance test (0: off)
+# 21 mag_min_undisturbed [s] continuous undisturbed field required before the field is used
+# 22 mag_bias (>0.5)   heading update also corrects the bias (else consider states)
+# 23 bias_clip         [rad/s] no rest while a low-passed gyro axis exceeds it
+# 24 k_gyro_rate       [sqrt(s)] gyro noise density grows as sqrt(sigma_gyro^2 + (k |ω|)^2)
+# 25 tau_acc           [s] > 0: tilt-correction time constant, replaces 2 (variance (tau sigma_gyro)^2 / dt)
+# 26 tau_mag           [s] > 0: heading-correction time constant, replaces 5 (whatever the dip)
 
 N_PARAMS = 27
 N_STATE = 24
@@ -591,8 +599,8 @@ def mekf_step(q, b, P, st, gyr, acc, mag, dt, p, out_phi):
                 st[3] += dt
                 flags |= 2
                 if p[14] > 0.0 and st[3] > p[14]:
-                    st[1] = mn
-                    st[2] = dip
+                    st[1] = mn_t
+                    st[2] = dip_t
                     st[3] = 0.0
             else:
                 st[3] = 0.0
