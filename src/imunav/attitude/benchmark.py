@@ -183,8 +183,10 @@ def cv_grid_search(name: str, grid: dict[str, list[Any]], trials: Iterable[str |
     """
     tl = [str(t) for t in trials]
     res = results if results is not None else grid_search(name, grid, tl, workers=workers, progress=progress)
-    S = np.array([[t.total_rmse_deg for t in r.trials] for r in res])
     names = [t.trial for t in res[0].trials]
+    if any([t.trial for t in r.trials] != names for r in res):
+        raise ConfigError("cv_grid_search: the results do not score the same trials in the same order")
+    S = np.array([[t.total_rmse_deg for t in r.trials] for r in res])
     cv = select_by_cv(S, names, items=names)
     return replace(cv, fold_choice={g: res[j].params for g, j in cv.fold_choice.items()},
                    in_sample_choice=res[cv.in_sample_choice].params), res

@@ -36,7 +36,7 @@ def one_line(text: str) -> str:
 
 
 def _message(exc: BaseException) -> str:
-    if isinstance(exc, OSError) and not str(exc).startswith("cannot") and exc.strerror:
+    if isinstance(exc, OSError) and exc.strerror:
         where = f"{exc.filename}: " if exc.filename is not None else ""
         two = f" -> {exc.filename2}" if getattr(exc, "filename2", None) else ""
         return one_line(f"{where}{exc.strerror}{two}")

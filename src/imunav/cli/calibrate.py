@@ -278,7 +278,7 @@ def temperature(
     """
     from imunav.io._atomic import check_outputs
 
-    check_outputs([c.rsplit("@", 1)[0] for c in calibrations if "@" in c], [out])
+    check_outputs([c.rsplit("@", 1)[0] for c in calibrations], [out])
 
     from rich.console import Console
     from rich.table import Table
