@@ -259,6 +259,9 @@ class LstmDetector:
                 for key in ("scale", "speed"):
                     if key in cfgd:
                         cfgd[key] = tuple(cfgd[key])
+                # a model saved before the SHOE guard existed has no guard threshold chosen on its own
+                # training trials: keep its behaviour (no guard) rather than borrow the shipped model's
+                cfgd.setdefault("guard", False)
                 cfg = LstmConfig(**cfgd)
                 weights = [(z[f"w_ih_{l}"].astype(float), z[f"w_hh_{l}"].astype(float), z[f"b_{l}"].astype(float))
                            for l in range(cfg.layers)]
