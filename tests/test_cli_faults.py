@@ -262,3 +262,20 @@ def test_json_writer_nulls_non_finite(tmp_path):
                                          "d": np.array([1.0, np.nan]), "e": np.int64(3), "f": Path("p")})
     assert _strict(p.read_text()) == {"a": None, "b": [None, None, 1.5], "c": None, "d": [1.0, None], "e": 3, "f": "p"}
     assert oct(os.stat(p).st_mode & 0o777) != oct(0o600)
+
+
+def test_calibrate_report_that_is_a_file_leaves_no_calibration(tmp_path):
+    """--report naming an existing file: exit 2 before any work, one line, and no calibration output written."""
+    rng = np.random.default_rng(0)
+    u = rng.normal(size=(500, 3))
+    h = 50.0 * u / np.linalg.norm(u, axis=1)[:, None] + [10.0, -5.0, 3.0]
+    rec = tmp_path / "mag.csv"
+    np.savetxt(rec, h, delimiter=",", header="mag_x,mag_y,mag_z", comments="")
+    blocker = tmp_path / "rep"
+    blocker.write_text("not a folder")
+    out = tmp_path / "cal.json"
+    r = CliRunner().invoke(app, ["calibrate", "mag", str(rec), "--out", str(out), "--report", str(blocker)])
+    assert r.exit_code == 2
+    assert not out.exists()
+    ok = CliRunner().invoke(app, ["calibrate", "mag", str(rec), "--out", str(out), "--report", str(tmp_path / "r2")])
+    assert ok.exit_code == 0 and out.exists() and (tmp_path / "r2" / "report.json").exists()

@@ -72,18 +72,31 @@ def _segments(path: Path) -> Any:
         raise FileFormatError(f"{path}: segment table lacks the column {e} (write it with Profile.to_dict())") from None
 
 
+def _check_report(report: Optional[Path]) -> None:
+    """Refuse, before any work, a report folder that cannot be created or written (e.g. an existing file)."""
+    if report is not None:
+        from imunav.io._atomic import check_writable
+
+        check_writable(report / "report.json")
+
+
 def _finish(result: Any, out: Path, report: Optional[Path], *, save: Any = None) -> None:
     from rich.console import Console
     from rich.table import Table
 
     from imunav.calib.model import write_json_atomic
 
+    if report is not None:
+        # the report folder first: a report that cannot be written leaves no calibration behind either
+        from imunav.io._atomic import check_writable
+
+        report.mkdir(parents=True, exist_ok=True)
+        check_writable(report / "report.json")
     (save or result.calibration.save)(out)
     con = Console()
     if report is not None:
         from imunav.calib.plot import plot_residuals, save_figure
 
-        report.mkdir(parents=True, exist_ok=True)
         write_json_atomic(result.to_dict(), report / "report.json")
         save_figure(plot_residuals(result), report / "residuals.png")
     tab = Table(title=f"{result.method}: residual RMS and design condition")
@@ -141,6 +154,7 @@ def multiposition(
     from imunav.io._atomic import check_outputs
 
     check_outputs([recording, segments, noise_model], [out])
+    _check_report(report)
 
     from imunav.calib import multiposition as fit
 
@@ -174,6 +188,7 @@ def ratetable(
     from imunav.io._atomic import check_outputs
 
     check_outputs([recording, segments, static, static_segments, base, noise_model], [out])
+    _check_report(report)
 
     from imunav.calib import ImuCalibration, combine, multiposition
     from imunav.calib import ratetable as fit
@@ -215,6 +230,7 @@ def ferraris(
     from imunav.io._atomic import check_outputs
 
     check_outputs([recording, sections], [out, imucal_out])
+    _check_report(report)
 
     from imunav.calib import ferraris_from_session
     from imunav.calib.model import write_json_atomic
@@ -251,6 +267,7 @@ def multipose(
     from imunav.io._atomic import check_outputs
 
     check_outputs([recording], [out])
+    _check_report(report)
 
     from imunav.calib import multipose as fit
 
@@ -279,6 +296,7 @@ def temperature(
     from imunav.io._atomic import check_outputs
 
     check_outputs([c.rsplit("@", 1)[0] for c in calibrations], [out])
+    _check_report(report)
 
     from rich.console import Console
     from rich.table import Table
@@ -336,6 +354,7 @@ def mag(
     from imunav.io._atomic import check_outputs
 
     check_outputs([recording], [out])
+    _check_report(report)
 
     from rich.console import Console
 
