@@ -29,22 +29,14 @@ def register(root: typer.Typer) -> None:
 def _read(path: Path, fs: Optional[float], accel_unit: Optional[str], gyro_unit: Optional[str],
           accel_scale: Optional[float], gyro_scale: Optional[float], skiprows: Optional[int],
           columns: Optional[str]) -> Any:
+    from imunav.cli._options import reader_options
     from imunav.io import read_imu
 
-    opts: dict[str, Any] = {}
-    if fs:
-        opts["fs"] = fs
-    units = {k: v for k, v in (("accel", accel_unit), ("gyro", gyro_unit)) if v}
-    if units:
-        opts["units"] = units
-    scales = {k: v for k, v in (("accel", accel_scale), ("gyro", gyro_scale)) if v}
-    if scales:
-        opts["scales"] = scales
-    if skiprows is not None:
-        opts["skiprows"] = skiprows
-    if columns:
-        opts["columns"] = _columns(columns)
-    return read_imu(path, **opts)
+    return read_imu(path, **reader_options(
+        units={k: v for k, v in (("accel", accel_unit), ("gyro", gyro_unit)) if v},
+        scales={k: v for k, v in (("accel", accel_scale), ("gyro", gyro_scale)) if v},
+        fs=fs or None, skiprows=skiprows, columns=_columns(columns) if columns else None,
+    ))
 
 
 def _columns(text: str) -> Any:

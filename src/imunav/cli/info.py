@@ -57,6 +57,7 @@ def info(
     from imunav.errors import InvalidInputError
     from imunav.io import read_imu
     from imunav.io._atomic import check_outputs, write_json
+    from imunav.cli._options import reader_options
     from imunav.timeseries import describe
     from imunav.units import DEG, G0
 
@@ -66,19 +67,11 @@ def info(
         raise InvalidInputError(f"--window {window_s}: the static-detector window must be a finite number of seconds > 0")
     if min_static_s is not None and not (math.isfinite(min_static_s) and min_static_s > 0):
         raise InvalidInputError(f"--min-static {min_static_s}: must be a finite number of seconds > 0")
-    opts: dict[str, Any] = {"nan_policy": nan_policy}
-    units = {k: v for k, v in (("t", time_unit), ("gyro", gyro_unit), ("accel", accel_unit)) if v}
-    scales = {k: v for k, v in (("gyro", gyro_scale), ("accel", accel_scale)) if v is not None}
-    if units:
-        opts["units"] = units
-    if scales:
-        opts["scales"] = scales
-    if fs is not None:
-        opts["fs"] = fs
-    if skiprows is not None:
-        opts["skiprows"] = skiprows
-    if column:
-        opts["columns"] = _parse_columns(column)
+    opts = reader_options(
+        units={k: v for k, v in (("t", time_unit), ("gyro", gyro_unit), ("accel", accel_unit)) if v},
+        scales={k: v for k, v in (("gyro", gyro_scale), ("accel", accel_scale)) if v is not None},
+        fs=fs, skiprows=skiprows, columns=_parse_columns(column) if column else None, nan_policy=nan_policy,
+    )
     data = read_imu(file, format=format, **opts)
     s = describe(
         data,

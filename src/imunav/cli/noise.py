@@ -79,6 +79,7 @@ def noise(
     from rich.table import Table
 
     from imunav.errors import InvalidInputError
+    from imunav.cli._options import reader_options
     from imunav.io import read_imu
     from imunav.cli._errors import check_figure_path
     from imunav.io._atomic import atomic_path, check_outputs, write_json
@@ -98,14 +99,8 @@ def noise(
     term_list = tuple(t.strip().upper() for t in terms.split(",") if t.strip())
     if select not in ("bic", "aic", "none"):
         raise InvalidInputError(f"--select {select!r}: use bic, aic or none")
-    opts: dict[str, Any] = {}
-    units = {k: v for k, v in (("gyro", gyro_unit), ("accel", accel_unit)) if v}
-    if units:
-        opts["units"] = units
-    if fs is not None:
-        opts["fs"] = fs
-    if skiprows is not None:
-        opts["skiprows"] = skiprows
+    opts = reader_options(units={k: v for k, v in (("gyro", gyro_unit), ("accel", accel_unit)) if v}, fs=fs,
+                          skiprows=skiprows)
     data = read_imu(file, format=format, **opts)
     rate = float(data.fs)
     if fs is None and abs(rate - round(rate)) < 1e-6 * rate:
