@@ -34,13 +34,8 @@ def _same(q_ext, q_ref_ext):
     return np.max(np.abs(quat_canonical(q_ext) - quat_canonical(q_ref_ext)))
 
 
-@pytest.mark.parametrize("use_mag", [False, True])
-def test_madgwick_matches_ahrs_sample_by_sample(use_mag):
-    data, q_true = _data()
-    beta = 0.08
-    res = Madgwick(beta=beta).run(data, q0=q_true[0], use_mag=use_mag)
-    peer = ahrs_filters.Madgwick(gain=beta, frequency=100.0)
-    q = to_convention(q_true[0], "ahrs")
+def _run_peer(peer, data, q, use_mag):
+    """The ahrs filter's per-sample loop from q (its convention), 100 Hz; (N, 4) quaternions."""
     out = np.empty((N, 4))
     for k in range(N):
         if use_mag:
@@ -48,6 +43,16 @@ def test_madgwick_matches_ahrs_sample_by_sample(use_mag):
         else:
             q = peer.updateIMU(q, data.gyro[k], data.accel[k], dt=0.01)
         out[k] = q
+    return out
+
+
+@pytest.mark.parametrize("use_mag", [False, True])
+def test_madgwick_matches_ahrs_sample_by_sample(use_mag):
+    data, q_true = _data()
+    beta = 0.08
+    res = Madgwick(beta=beta).run(data, q0=q_true[0], use_mag=use_mag)
+    peer = ahrs_filters.Madgwick(gain=beta, frequency=100.0)
+    out = _run_peer(peer, data, to_convention(q_true[0], "ahrs"), use_mag)
     assert _same(out, to_convention(res.q_nb, "ahrs")) <= TOL
     if use_mag:
         m = find_convention(out, res.q_nb)
@@ -61,14 +66,7 @@ def test_mahony_matches_ahrs_sample_by_sample(use_mag):
     res = Mahony(kp=kp, ki=ki).run(data, q0=q_true[0], use_mag=use_mag)
     conv = "enu" if use_mag else "ahrs"  # 6D: any z-up frame; ahrs's MARG field reference puts north on y
     peer = ahrs_filters.Mahony(k_P=kp, k_I=ki, frequency=100.0)
-    q = to_convention(q_true[0], conv)
-    out = np.empty((N, 4))
-    for k in range(N):
-        if use_mag:
-            q = peer.updateMARG(q, data.gyro[k], data.accel[k], data.mag[k], dt=0.01)
-        else:
-            q = peer.updateIMU(q, data.gyro[k], data.accel[k], dt=0.01)
-        out[k] = q
+    out = _run_peer(peer, data, to_convention(q_true[0], conv), use_mag)
     assert _same(out, to_convention(res.q_nb, conv)) <= TOL
     # the gyro-bias estimate too: ahrs's b is imunav's bias (both -integral term)
     np.testing.assert_allclose(peer.b, res.bias[-1], atol=TOL)
