@@ -8,16 +8,18 @@ from typer.testing import CliRunner
 from imunav.cli.main import app
 
 
-def _leaves(cmd, path):
+def _leaves(cmd, path, groups=False):
     if hasattr(cmd, "commands"):
+        if groups:
+            yield path, cmd
         for name, sub in cmd.commands.items():
-            yield from _leaves(sub, [*path, name])
+            yield from _leaves(sub, [*path, name], groups)
     else:
         yield path, cmd
 
 
 def test_every_command_has_an_example():
-    leaves = list(_leaves(get_command(app), []))
+    leaves = list(_leaves(get_command(app), [], groups=True))
     assert len(leaves) >= 20  # info, simulate, lab, noise, calibrate ×6, compensate, attitude ×3, zupt ×3, airdata ×4, batch ×3
     runner = CliRunner()
     for path, _ in leaves:
@@ -29,3 +31,17 @@ def test_every_command_has_an_example():
 def test_version():
     res = CliRunner().invoke(app, ["--version"])
     assert res.exit_code == 0 and res.output.strip()
+
+
+def test_bracketed_help_text_is_shown_as_written():
+    """Rich markup swallowed '[spec.<parameter>]' and '[lab]' from the lab's help (issue 16)."""
+    res = CliRunner().invoke(app, ["lab", "--help"], env={"COLUMNS": "200"})
+    assert res.exit_code == 0
+    text = " ".join(res.output.split())
+    for tag in ("[recordings.<name>]", "[spec.<parameter>]", "[lab]"):
+        assert tag in text, tag
+
+
+def test_a_group_without_a_command_prints_its_help():
+    res = CliRunner().invoke(app, ["calibrate"])
+    assert res.exit_code == 0 and "multiposition" in res.stdout and not res.stderr

@@ -9,8 +9,10 @@ Every command runs inside :class:`ImunavGroup`, whose ``invoke`` turns
   status 1.
 
 With ``imunav --debug ...`` (or ``IMUNAV_DEBUG=1``) the traceback is printed
-as well.  Click's own usage errors (unknown option, bad number) keep Click's
-format and exit status 2.
+as well.  Click's own usage errors (unknown option, bad number, missing
+argument, unknown command) are also ONE line on stderr,
+``error: <message> (see 'imunav <command> --help')``, with exit status 2
+(:meth:`ImunavGroup.main`).  A group called without a command prints its help.
 """
 
 from __future__ import annotations
@@ -24,6 +26,15 @@ from typing import Any, NoReturn
 import click
 import typer
 from typer.core import TyperGroup
+
+try:  # typer >= 0.2x runs on its own vendored copy of click: its exceptions are not click's
+    from typer import _click as _tclick
+except ImportError:  # pragma: no cover - older typer uses click itself
+    _tclick = click
+
+_CLICK_ERRORS: tuple[type[BaseException], ...] = tuple({click.ClickException, _tclick.exceptions.ClickException})
+_EXITS: tuple[type[BaseException], ...] = (click.exceptions.Exit, click.Abort, typer.Exit, typer.Abort,
+                                             KeyboardInterrupt, SystemExit)
 
 __all__ = ["ImunavGroup", "check_figure_path", "fail", "one_line"]
 
@@ -49,7 +60,7 @@ def _message(exc: BaseException) -> str:
 def _debug_wanted(ctx: click.Context | None = None) -> bool:
     if os.environ.get("IMUNAV_DEBUG", "").strip().lower() in ("1", "true", "yes", "on"):
         return True
-    ctx = ctx or click.get_current_context(silent=True)
+    ctx = ctx or _tclick.get_current_context(silent=True) or click.get_current_context(silent=True)
     while ctx is not None:
         if ctx.params.get("debug"):
             return True
@@ -85,8 +96,7 @@ class ImunavGroup(TyperGroup):
 
         try:
             return super().invoke(ctx)
-        except (click.exceptions.Exit, click.ClickException, click.Abort, typer.Exit, typer.Abort,
-                KeyboardInterrupt, SystemExit):
+        except _EXITS + _CLICK_ERRORS:  # usage errors are reported by main()
             raise
         except (ImunavError, OSError) as exc:
             fail(exc, ctx)
@@ -103,3 +113,45 @@ class ImunavGroup(TyperGroup):
                 err=True,
             )
             raise typer.Exit(1) from None
+
+    def main(self, args: Any = None, prog_name: str | None = None, complete_var: str | None = None,
+             standalone_mode: bool = True, **extra: Any) -> Any:
+        """Run the command line; a usage error becomes one line on stderr and exit status 2."""
+        try:
+            rv = super().main(args=args, prog_name=prog_name, complete_var=complete_var, standalone_mode=False,
+                              **extra)
+        except _CLICK_ERRORS as exc:
+            if not standalone_mode:
+                raise
+            sys.exit(_usage_error(exc))
+        except (click.Abort, typer.Abort):  # EOF at a prompt (Ctrl-C arrives as Exit(130))
+            if not standalone_mode:
+                raise
+            typer.echo("error: aborted", err=True)
+            sys.exit(1)
+        if not standalone_mode:
+            return rv
+        # in non-standalone mode Click returns an Exit's code; commands themselves return None
+        sys.exit(rv if isinstance(rv, int) and not isinstance(rv, bool) else 0)
+
+
+def _command_path(ctx: Any) -> str:
+    names = []
+    while ctx is not None:
+        if ctx.parent is not None and ctx.info_name:
+            names.append(ctx.info_name)
+        ctx = ctx.parent
+    return " ".join(["imunav", *reversed(names)])
+
+
+def _usage_error(exc: BaseException) -> int:
+    """Print a Click exception (one line on stderr, or the help of a group called without a command)."""
+    ctx = getattr(exc, "ctx", None)
+    if type(exc).__name__ == "NoArgsIsHelpError" and ctx is not None:
+        typer.echo(ctx.get_help())
+        return 0
+    msg = exc.format_message() if hasattr(exc, "format_message") else str(exc)
+    hint = f" (see '{_command_path(ctx)} --help')" if ctx is not None else ""
+    typer.echo(f"error: {one_line(msg)}{hint}", err=True)
+    code = getattr(exc, "exit_code", 2)
+    return code if isinstance(code, int) and code else 2

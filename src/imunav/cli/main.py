@@ -47,6 +47,17 @@ for _name in _COMMAND_MODULES:
     importlib.import_module(f"imunav.cli.{_name}").register(app)
 
 
+def _plain_help(t: typer.Typer) -> None:
+    """Print every --help as written: Rich markup would swallow bracketed text such as ``[spec.<name>]``."""
+    t.rich_markup_mode = None
+    for group in t.registered_groups:
+        if group.typer_instance is not None:
+            _plain_help(group.typer_instance)
+
+
+_plain_help(app)
+
+
 @app.callback(invoke_without_command=True)
 def _main(
     ctx: typer.Context,
