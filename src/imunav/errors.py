@@ -22,6 +22,10 @@ __all__ = [
     "ConvergenceError",
     "MissingDependencyError",
     "ConfigError",
+    "ProvenanceError",
+    "RunFolderError",
+    "NotStaticError",
+    "ImunavWarning",
 ]
 
 
@@ -67,6 +71,22 @@ class SaturationError(InvalidInputError):
 
 class ConfigError(InvalidInputError):
     """A TOML / JSON configuration is invalid."""
+
+
+class ProvenanceError(InvalidInputError):
+    """An operation would repeat one already recorded in the data's provenance (e.g. a second compensation)."""
+
+
+class RunFolderError(InvalidInputError):
+    """A run folder (lab, batch) holds another run, or has no complete manifest (a killed run)."""
+
+
+class NotStaticError(InvalidInputError):
+    """A recording that must be static (noise identification) shows motion."""
+
+
+class ImunavWarning(UserWarning):
+    """Something that may be a mistake but has a legitimate use (the command line prints it as one line)."""
 
 
 class ConvergenceError(ImunavError, RuntimeError):

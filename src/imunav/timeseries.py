@@ -52,6 +52,8 @@ __all__ = [
 ]
 
 NanPolicy = Literal["raise", "drop", "interpolate"]
+#: Most samples :meth:`ImuData.resample` makes beyond 100 x the input's (memory guard).
+_RESAMPLE_MAX = 10_000_000
 _VECTOR_FIELDS = ("gyro", "accel", "mag")
 
 
@@ -226,7 +228,15 @@ class ImuData:
         meta = dict(meta or {})
         declared = {"time": time_unit, "gyro": gyro_unit, "accel": accel_unit}
         if declared != {"time": "s", "gyro": "rad/s", "accel": "m/s^2"}:
+            from imunav.provenance import add_step
+
             meta.setdefault("units_in", declared)
+            params: dict[str, Any] = {"from": declared, "to": {"time": "s", "gyro": "rad/s", "accel": "m/s^2"}}
+            for name, v in (("gyro_scale", gyro_scale), ("accel_scale", accel_scale), ("gyro_offset", gyro_offset),
+                            ("accel_offset", accel_offset)):
+                if v is not None and np.any(np.asarray(v) != 0):
+                    params[name] = np.asarray(v, dtype=float).tolist()
+            meta = add_step(meta, "convert_units", params)
         if nan_policy != "raise":
             ts, g, a, m, tp, info = _apply_nan_policy(ts, g, a, m, tp, nan_policy)
             meta["nan_policy"] = info
@@ -337,13 +347,32 @@ class ImuData:
 
         Resampling to a lower rate without low-pass filtering aliases
         noise; decimate with an anti-alias filter first if noise statistics
-        matter.  ``meta["resampled_from_hz"]`` records the original rate.
+        matter.  ``meta["resampled_from_hz"]`` and a ``resample`` step in
+        ``meta["provenance"]`` record the original rate.  A rate that would make
+        more than max(100 N, 1e7) samples is refused (e.g. ``resample(1e12)``
+        meant as a period), as is one that leaves fewer than 2 samples.
         """
         if not (np.isfinite(fs) and fs > 0):
             raise InvalidInputError(f"fs must be positive and finite, got {fs}")
-        k = int(np.floor(self.duration * fs + 1e-9))
-        out = self.interp(self.t[0] + np.arange(k + 1) / fs)
-        out.meta["resampled_from_hz"] = self.fs if self.n >= 2 else None
+        k = np.floor(self.duration * fs + 1e-9)
+        limit = max(100 * self.n, _RESAMPLE_MAX)
+        if k + 1 > limit:
+            raise InvalidInputError(
+                f"resample(fs={fs:g}) would make {k + 1:.3g} samples from {self.n} ({self.duration:g} s); the limit is "
+                f"{limit:.3g} (x100 the samples, or {_RESAMPLE_MAX:.0e}): give the new rate in Hz, e.g. "
+                f"resample({self.fs if self.n >= 2 else 100:g})"
+            )
+        if k < 1:
+            raise InvalidInputError(
+                f"resample(fs={fs:g}) leaves fewer than 2 samples over {self.duration:g} s; use fs >= {1 / self.duration:g} Hz"
+                if self.duration > 0 else "a single-sample recording cannot be resampled"
+            )
+        from imunav.provenance import add_step
+
+        from_hz = self.fs if self.n >= 2 else None
+        out = self.interp(self.t[0] + np.arange(int(k) + 1) / fs)
+        out.meta.update(add_step(out.meta, "resample", {"from_hz": from_hz, "to_hz": float(fs), "method": "linear"}))
+        out.meta["resampled_from_hz"] = from_hz
         return out
 
     def to_dataframe(self) -> "pd.DataFrame":

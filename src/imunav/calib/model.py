@@ -239,23 +239,94 @@ class ImuCalibration:
         g = np.einsum("nij,nj->ni", tg, w) + bg + f @ self.g_sensitivity.T
         return a, g
 
-    def apply(self, data: Any, temp_c: ArrayLike | None = None) -> Any:
-        """Compensate an :class:`imunav.timeseries.ImuData` (or ``(accel, gyro)``)."""
-        return self._on_data(data, temp_c, self.apply_arrays, "apply")
+    @property
+    def sha256(self) -> str:
+        """Hash of the parameters and units (not ``meta`` nor ``stderr``): the calibration's identity
+        in the provenance of the recordings it compensated."""
+        from imunav.provenance import fingerprint
 
-    def invert(self, data: Any, temp_c: ArrayLike | None = None) -> Any:
-        """Corrupt ideal :class:`ImuData` (or ``(accel, gyro)``) with this model."""
-        return self._on_data(data, temp_c, self.invert_arrays, "invert")
+        d = self.to_dict()
+        return fingerprint({k: v for k, v in d.items() if k not in ("meta", "stderr")})
 
-    def _on_data(self, data: Any, temp_c: ArrayLike | None, arrays_fn: Any, what: str) -> Any:
+    def apply(self, data: Any, temp_c: ArrayLike | None = None, *, force: bool = False,
+              source: str | None = None) -> Any:
+        """Compensate an :class:`imunav.timeseries.ImuData` (or ``(accel, gyro)``).
+
+        The step is recorded in ``data.meta["provenance"]`` (see :mod:`imunav.provenance`)
+        with the calibration's :attr:`sha256` and ``source`` (e.g. its file).  A recording
+        already compensated with this calibration is refused
+        (:class:`~imunav.errors.ProvenanceError`) unless ``force=True``; one compensated
+        with another calibration gets an :class:`~imunav.errors.ImunavWarning` (right only
+        when this calibration is a residual one, estimated on the compensated data).
+
+        Parameters
+        ----------
+        data : ImuData (SI) or ``(accel, gyro)`` arrays (no provenance for arrays).
+        temp_c : temperature, °C (default: ``data.temp``).
+        force : compensate even if the provenance says it was done with this calibration.
+        source : where the calibration comes from (file name), recorded in the provenance.
+
+        Returns
+        -------
+        ImuData or (accel, gyro)
+        """
+        if not isinstance(data, tuple):
+            self._require_si("apply")
+            self._check_provenance(data, force)
+        return self._on_data(data, temp_c, self.apply_arrays, "apply", source, force)
+
+    def invert(self, data: Any, temp_c: ArrayLike | None = None, *, source: str | None = None) -> Any:
+        """Corrupt ideal :class:`ImuData` (or ``(accel, gyro)``) with this model (recorded as ``uncompensate``)."""
+        return self._on_data(data, temp_c, self.invert_arrays, "invert", source, False)
+
+    def _check_provenance(self, data: Any, force: bool) -> None:
+        import warnings
+
+        from imunav.errors import ImunavWarning, ProvenanceError
+        from imunav.provenance import net_compensations
+
+        h = self.sha256
+        same = net_compensations(data, h)
+        if same and not force:
+            s = same[-1]
+            src = (s.get("calibration") or {}).get("source")
+            raise ProvenanceError(
+                f"the recording is already compensated with calibration sha256:{h[:12]}"
+                f"{f' ({src})' if src else ''} on {s.get('time', '?')}; compensating again applies the bias and "
+                "scale corrections twice. Use the raw recording, or pass force=True (command line: --force) to "
+                "compensate again"
+            )
+        other = [s for s in net_compensations(data) if (s.get("calibration") or {}).get("sha256") != h]
+        if other:
+            o = other[-1].get("calibration") or {}
+            where = f" ({o['source']})" if o.get("source") else ""
+            warnings.warn(
+                f"the recording is already compensated with another calibration sha256:{str(o.get('sha256'))[:12]}"
+                f"{where}; "
+                f"applying sha256:{h[:12]} on top is right only if it was estimated on the compensated data "
+                "(a residual calibration); otherwise compensate the raw recording",
+                ImunavWarning, stacklevel=3,
+            )
+
+    def _on_data(self, data: Any, temp_c: ArrayLike | None, arrays_fn: Any, what: str,
+                 source: str | None = None, force: bool = False) -> Any:
         """``arrays_fn(accel, gyro, temp_c)`` on an ``(accel, gyro)`` tuple, or on
         an SI :class:`ImuData` (temperature from the data unless ``temp_c`` is given)."""
+        from imunav.provenance import add_step
+
         if isinstance(data, tuple):
             return arrays_fn(data[0], data[1], temp_c)
         self._require_si(what)
         t = temp_c if temp_c is not None else getattr(data, "temp", None)
         a, g = arrays_fn(data.accel, data.gyro, t)
-        return data.with_(accel=a, gyro=g)
+        cal = {"sha256": self.sha256, "source": source if source is not None else self.meta.get("source"),
+               "method": self.meta.get("method")}
+        params: dict[str, Any] = {"temperature": "data" if temp_c is None and t is not None
+                                  else ("given" if temp_c is not None else None)}
+        if force:
+            params["force"] = True
+        op = "compensate" if what == "apply" else "uncompensate"
+        return data.with_(accel=a, gyro=g, meta=add_step(data.meta, op, params, calibration=cal))
 
     def _require_si(self, what: str) -> None:
         if (self.raw_accel_unit, self.raw_gyro_unit) != (_SI_ACCEL, _SI_GYRO):

@@ -13,6 +13,8 @@ as well.  Click's own usage errors (unknown option, bad number, missing
 argument, unknown command) are also ONE line on stderr,
 ``error: <message> (see 'imunav <command> --help')``, with exit status 2
 (:meth:`ImunavGroup.main`).  A group called without a command prints its help.
+An :class:`imunav.errors.ImunavWarning` is printed as one line,
+``warning: <message>``, and the command goes on.
 """
 
 from __future__ import annotations
@@ -20,6 +22,7 @@ from __future__ import annotations
 import os
 import sys
 import traceback
+import warnings
 from pathlib import Path
 from typing import Any, NoReturn
 
@@ -27,10 +30,12 @@ import click
 import typer
 from typer.core import TyperGroup
 
-try:  # typer >= 0.2x runs on its own vendored copy of click: its exceptions are not click's
+try:  # typer >= 0.2x runs on its own vendored copy of click: its exceptions and contexts are not click's
     from typer import _click as _tclick
+    from typer._click.globals import get_current_context as _current_context
 except ImportError:  # pragma: no cover - older typer uses click itself
     _tclick = click
+    _current_context = click.get_current_context
 
 _CLICK_ERRORS: tuple[type[BaseException], ...] = tuple({click.ClickException, _tclick.exceptions.ClickException})
 _EXITS: tuple[type[BaseException], ...] = (click.exceptions.Exit, click.Abort, typer.Exit, typer.Abort,
@@ -60,7 +65,7 @@ def _message(exc: BaseException) -> str:
 def _debug_wanted(ctx: click.Context | None = None) -> bool:
     if os.environ.get("IMUNAV_DEBUG", "").strip().lower() in ("1", "true", "yes", "on"):
         return True
-    ctx = ctx or _tclick.get_current_context(silent=True) or click.get_current_context(silent=True)
+    ctx = ctx or _current_context(silent=True) or click.get_current_context(silent=True)
     while ctx is not None:
         if ctx.params.get("debug"):
             return True
@@ -88,14 +93,30 @@ def check_figure_path(path: Path | None, option: str) -> None:
                                 f"use one of {', '.join(_FIG_SUFFIXES)}")
 
 
+_showwarning = warnings.showwarning
+
+
+def _show_warning(message: Any, category: Any, filename: str, lineno: int, file: Any = None, line: Any = None) -> None:
+    """An :class:`imunav.errors.ImunavWarning` as one line on stderr, ``warning: <message>``."""
+    from imunav.errors import ImunavWarning
+
+    if isinstance(category, type) and issubclass(category, ImunavWarning):
+        typer.echo(f"warning: {one_line(str(message))}", err=True)
+    else:
+        _showwarning(message, category, filename, lineno, file, line)
+
+
 class ImunavGroup(TyperGroup):
     """Root command group: the single place where exceptions become messages and exit codes."""
 
     def invoke(self, ctx: click.Context) -> Any:
-        from imunav.errors import ImunavError
+        from imunav.errors import ImunavError, ImunavWarning
 
         try:
-            return super().invoke(ctx)
+            with warnings.catch_warnings():
+                warnings.simplefilter("default", ImunavWarning)
+                warnings.showwarning = _show_warning
+                return super().invoke(ctx)
         except _EXITS + _CLICK_ERRORS:  # usage errors are reported by main()
             raise
         except (ImunavError, OSError) as exc:

@@ -20,8 +20,14 @@ def compensate(
     accel_unit: Optional[str] = typer.Option(None, help="Accelerometer unit in the file."),
     gyro_unit: Optional[str] = typer.Option(None, help="Gyro unit in the file."),
     temp_c: Optional[float] = typer.Option(None, help="Constant temperature, °C, when the file has none."),
+    force: bool = typer.Option(False, "--force", help="Compensate even if the recording's provenance says it "
+                               "was already compensated with this calibration."),
 ) -> None:
     """Compensate a recording with a calibration (accelerometer first, then gyro).
+
+    The step (calibration hash and file, time) is recorded in the output's metadata (meta.provenance); a
+    recording already compensated with the same calibration is refused unless --force, and one compensated
+    with another calibration gets a warning.
 
     Example: imunav compensate static.npz --cal cal.json --out static_compensated.npz
     """
@@ -38,5 +44,5 @@ def compensate(
     data = _read(recording, fs, accel_unit, gyro_unit, None, None, None, None)
     c = ImuCalibration.load(cal)
     t = None if temp_c is None else np.full(data.n, temp_c)
-    write_imu(c.apply(data, temp_c=t), out)
+    write_imu(c.apply(data, temp_c=t, force=force, source=str(cal)), out)
     typer.echo(f"compensated {data.n} samples -> {out}")
