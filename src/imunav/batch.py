@@ -600,19 +600,24 @@ def noise_unit(
     out_dir: str | os.PathLike[str] | None = None,
     read_options: Mapping[str, Any] | None = None,
     terms: Sequence[str] = ("Q", "N", "B", "K", "R"),
+    force: bool = False,
 ) -> dict[str, Any]:
     """Allan-variance noise identification of one static recording (gyro and accelerometer).
 
+    The recording must be static (:func:`imunav.noise.require_static`: one pose, no rotation);
+    otherwise :class:`~imunav.errors.NotStaticError` unless ``force=True``.
     Writes ``<out_dir>/<unit>_noise.json`` (both :class:`imunav.noise.NoiseFit`) and
     returns ``{"unit", "estimates": {name: (value_si, se_si)}, "files"}``.
     """
     from imunav.io import read_imu
     from imunav.noise.allan import allan_deviation
     from imunav.noise.fit import fit_noise
+    from imunav.noise.static import require_static
     from imunav.report.catalog import noise_estimates
 
     rec = Path(recording)
     data = read_imu(rec, **dict(read_options or {}))
+    require_static(data, force=force, where=str(rec))
     est: dict[str, tuple[float, float | None]] = {}
     fits = {}
     for sensor, x in (("gyro", data.gyro), ("accel", data.accel)):
@@ -640,11 +645,16 @@ def noise_batch(
     n_workers: int | None = None,
     address: str | None = None,
     progress: bool = False,
+    force: bool = False,
 ) -> BatchSummary:
     """Noise identification (Allan variance + GLS term fit) of every unit's static recording, in parallel.
 
     Writes ``<unit>_noise.json``, ``summary.csv``, ``summary.json`` and
-    ``index.html`` to ``out_dir`` (default ``<folder>/noise``).
+    ``index.html`` to ``out_dir`` (default ``<folder>/noise``).  A unit whose
+    recording is not static (:func:`imunav.noise.require_static`) fails with the
+    reason; when no unit is static (e.g. a folder of multi-position tests) the
+    batch is refused with :class:`~imunav.errors.NotStaticError` before any
+    result is written.  ``force=True`` analyses them anyway.
     """
     import time
 
@@ -655,7 +665,13 @@ def noise_batch(
     t0 = time.perf_counter()
     res = run_batch(noise_unit, [str(u) for u in units], executor=executor, n_workers=n_workers, address=address,
                     progress=progress, description="noise", out_dir=str(od), read_options=dict(read_options or {}),
-                    terms=tuple(terms))
+                    terms=tuple(terms), force=bool(force))
+    from imunav.errors import NotStaticError
+
+    moving = [r for r in res if isinstance(r, NotStaticError)]
+    if moving and len(moving) == len(res):
+        raise NotStaticError(f"no unit of {folder} is static ({len(moving)} of {len(res)} recordings moved); "
+                             f"first: {moving[0]}")
     summary = _summarise("noise", [u.stem for u in units], res, limits, od, time.perf_counter() - t0)
     write_summary(summary, od, f"Batch noise identification of {Path(folder).name}")
     return summary

@@ -178,11 +178,14 @@ def noise_cmd(
     fs: Optional[float] = _FS, accel_unit: Optional[str] = _AU, gyro_unit: Optional[str] = _GU,
     columns: Optional[str] = _COLS,
     terms: str = typer.Option("Q,N,B,K,R", "--terms", help="Candidate IEEE-952 terms (BIC selects among them)."),
+    force: bool = typer.Option(False, "--force", help="Analyse recordings that are not static (moved or rotated)."),
     executor: str = _EXEC, workers: Optional[int] = _WORKERS, address: Optional[str] = _ADDR, quiet: bool = _QUIET,
 ) -> None:
     """Allan-variance noise identification (ARW / VRW, bias instability, random walk) of every unit, in parallel.
 
-    Writes <unit>_noise.json per unit, summary.csv, summary.json and index.html.
+    Writes <unit>_noise.json per unit, summary.csv, summary.json and index.html. Each recording must be static
+    (one pose, no rotation; judged from its window means and mean specific force): a folder of multi-position
+    tests is refused unless --force.
 
     Example: imunav batch simulate 3 --static 600 --out static_batch && imunav batch noise static_batch --terms N,B,K
     """
@@ -195,7 +198,7 @@ def noise_cmd(
 
     try:
         s = noise_batch(folder, out_dir=out, spec=spec, read_options=_read_options(fs, accel_unit, gyro_unit, columns),
-                        terms=tuple(t.strip() for t in terms.split(",") if t.strip()), executor=executor, n_workers=workers, address=address, progress=not quiet)  # type: ignore[arg-type]
+                        terms=tuple(t.strip() for t in terms.split(",") if t.strip()), executor=executor, n_workers=workers, address=address, progress=not quiet, force=force)  # type: ignore[arg-type]
     except InvalidInputError as exc:
         _fail(exc)
     cols = ["gyro_arw", "gyro_bias_instability", "accel_vrw", "accel_bias_instability"]

@@ -69,11 +69,15 @@ def noise(
     accel_unit: str | None = typer.Option(None, "--accel-unit", help="Unit of the accel columns (m/s^2, g, mg, ...)."),
     format: str | None = typer.Option(None, "--format", help="csv, parquet, hdf5, mat, npz (default: suffix)."),
     skiprows: int | None = typer.Option(None, "--skiprows", help="CSV: lines to skip before the header."),
+    force: bool = typer.Option(False, "--force", help="Analyse a recording that is not static (moved or rotated)."),
 ) -> None:
     """Identify the stochastic errors of a static IMU recording: overlapping Allan
     deviation with confidence intervals, GLS fit of quantization Q, white noise N,
     bias instability B, random walk K and ramp R (with standard errors), the
-    IEEE-952 slope read-outs, and the PSD estimate of N as a cross-check."""
+    IEEE-952 slope read-outs, and the PSD estimate of N as a cross-check.
+
+    The recording must be static (one pose, no rotation): a recording whose mean specific force is far from g,
+    or whose 1 s window means change pose or rotate, is refused unless --force."""
     from rich.console import Console
     from rich.progress import Progress
     from rich.table import Table
@@ -109,6 +113,9 @@ def noise(
         raise InvalidInputError(f"{file}: the record has {len(data.gaps())} time gap(s); the noise analysis "
                                 "needs one gap-free static record (split it, or use imunav.noise.allan_deviation "
                                 "with nan_policy='segments')")
+    from imunav.noise.static import require_static
+
+    require_static(data, force=force, where=str(file))
     groups = []
     for sensor, arr, unit, names in (("gyro", data.gyro, "rad/s", _CH[:3]), ("accel", data.accel, "m/s^2", _CH[3:])):
         idx = [i for i, n in enumerate(names) if n in chans]

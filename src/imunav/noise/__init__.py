@@ -1,7 +1,8 @@
 """Stochastic error identification: Allan family, noise-term fitting, PSD,
 AR / Gauss-Markov models, wavelet denoising, curve fits of the Allan curve.
 
-Main entry points: :func:`allan_deviation` -> :class:`AllanResult`,
+Main entry points: :func:`require_static` (the gate: noise identification
+needs a recording at rest), :func:`allan_deviation` -> :class:`AllanResult`,
 :func:`fit_noise` -> :class:`NoiseFit`, :func:`psd` / :func:`fit_psd`,
 :func:`fit_gauss_markov`, :func:`wavelet_denoise`; figures in
 :mod:`imunav.noise.plot`.
@@ -12,6 +13,7 @@ from imunav.noise.ar import GaussMarkovFit, autocorrelation, fit_gauss_markov, g
 from imunav.noise.curvefit import CurveFit, compare_curve_fits, fit_polynomial, fit_rational
 from imunav.noise.fit import NoiseFit, SlopeReadout, avar_model, fit_noise, slope_readout, write_kalibr_yaml
 from imunav.noise.psd import PsdFit, PsdResult, compare_psd_allan, fit_psd, frequency_average, log_average, psd
+from imunav.noise.static import StaticCheck, check_static, require_static
 from imunav.noise.wavelet import compare_hybrid, wavelet_denoise
 
 __all__ = [
@@ -21,4 +23,5 @@ __all__ = [
     "GaussMarkovFit", "autocorrelation", "fit_gauss_markov", "gm_discrete", "yule_walker",
     "CurveFit", "compare_curve_fits", "fit_polynomial", "fit_rational",
     "compare_hybrid", "wavelet_denoise",
+    "StaticCheck", "check_static", "require_static",
 ]

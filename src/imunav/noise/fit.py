@@ -293,9 +293,16 @@ def _cov_rel(res_tau, m, n_phase, names, Ts, theta, fs, model, edf, overlapping)
         bad = ~(d > 0)
         d[bad] = (2.0 * model**2 / edf)[bad]
         cov[np.diag_indices_from(cov)] = d
-        rel = cov / np.outer(model, model)
+        with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+            rel = cov / np.outer(model, model)
     else:
         rel = np.diag(2.0 / edf)
+    if not np.all(np.isfinite(rel)):
+        from imunav.errors import ConvergenceError
+
+        raise ConvergenceError("the noise terms cannot be fitted: the model variance is zero or not finite at some "
+                               "tau, the Allan curve follows none of the terms (is the recording static? choose other "
+                               "terms)")
     # keep positive definite (the lag sums are approximate)
     w, v = np.linalg.eigh(0.5 * (rel + rel.T))
     w = np.maximum(w, 1e-6 * w.max())
