@@ -15,7 +15,7 @@ $(BIN)/imunav: pyproject.toml
 setup: $(BIN)/imunav
 
 run: setup
-	$(BIN)/imunav lab --out $(OUT)
+	$(BIN)/imunav lab --out $(OUT) --overwrite
 
 # Debian's Chromium for the report rendering test; skipped (the test then
 # skips) where it cannot be installed, e.g. without root.

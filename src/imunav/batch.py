@@ -66,29 +66,51 @@ CALIBRATION_METHODS = ("multiposition", "thesis", "multipose")
 # ---------------------------------------------------------------------------
 
 
-def find_units(folder: str | os.PathLike[str]) -> list[Path]:
-    """Recordings of the units in ``folder`` (sorted; ``*_rate.*`` companions excluded)."""
+def _batch_files(folder: str | os.PathLike[str]) -> tuple[list[Path], list[str] | None]:
+    """(unit recordings, trusted files or None).
+
+    A run folder (written by :func:`simulate_batch`) is read through its verified manifest
+    (:func:`imunav.runfolder.trusted_files`): only the files it lists are used, and an incomplete run
+    (killed, or still running) is refused.  A plain folder of recordings is used as it is, hidden files
+    (temporary files of a killed writer) ignored.
+    """
+    from imunav.runfolder import trusted_files
+
     d = Path(folder)
     if not d.is_dir():
         raise InvalidInputError(f"batch folder {d} does not exist or is not a folder")
-    units = sorted(
-        p for p in d.iterdir()
-        if p.is_file() and p.suffix.lower() in RECORDING_SUFFIXES and not p.stem.endswith("_rate")
-    )
+    trusted = trusted_files(d)
+    top = [p for p in trusted if p.parent == d] if trusted is not None else [
+        p for p in d.iterdir() if p.is_file() and not p.name.startswith(".")]
+    units = sorted(p for p in top if p.suffix.lower() in RECORDING_SUFFIXES and not p.stem.endswith("_rate"))
     if not units:
         raise InvalidInputError(
             f"batch folder {d} has no recordings (files ending in {', '.join(RECORDING_SUFFIXES)}); "
             "put one recording per unit there"
         )
-    return units
+    return units, None if trusted is None else [str(p.resolve()) for p in trusted]
 
 
-def _sidecar(rec: Path, suffix: str, shared: str) -> Path | None:
+def find_units(folder: str | os.PathLike[str]) -> list[Path]:
+    """Recordings of the units in ``folder`` (sorted; ``*_rate.*`` companions and hidden files excluded).
+
+    A folder written by :func:`simulate_batch` is read through its manifest: only the recordings it lists
+    count, and a folder without a complete manifest (a killed run) is refused
+    (:class:`~imunav.errors.RunFolderError`).
+    """
+    return _batch_files(folder)[0]
+
+
+def _usable(p: Path, trusted: Sequence[str] | None) -> bool:
+    return p.is_file() and not p.name.startswith(".") and (trusted is None or str(p.resolve()) in trusted)
+
+
+def _sidecar(rec: Path, suffix: str, shared: str, trusted: Sequence[str] | None = None) -> Path | None:
     own = rec.with_name(f"{rec.stem}{suffix}.json")
-    if own.is_file():
+    if _usable(own, trusted):
         return own
     common = rec.parent / shared
-    return common if common.is_file() else None
+    return common if _usable(common, trusted) else None
 
 
 def _read_segments(path: Path) -> Any:
@@ -183,6 +205,7 @@ def simulate_batch(
     executor: Executor = "processes",
     n_workers: int | None = None,
     progress: bool = False,
+    overwrite: bool = False,
 ) -> list[Path]:
     """Simulate a production batch of ``n_units`` IMUs (seeded, unit-to-unit spread).
 
@@ -194,6 +217,11 @@ def simulate_batch(
     test when ``rate_table``) at ``fs`` with ``dwell_s`` per position/step;
     with ``static_s`` each unit instead records one level static test of that
     length (for noise identification).
+
+    ``out_dir`` is a run folder (:mod:`imunav.runfolder`): new or empty, or
+    (``overwrite=True``) a previous run that is cleared first, so that no unit
+    of another run stays beside these; ``segments.json``, ``batch.json`` and
+    last ``manifest.json`` are written after the units.
 
     Returns the unit recordings (static tests) written to ``out_dir``.
     """
@@ -207,28 +235,31 @@ def simulate_batch(
         raise InvalidInputError(f"format must be one of npz, csv, parquet, hdf5, mat; got {format!r}")
     presets.get(preset)  # fails early with the list of presets
     out = Path(out_dir)
-    out.mkdir(parents=True, exist_ok=True)
     width = max(3, len(str(n_units)))
     names = [f"unit_{k + 1:0{width}d}" for k in range(n_units)]
     if static_s is not None and not (static_s > 0):
         raise InvalidInputError(f"static_s must be a positive duration in seconds, got {static_s!r}")
-    if not static_s:
-        _write_json(hundred_position_profile(fs, dwell_s, transition_s).to_dict(), out / "segments.json")
-    if rate_table and not static_s:
-        _write_json(thesis_rate_table_profile(fs, dwell_s, transition_s).to_dict(), out / "rate_segments.json")
-    _write_json({"n_units": n_units, "preset": preset, "spread": spread, "seed": int(rng), "fs": fs,
-                 "dwell_s": dwell_s, "transition_s": transition_s, "rate_table": rate_table and not static_s,
-                 "static_s": static_s, "units": names},
-                out / "batch.json")
-    res = run_batch(
-        _simulate_unit, list(enumerate(names)), executor=executor, n_workers=n_workers, progress=progress,
-        description="simulate units", out_dir=str(out), preset=preset, spread=float(spread), seed=int(rng),
-        n_units=n_units, fs=float(fs), dwell_s=float(dwell_s), transition_s=float(transition_s),
-        rate_table=bool(rate_table), fmt=format, static_s=None if not static_s else float(static_s),
-    )
-    for name, r in zip(names, res):
-        if isinstance(r, BaseException):
-            raise r
+    from imunav.runfolder import RunFolder
+
+    params = {"n_units": n_units, "preset": preset, "spread": spread, "seed": int(rng), "fs": fs,
+              "dwell_s": dwell_s, "transition_s": transition_s, "rate_table": rate_table and not static_s,
+              "static_s": static_s, "format": format, "units": names}
+    with RunFolder(out, "batch-simulate", seed=int(rng), parameters=params, overwrite=overwrite):
+        res = run_batch(
+            _simulate_unit, list(enumerate(names)), executor=executor, n_workers=n_workers, progress=progress,
+            description="simulate units", out_dir=str(out), preset=preset, spread=float(spread), seed=int(rng),
+            n_units=n_units, fs=float(fs), dwell_s=float(dwell_s), transition_s=float(transition_s),
+            rate_table=bool(rate_table), fmt=format, static_s=None if not static_s else float(static_s),
+        )
+        for name, r in zip(names, res):
+            if isinstance(r, BaseException):
+                raise r
+        # the tables that describe the batch come after the units (a killed run leaves no batch.json)
+        if not static_s:
+            _write_json(hundred_position_profile(fs, dwell_s, transition_s).to_dict(), out / "segments.json")
+        if rate_table and not static_s:
+            _write_json(thesis_rate_table_profile(fs, dwell_s, transition_s).to_dict(), out / "rate_segments.json")
+        _write_json(params, out / "batch.json")
     return [out / f"{n}.{format}" for n in names]
 
 
@@ -462,14 +493,14 @@ def _spread_figure(tab: pd.DataFrame, params: list[str]) -> Any:
 # ---------------------------------------------------------------------------
 
 
-def _truth_estimates(rec: Path) -> dict[str, float]:
-    """True parameters of a simulated unit (``truth/<unit>.json``), flat names, SI."""
+def _truth_estimates(rec: Path, trusted: Sequence[str] | None = None) -> dict[str, float]:
+    """True parameters of a simulated unit (``truth/<unit>.json``, if the manifest lists it), flat names, SI."""
     from imunav.calib import ImuCalibration
     from imunav.report.catalog import calibration_estimates
     from imunav.sim import ImuErrorModel
 
     p = rec.parent / "truth" / f"{rec.stem}.json"
-    if not p.is_file():
+    if not _usable(p, trusted):
         return {}
     model = ImuErrorModel.from_dict(json.loads(p.read_text(encoding="utf-8")))
     cal = ImuCalibration.from_error_model(model)
@@ -486,8 +517,12 @@ def calibrate_unit(
     read_options: Mapping[str, Any] | None = None,
     latitude: float | None = None,
     gravity: float | None = None,
+    trusted: Sequence[str] | None = None,
 ) -> dict[str, Any]:
     """Calibrate one unit of a batch folder; writes ``<out_dir>/<unit>.json`` (the calibration).
+
+    ``trusted``: the only files of the folder that may be used (its manifest, see :func:`find_units`),
+    or None for a plain folder.
 
     Returns ``{"unit", "method", "estimates": {name: (value_si, se_si)},
     "truth": {name: value_si} (simulated batches), "files", "residual_rms",
@@ -503,7 +538,7 @@ def calibrate_unit(
     opts = dict(read_options or {})
     data = read_imu(rec, **opts)
     if method in ("multiposition", "thesis"):
-        seg = _sidecar(rec, "_segments", "segments.json")
+        seg = _sidecar(rec, "_segments", "segments.json", trusted)
         if seg is None:
             raise InvalidInputError(
                 f"{rec}: no segment table for the multi-position test; put {rec.stem}_segments.json or "
@@ -511,8 +546,9 @@ def calibrate_unit(
             )
         res = calib.multiposition(data, _read_segments(seg), latitude=latitude, gravity=gravity)
         if method == "thesis":
-            rate = next((p for p in rec.parent.glob(f"{rec.stem}_rate.*") if p.suffix.lower() in RECORDING_SUFFIXES), None)
-            rseg = _sidecar(rec.with_name(f"{rec.stem}_rate{rec.suffix}"), "_segments", "rate_segments.json")
+            rate = next((p for p in sorted(rec.parent.glob(f"{rec.stem}_rate.*"))
+                         if p.suffix.lower() in RECORDING_SUFFIXES and _usable(p, trusted)), None)
+            rseg = _sidecar(rec.with_name(f"{rec.stem}_rate{rec.suffix}"), "_segments", "rate_segments.json", trusted)
             if rate is None or rseg is None:
                 raise InvalidInputError(
                     f"{rec}: method 'thesis' needs the rate-table test {rec.stem}_rate.<ext> and its segment table "
@@ -535,7 +571,7 @@ def calibrate_unit(
         "unit": rec.stem,
         "method": res.method or method,
         "estimates": calibration_estimates(cal, res.stderr),
-        "truth": _truth_estimates(rec),
+        "truth": _truth_estimates(rec, trusted),
         "files": files,
         "residual_rms": {k: np.sqrt(np.mean(np.asarray(v, float) ** 2, axis=0)).tolist() for k, v in res.residuals.items()},
         "condition": {k: float(v) for k, v in res.condition.items()},
@@ -563,6 +599,7 @@ def calibrate_batch(
     n_workers: int | None = None,
     address: str | None = None,
     progress: bool = False,
+    overwrite: bool = False,
 ) -> BatchSummary:
     """Calibrate every unit of a batch folder in parallel.
 
@@ -571,22 +608,36 @@ def calibrate_batch(
     ``index.html`` to ``out_dir`` (default ``<folder>/calibration``).  A unit
     that fails (bad file, missing segments, degenerate design) is reported in
     the table with its error; the others are still processed.
+
+    A batch folder written by :func:`simulate_batch` is read through its
+    manifest (only the files it lists, checked against their SHA-256; a killed
+    run is refused).  ``out_dir`` is a run folder of its own
+    (:mod:`imunav.runfolder`; ``overwrite`` clears a previous one).
     """
     import time
+
+    from imunav.runfolder import RunFolder
 
     if method not in CALIBRATION_METHODS:
         raise ConfigError(f"unknown calibration method {method!r}; choose from {', '.join(CALIBRATION_METHODS)}")
     limits = _load_spec(spec)
-    units = find_units(folder)
+    units, trusted = _batch_files(folder)
     od = Path(out_dir) if out_dir is not None else Path(folder) / "calibration"
-    od.mkdir(parents=True, exist_ok=True)
-    t0 = time.perf_counter()
-    res = run_batch(calibrate_unit, [str(u) for u in units], executor=executor, n_workers=n_workers, address=address,
-                    progress=progress, description=f"calibrate ({method})", method=method, out_dir=str(od),
-                    read_options=dict(read_options or {}), latitude=latitude, gravity=gravity)
-    summary = _summarise("calibration", [u.stem for u in units], res, limits, od, time.perf_counter() - t0)
-    write_summary(summary, od, f"Batch calibration ({method}) of {Path(folder).name}")
+    params = {"folder": str(folder), "method": method, "latitude": latitude, "gravity": gravity,
+              "read_options": dict(read_options or {}), "spec": str(spec) if isinstance(spec, (str, Path)) else None}
+    with RunFolder(od, "batch-calibrate", parameters=params, overwrite=overwrite, inputs=[*units, _spec_path(spec)]):
+        t0 = time.perf_counter()
+        res = run_batch(calibrate_unit, [str(u) for u in units], executor=executor, n_workers=n_workers,
+                        address=address, progress=progress, description=f"calibrate ({method})", method=method,
+                        out_dir=str(od), read_options=dict(read_options or {}), latitude=latitude, gravity=gravity,
+                        trusted=trusted)
+        summary = _summarise("calibration", [u.stem for u in units], res, limits, od, time.perf_counter() - t0)
+        write_summary(summary, od, f"Batch calibration ({method}) of {Path(folder).name}")
     return summary
+
+
+def _spec_path(spec: Any) -> Path | None:
+    return Path(spec) if isinstance(spec, (str, os.PathLike)) else None
 
 
 # ---------------------------------------------------------------------------
@@ -646,6 +697,7 @@ def noise_batch(
     address: str | None = None,
     progress: bool = False,
     force: bool = False,
+    overwrite: bool = False,
 ) -> BatchSummary:
     """Noise identification (Allan variance + GLS term fit) of every unit's static recording, in parallel.
 
@@ -654,24 +706,28 @@ def noise_batch(
     recording is not static (:func:`imunav.noise.require_static`) fails with the
     reason; when no unit is static (e.g. a folder of multi-position tests) the
     batch is refused with :class:`~imunav.errors.NotStaticError` before any
-    result is written.  ``force=True`` analyses them anyway.
+    result is written.  ``force=True`` analyses them anyway.  Folders are read
+    and written as in :func:`calibrate_batch` (manifests, ``overwrite``).
     """
     import time
 
-    limits = _load_spec(spec)
-    units = find_units(folder)
-    od = Path(out_dir) if out_dir is not None else Path(folder) / "noise"
-    od.mkdir(parents=True, exist_ok=True)
-    t0 = time.perf_counter()
-    res = run_batch(noise_unit, [str(u) for u in units], executor=executor, n_workers=n_workers, address=address,
-                    progress=progress, description="noise", out_dir=str(od), read_options=dict(read_options or {}),
-                    terms=tuple(terms), force=bool(force))
     from imunav.errors import NotStaticError
+    from imunav.runfolder import RunFolder
 
-    moving = [r for r in res if isinstance(r, NotStaticError)]
-    if moving and len(moving) == len(res):
-        raise NotStaticError(f"no unit of {folder} is static ({len(moving)} of {len(res)} recordings moved); "
-                             f"first: {moving[0]}")
-    summary = _summarise("noise", [u.stem for u in units], res, limits, od, time.perf_counter() - t0)
-    write_summary(summary, od, f"Batch noise identification of {Path(folder).name}")
+    limits = _load_spec(spec)
+    units, _ = _batch_files(folder)
+    od = Path(out_dir) if out_dir is not None else Path(folder) / "noise"
+    params = {"folder": str(folder), "terms": list(terms), "force": bool(force),
+              "read_options": dict(read_options or {}), "spec": str(spec) if isinstance(spec, (str, Path)) else None}
+    with RunFolder(od, "batch-noise", parameters=params, overwrite=overwrite, inputs=[*units, _spec_path(spec)]):
+        t0 = time.perf_counter()
+        res = run_batch(noise_unit, [str(u) for u in units], executor=executor, n_workers=n_workers,
+                        address=address, progress=progress, description="noise", out_dir=str(od),
+                        read_options=dict(read_options or {}), terms=tuple(terms), force=bool(force))
+        moving = [r for r in res if isinstance(r, NotStaticError)]
+        if moving and len(moving) == len(res):
+            raise NotStaticError(f"no unit of {folder} is static ({len(moving)} of {len(res)} recordings moved); "
+                                 f"first: {moving[0]}")
+        summary = _summarise("noise", [u.stem for u in units], res, limits, od, time.perf_counter() - t0)
+        write_summary(summary, od, f"Batch noise identification of {Path(folder).name}")
     return summary

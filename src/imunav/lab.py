@@ -33,8 +33,10 @@ it and the report opens with the pass / fail table.
 Outputs in ``out_dir`` (each written atomically): ``summary.json`` (machine
 readable: every step's summary, timing, verdict, error), ``summary.md`` and
 ``index.html`` (the report), plus whatever the steps write (``data/``,
-``figures/``).  A step that raises is recorded with its traceback and the
-remaining steps still run.
+``figures/``), and last ``manifest.json`` (:mod:`imunav.runfolder`: run id,
+seed, configuration, every file with size and SHA-256).  A folder holding
+another run is refused unless ``overwrite=True``.  A step that raises is
+recorded with its traceback and the remaining steps still run.
 
 Example
 -------
@@ -451,18 +453,26 @@ def run_lab(
     steps: list[str] | None = None,
     progress: bool = True,
     console: Any = None,
+    overwrite: bool = False,
 ) -> LabResult:
     """Run the lab steps and write the report folder.
 
+    The report folder is a run folder (:mod:`imunav.runfolder`): a folder that
+    holds another run is refused unless ``overwrite`` (which clears it first),
+    and ``manifest.json`` (run id, seed, configuration, every file with its
+    size and SHA-256) is written last; an interrupted or failed lab leaves no
+    manifest.
+
     Parameters
     ----------
-    out_dir : report folder (created).
+    out_dir : report folder (created; new, empty, or an imunav run folder with ``overwrite``).
     config : TOML file or dict (see :func:`load_lab_config`); None = defaults
         (the built-in virtual IMU).
     rng : root seed (int) or Generator; ``[lab] seed`` in the config wins.
     steps : step names to run (default ``[lab] steps`` or :data:`STEPS`).
     progress : show rich progress bars.
     console : a :class:`rich.console.Console` to draw on.
+    overwrite : clear a report folder that holds another run instead of refusing.
 
     Returns
     -------
@@ -476,9 +486,22 @@ def run_lab(
     bad = [s for s in names if s not in known]
     if bad:
         raise ConfigError(f"unknown lab step(s) {bad}; available: {known}")
+    if not names:
+        raise ConfigError("no lab step to run (the step list is empty); name steps from: " + ", ".join(known))
     out = Path(out_dir)
-    out.mkdir(parents=True, exist_ok=True)
+    from imunav.runfolder import RunFolder
 
+    inputs = [typed.source] + [r.path for r in typed.recordings.values()] + [
+        r.segments for r in typed.recordings.values()]
+    params = {"config": str(typed.source) if typed.source is not None else _jsonable(cfg), "steps": names,
+              "title": typed.title}
+    with RunFolder(out, "lab", seed=seed, parameters=params, overwrite=overwrite, inputs=inputs):
+        return _run_steps(out, names, seed, cfg, typed, progress, console)
+
+
+def _run_steps(out: Path, names: list[str], seed: int, cfg: dict, typed: LabConfig, progress: bool,
+               console: Any) -> LabResult:
+    """The body of :func:`run_lab` inside its run folder: every step, then summary.json / .md and index.html."""
     if progress:
         from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
 

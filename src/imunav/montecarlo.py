@@ -364,6 +364,9 @@ def run_batch(
     items = list(items)
     if not items:
         raise InvalidInputError("run_batch needs at least one item")
+    if address is not None and executor != "dask":
+        raise InvalidInputError(f"a scheduler address ({address}) is used only with the dask executor, not "
+                                f"{executor!r}: add --executor dask (executor='dask') or drop --address")
     out: list[Any] = [None] * len(items)
     if executor == "serial":
         for i, it in enumerate(items):

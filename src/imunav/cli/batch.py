@@ -28,6 +28,8 @@ _SPEC = typer.Option(None, "--spec", help="Datasheet spec (TOML with a [spec] ta
 _JSON = typer.Option(None, "--json", help="Also write the summary (JSON) here.")
 _COLS = typer.Option(None, "--columns", help='CSV column mapping as JSON, e.g. \'{"gyro": ["gx","gy","gz"]}\'.')
 _FS = typer.Option(None, "--fs", help="Sampling rate, Hz (files without a time column).")
+_OVERWRITE = typer.Option(False, "--overwrite", help="Clear an output folder that holds another imunav run "
+                          "(only the files its manifest lists) instead of refusing.")
 _AU = typer.Option(None, "--accel-unit", help="Accelerometer unit in the files (e.g. g).")
 _GU = typer.Option(None, "--gyro-unit", help="Gyro unit in the files (e.g. deg/s).")
 
@@ -109,11 +111,11 @@ def simulate_cmd(
     rate_table: bool = typer.Option(True, "--rate-table/--no-rate-table", help="Also simulate the 120-step rate-table test."),
     fmt: str = typer.Option("npz", "--format", help="Recording format: npz, csv, parquet, hdf5, mat."),
     static: Optional[float] = typer.Option(None, "--static", help="Instead: one level static record of this many seconds per unit (for noise)."),
-    executor: str = _EXEC, workers: Optional[int] = _WORKERS, quiet: bool = _QUIET,
+    executor: str = _EXEC, workers: Optional[int] = _WORKERS, quiet: bool = _QUIET, overwrite: bool = _OVERWRITE,
 ) -> None:
     """Simulate a production batch of IMUs: 100-position (and rate-table) tests of N units with unit-to-unit spread.
 
-    Writes <unit>.<format>, <unit>_rate.<format>, segments.json, rate_segments.json, truth/<unit>.json and batch.json.
+    Writes <unit>.<format>, <unit>_rate.<format>, segments.json, rate_segments.json, truth/<unit>.json, batch.json and, last, manifest.json (run id, seed, every file with its SHA-256). A folder that holds another run is refused unless --overwrite, which clears it first; batch calibrate / noise trust only the files of a complete manifest.
 
     Example: imunav batch simulate 4 --out batch --fs 20 --dwell 4
     """
@@ -123,7 +125,8 @@ def simulate_cmd(
     try:
         files = simulate_batch(n_units, out, preset=preset, spread=spread, rng=seed, fs=fs, dwell_s=dwell,
                                transition_s=transition, rate_table=rate_table, format=fmt, static_s=static,
-                               executor=executor, n_workers=workers, progress=not quiet)  # type: ignore[arg-type]
+                               executor=executor, n_workers=workers, progress=not quiet,
+                               overwrite=overwrite)  # type: ignore[arg-type]
     except InvalidInputError as exc:
         _fail(exc)
     typer.echo(f"{len(files)} units written to {out}")
@@ -141,10 +144,11 @@ def calibrate_cmd(
     fs: Optional[float] = _FS, accel_unit: Optional[str] = _AU, gyro_unit: Optional[str] = _GU,
     columns: Optional[str] = _COLS,
     executor: str = _EXEC, workers: Optional[int] = _WORKERS, address: Optional[str] = _ADDR, quiet: bool = _QUIET,
+    overwrite: bool = _OVERWRITE,
 ) -> None:
     """Calibrate every unit of a batch folder in parallel; prints the summary table.
 
-    Writes per unit <unit>.json (calibration) and <unit>_report.json, plus summary.csv, summary.json and index.html. Exit status 1 when a unit fails to process or fails the spec.
+    Writes per unit <unit>.json (calibration) and <unit>_report.json, plus summary.csv, summary.json, index.html and manifest.json (the result folder is a run folder: --overwrite to replace one). A batch folder written by batch simulate is read through its manifest (a killed run is refused). Exit status 1 when a unit fails to process or fails the spec.
 
     Example: imunav batch calibrate batch --method thesis --spec examples/lab_spec.toml --json batch_cal.json
     """
@@ -161,7 +165,8 @@ def calibrate_cmd(
         s = calibrate_batch(folder, method=method, out_dir=out, spec=spec,
                             read_options=_read_options(fs, accel_unit, gyro_unit, columns),
                             latitude=None if latitude_deg is None else math.radians(latitude_deg), gravity=gravity,
-                            executor=executor, n_workers=workers, address=address, progress=not quiet)  # type: ignore[arg-type]
+                            executor=executor, n_workers=workers, address=address, progress=not quiet,
+                            overwrite=overwrite)  # type: ignore[arg-type]
     except InvalidInputError as exc:
         _fail(exc)
     cols = ["accel_bias", "accel_scale", "gyro_bias", "gyro_scale", "gyro_g_sensitivity"]
@@ -180,6 +185,7 @@ def noise_cmd(
     terms: str = typer.Option("Q,N,B,K,R", "--terms", help="Candidate IEEE-952 terms (BIC selects among them)."),
     force: bool = typer.Option(False, "--force", help="Analyse recordings that are not static (moved or rotated)."),
     executor: str = _EXEC, workers: Optional[int] = _WORKERS, address: Optional[str] = _ADDR, quiet: bool = _QUIET,
+    overwrite: bool = _OVERWRITE,
 ) -> None:
     """Allan-variance noise identification (ARW / VRW, bias instability, random walk) of every unit, in parallel.
 
@@ -198,7 +204,7 @@ def noise_cmd(
 
     try:
         s = noise_batch(folder, out_dir=out, spec=spec, read_options=_read_options(fs, accel_unit, gyro_unit, columns),
-                        terms=tuple(t.strip() for t in terms.split(",") if t.strip()), executor=executor, n_workers=workers, address=address, progress=not quiet, force=force)  # type: ignore[arg-type]
+                        terms=tuple(t.strip() for t in terms.split(",") if t.strip()), executor=executor, n_workers=workers, address=address, progress=not quiet, force=force, overwrite=overwrite)  # type: ignore[arg-type]
     except InvalidInputError as exc:
         _fail(exc)
     cols = ["gyro_arw", "gyro_bias_instability", "accel_vrw", "accel_bias_instability"]

@@ -11,6 +11,8 @@ _HELP = """Run the lab and write a report folder (index.html, summary.md, summar
 
 With no arguments it runs every step on the built-in virtual IMU (preset thesis_sim): the 100-position static test, the 120-step rate-table test and a 1 h static record are simulated and analysed, a thermal test gives B(T) and S(T), and the calibration is applied to a fresh recording to check the residual errors against the reported uncertainty.
 
+The report folder gets a manifest.json (run id, seed, configuration, every file with its size and SHA-256), written last; a folder that holds another run is refused unless --overwrite, which clears that run first.
+
 With a TOML lab definition (--config) that has [recordings.<name>] tables it runs on real recordings instead (path, format, column mapping, units, which test). A [spec.<parameter>] table gives datasheet limits (pass / fail in the report); a table named after a step sets its options; [lab] sets seed, title and steps. See examples/lab_real.toml and examples/lab_spec.toml. Exit status 1 when a step fails with an error, 2 for a bad lab definition.
 
 Example: imunav lab --out lab-report --seed 0
@@ -26,6 +28,8 @@ def register(app: typer.Typer) -> None:
         steps: Optional[str] = typer.Option(None, "--steps", help="Comma-separated step names to run (default: all)."),
         quiet: bool = typer.Option(False, "--quiet", "-q", help="No progress bars."),
         json_out: Optional[Path] = typer.Option(None, "--json", help="Also copy summary.json here."),
+        overwrite: bool = typer.Option(False, "--overwrite", help="Clear a report folder that holds another run "
+                                       "(only files of imunav runs) instead of refusing."),
     ) -> None:
         from imunav.io._atomic import check_outputs
 
@@ -42,7 +46,7 @@ def register(app: typer.Typer) -> None:
         try:
             result = run_lab(
                 out, config, seed, steps=None if steps is None else [s.strip() for s in steps.split(",") if s.strip()],
-                progress=not quiet, console=console,
+                progress=not quiet, console=console, overwrite=overwrite,
             )
         except InvalidInputError as exc:
             from imunav.cli._errors import fail

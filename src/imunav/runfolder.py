@@ -1,0 +1,388 @@
+"""Run folders: the output folders of ``imunav lab`` and ``imunav batch`` carry a manifest.
+
+A run (:class:`RunFolder`, a context manager) owns its folder:
+
+* **Start.**  The folder must be new, empty, or hold only hidden files.  A
+  folder that holds another run -- a ``manifest.json``, the hidden marker
+  ``.imunav-run.json`` of a run that is still going or was killed, or any
+  other non-hidden file -- is refused (:class:`~imunav.errors.RunFolderError`)
+  unless ``overwrite=True``, which clears it first, and only what belongs to
+  imunav runs: the files listed in the manifest (and nested run folders such
+  as ``batch/calibration``), or everything in a folder whose marker shows it
+  was an imunav run that did not finish.  A folder with files that no
+  manifest lists is never cleared; nothing outside the folder is touched, and
+  a folder that is the file system's root, the home folder, the working
+  folder (or one of its parents) or that holds an input of the run is never
+  cleared.  Hidden temporary files (``.<name>.*.tmp*``, left by a killed
+  atomic write) are removed.  The marker is created exclusively
+  (``O_EXCL``): of two runs started together on one folder, one is refused.
+* **Finish.**  The run checks that the marker is still its own (a concurrent
+  run with ``overwrite`` would have replaced it: the folder then holds mixed
+  files, and no manifest is written), lists every non-hidden file with its
+  size and SHA-256, and writes ``manifest.json`` LAST and atomically (run id,
+  kind, seed, parameters, command line, start and end times, files); then
+  it removes the marker.  A run that fails or is interrupted (SIGINT) leaves
+  the marker and no manifest (or nothing at all if it had written no file).
+
+Readers (:func:`trusted_files`, used by ``batch calibrate`` / ``batch noise``)
+trust only the files of a complete manifest, checked against their size and
+SHA-256; a folder with a marker and no manifest (a killed or running run) is
+refused; a folder with neither is a plain folder of the user's files (hidden
+files ignored).
+"""
+
+from __future__ import annotations
+
+import contextlib
+import datetime as _dt
+import errno
+import hashlib
+import json
+import os
+import shutil
+import socket
+import sys
+import uuid
+from collections.abc import Iterable, Mapping
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+from imunav.errors import RunFolderError
+
+__all__ = ["MANIFEST", "MARKER", "Manifest", "RunFolder", "read_manifest", "trusted_files", "sha256_file"]
+
+MANIFEST = "manifest.json"
+MARKER = ".imunav-run.json"
+_FORMAT = "imunav-run-manifest"
+_VERSION = 1
+
+
+def _now() -> str:
+    return _dt.datetime.now(_dt.timezone.utc).isoformat(timespec="seconds")
+
+
+def sha256_file(path: str | os.PathLike[str]) -> str:
+    """SHA-256 (hex) of a file's bytes."""
+    h = hashlib.sha256()
+    with open(path, "rb") as fh:
+        for block in iter(lambda: fh.read(1 << 20), b""):
+            h.update(block)
+    return h.hexdigest()
+
+
+def _is_temp(name: str) -> bool:
+    """A hidden temporary file of :func:`imunav.io._atomic.atomic_path` (``.<name>.<random>.tmp<suffix>``)."""
+    return name.startswith(".") and ".tmp" in name and name != MARKER
+
+
+def _visible_files(root: Path) -> list[Path]:
+    """Non-hidden files under ``root`` (hidden files and folders skipped; symlinks listed, not followed)."""
+    out = []
+    for dirpath, dirnames, filenames in os.walk(root):
+        dirnames[:] = sorted(d for d in dirnames if not d.startswith("."))
+        out += [Path(dirpath) / f for f in sorted(filenames) if not f.startswith(".")]
+    return out
+
+
+def _remove_temp_files(root: Path) -> list[Path]:
+    gone = []
+    for dirpath, dirnames, filenames in os.walk(root):
+        for f in filenames:
+            if _is_temp(f):
+                with contextlib.suppress(FileNotFoundError):
+                    (Path(dirpath) / f).unlink()
+                    gone.append(Path(dirpath) / f)
+    return gone
+
+
+@dataclass(frozen=True)
+class Manifest:
+    """A run folder's ``manifest.json`` (see the module docstring)."""
+
+    folder: Path
+    run_id: str
+    kind: str
+    seed: int | None
+    created: str
+    finished: str
+    files: list[dict[str, Any]]
+    parameters: dict[str, Any] = field(default_factory=dict)
+    argv: list[str] = field(default_factory=list)
+
+    def paths(self) -> list[Path]:
+        """The listed files as paths inside the folder."""
+        return [self.folder / f["path"] for f in self.files]
+
+    def to_dict(self) -> dict[str, Any]:
+        return {"format": _FORMAT, "version": _VERSION, "run_id": self.run_id, "kind": self.kind, "seed": self.seed,
+                "created": self.created, "finished": self.finished, "parameters": self.parameters,
+                "argv": self.argv, "files": self.files}
+
+
+def _inside(root: Path, rel: str) -> Path:
+    p = (root / rel).resolve()
+    if rel.startswith(("/", "\\")) or ".." in Path(rel).parts or root.resolve() not in (p, *p.parents):
+        raise RunFolderError(f"{root / MANIFEST}: the file entry {rel!r} points outside the run folder; the manifest "
+                             "is damaged or forged: re-run into a new folder")
+    return root / rel
+
+
+def read_manifest(folder: str | os.PathLike[str], *, verify: bool = True) -> Manifest | None:
+    """The manifest of a run folder; ``None`` for a plain folder (no manifest, no marker).
+
+    Raises :class:`~imunav.errors.RunFolderError` for an incomplete run (marker without manifest), a
+    damaged manifest, or (``verify``) a listed file that is missing or whose size / SHA-256 differ.
+    """
+    root = Path(folder)
+    mp = root / MANIFEST
+    if not mp.is_file():
+        if (root / MARKER).exists():
+            started = _marker(root).get("started", "?")
+            raise RunFolderError(
+                f"{root} holds an incomplete run (started {started}, no {MANIFEST}): it was killed, failed, or is "
+                "still running, and its files may be partial or mixed; re-run it with --overwrite (overwrite=True)"
+            )
+        return None
+    from imunav.io._atomic import read_json
+
+    d = read_json(mp, "run manifest")
+    if not isinstance(d, dict) or d.get("format") != _FORMAT or not isinstance(d.get("files"), list):
+        raise RunFolderError(f"{mp} is not an imunav run manifest; re-run into a new folder")
+    try:
+        files = [{"path": str(f["path"]), "size": int(f["size"]), "sha256": str(f["sha256"])} for f in d["files"]]
+    except (KeyError, TypeError, ValueError):
+        raise RunFolderError(f"{mp}: a file entry lacks path / size / sha256; re-run into a new folder") from None
+    m = Manifest(root, str(d.get("run_id")), str(d.get("kind")), d.get("seed"), str(d.get("created")),
+                 str(d.get("finished")), files, dict(d.get("parameters") or {}), list(d.get("argv") or []))
+    for f in files:
+        p = _inside(root, f["path"])
+        if verify:
+            if not p.is_file():
+                raise RunFolderError(f"{p} is listed in {mp} (run {m.run_id}) but missing; the folder was changed "
+                                     "after the run: re-run it with --overwrite")
+            if p.stat().st_size != f["size"] or sha256_file(p) != f["sha256"]:
+                raise RunFolderError(f"{p} differs from {mp} (run {m.run_id}: size / sha256); another run or a user "
+                                     "changed it after the run: re-run it with --overwrite")
+    return m
+
+
+def trusted_files(folder: str | os.PathLike[str]) -> list[Path] | None:
+    """Files a reader of ``folder`` may use: those of its verified manifest, or ``None`` for a plain folder.
+
+    An incomplete run folder raises :class:`~imunav.errors.RunFolderError` (see :func:`read_manifest`).
+    """
+    m = read_manifest(folder)
+    return None if m is None else m.paths()
+
+
+def _marker(root: Path) -> dict[str, Any]:
+    try:
+        d = json.loads((root / MARKER).read_text(encoding="utf-8"))
+        return d if isinstance(d, dict) else {}
+    except (OSError, ValueError):
+        return {}
+
+
+def _owned(root: Path) -> tuple[list[Path], list[Path]]:
+    """(paths that belong to imunav runs and may be removed, non-hidden files that belong to none)."""
+    mine: list[Path] = []
+    foreign: list[Path] = []
+    if (root / MARKER).exists() and not (root / MANIFEST).exists():
+        # a run that did not finish: every non-hidden entry is its (it started in a folder without any)
+        return [p for p in root.iterdir() if not p.name.startswith(".") or _is_temp(p.name) or p.name == MARKER], []
+    listed: set[Path] = set()
+    if (root / MANIFEST).is_file():
+        try:
+            m = read_manifest(root, verify=False)
+        except (RunFolderError, ValueError):
+            m = None
+        if m is None:
+            return [], [root / MANIFEST]
+        listed = {p.resolve() for p in m.paths()}
+        mine.append(root / MANIFEST)
+    for entry in sorted(root.iterdir()):
+        if entry.name == MANIFEST:
+            continue  # listed in ``mine`` above when valid
+        if entry.name.startswith("."):
+            if _is_temp(entry.name) or entry.name == MARKER:
+                mine.append(entry)
+            continue
+        if entry.is_dir() and not entry.is_symlink():
+            if (entry / MANIFEST).exists() or (entry / MARKER).exists():
+                sub_mine, sub_foreign = _owned(entry)
+                mine += sub_mine
+                foreign += sub_foreign
+                continue
+            for p in _visible_files(entry):
+                (mine if p.resolve() in listed else foreign).append(p)
+            mine += [Path(d) / f for d, _, fs in os.walk(entry) for f in fs if _is_temp(f)]
+        else:
+            (mine if entry.resolve() in listed else foreign).append(entry)
+    return mine, foreign
+
+
+def _protected(root: Path, inputs: Iterable[str | os.PathLike[str] | None]) -> str | None:
+    r = root.resolve()
+    cwd = Path.cwd().resolve()
+    if r == Path(r.anchor) or r == Path.home().resolve():
+        return "it is the file system's root or the home folder"
+    if r == cwd or r in cwd.parents:
+        return "it is the working folder or one of its parents"
+    for p in inputs:
+        if p is None:
+            continue
+        q = Path(p).expanduser().resolve()
+        if r == q or r in q.parents:
+            return f"it holds an input of this run ({p})"
+    return None
+
+
+def _clear(root: Path, inputs: Iterable[str | os.PathLike[str] | None]) -> None:
+    why = _protected(root, inputs)
+    if why:
+        raise RunFolderError(f"--overwrite refuses to clear {root}: {why}; choose another output folder")
+    mine, foreign = _owned(root)
+    if foreign:
+        shown = ", ".join(str(p.relative_to(root)) for p in foreign[:5]) + (" ..." if len(foreign) > 5 else "")
+        raise RunFolderError(
+            f"{root} holds {len(foreign)} file(s) that no imunav run manifest lists ({shown}); --overwrite clears only "
+            "imunav run folders: move those files away or choose another output folder"
+        )
+    for p in mine:
+        if p.is_symlink() or p.is_file():
+            with contextlib.suppress(FileNotFoundError):
+                p.unlink()
+        elif p.is_dir():
+            shutil.rmtree(p)
+    for dirpath, _, _ in sorted(os.walk(root), key=lambda w: -len(Path(w[0]).parts)):
+        d = Path(dirpath)
+        rel = d.relative_to(root).parts
+        if rel and not any(part.startswith(".") for part in rel) and not any(d.iterdir()):
+            d.rmdir()
+
+
+class RunFolder:
+    """Context manager for a run that writes a folder (see the module docstring).
+
+    Parameters
+    ----------
+    folder : the run folder.
+    kind : what runs (``"lab"``, ``"batch-simulate"``, ...), recorded in the manifest.
+    seed : the run's seed (None when it has none).
+    parameters : the run's parameters / configuration (JSON types), recorded in the manifest.
+    overwrite : clear a folder that holds another imunav run (rules in the module docstring) instead of refusing.
+    inputs : input files of the run: a folder holding one of them is never cleared.
+
+    Examples
+    --------
+    >>> import tempfile, pathlib
+    >>> d = pathlib.Path(tempfile.mkdtemp()) / "run"
+    >>> with RunFolder(d, "demo", seed=0) as run:
+    ...     _ = (d / "a.txt").write_text("a")
+    >>> read_manifest(d).files[0]["path"]
+    'a.txt'
+    """
+
+    def __init__(self, folder: str | os.PathLike[str], kind: str, *, seed: int | None = None,
+                 parameters: Mapping[str, Any] | None = None, overwrite: bool = False,
+                 inputs: Iterable[str | os.PathLike[str] | None] = ()) -> None:
+        self.folder = Path(folder)
+        self.kind = kind
+        self.seed = None if seed is None else int(seed)
+        self.parameters = dict(parameters or {})
+        self.overwrite = bool(overwrite)
+        self.inputs = list(inputs)
+        self.run_id = str(uuid.uuid4())
+        self.created = ""
+        self.manifest: Manifest | None = None
+
+    # ------------------------------------------------------------------ start
+    def start(self) -> "RunFolder":
+        root = self.folder
+        if root.exists() and not root.is_dir():
+            raise NotADirectoryError(errno.ENOTDIR, "the run folder is a file; give a folder", str(root))
+        root.mkdir(parents=True, exist_ok=True)
+        busy = (root / MANIFEST).exists() or (root / MARKER).exists() or any(
+            not p.name.startswith(".") for p in root.iterdir())
+        if busy:
+            if not self.overwrite:
+                raise RunFolderError(self._busy_message())
+            _clear(root, self.inputs)
+        _remove_temp_files(root)
+        self.created = _now()
+        marker = {"run_id": self.run_id, "kind": self.kind, "pid": os.getpid(), "host": socket.gethostname(),
+                  "started": self.created}
+        try:
+            fd = os.open(root / MARKER, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o644)
+        except FileExistsError:
+            raise RunFolderError(f"{root}: another run started in this folder at the same time; wait for it to end, "
+                                 "or choose another folder") from None
+        with os.fdopen(fd, "w", encoding="utf-8") as fh:
+            json.dump(marker, fh)
+        return self
+
+    def _busy_message(self) -> str:
+        root = self.folder
+        if (root / MANIFEST).exists():
+            what = "a finished run (manifest.json)"
+            with contextlib.suppress(Exception):
+                m = read_manifest(root, verify=False)
+                if m is not None:
+                    what = f"the finished run {m.run_id} ({m.kind}, {m.finished})"
+        elif (root / MARKER).exists():
+            mk = _marker(root)
+            what = (f"a run that is still going or was killed (run {mk.get('run_id', '?')}, {mk.get('kind', '?')}, "
+                    f"started {mk.get('started', '?')} by pid {mk.get('pid', '?')})")
+        else:
+            names = [p.name for p in sorted(root.iterdir()) if not p.name.startswith(".")]
+            what = f"other files ({', '.join(names[:5])}{' ...' if len(names) > 5 else ''})"
+        return (f"the output folder {root} holds {what}; writing into it would mix two runs: choose a new folder, "
+                "or pass --overwrite (overwrite=True) to clear that run first")
+
+    # ----------------------------------------------------------------- finish
+    def finish(self) -> Manifest:
+        """Check the folder is still this run's, then write the manifest (last, atomically) and drop the marker."""
+        from imunav import __version__
+        from imunav.io._atomic import jsonable, write_json
+
+        root = self.folder
+        mk = _marker(root)
+        if mk.get("run_id") != self.run_id:
+            raise RunFolderError(
+                f"{root}: another run ({mk.get('run_id', 'marker removed')}) took over this folder while run "
+                f"{self.run_id} was writing it; the folder holds mixed files and gets no manifest: re-run with --overwrite"
+            )
+        files = []
+        for p in _visible_files(root):
+            if p.name == MANIFEST and p.parent == root:
+                continue
+            files.append({"path": p.relative_to(root).as_posix(), "size": p.stat().st_size, "sha256": sha256_file(p)})
+        m = Manifest(root, self.run_id, self.kind, self.seed, self.created, _now(), files,
+                     jsonable(self.parameters), list(map(str, sys.argv)))
+        d = m.to_dict()
+        d["imunav"] = __version__
+        write_json(root / MANIFEST, d)
+        with contextlib.suppress(FileNotFoundError):
+            (root / MARKER).unlink()
+        self.manifest = m
+        return m
+
+    def __enter__(self) -> "RunFolder":
+        return self.start()
+
+    def __exit__(self, et: Any, ev: Any, tb: Any) -> bool:
+        if et is None:
+            self.finish()
+            return False
+        # on an error or an interrupt: no manifest; the marker stays to show the folder holds an
+        # incomplete run, unless the run wrote nothing (then the folder is left as it was found)
+        with contextlib.suppress(OSError):
+            root = self.folder
+            _remove_temp_files(root)
+            if _marker(root).get("run_id") == self.run_id and not any(
+                    not p.name.startswith(".") for p in root.iterdir()):
+                (root / MARKER).unlink()
+                if not any(root.iterdir()):
+                    root.rmdir()
+        return False
