@@ -179,9 +179,8 @@ class LabContext:
         tid = self.progress.add_task(description, total=total)
         try:
             yield lambda n=1: self.progress.advance(tid, n)
-        finally:
-            if total is not None:
-                self.progress.update(tid, completed=total)
+        finally:  # a finished task shows 100 %, also one of unknown length (total=None)
+            self.progress.update(tid, total=total if total is not None else 1, completed=total if total is not None else 1)
 
 
 def _word(k: int | str) -> int:
@@ -353,6 +352,11 @@ def parse_lab_config(config: str | os.PathLike[str] | Mapping[str, Any] | None) 
             )
         if not isinstance(value, Mapping):
             raise ConfigError(f"{where}: '{key}' must be a table ([{key}]), not {type(value).__name__}")
+    for key, value in cfg.items():
+        allowed = _step_options(key) if key in steps and key not in _TOP_LEVEL else None
+        unknown_opts = sorted(set(value) - set(allowed)) if allowed is not None else []
+        if unknown_opts:
+            raise ConfigError(f"{where}: unknown option(s) {unknown_opts} in [{key}]; allowed: {sorted(allowed)}")
     lab = cfg.get("lab", {})
     unknown = set(lab) - {"seed", "steps", "title"}
     if unknown:
@@ -386,6 +390,15 @@ def parse_lab_config(config: str | os.PathLike[str] | Mapping[str, Any] | None) 
         options={k: dict(v) for k, v in cfg.items() if k not in ("lab", "spec", "recordings")},
         source=path,
     )
+
+
+def _step_options(name: str) -> list[str] | None:
+    """Option names a step accepts in its table: its ``OPTIONS`` or the keys of its ``_DEFAULTS`` (None: unchecked)."""
+    mod = importlib.import_module(f"imunav.labsteps.{name}")
+    opts = getattr(mod, "OPTIONS", None)
+    if opts is None and isinstance(getattr(mod, "_DEFAULTS", None), Mapping):
+        opts = list(mod._DEFAULTS)
+    return None if opts is None else list(opts)
 
 
 def load_lab_config(config: str | os.PathLike[str] | Mapping[str, Any] | None) -> dict:

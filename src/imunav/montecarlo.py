@@ -269,6 +269,7 @@ def run_montecarlo(
         raise InvalidInputError(f"n_runs must be >= 1, got {n_runs}")
     if not callable(scenario):
         raise InvalidInputError("scenario must be a callable")
+    _check_address(executor, address)
     workers = n_workers or os.cpu_count() or 1
     cs = chunk_size or max(1, math.ceil(n_runs / (4 * workers)))
     chunks = _chunks(n_runs, cs)
@@ -297,22 +298,9 @@ def run_montecarlo(
                     per_chunk[ci] = f.result()
                     prog.advance(task, chunks[ci][1] - chunks[ci][0])
     elif executor == "dask":
-        try:
-            from dask.distributed import Client, LocalCluster, as_completed as das_completed
-        except ImportError as e:  # pragma: no cover - depends on the extra
-            raise MissingDependencyError("dask[distributed]", "dask", "The Dask executor") from e
-        cluster = None
-        if address is None:
-            cluster = LocalCluster(
-                n_workers=workers,
-                threads_per_worker=1,
-                processes=True,
-                host="127.0.0.1",
-                dashboard_address=None,
-            )
-            client = Client(cluster)
-        else:
-            client = Client(address)
+        client, cluster = _dask_client(address, workers)
+        from dask.distributed import as_completed as das_completed
+
         try:
             futs = [
                 client.submit(_run_chunk, scenario, seed, a, b, batched, dict(kwargs), pure=False)
@@ -344,6 +332,35 @@ def run_montecarlo(
     )
 
 
+#: Seconds to wait for a Dask scheduler given by address before giving up.
+DASK_CONNECT_TIMEOUT_S = 5.0
+
+
+def _check_address(executor: str, address: str | None) -> None:
+    """A scheduler address only makes sense with the Dask executor (it would be silently ignored)."""
+    _check_address(executor, address)
+
+
+def _dask_client(address: str | None, workers: int) -> tuple[Any, Any]:
+    """(client, local cluster or None): a local cluster without ``address``; a scheduler that does not
+    answer within :data:`DASK_CONNECT_TIMEOUT_S` is an :class:`~imunav.errors.InvalidInputError`."""
+    try:
+        from dask.distributed import Client, LocalCluster
+    except ImportError as e:  # pragma: no cover - depends on the extra
+        raise MissingDependencyError("dask[distributed]", "dask", "The Dask executor") from e
+    if address is None:
+        cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True, host="127.0.0.1",
+                               dashboard_address=None)
+        return Client(cluster), cluster
+    try:
+        return Client(address, timeout=DASK_CONNECT_TIMEOUT_S), None
+    except (OSError, TimeoutError) as exc:
+        raise InvalidInputError(
+            f"the Dask scheduler at {address} did not answer within {DASK_CONNECT_TIMEOUT_S:g} s ({exc}); "
+            "start it (dask scheduler), check the address, or drop --address to use a local cluster"
+        ) from None
+
+
 def run_batch(
     fn: Callable[..., Mapping[str, Any]],
     items: Sequence[Any],
@@ -364,9 +381,7 @@ def run_batch(
     items = list(items)
     if not items:
         raise InvalidInputError("run_batch needs at least one item")
-    if address is not None and executor != "dask":
-        raise InvalidInputError(f"a scheduler address ({address}) is used only with the dask executor, not "
-                                f"{executor!r}: add --executor dask (executor='dask') or drop --address")
+    _check_address(executor, address)
     out: list[Any] = [None] * len(items)
     if executor == "serial":
         for i, it in enumerate(items):
@@ -386,16 +401,7 @@ def run_batch(
                     prog.advance(task)
         return out
     if executor == "dask":
-        try:
-            from dask.distributed import Client, LocalCluster
-        except ImportError as e:  # pragma: no cover
-            raise MissingDependencyError("dask[distributed]", "dask", "The Dask executor") from e
-        cluster = None
-        if address is None:
-            cluster = LocalCluster(n_workers=workers, threads_per_worker=1, host="127.0.0.1", dashboard_address=None)
-            client = Client(cluster)
-        else:
-            client = Client(address)
+        client, cluster = _dask_client(address, workers)
         try:
             futs = [client.submit(_safe_call, fn, it, dict(kwargs), pure=False) for it in items]
             return list(client.gather(futs))

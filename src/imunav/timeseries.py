@@ -860,9 +860,11 @@ class RecordingSummary:
     channels: list[dict[str, Any]]
     mag_unit: str | None
     meta: dict[str, Any]
+    warnings: list[str] = field(default_factory=list)
 
     def to_dict(self) -> dict[str, Any]:
         return {
+            "warnings": list(self.warnings),
             "n": self.n,
             "duration_s": self.duration_s,
             "fs_hz": self.fs_hz,
@@ -890,7 +892,9 @@ def describe(
     """Rate, duration, gaps, saturation, static intervals and channel statistics.
 
     Static intervals are skipped (``None``) when the record is shorter than
-    one window.  Full scales are SI (rad/s, m/s²); without them saturation
+    one window.  A specific force at rest outside g/4 .. 2 g (e.g. an
+    accelerometer in g read as m/s²) is reported in ``warnings`` and with an
+    :class:`~imunav.errors.ImunavWarning`.  Full scales are SI (rad/s, m/s²); without them saturation
     is detected from runs at the channels' extreme values.
     """
     from imunav.units import DEG as _DEG
@@ -907,22 +911,36 @@ def describe(
             return
         cols = [arr] if arr.ndim == 1 else [arr[:, j] for j in range(arr.shape[1])]
         for j, c in enumerate(cols):
-            x = c * factor
-            channels.append(
-                {
-                    "channel": group if arr.ndim == 1 else f"{group}_{'xyz'[j]}",
-                    "unit": unit,
-                    "mean": float(x.mean()),
-                    "std": float(x.std()),
-                    "min": float(x.min()),
-                    "max": float(x.max()),
-                }
-            )
+            # mean and std of x / max|x|, scaled back: no overflow for values near the float range (1e300)
+            s = float(np.max(np.abs(c)))
+            y = c / s if s > 0 else c
+            with np.errstate(over="ignore"):
+                channels.append(
+                    {
+                        "channel": group if arr.ndim == 1 else f"{group}_{'xyz'[j]}",
+                        "unit": unit,
+                        "mean": float(y.mean()) * (s or 1.0) * factor,
+                        "std": float(y.std()) * (s or 1.0) * factor,
+                        "min": float(c.min()) * factor,
+                        "max": float(c.max()) * factor,
+                    }
+                )
 
     add("gyro", data.gyro, "deg/s", 1.0 / _DEG)
     add("accel", data.accel, "m/s^2", 1.0)
     add("mag", data.mag, data.mag_unit, 1.0)
     add("temp", data.temp, "degC", 1.0)
+    notes: list[str] = []
+    if static is not None and static.mask.any():
+        import warnings
+
+        from imunav.errors import ImunavWarning
+        from imunav.noise.static import rest_force_problem
+
+        problem = rest_force_problem(float(np.median(np.linalg.norm(data.accel[static.mask], axis=1))))
+        if problem:
+            notes.append(problem)
+            warnings.warn(problem, ImunavWarning, stacklevel=2)
     return RecordingSummary(
         n=n,
         duration_s=data.duration,
@@ -936,4 +954,5 @@ def describe(
         channels=channels,
         mag_unit=data.mag_unit if data.mag is not None else None,
         meta=dict(data.meta),
+        warnings=notes,
     )

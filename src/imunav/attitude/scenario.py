@@ -19,6 +19,7 @@ magnitude.  Both readings are available; Table 2 uses (ii).
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass, field, replace
 from typing import Any, Literal
@@ -133,19 +134,30 @@ def _one(args: tuple[PaperScenario, int, dict[str, GravityKF]]) -> dict[str, NDA
 
 
 def run_montecarlo(scn: PaperScenario | None = None, n_runs: int = 100, rng: int | None = 0,
-                   filters: dict[str, GravityKF] | None = None, workers: int = 1) -> MonteCarloResult:
-    """Seeded Monte Carlo: run ``i`` uses noise seed ``SeedSequence(rng).spawn`` #i."""
+                   filters: dict[str, GravityKF] | None = None, workers: int = 1,
+                   progress: Callable[[int, int], None] | None = None) -> MonteCarloResult:
+    """Seeded Monte Carlo: run ``i`` uses noise seed ``SeedSequence(rng).spawn`` #i.
+
+    ``progress(done, total)`` is called after each run.
+    """
     scn = scn or PaperScenario()
     if n_runs < 1:
         raise ConfigError(f"n_runs must be >= 1, got {n_runs}")
     filters = filters or default_filters(scn)
     seeds = [int(s.generate_state(1)[0]) for s in np.random.SeedSequence(rng).spawn(n_runs)]
     tasks = [(scn, s, filters) for s in seeds]
+    res = []
     if workers > 1:
         with ProcessPoolExecutor(max_workers=workers) as ex:
-            res = list(ex.map(_one, tasks))
+            for r in ex.map(_one, tasks):
+                res.append(r)
+                if progress:
+                    progress(len(res), n_runs)
     else:
-        res = [_one(t) for t in tasks]
+        for t in tasks:
+            res.append(_one(t))
+            if progress:
+                progress(len(res), n_runs)
     rmse = {k: np.array([r[k] for r in res]) for k in filters}
     return MonteCarloResult(rmse=rmse, scenario=scn,
                             params={k: f.params.__dict__ | {"kind": f.kind} for k, f in filters.items()})

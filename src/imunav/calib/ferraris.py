@@ -103,6 +103,8 @@ def ferraris(
     Ga = np.stack([mean_g[f"{a}_a"] for a in "xyz"], axis=1)
     G = (Gp - Ga) / (2.0 * gravity)
     se_G = np.sqrt(np.stack([se_g[f"{a}_p"] for a in "xyz"], 1) ** 2 + np.stack([se_g[f"{a}_a"] for a in "xyz"], 1) ** 2) / (2 * gravity)
+    _check_matrix(T_a, "accelerometer", "the parallel and antiparallel poses ({a}_p, {a}_a)",
+                  "each pair must read +g and -g along its axis")
     T_a_inv = np.linalg.inv(T_a)
     angle = expected_angle_deg * DEG
     T_g = np.zeros((3, 3))
@@ -118,6 +120,9 @@ def ferraris(
         n_rot, S = len(w), f_cal.sum(0)
         var_sum = n_rot * sig_g**2 + n_rot**2 * se_bg**2 + (se_G**2) @ (S**2)
         se_Tg[:, j] = np.sqrt(var_sum) / fs / abs(angle)
+    _check_matrix(T_g, "gyro", "the rotation section {a}_rot",
+                  f"each must hold one full turn about its axis ({expected_angle_deg:g} deg as measured)",
+                  signed=False)
     stderr = {
         "accel_bias": se_ba, "accel_matrix": se_Ta, "gyro_bias": se_bg,
         "g_sensitivity": se_G, "gyro_matrix": se_Tg,
@@ -134,6 +139,34 @@ def ferraris(
         cal, stderr, {"accel_norm": res_a}, {"accel": design_condition(X6)}, {}, "ferraris",
         {"n_static_samples": len(all_static_g), "fs": fs},
     )
+
+
+#: Largest condition number accepted for T_a and T_g: a real sensor's scale factors differ by a few
+#: percent and its misalignments are small, so T is close to a multiple of the identity (cond ~ 1).
+_MAX_COND = 100.0
+
+
+def _check_matrix(T: Array, sensor: str, what: str, need: str, signed: bool = True) -> None:
+    """Refuse a Ferraris T whose columns do not point along their axes (identical, swapped or empty sections).
+
+    ``signed``: the diagonal must also be positive (accelerometer: ``x_p`` reads +g); the gyro's sign
+    depends on the turning sense (``expected_angle_deg``), so only its magnitude is checked.
+    """
+    from imunav.errors import DegenerateGeometryError
+
+    cols = np.linalg.norm(T, axis=0)
+    diag = np.diag(T) if signed else np.abs(np.diag(T))
+    with np.errstate(divide="ignore", invalid="ignore"):
+        cond = np.linalg.cond(T) if np.all(np.isfinite(T)) and cols.min() > 0 else np.inf
+    bad = [j for j in range(3) if not (diag[j] > 0.5 * cols[j] > 0)]
+    if bad or not cond < _MAX_COND:
+        j = bad[0] if bad else int(np.argmin(cols))
+        a = "xyz"[j]
+        raise DegenerateGeometryError(
+            f"Ferraris: the {sensor} matrix is degenerate (condition {cond:.3g}, column {a}: "
+            f"{np.array2string(T[:, j], precision=4)}): check {what.format(a=a)}; {need}. Identical, swapped or "
+            "mislabelled sections give this; check the section list"
+        )
 
 
 def ferraris_from_session(

@@ -33,6 +33,7 @@ from scipy.optimize import least_squares
 from imunav.errors import (
     DegenerateGeometryError,
     InsufficientDataError,
+    InvalidInputError,
     NonFiniteError,
     ShapeError,
 )
@@ -93,7 +94,15 @@ def _points(h: ArrayLike, minimum: int) -> Array:
         raise NonFiniteError(f"magnetometer samples: non-finite rows {np.flatnonzero(~np.isfinite(a).all(1))[:10].tolist()}")
     if a.shape[0] < minimum:
         raise InsufficientDataError(f"magnetometer calibration needs at least {minimum} samples, got {a.shape[0]}")
+    big = float(np.abs(a).max())
+    if big > _MAX_ABS:
+        raise InvalidInputError(f"magnetometer samples reach {big:.3g}, beyond {_MAX_ABS:.0e}: no unit (T, uT, nT, "
+                                "gauss, raw counts) gives such values; check the file's scaling")
     return a
+
+
+#: Largest magnitude accepted in a magnetometer sample (any unit): squares stay far inside the float range.
+_MAX_ABS = 1e30
 
 
 def _fibonacci(n: int) -> Array:
@@ -298,7 +307,11 @@ def fit_ellipsoid(
     """
     a = _points(h, minimum=10)
     _check_planar(a, planar_tol)
-    c0, M, cond = _li_griffiths(a)
+    try:
+        c0, M, cond = _li_griffiths(a)
+    except np.linalg.LinAlgError as exc:
+        raise DegenerateGeometryError(f"ellipsoid fit: the linear algebra failed ({exc}); the data do not describe "
+                                      "an ellipsoid: rotate the sensor over the whole sphere") from None
     L0 = _sqrtm_spd(M)  # |L0 (h - c0)| = 1
     cov0 = sphere_coverage((a - c0) @ L0.T)
     if cov0 < min_coverage:

@@ -41,7 +41,7 @@ _CLICK_ERRORS: tuple[type[BaseException], ...] = tuple({click.ClickException, _t
 _EXITS: tuple[type[BaseException], ...] = (click.exceptions.Exit, click.Abort, typer.Exit, typer.Abort,
                                              KeyboardInterrupt, SystemExit)
 
-__all__ = ["ImunavGroup", "check_figure_path", "fail", "one_line"]
+__all__ = ["ImunavGroup", "check_figure_path", "check_suffix", "fail", "one_line"]
 
 REPORT_TO = "the imunav issue tracker"
 
@@ -84,13 +84,18 @@ def fail(exc: BaseException, ctx: click.Context | None = None) -> NoReturn:
 _FIG_SUFFIXES = (".png", ".pdf", ".svg", ".svgz", ".jpg", ".jpeg", ".eps", ".ps", ".tif", ".tiff", ".webp")
 
 
-def check_figure_path(path: Path | None, option: str) -> None:
-    """Refuse a figure path whose suffix matplotlib cannot write."""
+def check_suffix(path: Path | None, option: str, suffixes: tuple[str, ...], what: str) -> None:
+    """Refuse an output path whose suffix is not among ``suffixes`` (the file would not be what its name says)."""
     from imunav.errors import InvalidInputError
 
-    if path is not None and Path(path).suffix.lower() not in _FIG_SUFFIXES:
-        raise InvalidInputError(f"{option} {path}: unknown figure type {Path(path).suffix or '(no suffix)'!r}; "
-                                f"use one of {', '.join(_FIG_SUFFIXES)}")
+    if path is not None and Path(path).suffix.lower() not in suffixes:
+        raise InvalidInputError(f"{option} {path}: {what} is written as {' / '.join(suffixes)}, not "
+                                f"{Path(path).suffix or '(no suffix)'!r}; give a file name ending in {suffixes[0]}")
+
+
+def check_figure_path(path: Path | None, option: str) -> None:
+    """Refuse a figure path whose suffix matplotlib cannot write."""
+    check_suffix(path, option, _FIG_SUFFIXES, "a figure")
 
 
 _showwarning = warnings.showwarning

@@ -90,6 +90,9 @@ Example: imunav airdata simulate turns --duration 120 --wind 8,-12,0 --turbulenc
         from imunav.io._atomic import check_outputs
 
         check_outputs([config], [out, json_out])
+        from imunav.cli._errors import check_suffix
+
+        check_suffix(out, "--out", (".npz",), "the simulated flight (NumPy archive)")
 
         import numpy as np
 
@@ -156,7 +159,9 @@ Example: imunav airdata run flight.npz --robust nis --json run.json
         from imunav.io._atomic import check_outputs
 
         check_outputs([path], [json_out, out, plot])
-        from imunav.cli._errors import check_figure_path
+        from imunav.cli._errors import check_figure_path, check_suffix
+
+        check_suffix(out, "--out", (".npz",), "the estimates (NumPy archive)")
 
         check_figure_path(plot, "--plot")
 

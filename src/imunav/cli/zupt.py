@@ -73,6 +73,9 @@ def run_cmd(
     from imunav.io._atomic import check_outputs
 
     check_outputs([file, model], [out, json_out])
+    from imunav.cli._errors import check_suffix
+
+    check_suffix(out, "--out", (".npz",), "the trajectory (NumPy archive)")
 
     import numpy as np
 
@@ -144,6 +147,12 @@ def train_cmd(
 
     Example: imunav zupt train ../shared/data/foot/pyshoe_vicon --out zupt_lstm.npz
     """
+    from imunav.cli._errors import check_suffix
+    from imunav.io._atomic import check_outputs
+
+    check_outputs([], [out])  # before the long training
+    check_suffix(out, "--out", (".npz",), "the model (NumPy archive)")
+
     from rich.progress import Progress
 
     from imunav.errors import ImunavError
@@ -191,7 +200,7 @@ def benchmark_cmd(
     directory: Path = typer.Argument(..., help="Folder of pyshoe-format *.mat trials."),
     json_out: Optional[Path] = typer.Option(None, "--json", help="Write per-trial 2-D errors as JSON."),
     model: Optional[Path] = typer.Option(None, help="LSTM model file (default: the shipped one)."),
-    limit: Optional[int] = typer.Option(None, help="Only the first N trials (sorted by name)."),
+    limit: Optional[int] = typer.Option(None, min=1, help="Only the first N trials (sorted by name), N >= 1."),
 ) -> None:
     """Every detector (fixed thresholds) and the LSTM on every trial: per-trial 2-D error.
 

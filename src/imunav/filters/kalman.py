@@ -381,6 +381,12 @@ def batch_kalman_filter(
     modes = {None: MODE_NONE, "gate": MODE_GATE, "isolate": MODE_ISOLATE, "huber": MODE_HUBER, "nis": MODE_NIS}
     if robust not in modes:
         raise InvalidInputError(f"robust must be None, 'gate', 'isolate', 'nis' or 'huber', got {robust!r}")
+    for name, v in (("gate_m", gate_m), ("huber_c", huber_c)):
+        if not (np.isfinite(v) and v > 0):
+            raise InvalidInputError(f"{name} must be positive and finite (a gate of {v!r} normalised innovations "
+                                    "rejects every measurement or none), e.g. gate_m=2 (command line: --gate-m 2)")
+    if not 0.0 < alpha < 1.0:
+        raise InvalidInputError(f"alpha must be a test level in (0, 1), got {alpha!r}")
     P0m = as_covariance(P0, "P0")
     n = P0m.shape[0]
     x0a = np.asarray(x0, dtype=np.float64)

@@ -244,6 +244,13 @@ def build_imu(
         if str(e).startswith(source):
             raise
         raise type(e)(f"{source}: {e}") from None
+    if fs is not None and arrays.get("t") is not None and data.n >= 2:
+        # the file's time stamps win; a sampling rate that contradicts them is an error, not silently ignored
+        if not (np.isfinite(fs) and fs > 0) or abs(data.fs / float(fs) - 1.0) > 0.01:
+            raise InvalidInputError(
+                f"{source}: the file has a time column (samples at {data.fs:.6g} Hz), but the option says "
+                f"fs={fs!r}; the time stamps win - drop the fs option (it is for files without time stamps)"
+            )
     return data
 
 

@@ -28,6 +28,9 @@ from imunav.lab import LabContext, StepResult
 
 TITLE = "Air data + Doppler radar: wind filter, robust filtering, fault detection"
 
+#: Option names of the [airdata] table (checked when the lab definition is parsed).
+OPTIONS = ("runs", "p_false_alarm", "robust_methods")
+
 
 def run(ctx: LabContext) -> StepResult:
     import numpy as np
@@ -38,7 +41,7 @@ def run(ctx: LabContext) -> StepResult:
     from imunav.filters import detect_faults
 
     opts = ctx.options
-    unknown = set(opts) - {"runs", "p_false_alarm", "robust_methods"}
+    unknown = set(opts) - set(OPTIONS)
     if unknown:
         raise ConfigError(f"[airdata] unknown option(s) {sorted(unknown)}; known: runs, p_false_alarm, robust_methods")
     runs = int(opts.get("runs", 100))

@@ -91,8 +91,8 @@ def run(ctx: LabContext) -> StepResult:
                 res = attitude_rmse(r.q_nb, q, t > 10.0).to_dict()
                 (raw_scores if (kind == "raw" and cal is not None) else scores)[name] = res
                 adv()
-    with ctx.task("Candan & Söken Monte Carlo", total=None):
-        mc = run_montecarlo(n_runs=int(opt["mc_runs"]), rng=ctx.seed)
+    with ctx.task("Candan & Söken Monte Carlo", total=int(opt["mc_runs"])) as adv:
+        mc = run_montecarlo(n_runs=int(opt["mc_runs"]), rng=ctx.seed, progress=lambda done, total: adv())
     tab = mc.table()
     prop_ok = tab["proposed"]["pitch_mean"] <= 0.05 and tab["proposed"]["roll_mean"] <= 0.05
     lee_ok = tab["lee"]["pitch_mean"] >= 10 * tab["proposed"]["pitch_mean"]

@@ -44,8 +44,6 @@ The SHOE threshold is chosen on the training trials
 from __future__ import annotations
 
 import json
-import os
-import tempfile
 import time
 import zipfile
 from collections.abc import Callable, Sequence
@@ -233,17 +231,10 @@ class LstmDetector:
             arrays[f"w_hh_{l}"] = b.astype(np.float32)
             arrays[f"b_{l}"] = c.astype(np.float32)
         arrays["meta"] = np.array(json.dumps({"config": self.config.to_dict(), "info": self.info}))
-        p.parent.mkdir(parents=True, exist_ok=True)
-        fd, tmp = tempfile.mkstemp(dir=p.parent, suffix=".npz.tmp")
-        os.close(fd)
-        try:
-            with open(tmp, "wb") as fh:
-                np.savez_compressed(fh, **arrays)
-            os.chmod(tmp, 0o644)
-            os.replace(tmp, p)
-        finally:
-            if os.path.exists(tmp):
-                os.unlink(tmp)
+        from imunav.io._atomic import atomic_path
+
+        with atomic_path(p) as tmp, open(tmp, "wb") as fh:
+            np.savez_compressed(fh, **arrays)
         return p
 
     @classmethod

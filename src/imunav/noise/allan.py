@@ -374,6 +374,16 @@ def _edf_for(kind: str, alpha: int, m: int, n_phase: int) -> float:
     return edf_greenhall(a, d, int(m), int(n_phase), overlapping, modified)
 
 
+def check_rows_are_samples(shape: tuple[int, ...], name: str = "x") -> None:
+    """Refuse a (C, N) array given where (N, C) is expected: more columns (channels) than rows (samples).
+
+    A (6, N) recording would otherwise be taken as N channels of 6 samples each.
+    """
+    if len(shape) == 2 and shape[1] > shape[0]:
+        raise ShapeError(f"{name} has shape {shape}: {shape[1]} channels of {shape[0]} samples each; samples go in "
+                         f"rows, channels in columns, so it looks transposed: pass {name}.T (shape {shape[::-1]})")
+
+
 def allan_deviation(
     x: ArrayLike,
     fs: float,
@@ -447,6 +457,7 @@ def allan_deviation(
     if arr.ndim not in (1, 2):
         raise ShapeError(f"x must be (N,) or (N, C), got shape {arr.shape}")
     a2 = arr[:, None] if one_d else arr
+    check_rows_are_samples(a2.shape, "x")
     if not np.issubdtype(a2.dtype, np.number):
         raise InvalidInputError(f"x must be numeric, got dtype {a2.dtype}")
     n_rows, n_ch = a2.shape

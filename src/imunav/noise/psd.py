@@ -67,6 +67,9 @@ def _as2d(x: ArrayLike) -> tuple[np.ndarray, bool]:
         raise ShapeError(f"x must be (N,) or (N, C), got shape {a.shape}")
     one = a.ndim == 1
     a2 = a[:, None] if one else a
+    from imunav.noise.allan import check_rows_are_samples
+
+    check_rows_are_samples(a2.shape, "x")
     if not np.all(np.isfinite(a2)):
         r, c = np.argwhere(~np.isfinite(a2))[0]
         raise NonFiniteError(f"non-finite value in row {r}, column {c}; the PSD needs a gap-free record")

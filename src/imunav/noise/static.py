@@ -56,7 +56,7 @@ import numpy as np
 
 from imunav.errors import InvalidInputError, NotStaticError
 
-__all__ = ["StaticCheck", "check_static", "require_static", "G_REF"]
+__all__ = ["StaticCheck", "check_static", "require_static", "rest_force_problem", "G_REF"]
 
 #: Reference gravity (m/s²) of the mean-specific-force test (accepted: G_REF / 4 to 2 G_REF).
 G_REF = 9.80665
@@ -128,6 +128,24 @@ def _window_test(x: np.ndarray, w: int, k: int, alpha: float) -> tuple[np.ndarra
     return d, limit, float(slope.max()) if slope.size else float("nan")
 
 
+def rest_force_problem(fmag: float, gravity: float = G_REF) -> str | None:
+    """Why a specific force of magnitude ``fmag`` (m/s²) cannot be a sensor at rest, or None if it can.
+
+    Accepted: ``g/4 ≤ fmag ≤ 2 g`` (see the module docstring).  The message names the likely unit
+    mistake (a reading of about 1 is an accelerometer in g, about 1000 one in mg).
+    """
+    if 0.25 * gravity <= fmag <= 2.0 * gravity:
+        return None
+    if 0.9 < fmag < 1.1:
+        hint = "the accelerometer looks like it is in g: declare its unit (--accel-unit g, units={'accel': 'g'})"
+    elif 900 < fmag < 1100:
+        hint = "the accelerometer looks like it is in mg: declare its unit (--accel-unit mg)"
+    else:
+        hint = "check the accelerometer's unit and that the file holds its data"
+    return (f"the mean specific force at rest is {fmag:.4g} m/s^2, outside g/4 .. 2 g (g = {gravity:.4g} m/s^2); "
+            + hint)
+
+
 def check_static(data: Any, *, window_s: float = 1.0, max_tilt_deg: float = 2.0, max_rotation_deg: float = 2.0,
                  alpha: float = 1e-6, gravity: float = G_REF) -> StaticCheck:
     """Judge whether a recording is static (one pose, no rotation); see the module docstring.
@@ -168,11 +186,9 @@ def check_static(data: Any, *, window_s: float = 1.0, max_tilt_deg: float = 2.0,
     else:
         fbar = np.median(data.accel, axis=0)
     fmag = float(np.linalg.norm(fbar))
-    if not 0.25 * gravity <= fmag <= 2.0 * gravity:
-        hint = (" (the accelerometer looks like it is in g: declare its unit, --accel-unit g)"
-                if 0.9 < fmag < 1.1 else " (check the accelerometer's unit and that the file holds its data)")
-        reasons.append(f"the mean specific force is {fmag:.4g} m/s^2, outside g/4 .. 2 g (g = {gravity:.4g} m/s^2) as at rest"
-                       + hint)
+    problem = rest_force_problem(fmag, gravity)
+    if problem:
+        reasons.append(problem)
     tilt = rot = 0.0
     tilt_lim = max_tilt_deg
     rot_lim = max_rotation_deg

@@ -74,6 +74,9 @@ def wavelet_denoise(x: ArrayLike, fs: float | None = None, *, wavelet: str = "db
     a = np.asarray(x, dtype=float)
     if a.ndim not in (1, 2):
         raise ShapeError(f"x must be (N,) or (N, C), got {a.shape}")
+    from imunav.noise.allan import check_rows_are_samples
+
+    check_rows_are_samples(a.shape, "x")
     if not np.all(np.isfinite(a)):
         raise NonFiniteError("wavelet_denoise needs finite samples (row "
                              f"{int(np.argwhere(~np.isfinite(a))[0][0])})")
