@@ -17,3 +17,49 @@ def rng():
     import numpy as np
 
     return np.random.default_rng(20261122)
+
+
+# -- the fault suite's captured stderr (issue 16: `grep -c Traceback` over it must be 0) ---------------
+# tests/test_cli_faults.py appends every case's stderr to <dir>/<worker>.log; the controller counts the
+# lines with "Traceback" over all workers at the end, fails the session if there is one, and prints
+# the count.  Set IMUNAV_FAULT_LOG_DIR to keep the logs (then: grep -c Traceback $IMUNAV_FAULT_LOG_DIR/*.log).
+FAULT_LOG_ENV = "IMUNAV_FAULT_LOG_DIR"
+
+
+def pytest_configure(config):
+    import os
+    import tempfile
+    from pathlib import Path
+
+    if hasattr(config, "workerinput"):  # an xdist worker: it inherited the controller's environment
+        return
+    d = os.environ.get(FAULT_LOG_ENV)
+    if d:
+        for p in Path(d).glob("*.log"):
+            p.unlink()
+    else:
+        os.environ[FAULT_LOG_ENV] = tempfile.mkdtemp(prefix="imunav-fault-log-")
+
+
+def pytest_sessionfinish(session, exitstatus):
+    import os
+    from pathlib import Path
+
+    if hasattr(session.config, "workerinput"):
+        return
+    d = Path(os.environ.get(FAULT_LOG_ENV, ""))
+    logs = sorted(d.glob("*.log")) if d.is_dir() else []
+    if not logs:
+        return
+    text = "".join(p.read_text(encoding="utf-8") for p in logs)
+    n_cases = text.count("=== case ")
+    n_tb = sum("Traceback" in ln for ln in text.splitlines())
+    session.config._imunav_fault_summary = (n_cases, n_tb, d)
+    if n_tb and session.exitstatus == 0:
+        session.exitstatus = 1
+
+
+def pytest_terminal_summary(terminalreporter, exitstatus, config):
+    s = getattr(config, "_imunav_fault_summary", None)
+    if s:
+        terminalreporter.write_line(f"fault suite: stderr of {s[0]} CLI cases in {s[2]}; lines with 'Traceback': {s[1]}")

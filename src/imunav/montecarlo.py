@@ -338,7 +338,9 @@ DASK_CONNECT_TIMEOUT_S = 5.0
 
 def _check_address(executor: str, address: str | None) -> None:
     """A scheduler address only makes sense with the Dask executor (it would be silently ignored)."""
-    _check_address(executor, address)
+    if address is not None and executor != "dask":
+        raise InvalidInputError(f"a scheduler address ({address}) is used only with the dask executor, not "
+                                f"{executor!r}: add --executor dask (executor='dask') or drop --address")
 
 
 def _dask_client(address: str | None, workers: int) -> tuple[Any, Any]:

@@ -229,6 +229,11 @@ class LongHorizonConfig(ResultMixin):
             raise InvalidInputError("wind_sigma, wind_tau, turbulence_tau must be > 0 and turbulence_sigma >= 0")
         if self.robust not in (None, "gate", "isolate", "nis", "huber"):
             raise InvalidInputError(f"robust must be None, 'gate', 'isolate', 'nis' or 'huber', got {self.robust!r}")
+        if not (np.isfinite(self.gate_m) and self.gate_m > 0):
+            raise InvalidInputError(f"gate_m must be positive and finite (a gate of {self.gate_m!r} normalised "
+                                    "innovations rejects every measurement), e.g. gate_m=3 (command line: --gate-m 3)")
+        if not 0.0 < self.alpha < 1.0:
+            raise InvalidInputError(f"alpha must be a test level in (0, 1), got {self.alpha!r}")
 
 
 @dataclass(frozen=True)

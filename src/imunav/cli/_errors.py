@@ -158,7 +158,11 @@ class ImunavGroup(TyperGroup):
         if not standalone_mode:
             return rv
         # in non-standalone mode Click returns an Exit's code; commands themselves return None
-        sys.exit(rv if isinstance(rv, int) and not isinstance(rv, bool) else 0)
+        code = rv if isinstance(rv, int) and not isinstance(rv, bool) else 0
+        if code == 130:  # Ctrl-C (SIGINT): typer turns the KeyboardInterrupt into Exit(130)
+            typer.echo("error: interrupted; files being written were not completed (no run folder got its manifest)",
+                       err=True)
+        sys.exit(code)
 
 
 def _command_path(ctx: Any) -> str:

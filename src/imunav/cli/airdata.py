@@ -252,6 +252,10 @@ Example: imunav airdata faults --kind variance --magnitude 3.5 --runs 100 --seed
         seed: int = typer.Option(0, "--seed", help="Random seed."),
         json_out: Optional[Path] = typer.Option(None, "--json", help="Write the table as JSON here."),
     ) -> None:
+        from imunav.io._atomic import check_outputs
+
+        check_outputs([], [json_out])  # before the Monte Carlo
+
         import numpy as np
         from rich.console import Console
         from rich.progress import Progress
@@ -331,6 +335,9 @@ Example: imunav airdata thesis --runs 50 --json thesis.json
                                            help="Robust filters to compare (gate<m>, nis, isolate, huber); "
                                                 "gate2 and nis are required."),
     ) -> None:
+        from imunav.io._atomic import check_outputs
+
+        check_outputs([], [json_out])  # before the Monte Carlo
         from rich.console import Console
 
         from imunav.airdata.scenario import thesis_report

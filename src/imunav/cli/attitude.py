@@ -132,6 +132,9 @@ def benchmark_cmd(
 
     Example: imunav attitude benchmark broad --filter madgwick_c --filter adaptive --json bench.json
     """
+    from imunav.io._atomic import check_outputs
+
+    check_outputs([], [json_out])  # before the benchmark
     from rich.console import Console
     from rich.progress import Progress
     from rich.table import Table
