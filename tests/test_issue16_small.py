@@ -11,7 +11,12 @@ import pytest
 from typer.testing import CliRunner
 
 from imunav.cli.main import app
-from imunav.errors import DegenerateGeometryError, ImunavWarning, InvalidInputError, ShapeError
+from imunav.errors import (
+    DegenerateGeometryError,
+    ImunavWarning,
+    InvalidInputError,
+    ShapeError,
+)
 from imunav.io import read_imu, write_imu
 from imunav.timeseries import ImuData, describe
 
@@ -167,9 +172,9 @@ def test_json_and_figure_outputs_follow_the_umask(tmp_path):
                     "--json", tmp_path / "as.json").exit_code == 0
         assert _cli("airdata", "run", tmp_path / "a.npz", "--plot", tmp_path / "ar.png",
                     "--json", tmp_path / "ar.json").exit_code == 0
-        from imunav.attitude.plot import save
-
         import matplotlib
+
+        from imunav.attitude.plot import save
 
         matplotlib.use("Agg")
         import matplotlib.pyplot as plt
