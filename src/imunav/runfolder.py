@@ -296,12 +296,14 @@ class RunFolder:
         self.run_id = str(uuid.uuid4())
         self.created = ""
         self.manifest: Manifest | None = None
+        self._made = False
 
     # ------------------------------------------------------------------ start
     def start(self) -> "RunFolder":
         root = self.folder
         if root.exists() and not root.is_dir():
             raise NotADirectoryError(errno.ENOTDIR, "the run folder is a file; give a folder", str(root))
+        self._made = not root.exists()
         root.mkdir(parents=True, exist_ok=True)
         busy = (root / MANIFEST).exists() or (root / MARKER).exists() or any(
             not p.name.startswith(".") for p in root.iterdir())
@@ -383,6 +385,6 @@ class RunFolder:
             if _marker(root).get("run_id") == self.run_id and not any(
                     not p.name.startswith(".") for p in root.iterdir()):
                 (root / MARKER).unlink()
-                if not any(root.iterdir()):
+                if self._made and not any(root.iterdir()):
                     root.rmdir()
         return False
