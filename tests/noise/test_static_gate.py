@@ -155,3 +155,14 @@ def test_batch_noise_of_a_multiposition_batch_is_refused(tmp_path):
     with pytest.raises(NotStaticError):
         noise_unit(pc)
     assert noise_unit(pc, force=True, terms=("N", "K"))["estimates"]
+
+
+def test_cli_gyro_only_noise_skips_the_mean_force_test(tmp_path):
+    """The README's gyro-only run on the ADIS record gives no accelerometer unit: only the analysed sensor's
+    unit matters; with an accelerometer channel the file in g is refused with the unit hint."""
+    d = _static("tactical", 50.0, 0, duration=120.0)
+    p = write_imu(d.with_(accel=d.accel / 9.80665), tmp_path / "ing.npz")  # accelerometer values in g
+    r = CliRunner().invoke(app, ["noise", str(p), "--channels", "gx,gy,gz", "--terms", "N,K"])
+    assert r.exit_code == 0, r.stderr
+    r = CliRunner().invoke(app, ["noise", str(p), "--channels", "gx,ax", "--terms", "N,K"])
+    assert r.exit_code == 2 and "--accel-unit g" in r.stderr

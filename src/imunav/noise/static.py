@@ -147,7 +147,7 @@ def rest_force_problem(fmag: float, gravity: float = G_REF) -> str | None:
 
 
 def check_static(data: Any, *, window_s: float = 1.0, max_tilt_deg: float = 2.0, max_rotation_deg: float = 2.0,
-                 alpha: float = 1e-6, gravity: float = G_REF) -> StaticCheck:
+                 alpha: float = 1e-6, gravity: float = G_REF, mean_force: bool = True) -> StaticCheck:
     """Judge whether a recording is static (one pose, no rotation); see the module docstring.
 
     Parameters
@@ -158,6 +158,8 @@ def check_static(data: Any, *, window_s: float = 1.0, max_tilt_deg: float = 2.0,
     max_rotation_deg : physical allowance on the rotation within one window beyond the gyro bias, degrees.
     alpha : false-alarm probability per record and sensor under white noise (statistical limit).
     gravity : expected ``|f̄|`` at rest, m/s².
+    mean_force : apply the mean-specific-force test (False when only the gyro is analysed and the
+        accelerometer's unit may be undeclared; the window tests still run).
 
     Returns
     -------
@@ -186,7 +188,7 @@ def check_static(data: Any, *, window_s: float = 1.0, max_tilt_deg: float = 2.0,
     else:
         fbar = np.median(data.accel, axis=0)
     fmag = float(np.linalg.norm(fbar))
-    problem = rest_force_problem(fmag, gravity)
+    problem = rest_force_problem(fmag, gravity) if mean_force else None
     if problem:
         reasons.append(problem)
     tilt = rot = 0.0
