@@ -55,7 +55,6 @@ import numpy as np
 from numpy.typing import NDArray
 
 from imunav.errors import FileFormatError, InvalidInputError, MissingDependencyError, TimeOrderError
-from imunav.rotation import C_ENU_NED, C_FLU_FRD
 from imunav.timeseries import ImuData
 
 __all__ = [
@@ -112,23 +111,32 @@ def require(kind: str, feature: str) -> None:
 
 
 # -- frames -------------------------------------------------------------------------------------
+# imunav.rotation is imported in the functions: it loads numba kernels, which listing topics does not need
 def ros_to_frd(v: Any) -> Array:
     """Body vectors (N, 3) from ROS FLU to imunav FRD: ``(x, -y, -z)``."""
+    from imunav.rotation import C_FLU_FRD
+
     return np.asarray(v, dtype=np.float64) @ C_FLU_FRD.T
 
 
 def frd_to_ros(v: Any) -> Array:
     """Body vectors (N, 3) from FRD to ROS FLU (the same flip; its own inverse)."""
+    from imunav.rotation import C_FLU_FRD
+
     return np.asarray(v, dtype=np.float64) @ C_FLU_FRD
 
 
 def enu_to_ned(v: Any) -> Array:
     """World vectors (N, 3) from ENU to NED: ``(y, x, -z)``."""
+    from imunav.rotation import C_ENU_NED
+
     return np.asarray(v, dtype=np.float64) @ C_ENU_NED
 
 
 def ned_to_enu(v: Any) -> Array:
     """World vectors (N, 3) from NED to ENU (the same swap; its own inverse)."""
+    from imunav.rotation import C_ENU_NED
+
     return np.asarray(v, dtype=np.float64) @ C_ENU_NED.T
 
 
@@ -363,7 +371,7 @@ def merge_onto(imu: TopicData, aux: TopicData, name: str, source: str) -> tuple[
 
 
 def read_log_imu(path: str | os.PathLike[str], *, topic: str | None = None, instance: int | None = None,
-                 mag_topic: str | None = None, temp_topic: str | None = None,
+                 mag_topic: str | None = None, temp_topic: str | None = None, nan_policy: str = "raise",
                  meta: Mapping[str, Any] | None = None) -> ImuData:
     """An :class:`ImuData` from a bag or a ULog (what :func:`imunav.io.read_imu` calls for those files).
 
@@ -378,6 +386,7 @@ def read_log_imu(path: str | os.PathLike[str], *, topic: str | None = None, inst
         ``vehicle_magnetometer``) or temperature topic, linearly interpolated onto the IMU stamps;
         IMU samples outside its span are cut (counts in ``meta``).  PX4 ``sensor_combined`` logs that
         carry ``magnetometer_ga`` give the magnetometer without this.
+    nan_policy : ``"raise"``, ``"drop"`` or ``"interpolate"`` (:meth:`ImuData.from_arrays`).
     meta : entries added to the result's ``meta``.
 
     Returns
@@ -403,7 +412,8 @@ def read_log_imu(path: str | os.PathLike[str], *, topic: str | None = None, inst
     m.update({f"{k}_from": v for k, v in notes.items()})
     m.update(meta or {})
     try:
-        return ImuData(imu.t, imu.values["gyro"], imu.values["accel"], imu.values.get("mag"),
-                       imu.values.get("temp"), mag_unit="uT", meta=m)
+        return ImuData.from_arrays(imu.t, imu.values["gyro"], imu.values["accel"], imu.values.get("mag"),
+                                   imu.values.get("temp"), mag_unit="uT", nan_policy=nan_policy,  # type: ignore[arg-type]
+                                   meta=m)
     except InvalidInputError as e:
         raise type(e)(f"{source}: topic {imu.topic!r}: {e}") from None

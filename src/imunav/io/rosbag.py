@@ -38,8 +38,7 @@ from typing import Any
 import numpy as np
 
 from imunav.errors import FileFormatError, InvalidInputError
-from imunav.io.logs import TopicData, TopicInfo, enu_to_ned, ros_to_frd, topic_data
-from imunav.rotation import C_FLU_FRD
+from imunav.io.logs import TopicData, TopicInfo, enu_to_ned, frd_to_ros, ros_to_frd, topic_data
 
 __all__ = ["list_topics", "read_topic", "read_imu_topic", "KINDS"]
 
@@ -206,7 +205,7 @@ def _rot_cov(c: np.ndarray) -> list[float]:
     s = np.asarray(c, dtype=np.float64).reshape(3, 3)
     if s[0, 0] == -1.0:
         return s.reshape(-1).tolist()
-    return (C_FLU_FRD @ s @ C_FLU_FRD.T).reshape(-1).tolist()
+    return ros_to_frd(ros_to_frd(s).T).reshape(-1).tolist()  # C Σ Cᵀ with C symmetric
 
 
 def _values(kind: str, f: np.ndarray, info: dict) -> tuple[dict[str, np.ndarray], dict[str, str], dict[str, Any]]:
@@ -415,10 +414,10 @@ def _write(path: Path, streams: list[tuple[str, str, Any]], storage: str, frame_
         st = _stamps(d)
         vals = d.values if isinstance(d, TopicData) else {"gyro": d.gyro, "accel": d.accel, "mag": d.mag, "temp": d.temp}
         if kind == "imu":
-            g = (np.asarray(vals["gyro"]) @ C_FLU_FRD.T).tolist()
-            a = (np.asarray(vals["accel"]) @ C_FLU_FRD.T).tolist()
+            g = frd_to_ros(vals["gyro"]).tolist()
+            a = frd_to_ros(vals["accel"]).tolist()
         elif kind == "mag":
-            m = (np.asarray(vals["mag"]) @ C_FLU_FRD.T * 1e-6).tolist()
+            m = (frd_to_ros(vals["mag"]) * 1e-6).tolist()
         else:
             tp = np.asarray(vals["temp"]).tolist()
         for i, s in enumerate(st.tolist()):
