@@ -36,8 +36,8 @@ IMU's ``meta``.  Stamps out of order are **sorted** (stable, by stamp) with a :c
 the count is recorded in ``meta["time"]["out_of_order"]``: messages delivered late by a transport or a
 multi-threaded driver still carry a valid sensor stamp, and every downstream step needs increasing time.
 Duplicated stamps are refused (:class:`~imunav.errors.TimeOrderError`, naming the messages): two
-samples cannot share one instant.  Jitter (std and worst deviation of the interval from its median)
-and gaps (intervals over 1.5 × the median, with the estimated count of missing messages) are in
+samples cannot share one instant.  Jitter (std and worst deviation from the median of the intervals
+that are not gaps) and gaps (intervals over 1.5 × the median, with the estimated count of missing messages) are in
 ``meta["time"]`` and printed by ``imunav info FILE --topic T``.
 """
 
@@ -242,10 +242,11 @@ def time_axis(stamps_ns: NDArray[np.int64], source: str, what: str) -> tuple[NDA
         dts = d * 1e-9
         med = float(np.median(dts))
         big = dts > 1.5 * med
+        ok = dts[~big] if (~big).any() else dts  # jitter: the intervals that are not gaps
         rep.update({
             "dt_median_s": med,
-            "jitter_std_s": float(np.std(dts)),
-            "jitter_max_s": float(np.max(np.abs(dts - med))),
+            "jitter_std_s": float(np.std(ok)),
+            "jitter_max_s": float(np.max(np.abs(ok - med))),
             "gaps": int(big.sum()),
             "missing_estimate": int(np.sum(np.round(dts[big] / med) - 1)) if big.any() else 0,
             "longest_gap_s": float(dts.max()) if big.any() else None,
