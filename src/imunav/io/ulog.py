@@ -30,7 +30,7 @@ topic                                      kind           values
 ``estimator_attitude``                                    against an attitude filter on real flights)
 =========================================  =============  =============================================
 
-Time: ``timestamp_sample`` when the topic has it (the sensor's sample time), else ``timestamp``; the
+Time: ``timestamp_sample`` when the topic fills it (the sensor's sample time), else ``timestamp``; the
 publication ``timestamp`` is then kept as the receive time.  ULog has no index: listing the topics
 parses the file once (pyulog), keeping only each topic's time stamps.
 """
@@ -50,6 +50,9 @@ __all__ = ["list_topics", "read_topic", "read_imu_topic", "IMU_TOPICS"]
 #: ULog topics that give an IMU (gyro + accel); ``sensor_combined`` is the default.
 IMU_TOPICS = ("sensor_combined", "vehicle_imu", "sensor_gyro", "sensor_accel")
 _GAUSS_TO_UT = 100.0
+#: PX4 parameters kept in ``meta["px4_params"]``: the estimator in use and the magnetic declination it
+#: applied (deg), which an attitude filter referenced to magnetic north differs from in yaw.
+_PARAMS = ("SYS_MC_EST_GROUP", "EKF2_MAG_DECL", "EKF2_DECL_TYPE", "ATT_MAG_DECL", "ATT_MAG_DECL_A")
 
 
 def _load(path: str | os.PathLike[str], names: list[str] | None) -> Any:
@@ -217,11 +220,15 @@ def _read(ulog: Any, d: Any, source: str) -> TopicData:
             "GNSS, barometer, local-position and attitude topics"
         )
     vals, units, meta = _values(d.name, kind, d.data, source)
-    has_sample = "timestamp_sample" in d.data
+    # timestamp_sample when filled (the simulator's ground-truth topics leave it 0)
+    has_sample = "timestamp_sample" in d.data and bool(np.all(np.asarray(d.data["timestamp_sample"]) > 0))
     stamps_us = np.asarray(d.data["timestamp_sample" if has_sample else "timestamp"], dtype=np.int64)
     recv = np.asarray(d.data["timestamp"], dtype=np.int64) * 1000 if has_sample else None
     meta.update({"format": "ulog", "msgtype": d.name, "time_field": "timestamp_sample" if has_sample else "timestamp",
                  "clock": "PX4 boot time (t0_ns since boot)"})
+    params = {k: ulog.initial_parameters[k] for k in _PARAMS if k in ulog.initial_parameters}
+    if params:
+        meta["px4_params"] = params
     sys_name = ulog.msg_info_dict.get("sys_name")
     if sys_name is not None:
         meta["system"] = {k: str(ulog.msg_info_dict[k]) for k in ("sys_name", "ver_hw", "ver_sw") if k in ulog.msg_info_dict}
