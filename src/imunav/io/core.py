@@ -69,6 +69,8 @@ def format_from_suffix(path: str | os.PathLike[str], format: str | None = None) 
 
 def _call(fn: Callable[..., Any], what: str, *args: Any, **options: Any) -> Any:
     params = inspect.signature(fn).parameters
+    if any(p.kind is inspect.Parameter.VAR_KEYWORD for p in params.values()):
+        return fn(*args, **options)  # the reader passes its options on and checks them there
     unknown = [k for k in options if k not in params]
     if unknown:
         allowed = [k for k, p in params.items() if p.kind is inspect.Parameter.KEYWORD_ONLY]
