@@ -14,17 +14,34 @@ import numpy as np
 import pytest
 from typer.testing import CliRunner
 
+from imunav.cli.main import app
+from imunav.errors import (
+    FileFormatError,
+    InvalidInputError,
+    MissingDependencyError,
+    TimeOrderError,
+)
+from imunav.io import read_imu
+from imunav.io.logs import (
+    enu_to_ned,
+    frd_to_ros,
+    list_topics,
+    ned_to_enu,
+    read_topic,
+    ros_to_frd,
+)
+from imunav.io.rosbag import write_bag
+from imunav.rotation import (
+    C_ENU_NED,
+    integrate_rate,
+    quat_conjugate,
+    quat_from_euler,
+    quat_rotate,
+    to_convention,
+)
+from imunav.timeseries import ImuData
+
 pytest.importorskip("rosbags")
-
-from rosbags.typesys import Stores, get_typestore  # noqa: E402
-
-from imunav.cli.main import app  # noqa: E402
-from imunav.errors import FileFormatError, InvalidInputError, MissingDependencyError, TimeOrderError  # noqa: E402
-from imunav.io import read_imu  # noqa: E402
-from imunav.io.logs import enu_to_ned, frd_to_ros, list_topics, ned_to_enu, read_topic, ros_to_frd  # noqa: E402
-from imunav.io.rosbag import write_bag  # noqa: E402
-from imunav.rotation import C_ENU_NED, integrate_rate, quat_conjugate, quat_from_euler, quat_rotate, to_convention  # noqa: E402,I001
-from imunav.timeseries import ImuData  # noqa: E402
 
 STORAGES = ("ros1", "sqlite3", "mcap")
 T0 = 1_712_345_678_901_234_567  # an April 2024 stamp, ns since 1970: too large for float64 seconds
@@ -50,6 +67,8 @@ def _motion(n=400, fs=200.0):
 
 def _raw_writer(path, storage):
     """rosbags writer + typestore + serializer for ``storage``."""
+    from rosbags.typesys import Stores, get_typestore
+
     if storage == "ros1":
         from rosbags.rosbag1 import Writer
 

@@ -14,15 +14,19 @@ import pytest
 from shared_data import data_path
 from typer.testing import CliRunner
 
+from imunav.attitude import MEKF
+from imunav.cli.main import app
+from imunav.errors import (
+    FileFormatError,
+    InvalidInputError,
+    MissingDependencyError,
+    TimeOrderError,
+)
+from imunav.io import read_imu
+from imunav.io.logs import list_topics, read_topic
+from imunav.rotation import euler_from_quat, find_convention, quat_interp
+
 pytest.importorskip("pyulog")
-
-from imunav.attitude import MEKF  # noqa: E402
-from imunav.cli.main import app  # noqa: E402
-from imunav.errors import FileFormatError, InvalidInputError, MissingDependencyError, TimeOrderError  # noqa: E402
-from imunav.io import read_imu  # noqa: E402
-from imunav.io.logs import list_topics, read_topic  # noqa: E402
-from imunav.rotation import euler_from_quat, find_convention, quat_interp  # noqa: E402
-
 runner = CliRunner()
 pytestmark = pytest.mark.data
 

@@ -9,7 +9,6 @@ from typing import Any, Optional
 import typer
 
 from imunav.cli._options import INSTANCE, LAYOUT, MAG_TOPIC, TOPIC
-
 from imunav.errors import ConfigError
 
 app = typer.Typer(help="Attitude filters (Madgwick, Mahony, MEKF, UKF, adaptive, smoother, paper KFs).",
