@@ -246,3 +246,17 @@ def test_convert_ulog_to_parquet(tmp_path):
     assert r.exit_code == 0, r.output
     a, b = read_imu(_log(SAMPLE)), read_imu(out)
     assert np.array_equal(a.gyro, b.gyro) and np.array_equal(a.mag, b.mag) and b.meta["t0_ns"] == a.meta["t0_ns"]
+
+
+def test_lab_recording_declares_a_topic(tmp_path):
+    """[recordings.*] takes topic / instance / mag_topic / layout; the lab reads the log with them."""
+    from imunav.errors import ConfigError
+    from imunav.labsteps.recordings import parse_recordings
+
+    p = _log(SMALL)
+    specs = parse_recordings({"vimu": {"path": str(p), "test": "static", "topic": "vehicle_imu", "instance": 1}},
+                             tmp_path)
+    d = read_imu(specs["vimu"].path, **specs["vimu"].read)
+    assert d.meta["topic"] == "vehicle_imu" and d.meta["instance"] == 1
+    with pytest.raises(ConfigError, match="instance must be a non-negative integer"):
+        parse_recordings({"x": {"path": str(p), "test": "static", "instance": "one"}}, tmp_path)
