@@ -363,3 +363,49 @@ def test_warning_free_normal_read(two_imu_bag):
     with warnings.catch_warnings():
         warnings.simplefilter("error")
         read_imu(two_imu_bag, topic="/imu_a")
+
+
+def test_gnss_pressure_and_temperature_topics(tmp_path):
+    """NavSatFix (deg, m), TwistStamped (ENU -> NED), FluidPressure (Pa), Temperature (°C, merged as temp)."""
+    stamps = T0 + np.arange(5) * 200_000_000
+
+    def fix(T, hdr):
+        st = T["sensor_msgs/msg/NavSatStatus"](status=0, service=1)
+        return T["sensor_msgs/msg/NavSatFix"](header=hdr, status=st, latitude=47.3977, longitude=8.5456, altitude=530.5,
+                                              position_covariance=np.r_[4.0, 0, 0, 0, 4.0, 0, 0, 0, 9.0],
+                                              position_covariance_type=2)
+
+    def vel(T, hdr):
+        V = T["geometry_msgs/msg/Vector3"]
+        tw = T["geometry_msgs/msg/Twist"](linear=V(1.0, 2.0, 3.0), angular=V(0.0, 0.0, 0.5))  # east, north, up
+        return T["geometry_msgs/msg/TwistStamped"](header=hdr, twist=tw)
+
+    def baro(T, hdr):
+        return T["sensor_msgs/msg/FluidPressure"](header=hdr, fluid_pressure=95123.5, variance=4.0)
+
+    def temp(T, hdr):
+        return T["sensor_msgs/msg/Temperature"](header=hdr, temperature=21.5, variance=0.01)
+
+    imu_stamps = T0 + np.arange(41) * 20_000_000
+    p = _path(tmp_path, "sqlite3")
+    _write_raw(p, "sqlite3", {
+        "/fix": [(int(s), "sensor_msgs/msg/NavSatFix", int(s), "gps", fix) for s in stamps],
+        "/vel": [(int(s), "geometry_msgs/msg/TwistStamped", int(s), "gps", vel) for s in stamps],
+        "/baro": [(int(s), "sensor_msgs/msg/FluidPressure", int(s), "baro", baro) for s in stamps],
+        "/temp": [(int(s), "sensor_msgs/msg/Temperature", int(s), "imu", temp) for s in stamps],
+        "/imu": _imu_series(imu_stamps),
+    })
+    kinds = {ti.topic: ti.kind for ti in list_topics(p)}
+    assert kinds == {"/fix": "gnss", "/vel": "gnss_velocity", "/baro": "pressure", "/temp": "temperature", "/imu": "imu"}
+    g = read_topic(p, "/fix")
+    assert g.values["lat_deg"][0] == 47.3977 and g.values["alt_m"][0] == 530.5
+    np.testing.assert_array_equal(g.values["pos_cov_enu_diag"][0], [4.0, 4.0, 9.0])
+    v = read_topic(p, "/vel")
+    np.testing.assert_array_equal(v.values["vel_ned"], np.tile([2.0, 1.0, -3.0], (5, 1)))
+    np.testing.assert_array_equal(v.values["rate_frd"], np.tile([0.0, 0.0, -0.5], (5, 1)))
+    assert read_topic(p, "/baro").values["pressure"][0] == 95123.5
+    d = read_imu(p, topic="/imu", temp_topic="/temp")
+    np.testing.assert_array_equal(d.temp, 21.5)
+    assert d.n == 41 and d.meta["temp_from"]["topic"] == "/temp"
+    with pytest.raises(InvalidInputError, match="without mag data"):
+        read_imu(p, topic="/imu", mag_topic="/baro")
