@@ -363,9 +363,9 @@ def merge_onto(imu: TopicData, aux: TopicData, name: str, source: str) -> tuple[
     merged = merged.reshape((t_imu.size,) + v.shape[1:])
     vals = {k: a[sl] for k, a in imu.values.items()}
     vals[name] = merged
+    dt_aux = aux.meta.get("time", {}).get("dt_median_s")
     note = {"topic": aux.topic, "instance": aux.instance, "interpolation": "linear", "rows_cut_start": i0,
-            "rows_cut_end": int(imu.t.size - i1), "rate_hz": aux.meta.get("time", {}).get("dt_median_s") and
-            1.0 / aux.meta["time"]["dt_median_s"]}
+            "rows_cut_end": int(imu.t.size - i1), "rate_hz": 1.0 / dt_aux if dt_aux else None}
     out = TopicData(imu.topic, imu.kind, t_imu, vals, {**imu.units, name: aux.units[name]},
                     None if imu.t_receive is None else imu.t_receive[sl], imu.instance, dict(imu.meta))
     return out, note
