@@ -8,6 +8,9 @@ times, each in a fresh subprocess (so that the peak resident memory, ``ru_maxrss
   nothing kept: the floor any reader built on rosbags pays;
 * ``imunav``: ``read_imu(bag, topic="/imu")``, an ImuData in SI / FRD.
 
+Peak memory is the process's ``VmHWM`` (``/proc/self/status``; ``ru_maxrss`` would carry the parent's
+peak across the fork on Linux).
+
 Target (issue 17): imunav time ≤ 2 × rosbags time (≥ 50 % of its speed), and memory linear in the
 selected topic only: the peak over the interpreter's baseline, per IMU message, is printed next to the
 size of a message in the bag.
@@ -32,8 +35,15 @@ import numpy as np
 
 BYTES_PER_IMU_MSG = 380  # CDR Imu (~330 B) + MCAP record and index, measured on a small bag
 
-_ROSBAGS = """
-import json, resource, sys, time
+_HWM = """
+def hwm_kb():
+    for line in open('/proc/self/status'):
+        if line.startswith('VmHWM:'):
+            return int(line.split()[1])
+"""
+
+_ROSBAGS = _HWM + """
+import json, sys, time
 from pathlib import Path
 from rosbags.highlevel import AnyReader
 t0, c0 = time.perf_counter(), time.process_time()
@@ -44,25 +54,25 @@ with AnyReader([Path(sys.argv[1])]) as r:
         msg = r.deserialize(raw, conn.msgtype)
         n += 1
 print(json.dumps({'n': n, 'time_s': time.perf_counter() - t0, 'cpu_s': time.process_time() - c0,
-                  'maxrss_kb': resource.getrusage(resource.RUSAGE_SELF).ru_maxrss}))
+                  'maxrss_kb': hwm_kb()}))
 """
 
-_IMUNAV = """
-import json, resource, sys, time
+_IMUNAV = _HWM + """
+import json, sys, time
 from imunav.io import read_imu
 import imunav.io.rosbag, imunav.rotation, rosbags.highlevel  # imports (numba kernels: ~1 s once) untimed
-base = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
+base = hwm_kb()
 t0, c0 = time.perf_counter(), time.process_time()
 d = read_imu(sys.argv[1], topic='/imu')
 print(json.dumps({'n': d.n, 'time_s': time.perf_counter() - t0, 'cpu_s': time.process_time() - c0,
-                  'maxrss_kb': resource.getrusage(resource.RUSAGE_SELF).ru_maxrss, 'base_kb': base}))
+                  'maxrss_kb': hwm_kb(), 'base_kb': base}))
 """
 
-_BASE = """
-import json, resource
+_BASE = _HWM + """
+import json
 from imunav.io import read_imu
 import imunav.io.rosbag, imunav.rotation, rosbags.highlevel
-print(json.dumps({'maxrss_kb': resource.getrusage(resource.RUSAGE_SELF).ru_maxrss}))
+print(json.dumps({'maxrss_kb': hwm_kb()}))
 """
 
 
