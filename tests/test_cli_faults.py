@@ -26,6 +26,14 @@ runner = CliRunner()
 # {IN} is the input under test; other inputs get a valid-looking placeholder file.
 COMMANDS: list[tuple[str, list[str], str, list[tuple[str, str]]]] = [
     ("info", ["info", "{IN}", "--json", "{OUT}"], ".csv", [("OUT", ".json")]),
+    ("info-ulog", ["info", "{IN}", "--json", "{OUT}"], ".ulg", [("OUT", ".json")]),
+    ("info-bag", ["info", "{IN}", "--json", "{OUT}"], ".bag", [("OUT", ".json")]),
+    ("info-mcap-topic", ["info", "{IN}", "--topic", "/imu", "--json", "{OUT}"], ".mcap", [("OUT", ".json")]),
+    ("convert-ulog", ["convert", "{IN}", "{OUT}"], ".ulg", [("OUT", ".parquet")]),
+    ("convert-db3", ["convert", "{IN}", "{OUT}", "--topic", "/imu"], ".db3", [("OUT", ".h5")]),
+    ("convert-layout", ["convert", "{IN}", "{OUT}", "--layout", "euroc"], ".csv", [("OUT", ".npz")]),
+    ("attitude-run-ulog", ["attitude", "run", "{IN}", "--topic", "sensor_combined", "--json", "{OUT}"], ".ulg",
+     [("OUT", ".json")]),
     ("noise-json", ["noise", "{IN}", "--json", "{OUT}"], ".csv", [("OUT", ".json")]),
     ("noise-plot", ["noise", "{IN}", "--plot", "{OUT}"], ".csv", [("OUT", ".png")]),
     ("noise-yaml", ["noise", "{IN}", "--yaml", "{OUT}"], ".csv", [("OUT", ".yaml")]),

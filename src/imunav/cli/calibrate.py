@@ -14,6 +14,8 @@ from typing import Any, Optional
 import numpy as np
 import typer
 
+from imunav.cli._options import INSTANCE, LAYOUT, TOPIC
+
 app = typer.Typer(
     help="Calibrate an IMU or magnetometer from a recording; writes the calibration JSON.\n\n"
     "Example: imunav calibrate multiposition rec.npz --segments segments.json --out cal.json",
@@ -28,7 +30,8 @@ def register(root: typer.Typer) -> None:
 # ---------------------------------------------------------------- helpers
 def _read(path: Path, fs: Optional[float], accel_unit: Optional[str], gyro_unit: Optional[str],
           accel_scale: Optional[float], gyro_scale: Optional[float], skiprows: Optional[int],
-          columns: Optional[str]) -> Any:
+          columns: Optional[str], topic: Optional[str] = None, instance: Optional[int] = None,
+          layout: Optional[str] = None) -> Any:
     from imunav.cli._options import reader_options
     from imunav.io import read_imu
 
@@ -36,6 +39,7 @@ def _read(path: Path, fs: Optional[float], accel_unit: Optional[str], gyro_unit:
         units={k: v for k, v in (("accel", accel_unit), ("gyro", gyro_unit)) if v},
         scales={k: v for k, v in (("accel", accel_scale), ("gyro", gyro_scale)) if v},
         fs=fs or None, skiprows=skiprows, columns=_columns(columns) if columns else None,
+        topic=topic, instance=instance, layout=layout,
     ))
 
 
@@ -137,7 +141,8 @@ def multiposition(
     noise_model: Optional[Path] = _NM,
     fs: Optional[float] = _FS, accel_unit: Optional[str] = _AU, gyro_unit: Optional[str] = _GU,
     accel_scale: Optional[float] = _AS, gyro_scale: Optional[float] = _GS, skiprows: Optional[int] = _SK,
-    columns: Optional[str] = _COL,
+    columns: Optional[str] = _COL, topic: Optional[str] = TOPIC, instance: Optional[int] = INSTANCE,
+    layout: Optional[str] = LAYOUT,
 ) -> None:
     """Multi-position least squares (accelerometer T, b; gyro bias and g-sensitivity).
 
@@ -150,7 +155,8 @@ def multiposition(
 
     from imunav.calib import multiposition as fit
 
-    data = _read(recording, fs, accel_unit, gyro_unit, accel_scale, gyro_scale, skiprows, columns)
+    data = _read(recording, fs, accel_unit, gyro_unit, accel_scale, gyro_scale, skiprows, columns, topic, instance,
+                 layout)
     lat = None if latitude_deg is None else np.deg2rad(latitude_deg)
     res = fit(data, _segments(segments), latitude=lat, gravity=gravity, g_sensitivity=g_sensitivity,
               noise_model=_noise_model(noise_model))
@@ -171,7 +177,8 @@ def ratetable(
     noise_model: Optional[Path] = _NM,
     fs: Optional[float] = _FS, accel_unit: Optional[str] = _AU, gyro_unit: Optional[str] = _GU,
     accel_scale: Optional[float] = _AS, gyro_scale: Optional[float] = _GS, skiprows: Optional[int] = _SK,
-    columns: Optional[str] = _COL,
+    columns: Optional[str] = _COL, topic: Optional[str] = TOPIC, instance: Optional[int] = INSTANCE,
+    layout: Optional[str] = LAYOUT,
 ) -> None:
     """Rate-table least squares for the gyro matrix (with the static test: the full thesis model).
 
@@ -186,7 +193,7 @@ def ratetable(
     from imunav.calib import ratetable as fit
 
     lat = None if latitude_deg is None else np.deg2rad(latitude_deg)
-    rd = (fs, accel_unit, gyro_unit, accel_scale, gyro_scale, skiprows, columns)
+    rd = (fs, accel_unit, gyro_unit, accel_scale, gyro_scale, skiprows, columns, topic, instance, layout)
     st = None
     nm = _noise_model(noise_model)
     if static is not None:
@@ -213,7 +220,8 @@ def ferraris(
     report: Optional[Path] = _REP,
     fs: Optional[float] = _FS, accel_unit: Optional[str] = _AU, gyro_unit: Optional[str] = _GU,
     accel_scale: Optional[float] = _AS, gyro_scale: Optional[float] = _GS, skiprows: Optional[int] = _SK,
-    columns: Optional[str] = _COL,
+    columns: Optional[str] = _COL, topic: Optional[str] = TOPIC, instance: Optional[int] = INSTANCE,
+    layout: Optional[str] = LAYOUT,
 ) -> None:
     """Ferraris six-pose + three-turn calibration (imucal-compatible).
 
@@ -227,7 +235,8 @@ def ferraris(
     from imunav.calib import ferraris_from_session
     from imunav.calib.model import write_json_atomic
 
-    data = _read(recording, fs, accel_unit, gyro_unit, accel_scale, gyro_scale, skiprows, columns)
+    data = _read(recording, fs, accel_unit, gyro_unit, accel_scale, gyro_scale, skiprows, columns, topic, instance,
+                 layout)
     from imunav.io._atomic import read_json
 
     secs = read_json(sections, "imucal section list JSON")
@@ -250,7 +259,8 @@ def multipose(
     report: Optional[Path] = _REP,
     fs: Optional[float] = _FS, accel_unit: Optional[str] = _AU, gyro_unit: Optional[str] = _GU,
     accel_scale: Optional[float] = _AS, gyro_scale: Optional[float] = _GS, skiprows: Optional[int] = _SK,
-    columns: Optional[str] = _COL,
+    columns: Optional[str] = _COL, topic: Optional[str] = TOPIC, instance: Optional[int] = INSTANCE,
+    layout: Optional[str] = LAYOUT,
 ) -> None:
     """Tedaldi et al. (2014) multi-pose calibration without a rate table.
 
@@ -263,7 +273,8 @@ def multipose(
 
     from imunav.calib import multipose as fit
 
-    data = _read(recording, fs, accel_unit, gyro_unit, accel_scale, gyro_scale, skiprows, columns)
+    data = _read(recording, fs, accel_unit, gyro_unit, accel_scale, gyro_scale, skiprows, columns, topic, instance,
+                 layout)
     res = fit(data.accel, data.gyro, data.fs, init_s=init_s, wait_s=wait_s, gravity=gravity, strict=strict,
               accel_misalignment=accel_misalignment, raw_accel_unit="m/s^2", raw_gyro_unit="rad/s")
     _finish(res, out, report)
@@ -332,16 +343,20 @@ def temperature(
 
 @app.command()
 def mag(
-    recording: Path = typer.Argument(..., help="Magnetometer samples: CSV/NPZ with mag_x, mag_y, mag_z (or mx..)."),
+    recording: Path = typer.Argument(..., help="Magnetometer samples: CSV/NPZ with mag_x, mag_y, mag_z (or mx..), "
+                                     "or a ROS bag / PX4 ULog magnetometer topic (µT, FRD)."),
     out: Path = _OUT,
     method: str = typer.Option("ellipsoid", help="ellipsoid (Li & Griffiths), rotation-scale (thesis) or minmax."),
     field_norm: Optional[float] = typer.Option(None, help="Known field magnitude (data unit); default det(A) = 1."),
     min_coverage: float = typer.Option(0.3, help="Smallest accepted sphere coverage (ellipsoid)."),
     report: Optional[Path] = _REP,
+    topic: Optional[str] = TOPIC, instance: Optional[int] = INSTANCE,
 ) -> None:
     """Hard- and soft-iron magnetometer calibration: h_cal = A (h - b).
 
     Example: imunav calibrate mag mag.csv --out mag_cal.json --report mag_report
+
+    Example: imunav calibrate mag flight.ulg --topic sensor_mag --instance 0 --out mag_cal.json
     """
     from imunav.io._atomic import check_outputs
 
@@ -359,7 +374,7 @@ def mag(
     from imunav.calib.model import write_json_atomic
     from imunav.errors import InvalidInputError
 
-    h = _read_mag(recording)
+    h = _read_mag(recording, topic, instance)
     if method == "ellipsoid":
         cal = fit_ellipsoid(h, field_norm, min_coverage=min_coverage)
     elif method == "rotation-scale":
@@ -381,10 +396,20 @@ def mag(
     typer.echo(f"magnetometer calibration written to {out}")
 
 
-def _read_mag(path: Path) -> np.ndarray:
-    from imunav.errors import FileFormatError
+def _read_mag(path: Path, topic: Optional[str] = None, instance: Optional[int] = None) -> np.ndarray:
+    from imunav.errors import FileFormatError, InvalidInputError
+    from imunav.io.logs import log_kind, read_topic
 
     p = Path(path)
+    if p.exists() and log_kind(p) is not None:
+        if topic is None:
+            raise InvalidInputError(f"{p}: name the magnetometer topic with --topic (`imunav info {p}` lists them)")
+        d = read_topic(p, topic, instance=instance)
+        if "mag" not in d.values:
+            raise InvalidInputError(f"{p}: topic {topic!r} is a {d.kind} topic, not a magnetometer")
+        return np.asarray(d.values["mag"], float)
+    if topic is not None or instance is not None:
+        raise InvalidInputError(f"{p}: --topic / --instance apply to ROS bags and PX4 ULogs only")
     from imunav.io._common import check_nonempty, wrap_read_errors
 
     check_nonempty(p)

@@ -7,6 +7,8 @@ from typing import Any
 
 import typer
 
+from imunav.cli._options import INSTANCE, LAYOUT, TOPIC
+
 _EXAMPLE = (
     "Example:\n\n"
     "  imunav noise ../shared/data/adis16405/adis16405_imu2.npz --gyro-unit deg/s --accel-unit g "
@@ -52,7 +54,7 @@ def _curve_fits(r: Any) -> dict[str, Any]:
 
 
 def noise(
-    file: Path = typer.Argument(..., help="Static recording: .csv/.txt, .parquet, .h5, .mat, .npz."),
+    file: Path = typer.Argument(..., help="Static recording: .csv/.txt, .parquet, .h5, .mat, .npz, ROS bag or PX4 .ulg."),
     channels: str = typer.Option(",".join(_CH), "--channels", help="Comma-separated subset of gx,gy,gz,ax,ay,az."),
     json_out: Path | None = typer.Option(None, "--json", help="Write Allan curves, fitted terms and PSD terms as JSON."),
     plot: Path | None = typer.Option(None, "--plot", help="Allan-deviation figure with fit and CIs (.png/.pdf/.svg)."),
@@ -67,8 +69,12 @@ def noise(
     fs: float | None = typer.Option(None, "--fs", help="Sampling rate (Hz) when the file has no time column."),
     gyro_unit: str | None = typer.Option(None, "--gyro-unit", help="Unit of the gyro columns (rad/s, deg/s, ...)."),
     accel_unit: str | None = typer.Option(None, "--accel-unit", help="Unit of the accel columns (m/s^2, g, mg, ...)."),
-    format: str | None = typer.Option(None, "--format", help="csv, parquet, hdf5, mat, npz (default: suffix)."),
+    format: str | None = typer.Option(None, "--format", help="csv, parquet, hdf5, mat, npz, rosbag, ulog (default: "
+                                      "suffix / content)."),
     skiprows: int | None = typer.Option(None, "--skiprows", help="CSV: lines to skip before the header."),
+    topic: str | None = TOPIC,
+    instance: int | None = INSTANCE,
+    layout: str | None = LAYOUT,
 ) -> None:
     """Identify the stochastic errors of a static IMU recording: overlapping Allan
     deviation with confidence intervals, GLS fit of quantization Q, white noise N,
@@ -100,7 +106,7 @@ def noise(
     if select not in ("bic", "aic", "none"):
         raise InvalidInputError(f"--select {select!r}: use bic, aic or none")
     opts = reader_options(units={k: v for k, v in (("gyro", gyro_unit), ("accel", accel_unit)) if v}, fs=fs,
-                          skiprows=skiprows)
+                          skiprows=skiprows, topic=topic, instance=instance, layout=layout)
     data = read_imu(file, format=format, **opts)
     rate = float(data.fs)
     if fs is None and abs(rate - round(rate)) < 1e-6 * rate:
