@@ -57,7 +57,7 @@ test: $(STAMP_TEST) browser
 
 # API reference + gallery into docs/_build/html, warnings as errors.  The gallery's figures come
 # from a shortened lab run that docs/conf.py starts (docs/gallery.py, docs/gallery_lab.toml), kept
-# in docs/_generated: the first build takes about two minutes, later ones reuse it.
+# in docs/_generated: the first build takes about two minutes, a rebuild about 20 s.
 docs: $(STAMP_DOCS)
 	$(BIN)/python -m sphinx -W --keep-going -b html -q docs docs/_build/html
 	@echo "open docs/_build/html/index.html"
