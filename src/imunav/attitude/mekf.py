@@ -4,9 +4,11 @@ Error state δx = [δθ, δb] (6): body-frame attitude error q = q̂ ⊗ exp(δ�
 gyro-bias error b = b̂ + δb (Markley, "Attitude error representations for
 Kalman filtering", JGCD 26(2), 2003; Solà 2017 §7).
 
-Prediction over Δt with ω̄ = ω − b̂:
+Prediction over Δt with ω̄ = ω − b̂::
+
     q̂ ← q̂ ⊗ exp(ω̄ Δt),  Φ = [[exp(−[ω̄]× Δt), −I Δt], [0, I]],
     Q = diag((σ_g² + k_ω² |ω̄|²) Δt I, σ_b² Δt I).
+
 The accelerometer and magnetometer noise can be given per sample
 (``sigma_acc``, ``sigma_mag``) or, independent of the sampling rate, as the
 time constants of the corrections they make: with ``tau_acc`` > 0 the

@@ -164,7 +164,12 @@ def train_cmd(
     from imunav.errors import ImunavError
     from imunav.io.foot import read_pyshoe_mat
     from imunav.learn import LstmConfig, best_labels, select_shoe_threshold, train_lstm
+    from imunav.learn.lstm import require_torch
 
+    try:
+        require_torch()  # before the slow label selection: training is the one command that needs torch
+    except ImunavError as exc:
+        _fail(exc)
     files = sorted(directory.glob("*.mat"))
     if not files:
         _fail(FileNotFoundError(f"no *.mat trials in {directory}"))
