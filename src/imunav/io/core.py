@@ -2,18 +2,18 @@
 
 The format comes from the file suffix unless given:
 
-=========  ==========================  ====================================
-format     suffixes                    module
-=========  ==========================  ====================================
-csv        .csv .txt .tsv .dat         :mod:`imunav.io.csv`
-parquet    .parquet .pq                :mod:`imunav.io.parquet`
-hdf5       .h5 .hdf5 .hdf              :mod:`imunav.io.hdf5`
-mat        .mat (v5; v7.3 on read)     :mod:`imunav.io.mat`
-mat73      (write MAT v7.3)            :mod:`imunav.io.mat`
-npz        .npz                        :mod:`imunav.io.npz`
-rosbag     .bag .db3 .mcap, ROS 2 folder  :mod:`imunav.io.rosbag` (read; extra ``ros``)
-ulog       .ulg                        :mod:`imunav.io.ulog` (read; extra ``px4``)
-=========  ==========================  ====================================
+=======  =============================  =============================================
+format   suffixes                       module
+=======  =============================  =============================================
+csv      .csv .txt .tsv .dat            :mod:`imunav.io.csv`
+parquet  .parquet .pq                   :mod:`imunav.io.parquet`
+hdf5     .h5 .hdf5 .hdf                 :mod:`imunav.io.hdf5`
+mat      .mat (v5; v7.3 on read)        :mod:`imunav.io.mat`
+mat73    (write MAT v7.3)               :mod:`imunav.io.mat`
+npz      .npz                           :mod:`imunav.io.npz`
+rosbag   .bag .db3 .mcap, ROS 2 folder  :mod:`imunav.io.rosbag` (read; extra ``ros``)
+ulog     .ulg                           :mod:`imunav.io.ulog` (read; extra ``px4``)
+=======  =============================  =============================================
 
 Bags and logs are also recognised by their content (magic bytes) whatever their suffix; see
 :mod:`imunav.io.logs`.  Named CSV layouts (``layout="euroc"`` ...) are in :mod:`imunav.io.layouts`.

@@ -7,20 +7,20 @@ so memory grows with the selected topic only.
 
 Message types read (frames: FLU body / ENU world → FRD / NED, see :mod:`imunav.io.logs`):
 
-========================================  =============  =========================================
-type                                      kind           values
-========================================  =============  =========================================
-``sensor_msgs/msg/Imu``                   ``imu``        ``gyro``, ``accel``, and ``q_nb`` when the
-                                                         orientation is filled (covariance[0] ≠ -1);
-                                                         the three covariances in ``meta``
-``sensor_msgs/msg/MagneticField``         ``mag``        ``mag`` (T → µT), covariance in ``meta``
-``sensor_msgs/msg/NavSatFix``             ``gnss``       ``lat_deg``, ``lon_deg``, ``alt_m``
-                                                         (ellipsoid), ``fix_status``, ``pos_cov``
+========================================  =================  =========================================
+type                                      kind               values
+========================================  =================  =========================================
+``sensor_msgs/msg/Imu``                   ``imu``            ``gyro``, ``accel``, and ``q_nb`` when the
+                                                             orientation is filled (covariance[0] ≠ -1);
+                                                             the three covariances in ``meta``
+``sensor_msgs/msg/MagneticField``         ``mag``            ``mag`` (T → µT), covariance in ``meta``
+``sensor_msgs/msg/NavSatFix``             ``gnss``           ``lat_deg``, ``lon_deg``, ``alt_m``
+                                                             (ellipsoid), ``fix_status``, ``pos_cov``
 ``geometry_msgs/msg/TwistStamped``        ``gnss_velocity``  ``vel_ned`` (twist.linear taken as ENU,
-                                                         as GNSS drivers publish it), ``rate_frd``
-``sensor_msgs/msg/FluidPressure``         ``pressure``   ``pressure`` (Pa), ``variance``
-``sensor_msgs/msg/Temperature``           ``temperature``  ``temp`` (°C), ``variance``
-========================================  =============  =========================================
+                                                             as GNSS drivers publish it), ``rate_frd``
+``sensor_msgs/msg/FluidPressure``         ``pressure``       ``pressure`` (Pa), ``variance``
+``sensor_msgs/msg/Temperature``           ``temperature``    ``temp`` (°C), ``variance``
+========================================  =================  =========================================
 
 A topic whose messages name more than one ``header.frame_id`` is refused: its samples would mix
 sensor frames.  ROS 1 ``header.seq`` gaps are counted in ``meta["seq_gaps"]`` (dropped messages).
