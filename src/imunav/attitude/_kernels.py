@@ -18,7 +18,7 @@ import math
 import numpy as np
 from numba import njit
 
-from imunav._rotation_kernels import qexp_1, qexp_t, qlog_1, qmul_1, qmul_t, qrot_1, qrot_t
+from imunav._rotation_kernels import dcm_from_quat_1, qexp_1, qexp_t, qlog_1, qmul_1, qmul_t, qrot_1, qrot_t
 
 # ---------------------------------------------------------------------------
 # small helpers
@@ -435,19 +435,15 @@ def _heading_update(P, dx, qw, qx, qy, qz, tan_dip, r, psi, PH, with_bias):
     bias is a consider state as well.  Returns the NIS term.
     """
     # rows of T: C_nb row 3 (down), identity on the bias, C_nb rows 1 and 2
+    qa = np.empty(4)
+    qa[0], qa[1], qa[2], qa[3] = qw, qx, qy, qz
+    C = dcm_from_quat_1(qa)
     T = np.zeros((6, 6))
-    T[0, 0] = 2.0 * (qx * qz - qw * qy)
-    T[0, 1] = 2.0 * (qy * qz + qw * qx)
-    T[0, 2] = 1.0 - 2.0 * (qx * qx + qy * qy)
-    T[1, 3] = 1.0
-    T[2, 4] = 1.0
-    T[3, 5] = 1.0
-    T[4, 0] = 1.0 - 2.0 * (qy * qy + qz * qz)
-    T[4, 1] = 2.0 * (qx * qy - qw * qz)
-    T[4, 2] = 2.0 * (qx * qz + qw * qy)
-    T[5, 0] = 2.0 * (qx * qy + qw * qz)
-    T[5, 1] = 1.0 - 2.0 * (qx * qx + qz * qz)
-    T[5, 2] = 2.0 * (qy * qz - qw * qx)
+    T[0, 0:3] = C[2]
+    T[4, 0:3] = C[0]
+    T[5, 0:3] = C[1]
+    for i in range(3):
+        T[1 + i, 3 + i] = 1.0
     Py = T @ P @ T.T
     dy = T @ dx
     Hy = np.zeros(6)
