@@ -13,8 +13,8 @@ as well.  Click's own usage errors (unknown option, bad number, missing
 argument, unknown command) are also ONE line on stderr,
 ``error: <message> (see 'imunav <command> --help')``, with exit status 2
 (:meth:`ImunavGroup.main`).  A group called without a command prints its help.
-An :class:`imunav.errors.ImunavWarning` is printed as one line,
-``warning: <message>``, and the command goes on.
+An :class:`imunav.errors.ImunavWarning` (or any ``UserWarning``) is printed as
+one line, ``warning: <message>``, and the command goes on.
 """
 
 from __future__ import annotations
@@ -26,20 +26,22 @@ import warnings
 from pathlib import Path
 from typing import Any, NoReturn
 
-import click
 import typer
 from typer.core import TyperGroup
 
-try:  # typer >= 0.2x runs on its own vendored copy of click: its exceptions and contexts are not click's
-    from typer import _click as _tclick
-    from typer._click.globals import get_current_context as _current_context
-except ImportError:  # pragma: no cover - older typer uses click itself
-    _tclick = click
-    _current_context = click.get_current_context
+try:  # typer >= 0.20 carries its own copy of click (and no longer installs the click package)
+    from typer import _click as click
+    from typer._click.globals import get_current_context
+except ImportError:  # older typer runs on the click package
+    import click
 
-_CLICK_ERRORS: tuple[type[BaseException], ...] = tuple({click.ClickException, _tclick.exceptions.ClickException})
-_EXITS: tuple[type[BaseException], ...] = (click.exceptions.Exit, click.Abort, typer.Exit, typer.Abort,
-                                             KeyboardInterrupt, SystemExit)
+    get_current_context = click.get_current_context
+
+# exceptions that typer / click handle themselves (usage errors: reported by ImunavGroup.main; Exit; Abort)
+_PASS_THROUGH = tuple({e for e in (typer.Exit, typer.Abort, getattr(typer, "TyperException", None),
+                                   getattr(click, "ClickException", None), getattr(click, "Abort", None),
+                                   getattr(getattr(click, "exceptions", None), "Exit", None)) if e is not None})
+_ABORTS = tuple({e for e in (typer.Abort, getattr(click, "Abort", None)) if e is not None})
 
 __all__ = ["ImunavGroup", "check_figure_path", "check_suffix", "fail", "one_line"]
 
@@ -65,7 +67,7 @@ def _message(exc: BaseException) -> str:
 def _debug_wanted(ctx: click.Context | None = None) -> bool:
     if os.environ.get("IMUNAV_DEBUG", "").strip().lower() in ("1", "true", "yes", "on"):
         return True
-    ctx = ctx or _current_context(silent=True) or click.get_current_context(silent=True)
+    ctx = ctx or get_current_context(silent=True)
     while ctx is not None:
         if ctx.params.get("debug"):
             return True
@@ -102,10 +104,9 @@ _showwarning = warnings.showwarning
 
 
 def _show_warning(message: Any, category: Any, filename: str, lineno: int, file: Any = None, line: Any = None) -> None:
-    """An :class:`imunav.errors.ImunavWarning` as one line on stderr, ``warning: <message>``."""
-    from imunav.errors import ImunavWarning
-
-    if isinstance(category, type) and issubclass(category, ImunavWarning):
+    """A user warning (:class:`imunav.errors.ImunavWarning` or any other ``UserWarning``) as one line on
+    stderr, ``warning: <message>``; other categories keep Python's format."""
+    if isinstance(category, type) and issubclass(category, UserWarning):
         typer.echo(f"warning: {one_line(str(message))}", err=True)
     else:
         _showwarning(message, category, filename, lineno, file, line)
@@ -122,7 +123,7 @@ class ImunavGroup(TyperGroup):
                 warnings.simplefilter("default", ImunavWarning)
                 warnings.showwarning = _show_warning
                 return super().invoke(ctx)
-        except _EXITS + _CLICK_ERRORS:  # usage errors are reported by main()
+        except (*_PASS_THROUGH, KeyboardInterrupt, SystemExit):  # usage errors are reported by main()
             raise
         except (ImunavError, OSError) as exc:
             fail(exc, ctx)
@@ -146,11 +147,11 @@ class ImunavGroup(TyperGroup):
         try:
             rv = super().main(args=args, prog_name=prog_name, complete_var=complete_var, standalone_mode=False,
                               **extra)
-        except _CLICK_ERRORS as exc:
+        except click.ClickException as exc:
             if not standalone_mode:
                 raise
             sys.exit(_usage_error(exc))
-        except (click.Abort, typer.Abort):  # EOF at a prompt (Ctrl-C arrives as Exit(130))
+        except _ABORTS:  # EOF at a prompt (Ctrl-C arrives as Exit(130))
             if not standalone_mode:
                 raise
             typer.echo("error: aborted", err=True)
