@@ -36,7 +36,7 @@ def write_gallery_page(out: str | Path) -> Path:
     if not (report / "summary.json").is_file():
         # IMUNAV_GALLERY_LAB: another lab definition (the docs test uses a tiny one to stay quick)
         config = os.environ.get("IMUNAV_GALLERY_LAB") or HERE / "gallery_lab.toml"
-        run_lab(report, config, progress=False)
+        run_lab(report, config, progress=False, overwrite=True)  # a killed earlier run is cleared
     summary = json.loads((report / "summary.json").read_text())
     figs = sorted((report / "figures").glob("*.png"))
     lines = ["# Gallery of the lab's figures", "",
