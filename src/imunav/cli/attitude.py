@@ -10,11 +10,8 @@ import typer
 
 from imunav.errors import ConfigError
 
-app = typer.Typer(
-    help="Attitude filters (Madgwick, Mahony, MEKF, UKF, adaptive, smoother, paper KFs).\n\n"
-    "Example: imunav attitude run 05_undisturbed_slow_rotation_with_breaks_B.mat --filter adaptive --json run.json",
-    no_args_is_help=True,
-)
+app = typer.Typer(help="Attitude filters (Madgwick, Mahony, MEKF, UKF, adaptive, smoother, paper KFs).",
+                  no_args_is_help=True)
 
 
 def _parse_params(items: list[str] | None) -> dict[str, Any]:
