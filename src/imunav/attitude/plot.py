@@ -66,13 +66,10 @@ def plot_montecarlo_box(mc: Any):
 
 
 def save(fig: Any, path: str | Path) -> Path:
-    """Save atomically (temp file in the same folder, then rename)."""
-    import os
-    import tempfile
+    """Save atomically (temp file in the same folder, then rename; usual file mode)."""
+    from imunav.io._atomic import atomic_path
 
     p = Path(path)
-    fd, tmp = tempfile.mkstemp(dir=p.parent if str(p.parent) else ".", suffix=p.suffix)
-    os.close(fd)
-    fig.savefig(tmp, dpi=120)
-    os.replace(tmp, p)
+    with atomic_path(p) as tmp:
+        fig.savefig(tmp, dpi=120, format=p.suffix.lstrip(".").lower() or "png")
     return p

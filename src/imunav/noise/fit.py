@@ -45,10 +45,8 @@ at tau = sqrt(2) s and B = min(sigma)/0.6643.
 from __future__ import annotations
 
 import itertools
-import json
 import math
 import os
-import tempfile
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -215,31 +213,18 @@ class NoiseFit:
         return out
 
     def to_json(self, path: str | os.PathLike) -> Path:
-        """Write :meth:`to_dict` as JSON (atomically)."""
-        return _atomic_write(Path(path), json.dumps(_jsonable(self.to_dict()), indent=2))
+        """Write :meth:`to_dict` as standard JSON (atomically, null for a missing value)."""
+        from imunav.io._atomic import write_json
 
-
-def _jsonable(o: Any) -> Any:
-    if isinstance(o, dict):
-        return {k: _jsonable(v) for k, v in o.items()}
-    if isinstance(o, (list, tuple)):
-        return [_jsonable(v) for v in o]
-    if isinstance(o, float) and not math.isfinite(o):
-        return None
-    return o
+        return write_json(path, self.to_dict())
 
 
 def _atomic_write(path: Path, text: str) -> Path:
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
-    try:
-        with os.fdopen(fd, "w") as f:
-            f.write(text)
-        os.replace(tmp, path)
-    except BaseException:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
-        raise
+    """Write ``text`` to ``path`` through :func:`imunav.io._atomic.atomic_path` (usual file mode, no temp left)."""
+    from imunav.io._atomic import atomic_path
+
+    with atomic_path(path) as tmp:
+        tmp.write_text(text, encoding="utf-8")
     return path
 
 
