@@ -25,6 +25,9 @@ the example it changes:
 ``<!-- readme-test: expect V1 V2 ... -->``
     the block's output must show each figure V (a number printed that rounds
     to V at V's decimals), so a figure quoted in the README is checked.
+``<!-- readme-test: status N PREFIX -->``
+    the command line that starts with PREFIX must exit with status N (a
+    documented non-zero exit, e.g. a batch whose units fail the spec).
 ``<!-- readme-test: slow -->``
     marked ``pytest.mark.slow``.
 
@@ -67,6 +70,7 @@ class Block:
     reduce: list[tuple[str, str]] = field(default_factory=list)
     file: str | None = None
     expect: list[str] = field(default_factory=list)
+    status: list[tuple[int, str]] = field(default_factory=list)
     slow: bool = False
 
     @property
@@ -77,7 +81,24 @@ class Block:
         text = self.text
         for old, new in self.reduce:
             text = text.replace(old, new)
+        for code, prefix in self.status:
+            text = _expect_status(text, prefix, code)
         return text
+
+
+def _expect_status(text: str, prefix: str, code: int) -> str:
+    """``text`` with the command that starts with ``prefix`` (and its continuation lines) required to exit
+    with ``code``."""
+    lines = text.split("\n")
+    start = next((i for i, line in enumerate(lines) if line.startswith(prefix)), None)
+    assert start is not None, f"no line starts with {prefix!r}"
+    end = start
+    while lines[end].rstrip().endswith("\\"):
+        end += 1
+    lines[start] = "if " + lines[start]
+    lines[end] += (f"\nthen echo 'expected exit status {code}, got 0' >&2; false; else s=$?; [ $s -eq {code} ] || "
+                   f"{{ echo \"expected exit status {code}, got $s\" >&2; false; }}; fi")
+    return "\n".join(lines)
 
 
 def parse_readme(path: Path = README) -> list[Block]:
@@ -121,6 +142,9 @@ def _apply(b: Block, d: str) -> None:
         b.file = rest.strip()
     elif word == "expect":
         b.expect = rest.split()
+    elif word == "status":
+        code, _, prefix = rest.partition(" ")
+        b.status.append((int(code), prefix))
     elif word == "slow":
         b.slow = True
     else:
@@ -137,7 +161,9 @@ def _data_dir() -> Path:
 
 
 def _needs_data(b: Block) -> bool:
-    return any(m in b.text for m in _DATA_MARKERS)
+    """The block reads the shared data, itself or through a file written from another block."""
+    return any(m in b.text for m in _DATA_MARKERS) or any(
+        f.file in b.text and _needs_data(f) for f in BLOCKS if f.file and f is not b)
 
 
 def _workdir(tmp: Path) -> tuple[Path, dict[str, str]]:
@@ -240,6 +266,10 @@ def test_readme_reductions_listed() -> None:
             print(f"  file     line {b.line} ({b.lang}): written as {b.file}")
         if b.expect:
             print(f"  checks   line {b.line} ({b.lang}): figures {' '.join(b.expect)}")
+        if b.slow:
+            print(f"  slow     line {b.line} ({b.lang}): marked pytest.mark.slow")
+        for code, prefix in b.status:
+            print(f"  status   line {b.line} ({b.lang}): {prefix} ... exits {code}")
 
 
 def test_readme_figures_registered() -> None:
