@@ -217,7 +217,7 @@ def test_readme_example(block: Block, tmp_path: Path) -> None:
     text = block.runnable_text()
     if block.lang == "bash":
         # README line of the failing command: the script's lines are the block's lines
-        script = (f"set -e -o pipefail; trap 'echo \"README line $(({block.line} + LINENO))\" >&2' ERR\n"
+        script = (f"set -e -o pipefail; trap 'echo \"README line $(({block.line} - 1 + LINENO))\" >&2' ERR\n"
                   f"{text}")
         cmd = ["bash", "-c", script]
     else:
