@@ -199,7 +199,7 @@ FIGURES: tuple[Figure, ...] = (
     Figure(
         "airdata_alg1",
         "alarms on ≈ 43 % of fault-free steps",
-        "{python} benchmarks/bench_airdata_faults.py", 8.0,
+        "{python} benchmarks/bench_airdata_faults.py", 1.0,
         values={"alg1 thesis-threshold alarms": 0.43},
         patterns={"alg1 thesis-threshold alarms": r"alg1\s+[\d.]+\s+[\d.]+\s+[\d.]+\s+[\d.]+\s+([\d.]+)"},
         tol={"alg1 thesis-threshold alarms": 0.005},
