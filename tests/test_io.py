@@ -346,3 +346,23 @@ def test_csv_iso_datetime_time_column(tmp_path):
     p.write_text("timestamp,gx,gy,gz,ax,ay,az\n2024-05-01T12:00:00Z,0,0,0,0,0,0\nyesterday,0,0,0,0,0,0\n")
     with pytest.raises(FileFormatError, match=r"time column 'timestamp' holds date-times but data row 1 \('yesterday'\)"):
         read_imu(p)
+
+
+def test_parquet_without_pyarrow_names_the_extra(tmp_path, monkeypatch):
+    """pyarrow is the `parquet` extra (not in the core install): Parquet I/O says what to install, other formats work."""
+    import sys
+
+    from imunav.errors import MissingDependencyError
+    from imunav.io import read_imu, write_imu
+    from imunav.timeseries import ImuData
+
+    data = ImuData.from_arrays(None, np.zeros((10, 3)), np.tile([0.0, 0.0, -9.81], (10, 1)), fs=10.0)
+    write_imu(data, tmp_path / "r.parquet")
+    monkeypatch.setitem(sys.modules, "pyarrow", None)
+    monkeypatch.setitem(sys.modules, "pyarrow.parquet", None)
+    with pytest.raises(MissingDependencyError, match=r"pip install 'imunav\[parquet\]'"):
+        read_imu(tmp_path / "r.parquet")
+    with pytest.raises(MissingDependencyError, match="parquet"):
+        write_imu(data, tmp_path / "s.parquet")
+    assert not (tmp_path / "s.parquet").exists()
+    np.testing.assert_array_equal(read_imu(write_imu(data, tmp_path / "r.npz")).accel, data.accel)

@@ -3,7 +3,7 @@
 One implementation shared by :mod:`imunav.noise` (the noise-term fit and
 :meth:`NoiseFit.model_avar`) and :mod:`imunav.sim` (the error models' Allan
 curves), so the two cannot disagree (IEEE Std 952-1997 Annex C;
-ahrs-sensor-errors.md §3.8; references.md §1):
+ahrs-sensor-errors.md §3.8; references.md §1)::
 
     quantisation      Q:  3 Q^2 / tau^2
     white (ARW/VRW)   N:  N^2 / tau

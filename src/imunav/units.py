@@ -7,20 +7,20 @@ datasheets and IEEE Std 952-1997 quote them (:func:`to_display`).
 
 Display units (with x = value in SI):
 
-========================  =======================  =========================
-term                      SI unit                  display unit
-========================  =======================  =========================
-angle random walk N       rad/s/sqrt(Hz)=rad/sqrt(s)  deg/sqrt(h)  (x*180/pi*60)
-gyro bias instability B   rad/s                    deg/h        (x*180/pi*3600)
-rate random walk K        rad/s/sqrt(s)            deg/h/sqrt(h) (x*180/pi*3600*60)
-rate ramp R               rad/s^2                  deg/h^2      (x*180/pi*3600^2)
-velocity random walk N    m/s/sqrt(s)              m/s/sqrt(h)  (x*60)
-accel bias instability B  m/s^2                    ug           (x/g0*1e6)
-accel random walk K       m/s^2/sqrt(s)            m/s/h/sqrt(h) (x*3600*60)
-noise density             unit/sqrt(Hz)            ug/sqrt(Hz), deg/s/sqrt(Hz)
-scale factor              1 (ratio)                ppm          (x*1e6)
-misalignment              rad                      mrad         (x*1e3)
-========================  =======================  =========================
+========================  ============================  =================================
+term                      SI unit                       display unit
+========================  ============================  =================================
+angle random walk N       rad/s/sqrt(Hz)=rad/sqrt(s)    deg/sqrt(h)  (x*180/pi*60)
+gyro bias instability B   rad/s                         deg/h        (x*180/pi*3600)
+rate random walk K        rad/s/sqrt(s)                 deg/h/sqrt(h) (x*180/pi*3600*60)
+rate ramp R               rad/s^2                       deg/h^2      (x*180/pi*3600^2)
+velocity random walk N    m/s/sqrt(s)                   m/s/sqrt(h)  (x*60)
+accel bias instability B  m/s^2                         ug           (x/g0*1e6)
+accel random walk K       m/s^2/sqrt(s)                 m/s/h/sqrt(h) (x*3600*60)
+noise density             unit/sqrt(Hz)                 ug/sqrt(Hz), deg/s/sqrt(Hz)
+scale factor              1 (ratio)                     ppm          (x*1e6)
+misalignment              rad                           mrad         (x*1e3)
+========================  ============================  =================================
 """
 
 from __future__ import annotations

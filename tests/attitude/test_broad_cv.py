@@ -41,8 +41,8 @@ def test_adaptive_out_of_fold_beats_vqf_and_defaults_come_from_the_grid():
           f"(in sample {cv.in_sample_mean:.3f}); worst trial vs vqf {np.max(cv.oof - v):+.2f} deg")
     assert ratio <= 0.95
     assert np.max(cv.oof - v) <= 2.0
-    # the out-of-fold figure is what the benchmark and README report (0.731 x when this was written)
-    assert ratio == pytest.approx(0.731, abs=0.005)
+    # the out-of-fold figure is what the benchmark and README report (0.713 x when this was written)
+    assert ratio == pytest.approx(0.713, abs=0.005)
     # the shipped defaults are the grid's in-sample choice
     assert replace(ADAPTIVE_DEFAULTS, **cv.in_sample_choice) == ADAPTIVE_DEFAULTS
     assert res[0].params == cv.in_sample_choice

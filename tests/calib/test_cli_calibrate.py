@@ -52,10 +52,27 @@ def test_ratetable_with_static_and_compensate(demo):
     assert abs(np.median(np.linalg.norm(comp.accel, axis=1)) - 9.8017) < 0.02
 
 
+def _params(path):
+    """QGroundControl parameter file -> {name: value} (comment lines start with #; fields are tab-separated)."""
+    rows = [ln.split("\t") for ln in path.read_text().splitlines() if ln and not ln.startswith("#")]
+    return {r[2]: float(r[3]) for r in rows}
+
+
 def test_multiposition_and_mag(demo):
-    _run("calibrate", "multiposition", demo / "static.npz", "--segments", demo / "static_segments.json",
-         "--out", demo / "s.json")
-    out = _run("calibrate", "mag", demo / "mag.csv", "--out", demo / "mag.json")
+    from imunav.calib import ImuCalibration
+
+    out = _run("calibrate", "multiposition", demo / "static.npz", "--segments", demo / "static_segments.json",
+               "--out", demo / "s.json", "--px4-params", demo / "s.params")
+    cal, p = ImuCalibration.load(demo / "s.json"), _params(demo / "s.params")
+    np.testing.assert_array_equal([p[f"CAL_ACC0_{a}OFF"] for a in "XYZ"], cal.accel_bias)
+    np.testing.assert_array_equal([p[f"CAL_GYRO0_{a}OFF"] for a in "XYZ"], cal.gyro_bias)
+    # the misalignment a multi-position fit estimates has no PX4 parameter: dropped, and said so
+    assert "dropped: accelerometer cross-axis" in out and "accelerometer cross-axis" in (demo / "s.params").read_text()
+    out = _run("calibrate", "mag", demo / "mag.csv", "--out", demo / "mag.json", "--px4-params", demo / "mag.params",
+               "--mag-unit", "uT")
+    pm = _params(demo / "mag.params")
+    np.testing.assert_allclose([pm[f"CAL_MAG0_{a}OFF"] for a in "XYZ"],
+                               np.array(json.loads((demo / "mag.json").read_text())["b"]) * 0.01, rtol=1e-15)
     d = json.loads((demo / "mag.json").read_text())
     np.testing.assert_allclose(d["b"], [15.85, -3.749, 19.196], atol=0.05)
     assert "written" in out

@@ -322,3 +322,76 @@ def test_select_shoe_threshold_is_the_argmin_of_the_mean_error():
         select_shoe_threshold([], grid)
     with pytest.raises(InvalidInputError, match="grid"):
         select_shoe_threshold([trial], [-1.0])
+
+
+# --- inference without torch (issue 17: a plain `pip install imunav` runs every command but training) -------------
+
+def _torch_reference(model: LstmDetector, x: np.ndarray, torch) -> np.ndarray:
+    """P(stationary) of ``model`` computed by torch.nn.LSTM + Linear (float64) on normalised windows ``x``."""
+    c = model.config
+    net = torch.nn.LSTM(x.shape[-1], c.hidden, c.layers, batch_first=True).double()
+    fc = torch.nn.Linear(c.hidden, 2).double()
+    with torch.no_grad():
+        for l, (w_ih, w_hh, b) in enumerate(model.weights):
+            getattr(net, f"weight_ih_l{l}").copy_(torch.from_numpy(w_ih))
+            getattr(net, f"weight_hh_l{l}").copy_(torch.from_numpy(w_hh))
+            getattr(net, f"bias_ih_l{l}").copy_(torch.from_numpy(b))  # imunav stores b_ih + b_hh
+            getattr(net, f"bias_hh_l{l}").zero_()
+        fc.weight.copy_(torch.from_numpy(model.fc_w))
+        fc.bias.copy_(torch.from_numpy(model.fc_b))
+        return torch.softmax(fc(net(torch.from_numpy(x))[0]), -1)[..., 1].numpy()
+
+
+def test_shipped_model_numpy_inference_matches_torch():
+    """The shipped model's numpy forward pass against torch's LSTM on the same weights and windows (<= 1e-6)."""
+    torch = pytest.importorskip("torch")
+    from imunav.learn.lstm import input_features
+
+    model = LstmDetector.load()
+    sim = simulate_gait("walk", 6, rng=5, error_model="foot_mems")
+    x = (input_features(sim.imu, model.config.features) - model.mean) / model.std
+    W = model.config.window
+    windows = np.stack([x[s:s + W] for s in range(0, x.shape[0] - W, 37)][:40])
+    ref = _torch_reference(model, windows, torch)
+    out = lstm_forward(model.weights, model.fc_w, model.fc_b, windows)
+    assert out.shape == ref.shape == (len(windows), W)
+    assert np.max(np.abs(out - ref)) <= 1e-6
+    assert 0.05 < np.mean(out > 0.5) < 0.95  # the windows hold both stance and swing: the comparison is not trivial
+
+
+def test_inference_and_training_error_without_torch(monkeypatch, tmp_path):
+    """With torch unimportable the shipped LSTM still detects; training names the extra to install, at once."""
+    import sys
+
+    from typer.testing import CliRunner
+
+    from imunav.cli.main import app
+    from imunav.errors import MissingDependencyError
+
+    monkeypatch.setitem(sys.modules, "torch", None)  # `import torch` raises ImportError
+    sim = simulate_gait("walk", 6, rng=6, error_model="foot_mems")
+    zv = LstmDetector.load().detect(sim.imu).zv
+    assert np.mean(zv[sim.stance]) > 0.5 and np.mean(zv[~sim.stance]) < 0.1
+    with pytest.raises(MissingDependencyError, match=r"pip install 'imunav\[learn\]'"):
+        train_lstm([sim.imu], [sim.stance], LstmConfig(layers=1, hidden=4))
+    (tmp_path / "trials").mkdir()  # empty: the missing torch is reported before the trials are looked at
+    r = CliRunner().invoke(app, ["zupt", "train", str(tmp_path / "trials"), "--out", str(tmp_path / "m.npz")])
+    assert r.exit_code == 2 and "imunav[learn]" in r.stderr and len(r.stderr.strip().splitlines()) == 1
+
+
+@pytest.mark.data
+def test_zupt_run_lstm_cli_without_torch(monkeypatch, tmp_path):
+    """`imunav zupt run --detector lstm` on a real trial with torch unimportable."""
+    import json
+    import sys
+
+    from shared_data import data_path
+    from typer.testing import CliRunner
+
+    from imunav.cli.main import app
+
+    f = data_path("foot", "pyshoe_vicon", "2017-11-22-11-22-03.mat")
+    monkeypatch.setitem(sys.modules, "torch", None)
+    r = CliRunner().invoke(app, ["zupt", "run", str(f), "--detector", "lstm", "--json", str(tmp_path / "z.json")])
+    assert r.exit_code == 0, r.output
+    assert json.loads((tmp_path / "z.json").read_text())["error_2d_m"] < 0.1  # as with torch (test_ins_cli.py)

@@ -39,13 +39,19 @@ def test_cli_noise_end_to_end(tmp_path, rng):
     _write_npz(f, rng)
     out = tmp_path / "noise.json"
     r = CliRunner().invoke(app, ["noise", str(f), "--gyro-unit", "deg/s", "--accel-unit", "g", "--json", str(out),
-                                 "--plot", str(tmp_path / "allan.png"), "--yaml", str(tmp_path / "imu.yaml")])
+                                 "--plot", str(tmp_path / "allan.png"), "--yaml", str(tmp_path / "imu.yaml"),
+                                 "--openvins", str(tmp_path / "ov.yaml"), "--vins", str(tmp_path / "vins.yaml")])
     assert r.exit_code == 0, r.output
     d = json.loads(out.read_text())
     n_gyro = np.array(d["gyro"]["fit"]["terms"]["N"]["value"])
     np.testing.assert_allclose(n_gyro, 0.01 * np.pi / 180, rtol=0.03)
     assert (tmp_path / "allan_gyro.png").stat().st_size > 1000
-    assert "gyroscope_noise_density" in (tmp_path / "imu.yaml").read_text()
+    # the three estimator files carry the fitted gyro white noise (max over the axes), as written by the API
+    nmax = float(n_gyro.max())
+    for name, key in (("imu.yaml", "gyroscope_noise_density:"), ("ov.yaml", "gyroscope_noise_density:"),
+                      ("vins.yaml", "gyr_n:")):
+        line = next(ln for ln in (tmp_path / name).read_text().splitlines() if ln.strip().startswith(key))
+        assert float(line.split(":")[1].split("#")[0]) == pytest.approx(nmax, rel=1e-12), name
 
 
 def test_cli_noise_bad_channel(tmp_path, rng):
@@ -53,6 +59,9 @@ def test_cli_noise_bad_channel(tmp_path, rng):
     _write_npz(f, rng, n=2000)
     r = CliRunner().invoke(app, ["noise", str(f), "--channels", "gx,qq"])
     assert r.exit_code == 2 and "unknown" in r.output
+    r = CliRunner().invoke(app, ["noise", str(f), "--channels", "gx,gy", "--kalibr", str(tmp_path / "k.yaml")])
+    assert r.exit_code == 2 and "needs both gyro and accel" in r.output
+    assert not (tmp_path / "k.yaml").exists()
 
 
 @pytest.mark.data

@@ -204,12 +204,18 @@ def run_thesis_filter(
 class LongHorizonConfig(ResultMixin):
     """Navigation-frame wind filter for real flights (see module docstring).
 
-    wind_sigma, wind_tau : Gauss-Markov mean-wind std (m/s) and correlation time (s)
-    turbulence_sigma, turbulence_tau : Gauss-Markov gust std (m/s) and correlation
-        time (s, ≈ L_u / V = 533 m / 200 m/s for Dryden at altitude)
-    sigma_ads, sigma_doppler : body-axis velocity noise std (m/s) per axis
-    p0_wind, p0_position : initial variances (m²/s², m²)
-    robust : None, "gate", "isolate" (default) or "huber"; alpha its test level
+    Attributes
+    ----------
+    wind_sigma, wind_tau : float
+        Gauss-Markov mean-wind std (m/s) and correlation time (s).
+    turbulence_sigma, turbulence_tau : float
+        Gauss-Markov gust std (m/s) and correlation time (s, ≈ L_u / V = 533 m / 200 m/s for Dryden at altitude).
+    sigma_ads, sigma_doppler : float
+        Body-axis velocity noise std (m/s) per axis.
+    p0_wind, p0_position : float
+        Initial variances (m²/s², m²).
+    robust : str or None
+        None, "gate", "isolate" (default) or "huber"; ``alpha`` its test level.
     """
 
     wind_sigma: float = 10.0

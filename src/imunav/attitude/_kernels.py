@@ -18,7 +18,7 @@ import math
 import numpy as np
 from numba import njit
 
-from imunav._rotation_kernels import qexp_1, qexp_t, qlog_1, qmul_1, qmul_t, qrot_1, qrot_t
+from imunav._rotation_kernels import dcm_from_quat_1, qexp_1, qexp_t, qlog_1, qmul_1, qmul_t, qrot_1, qrot_t
 
 # ---------------------------------------------------------------------------
 # small helpers
@@ -398,6 +398,64 @@ def _ekf_update_consider(P, dx, H, r, nu, PH, n_est):
 
 
 @njit(cache=True)
+def _reset_cov(P, dx):
+    """Error-state reset after injecting δθ into q̂ (in place).
+
+    The new error δθ⁺ = δθ − δθ̂ seen from the corrected q̂⁺ = q̂ ⊗ exp(δθ̂) is,
+    to first order, G (δθ − δθ̂) with G = I − [½ δθ̂]× (Markley 2003, §IV;
+    Solà 2017, §7.2): P ← G P Gᵀ on the attitude rows and columns.
+    """
+    G = np.eye(6)
+    G[0, 1] = 0.5 * dx[2]
+    G[0, 2] = -0.5 * dx[1]
+    G[1, 0] = -0.5 * dx[2]
+    G[1, 2] = 0.5 * dx[0]
+    G[2, 0] = 0.5 * dx[1]
+    G[2, 1] = -0.5 * dx[0]
+    P[:, :] = G @ P @ G.T
+
+
+@njit(cache=True)
+def _heading_update(P, dx, qw, qx, qy, qz, tan_dip, r, psi, PH, with_bias):
+    """Heading-only magnetometer update with the tilt as consider states (in place).
+
+    The field yaw ψ_m = atan2(n_E, n_N) of n = C_nb(q̂) m_b is computed with the
+    estimated tilt, so its error is, to first order in the navigation-frame
+    attitude error φ = C_nb δθ and for a reference field of yaw 0 and dip δ,
+        δψ_m = −φ_D + tan(δ) φ_N,
+    i.e. a tilt error leaks into the measured heading by tan(dip) (the reason a
+    compass is tilt-sensitive; Groves 2013, §6.1.1).  The update uses this H in
+    the frame y = [φ_D, δb, φ_N, φ_E], with φ_N and φ_E as consider states
+    (Schmidt-Kalman: zero gain, Simon 2006, §7.5): the field never tilts the
+    estimate, and the reported covariance carries the tilt uncertainty of the
+    measured heading.  ``tan_dip`` comes from the reference field, not from the
+    current sample: a Jacobian built from the noisy sample is correlated with
+    the innovation's noise and makes the bias covariance over-confident
+    (measured: z RMS 1.46 on a static sensor).  With ``with_bias`` False the
+    bias is a consider state as well.  Returns the NIS term.
+    """
+    # rows of T: C_nb row 3 (down), identity on the bias, C_nb rows 1 and 2
+    qa = np.empty(4)
+    qa[0], qa[1], qa[2], qa[3] = qw, qx, qy, qz
+    C = dcm_from_quat_1(qa)
+    T = np.zeros((6, 6))
+    T[0, 0:3] = C[2]
+    T[4, 0:3] = C[0]
+    T[5, 0:3] = C[1]
+    for i in range(3):
+        T[1 + i, 3 + i] = 1.0
+    Py = T @ P @ T.T
+    dy = T @ dx
+    Hy = np.zeros(6)
+    Hy[0] = -1.0
+    Hy[4] = tan_dip
+    nis = _ekf_update_consider(Py, dy, Hy, r, psi, PH, 4 if with_bias else 1)
+    P[:, :] = T.T @ Py @ T
+    dx[:] = T.T @ dy
+    return nis
+
+
+@njit(cache=True)
 def _apply_correction(q, b, dx):
     q = _qnorm(qmul_1(q, qexp_1(dx[0:3])))
     b = b + dx[3:6]
@@ -558,6 +616,7 @@ def mekf_step(q, b, P, st, gyr, acc, mag, dt, p, out_phi):
             nis += _ekf_update(P, dx, H, r, gyr[i] - b[i], PH)
             ndof += 1.0
     # apply the tilt / bias correction before the heading update
+    _reset_cov(P, dx)
     e0, e1, e2, e3 = qexp_t(dx[0], dx[1], dx[2])
     t0, t1, t2, t3 = qmul_t(qw, qx, qy, qz, e0, e1, e2, e3)
     qw, qx, qy, qz = _tnorm(t0, t1, t2, t3)
@@ -612,24 +671,15 @@ def mekf_step(q, b, P, st, gyr, acc, mag, dt, p, out_phi):
             # samples of a disturbance that happen to pass the test are not used
             if not disturbed and st[22] >= p[21] and hh > 1e-9 * mn:
                 psi = math.atan2(n1, n0)
-                # measured field yaw ≈ −(C δθ)_z  (nav yaw error of the estimate)
-                H[0] = -2.0 * (qx * qz - qw * qy)
-                H[1] = -2.0 * (qy * qz + qw * qx)
-                H[2] = -(1.0 - 2.0 * (qx * qx + qy * qy))
-                H[3] = 0.0
-                H[4] = 0.0
-                H[5] = 0.0
                 # σ_mag is field-vector noise, so the heading noise is σ_mag |m| / |m_h|;
                 # τ_mag is the time constant of the heading itself (whatever the dip)
                 sm2 = (p[26] * p[0]) ** 2 / dt if p[26] > 0.0 else (p[5] * mn / hh) ** 2
                 r = sm2 * (1.0 + p[8] * ((dn / p[6]) ** 2 + (dd / p[7]) ** 2))
                 for j in range(6):
                     dx[j] = 0.0
-                if p[22] > 0.5:
-                    nis += _ekf_update(P, dx, H, r, psi, PH)
-                else:
-                    nis += _ekf_update_consider(P, dx, H, r, psi, PH, 3)
+                nis += _heading_update(P, dx, qw, qx, qy, qz, math.tan(st[2]), r, psi, PH, p[22] > 0.5)
                 ndof += 1.0
+                _reset_cov(P, dx)
                 e0, e1, e2, e3 = qexp_t(dx[0], dx[1], dx[2])
                 t0, t1, t2, t3 = qmul_t(qw, qx, qy, qz, e0, e1, e2, e3)
                 qw, qx, qy, qz = _tnorm(t0, t1, t2, t3)

@@ -4,9 +4,11 @@ Error state δx = [δθ, δb] (6): body-frame attitude error q = q̂ ⊗ exp(δ�
 gyro-bias error b = b̂ + δb (Markley, "Attitude error representations for
 Kalman filtering", JGCD 26(2), 2003; Solà 2017 §7).
 
-Prediction over Δt with ω̄ = ω − b̂:
+Prediction over Δt with ω̄ = ω − b̂::
+
     q̂ ← q̂ ⊗ exp(ω̄ Δt),  Φ = [[exp(−[ω̄]× Δt), −I Δt], [0, I]],
     Q = diag((σ_g² + k_ω² |ω̄|²) Δt I, σ_b² Δt I).
+
 The accelerometer and magnetometer noise can be given per sample
 (``sigma_acc``, ``sigma_mag``) or, independent of the sampling rate, as the
 time constants of the corrections they make: with ``tau_acc`` > 0 the
@@ -26,8 +28,13 @@ H = [[h]×, 0], three sequential scalar updates, P ← P − K s Kᵀ (the symme
 R_acc = σ_a² (1 + k_acc (| |f| − g | / 0.01 g)²) + (k_ω |ω̄|)², and the sample
 is rejected when | |f| − g | / g exceeds ``acc_reject``.
 Magnetometer: heading only (the horizontal field in the nav frame, yaw
-ψ_m = atan2(h_E, h_N), H = [−(C_nb)_{3,:}, 0]), so field disturbances never
-tilt the estimate; it is rejected when the field norm or dip deviate from a
+ψ_m = atan2(h_E, h_N)), so field disturbances never tilt the estimate.  The
+measured yaw is computed with the estimated tilt, so a tilt error φ leaks into
+it through the dip δ: δψ_m = −φ_D + tan δ φ_N (nav-frame errors φ = C_nb δθ).
+The update uses that H with the tilt as consider states (Schmidt-Kalman), so
+the covariance carries the tilt uncertainty of the heading; tan δ comes from
+the reference field.  After each correction the covariance is reset with
+G = I − [½ δθ̂]× (Markley 2003).  The field is rejected when its norm or dip deviate from a
 reference (learned at start, tracked slowly, re-acquired after a long
 disturbance).  Rest detection adds a zero-rate pseudo-measurement
 ω_meas − b = 0 for gyro-bias estimation at rest.

@@ -21,9 +21,21 @@ import traceback
 from pathlib import Path
 from typing import Any, NoReturn
 
-import click
 import typer
 from typer.core import TyperGroup
+
+try:  # typer >= 0.20 carries its own copy of click (and no longer installs the click package)
+    from typer import _click as click
+    from typer._click.globals import get_current_context
+except ImportError:  # older typer runs on the click package
+    import click
+
+    get_current_context = click.get_current_context
+
+# exceptions that typer / click handle themselves (usage errors: exit 2 with the usage line; Exit; Abort)
+_PASS_THROUGH = tuple({e for e in (typer.Exit, typer.Abort, getattr(typer, "TyperException", None),
+                                   getattr(click, "ClickException", None), getattr(click, "Abort", None),
+                                   getattr(getattr(click, "exceptions", None), "Exit", None)) if e is not None})
 
 __all__ = ["ImunavGroup", "check_figure_path", "fail", "one_line"]
 
@@ -49,7 +61,7 @@ def _message(exc: BaseException) -> str:
 def _debug_wanted(ctx: click.Context | None = None) -> bool:
     if os.environ.get("IMUNAV_DEBUG", "").strip().lower() in ("1", "true", "yes", "on"):
         return True
-    ctx = ctx or click.get_current_context(silent=True)
+    ctx = ctx or get_current_context(silent=True)
     while ctx is not None:
         if ctx.params.get("debug"):
             return True
@@ -85,8 +97,7 @@ class ImunavGroup(TyperGroup):
 
         try:
             return super().invoke(ctx)
-        except (click.exceptions.Exit, click.ClickException, click.Abort, typer.Exit, typer.Abort,
-                KeyboardInterrupt, SystemExit):
+        except (*_PASS_THROUGH, KeyboardInterrupt, SystemExit):
             raise
         except (ImunavError, OSError) as exc:
             fail(exc, ctx)

@@ -1,17 +1,36 @@
-"""The reader options that several commands build from their flags (one place, not one per command)."""
+"""The reader options that several commands build from their flags (one place, not one per command).
+
+The ``typer`` options shared by every command that reads a recording from a bag, a PX4 log or a named
+CSV layout are defined here once (:data:`TOPIC`, :data:`INSTANCE`, :data:`MAG_TOPIC`, :data:`LAYOUT`).
+"""
 
 from __future__ import annotations
 
 from typing import Any
 
+import typer
+
+#: ``--topic``: the topic of a ROS bag or PX4 ULog.
+TOPIC = typer.Option(None, "--topic", help="ROS bag / PX4 ULog: the IMU topic (`imunav info FILE` lists them).")
+#: ``--instance``: the PX4 multi_id of the topic.
+INSTANCE = typer.Option(None, "--instance", help="PX4 ULog: the instance (multi_id) of --topic.")
+#: ``--mag-topic``: a magnetometer topic merged onto the IMU stamps.
+MAG_TOPIC = typer.Option(None, "--mag-topic", help="ROS bag / PX4 ULog: magnetometer topic, interpolated onto the "
+                         "IMU stamps (PX4: name or name:instance).")
+#: ``--layout``: a named CSV layout.
+LAYOUT = typer.Option(None, "--layout", help="Named CSV layout: euroc, tum-vi, kalibr, px4-csv or xio.")
+
 
 def reader_options(*, units: dict[str, str] | None = None, scales: dict[str, float] | None = None,
                    fs: float | None = None, skiprows: int | None = None, columns: Any = None,
-                   **extra: Any) -> dict[str, Any]:
+                   topic: str | None = None, instance: int | None = None, mag_topic: str | None = None,
+                   layout: str | None = None, **extra: Any) -> dict[str, Any]:
     """Keyword options for :func:`imunav.io.read_imu`, leaving out what the user did not give.
 
     ``units`` / ``scales`` are per-group dicts already filtered by the caller; empty ones and ``None``
-    values are dropped so that the reader's own defaults apply.
+    values are dropped so that the reader's own defaults apply.  ``topic`` / ``instance`` /
+    ``mag_topic`` are for bags and ULogs, ``layout`` for CSV files; the reader refuses an option that
+    does not fit the file, naming it.
     """
     opts: dict[str, Any] = dict(extra)
     if units:
@@ -24,4 +43,7 @@ def reader_options(*, units: dict[str, str] | None = None, scales: dict[str, flo
         opts["skiprows"] = skiprows
     if columns:
         opts["columns"] = columns
+    for k, v in (("topic", topic), ("instance", instance), ("mag_topic", mag_topic), ("layout", layout)):
+        if v is not None:
+            opts[k] = v
     return opts

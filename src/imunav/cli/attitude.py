@@ -8,6 +8,7 @@ from typing import Any, Optional
 
 import typer
 
+from imunav.cli._options import INSTANCE, LAYOUT, MAG_TOPIC, TOPIC
 from imunav.errors import ConfigError
 
 app = typer.Typer(help="Attitude filters (Madgwick, Mahony, MEKF, UKF, adaptive, smoother, paper KFs).",
@@ -58,15 +59,23 @@ def _write_json(obj: Any, path: Path) -> None:
 
 @app.command("run")
 def run_cmd(
-    file: Path = typer.Argument(..., help="Recording: a BROAD trial (*.mat) or any file imunav.io can read."),
+    file: Path = typer.Argument(..., help="Recording: a BROAD trial (*.mat) or any file imunav.io can read (also a ROS "
+                                "bag or PX4 .ulg)."),
     filter: str = typer.Option("adaptive", "--filter", "-f", help="Filter name (see `benchmark --help`)."),
     param: Optional[list[str]] = typer.Option(None, "--param", "-p", help="Parameter override NAME=VALUE."),
     no_mag: bool = typer.Option(False, "--no-mag", help="6D: ignore the magnetometer."),
     json_out: Optional[Path] = typer.Option(None, "--json", help="Write the result (quaternions, flags) as JSON."),
+    topic: Optional[str] = TOPIC,
+    instance: Optional[int] = INSTANCE,
+    mag_topic: Optional[str] = MAG_TOPIC,
+    layout: Optional[str] = LAYOUT,
 ) -> None:
     """Run one filter over a whole recording and print a summary (BROAD RMSE when a reference exists).
 
     Example: imunav attitude run 05_undisturbed_slow_rotation_with_breaks_B.mat --filter madgwick_c
+
+    Example (PX4 log; sensor_combined carries its magnetometer):
+    imunav attitude run ../shared/data/px4_ulog/sample.ulg --topic sensor_combined --filter mekf
     """
     from imunav.io._atomic import check_outputs
 
@@ -78,20 +87,21 @@ def run_cmd(
     from imunav.attitude.metrics import attitude_rmse
 
     con = Console()
+    from imunav.cli._options import reader_options
+
     file = _resolve(file, False)
     f = make_filter(filter, _parse_params(param))
     ref = None
-    if file.suffix.lower() == ".mat":
+    opts = reader_options(topic=topic, instance=instance, mag_topic=mag_topic, layout=layout)
+    if file.suffix.lower() == ".mat" and not opts:
         from imunav.io.broad import load_broad
 
         tr = load_broad(file)
         data, ref, mask = tr.imu, tr.q_ref_nb, tr.movement
     else:
-        import imunav.io as iio
+        from imunav.io import read_imu
 
-        if not hasattr(iio, "read_imu"):
-            raise ConfigError(f"{file}: only BROAD .mat trials are supported in this build")
-        data = iio.read_imu(file)
+        data = read_imu(file, **opts)
     kw: dict[str, Any] = {"use_mag": False if no_mag else None}
     from imunav.attitude.benchmark import reference_start
 

@@ -14,6 +14,8 @@ from typing import Any, Optional
 import numpy as np
 import typer
 
+from imunav.cli._options import INSTANCE, LAYOUT, TOPIC
+
 app = typer.Typer(
     help="Calibrate an IMU or magnetometer from a recording; writes the calibration JSON.\n\n"
     "Example: imunav calibrate multiposition rec.npz --segments segments.json --out cal.json",
@@ -28,7 +30,8 @@ def register(root: typer.Typer) -> None:
 # ---------------------------------------------------------------- helpers
 def _read(path: Path, fs: Optional[float], accel_unit: Optional[str], gyro_unit: Optional[str],
           accel_scale: Optional[float], gyro_scale: Optional[float], skiprows: Optional[int],
-          columns: Optional[str]) -> Any:
+          columns: Optional[str], topic: Optional[str] = None, instance: Optional[int] = None,
+          layout: Optional[str] = None) -> Any:
     from imunav.cli._options import reader_options
     from imunav.io import read_imu
 
@@ -36,6 +39,7 @@ def _read(path: Path, fs: Optional[float], accel_unit: Optional[str], gyro_unit:
         units={k: v for k, v in (("accel", accel_unit), ("gyro", gyro_unit)) if v},
         scales={k: v for k, v in (("accel", accel_scale), ("gyro", gyro_scale)) if v},
         fs=fs or None, skiprows=skiprows, columns=_columns(columns) if columns else None,
+        topic=topic, instance=instance, layout=layout,
     ))
 
 
@@ -72,11 +76,32 @@ def _check_report(report: Optional[Path]) -> None:
         check_writable(report / "report.json")
 
 
-def _finish(result: Any, out: Path, report: Optional[Path], *, save: Any = None) -> None:
+def _px4(px4_params: Optional[Path], **calibration: Any) -> Any:
+    """The PX4 parameters (:func:`imunav.io.px4params.px4_parameters`) when ``--px4-params`` is given, else None;
+    computed before any file is written, so a calibration PX4 cannot take leaves no file behind."""
+    if px4_params is None:
+        return None
+    from imunav.io.px4params import px4_parameters
+
+    return px4_parameters(**calibration)
+
+
+def _write_px4(params: Any, path: Optional[Path]) -> None:
+    if params is None or path is None:
+        return
+    params.write(path)
+    typer.echo(f"PX4 parameters written to {path}")
+    for d in params.dropped:
+        typer.echo(f"  not expressible in PX4, dropped: {d}")
+
+
+def _finish(result: Any, out: Path, report: Optional[Path], *, save: Any = None, px4: Optional[Path] = None) -> None:
     from rich.console import Console
     from rich.table import Table
 
     from imunav.calib.model import write_json_atomic
+
+    px4_values = _px4(px4, imu=result.calibration)
 
     if report is not None:
         # the report folder first: a report that cannot be written leaves no calibration behind either
@@ -101,6 +126,7 @@ def _finish(result: Any, out: Path, report: Optional[Path], *, save: Any = None)
         tab.add_row(k, np.array2string(np.atleast_1d(rms), precision=4), f"{c:.3g}")
     con.print(tab)
     con.print(f"calibration written to {out}" + (f", report in {report}" if report else ""))
+    _write_px4(px4_values, px4)
 
 
 _FS = typer.Option(None, help="Sampling rate, Hz (files without a time column).")
@@ -122,6 +148,9 @@ def _noise_model(path: Optional[Path]) -> Any:
 
     return ImuErrorModel.from_toml(path)
 _REP = typer.Option(None, help="Folder for report.json and residual plots.")
+_PX4 = typer.Option(None, "--px4-params", help="Also write the calibration as PX4 parameters (QGroundControl "
+                    ".params file: CAL_ACC0_*, CAL_GYRO0_*, CAL_MAG0_*); terms PX4 cannot express are dropped and "
+                    "listed in its header.")
 
 
 # ---------------------------------------------------------------- commands
@@ -131,30 +160,33 @@ def multiposition(
     segments: Path = typer.Option(..., help="Segment table JSON (Profile.to_dict() / Segments.to_dict())."),
     out: Path = _OUT,
     report: Optional[Path] = _REP,
+    px4_params: Optional[Path] = _PX4,
     latitude_deg: Optional[float] = typer.Option(None, help="Latitude, deg: normal gravity and Earth-rate removal."),
     gravity: Optional[float] = typer.Option(None, help="Local gravity, m/s^2 (default normal gravity / 9.80665)."),
     g_sensitivity: str = typer.Option("diagonal", help="Gyro g-sensitivity: diagonal, full or none."),
     noise_model: Optional[Path] = _NM,
     fs: Optional[float] = _FS, accel_unit: Optional[str] = _AU, gyro_unit: Optional[str] = _GU,
     accel_scale: Optional[float] = _AS, gyro_scale: Optional[float] = _GS, skiprows: Optional[int] = _SK,
-    columns: Optional[str] = _COL,
+    columns: Optional[str] = _COL, topic: Optional[str] = TOPIC, instance: Optional[int] = INSTANCE,
+    layout: Optional[str] = LAYOUT,
 ) -> None:
     """Multi-position least squares (accelerometer T, b; gyro bias and g-sensitivity).
 
-    Example: imunav calibrate multiposition static.npz --segments static_segments.json --out static_cal.json --report rep
+    Example: imunav calibrate multiposition static.npz --segments static_segments.json --out static_cal.json --report rep --px4-params static_cal.params
     """
     from imunav.io._atomic import check_outputs
 
-    check_outputs([recording, segments, noise_model], [out])
+    check_outputs([recording, segments, noise_model], [out, px4_params])
     _check_report(report)
 
     from imunav.calib import multiposition as fit
 
-    data = _read(recording, fs, accel_unit, gyro_unit, accel_scale, gyro_scale, skiprows, columns)
+    data = _read(recording, fs, accel_unit, gyro_unit, accel_scale, gyro_scale, skiprows, columns, topic, instance,
+                 layout)
     lat = None if latitude_deg is None else np.deg2rad(latitude_deg)
     res = fit(data, _segments(segments), latitude=lat, gravity=gravity, g_sensitivity=g_sensitivity,
               noise_model=_noise_model(noise_model))
-    _finish(res, out, report)
+    _finish(res, out, report, px4=px4_params)
 
 
 @app.command()
@@ -167,11 +199,13 @@ def ratetable(
     base: Optional[Path] = typer.Option(None, help="Existing calibration JSON to take bias / g-sensitivity from."),
     intercept: bool = typer.Option(False, help="Estimate a separate gyro bias in the rate fit."),
     report: Optional[Path] = _REP,
+    px4_params: Optional[Path] = _PX4,
     latitude_deg: Optional[float] = typer.Option(None, help="Latitude, deg (Earth rate, normal gravity)."),
     noise_model: Optional[Path] = _NM,
     fs: Optional[float] = _FS, accel_unit: Optional[str] = _AU, gyro_unit: Optional[str] = _GU,
     accel_scale: Optional[float] = _AS, gyro_scale: Optional[float] = _GS, skiprows: Optional[int] = _SK,
-    columns: Optional[str] = _COL,
+    columns: Optional[str] = _COL, topic: Optional[str] = TOPIC, instance: Optional[int] = INSTANCE,
+    layout: Optional[str] = LAYOUT,
 ) -> None:
     """Rate-table least squares for the gyro matrix (with the static test: the full thesis model).
 
@@ -179,14 +213,14 @@ def ratetable(
     """
     from imunav.io._atomic import check_outputs
 
-    check_outputs([recording, segments, static, static_segments, base, noise_model], [out])
+    check_outputs([recording, segments, static, static_segments, base, noise_model], [out, px4_params])
     _check_report(report)
 
     from imunav.calib import ImuCalibration, combine, multiposition
     from imunav.calib import ratetable as fit
 
     lat = None if latitude_deg is None else np.deg2rad(latitude_deg)
-    rd = (fs, accel_unit, gyro_unit, accel_scale, gyro_scale, skiprows, columns)
+    rd = (fs, accel_unit, gyro_unit, accel_scale, gyro_scale, skiprows, columns, topic, instance, layout)
     st = None
     nm = _noise_model(noise_model)
     if static is not None:
@@ -199,7 +233,7 @@ def ratetable(
     res = fit(_read(recording, *rd), _segments(segments), base=b, latitude=lat, intercept=intercept, noise_model=nm)
     if st is not None:
         res = combine(st, res)
-    _finish(res, out, report)
+    _finish(res, out, report, px4=px4_params)
 
 
 @app.command()
@@ -211,9 +245,11 @@ def ferraris(
     gravity: float = typer.Option(9.81, help="Gravity used by the method (imucal default 9.81)."),
     expected_angle_deg: float = typer.Option(-360.0, help="Angle measured per turn (imucal default -360)."),
     report: Optional[Path] = _REP,
+    px4_params: Optional[Path] = _PX4,
     fs: Optional[float] = _FS, accel_unit: Optional[str] = _AU, gyro_unit: Optional[str] = _GU,
     accel_scale: Optional[float] = _AS, gyro_scale: Optional[float] = _GS, skiprows: Optional[int] = _SK,
-    columns: Optional[str] = _COL,
+    columns: Optional[str] = _COL, topic: Optional[str] = TOPIC, instance: Optional[int] = INSTANCE,
+    layout: Optional[str] = LAYOUT,
 ) -> None:
     """Ferraris six-pose + three-turn calibration (imucal-compatible).
 
@@ -221,19 +257,20 @@ def ferraris(
     """
     from imunav.io._atomic import check_outputs
 
-    check_outputs([recording, sections], [out, imucal_out])
+    check_outputs([recording, sections], [out, px4_params, imucal_out])
     _check_report(report)
 
     from imunav.calib import ferraris_from_session
     from imunav.calib.model import write_json_atomic
 
-    data = _read(recording, fs, accel_unit, gyro_unit, accel_scale, gyro_scale, skiprows, columns)
+    data = _read(recording, fs, accel_unit, gyro_unit, accel_scale, gyro_scale, skiprows, columns, topic, instance,
+                 layout)
     from imunav.io._atomic import read_json
 
     secs = read_json(sections, "imucal section list JSON")
     res = ferraris_from_session(data.accel, data.gyro, secs, data.fs, gravity=gravity,
                                 expected_angle_deg=expected_angle_deg)
-    _finish(res, out, report)
+    _finish(res, out, report, px4=px4_params)
     if imucal_out is not None:
         write_json_atomic(res.calibration.to_imucal(), imucal_out)
 
@@ -248,9 +285,11 @@ def multipose(
     strict: bool = typer.Option(True, help="Refuse sessions whose poses leave a misalignment undetermined."),
     accel_misalignment: bool = typer.Option(True, help="Estimate the accelerometer misalignments (else fix at 0)."),
     report: Optional[Path] = _REP,
+    px4_params: Optional[Path] = _PX4,
     fs: Optional[float] = _FS, accel_unit: Optional[str] = _AU, gyro_unit: Optional[str] = _GU,
     accel_scale: Optional[float] = _AS, gyro_scale: Optional[float] = _GS, skiprows: Optional[int] = _SK,
-    columns: Optional[str] = _COL,
+    columns: Optional[str] = _COL, topic: Optional[str] = TOPIC, instance: Optional[int] = INSTANCE,
+    layout: Optional[str] = LAYOUT,
 ) -> None:
     """Tedaldi et al. (2014) multi-pose calibration without a rate table.
 
@@ -258,13 +297,14 @@ def multipose(
     """
     from imunav.io._atomic import check_outputs
 
-    check_outputs([recording], [out])
+    check_outputs([recording], [out, px4_params])
     _check_report(report)
 
     from imunav.calib import multipose as fit
     from imunav.calib.multipose import undetermined_misalignment_error
 
-    data = _read(recording, fs, accel_unit, gyro_unit, accel_scale, gyro_scale, skiprows, columns)
+    data = _read(recording, fs, accel_unit, gyro_unit, accel_scale, gyro_scale, skiprows, columns, topic, instance,
+                 layout)
     res = fit(data.accel, data.gyro, data.fs, init_s=init_s, wait_s=wait_s, gravity=gravity, strict=False,
               accel_misalignment=accel_misalignment, raw_accel_unit="m/s^2", raw_gyro_unit="rad/s")
     if strict and res.info["weak_parameters"]:  # the library's refusal, naming this command's flags
@@ -272,7 +312,7 @@ def multipose(
             res.info["n_poses"], res.info["weak_parameters"], res.info["max_misalignment_stderr"],
             no_accel_misalignment="--no-accel-misalignment", not_strict="--no-strict",
         )
-    _finish(res, out, report)
+    _finish(res, out, report, px4=px4_params)
     if res.info["weak_parameters"]:
         typer.echo("weakly determined: " + "; ".join(res.info["weak_parameters"]), err=True)
 
@@ -338,20 +378,28 @@ def temperature(
 
 @app.command()
 def mag(
-    recording: Path = typer.Argument(..., help="Magnetometer samples: CSV/NPZ with mag_x, mag_y, mag_z (or mx..)."),
+    recording: Path = typer.Argument(..., help="Magnetometer samples: CSV/NPZ with mag_x, mag_y, mag_z (or mx..), "
+                                     "or a ROS bag / PX4 ULog magnetometer topic (µT, FRD)."),
     out: Path = _OUT,
     method: str = typer.Option("ellipsoid", help="ellipsoid (Li & Griffiths), rotation-scale (thesis) or minmax."),
     field_norm: Optional[float] = typer.Option(None, help="Known field magnitude (data unit); default det(A) = 1."),
     min_coverage: float = typer.Option(0.3, help="Smallest accepted sphere coverage (ellipsoid)."),
     report: Optional[Path] = _REP,
+    topic: Optional[str] = TOPIC, instance: Optional[int] = INSTANCE,
+    px4_params: Optional[Path] = _PX4,
+    mag_unit: Optional[str] = typer.Option(None, help="Unit of the magnetometer data (gauss, uT, nT, T), for "
+                                           "--px4-params (PX4's offsets are gauss). Default: uT for a bag or "
+                                           "ULog (their readers convert to uT), gauss for a table."),
 ) -> None:
     """Hard- and soft-iron magnetometer calibration: h_cal = A (h - b).
 
-    Example: imunav calibrate mag mag.csv --out mag_cal.json --report mag_report
+    Example: imunav calibrate mag mag.csv --out mag_cal.json --report mag_report --px4-params mag.params --mag-unit uT
+
+    Example: imunav calibrate mag flight.ulg --topic sensor_mag --instance 0 --out mag_cal.json
     """
     from imunav.io._atomic import check_outputs
 
-    check_outputs([recording], [out])
+    check_outputs([recording], [out, px4_params])
     _check_report(report)
 
     from rich.console import Console
@@ -365,7 +413,7 @@ def mag(
     from imunav.calib.model import write_json_atomic
     from imunav.errors import InvalidInputError
 
-    h = _read_mag(recording)
+    h = _read_mag(recording, topic, instance)
     if method == "ellipsoid":
         cal = fit_ellipsoid(h, field_norm, min_coverage=min_coverage)
     elif method == "rotation-scale":
@@ -376,6 +424,11 @@ def mag(
         cal = MagCalibration(b, np.eye(3), float(np.mean(n)), "minmax", {}, {"norm_spread_after": float(np.std(n) / np.mean(n))})
     else:
         raise InvalidInputError(f"--method must be ellipsoid, rotation-scale or minmax, not {method!r}")
+    if mag_unit is None:
+        from imunav.io.logs import log_kind
+
+        mag_unit = "uT" if log_kind(recording) is not None else "gauss"
+    px4_values = _px4(px4_params, mag=cal, mag_unit=mag_unit)
     write_json_atomic(cal.to_dict(), out)
     if report is not None:
         from imunav.calib.plot import plot_magnetometer, save_figure
@@ -385,12 +438,23 @@ def mag(
         save_figure(plot_magnetometer(h, cal), report / "projections.png")
     Console().print({"b": cal.b.round(6).tolist(), "field_norm": round(cal.field_norm, 6), "quality": cal.quality})
     typer.echo(f"magnetometer calibration written to {out}")
+    _write_px4(px4_values, px4_params)
 
 
-def _read_mag(path: Path) -> np.ndarray:
-    from imunav.errors import FileFormatError
+def _read_mag(path: Path, topic: Optional[str] = None, instance: Optional[int] = None) -> np.ndarray:
+    from imunav.errors import FileFormatError, InvalidInputError
+    from imunav.io.logs import log_kind, read_topic
 
     p = Path(path)
+    if p.exists() and log_kind(p) is not None:
+        if topic is None:
+            raise InvalidInputError(f"{p}: name the magnetometer topic with --topic (`imunav info {p}` lists them)")
+        d = read_topic(p, topic, instance=instance)
+        if "mag" not in d.values:
+            raise InvalidInputError(f"{p}: topic {topic!r} is a {d.kind} topic, not a magnetometer")
+        return np.asarray(d.values["mag"], float)
+    if topic is not None or instance is not None:
+        raise InvalidInputError(f"{p}: --topic / --instance apply to ROS bags and PX4 ULogs only")
     from imunav.io._common import check_nonempty, wrap_read_errors
 
     check_nonempty(p)

@@ -8,6 +8,8 @@ from typing import Any
 
 import typer
 
+from imunav.cli._options import INSTANCE, LAYOUT, MAG_TOPIC, TOPIC
+
 _EXAMPLE = (
     "Example:\n\n"
     "  python -c \"import numpy as np; from imunav.io import write_imu; from imunav.timeseries import ImuData; "
@@ -15,7 +17,9 @@ _EXAMPLE = (
     "r.normal([0, 0, -1], 0.01, (3000, 3)), fs=100, gyro_unit='deg/s', accel_unit='g'), 'rec.csv')\"\n\n"
     "  imunav info rec.csv --json info.json\n\n"
     "  imunav info ../shared/data/mpu6050_tedaldi/example_data_calibration.csv --skiprows 4 --fs 100 "
-    "--gyro-unit counts --gyro-scale 1.3323e-4 --accel-unit counts --accel-scale 5.9855e-4 --gyro-full-scale-dps 250"
+    "--gyro-unit counts --gyro-scale 1.3323e-4 --accel-unit counts --accel-scale 5.9855e-4 --gyro-full-scale-dps 250\n\n"
+    "  imunav info ../shared/data/px4_ulog/sample.ulg                         # topics, counts, rates (index only)\n\n"
+    "  imunav info ../shared/data/px4_ulog/sample.ulg --topic sensor_combined  # one topic: gaps, jitter, ..."
 )
 
 
@@ -32,8 +36,14 @@ def _parse_columns(items: list[str]) -> dict[str, Any]:
 
 
 def info(
-    file: Path = typer.Argument(..., help="Recording: .csv/.txt, .parquet, .h5, .mat (v5 or v7.3), .npz."),
-    format: str | None = typer.Option(None, "--format", help="csv, parquet, hdf5, mat, npz (default: from the suffix)."),
+    file: Path = typer.Argument(..., help="Recording: .csv/.txt, .parquet, .h5, .mat (v5 or v7.3), .npz; ROS bag "
+                                "(.bag, ROS 2 folder, .db3, .mcap) or PX4 .ulg."),
+    format: str | None = typer.Option(None, "--format", help="csv, parquet, hdf5, mat, npz, rosbag, ulog (default: from "
+                                      "the suffix / content)."),
+    topic: str | None = TOPIC,
+    instance: int | None = INSTANCE,
+    mag_topic: str | None = MAG_TOPIC,
+    layout: str | None = LAYOUT,
     json_out: Path | None = typer.Option(None, "--json", help="Also write the summary as JSON to this file."),
     window_s: float = typer.Option(1.0, "--window", help="Static detector window (s)."),
     min_static_s: float | None = typer.Option(None, "--min-static", help="Shortest static interval kept (s); default = window."),
@@ -50,7 +60,11 @@ def info(
     nan_policy: str = typer.Option("raise", "--nan-policy", help="raise, drop or interpolate."),
     max_rows: int = typer.Option(10, "--max-rows", help="Rows shown per table of gaps / static intervals."),
 ) -> None:
-    """Rate, duration, gaps, saturation, static intervals and per-channel mean/std of a recording."""
+    """Rate, duration, gaps, saturation, static intervals and per-channel mean/std of a recording.
+
+    On a ROS bag or PX4 ULog without --topic: the topics (instances) with type, count, rate and
+    duration, from the index, without reading the messages; with --topic: that IMU as above, plus
+    the jitter, drops and out-of-order stamps of its messages."""
     from rich.console import Console
     from rich.table import Table
 
@@ -67,10 +81,16 @@ def info(
         raise InvalidInputError(f"--window {window_s}: the static-detector window must be a finite number of seconds > 0")
     if min_static_s is not None and not (math.isfinite(min_static_s) and min_static_s > 0):
         raise InvalidInputError(f"--min-static {min_static_s}: must be a finite number of seconds > 0")
+    from imunav.io.logs import log_kind
+
+    if topic is None and format in (None, "rosbag", "ulog") and file.exists() and log_kind(file) is not None:
+        _list_topics(console, file, json_out)
+        return
     opts = reader_options(
         units={k: v for k, v in (("t", time_unit), ("gyro", gyro_unit), ("accel", accel_unit)) if v},
         scales={k: v for k, v in (("gyro", gyro_scale), ("accel", accel_scale)) if v is not None},
         fs=fs, skiprows=skiprows, columns=_parse_columns(column) if column else None, nan_policy=nan_policy,
+        topic=topic, instance=instance, mag_topic=mag_topic, layout=layout,
     )
     data = read_imu(file, format=format, **opts)
     s = describe(
@@ -99,6 +119,12 @@ def info(
         head.add_row("static intervals", f"{len(s.static)} ({tot:.4g} s in all, window {s.static.window} samples)")
     if s.mag_unit:
         head.add_row("magnetometer unit", s.mag_unit)
+    tq = s.meta.get("time") if isinstance(s.meta.get("time"), dict) else None
+    if tq is not None and "dt_median_s" in tq:  # a bag / log topic: its message timing
+        head.add_row("messages: jitter", f"std {tq['jitter_std_s']:.3g} s, worst {tq['jitter_max_s']:.3g} s from the "
+                     f"median {tq['dt_median_s']:.6g} s")
+        head.add_row("messages: drops", f"{tq['gaps']} gap(s), about {tq['missing_estimate']} message(s) missing")
+        head.add_row("messages: out of order", f"{tq['out_of_order']}" + (" (sorted by stamp)" if tq["out_of_order"] else ""))
     for k, v in s.meta.items():
         head.add_row(f"meta.{k}", str(v)[:80])
     console.print(head)
@@ -133,6 +159,35 @@ def info(
 
     if json_out is not None:
         write_json(json_out, d)
+        console.print(f"summary written to {json_out}")
+
+
+def _list_topics(console: Any, file: Path, json_out: Path | None) -> None:
+    """The topics of a bag / ULog as a table (and JSON), with the time the listing took."""
+    import time
+
+    from rich.table import Table
+
+    from imunav.io._atomic import write_json
+    from imunav.io.logs import list_topics
+
+    t0 = time.perf_counter()
+    topics = list_topics(file)
+    took = time.perf_counter() - t0
+    ulog = all(ti.instance is not None for ti in topics)  # a ULog: the type is the topic name
+    tab = Table(title=f"{file}: {len(topics)} topics (listed in {took:.2f} s)", title_justify="left")
+    cols = [("topic", "left"), ("instance" if ulog else "type", "right" if ulog else "left"), ("reads as", "left"),
+            ("count", "right"), ("rate (Hz)", "right"), ("duration (s)", "right")]
+    for c, j in cols:
+        tab.add_column(c, justify=j, no_wrap=c in ("topic", "type"))  # type: ignore[arg-type]
+    for ti in topics:
+        tab.add_row(ti.topic, str(ti.instance) if ulog else ti.msgtype, ti.kind or "",
+                    f"{ti.count:,}", "" if ti.rate_hz is None else f"{ti.rate_hz:.6g}",
+                    "" if ti.duration_s is None else f"{ti.duration_s:.6g}")
+    console.print(tab)
+    console.print("choose one with --topic (and --instance for a PX4 topic with several instances)")
+    if json_out is not None:
+        write_json(json_out, {"file": str(file), "list_time_s": took, "topics": [ti.to_dict() for ti in topics]})
         console.print(f"summary written to {json_out}")
 
 

@@ -32,6 +32,7 @@ app = typer.Typer(
 # One entry per command module (imunav.cli.<name> with a register(app) function).
 _COMMAND_MODULES: list[str] = [
     "info",
+    "convert",
     "noise",
     "simulate",
     "lab",

@@ -7,10 +7,13 @@ from typing import Any
 
 import typer
 
+from imunav.cli._options import INSTANCE, LAYOUT, TOPIC
+
 _EXAMPLE = (
     "Example:\n\n"
     "  imunav noise ../shared/data/adis16405/adis16405_imu2.npz --gyro-unit deg/s --accel-unit g "
-    "--json noise.json --plot allan.png --psd-plot psd.png --yaml imu.yaml"
+    "--json noise.json --plot allan.png --psd-plot psd.png --kalibr imu.yaml --openvins kalibr_imu_chain.yaml "
+    "--vins vins_imu.yaml"
 )
 _CH = ("gx", "gy", "gz", "ax", "ay", "az")
 
@@ -52,12 +55,16 @@ def _curve_fits(r: Any) -> dict[str, Any]:
 
 
 def noise(
-    file: Path = typer.Argument(..., help="Static recording: .csv/.txt, .parquet, .h5, .mat, .npz."),
+    file: Path = typer.Argument(..., help="Static recording: .csv/.txt, .parquet, .h5, .mat, .npz, ROS bag or PX4 .ulg."),
     channels: str = typer.Option(",".join(_CH), "--channels", help="Comma-separated subset of gx,gy,gz,ax,ay,az."),
     json_out: Path | None = typer.Option(None, "--json", help="Write Allan curves, fitted terms and PSD terms as JSON."),
     plot: Path | None = typer.Option(None, "--plot", help="Allan-deviation figure with fit and CIs (.png/.pdf/.svg)."),
     psd_plot: Path | None = typer.Option(None, "--psd-plot", help="PSD figure with the fitted model."),
-    yaml_out: Path | None = typer.Option(None, "--yaml", help="Kalibr-style imu.yaml (needs gyro and accel channels)."),
+    kalibr_out: Path | None = typer.Option(None, "--kalibr", "--yaml", help="Kalibr imu.yaml (needs gyro and accel "
+                                         "channels; --yaml is the older name)."),
+    openvins_out: Path | None = typer.Option(None, "--openvins", help="OpenVINS kalibr_imu_chain.yaml (IMU noise)."),
+    vins_out: Path | None = typer.Option(None, "--vins", help="VINS-Fusion IMU block: acc_n, gyr_n, acc_w, gyr_w, "
+                                         "g_norm (identified values, not inflated)."),
     kind: str = typer.Option("overlapping", "--kind", help="overlapping, standard or total (the fit needs these)."),
     taus: str = typer.Option("octave", "--taus", help="octave, decade, all, or log:N."),
     terms: str = typer.Option("N,B,K,R", "--terms", help="Candidate terms among Q,N,B,K,R (Q, angle/velocity "
@@ -67,8 +74,12 @@ def noise(
     fs: float | None = typer.Option(None, "--fs", help="Sampling rate (Hz) when the file has no time column."),
     gyro_unit: str | None = typer.Option(None, "--gyro-unit", help="Unit of the gyro columns (rad/s, deg/s, ...)."),
     accel_unit: str | None = typer.Option(None, "--accel-unit", help="Unit of the accel columns (m/s^2, g, mg, ...)."),
-    format: str | None = typer.Option(None, "--format", help="csv, parquet, hdf5, mat, npz (default: suffix)."),
+    format: str | None = typer.Option(None, "--format", help="csv, parquet, hdf5, mat, npz, rosbag, ulog (default: "
+                                      "suffix / content)."),
     skiprows: int | None = typer.Option(None, "--skiprows", help="CSV: lines to skip before the header."),
+    topic: str | None = TOPIC,
+    instance: int | None = INSTANCE,
+    layout: str | None = LAYOUT,
 ) -> None:
     """Identify the stochastic errors of a static IMU recording: overlapping Allan
     deviation with confidence intervals, GLS fit of quantization Q, white noise N,
@@ -84,11 +95,11 @@ def noise(
     from imunav.cli._errors import check_figure_path
     from imunav.io._atomic import atomic_path, check_outputs, write_json
     from imunav.noise import allan_deviation, compare_psd_allan, fit_noise, fit_psd, log_average, psd
-    from imunav.noise.fit import write_kalibr_yaml
     from imunav.units import to_display
 
     console = Console()
-    check_outputs([file], [json_out, plot, psd_plot, yaml_out])
+    exports = {"Kalibr imu.yaml": kalibr_out, "OpenVINS IMU file": openvins_out, "VINS-Fusion IMU block": vins_out}
+    check_outputs([file], [json_out, plot, psd_plot, *exports.values()])
     check_figure_path(plot, "--plot")
     check_figure_path(psd_plot, "--psd-plot")
     tau_spec = _taus(taus)
@@ -96,11 +107,14 @@ def noise(
     bad = [c for c in chans if c not in _CH]
     if bad or not chans:
         raise InvalidInputError(f"--channels: unknown {bad}; choose from {','.join(_CH)}")
+    wanted = [opt for opt, path in zip(("--kalibr", "--openvins", "--vins"), exports.values()) if path is not None]
+    if wanted and not (set(chans) & set(_CH[:3]) and set(chans) & set(_CH[3:])):
+        raise InvalidInputError(f"{', '.join(wanted)}: needs both gyro and accel channels; add them to --channels")
     term_list = tuple(t.strip().upper() for t in terms.split(",") if t.strip())
     if select not in ("bic", "aic", "none"):
         raise InvalidInputError(f"--select {select!r}: use bic, aic or none")
     opts = reader_options(units={k: v for k, v in (("gyro", gyro_unit), ("accel", accel_unit)) if v}, fs=fs,
-                          skiprows=skiprows)
+                          skiprows=skiprows, topic=topic, instance=instance, layout=layout)
     data = read_imu(file, format=format, **opts)
     rate = float(data.fs)
     if fs is None and abs(rate - round(rate)) < 1e-6 * rate:
@@ -129,8 +143,6 @@ def noise(
             pf = fit_psd(pa, f_range=[(pa.f[0], min(0.4 * rate, 0.5 / float(tm))) for tm in f.tau_min])
             prog.advance(task)
             results[sensor] = (r, f, p, pa, pf, compare_psd_allan(pf, f))
-    if yaml_out is not None and not ("gyro" in results and "accel" in results):
-        raise InvalidInputError("--yaml needs both gyro and accel channels")
 
     console.print(f"[bold]{file}[/bold]: {data.n:,} samples at {rate:g} Hz ({data.n / rate:.6g} s), "
                   f"kind={kind}, taus={taus}")
@@ -179,9 +191,18 @@ def noise(
                 with atomic_path(target) as tmp:
                     fig.savefig(tmp, dpi=110, format=target.suffix.lstrip(".") or "png")
                 console.print(f"figure written to {target}")
-    if yaml_out is not None:
-        write_kalibr_yaml(yaml_out, results["gyro"][1], results["accel"][1], update_rate=rate)
-        console.print(f"Kalibr imu.yaml written to {yaml_out}")
+    if wanted:
+        from imunav.io.kalibr import write_kalibr_yaml
+        from imunav.io.openvins import write_openvins_yaml
+        from imunav.io.vins import write_vins_yaml
+
+        fg, fa = results["gyro"][1], results["accel"][1]
+        writers = (lambda p: write_kalibr_yaml(p, fg, fa, rate), lambda p: write_openvins_yaml(p, fg, fa, rate),
+                   lambda p: write_vins_yaml(p, fg, fa))
+        for (what, path), write in zip(exports.items(), writers):
+            if path is not None:
+                write(path)
+                console.print(f"{what} written to {path}")
 
 
 noise.__doc__ = (noise.__doc__ or "") + "\n\n" + _EXAMPLE

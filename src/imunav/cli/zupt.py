@@ -7,6 +7,8 @@ from typing import Any, Optional
 
 import typer
 
+from imunav.cli._options import INSTANCE, LAYOUT, TOPIC
+
 zupt_app = typer.Typer(
     help="Foot-mounted INS with zero-velocity updates.\n\nExample: imunav zupt run trial.mat --detector shoe",
     no_args_is_help=True,
@@ -23,12 +25,18 @@ def _write_json(path: Path, obj: Any) -> None:
     write_json(path, obj, indent=1)
 
 
-def load_foot_file(path: Path) -> Any:
-    """Read a foot recording by its format: pyshoe ``.mat``, x-io or FGO ``.csv``."""
+def load_foot_file(path: Path, **read: Any) -> Any:
+    """Read a foot recording by its format: pyshoe ``.mat``, x-io or FGO ``.csv``; a ROS bag / PX4 ULog (or
+    any file with ``read`` options such as ``topic`` / ``layout``) through :func:`imunav.io.read_imu`."""
     from imunav.errors import FileFormatError
     from imunav.io import foot
     from imunav.io._common import check_nonempty
+    from imunav.io.logs import log_kind
 
+    if read or (path.exists() and log_kind(path) is not None):
+        from imunav.io import read_imu
+
+        return foot.FootTrial(read_imu(path, **read), name=path.stem)
     check_nonempty(path)
     if path.suffix.lower() == ".mat":
         return foot.read_pyshoe_mat(path)
@@ -52,7 +60,7 @@ def _fail(exc: Exception) -> None:
 
 @zupt_app.command("run")
 def run_cmd(
-    file: Path = typer.Argument(..., help="Foot recording (.mat pyshoe, .csv x-io / FGO)."),
+    file: Path = typer.Argument(..., help="Foot recording (.mat pyshoe, .csv x-io / FGO, a ROS bag or PX4 .ulg)."),
     detector: str = typer.Option("shoe", "--detector", "-d", help="shoe, ared, amvd, mbgtd, adaptive, freeacc, lstm, or 'labels:NAME' for stored labels."),
     threshold: Optional[float] = typer.Option(None, help="Detector threshold (default: the library default)."),
     states: int = typer.Option(9, help="9 (thesis) or 15 (with biases)."),
@@ -65,10 +73,15 @@ def run_cmd(
     model: Optional[Path] = typer.Option(None, help="LSTM model file (default: the shipped one)."),
     out: Optional[Path] = typer.Option(None, help="Write the trajectory (t, position, velocity, quaternion, zv) to .npz."),
     json_out: Optional[Path] = typer.Option(None, "--json", help="Write the summary as JSON."),
+    topic: Optional[str] = TOPIC,
+    instance: Optional[int] = INSTANCE,
+    layout: Optional[str] = LAYOUT,
 ) -> None:
     """Run the ZUPT-aided INS on one recording and print its errors.
 
     Example: imunav zupt run ../shared/data/foot/pyshoe_vicon/2017-11-22-11-22-03.mat --detector shoe
+
+    Example (a foot IMU in a ROS 2 bag): imunav zupt run walk.mcap --topic /foot/imu
     """
     from imunav.io._atomic import check_outputs
 
@@ -80,7 +93,9 @@ def run_cmd(
     from imunav.ins import ZuptConfig, detect_zero_velocity, error_2d, loop_closure_error, run_zupt
 
     try:
-        trial = load_foot_file(file)
+        from imunav.cli._options import reader_options
+
+        trial = load_foot_file(file, **reader_options(topic=topic, instance=instance, layout=layout))
         guard = None
         if detector.startswith("labels:"):
             key = detector.split(":", 1)[1]
@@ -149,7 +164,12 @@ def train_cmd(
     from imunav.errors import ImunavError
     from imunav.io.foot import read_pyshoe_mat
     from imunav.learn import LstmConfig, best_labels, select_shoe_threshold, train_lstm
+    from imunav.learn.lstm import require_torch
 
+    try:
+        require_torch()  # before the slow label selection: training is the one command that needs torch
+    except ImunavError as exc:
+        _fail(exc)
     files = sorted(directory.glob("*.mat"))
     if not files:
         _fail(FileNotFoundError(f"no *.mat trials in {directory}"))

@@ -350,12 +350,16 @@ def detect_faults(
 ) -> FaultDetectionResult:
     """Run Alg. 1-3, NIS and both CUSUMs on normalised innovations (N, s).
 
-    threshold_mode : ``"calibrated"`` (per-step false-alarm rate
-        ``p_false_alarm``) or ``"thesis"`` (χ² points of the thesis for
-        Alg. 1-3; calibrated for the others).  ``thresholds`` overrides.
-    start : alarms before this step are ignored (e.g. filter transient).
-    p_isolation : per-step level of the per-channel isolation tests (a channel
-        is isolated when flagged on >= 3 steps with a system alarm).
+    Parameters
+    ----------
+    threshold_mode : str
+        ``"calibrated"`` (per-step false-alarm rate ``p_false_alarm``) or ``"thesis"`` (χ² points of the
+        thesis for Alg. 1-3; calibrated for the others).  ``thresholds`` overrides.
+    start : int
+        Alarms before this step are ignored (e.g. filter transient).
+    p_isolation : float
+        Per-step level of the per-channel isolation tests (a channel is isolated when flagged on >= 3 steps
+        with a system alarm).
     """
     nv = _check_nv(normalized)
     N, s = nv.shape
@@ -396,12 +400,16 @@ def detect_faults(
 class Fault:
     """A fault to inject into a measurement sequence.
 
-    kind : ``"bias"`` (add ``magnitude``), ``"drift"`` (add ``magnitude`` per
-        second from onset, needs ``dt``), ``"noise"`` (noise × ``magnitude``),
-        ``"stuck"`` (output frozen at its onset value), ``"outlier"`` (noise ×
-        ``magnitude`` at the single steps ``steps``).
-    onset, end : step range [onset, end) (end None = to the last step).
-    channels : channel indices (None = all).
+    Attributes
+    ----------
+    kind : str
+        ``"bias"`` (add ``magnitude``), ``"drift"`` (add ``magnitude`` per second from onset, needs ``dt``),
+        ``"noise"`` (noise × ``magnitude``), ``"stuck"`` (output frozen at its onset value), ``"outlier"``
+        (noise × ``magnitude`` at the single steps ``steps``).
+    onset, end : int
+        Step range [onset, end) (end None = to the last step).
+    channels : tuple of int or None
+        Channel indices (None = all).
     """
 
     kind: str

@@ -219,6 +219,8 @@ def build_imu(
     out_meta = dict(stored.get("meta") or {})
     if arrays.get("t_origin") is not None:
         out_meta.setdefault("t_origin", arrays["t_origin"])
+    if arrays.get("t_origin_raw") is not None:
+        out_meta.setdefault("t_origin_raw", arrays["t_origin_raw"])
     if meta:
         out_meta.update(meta)
     declared = {"gyro": u.get("gyro", "rad/s"), "accel": u.get("accel", "m/s^2")}

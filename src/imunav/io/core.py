@@ -2,16 +2,21 @@
 
 The format comes from the file suffix unless given:
 
-=========  ==========================  ====================================
-format     suffixes                    module
-=========  ==========================  ====================================
-csv        .csv .txt .tsv .dat         :mod:`imunav.io.csv`
-parquet    .parquet .pq                :mod:`imunav.io.parquet`
-hdf5       .h5 .hdf5 .hdf              :mod:`imunav.io.hdf5`
-mat        .mat (v5; v7.3 on read)     :mod:`imunav.io.mat`
-mat73      (write MAT v7.3)            :mod:`imunav.io.mat`
-npz        .npz                        :mod:`imunav.io.npz`
-=========  ==========================  ====================================
+=======  =============================  =============================================
+format   suffixes                       module
+=======  =============================  =============================================
+csv      .csv .txt .tsv .dat            :mod:`imunav.io.csv`
+parquet  .parquet .pq                   :mod:`imunav.io.parquet`
+hdf5     .h5 .hdf5 .hdf                 :mod:`imunav.io.hdf5`
+mat      .mat (v5; v7.3 on read)        :mod:`imunav.io.mat`
+mat73    (write MAT v7.3)               :mod:`imunav.io.mat`
+npz      .npz                           :mod:`imunav.io.npz`
+rosbag   .bag .db3 .mcap, ROS 2 folder  :mod:`imunav.io.rosbag` (read; extra ``ros``)
+ulog     .ulg                           :mod:`imunav.io.ulog` (read; extra ``px4``)
+=======  =============================  =============================================
+
+Bags and logs are also recognised by their content (magic bytes) whatever their suffix; see
+:mod:`imunav.io.logs`.  Named CSV layouts (``layout="euroc"`` ...) are in :mod:`imunav.io.layouts`.
 """
 
 from __future__ import annotations
@@ -28,6 +33,8 @@ from imunav.timeseries import ImuData
 __all__ = ["read_imu", "write_imu", "FORMATS", "format_from_suffix"]
 
 FORMATS = ("csv", "parquet", "hdf5", "mat", "mat73", "npz")
+#: Formats that are read only (through an optional extra).
+LOG_FORMATS = ("rosbag", "ulog")
 _SUFFIXES = {
     ".csv": "csv", ".txt": "csv", ".tsv": "csv", ".dat": "csv",
     ".parquet": "parquet", ".pq": "parquet",
@@ -35,7 +42,7 @@ _SUFFIXES = {
     ".mat": "mat",
     ".npz": "npz",
 }  # fmt: skip
-_ALIASES = {"h5": "hdf5", "hdf": "hdf5", "pq": "parquet", "mat5": "mat", "matv5": "mat", "mat7.3": "mat73", "matv73": "mat73", "txt": "csv"}
+_ALIASES = {"bag": "rosbag", "mcap": "rosbag", "db3": "rosbag", "ulg": "ulog", "h5": "hdf5", "hdf": "hdf5", "pq": "parquet", "mat5": "mat", "matv5": "mat", "mat7.3": "mat73", "matv73": "mat73", "txt": "csv"}
 
 
 def format_from_suffix(path: str | os.PathLike[str], format: str | None = None) -> str:
@@ -43,20 +50,27 @@ def format_from_suffix(path: str | os.PathLike[str], format: str | None = None) 
     if format is not None:
         f = str(format).lower().lstrip(".")
         f = _ALIASES.get(f, f)
-        if f not in FORMATS:
-            raise InvalidInputError(f"unknown format {format!r}; choose one of {list(FORMATS)}")
+        if f not in FORMATS + LOG_FORMATS:
+            raise InvalidInputError(f"unknown format {format!r}; choose one of {list(FORMATS + LOG_FORMATS)}")
         return f
+    from imunav.io.logs import log_kind
+
+    kind = log_kind(path)
+    if kind is not None:
+        return kind
     suffix = Path(path).suffix.lower()
     if suffix not in _SUFFIXES:
         raise InvalidInputError(
             f"cannot tell the format of {os.fspath(path)!r} from its suffix {suffix!r}; known suffixes "
-            f"{sorted(_SUFFIXES)}; pass format= one of {list(FORMATS)}"
+            f"{sorted(_SUFFIXES) + ['.bag', '.db3', '.mcap', '.ulg']}; pass format= one of {list(FORMATS)}"
         )
     return _SUFFIXES[suffix]
 
 
 def _call(fn: Callable[..., Any], what: str, *args: Any, **options: Any) -> Any:
     params = inspect.signature(fn).parameters
+    if any(p.kind is inspect.Parameter.VAR_KEYWORD for p in params.values()):
+        return fn(*args, **options)  # the reader passes its options on and checks them there
     unknown = [k for k in options if k not in params]
     if unknown:
         allowed = [k for k, p in params.items() if p.kind is inspect.Parameter.KEYWORD_ONLY]
@@ -64,19 +78,25 @@ def _call(fn: Callable[..., Any], what: str, *args: Any, **options: Any) -> Any:
     return fn(*args, **options)
 
 
-def read_imu(path: str | os.PathLike[str], format: str | None = None, **options: Any) -> ImuData:
+def read_imu(path: str | os.PathLike[str], format: str | None = None, *, layout: str | None = None,
+             **options: Any) -> ImuData:
     """Read a recording into a validated :class:`~imunav.timeseries.ImuData` (SI).
 
     Parameters
     ----------
-    path : file to read.
+    path : file to read (a ROS 2 bag may be its folder).
     format : ``"csv"``, ``"parquet"``, ``"hdf5"``, ``"mat"`` (v5 and v7.3),
-        ``"npz"``; from the suffix when None.
+        ``"npz"``, ``"rosbag"`` (ROS 1 / ROS 2 sqlite3 / MCAP), ``"ulog"``
+        (PX4); from the suffix or content when None.
+    layout : a named CSV layout (``"euroc"``, ``"tum-vi"``, ``"kalibr"``,
+        ``"px4-csv"``, ``"xio"``; see :mod:`imunav.io.layouts`).
     **options : reader options, common to all formats: ``columns`` (name
         mapping), ``units`` / ``scales`` / ``offsets`` (per group, for non-SI
         or raw-count content), ``fs`` and ``t0`` (when there is no time
         column), ``nan_policy``, ``mag_unit``, ``meta``; CSV also takes
-        ``delimiter`` and ``skiprows``, HDF5 ``group``.
+        ``delimiter`` and ``skiprows``, HDF5 ``group``.  Bags and ULogs take
+        ``topic``, ``instance`` (PX4 ``multi_id``), ``mag_topic``,
+        ``temp_topic`` and ``meta`` (:func:`imunav.io.logs.read_log_imu`).
 
     Examples
     --------
@@ -88,7 +108,17 @@ def read_imu(path: str | os.PathLike[str], format: str | None = None, **options:
     >>> read_imu(p).accel[0, 2]
     np.float64(-9.81)
     """
+    if layout is not None:
+        from imunav.io.layouts import read_layout
+
+        if format not in (None, "csv"):
+            raise InvalidInputError(f"layout={layout!r} names a CSV layout; it does not combine with format={format!r}")
+        return _call(read_layout, f"read_imu(layout={layout!r})", path, layout, **options)
     fmt = format_from_suffix(path, format)
+    if fmt in LOG_FORMATS:
+        from imunav.io.logs import read_log_imu
+
+        return _call(read_log_imu, f"read_imu(format={fmt!r})", path, **options)
     from imunav.io import csv, hdf5, mat, npz, parquet
 
     reader = {"csv": csv.read_csv, "parquet": parquet.read_parquet, "hdf5": hdf5.read_hdf5,
@@ -106,6 +136,9 @@ def write_imu(data: ImuData, path: str | os.PathLike[str], format: str | None = 
     if not isinstance(data, ImuData):
         raise InvalidInputError(f"write_imu needs an ImuData, got {type(data).__name__}")
     fmt = format_from_suffix(path, format)
+    if fmt in LOG_FORMATS:
+        raise InvalidInputError(f"write_imu does not write {fmt} files; write_bag in imunav.io.rosbag writes a ROS bag, "
+                                f"or choose a table format {list(FORMATS)}")
     from imunav.io import csv, hdf5, mat, npz, parquet
 
     if fmt == "mat73":

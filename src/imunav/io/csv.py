@@ -189,6 +189,12 @@ def table_to_arrays(df: pd.DataFrame, cols: Mapping[str, Any], source: str) -> d
             # seconds since the first sample (exact to the ns for 104 days); the origin goes to meta
             arrays["t"] = (ticks - ticks[0]).astype(np.float64) * 1e-9
             arrays["t_origin"] = str(s_t.iloc[0].isoformat()) if hasattr(s_t.iloc[0], "isoformat") else str(s_t.iloc[0])
+        elif pd.api.types.is_integer_dtype(s_t) and len(s_t) and int(np.abs(s_t.to_numpy()).max()) > 2**53:
+            # integer stamps beyond 2**53 (ns since 1970: EuRoC, TUM-VI, Kalibr) are not exact as float64:
+            # subtract the first one in integer arithmetic; it goes to meta (in the file's time unit)
+            ticks = s_t.to_numpy(dtype=np.int64)
+            arrays["t"] = (ticks - ticks[0]).astype(np.float64)
+            arrays["t_origin_raw"] = int(ticks[0])
         else:
             arrays["t"] = col("t")
     for g, chans in _GROUP_CHANNELS.items():

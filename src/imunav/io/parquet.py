@@ -15,16 +15,25 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-import pyarrow as pa
-import pyarrow.parquet as pq
 
-from imunav.errors import FileFormatError
+from imunav.errors import FileFormatError, MissingDependencyError
 from imunav.io._atomic import atomic_path
 from imunav.io._common import build_imu, check_nonempty, header_json, parse_header, wrap_read_errors
 from imunav.io.csv import imu_to_table, resolve_columns, table_to_arrays
 from imunav.timeseries import ImuData
 
 __all__ = ["read_parquet", "write_parquet"]
+
+
+def _pyarrow() -> tuple[Any, Any]:
+    """``(pyarrow, pyarrow.parquet)``; pyarrow (170 MB) is the ``parquet`` extra, kept out of the core install."""
+    try:
+        import pyarrow as pa  # optional: the `parquet` extra
+        import pyarrow.parquet as pq
+    except ImportError as exc:
+        raise MissingDependencyError("pyarrow", "parquet", "Reading and writing Parquet files") from exc
+    return pa, pq
+
 
 _META_KEY = b"imunav"
 
@@ -43,6 +52,7 @@ def read_parquet(
     meta: Mapping[str, Any] | None = None,
 ) -> ImuData:
     """Read a Parquet recording (options as :func:`imunav.io.csv.read_csv`)."""
+    _, pq = _pyarrow()
     source = check_nonempty(path)
     with wrap_read_errors(source, "Parquet"):
         table = pq.read_table(source)
@@ -62,6 +72,7 @@ def read_parquet(
 
 def write_parquet(data: ImuData, path: str | os.PathLike[str], *, compression: str = "zstd") -> Path:
     """Write ``data`` (SI) as Parquet, float64 columns, atomically."""
+    pa, pq = _pyarrow()
     names, block = imu_to_table(data)
     schema = pa.schema([pa.field(n, pa.float64(), nullable=False) for n in names], metadata={_META_KEY: header_json(data).encode()})
     table = pa.table([pa.array(np.ascontiguousarray(block[:, j])) for j in range(block.shape[1])], schema=schema)

@@ -17,6 +17,9 @@ Each table describes one recording file and which test it is::
     # columns = { accel = ["ax", "ay", "az"], gyro = ["gx", "gy", "gz"] }
     # scales = { accel = 5.9855e-4, gyro = 1.3323e-4 }   # SI per count (with units = "counts")
     # skiprows = 4 ; delimiter = "," ; offsets = { ... } ; nan_policy = "raise"
+    # layout = "euroc"                    # a named CSV layout (euroc, tum-vi, kalibr, px4-csv, xio)
+    # ROS bag / PX4 ULog (path = "flight.ulg", "run.bag", a ROS 2 bag folder, .db3, .mcap):
+    # topic = "/imu/data" ; instance = 1 ; mag_topic = "/imu/mag"
     # segments = "static_segments.json"   # multiposition / rate_table: the segment table
     # init_s = 36.5 ; wait_s = 3.0        # multipose: initial rest and time per pose
     # gravity = 9.80665 ; latitude_deg = 45.0
@@ -55,7 +58,7 @@ TESTS = {"static": "static_long", "multiposition": "hundred_position", "rate_tab
          "multipose": "multipose"}
 
 _READ_KEYS = ("format", "columns", "units", "scales", "offsets", "fs", "t0", "delimiter", "skiprows", "nan_policy",
-              "mag_unit")
+              "mag_unit", "topic", "instance", "mag_topic", "layout")
 _LAB_KEYS = ("path", "test", "unit", "segments", "max_duration_s", "t_start_s", "init_s", "wait_s", "gravity",
              "latitude_deg", "description")
 
@@ -112,7 +115,7 @@ def resolve_path(value: str, base_dir: Path, where: str) -> Path:
         p = Path(value).expanduser()
         if not p.is_absolute():
             p = base_dir / p
-    if not p.is_file():
+    if not (p.is_file() or (p / "metadata.yaml").is_file()):  # a file, or a ROS 2 bag folder
         raise ConfigError(f"{where}: recording file {p} does not exist")
     return p
 
@@ -150,8 +153,14 @@ def parse_recordings(table: Mapping[str, Any], base_dir: Path, where: str = "lab
         for k in ("columns", "units", "scales", "offsets"):
             if k in tab and not isinstance(tab[k], Mapping):
                 raise ConfigError(f"{w}: {k} must be a table, e.g. {k} = {{ gyro = ..., accel = ... }}")
-        if "format" in tab and tab["format"] not in ("csv", "parquet", "hdf5", "mat", "npz"):
-            raise ConfigError(f"{w}: format must be csv, parquet, hdf5, mat or npz; got {tab['format']!r}")
+        if "format" in tab and tab["format"] not in ("csv", "parquet", "hdf5", "mat", "npz", "rosbag", "ulog"):
+            raise ConfigError(f"{w}: format must be csv, parquet, hdf5, mat, npz, rosbag or ulog; got {tab['format']!r}")
+        for k in ("topic", "mag_topic", "layout"):
+            if k in tab and not isinstance(tab[k], str):
+                raise ConfigError(f"{w}: {k} must be a string (a bag / ULog topic, or a CSV layout name), got {tab[k]!r}")
+        if "instance" in tab and (not isinstance(tab["instance"], int) or isinstance(tab["instance"], bool)
+                                  or tab["instance"] < 0):
+            raise ConfigError(f"{w}: instance must be a non-negative integer (a PX4 multi_id), got {tab['instance']!r}")
         if "skiprows" in tab and (not isinstance(tab["skiprows"], int) or tab["skiprows"] < 0):
             raise ConfigError(f"{w}: skiprows must be a non-negative integer, got {tab['skiprows']!r}")
         read = {k: (dict(tab[k]) if isinstance(tab[k], Mapping) else tab[k]) for k in _READ_KEYS if k in tab}

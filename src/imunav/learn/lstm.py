@@ -77,6 +77,7 @@ __all__ = [
     "input_features",
     "lstm_forward",
     "random_rotations",
+    "require_torch",
     "select_shoe_threshold",
     "time_warp",
     "train_lstm",
@@ -558,10 +559,20 @@ class TrainingReport:
                 "train_accuracy": self.train_accuracy, "stopped_by_budget": self.stopped_by_budget, **self.extra}
 
 
-def _torch():
+def require_torch() -> Any:
+    """The ``torch`` module, or :class:`~imunav.errors.MissingDependencyError` naming ``imunav[learn]``.
+
+    Only training needs torch (the ``learn`` extra, kept out of the core install: it is several hundred MB);
+    inference is numpy.  Call it before slow preparations so that a missing torch is reported at once.
+
+    Returns
+    -------
+    module
+        ``torch``.
+    """
     try:
-        import torch
-    except ImportError as exc:  # pragma: no cover - depends on the environment
+        import torch  # optional: the `learn` extra
+    except ImportError as exc:
         raise MissingDependencyError("torch", "learn", "Training the LSTM zero-velocity detector") from exc
     return torch
 
@@ -582,7 +593,7 @@ def train_lstm(trials: Sequence[Any], labels: Sequence[Any], config: LstmConfig 
     threads : torch CPU threads (default 1: the machine is shared).
     """
     cfg = LstmConfig() if config is None else config
-    torch = _torch()
+    torch = require_torch()
     if len(trials) == 0 or len(trials) != len(labels):
         raise InvalidInputError(f"need as many label arrays as trials (>= 1); got {len(trials)} and {len(labels)}")
     X = [_features(d) for d in trials]

@@ -7,10 +7,11 @@ Main entry points: :func:`allan_deviation` -> :class:`AllanResult`,
 :mod:`imunav.noise.plot`.
 """
 
+from imunav.io.kalibr import write_kalibr_yaml  # re-export: the README's noise API names it here
 from imunav.noise.allan import KINDS, AllanResult, allan_deviation, allan_variance, tau_grid
 from imunav.noise.ar import GaussMarkovFit, autocorrelation, fit_gauss_markov, gm_discrete, yule_walker
 from imunav.noise.curvefit import CurveFit, compare_curve_fits, fit_polynomial, fit_rational
-from imunav.noise.fit import NoiseFit, SlopeReadout, avar_model, fit_noise, slope_readout, write_kalibr_yaml
+from imunav.noise.fit import NoiseFit, SlopeReadout, avar_model, fit_noise, slope_readout
 from imunav.noise.psd import (
     PsdFit,
     PsdResult,

@@ -70,7 +70,6 @@ __all__ = [
     "avar_term",
     "fit_noise",
     "slope_readout",
-    "write_kalibr_yaml",
 ]
 
 TERMS = _am.IEEE952_TERMS
@@ -213,47 +212,10 @@ class NoiseFit:
         return out
 
     def to_json(self, path: str | os.PathLike) -> Path:
-        """Write :meth:`to_dict` as standard JSON (atomically, null for a missing value)."""
+        """Write :meth:`to_dict` as JSON (atomically)."""
         from imunav.io._atomic import write_json
 
         return write_json(path, self.to_dict())
-
-
-def _atomic_write(path: Path, text: str) -> Path:
-    """Write ``text`` to ``path`` through :func:`imunav.io._atomic.atomic_path` (usual file mode, no temp left)."""
-    from imunav.io._atomic import atomic_path
-
-    with atomic_path(path) as tmp:
-        tmp.write_text(text, encoding="utf-8")
-    return path
-
-
-def write_kalibr_yaml(path: str | os.PathLike, gyro: NoiseFit, accel: NoiseFit, update_rate: float,
-                      rostopic: str = "/imu0", combine: str = "max") -> Path:
-    """Kalibr ``imu.yaml`` (noise densities N and random walks K, SI, continuous time).
-
-    Kalibr takes one value per sensor; ``combine="max"`` (conservative,
-    default) or ``"mean"`` over the axes.  Per-axis values are written as
-    comments.  Written by hand (no YAML dependency), atomically.
-    """
-    pick = {"max": np.max, "mean": np.mean}.get(combine)
-    if pick is None:
-        raise InvalidInputError(f"combine={combine!r}; use 'max' or 'mean'")
-
-    def val(fit: NoiseFit, nm: str) -> tuple[float, list[float]]:
-        v = fit.value[fit.names.index(nm)] if nm in fit.names else np.zeros(len(fit.channels))
-        return float(pick(v)), [float(a) for a in v]
-
-    lines = ["# IMU noise model identified by imunav (Allan-variance GLS fit); SI, continuous time", ""]
-    for key, fit, nm, unit in (("accelerometer_noise_density", accel, "N", "m/s^2/sqrt(Hz)"),
-                               ("accelerometer_random_walk", accel, "K", "m/s^3/sqrt(Hz)"),
-                               ("gyroscope_noise_density", gyro, "N", "rad/s/sqrt(Hz)"),
-                               ("gyroscope_random_walk", gyro, "K", "rad/s^2/sqrt(Hz)")):
-        v, per = val(fit, nm)
-        lines.append(f"{key}: {v:.9e}  # [{unit}] {combine} of per-axis " + ", ".join(f"{p:.6e}" for p in per))
-    lines.append(f"rostopic: {rostopic}")
-    lines.append(f"update_rate: {float(update_rate):.6f}  # [Hz]")
-    return _atomic_write(Path(path), "\n".join(lines) + "\n")
 
 
 # --------------------------------------------------------------------------- fitting

@@ -186,14 +186,23 @@ def dryden_gusts(n: int, dt: float, airspeed: float, sigma: float | tuple[float,
 class FlightConfig(ResultMixin):
     """A simulated flight (SI; angles in degrees where named so).
 
-    profile : "cruise", "turns" (alternating 90° turns at 1.5°/s) or
-        "manoeuvre" (turns + climbs/descents + speed changes).
-    wind_ned : constant mean wind (velocity of the air mass, m/s, NED).
-    turbulence : "none", "light", "moderate", "severe" (Dryden σ 0/1.5/3/6.5 m/s).
-    rate_truth, rate_ads, rate_doppler : Hz (truth must be a multiple of the sensor rates).
-    ADS noise: sigma_ps / sigma_qc (Pa), sigma_tat (K), sigma_alpha_deg / sigma_beta_deg.
-    doppler : beam-level error model; over_water : [(t0, t1), ...] intervals (s).
-    sigma_attitude_deg : attitude-reference noise (per Euler angle).
+    Attributes
+    ----------
+    profile : str
+        "cruise", "turns" (alternating 90° turns at 1.5°/s) or "manoeuvre" (turns + climbs/descents + speed
+        changes).
+    wind_ned : array
+        Constant mean wind (velocity of the air mass, m/s, NED).
+    turbulence : str
+        "none", "light", "moderate", "severe" (Dryden σ 0/1.5/3/6.5 m/s).
+    rate_truth, rate_ads, rate_doppler : float
+        Hz (truth must be a multiple of the sensor rates).
+    sigma_ps, sigma_qc, sigma_tat, sigma_alpha_deg, sigma_beta_deg : float
+        Air-data system noise: static and impact pressure (Pa), total air temperature (K), angles (deg).
+    doppler, over_water
+        Beam-level error model; [(t0, t1), ...] intervals over water (s).
+    sigma_attitude_deg : float
+        Attitude-reference noise (per Euler angle).
     """
 
     profile: str = "turns"

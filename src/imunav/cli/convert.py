@@ -1,0 +1,52 @@
+"""``imunav convert``: turn a recording (a ROS bag or PX4 ULog topic, a named CSV layout, any readable file)
+into an imunav table once (Parquet, HDF5, CSV, MAT, NPZ)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Optional
+
+import typer
+
+from imunav.cli._options import INSTANCE, LAYOUT, MAG_TOPIC, TOPIC
+
+_EXAMPLE = (
+    "Examples:\n\n"
+    "  imunav convert ../shared/data/px4_ulog/sample.ulg sample.parquet --topic sensor_combined\n\n"
+    "  imunav convert run.mcap imu.h5 --topic /imu/data --mag-topic /imu/mag\n\n"
+    "  imunav convert data.csv imu.parquet --layout euroc"
+)
+
+
+def convert(
+    src: Path = typer.Argument(..., help="Input: ROS bag (.bag, ROS 2 folder, .db3, .mcap), PX4 .ulg, or any file "
+                               "read_imu reads."),
+    out: Path = typer.Argument(..., help="Output table: .parquet, .h5, .csv, .mat, .npz (format from the suffix)."),
+    topic: Optional[str] = TOPIC,
+    instance: Optional[int] = INSTANCE,
+    mag_topic: Optional[str] = MAG_TOPIC,
+    layout: Optional[str] = LAYOUT,
+    format: Optional[str] = typer.Option(None, "--format", help="Output format (default: from OUT's suffix)."),
+    nan_policy: str = typer.Option("raise", "--nan-policy", help="raise, drop or interpolate."),
+) -> None:
+    """Read one IMU (SI, FRD, magnetometer in µT) and write it as an imunav table, atomically.
+
+    The output keeps the time axis (s since meta.t0_ns), the units and the reader's meta (topic,
+    frame conversion, time report); OUT may not be SRC."""
+    from imunav.cli._options import reader_options
+    from imunav.io import read_imu, write_imu
+    from imunav.io._atomic import check_outputs
+
+    check_outputs([src], [out])
+    data = read_imu(src, **reader_options(topic=topic, instance=instance, mag_topic=mag_topic, layout=layout,
+                                          nan_policy=nan_policy))
+    path = write_imu(data, out, format=format)
+    typer.echo(f"{data.n} samples ({data.duration:.6g} s, {data.fs:.6g} Hz) written to {path}")
+
+
+convert.__doc__ = (convert.__doc__ or "") + "\n\n" + _EXAMPLE
+
+
+def register(app: typer.Typer) -> None:
+    """Add ``imunav convert`` to the app."""
+    app.command("convert", help=convert.__doc__)(convert)

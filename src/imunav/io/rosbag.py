@@ -1,0 +1,456 @@
+"""ROS 1 and ROS 2 bags through ``rosbags`` (extra ``imunav[ros]``); see :mod:`imunav.io.logs`.
+
+Accepted: a ROS 1 ``.bag``, a ROS 2 bag folder (``metadata.yaml`` with sqlite3 or MCAP storage), or a
+bare ROS 2 ``.db3`` / ``.mcap`` file.  Messages are deserialized by ``rosbags`` (the bag's own type
+definitions, else the latest ROS 2 type store); imunav only copies their fields into arrays, in chunks,
+so memory grows with the selected topic only.
+
+Message types read (frames: FLU body / ENU world → FRD / NED, see :mod:`imunav.io.logs`):
+
+========================================  =================  =========================================
+type                                      kind               values
+========================================  =================  =========================================
+``sensor_msgs/msg/Imu``                   ``imu``            ``gyro``, ``accel``, and ``q_nb`` when the
+                                                             orientation is filled (covariance[0] ≠ -1);
+                                                             the three covariances in ``meta``
+``sensor_msgs/msg/MagneticField``         ``mag``            ``mag`` (T → µT), covariance in ``meta``
+``sensor_msgs/msg/NavSatFix``             ``gnss``           ``lat_deg``, ``lon_deg``, ``alt_m``
+                                                             (ellipsoid), ``fix_status``, ``pos_cov``
+``geometry_msgs/msg/TwistStamped``        ``gnss_velocity``  ``vel_ned`` (twist.linear taken as ENU,
+                                                             as GNSS drivers publish it), ``rate_frd``
+``sensor_msgs/msg/FluidPressure``         ``pressure``       ``pressure`` (Pa), ``variance``
+``sensor_msgs/msg/Temperature``           ``temperature``    ``temp`` (°C), ``variance``
+========================================  =================  =========================================
+
+A topic whose messages name more than one ``header.frame_id`` is refused: its samples would mix
+sensor frames.  ROS 1 ``header.seq`` gaps are counted in ``meta["seq_gaps"]`` (dropped messages).
+"""
+
+from __future__ import annotations
+
+import os
+import shutil
+import tempfile
+from collections.abc import Callable, Iterable
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from imunav.errors import FileFormatError, InvalidInputError
+from imunav.io.logs import TopicData, TopicInfo, enu_to_ned, frd_to_ros, ros_to_frd, topic_data
+
+__all__ = ["list_topics", "read_topic", "read_imu_topic", "KINDS"]
+
+#: Message type -> kind read by imunav.
+KINDS = {
+    "sensor_msgs/msg/Imu": "imu",
+    "sensor_msgs/msg/MagneticField": "mag",
+    "sensor_msgs/msg/NavSatFix": "gnss",
+    "geometry_msgs/msg/TwistStamped": "gnss_velocity",
+    "sensor_msgs/msg/FluidPressure": "pressure",
+    "sensor_msgs/msg/Temperature": "temperature",
+}
+_CHUNK = 65536
+
+
+def _open(path: str | os.PathLike[str]) -> Any:
+    """An opened-to-be ``AnyReader`` on ``path`` (rosbags errors become FileFormatError)."""
+    # optional dependency (imunav[ros]); logs.require has checked it is installed
+    from rosbags.highlevel import AnyReader
+    from rosbags.typesys import Stores, get_typestore
+
+    return AnyReader([Path(path)], default_typestore=get_typestore(Stores.LATEST))
+
+
+class _Bag:
+    """Context manager: an open AnyReader whose errors are reported as FileFormatError naming the bag."""
+
+    def __init__(self, path: str | os.PathLike[str]) -> None:
+        self.source = os.fspath(path)
+        self.reader: Any = None
+        try:
+            self.reader = _open(path)
+        except (FileNotFoundError, PermissionError):
+            raise
+        except Exception as e:  # rosbags raises several types for a bad bag
+            raise FileFormatError(f"{self.source}: cannot open it as a ROS bag ({type(e).__name__}: {e})") from None
+
+    def __enter__(self) -> Any:
+        try:
+            self.reader.open()
+        except (FileNotFoundError, PermissionError):
+            raise
+        except Exception as e:  # rosbags raises several types for a bad bag
+            raise FileFormatError(
+                f"{self.source}: cannot read it as a ROS bag ({type(e).__name__}: {e}); the bag may be truncated "
+                "(a ROS 1 bag still being recorded needs `rosbag reindex`) or of another format"
+            ) from None
+        return self.reader
+
+    def __exit__(self, *exc: Any) -> bool:
+        self.reader.close()
+        return False
+
+
+def _span_ns(reader: Any, conns: list[Any], count: int) -> tuple[int, int] | None:
+    """First and last record time of a topic, from time windows at each end of the bag (the index finds
+    the chunks or rows of a window; nothing else is read)."""
+    if count == 0:
+        return None
+    start, end = int(reader.start_time), int(reader.end_time)
+    w0 = max(int((end - start) * min(1.0, 20.0 / count)), 1_000_000)  # about 20 messages of the topic
+
+    def edge(from_start: bool) -> int | None:
+        w, pos = w0, (start if from_start else end + 1)
+        while (pos < end + 1) if from_start else (pos > start):
+            lo, hi = (pos, pos + w) if from_start else (max(pos - w, start), pos)
+            ts = [t for _, t, _ in reader.messages(connections=conns, start=lo, stop=hi)]
+            if ts:
+                return ts[0] if from_start else ts[-1]
+            pos = hi if from_start else lo
+            w *= 8
+        return None
+
+    first, last = edge(True), edge(False)
+    if first is None or last is None:
+        return None
+    return first, last
+
+
+def list_topics(path: str | os.PathLike[str]) -> list[TopicInfo]:
+    """Topics of a bag with type, count (from the index), duration and rate (see :func:`imunav.io.logs.list_topics`)."""
+    out = []
+    with _Bag(path) as reader:
+        for name, info in sorted(reader.topics.items()):
+            conns = list(info.connections)
+            count = int(info.msgcount)
+            span = _span_ns(reader, conns, count)
+            dur = None if span is None else (span[1] - span[0]) * 1e-9
+            rate = (count - 1) / dur if dur and count >= 2 else None
+            msgtype = info.msgtype or ", ".join(sorted({c.msgtype for c in conns}))
+            out.append(TopicInfo(name, msgtype, count, None, dur, rate, KINDS.get(msgtype)))
+    return out
+
+
+# -- per-type field extraction (one tuple of floats per message) ---------------------------------
+def _vec(v: Any) -> tuple[float, float, float]:
+    return (v.x, v.y, v.z)
+
+
+_FIELDS: dict[str, tuple[Callable[[Any], tuple], int, tuple[str, ...]]] = {
+    # kind: (extract, number of floats, covariance attribute names compared across messages)
+    "imu": (lambda m: (m.angular_velocity.x, m.angular_velocity.y, m.angular_velocity.z,
+                       m.linear_acceleration.x, m.linear_acceleration.y, m.linear_acceleration.z,
+                       m.orientation.w, m.orientation.x, m.orientation.y, m.orientation.z), 10,
+            ("angular_velocity_covariance", "linear_acceleration_covariance", "orientation_covariance")),
+    "mag": (lambda m: _vec(m.magnetic_field), 3, ("magnetic_field_covariance",)),
+    "gnss": (lambda m: (m.latitude, m.longitude, m.altitude, m.status.status, m.position_covariance[0],
+                        m.position_covariance[4], m.position_covariance[8], m.position_covariance_type), 8, ()),
+    "gnss_velocity": (lambda m: (*_vec(m.twist.linear), *_vec(m.twist.angular)), 6, ()),
+    "pressure": (lambda m: (m.fluid_pressure, m.variance), 2, ()),
+    "temperature": (lambda m: (m.temperature, m.variance), 2, ()),
+}
+
+
+def _collect(reader: Any, conns: list[Any], kind: str, source: str, topic: str) -> tuple[np.ndarray, np.ndarray, dict]:
+    """(stamps (N, 3) int64 [sec, nanosec, receive_ns], floats (N, k), info) of every message of ``conns``."""
+    extract, k, cov_names = _FIELDS[kind]
+    ros1 = not reader.is2
+    total = sum(int(c.msgcount) for c in conns)
+    ints = np.empty((max(total, 1), 4 if ros1 else 3), dtype=np.int64)
+    flts = np.empty((max(total, 1), k), dtype=np.float64)
+    frames: dict[str, int] = {}
+    cov_first: dict[str, np.ndarray] = {}
+    cov_varies = False
+    cov_bytes: list[bytes] = []
+    ci: list[tuple] = []
+    cf: list[tuple] = []
+    n = 0
+    deser = reader.deserialize
+
+    def flush() -> None:
+        nonlocal n, ints, flts
+        m = len(ci)
+        if n + m > ints.shape[0]:  # the index under-counted: grow
+            ints = np.concatenate([ints, np.empty((n + m, ints.shape[1]), np.int64)])
+            flts = np.concatenate([flts, np.empty((n + m, k), np.float64)])
+        ints[n:n + m] = ci
+        flts[n:n + m] = cf
+        n += m
+        ci.clear()
+        cf.clear()
+
+    for conn, ts, raw in reader.messages(connections=conns):
+        try:
+            msg = deser(raw, conn.msgtype)
+        except Exception as e:  # rosbags raises several types for a damaged message
+            raise FileFormatError(f"{source}: topic {topic!r}: message {n + len(ci)} cannot be decoded ({e})") from None
+        h = msg.header
+        st = h.stamp
+        ci.append((st.sec, st.nanosec, ts, h.seq) if ros1 else (st.sec, st.nanosec, ts))
+        cf.append(extract(msg))
+        fid = h.frame_id
+        frames[fid] = frames.get(fid, 0) + 1
+        if cov_names:
+            if not cov_first:
+                cov_first = {c: np.array(getattr(msg, c), dtype=np.float64) for c in cov_names}
+                cov_bytes = [cov_first[c].tobytes() for c in cov_names]
+            elif not cov_varies:  # bytes, not np.array_equal: a tenth of the time per message
+                cov_varies = [getattr(msg, c).tobytes() for c in cov_names] != cov_bytes
+        if len(ci) >= _CHUNK:
+            flush()
+    flush()
+    if n == 0:
+        raise FileFormatError(f"{source}: topic {topic!r} has no messages")
+    if len(frames) > 1:
+        raise FileFormatError(
+            f"{source}: topic {topic!r} mixes frame_ids {frames} (messages per frame); its samples come from "
+            "different sensor frames - record one topic per sensor, or split the topic by frame_id first"
+        )
+    info = {"frame_id": next(iter(frames)), "cov": cov_first, "cov_varies": cov_varies}
+    return ints[:n], flts[:n], info
+
+
+def _rot_cov(c: np.ndarray) -> list[float]:
+    """Row-major 3×3 covariance FLU → FRD (C Σ Cᵀ); unknown (-1 first entry, REP-145) is kept as is."""
+    s = np.asarray(c, dtype=np.float64).reshape(3, 3)
+    if s[0, 0] == -1.0:
+        return s.reshape(-1).tolist()
+    return ros_to_frd(ros_to_frd(s).T).reshape(-1).tolist()  # C Σ Cᵀ with C symmetric
+
+
+def _values(kind: str, f: np.ndarray, info: dict) -> tuple[dict[str, np.ndarray], dict[str, str], dict[str, Any]]:
+    meta: dict[str, Any] = {"frame_id": info["frame_id"]}
+    if kind == "imu":
+        vals = {"gyro": ros_to_frd(f[:, 0:3]), "accel": ros_to_frd(f[:, 3:6])}
+        units = {"gyro": "rad/s", "accel": "m/s^2"}
+        cov = info["cov"]
+        meta["covariance"] = {
+            "gyro": _rot_cov(cov["angular_velocity_covariance"]),
+            "accel": _rot_cov(cov["linear_acceleration_covariance"]),
+            "varies": info["cov_varies"],
+        }
+        if cov["orientation_covariance"][0] != -1.0:
+            from imunav.rotation import from_convention
+
+            # orientation: FLU body -> ENU world (REP-103) -> imunav FRD body -> NED
+            vals["q_nb"] = from_convention(f[:, 6:10], "enu", body="flu")
+            units["q_nb"] = "1"
+        meta["frames"] = "FLU -> FRD: (x, -y, -z)"
+    elif kind == "mag":
+        vals = {"mag": ros_to_frd(f[:, 0:3]) * 1e6}
+        units = {"mag": "uT"}
+        meta["covariance"] = {"mag_T2": _rot_cov(info["cov"]["magnetic_field_covariance"]), "varies": info["cov_varies"]}
+        meta["frames"] = "FLU -> FRD: (x, -y, -z); tesla -> uT"
+    elif kind == "gnss":
+        vals = {"lat_deg": f[:, 0], "lon_deg": f[:, 1], "alt_m": f[:, 2], "fix_status": f[:, 3].astype(np.int8),
+                "pos_cov_enu_diag": f[:, 4:7], "pos_cov_type": f[:, 7].astype(np.uint8)}
+        units = {"lat_deg": "deg", "lon_deg": "deg", "alt_m": "m", "fix_status": "1", "pos_cov_enu_diag": "m^2",
+                 "pos_cov_type": "1"}
+        meta["altitude"] = "above the WGS 84 ellipsoid (sensor_msgs/NavSatFix)"
+    elif kind == "gnss_velocity":
+        vals = {"vel_ned": enu_to_ned(f[:, 0:3]), "rate_frd": ros_to_frd(f[:, 3:6])}
+        units = {"vel_ned": "m/s", "rate_frd": "rad/s"}
+        meta["frames"] = "twist.linear taken as ENU -> NED (y, x, -z); twist.angular FLU -> FRD"
+    elif kind == "pressure":
+        vals, units = {"pressure": f[:, 0], "variance": f[:, 1]}, {"pressure": "Pa", "variance": "Pa^2"}
+    else:
+        vals, units = {"temp": f[:, 0], "variance": f[:, 1]}, {"temp": "degC", "variance": "degC^2"}
+    return vals, units, meta
+
+
+def _choose(topics: dict[str, Any], topic: str | None, source: str, want: Iterable[str] | None) -> str:
+    if topic is not None:
+        if topic not in topics:
+            listed = ", ".join(f"{k} ({v.msgtype})" for k, v in sorted(topics.items())) or "none"
+            raise InvalidInputError(f"{source}: no topic {topic!r} in the bag; its topics: {listed}")
+        return topic
+    cands = sorted(k for k, v in topics.items() if KINDS.get(v.msgtype) in (want or ()))
+    if len(cands) == 1:
+        return cands[0]
+    if not cands:
+        listed = ", ".join(f"{k} ({v.msgtype})" for k, v in sorted(topics.items())) or "none"
+        raise FileFormatError(f"{source}: no sensor_msgs/Imu topic in the bag; its topics: {listed}")
+    raise InvalidInputError(f"{source}: {len(cands)} IMU topics: {', '.join(cands)}; choose one with "
+                            f"topic=... (CLI: --topic)")
+
+
+def read_topic(path: str | os.PathLike[str], topic: str, *, instance: int | None = None,
+               _want: Iterable[str] | None = None) -> TopicData:
+    """Read one topic of a bag (see the module docstring for the types and conversions).
+
+    Parameters
+    ----------
+    path : the bag (file or ROS 2 folder).
+    topic : topic name; with ``None`` (internal use) the single topic of a kind in ``_want``.
+    instance : must be None (ROS topics have no instances).
+
+    Returns
+    -------
+    TopicData
+    """
+    source = os.fspath(path)
+    if instance is not None:
+        raise InvalidInputError(f"{source}: instance= is for PX4 ULog topics; a ROS bag chooses by topic= only")
+    with _Bag(path) as reader:
+        topics = reader.topics
+        name = _choose(topics, topic, source, _want)
+        info = topics[name]
+        kind = KINDS.get(info.msgtype or "")
+        if kind is None:
+            raise InvalidInputError(
+                f"{source}: topic {name!r} is {info.msgtype}; imunav reads {', '.join(sorted(KINDS))}"
+            )
+        ints, flts, cinfo = _collect(reader, list(info.connections), kind, source, name)
+        is2 = reader.is2
+    stamps = ints[:, 0] * 1_000_000_000 + ints[:, 1]
+    vals, units, meta = _values(kind, flts, cinfo)
+    meta.update({"format": "rosbag2" if is2 else "rosbag1", "msgtype": info.msgtype})
+    if not is2:
+        seq = ints[:, 3]
+        ds = np.diff(seq)
+        meta["seq_gaps"] = {"gaps": int(np.sum(ds > 1)), "missing": int(np.sum(ds[ds > 1] - 1))}
+    return topic_data(name, kind, stamps, vals, units, source, receive_ns=ints[:, 2], meta=meta)
+
+
+def read_imu_topic(path: str | os.PathLike[str], topic: str | None, *, instance: int | None = None) -> TopicData:
+    """The IMU topic ``topic`` (or the only ``sensor_msgs/Imu`` topic); errors list the candidates."""
+    d = read_topic(path, topic, instance=instance, _want=("imu",))
+    if d.kind != "imu":
+        raise InvalidInputError(f"{os.fspath(path)}: topic {d.topic!r} is {d.meta['msgtype']}, not sensor_msgs/Imu; "
+                                "choose an IMU topic")
+    return d
+
+
+# -- writing ------------------------------------------------------------------------------------
+#: Storage names of :func:`write_bag`.
+STORAGES = ("ros1", "sqlite3", "mcap")
+_DEFAULT_T0_NS = 1_700_000_000_000_000_000  # 2023-11-14T22:13:20Z, when a recording has no t0_ns
+
+
+def _stamps(d: Any) -> np.ndarray:
+    t0 = int(d.meta.get("t0_ns", _DEFAULT_T0_NS))
+    return t0 + np.round(np.asarray(d.t, dtype=np.float64) * 1e9).astype(np.int64)
+
+
+def write_bag(path: str | os.PathLike[str], topics: Any, *, storage: str = "mcap", frame_id: str = "imu",
+              mag_suffix: str = "/mag") -> Path:
+    """Write IMU recordings as a ROS bag (``sensor_msgs/Imu``, ``MagneticField``, ``Temperature``), atomically.
+
+    The inverse of the reader: body vectors go FRD → FLU, µT → T, and the stamps are
+    ``meta["t0_ns"] + round(t · 1e9)`` ns (a fixed 2023 date when there is no ``t0_ns``); the record time
+    equals the stamp.
+
+    Parameters
+    ----------
+    path : ``.bag`` for ``storage="ros1"``; for ROS 2 a folder (``metadata.yaml`` + storage file).
+    topics : mapping topic -> :class:`~imunav.timeseries.ImuData` (an ``Imu`` topic, plus
+        ``topic + mag_suffix`` with its magnetometer) or :class:`~imunav.io.logs.TopicData` of kind
+        ``imu``, ``mag`` or ``temperature``.
+    storage : ``"ros1"``, ``"sqlite3"`` or ``"mcap"``.
+    frame_id : ``header.frame_id`` of every message.
+
+    Returns
+    -------
+    Path of the bag.
+
+    Examples
+    --------
+    >>> import numpy as np, tempfile, os
+    >>> from imunav.timeseries import ImuData
+    >>> d = ImuData(np.arange(5) / 100, np.zeros((5, 3)), np.tile([0, 0, -9.81], (5, 1)))
+    >>> p = write_bag(os.path.join(tempfile.mkdtemp(), "rec"), {"/imu": d})
+    >>> from imunav.io import read_imu
+    >>> read_imu(p).accel[0, 2]
+    np.float64(-9.81)
+    """
+    # optional dependency (imunav[ros]): checked below with a clear error
+    from imunav.io.logs import require
+    from imunav.timeseries import ImuData
+
+    require("rosbag", "writing a ROS bag")
+    if storage not in STORAGES:
+        raise InvalidInputError(f"storage={storage!r}: choose one of {list(STORAGES)}")
+    streams: list[tuple[str, str, Any]] = []  # (topic, kind, data)
+    for name, d in dict(topics).items():
+        if isinstance(d, ImuData):
+            streams.append((name, "imu", d))
+            if d.mag is not None:
+                streams.append((name + mag_suffix, "mag", d))
+            if d.temp is not None:
+                streams.append((name + "/temperature", "temperature", d))
+        elif isinstance(d, TopicData) and d.kind in ("imu", "mag", "temperature"):
+            streams.append((name, d.kind, d))
+        else:
+            raise InvalidInputError(f"write_bag: topic {name!r} must be an ImuData or a TopicData of kind imu, mag "
+                                    f"or temperature, got {type(d).__name__}")
+    target = Path(path)
+    if storage != "ros1" and target.exists():
+        raise InvalidInputError(f"{target} exists; a ROS 2 bag is a new folder - remove it or choose another path")
+    # written in a temporary folder beside the target, then renamed onto it (atomic on one file system)
+    tmpdir = Path(tempfile.mkdtemp(prefix=f".{target.name}.", dir=target.parent if target.parent.exists() else None))
+    try:
+        _write(tmpdir / target.name, streams, storage, frame_id)
+        os.replace(tmpdir / target.name, target)
+    finally:
+        shutil.rmtree(tmpdir, ignore_errors=True)
+    return target
+
+
+def _write(path: Path, streams: list[tuple[str, str, Any]], storage: str, frame_id: str) -> None:
+    import heapq
+
+    from rosbags.typesys import Stores, get_typestore
+
+    ts = get_typestore(Stores.ROS1_NOETIC if storage == "ros1" else Stores.LATEST)
+    T = ts.types
+    Time, Header, Vec = T["builtin_interfaces/msg/Time"], T["std_msgs/msg/Header"], T["geometry_msgs/msg/Vector3"]
+    ros1 = storage == "ros1"
+    if ros1:
+        from rosbags.rosbag1 import Writer
+
+        writer = Writer(path)
+        ser = ts.serialize_ros1
+    else:
+        from rosbags.rosbag2 import StoragePlugin, Writer
+
+        writer = Writer(path, version=9, storage_plugin=StoragePlugin[storage.upper()])
+        ser = ts.serialize_cdr
+    zero9 = np.zeros(9)
+    unknown = np.r_[-1.0, np.zeros(8)]
+    msgtype = {"imu": "sensor_msgs/msg/Imu", "mag": "sensor_msgs/msg/MagneticField",
+               "temperature": "sensor_msgs/msg/Temperature"}
+
+    def gen(topic: str, kind: str, d: Any, conn: Any):
+        st = _stamps(d)
+        vals = d.values if isinstance(d, TopicData) else {"gyro": d.gyro, "accel": d.accel, "mag": d.mag, "temp": d.temp}
+        if kind == "imu":
+            g = frd_to_ros(vals["gyro"]).tolist()
+            a = frd_to_ros(vals["accel"]).tolist()
+        elif kind == "mag":
+            m = (frd_to_ros(vals["mag"]) * 1e-6).tolist()
+        else:
+            tp = np.asarray(vals["temp"]).tolist()
+        for i, s in enumerate(st.tolist()):
+            sec, nsec = divmod(s, 1_000_000_000)
+            hdr = Header(seq=i, stamp=Time(sec=sec, nanosec=nsec), frame_id=frame_id) if ros1 else \
+                Header(stamp=Time(sec=sec, nanosec=nsec), frame_id=frame_id)
+            if kind == "imu":
+                msg = T[msgtype[kind]](header=hdr, orientation=T["geometry_msgs/msg/Quaternion"](x=0.0, y=0.0, z=0.0, w=1.0),
+                                       orientation_covariance=unknown, angular_velocity=Vec(*g[i]),
+                                       angular_velocity_covariance=zero9, linear_acceleration=Vec(*a[i]),
+                                       linear_acceleration_covariance=zero9)
+            elif kind == "mag":
+                msg = T[msgtype[kind]](header=hdr, magnetic_field=Vec(*m[i]), magnetic_field_covariance=zero9)
+            else:
+                msg = T[msgtype[kind]](header=hdr, temperature=tp[i], variance=0.0)
+            yield s, conn, ser(msg, msgtype[kind])
+
+    with writer:
+        gens = []
+        for topic, kind, d in streams:
+            conn = writer.add_connection(topic, msgtype[kind], typestore=ts)
+            gens.append(gen(topic, kind, d, conn))
+        for s, conn, raw in heapq.merge(*gens, key=lambda x: x[0]):
+            writer.write(conn, s, raw)

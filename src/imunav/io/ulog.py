@@ -1,0 +1,280 @@
+"""PX4 ULog files through ``pyulog`` (extra ``imunav[px4]``); see :mod:`imunav.io.logs`.
+
+PX4 is FRD body / NED world with Hamilton scalar-first ``q`` (body → NED), imunav's own conventions,
+so vectors and quaternions pass through; only units change (gauss → µT, µs → s, hPa → Pa).  A topic
+with several instances (``multi_id``, one per sensor) is chosen with ``instance=`` or ``"name:k"``.
+
+=========================================  =============  =============================================
+topic                                      kind           values
+=========================================  =============  =============================================
+``sensor_combined``                        ``imu``        ``gyro_rad``, ``accelerometer_m_s2`` and, in
+                                                          older logs, ``magnetometer_ga`` (→ µT); time
+                                                          ``timestamp`` (the gyro sample time)
+``vehicle_imu``                            ``imu``        rates from the integrated increments:
+                                                          ``gyro = delta_angle / delta_angle_dt`` and
+                                                          ``accel = delta_velocity / delta_velocity_dt``
+                                                          (the mean over each interval ending at
+                                                          ``timestamp_sample``; coning-corrected by PX4)
+``sensor_gyro`` / ``sensor_accel``         ``gyro`` /     ``gyro`` / ``accel`` and ``temp``; as an IMU the
+                                           ``accel``      accel of the same instance is interpolated
+                                                          onto the gyro stamps
+``sensor_mag``, ``vehicle_magnetometer``   ``mag``        ``mag`` (gauss → µT)
+``vehicle_gps_position``, ``sensor_gps``,  ``gnss``       ``lat_deg``, ``lon_deg``, ``alt_m`` (MSL),
+``*global_position*``                                     ``vel_ned``, ``fix_type``, ``eph_m``, ``epv_m``
+``sensor_baro``                            ``pressure``   ``pressure`` (Pa; logs before PX4 1.13 store
+                                                          hPa, recognised by a median under 2000) and
+                                                          ``temp``
+``*local_position*``                       ``position``   ``pos_ned``, ``vel_ned``
+``vehicle_attitude``,                      ``attitude``   ``q_nb`` (passes through: PX4's ``q`` is
+``vehicle_attitude_groundtruth``,                         body → NED, Hamilton, scalar first; checked
+``estimator_attitude``                                    against an attitude filter on real flights)
+=========================================  =============  =============================================
+
+Time: ``timestamp_sample`` when the topic fills it (the sensor's sample time), else ``timestamp``; the
+publication ``timestamp`` is then kept as the receive time.  ULog has no index: listing the topics
+parses the file once (pyulog), keeping only each topic's time stamps.
+"""
+
+from __future__ import annotations
+
+import os
+from typing import Any
+
+import numpy as np
+
+from imunav.errors import FileFormatError, InvalidInputError
+from imunav.io.logs import TopicData, TopicInfo, merge_onto, topic_data
+
+__all__ = ["list_topics", "read_topic", "read_imu_topic", "IMU_TOPICS"]
+
+#: ULog topics that give an IMU (gyro + accel); ``sensor_combined`` is the default.
+IMU_TOPICS = ("sensor_combined", "vehicle_imu", "sensor_gyro", "sensor_accel")
+_GAUSS_TO_UT = 100.0
+#: PX4 parameters kept in ``meta["px4_params"]``: the estimator in use and the magnetic declination it
+#: applied (deg), which an attitude filter referenced to magnetic north differs from in yaw.
+_PARAMS = ("SYS_MC_EST_GROUP", "EKF2_MAG_DECL", "EKF2_DECL_TYPE", "ATT_MAG_DECL", "ATT_MAG_DECL_A")
+
+
+def _load(path: str | os.PathLike[str], names: list[str] | None) -> Any:
+    # optional dependency (imunav[px4]); logs.require has checked it is installed
+    from pyulog import ULog
+
+    source = os.fspath(path)
+    try:
+        return ULog(source, names)
+    except (FileNotFoundError, PermissionError, IsADirectoryError):
+        raise
+    except Exception as e:  # pyulog raises several types for a bad file
+        raise FileFormatError(f"{source}: cannot read it as a PX4 ULog ({type(e).__name__}: {e})") from None
+
+
+def kind_of(name: str, fields: set[str]) -> str | None:
+    """What imunav reads from a ULog topic with these fields (None: nothing)."""
+    if name in ("sensor_combined", "vehicle_imu"):
+        return "imu"
+    if name == "sensor_gyro":
+        return "gyro"
+    if name == "sensor_accel":
+        return "accel"
+    if name in ("sensor_mag", "vehicle_magnetometer"):
+        return "mag"
+    if name == "sensor_baro":
+        return "pressure"
+    if "q[0]" in fields and "attitude" in name and "setpoint" not in name:
+        return "attitude"
+    if {"lat", "lon"} <= fields or {"latitude_deg", "longitude_deg"} <= fields:
+        return "gnss"
+    if "local_position" in name and {"x", "y", "z"} <= fields:
+        return "position"
+    return None
+
+
+def list_topics(path: str | os.PathLike[str]) -> list[TopicInfo]:
+    """Topic instances of a ULog with count, duration and rate (see :func:`imunav.io.logs.list_topics`)."""
+    ulog = _load(path, None)
+    out = []
+    for d in ulog.data_list:
+        ts = np.asarray(d.data["timestamp"], dtype=np.int64)
+        n = int(ts.size)
+        dur = float(ts.max() - ts.min()) * 1e-6 if n else None
+        rate = (n - 1) / dur if dur and n >= 2 else None
+        out.append(TopicInfo(d.name, d.name, n, int(d.multi_id), dur, rate, kind_of(d.name, set(d.data))))
+    return sorted(out, key=lambda i: (i.topic, i.instance))
+
+
+def _split(topic: str, instance: int | None, source: str) -> tuple[str, int | None]:
+    name, sep, k = topic.rpartition(":")
+    if sep and k.isdigit():
+        if instance is not None and int(k) != instance:
+            raise InvalidInputError(f"{source}: topic {topic!r} names instance {k} but instance={instance}")
+        return name, int(k)
+    return topic, instance
+
+
+def _dataset(path: str | os.PathLike[str], topic: str, instance: int | None) -> tuple[Any, Any]:
+    source = os.fspath(path)
+    name, inst = _split(topic, instance, source)
+    ulog = _load(path, [name])
+    found = [d for d in ulog.data_list if d.name == name]
+    if not found:
+        names = sorted({d.name for d in _load(path, None).data_list})
+        hint = "; this log has no IMU data (no " + ", ".join(IMU_TOPICS) + ")" if not set(IMU_TOPICS) & set(names) else ""
+        raise InvalidInputError(f"{source}: no topic {name!r} in the log{hint}; its topics: {', '.join(names)}")
+    ids = sorted(int(d.multi_id) for d in found)
+    if inst is None:
+        if len(found) > 1:
+            raise InvalidInputError(
+                f"{source}: topic {name!r} has {len(found)} instances {ids}; choose one with instance=... "
+                f"(CLI: --instance) or topic='{name}:{ids[0]}'"
+            )
+        return ulog, found[0]
+    for d in found:
+        if int(d.multi_id) == inst:
+            return ulog, d
+    raise InvalidInputError(f"{source}: topic {name!r} has no instance {inst}; its instances: {ids}")
+
+
+def _cols(data: dict[str, np.ndarray], base: str, n: int = 3) -> np.ndarray:
+    return np.column_stack([np.asarray(data[f"{base}[{i}]"], dtype=np.float64) for i in range(n)])
+
+
+def _xyz(data: dict[str, np.ndarray]) -> np.ndarray:
+    return np.column_stack([np.asarray(data[a], dtype=np.float64) for a in "xyz"])
+
+
+def _values(name: str, kind: str, data: dict[str, np.ndarray], source: str) -> tuple[dict, dict, dict]:
+    f = data
+    meta: dict[str, Any] = {}
+    if kind == "imu" and name == "sensor_combined":
+        vals = {"gyro": _cols(f, "gyro_rad"), "accel": _cols(f, "accelerometer_m_s2")}
+        units = {"gyro": "rad/s", "accel": "m/s^2"}
+        if "magnetometer_ga[0]" in f:
+            vals["mag"] = _cols(f, "magnetometer_ga") * _GAUSS_TO_UT
+            units["mag"] = "uT"
+        if "accelerometer_timestamp_relative" in f:
+            rel = np.asarray(f["accelerometer_timestamp_relative"], dtype=np.int64)
+            meta["accel_time_offset_us"] = {"min": int(rel.min()), "max": int(rel.max())}
+    elif kind == "imu":  # vehicle_imu: integrated increments -> mean rates over each interval
+        dta = np.asarray(f["delta_angle_dt"], dtype=np.float64) * 1e-6
+        dtv = np.asarray(f["delta_velocity_dt"], dtype=np.float64) * 1e-6
+        bad = np.flatnonzero((dta <= 0) | (dtv <= 0))
+        if bad.size:
+            raise FileFormatError(f"{source}: vehicle_imu has a zero integration interval at messages {bad[:5].tolist()}")
+        vals = {"gyro": _cols(f, "delta_angle") / dta[:, None], "accel": _cols(f, "delta_velocity") / dtv[:, None]}
+        units = {"gyro": "rad/s", "accel": "m/s^2"}
+        meta["integration"] = ("rates = delta_angle / delta_angle_dt, accel = delta_velocity / delta_velocity_dt: "
+                               "means over the interval ending at timestamp_sample (lag dt/2)")
+        meta["integration_dt_median_s"] = float(np.median(dta))
+    elif kind in ("gyro", "accel"):
+        vals = {kind: _xyz(f)}
+        units = {kind: "rad/s" if kind == "gyro" else "m/s^2"}
+        if "temperature" in f and np.all(np.isfinite(f["temperature"])):
+            vals["temp"], units["temp"] = np.asarray(f["temperature"], dtype=np.float64), "degC"
+    elif kind == "mag":
+        vals = {"mag": (_cols(f, "magnetometer_ga") if "magnetometer_ga[0]" in f else _xyz(f)) * _GAUSS_TO_UT}
+        units = {"mag": "uT"}
+    elif kind == "pressure":
+        p = np.asarray(f["pressure"], dtype=np.float64)
+        hpa = bool(np.median(p) < 2000.0)
+        vals, units = {"pressure": p * 100.0 if hpa else p}, {"pressure": "Pa"}
+        meta["pressure_unit_in_log"] = "hPa" if hpa else "Pa"
+        if "temperature" in f:
+            vals["temp"], units["temp"] = np.asarray(f["temperature"], dtype=np.float64), "degC"
+    elif kind == "attitude":
+        vals, units = {"q_nb": _cols(f, "q", 4)}, {"q_nb": "1"}
+    elif kind == "gnss":
+        if "latitude_deg" in f:
+            lat, lon = (np.asarray(f[k], dtype=np.float64) for k in ("latitude_deg", "longitude_deg"))
+            alt = np.asarray(f.get("altitude_msl_m", f.get("alt")), dtype=np.float64)
+        else:
+            lat, lon = (np.asarray(f[k], dtype=np.float64) * (1e-7 if f[k].dtype.kind == "i" else 1.0)
+                        for k in ("lat", "lon"))
+            a = f["alt"]
+            alt = np.asarray(a, dtype=np.float64) * (1e-3 if a.dtype.kind == "i" else 1.0)  # int mm, float m
+        vals = {"lat_deg": lat, "lon_deg": lon, "alt_m": alt}
+        units = {"lat_deg": "deg", "lon_deg": "deg", "alt_m": "m"}
+        meta["altitude"] = "above mean sea level (PX4 alt)"
+        if "vel_n_m_s" in f:
+            vals["vel_ned"] = np.column_stack([np.asarray(f[f"vel_{a}_m_s"], dtype=np.float64) for a in "ned"])
+            units["vel_ned"] = "m/s"
+        for k, unit in (("fix_type", "1"), ("eph", "m"), ("epv", "m"), ("satellites_used", "1")):
+            if k in f:
+                vals[k if unit == "1" else f"{k}_m"] = np.asarray(f[k])
+                units[k if unit == "1" else f"{k}_m"] = unit
+    elif kind == "position":
+        vals = {"pos_ned": _xyz(f)}
+        units = {"pos_ned": "m"}
+        if {"vx", "vy", "vz"} <= set(f):
+            vals["vel_ned"] = np.column_stack([np.asarray(f[k], dtype=np.float64) for k in ("vx", "vy", "vz")])
+            units["vel_ned"] = "m/s"
+    else:
+        raise InvalidInputError(f"{source}: imunav does not read topic {name!r}")
+    return vals, units, meta
+
+
+def _read(ulog: Any, d: Any, source: str) -> TopicData:
+    kind = kind_of(d.name, set(d.data))
+    if kind is None:
+        raise InvalidInputError(
+            f"{source}: imunav does not read topic {d.name!r}; it reads IMU ({', '.join(IMU_TOPICS)}), magnetometer, "
+            "GNSS, barometer, local-position and attitude topics"
+        )
+    vals, units, meta = _values(d.name, kind, d.data, source)
+    # timestamp_sample when filled (the simulator's ground-truth topics leave it 0)
+    has_sample = "timestamp_sample" in d.data and bool(np.all(np.asarray(d.data["timestamp_sample"]) > 0))
+    stamps_us = np.asarray(d.data["timestamp_sample" if has_sample else "timestamp"], dtype=np.int64)
+    recv = np.asarray(d.data["timestamp"], dtype=np.int64) * 1000 if has_sample else None
+    meta.update({"format": "ulog", "msgtype": d.name, "time_field": "timestamp_sample" if has_sample else "timestamp",
+                 "clock": "PX4 boot time (t0_ns since boot)"})
+    params = {k: ulog.initial_parameters[k] for k in _PARAMS if k in ulog.initial_parameters}
+    if params:
+        meta["px4_params"] = params
+    sys_name = ulog.msg_info_dict.get("sys_name")
+    if sys_name is not None:
+        meta["system"] = {k: str(ulog.msg_info_dict[k]) for k in ("sys_name", "ver_hw", "ver_sw") if k in ulog.msg_info_dict}
+    return topic_data(d.name, kind, stamps_us * 1000, vals, units, source, receive_ns=recv,
+                      instance=int(d.multi_id), meta=meta)
+
+
+def read_topic(path: str | os.PathLike[str], topic: str, *, instance: int | None = None) -> TopicData:
+    """Read one topic instance of a ULog (see the module docstring).
+
+    Parameters
+    ----------
+    path : the ``.ulg`` file.
+    topic : topic name, optionally ``"name:instance"``.
+    instance : ``multi_id`` when the topic has several instances.
+
+    Returns
+    -------
+    TopicData
+    """
+    ulog, d = _dataset(path, topic, instance)
+    return _read(ulog, d, os.fspath(path))
+
+
+def read_imu_topic(path: str | os.PathLike[str], topic: str | None, *, instance: int | None = None) -> TopicData:
+    """The IMU of a ULog: ``sensor_combined`` by default, else ``vehicle_imu`` / a gyro + accel instance pair."""
+    source = os.fspath(path)
+    if topic is None:
+        topic = "sensor_combined"
+        names = {d.name for d in _load(path, list(IMU_TOPICS)).data_list}
+        if "sensor_combined" not in names:
+            if not names:
+                raise FileFormatError(f"{source}: this log has no IMU data (none of {', '.join(IMU_TOPICS)})")
+            raise InvalidInputError(f"{source}: no sensor_combined; choose an IMU with topic=... among "
+                                    f"{', '.join(sorted(names))} (and instance=...)")
+    name, inst = _split(topic, instance, source)
+    if name not in IMU_TOPICS:
+        raise InvalidInputError(f"{source}: topic {name!r} is not an IMU topic; choose one of {', '.join(IMU_TOPICS)}")
+    if name in ("sensor_gyro", "sensor_accel"):
+        g = read_topic(path, "sensor_gyro", instance=inst)
+        a = read_topic(path, "sensor_accel", instance=g.instance)
+        g = TopicData(g.topic, "imu", g.t, {"gyro": g.values["gyro"]}, {"gyro": "rad/s"}, g.t_receive, g.instance,
+                      dict(g.meta))
+        imu, note = merge_onto(g, a, "accel", source)
+        if "temp" in a.values:
+            imu, _ = merge_onto(imu, a, "temp", source)
+        imu.meta["accel_from"] = note
+        return imu
+    return read_topic(path, name, instance=inst)

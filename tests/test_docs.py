@@ -1,0 +1,48 @@
+"""The reference site builds with no warning (``make docs``: Sphinx, -W), so CI checks every docstring it renders."""
+
+from __future__ import annotations
+
+import os
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+
+TINY_LAB = """
+[lab]
+seed = 3
+steps = ["simulate_tests"]
+
+[simulate_tests]
+fs = 10.0
+dwell_s = 1.0
+transition_s = 0.5
+remount_s = 1.0
+static_duration_s = 20.0
+"""
+
+
+@pytest.mark.slow
+def test_docs_build_without_warnings(tmp_path):
+    pytest.importorskip("sphinx")
+    pytest.importorskip("myst_parser")
+    src = tmp_path / "docs"
+    shutil.copytree(ROOT / "docs", src, ignore=shutil.ignore_patterns("_build", "_generated", "generated"))
+    (tmp_path / "lab.toml").write_text(TINY_LAB)
+    env = {**os.environ, "IMUNAV_GALLERY_LAB": str(tmp_path / "lab.toml"),
+           "PYTHONPATH": os.pathsep.join(p for p in (str(ROOT / "src"), os.environ.get("PYTHONPATH")) if p)}
+    r = subprocess.run([sys.executable, "-m", "sphinx", "-W", "--keep-going", "-b", "html", "-q", str(src),
+                        str(tmp_path / "html")], capture_output=True, text=True, env=env, timeout=900)
+    assert r.returncode == 0, r.stderr[-6000:]
+    assert "WARNING" not in r.stderr and "ERROR" not in r.stderr, r.stderr[-6000:]
+    html = tmp_path / "html"
+    for page in ("index.html", "conventions.html", "gallery.html", "api/io.html",
+                 "api/generated/imunav.io.px4params.html", "api/generated/imunav.noise.fit.html"):
+        assert (html / page).is_file(), page
+    # the gallery shows the lab's figures; the API pages hold the numpydoc sections
+    assert (html / "gallery.html").read_text().count("<img") >= 3
+    assert "write_px4_params" in (html / "api/generated/imunav.io.px4params.html").read_text()
