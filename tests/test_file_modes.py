@@ -26,10 +26,11 @@ def _mode(path) -> int:
 def test_noise_fit_json_and_kalibr_yaml_modes(tmp_path, umask_022):
     from imunav.noise import allan_deviation, fit_noise, write_kalibr_yaml
 
-    y = np.random.default_rng(0).normal(0, 0.01, (20_000, 3))
-    f = fit_noise(allan_deviation(y, fs=100.0, units="rad/s"), terms=("N",))
-    assert _mode(f.to_json(tmp_path / "fit.json")) == umask_022
-    assert _mode(write_kalibr_yaml(tmp_path / "imu.yaml", f, f, 100.0)) == umask_022
+    rng = np.random.default_rng(0)
+    gyro = fit_noise(allan_deviation(rng.normal(0, 0.01, (20_000, 3)), fs=100.0, units="rad/s"), terms=("N", "K"))
+    accel = fit_noise(allan_deviation(rng.normal(0, 0.02, (20_000, 3)), fs=100.0, units="m/s^2"), terms=("N", "K"))
+    assert _mode(gyro.to_json(tmp_path / "fit.json")) == umask_022
+    assert _mode(write_kalibr_yaml(tmp_path / "imu.yaml", gyro, accel, 100.0)) == umask_022
     assert sorted(p.name for p in tmp_path.iterdir()) == ["fit.json", "imu.yaml"]  # no temp file left
 
 
