@@ -66,7 +66,7 @@ def plot_montecarlo_box(mc: Any):
 
 
 def save(fig: Any, path: str | Path) -> Path:
-    """Save atomically (temp file in the same folder, then rename; usual file mode)."""
+    """Save atomically (:func:`imunav.io._atomic.atomic_path`: hidden temp file, usual file mode, rename)."""
     from imunav.io._atomic import atomic_path
 
     p = Path(path)
