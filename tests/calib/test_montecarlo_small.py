@@ -71,3 +71,38 @@ def test_compensated_imu_errors_consistent_with_reported_uncertainty():
     print(f"compensated-output errors: mean z^2 = {np.mean(z**2):.3f}, within 3 sigma {np.mean(np.abs(z) <= 3):.3f}")
     assert 0.6 < np.mean(z**2) < 1.5, np.mean(z**2)
     assert np.mean(np.abs(z) <= 3) >= 0.98
+
+
+def test_noise_model_sets_the_covariance_of_the_fit():
+    """The noise model acts (issue 16, item 7 asked, since the bench's --tc 10 rows with and without it are
+    nearly equal): with a model whose white noise is 20 and 40 times the data's, the residual scatter is far
+    below the model's, so the generalised least squares covariance is the model's alone and every reported
+    standard error doubles from the first to the second, for the static and the rate-table fits.  Ignoring the
+    model would leave them at the residual scatter, equal in both fits."""
+    import dataclasses
+
+    from imunav.sim import apply_errors, hundred_position_profile, ideal_imu, presets, thesis_rate_table_profile
+
+    base = presets.get("thesis_sim")
+    white = dataclasses.replace(base, accel=dataclasses.replace(base.accel, bias_instability=None),
+                                gyro=dataclasses.replace(base.gyro, bias_instability=None))
+
+    def scaled(k):
+        return dataclasses.replace(
+            white, accel=dataclasses.replace(white.accel, noise_density=white.accel.noise_density * k),
+            gyro=dataclasses.replace(white.gyro, noise_density=white.gyro.noise_density * k))
+
+    kw = {"earth_rate": False, "transport_rate": False, "gravity": "constant"}
+    sp, rp = hundred_position_profile(fs=5.0), thesis_rate_table_profile(fs=5.0)
+    ds = apply_errors(ideal_imu(sp.trajectory, **kw), white, rng=7)
+    dr = apply_errors(ideal_imu(rp.trajectory, **kw), white, rng=8)
+    se = {}
+    for k in (20.0, 40.0):
+        st = multiposition(ds, sp.segments, gravity=G0, noise_model=scaled(k))
+        res = combine(st, ratetable(dr, rp.segments, base=st.calibration, gravity=G0, noise_model=scaled(k)))
+        se[k] = parameter_stderr(res.stderr)
+    plain = parameter_stderr(combine(st0 := multiposition(ds, sp.segments, gravity=G0),
+                                     ratetable(dr, rp.segments, base=st0.calibration, gravity=G0)).stderr)
+    for name in ("accel_S", "accel_B", "accel_M", "gyro_S", "gyro_M", "gyro_B", "gyro_BG"):
+        np.testing.assert_allclose(se[40.0][name] / se[20.0][name], 2.0, rtol=1e-6, err_msg=name)
+        assert np.all(se[20.0][name] > 5 * plain[name]), name  # the model's noise, not the residual scatter

@@ -79,6 +79,26 @@ def test_mpu6050_session_refused_in_strict_mode():
                   gyro_scale_guess=1.33e-4)
 
 
+def test_mpu6050_refusal_through_the_cli_names_the_flags(tmp_path):
+    """The README's documented refusal (the MPU-6050 session without --no-accel-misalignment): one line, exit 2,
+    and the ways out named as the command's flags, not as Python keyword arguments (issue 16, item 7)."""
+    from typer.testing import CliRunner
+
+    from imunav.cli.main import app
+
+    out = tmp_path / "mpu_cal.json"
+    csv = data_path("mpu6050_tedaldi", "example_data_calibration.csv")
+    r = CliRunner().invoke(app, ["calibrate", "multipose", str(csv), "--skiprows", "4", "--fs", "100",
+                                 "--accel-unit", "counts", "--accel-scale", "5.9855e-4", "--gyro-unit", "counts",
+                                 "--gyro-scale", "1.3323e-4", "--init-s", "36.5", "--out", str(out)])
+    assert r.exit_code == 2, r.output
+    lines = r.stderr.strip().splitlines()
+    assert len(lines) == 1 and "Traceback" not in r.stderr, r.stderr
+    assert "accel m_yz" in lines[0] and "--no-accel-misalignment" in lines[0] and "--no-strict" in lines[0], lines[0]
+    assert "=False" not in lines[0], lines[0]
+    assert not out.exists()
+
+
 def _table(r, pub_a, pub_g, title):
     t = r.info["tedaldi"]
     rows = list(zip(["acc " + n for n in t["accel_names"]], pub_a, t["accel"], t["accel_stderr"]))

@@ -71,3 +71,15 @@ def test_bad_inputs():
         psd(np.ones(100), 1.0, "welch", nperseg=1000)
     with pytest.raises(InvalidInputError, match="terms"):
         fit_psd(psd(np.random.default_rng(0).normal(size=256), 1.0), terms=("Z",))
+
+
+def test_every_psd_function_is_exported_by_imunav_noise():
+    """The README lists psd_readout among `imunav.noise`'s functions; `from imunav.noise import psd_readout`
+    failed (issue 16, item 7)."""
+    import importlib
+
+    import imunav.noise
+    from imunav.noise import psd_readout  # noqa: F401
+
+    module = importlib.import_module("imunav.noise.psd")  # the attribute imunav.noise.psd is the function psd
+    assert set(module.__all__) <= set(imunav.noise.__all__)

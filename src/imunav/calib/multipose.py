@@ -542,17 +542,31 @@ def multipose(
     weak = [f"accel {n} (stderr {v:.3g} rad)" for n, v in zip(TEDALDI_ACCEL_NAMES[:3], se_ma) if not v <= max_misalignment_stderr]
     weak += [f"gyro {n} (stderr {v:.3g} rad)" for n, v in zip(TEDALDI_GYRO_NAMES[:6], se_mg) if not v <= max_misalignment_stderr]
     info["weak_parameters"] = weak
+    info["max_misalignment_stderr"] = max_misalignment_stderr
     if weak and strict:
-        raise DegenerateGeometryError(
-            f"multi-pose calibration: the {K} poses do not determine {', '.join(weak)} (limit "
-            f"{max_misalignment_stderr} rad); add poses tilted between the axes (36-50 poses recommended), "
-            "fit without accelerometer misalignment (accel_misalignment=False) or pass strict=False to get "
-            "the estimate anyway"
-        )
+        raise undetermined_misalignment_error(K, weak, max_misalignment_stderr)
     cond = {"accel": float(np.linalg.cond(sol.jac)), "gyro": float(np.linalg.cond(solg.jac))}
     return CalibrationResult(
         cal, stderr, {"accel_norm": best["res"], "gyro_direction": solg.fun.reshape(-1, 3)}, cond,
         {"static": segs}, "multipose", info,
+    )
+
+
+def undetermined_misalignment_error(
+    n_poses: int, weak: list[str], limit: float, *, no_accel_misalignment: str = "accel_misalignment=False",
+    not_strict: str = "strict=False",
+) -> DegenerateGeometryError:
+    """The refusal of a session whose poses leave misalignments undetermined.
+
+    ``no_accel_misalignment`` / ``not_strict`` name the two ways out as the
+    caller spells them (the keyword arguments here, the flags in the CLI).
+    """
+    ways = ["add poses tilted between the axes (36-50 poses recommended)"]
+    if any(w.startswith("accel ") for w in weak):
+        ways.append(f"fit without accelerometer misalignment ({no_accel_misalignment})")
+    return DegenerateGeometryError(
+        f"multi-pose calibration: the {n_poses} poses do not determine {', '.join(weak)} (limit {limit} rad); "
+        f"{', '.join(ways)} or pass {not_strict} to get the estimate anyway"
     )
 
 

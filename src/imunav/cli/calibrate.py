@@ -301,11 +301,17 @@ def multipose(
     _check_report(report)
 
     from imunav.calib import multipose as fit
+    from imunav.calib.multipose import undetermined_misalignment_error
 
     data = _read(recording, fs, accel_unit, gyro_unit, accel_scale, gyro_scale, skiprows, columns, topic, instance,
                  layout)
-    res = fit(data.accel, data.gyro, data.fs, init_s=init_s, wait_s=wait_s, gravity=gravity, strict=strict,
+    res = fit(data.accel, data.gyro, data.fs, init_s=init_s, wait_s=wait_s, gravity=gravity, strict=False,
               accel_misalignment=accel_misalignment, raw_accel_unit="m/s^2", raw_gyro_unit="rad/s")
+    if strict and res.info["weak_parameters"]:  # the library's refusal, naming this command's flags
+        raise undetermined_misalignment_error(
+            res.info["n_poses"], res.info["weak_parameters"], res.info["max_misalignment_stderr"],
+            no_accel_misalignment="--no-accel-misalignment", not_strict="--no-strict",
+        )
     _finish(res, out, report, px4=px4_params)
     if res.info["weak_parameters"]:
         typer.echo("weakly determined: " + "; ".join(res.info["weak_parameters"]), err=True)

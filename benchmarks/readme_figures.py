@@ -1,0 +1,316 @@
+"""The README's benchmark figures: where each comes from, and a check that they still hold.
+
+Figures that a quick command gives are checked by ``tests/test_readme.py``
+(README examples with an ``expect`` directive) or by the test named beside
+them here.  The others come from benchmarks that run for minutes to hours;
+each is listed in ``FIGURES`` with the README text that quotes it (verbatim,
+up to line breaks: ``tests/test_readme.py`` fails when the README no longer
+contains it, so text and list cannot drift apart), the command that
+regenerates it, and, where the command's output can be read, a pattern that
+reads each figure and the tolerance within which it must agree.
+
+    python benchmarks/readme_figures.py                    # list every figure and its command
+    python benchmarks/readme_figures.py --check calib_tc5  # run the command, print README vs measured
+    python benchmarks/readme_figures.py --check --max-minutes 15   # every checkable figure of <= 15 min
+
+``--check`` exits 1 when a figure differs from the README by more than its
+tolerance.  Tolerances: half a unit of the last digit the README shows for
+seeded (deterministic) figures; timings are machine-dependent and are printed
+only (``info``).  Commands run from the repository root with this tree's
+``src`` first on ``PYTHONPATH``; ``{python}`` is this interpreter and
+``{imunav}`` the command line of this tree.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import re
+import subprocess
+import sys
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+@dataclass(frozen=True)
+class Figure:
+    """One README claim: the text that quotes it, the command that regenerates it, how to read it back."""
+
+    name: str
+    readme: str  # README text (whitespace-normalised) that quotes the figure(s)
+    command: str  # run from the repository root; {python} / {imunav} are filled in
+    minutes: float  # rough wall time on the 2-core development machine
+    values: dict[str, float] = field(default_factory=dict)  # README value of each figure read back
+    patterns: dict[str, str | tuple[str, int]] = field(default_factory=dict)  # regex on the output (, group)
+    tol: dict[str, float] = field(default_factory=dict)  # absolute tolerance per figure (default: half a unit)
+    bounds: dict[str, tuple[float, float]] = field(default_factory=dict)  # README states a range, not a value
+    info: tuple[str, ...] = ()  # machine-dependent figures: printed, never a mismatch
+    note: str = ""  # where else it is checked, or why it cannot be run here
+
+    def checkable(self) -> bool:
+        return bool(self.patterns)
+
+
+def _calib(name: str, readme: str, args: str, acc: float, acc_sd: float, gyr: float, gyr_sd: float,
+           cover: float) -> Figure:
+    return Figure(
+        name, readme, f"{{python}} benchmarks/bench_calib_montecarlo.py --runs 100 {args}".strip(), 9.0,
+        values={"accel %": acc, "accel sd": acc_sd, "gyro %": gyr, "gyro sd": gyr_sd, "lowest 3σ coverage": cover},
+        patterns={"accel %": r"mean success accel ([\d.]+) %", "accel sd": r"mean success accel [\d.]+ % \(sd ([\d.]+)",
+                  "gyro %": r"mean success gyro\s+([\d.]+) %", "gyro sd": r"mean success gyro\s+[\d.]+ % \(sd ([\d.]+)",
+                  "lowest 3σ coverage": r"lowest coverage: ([\d.]+)"},
+        note="seeded: run r simulates with seeds 2r and 2r + 1",
+    )
+
+
+_XIO_ROWS = {  # README row -> (regex of the benchmark's row, column: 1 = 3-D, 2 = horizontal)
+    "x-io method": (r"x-io method \(imufusion\), run here", 1),
+    "freeacc floor": (r"freeacc 3 m/s\^2[^\n]*\n\s*\+ level floor", 1),
+    "freeacc": (r"freeacc 3 m/s\^2[^\n]*\)", 1),
+    "freeacc horiz.": (r"freeacc 3 m/s\^2[^\n]*\)", 2),
+    "shoe": (r"SHOE 1e8, margin 0\.125 s \(README\)", 1),
+    "shoe horiz.": (r"SHOE 1e8, margin 0\.125 s \(README\)", 2),
+}
+
+_MC_ROW = r"{f}\s*│\s*([\d.]+) ± ([\d.]+)[^│]*│\s*([\d.]+) ± ([\d.]+)"
+
+
+def _mc(filt: str, label: str, pitch: float, pitch_sd: float, roll: float, roll_sd: float) -> Figure:
+    row = _MC_ROW.format(f=filt)
+    return Figure(
+        f"attitude_mc_{filt}", f"| {label} | {pitch:.4f} ± {pitch_sd:.4f} | {roll:.4f} ± {roll_sd:.4f} |",
+        "{imunav} attitude montecarlo --runs 100 --seed 0", 3.0,
+        values={"pitch": pitch, "pitch sd": pitch_sd, "roll": roll, "roll sd": roll_sd},
+        patterns={k: (row, i + 1) for i, k in enumerate(("pitch", "pitch sd", "roll", "roll sd"))},
+        tol=dict.fromkeys(("pitch", "pitch sd", "roll", "roll sd"), 5e-5),  # the README shows 4 decimals
+        note="seeded (--seed 0, run i uses imunav.montecarlo.spawn_generators(0)[i]); same numbers on every executor",
+    )
+
+
+FIGURES: tuple[Figure, ...] = (
+    Figure(
+        "install_footprint",
+        "a fresh venv with `pip install --no-compile .` is 550 MB, 586 MB after a first lab run (target < 600 MB; "
+        "no torch, no pyarrow in it)",
+        "{python} benchmarks/bench_install_footprint.py", 5.0,
+        note="needs network access to PyPI (creates a fresh venv)",
+    ),
+    Figure(
+        "ulog_px4_agreement",
+        "agrees with PX4's onboard `vehicle_attitude` after 10 s to 0.02° / 0.04° / 0.22° RMS in roll / pitch / yaw",
+        "{python} -m pytest tests/test_io_ulog.py -q -s", 1.0,
+        note="that test asserts < 0.05 / 0.1 / 0.5 deg and prints the measured RMS",
+    ),
+    Figure(
+        "ros_read_speed",
+        "runs at 67–76 % of the speed of iterating and deserializing the same messages with `rosbags` alone (CPU "
+        "time, 80 s vs 53 s), with 217 B of memory per selected message",
+        "{python} benchmarks/bench_ros_read.py", 15.0,
+        note="writes a 1 GB MCAP bag; --size-mb 50 for a quick run (other figures)",
+    ),
+    Figure(
+        "noise_allan_peer",
+        "OADEV of 10⁷ samples at 100 log-spaced τ 22× faster than `allantools.oadev` with the same values "
+        "(max relative difference 3e-14)",
+        "{python} benchmarks/bench_noise_allan.py --skip-big", 3.0,
+        values={"speed-up": 22, "max rel diff": 3e-14},
+        patterns={"speed-up": r'imunav \("log", 100\)[^\n]*\n[^\n]*\n\s*imunav \(full, with CIs\)\s+[\d.]+ s'
+                              r"\s+speed-up\s+([\d.]+)x",
+                  "max rel diff": r"max \|rel diff\| ([\d.e+-]+)"},
+        info=("speed-up", "max rel diff"),
+        note="the benchmark itself checks the targets (>= 10x, rel diff < 1e-9) and prints MET / NOT MET",
+    ),
+    Figure(
+        "noise_allan_memmap",
+        "a memory-mapped 10⁸ × 6 record (4.8 GB) in 21–41 s (by machine load) with a peak RSS of 1035 MiB",
+        "{python} benchmarks/bench_noise_allan.py --skip-peer", 2.0,
+        values={"wall s": 21, "peak RSS MiB": 1035},
+        patterns={"wall s": r"wall time ([\d.]+) s", "peak RSS MiB": r"peak RSS\s+([\d.]+) MB"},
+        tol={"peak RSS MiB": 60},
+        info=("wall s",),
+        note="writes a 4.8 GB file once ($IMUNAV_BENCH_DIR or /tmp); RSS = VmHWM of the analysing process",
+    ),
+    Figure(
+        "noise_truth",
+        "`benchmarks/bench_noise_truth.py` — 50 runs of the allan_variance_ros simulator parameters: the median of "
+        "the signed errors of N and K is below 0.5 % (no bias); the error of one run is typically 0.03 % for N and "
+        "5.4 % (accelerometer) / 9.2 % (gyro) for K, which only the longest τ constrain (median |error|); the 95 % "
+        "intervals cover the truth in 94–96 % of runs.",
+        "{python} benchmarks/bench_noise_truth.py 50", 3.0,
+        values={"accel N median |err| %": 0.03, "accel K median |err| %": 5.4,
+                "gyro N median |err| %": 0.03, "gyro K median |err| %": 9.2},
+        patterns={f"{s} {t}": (rf"(?s){s}: \d+ runs.*?{row}\s+(-?[\d.]+)%\s+(-?[\d.]+)%", g)
+                  for s in ("accel", "gyro")
+                  for t, row, g in (("N median err %", r"GLS median rel err", 1),
+                                    ("K median err %", r"GLS median rel err", 2),
+                                    ("N median |err| %", r"GLS median \|rel err\|", 1),
+                                    ("K median |err| %", r"GLS median \|rel err\|", 2),
+                                    ("N coverage %", r"GLS 95% CI coverage", 1),
+                                    ("K coverage %", r"GLS 95% CI coverage", 2))},
+        bounds={f"{s} {t}": b for s in ("accel", "gyro")
+                for t, b in (("N median err %", (-0.5, 0.5)), ("K median err %", (-0.5, 0.5)),
+                             ("N coverage %", (94.0, 96.0)), ("K coverage %", (94.0, 96.0)))},
+        note="seeded (numpy default_rng([2026, run, sensor]))",
+    ),
+    _calib("calib_tc5",
+           "| 5 s (preset default, `presets.THESIS_TC_S`) | 99.21 % (sd 0.21) | 99.67 % (sd 0.13) | 0.98 |",
+           "", 99.21, 0.21, 99.67, 0.13, 0.98),
+    _calib("calib_tc10", "| 10 s (`--tc 10`) | 98.92 % (sd 0.29) | 99.54 % (sd 0.18) | 0.98 |",
+           "--tc 10", 98.92, 0.29, 99.54, 0.18, 0.98),
+    _calib("calib_tc10_no_noise_model",
+           "| 10 s, no noise model (`--no-noise-model`: AR(1) from residuals) | 98.92 % (sd 0.29) | 99.54 % (sd 0.18) "
+           "| 0.97 |", "--tc 10 --no-noise-model", 98.92, 0.29, 99.54, 0.18, 0.97),
+    _calib("calib_white", "| white noise only (`--tc 0`) | 99.89 % (sd 0.03) | 99.93 % (sd 0.03) | 0.98 |",
+           "--tc 0", 99.89, 0.03, 99.93, 0.03, 0.98),
+    _mc("lee", "Lee 2012 (c_a = 0.1)", 1.1415, 0.0021, 0.0291, 0.0017),
+    _mc("javed", 'Javed 2020 ("Javed-like" reconstruction, c_a = 0.1)', 0.0167, 0.0074, 0.0133, 0.0091),
+    _mc("proposed", "proposed (diagonal S, detector D1 τ = 0.02 m/s²)", 0.0311, 0.0020, 0.0315, 0.0020),
+    Figure(
+        "broad_published",
+        "reproduces the published per-trial total RMSE of all 10 trials within 0.0002°; Mahony (Kp 0.74, Ki 0.0012) "
+        "within 0.001°",
+        "{python} -m pytest tests/attitude/test_broad.py -k all_trials -s -q", 1.0,
+        note="checked by that test (largest differences 1.2e-4° Madgwick-C, trial 15; 8.0e-4° Mahony, trial 27)",
+    ),
+    Figure(
+        "broad_table",
+        "| **mean** | **2.76** | **2.25** | **1.96** (1.95) = 0.71 × vqf | **1.95** (1.95) = 0.87 × offline VQF |",
+        "{python} benchmarks/bench_attitude_broad.py --holdout DIR --workers 2", 60.0,
+        note="DIR = data_mat/ of the BROAD repository (20 trials not in the shared data): cannot run here",
+    ),
+    Figure(
+        "zupt_lstm_cv",
+        "| LSTM, `--detector lstm` (guard rule chosen per fold) | **0.176 m (0.46×)** | **0.72 m** | 0.130 m "
+        "(worst 0.73 m) |",
+        "{python} benchmarks/bench_zupt_lstm_cv.py", 20.0,
+        note="trains 6 LSTMs; 'about 15 min on one CPU thread'",
+    ),
+    Figure(
+        "zupt_xio",
+        "| x-io's method (imufusion), run by the benchmark | 0.082 m | 0.421 m | | `freeacc --margin-s 0.1 "
+        "--level-floor` | 0.057 m | 0.227 m | | `freeacc --margin-s 0.1` (no floor constraint) | 0.130 m (horizontal "
+        "0.057) | 0.367 m (horizontal 0.225) | | `shoe --threshold 1e8 --margin-s 0.125 --sigma-acc 2` | 0.138 m "
+        "(horizontal 0.082) | 0.186 m |",
+        "{python} benchmarks/bench_zupt_xio.py", 1.0,
+        values={f"{w} {k}": v for w, vals in (("short", (0.082, 0.057, 0.130, 0.057, 0.138, 0.082)),
+                                               ("long", (0.421, 0.227, 0.367, 0.225, 0.186, None)))
+                for k, v in zip(_XIO_ROWS, vals) if v is not None},
+        patterns={f"{w} {k}": (rf"(?s){w}_walk:.*?{row}\s+([\d.]+)\s+([\d.]+)", g)
+                  for w in ("short", "long") for k, (row, g) in _XIO_ROWS.items()
+                  if not (w == "long" and k == "shoe horiz.")},
+        tol=dict.fromkeys([f"{w} {k}" for w in ("short", "long") for k in _XIO_ROWS], 5e-4),
+        note="the settings sweep below the table is printed by the same command (sensitivity lines)",
+    ),
+    Figure(
+        "airdata_robust",
+        "a per-channel ±2σ gate cannot reject more than ≈ 89 % of ×15 outliers (≈ 11 % of them fall inside ±2σ); "
+        "the vector χ² gate (`--robust nis`) rejects ≈ 99.4 % of these whole-sensor outliers and only 0.1 % of good "
+        "data",
+        "{python} benchmarks/bench_airdata_thesis.py", 6.0,
+        values={"gate2 rejected": 0.89, "nis rejected": 0.994, "nis false rejections": 0.001},
+        patterns={"gate2 rejected": r"gate2\s+([\d.]+)", "nis rejected": r"\n\s+nis\s+([\d.]+)",
+                  "nis false rejections": r"\n\s+nis\s+[\d.]+\s+([\d.]+)"},
+        tol={"gate2 rejected": 0.005, "nis rejected": 0.0005, "nis false rejections": 0.0005},
+        note="2000 seeded runs (--seed 0); also prints P44 (checked by the README test) and the wind figures",
+    ),
+    Figure(
+        "airdata_alg1",
+        "alarms on ≈ 43 % of fault-free steps",
+        "{python} benchmarks/bench_airdata_faults.py", 1.0,
+        values={"alg1 thesis-threshold alarms": 0.43},
+        patterns={"alg1 thesis-threshold alarms": r"alg1\s+[\d.]+\s+[\d.]+\s+[\d.]+\s+[\d.]+\s+([\d.]+)"},
+        tol={"alg1 thesis-threshold alarms": 0.005},
+        note="2000 seeded runs (--seed 0); the thesis's 28.87 against the calibrated threshold",
+    ),
+)
+
+
+def _normalise(text: str) -> str:
+    return " ".join(text.split())
+
+
+def _command(f: Figure) -> str:
+    imunav = f"{sys.executable} -m imunav.cli.main"
+    return f.command.format(python=sys.executable, imunav=imunav)
+
+
+def _decimals(x: float) -> float:
+    """Half a unit of the last digit of ``x`` as the README writes it."""
+    s = repr(float(x))
+    if "e" in s:
+        return abs(x) * 0.5
+    frac = s.partition(".")[2].rstrip("0")
+    return 0.5 * 10.0 ** (-len(frac))
+
+
+def check(f: Figure) -> list[tuple[str, str, float | None, bool]]:
+    """Run the figure's command; (figure, README value or range, measured, agrees) for each figure."""
+    env = dict(os.environ)
+    env["PYTHONPATH"] = os.pathsep.join([str(ROOT / "src"), *filter(None, [env.get("PYTHONPATH")])])
+    env.setdefault("COLUMNS", "160")
+    t0 = time.time()
+    res = subprocess.run(_command(f), shell=True, cwd=ROOT, env=env, capture_output=True, text=True)
+    out = res.stdout + res.stderr
+    print(f"  ({time.time() - t0:.0f} s, exit {res.returncode})")
+    rows = []
+    for key, pat in f.patterns.items():
+        regex, group = pat if isinstance(pat, tuple) else (pat, 1)
+        m = re.search(regex, out)
+        got = float(m.group(group)) if m else None
+        if key in f.bounds:
+            lo, hi = f.bounds[key]
+            ok = got is not None and lo <= got <= hi
+            rows.append((key, f"{lo:g}-{hi:g}", got, ok))
+            continue
+        want = f.values[key]
+        tol = f.tol.get(key, _decimals(want))
+        ok = key in f.info or (got is not None and abs(got - want) <= tol + 1e-12)
+        rows.append((key, f"{want:g}", got, ok))
+    if res.returncode != 0:
+        print(out[-3000:])
+        rows.append(("exit status", "0", float(res.returncode), False))
+    return rows
+
+
+def main(argv: list[str] | None = None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--check", nargs="*", metavar="NAME",
+                    help="run these figures' commands (none named: every checkable one)")
+    ap.add_argument("--max-minutes", type=float, default=None,
+                    help="with --check and no NAME: only the figures this quick")
+    a = ap.parse_args(argv)
+    readme = _normalise((ROOT / "README.md").read_text(encoding="utf-8"))
+    by_name = {f.name: f for f in FIGURES}
+    if a.check is None:
+        for f in FIGURES:
+            state = "in README" if _normalise(f.readme) in readme else "NOT IN README"
+            how = "checkable" if f.checkable() else "by hand"
+            print(f"{f.name:28s} ~{f.minutes:4.0f} min  {how:9s} {state}\n    {f.command}\n    {f.note}".rstrip())
+        return 0
+    unknown = [n for n in a.check if n not in by_name]
+    if unknown:
+        ap.error(f"unknown figure(s) {unknown}; choose from {sorted(by_name)}")
+    chosen = [by_name[n] for n in a.check] or [f for f in FIGURES if f.checkable()
+                                                and (a.max_minutes is None or f.minutes <= a.max_minutes)]
+    bad = 0
+    for f in chosen:
+        print(f"{f.name}: {_command(f)}")
+        if _normalise(f.readme) not in readme:
+            print("  README no longer quotes:", f.readme)
+            bad += 1
+        if not f.checkable():
+            print("  (no pattern: compare by hand)", f.note)
+            continue
+        for key, want, got, ok in check(f):
+            flag = "info" if key in f.info else ("ok" if ok else "MISMATCH")
+            print(f"  {key:20s} README {want:<10s} measured {'-' if got is None else f'{got:g}':<10s} {flag}")
+            bad += not ok
+    print("all figures agree" if not bad else f"{bad} mismatch(es)")
+    return 1 if bad else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
