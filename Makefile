@@ -53,6 +53,7 @@ browser:
 	  echo "chromium not installed: the browser rendering test will be skipped"
 
 test: $(STAMP_TEST) browser
+	$(BIN)/python -m ruff check .
 	$(BIN)/python -m pytest -n 2 -q
 
 # API reference + gallery into docs/_build/html, warnings as errors.  The gallery's figures come

@@ -22,7 +22,6 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
-import json
 import time
 
 import numpy as np
@@ -49,8 +48,15 @@ def model_with_tc(tc: float | None):
 
 
 def one_run(seed, model, sp, rp, ideal_s, ideal_r, lat, gravity, use_noise_model=True):
-    from imunav.calib import ImuCalibration, calibration_parameters, combine, multiposition, parameter_stderr
-    from imunav.calib import ratetable, success_percentages
+    from imunav.calib import (
+        ImuCalibration,
+        calibration_parameters,
+        combine,
+        multiposition,
+        parameter_stderr,
+        ratetable,
+        success_percentages,
+    )
     from imunav.sim import apply_errors
 
     ds = apply_errors(ideal_s, model, rng=2 * seed)

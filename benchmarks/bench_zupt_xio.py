@@ -117,7 +117,7 @@ def main() -> int:
                   f"{float(np.hypot(*(pos[-1, :2] - pos[0, :2]))):8.4f} {abs(pos[-1, 2] - pos[0, 2]):8.4f} "
                   f"{1.0:6.2f}")
 
-        def row(label, lc):
+        def row(label, lc, ref=ref):
             print(f"  {label:60s} {lc.error_3d:8.4f} {lc.horizontal:8.4f} {abs(lc.vertical):8.4f} "
                   f"{lc.error_3d / ref:6.2f}")
 

@@ -8,7 +8,6 @@ data_path``, which skips with the missing path named when they are absent.
 from __future__ import annotations
 
 import pytest
-
 from shared_data import ROOT, data_path  # noqa: E402,F401  (re-exported for old imports)
 
 

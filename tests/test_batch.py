@@ -106,7 +106,7 @@ def test_batch_calibrate_reports_a_bad_unit_and_continues(tiny_batch, tmp_path):
 def test_batch_noise_recovers_white_noise(tmp_path):
     """Static units: the Allan fit's ARW / VRW match the simulated noise densities."""
     from imunav.io import write_imu
-    from imunav.sim import TriadErrors, static_profile, simulate_imu
+    from imunav.sim import TriadErrors, simulate_imu, static_profile
 
     m = ImuErrorModel(gyro=TriadErrors(noise_density=np.array([1e-3, 2e-3, 1.5e-3])),
                       accel=TriadErrors(noise_density=2e-3))

@@ -68,7 +68,9 @@ def test_radii_published_and_geometric():
     assert rn == pytest.approx(earth.A**2 / earth.B, abs=1e-6)  # 6399593.626 m
     # geometric meaning: |dr/dlat| = R_N and |dr/dlon| = R_E cos(lat) on the ellipsoid
     lat, lon, d = 0.8, 0.3, 1e-6
-    r = lambda la, lo: earth.lla_to_ecef([la, lo, 0.0])
+    def r(la, lo):
+        return earth.lla_to_ecef([la, lo, 0.0])
+
     rn, re = earth.radii(lat)
     assert np.linalg.norm(r(lat + d, lon) - r(lat - d, lon)) / (2 * d) == pytest.approx(rn, rel=1e-9)
     assert np.linalg.norm(r(lat, lon + d) - r(lat, lon - d)) / (2 * d) == pytest.approx(re * np.cos(lat), rel=1e-9)

@@ -11,8 +11,8 @@ import scipy.io
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 from hypothesis.extra import numpy as hnp
-
 from shared_data import data_path
+
 from imunav.errors import FileFormatError, InvalidInputError, NonFiniteError, ShapeError, TimeOrderError, UnitError
 from imunav.io import FORMATS, read_imu, write_imu
 from imunav.timeseries import ImuData

@@ -70,7 +70,7 @@ def test_cli_lab_writes_report_and_data(tmp_path):
 def test_run_lab_artifacts_and_reproducibility(tmp_path):
     r1 = run_lab(tmp_path / "a", _cfg(tmp_path), progress=False)
     r2 = run_lab(tmp_path / "b", _cfg(tmp_path), progress=False)
-    assert r1.passed and not r1.failed_steps
+    assert r1.passed and not r1.failed_steps and r2.passed
     a = read_imu(tmp_path / "a" / "data" / "rate_table.npz")
     b = read_imu(tmp_path / "b" / "data" / "rate_table.npz")
     np.testing.assert_array_equal(a.gyro, b.gyro)

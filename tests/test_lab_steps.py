@@ -4,11 +4,11 @@ from __future__ import annotations
 
 import json
 
+import browser
 import numpy as np
 import pytest
 from typer.testing import CliRunner
 
-import browser
 from imunav.cli.main import app
 from imunav.errors import ConfigError
 from imunav.lab import parse_lab_config, run_lab

@@ -2,10 +2,10 @@
 
 from __future__ import annotations
 
+import mc_scenarios as sc
 import numpy as np
 import pytest
 
-import mc_scenarios as sc
 from imunav.errors import InvalidInputError
 from imunav.montecarlo import nees_consistency, run_batch, run_montecarlo, spawn_generators
 

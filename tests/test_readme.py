@@ -52,7 +52,6 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 import pytest
-
 from shared_data import ROOT
 
 README = ROOT / "README.md"

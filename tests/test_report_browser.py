@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import browser
+
 from imunav.report import Parameter, Report
 
 

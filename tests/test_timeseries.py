@@ -7,8 +7,8 @@ import json
 
 import numpy as np
 import pytest
-
 from shared_data import data_path
+
 from imunav.errors import (
     InsufficientDataError,
     InvalidInputError,

@@ -251,7 +251,7 @@ def simulate_batch(
             n_units=n_units, fs=float(fs), dwell_s=float(dwell_s), transition_s=float(transition_s),
             rate_table=bool(rate_table), fmt=format, static_s=None if not static_s else float(static_s),
         )
-        for name, r in zip(names, res):
+        for _name, r in zip(names, res):
             if isinstance(r, BaseException):
                 raise r
         # the tables that describe the batch come after the units (a killed run leaves no batch.json)

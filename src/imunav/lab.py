@@ -46,7 +46,6 @@ Example
 
 from __future__ import annotations
 
-import base64
 import contextlib
 import importlib
 import os

@@ -87,7 +87,7 @@ def _visible_files(root: Path) -> list[Path]:
 
 def _remove_temp_files(root: Path) -> list[Path]:
     gone = []
-    for dirpath, dirnames, filenames in os.walk(root):
+    for dirpath, _dirnames, filenames in os.walk(root):
         for f in filenames:
             if _is_temp(f):
                 with contextlib.suppress(FileNotFoundError):

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from imunav.rotation import quat_conjugate, quat_from_euler, quat_multiply, quat_rotate, quat_exp
+from imunav.rotation import quat_conjugate, quat_exp, quat_from_euler, quat_multiply, quat_rotate
 from imunav.timeseries import ImuData
 
 G = 9.81

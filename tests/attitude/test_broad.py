@@ -8,8 +8,8 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-
 from shared_data import data_path
+
 from imunav.attitude.alignment import broad_reference_start
 from imunav.attitude.madgwick import Madgwick
 from imunav.attitude.mahony import Mahony

@@ -17,7 +17,6 @@ import pytest
 from imunav.attitude import _gravity_kernels as G
 from imunav.attitude.gravity_kf import GravityKF, GravityKfParams
 from imunav.attitude.scenario import PaperScenario, simulate
-from imunav.timeseries import ImuData
 
 _KIND = {"lee": 0, "javed": 1, "proposed": 2}
 

@@ -180,7 +180,7 @@ def test_step_refuses_a_bad_time_step(make, dt):
 
 
 def test_impossible_rates_refused_in_step_and_run():
-    from imunav.attitude import Complementary, GravityKF, Madgwick, Mahony, UKF
+    from imunav.attitude import UKF, Complementary, GravityKF, Madgwick, Mahony
 
     for f in (MEKF(), Madgwick(), Mahony(), Complementary(), UKF()):
         with pytest.raises(InvalidInputError, match="exceeds"):

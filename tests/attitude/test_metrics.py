@@ -8,7 +8,7 @@ import pytest
 from imunav.attitude.metrics import attitude_rmse, error_angles, euler_rmse
 from imunav.errors import InsufficientDataError, ShapeError
 from imunav.io.broad import from_enu, to_enu
-from imunav.rotation import quat_from_euler, quat_multiply, quat_from_rotvec
+from imunav.rotation import quat_from_rotvec, quat_multiply
 
 
 def _rand_q(rng, n):

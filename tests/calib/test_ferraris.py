@@ -4,12 +4,11 @@ import json
 
 import numpy as np
 import pytest
-
+from _simulate import thesis_truth
 from conftest_data import data_path
+
 from imunav.calib import FERRARIS_SECTIONS, ImuCalibration, ferraris, ferraris_from_session
 from imunav.errors import InsufficientDataError, SaturationError
-
-from _simulate import thesis_truth
 
 
 def _annotated():

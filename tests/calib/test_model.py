@@ -4,11 +4,10 @@ import json
 
 import numpy as np
 import pytest
+from _simulate import thesis_truth
 
 from imunav.calib import ImuCalibration, TempCurve, calibration_parameters, success_percentages
 from imunav.errors import FileFormatError, InvalidInputError, NonFiniteError, ShapeError, UnitError
-
-from _simulate import thesis_truth
 
 
 def test_apply_inverts_invert_exactly(rng):

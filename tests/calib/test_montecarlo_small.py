@@ -2,8 +2,15 @@
 
 import numpy as np
 
-from imunav.calib import ImuCalibration, calibration_parameters, combine, multiposition, parameter_stderr
-from imunav.calib import ratetable, success_percentages
+from imunav.calib import (
+    ImuCalibration,
+    calibration_parameters,
+    combine,
+    multiposition,
+    parameter_stderr,
+    ratetable,
+    success_percentages,
+)
 from imunav.units import G0
 
 

@@ -2,12 +2,10 @@
 
 import numpy as np
 import pytest
-
-from imunav.calib import combine, multiposition, ratetable, ratetable_from_means
-from imunav.calib import success_percentages
-from imunav.errors import DegenerateGeometryError, InsufficientDataError
-
 from _simulate import G, thesis_rate_steps, thesis_truth
+
+from imunav.calib import combine, multiposition, ratetable, ratetable_from_means, success_percentages
+from imunav.errors import DegenerateGeometryError, InsufficientDataError
 
 
 def test_rate_steps_noise_free_exact():

@@ -2,12 +2,10 @@
 
 import numpy as np
 import pytest
-
-from imunav.calib import multiposition, multiposition_from_means, six_position, success_percentages
-from imunav.calib import parameter_stderr
-from imunav.errors import DegenerateGeometryError, InsufficientDataError, SaturationError
-
 from _simulate import G, hundred_positions, thesis_truth
+
+from imunav.calib import multiposition, multiposition_from_means, parameter_stderr, six_position, success_percentages
+from imunav.errors import DegenerateGeometryError, InsufficientDataError, SaturationError
 
 
 def _means(truth, u, rng=None, sa=0.0, sg=0.0):
@@ -81,7 +79,7 @@ def test_time_series_with_transitions_and_hints(rng):
     truth = thesis_truth()
     u = hundred_positions()[::4]  # 25 positions
     fs, dwell, trans = 50.0, 6.0, 2.0
-    f_list, t_list, windows = [], [], []
+    f_list, windows = [], []
     t0 = 0.0
     for k in range(len(u)):
         n = int(dwell * fs)

@@ -6,8 +6,8 @@ import glob
 
 import numpy as np
 import pytest
-
 from shared_data import data_path
+
 from imunav.errors import InvalidInputError, ShapeError
 from imunav.ins import amvd, ared, detect_zero_velocity, detector_statistic, mbgtd, motion_adaptive, shoe
 from imunav.ins.detectors import optimize_threshold

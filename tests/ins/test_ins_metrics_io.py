@@ -4,8 +4,8 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-
 from shared_data import data_path
+
 from imunav.errors import FileFormatError, InsufficientDataError, InvalidInputError, ShapeError
 from imunav.ins import ZuptConfig, detect_zero_velocity, error_2d, loop_closure_error, position_rmse, run_zupt
 from imunav.ins.metrics import align_heading, vertical_error

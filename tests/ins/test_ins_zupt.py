@@ -7,8 +7,8 @@ import math
 
 import numpy as np
 import pytest
-
 from shared_data import data_path
+
 from imunav.errors import ConfigError, InsufficientDataError, InvalidInputError, ShapeError
 from imunav.ins import ZuptConfig, align_from_accel, error_2d, first_stance, run_zupt
 from imunav.rotation import euler_from_quat, quat_from_euler

@@ -8,11 +8,11 @@ import pytest
 
 mpmath = pytest.importorskip("mpmath")
 
-from imunav import allan_models as am
-from imunav.errors import InvalidInputError
-from imunav.noise import avar_model
-from imunav.noise.fit import avar_term
-from imunav.sim import allan_variance_gauss_markov, allan_variance_ieee952
+from imunav import allan_models as am  # noqa: E402 (after the importorskip)
+from imunav.errors import InvalidInputError  # noqa: E402
+from imunav.noise import avar_model  # noqa: E402
+from imunav.noise.fit import avar_term  # noqa: E402
+from imunav.sim import allan_variance_gauss_markov, allan_variance_ieee952  # noqa: E402
 
 
 def _gm_unit_mp(tau: float, T: float) -> float:

@@ -9,8 +9,16 @@ import pytest
 from scipy.signal import lfilter
 
 from imunav.errors import InsufficientDataError, InvalidInputError, NonFiniteError, ShapeError
-from imunav.noise.ar import (ar1_correlation_time, ar1_noise_bias, autocorrelation, block_decimate,
-                             correlation_time_acf, fit_gauss_markov, gm_discrete, yule_walker)
+from imunav.noise.ar import (
+    ar1_correlation_time,
+    ar1_noise_bias,
+    autocorrelation,
+    block_decimate,
+    correlation_time_acf,
+    fit_gauss_markov,
+    gm_discrete,
+    yule_walker,
+)
 
 
 def ar_series(c, n, rng, sigma_w=1.0):

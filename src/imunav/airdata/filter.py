@@ -52,9 +52,8 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from imunav.errors import InvalidInputError, ShapeError
-from imunav.filters import BatchRun, KalmanFilter, batch_kalman_filter
+from imunav.filters import BatchRun, batch_kalman_filter
 from imunav.filters._common import ResultMixin
-from imunav.filters.robust import robust_update
 
 __all__ = [
     "ThesisFilterConfig",
@@ -297,8 +296,7 @@ def run_long_horizon(
     ``z = C_nb V_D − C_nb V_A = W + g + noise`` with
     ``R = C_nb (R_D + R_A) C_nbᵀ``.
     """
-    from imunav.filters._batch import huber_batch, isolate_batch
-    from imunav.filters._batch import inv_sqrt_batch, masked_update, sym
+    from imunav.filters._batch import huber_batch, inv_sqrt_batch, isolate_batch, masked_update, sym
     from imunav.filters.robust import isolation_thresholds
 
     c = LongHorizonConfig() if cfg is None else cfg

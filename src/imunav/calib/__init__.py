@@ -9,7 +9,17 @@
 - :mod:`.magnetometer`: hard/soft iron, :func:`fit_ellipsoid` (Li & Griffiths 2004).
 """
 
+from imunav.calib.ferraris import FERRARIS_SECTIONS, ferraris, ferraris_from_session
+from imunav.calib.magnetometer import (
+    MagCalibration,
+    fit_ellipsoid,
+    hard_iron_minmax,
+    soft_iron_rotation_scale,
+    sphere_coverage,
+)
 from imunav.calib.model import FORMAT_VERSION, ImuCalibration, TempCurve, calibration_parameters, success_percentages
+from imunav.calib.multipose import multipose
+from imunav.calib.ratetable import combine, ratetable, ratetable_from_means
 from imunav.calib.result import CalibrationResult, parameter_stderr
 from imunav.calib.static import (
     earth_rate_body,
@@ -18,17 +28,7 @@ from imunav.calib.static import (
     reference_specific_force,
     six_position,
 )
-from imunav.calib.ratetable import combine, ratetable, ratetable_from_means
-from imunav.calib.ferraris import FERRARIS_SECTIONS, ferraris, ferraris_from_session
-from imunav.calib.multipose import multipose
 from imunav.calib.temperature import TemperatureFit, ThermalResult, fit_temperature_curve, thermal_calibration
-from imunav.calib.magnetometer import (
-    MagCalibration,
-    fit_ellipsoid,
-    hard_iron_minmax,
-    soft_iron_rotation_scale,
-    sphere_coverage,
-)
 
 __all__ = [
     "FORMAT_VERSION",

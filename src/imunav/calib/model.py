@@ -503,7 +503,6 @@ def _from_imucal_unit(u: str | None, si: str) -> str:
 def _pair(a: ArrayLike, g: ArrayLike) -> tuple[Array, Array]:
     a = np.asarray(a, dtype=float)
     g = np.asarray(g, dtype=float)
-    one = a.ndim == 1
     a2 = np.atleast_2d(a)
     g2 = np.atleast_2d(g)
     if a2.shape[-1] != 3 or g2.shape != a2.shape or a2.ndim != 2:

@@ -8,7 +8,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from imunav.calib.model import ImuCalibration, _OFF
+from imunav.calib.model import _OFF, ImuCalibration
 
 __all__ = ["CalibrationResult", "parameter_stderr"]
 

@@ -32,8 +32,8 @@ from imunav.calib._segments import (
 )
 from imunav.calib.model import ImuCalibration
 from imunav.calib.result import CalibrationResult
-from imunav.errors import DegenerateGeometryError, InsufficientDataError, InvalidInputError, NonFiniteError, ShapeError
 from imunav.earth import OMEGA_E
+from imunav.errors import DegenerateGeometryError, InsufficientDataError, InvalidInputError, NonFiniteError, ShapeError
 from imunav.units import G0
 
 __all__ = [

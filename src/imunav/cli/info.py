@@ -68,10 +68,10 @@ def info(
     from rich.console import Console
     from rich.table import Table
 
+    from imunav.cli._options import reader_options
     from imunav.errors import InvalidInputError
     from imunav.io import read_imu
     from imunav.io._atomic import check_outputs, write_json
-    from imunav.cli._options import reader_options
     from imunav.timeseries import describe
     from imunav.units import DEG, G0
 

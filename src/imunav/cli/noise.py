@@ -93,10 +93,10 @@ def noise(
     from rich.progress import Progress
     from rich.table import Table
 
-    from imunav.errors import InvalidInputError
-    from imunav.cli._options import reader_options
-    from imunav.io import read_imu
     from imunav.cli._errors import check_figure_path
+    from imunav.cli._options import reader_options
+    from imunav.errors import InvalidInputError
+    from imunav.io import read_imu
     from imunav.io._atomic import atomic_path, check_outputs, write_json
     from imunav.noise import allan_deviation, compare_psd_allan, fit_noise, fit_psd, log_average, psd
     from imunav.units import to_display
@@ -154,7 +154,7 @@ def noise(
 
     console.print(f"[bold]{file}[/bold]: {data.n:,} samples at {rate:g} Hz ({data.n / rate:.6g} s), "
                   f"kind={kind}, taus={taus}")
-    for sensor, (r, f, p, pa, pf, cmp) in results.items():
+    for sensor, (r, f, _p, _pa, _pf, cmp) in results.items():
         t = Table(title=f"{sensor} noise terms (GLS fit ± standard error; display units)", title_justify="left")
         t.add_column("channel")
         shown = [i for i, nm in enumerate(f.names) if f.selected[i].any() or nm in ("N", "B", "K")]
@@ -179,7 +179,7 @@ def noise(
         console.print(t)
     if json_out is not None:
         out = {"file": str(file), "fs": rate, "n_samples": int(data.n)}
-        for sensor, (r, f, p, pa, pf, cmp) in results.items():
+        for sensor, (r, f, _p, _pa, pf, cmp) in results.items():
             out[sensor] = {"allan": r.to_dict(), "fit": f.to_dict(), "psd_fit": pf.to_dict(), "psd_vs_allan": cmp,
                            "curve_fits": _curve_fits(r)}
         write_json(json_out, out, indent=1)

@@ -88,8 +88,14 @@ def run_simulate(
 
     from imunav.errors import ConfigError, InvalidInputError
     from imunav.io import write_imu
-    from imunav.sim import ferraris_profile, hundred_position_profile, ideal_imu, six_position_profile
-    from imunav.sim import static_profile, thesis_rate_table_profile
+    from imunav.sim import (
+        ferraris_profile,
+        hundred_position_profile,
+        ideal_imu,
+        six_position_profile,
+        static_profile,
+        thesis_rate_table_profile,
+    )
     from imunav.units import DEG
 
     if profile not in PROFILES:

@@ -94,7 +94,7 @@ def huber_batch(x: Array, P: Array, z: Array, H: Array, R: Array, c: float, vali
     xe = x.copy()
     w = np.ones((B, m))
     it = 0
-    for it in range(1, max_iter + 1):
+    for it in range(1, max_iter + 1):  # noqa: B007 (the count is returned)
         r = np.einsum("ij,bj->bi", Lri, z - xe @ H.T)
         a = np.abs(r)
         w = np.where(a <= c, 1.0, c / np.maximum(a, 1e-300))

@@ -147,14 +147,14 @@ def huber_update(
 
 def _huber_stacked(x, P, z, H, R, c, max_iter, tol):
     """IRLS with prior rows re-weighted too (Karlgaard & Schaub 2007)."""
-    n, m = x.shape[0], z.shape[0]
+    n = x.shape[0]
     Lpi = np.linalg.inv(np.linalg.cholesky(P))
     Lri = np.linalg.inv(np.linalg.cholesky(R))
     M = np.vstack([Lpi, Lri @ H])
     y = np.concatenate([Lpi @ x, Lri @ z])
     xe = x.copy()
     it = 0
-    for it in range(1, max_iter + 1):
+    for it in range(1, max_iter + 1):  # noqa: B007 (the count is returned)
         w = huber_weights(y - M @ xe, c)
         xn = np.linalg.solve(M.T @ (M * w[:, None]), (M * w[:, None]).T @ y)
         done = np.max(np.abs(xn - xe)) < tol

@@ -399,7 +399,7 @@ def read_log_imu(path: str | os.PathLike[str], *, topic: str | None = None, inst
     source = os.fspath(path)
     imu = mod.read_imu_topic(path, topic, instance=instance)
     notes: dict[str, Any] = {}
-    for opt, name, kinds in (("mag_topic", "mag", ("mag",)), ("temp_topic", "temp", ("temperature", "imu"))):
+    for opt, name, _kinds in (("mag_topic", "mag", ("mag",)), ("temp_topic", "temp", ("temperature", "imu"))):
         tp = mag_topic if name == "mag" else temp_topic
         if tp is None:
             continue

@@ -78,8 +78,7 @@ def _rows(est: Any, truth: Any, stderr: dict, success: dict) -> list[dict]:
 
 
 def run(ctx: LabContext) -> StepResult:
-    from imunav.calib import ImuCalibration, combine, multiposition, parameter_stderr, ratetable
-    from imunav.calib import success_percentages
+    from imunav.calib import ImuCalibration, combine, multiposition, parameter_stderr, ratetable, success_percentages
     from imunav.calib.model import write_json_atomic
 
     opts = _options(ctx)

@@ -286,7 +286,7 @@ def detrend_quadratic(z):  # pragma: no cover - numba
     b = np.zeros(3)
     for i in range(n):
         t = (i - c) / s
-        p0, p1, p2 = 1.0, t, t * t
+        p1, p2 = t, t * t
         A[0, 0] += 1.0
         A[0, 1] += p1
         A[0, 2] += p2

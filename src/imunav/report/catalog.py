@@ -101,7 +101,7 @@ def calibration_estimates(calibration: Any, stderr: Mapping[str, Any] | None = N
             sT = np.asarray(sT, float)
             for i, a in enumerate("xyz"):
                 out[f"{s}_scale_{a}"] = (float(T[i, i] - 1.0), float(sT[i, i]))
-            for k, ab in enumerate(_OFF):
+            for ab in _OFF:
                 i, j = "xyz".index(ab[0]), "xyz".index(ab[1])
                 out[f"{s}_misalignment_{ab}"] = (float(T[i, j]), float(sT[i, j]))
     sg = se.get("g_sensitivity")

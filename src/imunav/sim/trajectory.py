@@ -28,7 +28,6 @@ from numpy.typing import ArrayLike, NDArray
 
 from imunav import earth
 from imunav.errors import InvalidInputError, NonFiniteError, ShapeError, TimeOrderError
-from imunav.timeseries import ImuData
 from imunav.rotation import (
     dcm_from_quat,
     quat_conjugate,
@@ -37,6 +36,7 @@ from imunav.rotation import (
     quat_normalize,
     rotvec_from_quat,
 )
+from imunav.timeseries import ImuData
 from imunav.units import G0
 
 __all__ = [
