@@ -725,9 +725,6 @@ def mekf_run(q0, b0, P0, gyr, acc, mag, dt, p, store):
     st = np.zeros(N_STATE)
     phi = np.empty((6, 6))
     for k in range(n):
-        if store:
-            # predicted covariance is recomputed inside; keep a copy
-            pass
         q, b = mekf_step(q, b, P, st, gyr[k], acc[k], mag[k], dt[k], p, phi)
         if store:
             Ph[k] = phi
