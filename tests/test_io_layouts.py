@@ -82,3 +82,22 @@ def test_unknown_layout_and_clashes(tmp_path):
         read_imu(p, format="parquet", layout="kalibr")
     r = runner.invoke(app, ["info", str(p), "--layout", "vicon"])
     assert r.exit_code == 2 and len(r.stderr.strip().splitlines()) == 1
+
+
+def test_layouts_through_the_cli_options(tmp_path):
+    """The CLI always passes nan_policy: the x-io layout takes its default; an option of another source (a bag's
+    --instance / --mag-topic) on a CSV layout is a one-line user error, not an internal TypeError (review finding)."""
+    x = data_path("foot", "xio_gait", "short_walk.csv")
+    r = runner.invoke(app, ["convert", str(x), str(tmp_path / "x.npz"), "--layout", "xio"])
+    assert r.exit_code == 0, r.output
+    stamps, w, a = _rows()
+    p = tmp_path / "data.csv"
+    p.write_text("#timestamp [ns],w_RS_S_x [rad s^-1],w_RS_S_y [rad s^-1],w_RS_S_z [rad s^-1],"
+                 "a_RS_S_x [m s^-2],a_RS_S_y [m s^-2],a_RS_S_z [m s^-2]\n"
+                 + "\n".join(",".join([str(s)] + [repr(float(v)) for v in (*w[i], *a[i])])
+                             for i, s in enumerate(stamps)) + "\n")
+    with pytest.raises(InvalidInputError, match="instance"):
+        read_imu(p, layout="euroc", instance=1)
+    for opt in (["--instance", "1"], ["--mag-topic", "x"]):
+        r = runner.invoke(app, ["convert", str(p), str(tmp_path / "o.npz"), "--layout", "euroc", *opt])
+        assert r.exit_code == 2 and len(r.stderr.strip().splitlines()) == 1 and "internal" not in r.stderr, r.stderr

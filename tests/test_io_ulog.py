@@ -260,3 +260,13 @@ def test_lab_recording_declares_a_topic(tmp_path):
     assert d.meta["topic"] == "vehicle_imu" and d.meta["instance"] == 1
     with pytest.raises(ConfigError, match="instance must be a non-negative integer"):
         parse_recordings({"x": {"path": str(p), "test": "static", "instance": "one"}}, tmp_path)
+
+
+def test_mag_calibration_on_a_topic_without_coverage_is_one_line(tmp_path):
+    """sensor_combined of sample.ulg barely rotates: the ellipsoid fit is not an ellipsoid.  One line on stderr,
+    exit 2, no numpy RuntimeWarning from det ** (-1/3) of an indefinite shape matrix (review finding)."""
+    r = runner.invoke(app, ["calibrate", "mag", str(_log(SAMPLE)), "--topic", "sensor_combined",
+                            "--out", str(tmp_path / "m.json")])
+    assert r.exit_code == 2, r.output
+    assert len(r.stderr.strip().splitlines()) == 1 and "RuntimeWarning" not in r.stderr, r.stderr
+    assert not (tmp_path / "m.json").exists()

@@ -255,3 +255,26 @@ def test_a_killed_batch_run_is_refused_then_cleared_by_overwrite(tmp_path):
     assert sorted(p.name for p in out.iterdir()) == ["batch.json", "manifest.json", "segments.json", "truth",
                                                      "unit_001.npz", "unit_002.npz"]
     assert np.load(out / "unit_002.npz")  # a readable recording
+
+
+def test_overwrite_keeps_what_no_manifest_lists(tmp_path):
+    """A user's symlink to a listed file is not listed (paths compared as written, not resolved): --overwrite refuses
+    rather than delete it; an empty folder of the user's survives, a folder that held listed files goes (review)."""
+    from imunav.errors import RunFolderError
+    from imunav.runfolder import RunFolder
+
+    d = tmp_path / "run"
+    with RunFolder(d, "demo"):
+        (d / "a.txt").write_text("a")
+        (d / "sub").mkdir()
+        (d / "sub" / "b.txt").write_text("b")
+    os.symlink("a.txt", d / "mylink")
+    (d / "emptyuser").mkdir()
+    with pytest.raises(RunFolderError, match="mylink"):
+        with RunFolder(d, "demo", overwrite=True):
+            pass
+    assert (d / "mylink").is_symlink() and (d / "a.txt").exists()
+    os.remove(d / "mylink")
+    with RunFolder(d, "demo", overwrite=True):
+        (d / "c.txt").write_text("c")
+    assert sorted(p.name for p in d.iterdir()) == ["c.txt", "emptyuser", "manifest.json"]

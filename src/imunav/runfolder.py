@@ -191,7 +191,7 @@ def _owned(root: Path) -> tuple[list[Path], list[Path]]:
     if (root / MARKER).exists() and not (root / MANIFEST).exists():
         # a run that did not finish: every non-hidden entry is its (it started in a folder without any)
         return [p for p in root.iterdir() if not p.name.startswith(".") or _is_temp(p.name) or p.name == MARKER], []
-    listed: set[Path] = set()
+    listed: set[str] = set()
     if (root / MANIFEST).is_file():
         try:
             m = read_manifest(root, verify=False)
@@ -199,7 +199,8 @@ def _owned(root: Path) -> tuple[list[Path], list[Path]]:
             m = None
         if m is None:
             return [], [root / MANIFEST]
-        listed = {p.resolve() for p in m.paths()}
+        # compared as written (relative, not resolved): a user's symlink to a listed file is not listed
+        listed = {Path(os.path.normpath(f["path"])).as_posix() for f in m.files}
         mine.append(root / MANIFEST)
     for entry in sorted(root.iterdir()):
         if entry.name == MANIFEST:
@@ -215,10 +216,10 @@ def _owned(root: Path) -> tuple[list[Path], list[Path]]:
                 foreign += sub_foreign
                 continue
             for p in _visible_files(entry):
-                (mine if p.resolve() in listed else foreign).append(p)
+                (mine if p.relative_to(root).as_posix() in listed else foreign).append(p)
             mine += [Path(d) / f for d, _, fs in os.walk(entry) for f in fs if _is_temp(f)]
         else:
-            (mine if entry.resolve() in listed else foreign).append(entry)
+            (mine if entry.relative_to(root).as_posix() in listed else foreign).append(entry)
     return mine, foreign
 
 
@@ -249,16 +250,17 @@ def _clear(root: Path, inputs: Iterable[str | os.PathLike[str] | None]) -> None:
             f"{root} holds {len(foreign)} file(s) that no imunav run manifest lists ({shown}); --overwrite clears only "
             "imunav run folders: move those files away or choose another output folder"
         )
+    emptied: set[Path] = set()
     for p in mine:
         if p.is_symlink() or p.is_file():
             with contextlib.suppress(FileNotFoundError):
                 p.unlink()
+            emptied.update(d for d in p.parents if d != root and root in d.parents)
         elif p.is_dir():
             shutil.rmtree(p)
-    for dirpath, _, _ in sorted(os.walk(root), key=lambda w: -len(Path(w[0]).parts)):
-        d = Path(dirpath)
-        rel = d.relative_to(root).parts
-        if rel and not any(part.startswith(".") for part in rel) and not any(d.iterdir()):
+    # only the folders that held removed files, deepest first, and only when now empty
+    for d in sorted(emptied, key=lambda d: -len(d.parts)):
+        if d.is_dir() and not d.is_symlink() and not any(d.iterdir()):
             d.rmdir()
 
 

@@ -333,6 +333,9 @@ def fit_ellipsoid(
             cov = s2 * np.linalg.inv(J.T @ J)
         except np.linalg.LinAlgError:
             raise DegenerateGeometryError("ellipsoid fit: singular refinement Jacobian; cover the sphere better") from None
+    if not np.linalg.eigvalsh(0.5 * (L + L.T)).min() > 0:
+        raise DegenerateGeometryError("ellipsoid fit: the fitted surface is not an ellipsoid (the shape matrix is not "
+                                      "positive definite); rotate the sensor through more orientations")
     if field_norm is None:
         det = np.linalg.det(L)
         F = float(det ** (-1.0 / 3.0))

@@ -108,8 +108,10 @@ def read_layout(path: str | os.PathLike[str], layout: str, *, meta: dict[str, An
     if key == "xio":
         from imunav.io.foot import read_xio_gait_csv
 
-        if options:
-            raise InvalidInputError(f"layout 'xio' takes no reader options, got {sorted(options)}")
+        # nan_policy="raise" is what the x-io reader does anyway (the CLI always passes it)
+        extra = sorted(k for k, v in options.items() if not (k == "nan_policy" and v == "raise"))
+        if extra:
+            raise InvalidInputError(f"layout 'xio' takes no reader options, got {extra}")
         d = read_xio_gait_csv(path).imu
         return d.with_(meta={**d.meta, "layout": "xio", **(meta or {})})
     opts = layout_options(path, key)
@@ -117,7 +119,9 @@ def read_layout(path: str | os.PathLike[str], layout: str, *, meta: dict[str, An
     if clash:
         raise InvalidInputError(f"layout={layout!r} sets {clash}; drop them, or read without a layout")
     opts["meta"].update(meta or {})
-    d = read_csv(path, **opts, **options)
+    from imunav.io.core import _call
+
+    d = _call(read_csv, f"read_imu(layout={layout!r})", path, **opts, **options)
     if d.mag is not None and d.mag_unit != "uT":
         from imunav.units import unit_factor
 
