@@ -20,11 +20,16 @@ from imunav.errors import InvalidInputError
 if TYPE_CHECKING:  # only for the annotations: the writers take the fits the user already has
     from imunav.noise.fit import NoiseFit
 
-__all__ = ["NoiseValue", "check_rate", "imu_noise_values", "write_text"]
+__all__ = ["KALIBR_KEYS", "NoiseValue", "check_rate", "imu_noise_values", "value_lines", "write_text"]
 
 #: SI units of the four values, by (sensor, term).
 UNITS = {("gyro", "N"): "rad/s/sqrt(Hz)", ("gyro", "K"): "rad/s^2/sqrt(Hz)",
          ("accel", "N"): "m/s^2/sqrt(Hz)", ("accel", "K"): "m/s^3/sqrt(Hz)"}
+
+
+#: Kalibr's key for each value (OpenVINS reads the same keys).
+KALIBR_KEYS = (("accelerometer_noise_density", ("accel", "N")), ("accelerometer_random_walk", ("accel", "K")),
+               ("gyroscope_noise_density", ("gyro", "N")), ("gyroscope_random_walk", ("gyro", "K")))
 
 
 @dataclass(frozen=True)
@@ -112,6 +117,12 @@ def imu_noise_values(gyro: NoiseFit, accel: NoiseFit, combine: str = "max") -> d
             out[(sensor, term)] = NoiseValue(float(pick(vals)), tuple(float(v) for v in vals),
                                              UNITS[(sensor, term)], note)
     return out
+
+
+def value_lines(values: dict[tuple[str, str], NoiseValue], keys: tuple[tuple[str, tuple[str, str]], ...],
+                indent: str = "") -> list[str]:
+    """``key: value  # comment`` YAML lines, one per ``(key, (sensor, term))`` of ``keys``."""
+    return [f"{indent}{key}: {values[sk].value!r}  # {values[sk].comment()}" for key, sk in keys]
 
 
 def check_rate(update_rate: float) -> float:

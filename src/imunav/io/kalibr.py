@@ -14,7 +14,7 @@ import os
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from imunav.io._noise import check_rate, imu_noise_values, write_text
+from imunav.io._noise import KALIBR_KEYS, check_rate, imu_noise_values, value_lines, write_text
 
 if TYPE_CHECKING:  # annotations only
     from imunav.noise.fit import NoiseFit
@@ -22,8 +22,7 @@ if TYPE_CHECKING:  # annotations only
 __all__ = ["KALIBR_IMU_KEYS", "write_kalibr_yaml"]
 
 #: The keys written, as Kalibr's IMU configuration names them.
-KALIBR_IMU_KEYS = ("accelerometer_noise_density", "accelerometer_random_walk", "gyroscope_noise_density",
-                   "gyroscope_random_walk", "rostopic", "update_rate")
+KALIBR_IMU_KEYS = tuple(k for k, _ in KALIBR_KEYS) + ("rostopic", "update_rate")
 
 
 def write_kalibr_yaml(path: str | os.PathLike[str], gyro: NoiseFit, accel: NoiseFit, update_rate: float,
@@ -58,9 +57,7 @@ def write_kalibr_yaml(path: str | os.PathLike[str], gyro: NoiseFit, accel: Noise
     rate = check_rate(update_rate)
     v = imu_noise_values(gyro, accel, combine)
     lines = ["# IMU noise model identified by imunav (Allan-variance GLS fit); SI, continuous time", ""]
-    for key, sk in (("accelerometer_noise_density", ("accel", "N")), ("accelerometer_random_walk", ("accel", "K")),
-                    ("gyroscope_noise_density", ("gyro", "N")), ("gyroscope_random_walk", ("gyro", "K"))):
-        lines.append(f"{key}: {v[sk].value!r}  # {v[sk].comment()}")
+    lines += value_lines(v, KALIBR_KEYS)
     lines.append(f"rostopic: {rostopic}")
     lines.append(f"update_rate: {rate!r}  # [Hz]")
     return write_text(path, lines)

@@ -16,7 +16,7 @@ import os
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from imunav.io._noise import check_rate, imu_noise_values, write_text
+from imunav.io._noise import KALIBR_KEYS, check_rate, imu_noise_values, value_lines, write_text
 
 if TYPE_CHECKING:  # annotations only
     from imunav.noise.fit import NoiseFit
@@ -66,9 +66,7 @@ def write_openvins_yaml(path: str | os.PathLike[str], gyro: NoiseFit, accel: Noi
     lines = ["%YAML:1.0", "", "# IMU noise identified by imunav (Allan-variance GLS fit); SI, continuous time.",
              "# Intrinsics are identity: apply the imunav calibration to the data first.", "", "imu0:"]
     lines += _matrix("T_i_b", 4, 1.0)
-    for key, sk in (("accelerometer_noise_density", ("accel", "N")), ("accelerometer_random_walk", ("accel", "K")),
-                    ("gyroscope_noise_density", ("gyro", "N")), ("gyroscope_random_walk", ("gyro", "K"))):
-        lines.append(f"  {key}: {v[sk].value!r}  # {v[sk].comment()}")
+    lines += value_lines(v, KALIBR_KEYS, indent="  ")
     lines += [f"  rostopic: {rostopic}", "  time_offset: 0.0", f"  update_rate: {rate!r}", '  model: "kalibr"']
     lines += _matrix("Tw", 3, 1.0) + _matrix("R_IMUtoGYRO", 3, 1.0) + _matrix("Ta", 3, 1.0)
     lines += _matrix("R_IMUtoACC", 3, 1.0) + _matrix("Tg", 3, 0.0)

@@ -21,7 +21,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from imunav.errors import InvalidInputError
-from imunav.io._noise import imu_noise_values, write_text
+from imunav.io._noise import imu_noise_values, value_lines, write_text
 from imunav.units import G0
 
 if TYPE_CHECKING:  # annotations only
@@ -71,8 +71,7 @@ def write_vins_yaml(path: str | os.PathLike[str], gyro: NoiseFit, accel: NoiseFi
              "# These are the identified values, NOT inflated: VINS users conventionally multiply them",
              "# (often by 10 or more) to cover vibration and unmodelled errors; decide that here.",
              "imu: 1", f'imu_topic: "{imu_topic}"']
-    for key, sk in (("acc_n", ("accel", "N")), ("gyr_n", ("gyro", "N")), ("acc_w", ("accel", "K")),
-                    ("gyr_w", ("gyro", "K"))):
-        lines.append(f"{key}: {v[sk].value!r}  # {v[sk].comment()}")
+    lines += value_lines(v, (("acc_n", ("accel", "N")), ("gyr_n", ("gyro", "N")), ("acc_w", ("accel", "K")),
+                             ("gyr_w", ("gyro", "K"))))
     lines.append(f"g_norm: {g!r}  # [m/s^2] gravity magnitude")
     return write_text(path, lines)
