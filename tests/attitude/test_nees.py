@@ -63,12 +63,18 @@ def test_ukf_nees_in_band():
     _check(_runs("ukf"))
 
 
-def _public_last_z(sim_seed, draw_seed, sim_kw, param_kw, use_mag):
-    """z-scores at the last sample of 100 seeded ``MEKF().run`` calls (attitude, bias), the initial errors drawn
-    from P0 (0.02 rad, 0.03 rad/s)."""
+def _mekf(**param_kw):
+    from imunav.attitude import MEKF
+
+    return MEKF.with_params(sigma_gyro=0.0002, sigma_bias=1e-6, sigma_acc=0.05 / G, p0_att=0.02, p0_bias=0.03,
+                            **param_kw)
+
+
+def _public_last_z(sim_seed, draw_seed, sim_kw, param_kw, use_mag, make=_mekf):
+    """z-scores at the last sample of 100 seeded ``make(**param_kw).run`` calls (attitude, bias; the MEKF by
+    default), the initial errors drawn from P0 (0.02 rad, 0.03 rad/s)."""
     from _calibration import z_scores
 
-    from imunav.attitude import MEKF
     from imunav.rotation import quat_exp
 
     pa, pb = 0.02, 0.03
@@ -78,9 +84,7 @@ def _public_last_z(sim_seed, draw_seed, sim_kw, param_kw, use_mag):
         r = np.random.default_rng(draw_seed + seed)
         q0 = quat_multiply(q[0], quat_exp(r.normal(0, pa, 3)))
         b0 = BIAS + r.normal(0, pb, 3)
-        f = MEKF.with_params(sigma_gyro=0.0002, sigma_bias=1e-6, sigma_acc=0.05 / G, p0_att=pa, p0_bias=pb,
-                             **param_kw)
-        res = f.run(data, q0=q0, bias0=b0, use_mag=use_mag)
+        res = make(**param_kw).run(data, q0=q0, bias0=b0, use_mag=use_mag)
         dth = rotvec_from_quat(quat_multiply(quat_conjugate(res.q_nb[-1]), q[-1]))
         sd = np.sqrt(res.cov_diag[-1])
         za.append(z_scores(dth, 0.0, sd[:3]))
@@ -147,3 +151,36 @@ def test_mekf_public_covariance_calibrated_rotating_with_magnetometer():
     za, zb = _public_last_z(3000, 8000, dict(duration=10.0), dict(sigma_mag=0.3 / 48.5), use_mag=None)
     assert_rms_calibrated(za, "MEKF attitude (rotating, magnetometer)")
     assert_rms_calibrated(zb, "MEKF gyro bias (rotating, magnetometer)")
+
+
+def _ukf(mag_ref_ned=None, **param_kw):
+    from imunav.attitude.ukf import UKF
+
+    p = UkfParams(sigma_gyro=0.0002, sigma_bias=1e-6, sigma_acc=0.05 / G, p0_att=0.02, p0_bias=0.03, **param_kw)
+    return UKF(p, mag_ref_ned=mag_ref_ned)
+
+
+def test_ukf_public_covariance_calibrated_static():
+    """``UKF().run(data).cov_diag`` is calibrated: the static accelerometer-only case of the MEKF test above,
+    through the UKF's public ``run`` (100 seeded runs, initial errors drawn from P0, RMS of 300 z-values in the
+    99 % interval, which rejects a sigma wrong by 1.5)."""
+    from _calibration import assert_rms_calibrated
+
+    za, zb = _public_last_z(1000, 5000, dict(duration=5.0, rate_amp=0.0), {}, use_mag=False, make=_ukf)
+    assert_rms_calibrated(za, "UKF attitude")
+    assert_rms_calibrated(zb, "UKF gyro bias")
+
+
+def test_ukf_public_covariance_calibrated_rotating_with_magnetometer():
+    """``UKF(mag_ref_ned=...).run(data).cov_diag`` is calibrated rotating with the magnetometer (the MEKF's
+    rotating test through the UKF).  The reference field is given: learned from the first sample (the default) it
+    inherits the initial attitude error, which the 6-state UKF cannot represent, so its heading is then
+    over-confident by design (documented on ``UKF``)."""
+    from _calibration import assert_rms_calibrated
+
+    from ._sim import MAG_NED
+
+    za, zb = _public_last_z(3000, 8000, dict(duration=10.0), dict(sigma_mag=0.3 / 48.5, mag_ref_ned=MAG_NED),
+                            use_mag=None, make=_ukf)
+    assert_rms_calibrated(za, "UKF attitude (rotating, magnetometer)")
+    assert_rms_calibrated(zb, "UKF gyro bias (rotating, magnetometer)")
