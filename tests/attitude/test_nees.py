@@ -70,9 +70,9 @@ def _mekf(**param_kw):
                             **param_kw)
 
 
-def _public_last_z(sim_seed, draw_seed, sim_kw, param_kw, use_mag, make=_mekf):
-    """z-scores at the last sample of 100 seeded ``make(**param_kw).run`` calls (attitude, bias; the MEKF by
-    default), the initial errors drawn from P0 (0.02 rad, 0.03 rad/s)."""
+def _public_last_z(sim_seed, draw_seed, sim_kw, param_kw, use_mag, make=_mekf, at=-1):
+    """z-scores at sample ``at`` (the last by default) of 100 seeded ``make(**param_kw).run`` calls (attitude,
+    bias; the MEKF by default), the initial errors drawn from P0 (0.02 rad, 0.03 rad/s)."""
     from _calibration import z_scores
 
     from imunav.rotation import quat_exp
@@ -85,10 +85,10 @@ def _public_last_z(sim_seed, draw_seed, sim_kw, param_kw, use_mag, make=_mekf):
         q0 = quat_multiply(q[0], quat_exp(r.normal(0, pa, 3)))
         b0 = BIAS + r.normal(0, pb, 3)
         res = make(**param_kw).run(data, q0=q0, bias0=b0, use_mag=use_mag)
-        dth = rotvec_from_quat(quat_multiply(quat_conjugate(res.q_nb[-1]), q[-1]))
-        sd = np.sqrt(res.cov_diag[-1])
+        dth = rotvec_from_quat(quat_multiply(quat_conjugate(res.q_nb[at]), q[at]))
+        sd = np.sqrt(res.cov_diag[at])
         za.append(z_scores(dth, 0.0, sd[:3]))
-        zb.append(z_scores(BIAS, res.bias[-1], sd[3:]))
+        zb.append(z_scores(BIAS, res.bias[at], sd[3:]))
     return np.concatenate(za), np.concatenate(zb)
 
 
@@ -184,3 +184,22 @@ def test_ukf_public_covariance_calibrated_rotating_with_magnetometer():
                             use_mag=None, make=_ukf)
     assert_rms_calibrated(za, "UKF attitude (rotating, magnetometer)")
     assert_rms_calibrated(zb, "UKF gyro bias (rotating, magnetometer)")
+
+
+def _smoother(**param_kw):
+    from imunav.attitude.smoother import Smoother
+
+    return Smoother(_mekf(**param_kw).params)
+
+
+def test_smoother_public_covariance_calibrated_rotating_with_magnetometer():
+    """``Smoother().run(data).cov_diag`` is calibrated in mid-run, where the backward pass has most effect
+    (at the last sample it equals the filter's).  The MEKF's rotating-with-magnetometer runs, z-scores at the
+    middle sample (5 s of 10 s), RMS of 300 values in the 99 % interval, which rejects a sigma wrong by 1.5.
+    (Measured over 400 runs: attitude z RMS 1.01 / 0.95 / 1.00, bias 0.95 / 1.02 / 1.04 per axis.)"""
+    from _calibration import assert_rms_calibrated
+
+    za, zb = _public_last_z(3000, 8000, dict(duration=10.0), dict(sigma_mag=0.3 / 48.5), use_mag=None,
+                            make=_smoother, at=500)
+    assert_rms_calibrated(za, "Smoother attitude (rotating, magnetometer, mid-run)")
+    assert_rms_calibrated(zb, "Smoother gyro bias (rotating, magnetometer, mid-run)")
