@@ -53,7 +53,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from imunav.errors import InvalidInputError, ShapeError
 from imunav.filters import BatchRun, batch_kalman_filter
-from imunav.filters._common import ResultMixin
+from imunav.results import Result
 
 __all__ = [
     "ThesisFilterConfig",
@@ -86,7 +86,7 @@ def thesis_row(iteration: int | ArrayLike) -> int | Array:
 
 
 @dataclass(frozen=True)
-class ThesisFilterConfig(ResultMixin):
+class ThesisFilterConfig(Result):
     """Parameters of the thesis filter (defaults: the thesis's values, digest §3)."""
 
     dt: float = 0.001
@@ -121,7 +121,7 @@ def thesis_matrices(cfg: ThesisFilterConfig | None = None) -> dict[str, Array]:
 
 
 @dataclass(frozen=True)
-class WindFilterResult(ResultMixin):
+class WindFilterResult(Result):
     """One run of the thesis filter.
 
     x (N, 6) state estimates, P_diag (N, 6), innovation / normalized (N, 3),
@@ -200,7 +200,7 @@ def run_thesis_filter(
 
 
 @dataclass(frozen=True)
-class LongHorizonConfig(ResultMixin):
+class LongHorizonConfig(Result):
     """Navigation-frame wind filter for real flights (see module docstring).
 
     Attributes
@@ -242,7 +242,7 @@ class LongHorizonConfig(ResultMixin):
 
 
 @dataclass(frozen=True)
-class LongHorizonResult(ResultMixin):
+class LongHorizonResult(Result):
     """Long-horizon run: estimates at the Doppler epochs ``t``.
 
     wind (N, 3) NED total-wind estimate (mean + gust) and its std,

@@ -33,7 +33,6 @@ from imunav.airdata.filter import (
 )
 from imunav.errors import InvalidInputError
 from imunav.filters import Fault, inject_faults
-from imunav.filters._common import ResultMixin
 from imunav.filters.faults import (
     DETECTORS,
     alarms,
@@ -43,6 +42,7 @@ from imunav.filters.faults import (
     false_alarm_rates,
     thesis_thresholds,
 )
+from imunav.results import Result
 
 __all__ = [
     "KINDS",
@@ -66,7 +66,7 @@ KINDS = ("nominal", "outliers", "variance", "bias", "drift", "stuck")
 
 
 @dataclass(frozen=True)
-class ThesisScenario(ResultMixin):
+class ThesisScenario(Result):
     """Thesis scenario parameters (defaults from the thesis; steps are the thesis's 1-based steps)."""
 
     kind: str = "nominal"
@@ -126,7 +126,7 @@ class ThesisScenario(ResultMixin):
 
 
 @dataclass(frozen=True)
-class ThesisData(ResultMixin):
+class ThesisData(Result):
     """One simulated thesis run: truth and sensors, (N, 3) per body axis unless noted.
 
     x_true (N, 6) true error state (δX, W), wind_true = x_true[:, 3:],
@@ -280,7 +280,7 @@ def actual_error_covariance(cfg: ThesisFilterConfig | None = None, n_steps: int 
 
 
 @dataclass(frozen=True)
-class ThesisMonteCarlo(ResultMixin):
+class ThesisMonteCarlo(Result):
     """Monte Carlo figures of the thesis scenarios (see :func:`monte_carlo_thesis`)."""
 
     n_runs: int

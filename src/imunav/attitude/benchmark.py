@@ -23,6 +23,7 @@ import numpy as np
 
 from imunav.crossval import CvResult, select_by_cv
 from imunav.errors import ConfigError
+from imunav.results import Result
 
 __all__ = ["FILTERS", "REALTIME", "make_filter", "evaluate", "grid_search", "cv_grid_search", "TrialScore",
            "BenchResult", "reference_start"]
@@ -73,7 +74,7 @@ class TrialScore:
 
 
 @dataclass(frozen=True)
-class BenchResult:
+class BenchResult(Result):
     filter: str
     params: dict[str, Any]
     trials: list[TrialScore]

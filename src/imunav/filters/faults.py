@@ -56,7 +56,7 @@ from numpy.typing import ArrayLike, NDArray
 from scipy.stats import chi2, norm
 
 from imunav.errors import InvalidInputError, ShapeError
-from imunav.filters._common import ResultMixin
+from imunav.results import Result
 
 __all__ = [
     "DETECTORS",
@@ -306,7 +306,7 @@ def isolate_faulty_channels(normalized: ArrayLike, M: int = 20, p_false_alarm: f
 
 
 @dataclass(frozen=True)
-class DetectorResult(ResultMixin):
+class DetectorResult(Result):
     """One detector over a sequence.
 
     statistic (N,) (NaN before the window is full), threshold used,
@@ -324,7 +324,7 @@ class DetectorResult(ResultMixin):
 
 
 @dataclass(frozen=True)
-class FaultDetectionResult(ResultMixin):
+class FaultDetectionResult(Result):
     """All detectors on one sequence, plus channel isolation after the first alarm."""
 
     detectors: dict[str, DetectorResult]

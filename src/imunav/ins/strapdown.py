@@ -31,6 +31,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from imunav.errors import InvalidInputError, ShapeError
 from imunav.ins import _kernels as _k
+from imunav.results import Result
 
 __all__ = ["StrapdownResult", "coning_sculling_increments", "strapdown_local", "strapdown_ned", "OMEGA_E"]
 
@@ -40,7 +41,7 @@ OMEGA_E = 7.292115e-5
 
 
 @dataclass(frozen=True)
-class StrapdownResult:
+class StrapdownResult(Result):
     """Integrated trajectory: ``position`` (N, 3) m in the local frame, or
     ``lla`` (N, 3) (lat rad, lon rad, h m) for the NED mechanization."""
 

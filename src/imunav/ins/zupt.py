@@ -47,6 +47,7 @@ from numpy.typing import ArrayLike, NDArray
 from imunav._timeseries_kernels import runs
 from imunav.errors import ConfigError, InsufficientDataError, InvalidInputError, ShapeError
 from imunav.ins import _kernels as _k
+from imunav.results import Result
 from imunav.rotation import euler_from_quat, quat_from_euler
 
 __all__ = ["ZuptConfig", "ZuptResult", "run_zupt", "align_from_accel", "first_stance", "long_stances"]
@@ -145,7 +146,7 @@ class ZuptConfig:
 
 
 @dataclass(frozen=True)
-class ZuptResult:
+class ZuptResult(Result):
     """Output of :func:`run_zupt` (arrays one row per sample).
 
     ``innovation`` / ``innovation_var`` hold the ZUPT innovation ``-v̂`` and

@@ -61,6 +61,7 @@ from imunav.errors import (
     MissingDependencyError,
     ShapeError,
 )
+from imunav.results import Result
 
 __all__ = [
     "DEFAULT_MODEL_PATH",
@@ -535,7 +536,7 @@ def gravity_in_body(data: Any, stance: Any, g: float = 9.80665) -> Array:
 
 
 @dataclass(frozen=True)
-class TrainingReport:
+class TrainingReport(Result):
     """What :func:`train_lstm` did: loss per batch, accuracy on the training windows, time."""
 
     losses: Array

@@ -33,6 +33,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from imunav.errors import InvalidInputError
+from imunav.results import Result
 from imunav.rotation import quat_from_euler
 from imunav.timeseries import ImuData
 
@@ -49,7 +50,7 @@ GAIT_MODES: dict[str, tuple[float, float, float, float, float, float]] = {
 
 
 @dataclass(frozen=True)
-class GaitSimulation:
+class GaitSimulation(Result):
     """Simulated foot motion and IMU.
 
     ``imu`` has the sensor errors, ``ideal`` not; ``position`` / ``velocity``
