@@ -26,13 +26,13 @@ Files: ``figures/noise_allan_gyro.png``, ``figures/noise_allan_accel.png``,
 
 from __future__ import annotations
 
-import json
 from typing import Any
 
 import numpy as np
 from scipy.stats import norm
 
 from imunav.errors import ConfigError
+from imunav.io._atomic import write_json
 from imunav.lab import LabContext, StepResult
 
 #: two-sided normal quantile for a family-wise 95 % level over six axes (Bonferroni)
@@ -119,8 +119,7 @@ def run(ctx: LabContext) -> StepResult:
             advance()
     ctx.artifacts["noise_fit"] = fits
     out = ctx.path("data", "noise_fit.json")
-    out.write_text(json.dumps({k: v.to_dict() for k, v in fits.items()}, indent=1,
-                              default=lambda o: None))
+    write_json(out, {k: v.to_dict() for k, v in fits.items()}, indent=1)
     passed = bool(all(ok_n) and (all(ok_gm) if ok_gm else True))
     summary = {
         "record": opts["record"], "fs": fs, "duration_s": data.n / fs,
