@@ -7,7 +7,8 @@ import numpy as np
 import pytest
 
 from imunav.errors import InvalidInputError
-from imunav.montecarlo import nees_consistency, run_batch, run_montecarlo, spawn_generators
+from imunav.filters import ConsistencyResult, consistency_test
+from imunav.montecarlo import run_batch, run_montecarlo, spawn_generators
 
 
 def test_same_seed_same_numbers_whatever_the_chunking():
@@ -51,13 +52,14 @@ def test_batched_scenario():
 def test_optimal_kf_is_nees_consistent():
     r = run_montecarlo(sc.random_walk_kf, 50, seed=5, executor="serial")
     c = r.consistency("nees", dof=1)
+    assert isinstance(c, ConsistencyResult)  # the one consistency result of imunav.filters
     # The KF is optimal, so its average NEES lies in the 95 % band about 95 % of the time.
     assert c.fraction_inside > 0.85
     assert c.lower < 1.0 < c.upper
 
 
 def test_inconsistent_filter_is_flagged():
-    bad = nees_consistency(np.full((50, 100), 3.0), dof=1)
+    bad = consistency_test(np.full((50, 100), 3.0), dof=1)
     assert bad.fraction_inside == 0.0
 
 
@@ -73,4 +75,4 @@ def test_bad_arguments():
     with pytest.raises(InvalidInputError, match="executor"):
         run_montecarlo(sc.random_walk_kf, 2, executor="cloud")
     with pytest.raises(InvalidInputError, match="dof"):
-        nees_consistency(np.ones((2, 2)), 0)
+        consistency_test(np.ones((2, 2)), 0)
