@@ -46,13 +46,13 @@ class StrapdownResult(Result):
     ``lla`` (N, 3) (lat rad, lon rad, h m) for the NED mechanization."""
 
     t: Array
-    quaternion: Array
+    q_nb: Array
     velocity: Array
     position: Array | None = None
     lla: Array | None = None
 
     def to_dict(self) -> dict[str, Any]:
-        d = {"t": self.t.tolist(), "quaternion": self.quaternion.tolist(), "velocity": self.velocity.tolist()}
+        d = {"t": self.t.tolist(), "q_nb": self.q_nb.tolist(), "velocity": self.velocity.tolist()}
         if self.position is not None:
             d["position"] = self.position.tolist()
         if self.lla is not None:

@@ -158,7 +158,7 @@ class ZuptResult(Result):
     t: Array
     position: Array
     velocity: Array
-    quaternion: Array
+    q_nb: Array
     accel_bias: Array
     gyro_bias: Array
     cov_diag: Array
@@ -171,14 +171,14 @@ class ZuptResult(Result):
     @property
     def euler(self) -> Array:
         """(N, 3) roll, pitch, yaw in rad."""
-        return euler_from_quat(self.quaternion)
+        return euler_from_quat(self.q_nb)
 
     @property
     def position_std(self) -> Array:
         return np.sqrt(self.cov_diag[:, 0:3])
 
     def to_dict(self) -> dict[str, Any]:
-        d = {k: getattr(self, k).tolist() for k in ("t", "position", "velocity", "quaternion", "cov_diag")}
+        d = {k: getattr(self, k).tolist() for k in ("t", "position", "velocity", "q_nb", "cov_diag")}
         d["zv"] = self.zv.astype(int).tolist()
         if self.config.states == 15:
             d["accel_bias"] = self.accel_bias.tolist()

@@ -531,7 +531,7 @@ def gravity_in_body(data: Any, stance: Any, g: float = 9.80665) -> Array:
     from imunav.ins.zupt import run_zupt
     from imunav.rotation import quat_conjugate, quat_rotate
 
-    q = run_zupt(data, np.asarray(stance, dtype=bool)).quaternion
+    q = run_zupt(data, np.asarray(stance, dtype=bool)).q_nb
     return quat_rotate(quat_conjugate(q), np.broadcast_to(np.array([0.0, 0.0, -g]), (q.shape[0], 3)))
 
 

@@ -54,7 +54,7 @@ class GaitSimulation(Result):
     """Simulated foot motion and IMU.
 
     ``imu`` has the sensor errors, ``ideal`` not; ``position`` / ``velocity``
-    (NED, m, m/s), ``quaternion`` (``q_nb``) and ``stance`` (bool) are the
+    (NED, m, m/s), ``q_nb`` (body → NED) and ``stance`` (bool) are the
     truth; ``gyro_bias`` / ``accel_bias`` the realised total biases (N, 3)
     (zero without an error model); ``modes`` the mode of each stride.
     """
@@ -63,7 +63,7 @@ class GaitSimulation(Result):
     ideal: ImuData
     position: Array
     velocity: Array
-    quaternion: Array
+    q_nb: Array
     stance: NDArray[np.bool_]
     gyro_bias: Array
     accel_bias: Array
