@@ -168,9 +168,8 @@ class ZuptResult(Result):
     zv: NDArray[np.bool_]
     config: ZuptConfig = field(default_factory=ZuptConfig)
 
-    @property
     def euler(self) -> Array:
-        """(N, 3) roll, pitch, yaw in rad."""
+        """(N, 3) roll, pitch, yaw in rad (ZYX) from ``q_nb``: a method, as :meth:`AttitudeResult.euler`."""
         return euler_from_quat(self.q_nb)
 
     @property
