@@ -124,14 +124,14 @@ def thesis_matrices(cfg: ThesisFilterConfig | None = None) -> dict[str, Array]:
 class WindFilterResult(Result):
     """One run of the thesis filter.
 
-    x (N, 6) state estimates, P_diag (N, 6), innovation / normalized (N, 3),
+    x (N, 6) state estimates, cov_diag (N, 6) (the diagonal of P), innovation / normalized (N, 3),
     weights (N, 3) (1 used, 0 rejected), wind (N, 3) = x[:, 3:],
     velocity (N, 3) = V_A + Ŵ, position (N, 3) = X_A + δX̂ (when V_A given),
     difference_loop (N, 3) = z (the raw wind of the difference loop).
     """
 
     x: Array
-    P_diag: Array
+    cov_diag: Array
     innovation: Array
     normalized: Array
     weights: Array
@@ -191,7 +191,7 @@ def run_thesis_filter(
             raise ShapeError(f"v_ads must have the shape of z {zz.shape}, got {va.shape}")
         vel = va + x[:, 3:]
         pos = c.dt * np.cumsum(va, axis=0) + x[:, :3]
-    return WindFilterResult(x, r.P_diag[0], r.innovation[0], r.normalized[0], r.weights[0], x[:, 3:].copy(), zz,
+    return WindFilterResult(x, r.cov_diag[0], r.innovation[0], r.normalized[0], r.weights[0], x[:, 3:].copy(), zz,
                             vel, pos, robust)
 
 

@@ -243,8 +243,8 @@ def covariance_sequence(cfg: ThesisFilterConfig | None = None, n_steps: int = 50
     """P44 and P11 at the thesis's table iterations, beside the thesis's P44 values."""
     r = run_thesis_filter(np.zeros((n_steps, 3)), cfg)
     rows = thesis_row(np.asarray(THESIS_ITERATIONS))
-    return {"iteration": list(THESIS_ITERATIONS), "P44": [float(r.P_diag[k, 3]) for k in rows],
-            "P11": [float(r.P_diag[k, 0]) for k in rows], "P44_thesis": list(THESIS_P44)}
+    return {"iteration": list(THESIS_ITERATIONS), "P44": [float(r.cov_diag[k, 3]) for k in rows],
+            "P11": [float(r.cov_diag[k, 0]) for k in rows], "P44_thesis": list(THESIS_P44)}
 
 
 def actual_error_covariance(cfg: ThesisFilterConfig | None = None, n_steps: int = 500,
@@ -346,7 +346,7 @@ def monte_carlo_thesis(
         "difference_loop_rms": float(_rms(ed)),
         "variance_ratio": float(np.var(ed) / np.var(ew)),
         "kf_mean_error": float(np.mean(ew)),
-        "P44_steady": float(opt.P_diag[0, -1, 3]),
+        "P44_steady": float(opt.cov_diag[0, -1, 3]),
         "empirical_error_variance": float(np.var(ew)),
         "position_state_rms_end": float(_rms(ep)),
         "rows": [int(k0), int(base.n_steps - 1)],
@@ -476,7 +476,7 @@ def thesis_tables(rng: int = 0) -> dict:
         row = {"iteration": i}
         for name, rr in runs.items():
             row[f"{name}_err"] = float(rr.wind[k, 0] - do.wind_true[k, 0])
-            row[f"{name}_P44"] = float(rr.P_diag[k, 3])
+            row[f"{name}_P44"] = float(rr.cov_diag[k, 3])
         t63.append(row)
     return {"table_6_1": t61, "table_6_3": t63, "seed": int(rng)}
 

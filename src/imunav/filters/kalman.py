@@ -341,13 +341,13 @@ def kalman_filter(
 class BatchRun(Result):
     """Many independent runs of one linear filter (leading axis = run).
 
-    x, P_diag (R, N, n) posteriors; innovation, normalized (R, N, m) (NaN
+    x, cov_diag (R, N, n) posteriors (the diagonal of P); innovation, normalized (R, N, m) (NaN
     without measurement); weights (R, N, m): 1 used, 0 rejected, Huber
     weight in between.
     """
 
     x: Array
-    P_diag: Array
+    cov_diag: Array
     innovation: Array
     normalized: Array
     weights: Array
