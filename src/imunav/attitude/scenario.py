@@ -25,7 +25,7 @@ from typing import Any, Literal
 import numpy as np
 from numpy.typing import NDArray
 
-from imunav.attitude.gravity_kf import GravityKF, GravityKfParams
+from imunav.attitude.gravity_kf import GravityKF, GravityKfConfig
 from imunav.errors import ConfigError
 from imunav.timeseries import ImuData
 
@@ -69,9 +69,9 @@ class PaperScenario:
     def sigma_accel(self) -> float:
         return self.accel_noise_ug_rthz * 1e-6 * 9.80665 * np.sqrt(self.fs)
 
-    def filter_params(self, **kw: Any) -> GravityKfParams:
+    def filter_params(self, **kw: Any) -> GravityKfConfig:
         """Filter-side parameters matching the truth (overridable)."""
-        return replace(GravityKfParams(sigma_g=self.sigma_gyro, sigma_a=self.sigma_accel, g=self.g), **kw)
+        return replace(GravityKfConfig(sigma_g=self.sigma_gyro, sigma_a=self.sigma_accel, g=self.g), **kw)
 
 
 def simulate(scn: PaperScenario, rng: np.random.Generator | int | None = None) -> tuple[ImuData, NDArray]:
