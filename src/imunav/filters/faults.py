@@ -65,7 +65,7 @@ __all__ = [
     "wishart_largest_root_quantile",
     "window_statistics",
     "cusum_statistics",
-    "DetectorResult",
+    "FaultDetectorResult",
     "FaultDetectionResult",
     "detect_faults",
     "latch",
@@ -306,8 +306,9 @@ def isolate_faulty_channels(normalized: ArrayLike, M: int = 20, p_false_alarm: f
 
 
 @dataclass(frozen=True)
-class DetectorResult(Result):
-    """One detector over a sequence.
+class FaultDetectorResult(Result):
+    """One fault detector over an innovation sequence (not :class:`imunav.ins.DetectorResult`, the
+    zero-velocity detector's flags).
 
     statistic (N,) (NaN before the window is full), threshold used,
     thesis_threshold (NaN where the thesis has none), alarm (N,) raw
@@ -327,7 +328,7 @@ class DetectorResult(Result):
 class FaultDetectionResult(Result):
     """All detectors on one sequence, plus channel isolation after the first alarm."""
 
-    detectors: dict[str, DetectorResult]
+    detectors: dict[str, FaultDetectorResult]
     isolated_channels: NDArray[np.bool_]
     channel_first_flag: Array
     window: int
@@ -383,7 +384,7 @@ def detect_faults(
         alarm = alarms(name, st, thr[name])
         alarm[:start] = False
         fa = first_alarm(alarm)
-        dets[name] = DetectorResult(name, st, thr[name], th.get(name, np.nan), alarm, latch(alarm), fa)
+        dets[name] = FaultDetectorResult(name, st, thr[name], th.get(name, np.nan), alarm, latch(alarm), fa)
         if fa >= 0 and (earliest < 0 or fa < earliest):
             earliest = fa
     if earliest >= 0:
