@@ -32,7 +32,7 @@ import numpy as np
 from scipy.stats import norm
 
 from imunav.errors import ConfigError
-from imunav.io._atomic import write_json
+from imunav.io._atomic import atomic_path, write_json
 from imunav.lab import LabContext, StepResult
 
 #: two-sided normal quantile for a family-wise 95 % level over six axes (Bonferroni)
@@ -114,7 +114,8 @@ def run(ctx: LabContext) -> StepResult:
                 rows.append(row)
             fig = plot_allan(r, f, title=f"{sensor}: {opts['record']}")
             p = ctx.path("figures", f"noise_allan_{sensor}.png")
-            fig.savefig(p, dpi=100)
+            with atomic_path(p) as tmp:
+                fig.savefig(tmp, dpi=100)
             figures.append(p)
             advance()
     ctx.artifacts["noise_fit"] = fits
