@@ -82,7 +82,7 @@ def main() -> None:
     per = best / data.n * 1e6
     m = min(3000, data.n)
     sub = data.slice(0, m)
-    q0 = res.quaternion[0]
+    q0 = res.q_nb[0]
     c0 = time.process_time()
     p_py = python_zupt(sub.t, sub.accel, sub.gyro, zv[:m], q0)
     py = (time.process_time() - c0) / m * 1e6

@@ -246,8 +246,9 @@ def test_fit_ellipsoid_fits_a_perfect_noise_free_sphere():
 
 # ---------------------------------------------------------------- progress of the lab
 def test_lab_tasks_end_at_100_percent_and_the_monte_carlo_reports_progress(tmp_path):
-    from imunav.attitude.scenario import PaperScenario, run_montecarlo
     from imunav.lab import LabContext
+    from imunav.montecarlo import run_montecarlo
+    from imunav.scenarios import attitude_paper
 
     class Recorder:
         def __init__(self):
@@ -270,5 +271,6 @@ def test_lab_tasks_end_at_100_percent_and_the_monte_carlo_reports_progress(tmp_p
     t = rec.tasks["unknown length"]
     assert t["total"] and t["completed"] == t["total"]
     seen = []
-    run_montecarlo(PaperScenario(duration=5.0), n_runs=3, rng=0, progress=lambda done, total: seen.append((done, total)))
+    run_montecarlo(attitude_paper, 3, seed=0, executor="serial", batched=True, chunk_size=1, duration=5.0,
+                   progress=lambda done, total: seen.append((done, total)))
     assert seen == [(1, 3), (2, 3), (3, 3)]

@@ -7,7 +7,8 @@ import numpy as np
 import pytest
 
 from imunav.errors import InvalidInputError
-from imunav.montecarlo import nees_consistency, run_batch, run_montecarlo, spawn_generators
+from imunav.filters import ConsistencyResult, consistency_test
+from imunav.montecarlo import run_batch, run_montecarlo, spawn_generators
 
 
 def test_same_seed_same_numbers_whatever_the_chunking():
@@ -51,13 +52,14 @@ def test_batched_scenario():
 def test_optimal_kf_is_nees_consistent():
     r = run_montecarlo(sc.random_walk_kf, 50, seed=5, executor="serial")
     c = r.consistency("nees", dof=1)
+    assert isinstance(c, ConsistencyResult)  # the one consistency result of imunav.filters
     # The KF is optimal, so its average NEES lies in the 95 % band about 95 % of the time.
     assert c.fraction_inside > 0.85
     assert c.lower < 1.0 < c.upper
 
 
 def test_inconsistent_filter_is_flagged():
-    bad = nees_consistency(np.full((50, 100), 3.0), dof=1)
+    bad = consistency_test(np.full((50, 100), 3.0), dof=1)
     assert bad.fraction_inside == 0.0
 
 
@@ -73,4 +75,22 @@ def test_bad_arguments():
     with pytest.raises(InvalidInputError, match="executor"):
         run_montecarlo(sc.random_walk_kf, 2, executor="cloud")
     with pytest.raises(InvalidInputError, match="dof"):
-        nees_consistency(np.ones((2, 2)), 0)
+        consistency_test(np.ones((2, 2)), 0)
+
+
+def test_attitude_paper_seed_words_follow_the_documented_scheme():
+    # seeding="seed_word" (the lab's Table 2): run i simulates with default_rng(w_i), w_i the first 32-bit word of
+    # child i of SeedSequence(seed) as numpy's own spawn() makes it; equal to running those generators directly
+    from imunav.scenarios import attitude_paper, paper_rmse, paper_table
+
+    kw = {"filters": ("proposed", "lee"), "duration": 5.0}
+    r = run_montecarlo(attitude_paper, 3, seed=4, executor="serial", batched=True, seeding="seed_word", **kw)
+    words = [int(s.generate_state(1)[0]) for s in np.random.SeedSequence(4).spawn(3)]
+    direct = attitude_paper([np.random.default_rng(w) for w in words], **kw)
+    rmse = paper_rmse(r)
+    assert list(rmse) == ["proposed", "lee"] and rmse["lee"].shape == (3, 2)
+    for i, row in enumerate(direct):
+        assert rmse["lee"][i].tolist() == [row["lee_pitch_rmse_deg"], row["lee_roll_rmse_deg"]]
+    assert paper_table(r)["proposed"]["pitch_mean"] == pytest.approx(np.mean(rmse["proposed"][:, 0]), rel=1e-15)
+    g = run_montecarlo(attitude_paper, 3, seed=4, executor="serial", batched=True, **kw)
+    assert not np.array_equal(paper_rmse(g)["lee"], rmse["lee"])  # the generator seeding is another stream

@@ -255,6 +255,23 @@ def test_moving_variance_matches_numpy(rng):
         moving_variance(x, 1)
 
 
+def test_moving_variance_windows_are_named(rng):
+    # the window is trailing (one value per complete window) or centred (one value per sample, cut at the ends);
+    # both against numpy's two-pass variance, on data with a large offset (the sliding sums subtract it)
+    x = rng.normal([0.0, 0.0, -9.81], 0.01, (600, 3))
+    n, h = 20, 10
+    per = moving_variance(x, n, per_column=True)
+    np.testing.assert_allclose(per, [x[j : j + n].var(axis=0) for j in range(600 - n + 1)], rtol=1e-8)
+    np.testing.assert_allclose(moving_variance(x, n), per.sum(axis=1), rtol=1e-14)
+    cen = moving_variance(x, n, align="centred", per_column=True)
+    ref = [x[max(i - h, 0) : min(i - h + n, 600)].var(axis=0) for i in range(600)]
+    assert cen.shape == (600, 3)
+    np.testing.assert_allclose(cen, ref, rtol=1e-8)
+    np.testing.assert_allclose(moving_variance(x[:, 2], n, align="centred"), cen[:, 2], rtol=1e-14)
+    with pytest.raises(InvalidInputError, match="align"):
+        moving_variance(x, n, align="leading")
+
+
 def _synthetic_session(rng, fs=100.0):
     """Static poses separated by tumbling motions; truth = static index ranges."""
     segs = [("s", 4.0), ("m", 2.0), ("s", 3.0), ("m", 1.5), ("s", 5.0), ("m", 2.5), ("s", 2.0)]

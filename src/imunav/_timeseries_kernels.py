@@ -62,6 +62,54 @@ def _moving_var_add(x: np.ndarray, w: int, out: np.ndarray) -> None:
 
 
 @njit(cache=True)
+def moving_variance_kernel(x, n):
+    """Centred moving variance of each column over ``n`` samples (shorter windows at the edges).
+
+    Sliding sums of ``x - c`` (``c`` the column's first value) updated in O(1)
+    per sample and recomputed exactly every ``64 n`` samples to bound rounding drift.
+    """
+    N, m = x.shape
+    out = np.empty((N, m))
+    h = n // 2
+    for j in range(m):
+        c = x[0, j]
+        s1 = 0.0
+        s2 = 0.0
+        lo, hi = 0, 0  # current window [lo, hi)
+        since = 0
+        for i in range(N):
+            a = i - h
+            b = i - h + n
+            a = max(a, 0)
+            b = min(b, N)
+            if since >= 64 * n:
+                s1 = 0.0
+                s2 = 0.0
+                for k in range(a, b):
+                    d = x[k, j] - c
+                    s1 += d
+                    s2 += d * d
+                lo, hi = a, b
+                since = 0
+            while hi < b:
+                d = x[hi, j] - c
+                s1 += d
+                s2 += d * d
+                hi += 1
+            while lo < a:
+                d = x[lo, j] - c
+                s1 -= d
+                s2 -= d * d
+                lo += 1
+            since += 1
+            cnt = hi - lo
+            mu = s1 / cnt
+            v = s2 / cnt - mu * mu
+            out[i, j] = max(0.0, v)
+    return out
+
+
+@njit(cache=True)
 def runs(mask: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Half-open [start, stop) index pairs of the True runs of ``mask``."""
     n = mask.shape[0]

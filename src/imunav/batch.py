@@ -43,7 +43,9 @@ import numpy as np
 import pandas as pd
 
 from imunav.errors import ConfigError, FileFormatError, InvalidInputError
+from imunav.io._atomic import write_json
 from imunav.montecarlo import Executor, run_batch, spawn_generators
+from imunav.results import Result
 
 __all__ = [
     "RECORDING_SUFFIXES",
@@ -127,25 +129,6 @@ def _read_segments(path: Path) -> Any:
         raise FileFormatError(f"{path}: segment table lacks the column {e} (write it with Profile.to_dict())") from None
 
 
-def _write_json(obj: Any, path: Path) -> Path:
-    from imunav.io._atomic import write_json
-
-    write_json(path, obj)  # standard JSON: null for NaN / inf
-    return path
-
-
-def _json_default(o: Any) -> Any:
-    if isinstance(o, np.ndarray):
-        return o.tolist()
-    if isinstance(o, np.generic):
-        return o.item()
-    if hasattr(o, "to_dict"):
-        return o.to_dict()
-    if isinstance(o, Path):
-        return str(o)
-    raise TypeError(f"not JSON serialisable: {type(o).__name__}")
-
-
 # ---------------------------------------------------------------------------
 # simulation of a production batch
 # ---------------------------------------------------------------------------
@@ -185,7 +168,7 @@ def _simulate_unit(item: tuple[int, str], *, out_dir: str, preset: str, spread: 
         rd = simulate_imu(rp.trajectory, model, rng, earth_rate=False, transport_rate=False, gravity="constant")
         files.append(write_imu(rd.with_(meta={"unit": name}), out / f"{name}_rate.{fmt}"))
     (out / "truth").mkdir(exist_ok=True)
-    _write_json(model.to_dict(), out / "truth" / f"{name}.json")
+    write_json(out / "truth" / f"{name}.json", model.to_dict())
     return {"unit": name, "files": [str(f) for f in files], "samples": int(data.n)}
 
 
@@ -256,10 +239,10 @@ def simulate_batch(
                 raise r
         # the tables that describe the batch come after the units (a killed run leaves no batch.json)
         if not static_s:
-            _write_json(hundred_position_profile(fs, dwell_s, transition_s).to_dict(), out / "segments.json")
+            write_json(out / "segments.json", hundred_position_profile(fs, dwell_s, transition_s).to_dict())
         if rate_table and not static_s:
-            _write_json(thesis_rate_table_profile(fs, dwell_s, transition_s).to_dict(), out / "rate_segments.json")
-        _write_json(params, out / "batch.json")
+            write_json(out / "rate_segments.json", thesis_rate_table_profile(fs, dwell_s, transition_s).to_dict())
+        write_json(out / "batch.json", params)
     return [out / f"{n}.{format}" for n in names]
 
 
@@ -269,7 +252,7 @@ def simulate_batch(
 
 
 @dataclass(frozen=True)
-class BatchSummary:
+class BatchSummary(Result):
     """Per-unit results of a batch run.
 
     Attributes
@@ -375,7 +358,7 @@ def write_summary(summary: BatchSummary, out_dir: Path, title: str) -> dict[str,
     with atomic_path(out_dir / "summary.csv") as tmp:
         summary.table.to_csv(tmp, index=False)
     paths["csv"] = out_dir / "summary.csv"
-    paths["json"] = _write_json(summary.to_dict(), out_dir / "summary.json")
+    paths["json"] = write_json(out_dir / "summary.json", summary.to_dict())
 
     n = len(summary.table)
     rep = Report(title, f"{n} units · {summary.n_failed} failed to process · {summary.seconds:.1f} s")
@@ -566,7 +549,7 @@ def calibrate_unit(
         od = Path(out_dir)
         od.mkdir(parents=True, exist_ok=True)
         files["calibration"] = str(cal.save(od / f"{rec.stem}.json"))
-        files["report"] = str(_write_json(res.to_dict(), od / f"{rec.stem}_report.json"))
+        files["report"] = str(write_json(od / f"{rec.stem}_report.json", res.to_dict()))
     return {
         "unit": rec.stem,
         "method": res.method or method,
@@ -680,8 +663,8 @@ def noise_unit(
     if out_dir is not None:
         od = Path(out_dir)
         od.mkdir(parents=True, exist_ok=True)
-        files["noise"] = str(_write_json({"unit": rec.stem, "fs_hz": data.fs, "duration_s": data.duration, **fits},
-                                         od / f"{rec.stem}_noise.json"))
+        files["noise"] = str(write_json(od / f"{rec.stem}_noise.json",
+                                      {"unit": rec.stem, "fs_hz": data.fs, "duration_s": data.duration, **fits}))
     return {"unit": rec.stem, "estimates": est, "truth": {}, "files": files}
 
 

@@ -38,6 +38,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from imunav.errors import InsufficientDataError, InvalidInputError, NonFiniteError, ShapeError
+from imunav.results import Result
 
 __all__ = ["Fold", "CvResult", "leave_one_group_out", "select_by_cv", "cross_validate", "pyshoe_session"]
 
@@ -92,7 +93,7 @@ def leave_one_group_out(groups: Sequence[Hashable]) -> list[Fold]:
 
 
 @dataclass(frozen=True)
-class CvResult:
+class CvResult(Result):
     """Out-of-fold and in-sample scores of one tuning procedure.
 
     Attributes

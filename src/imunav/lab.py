@@ -61,7 +61,8 @@ from typing import Any, Iterator, Mapping
 import numpy as np
 
 from imunav.errors import ConfigError
-from imunav.io._atomic import json_text
+from imunav.io._atomic import json_text, jsonable
+from imunav.results import Result
 
 __all__ = ["STEPS", "SIMULATION_ONLY", "LabConfig", "LabContext", "StepResult", "StepRecord", "LabResult", "run_lab",
            "load_lab_config", "parse_lab_config", "available_steps", "embed_png", "display_parameters",
@@ -80,7 +81,7 @@ STEPS: list[str] = [
 
 
 @dataclass(frozen=True)
-class StepResult:
+class StepResult(Result):
     """What a lab step returns.
 
     Attributes
@@ -104,13 +105,13 @@ class StepResult:
 
     def to_dict(self) -> dict:
         d = {
-            "summary": _jsonable(self.summary),
+            "summary": jsonable(self.summary),
             "figures": [str(p) for p in self.figures],
             "passed": self.passed,
         }
         if self.parameters:
             d["parameters"] = {k: {"value_si": v, "sigma_si": s} for k, (v, s) in self.parameters.items()}
-        return _jsonable(d)
+        return jsonable(d)
 
 
 class _NullProgress:
@@ -189,7 +190,7 @@ def _word(k: int | str) -> int:
 
 
 @dataclass(frozen=True)
-class StepRecord:
+class StepRecord(Result):
     """One step's outcome inside a lab run."""
 
     name: str
@@ -213,7 +214,7 @@ class StepRecord:
 
 
 @dataclass(frozen=True)
-class LabResult:
+class LabResult(Result):
     """A lab run: its folder, step records and overall verdict."""
 
     out_dir: Path
@@ -420,24 +421,6 @@ def load_lab_config(config: str | os.PathLike[str] | Mapping[str, Any] | None) -
 # ---------------------------------------------------------------------------
 
 
-def _jsonable(x: Any) -> Any:
-    if isinstance(x, Mapping):
-        return {str(k): _jsonable(v) for k, v in x.items()}
-    if isinstance(x, (list, tuple)):
-        return [_jsonable(v) for v in x]
-    if isinstance(x, np.ndarray):
-        return _jsonable(x.tolist())
-    if isinstance(x, np.generic):
-        return _jsonable(x.item())
-    if isinstance(x, float) and not np.isfinite(x):
-        return None
-    if isinstance(x, Path):
-        return str(x)
-    if hasattr(x, "to_dict"):
-        return _jsonable(x.to_dict())
-    return x
-
-
 def _write_text(path: Path, text: str) -> None:
     from imunav.io._atomic import atomic_path
 
@@ -505,7 +488,7 @@ def run_lab(
 
     inputs = [typed.source] + [r.path for r in typed.recordings.values()] + [
         r.segments for r in typed.recordings.values()]
-    params = {"config": str(typed.source) if typed.source is not None else _jsonable(cfg), "steps": names,
+    params = {"config": str(typed.source) if typed.source is not None else jsonable(cfg), "steps": names,
               "title": typed.title}
     with RunFolder(out, "lab", seed=seed, parameters=params, overwrite=overwrite, inputs=inputs):
         return _run_steps(out, names, seed, cfg, typed, progress, console)
@@ -654,7 +637,7 @@ def _markdown(result: LabResult) -> str:
             continue
         assert s.result is not None
         lines += ["| key | value |", "|---|---|"]
-        for k, v in _flat(_jsonable(s.result.summary)):
+        for k, v in _flat(jsonable(s.result.summary)):
             lines.append(f"| {k} | {v} |")
         for f in s.result.figures:
             rel = os.path.relpath(f, result.out_dir)
@@ -741,7 +724,7 @@ def _write_html(result: LabResult, ctx: LabContext, title: str) -> None:
                 sec.parameters(display_parameters(s.result.parameters, ctx.lab.spec if ctx.lab else None),
                                "Estimated parameters (display units, ±1σ)")
         else:
-            sec.table([{"key": k, "value": v} for k, v in _flat(_jsonable(s.result.summary))], "summary")
+            sec.table([{"key": k, "value": v} for k, v in _flat(jsonable(s.result.summary))], "summary")
             for caption, rows in s.result.tables:
                 sec.table(rows, caption)
             if s.result.parameters:

@@ -39,13 +39,13 @@ import pandas as pd
 from numpy.typing import NDArray
 
 from imunav.errors import InvalidInputError, MissingDependencyError
+from imunav.filters.consistency import ConsistencyResult, consistency_test
+from imunav.results import Result
 
 __all__ = [
     "run_montecarlo",
     "run_batch",
     "MonteCarloResult",
-    "ConsistencyResult",
-    "nees_consistency",
     "spawn_generators",
 ]
 
@@ -81,63 +81,7 @@ def _run_chunk(
 
 
 @dataclass(frozen=True)
-class ConsistencyResult:
-    """Average NEES / NIS with its two-sided χ² acceptance band.
-
-    For ``n`` runs of a consistent filter with ``dof``-dimensional errors, the
-    run-average ``ε̄_k = (1/n) Σ ε_k,i`` satisfies ``n ε̄_k ~ χ²(n·dof)``
-    (Bar-Shalom, Li & Kirubarajan 2001, §5.4.2), so the band is
-    ``[χ²_{α/2}(n·dof), χ²_{1-α/2}(n·dof)] / n``.
-    """
-
-    average: NDArray[np.float64]
-    lower: float
-    upper: float
-    dof: int
-    n_runs: int
-    fraction_inside: float
-    confidence: float
-
-    def to_dict(self) -> dict[str, Any]:
-        return {
-            "average": self.average.tolist(),
-            "lower": self.lower,
-            "upper": self.upper,
-            "dof": self.dof,
-            "n_runs": self.n_runs,
-            "fraction_inside": self.fraction_inside,
-            "confidence": self.confidence,
-        }
-
-
-def nees_consistency(values: NDArray[np.float64], dof: int, confidence: float = 0.95) -> ConsistencyResult:
-    """Monte Carlo NEES / NIS consistency test.
-
-    Parameters
-    ----------
-    values : (n_runs, T) normalised squared errors per run and time step.
-    dof : dimension of the error (state for NEES, measurement for NIS).
-    """
-    from scipy.stats import chi2
-
-    v = np.asarray(values, dtype=float)
-    if v.ndim == 1:
-        v = v[:, None]
-    if v.ndim != 2 or v.shape[0] < 1:
-        raise InvalidInputError(f"values must be (n_runs, T); got shape {v.shape}")
-    if dof < 1:
-        raise InvalidInputError(f"dof must be >= 1, got {dof}")
-    n = v.shape[0]
-    avg = v.mean(axis=0)
-    a = 1.0 - confidence
-    lo = chi2.ppf(a / 2, n * dof) / n
-    hi = chi2.ppf(1 - a / 2, n * dof) / n
-    inside = float(np.mean((avg >= lo) & (avg <= hi)))
-    return ConsistencyResult(avg, float(lo), float(hi), int(dof), n, inside, confidence)
-
-
-@dataclass(frozen=True)
-class MonteCarloResult:
+class MonteCarloResult(Result):
     """Results of a Monte Carlo: one row per run.
 
     Attributes
@@ -169,10 +113,24 @@ class MonteCarloResult:
         return pd.DataFrame(rows).T
 
     def consistency(self, name: str, dof: int, confidence: float = 0.95) -> ConsistencyResult:
-        """:func:`nees_consistency` of the stacked array ``name``."""
+        """χ² consistency (:func:`imunav.filters.consistency_test`) of the stacked NEES / NIS array ``name``.
+
+        Parameters
+        ----------
+        name : str
+            An array result of shape ``(n_runs, steps)``.
+        dof : int
+            Dimension of the error (state for NEES, measurement for NIS).
+        confidence : float
+            Two-sided confidence of the acceptance band.
+
+        Returns
+        -------
+        imunav.filters.ConsistencyResult
+        """
         if name not in self.arrays:
             raise InvalidInputError(f"no array result {name!r}; available: {sorted(self.arrays)}")
-        return nees_consistency(self.arrays[name], dof, confidence)
+        return consistency_test(self.arrays[name], dof, confidence)
 
     def to_dict(self) -> dict[str, Any]:
         return {
@@ -216,7 +174,29 @@ def _chunks(n_runs: int, chunk_size: int) -> list[tuple[int, int]]:
     return [(s, min(s + chunk_size, n_runs)) for s in range(0, n_runs, chunk_size)]
 
 
-def _progress(enabled: bool, total: int, description: str):
+class _Callback:
+    """The progress-bar interface over a ``progress(done, total)`` callable."""
+
+    def __init__(self, fn: Callable[[int, int], None], total: int) -> None:
+        self.fn, self.total, self.done = fn, total, 0
+
+    def __enter__(self) -> _Callback:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        return None
+
+    def add_task(self, description: str, total: int) -> int:
+        return 0
+
+    def advance(self, task: int, n: int = 1) -> None:
+        self.done += n
+        self.fn(self.done, self.total)
+
+
+def _progress(enabled: bool | Callable[[int, int], None], total: int, description: str):
+    if callable(enabled):
+        return _Callback(enabled, total)
     from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
 
     prog = Progress(
@@ -240,7 +220,7 @@ def run_montecarlo(
     address: str | None = None,
     batched: bool = False,
     chunk_size: int | None = None,
-    progress: bool = False,
+    progress: bool | Callable[[int, int], None] = False,
     description: str = "Monte Carlo",
     **kwargs: Any,
 ) -> MonteCarloResult:
@@ -258,7 +238,8 @@ def run_montecarlo(
         LocalCluster is started on 127.0.0.1 and closed afterwards.
     chunk_size : runs per task (default: ``ceil(n_runs / (4 n_workers))``).
         Chunking does not change the numbers.
-    progress : show a rich progress bar.
+    progress : True for a rich progress bar, or a callable ``progress(done, total)`` called after each
+        chunk (with ``chunk_size=1``, after each run).
     **kwargs : passed to ``scenario``.
 
     Returns

@@ -518,21 +518,55 @@ def _apply_nan_policy(t, g, a, m, tp, policy):
 # -- moving variance and static intervals --------------------------------------
 
 
-def moving_variance(x: ArrayLike, window: int) -> NDArray[np.float64]:
-    """Population variance of each window ``x[j:j+window]`` (j = 0 .. N-window).
+def moving_variance(x: ArrayLike, window: int, *, align: Literal["trailing", "centred"] = "trailing",
+                    per_column: bool = False) -> NDArray[np.float64]:
+    """Population variance of ``x`` over a moving window of ``window`` samples.
 
-    For (N, k) input the per-column variances are summed (``sum_k var(x_k)``).
-    numba kernel with a sliding Welford update; O(N).
+    The one moving variance of the package (static intervals, steady calibration
+    segments, the multi-pose static detector); numba kernels, O(N).
+
+    Parameters
+    ----------
+    x : array_like, (N,) or (N, k)
+        Samples, one row per sample.
+    window : int
+        Window length in samples (at least 2).
+    align : {"trailing", "centred"}
+        ``"trailing"``: one value per complete window, ``out[j] = var(x[j:j+window])``
+        (the window that ends at sample ``j + window - 1``), ``N - window + 1`` values;
+        sliding Welford update.  ``"centred"``: one value per sample, the window
+        ``x[i - window//2 : i - window//2 + window]`` cut at both ends of the record
+        (shorter windows there); sliding sums of ``x - x[0]``.  Both recompute their
+        sums exactly every ``64 window`` samples, so rounding cannot accumulate.
+    per_column : bool
+        For (N, k) input: False sums the per-column variances (``sum_k var(x_k)``,
+        one value per window), True returns them per column, shape (M, k).
+
+    Returns
+    -------
+    numpy.ndarray
+        (M,) or, with ``per_column`` and 2-D input, (M, k); M as given by ``align``.
     """
-    from imunav._timeseries_kernels import moving_var_cols
+    from imunav._timeseries_kernels import moving_var_cols, moving_variance_kernel
 
     a = np.asarray(x, dtype=np.float64)
     w = int(window)
+    if align not in ("trailing", "centred"):
+        raise InvalidInputError(f"align={align!r}: choose 'trailing' or 'centred'")
     if w < 2:
         raise InvalidInputError(f"the window must hold at least 2 samples, got {w}")
-    if a.shape[0] < w:
-        raise InvalidInputError(f"{a.shape[0]} samples are fewer than one window of {w} samples")
-    return moving_var_cols(a.reshape(a.shape[0], -1), w)
+    cols = np.ascontiguousarray(a.reshape(a.shape[0], -1))
+    if align == "centred":
+        v = moving_variance_kernel(cols, w)
+    else:
+        if a.shape[0] < w:
+            raise InvalidInputError(f"{a.shape[0]} samples are fewer than one window of {w} samples")
+        if not per_column:
+            return moving_var_cols(cols, w)
+        v = np.column_stack([moving_var_cols(cols[:, c : c + 1], w) for c in range(cols.shape[1])])
+    if not per_column:
+        return v.sum(axis=1)
+    return v if a.ndim > 1 else v[:, 0]
 
 
 @dataclass(frozen=True, eq=False)

@@ -57,7 +57,7 @@ def test_steady_state_closed_form():
     Pss = riccati_steady_state(m["F"][3:4, 3:4], [[q]], [[1.0]], [[r]])[0, 0]
     assert (-q + np.sqrt(q * q + 4 * q * r)) / 2 == pytest.approx(0.06283, abs=1e-5)
     assert Pss == pytest.approx(0.06283, abs=2e-5)  # 1 − T/τ decay shifts it by < 1e-5
-    assert run_thesis_filter(np.zeros((3000, 3))).P_diag[-1, 3] == pytest.approx(Pss, rel=1e-6)
+    assert run_thesis_filter(np.zeros((3000, 3))).cov_diag[-1, 3] == pytest.approx(Pss, rel=1e-6)
 
 
 def test_sign_convention_wind_converges_to_plus_w():
@@ -92,7 +92,7 @@ def test_wind_error_below_02_and_variance_ratio():
     ratio = np.var(z[:, K0:] - xt[None, K0:, 3:]) / np.var(e)
     assert ratio > 10
     # the empirical variance is about half of P (truth has no process noise, digest §4.2)
-    assert np.var(e) / r.P_diag[0, -1, 3] == pytest.approx(E[-1, 3] / 0.06282, rel=0.1)
+    assert np.var(e) / r.cov_diag[0, -1, 3] == pytest.approx(E[-1, 3] / 0.06282, rel=0.1)
 
 
 def test_robust_filters_reject_outliers_and_keep_nominal_accuracy():
@@ -125,8 +125,8 @@ def test_gate_rejection_signature_p_equals_prior():
     rej = np.argwhere(r.weights[98:] == 0)
     k, ch = rej[0]
     k += 98
-    P_prior = r.P_diag[k - 1, 3 + ch] + 0.001 + 2 * 0  # F has 1 - T/τ ≈ 1 on the wind block
-    assert r.P_diag[k, 3 + ch] == pytest.approx(P_prior, abs=2e-6)
+    P_prior = r.cov_diag[k - 1, 3 + ch] + 0.001 + 2 * 0  # F has 1 - T/τ ≈ 1 on the wind block
+    assert r.cov_diag[k, 3 + ch] == pytest.approx(P_prior, abs=2e-6)
 
 
 def test_detectors_false_alarms_and_variance_fault_detection():

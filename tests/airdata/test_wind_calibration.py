@@ -90,7 +90,7 @@ def test_thesis_filter_nis_and_nees_on_its_own_model():
     """The thesis filter on data drawn from its own model (the thesis's constant-wind truth is not what its
     process noise q assumes, so its NEES there is not chi-square by design): x0 ~ N(x0, P0),
     x_k+1 = F x_k + G w, z = H x + v.  Normalised innovations over 40 runs x 3000 steps x 3 axes, and the
-    wind and position errors at the last epoch against P_diag."""
+    wind and position errors at the last epoch against cov_diag."""
     from imunav.airdata.filter import run_thesis_filter_batch
 
     cfg = ThesisFilterConfig(dt=0.01, tau=60.0, q=0.05, sigma_ads=0.5, sigma_doppler=0.1)
@@ -104,7 +104,7 @@ def test_thesis_filter_nis_and_nees_on_its_own_model():
         z[:, k] = x @ m["H"].T + rng.normal(scale=np.sqrt(m["R"][0, 0]), size=(runs, 3))
     r = run_thesis_filter_batch(z, cfg)
     assert_rms_calibrated(r.normalized.ravel() / sigma_scale(), "thesis filter normalised innovations")
-    zw = z_scores(r.x[:, -1, 3:], x[:, 3:], np.sqrt(r.P_diag[:, -1, 3:]))
-    zp = z_scores(r.x[:, -1, :3], x[:, :3], np.sqrt(r.P_diag[:, -1, :3]))
+    zw = z_scores(r.x[:, -1, 3:], x[:, 3:], np.sqrt(r.cov_diag[:, -1, 3:]))
+    zp = z_scores(r.x[:, -1, :3], x[:, :3], np.sqrt(r.cov_diag[:, -1, :3]))
     assert_rms_calibrated(zw, "thesis filter wind")
     assert_rms_calibrated(zp, "thesis filter position error")

@@ -9,9 +9,9 @@ from imunav.attitude.adaptive import AdaptiveMEKF
 from imunav.attitude.complementary import Complementary
 from imunav.attitude.madgwick import Madgwick
 from imunav.attitude.mahony import Mahony
-from imunav.attitude.mekf import MEKF, MekfParams
+from imunav.attitude.mekf import MEKF, MekfConfig
 from imunav.attitude.smoother import Smoother
-from imunav.attitude.ukf import UKF, UkfParams
+from imunav.attitude.ukf import UKF, UkfConfig
 from imunav.errors import ConfigError, InvalidInputError, ShapeError
 
 from ._sim import G, angle_err_deg, simulate
@@ -26,7 +26,7 @@ def sim():
 
 def _mekf_params(**kw):
     # matched to the simulation: gyro density = 0.002/sqrt(100), accel direction 0.05/g, heading 0.3/|m|
-    return MekfParams(sigma_gyro=0.0002, sigma_bias=1e-6, sigma_acc=0.05 / G, sigma_mag=0.3 / 48.5, **kw)
+    return MekfConfig(sigma_gyro=0.0002, sigma_bias=1e-6, sigma_acc=0.05 / G, sigma_mag=0.3 / 48.5, **kw)
 
 
 @pytest.mark.parametrize(
@@ -37,7 +37,7 @@ def _mekf_params(**kw):
         (Complementary(k_acc=2.0, k_mag=2.0), 2.0),
         (MEKF(_mekf_params()), 0.5),
         (AdaptiveMEKF(), 1.5),
-        (UKF(UkfParams(sigma_gyro=0.0002, sigma_bias=1e-6, sigma_acc=0.05 / G, sigma_mag=0.3 / 48.5)), 0.5),
+        (UKF(UkfConfig(sigma_gyro=0.0002, sigma_bias=1e-6, sigma_acc=0.05 / G, sigma_mag=0.3 / 48.5)), 0.5),
         (Smoother(_mekf_params()), 0.3),
     ],
     ids=lambda x: getattr(x, "name", str(x)),
@@ -102,7 +102,7 @@ def test_bad_inputs(sim):
     with pytest.raises(InvalidInputError, match="beta"):
         Madgwick(beta=-1.0)
     with pytest.raises(ConfigError, match="sigma_acc"):
-        MekfParams(sigma_acc=-1.0)
+        MekfConfig(sigma_acc=-1.0)
     with pytest.raises(ShapeError, match="q0"):
         Madgwick().run(data, q0=[1.0, 0.0])
     with pytest.raises(InvalidInputError, match="ImuData"):

@@ -15,7 +15,7 @@ import numpy as np
 import pytest
 
 from imunav.attitude import _gravity_kernels as G
-from imunav.attitude.gravity_kf import GravityKF, GravityKfParams
+from imunav.attitude.gravity_kf import GravityKF, GravityKfConfig
 from imunav.attitude.scenario import PaperScenario, simulate
 
 _KIND = {"lee": 0, "javed": 1, "proposed": 2}
@@ -25,7 +25,7 @@ def _skew(v):
     return np.array([[0, -v[2], v[1]], [v[2], 0, -v[0]], [-v[1], v[0], 0]])
 
 
-def _reference(kind, x0, P0, gyr, ya, dt, p: GravityKfParams):
+def _reference(kind, x0, P0, gyr, ya, dt, p: GravityKfConfig):
     """Plain numpy, one equation per line (same conventions as gravity_kf)."""
     g, sa2, sg2 = p.g, p.sigma_a**2, p.sigma_g**2
     x, P = x0.copy(), P0.copy()
@@ -103,7 +103,7 @@ def _inputs(n, seed=3):
 @pytest.mark.parametrize("extra", [{}, {"s_mode": "A"}, {"s_mode": "C"},
                                    {"exact": True, "normalize": True, "hold_s": 0.3}])
 def test_kernel_equals_numpy_reference(kind, extra):
-    p = replace(GravityKfParams(c_a=0.1), bias_window=10, **extra)
+    p = replace(GravityKfConfig(c_a=0.1), bias_window=10, **extra)
     data, ya, dt = _inputs(300)
     x0, P0 = np.array([0.0, 0.0, 1.0]), np.eye(3) * p.p0**2
     xs, al, S, ap, bb = G.gravity_run(_KIND[kind], x0, P0, data.gyro, ya, dt, p.vector())
@@ -117,7 +117,7 @@ def test_kernel_equals_numpy_reference(kind, extra):
 
 
 def test_step_api_equals_run():
-    p = GravityKfParams()
+    p = GravityKfConfig()
     data, _, _ = _inputs(250)
     f = GravityKF("proposed", p)
     ref = f.run(data).flags["x"]
@@ -133,7 +133,7 @@ def test_javed_cascade_is_rounding_sensitive():
     grows past 1e-12 within 1000 samples (it did in the former general-matrix
     kernel too); no re-implementation can match to 1e-12 over a whole run."""
     data, ya, dt = _inputs(1000)
-    p = GravityKfParams(c_a=0.1)
+    p = GravityKfConfig(c_a=0.1)
     x0, P0 = np.array([0.0, 0.0, 1.0]), np.eye(3) * p.p0**2
     a = G.gravity_run(1, x0, P0, data.gyro, ya, dt, p.vector())[0]
     a2 = G.gravity_run(1, x0 + [0, 1e-16, 0], P0, data.gyro, ya, dt, p.vector())[0]

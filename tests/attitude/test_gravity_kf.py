@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from imunav.attitude.gravity_kf import GravityKF, GravityKfParams, process_noise, roll_pitch_from_x
+from imunav.attitude.gravity_kf import GravityKF, GravityKfConfig, process_noise, roll_pitch_from_x
 from imunav.attitude.scenario import PaperScenario, simulate
 from imunav.errors import ConfigError
 from imunav.rotation import dcm_from_euler
@@ -72,7 +72,7 @@ def test_static_bias_free_within_3_sigma():
 
 def test_bad_config():
     with pytest.raises(ConfigError, match="s_mode"):
-        GravityKfParams(s_mode="Z")
+        GravityKfConfig(s_mode="Z")
     with pytest.raises(ConfigError, match="kind"):
         GravityKF("foo")
     with pytest.raises(ConfigError, match="gyro_noise_unit"):

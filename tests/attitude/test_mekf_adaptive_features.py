@@ -12,7 +12,7 @@ import pytest
 
 from imunav.attitude import AdaptiveMEKF
 from imunav.attitude.adaptive import ADAPTIVE_DEFAULTS
-from imunav.attitude.mekf import MEKF, MekfParams
+from imunav.attitude.mekf import MEKF, MekfConfig
 from imunav.errors import ConfigError, InvalidInputError
 from imunav.rotation import quat_conjugate, quat_exp, quat_from_euler, quat_rotate
 from imunav.timeseries import ImuData
@@ -36,7 +36,7 @@ def test_rate_dependent_gyro_noise_matches_closed_form():
     sg, k, p0, p0b, sb = 0.002, 0.004, 0.01, 0.001, 1e-4
     data = ImuData(t=np.arange(n) / fs, gyro=np.tile([0.0, 0.0, w], (n, 1)),
                    accel=np.tile([0.0, 0.0, -9.81], (n, 1)))
-    prm = MekfParams(sigma_gyro=sg, k_gyro_rate=k, sigma_bias=sb, acc_reject=0.0, use_mag=False,
+    prm = MekfConfig(sigma_gyro=sg, k_gyro_rate=k, sigma_bias=sb, acc_reject=0.0, use_mag=False,
                      p0_att=p0, p0_bias=p0b)
     r = MEKF(prm).run(data, q0=[1.0, 0, 0, 0])
     # the discrete z-axis recursion of δθ_{k+1} = δθ_k − Δt δb_k + w_k, δb_{k+1} = δb_k + w_b,k
@@ -66,9 +66,9 @@ def test_lowpass_rest_test_ignores_accel_scale_and_noise():
     fs, n = 200.0, 4000
     bias = np.radians([0.5, -0.3, 0.45])
     data, q = _static(n, fs, bias=bias, sg=0.005, sa=0.02, sm=0.1, acc_scale=1.03, seed=3)
-    plain = MEKF(MekfParams(rest_gyro=0.02, rest_acc=0.2, rest_time=1.5, sigma_gyro=0.003)).run(data)
+    plain = MEKF(MekfConfig(rest_gyro=0.02, rest_acc=0.2, rest_time=1.5, sigma_gyro=0.003)).run(data)
     # sigma_rest is the gyro's per-sample noise: the zero-rate measurement is then modelled correctly
-    lp = MEKF(MekfParams(rest_gyro=0.035, rest_acc=0.5, rest_time=1.5, rest_lpf_tau=0.5, bias_clip=0.035,
+    lp = MEKF(MekfConfig(rest_gyro=0.035, rest_acc=0.5, rest_time=1.5, rest_lpf_tau=0.5, bias_clip=0.035,
                          sigma_gyro=0.003, sigma_rest=0.005)).run(data)
     assert plain.flags["rest"].mean() < 0.05
     assert lp.flags["rest"][int(2.5 * fs):].all()
@@ -76,7 +76,7 @@ def test_lowpass_rest_test_ignores_accel_scale_and_noise():
     assert np.all(np.abs(z) < 3.5), z
     # a rotation as slow as a bias but above bias_clip is not rest
     fast = replace(data, gyro=data.gyro + [0.0, 0.0, 0.05])
-    clip = MekfParams(rest_gyro=0.035, rest_acc=0.5, rest_lpf_tau=0.5, bias_clip=0.035, use_mag=False)
+    clip = MekfConfig(rest_gyro=0.035, rest_acc=0.5, rest_lpf_tau=0.5, bias_clip=0.035, use_mag=False)
     assert not MEKF(clip).run(fast).flags["rest"].any()
     # the same steady 0.05 rad/s without the clip passes the deviation test: the clip is what refused it
     assert MEKF(replace(clip, bias_clip=1e9)).run(fast).flags["rest"][int(2.5 * fs):].all()
@@ -116,7 +116,7 @@ def test_consider_heading_update_leaves_the_bias_alone():
     m = data.mag.copy()
     m[2000:] = quat_rotate(qc, quat_rotate(quat_exp(np.array([0, 0, np.radians(20.0)])), MAG_NED))
     d = replace(data, mag=m)
-    prm = MekfParams(sigma_gyro=0.003, sigma_bias=1e-4, sigma_acc=0.05, sigma_mag=0.3)
+    prm = MekfConfig(sigma_gyro=0.003, sigma_bias=1e-4, sigma_acc=0.05, sigma_mag=0.3)
     b_on = MEKF(prm).run(d).bias[:, 2]
     b_off = MEKF(replace(prm, mag_bias=False)).run(d).bias[:, 2]
     moved_on = np.max(np.abs(b_on[2000:] - b_on[1999]))
@@ -126,9 +126,9 @@ def test_consider_heading_update_leaves_the_bias_alone():
 
 def test_new_parameters_validated():
     with pytest.raises(ConfigError, match="k_gyro_rate"):
-        MekfParams(k_gyro_rate=-1.0)
+        MekfConfig(k_gyro_rate=-1.0)
     with pytest.raises(ConfigError, match="mag_min_undisturbed"):
-        MekfParams(mag_min_undisturbed=float("nan"))
+        MekfConfig(mag_min_undisturbed=float("nan"))
 
 
 def test_defaults_track_a_moving_sensor():
@@ -145,7 +145,7 @@ def test_time_constants_give_rate_independent_steady_state():
     field is nearly horizontal, larger at a steep dip, and the same at every rate.  (That the larger heading
     variance is the true one is checked by the calibration tests in test_nees.py.)"""
     sg, ta, tm = 0.003, 2.0, 10.0
-    prm = MekfParams(sigma_gyro=sg, tau_acc=ta, tau_mag=tm, sigma_bias=0.0, p0_bias=1e-12)
+    prm = MekfConfig(sigma_gyro=sg, tau_acc=ta, tau_mag=tm, sigma_bias=0.0, p0_bias=1e-12)
     heading = {}
     for fs in (50.0, 400.0):
         n = int(12 * tm * fs)

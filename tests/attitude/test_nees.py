@@ -6,8 +6,8 @@ import numpy as np
 from scipy.stats import chi2
 
 from imunav.attitude import _kernels as _k
-from imunav.attitude.mekf import MekfParams
-from imunav.attitude.ukf import UkfParams
+from imunav.attitude.mekf import MekfConfig
+from imunav.attitude.ukf import UkfConfig
 from imunav.rotation import quat_conjugate, quat_multiply, rotvec_from_quat
 
 from ._sim import G, simulate
@@ -30,12 +30,12 @@ def _runs(kind):
         q0 = q[0]  # start at the truth with a consistent P0
         mag = np.ascontiguousarray(data.mag)
         if kind == "ekf":
-            p = MekfParams(sigma_gyro=0.0002, sigma_bias=1e-6, sigma_acc=0.05 / G, sigma_mag=0.3 / 48.5,
+            p = MekfConfig(sigma_gyro=0.0002, sigma_bias=1e-6, sigma_acc=0.05 / G, sigma_mag=0.3 / 48.5,
                            p0_att=0.02, p0_bias=0.03)
             qs, bs, _, _, _, _, Pu, _, _ = _k.mekf_run(q0, np.zeros(3), p.P0(), data.gyro, data.accel, mag, d,
                                                        p.vector(), True)
         else:
-            p = UkfParams(sigma_gyro=0.0002, sigma_bias=1e-6, sigma_acc=0.05 / G, sigma_mag=0.3 / 48.5,
+            p = UkfConfig(sigma_gyro=0.0002, sigma_bias=1e-6, sigma_acc=0.05 / G, sigma_mag=0.3 / 48.5,
                           p0_att=0.02, p0_bias=0.03)
             ref = np.array([18.0, 0.0, 45.0]) / np.hypot(18.0, 45.0)
             qs, bs, _, Pu, _, _ = _k.ukf_run(q0, np.zeros(3), p.P0(), data.gyro, data.accel, mag, d,

@@ -46,7 +46,7 @@ def _mc(r_filter, runs=60, steps=80, seed=1):
     P = kalman_filter([0, 1], np.eye(2), F, Q, H, [[r_filter]], z[0]).P
     ne = nees(xs - run.x, np.broadcast_to(P, (runs, steps, 2, 2)))
     ni = run.normalized[..., 0] ** 2
-    np.testing.assert_allclose(run.P_diag[0], np.einsum("kii->ki", P), rtol=1e-12)
+    np.testing.assert_allclose(run.cov_diag[0], np.einsum("kii->ki", P), rtol=1e-12)
     return ne, ni
 
 

@@ -41,7 +41,7 @@ def test_strapdown_second_order_convergence():
     errs = []
     for fs in (200.0, 1000.0):
         sim = simulate_gait("run", 4, error_model=None, rng=1, fs=fs)
-        st = strapdown_local(sim.imu, sim.quaternion[0], g=9.80665)
+        st = strapdown_local(sim.imu, sim.q_nb[0], g=9.80665)
         errs.append(np.linalg.norm(st.velocity[-1] - sim.velocity[-1]))
     assert errs[0] < 0.1
     assert errs[1] < errs[0] / 10
@@ -81,7 +81,7 @@ def test_ned_static_on_rotating_earth():
     dn = (st.lla[-1, 0] - lat) * (RN + h)
     de = (st.lla[-1, 1] - 0.3) * (RE + h) * math.cos(lat)
     assert abs(dn) < 1e-3 and abs(de) < 1e-3 and abs(st.lla[-1, 2] - h) < 1e-3
-    np.testing.assert_allclose(st.quaternion[-1], [1, 0, 0, 0], atol=1e-9)
+    np.testing.assert_allclose(st.q_nb[-1], [1, 0, 0, 0], atol=1e-9)
     with pytest.raises(InvalidInputError, match="pole"):
         strapdown_ned(ImuData(t[:5], gyro[:5], accel[:5]), [1, 0, 0, 0], [math.pi / 2, 0, 0])
     with pytest.raises(InvalidInputError, match="unit quaternion"):

@@ -44,7 +44,7 @@ def test_tilt_error_shrinks_under_zupt():
     data = _static(n=4000)
     q0 = quat_from_euler(math.radians(2.0), 0.0, 0.0)
     res = run_zupt(data, np.ones(data.n, bool), ZuptConfig(p0_att=math.radians(3.0)), initial_quaternion=q0)
-    roll = euler_from_quat(res.quaternion)[:, 0]
+    roll = euler_from_quat(res.q_nb)[:, 0]
     assert abs(roll[-1]) < 0.1 * math.radians(2.0)
     # the filter is consistent: the final error is inside 3 sigma of its attitude variance
     assert abs(roll[-1]) < 3 * math.sqrt(res.cov_diag[-1, 6]) + 1e-6

@@ -71,7 +71,7 @@ def _runs(states: int, seed: int):
                       sim.ideal.accel + ba + rng.normal(scale=cfg.sigma_acc, size=(n, 3)))
         dphi = rng.normal(scale=cfg.p0_att, size=3)
         # C_true = exp([dphi x]) C_hat  =>  q_hat = q(-dphi) * q_true (nav-frame error)
-        q0 = quat_multiply(quat_from_rotvec(-dphi), sim.quaternion[0])
+        q0 = quat_multiply(quat_from_rotvec(-dphi), sim.q_nb[0])
         res = run_zupt(imu, sim.stance, cfg, initial_quaternion=q0)
         e = sim.position[-1] - res.position[-1]
         nees.append(float(e @ np.linalg.solve(res.P[:3, :3], e)))

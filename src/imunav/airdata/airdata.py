@@ -28,7 +28,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from imunav.airdata.atmosphere import A0, GAMMA, P0, R_AIR, RHO0, pressure_altitude
 from imunav.errors import ConvergenceError, InvalidInputError, NonFiniteError, ShapeError
-from imunav.filters._common import ResultMixin
+from imunav.results import Result
 
 __all__ = [
     "PT_RATIO_SONIC",
@@ -184,7 +184,7 @@ def tas_to_body(tas: ArrayLike, alpha: ArrayLike, beta: ArrayLike, definition: s
 
 
 @dataclass(frozen=True)
-class AirData(ResultMixin):
+class AirData(Result):
     """Outputs of an air-data computer (SI): pressure altitude (m), Mach, CAS, TAS (m/s),
     static temperature (K), density (kg/m³), impact pressure (Pa)."""
 

@@ -25,7 +25,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from imunav.errors import InvalidInputError, NonFiniteError
-from imunav.filters._common import ResultMixin
+from imunav.results import Result
 
 __all__ = [
     "P0",
@@ -85,7 +85,7 @@ def _check(x: ArrayLike, name: str) -> Array:
 
 
 @dataclass(frozen=True)
-class IsaState(ResultMixin):
+class IsaState(Result):
     """ISA state at geopotential altitude ``altitude`` (m): T (K), p (Pa), ρ (kg/m³), a (m/s)."""
 
     altitude: Array

@@ -28,7 +28,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from imunav.errors import DegenerateGeometryError, InvalidInputError, NonFiniteError, ShapeError
-from imunav.filters._common import ResultMixin
+from imunav.results import Result
 
 __all__ = [
     "JANUS4_AZIMUTHS_DEG",
@@ -126,7 +126,7 @@ def beam_angle_error(gamma0: ArrayLike, dgamma: ArrayLike) -> Array:
 
 
 @dataclass(frozen=True)
-class DopplerErrors(ResultMixin):
+class DopplerErrors(Result):
     """Doppler radar error budget (SI).
 
     bias : per-beam velocity bias (m/s), scalar or (n_beams,)
@@ -144,7 +144,7 @@ class DopplerErrors(ResultMixin):
 
 
 @dataclass(frozen=True)
-class DopplerMeasurement(ResultMixin):
+class DopplerMeasurement(Result):
     """Simulated Doppler output: beam velocities (N, n_beams) and LS body velocity (N, 3)."""
 
     beam_velocity: Array

@@ -53,7 +53,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from imunav.errors import InvalidInputError, ShapeError
 from imunav.filters import BatchRun, batch_kalman_filter
-from imunav.filters._common import ResultMixin
+from imunav.results import Result
 
 __all__ = [
     "ThesisFilterConfig",
@@ -86,7 +86,7 @@ def thesis_row(iteration: int | ArrayLike) -> int | Array:
 
 
 @dataclass(frozen=True)
-class ThesisFilterConfig(ResultMixin):
+class ThesisFilterConfig(Result):
     """Parameters of the thesis filter (defaults: the thesis's values, digest §3)."""
 
     dt: float = 0.001
@@ -121,17 +121,17 @@ def thesis_matrices(cfg: ThesisFilterConfig | None = None) -> dict[str, Array]:
 
 
 @dataclass(frozen=True)
-class WindFilterResult(ResultMixin):
+class WindFilterResult(Result):
     """One run of the thesis filter.
 
-    x (N, 6) state estimates, P_diag (N, 6), innovation / normalized (N, 3),
+    x (N, 6) state estimates, cov_diag (N, 6) (the diagonal of P), innovation / normalized (N, 3),
     weights (N, 3) (1 used, 0 rejected), wind (N, 3) = x[:, 3:],
     velocity (N, 3) = V_A + Ŵ, position (N, 3) = X_A + δX̂ (when V_A given),
     difference_loop (N, 3) = z (the raw wind of the difference loop).
     """
 
     x: Array
-    P_diag: Array
+    cov_diag: Array
     innovation: Array
     normalized: Array
     weights: Array
@@ -191,7 +191,7 @@ def run_thesis_filter(
             raise ShapeError(f"v_ads must have the shape of z {zz.shape}, got {va.shape}")
         vel = va + x[:, 3:]
         pos = c.dt * np.cumsum(va, axis=0) + x[:, :3]
-    return WindFilterResult(x, r.P_diag[0], r.innovation[0], r.normalized[0], r.weights[0], x[:, 3:].copy(), zz,
+    return WindFilterResult(x, r.cov_diag[0], r.innovation[0], r.normalized[0], r.weights[0], x[:, 3:].copy(), zz,
                             vel, pos, robust)
 
 
@@ -200,7 +200,7 @@ def run_thesis_filter(
 
 
 @dataclass(frozen=True)
-class LongHorizonConfig(ResultMixin):
+class LongHorizonConfig(Result):
     """Navigation-frame wind filter for real flights (see module docstring).
 
     Attributes
@@ -242,7 +242,7 @@ class LongHorizonConfig(ResultMixin):
 
 
 @dataclass(frozen=True)
-class LongHorizonResult(ResultMixin):
+class LongHorizonResult(Result):
     """Long-horizon run: estimates at the Doppler epochs ``t``.
 
     wind (N, 3) NED total-wind estimate (mean + gust) and its std,

@@ -30,7 +30,7 @@ def plot_wind(result, data=None, axis_names=("x", "y", "z")):
         if data is not None:
             ax.plot(k, data.wind_true[:, i], "k:", label="true")
         ax.plot(k, result.wind[:, i], "C0--", label="KF estimate")
-        s = np.sqrt(result.P_diag[:, 3 + i])
+        s = np.sqrt(result.cov_diag[:, 3 + i])
         ax.fill_between(k, result.wind[:, i] - s, result.wind[:, i] + s, color="C0", alpha=0.2)
         ax.set_ylabel(f"W_{axis_names[i]} [m/s]")
     axes[0].legend(loc="upper right", fontsize=8)

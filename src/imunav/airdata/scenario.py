@@ -33,7 +33,6 @@ from imunav.airdata.filter import (
 )
 from imunav.errors import InvalidInputError
 from imunav.filters import Fault, inject_faults
-from imunav.filters._common import ResultMixin
 from imunav.filters.faults import (
     DETECTORS,
     alarms,
@@ -43,6 +42,7 @@ from imunav.filters.faults import (
     false_alarm_rates,
     thesis_thresholds,
 )
+from imunav.results import Result
 
 __all__ = [
     "KINDS",
@@ -66,7 +66,7 @@ KINDS = ("nominal", "outliers", "variance", "bias", "drift", "stuck")
 
 
 @dataclass(frozen=True)
-class ThesisScenario(ResultMixin):
+class ThesisScenario(Result):
     """Thesis scenario parameters (defaults from the thesis; steps are the thesis's 1-based steps)."""
 
     kind: str = "nominal"
@@ -126,7 +126,7 @@ class ThesisScenario(ResultMixin):
 
 
 @dataclass(frozen=True)
-class ThesisData(ResultMixin):
+class ThesisData(Result):
     """One simulated thesis run: truth and sensors, (N, 3) per body axis unless noted.
 
     x_true (N, 6) true error state (δX, W), wind_true = x_true[:, 3:],
@@ -243,8 +243,8 @@ def covariance_sequence(cfg: ThesisFilterConfig | None = None, n_steps: int = 50
     """P44 and P11 at the thesis's table iterations, beside the thesis's P44 values."""
     r = run_thesis_filter(np.zeros((n_steps, 3)), cfg)
     rows = thesis_row(np.asarray(THESIS_ITERATIONS))
-    return {"iteration": list(THESIS_ITERATIONS), "P44": [float(r.P_diag[k, 3]) for k in rows],
-            "P11": [float(r.P_diag[k, 0]) for k in rows], "P44_thesis": list(THESIS_P44)}
+    return {"iteration": list(THESIS_ITERATIONS), "P44": [float(r.cov_diag[k, 3]) for k in rows],
+            "P11": [float(r.cov_diag[k, 0]) for k in rows], "P44_thesis": list(THESIS_P44)}
 
 
 def actual_error_covariance(cfg: ThesisFilterConfig | None = None, n_steps: int = 500,
@@ -280,7 +280,7 @@ def actual_error_covariance(cfg: ThesisFilterConfig | None = None, n_steps: int 
 
 
 @dataclass(frozen=True)
-class ThesisMonteCarlo(ResultMixin):
+class ThesisMonteCarlo(Result):
     """Monte Carlo figures of the thesis scenarios (see :func:`monte_carlo_thesis`)."""
 
     n_runs: int
@@ -346,7 +346,7 @@ def monte_carlo_thesis(
         "difference_loop_rms": float(_rms(ed)),
         "variance_ratio": float(np.var(ed) / np.var(ew)),
         "kf_mean_error": float(np.mean(ew)),
-        "P44_steady": float(opt.P_diag[0, -1, 3]),
+        "P44_steady": float(opt.cov_diag[0, -1, 3]),
         "empirical_error_variance": float(np.var(ew)),
         "position_state_rms_end": float(_rms(ep)),
         "rows": [int(k0), int(base.n_steps - 1)],
@@ -476,7 +476,7 @@ def thesis_tables(rng: int = 0) -> dict:
         row = {"iteration": i}
         for name, rr in runs.items():
             row[f"{name}_err"] = float(rr.wind[k, 0] - do.wind_true[k, 0])
-            row[f"{name}_P44"] = float(rr.P_diag[k, 3])
+            row[f"{name}_P44"] = float(rr.cov_diag[k, 3])
         t63.append(row)
     return {"table_6_1": t61, "table_6_3": t63, "seed": int(rng)}
 

@@ -9,17 +9,17 @@ accel, mag, dt)``.  Quaternions are ``q_nb`` (body -> NED), Hamilton, scalar fir
 from imunav.attitude.adaptive import ADAPTIVE_DEFAULTS, AdaptiveMEKF
 from imunav.attitude.alignment import align, broad_reference_start, tilt_from_accel
 from imunav.attitude.complementary import Complementary
-from imunav.attitude.gravity_kf import GravityKF, GravityKfParams, JavedKF, LeeKF, ProposedKF
+from imunav.attitude.gravity_kf import GravityKF, GravityKfConfig, JavedKF, LeeKF, ProposedKF
 from imunav.attitude.madgwick import Madgwick
 from imunav.attitude.mahony import Mahony
-from imunav.attitude.mekf import MEKF, MekfParams
+from imunav.attitude.mekf import MEKF, MekfConfig
 from imunav.attitude.metrics import attitude_rmse, error_angles, euler_rmse
 from imunav.attitude.result import AttitudeResult
 from imunav.attitude.smoother import Smoother
-from imunav.attitude.ukf import UKF, UkfParams
+from imunav.attitude.ukf import UKF, UkfConfig
 
 __all__ = [
-    "ADAPTIVE_DEFAULTS", "AdaptiveMEKF", "AttitudeResult", "Complementary", "GravityKF", "GravityKfParams",
-    "JavedKF", "LeeKF", "MEKF", "Madgwick", "Mahony", "MekfParams", "ProposedKF", "Smoother", "UKF", "UkfParams",
+    "ADAPTIVE_DEFAULTS", "AdaptiveMEKF", "AttitudeResult", "Complementary", "GravityKF", "GravityKfConfig",
+    "JavedKF", "LeeKF", "MEKF", "Madgwick", "Mahony", "MekfConfig", "ProposedKF", "Smoother", "UKF", "UkfConfig",
     "align", "attitude_rmse", "broad_reference_start", "error_angles", "euler_rmse", "tilt_from_accel",
 ]

@@ -55,11 +55,11 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from imunav.attitude.mekf import MEKF, MekfParams
+from imunav.attitude.mekf import MEKF, MekfConfig
 
 __all__ = ["AdaptiveMEKF", "ADAPTIVE_DEFAULTS", "ADAPTIVE_GRID"]
 
-ADAPTIVE_DEFAULTS = MekfParams(
+ADAPTIVE_DEFAULTS = MekfConfig(
     # chosen over ADAPTIVE_GRID (see the module docstring)
     sigma_gyro=0.003,
     tau_acc=3.0,
@@ -99,6 +99,6 @@ ADAPTIVE_GRID: dict[str, list[float]] = {
 class AdaptiveMEKF(MEKF):
     """MEKF with adaptive R, disturbance rejection and rest bias estimation."""
 
-    params: MekfParams = field(default_factory=lambda: ADAPTIVE_DEFAULTS)
+    params: MekfConfig = field(default_factory=lambda: ADAPTIVE_DEFAULTS)
 
     name = "adaptive"

@@ -23,6 +23,7 @@ import numpy as np
 
 from imunav.crossval import CvResult, select_by_cv
 from imunav.errors import ConfigError
+from imunav.results import Result
 
 __all__ = ["FILTERS", "REALTIME", "make_filter", "evaluate", "grid_search", "cv_grid_search", "TrialScore",
            "BenchResult", "reference_start"]
@@ -46,13 +47,13 @@ def make_filter(name: str, params: dict[str, Any] | None = None) -> Any:
         if name == "complementary":
             return complementary.Complementary(**p)
         if name == "mekf":
-            return mekf.MEKF(replace(mekf.MekfParams(), **p))
+            return mekf.MEKF(replace(mekf.MekfConfig(), **p))
         if name == "adaptive":
             return adaptive.AdaptiveMEKF(replace(adaptive.ADAPTIVE_DEFAULTS, **p))
         if name == "smoother":
             return smoother.Smoother(replace(adaptive.ADAPTIVE_DEFAULTS, **p))
         if name == "ukf":
-            return ukf.UKF(replace(ukf.UkfParams(), **p))
+            return ukf.UKF(replace(ukf.UkfConfig(), **p))
     except TypeError as exc:
         raise ConfigError(f"bad parameter for filter {name!r}: {exc}") from exc
     raise ConfigError(f"unknown filter {name!r}; choose one of {', '.join(FILTERS)}")
@@ -73,7 +74,7 @@ class TrialScore:
 
 
 @dataclass(frozen=True)
-class BenchResult:
+class BenchResult(Result):
     filter: str
     params: dict[str, Any]
     trials: list[TrialScore]

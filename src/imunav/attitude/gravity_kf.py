@@ -44,7 +44,7 @@ from imunav.errors import ConfigError, ShapeError
 from imunav.rotation import quat_from_euler
 from imunav.timeseries import ImuData
 
-__all__ = ["GravityKfParams", "GravityKF", "LeeKF", "JavedKF", "ProposedKF", "roll_pitch_from_x",
+__all__ = ["GravityKfConfig", "GravityKF", "LeeKF", "JavedKF", "ProposedKF", "roll_pitch_from_x",
            "process_noise"]
 
 _KINDS = {"lee": 0, "javed": 1, "proposed": 2}
@@ -52,7 +52,7 @@ _SMODES = {"A": 0, "B": 1, "C": 2}
 
 
 @dataclass(frozen=True)
-class GravityKfParams:
+class GravityKfConfig:
     """Filter-side settings (SI, per-sample standard deviations)."""
 
     sigma_g: float = 8.7266e-4  # rad/s per sample (0.05 °/s: reading (ii) at 100 Hz)
@@ -76,7 +76,7 @@ class GravityKfParams:
         for f in fields(self):
             v = getattr(self, f.name)
             if isinstance(v, (int, float)) and not isinstance(v, bool) and not (np.isfinite(v) and v >= 0):
-                raise ConfigError(f"GravityKfParams.{f.name} must be finite and >= 0, got {v}")
+                raise ConfigError(f"GravityKfConfig.{f.name} must be finite and >= 0, got {v}")
         if self.bias_window < 1:
             raise ConfigError("bias_window must be >= 1 sample")
 
@@ -106,7 +106,7 @@ class GravityKF:
     """One of the paper's filters; ``kind`` in {"lee", "javed", "proposed"}."""
 
     kind: Literal["lee", "javed", "proposed"] = "proposed"
-    params: GravityKfParams = field(default_factory=GravityKfParams)
+    params: GravityKfConfig = field(default_factory=GravityKfConfig)
     accel_convention: Literal["specific_force", "paper"] = "specific_force"
 
     def __post_init__(self) -> None:
@@ -165,16 +165,16 @@ class GravityKF:
                                                             for f in fields(self.params)}})
 
 
-def LeeKF(params: GravityKfParams | None = None, **kw) -> GravityKF:  # noqa: N802
+def LeeKF(params: GravityKfConfig | None = None, **kw) -> GravityKF:  # noqa: N802
     """Lee et al. 2012: constant c_a, equal-axis Σ_acc, S = 1."""
-    return GravityKF("lee", params or GravityKfParams(), **kw)
+    return GravityKF("lee", params or GravityKfConfig(), **kw)
 
 
-def JavedKF(params: GravityKfParams | None = None, **kw) -> GravityKF:  # noqa: N802
+def JavedKF(params: GravityKfConfig | None = None, **kw) -> GravityKF:  # noqa: N802
     """Javed et al. 2020 ("Javed-like" reconstruction, digest §5.2)."""
-    return GravityKF("javed", params or GravityKfParams(), **kw)
+    return GravityKF("javed", params or GravityKfConfig(), **kw)
 
 
-def ProposedKF(params: GravityKfParams | None = None, **kw) -> GravityKF:  # noqa: N802
+def ProposedKF(params: GravityKfConfig | None = None, **kw) -> GravityKF:  # noqa: N802
     """Candan & Söken 2020: detector-switched c_a ∈ {0, 1}, diagonal S (mode B)."""
-    return GravityKF("proposed", params or GravityKfParams(), **kw)
+    return GravityKF("proposed", params or GravityKfConfig(), **kw)

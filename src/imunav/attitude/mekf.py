@@ -71,11 +71,11 @@ from imunav.attitude.result import AttitudeResult
 from imunav.errors import ConfigError
 from imunav.timeseries import ImuData
 
-__all__ = ["MekfParams", "MEKF"]
+__all__ = ["MekfConfig", "MEKF"]
 
 
 @dataclass(frozen=True)
-class MekfParams:
+class MekfConfig:
     """MEKF tuning (SI; see the module docstring for the equations)."""
 
     sigma_gyro: float = 0.005  # rad/s/√Hz
@@ -112,9 +112,9 @@ class MekfParams:
         for f in fields(self):
             v = getattr(self, f.name)
             if f.name not in ("use_mag", "mag_bias") and not (np.isfinite(v) and v >= 0):
-                raise ConfigError(f"MekfParams.{f.name} must be finite and >= 0, got {v}")
+                raise ConfigError(f"MekfConfig.{f.name} must be finite and >= 0, got {v}")
         if self.g <= 0:
-            raise ConfigError(f"MekfParams.g must be > 0, got {self.g}")
+            raise ConfigError(f"MekfConfig.g must be > 0, got {self.g}")
 
     def vector(self) -> np.ndarray:
         """Packed parameter array of the kernel (order of ``_kernels`` params)."""
@@ -136,9 +136,9 @@ FLAG_NAMES = {"acc_rejected": 1, "mag_disturbed": 2, "rest": 4}
 
 @dataclass
 class MEKF:
-    """Multiplicative EKF; ``params`` a :class:`MekfParams` (keyword overrides allowed)."""
+    """Multiplicative EKF; ``params`` a :class:`MekfConfig` (keyword overrides allowed)."""
 
-    params: MekfParams = field(default_factory=MekfParams)
+    params: MekfConfig = field(default_factory=MekfConfig)
 
     name = "mekf"
 

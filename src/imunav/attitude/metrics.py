@@ -25,6 +25,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from imunav.errors import InsufficientDataError, ShapeError
+from imunav.results import Result
 from imunav.rotation import quat_conjugate, quat_multiply
 
 Array = NDArray[np.float64]
@@ -42,7 +43,7 @@ class ErrorAngles:
 
 
 @dataclass(frozen=True)
-class AttitudeRmse:
+class AttitudeRmse(Result):
     """RMSE [deg] of the BROAD error angles and the number of samples used."""
 
     total_rmse_deg: float

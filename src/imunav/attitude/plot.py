@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
@@ -51,13 +52,24 @@ def plot_errors(t: np.ndarray, angles: Any, title: str = ""):
     return fig
 
 
-def plot_montecarlo_box(mc: Any):
-    """Box plots of the per-run pitch and roll RMSE of each filter (log scale)."""
+def plot_montecarlo_box(rmse: Mapping[str, np.ndarray]):
+    """Box plots of the per-run pitch and roll RMSE of each filter (log scale).
+
+    Parameters
+    ----------
+    rmse : mapping
+        Filter name to its ``(n_runs, 2)`` (pitch, roll) RMSE [deg], e.g.
+        :func:`imunav.scenarios.paper_rmse` of a Monte Carlo.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
     plt = _plt()
     fig, axs = plt.subplots(1, 2, figsize=(9, 4))
-    names = list(mc.rmse)
+    names = list(rmse)
     for j, lab in enumerate(("pitch", "roll")):
-        axs[j].boxplot([mc.rmse[n][:, j] for n in names])
+        axs[j].boxplot([rmse[n][:, j] for n in names])
         axs[j].set_xticks(range(1, len(names) + 1), names)
         axs[j].set_yscale("log")
         axs[j].set_ylabel(f"{lab} RMSE [deg]")

@@ -8,6 +8,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from imunav.results import Result
 from imunav.rotation import euler_from_quat
 
 Array = NDArray[np.float64]
@@ -16,7 +17,7 @@ __all__ = ["AttitudeResult"]
 
 
 @dataclass(frozen=True)
-class AttitudeResult:
+class AttitudeResult(Result):
     """Attitude estimate over a recording.
 
     Attributes

@@ -19,20 +19,17 @@ magnitude.  Both readings are available; Table 2 uses (ii).
 
 from __future__ import annotations
 
-from collections.abc import Callable
-from concurrent.futures import ProcessPoolExecutor
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, replace
 from typing import Any, Literal
 
 import numpy as np
 from numpy.typing import NDArray
 
-from imunav.attitude.gravity_kf import GravityKF, GravityKfParams
-from imunav.attitude.metrics import euler_rmse
+from imunav.attitude.gravity_kf import GravityKF, GravityKfConfig
 from imunav.errors import ConfigError
 from imunav.timeseries import ImuData
 
-__all__ = ["PaperScenario", "simulate", "MonteCarloResult", "run_montecarlo", "PAPER_TABLE2"]
+__all__ = ["PaperScenario", "simulate", "default_filters", "PAPER_TABLE2"]
 
 DEG = np.pi / 180.0
 
@@ -72,9 +69,9 @@ class PaperScenario:
     def sigma_accel(self) -> float:
         return self.accel_noise_ug_rthz * 1e-6 * 9.80665 * np.sqrt(self.fs)
 
-    def filter_params(self, **kw: Any) -> GravityKfParams:
+    def filter_params(self, **kw: Any) -> GravityKfConfig:
         """Filter-side parameters matching the truth (overridable)."""
-        return replace(GravityKfParams(sigma_g=self.sigma_gyro, sigma_a=self.sigma_accel, g=self.g), **kw)
+        return replace(GravityKfConfig(sigma_g=self.sigma_gyro, sigma_a=self.sigma_accel, g=self.g), **kw)
 
 
 def simulate(scn: PaperScenario, rng: np.random.Generator | int | None = None) -> tuple[ImuData, NDArray]:
@@ -92,28 +89,6 @@ def simulate(scn: PaperScenario, rng: np.random.Generator | int | None = None) -
     return ImuData(t=t, gyro=w, accel=f), np.zeros((n, 3))
 
 
-@dataclass(frozen=True)
-class MonteCarloResult:
-    """RMSE [deg] per run: ``rmse[filter]`` is (n_runs, 2) = (pitch, roll)."""
-
-    rmse: dict[str, NDArray[np.float64]]
-    scenario: PaperScenario
-    params: dict[str, dict[str, Any]] = field(default_factory=dict)
-
-    def table(self) -> dict[str, dict[str, float]]:
-        out = {}
-        for k, v in self.rmse.items():
-            out[k] = {"pitch_mean": float(v[:, 0].mean()), "pitch_std": float(v[:, 0].std()),
-                      "pitch_p95": float(np.percentile(v[:, 0], 95)), "roll_mean": float(v[:, 1].mean()),
-                      "roll_std": float(v[:, 1].std()), "roll_p95": float(np.percentile(v[:, 1], 95))}
-        return out
-
-    def to_dict(self) -> dict[str, Any]:
-        return {"table": self.table(), "paper_table2": {k: {"pitch": v[0], "roll": v[1]} for k, v in PAPER_TABLE2.items()},
-                "rmse": {k: v.tolist() for k, v in self.rmse.items()}, "params": self.params,
-                "scenario": {k: getattr(self.scenario, k) for k in self.scenario.__dataclass_fields__}}
-
-
 def default_filters(scn: PaperScenario) -> dict[str, GravityKF]:
     """Lee (c_a = 0.1), Javed-like (c_a = 0.1) and the proposed filter (mode B)."""
     return {
@@ -121,43 +96,3 @@ def default_filters(scn: PaperScenario) -> dict[str, GravityKF]:
         "javed": GravityKF("javed", scn.filter_params(c_a=0.1)),
         "proposed": GravityKF("proposed", scn.filter_params()),
     }
-
-
-def _one(args: tuple[PaperScenario, int, dict[str, GravityKF]]) -> dict[str, NDArray]:
-    scn, seed, filters = args
-    data, truth = simulate(scn, seed)
-    out = {}
-    for name, f in filters.items():
-        e = f.run(data).euler()
-        out[name] = euler_rmse(e[:, :2], truth[:, :2])[::-1]  # (pitch, roll)
-    return out
-
-
-def run_montecarlo(scn: PaperScenario | None = None, n_runs: int = 100, rng: int | None = 0,
-                   filters: dict[str, GravityKF] | None = None, workers: int = 1,
-                   progress: Callable[[int, int], None] | None = None) -> MonteCarloResult:
-    """Seeded Monte Carlo: run ``i`` uses noise seed ``SeedSequence(rng).spawn`` #i.
-
-    ``progress(done, total)`` is called after each run.
-    """
-    scn = scn or PaperScenario()
-    if n_runs < 1:
-        raise ConfigError(f"n_runs must be >= 1, got {n_runs}")
-    filters = filters or default_filters(scn)
-    seeds = [int(s.generate_state(1)[0]) for s in np.random.SeedSequence(rng).spawn(n_runs)]
-    tasks = [(scn, s, filters) for s in seeds]
-    res = []
-    if workers > 1:
-        with ProcessPoolExecutor(max_workers=workers) as ex:
-            for r in ex.map(_one, tasks):
-                res.append(r)
-                if progress:
-                    progress(len(res), n_runs)
-    else:
-        for t in tasks:
-            res.append(_one(t))
-            if progress:
-                progress(len(res), n_runs)
-    rmse = {k: np.array([r[k] for r in res]) for k in filters}
-    return MonteCarloResult(rmse=rmse, scenario=scn,
-                            params={k: f.params.__dict__ | {"kind": f.kind} for k, f in filters.items()})

@@ -24,7 +24,7 @@ from numpy.typing import ArrayLike
 
 from imunav.attitude import _kernels as _k
 from imunav.attitude.adaptive import ADAPTIVE_DEFAULTS
-from imunav.attitude.mekf import FLAG_NAMES, MEKF, MekfParams
+from imunav.attitude.mekf import FLAG_NAMES, MEKF, MekfConfig
 from imunav.attitude.result import AttitudeResult
 from imunav.timeseries import ImuData
 
@@ -35,7 +35,7 @@ __all__ = ["Smoother"]
 class Smoother:
     """RTS smoother over the adaptive MEKF (offline only: no step API)."""
 
-    params: MekfParams = field(default_factory=lambda: ADAPTIVE_DEFAULTS)
+    params: MekfConfig = field(default_factory=lambda: ADAPTIVE_DEFAULTS)
 
     name = "smoother"
 

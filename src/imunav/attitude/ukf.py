@@ -27,11 +27,11 @@ from imunav.errors import ConfigError
 from imunav.rotation import quat_rotate
 from imunav.timeseries import ImuData
 
-__all__ = ["UkfParams", "UKF"]
+__all__ = ["UkfConfig", "UKF"]
 
 
 @dataclass(frozen=True)
-class UkfParams:
+class UkfConfig:
     sigma_gyro: float = 0.005  # rad/s/√Hz
     sigma_bias: float = 1e-5  # rad/s/√s
     sigma_acc: float = 0.05  # unit-vector noise per sample
@@ -48,9 +48,9 @@ class UkfParams:
         for f in fields(self):
             v = getattr(self, f.name)
             if not np.isfinite(v) or (v < 0 and f.name != "kappa"):
-                raise ConfigError(f"UkfParams.{f.name} must be finite and >= 0, got {v}")
+                raise ConfigError(f"UkfConfig.{f.name} must be finite and >= 0, got {v}")
         if self.alpha <= 0:
-            raise ConfigError("UkfParams.alpha must be > 0")
+            raise ConfigError("UkfConfig.alpha must be > 0")
 
     def vector(self, use_mag: bool) -> np.ndarray:
         p = np.zeros(_k.N_PARAMS)
@@ -67,7 +67,7 @@ class UkfParams:
 class UKF:
     """Error-state UKF; ``mag_ref_ned`` unit field direction in NED (or None)."""
 
-    params: UkfParams = field(default_factory=UkfParams)
+    params: UkfConfig = field(default_factory=UkfConfig)
     mag_ref_ned: np.ndarray | None = None
 
     name = "ukf"

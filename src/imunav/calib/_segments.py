@@ -13,15 +13,9 @@ import numpy as np
 from numpy.typing import NDArray
 
 from imunav.errors import InsufficientDataError, InvalidInputError, SaturationError
+from imunav.timeseries import moving_variance
 
 Array = NDArray[np.float64]
-
-
-def moving_variance(x: Array, n: int) -> Array:
-    """Centred moving variance of each column over ``n`` samples (edges use shorter windows)."""
-    from imunav.calib._kernels import moving_variance_kernel
-
-    return moving_variance_kernel(np.ascontiguousarray(x, dtype=float), int(n))
 
 
 def steady_segments(
@@ -41,7 +35,7 @@ def steady_segments(
     session is steady (true of calibration sessions).
     """
     n = max(int(round(window_s * fs)), 8)  # a few samples at least: the variance of 2 samples is too noisy
-    v = moving_variance(x, n)
+    v = moving_variance(x, n, align="centred", per_column=True)
     if threshold is None:
         # floor: noise-free (simulated) data have a rounding-level variance only
         thr = np.maximum(factor * np.median(v, axis=0), 1e-9 * np.mean(x**2, axis=0) + np.finfo(float).tiny)

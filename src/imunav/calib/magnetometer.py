@@ -37,6 +37,7 @@ from imunav.errors import (
     NonFiniteError,
     ShapeError,
 )
+from imunav.results import Result
 
 __all__ = [
     "MagCalibration",
@@ -50,7 +51,7 @@ Array = NDArray[np.float64]
 
 
 @dataclass(frozen=True)
-class MagCalibration:
+class MagCalibration(Result):
     """Hard iron ``b`` (3,), soft iron ``A`` (3, 3): ``h_cal = A (h − b)``.
 
     ``field_norm``: the (given or estimated) field magnitude in the data unit.

@@ -35,6 +35,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from imunav.errors import FileFormatError, InvalidInputError, NonFiniteError, ShapeError, UnitError
+from imunav.io._atomic import write_json
 from imunav.units import DEG
 
 __all__ = [
@@ -43,7 +44,6 @@ __all__ = [
     "FORMAT_VERSION",
     "success_percentages",
     "calibration_parameters",
-    "write_json_atomic",
 ]
 
 Array = NDArray[np.float64]
@@ -51,25 +51,6 @@ FORMAT_VERSION = 1
 _FORMAT = "imunav.imu-calibration"
 _SI_ACCEL = "m/s^2"
 _SI_GYRO = "rad/s"
-
-
-def write_json_atomic(obj: Any, path: str | os.PathLike[str]) -> Path:
-    """Write ``obj`` as JSON to ``path`` atomically (temp file + ``os.replace``)."""
-    from imunav.io._atomic import write_json
-
-    return write_json(path, obj)
-
-
-def _json_default(o: Any) -> Any:
-    if isinstance(o, np.ndarray):
-        return o.tolist()
-    if isinstance(o, (np.floating, np.integer)):
-        return o.item()
-    if isinstance(o, np.bool_):
-        return bool(o)
-    if hasattr(o, "to_dict"):
-        return o.to_dict()
-    raise TypeError(f"not JSON serialisable: {type(o)}")
 
 
 @dataclass(frozen=True)
@@ -397,7 +378,7 @@ class ImuCalibration:
 
     def save(self, path: str | os.PathLike[str]) -> Path:
         """Write the calibration as JSON (atomic)."""
-        return write_json_atomic(self.to_dict(), path)
+        return write_json(path, self.to_dict())
 
     @classmethod
     def load(cls, path: str | os.PathLike[str]) -> "ImuCalibration":

@@ -47,7 +47,6 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy.optimize import least_squares
 
-from imunav.calib._segments import moving_variance
 from imunav.calib.model import ImuCalibration
 from imunav.calib.result import CalibrationResult
 from imunav.errors import (
@@ -58,6 +57,7 @@ from imunav.errors import (
     SaturationError,
     ShapeError,
 )
+from imunav.timeseries import moving_variance
 from imunav.units import G0
 
 __all__ = ["TEDALDI_ACCEL_NAMES", "TEDALDI_GYRO_NAMES", "accel_tedaldi_matrix", "gyro_tedaldi_matrix", "multipose"]
@@ -379,7 +379,7 @@ def multipose(
     if zeta <= 0:
         raise InvalidInputError("the initial rest period has zero accelerometer variance (constant data?)")
     nwin = max(int(np.rint(wait_s * fs)), 2)
-    mv = np.sum(moving_variance(a, nwin) ** 2, axis=1)
+    mv = np.sum(moving_variance(a, nwin, align="centred", per_column=True) ** 2, axis=1)
     min_len = max(int(np.rint((0.25 if min_static_s is None else min_static_s) * fs)), 2)
     best: dict[str, Any] | None = None
     poor: float | None = None

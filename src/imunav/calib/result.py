@@ -9,6 +9,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from imunav.calib.model import _OFF, ImuCalibration
+from imunav.results import Result
 
 __all__ = ["CalibrationResult", "parameter_stderr"]
 
@@ -16,7 +17,7 @@ Array = NDArray[np.float64]
 
 
 @dataclass(frozen=True)
-class CalibrationResult:
+class CalibrationResult(Result):
     """An estimated :class:`ImuCalibration` with its uncertainty and diagnostics.
 
     Attributes

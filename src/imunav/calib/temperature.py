@@ -29,6 +29,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from imunav.calib.model import ImuCalibration, TempCurve
 from imunav.errors import InsufficientDataError, InvalidInputError, ShapeError
+from imunav.results import Result
 
 __all__ = ["OrderMetrics", "TemperatureFit", "fit_temperature_curve", "ThermalResult", "thermal_calibration"]
 
@@ -36,7 +37,7 @@ Array = NDArray[np.float64]
 
 
 @dataclass(frozen=True)
-class OrderMetrics:
+class OrderMetrics(Result):
     """Fit of one order: coefficients, stderr and the spec's residual metrics."""
 
     order: int
@@ -63,7 +64,7 @@ class OrderMetrics:
 
 
 @dataclass(frozen=True)
-class TemperatureFit:
+class TemperatureFit(Result):
     """All fitted orders of one parameter and the chosen one."""
 
     temp_c: Array
@@ -202,7 +203,7 @@ def fit_temperature_curve(
 
 
 @dataclass(frozen=True)
-class ThermalResult:
+class ThermalResult(Result):
     """Thermal model of an IMU: per parameter and axis a :class:`TemperatureFit`."""
 
     calibration: ImuCalibration

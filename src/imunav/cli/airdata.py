@@ -192,8 +192,8 @@ Example: imunav airdata run flight.npz --robust nis --json run.json
                            "difference_loop_rms_per_axis": np.sqrt(np.mean(ed**2, 0)).tolist(),
                            "rejected_samples": int((r.weights == 0).sum()),
                            "final_wind": r.wind[-1].tolist(), "true_wind": data["wind_true"][-1].tolist(),
-                           "P44_final": float(r.P_diag[-1, 3])}
-                arrays = {"wind": r.wind, "P_diag": r.P_diag, "normalized": r.normalized, "weights": r.weights}
+                           "P44_final": float(r.cov_diag[-1, 3])}
+                arrays = {"wind": r.wind, "P_diag": r.cov_diag, "normalized": r.normalized, "weights": r.weights}
             elif meta["type"] == "flight":
                 from imunav.airdata.filter import LongHorizonConfig, run_long_horizon
                 from imunav.rotation import dcm_from_euler

@@ -240,13 +240,12 @@ def montecarlo_cmd(
 
     check_outputs([], [json_out, plot])
     check_figure_path(plot, "--plot")
-    import numpy as np
     from rich.console import Console
     from rich.table import Table
 
-    from imunav.attitude.scenario import PAPER_TABLE2, MonteCarloResult, PaperScenario, default_filters
+    from imunav.attitude.scenario import PAPER_TABLE2, PaperScenario, default_filters
     from imunav.montecarlo import run_montecarlo
-    from imunav.scenarios import attitude_paper
+    from imunav.scenarios import attitude_paper, paper_report, paper_rmse, paper_table
 
     con = Console()
     names = tuple(f.strip() for f in filters.split(",") if f.strip())
@@ -259,27 +258,21 @@ def montecarlo_cmd(
                          n_workers=workers, address=address, progress=True,
                          description="attitude Monte Carlo", filters=names, duration=duration,
                          gyro_noise_unit=gyro_noise_unit)
-    m = res.metrics
-    mc = MonteCarloResult(
-        rmse={k: np.column_stack([m[f"{k}_pitch_rmse_deg"].to_numpy(), m[f"{k}_roll_rmse_deg"].to_numpy()])
-              for k in names},
-        scenario=scn,
-        params={k: every[k].params.__dict__ | {"kind": every[k].kind} for k in names})
     t = Table(title=f"RMSE [deg] over {runs} runs (mean ± std); paper Table 2 in brackets")
     for c in ("filter", "pitch", "roll"):
         t.add_column(c)
-    for k, v in mc.table().items():
+    for k, v in paper_table(res).items():
         p = PAPER_TABLE2.get(k, (float("nan"),) * 2)
         t.add_row(k, f"{v['pitch_mean']:.4f} ± {v['pitch_std']:.4f} [{p[0]}]",
                   f"{v['roll_mean']:.4f} ± {v['roll_std']:.4f} [{p[1]}]")
     con.print(t)
     if json_out:
-        _write_json(mc.to_dict(), json_out)
+        _write_json(paper_report(res, scn, {k: every[k] for k in names}), json_out)
         con.print(f"wrote {json_out}")
     if plot:
         from imunav.attitude.plot import plot_montecarlo_box, save
 
-        save(plot_montecarlo_box(mc), plot)
+        save(plot_montecarlo_box(paper_rmse(res)), plot)
         con.print(f"wrote {plot}")
 
 

@@ -99,7 +99,7 @@ def _finish(result: Any, out: Path, report: Optional[Path], *, save: Any = None,
     from rich.console import Console
     from rich.table import Table
 
-    from imunav.calib.model import write_json_atomic
+    from imunav.io._atomic import write_json
 
     px4_values = _px4(px4, imu=result.calibration)
 
@@ -114,7 +114,7 @@ def _finish(result: Any, out: Path, report: Optional[Path], *, save: Any = None,
     if report is not None:
         from imunav.calib.plot import plot_residuals, save_figure
 
-        write_json_atomic(result.to_dict(), report / "report.json")
+        write_json(report / "report.json", result.to_dict())
         save_figure(plot_residuals(result), report / "residuals.png")
     tab = Table(title=f"{result.method}: residual RMS and design condition")
     tab.add_column("fit")
@@ -261,7 +261,7 @@ def ferraris(
     _check_report(report)
 
     from imunav.calib import ferraris_from_session
-    from imunav.calib.model import write_json_atomic
+    from imunav.io._atomic import write_json
 
     data = _read(recording, fs, accel_unit, gyro_unit, accel_scale, gyro_scale, skiprows, columns, topic, instance,
                  layout)
@@ -272,7 +272,7 @@ def ferraris(
                                 expected_angle_deg=expected_angle_deg)
     _finish(res, out, report, px4=px4_params)
     if imucal_out is not None:
-        write_json_atomic(res.calibration.to_imucal(), imucal_out)
+        write_json(imucal_out, res.calibration.to_imucal())
 
 
 @app.command()
@@ -340,9 +340,9 @@ def temperature(
     from rich.table import Table
 
     from imunav.calib import ImuCalibration
-    from imunav.calib.model import write_json_atomic
     from imunav.calib.temperature import thermal_calibration
     from imunav.errors import InvalidInputError
+    from imunav.io._atomic import write_json
 
     temps, cals = [], []
     for item in calibrations:
@@ -369,7 +369,7 @@ def temperature(
         from imunav.calib.plot import plot_temperature_fit, save_figure
 
         report.mkdir(parents=True, exist_ok=True)
-        write_json_atomic(res.to_dict(), report / "report.json")
+        write_json(report / "report.json", res.to_dict())
         for k, fits in res.fits.items():
             for i, f in enumerate(fits):
                 save_figure(plot_temperature_fit(f, f"{k} {'xyz'[i]}"), report / f"{k}_{'xyz'[i]}.png")
@@ -410,8 +410,8 @@ def mag(
         hard_iron_minmax,
         soft_iron_rotation_scale,
     )
-    from imunav.calib.model import write_json_atomic
     from imunav.errors import InvalidInputError
+    from imunav.io._atomic import write_json
 
     h = _read_mag(recording, topic, instance)
     if method == "ellipsoid":
@@ -429,12 +429,12 @@ def mag(
 
         mag_unit = "uT" if log_kind(recording) is not None else "gauss"
     px4_values = _px4(px4_params, mag=cal, mag_unit=mag_unit)
-    write_json_atomic(cal.to_dict(), out)
+    write_json(out, cal.to_dict())
     if report is not None:
         from imunav.calib.plot import plot_magnetometer, save_figure
 
         report.mkdir(parents=True, exist_ok=True)
-        write_json_atomic(cal.to_dict(), report / "report.json")
+        write_json(report / "report.json", cal.to_dict())
         save_figure(plot_magnetometer(h, cal), report / "projections.png")
     Console().print({"b": cal.b.round(6).tolist(), "field_norm": round(cal.field_norm, 6), "quality": cal.quality})
     typer.echo(f"magnetometer calibration written to {out}")

@@ -137,7 +137,7 @@ def run_cmd(
 
         with atomic_path(out) as tmp, open(tmp, "wb") as fh:  # a failed write leaves no temp file
             np.savez_compressed(fh, t=res.t, position=res.position, velocity=res.velocity,
-                                quaternion=res.quaternion, zv=res.zv)
+                                quaternion=res.q_nb, zv=res.zv)
     if json_out is not None:
         _write_json(json_out, summary)
 

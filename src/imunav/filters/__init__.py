@@ -16,9 +16,9 @@ from __future__ import annotations
 from imunav.filters.consistency import ConsistencyResult, chi2_bounds, consistency_test, nees, nis
 from imunav.filters.ekf import ExtendedKalmanFilter, numerical_jacobian
 from imunav.filters.faults import (
-    DetectorResult,
     Fault,
     FaultDetectionResult,
+    FaultDetectorResult,
     alarms,
     calibrated_thresholds,
     detect_faults,
@@ -71,7 +71,7 @@ __all__ = [
     "detect_faults",
     "alarms",
     "detector_statistics",
-    "DetectorResult",
+    "FaultDetectorResult",
     "FaultDetectionResult",
     "calibrated_thresholds",
     "thesis_thresholds",

@@ -1,14 +1,12 @@
-"""Shared helpers of :mod:`imunav.filters`: input checks and result serialisation."""
+"""Shared helpers of :mod:`imunav.filters`: input checks."""
 
 from __future__ import annotations
-
-import dataclasses
-from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from imunav.errors import InvalidInputError, NonFiniteError, ShapeError
+from imunav.results import Result
 
 Array = NDArray[np.float64]
 
@@ -77,27 +75,5 @@ def inv_sqrt_spd(S: Array) -> Array:
     return (V / np.sqrt(w)) @ V.T
 
 
-def to_jsonable(v: Any) -> Any:
-    if isinstance(v, np.ndarray):
-        if v.dtype.kind == "f" and not np.all(np.isfinite(v)):
-            # JSON has no NaN / inf: write null
-            return np.where(np.isfinite(v), v, None).tolist()
-        return v.tolist()
-    if isinstance(v, (np.floating, np.integer, np.bool_)):
-        v = v.item()
-    if dataclasses.is_dataclass(v) and not isinstance(v, type):
-        return {f.name: to_jsonable(getattr(v, f.name)) for f in dataclasses.fields(v)}
-    if isinstance(v, dict):
-        return {str(k): to_jsonable(x) for k, x in v.items()}
-    if isinstance(v, (list, tuple)):
-        return [to_jsonable(x) for x in v]
-    if isinstance(v, float) and not np.isfinite(v):
-        return None  # JSON has no NaN / inf
-    return v
-
-
-class ResultMixin:
-    """``to_dict()`` for frozen result dataclasses (arrays become lists)."""
-
-    def to_dict(self) -> dict[str, Any]:
-        return {f.name: to_jsonable(getattr(self, f.name)) for f in dataclasses.fields(self)}  # type: ignore[arg-type]
+# The result base moved to :mod:`imunav.results`; this name stays until the branches that import it are merged.
+ResultMixin = Result

@@ -16,7 +16,7 @@ from numpy.typing import ArrayLike, NDArray
 from scipy.stats import chi2
 
 from imunav.errors import InvalidInputError, ShapeError
-from imunav.filters._common import ResultMixin
+from imunav.results import Result
 
 __all__ = ["nis", "nees", "chi2_bounds", "ConsistencyResult", "consistency_test"]
 
@@ -58,7 +58,7 @@ def chi2_bounds(dof: int, n_samples: int = 1, confidence: float = 0.95) -> tuple
 
 
 @dataclass(frozen=True)
-class ConsistencyResult(ResultMixin):
+class ConsistencyResult(Result):
     """Per-step Monte Carlo averages of a χ² statistic and their bounds.
 
     ``mean_per_step`` averages over runs; ``lower``/``upper`` are the bounds

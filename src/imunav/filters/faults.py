@@ -56,7 +56,7 @@ from numpy.typing import ArrayLike, NDArray
 from scipy.stats import chi2, norm
 
 from imunav.errors import InvalidInputError, ShapeError
-from imunav.filters._common import ResultMixin
+from imunav.results import Result
 
 __all__ = [
     "DETECTORS",
@@ -65,7 +65,7 @@ __all__ = [
     "wishart_largest_root_quantile",
     "window_statistics",
     "cusum_statistics",
-    "DetectorResult",
+    "FaultDetectorResult",
     "FaultDetectionResult",
     "detect_faults",
     "latch",
@@ -306,8 +306,9 @@ def isolate_faulty_channels(normalized: ArrayLike, M: int = 20, p_false_alarm: f
 
 
 @dataclass(frozen=True)
-class DetectorResult(ResultMixin):
-    """One detector over a sequence.
+class FaultDetectorResult(Result):
+    """One fault detector over an innovation sequence (not :class:`imunav.ins.DetectorResult`, the
+    zero-velocity detector's flags).
 
     statistic (N,) (NaN before the window is full), threshold used,
     thesis_threshold (NaN where the thesis has none), alarm (N,) raw
@@ -324,10 +325,10 @@ class DetectorResult(ResultMixin):
 
 
 @dataclass(frozen=True)
-class FaultDetectionResult(ResultMixin):
+class FaultDetectionResult(Result):
     """All detectors on one sequence, plus channel isolation after the first alarm."""
 
-    detectors: dict[str, DetectorResult]
+    detectors: dict[str, FaultDetectorResult]
     isolated_channels: NDArray[np.bool_]
     channel_first_flag: Array
     window: int
@@ -383,7 +384,7 @@ def detect_faults(
         alarm = alarms(name, st, thr[name])
         alarm[:start] = False
         fa = first_alarm(alarm)
-        dets[name] = DetectorResult(name, st, thr[name], th.get(name, np.nan), alarm, latch(alarm), fa)
+        dets[name] = FaultDetectorResult(name, st, thr[name], th.get(name, np.nan), alarm, latch(alarm), fa)
         if fa >= 0 and (earliest < 0 or fa < earliest):
             earliest = fa
     if earliest >= 0:

@@ -27,13 +27,13 @@ from numpy.typing import ArrayLike, NDArray
 
 from imunav.errors import InvalidInputError
 from imunav.filters._common import (
-    ResultMixin,
     as_covariance,
     as_matrix,
     as_vector,
     inv_sqrt_spd,
     symmetrize,
 )
+from imunav.results import Result
 
 __all__ = [
     "KalmanFilter",
@@ -50,7 +50,7 @@ Array = NDArray[np.float64]
 
 
 @dataclass(frozen=True)
-class UpdateResult(ResultMixin):
+class UpdateResult(Result):
     """What one measurement update did.
 
     Attributes
@@ -233,7 +233,7 @@ class KalmanFilter:
 
 
 @dataclass(frozen=True)
-class KalmanRun(ResultMixin):
+class KalmanRun(Result):
     """A whole-sequence linear Kalman filter run (see :func:`kalman_filter`).
 
     ``x_pred``/``P_pred`` are the priors at each step, ``x``/``P`` the
@@ -338,16 +338,16 @@ def kalman_filter(
 
 
 @dataclass(frozen=True)
-class BatchRun(ResultMixin):
+class BatchRun(Result):
     """Many independent runs of one linear filter (leading axis = run).
 
-    x, P_diag (R, N, n) posteriors; innovation, normalized (R, N, m) (NaN
+    x, cov_diag (R, N, n) posteriors (the diagonal of P); innovation, normalized (R, N, m) (NaN
     without measurement); weights (R, N, m): 1 used, 0 rejected, Huber
     weight in between.
     """
 
     x: Array
-    P_diag: Array
+    cov_diag: Array
     innovation: Array
     normalized: Array
     weights: Array

@@ -42,6 +42,7 @@ from numpy.typing import ArrayLike, NDArray
 from imunav._timeseries_kernels import runs
 from imunav.errors import InvalidInputError, ShapeError
 from imunav.ins import _kernels as _k
+from imunav.results import Result
 
 __all__ = [
     "DETECTORS",
@@ -174,7 +175,7 @@ def detector_statistic(data: Any, detector: str = "shoe", *, window: int = 5, si
 
 
 @dataclass(frozen=True)
-class DetectorResult:
+class DetectorResult(Result):
     """Output of a zero-velocity detector.
 
     Attributes
@@ -332,7 +333,7 @@ def free_acceleration(data: Any, *, threshold: float = 3.0, g: float = G_PYSHOE,
 
 
 @dataclass(frozen=True)
-class ThresholdSearch:
+class ThresholdSearch(Result):
     """Result of :func:`optimize_threshold`: error per grid threshold and the best one."""
 
     detector: str

@@ -23,6 +23,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from imunav.errors import InsufficientDataError, InvalidInputError, ShapeError
+from imunav.results import Result
 
 __all__ = [
     "error_2d",
@@ -84,7 +85,7 @@ def error_2d(estimate: ArrayLike, reference: ArrayLike, align_distance: float = 
 
 
 @dataclass(frozen=True)
-class LoopClosure:
+class LoopClosure(Result):
     """Final-minus-initial position: 3-D norm, horizontal and vertical parts (m)."""
 
     error_3d: float

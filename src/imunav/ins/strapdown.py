@@ -31,6 +31,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from imunav.errors import InvalidInputError, ShapeError
 from imunav.ins import _kernels as _k
+from imunav.results import Result
 
 __all__ = ["StrapdownResult", "coning_sculling_increments", "strapdown_local", "strapdown_ned", "OMEGA_E"]
 
@@ -40,18 +41,18 @@ OMEGA_E = 7.292115e-5
 
 
 @dataclass(frozen=True)
-class StrapdownResult:
+class StrapdownResult(Result):
     """Integrated trajectory: ``position`` (N, 3) m in the local frame, or
     ``lla`` (N, 3) (lat rad, lon rad, h m) for the NED mechanization."""
 
     t: Array
-    quaternion: Array
+    q_nb: Array
     velocity: Array
     position: Array | None = None
     lla: Array | None = None
 
     def to_dict(self) -> dict[str, Any]:
-        d = {"t": self.t.tolist(), "quaternion": self.quaternion.tolist(), "velocity": self.velocity.tolist()}
+        d = {"t": self.t.tolist(), "q_nb": self.q_nb.tolist(), "velocity": self.velocity.tolist()}
         if self.position is not None:
             d["position"] = self.position.tolist()
         if self.lla is not None:

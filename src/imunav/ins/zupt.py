@@ -47,6 +47,7 @@ from numpy.typing import ArrayLike, NDArray
 from imunav._timeseries_kernels import runs
 from imunav.errors import ConfigError, InsufficientDataError, InvalidInputError, ShapeError
 from imunav.ins import _kernels as _k
+from imunav.results import Result
 from imunav.rotation import euler_from_quat, quat_from_euler
 
 __all__ = ["ZuptConfig", "ZuptResult", "run_zupt", "align_from_accel", "first_stance", "long_stances"]
@@ -145,7 +146,7 @@ class ZuptConfig:
 
 
 @dataclass(frozen=True)
-class ZuptResult:
+class ZuptResult(Result):
     """Output of :func:`run_zupt` (arrays one row per sample).
 
     ``innovation`` / ``innovation_var`` hold the ZUPT innovation ``-v̂`` and
@@ -157,7 +158,7 @@ class ZuptResult:
     t: Array
     position: Array
     velocity: Array
-    quaternion: Array
+    q_nb: Array
     accel_bias: Array
     gyro_bias: Array
     cov_diag: Array
@@ -167,17 +168,16 @@ class ZuptResult:
     zv: NDArray[np.bool_]
     config: ZuptConfig = field(default_factory=ZuptConfig)
 
-    @property
     def euler(self) -> Array:
-        """(N, 3) roll, pitch, yaw in rad."""
-        return euler_from_quat(self.quaternion)
+        """(N, 3) roll, pitch, yaw in rad (ZYX) from ``q_nb``: a method, as :meth:`AttitudeResult.euler`."""
+        return euler_from_quat(self.q_nb)
 
     @property
     def position_std(self) -> Array:
         return np.sqrt(self.cov_diag[:, 0:3])
 
     def to_dict(self) -> dict[str, Any]:
-        d = {k: getattr(self, k).tolist() for k in ("t", "position", "velocity", "quaternion", "cov_diag")}
+        d = {k: getattr(self, k).tolist() for k in ("t", "position", "velocity", "q_nb", "cov_diag")}
         d["zv"] = self.zv.astype(int).tolist()
         if self.config.states == 15:
             d["accel_bias"] = self.accel_bias.tolist()

@@ -9,12 +9,13 @@ error the temporary file is removed and the target is left untouched.
 from __future__ import annotations
 
 import contextlib
+import dataclasses
 import errno
 import json
 import math
 import os
 import tempfile
-from collections.abc import Iterable, Iterator
+from collections.abc import Iterable, Iterator, Mapping
 from pathlib import Path
 from typing import Any
 
@@ -82,7 +83,10 @@ def jsonable(obj: Any) -> Any:
     """``obj`` as plain JSON types, with ``None`` (JSON null) for NaN / ±inf.
 
     NumPy arrays and scalars become lists and numbers, objects with a
-    ``to_dict()`` method their dictionary, paths and anything else their text.
+    ``to_dict()`` method their dictionary, other dataclasses a dictionary of
+    their fields, paths and anything else their text.  This is the one JSON
+    conversion of the package: :class:`imunav.results.Result` and
+    :func:`write_json` use it.
     """
     if obj is None or isinstance(obj, (bool, str)):
         return obj
@@ -90,7 +94,7 @@ def jsonable(obj: Any) -> Any:
         return int(obj)
     if isinstance(obj, float):
         return obj if math.isfinite(obj) else None
-    if isinstance(obj, dict):
+    if isinstance(obj, Mapping):
         return {str(k): jsonable(v) for k, v in obj.items()}
     if isinstance(obj, (list, tuple, set, frozenset)):
         return [jsonable(v) for v in obj]
@@ -111,6 +115,8 @@ def jsonable(obj: Any) -> Any:
             return str(obj)
     if hasattr(obj, "to_dict") and callable(obj.to_dict):
         return jsonable(obj.to_dict())
+    if dataclasses.is_dataclass(obj) and not isinstance(obj, type):
+        return {f.name: jsonable(getattr(obj, f.name)) for f in dataclasses.fields(obj)}
     return str(obj)
 
 

@@ -19,11 +19,10 @@ Artifacts set: ``"airdata"`` (the report dict).
 
 from __future__ import annotations
 
-import json
-import os
 from pathlib import Path
 
 from imunav.errors import ConfigError
+from imunav.io._atomic import atomic_path, write_json
 from imunav.lab import LabContext, StepResult
 
 TITLE = "Air data + Doppler radar: wind filter, robust filtering, fault detection"
@@ -58,9 +57,7 @@ def run(ctx: LabContext) -> StepResult:
     data_dir.mkdir(parents=True, exist_ok=True)
     fig_dir.mkdir(parents=True, exist_ok=True)
     out = data_dir / "airdata_thesis.json"
-    tmp = out.with_suffix(".json.tmp")
-    tmp.write_text(json.dumps(rep, indent=2, allow_nan=False))
-    os.replace(tmp, out)
+    write_json(out, rep)
 
     d = simulate_thesis(ThesisScenario(kind="variance"), seed)
     r = run_thesis_filter(d.z, robust="nis")
@@ -69,9 +66,8 @@ def run(ctx: LabContext) -> StepResult:
     for name, fig in (("wind", P.plot_wind(r, d)), ("innovations", P.plot_innovations(r)),
                       ("detectors", P.plot_detectors(det))):
         path = fig_dir / f"airdata_{name}.png"
-        tmpf = path.with_name(f".{path.name}.tmp.png")
-        fig.savefig(tmpf, dpi=90)
-        os.replace(tmpf, path)
+        with atomic_path(path) as tmp:
+            fig.savefig(tmp, dpi=90)
         figs.append(path)
     ctx.progress.update(task, advance=1)
 

@@ -79,7 +79,7 @@ def _rows(est: Any, truth: Any, stderr: dict, success: dict) -> list[dict]:
 
 def run(ctx: LabContext) -> StepResult:
     from imunav.calib import ImuCalibration, combine, multiposition, parameter_stderr, ratetable, success_percentages
-    from imunav.calib.model import write_json_atomic
+    from imunav.io._atomic import write_json
 
     opts = _options(ctx)
     recs = ctx.artifacts.get("recordings", {})
@@ -107,7 +107,7 @@ def run(ctx: LabContext) -> StepResult:
     rows = _rows(res.calibration, truth, se, s)
     within = float(np.mean([abs(r["z"]) <= 3 for r in rows]))
     res.calibration.save(ctx.path("data", "calibration.json"))
-    write_json_atomic(res.to_dict(), ctx.path("data", "calibration_report.json"))
+    write_json(ctx.path("data", "calibration_report.json"), res.to_dict())
     figures = []
     if opts["figures"]:
         from imunav.calib.plot import plot_residuals, save_figure

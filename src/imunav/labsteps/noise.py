@@ -26,13 +26,13 @@ Files: ``figures/noise_allan_gyro.png``, ``figures/noise_allan_accel.png``,
 
 from __future__ import annotations
 
-import json
 from typing import Any
 
 import numpy as np
 from scipy.stats import norm
 
 from imunav.errors import ConfigError
+from imunav.io._atomic import atomic_path, write_json
 from imunav.lab import LabContext, StepResult
 
 #: two-sided normal quantile for a family-wise 95 % level over six axes (Bonferroni)
@@ -114,13 +114,13 @@ def run(ctx: LabContext) -> StepResult:
                 rows.append(row)
             fig = plot_allan(r, f, title=f"{sensor}: {opts['record']}")
             p = ctx.path("figures", f"noise_allan_{sensor}.png")
-            fig.savefig(p, dpi=100)
+            with atomic_path(p) as tmp:
+                fig.savefig(tmp, dpi=100)
             figures.append(p)
             advance()
     ctx.artifacts["noise_fit"] = fits
     out = ctx.path("data", "noise_fit.json")
-    out.write_text(json.dumps({k: v.to_dict() for k, v in fits.items()}, indent=1,
-                              default=lambda o: None))
+    write_json(out, {k: v.to_dict() for k, v in fits.items()}, indent=1)
     passed = bool(all(ok_n) and (all(ok_gm) if ok_gm else True))
     summary = {
         "record": opts["record"], "fs": fs, "duration_s": data.n / fs,

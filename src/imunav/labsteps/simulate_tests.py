@@ -44,13 +44,13 @@ Artifacts set (``ctx.artifacts``):
 
 from __future__ import annotations
 
-import json
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
 from imunav.errors import ConfigError
+from imunav.io._atomic import atomic_path, write_json
 from imunav.lab import LabContext, StepResult
 from imunav.units import DEG, G0
 
@@ -176,8 +176,6 @@ def run(ctx: LabContext) -> StepResult:
 
                 fig = plot_test_recording(data, prof.segments, title=f"{name} ({model.name})")
                 fpath = fig_dir / f"{name}.png"
-                from imunav.io._atomic import atomic_path
-
                 with atomic_path(fpath) as tmp:
                     fig.savefig(tmp, dpi=90)
                 import matplotlib.pyplot as plt
@@ -187,10 +185,7 @@ def run(ctx: LabContext) -> StepResult:
             advance()
 
     model.to_toml(data_dir / "true_model.toml")
-    from imunav.io._atomic import atomic_path
-
-    with atomic_path(data_dir / "true_model.json") as tmp:
-        tmp.write_text(json.dumps(model.to_dict(), indent=2, default=lambda o: np.asarray(o).tolist()))
+    write_json(data_dir / "true_model.json", model.to_dict())
 
     ctx.artifacts.update(
         error_model=model,

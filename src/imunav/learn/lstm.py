@@ -61,6 +61,7 @@ from imunav.errors import (
     MissingDependencyError,
     ShapeError,
 )
+from imunav.results import Result
 
 __all__ = [
     "DEFAULT_MODEL_PATH",
@@ -530,12 +531,12 @@ def gravity_in_body(data: Any, stance: Any, g: float = 9.80665) -> Array:
     from imunav.ins.zupt import run_zupt
     from imunav.rotation import quat_conjugate, quat_rotate
 
-    q = run_zupt(data, np.asarray(stance, dtype=bool)).quaternion
+    q = run_zupt(data, np.asarray(stance, dtype=bool)).q_nb
     return quat_rotate(quat_conjugate(q), np.broadcast_to(np.array([0.0, 0.0, -g]), (q.shape[0], 3)))
 
 
 @dataclass(frozen=True)
-class TrainingReport:
+class TrainingReport(Result):
     """What :func:`train_lstm` did: loss per batch, accuracy on the training windows, time."""
 
     losses: Array

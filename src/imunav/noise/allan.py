@@ -49,6 +49,7 @@ from numpy.typing import ArrayLike, NDArray
 from imunav.errors import InsufficientDataError, InvalidInputError, NonFiniteError, ShapeError
 from imunav.noise import _allan_kernels as _k
 from imunav.noise.edf import ONE_SIGMA, chi2_interval, edf_greenhall, edf_totdev, noise_id_lag1
+from imunav.results import Result
 
 __all__ = ["AllanResult", "allan_deviation", "allan_variance", "tau_grid", "KINDS", "cluster_sizes"]
 
@@ -63,7 +64,7 @@ _CHUNK = 1 << 20
 
 
 @dataclass(frozen=True)
-class AllanResult:
+class AllanResult(Result):
     """Result of :func:`allan_deviation`.
 
     Attributes

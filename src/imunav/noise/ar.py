@@ -29,6 +29,7 @@ from numpy.typing import ArrayLike, NDArray
 from scipy.linalg import solve_toeplitz
 
 from imunav.errors import InsufficientDataError, InvalidInputError, NonFiniteError, ShapeError
+from imunav.results import Result
 
 __all__ = [
     "autocorrelation",
@@ -74,7 +75,7 @@ def autocorrelation(x: ArrayLike, max_lag: int | None = None, *, demean: bool = 
 
 
 @dataclass(frozen=True)
-class ARModel:
+class ARModel(Result):
     """AR(p) ``x_k = sum c_i x_{k-i} + w_k``; ``sigma_w2`` driving variance, ``r0`` process variance."""
 
     c: NDArray[np.float64]
@@ -153,7 +154,7 @@ def ar1_noise_bias(sigma_gm: float, sigma_n: float, T: float, dt: float) -> floa
 
 
 @dataclass(frozen=True)
-class GaussMarkovFit:
+class GaussMarkovFit(Result):
     """First-order Gauss-Markov model of a static record."""
 
     T: float  # correlation time from AR(1), s

@@ -27,12 +27,13 @@ from scipy.optimize import least_squares
 
 from imunav.errors import InsufficientDataError, InvalidInputError
 from imunav.noise.fit import BI_FACTOR
+from imunav.results import Result
 
 __all__ = ["CurveFit", "fit_polynomial", "fit_rational", "compare_curve_fits"]
 
 
 @dataclass(frozen=True)
-class CurveFit:
+class CurveFit(Result):
     """A smooth fit of log10 sigma against normalised log10 tau."""
 
     kind: str  # "poly<n>" or "rational<n>/<m>"

@@ -46,10 +46,8 @@ from __future__ import annotations
 
 import itertools
 import math
-import os
 from collections.abc import Sequence
 from dataclasses import dataclass, field
-from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -60,6 +58,7 @@ from imunav import allan_models as _am
 from imunav.errors import InsufficientDataError, InvalidInputError
 from imunav.noise import _allan_kernels as _ak
 from imunav.noise.allan import AllanResult
+from imunav.results import Result
 from imunav.units import to_display
 
 __all__ = [
@@ -130,7 +129,7 @@ def _overlapping_cov(tau: np.ndarray, m: np.ndarray, n_phase: int, names: list[s
 
 # --------------------------------------------------------------------------- results
 @dataclass(frozen=True)
-class SlopeReadout:
+class SlopeReadout(Result):
     """IEEE-952 slope read-outs (per channel): values (SI) and the tau ranges used."""
 
     names: tuple[str, ...]
@@ -145,7 +144,7 @@ class SlopeReadout:
 
 
 @dataclass(frozen=True)
-class NoiseFit:
+class NoiseFit(Result):
     """Fitted noise terms of every channel.
 
     ``names`` are ``"Q", "N", "B", "K", "R"`` and for Gauss-Markov term j
@@ -210,12 +209,6 @@ class NoiseFit:
         if self.slopes is not None:
             out["slope_readout"] = self.slopes.to_dict()
         return out
-
-    def to_json(self, path: str | os.PathLike) -> Path:
-        """Write :meth:`to_dict` as JSON (atomically)."""
-        from imunav.io._atomic import write_json
-
-        return write_json(path, self.to_dict())
 
 
 # --------------------------------------------------------------------------- fitting

@@ -32,13 +32,14 @@ from scipy import signal
 from scipy.optimize import nnls
 
 from imunav.errors import InsufficientDataError, InvalidInputError, NonFiniteError, ShapeError
+from imunav.results import Result
 
 __all__ = ["PsdResult", "PsdFit", "psd", "frequency_average", "log_average", "fit_psd", "psd_readout",
            "compare_psd_allan"]
 
 
 @dataclass(frozen=True)
-class PsdResult:
+class PsdResult(Result):
     """One-sided PSD (unit^2/Hz).  ``psd`` is (F,) or (F, C) like the input;
     ``counts`` (F,) is the number of raw periodogram bins (times Welch
     segments) averaged into each point, which sets its relative variance 1/count."""
@@ -158,7 +159,7 @@ def log_average(res: PsdResult, per_decade: int = 20) -> PsdResult:
 
 
 @dataclass(frozen=True)
-class PsdFit:
+class PsdFit(Result):
     """Noise terms from the PSD (SI, same meaning as :class:`imunav.noise.fit.NoiseFit`)."""
 
     names: tuple[str, ...]

@@ -55,6 +55,7 @@ from typing import Any
 import numpy as np
 
 from imunav.errors import InvalidInputError, NotStaticError
+from imunav.results import Result
 
 __all__ = ["StaticCheck", "check_static", "require_static", "rest_force_problem", "G_REF"]
 
@@ -63,7 +64,7 @@ G_REF = 9.80665
 
 
 @dataclass(frozen=True)
-class StaticCheck:
+class StaticCheck(Result):
     """Outcome of :func:`check_static`.
 
     Attributes

@@ -32,6 +32,7 @@ from numba import njit
 from numpy.typing import ArrayLike, NDArray
 
 from imunav.errors import InsufficientDataError, InvalidInputError, NonFiniteError, ShapeError
+from imunav.results import Result
 
 __all__ = ["wavelet_denoise", "mad_sigma", "default_level", "bias_kalman", "HybridComparison", "compare_hybrid"]
 
@@ -149,7 +150,7 @@ def bias_kalman(y: ArrayLike, fs: float, T: float, sigma_gm: float, r: float, *,
 
 
 @dataclass(frozen=True)
-class HybridComparison:
+class HybridComparison(Result):
     """KF-only vs DWT + KF bias estimation against a known bias."""
 
     rmse_kf: float

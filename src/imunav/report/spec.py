@@ -25,6 +25,7 @@ from pathlib import Path
 from typing import Any
 
 from imunav.errors import ConfigError
+from imunav.results import Result
 from imunav.units import from_display
 
 __all__ = ["SpecLimit", "SpecCheck", "load_spec", "check_spec"]
@@ -54,7 +55,7 @@ class SpecLimit:
 
 
 @dataclass(frozen=True)
-class SpecCheck:
+class SpecCheck(Result):
     name: str
     value_si: float
     sigma_si: float | None

@@ -66,6 +66,8 @@ from imunav.errors import (
     ShapeError,
     UnitError,
 )
+from imunav.io._atomic import atomic_path
+from imunav.results import Result
 from imunav.sim import _kernels as _k
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -803,9 +805,8 @@ class ImuErrorModel:
         """Write the model as TOML (atomically: temp file, then rename)."""
         p = Path(path)
         text = _to_toml(self.to_dict())
-        tmp = p.with_name(f".{p.name}.tmp{os.getpid()}")
-        tmp.write_text(text, encoding="utf-8")
-        os.replace(tmp, p)
+        with atomic_path(p) as tmp:
+            tmp.write_text(text, encoding="utf-8")
         return p
 
     def __eq__(self, other: object) -> bool:
@@ -887,7 +888,7 @@ def normals(root: np.random.SeedSequence, key: tuple[int, ...], n: int) -> NDArr
 # truth
 # --------------------------------------------------------------------------
 @dataclass(frozen=True)
-class TriadTruth:
+class TriadTruth(Result):
     """Realised error terms of one triad, each (N, 3), SI.
 
     ``bias`` is the total additive bias b + b(dT) + bias_instability +
@@ -908,7 +909,7 @@ class TriadTruth:
 
 
 @dataclass(frozen=True)
-class ImuErrorTruth:
+class ImuErrorTruth(Result):
     """Realised error terms of a simulated recording (``return_truth=True``)."""
 
     gyro: TriadTruth

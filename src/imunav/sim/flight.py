@@ -38,7 +38,7 @@ from imunav.airdata.airdata import air_data, aoa_sideslip, pitot_ratio, tas_to_b
 from imunav.airdata.atmosphere import G0, isa
 from imunav.airdata.doppler import DopplerErrors, janus_beams, simulate_doppler
 from imunav.errors import InvalidInputError
-from imunav.filters._common import ResultMixin
+from imunav.results import Result
 from imunav.rotation import dcm_from_euler
 
 __all__ = [
@@ -79,7 +79,7 @@ def charlie_model(dt: float = 0.001, u0: float = 250.0) -> tuple[Array, Array]:
 
 
 @dataclass(frozen=True)
-class ThesisFlight(ResultMixin):
+class ThesisFlight(Result):
     """Thesis aircraft run: t (N,), states (N, 12), body velocity (N, 3), position (N, 3)."""
 
     t: Array
@@ -183,7 +183,7 @@ def dryden_gusts(n: int, dt: float, airspeed: float, sigma: float | tuple[float,
 
 
 @dataclass(frozen=True)
-class FlightConfig(ResultMixin):
+class FlightConfig(Result):
     """A simulated flight (SI; angles in degrees where named so).
 
     Attributes
@@ -247,7 +247,7 @@ class FlightConfig(ResultMixin):
 
 
 @dataclass(frozen=True)
-class FlightData(ResultMixin):
+class FlightData(Result):
     """Truth and sensor outputs of :func:`simulate_flight`.
 
     Truth (rate_truth): t, position_ned, velocity_ned (ground), wind_ned

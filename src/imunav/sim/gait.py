@@ -33,6 +33,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from imunav.errors import InvalidInputError
+from imunav.results import Result
 from imunav.rotation import quat_from_euler
 from imunav.timeseries import ImuData
 
@@ -49,11 +50,11 @@ GAIT_MODES: dict[str, tuple[float, float, float, float, float, float]] = {
 
 
 @dataclass(frozen=True)
-class GaitSimulation:
+class GaitSimulation(Result):
     """Simulated foot motion and IMU.
 
     ``imu`` has the sensor errors, ``ideal`` not; ``position`` / ``velocity``
-    (NED, m, m/s), ``quaternion`` (``q_nb``) and ``stance`` (bool) are the
+    (NED, m, m/s), ``q_nb`` (body → NED) and ``stance`` (bool) are the
     truth; ``gyro_bias`` / ``accel_bias`` the realised total biases (N, 3)
     (zero without an error model); ``modes`` the mode of each stride.
     """
@@ -62,7 +63,7 @@ class GaitSimulation:
     ideal: ImuData
     position: Array
     velocity: Array
-    quaternion: Array
+    q_nb: Array
     stance: NDArray[np.bool_]
     gyro_bias: Array
     accel_bias: Array
