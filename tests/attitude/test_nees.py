@@ -156,7 +156,7 @@ def test_mekf_public_covariance_calibrated_rotating_with_magnetometer():
 def _ukf(mag_ref_ned=None, **param_kw):
     from imunav.attitude.ukf import UKF
 
-    p = UkfParams(sigma_gyro=0.0002, sigma_bias=1e-6, sigma_acc=0.05 / G, p0_att=0.02, p0_bias=0.03, **param_kw)
+    p = UkfConfig(sigma_gyro=0.0002, sigma_bias=1e-6, sigma_acc=0.05 / G, p0_att=0.02, p0_bias=0.03, **param_kw)
     return UKF(p, mag_ref_ned=mag_ref_ned)
 
 
