@@ -47,3 +47,19 @@ def test_zupt_error_state_and_parameter_record():
     cfg_names = {f.name for f in fields(ZuptConfig)}
     # every parameter of the kernel record is a config field (g: resolved when None), except two derived ones
     assert set(ik.ZuptKernelParams._fields) - cfg_names == {"nx", "coning"}  # from states and integration
+
+
+def test_gravity_parameter_constants_index_the_packed_config():
+    from imunav.attitude import _gravity_kernels as gk
+    from imunav.attitude.gravity_kf import GravityKfParams
+
+    names = {f.name for f in fields(GravityKfParams)}
+    assert set(gk.GRAVITY_PARAMS) <= names and names - set(gk.GRAVITY_PARAMS) == {"p0"}
+    p = GravityKfParams(sigma_g=1.0, sigma_a=2.0, c_a=3.0, g=4.0, tau=5.0, s_mode="C", s_fixed=7.0, hold_s=8.0,
+                        normalize=True, exact=False, sigma_b=11.0, r_b=12.0, bias_window=13)
+    v = p.vector()
+    for name, want in (("sigma_g", 1), ("sigma_a", 2), ("c_a", 3), ("g", 4), ("tau", 5), ("s_mode", 2),
+                       ("s_fixed", 7), ("hold_s", 8), ("normalize", 1), ("exact", 0), ("sigma_b", 11), ("r_b", 12),
+                       ("bias_window", 13)):
+        assert v[getattr(gk, "G_" + name.upper())] == want, name
+    assert gk.SV_BIAS_COUNT == gk.N_SV - 1

@@ -658,3 +658,108 @@ def strapdown_step_ned(q, v, lla, dth, dv, h, omega_e, att, q_out, v_out, lla_ou
     lla_out[0] = lat + vm0 / (RN + alt) * h
     lla_out[1] = lla[1] + vm1 / ((RE + alt) * math.cos(lat)) * h
     return dvn
+
+
+# ---------------------------------------------------------------------------------------------------------------
+# Allocation-free 3 × 3 forms (vector filters whose state is a 3-vector, e.g. the gravity-vector filters)
+
+
+@njit(cache=True)
+def inv3(A, out):
+    """``out = A⁻¹`` for a 3 × 3 matrix by the adjugate, ``A⁻¹ = adj(A) / det A`` (no allocation).
+
+    Parameters
+    ----------
+    A : (3, 3) float64 array, non-singular.
+    out : (3, 3) float64 array that receives the inverse (distinct from A).
+
+    Returns
+    -------
+    None
+    """
+    a00, a01, a02 = A[0, 0], A[0, 1], A[0, 2]
+    a10, a11, a12 = A[1, 0], A[1, 1], A[1, 2]
+    a20, a21, a22 = A[2, 0], A[2, 1], A[2, 2]
+    c00 = a11 * a22 - a12 * a21
+    c01 = a02 * a21 - a01 * a22
+    c02 = a01 * a12 - a02 * a11
+    c10 = a12 * a20 - a10 * a22
+    c11 = a00 * a22 - a02 * a20
+    c12 = a02 * a10 - a00 * a12
+    c20 = a10 * a21 - a11 * a20
+    c21 = a01 * a20 - a00 * a21
+    c22 = a00 * a11 - a01 * a10
+    d = 1.0 / (a00 * c00 + a01 * c10 + a02 * c20)
+    out[0, 0], out[0, 1], out[0, 2] = c00 * d, c01 * d, c02 * d
+    out[1, 0], out[1, 1], out[1, 2] = c10 * d, c11 * d, c12 * d
+    out[2, 0], out[2, 1], out[2, 2] = c20 * d, c21 * d, c22 * d
+
+
+@njit(cache=True)
+def mm3(A, B, C):
+    """``C = A B`` for 3 × 3 matrices (C distinct from A and B).
+
+    Parameters
+    ----------
+    A, B : (3, 3) float64 arrays.
+    C : (3, 3) float64 array, receives the product.
+
+    Returns
+    -------
+    None
+    """
+    for i in range(3):
+        for j in range(3):
+            C[i, j] = A[i, 0] * B[0, j] + A[i, 1] * B[1, j] + A[i, 2] * B[2, j]
+
+
+@njit(cache=True)
+def mmt3(A, B, C):
+    """``C = A Bᵀ`` for 3 × 3 matrices (C distinct from A and B).
+
+    Parameters
+    ----------
+    A, B : (3, 3) float64 arrays.
+    C : (3, 3) float64 array, receives the product.
+
+    Returns
+    -------
+    None
+    """
+    for i in range(3):
+        for j in range(3):
+            C[i, j] = A[i, 0] * B[j, 0] + A[i, 1] * B[j, 1] + A[i, 2] * B[j, 2]
+
+
+@njit(cache=True)
+def joseph_cov3(P_prior, KH, K, r0, r1, r2, P_out, A, T):
+    """Joseph-form covariance of a 3-state filter with diagonal R, allocation-free:
+
+    ``P = (I − K H) P⁻ (I − K H)ᵀ + K diag(r) Kᵀ`` (Bucy & Joseph 1968), symmetrised.
+
+    Parameters
+    ----------
+    P_prior : (3, 3) prior covariance P⁻.
+    KH : (3, 3) the product K H (the caller forms it: ``g K`` for ``H = g I``).
+    K : (3, 3) gain.
+    r0, r1, r2 : float, diagonal of R.
+    P_out : (3, 3) receives P (may be P_prior only if A and T are distinct from both).
+    A, T : (3, 3) workspace.
+
+    Returns
+    -------
+    None
+    """
+    for i in range(3):
+        for j in range(3):
+            A[i, j] = (1.0 if i == j else 0.0) - KH[i, j]
+    mm3(A, P_prior, T)
+    for i in range(3):
+        for j in range(3):
+            P_out[i, j] = (T[i, 0] * A[j, 0] + T[i, 1] * A[j, 1] + T[i, 2] * A[j, 2]
+                           + K[i, 0] * r0 * K[j, 0] + K[i, 1] * r1 * K[j, 1] + K[i, 2] * r2 * K[j, 2])
+    for i in range(3):
+        for j in range(i + 1, 3):
+            v = 0.5 * (P_out[i, j] + P_out[j, i])
+            P_out[i, j] = v
+            P_out[j, i] = v
