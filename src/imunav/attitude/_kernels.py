@@ -19,7 +19,7 @@ import numpy as np
 from numba import njit
 
 from imunav._rotation_kernels import dcm_from_quat_1, qexp_1, qexp_t, qlog_1, qmul_1, qmul_t, qrot_1, qrot_t
-from imunav.filters._core import reset_attitude_cov, scalar_update
+from imunav.filters._core import inject_attitude_local, reset_attitude_cov, scalar_update
 from imunav.filters._core_models import gravity_direction_row, gyro_rest_row
 
 # ---------------------------------------------------------------------------
@@ -741,7 +741,7 @@ def rts_smooth(qf, bf, Pu, Pp, Ph, gyr, dt, P0, q0, b0):
         e[3:6] = bs[k + 1] - bf[k]
         C = Pu[k] @ Ph[k + 1].T @ _inv_spd(Pp[k + 1])
         dx = C @ e
-        qs[k] = _qnorm(qmul_1(qf[k], qexp_1(dx[0:3])))
+        qs[k] = inject_attitude_local(qf[k], dx, I_ATT)
         bs[k] = bf[k] + dx[3:6]
         Ps = Pu[k] + C @ (Ps - Pp[k + 1]) @ C.T
         for i in range(6):
@@ -885,7 +885,7 @@ def ukf_step(q, b, P, gyr, acc, mag, dt, p, alpha, beta_u, kappa, mag_ref):
         P = 0.5 * (P + P.T)
         nis = nu @ Si @ nu
         dof = nz
-        q = _qnorm(qmul_1(q, qexp_1(dx[0:3])))
+        q = inject_attitude_local(q, dx, I_ATT)
         b = b + dx[3:6]
     return q, b, P, nis, dof
 
