@@ -70,6 +70,19 @@ def inv_small(S, Si):
 
 
 @njit(cache=True)
+def _apply_scalar_gain(P, dx, PH, nu, s, n_est):
+    """dx += K ν, P −= P hᵀ h P / s with K = P hᵀ / s on the first ``n_est`` states (the shared tail of the
+    scalar updates; see :func:`scalar_update`)."""
+    n = P.shape[0]
+    for i in range(n_est):
+        dx[i] += PH[i] * nu / s
+    for i in range(n):
+        for j in range(n):
+            if i < n_est or j < n_est:
+                P[i, j] -= PH[i] * PH[j] / s
+
+
+@njit(cache=True)
 def scalar_update(P, dx, h, r, nu, PH, n_est):
     """Scalar measurement update of an error state (dense row ``h``), in place on ``P`` and ``dx``.
 
@@ -109,12 +122,7 @@ def scalar_update(P, dx, h, r, nu, PH, n_est):
         s += h[i] * PH[i]
         hdx += h[i] * dx[i]
     nu = nu - hdx
-    for i in range(n_est):
-        dx[i] += PH[i] * nu / s
-    for i in range(n):
-        for j in range(n):
-            if i < n_est or j < n_est:
-                P[i, j] -= PH[i] * PH[j] / s
+    _apply_scalar_gain(P, dx, PH, nu, s, n_est)
     return nu, s
 
 
@@ -154,12 +162,7 @@ def scalar_update_sparse(P, dx, idx, hv, r, nu, PH, n_est):
         s += hv[l] * PH[idx[l]]
         hdx += hv[l] * dx[idx[l]]
     nu = nu - hdx
-    for i in range(n_est):
-        dx[i] += PH[i] * nu / s
-    for i in range(n):
-        for j in range(n):
-            if i < n_est or j < n_est:
-                P[i, j] -= PH[i] * PH[j] / s
+    _apply_scalar_gain(P, dx, PH, nu, s, n_est)
     return nu, s
 
 
