@@ -255,3 +255,17 @@ def test_zero_velocity_zero_rate_and_height_models():
     n1, r1 = np.empty(1), np.empty(1)
     models.height(-1.5, -1.0, 0.1, n1, r1)
     assert n1[0] == pytest.approx(0.5) and r1[0] == pytest.approx(0.01)
+
+
+def test_sparse_covariance_propagation_matches_numpy(rng):
+    n = 15
+    P = _spd(rng, n)
+    Phi = np.eye(n)
+    Phi[0:3, 3:6] = 0.01 * np.eye(3)
+    Phi[3:6, 6:9] = rng.normal(size=(3, 3)) * 0.01
+    Q = np.diag(rng.uniform(0.1, 1.0, n))
+    Q[0, 1] = 0.05  # not symmetric: the kernel uses its symmetric part
+    ref = Phi @ P @ Phi.T + 0.5 * (Q + Q.T)
+    core.propagate_cov_sparse(Phi, P, Q, np.empty((n, n)), np.empty((n, n), np.int64), np.empty(n, np.int64))
+    np.testing.assert_allclose(P, ref, rtol=0, atol=RTOL * np.abs(ref).max())
+    assert np.array_equal(P, P.T)

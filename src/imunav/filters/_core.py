@@ -456,6 +456,56 @@ def reset_attitude_cov(P, dx, i0):
 
 
 # ---------------------------------------------------------------------------------------------------------------
+# Covariance propagation
+
+
+@njit(cache=True)
+def propagate_cov_sparse(Phi, P, Qd, M, nzc, nzn):
+    """Covariance prediction ``P ← Φ P Φᵀ + Q_d`` (symmetrised ``Q_d``), skipping the zeros of a sparse Φ, in place.
+
+    The error-state transition of an INS (``Φ = I + F Δt``) is mostly zeros; the products run over the non-zero
+    entries of each row of Φ only (Groves 2013, §3.2.2 for the prediction).  P comes out exactly symmetric.
+
+    Parameters
+    ----------
+    Phi : (n, n) transition matrix.
+    P : (n, n) covariance, updated in place.
+    Qd : (n, n) discrete process noise.
+    M : (n, n) workspace.
+    nzc : (n, n) int64 workspace (column indices of the non-zeros of each row of Φ).
+    nzn : (n,) int64 workspace (their counts).
+
+    Returns
+    -------
+    None
+    """
+    nx = P.shape[0]
+    for i in range(nx):
+        c = 0
+        for l in range(nx):
+            if Phi[i, l] != 0.0:
+                nzc[i, c] = l
+                c += 1
+        nzn[i] = c
+    for i in range(nx):
+        for j in range(nx):
+            acc = 0.0
+            for c in range(nzn[i]):
+                l = nzc[i, c]
+                acc += Phi[i, l] * P[l, j]
+            M[i, j] = acc
+    for i in range(nx):
+        for j in range(i, nx):
+            acc = 0.0
+            for c in range(nzn[j]):
+                l = nzc[j, c]
+                acc += M[i, l] * Phi[j, l]
+            acc += 0.5 * (Qd[i, j] + Qd[j, i])
+            P[i, j] = acc
+            P[j, i] = acc
+
+
+# ---------------------------------------------------------------------------------------------------------------
 # Discretisation
 
 

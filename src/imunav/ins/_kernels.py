@@ -22,6 +22,7 @@ from imunav.filters._core import (
     inject_additive,
     inject_attitude_global,
     joseph_update_rows,
+    propagate_cov_sparse,
     strapdown_step_local,
     strapdown_step_ned,
 )
@@ -298,35 +299,6 @@ ZuptKernelParams = namedtuple(
 
 
 @njit(cache=True)
-def _sandwich(Phi, P, Qd, M, nzc, nzn):
-    """P <- sym(Phi P Phi^T + Qd), skipping the zeros of the sparse Phi."""
-    nx = P.shape[0]
-    for i in range(nx):
-        c = 0
-        for l in range(nx):
-            if Phi[i, l] != 0.0:
-                nzc[i, c] = l
-                c += 1
-        nzn[i] = c
-    for i in range(nx):
-        for j in range(nx):
-            acc = 0.0
-            for c in range(nzn[i]):
-                l = nzc[i, c]
-                acc += Phi[i, l] * P[l, j]
-            M[i, j] = acc
-    for i in range(nx):
-        for j in range(i, nx):
-            acc = 0.0
-            for c in range(nzn[j]):
-                l = nzc[j, c]
-                acc += M[i, l] * Phi[j, l]
-            acc += 0.5 * (Qd[i, j] + Qd[j, i])
-            P[i, j] = acc
-            P[j, i] = acc
-
-
-@njit(cache=True)
 def _zupt_transition(Phi, Qd, C, dvn, h, prm):
     """Φ = I + F h and Q_d = G Q Gᵀ h² (+ bias random walks σ² h) of the ZUPT error state (in place)."""
     nx = prm.nx
@@ -454,7 +426,7 @@ def zupt_ekf_kernel(t, acc, gyr, zv, zaru, q0, p0, v0, ba0, bg0, P0, prm):
             bg[k, j] = bg[k - 1, j]
         # ---- covariance propagation
         _zupt_transition(Phi, Qd, dcm_from_quat_1(q[k - 1]), dvn, h, prm)
-        _sandwich(Phi, P, Qd, M, nzc, nzn)
+        propagate_cov_sparse(Phi, P, Qd, M, nzc, nzn)
         # ---- updates
         if zv[k]:
             zero_velocity(v[k], prm.sigma_v, z3, r3)
