@@ -472,13 +472,9 @@ def _mekf_predict(P, R, dt, sg2, sb2, W):
 
 @njit(cache=True)
 def mekf_step(q, b, P, st, gyr, acc, mag, dt, p, out_phi):
-    """One MEKF step.  ``st`` (float64 array, len N_STATE) is the adaptive state:
-    [0] rest timer, [1] mag ref norm, [2] mag ref dip, [3] disturbed timer,
-    [4] ref valid flag, [5:8] low-passed nav specific force, [8] flag bits,
-    [9] NIS sum, [10] NIS dof, [11] low-pass initialised, [12:15] low-passed
-    gyro and [15:18] accelerometer of the rest test, [18] their init flag,
-    [19] low-passed field norm, [20] dip, [21] their init flag, [22] time
-    since the field was last disturbed, [23] attitude process variance of the step.
+    """One MEKF step.  ``st`` (float64 array, len N_STATE) is the adaptive state, laid out as MEKF_STATE
+    (S_* constants); ``p`` the parameters (P_* constants).  The measurement updates are the models of
+    :mod:`imunav.filters._core_models` fed to :func:`imunav.filters._core.scalar_update`, one scalar row at a time.
     Returns (q, b).  ``out_phi`` receives the 6x6 transition matrix.
     """
     g = p[P_G]
