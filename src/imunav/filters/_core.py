@@ -9,9 +9,10 @@ function is ``@njit(cache=True)`` and works in place on caller-owned buffers, so
 Conventions (docs/conventions.md): SI units, NED navigation frame, Hamilton scalar-first quaternions ``q_nb``
 (body → nav).  Two attitude-error conventions exist and both are kept:
 
-* *local* (body) error, ``q = q̂ ⊗ exp(δθ)`` (Solà 2017, §7.2; the attitude MEKF/UKF/smoother);
-* *global* (navigation-frame) error, ``C_nb = exp([δφ×]) Ĉ_nb``, i.e. ``q = exp(δφ) ⊗ q̂`` (Groves 2013, §14.2;
-  the ZUPT and INS error-state filters).
+* *local* (body) error, ``q = q̂ ⊗ exp(δθ)`` (Solà 2017, *Quaternion kinematics for the error-state Kalman
+  filter*, §5–6; Markley 2003; the attitude MEKF/UKF/smoother);
+* *global* (navigation-frame) error, ``C_nb = exp([δφ×]) Ĉ_nb``, i.e. ``q = exp(δφ) ⊗ q̂`` (Solà 2017, §7;
+  Groves 2013, ch. 14; the ZUPT and INS error-state filters).
 
 ``exp`` of a rotation vector r is the unit quaternion ``[cos(|r|/2), sin(|r|/2) r/|r|]``
 (:func:`imunav._rotation_kernels.qexp_1`).
@@ -173,7 +174,7 @@ def joseph_update(P, dx, H, R, nu, innov_out, S_out):
     ::
 
         ν' = ν − H dx,   S = H P Hᵀ + R,   K = P Hᵀ S⁻¹,   dx ← dx + K ν',
-        P ← (I − K H) P (I − K H)ᵀ + K R Kᵀ          (Bucy & Joseph 1968; Groves 2013, eq. 3.58)
+        P ← (I − K H) P (I − K H)ᵀ + K R Kᵀ          (Bucy & Joseph 1968)
 
     P is symmetrised.  Writes ``ν'`` and ``S`` for NIS records (:func:`nis`, :func:`chi2_gate`).
 
@@ -384,7 +385,7 @@ def inject_additive(x, dx, i0, n):
 def inject_attitude_local(q, dx, i0):
     """Multiplicative injection of a body-frame attitude error: ``q ← q ⊗ exp(δθ)``, normalised.
 
-    ``δθ = dx[i0:i0+3]`` (Solà 2017, eq. 282 with the Hamilton product; Markley 2003, §III).
+    ``δθ = dx[i0:i0+3]`` (Solà 2017, §6.2, Hamilton product; Markley 2003).
 
     Parameters
     ----------
@@ -406,7 +407,7 @@ def inject_attitude_local(q, dx, i0):
 def inject_attitude_global(q, dx, i0):
     """Multiplicative injection of a navigation-frame attitude error: ``q ← exp(δφ) ⊗ q``, normalised.
 
-    ``C_nb = exp([δφ×]) Ĉ_nb`` with ``δφ = dx[i0:i0+3]`` (Groves 2013, eq. 14.7 convention, ψ-angle form).
+    ``C_nb = exp([δφ×]) Ĉ_nb`` with ``δφ = dx[i0:i0+3]`` (Solà 2017, §7.2; Groves 2013, ch. 14).
 
     Parameters
     ----------
@@ -427,7 +428,7 @@ def inject_attitude_global(q, dx, i0):
 @njit(cache=True)
 def reset_attitude_cov(P, dx, i0):
     """Covariance reset after injecting a body attitude error: ``P ← G P Gᵀ``, ``G = I − [½ δθ̂×]`` on the
-    attitude rows/columns ``i0:i0+3`` (Markley 2003, §IV; Solà 2017, §7.2), in place.
+    attitude rows/columns ``i0:i0+3`` (Markley 2003; Solà 2017, §6.3), in place.
 
     The error seen from the corrected ``q̂⁺ = q̂ ⊗ exp(δθ̂)`` is ``δθ⁺ ≈ G (δθ − δθ̂)``.
 
