@@ -39,7 +39,7 @@ from imunav.io._atomic import atomic_path
 from imunav.io._common import check_nonempty, wrap_read_errors
 
 __all__ = ["GnssData", "read_gnss_text", "read_gnss_csv", "write_gnss_text", "read_table", "write_table",
-           "ANGLE_UNITS"]
+           "ANGLE_UNITS", "lat_lon_radians"]
 
 Array = NDArray[np.float64]
 
@@ -216,7 +216,12 @@ def write_table(path: str | os.PathLike[str], columns: list[ArrayLike], fmt: str
     return Path(path)
 
 
-def _angles(lat: Array, lon: Array, angle_unit: str, src: str) -> tuple[Array, Array]:
+def lat_lon_radians(lat: Array, lon: Array, angle_unit: str, src: str) -> tuple[Array, Array]:
+    """Latitudes and longitudes declared in ``angle_unit`` (:data:`ANGLE_UNITS`) checked and converted to radians.
+
+    Raises :class:`InvalidInputError` (naming ``src`` and the row) for values out of range, degrees declared as
+    radians, or radians declared as degrees (see the module docstring).
+    """
     if angle_unit not in ANGLE_UNITS:
         raise InvalidInputError(f"angle_unit {angle_unit!r} is unknown; use one of {ANGLE_UNITS}")
     if angle_unit == "rad":
@@ -254,7 +259,7 @@ def read_gnss_text(path: str | os.PathLike[str], *, angle_unit: str = "deg") -> 
     """
     a = read_table(path, (7, 13), "KF-GINS GNSS")
     src = os.fspath(path)
-    lat, lon = _angles(a[:, 1], a[:, 2], angle_unit, src)
+    lat, lon = lat_lon_radians(a[:, 1], a[:, 2], angle_unit, src)
     lla = np.column_stack([lat, lon, a[:, 3]])
     meta = {"source": src, "format": "kf-gins-gnss"}
     if a.shape[1] == 7:
@@ -333,7 +338,7 @@ def read_gnss_csv(
             k = int(np.flatnonzero(~np.isfinite(vals))[0])
             raise NonFiniteError(f"{src}: column {c!r} is not finite on data row {k + 1}")
         col[c] = vals
-    la, lo = _angles(col[lat], col[lon], angle_unit, src)
+    la, lo = lat_lon_radians(col[lat], col[lon], angle_unit, src)
     n = la.size
     if pos_std is not None:
         ps: ArrayLike = np.column_stack([col[c] for c in pos_std])
