@@ -54,6 +54,7 @@ from numpy.typing import ArrayLike, NDArray
 from imunav.errors import InvalidInputError, ShapeError
 from imunav.filters import BatchRun, batch_kalman_filter
 from imunav.filters._common import ResultMixin
+from imunav.filters._core import van_loan
 
 __all__ = [
     "ThesisFilterConfig",
@@ -264,18 +265,9 @@ class LongHorizonResult(ResultMixin):
 
 def _van_loan(dt: float, c: LongHorizonConfig) -> tuple[Array, Array]:
     """Exact discrete (Φ, Q) per axis of ``δṗ = W + g``, ``Ẇ = −W/τ_w + w₁``, ``ġ = −g/τ_g + w₂``."""
-    from scipy.linalg import expm
-
     A = np.array([[0.0, 1.0, 1.0], [0.0, -1.0 / c.wind_tau, 0.0], [0.0, 0.0, -1.0 / c.turbulence_tau]])
     Qc = np.diag([0.0, 2.0 * c.wind_sigma**2 / c.wind_tau, 2.0 * c.turbulence_sigma**2 / c.turbulence_tau])
-    M = np.zeros((6, 6))
-    M[:3, :3] = -A
-    M[:3, 3:] = Qc
-    M[3:, 3:] = A.T
-    E = expm(M * dt)
-    Phi = E[3:, 3:].T
-    Qd = Phi @ E[:3, 3:]
-    return Phi, 0.5 * (Qd + Qd.T)
+    return van_loan(A, Qc, float(dt))
 
 
 def run_long_horizon(

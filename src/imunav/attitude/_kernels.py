@@ -19,6 +19,8 @@ import numpy as np
 from numba import njit
 
 from imunav._rotation_kernels import dcm_from_quat_1, qexp_1, qexp_t, qlog_1, qmul_1, qmul_t, qrot_1, qrot_t
+from imunav.filters._core import inject_attitude_local, reset_attitude_cov, scalar_update
+from imunav.filters._core_models import gravity_direction_row, gyro_rest_row
 
 # ---------------------------------------------------------------------------
 # small helpers
@@ -315,104 +317,90 @@ def complementary_run(q0, gyr, acc, mag, dt, k_acc, k_mag, use_mag):
 # ---------------------------------------------------------------------------
 # Multiplicative EKF with gyro-bias states, adaptive R, disturbance rejection
 #
-# params (float64 array):
-#  0 sigma_gyro        gyro white noise [rad/s/sqrt(Hz)]
-#  1 sigma_bias        gyro bias random walk [rad/s/sqrt(s)]
-#  2 sigma_acc         accelerometer direction noise [unitless, per sample]
-#  3 k_acc             R_acc inflation per (| |f| - g | / g)^2   (adaptive R)
-#  4 acc_reject        reject accelerometer when | |f| - g | / g > acc_reject
-#  5 sigma_mag         heading noise from the magnetometer [rad, per sample]
-#  6 mag_norm_tol      relative field-norm tolerance for disturbance detection
-#  7 mag_dip_tol       dip-angle tolerance [rad]
-#  8 k_mag             R_mag inflation per normalised (norm, dip) deviation^2
-#  9 rest_gyro         rest detection: max |ω - b̂| [rad/s] (<= 0 disables)
-# 10 rest_acc          rest detection: max | |f| - g | [m/s^2]
-# 11 rest_time         rest detection: minimum duration [s]
-# 12 sigma_rest        zero-rate pseudo-measurement noise [rad/s]
-# 13 g                 gravity magnitude [m/s^2]
-# 14 mag_ref_time      after this long continuously disturbed [s], accept the
-#                      current field as the new reference (<= 0: never)
-# 15 sigma_acc_rate    extra accelerometer noise per rad/s of |ω| (centripetal)
-# 16 ref_tau           time constant [s] of the slow field-reference update
-# 17 use_mag (>0.5)
-# 18 acc_lpf_tau       [s] low-pass of the nav-frame specific force (0: off)
-# 19 rest_lpf_tau      [s] > 0: rest test on deviations from low-passes (9, 10 are then deviation bounds)
-# 20 mag_lpf_tau       [s] low-pass of field norm and dip before the disturbance test (0: off)
-# 21 mag_min_undisturbed [s] continuous undisturbed field required before the field is used
-# 22 mag_bias (>0.5)   heading update also corrects the bias (else consider states)
-# 23 bias_clip         [rad/s] no rest while a low-passed gyro axis exceeds it
-# 24 k_gyro_rate       [sqrt(s)] gyro noise density grows as sqrt(sigma_gyro^2 + (k |ω|)^2)
-# 25 tau_acc           [s] > 0: tilt-correction time constant, replaces 2 (variance (tau sigma_gyro)^2 / dt)
-# 26 tau_mag           [s] > 0: heading-correction time constant, replaces 5 (whatever the dip)
+# Parameter vector ``p`` (float64): one entry per name of MEKF_PARAMS, in that order; the kernels read it through
+# the P_* constants generated from the tuple (numba freezes module-level integers at compile time).  The names are
+# the fields of :class:`imunav.attitude.mekf.MekfParams` (``vector()`` packs them in this order):
+#   sigma_gyro        gyro white noise [rad/s/sqrt(Hz)]
+#   sigma_bias        gyro bias random walk [rad/s/sqrt(s)]
+#   sigma_acc         accelerometer direction noise [unitless, per sample]
+#   k_acc             R_acc inflation per (| |f| - g | / g)^2   (adaptive R)
+#   acc_reject        reject accelerometer when | |f| - g | / g > acc_reject
+#   sigma_mag         heading noise from the magnetometer [rad, per sample]
+#   mag_norm_tol      relative field-norm tolerance for disturbance detection
+#   mag_dip_tol       dip-angle tolerance [rad]
+#   k_mag             R_mag inflation per normalised (norm, dip) deviation^2
+#   rest_gyro         rest detection: max |ω - b̂| [rad/s] (<= 0 disables)
+#   rest_acc          rest detection: max | |f| - g | [m/s^2]
+#   rest_time         rest detection: minimum duration [s]
+#   sigma_rest        zero-rate pseudo-measurement noise [rad/s]
+#   g                 gravity magnitude [m/s^2]
+#   mag_ref_time      after this long continuously disturbed [s], accept the
+#                     current field as the new reference (<= 0: never)
+#   k_rate            extra accelerometer noise per rad/s of |ω| (centripetal)
+#   ref_tau           time constant [s] of the slow field-reference update
+#   use_mag           (> 0.5) use the magnetometer
+#   acc_lpf_tau       [s] low-pass of the nav-frame specific force (0: off)
+#   rest_lpf_tau      [s] > 0: rest test on deviations from low-passes (rest_gyro, rest_acc are then deviation bounds)
+#   mag_lpf_tau       [s] low-pass of field norm and dip before the disturbance test (0: off)
+#   mag_min_undisturbed [s] continuous undisturbed field required before the field is used
+#   mag_bias          (> 0.5) heading update also corrects the bias (else consider states)
+#   bias_clip         [rad/s] no rest while a low-passed gyro axis exceeds it
+#   k_gyro_rate       [sqrt(s)] gyro noise density grows as sqrt(sigma_gyro^2 + (k |ω|)^2)
+#   tau_acc           [s] > 0: tilt-correction time constant, replaces sigma_acc (variance (tau sigma_gyro)^2 / dt)
+#   tau_mag           [s] > 0: heading-correction time constant, replaces sigma_mag (whatever the dip)
 
-N_PARAMS = 27
-N_STATE = 24
+MEKF_PARAMS = (
+    "sigma_gyro", "sigma_bias", "sigma_acc", "k_acc", "acc_reject", "sigma_mag", "mag_norm_tol", "mag_dip_tol",
+    "k_mag", "rest_gyro", "rest_acc", "rest_time", "sigma_rest", "g", "mag_ref_time", "k_rate", "ref_tau",
+    "use_mag", "acc_lpf_tau", "rest_lpf_tau", "mag_lpf_tau", "mag_min_undisturbed", "mag_bias", "bias_clip",
+    "k_gyro_rate", "tau_acc", "tau_mag",
+)
+(
+    P_SIGMA_GYRO, P_SIGMA_BIAS, P_SIGMA_ACC, P_K_ACC, P_ACC_REJECT, P_SIGMA_MAG, P_MAG_NORM_TOL, P_MAG_DIP_TOL,
+    P_K_MAG, P_REST_GYRO, P_REST_ACC, P_REST_TIME, P_SIGMA_REST, P_G, P_MAG_REF_TIME, P_K_RATE, P_REF_TAU,
+    P_USE_MAG, P_ACC_LPF_TAU, P_REST_LPF_TAU, P_MAG_LPF_TAU, P_MAG_MIN_UNDISTURBED, P_MAG_BIAS, P_BIAS_CLIP,
+    P_K_GYRO_RATE, P_TAU_ACC, P_TAU_MAG,
+) = range(len(MEKF_PARAMS))
+N_PARAMS = len(MEKF_PARAMS)
+
+# Adaptive state ``st`` (float64, N_STATE) of mekf_step: (name, length) in order; S_* is the first index of each.
+MEKF_STATE = (
+    ("rest_timer", 1),  # s at rest so far
+    ("mag_ref_norm", 1),  # reference field norm
+    ("mag_ref_dip", 1),  # reference dip, rad
+    ("disturbed_timer", 1),  # s continuously disturbed
+    ("mag_ref_valid", 1),  # > 0.5 once the reference is set
+    ("f_lp", 3),  # low-passed nav-frame specific force
+    ("flags", 1),  # flag bits of the step (FLAG_NAMES of mekf.py)
+    ("nis", 1),  # NIS sum of the step
+    ("dof", 1),  # its degrees of freedom
+    ("f_lp_init", 1),  # f_lp initialised
+    ("gyr_lp", 3),  # low-passed gyro of the rest test
+    ("acc_lp", 3),  # low-passed accelerometer of the rest test
+    ("rest_lp_init", 1),  # their init flag
+    ("mag_norm_lp", 1),  # low-passed field norm
+    ("mag_dip_lp", 1),  # low-passed dip
+    ("mag_lp_init", 1),  # their init flag
+    ("undisturbed", 1),  # s since the field was last disturbed
+    ("att_q", 1),  # attitude process variance of the step
+)
+(
+    S_REST_TIMER, S_MAG_REF_NORM, S_MAG_REF_DIP, S_DISTURBED_TIMER, S_MAG_REF_VALID, S_F_LP, S_FLAGS, S_NIS, S_DOF,
+    S_F_LP_INIT, S_GYR_LP, S_ACC_LP, S_REST_LP_INIT, S_MAG_NORM_LP, S_MAG_DIP_LP, S_MAG_LP_INIT, S_UNDISTURBED,
+    S_ATT_Q,
+) = (sum(n for _, n in MEKF_STATE[:i]) for i in range(len(MEKF_STATE)))
+N_STATE = sum(n for _, n in MEKF_STATE)
+
+# error state [δθ (body), δb_g]
+I_ATT = 0
+I_BIAS = 3
+NX = 6
 
 
 @njit(cache=True)
 def _lowpass(st, k, x, c, first):
     """First-order low-pass of ``x`` held in ``st[k]`` with factor c = 1 − exp(−Δt/τ); ``first`` starts it at x."""
     st[k] = x if first else st[k] + c * (x - st[k])
-
-
-@njit(cache=True)
-def _ekf_update(P, dx, H, r, nu, PH):
-    """Scalar measurement update of the 6-state error (in place).
-
-    s = H P Hᵀ + r, K = P Hᵀ / s, dx += K (ν − H dx), P −= K s Kᵀ (the
-    symmetric form of (I − K H) P for a scalar update; P stays symmetric).
-    Returns the NIS term ν'² / s.
-    """
-    return _ekf_update_consider(P, dx, H, r, nu, PH, 6)
-
-
-@njit(cache=True)
-def _ekf_update_consider(P, dx, H, r, nu, PH, n_est):
-    """Scalar update of the first ``n_est`` states only; the rest are consider
-    states (Schmidt-Kalman: their gain is zero, Simon, *Optimal State
-    Estimation*, 2006, §7.5).  ``n_est = 6`` is the plain update.
-
-    With K = [P Hᵀ / s for i < n_est, 0 otherwise] the Joseph form
-    (I − K H) P (I − K H)ᵀ + K r Kᵀ reduces to the optimal update on every
-    block except the consider-consider block, which is left unchanged.
-    Returns the NIS term ν'² / s.
-    """
-    for i in range(6):
-        acc = 0.0
-        for j in range(6):
-            acc += P[i, j] * H[j]
-        PH[i] = acc
-    s = r
-    hdx = 0.0
-    for i in range(6):
-        s += H[i] * PH[i]
-        hdx += H[i] * dx[i]
-    nu = nu - hdx
-    for i in range(n_est):
-        dx[i] += PH[i] * nu / s
-    for i in range(6):
-        for j in range(6):
-            if i < n_est or j < n_est:
-                P[i, j] -= PH[i] * PH[j] / s
-    return nu * nu / s
-
-
-@njit(cache=True)
-def _reset_cov(P, dx):
-    """Error-state reset after injecting δθ into q̂ (in place).
-
-    The new error δθ⁺ = δθ − δθ̂ seen from the corrected q̂⁺ = q̂ ⊗ exp(δθ̂) is,
-    to first order, G (δθ − δθ̂) with G = I − [½ δθ̂]× (Markley 2003, §IV;
-    Solà 2017, §7.2): P ← G P Gᵀ on the attitude rows and columns.
-    """
-    G = np.eye(6)
-    G[0, 1] = 0.5 * dx[2]
-    G[0, 2] = -0.5 * dx[1]
-    G[1, 0] = -0.5 * dx[2]
-    G[1, 2] = 0.5 * dx[0]
-    G[2, 0] = 0.5 * dx[1]
-    G[2, 1] = -0.5 * dx[0]
-    P[:, :] = G @ P @ G.T
 
 
 @njit(cache=True)
@@ -449,17 +437,11 @@ def _heading_update(P, dx, qw, qx, qy, qz, tan_dip, r, psi, PH, with_bias):
     Hy = np.zeros(6)
     Hy[0] = -1.0
     Hy[4] = tan_dip
-    nis = _ekf_update_consider(Py, dy, Hy, r, psi, PH, 4 if with_bias else 1)
+    nu, s = scalar_update(Py, dy, Hy, r, psi, PH, 4 if with_bias else 1)
+    nis = nu * nu / s
     P[:, :] = T.T @ Py @ T
     dx[:] = T.T @ dy
     return nis
-
-
-@njit(cache=True)
-def _apply_correction(q, b, dx):
-    q = _qnorm(qmul_1(q, qexp_1(dx[0:3])))
-    b = b + dx[3:6]
-    return q, b
 
 
 @njit(cache=True)
@@ -499,8 +481,8 @@ def mekf_step(q, b, P, st, gyr, acc, mag, dt, p, out_phi):
     since the field was last disturbed, [23] attitude process variance of the step.
     Returns (q, b).  ``out_phi`` receives the 6x6 transition matrix.
     """
-    g = p[13]
-    use_mag = p[17] > 0.5
+    g = p[P_G]
+    use_mag = p[P_USE_MAG] > 0.5
     W = np.empty((6, 6))
     dx = np.zeros(6)
     H = np.zeros(6)
@@ -523,9 +505,9 @@ def mekf_step(q, b, P, st, gyr, acc, mag, dt, p, out_phi):
     # gyro noise grows with the rate (scale-factor and misalignment errors of an
     # uncalibrated gyro act in proportion to |ω|): σ² = σ_g² + (k_ω |ω̄|)²
     wn2 = w0 * w0 + w1 * w1 + w2 * w2
-    sg2 = (p[0] * p[0] + p[24] * p[24] * wn2) * dt
-    st[23] = sg2
-    _mekf_predict(P, R, dt, sg2, p[1] * p[1] * dt, W)
+    sg2 = (p[P_SIGMA_GYRO] * p[P_SIGMA_GYRO] + p[P_K_GYRO_RATE] * p[P_K_GYRO_RATE] * wn2) * dt
+    st[S_ATT_Q] = sg2
+    _mekf_predict(P, R, dt, sg2, p[P_SIGMA_BIAS] * p[P_SIGMA_BIAS] * dt, W)
     flags = 0
     nis = 0.0
     ndof = 0.0
@@ -534,89 +516,73 @@ def mekf_step(q, b, P, st, gyr, acc, mag, dt, p, out_phi):
     a0, a1, a2 = acc[0], acc[1], acc[2]
     an = math.sqrt(a0 * a0 + a1 * a1 + a2 * a2)
     wn = math.sqrt(w0 * w0 + w1 * w1 + w2 * w2)
-    if p[19] > 0.0:
+    if p[P_REST_LPF_TAU] > 0.0:
         # rest from the deviation of gyro and accelerometer from their low-pass
-        # (time constant p[19]) plus a bias-size bound on the low-passed rate
+        # (time constant p[P_REST_LPF_TAU]) plus a bias-size bound on the low-passed rate
         # (Laidig & Seel 2023, §4.2): independent of the accelerometer's
         # scale and of the current bias estimate, robust to per-sample noise
-        first = st[18] < 0.5
-        st[18] = 1.0
-        c = 1.0 - math.exp(-dt / p[19])
+        first = st[S_REST_LP_INIT] < 0.5
+        st[S_REST_LP_INIT] = 1.0
+        c = 1.0 - math.exp(-dt / p[P_REST_LPF_TAU])
         dg = 0.0
         da = 0.0
         big = False
         for i in range(3):
-            _lowpass(st, 12 + i, gyr[i], c, first)
-            _lowpass(st, 15 + i, acc[i], c, first)
-            dg += (gyr[i] - st[12 + i]) ** 2
-            da += (acc[i] - st[15 + i]) ** 2
-            if abs(st[12 + i]) > p[23]:
+            _lowpass(st, S_GYR_LP + i, gyr[i], c, first)
+            _lowpass(st, S_ACC_LP + i, acc[i], c, first)
+            dg += (gyr[i] - st[S_GYR_LP + i]) ** 2
+            da += (acc[i] - st[S_ACC_LP + i]) ** 2
+            if abs(st[S_GYR_LP + i]) > p[P_BIAS_CLIP]:
                 big = True
-        if p[9] > 0.0 and dg < p[9] * p[9] and da < p[10] * p[10] and not big:
-            st[0] += dt
+        if p[P_REST_GYRO] > 0.0 and dg < p[P_REST_GYRO] * p[P_REST_GYRO] and da < p[P_REST_ACC] * p[P_REST_ACC] and not big:
+            st[S_REST_TIMER] += dt
         else:
-            st[0] = 0.0
-    elif p[9] > 0.0 and wn < p[9] and abs(an - g) < p[10]:
-        st[0] += dt
+            st[S_REST_TIMER] = 0.0
+    elif p[P_REST_GYRO] > 0.0 and wn < p[P_REST_GYRO] and abs(an - g) < p[P_REST_ACC]:
+        st[S_REST_TIMER] += dt
     else:
-        st[0] = 0.0
-    if p[18] > 0.0:
+        st[S_REST_TIMER] = 0.0
+    if p[P_ACC_LPF_TAU] > 0.0:
         # low-pass of the specific force in the nav frame; the stored vector is
         # rotated with every correction below, so this is the low-pass in the
         # gyro-integrated frame: translational accelerations average out
         # because velocity stays bounded (cf. Laidig & Seel 2023, §4.1)
         f0, f1, f2 = qrot_t(qw, qx, qy, qz, a0, a1, a2)
-        first = st[11] < 0.5
-        st[11] = 1.0
-        c = 1.0 - math.exp(-dt / p[18])
-        _lowpass(st, 5, f0, c, first)
-        _lowpass(st, 6, f1, c, first)
-        _lowpass(st, 7, f2, c, first)
-        a0, a1, a2 = qrot_t(qw, -qx, -qy, -qz, st[5], st[6], st[7])
+        first = st[S_F_LP_INIT] < 0.5
+        st[S_F_LP_INIT] = 1.0
+        c = 1.0 - math.exp(-dt / p[P_ACC_LPF_TAU])
+        _lowpass(st, S_F_LP, f0, c, first)
+        _lowpass(st, S_F_LP + 1, f1, c, first)
+        _lowpass(st, S_F_LP + 2, f2, c, first)
+        a0, a1, a2 = qrot_t(qw, -qx, -qy, -qz, st[S_F_LP], st[S_F_LP + 1], st[S_F_LP + 2])
         an = math.sqrt(a0 * a0 + a1 * a1 + a2 * a2)
     dev = abs(an - g) / g
-    if an > 0.0 and dev < p[4]:
-        # predicted up-direction in body axes: h = q* (0,0,-1) q = -(C_nb row 3)
-        h0 = -2.0 * (qx * qz - qw * qy)
-        h1 = -2.0 * (qy * qz + qw * qx)
-        h2 = -(1.0 - 2.0 * (qx * qx + qy * qy))
+    if an > 0.0 and dev < p[P_ACC_REJECT]:
         # per-sample variance: σ_a², or from the time constant τ_a of the tilt
         # correction, (τ_a σ_g)² / Δt (steady state of a random walk of density
         # σ_g seen through white noise of density τ_a σ_g: gain 1/τ_a)
-        sa2 = (p[25] * p[0]) ** 2 / dt if p[25] > 0.0 else p[2] * p[2]
-        r = sa2 * (1.0 + p[3] * (dev / 0.01) ** 2) + (p[15] * wn) ** 2
-        # H = [h]x rows for the body error (h(q̂⊗exp δθ) ≈ ĥ + [ĥ]x δθ)
+        sa2 = (p[P_TAU_ACC] * p[P_SIGMA_GYRO]) ** 2 / dt if p[P_TAU_ACC] > 0.0 else p[P_SIGMA_ACC] * p[P_SIGMA_ACC]
+        r = sa2 * (1.0 + p[P_K_ACC] * (dev / 0.01) ** 2) + (p[P_K_RATE] * wn) ** 2
+        # gravity-direction model, one scalar row at a time (H = [ĥ]x rows for the body error)
         for i in range(3):
-            for j in range(6):
-                H[j] = 0.0
-            if i == 0:
-                H[1] = -h2
-                H[2] = h1
-                nu = a0 / an - h0
-            elif i == 1:
-                H[0] = h2
-                H[2] = -h0
-                nu = a1 / an - h1
-            else:
-                H[0] = -h1
-                H[1] = h0
-                nu = a2 / an - h2
-            nis += _ekf_update(P, dx, H, r, nu, PH)
+            a_i = a0 if i == 0 else (a1 if i == 1 else a2)
+            nu = gravity_direction_row(qw, qx, qy, qz, a_i / an, i, H)
+            nu, s = scalar_update(P, dx, H, r, nu, PH, NX)
+            nis += nu * nu / s
             ndof += 1.0
     else:
         flags |= 1
     # ---- rest: zero-rate pseudo measurement ω_meas - b = 0 (+ noise)
-    if p[9] > 0.0 and st[0] >= p[11]:
+    if p[P_REST_GYRO] > 0.0 and st[S_REST_TIMER] >= p[P_REST_TIME]:
         flags |= 4
-        r = p[12] * p[12]
+        r = p[P_SIGMA_REST] * p[P_SIGMA_REST]
         for i in range(3):
-            for j in range(6):
-                H[j] = 0.0
-            H[3 + i] = 1.0
-            nis += _ekf_update(P, dx, H, r, gyr[i] - b[i], PH)
+            nu = gyro_rest_row(gyr[i], b[i], i, H)
+            nu, s = scalar_update(P, dx, H, r, nu, PH, NX)
+            nis += nu * nu / s
             ndof += 1.0
     # apply the tilt / bias correction before the heading update
-    _reset_cov(P, dx)
+    reset_attitude_cov(P, dx, I_ATT)
     e0, e1, e2, e3 = qexp_t(dx[0], dx[1], dx[2])
     t0, t1, t2, t3 = qmul_t(qw, qx, qy, qz, e0, e1, e2, e3)
     qw, qx, qy, qz = _tnorm(t0, t1, t2, t3)
@@ -631,68 +597,68 @@ def mekf_step(q, b, P, st, gyr, acc, mag, dt, p, out_phi):
             n0, n1, n2 = qrot_t(qw, qx, qy, qz, mag[0], mag[1], mag[2])
             hh = math.sqrt(n0 * n0 + n1 * n1)
             dip = math.atan2(n2, hh)
-            if p[20] > 0.0:
-                # norm and dip low-passed (time constant p[20]) before the disturbance test
-                first = st[21] < 0.5
-                st[21] = 1.0
-                c = 1.0 - math.exp(-dt / p[20])
-                _lowpass(st, 19, mn, c, first)
-                _lowpass(st, 20, dip, c, first)
-                mn_t = st[19]
-                dip_t = st[20]
+            if p[P_MAG_LPF_TAU] > 0.0:
+                # norm and dip low-passed (time constant p[P_MAG_LPF_TAU]) before the disturbance test
+                first = st[S_MAG_LP_INIT] < 0.5
+                st[S_MAG_LP_INIT] = 1.0
+                c = 1.0 - math.exp(-dt / p[P_MAG_LPF_TAU])
+                _lowpass(st, S_MAG_NORM_LP, mn, c, first)
+                _lowpass(st, S_MAG_DIP_LP, dip, c, first)
+                mn_t = st[S_MAG_NORM_LP]
+                dip_t = st[S_MAG_DIP_LP]
             else:
                 mn_t = mn
                 dip_t = dip
-            if st[4] < 0.5:
-                st[1] = mn_t
-                st[2] = dip_t
-                st[4] = 1.0
-            dn = (mn_t - st[1]) / st[1]
-            dd = dip_t - st[2]
-            disturbed = abs(dn) > p[6] or abs(dd) > p[7]
+            if st[S_MAG_REF_VALID] < 0.5:
+                st[S_MAG_REF_NORM] = mn_t
+                st[S_MAG_REF_DIP] = dip_t
+                st[S_MAG_REF_VALID] = 1.0
+            dn = (mn_t - st[S_MAG_REF_NORM]) / st[S_MAG_REF_NORM]
+            dd = dip_t - st[S_MAG_REF_DIP]
+            disturbed = abs(dn) > p[P_MAG_NORM_TOL] or abs(dd) > p[P_MAG_DIP_TOL]
             if disturbed:
-                st[22] = 0.0
+                st[S_UNDISTURBED] = 0.0
             else:
-                st[22] += dt
+                st[S_UNDISTURBED] += dt
             if disturbed:
-                st[3] += dt
+                st[S_DISTURBED_TIMER] += dt
                 flags |= 2
-                if p[14] > 0.0 and st[3] > p[14]:
-                    st[1] = mn_t
-                    st[2] = dip_t
-                    st[3] = 0.0
+                if p[P_MAG_REF_TIME] > 0.0 and st[S_DISTURBED_TIMER] > p[P_MAG_REF_TIME]:
+                    st[S_MAG_REF_NORM] = mn_t
+                    st[S_MAG_REF_DIP] = dip_t
+                    st[S_DISTURBED_TIMER] = 0.0
             else:
-                st[3] = 0.0
-                if p[16] > 0.0:
-                    c = dt / p[16]
-                    st[1] += c * (mn_t - st[1])
-                    st[2] += c * (dip_t - st[2])
-            # used only after p[21] s of continuous undisturbed field: the few
+                st[S_DISTURBED_TIMER] = 0.0
+                if p[P_REF_TAU] > 0.0:
+                    c = dt / p[P_REF_TAU]
+                    st[S_MAG_REF_NORM] += c * (mn_t - st[S_MAG_REF_NORM])
+                    st[S_MAG_REF_DIP] += c * (dip_t - st[S_MAG_REF_DIP])
+            # used only after p[P_MAG_MIN_UNDISTURBED] s of continuous undisturbed field: the few
             # samples of a disturbance that happen to pass the test are not used
-            if not disturbed and st[22] >= p[21] and hh > 1e-9 * mn:
+            if not disturbed and st[S_UNDISTURBED] >= p[P_MAG_MIN_UNDISTURBED] and hh > 1e-9 * mn:
                 psi = math.atan2(n1, n0)
                 # σ_mag is field-vector noise, so the heading noise is σ_mag |m| / |m_h|;
                 # τ_mag is the time constant of the heading itself (whatever the dip)
-                sm2 = (p[26] * p[0]) ** 2 / dt if p[26] > 0.0 else (p[5] * mn / hh) ** 2
-                r = sm2 * (1.0 + p[8] * ((dn / p[6]) ** 2 + (dd / p[7]) ** 2))
+                sm2 = (p[P_TAU_MAG] * p[P_SIGMA_GYRO]) ** 2 / dt if p[P_TAU_MAG] > 0.0 else (p[P_SIGMA_MAG] * mn / hh) ** 2
+                r = sm2 * (1.0 + p[P_K_MAG] * ((dn / p[P_MAG_NORM_TOL]) ** 2 + (dd / p[P_MAG_DIP_TOL]) ** 2))
                 for j in range(6):
                     dx[j] = 0.0
-                nis += _heading_update(P, dx, qw, qx, qy, qz, math.tan(st[2]), r, psi, PH, p[22] > 0.5)
+                nis += _heading_update(P, dx, qw, qx, qy, qz, math.tan(st[S_MAG_REF_DIP]), r, psi, PH, p[P_MAG_BIAS] > 0.5)
                 ndof += 1.0
-                _reset_cov(P, dx)
+                reset_attitude_cov(P, dx, I_ATT)
                 e0, e1, e2, e3 = qexp_t(dx[0], dx[1], dx[2])
                 t0, t1, t2, t3 = qmul_t(qw, qx, qy, qz, e0, e1, e2, e3)
                 qw, qx, qy, qz = _tnorm(t0, t1, t2, t3)
                 bo[0] += dx[3]
                 bo[1] += dx[4]
                 bo[2] += dx[5]
-    if p[18] > 0.0:
+    if p[P_ACC_LPF_TAU] > 0.0:
         # rotate the low-passed nav-frame vector with the total correction q ⊗ q_before*
         d0, d1, d2, d3 = qmul_t(qw, qx, qy, qz, qbw, -qbx, -qby, -qbz)
-        st[5], st[6], st[7] = qrot_t(d0, d1, d2, d3, st[5], st[6], st[7])
-    st[8] = flags
-    st[9] = nis
-    st[10] = ndof
+        st[S_F_LP], st[S_F_LP + 1], st[S_F_LP + 2] = qrot_t(d0, d1, d2, d3, st[S_F_LP], st[S_F_LP + 1], st[S_F_LP + 2])
+    st[S_FLAGS] = flags
+    st[S_NIS] = nis
+    st[S_DOF] = ndof
     qo = np.empty(4)
     qo[0] = qw
     qo[1] = qx
@@ -732,17 +698,17 @@ def mekf_run(q0, b0, P0, gyr, acc, mag, dt, p, store):
             Pprev = P0 if k == 0 else Pu[k - 1]
             Q = np.zeros((6, 6))
             for i in range(3):
-                Q[i, i] = st[23]
-                Q[3 + i, 3 + i] = p[1] * p[1] * dt[k]
+                Q[i, i] = st[S_ATT_Q]
+                Q[3 + i, 3 + i] = p[P_SIGMA_BIAS] * p[P_SIGMA_BIAS] * dt[k]
             Pp[k] = phi @ Pprev @ phi.T + Q
             Pu[k] = P
         qs[k] = q
         bs[k] = b
         for i in range(6):
             pd[k, i] = P[i, i]
-        flags[k] = int(st[8])
-        nis[k] = st[9]
-        dof[k] = st[10]
+        flags[k] = int(st[S_FLAGS])
+        nis[k] = st[S_NIS]
+        dof[k] = st[S_DOF]
     return qs, bs, pd, flags, nis, dof, Pu, Pp, Ph
 
 
@@ -775,7 +741,7 @@ def rts_smooth(qf, bf, Pu, Pp, Ph, gyr, dt, P0, q0, b0):
         e[3:6] = bs[k + 1] - bf[k]
         C = Pu[k] @ Ph[k + 1].T @ _inv_spd(Pp[k + 1])
         dx = C @ e
-        qs[k] = _qnorm(qmul_1(qf[k], qexp_1(dx[0:3])))
+        qs[k] = inject_attitude_local(qf[k], dx, I_ATT)
         bs[k] = bf[k] + dx[3:6]
         Ps = Pu[k] + C @ (Ps - Pp[k + 1]) @ C.T
         for i in range(6):
@@ -837,7 +803,7 @@ def ukf_step(q, b, P, gyr, acc, mag, dt, p, alpha, beta_u, kappa, mag_ref):
     wm0 = lam / (nx + lam)
     wc0 = wm0 + (1.0 - alpha * alpha + beta_u)
     wi = 0.5 / (nx + lam)
-    g = p[13]
+    g = p[P_G]
     # ---- predict: sigma points of the error around (q, b)
     L = _chol((nx + lam) * P)
     ns = 2 * nx + 1
@@ -861,8 +827,8 @@ def ukf_step(q, b, P, gyr, acc, mag, dt, p, alpha, beta_u, kappa, mag_ref):
         d = Y[s] - ym
         Pn += (wc0 if s == 0 else wi) * np.outer(d, d)
     for i in range(3):
-        Pn[i, i] += p[0] * p[0] * dt
-        Pn[3 + i, 3 + i] += p[1] * p[1] * dt
+        Pn[i, i] += p[P_SIGMA_GYRO] * p[P_SIGMA_GYRO] * dt
+        Pn[3 + i, 3 + i] += p[P_SIGMA_BIAS] * p[P_SIGMA_BIAS] * dt
     q = _qnorm(qmul_1(qp0, qexp_1(ym[0:3])))
     b = b + ym[3:6]
     P = Pn
@@ -870,8 +836,8 @@ def ukf_step(q, b, P, gyr, acc, mag, dt, p, alpha, beta_u, kappa, mag_ref):
     dof = 0.0
     # ---- update: stacked accelerometer direction (+ field direction)
     an = _norm3(acc)
-    use_acc = an > 0.0 and abs(an - g) / g < p[4]
-    use_mag = p[17] > 0.5 and _norm3(mag) > 0.0
+    use_acc = an > 0.0 and abs(an - g) / g < p[P_ACC_REJECT]
+    use_mag = p[P_USE_MAG] > 0.5 and _norm3(mag) > 0.0
     nz = (3 if use_acc else 0) + (3 if use_mag else 0)
     if nz > 0:
         L = _chol((nx + lam) * P)
@@ -905,12 +871,12 @@ def ukf_step(q, b, P, gyr, acc, mag, dt, p, alpha, beta_u, kappa, mag_ref):
         if use_acc:
             z[0:3] = acc / an
             for i in range(3):
-                Pzz[i, i] += p[2] * p[2]
+                Pzz[i, i] += p[P_SIGMA_ACC] * p[P_SIGMA_ACC]
             j = 3
         if use_mag:
             z[j:j + 3] = mag / _norm3(mag)
             for i in range(3):
-                Pzz[j + i, j + i] += p[5] * p[5]
+                Pzz[j + i, j + i] += p[P_SIGMA_MAG] * p[P_SIGMA_MAG]
         Si = _inv_spd(Pzz)
         K = Pxz @ Si
         nu = z - zm
@@ -919,7 +885,7 @@ def ukf_step(q, b, P, gyr, acc, mag, dt, p, alpha, beta_u, kappa, mag_ref):
         P = 0.5 * (P + P.T)
         nis = nu @ Si @ nu
         dof = nz
-        q = _qnorm(qmul_1(q, qexp_1(dx[0:3])))
+        q = inject_attitude_local(q, dx, I_ATT)
         b = b + dx[3:6]
     return q, b, P, nis, dof
 

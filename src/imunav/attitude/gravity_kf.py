@@ -81,9 +81,8 @@ class GravityKfParams:
             raise ConfigError("bias_window must be >= 1 sample")
 
     def vector(self) -> np.ndarray:
-        return np.array([self.sigma_g, self.sigma_a, self.c_a, self.g, self.tau, float(_SMODES[self.s_mode]),
-                         self.s_fixed, self.hold_s, float(self.normalize), float(self.exact), self.sigma_b,
-                         self.r_b, float(self.bias_window)])
+        return np.array([float(_SMODES[self.s_mode]) if name == "s_mode" else float(getattr(self, name))
+                         for name in _gk.GRAVITY_PARAMS])
 
 
 def roll_pitch_from_x(x: ArrayLike) -> NDArray[np.float64]:
@@ -123,11 +122,11 @@ class GravityKF:
         """Start the per-sample API from ``x0`` (default level [0, 0, 1])."""
         self.x = np.array([0.0, 0.0, 1.0]) if x0 is None else np.asarray(x0, float).reshape(3).copy()
         self.P = np.eye(3) * self.params.p0**2
-        self._sv = np.zeros(11)
+        self._sv = np.zeros(_gk.N_SV)
         self._Pb = np.eye(3) * 1e-6
         self._gprev: np.ndarray | None = None
         self._S = np.ones(3)
-        self._work = [np.empty((3, 3)) for _ in range(6)]
+        self._work = np.empty((_gk.N_WORK, 3, 3))
 
     def step(self, gyro: ArrayLike, accel: ArrayLike, dt: float) -> np.ndarray:
         """Process one sample (gyro and accelerometer at t; the gyro of t−1 drives
@@ -141,8 +140,8 @@ class GravityKF:
         ya = -a if self.accel_convention == "specific_force" else a
         if self._gprev is not None:
             gp = self._gprev
-            _gk.gravity_step(_KINDS[self.kind], self.x, self.P, self._sv, self._Pb, gp[0], gp[1], gp[2],
-                             ya[0], ya[1], ya[2], dt, self.params.vector(), self._S, *self._work)
+            _gk.gravity_step(_KINDS[self.kind], self.x, self.P, self._sv, self._Pb, gp, np.ascontiguousarray(ya),
+                             dt, self.params.vector(), self._S, self._work)
         self._gprev = g.copy()
         return roll_pitch_from_x(self.x[None, :])[0]
 

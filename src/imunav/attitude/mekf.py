@@ -117,15 +117,8 @@ class MekfParams:
             raise ConfigError(f"MekfParams.g must be > 0, got {self.g}")
 
     def vector(self) -> np.ndarray:
-        """Packed parameter array of the kernel (order of ``_kernels`` params)."""
-        return np.array([
-            self.sigma_gyro, self.sigma_bias, self.sigma_acc, self.k_acc, self.acc_reject,
-            self.sigma_mag, self.mag_norm_tol, self.mag_dip_tol, self.k_mag, self.rest_gyro,
-            self.rest_acc, self.rest_time, self.sigma_rest, self.g, self.mag_ref_time, self.k_rate,
-            self.ref_tau, 1.0 if self.use_mag else 0.0, self.acc_lpf_tau, self.rest_lpf_tau,
-            self.mag_lpf_tau, self.mag_min_undisturbed, 1.0 if self.mag_bias else 0.0, self.bias_clip,
-            self.k_gyro_rate, self.tau_acc, self.tau_mag,
-        ], dtype=np.float64)
+        """Packed parameter array of the kernel: the fields named in ``_kernels.MEKF_PARAMS``, in that order."""
+        return np.array([float(getattr(self, name)) for name in _k.MEKF_PARAMS], dtype=np.float64)
 
     def P0(self) -> np.ndarray:
         return np.diag([self.p0_att**2] * 3 + [self.p0_bias**2] * 3)

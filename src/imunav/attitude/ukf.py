@@ -54,9 +54,9 @@ class UkfParams:
 
     def vector(self, use_mag: bool) -> np.ndarray:
         p = np.zeros(_k.N_PARAMS)
-        p[0], p[1], p[2], p[4], p[5], p[13] = (self.sigma_gyro, self.sigma_bias, self.sigma_acc,
-                                               self.acc_reject, self.sigma_mag, self.g)
-        p[17] = 1.0 if use_mag else 0.0
+        for name in ("sigma_gyro", "sigma_bias", "sigma_acc", "acc_reject", "sigma_mag", "g"):
+            p[_k.MEKF_PARAMS.index(name)] = getattr(self, name)
+        p[_k.P_USE_MAG] = 1.0 if use_mag else 0.0
         return p
 
     def P0(self) -> np.ndarray:

@@ -9,12 +9,23 @@ in :mod:`imunav.ins.detectors`, :mod:`imunav.ins.strapdown` and
 from __future__ import annotations
 
 import math
+from collections import namedtuple
 
 import numpy as np
 from numba import njit
 
-from imunav._rotation_kernels import dcm_from_quat_1, qexp_1, qlog_1, qmul_1, qrot_1
-from imunav.earth import radii_gravity_1
+from imunav._rotation_kernels import dcm_from_quat_1
+from imunav.filters._core import (
+    ATT_END,
+    ATT_MID,
+    ATT_START,
+    inject_additive,
+    inject_attitude_global,
+    joseph_update_rows,
+    strapdown_step_local,
+    strapdown_step_ned,
+)
+from imunav.filters._core_models import heading_hold, height, zero_rate, zero_velocity
 
 # --------------------------------------------------------------------------
 # Zero-velocity detector statistics
@@ -172,12 +183,6 @@ def _cross(a, b):
 
 
 @njit(cache=True)
-def _normalize4(q):
-    nn = math.sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3])
-    return q / nn
-
-
-@njit(cache=True)
 def increments(t, gyr, acc, corrected):
     """Angle and velocity increments over [t_{k-1}, t_k] for k = 1..N-1.
 
@@ -221,7 +226,7 @@ def increments(t, gyr, acc, corrected):
 
 
 # --------------------------------------------------------------------------
-# Strapdown: local level (no Earth rate) and NED with Earth / transport rate
+# Strapdown: local level (no Earth rate) and NED with Earth / transport rate, both on the core's step
 # --------------------------------------------------------------------------
 
 
@@ -229,10 +234,9 @@ def increments(t, gyr, acc, corrected):
 def strapdown_local_kernel(dth, dv, dt, q0, v0, p0, g, compensated):
     """Integrate increments in a fixed local-level NED frame (gravity (0,0,g)).
 
-    q_k = q_{k-1} ⊗ exp(dth_k); v_k = v_{k-1} + C dv_k + g dt_k with C the
-    attitude at the start of the interval when ``dv`` already carries the
-    rotation compensation (``compensated``), else at mid interval;
-    p_k = p_{k-1} + (v_{k-1} + v_k) dt_k / 2.
+    Each row is :func:`imunav.filters._core.strapdown_step_local` with the velocity increment resolved at the
+    start of the interval when ``dv`` already carries the rotation compensation (``compensated``), else at mid
+    interval.
     """
     n = dth.shape[0]
     q = np.empty((n, 4))
@@ -241,30 +245,16 @@ def strapdown_local_kernel(dth, dv, dt, q0, v0, p0, g, compensated):
     q[0] = q0
     v[0] = v0
     p[0] = p0
-    half = np.empty(3)
+    att = ATT_START if compensated else ATT_MID
     for k in range(1, n):
-        for j in range(3):
-            half[j] = 0.0 if compensated else 0.5 * dth[k, j]
-        qm = qmul_1(q[k - 1], qexp_1(half))
-        dvn = qrot_1(qm, dv[k])
-        q[k] = _normalize4(qmul_1(q[k - 1], qexp_1(dth[k])))
-        h = dt[k]
-        for j in range(3):
-            v[k, j] = v[k - 1, j] + dvn[j]
-        v[k, 2] += g * h
-        for j in range(3):
-            p[k, j] = p[k - 1, j] + 0.5 * (v[k - 1, j] + v[k, j]) * h
+        strapdown_step_local(q[k - 1], v[k - 1], p[k - 1], dth[k], dv[k], dt[k], g, att, q[k], v[k], p[k])
     return q, v, p
 
 
 @njit(cache=True)
 def strapdown_ned_kernel(dth, dv, dt, q0, v0, lat0, lon0, h0, omega_e, compensated):
-    """NED mechanization with Earth rate, transport rate and Coriolis.
-
-    q_k = exp(-w_in^n dt) ⊗ q_{k-1} ⊗ exp(dth_k)  (Groves 2013 eq. 5.44 form);
-    v_k = v_{k-1} + [C_mid dv_k + (g^n - (2 w_ie^n + w_en^n) x v) dt];
-    lat, lon, h from the mean velocity with the WGS84 radii.
-    """
+    """NED mechanization with Earth rate, transport rate and Coriolis: each row is
+    :func:`imunav.filters._core.strapdown_step_ned` (Groves 2013 eq. 5.44 form)."""
     n = dth.shape[0]
     q = np.empty((n, 4))
     v = np.empty((n, 3))
@@ -274,136 +264,37 @@ def strapdown_ned_kernel(dth, dv, dt, q0, v0, lat0, lon0, h0, omega_e, compensat
     lla[0, 0] = lat0
     lla[0, 1] = lon0
     lla[0, 2] = h0
-    w_in = np.empty(3)
-    half = np.empty(3)
+    att = ATT_START if compensated else ATT_MID
     for k in range(1, n):
-        h = dt[k]
-        lat = lla[k - 1, 0]
-        alt = lla[k - 1, 2]
-        RN, RE, g = radii_gravity_1(lat, alt)
-        vn = v[k - 1]
-        w_ie0 = omega_e * math.cos(lat)
-        w_ie2 = -omega_e * math.sin(lat)
-        w_en0 = vn[1] / (RE + alt)
-        w_en1 = -vn[0] / (RN + alt)
-        w_en2 = -vn[1] * math.tan(lat) / (RE + alt)
-        w_in[0] = w_ie0 + w_en0
-        w_in[1] = w_en1
-        w_in[2] = w_ie2 + w_en2
-        # attitude for the velocity increment: start (compensated dv) or mid interval
-        for j in range(3):
-            half[j] = 0.0 if compensated else 0.5 * dth[k, j]
-        qm = qmul_1(q[k - 1], qexp_1(half))
-        for j in range(3):
-            half[j] = -0.5 * w_in[j] * h
-        qm = qmul_1(qexp_1(half), qm)
-        dvn = qrot_1(qm, dv[k])
-        # Coriolis and gravity
-        c0 = 2.0 * w_ie0 + w_en0
-        c1 = w_en1
-        c2 = 2.0 * w_ie2 + w_en2
-        cx = c1 * vn[2] - c2 * vn[1]
-        cy = c2 * vn[0] - c0 * vn[2]
-        cz = c0 * vn[1] - c1 * vn[0]
-        v[k, 0] = vn[0] + dvn[0] - cx * h
-        v[k, 1] = vn[1] + dvn[1] - cy * h
-        v[k, 2] = vn[2] + dvn[2] + (g - cz) * h
-        for j in range(3):
-            half[j] = -w_in[j] * h
-        q[k] = _normalize4(qmul_1(qexp_1(half), qmul_1(q[k - 1], qexp_1(dth[k]))))
-        vm0 = 0.5 * (vn[0] + v[k, 0])
-        vm1 = 0.5 * (vn[1] + v[k, 1])
-        vm2 = 0.5 * (vn[2] + v[k, 2])
-        lla[k, 2] = alt - vm2 * h
-        lla[k, 0] = lat + vm0 / (RN + alt) * h
-        lla[k, 1] = lla[k - 1, 1] + vm1 / ((RE + alt) * math.cos(lat)) * h
+        strapdown_step_ned(q[k - 1], v[k - 1], lla[k - 1], dth[k], dv[k], dt[k], omega_e, att, q[k], v[k], lla[k])
     return q, v, lla
 
 
 # --------------------------------------------------------------------------
 # Error-state ZUPT EKF
 # --------------------------------------------------------------------------
-# Error state dx = [dp, dv, dphi, (dba, dbg)] with
+# Error state dx = [dp, dv, dphi, (dba, dbg)] (layout: the I_* constants) with
 #   p = p_hat + dp, v = v_hat + dv, C_nb = exp([dphi x]) C_hat,
 #   b_a = ba_hat + dba, b_g = bg_hat + dbg.
 # Continuous error dynamics (local level, no Earth rate):
 #   dp' = dv,  dv' = -[f^n x] dphi - C_hat dba + C_hat n_a,
 #   dphi' = -C_hat dbg - C_hat n_g,  dba' = w_ba, dbg' = w_bg.
 
+I_POS = 0  # δp, m (3)
+I_VEL = 3  # δv, m/s (3)
+I_ATT = 6  # δφ, rad, navigation-frame attitude error (3)
+I_BA = 9  # δb_a, m/s² (3; 15-state filter only)
+I_BG = 12  # δb_g, rad/s (3; 15-state filter only)
+NX_NAV = 9
+NX_BIAS = 15
 
-@njit(cache=True)
-def _inv_small(S, Si):
-    """Inverse of a small SPD matrix by Gauss-Jordan (m <= 6)."""
-    m = S.shape[0]
-    A = S.copy()
-    for i in range(m):
-        for j in range(m):
-            Si[i, j] = 1.0 if i == j else 0.0
-    for c in range(m):
-        piv = A[c, c]
-        for j in range(m):
-            A[c, j] /= piv
-            Si[c, j] /= piv
-        for r in range(m):
-            if r != c:
-                fct = A[r, c]
-                if fct != 0.0:
-                    for j in range(m):
-                        A[r, j] -= fct * A[c, j]
-                        Si[r, j] -= fct * Si[c, j]
-
-
-@njit(cache=True)
-def _joseph_update(P, dx, idx, z, r, innov_out, s_out):
-    """Update for unit-row H (measured states ``idx``), Joseph form.
-
-    S = H P H^T + R; K = P H^T S^-1; dx = K z;
-    P <- (I-KH) P (I-KH)^T + K R K^T, evaluated in O(nx^2 m) using that H
-    only selects states.  Writes the innovation z and the diagonal of S.
-    """
-    nx = P.shape[0]
-    m = idx.shape[0]
-    S = np.empty((m, m))
-    Si = np.empty((m, m))
-    for i in range(m):
-        for j in range(m):
-            S[i, j] = P[idx[i], idx[j]]
-        S[i, i] += r[i]
-    _inv_small(S, Si)
-    K = np.empty((nx, m))
-    for i in range(nx):
-        for j in range(m):
-            acc = 0.0
-            for l in range(m):
-                acc += P[i, idx[l]] * Si[l, j]
-            K[i, j] = acc
-    for i in range(nx):
-        acc = 0.0
-        for j in range(m):
-            acc += K[i, j] * z[j]
-        dx[i] = acc
-    # X = (I - K H) P = P - K P[idx, :]
-    X = np.empty((nx, nx))
-    for i in range(nx):
-        for j in range(nx):
-            acc = P[i, j]
-            for l in range(m):
-                acc -= K[i, l] * P[idx[l], j]
-            X[i, j] = acc
-    # P = X (I - K H)^T + K R K^T = X - X[:, idx] K^T + K R K^T
-    for i in range(nx):
-        for j in range(i, nx):
-            acc = X[i, j]
-            for l in range(m):
-                acc += -X[i, idx[l]] * K[j, l] + K[i, l] * r[l] * K[j, l]
-            acc2 = X[j, i]
-            for l in range(m):
-                acc2 += -X[j, idx[l]] * K[i, l] + K[j, l] * r[l] * K[i, l]
-            P[i, j] = 0.5 * (acc + acc2)
-            P[j, i] = P[i, j]
-    for j in range(m):
-        innov_out[j] = z[j]
-        s_out[j] = S[j, j]
+#: Parameters of :func:`zupt_ekf_kernel` (from :class:`imunav.ins.zupt.ZuptConfig`; numba passes a named tuple
+#: by value, its fields are compile-time typed).
+ZuptKernelParams = namedtuple(
+    "ZuptKernelParams",
+    ["nx", "g", "sigma_acc", "sigma_gyro", "sigma_acc_bias_rw", "sigma_gyro_bias_rw", "sigma_v", "sigma_zaru",
+     "heading_hold", "sigma_heading", "coning", "level_floor", "sigma_floor"],
+)
 
 
 @njit(cache=True)
@@ -436,41 +327,62 @@ def _sandwich(Phi, P, Qd, M, nzc, nzn):
 
 
 @njit(cache=True)
-def _heading_change(q, q_ref):
-    """Vertical (nav z) component of the rotation vector of ``C(q) C(q_ref)^T``.
-
-    This is the rotation about the local vertical since ``q_ref``, whatever
-    the sensor's mounting.  (The difference of ZYX yaw angles is not: the yaw
-    of a tilted sensor changes when the foot only pitches, heel to toe.)
-    """
-    qc = np.empty(4)
-    qc[0] = q_ref[0]
-    for j in range(3):
-        qc[1 + j] = -q_ref[1 + j]
-    return qlog_1(qmul_1(q, qc))[2]
+def _zupt_transition(Phi, Qd, C, dvn, h, prm):
+    """Φ = I + F h and Q_d = G Q Gᵀ h² (+ bias random walks σ² h) of the ZUPT error state (in place)."""
+    nx = prm.nx
+    for i in range(nx):
+        for j in range(nx):
+            Phi[i, j] = 1.0 if i == j else 0.0
+            Qd[i, j] = 0.0
+    for i in range(3):
+        Phi[I_POS + i, I_VEL + i] = h
+    # -[dv^n x]: the Jacobian of v_k = v_{k-1} + dv^n + g h w.r.t. the nav-frame attitude error
+    # (C = exp([dphi x]) C_hat  =>  d(dv^n) = dphi x dv^n) uses the very increment dv^n that the
+    # nominal integration added, so that over a swing sum(dv^n) is the estimated velocity change
+    # (~0 horizontally) and the yaw stays unobservable, as it is.
+    Phi[I_VEL + 0, I_ATT + 1] = dvn[2]
+    Phi[I_VEL + 0, I_ATT + 2] = -dvn[1]
+    Phi[I_VEL + 1, I_ATT + 0] = -dvn[2]
+    Phi[I_VEL + 1, I_ATT + 2] = dvn[0]
+    Phi[I_VEL + 2, I_ATT + 0] = dvn[1]
+    Phi[I_VEL + 2, I_ATT + 1] = -dvn[0]
+    if nx == NX_BIAS:
+        for i in range(3):
+            for j in range(3):
+                Phi[I_VEL + i, I_BA + j] = -C[i, j] * h
+                Phi[I_ATT + i, I_BG + j] = -C[i, j] * h
+    # G Q G^T with G = dt C blocks: C diag(s^2) C^T = s^2 I for isotropic s
+    qa = prm.sigma_acc * prm.sigma_acc * h * h
+    qg = prm.sigma_gyro * prm.sigma_gyro * h * h
+    for i in range(3):
+        Qd[I_VEL + i, I_VEL + i] = qa
+        Qd[I_ATT + i, I_ATT + i] = qg
+    if nx == NX_BIAS:
+        for i in range(3):
+            Qd[I_BA + i, I_BA + i] = prm.sigma_acc_bias_rw * prm.sigma_acc_bias_rw * h
+            Qd[I_BG + i, I_BG + i] = prm.sigma_gyro_bias_rw * prm.sigma_gyro_bias_rw * h
 
 
 @njit(cache=True)
-def zupt_ekf_kernel(
-    t, acc, gyr, zv, q0, p0, v0, ba0, bg0, P0, nx, g,
-    sig_a, sig_g, sig_ba, sig_bg, sig_v, zaru, sig_zaru, heading, sig_psi, coning,
-    floor, sig_floor,
-):
-    """Run the error-state ZUPT EKF over a whole recording.
+def zupt_ekf_kernel(t, acc, gyr, zv, zaru, q0, p0, v0, ba0, bg0, P0, prm):
+    """Run the error-state ZUPT EKF over a whole recording (``prm``: :data:`ZuptKernelParams`).
 
     Sample 0 carries the initial state; for k >= 1 the nominal state is
-    propagated with sample k over t_k - t_{k-1}, the covariance with
-    Phi = I + F dt, Q_d = G diag(sig_a^2, sig_g^2) G^T dt^2 (per-sample noise
+    propagated with sample k over t_k - t_{k-1} (:func:`imunav.filters._core.strapdown_step_local`), the
+    covariance with Phi = I + F dt, Q_d = G diag(sig_a^2, sig_g^2) G^T dt^2 (per-sample noise
     std, as in OpenShoe / pyshoe) plus bias random walks sig_b^2 dt; then, if
     zv[k], the ZUPT (and optionally heading-hold) updates apply, and the ZARU
-    where the boolean mask zaru[k] is set (a subset of zv).
+    where the boolean mask zaru[k] is set (a subset of zv).  Each update is a measurement model of
+    :mod:`imunav.filters._core_models` followed by :func:`imunav.filters._core.joseph_update_rows` and the
+    injection of the error estimate.
 
     Heading hold: from the second sample of a stance on, the rotation about
-    the nav vertical since its first sample is measured as 0 (std sig_psi).
-    Level floor (``floor``): each stance sample measures the height as the
-    initial height p0[2] (std sig_floor).
+    the nav vertical since its first sample is measured as 0 (std sigma_heading).
+    Level floor (``level_floor``): each stance sample measures the height as the
+    initial height p0[2] (std sigma_floor).
     """
     n = t.shape[0]
+    nx = prm.nx
     q = np.empty((n, 4))
     v = np.empty((n, 3))
     p = np.empty((n, 3))
@@ -493,16 +405,12 @@ def zupt_ekf_kernel(
     nzc = np.empty((nx, nx), dtype=np.int64)
     nzn = np.empty(nx, dtype=np.int64)
     dx = np.zeros(nx)
-    w = np.empty(3)
-    f = np.empty(3)
-    idx_v = np.array([3, 4, 5])
-    idx_b = np.array([12, 13, 14])
-    idx_psi = np.array([8])
-    idx_z = np.array([2])
-    rz = np.full(1, sig_floor * sig_floor)
-    rv = np.full(3, sig_v * sig_v)
-    rb = np.full(3, sig_zaru * sig_zaru)
-    rpsi = np.full(1, sig_psi * sig_psi)
+    idx_v = np.arange(I_VEL, I_VEL + 3)
+    idx_b = np.arange(I_BG, I_BG + 3)
+    idx_psi = np.array([I_ATT + 2])
+    idx_z = np.array([I_POS + 2])
+    r3 = np.empty(3)
+    r1 = np.empty(1)
     z3 = np.empty(3)
     z1 = np.empty(1)
     tmp3 = np.empty(3)
@@ -518,16 +426,13 @@ def zupt_ekf_kernel(
     for k in range(1, n):
         h = t[k] - t[k - 1]
         for j in range(3):
-            w[j] = gyr[k, j] - bg[k - 1, j]
-            f[j] = acc[k, j] - ba[k - 1, j]
-            if coning:
+            if prm.coning:
                 dth[j] = (0.5 * (gyr[k, j] + gyr[k - 1, j]) - bg[k - 1, j]) * h
                 dvb[j] = (0.5 * (acc[k, j] + acc[k - 1, j]) - ba[k - 1, j]) * h
             else:
-                dth[j] = w[j] * h
-                dvb[j] = f[j] * h
-        qprev = q[k - 1]
-        if coning:
+                dth[j] = (gyr[k, j] - bg[k - 1, j]) * h
+                dvb[j] = (acc[k, j] - ba[k - 1, j]) * h
+        if prm.coning:
             rot = _cross(dth, dvb)
             s1 = _cross(dth_prev, dvb)
             s2 = _cross(dv_prev, dth)
@@ -538,81 +443,41 @@ def zupt_ekf_kernel(
             for j in range(3):
                 dth_prev[j] = dth[j]
                 dth[j] = dth[j] + con[j] / 12.0
-            qk = _normalize4(qmul_1(qprev, qexp_1(dth)))
-            dvn = qrot_1(qprev, dvb)
+            # compensated increments: the velocity increment is resolved with the start attitude
+            att = ATT_START
         else:
             # first-order: rotate first, then the specific force with the new attitude
-            qk = _normalize4(qmul_1(qprev, qexp_1(dth)))
-            dvn = qrot_1(qk, dvb)
-        q[k] = qk
+            att = ATT_END
+        dvn = strapdown_step_local(q[k - 1], v[k - 1], p[k - 1], dth, dvb, h, prm.g, att, q[k], v[k], p[k])
         for j in range(3):
-            v[k, j] = v[k - 1, j] + dvn[j]
-        v[k, 2] += g * h
-        for j in range(3):
-            p[k, j] = p[k - 1, j] + 0.5 * (v[k - 1, j] + v[k, j]) * h
             ba[k, j] = ba[k - 1, j]
             bg[k, j] = bg[k - 1, j]
         # ---- covariance propagation
-        C = dcm_from_quat_1(qprev)
-        for i in range(nx):
-            for j in range(nx):
-                Phi[i, j] = 1.0 if i == j else 0.0
-                Qd[i, j] = 0.0
-        for i in range(3):
-            Phi[i, 3 + i] = h
-        # -[dv^n x]: the Jacobian of v_k = v_{k-1} + dv^n + g h w.r.t. the nav-frame attitude error
-        # (C = exp([dphi x]) C_hat  =>  d(dv^n) = dphi x dv^n) uses the very increment dv^n that the
-        # nominal integration added, so that over a swing sum(dv^n) is the estimated velocity change
-        # (~0 horizontally) and the yaw stays unobservable, as it is.
-        Phi[3, 7] = dvn[2]
-        Phi[3, 8] = -dvn[1]
-        Phi[4, 6] = -dvn[2]
-        Phi[4, 8] = dvn[0]
-        Phi[5, 6] = dvn[1]
-        Phi[5, 7] = -dvn[0]
-        if nx == 15:
-            for i in range(3):
-                for j in range(3):
-                    Phi[3 + i, 9 + j] = -C[i, j] * h
-                    Phi[6 + i, 12 + j] = -C[i, j] * h
-        # G Q G^T with G = dt C blocks: C diag(s^2) C^T = s^2 I for isotropic s
-        qa = sig_a * sig_a * h * h
-        qg = sig_g * sig_g * h * h
-        for i in range(3):
-            Qd[3 + i, 3 + i] = qa
-            Qd[6 + i, 6 + i] = qg
-        if nx == 15:
-            for i in range(3):
-                Qd[9 + i, 9 + i] = sig_ba * sig_ba * h
-                Qd[12 + i, 12 + i] = sig_bg * sig_bg * h
+        _zupt_transition(Phi, Qd, dcm_from_quat_1(q[k - 1]), dvn, h, prm)
         _sandwich(Phi, P, Qd, M, nzc, nzn)
         # ---- updates
         if zv[k]:
-            # ZUPT: z = 0 - v_hat = dv + noise
-            for j in range(3):
-                z3[j] = -v[k, j]
-            _joseph_update(P, dx, idx_v, z3, rv, tmp3, s3)
+            zero_velocity(v[k], prm.sigma_v, z3, r3)
+            joseph_update_rows(P, dx, idx_v, z3, r3, tmp3, s3)
             for j in range(3):
                 innov[k, j] = tmp3[j]
                 svar[k, j] = s3[j]
             _inject(dx, k, p, v, q, ba, bg, nx)
-            if zaru[k] and nx == 15:
-                for j in range(3):
-                    z3[j] = gyr[k, j] - bg[k, j]
-                _joseph_update(P, dx, idx_b, z3, rb, tmp3, s3)
+            if zaru[k] and nx == NX_BIAS:
+                zero_rate(gyr[k], bg[k], prm.sigma_zaru, z3, r3)
+                joseph_update_rows(P, dx, idx_b, z3, r3, tmp3, s3)
                 _inject(dx, k, p, v, q, ba, bg, nx)
-            if heading:
+            if prm.heading_hold:
                 if not in_stance:
                     for j in range(4):
                         q_ref[j] = q[k, j]
                 else:
-                    # C = exp([dphi x]) C_hat  =>  measured change 0 = change_hat + dphi_z
-                    z1[0] = -_heading_change(q[k], q_ref)
-                    _joseph_update(P, dx, idx_psi, z1, rpsi, tmp1, s1_)
+                    heading_hold(q[k], q_ref, prm.sigma_heading, z1, r1)
+                    joseph_update_rows(P, dx, idx_psi, z1, r1, tmp1, s1_)
                     _inject(dx, k, p, v, q, ba, bg, nx)
-            if floor:
-                z1[0] = p0[2] - p[k, 2]
-                _joseph_update(P, dx, idx_z, z1, rz, tmp1, s1_)
+            if prm.level_floor:
+                height(p[k, 2], p0[2], prm.sigma_floor, z1, r1)
+                joseph_update_rows(P, dx, idx_z, z1, r1, tmp1, s1_)
                 _inject(dx, k, p, v, q, ba, bg, nx)
             in_stance = True
         else:
@@ -624,17 +489,12 @@ def zupt_ekf_kernel(
 
 @njit(cache=True)
 def _inject(dx, k, p, v, q, ba, bg, nx):
-    """Fold the error estimate into the nominal state (then dx is reset)."""
-    for j in range(3):
-        p[k, j] += dx[j]
-        v[k, j] += dx[3 + j]
-    r = np.empty(3)
-    for j in range(3):
-        r[j] = dx[6 + j]
-    q[k] = _normalize4(qmul_1(qexp_1(r), q[k]))
-    if nx == 15:
-        for j in range(3):
-            ba[k, j] += dx[9 + j]
-            bg[k, j] += dx[12 + j]
+    """Fold the error estimate into the nominal state of row k (then dx is reset)."""
+    inject_additive(p[k], dx, I_POS, 3)
+    inject_additive(v[k], dx, I_VEL, 3)
+    q[k] = inject_attitude_global(q[k], dx, I_ATT)
+    if nx == NX_BIAS:
+        inject_additive(ba[k], dx, I_BA, 3)
+        inject_additive(bg[k], dx, I_BG, 3)
     for j in range(nx):
         dx[j] = 0.0

@@ -283,9 +283,12 @@ def run_zupt(data: Any, zv: ArrayLike, config: ZuptConfig | None = None, *,
     pos0 = np.array(pos0, dtype=np.float64)
     t, a, w = (np.array(x, dtype=np.float64, order="C") for x in (t, a, w))
     zaru_mask = long_stances(t, z, cfg.zaru_min_s) if cfg.zaru else np.zeros(t.size, dtype=bool)
+    prm = _k.ZuptKernelParams(
+        nx=nx, g=g, sigma_acc=float(cfg.sigma_acc), sigma_gyro=float(cfg.sigma_gyro),
+        sigma_acc_bias_rw=float(cfg.sigma_acc_bias_rw), sigma_gyro_bias_rw=float(cfg.sigma_gyro_bias_rw),
+        sigma_v=float(cfg.sigma_v), sigma_zaru=float(cfg.sigma_zaru), heading_hold=bool(cfg.heading_hold),
+        sigma_heading=float(cfg.sigma_heading), coning=cfg.integration == "coning",
+        level_floor=bool(cfg.level_floor), sigma_floor=float(cfg.sigma_floor))
     q, v, p, ba, bg, Pd, innov, svar, P = _k.zupt_ekf_kernel(
-        t, a, w, z, q0, pos0, np.zeros(3), np.zeros(3), np.zeros(3), P0, nx, g,
-        cfg.sigma_acc, cfg.sigma_gyro, cfg.sigma_acc_bias_rw, cfg.sigma_gyro_bias_rw, cfg.sigma_v,
-        zaru_mask, cfg.sigma_zaru, bool(cfg.heading_hold), cfg.sigma_heading, cfg.integration == "coning",
-        bool(cfg.level_floor), cfg.sigma_floor)
+        t, a, w, z, zaru_mask, q0, pos0, np.zeros(3), np.zeros(3), np.zeros(3), P0, prm)
     return ZuptResult(t, p, v, q, ba, bg, Pd, innov, svar, P, z, cfg)

@@ -21,6 +21,7 @@ otherwise ``dt[k] = t[k] - t[k-1]`` per sample (``dt[0] = t[1] - t[0]``).
 from __future__ import annotations
 
 import math
+from collections import namedtuple
 
 import numpy as np
 from numba import njit
@@ -114,12 +115,21 @@ def fill_normal(s, out):  # pragma: no cover - compiled
         out[k] = next_normal(s)
 
 
+#: Error parameters of one triad for :func:`simulate_triad` (SI; arrays are float64 and contiguous):
+#: ``use_g`` apply the g-sensitivity ``g_mat`` (3, 3) to the specific force; ``t_mat`` (3, 3) scale factor and
+#: misalignment; ``bias`` (3,); ``bias_poly``, ``scale_poly`` (P, 3) temperature polynomials; ``nd`` (3,) white-noise
+#: density; ``gm_sig``, ``gm_tau`` (3, M) Gauss-Markov components; ``k_rw`` (3,) random walk; ``ramp`` (3,) rate
+#: ramp; ``q`` (3,) quantization LSB; ``integrated`` carry the quantization residue; ``full_scale`` (3,) (0: none).
+TriadParams = namedtuple(
+    "TriadParams",
+    ["use_g", "t_mat", "g_mat", "bias", "bias_poly", "scale_poly", "nd", "gm_sig", "gm_tau", "k_rw", "ramp", "q",
+     "integrated", "full_scale"],
+)
+
+
 @njit(cache=True, nogil=True)
-def simulate_triad(
-    t, dt_const, x, f, use_g, t_mat, g_mat, bias, dtemp, bias_poly, scale_poly,
-    nd, gm_sig, gm_tau, k_rw, ramp, q, integrated, full_scale, states, out, truth, keep_truth,
-):  # pragma: no cover - compiled
-    """Measurement model of one triad in a single pass over the samples.
+def simulate_triad(t, dt_const, x, f, dtemp, prm, states, out, truth, keep_truth):  # pragma: no cover - compiled
+    """Measurement model of one triad in a single pass over the samples (``prm``: :data:`TriadParams`).
 
     For every sample k (imu-error-calibration.md eqs. 2 and 4, full 3x3
     g-sensitivity, temperature polynomials around the reference):
@@ -148,6 +158,9 @@ def simulate_triad(
     instability, random walk, ramp, white noise.  Returns the number of
     saturated samples per axis.
     """
+    use_g, t_mat, g_mat, bias = prm.use_g, prm.t_mat, prm.g_mat, prm.bias
+    bias_poly, scale_poly, nd, gm_sig, gm_tau = prm.bias_poly, prm.scale_poly, prm.nd, prm.gm_sig, prm.gm_tau
+    k_rw, ramp, q, integrated, full_scale = prm.k_rw, prm.ramp, prm.q, prm.integrated, prm.full_scale
     n = x.shape[0]
     m = gm_sig.shape[1]
     ns = 2 + m

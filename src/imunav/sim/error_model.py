@@ -1018,15 +1018,12 @@ def _apply_arrays(
         g = model.g_sensitivity if is_gyro else np.zeros((3, 3))
         states, sig, tc = _states(root, _SENSOR_KEY[nm], te, common_axis_noise)
         fs = te.full_scale if te.full_scale is not None else np.zeros(3)
-        nsat[nm] = _k.simulate_triad(
-            t, dt_const, x, accel,
-            bool(is_gyro and np.any(g != 0)),
-            _f64(te.scale_misalignment), _f64(g), _f64(te.bias), dtemp_arr,
-            _f64(te.bias_temp_poly), _f64(te.scale_temp_poly),
-            _f64(te.noise_density), sig, tc, _f64(te.random_walk), _f64(te.rate_ramp),
-            _f64(te.quantization), te.quantization_mode == "integrated", _f64(fs),
-            states, out, tr, return_truth,
-        )  # fmt: skip
+        prm = _k.TriadParams(
+            use_g=bool(is_gyro and np.any(g != 0)), t_mat=_f64(te.scale_misalignment), g_mat=_f64(g),
+            bias=_f64(te.bias), bias_poly=_f64(te.bias_temp_poly), scale_poly=_f64(te.scale_temp_poly),
+            nd=_f64(te.noise_density), gm_sig=sig, gm_tau=tc, k_rw=_f64(te.random_walk), ramp=_f64(te.rate_ramp),
+            q=_f64(te.quantization), integrated=te.quantization_mode == "integrated", full_scale=_f64(fs))
+        nsat[nm] = _k.simulate_triad(t, dt_const, x, accel, dtemp_arr, prm, states, out, tr, return_truth)
         outs[nm] = out
         truth_arr[nm] = tr
 

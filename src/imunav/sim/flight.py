@@ -39,6 +39,7 @@ from imunav.airdata.atmosphere import G0, isa
 from imunav.airdata.doppler import DopplerErrors, janus_beams, simulate_doppler
 from imunav.errors import InvalidInputError
 from imunav.filters._common import ResultMixin
+from imunav.filters._core import van_loan
 from imunav.rotation import dcm_from_euler
 
 __all__ = [
@@ -114,19 +115,12 @@ TURBULENCE_SIGMA = {"none": 0.0, "light": 1.5, "moderate": 3.0, "severe": 6.5}  
 
 def _shaping_discrete(num: Array, den: Array, dt: float) -> tuple[Array, Array, Array]:
     """Discrete (Φ, Γ-cov, C) of a strictly proper / proper SISO shaping filter, unit-variance output."""
-    from scipy.linalg import expm, solve_discrete_lyapunov
+    from scipy.linalg import solve_discrete_lyapunov
     from scipy.signal import tf2ss
 
     A, B, C, D = tf2ss(num, den)
-    n = A.shape[0]
-    M = np.zeros((2 * n, 2 * n))
-    M[:n, :n] = -A
-    M[:n, n:] = B @ B.T
-    M[n:, n:] = A.T
-    E = expm(M * dt)
-    Phi = E[n:, n:].T
-    Qd = Phi @ E[:n, n:]
-    Qd = 0.5 * (Qd + Qd.T)
+    Phi, Qd = van_loan(np.ascontiguousarray(A, dtype=np.float64), np.ascontiguousarray(B @ B.T, dtype=np.float64),
+                       float(dt))
     if np.any(np.abs(D) > 0):
         raise InvalidInputError("shaping filter must be strictly proper")
     P = solve_discrete_lyapunov(Phi, Qd)
