@@ -1,0 +1,311 @@
+"""Loosely coupled GNSS/INS: an error-state Kalman filter on the NED strapdown, aided by GNSS position and velocity.
+
+:func:`run_gins` integrates IMU rates (:class:`~imunav.timeseries.ImuData`, with two-sample coning / sculling
+corrections) or increments (:class:`~imunav.io.kfgins.ImuIncrements`) with
+:func:`imunav.filters._core.strapdown_step_ned` and estimates 15 error states (position, velocity, attitude,
+gyro and accelerometer biases) or 21 (plus scale factors), biases and scale factors being first-order
+Gauss–Markov processes with configurable σ and correlation time (:class:`GinsConfig`).  GNSS fixes are used at
+their own time stamps between IMU samples, with the antenna lever arm, behind a χ² gate; every epoch's NIS is
+recorded.  The equations are in :mod:`imunav.ins._gins_kernels`.
+
+Example
+-------
+>>> import numpy as np
+>>> from imunav.ins.gins import GinsConfig, run_gins
+>>> from imunav.sim import presets, simulate_imu
+>>> from imunav.sim.gnss import simulate_gnss
+>>> from imunav.sim.vehicle import demo_drive, vehicle_trajectory
+>>> truth = vehicle_trajectory(demo_drive(120), fs=100)
+>>> imu = simulate_imu(truth, presets.get("navigation_a15"), rng=1)
+>>> gnss = simulate_gnss(truth, rng=2)
+>>> cfg = GinsConfig.from_preset("navigation_a15")
+>>> res = run_gins(imu, gnss, cfg, lla0=truth.pos_lla[0], vel0=truth.vel_ned[0], q0=truth.q_nb[0])
+>>> bool(np.all(np.isfinite(res.lla)))
+True
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+from scipy.stats import chi2
+
+from imunav.earth import OMEGA_E
+from imunav.errors import InvalidInputError, ShapeError
+from imunav.ins import _gins_kernels as _k
+from imunav.ins.strapdown import coning_sculling_increments
+from imunav.io.gnss import GnssData
+from imunav.io.kfgins import ImuIncrements, KfGinsConfig
+from imunav.rotation import euler_from_quat, quat_normalize
+from imunav.timeseries import ImuData
+
+__all__ = ["GinsConfig", "GinsResult", "run_gins", "STATE_NAMES"]
+
+Array = NDArray[np.float64]
+
+#: Names of the error states, in filter order (the first 15 of the 21-state filter are the 15-state filter).
+STATE_NAMES = tuple(f"{g}_{a}" for g in ("pos", "vel", "att", "gyro_bias", "accel_bias", "gyro_scale",
+                                           "accel_scale") for a in "xyz")
+
+
+def _v3(x: ArrayLike, name: str, *, positive: bool = False, nonneg: bool = False) -> Array:
+    a = np.asarray(x, dtype=float) * np.ones(3)
+    if a.shape != (3,) or not np.all(np.isfinite(a)):
+        raise ShapeError(f"GinsConfig.{name} must be a finite scalar or 3-vector; got {x!r}")
+    if positive and np.any(a <= 0):
+        raise InvalidInputError(f"GinsConfig.{name} = {a.tolist()}: a standard deviation / time must be > 0")
+    if nonneg and np.any(a < 0):
+        raise InvalidInputError(f"GinsConfig.{name} = {a.tolist()}: must be >= 0")
+    return a
+
+
+@dataclass(frozen=True)
+class GinsConfig:
+    """Configuration of :func:`run_gins`, SI units.
+
+    Parameters
+    ----------
+    arw : (3,) gyro white noise, rad/√s.  vrw : (3,) accelerometer white noise, m/s/√s.
+    gyro_bias_std, accel_bias_std : (3,) Gauss–Markov σ of the biases, rad/s and m/s².
+    gyro_scale_std, accel_scale_std : (3,) Gauss–Markov σ of the scale factors (dimensionless).
+    corr_time : correlation time of all Gauss–Markov states, s (KF-GINS: ``corrtime``).
+    scale_factors : True: 21 states; False: 15 (no scale-factor states).
+    init_pos_std, init_vel_std, init_att_std : (3,) initial σ (m NED, m/s NED, rad roll/pitch/yaw ~ N/E/D).
+    init_gyro_bias_std ... : initial σ of the IMU-error states (default: their Gauss–Markov σ).
+    lever_arm : (3,) GNSS antenna in body FRD from the IMU, m.
+    use_gnss_velocity : use the fixes' velocity when they have one.
+    gate_alpha : false-alarm probability of the χ² gates (0 disables the gates).
+    cov_interval_s : covariance propagation step, s (the nominal state is integrated every sample).
+    """
+
+    arw: Any
+    vrw: Any
+    gyro_bias_std: Any
+    accel_bias_std: Any
+    gyro_scale_std: Any = 1e-3
+    accel_scale_std: Any = 1e-3
+    corr_time: float = 3600.0
+    scale_factors: bool = True
+    init_pos_std: Any = 1.0
+    init_vel_std: Any = 0.1
+    init_att_std: Any = (1e-3, 1e-3, 1e-2)
+    init_gyro_bias_std: Any = None
+    init_accel_bias_std: Any = None
+    init_gyro_scale_std: Any = None
+    init_accel_scale_std: Any = None
+    lever_arm: Any = (0.0, 0.0, 0.0)
+    use_gnss_velocity: bool = True
+    gate_alpha: float = 1e-6
+    cov_interval_s: float = 0.1
+
+    def __post_init__(self) -> None:
+        s = object.__setattr__
+        for name in ("arw", "vrw", "gyro_bias_std", "accel_bias_std", "gyro_scale_std", "accel_scale_std",
+                     "init_pos_std", "init_vel_std", "init_att_std"):
+            s(self, name, _v3(getattr(self, name), name, positive=True))
+        for name, src in (("init_gyro_bias_std", "gyro_bias_std"), ("init_accel_bias_std", "accel_bias_std"),
+                          ("init_gyro_scale_std", "gyro_scale_std"), ("init_accel_scale_std", "accel_scale_std")):
+            v = getattr(self, name)
+            s(self, name, getattr(self, src) if v is None else _v3(v, name, positive=True))
+        s(self, "lever_arm", _v3(self.lever_arm, "lever_arm"))
+        if not (np.isfinite(self.corr_time) and self.corr_time > 0):
+            raise InvalidInputError(f"GinsConfig.corr_time must be > 0 s; got {self.corr_time!r}")
+        if not (0 <= self.gate_alpha < 1):
+            raise InvalidInputError(f"GinsConfig.gate_alpha must be in [0, 1); got {self.gate_alpha!r}")
+        if not (self.cov_interval_s > 0):
+            raise InvalidInputError(f"GinsConfig.cov_interval_s must be > 0 s; got {self.cov_interval_s!r}")
+
+    @property
+    def n_states(self) -> int:
+        """15 or 21."""
+        return _k.NX21 if self.scale_factors else _k.NX15
+
+    @classmethod
+    def from_kfgins(cls, cfg: KfGinsConfig, **overrides: Any) -> GinsConfig:
+        """The filter configuration of a KF-GINS YAML (:func:`imunav.io.kfgins.load_kfgins_config`).
+
+        Parameters
+        ----------
+        cfg : KfGinsConfig
+        **overrides : any field of :class:`GinsConfig`.
+
+        Returns
+        -------
+        GinsConfig
+        """
+        n = cfg.noise
+        kw: dict[str, Any] = dict(
+            arw=n.arw, vrw=n.vrw, gyro_bias_std=n.gyro_bias_std, accel_bias_std=n.accel_bias_std,
+            gyro_scale_std=n.gyro_scale_std, accel_scale_std=n.accel_scale_std, corr_time=n.corr_time,
+            init_pos_std=cfg.init_pos_std, init_vel_std=cfg.init_vel_std, init_att_std=cfg.init_att_std,
+            init_gyro_bias_std=cfg.init_gyro_bias_std, init_accel_bias_std=cfg.init_accel_bias_std,
+            init_gyro_scale_std=cfg.init_gyro_scale_std, init_accel_scale_std=cfg.init_accel_scale_std,
+            lever_arm=cfg.antenna_lever_arm,
+        )
+        kw.update(overrides)
+        return cls(**kw)
+
+    @classmethod
+    def from_preset(cls, name: str, **overrides: Any) -> GinsConfig:
+        """A configuration matched to an IMU preset of :mod:`imunav.sim.presets` (noise densities; bias σ from
+        the turn-on bias and the bias instability; scale σ from the scale-factor errors; its correlation time).
+
+        Parameters
+        ----------
+        name : preset name.
+        **overrides : any field of :class:`GinsConfig`.
+
+        Returns
+        -------
+        GinsConfig
+        """
+        from imunav.sim import presets  # sim sits beside ins; only this convenience constructor needs it
+
+        m = presets.get(name)
+
+        def bias(te):
+            sig, tc = te.bias_instability.components() if te.bias_instability is not None else (np.zeros((1, 3)),
+                                                                                                  np.full((1, 3), 3600.0))
+            return np.sqrt(te.bias**2 + np.sum(sig**2, axis=0)), float(np.max(tc))
+
+        gb, tg = bias(m.gyro)
+        ab, ta = bias(m.accel)
+        kw: dict[str, Any] = dict(
+            arw=np.maximum(m.gyro.noise_density, 1e-9), vrw=np.maximum(m.accel.noise_density, 1e-9),
+            gyro_bias_std=np.maximum(gb, 1e-12), accel_bias_std=np.maximum(ab, 1e-12),
+            gyro_scale_std=np.maximum(np.abs(np.diag(m.gyro.scale_misalignment) - 1), 1e-6) * 1.5,
+            accel_scale_std=np.maximum(np.abs(np.diag(m.accel.scale_misalignment) - 1), 1e-6) * 1.5,
+            corr_time=max(tg, ta),
+        )
+        kw.update(overrides)
+        return cls(**kw)
+
+
+@dataclass(frozen=True)
+class GinsResult:
+    """Output of :func:`run_gins` (SI).
+
+    Attributes
+    ----------
+    t : (N,) IMU times, s.  lla : (N, 3) rad, rad, m.  vel_ned : (N, 3) m/s.  q_nb : (N, 4).
+    gyro_bias, accel_bias, gyro_scale, accel_scale : (N, 3) estimated IMU errors (scale zero for 15 states).
+    cov_t : (M,) times of the covariance records.  cov_diag : (M, n) variances of the error states
+        (:data:`STATE_NAMES`).  cov_nav : (M, 9, 9) position/velocity/attitude block.
+    gnss_t : (G,) fixes used.  nis : (G, 2) NIS of position / velocity (NaN: not used).  accepted : (G, 2).
+    config : the configuration.  meta : removed fixes, gates.
+    """
+
+    t: Array
+    lla: Array
+    vel_ned: Array
+    q_nb: Array
+    gyro_bias: Array
+    accel_bias: Array
+    gyro_scale: Array
+    accel_scale: Array
+    cov_t: Array
+    cov_diag: Array
+    cov_nav: Array
+    gnss_t: Array
+    nis: Array
+    accepted: Array
+    config: GinsConfig
+    meta: dict[str, Any] = field(default_factory=dict)
+
+    def euler(self) -> Array:
+        """ZYX Euler angles (roll, pitch, yaw), rad."""
+        return euler_from_quat(self.q_nb)
+
+
+def _increments(imu: ImuData | ImuIncrements) -> tuple[Array, Array, Array]:
+    if isinstance(imu, ImuIncrements):
+        dth = np.array(imu.dtheta, dtype=float)
+        dv = np.array(imu.dvel, dtype=float)
+        # two-sample coning / sculling and rotation compensation on the increments (Savage 1998)
+        c = np.zeros_like(dth)
+        s = np.zeros_like(dv)
+        c[1:] = np.cross(dth[:-1], dth[1:]) / 12.0
+        s[1:] = (np.cross(dth[:-1], dv[1:]) + np.cross(dv[:-1], dth[1:])) / 12.0
+        dv_out = dv + 0.5 * np.cross(dth, dv) + s
+        return np.ascontiguousarray(imu.t, dtype=float), dth + c, dv_out
+    if isinstance(imu, ImuData):
+        dth, dv = coning_sculling_increments(imu, True)
+        return np.ascontiguousarray(imu.t, dtype=float), dth, dv
+    raise InvalidInputError(f"imu must be an ImuData (rates) or ImuIncrements; got {type(imu).__name__}")
+
+
+def run_gins(imu: ImuData | ImuIncrements, gnss: GnssData, config: GinsConfig, *, lla0: ArrayLike,
+             vel0: ArrayLike, q0: ArrayLike, imu_errors0: ArrayLike | None = None) -> GinsResult:
+    """Run the GNSS/INS filter forward over the IMU recording.
+
+    Parameters
+    ----------
+    imu : ImuData (rates; coning / sculling applied) or ImuIncrements (Δθ, Δv).
+    gnss : GnssData; fixes outside the IMU span are removed (recorded in ``meta``), none inside is an error.
+    config : GinsConfig.
+    lla0, vel0, q0 : initial position (lat rad, lon rad, h m), NED velocity (m/s) and ``q_nb`` at ``imu.t[0]``.
+    imu_errors0 : (12,) initial gyro bias, accel bias, gyro scale, accel scale (default zeros).
+
+    Returns
+    -------
+    GinsResult
+    """
+    t, dth, dv = _increments(imu)
+    if t.size < 2:
+        raise InvalidInputError("run_gins needs at least 2 IMU samples")
+    g = gnss.within(float(t[0]), float(t[-1]))
+    g = g.select(g.t > t[0], "at the first IMU sample (the initial state stands for it)")
+    lla = np.asarray(lla0, dtype=float)
+    if lla.shape != (3,) or abs(lla[0]) >= np.pi / 2:
+        raise InvalidInputError(f"lla0 must be (lat rad, lon rad, h m) with |lat| < pi/2; got {lla0!r}")
+    v = np.asarray(vel0, dtype=float)
+    if v.shape != (3,):
+        raise ShapeError(f"vel0 must be a 3-vector (NED m/s); got {vel0!r}")
+    q = quat_normalize(np.asarray(q0, dtype=float))
+    err = np.zeros(_k.NE) if imu_errors0 is None else np.asarray(imu_errors0, dtype=float).copy()
+    if err.shape != (_k.NE,):
+        raise ShapeError(f"imu_errors0 must have 12 values (bg, ba, sg, sa); got shape {err.shape}")
+    c = config
+    nx = c.n_states
+    P0 = np.diag(np.concatenate([c.init_pos_std, c.init_vel_std, c.init_att_std, c.init_gyro_bias_std,
+                                 c.init_accel_bias_std, c.init_gyro_scale_std, c.init_accel_scale_std])[:nx] ** 2)
+    fs = 1.0 / float(np.median(np.diff(t)))
+    prm = np.zeros(_k.NK)
+    prm[_k.K_OMEGA_E] = OMEGA_E
+    prm[_k.K_ARW:_k.K_ARW + 3] = c.arw
+    prm[_k.K_VRW:_k.K_VRW + 3] = c.vrw
+    for kq, kt, sd in ((_k.K_BG_Q, _k.K_BG_T, c.gyro_bias_std), (_k.K_BA_Q, _k.K_BA_T, c.accel_bias_std),
+                       (_k.K_SG_Q, _k.K_SG_T, c.gyro_scale_std), (_k.K_SA_Q, _k.K_SA_T, c.accel_scale_std)):
+        prm[kq:kq + 3] = 2.0 * sd**2 / c.corr_time
+        prm[kt:kt + 3] = c.corr_time
+    prm[_k.K_LEVER:_k.K_LEVER + 3] = c.lever_arm
+    big = 1e300
+    prm[_k.K_GATE_POS] = chi2.ppf(1 - c.gate_alpha, 3) if c.gate_alpha > 0 else big
+    prm[_k.K_GATE_VEL] = prm[_k.K_GATE_POS]
+    prm[_k.K_COV_STEP] = max(1, int(round(c.cov_interval_s * fs)))
+    use_vel = c.use_gnss_velocity and g.vel_ned is not None
+    prm[_k.K_USE_VEL] = 1.0 if use_vel else 0.0
+    n = t.size
+    ng = g.n
+    g_vel = g.vel_ned if use_vel else np.zeros((ng, 3))
+    g_rv = g.vel_std**2 if use_vel else np.ones((ng, 3))
+    q_out = np.empty((n, 4))
+    v_out = np.empty((n, 3))
+    lla_out = np.empty((n, 3))
+    err_out = np.empty((n, _k.NE))
+    mmax = n // int(prm[_k.K_COV_STEP]) + 3
+    cov_t = np.empty(mmax)
+    cov_diag = np.empty((mmax, nx))
+    cov_nav = np.empty((mmax, 9, 9))
+    nis = np.full((ng, 2), np.nan)
+    acc = np.zeros((ng, 2))
+    m = _k.gins_run(t, dth, dv, np.ascontiguousarray(g.t), np.ascontiguousarray(g.lla), g.pos_std**2,
+                    np.ascontiguousarray(g_vel), np.ascontiguousarray(g_rv), q, v, lla, err, P0, prm,
+                    q_out, v_out, lla_out, err_out, cov_t, cov_diag, cov_nav, nis, acc)
+    meta = {"removed_gnss": g.meta.get("removed", []), "n_states": nx, "gate_threshold": float(prm[_k.K_GATE_POS]),
+            "cov_step_samples": int(prm[_k.K_COV_STEP]), "gnss_velocity": bool(use_vel)}
+    return GinsResult(t, lla_out, v_out, q_out, err_out[:, 0:3], err_out[:, 3:6], err_out[:, 6:9], err_out[:, 9:12],
+                      cov_t[:m], cov_diag[:m], cov_nav[:m], g.t.copy(), nis, acc > 0.5, c, meta)
