@@ -40,6 +40,7 @@ from imunav.ins.strapdown import coning_sculling_increments
 from imunav.io.gnss import GnssData
 from imunav.io.kfgins import ImuIncrements, KfGinsConfig
 from imunav.rotation import euler_from_quat, quat_normalize
+from imunav.sim import presets
 from imunav.timeseries import ImuData
 
 __all__ = ["GinsConfig", "GinsResult", "run_gins", "STATE_NAMES"]
@@ -162,8 +163,6 @@ class GinsConfig:
         -------
         GinsConfig
         """
-        from imunav.sim import presets  # sim sits beside ins; only this convenience constructor needs it
-
         m = presets.get(name)
 
         def bias(te):
