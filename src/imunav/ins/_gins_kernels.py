@@ -56,7 +56,8 @@ E_BG = 0
 E_BA = 3
 E_SG = 6
 E_SA = 9
-NE = 12
+E_ODO = 12  # odometer scale factor
+NE = 13
 
 # parameter vector layout (built by imunav.ins.gins._params)
 K_OMEGA_E = 0
@@ -75,7 +76,16 @@ K_GATE_POS = 34
 K_GATE_VEL = 35
 K_COV_STEP = 36  # samples between covariance propagations
 K_USE_VEL = 37  # 1.0: use GNSS velocity when given
-NK = 38
+K_NB = 38  # 15 or 21: navigation + IMU-error states before the optional odometer scale state
+K_I_ODO = 39  # index of the odometer scale state, -1 without odometer
+K_ODO_Q = 40  # 2 σ² / T of the odometer scale
+K_ODO_T = 41
+K_ODO_LEVER = 42  # 3: wheel contact point (odometer and NHC), body FRD, m
+K_NHC_R = 45  # NHC variance (m/s)², 0: no NHC
+K_GATE_VEH = 46  # χ² gate of the vehicle update (3 rows; 2 and 1 rows scaled in the wrapper)
+K_GATE_VEH2 = 47
+K_GATE_VEH1 = 48
+NK = 49
 
 # NIS record columns
 N_POS = 0
@@ -134,7 +144,11 @@ def _system(q, v, lla, fb, wb, prm, nx, F, Q):
         F[I_BA + j, I_BA + j] = -1.0 / prm[K_BA_T + j]
         Q[I_BG + j, I_BG + j] = prm[K_BG_Q + j]
         Q[I_BA + j, I_BA + j] = prm[K_BA_Q + j]
-    if nx == NX21:
+    io = int(prm[K_I_ODO])
+    if io >= 0:
+        F[io, io] = -1.0 / prm[K_ODO_T]
+        Q[io, io] = prm[K_ODO_Q]
+    if prm[K_NB] == NX21:
         _mat3(C, F, I_VEL, I_SA, -1.0, fb)
         _mat3(C, F, I_ATT, I_SG, -1.0, wb)
         for j in range(3):
@@ -155,7 +169,7 @@ def _system(q, v, lla, fb, wb, prm, nx, F, Q):
 
 
 @njit(cache=True)
-def _inject(dx, q, v, lla, err, nx):
+def _inject(dx, q, v, lla, err, nx, prm):
     """Feed the error estimate back into the nominal state and zero it."""
     inject_position_lla(lla, dx, I_POS)
     inject_additive(v, dx, I_VEL, 3)
@@ -166,7 +180,10 @@ def _inject(dx, q, v, lla, err, nx):
     ba = err[E_BA:E_BA + 3]
     inject_additive(bg, dx, I_BG, 3)
     inject_additive(ba, dx, I_BA, 3)
-    if nx == NX21:
+    io = int(prm[K_I_ODO])
+    if io >= 0:
+        err[E_ODO] += dx[io]
+    if prm[K_NB] == NX21:
         sg = err[E_SG:E_SG + 3]
         sa = err[E_SA:E_SA + 3]
         inject_additive(sg, dx, I_SG, 3)
@@ -199,7 +216,7 @@ def _gnss_update(P, dx, q, v, lla, err, wb, zp, rp, zv, rv, use_vel, prm, nx, ni
     acc_out[N_POS] = 1.0 if ok else 0.0
     if ok:
         joseph_update(P, dx, H, R, nu, innov, S)
-        _inject(dx, q, v, lla, err, nx)
+        _inject(dx, q, v, lla, err, nx, prm)
     if not use_vel:
         return
     C = dcm_from_quat_1(q)
@@ -222,7 +239,7 @@ def _gnss_update(P, dx, q, v, lla, err, wb, zp, rp, zv, rv, use_vel, prm, nx, ni
     for i in range(3):
         for j in range(3):
             H[i, I_BG + j] = CL[i, j]
-            if nx == NX21:
+            if prm[K_NB] == NX21:
                 H[i, I_SG + j] = CL[i, j] * wb[j]
     S0 = H @ P @ H.T + R
     ok, d = chi2_gate(nu, S0, prm[K_GATE_VEL])
@@ -230,7 +247,75 @@ def _gnss_update(P, dx, q, v, lla, err, wb, zp, rp, zv, rv, use_vel, prm, nx, ni
     acc_out[N_VEL] = 1.0 if ok else 0.0
     if ok:
         joseph_update(P, dx, H, R, nu, innov, S)
-        _inject(dx, q, v, lla, err, nx)
+        _inject(dx, q, v, lla, err, nx, prm)
+
+
+@njit(cache=True)
+def _vehicle_update(P, dx, q, v, lla, err, wb, z_odo, r_odo, prm, nx, out):
+    """Odometer (forward wheel speed, scale-factor state) and non-holonomic constraint (zero lateral and vertical
+    velocity of the wheel point) as one update of up to 3 rows; ``out`` receives (NIS, accepted, rows).
+
+    Wheel-point body velocity ``v_w = Ĉᵀ v + ω × l``; with ``C = exp([φ×]) Ĉ``:
+    ``∂v_w/∂δv = Ĉᵀ``, ``∂v_w/∂φ = Ĉᵀ [v×]``, ``∂v_w/∂δb_g = [l×]``, ``∂v_w/∂δs_g = [l×] diag(ω)``;
+    the odometer reads ``(1 + k) v_w,x`` (Groves 2013, §16.3; Niu et al. 2007 for the NHC).
+    """
+    use_odo = not math.isnan(z_odo)
+    use_nhc = prm[K_NHC_R] > 0.0
+    m = (1 if use_odo else 0) + (2 if use_nhc else 0)
+    if m == 0:
+        return
+    C = dcm_from_quat_1(q)
+    lever = prm[K_ODO_LEVER:K_ODO_LEVER + 3]
+    vb = C.T @ v
+    vw = vb + np.array([wb[1] * lever[2] - wb[2] * lever[1], wb[2] * lever[0] - wb[0] * lever[2],
+                        wb[0] * lever[1] - wb[1] * lever[0]])
+    Hv = np.zeros((3, nx))
+    for i in range(3):
+        for j in range(3):
+            Hv[i, I_VEL + j] = C[j, i]
+    Vx = np.zeros((3, 3))
+    _skew(v, Vx, 0, 0, 1.0)
+    CtV = C.T @ Vx
+    Lx = np.zeros((3, 3))
+    _skew(lever, Lx, 0, 0, 1.0)
+    for i in range(3):
+        for j in range(3):
+            Hv[i, I_ATT + j] = CtV[i, j]
+            Hv[i, I_BG + j] = Lx[i, j]
+            if prm[K_NB] == NX21:
+                Hv[i, I_SG + j] = Lx[i, j] * wb[j]
+    H = np.zeros((m, nx))
+    R = np.zeros((m, m))
+    nu = np.empty(m)
+    r = 0
+    io = int(prm[K_I_ODO])
+    if use_odo:
+        k = err[E_ODO] if io >= 0 else 0.0
+        for j in range(nx):
+            H[r, j] = (1.0 + k) * Hv[0, j]
+        if io >= 0:
+            H[r, io] = vw[0]
+        nu[r] = z_odo - (1.0 + k) * vw[0]
+        R[r, r] = r_odo
+        r += 1
+    if use_nhc:
+        for a in (1, 2):
+            for j in range(nx):
+                H[r, j] = Hv[a, j]
+            nu[r] = -vw[a]
+            R[r, r] = prm[K_NHC_R]
+            r += 1
+    S0 = H @ P @ H.T + R
+    gate = prm[K_GATE_VEH] if m == 3 else (prm[K_GATE_VEH2] if m == 2 else prm[K_GATE_VEH1])
+    ok, d = chi2_gate(nu, S0, gate)
+    out[0] = d
+    out[1] = 1.0 if ok else 0.0
+    out[2] = m
+    if ok:
+        innov = np.empty(m)
+        S = np.empty((m, m))
+        joseph_update(P, dx, H, R, nu, innov, S)
+        _inject(dx, q, v, lla, err, nx, prm)
 
 
 @njit(cache=True)
@@ -240,8 +325,8 @@ def _step(q, v, lla, dth, dv, h, err, nx, om, qn, vn, llan, wb, fb):
     dthc = np.empty(3)
     dvc = np.empty(3)
     for j in range(3):
-        sg = err[E_SG + j] if nx == NX21 else 0.0
-        sa = err[E_SA + j] if nx == NX21 else 0.0
+        sg = err[E_SG + j] if nx >= NX21 else 0.0
+        sa = err[E_SA + j] if nx >= NX21 else 0.0
         dthc[j] = (dth[j] - err[E_BG + j] * h) / (1.0 + sg)
         dvc[j] = (dv[j] - err[E_BA + j] * h) / (1.0 + sa)
         wb[j] = dthc[j] / h
@@ -253,8 +338,8 @@ def _step(q, v, lla, dth, dv, h, err, nx, om, qn, vn, llan, wb, fb):
 
 
 @njit(cache=True)
-def gins_run(t, dth, dv, g_t, g_lla, g_rp, g_vel, g_rv, q0, v0, lla0, err0, P0, prm,
-             q_out, v_out, lla_out, err_out, cov_t, cov_diag, cov_nav, nis, acc):
+def gins_run(t, dth, dv, g_t, g_lla, g_rp, g_vel, g_rv, odo, odo_r, q0, v0, lla0, err0, P0, prm,
+             q_out, v_out, lla_out, err_out, cov_t, cov_diag, cov_nav, nis, acc, veh):
     """Forward filter over all IMU samples (row k: increments over [t[k-1], t[k]]).
 
     Returns the number of covariance records written.
@@ -354,6 +439,10 @@ def gins_run(t, dth, dv, g_t, g_lla, g_rp, g_vel, g_rv, q0, v0, lla0, err0, P0, 
             sw[:] = 0.0
             sf[:] = 0.0
             n_cov = 0
+            if not math.isnan(odo[k]) or prm[K_NHC_R] > 0.0:
+                for j in range(3):
+                    wb[j] = dth[k, j] / (t[k] - t[k - 1]) - err[E_BG + j]
+                _vehicle_update(P, dx, q, v, lla, err, wb, odo[k], odo_r[k], prm, nx, veh[k])
             if m < cov_t.shape[0]:
                 for j in range(nx):
                     cov_diag[m, j] = P[j, j]

@@ -41,6 +41,7 @@ from imunav.io.gnss import GnssData
 from imunav.io.kfgins import ImuIncrements, KfGinsConfig
 from imunav.rotation import euler_from_quat, quat_normalize
 from imunav.sim import presets
+from imunav.sim.vehicle import OdometerData
 from imunav.timeseries import ImuData
 
 __all__ = ["GinsConfig", "GinsResult", "run_gins", "STATE_NAMES"]
@@ -80,6 +81,10 @@ class GinsConfig:
     use_gnss_velocity : use the fixes' velocity when they have one.
     gate_alpha : false-alarm probability of the χ² gates (0 disables the gates).
     cov_interval_s : covariance propagation step, s (the nominal state is integrated every sample).
+    odo_lever_arm : (3,) wheel contact point in body FRD, m (odometer and non-holonomic constraint).
+    odo_noise : odometer speed σ, m/s.  odo_scale_std : σ of the odometer scale-factor state (Gauss–Markov,
+        ``corr_time``).  The odometer and the NHC are applied at the covariance steps.
+    nhc_noise : σ of the non-holonomic constraint (zero lateral and vertical wheel velocity), m/s; None: off.
     """
 
     arw: Any
@@ -100,7 +105,11 @@ class GinsConfig:
     lever_arm: Any = (0.0, 0.0, 0.0)
     use_gnss_velocity: bool = True
     gate_alpha: float = 1e-6
-    cov_interval_s: float = 0.1
+    cov_interval_s: float = 0.2
+    odo_lever_arm: Any = (0.0, 0.0, 0.0)
+    odo_noise: float = 0.05
+    odo_scale_std: float = 0.01
+    nhc_noise: float | None = None
 
     def __post_init__(self) -> None:
         s = object.__setattr__
@@ -112,6 +121,12 @@ class GinsConfig:
             v = getattr(self, name)
             s(self, name, getattr(self, src) if v is None else _v3(v, name, positive=True))
         s(self, "lever_arm", _v3(self.lever_arm, "lever_arm"))
+        s(self, "odo_lever_arm", _v3(self.odo_lever_arm, "odo_lever_arm"))
+        for name in ("odo_noise", "odo_scale_std"):
+            if not (np.isfinite(getattr(self, name)) and getattr(self, name) > 0):
+                raise InvalidInputError(f"GinsConfig.{name} must be > 0; got {getattr(self, name)!r}")
+        if self.nhc_noise is not None and not (np.isfinite(self.nhc_noise) and self.nhc_noise > 0):
+            raise InvalidInputError(f"GinsConfig.nhc_noise must be > 0 m/s or None; got {self.nhc_noise!r}")
         if not (np.isfinite(self.corr_time) and self.corr_time > 0):
             raise InvalidInputError(f"GinsConfig.corr_time must be > 0 s; got {self.corr_time!r}")
         if not (0 <= self.gate_alpha < 1):
@@ -191,9 +206,12 @@ class GinsResult:
     ----------
     t : (N,) IMU times, s.  lla : (N, 3) rad, rad, m.  vel_ned : (N, 3) m/s.  q_nb : (N, 4).
     gyro_bias, accel_bias, gyro_scale, accel_scale : (N, 3) estimated IMU errors (scale zero for 15 states).
+    odo_scale : (N,) estimated odometer scale factor (zero without odometer).
     cov_t : (M,) times of the covariance records.  cov_diag : (M, n) variances of the error states
         (:data:`STATE_NAMES`).  cov_nav : (M, 9, 9) position/velocity/attitude block.
     gnss_t : (G,) fixes used.  nis : (G, 2) NIS of position / velocity (NaN: not used).  accepted : (G, 2).
+    vehicle_t : (V,) times of the odometer / NHC updates.  vehicle_nis : (V,) their NIS, ``vehicle_dof`` (V,)
+        their rows (1-3), ``vehicle_accepted`` (V,).
     config : the configuration.  meta : removed fixes, gates.
     """
 
@@ -205,12 +223,17 @@ class GinsResult:
     accel_bias: Array
     gyro_scale: Array
     accel_scale: Array
+    odo_scale: Array
     cov_t: Array
     cov_diag: Array
     cov_nav: Array
     gnss_t: Array
     nis: Array
     accepted: Array
+    vehicle_t: Array
+    vehicle_nis: Array
+    vehicle_dof: Array
+    vehicle_accepted: Array
     config: GinsConfig
     meta: dict[str, Any] = field(default_factory=dict)
 
@@ -237,7 +260,8 @@ def _increments(imu: ImuData | ImuIncrements) -> tuple[Array, Array, Array]:
 
 
 def run_gins(imu: ImuData | ImuIncrements, gnss: GnssData, config: GinsConfig, *, lla0: ArrayLike,
-             vel0: ArrayLike, q0: ArrayLike, imu_errors0: ArrayLike | None = None) -> GinsResult:
+             vel0: ArrayLike, q0: ArrayLike, imu_errors0: ArrayLike | None = None,
+             odometer: OdometerData | None = None) -> GinsResult:
     """Run the GNSS/INS filter forward over the IMU recording.
 
     Parameters
@@ -247,6 +271,8 @@ def run_gins(imu: ImuData | ImuIncrements, gnss: GnssData, config: GinsConfig, *
     config : GinsConfig.
     lla0, vel0, q0 : initial position (lat rad, lon rad, h m), NED velocity (m/s) and ``q_nb`` at ``imu.t[0]``.
     imu_errors0 : (12,) initial gyro bias, accel bias, gyro scale, accel scale (default zeros).
+    odometer : wheel speeds (:class:`imunav.sim.vehicle.OdometerData`), interpolated to the IMU stamps inside
+        their span; adds the odometer scale-factor state.
 
     Returns
     -------
@@ -264,13 +290,18 @@ def run_gins(imu: ImuData | ImuIncrements, gnss: GnssData, config: GinsConfig, *
     if v.shape != (3,):
         raise ShapeError(f"vel0 must be a 3-vector (NED m/s); got {vel0!r}")
     q = quat_normalize(np.asarray(q0, dtype=float))
-    err = np.zeros(_k.NE) if imu_errors0 is None else np.asarray(imu_errors0, dtype=float).copy()
-    if err.shape != (_k.NE,):
-        raise ShapeError(f"imu_errors0 must have 12 values (bg, ba, sg, sa); got shape {err.shape}")
+    err = np.zeros(_k.NE)
+    if imu_errors0 is not None:
+        e0 = np.asarray(imu_errors0, dtype=float)
+        if e0.shape != (12,):
+            raise ShapeError(f"imu_errors0 must have 12 values (bg, ba, sg, sa); got shape {e0.shape}")
+        err[:12] = e0
     c = config
-    nx = c.n_states
-    P0 = np.diag(np.concatenate([c.init_pos_std, c.init_vel_std, c.init_att_std, c.init_gyro_bias_std,
-                                 c.init_accel_bias_std, c.init_gyro_scale_std, c.init_accel_scale_std])[:nx] ** 2)
+    nb = c.n_states
+    nx = nb + (1 if odometer is not None else 0)
+    sd0 = np.concatenate([c.init_pos_std, c.init_vel_std, c.init_att_std, c.init_gyro_bias_std,
+                          c.init_accel_bias_std, c.init_gyro_scale_std, c.init_accel_scale_std])[:nb]
+    P0 = np.diag(np.concatenate([sd0, [c.odo_scale_std]])[:nx] ** 2)
     fs = 1.0 / float(np.median(np.diff(t)))
     prm = np.zeros(_k.NK)
     prm[_k.K_OMEGA_E] = OMEGA_E
@@ -287,7 +318,28 @@ def run_gins(imu: ImuData | ImuIncrements, gnss: GnssData, config: GinsConfig, *
     prm[_k.K_COV_STEP] = max(1, int(round(c.cov_interval_s * fs)))
     use_vel = c.use_gnss_velocity and g.vel_ned is not None
     prm[_k.K_USE_VEL] = 1.0 if use_vel else 0.0
+    prm[_k.K_NB] = nb
+    prm[_k.K_I_ODO] = nb if odometer is not None else -1
+    prm[_k.K_ODO_Q] = 2.0 * c.odo_scale_std**2 / c.corr_time
+    prm[_k.K_ODO_T] = c.corr_time
+    prm[_k.K_ODO_LEVER:_k.K_ODO_LEVER + 3] = c.odo_lever_arm
+    prm[_k.K_NHC_R] = 0.0 if c.nhc_noise is None else c.nhc_noise**2
+    for key, dof in ((_k.K_GATE_VEH, 3), (_k.K_GATE_VEH2, 2), (_k.K_GATE_VEH1, 1)):
+        prm[key] = chi2.ppf(1 - c.gate_alpha, dof) if c.gate_alpha > 0 else big
     n = t.size
+    odo = np.full(n, np.nan)
+    if odometer is not None:
+        if not isinstance(odometer, OdometerData):
+            raise InvalidInputError(f"odometer must be an OdometerData; got {type(odometer).__name__}")
+        ot = np.asarray(odometer.t, dtype=float)
+        if ot.size < 2 or np.any(np.diff(ot) <= 0):
+            raise InvalidInputError("odometer time stamps must be strictly increasing (at least 2 samples)")
+        inside = (t >= ot[0]) & (t <= ot[-1])
+        if not inside.any():
+            raise InvalidInputError(f"odometer time {ot[0]:.3f}..{ot[-1]:.3f} s lies outside the IMU span")
+        odo[inside] = np.interp(t[inside], ot, np.asarray(odometer.speed, dtype=float))
+    odo_r = np.full(n, c.odo_noise**2)
+    veh = np.full((n, 3), np.nan)
     ng = g.n
     g_vel = g.vel_ned if use_vel else np.zeros((ng, 3))
     g_rv = g.vel_std**2 if use_vel else np.ones((ng, 3))
@@ -302,9 +354,12 @@ def run_gins(imu: ImuData | ImuIncrements, gnss: GnssData, config: GinsConfig, *
     nis = np.full((ng, 2), np.nan)
     acc = np.zeros((ng, 2))
     m = _k.gins_run(t, dth, dv, np.ascontiguousarray(g.t), np.ascontiguousarray(g.lla), g.pos_std**2,
-                    np.ascontiguousarray(g_vel), np.ascontiguousarray(g_rv), q, v, lla, err, P0, prm,
-                    q_out, v_out, lla_out, err_out, cov_t, cov_diag, cov_nav, nis, acc)
+                    np.ascontiguousarray(g_vel), np.ascontiguousarray(g_rv), odo, odo_r, q, v, lla, err, P0, prm,
+                    q_out, v_out, lla_out, err_out, cov_t, cov_diag, cov_nav, nis, acc, veh)
+    used = ~np.isnan(veh[:, 0])
     meta = {"removed_gnss": g.meta.get("removed", []), "n_states": nx, "gate_threshold": float(prm[_k.K_GATE_POS]),
-            "cov_step_samples": int(prm[_k.K_COV_STEP]), "gnss_velocity": bool(use_vel)}
+            "cov_step_samples": int(prm[_k.K_COV_STEP]), "gnss_velocity": bool(use_vel),
+            "odometer": odometer is not None, "nhc": c.nhc_noise is not None}
     return GinsResult(t, lla_out, v_out, q_out, err_out[:, 0:3], err_out[:, 3:6], err_out[:, 6:9], err_out[:, 9:12],
-                      cov_t[:m], cov_diag[:m], cov_nav[:m], g.t.copy(), nis, acc > 0.5, c, meta)
+                      err_out[:, _k.E_ODO], cov_t[:m], cov_diag[:m], cov_nav[:m], g.t.copy(), nis, acc > 0.5,
+                      t[used], veh[used, 0], veh[used, 2].astype(int), veh[used, 1] > 0.5, c, meta)

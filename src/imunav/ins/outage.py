@@ -105,7 +105,7 @@ def outage_drift(res: GinsResult, truth: Any, outages: list[tuple[float, float]]
 
 def outage_test(imu: ImuData, gnss: GnssData, config: GinsConfig, truth: Any, *, lla0: Any, vel0: Any, q0: Any,
                 converge_s: float = 300.0, every_s: float = 180.0, length_s: float = 60.0,
-                shifts_s: tuple[float, ...] = (0.0, 60.0, 120.0)) -> OutageReport:
+                shifts_s: tuple[float, ...] = (0.0, 60.0, 120.0), odometer: Any = None) -> OutageReport:
     """The KF-GINS outage protocol: one run per shift with the scheduled outages removed from ``gnss``.
 
     Parameters
@@ -115,6 +115,7 @@ def outage_test(imu: ImuData, gnss: GnssData, config: GinsConfig, truth: Any, *,
     converge_s : time after the first IMU sample before the first outage, s.
     every_s, length_s : outage period and length, s.
     shifts_s : shifts of the first outage, s.
+    odometer : wheel speeds for :func:`~imunav.ins.gins.run_gins` (kept through the outages), or None.
 
     Returns
     -------
@@ -131,7 +132,8 @@ def outage_test(imu: ImuData, gnss: GnssData, config: GinsConfig, truth: Any, *,
         keep = np.ones(gnss.n, dtype=bool)
         for s, d in sched:
             keep &= ~((gnss.t >= s) & (gnss.t < s + d))
-        res = run_gins(imu, gnss.select(keep, "outage protocol"), config, lla0=lla0, vel0=vel0, q0=q0)
+        res = run_gins(imu, gnss.select(keep, "outage protocol"), config, lla0=lla0, vel0=vel0, q0=q0,
+                       odometer=odometer)
         reports.append(outage_drift(res, truth, sched))
     return OutageReport(
         [o for r in reports for o in r.outages],
