@@ -98,3 +98,23 @@ def test_bad_inputs_are_refused(drive):
         GinsConfig.from_preset("mems_adis16465", init_pos_std=0.0)
     with pytest.raises(InvalidInputError, match="lat"):
         run_gins(imu, g, cfg, lla0=(30.0, 114.0, 0.0), vel0=(0, 0, 0), q0=(1, 0, 0, 0))
+
+
+def test_rts_smoother_bridges_an_outage(drive):
+    """A 60 s outage on the MEMS drive: the RTS pass shrinks the maximum horizontal error inside it at least 5x
+    (measured 8.7 m -> 0.43 m), every smoothed position error lies inside its smoothed 3 sigma, and at the
+    last epoch the smoothed and filtered solutions coincide (nothing after it to smooth with)."""
+    truth, imu = drive
+    g = simulate_gnss(truth, rng=7, outages=[(420.0, 60.0)])
+    res = run_gins(imu, g, GinsConfig.from_preset("mems_adis16465"), **_start(truth), smoother=True)
+    s = res.smoothed
+    m = (truth.t >= 420) & (truth.t <= 480)
+    hf = _hpos_err(truth, res)[m].max()
+    hs = np.hypot(*(earth.lla_to_ned(s.lla, truth.pos_lla[0]) - earth.lla_to_ned(truth.pos_lla, truth.pos_lla[0]))[m, :2].T).max()
+    assert hs < hf / 5, (hf, hs)
+    idx = np.searchsorted(truth.t, s.cov_t)
+    e = (earth.lla_to_ned(s.lla, truth.pos_lla[0]) - earth.lla_to_ned(truth.pos_lla, truth.pos_lla[0]))[idx]
+    sd = np.sqrt(np.einsum("nii->ni", s.cov_nav[:, :3, :3]))
+    assert np.mean(np.abs(e) <= 3 * sd) >= 0.99
+    np.testing.assert_allclose(s.lla[-1], res.lla[-1], rtol=0, atol=1e-12)
+    assert res.smoothed is not None and run_gins(imu, g, res.config, **_start(truth)).smoothed is None

@@ -169,7 +169,7 @@ def _system(q, v, lla, fb, wb, prm, nx, F, Q):
 
 
 @njit(cache=True)
-def _inject(dx, q, v, lla, err, nx, prm):
+def _inject(dx, q, v, lla, err, nx, prm, acc_dx):
     """Feed the error estimate back into the nominal state and zero it."""
     inject_position_lla(lla, dx, I_POS)
     inject_additive(v, dx, I_VEL, 3)
@@ -188,11 +188,13 @@ def _inject(dx, q, v, lla, err, nx, prm):
         sa = err[E_SA:E_SA + 3]
         inject_additive(sg, dx, I_SG, 3)
         inject_additive(sa, dx, I_SA, 3)
+    for j in range(nx):
+        acc_dx[j] += dx[j]
     dx[:] = 0.0
 
 
 @njit(cache=True)
-def _gnss_update(P, dx, q, v, lla, err, wb, zp, rp, zv, rv, use_vel, prm, nx, nis_out, acc_out):
+def _gnss_update(P, dx, q, v, lla, err, wb, zp, rp, zv, rv, use_vel, prm, nx, nis_out, acc_out, acc_dx):
     """GNSS position (and velocity) update with the antenna lever arm; χ² gates; NIS recorded."""
     C = dcm_from_quat_1(q)
     lever = prm[K_LEVER:K_LEVER + 3]
@@ -216,7 +218,7 @@ def _gnss_update(P, dx, q, v, lla, err, wb, zp, rp, zv, rv, use_vel, prm, nx, ni
     acc_out[N_POS] = 1.0 if ok else 0.0
     if ok:
         joseph_update(P, dx, H, R, nu, innov, S)
-        _inject(dx, q, v, lla, err, nx, prm)
+        _inject(dx, q, v, lla, err, nx, prm, acc_dx)
     if not use_vel:
         return
     C = dcm_from_quat_1(q)
@@ -247,11 +249,11 @@ def _gnss_update(P, dx, q, v, lla, err, wb, zp, rp, zv, rv, use_vel, prm, nx, ni
     acc_out[N_VEL] = 1.0 if ok else 0.0
     if ok:
         joseph_update(P, dx, H, R, nu, innov, S)
-        _inject(dx, q, v, lla, err, nx, prm)
+        _inject(dx, q, v, lla, err, nx, prm, acc_dx)
 
 
 @njit(cache=True)
-def _vehicle_update(P, dx, q, v, lla, err, wb, z_odo, r_odo, prm, nx, out):
+def _vehicle_update(P, dx, q, v, lla, err, wb, z_odo, r_odo, prm, nx, out, acc_dx):
     """Odometer (forward wheel speed, scale-factor state) and non-holonomic constraint (zero lateral and vertical
     velocity of the wheel point) as one update of up to 3 rows; ``out`` receives (NIS, accepted, rows).
 
@@ -315,7 +317,7 @@ def _vehicle_update(P, dx, q, v, lla, err, wb, z_odo, r_odo, prm, nx, out):
         innov = np.empty(m)
         S = np.empty((m, m))
         joseph_update(P, dx, H, R, nu, innov, S)
-        _inject(dx, q, v, lla, err, nx, prm)
+        _inject(dx, q, v, lla, err, nx, prm, acc_dx)
 
 
 @njit(cache=True)
@@ -338,11 +340,31 @@ def _step(q, v, lla, dth, dv, h, err, nx, om, qn, vn, llan, wb, fb):
 
 
 @njit(cache=True)
+def _rec_post(r, tr, P, q, v, lla, acc_dx, rec_t, rec_ppost, rec_inj, rec_state):
+    """Smoother record of epoch r after its updates: time, posterior P, injected error (added), nominal state."""
+    rec_t[r] = tr
+    rec_ppost[r] = P
+    for j in range(acc_dx.shape[0]):
+        rec_inj[r, j] += acc_dx[j]
+        acc_dx[j] = 0.0
+    for j in range(3):
+        rec_state[r, j] = lla[j]
+        rec_state[r, 3 + j] = v[j]
+    for j in range(4):
+        rec_state[r, 6 + j] = q[j]
+
+
+@njit(cache=True)
 def gins_run(t, dth, dv, g_t, g_lla, g_rp, g_vel, g_rv, odo, odo_r, q0, v0, lla0, err0, P0, prm,
-             q_out, v_out, lla_out, err_out, cov_t, cov_diag, cov_nav, nis, acc, veh):
+             q_out, v_out, lla_out, err_out, cov_t, cov_diag, cov_nav, nis, acc, veh,
+             rec_t, rec_phi, rec_ppri, rec_ppost, rec_inj, rec_state):
     """Forward filter over all IMU samples (row k: increments over [t[k-1], t[k]]).
 
-    Returns the number of covariance records written.
+    With ``rec_*`` of length R > 0 it also records, per covariance epoch r, what the RTS smoother needs: the
+    transition Φ_r into r, the prior and posterior covariances, the error injected at r and the posterior nominal
+    state (lat, lon, h, v, q).
+
+    Returns the number of covariance records written and the number of smoother epochs recorded.
     """
     n = t.shape[0]
     nx = P0.shape[0]
@@ -386,6 +408,11 @@ def gins_run(t, dth, dv, g_t, g_lla, g_rp, g_vel, g_rv, odo, odo_r, q0, v0, lla0
             cov_nav[m, a, b] = P[a, b]
     cov_t[m] = t[0]
     m += 1
+    acc_dx = np.zeros(nx)
+    rec = rec_t.shape[0] > 0
+    r = 0
+    if rec:
+        _rec_post(r, t[0], P, q, v, lla, acc_dx, rec_t, rec_ppost, rec_inj, rec_state)
     for k in range(1, n):
         t_cur = t[k - 1]
         for j in range(3):
@@ -412,13 +439,19 @@ def gins_run(t, dth, dv, g_t, g_lla, g_rp, g_vel, g_rv, odo, odo_r, q0, v0, lla0
                     wb[j] = sw[j] / dtc
                     fb[j] = sf[j] / dtc
                 _system(q, v, lla, fb, wb, prm, nx, F, Q)
-                propagate_cov_series(P, F, Q, dtc)
+                Phi = propagate_cov_series(P, F, Q, dtc)
                 t_cov = t_cur
                 sw[:] = 0.0
                 sf[:] = 0.0
                 n_cov = 0
+                if rec and r + 1 < rec_t.shape[0]:
+                    r += 1
+                    rec_phi[r] = Phi
+                    rec_ppri[r] = P
             _gnss_update(P, dx, q, v, lla, err, wb, g_lla[gi], g_rp[gi], g_vel[gi], g_rv[gi], use_vel, prm, nx,
-                         nis[gi], acc[gi])
+                         nis[gi], acc[gi], acc_dx)
+            if rec:
+                _rec_post(r, t_cur, P, q, v, lla, acc_dx, rec_t, rec_ppost, rec_inj, rec_state)
             gi += 1
         hh = t[k] - t_cur
         if hh > 0.0:
@@ -434,7 +467,11 @@ def gins_run(t, dth, dv, g_t, g_lla, g_rp, g_vel, g_rv, odo, odo_r, q0, v0, lla0
                     wb[j] = sw[j] / dtc
                     fb[j] = sf[j] / dtc
                 _system(q, v, lla, fb, wb, prm, nx, F, Q)
-                propagate_cov_series(P, F, Q, dtc)
+                Phi = propagate_cov_series(P, F, Q, dtc)
+                if rec and r + 1 < rec_t.shape[0]:
+                    r += 1
+                    rec_phi[r] = Phi
+                    rec_ppri[r] = P
             t_cov = t[k]
             sw[:] = 0.0
             sf[:] = 0.0
@@ -442,7 +479,9 @@ def gins_run(t, dth, dv, g_t, g_lla, g_rp, g_vel, g_rv, odo, odo_r, q0, v0, lla0
             if not math.isnan(odo[k]) or prm[K_NHC_R] > 0.0:
                 for j in range(3):
                     wb[j] = dth[k, j] / (t[k] - t[k - 1]) - err[E_BG + j]
-                _vehicle_update(P, dx, q, v, lla, err, wb, odo[k], odo_r[k], prm, nx, veh[k])
+                _vehicle_update(P, dx, q, v, lla, err, wb, odo[k], odo_r[k], prm, nx, veh[k], acc_dx)
+            if rec:
+                _rec_post(r, t[k], P, q, v, lla, acc_dx, rec_t, rec_ppost, rec_inj, rec_state)
             if m < cov_t.shape[0]:
                 for j in range(nx):
                     cov_diag[m, j] = P[j, j]
@@ -455,4 +494,4 @@ def gins_run(t, dth, dv, g_t, g_lla, g_rp, g_vel, g_rv, odo, odo_r, q0, v0, lla0
         v_out[k] = v
         lla_out[k] = lla
         err_out[k] = err
-    return m
+    return m, (r + 1 if rec else 0)

@@ -34,17 +34,18 @@ from numpy.typing import ArrayLike, NDArray
 from scipy.stats import chi2
 
 from imunav.earth import OMEGA_E
+from imunav.earth import radii as earth_radii
 from imunav.errors import InvalidInputError, ShapeError
 from imunav.ins import _gins_kernels as _k
 from imunav.ins.strapdown import coning_sculling_increments
 from imunav.io.gnss import GnssData
 from imunav.io.kfgins import ImuIncrements, KfGinsConfig
-from imunav.rotation import euler_from_quat, quat_normalize
+from imunav.rotation import euler_from_quat, quat_from_rotvec, quat_multiply, quat_normalize
 from imunav.sim import presets
 from imunav.sim.vehicle import OdometerData
 from imunav.timeseries import ImuData
 
-__all__ = ["GinsConfig", "GinsResult", "run_gins", "STATE_NAMES"]
+__all__ = ["GinsConfig", "GinsResult", "SmoothedTrack", "run_gins", "STATE_NAMES"]
 
 Array = NDArray[np.float64]
 
@@ -236,10 +237,61 @@ class GinsResult:
     vehicle_accepted: Array
     config: GinsConfig
     meta: dict[str, Any] = field(default_factory=dict)
+    smoothed: SmoothedTrack | None = None
 
     def euler(self) -> Array:
         """ZYX Euler angles (roll, pitch, yaw), rad."""
         return euler_from_quat(self.q_nb)
+
+
+@dataclass(frozen=True)
+class SmoothedTrack:
+    """RTS-smoothed navigation (SI): per IMU sample ``t``, ``lla``, ``vel_ned``, ``q_nb``; per smoother epoch
+    ``cov_t`` and the smoothed position/velocity/attitude covariance ``cov_nav`` (M, 9, 9)."""
+
+    t: Array
+    lla: Array
+    vel_ned: Array
+    q_nb: Array
+    cov_t: Array
+    cov_nav: Array
+
+    def euler(self) -> Array:
+        """ZYX Euler angles (roll, pitch, yaw), rad."""
+        return euler_from_quat(self.q_nb)
+
+
+def _rts(t: Array, lla: Array, vel: Array, q: Array, rec_t: Array, phi: Array, ppri: Array, ppost: Array,
+         inj: Array, state: Array) -> SmoothedTrack:
+    """Rauch–Tung–Striebel backward pass over the error state of the feedback filter (Rauch, Tung & Striebel
+    1965; Groves 2013, §3.4.2), then the smoothed corrections applied to the nominal trajectory.
+
+    With the posterior error at every epoch reset to zero by the feedback, the smoothed error ``δs_r`` (true minus
+    posterior nominal at r) obeys ``δs_r = A_r (δs_{r+1} + δx_inj,{r+1})``, ``A_r = P_r⁺ Φ_{r+1}ᵀ (P_{r+1}⁻)⁻¹``,
+    ``P_r^s = P_r⁺ + A_r (P_{r+1}^s − P_{r+1}⁻) A_rᵀ``; between epochs the correction is interpolated in time
+    from ``δs_r`` (after r) to ``δs_{r+1} + δx_inj,{r+1}`` (before the injection at r+1).
+    """
+    M, n = inj.shape
+    ds = np.zeros((M, n))
+    Ps = np.empty((M, 9, 9))
+    Pn = ppost[M - 1].copy()
+    Ps[M - 1] = Pn[:9, :9]
+    for r in range(M - 2, -1, -1):
+        A = np.linalg.solve(ppri[r + 1].T, (ppost[r] @ phi[r + 1].T).T).T
+        ds[r] = A @ (ds[r + 1] + inj[r + 1])
+        Pn = ppost[r] + A @ (Pn - ppri[r + 1]) @ A.T
+        Ps[r] = Pn[:9, :9]
+    before = ds + inj  # relative to the prior nominal at each epoch (before its injection)
+    i = np.clip(np.searchsorted(rec_t, t, side="right") - 1, 0, M - 1)
+    j = np.minimum(i + 1, M - 1)
+    span = rec_t[j] - rec_t[i]
+    w = np.where(span > 0, (t - rec_t[i]) / np.where(span > 0, span, 1.0), 0.0)[:, None]
+    corr = (1 - w) * ds[i] + w * before[j]
+    rn, re = earth_radii(lla[:, 0])
+    out_lla = lla + np.column_stack([corr[:, 0] / (rn + lla[:, 2]), corr[:, 1] / ((re + lla[:, 2]) * np.cos(lla[:, 0])),
+                                     -corr[:, 2]])
+    out_q = quat_multiply(quat_from_rotvec(corr[:, 6:9]), q)
+    return SmoothedTrack(t, out_lla, vel + corr[:, 3:6], quat_normalize(out_q), rec_t.copy(), Ps)
 
 
 def _increments(imu: ImuData | ImuIncrements) -> tuple[Array, Array, Array]:
@@ -261,7 +313,7 @@ def _increments(imu: ImuData | ImuIncrements) -> tuple[Array, Array, Array]:
 
 def run_gins(imu: ImuData | ImuIncrements, gnss: GnssData, config: GinsConfig, *, lla0: ArrayLike,
              vel0: ArrayLike, q0: ArrayLike, imu_errors0: ArrayLike | None = None,
-             odometer: OdometerData | None = None) -> GinsResult:
+             odometer: OdometerData | None = None, smoother: bool = False) -> GinsResult:
     """Run the GNSS/INS filter forward over the IMU recording.
 
     Parameters
@@ -273,6 +325,8 @@ def run_gins(imu: ImuData | ImuIncrements, gnss: GnssData, config: GinsConfig, *
     imu_errors0 : (12,) initial gyro bias, accel bias, gyro scale, accel scale (default zeros).
     odometer : wheel speeds (:class:`imunav.sim.vehicle.OdometerData`), interpolated to the IMU stamps inside
         their span; adds the odometer scale-factor state.
+    smoother : also run the RTS smoother (``result.smoothed``); keeps three n x n matrices per covariance epoch
+        (about 190 MB per hour at 200 Hz with 21 states and the default 0.2 s step).
 
     Returns
     -------
@@ -340,6 +394,13 @@ def run_gins(imu: ImuData | ImuIncrements, gnss: GnssData, config: GinsConfig, *
         odo[inside] = np.interp(t[inside], ot, np.asarray(odometer.speed, dtype=float))
     odo_r = np.full(n, c.odo_noise**2)
     veh = np.full((n, 3), np.nan)
+    nrec = (n // int(prm[_k.K_COV_STEP]) + g.n + 3) if smoother else 0
+    rec_t = np.zeros(nrec)
+    rec_phi = np.zeros((nrec, nx, nx))
+    rec_ppri = np.zeros((nrec, nx, nx))
+    rec_ppost = np.zeros((nrec, nx, nx))
+    rec_inj = np.zeros((nrec, nx))
+    rec_state = np.zeros((nrec, 10))
     ng = g.n
     g_vel = g.vel_ned if use_vel else np.zeros((ng, 3))
     g_rv = g.vel_std**2 if use_vel else np.ones((ng, 3))
@@ -353,13 +414,18 @@ def run_gins(imu: ImuData | ImuIncrements, gnss: GnssData, config: GinsConfig, *
     cov_nav = np.empty((mmax, 9, 9))
     nis = np.full((ng, 2), np.nan)
     acc = np.zeros((ng, 2))
-    m = _k.gins_run(t, dth, dv, np.ascontiguousarray(g.t), np.ascontiguousarray(g.lla), g.pos_std**2,
+    m, r = _k.gins_run(t, dth, dv, np.ascontiguousarray(g.t), np.ascontiguousarray(g.lla), g.pos_std**2,
                     np.ascontiguousarray(g_vel), np.ascontiguousarray(g_rv), odo, odo_r, q, v, lla, err, P0, prm,
-                    q_out, v_out, lla_out, err_out, cov_t, cov_diag, cov_nav, nis, acc, veh)
+                    q_out, v_out, lla_out, err_out, cov_t, cov_diag, cov_nav, nis, acc, veh,
+                       rec_t, rec_phi, rec_ppri, rec_ppost, rec_inj, rec_state)
+    smoothed = None
+    if smoother:
+        smoothed = _rts(t, lla_out, v_out, q_out, rec_t[:r], rec_phi[:r], rec_ppri[:r], rec_ppost[:r], rec_inj[:r],
+                        rec_state[:r])
     used = ~np.isnan(veh[:, 0])
     meta = {"removed_gnss": g.meta.get("removed", []), "n_states": nx, "gate_threshold": float(prm[_k.K_GATE_POS]),
             "cov_step_samples": int(prm[_k.K_COV_STEP]), "gnss_velocity": bool(use_vel),
             "odometer": odometer is not None, "nhc": c.nhc_noise is not None}
     return GinsResult(t, lla_out, v_out, q_out, err_out[:, 0:3], err_out[:, 3:6], err_out[:, 6:9], err_out[:, 9:12],
                       err_out[:, _k.E_ODO], cov_t[:m], cov_diag[:m], cov_nav[:m], g.t.copy(), nis, acc > 0.5,
-                      t[used], veh[used, 0], veh[used, 2].astype(int), veh[used, 1] > 0.5, c, meta)
+                      t[used], veh[used, 0], veh[used, 2].astype(int), veh[used, 1] > 0.5, c, meta, smoothed)
