@@ -36,9 +36,11 @@ from imunav.filters._core import (
     inject_additive,
     inject_attitude_global,
     joseph_update,
+    joseph_update_rows,
     strapdown_step_ned,
 )
 from imunav.filters._core_gins import inject_position_lla, propagate_cov_series
+from imunav.filters._core_models import height, zero_velocity
 
 # error-state layout
 I_POS = 0  # δr N E D, m
@@ -85,7 +87,16 @@ K_NHC_R = 45  # NHC variance (m/s)², 0: no NHC
 K_GATE_VEH = 46  # χ² gate of the vehicle update (3 rows; 2 and 1 rows scaled in the wrapper)
 K_GATE_VEH2 = 47
 K_GATE_VEH1 = 48
-NK = 49
+K_ZUPT_SD = 49  # ZUPT velocity σ, m/s
+K_ZARU_SD = 50  # ZARU rate σ, rad/s
+K_BARO_SD = 51  # barometric height σ, m
+K_GATE_ZUPT = 52  # χ²(6)
+K_GATE_BARO = 53  # χ²(1)
+NK = 54
+
+# aiding NIS record columns (per IMU sample, NaN when not applied)
+A_ZUPT = 0
+A_BARO = 1
 
 # NIS record columns
 N_POS = 0
@@ -321,6 +332,56 @@ def _vehicle_update(P, dx, q, v, lla, err, wb, z_odo, r_odo, prm, nx, out, acc_d
 
 
 @njit(cache=True)
+def _rows_update(P, dx, idx, z, r, gate, q, v, lla, err, nx, prm, acc_dx):
+    """Gated unit-row update (H selects ``idx``) with :func:`~imunav.filters._core.joseph_update_rows`; returns NIS."""
+    m = idx.shape[0]
+    S = np.empty((m, m))
+    for i in range(m):
+        for j in range(m):
+            S[i, j] = P[idx[i], idx[j]]
+        S[i, i] += r[i]
+    ok, d = chi2_gate(z, S, gate)
+    if ok:
+        innov = np.empty(m)
+        s_out = np.empty(m)
+        joseph_update_rows(P, dx, idx, z, r, innov, s_out)
+        _inject(dx, q, v, lla, err, nx, prm, acc_dx)
+    return d
+
+
+@njit(cache=True)
+def _rest_and_baro_update(P, dx, q, v, lla, err, gyr, static, h_baro, prm, nx, out, acc_dx):
+    """ZUPT + ZARU while ``static`` (zero velocity; the gyro measures Earth rate plus its bias:
+    ``ν = ω̃ − Ĉᵀ ω_ie − b̂_g`` on the gyro-bias error) and barometric height (``ν = −h_b + ĥ`` on δr_D, through
+    :func:`~imunav.filters._core_models.height`).  ZARU's innovation is written here: the core's
+    :func:`~imunav.filters._core_models.zero_rate` is the local-level model without Earth rate."""
+    if static and prm[K_ZUPT_SD] > 0.0:
+        idx = np.empty(6, dtype=np.int64)
+        z = np.empty(6)
+        r = np.empty(6)
+        nu3 = np.empty(3)
+        r3 = np.empty(3)
+        zero_velocity(v, prm[K_ZUPT_SD], nu3, r3)
+        C = dcm_from_quat_1(q)
+        om = prm[K_OMEGA_E]
+        w_ie_b = C.T @ np.array([om * math.cos(lla[0]), 0.0, -om * math.sin(lla[0])])
+        for j in range(3):
+            idx[j] = I_VEL + j
+            z[j] = nu3[j]
+            r[j] = r3[j]
+            idx[3 + j] = I_BG + j
+            z[3 + j] = gyr[j] - w_ie_b[j] - err[E_BG + j]
+            r[3 + j] = prm[K_ZARU_SD] ** 2
+        out[A_ZUPT] = _rows_update(P, dx, idx, z, r, prm[K_GATE_ZUPT], q, v, lla, err, nx, prm, acc_dx)
+    if not math.isnan(h_baro):
+        nu1 = np.empty(1)
+        r1 = np.empty(1)
+        height(-lla[2], -h_baro, prm[K_BARO_SD], nu1, r1)
+        idx1 = np.array([I_POS + 2], dtype=np.int64)
+        out[A_BARO] = _rows_update(P, dx, idx1, nu1, r1, prm[K_GATE_BARO], q, v, lla, err, nx, prm, acc_dx)
+
+
+@njit(cache=True)
 def _step(q, v, lla, dth, dv, h, err, nx, om, qn, vn, llan, wb, fb):
     """Compensate the increments for the estimated IMU errors and run one NED strapdown step in place;
     ``wb``, ``fb`` receive the compensated mean rate and specific force."""
@@ -357,7 +418,7 @@ def _rec_post(r, tr, P, q, v, lla, acc_dx, rec_t, rec_ppost, rec_inj, rec_state)
 @njit(cache=True)
 def gins_run(t, dth, dv, g_t, g_lla, g_rp, g_vel, g_rv, odo, odo_r, q0, v0, lla0, err0, P0, prm,
              q_out, v_out, lla_out, err_out, cov_t, cov_diag, cov_nav, nis, acc, veh,
-             rec_t, rec_phi, rec_ppri, rec_ppost, rec_inj, rec_state):
+             rec_t, rec_phi, rec_ppri, rec_ppost, rec_inj, rec_state, static, baro, aid):
     """Forward filter over all IMU samples (row k: increments over [t[k-1], t[k]]).
 
     With ``rec_*`` of length R > 0 it also records, per covariance epoch r, what the RTS smoother needs: the
@@ -480,6 +541,10 @@ def gins_run(t, dth, dv, g_t, g_lla, g_rp, g_vel, g_rv, odo, odo_r, q0, v0, lla0
                 for j in range(3):
                     wb[j] = dth[k, j] / (t[k] - t[k - 1]) - err[E_BG + j]
                 _vehicle_update(P, dx, q, v, lla, err, wb, odo[k], odo_r[k], prm, nx, veh[k], acc_dx)
+            if static[k] > 0.5 or not math.isnan(baro[k]):
+                for j in range(3):
+                    wb[j] = dth[k, j] / (t[k] - t[k - 1])
+                _rest_and_baro_update(P, dx, q, v, lla, err, wb, static[k] > 0.5, baro[k], prm, nx, aid[k], acc_dx)
             if rec:
                 _rec_post(r, t[k], P, q, v, lla, acc_dx, rec_t, rec_ppost, rec_inj, rec_state)
             if m < cov_t.shape[0]:

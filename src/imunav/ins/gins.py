@@ -42,7 +42,7 @@ from imunav.io.gnss import GnssData
 from imunav.io.kfgins import ImuIncrements, KfGinsConfig
 from imunav.rotation import euler_from_quat, quat_from_rotvec, quat_multiply, quat_normalize
 from imunav.sim import presets
-from imunav.sim.vehicle import OdometerData
+from imunav.sim.vehicle import BaroData, OdometerData
 from imunav.timeseries import ImuData
 
 __all__ = ["GinsConfig", "GinsResult", "SmoothedTrack", "run_gins", "STATE_NAMES"]
@@ -86,6 +86,9 @@ class GinsConfig:
     odo_noise : odometer speed σ, m/s.  odo_scale_std : σ of the odometer scale-factor state (Gauss–Markov,
         ``corr_time``).  The odometer and the NHC are applied at the covariance steps.
     nhc_noise : σ of the non-holonomic constraint (zero lateral and vertical wheel velocity), m/s; None: off.
+    zupt_noise, zaru_noise : σ of the zero-velocity (m/s) and zero-angular-rate (rad/s) updates applied while
+        ``static`` says the vehicle stands still.
+    baro_noise : σ of the barometric height, m (its bias included: no baro-bias state).
     """
 
     arw: Any
@@ -111,6 +114,9 @@ class GinsConfig:
     odo_noise: float = 0.05
     odo_scale_std: float = 0.01
     nhc_noise: float | None = None
+    zupt_noise: float = 0.01
+    zaru_noise: float = 1e-4
+    baro_noise: float = 2.0
 
     def __post_init__(self) -> None:
         s = object.__setattr__
@@ -211,6 +217,8 @@ class GinsResult:
     cov_t : (M,) times of the covariance records.  cov_diag : (M, n) variances of the error states
         (:data:`STATE_NAMES`).  cov_nav : (M, 9, 9) position/velocity/attitude block.
     gnss_t : (G,) fixes used.  nis : (G, 2) NIS of position / velocity (NaN: not used).  accepted : (G, 2).
+    zupt_nis, baro_nis : (N,) NIS of the ZUPT + ZARU (6 dof) and barometer (1 dof) updates per IMU sample, NaN
+        where none was applied.  smoothed : the RTS solution when asked for.
     vehicle_t : (V,) times of the odometer / NHC updates.  vehicle_nis : (V,) their NIS, ``vehicle_dof`` (V,)
         their rows (1-3), ``vehicle_accepted`` (V,).
     config : the configuration.  meta : removed fixes, gates.
@@ -238,6 +246,8 @@ class GinsResult:
     config: GinsConfig
     meta: dict[str, Any] = field(default_factory=dict)
     smoothed: SmoothedTrack | None = None
+    zupt_nis: Array | None = None
+    baro_nis: Array | None = None
 
     def euler(self) -> Array:
         """ZYX Euler angles (roll, pitch, yaw), rad."""
@@ -313,7 +323,8 @@ def _increments(imu: ImuData | ImuIncrements) -> tuple[Array, Array, Array]:
 
 def run_gins(imu: ImuData | ImuIncrements, gnss: GnssData, config: GinsConfig, *, lla0: ArrayLike,
              vel0: ArrayLike, q0: ArrayLike, imu_errors0: ArrayLike | None = None,
-             odometer: OdometerData | None = None, smoother: bool = False) -> GinsResult:
+             odometer: OdometerData | None = None, smoother: bool = False, static: ArrayLike | None = None,
+             baro: BaroData | None = None) -> GinsResult:
     """Run the GNSS/INS filter forward over the IMU recording.
 
     Parameters
@@ -325,6 +336,8 @@ def run_gins(imu: ImuData | ImuIncrements, gnss: GnssData, config: GinsConfig, *
     imu_errors0 : (12,) initial gyro bias, accel bias, gyro scale, accel scale (default zeros).
     odometer : wheel speeds (:class:`imunav.sim.vehicle.OdometerData`), interpolated to the IMU stamps inside
         their span; adds the odometer scale-factor state.
+    static : (N,) bool, True where the vehicle stands still (e.g. from :mod:`imunav.ins.detectors`): ZUPT + ZARU.
+    baro : barometric heights (:class:`imunav.sim.vehicle.BaroData`), interpolated to the IMU stamps.
     smoother : also run the RTS smoother (``result.smoothed``); keeps three n x n matrices per covariance epoch
         (about 190 MB per hour at 200 Hz with 21 states and the default 0.2 s step).
 
@@ -394,6 +407,25 @@ def run_gins(imu: ImuData | ImuIncrements, gnss: GnssData, config: GinsConfig, *
         odo[inside] = np.interp(t[inside], ot, np.asarray(odometer.speed, dtype=float))
     odo_r = np.full(n, c.odo_noise**2)
     veh = np.full((n, 3), np.nan)
+    st = np.zeros(n) if static is None else np.asarray(static, dtype=bool).astype(float)
+    if st.shape != (n,):
+        raise ShapeError(f"static must be (N,) = ({n},) booleans, one per IMU sample; got {st.shape}")
+    hb = np.full(n, np.nan)
+    if baro is not None:
+        if not isinstance(baro, BaroData):
+            raise InvalidInputError(f"baro must be a BaroData; got {type(baro).__name__}")
+        bt = np.asarray(baro.t, dtype=float)
+        inside = (t >= bt[0]) & (t <= bt[-1])
+        if bt.size < 2 or not inside.any():
+            raise InvalidInputError("barometer time must be increasing and overlap the IMU span")
+        hb[inside] = np.interp(t[inside], bt, np.asarray(baro.height, dtype=float))
+    aid = np.full((n, 2), np.nan)
+    for key, sd in ((_k.K_ZUPT_SD, c.zupt_noise), (_k.K_ZARU_SD, c.zaru_noise), (_k.K_BARO_SD, c.baro_noise)):
+        if not (np.isfinite(sd) and sd > 0):
+            raise InvalidInputError(f"GinsConfig zupt_noise / zaru_noise / baro_noise must be > 0; got {sd!r}")
+        prm[key] = sd
+    prm[_k.K_GATE_ZUPT] = chi2.ppf(1 - c.gate_alpha, 6) if c.gate_alpha > 0 else big
+    prm[_k.K_GATE_BARO] = chi2.ppf(1 - c.gate_alpha, 1) if c.gate_alpha > 0 else big
     nrec = (n // int(prm[_k.K_COV_STEP]) + g.n + 3) if smoother else 0
     rec_t = np.zeros(nrec)
     rec_phi = np.zeros((nrec, nx, nx))
@@ -417,7 +449,7 @@ def run_gins(imu: ImuData | ImuIncrements, gnss: GnssData, config: GinsConfig, *
     m, r = _k.gins_run(t, dth, dv, np.ascontiguousarray(g.t), np.ascontiguousarray(g.lla), g.pos_std**2,
                     np.ascontiguousarray(g_vel), np.ascontiguousarray(g_rv), odo, odo_r, q, v, lla, err, P0, prm,
                     q_out, v_out, lla_out, err_out, cov_t, cov_diag, cov_nav, nis, acc, veh,
-                       rec_t, rec_phi, rec_ppri, rec_ppost, rec_inj, rec_state)
+                       rec_t, rec_phi, rec_ppri, rec_ppost, rec_inj, rec_state, st, hb, aid)
     smoothed = None
     if smoother:
         smoothed = _rts(t, lla_out, v_out, q_out, rec_t[:r], rec_phi[:r], rec_ppri[:r], rec_ppost[:r], rec_inj[:r],
@@ -428,4 +460,5 @@ def run_gins(imu: ImuData | ImuIncrements, gnss: GnssData, config: GinsConfig, *
             "odometer": odometer is not None, "nhc": c.nhc_noise is not None}
     return GinsResult(t, lla_out, v_out, q_out, err_out[:, 0:3], err_out[:, 3:6], err_out[:, 6:9], err_out[:, 9:12],
                       err_out[:, _k.E_ODO], cov_t[:m], cov_diag[:m], cov_nav[:m], g.t.copy(), nis, acc > 0.5,
-                      t[used], veh[used, 0], veh[used, 2].astype(int), veh[used, 1] > 0.5, c, meta, smoothed)
+                      t[used], veh[used, 0], veh[used, 2].astype(int), veh[used, 1] > 0.5, c, meta, smoothed,
+                      aid[:, _k.A_ZUPT].copy(), aid[:, _k.A_BARO].copy())
