@@ -122,3 +122,20 @@ def test_example_toml_loads_with_display_units():
     assert m.accel.bias_instability.tau[0] == pytest.approx(120.0)
     assert m.g_sensitivity[2, 2] == pytest.approx(0.02 * DEG / G0)
     assert m.gyro.bias_temp_poly[0, 2] == pytest.approx(0.02 * DEG)
+
+
+def test_gnss_ins_presets_carry_their_published_figures():
+    """ADIS16465 data sheet (rev. C) and KF-GINS's Leador-A15 imunoise, back in display units."""
+    m = presets.get("mems_adis16465")
+    assert to_display(m.gyro.noise_density[0], "deg/sqrt(h)") == pytest.approx(0.15)
+    assert to_display(m.accel.noise_density[0], "m/s/sqrt(h)") == pytest.approx(0.012)
+    assert to_display(m.gyro.bias_instability.b[0] * BIAS_INSTABILITY_FLOOR, "deg/h") == pytest.approx(2.0)
+    assert m.accel.bias_instability.b[0] * BIAS_INSTABILITY_FLOOR / (1e-6 * G0) == pytest.approx(3.6)
+    a = presets.get("navigation_a15")
+    assert to_display(a.gyro.noise_density[0], "deg/sqrt(h)") == pytest.approx(0.003)
+    assert to_display(a.accel.noise_density[0], "m/s/sqrt(h)") == pytest.approx(0.03)
+    assert isinstance(a.gyro.bias_instability, GaussMarkov)
+    assert to_display(a.gyro.bias_instability.sigma[0], "deg/h") == pytest.approx(0.027)
+    assert a.accel.bias_instability.sigma[0] == pytest.approx(15e-5)  # 15 mGal
+    np.testing.assert_allclose(a.gyro.bias_instability.tau, 4 * 3600.0)
+    np.testing.assert_array_equal(a.gyro.bias, 0.0)  # the whole bias is the Gauss-Markov process

@@ -40,6 +40,7 @@ _COMMAND_MODULES: list[str] = [
     "compensate",
     "attitude",
     "zupt",
+    "gins",
     "airdata",
     "batch",
 ]

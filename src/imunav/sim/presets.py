@@ -45,6 +45,7 @@ RRW = DEG / HOUR / 60.0  # deg/h/sqrt(h) -> rad/s/sqrt(s)
 MG = 1e-3 * G0
 UG = 1e-6 * G0
 VRW = 1.0 / 60.0  # m/s/sqrt(h) -> m/s/sqrt(s)
+MGAL = 1e-5  # mGal -> m/s^2
 
 #: Correlation time assumed for the thesis's bias instability.  The thesis
 #: gives none.  Digest §9 Monte Carlo: T_c = 5 s gives mean success 99.21 % /
@@ -290,12 +291,98 @@ def _navigation() -> ImuErrorModel:
     )
 
 
+def _mems_adis16465() -> ImuErrorModel:
+    """MEMS, ADIS16465 class: Analog Devices ADIS16465 data sheet (rev. C), ADIS16465-1 / -3 figures.
+
+    Datasheet figures used: gyro in-run bias stability 2 deg/h (Allan minimum, B = 2 / 0.6643 deg/h),
+    ARW 0.15 deg/sqrt(h), +-125 deg/s range (-1); accelerometer in-run bias stability 3.6 ug
+    (B = 3.6 / 0.6643 ug), VRW 0.012 m/s/sqrt(h), +-8 g range.  Assumed (class-typical, not from the data
+    sheet): residual turn-on biases 0.05 deg/s and 2 mg after factory calibration, residual scale factors
+    500-1000 ppm, misalignment 0.5 mrad, g-sensitivity 0.002 deg/s/g, flat bias floor 1 s..1000 s.
+    The MEMS unit of the i2Nav GNSS/INS data sets (awesome-gins-datasets) is of this class.
+    """
+    gyro = TriadErrors(
+        bias=np.array([0.05, -0.03, 0.04]) * DPS,
+        scale_misalignment=scale_misalignment_matrix(
+            np.array([800.0, -600.0, 1000.0]) * PPM,
+            np.array([0.5, -0.4, 0.3, 0.5, -0.3, 0.4]) * MRAD,
+        ),
+        noise_density=0.15 * ARW,
+        bias_instability=Flicker(b=2.0 / BIAS_INSTABILITY_FLOOR * DPH, tau_min=1.0, tau_max=1000.0),
+        full_scale=125.0 * DPS,
+    )
+    accel = TriadErrors(
+        bias=np.array([2.0, -1.5, 1.8]) * MG,
+        scale_misalignment=scale_misalignment_matrix(
+            np.array([700.0, -500.0, 900.0]) * PPM,
+            np.array([0.4, 0.3, -0.5, 0.4, 0.3, -0.4]) * MRAD,
+        ),
+        noise_density=0.012 * VRW,
+        bias_instability=Flicker(b=3.6 / BIAS_INSTABILITY_FLOOR * UG, tau_min=1.0, tau_max=1000.0),
+        full_scale=8.0 * G0,
+    )
+    return ImuErrorModel(
+        gyro=gyro,
+        accel=accel,
+        g_sensitivity=np.full(3, 0.002) * DPS / G0,
+        name="mems_adis16465",
+        source=(
+            "Analog Devices ADIS16465 data sheet rev. C: 2 deg/h gyro in-run bias stability, 0.15 deg/sqrt(h) ARW, "
+            "+-125 deg/s (ADIS16465-1); 3.6 ug accelerometer in-run bias stability, 0.012 m/s/sqrt(h) VRW, +-8 g. "
+            "Assumed (class-typical): residual biases 0.05 deg/s and 2 mg, scale factors 500-1000 ppm, "
+            "misalignment 0.5 mrad, g-sensitivity 0.002 deg/s/g."
+        ),
+    )
+
+
+def _navigation_a15() -> ImuErrorModel:
+    """Navigation grade, Leador-A15 class: the IMU noise of KF-GINS's Leador-A15 data set.
+
+    Figures of KF-GINS's configuration for that data set (i2Nav-WHU/KF-GINS, ``dataset/kf-gins.yaml``,
+    ``imunoise``): ARW 0.003 deg/sqrt(h), VRW 0.03 m/s/sqrt(h), gyro bias 0.027 deg/h and accelerometer
+    bias 15 mGal (1.5e-4 m/s^2) as first-order Gauss-Markov processes with a 4 h correlation time.  The
+    whole bias is that Gauss-Markov process (no separate turn-on bias), which is the model a KF-GINS-style
+    filter assumes.  Assumed (a representative unit inside KF-GINS's 300 ppm scale-factor sigma): scale
+    factors 50-150 ppm, misalignment 20 urad; ranges +-400 deg/s and +-20 g.
+    """
+    gyro = TriadErrors(
+        scale_misalignment=scale_misalignment_matrix(
+            np.array([100.0, -80.0, 120.0]) * PPM,
+            np.array([20.0, -15.0, 10.0, 20.0, -10.0, 15.0]) * 1e-6,
+        ),
+        noise_density=0.003 * ARW,
+        bias_instability=GaussMarkov(sigma=0.027 * DPH, tau=4.0 * HOUR),
+        full_scale=400.0 * DPS,
+    )
+    accel = TriadErrors(
+        scale_misalignment=scale_misalignment_matrix(
+            np.array([150.0, -100.0, 50.0]) * PPM,
+            np.array([20.0, 15.0, -10.0, 20.0, 10.0, -15.0]) * 1e-6,
+        ),
+        noise_density=0.03 * VRW,
+        bias_instability=GaussMarkov(sigma=15.0 * MGAL, tau=4.0 * HOUR),
+        full_scale=20.0 * G0,
+    )
+    return ImuErrorModel(
+        gyro=gyro,
+        accel=accel,
+        name="navigation_a15",
+        source=(
+            "KF-GINS (i2Nav-WHU, GPS Solutions 2025), dataset/kf-gins.yaml imunoise of the Leador-A15 data: "
+            "ARW 0.003 deg/sqrt(h), VRW 0.03 m/s/sqrt(h), bias GM 0.027 deg/h and 15 mGal with T = 4 h. "
+            "Assumed: scale factors 50-150 ppm, misalignment 20 urad, ranges."
+        ),
+    )
+
+
 _PRESETS: dict[str, Callable[[], ImuErrorModel]] = {
     "thesis_sim": _thesis_sim,
     "thesis_real": _thesis_real,
     "consumer_mems": _consumer_mems,
     "tactical": _tactical,
     "navigation": _navigation,
+    "mems_adis16465": _mems_adis16465,
+    "navigation_a15": _navigation_a15,
 }
 
 

@@ -1,0 +1,197 @@
+"""GNSS/INS side by side: imunav and pyins on the SAME simulated IMU and GNSS (issue 15, item 8).
+
+Scenario: a land-vehicle drive (:func:`imunav.sim.vehicle.demo_drive`, turns, hills, stops), the IMU of a
+preset (:func:`imunav.sim.simulate_imu`, Earth rate and transport rate included), GNSS position and
+velocity at 1 Hz with an antenna lever arm (:func:`imunav.sim.gnss.simulate_gnss`), and one seeded initial
+error (position, velocity, attitude) given to both filters.
+
+pyins (package ``python-ins``, MIT; test extra) runs its feedback EKF (``pyins.filters.run_feedback_filter``)
+on increments made from the same IMU samples by its own ``compute_increments_from_imu(..., 'rate')``, with
+``Position`` and ``NedVelocity`` measurements carrying the same lever arm and per-axis σ.  Its sensor
+models are set from the preset the way a pyins user would: bias σ from the turn-on bias and the
+bias-instability σ, bias walk from the Gauss–Markov components (``σ √(2/T)``), noise from the ARW / VRW.
+
+Printed: RMSE of position (N, E, D m), velocity (m/s) and attitude (roll, pitch, yaw deg) against the
+truth at the IMU rate, and the wall time per IMU sample (µs) of each filter on the same machine, one after
+the other, with their ratio.
+
+Times are CPU seconds of this process (time.process_time): the figures hold on a shared, loaded machine.
+
+Run:  PYTHONPATH=src python benchmarks/bench_gins_pyins.py [--duration 600] [--preset mems_adis16465] [--seed 1]
+"""
+
+from __future__ import annotations
+
+import argparse
+import time
+from dataclasses import dataclass
+
+import numpy as np
+
+from imunav import earth
+from imunav.io.gnss import GnssData
+from imunav.rotation import (
+    euler_from_quat,
+    quat_conjugate,
+    quat_from_euler,
+    quat_from_rotvec,
+    quat_multiply,
+    rotvec_from_quat,
+)
+from imunav.sim import presets, simulate_imu
+from imunav.sim.error_model import TriadErrors
+from imunav.sim.gnss import simulate_gnss
+from imunav.sim.trajectory import Trajectory
+from imunav.sim.vehicle import demo_drive, vehicle_trajectory
+from imunav.timeseries import ImuData
+from imunav.units import DEG
+
+LEVER_ARM = np.array([0.5, -0.3, -1.2])  # antenna, body FRD, m
+POS_NOISE = np.array([0.5, 0.5, 1.0])  # m, white, N E D
+VEL_NOISE = np.array([0.05, 0.05, 0.1])  # m/s
+INIT_SD = {"pos": 1.0, "vel": 0.1, "level_deg": 0.1, "azimuth_deg": 1.0}
+
+
+@dataclass
+class Scenario:
+    """Everything both filters get: the IMU samples, the GNSS fixes, the initial state and the truth."""
+
+    truth: Trajectory
+    imu: ImuData
+    gnss: GnssData
+    lla0: np.ndarray
+    vel0: np.ndarray
+    q0: np.ndarray
+    preset: str
+
+
+def make_scenario(duration: float, preset: str, seed: int, fs: float = 100.0) -> Scenario:
+    """The drive, its IMU and GNSS, and one initial error drawn from ``INIT_SD`` (seeded)."""
+    truth = vehicle_trajectory(demo_drive(duration), fs=fs, origin_lla=(30.44 * DEG, 114.47 * DEG, 20.0),
+                               t0=456300.0)
+    rng = np.random.default_rng(seed)
+    imu = simulate_imu(truth, presets.get(preset), rng=seed)
+    gnss = simulate_gnss(truth, pos_noise=POS_NOISE, vel_noise=VEL_NOISE, lever_arm=LEVER_ARM, rng=seed + 1)
+    dpos = INIT_SD["pos"] * rng.standard_normal(3)
+    rn, re = earth.radii(truth.pos_lla[0, 0])
+    lla0 = truth.pos_lla[0] + [dpos[0] / rn, dpos[1] / (re * np.cos(truth.pos_lla[0, 0])), -dpos[2]]
+    vel0 = truth.vel_ned[0] + INIT_SD["vel"] * rng.standard_normal(3)
+    dphi = np.radians([INIT_SD["level_deg"], INIT_SD["level_deg"], INIT_SD["azimuth_deg"]]) * rng.standard_normal(3)
+    q0 = quat_multiply(quat_from_rotvec(dphi), truth.q_nb[0])
+    return Scenario(truth, imu, gnss, lla0, vel0, q0, preset)
+
+
+def nav_errors(truth: Trajectory, t: np.ndarray, lla: np.ndarray, vel: np.ndarray, q: np.ndarray) -> dict:
+    """RMSE of position (N E D m), velocity (m/s) and attitude (roll pitch yaw deg, small-angle) on the truth grid."""
+    idx = np.searchsorted(truth.t, t)
+    ok = (idx < truth.n) & (np.abs(truth.t[np.minimum(idx, truth.n - 1)] - t) < 1e-6)
+    idx, t = idx[ok], t[ok]
+    ref = truth.pos_lla[idx]
+    rn, re = earth.radii(ref[:, 0])
+    d = lla[ok] - ref
+    dn = np.column_stack([d[:, 0] * (rn + ref[:, 2]), d[:, 1] * (re + ref[:, 2]) * np.cos(ref[:, 0]), -d[:, 2]])
+    dv = vel[ok] - truth.vel_ned[idx]
+    dphi = rotvec_from_quat(quat_multiply(q[ok], quat_conjugate(truth.q_nb[idx])))  # NED frame error
+    # in roll/pitch/yaw: compare Euler angles (wrapped)
+    de = np.degrees(euler_from_quat(q[ok]) - euler_from_quat(truth.q_nb[idx]))
+    de = (de + 180.0) % 360.0 - 180.0
+
+    def rms(x):
+        return np.sqrt(np.mean(x**2, axis=0)).tolist()
+
+    return {"pos_rmse_ned_m": rms(dn), "vel_rmse_ned_mps": rms(dv), "att_rmse_rpy_deg": rms(de),
+            "att_rmse_total_deg": float(np.degrees(np.sqrt(np.mean(np.sum(dphi**2, axis=1))))), "n": int(ok.sum())}
+
+
+def _pyins_sensor(te: TriadErrors):
+    """pyins EstimationModel parameters from an imunav triad error model (see the module docstring)."""
+    sig, tc = te.bias_instability.components() if te.bias_instability is not None else (np.zeros((1, 3)),
+                                                                                          np.ones((1, 3)))
+    bias_sd = np.sqrt(te.bias**2 + np.sum(sig**2, axis=0)) + 1e-12
+    bias_walk = np.sqrt(np.sum(2 * sig**2 / tc, axis=0))
+    dev = te.scale_misalignment - np.eye(3)
+    scale_sd = np.full((3, 3), max(float(np.sqrt(np.mean(np.diag(dev) ** 2))), 1e-6))
+    return bias_sd, te.noise_density, bias_walk, scale_sd
+
+
+def run_pyins(sc: Scenario) -> dict:
+    """pyins' feedback EKF on the scenario: errors and µs per IMU sample (pyins is imported here: a peer)."""
+    import pandas as pd  # pyins works on DataFrames
+    from pyins import filters, inertial_sensor, measurements, strapdown  # optional peer (test extra)
+    from pyins.util import ACCEL_COLS, GYRO_COLS, LLA_COLS, RPH_COLS, VEL_COLS
+
+    m = presets.get(sc.preset)
+    imu_df = pd.DataFrame(np.hstack([sc.imu.gyro, sc.imu.accel]), index=sc.imu.t, columns=GYRO_COLS + ACCEL_COLS)
+    t_start = time.process_time()
+    inc = strapdown.compute_increments_from_imu(imu_df, "rate")
+    g = sc.gnss
+    lla_deg = np.column_stack([np.degrees(g.lla[:, :2]), g.lla[:, 2]])
+    pos = measurements.Position(pd.DataFrame(lla_deg, index=g.t, columns=LLA_COLS), 1.0, LEVER_ARM)
+    pos.R = np.diag(POS_NOISE**2)
+    vel = measurements.NedVelocity(pd.DataFrame(g.vel_ned, index=g.t, columns=VEL_COLS), 1.0, LEVER_ARM)
+    vel.R = np.diag(VEL_NOISE**2)
+    gb, gn, gw, gs = _pyins_sensor(m.gyro)
+    ab, an, aw, as_ = _pyins_sensor(m.accel)
+    pva0 = pd.Series(np.hstack([np.degrees(sc.lla0[:2]), sc.lla0[2], sc.vel0, np.degrees(euler_from_quat(sc.q0))]),
+                     index=LLA_COLS + VEL_COLS + RPH_COLS, name=sc.imu.t[0])
+    res = filters.run_feedback_filter(
+        pva0, INIT_SD["pos"], INIT_SD["vel"], INIT_SD["level_deg"], INIT_SD["azimuth_deg"], inc,
+        gyro_model=inertial_sensor.EstimationModel(gb, gn, gw, gs),
+        accel_model=inertial_sensor.EstimationModel(ab, an, aw, as_),
+        measurements=[pos, vel], time_step=0.1)
+    wall = time.process_time() - t_start
+    tr = res.trajectory
+    lla = np.column_stack([np.radians(tr[LLA_COLS[:2]].to_numpy()), tr[LLA_COLS[2]].to_numpy()])
+    q = quat_from_euler(np.radians(tr[RPH_COLS].to_numpy()))
+    out = nav_errors(sc.truth, tr.index.to_numpy(), lla, tr[VEL_COLS].to_numpy(), q)
+    out["us_per_sample"] = wall / sc.imu.t.size * 1e6
+    return out
+
+
+def run_imunav(sc: Scenario, *, scale_factors: bool = True) -> dict:
+    """imunav's GNSS/INS filter (:func:`imunav.ins.gins.run_gins`, 21 states) on the scenario; the time is that of
+    a second call (the first compiles the numba kernels, cached on disk afterwards)."""
+    from imunav.ins.gins import GinsConfig, run_gins
+
+    cfg = GinsConfig.from_preset(sc.preset, lever_arm=LEVER_ARM, scale_factors=scale_factors,
+                                 init_pos_std=INIT_SD["pos"], init_vel_std=INIT_SD["vel"],
+                                 init_att_std=np.radians([INIT_SD["level_deg"], INIT_SD["level_deg"],
+                                                          INIT_SD["azimuth_deg"]]))
+    run_gins(sc.imu, sc.gnss, cfg, lla0=sc.lla0, vel0=sc.vel0, q0=sc.q0)
+    t0 = time.process_time()
+    res = run_gins(sc.imu, sc.gnss, cfg, lla0=sc.lla0, vel0=sc.vel0, q0=sc.q0)
+    wall = time.process_time() - t0
+    out = nav_errors(sc.truth, res.t, res.lla, res.vel_ned, res.q_nb)
+    out["us_per_sample"] = wall / sc.imu.t.size * 1e6
+    return out
+
+
+def _fmt(r: dict) -> list[str]:
+    return [" ".join(f"{v:.3f}" for v in r["pos_rmse_ned_m"]), " ".join(f"{v:.4f}" for v in r["vel_rmse_ned_mps"]),
+            " ".join(f"{v:.4f}" for v in r["att_rmse_rpy_deg"]), f"{r['us_per_sample']:.1f}"]
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--duration", type=float, default=600.0, help="drive length, s")
+    ap.add_argument("--preset", default="mems_adis16465", help="IMU preset (imunav.sim.presets)")
+    ap.add_argument("--seed", type=int, default=1)
+    ap.add_argument("--fs", type=float, default=100.0, help="IMU rate, Hz")
+    a = ap.parse_args()
+    sc = make_scenario(a.duration, a.preset, a.seed, a.fs)
+    print(f"drive {a.duration:.0f} s, {sc.imu.t.size} IMU samples at {a.fs:g} Hz, preset {a.preset}, "
+          f"{sc.gnss.n} GNSS fixes (1 Hz, lever arm {LEVER_ARM.tolist()} m), seed {a.seed}")
+    ours = run_imunav(sc)
+    peer = run_pyins(sc)
+    rows = {"pyins": _fmt(peer), "imunav": _fmt(ours)}
+    head = ["pos RMSE N E D (m)", "vel RMSE N E D (m/s)", "att RMSE r p y (deg)", "us/sample"]
+    print(f"{'':8s}" + "".join(f"{h:>28s}" for h in head))
+    for name, cells in rows.items():
+        print(f"{name:8s}" + "".join(f"{c:>28s}" for c in cells))
+    print(f"imunav is {peer['us_per_sample'] / ours['us_per_sample']:.0f}x faster per IMU sample; "
+          f"3-D position RMSE {np.linalg.norm(ours['pos_rmse_ned_m']):.3f} m (imunav) vs "
+          f"{np.linalg.norm(peer['pos_rmse_ned_m']):.3f} m (pyins)")
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,73 @@
+"""Estimation-core primitives the GNSS/INS filter needs and :mod:`imunav.filters._core` lacks (private).
+
+* :func:`inject_position_lla`: injection of a NED position error (metres) into a geodetic nominal position.
+* :func:`propagate_cov_series`: ``P ← Φ P Φᵀ + Q_d`` with the second-order series ``Φ = I + FΔt + (FΔt)²/2``
+  and the trapezoidal ``Q_d = (Φ Q Φᵀ + Q) Δt / 2`` — the cheap discretisation of a 15/21-state INS error model
+  over a covariance step of ~0.1 s (:func:`imunav.filters._core.van_loan` is exact but costs a 2n-matrix
+  exponential per step).
+
+Same conventions and stability promise as :mod:`imunav.filters._core`.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+from imunav.earth import radii_gravity_1
+
+
+@njit(cache=True)
+def inject_position_lla(lla, dx, i0):
+    """Inject a NED position error ``δr = dx[i0:i0+3]`` (m) into ``lla = (lat rad, lon rad, h m)``, in place.
+
+    ``φ += δr_N / (R_N + h)``, ``λ += δr_E / ((R_E + h) cos φ)``, ``h −= δr_D`` (Groves 2013, eq. 2.119 linearised).
+
+    Parameters
+    ----------
+    lla : (3,) nominal geodetic position, updated in place.
+    dx : error-state vector.
+    i0 : int, index of δr_N in ``dx``.
+
+    Returns
+    -------
+    None
+    """
+    RN, RE, _ = radii_gravity_1(lla[0], lla[2])
+    lat = lla[0]
+    lla[0] = lat + dx[i0] / (RN + lla[2])
+    lla[1] = lla[1] + dx[i0 + 1] / ((RE + lla[2]) * math.cos(lat))
+    lla[2] = lla[2] - dx[i0 + 2]
+
+
+@njit(cache=True)
+def propagate_cov_series(P, F, Q, dt):
+    """``P ← Φ P Φᵀ + Q_d`` with ``Φ = I + A + A²/2``, ``A = F dt`` and ``Q_d = (Φ Q Φᵀ + Q) dt / 2``, in place.
+
+    Second order in ``dt`` for Φ and the trapezoid rule for Q_d (Groves 2013, eqs. 3.34 and 3.46); P is
+    symmetrised.
+
+    Parameters
+    ----------
+    P : (n, n) covariance, updated in place.
+    F : (n, n) continuous system matrix.
+    Q : (n, n) continuous process-noise spectral density ``G Q Gᵀ``.
+    dt : float, step, s.
+
+    Returns
+    -------
+    Phi : (n, n) the transition matrix used.
+    """
+    n = P.shape[0]
+    A = F * dt
+    Phi = np.eye(n) + A + 0.5 * (A @ A)
+    PhiT = np.ascontiguousarray(Phi.T)
+    Pn = Phi @ P @ PhiT + 0.5 * dt * (Phi @ Q @ PhiT + Q)
+    for i in range(n):
+        for j in range(i, n):
+            v = 0.5 * (Pn[i, j] + Pn[j, i])
+            P[i, j] = v
+            P[j, i] = v
+    return Phi

@@ -1,0 +1,464 @@
+"""Loosely coupled GNSS/INS: an error-state Kalman filter on the NED strapdown, aided by GNSS position and velocity.
+
+:func:`run_gins` integrates IMU rates (:class:`~imunav.timeseries.ImuData`, with two-sample coning / sculling
+corrections) or increments (:class:`~imunav.io.kfgins.ImuIncrements`) with
+:func:`imunav.filters._core.strapdown_step_ned` and estimates 15 error states (position, velocity, attitude,
+gyro and accelerometer biases) or 21 (plus scale factors), biases and scale factors being first-order
+Gauss–Markov processes with configurable σ and correlation time (:class:`GinsConfig`).  GNSS fixes are used at
+their own time stamps between IMU samples, with the antenna lever arm, behind a χ² gate; every epoch's NIS is
+recorded.  The equations are in :mod:`imunav.ins._gins_kernels`.
+
+Example
+-------
+>>> import numpy as np
+>>> from imunav.ins.gins import GinsConfig, run_gins
+>>> from imunav.sim import presets, simulate_imu
+>>> from imunav.sim.gnss import simulate_gnss
+>>> from imunav.sim.vehicle import demo_drive, vehicle_trajectory
+>>> truth = vehicle_trajectory(demo_drive(120), fs=100)
+>>> imu = simulate_imu(truth, presets.get("navigation_a15"), rng=1)
+>>> gnss = simulate_gnss(truth, rng=2)
+>>> cfg = GinsConfig.from_preset("navigation_a15")
+>>> res = run_gins(imu, gnss, cfg, lla0=truth.pos_lla[0], vel0=truth.vel_ned[0], q0=truth.q_nb[0])
+>>> bool(np.all(np.isfinite(res.lla)))
+True
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+from scipy.stats import chi2
+
+from imunav.earth import OMEGA_E
+from imunav.earth import radii as earth_radii
+from imunav.errors import InvalidInputError, ShapeError
+from imunav.ins import _gins_kernels as _k
+from imunav.ins.strapdown import coning_sculling_increments
+from imunav.io.gnss import GnssData
+from imunav.io.kfgins import ImuIncrements, KfGinsConfig
+from imunav.rotation import euler_from_quat, quat_from_rotvec, quat_multiply, quat_normalize
+from imunav.sim import presets
+from imunav.sim.vehicle import BaroData, OdometerData
+from imunav.timeseries import ImuData
+
+__all__ = ["GinsConfig", "GinsResult", "SmoothedTrack", "run_gins", "STATE_NAMES"]
+
+Array = NDArray[np.float64]
+
+#: Names of the error states, in filter order (the first 15 of the 21-state filter are the 15-state filter).
+STATE_NAMES = tuple(f"{g}_{a}" for g in ("pos", "vel", "att", "gyro_bias", "accel_bias", "gyro_scale",
+                                           "accel_scale") for a in "xyz")
+
+
+def _v3(x: ArrayLike, name: str, *, positive: bool = False, nonneg: bool = False) -> Array:
+    a = np.asarray(x, dtype=float) * np.ones(3)
+    if a.shape != (3,) or not np.all(np.isfinite(a)):
+        raise ShapeError(f"GinsConfig.{name} must be a finite scalar or 3-vector; got {x!r}")
+    if positive and np.any(a <= 0):
+        raise InvalidInputError(f"GinsConfig.{name} = {a.tolist()}: a standard deviation / time must be > 0")
+    if nonneg and np.any(a < 0):
+        raise InvalidInputError(f"GinsConfig.{name} = {a.tolist()}: must be >= 0")
+    return a
+
+
+@dataclass(frozen=True)
+class GinsConfig:
+    """Configuration of :func:`run_gins`, SI units.
+
+    Parameters
+    ----------
+    arw : (3,) gyro white noise, rad/√s.  vrw : (3,) accelerometer white noise, m/s/√s.
+    gyro_bias_std, accel_bias_std : (3,) Gauss–Markov σ of the biases, rad/s and m/s².
+    gyro_scale_std, accel_scale_std : (3,) Gauss–Markov σ of the scale factors (dimensionless).
+    corr_time : correlation time of all Gauss–Markov states, s (KF-GINS: ``corrtime``).
+    scale_factors : True: 21 states; False: 15 (no scale-factor states).
+    init_pos_std, init_vel_std, init_att_std : (3,) initial σ (m NED, m/s NED, rad roll/pitch/yaw ~ N/E/D).
+    init_gyro_bias_std ... : initial σ of the IMU-error states (default: their Gauss–Markov σ).
+    lever_arm : (3,) GNSS antenna in body FRD from the IMU, m.
+    use_gnss_velocity : use the fixes' velocity when they have one.
+    gate_alpha : false-alarm probability of the χ² gates (0 disables the gates).
+    cov_interval_s : covariance propagation step, s (the nominal state is integrated every sample).
+    odo_lever_arm : (3,) wheel contact point in body FRD, m (odometer and non-holonomic constraint).
+    odo_noise : odometer speed σ, m/s.  odo_scale_std : σ of the odometer scale-factor state (Gauss–Markov,
+        ``corr_time``).  The odometer and the NHC are applied at the covariance steps.
+    nhc_noise : σ of the non-holonomic constraint (zero lateral and vertical wheel velocity), m/s; None: off.
+    zupt_noise, zaru_noise : σ of the zero-velocity (m/s) and zero-angular-rate (rad/s) updates applied while
+        ``static`` says the vehicle stands still.
+    baro_noise : σ of the barometric height, m (its bias included: no baro-bias state).
+    """
+
+    arw: Any
+    vrw: Any
+    gyro_bias_std: Any
+    accel_bias_std: Any
+    gyro_scale_std: Any = 1e-3
+    accel_scale_std: Any = 1e-3
+    corr_time: float = 3600.0
+    scale_factors: bool = True
+    init_pos_std: Any = 1.0
+    init_vel_std: Any = 0.1
+    init_att_std: Any = (1e-3, 1e-3, 1e-2)
+    init_gyro_bias_std: Any = None
+    init_accel_bias_std: Any = None
+    init_gyro_scale_std: Any = None
+    init_accel_scale_std: Any = None
+    lever_arm: Any = (0.0, 0.0, 0.0)
+    use_gnss_velocity: bool = True
+    gate_alpha: float = 1e-6
+    cov_interval_s: float = 0.2
+    odo_lever_arm: Any = (0.0, 0.0, 0.0)
+    odo_noise: float = 0.05
+    odo_scale_std: float = 0.01
+    nhc_noise: float | None = None
+    zupt_noise: float = 0.01
+    zaru_noise: float = 1e-4
+    baro_noise: float = 2.0
+
+    def __post_init__(self) -> None:
+        s = object.__setattr__
+        for name in ("arw", "vrw", "gyro_bias_std", "accel_bias_std", "gyro_scale_std", "accel_scale_std",
+                     "init_pos_std", "init_vel_std", "init_att_std"):
+            s(self, name, _v3(getattr(self, name), name, positive=True))
+        for name, src in (("init_gyro_bias_std", "gyro_bias_std"), ("init_accel_bias_std", "accel_bias_std"),
+                          ("init_gyro_scale_std", "gyro_scale_std"), ("init_accel_scale_std", "accel_scale_std")):
+            v = getattr(self, name)
+            s(self, name, getattr(self, src) if v is None else _v3(v, name, positive=True))
+        s(self, "lever_arm", _v3(self.lever_arm, "lever_arm"))
+        s(self, "odo_lever_arm", _v3(self.odo_lever_arm, "odo_lever_arm"))
+        for name in ("odo_noise", "odo_scale_std"):
+            if not (np.isfinite(getattr(self, name)) and getattr(self, name) > 0):
+                raise InvalidInputError(f"GinsConfig.{name} must be > 0; got {getattr(self, name)!r}")
+        if self.nhc_noise is not None and not (np.isfinite(self.nhc_noise) and self.nhc_noise > 0):
+            raise InvalidInputError(f"GinsConfig.nhc_noise must be > 0 m/s or None; got {self.nhc_noise!r}")
+        if not (np.isfinite(self.corr_time) and self.corr_time > 0):
+            raise InvalidInputError(f"GinsConfig.corr_time must be > 0 s; got {self.corr_time!r}")
+        if not (0 <= self.gate_alpha < 1):
+            raise InvalidInputError(f"GinsConfig.gate_alpha must be in [0, 1); got {self.gate_alpha!r}")
+        if not (self.cov_interval_s > 0):
+            raise InvalidInputError(f"GinsConfig.cov_interval_s must be > 0 s; got {self.cov_interval_s!r}")
+
+    @property
+    def n_states(self) -> int:
+        """15 or 21."""
+        return _k.NX21 if self.scale_factors else _k.NX15
+
+    @classmethod
+    def from_kfgins(cls, cfg: KfGinsConfig, **overrides: Any) -> GinsConfig:
+        """The filter configuration of a KF-GINS YAML (:func:`imunav.io.kfgins.load_kfgins_config`).
+
+        Parameters
+        ----------
+        cfg : KfGinsConfig
+        **overrides : any field of :class:`GinsConfig`.
+
+        Returns
+        -------
+        GinsConfig
+        """
+        n = cfg.noise
+        kw: dict[str, Any] = dict(
+            arw=n.arw, vrw=n.vrw, gyro_bias_std=n.gyro_bias_std, accel_bias_std=n.accel_bias_std,
+            gyro_scale_std=n.gyro_scale_std, accel_scale_std=n.accel_scale_std, corr_time=n.corr_time,
+            init_pos_std=cfg.init_pos_std, init_vel_std=cfg.init_vel_std, init_att_std=cfg.init_att_std,
+            init_gyro_bias_std=cfg.init_gyro_bias_std, init_accel_bias_std=cfg.init_accel_bias_std,
+            init_gyro_scale_std=cfg.init_gyro_scale_std, init_accel_scale_std=cfg.init_accel_scale_std,
+            lever_arm=cfg.antenna_lever_arm,
+        )
+        kw.update(overrides)
+        return cls(**kw)
+
+    @classmethod
+    def from_preset(cls, name: str, **overrides: Any) -> GinsConfig:
+        """A configuration matched to an IMU preset of :mod:`imunav.sim.presets` (noise densities; bias σ from
+        the turn-on bias and the bias instability; scale σ from the scale-factor errors; its correlation time).
+
+        Parameters
+        ----------
+        name : preset name.
+        **overrides : any field of :class:`GinsConfig`.
+
+        Returns
+        -------
+        GinsConfig
+        """
+        m = presets.get(name)
+
+        def bias(te):
+            sig, tc = te.bias_instability.components() if te.bias_instability is not None else (np.zeros((1, 3)),
+                                                                                                  np.full((1, 3), 3600.0))
+            return np.sqrt(te.bias**2 + np.sum(sig**2, axis=0)), float(np.max(tc))
+
+        gb, tg = bias(m.gyro)
+        ab, ta = bias(m.accel)
+        kw: dict[str, Any] = dict(
+            arw=np.maximum(m.gyro.noise_density, 1e-9), vrw=np.maximum(m.accel.noise_density, 1e-9),
+            gyro_bias_std=np.maximum(gb, 1e-12), accel_bias_std=np.maximum(ab, 1e-12),
+            gyro_scale_std=np.maximum(np.abs(np.diag(m.gyro.scale_misalignment) - 1), 1e-6) * 1.5,
+            accel_scale_std=np.maximum(np.abs(np.diag(m.accel.scale_misalignment) - 1), 1e-6) * 1.5,
+            corr_time=max(tg, ta),
+        )
+        kw.update(overrides)
+        return cls(**kw)
+
+
+@dataclass(frozen=True)
+class GinsResult:
+    """Output of :func:`run_gins` (SI).
+
+    Attributes
+    ----------
+    t : (N,) IMU times, s.  lla : (N, 3) rad, rad, m.  vel_ned : (N, 3) m/s.  q_nb : (N, 4).
+    gyro_bias, accel_bias, gyro_scale, accel_scale : (N, 3) estimated IMU errors (scale zero for 15 states).
+    odo_scale : (N,) estimated odometer scale factor (zero without odometer).
+    cov_t : (M,) times of the covariance records.  cov_diag : (M, n) variances of the error states
+        (:data:`STATE_NAMES`).  cov_nav : (M, 9, 9) position/velocity/attitude block.
+    gnss_t : (G,) fixes used.  nis : (G, 2) NIS of position / velocity (NaN: not used).  accepted : (G, 2).
+    zupt_nis, baro_nis : (N,) NIS of the ZUPT + ZARU (6 dof) and barometer (1 dof) updates per IMU sample, NaN
+        where none was applied.  smoothed : the RTS solution when asked for.
+    vehicle_t : (V,) times of the odometer / NHC updates.  vehicle_nis : (V,) their NIS, ``vehicle_dof`` (V,)
+        their rows (1-3), ``vehicle_accepted`` (V,).
+    config : the configuration.  meta : removed fixes, gates.
+    """
+
+    t: Array
+    lla: Array
+    vel_ned: Array
+    q_nb: Array
+    gyro_bias: Array
+    accel_bias: Array
+    gyro_scale: Array
+    accel_scale: Array
+    odo_scale: Array
+    cov_t: Array
+    cov_diag: Array
+    cov_nav: Array
+    gnss_t: Array
+    nis: Array
+    accepted: Array
+    vehicle_t: Array
+    vehicle_nis: Array
+    vehicle_dof: Array
+    vehicle_accepted: Array
+    config: GinsConfig
+    meta: dict[str, Any] = field(default_factory=dict)
+    smoothed: SmoothedTrack | None = None
+    zupt_nis: Array | None = None
+    baro_nis: Array | None = None
+
+    def euler(self) -> Array:
+        """ZYX Euler angles (roll, pitch, yaw), rad."""
+        return euler_from_quat(self.q_nb)
+
+
+@dataclass(frozen=True)
+class SmoothedTrack:
+    """RTS-smoothed navigation (SI): per IMU sample ``t``, ``lla``, ``vel_ned``, ``q_nb``; per smoother epoch
+    ``cov_t`` and the smoothed position/velocity/attitude covariance ``cov_nav`` (M, 9, 9)."""
+
+    t: Array
+    lla: Array
+    vel_ned: Array
+    q_nb: Array
+    cov_t: Array
+    cov_nav: Array
+
+    def euler(self) -> Array:
+        """ZYX Euler angles (roll, pitch, yaw), rad."""
+        return euler_from_quat(self.q_nb)
+
+
+def _rts(t: Array, lla: Array, vel: Array, q: Array, rec_t: Array, phi: Array, ppri: Array, ppost: Array,
+         inj: Array, state: Array) -> SmoothedTrack:
+    """Rauch–Tung–Striebel backward pass over the error state of the feedback filter (Rauch, Tung & Striebel
+    1965; Groves 2013, §3.4.2), then the smoothed corrections applied to the nominal trajectory.
+
+    With the posterior error at every epoch reset to zero by the feedback, the smoothed error ``δs_r`` (true minus
+    posterior nominal at r) obeys ``δs_r = A_r (δs_{r+1} + δx_inj,{r+1})``, ``A_r = P_r⁺ Φ_{r+1}ᵀ (P_{r+1}⁻)⁻¹``,
+    ``P_r^s = P_r⁺ + A_r (P_{r+1}^s − P_{r+1}⁻) A_rᵀ``; between epochs the correction is interpolated in time
+    from ``δs_r`` (after r) to ``δs_{r+1} + δx_inj,{r+1}`` (before the injection at r+1).
+    """
+    M, n = inj.shape
+    ds = np.zeros((M, n))
+    Ps = np.empty((M, 9, 9))
+    Pn = ppost[M - 1].copy()
+    Ps[M - 1] = Pn[:9, :9]
+    for r in range(M - 2, -1, -1):
+        A = np.linalg.solve(ppri[r + 1].T, (ppost[r] @ phi[r + 1].T).T).T
+        ds[r] = A @ (ds[r + 1] + inj[r + 1])
+        Pn = ppost[r] + A @ (Pn - ppri[r + 1]) @ A.T
+        Ps[r] = Pn[:9, :9]
+    before = ds + inj  # relative to the prior nominal at each epoch (before its injection)
+    i = np.clip(np.searchsorted(rec_t, t, side="right") - 1, 0, M - 1)
+    j = np.minimum(i + 1, M - 1)
+    span = rec_t[j] - rec_t[i]
+    w = np.where(span > 0, (t - rec_t[i]) / np.where(span > 0, span, 1.0), 0.0)[:, None]
+    corr = (1 - w) * ds[i] + w * before[j]
+    rn, re = earth_radii(lla[:, 0])
+    out_lla = lla + np.column_stack([corr[:, 0] / (rn + lla[:, 2]), corr[:, 1] / ((re + lla[:, 2]) * np.cos(lla[:, 0])),
+                                     -corr[:, 2]])
+    out_q = quat_multiply(quat_from_rotvec(corr[:, 6:9]), q)
+    return SmoothedTrack(t, out_lla, vel + corr[:, 3:6], quat_normalize(out_q), rec_t.copy(), Ps)
+
+
+def _increments(imu: ImuData | ImuIncrements) -> tuple[Array, Array, Array]:
+    if isinstance(imu, ImuIncrements):
+        dth = np.array(imu.dtheta, dtype=float)
+        dv = np.array(imu.dvel, dtype=float)
+        # two-sample coning / sculling and rotation compensation on the increments (Savage 1998)
+        c = np.zeros_like(dth)
+        s = np.zeros_like(dv)
+        c[1:] = np.cross(dth[:-1], dth[1:]) / 12.0
+        s[1:] = (np.cross(dth[:-1], dv[1:]) + np.cross(dv[:-1], dth[1:])) / 12.0
+        dv_out = dv + 0.5 * np.cross(dth, dv) + s
+        return np.ascontiguousarray(imu.t, dtype=float), dth + c, dv_out
+    if isinstance(imu, ImuData):
+        dth, dv = coning_sculling_increments(imu, True)
+        return np.ascontiguousarray(imu.t, dtype=float), dth, dv
+    raise InvalidInputError(f"imu must be an ImuData (rates) or ImuIncrements; got {type(imu).__name__}")
+
+
+def run_gins(imu: ImuData | ImuIncrements, gnss: GnssData, config: GinsConfig, *, lla0: ArrayLike,
+             vel0: ArrayLike, q0: ArrayLike, imu_errors0: ArrayLike | None = None,
+             odometer: OdometerData | None = None, smoother: bool = False, static: ArrayLike | None = None,
+             baro: BaroData | None = None) -> GinsResult:
+    """Run the GNSS/INS filter forward over the IMU recording.
+
+    Parameters
+    ----------
+    imu : ImuData (rates; coning / sculling applied) or ImuIncrements (Δθ, Δv).
+    gnss : GnssData; fixes outside the IMU span are removed (recorded in ``meta``), none inside is an error.
+    config : GinsConfig.
+    lla0, vel0, q0 : initial position (lat rad, lon rad, h m), NED velocity (m/s) and ``q_nb`` at ``imu.t[0]``.
+    imu_errors0 : (12,) initial gyro bias, accel bias, gyro scale, accel scale (default zeros).
+    odometer : wheel speeds (:class:`imunav.sim.vehicle.OdometerData`), interpolated to the IMU stamps inside
+        their span; adds the odometer scale-factor state.
+    static : (N,) bool, True where the vehicle stands still (e.g. from :mod:`imunav.ins.detectors`): ZUPT + ZARU.
+    baro : barometric heights (:class:`imunav.sim.vehicle.BaroData`), interpolated to the IMU stamps.
+    smoother : also run the RTS smoother (``result.smoothed``); keeps three n x n matrices per covariance epoch
+        (about 190 MB per hour at 200 Hz with 21 states and the default 0.2 s step).
+
+    Returns
+    -------
+    GinsResult
+    """
+    t, dth, dv = _increments(imu)
+    if t.size < 2:
+        raise InvalidInputError("run_gins needs at least 2 IMU samples")
+    g = gnss.within(float(t[0]), float(t[-1]))
+    g = g.select(g.t > t[0], "at the first IMU sample (the initial state stands for it)")
+    lla = np.asarray(lla0, dtype=float)
+    if lla.shape != (3,) or abs(lla[0]) >= np.pi / 2:
+        raise InvalidInputError(f"lla0 must be (lat rad, lon rad, h m) with |lat| < pi/2; got {lla0!r}")
+    v = np.asarray(vel0, dtype=float)
+    if v.shape != (3,):
+        raise ShapeError(f"vel0 must be a 3-vector (NED m/s); got {vel0!r}")
+    q = quat_normalize(np.asarray(q0, dtype=float))
+    err = np.zeros(_k.NE)
+    if imu_errors0 is not None:
+        e0 = np.asarray(imu_errors0, dtype=float)
+        if e0.shape != (12,):
+            raise ShapeError(f"imu_errors0 must have 12 values (bg, ba, sg, sa); got shape {e0.shape}")
+        err[:12] = e0
+    c = config
+    nb = c.n_states
+    nx = nb + (1 if odometer is not None else 0)
+    sd0 = np.concatenate([c.init_pos_std, c.init_vel_std, c.init_att_std, c.init_gyro_bias_std,
+                          c.init_accel_bias_std, c.init_gyro_scale_std, c.init_accel_scale_std])[:nb]
+    P0 = np.diag(np.concatenate([sd0, [c.odo_scale_std]])[:nx] ** 2)
+    fs = 1.0 / float(np.median(np.diff(t)))
+    prm = np.zeros(_k.NK)
+    prm[_k.K_OMEGA_E] = OMEGA_E
+    prm[_k.K_ARW:_k.K_ARW + 3] = c.arw
+    prm[_k.K_VRW:_k.K_VRW + 3] = c.vrw
+    for kq, kt, sd in ((_k.K_BG_Q, _k.K_BG_T, c.gyro_bias_std), (_k.K_BA_Q, _k.K_BA_T, c.accel_bias_std),
+                       (_k.K_SG_Q, _k.K_SG_T, c.gyro_scale_std), (_k.K_SA_Q, _k.K_SA_T, c.accel_scale_std)):
+        prm[kq:kq + 3] = 2.0 * sd**2 / c.corr_time
+        prm[kt:kt + 3] = c.corr_time
+    prm[_k.K_LEVER:_k.K_LEVER + 3] = c.lever_arm
+    big = 1e300
+    prm[_k.K_GATE_POS] = chi2.ppf(1 - c.gate_alpha, 3) if c.gate_alpha > 0 else big
+    prm[_k.K_GATE_VEL] = prm[_k.K_GATE_POS]
+    prm[_k.K_COV_STEP] = max(1, int(round(c.cov_interval_s * fs)))
+    use_vel = c.use_gnss_velocity and g.vel_ned is not None
+    prm[_k.K_USE_VEL] = 1.0 if use_vel else 0.0
+    prm[_k.K_NB] = nb
+    prm[_k.K_I_ODO] = nb if odometer is not None else -1
+    prm[_k.K_ODO_Q] = 2.0 * c.odo_scale_std**2 / c.corr_time
+    prm[_k.K_ODO_T] = c.corr_time
+    prm[_k.K_ODO_LEVER:_k.K_ODO_LEVER + 3] = c.odo_lever_arm
+    prm[_k.K_NHC_R] = 0.0 if c.nhc_noise is None else c.nhc_noise**2
+    for key, dof in ((_k.K_GATE_VEH, 3), (_k.K_GATE_VEH2, 2), (_k.K_GATE_VEH1, 1)):
+        prm[key] = chi2.ppf(1 - c.gate_alpha, dof) if c.gate_alpha > 0 else big
+    n = t.size
+    odo = np.full(n, np.nan)
+    if odometer is not None:
+        if not isinstance(odometer, OdometerData):
+            raise InvalidInputError(f"odometer must be an OdometerData; got {type(odometer).__name__}")
+        ot = np.asarray(odometer.t, dtype=float)
+        if ot.size < 2 or np.any(np.diff(ot) <= 0):
+            raise InvalidInputError("odometer time stamps must be strictly increasing (at least 2 samples)")
+        inside = (t >= ot[0]) & (t <= ot[-1])
+        if not inside.any():
+            raise InvalidInputError(f"odometer time {ot[0]:.3f}..{ot[-1]:.3f} s lies outside the IMU span")
+        odo[inside] = np.interp(t[inside], ot, np.asarray(odometer.speed, dtype=float))
+    odo_r = np.full(n, c.odo_noise**2)
+    veh = np.full((n, 3), np.nan)
+    st = np.zeros(n) if static is None else np.asarray(static, dtype=bool).astype(float)
+    if st.shape != (n,):
+        raise ShapeError(f"static must be (N,) = ({n},) booleans, one per IMU sample; got {st.shape}")
+    hb = np.full(n, np.nan)
+    if baro is not None:
+        if not isinstance(baro, BaroData):
+            raise InvalidInputError(f"baro must be a BaroData; got {type(baro).__name__}")
+        bt = np.asarray(baro.t, dtype=float)
+        inside = (t >= bt[0]) & (t <= bt[-1])
+        if bt.size < 2 or not inside.any():
+            raise InvalidInputError("barometer time must be increasing and overlap the IMU span")
+        hb[inside] = np.interp(t[inside], bt, np.asarray(baro.height, dtype=float))
+    aid = np.full((n, 2), np.nan)
+    for key, sd in ((_k.K_ZUPT_SD, c.zupt_noise), (_k.K_ZARU_SD, c.zaru_noise), (_k.K_BARO_SD, c.baro_noise)):
+        if not (np.isfinite(sd) and sd > 0):
+            raise InvalidInputError(f"GinsConfig zupt_noise / zaru_noise / baro_noise must be > 0; got {sd!r}")
+        prm[key] = sd
+    prm[_k.K_GATE_ZUPT] = chi2.ppf(1 - c.gate_alpha, 6) if c.gate_alpha > 0 else big
+    prm[_k.K_GATE_BARO] = chi2.ppf(1 - c.gate_alpha, 1) if c.gate_alpha > 0 else big
+    nrec = (n // int(prm[_k.K_COV_STEP]) + g.n + 3) if smoother else 0
+    rec_t = np.zeros(nrec)
+    rec_phi = np.zeros((nrec, nx, nx))
+    rec_ppri = np.zeros((nrec, nx, nx))
+    rec_ppost = np.zeros((nrec, nx, nx))
+    rec_inj = np.zeros((nrec, nx))
+    rec_state = np.zeros((nrec, 10))
+    ng = g.n
+    g_vel = g.vel_ned if use_vel else np.zeros((ng, 3))
+    g_rv = g.vel_std**2 if use_vel else np.ones((ng, 3))
+    q_out = np.empty((n, 4))
+    v_out = np.empty((n, 3))
+    lla_out = np.empty((n, 3))
+    err_out = np.empty((n, _k.NE))
+    mmax = n // int(prm[_k.K_COV_STEP]) + 3
+    cov_t = np.empty(mmax)
+    cov_diag = np.empty((mmax, nx))
+    cov_nav = np.empty((mmax, 9, 9))
+    nis = np.full((ng, 2), np.nan)
+    acc = np.zeros((ng, 2))
+    m, r = _k.gins_run(t, dth, dv, np.ascontiguousarray(g.t), np.ascontiguousarray(g.lla), g.pos_std**2,
+                    np.ascontiguousarray(g_vel), np.ascontiguousarray(g_rv), odo, odo_r, q, v, lla, err, P0, prm,
+                    q_out, v_out, lla_out, err_out, cov_t, cov_diag, cov_nav, nis, acc, veh,
+                       rec_t, rec_phi, rec_ppri, rec_ppost, rec_inj, rec_state, st, hb, aid)
+    smoothed = None
+    if smoother:
+        smoothed = _rts(t, lla_out, v_out, q_out, rec_t[:r], rec_phi[:r], rec_ppri[:r], rec_ppost[:r], rec_inj[:r],
+                        rec_state[:r])
+    used = ~np.isnan(veh[:, 0])
+    meta = {"removed_gnss": g.meta.get("removed", []), "n_states": nx, "gate_threshold": float(prm[_k.K_GATE_POS]),
+            "cov_step_samples": int(prm[_k.K_COV_STEP]), "gnss_velocity": bool(use_vel),
+            "odometer": odometer is not None, "nhc": c.nhc_noise is not None}
+    return GinsResult(t, lla_out, v_out, q_out, err_out[:, 0:3], err_out[:, 3:6], err_out[:, 6:9], err_out[:, 9:12],
+                      err_out[:, _k.E_ODO], cov_t[:m], cov_diag[:m], cov_nav[:m], g.t.copy(), nis, acc > 0.5,
+                      t[used], veh[used, 0], veh[used, 2].astype(int), veh[used, 1] > 0.5, c, meta, smoothed,
+                      aid[:, _k.A_ZUPT].copy(), aid[:, _k.A_BARO].copy())

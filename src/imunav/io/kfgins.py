@@ -1,0 +1,495 @@
+"""KF-GINS files: IMU increments, navigation results, IMU errors, state σ, and the YAML configuration.
+
+KF-GINS (i2Nav-WHU, GPS Solutions 2025) and the awesome-gins-datasets use
+plain text tables (columns separated by spaces):
+
+* IMU: seconds of week; Δθ x y z (rad); Δv x y z (m/s), body FRD;
+* GNSS: see :mod:`imunav.io.gnss` (seconds of week, lat °, lon °, h, σ N E D);
+* navigation ``.nav``: week; seconds of week; lat °, lon °, h m; v N E D (m/s); roll pitch yaw (°);
+* IMU errors: seconds; gyro bias (°/h); accel bias (mGal); gyro scale (ppm); accel scale (ppm);
+* state σ: seconds; σ pos N E D (m); σ vel (m/s); σ att (°); σ biases; σ scale factors.
+
+:func:`load_kfgins_config` reads KF-GINS's own YAML configuration with its
+keys and units into a typed :class:`KfGinsConfig` in SI; paths are relative to
+the YAML file.  Writers write atomically (:func:`imunav.io._atomic.atomic_path`).
+"""
+
+from __future__ import annotations
+
+import math
+import os
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from imunav.errors import ConfigError, InvalidInputError, MissingDependencyError, ShapeError, TimeOrderError
+from imunav.io.gnss import lat_lon_radians, read_table, write_table
+from imunav.rotation import euler_from_quat, quat_from_euler
+from imunav.timeseries import ImuData
+from imunav.units import DEG, HOUR
+
+__all__ = [
+    "ImuIncrements",
+    "NavTrack",
+    "ImuNoise",
+    "KfGinsConfig",
+    "read_kfgins_imu",
+    "write_kfgins_imu",
+    "read_kfgins_nav",
+    "write_kfgins_nav",
+    "write_kfgins_imu_errors",
+    "write_kfgins_std",
+    "load_kfgins_config",
+    "KFGINS_KEYS",
+]
+
+Array = NDArray[np.float64]
+
+MGAL = 1e-5  # m/s^2
+PPM = 1e-6
+DPH = DEG / HOUR  # deg/h -> rad/s
+#: Largest relative difference between the declared IMU rate and the one of the time stamps (median step).
+RATE_TOLERANCE = 0.01
+
+
+# ---------------------------------------------------------------------------
+# IMU increments
+# ---------------------------------------------------------------------------
+
+
+@dataclass(frozen=True)
+class ImuIncrements:
+    """IMU output as increments over ``[t_{k-1}, t_k]`` (row k), the way many logging IMUs deliver it.
+
+    Parameters
+    ----------
+    t : (N,) strictly increasing end time of each interval, s.
+    dtheta : (N, 3) angle increments, rad, body FRD.
+    dvel : (N, 3) velocity increments (integrated specific force), m/s.
+    dt : (N,) interval lengths, s (row 0: ``1 / rate``).
+    meta : source file, rate, gaps found ...
+    """
+
+    t: Array
+    dtheta: Array
+    dvel: Array
+    dt: Array
+    meta: dict[str, Any] = field(default_factory=dict)
+
+    def __post_init__(self) -> None:
+        t = np.asarray(self.t, dtype=float)
+        n = t.size
+        for name in ("dtheta", "dvel"):
+            if np.shape(getattr(self, name)) != (n, 3):
+                raise ShapeError(f"ImuIncrements.{name} must have shape ({n}, 3); got {np.shape(getattr(self, name))}")
+        if np.shape(self.dt) != (n,) or np.any(np.asarray(self.dt) <= 0):
+            raise InvalidInputError("ImuIncrements.dt must be (N,) positive interval lengths in seconds")
+
+    @property
+    def n(self) -> int:
+        """Number of samples."""
+        return int(self.t.size)
+
+    def to_imu_data(self) -> ImuData:
+        """Mean rates over each interval (increment / dt) as an :class:`ImuData` stamped at the interval ends."""
+        return ImuData(self.t, self.dtheta / self.dt[:, None], self.dvel / self.dt[:, None],
+                       meta={**self.meta, "from_increments": True})
+
+    @classmethod
+    def from_imu_data(cls, imu: ImuData, rate_hz: float | None = None) -> ImuIncrements:
+        """Increments of point-sampled rates by the trapezoid rule (row 0 over ``1 / rate_hz`` at its own rate).
+
+        Parameters
+        ----------
+        imu : ImuData (rad/s, m/s^2).
+        rate_hz : nominal rate for row 0 (default: the median rate of ``imu``).
+
+        Returns
+        -------
+        ImuIncrements
+        """
+        t = np.asarray(imu.t, dtype=float)
+        if t.size < 2:
+            raise InvalidInputError("ImuIncrements.from_imu_data needs at least 2 samples")
+        rate = float(rate_hz) if rate_hz is not None else float(1.0 / np.median(np.diff(t)))
+        dt = np.concatenate([[1.0 / rate], np.diff(t)])
+        dth = np.empty((t.size, 3))
+        dv = np.empty((t.size, 3))
+        dth[0], dv[0] = imu.gyro[0] * dt[0], imu.accel[0] * dt[0]
+        dth[1:] = 0.5 * (imu.gyro[1:] + imu.gyro[:-1]) * dt[1:, None]
+        dv[1:] = 0.5 * (imu.accel[1:] + imu.accel[:-1]) * dt[1:, None]
+        return cls(t, dth, dv, dt, {"rate_hz": rate, "source": imu.meta.get("source", "ImuData")})
+
+
+def read_kfgins_imu(path: str | os.PathLike[str], rate_hz: float) -> ImuIncrements:
+    """Read a KF-GINS IMU text file (seconds of week, Δθ rad, Δv m/s; extra columns such as odometer ignored).
+
+    Parameters
+    ----------
+    path : text file with 7 or more columns.
+    rate_hz : the declared IMU rate (KF-GINS's ``imudatarate``), Hz.
+
+    Returns
+    -------
+    ImuIncrements
+        ``meta["gaps"]`` lists intervals longer than 1.5 / rate (start time, length s).
+
+    Raises
+    ------
+    TimeOrderError
+        Time stamps that do not increase.
+    InvalidInputError
+        A declared rate that the time stamps contradict (median step off by more than 1 %), or
+        values that are not increments (rates or degrees).
+    """
+    rate = float(rate_hz)
+    if not (math.isfinite(rate) and rate > 0):
+        raise InvalidInputError(f"rate_hz (imudatarate) must be a positive rate in Hz; got {rate_hz!r}")
+    a = read_table(path, tuple(range(7, 40)), "KF-GINS IMU")
+    src = os.fspath(path)
+    t = a[:, 0]
+    if t.size < 2:
+        raise InvalidInputError(f"{src}: an IMU file needs at least 2 samples")
+    d = np.diff(t)
+    bad = np.flatnonzero(d <= 0)
+    if bad.size:
+        k = int(bad[0]) + 1
+        raise TimeOrderError(f"{src}: IMU time is not strictly increasing at data row {k + 1} "
+                             f"({t[k - 1]!r} then {t[k]!r}); sort the file and remove duplicates")
+    med = float(np.median(d))
+    if abs(med * rate - 1.0) > RATE_TOLERANCE:
+        raise InvalidInputError(
+            f"{src}: the time stamps step by {med:.6g} s ({1 / med:.6g} Hz) but the declared rate is {rate:g} Hz; "
+            "fix imudatarate (or rate_hz) to the file's rate"
+        )
+    dt = np.concatenate([[1.0 / rate], d])
+    dth, dv = a[:, 1:4], a[:, 4:7]
+    big = np.max(np.linalg.norm(dth, axis=1) / dt)
+    if big > 50.0:  # rad/s: no vehicle IMU turns faster; degrees or rates were given
+        raise InvalidInputError(f"{src}: the angle increments reach {big:.3g} rad/s; KF-GINS files hold increments "
+                                "in radians (not degrees, not rates)")
+    f_med = float(np.median(np.linalg.norm(dv, axis=1) / dt))
+    if f_med > 200.0:
+        raise InvalidInputError(f"{src}: the velocity increments average {f_med:.3g} m/s^2 of specific force; "
+                                "the file holds rates or another unit, not increments in m/s")
+    gaps = np.flatnonzero(d > 1.5 / rate)
+    meta = {"source": src, "format": "kf-gins-imu", "rate_hz": rate,
+            "gaps": [[float(t[i]), float(d[i])] for i in gaps[:1000]], "n_gaps": int(gaps.size)}
+    return ImuIncrements(t, dth, dv, dt, meta)
+
+
+def write_kfgins_imu(path: str | os.PathLike[str], inc: ImuIncrements) -> Path:
+    """Write increments as a KF-GINS IMU text file (7 columns), atomically."""
+    return write_table(path, [inc.t, *inc.dtheta.T, *inc.dvel.T])
+
+
+# ---------------------------------------------------------------------------
+# navigation results and truth
+# ---------------------------------------------------------------------------
+
+
+@dataclass(frozen=True)
+class NavTrack:
+    """A navigation solution or truth: time, geodetic position, NED velocity and attitude (SI).
+
+    Parameters
+    ----------
+    t : (N,) s (seconds of week in KF-GINS files).
+    lla : (N, 3) lat rad, lon rad, h m.
+    vel_ned : (N, 3) m/s.
+    q_nb : (N, 4) attitude body -> NED.
+    week : GPS week (KF-GINS writes 0 when unknown).
+    meta : source ...
+    """
+
+    t: Array
+    lla: Array
+    vel_ned: Array
+    q_nb: Array
+    week: int = 0
+    meta: dict[str, Any] = field(default_factory=dict)
+
+    def __post_init__(self) -> None:
+        n = np.size(self.t)
+        for name, w in (("lla", 3), ("vel_ned", 3), ("q_nb", 4)):
+            if np.shape(getattr(self, name)) != (n, w):
+                raise ShapeError(f"NavTrack.{name} must have shape ({n}, {w}); got {np.shape(getattr(self, name))}")
+
+    def euler(self) -> Array:
+        """ZYX Euler angles (roll, pitch, yaw), rad, (N, 3)."""
+        return euler_from_quat(self.q_nb)
+
+
+def read_kfgins_nav(path: str | os.PathLike[str]) -> NavTrack:
+    """Read a KF-GINS navigation / truth file (``.nav``: week, seconds, lat °, lon °, h, v NED, roll pitch yaw °).
+
+    Returns
+    -------
+    NavTrack
+    """
+    a = read_table(path, (11,), "KF-GINS navigation (.nav)")
+    src = os.fspath(path)
+    t = a[:, 1]
+    bad = np.flatnonzero(np.diff(t) <= 0)
+    if bad.size:
+        k = int(bad[0]) + 1
+        raise TimeOrderError(f"{src}: time is not strictly increasing at data row {k + 1}")
+    lat, lon = lat_lon_radians(a[:, 2], a[:, 3], "deg", src)
+    q = quat_from_euler(np.radians(a[:, 8:11]))
+    weeks = np.unique(a[:, 0])
+    return NavTrack(t, np.column_stack([lat, lon, a[:, 4]]), a[:, 5:8], q, int(weeks[0]),
+                    {"source": src, "format": "kf-gins-nav"})
+
+
+def write_kfgins_nav(path: str | os.PathLike[str], nav: NavTrack) -> Path:
+    """Write a KF-GINS ``.nav`` file (11 columns, degrees), atomically."""
+    eul = np.degrees(nav.euler())
+    return write_table(path, [np.full(nav.t.size, float(nav.week)), nav.t, np.degrees(nav.lla[:, 0]),
+                              np.degrees(nav.lla[:, 1]), nav.lla[:, 2], *nav.vel_ned.T, *eul.T])
+
+
+def _cols(x: ArrayLike, n: int, name: str) -> Array:
+    a = np.asarray(x, dtype=float)
+    if a.shape != (n, 3):
+        raise ShapeError(f"{name} must have shape ({n}, 3); got {a.shape}")
+    return a
+
+
+def write_kfgins_imu_errors(path: str | os.PathLike[str], t: ArrayLike, gyro_bias: ArrayLike, accel_bias: ArrayLike,
+                            gyro_scale: ArrayLike, accel_scale: ArrayLike) -> Path:
+    """Write KF-GINS's IMU error file: seconds, gyro bias °/h, accel bias mGal, gyro and accel scale ppm.
+
+    Parameters
+    ----------
+    t : (N,) s.
+    gyro_bias : (N, 3) rad/s.  accel_bias : (N, 3) m/s^2.
+    gyro_scale, accel_scale : (N, 3) dimensionless scale-factor errors.
+    """
+    ta = np.asarray(t, dtype=float)
+    n = ta.size
+    return write_table(path, [ta, *(_cols(gyro_bias, n, "gyro_bias") / DPH).T,
+                              *(_cols(accel_bias, n, "accel_bias") / MGAL).T,
+                              *(_cols(gyro_scale, n, "gyro_scale") / PPM).T,
+                              *(_cols(accel_scale, n, "accel_scale") / PPM).T])
+
+
+def write_kfgins_std(path: str | os.PathLike[str], t: ArrayLike, pos_std: ArrayLike, vel_std: ArrayLike,
+                     att_std: ArrayLike, gyro_bias_std: ArrayLike, accel_bias_std: ArrayLike,
+                     gyro_scale_std: ArrayLike, accel_scale_std: ArrayLike) -> Path:
+    """Write KF-GINS's state σ file (22 columns): seconds, pos N E D m, vel m/s, att (roll pitch yaw) °,
+    gyro bias °/h, accel bias mGal, gyro and accel scale ppm.  Inputs in SI (m, m/s, rad, rad/s, m/s^2, 1)."""
+    ta = np.asarray(t, dtype=float)
+    n = ta.size
+    return write_table(path, [ta, *_cols(pos_std, n, "pos_std").T, *_cols(vel_std, n, "vel_std").T,
+                              *np.degrees(_cols(att_std, n, "att_std")).T,
+                              *(_cols(gyro_bias_std, n, "gyro_bias_std") / DPH).T,
+                              *(_cols(accel_bias_std, n, "accel_bias_std") / MGAL).T,
+                              *(_cols(gyro_scale_std, n, "gyro_scale_std") / PPM).T,
+                              *(_cols(accel_scale_std, n, "accel_scale_std") / PPM).T])
+
+
+# ---------------------------------------------------------------------------
+# YAML configuration
+# ---------------------------------------------------------------------------
+
+#: KF-GINS configuration keys (dataset/kf-gins.yaml) and their units.
+KFGINS_KEYS: dict[str, str] = {
+    "imupath": "path", "gnsspath": "path", "outputpath": "path", "imudatalen": "columns", "imudatarate": "Hz",
+    "starttime": "s of week", "endtime": "s of week (-1: end of file)",
+    "initpos": "deg, deg, m", "initvel": "m/s NED", "initatt": "deg roll pitch yaw",
+    "initgyrbias": "deg/h", "initaccbias": "mGal", "initgyrscale": "ppm", "initaccscale": "ppm",
+    "initposstd": "m NED", "initvelstd": "m/s NED", "initattstd": "deg",
+    "initbgstd": "deg/h", "initbastd": "mGal", "initsgstd": "ppm", "initsastd": "ppm",
+    "imunoise": "arw deg/sqrt(h), vrw m/s/sqrt(h), gbstd deg/h, abstd mGal, gsstd ppm, asstd ppm, corrtime h",
+    "antlever": "m FRD",
+}
+_NOISE_KEYS = ("arw", "vrw", "gbstd", "abstd", "gsstd", "asstd", "corrtime")
+
+
+@dataclass(frozen=True)
+class ImuNoise:
+    """IMU noise of the filter in SI: ARW rad/√s, VRW m/s/√s, Gauss–Markov bias σ (rad/s, m/s²) and
+    scale-factor σ (1), correlation time s."""
+
+    arw: Array
+    vrw: Array
+    gyro_bias_std: Array
+    accel_bias_std: Array
+    gyro_scale_std: Array
+    accel_scale_std: Array
+    corr_time: float
+
+
+@dataclass(frozen=True)
+class KfGinsConfig:
+    """KF-GINS configuration in SI (angles rad, biases rad/s and m/s², scale factors dimensionless).
+
+    ``end_time`` is None for KF-GINS's ``-1`` (to the end of the IMU file).  ``options`` holds the keys
+    KF-GINS does not know (imunav options such as an odometer file), as written.
+    """
+
+    source: Path
+    imu_path: Path
+    gnss_path: Path
+    output_path: Path
+    imu_rate_hz: float
+    imu_columns: int
+    start_time: float
+    end_time: float | None
+    init_lla: Array
+    init_vel: Array
+    init_euler: Array
+    init_gyro_bias: Array
+    init_accel_bias: Array
+    init_gyro_scale: Array
+    init_accel_scale: Array
+    init_pos_std: Array
+    init_vel_std: Array
+    init_att_std: Array
+    init_gyro_bias_std: Array
+    init_accel_bias_std: Array
+    init_gyro_scale_std: Array
+    init_accel_scale_std: Array
+    noise: ImuNoise
+    antenna_lever_arm: Array
+    options: dict[str, Any] = field(default_factory=dict)
+
+
+def _vec(doc: dict[str, Any], key: str, src: str, *, scale: float = 1.0, positive: bool = False,
+         default: Any = None) -> Array:
+    if key not in doc:
+        if default is None:
+            unit = KFGINS_KEYS.get(key, "see KF-GINS's imunoise")
+            raise ConfigError(f"{src}: missing key '{key}' ({unit}); add it as in KF-GINS's dataset/kf-gins.yaml")
+        return np.asarray(default, dtype=float) * scale
+    v = doc[key]
+    try:
+        a = np.asarray(v, dtype=float)
+    except (TypeError, ValueError):
+        raise ConfigError(f"{src}: '{key}' must be a list of 3 numbers; got {v!r}") from None
+    if a.shape != (3,) or not np.all(np.isfinite(a)):
+        raise ConfigError(f"{src}: '{key}' must be a list of 3 finite numbers; got {v!r}")
+    if positive and np.any(a <= 0):
+        raise ConfigError(f"{src}: '{key}' = {v!r}; a standard deviation must be > 0 (in {KFGINS_KEYS.get(key, key)})")
+    return a * scale
+
+
+def _num(doc: dict[str, Any], key: str, src: str, default: float | None = None) -> float:
+    if key not in doc:
+        if default is None:
+            raise ConfigError(f"{src}: missing key '{key}' ({KFGINS_KEYS.get(key, '')})")
+        return default
+    try:
+        x = float(doc[key])
+    except (TypeError, ValueError):
+        raise ConfigError(f"{src}: '{key}' must be a number; got {doc[key]!r}") from None
+    if not math.isfinite(x):
+        raise ConfigError(f"{src}: '{key}' must be finite; got {doc[key]!r}")
+    return x
+
+
+def _path(doc: dict[str, Any], key: str, base: Path, src: str) -> Path:
+    if not isinstance(doc.get(key), str) or not doc[key].strip():
+        raise ConfigError(f"{src}: '{key}' must be a file path (relative to the YAML file); got {doc.get(key)!r}")
+    p = Path(doc[key])
+    return p if p.is_absolute() else (base / p)
+
+
+def load_kfgins_config(path: str | os.PathLike[str]) -> KfGinsConfig:
+    """Read KF-GINS's YAML configuration (same keys and units) into a :class:`KfGinsConfig` in SI.
+
+    Parameters
+    ----------
+    path : the YAML file; ``imupath``, ``gnsspath`` and ``outputpath`` are relative to its folder.
+
+    Returns
+    -------
+    KfGinsConfig
+
+    Raises
+    ------
+    ConfigError
+        A missing key, a value of the wrong shape, a σ <= 0, an initial position out of range or in
+        radians, a start time outside a GPS week or an end time before it.
+    """
+    try:
+        import yaml  # optional: KF-GINS YAML support (extra 'yaml')
+    except ImportError as exc:  # pragma: no cover - depends on the installation
+        raise MissingDependencyError("pyyaml", "yaml", "Reading KF-GINS YAML configurations") from exc
+    p = Path(path)
+    src = os.fspath(p)
+    if not p.is_file():
+        raise FileNotFoundError(f"{src}: no such configuration file")
+    try:
+        doc = yaml.safe_load(p.read_text(encoding="utf-8"))
+    except yaml.YAMLError as exc:
+        raise ConfigError(f"{src}: not valid YAML ({exc})") from None
+    if not isinstance(doc, dict):
+        raise ConfigError(f"{src}: a KF-GINS configuration is a mapping of keys (imupath, gnsspath, ...)")
+    base = p.resolve().parent
+    noise_doc = doc.get("imunoise")
+    if not isinstance(noise_doc, dict):
+        raise ConfigError(f"{src}: 'imunoise' must be a mapping with keys {', '.join(_NOISE_KEYS)}")
+    nsrc = f"{src}: imunoise"
+    corr = _num(noise_doc, "corrtime", nsrc)
+    if corr <= 0:
+        raise ConfigError(f"{nsrc}: 'corrtime' = {corr!r} h; a correlation time must be > 0 hours")
+    noise = ImuNoise(
+        arw=_vec(noise_doc, "arw", nsrc, scale=DEG / 60.0, positive=True),
+        vrw=_vec(noise_doc, "vrw", nsrc, scale=1.0 / 60.0, positive=True),
+        gyro_bias_std=_vec(noise_doc, "gbstd", nsrc, scale=DPH, positive=True),
+        accel_bias_std=_vec(noise_doc, "abstd", nsrc, scale=MGAL, positive=True),
+        gyro_scale_std=_vec(noise_doc, "gsstd", nsrc, scale=PPM, positive=True),
+        accel_scale_std=_vec(noise_doc, "asstd", nsrc, scale=PPM, positive=True),
+        corr_time=corr * HOUR,
+    )
+    pos = _vec(doc, "initpos", src)
+    lat, lon = lat_lon_radians(pos[:1], pos[1:2], "deg", f"{src}: initpos")
+    rate = _num(doc, "imudatarate", src)
+    if rate <= 0:
+        raise ConfigError(f"{src}: 'imudatarate' = {rate!r}; the IMU rate must be > 0 Hz")
+    cols = int(_num(doc, "imudatalen", src, 7.0))
+    if cols < 7:
+        raise ConfigError(f"{src}: 'imudatalen' = {cols}; a KF-GINS IMU file has at least 7 columns")
+    start = _num(doc, "starttime", src)
+    end = _num(doc, "endtime", src)
+    if not (0 <= start <= 604800):
+        raise ConfigError(f"{src}: 'starttime' = {start!r}; it is a GPS second of week in [0, 604800]")
+    if end != -1 and not (start < end <= 604800):
+        raise ConfigError(f"{src}: 'endtime' = {end!r}; use -1 (to the end of the IMU file) or a second of week "
+                          f"after starttime {start!r}")
+    options = {k: v for k, v in doc.items() if k not in KFGINS_KEYS}
+    return KfGinsConfig(
+        source=p,
+        imu_path=_path(doc, "imupath", base, src),
+        gnss_path=_path(doc, "gnsspath", base, src),
+        output_path=_path(doc, "outputpath", base, src),
+        imu_rate_hz=rate,
+        imu_columns=cols,
+        start_time=start,
+        end_time=None if end == -1 else end,
+        init_lla=np.array([lat[0], lon[0], pos[2]]),
+        init_vel=_vec(doc, "initvel", src),
+        init_euler=_vec(doc, "initatt", src, scale=DEG),
+        init_gyro_bias=_vec(doc, "initgyrbias", src, scale=DPH, default=np.zeros(3)),
+        init_accel_bias=_vec(doc, "initaccbias", src, scale=MGAL, default=np.zeros(3)),
+        init_gyro_scale=_vec(doc, "initgyrscale", src, scale=PPM, default=np.zeros(3)),
+        init_accel_scale=_vec(doc, "initaccscale", src, scale=PPM, default=np.zeros(3)),
+        init_pos_std=_vec(doc, "initposstd", src, positive=True),
+        init_vel_std=_vec(doc, "initvelstd", src, positive=True),
+        init_att_std=_vec(doc, "initattstd", src, scale=DEG, positive=True),
+        init_gyro_bias_std=_vec(doc, "initbgstd", src, scale=DPH, positive=True,
+                                default=noise.gyro_bias_std / DPH),
+        init_accel_bias_std=_vec(doc, "initbastd", src, scale=MGAL, positive=True,
+                                 default=noise.accel_bias_std / MGAL),
+        init_gyro_scale_std=_vec(doc, "initsgstd", src, scale=PPM, positive=True,
+                                 default=noise.gyro_scale_std / PPM),
+        init_accel_scale_std=_vec(doc, "initsastd", src, scale=PPM, positive=True,
+                                  default=noise.accel_scale_std / PPM),
+        noise=noise,
+        antenna_lever_arm=_vec(doc, "antlever", src),
+        options=options,
+    )

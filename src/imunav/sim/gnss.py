@@ -1,0 +1,199 @@
+"""GNSS receiver simulator: position and velocity fixes from a truth trajectory.
+
+Fix ``k`` with time stamp ``t_k`` describes the antenna at ``t_k − latency``
+(the receiver's solution arrives and is stamped late; a filter that does not
+know the latency sees a time error):
+
+    p_k = p_ant(t_k − latency) + b_k + w_k,      b: Gauss–Markov (σ_c, T), w: white (σ_w),
+    v_k = v_ant(t_k − latency) + u_k,            u: white (σ_v),
+
+per north/east/down axis, with the antenna at the body lever arm ``l``:
+``p_ant = p + C_nb l`` and ``v_ant = v + C_nb (ω_eb^b × l)`` (Groves 2013 eqs.
+14.121-14.122 in NED).  The truth between its samples is interpolated by cubic
+Hermite polynomials (position from velocity, velocity from acceleration) and
+attitude by slerp.  Epochs are dropped at random (``dropout_prob``) and inside
+scheduled outages; the fixes report ``σ = √(σ_w² + σ_c²)`` per axis.  Every
+removal is recorded in ``meta``.  Seeded with ``rng``: the same seed gives the
+same fixes.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from typing import Any
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from imunav import earth
+from imunav.errors import InvalidInputError, ShapeError
+from imunav.io.gnss import GnssData
+from imunav.rotation import dcm_from_quat, quat_interp
+from imunav.sim.trajectory import Trajectory
+from imunav.sim.vehicle import gauss_markov_sequence, omega_eb_b
+
+__all__ = ["simulate_gnss", "outage_schedule", "truth_at"]
+
+Array = NDArray[np.float64]
+
+
+def _hermite(t: Array, x: Array, xd: Array, tq: Array) -> Array:
+    """Cubic Hermite interpolation of rows of ``x`` (with derivative ``xd``) at ``tq``."""
+    i = np.clip(np.searchsorted(t, tq, side="right") - 1, 0, t.size - 2)
+    h = (t[i + 1] - t[i])[:, None]
+    s = ((tq - t[i]) / (t[i + 1] - t[i]))[:, None]
+    h00 = 2 * s**3 - 3 * s**2 + 1
+    h10 = s**3 - 2 * s**2 + s
+    h01 = -2 * s**3 + 3 * s**2
+    h11 = s**3 - s**2
+    return h00 * x[i] + h10 * h * xd[i] + h01 * x[i + 1] + h11 * h * xd[i + 1]
+
+
+def truth_at(truth: Trajectory, tq: ArrayLike, lever_arm: ArrayLike = (0.0, 0.0, 0.0)) -> tuple[Array, Array]:
+    """Geodetic position (lat rad, lon rad, h m) and NED velocity (m/s) of the point at body ``lever_arm``
+    at times ``tq`` inside the truth's span (interpolated, see the module docstring).
+
+    Parameters
+    ----------
+    truth : Trajectory with ``pos_lla`` and ``vel_ned``.
+    tq : (M,) times, s.
+    lever_arm : (3,) body FRD offset of the point from the IMU, m.
+
+    Returns
+    -------
+    lla : (M, 3), vel : (M, 3)
+    """
+    if truth.pos_lla is None or truth.vel_ned is None:
+        raise InvalidInputError("the truth trajectory needs pos_lla and vel_ned (use imunav.sim.vehicle_trajectory)")
+    tq = np.atleast_1d(np.asarray(tq, dtype=float))
+    if tq.size and (tq.min() < truth.t[0] - 1e-9 or tq.max() > truth.t[-1] + 1e-9):
+        raise InvalidInputError(f"times {tq.min():.3f}..{tq.max():.3f} s are outside the truth span "
+                                f"{truth.t[0]:.3f}..{truth.t[-1]:.3f} s")
+    la = np.asarray(lever_arm, dtype=float)
+    if la.shape != (3,) or not np.all(np.isfinite(la)):
+        raise ShapeError(f"lever_arm must be a finite 3-vector (body FRD, m); got {lever_arm!r}")
+    lla0 = truth.pos_lla[0]
+    ned = earth.lla_to_ned(truth.pos_lla, lla0)
+    # d(ned)/dt of the tangent-plane coordinates = C_n0^n-ish rotation of v^n; differentiate the samples
+    # exactly enough by expressing v^n in the tangent frame at the origin
+    C_e0 = earth.dcm_en(lla0[0], lla0[1])
+    C_ek = earth.dcm_en(truth.pos_lla[:, 0], truth.pos_lla[:, 1])
+    v0 = np.einsum("ij,njk,nk->ni", C_e0.T, C_ek, truth.vel_ned)
+    acc = truth.accel_ned if truth.accel_ned is not None else np.gradient(truth.vel_ned, truth.t, axis=0)
+    vq = _hermite(truth.t, truth.vel_ned, acc, tq)
+    nq = _hermite(truth.t, ned, v0, tq)
+    lla = earth.ned_to_lla(nq, lla0)
+    if np.any(la != 0):
+        q = quat_interp(truth.t, truth.q_nb, tq)
+        C = dcm_from_quat(q)
+        w = omega_eb_b(truth)
+        wq = np.stack([np.interp(tq, truth.t, w[:, j]) for j in range(3)], axis=1)
+        d_n = np.einsum("nij,j->ni", C, la)
+        rn, re = earth.radii(lla[:, 0])
+        lla = lla + np.column_stack([d_n[:, 0] / (rn + lla[:, 2]),
+                                     d_n[:, 1] / ((re + lla[:, 2]) * np.cos(lla[:, 0])), -d_n[:, 2]])
+        vq = vq + np.einsum("nij,nj->ni", C, np.cross(wq, la))
+    return lla, vq
+
+
+def outage_schedule(t_start: float, t_end: float, *, every_s: float = 180.0, length_s: float = 60.0,
+                    first_s: float = 0.0) -> list[tuple[float, float]]:
+    """Outages ``(start, length)`` of ``length_s`` every ``every_s`` from ``t_start + first_s`` while they
+    end before ``t_end`` (the KF-GINS protocol: 60 s every 180 s, first at 0, 60 or 120 s after convergence).
+
+    Returns
+    -------
+    list of (start s, length s)
+    """
+    if not (every_s > length_s > 0):
+        raise InvalidInputError(f"need every_s > length_s > 0; got every_s={every_s}, length_s={length_s}")
+    out = []
+    s = t_start + first_s
+    while s + length_s <= t_end:
+        out.append((float(s), float(length_s)))
+        s += every_s
+    return out
+
+
+def simulate_gnss(
+    truth: Trajectory,
+    *,
+    rate_hz: float = 1.0,
+    pos_noise: ArrayLike = (0.5, 0.5, 1.0),
+    pos_corr_sigma: ArrayLike = (0.0, 0.0, 0.0),
+    pos_corr_tau: float = 300.0,
+    vel_noise: ArrayLike | None = (0.05, 0.05, 0.1),
+    latency_s: float = 0.0,
+    lever_arm: ArrayLike = (0.0, 0.0, 0.0),
+    dropout_prob: float = 0.0,
+    outages: Sequence[tuple[float, float]] = (),
+    t_offset: float = 0.0,
+    rng: Any = None,
+) -> GnssData:
+    """Simulated GNSS fixes of the antenna on a truth trajectory.
+
+    Parameters
+    ----------
+    truth : Trajectory with ``pos_lla`` and ``vel_ned`` (e.g. :func:`imunav.sim.vehicle.vehicle_trajectory`).
+    rate_hz : fix rate, Hz; stamps ``t_offset + truth.t[0] + k / rate_hz`` (first one after the latency).
+    pos_noise : (3,) white position noise σ_w north/east/down, m (> 0).
+    pos_corr_sigma, pos_corr_tau : (3,) σ_c (m, >= 0) and correlation time T (s) of the Gauss–Markov
+        position error (multipath, atmosphere).
+    vel_noise : (3,) white velocity noise σ_v, m/s (> 0), or None for position-only fixes.
+    latency_s : age of each fix at its time stamp, s (>= 0).
+    lever_arm : (3,) antenna in body FRD from the IMU, m.
+    dropout_prob : probability that an epoch is missing, independently (0 <= p < 1).
+    outages : (start s, length s) pairs with no fix (see :func:`outage_schedule`).
+    t_offset : offset of the stamps from the grid, s (fixes between IMU samples).
+    rng : numpy Generator or seed.
+
+    Returns
+    -------
+    GnssData
+        ``meta`` holds the settings, the outages and the epochs removed (``meta["removed"]``).
+    """
+    g = np.random.default_rng(rng)
+    pw = np.asarray(pos_noise, dtype=float) * np.ones(3)
+    pc = np.asarray(pos_corr_sigma, dtype=float) * np.ones(3)
+    if np.any(pw <= 0) or np.any(pc < 0):
+        raise InvalidInputError(f"pos_noise must be > 0 and pos_corr_sigma >= 0 (m); got {pos_noise!r}, {pos_corr_sigma!r}")
+    if not (math.isfinite(rate_hz) and 0 < rate_hz <= truth.fs):
+        raise InvalidInputError(f"rate_hz must be in (0, {truth.fs:g}] Hz; got {rate_hz!r}")
+    if not (math.isfinite(latency_s) and latency_s >= 0):
+        raise InvalidInputError(f"latency_s must be >= 0 s; got {latency_s!r}")
+    if not (0.0 <= dropout_prob < 1.0):
+        raise InvalidInputError(f"dropout_prob must be in [0, 1); got {dropout_prob!r}")
+    t0 = truth.t[0] + latency_s + (float(t_offset) % (1.0 / rate_hz))
+    n = int(math.floor((truth.t[-1] - t0) * rate_hz + 1e-9)) + 1
+    if n < 1:
+        raise InvalidInputError("the truth is shorter than one GNSS interval after the latency")
+    t = t0 + np.arange(n) / rate_hz
+    lla, vel = truth_at(truth, t - latency_s, lever_arm)
+    err = pw * g.standard_normal((n, 3))
+    if np.any(pc > 0):
+        err += gauss_markov_sequence(t, pc, float(pos_corr_tau), g)
+    rn, re = earth.radii(lla[:, 0])
+    lla = lla + np.column_stack([err[:, 0] / (rn + lla[:, 2]), err[:, 1] / ((re + lla[:, 2]) * np.cos(lla[:, 0])),
+                                 -err[:, 2]])
+    vstd = None
+    if vel_noise is not None:
+        vstd = np.asarray(vel_noise, dtype=float) * np.ones(3)
+        if np.any(vstd <= 0):
+            raise InvalidInputError(f"vel_noise must be > 0 m/s (or None); got {vel_noise!r}")
+        vel = vel + vstd * g.standard_normal((n, 3))
+    keep_drop = g.random(n) >= dropout_prob
+    in_outage = np.zeros(n, dtype=bool)
+    for s, d in outages:
+        if not (d > 0):
+            raise InvalidInputError(f"an outage length must be > 0 s; got {d!r}")
+        in_outage |= (t >= s) & (t < s + d)
+    meta = {
+        "source": "imunav.sim.simulate_gnss",
+        "rate_hz": float(rate_hz), "pos_noise": pw.tolist(), "pos_corr_sigma": pc.tolist(),
+        "pos_corr_tau": float(pos_corr_tau), "vel_noise": None if vstd is None else vstd.tolist(),
+        "latency_s": float(latency_s), "lever_arm": np.asarray(lever_arm, dtype=float).tolist(),
+        "dropout_prob": float(dropout_prob), "outages": [[float(s), float(d)] for s, d in outages],
+    }
+    full = GnssData(t, lla, np.sqrt(pw**2 + pc**2), None if vstd is None else vel, vstd, meta)
+    return full.select(keep_drop, "random dropout").select(~in_outage[keep_drop], "scheduled outage")

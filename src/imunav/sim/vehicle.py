@@ -1,0 +1,445 @@
+"""Land-vehicle trajectories (truth for GNSS/INS) and the vehicle's own sensors.
+
+A drive is a list of manoeuvres: :func:`straight`, :func:`speed_change`,
+:func:`turn`, :func:`stop` and :func:`hill`.  :func:`vehicle_trajectory` turns
+it into a :class:`~imunav.sim.trajectory.Trajectory` on the WGS84 ellipsoid
+(geodetic position, NED velocity, ``q_nb``, and the *exact* body rate
+``ω_nb^b`` and NED acceleration ``v̇^n``), so that
+:func:`~imunav.sim.error_model.simulate_imu` / :func:`~imunav.sim.trajectory.ideal_imu`
+give the IMU a strapdown NED mechanization expects, with Earth rotation and
+transport rate.
+
+Vehicle model: the body x axis points along the velocity (no side slip, no
+vertical body velocity: the non-holonomic constraint holds exactly), roll is
+zero, pitch is the road grade γ and yaw the heading ψ::
+
+    v^n = s (cos γ cos ψ, cos γ sin ψ, −sin γ),
+    ω_nb^b = (−ψ̇ sin γ, γ̇, ψ̇ cos γ)          (ZYX Euler rates at zero roll).
+
+Every manoeuvre shapes a rate (acceleration ṡ, yaw rate ψ̇, grade rate γ̇)
+with Hann pulses ``A/T (1 − cos 2πu)``, ``u = (t − t0)/T``: rates, values and
+their derivatives are closed-form and continuous, and the IMU signals have no
+steps.  Geodetic position is integrated from ``v^n`` with Simpson's rule on
+half-steps (``lat' = v_N/(R_N + h)``, ``lon' = v_E/((R_E + h) cos lat)``,
+``h' = −v_D``; Groves 2013 eq. 2.111), error below 1e-12 rad at 100 Hz.
+
+:func:`simulate_odometer` (wheel speed, with a lever arm and a scale factor)
+and :func:`simulate_baro` (barometric height, with a Gauss–Markov bias) are
+sampled from the same truth.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from imunav import earth
+from imunav.errors import InvalidInputError, ShapeError
+from imunav.rotation import dcm_from_quat, quat_from_euler
+from imunav.sim.trajectory import Trajectory, body_rate_from_attitude
+from imunav.units import DEG
+
+__all__ = [
+    "Maneuver",
+    "straight",
+    "speed_change",
+    "turn",
+    "stop",
+    "hill",
+    "vehicle_trajectory",
+    "demo_drive",
+    "OdometerData",
+    "BaroData",
+    "simulate_odometer",
+    "simulate_baro",
+    "gauss_markov_sequence",
+]
+
+Array = NDArray[np.float64]
+
+
+@dataclass(frozen=True)
+class Maneuver:
+    """One manoeuvre of a drive (build it with :func:`straight`, :func:`turn`, ...).
+
+    Parameters
+    ----------
+    kind : "straight", "speed", "turn", "stop" or "hill".
+    duration_s : length, s (> 0).
+    to_speed : speed reached at the end, m/s (kind "speed").
+    dheading : heading change, rad (kind "turn"; positive turns right, towards east from north).
+    grade : road grade reached, rad (kind "hill"; positive climbs).
+    ramp_s : time to reach the grade and to come back, s (kind "hill").
+    """
+
+    kind: str
+    duration_s: float
+    to_speed: float = 0.0
+    dheading: float = 0.0
+    grade: float = 0.0
+    ramp_s: float = 0.0
+
+    def __post_init__(self) -> None:
+        if self.kind not in ("straight", "speed", "turn", "stop", "hill"):
+            raise InvalidInputError(f"Maneuver.kind {self.kind!r} is unknown; use straight, speed, turn, stop or hill")
+        if not (math.isfinite(self.duration_s) and self.duration_s > 0):
+            raise InvalidInputError(f"{self.kind}: duration_s must be a positive number of seconds; got {self.duration_s!r}")
+        for name in ("to_speed", "dheading", "grade", "ramp_s"):
+            if not math.isfinite(getattr(self, name)):
+                raise InvalidInputError(f"{self.kind}: {name} must be finite; got {getattr(self, name)!r}")
+        if self.kind == "hill":
+            if abs(self.grade) >= math.radians(45):
+                raise InvalidInputError(f"hill: grade {math.degrees(self.grade):.3g} deg is not a road; keep |grade| < 45 deg")
+            if not (0 < self.ramp_s <= self.duration_s / 2):
+                raise InvalidInputError(
+                    f"hill: ramp_s must be in (0, duration_s/2] = (0, {self.duration_s / 2:g}] s; got {self.ramp_s!r}"
+                )
+
+
+def straight(duration_s: float) -> Maneuver:
+    """Constant speed and heading for ``duration_s`` seconds."""
+    return Maneuver("straight", float(duration_s))
+
+
+def speed_change(to_speed: float, duration_s: float) -> Maneuver:
+    """Accelerate (or brake) smoothly to ``to_speed`` m/s over ``duration_s`` s.
+
+    Peak acceleration is ``2 Δs / duration_s`` for a change Δs.
+    """
+    return Maneuver("speed", float(duration_s), to_speed=float(to_speed))
+
+
+def turn(angle_deg: float, duration_s: float) -> Maneuver:
+    """Change heading by ``angle_deg`` (positive: to the right) over ``duration_s`` s at the current speed.
+
+    Peak yaw rate ``2 angle / duration_s``; lateral acceleration ``speed × yaw rate``.
+    """
+    return Maneuver("turn", float(duration_s), dheading=float(angle_deg) * DEG)
+
+
+def stop(duration_s: float) -> Maneuver:
+    """Stand still for ``duration_s`` s (the speed reached so far must be zero: brake first with
+    :func:`speed_change`)."""
+    return Maneuver("stop", float(duration_s))
+
+
+def hill(grade_deg: float, duration_s: float, ramp_s: float = 5.0) -> Maneuver:
+    """Climb (``grade_deg`` > 0) or descend: the grade rises to ``grade_deg`` over ``ramp_s``,
+    holds, and returns to level over the last ``ramp_s`` of ``duration_s``."""
+    return Maneuver("hill", float(duration_s), grade=float(grade_deg) * DEG, ramp_s=float(ramp_s))
+
+
+# ---------------------------------------------------------------------------
+# Hann pulses: rate A/T (1 - cos 2πu) on [t0, t0 + T], area A
+# ---------------------------------------------------------------------------
+
+
+@dataclass
+class _Signal:
+    """A signal x(t) whose rate is a sum of non-overlapping Hann pulses: x, ẋ, ẍ in closed form."""
+
+    x0: float
+    pulses: list[tuple[float, float, float]] = field(default_factory=list)  # (t0, T, area)
+
+    def eval(self, t: Array) -> tuple[Array, Array, Array]:
+        """x, ẋ, ẍ at the sorted times ``t``."""
+        jump = np.zeros(t.size + 1)
+        xd = np.zeros(t.size)
+        xdd = np.zeros(t.size)
+        x = np.zeros(t.size)
+        for s, d, a in self.pulses:
+            i0, i1 = np.searchsorted(t, [s, s + d], side="right")
+            jump[i1] += a  # the full area from the end of the pulse on
+            u = (t[i0:i1] - s) / d
+            w = 2.0 * np.pi * u
+            x[i0:i1] += a * (u - np.sin(w) / (2.0 * np.pi))
+            xd[i0:i1] += a / d * (1.0 - np.cos(w))
+            xdd[i0:i1] += a / d * (2.0 * np.pi / d) * np.sin(w)
+        return self.x0 + x + np.cumsum(jump)[:-1], xd, xdd
+
+
+def _plan(maneuvers: Sequence[Maneuver], speed0: float) -> tuple[_Signal, _Signal, _Signal, float]:
+    speed = _Signal(speed0)
+    heading = _Signal(0.0)
+    grade = _Signal(0.0)
+    t = 0.0
+    s_now = speed0
+    for i, m in enumerate(maneuvers):
+        if not isinstance(m, Maneuver):
+            raise InvalidInputError(f"maneuvers[{i}] is a {type(m).__name__}; build it with straight(), turn(), ...")
+        if m.kind == "speed":
+            if m.to_speed < 0:
+                raise InvalidInputError(f"maneuvers[{i}]: speed_change to {m.to_speed} m/s; a vehicle speed is >= 0 "
+                                        "(this generator drives forwards only)")
+            speed.pulses.append((t, m.duration_s, m.to_speed - s_now))
+            s_now = m.to_speed
+        elif m.kind == "turn":
+            heading.pulses.append((t, m.duration_s, m.dheading))
+        elif m.kind == "stop" and s_now != 0.0:
+            raise InvalidInputError(f"maneuvers[{i}]: stop at {s_now} m/s; brake first with speed_change(0, duration_s)")
+        elif m.kind == "hill":
+            if s_now == 0.0:
+                raise InvalidInputError(f"maneuvers[{i}]: a hill at standstill cannot change height; drive first")
+            grade.pulses.append((t, m.ramp_s, m.grade))
+            grade.pulses.append((t + m.duration_s - m.ramp_s, m.ramp_s, -m.grade))
+        t += m.duration_s
+    return speed, heading, grade, t
+
+
+def _simpson_cumulative(f: Array, dt: float) -> Array:
+    """Cumulative integral on a grid of step ``dt`` from values on the half-step grid (``f[::2]`` on the grid)."""
+    inc = dt / 6.0 * (f[0:-1:2] + 4.0 * f[1::2] + f[2::2])
+    return np.concatenate([[0.0], np.cumsum(inc)])
+
+
+def _half_grid(x: Array, xd: Array, dt: float) -> Array:
+    """Values on the half-step grid from grid values and derivatives (cubic Hermite at the mid points)."""
+    out = np.empty(2 * x.size - 1)
+    out[0::2] = x
+    out[1::2] = 0.5 * (x[:-1] + x[1:]) + dt / 8.0 * (xd[:-1] - xd[1:])
+    return out
+
+
+def vehicle_trajectory(
+    maneuvers: Sequence[Maneuver],
+    *,
+    fs: float = 200.0,
+    origin_lla: ArrayLike = (30.0 * DEG, 114.0 * DEG, 20.0),
+    heading0_deg: float = 0.0,
+    speed0: float = 0.0,
+    t0: float = 0.0,
+) -> Trajectory:
+    """Truth trajectory of a drive, sampled at the IMU rate.
+
+    Parameters
+    ----------
+    maneuvers : sequence of :class:`Maneuver`
+        The drive, in order (:func:`straight`, :func:`speed_change`, :func:`turn`, :func:`stop`, :func:`hill`).
+    fs : float
+        Sample rate, Hz.
+    origin_lla : (3,)
+        Start position (lat rad, lon rad, h m).
+    heading0_deg : float
+        Initial heading, degrees clockwise from north.
+    speed0 : float
+        Initial speed, m/s.
+    t0 : float
+        Time of the first sample, s (e.g. a GPS second of week).
+
+    Returns
+    -------
+    Trajectory
+        With ``pos_lla``, ``vel_ned``, ``q_nb``, exact ``omega_nb_b`` and ``accel_ned``.
+    """
+    if not maneuvers:
+        raise InvalidInputError("vehicle_trajectory: give at least one manoeuvre, e.g. [straight(60)]")
+    if not (math.isfinite(fs) and fs > 0):
+        raise InvalidInputError(f"fs must be a positive sample rate in Hz; got {fs!r}")
+    if not (math.isfinite(speed0) and speed0 >= 0):
+        raise InvalidInputError(f"speed0 must be a speed >= 0 m/s; got {speed0!r}")
+    o = np.asarray(origin_lla, dtype=float)
+    if o.shape != (3,) or not np.all(np.isfinite(o)):
+        raise ShapeError(f"origin_lla must be (lat rad, lon rad, h m); got {origin_lla!r}")
+    if abs(o[0]) > math.radians(85):
+        raise InvalidInputError(f"origin latitude {math.degrees(o[0]):.4g} deg: give it in radians, within +-85 deg")
+    speed, heading, grade, total = _plan(maneuvers, float(speed0))
+    heading.x0 = float(heading0_deg) * DEG
+    dt = 1.0 / float(fs)
+    n = int(math.floor(total * fs + 1e-9)) + 1
+    th = np.arange(2 * n - 1) * (dt / 2.0)  # grid and mid points
+    s, sd, _ = speed.eval(th)
+    psi, psid, _ = heading.eval(th)
+    gam, gamd, _ = grade.eval(th)
+    if np.any(s < -1e-9):
+        raise InvalidInputError("the drive reaches a negative speed; check the speed_change targets")
+    s = np.maximum(s, 0.0)
+    cg, sg, cp, sp = np.cos(gam), np.sin(gam), np.cos(psi), np.sin(psi)
+    vel = np.stack([s * cg * cp, s * cg * sp, -s * sg], axis=1)
+    acc = np.stack([
+        sd * cg * cp - s * (sg * gamd * cp + cg * sp * psid),
+        sd * cg * sp - s * (sg * gamd * sp - cg * cp * psid),
+        -sd * sg - s * cg * gamd,
+    ], axis=1)
+    # geodetic position: h first, then latitude by fixed-point iteration (R_N depends weakly on lat), then lon
+    h = o[2] + _simpson_cumulative(-vel[:, 2], dt)
+    h_half = _half_grid(h, -vel[0::2, 2], dt)
+    lat = np.full(th.size, o[0])
+    for _ in range(4):
+        rn, _re = earth.radii(lat)
+        f = vel[:, 0] / (rn + h_half)
+        lat = _half_grid(o[0] + _simpson_cumulative(f, dt), f[0::2], dt)
+    rn, re = earth.radii(lat)
+    lon_rate = vel[:, 1] / ((re + h_half) * np.cos(lat))
+    lon = o[1] + _simpson_cumulative(lon_rate, dt)
+    g = slice(0, None, 2)
+    lla = np.stack([lat[g], lon, h], axis=1)
+    q = quat_from_euler(np.zeros(n), gam[g], psi[g])
+    w = np.stack([-psid[g] * sg[g], gamd[g], psid[g] * cg[g]], axis=1)
+    t = float(t0) + np.arange(n) * dt
+    return Trajectory(t, q, vel_ned=vel[g], pos_lla=lla, omega_nb_b=w, accel_ned=acc[g])
+
+
+def demo_drive(duration_s: float = 600.0, *, speed: float = 15.0) -> list[Maneuver]:
+    """A drive of about ``duration_s`` seconds: start from rest, then repeated blocks of straights,
+    left and right turns, a hill, a speed change and a stop (the scenario of the tests and benchmarks)."""
+    if not (math.isfinite(duration_s) and duration_s >= 120):
+        raise InvalidInputError(f"demo_drive: duration_s must be at least 120 s; got {duration_s!r}")
+    m: list[Maneuver] = [stop(20.0), speed_change(speed, 15.0)]
+    t = 35.0
+    block = [
+        straight(20.0), turn(90.0, 10.0), straight(15.0), hill(3.0, 30.0, 6.0), turn(-45.0, 8.0),
+        speed_change(1.5 * speed, 12.0), straight(10.0), turn(-135.0, 14.0), speed_change(speed, 10.0),
+        turn(30.0, 6.0), speed_change(0.0, 12.0), stop(8.0), speed_change(speed, 12.0),
+    ]
+    blen = sum(b.duration_s for b in block)
+    while t + blen + 30.0 <= duration_s:
+        m.extend(block)
+        t += blen
+    rest = duration_s - t - 15.0
+    if rest > 0:
+        m.append(straight(rest))
+    m.append(speed_change(0.0, 15.0))
+    return m
+
+
+# ---------------------------------------------------------------------------
+# vehicle sensors: odometer and barometer
+# ---------------------------------------------------------------------------
+
+
+def gauss_markov_sequence(t: Array, sigma: ArrayLike, tau: float, rng: np.random.Generator) -> Array:
+    """Stationary first-order Gauss–Markov samples at times ``t`` (exact discretisation).
+
+    ``x_k = e^{-Δt/T} x_{k-1} + σ √(1 − e^{-2Δt/T}) w_k``, ``x_0 ~ N(0, σ²)``; ``sigma`` scalar or
+    per column (then the result is (N, m)).  ``tau = inf`` gives a random constant.
+    """
+    sig = np.atleast_1d(np.asarray(sigma, dtype=float))
+    if np.any(sig < 0) or not np.all(np.isfinite(sig)):
+        raise InvalidInputError(f"Gauss-Markov sigma must be finite and >= 0; got {sigma!r}")
+    if not (tau > 0):
+        raise InvalidInputError(f"Gauss-Markov correlation time must be > 0 s; got {tau!r}")
+    n = t.size
+    w = rng.standard_normal((n, sig.size))
+    out = np.empty((n, sig.size))
+    out[0] = sig * w[0]
+    phi = np.exp(-np.diff(t) / tau)
+    c = np.sqrt(1.0 - phi * phi)
+    for k in range(1, n):
+        out[k] = phi[k - 1] * out[k - 1] + sig * c[k - 1] * w[k]
+    return out[:, 0] if np.ndim(sigma) == 0 else out
+
+
+def _lever(x: ArrayLike, name: str) -> Array:
+    a = np.asarray(x, dtype=float)
+    if a.shape != (3,) or not np.all(np.isfinite(a)):
+        raise ShapeError(f"{name} must be a finite 3-vector in body FRD metres; got {x!r}")
+    return a
+
+
+def omega_eb_b(truth: Trajectory) -> Array:
+    """Body rate relative to the Earth, ``ω_eb^b = ω_nb^b + C_bn ω_en^n`` (rad/s), per sample."""
+    if truth.pos_lla is None or truth.vel_ned is None:
+        raise InvalidInputError("the truth trajectory needs pos_lla and vel_ned (use vehicle_trajectory)")
+    w_nb = truth.omega_nb_b
+    if w_nb is None:
+        w_nb = body_rate_from_attitude(truth.t, truth.q_nb)
+    w_en = earth.transport_rate_ned(truth.pos_lla[:, 0], truth.pos_lla[:, 2], truth.vel_ned)
+    return w_nb + np.einsum("nji,nj->ni", dcm_from_quat(truth.q_nb), w_en)
+
+
+def lever_arm_velocity_body(truth: Trajectory, lever_b: ArrayLike) -> Array:
+    """Body-frame velocity (m/s) of the point at ``lever_b`` (body FRD, m): ``C_bn v^n + ω_eb^b × l``."""
+    lb = _lever(lever_b, "lever_b")
+    v_b = np.einsum("nji,nj->ni", dcm_from_quat(truth.q_nb), truth.vel_ned)
+    return v_b + np.cross(omega_eb_b(truth), lb)
+
+
+@dataclass(frozen=True)
+class OdometerData:
+    """Wheel-odometer forward speed (m/s) at times ``t`` (s); ``meta`` records the simulated errors."""
+
+    t: Array
+    speed: Array
+    meta: dict[str, Any] = field(default_factory=dict)
+
+
+@dataclass(frozen=True)
+class BaroData:
+    """Barometric (ellipsoidal-equivalent) height (m) at times ``t`` (s)."""
+
+    t: Array
+    height: Array
+    meta: dict[str, Any] = field(default_factory=dict)
+
+
+def _decimate(truth: Trajectory, rate_hz: float | None) -> Array:
+    if rate_hz is None:
+        return np.arange(truth.n)
+    if not (math.isfinite(rate_hz) and 0 < rate_hz <= truth.fs + 1e-9):
+        raise InvalidInputError(f"rate_hz must be in (0, {truth.fs:g}] Hz (the truth rate); got {rate_hz!r}")
+    step = max(1, int(round(truth.fs / rate_hz)))
+    return np.arange(0, truth.n, step)
+
+
+def simulate_odometer(
+    truth: Trajectory,
+    *,
+    lever_arm: ArrayLike = (0.0, 0.0, 0.0),
+    scale_factor: float = 0.0,
+    noise_std: float = 0.0,
+    rate_hz: float | None = None,
+    rng: Any = None,
+) -> OdometerData:
+    """Wheel speed: forward body velocity at the wheel, ``(1 + k) (C_bn v^n + ω_eb^b × l)_x + w``.
+
+    Parameters
+    ----------
+    truth : Trajectory (from :func:`vehicle_trajectory`).
+    lever_arm : (3,) wheel contact point in body FRD, m.
+    scale_factor : k, the odometer scale-factor error (dimensionless, e.g. 0.005).
+    noise_std : white-noise σ of each sample, m/s (>= 0).
+    rate_hz : output rate (default: every truth sample).
+    rng : numpy Generator or seed.
+
+    Returns
+    -------
+    OdometerData
+    """
+    if not (math.isfinite(noise_std) and noise_std >= 0) or not math.isfinite(scale_factor):
+        raise InvalidInputError(f"noise_std must be >= 0 m/s and scale_factor finite; got {noise_std!r}, {scale_factor!r}")
+    g = np.random.default_rng(rng)
+    idx = _decimate(truth, rate_hz)
+    v = lever_arm_velocity_body(truth, lever_arm)[idx, 0]
+    speed = (1.0 + scale_factor) * v + noise_std * g.standard_normal(idx.size)
+    meta = {"lever_arm": list(map(float, _lever(lever_arm, "lever_arm"))), "scale_factor": float(scale_factor),
+            "noise_std": float(noise_std)}
+    return OdometerData(truth.t[idx].copy(), speed, meta)
+
+
+def simulate_baro(
+    truth: Trajectory,
+    *,
+    noise_std: float = 0.5,
+    bias_std: float = 2.0,
+    bias_tau: float = 600.0,
+    rate_hz: float | None = 10.0,
+    rng: Any = None,
+) -> BaroData:
+    """Barometric height: ``h + b + w`` with a Gauss–Markov bias ``b`` (σ ``bias_std`` m, correlation time
+    ``bias_tau`` s; weather and the geoid–ellipsoid offset) and white noise ``noise_std`` m."""
+    if truth.pos_lla is None:
+        raise InvalidInputError("the truth trajectory needs pos_lla (use vehicle_trajectory)")
+    if not (math.isfinite(noise_std) and noise_std >= 0):
+        raise InvalidInputError(f"noise_std must be >= 0 m; got {noise_std!r}")
+    g = np.random.default_rng(rng)
+    idx = _decimate(truth, rate_hz)
+    t = truth.t[idx]
+    b = gauss_markov_sequence(t, float(bias_std), float(bias_tau), g)
+    hgt = truth.pos_lla[idx, 2] + b + noise_std * g.standard_normal(idx.size)
+    return BaroData(t.copy(), hgt, {"noise_std": float(noise_std), "bias_std": float(bias_std),
+                                    "bias_tau": float(bias_tau), "bias": b.tolist()[:1]})
