@@ -40,6 +40,7 @@ from imunav.ins import _gins_kernels as _k
 from imunav.ins.strapdown import coning_sculling_increments
 from imunav.io.gnss import GnssData
 from imunav.io.kfgins import ImuIncrements, KfGinsConfig
+from imunav.results import Result
 from imunav.rotation import euler_from_quat, quat_from_rotvec, quat_multiply, quat_normalize
 from imunav.sim import presets
 from imunav.sim.vehicle import BaroData, OdometerData
@@ -206,7 +207,7 @@ class GinsConfig:
 
 
 @dataclass(frozen=True)
-class GinsResult:
+class GinsResult(Result):
     """Output of :func:`run_gins` (SI).
 
     Attributes
@@ -255,7 +256,7 @@ class GinsResult:
 
 
 @dataclass(frozen=True)
-class SmoothedTrack:
+class SmoothedTrack(Result):
     """RTS-smoothed navigation (SI): per IMU sample ``t``, ``lla``, ``vel_ned``, ``q_nb``; per smoother epoch
     ``cov_t`` and the smoothed position/velocity/attitude covariance ``cov_nav`` (M, 9, 9)."""
 

@@ -19,6 +19,7 @@ from imunav import earth
 from imunav.errors import InvalidInputError
 from imunav.ins.gins import GinsConfig, GinsResult, run_gins
 from imunav.io.gnss import GnssData
+from imunav.results import Result
 from imunav.rotation import euler_from_quat
 from imunav.sim.gnss import outage_schedule
 from imunav.timeseries import ImuData
@@ -29,7 +30,7 @@ Array = NDArray[np.float64]
 
 
 @dataclass(frozen=True)
-class OutageReport:
+class OutageReport(Result):
     """Per-outage drift and its RMS (m, deg); ``contained``: share of outages inside the predicted 3σ."""
 
     outages: list[tuple[float, float]]
