@@ -297,7 +297,7 @@ def run_long_horizon(
     ``R = C_nb (R_D + R_A) C_nbᵀ``.
     """
     from imunav.filters._batch import huber_batch, inv_sqrt_batch, isolate_batch, masked_update, sym
-    from imunav.filters.robust import isolation_thresholds
+    from imunav.filters.gates import isolation_thresholds
 
     c = LongHorizonConfig() if cfg is None else cfg
     ta = np.asarray(t_ads, dtype=np.float64)

@@ -376,7 +376,7 @@ def batch_kalman_filter(
     ``"huber"`` (see :mod:`imunav.filters.robust`).  x0 may be (n,) or per run (R, n).
     """
     from imunav.filters._batch import MODE_GATE, MODE_HUBER, MODE_ISOLATE, MODE_NIS, MODE_NONE, batch_filter
-    from imunav.filters.robust import isolation_thresholds
+    from imunav.filters.gates import isolation_thresholds
 
     modes = {None: MODE_NONE, "gate": MODE_GATE, "isolate": MODE_ISOLATE, "huber": MODE_HUBER, "nis": MODE_NIS}
     if robust not in modes:
