@@ -311,7 +311,8 @@ class LstmDetector:
         share of samples that took SHOE's flags; ``fallback``: any block did).
         ``probability``: ``self.probability(data)`` if already computed (skips the network).
         """
-        from imunav.ins.detectors import DetectorResult, detector_statistic
+        from imunav.ins.result import DetectorResult
+        from imunav.ins.statistics import detector_statistic
 
         if isinstance(max_gap_s, str):
             max_gap_s = self.config.max_gap_s
@@ -692,8 +693,8 @@ def select_shoe_threshold(trials: Sequence[Any], grid: Any = None, config: Any =
     ``grid`` value (default :data:`SHOE_GUARD_GRID`) and is scored with
     :func:`imunav.ins.error_2d`.  Returns ``(threshold, mean error per grid value)``.
     """
-    from imunav.ins.detectors import detector_statistic
     from imunav.ins.metrics import error_2d
+    from imunav.ins.statistics import detector_statistic
     from imunav.ins.zupt import run_zupt
 
     g = SHOE_GUARD_GRID if grid is None else np.asarray(grid, dtype=float)
