@@ -18,6 +18,10 @@ from collections.abc import Iterable, Iterator
 from pathlib import Path
 from typing import Any
 
+import numpy as np
+
+from imunav.errors import FileFormatError, InvalidInputError
+
 __all__ = ["atomic_path", "check_outputs", "check_writable", "json_text", "jsonable", "read_json", "write_json"]
 
 
@@ -94,21 +98,16 @@ def jsonable(obj: Any) -> Any:
         return {str(k): jsonable(v) for k, v in obj.items()}
     if isinstance(obj, (list, tuple, set, frozenset)):
         return [jsonable(v) for v in obj]
-    try:
-        import numpy as np
-    except ImportError:  # pragma: no cover
-        np = None  # type: ignore[assignment]
-    if np is not None:
-        if isinstance(obj, np.ndarray):
-            return jsonable(obj.tolist())
-        if isinstance(obj, np.bool_):
-            return bool(obj)
-        if isinstance(obj, np.integer):
-            return int(obj)
-        if isinstance(obj, np.floating):
-            return jsonable(float(obj))
-        if isinstance(obj, np.complexfloating):
-            return str(obj)
+    if isinstance(obj, np.ndarray):
+        return jsonable(obj.tolist())
+    if isinstance(obj, np.bool_):
+        return bool(obj)
+    if isinstance(obj, np.integer):
+        return int(obj)
+    if isinstance(obj, np.floating):
+        return jsonable(float(obj))
+    if isinstance(obj, np.complexfloating):
+        return str(obj)
     if hasattr(obj, "to_dict") and callable(obj.to_dict):
         return jsonable(obj.to_dict())
     return str(obj)
@@ -132,7 +131,6 @@ def write_json(path: str | os.PathLike[str], obj: Any, indent: int | None = 2) -
 
 def read_json(path: str | os.PathLike[str], what: str = "JSON file") -> Any:
     """Load a JSON file; a syntax error becomes a :class:`~imunav.errors.FileFormatError` naming the file."""
-    from imunav.errors import FileFormatError
 
     text = Path(path).read_text(encoding="utf-8")
     try:
@@ -166,7 +164,6 @@ def check_outputs(inputs: Iterable[str | os.PathLike[str] | None],
 
     ``None`` entries are skipped.  Raises :class:`~imunav.errors.InvalidInputError`.
     """
-    from imunav.errors import InvalidInputError
 
     def key(p: str | os.PathLike[str]) -> Path:
         return Path(p).expanduser().resolve()
