@@ -23,8 +23,14 @@ import json
 import os
 from pathlib import Path
 
+import numpy as np
+
+from imunav.airdata import plot as P
+from imunav.airdata.filter import run_thesis_filter
+from imunav.airdata.scenario import ThesisScenario, simulate_thesis, thesis_report
 from imunav.errors import ConfigError
-from imunav.lab import LabContext, StepResult
+from imunav.filters import detect_faults
+from imunav.labsteps._api import LabContext, StepResult
 
 TITLE = "Air data + Doppler radar: wind filter, robust filtering, fault detection"
 
@@ -33,13 +39,6 @@ OPTIONS = ("runs", "p_false_alarm", "robust_methods")
 
 
 def run(ctx: LabContext) -> StepResult:
-    import numpy as np
-
-    from imunav.airdata import plot as P
-    from imunav.airdata.filter import run_thesis_filter
-    from imunav.airdata.scenario import ThesisScenario, simulate_thesis, thesis_report
-    from imunav.filters import detect_faults
-
     opts = ctx.options
     unknown = set(opts) - set(OPTIONS)
     if unknown:
