@@ -35,6 +35,7 @@ from __future__ import annotations
 
 import json
 import os
+import time
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any, Mapping, Sequence
@@ -42,8 +43,34 @@ from typing import Any, Mapping, Sequence
 import numpy as np
 import pandas as pd
 
-from imunav.errors import ConfigError, FileFormatError, InvalidInputError
+from imunav import calib
+from imunav.calib import ImuCalibration
+from imunav.errors import ConfigError, FileFormatError, InvalidInputError, NotStaticError
+from imunav.io import read_imu, write_imu
+from imunav.io._atomic import atomic_path, write_json
 from imunav.montecarlo import Executor, run_batch, spawn_generators
+from imunav.noise.allan import allan_deviation
+from imunav.noise.fit import fit_noise
+from imunav.noise.static import require_static
+from imunav.report import Report, check_spec, load_spec
+from imunav.report.catalog import (
+    base_name,
+    calibration_estimates,
+    display_unit,
+    expand_spec,
+    noise_estimates,
+    to_display_value,
+)
+from imunav.runfolder import RunFolder, trusted_files
+from imunav.sim import (
+    ImuErrorModel,
+    Segments,
+    hundred_position_profile,
+    presets,
+    simulate_imu,
+    static_profile,
+    thesis_rate_table_profile,
+)
 
 __all__ = [
     "RECORDING_SUFFIXES",
@@ -74,7 +101,6 @@ def _batch_files(folder: str | os.PathLike[str]) -> tuple[list[Path], list[str] 
     (killed, or still running) is refused.  A plain folder of recordings is used as it is, hidden files
     (temporary files of a killed writer) ignored.
     """
-    from imunav.runfolder import trusted_files
 
     d = Path(folder)
     if not d.is_dir():
@@ -114,8 +140,6 @@ def _sidecar(rec: Path, suffix: str, shared: str, trusted: Sequence[str] | None 
 
 
 def _read_segments(path: Path) -> Any:
-    from imunav.sim import Segments
-
     try:
         d = json.loads(path.read_text(encoding="utf-8"))
     except json.JSONDecodeError as e:
@@ -128,8 +152,6 @@ def _read_segments(path: Path) -> Any:
 
 
 def _write_json(obj: Any, path: Path) -> Path:
-    from imunav.io._atomic import write_json
-
     write_json(path, obj)  # standard JSON: null for NaN / inf
     return path
 
@@ -170,9 +192,6 @@ def _spread_model(model: Any, rng: np.random.Generator, spread: float, name: str
 def _simulate_unit(item: tuple[int, str], *, out_dir: str, preset: str, spread: float, seed: int, n_units: int,
                    fs: float, dwell_s: float, transition_s: float, rate_table: bool, fmt: str,
                    static_s: float | None = None) -> dict[str, Any]:
-    from imunav.io import write_imu
-    from imunav.sim import hundred_position_profile, presets, simulate_imu, static_profile, thesis_rate_table_profile
-
     k, name = item
     rng = spawn_generators(seed, 1, k)[0]
     model = _spread_model(presets.get(preset), rng, spread, name)
@@ -225,7 +244,6 @@ def simulate_batch(
 
     Returns the unit recordings (static tests) written to ``out_dir``.
     """
-    from imunav.sim import hundred_position_profile, presets, thesis_rate_table_profile
 
     if not isinstance(n_units, (int, np.integer)) or n_units < 1:
         raise InvalidInputError(f"n_units must be a positive integer, got {n_units!r}")
@@ -239,7 +257,6 @@ def simulate_batch(
     names = [f"unit_{k + 1:0{width}d}" for k in range(n_units)]
     if static_s is not None and not (static_s > 0):
         raise InvalidInputError(f"static_s must be a positive duration in seconds, got {static_s!r}")
-    from imunav.runfolder import RunFolder
 
     params = {"n_units": n_units, "preset": preset, "spread": spread, "seed": int(rng), "fs": fs,
               "dwell_s": dwell_s, "transition_s": transition_s, "rate_table": rate_table and not static_s,
@@ -320,12 +337,8 @@ class BatchSummary:
 
 
 def _spec_rows(estimates: Mapping[str, tuple[float, float | None]], spec: Any) -> tuple[list[dict], bool | None]:
-    from imunav.report import check_spec
-    from imunav.report.catalog import expand_spec
-
     if not spec:
         return [], None
-    from imunav.report.catalog import base_name
 
     # a batch checks the parameter families it measures (a calibration batch ignores the noise lines
     # of a full datasheet); inside those families a limit without an estimate still fails
@@ -339,8 +352,6 @@ def _spec_rows(estimates: Mapping[str, tuple[float, float | None]], spec: Any) -
 
 def _summarise(kind: str, names: list[str], results: list[Any], spec: Any, out_dir: Path | None,
                seconds: float) -> BatchSummary:
-    from imunav.report.catalog import to_display_value
-
     rows, units, checks = [], {}, {}
     for name, r in zip(names, results):
         if isinstance(r, BaseException):
@@ -367,9 +378,6 @@ def _summarise(kind: str, names: list[str], results: list[Any], spec: Any, out_d
 
 def write_summary(summary: BatchSummary, out_dir: Path, title: str) -> dict[str, Path]:
     """``summary.csv``, ``summary.json`` and ``index.html`` (spread figures, pass / fail table)."""
-    from imunav.io._atomic import atomic_path
-    from imunav.report import Report
-    from imunav.report.catalog import display_unit
 
     paths = {}
     with atomic_path(out_dir / "summary.csv") as tmp:
@@ -386,7 +394,6 @@ def write_summary(summary: BatchSummary, out_dir: Path, title: str) -> dict[str,
     sec.text("One row per unit: processing status and the verdict against the specification "
              "(every parameter with a limit must lie inside it). Values in display units; "
              "the per-unit JSON files hold every parameter with its standard error.")
-    from imunav.report.catalog import base_name
 
     fams: list[str] = []
     for p in params:
@@ -450,18 +457,16 @@ def write_summary(summary: BatchSummary, out_dir: Path, title: str) -> dict[str,
 
 
 def _disp(name: str, v: float | None) -> float | None:
-    from imunav.report.catalog import to_display_value
-
     return to_display_value(name, v)
 
 
 def _spread_figure(tab: pd.DataFrame, params: list[str]) -> Any:
+    # optional: matplotlib loads only when a figure is drawn (import time of imunav and its CLI)
     import matplotlib
 
     matplotlib.use("Agg")
+    # optional: matplotlib loads only when a figure is drawn (import time of imunav and its CLI)
     import matplotlib.pyplot as plt
-
-    from imunav.report.catalog import base_name, display_unit
 
     fams: dict[str, list[str]] = {}
     for p in params:
@@ -495,9 +500,6 @@ def _spread_figure(tab: pd.DataFrame, params: list[str]) -> Any:
 
 def _truth_estimates(rec: Path, trusted: Sequence[str] | None = None) -> dict[str, float]:
     """True parameters of a simulated unit (``truth/<unit>.json``, if the manifest lists it), flat names, SI."""
-    from imunav.calib import ImuCalibration
-    from imunav.report.catalog import calibration_estimates
-    from imunav.sim import ImuErrorModel
 
     p = rec.parent / "truth" / f"{rec.stem}.json"
     if not _usable(p, trusted):
@@ -528,9 +530,6 @@ def calibrate_unit(
     "truth": {name: value_si} (simulated batches), "files", "residual_rms",
     "condition"}``.
     """
-    from imunav import calib
-    from imunav.io import read_imu
-    from imunav.report.catalog import calibration_estimates
 
     rec = Path(recording)
     if method not in CALIBRATION_METHODS:
@@ -579,8 +578,6 @@ def calibrate_unit(
 
 
 def _load_spec(spec: Any) -> Any:
-    from imunav.report import load_spec
-
     if spec is None:
         return None
     return spec if isinstance(spec, Mapping) and all(hasattr(v, "max_si") for v in spec.values()) else load_spec(spec)
@@ -614,9 +611,6 @@ def calibrate_batch(
     run is refused).  ``out_dir`` is a run folder of its own
     (:mod:`imunav.runfolder`; ``overwrite`` clears a previous one).
     """
-    import time
-
-    from imunav.runfolder import RunFolder
 
     if method not in CALIBRATION_METHODS:
         raise ConfigError(f"unknown calibration method {method!r}; choose from {', '.join(CALIBRATION_METHODS)}")
@@ -660,11 +654,6 @@ def noise_unit(
     Writes ``<out_dir>/<unit>_noise.json`` (both :class:`imunav.noise.NoiseFit`) and
     returns ``{"unit", "estimates": {name: (value_si, se_si)}, "files"}``.
     """
-    from imunav.io import read_imu
-    from imunav.noise.allan import allan_deviation
-    from imunav.noise.fit import fit_noise
-    from imunav.noise.static import require_static
-    from imunav.report.catalog import noise_estimates
 
     rec = Path(recording)
     data = read_imu(rec, **dict(read_options or {}))
@@ -709,10 +698,6 @@ def noise_batch(
     result is written.  ``force=True`` analyses them anyway.  Folders are read
     and written as in :func:`calibrate_batch` (manifests, ``overwrite``).
     """
-    import time
-
-    from imunav.errors import NotStaticError
-    from imunav.runfolder import RunFolder
 
     limits = _load_spec(spec)
     units, _ = _batch_files(folder)

@@ -29,14 +29,18 @@ Executors
 from __future__ import annotations
 
 import math
+import multiprocessing as mp
 import os
 from collections.abc import Callable, Mapping, Sequence
+from concurrent.futures import ProcessPoolExecutor, as_completed
 from dataclasses import dataclass, field
 from typing import Any, Literal
 
 import numpy as np
 import pandas as pd
 from numpy.typing import NDArray
+from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
+from scipy.stats import chi2
 
 from imunav.errors import InvalidInputError, MissingDependencyError
 
@@ -118,7 +122,6 @@ def nees_consistency(values: NDArray[np.float64], dof: int, confidence: float = 
     values : (n_runs, T) normalised squared errors per run and time step.
     dof : dimension of the error (state for NEES, measurement for NIS).
     """
-    from scipy.stats import chi2
 
     v = np.asarray(values, dtype=float)
     if v.ndim == 1:
@@ -217,8 +220,6 @@ def _chunks(n_runs: int, chunk_size: int) -> list[tuple[int, int]]:
 
 
 def _progress(enabled: bool, total: int, description: str):
-    from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
-
     prog = Progress(
         TextColumn("{task.description}"),
         BarColumn(),
@@ -282,9 +283,6 @@ def run_montecarlo(
                 per_chunk[ci] = _run_chunk(scenario, seed, a, b, batched, kwargs)
                 prog.advance(task, b - a)
     elif executor == "processes":
-        import multiprocessing as mp
-        from concurrent.futures import ProcessPoolExecutor, as_completed
-
         ctx = mp.get_context("forkserver")
         with ProcessPoolExecutor(max_workers=workers, mp_context=ctx) as pool:
             futs = {
@@ -299,6 +297,7 @@ def run_montecarlo(
                     prog.advance(task, chunks[ci][1] - chunks[ci][0])
     elif executor == "dask":
         client, cluster = _dask_client(address, workers)
+        # optional: dask (imunav[dask]) only for a cluster run
         from dask.distributed import as_completed as das_completed
 
         try:
@@ -347,6 +346,7 @@ def _dask_client(address: str | None, workers: int) -> tuple[Any, Any]:
     """(client, local cluster or None): a local cluster without ``address``; a scheduler that does not
     answer within :data:`DASK_CONNECT_TIMEOUT_S` is an :class:`~imunav.errors.InvalidInputError`."""
     try:
+        # optional: dask (imunav[dask]) only for a cluster run
         from dask.distributed import Client, LocalCluster
     except ImportError as e:  # pragma: no cover - depends on the extra
         raise MissingDependencyError("dask[distributed]", "dask", "The Dask executor") from e
@@ -391,9 +391,6 @@ def run_batch(
         return out
     workers = n_workers or os.cpu_count() or 1
     if executor == "processes":
-        import multiprocessing as mp
-        from concurrent.futures import ProcessPoolExecutor, as_completed
-
         with ProcessPoolExecutor(max_workers=workers, mp_context=mp.get_context("forkserver")) as pool:
             futs = {pool.submit(_safe_call, fn, it, dict(kwargs)): i for i, it in enumerate(items)}
             with _progress(progress, len(items), description) as prog:

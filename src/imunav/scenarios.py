@@ -12,6 +12,11 @@ from typing import Any, Sequence
 
 import numpy as np
 
+from imunav.attitude.gravity_kf import roll_pitch_from_x
+from imunav.attitude.metrics import euler_rmse
+from imunav.attitude.scenario import PaperScenario, default_filters, simulate
+from imunav.errors import ConfigError
+
 __all__ = ["attitude_paper"]
 
 
@@ -30,9 +35,6 @@ def attitude_paper(
     (``<filter>_pitch_rmse_deg``, ``<filter>_roll_rmse_deg``), the paper's
     Table 2 metric.  Filters are built once per batch.
     """
-    from imunav.attitude.gravity_kf import roll_pitch_from_x
-    from imunav.attitude.metrics import euler_rmse
-    from imunav.attitude.scenario import PaperScenario, default_filters, simulate
 
     kw: dict[str, Any] = {}
     if duration is not None:
@@ -43,8 +45,6 @@ def attitude_paper(
     every = default_filters(scn)
     unknown = [f for f in filters if f not in every]
     if unknown:
-        from imunav.errors import ConfigError
-
         raise ConfigError(f"unknown attitude filter(s) {unknown}; choose from {sorted(every)}")
     out = []
     for g in rngs:

@@ -50,10 +50,13 @@ from dataclasses import dataclass, field
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
+from scipy.linalg import expm
 
 from imunav.errors import InvalidInputError, ShapeError
 from imunav.filters import BatchRun, batch_kalman_filter
+from imunav.filters._batch import huber_batch, inv_sqrt_batch, isolate_batch, masked_update, sym
 from imunav.filters._common import ResultMixin
+from imunav.filters.gates import isolation_thresholds
 
 __all__ = [
     "ThesisFilterConfig",
@@ -264,7 +267,6 @@ class LongHorizonResult(ResultMixin):
 
 def _van_loan(dt: float, c: LongHorizonConfig) -> tuple[Array, Array]:
     """Exact discrete (Φ, Q) per axis of ``δṗ = W + g``, ``Ẇ = −W/τ_w + w₁``, ``ġ = −g/τ_g + w₂``."""
-    from scipy.linalg import expm
 
     A = np.array([[0.0, 1.0, 1.0], [0.0, -1.0 / c.wind_tau, 0.0], [0.0, 0.0, -1.0 / c.turbulence_tau]])
     Qc = np.diag([0.0, 2.0 * c.wind_sigma**2 / c.wind_tau, 2.0 * c.turbulence_sigma**2 / c.turbulence_tau])
@@ -296,8 +298,6 @@ def run_long_horizon(
     ``z = C_nb V_D − C_nb V_A = W + g + noise`` with
     ``R = C_nb (R_D + R_A) C_nbᵀ``.
     """
-    from imunav.filters._batch import huber_batch, inv_sqrt_batch, isolate_batch, masked_update, sym
-    from imunav.filters.gates import isolation_thresholds
 
     c = LongHorizonConfig() if cfg is None else cfg
     ta = np.asarray(t_ads, dtype=np.float64)

@@ -12,6 +12,7 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import NDArray
 
+from imunav.calib._kernels import moving_variance_kernel
 from imunav.errors import InsufficientDataError, InvalidInputError, SaturationError
 
 Array = NDArray[np.float64]
@@ -19,7 +20,6 @@ Array = NDArray[np.float64]
 
 def moving_variance(x: Array, n: int) -> Array:
     """Centred moving variance of each column over ``n`` samples (edges use shorter windows)."""
-    from imunav.calib._kernels import moving_variance_kernel
 
     return moving_variance_kernel(np.ascontiguousarray(x, dtype=float), int(n))
 

@@ -9,6 +9,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from imunav.calib.model import _OFF, ImuCalibration
+from imunav.errors import InvalidInputError
 
 __all__ = ["CalibrationResult", "parameter_stderr"]
 
@@ -62,7 +63,6 @@ class CalibrationResult:
         being independent (separate regressions).  Needs a multi-position
         (+ rate-table) result.
         """
-        from imunav.errors import InvalidInputError
 
         ca = self.info.get("_cov_accel")
         if ca is None:

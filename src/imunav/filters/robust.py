@@ -33,6 +33,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from imunav.errors import InvalidInputError
+from imunav.filters._batch import huber_batch
 from imunav.filters._common import as_covariance, as_matrix, as_vector, inv_sqrt_spd
 from imunav.filters.gates import gate_channels, isolate_channels, isolation_thresholds, nis_gate
 from imunav.filters.kalman import KalmanFilter, UpdateResult
@@ -86,7 +87,6 @@ def huber_update(
     from a bad measurement, and re-weighting the prior (Karlgaard & Schaub)
     lets an outlier pull the estimate half-way.
     """
-    from imunav.filters._batch import huber_batch
 
     xv = as_vector(x_pred, "x_pred")
     n = xv.shape[0]

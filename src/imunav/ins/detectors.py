@@ -40,8 +40,10 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from imunav._timeseries_kernels import runs
+from imunav.attitude import Mahony
 from imunav.errors import InvalidInputError, ShapeError
 from imunav.ins import _kernels as _k
+from imunav.ins.metrics import error_2d
 from imunav.ins.result import DetectorResult
 from imunav.ins.statistics import (
     DETECTORS,
@@ -55,6 +57,9 @@ from imunav.ins.statistics import (
     mbgtd,
     shoe,
 )
+from imunav.ins.zupt import run_zupt
+from imunav.learn import LstmDetector
+from imunav.rotation import quat_rotate
 
 __all__ = [
     "DETECTORS",
@@ -162,8 +167,6 @@ def _detect(data: Any, detector: str, threshold: Any, window: int, sigma_a: floa
     if name == "freeacc":
         return free_acceleration(data, threshold=3.0 if threshold is None else float(threshold), g=g)
     if name == "lstm":
-        from imunav.learn import LstmDetector
-
         det = model if model is not None else LstmDetector.load()
         return det.detect(data, threshold=0.85 if threshold is None else float(threshold))
     T = detector_statistic(data, name, window=window, sigma_a=sigma_a, sigma_w=sigma_w, g=g)
@@ -217,8 +220,6 @@ def free_acceleration(data: Any, *, threshold: float = 3.0, g: float = G_PYSHOE,
     matters, since ``|.|`` ignores the heading.  x-io widens each moving period
     by 0.1 s on both sides: ``detect_zero_velocity(..., margin_s=0.1)``.
     """
-    from imunav.attitude import Mahony
-    from imunav.rotation import quat_rotate
 
     if not (threshold > 0 and np.isfinite(threshold)):
         raise InvalidInputError(f"threshold must be a finite free acceleration > 0 m/s^2; got {threshold!r}")
@@ -257,8 +258,6 @@ def optimize_threshold(data: Any, reference: ArrayLike, detector: str = "shoe",
     go to the larger threshold (as in the published search).  ``reference``
     is the (N, 3) reference position, one row per IMU sample.
     """
-    from imunav.ins.metrics import error_2d
-    from imunav.ins.zupt import run_zupt
 
     name = detector.lower()
     grid = THRESHOLD_GRIDS[name] if thresholds is None else np.asarray(thresholds, dtype=float)

@@ -61,6 +61,13 @@ from imunav.errors import (
     MissingDependencyError,
     ShapeError,
 )
+from imunav.ins.metrics import error_2d
+from imunav.ins.result import DetectorResult
+from imunav.ins.statistics import detector_statistic
+from imunav.ins.zupt import run_zupt
+from imunav.io._atomic import atomic_path
+from imunav.learn import _kernels as _lk
+from imunav.rotation import quat_conjugate, quat_rotate
 
 __all__ = [
     "DEFAULT_MODEL_PATH",
@@ -232,7 +239,6 @@ class LstmDetector:
             arrays[f"w_hh_{l}"] = b.astype(np.float32)
             arrays[f"b_{l}"] = c.astype(np.float32)
         arrays["meta"] = np.array(json.dumps({"config": self.config.to_dict(), "info": self.info}))
-        from imunav.io._atomic import atomic_path
 
         with atomic_path(p) as tmp, open(tmp, "wb") as fh:
             np.savez_compressed(fh, **arrays)
@@ -311,8 +317,6 @@ class LstmDetector:
         share of samples that took SHOE's flags; ``fallback``: any block did).
         ``probability``: ``self.probability(data)`` if already computed (skips the network).
         """
-        from imunav.ins.result import DetectorResult
-        from imunav.ins.statistics import detector_statistic
 
         if isinstance(max_gap_s, str):
             max_gap_s = self.config.max_gap_s
@@ -381,7 +385,6 @@ def guard_stances(zv: Any, reference: Any, fs: float, *, min_ratio: float = 0.5,
     ``bridged_gaps``, ``fallback_blocks``, ``blocks``, ``fallback_fraction``
     (share of samples that took the reference) and ``fallback`` (bool).
     """
-    from imunav.learn import _kernels as _lk
 
     z = np.ascontiguousarray(np.asarray(zv, dtype=bool))
     r = np.ascontiguousarray(np.asarray(reference, dtype=bool))
@@ -528,8 +531,6 @@ def time_warp(x: Array, gravity_body: Array, factor: float, start: float = 0.0,
 def gravity_in_body(data: Any, stance: Any, g: float = 9.80665) -> Array:
     """Accelerometer reading at rest ``f_g = −Rᵀ (0, 0, g)`` per sample (N, 3), ``R`` from the ZUPT INS
     (:func:`imunav.ins.run_zupt`) run with the stance flags ``stance``."""
-    from imunav.ins.zupt import run_zupt
-    from imunav.rotation import quat_conjugate, quat_rotate
 
     q = run_zupt(data, np.asarray(stance, dtype=bool)).quaternion
     return quat_rotate(quat_conjugate(q), np.broadcast_to(np.array([0.0, 0.0, -g]), (q.shape[0], 3)))
@@ -693,9 +694,6 @@ def select_shoe_threshold(trials: Sequence[Any], grid: Any = None, config: Any =
     ``grid`` value (default :data:`SHOE_GUARD_GRID`) and is scored with
     :func:`imunav.ins.error_2d`.  Returns ``(threshold, mean error per grid value)``.
     """
-    from imunav.ins.metrics import error_2d
-    from imunav.ins.statistics import detector_statistic
-    from imunav.ins.zupt import run_zupt
 
     g = SHOE_GUARD_GRID if grid is None else np.asarray(grid, dtype=float)
     if g.ndim != 1 or g.size == 0 or not np.all(g > 0):
@@ -721,8 +719,6 @@ def best_labels(trial: Any, detectors: Sequence[str] = ("shoe", "ared", "amvd", 
     through the ZUPT INS and is scored with :func:`imunav.ins.error_2d`.
     Returns ``(labels, detector, error)``.
     """
-    from imunav.ins.metrics import error_2d
-    from imunav.ins.zupt import run_zupt
 
     if trial.position is None:
         raise InvalidInputError(f"trial {trial.name!r} has no reference position to rank the detectors")

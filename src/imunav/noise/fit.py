@@ -57,7 +57,8 @@ from numpy.typing import ArrayLike, NDArray
 from scipy.optimize import minimize_scalar, nnls
 
 from imunav import allan_models as _am
-from imunav.errors import InsufficientDataError, InvalidInputError
+from imunav.errors import ConvergenceError, InsufficientDataError, InvalidInputError
+from imunav.io._atomic import write_json
 from imunav.noise import _allan_kernels as _ak
 from imunav.noise.allan import AllanResult
 from imunav.units import to_display
@@ -213,7 +214,6 @@ class NoiseFit:
 
     def to_json(self, path: str | os.PathLike) -> Path:
         """Write :meth:`to_dict` as JSON (atomically)."""
-        from imunav.io._atomic import write_json
 
         return write_json(path, self.to_dict())
 
@@ -245,8 +245,6 @@ def _cov_rel(res_tau, m, n_phase, names, Ts, theta, fs, model, edf, overlapping)
     else:
         rel = np.diag(2.0 / edf)
     if not np.all(np.isfinite(rel)):
-        from imunav.errors import ConvergenceError
-
         raise ConvergenceError("the noise terms cannot be fitted: the model variance is zero or not finite at some "
                                "tau, the Allan curve follows none of the terms (is the recording static? choose other "
                                "terms)")

@@ -25,7 +25,7 @@ from pathlib import Path
 from typing import Any
 
 from imunav.errors import ConfigError
-from imunav.units import from_display
+from imunav.units import from_display, to_display
 
 __all__ = ["SpecLimit", "SpecCheck", "load_spec", "check_spec"]
 
@@ -41,8 +41,6 @@ class SpecLimit:
     description: str = ""
 
     def describe(self) -> str:
-        from imunav.units import to_display
-
         def d(x: float) -> str:
             return f"{to_display(x, self.unit):g}" if self.unit else f"{x:g}"
 

@@ -54,6 +54,7 @@ from typing import TYPE_CHECKING, Any, Literal
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
+from scipy.optimize import nnls
 
 from imunav import allan_models as _am
 from imunav import units as _units
@@ -67,6 +68,7 @@ from imunav.errors import (
     UnitError,
 )
 from imunav.sim import _kernels as _k
+from imunav.sim.trajectory import ideal_imu
 
 if TYPE_CHECKING:  # pragma: no cover
     from imunav.timeseries import ImuData
@@ -264,7 +266,6 @@ def _flicker_weights(tau_min: float, tau_max: float, per_decade: int) -> tuple[n
     least-squares solution in relative error (scipy.optimize.nnls).  Returns
     (T_j, w_j, max relative deviation of sigma_A from the floor in the band).
     """
-    from scipy.optimize import nnls
 
     lo = math.log10(tau_min) - 0.6  # a little beyond the band so its edges stay flat
     hi = math.log10(tau_max) + 0.3
@@ -1155,7 +1156,6 @@ def simulate_imu(
     with ``ideal_kw``: earth_rate, transport_rate, gravity, lat, h) with the
     errors of ``error_model`` applied (:func:`apply_errors`; same ``rng``,
     ``temp_c``, ``return_truth`` and ``common_axis_noise``)."""
-    from imunav.sim.trajectory import ideal_imu  # lazy: owned by the trajectory module
 
     if not isinstance(error_model, ImuErrorModel):
         raise InvalidInputError(

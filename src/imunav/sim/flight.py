@@ -33,6 +33,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 from numpy.typing import NDArray
+from scipy.linalg import cholesky, expm, solve_discrete_lyapunov
+from scipy.signal import lfilter, ss2tf, tf2ss
 
 from imunav.airdata.airdata import air_data, aoa_sideslip, pitot_ratio, tas_to_body, total_temperature
 from imunav.airdata.atmosphere import G0, isa
@@ -114,8 +116,6 @@ TURBULENCE_SIGMA = {"none": 0.0, "light": 1.5, "moderate": 3.0, "severe": 6.5}  
 
 def _shaping_discrete(num: Array, den: Array, dt: float) -> tuple[Array, Array, Array]:
     """Discrete (Φ, Γ-cov, C) of a strictly proper / proper SISO shaping filter, unit-variance output."""
-    from scipy.linalg import expm, solve_discrete_lyapunov
-    from scipy.signal import tf2ss
 
     A, B, C, D = tf2ss(num, den)
     n = A.shape[0]
@@ -142,8 +142,6 @@ def dryden_gusts(n: int, dt: float, airspeed: float, sigma: float | tuple[float,
     ``τ = L/V``, L_v = L_w = L_u/2 (MIL-F-8785C); each output scaled to the
     requested standard deviation exactly (stationary start).
     """
-    from scipy.linalg import cholesky, solve_discrete_lyapunov
-    from scipy.signal import lfilter, ss2tf
 
     sig = np.broadcast_to(np.asarray(sigma, dtype=np.float64), (3,))
     if np.any(sig < 0) or not airspeed > 0 or not length_u > 0 or not dt > 0:
