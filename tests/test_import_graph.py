@@ -6,8 +6,9 @@ The graph is read from the source with :mod:`ast` (nothing is imported): every `
 name taken from a package (``from imunav.ins import run_zupt``) followed through the package's
 ``__init__`` re-exports to the module that defines it.  Imports under ``if TYPE_CHECKING:`` are
 annotations only (they never run) and are not edges.  Importing ``a.b.c`` also runs ``a/__init__`` and
-``a/b/__init__``; those implicit edges are not counted: a package ``__init__`` only re-exports its
-submodules, so its own imports are edges of the graph already.
+``a/b/__init__`` (unless they are the importer's own packages, already running): those are edges too,
+since a package ``__init__`` that re-exports its submodules imports them all (importing
+``imunav.io.csv`` runs ``imunav/io/__init__``, which imports every format).
 
 The layers are those of ``docs/design.md`` section 1 (:data:`LAYERS`).
 """
@@ -28,7 +29,7 @@ SRC = ROOT / "src"
 LAYERS: list[tuple[str, tuple[str, ...]]] = [
     ("core", ("imunav", "imunav.errors", "imunav.units", "imunav.rotation", "imunav._rotation_kernels",
               "imunav.earth", "imunav.allan_models", "imunav.crossval", "imunav._timeseries_kernels",
-              "imunav.provenance", "imunav.io._atomic", "imunav.runfolder", "imunav.filters._common",
+              "imunav.provenance", "imunav._atomic", "imunav.runfolder", "imunav.filters._common",
               "imunav.filters._kernels", "imunav.filters._core")),
     ("recordings, io", ("imunav.timeseries", "imunav.io")),
     ("noise, calib, filters", ("imunav.noise", "imunav.calib", "imunav.filters")),
@@ -139,8 +140,12 @@ def build_graph(src: Path, package: str) -> Graph:
                     while base not in modules and "." in base:  # "import a.b.c" of a name, not a module
                         base = base.rpartition(".")[0]
                     target = resolve(base, name)
-                    if target != m:
-                        graph.edges.append(Import(m, target, node.lineno, in_fn))
+                    # importing a.b.c first runs a/__init__ and a/b/__init__ (those not already running for m)
+                    parts = target.split(".")
+                    chain = [".".join(parts[:k]) for k in range(1, len(parts))] + [target]
+                    for t in chain:
+                        if t != m and not m.startswith(t + "."):
+                            graph.edges.append(Import(m, t, node.lineno, in_fn))
                 elif in_fn:
                     prev = lines[m][node.lineno - 2] if node.lineno >= 2 else ""
                     commented = "# optional:" in lines[m][node.lineno - 1] or prev.strip().startswith("# optional:")

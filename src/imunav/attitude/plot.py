@@ -69,7 +69,7 @@ def plot_montecarlo_box(mc: Any):
 
 
 def save(fig: Any, path: str | Path) -> Path:
-    """Save atomically (:func:`imunav.io._atomic.atomic_path`: hidden temp file, usual file mode, rename)."""
+    """Save atomically (:func:`imunav._atomic.atomic_path`: hidden temp file, usual file mode, rename)."""
 
     p = Path(path)
     with atomic_path(p) as tmp:
