@@ -35,6 +35,7 @@ from imunav.airdata.filter import (
     thesis_matrices,
     thesis_row,
 )
+from imunav.airdata.flight import FlightConfig, simulate_thesis_aircraft
 from imunav.errors import ConfigError, InvalidInputError
 from imunav.filters import Fault, inject_faults
 from imunav.filters._common import ResultMixin
@@ -48,7 +49,6 @@ from imunav.filters.faults import (
     false_alarm_rates,
     thesis_thresholds,
 )
-from imunav.sim.flight import FlightConfig, simulate_thesis_aircraft
 
 __all__ = [
     "KINDS",
@@ -487,7 +487,7 @@ def thesis_tables(rng: int = 0) -> dict:
 
 def load_config(path) -> "ThesisScenario | object":
     """Read a TOML scenario: a ``[thesis]`` table → :class:`ThesisScenario`, a ``[flight]`` table →
-    :class:`imunav.sim.flight.FlightConfig` (tuples given as arrays; ``doppler`` as a sub-table of
+    :class:`imunav.airdata.flight.FlightConfig` (tuples given as arrays; ``doppler`` as a sub-table of
     :class:`~imunav.airdata.doppler.DopplerErrors` fields).  Unknown keys raise :class:`ConfigError`.
     """
 

@@ -14,6 +14,7 @@ from rich.table import Table
 
 from imunav.airdata import plot as P
 from imunav.airdata.filter import LongHorizonConfig, run_long_horizon, run_thesis_filter, thesis_row
+from imunav.airdata.flight import FlightConfig, simulate_flight
 from imunav.airdata.scenario import (
     ThesisScenario,
     delay_summary,
@@ -28,7 +29,6 @@ from imunav.filters.faults import DETECTORS, alarms, calibrated_thresholds, fals
 from imunav.io._atomic import atomic_path, check_outputs, write_json
 from imunav.io._common import wrap_read_errors
 from imunav.rotation import dcm_from_euler
-from imunav.sim.flight import FlightConfig, simulate_flight
 
 _HELP = """Air data + Doppler radar integration: wind-estimating Kalman filter, robust filtering, fault detection.
 
