@@ -43,6 +43,7 @@ from imunav._timeseries_kernels import runs
 from imunav.attitude import Mahony
 from imunav.errors import InvalidInputError, ShapeError
 from imunav.ins import _kernels as _k
+from imunav.ins.lstm import LstmDetector
 from imunav.ins.metrics import error_2d
 from imunav.ins.result import DetectorResult
 from imunav.ins.statistics import (
@@ -58,7 +59,6 @@ from imunav.ins.statistics import (
     shoe,
 )
 from imunav.ins.zupt import run_zupt
-from imunav.learn import LstmDetector
 from imunav.rotation import quat_rotate
 
 __all__ = [
