@@ -279,8 +279,8 @@ def test_checks_fail_on_a_synthetic_cycle_violation_and_lazy_import(tmp_path):
         "ok.py": "from typing import TYPE_CHECKING\nif TYPE_CHECKING:\n    from pkg.high import g\n",
     })
     g = build_graph(src, "pkg")
-    # the re-export of pkg.low resolves to pkg.low.a, closing the cycle a -> high -> a
-    assert find_cycles(g) == [["pkg.high", "pkg.low.a"]]
+    # the re-export of pkg.low resolves to pkg.low.a: a -> high -> (pkg.low/__init__ ->) a
+    assert find_cycles(g) == [["pkg.high", "pkg.low", "pkg.low.a"]]
     layers = [("low", ("pkg", "pkg.low", "pkg.ok")), ("high", ("pkg.high",))]
     assert layer_violations(g, layers) == ["pkg.low.a:2 imports pkg.high (low -> high)"]
     assert function_level_problems(g) == [
@@ -289,3 +289,16 @@ def test_checks_fail_on_a_synthetic_cycle_violation_and_lazy_import(tmp_path):
         "pkg.low.a:3 imports numpy inside a function (not an optional dependency: move it up)",
     ]
     assert "pkg.high: in no layer (add it to LAYERS and to docs/design.md)" in layer_violations(g, [("low", ("pkg.low",))])
+
+
+def test_a_cycle_through_a_package_init_is_found(tmp_path):
+    """q imports p.n, which first runs p/__init__, which imports p.m, which imports q: a cycle at run time
+    (``import pkg.q`` fails) although no module names another that names it back."""
+    src = _write_package(tmp_path, {
+        "__init__.py": "",
+        "p/__init__.py": "from pkg.p.m import f\n",
+        "p/m.py": "from pkg.q import g\n\ndef f():\n    return g\n",
+        "p/n.py": "",
+        "q.py": "import pkg.p.n\n\ndef g():\n    return pkg.p.n\n",
+    })
+    assert find_cycles(build_graph(src, "pkg")) == [["pkg.p", "pkg.p.m", "pkg.q"]]
