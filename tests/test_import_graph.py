@@ -16,6 +16,9 @@ The layers are those of ``docs/design.md`` section 1 (:data:`LAYERS`).
 from __future__ import annotations
 
 import ast
+import os
+import subprocess
+import sys
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -259,6 +262,18 @@ def test_no_import_from_a_lower_layer_to_a_higher_one(graph):
 
 def test_function_level_imports_only_for_optional_dependencies(graph):
     assert function_level_problems(graph) == []
+
+
+def test_importing_the_packages_does_not_load_matplotlib():
+    """matplotlib is imported inside the drawing functions only: every package (plot modules included) imports
+    without it, in a fresh interpreter."""
+    packages = sorted(m for m, p in build_graph(SRC, "imunav").modules.items()
+                      if p.name == "__init__.py" or m.endswith(".plot") or m in ("imunav.lab", "imunav.batch"))
+    code = f"import sys\nimport {', '.join(packages)}\nprint('matplotlib' in sys.modules)\n"
+    env = {**os.environ, "PYTHONPATH": os.pathsep.join(p for p in (str(SRC), os.environ.get("PYTHONPATH")) if p)}
+    r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=env, timeout=300)
+    assert r.returncode == 0, r.stderr[-3000:]
+    assert r.stdout.strip() == "False"
 
 
 def _write_package(root: Path, files: dict[str, str]) -> Path:
