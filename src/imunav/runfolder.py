@@ -49,8 +49,8 @@ from pathlib import Path
 from typing import Any
 
 from imunav import __version__
-from imunav.errors import RunFolderError
 from imunav._atomic import jsonable, read_json, write_json
+from imunav.errors import RunFolderError
 
 __all__ = ["MANIFEST", "MARKER", "Manifest", "RunFolder", "read_manifest", "trusted_files", "sha256_file"]
 
