@@ -35,6 +35,7 @@ from __future__ import annotations
 
 import json
 import os
+import time
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any, Mapping, Sequence
@@ -42,10 +43,35 @@ from typing import Any, Mapping, Sequence
 import numpy as np
 import pandas as pd
 
-from imunav.errors import ConfigError, FileFormatError, InvalidInputError
-from imunav.io._atomic import write_json
+from imunav import calib
+from imunav.calib import ImuCalibration
+from imunav.errors import ConfigError, FileFormatError, InvalidInputError, NotStaticError
+from imunav.io import read_imu, write_imu
+from imunav.io._atomic import atomic_path, write_json
 from imunav.montecarlo import Executor, run_batch, spawn_generators
+from imunav.noise.allan import allan_deviation
+from imunav.noise.fit import fit_noise
+from imunav.noise.static import require_static
+from imunav.report import check_spec, load_spec
+from imunav.report.batch import write_batch_html
+from imunav.report.catalog import (
+    base_name,
+    calibration_estimates,
+    expand_spec,
+    noise_estimates,
+    to_display_value,
+)
 from imunav.results import Result
+from imunav.runfolder import RunFolder, trusted_files
+from imunav.sim import (
+    ImuErrorModel,
+    Segments,
+    hundred_position_profile,
+    presets,
+    simulate_imu,
+    static_profile,
+    thesis_rate_table_profile,
+)
 
 __all__ = [
     "RECORDING_SUFFIXES",
@@ -76,7 +102,6 @@ def _batch_files(folder: str | os.PathLike[str]) -> tuple[list[Path], list[str] 
     (killed, or still running) is refused.  A plain folder of recordings is used as it is, hidden files
     (temporary files of a killed writer) ignored.
     """
-    from imunav.runfolder import trusted_files
 
     d = Path(folder)
     if not d.is_dir():
@@ -116,8 +141,6 @@ def _sidecar(rec: Path, suffix: str, shared: str, trusted: Sequence[str] | None 
 
 
 def _read_segments(path: Path) -> Any:
-    from imunav.sim import Segments
-
     try:
         d = json.loads(path.read_text(encoding="utf-8"))
     except json.JSONDecodeError as e:
@@ -153,9 +176,6 @@ def _spread_model(model: Any, rng: np.random.Generator, spread: float, name: str
 def _simulate_unit(item: tuple[int, str], *, out_dir: str, preset: str, spread: float, seed: int, n_units: int,
                    fs: float, dwell_s: float, transition_s: float, rate_table: bool, fmt: str,
                    static_s: float | None = None) -> dict[str, Any]:
-    from imunav.io import write_imu
-    from imunav.sim import hundred_position_profile, presets, simulate_imu, static_profile, thesis_rate_table_profile
-
     k, name = item
     rng = spawn_generators(seed, 1, k)[0]
     model = _spread_model(presets.get(preset), rng, spread, name)
@@ -208,7 +228,6 @@ def simulate_batch(
 
     Returns the unit recordings (static tests) written to ``out_dir``.
     """
-    from imunav.sim import hundred_position_profile, presets, thesis_rate_table_profile
 
     if not isinstance(n_units, (int, np.integer)) or n_units < 1:
         raise InvalidInputError(f"n_units must be a positive integer, got {n_units!r}")
@@ -222,7 +241,6 @@ def simulate_batch(
     names = [f"unit_{k + 1:0{width}d}" for k in range(n_units)]
     if static_s is not None and not (static_s > 0):
         raise InvalidInputError(f"static_s must be a positive duration in seconds, got {static_s!r}")
-    from imunav.runfolder import RunFolder
 
     params = {"n_units": n_units, "preset": preset, "spread": spread, "seed": int(rng), "fs": fs,
               "dwell_s": dwell_s, "transition_s": transition_s, "rate_table": rate_table and not static_s,
@@ -303,12 +321,8 @@ class BatchSummary(Result):
 
 
 def _spec_rows(estimates: Mapping[str, tuple[float, float | None]], spec: Any) -> tuple[list[dict], bool | None]:
-    from imunav.report import check_spec
-    from imunav.report.catalog import expand_spec
-
     if not spec:
         return [], None
-    from imunav.report.catalog import base_name
 
     # a batch checks the parameter families it measures (a calibration batch ignores the noise lines
     # of a full datasheet); inside those families a limit without an estimate still fails
@@ -322,8 +336,6 @@ def _spec_rows(estimates: Mapping[str, tuple[float, float | None]], spec: Any) -
 
 def _summarise(kind: str, names: list[str], results: list[Any], spec: Any, out_dir: Path | None,
                seconds: float) -> BatchSummary:
-    from imunav.report.catalog import to_display_value
-
     rows, units, checks = [], {}, {}
     for name, r in zip(names, results):
         if isinstance(r, BaseException):
@@ -349,10 +361,7 @@ def _summarise(kind: str, names: list[str], results: list[Any], spec: Any, out_d
 
 
 def write_summary(summary: BatchSummary, out_dir: Path, title: str) -> dict[str, Path]:
-    """``summary.csv``, ``summary.json`` and ``index.html`` (spread figures, pass / fail table)."""
-    from imunav.io._atomic import atomic_path
-    from imunav.report import Report
-    from imunav.report.catalog import display_unit
+    """``summary.csv``, ``summary.json`` and ``index.html`` (:func:`imunav.report.batch.write_batch_html`)."""
 
     paths = {}
     with atomic_path(out_dir / "summary.csv") as tmp:
@@ -360,115 +369,8 @@ def write_summary(summary: BatchSummary, out_dir: Path, title: str) -> dict[str,
     paths["csv"] = out_dir / "summary.csv"
     paths["json"] = write_json(out_dir / "summary.json", summary.to_dict())
 
-    n = len(summary.table)
-    rep = Report(title, f"{n} units · {summary.n_failed} failed to process · {summary.seconds:.1f} s")
-    sec = rep.section("Units", summary.passed)
-    tab = summary.table
-    params = [c for c in tab.columns if c not in ("unit", "status", "passed", "error")
-              and not c.endswith("_se") and not c.endswith("_err")]
-    sec.text("One row per unit: processing status and the verdict against the specification "
-             "(every parameter with a limit must lie inside it). Values in display units; "
-             "the per-unit JSON files hold every parameter with its standard error.")
-    from imunav.report.catalog import base_name
-
-    fams: list[str] = []
-    for p in params:
-        if base_name(p) not in fams and not base_name(p).endswith("misalignment"):
-            fams.append(base_name(p))
-    errs_cols = [c for c in tab.columns if c.endswith("_err")]
-    short = []
-    for r in tab.to_dict(orient="records"):
-        row: dict[str, Any] = {"unit": r["unit"], "status": r["status"], "verdict": r["passed"]}
-        for f in fams:
-            vals = [r.get(f"{f}_{a}") for a in "xyz"]
-            row[f"{f} x, y, z ({display_unit(f)})"] = ", ".join(
-                "–" if v is None or (isinstance(v, float) and not np.isfinite(v)) else f"{v:.5g}" for v in vals)
-        if errs_cols:
-            z = [abs(r[c] / r[c[:-4] + "_se"]) for c in errs_cols
-                 if isinstance(r.get(c), float) and isinstance(r.get(c[:-4] + "_se"), float) and r[c[:-4] + "_se"] > 0]
-            row["max |error|/σ vs truth"] = max(z) if z else None
-        if r.get("error"):
-            row["error"] = r["error"]
-        short.append(row)
-    cols: list[str] = []
-    for r in short:
-        cols += [k for k in r if k not in cols]
-    sec.table([{**{c: None for c in cols}, **r} for r in short], "Units (misalignments in the per-unit files and below)", cols)
-    if params:
-        stats = summary.statistics().loc[[p for p in params if p in summary.statistics().index]]
-        stats.insert(0, "unit of measure", [display_unit(p) for p in stats.index])
-        stats.index.name = "parameter"
-        sec2 = rep.section("Unit-to-unit spread")
-        sec2.text("Statistics of each estimated parameter over the batch (display units).")
-        sec2.table(stats, "Parameter statistics over the units")
-        errs = [c for c in tab.columns if c.endswith("_err")]
-        if errs:
-            e = tab[errs].apply(pd.to_numeric, errors="coerce")
-            se = tab[[c[:-4] + "_se" for c in errs]].apply(pd.to_numeric, errors="coerce").to_numpy()
-            with np.errstate(invalid="ignore", divide="ignore"):
-                z = np.abs(e.to_numpy() / se)
-            rows = [{"parameter": c[:-4], "unit of measure": display_unit(c[:-4]),
-                     "RMS error": float(np.sqrt(np.nanmean(e[c].to_numpy() ** 2))),
-                     "RMS standard error": float(np.sqrt(np.nanmean(se[:, i] ** 2))),
-                     "max |error|/σ": float(np.nanmax(z[:, i])) if np.isfinite(z[:, i]).any() else None}
-                    for i, c in enumerate(errs)]
-            sec2.table(rows, "Estimate − truth over the units (simulated batch): errors vs reported uncertainty")
-        try:
-            sec2.figure(_spread_figure(tab, params), "Each parameter over the units (value ± 1σ)")
-        except Exception as exc:  # a figure problem must not lose the summary
-            sec2.text(f"(figure not drawn: {exc})")
-    if summary.spec_checks and any(summary.spec_checks.values()):
-        sec3 = rep.section("Specification checks", summary.passed)
-        rows = []
-        for u, lst in summary.spec_checks.items():
-            for c in lst:
-                rows.append({"unit": u, "parameter": c["name"],
-                             "value": _disp(c["name"], c["value_si"]), "±1σ": _disp(c["name"], c["sigma_si"]),
-                             "unit of measure": display_unit(c["name"]), "limit": c["limit"], "verdict": c["passed"]})
-        failed = [r for r in rows if r["verdict"] is False]
-        sec3.text(f"{len(rows)} checks, {len(failed)} failed." + (" Failed checks first." if failed else ""))
-        sec3.table(failed + [r for r in rows if r["verdict"] is not False], "Checks per unit")
-    paths["html"] = rep.write(out_dir / "index.html")
+    paths["html"] = write_batch_html(summary, out_dir, title)
     return paths
-
-
-def _disp(name: str, v: float | None) -> float | None:
-    from imunav.report.catalog import to_display_value
-
-    return to_display_value(name, v)
-
-
-def _spread_figure(tab: pd.DataFrame, params: list[str]) -> Any:
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    from imunav.report.catalog import base_name, display_unit
-
-    fams: dict[str, list[str]] = {}
-    for p in params:
-        fams.setdefault(base_name(p), []).append(p)
-    n = len(fams)
-    cols = min(3, n)
-    rows = (n + cols - 1) // cols
-    fig, axes = plt.subplots(rows, cols, figsize=(4.2 * cols, 2.8 * rows), squeeze=False)
-    x = np.arange(len(tab))
-    for ax, (fam, ps) in zip(axes.flat, fams.items()):
-        for j, p in enumerate(ps):
-            v = pd.to_numeric(tab[p], errors="coerce").to_numpy()
-            s = pd.to_numeric(tab.get(f"{p}_se"), errors="coerce").to_numpy() if f"{p}_se" in tab else None
-            ax.errorbar(x + 0.08 * (j - (len(ps) - 1) / 2), v, yerr=s, fmt="o", ms=3, capsize=2,
-                        label=p[len(fam) + 1:] or p)
-        ax.set_title(f"{fam} [{display_unit(ps[0])}]", fontsize=9)
-        ax.set_xlabel("unit #", fontsize=8)
-        ax.tick_params(labelsize=7)
-        if len(ps) <= 6:
-            ax.legend(fontsize=6, ncol=3)
-    for ax in list(axes.flat)[n:]:
-        ax.axis("off")
-    fig.tight_layout()
-    return fig
 
 
 # ---------------------------------------------------------------------------
@@ -478,9 +380,6 @@ def _spread_figure(tab: pd.DataFrame, params: list[str]) -> Any:
 
 def _truth_estimates(rec: Path, trusted: Sequence[str] | None = None) -> dict[str, float]:
     """True parameters of a simulated unit (``truth/<unit>.json``, if the manifest lists it), flat names, SI."""
-    from imunav.calib import ImuCalibration
-    from imunav.report.catalog import calibration_estimates
-    from imunav.sim import ImuErrorModel
 
     p = rec.parent / "truth" / f"{rec.stem}.json"
     if not _usable(p, trusted):
@@ -511,9 +410,6 @@ def calibrate_unit(
     "truth": {name: value_si} (simulated batches), "files", "residual_rms",
     "condition"}``.
     """
-    from imunav import calib
-    from imunav.io import read_imu
-    from imunav.report.catalog import calibration_estimates
 
     rec = Path(recording)
     if method not in CALIBRATION_METHODS:
@@ -562,8 +458,6 @@ def calibrate_unit(
 
 
 def _load_spec(spec: Any) -> Any:
-    from imunav.report import load_spec
-
     if spec is None:
         return None
     return spec if isinstance(spec, Mapping) and all(hasattr(v, "max_si") for v in spec.values()) else load_spec(spec)
@@ -597,9 +491,6 @@ def calibrate_batch(
     run is refused).  ``out_dir`` is a run folder of its own
     (:mod:`imunav.runfolder`; ``overwrite`` clears a previous one).
     """
-    import time
-
-    from imunav.runfolder import RunFolder
 
     if method not in CALIBRATION_METHODS:
         raise ConfigError(f"unknown calibration method {method!r}; choose from {', '.join(CALIBRATION_METHODS)}")
@@ -643,11 +534,6 @@ def noise_unit(
     Writes ``<out_dir>/<unit>_noise.json`` (both :class:`imunav.noise.NoiseFit`) and
     returns ``{"unit", "estimates": {name: (value_si, se_si)}, "files"}``.
     """
-    from imunav.io import read_imu
-    from imunav.noise.allan import allan_deviation
-    from imunav.noise.fit import fit_noise
-    from imunav.noise.static import require_static
-    from imunav.report.catalog import noise_estimates
 
     rec = Path(recording)
     data = read_imu(rec, **dict(read_options or {}))
@@ -692,10 +578,6 @@ def noise_batch(
     result is written.  ``force=True`` analyses them anyway.  Folders are read
     and written as in :func:`calibrate_batch` (manifests, ``overwrite``).
     """
-    import time
-
-    from imunav.errors import NotStaticError
-    from imunav.runfolder import RunFolder
 
     limits = _load_spec(spec)
     units, _ = _batch_files(folder)

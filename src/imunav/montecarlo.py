@@ -29,14 +29,17 @@ Executors
 from __future__ import annotations
 
 import math
+import multiprocessing as mp
 import os
 from collections.abc import Callable, Mapping, Sequence
+from concurrent.futures import ProcessPoolExecutor, as_completed
 from dataclasses import dataclass, field
 from typing import Any, Literal
 
 import numpy as np
 import pandas as pd
 from numpy.typing import NDArray
+from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
 
 from imunav.errors import InvalidInputError, MissingDependencyError
 from imunav.filters.consistency import ConsistencyResult, consistency_test
@@ -197,7 +200,6 @@ class _Callback:
 def _progress(enabled: bool | Callable[[int, int], None], total: int, description: str):
     if callable(enabled):
         return _Callback(enabled, total)
-    from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
 
     prog = Progress(
         TextColumn("{task.description}"),
@@ -263,8 +265,6 @@ def run_montecarlo(
                 per_chunk[ci] = _run_chunk(scenario, seed, a, b, batched, kwargs)
                 prog.advance(task, b - a)
     elif executor == "processes":
-        import multiprocessing as mp
-        from concurrent.futures import ProcessPoolExecutor, as_completed
 
         ctx = mp.get_context("forkserver")
         with ProcessPoolExecutor(max_workers=workers, mp_context=ctx) as pool:
@@ -280,6 +280,7 @@ def run_montecarlo(
                     prog.advance(task, chunks[ci][1] - chunks[ci][0])
     elif executor == "dask":
         client, cluster = _dask_client(address, workers)
+        # optional: dask (imunav[dask]) only for a cluster run
         from dask.distributed import as_completed as das_completed
 
         try:
@@ -328,6 +329,7 @@ def _dask_client(address: str | None, workers: int) -> tuple[Any, Any]:
     """(client, local cluster or None): a local cluster without ``address``; a scheduler that does not
     answer within :data:`DASK_CONNECT_TIMEOUT_S` is an :class:`~imunav.errors.InvalidInputError`."""
     try:
+        # optional: dask (imunav[dask]) only for a cluster run
         from dask.distributed import Client, LocalCluster
     except ImportError as e:  # pragma: no cover - depends on the extra
         raise MissingDependencyError("dask[distributed]", "dask", "The Dask executor") from e
@@ -372,8 +374,6 @@ def run_batch(
         return out
     workers = n_workers or os.cpu_count() or 1
     if executor == "processes":
-        import multiprocessing as mp
-        from concurrent.futures import ProcessPoolExecutor, as_completed
 
         with ProcessPoolExecutor(max_workers=workers, mp_context=mp.get_context("forkserver")) as pool:
             futs = {pool.submit(_safe_call, fn, it, dict(kwargs)): i for i, it in enumerate(items)}

@@ -30,6 +30,9 @@ import json
 from collections.abc import Mapping
 from typing import Any
 
+from imunav import __version__
+from imunav._atomic import jsonable
+
 __all__ = ["PROVENANCE_KEY", "add_step", "steps", "fingerprint", "net_compensations"]
 
 #: Key of the step list in ``ImuData.meta``.
@@ -55,8 +58,6 @@ def add_step(meta: Mapping[str, Any] | None, op: str, parameters: Mapping[str, A
     -------
     dict : the new metadata.
     """
-    from imunav import __version__
-    from imunav.io._atomic import jsonable
 
     out = dict(meta or {})
     step = {"op": op, "time": _now(), "imunav": __version__, "parameters": jsonable(dict(parameters or {}))}
@@ -77,7 +78,6 @@ def steps(meta_or_data: Any, op: str | None = None) -> list[dict[str, Any]]:
 
 def fingerprint(obj: Mapping[str, Any]) -> str:
     """SHA-256 of the canonical JSON of ``obj`` (sorted keys, no blanks): equal content, equal hash."""
-    from imunav.io._atomic import jsonable
 
     text = json.dumps(jsonable(obj), sort_keys=True, separators=(",", ":"), allow_nan=False)
     return hashlib.sha256(text.encode("utf-8")).hexdigest()

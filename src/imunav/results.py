@@ -2,14 +2,14 @@
 
 Every result dataclass of imunav derives from :class:`Result`.  ``to_dict()``
 gives plain JSON types (arrays become lists, NaN / ±inf become ``None``:
-strict JSON, never a ``NaN`` token) through :func:`imunav.io._atomic.jsonable`;
+strict JSON, never a ``NaN`` token) through :func:`imunav._atomic.jsonable`;
 ``to_json(path)`` writes that dictionary through
-:func:`imunav.io._atomic.write_json` (temporary file beside the target, then
+:func:`imunav._atomic.write_json` (temporary file beside the target, then
 an atomic rename).  A result whose JSON shape is not simply its fields
 overrides ``to_dict()``; ``to_json()`` follows the override.
 
 This module sits at the bottom of the package: it imports nothing above
-:mod:`imunav.io._atomic`.
+:mod:`imunav._atomic`.
 """
 
 from __future__ import annotations
@@ -19,7 +19,7 @@ import os
 from pathlib import Path
 from typing import Any
 
-from imunav.io._atomic import jsonable, write_json
+from imunav._atomic import jsonable, write_json
 
 __all__ = ["Result", "jsonable"]
 

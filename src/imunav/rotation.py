@@ -27,13 +27,14 @@ Navigation Systems*, 2nd ed., Artech House, 2013, §2.2 (DCM, Euler).
 
 from __future__ import annotations
 
+import itertools
 from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from imunav import _rotation_kernels as _k
-from imunav.errors import NonFiniteError, ShapeError
+from imunav.errors import InvalidInputError, NonFiniteError, ShapeError, TimeOrderError
 
 __all__ = [
     "quat_multiply",
@@ -286,7 +287,6 @@ def quat_interp(t: ArrayLike, q: ArrayLike, t_new: ArrayLike) -> Array:
     ``t`` strictly increasing, ``q`` of shape ``(N, 4)``; ``t_new`` inside
     ``[t[0], t[-1]]`` (outside raises).
     """
-    from imunav.errors import InvalidInputError, TimeOrderError
 
     ta = np.asarray(t, dtype=float)
     qa, _ = _as(q, (4,), "q")
@@ -335,7 +335,6 @@ def integrate_rate(
     -------
     (N, 4) attitude at each ``t``.
     """
-    from imunav.errors import InvalidInputError, TimeOrderError
 
     ta = np.ascontiguousarray(t, dtype=float)
     w, _ = _as(gyro, (3,), "gyro")
@@ -382,8 +381,6 @@ EXTERNAL_CONVENTIONS: dict[str, tuple[np.ndarray, bool]] = {
 
 
 def _conv(name: str) -> tuple[Array, bool]:
-    from imunav.errors import InvalidInputError
-
     key = name.lower()
     if key not in EXTERNAL_CONVENTIONS:
         raise InvalidInputError(f"unknown convention {name!r}; known: {sorted(EXTERNAL_CONVENTIONS)}")
@@ -403,8 +400,6 @@ def to_convention(q_nb: ArrayLike, convention: str, *, body: str = "same") -> Ar
     if body == "flu":
         q = quat_multiply(q, Q_FRD_FLU)
     elif body != "same":
-        from imunav.errors import InvalidInputError
-
         raise InvalidInputError(f"body must be 'same' or 'flu', not {body!r}")
     q = quat_canonical(q)
     return q[..., [1, 2, 3, 0]] if scalar_last else q
@@ -427,15 +422,11 @@ def from_convention(q_ext: ArrayLike, convention: str, *, body: str = "same") ->
     if body == "flu":
         q = quat_multiply(q, quat_conjugate(Q_FRD_FLU))
     elif body != "same":
-        from imunav.errors import InvalidInputError
-
         raise InvalidInputError(f"body must be 'same' or 'flu', not {body!r}")
     return q
 
 
 def _axis_rotations() -> list[Array]:
-    import itertools
-
     out = []
     for p in itertools.permutations(range(3)):
         for s in itertools.product((1.0, -1.0), repeat=3):

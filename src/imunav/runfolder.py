@@ -48,6 +48,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+from imunav import __version__
+from imunav._atomic import jsonable, read_json, write_json
 from imunav.errors import RunFolderError
 
 __all__ = ["MANIFEST", "MARKER", "Manifest", "RunFolder", "read_manifest", "trusted_files", "sha256_file"]
@@ -72,7 +74,7 @@ def sha256_file(path: str | os.PathLike[str]) -> str:
 
 
 def _is_temp(name: str) -> bool:
-    """A hidden temporary file of :func:`imunav.io._atomic.atomic_path` (``.<name>.<random>.tmp<suffix>``)."""
+    """A hidden temporary file of :func:`imunav._atomic.atomic_path` (``.<name>.<random>.tmp<suffix>``)."""
     return name.startswith(".") and ".tmp" in name and name != MARKER
 
 
@@ -144,7 +146,6 @@ def read_manifest(folder: str | os.PathLike[str], *, verify: bool = True) -> Man
                 "still running, and its files may be partial or mixed; re-run it with --overwrite (overwrite=True)"
             )
         return None
-    from imunav.io._atomic import read_json
 
     d = read_json(mp, "run manifest")
     if not isinstance(d, dict) or d.get("format") != _FORMAT or not isinstance(d.get("files"), list):
@@ -347,8 +348,6 @@ class RunFolder:
     # ----------------------------------------------------------------- finish
     def finish(self) -> Manifest:
         """Check the folder is still this run's, then write the manifest (last, atomically) and drop the marker."""
-        from imunav import __version__
-        from imunav.io._atomic import jsonable, write_json
 
         root = self.folder
         mk = _marker(root)

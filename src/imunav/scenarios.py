@@ -9,14 +9,18 @@ module adapts scenarios that live in the capability packages to the
 from __future__ import annotations
 
 from collections.abc import Mapping
-from typing import Any, Literal, Sequence
+from typing import TYPE_CHECKING, Any, Literal, Sequence
 
 import numpy as np
 from numpy.typing import NDArray
 
-from imunav.attitude.scenario import PAPER_TABLE2
-from imunav.errors import InvalidInputError
-from imunav.montecarlo import MonteCarloResult
+from imunav.attitude.gravity_kf import roll_pitch_from_x
+from imunav.attitude.metrics import euler_rmse
+from imunav.attitude.scenario import PAPER_TABLE2, PaperScenario, default_filters, simulate
+from imunav.errors import ConfigError, InvalidInputError
+
+if TYPE_CHECKING:  # the type only: montecarlo is a layer above the scenarios it runs
+    from imunav.montecarlo import MonteCarloResult
 
 __all__ = ["attitude_paper", "paper_rmse", "paper_table", "paper_report"]
 
@@ -60,9 +64,6 @@ def attitude_paper(
     """
     if seeding not in ("generator", "seed_word"):
         raise InvalidInputError(f"seeding={seeding!r}: choose 'generator' or 'seed_word'")
-    from imunav.attitude.gravity_kf import roll_pitch_from_x
-    from imunav.attitude.metrics import euler_rmse
-    from imunav.attitude.scenario import PaperScenario, default_filters, simulate
 
     kw: dict[str, Any] = {}
     if duration is not None:
@@ -73,7 +74,6 @@ def attitude_paper(
     every = default_filters(scn)
     unknown = [f for f in filters if f not in every]
     if unknown:
-        from imunav.errors import ConfigError
 
         raise ConfigError(f"unknown attitude filter(s) {unknown}; choose from {sorted(every)}")
     out = []

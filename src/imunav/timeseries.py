@@ -20,24 +20,27 @@ from __future__ import annotations
 
 import dataclasses
 import functools
+import warnings
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Any, Literal
+from typing import Any, Literal
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from imunav._timeseries_kernels import covered, moving_var_cols, moving_variance_kernel, runs
 from imunav.errors import (
+    ImunavWarning,
     InsufficientDataError,
     InvalidInputError,
     NonFiniteError,
     SaturationError,
     ShapeError,
     TimeOrderError,
+    UnitError,
 )
+from imunav.provenance import add_step
+from imunav.units import DEG as _DEG
 from imunav.units import to_si
-
-if TYPE_CHECKING:  # pragma: no cover
-    import pandas as pd
 
 __all__ = [
     "ImuData",
@@ -49,6 +52,8 @@ __all__ = [
     "detect_saturation",
     "RecordingSummary",
     "describe",
+    "rest_force_problem",
+    "G_REF",
 ]
 
 NanPolicy = Literal["raise", "drop", "interpolate"]
@@ -228,8 +233,6 @@ class ImuData:
         meta = dict(meta or {})
         declared = {"time": time_unit, "gyro": gyro_unit, "accel": accel_unit}
         if declared != {"time": "s", "gyro": "rad/s", "accel": "m/s^2"}:
-            from imunav.provenance import add_step
-
             meta.setdefault("units_in", declared)
             params: dict[str, Any] = {"from": declared, "to": {"time": "s", "gyro": "rad/s", "accel": "m/s^2"}}
             for name, v in (("gyro_scale", gyro_scale), ("accel_scale", accel_scale), ("gyro_offset", gyro_offset),
@@ -367,62 +370,12 @@ class ImuData:
                 f"resample(fs={fs:g}) leaves fewer than 2 samples over {self.duration:g} s; use fs >= {1 / self.duration:g} Hz"
                 if self.duration > 0 else "a single-sample recording cannot be resampled"
             )
-        from imunav.provenance import add_step
 
         from_hz = self.fs if self.n >= 2 else None
         out = self.interp(self.t[0] + np.arange(int(k) + 1) / fs)
         out.meta.update(add_step(out.meta, "resample", {"from_hz": from_hz, "to_hz": float(fs), "method": "linear"}))
         out.meta["resampled_from_hz"] = from_hz
         return out
-
-    def to_dataframe(self) -> "pd.DataFrame":
-        """pandas DataFrame, one column per channel (``t, gyro_x ... temp``), SI.
-
-        ``mag_unit`` and ``meta`` go to ``DataFrame.attrs``.
-        """
-        import pandas as pd
-
-        from imunav.io.csv import imu_to_table
-
-        names, block = imu_to_table(self)
-        df = pd.DataFrame(block, columns=names)
-        df.attrs["mag_unit"] = self.mag_unit
-        df.attrs["meta"] = dict(self.meta)
-        return df
-
-    @classmethod
-    def from_dataframe(
-        cls,
-        df: "pd.DataFrame",
-        *,
-        columns: dict[str, Any] | None = None,
-        units: dict[str, str] | None = None,
-        scales: dict[str, float] | None = None,
-        offsets: dict[str, float] | None = None,
-        fs: float | None = None,
-        t0: float = 0.0,
-        nan_policy: NanPolicy = "raise",
-        mag_unit: str | None = None,
-        meta: dict[str, Any] | None = None,
-    ) -> "ImuData":
-        """Build from a DataFrame; columns found by name or ``columns`` mapping.
-
-        Column names, ``units``/``scales``/``offsets`` work as in
-        :func:`imunav.io.csv.read_csv` (e.g. ``columns={"t": "time_s",
-        "gx": "GyrX", ...}``, ``units={"gyro": "deg/s"}``).  Inverse of
-        :meth:`to_dataframe` (``attrs`` give back ``mag_unit`` and ``meta``).
-        """
-        from imunav.io._common import build_imu
-        from imunav.io.csv import resolve_columns, table_to_arrays
-
-        source = "DataFrame"
-        cols = resolve_columns(list(df.columns), columns, source)
-        arrays = table_to_arrays(df, cols, source)
-        stored = {"mag_unit": df.attrs.get("mag_unit"), "meta": df.attrs.get("meta") or {}}
-        return build_imu(
-            arrays, source, stored=stored, units=units, scales=scales, offsets=offsets, fs=fs, t0=t0,
-            nan_policy=nan_policy, mag_unit=mag_unit, meta=meta,
-        )  # fmt: skip
 
     def static_intervals(self, window_s: float = 1.0, **kwargs: Any) -> "StaticIntervals":
         """Shortcut for :func:`static_intervals` on this recording."""
@@ -444,7 +397,6 @@ def _vector_to_si(x, unit, quantity, scale, offset, name):
     """``to_si`` for a triad, accepting per-axis (3,) count scales and offsets."""
     if np.ndim(scale) == 0 and np.ndim(offset) == 0:
         return to_si(x, unit, quantity, scale=scale, offset=float(offset))
-    from imunav.errors import UnitError
 
     if unit.strip().lower() not in ("counts", "count", "lsb", "raw"):
         raise UnitError(f"per-axis {name}_scale / {name}_offset need {name}_unit='counts', not {unit!r}")
@@ -547,7 +499,6 @@ def moving_variance(x: ArrayLike, window: int, *, align: Literal["trailing", "ce
     numpy.ndarray
         (M,) or, with ``per_column`` and 2-D input, (M, k); M as given by ``align``.
     """
-    from imunav._timeseries_kernels import moving_var_cols, moving_variance_kernel
 
     a = np.asarray(x, dtype=np.float64)
     w = int(window)
@@ -743,8 +694,6 @@ def static_intervals(
     else:
         thr_g = float("nan")
     # sample i is static if a static window starts in [i - w + 1, i]
-    from imunav._timeseries_kernels import covered, runs
-
     starts, stops = runs(covered(quiet, n, w))
     # duration of a run of samples = its count times the sample interval
     keep = (data.t[stops - 1] - data.t[starts]) + 1.0 / data.fs >= min_duration_s - 1e-9
@@ -812,8 +761,6 @@ class Saturation:
 
 
 def _extreme_runs(x: NDArray[np.float64], min_run: int) -> NDArray[np.bool_]:
-    from imunav._timeseries_kernels import runs
-
     out = np.zeros(x.shape[0], dtype=bool)
     med = float(np.median(x))
     mad = float(np.median(np.abs(x - med))) * 1.4826
@@ -915,6 +862,28 @@ class RecordingSummary:
         }
 
 
+#: Reference gravity (m/s²) of the mean-specific-force test (accepted: G_REF / 4 to 2 G_REF).
+G_REF = 9.80665
+
+
+def rest_force_problem(fmag: float, gravity: float = G_REF) -> str | None:
+    """Why a specific force of magnitude ``fmag`` (m/s²) cannot be a sensor at rest, or None if it can.
+
+    Accepted: ``g/4 ≤ fmag ≤ 2 g`` (see the module docstring).  The message names the likely unit
+    mistake (a reading of about 1 is an accelerometer in g, about 1000 one in mg).
+    """
+    if 0.25 * gravity <= fmag <= 2.0 * gravity:
+        return None
+    if 0.9 < fmag < 1.1:
+        hint = "the accelerometer looks like it is in g: declare its unit (--accel-unit g, units={'accel': 'g'})"
+    elif 900 < fmag < 1100:
+        hint = "the accelerometer looks like it is in mg: declare its unit (--accel-unit mg)"
+    else:
+        hint = "check the accelerometer's unit and that the file holds its data"
+    return (f"the mean specific force at rest is {fmag:.4g} m/s^2, outside g/4 .. 2 g (g = {gravity:.4g} m/s^2); "
+            + hint)
+
+
 def describe(
     data: ImuData,
     *,
@@ -931,7 +900,6 @@ def describe(
     :class:`~imunav.errors.ImunavWarning`.  Full scales are SI (rad/s, m/s²); without them saturation
     is detected from runs at the channels' extreme values.
     """
-    from imunav.units import DEG as _DEG
 
     n = data.n
     dt = data.dt
@@ -966,11 +934,6 @@ def describe(
     add("temp", data.temp, "degC", 1.0)
     notes: list[str] = []
     if static is not None and static.mask.any():
-        import warnings
-
-        from imunav.errors import ImunavWarning
-        from imunav.noise.static import rest_force_problem
-
         problem = rest_force_problem(float(np.median(np.linalg.norm(data.accel[static.mask], axis=1))))
         if problem:
             notes.append(problem)

@@ -53,7 +53,9 @@ from numpy.typing import ArrayLike, NDArray
 
 from imunav.errors import InvalidInputError, ShapeError
 from imunav.filters import BatchRun, batch_kalman_filter
+from imunav.filters._batch import huber_batch, inv_sqrt_batch, isolate_batch, masked_update, sym
 from imunav.filters._core import van_loan
+from imunav.filters.gates import isolation_thresholds
 from imunav.results import Result
 
 __all__ = [
@@ -265,6 +267,7 @@ class LongHorizonResult(Result):
 
 def _van_loan(dt: float, c: LongHorizonConfig) -> tuple[Array, Array]:
     """Exact discrete (Φ, Q) per axis of ``δṗ = W + g``, ``Ẇ = −W/τ_w + w₁``, ``ġ = −g/τ_g + w₂``."""
+
     A = np.array([[0.0, 1.0, 1.0], [0.0, -1.0 / c.wind_tau, 0.0], [0.0, 0.0, -1.0 / c.turbulence_tau]])
     Qc = np.diag([0.0, 2.0 * c.wind_sigma**2 / c.wind_tau, 2.0 * c.turbulence_sigma**2 / c.turbulence_tau])
     return van_loan(A, Qc, float(dt))
@@ -288,8 +291,6 @@ def run_long_horizon(
     ``z = C_nb V_D − C_nb V_A = W + g + noise`` with
     ``R = C_nb (R_D + R_A) C_nbᵀ``.
     """
-    from imunav.filters._batch import huber_batch, inv_sqrt_batch, isolate_batch, masked_update, sym
-    from imunav.filters.robust import isolation_thresholds
 
     c = LongHorizonConfig() if cfg is None else cfg
     ta = np.asarray(t_ads, dtype=np.float64)

@@ -12,9 +12,11 @@ __all__ = ["plot_wind", "plot_innovations", "plot_detectors", "plot_long_horizon
 
 
 def _plt():
+    # optional: matplotlib loads only when a figure is drawn (import time of imunav and its CLI)
     import matplotlib
 
     matplotlib.use("Agg", force=False)
+    # optional: matplotlib loads only when a figure is drawn (import time of imunav and its CLI)
     import matplotlib.pyplot as plt
 
     return plt

@@ -16,12 +16,16 @@ Thesis step s is row s − 1 of the arrays.
 
 from __future__ import annotations
 
+import dataclasses
+import tomllib
 from collections.abc import Callable
 from dataclasses import dataclass, field, replace
+from pathlib import Path
 
 import numpy as np
 from numpy.typing import NDArray
 
+from imunav.airdata.doppler import DopplerErrors
 from imunav.airdata.filter import (
     THESIS_ITERATIONS,
     THESIS_P44,
@@ -31,12 +35,14 @@ from imunav.airdata.filter import (
     thesis_matrices,
     thesis_row,
 )
-from imunav.errors import InvalidInputError
+from imunav.airdata.flight import FlightConfig, simulate_thesis_aircraft
+from imunav.errors import ConfigError, InvalidInputError
 from imunav.filters import Fault, inject_faults
 from imunav.filters.faults import (
     DETECTORS,
     alarms,
     calibrated_thresholds,
+    detect_faults,
     detection_delays,
     detector_statistics,
     false_alarm_rates,
@@ -158,7 +164,6 @@ def _truth(sc: ThesisScenario) -> Array:
 
 def _simulate(s: ThesisScenario, n_runs: int, rng: np.random.Generator | int | None) -> tuple[Array, ...]:
     """Truth x (N, 6), aircraft velocity v (N, 3), ADS va, Doppler vd and ADS noise (runs, N, 3)."""
-    from imunav.sim.flight import simulate_thesis_aircraft
 
     gen = np.random.default_rng(rng)
     xt = _truth(s)
@@ -432,7 +437,6 @@ def monte_carlo_thesis(
 
 def thesis_report(n_runs: int = 200, rng: int = 0, **kw) -> dict:
     """Everything ``imunav airdata thesis`` writes: covariance sequence, Monte Carlo, one seeded run's detection steps."""
-    from imunav.filters.faults import detect_faults
 
     cov = covariance_sequence()
     mc = monte_carlo_thesis(n_runs, rng, **kw)
@@ -483,14 +487,9 @@ def thesis_tables(rng: int = 0) -> dict:
 
 def load_config(path) -> "ThesisScenario | object":
     """Read a TOML scenario: a ``[thesis]`` table → :class:`ThesisScenario`, a ``[flight]`` table →
-    :class:`imunav.sim.flight.FlightConfig` (tuples given as arrays; ``doppler`` as a sub-table of
+    :class:`imunav.airdata.flight.FlightConfig` (tuples given as arrays; ``doppler`` as a sub-table of
     :class:`~imunav.airdata.doppler.DopplerErrors` fields).  Unknown keys raise :class:`ConfigError`.
     """
-    import dataclasses
-    import tomllib
-    from pathlib import Path
-
-    from imunav.errors import ConfigError
 
     p = Path(path)
     try:
@@ -506,9 +505,6 @@ def load_config(path) -> "ThesisScenario | object":
     if keys[0] == "thesis":
         cls = ThesisScenario
     else:
-        from imunav.airdata.doppler import DopplerErrors
-        from imunav.sim.flight import FlightConfig
-
         cls = FlightConfig
         if "doppler" in table:
             sub = table.pop("doppler")

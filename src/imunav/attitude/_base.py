@@ -8,6 +8,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from imunav.attitude.alignment import align
 from imunav.errors import InvalidInputError, NonFiniteError, ShapeError
 from imunav.timeseries import ImuData
 
@@ -109,8 +110,6 @@ def check_positive(**kw: float) -> None:
 
 
 def initial_q(acc: Array, mag: Array, use_mag: bool, q0: ArrayLike | None) -> Array:
-    from imunav.attitude.alignment import align
-
     if q0 is not None:
         return check_q0(q0)
     return align(acc[0], mag[0] if use_mag else None)

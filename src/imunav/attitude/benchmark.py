@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import itertools
 import os
+import time
 from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass, replace
 from pathlib import Path
@@ -21,8 +22,12 @@ from typing import Any, Callable, Iterable
 
 import numpy as np
 
+from imunav.attitude import adaptive, complementary, madgwick, mahony, mekf, smoother, ukf
+from imunav.attitude.alignment import broad_reference_start
+from imunav.attitude.metrics import attitude_rmse
 from imunav.crossval import CvResult, select_by_cv
 from imunav.errors import ConfigError
+from imunav.io.broad import load_broad
 from imunav.results import Result
 
 __all__ = ["FILTERS", "REALTIME", "make_filter", "evaluate", "grid_search", "cv_grid_search", "TrialScore",
@@ -34,7 +39,6 @@ FILTERS = (*REALTIME, "smoother")
 
 def make_filter(name: str, params: dict[str, Any] | None = None) -> Any:
     """Filter object by name with parameter overrides."""
-    from imunav.attitude import adaptive, complementary, madgwick, mahony, mekf, smoother, ukf
 
     p = dict(params or {})
     try:
@@ -98,19 +102,12 @@ _CACHE: dict[str, Any] = {}
 
 
 def _load(path: str):
-    from imunav.io.broad import load_broad
-
     if path not in _CACHE:
         _CACHE[path] = load_broad(path)
     return _CACHE[path]
 
 
 def _score_trial(name: str, params: dict[str, Any], path: str) -> TrialScore:
-    import time
-
-    from imunav.attitude.alignment import broad_reference_start
-    from imunav.attitude.metrics import attitude_rmse
-
     tr = _load(path)
     f = make_filter(name, params)
     q0 = broad_reference_start(tr.imu.accel[0], tr.imu.mag[0]) if reference_start(name) else None

@@ -9,14 +9,17 @@ from typing import Any
 import numpy as np
 
 from imunav.attitude.result import AttitudeResult
+from imunav.io._atomic import atomic_path
 
 __all__ = ["plot_euler", "plot_errors", "plot_montecarlo_box", "save"]
 
 
 def _plt():
+    # optional: matplotlib loads only when a figure is drawn (import time of imunav and its CLI)
     import matplotlib
 
     matplotlib.use("Agg", force=False)
+    # optional: matplotlib loads only when a figure is drawn (import time of imunav and its CLI)
     import matplotlib.pyplot as plt
 
     return plt
@@ -78,8 +81,7 @@ def plot_montecarlo_box(rmse: Mapping[str, np.ndarray]):
 
 
 def save(fig: Any, path: str | Path) -> Path:
-    """Save atomically (:func:`imunav.io._atomic.atomic_path`: hidden temp file, usual file mode, rename)."""
-    from imunav.io._atomic import atomic_path
+    """Save atomically (:func:`imunav._atomic.atomic_path`: hidden temp file, usual file mode, rename)."""
 
     p = Path(path)
     with atomic_path(p) as tmp:

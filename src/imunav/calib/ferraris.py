@@ -30,7 +30,7 @@ from numpy.typing import ArrayLike, NDArray
 from imunav.calib._lsq import design_condition
 from imunav.calib.model import ImuCalibration
 from imunav.calib.result import CalibrationResult
-from imunav.errors import InsufficientDataError, InvalidInputError, SaturationError
+from imunav.errors import DegenerateGeometryError, InsufficientDataError, InvalidInputError, SaturationError
 from imunav.units import DEG
 
 __all__ = ["FERRARIS_SECTIONS", "ferraris", "ferraris_from_session"]
@@ -152,7 +152,6 @@ def _check_matrix(T: Array, sensor: str, what: str, need: str, signed: bool = Tr
     ``signed``: the diagonal must also be positive (accelerometer: ``x_p`` reads +g); the gyro's sign
     depends on the turning sense (``expected_angle_deg``), so only its magnitude is checked.
     """
-    from imunav.errors import DegenerateGeometryError
 
     cols = np.linalg.norm(T, axis=0)
     diag = np.diag(T) if signed else np.abs(np.diag(T))

@@ -38,6 +38,7 @@ from imunav.errors import (
     ShapeError,
 )
 from imunav.results import Result
+from imunav.rotation import euler_from_dcm
 
 __all__ = [
     "MagCalibration",
@@ -196,7 +197,6 @@ def soft_iron_rotation_scale(h: ArrayLike, *, planar_tol: float = 0.02) -> MagCa
     r = 1.0 / np.sqrt(w)  # semi-axis lengths along the principal axes
     alpha = r / r.mean()
     A = R.T @ np.diag(1.0 / alpha) @ R
-    from imunav.rotation import euler_from_dcm
 
     ang = np.asarray(euler_from_dcm(R.T), float)
     F = float(r.mean())

@@ -27,15 +27,25 @@ from __future__ import annotations
 
 import json
 import os
-from dataclasses import dataclass, field
+import warnings
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from imunav.errors import FileFormatError, InvalidInputError, NonFiniteError, ShapeError, UnitError
+from imunav.errors import (
+    FileFormatError,
+    ImunavWarning,
+    InvalidInputError,
+    NonFiniteError,
+    ProvenanceError,
+    ShapeError,
+    UnitError,
+)
 from imunav.io._atomic import write_json
+from imunav.provenance import add_step, fingerprint, net_compensations
 from imunav.units import DEG
 
 __all__ = [
@@ -224,7 +234,6 @@ class ImuCalibration:
     def sha256(self) -> str:
         """Hash of the parameters and units (not ``meta`` nor ``stderr``): the calibration's identity
         in the provenance of the recordings it compensated."""
-        from imunav.provenance import fingerprint
 
         d = self.to_dict()
         return fingerprint({k: v for k, v in d.items() if k not in ("meta", "stderr")})
@@ -261,11 +270,6 @@ class ImuCalibration:
         return self._on_data(data, temp_c, self.invert_arrays, "invert", source, False)
 
     def _check_provenance(self, data: Any, force: bool) -> None:
-        import warnings
-
-        from imunav.errors import ImunavWarning, ProvenanceError
-        from imunav.provenance import net_compensations
-
         h = self.sha256
         same = net_compensations(data, h)
         if same and not force:
@@ -293,7 +297,6 @@ class ImuCalibration:
                  source: str | None = None, force: bool = False) -> Any:
         """``arrays_fn(accel, gyro, temp_c)`` on an ``(accel, gyro)`` tuple, or on
         an SI :class:`ImuData` (temperature from the data unless ``temp_c`` is given)."""
-        from imunav.provenance import add_step
 
         if isinstance(data, tuple):
             return arrays_fn(data[0], data[1], temp_c)
@@ -466,8 +469,6 @@ class ImuCalibration:
         )
 
     def with_(self, **changes: Any) -> "ImuCalibration":
-        from dataclasses import replace
-
         return replace(self, **changes)
 
 

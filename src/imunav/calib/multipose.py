@@ -47,6 +47,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy.optimize import least_squares
 
+from imunav.calib._kernels import rotate_between_poses
 from imunav.calib.model import ImuCalibration
 from imunav.calib.result import CalibrationResult
 from imunav.errors import (
@@ -175,7 +176,6 @@ def gyro_initial_scale(raw: Array, offsets: NDArray[np.int64], dt: float, u_from
     gravity direction moved by at least 10° is refined on a logarithmic grid
     (×1/3 … ×3) of the full integration cost with ``T_g K_g = s I``.
     """
-    from imunav.calib._kernels import rotate_between_poses
 
     ratios = []
     for m in range(len(offsets) - 1):
@@ -452,7 +452,6 @@ def multipose(
             f"multi-pose gyro fit: {len(pairs)} usable pose-to-pose rotations (excluded for saturation: {excluded}); "
             "need at least 4 - turn more slowly or add poses"
         )
-    from imunav.calib._kernels import rotate_between_poses
 
     raw_cat = np.ascontiguousarray(np.vstack([g[i0:i1] - b_g for _, i0, i1 in pairs]))
     offsets = np.concatenate([[0], np.cumsum([i1 - i0 for _, i0, i1 in pairs])]).astype(np.int64)

@@ -8,13 +8,17 @@ from typing import Any
 
 import numpy as np
 
+from imunav.io._atomic import atomic_path
+
 __all__ = ["plot_residuals", "plot_temperature_fit", "plot_magnetometer", "save_figure"]
 
 
 def _plt() -> Any:
+    # optional: matplotlib loads only when a figure is drawn (import time of imunav and its CLI)
     import matplotlib
 
     matplotlib.use("Agg", force=False)
+    # optional: matplotlib loads only when a figure is drawn (import time of imunav and its CLI)
     import matplotlib.pyplot as plt
 
     return plt
@@ -22,7 +26,6 @@ def _plt() -> Any:
 
 def save_figure(fig: Any, path: str | os.PathLike[str], dpi: int = 110) -> Path:
     """Save a figure atomically (temp file in the same folder, then rename) and close it."""
-    from imunav.io._atomic import atomic_path
 
     try:
         with atomic_path(path) as tmp:

@@ -21,10 +21,11 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from imunav.calib._lsq import linear_fit
+from imunav.calib._noisecov import segment_mean_covariances
 from imunav.calib._segments import as_time, assign_to_windows, check_saturation, segment_means, steady_segments
 from imunav.calib.model import ImuCalibration
 from imunav.calib.result import CalibrationResult
-from imunav.calib.static import _gravity
+from imunav.calib.static import _gravity, fit_gyro_static
 from imunav.earth import OMEGA_E
 from imunav.errors import InsufficientDataError, ShapeError
 
@@ -150,8 +151,6 @@ def ratetable(
     f = g * u / np.linalg.norm(u, axis=1)[:, None]
     gc = None
     if noise_model is not None:
-        from imunav.calib._noisecov import segment_mean_covariances
-
         gc = segment_mean_covariances(
             noise_model.gyro, t[segs[:, 0]], t[segs[:, 1] - 1] + 1.0 / fs_, segs[:, 1] - segs[:, 0], fs_
         )
@@ -168,7 +167,6 @@ def combine(static: CalibrationResult, rate: CalibrationResult) -> CalibrationRe
     matrix (``ω̃ = T_g ω_ie + b_g + G f``), unknown until the rate table; the
     static gyro fit is then repeated with ``T_g ω_ie``.
     """
-    from imunav.calib.static import fit_gyro_static
 
     stderr = {**static.stderr, **{k: v for k, v in rate.stderr.items() if k in ("gyro_matrix",)}}
     residuals = {**static.residuals, **rate.residuals}

@@ -9,6 +9,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from imunav.calib.model import _OFF, ImuCalibration
+from imunav.errors import InvalidInputError
 from imunav.results import Result
 
 __all__ = ["CalibrationResult", "parameter_stderr"]
@@ -63,7 +64,6 @@ class CalibrationResult(Result):
         being independent (separate regressions).  Needs a multi-position
         (+ rate-table) result.
         """
-        from imunav.errors import InvalidInputError
 
         ca = self.info.get("_cov_accel")
         if ca is None:

@@ -23,6 +23,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from imunav.calib._lsq import design_condition, linear_fit
+from imunav.calib._noisecov import segment_mean_covariances
 from imunav.calib._segments import (
     as_time,
     assign_to_windows,
@@ -32,8 +33,9 @@ from imunav.calib._segments import (
 )
 from imunav.calib.model import ImuCalibration
 from imunav.calib.result import CalibrationResult
-from imunav.earth import OMEGA_E
+from imunav.earth import OMEGA_E, normal_gravity
 from imunav.errors import DegenerateGeometryError, InsufficientDataError, InvalidInputError, NonFiniteError, ShapeError
+from imunav.rotation import dcm_from_quat
 from imunav.units import G0
 
 __all__ = [
@@ -53,8 +55,6 @@ def _gravity(gravity: float | None, latitude: float | None, height: float = 0.0)
     if gravity is not None:
         return float(gravity)
     if latitude is not None:
-        from imunav.earth import normal_gravity
-
         return float(normal_gravity(latitude, height))
     return G0
 
@@ -74,7 +74,6 @@ def reference_specific_force(orientations: ArrayLike, gravity: float = G0) -> Ar
         if np.any(n == 0):
             raise InvalidInputError(f"orientation rows {np.flatnonzero(n == 0)[:10].tolist()} are zero vectors")
         return gravity * o / n[:, None]
-    from imunav.rotation import dcm_from_quat
 
     C = dcm_from_quat(o)  # C_nb
     return np.einsum("kji,j->ki", C, np.array([0.0, 0.0, -gravity]))
@@ -90,8 +89,6 @@ def earth_rate_body(orientations: ArrayLike, latitude: float | None) -> Array | 
         return None
     o = np.asarray(orientations, dtype=float)
     if o.shape[1] == 4:
-        from imunav.rotation import dcm_from_quat
-
         w_n = OMEGA_E * np.array([np.cos(latitude), 0.0, -np.sin(latitude)])
         return np.einsum("kji,j->ki", dcm_from_quat(o), w_n)
     u = o / np.linalg.norm(o, axis=1)[:, None]
@@ -301,8 +298,6 @@ def multiposition(
     )
     ac = gc = None
     if noise_model is not None:
-        from imunav.calib._noisecov import segment_mean_covariances
-
         t0, t1, n = t[segs[:, 0]], t[segs[:, 1] - 1] + 1.0 / fs_, segs[:, 1] - segs[:, 0]
         ac = segment_mean_covariances(noise_model.accel, t0, t1, n, fs_)
         gc = segment_mean_covariances(noise_model.gyro, t0, t1, n, fs_)

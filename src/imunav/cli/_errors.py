@@ -29,6 +29,8 @@ from typing import Any, NoReturn
 import typer
 from typer.core import TyperGroup
 
+from imunav.errors import ImunavError, ImunavWarning, InvalidInputError
+
 try:  # typer >= 0.20 carries its own copy of click (and no longer installs the click package)
     from typer import _click as click
     from typer._click.globals import get_current_context
@@ -88,7 +90,6 @@ _FIG_SUFFIXES = (".png", ".pdf", ".svg", ".svgz", ".jpg", ".jpeg", ".eps", ".ps"
 
 def check_suffix(path: Path | None, option: str, suffixes: tuple[str, ...], what: str) -> None:
     """Refuse an output path whose suffix is not among ``suffixes`` (the file would not be what its name says)."""
-    from imunav.errors import InvalidInputError
 
     if path is not None and Path(path).suffix.lower() not in suffixes:
         raise InvalidInputError(f"{option} {path}: {what} is written as {' / '.join(suffixes)}, not "
@@ -116,8 +117,6 @@ class ImunavGroup(TyperGroup):
     """Root command group: the single place where exceptions become messages and exit codes."""
 
     def invoke(self, ctx: click.Context) -> Any:
-        from imunav.errors import ImunavError, ImunavWarning
-
         try:
             with warnings.catch_warnings():
                 warnings.simplefilter("default", ImunavWarning)

@@ -6,7 +6,29 @@ import json
 from pathlib import Path
 from typing import Optional
 
+import numpy as np
 import typer
+from rich.console import Console
+from rich.progress import Progress
+from rich.table import Table
+
+from imunav.airdata import plot as P
+from imunav.airdata.filter import LongHorizonConfig, run_long_horizon, run_thesis_filter, thesis_row
+from imunav.airdata.flight import FlightConfig, simulate_flight
+from imunav.airdata.scenario import (
+    ThesisScenario,
+    delay_summary,
+    load_config,
+    simulate_detector_statistics,
+    simulate_thesis,
+    thesis_report,
+)
+from imunav.cli._errors import check_figure_path, check_suffix, fail
+from imunav.errors import FileFormatError, InvalidInputError
+from imunav.filters.faults import DETECTORS, alarms, calibrated_thresholds, false_alarm_rates, thesis_thresholds
+from imunav.io._atomic import atomic_path, check_outputs, write_json
+from imunav.io._common import wrap_read_errors
+from imunav.rotation import dcm_from_euler
 
 _HELP = """Air data + Doppler radar integration: wind-estimating Kalman filter, robust filtering, fault detection.
 
@@ -15,22 +37,17 @@ Example: imunav airdata thesis --runs 50 --json thesis.json
 
 
 def _write_atomic(path: Path, write) -> None:
-    from imunav.io._atomic import atomic_path
-
     with atomic_path(path) as tmp:
         write(str(tmp))
 
 
 def _write_json(path: Path, obj: dict) -> None:
-    from imunav.io._atomic import write_json
-
     write_json(path, obj)
 
 
 def _channels(text: Optional[str]) -> tuple[int, ...] | None:
     if text is None or text.strip().lower() in ("", "all"):
         return None
-    from imunav.errors import InvalidInputError
 
     try:
         ch = tuple(int(c) for c in text.split(","))
@@ -42,8 +59,6 @@ def _channels(text: Optional[str]) -> tuple[int, ...] | None:
 
 
 def _vec3(text: str, name: str) -> tuple[float, float, float]:
-    from imunav.errors import InvalidInputError
-
     try:
         v = tuple(float(x) for x in text.split(","))
     except ValueError as exc:
@@ -54,8 +69,6 @@ def _vec3(text: str, name: str) -> tuple[float, float, float]:
 
 
 def _fail(exc: Exception) -> None:
-    from imunav.cli._errors import fail
-
     fail(exc)
 
 
@@ -87,27 +100,16 @@ Example: imunav airdata simulate turns --duration 120 --wind 8,-12,0 --turbulenc
         seed: int = typer.Option(0, "--seed", help="Random seed."),
         json_out: Optional[Path] = typer.Option(None, "--json", help="Also write a JSON summary here."),
     ) -> None:
-        from imunav.io._atomic import check_outputs
-
         check_outputs([config], [out, json_out])
-        from imunav.cli._errors import check_suffix
 
         check_suffix(out, "--out", (".npz",), "the simulated flight (NumPy archive)")
-
-        import numpy as np
-
-        from imunav.errors import InvalidInputError
 
         try:
             loaded = None
             if config is not None:
-                from imunav.airdata.scenario import ThesisScenario, load_config
-
                 loaded = load_config(config)
                 profile = "thesis" if isinstance(loaded, ThesisScenario) else loaded.profile
             if profile == "thesis":
-                from imunav.airdata.scenario import ThesisScenario, simulate_thesis
-
                 sc = loaded if loaded is not None else ThesisScenario(kind=kind)
                 kind = sc.kind
                 d = simulate_thesis(sc, rng=seed)
@@ -116,8 +118,6 @@ Example: imunav airdata simulate turns --duration 120 --wind 8,-12,0 --turbulenc
                 meta = {"type": "thesis", "scenario": d.scenario.to_dict(), "seed": seed}
                 summary = {"file": str(out), "type": "thesis", "kind": kind, "steps": int(d.t.size), "seed": seed}
             else:
-                from imunav.sim.flight import FlightConfig, simulate_flight
-
                 cfg = loaded if loaded is not None else FlightConfig(
                     profile=profile, duration=duration, tas=tas, altitude=altitude, wind_ned=_vec3(wind, "--wind"),
                     turbulence=turbulence, rate_ads=rate_ads, rate_doppler=rate_doppler)
@@ -156,24 +156,16 @@ Example: imunav airdata run flight.npz --robust nis --json run.json
         out: Optional[Path] = typer.Option(None, "--out", help="Write the estimates as .npz here."),
         plot: Optional[Path] = typer.Option(None, "--plot", help="Write a wind figure (.png) here."),
     ) -> None:
-        from imunav.io._atomic import check_outputs
-
         check_outputs([path], [json_out, out, plot])
-        from imunav.cli._errors import check_figure_path, check_suffix
 
         check_suffix(out, "--out", (".npz",), "the estimates (NumPy archive)")
 
         check_figure_path(plot, "--plot")
 
-        import numpy as np
-
-        from imunav.errors import FileFormatError, InvalidInputError
-
         rb = None if robust == "none" else robust
         try:
             if not path.exists():
                 raise FileFormatError(f"{path}: no such file; create one with `imunav airdata simulate`")
-            from imunav.io._common import wrap_read_errors
 
             with wrap_read_errors(str(path), "an `imunav airdata simulate` .npz file"), open(path, "rb") as fh, \
                     np.load(fh, allow_pickle=False) as z:
@@ -182,8 +174,6 @@ Example: imunav airdata run flight.npz --robust nis --json run.json
                 meta = json.loads(str(z["meta"]))
                 data = {k: z[k] for k in z.files if k != "meta"}
             if meta["type"] == "thesis":
-                from imunav.airdata.filter import run_thesis_filter, thesis_row
-
                 r = run_thesis_filter(data["z"], v_ads=data["v_ads"], robust=rb, gate_m=gate_m, alpha=alpha)
                 k0 = thesis_row(100)
                 e = r.wind[k0:] - data["wind_true"][k0:]
@@ -195,9 +185,6 @@ Example: imunav airdata run flight.npz --robust nis --json run.json
                            "P44_final": float(r.cov_diag[-1, 3])}
                 arrays = {"wind": r.wind, "P_diag": r.cov_diag, "normalized": r.normalized, "weights": r.weights}
             elif meta["type"] == "flight":
-                from imunav.airdata.filter import LongHorizonConfig, run_long_horizon
-                from imunav.rotation import dcm_from_euler
-
                 r = run_long_horizon(data["t_ads"], data["v_ads_body"], data["t_doppler"], data["v_doppler_body"],
                                      dcm_from_euler(data["euler_doppler"]), dcm_from_euler(data["euler_ads"]),
                                      LongHorizonConfig(robust=rb, alpha=alpha, gate_m=gate_m))
@@ -219,13 +206,9 @@ Example: imunav airdata run flight.npz --robust nis --json run.json
             _fail(exc if isinstance(exc, InvalidInputError) else FileFormatError(f"{path}: missing entry {exc}"))
             return
         if out is not None:
-            from imunav.io._atomic import atomic_path
-
             with atomic_path(out) as tmp, open(tmp, "wb") as fh:
                 np.savez_compressed(fh, **arrays)
         if plot is not None:
-            from imunav.airdata import plot as P
-
             fig = P.plot_wind(r) if meta["type"] == "thesis" else P.plot_long_horizon(r)
             _write_atomic(plot, lambda tmp: fig.savefig(tmp, dpi=100, format=plot.suffix.lstrip(".") or "png"))
         if json_out is not None:
@@ -252,18 +235,7 @@ Example: imunav airdata faults --kind variance --magnitude 3.5 --runs 100 --seed
         seed: int = typer.Option(0, "--seed", help="Random seed."),
         json_out: Optional[Path] = typer.Option(None, "--json", help="Write the table as JSON here."),
     ) -> None:
-        from imunav.io._atomic import check_outputs
-
         check_outputs([], [json_out])  # before the Monte Carlo
-
-        import numpy as np
-        from rich.console import Console
-        from rich.progress import Progress
-        from rich.table import Table
-
-        from imunav.airdata.scenario import ThesisScenario, delay_summary, simulate_detector_statistics
-        from imunav.errors import InvalidInputError
-        from imunav.filters.faults import DETECTORS, alarms, calibrated_thresholds, false_alarm_rates, thesis_thresholds
 
         try:
             kw = {"kind": kind, "fault_step": onset, "channels": _channels(channels)}
@@ -335,13 +307,7 @@ Example: imunav airdata thesis --runs 50 --json thesis.json
                                            help="Robust filters to compare (gate<m>, nis, isolate, huber); "
                                                 "gate2 and nis are required."),
     ) -> None:
-        from imunav.io._atomic import check_outputs
-
         check_outputs([], [json_out])  # before the Monte Carlo
-        from rich.console import Console
-
-        from imunav.airdata.scenario import thesis_report
-        from imunav.errors import InvalidInputError
 
         try:
             if runs < 2:

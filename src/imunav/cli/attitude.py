@@ -6,10 +6,26 @@ import json
 from pathlib import Path
 from typing import Any, Optional
 
+import numpy as np
 import typer
+from rich.console import Console
+from rich.progress import Progress
+from rich.table import Table
 
-from imunav.cli._options import INSTANCE, LAYOUT, MAG_TOPIC, TOPIC
+from imunav.attitude.alignment import broad_reference_start
+from imunav.attitude.benchmark import FILTERS, cv_grid_search, evaluate, grid_search, make_filter, reference_start
+from imunav.attitude.metrics import attitude_rmse
+from imunav.attitude.plot import plot_montecarlo_box, save
+from imunav.attitude.scenario import PAPER_TABLE2, PaperScenario, default_filters
+from imunav.cli._errors import check_figure_path
+from imunav.cli._options import INSTANCE, LAYOUT, MAG_TOPIC, TOPIC, reader_options
 from imunav.errors import ConfigError
+from imunav.io import read_imu
+from imunav.io._atomic import check_outputs, write_json
+from imunav.io.broad import broad_trials, load_broad
+from imunav.io.datasets import shared_data_path
+from imunav.montecarlo import run_montecarlo
+from imunav.scenarios import attitude_paper, paper_report, paper_rmse, paper_table
 
 app = typer.Typer(help="Attitude filters (Madgwick, Mahony, MEKF, UKF, adaptive, smoother, paper KFs).\n\n"
                   "Example: imunav attitude run 05_undisturbed_slow_rotation_with_breaks_B.mat --filter madgwick_c",
@@ -44,7 +60,6 @@ def _resolve(path: Path, is_dir: bool) -> Path:
     """The path as given, else the same name inside the shared BROAD folder."""
     if path.exists():
         return path
-    from imunav.io.datasets import shared_data_path
 
     cand = shared_data_path("broad") if is_dir and path.name == "broad" else shared_data_path("broad", path.name)
     if cand is not None and cand.exists():
@@ -53,8 +68,6 @@ def _resolve(path: Path, is_dir: bool) -> Path:
 
 
 def _write_json(obj: Any, path: Path) -> None:
-    from imunav.io._atomic import write_json
-
     write_json(path, obj, indent=1)
 
 
@@ -78,41 +91,27 @@ def run_cmd(
     Example (PX4 log; sensor_combined carries its magnetometer):
     imunav attitude run ../shared/data/px4_ulog/sample.ulg --topic sensor_combined --filter mekf
     """
-    from imunav.io._atomic import check_outputs
 
     check_outputs([file], [json_out])
 
-    from rich.console import Console
-
-    from imunav.attitude.benchmark import make_filter
-    from imunav.attitude.metrics import attitude_rmse
-
     con = Console()
-    from imunav.cli._options import reader_options
 
     file = _resolve(file, False)
     f = make_filter(filter, _parse_params(param))
     ref = None
     opts = reader_options(topic=topic, instance=instance, mag_topic=mag_topic, layout=layout)
     if file.suffix.lower() == ".mat" and not opts:
-        from imunav.io.broad import load_broad
-
         tr = load_broad(file)
         data, ref, mask = tr.imu, tr.q_ref_nb, tr.movement
     else:
-        from imunav.io import read_imu
-
         data = read_imu(file, **opts)
     kw: dict[str, Any] = {"use_mag": False if no_mag else None}
-    from imunav.attitude.benchmark import reference_start
 
     if ref is not None and reference_start(filter) and not no_mag:
         # start like the BROAD reference runs (first accelerometer / magnetometer sample)
-        from imunav.attitude.alignment import broad_reference_start
 
         kw["q0"] = broad_reference_start(data.accel[0], data.mag[0])
     res = f.run(data, **kw)
-    import numpy as np
 
     e = np.degrees(res.euler()[-1])
     con.print(f"[bold]{res.name}[/bold]: {res.n} samples, final roll/pitch/yaw = "
@@ -142,15 +141,8 @@ def benchmark_cmd(
 
     Example: imunav attitude benchmark broad --filter madgwick_c --filter adaptive --json bench.json
     """
-    from imunav.io._atomic import check_outputs
 
     check_outputs([], [json_out])  # before the benchmark
-    from rich.console import Console
-    from rich.progress import Progress
-    from rich.table import Table
-
-    from imunav.attitude.benchmark import FILTERS, cv_grid_search, evaluate, grid_search
-    from imunav.io.broad import broad_trials
 
     con = Console()
     files = broad_trials(_resolve(directory, True))
@@ -235,17 +227,10 @@ def montecarlo_cmd(
 
     Example: imunav attitude montecarlo --runs 5 --executor serial --json mc.json
     """
-    from imunav.cli._errors import check_figure_path
-    from imunav.io._atomic import check_outputs
 
     check_outputs([], [json_out, plot])
     check_figure_path(plot, "--plot")
-    from rich.console import Console
-    from rich.table import Table
 
-    from imunav.attitude.scenario import PAPER_TABLE2, PaperScenario, default_filters
-    from imunav.montecarlo import run_montecarlo
-    from imunav.scenarios import attitude_paper, paper_report, paper_rmse, paper_table
 
     con = Console()
     names = tuple(f.strip() for f in filters.split(",") if f.strip())
@@ -270,8 +255,6 @@ def montecarlo_cmd(
         _write_json(paper_report(res, scn, {k: every[k] for k in names}), json_out)
         con.print(f"wrote {json_out}")
     if plot:
-        from imunav.attitude.plot import plot_montecarlo_box, save
-
         save(plot_montecarlo_box(paper_rmse(res)), plot)
         con.print(f"wrote {plot}")
 

@@ -3,10 +3,21 @@
 from __future__ import annotations
 
 import json
+import math
 from pathlib import Path
 from typing import Any, Optional
 
+import numpy as np
 import typer
+from rich.console import Console
+from rich.markup import escape
+from rich.table import Table
+
+from imunav.batch import calibrate_batch, noise_batch, simulate_batch
+from imunav.cli._errors import fail
+from imunav.errors import InvalidInputError
+from imunav.io._atomic import check_outputs, write_json
+from imunav.report.catalog import display_unit
 
 app = typer.Typer(
     help="Process a folder of recordings (one per unit of a production batch) in parallel, "
@@ -48,21 +59,11 @@ def _read_options(fs: Optional[float], accel_unit: Optional[str], gyro_unit: Opt
 
 
 def _fail(exc: Exception) -> None:
-    from imunav.cli._errors import fail
-
     fail(exc)
 
 
 def _print_summary(summary: Any, families: list[str], title: str) -> None:
     """Rich table: one row per unit, one column per parameter family (x, y, z in one cell)."""
-    import math
-
-    import numpy as np
-    from rich.console import Console
-    from rich.markup import escape
-    from rich.table import Table
-
-    from imunav.report.catalog import display_unit
 
     t = summary.table
     fams = [f for f in families if any(c.startswith(f + "_") and not c.endswith(("_se", "_err")) for c in t.columns)]
@@ -119,8 +120,6 @@ def simulate_cmd(
 
     Example: imunav batch simulate 4 --out batch --fs 20 --dwell 4
     """
-    from imunav.batch import simulate_batch
-    from imunav.errors import InvalidInputError
 
     try:
         files = simulate_batch(n_units, out, preset=preset, spread=spread, rng=seed, fs=fs, dwell_s=dwell,
@@ -152,14 +151,8 @@ def calibrate_cmd(
 
     Example: imunav batch calibrate batch --method thesis --spec examples/lab_spec.toml --json batch_cal.json
     """
-    from imunav.io._atomic import check_outputs
 
     check_outputs([spec], [json_out])
-
-    import math
-
-    from imunav.batch import calibrate_batch
-    from imunav.errors import InvalidInputError
 
     try:
         s = calibrate_batch(folder, method=method, out_dir=out, spec=spec,
@@ -195,12 +188,8 @@ def noise_cmd(
 
     Example: imunav batch simulate 3 --static 600 --out static_batch && imunav batch noise static_batch --terms N,B,K
     """
-    from imunav.io._atomic import check_outputs
 
     check_outputs([spec], [json_out])
-
-    from imunav.batch import noise_batch
-    from imunav.errors import InvalidInputError
 
     try:
         s = noise_batch(folder, out_dir=out, spec=spec, read_options=_read_options(fs, accel_unit, gyro_unit, columns),
@@ -213,8 +202,6 @@ def noise_cmd(
 
 
 def _finish(summary: Any, json_out: Optional[Path]) -> None:
-    from imunav.io._atomic import write_json
-
     if json_out is not None:
         write_json(json_out, summary.to_dict())
     typer.echo(f"summary: {summary.out_dir / 'summary.csv'}, report: {summary.out_dir / 'index.html'}")

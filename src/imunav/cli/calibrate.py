@@ -12,9 +12,25 @@ from pathlib import Path
 from typing import Any, Optional
 
 import numpy as np
+import pandas as pd
 import typer
+from rich.console import Console
+from rich.table import Table
 
-from imunav.cli._options import INSTANCE, LAYOUT, TOPIC
+from imunav import calib
+from imunav.calib import ImuCalibration, combine, ferraris_from_session
+from imunav.calib.magnetometer import MagCalibration, fit_ellipsoid, hard_iron_minmax, soft_iron_rotation_scale
+from imunav.calib.multipose import undetermined_misalignment_error
+from imunav.calib.plot import plot_magnetometer, plot_residuals, plot_temperature_fit, save_figure
+from imunav.calib.temperature import thermal_calibration
+from imunav.cli._options import INSTANCE, LAYOUT, TOPIC, reader_options
+from imunav.errors import FileFormatError, InvalidInputError
+from imunav.io import read_imu
+from imunav.io._atomic import check_outputs, check_writable, read_json, write_json
+from imunav.io._common import check_nonempty, wrap_read_errors
+from imunav.io.logs import log_kind, read_topic
+from imunav.io.px4params import px4_parameters
+from imunav.sim import ImuErrorModel, Segments
 
 app = typer.Typer(
     help="Calibrate an IMU or magnetometer from a recording; writes the calibration JSON.\n\n"
@@ -32,9 +48,6 @@ def _read(path: Path, fs: Optional[float], accel_unit: Optional[str], gyro_unit:
           accel_scale: Optional[float], gyro_scale: Optional[float], skiprows: Optional[int],
           columns: Optional[str], topic: Optional[str] = None, instance: Optional[int] = None,
           layout: Optional[str] = None) -> Any:
-    from imunav.cli._options import reader_options
-    from imunav.io import read_imu
-
     return read_imu(path, **reader_options(
         units={k: v for k, v in (("accel", accel_unit), ("gyro", gyro_unit)) if v},
         scales={k: v for k, v in (("accel", accel_scale), ("gyro", gyro_scale)) if v},
@@ -44,8 +57,6 @@ def _read(path: Path, fs: Optional[float], accel_unit: Optional[str], gyro_unit:
 
 
 def _columns(text: str) -> Any:
-    from imunav.errors import InvalidInputError
-
     try:
         return json.loads(text)
     except json.JSONDecodeError as exc:
@@ -54,10 +65,6 @@ def _columns(text: str) -> Any:
 
 
 def _segments(path: Path) -> Any:
-    from imunav.errors import FileFormatError
-    from imunav.io._atomic import read_json
-    from imunav.sim import Segments
-
     d = read_json(path, "segment table JSON (write it with Profile.to_dict() / Segments.to_dict())")
     if not isinstance(d, dict):
         raise FileFormatError(f"{path}: a segment table JSON is an object with the columns of Segments")
@@ -71,8 +78,6 @@ def _segments(path: Path) -> Any:
 def _check_report(report: Optional[Path]) -> None:
     """Refuse, before any work, a report folder that cannot be created or written (e.g. an existing file)."""
     if report is not None:
-        from imunav.io._atomic import check_writable
-
         check_writable(report / "report.json")
 
 
@@ -81,7 +86,6 @@ def _px4(px4_params: Optional[Path], **calibration: Any) -> Any:
     computed before any file is written, so a calibration PX4 cannot take leaves no file behind."""
     if px4_params is None:
         return None
-    from imunav.io.px4params import px4_parameters
 
     return px4_parameters(**calibration)
 
@@ -96,24 +100,18 @@ def _write_px4(params: Any, path: Optional[Path]) -> None:
 
 
 def _finish(result: Any, out: Path, report: Optional[Path], *, save: Any = None, px4: Optional[Path] = None) -> None:
-    from rich.console import Console
-    from rich.table import Table
 
-    from imunav.io._atomic import write_json
 
     px4_values = _px4(px4, imu=result.calibration)
 
     if report is not None:
         # the report folder first: a report that cannot be written leaves no calibration behind either
-        from imunav.io._atomic import check_writable
 
         report.mkdir(parents=True, exist_ok=True)
         check_writable(report / "report.json")
     (save or result.calibration.save)(out)
     con = Console()
     if report is not None:
-        from imunav.calib.plot import plot_residuals, save_figure
-
         write_json(report / "report.json", result.to_dict())
         save_figure(plot_residuals(result), report / "residuals.png")
     tab = Table(title=f"{result.method}: residual RMS and design condition")
@@ -144,7 +142,6 @@ _NM = typer.Option(None, help="Characterised noise (ImuErrorModel TOML: noise de
 def _noise_model(path: Optional[Path]) -> Any:
     if path is None:
         return None
-    from imunav.sim import ImuErrorModel
 
     return ImuErrorModel.from_toml(path)
 _REP = typer.Option(None, help="Folder for report.json and residual plots.")
@@ -174,18 +171,15 @@ def multiposition(
 
     Example: imunav calibrate multiposition static.npz --segments static_segments.json --out static_cal.json --report rep --px4-params static_cal.params
     """
-    from imunav.io._atomic import check_outputs
 
     check_outputs([recording, segments, noise_model], [out, px4_params])
     _check_report(report)
 
-    from imunav.calib import multiposition as fit
-
     data = _read(recording, fs, accel_unit, gyro_unit, accel_scale, gyro_scale, skiprows, columns, topic, instance,
                  layout)
     lat = None if latitude_deg is None else np.deg2rad(latitude_deg)
-    res = fit(data, _segments(segments), latitude=lat, gravity=gravity, g_sensitivity=g_sensitivity,
-              noise_model=_noise_model(noise_model))
+    res = calib.multiposition(data, _segments(segments), latitude=lat, gravity=gravity, g_sensitivity=g_sensitivity,
+                              noise_model=_noise_model(noise_model))
     _finish(res, out, report, px4=px4_params)
 
 
@@ -211,13 +205,9 @@ def ratetable(
 
     Example: imunav calibrate ratetable rate.npz --segments rate_segments.json --static static.npz --static-segments static_segments.json --out cal.json
     """
-    from imunav.io._atomic import check_outputs
 
     check_outputs([recording, segments, static, static_segments, base, noise_model], [out, px4_params])
     _check_report(report)
-
-    from imunav.calib import ImuCalibration, combine, multiposition
-    from imunav.calib import ratetable as fit
 
     lat = None if latitude_deg is None else np.deg2rad(latitude_deg)
     rd = (fs, accel_unit, gyro_unit, accel_scale, gyro_scale, skiprows, columns, topic, instance, layout)
@@ -226,11 +216,12 @@ def ratetable(
     if static is not None:
         if static_segments is None:
             raise typer.BadParameter("--static needs --static-segments")
-        st = multiposition(_read(static, *rd), _segments(static_segments), latitude=lat, noise_model=nm)
+        st = calib.multiposition(_read(static, *rd), _segments(static_segments), latitude=lat, noise_model=nm)
         b = st.calibration
     else:
         b = ImuCalibration.load(base) if base is not None else None
-    res = fit(_read(recording, *rd), _segments(segments), base=b, latitude=lat, intercept=intercept, noise_model=nm)
+    res = calib.ratetable(_read(recording, *rd), _segments(segments), base=b, latitude=lat, intercept=intercept,
+                          noise_model=nm)
     if st is not None:
         res = combine(st, res)
     _finish(res, out, report, px4=px4_params)
@@ -255,17 +246,13 @@ def ferraris(
 
     Example: imunav calibrate ferraris session.csv --sections sections.json --fs 102.4 --gyro-unit deg/s --out cal.json
     """
-    from imunav.io._atomic import check_outputs
 
     check_outputs([recording, sections], [out, px4_params, imucal_out])
     _check_report(report)
 
-    from imunav.calib import ferraris_from_session
-    from imunav.io._atomic import write_json
 
     data = _read(recording, fs, accel_unit, gyro_unit, accel_scale, gyro_scale, skiprows, columns, topic, instance,
                  layout)
-    from imunav.io._atomic import read_json
 
     secs = read_json(sections, "imucal section list JSON")
     res = ferraris_from_session(data.accel, data.gyro, secs, data.fs, gravity=gravity,
@@ -295,18 +282,14 @@ def multipose(
 
     Example: imunav calibrate multipose session.csv --fs 100 --init-s 36.5 --no-accel-misalignment --out cal.json
     """
-    from imunav.io._atomic import check_outputs
 
     check_outputs([recording], [out, px4_params])
     _check_report(report)
 
-    from imunav.calib import multipose as fit
-    from imunav.calib.multipose import undetermined_misalignment_error
-
     data = _read(recording, fs, accel_unit, gyro_unit, accel_scale, gyro_scale, skiprows, columns, topic, instance,
                  layout)
-    res = fit(data.accel, data.gyro, data.fs, init_s=init_s, wait_s=wait_s, gravity=gravity, strict=False,
-              accel_misalignment=accel_misalignment, raw_accel_unit="m/s^2", raw_gyro_unit="rad/s")
+    res = calib.multipose(data.accel, data.gyro, data.fs, init_s=init_s, wait_s=wait_s, gravity=gravity, strict=False,
+                          accel_misalignment=accel_misalignment, raw_accel_unit="m/s^2", raw_gyro_unit="rad/s")
     if strict and res.info["weak_parameters"]:  # the library's refusal, naming this command's flags
         raise undetermined_misalignment_error(
             res.info["n_poses"], res.info["weak_parameters"], res.info["max_misalignment_stderr"],
@@ -331,18 +314,11 @@ def temperature(
 
     Example: imunav calibrate temperature cal_m30.json@-30 cal_0.json@0 cal_20.json@20 cal_50.json@50 --orders 1,2 --out thermal_cal.json
     """
-    from imunav.io._atomic import check_outputs
 
     check_outputs([c.rsplit("@", 1)[0] for c in calibrations], [out])
     _check_report(report)
 
-    from rich.console import Console
-    from rich.table import Table
 
-    from imunav.calib import ImuCalibration
-    from imunav.calib.temperature import thermal_calibration
-    from imunav.errors import InvalidInputError
-    from imunav.io._atomic import write_json
 
     temps, cals = [], []
     for item in calibrations:
@@ -366,8 +342,6 @@ def temperature(
             tab.add_row(f"{k}[{'xyz'[i]}]", *[f"{m.mse:.3g}" + ("*" if m.order == f.chosen_order else "") for m in f.fits])
     Console().print(tab)
     if report is not None:
-        from imunav.calib.plot import plot_temperature_fit, save_figure
-
         report.mkdir(parents=True, exist_ok=True)
         write_json(report / "report.json", res.to_dict())
         for k, fits in res.fits.items():
@@ -397,21 +371,11 @@ def mag(
 
     Example: imunav calibrate mag flight.ulg --topic sensor_mag --instance 0 --out mag_cal.json
     """
-    from imunav.io._atomic import check_outputs
 
     check_outputs([recording], [out, px4_params])
     _check_report(report)
 
-    from rich.console import Console
 
-    from imunav.calib.magnetometer import (
-        MagCalibration,
-        fit_ellipsoid,
-        hard_iron_minmax,
-        soft_iron_rotation_scale,
-    )
-    from imunav.errors import InvalidInputError
-    from imunav.io._atomic import write_json
 
     h = _read_mag(recording, topic, instance)
     if method == "ellipsoid":
@@ -425,14 +389,10 @@ def mag(
     else:
         raise InvalidInputError(f"--method must be ellipsoid, rotation-scale or minmax, not {method!r}")
     if mag_unit is None:
-        from imunav.io.logs import log_kind
-
         mag_unit = "uT" if log_kind(recording) is not None else "gauss"
     px4_values = _px4(px4_params, mag=cal, mag_unit=mag_unit)
     write_json(out, cal.to_dict())
     if report is not None:
-        from imunav.calib.plot import plot_magnetometer, save_figure
-
         report.mkdir(parents=True, exist_ok=True)
         write_json(report / "report.json", cal.to_dict())
         save_figure(plot_magnetometer(h, cal), report / "projections.png")
@@ -442,9 +402,6 @@ def mag(
 
 
 def _read_mag(path: Path, topic: Optional[str] = None, instance: Optional[int] = None) -> np.ndarray:
-    from imunav.errors import FileFormatError, InvalidInputError
-    from imunav.io.logs import log_kind, read_topic
-
     p = Path(path)
     if p.exists() and log_kind(p) is not None:
         if topic is None:
@@ -455,7 +412,6 @@ def _read_mag(path: Path, topic: Optional[str] = None, instance: Optional[int] =
         return np.asarray(d.values["mag"], float)
     if topic is not None or instance is not None:
         raise InvalidInputError(f"{p}: --topic / --instance apply to ROS bags and PX4 ULogs only")
-    from imunav.io._common import check_nonempty, wrap_read_errors
 
     check_nonempty(p)
     if p.suffix == ".npz":
@@ -465,7 +421,6 @@ def _read_mag(path: Path, topic: Optional[str] = None, instance: Optional[int] =
                     return np.asarray(z[k], float)
             names = list(z.files)
         raise FileFormatError(f"{p}: no 'mag' array (found {names})")
-    import pandas as pd
 
     df = pd.read_csv(p, comment="#")
     low = {c.lower().replace("_", ""): c for c in df.columns}

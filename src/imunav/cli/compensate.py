@@ -5,7 +5,13 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Optional
 
+import numpy as np
 import typer
+
+from imunav.calib import ImuCalibration
+from imunav.cli.calibrate import _read
+from imunav.io import write_imu
+from imunav.io._atomic import check_outputs
 
 
 def register(root: typer.Typer) -> None:
@@ -31,15 +37,8 @@ def compensate(
 
     Example: imunav compensate static.npz --cal cal.json --out static_compensated.npz
     """
-    from imunav.io._atomic import check_outputs
 
     check_outputs([recording, cal], [out])
-
-    import numpy as np
-
-    from imunav.calib import ImuCalibration
-    from imunav.cli.calibrate import _read
-    from imunav.io import write_imu
 
     data = _read(recording, fs, accel_unit, gyro_unit, None, None, None, None)
     c = ImuCalibration.load(cal)

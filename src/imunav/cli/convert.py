@@ -8,7 +8,9 @@ from typing import Optional
 
 import typer
 
-from imunav.cli._options import INSTANCE, LAYOUT, MAG_TOPIC, TOPIC
+from imunav.cli._options import INSTANCE, LAYOUT, MAG_TOPIC, TOPIC, reader_options
+from imunav.io import read_imu, write_imu
+from imunav.io._atomic import check_outputs
 
 _EXAMPLE = (
     "Examples:\n\n"
@@ -33,9 +35,6 @@ def convert(
 
     The output keeps the time axis (s since meta.t0_ns), the units and the reader's meta (topic,
     frame conversion, time report); OUT may not be SRC."""
-    from imunav.cli._options import reader_options
-    from imunav.io import read_imu, write_imu
-    from imunav.io._atomic import check_outputs
 
     check_outputs([src], [out])
     data = read_imu(src, **reader_options(topic=topic, instance=instance, mag_topic=mag_topic, layout=layout,

@@ -3,12 +3,21 @@
 from __future__ import annotations
 
 import math
+import time
 from pathlib import Path
 from typing import Any
 
 import typer
+from rich.console import Console
+from rich.table import Table
 
-from imunav.cli._options import INSTANCE, LAYOUT, MAG_TOPIC, TOPIC
+from imunav.cli._options import INSTANCE, LAYOUT, MAG_TOPIC, TOPIC, reader_options
+from imunav.errors import InvalidInputError
+from imunav.io import read_imu
+from imunav.io._atomic import check_outputs, write_json
+from imunav.io.logs import list_topics, log_kind
+from imunav.timeseries import describe
+from imunav.units import DEG, G0
 
 _EXAMPLE = (
     "Example:\n\n"
@@ -24,8 +33,6 @@ _EXAMPLE = (
 
 
 def _parse_columns(items: list[str]) -> dict[str, Any]:
-    from imunav.errors import InvalidInputError
-
     out: dict[str, Any] = {}
     for it in items:
         if "=" not in it:
@@ -65,15 +72,6 @@ def info(
     On a ROS bag or PX4 ULog without --topic: the topics (instances) with type, count, rate and
     duration, from the index, without reading the messages; with --topic: that IMU as above, plus
     the jitter, drops and out-of-order stamps of its messages."""
-    from rich.console import Console
-    from rich.table import Table
-
-    from imunav.cli._options import reader_options
-    from imunav.errors import InvalidInputError
-    from imunav.io import read_imu
-    from imunav.io._atomic import check_outputs, write_json
-    from imunav.timeseries import describe
-    from imunav.units import DEG, G0
 
     console = Console()
     check_outputs([file], [json_out])
@@ -81,7 +79,6 @@ def info(
         raise InvalidInputError(f"--window {window_s}: the static-detector window must be a finite number of seconds > 0")
     if min_static_s is not None and not (math.isfinite(min_static_s) and min_static_s > 0):
         raise InvalidInputError(f"--min-static {min_static_s}: must be a finite number of seconds > 0")
-    from imunav.io.logs import log_kind
 
     if topic is None and format in (None, "rosbag", "ulog") and file.exists() and log_kind(file) is not None:
         _list_topics(console, file, json_out)
@@ -164,12 +161,6 @@ def info(
 
 def _list_topics(console: Any, file: Path, json_out: Path | None) -> None:
     """The topics of a bag / ULog as a table (and JSON), with the time the listing took."""
-    import time
-
-    from rich.table import Table
-
-    from imunav.io._atomic import write_json
-    from imunav.io.logs import list_topics
 
     t0 = time.perf_counter()
     topics = list_topics(file)

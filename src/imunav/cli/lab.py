@@ -6,6 +6,14 @@ from pathlib import Path
 from typing import Optional
 
 import typer
+from rich.console import Console
+from rich.markup import escape
+from rich.table import Table
+
+from imunav.cli._errors import fail
+from imunav.errors import InvalidInputError
+from imunav.io._atomic import check_outputs, read_json, write_json
+from imunav.lab import run_lab
 
 _HELP = """Run the lab and write a report folder (index.html, summary.md, summary.json, data/, figures/).
 
@@ -31,16 +39,7 @@ def register(app: typer.Typer) -> None:
         overwrite: bool = typer.Option(False, "--overwrite", help="Clear a report folder that holds another run "
                                        "(only files of imunav runs) instead of refusing."),
     ) -> None:
-        from imunav.io._atomic import check_outputs
-
         check_outputs([config], [json_out])
-
-        from rich.console import Console
-        from rich.markup import escape
-        from rich.table import Table
-
-        from imunav.errors import InvalidInputError
-        from imunav.lab import run_lab
 
         console = Console(stderr=True)
         try:
@@ -49,8 +48,6 @@ def register(app: typer.Typer) -> None:
                 progress=not quiet, console=console, overwrite=overwrite,
             )
         except InvalidInputError as exc:
-            from imunav.cli._errors import fail
-
             fail(exc)
         table = Table(title=f"imunav lab → {out}")
         table.add_column("step")
@@ -70,8 +67,6 @@ def register(app: typer.Typer) -> None:
             if s.error:
                 console.print(f"[red]{s.name} failed:[/red]\n{escape(s.error)}", soft_wrap=True, highlight=False)
         if json_out is not None:
-            from imunav.io._atomic import read_json, write_json
-
             write_json(json_out, read_json(Path(out) / "summary.json"))
         typer.echo(f"report: {Path(out) / 'index.html'}")
         if result.failed_steps:

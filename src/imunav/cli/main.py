@@ -1,7 +1,9 @@
 """Entry point of the ``imunav`` command.
 
 Each command module in :mod:`imunav.cli` exposes ``register(app)``, which adds
-its command or command group to the Typer app.  Keep the modules thin: they
+its command or command group to the Typer app; :data:`COMMANDS` names them and
+:class:`imunav.cli._lazy.LazyGroup` imports a module only when its command is
+used, so that ``imunav --help`` starts in a fraction of a second.  Keep the modules thin: they
 parse options, call the library and print / write results.  They do not catch
 errors: :class:`imunav.cli._errors.ImunavGroup` turns every imunav error and
 every OS error into one line on stderr and exit status 2 (a traceback only
@@ -10,14 +12,42 @@ with ``--debug``), and any other exception into exit status 1.
 
 from __future__ import annotations
 
-import importlib
-
 import typer
 
-from imunav.cli._errors import ImunavGroup
+from imunav import __version__
+from imunav.cli._lazy import LazyGroup
+
+#: The commands, in the order ``imunav --help`` lists them: name (the module ``imunav.cli.<name>``, with a
+#: ``register(app)`` function) -> the first sentence of the command's help, listed without importing the
+#: module (tests/test_cli_help.py checks each against the command's own help).
+COMMANDS: dict[str, str] = {
+    "info": "Rate, duration, gaps, saturation, static intervals and per-channel mean/std of a recording.",
+    "convert": "Read one IMU (SI, FRD, magnetometer in µT) and write it as an imunav table, atomically.",
+    "noise": "Identify the stochastic errors of a static IMU recording: overlapping Allan deviation with "
+             "confidence intervals, GLS fit of quantization Q, white noise N, bias instability B, random walk K "
+             "and ramp R (with standard errors), the IEEE-952 slope read-outs, and the PSD estimate of N as a "
+             "cross-check.",
+    "simulate": "Simulate a test PROFILE (static, multiposition, ratetable, sixposition, ferraris) with a virtual "
+                "IMU and write the recording.",
+    "lab": "Run the lab and write a report folder (index.html, summary.md, summary.json, data/, figures/).",
+    "compensate": "Compensate a recording with a calibration (accelerometer first, then gyro).",
+    "calibrate": "Calibrate an IMU or magnetometer from a recording; writes the calibration JSON.",
+    "attitude": "Attitude filters (Madgwick, Mahony, MEKF, UKF, adaptive, smoother, paper KFs).",
+    "zupt": "Foot-mounted INS with zero-velocity updates.",
+    "gins": "Loosely coupled GNSS/INS (error-state Kalman filter) on KF-GINS files.",
+    "airdata": "Air data + Doppler radar integration: wind-estimating Kalman filter, robust filtering, fault "
+               "detection.",
+    "batch": "Process a folder of recordings (one per unit of a production batch) in parallel, with a summary "
+             "table and per-unit result files.",
+}
+
+
+class _Group(LazyGroup):
+    summaries = COMMANDS
+
 
 app = typer.Typer(
-    cls=ImunavGroup,
+    cls=_Group,
     name="imunav",
     help=(
         "Inertial sensors end to end: simulate, characterize, calibrate IMUs and "
@@ -27,37 +57,8 @@ app = typer.Typer(
     no_args_is_help=True,
     add_completion=False,
     pretty_exceptions_show_locals=False,
+    rich_markup_mode=None,
 )
-
-# One entry per command module (imunav.cli.<name> with a register(app) function).
-_COMMAND_MODULES: list[str] = [
-    "info",
-    "convert",
-    "noise",
-    "simulate",
-    "lab",
-    "calibrate",
-    "compensate",
-    "attitude",
-    "zupt",
-    "gins",
-    "airdata",
-    "batch",
-]
-
-for _name in _COMMAND_MODULES:
-    importlib.import_module(f"imunav.cli.{_name}").register(app)
-
-
-def _plain_help(t: typer.Typer) -> None:
-    """Print every --help as written: Rich markup would swallow bracketed text such as ``[spec.<name>]``."""
-    t.rich_markup_mode = None
-    for group in t.registered_groups:
-        if group.typer_instance is not None:
-            _plain_help(group.typer_instance)
-
-
-_plain_help(app)
 
 
 @app.callback(invoke_without_command=True)
@@ -67,8 +68,6 @@ def _main(
     debug: bool = typer.Option(False, "--debug", help="On an error, also print the Python traceback."),
 ) -> None:
     if version:
-        from imunav import __version__
-
         typer.echo(__version__)
         raise typer.Exit()
     if ctx.invoked_subcommand is None:

@@ -6,8 +6,23 @@ from pathlib import Path
 from typing import Any
 
 import typer
+from rich.console import Console
+from rich.progress import Progress
+from rich.table import Table
 
-from imunav.cli._options import INSTANCE, LAYOUT, TOPIC
+from imunav.cli._errors import check_figure_path
+from imunav.cli._options import INSTANCE, LAYOUT, TOPIC, reader_options
+from imunav.errors import InvalidInputError
+from imunav.io import read_imu
+from imunav.io._atomic import atomic_path, check_outputs, write_json
+from imunav.io.kalibr import write_kalibr_yaml
+from imunav.io.openvins import write_openvins_yaml
+from imunav.io.vins import write_vins_yaml
+from imunav.noise import allan_deviation, compare_psd_allan, fit_noise, fit_psd, log_average, psd
+from imunav.noise.curvefit import compare_curve_fits
+from imunav.noise.plot import plot_allan, plot_psd
+from imunav.noise.static import require_static
+from imunav.units import to_display
 
 _EXAMPLE = (
     "Example:\n\n"
@@ -19,8 +34,6 @@ _CH = ("gx", "gy", "gz", "ax", "ay", "az")
 
 
 def _taus(spec: str) -> Any:
-    from imunav.errors import InvalidInputError
-
     if spec.startswith("log:"):
         n = spec.split(":", 1)[1].strip()
         if not n.isdigit() or int(n) < 2:
@@ -39,8 +52,6 @@ def _fmt(v: float, se: float) -> str:
 
 def _curve_fits(r: Any) -> dict[str, Any]:
     """Thesis-style smooth fits of each channel's Allan curve (reported beside the term fit)."""
-    from imunav.errors import InvalidInputError
-    from imunav.noise.curvefit import compare_curve_fits
 
     out: dict[str, Any] = {}
     for c, name in enumerate(r.channels):
@@ -89,17 +100,6 @@ def noise(
 
     The recording must be static (one pose, no rotation): a recording whose mean specific force is far from g,
     or whose 1 s window means change pose or rotate, is refused unless --force."""
-    from rich.console import Console
-    from rich.progress import Progress
-    from rich.table import Table
-
-    from imunav.cli._errors import check_figure_path
-    from imunav.cli._options import reader_options
-    from imunav.errors import InvalidInputError
-    from imunav.io import read_imu
-    from imunav.io._atomic import atomic_path, check_outputs, write_json
-    from imunav.noise import allan_deviation, compare_psd_allan, fit_noise, fit_psd, log_average, psd
-    from imunav.units import to_display
 
     console = Console()
     exports = {"Kalibr imu.yaml": kalibr_out, "OpenVINS IMU file": openvins_out, "VINS-Fusion IMU block": vins_out}
@@ -127,7 +127,6 @@ def noise(
         raise InvalidInputError(f"{file}: the record has {len(data.gaps())} time gap(s); the noise analysis "
                                 "needs one gap-free static record (split it, or use imunav.noise.allan_deviation "
                                 "with nan_policy='segments')")
-    from imunav.noise.static import require_static
 
     # gyro-only analyses skip the mean-specific-force test: the accelerometer's unit may be undeclared
     require_static(data, force=force, where=str(file), mean_force=any(c.startswith("a") for c in chans))
@@ -185,8 +184,6 @@ def noise(
         write_json(json_out, out, indent=1)
         console.print(f"results written to {json_out}")
     if plot is not None or psd_plot is not None:
-        from imunav.noise.plot import plot_allan, plot_psd
-
         for path, which in ((plot, "allan"), (psd_plot, "psd")):
             if path is None:
                 continue
@@ -200,10 +197,6 @@ def noise(
                     fig.savefig(tmp, dpi=110, format=target.suffix.lstrip(".") or "png")
                 console.print(f"figure written to {target}")
     if wanted:
-        from imunav.io.kalibr import write_kalibr_yaml
-        from imunav.io.openvins import write_openvins_yaml
-        from imunav.io.vins import write_vins_yaml
-
         fg, fa = results["gyro"][1], results["accel"][1]
         writers = (lambda p: write_kalibr_yaml(p, fg, fa, rate), lambda p: write_openvins_yaml(p, fg, fa, rate),
                    lambda p: write_vins_yaml(p, fg, fa))

@@ -6,6 +6,25 @@ from pathlib import Path
 from typing import Optional
 
 import typer
+from rich.console import Console
+from rich.markup import escape
+from rich.progress import Progress
+
+from imunav.errors import ConfigError, InvalidInputError
+from imunav.io import write_imu
+from imunav.io._atomic import check_outputs, write_json
+from imunav.sim import (
+    ImuErrorModel,
+    ferraris_profile,
+    hundred_position_profile,
+    ideal_imu,
+    presets,
+    simulate_imu,
+    six_position_profile,
+    static_profile,
+    thesis_rate_table_profile,
+)
+from imunav.units import DEG
 
 PROFILES = ("static", "multiposition", "ratetable", "sixposition", "ferraris")
 
@@ -36,14 +55,7 @@ def register(app: typer.Typer) -> None:
         segments: Optional[Path] = typer.Option(None, "--segments", help="Segment-table CSV (default <out stem>_segments.csv)."),
         json_out: Optional[Path] = typer.Option(None, "--json", help="Also write a JSON summary here."),
     ) -> None:
-        from imunav.io._atomic import check_outputs
-
         check_outputs([model], [out, segments, json_out])
-
-        from rich.console import Console
-        from rich.markup import escape
-
-        from imunav.errors import InvalidInputError
 
         console = Console(stderr=True)
         try:
@@ -56,8 +68,6 @@ def register(app: typer.Typer) -> None:
             console.print(f"[red]error:[/red] {escape(str(exc))}", soft_wrap=True)
             raise typer.Exit(2) from exc
         if json_out is not None:
-            from imunav.io._atomic import write_json
-
             write_json(json_out, summary)
         typer.echo(
             f"wrote {summary['file']}: {summary['samples']} samples, {summary['duration_s']:.1f} s at "
@@ -84,19 +94,6 @@ def run_simulate(
     console: object | None = None,
 ) -> dict:
     """What ``imunav simulate`` does, callable from Python; returns the summary dict."""
-    from rich.progress import Progress
-
-    from imunav.errors import ConfigError, InvalidInputError
-    from imunav.io import write_imu
-    from imunav.sim import (
-        ferraris_profile,
-        hundred_position_profile,
-        ideal_imu,
-        six_position_profile,
-        static_profile,
-        thesis_rate_table_profile,
-    )
-    from imunav.units import DEG
 
     if profile not in PROFILES:
         raise InvalidInputError(f"unknown profile {profile!r}; choose one of {', '.join(PROFILES)}")
@@ -130,16 +127,12 @@ def run_simulate(
         prog.advance(task)
         name = preset or "thesis_sim"
         if model is not None:
-            from imunav.sim import ImuErrorModel
-
             em = ImuErrorModel.from_toml(model)
             data = _simulate(prof, em, seed, ideal_kw)
             name = em.name or Path(model).stem
         elif name == "ideal":
             data = ideal_imu(prof.trajectory, **ideal_kw)
         else:
-            from imunav.sim import presets
-
             data = _simulate(prof, presets.get(name), seed, ideal_kw)
         prog.advance(task)
         data = data.with_(meta={**dict(data.meta or {}), "profile": profile, "error_model": name, "seed": seed})
@@ -164,6 +157,4 @@ def run_simulate(
 
 
 def _simulate(prof, model, seed, ideal_kw):
-    from imunav.sim import simulate_imu
-
     return simulate_imu(prof.trajectory, model, seed, **ideal_kw)

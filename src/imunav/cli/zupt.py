@@ -5,9 +5,31 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Any, Optional
 
+import numpy as np
 import typer
+from rich.console import Console
+from rich.progress import Progress, track
+from rich.table import Table
 
-from imunav.cli._options import INSTANCE, LAYOUT, TOPIC
+from imunav.cli._errors import check_suffix, fail
+from imunav.cli._options import INSTANCE, LAYOUT, TOPIC, reader_options
+from imunav.errors import FileFormatError, ImunavError
+from imunav.ins import (
+    DEFAULT_THRESHOLDS,
+    DETECTORS,
+    ZuptConfig,
+    detect_zero_velocity,
+    error_2d,
+    loop_closure_error,
+    run_zupt,
+)
+from imunav.io import foot, read_imu
+from imunav.io._atomic import atomic_path, check_outputs, write_json
+from imunav.io._common import check_nonempty
+from imunav.io.foot import read_pyshoe_mat
+from imunav.io.logs import log_kind
+from imunav.learn import LstmConfig, LstmDetector, best_labels, select_shoe_threshold, train_lstm
+from imunav.learn.lstm import require_torch
 
 zupt_app = typer.Typer(
     help="Foot-mounted INS with zero-velocity updates.\n\nExample: imunav zupt run trial.mat --detector shoe",
@@ -20,22 +42,14 @@ def register(app: typer.Typer) -> None:
 
 
 def _write_json(path: Path, obj: Any) -> None:
-    from imunav.io._atomic import write_json
-
     write_json(path, obj, indent=1)
 
 
 def load_foot_file(path: Path, **read: Any) -> Any:
     """Read a foot recording by its format: pyshoe ``.mat``, x-io or FGO ``.csv``; a ROS bag / PX4 ULog (or
     any file with ``read`` options such as ``topic`` / ``layout``) through :func:`imunav.io.read_imu`."""
-    from imunav.errors import FileFormatError
-    from imunav.io import foot
-    from imunav.io._common import check_nonempty
-    from imunav.io.logs import log_kind
 
     if read or (path.exists() and log_kind(path) is not None):
-        from imunav.io import read_imu
-
         return foot.FootTrial(read_imu(path, **read), name=path.stem)
     check_nonempty(path)
     if path.suffix.lower() == ".mat":
@@ -53,8 +67,6 @@ def load_foot_file(path: Path, **read: Any) -> Any:
 
 
 def _fail(exc: Exception) -> None:
-    from imunav.cli._errors import fail
-
     fail(exc)
 
 
@@ -83,21 +95,12 @@ def run_cmd(
 
     Example (a foot IMU in a ROS 2 bag): imunav zupt run walk.mcap --topic /foot/imu
     """
-    from imunav.io._atomic import check_outputs
 
     check_outputs([file, model], [out, json_out])
-    from imunav.cli._errors import check_suffix
 
     check_suffix(out, "--out", (".npz",), "the trajectory (NumPy archive)")
 
-    import numpy as np
-
-    from imunav.errors import ImunavError
-    from imunav.ins import ZuptConfig, detect_zero_velocity, error_2d, loop_closure_error, run_zupt
-
     try:
-        from imunav.cli._options import reader_options
-
         trial = load_foot_file(file, **reader_options(topic=topic, instance=instance, layout=layout))
         guard = None
         if detector.startswith("labels:"):
@@ -108,8 +111,6 @@ def run_cmd(
         else:
             m = None
             if model is not None:
-                from imunav.learn import LstmDetector
-
                 m = LstmDetector.load(model)
             det_res = detect_zero_velocity(trial.imu, detector, threshold, model=m, margin_s=margin_s)
             zv = det_res.zv
@@ -133,8 +134,6 @@ def run_cmd(
     for k, v in summary.items():
         typer.echo(f"{k:28s} {v:.4f}" if isinstance(v, float) else f"{k:28s} {v}")
     if out is not None:
-        from imunav.io._atomic import atomic_path
-
         with atomic_path(out) as tmp, open(tmp, "wb") as fh:  # a failed write leaves no temp file
             np.savez_compressed(fh, t=res.t, position=res.position, velocity=res.velocity,
                                 quaternion=res.q_nb, zv=res.zv)
@@ -162,18 +161,9 @@ def train_cmd(
 
     Example: imunav zupt train ../shared/data/foot/pyshoe_vicon --out zupt_lstm.npz
     """
-    from imunav.cli._errors import check_suffix
-    from imunav.io._atomic import check_outputs
 
     check_outputs([], [out])  # before the long training
     check_suffix(out, "--out", (".npz",), "the model (NumPy archive)")
-
-    from rich.progress import Progress
-
-    from imunav.errors import ImunavError
-    from imunav.io.foot import read_pyshoe_mat
-    from imunav.learn import LstmConfig, best_labels, select_shoe_threshold, train_lstm
-    from imunav.learn.lstm import require_torch
 
     try:
         require_torch()  # before the slow label selection: training is the one command that needs torch
@@ -226,19 +216,8 @@ def benchmark_cmd(
 
     Example: imunav zupt benchmark ../shared/data/foot/pyshoe_vicon --limit 3 --json zupt-bench.json
     """
-    from imunav.io._atomic import check_outputs
 
     check_outputs([model], [json_out])
-
-    import numpy as np
-    from rich.console import Console
-    from rich.progress import track
-    from rich.table import Table
-
-    from imunav.errors import ImunavError
-    from imunav.ins import DEFAULT_THRESHOLDS, DETECTORS, detect_zero_velocity, error_2d, run_zupt
-    from imunav.io.foot import read_pyshoe_mat
-    from imunav.learn import LstmDetector
 
     files = sorted(directory.glob("*.mat"))[:limit]
     if not files:

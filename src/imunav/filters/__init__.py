@@ -30,6 +30,7 @@ from imunav.filters.faults import (
     thesis_thresholds,
     window_statistics,
 )
+from imunav.filters.gates import gate_channels, isolate_channels, nis_gate
 from imunav.filters.kalman import (
     BatchRun,
     KalmanFilter,
@@ -40,7 +41,7 @@ from imunav.filters.kalman import (
     kalman_filter,
     riccati_steady_state,
 )
-from imunav.filters.robust import gate_channels, huber_update, isolate_channels, nis_gate, robust_update
+from imunav.filters.robust import huber_update, robust_update
 from imunav.filters.ukf import UnscentedKalmanFilter, sigma_points
 
 __all__ = [

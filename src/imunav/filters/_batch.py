@@ -14,6 +14,7 @@ update with the accepted channels only.
 from __future__ import annotations
 
 import numpy as np
+from numpy.lib.stride_tricks import sliding_window_view
 from numpy.typing import NDArray
 
 Array = NDArray[np.float64]
@@ -219,7 +220,6 @@ def _batch_plain(x: Array, P0: Array, F: Array, Qn: Array, H: Array, R: Array, z
 
 def window_stats_batch(nv: Array, M: int, Pinv: Array, L: Array) -> tuple[Array, Array, Array]:
     """Sliding-window Alg. 1 / Alg. 2 / Alg. 3 statistics for nv (..., N, s); NaN for k < M − 1."""
-    from numpy.lib.stride_tricks import sliding_window_view
 
     *lead, N, s = nv.shape
     W = sliding_window_view(nv, M, axis=-2)  # (..., N-M+1, s, M)

@@ -56,6 +56,8 @@ from numpy.typing import ArrayLike, NDArray
 from scipy.stats import chi2, norm
 
 from imunav.errors import InvalidInputError, ShapeError
+from imunav.filters._batch import window_stats_batch
+from imunav.filters._kernels import cusum_stats
 from imunav.results import Result
 
 __all__ = [
@@ -145,8 +147,6 @@ def wishart_largest_root_quantile(q: float, M: int = 20, s: int = 3, n_mc: int =
 @lru_cache(maxsize=32)
 def _cusum_quantiles(s: int, rho: float, k_mean: float, p: float, n_runs: int, n_steps: int, seed: int
                      ) -> tuple[float, float]:
-    from imunav.filters._kernels import cusum_stats
-
     # one long H0 sequence (the CUSUMs are ergodic Markov chains), burn-in dropped
     rng = np.random.default_rng(seed)
     burn = 2000
@@ -210,7 +210,6 @@ def window_statistics(normalized: ArrayLike, M: int = 20, P: ArrayLike | None = 
     ``P`` is the covariance of ν̃ under H0 (identity); ``L`` the fixed
     direction of Alg. 2 (all ones).
     """
-    from imunav.filters._batch import window_stats_batch
 
     nv = _check_nv(normalized, batch=True)
     N, s = nv.shape[-2:]
@@ -224,7 +223,6 @@ def window_statistics(normalized: ArrayLike, M: int = 20, P: ArrayLike | None = 
 
 def cusum_statistics(normalized: ArrayLike, rho: float = 4.0, k: float = 0.5) -> tuple[Array, Array]:
     """Variance CUSUM (tuned to a variance ratio ρ) and two-sided mean CUSUM (reference k)."""
-    from imunav.filters._kernels import cusum_stats
 
     if not rho > 1:
         raise InvalidInputError(f"cusum rho (variance ratio to detect) must be > 1, got {rho}")
@@ -241,7 +239,6 @@ def detector_statistics(normalized: ArrayLike, M: int = 20, *, cusum_rho: float 
     before the window is full).  Compare with the thresholds of
     :func:`calibrated_thresholds` / :func:`thesis_thresholds`.
     """
-    from imunav.filters._kernels import cusum_stats
 
     nv = _check_nv(normalized, batch=True)
     single = nv.ndim == 2

@@ -24,8 +24,10 @@ from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
+from scipy.linalg import solve_discrete_are
 
 from imunav.errors import InvalidInputError
+from imunav.filters._batch import MODE_GATE, MODE_HUBER, MODE_ISOLATE, MODE_NIS, MODE_NONE, batch_filter
 from imunav.filters._common import (
     as_covariance,
     as_matrix,
@@ -33,6 +35,7 @@ from imunav.filters._common import (
     inv_sqrt_spd,
     symmetrize,
 )
+from imunav.filters.gates import isolation_thresholds
 from imunav.results import Result
 
 __all__ = [
@@ -89,7 +92,6 @@ def riccati_steady_state(F: ArrayLike, Q: ArrayLike, H: ArrayLike, R: ArrayLike,
     ``P = P⁻ − P⁻ Hᵀ S⁻¹ H P⁻``.  For a scalar random walk (F = H = 1) this is
     ``P = (−Q + √(Q² + 4 Q R)) / 2``.
     """
-    from scipy.linalg import solve_discrete_are
 
     F = as_matrix(F, "F")
     n = F.shape[0]
@@ -284,7 +286,6 @@ def kalman_filter(
     (prediction only), which is how slower sensors are handled.  Many runs at
     once: :func:`imunav.filters._batch.batch_filter` (leading batch axis).
     """
-    from imunav.filters._batch import batch_filter
 
     x0v = as_vector(x0, "x0")
     n = x0v.shape[0]
@@ -375,8 +376,6 @@ def batch_kalman_filter(
     (the whole measurement rejected when its NIS exceeds χ²_{1−alpha}(m)) or
     ``"huber"`` (see :mod:`imunav.filters.robust`).  x0 may be (n,) or per run (R, n).
     """
-    from imunav.filters._batch import MODE_GATE, MODE_HUBER, MODE_ISOLATE, MODE_NIS, MODE_NONE, batch_filter
-    from imunav.filters.robust import isolation_thresholds
 
     modes = {None: MODE_NONE, "gate": MODE_GATE, "isolate": MODE_ISOLATE, "huber": MODE_HUBER, "nis": MODE_NIS}
     if robust not in modes:

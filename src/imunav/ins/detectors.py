@@ -33,16 +33,34 @@ defaults are the published ones (``sigma_a = 0.00098`` m/s²,
 from __future__ import annotations
 
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from imunav._timeseries_kernels import runs
+from imunav.attitude import Mahony
 from imunav.errors import InvalidInputError, ShapeError
 from imunav.ins import _kernels as _k
+from imunav.ins.lstm import LstmDetector
+from imunav.ins.metrics import error_2d
+from imunav.ins.result import DetectorResult
+from imunav.ins.statistics import (
+    DETECTORS,
+    G_PYSHOE,
+    SIGMA_A,
+    SIGMA_W,
+    _accel_gyro,
+    amvd,
+    ared,
+    detector_statistic,
+    mbgtd,
+    shoe,
+)
+from imunav.ins.zupt import run_zupt
 from imunav.results import Result
+from imunav.rotation import quat_rotate
 
 __all__ = [
     "DETECTORS",
@@ -63,9 +81,6 @@ __all__ = [
 ]
 
 Array = NDArray[np.float64]
-
-#: Names of the classical detectors.
-DETECTORS: tuple[str, ...] = ("shoe", "ared", "amvd", "mbgtd")
 
 #: Fixed thresholds at 200 Hz with the default sigmas and W = 5: the single
 #: threshold per detector with the smallest mean 2-D error over the 42 shared
@@ -89,118 +104,6 @@ THRESHOLD_GRIDS: dict[str, Array] = {
     "mbgtd": np.concatenate([
         np.arange(1e-3, 1e-2, 0.25e-3), np.arange(1e-2, 1e-1, 0.25e-2), np.arange(1e-1, 1, 0.25e-1)]),
 }
-
-SIGMA_A = 0.00098
-SIGMA_W = 8.7266463e-5
-G_PYSHOE = 9.8029
-
-
-def _vec(x: ArrayLike, name: str) -> Array:
-    a = np.ascontiguousarray(x, dtype=np.float64)
-    if a.ndim != 2 or a.shape[1] != 3:
-        raise ShapeError(f"{name} must have shape (N, 3); got {a.shape}")
-    if not np.all(np.isfinite(a)):
-        rows = np.flatnonzero(~np.all(np.isfinite(a), axis=1))
-        raise InvalidInputError(f"{name} has non-finite values at rows {rows[:10].tolist()}; remove or interpolate them")
-    return a
-
-
-def _window(W: int, n: int) -> int:
-    if int(W) != W or W < 2:
-        raise InvalidInputError(f"window must be an integer >= 2 samples; got {W!r}")
-    if n < W:
-        raise InvalidInputError(f"the recording has {n} samples, fewer than the window W={W}; use a shorter window")
-    return int(W)
-
-
-def shoe(accel: ArrayLike, gyro: ArrayLike, window: int = 5, *, sigma_a: float = SIGMA_A,
-         sigma_w: float = SIGMA_W, g: float = G_PYSHOE) -> Array:
-    """SHOE statistic (N,) on non-overlapping blocks (see module docstring)."""
-    a = _vec(accel, "accel")
-    w = _vec(gyro, "gyro")
-    if a.shape != w.shape:
-        raise ShapeError(f"accel {a.shape} and gyro {w.shape} must have the same shape")
-    if sigma_a <= 0 or sigma_w <= 0 or g <= 0:
-        raise InvalidInputError(f"sigma_a, sigma_w and g must be > 0; got {sigma_a}, {sigma_w}, {g}")
-    W = _window(window, a.shape[0])
-    if np.any(np.linalg.norm(a, axis=1) == 0):
-        raise InvalidInputError("accel has all-zero rows; SHOE needs the gravity direction (check the units/columns)")
-    return _k.shoe_blocks(a, w, W, float(sigma_a), float(sigma_w), float(g))
-
-
-def ared(gyro: ArrayLike, window: int = 5) -> Array:
-    """ARED statistic (N,), rad²/s², on non-overlapping blocks."""
-    w = _vec(gyro, "gyro")
-    return _k.ared_blocks(w, _window(window, w.shape[0]))
-
-
-def amvd(accel: ArrayLike, window: int = 5) -> Array:
-    """AMVD statistic (N,), (m/s²)², on non-overlapping blocks."""
-    a = _vec(accel, "accel")
-    return _k.amvd_blocks(a, _window(window, a.shape[0]))
-
-
-def mbgtd(accel: ArrayLike, window: int = 5, *, tail: float = 1.0) -> Array:
-    """MBGTD statistic (N,), m/s², on a per-sample sliding window.
-
-    The last ``window - 1`` samples get ``tail`` (published convention: 1).
-    """
-    a = _vec(accel, "accel")
-    return _k.mbgtd_sliding(a, _window(window, a.shape[0]), float(tail))
-
-
-def _accel_gyro(data: Any) -> tuple[Array, Array]:
-    try:
-        return _vec(data.accel, "data.accel"), _vec(data.gyro, "data.gyro")
-    except AttributeError as exc:
-        raise InvalidInputError(
-            "data must be an ImuData (or have .accel and .gyro arrays (N, 3)); "
-            f"got {type(data).__name__}") from exc
-
-
-def detector_statistic(data: Any, detector: str = "shoe", *, window: int = 5, sigma_a: float = SIGMA_A,
-                       sigma_w: float = SIGMA_W, g: float = G_PYSHOE) -> Array:
-    """Statistic ``T`` (N,) of a named detector on an :class:`~imunav.timeseries.ImuData`."""
-    name = detector.lower()
-    a, w = _accel_gyro(data)
-    if name == "shoe":
-        return shoe(a, w, window, sigma_a=sigma_a, sigma_w=sigma_w, g=g)
-    if name == "ared":
-        return ared(w, window)
-    if name == "amvd":
-        return amvd(a, window)
-    if name == "mbgtd":
-        return mbgtd(a, window)
-    raise InvalidInputError(f"unknown detector {detector!r}; choose one of {', '.join(DETECTORS)}")
-
-
-@dataclass(frozen=True)
-class DetectorResult(Result):
-    """Output of a zero-velocity detector.
-
-    Attributes
-    ----------
-    zv : (N,) bool, True where the foot is declared stationary.
-    statistic : (N,) float, test statistic ``T`` (NaN for learned detectors).
-    threshold : (N,) float, threshold applied at each sample.
-    detector : name; ``params`` the settings used.
-    """
-
-    zv: NDArray[np.bool_]
-    statistic: Array
-    threshold: Array
-    detector: str
-    params: dict[str, Any] = field(default_factory=dict)
-
-    @property
-    def stance_fraction(self) -> float:
-        """Fraction of samples declared stationary."""
-        return float(np.mean(self.zv))
-
-    def to_dict(self) -> dict[str, Any]:
-        return {"detector": self.detector, "params": self.params, "zv": self.zv.astype(int).tolist(),
-                "statistic": self.statistic.tolist(), "threshold": self.threshold.tolist()}
-
 
 def shrink_stances(zv: ArrayLike, margin: int) -> NDArray[np.bool_]:
     """Remove ``margin`` samples at both ends of every stance (run of True).
@@ -265,8 +168,6 @@ def _detect(data: Any, detector: str, threshold: Any, window: int, sigma_a: floa
     if name == "freeacc":
         return free_acceleration(data, threshold=3.0 if threshold is None else float(threshold), g=g)
     if name == "lstm":
-        from imunav.learn import LstmDetector
-
         det = model if model is not None else LstmDetector.load()
         return det.detect(data, threshold=0.85 if threshold is None else float(threshold))
     T = detector_statistic(data, name, window=window, sigma_a=sigma_a, sigma_w=sigma_w, g=g)
@@ -320,8 +221,6 @@ def free_acceleration(data: Any, *, threshold: float = 3.0, g: float = G_PYSHOE,
     matters, since ``|.|`` ignores the heading.  x-io widens each moving period
     by 0.1 s on both sides: ``detect_zero_velocity(..., margin_s=0.1)``.
     """
-    from imunav.attitude import Mahony
-    from imunav.rotation import quat_rotate
 
     if not (threshold > 0 and np.isfinite(threshold)):
         raise InvalidInputError(f"threshold must be a finite free acceleration > 0 m/s^2; got {threshold!r}")
@@ -360,8 +259,6 @@ def optimize_threshold(data: Any, reference: ArrayLike, detector: str = "shoe",
     go to the larger threshold (as in the published search).  ``reference``
     is the (N, 3) reference position, one row per IMU sample.
     """
-    from imunav.ins.metrics import error_2d
-    from imunav.ins.zupt import run_zupt
 
     name = detector.lower()
     grid = THRESHOLD_GRIDS[name] if thresholds is None else np.asarray(thresholds, dtype=float)

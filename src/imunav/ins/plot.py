@@ -6,6 +6,8 @@ from typing import Any
 
 import numpy as np
 
+from imunav.ins.metrics import align_heading
+
 __all__ = ["plot_trajectory", "plot_zero_velocity"]
 
 
@@ -15,9 +17,8 @@ def plot_trajectory(result: Any, reference: Any = None, *, ax: Any = None, label
     The reference is aligned as in :func:`imunav.ins.error_2d` (start shifted,
     heading rotated) when it has one row per sample.
     """
+    # optional: matplotlib loads only when a figure is drawn (import time of imunav and its CLI)
     import matplotlib.pyplot as plt
-
-    from imunav.ins.metrics import align_heading
 
     if ax is None:
         _, ax = plt.subplots(figsize=(6, 6))
@@ -39,6 +40,7 @@ def plot_trajectory(result: Any, reference: Any = None, *, ax: Any = None, label
 
 def plot_zero_velocity(data: Any, detections: dict[str, Any], *, ax: Any = None) -> Any:
     """Zero-velocity timeline: |ω| and |f| - g with each detector's stance flags underneath."""
+    # optional: matplotlib loads only when a figure is drawn (import time of imunav and its CLI)
     import matplotlib.pyplot as plt
 
     if ax is None:

@@ -45,7 +45,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from imunav._timeseries_kernels import runs
-from imunav.errors import ConfigError, InsufficientDataError, InvalidInputError, ShapeError
+from imunav.errors import ConfigError, InsufficientDataError, InvalidInputError, ShapeError, TimeOrderError
 from imunav.ins import _kernels as _k
 from imunav.results import Result
 from imunav.rotation import euler_from_quat, quat_from_euler
@@ -230,8 +230,6 @@ def _arrays(data: Any) -> tuple[Array, Array, Array]:
     if t.size < 2:
         raise InsufficientDataError("the recording needs at least 2 samples")
     if np.any(np.diff(t) <= 0):
-        from imunav.errors import TimeOrderError
-
         bad = np.flatnonzero(np.diff(t) <= 0)
         raise TimeOrderError(f"time stamps not strictly increasing at rows {(bad + 1)[:10].tolist()}")
     return t, a, w

@@ -10,15 +10,17 @@ header (:func:`header_json`) holding ``mag_unit`` and ``meta``.
 
 from __future__ import annotations
 
+import inspect
 import json
 import os
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from typing import Any
 
 import numpy as np
 
 from imunav.errors import FileFormatError, InvalidInputError, UnitError
 from imunav.timeseries import ImuData
+from imunav.units import normalize_unit, unit_factor
 
 __all__ = [
     "GROUPS",
@@ -118,8 +120,6 @@ _QUANTITY_OF = {"t": "time", "gyro": "angular_rate", "accel": "acceleration", "m
 
 
 def _same_unit(a: str, b: str, group: str) -> bool:
-    from imunav.units import normalize_unit, unit_factor
-
     q = _QUANTITY_OF.get(group)
     raw = normalize_unit(b) in ("counts", "count", "lsb", "raw")
     fb = unit_factor(b, q) if q is not None and not raw else None  # an unknown unit option is reported as such
@@ -342,3 +342,14 @@ def check_nonempty(path: os.PathLike[str] | str) -> str:
         raise FileFormatError(f"{p}: the file is empty (0 bytes)")
     return p
 
+
+def call_reader(fn: Callable[..., Any], what: str, *args: Any, **options: Any) -> Any:
+    """Call a reader or writer with ``options``, naming ``what`` when it does not take one of them."""
+    params = inspect.signature(fn).parameters
+    if any(p.kind is inspect.Parameter.VAR_KEYWORD for p in params.values()):
+        return fn(*args, **options)  # the reader passes its options on and checks them there
+    unknown = [k for k in options if k not in params]
+    if unknown:
+        allowed = [k for k, p in params.items() if p.kind is inspect.Parameter.KEYWORD_ONLY]
+        raise InvalidInputError(f"{what} does not take option(s) {unknown}; it accepts {allowed}")
+    return fn(*args, **options)

@@ -16,6 +16,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from imunav.errors import InvalidInputError
+from imunav.io._atomic import atomic_path
 
 if TYPE_CHECKING:  # only for the annotations: the writers take the fits the user already has
     from imunav.noise.fit import NoiseFit
@@ -135,7 +136,6 @@ def check_rate(update_rate: float) -> float:
 
 def write_text(path: str | os.PathLike[str], lines: list[str]) -> Path:
     """Write ``lines`` (newline-terminated) to ``path`` atomically; returns the path."""
-    from imunav.io._atomic import atomic_path
 
     with atomic_path(path) as tmp:
         tmp.write_text("\n".join(lines) + "\n", encoding="utf-8")

@@ -28,6 +28,7 @@ from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
+from scipy.io import loadmat
 
 from imunav.errors import FileFormatError, InvalidInputError
 from imunav.rotation import C_ENU_NED, from_convention, quat_from_dcm, to_convention
@@ -84,7 +85,6 @@ def load_broad(path: str | Path) -> BroadTrial:
     Time is ``t = k / sampling_rate``.  Gyro rad/s, accelerometer m/s² (specific
     force), magnetometer µT, all in the sensor frame (see module docstring).
     """
-    from scipy.io import loadmat
 
     p = Path(path)
     if not p.is_file():

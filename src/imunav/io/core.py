@@ -21,13 +21,15 @@ Bags and logs are also recognised by their content (magic bytes) whatever their 
 
 from __future__ import annotations
 
-import inspect
 import os
-from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
 from imunav.errors import InvalidInputError
+from imunav.io import csv, hdf5, mat, npz, parquet
+from imunav.io._common import call_reader
+from imunav.io.layouts import read_layout
+from imunav.io.logs import log_kind, read_log_imu
 from imunav.timeseries import ImuData
 
 __all__ = ["read_imu", "write_imu", "FORMATS", "format_from_suffix"]
@@ -53,7 +55,6 @@ def format_from_suffix(path: str | os.PathLike[str], format: str | None = None) 
         if f not in FORMATS + LOG_FORMATS:
             raise InvalidInputError(f"unknown format {format!r}; choose one of {list(FORMATS + LOG_FORMATS)}")
         return f
-    from imunav.io.logs import log_kind
 
     kind = log_kind(path)
     if kind is not None:
@@ -65,17 +66,6 @@ def format_from_suffix(path: str | os.PathLike[str], format: str | None = None) 
             f"{sorted(_SUFFIXES) + ['.bag', '.db3', '.mcap', '.ulg']}; pass format= one of {list(FORMATS)}"
         )
     return _SUFFIXES[suffix]
-
-
-def _call(fn: Callable[..., Any], what: str, *args: Any, **options: Any) -> Any:
-    params = inspect.signature(fn).parameters
-    if any(p.kind is inspect.Parameter.VAR_KEYWORD for p in params.values()):
-        return fn(*args, **options)  # the reader passes its options on and checks them there
-    unknown = [k for k in options if k not in params]
-    if unknown:
-        allowed = [k for k, p in params.items() if p.kind is inspect.Parameter.KEYWORD_ONLY]
-        raise InvalidInputError(f"{what} does not take option(s) {unknown}; it accepts {allowed}")
-    return fn(*args, **options)
 
 
 def read_imu(path: str | os.PathLike[str], format: str | None = None, *, layout: str | None = None,
@@ -109,21 +99,16 @@ def read_imu(path: str | os.PathLike[str], format: str | None = None, *, layout:
     np.float64(-9.81)
     """
     if layout is not None:
-        from imunav.io.layouts import read_layout
-
         if format not in (None, "csv"):
             raise InvalidInputError(f"layout={layout!r} names a CSV layout; it does not combine with format={format!r}")
-        return _call(read_layout, f"read_imu(layout={layout!r})", path, layout, **options)
+        return call_reader(read_layout, f"read_imu(layout={layout!r})", path, layout, **options)
     fmt = format_from_suffix(path, format)
     if fmt in LOG_FORMATS:
-        from imunav.io.logs import read_log_imu
-
-        return _call(read_log_imu, f"read_imu(format={fmt!r})", path, **options)
-    from imunav.io import csv, hdf5, mat, npz, parquet
+        return call_reader(read_log_imu, f"read_imu(format={fmt!r})", path, **options)
 
     reader = {"csv": csv.read_csv, "parquet": parquet.read_parquet, "hdf5": hdf5.read_hdf5,
               "mat": mat.read_mat, "mat73": mat.read_mat, "npz": npz.read_npz}[fmt]  # fmt: skip
-    return _call(reader, f"read_imu(format={fmt!r})", path, **options)
+    return call_reader(reader, f"read_imu(format={fmt!r})", path, **options)
 
 
 def write_imu(data: ImuData, path: str | os.PathLike[str], format: str | None = None, **options: Any) -> Path:
@@ -139,10 +124,9 @@ def write_imu(data: ImuData, path: str | os.PathLike[str], format: str | None = 
     if fmt in LOG_FORMATS:
         raise InvalidInputError(f"write_imu does not write {fmt} files; write_bag in imunav.io.rosbag writes a ROS bag, "
                                 f"or choose a table format {list(FORMATS)}")
-    from imunav.io import csv, hdf5, mat, npz, parquet
 
     if fmt == "mat73":
         options.setdefault("version", "7.3")
     writer = {"csv": csv.write_csv, "parquet": parquet.write_parquet, "hdf5": hdf5.write_hdf5,
               "mat": mat.write_mat, "mat73": mat.write_mat, "npz": npz.write_npz}[fmt]  # fmt: skip
-    return _call(writer, f"write_imu(format={fmt!r})", data, path, **options)
+    return call_reader(writer, f"write_imu(format={fmt!r})", data, path, **options)

@@ -30,6 +30,7 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+import scipy.io
 from numpy.typing import NDArray
 
 from imunav.errors import FileFormatError
@@ -88,7 +89,6 @@ _PYSHOE_ERROR_ORDER = ("shoe", "ared", "ared_dup", "mbgtd", "vicon")
 
 def read_pyshoe_mat(path: str | Path) -> FootTrial:
     """Read a processed trial of the Toronto foot dataset (pyshoe ``.mat``)."""
-    import scipy.io
 
     p = Path(path)
     try:

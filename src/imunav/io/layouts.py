@@ -27,7 +27,11 @@ import os
 from typing import Any
 
 from imunav.errors import InvalidInputError
+from imunav.io._common import call_reader
+from imunav.io.csv import read_csv
+from imunav.io.foot import read_xio_gait_csv
 from imunav.timeseries import ImuData
+from imunav.units import unit_factor
 
 __all__ = ["LAYOUTS", "layout_options", "read_layout"]
 
@@ -102,12 +106,9 @@ def read_layout(path: str | os.PathLike[str], layout: str, *, meta: dict[str, An
     -------
     ImuData
     """
-    from imunav.io.csv import read_csv
 
     key = str(layout).lower().replace("_", "-")
     if key == "xio":
-        from imunav.io.foot import read_xio_gait_csv
-
         # nan_policy="raise" is what the x-io reader does anyway (the CLI always passes it)
         extra = sorted(k for k, v in options.items() if not (k == "nan_policy" and v == "raise"))
         if extra:
@@ -119,12 +120,8 @@ def read_layout(path: str | os.PathLike[str], layout: str, *, meta: dict[str, An
     if clash:
         raise InvalidInputError(f"layout={layout!r} sets {clash}; drop them, or read without a layout")
     opts["meta"].update(meta or {})
-    from imunav.io.core import _call
-
-    d = _call(read_csv, f"read_imu(layout={layout!r})", path, **opts, **options)
+    d = call_reader(read_csv, f"read_imu(layout={layout!r})", path, **opts, **options)
     if d.mag is not None and d.mag_unit != "uT":
-        from imunav.units import unit_factor
-
         # gauss (PX4) -> µT, imunav's magnetometer unit, at the edge
         f = unit_factor(d.mag_unit, "magnetic_field") / unit_factor("uT", "magnetic_field")
         d = d.with_(mag=d.mag * f, mag_unit="uT")

@@ -29,7 +29,7 @@ def _pyarrow() -> tuple[Any, Any]:
     """``(pyarrow, pyarrow.parquet)``; pyarrow (170 MB) is the ``parquet`` extra, kept out of the core install."""
     try:
         import pyarrow as pa  # optional: the `parquet` extra
-        import pyarrow.parquet as pq
+        import pyarrow.parquet as pq  # optional: the `parquet` extra
     except ImportError as exc:
         raise MissingDependencyError("pyarrow", "parquet", "Reading and writing Parquet files") from exc
     return pa, pq

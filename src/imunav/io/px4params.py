@@ -47,7 +47,10 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from imunav import __version__
 from imunav.errors import InvalidInputError, UnitError
+from imunav.io._atomic import atomic_path
+from imunav.units import unit_factor
 
 if TYPE_CHECKING:  # annotations only
     from imunav.calib.magnetometer import MagCalibration
@@ -86,7 +89,6 @@ class Px4Parameters:
 
     def text(self, vehicle_id: int = 1, component_id: int = 1) -> str:
         """The QGroundControl parameter file as text (see the module docstring)."""
-        from imunav import __version__
 
         head = [f"# PX4 sensor calibration written by imunav {__version__}",
                 "# Load it in QGroundControl: Vehicle Setup > Parameters > Tools > Load from file; then reboot.",
@@ -105,7 +107,6 @@ class Px4Parameters:
 
     def write(self, path: str | os.PathLike[str], vehicle_id: int = 1, component_id: int = 1) -> Path:
         """Write :meth:`text` to ``path`` atomically; returns the path."""
-        from imunav.io._atomic import atomic_path
 
         with atomic_path(path) as tmp:
             tmp.write_text(self.text(vehicle_id, component_id), encoding="utf-8")
@@ -156,8 +157,6 @@ def _imu_params(cal: ImuCalibration, n: int, out: dict[str, float | int], droppe
 
 
 def _mag_params(mag: MagCalibration, unit: str, n: int, out: dict[str, float | int], dropped: list[str]) -> None:
-    from imunav.units import unit_factor
-
     try:
         to_gauss = unit_factor(unit, "magnetic_field") / _GAUSS
     except UnitError as exc:

@@ -28,6 +28,7 @@ sensor frames.  ROS 1 ``header.seq`` gaps are counted in ``meta["seq_gaps"]`` (d
 
 from __future__ import annotations
 
+import heapq
 import os
 import shutil
 import tempfile
@@ -38,7 +39,9 @@ from typing import Any
 import numpy as np
 
 from imunav.errors import FileFormatError, InvalidInputError
-from imunav.io.logs import TopicData, TopicInfo, enu_to_ned, frd_to_ros, ros_to_frd, topic_data
+from imunav.io.topics import TopicData, TopicInfo, enu_to_ned, frd_to_ros, require, ros_to_frd, topic_data
+from imunav.rotation import from_convention
+from imunav.timeseries import ImuData
 
 __all__ = ["list_topics", "read_topic", "read_imu_topic", "KINDS"]
 
@@ -56,9 +59,9 @@ _CHUNK = 65536
 
 def _open(path: str | os.PathLike[str]) -> Any:
     """An opened-to-be ``AnyReader`` on ``path`` (rosbags errors become FileFormatError)."""
-    # optional dependency (imunav[ros]); logs.require has checked it is installed
+    # optional: rosbags (imunav[ros]); topics.require has checked it is installed
     from rosbags.highlevel import AnyReader
-    from rosbags.typesys import Stores, get_typestore
+    from rosbags.typesys import Stores, get_typestore  # optional: rosbags
 
     return AnyReader([Path(path)], default_typestore=get_typestore(Stores.LATEST))
 
@@ -232,8 +235,6 @@ def _values(kind: str, f: np.ndarray, info: dict) -> tuple[dict[str, np.ndarray]
             "varies": info["cov_varies"],
         }
         if cov["orientation_covariance"][0] != -1.0:
-            from imunav.rotation import from_convention
-
             # orientation: FLU body -> ENU world (REP-103) -> imunav FRD body -> NED
             vals["q_nb"] = from_convention(f[:, 6:10], "enu", body="flu")
             units["q_nb"] = "1"
@@ -365,10 +366,6 @@ def write_bag(path: str | os.PathLike[str], topics: Any, *, storage: str = "mcap
     >>> read_imu(p).accel[0, 2]
     np.float64(-9.81)
     """
-    # optional dependency (imunav[ros]): checked below with a clear error
-    from imunav.io.logs import require
-    from imunav.timeseries import ImuData
-
     require("rosbag", "writing a ROS bag")
     if storage not in STORAGES:
         raise InvalidInputError(f"storage={storage!r}: choose one of {list(STORAGES)}")
@@ -399,8 +396,7 @@ def write_bag(path: str | os.PathLike[str], topics: Any, *, storage: str = "mcap
 
 
 def _write(path: Path, streams: list[tuple[str, str, Any]], storage: str, frame_id: str) -> None:
-    import heapq
-
+    # optional: rosbags (imunav[ros]) only to read or write a bag
     from rosbags.typesys import Stores, get_typestore
 
     ts = get_typestore(Stores.ROS1_NOETIC if storage == "ros1" else Stores.LATEST)
@@ -408,11 +404,13 @@ def _write(path: Path, streams: list[tuple[str, str, Any]], storage: str, frame_
     Time, Header, Vec = T["builtin_interfaces/msg/Time"], T["std_msgs/msg/Header"], T["geometry_msgs/msg/Vector3"]
     ros1 = storage == "ros1"
     if ros1:
+        # optional: rosbags (imunav[ros]) only to read or write a bag
         from rosbags.rosbag1 import Writer
 
         writer = Writer(path)
         ser = ts.serialize_ros1
     else:
+        # optional: rosbags (imunav[ros]) only to read or write a bag
         from rosbags.rosbag2 import StoragePlugin, Writer
 
         writer = Writer(path, version=9, storage_plugin=StoragePlugin[storage.upper()])

@@ -43,7 +43,7 @@ from typing import Any
 import numpy as np
 
 from imunav.errors import FileFormatError, InvalidInputError
-from imunav.io.logs import TopicData, TopicInfo, merge_onto, topic_data
+from imunav.io.topics import TopicData, TopicInfo, merge_onto, topic_data
 
 __all__ = ["list_topics", "read_topic", "read_imu_topic", "IMU_TOPICS"]
 
@@ -56,7 +56,7 @@ _PARAMS = ("SYS_MC_EST_GROUP", "EKF2_MAG_DECL", "EKF2_DECL_TYPE", "ATT_MAG_DECL"
 
 
 def _load(path: str | os.PathLike[str], names: list[str] | None) -> Any:
-    # optional dependency (imunav[px4]); logs.require has checked it is installed
+    # optional: pyulog (imunav[px4]); topics.require has checked it is installed
     from pyulog import ULog
 
     source = os.fspath(path)

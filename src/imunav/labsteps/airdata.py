@@ -21,9 +21,15 @@ from __future__ import annotations
 
 from pathlib import Path
 
+import numpy as np
+
+from imunav.airdata import plot as P
+from imunav.airdata.filter import run_thesis_filter
+from imunav.airdata.scenario import ThesisScenario, simulate_thesis, thesis_report
 from imunav.errors import ConfigError
+from imunav.filters import detect_faults
 from imunav.io._atomic import atomic_path, write_json
-from imunav.lab import LabContext, StepResult
+from imunav.labsteps._api import LabContext, StepResult
 
 TITLE = "Air data + Doppler radar: wind filter, robust filtering, fault detection"
 
@@ -32,13 +38,6 @@ OPTIONS = ("runs", "p_false_alarm", "robust_methods")
 
 
 def run(ctx: LabContext) -> StepResult:
-    import numpy as np
-
-    from imunav.airdata import plot as P
-    from imunav.airdata.filter import run_thesis_filter
-    from imunav.airdata.scenario import ThesisScenario, simulate_thesis, thesis_report
-    from imunav.filters import detect_faults
-
     opts = ctx.options
     unknown = set(opts) - set(OPTIONS)
     if unknown:

@@ -33,9 +33,16 @@ from typing import Any
 
 import numpy as np
 
-from imunav.lab import LabContext, StepResult
+from imunav.attitude.benchmark import make_filter
+from imunav.attitude.metrics import attitude_rmse
+from imunav.attitude.plot import plot_montecarlo_box, save
+from imunav.attitude.scenario import PAPER_TABLE2
+from imunav.labsteps._api import LabContext, StepResult
 from imunav.montecarlo import run_montecarlo
+from imunav.rotation import integrate_rate, quat_conjugate, quat_from_euler, quat_rotate
 from imunav.scenarios import attitude_paper, paper_rmse, paper_table
+from imunav.sim import apply_errors, presets
+from imunav.timeseries import ImuData
 
 TITLE = "Attitude filters on the virtual IMU; Candan & Söken Table 2"
 
@@ -44,7 +51,6 @@ _DEFAULTS: dict[str, Any] = {"duration_s": 60.0, "fs": 100.0, "mag_noise_ut": 0.
 
 
 def _truth(rng: np.random.Generator, n: int, fs: float):
-    from imunav.rotation import integrate_rate, quat_from_euler
 
     t = np.arange(n) / fs
     f = rng.uniform(0.05, 0.3, 3)
@@ -57,12 +63,6 @@ def _truth(rng: np.random.Generator, n: int, fs: float):
 
 
 def run(ctx: LabContext) -> StepResult:
-    from imunav.attitude.benchmark import make_filter
-    from imunav.attitude.metrics import attitude_rmse
-    from imunav.attitude.scenario import PAPER_TABLE2
-    from imunav.rotation import quat_conjugate, quat_rotate
-    from imunav.sim import apply_errors, presets
-    from imunav.timeseries import ImuData
 
     opt = {**_DEFAULTS, **ctx.options}
     fs = float(opt["fs"])
@@ -104,7 +104,6 @@ def run(ctx: LabContext) -> StepResult:
     mekf_ok = scores["mekf"]["total_rmse_deg"] < float(opt["mekf_limit_deg"])
     figs = []
     try:
-        from imunav.attitude.plot import plot_montecarlo_box, save
 
         figs.append(save(plot_montecarlo_box(paper_rmse(mc)), ctx.path("figures", "attitude_table2.png")))
     except Exception:  # pragma: no cover - figures are optional

@@ -32,8 +32,21 @@ from typing import Any
 
 import numpy as np
 
+from imunav.calib import (
+    ImuCalibration,
+    calibration_parameters,
+    combine,
+    multiposition,
+    parameter_stderr,
+    ratetable,
+    success_percentages,
+)
+from imunav.calib.model import parameter_names
+from imunav.calib.plot import plot_residuals, save_figure
 from imunav.errors import ConfigError, InsufficientDataError
-from imunav.lab import LabContext, StepResult
+from imunav.io._atomic import write_json
+from imunav.labsteps._api import LabContext, StepResult
+from imunav.units import DEG, G0
 
 TITLE = "Deterministic calibration (100-position + 120-step tests)"
 
@@ -51,10 +64,6 @@ def _options(ctx: LabContext) -> dict[str, Any]:
 
 
 def _rows(est: Any, truth: Any, stderr: dict, success: dict) -> list[dict]:
-    from imunav.calib import calibration_parameters
-    from imunav.calib.model import parameter_names
-    from imunav.units import DEG, G0
-
     pe, pt = calibration_parameters(est), calibration_parameters(truth)
     names = parameter_names()
     rows = []
@@ -78,8 +87,6 @@ def _rows(est: Any, truth: Any, stderr: dict, success: dict) -> list[dict]:
 
 
 def run(ctx: LabContext) -> StepResult:
-    from imunav.calib import ImuCalibration, combine, multiposition, parameter_stderr, ratetable, success_percentages
-    from imunav.io._atomic import write_json
 
     opts = _options(ctx)
     recs = ctx.artifacts.get("recordings", {})
@@ -110,8 +117,6 @@ def run(ctx: LabContext) -> StepResult:
     write_json(ctx.path("data", "calibration_report.json"), res.to_dict())
     figures = []
     if opts["figures"]:
-        from imunav.calib.plot import plot_residuals, save_figure
-
         figures.append(save_figure(plot_residuals(res), ctx.path("figures", "calibration_residuals.png")))
     ctx.artifacts.update(calibration=res.calibration, calibration_result=res)
     passed = s["accel_mean"] >= 98.5 and s["gyro_mean"] >= 99.0 and within >= 0.9

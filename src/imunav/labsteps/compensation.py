@@ -42,8 +42,15 @@ from typing import Any
 
 import numpy as np
 
+from imunav import calib
+from imunav.calib import ImuCalibration
 from imunav.errors import ConfigError
-from imunav.lab import LabContext, StepResult
+from imunav.io._atomic import atomic_path
+from imunav.labsteps._api import LabContext, StepResult
+from imunav.report.catalog import calibration_estimates
+from imunav.report.lab import display_parameters, embed_png
+from imunav.sim import ideal_imu, multiposition_profile, rate_table_profile, simulate_imu
+from imunav.timeseries import static_intervals
 from imunav.units import DEG, G0
 
 #: The report hook shows the parameters itself.
@@ -89,7 +96,6 @@ def _from_artifacts(ctx: LabContext) -> tuple[Any, dict] | None:
 
 def estimate_calibration(ctx: LabContext) -> tuple[Any, dict, str]:
     """The calibration from the artifacts, else estimated here from the lab's recordings."""
-    from imunav import calib
 
     got = _from_artifacts(ctx)
     if got is not None:
@@ -148,8 +154,6 @@ def _predicted_sigma(stderr: dict, x: np.ndarray, f: np.ndarray | None, sensor: 
 
 
 def _virtual(ctx: LabContext, cal: Any, stderr: dict, opts: dict) -> dict[str, Any]:
-    from imunav.sim import multiposition_profile, rate_table_profile, simulate_imu
-
     model = ctx.artifacts["error_model"]
     sim = ctx.artifacts.get("sim", {})
     fs = float(opts["fs"] or sim.get("fs", 100.0))
@@ -171,8 +175,6 @@ def _virtual(ctx: LabContext, cal: Any, stderr: dict, opts: dict) -> dict[str, A
     Ta_hat, Tg_hat, G_hat = cal.accel_matrix, cal.gyro_matrix, cal.g_sensitivity
     rows = []
     for kind, prof in profiles:
-        from imunav.sim import ideal_imu
-
         ideal = ideal_imu(prof.trajectory, lat=lat, **ideal_kw)
         data, truth = simulate_imu(prof.trajectory, model, ctx.rng("validation", kind), return_truth=True, lat=lat,
                                    **ideal_kw)
@@ -239,8 +241,6 @@ def _rms(x: np.ndarray) -> float:
 
 
 def _real(ctx: LabContext, cal: Any, unit: str | None) -> dict[str, Any]:
-    from imunav.timeseries import static_intervals
-
     g = ctx.artifacts.get("sim", {}).get("g") or G0
     specs = ctx.artifacts.get("recording_specs", {})
     rows = []
@@ -263,8 +263,6 @@ def _real(ctx: LabContext, cal: Any, unit: str | None) -> dict[str, Any]:
 
 
 def run(ctx: LabContext) -> StepResult:
-    from imunav.report.catalog import calibration_estimates
-
     opts = _options(ctx)
     with ctx.task("compensation", total=2) as advance:
         cal, stderr, how = estimate_calibration(ctx)
@@ -295,8 +293,6 @@ def run(ctx: LabContext) -> StepResult:
                        "and its predicted 1σ from the calibration's standard errors", v["rows"])]
             truth = None
             if own:
-                from imunav.calib import ImuCalibration
-
                 tc = ImuCalibration.from_error_model(ctx.artifacts["error_model"])
                 full = {k: np.ones((3, 3)) for k in ("accel_matrix", "gyro_matrix", "g_sensitivity")}
                 full.update(accel_bias=np.ones(3), gyro_bias=np.ones(3))
@@ -322,12 +318,12 @@ def run(ctx: LabContext) -> StepResult:
 
 
 def _plot_z(v: dict, path: Path) -> None:
+    # optional: matplotlib loads only when a figure is drawn (import time of imunav and its CLI)
     import matplotlib
 
     matplotlib.use("Agg")
+    # optional: matplotlib loads only when a figure is drawn (import time of imunav and its CLI)
     import matplotlib.pyplot as plt
-
-    from imunav.io._atomic import atomic_path
 
     fig, axes = plt.subplots(1, 2, figsize=(10, 3.4), sharey=True)
     for ax, key, title in ((axes[0], "z_accel", "accelerometer"), (axes[1], "z_gyro", "gyro")):
@@ -349,8 +345,6 @@ def _plot_z(v: dict, path: Path) -> None:
 
 
 def report(section: Any, result: StepResult, ctx: LabContext) -> None:
-    from imunav.lab import display_parameters, embed_png
-
     s = result.summary
     if "accel" in s:
         section.table([

@@ -33,7 +33,11 @@ from scipy.stats import norm
 
 from imunav.errors import ConfigError
 from imunav.io._atomic import atomic_path, write_json
-from imunav.lab import LabContext, StepResult
+from imunav.labsteps._api import LabContext, StepResult
+from imunav.noise import allan_deviation, compare_psd_allan, fit_noise, fit_psd, log_average, psd
+from imunav.noise.ar import fit_gauss_markov
+from imunav.noise.plot import plot_allan
+from imunav.units import to_display
 
 #: two-sided normal quantile for a family-wise 95 % level over six axes (Bonferroni)
 _Z_FAMILY = float(norm.ppf(1 - 0.05 / 12))
@@ -45,11 +49,6 @@ _DEFAULTS: dict[str, Any] = {"record": "static_long", "terms": ["N", "B", "K"], 
 
 
 def run(ctx: LabContext) -> StepResult:
-    from imunav.noise import allan_deviation, compare_psd_allan, fit_noise, fit_psd, log_average, psd
-    from imunav.noise.ar import fit_gauss_markov
-    from imunav.noise.plot import plot_allan
-    from imunav.units import to_display
-
     opts = dict(_DEFAULTS)
     unknown = set(ctx.options) - set(_DEFAULTS)
     if unknown:

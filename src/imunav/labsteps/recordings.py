@@ -46,8 +46,17 @@ from typing import Any, Mapping
 
 import numpy as np
 
-from imunav.errors import ConfigError
-from imunav.lab import LabContext, StepResult
+from imunav.batch import _read_segments
+from imunav.errors import ConfigError, InvalidInputError
+from imunav.io import read_imu
+from imunav.io._atomic import atomic_path
+from imunav.io.datasets import shared_data_dir
+from imunav.labsteps._api import LabContext, StepResult
+from imunav.noise import allan_deviation, fit_noise
+from imunav.noise.plot import plot_allan
+from imunav.report.catalog import noise_estimates
+from imunav.report.lab import display_parameters, embed_png
+from imunav.units import to_display
 
 #: The report hook shows the parameters itself.
 RENDERS_PARAMETERS = True
@@ -102,8 +111,6 @@ class RecordingSpec:
 def resolve_path(value: str, base_dir: Path, where: str) -> Path:
     """``shared:<sub/path>`` -> the shared data folder; relative paths -> relative to ``base_dir``."""
     if value.startswith("shared:"):
-        from imunav.io.datasets import shared_data_dir
-
         root = shared_data_dir()
         if root is None:
             raise ConfigError(
@@ -187,14 +194,10 @@ def parse_recordings(table: Mapping[str, Any], base_dir: Path, where: str = "lab
 
 
 def _segments(path: Path) -> Any:
-    from imunav.batch import _read_segments
-
     return _read_segments(path)
 
 
 def run(ctx: LabContext) -> StepResult:
-    from imunav.io import read_imu
-
     specs: dict[str, RecordingSpec] = dict(getattr(ctx.lab, "recordings", {}) or {})
     if not specs:
         raise ConfigError("the recordings step needs [recordings.<name>] tables in the lab definition")
@@ -228,8 +231,6 @@ def run(ctx: LabContext) -> StepResult:
     figures, noise_rows = [], []
     notes_extra = []
     if "static_long" in recs:
-        from imunav.errors import InvalidInputError
-
         try:
             params, figures, noise_rows = _characterise_static(ctx, recs["static_long"], specs)
         except InvalidInputError as exc:  # e.g. a record too short for an Allan fit: say so, keep the rest
@@ -258,10 +259,6 @@ def _characterise_static(ctx: LabContext, data: Any, specs: Mapping[str, Recordi
     instability B and random walk K by generalised least squares on the
     overlapping Allan variance (:func:`imunav.noise.fit_noise`).
     """
-    from imunav.noise import allan_deviation, fit_noise
-    from imunav.noise.plot import plot_allan
-    from imunav.report.catalog import noise_estimates
-    from imunav.units import to_display
 
     params: dict[str, tuple[float, float | None]] = {}
     figs, rows = [], []
@@ -286,7 +283,6 @@ def _characterise_static(ctx: LabContext, data: Any, specs: Mapping[str, Recordi
                     })
             fig = plot_allan(ad, fit, title=f"{sensor}: {name}")
             path = ctx.path("figures", f"recordings_allan_{sensor}.png")
-            from imunav.io._atomic import atomic_path
 
             with atomic_path(path) as tmp:
                 fig.savefig(tmp, format="png", dpi=80)
@@ -296,8 +292,6 @@ def _characterise_static(ctx: LabContext, data: Any, specs: Mapping[str, Recordi
 
 
 def report(section: Any, result: StepResult, ctx: LabContext) -> None:
-    from imunav.lab import display_parameters, embed_png
-
     for caption, rows in result.tables[:1]:
         section.table(rows, caption)
     for f in result.figures:

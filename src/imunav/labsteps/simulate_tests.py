@@ -49,9 +49,21 @@ from typing import Any
 
 import numpy as np
 
+from imunav.earth import normal_gravity
 from imunav.errors import ConfigError
+from imunav.io import write_imu
 from imunav.io._atomic import atomic_path, write_json
-from imunav.lab import LabContext, StepResult
+from imunav.labsteps._api import LabContext, StepResult
+from imunav.report.lab import embed_png
+from imunav.sim import (
+    ImuErrorModel,
+    hundred_position_profile,
+    presets,
+    simulate_imu,
+    static_profile,
+    thesis_rate_table_profile,
+)
+from imunav.sim.plot import plot_test_recording
 from imunav.units import DEG, G0
 
 TITLE = "Simulated calibration tests (virtual IMU)"
@@ -92,7 +104,6 @@ def _options(ctx: LabContext) -> dict[str, Any]:
 
 
 def _error_model(opts: dict[str, Any]) -> Any:
-    from imunav.sim import ImuErrorModel, presets
 
     if opts["model"]:
         return ImuErrorModel.from_toml(opts["model"])
@@ -119,13 +130,6 @@ def _true_table(model: Any) -> list[dict]:
 
 
 def run(ctx: LabContext) -> StepResult:
-    from imunav.io import write_imu
-    from imunav.sim import (
-        hundred_position_profile,
-        simulate_imu,
-        static_profile,
-        thesis_rate_table_profile,
-    )
 
     opts = _options(ctx)
     model = _error_model(opts)
@@ -135,7 +139,6 @@ def run(ctx: LabContext) -> StepResult:
     gravity = opts["gravity"]
     g_value = {"constant": G0}.get(gravity) if isinstance(gravity, str) else float(gravity)
     if gravity == "normal":
-        from imunav.earth import normal_gravity
 
         g_value = normal_gravity(lat, h)
     elif isinstance(gravity, str) and gravity != "constant":
@@ -172,12 +175,12 @@ def run(ctx: LabContext) -> StepResult:
                 "segments": s["segments"],
             }
             if opts["figures"]:
-                from imunav.sim.plot import plot_test_recording
 
                 fig = plot_test_recording(data, prof.segments, title=f"{name} ({model.name})")
                 fpath = fig_dir / f"{name}.png"
                 with atomic_path(fpath) as tmp:
                     fig.savefig(tmp, dpi=90)
+                # optional: matplotlib loads only when a figure is drawn (import time of imunav and its CLI)
                 import matplotlib.pyplot as plt
 
                 plt.close(fig)
@@ -227,7 +230,6 @@ def run(ctx: LabContext) -> StepResult:
 
 def report(section: Any, result: StepResult, ctx: LabContext) -> None:
     """HTML: test table, injected parameters, profile figures."""
-    from imunav.lab import embed_png
 
     for caption, rows in result.tables:
         section.table(rows, caption)

@@ -34,8 +34,13 @@ from typing import Any
 
 import numpy as np
 
+from imunav import calib
+from imunav.calib import thermal_calibration
 from imunav.errors import ConfigError
-from imunav.lab import LabContext, StepResult
+from imunav.io._atomic import atomic_path
+from imunav.labsteps._api import LabContext, StepResult
+from imunav.report.lab import embed_png
+from imunav.sim import hundred_position_profile, presets, rate_table_profile, simulate_imu
 from imunav.units import DEG, G0
 
 #: The report hook shows the parameters itself.
@@ -95,9 +100,6 @@ def _true_curve(model: Any, param: str, axis: int, temp_c: np.ndarray) -> np.nda
 
 
 def _calibrate_at(ctx: LabContext, model: Any, temp: float, opts: dict, profiles: tuple) -> tuple[Any, dict]:
-    from imunav import calib
-    from imunav.sim import simulate_imu
-
     mp, rt = profiles
     kw = {"earth_rate": False, "transport_rate": False, "gravity": "constant"}
     d1 = simulate_imu(mp.trajectory, model, ctx.rng("static", f"{temp:g}"), temp_c=float(temp), **kw)
@@ -109,9 +111,6 @@ def _calibrate_at(ctx: LabContext, model: Any, temp: float, opts: dict, profiles
 
 
 def run(ctx: LabContext) -> StepResult:
-    from imunav.calib import thermal_calibration
-    from imunav.sim import hundred_position_profile, presets, rate_table_profile
-
     opts = _options(ctx)
     model = presets.get(opts["preset"])
     if model.accel.bias_temp_poly is None and model.gyro.bias_temp_poly is None:
@@ -186,12 +185,12 @@ def run(ctx: LabContext) -> StepResult:
 
 
 def _figures(ctx: LabContext, thermal: Any, model: Any, temps: np.ndarray, tt: np.ndarray) -> list[Path]:
+    # optional: matplotlib loads only when a figure is drawn (import time of imunav and its CLI)
     import matplotlib
 
     matplotlib.use("Agg")
+    # optional: matplotlib loads only when a figure is drawn (import time of imunav and its CLI)
     import matplotlib.pyplot as plt
-
-    from imunav.io._atomic import atomic_path
 
     fig, axes = plt.subplots(2, 2, figsize=(10, 6.2))
     for ax, p in zip(axes.flat, _PARAMS):
@@ -217,8 +216,6 @@ def _figures(ctx: LabContext, thermal: Any, model: Any, temps: np.ndarray, tt: n
 
 
 def report(section: Any, result: StepResult, ctx: LabContext) -> None:
-    from imunav.lab import embed_png
-
     for f in result.figures:
         embed_png(section, f, "Bias and scale factor against temperature: estimates, fitted curves and truth")
     for caption, rows in result.tables:

@@ -25,6 +25,8 @@ import numpy as np
 from scipy.special import comb
 from scipy.stats import chi2
 
+from imunav.noise._allan_kernels import detrend_quadratic, lag1_acf
+
 __all__ = ["edf_greenhall", "edf_totdev", "noise_id_lag1", "chi2_interval", "ONE_SIGMA"]
 
 #: probability mass within +-1 sigma of a normal distribution
@@ -185,8 +187,6 @@ def edf_totdev(n: int, m: int, alpha: int) -> float:
 
 
 def _lag1(z: np.ndarray) -> float:
-    from imunav.noise._allan_kernels import lag1_acf
-
     return float(lag1_acf(np.ascontiguousarray(z, dtype=np.float64)))
 
 
@@ -199,7 +199,6 @@ def noise_id_lag1(x: np.ndarray, m: int, dmax: int = 2, max_points: int = 1 << 1
     at most ``max_points`` decimated points (the start of the record).
     Returns None when fewer than 30 points are available.
     """
-    from imunav.noise._allan_kernels import detrend_quadratic
 
     z = np.ascontiguousarray(x[::m][:max_points], dtype=np.float64)
     if z.size < 30:

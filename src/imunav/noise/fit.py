@@ -55,7 +55,7 @@ from numpy.typing import ArrayLike, NDArray
 from scipy.optimize import minimize_scalar, nnls
 
 from imunav import allan_models as _am
-from imunav.errors import InsufficientDataError, InvalidInputError
+from imunav.errors import ConvergenceError, InsufficientDataError, InvalidInputError
 from imunav.noise import _allan_kernels as _ak
 from imunav.noise.allan import AllanResult
 from imunav.results import Result
@@ -238,7 +238,6 @@ def _cov_rel(res_tau, m, n_phase, names, Ts, theta, fs, model, edf, overlapping)
     else:
         rel = np.diag(2.0 / edf)
     if not np.all(np.isfinite(rel)):
-        from imunav.errors import ConvergenceError
 
         raise ConvergenceError("the noise terms cannot be fitted: the model variance is zero or not finite at some "
                                "tau, the Allan curve follows none of the terms (is the recording static? choose other "

@@ -7,14 +7,16 @@ compute code never plots.
 from __future__ import annotations
 
 import math
-from typing import Sequence
+from typing import TYPE_CHECKING, Sequence
 
 import numpy as np
-from matplotlib.figure import Figure
 
 from imunav.noise.allan import AllanResult
 from imunav.noise.fit import NoiseFit, avar_term
 from imunav.noise.psd import PsdFit, PsdResult
+
+if TYPE_CHECKING:  # annotations only
+    from matplotlib.figure import Figure
 
 __all__ = ["plot_allan", "plot_psd", "plot_curve_fits"]
 
@@ -30,6 +32,9 @@ def plot_allan(result: AllanResult, fit: NoiseFit | None = None, channels: Seque
                title: str | None = None) -> Figure:
     """Allan deviation per channel with its confidence band, the fitted model
     and each fitted term (dashed)."""
+    # optional: matplotlib loads only when a figure is drawn (import time of imunav and its CLI)
+    from matplotlib.figure import Figure
+
     adev = result.adev if result.adev.ndim == 2 else result.adev[:, None]
     lo = result.adev_lo if result.adev_lo.ndim == 2 else result.adev_lo[:, None]
     hi = result.adev_hi if result.adev_hi.ndim == 2 else result.adev_hi[:, None]
@@ -66,6 +71,9 @@ def plot_allan(result: AllanResult, fit: NoiseFit | None = None, channels: Seque
 def plot_psd(res: PsdResult, fit: PsdFit | None = None, averaged: PsdResult | None = None,
              title: str | None = None) -> Figure:
     """One-sided PSD per channel (raw in grey, averaged in colour) with the fitted model."""
+    # optional: matplotlib loads only when a figure is drawn (import time of imunav and its CLI)
+    from matplotlib.figure import Figure
+
     p = res.psd if res.psd.ndim == 2 else res.psd[:, None]
     n_ch = p.shape[1]
     rows, cols = _grid(n_ch)
@@ -95,6 +103,9 @@ def plot_psd(res: PsdResult, fit: PsdFit | None = None, averaged: PsdResult | No
 
 def plot_curve_fits(tau: np.ndarray, adev: np.ndarray, fits: dict, title: str | None = None) -> Figure:
     """An Allan curve with smooth curve fits (thesis Figs. 7.57-7.60)."""
+    # optional: matplotlib loads only when a figure is drawn (import time of imunav and its CLI)
+    from matplotlib.figure import Figure
+
     fig = Figure(figsize=(5, 3.8), constrained_layout=True)
     ax = fig.subplots()
     ax.loglog(tau, adev, "ko", ms=3, label="ADEV")

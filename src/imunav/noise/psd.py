@@ -32,6 +32,7 @@ from scipy import signal
 from scipy.optimize import nnls
 
 from imunav.errors import InsufficientDataError, InvalidInputError, NonFiniteError, ShapeError
+from imunav.noise.allan import check_rows_are_samples
 from imunav.results import Result
 
 __all__ = ["PsdResult", "PsdFit", "psd", "frequency_average", "log_average", "fit_psd", "psd_readout",
@@ -68,7 +69,6 @@ def _as2d(x: ArrayLike) -> tuple[np.ndarray, bool]:
         raise ShapeError(f"x must be (N,) or (N, C), got shape {a.shape}")
     one = a.ndim == 1
     a2 = a[:, None] if one else a
-    from imunav.noise.allan import check_rows_are_samples
 
     check_rows_are_samples(a2.shape, "x")
     if not np.all(np.isfinite(a2)):

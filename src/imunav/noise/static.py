@@ -53,15 +53,14 @@ from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
+from scipy.stats import chi2
 
 from imunav.errors import InvalidInputError, NotStaticError
+from imunav.io._atomic import jsonable
 from imunav.results import Result
+from imunav.timeseries import G_REF, ImuData, rest_force_problem
 
 __all__ = ["StaticCheck", "check_static", "require_static", "rest_force_problem", "G_REF"]
-
-#: Reference gravity (m/s²) of the mean-specific-force test (accepted: G_REF / 4 to 2 G_REF).
-G_REF = 9.80665
-
 
 @dataclass(frozen=True)
 class StaticCheck(Result):
@@ -95,8 +94,6 @@ class StaticCheck(Result):
     flagged_windows: dict[str, list[float]] = field(default_factory=dict)
 
     def to_dict(self) -> dict[str, Any]:
-        from imunav.io._atomic import jsonable
-
         return jsonable(self.__dict__)
 
 
@@ -114,7 +111,6 @@ def _sigma0(x: np.ndarray) -> np.ndarray:
 
 def _window_test(x: np.ndarray, w: int, k: int, alpha: float) -> tuple[np.ndarray, float, float]:
     """Distances of the window means from their median, the statistical limit on them, and the Allan slope."""
-    from scipy.stats import chi2
 
     means = x[: k * w].reshape(k, w, 3).mean(axis=1)
     d = np.linalg.norm(means - np.median(means, axis=0), axis=1)
@@ -127,24 +123,6 @@ def _window_test(x: np.ndarray, w: int, k: int, alpha: float) -> tuple[np.ndarra
         slope = np.log(adev_w / s0) / math.log(w)
     slope = slope[np.isfinite(slope)]
     return d, limit, float(slope.max()) if slope.size else float("nan")
-
-
-def rest_force_problem(fmag: float, gravity: float = G_REF) -> str | None:
-    """Why a specific force of magnitude ``fmag`` (m/s²) cannot be a sensor at rest, or None if it can.
-
-    Accepted: ``g/4 ≤ fmag ≤ 2 g`` (see the module docstring).  The message names the likely unit
-    mistake (a reading of about 1 is an accelerometer in g, about 1000 one in mg).
-    """
-    if 0.25 * gravity <= fmag <= 2.0 * gravity:
-        return None
-    if 0.9 < fmag < 1.1:
-        hint = "the accelerometer looks like it is in g: declare its unit (--accel-unit g, units={'accel': 'g'})"
-    elif 900 < fmag < 1100:
-        hint = "the accelerometer looks like it is in mg: declare its unit (--accel-unit mg)"
-    else:
-        hint = "check the accelerometer's unit and that the file holds its data"
-    return (f"the mean specific force at rest is {fmag:.4g} m/s^2, outside g/4 .. 2 g (g = {gravity:.4g} m/s^2); "
-            + hint)
 
 
 def check_static(data: Any, *, window_s: float = 1.0, max_tilt_deg: float = 2.0, max_rotation_deg: float = 2.0,
@@ -166,8 +144,6 @@ def check_static(data: Any, *, window_s: float = 1.0, max_tilt_deg: float = 2.0,
     -------
     StaticCheck
     """
-    from imunav.timeseries import ImuData
-
     if not isinstance(data, ImuData):
         raise InvalidInputError(f"check_static needs an ImuData, got {type(data).__name__}")
     for name, v in (("window_s", window_s), ("max_tilt_deg", max_tilt_deg), ("max_rotation_deg", max_rotation_deg),

@@ -28,18 +28,18 @@ from dataclasses import dataclass
 from typing import Any, Literal
 
 import numpy as np
+import pywt
 from numba import njit
 from numpy.typing import ArrayLike, NDArray
 
 from imunav.errors import InsufficientDataError, InvalidInputError, NonFiniteError, ShapeError
+from imunav.noise.allan import check_rows_are_samples
 from imunav.results import Result
 
 __all__ = ["wavelet_denoise", "mad_sigma", "default_level", "bias_kalman", "HybridComparison", "compare_hybrid"]
 
 
 def _pywt():
-    import pywt  # runtime dependency (PyWavelets)
-
     return pywt
 
 
@@ -75,7 +75,6 @@ def wavelet_denoise(x: ArrayLike, fs: float | None = None, *, wavelet: str = "db
     a = np.asarray(x, dtype=float)
     if a.ndim not in (1, 2):
         raise ShapeError(f"x must be (N,) or (N, C), got {a.shape}")
-    from imunav.noise.allan import check_rows_are_samples
 
     check_rows_are_samples(a.shape, "x")
     if not np.all(np.isfinite(a)):

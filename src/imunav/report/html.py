@@ -20,6 +20,10 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+import pandas as pd
+
+from imunav import __version__
+from imunav.io._atomic import atomic_path
 
 __all__ = ["Report", "Section", "Parameter"]
 
@@ -107,14 +111,9 @@ class Section:
         digits: int = 5,
     ) -> "Section":
         """A table from a list of dicts or a pandas DataFrame (index kept as first column)."""
-        try:
-            import pandas as pd
-
-            if isinstance(rows, pd.DataFrame):
-                df = rows.reset_index() if rows.index.name or not isinstance(rows.index, pd.RangeIndex) else rows
-                rows = df.to_dict(orient="records")
-        except ImportError:  # pragma: no cover
-            pass
+        if isinstance(rows, pd.DataFrame):
+            df = rows.reset_index() if rows.index.name or not isinstance(rows.index, pd.RangeIndex) else rows
+            rows = df.to_dict(orient="records")
         rows = list(rows)
         cols = list(columns) if columns else (list(rows[0].keys()) if rows else [])
         head = "".join(f'<th class="l">{html.escape(str(c))}</th>' if i == 0 else f"<th>{html.escape(str(c))}</th>" for i, c in enumerate(cols))
@@ -164,6 +163,7 @@ class Section:
 
     def figure(self, fig: Any, caption: str | None = None, dpi: int = 110) -> "Section":
         """Embed a matplotlib figure as a PNG (the figure is closed afterwards)."""
+        # optional: matplotlib loads only when a figure is drawn (import time of imunav and its CLI)
         import matplotlib.pyplot as plt
 
         buf = io.BytesIO()
@@ -214,8 +214,6 @@ class Report:
         return None if not verdicts else all(verdicts)
 
     def to_html(self) -> str:
-        from imunav import __version__
-
         stamp = _dt.datetime.now(_dt.timezone.utc).strftime("%Y-%m-%d %H:%M UTC")
         toc = "".join(
             f'<li><a href="#s{i}">{html.escape(s.title)}</a> {_verdict(s.passed) if s.passed is not None else ""}</li>'
@@ -234,7 +232,6 @@ class Report:
 
     def write(self, path: str | Path) -> Path:
         """Write the report atomically; returns the path."""
-        from imunav.io._atomic import atomic_path
 
         p = Path(path)
         with atomic_path(p) as tmp:

@@ -26,7 +26,7 @@ from typing import Any
 
 from imunav.errors import ConfigError
 from imunav.results import Result
-from imunav.units import from_display
+from imunav.units import from_display, to_display
 
 __all__ = ["SpecLimit", "SpecCheck", "load_spec", "check_spec"]
 
@@ -42,8 +42,6 @@ class SpecLimit:
     description: str = ""
 
     def describe(self) -> str:
-        from imunav.units import to_display
-
         def d(x: float) -> str:
             return f"{to_display(x, self.unit):g}" if self.unit else f"{x:g}"
 

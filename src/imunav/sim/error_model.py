@@ -54,6 +54,7 @@ from typing import TYPE_CHECKING, Any, Literal
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
+from scipy.optimize import nnls
 
 from imunav import allan_models as _am
 from imunav import units as _units
@@ -67,8 +68,11 @@ from imunav.errors import (
     UnitError,
 )
 from imunav.io._atomic import atomic_path
+from imunav.io.toml import toml_text
 from imunav.results import Result
 from imunav.sim import _kernels as _k
+from imunav.sim.streams import normals, seed_sequence, stream_state
+from imunav.sim.trajectory import ideal_imu
 
 if TYPE_CHECKING:  # pragma: no cover
     from imunav.timeseries import ImuData
@@ -266,7 +270,6 @@ def _flicker_weights(tau_min: float, tau_max: float, per_decade: int) -> tuple[n
     least-squares solution in relative error (scipy.optimize.nnls).  Returns
     (T_j, w_j, max relative deviation of sigma_A from the floor in the band).
     """
-    from scipy.optimize import nnls
 
     lo = math.log10(tau_min) - 0.6  # a little beyond the band so its edges stay flat
     hi = math.log10(tau_max) + 0.3
@@ -804,7 +807,7 @@ class ImuErrorModel:
     def to_toml(self, path: str | os.PathLike[str]) -> Path:
         """Write the model as TOML (atomically: temp file, then rename)."""
         p = Path(path)
-        text = _to_toml(self.to_dict())
+        text = toml_text(self.to_dict())
         with atomic_path(p) as tmp:
             tmp.write_text(text, encoding="utf-8")
         return p
@@ -813,75 +816,6 @@ class ImuErrorModel:
         return isinstance(other, ImuErrorModel) and _deep_equal(self.to_dict(), other.to_dict())
 
     __hash__ = None  # type: ignore[assignment]
-
-
-def _toml_value(v: Any) -> str:
-    if isinstance(v, bool):
-        return "true" if v else "false"
-    if isinstance(v, (int, float)):
-        f = float(v)
-        if math.isinf(f):
-            return "inf" if f > 0 else "-inf"
-        return repr(f) if isinstance(v, float) else str(v)
-    if isinstance(v, str):
-        return '"' + v.replace("\\", "\\\\").replace('"', '\\"').replace("\n", "\\n") + '"'
-    if isinstance(v, (list, tuple)):
-        return "[" + ", ".join(_toml_value(x) for x in v) + "]"
-    raise TypeError(f"cannot write {type(v).__name__} as TOML")
-
-
-def _to_toml(d: Mapping[str, Any], prefix: str = "") -> str:
-    lines = [f"{k} = {_toml_value(v)}" for k, v in d.items() if not isinstance(v, Mapping)]
-    out = "\n".join(lines)
-    for k, v in d.items():
-        if isinstance(v, Mapping):
-            name = f"{prefix}.{k}" if prefix else k
-            out += f"\n\n[{name}]\n" + _to_toml(v, name)
-    return out.strip() + "\n"
-
-
-# --------------------------------------------------------------------------
-# random streams
-# --------------------------------------------------------------------------
-def seed_sequence(rng: Any) -> np.random.SeedSequence:
-    """Root SeedSequence from rng (Generator | int seed | SeedSequence | None).
-
-    A Generator contributes 128 bits drawn from it (so successive calls with
-    the same Generator give new, reproducible realisations).
-    """
-    if rng is None:
-        return np.random.SeedSequence()
-    if isinstance(rng, np.random.SeedSequence):
-        return rng
-    if isinstance(rng, np.random.Generator):
-        return np.random.SeedSequence([int(x) for x in rng.integers(0, 2**32, size=4, dtype=np.uint64)])
-    if isinstance(rng, (int, np.integer)) and not isinstance(rng, bool):
-        if rng < 0:
-            raise InvalidInputError(f"rng: a seed must be a non-negative integer, got {rng}")
-        return np.random.SeedSequence(int(rng))
-    raise InvalidInputError(
-        f"rng: expected a numpy Generator, a non-negative integer seed or None, got {type(rng).__name__}"
-    )
-
-
-def stream_state(root: np.random.SeedSequence, *key: int) -> NDArray[np.uint64]:
-    """256-bit xoshiro256++ state of the stream ``key`` under ``root``.
-
-    The stream depends only on the root entropy and on ``key`` =
-    (sensor, process, axis, component), never on which other streams exist.
-    """
-    ss = np.random.SeedSequence(entropy=root.entropy, spawn_key=tuple(root.spawn_key) + tuple(key))
-    st = ss.generate_state(4, np.uint64)
-    if not np.any(st):  # the all-zero state is the one invalid state
-        st[0] = np.uint64(1)
-    return st
-
-
-def normals(root: np.random.SeedSequence, key: tuple[int, ...], n: int) -> NDArray[np.float64]:
-    """n standard normals of the stream ``key`` (same generator as the IMU kernels)."""
-    out = np.empty(n)
-    _k.fill_normal(stream_state(root, *key), out)
-    return out
 
 
 # --------------------------------------------------------------------------
@@ -1153,7 +1087,6 @@ def simulate_imu(
     with ``ideal_kw``: earth_rate, transport_rate, gravity, lat, h) with the
     errors of ``error_model`` applied (:func:`apply_errors`; same ``rng``,
     ``temp_c``, ``return_truth`` and ``common_axis_noise``)."""
-    from imunav.sim.trajectory import ideal_imu  # lazy: owned by the trajectory module
 
     if not isinstance(error_model, ImuErrorModel):
         raise InvalidInputError(

@@ -35,6 +35,7 @@ from numpy.typing import NDArray
 from imunav.errors import InvalidInputError
 from imunav.results import Result
 from imunav.rotation import quat_from_euler
+from imunav.sim import GaussMarkov, ImuErrorModel, Trajectory, TriadErrors, apply_errors, ideal_imu
 from imunav.timeseries import ImuData
 
 __all__ = ["GaitSimulation", "GAIT_MODES", "simulate_gait", "foot_mems_model"]
@@ -81,7 +82,6 @@ def foot_mems_model(scale: float = 1.0) -> Any:
     instability GM(8 °/h, 100 s); accel: bias 2-4 mg, noise 60 µg/√Hz,
     GM(0.04 mg, 100 s).  ``scale`` multiplies every term.
     """
-    from imunav.sim import GaussMarkov, ImuErrorModel, TriadErrors
 
     dps = math.pi / 180.0
     mg = 9.80665e-3
@@ -116,7 +116,6 @@ def simulate_gait(modes: str | list[str] = "walk", strides: int = 20, *, fs: flo
     error_model : an :class:`imunav.sim.ImuErrorModel`, ``"foot_mems"`` or None (ideal).
     rng : Generator | int | None.
     """
-    from imunav.sim import Trajectory, apply_errors, ideal_imu
 
     gen = np.random.default_rng(rng)
     seq = [modes] if isinstance(modes, str) else list(modes)

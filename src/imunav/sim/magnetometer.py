@@ -27,7 +27,8 @@ from numpy.typing import ArrayLike, NDArray
 
 from imunav.errors import DegenerateGeometryError, InvalidInputError, NonFiniteError, ShapeError
 from imunav.rotation import quat_conjugate, quat_rotate
-from imunav.sim.error_model import _mat3, _vec3, normals, seed_sequence
+from imunav.sim.error_model import _mat3, _vec3
+from imunav.sim.streams import normals, seed_sequence
 
 __all__ = ["MagnetometerModel", "simulate_magnetometer"]
 

@@ -25,9 +25,11 @@ def plot_test_recording(data: Any, segments: Any = None, title: str = "", max_po
     -------
     matplotlib Figure.
     """
+    # optional: matplotlib loads only when a figure is drawn (import time of imunav and its CLI)
     import matplotlib
 
     matplotlib.use("Agg", force=False)
+    # optional: matplotlib loads only when a figure is drawn (import time of imunav and its CLI)
     import matplotlib.pyplot as plt
 
     step = max(1, data.t.size // max_points)

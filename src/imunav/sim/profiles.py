@@ -35,6 +35,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from imunav.errors import InvalidInputError, ShapeError
+from imunav.io._atomic import atomic_path
 from imunav.rotation import (
     quat_conjugate,
     quat_from_rotvec,
@@ -147,7 +148,6 @@ class Segments:
     def write_csv(self, path: str | os.PathLike[str]) -> Path:
         """Write the table as CSV (atomically): one row per segment, rates and
         angles in degrees, ``up``/``axis``/``q`` split into columns."""
-        from imunav.io._atomic import atomic_path
 
         cols = ["kind", "step", "t_start", "t_stop", "i_start", "i_stop", "up_x", "up_y", "up_z",
                 "axis_x", "axis_y", "axis_z", "rate_dps", "angle_deg", "qw", "qx", "qy", "qz"]

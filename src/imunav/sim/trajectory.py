@@ -25,6 +25,8 @@ from typing import Callable
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
+from scipy.interpolate import CubicSpline
+from scipy.spatial.transform import Rotation, RotationSpline
 
 from imunav import earth
 from imunav.errors import InvalidInputError, NonFiniteError, ShapeError, TimeOrderError
@@ -458,8 +460,6 @@ def trajectory_from_waypoints(
     pos_key_ned : (K, 3) key positions, m, or None (fixed position).
     fs : sample rate, Hz; samples at ``t_key[0] + k/fs`` up to ``t_key[-1]``.
     """
-    from scipy.interpolate import CubicSpline
-    from scipy.spatial.transform import Rotation, RotationSpline
 
     tk = np.asarray(t_key, dtype=float)
     if tk.ndim != 1 or tk.size < 2 or np.any(np.diff(tk) <= 0):

@@ -1,0 +1,132 @@
+"""The lab step API: what every step of ``imunav lab`` gets (:class:`LabContext`) and returns (:class:`StepResult`).
+
+A step is a module ``imunav.labsteps.<name>`` with ``TITLE: str`` and
+``run(ctx: LabContext) -> StepResult`` (see :mod:`imunav.lab`).  These types
+sit here, below both the steps and the runner, so that a step never imports
+the runner that imports it.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import zlib
+from collections.abc import Iterator
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from imunav._atomic import jsonable
+from imunav.results import Result
+
+__all__ = ["StepResult", "LabContext"]
+
+
+@dataclass(frozen=True)
+class StepResult(Result):
+    """What a lab step returns.
+
+    Attributes
+    ----------
+    summary : JSON-able dict of the step's key figures.
+    figures : PNG files written by the step (embedded in the HTML report).
+    passed : verdict against the step's acceptance, or None when it has none.
+    tables : optional ``(caption, rows)`` pairs (rows: list of dicts) for the report.
+    notes : optional paragraphs for the report.
+    parameters : estimated parameters checked against the lab's ``[spec]``:
+        ``{name: (value_si, sigma_si)}`` with the names of
+        :mod:`imunav.report.catalog` (``gyro_bias_x``, ``accel_vrw_z``, ...).
+    """
+
+    summary: dict
+    figures: list[Path] = field(default_factory=list)
+    passed: bool | None = None
+    tables: list[tuple[str, list[dict]]] = field(default_factory=list)
+    notes: list[str] = field(default_factory=list)
+    parameters: dict[str, tuple[float, float | None]] = field(default_factory=dict)
+
+    def to_dict(self) -> dict:
+        d = {
+            "summary": jsonable(self.summary),
+            "figures": [str(p) for p in self.figures],
+            "passed": self.passed,
+        }
+        if self.parameters:
+            d["parameters"] = {k: {"value_si": v, "sigma_si": s} for k, (v, s) in self.parameters.items()}
+        return jsonable(d)
+
+
+class _NullProgress:
+    """Stand-in for :class:`rich.progress.Progress` when output is off."""
+
+    def add_task(self, description: str, total: float | None = None, **kw: Any) -> int:
+        return 0
+
+    def update(self, task: int, **kw: Any) -> None:
+        pass
+
+    def advance(self, task: int, advance: float = 1) -> None:
+        pass
+
+    def remove_task(self, task: int) -> None:
+        pass
+
+
+@dataclass
+class LabContext:
+    """What every step gets.
+
+    Attributes
+    ----------
+    out_dir : the report folder (exists).
+    seed : the lab's root seed; use :meth:`rng` for a step's own stream.
+    progress : a :class:`rich.progress.Progress` (or a silent stand-in) for
+        progress bars: ``task = ctx.progress.add_task("…", total=n)``.
+    artifacts : shared objects between steps (recordings, true models, …).
+    config : the whole lab configuration (parsed TOML).
+    """
+
+    out_dir: Path
+    seed: int
+    progress: Any
+    artifacts: dict = field(default_factory=dict)
+    config: dict = field(default_factory=dict)
+    step: str = ""
+    lab: Any = None
+
+    @property
+    def mode(self) -> str:
+        """``"recordings"`` when the lab runs on real recordings, else ``"virtual"``."""
+        return getattr(self.lab, "mode", "virtual")
+
+    @property
+    def options(self) -> dict:
+        """The TOML table of the running step (``[<step name>]``), or {}."""
+        return dict(self.config.get(self.step, {}))
+
+    def rng(self, *key: int | str) -> np.random.Generator:
+        """Independent, reproducible generator for ``(seed, step, *key)``."""
+        words = [self.seed] + [_word(k) for k in (self.step, *key)]
+        return np.random.default_rng(np.random.SeedSequence(words))
+
+    def path(self, *parts: str) -> Path:
+        """A path inside ``out_dir`` (parent folders created)."""
+        p = self.out_dir.joinpath(*parts)
+        p.parent.mkdir(parents=True, exist_ok=True)
+        return p
+
+    @contextlib.contextmanager
+    def task(self, description: str, total: float | None = None) -> Iterator[Any]:
+        """Progress task as a context manager; yields ``advance(n=1)``."""
+        tid = self.progress.add_task(description, total=total)
+        try:
+            yield lambda n=1: self.progress.advance(tid, n)
+        finally:  # a finished task shows 100 %, also one of unknown length (total=None)
+            self.progress.update(tid, total=total if total is not None else 1, completed=total if total is not None else 1)
+
+
+def _word(k: int | str) -> int:
+    if isinstance(k, (int, np.integer)):
+        return int(k) & 0xFFFFFFFF
+    return zlib.crc32(str(k).encode("utf-8"))  # stable across runs (unlike hash())
