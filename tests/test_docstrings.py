@@ -133,7 +133,6 @@ NOT_YET_DONE = {
     "imunav.sim.profiles",
     "imunav.sim.trajectory",
     "imunav.timeseries",
-    "imunav.units",
 }
 
 # Modules whose docstrings still cite the project's private notes instead of the published source.
