@@ -121,7 +121,6 @@ NOT_YET_DONE = {
     "imunav.report.catalog",
     "imunav.report.html",
     "imunav.report.spec",
-    "imunav.rotation",
     "imunav.runfolder",
     "imunav.scenarios",
     "imunav.sim.error_model",
