@@ -70,7 +70,6 @@ NOT_YET_DONE = {
     "imunav.calib.static",
     "imunav.calib.temperature",
     "imunav.crossval",
-    "imunav.earth",
     "imunav.errors",
     "imunav.filters.consistency",
     "imunav.filters.ekf",
