@@ -66,7 +66,20 @@ def add_step(meta: Mapping[str, Any] | None, op: str, parameters: Mapping[str, A
 
 
 def steps(meta_or_data: Any, op: str | None = None) -> list[dict[str, Any]]:
-    """The provenance steps of a recording (or of its ``meta`` dict), optionally only those of ``op``."""
+    """The provenance steps of a recording (or of its ``meta`` dict), optionally only those of ``op``.
+
+    Parameters
+    ----------
+    meta_or_data : ImuData or mapping
+        A recording (its ``meta`` is read) or its metadata dict.
+    op : str, optional
+        Keep only the steps of this operation (e.g. ``"compensate"``).
+
+    Returns
+    -------
+    list of dict
+        Copies of the steps, oldest first; empty when there is no provenance.
+    """
     meta = getattr(meta_or_data, "meta", meta_or_data)
     if not isinstance(meta, Mapping):
         return []
@@ -76,7 +89,18 @@ def steps(meta_or_data: Any, op: str | None = None) -> list[dict[str, Any]]:
 
 
 def fingerprint(obj: Mapping[str, Any]) -> str:
-    """SHA-256 of the canonical JSON of ``obj`` (sorted keys, no blanks): equal content, equal hash."""
+    """SHA-256 of the canonical JSON of ``obj`` (sorted keys, no blanks): equal content, equal hash.
+
+    Parameters
+    ----------
+    obj : mapping
+        JSON-like content (numpy values are converted first).
+
+    Returns
+    -------
+    str
+        The SHA-256 hash (FIPS 180-4) as 64 hexadecimal characters.
+    """
     from imunav.io._atomic import jsonable
 
     text = json.dumps(jsonable(obj), sort_keys=True, separators=(",", ":"), allow_nan=False)
@@ -86,7 +110,17 @@ def fingerprint(obj: Mapping[str, Any]) -> str:
 def net_compensations(meta_or_data: Any, sha256: str | None = None) -> list[dict[str, Any]]:
     """Compensation steps not undone by a later ``uncompensate`` with the same calibration.
 
-    With ``sha256`` only those of that calibration.
+    Parameters
+    ----------
+    meta_or_data : ImuData or mapping
+        A recording (its ``meta`` is read) or its metadata dict.
+    sha256 : str, optional
+        Keep only the steps of the calibration with this fingerprint (:func:`fingerprint`).
+
+    Returns
+    -------
+    list of dict
+        The ``compensate`` steps still in effect, oldest first.
     """
     live: list[dict[str, Any]] = []
     for s in steps(meta_or_data):
