@@ -26,9 +26,30 @@ def attitude_paper(
 
     Each run simulates the 245 s straight-road drive with its own generator and
     runs the named gravity-vector Kalman filters (``"proposed"``, ``"lee"``,
-    ``"javed"``); it returns per filter the pitch and roll RMSE in degrees
-    (``<filter>_pitch_rmse_deg``, ``<filter>_roll_rmse_deg``), the paper's
-    Table 2 metric.  Filters are built once per batch.
+    ``"javed"``); it returns per filter the pitch and roll RMSE in degrees, the metric of Table 2 of
+    Candan & Söken, UHUK-2020-173 (Ulusal Havacılık ve Uzay Konferansı, 2020).  Filters are built once per
+    batch.
+
+    Parameters
+    ----------
+    rngs : sequence of numpy.random.Generator
+        One generator per run (seeded by the Monte Carlo runner).
+    filters : sequence of str
+        Filters to run, from ``"proposed"``, ``"lee"``, ``"javed"``.
+    duration : float, optional
+        Scenario length, s (default: the paper's 245 s).
+    gyro_noise_unit : str, optional
+        Reading of the paper's gyro-noise unit (see :class:`imunav.attitude.scenario.PaperScenario`).
+
+    Returns
+    -------
+    list of dict
+        One dict per run: ``<filter>_pitch_rmse_deg`` and ``<filter>_roll_rmse_deg``, degrees.
+
+    Raises
+    ------
+    ConfigError
+        If a filter name is unknown.
     """
     from imunav.attitude.gravity_kf import roll_pitch_from_x
     from imunav.attitude.metrics import euler_rmse
