@@ -104,7 +104,6 @@ NOT_YET_DONE = {
     "imunav.labsteps.temperature",
     "imunav.learn.lstm",
     "imunav.montecarlo",
-    "imunav.noise.allan",
     "imunav.noise.ar",
     "imunav.noise.curvefit",
     "imunav.noise.edf",

@@ -110,7 +110,23 @@ class AllanResult:
         return 1 if self.adev.ndim == 1 else self.adev.shape[1]
 
     def channel(self, c: int | str) -> "AllanResult":
-        """One channel as a 1-D result (by index or name)."""
+        """One channel as a 1-D result (by index or name).
+
+        Parameters
+        ----------
+        c : int or str
+            Channel index (0-based) or name (one of :attr:`channels`).
+
+        Returns
+        -------
+        AllanResult
+            The same statistics for that channel only (1-D arrays); ``self`` for a single-channel result.
+
+        Raises
+        ------
+        InvalidInputError
+            If the name is unknown or the index out of range.
+        """
         if isinstance(c, str):
             if c not in self.channels:
                 raise InvalidInputError(f"unknown channel {c!r}; channels are {self.channels}")
@@ -131,7 +147,15 @@ class AllanResult:
         )
 
     def to_dict(self) -> dict[str, Any]:
-        """JSON-ready dictionary (lists of floats)."""
+        """JSON-ready dictionary (lists of floats).
+
+        Returns
+        -------
+        dict
+            ``kind``, ``input``, ``units``, ``fs`` (Hz), ``n_samples``, ``ci``, ``channels``, the arrays ``tau`` (s),
+            ``m``, ``adev``, ``adev_lo``, ``adev_hi`` (in ``units``), ``edf``, ``alpha``, ``n_terms`` as lists,
+            and ``segments``.
+        """
         return {
             "kind": self.kind, "input": self.input, "units": self.units, "fs": self.fs,
             "n_samples": self.n_samples, "ci": self.ci, "channels": list(self.channels),
@@ -171,7 +195,32 @@ def _log_grid(n: int, mmax: int, m0: int = 64) -> np.ndarray:
 
 
 def cluster_sizes(taus: Any, fs: float, n_phase: int, kind: str = "overlapping") -> NDArray[np.int64]:
-    """Cluster sizes m for a tau specification (see :func:`tau_grid`)."""
+    """Cluster sizes m for a tau specification (see :func:`tau_grid`).
+
+    Parameters
+    ----------
+    taus : str, tuple or array_like
+        ``"octave"``, ``"decade"``, ``"all"``, ``"log"``, ``("log", n)`` or explicit cluster times, s.
+    fs : float
+        Sample rate, Hz.
+    n_phase : int
+        Number of phase points (rate samples + 1).
+    kind : str
+        Statistic (one of :data:`KINDS`): it sets the largest usable m, (n_phase - 1) // 2 for the Allan
+        family, // 3 for the modified and Hadamard family.
+
+    Returns
+    -------
+    numpy.ndarray of int64
+        The cluster sizes m, increasing and unique (tau = m / fs).
+
+    Raises
+    ------
+    InsufficientDataError
+        If the record is too short for ``kind``, or an explicit tau exceeds the largest usable one.
+    InvalidInputError
+        If ``taus`` is not understood, or an explicit tau is not positive and finite or is below 1 / fs.
+    """
     mmax = _max_m(kind, n_phase)
     if mmax < 1:
         raise InsufficientDataError(
@@ -214,11 +263,33 @@ def cluster_sizes(taus: Any, fs: float, n_phase: int, kind: str = "overlapping")
 
 
 def tau_grid(n_samples: int, fs: float, taus: Any = "octave", kind: str = "overlapping") -> NDArray[np.float64]:
-    """The tau values (s) :func:`allan_deviation` would use for a record of
-    ``n_samples`` rate samples: ``"octave"`` (m = 1, 2, 4, ...), ``"decade"``
-    (1, 2, 4 x 10^k), ``"all"``, ``"log"`` / ``("log", n)`` (n log-spaced,
-    rounded to whole samples, duplicates removed) or explicit seconds
-    (rounded to whole samples; the result reports the tau actually used)."""
+    """The tau values (s) :func:`allan_deviation` would use for a record of ``n_samples`` rate samples.
+
+    Parameters
+    ----------
+    n_samples : int
+        Number of rate samples per channel.
+    fs : float
+        Sample rate, Hz.
+    taus : str, tuple or array_like
+        ``"octave"`` (m = 1, 2, 4, ...), ``"decade"`` (1, 2, 4 x 10^k), ``"all"``, ``"log"`` / ``("log", n)``
+        (n log-spaced, rounded to whole samples, duplicates removed) or explicit seconds (rounded to whole
+        samples; the result reports the tau actually used).
+    kind : str
+        Statistic, one of :data:`KINDS` or an alias (``"oadev"``, ``"mdev"``, ...).
+
+    Returns
+    -------
+    numpy.ndarray
+        Cluster times tau = m / fs, s.
+
+    Raises
+    ------
+    InvalidInputError
+        If ``kind`` or ``taus`` is not understood.
+    InsufficientDataError
+        If the record is too short.
+    """
     return cluster_sizes(taus, fs, n_samples + 1, _kind(kind)) / fs
 
 
@@ -378,6 +449,18 @@ def check_rows_are_samples(shape: tuple[int, ...], name: str = "x") -> None:
     """Refuse a (C, N) array given where (N, C) is expected: more columns (channels) than rows (samples).
 
     A (6, N) recording would otherwise be taken as N channels of 6 samples each.
+
+    Parameters
+    ----------
+    shape : tuple of int
+        Shape of the array.
+    name : str
+        Name of the argument, for the message.
+
+    Raises
+    ------
+    ShapeError
+        If the array is 2-D with more columns than rows; the message suggests ``name.T``.
     """
     if len(shape) == 2 and shape[1] > shape[0]:
         raise ShapeError(f"{name} has shape {shape}: {shape[1]} channels of {shape[0]} samples each; samples go in "
@@ -557,6 +640,27 @@ def allan_deviation(
 
 
 def allan_variance(x: ArrayLike, fs: float, taus: Any = "octave", kind: str = "overlapping", **kw: Any):
-    """``(tau, avar)`` of :func:`allan_deviation` (same arguments)."""
+    """``(tau, avar)`` of :func:`allan_deviation` (same arguments).
+
+    Parameters
+    ----------
+    x : array_like, shape (N,) or (N, C)
+        Rates (rad/s, m/s^2, ...), increments or phase, per ``input``.
+    fs : float
+        Sample rate, Hz.
+    taus : str, tuple or array_like
+        Tau specification (see :func:`tau_grid`).
+    kind : str
+        Statistic (see :data:`KINDS`).
+    **kw
+        Further keywords of :func:`allan_deviation` (``input``, ``t``, ``nan_policy``, ``ci``, ...).
+
+    Returns
+    -------
+    tau : numpy.ndarray, shape (T,)
+        Cluster times, s.
+    avar : numpy.ndarray, shape (T,) or (T, C)
+        The variance (deviation squared), in the square of the input's unit.
+    """
     r = allan_deviation(x, fs, taus, kind, **kw)
     return r.tau, r.avar
