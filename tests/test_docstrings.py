@@ -106,7 +106,6 @@ NOT_YET_DONE = {
     "imunav.montecarlo",
     "imunav.noise.ar",
     "imunav.noise.curvefit",
-    "imunav.noise.edf",
     "imunav.noise.fit",
     "imunav.noise.plot",
     "imunav.noise.psd",
