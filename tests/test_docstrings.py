@@ -109,7 +109,6 @@ NOT_YET_DONE = {
     "imunav.noise.fit",
     "imunav.noise.plot",
     "imunav.noise.psd",
-    "imunav.noise.static",
     "imunav.noise.wavelet",
     "imunav.report.catalog",
     "imunav.report.html",

@@ -94,6 +94,13 @@ class StaticCheck:
     flagged_windows: dict[str, list[float]] = field(default_factory=dict)
 
     def to_dict(self) -> dict[str, Any]:
+        """JSON-ready dictionary of the outcome.
+
+        Returns
+        -------
+        dict
+            Every attribute under its own name (angles in degrees, force in m/s², window in s).
+        """
         from imunav.io._atomic import jsonable
 
         return jsonable(self.__dict__)
@@ -133,6 +140,18 @@ def rest_force_problem(fmag: float, gravity: float = G_REF) -> str | None:
 
     Accepted: ``g/4 ≤ fmag ≤ 2 g`` (see the module docstring).  The message names the likely unit
     mistake (a reading of about 1 is an accelerometer in g, about 1000 one in mg).
+
+    Parameters
+    ----------
+    fmag : float
+        Magnitude of the mean specific force, m/s².
+    gravity : float
+        Expected magnitude at rest, m/s² (default: standard gravity).
+
+    Returns
+    -------
+    str or None
+        The reason, ready for an error message, or None when ``fmag`` is plausible at rest.
     """
     if 0.25 * gravity <= fmag <= 2.0 * gravity:
         return None
@@ -227,7 +246,26 @@ def check_static(data: Any, *, window_s: float = 1.0, max_tilt_deg: float = 2.0,
 def require_static(data: Any, *, force: bool = False, where: str = "the recording", **kwargs: Any) -> StaticCheck:
     """:func:`check_static`, raising :class:`~imunav.errors.NotStaticError` when the data moved, unless ``force``.
 
-    ``where`` names the recording in the message; ``kwargs`` go to :func:`check_static`.
+    Parameters
+    ----------
+    data : ImuData
+        The recording, in SI units.
+    force : bool
+        Return the outcome instead of raising when the recording is not static.
+    where : str
+        Names the recording in the message.
+    **kwargs
+        Keywords of :func:`check_static` (``window_s``, ``max_tilt_deg``, ...).
+
+    Returns
+    -------
+    StaticCheck
+        The outcome of the tests.
+
+    Raises
+    ------
+    NotStaticError
+        If a test failed and ``force`` is False; the message gives the reasons and the ways out.
     """
     res = check_static(data, **kwargs)
     if not res.static and not force:
