@@ -264,7 +264,7 @@ def block_decimate(x: ArrayLike, q: int) -> NDArray[np.float64]:
 def gm_discrete(T: float, sigma: float, dt: float) -> tuple[float, float]:
     """Discrete first-order Gauss-Markov: (phi, sigma_w^2) = (e^{-dt/T}, sigma^2 (1 - e^{-2dt/T})).
 
-    Brown & Hwang 2012, §4.2 (exact discretisation of ``dx/dt = -x/T + w``).
+    Brown & Hwang 2012 (exact discretisation of ``dx/dt = -x/T + w``).
 
     Parameters
     ----------
