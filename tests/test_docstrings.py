@@ -104,7 +104,6 @@ NOT_YET_DONE = {
     "imunav.labsteps.temperature",
     "imunav.learn.lstm",
     "imunav.montecarlo",
-    "imunav.noise.plot",
     "imunav.report.catalog",
     "imunav.report.html",
     "imunav.report.spec",
