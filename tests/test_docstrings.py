@@ -64,7 +64,6 @@ NOT_YET_DONE = {
     "imunav.calib.multipose",
     "imunav.calib.plot",
     "imunav.calib.ratetable",
-    "imunav.calib.result",
     "imunav.calib.static",
     "imunav.calib.temperature",
     "imunav.filters.consistency",
