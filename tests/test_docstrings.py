@@ -59,7 +59,6 @@ NOT_YET_DONE = {
     "imunav.attitude.smoother",
     "imunav.attitude.ukf",
     "imunav.batch",
-    "imunav.calib.ferraris",
     "imunav.calib.magnetometer",
     "imunav.calib.multipose",
     "imunav.calib.plot",
