@@ -59,7 +59,6 @@ NOT_YET_DONE = {
     "imunav.attitude.smoother",
     "imunav.attitude.ukf",
     "imunav.batch",
-    "imunav.calib.multipose",
     "imunav.calib.plot",
     "imunav.calib.temperature",
     "imunav.filters.consistency",
