@@ -59,7 +59,6 @@ NOT_YET_DONE = {
     "imunav.attitude.smoother",
     "imunav.attitude.ukf",
     "imunav.batch",
-    "imunav.calib.plot",
     "imunav.filters.consistency",
     "imunav.filters.ekf",
     "imunav.filters.faults",
