@@ -41,7 +41,6 @@ NOT_YET_DONE = {
     "imunav.airdata.filter",
     "imunav.airdata.plot",
     "imunav.airdata.scenario",
-    "imunav.airdata.wind",
     "imunav.attitude.adaptive",
     "imunav.attitude.alignment",
     "imunav.attitude.benchmark",
