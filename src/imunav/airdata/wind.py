@@ -148,7 +148,7 @@ def heading_for_course(tas: ArrayLike, course: ArrayLike, w_north: ArrayLike, w_
     Raises
     ------
     InvalidInputError
-        Where the TAS is not positive, or the crosswind exceeds the TAS (no solution).
+        Where the crosswind exceeds the TAS (no solution), or the headwind does (ground speed <= 0).
     """
     V, chi, wn, we = (np.asarray(x, dtype=np.float64) for x in (tas, course, w_north, w_east))
     s = (we * np.cos(chi) - wn * np.sin(chi)) / V
