@@ -94,7 +94,6 @@ NOT_YET_DONE = {
     "imunav.report.spec",
     "imunav.runfolder",
     "imunav.sim.error_model",
-    "imunav.sim.flight",
     "imunav.sim.gait",
     "imunav.sim.magnetometer",
     "imunav.sim.plot",
@@ -117,7 +116,6 @@ NOTES_NOT_YET_DONE = {
     "imunav.labsteps.simulate_tests",
     "imunav.labsteps.temperature",
     "imunav.sim.error_model",
-    "imunav.sim.flight",
     "imunav.sim.presets",
     "imunav.sim.profiles",
 }
