@@ -94,7 +94,6 @@ NOT_YET_DONE = {
     "imunav.report.spec",
     "imunav.runfolder",
     "imunav.sim.error_model",
-    "imunav.sim.magnetometer",
     "imunav.sim.plot",
     "imunav.sim.presets",
     "imunav.sim.profiles",

@@ -69,6 +69,13 @@ class MagnetometerModel:
         return np.linalg.inv(self.soft_iron)
 
     def to_dict(self) -> dict[str, Any]:
+        """JSON-ready dictionary of the model.
+
+        Returns
+        -------
+        dict
+            ``hard_iron``, ``soft_iron``, ``noise`` as lists.
+        """
         return {
             "hard_iron": self.hard_iron.tolist(),
             "soft_iron": self.soft_iron.tolist(),
@@ -77,6 +84,18 @@ class MagnetometerModel:
 
     @classmethod
     def from_dict(cls, d: dict[str, Any]) -> MagnetometerModel:
+        """Rebuild a model from :meth:`to_dict`.
+
+        Parameters
+        ----------
+        d : dict
+            ``hard_iron``, ``soft_iron``, ``noise``.
+
+        Returns
+        -------
+        MagnetometerModel
+            The model.
+        """
         return cls(**d)
 
 
