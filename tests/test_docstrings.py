@@ -95,7 +95,6 @@ NOT_YET_DONE = {
     "imunav.runfolder",
     "imunav.sim.error_model",
     "imunav.sim.plot",
-    "imunav.sim.presets",
     "imunav.sim.profiles",
     "imunav.sim.trajectory",
     "imunav.timeseries",
@@ -114,7 +113,6 @@ NOTES_NOT_YET_DONE = {
     "imunav.labsteps.simulate_tests",
     "imunav.labsteps.temperature",
     "imunav.sim.error_model",
-    "imunav.sim.presets",
     "imunav.sim.profiles",
 }
 
