@@ -94,7 +94,6 @@ NOT_YET_DONE = {
     "imunav.report.spec",
     "imunav.runfolder",
     "imunav.sim.error_model",
-    "imunav.sim.plot",
     "imunav.sim.profiles",
     "imunav.sim.trajectory",
     "imunav.timeseries",
