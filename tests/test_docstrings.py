@@ -95,7 +95,6 @@ NOT_YET_DONE = {
     "imunav.runfolder",
     "imunav.sim.error_model",
     "imunav.sim.profiles",
-    "imunav.sim.trajectory",
     "imunav.timeseries",
 }
 
