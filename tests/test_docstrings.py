@@ -94,7 +94,6 @@ NOT_YET_DONE = {
     "imunav.report.spec",
     "imunav.runfolder",
     "imunav.sim.error_model",
-    "imunav.sim.profiles",
     "imunav.timeseries",
 }
 
@@ -111,7 +110,6 @@ NOTES_NOT_YET_DONE = {
     "imunav.labsteps.simulate_tests",
     "imunav.labsteps.temperature",
     "imunav.sim.error_model",
-    "imunav.sim.profiles",
 }
 
 # The two modules that locate the shared data folder document where they look: ``../shared/data`` is their
