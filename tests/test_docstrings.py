@@ -41,7 +41,6 @@ NOT_YET_DONE = {
     "imunav.attitude.adaptive",
     "imunav.attitude.alignment",
     "imunav.attitude.benchmark",
-    "imunav.attitude.complementary",
     "imunav.attitude.gravity_kf",
     "imunav.attitude.madgwick",
     "imunav.attitude.mahony",
