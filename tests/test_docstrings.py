@@ -43,7 +43,6 @@ NOT_YET_DONE = {
     "imunav.attitude.benchmark",
     "imunav.attitude.gravity_kf",
     "imunav.attitude.madgwick",
-    "imunav.attitude.mahony",
     "imunav.attitude.mekf",
     "imunav.attitude.metrics",
     "imunav.attitude.plot",
