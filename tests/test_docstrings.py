@@ -42,7 +42,6 @@ NOT_YET_DONE = {
     "imunav.attitude.alignment",
     "imunav.attitude.benchmark",
     "imunav.attitude.gravity_kf",
-    "imunav.attitude.madgwick",
     "imunav.attitude.mekf",
     "imunav.attitude.metrics",
     "imunav.attitude.plot",
@@ -99,7 +98,6 @@ NOT_YET_DONE = {
 NOTES_NOT_YET_DONE = {
     "imunav.airdata.filter",
     "imunav.attitude.gravity_kf",
-    "imunav.attitude.madgwick",
     "imunav.attitude.scenario",
     "imunav.batch",
     "imunav.filters.faults",
