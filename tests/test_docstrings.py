@@ -42,7 +42,6 @@ NOT_YET_DONE = {
     "imunav.attitude.alignment",
     "imunav.attitude.benchmark",
     "imunav.attitude.gravity_kf",
-    "imunav.attitude.mekf",
     "imunav.attitude.metrics",
     "imunav.attitude.plot",
     "imunav.attitude.result",
