@@ -45,7 +45,6 @@ NOT_YET_DONE = {
     "imunav.attitude.plot",
     "imunav.attitude.result",
     "imunav.attitude.scenario",
-    "imunav.attitude.ukf",
     "imunav.batch",
     "imunav.filters.consistency",
     "imunav.filters.ekf",
