@@ -43,7 +43,6 @@ NOT_YET_DONE = {
     "imunav.attitude.gravity_kf",
     "imunav.attitude.metrics",
     "imunav.attitude.plot",
-    "imunav.attitude.result",
     "imunav.attitude.scenario",
     "imunav.batch",
     "imunav.filters.consistency",
