@@ -39,7 +39,6 @@ import imunav  # noqa: E402
 NOT_YET_DONE = {
     "imunav.airdata.filter",
     "imunav.attitude.benchmark",
-    "imunav.attitude.gravity_kf",
     "imunav.attitude.metrics",
     "imunav.attitude.plot",
     "imunav.attitude.scenario",
@@ -91,7 +90,6 @@ NOT_YET_DONE = {
 # Modules whose docstrings still cite the project's private notes instead of the published source.
 NOTES_NOT_YET_DONE = {
     "imunav.airdata.filter",
-    "imunav.attitude.gravity_kf",
     "imunav.attitude.scenario",
     "imunav.batch",
     "imunav.filters.faults",
