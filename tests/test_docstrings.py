@@ -39,7 +39,6 @@ import imunav  # noqa: E402
 NOT_YET_DONE = {
     "imunav.airdata.filter",
     "imunav.attitude.benchmark",
-    "imunav.attitude.plot",
     "imunav.attitude.scenario",
     "imunav.batch",
     "imunav.filters.consistency",
