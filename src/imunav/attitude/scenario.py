@@ -1,14 +1,15 @@
 """The Candan & Söken simulation scenario and its seeded Monte Carlo.
 
+S. Candan, H. E. Söken, paper UHUK-2020-173, Ulusal Havacılık ve Uzay Konferansı, 2020 ("the paper").
 Vehicle moving north on a straight road, no rotation (true roll = pitch =
-yaw = 0), 245 s at 100 Hz, piecewise-constant north acceleration (digest
-§6.1 default profile: +1 m/s² 30-40 s, +2 m/s² 100-110 s, −3 m/s² 170-180 s).
-Sensors (digest §6.2): gyro bias 50 °/h on each axis, accelerometer noise
+yaw = 0), 245 s at 100 Hz, piecewise-constant north acceleration (the paper shows its profile only in a
+figure; default: +1 m/s² 30-40 s, +2 m/s² 100-110 s, −3 m/s² 170-180 s).
+Sensors (the paper's values): gyro bias 50 °/h on each axis, accelerometer noise
 45 µg/√Hz, accelerometer bias 30 mg *neglected* (as in the paper), Earth rate
 off.  Noise densities become per-sample standard deviations with σ = N √f_s
-(digest §6.3).
+(IEEE Std 952-1997, Annex C).
 
-**Gyro-noise unit reading** (digest §11.2): the paper prints "0.005 deg/√h".
+**Gyro-noise unit reading**: the paper prints "0.005 deg/√h".
 Read literally (``gyro_noise_unit="deg/sqrt(h)"``, reading (i)), it is
 navigation-grade ARW (σ = 1.45e-5 rad/s per sample) and a filter with that
 Σ_g cannot absorb the 50 °/h bias (RMSE ≈ 0.4°).  Read as the usual MEMS
@@ -42,6 +43,34 @@ PAPER_TABLE2 = {"proposed": (0.027, 0.028), "javed": (0.04, 0.3), "lee": (1.0, 0
 
 @dataclass(frozen=True)
 class PaperScenario:
+    """The paper's scenario (module docstring).
+
+    Attributes
+    ----------
+    fs : float
+        Sample rate, Hz.
+    duration : float
+        Length, s.
+    segments : tuple of (float, float, float)
+        ``(t_start, t_stop, acceleration)`` of the north-acceleration pulses, s, s, m/s².
+    g : float
+        Gravity magnitude, m/s².
+    gyro_bias_dph : tuple of float
+        Gyro bias per axis, °/h.
+    accel_noise_ug_rthz : float
+        Accelerometer noise density, µg/√Hz.
+    gyro_noise : float
+        Gyro noise in ``gyro_noise_unit``.
+    gyro_noise_unit : {"deg/sqrt(h)", "deg/s/sqrt(Hz)"}
+        Reading of the paper's gyro-noise unit (module docstring).
+    accel_bias_mg : float
+        Accelerometer bias, mg (30 mg in the paper, neglected there).
+
+    Raises
+    ------
+    ConfigError
+        If ``gyro_noise_unit`` is unknown, or ``fs`` or ``duration`` is not positive.
+    """
     fs: float = 100.0
     duration: float = 245.0
     # (t_start, t_end, north acceleration m/s²)
@@ -73,12 +102,38 @@ class PaperScenario:
         return self.accel_noise_ug_rthz * 1e-6 * 9.80665 * np.sqrt(self.fs)
 
     def filter_params(self, **kw: Any) -> GravityKfParams:
-        """Filter-side parameters matching the truth (overridable)."""
+        """Filter-side parameters matching the truth (overridable).
+
+        Parameters
+        ----------
+        **kw
+            :class:`~imunav.attitude.gravity_kf.GravityKfParams` fields to override.
+
+        Returns
+        -------
+        GravityKfParams
+            ``sigma_g``, ``sigma_a`` per sample and ``g`` of the scenario, with the overrides.
+        """
         return replace(GravityKfParams(sigma_g=self.sigma_gyro, sigma_a=self.sigma_accel, g=self.g), **kw)
 
 
 def simulate(scn: PaperScenario, rng: np.random.Generator | int | None = None) -> tuple[ImuData, NDArray]:
-    """Specific-force IMU data and the true (roll, pitch, yaw) (all zero)."""
+    """Specific-force IMU data and the true (roll, pitch, yaw) (all zero).
+
+    Parameters
+    ----------
+    scn : PaperScenario
+        The scenario.
+    rng : numpy.random.Generator or int, optional
+        Random generator or seed.
+
+    Returns
+    -------
+    data : ImuData
+        Gyro (rad/s) and specific force (m/s²), body FRD.
+    truth : numpy.ndarray, shape (N, 3)
+        True roll, pitch, yaw, rad.
+    """
     r = np.random.default_rng(rng)
     n = int(round(scn.duration * scn.fs))
     t = np.arange(n) / scn.fs
@@ -94,13 +149,31 @@ def simulate(scn: PaperScenario, rng: np.random.Generator | int | None = None) -
 
 @dataclass(frozen=True)
 class MonteCarloResult:
-    """RMSE [deg] per run: ``rmse[filter]`` is (n_runs, 2) = (pitch, roll)."""
+    """RMSE per run of each filter.
+
+    Attributes
+    ----------
+    rmse : dict of str to numpy.ndarray
+        ``rmse[filter]`` of shape (n_runs, 2): (pitch, roll) RMSE, degrees.
+    scenario : PaperScenario
+        The scenario.
+    params : dict
+        Each filter's parameters.
+    """
 
     rmse: dict[str, NDArray[np.float64]]
     scenario: PaperScenario
     params: dict[str, dict[str, Any]] = field(default_factory=dict)
 
     def table(self) -> dict[str, dict[str, float]]:
+        """Mean, standard deviation and 95th percentile of each RMSE (the paper's Table 2 reports the means).
+
+        Returns
+        -------
+        dict of str to dict
+            Per filter: ``pitch_mean``, ``pitch_std``, ``pitch_p95``, ``roll_mean``, ``roll_std``, ``roll_p95``,
+            degrees.
+        """
         out = {}
         for k, v in self.rmse.items():
             out[k] = {"pitch_mean": float(v[:, 0].mean()), "pitch_std": float(v[:, 0].std()),
@@ -109,13 +182,31 @@ class MonteCarloResult:
         return out
 
     def to_dict(self) -> dict[str, Any]:
+        """JSON-ready dictionary.
+
+        Returns
+        -------
+        dict
+            ``table``, ``paper_table2`` (the paper's values), ``rmse``, ``params`` and ``scenario``.
+        """
         return {"table": self.table(), "paper_table2": {k: {"pitch": v[0], "roll": v[1]} for k, v in PAPER_TABLE2.items()},
                 "rmse": {k: v.tolist() for k, v in self.rmse.items()}, "params": self.params,
                 "scenario": {k: getattr(self.scenario, k) for k in self.scenario.__dataclass_fields__}}
 
 
 def default_filters(scn: PaperScenario) -> dict[str, GravityKF]:
-    """Lee (c_a = 0.1), Javed-like (c_a = 0.1) and the proposed filter (mode B)."""
+    """Lee (c_a = 0.1), Javed-like (c_a = 0.1) and the proposed filter (mode B).
+
+    Parameters
+    ----------
+    scn : PaperScenario
+        The scenario (sets the filters' noise parameters).
+
+    Returns
+    -------
+    dict of str to GravityKF
+        ``"lee"``, ``"javed"``, ``"proposed"``.
+    """
     return {
         "lee": GravityKF("lee", scn.filter_params(c_a=0.1)),
         "javed": GravityKF("javed", scn.filter_params(c_a=0.1)),
@@ -138,7 +229,30 @@ def run_montecarlo(scn: PaperScenario | None = None, n_runs: int = 100, rng: int
                    progress: Callable[[int, int], None] | None = None) -> MonteCarloResult:
     """Seeded Monte Carlo: run ``i`` uses noise seed ``SeedSequence(rng).spawn`` #i.
 
-    ``progress(done, total)`` is called after each run.
+    Parameters
+    ----------
+    scn : PaperScenario, optional
+        The scenario (default :class:`PaperScenario` ()).
+    n_runs : int
+        Number of runs, >= 1.
+    rng : int or None
+        Seed of the runs.
+    filters : dict of str to GravityKF, optional
+        Filters to run (default :func:`default_filters`).
+    workers : int
+        Processes.
+    progress : callable, optional
+        Called as ``progress(done, total)`` after each run.
+
+    Returns
+    -------
+    MonteCarloResult
+        Pitch and roll RMSE of every filter and run, degrees.
+
+    Raises
+    ------
+    ConfigError
+        If ``n_runs < 1``.
     """
     scn = scn or PaperScenario()
     if n_runs < 1:
