@@ -50,7 +50,6 @@ NOT_YET_DONE = {
     "imunav.ins.plot",
     "imunav.ins.strapdown",
     "imunav.ins.zupt",
-    "imunav.io.core",
     "imunav.io.csv",
     "imunav.io.datasets",
     "imunav.io.foot",
