@@ -51,7 +51,6 @@ NOT_YET_DONE = {
     "imunav.ins.strapdown",
     "imunav.ins.zupt",
     "imunav.io.csv",
-    "imunav.io.datasets",
     "imunav.io.foot",
     "imunav.io.hdf5",
     "imunav.io.layouts",
