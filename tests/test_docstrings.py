@@ -52,7 +52,6 @@ NOT_YET_DONE = {
     "imunav.ins.zupt",
     "imunav.io.csv",
     "imunav.io.foot",
-    "imunav.io.hdf5",
     "imunav.io.layouts",
     "imunav.io.logs",
     "imunav.io.mat",
