@@ -98,8 +98,6 @@ def read_hdf5(
         If the file is missing, unreadable, or lacks a required group (the message lists what was found).
     NonFiniteError, TimeOrderError, ShapeError, UnitError
         From the validation of the values.
-    MissingDependencyError
-        If h5py is not installed.
     """
     source = check_nonempty(path)
     with wrap_read_errors(source, "HDF5"):
