@@ -51,7 +51,6 @@ NOT_YET_DONE = {
     "imunav.ins.strapdown",
     "imunav.ins.zupt",
     "imunav.io.csv",
-    "imunav.io.layouts",
     "imunav.io.logs",
     "imunav.io.mat",
     "imunav.io.npz",

@@ -68,7 +68,25 @@ def _header(path: str | os.PathLike[str]) -> list[str]:
 
 
 def layout_options(path: str | os.PathLike[str], layout: str) -> dict[str, Any]:
-    """Reader options of ``layout`` for the file at ``path`` (optional columns only when its header has them)."""
+    """Reader options of ``layout`` for the file at ``path`` (optional columns only when its header has them).
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The CSV file (its header is read).
+    layout : str
+        One of :data:`LAYOUTS`.
+
+    Returns
+    -------
+    dict
+        ``columns``, ``units`` and further :func:`imunav.io.csv.read_csv` options.
+
+    Raises
+    ------
+    InvalidInputError
+        If the layout is unknown.
+    """
     key = str(layout).lower().replace("_", "-")
     if key not in LAYOUTS or key == "xio":
         raise InvalidInputError(f"unknown CSV layout {layout!r}; choose one of {sorted(LAYOUTS)}")
