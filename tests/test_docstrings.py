@@ -142,8 +142,8 @@ def _signature_params(obj) -> list[str]:
         return []
     out = []
     for i, p in enumerate(sig.parameters.values()):
-        if i == 0 and p.name in ("self", "cls"):
-            continue
+        if (i == 0 and p.name in ("self", "cls")) or p.name.startswith("_"):
+            continue  # the instance, or a private keyword (not part of the public API)
         if p.kind is p.VAR_POSITIONAL:
             out.append("*" + p.name)
         elif p.kind is p.VAR_KEYWORD:
