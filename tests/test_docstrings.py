@@ -52,7 +52,6 @@ NOT_YET_DONE = {
     "imunav.ins.zupt",
     "imunav.io.csv",
     "imunav.io.logs",
-    "imunav.io.mat",
     "imunav.io.npz",
     "imunav.io.parquet",
     "imunav.io.px4params",
