@@ -52,7 +52,6 @@ NOT_YET_DONE = {
     "imunav.ins.zupt",
     "imunav.io.csv",
     "imunav.io.logs",
-    "imunav.io.parquet",
     "imunav.io.px4params",
     "imunav.io.rosbag",
     "imunav.io.ulog",
