@@ -119,7 +119,25 @@ def _span_ns(reader: Any, conns: list[Any], count: int) -> tuple[int, int] | Non
 
 
 def list_topics(path: str | os.PathLike[str]) -> list[TopicInfo]:
-    """Topics of a bag with type, count (from the index), duration and rate (see :func:`imunav.io.logs.list_topics`)."""
+    """Topics of a bag with type, count (from the index), duration and rate (see :func:`imunav.io.logs.list_topics`).
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        ROS 1 ``.bag``, ROS 2 folder, ``.db3`` or ``.mcap``.
+
+    Returns
+    -------
+    list of TopicInfo
+        Sorted by topic.
+
+    Raises
+    ------
+    MissingDependencyError
+        If ``rosbags`` is not installed (``pip install 'imunav[ros]'``).
+    FileFormatError
+        If the bag cannot be opened.
+    """
     out = []
     with _Bag(path) as reader:
         for name, info in sorted(reader.topics.items()):
@@ -315,7 +333,27 @@ def read_topic(path: str | os.PathLike[str], topic: str, *, instance: int | None
 
 
 def read_imu_topic(path: str | os.PathLike[str], topic: str | None, *, instance: int | None = None) -> TopicData:
-    """The IMU topic ``topic`` (or the only ``sensor_msgs/Imu`` topic); errors list the candidates."""
+    """The IMU topic ``topic`` (or the only ``sensor_msgs/Imu`` topic); errors list the candidates.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The bag.
+    topic : str or None
+        The ``sensor_msgs/Imu`` topic; None when the bag has exactly one.
+    instance : None
+        Must be None (ROS topics have no instances).
+
+    Returns
+    -------
+    TopicData
+        Gyro (rad/s) and specific force (m/s²) in body FRD, ``t`` in s since ``meta["t0_ns"]``.
+
+    Raises
+    ------
+    InvalidInputError
+        If the topic is not an IMU topic, or there are none or several and none is chosen.
+    """
     d = read_topic(path, topic, instance=instance, _want=("imu",))
     if d.kind != "imu":
         raise InvalidInputError(f"{os.fspath(path)}: topic {d.topic!r} is {d.meta['msgtype']}, not sensor_msgs/Imu; "
@@ -350,6 +388,7 @@ def write_bag(path: str | os.PathLike[str], topics: Any, *, storage: str = "mcap
         ``imu``, ``mag`` or ``temperature``.
     storage : ``"ros1"``, ``"sqlite3"`` or ``"mcap"``.
     frame_id : ``header.frame_id`` of every message.
+    mag_suffix : suffix of the magnetometer topic written beside each ImuData's IMU topic.
 
     Returns
     -------
