@@ -51,7 +51,6 @@ NOT_YET_DONE = {
     "imunav.ins.strapdown",
     "imunav.ins.zupt",
     "imunav.io.csv",
-    "imunav.io.ulog",
     "imunav.lab",
     "imunav.labsteps.airdata",
     "imunav.labsteps.attitude",

@@ -69,7 +69,20 @@ def _load(path: str | os.PathLike[str], names: list[str] | None) -> Any:
 
 
 def kind_of(name: str, fields: set[str]) -> str | None:
-    """What imunav reads from a ULog topic with these fields (None: nothing)."""
+    """What imunav reads from a ULog topic with these fields (None: nothing).
+
+    Parameters
+    ----------
+    name : str
+        Topic name (``sensor_combined``, ``sensor_mag``, ...).
+    fields : set of str
+        Its field names.
+
+    Returns
+    -------
+    str or None
+        ``imu``, ``mag``, ``gnss``, ``pressure``, ``temperature``, ``attitude`` ..., or None.
+    """
     if name in ("sensor_combined", "vehicle_imu"):
         return "imu"
     if name == "sensor_gyro":
@@ -90,7 +103,23 @@ def kind_of(name: str, fields: set[str]) -> str | None:
 
 
 def list_topics(path: str | os.PathLike[str]) -> list[TopicInfo]:
-    """Topic instances of a ULog with count, duration and rate (see :func:`imunav.io.logs.list_topics`)."""
+    """Topic instances of a ULog with count, duration and rate (see :func:`imunav.io.logs.list_topics`).
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The ``.ulg`` file.
+
+    Returns
+    -------
+    list of TopicInfo
+        Sorted by topic and instance.
+
+    Raises
+    ------
+    FileFormatError
+        If the file cannot be parsed as a ULog.
+    """
     ulog = _load(path, None)
     out = []
     for d in ulog.data_list:
@@ -254,7 +283,29 @@ def read_topic(path: str | os.PathLike[str], topic: str, *, instance: int | None
 
 
 def read_imu_topic(path: str | os.PathLike[str], topic: str | None, *, instance: int | None = None) -> TopicData:
-    """The IMU of a ULog: ``sensor_combined`` by default, else ``vehicle_imu`` / a gyro + accel instance pair."""
+    """The IMU of a ULog: ``sensor_combined`` by default, else ``vehicle_imu`` / a gyro + accel instance pair.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The ``.ulg`` file.
+    topic : str or None
+        IMU topic (``sensor_combined``, ``vehicle_imu``, ``sensor_gyro`` / ``sensor_accel``); None: the default.
+    instance : int, optional
+        ``multi_id`` of the topic.
+
+    Returns
+    -------
+    TopicData
+        Gyro (rad/s) and specific force (m/s²) in body FRD, ``t`` in s since ``meta["t0_ns"]``.
+
+    Raises
+    ------
+    InvalidInputError
+        If the topic is not an IMU topic, or several candidates exist and none is chosen.
+    FileFormatError
+        If a gyro / accel pair cannot be matched in time.
+    """
     source = os.fspath(path)
     if topic is None:
         topic = "sensor_combined"
