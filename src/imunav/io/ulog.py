@@ -304,7 +304,7 @@ def read_imu_topic(path: str | os.PathLike[str], topic: str | None, *, instance:
     InvalidInputError
         If the topic is not an IMU topic, or several candidates exist and none is chosen.
     FileFormatError
-        If a gyro / accel pair cannot be matched in time.
+        If the log has no IMU topic at all, or a gyro / accel pair cannot be matched in time.
     """
     source = os.fspath(path)
     if topic is None:
