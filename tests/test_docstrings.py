@@ -65,7 +65,6 @@ NOT_YET_DONE = {
     "imunav.report.catalog",
     "imunav.report.html",
     "imunav.report.spec",
-    "imunav.runfolder",
     "imunav.sim.error_model",
     "imunav.timeseries",
 }
