@@ -47,7 +47,7 @@ class PsdResult:
     f : numpy.ndarray, shape (F,)
         Frequencies, Hz (DC dropped).
     psd : numpy.ndarray, shape (F,) or (F, C)
-        One-sided density S1(f) of each channel, ``units``^2/Hz, like the input.
+        One-sided density S1(f) of each channel, (unit of ``units``)²/Hz, like the input.
     counts : numpy.ndarray, shape (F,)
         Number of raw periodogram bins (times Welch segments) averaged into each point, which sets its
         relative variance 1/count.
@@ -134,7 +134,7 @@ def psd(x: ArrayLike, fs: float, method: Literal["periodogram", "welch"] = "peri
     Returns
     -------
     PsdResult
-        The one-sided density, ``units``^2/Hz.
+        The one-sided density, (unit of ``units``)²/Hz.
 
     Raises
     ------
