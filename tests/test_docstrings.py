@@ -64,7 +64,6 @@ NOT_YET_DONE = {
     "imunav.montecarlo",
     "imunav.report.catalog",
     "imunav.report.html",
-    "imunav.report.spec",
     "imunav.sim.error_model",
     "imunav.timeseries",
 }
