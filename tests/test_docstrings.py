@@ -62,7 +62,6 @@ NOT_YET_DONE = {
     "imunav.labsteps.temperature",
     "imunav.learn.lstm",
     "imunav.montecarlo",
-    "imunav.report.html",
     "imunav.sim.error_model",
     "imunav.timeseries",
 }
