@@ -33,48 +33,34 @@ docscrape = pytest.importorskip("numpydoc.docscrape")
 
 import imunav  # noqa: E402
 
-# Modules not yet brought to numpydoc (issue 14, deliverable 5): their sections are not checked yet.  Several
-# are being split or moved by the concurrent restructuring (layers, vocab, core), so their docstrings are
-# written after the move.  Shrink these lists as modules are done; the aim is two empty sets.
+# Modules not yet brought to numpydoc (issue 14, deliverable 5): their sections are not checked yet.  They
+# are the ones the concurrent restructuring (branches layers, vocab, core) splits or moves, so their
+# docstrings are written after the move.  "pkg.*" stands for every module of a package (moved code lands in
+# new modules there).  Shrink these sets as modules are done; the aim is two empty sets.
 NOT_YET_DONE = {
-    "imunav.airdata.filter",
+    "imunav.airdata.filter",  # the wind filters, rebuilt on the estimation core
     "imunav.batch",
-    "imunav.filters.consistency",
-    "imunav.filters.ekf",
-    "imunav.filters.faults",
-    "imunav.filters.kalman",
-    "imunav.filters.robust",
-    "imunav.filters.ukf",
-    "imunav.ins.detectors",
-    "imunav.ins.metrics",
-    "imunav.ins.plot",
-    "imunav.ins.strapdown",
-    "imunav.ins.zupt",
+    "imunav.filters.*",
+    "imunav.ins.*",
     "imunav.io.csv",
     "imunav.lab",
-    "imunav.labsteps.airdata",
-    "imunav.labsteps.attitude",
-    "imunav.labsteps.calibration",
-    "imunav.labsteps.compensation",
-    "imunav.labsteps.noise",
-    "imunav.labsteps.recordings",
-    "imunav.labsteps.simulate_tests",
-    "imunav.labsteps.temperature",
-    "imunav.learn.lstm",
+    "imunav.labsteps.*",
+    "imunav.learn.*",
     "imunav.montecarlo",
     "imunav.sim.error_model",
     "imunav.timeseries",
+    # modules the layers branch creates from code of the modules above
+    "imunav.labconfig",
+    "imunav.report.lab",
+    "imunav.sim.streams",
 }
 
-# Modules whose docstrings still cite the project's private notes instead of the published source.
+# Modules whose docstrings still cite the project's private notes instead of the published source (same form).
 NOTES_NOT_YET_DONE = {
     "imunav.airdata.filter",
     "imunav.batch",
     "imunav.filters.faults",
-    "imunav.labsteps.calibration",
-    "imunav.labsteps.compensation",
-    "imunav.labsteps.simulate_tests",
-    "imunav.labsteps.temperature",
+    "imunav.labsteps.*",
     "imunav.sim.error_model",
 }
 
@@ -85,6 +71,10 @@ SHARED_DATA_LOOKUP = {"imunav.io.datasets", "imunav.labsteps.recordings"}
 # ``../shared``, ``specs/``, "digest", and the file names of the project's digests of its sources
 PRIVATE_NOTES = re.compile(r"\.\./shared|\bspecs/|\bdigest\b|references\.md|ahrs-sensor-errors|airdata-doppler-wind"
                            r"|attitude-kf-external|imu-error-calibration|zupt-lstm-pedestrian", re.IGNORECASE)
+
+
+def _listed(modname: str, names: set[str]) -> bool:
+    return modname in names or any(n.endswith(".*") and modname.startswith(n[:-1]) for n in names)
 
 
 def _public_modules() -> list[str]:
@@ -210,15 +200,15 @@ def _all_problems(include_not_done: bool = False) -> Iterator[str]:
     for modname in _public_modules():
         mod = importlib.import_module(modname)
         doc = mod.__doc__ or ""
-        if PRIVATE_NOTES.search(doc) and modname not in SHARED_DATA_LOOKUP | NOTES_NOT_YET_DONE:
+        if PRIVATE_NOTES.search(doc) and modname not in SHARED_DATA_LOOKUP and not _listed(modname, NOTES_NOT_YET_DONE):
             yield f"{modname} (module docstring): refers to the project's private notes; cite the published source"
         for qualname, obj in _public_objects(mod):
             if id(obj) in seen:
                 continue
             seen.add(id(obj))
             owner = obj.__module__
-            yield from docstring_problems(qualname, obj, include_not_done or owner not in NOT_YET_DONE,
-                                          include_not_done or owner not in NOTES_NOT_YET_DONE)
+            yield from docstring_problems(qualname, obj, include_not_done or not _listed(owner, NOT_YET_DONE),
+                                          include_not_done or not _listed(owner, NOTES_NOT_YET_DONE))
 
 
 # ---------------------------------------------------------------------------------------------------------
