@@ -56,13 +56,7 @@ NOT_YET_DONE = {
 }
 
 # Modules whose docstrings still cite the project's private notes instead of the published source (same form).
-NOTES_NOT_YET_DONE = {
-    "imunav.airdata.filter",
-    "imunav.batch",
-    "imunav.filters.faults",
-    "imunav.labsteps.*",
-    "imunav.sim.error_model",
-}
+NOTES_NOT_YET_DONE: set[str] = set()
 
 # The two modules that locate the shared data folder document where they look: ``../shared/data`` is their
 # behaviour there, not a reference.
