@@ -284,6 +284,11 @@ def cv_grid_search(name: str, grid: dict[str, list[Any]], trials: Iterable[str |
         ``CvResult.oof`` per trial total RMSE out of fold, ``in_sample`` that of
         the overall best set; ``fold_choice`` / ``in_sample_choice`` are
         parameter dicts.  ``results`` as :func:`grid_search` (best first).
+
+    Raises
+    ------
+    ConfigError
+        If ``results`` do not score the same trials in the same order, or the grid is empty.
     """
     tl = [str(t) for t in trials]
     res = results if results is not None else grid_search(name, grid, tl, workers=workers, progress=progress)
