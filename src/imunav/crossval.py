@@ -243,6 +243,15 @@ def select_by_cv(scores: ArrayLike, groups: Sequence[Hashable], *, items: Sequen
         score over the items outside group g (ties: the first); ``oof[i]`` is
         item i's score under its fold's choice; ``in_sample_choice`` is the
         candidate with the lowest mean over all items, the one to ship.
+
+    Raises
+    ------
+    ShapeError
+        If ``scores`` is not (n_candidates, n_items) with one column per group entry.
+    NonFiniteError
+        If a score is NaN or infinite (every candidate must score every item).
+    InsufficientDataError
+        With fewer than two groups.
     """
     S = np.asarray(scores, dtype=float)
     if S.ndim == 1:
