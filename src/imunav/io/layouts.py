@@ -119,6 +119,12 @@ def read_layout(path: str | os.PathLike[str], layout: str, *, meta: dict[str, An
     Returns
     -------
     ImuData
+
+    Raises
+    ------
+    InvalidInputError
+        If the layout is unknown, or ``options`` set what the layout fixes (``columns``, ``units``; any
+        option for ``xio``).
     """
     from imunav.io.csv import read_csv
 
