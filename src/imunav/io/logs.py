@@ -551,6 +551,16 @@ def read_log_imu(path: str | os.PathLike[str], *, topic: str | None = None, inst
     -------
     ImuData
         SI, body FRD, magnetometer in µT, ``t`` in s since ``meta["t0_ns"]``.
+
+    Raises
+    ------
+    InvalidInputError
+        If the topic is ambiguous or not an IMU topic, or ``mag_topic`` / ``temp_topic`` lack that data or
+        duplicate what the IMU topic carries.
+    FileFormatError
+        If the file is not a bag or a ULog, or a topic is empty or does not overlap the IMU in time.
+    MissingDependencyError
+        If ``rosbags`` / ``pyulog`` is not installed.
     """
     mod, _ = _module(path, f"reading {os.fspath(path)}")
     source = os.fspath(path)
