@@ -307,6 +307,13 @@ def read_topic(path: str | os.PathLike[str], topic: str, *, instance: int | None
     Returns
     -------
     TopicData
+
+    Raises
+    ------
+    InvalidInputError
+        If ``instance`` is given, the topic is absent, or its message type is not one imunav reads.
+    FileFormatError
+        If the topic is empty, mixes frame ids, or a message cannot be decoded.
     """
     source = os.fspath(path)
     if instance is not None:
@@ -393,6 +400,12 @@ def write_bag(path: str | os.PathLike[str], topics: Any, *, storage: str = "mcap
     Returns
     -------
     Path of the bag.
+
+    Raises
+    ------
+    InvalidInputError
+        If ``storage`` is unknown, the ROS 2 folder exists, or a topic's data is neither an ImuData nor a
+        TopicData of kind imu, mag or temperature.
 
     Examples
     --------
