@@ -518,6 +518,19 @@ def allan_deviation(
     -------
     AllanResult
 
+    Raises
+    ------
+    InvalidInputError
+        If ``input``, ``nan_policy``, ``kind`` or ``taus`` is not understood, ``fs`` is not positive, ``ci``
+        is outside (0, 1), ``x`` is not numeric, ``t`` is not strictly increasing, or (``nan_policy="raise"``)
+        the time stamps have a gap.
+    ShapeError
+        If ``x`` is not (N,) / (N, C) or looks transposed, or ``t`` / ``channels`` do not match it.
+    NonFiniteError
+        If ``x`` has NaN or infinite values and ``nan_policy="raise"``.
+    InsufficientDataError
+        If the record is too short for one difference or for the requested taus.
+
     Examples
     --------
     >>> import numpy as np
