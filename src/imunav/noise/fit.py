@@ -576,6 +576,14 @@ def fit_noise(
         Q (rad | m/s), N (unit/sqrt(Hz) = unit*sqrt(s)), B (unit), K
         (unit/s/sqrt(Hz)), R (unit/s), Gauss-Markov sigma (unit) and T (s),
         each with standard error and 95 % interval.
+
+    Raises
+    ------
+    InvalidInputError
+        If ``result`` is not an AllanResult of the Allan variance (``overlapping``, ``standard`` or
+        ``total``), or a term, ``select``, ``gauss_markov`` or ``quantity`` is invalid.
+    InsufficientDataError
+        If a channel has fewer than 2 usable tau points.
     """
     if not isinstance(result, AllanResult):
         raise InvalidInputError("fit_noise needs an AllanResult from imunav.noise.allan_deviation")
@@ -712,6 +720,11 @@ def slope_readout(result: AllanResult, tol: float = 0.1) -> SlopeReadout:
     -------
     SlopeReadout
         The read-outs, SI units, with the tau ranges used.
+
+    Raises
+    ------
+    InsufficientDataError
+        With fewer than 3 tau points.
     """
     adev = result.adev if result.adev.ndim == 2 else result.adev[:, None]
     n_ch = adev.shape[1]
