@@ -183,6 +183,12 @@ def check_static(data: Any, *, window_s: float = 1.0, max_tilt_deg: float = 2.0,
     Returns
     -------
     StaticCheck
+
+    Raises
+    ------
+    InvalidInputError
+        If ``data`` is not an ImuData with at least 3 samples, a window or allowance is not positive, or
+        ``alpha`` is outside (0, 1).
     """
     from imunav.timeseries import ImuData
 
