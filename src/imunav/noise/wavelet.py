@@ -330,6 +330,8 @@ def compare_hybrid(y: ArrayLike, true_bias: ArrayLike, fs: float, T: float, sigm
     ------
     ShapeError
         If ``y`` and ``true_bias`` are not 1-D of the same length.
+    InvalidInputError
+        If ``skip_s`` is longer than the record, or the true bias has zeros (MAPE undefined).
     """
     a = np.asarray(y, dtype=float)
     b = np.asarray(true_bias, dtype=float)
