@@ -124,6 +124,15 @@ def simulate_magnetometer(
     Returns
     -------
     (N, 3) array h_meas = S h_body + b + n (and h_body when asked).
+
+    Raises
+    ------
+    ShapeError
+        If ``q_nb`` is not (N, 4) or ``field_ned`` not (3,) / (N, 3).
+    NonFiniteError
+        If ``q_nb`` or ``field_ned`` is not finite.
+    InvalidInputError
+        If ``model`` is not a MagnetometerModel.
     """
     q = getattr(traj_or_q_nb, "q_nb", traj_or_q_nb)
     q = np.asarray(q, dtype=float)
