@@ -9,6 +9,8 @@ public methods of those classes.  For each one (numpydoc's own parser, :mod:`num
   ``__init__``; a dataclass may name its fields under ``Attributes`` instead, numpydoc's section for them);
 - a function that returns something (a return annotation other than ``None``, or a ``return <value>``)
   has a ``Returns`` (or ``Yields``) section;
+- a function whose own body raises an :mod:`imunav.errors` exception (``raise ShapeError(...)``) names it,
+  or one of its base classes, under ``Raises`` (exceptions raised by the helpers it calls are not traced);
 - no docstring points at the project's private notes (``../shared``, ``specs/`` digests), which a user of
   the installed package does not have: references go to published sources.
 
@@ -32,6 +34,7 @@ import pytest
 docscrape = pytest.importorskip("numpydoc.docscrape")
 
 import imunav  # noqa: E402
+from imunav import errors as _errors  # noqa: E402
 
 # Modules not yet brought to numpydoc (issue 14, deliverable 5): their sections are not checked yet.  They
 # are the ones the concurrent restructuring (branches layers, vocab, core) splits or moves, so their
@@ -135,17 +138,35 @@ def _returns_value(func) -> bool:
         tree = ast.parse(textwrap.dedent(inspect.getsource(func)))
     except (OSError, TypeError, SyntaxError):
         return False
-    fn = tree.body[0]
-
-    def walk(node) -> Iterator[ast.AST]:  # the function's own body, not nested functions / classes
-        for child in ast.iter_child_nodes(node):
-            if isinstance(child, (ast.FunctionDef, ast.AsyncFunctionDef, ast.Lambda, ast.ClassDef)):
-                continue
-            yield child
-            yield from walk(child)
-
     return any(isinstance(n, ast.Return) and n.value is not None and not (
-        isinstance(n.value, ast.Constant) and n.value.value is None) for n in walk(fn))
+        isinstance(n.value, ast.Constant) and n.value.value is None) for n in _own_body(tree.body[0]))
+
+
+_ERRORS = {n: c for n, c in vars(_errors).items() if isinstance(c, type) and issubclass(c, Exception)}
+
+
+def _own_body(fn: ast.AST) -> Iterator[ast.AST]:
+    """The nodes of a function's own body, not of nested functions / classes."""
+    for child in ast.iter_child_nodes(fn):
+        if isinstance(child, (ast.FunctionDef, ast.AsyncFunctionDef, ast.Lambda, ast.ClassDef)):
+            continue
+        yield child
+        yield from _own_body(child)
+
+
+def _raised_errors(func) -> set[str]:
+    """Names of the imunav.errors exceptions that ``func``'s own body raises."""
+    try:
+        fn = ast.parse(textwrap.dedent(inspect.getsource(func))).body[0]
+    except (OSError, TypeError, SyntaxError, IndexError):
+        return set()
+    out = set()
+    for n in _own_body(fn):
+        if isinstance(n, ast.Raise) and isinstance(n.exc, ast.Call):
+            name = getattr(n.exc.func, "id", None) or getattr(n.exc.func, "attr", None)  # X(...) or errors.X(...)
+            if name in _ERRORS:
+                out.add(name)
+    return out
 
 
 def _section_names(entries) -> set[str]:
@@ -186,6 +207,13 @@ def docstring_problems(qualname: str, obj, check_sections: bool = True, check_no
             problems.append(f"{qualname}: Parameters does not name {', '.join(missing)}")
     if inspect.isfunction(obj) and _returns_value(obj) and not (parsed["Returns"] or parsed["Yields"]):
         problems.append(f"{qualname}: returns a value but has no Returns section")
+    if inspect.isfunction(obj):
+        listed = {w.strip("~.`:").split(".")[-1] for e in parsed["Raises"]
+                  for w in f"{e.name} {e.type}".replace(",", " ").split()}
+        missing = sorted(r for r in _raised_errors(obj)
+                         if not any(c.__name__ in listed for c in _ERRORS[r].__mro__))
+        if missing:
+            problems.append(f"{qualname}: raises {', '.join(missing)} but its Raises section does not say so")
     return problems
 
 
@@ -266,6 +294,31 @@ def _private_ref(x: float) -> None:
     """
 
 
+def _raises_undocumented(x: float) -> float:
+    """Square root.
+
+    Parameters
+    ----------
+    x : float
+        Value, >= 0.
+
+    Returns
+    -------
+    float
+        sqrt(x).
+
+    Raises
+    ------
+    InvalidInputError
+        If ``x`` is not finite (a base class of NonFiniteError: enough).
+    """
+    if x != x:
+        raise _errors.NonFiniteError("x is NaN")
+    if x < 0:
+        raise ConvergenceError("no")  # noqa: F821 - never run; only its name is read
+    return x**0.5
+
+
 @dataclasses.dataclass
 class _GoodResult:
     """A result.
@@ -295,6 +348,7 @@ class _BadClass:
     (_missing_one, "does not name y"),
     (_no_returns, "no Returns section"),
     (_private_ref, "private notes"),
+    (_raises_undocumented, "raises ConvergenceError but its Raises section"),
     (_GoodResult, None),
     (_BadClass, "no Parameters section (parameters: gain)"),
 ])
