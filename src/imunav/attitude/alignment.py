@@ -62,9 +62,12 @@ def align(accel: ArrayLike, mag: ArrayLike | None = None, *, yaw: float = 0.0) -
 
     Parameters
     ----------
-    accel : (3,) or (N, 3) specific force [m/s²].
-    mag : (3,) or (N, 3) magnetic field (any unit) or None.
-    yaw : heading [rad] used when ``mag`` is None.
+    accel : array_like
+        (3,) or (N, 3) specific force [m/s²].
+    mag : array_like, optional
+        (3,) or (N, 3) magnetic field (any unit) or None.
+    yaw : float
+        Heading [rad] used when ``mag`` is None.
 
     Returns
     -------
