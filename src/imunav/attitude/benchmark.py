@@ -276,7 +276,8 @@ def cv_grid_search(name: str, grid: dict[str, list[Any]], trials: Iterable[str |
     Parameters
     ----------
     name, grid, trials, workers, progress : as :func:`grid_search`.
-    results : the grid's results when already computed (skips the runs).
+    results : list of BenchResult, optional
+        The grid's results when already computed (skips the runs).
 
     Returns
     -------
