@@ -367,12 +367,17 @@ def fit_ellipsoid(
 
     Parameters
     ----------
-    h : (N, 3) raw magnetometer samples, any unit (kept).
-    field_norm : known field magnitude; ``A`` is scaled so ``|A (h − b)| = field_norm``.
+    h : array_like
+        (N, 3) raw magnetometer samples, any unit (kept).
+    field_norm : float, optional
+        Known field magnitude; ``A`` is scaled so ``|A (h − b)| = field_norm``.
         Default None: ``det A = 1`` and the field norm is estimated.
-    min_coverage : smallest accepted fraction of the sphere covered (60 cells).
-    planar_tol : smallest accepted thickness/span of the raw cloud.
-    refine : refine geometrically and report standard errors (else stderr empty).
+    min_coverage : float
+        Smallest accepted fraction of the sphere covered (60 cells).
+    planar_tol : float
+        Smallest accepted thickness/span of the raw cloud.
+    refine : bool
+        Refine geometrically and report standard errors (else stderr empty).
 
     Returns
     -------
