@@ -193,15 +193,22 @@ class ImuCalibration:
 
     Attributes
     ----------
-    accel_bias, gyro_bias : (3,) raw units.
-    accel_matrix, gyro_matrix : (3, 3) ``T`` (raw units per SI unit).
-    g_sensitivity : (3, 3) ``G`` (raw gyro units per m/s²); diagonal in the theses.
-    thermal : ``{"accel_bias": [TempCurve]*3, ...}``; keys among
+    accel_bias, gyro_bias : numpy.ndarray
+        (3,) raw units.
+    accel_matrix, gyro_matrix : numpy.ndarray
+        (3, 3) ``T`` (raw units per SI unit).
+    g_sensitivity : numpy.ndarray
+        (3, 3) ``G`` (raw gyro units per m/s²); diagonal in the theses.
+    thermal : dict
+        ``{"accel_bias": [TempCurve]*3, ...}``; keys among
         ``accel_bias, accel_scale, gyro_bias, gyro_scale``; a ``*_scale`` curve
         gives the diagonal element ``T_ii(T)``.
-    raw_accel_unit, raw_gyro_unit : units of the raw data.
-    stderr : standard errors with the same keys/shapes as the parameters.
-    meta : free-form provenance (method, session, design condition...).
+    raw_accel_unit, raw_gyro_unit : str
+        Units of the raw data.
+    stderr : dict
+        Standard errors with the same keys/shapes as the parameters.
+    meta : dict
+        Free-form provenance (method, session, design condition...).
     """
 
     accel_bias: Array = field(default_factory=lambda: np.zeros(3))
@@ -365,10 +372,14 @@ class ImuCalibration:
 
         Parameters
         ----------
-        data : ImuData (SI) or ``(accel, gyro)`` arrays (no provenance for arrays).
-        temp_c : temperature, °C (default: ``data.temp``).
-        force : compensate even if the provenance says it was done with this calibration.
-        source : where the calibration comes from (file name), recorded in the provenance.
+        data : ImuData
+            ImuData (SI) or ``(accel, gyro)`` arrays (no provenance for arrays).
+        temp_c : array_like, optional
+            Temperature, °C (default: ``data.temp``).
+        force : bool
+            Compensate even if the provenance says it was done with this calibration.
+        source : str, optional
+            Where the calibration comes from (file name), recorded in the provenance.
 
         Returns
         -------
