@@ -360,34 +360,48 @@ def multipose(
 
     Parameters
     ----------
-    accel, gyro : (N, 3) raw samples (e.g. counts, signed or unsigned).
-    fs : sampling rate, Hz.
-    init_s : initial rest period, s (gyro bias and detector noise level).
-    wait_s : detector window, s (also the nominal static time per pose).
-    gravity : local gravity magnitude, m/s².
-    factors : detector thresholds tried, in units of the rest-period variance.
-    min_static_s : shortest static interval kept (default 0.25 s).
-    min_poses : fewest poses accepted (the accelerometer fit has 9 unknowns).
-    full_scale : (accel, gyro) raw saturation limits, each None, a number
+    accel, gyro : array_like
+        (N, 3) raw samples (e.g. counts, signed or unsigned).
+    fs : float
+        Sampling rate, Hz.
+    init_s : float
+        Initial rest period, s (gyro bias and detector noise level).
+    wait_s : float
+        Detector window, s (also the nominal static time per pose).
+    gravity : float
+        Local gravity magnitude, m/s².
+    factors : tuple
+        Detector thresholds tried, in units of the rest-period variance.
+    min_static_s : float, optional
+        Shortest static interval kept (default 0.25 s).
+    min_poses : int
+        Fewest poses accepted (the accelerometer fit has 9 unknowns).
+    full_scale : tuple
+        (accel, gyro) raw saturation limits, each None, a number
         (``|raw| ≥ v`` is saturated: signed counts, e.g. 32767) or a
         ``(min, max)`` pair (``raw ≤ min`` or ``raw ≥ max``: e.g. (0, 65535) for
         unsigned 16-bit counts); saturated static poses are refused,
         transitions with a saturated gyro are left out of the gyro fit
         (listed in ``info["gyro_pairs_excluded"]``).
-    accel_scale_guess, gyro_scale_guess : optional overrides of the initial
+    accel_scale_guess, gyro_scale_guess : float, optional
+        Optional overrides of the initial
         SI-per-raw scales.  Default: from the data, the accelerometer offsets
         and scales of the ellipsoid through the pose means
         (:func:`accel_initial_guess`), the gyro scale from the turns between
         poses (:func:`gyro_initial_scale`).  The accelerometer offsets always
         come from the ellipsoid fit.
-    raw_accel_unit, raw_gyro_unit : unit names of the raw data, recorded in the
+    raw_accel_unit, raw_gyro_unit : str
+        Unit names of the raw data, recorded in the
         calibration.
-    max_misalignment_stderr : largest acceptable standard error of a
+    max_misalignment_stderr : float
+        Largest acceptable standard error of a
         misalignment angle, rad; a larger one means the poses do not excite it.
-    strict : refuse such a session (DegenerateGeometryError); with False the
+    strict : bool
+        Refuse such a session (DegenerateGeometryError); with False the
         result is returned and the weak parameters are listed in
         ``info["weak_parameters"]``.
-    accel_misalignment : estimate the 3 accelerometer misalignments (False:
+    accel_misalignment : bool
+        Estimate the 3 accelerometer misalignments (False:
         fix them at 0 and fit scales and biases only, for sessions whose
         poses cannot separate them).
 
