@@ -21,14 +21,21 @@ class CalibrationResult:
 
     Attributes
     ----------
-    calibration : the estimated model (its ``stderr`` holds the same numbers).
-    stderr : standard errors, keys ``accel_bias`` (3,), ``accel_matrix`` (3, 3),
+    calibration : ImuCalibration
+        The estimated model (its ``stderr`` holds the same numbers).
+    stderr : dict
+        Standard errors, keys ``accel_bias`` (3,), ``accel_matrix`` (3, 3),
         ``gyro_bias``, ``gyro_matrix``, ``g_sensitivity`` (only those estimated).
-    residuals : per-position / per-step residuals of each fit, raw units.
-    condition : condition number of each design (column-scaled).
-    segments : half-open sample-index intervals used by each fit.
-    method : estimator name.
-    info : further scalars (dof, residual sigma, detector threshold ...).
+    residuals : dict
+        Per-position / per-step residuals of each fit, raw units.
+    condition : dict
+        Condition number of each design (column-scaled).
+    segments : dict
+        Half-open sample-index intervals used by each fit.
+    method : str
+        Estimator name.
+    info : dict
+        Further scalars (dof, residual sigma, detector threshold ...).
     """
 
     calibration: ImuCalibration
