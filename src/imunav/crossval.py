@@ -231,10 +231,13 @@ def select_by_cv(scores: ArrayLike, groups: Sequence[Hashable], *, items: Sequen
 
     Parameters
     ----------
-    scores : (n_candidates, n_items) score of each candidate on each item, lower
+    scores : array_like
+        (n_candidates, n_items) score of each candidate on each item, lower
         is better (e.g. total attitude RMSE, 2-D position error).
-    groups : group of each item (e.g. :func:`pyshoe_session` of each trial).
-    items : item names, for the report.
+    groups : sequence of hashable
+        Group of each item (e.g. :func:`pyshoe_session` of each trial).
+    items : sequence of str, optional
+        Item names, for the report.
 
     Returns
     -------
