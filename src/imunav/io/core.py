@@ -103,13 +103,17 @@ def read_imu(path: str | os.PathLike[str], format: str | None = None, *, layout:
 
     Parameters
     ----------
-    path : file to read (a ROS 2 bag may be its folder).
-    format : ``"csv"``, ``"parquet"``, ``"hdf5"``, ``"mat"`` (v5 and v7.3),
+    path : str or os.PathLike
+        File to read (a ROS 2 bag may be its folder).
+    format : str, optional
+        ``"csv"``, ``"parquet"``, ``"hdf5"``, ``"mat"`` (v5 and v7.3),
         ``"npz"``, ``"rosbag"`` (ROS 1 / ROS 2 sqlite3 / MCAP), ``"ulog"``
         (PX4); from the suffix or content when None.
-    layout : a named CSV layout (``"euroc"``, ``"tum-vi"``, ``"kalibr"``,
+    layout : str, optional
+        A named CSV layout (``"euroc"``, ``"tum-vi"``, ``"kalibr"``,
         ``"px4-csv"``, ``"xio"``; see :mod:`imunav.io.layouts`).
-    **options : reader options, common to all formats: ``columns`` (name
+    **options
+        Reader options, common to all formats: ``columns`` (name
         mapping), ``units`` / ``scales`` / ``offsets`` (per group, for non-SI
         or raw-count content), ``fs`` and ``t0`` (when there is no time
         column), ``nan_policy``, ``mag_unit``, ``meta``; CSV also takes
