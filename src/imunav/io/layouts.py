@@ -110,10 +110,14 @@ def read_layout(path: str | os.PathLike[str], layout: str, *, meta: dict[str, An
 
     Parameters
     ----------
-    path : the CSV file.
-    layout : one of :data:`LAYOUTS`.
-    meta : entries added to the result's ``meta``.
-    **options : further :func:`imunav.io.csv.read_csv` options (``nan_policy``, ``skiprows`` ...); the
+    path : str or os.PathLike
+        The CSV file.
+    layout : str
+        One of :data:`LAYOUTS`.
+    meta : dict, optional
+        Entries added to the result's ``meta``.
+    **options
+        Further :func:`imunav.io.csv.read_csv` options (``nan_policy``, ``skiprows`` ...); the
         layout's ``columns`` and ``units`` cannot be overridden (use plain ``read_imu`` for that).
 
     Returns
