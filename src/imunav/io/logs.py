@@ -215,13 +215,20 @@ class TopicInfo:
 
     Attributes
     ----------
-    topic : topic name (``/imu/data``, ``sensor_accel``).
-    msgtype : message type (``sensor_msgs/msg/Imu``) or, for ULog, the topic name again.
-    count : number of messages.
-    instance : PX4 ``multi_id`` (None for ROS).
-    duration_s : span of the stamps, s (ROS: of the bag's record times when only the index is read).
-    rate_hz : ``(count - 1) / duration_s`` (None for fewer than 2 messages).
-    kind : what imunav reads from it (``imu``, ``mag``, ``gnss``, ``gnss_velocity``, ``pressure``,
+    topic : str
+        Topic name (``/imu/data``, ``sensor_accel``).
+    msgtype : str
+        Message type (``sensor_msgs/msg/Imu``) or, for ULog, the topic name again.
+    count : int
+        Number of messages.
+    instance : int, optional
+        PX4 ``multi_id`` (None for ROS).
+    duration_s : float, optional
+        Span of the stamps, s (ROS: of the bag's record times when only the index is read).
+    rate_hz : float, optional
+        ``(count - 1) / duration_s`` (None for fewer than 2 messages).
+    kind : str, optional
+        What imunav reads from it (``imu``, ``mag``, ``gnss``, ``gnss_velocity``, ``pressure``,
         ``temperature``, ``attitude``) or None when imunav does not read that type.
     """
 
@@ -445,7 +452,8 @@ def list_topics(path: str | os.PathLike[str]) -> list[TopicInfo]:
 
     Parameters
     ----------
-    path : ROS 1 ``.bag``, ROS 2 folder / ``.db3`` / ``.mcap``, or PX4 ``.ulg``.
+    path : str or os.PathLike
+        ROS 1 ``.bag``, ROS 2 folder / ``.db3`` / ``.mcap``, or PX4 ``.ulg``.
 
     Returns
     -------
@@ -460,9 +468,12 @@ def read_topic(path: str | os.PathLike[str], topic: str, *, instance: int | None
 
     Parameters
     ----------
-    path : the bag or log.
-    topic : topic name (ROS ``/imu/data``; PX4 ``sensor_gps``, optionally ``name:instance``).
-    instance : PX4 ``multi_id`` when the topic has several instances.
+    path : str or os.PathLike
+        The bag or log.
+    topic : str
+        Topic name (ROS ``/imu/data``; PX4 ``sensor_gps``, optionally ``name:instance``).
+    instance : int, optional
+        PX4 ``multi_id`` when the topic has several instances.
 
     Returns
     -------
@@ -535,17 +546,23 @@ def read_log_imu(path: str | os.PathLike[str], *, topic: str | None = None, inst
 
     Parameters
     ----------
-    path : the bag or log.
-    topic : the IMU topic (ROS ``sensor_msgs/Imu``; PX4 ``sensor_combined`` (default), ``vehicle_imu``,
+    path : str or os.PathLike
+        The bag or log.
+    topic : str, optional
+        The IMU topic (ROS ``sensor_msgs/Imu``; PX4 ``sensor_combined`` (default), ``vehicle_imu``,
         ``sensor_gyro`` / ``sensor_accel`` (the two of one instance are paired)).  With several
         candidates and none chosen, the error lists them.
-    instance : PX4 ``multi_id`` of ``topic``.
-    mag_topic, temp_topic : a magnetometer (``sensor_msgs/MagneticField``, ``sensor_mag``,
+    instance : int, optional
+        PX4 ``multi_id`` of ``topic``.
+    mag_topic, temp_topic : str, optional
+        A magnetometer (``sensor_msgs/MagneticField``, ``sensor_mag``,
         ``vehicle_magnetometer``) or temperature topic, linearly interpolated onto the IMU stamps;
         IMU samples outside its span are cut (counts in ``meta``).  PX4 ``sensor_combined`` logs that
         carry ``magnetometer_ga`` give the magnetometer without this.
-    nan_policy : ``"raise"``, ``"drop"`` or ``"interpolate"`` (:meth:`ImuData.from_arrays`).
-    meta : entries added to the result's ``meta``.
+    nan_policy : str
+        ``"raise"``, ``"drop"`` or ``"interpolate"`` (:meth:`ImuData.from_arrays`).
+    meta : mapping, optional
+        Entries added to the result's ``meta``.
 
     Returns
     -------
