@@ -300,9 +300,12 @@ def read_topic(path: str | os.PathLike[str], topic: str, *, instance: int | None
 
     Parameters
     ----------
-    path : the bag (file or ROS 2 folder).
-    topic : topic name; with ``None`` (internal use) the single topic of a kind in ``_want``.
-    instance : must be None (ROS topics have no instances).
+    path : str or os.PathLike
+        The bag (file or ROS 2 folder).
+    topic : str
+        Topic name; with ``None`` (internal use) the single topic of a kind in ``_want``.
+    instance : int, optional
+        Must be None (ROS topics have no instances).
 
     Returns
     -------
@@ -389,13 +392,18 @@ def write_bag(path: str | os.PathLike[str], topics: Any, *, storage: str = "mcap
 
     Parameters
     ----------
-    path : ``.bag`` for ``storage="ros1"``; for ROS 2 a folder (``metadata.yaml`` + storage file).
-    topics : mapping topic -> :class:`~imunav.timeseries.ImuData` (an ``Imu`` topic, plus
+    path : str or os.PathLike
+        ``.bag`` for ``storage="ros1"``; for ROS 2 a folder (``metadata.yaml`` + storage file).
+    topics : mapping
+        Mapping topic -> :class:`~imunav.timeseries.ImuData` (an ``Imu`` topic, plus
         ``topic + mag_suffix`` with its magnetometer) or :class:`~imunav.io.logs.TopicData` of kind
         ``imu``, ``mag`` or ``temperature``.
-    storage : ``"ros1"``, ``"sqlite3"`` or ``"mcap"``.
-    frame_id : ``header.frame_id`` of every message.
-    mag_suffix : suffix of the magnetometer topic written beside each ImuData's IMU topic.
+    storage : str
+        ``"ros1"``, ``"sqlite3"`` or ``"mcap"``.
+    frame_id : str
+        ``header.frame_id`` of every message.
+    mag_suffix : str
+        Suffix of the magnetometer topic written beside each ImuData's IMU topic.
 
     Returns
     -------
