@@ -270,9 +270,12 @@ def read_topic(path: str | os.PathLike[str], topic: str, *, instance: int | None
 
     Parameters
     ----------
-    path : the ``.ulg`` file.
-    topic : topic name, optionally ``"name:instance"``.
-    instance : ``multi_id`` when the topic has several instances.
+    path : str or os.PathLike
+        The ``.ulg`` file.
+    topic : str
+        Topic name, optionally ``"name:instance"``.
+    instance : int, optional
+        ``multi_id`` when the topic has several instances.
 
     Returns
     -------
