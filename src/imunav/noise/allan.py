@@ -68,19 +68,29 @@ class AllanResult:
 
     Attributes
     ----------
-    tau : (T,) cluster times, s.
-    m : (T,) cluster sizes in samples (tau = m / fs).
-    adev : (T,) or (T, C) deviation of the requested ``kind`` (same
+    tau : numpy.ndarray
+        (T,) cluster times, s.
+    m : numpy.ndarray
+        (T,) cluster sizes in samples (tau = m / fs).
+    adev : numpy.ndarray
+        (T,) or (T, C) deviation of the requested ``kind`` (same
         dimensionality as the input; unit ``units``, or the phase unit for
         ``kind="time"``).
-    adev_lo, adev_hi : confidence bounds at level ``ci`` (chi-squared, EDF).
-    edf : equivalent degrees of freedom used for the bounds.
-    alpha : rate-PSD noise exponent used for the EDF at each tau (integer).
-    n_terms : (T,) or (T, C) number of squared differences averaged.
-    n_samples : number of rate samples per channel.
-    fs : sample rate, Hz.
+    adev_lo, adev_hi : numpy.ndarray
+        Confidence bounds at level ``ci`` (chi-squared, EDF).
+    edf : numpy.ndarray
+        Equivalent degrees of freedom used for the bounds.
+    alpha : numpy.ndarray
+        Rate-PSD noise exponent used for the EDF at each tau (integer).
+    n_terms : numpy.ndarray
+        (T,) or (T, C) number of squared differences averaged.
+    n_samples : int
+        Number of rate samples per channel.
+    fs : float
+        Sample rate, Hz.
     kind, input, units, channels, ci : as requested.
-    segments : per channel, (S, 2) half-open rate-sample ranges that were used.
+    segments : tuple
+        Per channel, (S, 2) half-open rate-sample ranges that were used.
     """
 
     tau: NDArray[np.float64]
@@ -491,19 +501,21 @@ def allan_deviation(
         be a ``numpy.memmap`` (read in chunks; memory ~ 8 N bytes).
     fs : float
         Sample rate, Hz (tau0 = 1/fs).
-    taus : "octave" | "decade" | "all" | "log" | ("log", n) | array of s
-        Cluster times; see :func:`tau_grid`.
+    taus : str, tuple or array_like
+        ``"octave"``, ``"decade"``, ``"all"``, ``"log"``, ``("log", n)`` or an array of cluster times, s;
+        see :func:`tau_grid`.
     kind : str
         ``"overlapping"`` (default), ``"standard"``, ``"modified"``, ``"time"``,
         ``"hadamard"``, ``"overlapping_hadamard"``, ``"total"`` (aliases
         ``"oadev"``, ``"adev"``, ``"mdev"``, ``"tdev"``, ``"hdev"``, ``"ohdev"``,
         ``"totdev"``).
-    input : "rate" | "increment" | "phase"
+    input : {"rate", "increment", "phase"}
+        What ``x`` holds: rates, per-sample increments, or their integral (phase).
     t : array_like (N,), optional
         Time stamps; gaps (steps > 1.5/fs) split the record into segments
         (``nan_policy="segments"``) or raise.
-    nan_policy : "raise" | "segments"
-        See the module docstring.
+    nan_policy : {"raise", "segments"}
+        What to do with NaN samples and time gaps; see the module docstring.
     ci : float
         Confidence level of ``adev_lo``/``adev_hi`` (default 68.27 %).
     alpha : int, optional
