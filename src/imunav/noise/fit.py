@@ -545,15 +545,15 @@ def fit_noise(
     result : AllanResult
         From :func:`allan_deviation` with kind ``"overlapping"`` (full GLS
         covariance), ``"standard"`` or ``"total"`` (diagonal weights).
-    terms : subset of ("Q", "N", "B", "K", "R")
-        Candidate terms.
+    terms : sequence of str
+        Candidate terms, a subset of ("Q", "N", "B", "K", "R").
     gauss_markov : int
         Number of first-order Gauss-Markov terms to add (correlation times
         are fitted).
-    select : "bic" | "aic" | None
+    select : {"bic", "aic"}, optional
         Automatic term selection over all subsets of the candidates, or keep
         all (non-negative least squares still sets absent terms to 0).
-    quantity : "gyro" | "accel" | None
+    quantity : {"gyro", "accel"}, optional
         Picks SI and display units; inferred from ``result.units``
         ("rad/s" -> gyro, "m/s^2" -> accel) when None.
     tau_range : (lo, hi), optional
