@@ -46,10 +46,14 @@ def add_step(meta: Mapping[str, Any] | None, op: str, parameters: Mapping[str, A
 
     Parameters
     ----------
-    meta : the recording's metadata.
-    op : operation name (``"compensate"``, ``"resample"``, ``"convert_units"``, ...).
-    parameters : the operation's parameters (JSON types).
-    **extra : further fields of the step (e.g. ``calibration={...}``).
+    meta : mapping, optional
+        The recording's metadata.
+    op : str
+        Operation name (``"compensate"``, ``"resample"``, ``"convert_units"``, ...).
+    parameters : mapping, optional
+        The operation's parameters (JSON types).
+    **extra
+        Further fields of the step (e.g. ``calibration={...}``).
 
     Returns
     -------
