@@ -342,12 +342,18 @@ class RunFolder:
 
     Parameters
     ----------
-    folder : the run folder.
-    kind : what runs (``"lab"``, ``"batch-simulate"``, ...), recorded in the manifest.
-    seed : the run's seed (None when it has none).
-    parameters : the run's parameters / configuration (JSON types), recorded in the manifest.
-    overwrite : clear a folder that holds another imunav run (rules in the module docstring) instead of refusing.
-    inputs : input files of the run: a folder holding one of them is never cleared.
+    folder : str or os.PathLike
+        The run folder.
+    kind : str
+        What runs (``"lab"``, ``"batch-simulate"``, ...), recorded in the manifest.
+    seed : int, optional
+        The run's seed (None when it has none).
+    parameters : mapping, optional
+        The run's parameters / configuration (JSON types), recorded in the manifest.
+    overwrite : bool
+        Clear a folder that holds another imunav run (rules in the module docstring) instead of refusing.
+    inputs : iterable of str or os.PathLike
+        Input files of the run: a folder holding one of them is never cleared.
 
     Examples
     --------
