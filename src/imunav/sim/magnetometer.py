@@ -111,7 +111,7 @@ def simulate_magnetometer(
 
     Parameters
     ----------
-    traj_or_q_nb : Trajectory or (N, 4) / (4,) array
+    traj_or_q_nb : Trajectory or array_like, shape (N, 4) or (4,)
         Attitude ``q_nb`` (Hamilton, scalar first, body -> NED), or an object
         with a ``q_nb`` attribute (``imunav.sim.Trajectory``).
     field_ned : (3,) or (N, 3)
