@@ -81,20 +81,29 @@ class Segments:
 
     Attributes
     ----------
-    kind : (K,) ``"static"``, ``"rate"`` (constant rate, possibly 0),
+    kind : numpy.ndarray
+        (K,) ``"static"``, ``"rate"`` (constant rate, possibly 0),
         ``"transition"`` (move between positions / change of rate) or
         ``"rotation"`` (a commanded turn of known angle, Ferraris-style).
-    t_start, t_stop : (K,) segment times, s (``t_stop`` of one = ``t_start`` of the next).
-    i_start, i_stop : (K,) half-open sample index span (samples with
+    t_start, t_stop : numpy.ndarray
+        (K,) segment times, s (``t_stop`` of one = ``t_start`` of the next).
+    i_start, i_stop : numpy.ndarray
+        (K,) half-open sample index span (samples with
         ``t_start <= t < t_stop``; the last segment includes the final sample).
-    q_nb : (K, 4) attitude at the segment start.
-    up_b : (K, 3) unit "up" vector in body axes at the segment start
+    q_nb : numpy.ndarray
+        (K, 4) attitude at the segment start.
+    up_b : numpy.ndarray
+        (K, 3) unit "up" vector in body axes at the segment start
         (``f_b = g · up_b`` at rest).
-    axis_b : (K, 3) body rotation axis (zeros for static segments).
-    rate : (K,) nominal rate about ``axis_b``, rad/s (0 for static, NaN for
+    axis_b : numpy.ndarray
+        (K, 3) body rotation axis (zeros for static segments).
+    rate : numpy.ndarray
+        (K,) nominal rate about ``axis_b``, rad/s (0 for static, NaN for
         transitions / rotations whose rate varies).
-    angle : (K,) total rotation angle over the segment, rad.
-    step : (K,) index of the position (static) or rate step (rate), -1 otherwise.
+    angle : numpy.ndarray
+        (K,) total rotation angle over the segment, rad.
+    step : numpy.ndarray
+        (K,) index of the position (static) or rate step (rate), -1 otherwise.
     """
 
     kind: NDArray[np.str_]
@@ -700,10 +709,14 @@ def multiposition_profile(
 
     Parameters
     ----------
-    orientations : (K, 4) attitudes ``q_nb``.
-    dwell_s : static time per position, s (scalar or (K,)).
-    fs : sample rate, Hz.
-    transition_s : duration of each move, s (> 0).
+    orientations : array_like
+        (K, 4) attitudes ``q_nb``.
+    dwell_s : float or array_like
+        Static time per position, s (scalar or (K,)).
+    fs : float
+        Sample rate, Hz.
+    transition_s : float
+        Duration of each move, s (> 0).
     lat, lon, h : fixed position (rad, rad, m), or None for none.
 
     t0 : float
@@ -851,10 +864,14 @@ def rate_table_profile(
 
     Parameters
     ----------
-    rates : (K,) commanded rates, rad/s (use ``np.deg2rad`` for °/s).
-    axes : (K,) axis indices (0, 1, 2) or (K, 3) body unit vectors.
-    dwell_s : time at each constant rate, s.
-    fs : sample rate, Hz.
+    rates : array_like
+        (K,) commanded rates, rad/s (use ``np.deg2rad`` for °/s).
+    axes : array_like
+        (K,) axis indices (0, 1, 2) or (K, 3) body unit vectors.
+    dwell_s : float
+        Time at each constant rate, s.
+    fs : float
+        Sample rate, Hz.
 
     transition_s : float
         Duration of each rate ramp, s.
