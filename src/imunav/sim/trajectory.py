@@ -69,14 +69,20 @@ class Trajectory:
 
     Parameters
     ----------
-    t : (N,) strictly increasing time, s.
-    q_nb : (N, 4) attitude, body → NED (normalised on construction).
-    vel_ned : (N, 3) NED velocity, m/s, or None (zero).
-    pos_lla : (N, 3) geodetic position (lat rad, lon rad, h m), or None
+    t : numpy.ndarray
+        (N,) strictly increasing time, s.
+    q_nb : numpy.ndarray
+        (N, 4) attitude, body → NED (normalised on construction).
+    vel_ned : numpy.ndarray, optional
+        (N, 3) NED velocity, m/s, or None (zero).
+    pos_lla : numpy.ndarray, optional
+        (N, 3) geodetic position (lat rad, lon rad, h m), or None
         (then :func:`ideal_imu` needs ``lat=`` for Earth rate / normal gravity).
-    omega_nb_b : (N, 3) body rate relative to NED in body axes, rad/s, when
+    omega_nb_b : numpy.ndarray, optional
+        (N, 3) body rate relative to NED in body axes, rad/s, when
         known exactly; None → derived from ``q_nb`` by differentiation.
-    accel_ned : (N, 3) kinematic acceleration ``dv_ned/dt``, m/s², when known
+    accel_ned : numpy.ndarray, optional
+        (N, 3) kinematic acceleration ``dv_ned/dt``, m/s², when known
         exactly; None → derived from ``vel_ned`` (or zero when there is none).
     """
 
@@ -238,12 +244,16 @@ def ideal_imu(
 
     Parameters
     ----------
-    traj : the true motion.
-    earth_rate : add Earth rotation ``C_bn ω_ie^n`` to the gyro and the
+    traj : Trajectory
+        The true motion.
+    earth_rate : bool
+        Add Earth rotation ``C_bn ω_ie^n`` to the gyro and the
         Coriolis term ``2 ω_ie^n × v^n`` to the specific force.
-    transport_rate : add ``C_bn ω_en^n`` to the gyro and ``ω_en^n × v^n`` to
+    transport_rate : bool
+        Add ``C_bn ω_en^n`` to the gyro and ``ω_en^n × v^n`` to
         the specific force (zero when the trajectory has no velocity).
-    gravity : ``"normal"`` (WGS84 normal gravity at the latitude and height,
+    gravity : str or float
+        ``"normal"`` (WGS84 normal gravity at the latitude and height,
         :func:`imunav.earth.normal_gravity`), ``"constant"`` (standard gravity
         9.80665 m/s²) or a number (m/s²), applied as ``g^n = (0, 0, +g)``.
     lat, h : latitude (rad) and height (m) used when the trajectory has no
@@ -432,14 +442,18 @@ def trajectory_from_functions(
 
     Parameters
     ----------
-    attitude : ``f(t) -> (N, 4)`` quaternions ``q_nb`` or ``(N, 3)`` ZYX Euler
+    attitude : callable
+        ``f(t) -> (N, 4)`` quaternions ``q_nb`` or ``(N, 3)`` ZYX Euler
         ``(roll, pitch, yaw)`` in rad, vectorised over ``t``.
-    position_ned : ``f(t) -> (N, 3)`` position in metres in the local NED
+    position_ned : callable, optional
+        ``f(t) -> (N, 3)`` position in metres in the local NED
         frame of ``origin_lla`` (tangent plane at the origin), or None (fixed).
     t, duration_s, fs : sample times, or a duration and a rate (t = k / fs).
-    origin_lla : origin (lat rad, lon rad, h m); needed with ``position_ned``
+    origin_lla : array_like, optional
+        Origin (lat rad, lon rad, h m); needed with ``position_ned``
         for the geodetic track, optional otherwise.
-    step_s : differentiation step ``δ`` for the derivatives.
+    step_s : float
+        Differentiation step ``δ`` for the derivatives.
 
     Notes
     -----
