@@ -275,7 +275,16 @@ def cv_grid_search(name: str, grid: dict[str, list[Any]], trials: Iterable[str |
 
     Parameters
     ----------
-    name, grid, trials, workers, progress : as :func:`grid_search`.
+    name : str
+        Filter name (see :func:`make_filter`).
+    grid : dict of str to list
+        Values of each parameter.
+    trials : iterable of str or pathlib.Path
+        BROAD trial files.
+    workers : int, optional
+        Number of processes (default: all cores).
+    progress : callable, optional
+        Called as ``progress(done, total)``.
     results : list of BenchResult, optional
         The grid's results when already computed (skips the runs).
 
