@@ -381,8 +381,9 @@ def fit_ellipsoid(
 
     Returns
     -------
-    MagCalibration with ``b``, ``A``, ``field_norm``, ``stderr["b"]``, ``stderr["A"]``
-    and ``quality`` (coverage, residual RMS, condition, spread of ``|h_cal|``).
+    MagCalibration
+        ``b``, ``A``, ``field_norm``, ``stderr["b"]``, ``stderr["A"]`` and ``quality`` (coverage, residual
+        RMS, condition, spread of ``|h_cal|``).
 
     Raises
     ------
