@@ -383,7 +383,9 @@ class ImuCalibration:
 
         Returns
         -------
-        ImuData or (accel, gyro)
+        ImuData or tuple of numpy.ndarray
+            The compensated recording (SI: m/s², rad/s), with the step in its provenance; or the
+            compensated ``(accel, gyro)`` arrays.
         """
         if not isinstance(data, tuple):
             self._require_si("apply")
