@@ -407,11 +407,12 @@ def multipose(
 
     Returns
     -------
-    CalibrationResult whose calibration maps raw units to SI; ``info["tedaldi"]``
-    holds the parameters and standard errors in the Tedaldi parameterisation
-    (``a = T_a K_a (ã + b_a)``, ``ω = T_g K_g (ω̃ − b_g)``; for unsigned counts
-    ``b_a`` is near −32768 and ``b_g`` near +32768), ``info["coverage"]`` the
-    coverage figure of the poses kept.
+    CalibrationResult
+        Its calibration maps raw units to SI; ``info["tedaldi"]``
+        holds the parameters and standard errors in the Tedaldi parameterisation
+        (``a = T_a K_a (ã + b_a)``, ``ω = T_g K_g (ω̃ − b_g)``; for unsigned counts
+        ``b_a`` is near −32768 and ``b_g`` near +32768), ``info["coverage"]`` the
+        coverage figure of the poses kept.
 
     Raises
     ------
