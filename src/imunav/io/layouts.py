@@ -123,6 +123,8 @@ def read_layout(path: str | os.PathLike[str], layout: str, *, meta: dict[str, An
     Returns
     -------
     ImuData
+        The recording in SI units; the body frame per layout as in the module docstring's table (the
+        sensor frame as recorded, or FRD for px4-csv and xio).
 
     Raises
     ------
