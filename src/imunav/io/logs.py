@@ -390,6 +390,7 @@ def topic_data(topic: str, kind: str, stamps_ns: Any, values: Mapping[str, np.nd
     Returns
     -------
     TopicData
+        The topic in SI units, body FRD / world NED, ``t`` in s since ``meta["t0_ns"]``.
         Sorted by stamp, ``t`` in s since ``meta["t0_ns"]``.
 
     Raises
@@ -457,7 +458,8 @@ def list_topics(path: str | os.PathLike[str]) -> list[TopicInfo]:
 
     Returns
     -------
-    list of TopicInfo, sorted by topic and instance.
+    list of TopicInfo
+        Sorted by topic and instance.
     """
     mod, _ = _module(path, f"listing the topics of {os.fspath(path)}")
     return mod.list_topics(path)
@@ -478,6 +480,7 @@ def read_topic(path: str | os.PathLike[str], topic: str, *, instance: int | None
     Returns
     -------
     TopicData
+        The topic in SI units, body FRD / world NED, ``t`` in s since ``meta["t0_ns"]``.
     """
     mod, _ = _module(path, f"reading {os.fspath(path)}")
     return mod.read_topic(path, topic, instance=instance)
