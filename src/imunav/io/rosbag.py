@@ -310,6 +310,7 @@ def read_topic(path: str | os.PathLike[str], topic: str, *, instance: int | None
     Returns
     -------
     TopicData
+        The topic in SI units, body FRD / world NED, ``t`` in s since ``meta["t0_ns"]``.
 
     Raises
     ------
@@ -357,6 +358,7 @@ def read_imu_topic(path: str | os.PathLike[str], topic: str | None, *, instance:
     Returns
     -------
     TopicData
+        The topic in SI units, body FRD / world NED, ``t`` in s since ``meta["t0_ns"]``.
         Gyro (rad/s) and specific force (m/s²) in body FRD, ``t`` in s since ``meta["t0_ns"]``.
 
     Raises
@@ -407,7 +409,8 @@ def write_bag(path: str | os.PathLike[str], topics: Any, *, storage: str = "mcap
 
     Returns
     -------
-    Path of the bag.
+    pathlib.Path
+        The bag written.
 
     Raises
     ------
