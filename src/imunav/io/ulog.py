@@ -280,6 +280,7 @@ def read_topic(path: str | os.PathLike[str], topic: str, *, instance: int | None
     Returns
     -------
     TopicData
+        The topic in SI units, body FRD / world NED, ``t`` in s since ``meta["t0_ns"]``.
     """
     ulog, d = _dataset(path, topic, instance)
     return _read(ulog, d, os.fspath(path))
@@ -300,6 +301,7 @@ def read_imu_topic(path: str | os.PathLike[str], topic: str | None, *, instance:
     Returns
     -------
     TopicData
+        The topic in SI units, body FRD / world NED, ``t`` in s since ``meta["t0_ns"]``.
         Gyro (rad/s) and specific force (m/s²) in body FRD, ``t`` in s since ``meta["t0_ns"]``.
 
     Raises
