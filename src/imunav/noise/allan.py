@@ -88,7 +88,16 @@ class AllanResult:
         Number of rate samples per channel.
     fs : float
         Sample rate, Hz.
-    kind, input, units, channels, ci : as requested.
+    kind : str
+        The statistic (see :data:`KINDS`).
+    input : str
+        ``"rate"``, ``"increment"`` or ``"phase"``.
+    units : str
+        Unit of the input samples.
+    channels : tuple of str
+        Channel names.
+    ci : float
+        Confidence level of ``adev_lo`` / ``adev_hi``.
     segments : tuple
         Per channel, (S, 2) half-open rate-sample ranges that were used.
     """
@@ -529,6 +538,7 @@ def allan_deviation(
     Returns
     -------
     AllanResult
+        Deviations, confidence bounds and EDF at each tau (s), in the unit of ``x`` (phase unit for TDEV).
 
     Raises
     ------
