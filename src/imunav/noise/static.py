@@ -84,7 +84,10 @@ class StaticCheck:
     allan_slope : dict
         Per sensor, the largest slope of the Allan deviation between ``τ0`` and ``window_s``
         over the axes (−0.5 for white noise).
-    window_s, n_windows : the windows used (no window test with fewer than 2 windows).
+    window_s : float
+        Window length used, s.
+    n_windows : int
+        Number of windows (no window test with fewer than 2).
     flagged_windows : dict
         Per sensor, start times (s) of the first flagged windows.
     """
@@ -198,6 +201,7 @@ def check_static(data: Any, *, window_s: float = 1.0, max_tilt_deg: float = 2.0,
     Returns
     -------
     StaticCheck
+        The verdict, the reasons and the figures of each test.
 
     Raises
     ------
@@ -281,6 +285,7 @@ def require_static(data: Any, *, force: bool = False, where: str = "the recordin
     Returns
     -------
     StaticCheck
+        The verdict, the reasons and the figures of each test.
         The outcome of the tests.
 
     Raises
