@@ -57,7 +57,8 @@ def add_step(meta: Mapping[str, Any] | None, op: str, parameters: Mapping[str, A
 
     Returns
     -------
-    dict : the new metadata.
+    dict
+        The new metadata.
     """
     from imunav import __version__
     from imunav.io._atomic import jsonable
