@@ -117,13 +117,18 @@ def simulate_magnetometer(
     field_ned : (3,) or (N, 3)
         Earth field in NED (any unit; the output has the same unit).
     model : MagnetometerModel
-    rng : Generator, int seed or None
+        Hard iron, soft iron and noise of the sensor.
+    rng : numpy.random.Generator or int, optional
+        Random generator or seed.
     return_truth : bool
         Also return the true body-frame field h_body (N, 3).
 
     Returns
     -------
-    (N, 3) array h_meas = S h_body + b + n (and h_body when asked).
+    h_meas : numpy.ndarray, shape (N, 3)
+        ``S h_body + b + n``, in the unit of ``field_ned``.
+    h_body : numpy.ndarray, shape (N, 3)
+        The true body-frame field (only with ``return_truth``).
 
     Raises
     ------
