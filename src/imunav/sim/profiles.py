@@ -717,7 +717,12 @@ def multiposition_profile(
         Sample rate, Hz.
     transition_s : float
         Duration of each move, s (> 0).
-    lat, lon, h : fixed position (rad, rad, m), or None for none.
+    lat : float, optional
+        Geodetic latitude of the fixed position, rad (None: no position).
+    lon : float
+        Longitude, rad.
+    h : float
+        Ellipsoidal height, m.
 
     t0 : float
         Time of the first sample, s.
