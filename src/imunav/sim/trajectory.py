@@ -262,7 +262,8 @@ def ideal_imu(
 
     Returns
     -------
-    ImuData with ``gyro = ω_ib^b`` (rad/s) and ``accel = f^b`` (m/s²).
+    ImuData
+        ``gyro = ω_ib^b`` (rad/s) and ``accel = f^b`` (m/s²), body axes.
 
     Notes
     -----
@@ -448,7 +449,12 @@ def trajectory_from_functions(
     position_ned : callable, optional
         ``f(t) -> (N, 3)`` position in metres in the local NED
         frame of ``origin_lla`` (tangent plane at the origin), or None (fixed).
-    t, duration_s, fs : sample times, or a duration and a rate (t = k / fs).
+    t : array_like, optional
+        Sample times, s.
+    duration_s : float, optional
+        Duration, s (with ``fs``; t = k / fs).
+    fs : float, optional
+        Sample rate, Hz.
     origin_lla : array_like, optional
         Origin (lat rad, lon rad, h m); needed with ``position_ned``
         for the geodetic track, optional otherwise.
