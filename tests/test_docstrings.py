@@ -9,6 +9,8 @@ public methods of those classes.  For each one (numpydoc's own parser, :mod:`num
   ``__init__``; a dataclass may name its fields under ``Attributes`` instead, numpydoc's section for them);
 - a function that returns something (a return annotation other than ``None``, or a ``return <value>``)
   has a ``Returns`` (or ``Yields``) section;
+- every entry of ``Parameters``, ``Attributes`` and ``Returns`` has an indented description under its
+  ``name : type`` line (a description written in the type slot renders as a type);
 - a function whose own body raises an :mod:`imunav.errors` exception (``raise ShapeError(...)``) names it,
   or one of its base classes, under ``Raises`` (exceptions raised by the helpers it calls are not traced);
 - no docstring points at the project's private notes (``../shared``, ``specs/`` digests), which a user of
@@ -205,6 +207,10 @@ def docstring_problems(qualname: str, obj, check_sections: bool = True, check_no
             problems.append(f"{qualname}: no Parameters section (parameters: {', '.join(params)})")
         elif missing:
             problems.append(f"{qualname}: Parameters does not name {', '.join(missing)}")
+    for sec in ("Parameters", "Attributes", "Returns"):
+        for e in parsed[sec]:
+            if not "".join(e.desc).strip():
+                problems.append(f"{qualname}: {sec} entry '{e.name or e.type}' has no description")
     if inspect.isfunction(obj) and _returns_value(obj) and not (parsed["Returns"] or parsed["Yields"]):
         problems.append(f"{qualname}: returns a value but has no Returns section")
     if inspect.isfunction(obj):
@@ -269,6 +275,7 @@ def _missing_one(x: float, y: float) -> float:
     Returns
     -------
     float
+        The sum.
     """
     return x + y
 
@@ -319,6 +326,21 @@ def _raises_undocumented(x: float) -> float:
     return x**0.5
 
 
+def _type_slot(x: float) -> float:
+    """Half.
+
+    Parameters
+    ----------
+    x : the value to halve, m.
+
+    Returns
+    -------
+    float
+        ``x / 2``, m.
+    """
+    return x / 2
+
+
 @dataclasses.dataclass
 class _GoodResult:
     """A result.
@@ -349,6 +371,7 @@ class _BadClass:
     (_no_returns, "no Returns section"),
     (_private_ref, "private notes"),
     (_raises_undocumented, "raises ConvergenceError but its Raises section"),
+    (_type_slot, "Parameters entry 'x' has no description"),
     (_GoodResult, None),
     (_BadClass, "no Parameters section (parameters: gain)"),
 ])
