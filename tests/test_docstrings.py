@@ -51,7 +51,6 @@ NOT_YET_DONE = {
     "imunav.filters.robust",
     "imunav.filters.gates",  # created by the layers branch from filters.robust
     "imunav.ins.*",
-    "imunav.io.csv",
     "imunav.lab",
     "imunav.labsteps.*",
     "imunav.learn.*",
