@@ -177,8 +177,8 @@ def table_to_arrays(df: pd.DataFrame, cols: Mapping[str, Any], source: str) -> d
     Returns
     -------
     dict of str to numpy.ndarray or None
-        ``t`` (N,), ``gyro``, ``accel`` (N, 3), ``mag`` (N, 3) or None, ``temp`` (N,) or None, float64, in
-        the file's units.
+        ``t`` (N,) (date-times become seconds since the first, with ``t_origin`` kept), ``gyro``,
+        ``accel`` (N, 3), ``mag`` (N, 3) or None, ``temp`` (N,) or None, float64, in the file's units.
 
     Raises
     ------
