@@ -52,7 +52,6 @@ NOT_YET_DONE = {
     "imunav.filters.gates",  # created by the layers branch from filters.robust
     "imunav.ins.detectors",
     "imunav.ins.plot",
-    "imunav.ins.strapdown",
     "imunav.ins.zupt",
     "imunav.ins.lstm",  # created by the layers branch from learn.lstm
     "imunav.ins.result",  # created by the layers branch from ins.detectors
