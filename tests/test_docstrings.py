@@ -51,7 +51,6 @@ NOT_YET_DONE = {
     "imunav.filters.robust",
     "imunav.filters.gates",  # created by the layers branch from filters.robust
     "imunav.ins.detectors",
-    "imunav.ins.plot",
     "imunav.ins.zupt",
     "imunav.ins.lstm",  # created by the layers branch from learn.lstm
     "imunav.ins.result",  # created by the layers branch from ins.detectors
