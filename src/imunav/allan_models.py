@@ -2,8 +2,10 @@
 
 One implementation shared by :mod:`imunav.noise` (the noise-term fit and
 :meth:`NoiseFit.model_avar`) and :mod:`imunav.sim` (the error models' Allan
-curves), so the two cannot disagree (IEEE Std 952-1997 Annex C;
-ahrs-sensor-errors.md §3.8; references.md §1)::
+curves), so the two cannot disagree (IEEE Std 952-1997, Annex C; the Gauss-Markov form as in
+W. J. Riley, *Handbook of Frequency Stability Analysis*, NIST SP 1065, 2008, and
+N. El-Sheimy, H. Hou, X. Niu, "Analysis and modeling of inertial sensors using Allan variance",
+IEEE Trans. Instrum. Meas. 57(1), 2008)::
 
     quantisation      Q:  3 Q^2 / tau^2
     white (ARW/VRW)   N:  N^2 / tau
@@ -61,7 +63,29 @@ _F_COEFS = tuple((-1.0) ** (k + 1) * (2.0**k - 4.0) / (2.0 * math.factorial(k)) 
 
 
 def ieee952_term(name: str, tau: ArrayLike) -> NDArray[np.float64]:
-    """Allan variance of one IEEE-952 term per unit squared coefficient (Q^2, N^2, B^2, K^2 or R^2)."""
+    """Allan variance of one IEEE-952 term per unit squared coefficient (Q^2, N^2, B^2, K^2 or R^2).
+
+    ``Q: 3/τ²``, ``N: 1/τ``, ``B: 2 ln2/π``, ``K: τ/3``, ``R: τ²/2`` (IEEE Std 952-1997, Annex C).
+
+    Parameters
+    ----------
+    name : {"Q", "N", "B", "K", "R"}
+        The term: quantisation, white noise (angle / velocity random walk), flicker (bias instability),
+        rate random walk, rate ramp.
+    tau : array_like
+        Averaging time(s) τ, s, > 0.
+
+    Returns
+    -------
+    numpy.ndarray
+        σ²(τ) / c² for the term's coefficient c, same shape as ``tau``; multiplied by c² (c in SI: N in
+        rad/√s, B in rad/s, ...) it gives the Allan variance in (rad/s)² or (m/s²)².
+
+    Raises
+    ------
+    InvalidInputError
+        If ``name`` is not one of the five terms.
+    """
     tau = np.asarray(tau, dtype=float)
     if name == "Q":
         return 3.0 / tau**2
@@ -78,7 +102,30 @@ def ieee952_term(name: str, tau: ArrayLike) -> NDArray[np.float64]:
 
 def ieee952(tau: ArrayLike, *, Q: float = 0.0, N: float = 0.0, B: float = 0.0, K: float = 0.0,
             R: float = 0.0) -> NDArray[np.float64]:
-    """Sum of the IEEE-952 terms: 3Q^2/tau^2 + N^2/tau + (2 ln2/pi) B^2 + K^2 tau/3 + R^2 tau^2/2."""
+    """Sum of the IEEE-952 terms: 3Q^2/tau^2 + N^2/tau + (2 ln2/pi) B^2 + K^2 tau/3 + R^2 tau^2/2.
+
+    IEEE Std 952-1997, Annex C (the terms are independent, so their Allan variances add).
+
+    Parameters
+    ----------
+    tau : array_like
+        Averaging time(s) τ, s, > 0.
+    Q : float
+        Quantisation noise, rad (gyro) or m/s (accelerometer).
+    N : float
+        White noise: angle random walk, rad/√s, or velocity random walk, m/s/√s.
+    B : float
+        Bias instability (flicker) coefficient, rad/s or m/s².
+    K : float
+        Rate random walk, rad/s/√s, or acceleration random walk, m/s²/√s.
+    R : float
+        Rate ramp, rad/s², or m/s³.
+
+    Returns
+    -------
+    numpy.ndarray
+        The model Allan variance σ²(τ), (rad/s)² or (m/s²)², same shape as ``tau``.
+    """
     tau = np.asarray(tau, dtype=float)
     out = np.zeros_like(tau)
     for name, c in zip(IEEE952_TERMS, (Q, N, B, K, R)):
@@ -88,7 +135,25 @@ def ieee952(tau: ArrayLike, *, Q: float = 0.0, N: float = 0.0, B: float = 0.0, K
 
 
 def gauss_markov_bracket(u: ArrayLike) -> NDArray[np.float64]:
-    """f(u) = 1 - (3 - 4 e^-u + e^-2u) / (2u), accurate to ~1e-15 relative for every u > 0 (f(0) = 0)."""
+    """f(u) = 1 - (3 - 4 e^-u + e^-2u) / (2u), accurate to ~1e-15 relative for every u > 0 (f(0) = 0).
+
+    The series of the module docstring below u = 1/2, the direct form (with ``expm1``) above.
+
+    Parameters
+    ----------
+    u : array_like
+        Ratio τ / T of averaging time to correlation time, >= 0.
+
+    Returns
+    -------
+    numpy.ndarray
+        f(u), same shape as ``u``.
+
+    Raises
+    ------
+    InvalidInputError
+        If some ``u`` is negative.
+    """
     u = np.asarray(u, dtype=float)
     if np.any(u < 0):
         raise InvalidInputError("gauss_markov_bracket: u = tau / T must be >= 0")
@@ -104,7 +169,25 @@ def gauss_markov_bracket(u: ArrayLike) -> NDArray[np.float64]:
 
 
 def gauss_markov_unit(tau: ArrayLike, T: float) -> NDArray[np.float64]:
-    """Allan variance of a first-order Gauss-Markov process per unit variance sigma^2: (2T/tau) f(tau/T)."""
+    """Allan variance of a first-order Gauss-Markov process per unit variance sigma^2: (2T/tau) f(tau/T).
+
+    Parameters
+    ----------
+    tau : array_like
+        Averaging time(s) τ, s, > 0.
+    T : float
+        Correlation time, s, finite and > 0.
+
+    Returns
+    -------
+    numpy.ndarray
+        σ²_A(τ) / σ², dimensionless, same shape as ``tau`` (0 at τ = 0).
+
+    Raises
+    ------
+    InvalidInputError
+        If ``T`` is not finite and positive, or some τ is negative.
+    """
     if not (np.isfinite(T) and T > 0):
         raise InvalidInputError("a Gauss-Markov term needs a finite positive correlation time T")
     tau = np.asarray(tau, dtype=float)
@@ -115,5 +198,27 @@ def gauss_markov_unit(tau: ArrayLike, T: float) -> NDArray[np.float64]:
 
 
 def gauss_markov(tau: ArrayLike, sigma: float, T: float) -> NDArray[np.float64]:
-    """Allan variance of a first-order Gauss-Markov process of standard deviation sigma and correlation time T."""
+    """Allan variance of a first-order Gauss-Markov process of standard deviation sigma and correlation time T.
+
+    σ²_A(τ) = (2σ²T/τ) [1 − (T/2τ)(3 − 4 e^(−τ/T) + e^(−2τ/T))] (El-Sheimy et al. 2008).
+
+    Parameters
+    ----------
+    tau : array_like
+        Averaging time(s) τ, s, > 0.
+    sigma : float
+        Standard deviation of the process (steady state), in the sensor's SI unit (rad/s or m/s²).
+    T : float
+        Correlation time, s, finite and > 0.
+
+    Returns
+    -------
+    numpy.ndarray
+        σ²_A(τ), in the square of ``sigma``'s unit, same shape as ``tau``.
+
+    Raises
+    ------
+    InvalidInputError
+        If ``T`` is not finite and positive, or some τ is negative.
+    """
     return sigma**2 * gauss_markov_unit(tau, T)

@@ -26,7 +26,8 @@ Methods of :func:`calibrate_batch`:
     g-sensitivity), :func:`imunav.calib.multiposition`;
 ``thesis``
     ``multiposition`` combined with the rate-table fit of the gyro matrix
-    (needs ``<unit>_rate.<ext>``), the full model of imu-error-calibration.md;
+    (needs ``<unit>_rate.<ext>``), the full model of Günhan 2014 (Y. Günhan, *Detection and
+    compensation of inertial measurement unit errors* (in Turkish), MSc thesis, Hacettepe University, 2014);
 ``multipose``
     hand-placed poses without a reference (Tedaldi-style), :func:`imunav.calib.multipose`.
 """

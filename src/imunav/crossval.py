@@ -51,7 +51,23 @@ def pyshoe_session(name: str | Path) -> str:
 
     ``2017-11-22-11-22-03.mat`` → ``"2017-11-22"``.  Trials of one day share
     the subject, the shoe mounting and the lab set-up, so they are held out
-    together.
+    together (data set: B. Wagstaff, V. Peretroukhin, J. Kelly, "Robust data-driven zero-velocity
+    detection for foot-mounted inertial navigation", IEEE Sensors J. 20(2), 2020).
+
+    Parameters
+    ----------
+    name : str or pathlib.Path
+        File name or path of the trial.
+
+    Returns
+    -------
+    str
+        The session, ``"YYYY-MM-DD"``.
+
+    Raises
+    ------
+    InvalidInputError
+        If the name holds no date ``YYYY-MM-DD``.
     """
     m = _DATE.search(Path(str(name)).name)
     if m is None:
@@ -64,7 +80,17 @@ def pyshoe_session(name: str | Path) -> str:
 
 @dataclass(frozen=True)
 class Fold:
-    """One fold: the held-out ``group`` and the item indices on each side."""
+    """One fold: the held-out ``group`` and the item indices on each side.
+
+    Attributes
+    ----------
+    group : hashable
+        The group held out in this fold.
+    train : numpy.ndarray of int
+        Indices of the items the choice is made on (every other group).
+    test : numpy.ndarray of int
+        Indices of the held-out items (the group's).
+    """
 
     group: Hashable
     train: NDArray[np.int64]
@@ -74,10 +100,20 @@ class Fold:
 def leave_one_group_out(groups: Sequence[Hashable]) -> list[Fold]:
     """Folds that hold out one group at a time, in order of first appearance.
 
+    Parameters
+    ----------
+    groups : sequence of hashable
+        Group of each item (e.g. :func:`pyshoe_session` of each trial).
+
+    Returns
+    -------
+    list of Fold
+        One fold per distinct group.
+
     Raises
     ------
     InsufficientDataError
-        With fewer than two groups (nothing would be left to train on).
+        With no items, or fewer than two groups (nothing would be left to train on).
     """
     g = list(groups)
     if len(g) == 0:
@@ -98,15 +134,22 @@ class CvResult(Result):
 
     Attributes
     ----------
-    items : names of the items (trials), in input order.
-    groups : group of each item.
-    oof : (n_items,) score of each item under the choice made without its group.
-    fold_choice : the choice of each fold, keyed by held-out group (candidate
+    items : tuple of str
+        Names of the items (trials), in input order.
+    groups : tuple of hashable
+        Group of each item.
+    oof : numpy.ndarray, shape (n_items,)
+        Score of each item under the choice made without its group.
+    fold_choice : dict
+        The choice of each fold, keyed by held-out group (candidate
         index for :func:`select_by_cv`, whatever ``describe(model)`` returned for
         :func:`cross_validate`).
-    in_sample : (n_items,) score of each item under the choice made on all items,
-        or None when not computed.
-    in_sample_choice : that choice.
+    in_sample : numpy.ndarray, shape (n_items,), or None
+        Score of each item under the choice made on all items, or None when not computed.
+    in_sample_choice : object
+        That choice.
+    extra : dict
+        Free-form further results a tuner attaches (not part of :meth:`to_dict`).
     """
 
     items: tuple[str, ...]
@@ -128,12 +171,25 @@ class CvResult(Result):
         return None if self.in_sample is None else float(np.mean(self.in_sample))
 
     def per_group(self) -> dict[Hashable, float]:
-        """Mean out-of-fold score of each group."""
+        """Mean out-of-fold score of each group.
+
+        Returns
+        -------
+        dict
+            Group -> mean out-of-fold score of its items, in order of first appearance.
+        """
         g = np.array([str(x) for x in self.groups])
         return {k: float(np.mean(self.oof[g == str(k)])) for k in dict.fromkeys(self.groups)}
 
     def to_dict(self) -> dict[str, Any]:
-        """JSON-ready summary (strict JSON: non-finite scores become None)."""
+        """JSON-ready summary (strict JSON: non-finite scores become None).
+
+        Returns
+        -------
+        dict
+            ``oof_mean``, ``in_sample_mean``, ``items`` (item, group, oof, in_sample), ``per_group``,
+            ``fold_choice`` and ``in_sample_choice``.
+        """
 
         def num(x: float) -> float | None:
             return float(x) if np.isfinite(x) else None
@@ -176,10 +232,13 @@ def select_by_cv(scores: ArrayLike, groups: Sequence[Hashable], *, items: Sequen
 
     Parameters
     ----------
-    scores : (n_candidates, n_items) score of each candidate on each item, lower
+    scores : array_like
+        (n_candidates, n_items) score of each candidate on each item, lower
         is better (e.g. total attitude RMSE, 2-D position error).
-    groups : group of each item (e.g. :func:`pyshoe_session` of each trial).
-    items : item names, for the report.
+    groups : sequence of hashable
+        Group of each item (e.g. :func:`pyshoe_session` of each trial).
+    items : sequence of str, optional
+        Item names, for the report.
 
     Returns
     -------
@@ -188,6 +247,15 @@ def select_by_cv(scores: ArrayLike, groups: Sequence[Hashable], *, items: Sequen
         score over the items outside group g (ties: the first); ``oof[i]`` is
         item i's score under its fold's choice; ``in_sample_choice`` is the
         candidate with the lowest mean over all items, the one to ship.
+
+    Raises
+    ------
+    ShapeError
+        If ``scores`` is not (n_candidates, n_items) with one column per group entry.
+    NonFiniteError
+        If a score is NaN or infinite (every candidate must score every item).
+    InsufficientDataError
+        With fewer than two groups.
     """
     S = np.asarray(scores, dtype=float)
     if S.ndim == 1:
@@ -215,16 +283,39 @@ def cross_validate(fit: Callable[[NDArray[np.int64]], Any],
                    progress: Callable[[int, int, Hashable], None] | None = None) -> CvResult:
     """Leave-one-group-out CV of a fitting procedure.
 
+    For each group g: ``model = fit(items outside g)``, then ``oof[g's items] = evaluate(model, g's items)``
+    (Hastie, Tibshirani & Friedman 2009, §7.10).
+
     Parameters
     ----------
-    fit : ``fit(train_indices) -> model``; must use only those items.
-    evaluate : ``evaluate(model, test_indices) -> scores`` (one per test item).
-    groups : group of each item.
-    items : item names.
-    describe : what to record of each fold's model (default: nothing).
-    in_sample : also fit on all items and score every item (the in-sample
+    fit : callable
+        ``fit(train_indices) -> model``; must use only those items.
+    evaluate : callable
+        ``evaluate(model, test_indices) -> scores`` (one per test item, lower is better).
+    groups : sequence of hashable
+        Group of each item.
+    items : sequence of str, optional
+        Item names, for the report (default: their indices).
+    describe : callable, optional
+        What to record of each fold's model (default: nothing).
+    in_sample : bool
+        Also fit on all items and score every item (the in-sample
         figure, to show the gap; costs one more fit).
-    progress : called as ``progress(k, n_folds, held_out_group)`` before each fit.
+    progress : callable, optional
+        Called as ``progress(k, n_folds, held_out_group)`` before each fit.
+
+    Returns
+    -------
+    CvResult
+        Out-of-fold scores, each fold's ``describe(model)``, and the in-sample scores when asked.
+
+    Raises
+    ------
+    InsufficientDataError
+        With fewer than two groups.
+    ShapeError
+        If ``evaluate`` returns a number of scores other than the number of held-out items, or ``items``
+        has the wrong length.
     """
     folds = leave_one_group_out(groups)
     n = len(groups)

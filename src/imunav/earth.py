@@ -136,8 +136,22 @@ def normal_gravity(lat: ArrayLike, h: ArrayLike = 0.0) -> Array | float:
 
     Parameters
     ----------
-    lat : geodetic latitude, rad (scalar or array).
-    h : ellipsoidal height, m (broadcasts with ``lat``).
+    lat : array_like
+        Geodetic latitude, rad, in [-pi/2, pi/2] (scalar or array).
+    h : array_like
+        Ellipsoidal height, m (broadcasts with ``lat``), inside :data:`H_RANGE_M`.
+
+    Returns
+    -------
+    float or numpy.ndarray
+        γ(φ, h), m/s², positive (pointing down in NED); a float for scalar inputs.
+
+    Raises
+    ------
+    InvalidInputError
+        If a latitude is outside [-pi/2, pi/2] or a height outside :data:`H_RANGE_M`.
+    NonFiniteError
+        If an input is NaN or infinite.
     """
     return _radii_gravity(lat, h)[2]
 
@@ -189,10 +203,29 @@ def _radii_gravity(lat: ArrayLike, h: ArrayLike) -> tuple[Array | float, Array |
 
 
 def gravity_ned(lat: ArrayLike, h: ArrayLike = 0.0) -> Array:
-    """Normal gravity vector in NED, ``(0, 0, +γ(φ, h))`` (m/s²); ``(3,)`` or ``(N, 3)``.
+    """Normal gravity vector in NED, ``(0, 0, +γ(φ, h))`` (m/s²).
 
     The small north component of the gravity vector above the ellipsoid
     (≈ −8.08e-9 h sin 2φ m/s², Groves 2.140) is neglected.
+
+    Parameters
+    ----------
+    lat : array_like
+        Geodetic latitude, rad, in [-pi/2, pi/2] (scalar or array).
+    h : array_like
+        Ellipsoidal height, m (broadcasts with ``lat``).
+
+    Returns
+    -------
+    numpy.ndarray, shape (3,) or (..., 3)
+        ``g_n`` in NED, m/s², one vector per latitude.
+
+    Raises
+    ------
+    InvalidInputError
+        If a latitude is outside [-pi/2, pi/2] or a height outside :data:`H_RANGE_M`.
+    NonFiniteError
+        If an input is NaN or infinite.
     """
     g = np.asarray(normal_gravity(lat, h))
     out = np.zeros(g.shape + (3,))
@@ -201,7 +234,27 @@ def gravity_ned(lat: ArrayLike, h: ArrayLike = 0.0) -> Array:
 
 
 def earth_rate_ned(lat: ArrayLike) -> Array:
-    """Earth rotation rate resolved in NED, ``ω_ie^n = Ω (cos φ, 0, −sin φ)`` rad/s (Groves 2.123)."""
+    """Earth rotation rate resolved in NED, ``ω_ie^n = Ω (cos φ, 0, −sin φ)`` rad/s (Groves 2.123).
+
+    Ω = :data:`OMEGA_E` = 7.292115e-5 rad/s (TR8350.2).
+
+    Parameters
+    ----------
+    lat : array_like
+        Geodetic latitude, rad, in [-pi/2, pi/2] (scalar or array).
+
+    Returns
+    -------
+    numpy.ndarray, shape (3,) or (..., 3)
+        ``ω_ie^n``, rad/s.
+
+    Raises
+    ------
+    InvalidInputError
+        If a latitude is outside [-pi/2, pi/2] or a height outside :data:`H_RANGE_M`.
+    NonFiniteError
+        If an input is NaN or infinite.
+    """
     lat = np.asarray(_f(lat))
     _check_lat_h(lat, np.zeros(()))
     out = np.zeros(lat.shape + (3,))
@@ -214,6 +267,25 @@ def radii(lat: ArrayLike) -> tuple[Array | float, Array | float]:
     """Meridian and prime-vertical radii of curvature ``(R_N, R_E)``, m (Groves 2.105-2.106).
 
     R_N = a (1 − e²) / (1 − e² sin²φ)^{3/2},   R_E = a / √(1 − e² sin²φ).
+
+    Parameters
+    ----------
+    lat : array_like
+        Geodetic latitude, rad, in [-pi/2, pi/2] (scalar or array).
+
+    Returns
+    -------
+    R_N : float or numpy.ndarray
+        Meridian radius of curvature, m.
+    R_E : float or numpy.ndarray
+        Prime-vertical (transverse) radius of curvature, m.
+
+    Raises
+    ------
+    InvalidInputError
+        If a latitude is outside [-pi/2, pi/2] or a height outside :data:`H_RANGE_M`.
+    NonFiniteError
+        If an input is NaN or infinite.
     """
     rn, re, _ = _radii_gravity(lat, 0.0)
     return rn, re
@@ -223,6 +295,29 @@ def transport_rate_ned(lat: ArrayLike, h: ArrayLike, vel_ned: ArrayLike) -> Arra
     """Transport rate ``ω_en^n`` (rate of NED w.r.t. ECEF) in NED, rad/s (Groves 5.44).
 
     ω_en^n = ( v_E/(R_E+h), −v_N/(R_N+h), −v_E tan φ/(R_E+h) ).
+
+    Parameters
+    ----------
+    lat : array_like
+        Geodetic latitude, rad, in [-pi/2, pi/2] (scalar or array).
+    h : array_like
+        Ellipsoidal height, m.
+    vel_ned : array_like, shape (3,) or (N, 3)
+        Velocity relative to the Earth, resolved in NED, m/s.
+
+    Returns
+    -------
+    numpy.ndarray, shape (3,) or (N, 3)
+        ``ω_en^n``, rad/s.
+
+    Raises
+    ------
+    InvalidInputError
+        If a latitude is outside [-pi/2, pi/2] or a height outside :data:`H_RANGE_M`.
+    NonFiniteError
+        If an input is NaN or infinite.
+    ShapeError
+        If ``vel_ned`` is not (3,) / (N, 3).
     """
     v, single = _triple(vel_ned, "vel_ned")
     lat = np.asarray(_f(lat), dtype=float)
@@ -240,8 +335,25 @@ def transport_rate_ned(lat: ArrayLike, h: ArrayLike, vel_ned: ArrayLike) -> Arra
 def dcm_en(lat: ArrayLike, lon: ArrayLike) -> Array:
     """``C_en``: rotates NED vectors into ECEF, ``v_e = C_en v_n`` (Groves 2.150 transposed).
 
-    Columns are the north, east and down unit vectors in ECEF.  ``(3, 3)`` for
-    scalars, ``(N, 3, 3)`` for arrays.
+    Columns are the north, east and down unit vectors in ECEF:
+    ``C_en = [[-sφ cλ, -sλ, -cφ cλ], [-sφ sλ, cλ, -cφ sλ], [cφ, 0, -sφ]]``.
+
+    Parameters
+    ----------
+    lat : array_like
+        Geodetic latitude, rad.
+    lon : array_like
+        Longitude, rad (broadcasts with ``lat``).
+
+    Returns
+    -------
+    numpy.ndarray, shape (3, 3) or (N, 3, 3)
+        ``C_en``; ``(3, 3)`` for scalars.
+
+    Raises
+    ------
+    NonFiniteError
+        If an input is NaN or infinite.
     """
     lat = np.asarray(_f(lat), dtype=float)
     lon = np.asarray(_f(lon), dtype=float)
@@ -265,6 +377,23 @@ def lla_to_ecef(lla: ArrayLike) -> Array:
     """Geodetic ``(lat, lon, h)`` (rad, rad, m) to ECEF position (m) (Groves 2.112).
 
     x = (R_E + h) cos φ cos λ,  y = (R_E + h) cos φ sin λ,  z = ((1 − e²) R_E + h) sin φ.
+
+    Parameters
+    ----------
+    lla : array_like, shape (3,) or (N, 3)
+        Geodetic latitude (rad), longitude (rad), ellipsoidal height (m).
+
+    Returns
+    -------
+    numpy.ndarray, shape (3,) or (N, 3)
+        ECEF position, m.
+
+    Raises
+    ------
+    ShapeError
+        If a triple is not (3,) / (N, 3).
+    NonFiniteError
+        If an input is NaN or infinite.
     """
     p, single = _triple(lla, "lla")
     # evaluated in extended precision (where the platform has it) so that the
@@ -288,6 +417,23 @@ def ecef_to_lla(ecef: ArrayLike) -> Array:
     (< 1e-12 rad, < 1e-9 m) everywhere except within ~50 km of the Earth's
     centre.  Height uses the well-conditioned form
     ``h = p cos φ + z sin φ − a √(1 − e² sin²φ)`` (valid at the poles too).
+
+    Parameters
+    ----------
+    ecef : array_like, shape (3,) or (N, 3)
+        ECEF position, m.
+
+    Returns
+    -------
+    numpy.ndarray, shape (3,) or (N, 3)
+        Geodetic latitude (rad), longitude (rad, in (-pi, pi]), ellipsoidal height (m).
+
+    Raises
+    ------
+    ShapeError
+        If a triple is not (3,) / (N, 3).
+    NonFiniteError
+        If an input is NaN or infinite.
     """
     r, single = _triple(ecef, "ecef")
     x, y, z = r[:, 0], r[:, 1], r[:, 2]
@@ -322,6 +468,25 @@ def ecef_to_ned(ecef: ArrayLike, ref_lla: ArrayLike) -> Array:
     """ECEF position(s) to local NED coordinates (m) about the origin ``ref_lla``.
 
     ``r_n = C_en(ref)ᵀ (r_e − r_e(ref))`` (the tangent plane at the origin).
+
+    Parameters
+    ----------
+    ecef : array_like, shape (3,) or (N, 3)
+        ECEF position(s), m.
+    ref_lla : array_like, shape (3,)
+        Origin of the local NED frame: geodetic ``(lat, lon, h)``, rad, rad, m.
+
+    Returns
+    -------
+    numpy.ndarray, shape (3,) or (N, 3)
+        North, east, down coordinates, m.
+
+    Raises
+    ------
+    ShapeError
+        If a triple is not (3,) / (N, 3).
+    NonFiniteError
+        If an input is NaN or infinite.
     """
     r, single = _triple(ecef, "ecef")
     ref = _ref(ref_lla)
@@ -331,7 +496,27 @@ def ecef_to_ned(ecef: ArrayLike, ref_lla: ArrayLike) -> Array:
 
 
 def ned_to_ecef(ned: ArrayLike, ref_lla: ArrayLike) -> Array:
-    """Local NED coordinates (m) about ``ref_lla`` to ECEF position(s) (m)."""
+    """Local NED coordinates (m) about ``ref_lla`` to ECEF position(s) (m): ``r_e = r_e(ref) + C_en(ref) r_n``.
+
+    Parameters
+    ----------
+    ned : array_like, shape (3,) or (N, 3)
+        North, east, down coordinates, m.
+    ref_lla : array_like, shape (3,)
+        Origin of the local NED frame: geodetic ``(lat, lon, h)``, rad, rad, m.
+
+    Returns
+    -------
+    numpy.ndarray, shape (3,) or (N, 3)
+        ECEF position(s), m.
+
+    Raises
+    ------
+    ShapeError
+        If a triple is not (3,) / (N, 3).
+    NonFiniteError
+        If an input is NaN or infinite.
+    """
     n, single = _triple(ned, "ned")
     ref = _ref(ref_lla)
     C = dcm_en(ref[0], ref[1])
@@ -339,17 +524,77 @@ def ned_to_ecef(ned: ArrayLike, ref_lla: ArrayLike) -> Array:
 
 
 def lla_to_ned(lla: ArrayLike, ref_lla: ArrayLike) -> Array:
-    """Geodetic position(s) to local NED coordinates (m) about ``ref_lla`` (via ECEF, exact)."""
+    """Geodetic position(s) to local NED coordinates (m) about ``ref_lla`` (via ECEF, exact).
+
+    Parameters
+    ----------
+    lla : array_like, shape (3,) or (N, 3)
+        Geodetic ``(lat, lon, h)``, rad, rad, m.
+    ref_lla : array_like, shape (3,)
+        Origin of the local NED frame: geodetic ``(lat, lon, h)``, rad, rad, m.
+
+    Returns
+    -------
+    numpy.ndarray, shape (3,) or (N, 3)
+        North, east, down coordinates, m.
+
+    Raises
+    ------
+    ShapeError
+        If a triple is not (3,) / (N, 3).
+    NonFiniteError
+        If an input is NaN or infinite.
+    """
     return ecef_to_ned(lla_to_ecef(lla), ref_lla)
 
 
 def ned_to_lla(ned: ArrayLike, ref_lla: ArrayLike) -> Array:
-    """Local NED coordinates (m) about ``ref_lla`` to geodetic position(s) (via ECEF, exact)."""
+    """Local NED coordinates (m) about ``ref_lla`` to geodetic position(s) (via ECEF, exact).
+
+    Parameters
+    ----------
+    ned : array_like, shape (3,) or (N, 3)
+        North, east, down coordinates, m.
+    ref_lla : array_like, shape (3,)
+        Origin of the local NED frame: geodetic ``(lat, lon, h)``, rad, rad, m.
+
+    Returns
+    -------
+    numpy.ndarray, shape (3,) or (N, 3)
+        Geodetic ``(lat, lon, h)``, rad, rad, m.
+
+    Raises
+    ------
+    ShapeError
+        If a triple is not (3,) / (N, 3).
+    NonFiniteError
+        If an input is NaN or infinite.
+    """
     return ecef_to_lla(ned_to_ecef(ned, ref_lla))
 
 
 def vel_ned_from_ecef(vel_ecef: ArrayLike, lla: ArrayLike) -> Array:
-    """Resolve ECEF velocity (m/s) in the NED frame at each position: ``v_n = C_enᵀ v_e``."""
+    """Resolve ECEF velocity (m/s) in the NED frame at each position: ``v_n = C_enᵀ v_e``.
+
+    Parameters
+    ----------
+    vel_ecef : array_like, shape (3,) or (N, 3)
+        Velocity resolved in ECEF, m/s.
+    lla : array_like, shape (3,) or (N, 3)
+        Geodetic position(s) ``(lat, lon, h)``, rad, rad, m: one, or one per velocity.
+
+    Returns
+    -------
+    numpy.ndarray, shape (3,) or (N, 3)
+        Velocity resolved in NED, m/s.
+
+    Raises
+    ------
+    ShapeError
+        If the shapes are wrong or the row counts differ.
+    NonFiniteError
+        If an input is NaN or infinite.
+    """
     v, single = _triple(vel_ecef, "vel_ecef")
     p, _ = _triple(lla, "lla")
     if p.shape[0] not in (1, v.shape[0]):

@@ -94,7 +94,19 @@ class ConvergenceError(ImunavError, RuntimeError):
 
 
 class MissingDependencyError(ImunavError, ImportError):
-    """An optional dependency (extra) is needed for this feature."""
+    """An optional dependency (extra) is needed for this feature.
+
+    The message names the package and the ``pip install 'imunav[<extra>]'`` command that installs it.
+
+    Parameters
+    ----------
+    package : str
+        Name of the missing package as imported (e.g. ``"rosbags"``).
+    extra : str
+        The imunav extra that installs it (e.g. ``"ros"``).
+    feature : str
+        What the user asked for that needs it (e.g. ``"reading ROS bags"``).
+    """
 
     def __init__(self, package: str, extra: str, feature: str) -> None:
         super().__init__(

@@ -49,14 +49,19 @@ def add_step(meta: Mapping[str, Any] | None, op: str, parameters: Mapping[str, A
 
     Parameters
     ----------
-    meta : the recording's metadata.
-    op : operation name (``"compensate"``, ``"resample"``, ``"convert_units"``, ...).
-    parameters : the operation's parameters (JSON types).
-    **extra : further fields of the step (e.g. ``calibration={...}``).
+    meta : mapping, optional
+        The recording's metadata.
+    op : str
+        Operation name (``"compensate"``, ``"resample"``, ``"convert_units"``, ...).
+    parameters : mapping, optional
+        The operation's parameters (JSON types).
+    **extra
+        Further fields of the step (e.g. ``calibration={...}``).
 
     Returns
     -------
-    dict : the new metadata.
+    dict
+        The new metadata.
     """
 
     out = dict(meta or {})
@@ -67,7 +72,20 @@ def add_step(meta: Mapping[str, Any] | None, op: str, parameters: Mapping[str, A
 
 
 def steps(meta_or_data: Any, op: str | None = None) -> list[dict[str, Any]]:
-    """The provenance steps of a recording (or of its ``meta`` dict), optionally only those of ``op``."""
+    """The provenance steps of a recording (or of its ``meta`` dict), optionally only those of ``op``.
+
+    Parameters
+    ----------
+    meta_or_data : ImuData or mapping
+        A recording (its ``meta`` is read) or its metadata dict.
+    op : str, optional
+        Keep only the steps of this operation (e.g. ``"compensate"``).
+
+    Returns
+    -------
+    list of dict
+        Copies of the steps, oldest first; empty when there is no provenance.
+    """
     meta = getattr(meta_or_data, "meta", meta_or_data)
     if not isinstance(meta, Mapping):
         return []
@@ -77,7 +95,18 @@ def steps(meta_or_data: Any, op: str | None = None) -> list[dict[str, Any]]:
 
 
 def fingerprint(obj: Mapping[str, Any]) -> str:
-    """SHA-256 of the canonical JSON of ``obj`` (sorted keys, no blanks): equal content, equal hash."""
+    """SHA-256 of the canonical JSON of ``obj`` (sorted keys, no blanks): equal content, equal hash.
+
+    Parameters
+    ----------
+    obj : mapping
+        JSON-like content (numpy values are converted first).
+
+    Returns
+    -------
+    str
+        The SHA-256 hash (FIPS 180-4) as 64 hexadecimal characters.
+    """
 
     text = json.dumps(jsonable(obj), sort_keys=True, separators=(",", ":"), allow_nan=False)
     return hashlib.sha256(text.encode("utf-8")).hexdigest()
@@ -86,7 +115,17 @@ def fingerprint(obj: Mapping[str, Any]) -> str:
 def net_compensations(meta_or_data: Any, sha256: str | None = None) -> list[dict[str, Any]]:
     """Compensation steps not undone by a later ``uncompensate`` with the same calibration.
 
-    With ``sha256`` only those of that calibration.
+    Parameters
+    ----------
+    meta_or_data : ImuData or mapping
+        A recording (its ``meta`` is read) or its metadata dict.
+    sha256 : str, optional
+        Keep only the steps of the calibration with this fingerprint (:func:`fingerprint`).
+
+    Returns
+    -------
+    list of dict
+        The ``compensate`` steps still in effect, oldest first.
     """
     live: list[dict[str, Any]] = []
     for s in steps(meta_or_data):

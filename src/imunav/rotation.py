@@ -109,14 +109,44 @@ def _broadcast_pair(a: Array, b: Array, na: str, nb: str) -> None:
 
 
 def quat_identity(n: int | None = None) -> Array:
-    """Identity quaternion ``[1, 0, 0, 0]`` (or ``(n, 4)`` of them)."""
+    """Identity quaternion ``[1, 0, 0, 0]`` (or ``(n, 4)`` of them).
+
+    Parameters
+    ----------
+    n : int, optional
+        Number of quaternions; ``None`` gives a single ``(4,)`` one.
+
+    Returns
+    -------
+    numpy.ndarray, shape (4,) or (n, 4)
+        The identity rotation(s), scalar first.
+    """
     q = np.zeros(4 if n is None else (n, 4))
     q[..., 0] = 1.0
     return q
 
 
 def quat_multiply(p: ArrayLike, q: ArrayLike) -> Array:
-    """Hamilton product ``p ⊗ q`` (single or batch; a single one broadcasts)."""
+    """Hamilton product ``p ⊗ q`` (single or batch; a single one broadcasts).
+
+    ``(p ⊗ q)_w = p_w q_w - p_v · q_v``, ``(p ⊗ q)_v = p_w q_v + q_w p_v + p_v × q_v``; with frames,
+    ``q_ac = q_ab ⊗ q_bc`` (Solà 2017).
+
+    Parameters
+    ----------
+    p, q : array_like, shape (4,) or (N, 4)
+        Quaternions ``[w, x, y, z]``; a single one broadcasts against a batch.
+
+    Returns
+    -------
+    numpy.ndarray, shape (4,) or (N, 4)
+        The product, single when both inputs are single.
+
+    Raises
+    ------
+    ShapeError
+        If a shape is not (4,) / (N, 4), or two batches differ in length.
+    """
     pa, sp = _as(p, (4,), "p")
     qa, sq = _as(q, (4,), "q")
     _broadcast_pair(pa, qa, "p", "q")
@@ -124,7 +154,23 @@ def quat_multiply(p: ArrayLike, q: ArrayLike) -> Array:
 
 
 def quat_conjugate(q: ArrayLike) -> Array:
-    """Conjugate ``[w, -x, -y, -z]``; the inverse of a unit quaternion."""
+    """Conjugate ``[w, -x, -y, -z]``; the inverse of a unit quaternion.
+
+    Parameters
+    ----------
+    q : array_like, shape (4,) or (N, 4)
+        Quaternion(s) ``[w, x, y, z]`` (Hamilton, scalar first), e.g. ``q_nb`` body (FRD) to navigation (NED).
+
+    Returns
+    -------
+    numpy.ndarray, shape (4,) or (N, 4)
+        ``q*``; for ``q_nb`` this is ``q_bn``.
+
+    Raises
+    ------
+    ShapeError
+        If an input does not have the shape given above.
+    """
     a = np.array(q, dtype=float)
     _as(a, (4,), "q")
     a[..., 1:] *= -1.0
@@ -132,13 +178,47 @@ def quat_conjugate(q: ArrayLike) -> Array:
 
 
 def quat_inverse(q: ArrayLike) -> Array:
-    """Inverse ``q* / |q|^2`` (valid for non-unit quaternions)."""
+    """Inverse ``q* / |q|^2`` (valid for non-unit quaternions).
+
+    Parameters
+    ----------
+    q : array_like, shape (4,) or (N, 4)
+        Quaternion(s) ``[w, x, y, z]`` (Hamilton, scalar first), e.g. ``q_nb`` body (FRD) to navigation (NED).
+
+    Returns
+    -------
+    numpy.ndarray, shape (4,) or (N, 4)
+        ``q^-1`` with ``q ⊗ q^-1 = [1, 0, 0, 0]``.
+
+    Raises
+    ------
+    ShapeError
+        If an input does not have the shape given above.
+    """
     a = quat_conjugate(q)
     return a / np.sum(a * a, axis=-1, keepdims=True)
 
 
 def quat_normalize(q: ArrayLike) -> Array:
-    """Unit quaternion(s); raises for zero or non-finite input."""
+    """Unit quaternion(s) ``q / |q|``.
+
+    Parameters
+    ----------
+    q : array_like, shape (4,) or (N, 4)
+        Quaternion(s) ``[w, x, y, z]`` (Hamilton, scalar first), e.g. ``q_nb`` body (FRD) to navigation (NED).
+
+    Returns
+    -------
+    numpy.ndarray, shape (4,) or (N, 4)
+        The normalised quaternion(s).
+
+    Raises
+    ------
+    NonFiniteError
+        If a quaternion is not finite or has a norm below 1e-12 (the rows are named).
+    ShapeError
+        If an input does not have the shape given above.
+    """
     a, s = _as(q, (4,), "q")
     _finite(a, "q")
     n = np.linalg.norm(a, axis=1, keepdims=True)
@@ -148,8 +228,26 @@ def quat_normalize(q: ArrayLike) -> Array:
 
 
 def quat_canonical(q: ArrayLike) -> Array:
-    """Representative with ``w > 0`` (at ``w == 0``: first non-zero vector part > 0);
-    ``q`` and ``-q`` are the same rotation."""
+    """Representative with ``w > 0`` (at ``w == 0``: first non-zero vector part > 0).
+
+    ``q`` and ``-q`` are the same rotation; this picks one of the two, so that quaternions can be compared
+    component by component.
+
+    Parameters
+    ----------
+    q : array_like, shape (4,) or (N, 4)
+        Quaternion(s) ``[w, x, y, z]`` (Hamilton, scalar first), e.g. ``q_nb`` body (FRD) to navigation (NED).
+
+    Returns
+    -------
+    numpy.ndarray, shape (4,) or (N, 4)
+        ``q`` or ``-q``, row by row.
+
+    Raises
+    ------
+    ShapeError
+        If an input does not have the shape given above.
+    """
     a, single = _as(q, (4,), "q")
     a = a.copy()
     for i in range(a.shape[0]):
@@ -162,7 +260,24 @@ def quat_rotate(q: ArrayLike, v: ArrayLike) -> Array:
     """Rotate vector(s): ``v_n = q ⊗ [0, v_b] ⊗ q*`` (= ``C(q) v_b``).
 
     For ``q = q_nb`` this maps body-frame vectors to the navigation frame; use
-    ``quat_rotate(quat_conjugate(q), v_n)`` for the reverse.
+    ``quat_rotate(quat_conjugate(q), v_n)`` for the reverse (Solà 2017).
+
+    Parameters
+    ----------
+    q : array_like, shape (4,) or (N, 4)
+        Quaternion(s) ``[w, x, y, z]`` (Hamilton, scalar first), e.g. ``q_nb`` body (FRD) to navigation (NED).
+    v : array_like, shape (3,) or (N, 3)
+        Vector(s) in the frame the quaternion rotates from (any unit; the result has the same unit).
+
+    Returns
+    -------
+    numpy.ndarray, shape (3,) or (N, 3)
+        The rotated vector(s); single when both inputs are single.
+
+    Raises
+    ------
+    ShapeError
+        If a shape is wrong or two batches differ in length.
     """
     qa, sq = _as(q, (4,), "q")
     va, sv = _as(v, (3,), "v")
@@ -171,13 +286,50 @@ def quat_rotate(q: ArrayLike, v: ArrayLike) -> Array:
 
 
 def dcm_from_quat(q: ArrayLike) -> Array:
-    """``C_nb`` of a unit quaternion ``q_nb``."""
+    """Direction-cosine matrix ``C_nb`` of a unit quaternion ``q_nb`` (Groves 2013, §2.2).
+
+    Parameters
+    ----------
+    q : array_like, shape (4,) or (N, 4)
+        Quaternion(s) ``[w, x, y, z]`` (Hamilton, scalar first), e.g. ``q_nb`` body (FRD) to navigation (NED).
+
+    Returns
+    -------
+    numpy.ndarray, shape (3, 3) or (N, 3, 3)
+        ``C_nb`` with ``v_n = C_nb v_b``.
+
+    Raises
+    ------
+    ShapeError
+        If an input does not have the shape given above.
+    """
     a, s = _as(q, (4,), "q")
     return _out(_k.dcm_from_quat_n(a), s)
 
 
 def quat_from_dcm(C: ArrayLike) -> Array:
-    """Unit quaternion (``w >= 0``) of a rotation matrix (Shepperd's method)."""
+    """Unit quaternion (``w >= 0``) of a rotation matrix (Shepperd's method).
+
+    S. W. Shepperd, "Quaternion from rotation matrix", *J. Guidance and Control* 1(3), 1978: the largest of
+    ``w², x², y², z²`` is computed first, which keeps the result accurate at every angle.
+
+    Parameters
+    ----------
+    C : array_like, shape (3, 3) or (N, 3, 3)
+        Rotation matrix ``C_nb`` (orthonormal, det +1).
+
+    Returns
+    -------
+    numpy.ndarray, shape (4,) or (N, 4)
+        ``q_nb``, scalar first, with ``w >= 0``.
+
+    Raises
+    ------
+    NonFiniteError
+        If ``C`` is not finite.
+    ShapeError
+        If ``C`` is not (3, 3) / (N, 3, 3).
+    """
     a, s = _as(C, (3, 3), "C")
     _finite(a, "C")
     return _out(_k.quat_from_dcm_n(a), s)
@@ -198,41 +350,152 @@ def quat_from_euler(roll: ArrayLike, pitch: ArrayLike | None = None, yaw: ArrayL
     """Quaternion ``q_nb`` of ZYX Euler angles (rad).
 
     Call as ``quat_from_euler(roll, pitch, yaw)`` or with one ``(…, 3)`` array
-    of ``(roll, pitch, yaw)``.  ``q = qz(yaw) ⊗ qy(pitch) ⊗ qx(roll)``.
+    of ``(roll, pitch, yaw)``.  ``q = qz(yaw) ⊗ qy(pitch) ⊗ qx(roll)`` (Groves 2013, §2.2).
+
+    Parameters
+    ----------
+    roll : array_like
+        Roll angle(s), rad, rotation about the body x (forward) axis; or an array of shape (3,) / (N, 3)
+        holding ``(roll, pitch, yaw)`` when ``pitch`` and ``yaw`` are omitted.
+    pitch : array_like, optional
+        Pitch angle(s), rad, about the intermediate y axis.
+    yaw : array_like, optional
+        Yaw (heading) angle(s), rad, about the navigation down axis.
+
+    Returns
+    -------
+    numpy.ndarray, shape (4,) or (N, 4)
+        ``q_nb``, body (FRD) to navigation (NED).
+
+    Raises
+    ------
+    ShapeError
+        If only one of ``pitch`` / ``yaw`` is given, or the shapes do not broadcast.
     """
     e, s = _euler_args(roll, pitch, yaw)
     return _out(_k.quat_from_euler_n(e), s)
 
 
 def euler_from_dcm(C: ArrayLike) -> Array:
-    """ZYX Euler angles ``(roll, pitch, yaw)`` (rad) of ``C_nb``.
+    """ZYX Euler angles ``(roll, pitch, yaw)`` (rad) of ``C_nb`` (Groves 2013, §2.2).
 
-    roll, yaw in (-pi, pi], pitch in [-pi/2, pi/2].  At gimbal lock roll is set
-    to 0 and yaw carries the rotation about the vertical.
+    ``roll = atan2(C32, C33)``, ``pitch = -asin(C31)``, ``yaw = atan2(C21, C11)``; roll, yaw in (-pi, pi],
+    pitch in [-pi/2, pi/2].  At gimbal lock roll is set to 0 and yaw carries the rotation about the vertical.
+
+    Parameters
+    ----------
+    C : array_like, shape (3, 3) or (N, 3, 3)
+        Rotation matrix ``C_nb``.
+
+    Returns
+    -------
+    numpy.ndarray, shape (3,) or (N, 3)
+        ``(roll, pitch, yaw)``, rad.
+
+    Raises
+    ------
+    ShapeError
+        If ``C`` is not (3, 3) / (N, 3, 3).
     """
     a, s = _as(C, (3, 3), "C")
     return _out(_k.euler_from_dcm_n(a), s)
 
 
 def euler_from_quat(q: ArrayLike) -> Array:
-    """ZYX Euler angles ``(roll, pitch, yaw)`` (rad) of ``q_nb``."""
+    """ZYX Euler angles ``(roll, pitch, yaw)`` (rad) of ``q_nb`` (through :func:`euler_from_dcm`).
+
+    Parameters
+    ----------
+    q : array_like, shape (4,) or (N, 4)
+        Quaternion(s) ``[w, x, y, z]`` (Hamilton, scalar first), e.g. ``q_nb`` body (FRD) to navigation (NED).
+
+    Returns
+    -------
+    numpy.ndarray, shape (3,) or (N, 3)
+        ``(roll, pitch, yaw)``, rad; roll, yaw in (-pi, pi], pitch in [-pi/2, pi/2].
+
+    Raises
+    ------
+    NonFiniteError
+        If a quaternion is zero or not finite.
+    ShapeError
+        If an input does not have the shape given above.
+    """
     return euler_from_dcm(dcm_from_quat(quat_normalize(q)))
 
 
 def dcm_from_euler(roll: ArrayLike, pitch: ArrayLike | None = None, yaw: ArrayLike | None = None) -> Array:
-    """``C_nb = Rz(yaw) Ry(pitch) Rx(roll)``."""
+    """``C_nb = Rz(yaw) Ry(pitch) Rx(roll)`` (Groves 2013, §2.2).
+
+    Parameters
+    ----------
+    roll : array_like
+        Roll angle(s), rad; or ``(roll, pitch, yaw)`` as one (3,) / (N, 3) array.
+    pitch, yaw : array_like, optional
+        Pitch and yaw angle(s), rad.
+
+    Returns
+    -------
+    numpy.ndarray, shape (3, 3) or (N, 3, 3)
+        ``C_nb``, body (FRD) to navigation (NED).
+
+    Raises
+    ------
+    ShapeError
+        If only one of ``pitch`` / ``yaw`` is given, or the shapes do not broadcast.
+    """
     return dcm_from_quat(quat_from_euler(roll, pitch, yaw))
 
 
 def quat_from_rotvec(r: ArrayLike) -> Array:
-    """``exp`` map: quaternion of rotation vector ``r`` (rad)."""
+    """``exp`` map: quaternion of rotation vector ``r`` (rad).
+
+    ``q = [cos(|r|/2), sin(|r|/2) r / |r|]`` (Solà 2017; a Taylor series near ``|r| = 0``).
+
+    Parameters
+    ----------
+    r : array_like, shape (3,) or (N, 3)
+        Rotation vector(s), rad: axis times angle.
+
+    Returns
+    -------
+    numpy.ndarray, shape (4,) or (N, 4)
+        Unit quaternion(s).
+
+    Raises
+    ------
+    NonFiniteError
+        If ``r`` is not finite.
+    ShapeError
+        If ``r`` is not (3,) / (N, 3).
+    """
     a, s = _as(r, (3,), "rotation vector")
     _finite(a, "rotation vector")
     return _out(_k.qexp_n(a), s)
 
 
 def rotvec_from_quat(q: ArrayLike) -> Array:
-    """``log`` map: rotation vector (rad, angle in [0, pi]) of unit ``q``."""
+    """``log`` map: rotation vector (rad, angle in [0, pi]) of unit ``q``.
+
+    ``r = 2 atan2(|q_v|, q_w) q_v / |q_v|`` on the canonical (``w >= 0``) representative (Solà 2017).
+
+    Parameters
+    ----------
+    q : array_like, shape (4,) or (N, 4)
+        Quaternion(s) ``[w, x, y, z]`` (Hamilton, scalar first), e.g. ``q_nb`` body (FRD) to navigation (NED).
+
+    Returns
+    -------
+    numpy.ndarray, shape (3,) or (N, 3)
+        Rotation vector(s), rad, with norm in [0, pi].
+
+    Raises
+    ------
+    NonFiniteError
+        If ``q`` is not finite.
+    ShapeError
+        If an input does not have the shape given above.
+    """
     a, s = _as(q, (4,), "q")
     _finite(a, "q")
     return _out(_k.qlog_n(a), s)
@@ -243,17 +506,74 @@ quat_log = rotvec_from_quat
 
 
 def dcm_from_rotvec(r: ArrayLike) -> Array:
-    """Rotation matrix of a rotation vector (Rodrigues)."""
+    """Rotation matrix of a rotation vector (Rodrigues' formula, ``C = exp([r]x)``).
+
+    Parameters
+    ----------
+    r : array_like, shape (3,) or (N, 3)
+        Rotation vector(s), rad.
+
+    Returns
+    -------
+    numpy.ndarray, shape (3, 3) or (N, 3, 3)
+        The rotation matrix / matrices.
+
+    Raises
+    ------
+    NonFiniteError
+        If ``r`` is not finite.
+    ShapeError
+        If ``r`` is not (3,) / (N, 3).
+    """
     return dcm_from_quat(quat_from_rotvec(r))
 
 
 def rotvec_from_dcm(C: ArrayLike) -> Array:
-    """Rotation vector of a rotation matrix."""
+    """Rotation vector of a rotation matrix (``log``, through the quaternion).
+
+    Parameters
+    ----------
+    C : array_like, shape (3, 3) or (N, 3, 3)
+        Rotation matrix / matrices.
+
+    Returns
+    -------
+    numpy.ndarray, shape (3,) or (N, 3)
+        Rotation vector(s), rad, norm in [0, pi].
+
+    Raises
+    ------
+    NonFiniteError
+        If ``C`` is not finite.
+    ShapeError
+        If ``C`` is not (3, 3) / (N, 3, 3).
+    """
     return rotvec_from_quat(quat_from_dcm(C))
 
 
 def quat_angle(q1: ArrayLike, q2: ArrayLike) -> Array | float:
-    """Angle (rad, in [0, pi]) of the rotation between ``q1`` and ``q2``."""
+    """Angle (rad, in [0, pi]) of the rotation between ``q1`` and ``q2``.
+
+    ``angle = 2 atan2(|d_v|, |d_w|)`` with ``d = q1* ⊗ q2``, accurate for small angles, unlike
+    ``2 acos(|q1 · q2|)``.
+
+    Parameters
+    ----------
+    q1, q2 : array_like, shape (4,) or (N, 4)
+        Quaternions (normalised here); a single one broadcasts.
+
+    Returns
+    -------
+    float or numpy.ndarray, shape (N,)
+        The angle(s), rad.
+
+    Raises
+    ------
+    NonFiniteError
+        If a quaternion is zero or not finite.
+    ShapeError
+        If a shape is wrong.
+    """
     # 2 atan2(|v|, |w|) of the relative rotation q1* ⊗ q2 is accurate for
     # small angles, unlike 2 acos(|q1·q2|) (error ~ sqrt(eps) ~ 1e-8 rad).
     d = quat_multiply(quat_conjugate(quat_normalize(q1)), quat_normalize(q2))
@@ -262,15 +582,40 @@ def quat_angle(q1: ArrayLike, q2: ArrayLike) -> Array | float:
 
 
 def quat_error_angle(q_est: ArrayLike, q_ref: ArrayLike) -> Array | float:
-    """Alias of :func:`quat_angle` for estimation errors."""
+    """Alias of :func:`quat_angle` for estimation errors.
+
+    Parameters
+    ----------
+    q_est : array_like, shape (4,) or (N, 4)
+        Estimated attitude ``q_nb``.
+    q_ref : array_like, shape (4,) or (N, 4)
+        Reference (true) attitude ``q_nb``.
+
+    Returns
+    -------
+    float or numpy.ndarray, shape (N,)
+        Angle of ``q_est* ⊗ q_ref``, rad, in [0, pi].
+    """
     return quat_angle(q_est, q_ref)
 
 
 def quat_slerp(q0: ArrayLike, q1: ArrayLike, s: ArrayLike) -> Array:
     """Spherical linear interpolation ``q0 ⊗ exp(s · log(q0* ⊗ q1))``.
 
-    Takes the short way (``q1`` is flipped when ``q0·q1 < 0``).  ``s`` may be a
-    scalar or an array broadcasting with the batch.
+    Takes the short way (``q1`` is flipped when ``q0·q1 < 0``); K. Shoemake, "Animating rotation with
+    quaternion curves", SIGGRAPH 1985.
+
+    Parameters
+    ----------
+    q0, q1 : array_like, shape (4,) or (N, 4)
+        End quaternions (normalised here).
+    s : array_like
+        Fraction(s) in [0, 1] (0 gives ``q0``, 1 gives ``q1``); a scalar or an array broadcasting with the batch.
+
+    Returns
+    -------
+    numpy.ndarray, shape (4,) or (N, 4)
+        The interpolated unit quaternion(s).
     """
     a0 = quat_normalize(q0)
     a1 = quat_normalize(q1)
@@ -282,10 +627,30 @@ def quat_slerp(q0: ArrayLike, q1: ArrayLike, s: ArrayLike) -> Array:
 
 
 def quat_interp(t: ArrayLike, q: ArrayLike, t_new: ArrayLike) -> Array:
-    """Interpolate an attitude time series by slerp between neighbours.
+    """Interpolate an attitude time series by slerp between neighbours (:func:`quat_slerp`).
 
-    ``t`` strictly increasing, ``q`` of shape ``(N, 4)``; ``t_new`` inside
-    ``[t[0], t[-1]]`` (outside raises).
+    Parameters
+    ----------
+    t : array_like, shape (N,)
+        Strictly increasing sample times, s.
+    q : array_like, shape (N, 4)
+        Attitude at ``t``, scalar first.
+    t_new : array_like
+        Time(s) at which to interpolate, s, inside ``[t[0], t[-1]]``.
+
+    Returns
+    -------
+    numpy.ndarray, shape (4,) or (M, 4)
+        Attitude at ``t_new`` (a single quaternion for a scalar ``t_new``).
+
+    Raises
+    ------
+    ShapeError
+        If ``t`` is not 1-D with one entry per quaternion.
+    TimeOrderError
+        If ``t`` has fewer than two entries or is not strictly increasing.
+    InvalidInputError
+        If ``t_new`` leaves ``[t[0], t[-1]]`` (no extrapolation).
     """
 
     ta = np.asarray(t, dtype=float)
@@ -306,7 +671,25 @@ def quat_interp(t: ArrayLike, q: ArrayLike, t_new: ArrayLike) -> Array:
 
 
 def skew(v: ArrayLike) -> Array:
-    """Cross-product matrix ``[v]x`` with ``[v]x u = v x u`` (single or batch)."""
+    """Cross-product matrix ``[v]x`` with ``[v]x u = v x u`` (single or batch).
+
+    ``[v]x = [[0, -v3, v2], [v3, 0, -v1], [-v2, v1, 0]]`` (Groves 2013, §2.2).
+
+    Parameters
+    ----------
+    v : array_like, shape (3,) or (N, 3)
+        Vector(s).
+
+    Returns
+    -------
+    numpy.ndarray, shape (3, 3) or (N, 3, 3)
+        The skew-symmetric matrix / matrices.
+
+    Raises
+    ------
+    ShapeError
+        If ``v`` is not (3,) / (N, 3).
+    """
     a, s = _as(v, (3,), "v")
     S = np.zeros((a.shape[0], 3, 3))
     S[:, 0, 1], S[:, 0, 2] = -a[:, 2], a[:, 1]
@@ -323,17 +706,36 @@ def integrate_rate(
     ``q_{k+1} = q_k ⊗ exp(phi_k)`` with, for ``method="zoh"``,
     ``phi_k = w_k (t_{k+1} - t_k)`` (exact for a rate held constant over each
     step), or for ``method="trapezoid"`` the mean rate plus the second-order
-    coning term ``(w_k × w_{k+1}) dt² / 12`` (Savage 1998).
+    coning term ``(w_k × w_{k+1}) dt² / 12`` (P. G. Savage, "Strapdown inertial navigation integration
+    algorithm design, part 1: attitude algorithms", *J. Guidance, Control, and Dynamics* 21(1), 1998).
+    The Earth's rate is not removed: ``gyro`` is taken as the rate relative to the navigation frame.
 
     Parameters
     ----------
-    q0 : (4,) initial attitude at ``t[0]``.
-    t : (N,) strictly increasing time, s.
-    gyro : (N, 3) body rates, rad/s.
+    q0 : array_like, shape (4,)
+        Initial attitude ``q_nb`` at ``t[0]``.
+    t : array_like, shape (N,)
+        Strictly increasing time, s.
+    gyro : array_like, shape (N, 3)
+        Body (FRD) angular rates, rad/s.
+    method : {"zoh", "trapezoid"}
+        Integration rule (see above).
 
     Returns
     -------
-    (N, 4) attitude at each ``t``.
+    numpy.ndarray, shape (N, 4)
+        Attitude ``q_nb`` at each ``t``.
+
+    Raises
+    ------
+    ShapeError
+        If ``t`` and ``gyro`` differ in length or ``gyro`` is not (N, 3).
+    NonFiniteError
+        If ``gyro`` is not finite.
+    TimeOrderError
+        If ``t`` is not strictly increasing.
+    InvalidInputError
+        If ``method`` is unknown.
     """
 
     ta = np.ascontiguousarray(t, dtype=float)
@@ -394,6 +796,27 @@ def to_convention(q_nb: ArrayLike, convention: str, *, body: str = "same") -> Ar
     wants.  ``body="flu"`` also re-expresses the body frame from FRD to FLU
     (for estimators whose sensor frame is forward-left-up); the default keeps
     the sensor axes as they are.
+
+    Parameters
+    ----------
+    q_nb : array_like, shape (4,) or (N, 4)
+        imunav attitude, body to NED, scalar first.
+    convention : str
+        A key of :data:`EXTERNAL_CONVENTIONS` (``"ned"``, ``"enu"``, ``"broad"``, ``"vqf"``, ``"ahrs"``,
+        ``"scipy"``), case-insensitive.
+    body : {"same", "flu"}
+        Keep the sensor axes, or re-express them from FRD to FLU.
+
+    Returns
+    -------
+    numpy.ndarray, shape (4,) or (N, 4)
+        The quaternion(s) in the external convention (canonical sign; ``[x, y, z, w]`` for scalar-last
+        conventions).
+
+    Raises
+    ------
+    InvalidInputError
+        If the convention or ``body`` is unknown.
     """
     C, scalar_last = _conv(convention)
     q = quat_multiply(quat_from_dcm(C.T), q_nb)
@@ -407,6 +830,25 @@ def to_convention(q_nb: ArrayLike, convention: str, *, body: str = "same") -> Ar
 
 def from_convention(q_ext: ArrayLike, convention: str, *, body: str = "same") -> Array:
     """Inverse of :func:`to_convention`: external quaternions to imunav ``q_nb``.
+
+    Parameters
+    ----------
+    q_ext : array_like, shape (4,) or (N, 4)
+        Quaternion(s) in the external convention.
+    convention : str
+        A key of :data:`EXTERNAL_CONVENTIONS`, case-insensitive.
+    body : {"same", "flu"}
+        ``"flu"`` when the external sensor frame is forward-left-up (re-expressed as FRD).
+
+    Returns
+    -------
+    numpy.ndarray, shape (4,) or (N, 4)
+        ``q_nb``, body to NED, scalar first.
+
+    Raises
+    ------
+    InvalidInputError
+        If the convention or ``body`` is unknown.
 
     Examples
     --------
@@ -442,10 +884,18 @@ def _axis_rotations() -> list[Array]:
 class ConventionMatch:
     """Result of :func:`find_convention`: ``q_ref ≈ L ⊗ f(q_ext) ⊗ B``.
 
-    ``nav_dcm`` is the DCM of L (reference nav frame from external nav
-    frame), ``body_dcm`` of B (external body frame from reference body
-    frame), ``scalar_last`` and ``conjugate`` describe f, and
-    ``median_error_rad`` the fit.
+    Attributes
+    ----------
+    nav_dcm : numpy.ndarray, shape (3, 3)
+        DCM of L (reference navigation frame from external navigation frame).
+    body_dcm : numpy.ndarray, shape (3, 3)
+        DCM of B (external body frame from reference body frame).
+    scalar_last : bool
+        Whether the external quaternions are ``[x, y, z, w]``.
+    conjugate : bool
+        Whether the external quaternions are conjugated (navigation to body).
+    median_error_rad : float
+        Median angle between ``q_ref`` and the converted ``q_ext`` over the compared samples, rad.
     """
 
     nav_dcm: Array
@@ -455,7 +905,18 @@ class ConventionMatch:
     median_error_rad: float
 
     def apply(self, q_ext: ArrayLike) -> Array:
-        """Convert external quaternions to the reference convention."""
+        """Convert external quaternions to the reference convention, ``L ⊗ f(q_ext) ⊗ B``.
+
+        Parameters
+        ----------
+        q_ext : array_like, shape (4,) or (N, 4)
+            Quaternion(s) in the convention that was found.
+
+        Returns
+        -------
+        numpy.ndarray, shape (4,) or (N, 4)
+            The same attitudes in the reference (imunav) convention.
+        """
         q = np.asarray(q_ext, dtype=float)
         if self.scalar_last:
             q = q[..., [3, 0, 1, 2]]
@@ -465,6 +926,13 @@ class ConventionMatch:
         return quat_multiply(quat_multiply(quat_from_dcm(self.nav_dcm), q), quat_from_dcm(self.body_dcm))
 
     def to_dict(self) -> dict:
+        """The match as plain JSON types.
+
+        Returns
+        -------
+        dict
+            ``nav_dcm``, ``body_dcm`` (nested lists), ``scalar_last``, ``conjugate``, ``median_error_rad`` (rad).
+        """
         return {
             "nav_dcm": self.nav_dcm.tolist(),
             "body_dcm": self.body_dcm.tolist(),
@@ -480,8 +948,26 @@ def find_convention(q_ext: ArrayLike, q_ref: ArrayLike, *, max_samples: int = 20
     Searches the component order (scalar first / last), conjugation, and the
     24 axis-aligned frame changes on each side, ``q_ref ≈ L ⊗ f(q_ext) ⊗ B``,
     and returns the combination with the smallest median angle error over up
-    to ``max_samples`` evenly spaced samples.  ``q_ref`` is in imunav's
-    convention (e.g. a simulated truth).
+    to ``max_samples`` evenly spaced samples.  Among fits within 5 % of the best, the simplest is reported.
+
+    Parameters
+    ----------
+    q_ext : array_like, shape (N, 4)
+        External attitude estimates, in an unknown convention.
+    q_ref : array_like, shape (N, 4)
+        Reference attitude in imunav's convention (e.g. a simulated truth), same samples as ``q_ext``.
+    max_samples : int
+        Number of evenly spaced samples compared.
+
+    Returns
+    -------
+    ConventionMatch
+        The frame changes, order and conjugation found, with the median error.
+
+    Raises
+    ------
+    ShapeError
+        If the two arrays are not both (N, 4) with the same N.
     """
     qe = np.asarray(q_ext, dtype=float)
     qr = quat_normalize(q_ref)

@@ -65,7 +65,18 @@ def _now() -> str:
 
 
 def sha256_file(path: str | os.PathLike[str]) -> str:
-    """SHA-256 (hex) of a file's bytes."""
+    """SHA-256 (hex) of a file's bytes (FIPS 180-4).
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The file.
+
+    Returns
+    -------
+    str
+        64 hexadecimal characters.
+    """
     h = hashlib.sha256()
     with open(path, "rb") as fh:
         for block in iter(lambda: fh.read(1 << 20), b""):
@@ -100,7 +111,27 @@ def _remove_temp_files(root: Path) -> list[Path]:
 
 @dataclass(frozen=True)
 class Manifest:
-    """A run folder's ``manifest.json`` (see the module docstring)."""
+    """A run folder's ``manifest.json`` (see the module docstring).
+
+    Attributes
+    ----------
+    folder : pathlib.Path
+        The run folder.
+    run_id : str
+        Unique id of the run.
+    kind : str
+        What ran (``"lab"``, ``"batch-simulate"``, ...).
+    seed : int or None
+        The run's seed.
+    created, finished : str
+        Start and end times, ISO 8601 UTC.
+    files : list of dict
+        Every file written: ``path`` (relative), ``size`` (bytes), ``sha256``.
+    parameters : dict
+        The run's parameters / configuration.
+    argv : list of str
+        The command line.
+    """
 
     folder: Path
     run_id: str
@@ -113,10 +144,24 @@ class Manifest:
     argv: list[str] = field(default_factory=list)
 
     def paths(self) -> list[Path]:
-        """The listed files as paths inside the folder."""
+        """The listed files as paths inside the folder.
+
+        Returns
+        -------
+        list of pathlib.Path
+            ``folder / file["path"]`` for every listed file.
+        """
         return [self.folder / f["path"] for f in self.files]
 
     def to_dict(self) -> dict[str, Any]:
+        """The ``manifest.json`` content.
+
+        Returns
+        -------
+        dict
+            ``format``, ``version``, ``run_id``, ``kind``, ``seed``, ``created``, ``finished``, ``parameters``,
+            ``argv``, ``files``.
+        """
         return {"format": _FORMAT, "version": _VERSION, "run_id": self.run_id, "kind": self.kind, "seed": self.seed,
                 "created": self.created, "finished": self.finished, "parameters": self.parameters,
                 "argv": self.argv, "files": self.files}
@@ -133,8 +178,23 @@ def _inside(root: Path, rel: str) -> Path:
 def read_manifest(folder: str | os.PathLike[str], *, verify: bool = True) -> Manifest | None:
     """The manifest of a run folder; ``None`` for a plain folder (no manifest, no marker).
 
-    Raises :class:`~imunav.errors.RunFolderError` for an incomplete run (marker without manifest), a
-    damaged manifest, or (``verify``) a listed file that is missing or whose size / SHA-256 differ.
+    Parameters
+    ----------
+    folder : str or os.PathLike
+        The folder.
+    verify : bool
+        Check every listed file's size and SHA-256.
+
+    Returns
+    -------
+    Manifest or None
+        The manifest.
+
+    Raises
+    ------
+    RunFolderError
+        For an incomplete run (marker without manifest), a damaged manifest, or (``verify``) a listed file
+        that is missing or whose size / SHA-256 differ.
     """
     root = Path(folder)
     mp = root / MANIFEST
@@ -171,7 +231,20 @@ def read_manifest(folder: str | os.PathLike[str], *, verify: bool = True) -> Man
 def trusted_files(folder: str | os.PathLike[str]) -> list[Path] | None:
     """Files a reader of ``folder`` may use: those of its verified manifest, or ``None`` for a plain folder.
 
-    An incomplete run folder raises :class:`~imunav.errors.RunFolderError` (see :func:`read_manifest`).
+    Parameters
+    ----------
+    folder : str or os.PathLike
+        The folder.
+
+    Returns
+    -------
+    list of pathlib.Path or None
+        The verified files.
+
+    Raises
+    ------
+    RunFolderError
+        For an incomplete or damaged run folder (see :func:`read_manifest`).
     """
     m = read_manifest(folder)
     return None if m is None else m.paths()
@@ -270,12 +343,18 @@ class RunFolder:
 
     Parameters
     ----------
-    folder : the run folder.
-    kind : what runs (``"lab"``, ``"batch-simulate"``, ...), recorded in the manifest.
-    seed : the run's seed (None when it has none).
-    parameters : the run's parameters / configuration (JSON types), recorded in the manifest.
-    overwrite : clear a folder that holds another imunav run (rules in the module docstring) instead of refusing.
-    inputs : input files of the run: a folder holding one of them is never cleared.
+    folder : str or os.PathLike
+        The run folder.
+    kind : str
+        What runs (``"lab"``, ``"batch-simulate"``, ...), recorded in the manifest.
+    seed : int, optional
+        The run's seed (None when it has none).
+    parameters : mapping, optional
+        The run's parameters / configuration (JSON types), recorded in the manifest.
+    overwrite : bool
+        Clear a folder that holds another imunav run (rules in the module docstring) instead of refusing.
+    inputs : iterable of str or os.PathLike
+        Input files of the run: a folder holding one of them is never cleared.
 
     Examples
     --------
@@ -303,6 +382,22 @@ class RunFolder:
 
     # ------------------------------------------------------------------ start
     def start(self) -> "RunFolder":
+        """Claim the folder: check it, clear it with ``overwrite``, and create the marker exclusively.
+
+        Called by ``with RunFolder(...)``.
+
+        Returns
+        -------
+        RunFolder
+            ``self``.
+
+        Raises
+        ------
+        RunFolderError
+            If the folder holds another run or foreign files and may not be cleared, or another run claims it.
+        NotADirectoryError
+            If the path is a file.
+        """
         root = self.folder
         if root.exists() and not root.is_dir():
             raise NotADirectoryError(errno.ENOTDIR, "the run folder is a file; give a folder", str(root))
@@ -347,7 +442,20 @@ class RunFolder:
 
     # ----------------------------------------------------------------- finish
     def finish(self) -> Manifest:
-        """Check the folder is still this run's, then write the manifest (last, atomically) and drop the marker."""
+        """Check the folder is still this run's, then write the manifest (last, atomically) and drop the marker.
+
+        Called when the ``with`` block ends without an exception.
+
+        Returns
+        -------
+        Manifest
+            The manifest written.
+
+        Raises
+        ------
+        RunFolderError
+            If another run replaced the marker (the folder holds mixed files; no manifest is written).
+        """
 
         root = self.folder
         mk = _marker(root)

@@ -871,6 +871,18 @@ def rest_force_problem(fmag: float, gravity: float = G_REF) -> str | None:
 
     Accepted: ``g/4 ≤ fmag ≤ 2 g`` (see the module docstring).  The message names the likely unit
     mistake (a reading of about 1 is an accelerometer in g, about 1000 one in mg).
+
+    Parameters
+    ----------
+    fmag : float
+        Magnitude of the mean specific force, m/s².
+    gravity : float
+        Expected magnitude at rest, m/s² (default: standard gravity).
+
+    Returns
+    -------
+    str or None
+        The reason, ready for an error message, or None when ``fmag`` is plausible at rest.
     """
     if 0.25 * gravity <= fmag <= 2.0 * gravity:
         return None

@@ -61,12 +61,34 @@ HOUR: Final[float] = 3600.0
 
 
 def deg2rad(x: ArrayLike) -> NDArray[np.float64]:
-    """Degrees to radians."""
+    """Degrees to radians, ``x * pi / 180``.
+
+    Parameters
+    ----------
+    x : array_like
+        Angle(s) or angular rate(s) in degrees (or deg/s).
+
+    Returns
+    -------
+    numpy.ndarray
+        The same values in radians (or rad/s), float64, same shape as ``x``.
+    """
     return np.asarray(x, dtype=float) * DEG
 
 
 def rad2deg(x: ArrayLike) -> NDArray[np.float64]:
-    """Radians to degrees."""
+    """Radians to degrees, ``x * 180 / pi``.
+
+    Parameters
+    ----------
+    x : array_like
+        Angle(s) or angular rate(s) in radians (or rad/s).
+
+    Returns
+    -------
+    numpy.ndarray
+        The same values in degrees (or deg/s), float64, same shape as ``x``.
+    """
     return np.asarray(x, dtype=float) / DEG
 
 
@@ -126,17 +148,44 @@ def _quantity(quantity: str) -> str:
 
 
 def normalize_unit(unit: str) -> str:
-    """Canonical spelling of a unit string (lower case, no spaces)."""
+    """Canonical spelling of a unit string (lower case, no spaces, ``sec`` -> ``s``).
+
+    Parameters
+    ----------
+    unit : str
+        A unit as a user writes it, e.g. ``"Deg / Sec"``.
+
+    Returns
+    -------
+    str
+        The spelling used as a key of the unit tables, e.g. ``"deg/s"``.
+    """
     return unit.strip().lower().replace(" ", "").replace("sec", "s")
 
 
 def unit_factor(unit: str, quantity: str) -> float:
     """Factor f such that ``value_si = f * value_in_unit``.
 
+    Parameters
+    ----------
+    unit : str
+        Unit of the values, e.g. ``"deg/s"``, ``"g"``, ``"hPa"`` (case and spaces do not matter).
+    quantity : str
+        The physical quantity: ``"angular_rate"`` (``"gyro"``), ``"acceleration"`` (``"accel"``), ``"angle"``,
+        ``"time"``, ``"temperature"``, ``"velocity"``, ``"length"``, ``"pressure"``, ``"magnetic_field"``
+        (``"mag"``).
+
+    Returns
+    -------
+    float
+        The multiplicative factor to SI (s, m, m/s, m/s^2, rad, rad/s, degC, Pa, T).  Standard gravity for
+        ``g`` is :data:`G0` = 9.80665 m/s^2 (CGPM 1901; BIPM, *The International System of Units*, 9th ed.,
+        2019).
+
     Raises
     ------
     UnitError
-        If the unit is unknown for that quantity; the message lists the
+        If the quantity is unknown, or the unit is unknown for that quantity; the message lists the
         accepted spellings.
     """
     q = _quantity(quantity)
@@ -160,6 +209,9 @@ def to_si(
 ) -> NDArray[np.float64]:
     """Convert values declared in ``unit`` to SI.
 
+    ``value_si = f * value`` with ``f`` from :func:`unit_factor`; for raw counts
+    ``value_si = (counts - offset) * scale``.
+
     Parameters
     ----------
     values : array_like
@@ -174,7 +226,18 @@ def to_si(
     scale : float, optional
         SI units per count for ``unit="counts"``.
     offset : float
-        Subtracted from counts before scaling (``unit="counts"`` only).
+        Subtracted from counts before scaling (``unit="counts"`` only), in counts.
+
+    Returns
+    -------
+    numpy.ndarray
+        The values in SI units, float64, same shape as ``values``.
+
+    Raises
+    ------
+    UnitError
+        If the unit or quantity is unknown, if counts come without a finite non-zero ``scale``, or if
+        ``scale`` is given with a unit other than counts.
     """
     x = np.asarray(values, dtype=float)
     if normalize_unit(unit) in ("counts", "count", "lsb", "raw"):
@@ -190,7 +253,27 @@ def to_si(
 
 
 def from_si(values: ArrayLike, unit: str, quantity: str) -> NDArray[np.float64]:
-    """Inverse of :func:`to_si` (no counts)."""
+    """Convert SI values to ``unit``: the inverse of :func:`to_si` (no counts), ``value = value_si / f``.
+
+    Parameters
+    ----------
+    values : array_like
+        Values in SI units.
+    unit : str
+        Target unit, e.g. ``"deg/s"``.
+    quantity : str
+        The physical quantity (see :func:`unit_factor`).
+
+    Returns
+    -------
+    numpy.ndarray
+        The values in ``unit``, float64, same shape as ``values``.
+
+    Raises
+    ------
+    UnitError
+        If the unit or quantity is unknown.
+    """
     return np.asarray(values, dtype=float) / unit_factor(unit, quantity)
 
 
@@ -232,6 +315,27 @@ def _display_key(unit: str) -> str:
 def to_display(x_si: ArrayLike, unit: str) -> NDArray[np.float64] | float:
     """Convert an SI value to a display unit, e.g. ARW rad/sqrt(s) -> deg/sqrt(h).
 
+    ``display = factor * x_si`` with the factors of :data:`DISPLAY_UNITS` (the table in the module
+    docstring), the units in which IEEE Std 952-1997 (Annex C) and datasheets quote noise terms.
+
+    Parameters
+    ----------
+    x_si : array_like
+        Value(s) in SI units (rad/sqrt(s), rad/s, m/s/sqrt(s), ratio, rad, ...).
+    unit : str
+        Display unit, a key of :data:`DISPLAY_UNITS` (``°``, ``√``, ``µ``, ``hr`` and ``²`` are accepted as
+        spellings of ``deg``, ``sqrt``, ``u``, ``h`` and ``^2``).
+
+    Returns
+    -------
+    float or numpy.ndarray
+        The value(s) in the display unit: a float for a scalar input.
+
+    Raises
+    ------
+    UnitError
+        If the display unit is unknown; the message lists the known ones.
+
     Examples
     --------
     >>> round(float(to_display(1e-3, "deg/sqrt(h)")), 6)   # 1 mrad/sqrt(s)
@@ -242,6 +346,24 @@ def to_display(x_si: ArrayLike, unit: str) -> NDArray[np.float64] | float:
 
 
 def from_display(x: ArrayLike, unit: str) -> NDArray[np.float64] | float:
-    """Convert a display-unit value to SI (inverse of :func:`to_display`)."""
+    """Convert a display-unit value to SI: the inverse of :func:`to_display`, ``x_si = x / factor``.
+
+    Parameters
+    ----------
+    x : array_like
+        Value(s) in the display unit.
+    unit : str
+        Display unit, a key of :data:`DISPLAY_UNITS`.
+
+    Returns
+    -------
+    float or numpy.ndarray
+        The value(s) in SI units: a float for a scalar input.
+
+    Raises
+    ------
+    UnitError
+        If the display unit is unknown.
+    """
     out = np.asarray(x, dtype=float) / DISPLAY_UNITS[_display_key(unit)]
     return float(out) if out.ndim == 0 else out

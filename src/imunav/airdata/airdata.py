@@ -1,5 +1,10 @@
 """Air-data computations (Akgün 2002, ch. 2, Table 2.1; Kayton & Fried 1997, ch. 4).
 
+References: O. Akgün, *Hava verileri sistemi ile Doppler radarının Kalman süzgeci temelinde
+tümleştirilmesi* (Integration of an air data system and a Doppler radar via Kalman filtering), MSc
+thesis, Istanbul Technical University, 2002 ("the thesis"); M. Kayton, W. R. Fried, *Avionics
+Navigation Systems*, 2nd ed., Wiley, 1997.
+
 Inputs are total (pitot) pressure ``p_t``, static pressure ``p`` (Pa) and
 total air temperature ``T_m`` (K).  Impact pressure ``q_c = p_t − p`` (eq. 2.1).
 
@@ -62,7 +67,25 @@ def _arr(x: ArrayLike, name: str, positive: bool = False) -> Array:
 
 
 def pitot_ratio(mach: ArrayLike) -> Array:
-    """``p_t / p`` for a pitot probe at Mach M (isentropic below 1, Rayleigh above)."""
+    """``p_t / p`` for a pitot probe at Mach M (isentropic below 1, Rayleigh above; module docstring).
+
+    Parameters
+    ----------
+    mach : array_like
+        Mach number, >= 0.
+
+    Returns
+    -------
+    numpy.ndarray
+        Ratio of total to static pressure, >= 1.
+
+    Raises
+    ------
+    InvalidInputError
+        If a Mach number is negative.
+    NonFiniteError
+        If a value is NaN or infinite.
+    """
     M = _arr(mach, "mach")
     if np.any(M < 0):
         raise InvalidInputError("mach must be >= 0")
@@ -99,14 +122,54 @@ def _invert_pitot(ratio: Array, name: str) -> Array:
 
 
 def mach_from_pressures(p_total: ArrayLike, p_static: ArrayLike) -> Array:
-    """Mach number from total and static pressure (Pa), sub- and supersonic."""
+    """Mach number from total and static pressure (Pa), sub- and supersonic (inverse of :func:`pitot_ratio`).
+
+    Parameters
+    ----------
+    p_total : array_like
+        Total (pitot) pressure, Pa.
+    p_static : array_like
+        Static pressure, Pa, > 0.
+
+    Returns
+    -------
+    numpy.ndarray
+        Mach number.
+
+    Raises
+    ------
+    InvalidInputError
+        If a pressure is not positive, or ``p_total < p_static``.
+    NonFiniteError
+        If a value is NaN or infinite.
+    ConvergenceError
+        If the supersonic inversion does not converge.
+    """
     pt = _arr(p_total, "p_total", True)
     ps = _arr(p_static, "p_static", True)
     return _invert_pitot(np.asarray(pt / ps, dtype=np.float64), "mach_from_pressures")
 
 
 def calibrated_airspeed(impact_pressure: ArrayLike) -> Array:
-    """Calibrated airspeed (m/s) from impact pressure ``q_c`` (Pa) (Table 2.1 d, inverted)."""
+    """Calibrated airspeed (m/s) from impact pressure ``q_c`` (Pa) (the thesis's Table 2.1 d, inverted).
+
+    Parameters
+    ----------
+    impact_pressure : array_like
+        ``q_c = p_t − p``, Pa, >= 0.
+
+    Returns
+    -------
+    numpy.ndarray
+        Calibrated airspeed, m/s.
+
+    Raises
+    ------
+    InvalidInputError
+        If an impact pressure is negative.
+    NonFiniteError
+        If a value is NaN or infinite.
+    """
     qc = _arr(impact_pressure, "impact_pressure")
     if np.any(qc < 0):
         raise InvalidInputError("impact_pressure must be >= 0 Pa (total pressure below static?)")
@@ -114,13 +177,46 @@ def calibrated_airspeed(impact_pressure: ArrayLike) -> Array:
 
 
 def impact_pressure_from_cas(cas: ArrayLike) -> Array:
-    """Impact pressure (Pa) for a calibrated airspeed (m/s)."""
+    """Impact pressure (Pa) for a calibrated airspeed (m/s) (the inverse of :func:`calibrated_airspeed`).
+
+    Parameters
+    ----------
+    cas : array_like
+        Calibrated airspeed, m/s, >= 0.
+
+    Returns
+    -------
+    numpy.ndarray
+        Impact pressure ``q_c``, Pa.
+    """
     v = _arr(cas, "cas")
     return P0 * (pitot_ratio(v / A0) - 1.0)
 
 
 def static_temperature(total_temperature_k: ArrayLike, mach: ArrayLike, recovery: float = 1.0) -> Array:
-    """``T_s = T_m / (1 + 0.2 r M²)`` (Table 2.1 e)."""
+    """``T_s = T_m / (1 + 0.2 r M²)`` (the thesis's Table 2.1 e).
+
+    Parameters
+    ----------
+    total_temperature_k : array_like
+        Measured total air temperature, K, > 0.
+    mach : array_like
+        Mach number, >= 0.
+    recovery : float
+        Probe recovery factor r in (0, 1].
+
+    Returns
+    -------
+    numpy.ndarray
+        Static air temperature, K.
+
+    Raises
+    ------
+    InvalidInputError
+        If a temperature is not positive or ``recovery`` is outside (0, 1].
+    NonFiniteError
+        If a value is NaN or infinite.
+    """
     Tm = _arr(total_temperature_k, "total_temperature_k", True)
     M = _arr(mach, "mach")
     if not 0 < recovery <= 1.0:
@@ -129,30 +225,107 @@ def static_temperature(total_temperature_k: ArrayLike, mach: ArrayLike, recovery
 
 
 def total_temperature(static_temperature_k: ArrayLike, mach: ArrayLike, recovery: float = 1.0) -> Array:
-    """Measured total air temperature ``T_m = T_s (1 + 0.2 r M²)``."""
+    """Measured total air temperature ``T_m = T_s (1 + 0.2 r M²)``.
+
+    Parameters
+    ----------
+    static_temperature_k : array_like
+        Static air temperature, K.
+    mach : array_like
+        Mach number, >= 0.
+    recovery : float
+        Probe recovery factor r.
+
+    Returns
+    -------
+    numpy.ndarray
+        Total air temperature, K.
+    """
     return _arr(static_temperature_k, "static_temperature_k", True) * (1.0 + 0.2 * recovery * _arr(mach, "mach")**2)
 
 
 def true_airspeed(mach: ArrayLike, static_temperature_k: ArrayLike) -> Array:
-    """``V_T = M √(γ R T_s)`` (Table 2.1 f: 20.0468 M √T_s)."""
+    """``V_T = M √(γ R T_s)`` (the thesis's Table 2.1 f: 20.0468 M √T_s).
+
+    Parameters
+    ----------
+    mach : array_like
+        Mach number, >= 0.
+    static_temperature_k : array_like
+        Static air temperature, K.
+
+    Returns
+    -------
+    numpy.ndarray
+        True airspeed, m/s.
+    """
     return _arr(mach, "mach") * np.sqrt(GAMMA * R_AIR * _arr(static_temperature_k, "static_temperature_k", True))
 
 
 def density_ratio(p_static: ArrayLike, static_temperature_k: ArrayLike) -> Array:
-    """``ρ/ρ₀ = p / (R T ρ₀)`` (Table 2.1 b; 0.35164 T in kPa units)."""
+    """``ρ/ρ₀ = p / (R T ρ₀)`` (the thesis's Table 2.1 b; 0.35164 T in kPa units).
+
+    Parameters
+    ----------
+    p_static : array_like
+        Static pressure, Pa.
+    static_temperature_k : array_like
+        Static air temperature, K.
+
+    Returns
+    -------
+    numpy.ndarray
+        Density relative to the ISA sea-level density ρ₀ = 1.225 kg/m³.
+    """
     return _arr(p_static, "p_static", True) / (R_AIR * _arr(static_temperature_k, "static_temperature_k", True) * RHO0)
 
 
 def tas_from_cas_low_speed(cas: ArrayLike, rho_ratio: ArrayLike, compressibility: ArrayLike = 1.0) -> Array:
-    """Low-speed TAS ``V_T = V_c (f/f₀) √(ρ₀/ρ)`` (thesis eq. 2.6 with the density ratio corrected)."""
+    """Low-speed TAS ``V_T = V_c (f/f₀) √(ρ₀/ρ)`` (the thesis's eq. 2.6 with the density ratio corrected).
+
+    Parameters
+    ----------
+    cas : array_like
+        Calibrated airspeed, m/s.
+    rho_ratio : array_like
+        Density ratio ρ/ρ₀.
+    compressibility : array_like
+        Compressibility correction ``f/f₀`` (1 at low speed).
+
+    Returns
+    -------
+    numpy.ndarray
+        True airspeed, m/s.
+    """
     return _arr(cas, "cas") * _arr(compressibility, "compressibility") / np.sqrt(_arr(rho_ratio, "rho_ratio", True))
 
 
 def aoa_sideslip(v_air_body: ArrayLike, definition: str = "thesis") -> tuple[Array, Array]:
-    """Angle of attack and sideslip (rad) from the body-axis air velocity (N, 3) or (3,).
+    """Angle of attack and sideslip (rad) from the body-axis air velocity.
 
     ``definition="thesis"``: ``α = atan2(V_z, V_x)``, ``β = atan(V_y/V_x)`` (eq. 2.5);
     ``"standard"``: ``β = asin(V_y/|V|)``.
+
+    Parameters
+    ----------
+    v_air_body : array_like, shape (3,) or (N, 3)
+        Air velocity relative to the aircraft in body axes (FRD), m/s.
+    definition : {"thesis", "standard"}
+        Definition of β.
+
+    Returns
+    -------
+    alpha : numpy.ndarray
+        Angle of attack, rad.
+    beta : numpy.ndarray
+        Sideslip angle, rad.
+
+    Raises
+    ------
+    ShapeError
+        If ``v_air_body`` is not (3,) / (N, 3).
+    InvalidInputError
+        If ``definition`` is unknown or the forward component is not positive.
     """
     v = _arr(v_air_body, "v_air_body")
     if v.shape[-1] != 3:
@@ -170,7 +343,29 @@ def aoa_sideslip(v_air_body: ArrayLike, definition: str = "thesis") -> tuple[Arr
 
 
 def tas_to_body(tas: ArrayLike, alpha: ArrayLike, beta: ArrayLike, definition: str = "thesis") -> Array:
-    """Body-axis air velocity (…, 3) from TAS, α, β (eq. 2.7 for the thesis definition of β)."""
+    """Body-axis air velocity from TAS, α, β (eq. 2.7 for the thesis definition of β).
+
+    Parameters
+    ----------
+    tas : array_like
+        True airspeed, m/s.
+    alpha : array_like
+        Angle of attack, rad.
+    beta : array_like
+        Sideslip angle, rad.
+    definition : {"thesis", "standard"}
+        Definition of β (see :func:`aoa_sideslip`).
+
+    Returns
+    -------
+    numpy.ndarray, shape (..., 3)
+        Air velocity in body axes (FRD), m/s.
+
+    Raises
+    ------
+    InvalidInputError
+        If ``definition`` is unknown.
+    """
     V = _arr(tas, "tas")
     a = _arr(alpha, "alpha")
     b = _arr(beta, "beta")
@@ -185,8 +380,25 @@ def tas_to_body(tas: ArrayLike, alpha: ArrayLike, beta: ArrayLike, definition: s
 
 @dataclass(frozen=True)
 class AirData(Result):
-    """Outputs of an air-data computer (SI): pressure altitude (m), Mach, CAS, TAS (m/s),
-    static temperature (K), density (kg/m³), impact pressure (Pa)."""
+    """Outputs of an air-data computer (SI).
+
+    Attributes
+    ----------
+    pressure_altitude : numpy.ndarray
+        Geopotential pressure altitude, m.
+    mach : numpy.ndarray
+        Mach number.
+    cas : numpy.ndarray
+        Calibrated airspeed, m/s.
+    tas : numpy.ndarray
+        True airspeed, m/s.
+    static_temperature : numpy.ndarray
+        Static air temperature, K.
+    density : numpy.ndarray
+        Air density, kg/m³.
+    impact_pressure : numpy.ndarray
+        Impact pressure ``q_c``, Pa.
+    """
 
     pressure_altitude: Array
     mach: Array
@@ -198,7 +410,31 @@ class AirData(Result):
 
 
 def air_data(p_total: ArrayLike, p_static: ArrayLike, total_temperature_k: ArrayLike, recovery: float = 1.0) -> AirData:
-    """Air-data computer: pressures (Pa) and TAT (K) → altitude, Mach, CAS, TAS, SAT, ρ."""
+    """Air-data computer: pressures (Pa) and TAT (K) → altitude, Mach, CAS, TAS, SAT, ρ (module docstring).
+
+    Parameters
+    ----------
+    p_total : array_like
+        Total (pitot) pressure, Pa.
+    p_static : array_like
+        Static pressure, Pa.
+    total_temperature_k : array_like
+        Measured total air temperature, K.
+    recovery : float
+        Probe recovery factor r.
+
+    Returns
+    -------
+    AirData
+        The derived quantities, shaped like the inputs.
+
+    Raises
+    ------
+    InvalidInputError
+        If a pressure or temperature is not positive, or the total pressure is below the static one.
+    NonFiniteError
+        If a value is NaN or infinite.
+    """
     pt = _arr(p_total, "p_total", True)
     ps = _arr(p_static, "p_static", True)
     M = mach_from_pressures(pt, ps)

@@ -12,8 +12,10 @@ base H     T_b (K)   p_b (Pa)      L (K/m)
 =========  ========  ============  ===========
 
 ``p = p_b (T/T_b)^{−g₀/(L R)}`` in gradient layers, ``p = p_b exp(−g₀ (H − H_b)/(R T_b))``
-in isothermal ones.  The troposphere formula is the thesis's Table 2.1(a):
-``P_s = 101.325 (1 − 2.25577·10⁻⁵ H)^{5.255879}`` kPa.  Geometric height z
+in isothermal ones.  The troposphere formula is Table 2.1(a) of O. Akgün, *Hava verileri sistemi ile
+Doppler radarının Kalman süzgeci temelinde tümleştirilmesi* (Integration of an air data system and a
+Doppler radar via Kalman filtering), MSc thesis, Istanbul Technical University, 2002 ("the thesis"
+below): ``P_s = 101.325 (1 − 2.25577·10⁻⁵ H)^{5.255879}`` kPa.  Geometric height z
 converts by ``H = r₀ z / (r₀ + z)`` (r₀ = 6 356 766 m) in :func:`geopotential_altitude`.
 """
 
@@ -86,7 +88,21 @@ def _check(x: ArrayLike, name: str) -> Array:
 
 @dataclass(frozen=True)
 class IsaState(Result):
-    """ISA state at geopotential altitude ``altitude`` (m): T (K), p (Pa), ρ (kg/m³), a (m/s)."""
+    """ISA state at geopotential altitude ``altitude``.
+
+    Attributes
+    ----------
+    altitude : numpy.ndarray
+        Geopotential altitude, m.
+    temperature : numpy.ndarray
+        Static temperature, K.
+    pressure : numpy.ndarray
+        Static pressure, Pa.
+    density : numpy.ndarray
+        Air density, kg/m³.
+    speed_of_sound : numpy.ndarray
+        Speed of sound, m/s.
+    """
 
     altitude: Array
     temperature: Array
@@ -100,6 +116,23 @@ def isa(altitude: ArrayLike, delta_t: float = 0.0) -> IsaState:
 
     ``delta_t`` (K) shifts the temperature (ISA+ΔT day) without changing the
     pressure profile (the pressure-altitude convention).  Valid for −500 to 47 000 m.
+
+    Parameters
+    ----------
+    altitude : array_like
+        Geopotential altitude, m, in [−500, 47 000].
+    delta_t : float
+        Temperature offset from the standard day, K.
+
+    Returns
+    -------
+    IsaState
+        T (K), p (Pa), ρ = p / (R T) (kg/m³) and a (m/s), shaped like ``altitude``.
+
+    Raises
+    ------
+    InvalidInputError
+        If an altitude is outside the model's range or not finite, or the temperature becomes non-positive.
     """
     H = _check(altitude, "altitude")
     if np.any(H < -500.0) or np.any(H > 47000.0):
@@ -117,7 +150,23 @@ def isa(altitude: ArrayLike, delta_t: float = 0.0) -> IsaState:
 
 
 def speed_of_sound(temperature: ArrayLike) -> Array:
-    """``a = √(γ R T)`` (thesis eq. 2.2)."""
+    """``a = √(γ R T)`` (the thesis's eq. 2.2), γ = 1.4, R = 287.05287 J/(kg K).
+
+    Parameters
+    ----------
+    temperature : array_like
+        Static temperature, K, > 0.
+
+    Returns
+    -------
+    numpy.ndarray
+        Speed of sound, m/s.
+
+    Raises
+    ------
+    InvalidInputError
+        If a temperature is not positive and finite.
+    """
     T = _check(temperature, "temperature")
     if np.any(T <= 0):
         raise InvalidInputError("temperature must be > 0 K (pass Kelvin, not °C)")
@@ -127,8 +176,23 @@ def speed_of_sound(temperature: ArrayLike) -> Array:
 def pressure_altitude(pressure: ArrayLike) -> Array:
     """Geopotential pressure altitude (m) from static pressure (Pa), the inverse of :func:`isa`.
 
-    Troposphere: ``H = [1 − (p/p₀)^{1/5.255879}] / 2.25577·10⁻⁵`` (thesis Table 2.1 inverted);
+    Troposphere: ``H = [1 − (p/p₀)^{1/5.255879}] / 2.25577·10⁻⁵`` (the thesis's Table 2.1 inverted);
     stratosphere: ``H = 11000 − ln(p/22632)·R T₁₁/g₀``.
+
+    Parameters
+    ----------
+    pressure : array_like
+        Static pressure, Pa, > 0.
+
+    Returns
+    -------
+    numpy.ndarray
+        Pressure altitude, geopotential m.
+
+    Raises
+    ------
+    InvalidInputError
+        If a pressure is not positive and finite, or lies outside the model's altitude range.
     """
     p = _check(pressure, "pressure")
     if np.any(p <= 0):
@@ -151,6 +215,17 @@ def pressure_altitude(pressure: ArrayLike) -> Array:
 
 
 def geopotential_altitude(height: ArrayLike) -> Array:
-    """Geopotential altitude ``H = r₀ z / (r₀ + z)`` from geometric height z (m)."""
+    """Geopotential altitude ``H = r₀ z / (r₀ + z)`` from geometric height z (m), r₀ = 6 356 766 m (ISO 2533).
+
+    Parameters
+    ----------
+    height : array_like
+        Geometric height above mean sea level, m.
+
+    Returns
+    -------
+    numpy.ndarray
+        Geopotential altitude, m.
+    """
     z = _check(height, "height")
     return R_EARTH_GEOPOT * z / (R_EARTH_GEOPOT + z)

@@ -1,13 +1,17 @@
 """Wind-estimating air-data / Doppler Kalman filters.
 
-Thesis filter (Akgün 2002, §5.2-5.3, 6.2a; digest §2.5)
--------------------------------------------------------
+Thesis filter (Akgün 2002, §5.2-5.3, 6.2a)
+------------------------------------------
+
+O. Akgün, *Hava verileri sistemi ile Doppler radarının Kalman süzgeci temelinde tümleştirilmesi*
+(Integration of an air data system and a Doppler radar via Kalman filtering), MSc thesis, Istanbul
+Technical University, 2002 ("the thesis").
 Indirect, open-loop, body-axis filter with state (6)::
 
     x = [δX, δY, δZ, W_x, W_y, W_z]
 
-**Sign convention (fixed here; the thesis's eqs. 5.3/5.7 and 5.9 disagree,
-digest §2.3 choice B):** ``W`` is the wind in body axes, defined by the wind
+**Sign convention (fixed here; the thesis's eqs. 5.3/5.7 and 5.9 disagree, and
+the state is read as the wind itself):** ``W`` is the wind in body axes, defined by the wind
 triangle ``V_G = V_A + W`` (ground velocity = air velocity + wind), and
 ``δX = X_G − X_A`` is the correction of the ADS dead-reckoning position
 ``X_A = Σ V_A T``.  The measurement is the Doppler minus ADS velocity::
@@ -90,7 +94,7 @@ def thesis_row(iteration: int | ArrayLike) -> int | Array:
 
 @dataclass(frozen=True)
 class ThesisFilterConfig(Result):
-    """Parameters of the thesis filter (defaults: the thesis's values, digest §3)."""
+    """Parameters of the thesis filter (defaults: the thesis's values, Akgün 2002, §6.2)."""
 
     dt: float = 0.001
     tau: float = 600.0

@@ -2,10 +2,12 @@
 
 Two families:
 
-* **Thesis aircraft** (Akgün 2002, §5.3.2, 6.2d): McLean's "Charlie A"
-  12-state linear model ``x = [u, w, q, θ, β, p, r, φ, ψ, X, Y, Z]``
+* **Thesis aircraft** (O. Akgün, *Integration of an air data system and a Doppler radar via Kalman
+  filtering* (in Turkish), MSc thesis, Istanbul Technical University, 2002, §5.3.2, 6.2d): the
+  "Charlie A" 12-state linear model of D. McLean, *Automatic Flight Control Systems*, Prentice Hall,
+  1990, ``x = [u, w, q, θ, β, p, r, φ, ψ, X, Y, Z]``
   (u, w perturbations about U₀ = 250 m/s) with u = 0, Euler-discretised at
-  T = 1 ms.  The printed discrete matrix is garbled (digest §2.8); the
+  T = 1 ms.  The discrete matrix printed in the thesis is garbled; the
   continuous matrix here uses the coarse derivatives it implies
   (Z_u = −0.1, Z_w = −0.3, M_q = −0.4, Y_v = −1, L'_β = −1, L'_p = −5,
   L'_r = 0.4, N'_β = 0.6, N'_r = −0.1) and the physically correct gravity and
@@ -61,7 +63,27 @@ CHARLIE_STATES = ("u", "w", "q", "theta", "beta", "p", "r", "phi", "psi", "X", "
 
 
 def charlie_model(dt: float = 0.001, u0: float = 250.0) -> tuple[Array, Array]:
-    """Continuous and Euler-discrete (``I + A T``) 12×12 matrices of the thesis aircraft."""
+    """Continuous and Euler-discrete (``I + A T``) 12×12 matrices of the thesis aircraft (module docstring).
+
+    Parameters
+    ----------
+    dt : float
+        Step T, s, > 0.
+    u0 : float
+        Trim airspeed U₀, m/s, > 0.
+
+    Returns
+    -------
+    A : numpy.ndarray, shape (12, 12)
+        Continuous state matrix (SI: m/s, rad, rad/s, m).
+    F : numpy.ndarray, shape (12, 12)
+        Discrete transition matrix ``I + A T``.
+
+    Raises
+    ------
+    InvalidInputError
+        If ``dt`` or ``u0`` is not positive.
+    """
     if not dt > 0 or not u0 > 0:
         raise InvalidInputError(f"dt and u0 must be > 0, got {dt}, {u0}")
     A = np.zeros((12, 12))
@@ -83,7 +105,19 @@ def charlie_model(dt: float = 0.001, u0: float = 250.0) -> tuple[Array, Array]:
 
 @dataclass(frozen=True)
 class ThesisFlight(Result):
-    """Thesis aircraft run: t (N,), states (N, 12), body velocity (N, 3), position (N, 3)."""
+    """Thesis aircraft run.
+
+    Attributes
+    ----------
+    t : numpy.ndarray, shape (N,)
+        Time, s.
+    states : numpy.ndarray, shape (N, 12)
+        ``[u, w, q, θ, β, p, r, φ, ψ, X, Y, Z]`` (m/s, rad, rad/s, m).
+    velocity : numpy.ndarray, shape (N, 3)
+        Body velocity ``(U₀ + u, U₀ β, w)``, m/s.
+    position : numpy.ndarray, shape (N, 3)
+        Position, m.
+    """
 
     t: Array
     states: Array
@@ -94,7 +128,37 @@ class ThesisFlight(Result):
 def simulate_thesis_aircraft(n_steps: int = 500, dt: float = 0.001, u0: float = 250.0,
                              beta0: float = 0.1, phi0_deg: float = 5.0, psi0: float = 0.1,
                              x0: float = 0.1, y0: float = 0.1, altitude: float = 12200.0) -> ThesisFlight:
-    """Free response (u = 0) of the thesis aircraft from the thesis's initial state (digest §2.8)."""
+    """Free response (u = 0) of the thesis aircraft from the thesis's initial state (Akgün 2002, §5.3.2).
+
+    Parameters
+    ----------
+    n_steps : int
+        Number of steps.
+    dt : float
+        Step, s.
+    u0 : float
+        Trim airspeed, m/s.
+    beta0 : float
+        Initial sideslip, rad.
+    phi0_deg : float
+        Initial roll angle, degrees.
+    psi0 : float
+        Initial heading, rad.
+    x0, y0 : float
+        Initial horizontal position, m.
+    altitude : float
+        Initial altitude, m.
+
+    Returns
+    -------
+    ThesisFlight
+        States, body velocity and position at every step.
+
+    Raises
+    ------
+    InvalidInputError
+        If ``n_steps < 1`` (or ``dt``, ``u0`` are not positive).
+    """
     if n_steps < 1:
         raise InvalidInputError(f"n_steps must be >= 1, got {n_steps}")
     _, Ad = charlie_model(dt, u0)
@@ -130,11 +194,36 @@ def _shaping_discrete(num: Array, den: Array, dt: float) -> tuple[Array, Array, 
 
 def dryden_gusts(n: int, dt: float, airspeed: float, sigma: float | tuple[float, float, float],
                  length_u: float = 533.0, rng: np.random.Generator | int | None = None) -> Array:
-    """Dryden gust velocities (n, 3) along (longitudinal, lateral, vertical) axes, m/s.
+    """Dryden gust velocities along (longitudinal, lateral, vertical) axes, m/s.
 
     u: ``H(s) ∝ 1/(1 + τ_u s)``; v, w: ``H(s) ∝ (1 + √3 τ s)/(1 + τ s)²`` with
-    ``τ = L/V``, L_v = L_w = L_u/2 (MIL-F-8785C); each output scaled to the
+    ``τ = L/V``, L_v = L_w = L_u/2 (MIL-F-8785C, 1980); each output scaled to the
     requested standard deviation exactly (stationary start).
+
+    Parameters
+    ----------
+    n : int
+        Number of samples.
+    dt : float
+        Step, s.
+    airspeed : float
+        True airspeed V, m/s, > 0.
+    sigma : float or tuple of float
+        Gust standard deviation, m/s: one for all axes or (u, v, w).
+    length_u : float
+        Longitudinal scale length L_u, m.
+    rng : numpy.random.Generator or int, optional
+        Random generator or seed.
+
+    Returns
+    -------
+    numpy.ndarray, shape (n, 3)
+        Gust velocities, m/s.
+
+    Raises
+    ------
+    InvalidInputError
+        If a parameter is not positive (``sigma`` >= 0).
     """
 
     sig = np.broadcast_to(np.asarray(sigma, dtype=np.float64), (3,))
@@ -183,7 +272,15 @@ class FlightConfig(Result):
     profile : str
         "cruise", "turns" (alternating 90° turns at 1.5°/s) or "manoeuvre" (turns + climbs/descents + speed
         changes).
-    wind_ned : array
+    duration : float
+        Flight length, s.
+    tas : float
+        True airspeed, m/s.
+    altitude : float
+        Initial altitude, m.
+    heading_deg : float
+        Initial heading, degrees.
+    wind_ned : tuple of float
         Constant mean wind (velocity of the air mass, m/s, NED).
     turbulence : str
         "none", "light", "moderate", "severe" (Dryden σ 0/1.5/3/6.5 m/s).
@@ -191,10 +288,18 @@ class FlightConfig(Result):
         Hz (truth must be a multiple of the sensor rates).
     sigma_ps, sigma_qc, sigma_tat, sigma_alpha_deg, sigma_beta_deg : float
         Air-data system noise: static and impact pressure (Pa), total air temperature (K), angles (deg).
-    doppler, over_water
-        Beam-level error model; [(t0, t1), ...] intervals over water (s).
+    alpha_trim_deg : float
+        Trim angle of attack, degrees.
+    n_beams : int
+        Doppler beams (3 or 4).
+    depression_deg : float
+        Doppler beam depression, degrees.
+    doppler : DopplerErrors
+        Beam-level error model.
+    over_water : tuple of (float, float)
+        ``[(t0, t1), ...]`` intervals over water, s.
     sigma_attitude_deg : float
-        Attitude-reference noise (per Euler angle).
+        Attitude-reference noise (per Euler angle), degrees.
     """
 
     profile: str = "turns"
@@ -240,13 +345,50 @@ class FlightConfig(Result):
 
 @dataclass(frozen=True)
 class FlightData(Result):
-    """Truth and sensor outputs of :func:`simulate_flight`.
+    """Truth and sensor outputs of :func:`simulate_flight` (SI, angles in rad).
 
-    Truth (rate_truth): t, position_ned, velocity_ned (ground), wind_ned
-    (mean + gust), euler (roll, pitch, yaw), v_air_body, tas, altitude.
-    ADS (rate_ads): t_ads, p_static, p_total, tat, alpha, beta, tas_ads,
-    v_ads_body, euler_ads (attitude reference).  Doppler (rate_doppler):
-    t_doppler, v_doppler_body, beam_velocity, euler_doppler, over_water.
+    Attributes
+    ----------
+    t : numpy.ndarray, shape (N,)
+        Truth epochs (``rate_truth``), s.
+    position_ned, velocity_ned : numpy.ndarray, shape (N, 3)
+        Position (m) and ground velocity (m/s), NED.
+    wind_ned : numpy.ndarray, shape (N, 3)
+        Wind (mean + gust), m/s, NED.
+    euler : numpy.ndarray, shape (N, 3)
+        Roll, pitch, yaw, rad.
+    v_air_body : numpy.ndarray, shape (N, 3)
+        Air-relative velocity in body axes (FRD), m/s.
+    tas : numpy.ndarray, shape (N,)
+        True airspeed, m/s.
+    altitude : numpy.ndarray, shape (N,)
+        Altitude, m.
+    t_ads : numpy.ndarray
+        Air-data epochs (``rate_ads``), s.
+    p_static, p_total : numpy.ndarray
+        Measured static and total pressure, Pa.
+    tat : numpy.ndarray
+        Measured total air temperature, K.
+    alpha, beta : numpy.ndarray
+        Measured angle of attack and sideslip, rad.
+    tas_ads : numpy.ndarray
+        True airspeed from the air-data computer, m/s.
+    v_ads_body : numpy.ndarray
+        Air-data velocity in body axes, m/s.
+    euler_ads : numpy.ndarray
+        Attitude reference at the air-data epochs, rad.
+    t_doppler : numpy.ndarray
+        Doppler epochs (``rate_doppler``), s.
+    v_doppler_body : numpy.ndarray
+        Doppler ground velocity in body axes, m/s.
+    beam_velocity : numpy.ndarray
+        Doppler beam velocities, m/s.
+    euler_doppler : numpy.ndarray
+        Attitude reference at the Doppler epochs, rad.
+    over_water : numpy.ndarray of bool
+        Doppler epochs over water.
+    config : FlightConfig
+        The configuration simulated.
     """
 
     t: Array
@@ -274,7 +416,18 @@ class FlightData(Result):
     config: FlightConfig
 
     def C_nb(self, which: str = "doppler") -> Array:
-        """Attitude DCMs (N, 3, 3) at the ADS or Doppler epochs (from the attitude reference)."""
+        """Attitude DCMs at the ADS or Doppler epochs (from the attitude reference), or of the truth.
+
+        Parameters
+        ----------
+        which : {"doppler", "ads", "truth"}
+            Epochs (the truth's attitude for ``"truth"``).
+
+        Returns
+        -------
+        numpy.ndarray, shape (N, 3, 3)
+            ``C_nb``, body (FRD) to NED.
+        """
         e = {"doppler": self.euler_doppler, "ads": self.euler_ads, "truth": self.euler}[which]
         return dcm_from_euler(e)
 
@@ -302,7 +455,26 @@ def _profiles(cfg: FlightConfig, t: Array) -> tuple[Array, Array, Array]:
 
 
 def simulate_flight(cfg: FlightConfig | None = None, rng: np.random.Generator | int | None = None) -> FlightData:
-    """Simulate truth, air-data, Doppler and attitude outputs of a flight (seeded)."""
+    """Simulate truth, air-data, Doppler and attitude outputs of a flight (seeded).
+
+    Parameters
+    ----------
+    cfg : FlightConfig, optional
+        The flight (default: :class:`FlightConfig` ()).
+    rng : numpy.random.Generator or int, optional
+        Random generator or seed.
+
+    Returns
+    -------
+    FlightData
+        Truth and sensor outputs.
+
+    Raises
+    ------
+    InvalidInputError
+        If the configuration is inconsistent (unknown profile or turbulence, rates that do not divide the
+        truth rate, non-positive durations or speeds).
+    """
     c = FlightConfig() if cfg is None else cfg
     gen = np.random.default_rng(rng)
     dt = 1.0 / c.rate_truth

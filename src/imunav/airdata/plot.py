@@ -1,7 +1,8 @@
-"""Figures of the air-data / Doppler wind filter (the thesis's figure set, digest §4.4).
+"""Figures of the air-data / Doppler wind filter.
 
-Each function takes results and returns a matplotlib Figure; nothing here
-computes estimates.
+The figure set of O. Akgün, *Integration of an air data system and a Doppler radar via Kalman
+filtering* (in Turkish), MSc thesis, Istanbul Technical University, 2002, ch. 6 ("the thesis").
+Each function takes results and returns a matplotlib Figure; nothing here computes estimates.
 """
 
 from __future__ import annotations
@@ -23,7 +24,22 @@ def _plt():
 
 
 def plot_wind(result, data=None, axis_names=("x", "y", "z")):
-    """Wind estimate vs truth and the difference-loop wind (thesis Figs. 6.1, 6.3, 6.8), with ±σ."""
+    """Wind estimate vs truth and the difference-loop wind (the thesis's Figs. 6.1, 6.3, 6.8), with ±σ.
+
+    Parameters
+    ----------
+    result : WindFilterResult
+        Output of :func:`imunav.airdata.filter.run_thesis_filter`; wind in m/s, body axes.
+    data : ThesisData, optional
+        The simulated run, for the true wind.
+    axis_names : tuple of str
+        Labels of the three axes.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        The figure.
+    """
     plt = _plt()
     fig, axes = plt.subplots(3, 1, figsize=(8, 8), sharex=True)
     k = np.arange(result.wind.shape[0])
@@ -42,7 +58,20 @@ def plot_wind(result, data=None, axis_names=("x", "y", "z")):
 
 
 def plot_innovations(result, bound: float = 3.0):
-    """Normalised innovations with ±bound lines and rejected samples marked (Figs. 6.7, 6.10, 6.13)."""
+    """Normalised innovations with ±bound lines and rejected samples marked (the thesis's Figs. 6.7, 6.10, 6.13).
+
+    Parameters
+    ----------
+    result : WindFilterResult
+        A filter output with normalised innovations and robust weights.
+    bound : float
+        Bound drawn at ±``bound`` (in standard deviations).
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        The figure.
+    """
     plt = _plt()
     fig, axes = plt.subplots(3, 1, figsize=(8, 7), sharex=True)
     k = np.arange(result.normalized.shape[0])
@@ -59,7 +88,20 @@ def plot_innovations(result, bound: float = 3.0):
 
 
 def plot_detectors(detection, names=("alg1", "alg2", "alg3")):
-    """Detector statistics with their thresholds (calibrated solid, thesis dashed) (Figs. 6.14, 6.16)."""
+    """Detector statistics with their thresholds (calibrated solid, thesis dashed) (the thesis's Figs. 6.14, 6.16).
+
+    Parameters
+    ----------
+    detection : dict
+        Detector statistics and thresholds (:func:`imunav.filters.faults.detector_statistics`).
+    names : tuple of str
+        The detectors drawn.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        The figure.
+    """
     plt = _plt()
     fig, axes = plt.subplots(len(names), 1, figsize=(8, 2.4 * len(names)), sharex=True)
     axes = np.atleast_1d(axes)
@@ -79,7 +121,20 @@ def plot_detectors(detection, names=("alg1", "alg2", "alg3")):
 
 
 def plot_long_horizon(result, flight=None):
-    """Long-horizon wind estimate (NED) with ±σ and, when given, the flight's true wind."""
+    """Long-horizon wind estimate (NED) with ±σ and, when given, the flight's true wind.
+
+    Parameters
+    ----------
+    result : LongHorizonResult
+        Output of :func:`imunav.airdata.filter.run_long_horizon`; wind in m/s, NED.
+    flight : object, optional
+        The simulated flight (:func:`imunav.sim.flight.simulate_flight`), for the true wind.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        The figure.
+    """
     plt = _plt()
     fig, axes = plt.subplots(3, 1, figsize=(9, 7), sharex=True)
     for i, ax in enumerate(axes):

@@ -1,6 +1,10 @@
-"""The thesis scenarios and their Monte Carlo evaluation (Akgün 2002, ch. 6; digest §3-4).
+"""The thesis scenarios and their Monte Carlo evaluation.
 
-Scenario (digest §3): T = 1 ms, 500 steps, ADS noise σ = 2 m/s and Doppler
+After O. Akgün, *Hava verileri sistemi ile Doppler radarının Kalman süzgeci temelinde tümleştirilmesi*
+(Integration of an air data system and a Doppler radar via Kalman filtering), MSc thesis, Istanbul
+Technical University, 2002, §5.3 and ch. 6 ("the thesis").
+
+Scenario (the thesis's §6.2): T = 1 ms, 500 steps, ADS noise σ = 2 m/s and Doppler
 σ = 0.1 m/s per body axis at every step, true wind (Gauss-Markov truth with
 no process noise, eq. 5.5) from ``x_g(0) = [0.1, 0.1, 0.1, 7, 5, 1.7]``,
 true aircraft velocity from the Charlie model (it cancels in z).  Sensors,
@@ -73,7 +77,39 @@ KINDS = ("nominal", "outliers", "variance", "bias", "drift", "stuck")
 
 @dataclass(frozen=True)
 class ThesisScenario(Result):
-    """Thesis scenario parameters (defaults from the thesis; steps are the thesis's 1-based steps)."""
+    """Thesis scenario parameters (defaults from the thesis; steps are the thesis's 1-based steps).
+
+    Attributes
+    ----------
+    kind : str
+        ``"nominal"``, ``"outliers"``, ``"variance"``, ``"bias"``, ``"drift"`` or ``"stuck"``.
+    n_steps : int
+        Number of filter steps.
+    dt : float
+        Step, s.
+    sigma_ads, sigma_doppler : float
+        Noise standard deviation per body axis of the air-data and Doppler velocities, m/s.
+    tau : float
+        Correlation time of the Gauss-Markov wind, s.
+    x_true0 : tuple of float
+        Initial true state ``(δX, W)``: position error (m) and wind (m/s), body axes.
+    outlier_steps : tuple of int
+        Steps of the outliers (``kind="outliers"``).
+    outlier_factor : float
+        Noise multiplier of an outlier.
+    fault_step : int
+        First step of a variance, bias, drift or stuck fault.
+    variance_factor : float
+        Noise multiplier of a variance fault.
+    bias : float
+        Bias fault, m/s.
+    drift_rate : float
+        Drift fault rate, m/s per s.
+    channels : tuple of int or None
+        Body axes affected by the fault (None: all).
+    filter : ThesisFilterConfig
+        The filter run on the scenario.
+    """
 
     kind: str = "nominal"
     n_steps: int = 500
@@ -106,6 +142,13 @@ class ThesisScenario(Result):
         return self.fault_step - 1
 
     def faults(self) -> list[Fault]:
+        """The injected faults of this scenario, for :mod:`imunav.filters.faults`.
+
+        Returns
+        -------
+        list of Fault
+            One entry per fault (empty for ``"nominal"`` and ``"outliers"``).
+        """
         ch = self.channels
         o = self.onset_row
         return {
@@ -119,7 +162,18 @@ class ThesisScenario(Result):
         }[self.kind]
 
     def anomaly_mask(self) -> NDArray[np.bool_]:
-        """(N, 3) True where the injected fault / outlier affects a sample."""
+        """Where the injected fault / outlier affects a sample.
+
+        Returns
+        -------
+        numpy.ndarray of bool, shape (N, 3)
+            True at the affected (step, body axis).
+
+        Raises
+        ------
+        InvalidInputError
+            If the kind is unknown, or a step or channel lies outside the run.
+        """
         m = np.zeros((self.n_steps, 3), dtype=bool)
         ch = slice(None) if self.channels is None else list(self.channels)
         if self.kind == "outliers":
@@ -135,8 +189,28 @@ class ThesisScenario(Result):
 class ThesisData(Result):
     """One simulated thesis run: truth and sensors, (N, 3) per body axis unless noted.
 
-    x_true (N, 6) true error state (δX, W), wind_true = x_true[:, 3:],
-    v_true body velocity, v_ads, v_doppler, z = V_D − V_A, ads_noise.
+    Attributes
+    ----------
+    t : numpy.ndarray, shape (N,)
+        Time, s.
+    x_true : numpy.ndarray, shape (N, 6)
+        True error state ``(δX, W)``: position error (m), wind (m/s).
+    wind_true : numpy.ndarray, shape (N, 3)
+        ``x_true[:, 3:]``, m/s.
+    v_true : numpy.ndarray
+        Body velocity over the ground, m/s.
+    v_ads : numpy.ndarray
+        Air-data velocity, m/s.
+    v_doppler : numpy.ndarray
+        Doppler velocity, m/s.
+    z : numpy.ndarray
+        Filter measurement ``V_D − V_A``, m/s.
+    ads_noise : numpy.ndarray
+        Air-data noise drawn, m/s.
+    anomaly : numpy.ndarray of bool
+        :meth:`ThesisScenario.anomaly_mask`.
+    scenario : ThesisScenario
+        The scenario simulated.
     """
 
     t: Array
@@ -180,7 +254,31 @@ def _simulate(s: ThesisScenario, n_runs: int, rng: np.random.Generator | int | N
 
 def simulate_thesis_batch(sc: ThesisScenario | None = None, n_runs: int = 100,
                           rng: np.random.Generator | int | None = None) -> tuple[Array, Array, Array]:
-    """(z (runs, N, 3), x_true (N, 6), ADS noise (runs, N, 3)) for Monte Carlo."""
+    """Measurements of many runs of a scenario at once, for Monte Carlo.
+
+    Parameters
+    ----------
+    sc : ThesisScenario, optional
+        The scenario (default: the nominal one).
+    n_runs : int
+        Number of runs, >= 1.
+    rng : numpy.random.Generator or int, optional
+        Random generator or seed.
+
+    Returns
+    -------
+    z : numpy.ndarray, shape (runs, N, 3)
+        Filter measurements ``V_D − V_A``, m/s.
+    x_true : numpy.ndarray, shape (N, 6)
+        True state (the same for every run: the truth has no process noise).
+    ads_noise : numpy.ndarray, shape (runs, N, 3)
+        Air-data noise drawn, m/s.
+
+    Raises
+    ------
+    InvalidInputError
+        If ``n_runs < 1``.
+    """
     s = ThesisScenario() if sc is None else sc
     if n_runs < 1:
         raise InvalidInputError(f"n_runs must be >= 1, got {n_runs}")
@@ -189,7 +287,20 @@ def simulate_thesis_batch(sc: ThesisScenario | None = None, n_runs: int = 100,
 
 
 def simulate_thesis(sc: ThesisScenario | None = None, rng: np.random.Generator | int | None = None) -> ThesisData:
-    """One thesis run with the aircraft truth (Charlie model) and both sensors."""
+    """One thesis run with the aircraft truth (Charlie model) and both sensors.
+
+    Parameters
+    ----------
+    sc : ThesisScenario, optional
+        The scenario (default: the nominal one).
+    rng : numpy.random.Generator or int, optional
+        Random generator or seed.
+
+    Returns
+    -------
+    ThesisData
+        Truth and sensor outputs.
+    """
     s = ThesisScenario() if sc is None else sc
     xt, v, va, vd, na = _simulate(s, 1, rng)
     return ThesisData(s.dt * np.arange(1, s.n_steps + 1), xt, xt[:, 3:].copy(), v, va[0], vd[0], vd[0] - va[0], na[0],
@@ -206,10 +317,38 @@ def simulate_detector_statistics(
     cfg: ThesisFilterConfig | None = None,
     on_chunk: Callable[[int], None] | None = None,
 ) -> dict[str, Array]:
-    """Detector statistics (:func:`imunav.filters.faults.detector_statistics`,
-    window ``window``) of ``n_runs`` simulated runs of ``sc`` through the
-    thesis filter, simulated ``chunk`` runs at a time (bounded memory);
-    ``on_chunk(n)`` is called after each chunk of ``n`` runs (progress)."""
+    """Detector statistics of many simulated runs through the thesis filter.
+
+    :func:`imunav.filters.faults.detector_statistics` with window ``window`` over ``n_runs`` runs of ``sc``,
+    simulated ``chunk`` runs at a time (bounded memory).
+
+    Parameters
+    ----------
+    sc : ThesisScenario
+        The scenario.
+    n_runs : int
+        Number of runs.
+    rng : numpy.random.Generator or int, optional
+        Random generator or seed.
+    window : int
+        Detector window, steps.
+    chunk : int
+        Runs simulated at a time.
+    cfg : ThesisFilterConfig, optional
+        Filter configuration (default: the thesis's values).
+    on_chunk : callable, optional
+        Called as ``on_chunk(n)`` after each chunk of ``n`` runs (progress).
+
+    Returns
+    -------
+    dict of str to numpy.ndarray
+        Per detector, its statistic for every run (runs stacked along the first axis).
+
+    Raises
+    ------
+    InvalidInputError
+        If ``n_runs < 1``.
+    """
     if n_runs < 1:
         raise InvalidInputError(f"n_runs must be >= 1, got {n_runs}")
     gen = np.random.default_rng(rng)
@@ -226,11 +365,25 @@ def simulate_detector_statistics(
 
 
 def delay_summary(alarm: NDArray[np.bool_], onset_row: int, horizon: int = 10) -> dict[str, float | None]:
-    """Detection-delay figures of an alarm matrix (runs, steps) for a fault at
-    ``onset_row`` (:func:`imunav.filters.faults.detection_delays`; the onset
-    sample is delay 1): ``median_delay``, ``p90_delay``, ``p99_delay``,
-    ``max_delay`` (None when no run detects), ``detected_within_<horizon>``
-    and ``missed`` (share of runs never detected)."""
+    """Detection-delay figures of an alarm matrix for a fault at ``onset_row``.
+
+    Delays as :func:`imunav.filters.faults.detection_delays` (the onset sample is delay 1).
+
+    Parameters
+    ----------
+    alarm : numpy.ndarray of bool, shape (runs, steps)
+        Alarm of each run at each step.
+    onset_row : int
+        Row of the first faulty sample.
+    horizon : int
+        Steps within which a detection counts as prompt.
+
+    Returns
+    -------
+    dict
+        ``median_delay``, ``p90_delay``, ``p99_delay``, ``max_delay`` (steps; None when no run detects),
+        ``detected_within_<horizon>`` and ``missed`` (share of runs never detected).
+    """
     delays, missed = detection_delays(alarm, onset_row)
     _, missed_h = detection_delays(alarm, onset_row, horizon)
     ok = delays[np.isfinite(delays)]
@@ -245,7 +398,20 @@ def delay_summary(alarm: NDArray[np.bool_], onset_row: int, horizon: int = 10) -
 
 
 def covariance_sequence(cfg: ThesisFilterConfig | None = None, n_steps: int = 500) -> dict[str, list[float]]:
-    """P44 and P11 at the thesis's table iterations, beside the thesis's P44 values."""
+    """P44 and P11 at the thesis's table iterations, beside the thesis's P44 values (Akgün 2002, Table 6.3).
+
+    Parameters
+    ----------
+    cfg : ThesisFilterConfig, optional
+        Filter configuration (default: the thesis's values).
+    n_steps : int
+        Number of steps.
+
+    Returns
+    -------
+    dict of str to list of float
+        ``iteration``, ``P44`` and ``P11`` of the filter, and the thesis's column ``P44_thesis``.
+    """
     r = run_thesis_filter(np.zeros((n_steps, 3)), cfg)
     rows = thesis_row(np.asarray(THESIS_ITERATIONS))
     return {"iteration": list(THESIS_ITERATIONS), "P44": [float(r.cov_diag[k, 3]) for k in rows],
@@ -261,7 +427,25 @@ def actual_error_covariance(cfg: ThesisFilterConfig | None = None, n_steps: int 
     Q = 0.001, so the actual error ``e = x̂ − x`` evolves as
     ``e⁺ = (I − K H) F e⁻ + K v`` with the filter's own gains K:
     ``E⁺ = (I−KH) F E Fᵀ (I−KH)ᵀ + K R_true Kᵀ`` and mean ``(I−KH) F μ``
-    (initial error = x̂₀ − x_g(0)).  Returns (mean (N, 6), covariance diag (N, 6)).
+    (initial error = x̂₀ − x_g(0)).
+
+    Parameters
+    ----------
+    cfg : ThesisFilterConfig, optional
+        Filter configuration (default: the thesis's values).
+    n_steps : int
+        Number of steps.
+    x_error0 : tuple of float
+        Initial estimation error, m and m/s.
+    sigma_ads, sigma_doppler : float
+        True noise standard deviations, m/s.
+
+    Returns
+    -------
+    mean : numpy.ndarray, shape (N, 6)
+        Mean error.
+    var : numpy.ndarray, shape (N, 6)
+        Diagonal of the error covariance.
     """
     m = thesis_matrices(cfg)
     F, H, G, Q, R = m["F"], m["H"], m["G"], m["Q"], m["R"]
@@ -286,7 +470,25 @@ def actual_error_covariance(cfg: ThesisFilterConfig | None = None, n_steps: int 
 
 @dataclass(frozen=True)
 class ThesisMonteCarlo(Result):
-    """Monte Carlo figures of the thesis scenarios (see :func:`monte_carlo_thesis`)."""
+    """Monte Carlo figures of the thesis scenarios (see :func:`monte_carlo_thesis`).
+
+    Attributes
+    ----------
+    n_runs : int
+        Runs per scenario.
+    seed : int
+        Seed of the run.
+    wind : dict
+        Wind-error figures of the nominal scenario.
+    robust : dict
+        Rejection figures of each robust method.
+    false_alarms : dict
+        False-alarm rates of every detector.
+    detection : dict
+        Detection delays of the variance and bias faults.
+    thresholds : dict
+        Calibrated and thesis detector thresholds.
+    """
 
     n_runs: int
     seed: int
@@ -330,6 +532,31 @@ def monte_carlo_thesis(
     * detection: variance and bias faults: detection delay (onset sample =
       delay 1) median / p90 / max, share detected within ``horizon`` steps,
       missed by the end of the run.
+
+    Parameters
+    ----------
+    n_runs : int
+        Runs per scenario.
+    rng : int
+        Seed.
+    p_false_alarm : float
+        Per-step false-alarm probability the detector thresholds are calibrated to.
+    window : int
+        Detector window, steps.
+    robust_methods : tuple of str
+        Robust updates compared (``"gate2"``, ``"gate3"``, ``"nis"``, ``"isolate"``, ``"huber"``).
+    horizon : int
+        Steps within which a detection counts as prompt.
+
+    Returns
+    -------
+    ThesisMonteCarlo
+        The figures above.
+
+    Raises
+    ------
+    InvalidInputError
+        If a robust method is unknown.
     """
     seed = int(rng)
     ss = np.random.SeedSequence(seed)
@@ -436,7 +663,22 @@ def monte_carlo_thesis(
 
 
 def thesis_report(n_runs: int = 200, rng: int = 0, **kw) -> dict:
-    """Everything ``imunav airdata thesis`` writes: covariance sequence, Monte Carlo, one seeded run's detection steps."""
+    """Everything ``imunav airdata thesis`` writes: covariance sequence, Monte Carlo, one seeded run's detection steps.
+
+    Parameters
+    ----------
+    n_runs : int
+        Monte Carlo runs per scenario.
+    rng : int
+        Seed.
+    **kw
+        Keywords of :func:`monte_carlo_thesis`.
+
+    Returns
+    -------
+    dict
+        JSON-ready report.
+    """
 
     cov = covariance_sequence()
     mc = monte_carlo_thesis(n_runs, rng, **kw)
@@ -463,7 +705,17 @@ def thesis_tables(rng: int = 0) -> dict:
     50…500.  Table 6.3: x wind error and P44 of the optimal and the robust
     filter (thesis gate ±2 and vector χ² gate) with outliers at steps
     100/200/300/400, at iterations 50, 100, 101, …, 500.  Errors are
-    estimate − truth; iteration n is row n − 2.
+    estimate − truth, m/s; iteration n is row n − 2.
+
+    Parameters
+    ----------
+    rng : int
+        Seed.
+
+    Returns
+    -------
+    dict
+        ``table_6_1`` and ``table_6_3`` (columns of the tables) and ``seed``.
     """
     its1 = list(range(50, 501, 50))
     d = simulate_thesis(ThesisScenario(), rng)
@@ -486,9 +738,26 @@ def thesis_tables(rng: int = 0) -> dict:
 
 
 def load_config(path) -> "ThesisScenario | object":
-    """Read a TOML scenario: a ``[thesis]`` table → :class:`ThesisScenario`, a ``[flight]`` table →
+    """Read a TOML scenario.
+
+    A ``[thesis]`` table gives a :class:`ThesisScenario`, a ``[flight]`` table a
     :class:`imunav.airdata.flight.FlightConfig` (tuples given as arrays; ``doppler`` as a sub-table of
-    :class:`~imunav.airdata.doppler.DopplerErrors` fields).  Unknown keys raise :class:`ConfigError`.
+    :class:`~imunav.airdata.doppler.DopplerErrors` fields).
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The TOML file.
+
+    Returns
+    -------
+    ThesisScenario or FlightConfig
+        The scenario.
+
+    Raises
+    ------
+    ConfigError
+        If the file cannot be read or parsed, has neither table, or holds unknown keys or bad values.
     """
 
     p = Path(path)

@@ -191,7 +191,7 @@ def gravity_step(kind, x, P, sv, Pb, yg, ya, h, gp, S, W):
 
 @njit(cache=True)
 def _javed_bias(x, xq0, xq1, xq2, yg0, yg1, yg2, h, gp, sv, Pb, W):
-    """Cascaded gyro-bias KF of the Javed-like filter (digest §5.2 [EXT]).
+    """Cascaded gyro-bias KF of the Javed-like filter (a standard design standing in for Javed et al. 2020's).
 
     Pseudo-measurement z_b = (x_t − x_{t−1})/Δt − [x_{t−1}]× y_g = −[x_{t−1}]× b,
     averaged over ``gp[G_BIAS_WINDOW]`` samples without detected acceleration.

@@ -124,7 +124,7 @@ def madgwick_step(q, gyr, acc, mag, dt, beta, use_mag, mag_scale):
     field reference b = [b_x, 0, b_z] = mag_scale [|h_xy|, 0, h_z] and
     h = q ⊗ m ⊗ q*.  ``mag_scale = 1`` is the derivation; ``0.5`` reproduces the
     C code, whose ``_2bx = sqrt(hx² + hy²)`` should be ``2 sqrt(...)``
-    (references.md §3).  The 6D branch uses the same residual without the field.
+    (Laidig et al. 2021, BROAD).  The 6D branch uses the same residual without the field.
     """
     q0, q1, q2, q3 = q[0], q[1], q[2], q[3]
     gx, gy, gz = gyr[0], gyr[1], gyr[2]

@@ -97,7 +97,15 @@ ADAPTIVE_GRID: dict[str, list[float]] = {
 
 @dataclass
 class AdaptiveMEKF(MEKF):
-    """MEKF with adaptive R, disturbance rejection and rest bias estimation."""
+    """MEKF with adaptive R, disturbance rejection and rest bias estimation (module docstring).
+
+    The methods are those of :class:`imunav.attitude.mekf.MEKF`.
+
+    Attributes
+    ----------
+    params : MekfParams
+        The tuning; default :data:`ADAPTIVE_DEFAULTS`.
+    """
 
     params: MekfConfig = field(default_factory=lambda: ADAPTIVE_DEFAULTS)
 

@@ -32,8 +32,25 @@ def _mean3(x: ArrayLike, name: str) -> Array:
 
 
 def tilt_from_accel(accel: ArrayLike) -> tuple[float, float]:
-    """(roll, pitch) [rad] from specific force: roll = atan2(−f_y, −f_z),
-    pitch = atan2(f_x, sqrt(f_y² + f_z²))."""
+    """Roll and pitch from specific force: roll = atan2(−f_y, −f_z), pitch = atan2(f_x, sqrt(f_y² + f_z²)).
+
+    Groves 2013, §5.6.2 (leveling): at rest the specific force is minus gravity in body axes.
+
+    Parameters
+    ----------
+    accel : array_like, shape (3,)
+        Specific force, body axes (FRD), m/s² (any unit).
+
+    Returns
+    -------
+    roll, pitch : float
+        Angles, rad.
+
+    Raises
+    ------
+    DegenerateGeometryError
+        If the specific force is zero.
+    """
     f = _mean3(accel, "accel")
     if np.linalg.norm(f) == 0.0:
         raise DegenerateGeometryError("accelerometer mean is zero; alignment needs gravity (a static sample)")
@@ -45,9 +62,22 @@ def align(accel: ArrayLike, mag: ArrayLike | None = None, *, yaw: float = 0.0) -
 
     Parameters
     ----------
-    accel : (3,) or (N, 3) specific force [m/s²].
-    mag : (3,) or (N, 3) magnetic field (any unit) or None.
-    yaw : heading [rad] used when ``mag`` is None.
+    accel : array_like
+        (3,) or (N, 3) specific force [m/s²].
+    mag : array_like, optional
+        (3,) or (N, 3) magnetic field (any unit) or None.
+    yaw : float
+        Heading [rad] used when ``mag`` is None.
+
+    Returns
+    -------
+    numpy.ndarray, shape (4,)
+        ``q_nb``, body (FRD) to NED (magnetic north with a magnetometer).
+
+    Raises
+    ------
+    DegenerateGeometryError
+        If the specific force is zero, or the field is parallel to it (no horizontal component).
     """
     f = _mean3(accel, "accel")
     fn = np.linalg.norm(f)
@@ -82,6 +112,18 @@ def broad_reference_start(acc0: ArrayLike, mag0: ArrayLike) -> Array:
     a wrong attitude and converge during the initial rest.  This function
     reproduces that start exactly and maps it to imunav's NED frame
     (q_ned = q_ned_nwu ⊗ q_nwu, q_ned_nwu = rotation of π about x).
+
+    Parameters
+    ----------
+    acc0 : array_like, shape (3,)
+        First accelerometer sample, body axes.
+    mag0 : array_like, shape (3,)
+        First magnetometer sample, body axes.
+
+    Returns
+    -------
+    numpy.ndarray, shape (4,)
+        The start attitude ``q_nb`` (NED) of the reference runs.
     """
     z = np.asarray(acc0, float).reshape(3)
     m = np.asarray(mag0, float).reshape(3)

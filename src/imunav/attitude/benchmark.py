@@ -38,7 +38,26 @@ FILTERS = (*REALTIME, "smoother")
 
 
 def make_filter(name: str, params: dict[str, Any] | None = None) -> Any:
-    """Filter object by name with parameter overrides."""
+    """Filter object by name with parameter overrides.
+
+    Parameters
+    ----------
+    name : str
+        ``"complementary"``, ``"mahony"``, ``"madgwick"``, ``"madgwick_c"``, ``"mekf"``, ``"adaptive"``,
+        ``"ukf"`` or ``"smoother"``.
+    params : dict, optional
+        Parameter overrides (the filter's fields, SI).
+
+    Returns
+    -------
+    object
+        The filter, with ``run(data)``.
+
+    Raises
+    ------
+    ConfigError
+        If the name or a parameter is unknown.
+    """
 
     p = dict(params or {})
     try:
@@ -64,12 +83,34 @@ def make_filter(name: str, params: dict[str, Any] | None = None) -> Any:
 
 
 def reference_start(name: str) -> bool:
-    """Madgwick/Mahony are started like the BROAD reference runs."""
+    """Whether a filter is started like the BROAD reference runs (Madgwick and Mahony).
+
+    Parameters
+    ----------
+    name : str
+        Filter name.
+
+    Returns
+    -------
+    bool
+        True for the filters that start from :func:`imunav.attitude.alignment.broad_reference_start`.
+    """
     return name in ("madgwick_c", "mahony")
 
 
 @dataclass(frozen=True)
 class TrialScore:
+    """BROAD score of one filter on one trial.
+
+    Attributes
+    ----------
+    trial : str
+        Trial name.
+    total_rmse_deg, heading_rmse_deg, inclination_rmse_deg : float
+        RMSE of the error angles over the movement samples, degrees.
+    seconds : float
+        Run time of the filter, s.
+    """
     trial: str
     total_rmse_deg: float
     heading_rmse_deg: float
@@ -79,6 +120,17 @@ class TrialScore:
 
 @dataclass(frozen=True)
 class BenchResult(Result):
+    """Scores of one filter and parameter set over the trials.
+
+    Attributes
+    ----------
+    filter : str
+        Filter name.
+    params : dict
+        The parameter overrides used.
+    trials : list of TrialScore
+        One score per trial.
+    """
     filter: str
     params: dict[str, Any]
     trials: list[TrialScore]
@@ -88,10 +140,24 @@ class BenchResult(Result):
         return float(np.mean([t.total_rmse_deg for t in self.trials]))
 
     def means(self) -> dict[str, float]:
+        """Mean of each RMSE over the trials.
+
+        Returns
+        -------
+        dict of str to float
+            ``total_rmse_deg``, ``heading_rmse_deg``, ``inclination_rmse_deg``, degrees.
+        """
         return {k: float(np.mean([getattr(t, k) for t in self.trials]))
                 for k in ("total_rmse_deg", "heading_rmse_deg", "inclination_rmse_deg")}
 
     def to_dict(self) -> dict[str, Any]:
+        """JSON-ready dictionary.
+
+        Returns
+        -------
+        dict
+            ``filter``, ``params``, ``mean`` (:meth:`means`) and ``trials`` keyed by trial name.
+        """
         return {"filter": self.filter, "params": self.params, "mean": self.means(),
                 "trials": {t.trial: {"total_rmse_deg": t.total_rmse_deg, "heading_rmse_deg": t.heading_rmse_deg,
                                      "inclination_rmse_deg": t.inclination_rmse_deg, "seconds": t.seconds}
@@ -119,7 +185,22 @@ def _score_trial(name: str, params: dict[str, Any], path: str) -> TrialScore:
 
 
 def evaluate(name: str, params: dict[str, Any] | None, trials: Iterable[str | Path]) -> BenchResult:
-    """Run filter ``name`` with one parameter set on every trial file."""
+    """Run filter ``name`` with one parameter set on every trial file.
+
+    Parameters
+    ----------
+    name : str
+        Filter name (see :func:`make_filter`).
+    params : dict or None
+        Parameter overrides.
+    trials : iterable of str or pathlib.Path
+        BROAD trial files (``.mat``; Laidig et al. 2021).
+
+    Returns
+    -------
+    BenchResult
+        Per-trial BROAD RMSE (degrees) and run time.
+    """
     p = dict(params or {})
     return BenchResult(name, p, [_score_trial(name, p, str(t)) for t in trials])
 
@@ -136,6 +217,29 @@ def grid_search(name: str, grid: dict[str, list[Any]], trials: Iterable[str | Pa
 
     ``workers`` processes (default: all cores); each task is one parameter set
     over all trials, so a worker's trial cache is reused across tasks.
+
+    Parameters
+    ----------
+    name : str
+        Filter name (see :func:`make_filter`).
+    grid : dict of str to list
+        Values of each parameter; every combination is evaluated.
+    trials : iterable of str or pathlib.Path
+        BROAD trial files (``.mat``; Laidig et al. 2021).
+    workers : int, optional
+        Number of processes (default: all cores).
+    progress : callable, optional
+        Called as ``progress(done, total)`` after each parameter set.
+
+    Returns
+    -------
+    list of BenchResult
+        One per combination, best (lowest mean total RMSE) first.
+
+    Raises
+    ------
+    ConfigError
+        If the grid is empty (an unknown parameter fails in :func:`make_filter`).
     """
     if not grid:
         raise ConfigError("empty parameter grid; give at least one parameter with a list of values")
@@ -169,8 +273,18 @@ def cv_grid_search(name: str, grid: dict[str, list[Any]], trials: Iterable[str |
 
     Parameters
     ----------
-    name, grid, trials, workers, progress : as :func:`grid_search`.
-    results : the grid's results when already computed (skips the runs).
+    name : str
+        Filter name (see :func:`make_filter`).
+    grid : dict of str to list
+        Values of each parameter.
+    trials : iterable of str or pathlib.Path
+        BROAD trial files.
+    workers : int, optional
+        Number of processes (default: all cores).
+    progress : callable, optional
+        Called as ``progress(done, total)``.
+    results : list of BenchResult, optional
+        The grid's results when already computed (skips the runs).
 
     Returns
     -------
@@ -178,6 +292,11 @@ def cv_grid_search(name: str, grid: dict[str, list[Any]], trials: Iterable[str |
         ``CvResult.oof`` per trial total RMSE out of fold, ``in_sample`` that of
         the overall best set; ``fold_choice`` / ``in_sample_choice`` are
         parameter dicts.  ``results`` as :func:`grid_search` (best first).
+
+    Raises
+    ------
+    ConfigError
+        If ``results`` do not score the same trials in the same order, or the grid is empty.
     """
     tl = [str(t) for t in trials]
     res = results if results is not None else grid_search(name, grid, tl, workers=workers, progress=progress)

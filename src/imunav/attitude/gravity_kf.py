@@ -1,6 +1,11 @@
-"""The three roll / pitch Kalman filters compared by Candan & Söken
-(UHUK-2020-173): Lee et al. 2012, Javed et al. 2020 (cascaded, reconstructed)
-and the proposed adaptive KF.  Digest: ``specs/attitude-kf-external-acceleration.md``.
+"""The three roll / pitch Kalman filters compared by Candan & Söken.
+
+S. Candan, H. E. Söken, paper UHUK-2020-173, Ulusal Havacılık ve Uzay Konferansı (Turkish National
+Aeronautics and Space Conference), 2020 ("the paper"), compares J. K. Lee, E. J. Park, S. N. Robinovitch,
+"Estimation of attitude and external acceleration using inertial sensor measurement during various
+dynamic conditions", IEEE Trans. Instrum. Meas. 61(8), 2012; M. A. Javed, M. Tahir, K. Ali, "Cascaded
+Kalman filtering-based attitude and gyro bias estimation with efficient compensation of external
+accelerations", IEEE Access 8, 2020 (cascaded, reconstructed); and its proposed adaptive KF.
 
 State x = third row of C_nb (gravity direction in body axes, eq. 7); process
 x_t = (I − Δt [y_g]×) x_{t−1} (eqs. 11-12), Q = −Δt² [x]× Σ_g [x]× (eq. 14);
@@ -8,25 +13,26 @@ measurement z = y_a − c_a a⁺_{t−1} = g x + v (eqs. 20-23); M = Σ_acc + σ
 with Σ_acc = c_a² ‖a⁺‖² / 3 I (eq. 25, Lee / proposed) or the Javed per-axis
 form (eqs. 29-30, reconstruction); gain K = P⁻Hᵀ(HP⁻Hᵀ + S M)⁻¹ (eq. 27).
 
-Fixes of the source made explicit (digest §11, Appendix A):
+Fixes of the paper's text (its OCR'd equations are garbled in places) made explicit:
 
-* **Accelerometer sign** (§3.1, §11.1): the paper's y_a = g + a reads +g on z
+* **Accelerometer sign**: the paper's y_a = g + a reads +g on z
   at rest; a specific-force accelerometer reads −g.  The filter is fed
-  y_a := −f (option a), so the paper's equations stay unchanged;
+  y_a := −f, so the paper's equations stay unchanged;
   ``accel_convention="paper"`` accepts data already in the paper convention.
 * **Roll / pitch** (eqs. 4-5, garbled): φ = atan2(x₂, x₃),
   θ = atan2(−x₁, hypot(x₂, x₃)).
 * **"propagation of F"** reads R; "(25)…(26)" reads (26)…(27); **a** is the
   external acceleration, not the "ideal accelerometer output".
-* **Scale factor S** (eq. 26, §4.5): diagonal Söken-Hajiyev form
-  s_i = max{1, ([ν νᵀ]_ii − [H P⁻ Hᵀ]_ii)/M_ii} (mode "B", default), or the
-  literal ×10⁴ during detected acceleration (mode "A"), or none (mode "C",
-  ablation).  S = 1 whenever no external acceleration is detected (10⁰).
-* **Javed's c_a** (eq. 28): c_a when detected, 0.5 c_a otherwise; the cascaded
-  gyro-bias KF is the digest's [EXT] design (pseudo-measurement
+* **Scale factor S** (eq. 26): diagonal Söken-Hajiyev form
+  s_i = max{1, ([ν νᵀ]_ii − [H P⁻ Hᵀ]_ii)/M_ii} (mode "B", default; H. E. Söken, C. Hajiyev, "Pico
+  satellite attitude estimation via robust unscented Kalman filter in the presence of measurement
+  faults", ISA Transactions 49(3), 2010), or the literal ×10⁴ during detected acceleration (mode "A"),
+  or none (mode "C", ablation).  S = 1 whenever no external acceleration is detected (10⁰).
+* **Javed's c_a** (eq. 28): c_a when detected, 0.5 c_a otherwise; the paper does not give Javed's
+  cascaded gyro-bias KF, so a standard design stands in for it (pseudo-measurement
   z_b = (x_t − x_{t−1})/Δt − [x_{t−1}]× y_g = −[x_{t−1}]× b, averaged over a
   window, updated only without detected acceleration).  Flagged "Javed-like".
-* **Gyro-noise unit** (§11.2): see :mod:`imunav.attitude.scenario`.
+* **Gyro-noise unit**: see :mod:`imunav.attitude.scenario`.
 """
 
 from __future__ import annotations
@@ -53,7 +59,44 @@ _SMODES = {"A": 0, "B": 1, "C": 2}
 
 @dataclass(frozen=True)
 class GravityKfConfig:
-    """Filter-side settings (SI, per-sample standard deviations)."""
+    """Filter-side settings (SI, per-sample standard deviations).
+
+    Attributes
+    ----------
+    sigma_g : float
+        Gyro noise per sample, rad/s.
+    sigma_a : float
+        Accelerometer noise per sample, m/s².
+    c_a : float
+        Lee / Javed external-acceleration constant (eq. 20).
+    g : float
+        Gravity magnitude, m/s².
+    tau : float
+        Detector threshold on ``| |y_a| − g |``, m/s².
+    s_mode : {"A", "B", "C"}
+        Scale factor S: literal ×``s_fixed`` (A), diagonal Söken-Hajiyev (B), none (C).
+    s_fixed : float
+        S of mode A during detected acceleration.
+    hold_s : float
+        Time the detection is held after the last detected sample, s.
+    normalize : bool
+        Re-normalise the state to unit length after each update.
+    exact : bool
+        Propagate with the exact rotation ``exp(−Δt [y_g]×)`` instead of ``I − Δt [y_g]×``.
+    sigma_b : float
+        Javed bias-KF random walk, rad/s/√s.
+    r_b : float
+        Javed bias pseudo-measurement noise, rad/s.
+    bias_window : int
+        Samples averaged per Javed bias update, >= 1.
+    p0 : float
+        Initial standard deviation of each state (P0 = p0² I; the paper gives none).
+
+    Raises
+    ------
+    ConfigError
+        If ``s_mode`` is unknown, a value is negative or not finite, or ``bias_window < 1``.
+    """
 
     sigma_g: float = 8.7266e-4  # rad/s per sample (0.05 °/s: reading (ii) at 100 Hz)
     sigma_a: float = 4.4145e-3  # m/s² per sample (45 µg/√Hz at 100 Hz)
@@ -81,12 +124,37 @@ class GravityKfConfig:
             raise ConfigError("bias_window must be >= 1 sample")
 
     def vector(self) -> np.ndarray:
+        """Packed parameter array of the kernel.
+
+        Returns
+        -------
+        numpy.ndarray, shape (13,)
+            The settings as float64.
+        """
         return np.array([float(_SMODES[self.s_mode]) if name == "s_mode" else float(getattr(self, name))
                          for name in _gk.GRAVITY_PARAMS])
 
 
 def roll_pitch_from_x(x: ArrayLike) -> NDArray[np.float64]:
-    """(N, 2) roll, pitch [rad] from the gravity-direction state (eqs. 4-5 fixed)."""
+    """Roll and pitch from the gravity-direction state (the paper's eqs. 4-5, fixed).
+
+    ``φ = atan2(x₂, x₃)``, ``θ = atan2(−x₁, hypot(x₂, x₃))``.
+
+    Parameters
+    ----------
+    x : array_like, shape (N, 3)
+        Gravity direction in body axes (third row of C_nb).
+
+    Returns
+    -------
+    numpy.ndarray, shape (N, 2)
+        Roll and pitch, rad.
+
+    Raises
+    ------
+    ShapeError
+        If ``x`` is not (N, 3).
+    """
     a = np.asarray(x, float)
     if a.ndim != 2 or a.shape[1] != 3:
         raise ShapeError(f"x must have shape (N, 3), got {a.shape}")
@@ -94,7 +162,22 @@ def roll_pitch_from_x(x: ArrayLike) -> NDArray[np.float64]:
 
 
 def process_noise(x: ArrayLike, sigma_g: float, dt: float) -> NDArray[np.float64]:
-    """Q = −Δt² [x]× Σ_g [x]× with Σ_g = σ_g² I (eq. 14)."""
+    """Q = −Δt² [x]× Σ_g [x]× with Σ_g = σ_g² I (the paper's eq. 14).
+
+    Parameters
+    ----------
+    x : array_like, shape (3,)
+        Gravity-direction state.
+    sigma_g : float
+        Gyro noise per sample, rad/s.
+    dt : float
+        Step, s.
+
+    Returns
+    -------
+    numpy.ndarray, shape (3, 3)
+        Process-noise covariance of the state.
+    """
     v = np.asarray(x, float).reshape(3)
     S = np.array([[0, -v[2], v[1]], [v[2], 0, -v[0]], [-v[1], v[0], 0]])
     return -dt * dt * sigma_g**2 * S @ S
@@ -102,7 +185,23 @@ def process_noise(x: ArrayLike, sigma_g: float, dt: float) -> NDArray[np.float64
 
 @dataclass
 class GravityKF:
-    """One of the paper's filters; ``kind`` in {"lee", "javed", "proposed"}."""
+    """One of the paper's filters.
+
+    Attributes
+    ----------
+    kind : {"lee", "javed", "proposed"}
+        The filter.
+    params : GravityKfParams
+        Its settings.
+    accel_convention : {"specific_force", "paper"}
+        ``"specific_force"`` for ordinary accelerometer data (f = a − g, reads −g on z when level), ``"paper"``
+        for data already in the paper's sign convention.
+
+    Raises
+    ------
+    ConfigError
+        If ``kind`` or ``accel_convention`` is unknown.
+    """
 
     kind: Literal["lee", "javed", "proposed"] = "proposed"
     params: GravityKfConfig = field(default_factory=GravityKfConfig)
@@ -119,7 +218,13 @@ class GravityKF:
         return f"gravity_{self.kind}"
 
     def reset(self, x0: ArrayLike | None = None) -> None:
-        """Start the per-sample API from ``x0`` (default level [0, 0, 1])."""
+        """Start the per-sample API from ``x0``.
+
+        Parameters
+        ----------
+        x0 : array_like, shape (3,), optional
+            Initial gravity direction in body axes (default level, [0, 0, 1]).
+        """
         self.x = np.array([0.0, 0.0, 1.0]) if x0 is None else np.asarray(x0, float).reshape(3).copy()
         self.P = np.eye(3) * self.params.p0**2
         self._sv = np.zeros(_gk.N_SV)
@@ -129,9 +234,32 @@ class GravityKF:
         self._work = np.empty((_gk.N_WORK, 3, 3))
 
     def step(self, gyro: ArrayLike, accel: ArrayLike, dt: float) -> np.ndarray:
-        """Process one sample (gyro and accelerometer at t; the gyro of t−1 drives
-        the propagation, eq. 11); returns (roll, pitch) [rad].  The first call
-        after :meth:`reset` only stores the gyro sample."""
+        """Process one sample.
+
+        The gyro and accelerometer are those of time t; the gyro of t−1 drives the propagation (eq. 11).  The
+        first call after :meth:`reset` only stores the gyro sample.
+
+        Parameters
+        ----------
+        gyro : array_like, shape (3,)
+            Angular rate, body axes, rad/s.
+        accel : array_like, shape (3,)
+            Accelerometer sample, m/s², in ``accel_convention``.
+        dt : float
+            Time since the previous sample, s, > 0.
+
+        Returns
+        -------
+        numpy.ndarray, shape (2,)
+            Roll and pitch, rad.
+
+        Raises
+        ------
+        InvalidInputError
+            If ``dt`` is not finite and positive, or the rate exceeds 1e4 rad/s.
+        ShapeError
+            If a sample is not a 3-vector.
+        """
         if not hasattr(self, "x"):
             self.reset()
         g = gyro3(gyro)
@@ -148,7 +276,23 @@ class GravityKF:
     def run(self, data: ImuData, *, x0: ArrayLike | None = None) -> AttitudeResult:
         """Filter a recording; q_nb has the estimated roll / pitch and yaw = 0.
 
-        ``x0`` defaults to the level state [0, 0, 1] (digest §10.1).
+        Parameters
+        ----------
+        data : ImuData
+            The recording (SI), body FRD.
+        x0 : array_like, shape (3,), optional
+            Initial gravity direction in body axes (default level, [0, 0, 1]: the paper's filters start level).
+
+        Returns
+        -------
+        AttitudeResult
+            ``q_nb`` with yaw 0; ``bias`` (rad/s) for Javed's filter; ``flags`` holds the state ``x``, the detector
+            output ``alpha``, the scale factor ``S`` and the external-acceleration estimate ``a_plus``.
+
+        Raises
+        ------
+        InvalidInputError
+            If ``data`` is not an ImuData with at least 2 samples.
         """
         t, g, a, _, dt, _ = prepare(data, False)
         ya = -a if self.accel_convention == "specific_force" else a
@@ -165,15 +309,54 @@ class GravityKF:
 
 
 def LeeKF(params: GravityKfConfig | None = None, **kw) -> GravityKF:  # noqa: N802
-    """Lee et al. 2012: constant c_a, equal-axis Σ_acc, S = 1."""
+    """Lee et al. 2012: constant c_a, equal-axis Σ_acc, S = 1.
+
+    Parameters
+    ----------
+    params : GravityKfParams, optional
+        Filter settings (default :class:`GravityKfParams` ()).
+    **kw
+        Further :class:`GravityKF` fields (``accel_convention``).
+
+    Returns
+    -------
+    GravityKF
+        The filter.
+    """
     return GravityKF("lee", params or GravityKfConfig(), **kw)
 
 
 def JavedKF(params: GravityKfConfig | None = None, **kw) -> GravityKF:  # noqa: N802
-    """Javed et al. 2020 ("Javed-like" reconstruction, digest §5.2)."""
+    """Javed et al. 2020 ("Javed-like" reconstruction of its cascaded bias KF; module docstring).
+
+    Parameters
+    ----------
+    params : GravityKfParams, optional
+        Filter settings (default :class:`GravityKfParams` ()).
+    **kw
+        Further :class:`GravityKF` fields (``accel_convention``).
+
+    Returns
+    -------
+    GravityKF
+        The filter.
+    """
     return GravityKF("javed", params or GravityKfConfig(), **kw)
 
 
 def ProposedKF(params: GravityKfConfig | None = None, **kw) -> GravityKF:  # noqa: N802
-    """Candan & Söken 2020: detector-switched c_a ∈ {0, 1}, diagonal S (mode B)."""
+    """Candan & Söken 2020: detector-switched c_a ∈ {0, 1}, diagonal S (mode B).
+
+    Parameters
+    ----------
+    params : GravityKfParams, optional
+        Filter settings (default :class:`GravityKfParams` ()).
+    **kw
+        Further :class:`GravityKF` fields (``accel_convention``).
+
+    Returns
+    -------
+    GravityKF
+        The filter.
+    """
     return GravityKF("proposed", params or GravityKfConfig(), **kw)

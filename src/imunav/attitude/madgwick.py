@@ -13,7 +13,8 @@ h = q ⊗ m ⊗ q* (normalised measurements).
 ``original_c=True`` reproduces the widely used C implementation, which forms
 the reference as ``_2bx = sqrt(hx² + hy²)`` (and ``_2bz = hz``) where the
 derivation needs ``2·sqrt(...)``: its reference field is half the measured
-one (references.md §3).  The BROAD published Madgwick numbers come from that
+one.  The Madgwick numbers published with the BROAD benchmark (D. Laidig, M. Caruso, A. Cereatti,
+T. Seel, "BROAD—A benchmark for robust inertial orientation estimation", Data 6(7), 2021) come from that
 code.
 """
 
@@ -34,7 +35,15 @@ __all__ = ["Madgwick"]
 
 @dataclass
 class Madgwick:
-    """Madgwick filter.  ``beta`` [rad/s] is the gradient-step gain."""
+    """Madgwick filter.
+
+    Attributes
+    ----------
+    beta : float
+        Gradient-step gain β, rad/s.
+    original_c : bool
+        Reproduce the original C implementation's half-size field reference (see the module docstring).
+    """
 
     beta: float = 0.1
     original_c: bool = False
@@ -48,10 +57,50 @@ class Madgwick:
         return "madgwick_c" if self.original_c else "madgwick"
 
     def reset(self, q0: ArrayLike) -> None:
+        """Set the attitude the next :meth:`step` starts from.
+
+        Parameters
+        ----------
+        q0 : array_like, shape (4,)
+            Attitude ``q_nb`` [w, x, y, z], body (FRD) to NED (normalised here).
+
+        Raises
+        ------
+        ShapeError
+            If ``q0`` is not a (4,) quaternion.
+        NonFiniteError
+            If ``q0`` is zero or not finite.
+        """
         self.q = check_q0(q0)
 
     def step(self, gyro: ArrayLike, accel: ArrayLike, mag: ArrayLike | None, dt: float) -> np.ndarray:
-        """Process one sample; returns the new q_nb."""
+        """Process one sample; returns the new q_nb.
+
+        Parameters
+        ----------
+        gyro : array_like, shape (3,)
+            Angular rate, body axes (FRD), rad/s.
+        accel : array_like, shape (3,)
+            Specific force, body axes, m/s² (any unit: only its direction is used).
+        mag : array_like, shape (3,), or None
+            Magnetic field, body axes (any unit); None for a 6D update.
+        dt : float
+            Time since the previous sample, s, > 0.
+
+        Returns
+        -------
+        numpy.ndarray, shape (4,)
+            The new attitude ``q_nb``.
+
+        Raises
+        ------
+        InvalidInputError
+            If ``dt`` is not finite and positive, or the rate exceeds 1e4 rad/s (not rad/s).
+        ShapeError
+            If a sample is not a 3-vector.
+        NonFiniteError
+            If a sample is not finite.
+        """
         use_mag = mag is not None
         q = _k.madgwick_step(
             _k._ned_nwu(self.q), gyro3(gyro), vec3(accel, "accel"), vec3(mag, "mag"), step_dt(dt),
@@ -61,8 +110,29 @@ class Madgwick:
         return self.q.copy()
 
     def run(self, data: ImuData, *, q0: ArrayLike | None = None, use_mag: bool | None = None) -> AttitudeResult:
-        """Filter a whole recording (numba kernel).  Starts from ``q0`` or from
-        the alignment of the first accelerometer / magnetometer sample."""
+        """Filter a whole recording (numba kernel).
+
+        Parameters
+        ----------
+        data : ImuData
+            The recording (SI: rad/s, m/s²; magnetometer in any unit), body FRD.
+        q0 : array_like, shape (4,), optional
+            Initial attitude ``q_nb`` (default: :func:`imunav.attitude.alignment.align` of the first accelerometer
+            / magnetometer sample).
+        use_mag : bool, optional
+            Use the magnetometer (9D); default: when the recording has one.
+
+        Returns
+        -------
+        AttitudeResult
+            ``q_nb`` at every sample, with the filter's name and parameters.
+
+        Raises
+        ------
+        InvalidInputError
+            If ``data`` is not an ImuData with at least 2 samples, ``use_mag=True`` without a magnetometer, or a
+            rate exceeds 1e4 rad/s.
+        """
         t, g, a, m, dt, um = prepare(data, use_mag)
         q_init = initial_q(a, m, um, q0)
         q = _k.madgwick_run(q_init, g, a, m, dt, float(self.beta), um, 0.5 if self.original_c else 1.0)

@@ -76,7 +76,75 @@ __all__ = ["MekfConfig", "MEKF"]
 
 @dataclass(frozen=True)
 class MekfConfig:
-    """MEKF tuning (SI; see the module docstring for the equations)."""
+    """MEKF tuning (SI; see the module docstring for the equations).
+
+    Attributes
+    ----------
+    sigma_gyro : float
+        Gyro white-noise density σ_g, rad/s/√Hz.
+    sigma_bias : float
+        Gyro-bias random-walk density σ_b, rad/s/√s.
+    sigma_acc : float
+        Noise of the measured gravity direction (unit vector) per sample.
+    k_acc : float
+        Inflation of R_acc with the specific-force norm deviation, ``(1 + k_acc (| |f| − g | / 0.01 g)²)``.
+    acc_reject : float
+        Accelerometer sample rejected when ``| |f| − g | / g`` exceeds it.
+    sigma_mag : float
+        Heading noise per sample, rad (at a horizontal field of |m|).
+    mag_norm_tol : float
+        Relative field-norm deviation from the reference that marks a disturbance.
+    mag_dip_tol : float
+        Dip deviation from the reference that marks a disturbance, rad.
+    k_mag : float
+        Inflation of the heading R with the norm and dip deviations.
+    rest_gyro : float
+        Rest threshold on the gyro, rad/s (0 disables rest detection).
+    rest_acc : float
+        Rest threshold on the accelerometer, m/s².
+    rest_time : float
+        Time at rest before the zero-rate pseudo-measurement, s.
+    sigma_rest : float
+        Noise of the zero-rate pseudo-measurement, rad/s.
+    g : float
+        Gravity magnitude, m/s², > 0.
+    mag_ref_time : float
+        Continuous disturbance after which the field reference is re-acquired, s (0: never).
+    k_rate : float
+        Adds ``(k_rate |ω̄|)²`` to the accelerometer variance, s.
+    ref_tau : float
+        Time constant of the slow tracking of the field reference while undisturbed, s (0: fixed).
+    use_mag : bool
+        Use the magnetometer when the recording has one.
+    acc_lpf_tau : float
+        Low-pass time constant of the specific force in the gyro-integrated navigation frame, s
+        (Laidig & Seel 2023, §4.1; 0: off).
+    p0_att : float
+        Initial attitude standard deviation, rad.
+    p0_bias : float
+        Initial gyro-bias standard deviation, rad/s.
+    rest_lpf_tau : float
+        > 0: rest test on the deviations from low-passes of this time constant, s (module docstring).
+    mag_lpf_tau : float
+        Low-pass time constant of the field norm and dip before the disturbance test, s.
+    mag_min_undisturbed : float
+        Continuous undisturbed field needed before the field is used again, s.
+    mag_bias : bool
+        False: the heading update corrects the attitude only (bias as consider states).
+    bias_clip : float
+        No rest while a low-passed gyro axis exceeds it, rad/s.
+    k_gyro_rate : float
+        Gyro noise density grows as ``sqrt(σ_g² + (k |ω|)²)``, √s.
+    tau_acc : float
+        > 0: tilt-correction time constant, s, replacing ``sigma_acc`` (rate-independent).
+    tau_mag : float
+        > 0: heading-correction time constant, s, replacing ``sigma_mag`` (rate-independent).
+
+    Raises
+    ------
+    ConfigError
+        If a value is negative or not finite, or ``g`` is not positive.
+    """
 
     sigma_gyro: float = 0.005  # rad/s/√Hz
     sigma_bias: float = 1e-5  # rad/s/√s
@@ -117,10 +185,23 @@ class MekfConfig:
             raise ConfigError(f"MekfConfig.g must be > 0, got {self.g}")
 
     def vector(self) -> np.ndarray:
-        """Packed parameter array of the kernel: the fields named in ``_kernels.MEKF_PARAMS``, in that order."""
+        """Packed parameter array of the kernel: the fields named in ``_kernels.MEKF_PARAMS``, in that order.
+
+        Returns
+        -------
+        numpy.ndarray, shape (27,)
+            The parameters as float64 (booleans as 0 / 1).
+        """
         return np.array([float(getattr(self, name)) for name in _k.MEKF_PARAMS], dtype=np.float64)
 
     def P0(self) -> np.ndarray:
+        """Initial error covariance ``diag(p0_att² I₃, p0_bias² I₃)``.
+
+        Returns
+        -------
+        numpy.ndarray, shape (6, 6)
+            Covariance of ``[δθ (rad), δb (rad/s)]``.
+        """
         return np.diag([self.p0_att**2] * 3 + [self.p0_bias**2] * 3)
 
 
@@ -144,6 +225,23 @@ class MEKF:
 
     @classmethod
     def with_params(cls, **kw: float) -> "MEKF":
+        """A filter with the default parameters, some replaced.
+
+        Parameters
+        ----------
+        **kw
+            :class:`MekfParams` fields and their values.
+
+        Returns
+        -------
+        MEKF
+            The filter.
+
+        Raises
+        ------
+        ConfigError
+            If a name is not a parameter, or a value is invalid.
+        """
         base = cls().params
         try:
             return cls(replace(base, **kw))
@@ -151,13 +249,55 @@ class MEKF:
             raise ConfigError(f"unknown MEKF parameter in {sorted(kw)}: {exc}") from exc
 
     def reset(self, q0: ArrayLike, bias: ArrayLike | None = None) -> None:
+        """Set the state the next :meth:`step` starts from (covariance back to ``params.P0()``).
+
+        Parameters
+        ----------
+        q0 : array_like, shape (4,)
+            Attitude ``q_nb`` [w, x, y, z], body (FRD) to NED (normalised here).
+        bias : array_like, shape (3,), optional
+            Initial gyro-bias estimate, rad/s (default zero).
+
+        Raises
+        ------
+        ShapeError
+            If ``q0`` is not a (4,) quaternion.
+        NonFiniteError
+            If ``q0`` is zero or not finite.
+        """
         self.q = check_q0(q0)
         self.b = vec3(bias, "bias")
         self.P = self.params.P0()
         self._st = np.zeros(_k.N_STATE)
 
     def step(self, gyro: ArrayLike, accel: ArrayLike, mag: ArrayLike | None, dt: float) -> np.ndarray:
-        """Process one sample; returns q_nb.  ``self.P``, ``self.b`` are updated in place."""
+        """Process one sample; returns q_nb.  ``self.P``, ``self.b`` are updated in place.
+
+        Parameters
+        ----------
+        gyro : array_like, shape (3,)
+            Angular rate, body axes (FRD), rad/s.
+        accel : array_like, shape (3,)
+            Specific force, body axes, m/s² (any unit: only its direction is used).
+        mag : array_like, shape (3,), or None
+            Magnetic field, body axes (any unit); None for a 6D update.
+        dt : float
+            Time since the previous sample, s, > 0.
+
+        Returns
+        -------
+        numpy.ndarray, shape (4,)
+            The new attitude ``q_nb``.
+
+        Raises
+        ------
+        InvalidInputError
+            If ``dt`` is not finite and positive, or the rate exceeds 1e4 rad/s (not rad/s).
+        ShapeError
+            If a sample is not a 3-vector.
+        NonFiniteError
+            If a sample is not finite.
+        """
         p = self.params.vector()
         if mag is None:
             p[17] = 0.0
@@ -180,7 +320,32 @@ class MEKF:
 
     def run(self, data: ImuData, *, q0: ArrayLike | None = None, bias0: ArrayLike | None = None,
             use_mag: bool | None = None) -> AttitudeResult:
-        """Filter a whole recording (numba kernel)."""
+        """Filter a whole recording (numba kernel).
+
+        Parameters
+        ----------
+        data : ImuData
+            The recording (SI: rad/s, m/s²; magnetometer in any unit), body FRD.
+        q0 : array_like, shape (4,), optional
+            Initial attitude ``q_nb`` (default: :func:`imunav.attitude.alignment.align` of the first accelerometer
+            / magnetometer sample).
+        bias0 : array_like, shape (3,), optional
+            Initial gyro-bias estimate, rad/s (default zero).
+        use_mag : bool, optional
+            Use the magnetometer (9D); default: ``params.use_mag`` and the recording has one.
+
+        Returns
+        -------
+        AttitudeResult
+            ``q_nb``, gyro bias (rad/s) and covariance diagonal at every sample; ``flags`` holds
+            ``acc_rejected``, ``mag_disturbed``, ``rest`` (bool per sample) and ``nis``, ``nis_dof``.
+
+        Raises
+        ------
+        InvalidInputError
+            If ``data`` is not an ImuData with at least 2 samples, ``use_mag=True`` without a magnetometer, or a
+            rate exceeds 1e4 rad/s.
+        """
         t, _, _, um, _, _, _, (q, b, pd, fl, nis, dof, *_rest) = self._run(data, q0, bias0, use_mag, False)
         self.q, self.b = q[-1].copy(), b[-1].copy()
         flags = {k: (fl & v) > 0 for k, v in FLAG_NAMES.items()}

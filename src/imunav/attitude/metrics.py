@@ -35,7 +35,17 @@ __all__ = ["ErrorAngles", "AttitudeRmse", "error_angles", "attitude_rmse", "eule
 
 @dataclass(frozen=True)
 class ErrorAngles:
-    """Per-sample error angles [rad] (NaN where the reference is NaN)."""
+    """Per-sample error angles (NaN where the reference is NaN).
+
+    Attributes
+    ----------
+    total : numpy.ndarray, shape (N,)
+        Total error angle ``2 acos |w|``, rad.
+    heading : numpy.ndarray, shape (N,)
+        Heading error ``2 atan |z / w|``, rad.
+    inclination : numpy.ndarray, shape (N,)
+        Inclination error ``2 acos sqrt(w² + z²)``, rad.
+    """
 
     total: Array
     heading: Array
@@ -44,7 +54,15 @@ class ErrorAngles:
 
 @dataclass(frozen=True)
 class AttitudeRmse(Result):
-    """RMSE [deg] of the BROAD error angles and the number of samples used."""
+    """RMSE of the BROAD error angles and the number of samples used.
+
+    Attributes
+    ----------
+    total_rmse_deg, heading_rmse_deg, inclination_rmse_deg : float
+        RMSE of each error angle, degrees.
+    n_used : int
+        Number of samples scored.
+    """
 
     total_rmse_deg: float
     heading_rmse_deg: float
@@ -52,6 +70,13 @@ class AttitudeRmse(Result):
     n_used: int
 
     def to_dict(self) -> dict[str, Any]:
+        """JSON-ready dictionary.
+
+        Returns
+        -------
+        dict
+            The four attributes by name.
+        """
         return {
             "total_rmse_deg": self.total_rmse_deg,
             "heading_rmse_deg": self.heading_rmse_deg,
@@ -68,7 +93,25 @@ def _quats(q: ArrayLike, name: str) -> Array:
 
 
 def error_angles(q_est: ArrayLike, q_ref: ArrayLike) -> ErrorAngles:
-    """Total, heading and inclination error angles, Earth-frame error quaternion."""
+    """Total, heading and inclination error angles of the Earth-frame error quaternion (Laidig et al. 2021).
+
+    Parameters
+    ----------
+    q_est : array_like, shape (N, 4)
+        Estimated attitude ``q_nb``.
+    q_ref : array_like, shape (N, 4)
+        Reference attitude ``q_nb`` (rows with NaN are skipped).
+
+    Returns
+    -------
+    ErrorAngles
+        The three angles at each sample, rad.
+
+    Raises
+    ------
+    ShapeError
+        If the arrays are not (N, 4) with the same N.
+    """
     qe = _quats(q_est, "q_est")
     qr = _quats(q_ref, "q_ref")
     if qe.shape != qr.shape:
@@ -85,7 +128,29 @@ def error_angles(q_est: ArrayLike, q_ref: ArrayLike) -> ErrorAngles:
 
 
 def attitude_rmse(q_est: ArrayLike, q_ref: ArrayLike, mask: ArrayLike | None = None) -> AttitudeRmse:
-    """BROAD RMSE [deg] over ``mask`` (all samples if None), NaN references skipped."""
+    """BROAD RMSE over ``mask`` (all samples if None), NaN references skipped (Laidig et al. 2021).
+
+    Parameters
+    ----------
+    q_est : array_like, shape (N, 4)
+        Estimated attitude ``q_nb``.
+    q_ref : array_like, shape (N, 4)
+        Reference attitude ``q_nb`` (rows with NaN are skipped).
+    mask : array_like of bool, shape (N,), optional
+        Samples scored (BROAD: the ``movement`` samples).
+
+    Returns
+    -------
+    AttitudeRmse
+        RMSE of the three angles, degrees.
+
+    Raises
+    ------
+    ShapeError
+        If the shapes do not match.
+    InsufficientDataError
+        If no sample is left to score.
+    """
     e = error_angles(q_est, q_ref)
     n = e.total.shape[0]
     m = np.ones(n, bool) if mask is None else np.asarray(mask).astype(bool).reshape(-1)
@@ -102,7 +167,27 @@ def attitude_rmse(q_est: ArrayLike, q_ref: ArrayLike, mask: ArrayLike | None = N
 
 
 def euler_rmse(euler_est: ArrayLike, euler_ref: ArrayLike, mask: ArrayLike | None = None) -> Array:
-    """RMSE [deg] per Euler angle (roll, pitch, yaw), angle differences wrapped to ±180°."""
+    """RMSE per Euler angle (roll, pitch, yaw), angle differences wrapped to ±180°.
+
+    Parameters
+    ----------
+    euler_est : array_like, shape (N, k)
+        Estimated ZYX Euler angles, rad (k = 2 for roll and pitch, or 3).
+    euler_ref : array_like, shape (N, k)
+        Reference angles, rad.
+    mask : array_like of bool, shape (N,), optional
+        Samples scored.
+
+    Returns
+    -------
+    numpy.ndarray, shape (k,)
+        RMSE of each angle, degrees.
+
+    Raises
+    ------
+    ShapeError
+        If the shapes do not match.
+    """
     a = np.asarray(euler_est, float)
     b = np.asarray(euler_ref, float)
     if a.shape != b.shape:

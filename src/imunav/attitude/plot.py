@@ -26,7 +26,20 @@ def _plt():
 
 
 def plot_euler(result: AttitudeResult, reference: AttitudeResult | None = None):
-    """Roll, pitch, yaw [deg] against time (with a reference if given)."""
+    """Roll, pitch, yaw (degrees) against time (with a reference if given).
+
+    Parameters
+    ----------
+    result : AttitudeResult
+        The estimate.
+    reference : AttitudeResult, optional
+        A reference drawn beside it.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        The figure.
+    """
     plt = _plt()
     fig, axs = plt.subplots(3, 1, sharex=True, figsize=(8, 6))
     e = np.degrees(result.euler())
@@ -42,7 +55,22 @@ def plot_euler(result: AttitudeResult, reference: AttitudeResult | None = None):
 
 
 def plot_errors(t: np.ndarray, angles: Any, title: str = ""):
-    """BROAD error angles (an :class:`~imunav.attitude.metrics.ErrorAngles`) [deg]."""
+    """BROAD error angles (degrees) against time.
+
+    Parameters
+    ----------
+    t : numpy.ndarray, shape (N,)
+        Time, s.
+    angles : ErrorAngles
+        :func:`imunav.attitude.metrics.error_angles` output, rad.
+    title : str
+        Figure title.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        The figure.
+    """
     plt = _plt()
     fig, ax = plt.subplots(figsize=(8, 3.5))
     for k in ("total", "heading", "inclination"):
@@ -81,7 +109,20 @@ def plot_montecarlo_box(rmse: Mapping[str, np.ndarray]):
 
 
 def save(fig: Any, path: str | Path) -> Path:
-    """Save atomically (:func:`imunav._atomic.atomic_path`: hidden temp file, usual file mode, rename)."""
+    """Save atomically (:func:`imunav._atomic.atomic_path`: hidden temp file, usual file mode, rename).
+
+    Parameters
+    ----------
+    fig : matplotlib.figure.Figure
+        The figure.
+    path : str or pathlib.Path
+        Output file; the format follows its suffix.
+
+    Returns
+    -------
+    pathlib.Path
+        The file written.
+    """
 
     p = Path(path)
     with atomic_path(p) as tmp:

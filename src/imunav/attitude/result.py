@@ -22,14 +22,20 @@ class AttitudeResult(Result):
 
     Attributes
     ----------
-    t : (N,) time [s].
-    q_nb : (N, 4) body -> NED quaternion, Hamilton, scalar first.
-    bias : (N, 3) gyro-bias estimate [rad/s] or None.
-    cov_diag : (N, k) diagonal of the error-state covariance (attitude error
-        [rad²] first, then bias [(rad/s)²]) or None.
-    flags : dict of (N,) arrays (e.g. ``acc_rejected``, ``mag_disturbed``,
-        ``rest``), filter-specific.
-    name : filter name; ``params`` the parameters used.
+    t : numpy.ndarray, shape (N,)
+        Time, s.
+    q_nb : numpy.ndarray, shape (N, 4)
+        Body (FRD) -> NED quaternion, Hamilton, scalar first.
+    bias : numpy.ndarray, shape (N, 3), or None
+        Gyro-bias estimate, rad/s.
+    cov_diag : numpy.ndarray, shape (N, k), or None
+        Diagonal of the error-state covariance (attitude error, rad², first, then bias, (rad/s)²).
+    flags : dict of str to numpy.ndarray
+        Per-sample arrays, filter-specific (e.g. ``acc_rejected``, ``mag_disturbed``, ``rest``, ``nis``).
+    name : str
+        Filter name.
+    params : dict
+        The parameters used.
     """
 
     t: Array
@@ -45,11 +51,23 @@ class AttitudeResult(Result):
         return int(self.q_nb.shape[0])
 
     def euler(self) -> Array:
-        """(N, 3) ZYX Euler angles (roll, pitch, yaw) [rad]."""
+        """ZYX Euler angles (roll, pitch, yaw) of ``q_nb`` (:func:`imunav.rotation.euler_from_quat`).
+
+        Returns
+        -------
+        numpy.ndarray, shape (N, 3)
+            Roll, pitch, yaw, rad.
+        """
         return euler_from_quat(self.q_nb)
 
     def to_dict(self) -> dict[str, Any]:
-        """JSON-ready dictionary (lists of floats)."""
+        """JSON-ready dictionary (lists of floats).
+
+        Returns
+        -------
+        dict
+            ``name``, ``params``, ``t``, ``q_nb``, ``bias`` and ``cov_diag`` when present, and ``flags``.
+        """
         d: dict[str, Any] = {
             "name": self.name,
             "params": {k: (v.tolist() if isinstance(v, np.ndarray) else v) for k, v in self.params.items()},

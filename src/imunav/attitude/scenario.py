@@ -1,14 +1,15 @@
 """The Candan & Söken simulation scenario and its seeded Monte Carlo.
 
+S. Candan, H. E. Söken, paper UHUK-2020-173, Ulusal Havacılık ve Uzay Konferansı, 2020 ("the paper").
 Vehicle moving north on a straight road, no rotation (true roll = pitch =
-yaw = 0), 245 s at 100 Hz, piecewise-constant north acceleration (digest
-§6.1 default profile: +1 m/s² 30-40 s, +2 m/s² 100-110 s, −3 m/s² 170-180 s).
-Sensors (digest §6.2): gyro bias 50 °/h on each axis, accelerometer noise
+yaw = 0), 245 s at 100 Hz, piecewise-constant north acceleration (the paper shows its profile only in a
+figure; default: +1 m/s² 30-40 s, +2 m/s² 100-110 s, −3 m/s² 170-180 s).
+Sensors (the paper's values): gyro bias 50 °/h on each axis, accelerometer noise
 45 µg/√Hz, accelerometer bias 30 mg *neglected* (as in the paper), Earth rate
 off.  Noise densities become per-sample standard deviations with σ = N √f_s
-(digest §6.3).
+(IEEE Std 952-1997, Annex C).
 
-**Gyro-noise unit reading** (digest §11.2): the paper prints "0.005 deg/√h".
+**Gyro-noise unit reading**: the paper prints "0.005 deg/√h".
 Read literally (``gyro_noise_unit="deg/sqrt(h)"``, reading (i)), it is
 navigation-grade ARW (σ = 1.45e-5 rad/s per sample) and a filter with that
 Σ_g cannot absorb the 50 °/h bias (RMSE ≈ 0.4°).  Read as the usual MEMS
@@ -39,6 +40,34 @@ PAPER_TABLE2 = {"proposed": (0.027, 0.028), "javed": (0.04, 0.3), "lee": (1.0, 0
 
 @dataclass(frozen=True)
 class PaperScenario:
+    """The paper's scenario (module docstring).
+
+    Attributes
+    ----------
+    fs : float
+        Sample rate, Hz.
+    duration : float
+        Length, s.
+    segments : tuple of (float, float, float)
+        ``(t_start, t_stop, acceleration)`` of the north-acceleration pulses, s, s, m/s².
+    g : float
+        Gravity magnitude, m/s².
+    gyro_bias_dph : tuple of float
+        Gyro bias per axis, °/h.
+    accel_noise_ug_rthz : float
+        Accelerometer noise density, µg/√Hz.
+    gyro_noise : float
+        Gyro noise in ``gyro_noise_unit``.
+    gyro_noise_unit : {"deg/sqrt(h)", "deg/s/sqrt(Hz)"}
+        Reading of the paper's gyro-noise unit (module docstring).
+    accel_bias_mg : float
+        Accelerometer bias, mg (30 mg in the paper, neglected there).
+
+    Raises
+    ------
+    ConfigError
+        If ``gyro_noise_unit`` is unknown, or ``fs`` or ``duration`` is not positive.
+    """
     fs: float = 100.0
     duration: float = 245.0
     # (t_start, t_end, north acceleration m/s²)
@@ -70,12 +99,38 @@ class PaperScenario:
         return self.accel_noise_ug_rthz * 1e-6 * 9.80665 * np.sqrt(self.fs)
 
     def filter_params(self, **kw: Any) -> GravityKfConfig:
-        """Filter-side parameters matching the truth (overridable)."""
+        """Filter-side parameters matching the truth (overridable).
+
+        Parameters
+        ----------
+        **kw
+            :class:`~imunav.attitude.gravity_kf.GravityKfParams` fields to override.
+
+        Returns
+        -------
+        GravityKfParams
+            ``sigma_g``, ``sigma_a`` per sample and ``g`` of the scenario, with the overrides.
+        """
         return replace(GravityKfConfig(sigma_g=self.sigma_gyro, sigma_a=self.sigma_accel, g=self.g), **kw)
 
 
 def simulate(scn: PaperScenario, rng: np.random.Generator | int | None = None) -> tuple[ImuData, NDArray]:
-    """Specific-force IMU data and the true (roll, pitch, yaw) (all zero)."""
+    """Specific-force IMU data and the true (roll, pitch, yaw) (all zero).
+
+    Parameters
+    ----------
+    scn : PaperScenario
+        The scenario.
+    rng : numpy.random.Generator or int, optional
+        Random generator or seed.
+
+    Returns
+    -------
+    data : ImuData
+        Gyro (rad/s) and specific force (m/s²), body FRD.
+    truth : numpy.ndarray, shape (N, 3)
+        True roll, pitch, yaw, rad.
+    """
     r = np.random.default_rng(rng)
     n = int(round(scn.duration * scn.fs))
     t = np.arange(n) / scn.fs
@@ -90,7 +145,18 @@ def simulate(scn: PaperScenario, rng: np.random.Generator | int | None = None) -
 
 
 def default_filters(scn: PaperScenario) -> dict[str, GravityKF]:
-    """Lee (c_a = 0.1), Javed-like (c_a = 0.1) and the proposed filter (mode B)."""
+    """Lee (c_a = 0.1), Javed-like (c_a = 0.1) and the proposed filter (mode B).
+
+    Parameters
+    ----------
+    scn : PaperScenario
+        The scenario (sets the filters' noise parameters).
+
+    Returns
+    -------
+    dict of str to GravityKF
+        ``"lee"``, ``"javed"``, ``"proposed"``.
+    """
     return {
         "lee": GravityKF("lee", scn.filter_params(c_a=0.1)),
         "javed": GravityKF("javed", scn.filter_params(c_a=0.1)),

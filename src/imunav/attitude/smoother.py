@@ -33,7 +33,13 @@ __all__ = ["Smoother"]
 
 @dataclass
 class Smoother:
-    """RTS smoother over the adaptive MEKF (offline only: no step API)."""
+    """RTS smoother over the adaptive MEKF (offline only: no step API).
+
+    Attributes
+    ----------
+    params : MekfParams
+        Tuning of the forward MEKF; default :data:`imunav.attitude.adaptive.ADAPTIVE_DEFAULTS`.
+    """
 
     params: MekfConfig = field(default_factory=lambda: ADAPTIVE_DEFAULTS)
 
@@ -41,6 +47,32 @@ class Smoother:
 
     def run(self, data: ImuData, *, q0: ArrayLike | None = None, bias0: ArrayLike | None = None,
             use_mag: bool | None = None) -> AttitudeResult:
+        """Forward MEKF pass, then the backward RTS pass (Rauch, Tung & Striebel 1965; module docstring).
+
+        Parameters
+        ----------
+        data : ImuData
+            The recording (SI: rad/s, m/s²; magnetometer in any unit), body FRD.
+        q0 : array_like, shape (4,), optional
+            Initial attitude ``q_nb`` (default: :func:`imunav.attitude.alignment.align` of the first accelerometer
+            / magnetometer sample).
+        bias0 : array_like, shape (3,), optional
+            Initial gyro-bias estimate, rad/s (default zero).
+        use_mag : bool, optional
+            Use the magnetometer (9D); default: when the recording has one.
+
+        Returns
+        -------
+        AttitudeResult
+            Smoothed ``q_nb``, gyro bias (rad/s) and covariance diagonal at every sample, with the forward
+            filter's flags.
+
+        Raises
+        ------
+        InvalidInputError
+            If ``data`` is not an ImuData with at least 2 samples, ``use_mag=True`` without a magnetometer, or a
+            rate exceeds 1e4 rad/s.
+        """
         f = MEKF(self.params)
         t, g, dt, um, q_init, b0, P0, out = f._run(data, q0, bias0, use_mag, True)
         qf, bf, _, fl, _, _, Pu, Pp, Ph = out

@@ -32,6 +32,35 @@ __all__ = ["UkfConfig", "UKF"]
 
 @dataclass(frozen=True)
 class UkfConfig:
+    """UKF tuning (SI).
+
+    Attributes
+    ----------
+    sigma_gyro : float
+        Gyro white-noise density, rad/s/√Hz.
+    sigma_bias : float
+        Gyro-bias random-walk density, rad/s/√s.
+    sigma_acc : float
+        Noise of the measured gravity direction (unit vector) per sample.
+    sigma_mag : float
+        Noise of the measured field direction (unit vector) per sample.
+    acc_reject : float
+        Accelerometer sample rejected when ``| |f| − g | / g`` exceeds it.
+    g : float
+        Gravity magnitude, m/s².
+    alpha, beta, kappa : float
+        Scaled unscented transform parameters (spread, prior-distribution and secondary scaling; E. A. Wan,
+        R. van der Merwe, "The unscented Kalman filter for nonlinear estimation", IEEE AS-SPCC 2000).
+    p0_att : float
+        Initial attitude standard deviation, rad.
+    p0_bias : float
+        Initial gyro-bias standard deviation, rad/s.
+
+    Raises
+    ------
+    ConfigError
+        If a value is out of range.
+    """
     sigma_gyro: float = 0.005  # rad/s/√Hz
     sigma_bias: float = 1e-5  # rad/s/√s
     sigma_acc: float = 0.05  # unit-vector noise per sample
@@ -53,6 +82,18 @@ class UkfConfig:
             raise ConfigError("UkfConfig.alpha must be > 0")
 
     def vector(self, use_mag: bool) -> np.ndarray:
+        """Packed parameter array of the kernel.
+
+        Parameters
+        ----------
+        use_mag : bool
+            Whether the magnetometer update is on.
+
+        Returns
+        -------
+        numpy.ndarray
+            The parameters as float64.
+        """
         p = np.zeros(_k.N_PARAMS)
         for name in ("sigma_gyro", "sigma_bias", "sigma_acc", "acc_reject", "sigma_mag", "g"):
             p[_k.MEKF_PARAMS.index(name)] = getattr(self, name)
@@ -60,12 +101,28 @@ class UkfConfig:
         return p
 
     def P0(self) -> np.ndarray:
+        """Initial error covariance ``diag(p0_att² I₃, p0_bias² I₃)``.
+
+        Returns
+        -------
+        numpy.ndarray, shape (6, 6)
+            Covariance of ``[δθ (rad), δb (rad/s)]``.
+        """
         return np.diag([self.p0_att**2] * 3 + [self.p0_bias**2] * 3)
 
 
 @dataclass
 class UKF:
-    """Error-state UKF; ``mag_ref_ned`` unit field direction in NED (or None)."""
+    """Error-state UKF (Crassidis & Markley 2003; module docstring).
+
+    Attributes
+    ----------
+    params : UkfParams
+        The tuning.
+    mag_ref_ned : numpy.ndarray, shape (3,), or None
+        Reference field direction in NED (normalised); None: learned from the first sample in :meth:`run`,
+        north in :meth:`step`.
+    """
 
     params: UkfConfig = field(default_factory=UkfConfig)
     mag_ref_ned: np.ndarray | None = None
@@ -78,6 +135,22 @@ class UKF:
         self.P = self.params.P0()
 
     def reset(self, q0: ArrayLike, bias: ArrayLike | None = None) -> None:
+        """Set the state the next :meth:`step` starts from (covariance back to ``params.P0()``).
+
+        Parameters
+        ----------
+        q0 : array_like, shape (4,)
+            Attitude ``q_nb`` [w, x, y, z], body (FRD) to NED (normalised here).
+        bias : array_like, shape (3,), optional
+            Initial gyro-bias estimate, rad/s (default zero).
+
+        Raises
+        ------
+        ShapeError
+            If ``q0`` is not a (4,) quaternion.
+        NonFiniteError
+            If ``q0`` is zero or not finite.
+        """
         self.q = check_q0(q0)
         self.b = vec3(bias, "bias")
         self.P = self.params.P0()
@@ -89,6 +162,33 @@ class UKF:
         return m / np.linalg.norm(m)
 
     def step(self, gyro: ArrayLike, accel: ArrayLike, mag: ArrayLike | None, dt: float) -> np.ndarray:
+        """Process one sample (unscented prediction and updates).
+
+        Parameters
+        ----------
+        gyro : array_like, shape (3,)
+            Angular rate, body axes (FRD), rad/s.
+        accel : array_like, shape (3,)
+            Specific force, body axes, m/s² (any unit: only its direction is used).
+        mag : array_like, shape (3,), or None
+            Magnetic field, body axes (any unit); None for a 6D update.
+        dt : float
+            Time since the previous sample, s, > 0.
+
+        Returns
+        -------
+        numpy.ndarray, shape (4,)
+            The new attitude ``q_nb``.
+
+        Raises
+        ------
+        InvalidInputError
+            If ``dt`` is not finite and positive, or the rate exceeds 1e4 rad/s (not rad/s).
+        ShapeError
+            If a sample is not a 3-vector.
+        NonFiniteError
+            If a sample is not finite.
+        """
         pr = self.params
         self.q, self.b, self.P, _, _ = _k.ukf_step(
             self.q, self.b, self.P, gyro3(gyro), vec3(accel, "accel"), vec3(mag, "mag"), step_dt(dt),
@@ -97,6 +197,32 @@ class UKF:
 
     def run(self, data: ImuData, *, q0: ArrayLike | None = None, bias0: ArrayLike | None = None,
             use_mag: bool | None = None) -> AttitudeResult:
+        """Filter a whole recording (numba kernel).
+
+        Parameters
+        ----------
+        data : ImuData
+            The recording (SI: rad/s, m/s²; magnetometer in any unit), body FRD.
+        q0 : array_like, shape (4,), optional
+            Initial attitude ``q_nb`` (default: :func:`imunav.attitude.alignment.align` of the first accelerometer
+            / magnetometer sample).
+        bias0 : array_like, shape (3,), optional
+            Initial gyro-bias estimate, rad/s (default zero).
+        use_mag : bool, optional
+            Use the magnetometer (9D); default: when the recording has one.
+
+        Returns
+        -------
+        AttitudeResult
+            ``q_nb``, gyro bias (rad/s) and covariance diagonal at every sample; ``flags`` holds ``nis``
+            and ``nis_dof``.
+
+        Raises
+        ------
+        InvalidInputError
+            If ``data`` is not an ImuData with at least 2 samples, ``use_mag=True`` without a magnetometer, or a
+            rate exceeds 1e4 rad/s.
+        """
         t, g, a, m, dt, um = prepare(data, use_mag)
         pr = self.params
         q_init = initial_q(a, m, um, q0)

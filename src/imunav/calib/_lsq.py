@@ -2,8 +2,8 @@
 
 All calibration designs here are multi-output linear regressions
 ``Y = X Θ + E`` with ``Y`` (K, m) per-position (or per-step) means, ``X``
-(K, p) the known inputs and ``Θ`` (p, m) the unknowns; imu-error-calibration
-§5.4, eqs. (12)-(17): ``Θ = (XᵀX)⁻¹ XᵀY``.
+(K, p) the known inputs and ``Θ`` (p, m) the unknowns; Günhan 2014, §4.1.3,
+eqs. (12)-(17): ``Θ = (XᵀX)⁻¹ XᵀY``.
 
 Uncertainty: each output column j gets ``cov(θ_j) = s_j² (XᵀX)⁻¹`` with
 ``s_j² = r_jᵀ r_j / (K − p)`` the scatter of the per-position residuals.  This

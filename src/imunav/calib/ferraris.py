@@ -51,14 +51,42 @@ def ferraris(
 ) -> CalibrationResult:
     """Ferraris calibration from the nine labelled sections.
 
+    F. Ferraris, U. Grimaldi, M. Parvis, "Procedure for effortless in-field calibration of three-axial rate
+    gyro and accelerometers", Sensors and Materials 7(5), 1995; section names and conventions as in the
+    imucal package (A. Küderle et al., mad-lab-fau).
+
     Parameters
     ----------
-    sections : ``{"x_p": (accel, gyro), ...}`` with the keys of
-        :data:`FERRARIS_SECTIONS`; arrays (n, 3) in raw units.
-    fs : sampling rate, Hz (the rotation integrals are sums / fs).
-    gravity : local gravity (imucal default 9.81 m/s²).
-    expected_angle_deg : angle the sensor should measure per rotation
-        (imucal default −360; use +360 for the opposite turning sense).
+    sections : mapping of str to (array_like, array_like)
+        ``{"x_p": (accel, gyro), ...}`` with the keys of :data:`FERRARIS_SECTIONS`; arrays (n, 3) in raw
+        units.
+    fs : float
+        Sampling rate, Hz (the rotation integrals are sums / fs).
+    gravity : float
+        Local gravity, m/s² (imucal default 9.81).
+    expected_angle_deg : float
+        Angle the sensor should measure per rotation, degrees (imucal default −360; use +360 for the opposite
+        turning sense).
+    raw_accel_unit, raw_gyro_unit : str
+        Units of the raw accelerometer and gyro data.
+    full_scale : tuple of (float or None)
+        (accel, gyro) ranges in raw units; sections touching them are refused.
+
+    Returns
+    -------
+    CalibrationResult
+        Biases, scale / misalignment matrices and gyro g-sensitivity.
+
+    Raises
+    ------
+    InsufficientDataError
+        If a section is missing or too short.
+    InvalidInputError
+        If ``fs`` is not positive or ``expected_angle_deg`` is zero.
+    SaturationError
+        If a section touches the full-scale range.
+    DegenerateGeometryError
+        If the sections do not excite every axis.
     """
     missing = [k for k in FERRARIS_SECTIONS if k not in sections]
     if missing:
@@ -177,8 +205,30 @@ def ferraris_from_session(
 ) -> CalibrationResult:
     """Ferraris calibration of a continuous recording with an imucal-style section list.
 
-    ``section_list``: ``{"x_p": {"start": i0, "end": i1}, ...}`` (row positions,
-    end exclusive) or ``{"x_p": (i0, i1), ...}``.
+    Parameters
+    ----------
+    accel : array_like, shape (N, 3)
+        Raw accelerometer samples.
+    gyro : array_like, shape (N, 3)
+        Raw gyro samples.
+    section_list : mapping
+        ``{"x_p": {"start": i0, "end": i1}, ...}`` (row positions, end exclusive) or ``{"x_p": (i0, i1), ...}``.
+    fs : float
+        Sampling rate, Hz.
+    **kwargs
+        Keywords of :func:`ferraris`.
+
+    Returns
+    -------
+    CalibrationResult
+        As :func:`ferraris`.
+
+    Raises
+    ------
+    InsufficientDataError
+        If a section is missing.
+    InvalidInputError
+        If a section's range is outside the recording.
     """
     a = np.asarray(accel, float)
     g = np.asarray(gyro, float)

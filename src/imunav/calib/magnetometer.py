@@ -6,19 +6,20 @@ user's unit throughout.
 
 Methods
 -------
-- :func:`hard_iron_minmax`: per-axis mid-range ``(max + min) / 2``
-  (ahrs-sensor-errors §3.10, eqs. 6.1-6.4).
+- :func:`hard_iron_minmax`: per-axis mid-range ``(max + min) / 2`` (E. Atasoy, *Estimation and analysis
+  of error parameters of attitude-heading reference system sensors* (in Turkish), MSc thesis, Başkent
+  University, ch. 6, eqs. 6.1-6.4).
 - :func:`soft_iron_rotation_scale`: the thesis "rotate then scale" method,
   automated: principal axes of the hard-iron-corrected cloud give the
   rotation, the semi-axis ratios ``α_i = r_i / r̄`` (eq. 6.9) the scales, and
   we rotate back: ``A = Rᵀ diag(1/α) R`` (the thesis leaves out the back
-  rotation, an 11° frame error in its own example; errata list item 13).
-- :func:`fit_ellipsoid`: Li & Griffiths (2004) ellipsoid-specific least
-  squares (constraint ``4J − I² = 1``), followed by a geometric refinement
-  ``min Σ (|A (h − b)| − F)²`` whose Jacobian gives the standard errors.
+  rotation, an 11° frame error in its own example).
+- :func:`fit_ellipsoid`: Q. Li, J. G. Griffiths, "Least squares ellipsoid specific fitting", Geometric
+  Modeling and Processing 2004: ellipsoid-specific least squares (constraint ``4J − I² = 1``), followed
+  by a geometric refinement ``min Σ (|A (h − b)| − F)²`` whose Jacobian gives the standard errors.
   Without a known field norm, ``A`` is normalised to ``det A = 1`` and the
-  expected field strength is ``F = (abc)^{1/3}`` of the semi-axes (MATLAB
-  ``magcal`` convention, references.md §2).
+  expected field strength is ``F = (abc)^{1/3}`` of the semi-axes (the convention of MATLAB's
+  ``magcal``, MathWorks Sensor Fusion and Tracking Toolbox documentation).
 """
 
 from __future__ import annotations
@@ -55,10 +56,22 @@ Array = NDArray[np.float64]
 class MagCalibration(Result):
     """Hard iron ``b`` (3,), soft iron ``A`` (3, 3): ``h_cal = A (h − b)``.
 
-    ``field_norm``: the (given or estimated) field magnitude in the data unit.
-    ``stderr``: standard errors of ``b`` and ``A``; ``quality``: coverage,
-    residual RMS, design condition, relative spread of ``|h_cal|`` before and
-    after; ``extra``: method-specific outputs (angles, α ...).
+    Attributes
+    ----------
+    b : numpy.ndarray, shape (3,)
+        Hard-iron offset, in the data's unit.
+    A : numpy.ndarray, shape (3, 3)
+        Soft-iron matrix (dimensionless).
+    field_norm : float
+        The (given or estimated) field magnitude, in the data's unit.
+    method : str
+        The method that produced it.
+    stderr : dict of str to numpy.ndarray
+        Standard errors of ``b`` and ``A`` (empty when not computed).
+    quality : dict of str to float
+        Coverage, residual RMS, design condition, relative spread of ``|h_cal|`` before and after.
+    extra : dict
+        Method-specific outputs (angles, α ...).
     """
 
     b: Array
@@ -70,10 +83,29 @@ class MagCalibration(Result):
     extra: dict[str, Any] = field(default_factory=dict)
 
     def apply(self, h: ArrayLike) -> Array:
-        """Calibrated field ``A (h − b)`` for (N, 3) samples."""
+        """Calibrated field ``A (h − b)``.
+
+        Parameters
+        ----------
+        h : array_like, shape (N, 3)
+            Raw magnetometer samples, any unit (kept), sensor axes.
+
+        Returns
+        -------
+        numpy.ndarray, shape (N, 3)
+            The calibrated field, same unit.
+        """
         return (_points(h, minimum=1) - self.b) @ self.A.T
 
     def to_dict(self) -> dict[str, Any]:
+        """JSON-ready dictionary (format ``imunav.mag-calibration``, version 1).
+
+        Returns
+        -------
+        dict
+            ``format``, ``format_version``, ``model``, ``method``, ``b``, ``A``, ``field_norm``, ``stderr``,
+            ``quality``, ``extra``.
+        """
         return {
             "format": "imunav.mag-calibration",
             "format_version": 1,
@@ -118,7 +150,18 @@ _CELLS = _fibonacci(60)
 
 
 def sphere_coverage(directions: ArrayLike) -> float:
-    """Fraction of 60 equal-area cells of the sphere that hold at least one direction."""
+    """Fraction of 60 equal-area cells of the sphere that hold at least one direction.
+
+    Parameters
+    ----------
+    directions : array_like, shape (N, 3)
+        Direction vectors (normalised here; zero vectors are ignored).
+
+    Returns
+    -------
+    float
+        Coverage in [0, 1].
+    """
     d = np.asarray(directions, float)
     d = d / np.linalg.norm(d, axis=1)[:, None]
     cell = np.argmax(d @ _CELLS.T, axis=1)
@@ -155,11 +198,29 @@ def _check_planar(h: Array, tol: float) -> None:
 
 
 def hard_iron_minmax(h: ArrayLike) -> Array:
-    """Hard iron as the per-axis mid-range ``(max + min)/2`` (thesis eqs. 6.1-6.3).
+    """Hard iron as the per-axis mid-range ``(max + min)/2`` (Atasoy, eqs. 6.1-6.3).
 
-    Raises :class:`~imunav.errors.DegenerateGeometryError` for a single repeated
-    point, a line or a plane: the mid-range of an axis that was not swept is not
-    the hard iron.
+    Parameters
+    ----------
+    h : array_like, shape (N, 3)
+        Raw magnetometer samples, any unit (kept), sensor axes.
+
+    Returns
+    -------
+    numpy.ndarray, shape (3,)
+        The hard-iron offset, in the data's unit.
+
+    Raises
+    ------
+    DegenerateGeometryError
+        For a single repeated point, a line or a plane: the mid-range of an axis that was not swept is not
+        the hard iron.
+    InsufficientDataError
+        With too few samples.
+    ShapeError
+        If ``h`` is not (N, 3).
+    NonFiniteError
+        If ``h`` has NaN or infinite values.
     """
     a = _points(h, minimum=2)
     _check_planar(a, 0.02)
@@ -167,12 +228,30 @@ def hard_iron_minmax(h: ArrayLike) -> Array:
 
 
 def soft_iron_rotation_scale(h: ArrayLike, *, planar_tol: float = 0.02) -> MagCalibration:
-    """Thesis method: mid-range hard iron, then rotate to the principal axes and scale.
+    """Thesis method: mid-range hard iron, then rotate to the principal axes and scale (Atasoy, ch. 6).
 
     The rotation ``R`` (rows = principal axes of the corrected cloud) replaces
     the thesis's angles picked by eye; ``r_i`` is half the span along axis i,
     ``α_i = r_i / mean(r)`` and ``A = Rᵀ diag(1/α) R``; the field norm is ``mean(r)``.
-    Extra outputs: ``R``, ``alpha``, Euler ``angles`` (roll, pitch, yaw of ``Rᵀ``), rad.
+
+    Parameters
+    ----------
+    h : array_like, shape (N, 3)
+        Raw magnetometer samples, any unit (kept), sensor axes.
+    planar_tol : float
+        Smallest accepted thickness / span of the raw cloud.
+
+    Returns
+    -------
+    MagCalibration
+        With extra outputs ``R``, ``alpha``, Euler ``angles`` (roll, pitch, yaw of ``Rᵀ``, rad).
+
+    Raises
+    ------
+    DegenerateGeometryError
+        For planar or degenerate data.
+    InsufficientDataError
+        With too few samples.
     """
     a = _points(h, minimum=10)
     _check_planar(a, planar_tol)
@@ -289,17 +368,23 @@ def fit_ellipsoid(
 
     Parameters
     ----------
-    h : (N, 3) raw magnetometer samples, any unit (kept).
-    field_norm : known field magnitude; ``A`` is scaled so ``|A (h − b)| = field_norm``.
+    h : array_like
+        (N, 3) raw magnetometer samples, any unit (kept).
+    field_norm : float, optional
+        Known field magnitude; ``A`` is scaled so ``|A (h − b)| = field_norm``.
         Default None: ``det A = 1`` and the field norm is estimated.
-    min_coverage : smallest accepted fraction of the sphere covered (60 cells).
-    planar_tol : smallest accepted thickness/span of the raw cloud.
-    refine : refine geometrically and report standard errors (else stderr empty).
+    min_coverage : float
+        Smallest accepted fraction of the sphere covered (60 cells).
+    planar_tol : float
+        Smallest accepted thickness/span of the raw cloud.
+    refine : bool
+        Refine geometrically and report standard errors (else stderr empty).
 
     Returns
     -------
-    MagCalibration with ``b``, ``A``, ``field_norm``, ``stderr["b"]``, ``stderr["A"]``
-    and ``quality`` (coverage, residual RMS, condition, spread of ``|h_cal|``).
+    MagCalibration
+        ``b``, ``A``, ``field_norm``, ``stderr["b"]``, ``stderr["A"]`` and ``quality`` (coverage, residual
+        RMS, condition, spread of ``|h_cal|``).
 
     Raises
     ------

@@ -1,14 +1,14 @@
 """The deterministic IMU calibration model and its (de)serialisation.
 
-Measurement model (imu-error-calibration.md eqs. 2 and 4; ahrs-sensor-errors.md
-§3.2, with the full 3×3 g-sensitivity allowed)::
+Measurement model (Y. Günhan, *Ataletsel ölçüm birimi hatalarının belirlenmesi ve düzeltilmesi* (Detection and compensation of inertial measurement unit errors), MSc thesis, Hacettepe University, 2014, eqs. 2 and 4; E. Atasoy, *Estimation and analysis of error parameters of attitude-heading reference system sensors* (in Turkish), MSc thesis, Başkent University, eqs. 5.1-5.2; with the full 3×3
+g-sensitivity allowed)::
 
     ã = T_a f + b_a                    (accelerometer, raw units)
     ω̃ = T_g ω + b_g + G f              (gyroscope, raw units)
 
 ``T = I + diag(S) + M`` when raw units are SI (``M`` zero diagonal, element
 ``M_ij`` = response of axis i to an input along axis j).  Compensation
-(eqs. 21/22, ahrs-sensor-errors §3.4), accelerometer first because the gyro
+(Günhan 2014, eqs. 21-22, §4.1.4; Atasoy, eqs. 5.4-5.5), accelerometer first because the gyro
 uses the *compensated* specific force::
 
     f̂ = T_a⁻¹ (ã − b_a)
@@ -69,7 +69,22 @@ class TempCurve:
 
     ``p(T) = Σ_k c_k x^k (+ step_height·[T ≥ step_c])`` with the centred and
     scaled temperature ``x = (T − center_c) / scale_c`` (centring keeps a
-    5th-order fit well conditioned; imu-error-calibration §7).
+    5th-order fit well conditioned; the polynomial models of Günhan 2014, ch. 6, and of
+    Y. Günhan, Ç. Ünsal, "Polynomial degree determination for temperature dependent error compensation
+    of inertial sensors", IEEE/ION PLANS 2014).  Calling it, ``curve(temp_c)``, evaluates p.
+
+    Attributes
+    ----------
+    coeffs : numpy.ndarray, shape (order + 1,)
+        Coefficients c_k, lowest power first, in the parameter's unit.
+    center_c : float
+        Centre of the temperature normalisation, °C.
+    scale_c : float
+        Scale of the temperature normalisation, °C.
+    step_c : float or None
+        Temperature of a step change, °C, or None.
+    step_height : float
+        Height of that step, in the parameter's unit.
     """
 
     coeffs: Array  # (order+1,), lowest power first
@@ -91,6 +106,13 @@ class TempCurve:
         return y
 
     def to_dict(self) -> dict[str, Any]:
+        """JSON-ready dictionary of the curve.
+
+        Returns
+        -------
+        dict
+            ``coeffs`` (list), ``center_c``, ``scale_c``, ``step_c``, ``step_height``.
+        """
         return {
             "coeffs": np.asarray(self.coeffs).tolist(),
             "center_c": self.center_c,
@@ -101,6 +123,18 @@ class TempCurve:
 
     @classmethod
     def from_dict(cls, d: dict[str, Any]) -> "TempCurve":
+        """Rebuild a curve from :meth:`to_dict`.
+
+        Parameters
+        ----------
+        d : dict
+            A dictionary as written by :meth:`to_dict`.
+
+        Returns
+        -------
+        TempCurve
+            The curve.
+        """
         return cls(
             np.asarray(d["coeffs"], dtype=float),
             float(d["center_c"]),
@@ -137,15 +171,22 @@ class ImuCalibration:
 
     Attributes
     ----------
-    accel_bias, gyro_bias : (3,) raw units.
-    accel_matrix, gyro_matrix : (3, 3) ``T`` (raw units per SI unit).
-    g_sensitivity : (3, 3) ``G`` (raw gyro units per m/s²); diagonal in the theses.
-    thermal : ``{"accel_bias": [TempCurve]*3, ...}``; keys among
+    accel_bias, gyro_bias : numpy.ndarray
+        (3,) raw units.
+    accel_matrix, gyro_matrix : numpy.ndarray
+        (3, 3) ``T`` (raw units per SI unit).
+    g_sensitivity : numpy.ndarray
+        (3, 3) ``G`` (raw gyro units per m/s²); diagonal in the theses.
+    thermal : dict
+        ``{"accel_bias": [TempCurve]*3, ...}``; keys among
         ``accel_bias, accel_scale, gyro_bias, gyro_scale``; a ``*_scale`` curve
         gives the diagonal element ``T_ii(T)``.
-    raw_accel_unit, raw_gyro_unit : units of the raw data.
-    stderr : standard errors with the same keys/shapes as the parameters.
-    meta : free-form provenance (method, session, design condition...).
+    raw_accel_unit, raw_gyro_unit : str
+        Units of the raw data.
+    stderr : dict
+        Standard errors with the same keys/shapes as the parameters.
+    meta : dict
+        Free-form provenance (method, session, design condition...).
     """
 
     accel_bias: Array = field(default_factory=lambda: np.zeros(3))
@@ -203,7 +244,36 @@ class ImuCalibration:
     def apply_arrays(
         self, accel: ArrayLike, gyro: ArrayLike, temp_c: ArrayLike | None = None
     ) -> tuple[Array, Array]:
-        """Compensate raw ``accel`` / ``gyro`` (N, 3), raw units → SI (eqs. 21/22)."""
+        """Compensate raw ``accel`` / ``gyro``, raw units → SI (Günhan 2014, eqs. 21-22).
+
+        ``f̂ = T_a⁻¹ (ã − b_a)``, ``ω̂ = T_g⁻¹ (ω̃ − b_g − G f̂)``, each at the sample's temperature when there is
+        a thermal part.
+
+        Parameters
+        ----------
+        accel : array_like, shape (N, 3)
+            Raw accelerometer samples, ``raw_accel_unit``.
+        gyro : array_like, shape (N, 3)
+            Raw gyro samples, ``raw_gyro_unit``.
+        temp_c : array_like, optional
+            Temperature, °C, scalar or (N,); required when the calibration has a thermal part.
+
+        Returns
+        -------
+        f : numpy.ndarray, shape (N, 3)
+            Compensated specific force, body frame, m/s².
+        w : numpy.ndarray, shape (N, 3)
+            Compensated angular rate, body frame, rad/s.
+
+        Raises
+        ------
+        ShapeError
+            If ``accel`` and ``gyro`` are not both (N, 3).
+        NonFiniteError
+            If a sample or temperature is not finite.
+        InvalidInputError
+            If the calibration is temperature dependent and ``temp_c`` is missing.
+        """
         a, g = _pair(accel, gyro)
         n = a.shape[0]
         if not self.thermal:
@@ -218,7 +288,35 @@ class ImuCalibration:
     def invert_arrays(
         self, accel: ArrayLike, gyro: ArrayLike, temp_c: ArrayLike | None = None
     ) -> tuple[Array, Array]:
-        """Corrupt true specific force / rate (SI, (N, 3)) into raw outputs (eqs. 2/4)."""
+        """Corrupt true specific force / rate into raw outputs (Günhan 2014, eqs. 2 and 4).
+
+        ``ã = T_a f + b_a``, ``ω̃ = T_g ω + b_g + G f``.
+
+        Parameters
+        ----------
+        accel : array_like, shape (N, 3)
+            True specific force, body frame, m/s².
+        gyro : array_like, shape (N, 3)
+            True angular rate, body frame, rad/s.
+        temp_c : array_like, optional
+            Temperature, °C, scalar or (N,); required when the calibration has a thermal part.
+
+        Returns
+        -------
+        a : numpy.ndarray, shape (N, 3)
+            Raw accelerometer output, ``raw_accel_unit``.
+        g : numpy.ndarray, shape (N, 3)
+            Raw gyro output, ``raw_gyro_unit``.
+
+        Raises
+        ------
+        ShapeError
+            If ``accel`` and ``gyro`` are not both (N, 3).
+        NonFiniteError
+            If a sample or temperature is not finite.
+        InvalidInputError
+            If the calibration is temperature dependent and ``temp_c`` is missing.
+        """
         f, w = _pair(accel, gyro)
         n = f.shape[0]
         if not self.thermal:
@@ -251,14 +349,20 @@ class ImuCalibration:
 
         Parameters
         ----------
-        data : ImuData (SI) or ``(accel, gyro)`` arrays (no provenance for arrays).
-        temp_c : temperature, °C (default: ``data.temp``).
-        force : compensate even if the provenance says it was done with this calibration.
-        source : where the calibration comes from (file name), recorded in the provenance.
+        data : ImuData
+            ImuData (SI) or ``(accel, gyro)`` arrays (no provenance for arrays).
+        temp_c : array_like, optional
+            Temperature, °C (default: ``data.temp``).
+        force : bool
+            Compensate even if the provenance says it was done with this calibration.
+        source : str, optional
+            Where the calibration comes from (file name), recorded in the provenance.
 
         Returns
         -------
-        ImuData or (accel, gyro)
+        ImuData or tuple of numpy.ndarray
+            The compensated recording (SI: m/s², rad/s), with the step in its provenance; or the
+            compensated ``(accel, gyro)`` arrays.
         """
         if not isinstance(data, tuple):
             self._require_si("apply")
@@ -266,7 +370,27 @@ class ImuCalibration:
         return self._on_data(data, temp_c, self.apply_arrays, "apply", source, force)
 
     def invert(self, data: Any, temp_c: ArrayLike | None = None, *, source: str | None = None) -> Any:
-        """Corrupt ideal :class:`ImuData` (or ``(accel, gyro)``) with this model (recorded as ``uncompensate``)."""
+        """Corrupt ideal :class:`ImuData` (or ``(accel, gyro)``) with this model (recorded as ``uncompensate``).
+
+        Parameters
+        ----------
+        data : ImuData or tuple of numpy.ndarray
+            An SI recording, or ``(accel, gyro)`` arrays (no provenance for arrays).
+        temp_c : array_like, optional
+            Temperature, °C (default: ``data.temp``).
+        source : str, optional
+            Where the calibration comes from (file name), recorded in the provenance.
+
+        Returns
+        -------
+        ImuData or tuple of numpy.ndarray
+            The same kind as ``data``, with the errors of this model added.
+
+        Raises
+        ------
+        UnitError
+            If the calibration maps raw units other than SI (use :meth:`invert_arrays`).
+        """
         return self._on_data(data, temp_c, self.invert_arrays, "invert", source, False)
 
     def _check_provenance(self, data: Any, force: bool) -> None:
@@ -321,15 +445,33 @@ class ImuCalibration:
 
     # ------------------------------------------------------------ thesis view
     def thesis_parameters(self) -> dict[str, Array]:
-        """Parameters in the thesis parameterisation (SI raw units required).
+        """Parameters in the thesis parameterisation (SI raw units required; Günhan 2014, eqs. 2 and 4).
 
         ``S_i = T_ii − 1``, ``M_ij = T_ij`` (i ≠ j), ``B``, ``B_G = diag(G)``.
+
+        Returns
+        -------
+        dict of str to numpy.ndarray
+            As :func:`calibration_parameters`.
+
+        Raises
+        ------
+        UnitError
+            If the raw units are not SI.
         """
         self._require_si("thesis_parameters")
         return calibration_parameters(self)
 
     # --------------------------------------------------------------- JSON I/O
     def to_dict(self) -> dict[str, Any]:
+        """JSON-ready dictionary (the calibration file format, ``format_version`` :data:`FORMAT_VERSION`).
+
+        Returns
+        -------
+        dict
+            ``format``, ``format_version``, ``units``, ``model``, ``accel`` (bias, matrix), ``gyro`` (bias, matrix,
+            g_sensitivity), ``thermal``, ``stderr``, ``meta``; arrays as numpy arrays (converted when written).
+        """
         return {
             "format": _FORMAT,
             "format_version": FORMAT_VERSION,
@@ -353,6 +495,25 @@ class ImuCalibration:
 
     @classmethod
     def from_dict(cls, d: dict[str, Any], *, source: str = "<dict>") -> "ImuCalibration":
+        """Rebuild a calibration from :meth:`to_dict` (or a parsed calibration file).
+
+        Parameters
+        ----------
+        d : dict
+            The dictionary.
+        source : str
+            Where it comes from, for error messages.
+
+        Returns
+        -------
+        ImuCalibration
+            The calibration.
+
+        Raises
+        ------
+        FileFormatError
+            If the format or its version is not this one, or a field is missing.
+        """
         if d.get("format") != _FORMAT:
             raise FileFormatError(f"{source}: not an imunav calibration (field 'format' is {d.get('format')!r})")
         v = d.get("format_version")
@@ -380,11 +541,39 @@ class ImuCalibration:
             raise FileFormatError(f"{source}: calibration JSON lacks the field {e}") from None
 
     def save(self, path: str | os.PathLike[str]) -> Path:
-        """Write the calibration as JSON (atomic)."""
+        """Write the calibration as JSON (atomic).
+
+        Parameters
+        ----------
+        path : str or os.PathLike
+            Output file.
+
+        Returns
+        -------
+        pathlib.Path
+            The file written.
+        """
         return write_json(path, self.to_dict())
 
     @classmethod
     def load(cls, path: str | os.PathLike[str]) -> "ImuCalibration":
+        """Read a calibration file: imunav's JSON, or an imucal Ferraris JSON.
+
+        Parameters
+        ----------
+        path : str or os.PathLike
+            The file.
+
+        Returns
+        -------
+        ImuCalibration
+            The calibration.
+
+        Raises
+        ------
+        FileFormatError
+            If the file does not exist, is not valid JSON, or is not a calibration of a supported format.
+        """
         p = Path(path)
         try:
             d = json.loads(p.read_text())
@@ -402,7 +591,28 @@ class ImuCalibration:
 
         imucal: ``a_c = R_a⁻¹ K_a⁻¹ (a_r − b_a)``,
         ``ω_c = R_g⁻¹ K_g⁻¹ (ω_r − K_ga a_c − b_g)``; hence ``T_a = K_a R_a``
-        with ``K_a`` the row norms of ``T_a`` and unit-norm rows in ``R_a``.
+        with ``K_a`` the row norms of ``T_a`` and unit-norm rows in ``R_a`` (the model of F. Ferraris,
+        U. Grimaldi, M. Parvis, "Procedure for effortless in-field calibration of three-axial rate gyro and
+        accelerometers", Sensors and Materials 7(5), 1995).
+
+        Parameters
+        ----------
+        acc_unit : str
+            Output accelerometer unit, ``"m/s^2"``.
+        gyr_unit : {"deg/s", "rad/s"}
+            Output gyro unit.
+
+        Returns
+        -------
+        dict
+            The imucal JSON content.
+
+        Raises
+        ------
+        InvalidInputError
+            If the calibration has a thermal part (imucal has none).
+        UnitError
+            If a unit is not supported.
         """
         if self.thermal:
             raise InvalidInputError("imucal has no temperature model; drop the thermal part first")
@@ -433,7 +643,25 @@ class ImuCalibration:
 
     @classmethod
     def from_imucal(cls, d: dict[str, Any] | str | os.PathLike[str]) -> "ImuCalibration":
-        """Build from an imucal Ferraris JSON (dict or path)."""
+        """Build from an imucal Ferraris JSON (dict or path).
+
+        Parameters
+        ----------
+        d : dict or str or os.PathLike
+            The parsed JSON, or its file.
+
+        Returns
+        -------
+        ImuCalibration
+            The equivalent calibration (``T = K R``).
+
+        Raises
+        ------
+        FileFormatError
+            If the calibration type is not Ferraris / Turntable.
+        UnitError
+            If its output units are not m/s² and deg/s or rad/s.
+        """
         if not isinstance(d, dict):
             d = json.loads(Path(d).read_text())
         if d.get("cal_type") not in ("Ferraris", "Turntable"):
@@ -458,7 +686,18 @@ class ImuCalibration:
 
     @classmethod
     def from_error_model(cls, model: Any) -> "ImuCalibration":
-        """The calibration that a :class:`imunav.sim.ImuErrorModel` implies (truth for tests)."""
+        """The calibration that a :class:`imunav.sim.ImuErrorModel` implies (truth for tests).
+
+        Parameters
+        ----------
+        model : ImuErrorModel
+            A simulation error model (SI).
+
+        Returns
+        -------
+        ImuCalibration
+            Its biases, scale-factor / misalignment matrices and g-sensitivity, SI raw units.
+        """
         return cls(
             accel_bias=np.asarray(model.accel.bias, float),
             accel_matrix=np.asarray(model.accel.scale_misalignment, float),
@@ -469,6 +708,18 @@ class ImuCalibration:
         )
 
     def with_(self, **changes: Any) -> "ImuCalibration":
+        """A copy with some fields replaced (:func:`dataclasses.replace`).
+
+        Parameters
+        ----------
+        **changes
+            Field names and their new values.
+
+        Returns
+        -------
+        ImuCalibration
+            The new calibration (validated again).
+        """
         return replace(self, **changes)
 
 
@@ -500,10 +751,19 @@ _AX = "xyz"
 
 
 def calibration_parameters(cal: ImuCalibration) -> dict[str, Array]:
-    """Thesis parameters as flat arrays (SI): accel ``S, B, M``; gyro ``S, B, B_G, M``.
+    """Thesis parameters as flat arrays (SI): accel ``S, B, M``; gyro ``S, B, B_G, M`` (Günhan 2014, eqs. 2 and 4).
 
-    Keys: ``accel_S`` (3,), ``accel_B`` (3,), ``accel_M`` (6,) ordered
-    xy, xz, yx, yz, zx, zy; ``gyro_S``, ``gyro_B``, ``gyro_BG`` (3,), ``gyro_M`` (6,).
+    Parameters
+    ----------
+    cal : ImuCalibration
+        A calibration with SI raw units.
+
+    Returns
+    -------
+    dict of str to numpy.ndarray
+        ``accel_S`` (3,), ``accel_B`` (3,, m/s²), ``accel_M`` (6,) ordered
+        xy, xz, yx, yz, zx, zy; ``gyro_S``, ``gyro_B`` (rad/s), ``gyro_BG`` (3,, rad/s per m/s²),
+        ``gyro_M`` (6,).  S and M are dimensionless.
     """
     out: dict[str, Array] = {}
     for s, T, B in (("accel", cal.accel_matrix, cal.accel_bias), ("gyro", cal.gyro_matrix, cal.gyro_bias)):
@@ -515,7 +775,13 @@ def calibration_parameters(cal: ImuCalibration) -> dict[str, Array]:
 
 
 def parameter_names() -> dict[str, list[str]]:
-    """Names matching :func:`calibration_parameters` (for tables)."""
+    """Names matching :func:`calibration_parameters` (for tables).
+
+    Returns
+    -------
+    dict of str to list of str
+        The same keys, each with one name per element (``S_x``, ``B_y``, ``M_xz``, ``B_Gz``, ...).
+    """
     m = [f"M_{_AX[i]}{_AX[j]}" for i, j in _OFF]
     s = [f"S_{a}" for a in _AX]
     b = [f"B_{a}" for a in _AX]
@@ -526,10 +792,21 @@ def parameter_names() -> dict[str, list[str]]:
 
 
 def success_percentages(estimate: ImuCalibration, truth: ImuCalibration) -> dict[str, Any]:
-    """The thesis "success" metric, ``100 (1 − |p̂ − p| / |p|)`` (imu-error-calibration §5.6).
+    """The thesis "success" metric, ``100 (1 − |p̂ − p| / |p|)`` (Günhan 2014, Tables 5.3-5.4).
 
-    Returns per-parameter percentages and the means over the 12 accelerometer
-    parameters (S, B, M) and the 15 gyro parameters (S, B, B_G, M).
+    Parameters
+    ----------
+    estimate : ImuCalibration
+        The estimated calibration.
+    truth : ImuCalibration
+        The true one (e.g. :meth:`ImuCalibration.from_error_model`).
+
+    Returns
+    -------
+    dict
+        ``per_parameter`` (percentages with the keys of :func:`calibration_parameters`), and the means over
+        the 12 accelerometer parameters (S, B, M), ``accel_mean``, and over the 15 gyro parameters
+        (S, B, B_G, M), ``gyro_mean``, in %.
     """
     pe, pt = calibration_parameters(estimate), calibration_parameters(truth)
     per: dict[str, Array] = {}

@@ -69,13 +69,38 @@ TEDALDI_GYRO_NAMES = ("m_yz", "m_zy", "m_xz", "m_zx", "m_xy", "m_yx", "s_x", "s_
 
 
 def accel_tedaldi_matrix(p: Array) -> Array:
-    """``T_a K_a`` from ``[m_yz, m_zy, m_zx, s_x, s_y, s_z, ...]``."""
+    """``T_a K_a`` from ``[m_yz, m_zy, m_zx, s_x, s_y, s_z, ...]`` (Tedaldi et al. 2014, eqs. 6-9).
+
+    ``T_a = [[1, -m_yz, m_zy], [0, 1, -m_zx], [0, 0, 1]]`` (upper triangular), ``K_a = diag(s)``.
+
+    Parameters
+    ----------
+    p : numpy.ndarray
+        Parameter vector; its first six entries are the three misalignments (rad) and three scales (SI per
+        raw unit).
+
+    Returns
+    -------
+    numpy.ndarray, shape (3, 3)
+        ``T_a K_a``.
+    """
     T = np.array([[1.0, -p[0], p[1]], [0.0, 1.0, -p[2]], [0.0, 0.0, 1.0]])
     return T * np.asarray(p[3:6])[None, :]
 
 
 def gyro_tedaldi_matrix(p: Array) -> Array:
-    """``T_g K_g`` from ``[m_yz, m_zy, m_xz, m_zx, m_xy, m_yx, s_x, s_y, s_z]``."""
+    """``T_g K_g`` from ``[m_yz, m_zy, m_xz, m_zx, m_xy, m_yx, s_x, s_y, s_z]`` (Tedaldi et al. 2014, eq. 10).
+
+    Parameters
+    ----------
+    p : numpy.ndarray, shape (9,)
+        Six misalignments (rad) and three scales (rad/s per raw unit).
+
+    Returns
+    -------
+    numpy.ndarray, shape (3, 3)
+        ``T_g K_g``.
+    """
     T = np.array([[1.0, -p[0], p[1]], [p[2], 1.0, -p[3]], [-p[4], p[5], 1.0]])
     return T * np.asarray(p[6:9])[None, :]
 
@@ -87,7 +112,7 @@ MIN_COVERAGE = 0.02
 def pose_coverage(means: ArrayLike) -> float:
     """Offset-invariant coverage of the sphere of gravity directions by the pose means.
 
-    ``λ_min(C) / trace(C)`` with ``C`` the scatter of the (K, 3) pose means about
+    ``λ_min(C) / trace(C)`` with ``C`` the scatter of the pose means about
     their own centroid: 1/3 for poses spread over the whole sphere (or the six
     faces), about 1/9 for a hemisphere, near 0 for poses in one cap, on one
     great circle or on one axis (up and down).  Subtracting the centroid makes
@@ -95,6 +120,16 @@ def pose_coverage(means: ArrayLike) -> float:
     any common scale factor.  With an unknown offset and radius, the
     information on the offset is ``K · Cov(u)`` (``u``: gravity directions):
     this ratio is its smallest eigenvalue relative to the total.
+
+    Parameters
+    ----------
+    means : array_like, shape (K, 3)
+        Mean accelerometer output of each pose, raw units.
+
+    Returns
+    -------
+    float
+        The coverage ratio in [0, 1/3]; 0 when every pose has the same mean.
     """
     m = np.asarray(means, float)
     d = m - m.mean(0)
@@ -143,10 +178,26 @@ def accel_initial_guess(means: ArrayLike, gravity: float) -> Array:
     distance ``h`` from it (so that the fit does not depend on the offset and
     is well conditioned for raw counts); the axis-aligned ellipsoid
     ``|diag(r) (x − o)| = 1`` is fitted by linear least squares (a sphere when
-    that fails, see :func:`_quadric_fit`) and mapped back to the raw data:
-    ``K_a = g diag(r) / h``, ``b_a = −(c + h o)``, misalignments 0.  Returns
-    ``[m_yz, m_zy, m_zx, s_x, s_y, s_z, b_x, b_y, b_z]``; raises
-    DegenerateGeometryError when not even a sphere fits.
+    that fails) and mapped back to the raw data:
+    ``K_a = g diag(r) / h``, ``b_a = −(c + h o)``, misalignments 0.
+
+    Parameters
+    ----------
+    means : array_like, shape (K, 3)
+        Mean accelerometer output of each pose, raw units.
+    gravity : float
+        Local gravity, m/s².
+
+    Returns
+    -------
+    numpy.ndarray, shape (9,)
+        ``[m_yz, m_zy, m_zx, s_x, s_y, s_z, b_x, b_y, b_z]``: misalignments (0), scales (m/s² per raw unit),
+        biases (raw units).
+
+    Raises
+    ------
+    DegenerateGeometryError
+        When every pose has the same mean, or not even a sphere fits the means.
     """
     m = np.asarray(means, float)
     c = m.mean(0)
@@ -175,6 +226,22 @@ def gyro_initial_scale(raw: Array, offsets: NDArray[np.int64], dt: float, u_from
     over the transitions whose axis is at least 30° from gravity and whose
     gravity direction moved by at least 10° is refined on a logarithmic grid
     (×1/3 … ×3) of the full integration cost with ``T_g K_g = s I``.
+
+    Parameters
+    ----------
+    raw : numpy.ndarray, shape (N, 3)
+        Raw gyro samples with the bias removed, raw units.
+    offsets : numpy.ndarray of int64
+        Sample index where each transition starts and ends (pose boundaries).
+    dt : float
+        Sample interval, s.
+    u_from, u_to : numpy.ndarray, shape (M, 3)
+        Calibrated gravity directions (unit vectors) before and after each transition.
+
+    Returns
+    -------
+    float
+        The scale, rad/s per raw unit.
     """
 
     ratios = []
@@ -293,44 +360,59 @@ def multipose(
 
     Parameters
     ----------
-    accel, gyro : (N, 3) raw samples (e.g. counts, signed or unsigned).
-    fs : sampling rate, Hz.
-    init_s : initial rest period, s (gyro bias and detector noise level).
-    wait_s : detector window, s (also the nominal static time per pose).
-    gravity : local gravity magnitude, m/s².
-    factors : detector thresholds tried, in units of the rest-period variance.
-    min_static_s : shortest static interval kept (default 0.25 s).
-    min_poses : fewest poses accepted (the accelerometer fit has 9 unknowns).
-    full_scale : (accel, gyro) raw saturation limits, each None, a number
+    accel, gyro : array_like
+        (N, 3) raw samples (e.g. counts, signed or unsigned).
+    fs : float
+        Sampling rate, Hz.
+    init_s : float
+        Initial rest period, s (gyro bias and detector noise level).
+    wait_s : float
+        Detector window, s (also the nominal static time per pose).
+    gravity : float
+        Local gravity magnitude, m/s².
+    factors : tuple
+        Detector thresholds tried, in units of the rest-period variance.
+    min_static_s : float, optional
+        Shortest static interval kept (default 0.25 s).
+    min_poses : int
+        Fewest poses accepted (the accelerometer fit has 9 unknowns).
+    full_scale : tuple
+        (accel, gyro) raw saturation limits, each None, a number
         (``|raw| ≥ v`` is saturated: signed counts, e.g. 32767) or a
         ``(min, max)`` pair (``raw ≤ min`` or ``raw ≥ max``: e.g. (0, 65535) for
         unsigned 16-bit counts); saturated static poses are refused,
         transitions with a saturated gyro are left out of the gyro fit
         (listed in ``info["gyro_pairs_excluded"]``).
-    accel_scale_guess, gyro_scale_guess : optional overrides of the initial
+    accel_scale_guess, gyro_scale_guess : float, optional
+        Optional overrides of the initial
         SI-per-raw scales.  Default: from the data, the accelerometer offsets
         and scales of the ellipsoid through the pose means
         (:func:`accel_initial_guess`), the gyro scale from the turns between
         poses (:func:`gyro_initial_scale`).  The accelerometer offsets always
         come from the ellipsoid fit.
-    raw_accel_unit, raw_gyro_unit : unit names of the raw data, recorded in the
+    raw_accel_unit, raw_gyro_unit : str
+        Unit names of the raw data, recorded in the
         calibration.
-    max_misalignment_stderr : largest acceptable standard error of a
+    max_misalignment_stderr : float
+        Largest acceptable standard error of a
         misalignment angle, rad; a larger one means the poses do not excite it.
-    strict : refuse such a session (DegenerateGeometryError); with False the
+    strict : bool
+        Refuse such a session (DegenerateGeometryError); with False the
         result is returned and the weak parameters are listed in
         ``info["weak_parameters"]``.
-    accel_misalignment : estimate the 3 accelerometer misalignments (False:
+    accel_misalignment : bool
+        Estimate the 3 accelerometer misalignments (False:
         fix them at 0 and fit scales and biases only, for sessions whose
         poses cannot separate them).
 
     Returns
     -------
-    CalibrationResult whose calibration maps raw units to SI; ``info["tedaldi"]``
-    holds the parameters and standard errors in the Tedaldi parameterisation
-    (``a = T_a K_a (ã + b_a)``, ``ω = T_g K_g (ω̃ − b_g)``; for unsigned counts
-    ``b_a`` is near −32768 and ``b_g`` near +32768), ``info["coverage"]`` the
-    coverage figure of the poses kept.
+    CalibrationResult
+        Its calibration maps raw units to SI; ``info["tedaldi"]``
+        holds the parameters and standard errors in the Tedaldi parameterisation
+        (``a = T_a K_a (ã + b_a)``, ``ω = T_g K_g (ω̃ − b_g)``; for unsigned counts
+        ``b_a`` is near −32768 and ``b_g`` near +32768), ``info["coverage"]`` the
+        coverage figure of the poses kept.
 
     Raises
     ------
@@ -557,8 +639,23 @@ def undetermined_misalignment_error(
 ) -> DegenerateGeometryError:
     """The refusal of a session whose poses leave misalignments undetermined.
 
-    ``no_accel_misalignment`` / ``not_strict`` name the two ways out as the
-    caller spells them (the keyword arguments here, the flags in the CLI).
+    Parameters
+    ----------
+    n_poses : int
+        Number of poses of the session.
+    weak : list of str
+        The parameters not determined (``"accel m_yz"``, ``"gyro m_xy"``, ...).
+    limit : float
+        The standard-error limit they exceed, rad.
+    no_accel_misalignment : str
+        How the caller spells the way out "fit without accelerometer misalignment" (keyword or CLI flag).
+    not_strict : str
+        How the caller spells the way out "get the estimate anyway".
+
+    Returns
+    -------
+    DegenerateGeometryError
+        The exception to raise, its message naming the ways out.
     """
     ways = ["add poses tilted between the axes (36-50 poses recommended)"]
     if any(w.startswith("accel ") for w in weak):

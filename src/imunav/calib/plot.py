@@ -25,7 +25,22 @@ def _plt() -> Any:
 
 
 def save_figure(fig: Any, path: str | os.PathLike[str], dpi: int = 110) -> Path:
-    """Save a figure atomically (temp file in the same folder, then rename) and close it."""
+    """Save a figure atomically (temp file in the same folder, then rename) and close it.
+
+    Parameters
+    ----------
+    fig : matplotlib.figure.Figure
+        The figure.
+    path : str or os.PathLike
+        Output file; the format follows its suffix.
+    dpi : int
+        Resolution, dots per inch.
+
+    Returns
+    -------
+    pathlib.Path
+        The file written.
+    """
 
     try:
         with atomic_path(path) as tmp:
@@ -36,7 +51,18 @@ def save_figure(fig: Any, path: str | os.PathLike[str], dpi: int = 110) -> Path:
 
 
 def plot_residuals(result: Any) -> Any:
-    """One panel per fit: residual of every position / step and axis (raw units)."""
+    """One panel per fit: residual of every position / step and axis (raw units).
+
+    Parameters
+    ----------
+    result : CalibrationResult
+        A calibration result.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        The figure.
+    """
     plt = _plt()
     res = {k: np.atleast_2d(np.asarray(v, float).T).T for k, v in result.residuals.items()}
     n = max(len(res), 1)
@@ -57,7 +83,20 @@ def plot_residuals(result: Any) -> Any:
 
 
 def plot_temperature_fit(fit: Any, title: str = "") -> Any:
-    """Parameter vs temperature with every fitted order, and the residuals (Figs. 6.1-6.10 analogue)."""
+    """Parameter vs temperature with every fitted order, and the residuals (after Günhan 2014, Figs. 6.1-6.10).
+
+    Parameters
+    ----------
+    fit : TemperatureFit
+        The fits of one parameter (temperature in °C).
+    title : str
+        Figure title.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        The figure.
+    """
     plt = _plt()
     fig, (a1, a2) = plt.subplots(2, 1, figsize=(7, 6), sharex=True)
     t = fit.temp_c
@@ -77,7 +116,20 @@ def plot_temperature_fit(fit: Any, title: str = "") -> Any:
 
 
 def plot_magnetometer(h: Any, cal: Any) -> Any:
-    """Y-Z, Z-X, X-Y projections before and after calibration (Figs. 7.61-7.69 analogue)."""
+    """Y-Z, Z-X, X-Y projections before and after calibration (after Atasoy's thesis, Figs. 7.61-7.69).
+
+    Parameters
+    ----------
+    h : array_like, shape (N, 3)
+        Raw magnetometer samples.
+    cal : MagCalibration
+        The calibration applied.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        The figure.
+    """
     plt = _plt()
     h = np.asarray(h, float)
     hc = cal.apply(h)

@@ -1,8 +1,9 @@
 """Rate-table calibration of the gyro scale / misalignment matrix.
 
-imu-error-calibration.md §5.3-5.4, eq. (20): after removing the bias and the
-g-dependent term found in the static test, the per-step mean gyro outputs are
-regressed on the table rate vectors without intercept::
+After Y. Günhan, *Ataletsel ölçüm birimi hatalarının belirlenmesi ve düzeltilmesi* (Detection and
+compensation of inertial measurement unit errors), MSc thesis, Hacettepe University, 2014, §4.1.2-4.1.3,
+eq. (20): after removing the bias and the g-dependent term found in the static test, the per-step mean
+gyro outputs are regressed on the table rate vectors without intercept::
 
     ω̃_k − b_g − G f_k = T_g ω_k        →   T_g = W̃ Wᵀ (W Wᵀ)⁻¹
 
@@ -10,7 +11,7 @@ regressed on the table rate vectors without intercept::
 vertical Earth rate ``Ω_e sin φ`` along the body up direction (it matters at
 the low rates of the profile; the horizontal part averages out on a rotating
 table).  ``intercept=True`` adds a bias term, for a rate run powered up
-separately from the static run (digest §12 item 10).
+separately from the static run (the thesis does not say whether the two runs share a power-up).
 """
 
 from __future__ import annotations
@@ -47,17 +48,45 @@ def ratetable_from_means(
     serial: bool = True,
     gyro_covs: list[Array] | None = None,
 ) -> CalibrationResult:
-    """Least-squares gyro matrix from per-step means.
+    """Least-squares gyro matrix from per-step means (Günhan 2014, eq. 20).
 
     Parameters
     ----------
-    rates : (K, 3) table rate in body axes, rad/s.
-    gyro_means : (K, 3) mean raw gyro output per step.
-    f_ref : (K, 3) body specific force during each step (for ``G f``).
-    base : calibration from the static test (gyro bias, g-sensitivity and the
+    rates : array_like, shape (K, 3)
+        Table rate of each step in body axes, rad/s.
+    gyro_means : array_like, shape (K, 3)
+        Mean raw gyro output per step, raw units.
+    f_ref : array_like, shape (K, 3), optional
+        Body specific force during each step, m/s² (for ``G f``).
+    base : ImuCalibration, optional
+        Calibration from the static test (gyro bias, g-sensitivity and the
         accelerometer part are taken from it); default: zero bias, no ``G``.
-    intercept : also estimate a bias (separate power-up).
-    latitude, up : add the vertical Earth rate ``Ω_e sin φ u_k`` to the reference.
+    intercept : bool
+        Also estimate a bias (separate power-up).
+    latitude : float, optional
+        Geodetic latitude, rad; with ``up``, adds the vertical Earth rate ``Ω_e sin φ u_k`` to the reference.
+    up : array_like, shape (K, 3), optional
+        Body up vector during each step.
+    segments : numpy.ndarray, optional
+        (K, 2) sample ranges of the steps, recorded in the result.
+    serial : bool
+        Allow for the correlation a drifting bias leaves between consecutive steps (AR(1) feasible GLS).
+    gyro_covs : list of numpy.ndarray, optional
+        Per-axis (K, K) covariance of the step means (generalised least squares).
+
+    Returns
+    -------
+    CalibrationResult
+        ``base`` with the estimated gyro matrix (and bias with ``intercept``), standard errors and residuals.
+
+    Raises
+    ------
+    ShapeError
+        If the arrays are not (K, 3) with the same K.
+    InsufficientDataError
+        With too few steps for the parameters.
+    DegenerateGeometryError
+        If the rates do not excite every axis.
     """
     W = np.asarray(rates, float)
     Y = np.asarray(gyro_means, float)
@@ -113,14 +142,51 @@ def ratetable(
     serial: bool = True,
     noise_model: Any = None,
 ) -> CalibrationResult:
-    """Rate-table calibration of a recording (e.g. the thesis 120-step test).
+    """Rate-table calibration of a recording (e.g. the 120-step test of Günhan 2014, §4.1.2).
 
-    ``rates`` (K, 3): body-frame table rate of each step (rad/s) in time order,
-    or an :class:`imunav.sim.Segments` table (its rate rows give rates, up and windows);
-    ``up`` (K, 3): body up vector during each step (gives ``f = g u``);
-    ``windows`` (K, 2): nominal step times (a hint; the constant-rate samples
-    inside are found from the data).  ``noise_model``: characterised gyro
-    noise for generalised least squares (see :func:`imunav.calib.multiposition`).
+    Parameters
+    ----------
+    data : ImuData
+        The recording (or any object with ``t``, ``accel``, ``gyro`` (N, 3)).
+    rates : array_like or Segments
+        (K, 3) body-frame table rate of each step (rad/s) in time order,
+        or an :class:`imunav.sim.Segments` table (its rate rows give rates, up and windows).
+    up : array_like, shape (K, 3), optional
+        Body up vector during each step (gives ``f = g u``).
+    windows : array_like, shape (K, 2), optional
+        Nominal step times, s (a hint; the constant-rate samples inside are found from the data).
+    base : ImuCalibration, optional
+        Calibration from the static test.
+    gravity : float, optional
+        Local gravity, m/s² (default: normal gravity at ``latitude``, else G0).
+    latitude : float, optional
+        Geodetic latitude, rad (vertical Earth rate in the reference).
+    intercept : bool
+        Also estimate a gyro bias.
+    window_s, min_duration_s, trim_s : float
+        Constant-rate detector settings, s.
+    full_scale : float, optional
+        Gyro range in raw units; steps touching it are refused.
+    fs : float, optional
+        Sample rate, Hz, when ``data`` has no time stamps.
+    serial : bool
+        Allow for correlation between consecutive steps.
+    noise_model : ImuErrorModel, optional
+        Characterised gyro noise for generalised least squares (see :func:`imunav.calib.multiposition`).
+
+    Returns
+    -------
+    CalibrationResult
+        The calibration with the gyro matrix estimated.
+
+    Raises
+    ------
+    InsufficientDataError
+        If fewer constant-rate segments than steps are found.
+    SaturationError
+        If a step touches the full-scale range.
+    ShapeError
+        If ``rates``, ``up`` or ``windows`` have the wrong shape.
     """
     if hasattr(rates, "kind") and hasattr(rates, "axis_b"):  # an imunav.sim Segments table
         st = rates.select("rate")
@@ -166,6 +232,18 @@ def combine(static: CalibrationResult, rate: CalibrationResult) -> CalibrationRe
     When the static fit removed the Earth rate, it is seen through the gyro
     matrix (``ω̃ = T_g ω_ie + b_g + G f``), unknown until the rate table; the
     static gyro fit is then repeated with ``T_g ω_ie``.
+
+    Parameters
+    ----------
+    static : CalibrationResult
+        Result of :func:`imunav.calib.multiposition`.
+    rate : CalibrationResult
+        Result of :func:`ratetable` with ``base`` from the static result.
+
+    Returns
+    -------
+    CalibrationResult
+        The full model with the standard errors of both fits.
     """
 
     stderr = {**static.stderr, **{k: v for k, v in rate.stderr.items() if k in ("gyro_matrix",)}}

@@ -23,14 +23,21 @@ class CalibrationResult(Result):
 
     Attributes
     ----------
-    calibration : the estimated model (its ``stderr`` holds the same numbers).
-    stderr : standard errors, keys ``accel_bias`` (3,), ``accel_matrix`` (3, 3),
+    calibration : ImuCalibration
+        The estimated model (its ``stderr`` holds the same numbers).
+    stderr : dict
+        Standard errors, keys ``accel_bias`` (3,), ``accel_matrix`` (3, 3),
         ``gyro_bias``, ``gyro_matrix``, ``g_sensitivity`` (only those estimated).
-    residuals : per-position / per-step residuals of each fit, raw units.
-    condition : condition number of each design (column-scaled).
-    segments : half-open sample-index intervals used by each fit.
-    method : estimator name.
-    info : further scalars (dof, residual sigma, detector threshold ...).
+    residuals : dict
+        Per-position / per-step residuals of each fit, raw units.
+    condition : dict
+        Condition number of each design (column-scaled).
+    segments : dict
+        Half-open sample-index intervals used by each fit.
+    method : str
+        Estimator name.
+    info : dict
+        Further scalars (dof, residual sigma, detector threshold ...).
     """
 
     calibration: ImuCalibration
@@ -42,6 +49,15 @@ class CalibrationResult(Result):
     info: dict[str, Any] = field(default_factory=dict)
 
     def to_dict(self) -> dict[str, Any]:
+        """JSON-ready dictionary of the result.
+
+        Returns
+        -------
+        dict
+            ``method``, ``calibration`` (:meth:`ImuCalibration.to_dict`), ``stderr``, ``residuals``,
+            ``residual_rms`` (per fit and axis, raw units), ``condition``, ``segments``, and ``info`` (its public
+            entries).
+        """
         return {
             "method": self.method,
             "calibration": self.calibration.to_dict(),
@@ -54,15 +70,41 @@ class CalibrationResult(Result):
         }
 
     def parameter_stderr(self) -> dict[str, Array]:
+        """Standard errors in the thesis parameterisation (:func:`parameter_stderr` of :attr:`stderr`).
+
+        Returns
+        -------
+        dict of str to numpy.ndarray
+            The keys of :func:`imunav.calib.model.calibration_parameters`; NaN where not estimated.
+        """
         return parameter_stderr(self.stderr)
 
     def compensation_stderr(self, f_true: Array, w_true: Array | None = None) -> tuple[Array, Array | None]:
-        """Standard deviation (N, 3) of the compensated outputs due to the parameter uncertainty.
+        """Standard deviation of the compensated outputs due to the parameter uncertainty.
 
         First order: ``δf̂ = −T_a⁻¹ (δT_a f + δb_a)`` and
         ``δω̂ = −T_g⁻¹ (δT_g ω + δb_g + δG f)``, each output row of the fits
         being independent (separate regressions).  Needs a multi-position
         (+ rate-table) result.
+
+        Parameters
+        ----------
+        f_true : array_like, shape (N, 3)
+            Specific force at which to evaluate, body frame, m/s².
+        w_true : array_like, shape (N, 3), optional
+            Angular rate at which to evaluate, body frame, rad/s.
+
+        Returns
+        -------
+        sf : numpy.ndarray, shape (N, 3)
+            Standard deviation of the compensated specific force, m/s².
+        sw : numpy.ndarray, shape (N, 3), or None
+            Standard deviation of the compensated rate, rad/s (None without ``w_true``).
+
+        Raises
+        ------
+        InvalidInputError
+            If the result carries no parameter covariance (not a multi-position / combined result).
         """
 
         ca = self.info.get("_cov_accel")
@@ -97,7 +139,20 @@ class CalibrationResult(Result):
 
 
 def parameter_stderr(stderr: dict[str, Array]) -> dict[str, Array]:
-    """Standard errors in the thesis parameterisation (see ``calibration_parameters``)."""
+    """Standard errors in the thesis parameterisation (see :func:`imunav.calib.model.calibration_parameters`).
+
+    Parameters
+    ----------
+    stderr : dict of str to numpy.ndarray
+        Standard errors keyed like the model fields (``accel_bias``, ``accel_matrix``, ``gyro_bias``,
+        ``gyro_matrix``, ``g_sensitivity``).
+
+    Returns
+    -------
+    dict of str to numpy.ndarray
+        ``accel_S``, ``accel_B``, ``accel_M``, ``gyro_S``, ``gyro_B``, ``gyro_M``, ``gyro_BG``; NaN where a
+        field was not estimated.
+    """
     out: dict[str, Array] = {}
     nan3 = np.full(3, np.nan)
     for s in ("accel", "gyro"):
@@ -111,4 +166,16 @@ def parameter_stderr(stderr: dict[str, Array]) -> dict[str, Array]:
 
 
 def as_calibration(result: "CalibrationResult | ImuCalibration") -> ImuCalibration:
+    """The :class:`ImuCalibration` of a result, or the calibration itself.
+
+    Parameters
+    ----------
+    result : CalibrationResult or ImuCalibration
+        An estimator's result or a calibration.
+
+    Returns
+    -------
+    ImuCalibration
+        The calibration.
+    """
     return result.calibration if isinstance(result, CalibrationResult) else result

@@ -1,7 +1,11 @@
 """Static multi-position calibration: six-position closed form and least squares.
 
-imu-error-calibration.md §5.2/§5.4 (eqs. 17-19) and Appendix A (§5.7);
-ahrs-sensor-errors.md §3.3.
+After Y. Günhan, *Ataletsel ölçüm birimi hatalarının belirlenmesi ve düzeltilmesi* (Detection and
+compensation of inertial measurement unit errors), MSc thesis, Hacettepe University, 2014, §4.1.1 and
+§4.1.3 (eqs. 17-19) and Appendix A (six-position test, eqs. 31-42); E. Atasoy, *Estimation and analysis
+of error parameters of attitude-heading reference system sensors* (in Turkish), MSc thesis, Başkent
+University, §5.1.  Multi-position designs as in D. Tedaldi, A. Pretto, E. Menegatti, "A robust and easy
+to implement method for IMU calibration without external equipments", IEEE ICRA 2014.
 
 Accelerometer: with the reference specific force ``f_k`` of position k (from
 the known orientation, ``|f| = g``) and the per-position mean ``ã_k``,
@@ -10,7 +14,7 @@ the known orientation, ``|f| = g``) and the per-position mean ``ã_k``,
 Gyroscope (static): ``ω̃_k = b_g + G f_k + ω_ie,k`` with the Earth rate
 ``ω_ie`` either neglected (thesis) or removed: fully when the orientations
 are attitudes ``q_nb`` and the latitude is known, else its vertical part
-``Ω_e sin φ`` along the body "up" direction (digest §12 item 8).  ``G`` is
+``Ω_e sin φ`` along the body "up" direction (the thesis says only "Earth rate").  ``G`` is
 diagonal (eq. 19, fitted per axis as ``ω̃_i = G_ii f_i + b_i``), full, or
 omitted.  The gyro scale matrix needs a rate table (:mod:`.ratetable`).
 """
@@ -62,9 +66,27 @@ def _gravity(gravity: float | None, latitude: float | None, height: float = 0.0)
 def reference_specific_force(orientations: ArrayLike, gravity: float = G0) -> Array:
     """Body specific force at rest for each orientation.
 
-    ``orientations`` is (K, 3) body-frame "up" vectors (normalised here; the
-    specific force at rest points up, ``f_b = g u_b``) or (K, 4) attitudes
-    ``q_nb`` (``f_b = C_bn (0, 0, −g)`` in NED).
+    Up vectors give ``f_b = g u_b`` (the specific force at rest points up); attitudes give
+    ``f_b = C_bn (0, 0, −g)`` in NED.
+
+    Parameters
+    ----------
+    orientations : array_like, shape (K, 3) or (K, 4)
+        Body-frame "up" unit vectors (normalised here), or attitudes ``q_nb`` (NED), one per position.
+    gravity : float
+        Local gravity magnitude, m/s².
+
+    Returns
+    -------
+    numpy.ndarray, shape (K, 3)
+        Specific force in body axes (FRD), m/s².
+
+    Raises
+    ------
+    ShapeError
+        If ``orientations`` is not (K, 3) or (K, 4).
+    InvalidInputError
+        If an up vector is zero or not finite.
     """
     o = np.asarray(orientations, dtype=float)
     if o.ndim != 2 or o.shape[1] not in (3, 4):
@@ -84,6 +106,18 @@ def earth_rate_body(orientations: ArrayLike, latitude: float | None) -> Array | 
 
     Quaternion orientations give the full vector ``C_bn ω_ie^n``; up vectors
     only the vertical component ``Ω_e sin φ · u_b`` (the heading is unknown).
+
+    Parameters
+    ----------
+    orientations : array_like, shape (K, 3) or (K, 4)
+        Body-frame "up" unit vectors (normalised here), or attitudes ``q_nb`` (NED), one per position.
+    latitude : float or None
+        Geodetic latitude, rad.
+
+    Returns
+    -------
+    numpy.ndarray, shape (K, 3), or None
+        Earth rate in body axes, rad/s.
     """
     if latitude is None:
         return None
@@ -98,7 +132,30 @@ def earth_rate_body(orientations: ArrayLike, latitude: float | None) -> Array | 
 def fit_accel_positions(
     f_ref: Array, accel_means: Array, serial: bool = True, covs: list[Array] | None = None
 ) -> tuple[Array, Array, Array, Array, Any]:
-    """LS of ``ã = T f + b`` (eq. 18).  Returns T, b, their stderr and the fit."""
+    """Least squares of ``ã = T f + b`` over the positions (Günhan 2014, eq. 18).
+
+    Parameters
+    ----------
+    f_ref : array_like, shape (K, 3)
+        Reference specific force of each position, body frame, m/s² (:func:`reference_specific_force`).
+    accel_means : numpy.ndarray, shape (K, 3)
+        Mean accelerometer output of each position, raw units.
+    serial : bool
+        Allow for the correlation a drifting bias leaves between consecutive positions (AR(1) feasible GLS).
+    covs : list of numpy.ndarray, optional
+        Per-axis (K, K) covariance of the position means (generalised least squares).
+
+    Returns
+    -------
+    T : numpy.ndarray, shape (3, 3)
+        Scale-factor / misalignment matrix, raw units per m/s².
+    b : numpy.ndarray, shape (3,)
+        Bias, raw units.
+    se_T, se_b : numpy.ndarray
+        Their standard errors.
+    fit : object
+        The per-axis fit (residuals, condition, parameter covariance).
+    """
     K = f_ref.shape[0]
     X = np.hstack([f_ref, np.ones((K, 1))])
     fit = linear_fit(X, accel_means, what="accelerometer multi-position fit", serial=serial, covs=covs)
@@ -116,11 +173,43 @@ def fit_gyro_static(
     serial: bool = True,
     covs: list[Array] | None = None,
 ) -> tuple[Array, Array, Array, Array, Array, float, Array]:
-    """Static gyro fit (eq. 19): bias and g-sensitivity.
+    """Static gyro fit (Günhan 2014, eq. 19): bias and g-sensitivity.
 
-    Returns ``b, G, se_b, se_G, residuals (K, 3), condition, cov`` with ``cov``
-    the per-axis parameter covariance ((3, 2, 2) of ``[G_ii, b_i]`` for
-    "diagonal", (3, 4, 4) of ``[G_i:, b_i]`` for "full", (3, 1, 1) for "none").
+    Parameters
+    ----------
+    f_ref : array_like, shape (K, 3)
+        Reference specific force of each position, body frame, m/s² (:func:`reference_specific_force`).
+    gyro_means : numpy.ndarray, shape (K, 3)
+        Mean gyro output of each position, raw units.
+    g_sensitivity : {"diagonal", "full", "none"}
+        Form of ``G``.
+    earth_rate_b : numpy.ndarray, shape (K, 3), optional
+        Earth rate in body axes to remove, rad/s (:func:`earth_rate_body`).
+    serial : bool
+        Allow for the correlation a drifting bias leaves between consecutive positions (AR(1) feasible GLS).
+    covs : list of numpy.ndarray, optional
+        Per-axis (K, K) covariance of the position means.
+
+    Returns
+    -------
+    b : numpy.ndarray, shape (3,)
+        Bias, raw units.
+    G : numpy.ndarray, shape (3, 3)
+        g-sensitivity, raw units per m/s².
+    se_b, se_G : numpy.ndarray
+        Their standard errors.
+    residuals : numpy.ndarray, shape (K, 3)
+        Residual of each position, raw units.
+    condition : float
+        Condition number of the (column-scaled) design.
+    cov : numpy.ndarray
+        Per-axis parameter covariance: (3, 2, 2) of ``[G_ii, b_i]`` for "diagonal", (3, 4, 4) of
+        ``[G_i:, b_i]`` for "full", (3, 1, 1) for "none".
+
+    Raises
+    ------
+    InvalidInputError
+        If ``g_sensitivity`` is unknown.
     """
     y = gyro_means - (earth_rate_b if earth_rate_b is not None else 0.0)
     K = f_ref.shape[0]
@@ -172,12 +261,42 @@ def multiposition_from_means(
 
     The gyro matrix stays identity (a static test cannot excite it); combine
     with :func:`imunav.calib.ratetable.ratetable` for the full model.
-    ``serial=True`` treats the positions as a time sequence and allows for the
-    correlation a drifting bias leaves between neighbours (AR(1) feasible GLS,
-    see ``_lsq.linear_fit``); use False for positions recorded independently.
-    ``accel_covs`` / ``gyro_covs``: per-axis (K, K) covariance of the position
-    means from a characterised noise model (white noise + Gauss-Markov drift):
-    generalised least squares with exact standard errors (see ``multiposition``).
+
+    Parameters
+    ----------
+    f_ref : array_like, shape (K, 3)
+        Reference specific force of each position, body frame, m/s² (:func:`reference_specific_force`).
+    accel_means : array_like, shape (K, 3)
+        Mean accelerometer output of each position, raw units.
+    gyro_means : array_like, shape (K, 3), optional
+        Mean gyro output of each position, raw units.
+    earth_rate_b : array_like, shape (K, 3), optional
+        Earth rate in body axes to remove from the gyro means, rad/s.
+    g_sensitivity : {"diagonal", "full", "none"}
+        Form of ``G``.
+    segments : numpy.ndarray, optional
+        (K, 2) sample ranges of the positions, recorded in the result.
+    serial : bool
+        Treat the positions as a time sequence and allow for the correlation a drifting bias leaves between
+        neighbours (AR(1) feasible GLS); False for positions recorded independently.
+    accel_covs, gyro_covs : list of numpy.ndarray, optional
+        Per-axis (K, K) covariance of the position means from a characterised noise model (white noise +
+        Gauss-Markov drift): generalised least squares with exact standard errors (see :func:`multiposition`).
+
+    Returns
+    -------
+    CalibrationResult
+        Accelerometer bias and matrix, gyro bias and g-sensitivity, with standard errors, residuals and the
+        condition of each design.
+
+    Raises
+    ------
+    ShapeError
+        If the arrays are not (K, 3) with the same K.
+    InsufficientDataError
+        With too few positions for the parameters.
+    DegenerateGeometryError
+        If the positions do not excite every axis.
     """
     f = np.asarray(f_ref, float)
     A = np.asarray(accel_means, float)
@@ -262,28 +381,57 @@ def multiposition(
     serial: bool = True,
     noise_model: Any = None,
 ) -> CalibrationResult:
-    """Multi-position static calibration of a recording (e.g. the 100-position test).
+    """Multi-position static calibration of a recording (e.g. the 100-position test of Günhan 2014, §4.1.1).
 
     Parameters
     ----------
-    data : ``ImuData`` (or any object with ``t``, ``accel``, ``gyro`` (N, 3)).
-    orientations : (K, 3) body up vectors or (K, 4) ``q_nb``, one per position in time order,
+    data : ImuData
+        The recording (or any object with ``t``, ``accel``, ``gyro`` (N, 3)); raw or SI units.
+    orientations : array_like or Segments
+        (K, 3) body up vectors or (K, 4) ``q_nb``, one per position in time order,
         or an :class:`imunav.sim.Segments` table (its static rows give ``q_nb`` and ``windows``).
-    windows : (K, 2) nominal start/stop times of the positions (a hint: the
+    windows : array_like, shape (K, 2), optional
+        Nominal start/stop times of the positions, s (a hint: the
         static samples inside each window are found from the data); without
         it, exactly K static segments must be detected.
-    gravity : local gravity, m/s² (default: normal gravity at ``latitude``, else G0).
-    latitude : rad; enables Earth-rate removal in the gyro static fit.
-    g_sensitivity : ``"diagonal"`` (thesis), ``"full"`` or ``"none"``.
-    window_s, min_duration_s, trim_s : static detector settings.
-    full_scale : (accel, gyro) ranges in raw units; segments touching them are refused.
-    serial : allow for correlation between consecutive positions (AR(1) GLS).
-    noise_model : characterised noise (e.g. an :class:`imunav.sim.ImuErrorModel`
+    gravity : float, optional
+        Local gravity, m/s² (default: normal gravity at ``latitude``, else G0).
+    latitude : float, optional
+        Geodetic latitude, rad; enables Earth-rate removal in the gyro static fit.
+    g_sensitivity : {"diagonal", "full", "none"}
+        ``"diagonal"`` (thesis), ``"full"`` or ``"none"``.
+    window_s, min_duration_s, trim_s : float
+        Static detector settings, s: window of the variance test, shortest static segment, and the span
+        trimmed at each end of a segment.
+    full_scale : tuple of (float or None)
+        (accel, gyro) ranges in raw units; segments touching them are refused.
+    fs : float, optional
+        Sample rate, Hz, when ``data`` has no time stamps.
+    serial : bool
+        Allow for correlation between consecutive positions (AR(1) GLS).
+    noise_model : ImuErrorModel, optional
+        Characterised noise (an :class:`imunav.sim.ImuErrorModel`
         or any object with ``accel`` / ``gyro`` carrying ``noise_density`` and
         ``bias_instability``, as found by Allan analysis): the exact covariance
         of the position means (white noise + Gauss-Markov drift across the
         session's timing) is used for generalised least squares, so standard
         errors account for the time-correlated bias.
+
+    Returns
+    -------
+    CalibrationResult
+        The calibration (gyro matrix identity), standard errors, residuals, the segments used.
+
+    Raises
+    ------
+    InsufficientDataError
+        If fewer static segments than positions are found, or a segment is too short.
+    SaturationError
+        If a segment touches the full-scale range.
+    ShapeError
+        If ``orientations`` or ``windows`` have the wrong shape.
+    DegenerateGeometryError
+        If the positions do not excite every axis.
     """
     if hasattr(orientations, "kind") and hasattr(orientations, "q_nb"):  # an imunav.sim Segments table
         st = orientations.select("static")
@@ -317,9 +465,9 @@ def six_position(
     gravity: float = G0,
     latitude: float | None = None,
 ) -> CalibrationResult:
-    """Six-position test, closed form (imu-error-calibration Appendix A, eqs. 31-42).
+    """Six-position test, closed form (Günhan 2014, Appendix A, eqs. 31-42).
 
-    ``accel_means`` (6, 3) in the order +x up, −x up, +y up, −y up, +z up, −z up
+    ``accel_means`` in the order +x up, −x up, +y up, −y up, +z up, −z up
     (or any order if ``f_ref`` gives the reference specific forces):
     ``B_i = (ã_i,up + ã_i,down)/2``, ``T_ii = (ã_i,up − ã_i,down)/(2g)``,
     ``T_ij = (ã_i|j up − ã_i|j down)/(2g)``.  The gyro bias is the mean over
@@ -328,6 +476,35 @@ def six_position(
 
     Standard errors come from the 2 residual degrees of freedom per axis of
     the equivalent least-squares fit (no misalignment-free assumption).
+
+    Parameters
+    ----------
+    accel_means : array_like, shape (6, 3)
+        Mean accelerometer output of each pose, raw units.
+    gyro_means : array_like, shape (6, 3), optional
+        Mean gyro output of each pose, raw units.
+    f_ref : array_like, shape (6, 3), optional
+        Reference specific force of each pose, m/s² (default: the order above).
+    gravity : float
+        Local gravity, m/s².
+    latitude : float, optional
+        Geodetic latitude, rad, to remove the vertical Earth rate from the gyro bias.
+
+    Returns
+    -------
+    CalibrationResult
+        Accelerometer bias and matrix, gyro bias, with standard errors.
+
+    Raises
+    ------
+    ShapeError
+        If the means are not (6, 3).
+    NonFiniteError
+        If a mean is not finite.
+    InvalidInputError
+        If ``f_ref`` does not hold six axis-aligned poses.
+    DegenerateGeometryError
+        If the poses do not point each axis up and down.
     """
     A = np.asarray(accel_means, float)
     if A.shape != (6, 3):

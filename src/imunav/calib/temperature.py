@@ -1,21 +1,26 @@
 """Temperature calibration: parameters as polynomials of temperature.
 
-imu-error-calibration.md §7 and §8.4 (Tables 6.1/6.2), ahrs-sensor-errors.md
-§3.5.  For each parameter p (a bias component, or a diagonal scale element)
+After Y. Günhan, *Ataletsel ölçüm birimi hatalarının belirlenmesi ve düzeltilmesi* (Detection and
+compensation of inertial measurement unit errors), MSc thesis, Hacettepe University, 2014, ch. 6
+(Tables 6.1/6.2), Y. Günhan, Ç. Ünsal, "Polynomial degree determination for temperature dependent error
+compensation of inertial sensors", IEEE/ION PLANS 2014, and E. Atasoy, *Estimation and analysis of error
+parameters of attitude-heading reference system sensors* (in Turkish), MSc thesis, Başkent University,
+§5.2 and §7.1.  For each parameter p (a bias component, or a diagonal scale element)
 measured at temperatures T_k::
 
     p(T) = Σ_{i=0}^{n} c_i x^i (+ h [T ≥ T_step]),     x = (T − T_c) / T_s
 
 with the temperature centred and scaled (a 5th-order fit in raw °C is badly
 conditioned) and an optional step for the abrupt changes seen on real units
-(ahrs-sensor-errors §4: a 24-25 °C step).  Each order n = 1…5 is fitted by
-least squares and reported with the spec's metrics: in-sample mean-square
+(Atasoy, §7.1: a 24-25 °C step).  Each order n = 1…5 is fitted by
+least squares and reported with the thesis's metrics: in-sample mean-square
 error (Tables 6.1/6.2 print it as "RMS" - it is the MSE), the largest
 positive residual and the magnitude of the largest negative one (the tables'
 "max"/"min" rows), and the leave-one-out cross-validation MSE (closed form
 ``e_i / (1 − h_ii)``).  The order is chosen from the LOO MSE (in-sample
 residuals always fall with the order,
-so they cannot choose it), using the one-standard-error rule: the smallest
+so they cannot choose it), using the one-standard-error rule (Hastie, Tibshirani & Friedman, *The
+Elements of Statistical Learning*, 2nd ed., 2009, §7.10): the smallest
 order whose LOO MSE is within one standard error (or ``tol``) of the best.
 """
 
@@ -38,7 +43,27 @@ Array = NDArray[np.float64]
 
 @dataclass(frozen=True)
 class OrderMetrics(Result):
-    """Fit of one order: coefficients, stderr and the spec's residual metrics."""
+    """Fit of one order: coefficients, stderr and the thesis's residual metrics.
+
+    Attributes
+    ----------
+    order : int
+        Polynomial order.
+    curve : TempCurve
+        The fitted curve (temperature in °C, value in the parameter's unit).
+    stderr : numpy.ndarray
+        Standard errors of the coefficients.
+    mse : float
+        In-sample mean-square error (the tables' "RMS").
+    max_residual : float
+        Largest positive residual.
+    min_residual_abs : float
+        Magnitude of the largest negative residual.
+    loo_mse : float
+        Leave-one-out cross-validation MSE.
+    residuals, loo_residuals : numpy.ndarray, shape (K,)
+        In-sample and leave-one-out residuals.
+    """
 
     order: int
     curve: TempCurve
@@ -51,6 +76,13 @@ class OrderMetrics(Result):
     loo_residuals: Array
 
     def to_dict(self) -> dict[str, Any]:
+        """JSON-ready dictionary of the fit (residual arrays left out).
+
+        Returns
+        -------
+        dict
+            ``order``, ``curve``, ``stderr``, ``mse``, ``rms``, ``max_residual``, ``min_residual_abs``, ``loo_mse``.
+        """
         return {
             "order": self.order,
             "curve": self.curve.to_dict(),
@@ -65,7 +97,21 @@ class OrderMetrics(Result):
 
 @dataclass(frozen=True)
 class TemperatureFit(Result):
-    """All fitted orders of one parameter and the chosen one."""
+    """All fitted orders of one parameter and the chosen one.
+
+    Attributes
+    ----------
+    temp_c : numpy.ndarray, shape (K,)
+        Calibration temperatures, °C.
+    values : numpy.ndarray, shape (K,)
+        The parameter at each temperature.
+    fits : tuple of OrderMetrics
+        One fit per order tried.
+    chosen_order : int
+        The order selected (or forced).
+    model : str
+        ``"poly"`` or ``"piecewise"``.
+    """
 
     temp_c: Array
     values: Array
@@ -82,7 +128,13 @@ class TemperatureFit(Result):
         return next(f for f in self.fits if f.order == self.chosen_order)
 
     def table(self) -> dict[str, list[float]]:
-        """Rows of Tables 6.1/6.2 (MSE, max residual, |min residual|) plus LOO MSE, per order."""
+        """Rows of Günhan 2014, Tables 6.1/6.2 (MSE, max residual, |min residual|) plus LOO MSE, per order.
+
+        Returns
+        -------
+        dict of str to list of float
+            ``order``, ``mse``, ``max_residual``, ``min_residual_abs``, ``loo_mse`` (one entry per order).
+        """
         return {
             "order": [f.order for f in self.fits],
             "mse": [f.mse for f in self.fits],
@@ -92,6 +144,13 @@ class TemperatureFit(Result):
         }
 
     def to_dict(self) -> dict[str, Any]:
+        """JSON-ready dictionary of all fits.
+
+        Returns
+        -------
+        dict
+            ``model``, ``chosen_order``, ``temp_c``, ``values``, ``fits``.
+        """
         return {
             "model": self.model,
             "chosen_order": self.chosen_order,
@@ -141,14 +200,39 @@ def fit_temperature_curve(
 
     Parameters
     ----------
-    temp_c, values : (K,) calibration temperatures (°C) and parameter values.
-    orders : orders to try (1-5 in the thesis).
-    model : ``"poly"`` or ``"piecewise"`` (polynomial + one step; ``step_c``
-        found by search over the mid-points between temperatures if None).
-    center_c, scale_c : default mid-range and half-range of ``temp_c``.
-    tol : relative LOO tolerance: a higher order must beat a lower one by more than a
-        factor ``1 + tol`` and by more than one standard error (default: halve it).
-    order : force the chosen order instead of LOO selection.
+    temp_c : array_like, shape (K,)
+        Calibration temperatures, °C.
+    values : array_like, shape (K,)
+        The parameter at each temperature (bias in its unit, or a diagonal element of T).
+    orders : iterable of int
+        Orders to try (1-5 in the thesis).
+    model : {"poly", "piecewise"}
+        Polynomial, or polynomial + one step.
+    step_c : float, optional
+        Temperature of the step of the piecewise model, °C (found by search over the mid-points between
+        temperatures if None).
+    center_c, scale_c : float, optional
+        Temperature normalisation, °C (default: mid-range and half-range of ``temp_c``).
+    tol : float
+        Relative LOO tolerance: a higher order must beat a lower one by more than a
+        factor ``1 + tol`` and by more than one standard error.
+    order : int, optional
+        Force the chosen order instead of LOO selection.
+
+    Returns
+    -------
+    TemperatureFit
+        Every order's fit and the chosen one.
+
+    Raises
+    ------
+    ShapeError
+        If ``temp_c`` and ``values`` are not equal-length 1-D arrays.
+    InvalidInputError
+        If a value is not finite, ``orders`` or ``model`` is invalid, ``scale_c`` is not positive, or a
+        forced ``order`` was not fitted.
+    InsufficientDataError
+        With too few temperatures for the highest order.
     """
     t = np.asarray(temp_c, float)
     y = np.asarray(values, float)
@@ -204,12 +288,27 @@ def fit_temperature_curve(
 
 @dataclass(frozen=True)
 class ThermalResult(Result):
-    """Thermal model of an IMU: per parameter and axis a :class:`TemperatureFit`."""
+    """Thermal model of an IMU: per parameter and axis a :class:`TemperatureFit`.
+
+    Attributes
+    ----------
+    calibration : ImuCalibration
+        The calibration with its ``thermal`` curves.
+    fits : dict of str to tuple of TemperatureFit
+        Per parameter (``accel_bias``, ``accel_scale``, ``gyro_bias``, ``gyro_scale``), one fit per axis.
+    """
 
     calibration: ImuCalibration
     fits: dict[str, tuple[TemperatureFit, TemperatureFit, TemperatureFit]] = field(default_factory=dict)
 
     def to_dict(self) -> dict[str, Any]:
+        """JSON-ready dictionary of the model.
+
+        Returns
+        -------
+        dict
+            ``calibration`` and ``fits``.
+        """
         return {
             "calibration": self.calibration.to_dict(),
             "fits": {k: [f.to_dict() for f in v] for k, v in self.fits.items()},
@@ -226,10 +325,39 @@ def thermal_calibration(
     order: int | None = None,
     tol: float = 1.0,
 ) -> ThermalResult:
-    """Temperature model from calibrations repeated at several temperatures (thesis ch. 6).
+    """Temperature model from calibrations repeated at several temperatures (Günhan 2014, ch. 6).
 
     The constant part of the result is the calibration closest to the
     centre temperature; ``params`` get temperature curves (scale = diagonal of T).
+
+    Parameters
+    ----------
+    temps_c : sequence of float
+        Temperature of each calibration, °C.
+    calibrations : sequence of ImuCalibration
+        One calibration per temperature.
+    params : sequence of str
+        Parameters that get curves, from ``accel_bias``, ``accel_scale``, ``gyro_bias``, ``gyro_scale``.
+    orders : iterable of int
+        Orders to try.
+    model : {"poly", "piecewise"}
+        Curve model.
+    order : int, optional
+        Force the order.
+    tol : float
+        LOO tolerance (see :func:`fit_temperature_curve`).
+
+    Returns
+    -------
+    ThermalResult
+        The temperature-dependent calibration and every fit.
+
+    Raises
+    ------
+    ShapeError
+        If the numbers of temperatures and calibrations differ.
+    InvalidInputError
+        If a parameter name is unknown.
     """
     t = np.asarray(temps_c, float)
     if len(calibrations) != t.size:

@@ -33,12 +33,38 @@ def _quadratic(e: ArrayLike, C: ArrayLike, name_e: str, name_c: str) -> Array:
 
 
 def nis(innovation: ArrayLike, S: ArrayLike) -> Array:
-    """Normalised innovation squared ``νᵀ S⁻¹ ν`` for (..., m) and (..., m, m)."""
+    """Normalised innovation squared ``νᵀ S⁻¹ ν`` for (..., m) and (..., m, m).
+
+    Parameters
+    ----------
+    innovation : array_like, shape (..., m)
+        Innovations ν.
+    S : array_like, shape (..., m, m)
+        Their covariances.
+
+    Returns
+    -------
+    numpy.ndarray, shape (...)
+        NIS values, ~ χ²(m) for a consistent filter.
+    """
     return _quadratic(innovation, S, "innovation", "S")
 
 
 def nees(error: ArrayLike, P: ArrayLike) -> Array:
-    """Normalised estimation error squared ``eᵀ P⁻¹ e`` for (..., n) and (..., n, n)."""
+    """Normalised estimation error squared ``eᵀ P⁻¹ e`` for (..., n) and (..., n, n).
+
+    Parameters
+    ----------
+    error : array_like, shape (..., n)
+        Estimation errors e = x̂ − x.
+    P : array_like, shape (..., n, n)
+        The filter's covariances.
+
+    Returns
+    -------
+    numpy.ndarray, shape (...)
+        NEES values, ~ χ²(n) for a consistent filter.
+    """
     return _quadratic(error, P, "error", "P")
 
 
@@ -47,6 +73,25 @@ def chi2_bounds(dof: int, n_samples: int = 1, confidence: float = 0.95) -> tuple
 
     ``n·mean ~ χ²(n·dof)`` so the bounds are ``χ²⁻¹((1∓c)/2, n·dof) / n``.
     Example: dof 2, 50 runs, 95 % → (1.60, 2.45) (Bar-Shalom et al. 2001, §5.4.2).
+
+    Parameters
+    ----------
+    dof : int
+        Degrees of freedom of each value, >= 1.
+    n_samples : int
+        Number of values averaged, >= 1.
+    confidence : float
+        Two-sided probability in (0, 1).
+
+    Returns
+    -------
+    lower, upper : float
+        Bounds of the mean.
+
+    Raises
+    ------
+    InvalidInputError
+        If ``dof`` or ``n_samples`` is below 1, or ``confidence`` outside (0, 1).
     """
     if dof < 1 or n_samples < 1:
         raise InvalidInputError(f"dof and n_samples must be >= 1, got {dof}, {n_samples}")
@@ -61,14 +106,30 @@ def chi2_bounds(dof: int, n_samples: int = 1, confidence: float = 0.95) -> tuple
 class ConsistencyResult(Result):
     """Per-step Monte Carlo averages of a χ² statistic and their bounds.
 
-    ``mean_per_step`` averages over runs; ``lower``/``upper`` are the bounds
-    for that average; ``fraction_inside`` is the share of steps inside;
-    ``time_average`` and ``time_bounds`` pool all runs and steps;
-    ``passed`` is ``time_bounds[0] <= time_average <= time_bounds[1]`` and
-    ``fraction_inside >= confidence - 3 sd`` of the binomial count.  The pooled
-    ``time_bounds`` assume independent steps, which holds for NIS (white
-    innovations) but not for NEES (errors are correlated in time): judge NEES
-    by ``fraction_inside`` and the per-step bounds.
+    The pooled ``time_bounds`` assume independent steps, which holds for NIS (white innovations) but not for
+    NEES (errors are correlated in time): judge NEES by ``fraction_inside`` and the per-step bounds.
+
+    Attributes
+    ----------
+    dof : int
+        Degrees of freedom of each value.
+    n_runs : int
+        Number of runs averaged.
+    confidence : float
+        Two-sided probability of the bounds.
+    mean_per_step : numpy.ndarray, shape (steps,)
+        Average over runs at each step.
+    lower, upper : float
+        Bounds for that average (:func:`chi2_bounds`).
+    fraction_inside : float
+        Share of steps inside the bounds.
+    time_average : float
+        Average over all runs and steps.
+    time_bounds : tuple of float
+        Bounds for ``time_average``.
+    passed : bool
+        ``time_bounds[0] <= time_average <= time_bounds[1]`` and ``fraction_inside >= confidence - 3 sd`` of
+        the binomial count.
     """
 
     dof: int
@@ -84,7 +145,29 @@ class ConsistencyResult(Result):
 
 
 def consistency_test(values: ArrayLike, dof: int, confidence: float = 0.95) -> ConsistencyResult:
-    """χ² consistency check of NIS or NEES values of shape (runs, steps) or (steps,)."""
+    """χ² consistency check of NIS or NEES values of shape (runs, steps) or (steps,).
+
+    Parameters
+    ----------
+    values : array_like, shape (runs, steps) or (steps,)
+        NIS or NEES values (NaN steps are left out).
+    dof : int
+        Degrees of freedom of each value.
+    confidence : float
+        Two-sided probability of the bounds.
+
+    Returns
+    -------
+    ConsistencyResult
+        Averages, bounds and the verdict.
+
+    Raises
+    ------
+    ShapeError
+        If ``values`` is not 1-D or 2-D, or empty.
+    InvalidInputError
+        If no step is free of NaN, or ``dof`` / ``confidence`` is out of range.
+    """
     v = np.asarray(values, dtype=np.float64)
     if v.ndim == 1:
         v = v[None, :]

@@ -24,7 +24,22 @@ Array = NDArray[np.float64]
 
 
 def numerical_jacobian(fun: Callable[[Array], ArrayLike], x: Array, eps: float = 1e-6) -> Array:
-    """Central-difference Jacobian ``∂fun/∂x`` at ``x`` (step ``eps·max(1, |x_i|)``)."""
+    """Central-difference Jacobian ``∂fun/∂x`` at ``x`` (step ``eps·max(1, |x_i|)``).
+
+    Parameters
+    ----------
+    fun : callable
+        ``fun(x) -> y``, a vector function of the state.
+    x : numpy.ndarray, shape (n,)
+        Point of linearisation.
+    eps : float
+        Relative step.
+
+    Returns
+    -------
+    numpy.ndarray, shape (m, n)
+        The Jacobian, truncation error O(step²).
+    """
     x = np.asarray(x, dtype=np.float64)
     f0 = np.atleast_1d(np.asarray(fun(x), dtype=np.float64))
     J = np.empty((f0.shape[0], x.shape[0]))
@@ -39,17 +54,26 @@ def numerical_jacobian(fun: Callable[[Array], ArrayLike], x: Array, eps: float =
 
 
 class ExtendedKalmanFilter:
-    """EKF with state ``x`` and covariance ``P``.
+    """EKF with state ``x`` and covariance ``P`` (module docstring; Gelb 1974, §6.1).
 
     Parameters
     ----------
-    x0, P0 : initial state and covariance.
-    f : ``f(x, u) -> x_next`` process model (``u`` may be None).
-    h : ``h(x) -> z_pred`` measurement model.
-    F_jac, H_jac : optional Jacobians ``F_jac(x, u)``, ``H_jac(x)``;
-        numerical when omitted.
-    Q, R : default noise covariances.
-    residual : optional ``residual(z, z_pred) -> ν`` (e.g. wrapping angles).
+    x0 : array_like, shape (n,)
+        Initial state.
+    P0 : array_like, shape (n, n)
+        Initial covariance.
+    f : callable
+        ``f(x, u) -> x_next`` process model (``u`` may be None).
+    h : callable
+        ``h(x) -> z_pred`` measurement model.
+    F_jac, H_jac : callable, optional
+        Jacobians ``F_jac(x, u)``, ``H_jac(x)``; numerical (:func:`numerical_jacobian`) when omitted.
+    Q : array_like, shape (n, n), optional
+        Default process-noise covariance of a step.
+    R : array_like, shape (m, m), optional
+        Default measurement-noise covariance.
+    residual : callable, optional
+        ``residual(z, z_pred) -> ν`` (e.g. wrapping angles); default ``z - z_pred``.
     """
 
     def __init__(
@@ -76,7 +100,27 @@ class ExtendedKalmanFilter:
         return int(self.x.shape[0])
 
     def predict(self, u: ArrayLike | None = None, *, Q: ArrayLike | None = None) -> tuple[Array, Array]:
-        """``x⁻ = f(x, u)``, ``P⁻ = F P Fᵀ + Q``; returns (x, P)."""
+        """``x⁻ = f(x, u)``, ``P⁻ = F P Fᵀ + Q``.
+
+        Parameters
+        ----------
+        u : array_like, optional
+            Control input passed to ``f``.
+        Q : array_like, shape (n, n), optional
+            Process-noise covariance of this step (default: the filter's ``Q``).
+
+        Returns
+        -------
+        x : numpy.ndarray, shape (n,)
+            Predicted state.
+        P : numpy.ndarray, shape (n, n)
+            Predicted covariance.
+
+        Raises
+        ------
+        ShapeError
+            If ``f`` returns a state of another size.
+        """
         Qm = self.Q if Q is None else as_covariance(Q, "Q", self.n)
         x0 = self.x
         if self.F_jac is not None:
@@ -92,7 +136,29 @@ class ExtendedKalmanFilter:
 
     def update(self, z: ArrayLike, *, R: ArrayLike | None = None, h: Callable[[Array], ArrayLike] | None = None,
                H_jac: Callable[[Array], ArrayLike] | None = None) -> UpdateResult:
-        """Measurement update with ``h`` (or an override, e.g. another sensor)."""
+        """Measurement update with ``h`` (or an override, e.g. another sensor); Joseph-form covariance.
+
+        Parameters
+        ----------
+        z : array_like, shape (m,)
+            Measurement.
+        R : array_like, shape (m, m), optional
+            Measurement-noise covariance (default: the filter's ``R``).
+        h : callable, optional
+            Measurement model for this update (default: the filter's ``h``).
+        H_jac : callable, optional
+            Its Jacobian (numerical when omitted).
+
+        Returns
+        -------
+        UpdateResult
+            Innovation, its covariance, the gain, the normalised innovation and the NIS.
+
+        Raises
+        ------
+        InvalidInputError
+            If ``R`` does not match the size of the measurement.
+        """
         hf = self.h if h is None else h
         Hj = self.H_jac if h is None else H_jac
         zp = np.atleast_1d(np.asarray(hf(self.x), dtype=np.float64))

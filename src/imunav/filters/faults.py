@@ -20,7 +20,7 @@ detectors here run over a whole sequence ``ν̃`` of shape (N, s):
   innovation, which the variance-increase tests cannot see; differencing
   removes the constant offset the frozen noise sample leaves behind.
 
-Thresholds (the thesis's are wrong, see the digest §2.7):
+Thresholds (those of Akgün 2002, §4.4, 5.3.3 and 6.2d, are wrong; the table says why):
 
 =========  =============================  =======================================
 detector   thesis threshold (α = 0.05)    calibrated (per-step false-alarm rate p)

@@ -24,7 +24,31 @@ Array = NDArray[np.float64]
 
 
 def sigma_points(x: Array, P: Array, alpha: float, beta: float, kappa: float) -> tuple[Array, Array, Array]:
-    """Scaled sigma points (2n+1, n) and mean / covariance weights."""
+    """Scaled sigma points and their mean / covariance weights (module docstring).
+
+    Parameters
+    ----------
+    x : numpy.ndarray, shape (n,)
+        Mean.
+    P : numpy.ndarray, shape (n, n)
+        Covariance (symmetric positive definite).
+    alpha, beta, kappa : float
+        Scaling parameters (spread, prior knowledge of the distribution, secondary scaling).
+
+    Returns
+    -------
+    chi : numpy.ndarray, shape (2n+1, n)
+        Sigma points.
+    Wm : numpy.ndarray, shape (2n+1,)
+        Mean weights.
+    Wc : numpy.ndarray, shape (2n+1,)
+        Covariance weights.
+
+    Raises
+    ------
+    InvalidInputError
+        If ``n + λ <= 0`` (increase alpha or kappa).
+    """
     n = x.shape[0]
     lam = alpha**2 * (n + kappa) - n
     if n + lam <= 0:
@@ -42,15 +66,26 @@ def sigma_points(x: Array, P: Array, alpha: float, beta: float, kappa: float) ->
 
 
 class UnscentedKalmanFilter:
-    """UKF with state ``x`` and covariance ``P``.
+    """UKF with state ``x`` and covariance ``P`` (module docstring).
 
     Parameters
     ----------
-    x0, P0 : initial state and covariance.
-    f : ``f(x, u) -> x_next``; h : ``h(x) -> z_pred``.
-    Q, R : additive process / measurement noise covariances.
-    alpha, beta, kappa : sigma-point scaling (defaults 1e-3, 2, 0).
-    residual : optional ``residual(z, z_pred)``.
+    x0 : array_like, shape (n,)
+        Initial state.
+    P0 : array_like, shape (n, n)
+        Initial covariance.
+    f : callable
+        ``f(x, u) -> x_next`` process model.
+    h : callable
+        ``h(x) -> z_pred`` measurement model.
+    Q : array_like, shape (n, n), optional
+        Additive process-noise covariance of a step.
+    R : array_like, shape (m, m), optional
+        Additive measurement-noise covariance.
+    alpha, beta, kappa : float
+        Sigma-point scaling (defaults 1e-3, 2, 0).
+    residual : callable, optional
+        ``residual(z, z_pred)`` (e.g. wrapping angles); default ``z - z_pred``.
     """
 
     def __init__(self, x0: ArrayLike, P0: ArrayLike, f: Callable[..., ArrayLike], h: Callable[[Array], ArrayLike],
@@ -74,7 +109,22 @@ class UnscentedKalmanFilter:
         return sigma_points(self.x, self.P, self.alpha, self.beta, self.kappa)
 
     def predict(self, u: ArrayLike | None = None, *, Q: ArrayLike | None = None) -> tuple[Array, Array]:
-        """Propagate the sigma points through f; returns (x, P)."""
+        """Propagate the sigma points through f.
+
+        Parameters
+        ----------
+        u : array_like, optional
+            Control input passed to ``f``.
+        Q : array_like, shape (n, n), optional
+            Process-noise covariance of this step (default: the filter's ``Q``).
+
+        Returns
+        -------
+        x : numpy.ndarray, shape (n,)
+            Predicted state.
+        P : numpy.ndarray, shape (n, n)
+            Predicted covariance.
+        """
         Qm = self.Q if Q is None else as_covariance(Q, "Q", self.n)
         X, Wm, Wc = self._sigma()
         Y = np.array([np.asarray(self.f(xi, u), dtype=np.float64).reshape(-1) for xi in X])
@@ -85,7 +135,25 @@ class UnscentedKalmanFilter:
         return self.x, self.P
 
     def update(self, z: ArrayLike, *, R: ArrayLike | None = None) -> UpdateResult:
-        """Measurement update from sigma points redrawn around the prior."""
+        """Measurement update from sigma points redrawn around the prior.
+
+        Parameters
+        ----------
+        z : array_like, shape (m,)
+            Measurement.
+        R : array_like, shape (m, m), optional
+            Measurement-noise covariance (default: the filter's ``R``).
+
+        Returns
+        -------
+        UpdateResult
+            Innovation, its covariance, the gain, the normalised innovation and the NIS.
+
+        Raises
+        ------
+        InvalidInputError
+            If ``R`` does not match the size of the measurement.
+        """
         X, Wm, Wc = self._sigma()
         Z = np.array([np.atleast_1d(np.asarray(self.h(xi), dtype=np.float64)) for xi in X])
         zp = Wm @ Z

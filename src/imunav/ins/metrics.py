@@ -50,7 +50,27 @@ def _pos(x: ArrayLike, name: str, min_cols: int = 2) -> Array:
 
 
 def align_heading(estimate: ArrayLike, reference: ArrayLike, align_distance: float = 0.8) -> Array:
-    """Estimate shifted to the origin and rotated about z as in :func:`error_2d`."""
+    """Estimate shifted to the origin and rotated about z as in :func:`error_2d`.
+
+    Parameters
+    ----------
+    estimate : array_like, shape (N, 2) or (N, 3)
+        Estimated positions, local NED (x, y horizontal), m.
+    reference : array_like, shape (N, 2) or (N, 3)
+        Reference positions at the same samples, m, frame with the same x-y handedness.
+    align_distance : float
+        Horizontal distance from the start at which the headings are aligned, m.
+
+    Returns
+    -------
+    numpy.ndarray
+        The aligned estimate, same shape, m.
+
+    Raises
+    ------
+    ShapeError
+        If the two tracks do not have the same number of rows.
+    """
     est = _pos(estimate, "estimate")
     ref = _pos(reference, "reference")
     if est.shape[0] != ref.shape[0]:
@@ -76,6 +96,25 @@ def error_2d(estimate: ArrayLike, reference: ArrayLike, align_distance: float = 
     :func:`align_heading` (see module docstring).  Both tracks must be
     expressed in frames whose x-y axes have the same handedness (use the
     adapters of :mod:`imunav.io.foot`).
+
+    Parameters
+    ----------
+    estimate : array_like, shape (N, 2) or (N, 3)
+        Estimated positions, local NED (x, y horizontal), m.
+    reference : array_like, shape (N, 2) or (N, 3)
+        Reference positions at the same samples, m, frame with the same x-y handedness.
+    align_distance : float
+        Horizontal distance from the start at which the headings are aligned, m.
+
+    Returns
+    -------
+    float
+        The 2-D error, m (Wagstaff, Peretroukhin & Kelly 2020, the pyshoe evaluation).
+
+    Raises
+    ------
+    ShapeError
+        If the two tracks do not have the same number of rows.
     """
     est = align_heading(estimate, reference, align_distance)
     ref = np.asarray(reference, dtype=float)
@@ -86,7 +125,19 @@ def error_2d(estimate: ArrayLike, reference: ArrayLike, align_distance: float = 
 
 @dataclass(frozen=True)
 class LoopClosure(Result):
-    """Final-minus-initial position: 3-D norm, horizontal and vertical parts (m)."""
+    """Final-minus-initial position of a closed track.
+
+    Attributes
+    ----------
+    error_3d : float
+        3-D norm of the final-minus-initial position, m.
+    horizontal : float
+        Its horizontal part, m.
+    vertical : float
+        Its vertical part, m.
+    distance_travelled : float
+        Length of the track, m.
+    """
 
     error_3d: float
     horizontal: float
@@ -98,12 +149,30 @@ class LoopClosure(Result):
         return 100.0 * self.error_3d / self.distance_travelled if self.distance_travelled > 0 else float("nan")
 
     def to_dict(self) -> dict[str, Any]:
+        """JSON-ready dictionary.
+
+        Returns
+        -------
+        dict
+            The four attributes by name, m.
+        """
         return {"error_3d": self.error_3d, "horizontal": self.horizontal, "vertical": self.vertical,
                 "distance_travelled": self.distance_travelled}
 
 
 def loop_closure_error(position: ArrayLike) -> LoopClosure:
-    """Loop-closure error of a track that ends where it started."""
+    """Loop-closure error of a track that ends where it started.
+
+    Parameters
+    ----------
+    position : array_like, shape (N, 3)
+        Positions, local NED, m.
+
+    Returns
+    -------
+    LoopClosure
+        The final-minus-initial position and the distance travelled.
+    """
     p = _pos(position, "position", 3)
     d = p[-1] - p[0]
     travelled = float(np.sum(np.linalg.norm(np.diff(p[:, :2], axis=0), axis=1)))
@@ -117,6 +186,29 @@ def position_rmse(estimate: ArrayLike, reference: ArrayLike, *, align: str = "ya
     ``"yaw"`` (shift, then the least-squares rotation about z, closed form
     ``psi = atan2(sum(x̂ y - ŷ x), sum(x̂ x + ŷ y))``).  ``dims``: 2
     (horizontal) or 3.  RMSE = sqrt(mean_k |e_k|²).
+
+    Parameters
+    ----------
+    estimate : array_like, shape (N, 2) or (N, 3)
+        Estimated positions, local NED (x, y horizontal), m.
+    reference : array_like, shape (N, 2) or (N, 3)
+        Reference positions at the same samples, m, frame with the same x-y handedness.
+    align : {"none", "start", "yaw"}
+        Alignment before the comparison (see above).
+    dims : {2, 3}
+        Horizontal or 3-D error.
+
+    Returns
+    -------
+    float
+        The RMSE, m.
+
+    Raises
+    ------
+    ShapeError
+        If the two tracks do not have the same number of rows.
+    InvalidInputError
+        If ``align`` or ``dims`` is not one of the values above.
     """
     est = _pos(estimate, "estimate", dims)
     ref = _pos(reference, "reference", dims)
@@ -146,6 +238,29 @@ def vertical_error(estimate: ArrayLike, reference_z: ArrayLike, index: ArrayLike
     The estimate is a NED track (``z_down=True``: height = -z) shifted to
     start at zero height; ``reference_z`` are reference heights above the
     start (up positive), one per index.
+
+    Parameters
+    ----------
+    estimate : array_like, shape (N, 3)
+        Estimated positions, m.
+    reference_z : array_like
+        Reference heights above the start (up positive), m, one per index.
+    index : array_like of int, optional
+        Samples compared (default: every sample).
+    z_down : bool
+        The estimate's z axis points down (NED).
+
+    Returns
+    -------
+    numpy.ndarray
+        ``|h_est - h_ref|`` at each index, m.
+
+    Raises
+    ------
+    ShapeError
+        If ``reference_z`` does not have one value per index.
+    InvalidInputError
+        If an index is out of range.
     """
     est = _pos(estimate, "estimate", 3)
     h = est[:, 2] - est[0, 2]

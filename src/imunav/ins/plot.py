@@ -16,6 +16,22 @@ def plot_trajectory(result: Any, reference: Any = None, *, ax: Any = None, label
 
     The reference is aligned as in :func:`imunav.ins.error_2d` (start shifted,
     heading rotated) when it has one row per sample.
+
+    Parameters
+    ----------
+    result : ZuptResult
+        The INS output (positions, local NED, m).
+    reference : array_like, shape (N, 2) or (N, 3), optional
+        Reference positions, m.
+    ax : matplotlib.axes.Axes, optional
+        Axes to draw into (default: a new figure).
+    label : str
+        Legend label of the estimate.
+
+    Returns
+    -------
+    matplotlib.axes.Axes
+        The axes drawn into.
     """
     # optional: matplotlib loads only when a figure is drawn (import time of imunav and its CLI)
     import matplotlib.pyplot as plt
@@ -39,7 +55,22 @@ def plot_trajectory(result: Any, reference: Any = None, *, ax: Any = None, label
 
 
 def plot_zero_velocity(data: Any, detections: dict[str, Any], *, ax: Any = None) -> Any:
-    """Zero-velocity timeline: |ω| and |f| - g with each detector's stance flags underneath."""
+    """Zero-velocity timeline: |ω| and |f| - g with each detector's stance flags underneath.
+
+    Parameters
+    ----------
+    data : ImuData
+        The recording (SI).
+    detections : dict
+        Detector name -> its stance flags (bool per sample) or :class:`~imunav.ins.DetectorResult`.
+    ax : matplotlib.axes.Axes, optional
+        Axes to draw into (default: a new figure).
+
+    Returns
+    -------
+    matplotlib.axes.Axes
+        The axes drawn into.
+    """
     # optional: matplotlib loads only when a figure is drawn (import time of imunav and its CLI)
     import matplotlib.pyplot as plt
 

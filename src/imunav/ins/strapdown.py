@@ -1,8 +1,10 @@
 """Strapdown mechanization over whole recordings.
 
 * :func:`strapdown_local`: local-level NED frame fixed at the start, no Earth
-  rate, constant gravity ``(0, 0, g)`` (pedestrian / short runs; Şahin 2022
-  eqs. 3.1-3.2)::
+  rate, constant gravity ``(0, 0, g)`` (pedestrian / short runs; F. Şahin, *Derin öğrenme yöntemleri
+  ile ataletsel navigasyon sistemlerinde doğruluğun geliştirilmesi* (Improving the accuracy of inertial
+  navigation systems with deep-learning methods), MSc thesis, Kırıkkale University, 2022, eqs.
+  3.1-3.2)::
 
       q_k = q_{k-1} ⊗ exp(Δθ_k)
       v_k = v_{k-1} + C(q_{k-1}) Δv_k + g Δt_k   (Δv_k rotation-compensated;
@@ -10,7 +12,7 @@
       p_k = p_{k-1} + (v_{k-1} + v_k) Δt_k / 2
 
 * :func:`strapdown_ned`: NED with Earth rate, transport rate, Coriolis and
-  WGS84 normal gravity (Groves 2013 §5.4; spec eqs. 2.3 and 4.1)::
+  WGS84 normal gravity (Groves 2013 §5.4; Şahin 2022, eqs. 2.3 and 4.1)::
 
       q_k = exp(-ω_in^n Δt) ⊗ q_{k-1} ⊗ exp(Δθ_k)
       v_k = v_{k-1} + C_mid Δv_k + (g^n - (2 ω_ie^n + ω_en^n) × v) Δt
@@ -42,8 +44,21 @@ OMEGA_E = 7.292115e-5
 
 @dataclass(frozen=True)
 class StrapdownResult(Result):
-    """Integrated trajectory: ``position`` (N, 3) m in the local frame, or
-    ``lla`` (N, 3) (lat rad, lon rad, h m) for the NED mechanization."""
+    """Integrated trajectory.
+
+    Attributes
+    ----------
+    t : numpy.ndarray, shape (N,)
+        Time, s.
+    quaternion : numpy.ndarray, shape (N, 4)
+        Attitude ``q_nb``, body (FRD) to NED.
+    velocity : numpy.ndarray, shape (N, 3)
+        Velocity, NED, m/s.
+    position : numpy.ndarray, shape (N, 3), or None
+        Position in the local frame, m (local mechanization).
+    lla : numpy.ndarray, shape (N, 3), or None
+        Geodetic position (lat rad, lon rad, h m) (NED mechanization).
+    """
 
     t: Array
     q_nb: Array
@@ -52,6 +67,13 @@ class StrapdownResult(Result):
     lla: Array | None = None
 
     def to_dict(self) -> dict[str, Any]:
+        """JSON-ready dictionary.
+
+        Returns
+        -------
+        dict
+            ``t``, ``quaternion``, ``velocity`` and ``position`` or ``lla`` as lists.
+        """
         d = {"t": self.t.tolist(), "q_nb": self.q_nb.tolist(), "velocity": self.velocity.tolist()}
         if self.position is not None:
             d["position"] = self.position.tolist()
@@ -86,6 +108,25 @@ def coning_sculling_increments(data: Any, corrected: bool = True) -> tuple[Array
     the rotation term ``Δθ_k × Δv_k / 2`` and the sculling term
     ``(Δθ_{k-1} × Δv_k + Δv_{k-1} × Δθ_k) / 12`` are added (Savage 1998;
     Groves 2013 eqs. 5.97-5.98).  Row 0 is zero.
+
+    Parameters
+    ----------
+    data : ImuData
+        The recording (SI: rad/s, m/s², specific force), body FRD.
+    corrected : bool
+        Add the two-sample coning and sculling corrections to the increments.
+
+    Returns
+    -------
+    dtheta : numpy.ndarray, shape (N, 3)
+        Angle increments, rad.
+    dv : numpy.ndarray, shape (N, 3)
+        Velocity increments, m/s.
+
+    Raises
+    ------
+    InvalidInputError
+        If ``data`` is not an ImuData.
     """
     t, w, a = _arrays(data)
     return _k.increments(t, w, a, bool(corrected))
@@ -93,7 +134,33 @@ def coning_sculling_increments(data: Any, corrected: bool = True) -> tuple[Array
 
 def strapdown_local(data: Any, q0: ArrayLike, *, v0: ArrayLike = (0, 0, 0), p0: ArrayLike = (0, 0, 0),
                     g: float = 9.80665, corrected: bool = True) -> StrapdownResult:
-    """Free-inertial integration in a local-level NED frame (no Earth rate)."""
+    """Free-inertial integration in a local-level NED frame (no Earth rate; module docstring).
+
+    Parameters
+    ----------
+    data : ImuData
+        The recording (SI: rad/s, m/s², specific force), body FRD.
+    q0 : array_like, shape (4,)
+        Initial attitude ``q_nb`` (unit quaternion).
+    v0 : array_like, shape (3,)
+        Initial velocity, NED, m/s.
+    p0 : array_like, shape (3,)
+        Initial position, local NED, m.
+    g : float
+        Gravity, m/s² (``g^n = (0, 0, g)``).
+    corrected : bool
+        Add the two-sample coning and sculling corrections to the increments.
+
+    Returns
+    -------
+    StrapdownResult
+        Attitude, velocity and local position at every sample.
+
+    Raises
+    ------
+    InvalidInputError
+        If ``q0`` is not a unit quaternion or ``data`` not an ImuData.
+    """
     t, _, _ = _arrays(data)
     q = np.asarray(q0, dtype=float)
     if q.shape != (4,) or abs(np.linalg.norm(q) - 1) > 1e-6:
@@ -110,6 +177,31 @@ def strapdown_ned(data: Any, q0: ArrayLike, lla0: ArrayLike, *, v0: ArrayLike = 
 
     ``lla0`` = (lat rad, lon rad, h m).  The IMU measures rates with respect
     to inertial space (include the Earth rate in ``gyro``).
+
+    Parameters
+    ----------
+    data : ImuData
+        The recording (SI: rad/s, m/s², specific force), body FRD.
+    q0 : array_like, shape (4,)
+        Initial attitude ``q_nb`` (unit quaternion).
+    lla0 : array_like, shape (3,)
+        Initial geodetic position (lat rad, lon rad, h m).
+    v0 : array_like, shape (3,)
+        Initial velocity, NED, m/s.
+    corrected : bool
+        Add the two-sample coning and sculling corrections to the increments.
+    omega_e : float
+        Earth rotation rate, rad/s.
+
+    Returns
+    -------
+    StrapdownResult
+        Attitude, velocity and geodetic position at every sample.
+
+    Raises
+    ------
+    InvalidInputError
+        If ``q0`` is not a unit quaternion, ``data`` not an ImuData, or the latitude is at a pole.
     """
     t, _, _ = _arrays(data)
     q = np.asarray(q0, dtype=float)

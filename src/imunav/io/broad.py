@@ -57,18 +57,60 @@ def _finite_rows(q: Array, convert) -> Array:
 
 
 def to_enu(q_nb: Array) -> Array:
-    """Body->NED quaternions to body->ENU (for BROAD-style output); NaN rows stay NaN."""
+    """Body->NED quaternions to body->ENU (for BROAD-style output); NaN rows stay NaN.
+
+    ``q_enu = Q_ENU_NED ⊗ q_nb`` (module docstring).
+
+    Parameters
+    ----------
+    q_nb : numpy.ndarray, shape (N, 4)
+        Attitude, body to NED, scalar first.
+
+    Returns
+    -------
+    numpy.ndarray, shape (N, 4)
+        Attitude, body to ENU, scalar first.
+    """
     return _finite_rows(q_nb, lambda q: to_convention(q, "broad"))
 
 
 def from_enu(q_enu: Array) -> Array:
-    """Body->ENU quaternions (BROAD ``opt_quat``) to body->NED; NaN rows stay NaN."""
+    """Body->ENU quaternions (BROAD ``opt_quat``) to body->NED; NaN rows stay NaN.
+
+    Parameters
+    ----------
+    q_enu : numpy.ndarray, shape (N, 4)
+        Attitude, body to ENU (y to magnetic north), scalar first.
+
+    Returns
+    -------
+    numpy.ndarray, shape (N, 4)
+        Attitude ``q_nb``, body to NED (north = magnetic north).
+    """
     return _finite_rows(q_enu, lambda q: from_convention(q, "broad"))
 
 
 @dataclass(frozen=True)
 class BroadTrial:
-    """One BROAD trial: IMU recording, reference in NED, scored-sample mask."""
+    """One BROAD trial: IMU recording, reference in NED, scored-sample mask.
+
+    Attributes
+    ----------
+    name : str
+        Trial name (file stem).
+    imu : ImuData
+        Gyro (rad/s), accelerometer (m/s², specific force), magnetometer (µT), sensor frame.
+    q_ref_nb : numpy.ndarray, shape (N, 4)
+        Optical reference attitude, sensor to NED; NaN rows where the motion capture had no data.
+    movement : numpy.ndarray of bool, shape (N,)
+        The samples the BROAD metric scores.
+    fs : float
+        Sample rate, Hz.
+    path : pathlib.Path
+        The file read.
+    meta : dict
+        Further fields of the file.
+    """
 
     name: str
     imu: ImuData
@@ -84,6 +126,23 @@ def load_broad(path: str | Path) -> BroadTrial:
 
     Time is ``t = k / sampling_rate``.  Gyro rad/s, accelerometer m/s² (specific
     force), magnetometer µT, all in the sensor frame (see module docstring).
+
+    Parameters
+    ----------
+    path : str or pathlib.Path
+        The trial file.
+
+    Returns
+    -------
+    BroadTrial
+        Recording, NED reference and movement mask.
+
+    Raises
+    ------
+    InvalidInputError
+        If the file does not exist.
+    FileFormatError
+        If it is not a MAT v5 file, lacks a BROAD variable, or its variables disagree in length.
     """
 
     p = Path(path)
@@ -117,7 +176,23 @@ def load_broad(path: str | Path) -> BroadTrial:
 
 
 def broad_trials(directory: str | Path) -> list[Path]:
-    """Sorted ``*.mat`` trial files in ``directory`` (raises if there are none)."""
+    """Sorted ``*.mat`` trial files in ``directory``.
+
+    Parameters
+    ----------
+    directory : str or pathlib.Path
+        Folder of BROAD trials.
+
+    Returns
+    -------
+    list of pathlib.Path
+        The trial files, sorted by name.
+
+    Raises
+    ------
+    InvalidInputError
+        If the folder does not exist or holds no ``.mat`` file.
+    """
     d = Path(directory)
     if not d.is_dir():
         raise InvalidInputError(f"BROAD folder not found: {d}; pass the folder holding the *.mat trials")

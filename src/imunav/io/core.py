@@ -48,7 +48,26 @@ _ALIASES = {"bag": "rosbag", "mcap": "rosbag", "db3": "rosbag", "ulg": "ulog", "
 
 
 def format_from_suffix(path: str | os.PathLike[str], format: str | None = None) -> str:
-    """The format name for ``path`` (or the normalised ``format`` if given)."""
+    """The format name for ``path`` (or the normalised ``format`` if given), from the table of the module
+    docstring.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The file (or ROS 2 bag folder).
+    format : str, optional
+        A format name or alias; overrides the suffix.
+
+    Returns
+    -------
+    str
+        ``"csv"``, ``"parquet"``, ``"hdf5"``, ``"mat"``, ``"mat73"``, ``"npz"``, ``"rosbag"`` or ``"ulog"``.
+
+    Raises
+    ------
+    InvalidInputError
+        If the format is unknown or the suffix not recognised.
+    """
     if format is not None:
         f = str(format).lower().lstrip(".")
         f = _ALIASES.get(f, f)
@@ -74,13 +93,17 @@ def read_imu(path: str | os.PathLike[str], format: str | None = None, *, layout:
 
     Parameters
     ----------
-    path : file to read (a ROS 2 bag may be its folder).
-    format : ``"csv"``, ``"parquet"``, ``"hdf5"``, ``"mat"`` (v5 and v7.3),
+    path : str or os.PathLike
+        File to read (a ROS 2 bag may be its folder).
+    format : str, optional
+        ``"csv"``, ``"parquet"``, ``"hdf5"``, ``"mat"`` (v5 and v7.3),
         ``"npz"``, ``"rosbag"`` (ROS 1 / ROS 2 sqlite3 / MCAP), ``"ulog"``
         (PX4); from the suffix or content when None.
-    layout : a named CSV layout (``"euroc"``, ``"tum-vi"``, ``"kalibr"``,
+    layout : str, optional
+        A named CSV layout (``"euroc"``, ``"tum-vi"``, ``"kalibr"``,
         ``"px4-csv"``, ``"xio"``; see :mod:`imunav.io.layouts`).
-    **options : reader options, common to all formats: ``columns`` (name
+    **options
+        Reader options, common to all formats: ``columns`` (name
         mapping), ``units`` / ``scales`` / ``offsets`` (per group, for non-SI
         or raw-count content), ``fs`` and ``t0`` (when there is no time
         column), ``nan_policy``, ``mag_unit``, ``meta``; CSV also takes
@@ -97,6 +120,17 @@ def read_imu(path: str | os.PathLike[str], format: str | None = None, *, layout:
     >>> _ = write_imu(d, p)
     >>> read_imu(p).accel[0, 2]
     np.float64(-9.81)
+
+    Returns
+    -------
+    ImuData
+        The recording in SI units (rad/s, m/s², °C), time in s.
+
+    Raises
+    ------
+    InvalidInputError
+        If the format cannot be told or the options do not fit it; the readers raise
+        :class:`~imunav.errors.FileFormatError`, :class:`~imunav.errors.UnitError`, ... for bad content.
     """
     if layout is not None:
         if format not in (None, "csv"):
@@ -114,9 +148,29 @@ def read_imu(path: str | os.PathLike[str], format: str | None = None, *, layout:
 def write_imu(data: ImuData, path: str | os.PathLike[str], format: str | None = None, **options: Any) -> Path:
     """Write ``data`` atomically (temporary file in the same folder, then rename).
 
-    ``format`` as in :func:`read_imu`, plus ``"mat73"`` for MAT v7.3 (or
-    ``format="mat", version="7.3"``).  SI values, ``mag_unit`` and ``meta``
-    are stored; every reader gives back the same bits.
+    SI values, ``mag_unit`` and ``meta`` are stored; every reader gives back the same bits.
+
+    Parameters
+    ----------
+    data : ImuData
+        The recording.
+    path : str or os.PathLike
+        Output file.
+    format : str, optional
+        As in :func:`read_imu`, plus ``"mat73"`` for MAT v7.3 (or ``format="mat", version="7.3"``); from the
+        suffix when None.  Bags and logs cannot be written.
+    **options
+        Writer options (e.g. ``compression`` for HDF5, ``version`` for MAT).
+
+    Returns
+    -------
+    pathlib.Path
+        The file written.
+
+    Raises
+    ------
+    InvalidInputError
+        If ``data`` is not an ImuData, or the format is unknown or read-only.
     """
     if not isinstance(data, ImuData):
         raise InvalidInputError(f"write_imu needs an ImuData, got {type(data).__name__}")

@@ -83,12 +83,28 @@ def resolve_columns(
 ) -> dict[str, Any]:
     """Map channels (``t``, ``gx`` ... ``temp``) to column labels of a table.
 
+    Parameters
+    ----------
+    found : sequence
+        Column labels of the table.
+    columns : mapping, optional
+        User mapping of channels or groups to labels (see the module docstring); None: by name.
+    source : str
+        The file, for messages.
+
+    Returns
+    -------
+    dict
+        Channel -> column label, for the channels present.
+
     Raises
     ------
     FileFormatError
         If a mapped column is absent, if gyro or accel columns cannot be
         found, or if a group is incomplete; the message lists the columns
         found and the names expected.
+    InvalidInputError
+        If a group of ``columns`` does not list 3 names, or names an unknown channel.
     """
     labels = list(found)
     out: dict[str, Any] = {}
@@ -147,7 +163,28 @@ def resolve_columns(
 
 
 def table_to_arrays(df: pd.DataFrame, cols: Mapping[str, Any], source: str) -> dict[str, np.ndarray | None]:
-    """Stack the mapped columns of a table into group arrays."""
+    """Stack the mapped columns of a table into group arrays.
+
+    Parameters
+    ----------
+    df : pandas.DataFrame
+        The table.
+    cols : mapping
+        Channel -> column label (:func:`resolve_columns`).
+    source : str
+        The file, for messages.
+
+    Returns
+    -------
+    dict of str to numpy.ndarray or None
+        ``t`` (N,) (date-times become seconds since the first, with ``t_origin`` kept), ``gyro``,
+        ``accel`` (N, 3), ``mag`` (N, 3) or None, ``temp`` (N,) or None, float64, in the file's units.
+
+    Raises
+    ------
+    FileFormatError
+        If a column holds non-numeric values, or the time column has a missing or unreadable value.
+    """
 
     def col(ch: str) -> np.ndarray:
         s = df[cols[ch]]
@@ -204,7 +241,20 @@ def table_to_arrays(df: pd.DataFrame, cols: Mapping[str, Any], source: str) -> d
 
 
 def imu_to_table(data: ImuData) -> tuple[list[str], np.ndarray]:
-    """Column names and an (N, k) float64 block of an :class:`ImuData` (SI)."""
+    """Column names and an (N, k) float64 block of an :class:`ImuData` (SI).
+
+    Parameters
+    ----------
+    data : ImuData
+        The recording.
+
+    Returns
+    -------
+    names : list of str
+        ``t``, gyro, accel, then magnetometer and temperature columns when present.
+    block : numpy.ndarray, shape (N, k)
+        The values, SI.
+    """
     names = [DEFAULT_NAMES[c] for c in ("t", "gx", "gy", "gz", "ax", "ay", "az")]
     blocks = [data.t[:, None], data.gyro, data.accel]
     if data.mag is not None:
@@ -257,16 +307,33 @@ def read_csv(
 
     Parameters
     ----------
-    path : path of the file.
-    columns : mapping of channels/groups to column names (see module doc).
-    units, scales, offsets : per-group declared units, SI-per-count scales
-        and count offsets (``units={"gyro": "counts"}, scales={"gyro": s}``
-        gives ``gyro_si = (counts - offset) * s``).
-    fs : sampling rate (Hz) when the file has no time column (``t = t0 + k/fs``).
-    delimiter : column separator; detected from the header line when None
-        (``,`` ``;`` tab ``|``, else whitespace).
-    skiprows : lines to skip before the header (after ``#`` comment lines).
-    nan_policy : ``"raise"`` (default), ``"drop"`` or ``"interpolate"``.
+    path : str or os.PathLike
+        The file.
+    columns : mapping, optional
+        Channels / groups to column names (see the module docstring); by default found by name.
+    units : mapping of str to str, optional
+        Declared unit of each group (``{"gyro": "deg/s", "accel": "g"}``, or ``"counts"``); default SI.
+    scales, offsets : mapping of str to float, optional
+        For ``"counts"``: ``value_si = (counts - offset) * scale``.
+    fs : float, optional
+        Sample rate, Hz, when the file has no time (``t = t0 + k / fs``).
+    t0 : float
+        Time of the first sample with ``fs``, s.
+    delimiter : str, optional
+        Column separator; detected from the header line when None (``,`` ``;`` tab ``|``, else whitespace).
+    skiprows : int
+        Lines to skip before the header (after ``#`` comment lines).
+    nan_policy : {"raise", "drop", "interpolate"}
+        What to do with NaN samples.
+    mag_unit : str, optional
+        Unit of the magnetometer (kept as stored).
+    meta : mapping, optional
+        Entries added to the recording's ``meta``.
+
+    Returns
+    -------
+    ImuData
+        The recording, SI, with the declared units and the header's metadata.
 
     Raises
     ------
@@ -348,7 +415,25 @@ def read_csv(
 
 
 def write_csv(data: ImuData, path: str | os.PathLike[str], *, delimiter: str = ",") -> Path:
-    """Write ``data`` (SI) as CSV with exact (``repr``) floats; atomic."""
+    """Write ``data`` (SI) as CSV with exact (``repr``) floats; atomic.
+
+    The first line is a ``# imunav {json}`` header (units, ``mag_unit``, ``meta``), read back by
+    :func:`read_csv`.
+
+    Parameters
+    ----------
+    data : ImuData
+        The recording.
+    path : str or os.PathLike
+        Output file.
+    delimiter : str
+        Column separator.
+
+    Returns
+    -------
+    pathlib.Path
+        The file written.
+    """
     names, block = imu_to_table(data)
     head = f"# imunav {header_json(data)}\n{delimiter.join(names)}\n"
     with atomic_path(path) as tmp:

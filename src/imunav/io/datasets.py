@@ -16,7 +16,13 @@ __all__ = ["shared_data_dir", "shared_data_path"]
 
 
 def shared_data_dir() -> Path | None:
-    """Path of the shared data folder, or ``None`` if it cannot be found."""
+    """Path of the shared data folder, or ``None`` if it cannot be found (module docstring).
+
+    Returns
+    -------
+    pathlib.Path or None
+        The folder.
+    """
     env = os.environ.get("IMUNAV_DATA")
     if env:
         p = Path(env).expanduser()
@@ -31,7 +37,18 @@ def shared_data_dir() -> Path | None:
 
 
 def shared_data_path(*parts: str) -> Path | None:
-    """``shared_data_dir() / parts`` if it exists, else ``None``."""
+    """``shared_data_dir() / parts`` if it exists, else ``None``.
+
+    Parameters
+    ----------
+    *parts : str
+        Path components inside the data folder (e.g. ``"broad"``, ``"trial.mat"``).
+
+    Returns
+    -------
+    pathlib.Path or None
+        The existing path.
+    """
     root = shared_data_dir()
     if root is None:
         return None

@@ -65,12 +65,20 @@ class FootTrial:
 
     Attributes
     ----------
-    imu : ImuData in SI, body FRD.
-    position : (N, 3) reference position in the INS NED frame, or None.
-    labels : stored zero-velocity labels by detector name (bool (N,)).
-    thresholds : stored optimal thresholds by detector name.
-    published_error : stored per-detector 2-D errors (m) by name.
-    name : trial name (file stem); ``meta`` anything else.
+    imu : ImuData
+        The IMU in SI, body FRD.
+    position : numpy.ndarray, shape (N, 3), or None
+        Reference position in the INS NED frame, m.
+    labels : dict of str to numpy.ndarray
+        Stored zero-velocity labels by detector name (bool (N,)).
+    thresholds : dict of str to float
+        Stored optimal thresholds by detector name.
+    published_error : dict of str to float
+        Stored per-detector 2-D errors, m, by name.
+    name : str
+        Trial name (file stem).
+    meta : dict
+        Anything else.
     """
 
     imu: ImuData
@@ -88,7 +96,24 @@ _PYSHOE_ERROR_ORDER = ("shoe", "ared", "ared_dup", "mbgtd", "vicon")
 
 
 def read_pyshoe_mat(path: str | Path) -> FootTrial:
-    """Read a processed trial of the Toronto foot dataset (pyshoe ``.mat``)."""
+    """Read a processed trial of the Toronto foot dataset (pyshoe ``.mat``; Wagstaff, Peretroukhin & Kelly,
+    IEEE Sensors J. 20(2), 2020).
+
+    Parameters
+    ----------
+    path : str or pathlib.Path
+        The ``.mat`` file.
+
+    Returns
+    -------
+    FootTrial
+        IMU (FRD), reference position (NED, :data:`PYSHOE_GT_TO_NED`), stored labels, thresholds and errors.
+
+    Raises
+    ------
+    FileFormatError
+        If the file is unreadable or lacks the ``imu`` / ``gt`` variables, or they disagree.
+    """
 
     p = Path(path)
     try:
@@ -160,6 +185,23 @@ def spread_duplicate_times(t: Array) -> tuple[Array, int]:
     run of equal stamps ``t_b = ... = t_b`` between ``t_a < t_b`` and
     ``t_c > t_b`` is placed evenly on ``(t_a, t_c)``.  Returns the new times and
     the number of samples moved.  Stamps going backwards raise.
+
+    Parameters
+    ----------
+    t : numpy.ndarray, shape (N,)
+        Time stamps, s, non-decreasing.
+
+    Returns
+    -------
+    t_new : numpy.ndarray, shape (N,)
+        Strictly increasing times, s.
+    n_moved : int
+        Number of samples moved.
+
+    Raises
+    ------
+    FileFormatError
+        If a stamp goes backwards.
     """
     t = np.asarray(t, dtype=float).copy()
     d = np.diff(t)
@@ -195,6 +237,22 @@ def read_xio_gait_csv(path: str | Path) -> FootTrial:
 
     Duplicated time stamps are spread by :func:`spread_duplicate_times`
     (count in ``imu.meta["duplicate_times_spread"]``).
+
+    Parameters
+    ----------
+    path : str or pathlib.Path
+        The CSV file.
+
+    Returns
+    -------
+    FootTrial
+        The IMU in SI, body FRD (:data:`Z_UP_TO_FRD`); no reference position.
+
+    Raises
+    ------
+    FileFormatError
+        If the file is empty, holds non-numeric values or ragged rows, lacks an x-io column, or its times go
+        backwards.
     """
     p = Path(path)
     header, arr = _read_csv(p)
@@ -214,6 +272,27 @@ def read_fgo_csv(imu_path: str | Path, position_path: str | Path | None = None, 
     ``foot`` (``"left"`` / ``"right"``) picks the ground-truth columns of
     ``positionGt.csv``; by default it is inferred from the IMU file name.
     The authors' ``is_zero_vel`` flags are returned as ``labels["authors"]``.
+
+    Parameters
+    ----------
+    imu_path : str or pathlib.Path
+        The IMU CSV file.
+    position_path : str or pathlib.Path, optional
+        ``positionGt.csv`` with the reference positions.
+    foot : {"left", "right"}, optional
+        Which foot's reference columns to take (default: from the IMU file name).
+    fs : float
+        Sample rate, Hz (the file holds sample indices).
+
+    Returns
+    -------
+    FootTrial
+        IMU in SI, body FRD; reference position (NED, m) when given; the authors' labels.
+
+    Raises
+    ------
+    FileFormatError
+        If a file is unreadable or lacks a column, the foot cannot be told, or the lengths disagree.
     """
     p = Path(imu_path)
     header, arr = _read_csv(p)

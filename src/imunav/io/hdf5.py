@@ -62,7 +62,43 @@ def read_hdf5(
     mag_unit: str | None = None,
     meta: Mapping[str, Any] | None = None,
 ) -> ImuData:
-    """Read an HDF5 recording (see module doc for the layout and options)."""
+    """Read an HDF5 recording (see the module docstring for the layout).
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The file.
+    group : str
+        HDF5 group holding the datasets.
+    columns : mapping of str to str, optional
+        Where each group is stored (e.g. ``{"gyro": "imu/gyr"}``); by default found by name.
+    units : mapping of str to str, optional
+        Declared unit of each group (``{"gyro": "deg/s", "accel": "g"}``, or ``"counts"``); default SI.
+    scales, offsets : mapping of str to float, optional
+        For ``"counts"``: ``value_si = (counts - offset) * scale``.
+    fs : float, optional
+        Sample rate, Hz, when the file has no time (``t = t0 + k / fs``).
+    t0 : float
+        Time of the first sample with ``fs``, s.
+    nan_policy : {"raise", "drop", "interpolate"}
+        What to do with NaN samples.
+    mag_unit : str, optional
+        Unit of the magnetometer (kept as stored).
+    meta : mapping, optional
+        Entries added to the recording's ``meta``.
+
+    Returns
+    -------
+    ImuData
+        The recording, SI.
+
+    Raises
+    ------
+    FileFormatError
+        If the file is missing, unreadable, or lacks a required group (the message lists what was found).
+    NonFiniteError, TimeOrderError, ShapeError, UnitError
+        From the validation of the values.
+    """
     source = check_nonempty(path)
     with wrap_read_errors(source, "HDF5"):
         fh = h5py.File(source, "r")
@@ -85,7 +121,24 @@ def read_hdf5(
 def write_hdf5(
     data: ImuData, path: str | os.PathLike[str], *, group: str = "/", compression: str | None = None
 ) -> Path:
-    """Write ``data`` (SI, float64) to HDF5 atomically (layout in the module doc)."""
+    """Write ``data`` (SI, float64) to HDF5 atomically (layout in the module docstring).
+
+    Parameters
+    ----------
+    data : ImuData
+        The recording.
+    path : str or os.PathLike
+        Output file.
+    group : str
+        HDF5 group to write into.
+    compression : str, optional
+        h5py dataset compression (e.g. ``"gzip"``).
+
+    Returns
+    -------
+    pathlib.Path
+        The file written.
+    """
     units = dict(SI_UNITS)
     if data.mag is not None:
         units["mag"] = data.mag_unit

@@ -72,7 +72,25 @@ def _header(path: str | os.PathLike[str]) -> list[str]:
 
 
 def layout_options(path: str | os.PathLike[str], layout: str) -> dict[str, Any]:
-    """Reader options of ``layout`` for the file at ``path`` (optional columns only when its header has them)."""
+    """Reader options of ``layout`` for the file at ``path`` (optional columns only when its header has them).
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The CSV file (its header is read).
+    layout : str
+        One of :data:`LAYOUTS`.
+
+    Returns
+    -------
+    dict
+        ``columns``, ``units`` and further :func:`imunav.io.csv.read_csv` options.
+
+    Raises
+    ------
+    InvalidInputError
+        If the layout is unknown.
+    """
     key = str(layout).lower().replace("_", "-")
     if key not in LAYOUTS or key == "xio":
         raise InvalidInputError(f"unknown CSV layout {layout!r}; choose one of {sorted(LAYOUTS)}")
@@ -96,15 +114,27 @@ def read_layout(path: str | os.PathLike[str], layout: str, *, meta: dict[str, An
 
     Parameters
     ----------
-    path : the CSV file.
-    layout : one of :data:`LAYOUTS`.
-    meta : entries added to the result's ``meta``.
-    **options : further :func:`imunav.io.csv.read_csv` options (``nan_policy``, ``skiprows`` ...); the
+    path : str or os.PathLike
+        The CSV file.
+    layout : str
+        One of :data:`LAYOUTS`.
+    meta : dict, optional
+        Entries added to the result's ``meta``.
+    **options
+        Further :func:`imunav.io.csv.read_csv` options (``nan_policy``, ``skiprows`` ...); the
         layout's ``columns`` and ``units`` cannot be overridden (use plain ``read_imu`` for that).
 
     Returns
     -------
     ImuData
+        The recording in SI units; the body frame per layout as in the module docstring's table (the
+        sensor frame as recorded, or FRD for px4-csv and xio).
+
+    Raises
+    ------
+    InvalidInputError
+        If the layout is unknown, or ``options`` set what the layout fixes (``columns``, ``units``; any
+        option for ``xio``).
     """
 
     key = str(layout).lower().replace("_", "-")

@@ -104,11 +104,13 @@ def list_topics(path: str | os.PathLike[str]) -> list[TopicInfo]:
 
     Parameters
     ----------
-    path : ROS 1 ``.bag``, ROS 2 folder / ``.db3`` / ``.mcap``, or PX4 ``.ulg``.
+    path : str or os.PathLike
+        ROS 1 ``.bag``, ROS 2 folder / ``.db3`` / ``.mcap``, or PX4 ``.ulg``.
 
     Returns
     -------
-    list of TopicInfo, sorted by topic and instance.
+    list of TopicInfo
+        Sorted by topic and instance.
     """
     mod, _ = _module(path, f"listing the topics of {os.fspath(path)}")
     return mod.list_topics(path)
@@ -119,13 +121,17 @@ def read_topic(path: str | os.PathLike[str], topic: str, *, instance: int | None
 
     Parameters
     ----------
-    path : the bag or log.
-    topic : topic name (ROS ``/imu/data``; PX4 ``sensor_gps``, optionally ``name:instance``).
-    instance : PX4 ``multi_id`` when the topic has several instances.
+    path : str or os.PathLike
+        The bag or log.
+    topic : str
+        Topic name (ROS ``/imu/data``; PX4 ``sensor_gps``, optionally ``name:instance``).
+    instance : int, optional
+        PX4 ``multi_id`` when the topic has several instances.
 
     Returns
     -------
     TopicData
+        The topic in SI units, body FRD / world NED, ``t`` in s since ``meta["t0_ns"]``.
     """
     mod, _ = _module(path, f"reading {os.fspath(path)}")
     return mod.read_topic(path, topic, instance=instance)
@@ -138,22 +144,38 @@ def read_log_imu(path: str | os.PathLike[str], *, topic: str | None = None, inst
 
     Parameters
     ----------
-    path : the bag or log.
-    topic : the IMU topic (ROS ``sensor_msgs/Imu``; PX4 ``sensor_combined`` (default), ``vehicle_imu``,
+    path : str or os.PathLike
+        The bag or log.
+    topic : str, optional
+        The IMU topic (ROS ``sensor_msgs/Imu``; PX4 ``sensor_combined`` (default), ``vehicle_imu``,
         ``sensor_gyro`` / ``sensor_accel`` (the two of one instance are paired)).  With several
         candidates and none chosen, the error lists them.
-    instance : PX4 ``multi_id`` of ``topic``.
-    mag_topic, temp_topic : a magnetometer (``sensor_msgs/MagneticField``, ``sensor_mag``,
+    instance : int, optional
+        PX4 ``multi_id`` of ``topic``.
+    mag_topic, temp_topic : str, optional
+        A magnetometer (``sensor_msgs/MagneticField``, ``sensor_mag``,
         ``vehicle_magnetometer``) or temperature topic, linearly interpolated onto the IMU stamps;
         IMU samples outside its span are cut (counts in ``meta``).  PX4 ``sensor_combined`` logs that
         carry ``magnetometer_ga`` give the magnetometer without this.
-    nan_policy : ``"raise"``, ``"drop"`` or ``"interpolate"`` (:meth:`ImuData.from_arrays`).
-    meta : entries added to the result's ``meta``.
+    nan_policy : str
+        ``"raise"``, ``"drop"`` or ``"interpolate"`` (:meth:`ImuData.from_arrays`).
+    meta : mapping, optional
+        Entries added to the result's ``meta``.
 
     Returns
     -------
     ImuData
         SI, body FRD, magnetometer in µT, ``t`` in s since ``meta["t0_ns"]``.
+
+    Raises
+    ------
+    InvalidInputError
+        If the topic is ambiguous or not an IMU topic, or ``mag_topic`` / ``temp_topic`` lack that data or
+        duplicate what the IMU topic carries.
+    FileFormatError
+        If the file is not a bag or a ULog, or a topic is empty or does not overlap the IMU in time.
+    MissingDependencyError
+        If ``rosbags`` / ``pyulog`` is not installed.
     """
     mod, _ = _module(path, f"reading {os.fspath(path)}")
     source = os.fspath(path)

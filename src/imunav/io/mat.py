@@ -42,7 +42,23 @@ _HDF5_SIGNATURE = b"\x89HDF\r\n\x1a\n"
 
 
 def mat_version(path: str | os.PathLike[str]) -> str:
-    """``"5"`` or ``"7.3"`` from the file header; raise if it is not a MAT-file."""
+    """``"5"`` or ``"7.3"`` from the file header.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The MAT-file.
+
+    Returns
+    -------
+    str
+        ``"5"`` or ``"7.3"``.
+
+    Raises
+    ------
+    FileFormatError
+        If the file is not a MAT-file, is truncated, or is a v4 MAT-file.
+    """
     source = os.fspath(path)
     with open(source, "rb") as fh:
         head = fh.read(520)
@@ -119,7 +135,41 @@ def read_mat(
     mag_unit: str | None = None,
     meta: Mapping[str, Any] | None = None,
 ) -> ImuData:
-    """Read a MAT-file (v5 or v7.3, detected from the header)."""
+    """Read a MAT-file (v5 or v7.3, detected from the header).
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The file.
+    columns : mapping of str to str, optional
+        Where each group is stored (e.g. ``{"gyro": "imu/gyr"}``); by default found by name.
+    units : mapping of str to str, optional
+        Declared unit of each group (``{"gyro": "deg/s", "accel": "g"}``, or ``"counts"``); default SI.
+    scales, offsets : mapping of str to float, optional
+        For ``"counts"``: ``value_si = (counts - offset) * scale``.
+    fs : float, optional
+        Sample rate, Hz, when the file has no time (``t = t0 + k / fs``).
+    t0 : float
+        Time of the first sample with ``fs``, s.
+    nan_policy : {"raise", "drop", "interpolate"}
+        What to do with NaN samples.
+    mag_unit : str, optional
+        Unit of the magnetometer (kept as stored).
+    meta : mapping, optional
+        Entries added to the recording's ``meta``.
+
+    Returns
+    -------
+    ImuData
+        The recording, SI.
+
+    Raises
+    ------
+    FileFormatError
+        If the file is missing, unreadable, or lacks a required group (the message lists what was found).
+    NonFiniteError, TimeOrderError, ShapeError, UnitError
+        From the validation of the values.
+    """
     source = check_nonempty(path)
     version = mat_version(source)
     numeric, strings = _read_v73(source) if version == "7.3" else _read_v5(source)
@@ -173,7 +223,27 @@ def _write_v73(data: ImuData, tmp: Path) -> None:
 
 
 def write_mat(data: ImuData, path: str | os.PathLike[str], *, version: str = "5") -> Path:
-    """Write a MAT-file, ``version="5"`` (scipy) or ``"7.3"`` (HDF5), atomically."""
+    """Write a MAT-file, ``version="5"`` (scipy) or ``"7.3"`` (HDF5), atomically.
+
+    Parameters
+    ----------
+    data : ImuData
+        The recording.
+    path : str or os.PathLike
+        Output file.
+    version : {"5", "7.3"}
+        MAT-file version.
+
+    Returns
+    -------
+    pathlib.Path
+        The file written.
+
+    Raises
+    ------
+    InvalidInputError
+        If the version is not "5" or "7.3".
+    """
     v = str(version).lstrip("v")
     if v not in ("5", "7", "7.3", "73"):
         raise InvalidInputError(f"MAT version must be '5' or '7.3', not {version!r}")

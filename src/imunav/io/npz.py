@@ -38,7 +38,41 @@ def read_npz(
     mag_unit: str | None = None,
     meta: Mapping[str, Any] | None = None,
 ) -> ImuData:
-    """Read an ``.npz`` recording (see module doc)."""
+    """Read an ``.npz`` recording (see the module docstring).
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The file.
+    columns : mapping of str to str, optional
+        Where each group is stored (e.g. ``{"gyro": "imu/gyr"}``); by default found by name.
+    units : mapping of str to str, optional
+        Declared unit of each group (``{"gyro": "deg/s", "accel": "g"}``, or ``"counts"``); default SI.
+    scales, offsets : mapping of str to float, optional
+        For ``"counts"``: ``value_si = (counts - offset) * scale``.
+    fs : float, optional
+        Sample rate, Hz, when the file has no time (``t = t0 + k / fs``).
+    t0 : float
+        Time of the first sample with ``fs``, s.
+    nan_policy : {"raise", "drop", "interpolate"}
+        What to do with NaN samples.
+    mag_unit : str, optional
+        Unit of the magnetometer (kept as stored).
+    meta : mapping, optional
+        Entries added to the recording's ``meta``.
+
+    Returns
+    -------
+    ImuData
+        The recording, SI.
+
+    Raises
+    ------
+    FileFormatError
+        If the file is missing, unreadable, or lacks a required group (the message lists what was found).
+    NonFiniteError, TimeOrderError, ShapeError, UnitError
+        From the validation of the values.
+    """
     source = check_nonempty(path)
     # open the file ourselves: np.load leaks its handle when the zip is damaged
     with wrap_read_errors(source, "NPZ (zip of .npy arrays)"), open(source, "rb") as fh:
@@ -54,7 +88,22 @@ def read_npz(
 
 
 def write_npz(data: ImuData, path: str | os.PathLike[str], *, compress: bool = False) -> Path:
-    """Write ``data`` as ``.npz`` (float64 SI arrays + JSON header), atomically."""
+    """Write ``data`` as ``.npz`` (float64 SI arrays + JSON header), atomically.
+
+    Parameters
+    ----------
+    data : ImuData
+        The recording.
+    path : str or os.PathLike
+        Output file.
+    compress : bool
+        Use ``numpy.savez_compressed``.
+
+    Returns
+    -------
+    pathlib.Path
+        The file written.
+    """
     arrays: dict[str, np.ndarray] = {"t": data.t, "gyro": data.gyro, "accel": data.accel}
     if data.mag is not None:
         arrays["mag"] = data.mag

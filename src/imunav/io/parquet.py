@@ -51,7 +51,44 @@ def read_parquet(
     mag_unit: str | None = None,
     meta: Mapping[str, Any] | None = None,
 ) -> ImuData:
-    """Read a Parquet recording (options as :func:`imunav.io.csv.read_csv`)."""
+    """Read a Parquet recording (options as :func:`imunav.io.csv.read_csv`).
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The file.
+    columns : mapping, optional
+        Column names of each channel or group (see :func:`imunav.io.csv.read_csv`); by default found by
+        name.
+    units : mapping of str to str, optional
+        Declared unit of each group (``{"gyro": "deg/s", "accel": "g"}``, or ``"counts"``); default SI.
+    scales, offsets : mapping of str to float, optional
+        For ``"counts"``: ``value_si = (counts - offset) * scale``.
+    fs : float, optional
+        Sample rate, Hz, when the file has no time (``t = t0 + k / fs``).
+    t0 : float
+        Time of the first sample with ``fs``, s.
+    nan_policy : {"raise", "drop", "interpolate"}
+        What to do with NaN samples.
+    mag_unit : str, optional
+        Unit of the magnetometer (kept as stored).
+    meta : mapping, optional
+        Entries added to the recording's ``meta``.
+
+    Returns
+    -------
+    ImuData
+        The recording, SI.
+
+    Raises
+    ------
+    FileFormatError
+        If the file is missing, unreadable, or lacks a required group (the message lists what was found).
+    NonFiniteError, TimeOrderError, ShapeError, UnitError
+        From the validation of the values.
+    MissingDependencyError
+        If pyarrow is not installed (``pip install 'imunav[parquet]'``).
+    """
     _, pq = _pyarrow()
     source = check_nonempty(path)
     with wrap_read_errors(source, "Parquet"):
@@ -71,7 +108,27 @@ def read_parquet(
 
 
 def write_parquet(data: ImuData, path: str | os.PathLike[str], *, compression: str = "zstd") -> Path:
-    """Write ``data`` (SI) as Parquet, float64 columns, atomically."""
+    """Write ``data`` (SI) as Parquet, float64 columns, atomically.
+
+    Parameters
+    ----------
+    data : ImuData
+        The recording.
+    path : str or os.PathLike
+        Output file.
+    compression : str
+        Parquet codec (``"zstd"``, ``"snappy"``, ``"gzip"``, ``"none"``).
+
+    Returns
+    -------
+    pathlib.Path
+        The file written.
+
+    Raises
+    ------
+    MissingDependencyError
+        If pyarrow is not installed.
+    """
     pa, pq = _pyarrow()
     names, block = imu_to_table(data)
     schema = pa.schema([pa.field(n, pa.float64(), nullable=False) for n in names], metadata={_META_KEY: header_json(data).encode()})

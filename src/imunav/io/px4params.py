@@ -84,11 +84,33 @@ class Px4Parameters:
     dropped: tuple[str, ...] = field(default_factory=tuple)
 
     def param_type(self, name: str) -> int:
-        """The MAVLink type code of parameter ``name`` (6 INT32, 9 REAL32)."""
+        """The MAVLink type code of parameter ``name`` (6 INT32, 9 REAL32).
+
+        Parameters
+        ----------
+        name : str
+            Parameter name (a key of :attr:`values`).
+
+        Returns
+        -------
+        int
+            ``MAV_PARAM_TYPE_INT32`` (6) for integers, ``MAV_PARAM_TYPE_REAL32`` (9) otherwise.
+        """
         return MAV_PARAM_TYPE_INT32 if isinstance(self.values[name], int) else MAV_PARAM_TYPE_REAL32
 
     def text(self, vehicle_id: int = 1, component_id: int = 1) -> str:
-        """The QGroundControl parameter file as text (see the module docstring)."""
+        """The QGroundControl parameter file as text (see the module docstring).
+
+        Parameters
+        ----------
+        vehicle_id, component_id : int
+            MAVLink system and component ids of the first two columns (1, 1 for a single vehicle).
+
+        Returns
+        -------
+        str
+            Header comments (with the dropped terms) and one tab-separated row per parameter.
+        """
 
         head = [f"# PX4 sensor calibration written by imunav {__version__}",
                 "# Load it in QGroundControl: Vehicle Setup > Parameters > Tools > Load from file; then reboot.",
@@ -106,7 +128,20 @@ class Px4Parameters:
         return "\n".join(head + rows) + "\n"
 
     def write(self, path: str | os.PathLike[str], vehicle_id: int = 1, component_id: int = 1) -> Path:
-        """Write :meth:`text` to ``path`` atomically; returns the path."""
+        """Write :meth:`text` to ``path`` atomically.
+
+        Parameters
+        ----------
+        path : str or os.PathLike
+            Output file (``.params``).
+        vehicle_id, component_id : int
+            MAVLink system and component ids of the first two columns (1, 1 for a single vehicle).
+
+        Returns
+        -------
+        pathlib.Path
+            The file written.
+        """
 
         with atomic_path(path) as tmp:
             tmp.write_text(self.text(vehicle_id, component_id), encoding="utf-8")

@@ -122,7 +122,25 @@ def _span_ns(reader: Any, conns: list[Any], count: int) -> tuple[int, int] | Non
 
 
 def list_topics(path: str | os.PathLike[str]) -> list[TopicInfo]:
-    """Topics of a bag with type, count (from the index), duration and rate (see :func:`imunav.io.logs.list_topics`)."""
+    """Topics of a bag with type, count (from the index), duration and rate (see :func:`imunav.io.logs.list_topics`).
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        ROS 1 ``.bag``, ROS 2 folder, ``.db3`` or ``.mcap``.
+
+    Returns
+    -------
+    list of TopicInfo
+        Sorted by topic.
+
+    Raises
+    ------
+    MissingDependencyError
+        If ``rosbags`` is not installed (``pip install 'imunav[ros]'``).
+    FileFormatError
+        If the bag cannot be opened.
+    """
     out = []
     with _Bag(path) as reader:
         for name, info in sorted(reader.topics.items()):
@@ -283,13 +301,24 @@ def read_topic(path: str | os.PathLike[str], topic: str, *, instance: int | None
 
     Parameters
     ----------
-    path : the bag (file or ROS 2 folder).
-    topic : topic name; with ``None`` (internal use) the single topic of a kind in ``_want``.
-    instance : must be None (ROS topics have no instances).
+    path : str or os.PathLike
+        The bag (file or ROS 2 folder).
+    topic : str
+        Topic name; with ``None`` (internal use) the single topic of a kind in ``_want``.
+    instance : int, optional
+        Must be None (ROS topics have no instances).
 
     Returns
     -------
     TopicData
+        The topic in SI units, body FRD / world NED, ``t`` in s since ``meta["t0_ns"]``.
+
+    Raises
+    ------
+    InvalidInputError
+        If ``instance`` is given, the topic is absent, or its message type is not one imunav reads.
+    FileFormatError
+        If the topic is empty, mixes frame ids, or a message cannot be decoded.
     """
     source = os.fspath(path)
     if instance is not None:
@@ -316,7 +345,28 @@ def read_topic(path: str | os.PathLike[str], topic: str, *, instance: int | None
 
 
 def read_imu_topic(path: str | os.PathLike[str], topic: str | None, *, instance: int | None = None) -> TopicData:
-    """The IMU topic ``topic`` (or the only ``sensor_msgs/Imu`` topic); errors list the candidates."""
+    """The IMU topic ``topic`` (or the only ``sensor_msgs/Imu`` topic); errors list the candidates.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The bag.
+    topic : str or None
+        The ``sensor_msgs/Imu`` topic; None when the bag has exactly one.
+    instance : None
+        Must be None (ROS topics have no instances).
+
+    Returns
+    -------
+    TopicData
+        The topic in SI units, body FRD / world NED, ``t`` in s since ``meta["t0_ns"]``.
+        Gyro (rad/s) and specific force (m/s²) in body FRD, ``t`` in s since ``meta["t0_ns"]``.
+
+    Raises
+    ------
+    InvalidInputError
+        If the topic is not an IMU topic, or there are none or several and none is chosen.
+    """
     d = read_topic(path, topic, instance=instance, _want=("imu",))
     if d.kind != "imu":
         raise InvalidInputError(f"{os.fspath(path)}: topic {d.topic!r} is {d.meta['msgtype']}, not sensor_msgs/Imu; "
@@ -345,16 +395,29 @@ def write_bag(path: str | os.PathLike[str], topics: Any, *, storage: str = "mcap
 
     Parameters
     ----------
-    path : ``.bag`` for ``storage="ros1"``; for ROS 2 a folder (``metadata.yaml`` + storage file).
-    topics : mapping topic -> :class:`~imunav.timeseries.ImuData` (an ``Imu`` topic, plus
+    path : str or os.PathLike
+        ``.bag`` for ``storage="ros1"``; for ROS 2 a folder (``metadata.yaml`` + storage file).
+    topics : mapping
+        Mapping topic -> :class:`~imunav.timeseries.ImuData` (an ``Imu`` topic, plus
         ``topic + mag_suffix`` with its magnetometer) or :class:`~imunav.io.logs.TopicData` of kind
         ``imu``, ``mag`` or ``temperature``.
-    storage : ``"ros1"``, ``"sqlite3"`` or ``"mcap"``.
-    frame_id : ``header.frame_id`` of every message.
+    storage : str
+        ``"ros1"``, ``"sqlite3"`` or ``"mcap"``.
+    frame_id : str
+        ``header.frame_id`` of every message.
+    mag_suffix : str
+        Suffix of the magnetometer topic written beside each ImuData's IMU topic.
 
     Returns
     -------
-    Path of the bag.
+    pathlib.Path
+        The bag written.
+
+    Raises
+    ------
+    InvalidInputError
+        If ``storage`` is unknown, the ROS 2 folder exists, or a topic's data is neither an ImuData nor a
+        TopicData of kind imu, mag or temperature.
 
     Examples
     --------

@@ -36,7 +36,18 @@ _MAGIC = ((b"ULog\x01\x12\x35", "ulog"), (b"#ROSBAG V2.0", "rosbag"), (b"\x89MCA
 
 
 def log_kind(path: str | os.PathLike[str]) -> str | None:
-    """``"rosbag"``, ``"ulog"`` or None for anything else (by suffix, folder layout, then magic bytes)."""
+    """``"rosbag"``, ``"ulog"`` or None for anything else (by suffix, folder layout, then magic bytes).
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        A file or a ROS 2 bag folder.
+
+    Returns
+    -------
+    str or None
+        The kind of log.
+    """
     p = Path(path)
     if p.is_dir():
         return "rosbag" if (p / "metadata.yaml").is_file() else None
@@ -57,7 +68,20 @@ def log_kind(path: str | os.PathLike[str]) -> str | None:
 
 
 def require(kind: str, feature: str) -> None:
-    """Raise :class:`MissingDependencyError` naming the extra when the package of ``kind`` is absent."""
+    """Raise :class:`MissingDependencyError` naming the extra when the package of ``kind`` is absent.
+
+    Parameters
+    ----------
+    kind : {"rosbag", "ulog"}
+        The log kind (``rosbags`` / ``pyulog``).
+    feature : str
+        What the user asked for, for the message.
+
+    Raises
+    ------
+    MissingDependencyError
+        If the package is not installed; the message names ``pip install 'imunav[ros]'`` / ``'imunav[px4]'``.
+    """
     pkg, extra = EXTRAS[kind]
     try:
         importlib.import_module(pkg)
@@ -68,25 +92,69 @@ def require(kind: str, feature: str) -> None:
 # -- frames -------------------------------------------------------------------------------------
 # imunav.rotation is imported in the functions: it loads numba kernels, which listing topics does not need
 def ros_to_frd(v: Any) -> Array:
-    """Body vectors (N, 3) from ROS FLU to imunav FRD: ``(x, -y, -z)``."""
+    """Body vectors from ROS FLU to imunav FRD: ``(x, -y, -z)`` (REP-103).
+
+    Parameters
+    ----------
+    v : array_like, shape (3,) or (N, 3)
+        Vectors.
+
+    Returns
+    -------
+    numpy.ndarray
+        The vectors in FRD, same shape and unit.
+    """
 
     return np.asarray(v, dtype=np.float64) @ C_FLU_FRD.T
 
 
 def frd_to_ros(v: Any) -> Array:
-    """Body vectors (N, 3) from FRD to ROS FLU (the same flip; its own inverse)."""
+    """Body vectors from FRD to ROS FLU (the same flip; its own inverse).
+
+    Parameters
+    ----------
+    v : array_like, shape (3,) or (N, 3)
+        Vectors.
+
+    Returns
+    -------
+    numpy.ndarray
+        The vectors in FLU, same shape and unit.
+    """
 
     return np.asarray(v, dtype=np.float64) @ C_FLU_FRD
 
 
 def enu_to_ned(v: Any) -> Array:
-    """World vectors (N, 3) from ENU to NED: ``(y, x, -z)``."""
+    """World vectors from ENU to NED: ``(y, x, -z)``.
+
+    Parameters
+    ----------
+    v : array_like, shape (3,) or (N, 3)
+        Vectors.
+
+    Returns
+    -------
+    numpy.ndarray
+        The vectors in NED.
+    """
 
     return np.asarray(v, dtype=np.float64) @ C_ENU_NED
 
 
 def ned_to_enu(v: Any) -> Array:
-    """World vectors (N, 3) from NED to ENU (the same swap; its own inverse)."""
+    """World vectors from NED to ENU (the same swap; its own inverse).
+
+    Parameters
+    ----------
+    v : array_like, shape (3,) or (N, 3)
+        Vectors.
+
+    Returns
+    -------
+    numpy.ndarray
+        The vectors in ENU.
+    """
 
     return np.asarray(v, dtype=np.float64) @ C_ENU_NED.T
 
@@ -98,13 +166,20 @@ class TopicInfo:
 
     Attributes
     ----------
-    topic : topic name (``/imu/data``, ``sensor_accel``).
-    msgtype : message type (``sensor_msgs/msg/Imu``) or, for ULog, the topic name again.
-    count : number of messages.
-    instance : PX4 ``multi_id`` (None for ROS).
-    duration_s : span of the stamps, s (ROS: of the bag's record times when only the index is read).
-    rate_hz : ``(count - 1) / duration_s`` (None for fewer than 2 messages).
-    kind : what imunav reads from it (``imu``, ``mag``, ``gnss``, ``gnss_velocity``, ``pressure``,
+    topic : str
+        Topic name (``/imu/data``, ``sensor_accel``).
+    msgtype : str
+        Message type (``sensor_msgs/msg/Imu``) or, for ULog, the topic name again.
+    count : int
+        Number of messages.
+    instance : int, optional
+        PX4 ``multi_id`` (None for ROS).
+    duration_s : float, optional
+        Span of the stamps, s (ROS: of the bag's record times when only the index is read).
+    rate_hz : float, optional
+        ``(count - 1) / duration_s`` (None for fewer than 2 messages).
+    kind : str, optional
+        What imunav reads from it (``imu``, ``mag``, ``gnss``, ``gnss_velocity``, ``pressure``,
         ``temperature``, ``attitude``) or None when imunav does not read that type.
     """
 
@@ -117,7 +192,13 @@ class TopicInfo:
     kind: str | None = None
 
     def to_dict(self) -> dict[str, Any]:
-        """JSON-ready dict."""
+        """JSON-ready dict.
+
+        Returns
+        -------
+        dict
+            The attributes by name.
+        """
         return {k: getattr(self, k) for k in self.__dataclass_fields__}
 
 
@@ -127,16 +208,25 @@ class TopicData:
 
     Attributes
     ----------
-    topic : topic name; ``instance`` the PX4 ``multi_id`` (None for ROS).
-    kind : ``imu``, ``mag``, ``gnss``, ``gnss_velocity``, ``pressure``, ``temperature`` or ``attitude``.
-    t : (N,) s since ``meta["t0_ns"]``, increasing (the sensor stamp, see the module docstring).
-    values : arrays by name: ``gyro`` (N, 3) rad/s and ``accel`` (N, 3) m/s² body FRD, ``mag`` (N, 3) µT
+    topic : str
+        Topic name.
+    kind : str
+        ``imu``, ``mag``, ``gnss``, ``gnss_velocity``, ``pressure``, ``temperature`` or ``attitude``.
+    t : numpy.ndarray, shape (N,)
+        s since ``meta["t0_ns"]``, increasing (the sensor stamp, see the module docstring).
+    values : dict of str to numpy.ndarray
+        Arrays by name: ``gyro`` (N, 3) rad/s and ``accel`` (N, 3) m/s² body FRD, ``mag`` (N, 3) µT
         body FRD, ``temp`` (N,) °C, ``pressure`` (N,) Pa, ``lat_deg`` / ``lon_deg`` / ``alt_m`` (N,),
         ``vel_ned`` (N, 3) m/s, ``q_nb`` (N, 4) body → NED Hamilton scalar-first, and what else a
         message carries (``fix_status``, ``eph_m`` ...).
-    units : unit of each entry of ``values``.
-    t_receive : (N,) receive (record) time on the same origin, or None (ULog).
-    meta : source, message type, frame id, conversions applied, time report.
+    units : dict of str to str
+        Unit of each entry of ``values``.
+    t_receive : numpy.ndarray, shape (N,), or None
+        Receive (record) time on the same origin, s (None for ULog).
+    instance : int or None
+        PX4 ``multi_id`` (None for ROS).
+    meta : dict
+        Source, message type, frame id, conversions applied, time report.
     """
 
     topic: str
@@ -162,10 +252,27 @@ class TopicData:
 def time_axis(stamps_ns: NDArray[np.int64], source: str, what: str) -> tuple[NDArray[np.intp] | None, dict[str, Any]]:
     """Order and quality report of integer-nanosecond stamps.
 
-    Returns ``(order, report)``: ``order`` is None when the stamps are already increasing, else the
-    stable sort order (and a :class:`UserWarning` is issued); ``report`` holds the count, the median
-    interval, the jitter, the gaps and the out-of-order count.  Raises
-    :class:`~imunav.errors.TimeOrderError` on duplicated stamps.
+    Parameters
+    ----------
+    stamps_ns : numpy.ndarray of int64, shape (N,)
+        Sensor stamps, ns.
+    source : str
+        The log, for messages.
+    what : str
+        The topic, for messages.
+
+    Returns
+    -------
+    order : numpy.ndarray of intp or None
+        None when the stamps are already increasing, else the stable sort order (and a
+        :class:`UserWarning` is issued).
+    report : dict
+        The count, the median interval, the jitter, the gaps and the out-of-order count (s).
+
+    Raises
+    ------
+    TimeOrderError
+        On duplicated stamps (the messages are named).
     """
     s = np.asarray(stamps_ns, dtype=np.int64)
     d0 = np.diff(s)
@@ -208,7 +315,42 @@ def time_axis(stamps_ns: NDArray[np.int64], source: str, what: str) -> tuple[NDA
 def topic_data(topic: str, kind: str, stamps_ns: Any, values: Mapping[str, np.ndarray], units: Mapping[str, str],
                source: str, *, receive_ns: Any = None, instance: int | None = None,
                meta: Mapping[str, Any] | None = None) -> TopicData:
-    """Build a :class:`TopicData` from integer-ns stamps: sort/check them, set the origin, report."""
+    """Build a :class:`TopicData` from integer-ns stamps: sort/check them, set the origin, report.
+
+    Parameters
+    ----------
+    topic : str
+        Topic name.
+    kind : str
+        What the topic holds (see :class:`TopicData`).
+    stamps_ns : array_like of int, shape (N,)
+        Sensor stamps, ns.
+    values : mapping of str to numpy.ndarray
+        Arrays by name, SI, in imunav frames, one row per message.
+    units : mapping of str to str
+        Unit of each array.
+    source : str
+        The log, for messages.
+    receive_ns : array_like of int, shape (N,), optional
+        Receive (record) times, ns.
+    instance : int, optional
+        PX4 ``multi_id``.
+    meta : mapping, optional
+        Entries of the result's ``meta``.
+
+    Returns
+    -------
+    TopicData
+        The topic in SI units, body FRD / world NED, ``t`` in s since ``meta["t0_ns"]``.
+        Sorted by stamp, ``t`` in s since ``meta["t0_ns"]``.
+
+    Raises
+    ------
+    FileFormatError
+        If the topic has no message.
+    TimeOrderError
+        On duplicated stamps.
+    """
     stamps = np.asarray(stamps_ns, dtype=np.int64)
     if stamps.size == 0:
         raise FileFormatError(f"{source}: topic {topic!r} has no messages")
@@ -237,7 +379,30 @@ def merge_onto(imu: TopicData, aux: TopicData, name: str, source: str) -> tuple[
     """Interpolate ``aux.values[name]`` linearly onto the IMU stamps; IMU rows outside its span are cut.
 
     Both topics must share the time origin of one clock (same log); the aux ``t`` is shifted by the
-    difference of their ``t0_ns``.  Returns the IMU with ``values[name]`` added and a note for ``meta``.
+    difference of their ``t0_ns``.
+
+    Parameters
+    ----------
+    imu : TopicData
+        The IMU topic.
+    aux : TopicData
+        The second topic (magnetometer, temperature).
+    name : str
+        Entry of ``aux.values`` to merge.
+    source : str
+        The log, for messages.
+
+    Returns
+    -------
+    imu : TopicData
+        The IMU with ``values[name]`` added (rows outside ``aux``'s span removed).
+    note : dict
+        What was done, for ``meta``.
+
+    Raises
+    ------
+    FileFormatError
+        If ``aux`` has fewer than 2 messages or does not overlap the IMU in time.
     """
     shift = (int(aux.meta["t0_ns"]) - int(imu.meta["t0_ns"])) * 1e-9
     ta = aux.t + shift

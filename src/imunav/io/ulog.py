@@ -69,7 +69,20 @@ def _load(path: str | os.PathLike[str], names: list[str] | None) -> Any:
 
 
 def kind_of(name: str, fields: set[str]) -> str | None:
-    """What imunav reads from a ULog topic with these fields (None: nothing)."""
+    """What imunav reads from a ULog topic with these fields (None: nothing).
+
+    Parameters
+    ----------
+    name : str
+        Topic name (``sensor_combined``, ``sensor_mag``, ...).
+    fields : set of str
+        Its field names.
+
+    Returns
+    -------
+    str or None
+        ``imu``, ``mag``, ``gnss``, ``pressure``, ``temperature``, ``attitude`` ..., or None.
+    """
     if name in ("sensor_combined", "vehicle_imu"):
         return "imu"
     if name == "sensor_gyro":
@@ -90,7 +103,23 @@ def kind_of(name: str, fields: set[str]) -> str | None:
 
 
 def list_topics(path: str | os.PathLike[str]) -> list[TopicInfo]:
-    """Topic instances of a ULog with count, duration and rate (see :func:`imunav.io.logs.list_topics`)."""
+    """Topic instances of a ULog with count, duration and rate (see :func:`imunav.io.logs.list_topics`).
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The ``.ulg`` file.
+
+    Returns
+    -------
+    list of TopicInfo
+        Sorted by topic and instance.
+
+    Raises
+    ------
+    FileFormatError
+        If the file cannot be parsed as a ULog.
+    """
     ulog = _load(path, None)
     out = []
     for d in ulog.data_list:
@@ -241,20 +270,47 @@ def read_topic(path: str | os.PathLike[str], topic: str, *, instance: int | None
 
     Parameters
     ----------
-    path : the ``.ulg`` file.
-    topic : topic name, optionally ``"name:instance"``.
-    instance : ``multi_id`` when the topic has several instances.
+    path : str or os.PathLike
+        The ``.ulg`` file.
+    topic : str
+        Topic name, optionally ``"name:instance"``.
+    instance : int, optional
+        ``multi_id`` when the topic has several instances.
 
     Returns
     -------
     TopicData
+        The topic in SI units, body FRD / world NED, ``t`` in s since ``meta["t0_ns"]``.
     """
     ulog, d = _dataset(path, topic, instance)
     return _read(ulog, d, os.fspath(path))
 
 
 def read_imu_topic(path: str | os.PathLike[str], topic: str | None, *, instance: int | None = None) -> TopicData:
-    """The IMU of a ULog: ``sensor_combined`` by default, else ``vehicle_imu`` / a gyro + accel instance pair."""
+    """The IMU of a ULog: ``sensor_combined`` by default, else ``vehicle_imu`` / a gyro + accel instance pair.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The ``.ulg`` file.
+    topic : str or None
+        IMU topic (``sensor_combined``, ``vehicle_imu``, ``sensor_gyro`` / ``sensor_accel``); None: the default.
+    instance : int, optional
+        ``multi_id`` of the topic.
+
+    Returns
+    -------
+    TopicData
+        The topic in SI units, body FRD / world NED, ``t`` in s since ``meta["t0_ns"]``.
+        Gyro (rad/s) and specific force (m/s²) in body FRD, ``t`` in s since ``meta["t0_ns"]``.
+
+    Raises
+    ------
+    InvalidInputError
+        If the topic is not an IMU topic, or several candidates exist and none is chosen.
+    FileFormatError
+        If the log has no IMU topic at all, or a gyro / accel pair cannot be matched in time.
+    """
     source = os.fspath(path)
     if topic is None:
         topic = "sensor_combined"

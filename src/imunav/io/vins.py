@@ -56,6 +56,11 @@ def write_vins_yaml(path: str | os.PathLike[str], gyro: NoiseFit, accel: NoiseFi
     Path
         ``path``.
 
+    Raises
+    ------
+    InvalidInputError
+        If ``g_norm`` is not a gravity magnitude on Earth (9.7-9.9 m/s²).
+
     Notes
     -----
     ``acc_n``/``gyr_n`` are the white-noise densities ``N`` and

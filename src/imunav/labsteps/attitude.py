@@ -124,5 +124,5 @@ def run(ctx: LabContext) -> StepResult:
         + ([("Same, uncompensated raw data [deg]", raw_rows)] if raw_rows else [])
         + [("Candan & Söken Table 2 (reading (ii) of the gyro-noise unit)", t2)],
         notes=["The gyro noise '0.005 deg/√h' of the paper is read as 0.005 °/s/√Hz; the literal reading "
-               "gives ≈0.4° for the proposed filter (digest §11.2)."],
+               "gives ≈0.4° for the proposed filter (see imunav.attitude.scenario)."],
     )

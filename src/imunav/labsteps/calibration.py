@@ -1,10 +1,10 @@
 """Lab step: deterministic calibration of the simulated 100-position and 120-step tests.
 
 Reads the recordings of the ``simulate_tests`` step, estimates the thesis
-model (imu-error-calibration §5.4: multi-position least squares for the
+model (Günhan 2014, §4.1.3: multi-position least squares for the
 accelerometer and the gyro bias / g-sensitivity, rate-table least squares for
 the gyro matrix) with parameter standard errors, and reports the spec's
-"success" metric (§5.6, mean over the 12 accelerometer and 15 gyro
+"success" metric (Günhan 2014, Tables 5.3-5.4, mean over the 12 accelerometer and 15 gyro
 parameters) against the injected truth, next to the thesis's single-run
 figures (Tables 5.3/5.4: 99.15 % / 99.24 %).
 

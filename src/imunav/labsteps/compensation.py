@@ -12,7 +12,7 @@ multi-pose).
 Virtual IMU: a *validation* recording is simulated with the same true IMU and
 new random streams (``positions`` random attitudes with ``dwell_s`` each,
 then ``rate_steps`` constant rates about the body axes).  After
-compensation (eqs. 21/22 of imu-error-calibration.md,
+compensation (eqs. 21/22 of Günhan 2014,
 ``f = T_a⁻¹(ã − b_a)``, ``ω = T_g⁻¹(ω̃ − b_g − G f)``) the error of each
 segment mean, with the realised stochastic part of the simulation (bias
 instability and white noise, known exactly) removed, is what the calibration
@@ -313,7 +313,7 @@ def run(ctx: LabContext) -> StepResult:
             ctx.artifacts["compensation"] = {"rows": rows, "truth": None}
         advance()
     notes = [f"Calibration used: {how}.",
-             "The compensation is f = T_a⁻¹(ã − b_a), ω = T_g⁻¹(ω̃ − b_g − G f) (imu-error-calibration.md eqs. 21-22)."]
+             "The compensation is f = T_a⁻¹(ã − b_a), ω = T_g⁻¹(ω̃ − b_g − G f) (Günhan 2014, eqs. 21-22)."]
     return StepResult(summary=summary, figures=figures, passed=passed, tables=tables, notes=notes, parameters=params)
 
 

@@ -1,6 +1,6 @@
 """Lab step: simulate the calibration tests of Günhan (2014) with the virtual IMU.
 
-Tests (``imu-error-calibration.md`` §5, §8.2):
+Tests (Günhan 2014, §4.1 and Tables 5.1/5.2):
 
 * ``hundred_position``: the reconstructed 100-position static test
   (22.5° steps, 30 s per position, minimum-jerk moves between positions);

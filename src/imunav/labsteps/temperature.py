@@ -3,7 +3,7 @@
 The virtual IMU (preset ``consumer_mems`` by default: it has the datasheet's
 bias and scale-factor temperature coefficients, ``B(T)``, ``S(T)``) is
 calibrated at each temperature of a sweep, as in a thermal chamber
-(imu-error-calibration.md ch. 6): at every temperature a 100-position static
+(Günhan 2014, ch. 6): at every temperature a 100-position static
 test and a short rate-table test are simulated at that constant temperature
 and calibrated (:func:`imunav.calib.multiposition` +
 :func:`imunav.calib.ratetable` + :func:`imunav.calib.combine`, generalised

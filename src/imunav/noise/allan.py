@@ -69,19 +69,38 @@ class AllanResult(Result):
 
     Attributes
     ----------
-    tau : (T,) cluster times, s.
-    m : (T,) cluster sizes in samples (tau = m / fs).
-    adev : (T,) or (T, C) deviation of the requested ``kind`` (same
+    tau : numpy.ndarray
+        (T,) cluster times, s.
+    m : numpy.ndarray
+        (T,) cluster sizes in samples (tau = m / fs).
+    adev : numpy.ndarray
+        (T,) or (T, C) deviation of the requested ``kind`` (same
         dimensionality as the input; unit ``units``, or the phase unit for
         ``kind="time"``).
-    adev_lo, adev_hi : confidence bounds at level ``ci`` (chi-squared, EDF).
-    edf : equivalent degrees of freedom used for the bounds.
-    alpha : rate-PSD noise exponent used for the EDF at each tau (integer).
-    n_terms : (T,) or (T, C) number of squared differences averaged.
-    n_samples : number of rate samples per channel.
-    fs : sample rate, Hz.
-    kind, input, units, channels, ci : as requested.
-    segments : per channel, (S, 2) half-open rate-sample ranges that were used.
+    adev_lo, adev_hi : numpy.ndarray
+        Confidence bounds at level ``ci`` (chi-squared, EDF).
+    edf : numpy.ndarray
+        Equivalent degrees of freedom used for the bounds.
+    alpha : numpy.ndarray
+        Rate-PSD noise exponent used for the EDF at each tau (integer).
+    n_terms : numpy.ndarray
+        (T,) or (T, C) number of squared differences averaged.
+    n_samples : int
+        Number of rate samples per channel.
+    fs : float
+        Sample rate, Hz.
+    kind : str
+        The statistic (see :data:`KINDS`).
+    input : str
+        ``"rate"``, ``"increment"`` or ``"phase"``.
+    units : str
+        Unit of the input samples.
+    channels : tuple of str
+        Channel names.
+    ci : float
+        Confidence level of ``adev_lo`` / ``adev_hi``.
+    segments : tuple
+        Per channel, (S, 2) half-open rate-sample ranges that were used.
     """
 
     tau: NDArray[np.float64]
@@ -111,7 +130,23 @@ class AllanResult(Result):
         return 1 if self.adev.ndim == 1 else self.adev.shape[1]
 
     def channel(self, c: int | str) -> "AllanResult":
-        """One channel as a 1-D result (by index or name)."""
+        """One channel as a 1-D result (by index or name).
+
+        Parameters
+        ----------
+        c : int or str
+            Channel index (0-based) or name (one of :attr:`channels`).
+
+        Returns
+        -------
+        AllanResult
+            The same statistics for that channel only (1-D arrays); ``self`` for a single-channel result.
+
+        Raises
+        ------
+        InvalidInputError
+            If the name is unknown or the index out of range.
+        """
         if isinstance(c, str):
             if c not in self.channels:
                 raise InvalidInputError(f"unknown channel {c!r}; channels are {self.channels}")
@@ -132,7 +167,15 @@ class AllanResult(Result):
         )
 
     def to_dict(self) -> dict[str, Any]:
-        """JSON-ready dictionary (lists of floats)."""
+        """JSON-ready dictionary (lists of floats).
+
+        Returns
+        -------
+        dict
+            ``kind``, ``input``, ``units``, ``fs`` (Hz), ``n_samples``, ``ci``, ``channels``, the arrays ``tau`` (s),
+            ``m``, ``adev``, ``adev_lo``, ``adev_hi`` (in ``units``), ``edf``, ``alpha``, ``n_terms`` as lists,
+            and ``segments``.
+        """
         return {
             "kind": self.kind, "input": self.input, "units": self.units, "fs": self.fs,
             "n_samples": self.n_samples, "ci": self.ci, "channels": list(self.channels),
@@ -172,7 +215,32 @@ def _log_grid(n: int, mmax: int, m0: int = 64) -> np.ndarray:
 
 
 def cluster_sizes(taus: Any, fs: float, n_phase: int, kind: str = "overlapping") -> NDArray[np.int64]:
-    """Cluster sizes m for a tau specification (see :func:`tau_grid`)."""
+    """Cluster sizes m for a tau specification (see :func:`tau_grid`).
+
+    Parameters
+    ----------
+    taus : str, tuple or array_like
+        ``"octave"``, ``"decade"``, ``"all"``, ``"log"``, ``("log", n)`` or explicit cluster times, s.
+    fs : float
+        Sample rate, Hz.
+    n_phase : int
+        Number of phase points (rate samples + 1).
+    kind : str
+        Statistic (one of :data:`KINDS`): it sets the largest usable m, (n_phase - 1) // 2 for the Allan
+        family, // 3 for the modified and Hadamard family.
+
+    Returns
+    -------
+    numpy.ndarray of int64
+        The cluster sizes m, increasing and unique (tau = m / fs).
+
+    Raises
+    ------
+    InsufficientDataError
+        If the record is too short for ``kind``, or an explicit tau exceeds the largest usable one.
+    InvalidInputError
+        If ``taus`` is not understood, or an explicit tau is not positive and finite or is below 1 / fs.
+    """
     mmax = _max_m(kind, n_phase)
     if mmax < 1:
         raise InsufficientDataError(
@@ -215,11 +283,33 @@ def cluster_sizes(taus: Any, fs: float, n_phase: int, kind: str = "overlapping")
 
 
 def tau_grid(n_samples: int, fs: float, taus: Any = "octave", kind: str = "overlapping") -> NDArray[np.float64]:
-    """The tau values (s) :func:`allan_deviation` would use for a record of
-    ``n_samples`` rate samples: ``"octave"`` (m = 1, 2, 4, ...), ``"decade"``
-    (1, 2, 4 x 10^k), ``"all"``, ``"log"`` / ``("log", n)`` (n log-spaced,
-    rounded to whole samples, duplicates removed) or explicit seconds
-    (rounded to whole samples; the result reports the tau actually used)."""
+    """The tau values (s) :func:`allan_deviation` would use for a record of ``n_samples`` rate samples.
+
+    Parameters
+    ----------
+    n_samples : int
+        Number of rate samples per channel.
+    fs : float
+        Sample rate, Hz.
+    taus : str, tuple or array_like
+        ``"octave"`` (m = 1, 2, 4, ...), ``"decade"`` (1, 2, 4 x 10^k), ``"all"``, ``"log"`` / ``("log", n)``
+        (n log-spaced, rounded to whole samples, duplicates removed) or explicit seconds (rounded to whole
+        samples; the result reports the tau actually used).
+    kind : str
+        Statistic, one of :data:`KINDS` or an alias (``"oadev"``, ``"mdev"``, ...).
+
+    Returns
+    -------
+    numpy.ndarray
+        Cluster times tau = m / fs, s.
+
+    Raises
+    ------
+    InvalidInputError
+        If ``kind`` or ``taus`` is not understood.
+    InsufficientDataError
+        If the record is too short.
+    """
     return cluster_sizes(taus, fs, n_samples + 1, _kind(kind)) / fs
 
 
@@ -379,6 +469,18 @@ def check_rows_are_samples(shape: tuple[int, ...], name: str = "x") -> None:
     """Refuse a (C, N) array given where (N, C) is expected: more columns (channels) than rows (samples).
 
     A (6, N) recording would otherwise be taken as N channels of 6 samples each.
+
+    Parameters
+    ----------
+    shape : tuple of int
+        Shape of the array.
+    name : str
+        Name of the argument, for the message.
+
+    Raises
+    ------
+    ShapeError
+        If the array is 2-D with more columns than rows; the message suggests ``name.T``.
     """
     if len(shape) == 2 and shape[1] > shape[0]:
         raise ShapeError(f"{name} has shape {shape}: {shape[1]} channels of {shape[0]} samples each; samples go in "
@@ -409,19 +511,21 @@ def allan_deviation(
         be a ``numpy.memmap`` (read in chunks; memory ~ 8 N bytes).
     fs : float
         Sample rate, Hz (tau0 = 1/fs).
-    taus : "octave" | "decade" | "all" | "log" | ("log", n) | array of s
-        Cluster times; see :func:`tau_grid`.
+    taus : str, tuple or array_like
+        ``"octave"``, ``"decade"``, ``"all"``, ``"log"``, ``("log", n)`` or an array of cluster times, s;
+        see :func:`tau_grid`.
     kind : str
         ``"overlapping"`` (default), ``"standard"``, ``"modified"``, ``"time"``,
         ``"hadamard"``, ``"overlapping_hadamard"``, ``"total"`` (aliases
         ``"oadev"``, ``"adev"``, ``"mdev"``, ``"tdev"``, ``"hdev"``, ``"ohdev"``,
         ``"totdev"``).
-    input : "rate" | "increment" | "phase"
+    input : {"rate", "increment", "phase"}
+        What ``x`` holds: rates, per-sample increments, or their integral (phase).
     t : array_like (N,), optional
         Time stamps; gaps (steps > 1.5/fs) split the record into segments
         (``nan_policy="segments"``) or raise.
-    nan_policy : "raise" | "segments"
-        See the module docstring.
+    nan_policy : {"raise", "segments"}
+        What to do with NaN samples and time gaps; see the module docstring.
     ci : float
         Confidence level of ``adev_lo``/``adev_hi`` (default 68.27 %).
     alpha : int, optional
@@ -435,6 +539,20 @@ def allan_deviation(
     Returns
     -------
     AllanResult
+        Deviations, confidence bounds and EDF at each tau (s), in the unit of ``x`` (phase unit for TDEV).
+
+    Raises
+    ------
+    InvalidInputError
+        If ``input``, ``nan_policy``, ``kind`` or ``taus`` is not understood, ``fs`` is not positive, ``ci``
+        is outside (0, 1), ``x`` is not numeric, ``t`` is not strictly increasing, or (``nan_policy="raise"``)
+        the time stamps have a gap.
+    ShapeError
+        If ``x`` is not (N,) / (N, C) or looks transposed, or ``t`` / ``channels`` do not match it.
+    NonFiniteError
+        If ``x`` has NaN or infinite values and ``nan_policy="raise"``.
+    InsufficientDataError
+        If the record is too short for one difference or for the requested taus.
 
     Examples
     --------
@@ -558,6 +676,27 @@ def allan_deviation(
 
 
 def allan_variance(x: ArrayLike, fs: float, taus: Any = "octave", kind: str = "overlapping", **kw: Any):
-    """``(tau, avar)`` of :func:`allan_deviation` (same arguments)."""
+    """``(tau, avar)`` of :func:`allan_deviation` (same arguments).
+
+    Parameters
+    ----------
+    x : array_like, shape (N,) or (N, C)
+        Rates (rad/s, m/s^2, ...), increments or phase, per ``input``.
+    fs : float
+        Sample rate, Hz.
+    taus : str, tuple or array_like
+        Tau specification (see :func:`tau_grid`).
+    kind : str
+        Statistic (see :data:`KINDS`).
+    **kw
+        Further keywords of :func:`allan_deviation` (``input``, ``t``, ``nan_policy``, ``ci``, ...).
+
+    Returns
+    -------
+    tau : numpy.ndarray, shape (T,)
+        Cluster times, s.
+    avar : numpy.ndarray, shape (T,) or (T, C)
+        The variance (deviation squared), in the square of the input's unit.
+    """
     r = allan_deviation(x, fs, taus, kind, **kw)
     return r.tau, r.avar

@@ -1,8 +1,9 @@
-"""Smooth curve fits of the Allan deviation curve (ahrs-sensor-errors.md §3.9).
+"""Smooth curve fits of the Allan deviation curve.
 
-The thesis's "proposed method": ordinary polynomials (degrees 5, 10, 20) and a
-rational polynomial (numerator degree 4, denominator degree 2) fitted to the
-(tau, sigma) curve.  They are smoothers, not physical models; they are
+The "proposed method" of E. Atasoy, *Estimation and analysis of error parameters of attitude-heading
+reference system sensors* (in Turkish), MSc thesis, Başkent University, §5.5 and §7.3: ordinary
+polynomials (degrees 5, 10, 20) and a rational polynomial (numerator degree 4, denominator degree 2)
+fitted to the (tau, sigma) curve.  They are smoothers, not physical models; they are
 reported beside the physical-term fit (:func:`imunav.noise.fit_noise`).
 
 Both are fitted in log-log space, x = (log10 tau - centre)/scale, y =
@@ -13,7 +14,7 @@ linearised problem ``p(x) - y (q1 x + q2) = y x^2`` and refined by
 Levenberg-Marquardt; a real denominator root inside the fitted range is
 reported as a pole.  Metrics: RMS and max error in log10 sigma.  Thesis-style
 read-outs from the smooth curve (sigma at tau = 1 s, min / 0.6643, sigma at
-tau = 3 s) are offered, flagged as such.
+tau = 3 s; IEEE Std 952-1997, Annex C) are offered, flagged as such.
 """
 
 from __future__ import annotations
@@ -34,7 +35,27 @@ __all__ = ["CurveFit", "fit_polynomial", "fit_rational", "compare_curve_fits"]
 
 @dataclass(frozen=True)
 class CurveFit(Result):
-    """A smooth fit of log10 sigma against normalised log10 tau."""
+    """A smooth fit of log10 sigma against normalised log10 tau, ``y = num(x) / den(x)``.
+
+    Calling it, ``fit(tau)``, gives the fitted deviation at ``tau`` (s).
+
+    Attributes
+    ----------
+    kind : str
+        ``"poly<n>"`` or ``"rational<n>/<m>"``.
+    num : numpy.ndarray
+        Numerator coefficients, highest power first.
+    den : numpy.ndarray
+        Denominator coefficients (monic), ``[1.0]`` for polynomials.
+    centre, scale : float
+        Normalisation ``x = (log10 tau - centre) / scale`` (tau in s).
+    rms_log10, max_log10 : float
+        RMS and largest absolute residual in log10 sigma (decades).
+    has_pole : bool
+        Whether a real root of the denominator lies inside the fitted range.
+    tau_range : tuple of float
+        Smallest and largest fitted tau, s.
+    """
 
     kind: str  # "poly<n>" or "rational<n>/<m>"
     num: NDArray[np.float64]  # numerator coefficients, highest power first
@@ -52,9 +73,17 @@ class CurveFit(Result):
         return 10 ** (np.polyval(self.num, x) / np.polyval(self.den, x))
 
     def readout(self) -> dict[str, float]:
-        """Thesis-style values from the smooth curve: sigma(1 s) (N if the -1/2
-        region reaches 1 s), min sigma / 0.6643 (B), sigma(3 s) (K if the +1/2
-        region covers 3 s).  Only meaningful where those slopes hold."""
+        """Thesis-style values from the smooth curve.
+
+        sigma(1 s) (N if the -1/2 region reaches 1 s), min sigma / 0.6643 (B), sigma(3 s) (K if the +1/2 region
+        covers 3 s), the read-outs of IEEE Std 952-1997, Annex C.  Only meaningful where those slopes hold.
+
+        Returns
+        -------
+        dict
+            ``"B"`` always; ``"N_at_1s"`` and ``"sigma_at_3s"`` when 1 s and 3 s are inside the fitted range.
+            In the unit of the fitted deviation.
+        """
         t = np.logspace(np.log10(self.tau_range[0]), np.log10(self.tau_range[1]), 400)
         s = self(t)
         out = {"B": float(s.min() / BI_FACTOR)}
@@ -65,6 +94,13 @@ class CurveFit(Result):
         return out
 
     def to_dict(self) -> dict[str, Any]:
+        """JSON-ready dictionary of the fit.
+
+        Returns
+        -------
+        dict
+            The attributes, arrays as lists.
+        """
         return {"kind": self.kind, "num": self.num.tolist(), "den": self.den.tolist(), "centre": self.centre,
                 "scale": self.scale, "rms_log10": self.rms_log10, "max_log10": self.max_log10,
                 "has_pole": self.has_pole, "tau_range": list(self.tau_range)}
@@ -84,7 +120,31 @@ def _prep(tau: ArrayLike, adev: ArrayLike) -> tuple[np.ndarray, np.ndarray, floa
 
 
 def fit_polynomial(tau: ArrayLike, adev: ArrayLike, degree: int) -> CurveFit:
-    """Least-squares polynomial of ``degree`` in log-log space (eq. 5.33)."""
+    """Least-squares polynomial of ``degree`` in log-log space (Atasoy, eq. 5.33).
+
+    Solved in the Chebyshev basis (well conditioned at degree 20), converted to power form.
+
+    Parameters
+    ----------
+    tau : array_like, shape (T,)
+        Cluster times, s (non-positive or non-finite points are left out).
+    adev : array_like, shape (T,)
+        Allan deviation of one channel at ``tau`` (rad/s or m/s²).
+    degree : int
+        Polynomial degree, >= 0.
+
+    Returns
+    -------
+    CurveFit
+        The fit with its residual metrics.
+
+    Raises
+    ------
+    InsufficientDataError
+        If there are not more points than ``degree``.
+    InvalidInputError
+        If ``tau`` and ``adev`` are not 1-D of the same length.
+    """
     x, y, c, sc = _prep(tau, adev)
     if degree < 0 or x.size <= degree:
         raise InsufficientDataError(f"degree {degree} needs more than {degree} points, got {x.size}")
@@ -99,7 +159,31 @@ def fit_polynomial(tau: ArrayLike, adev: ArrayLike, degree: int) -> CurveFit:
 
 
 def fit_rational(tau: ArrayLike, adev: ArrayLike, num_degree: int = 4, den_degree: int = 2) -> CurveFit:
-    """Rational fit with monic denominator (eq. 5.34, ``rat42`` by default)."""
+    """Rational fit with monic denominator (Atasoy, eq. 5.34, ``rat42`` by default).
+
+    Parameters
+    ----------
+    tau : array_like, shape (T,)
+        Cluster times, s (non-positive or non-finite points are left out).
+    adev : array_like, shape (T,)
+        Allan deviation of one channel at ``tau`` (rad/s or m/s²).
+    num_degree : int
+        Degree of the numerator.
+    den_degree : int
+        Degree of the (monic) denominator.
+
+    Returns
+    -------
+    CurveFit
+        The fit; ``has_pole`` flags a real denominator root inside the fitted range.
+
+    Raises
+    ------
+    InsufficientDataError
+        If there are not more points than coefficients.
+    InvalidInputError
+        If ``tau`` and ``adev`` are not 1-D of the same length.
+    """
     x, y, c, sc = _prep(tau, adev)
     npar = num_degree + 1 + den_degree
     if x.size <= npar:
@@ -130,8 +214,30 @@ def fit_rational(tau: ArrayLike, adev: ArrayLike, num_degree: int = 4, den_degre
 
 def compare_curve_fits(tau: ArrayLike, adev: ArrayLike, degrees: tuple[int, ...] = (5, 10, 20),
                        rational: tuple[int, int] = (4, 2)) -> dict[str, CurveFit]:
-    """The thesis's comparison: polynomials of the given degrees (skipped when
-    there are too few points) and the rational fit."""
+    """The thesis's comparison: polynomials of the given degrees (skipped when there are too few points) and the
+    rational fit.
+
+    Parameters
+    ----------
+    tau : array_like, shape (T,)
+        Cluster times, s (non-positive or non-finite points are left out).
+    adev : array_like, shape (T,)
+        Allan deviation of one channel at ``tau`` (rad/s or m/s²).
+    degrees : tuple of int
+        Polynomial degrees.
+    rational : tuple of int
+        ``(num_degree, den_degree)`` of the rational fit.
+
+    Returns
+    -------
+    dict of str to CurveFit
+        Keyed ``"poly<n>"`` and ``"rational<n>/<m>"``.
+
+    Raises
+    ------
+    InvalidInputError
+        If ``tau`` and ``adev`` are not 1-D of the same length.
+    """
     out: dict[str, CurveFit] = {}
     n = np.count_nonzero(np.isfinite(np.asarray(adev, dtype=float)))
     for d in degrees:

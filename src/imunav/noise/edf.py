@@ -118,6 +118,16 @@ def edf_greenhall(alpha: int, d: int, m: int, n: int, overlapping: bool, modifie
         Number of phase points.
     overlapping, modified : bool
         Estimator stride (1 vs m) and filter (modified = extra m-average).
+
+    Returns
+    -------
+    float
+        The equivalent degrees of freedom; NaN when the record is shorter than one estimator term.
+
+    Raises
+    ------
+    ValueError
+        If ``alpha + 2 d <= 1`` (the variance does not converge for that noise).
     """
     if alpha + 2 * d <= 1:
         raise ValueError(f"Greenhall EDF needs alpha + 2d > 1 (alpha={alpha}, d={d})")
@@ -174,10 +184,26 @@ def edf_greenhall(alpha: int, d: int, m: int, n: int, overlapping: bool, modifie
 
 
 def edf_totdev(n: int, m: int, alpha: int) -> float:
-    """EDF of the total deviation, NIST SP 1065 Table 7 (b T/tau - c), for
-    white, flicker and random-walk rate noise; for white / flicker phase
-    noise (not tabulated) the overlapping-Allan EDF is used, which is
-    conservative since TOTDEV has at least its degrees of freedom."""
+    """EDF of the total deviation, NIST SP 1065 Table 7.
+
+    ``edf = b (n - 1) / m - c`` (at least 1) with (b, c) = (1.50, 0), (1.17, 0.22), (0.93, 0.36) for white,
+    flicker and random-walk rate noise; for white / flicker phase noise (not tabulated) the overlapping-Allan
+    EDF is used, which is conservative since TOTDEV has at least its degrees of freedom.
+
+    Parameters
+    ----------
+    n : int
+        Number of phase points.
+    m : int
+        Cluster size (tau = m tau0).
+    alpha : int
+        Rate-PSD exponent of the dominant noise.
+
+    Returns
+    -------
+    float
+        The equivalent degrees of freedom.
+    """
     table = {0: (1.50, 0.0), -1: (1.17, 0.22), -2: (0.93, 0.36)}
     if alpha in table:
         b, c = table[alpha]
@@ -195,9 +221,24 @@ def noise_id_lag1(x: np.ndarray, m: int, dmax: int = 2, max_points: int = 1 << 1
 
     The phase is decimated by m, a quadratic trend removed, and it is
     differenced until the lag-1 autocorrelation r1 gives delta = r1/(1+r1) <
-    0.25 (or dmax differences); then alpha = 2 - round(2 delta) - 2 d.  Uses
-    at most ``max_points`` decimated points (the start of the record).
-    Returns None when fewer than 30 points are available.
+    0.25 (or dmax differences); then alpha = 2 - round(2 delta) - 2 d.
+
+    Parameters
+    ----------
+    x : numpy.ndarray, shape (N,)
+        Phase (integrated rate: rad for a gyro, m/s for an accelerometer).
+    m : int
+        Cluster size, samples.
+    dmax : int
+        Largest number of differences.
+    max_points : int
+        At most this many decimated points are used (the start of the record).
+
+    Returns
+    -------
+    int or None
+        The rate-PSD exponent alpha (+2 white phase ... -2 random-walk rate), or None when fewer than 30
+        decimated points are available.
     """
 
     z = np.ascontiguousarray(x[::m][:max_points], dtype=np.float64)
@@ -215,7 +256,24 @@ def noise_id_lag1(x: np.ndarray, m: int, dmax: int = 2, max_points: int = 1 << 1
 
 
 def chi2_interval(dev: np.ndarray, edf: np.ndarray, ci: float) -> tuple[np.ndarray, np.ndarray]:
-    """Chi-squared confidence interval of a deviation (SP 1065 eq. 48)."""
+    """Chi-squared confidence interval of a deviation (SP 1065 eq. 48).
+
+    ``lo = dev sqrt(edf / chi2_{(1+ci)/2}(edf))``, ``hi = dev sqrt(edf / chi2_{(1-ci)/2}(edf))``.
+
+    Parameters
+    ----------
+    dev : array_like
+        Estimated deviation(s).
+    edf : array_like
+        Equivalent degrees of freedom, broadcasting with ``dev``.
+    ci : float
+        Two-sided confidence level in (0, 1), e.g. :data:`ONE_SIGMA` (0.683).
+
+    Returns
+    -------
+    lo, hi : numpy.ndarray
+        Lower and upper bounds, in the unit of ``dev`` (NaN where ``edf`` is NaN).
+    """
     dev = np.asarray(dev, dtype=float)
     edf = np.asarray(edf, dtype=float)
     with np.errstate(invalid="ignore", divide="ignore"):

@@ -1,6 +1,8 @@
 """Noise-term identification from an Allan-variance curve.
 
-Model (IEEE Std 952-1997 Annex C; ahrs-sensor-errors.md §3.8), independent terms:
+Model (IEEE Std 952-1997 Annex C; the Allan method as applied by E. Atasoy, *Estimation and analysis of
+error parameters of attitude-heading reference system sensors* (in Turkish), MSc thesis, Başkent
+University, §5.4.2-5.4.4), independent terms:
 
     AVAR(tau) = 3 Q^2/tau^2 + N^2/tau + (2 ln2/pi) B^2 + K^2 tau/3 + R^2 tau^2/2
                 + sum_j (2 s_j^2 T_j/tau) [1 - (T_j/2tau)(3 - 4 e^{-tau/T_j} + e^{-2tau/T_j})]
@@ -92,8 +94,27 @@ _DISPLAY = {
 def avar_term(name: str, tau: ArrayLike, T: float | None = None) -> NDArray[np.float64]:
     """AVAR of one term per unit coefficient (theta = Q^2, N^2, B^2, K^2, R^2 or s^2).
 
-    The closed forms are those of :mod:`imunav.allan_models` (shared with
-    :mod:`imunav.sim`); ``"GM"`` needs the correlation time ``T``."""
+    The closed forms are those of :mod:`imunav.allan_models` (shared with :mod:`imunav.sim`).
+
+    Parameters
+    ----------
+    name : {"Q", "N", "B", "K", "R", "GM"}
+        The term; ``"GM"`` is a first-order Gauss-Markov process.
+    tau : array_like
+        Cluster times, s.
+    T : float, optional
+        Correlation time of the ``"GM"`` term, s, > 0.
+
+    Returns
+    -------
+    numpy.ndarray
+        σ²(τ) per unit coefficient, same shape as ``tau``.
+
+    Raises
+    ------
+    InvalidInputError
+        If the term is unknown, or ``"GM"`` comes without a positive ``T``.
+    """
     if name == "GM":
         if T is None or not T > 0:
             raise InvalidInputError("a Gauss-Markov term needs a positive correlation time T")
@@ -105,7 +126,25 @@ def avar_term(name: str, tau: ArrayLike, T: float | None = None) -> NDArray[np.f
 
 def avar_model(tau: ArrayLike, Q: float = 0.0, N: float = 0.0, B: float = 0.0, K: float = 0.0, R: float = 0.0,
                gm: Sequence[tuple[float, float]] = ()) -> NDArray[np.float64]:
-    """Closed-form AVAR of the IEEE-952 terms plus Gauss-Markov terms ``gm = [(sigma, T), ...]``."""
+    """Closed-form AVAR of the IEEE-952 terms plus Gauss-Markov terms ``gm = [(sigma, T), ...]``.
+
+    ``3Q²/τ² + N²/τ + (2 ln2/π) B² + K²τ/3 + R²τ²/2 + Σ_j σ_j² (2T_j/τ) f(τ/T_j)`` (module docstring).
+
+    Parameters
+    ----------
+    tau : array_like
+        Cluster times, s.
+    Q, N, B, K, R : float
+        Term coefficients in SI: Q rad (m/s), N rad/s/√Hz (m/s²/√Hz), B rad/s (m/s²), K rad/s²/√Hz
+        (m/s³/√Hz), R rad/s² (m/s³); gyro (accelerometer).
+    gm : sequence of (float, float)
+        Gauss-Markov terms as ``(sigma, T)``: standard deviation in rad/s (m/s²), correlation time in s.
+
+    Returns
+    -------
+    numpy.ndarray
+        The model Allan variance, (rad/s)² or (m/s²)², same shape as ``tau``.
+    """
     out = _am.ieee952(tau, Q=Q, N=N, B=B, K=K, R=R)
     for s, T in gm:
         out = out + s**2 * avar_term("GM", tau, T)
@@ -130,7 +169,19 @@ def _overlapping_cov(tau: np.ndarray, m: np.ndarray, n_phase: int, names: list[s
 # --------------------------------------------------------------------------- results
 @dataclass(frozen=True)
 class SlopeReadout(Result):
-    """IEEE-952 slope read-outs (per channel): values (SI) and the tau ranges used."""
+    """IEEE-952 slope read-outs (per channel): values (SI) and the tau ranges used.
+
+    Attributes
+    ----------
+    names : tuple of str
+        The terms read, ``("Q", "N", "B", "K", "R")``.
+    value : numpy.ndarray, shape (P, C)
+        Read-out of each term and channel, SI units (as in :class:`NoiseFit`).
+    tau_lo, tau_hi : numpy.ndarray, shape (P, C)
+        Range of cluster times, s, that had the term's slope.
+    found : numpy.ndarray of bool, shape (P, C)
+        False when no tau range had the slope (the two nearest points were used).
+    """
 
     names: tuple[str, ...]
     value: NDArray[np.float64]  # (P, C)
@@ -139,6 +190,13 @@ class SlopeReadout(Result):
     found: NDArray[np.bool_]  # (P, C) False when no tau range had the slope (nearest points used)
 
     def to_dict(self) -> dict[str, Any]:
+        """JSON-ready dictionary of the read-outs.
+
+        Returns
+        -------
+        dict
+            ``names``, ``value``, ``tau_lo``, ``tau_hi``, ``found`` as lists.
+        """
         return {"names": list(self.names), "value": self.value.tolist(), "tau_lo": self.tau_lo.tolist(),
                 "tau_hi": self.tau_hi.tolist(), "found": self.found.tolist()}
 
@@ -147,10 +205,40 @@ class SlopeReadout(Result):
 class NoiseFit(Result):
     """Fitted noise terms of every channel.
 
-    ``names`` are ``"Q", "N", "B", "K", "R"`` and for Gauss-Markov term j
-    ``"GMj_sigma"``, ``"GMj_T"``; ``value``/``se``/``ci_lo``/``ci_hi`` have
-    shape (P, C), SI units in ``units``; ``selected`` (P, C) tells which
-    terms the selection kept (others are 0 with se NaN).
+    Attributes
+    ----------
+    names : tuple of str
+        ``"Q", "N", "B", "K", "R"`` and for Gauss-Markov term j ``"GMj_sigma"``, ``"GMj_T"``.
+    value : numpy.ndarray, shape (P, C)
+        Estimate of each term and channel, SI units (``units``).
+    se : numpy.ndarray, shape (P, C)
+        Standard error (NaN for a term the selection dropped).
+    ci_lo, ci_hi : numpy.ndarray, shape (P, C)
+        Confidence interval at ``ci_level`` (delta method on the log of the term).
+    selected : numpy.ndarray of bool, shape (P, C)
+        Which terms the selection kept (others are 0 with se NaN).
+    units : tuple of str
+        SI unit of each term (e.g. ``"rad/s/sqrt(Hz)"`` for a gyro's N).
+    display_units : tuple of str
+        Display unit of each term (e.g. ``"deg/sqrt(h)"``; see :mod:`imunav.units`).
+    chi2 : numpy.ndarray, shape (C,)
+        Weighted residual sum of squares of each channel's fit.
+    n_points : int
+        Number of Allan-variance points fitted.
+    channels : tuple of str
+        Channel names.
+    quantity : str or None
+        ``"gyro"``, ``"accel"`` or None (units then unknown).
+    method : str
+        The weighting used (e.g. generalized least squares with the overlapping covariance).
+    tau : numpy.ndarray
+        Cluster times fitted, s.
+    slopes : SlopeReadout or None
+        The classic read-outs, computed beside the fit.
+    tau_min : numpy.ndarray, shape (C,)
+        Cluster time of the Allan-deviation minimum of each channel, s.
+    ci_level : float
+        Level of the confidence intervals (0.95).
     """
 
     names: tuple[str, ...]
@@ -172,10 +260,40 @@ class NoiseFit(Result):
     ci_level: float = 0.95
 
     def get(self, name: str, channel: int = 0) -> float:
+        """One fitted value, SI.
+
+        Parameters
+        ----------
+        name : str
+            Term name, one of :attr:`names`.
+        channel : int
+            Channel index.
+
+        Returns
+        -------
+        float
+            The estimate, in the SI unit of that term.
+
+        Raises
+        ------
+        ValueError
+            If the term is not in :attr:`names`.
+        """
         return float(self.value[self.names.index(name), channel])
 
     def display(self, name: str) -> NDArray[np.float64]:
-        """Values of a term in its display unit (e.g. N in deg/sqrt(h))."""
+        """Values of a term in its display unit (e.g. N in deg/sqrt(h)).
+
+        Parameters
+        ----------
+        name : str
+            Term name, one of :attr:`names`.
+
+        Returns
+        -------
+        numpy.ndarray, shape (C,)
+            The estimate of each channel in that term's display unit (:attr:`display_units`).
+        """
         i = self.names.index(name)
         du = self.display_units[i]
         if du == self.units[i]:
@@ -183,13 +301,35 @@ class NoiseFit(Result):
         return np.asarray(to_display(self.value[i], du), dtype=float)
 
     def model_avar(self, tau: ArrayLike, channel: int = 0) -> NDArray[np.float64]:
-        """Fitted AVAR at ``tau`` for one channel."""
+        """Fitted AVAR at ``tau`` for one channel (:func:`avar_model` with the fitted terms).
+
+        Parameters
+        ----------
+        tau : array_like
+            Cluster times, s.
+        channel : int
+            Channel index.
+
+        Returns
+        -------
+        numpy.ndarray
+            The model Allan variance, in the square of the channel's SI unit.
+        """
         v = {nm: self.value[i, channel] for i, nm in enumerate(self.names)}
         gm = [(v[f"GM{j}_sigma"], v[f"GM{j}_T"]) for j in range(1, 10) if f"GM{j}_sigma" in v
               and v[f"GM{j}_sigma"] > 0]
         return avar_model(tau, v.get("Q", 0), v.get("N", 0), v.get("B", 0), v.get("K", 0), v.get("R", 0), gm)
 
     def to_dict(self) -> dict[str, Any]:
+        """JSON-ready dictionary of the fit.
+
+        Returns
+        -------
+        dict
+            ``method``, ``quantity``, ``channels``, ``n_points``, ``ci_level``, ``chi2``, ``tau_min``, ``terms``
+            (per term: SI ``unit``, ``value``, ``se``, ``ci_lo``, ``ci_hi``, ``selected``, ``display_unit``,
+            ``display_value``, ``display_se``) and ``slope_readout``.
+        """
         out: dict[str, Any] = {
             "method": self.method, "quantity": self.quantity, "channels": list(self.channels),
             "n_points": self.n_points, "ci_level": self.ci_level, "chi2": self.chi2.tolist(),
@@ -386,15 +526,15 @@ def fit_noise(
     result : AllanResult
         From :func:`allan_deviation` with kind ``"overlapping"`` (full GLS
         covariance), ``"standard"`` or ``"total"`` (diagonal weights).
-    terms : subset of ("Q", "N", "B", "K", "R")
-        Candidate terms.
+    terms : sequence of str
+        Candidate terms, a subset of ("Q", "N", "B", "K", "R").
     gauss_markov : int
         Number of first-order Gauss-Markov terms to add (correlation times
         are fitted).
-    select : "bic" | "aic" | None
+    select : {"bic", "aic"}, optional
         Automatic term selection over all subsets of the candidates, or keep
         all (non-negative least squares still sets absent terms to 0).
-    quantity : "gyro" | "accel" | None
+    quantity : {"gyro", "accel"}, optional
         Picks SI and display units; inferred from ``result.units``
         ("rad/s" -> gyro, "m/s^2" -> accel) when None.
     tau_range : (lo, hi), optional
@@ -417,6 +557,14 @@ def fit_noise(
         Q (rad | m/s), N (unit/sqrt(Hz) = unit*sqrt(s)), B (unit), K
         (unit/s/sqrt(Hz)), R (unit/s), Gauss-Markov sigma (unit) and T (s),
         each with standard error and 95 % interval.
+
+    Raises
+    ------
+    InvalidInputError
+        If ``result`` is not an AllanResult of the Allan variance (``overlapping``, ``standard`` or
+        ``total``), or a term, ``select``, ``gauss_markov`` or ``quantity`` is invalid.
+    InsufficientDataError
+        If a channel has fewer than 2 usable tau points.
     """
     if not isinstance(result, AllanResult):
         raise InvalidInputError("fit_noise needs an AllanResult from imunav.noise.allan_deviation")
@@ -531,7 +679,7 @@ _SLOPE = {"Q": (-1.0, math.sqrt(3.0), 1.0), "N": (-0.5, 1.0, 1.0), "K": (0.5, 3.
 
 
 def slope_readout(result: AllanResult, tol: float = 0.1) -> SlopeReadout:
-    """Classic IEEE-952 read-outs from the Allan deviation curve.
+    """Classic IEEE-952 read-outs from the Allan deviation curve (IEEE Std 952-1997, Annex C).
 
     For each slope s (-1 Q, -1/2 N, +1/2 K, +1 R) the tau points where the
     local log-log slope lies within ``tol`` of s are taken, a line of slope s
@@ -541,6 +689,23 @@ def slope_readout(result: AllanResult, tol: float = 0.1) -> SlopeReadout:
     (``found`` False) -- that is what the popular scripts do, and why they
     over-estimate the random walk when its region is not reached.
     B = min(sigma) / 0.6643.
+
+    Parameters
+    ----------
+    result : AllanResult
+        An overlapping (or other) Allan deviation of one or more channels.
+    tol : float
+        Tolerance on the local log-log slope.
+
+    Returns
+    -------
+    SlopeReadout
+        The read-outs, SI units, with the tau ranges used.
+
+    Raises
+    ------
+    InsufficientDataError
+        With fewer than 3 tau points.
     """
     adev = result.adev if result.adev.ndim == 2 else result.adev[:, None]
     n_ch = adev.shape[1]

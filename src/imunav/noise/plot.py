@@ -30,8 +30,24 @@ def _grid(n: int) -> tuple[int, int]:
 
 def plot_allan(result: AllanResult, fit: NoiseFit | None = None, channels: Sequence[int] | None = None,
                title: str | None = None) -> Figure:
-    """Allan deviation per channel with its confidence band, the fitted model
-    and each fitted term (dashed)."""
+    """Allan deviation per channel with its confidence band, the fitted model and each fitted term (dashed).
+
+    Parameters
+    ----------
+    result : AllanResult
+        The Allan deviation (:func:`imunav.noise.allan_deviation`); tau in s.
+    fit : NoiseFit, optional
+        Fitted noise terms to draw (:func:`imunav.noise.fit_noise`).
+    channels : sequence of int, optional
+        Channels to draw (default: all).
+    title : str, optional
+        Figure title.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        The figure (not shown; save it with ``fig.savefig``).
+    """
     # optional: matplotlib loads only when a figure is drawn (import time of imunav and its CLI)
     from matplotlib.figure import Figure
 
@@ -70,7 +86,24 @@ def plot_allan(result: AllanResult, fit: NoiseFit | None = None, channels: Seque
 
 def plot_psd(res: PsdResult, fit: PsdFit | None = None, averaged: PsdResult | None = None,
              title: str | None = None) -> Figure:
-    """One-sided PSD per channel (raw in grey, averaged in colour) with the fitted model."""
+    """One-sided PSD per channel (raw in grey, averaged in colour) with the fitted model.
+
+    Parameters
+    ----------
+    res : PsdResult
+        The raw PSD; frequency in Hz.
+    fit : PsdFit, optional
+        Fitted terms to draw.
+    averaged : PsdResult, optional
+        An averaged PSD to draw over the raw one.
+    title : str, optional
+        Figure title.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        The figure (not shown; save it with ``fig.savefig``).
+    """
     # optional: matplotlib loads only when a figure is drawn (import time of imunav and its CLI)
     from matplotlib.figure import Figure
 
@@ -102,7 +135,24 @@ def plot_psd(res: PsdResult, fit: PsdFit | None = None, averaged: PsdResult | No
 
 
 def plot_curve_fits(tau: np.ndarray, adev: np.ndarray, fits: dict, title: str | None = None) -> Figure:
-    """An Allan curve with smooth curve fits (thesis Figs. 7.57-7.60)."""
+    """An Allan curve with smooth curve fits (Atasoy's thesis, Figs. 7.57-7.60; see :mod:`imunav.noise.curvefit`).
+
+    Parameters
+    ----------
+    tau : numpy.ndarray
+        Cluster times, s.
+    adev : numpy.ndarray
+        Allan deviation of one channel at ``tau``.
+    fits : dict of str to CurveFit
+        The fits (:func:`imunav.noise.curvefit.compare_curve_fits`).
+    title : str, optional
+        Figure title.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        The figure (not shown; save it with ``fig.savefig``).
+    """
     # optional: matplotlib loads only when a figure is drawn (import time of imunav and its CLI)
     from matplotlib.figure import Figure
 

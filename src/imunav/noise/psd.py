@@ -1,10 +1,11 @@
 """Power spectral density of IMU noise, IEEE-952 frequency averaging, and the
 PSD estimates of the noise terms.
 
-Normalisation (the thesis's eqs. 5.10-5.11 are wrong, ahrs-sensor-errors.md
-§3.7): :func:`psd` returns the **one-sided** density S1(f), which integrates
-to the variance over [0, fs/2]; white noise of per-sample standard deviation
-sigma at rate fs has S1 = 2 sigma^2 / fs.  The IEEE-952 term formulas use the
+After the PSD method of E. Atasoy, *Estimation and analysis of error parameters of attitude-heading
+reference system sensors* (in Turkish), MSc thesis, Başkent University, §5.4.1, and IEEE Std 952-1997,
+Annex C.  Normalisation (the thesis's eqs. 5.10-5.11 are wrong): :func:`psd` returns the **one-sided**
+density S1(f), which integrates to the variance over [0, fs/2]; white noise of per-sample standard
+deviation sigma at rate fs has S1 = 2 sigma^2 / fs.  The IEEE-952 term formulas use the
 two-sided level S2 = S1 / 2 (:attr:`PsdResult.two_sided`):
 
 ==================  ========================  ============================
@@ -41,9 +42,26 @@ __all__ = ["PsdResult", "PsdFit", "psd", "frequency_average", "log_average", "fi
 
 @dataclass(frozen=True)
 class PsdResult(Result):
-    """One-sided PSD (unit^2/Hz).  ``psd`` is (F,) or (F, C) like the input;
-    ``counts`` (F,) is the number of raw periodogram bins (times Welch
-    segments) averaged into each point, which sets its relative variance 1/count."""
+    """One-sided PSD, unit^2/Hz.
+
+    Attributes
+    ----------
+    f : numpy.ndarray, shape (F,)
+        Frequencies, Hz (DC dropped).
+    psd : numpy.ndarray, shape (F,) or (F, C)
+        One-sided density S1(f) of each channel, (unit of ``units``)²/Hz, like the input.
+    counts : numpy.ndarray, shape (F,)
+        Number of raw periodogram bins (times Welch segments) averaged into each point, which sets its
+        relative variance 1/count.
+    fs : float
+        Sample rate, Hz.
+    method : str
+        ``"periodogram"`` or ``"welch"``, with the averaging applied appended (``"welch+log-average"``).
+    units : str
+        Unit of the input samples (e.g. ``"rad/s"``).
+    channels : tuple of str
+        Channel names.
+    """
 
     f: NDArray[np.float64]
     psd: NDArray[np.float64]
@@ -59,6 +77,13 @@ class PsdResult(Result):
         return self.psd / 2.0
 
     def to_dict(self) -> dict[str, Any]:
+        """JSON-ready dictionary of the PSD.
+
+        Returns
+        -------
+        dict
+            ``f``, ``psd``, ``counts`` as lists, ``fs``, ``method``, ``units``, ``channels`` and ``sides: "one"``.
+        """
         return {"f": self.f.tolist(), "psd": self.psd.tolist(), "counts": self.counts.tolist(), "fs": self.fs,
                 "method": self.method, "units": self.units, "channels": list(self.channels), "sides": "one"}
 
@@ -84,7 +109,44 @@ def psd(x: ArrayLike, fs: float, method: Literal["periodogram", "welch"] = "peri
 
     ``"periodogram"``: one DFT of the whole record (rectangular window by
     default, as in the thesis); ``"welch"``: averaged segments (Hann window,
-    ``nperseg`` default N/16 rounded to a power of 2, 50 % overlap).  DC is dropped.
+    ``nperseg`` default N/16 rounded to a power of 2, 50 % overlap; P. D. Welch, IEEE Trans. Audio
+    Electroacoustics 15(2), 1967).  DC is dropped.
+
+    Parameters
+    ----------
+    x : array_like, shape (N,) or (N, C)
+        Samples (rates in rad/s, specific force in m/s², ...), rows are samples, finite.
+    fs : float
+        Sample rate, Hz, > 0.
+    method : {"periodogram", "welch"}
+        Estimator.
+    nperseg : int, optional
+        Welch segment length, samples.
+    window : str, optional
+        A :func:`scipy.signal.get_window` name (default: ``"boxcar"`` for the periodogram, ``"hann"`` for
+        Welch).
+    detrend : str
+        Detrending of each segment (``"constant"``, ``"linear"`` or ``"none"``).
+    units : str
+        Unit of ``x``, recorded in the result.
+    channels : sequence of str, optional
+        Channel names.
+
+    Returns
+    -------
+    PsdResult
+        The one-sided density, (unit of ``units``)²/Hz.
+
+    Raises
+    ------
+    ShapeError
+        If ``x`` is not (N,) / (N, C), or looks transposed.
+    NonFiniteError
+        If ``x`` has NaN or infinite values.
+    InvalidInputError
+        If ``fs`` is not positive, ``method`` is unknown or ``nperseg`` is outside 8..N.
+    InsufficientDataError
+        With fewer than 8 samples.
     """
     a2, one = _as2d(x)
     if not (np.isfinite(fs) and fs > 0):
@@ -124,14 +186,34 @@ def _group(res: PsdResult, groups: list[np.ndarray], geometric: bool, method: st
 
 
 def frequency_average(res: PsdResult, first: int = 32, per_octave: int = 16, geometric: bool = False) -> PsdResult:
-    """IEEE Std 952 frequency averaging (thesis Table 5.1), for any number of bins.
+    """IEEE Std 952 frequency averaging (Atasoy, Table 5.1), for any number of bins.
 
     The first ``first`` bins are kept; every following octave of bins
     [2^k + 1, 2^(k+1)] (k >= log2(first)) is split into ``per_octave`` equal
     groups of consecutive bins, each averaged.  A last, incomplete octave is
     split into groups of the same size (the final group may be shorter).
     For 32768 bins this gives the table's 32 + 10 x 16 = 192 points.
-    The frequency of a group is the arithmetic (default) or geometric mean.
+
+    Parameters
+    ----------
+    res : PsdResult
+        A one-sided PSD (raw or averaged).
+    first : int
+        Number of leading bins kept as they are, a power of 2.
+    per_octave : int
+        Groups per octave, >= 1.
+    geometric : bool
+        Frequency of a group: geometric mean (True) or arithmetic mean (False).
+
+    Returns
+    -------
+    PsdResult
+        The averaged PSD, with ``counts`` summed over each group.
+
+    Raises
+    ------
+    InvalidInputError
+        If ``first`` is not a power of 2 or ``per_octave < 1``.
     """
     nb = res.f.size
     if first < 1 or per_octave < 1 or first & (first - 1):
@@ -150,7 +232,20 @@ def frequency_average(res: PsdResult, first: int = 32, per_octave: int = 16, geo
 
 
 def log_average(res: PsdResult, per_decade: int = 20) -> PsdResult:
-    """Average into logarithmically spaced frequency bins (empty bins skipped)."""
+    """Average into logarithmically spaced frequency bins (empty bins skipped).
+
+    Parameters
+    ----------
+    res : PsdResult
+        A one-sided PSD (raw or averaged).
+    per_decade : int
+        Bins per decade of frequency.
+
+    Returns
+    -------
+    PsdResult
+        The averaged PSD (geometric-mean frequencies), ``"+log-average"`` appended to ``method``.
+    """
     edges = np.logspace(np.log10(res.f[0]), np.log10(res.f[-1]) + 1e-12,
                         max(2, int(np.ceil(per_decade * np.log10(res.f[-1] / res.f[0]))) + 1))
     idx = np.clip(np.searchsorted(edges, res.f, side="right") - 1, 0, edges.size - 2)
@@ -160,7 +255,21 @@ def log_average(res: PsdResult, per_decade: int = 20) -> PsdResult:
 
 @dataclass(frozen=True)
 class PsdFit(Result):
-    """Noise terms from the PSD (SI, same meaning as :class:`imunav.noise.fit.NoiseFit`)."""
+    """Noise terms from the PSD (SI, same meaning as :class:`imunav.noise.fit.NoiseFit`).
+
+    Attributes
+    ----------
+    names : tuple of str
+        Terms fitted, from ``"Q", "N", "B", "K"``.
+    value : numpy.ndarray, shape (P, C)
+        Estimate of each term and channel, SI (N in rad/s/√Hz for a gyro, ...).
+    se : numpy.ndarray, shape (P, C)
+        Standard errors.
+    channels : tuple of str
+        Channel names.
+    f_range : tuple of (float, float)
+        Frequency band fitted for each channel, Hz.
+    """
 
     names: tuple[str, ...]
     value: NDArray[np.float64]  # (P, C)
@@ -169,10 +278,39 @@ class PsdFit(Result):
     f_range: tuple[tuple[float, float], ...]  # per channel
 
     def get(self, name: str, channel: int = 0) -> float:
+        """One fitted value, SI.
+
+        Parameters
+        ----------
+        name : str
+            Term name, one of :attr:`names`.
+        channel : int
+            Channel index.
+
+        Returns
+        -------
+        float
+            The estimate.
+        """
         return float(self.value[self.names.index(name), channel])
 
     def model(self, f: ArrayLike, channel: int = 0, tau0: float = 0.0) -> NDArray[np.float64]:
-        """Fitted one-sided PSD."""
+        """Fitted one-sided PSD, ``2 [N² + B²/(2πf) + K²/(2πf)² + (2πf)² τ0 Q²]``.
+
+        Parameters
+        ----------
+        f : array_like
+            Frequencies, Hz.
+        channel : int
+            Channel index.
+        tau0 : float
+            Sample interval, s (only for the quantization term).
+
+        Returns
+        -------
+        numpy.ndarray
+            S1(f), in the square of the channel's unit per Hz.
+        """
         f = np.asarray(f, dtype=float)
         v = dict(zip(self.names, self.value[:, channel]))
         w = 2 * np.pi * f
@@ -180,17 +318,45 @@ class PsdFit(Result):
         return 2.0 * s2
 
     def to_dict(self) -> dict[str, Any]:
+        """JSON-ready dictionary of the fit.
+
+        Returns
+        -------
+        dict
+            ``names``, ``value``, ``se``, ``channels``, ``f_range``.
+        """
         return {"names": list(self.names), "value": self.value.tolist(), "se": self.se.tolist(),
                 "channels": list(self.channels), "f_range": list(self.f_range)}
 
 
 def fit_psd(res: PsdResult, terms: Sequence[str] = ("N", "B", "K"), f_range: Any = None) -> PsdFit:
-    """Weighted NNLS fit of the two-sided PSD model sum of the terms' shapes
-    (table in the module docstring) to an (averaged) PSD; each point's
-    relative variance is 1/count, and the residuals are weighted by the
-    model (iterated), like the Allan fit.  ``f_range`` (lo, hi) defaults to
-    [f_min, 0.4 fs] to stay clear of anti-alias filtering near Nyquist; a
-    list of (lo, hi), one per channel, sets each channel's band."""
+    """Weighted NNLS fit of the two-sided PSD model to an (averaged) PSD.
+
+    The model is the sum of the terms' shapes (table in the module docstring); each point's relative
+    variance is 1/count, and the residuals are weighted by the model (iterated), like the Allan fit.
+
+    Parameters
+    ----------
+    res : PsdResult
+        A one-sided PSD (raw or averaged).
+    terms : sequence of str
+        Terms to fit, a non-empty subset of ``("Q", "N", "B", "K")``.
+    f_range : tuple of float or list of tuple, optional
+        Band ``(lo, hi)``, Hz; default [f_min, 0.4 fs] to stay clear of anti-alias filtering near Nyquist.
+        A list of ``(lo, hi)``, one per channel, sets each channel's band.
+
+    Returns
+    -------
+    PsdFit
+        The terms, SI, with standard errors.
+
+    Raises
+    ------
+    InvalidInputError
+        If ``terms`` is empty or holds an unknown term.
+    InsufficientDataError
+        If a band holds too few points.
+    """
     allowed = ("Q", "N", "B", "K")
     if any(t not in allowed for t in terms) or not terms:
         raise InvalidInputError(f"terms must be a non-empty subset of {allowed}")
@@ -238,10 +404,32 @@ def fit_psd(res: PsdResult, terms: Sequence[str] = ("N", "B", "K"), f_range: Any
 
 
 def psd_readout(res: PsdResult, term: str, f_band: tuple[float, float]) -> NDArray[np.float64]:
-    """Fixed-slope read-out of one term over a frequency band (per channel):
-    the band's PSD points are averaged after removing the term's slope, i.e.
-    the line of slope (+2, 0, -1, -2) through them, and the coefficient read
-    with the formulas of the module docstring."""
+    """Fixed-slope read-out of one term over a frequency band (per channel).
+
+    The band's PSD points are averaged after removing the term's slope, i.e. the line of slope
+    (+2, 0, -1, -2) through them, and the coefficient read with the formulas of the module docstring.
+
+    Parameters
+    ----------
+    res : PsdResult
+        A one-sided PSD (raw or averaged).
+    term : {"Q", "N", "B", "K"}
+        The term read.
+    f_band : tuple of float
+        ``(lo, hi)``, Hz.
+
+    Returns
+    -------
+    numpy.ndarray, shape (C,)
+        The coefficient of each channel, SI.
+
+    Raises
+    ------
+    InsufficientDataError
+        If no PSD point lies in the band.
+    InvalidInputError
+        If the term is unknown.
+    """
     ok = (res.f >= f_band[0]) & (res.f <= f_band[1])
     if not ok.any():
         raise InsufficientDataError(f"no PSD points in f_band={f_band}")
@@ -262,7 +450,22 @@ def psd_readout(res: PsdResult, term: str, f_band: tuple[float, float]) -> NDArr
 
 
 def compare_psd_allan(psd_fit: PsdFit, noise_fit: Any, terms: Sequence[str] = ("N",)) -> dict[str, list[float]]:
-    """Relative difference PSD / Allan - 1 of the terms both fits have, per channel."""
+    """Relative difference PSD / Allan - 1 of the terms both fits have, per channel.
+
+    Parameters
+    ----------
+    psd_fit : PsdFit
+        Terms from the PSD.
+    noise_fit : NoiseFit
+        Terms from the Allan variance (:func:`imunav.noise.fit_noise`).
+    terms : sequence of str
+        Terms compared.
+
+    Returns
+    -------
+    dict of str to list of float
+        Per term present in both fits, ``psd / allan - 1`` of each channel.
+    """
     out = {}
     for t in terms:
         if t in psd_fit.names and t in noise_fit.names:

@@ -68,17 +68,28 @@ class StaticCheck(Result):
 
     Attributes
     ----------
-    static : no test failed.
-    reasons : one sentence per failed test (empty when static).
-    mean_specific_force : ``|f̄|``, m/s² (norm of the median window mean).
-    max_tilt_deg : largest change of a window's mean specific force from the median, as an angle
+    static : bool
+        No test failed.
+    reasons : list of str
+        One sentence per failed test (empty when static).
+    mean_specific_force : float
+        ``|f̄|``, m/s² (norm of the median window mean).
+    max_tilt_deg : float
+        Largest change of a window's mean specific force from the median, as an angle
         (``|d| / |f̄|`` in degrees).
-    max_rotation_deg : largest ``|ω̄_k − median| · window`` (degrees turned within a window beyond the bias).
-    tilt_limit_deg, rotation_limit_deg : the thresholds applied (the larger of the statistical and physical ones).
-    allan_slope : per sensor, the largest slope of the Allan deviation between ``τ0`` and ``window_s``
+    max_rotation_deg : float
+        Largest ``|ω̄_k − median| · window`` (degrees turned within a window beyond the bias).
+    tilt_limit_deg, rotation_limit_deg : float
+        The thresholds applied (the larger of the statistical and physical ones).
+    allan_slope : dict
+        Per sensor, the largest slope of the Allan deviation between ``τ0`` and ``window_s``
         over the axes (−0.5 for white noise).
-    window_s, n_windows : the windows used (no window test with fewer than 2 windows).
-    flagged_windows : per sensor, start times (s) of the first flagged windows.
+    window_s : float
+        Window length used, s.
+    n_windows : int
+        Number of windows (no window test with fewer than 2).
+    flagged_windows : dict
+        Per sensor, start times (s) of the first flagged windows.
     """
 
     static: bool
@@ -94,6 +105,13 @@ class StaticCheck(Result):
     flagged_windows: dict[str, list[float]] = field(default_factory=dict)
 
     def to_dict(self) -> dict[str, Any]:
+        """JSON-ready dictionary of the outcome.
+
+        Returns
+        -------
+        dict
+            Every attribute under its own name (angles in degrees, force in m/s², window in s).
+        """
         return jsonable(self.__dict__)
 
 
@@ -131,18 +149,32 @@ def check_static(data: Any, *, window_s: float = 1.0, max_tilt_deg: float = 2.0,
 
     Parameters
     ----------
-    data : ImuData (SI).
-    window_s : window length, s (at least 10 samples are used).
-    max_tilt_deg : physical allowance on the change of the mean specific force, degrees of tilt.
-    max_rotation_deg : physical allowance on the rotation within one window beyond the gyro bias, degrees.
-    alpha : false-alarm probability per record and sensor under white noise (statistical limit).
-    gravity : expected ``|f̄|`` at rest, m/s².
-    mean_force : apply the mean-specific-force test (False when only the gyro is analysed and the
+    data : ImuData
+        The recording, SI units.
+    window_s : float
+        Window length, s (at least 10 samples are used).
+    max_tilt_deg : float
+        Physical allowance on the change of the mean specific force, degrees of tilt.
+    max_rotation_deg : float
+        Physical allowance on the rotation within one window beyond the gyro bias, degrees.
+    alpha : float
+        False-alarm probability per record and sensor under white noise (statistical limit).
+    gravity : float
+        Expected ``|f̄|`` at rest, m/s².
+    mean_force : bool
+        Apply the mean-specific-force test (False when only the gyro is analysed and the
         accelerometer's unit may be undeclared; the window tests still run).
 
     Returns
     -------
     StaticCheck
+        The verdict, the reasons and the figures of each test.
+
+    Raises
+    ------
+    InvalidInputError
+        If ``data`` is not an ImuData with at least 3 samples, a window or allowance is not positive, or
+        ``alpha`` is outside (0, 1).
     """
     if not isinstance(data, ImuData):
         raise InvalidInputError(f"check_static needs an ImuData, got {type(data).__name__}")
@@ -204,7 +236,27 @@ def check_static(data: Any, *, window_s: float = 1.0, max_tilt_deg: float = 2.0,
 def require_static(data: Any, *, force: bool = False, where: str = "the recording", **kwargs: Any) -> StaticCheck:
     """:func:`check_static`, raising :class:`~imunav.errors.NotStaticError` when the data moved, unless ``force``.
 
-    ``where`` names the recording in the message; ``kwargs`` go to :func:`check_static`.
+    Parameters
+    ----------
+    data : ImuData
+        The recording, in SI units.
+    force : bool
+        Return the outcome instead of raising when the recording is not static.
+    where : str
+        Names the recording in the message.
+    **kwargs
+        Keywords of :func:`check_static` (``window_s``, ``max_tilt_deg``, ...).
+
+    Returns
+    -------
+    StaticCheck
+        The verdict, the reasons and the figures of each test.
+        The outcome of the tests.
+
+    Raises
+    ------
+    NotStaticError
+        If a test failed and ``force`` is False; the message gives the reasons and the ways out.
     """
     res = check_static(data, **kwargs)
     if not res.static and not force:

@@ -1,13 +1,16 @@
-"""Wavelet denoising (PyWavelets) and the hybrid DWT + Kalman bias estimator
-(imu-error-calibration.md §6).
+"""Wavelet denoising (PyWavelets) and the hybrid DWT + Kalman bias estimator.
 
-Denoising: multilevel DWT (Mallat filter bank), the detail coefficients are
-thresholded and the signal rebuilt (IDWT):
+The hybrid estimator is that of Y. Günhan, *Ataletsel ölçüm birimi hatalarının belirlenmesi ve
+düzeltilmesi* (Detection and compensation of IMU errors), MSc thesis, Hacettepe University, 2014, §4.2.
+
+Denoising: multilevel DWT (Mallat filter bank; S. Mallat, IEEE Trans. PAMI 11(7), 1989), the detail
+coefficients are thresholded and the signal rebuilt (IDWT):
 
 * ``mode="soft"`` / ``"hard"``: Donoho-Johnstone universal threshold
   ``lambda = sigma sqrt(2 ln N)``, with the noise sigma estimated by the
   **median** absolute deviation of the finest details, ``MAD(cD1)/0.6745``
-  (not the mean, which outliers and signal inflate);
+  (not the mean, which outliers and signal inflate); D. L. Donoho, I. M. Johnstone, "Ideal spatial
+  adaptation by wavelet shrinkage", Biometrika 81(3), 1994;
 * ``mode="zero"``: the thesis mode -- every detail set to zero (the
   approximation band alone is kept).
 
@@ -44,7 +47,27 @@ def _pywt():
 
 
 def mad_sigma(x: ArrayLike, wavelet: str = "db4") -> float:
-    """Noise standard deviation from the finest detail coefficients: median(|cD1|)/0.6745."""
+    """Noise standard deviation from the finest detail coefficients: median(|cD1|)/0.6745 (Donoho & Johnstone 1994).
+
+    Parameters
+    ----------
+    x : array_like, shape (N,)
+        One channel, N >= 4.
+    wavelet : str
+        A discrete PyWavelets wavelet name.
+
+    Returns
+    -------
+    float
+        The white-noise standard deviation per sample, in ``x``'s unit.
+
+    Raises
+    ------
+    ShapeError
+        If ``x`` is not 1-D with at least 4 samples.
+    MissingDependencyError
+        If PyWavelets is not installed.
+    """
     pywt = _pywt()
     a = np.asarray(x, dtype=float)
     if a.ndim != 1 or a.size < 4:
@@ -58,7 +81,24 @@ def _mad_of_details(d: np.ndarray) -> float:
 
 
 def default_level(n: int, fs: float | None, wavelet: str = "db4", band_hz: float = 1.0) -> int:
-    """Level L with fs/2^(L+1) <= band_hz, capped by the maximum useful level for n samples."""
+    """Level L with fs/2^(L+1) <= band_hz, capped by the maximum useful level for n samples.
+
+    Parameters
+    ----------
+    n : int
+        Number of samples.
+    fs : float or None
+        Sample rate, Hz; None gives the maximum useful level.
+    wavelet : str
+        A discrete PyWavelets wavelet name.
+    band_hz : float
+        Upper edge of the approximation band to keep, Hz.
+
+    Returns
+    -------
+    int
+        The decomposition level, >= 1.
+    """
     pywt = _pywt()
     lmax = max(1, pywt.dwt_max_level(n, pywt.Wavelet(wavelet).dec_len))
     if fs is None:
@@ -70,7 +110,41 @@ def default_level(n: int, fs: float | None, wavelet: str = "db4", band_hz: float
 def wavelet_denoise(x: ArrayLike, fs: float | None = None, *, wavelet: str = "db4", level: int | None = None,
                     mode: Literal["soft", "hard", "zero"] = "soft", sigma: float | None = None,
                     band_hz: float = 1.0) -> NDArray[np.float64]:
-    """Denoise each channel of x ((N,) or (N, C)); output has the input's shape."""
+    """Denoise each channel of x; the output has the input's shape.
+
+    Parameters
+    ----------
+    x : array_like, shape (N,) or (N, C)
+        Samples, rows are samples, finite.
+    fs : float, optional
+        Sample rate, Hz (sets the default level with ``band_hz``).
+    wavelet : str
+        A discrete PyWavelets wavelet name (``"db4"``, ``"sym8"``, ...).
+    level : int, optional
+        Decomposition level (default :func:`default_level`).
+    mode : {"soft", "hard", "zero"}
+        Thresholding of the details (see the module docstring); ``"zero"`` is the thesis's mode.
+    sigma : float, optional
+        Noise standard deviation for the threshold (default :func:`mad_sigma` of each channel).
+    band_hz : float
+        Approximation band kept by the default level, Hz.
+
+    Returns
+    -------
+    numpy.ndarray
+        The denoised samples, same shape and unit as ``x``.
+
+    Raises
+    ------
+    ShapeError
+        If ``x`` is not (N,) / (N, C) or looks transposed.
+    NonFiniteError
+        If ``x`` has NaN or infinite values.
+    InvalidInputError
+        If ``mode`` or ``wavelet`` is unknown.
+    InsufficientDataError
+        With fewer than 8 samples.
+    """
     pywt = _pywt()
     a = np.asarray(x, dtype=float)
     if a.ndim not in (1, 2):
@@ -135,8 +209,37 @@ def bias_kalman(y: ArrayLike, fs: float, T: float, sigma_gm: float, r: float, *,
                 ) -> NDArray[np.float64]:
     """Total-bias estimate (B + dB) of a static 1-D measurement y (reference removed).
 
-    State [B, dB]: B constant, dB Gauss-Markov (T, sigma_gm); R = r is the
-    measurement-noise variance per sample."""
+    State [B, dB]: B constant, dB first-order Gauss-Markov (T, sigma_gm), ``A = diag(1, c1)`` with
+    ``c1 = exp(-1/(fs T))``, ``Q = diag(0, sigma_gm² (1 - c1²))``, ``H = [1 1]``, ``R = r`` (Günhan 2014,
+    §4.2.2; the standard discrete Kalman filter, e.g. Brown & Hwang 2012).
+
+    Parameters
+    ----------
+    y : array_like, shape (N,)
+        Measurement with the true input removed (e.g. gyro rate at rest, rad/s).
+    fs : float
+        Sample rate, Hz, > 0.
+    T : float
+        Gauss-Markov correlation time, s, > 0.
+    sigma_gm : float
+        Gauss-Markov standard deviation, ``y``'s unit, >= 0.
+    r : float
+        Measurement-noise variance per sample, ``y``'s unit squared, > 0.
+    p0_bias : float, optional
+        Initial variance of the bias state (default: from the first second of data).
+
+    Returns
+    -------
+    numpy.ndarray, shape (N,)
+        The estimate of B + dB at each sample, ``y``'s unit.
+
+    Raises
+    ------
+    ShapeError
+        If ``y`` is not 1-D with at least 2 samples.
+    InvalidInputError
+        If a parameter is out of range.
+    """
     a = np.asarray(y, dtype=float)
     if a.ndim != 1 or a.size < 2:
         raise ShapeError("bias_kalman needs a 1-D series of at least 2 samples")
@@ -150,7 +253,19 @@ def bias_kalman(y: ArrayLike, fs: float, T: float, sigma_gm: float, r: float, *,
 
 @dataclass(frozen=True)
 class HybridComparison(Result):
-    """KF-only vs DWT + KF bias estimation against a known bias."""
+    """KF-only vs DWT + KF bias estimation against a known bias.
+
+    Attributes
+    ----------
+    rmse_kf, rmse_hybrid : float
+        RMSE of the bias estimate, the measurement's unit: KF on raw data, KF on denoised data.
+    mape_kf, mape_hybrid : float
+        Mean absolute percentage error, %.
+    r_kf, r_hybrid : float
+        Measurement-noise variance used by each filter.
+    level : int
+        Wavelet decomposition level.
+    """
 
     rmse_kf: float
     rmse_hybrid: float
@@ -161,20 +276,63 @@ class HybridComparison(Result):
     level: int
 
     def to_dict(self) -> dict[str, Any]:
+        """JSON-ready dictionary of the comparison.
+
+        Returns
+        -------
+        dict
+            The attributes by name.
+        """
         return dict(self.__dict__)
 
 
 def compare_hybrid(y: ArrayLike, true_bias: ArrayLike, fs: float, T: float, sigma_gm: float, *,
                    wavelet: str = "db4", level: int | None = None, mode: Literal["soft", "hard", "zero"] = "zero",
                    skip_s: float = 0.0, r_hybrid: float | None = None) -> HybridComparison:
-    """Thesis §4.2 experiment: KF on raw data vs KF on DWT-denoised data.
+    """Günhan 2014, §4.2 experiment: KF on raw data vs KF on DWT-denoised data.
 
     R for the raw data is the white-noise variance ``MAD(cD1)^2``.  For the
     denoised data R is re-derived rather than copied from its sample variance:
     the noise left is ~2^-L of the white power but correlated over ~2^L
     samples, so the per-sample information is the raw one and R stays
     ``MAD(cD1)^2`` unless ``r_hybrid`` is given.  RMSE = sqrt(mean((b_hat-b)^2)); MAPE =
-    100 mean(|b_hat-b|/|b|) over samples after ``skip_s`` (convergence)."""
+    100 mean(|b_hat-b|/|b|) over samples after ``skip_s`` (convergence).
+
+    Parameters
+    ----------
+    y : array_like, shape (N,)
+        Static measurement, true input removed.
+    true_bias : array_like, shape (N,)
+        The known bias (simulation), same unit.
+    fs : float
+        Sample rate, Hz.
+    T : float
+        Gauss-Markov correlation time, s.
+    sigma_gm : float
+        Gauss-Markov standard deviation, ``y``'s unit.
+    wavelet : str
+        A discrete PyWavelets wavelet name.
+    level : int, optional
+        Decomposition level (default :func:`default_level`).
+    mode : {"soft", "hard", "zero"}
+        Thresholding of the details (see the module docstring); ``"zero"`` is the thesis's mode.
+    skip_s : float
+        Initial span left out of the metrics, s.
+    r_hybrid : float, optional
+        Measurement-noise variance of the filter on denoised data (default: the raw one).
+
+    Returns
+    -------
+    HybridComparison
+        Both filters' RMSE and MAPE.
+
+    Raises
+    ------
+    ShapeError
+        If ``y`` and ``true_bias`` are not 1-D of the same length.
+    InvalidInputError
+        If ``skip_s`` is longer than the record, or the true bias has zeros (MAPE undefined).
+    """
     a = np.asarray(y, dtype=float)
     b = np.asarray(true_bias, dtype=float)
     if a.shape != b.shape or a.ndim != 1:

@@ -62,17 +62,52 @@ _OFF = ("xy", "xz", "yx", "yz", "zx", "zy")
 
 
 def base_name(name: str) -> str:
-    """``gyro_bias_x`` -> ``gyro_bias`` (names without an axis are returned as they are)."""
+    """``gyro_bias_x`` -> ``gyro_bias`` (names without an axis are returned as they are).
+
+    Parameters
+    ----------
+    name : str
+        A parameter name.
+
+    Returns
+    -------
+    str
+        The name without its axis suffix.
+    """
     return _AXIS.sub("", name)
 
 
 def display_unit(name: str) -> str:
-    """Display unit of a parameter name ('' when unknown: shown in SI)."""
+    """Display unit of a parameter name ('' when unknown: shown in SI).
+
+    Parameters
+    ----------
+    name : str
+        A parameter name, with or without axis.
+
+    Returns
+    -------
+    str
+        The display unit of the table in the module docstring.
+    """
     return DISPLAY_UNIT.get(base_name(name), "")
 
 
 def to_display_value(name: str, value_si: float | None) -> float | None:
-    """SI value -> display unit of ``name`` (None stays None)."""
+    """SI value -> display unit of ``name`` (None stays None).
+
+    Parameters
+    ----------
+    name : str
+        A parameter name.
+    value_si : float or None
+        The value in SI.
+
+    Returns
+    -------
+    float or None
+        The value in :func:`display_unit` of ``name`` (unchanged when the unit is unknown).
+    """
     if value_si is None or not np.isfinite(value_si):
         return value_si
     u = display_unit(name)
@@ -86,6 +121,19 @@ def calibration_estimates(calibration: Any, stderr: Mapping[str, Any] | None = N
     (``accel_bias``, ``accel_matrix``, ``gyro_bias``, ``gyro_matrix``,
     ``g_sensitivity``); parameters without a standard error (not estimated
     by the method) are left out.
+
+    Parameters
+    ----------
+    calibration : ImuCalibration
+        The calibration (SI raw units).
+    stderr : mapping, optional
+        Standard errors (default: ``calibration.stderr``).
+
+    Returns
+    -------
+    dict of str to (float, float or None)
+        ``{name: (value_si, sigma_si)}`` (scale errors and misalignments dimensionless, biases in m/s² and
+        rad/s, g-sensitivity in rad/s per m/s²).
     """
     se = dict(stderr if stderr is not None else getattr(calibration, "stderr", {}) or {})
     out: dict[str, tuple[float, float | None]] = {}
@@ -121,6 +169,18 @@ def noise_estimates(fit: Any, sensor: str) -> dict[str, tuple[float, float | Non
 
     Only the terms the fit selected are returned (a term set to zero by the
     term selection has no estimate).
+
+    Parameters
+    ----------
+    fit : NoiseFit
+        Noise terms of one triad (:func:`imunav.noise.fit_noise`).
+    sensor : {"gyro", "accel"}
+        The triad.
+
+    Returns
+    -------
+    dict of str to (float, float or None)
+        ``{name: (value_si, sigma_si)}`` for ARW / VRW, bias instability and rate / acceleration random walk.
     """
     out: dict[str, tuple[float, float | None]] = {}
     chans = list(fit.channels)
@@ -142,6 +202,18 @@ def expand_spec(spec: Mapping[str, SpecLimit], names: list[str] | tuple[str, ...
 
     Spec entries that match no estimated name are kept under their own name
     (so that :func:`imunav.report.check_spec` reports them as not measured).
+
+    Parameters
+    ----------
+    spec : mapping of str to SpecLimit
+        Limits as loaded (:func:`imunav.report.load_spec`).
+    names : sequence of str
+        The concrete names estimated.
+
+    Returns
+    -------
+    dict of str to SpecLimit
+        Limits per concrete name.
     """
     names = list(names)
     out: dict[str, SpecLimit] = {}

@@ -74,7 +74,25 @@ def _verdict(passed: bool | None) -> str:
 
 @dataclass(frozen=True)
 class Parameter:
-    """One estimated parameter with its 1σ uncertainty, unit and optional truth / limit."""
+    """One estimated parameter with its 1σ uncertainty, unit and optional truth / limit.
+
+    Attributes
+    ----------
+    name : str
+        Parameter name.
+    value : float
+        Estimate, in ``unit``.
+    sigma : float or None
+        1σ standard error, in ``unit``.
+    unit : str
+        Display unit.
+    truth : float or None
+        True value (simulation), in ``unit``.
+    limit : str or None
+        The limit as text (:meth:`imunav.report.spec.SpecLimit.describe`).
+    passed : bool or None
+        Verdict against the limit.
+    """
 
     name: str
     value: float
@@ -87,19 +105,49 @@ class Parameter:
 
 @dataclass
 class Section:
-    """A titled part of a report, filled with text, tables and figures."""
+    """A titled part of a report, filled with text, tables and figures.
+
+    Attributes
+    ----------
+    title : str
+        Heading.
+    passed : bool or None
+        Verdict shown beside the heading (None: none).
+    """
 
     title: str
     passed: bool | None = None
     _parts: list[str] = field(default_factory=list)
 
     def text(self, paragraph: str) -> "Section":
-        """A paragraph of plain text (escaped)."""
+        """A paragraph of plain text (escaped).
+
+        Parameters
+        ----------
+        paragraph : str
+            The text.
+
+        Returns
+        -------
+        Section
+            ``self``, so that calls chain.
+        """
         self._parts.append(f"<p>{html.escape(paragraph)}</p>")
         return self
 
     def code(self, text: str) -> "Section":
-        """Preformatted text (a command line, a configuration)."""
+        """Preformatted text (a command line, a configuration).
+
+        Parameters
+        ----------
+        text : str
+            The text (escaped).
+
+        Returns
+        -------
+        Section
+            ``self``, so that calls chain.
+        """
         self._parts.append(f"<pre>{html.escape(text)}</pre>")
         return self
 
@@ -110,7 +158,24 @@ class Section:
         columns: Sequence[str] | None = None,
         digits: int = 5,
     ) -> "Section":
-        """A table from a list of dicts or a pandas DataFrame (index kept as first column)."""
+        """A table from a list of dicts or a pandas DataFrame (index kept as first column).
+
+        Parameters
+        ----------
+        rows : sequence of mapping, or pandas.DataFrame
+            The rows.
+        caption : str, optional
+            Caption shown under it.
+        columns : sequence of str, optional
+            Columns shown, in order (default: all, in order of appearance).
+        digits : int
+            Significant digits of floats.
+
+        Returns
+        -------
+        Section
+            ``self``, so that calls chain.
+        """
         if isinstance(rows, pd.DataFrame):
             df = rows.reset_index() if rows.index.name or not isinstance(rows.index, pd.RangeIndex) else rows
             rows = df.to_dict(orient="records")
@@ -133,7 +198,20 @@ class Section:
         return self
 
     def parameters(self, params: Iterable[Parameter], caption: str | None = None) -> "Section":
-        """Table of parameters: value ± 1σ, unit, truth (if known), error in σ, limit, verdict."""
+        """Table of parameters: value ± 1σ, unit, truth (if known), error in σ, limit, verdict.
+
+        Parameters
+        ----------
+        params : iterable of Parameter
+            The parameters.
+        caption : str, optional
+            Caption shown under it.
+
+        Returns
+        -------
+        Section
+            ``self``, so that calls chain.
+        """
         rows = []
         for p in params:
             row: dict[str, Any] = {
@@ -162,7 +240,22 @@ class Section:
         return self
 
     def figure(self, fig: Any, caption: str | None = None, dpi: int = 110) -> "Section":
-        """Embed a matplotlib figure as a PNG (the figure is closed afterwards)."""
+        """Embed a matplotlib figure as a PNG (the figure is closed afterwards).
+
+        Parameters
+        ----------
+        fig : matplotlib.figure.Figure
+            The figure.
+        caption : str, optional
+            Caption shown under it.
+        dpi : int
+            Resolution, dots per inch.
+
+        Returns
+        -------
+        Section
+            ``self``, so that calls chain.
+        """
         # optional: matplotlib loads only when a figure is drawn (import time of imunav and its CLI)
         import matplotlib.pyplot as plt
 
@@ -176,7 +269,20 @@ class Section:
         return self
 
     def image(self, path: str | Path, caption: str | None = None) -> "Section":
-        """Embed a PNG file (e.g. a figure a step already saved)."""
+        """Embed a PNG file (e.g. a figure a step already saved).
+
+        Parameters
+        ----------
+        path : str or pathlib.Path
+            The PNG file.
+        caption : str, optional
+            Caption shown under it.
+
+        Returns
+        -------
+        Section
+            ``self``, so that calls chain.
+        """
         data = base64.b64encode(Path(path).read_bytes()).decode("ascii")
         cap = f"<figcaption>{html.escape(caption)}</figcaption>" if caption else ""
         alt = html.escape(caption or Path(path).stem)
@@ -184,11 +290,30 @@ class Section:
         return self
 
     def html(self, anchor: str) -> str:
+        """The section as HTML.
+
+        Parameters
+        ----------
+        anchor : str
+            ``id`` of the ``<section>`` element (for the table of contents).
+
+        Returns
+        -------
+        str
+            The HTML fragment.
+        """
         return f'<section id="{anchor}"><h2>{html.escape(self.title)}{_verdict(self.passed) if self.passed is not None else ""}</h2>{"".join(self._parts)}</section>'
 
 
 class Report:
     """An HTML report made of sections.
+
+    Parameters
+    ----------
+    title : str
+        Title of the page.
+    subtitle : str, optional
+        Line under the title.
 
     Examples
     --------
@@ -204,6 +329,20 @@ class Report:
         self.sections: list[Section] = []
 
     def section(self, title: str, passed: bool | None = None) -> Section:
+        """Add a section at the end.
+
+        Parameters
+        ----------
+        title : str
+            Heading.
+        passed : bool, optional
+            Verdict shown beside the heading.
+
+        Returns
+        -------
+        Section
+            The new section, to fill.
+        """
         s = Section(title, passed)
         self.sections.append(s)
         return s
@@ -214,6 +353,13 @@ class Report:
         return None if not verdicts else all(verdicts)
 
     def to_html(self) -> str:
+        """The whole report as one self-contained HTML page.
+
+        Returns
+        -------
+        str
+            The page (inline CSS, embedded images, no JavaScript).
+        """
         stamp = _dt.datetime.now(_dt.timezone.utc).strftime("%Y-%m-%d %H:%M UTC")
         toc = "".join(
             f'<li><a href="#s{i}">{html.escape(s.title)}</a> {_verdict(s.passed) if s.passed is not None else ""}</li>'
@@ -231,7 +377,18 @@ class Report:
         )
 
     def write(self, path: str | Path) -> Path:
-        """Write the report atomically; returns the path."""
+        """Write the report atomically.
+
+        Parameters
+        ----------
+        path : str or pathlib.Path
+            Output file (``.html``).
+
+        Returns
+        -------
+        pathlib.Path
+            The file written.
+        """
 
         p = Path(path)
         with atomic_path(p) as tmp:

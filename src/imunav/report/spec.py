@@ -33,7 +33,19 @@ __all__ = ["SpecLimit", "SpecCheck", "load_spec", "check_spec"]
 
 @dataclass(frozen=True)
 class SpecLimit:
-    """Limits of one parameter, stored in SI (``min_si`` / ``max_si``), with the display unit."""
+    """Limits of one parameter, stored in SI, with the display unit.
+
+    Attributes
+    ----------
+    name : str
+        Parameter name (see :mod:`imunav.report.catalog`), with or without axis.
+    min_si, max_si : float or None
+        Lower and upper limits, SI.
+    unit : str
+        Display unit the limits were given in (see :mod:`imunav.units`).
+    description : str
+        Free text.
+    """
 
     name: str
     min_si: float | None
@@ -42,6 +54,13 @@ class SpecLimit:
     description: str = ""
 
     def describe(self) -> str:
+        """The limits as text in the display unit (``"≤ 0.3 deg/sqrt(h)"``).
+
+        Returns
+        -------
+        str
+            The limits.
+        """
         def d(x: float) -> str:
             return f"{to_display(x, self.unit):g}" if self.unit else f"{x:g}"
 
@@ -54,6 +73,21 @@ class SpecLimit:
 
 @dataclass(frozen=True)
 class SpecCheck(Result):
+    """Outcome of checking one parameter against its limit.
+
+    Attributes
+    ----------
+    name : str
+        Parameter name.
+    value_si : float
+        The estimate, SI (NaN when not measured).
+    sigma_si : float or None
+        Its 1σ standard error, SI.
+    limit : SpecLimit or None
+        The limit applied.
+    passed : bool or None
+        The verdict; None without a limit.
+    """
     name: str
     value_si: float
     sigma_si: float | None
@@ -61,6 +95,13 @@ class SpecCheck(Result):
     passed: bool | None
 
     def to_dict(self) -> dict[str, Any]:
+        """JSON-ready dictionary.
+
+        Returns
+        -------
+        dict
+            ``name``, ``value_si``, ``sigma_si``, ``limit`` (:meth:`SpecLimit.describe`), ``passed``.
+        """
         return {
             "name": self.name,
             "value_si": self.value_si,
@@ -83,9 +124,26 @@ def _conv(v: Any, unit: str, where: str) -> float:
 
 
 def load_spec(source: str | Path | Mapping[str, Any]) -> dict[str, SpecLimit]:
-    """Read limits from a TOML file / string path or an already-parsed mapping.
+    """Read limits from a TOML file or an already-parsed mapping.
 
-    Accepts a top-level ``[spec]`` table or the table itself.
+    Accepts a top-level ``[spec]`` table or the table itself; each entry has ``min`` and / or ``max``, a
+    ``unit`` and an optional ``description``.
+
+    Parameters
+    ----------
+    source : str or pathlib.Path or mapping
+        The TOML file, or the parsed content.
+
+    Returns
+    -------
+    dict of str to SpecLimit
+        The limits by parameter name, SI.
+
+    Raises
+    ------
+    ConfigError
+        If the file does not exist or is invalid TOML, or an entry has unknown keys, no limit, a limit that
+        is not a number, an unknown unit, or min > max.
     """
     if isinstance(source, Mapping):
         data = dict(source)
@@ -134,6 +192,23 @@ def check_spec(
     Parameters without a limit get ``passed=None``; limits without an estimate
     are reported as failed checks with a NaN value (a spec item that was not
     measured cannot pass).
+
+    A limit with only ``max`` bounds the magnitude ``|value|``.  With ``conservative=True`` the 95 % bound
+    (value ± 1.96 σ) must lie within the limits too.
+
+    Parameters
+    ----------
+    estimates : mapping of str to float or (float, float or None)
+        ``{name: value_si | (value_si, sigma_si)}``.
+    spec : mapping of str to SpecLimit
+        Limits per concrete name (:func:`imunav.report.catalog.expand_spec`).
+    conservative : bool
+        Require the 95 % bound inside the limits.
+
+    Returns
+    -------
+    list of SpecCheck
+        One check per estimate, then one per limit without estimate.
     """
     checks: list[SpecCheck] = []
     for name, est in estimates.items():

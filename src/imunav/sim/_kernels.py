@@ -131,14 +131,14 @@ TriadParams = namedtuple(
 def simulate_triad(t, dt_const, x, f, dtemp, prm, states, out, truth, keep_truth):  # pragma: no cover - compiled
     """Measurement model of one triad in a single pass over the samples (``prm``: :data:`TriadParams`).
 
-    For every sample k (imu-error-calibration.md eqs. 2 and 4, full 3x3
+    For every sample k (Günhan 2014, eqs. 2 and 4, full 3x3
     g-sensitivity, temperature polynomials around the reference):
 
         y_k = (T + diag(s(dT_k))) x_k + b + b(dT_k) + G f_k + e_k
         b(dT)_i = sum_p bias_poly[p, i] dT^(p+1),  s(dT)_i = sum_p scale_poly[p, i] dT^(p+1)
         e_k = sum_j gm_j,k + rw_k + R (t_k - t_0) + n_k
 
-    * Gauss-Markov components, exact discretisation (references.md §1):
+    * Gauss-Markov components, exact discretisation (Brown & Hwang 2012):
       gm_k = phi gm_(k-1) + sigma sqrt(1 - phi^2) w_k, phi = exp(-dt / T),
       with the stationary start gm_0 = sigma w_0 (note 1 - phi^2 =
       1 - exp(-2 dt / T); the thesis's eq. 7 misses the factor 2);

@@ -1,7 +1,8 @@
 """Sensor error models of the virtual IMU.
 
-Measurement model per triad (imu-error-calibration.md eqs. 2 and 4, with a
-full 3x3 gyro g-sensitivity and temperature polynomials)::
+Measurement model per triad (Y. Günhan, *Ataletsel ölçüm birimi hatalarının belirlenmesi ve düzeltilmesi* (Detection and
+compensation of inertial measurement unit errors), MSc thesis, Hacettepe University, 2014,
+eqs. 2 and 4, with a full 3x3 gyro g-sensitivity and temperature polynomials)::
 
     f~ = T_a(dT) f + b_a(dT) + s_a(t) + n_a
     w~ = T_g(dT) w + b_g(dT) + G f + s_g(t) + n_g
@@ -13,12 +14,12 @@ full 3x3 gyro g-sensitivity and temperature polynomials)::
 
 followed by quantization to the LSB q and, optionally, saturation at the
 full scale.  ``M`` has a zero diagonal and ``M[i, j]`` is the response of the
-axis-i sensor to an axis-j input (matrix convention of the thesis, digest
-§12 item 4).  Every parameter is SI: rad/s and m/s^2 for biases, unit/sqrt(Hz)
+axis-i sensor to an axis-j input (matrix convention of the thesis, eq. 2).  Every parameter is SI: rad/s and m/s^2 for biases, unit/sqrt(Hz)
 for noise densities, unit/s/sqrt(s) for random walks, unit/s for ramps.
 
-Stochastic terms and their Allan variances (IEEE Std 952-1997, Annex C;
-references.md §1)::
+Stochastic terms and their Allan variances (IEEE Std 952-1997, Annex C; the Gauss-Markov form as in
+N. El-Sheimy, H. Hou, X. Niu, "Analysis and modeling of inertial sensors using Allan variance", IEEE
+Trans. Instrum. Meas. 57(1), 2008)::
 
     white noise  N         N^2 / tau
     quantization Q         3 Q^2 / tau^2         (integrating output, Q = q dt / sqrt(12))
@@ -29,7 +30,7 @@ references.md §1)::
 
 The Gauss-Markov process is discretised exactly: x_k = phi x_(k-1) +
 sigma sqrt(1 - phi^2) w_k with phi = exp(-dt / T) (the thesis's eq. 7 lacks
-the factor 2 in 1 - exp(-2 dt / T); digest §12 item 1).
+the factor 2 in 1 - exp(-2 dt / T)).
 
 Random streams: one xoshiro256++ stream per (sensor, process, axis,
 component), seeded by ``SeedSequence(seed)`` with the spawn key extended by
@@ -173,7 +174,7 @@ def scale_misalignment_matrix(scale_factor: ArrayLike = 0.0, misalignment: Array
         Off-diagonal terms (rad, small angles): six values in the order
         (M_xy, M_xz, M_yx, M_yz, M_zx, M_zy), or a 3x3 matrix with zero
         diagonal.  ``M[i, j]`` is the response of sensor i to an input on
-        axis j (imu-error-calibration.md eq. 2).
+        axis j (Günhan 2014, eq. 2).
     """
     s = _vec3(scale_factor, "scale_factor")
     m = np.asarray(misalignment, dtype=float)
@@ -203,7 +204,7 @@ def scale_misalignment_matrix(scale_factor: ArrayLike = 0.0, misalignment: Array
 # Allan-variance closed forms
 # --------------------------------------------------------------------------
 def allan_variance_gauss_markov(tau: ArrayLike, sigma: float, corr_time: float) -> NDArray[np.float64]:
-    """Allan variance of a first-order Gauss-Markov process (references.md §1).
+    """Allan variance of a first-order Gauss-Markov process (El-Sheimy, Hou & Niu 2008).
 
     sigma_A^2(tau) = (2 sigma^2 T / tau) [1 - (T / 2 tau)(3 - 4 e^(-tau/T) + e^(-2 tau/T))]
 
@@ -293,7 +294,7 @@ class Flicker:
     (``per_decade`` per decade) around the band [tau_min, tau_max] and whose
     variances are fitted (non-negative least squares) so that the closed-form
     Allan deviation of the sum is flat at sigma_min = 0.6643 B over that band,
-    i.e. B = sigma_min / 0.6643 (IEEE Std 952-1997, C.3; references.md §1).
+    i.e. B = sigma_min / 0.6643 (IEEE Std 952-1997, C.3).
     A sum of GM processes with log-spaced T and equal weights has a 1/f power
     spectrum between 1/(2 pi T_max) and 1/(2 pi T_min) (Keshner 1982).  Below
     tau_min the Allan deviation falls like a random walk's inverse (+1/2 slope
@@ -1046,7 +1047,7 @@ def apply_errors(
         Use the x-axis random streams on all three axes of a triad (same
         normalised realisation, scaled per axis).  Only for reproducing the
         thesis's simulation, whose estimation errors show this pattern
-        (imu-error-calibration.md §8.3); physically the axes are independent.
+        (Günhan 2014, Tables 5.3/5.4); physically the axes are independent.
 
     Returns
     -------

@@ -4,7 +4,8 @@ The foot alternates stance (stationary, flat, known duration) and swing.  In
 swing ``s = (t - t_0) / T_swing`` runs over [0, 1] and
 
 * the horizontal displacement follows the minimum-jerk profile
-  ``L (10 s³ - 15 s⁴ + 6 s⁵)`` along the current heading,
+  ``L (10 s³ - 15 s⁴ + 6 s⁵)`` along the current heading (T. Flash, N. Hogan, "The coordination of
+  arm movements", J. Neuroscience 5(7), 1985),
 * the height rises by ``clearance sin⁴(π s) + rise (10 s³ - 15 s⁴ + 6 s⁵)``
   (zero vertical acceleration at touch-down and toe-off)
   (``rise`` = step height on stairs),
@@ -71,16 +72,33 @@ class GaitSimulation(Result):
     modes: list[str] = field(default_factory=list)
 
     def to_dict(self) -> dict[str, Any]:
+        """JSON-ready summary (time, true position, stance, modes; not the IMU samples).
+
+        Returns
+        -------
+        dict
+            ``t`` (s), ``position`` (NED, m), ``stance`` (0/1), ``modes``.
+        """
         return {"t": self.imu.t.tolist(), "position": self.position.tolist(), "stance": self.stance.astype(int).tolist(),
                 "modes": self.modes}
 
 
 def foot_mems_model(scale: float = 1.0) -> Any:
-    """A foot-mounted MEMS IMU error model (MicroStrain 3DM-GX5-25 class).
+    """A foot-mounted MEMS IMU error model (MicroStrain 3DM-GX5-25 class, datasheet values).
 
     Gyro: bias 0.05 °/s per axis pattern, noise 0.005 °/s/√Hz, bias
     instability GM(8 °/h, 100 s); accel: bias 2-4 mg, noise 60 µg/√Hz,
-    GM(0.04 mg, 100 s).  ``scale`` multiplies every term.
+    GM(0.04 mg, 100 s).
+
+    Parameters
+    ----------
+    scale : float
+        Multiplies every term (0 gives an ideal sensor).
+
+    Returns
+    -------
+    ImuErrorModel
+        The error model, SI.
     """
 
     dps = math.pi / 180.0
@@ -102,19 +120,39 @@ def simulate_gait(modes: str | list[str] = "walk", strides: int = 20, *, fs: flo
                   speed_jitter: float = 0.1, turn_deg: float = 0.0, initial_stance_s: float = 2.0,
                   final_stance_s: float = 1.0, g: float = 9.80665, error_model: Any = "foot_mems",
                   rng: Any = None) -> GaitSimulation:
-    """Simulate a foot-mounted IMU over ``strides`` strides.
+    """Simulate a foot-mounted IMU over ``strides`` strides (module docstring).
 
     Parameters
     ----------
-    modes : one mode or a list cycled per stride (``"walk"``, ``"run"``, ``"stairs"``).
-    strides : number of swing phases.
-    fs : sample rate, Hz.
-    speed_jitter : relative spread (uniform ±) of step length and times per stride.
-    turn_deg : heading change per stride (°), e.g. 360 / strides for a loop.
-    initial_stance_s, final_stance_s : standing still before / after, s.
-    g : gravity, m/s² (``g^n = (0, 0, g)``).
-    error_model : an :class:`imunav.sim.ImuErrorModel`, ``"foot_mems"`` or None (ideal).
-    rng : Generator | int | None.
+    modes : str or list of str
+        One mode or a list cycled per stride (``"walk"``, ``"run"``, ``"stairs"``).
+    strides : int
+        Number of swing phases.
+    fs : float
+        Sample rate, Hz.
+    speed_jitter : float
+        Relative spread (uniform ±) of step length and times per stride.
+    turn_deg : float
+        Heading change per stride, degrees (e.g. 360 / strides for a loop).
+    initial_stance_s, final_stance_s : float
+        Standing still before / after, s.
+    g : float
+        Gravity, m/s² (``g^n = (0, 0, g)``).
+    error_model : ImuErrorModel or str or None
+        An :class:`imunav.sim.ImuErrorModel`, ``"foot_mems"`` (:func:`foot_mems_model`) or None (ideal).
+    rng : numpy.random.Generator or int, optional
+        Random generator or seed.
+
+    Returns
+    -------
+    GaitSimulation
+        IMU output and truth.
+
+    Raises
+    ------
+    InvalidInputError
+        If a mode is unknown, ``strides < 1``, ``fs <= 0``, ``speed_jitter`` is outside [0, 0.5), or
+        ``error_model`` is not understood.
     """
 
     gen = np.random.default_rng(rng)

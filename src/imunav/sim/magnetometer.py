@@ -70,6 +70,13 @@ class MagnetometerModel:
         return np.linalg.inv(self.soft_iron)
 
     def to_dict(self) -> dict[str, Any]:
+        """JSON-ready dictionary of the model.
+
+        Returns
+        -------
+        dict
+            ``hard_iron``, ``soft_iron``, ``noise`` as lists.
+        """
         return {
             "hard_iron": self.hard_iron.tolist(),
             "soft_iron": self.soft_iron.tolist(),
@@ -78,6 +85,18 @@ class MagnetometerModel:
 
     @classmethod
     def from_dict(cls, d: dict[str, Any]) -> MagnetometerModel:
+        """Rebuild a model from :meth:`to_dict`.
+
+        Parameters
+        ----------
+        d : dict
+            ``hard_iron``, ``soft_iron``, ``noise``.
+
+        Returns
+        -------
+        MagnetometerModel
+            The model.
+        """
         return cls(**d)
 
 
@@ -93,19 +112,33 @@ def simulate_magnetometer(
 
     Parameters
     ----------
-    traj_or_q_nb : Trajectory or (N, 4) / (4,) array
+    traj_or_q_nb : Trajectory or array_like, shape (N, 4) or (4,)
         Attitude ``q_nb`` (Hamilton, scalar first, body -> NED), or an object
         with a ``q_nb`` attribute (``imunav.sim.Trajectory``).
     field_ned : (3,) or (N, 3)
         Earth field in NED (any unit; the output has the same unit).
     model : MagnetometerModel
-    rng : Generator, int seed or None
+        Hard iron, soft iron and noise of the sensor.
+    rng : numpy.random.Generator or int, optional
+        Random generator or seed.
     return_truth : bool
         Also return the true body-frame field h_body (N, 3).
 
     Returns
     -------
-    (N, 3) array h_meas = S h_body + b + n (and h_body when asked).
+    h_meas : numpy.ndarray, shape (N, 3)
+        ``S h_body + b + n``, in the unit of ``field_ned``.
+    h_body : numpy.ndarray, shape (N, 3)
+        The true body-frame field (only with ``return_truth``).
+
+    Raises
+    ------
+    ShapeError
+        If ``q_nb`` is not (N, 4) or ``field_ned`` not (3,) / (N, 3).
+    NonFiniteError
+        If ``q_nb`` or ``field_ned`` is not finite.
+    InvalidInputError
+        If ``model`` is not a MagnetometerModel.
     """
     q = getattr(traj_or_q_nb, "q_nb", traj_or_q_nb)
     q = np.asarray(q, dtype=float)

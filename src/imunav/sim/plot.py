@@ -12,18 +12,26 @@ __all__ = ["plot_test_recording"]
 
 
 def plot_test_recording(data: Any, segments: Any = None, title: str = "", max_points: int = 20000) -> Any:
-    """Accelerometer (g) and gyro (°/s) of a test recording over time, with the
-    static / rate segments shaded (analogue of Günhan 2014 Figs. 4.6 and 4.11).
+    """Accelerometer (g) and gyro (°/s) of a test recording over time, with the static / rate segments shaded.
+
+    An analogue of Günhan 2014, Figs. 4.6 and 4.11 (Y. Günhan, *Detection and compensation of inertial
+    measurement unit errors* (in Turkish), MSc thesis, Hacettepe University, 2014).
 
     Parameters
     ----------
-    data : :class:`imunav.timeseries.ImuData`.
-    segments : :class:`imunav.sim.profiles.Segments` or None.
-    max_points : decimation for drawing.
+    data : ImuData
+        The recording (SI; drawn in g and °/s).
+    segments : Segments, optional
+        The test's segment table (:class:`imunav.sim.profiles.Segments`), shaded.
+    title : str
+        Figure title.
+    max_points : int
+        At most this many samples are drawn (decimation).
 
     Returns
     -------
-    matplotlib Figure.
+    matplotlib.figure.Figure
+        The figure.
     """
     # optional: matplotlib loads only when a figure is drawn (import time of imunav and its CLI)
     import matplotlib

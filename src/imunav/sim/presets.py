@@ -8,13 +8,16 @@ Conventions used when converting datasheet / thesis figures:
 
 * g = 9.80665 m/s^2 (:data:`imunav.units.G0`) for g, mg, ug and per-g figures;
 * a noise density n (unit/sqrt(Hz)) is the IEEE-952 white-noise coefficient
-  N: per-sample sigma = n sqrt(f_s) (imu-error-calibration.md §12 item 6);
-  ARW in deg/sqrt(h) converts as N [rad/sqrt(s)] = ARW * (pi/180) / 60;
+  N: per-sample sigma = n sqrt(f_s) (IEEE Std 952-1997, Annex C; Günhan 2014 does not say which
+  reading it uses); ARW in deg/sqrt(h) converts as N [rad/sqrt(s)] = ARW * (pi/180) / 60;
 * a datasheet "in-run bias stability" is the minimum of the Allan deviation,
   sigma_min, so the IEEE-952 coefficient is B = sigma_min / 0.6643 (flat floor,
   modelled with :class:`~imunav.sim.error_model.Flicker`);
 * datasheet tolerances (+-x) are bounds, not values: the presets use one
   representative unit with fixed values inside the bounds (stated per preset).
+
+"Günhan 2014" is Y. Günhan, *Ataletsel ölçüm birimi hatalarının belirlenmesi ve düzeltilmesi* (Detection
+and compensation of inertial measurement unit errors), MSc thesis, Hacettepe University, 2014.
 """
 
 from __future__ import annotations
@@ -48,7 +51,7 @@ VRW = 1.0 / 60.0  # m/s/sqrt(h) -> m/s/sqrt(s)
 MGAL = 1e-5  # mGal -> m/s^2
 
 #: Correlation time assumed for the thesis's bias instability.  The thesis
-#: gives none.  Digest §9 Monte Carlo: T_c = 5 s gives mean success 99.21 % /
+#: gives none.  A Monte Carlo of the thesis's test: T_c = 5 s gives mean success 99.21 % /
 #: 99.62 % (accel / gyro), 10 s gives 98.92 % / 99.51 %; the thesis's single
 #: run (99.15 % / 99.24 %) lies between the two.  5 s is the reading under
 #: which the thesis's headline 99.2 % / 99.3 % hold on average
@@ -57,9 +60,9 @@ THESIS_TC_S = 5.0
 
 
 def _thesis_sim() -> ImuErrorModel:
-    """Simulation inputs of Günhan (2014), Tables 5.1 and 5.2 (imu-error-calibration.md §8.2).
+    """Simulation inputs of Günhan (2014), Tables 5.1 and 5.2.
 
-    Readings of the unstated parts (digest §8.2, §12 items 5-7): the bias
+    Readings of the parts the thesis leaves unstated: the bias
     instability dB (0.001 g, 0.01 deg/s) is the 1-sigma of a first-order
     Gauss-Markov process with T_c = 5 s (THESIS_TC_S); the noise densities (0.00043 g/sqrt(Hz),
     0.0057 deg/s/sqrt(Hz); the OCR's "%" is "deg") are white-noise densities,
@@ -93,7 +96,7 @@ def _thesis_sim() -> ImuErrorModel:
         name="thesis_sim",
         source=(
             "Günhan, Y., 'Ataletsel Ölçüm Birimi Hatalarının Belirlenmesi ve Düzeltilmesi', MSc thesis, "
-            "Hacettepe University, 2014, Tables 5.1/5.2 (digest imu-error-calibration.md §8.2). Assumed: "
+            "Hacettepe University, 2014, Tables 5.1/5.2. Assumed: "
             "bias instability = GM 1-sigma with T_c = 5 s; noise density n with sigma = n*sqrt(fs); g = 9.80665."
         ),
     )
@@ -102,7 +105,7 @@ def _thesis_sim() -> ImuErrorModel:
 def _thesis_real() -> ImuErrorModel:
     """Parameters the thesis estimated for its real MEMS IMU, Tables 5.5 / 5.6.
 
-    Deterministic part from the tables (digest §8.4); the stochastic part is
+    Deterministic part from the tables; the stochastic part is
     not published for the real unit and is taken from Tables 5.1 / 5.2 (as
     in :func:`_thesis_sim`).
     """
@@ -131,8 +134,8 @@ def _thesis_real() -> ImuErrorModel:
         g_sensitivity=np.array([0.0201, -0.0211, 0.0284]) * DPS / G0,
         name="thesis_real",
         source=(
-            "Günhan (2014), Tables 5.5/5.6: parameters estimated for the real ROKETSAN-supplied MEMS IMU "
-            "(digest §8.4); noise and bias instability not published for it, taken from Tables 5.1/5.2 "
+            "Günhan (2014), Tables 5.5/5.6: parameters estimated for the real ROKETSAN-supplied MEMS IMU; "
+            "noise and bias instability not published for it, taken from Tables 5.1/5.2 "
             "(GM, T_c = 5 s)."
         ),
     )
@@ -387,12 +390,28 @@ _PRESETS: dict[str, Callable[[], ImuErrorModel]] = {
 
 
 def names() -> list[str]:
-    """Names of the presets."""
+    """Names of the presets.
+
+    Returns
+    -------
+    list of str
+        The preset names, for :func:`get`.
+    """
     return list(_PRESETS)
 
 
 def get(name: str) -> ImuErrorModel:
     """Error model of a preset (a new object each call).
+
+    Parameters
+    ----------
+    name : str
+        Preset name (case and ``-`` / ``_`` do not matter), one of :func:`names`.
+
+    Returns
+    -------
+    ImuErrorModel
+        The error model, SI, with its ``source``.
 
     Raises
     ------

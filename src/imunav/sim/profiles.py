@@ -15,10 +15,11 @@ span, nominal attitude, vertical direction in body axes ``up_b`` (at rest the
 accelerometers read ``f_b = g · up_b``), rotation axis and rate: the hints
 calibration code needs.
 
-Test designs follow ``imu-error-calibration.md`` §5 (Günhan 2014): the
-reconstructed 100-position static test (:func:`hundred_position_up_vectors`),
-the exact 120-step ±250 °/s rate-table test (:func:`thesis_rate_steps`), the
-six-position test (§5.7), and a Ferraris-style test (six static poses plus a
+Test designs follow Y. Günhan, *Ataletsel ölçüm birimi hatalarının belirlenmesi ve düzeltilmesi*
+(Detection and compensation of inertial measurement unit errors), MSc thesis, Hacettepe University, 2014,
+§4.1: the reconstructed 100-position static test (§4.1.1, :func:`hundred_position_up_vectors`),
+the exact 120-step ±250 °/s rate-table test (§4.1.2, :func:`thesis_rate_steps`), the
+six-position test (Appendix A), and a Ferraris-style test (six static poses plus a
 full turn about each axis; Ferraris et al., Sensors and Actuators A 46-47,
 1995).
 """
@@ -81,20 +82,29 @@ class Segments:
 
     Attributes
     ----------
-    kind : (K,) ``"static"``, ``"rate"`` (constant rate, possibly 0),
+    kind : numpy.ndarray
+        (K,) ``"static"``, ``"rate"`` (constant rate, possibly 0),
         ``"transition"`` (move between positions / change of rate) or
         ``"rotation"`` (a commanded turn of known angle, Ferraris-style).
-    t_start, t_stop : (K,) segment times, s (``t_stop`` of one = ``t_start`` of the next).
-    i_start, i_stop : (K,) half-open sample index span (samples with
+    t_start, t_stop : numpy.ndarray
+        (K,) segment times, s (``t_stop`` of one = ``t_start`` of the next).
+    i_start, i_stop : numpy.ndarray
+        (K,) half-open sample index span (samples with
         ``t_start <= t < t_stop``; the last segment includes the final sample).
-    q_nb : (K, 4) attitude at the segment start.
-    up_b : (K, 3) unit "up" vector in body axes at the segment start
+    q_nb : numpy.ndarray
+        (K, 4) attitude at the segment start.
+    up_b : numpy.ndarray
+        (K, 3) unit "up" vector in body axes at the segment start
         (``f_b = g · up_b`` at rest).
-    axis_b : (K, 3) body rotation axis (zeros for static segments).
-    rate : (K,) nominal rate about ``axis_b``, rad/s (0 for static, NaN for
+    axis_b : numpy.ndarray
+        (K, 3) body rotation axis (zeros for static segments).
+    rate : numpy.ndarray
+        (K,) nominal rate about ``axis_b``, rad/s (0 for static, NaN for
         transitions / rotations whose rate varies).
-    angle : (K,) total rotation angle over the segment, rad.
-    step : (K,) index of the position (static) or rate step (rate), -1 otherwise.
+    angle : numpy.ndarray
+        (K,) total rotation angle over the segment, rad.
+    step : numpy.ndarray
+        (K,) index of the position (static) or rate step (rate), -1 otherwise.
     """
 
     kind: NDArray[np.str_]
@@ -113,15 +123,43 @@ class Segments:
         return int(self.kind.size)
 
     def select(self, kind: str) -> "Segments":
-        """Rows of one kind (``"static"``, ``"rate"``, ``"transition"``, ``"rotation"``)."""
+        """Rows of one kind.
+
+        Parameters
+        ----------
+        kind : {"static", "rate", "transition", "rotation"}
+            Segment kind.
+
+        Returns
+        -------
+        Segments
+            The rows of that kind, in time order.
+        """
         m = self.kind == kind
         return Segments(**{f.name: getattr(self, f.name)[m] for f in fields(self)})
 
     def trim(self, start_s: float, stop_s: float | None = None) -> "Segments":
-        """Segments shortened by ``start_s`` at the start and ``stop_s`` (default
-        ``start_s``) at the end, e.g. to skip settling after a move.  Sample
-        spans are recomputed from the profile's uniform rate; segments that
-        would become empty raise."""
+        """Segments shortened at both ends, e.g. to skip settling after a move.
+
+        Sample spans are recomputed from the profile's uniform rate.
+
+        Parameters
+        ----------
+        start_s : float
+            Time removed at the start of each segment, s.
+        stop_s : float, optional
+            Time removed at the end, s (default ``start_s``).
+
+        Returns
+        -------
+        Segments
+            The shortened table.
+
+        Raises
+        ------
+        InvalidInputError
+            If a trim is negative or a segment would become empty.
+        """
         stop_s = start_s if stop_s is None else stop_s
         if start_s < 0 or stop_s < 0:
             raise InvalidInputError(f"trim times must be non-negative; got {start_s}, {stop_s}")
@@ -142,12 +180,30 @@ class Segments:
         return Segments(**d)
 
     def to_dict(self) -> dict:
-        """Column lists for JSON."""
+        """Column lists for JSON.
+
+        Returns
+        -------
+        dict
+            Every column by name (times in s, angles and rates in rad and rad/s).
+        """
         return {f.name: getattr(self, f.name).tolist() for f in fields(self)}
 
     def write_csv(self, path: str | os.PathLike[str]) -> Path:
-        """Write the table as CSV (atomically): one row per segment, rates and
-        angles in degrees, ``up``/``axis``/``q`` split into columns."""
+        """Write the table as CSV (atomically).
+
+        One row per segment, rates and angles in degrees, ``up``/``axis``/``q`` split into columns.
+
+        Parameters
+        ----------
+        path : str or os.PathLike
+            Output file.
+
+        Returns
+        -------
+        pathlib.Path
+            The file written.
+        """
 
         cols = ["kind", "step", "t_start", "t_stop", "i_start", "i_stop", "up_x", "up_y", "up_z",
                 "axis_x", "axis_y", "axis_z", "rate_dps", "angle_deg", "qw", "qx", "qy", "qz"]
@@ -165,14 +221,30 @@ class Segments:
         return p
 
     def to_records(self) -> list[dict]:
-        """One dict per segment (for tables / CSV)."""
+        """One dict per segment (for tables / CSV).
+
+        Returns
+        -------
+        list of dict
+            Rows with the columns of :meth:`write_csv` (rates and angles in degrees).
+        """
         d = self.to_dict()
         return [{k: d[k][i] for k in d} for i in range(len(self))]
 
 
 @dataclass(frozen=True)
 class Profile:
-    """A test profile: the true motion and its segment table."""
+    """A test profile: the true motion and its segment table.
+
+    Attributes
+    ----------
+    name : str
+        Profile name.
+    trajectory : Trajectory
+        The true motion (exact body rates).
+    segments : Segments
+        Its segment table.
+    """
 
     name: str
     trajectory: Trajectory
@@ -183,7 +255,14 @@ class Profile:
         yield self.segments
 
     def summary(self) -> dict:
-        """Name, samples, rate, duration and segment counts."""
+        """Name, samples, rate, duration and segment counts.
+
+        Returns
+        -------
+        dict
+            ``name``, ``samples``, ``fs_hz``, ``duration_s`` and ``segments`` (the count of segments of each
+            kind).
+        """
         kinds, counts = np.unique(self.segments.kind, return_counts=True)
         return {
             "name": self.name,
@@ -194,7 +273,13 @@ class Profile:
         }
 
     def to_dict(self) -> dict:
-        """Summary plus the segment table (not the samples)."""
+        """Summary plus the segment table (not the samples).
+
+        Returns
+        -------
+        dict
+            :meth:`summary` with ``segment_table`` (:meth:`Segments.to_dict`).
+        """
         return {**self.summary(), "segment_table": self.segments.to_dict()}
 
 
@@ -397,6 +482,23 @@ def orientations_from_up(up_b: ArrayLike, q0: ArrayLike | None = None) -> Array:
     reached from the previous one by the smallest body rotation that moves the
     vertical from ``up_b[k]`` to ``up_b[k+1]`` — the motion of a two-axis
     table stepping about one axis, so heading is carried along physically.
+
+    Parameters
+    ----------
+    up_b : array_like, shape (K, 3)
+        Unit "up" vectors in body axes, one per position.
+    q0 : array_like, shape (4,), optional
+        First attitude ``q_nb``.
+
+    Returns
+    -------
+    numpy.ndarray, shape (K, 4)
+        Attitudes ``q_nb``.
+
+    Raises
+    ------
+    InvalidInputError
+        If ``q0`` does not put the vertical along ``up_b[0]``.
     """
     u = _as_up(up_b)
     if q0 is None:
@@ -416,13 +518,24 @@ def orientations_from_up(up_b: ArrayLike, q0: ArrayLike | None = None) -> Array:
 
 
 def up_from_orientations(q_nb: ArrayLike) -> Array:
-    """Unit vertical ("up") in body axes of attitudes ``q_nb``: ``C_bn (0, 0, −1)``."""
+    """Unit vertical ("up") in body axes of attitudes ``q_nb``: ``C_bn (0, 0, −1)``.
+
+    Parameters
+    ----------
+    q_nb : array_like, shape (4,) or (K, 4)
+        Attitudes, body (FRD) to NED.
+
+    Returns
+    -------
+    numpy.ndarray, shape (3,) or (K, 3)
+        The up direction in body axes.
+    """
     q = np.atleast_2d(np.asarray(q_nb, dtype=float))
     return quat_rotate(quat_conjugate(q), np.tile(_UP_N, (q.shape[0], 1)))
 
 
 def hundred_position_up_vectors(step_deg: float = 22.5) -> Array:
-    """The reconstructed 100-position static test (``imu-error-calibration.md`` §5.2).
+    """The reconstructed 100-position static test (Günhan 2014, §4.1.1).
 
     For each axis i = x, y, z with the other two (j, k) in cyclic order, four
     chained half-turn sweeps of the vertical in body axes (u = up, so the
@@ -436,8 +549,22 @@ def hundred_position_up_vectors(step_deg: float = 22.5) -> Array:
     i.e. 33 positions per axis, then a final "z up" position (0, 0, +1): 100.
     Every consecutive pair differs by one ``step_deg`` turn (90° between the
     axis blocks, 180° for the final one), and every axis sees both signs.
-    The thesis's exact list is lost with its figures; this is the digest's
-    recommended reconstruction.
+    The thesis's exact list is lost with its figures; this is a reconstruction.
+
+    Parameters
+    ----------
+    step_deg : float
+        Turn between consecutive positions, degrees (180 / step_deg must be an integer).
+
+    Returns
+    -------
+    numpy.ndarray, shape (K, 3)
+        Unit up vectors in body axes (K = 100 at the default step).
+
+    Raises
+    ------
+    InvalidInputError
+        If ``step_deg`` does not divide 180° into at least 2 steps.
     """
     n_half = int(round(180.0 / step_deg))
     if n_half < 2 or abs(n_half * step_deg - 180.0) > 1e-9:
@@ -460,17 +587,40 @@ def hundred_position_up_vectors(step_deg: float = 22.5) -> Array:
 
 
 def hundred_position_orientations(step_deg: float = 22.5) -> Array:
-    """(100, 4) attitudes ``q_nb`` of :func:`hundred_position_up_vectors` (chained table moves)."""
+    """Attitudes ``q_nb`` of :func:`hundred_position_up_vectors` (chained table moves).
+
+    Parameters
+    ----------
+    step_deg : float
+        Turn between consecutive positions, degrees.
+
+    Returns
+    -------
+    numpy.ndarray, shape (100, 4)
+        Attitudes ``q_nb`` (at the default step).
+    """
     return orientations_from_up(hundred_position_up_vectors(step_deg))
 
 
 def six_position_up_vectors() -> Array:
-    """Each axis up then down: +x, −x, +y, −y, +z, −z (§5.7); ``(6, 3)``."""
+    """Each axis up then down: +x, −x, +y, −y, +z, −z (Günhan 2014, Appendix A).
+
+    Returns
+    -------
+    numpy.ndarray, shape (6, 3)
+        Unit up vectors in body axes.
+    """
     return np.array([[1, 0, 0], [-1, 0, 0], [0, 1, 0], [0, -1, 0], [0, 0, 1], [0, 0, -1]], dtype=float)
 
 
 def six_position_orientations() -> Array:
-    """(6, 4) attitudes of :func:`six_position_up_vectors`."""
+    """Attitudes of :func:`six_position_up_vectors`.
+
+    Returns
+    -------
+    numpy.ndarray, shape (6, 4)
+        Attitudes ``q_nb``.
+    """
     return orientations_from_up(six_position_up_vectors())
 
 
@@ -490,7 +640,37 @@ def static_profile(
     t0: float = 0.0,
     name: str = "static",
 ) -> Profile:
-    """One static position (level by default) for ``duration_s`` seconds."""
+    """One static position (level by default) for ``duration_s`` seconds.
+
+    Parameters
+    ----------
+    duration_s : float
+        Length, s.
+    fs : float
+        Sample rate, Hz.
+    orientation : array_like, shape (4,), optional
+        Attitude ``q_nb`` (default level, heading north).
+    lat : float, optional
+        Geodetic latitude of the fixed position, rad (None: no position).
+    lon : float
+        Longitude, rad.
+    h : float
+        Ellipsoidal height, m.
+    t0 : float
+        Time of the first sample, s.
+    name : str
+        Profile name.
+
+    Returns
+    -------
+    Profile
+        The trajectory (exact body rates) and its segment table.
+
+    Raises
+    ------
+    ShapeError
+        If ``orientation`` is not (4,).
+    """
     q = np.array([1.0, 0.0, 0.0, 0.0]) if orientation is None else np.asarray(orientation, float)
     if q.shape != (4,):
         raise ShapeError(f"orientation must be one quaternion q_nb of shape (4,); got {q.shape}")
@@ -529,11 +709,35 @@ def multiposition_profile(
 
     Parameters
     ----------
-    orientations : (K, 4) attitudes ``q_nb``.
-    dwell_s : static time per position, s (scalar or (K,)).
-    fs : sample rate, Hz.
-    transition_s : duration of each move, s (> 0).
-    lat, lon, h : fixed position (rad, rad, m), or None for none.
+    orientations : array_like
+        (K, 4) attitudes ``q_nb``.
+    dwell_s : float or array_like
+        Static time per position, s (scalar or (K,)).
+    fs : float
+        Sample rate, Hz.
+    transition_s : float
+        Duration of each move, s (> 0).
+    lat : float, optional
+        Geodetic latitude of the fixed position, rad (None: no position).
+    lon : float
+        Longitude, rad.
+    h : float
+        Ellipsoidal height, m.
+
+    t0 : float
+        Time of the first sample, s.
+    name : str
+        Profile name.
+
+    Returns
+    -------
+    Profile
+        The trajectory (exact body rates) and its segment table.
+
+    Raises
+    ------
+    ShapeError
+        If ``orientations`` or ``dwell_s`` has the wrong shape.
     """
     q = _as_orientations(orientations)
     K = q.shape[0]
@@ -561,7 +765,30 @@ def hundred_position_profile(
     lon: float = 0.0,
     h: float = 0.0,
 ) -> Profile:
-    """The 100-position static test (§5.2): 30 s per position by default."""
+    """The 100-position static test (Günhan 2014, §4.1.1): 30 s per position by default.
+
+    Parameters
+    ----------
+    fs : float
+        Sample rate, Hz.
+    dwell_s : float
+        Static time per position, s.
+    transition_s : float
+        Duration of each move, s.
+    step_deg : float
+        Turn between consecutive positions, degrees.
+    lat : float, optional
+        Geodetic latitude of the fixed position, rad (None: no position).
+    lon : float
+        Longitude, rad.
+    h : float
+        Ellipsoidal height, m.
+
+    Returns
+    -------
+    Profile
+        The trajectory (exact body rates) and its segment table.
+    """
     return multiposition_profile(
         hundred_position_orientations(step_deg), dwell_s, fs, transition_s, lat=lat, lon=lon, h=h,
         name="hundred_position",
@@ -577,7 +804,28 @@ def six_position_profile(
     lon: float = 0.0,
     h: float = 0.0,
 ) -> Profile:
-    """The six-position test (§5.7): each axis up then down."""
+    """The six-position test (Günhan 2014, Appendix A): each axis up then down.
+
+    Parameters
+    ----------
+    fs : float
+        Sample rate, Hz.
+    dwell_s : float
+        Static time per position, s.
+    transition_s : float
+        Duration of each move, s.
+    lat : float, optional
+        Geodetic latitude of the fixed position, rad (None: no position).
+    lon : float
+        Longitude, rad.
+    h : float
+        Ellipsoidal height, m.
+
+    Returns
+    -------
+    Profile
+        The trajectory (exact body rates) and its segment table.
+    """
     return multiposition_profile(
         six_position_orientations(), dwell_s, fs, transition_s, lat=lat, lon=lon, h=h, name="six_position"
     )
@@ -621,10 +869,43 @@ def rate_table_profile(
 
     Parameters
     ----------
-    rates : (K,) commanded rates, rad/s (use ``np.deg2rad`` for °/s).
-    axes : (K,) axis indices (0, 1, 2) or (K, 3) body unit vectors.
-    dwell_s : time at each constant rate, s.
-    fs : sample rate, Hz.
+    rates : array_like
+        (K,) commanded rates, rad/s (use ``np.deg2rad`` for °/s).
+    axes : array_like
+        (K,) axis indices (0, 1, 2) or (K, 3) body unit vectors.
+    dwell_s : float
+        Time at each constant rate, s.
+    fs : float
+        Sample rate, Hz.
+
+    transition_s : float
+        Duration of each rate ramp, s.
+    remount_s : float
+        Duration of the re-mounting move when the axis changes, s.
+    mounting : {"up", "down"}
+        Direction of the commanded body axis along the vertical table axis.
+    lat : float, optional
+        Geodetic latitude of the fixed position, rad (None: no position).
+    lon : float
+        Longitude, rad.
+    h : float
+        Ellipsoidal height, m.
+    t0 : float
+        Time of the first sample, s.
+    name : str
+        Profile name.
+
+    Returns
+    -------
+    Profile
+        The trajectory (exact body rates) and its segment table.
+
+    Raises
+    ------
+    ShapeError
+        If ``rates`` is not a 1-D array of finite rates, or ``axes`` does not match it.
+    InvalidInputError
+        If ``mounting`` is unknown.
     """
     r = np.asarray(rates, dtype=float)
     if r.ndim != 1 or r.size < 1 or not np.all(np.isfinite(r)):
@@ -653,11 +934,30 @@ def rate_table_profile(
 
 
 def thesis_rate_steps(step_dps: float = 25.0, max_dps: float = 250.0) -> tuple[Array, NDArray[np.int64]]:
-    """The 120-step rate-table test (§5.3): rates (rad/s) and axis indices.
+    """The 120-step rate-table test (Günhan 2014, §4.1.2): rates and axis indices.
 
     Per axis (x, then y, then z):
     ``[0, 25, …, 250, 225, …, 25, 0, −25, …, −250, −225, …, −25]`` °/s
     (11 + 9 + 1 + 10 + 9 = 40 rates), 30 s each in the thesis.
+
+    Parameters
+    ----------
+    step_dps : float
+        Rate step, °/s.
+    max_dps : float
+        Largest rate, °/s (a multiple of ``step_dps``).
+
+    Returns
+    -------
+    rates : numpy.ndarray, shape (K,)
+        Commanded rates, rad/s.
+    axes : numpy.ndarray of int64, shape (K,)
+        Body axis index (0, 1, 2) of each step.
+
+    Raises
+    ------
+    InvalidInputError
+        If ``max_dps`` is not a positive multiple of ``step_dps``.
     """
     n = int(round(max_dps / step_dps))
     if n < 1 or abs(n * step_dps - max_dps) > 1e-9:
@@ -680,7 +980,32 @@ def thesis_rate_table_profile(
     lon: float = 0.0,
     h: float = 0.0,
 ) -> Profile:
-    """The 120-step ±250 °/s rate-table test (§5.3), 30 s per step by default."""
+    """The 120-step ±250 °/s rate-table test (Günhan 2014, §4.1.2), 30 s per step by default.
+
+    Parameters
+    ----------
+    fs : float
+        Sample rate, Hz.
+    dwell_s : float
+        Time at each constant rate, s.
+    transition_s : float
+        Duration of each rate ramp, s.
+    remount_s : float
+        Duration of the re-mounting move when the axis changes, s.
+    mounting : {"up", "down"}
+        Direction of the commanded body axis along the table axis.
+    lat : float, optional
+        Geodetic latitude of the fixed position, rad (None: no position).
+    lon : float
+        Longitude, rad.
+    h : float
+        Ellipsoidal height, m.
+
+    Returns
+    -------
+    Profile
+        The trajectory (exact body rates) and its segment table.
+    """
     rates, axes = thesis_rate_steps()
     return rate_table_profile(
         rates, axes, dwell_s, fs, transition_s, remount_s=remount_s, mounting=mounting,
@@ -706,6 +1031,30 @@ def ferraris_profile(
     one full turn) about axis i over ``rotation_s`` (minimum-jerk, segment kind
     ``"rotation"``), rest ``dwell_s``.  The gyro integral over a rotation
     segment equals ``angle`` (Ferraris et al. 1995).
+
+    Parameters
+    ----------
+    fs : float
+        Sample rate, Hz.
+    dwell_s : float
+        Rest before and after each pose or turn, s.
+    transition_s : float
+        Duration of each move, s.
+    rotation_s : float
+        Duration of each turn, s.
+    angle : float
+        Turn angle, rad.
+    lat : float, optional
+        Geodetic latitude of the fixed position, rad (None: no position).
+    lon : float
+        Longitude, rad.
+    h : float
+        Ellipsoidal height, m.
+
+    Returns
+    -------
+    Profile
+        The trajectory (exact body rates) and its segment table.
     """
     rs = _positive(rotation_s, "rotation_s")
     tr = _positive(transition_s, "transition_s")

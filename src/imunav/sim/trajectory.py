@@ -71,14 +71,20 @@ class Trajectory:
 
     Parameters
     ----------
-    t : (N,) strictly increasing time, s.
-    q_nb : (N, 4) attitude, body → NED (normalised on construction).
-    vel_ned : (N, 3) NED velocity, m/s, or None (zero).
-    pos_lla : (N, 3) geodetic position (lat rad, lon rad, h m), or None
+    t : numpy.ndarray
+        (N,) strictly increasing time, s.
+    q_nb : numpy.ndarray
+        (N, 4) attitude, body → NED (normalised on construction).
+    vel_ned : numpy.ndarray, optional
+        (N, 3) NED velocity, m/s, or None (zero).
+    pos_lla : numpy.ndarray, optional
+        (N, 3) geodetic position (lat rad, lon rad, h m), or None
         (then :func:`ideal_imu` needs ``lat=`` for Earth rate / normal gravity).
-    omega_nb_b : (N, 3) body rate relative to NED in body axes, rad/s, when
+    omega_nb_b : numpy.ndarray, optional
+        (N, 3) body rate relative to NED in body axes, rad/s, when
         known exactly; None → derived from ``q_nb`` by differentiation.
-    accel_ned : (N, 3) kinematic acceleration ``dv_ned/dt``, m/s², when known
+    accel_ned : numpy.ndarray, optional
+        (N, 3) kinematic acceleration ``dv_ned/dt``, m/s², when known
         exactly; None → derived from ``vel_ned`` (or zero when there is none).
     """
 
@@ -128,12 +134,30 @@ class Trajectory:
         return float(self.t[-1] - self.t[0])
 
     def slice(self, i0: int, i1: int) -> "Trajectory":
-        """Samples ``i0 … i1-1`` (half-open)."""
+        """Samples ``i0 … i1-1`` (half-open).
+
+        Parameters
+        ----------
+        i0, i1 : int
+            First and one-past-last sample index.
+
+        Returns
+        -------
+        Trajectory
+            The sub-trajectory.
+        """
         kw = {f.name: (None if getattr(self, f.name) is None else getattr(self, f.name)[i0:i1]) for f in fields(self)}
         return Trajectory(**kw)
 
     def to_dict(self) -> dict:
-        """Plain lists for JSON."""
+        """Plain lists for JSON.
+
+        Returns
+        -------
+        dict
+            Every field by name (``t`` in s, ``q_nb``, ``vel_ned`` m/s, ``pos_lla`` rad/rad/m, ...), None where
+            absent.
+        """
         return {f.name: (None if getattr(self, f.name) is None else getattr(self, f.name).tolist()) for f in fields(self)}
 
 
@@ -153,6 +177,23 @@ def body_rate_from_attitude(t: ArrayLike, q_nb: ArrayLike) -> Array:
     ≈ Δt²/12 |ω × ω̇|) for smooth motion; the end samples use their single
     interval (first order).  Pass exact rates to :class:`Trajectory` where the
     motion is known analytically.
+
+    Parameters
+    ----------
+    t : array_like, shape (N,)
+        Strictly increasing time, s.
+    q_nb : array_like, shape (N, 4)
+        Attitude, body (FRD) to NED.
+
+    Returns
+    -------
+    numpy.ndarray, shape (N, 3)
+        ``ω_nb^b``, rad/s, body axes.
+
+    Raises
+    ------
+    ShapeError
+        If ``t`` and ``q_nb`` do not have matching shapes, or there are fewer than 2 samples.
     """
     ta = np.asarray(t, dtype=float)
     q = quat_normalize(np.asarray(q_nb, dtype=float))
@@ -205,12 +246,16 @@ def ideal_imu(
 
     Parameters
     ----------
-    traj : the true motion.
-    earth_rate : add Earth rotation ``C_bn ω_ie^n`` to the gyro and the
+    traj : Trajectory
+        The true motion.
+    earth_rate : bool
+        Add Earth rotation ``C_bn ω_ie^n`` to the gyro and the
         Coriolis term ``2 ω_ie^n × v^n`` to the specific force.
-    transport_rate : add ``C_bn ω_en^n`` to the gyro and ``ω_en^n × v^n`` to
+    transport_rate : bool
+        Add ``C_bn ω_en^n`` to the gyro and ``ω_en^n × v^n`` to
         the specific force (zero when the trajectory has no velocity).
-    gravity : ``"normal"`` (WGS84 normal gravity at the latitude and height,
+    gravity : str or float
+        ``"normal"`` (WGS84 normal gravity at the latitude and height,
         :func:`imunav.earth.normal_gravity`), ``"constant"`` (standard gravity
         9.80665 m/s²) or a number (m/s²), applied as ``g^n = (0, 0, +g)``.
     lat, h : latitude (rad) and height (m) used when the trajectory has no
@@ -219,7 +264,8 @@ def ideal_imu(
 
     Returns
     -------
-    ImuData with ``gyro = ω_ib^b`` (rad/s) and ``accel = f^b`` (m/s²).
+    ImuData
+        ``gyro = ω_ib^b`` (rad/s) and ``accel = f^b`` (m/s²), body axes.
 
     Notes
     -----
@@ -227,6 +273,11 @@ def ideal_imu(
     ``accel_ned``; otherwise those are derived by second-order central
     differences (see :func:`body_rate_from_attitude`; velocity is
     differentiated with :func:`numpy.gradient`, error ≈ Δt²/6 · |d³v/dt³|).
+
+    Raises
+    ------
+    InvalidInputError
+        If ``gravity`` is not understood, or ``lat`` is missing where it is needed (no ``pos_lla``).
     """
     if not isinstance(traj, Trajectory):
         raise InvalidInputError(f"traj must be an imunav.sim.Trajectory, not {type(traj).__name__}")
@@ -329,6 +380,26 @@ def trajectory_from_attitude(
 
     ``omega_nb_b`` is derived from ``q_nb`` (:func:`body_rate_from_attitude`)
     unless given; ``lat``/``lon`` (rad) and ``h`` (m) set a constant position.
+
+    Parameters
+    ----------
+    t : array_like, shape (N,)
+        Strictly increasing time, s.
+    q_nb : array_like, shape (N, 4)
+        Attitude, body (FRD) to NED.
+    omega_nb_b : array_like, shape (N, 3), optional
+        Exact body rate relative to NED, rad/s.
+    lat : float, optional
+        Geodetic latitude, rad (None: no position; :func:`ideal_imu` then needs ``lat=``).
+    lon : float
+        Longitude, rad.
+    h : float
+        Ellipsoidal height, m.
+
+    Returns
+    -------
+    Trajectory
+        Zero velocity, constant position.
     """
     ta = np.asarray(t, dtype=float)
     qa = np.asarray(q_nb, dtype=float)
@@ -374,14 +445,23 @@ def trajectory_from_functions(
 
     Parameters
     ----------
-    attitude : ``f(t) -> (N, 4)`` quaternions ``q_nb`` or ``(N, 3)`` ZYX Euler
+    attitude : callable
+        ``f(t) -> (N, 4)`` quaternions ``q_nb`` or ``(N, 3)`` ZYX Euler
         ``(roll, pitch, yaw)`` in rad, vectorised over ``t``.
-    position_ned : ``f(t) -> (N, 3)`` position in metres in the local NED
+    position_ned : callable, optional
+        ``f(t) -> (N, 3)`` position in metres in the local NED
         frame of ``origin_lla`` (tangent plane at the origin), or None (fixed).
-    t, duration_s, fs : sample times, or a duration and a rate (t = k / fs).
-    origin_lla : origin (lat rad, lon rad, h m); needed with ``position_ned``
+    t : array_like, optional
+        Sample times, s.
+    duration_s : float, optional
+        Duration, s (with ``fs``; t = k / fs).
+    fs : float, optional
+        Sample rate, Hz.
+    origin_lla : array_like, optional
+        Origin (lat rad, lon rad, h m); needed with ``position_ned``
         for the geodetic track, optional otherwise.
-    step_s : differentiation step ``δ`` for the derivatives.
+    step_s : float
+        Differentiation step ``δ`` for the derivatives.
 
     Notes
     -----
@@ -393,6 +473,18 @@ def trajectory_from_functions(
     Velocity is the ECEF velocity resolved in NED at the current position
     (so the frame's rotation along the track is accounted for) and
     ``accel_ned`` is its time derivative.
+
+    Returns
+    -------
+    Trajectory
+        The sampled motion with exact-to-truncation rates and accelerations.
+
+    Raises
+    ------
+    ShapeError
+        If a callable returns the wrong shape.
+    InvalidInputError
+        If neither ``t`` nor ``duration_s`` and ``fs`` are given.
     """
     ta = _sample_times(t, duration_s, fs)
     n = ta.size
@@ -455,10 +547,30 @@ def trajectory_from_waypoints(
 
     Parameters
     ----------
-    t_key : (K,) key times, s, strictly increasing, K ≥ 2.
-    q_key : (K, 4) key attitudes ``q_nb``, or (K, 3) ZYX Euler in rad.
-    pos_key_ned : (K, 3) key positions, m, or None (fixed position).
-    fs : sample rate, Hz; samples at ``t_key[0] + k/fs`` up to ``t_key[-1]``.
+    t_key : array_like, shape (K,)
+        Key times, s, strictly increasing, K ≥ 2.
+    q_key : array_like, shape (K, 4) or (K, 3)
+        Key attitudes ``q_nb``, or ZYX Euler ``(roll, pitch, yaw)`` in rad.
+    pos_key_ned : array_like, shape (K, 3), optional
+        Key positions, local NED, m (None: fixed position).
+    fs : float
+        Sample rate, Hz; samples at ``t_key[0] + k/fs`` up to ``t_key[-1]``.
+    origin_lla : array_like, shape (3,), optional
+        Origin of the local NED frame (lat rad, lon rad, h m); sets the geodetic track.
+
+    Returns
+    -------
+    Trajectory
+        The sampled motion with the splines' analytic rates and accelerations.
+
+    Raises
+    ------
+    TimeOrderError
+        If ``t_key`` is not 1-D and strictly increasing with at least 2 keys.
+    InvalidInputError
+        If ``fs`` is not positive.
+    ShapeError
+        If the key arrays have the wrong shapes.
     """
 
     tk = np.asarray(t_key, dtype=float)
