@@ -6,7 +6,6 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from imunav.errors import InvalidInputError, NonFiniteError, ShapeError
-from imunav.results import Result
 
 Array = NDArray[np.float64]
 
@@ -74,6 +73,3 @@ def inv_sqrt_spd(S: Array) -> Array:
                                 "R must be positive definite")
     return (V / np.sqrt(w)) @ V.T
 
-
-# The result base moved to :mod:`imunav.results`; this name stays until the branches that import it are merged.
-ResultMixin = Result
