@@ -91,6 +91,18 @@ def jsonable(obj: Any) -> Any:
     their fields, paths and anything else their text.  This is the one JSON
     conversion of the package: :class:`imunav.results.Result` and
     :func:`write_json` use it.
+
+    Parameters
+    ----------
+    obj : object
+        Any value: None, bool, str, number, mapping, sequence, set, NumPy array or scalar, object
+        with ``to_dict()``, dataclass instance, or anything with a text form.
+
+    Returns
+    -------
+    object
+        ``None``, bool, int, float (finite), str, list or dict (string keys), nested, that
+        :func:`json.dumps` writes with ``allow_nan=False``; complex numbers become their text.
     """
     if obj is None or isinstance(obj, (bool, str)):
         return obj

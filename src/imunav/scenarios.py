@@ -61,6 +61,13 @@ def attitude_paper(
     -------
     list of dict
         One row of RMSEs per run.
+
+    Raises
+    ------
+    InvalidInputError
+        If ``seeding`` is neither ``"generator"`` nor ``"seed_word"``.
+    ConfigError
+        If a name of ``filters`` is not one of the scenario's filters.
     """
     if seeding not in ("generator", "seed_word"):
         raise InvalidInputError(f"seeding={seeding!r}: choose 'generator' or 'seed_word'")

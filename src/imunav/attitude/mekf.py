@@ -210,7 +210,19 @@ FLAG_NAMES = {"acc_rejected": 1, "mag_disturbed": 2, "rest": 4}
 
 @dataclass
 class MEKF:
-    """Multiplicative EKF; ``params`` a :class:`MekfConfig` (keyword overrides allowed)."""
+    """Multiplicative extended Kalman filter: attitude ``q_nb`` and gyro bias, error state on the tangent space.
+
+    The state is the quaternion ``q_nb`` (Hamilton, scalar-first, body FRD -> NED) and the gyro bias; the
+    filter estimates a 3-vector attitude error and a bias error and folds them back into the reference
+    quaternion after each update (Markley, "Attitude error representations for Kalman filtering", J.
+    Guidance, Control, and Dynamics 26(2), 2003).
+
+    Parameters
+    ----------
+    params : MekfConfig
+        Noise densities, gates and initial uncertainties (default :class:`MekfConfig`); see
+        :meth:`with_params` to replace a few of them.
+    """
 
     params: MekfConfig = field(default_factory=MekfConfig)
 
@@ -230,7 +242,7 @@ class MEKF:
         Parameters
         ----------
         **kw
-            :class:`MekfParams` fields and their values.
+            :class:`MekfConfig` fields and their values.
 
         Returns
         -------

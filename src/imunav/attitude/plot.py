@@ -95,6 +95,7 @@ def plot_montecarlo_box(rmse: Mapping[str, np.ndarray]):
     Returns
     -------
     matplotlib.figure.Figure
+        Two panels (pitch, roll), one box per filter, RMSE in deg on a log axis.
     """
     plt = _plt()
     fig, axs = plt.subplots(1, 2, figsize=(9, 4))

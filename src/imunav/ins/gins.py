@@ -70,26 +70,57 @@ def _v3(x: ArrayLike, name: str, *, positive: bool = False, nonneg: bool = False
 class GinsConfig:
     """Configuration of :func:`run_gins`, SI units.
 
+    A scalar given for a 3-vector applies to the three axes.
+
     Parameters
     ----------
-    arw : (3,) gyro white noise, rad/√s.  vrw : (3,) accelerometer white noise, m/s/√s.
-    gyro_bias_std, accel_bias_std : (3,) Gauss–Markov σ of the biases, rad/s and m/s².
-    gyro_scale_std, accel_scale_std : (3,) Gauss–Markov σ of the scale factors (dimensionless).
-    corr_time : correlation time of all Gauss–Markov states, s (KF-GINS: ``corrtime``).
-    scale_factors : True: 21 states; False: 15 (no scale-factor states).
-    init_pos_std, init_vel_std, init_att_std : (3,) initial σ (m NED, m/s NED, rad roll/pitch/yaw ~ N/E/D).
-    init_gyro_bias_std ... : initial σ of the IMU-error states (default: their Gauss–Markov σ).
-    lever_arm : (3,) GNSS antenna in body FRD from the IMU, m.
-    use_gnss_velocity : use the fixes' velocity when they have one.
-    gate_alpha : false-alarm probability of the χ² gates (0 disables the gates).
-    cov_interval_s : covariance propagation step, s (the nominal state is integrated every sample).
-    odo_lever_arm : (3,) wheel contact point in body FRD, m (odometer and non-holonomic constraint).
-    odo_noise : odometer speed σ, m/s.  odo_scale_std : σ of the odometer scale-factor state (Gauss–Markov,
-        ``corr_time``).  The odometer and the NHC are applied at the covariance steps.
-    nhc_noise : σ of the non-holonomic constraint (zero lateral and vertical wheel velocity), m/s; None: off.
-    zupt_noise, zaru_noise : σ of the zero-velocity (m/s) and zero-angular-rate (rad/s) updates applied while
-        ``static`` says the vehicle stands still.
-    baro_noise : σ of the barometric height, m (its bias included: no baro-bias state).
+    arw : float or array_like, shape (3,)
+        Gyro white noise (angle random walk), rad/√s (> 0).
+    vrw : float or array_like, shape (3,)
+        Accelerometer white noise (velocity random walk), m/s/√s (> 0).
+    gyro_bias_std, accel_bias_std : float or array_like, shape (3,)
+        Stationary Gauss–Markov σ of the biases, rad/s and m/s² (> 0).
+    gyro_scale_std, accel_scale_std : float or array_like, shape (3,)
+        Stationary Gauss–Markov σ of the scale-factor errors, dimensionless (> 0).
+    corr_time : float
+        Correlation time of all Gauss–Markov states, s (> 0; KF-GINS: ``corrtime``).
+    scale_factors : bool
+        True: 21 states; False: 15 (no scale-factor states).
+    init_pos_std, init_vel_std, init_att_std : float or array_like, shape (3,)
+        Initial σ of position (m, NED), velocity (m/s, NED) and attitude (rad, about N/E/D: roll, pitch,
+        yaw at level).
+    init_gyro_bias_std, init_accel_bias_std : float or array_like, shape (3,), optional
+        Initial σ of the bias states, rad/s and m/s² (default: their Gauss–Markov σ).
+    init_gyro_scale_std, init_accel_scale_std : float or array_like, shape (3,), optional
+        Initial σ of the scale-factor states, dimensionless (default: their Gauss–Markov σ).
+    lever_arm : array_like, shape (3,)
+        GNSS antenna from the IMU, body FRD, m.
+    use_gnss_velocity : bool
+        Use the fixes' velocity when they have one.
+    gate_alpha : float
+        False-alarm probability of the χ² gates, in [0, 1) (0 disables the gates).
+    cov_interval_s : float
+        Covariance propagation step, s (> 0; the nominal state is integrated every sample).
+    odo_lever_arm : array_like, shape (3,)
+        Wheel contact point from the IMU, body FRD, m (odometer and non-holonomic constraint).
+    odo_noise : float
+        Odometer speed σ, m/s (> 0).  The odometer and the NHC are applied at the covariance steps.
+    odo_scale_std : float
+        σ of the odometer scale-factor state (Gauss–Markov with ``corr_time``), dimensionless (> 0).
+    nhc_noise : float or None
+        σ of the non-holonomic constraint (zero lateral and vertical wheel velocity), m/s; None: off.
+    zupt_noise, zaru_noise : float
+        σ of the zero-velocity (m/s) and zero-angular-rate (rad/s) updates applied while ``static`` says
+        the vehicle stands still (> 0).
+    baro_noise : float
+        σ of the barometric height, m (its bias included: no baro-bias state; > 0).
+
+    Raises
+    ------
+    ShapeError
+        If a vector field is neither a finite scalar nor a finite 3-vector.
+    InvalidInputError
+        If a σ, a time or the gate probability is out of range.
     """
 
     arw: Any
@@ -151,14 +182,20 @@ class GinsConfig:
     def from_kfgins(cls, cfg: KfGinsConfig, **overrides: Any) -> GinsConfig:
         """The filter configuration of a KF-GINS YAML (:func:`imunav.io.kfgins.load_kfgins_config`).
 
+        Noise densities, Gauss–Markov σ and correlation time, initial σ and the antenna lever arm are
+        taken from ``cfg``; the other fields keep their defaults.
+
         Parameters
         ----------
         cfg : KfGinsConfig
-        **overrides : any field of :class:`GinsConfig`.
+            The configuration read by :func:`~imunav.io.kfgins.load_kfgins_config` (SI).
+        **overrides
+            Any field of :class:`GinsConfig`, replacing the value taken from ``cfg``.
 
         Returns
         -------
         GinsConfig
+            The filter configuration.
         """
         n = cfg.noise
         kw: dict[str, Any] = dict(
@@ -177,14 +214,20 @@ class GinsConfig:
         """A configuration matched to an IMU preset of :mod:`imunav.sim.presets` (noise densities; bias σ from
         the turn-on bias and the bias instability; scale σ from the scale-factor errors; its correlation time).
 
+        The bias σ is ``√(b_0² + Σ σ_i²)`` (turn-on bias and the bias-instability components), the scale σ
+        1.5 times the preset's scale-factor error, the correlation time the longest of the preset's.
+
         Parameters
         ----------
-        name : preset name.
-        **overrides : any field of :class:`GinsConfig`.
+        name : str
+            Preset name (:func:`imunav.sim.presets.get`, e.g. ``"navigation_a15"``).
+        **overrides
+            Any field of :class:`GinsConfig`, replacing the value derived from the preset.
 
         Returns
         -------
         GinsConfig
+            The filter configuration.
         """
         m = presets.get(name)
 
@@ -212,17 +255,47 @@ class GinsResult(Result):
 
     Attributes
     ----------
-    t : (N,) IMU times, s.  lla : (N, 3) rad, rad, m.  vel_ned : (N, 3) m/s.  q_nb : (N, 4).
-    gyro_bias, accel_bias, gyro_scale, accel_scale : (N, 3) estimated IMU errors (scale zero for 15 states).
-    odo_scale : (N,) estimated odometer scale factor (zero without odometer).
-    cov_t : (M,) times of the covariance records.  cov_diag : (M, n) variances of the error states
-        (:data:`STATE_NAMES`).  cov_nav : (M, 9, 9) position/velocity/attitude block.
-    gnss_t : (G,) fixes used.  nis : (G, 2) NIS of position / velocity (NaN: not used).  accepted : (G, 2).
-    zupt_nis, baro_nis : (N,) NIS of the ZUPT + ZARU (6 dof) and barometer (1 dof) updates per IMU sample, NaN
-        where none was applied.  smoothed : the RTS solution when asked for.
-    vehicle_t : (V,) times of the odometer / NHC updates.  vehicle_nis : (V,) their NIS, ``vehicle_dof`` (V,)
-        their rows (1-3), ``vehicle_accepted`` (V,).
-    config : the configuration.  meta : removed fixes, gates.
+    t : numpy.ndarray, shape (N,)
+        IMU times, s.
+    lla : numpy.ndarray, shape (N, 3)
+        Estimated position of the IMU: lat rad, lon rad, ellipsoidal height m.
+    vel_ned : numpy.ndarray, shape (N, 3)
+        Estimated velocity, NED, m/s.
+    q_nb : numpy.ndarray, shape (N, 4)
+        Estimated attitude, Hamilton scalar-first quaternion, body (FRD) -> NED.
+    gyro_bias, accel_bias, gyro_scale, accel_scale : numpy.ndarray, shape (N, 3)
+        Estimated IMU errors: biases rad/s and m/s², scale factors dimensionless (zero for 15 states).
+    odo_scale : numpy.ndarray, shape (N,)
+        Estimated odometer scale factor (zero without odometer).
+    cov_t : numpy.ndarray, shape (M,)
+        Times of the covariance records, s.
+    cov_diag : numpy.ndarray, shape (M, n)
+        Variances of the error states (:data:`STATE_NAMES`, then the odometer scale), SI squared.
+    cov_nav : numpy.ndarray, shape (M, 9, 9)
+        Position (m, NED) / velocity (m/s) / attitude (rad) block of the covariance.
+    gnss_t : numpy.ndarray, shape (G,)
+        Times of the fixes used, s.
+    nis : numpy.ndarray, shape (G, 2)
+        Normalised innovation squared of the position / velocity update of each fix (NaN: not used).
+    accepted : numpy.ndarray of bool, shape (G, 2)
+        Whether the position / velocity update passed the χ² gate.
+    vehicle_t : numpy.ndarray, shape (V,)
+        Times of the odometer / NHC updates, s.
+    vehicle_nis : numpy.ndarray, shape (V,)
+        Their normalised innovation squared.
+    vehicle_dof : numpy.ndarray of int, shape (V,)
+        Their number of measurement rows (1-3).
+    vehicle_accepted : numpy.ndarray of bool, shape (V,)
+        Whether they passed the χ² gate.
+    config : GinsConfig
+        The configuration.
+    meta : dict
+        Removed fixes, number of states, gate threshold, covariance step, aids used.
+    smoothed : SmoothedTrack or None
+        The RTS solution when asked for (``run_gins(..., smoother=True)``).
+    zupt_nis, baro_nis : numpy.ndarray, shape (N,), or None
+        NIS of the ZUPT + ZARU (6 dof) and barometer (1 dof) updates per IMU sample, NaN where none was
+        applied.
     """
 
     t: Array
@@ -251,14 +324,36 @@ class GinsResult(Result):
     baro_nis: Array | None = None
 
     def euler(self) -> Array:
-        """ZYX Euler angles (roll, pitch, yaw), rad."""
+        """ZYX Euler angles of ``q_nb``.
+
+        Returns
+        -------
+        numpy.ndarray, shape (N, 3)
+            Roll, pitch, yaw, rad.
+        """
         return euler_from_quat(self.q_nb)
 
 
 @dataclass(frozen=True)
 class SmoothedTrack(Result):
-    """RTS-smoothed navigation (SI): per IMU sample ``t``, ``lla``, ``vel_ned``, ``q_nb``; per smoother epoch
-    ``cov_t`` and the smoothed position/velocity/attitude covariance ``cov_nav`` (M, 9, 9)."""
+    """RTS-smoothed navigation (Rauch, Tung & Striebel, "Maximum likelihood estimates of linear dynamic
+    systems", AIAA Journal 3(8), 1965), SI.
+
+    Attributes
+    ----------
+    t : numpy.ndarray, shape (N,)
+        IMU times, s.
+    lla : numpy.ndarray, shape (N, 3)
+        Smoothed position: lat rad, lon rad, ellipsoidal height m.
+    vel_ned : numpy.ndarray, shape (N, 3)
+        Smoothed velocity, NED, m/s.
+    q_nb : numpy.ndarray, shape (N, 4)
+        Smoothed attitude, Hamilton scalar-first quaternion, body (FRD) -> NED.
+    cov_t : numpy.ndarray, shape (M,)
+        Times of the smoother epochs, s.
+    cov_nav : numpy.ndarray, shape (M, 9, 9)
+        Smoothed position (m, NED) / velocity (m/s) / attitude (rad) covariance.
+    """
 
     t: Array
     lla: Array
@@ -268,7 +363,13 @@ class SmoothedTrack(Result):
     cov_nav: Array
 
     def euler(self) -> Array:
-        """ZYX Euler angles (roll, pitch, yaw), rad."""
+        """ZYX Euler angles of ``q_nb``.
+
+        Returns
+        -------
+        numpy.ndarray, shape (N, 3)
+            Roll, pitch, yaw, rad.
+        """
         return euler_from_quat(self.q_nb)
 
 
@@ -328,23 +429,48 @@ def run_gins(imu: ImuData | ImuIncrements, gnss: GnssData, config: GinsConfig, *
              baro: BaroData | None = None) -> GinsResult:
     """Run the GNSS/INS filter forward over the IMU recording.
 
+    The loosely coupled INS/GNSS integration of Groves (*Principles of GNSS, Inertial, and Multisensor
+    Integrated Navigation Systems*, 2nd ed., Artech House 2013, ch. 14): closed-loop error-state Kalman
+    filter, the estimated errors fed back into the nominal state after each update.
+
     Parameters
     ----------
-    imu : ImuData (rates; coning / sculling applied) or ImuIncrements (Δθ, Δv).
-    gnss : GnssData; fixes outside the IMU span are removed (recorded in ``meta``), none inside is an error.
-    config : GinsConfig.
-    lla0, vel0, q0 : initial position (lat rad, lon rad, h m), NED velocity (m/s) and ``q_nb`` at ``imu.t[0]``.
-    imu_errors0 : (12,) initial gyro bias, accel bias, gyro scale, accel scale (default zeros).
-    odometer : wheel speeds (:class:`imunav.sim.vehicle.OdometerData`), interpolated to the IMU stamps inside
+    imu : ImuData or ImuIncrements
+        Rates (rad/s, m/s², body FRD; coning / sculling applied) or increments (Δθ rad, Δv m/s).
+    gnss : GnssData
+        The fixes; those outside the IMU span, or at its first sample, are removed (recorded in ``meta``),
+        none inside is an error.
+    config : GinsConfig
+        Noise model, initial σ, lever arms and gates.
+    lla0, vel0, q0 : array_like, shapes (3,), (3,), (4,)
+        Initial position (lat rad, lon rad, h m), NED velocity (m/s) and ``q_nb`` (body FRD -> NED,
+        scalar first) at ``imu.t[0]``.
+    imu_errors0 : array_like, shape (12,), optional
+        Initial gyro bias (rad/s), accel bias (m/s²), gyro scale, accel scale (default zeros).
+    odometer : OdometerData, optional
+        Wheel speeds (:class:`imunav.sim.vehicle.OdometerData`), interpolated to the IMU stamps inside
         their span; adds the odometer scale-factor state.
-    static : (N,) bool, True where the vehicle stands still (e.g. from :mod:`imunav.ins.detectors`): ZUPT + ZARU.
-    baro : barometric heights (:class:`imunav.sim.vehicle.BaroData`), interpolated to the IMU stamps.
-    smoother : also run the RTS smoother (``result.smoothed``); keeps three n x n matrices per covariance epoch
+    smoother : bool
+        Also run the RTS smoother (``result.smoothed``); keeps three n x n matrices per covariance epoch
         (about 190 MB per hour at 200 Hz with 21 states and the default 0.2 s step).
+    static : array_like of bool, shape (N,), optional
+        True where the vehicle stands still (e.g. from :mod:`imunav.ins.detectors`): ZUPT + ZARU.
+    baro : BaroData, optional
+        Barometric heights (:class:`imunav.sim.vehicle.BaroData`), interpolated to the IMU stamps.
 
     Returns
     -------
     GinsResult
+        The filtered trajectory, IMU errors, covariance records and the NIS of every update.
+
+    Raises
+    ------
+    InvalidInputError
+        If there are fewer than 2 IMU samples, ``lla0`` is not a position in radians, the odometer or
+        barometer is not of its type or does not overlap the IMU span, or an aiding σ is not > 0 (also:
+        no GNSS fix inside the IMU span).
+    ShapeError
+        If ``vel0``, ``imu_errors0`` or ``static`` has the wrong shape.
     """
     t, dth, dv = _increments(imu)
     if t.size < 2:

@@ -33,9 +33,25 @@ Array = NDArray[np.float64]
 
 @dataclass(frozen=True)
 class Alignment:
-    """Initial state for :func:`imunav.ins.gins.run_gins`: time ``t`` (s), ``q_nb``, and from a motion alignment
-    ``lla`` and ``vel_ned`` (None for a static one: use the known position, zero velocity); ``heading_std``
-    (rad) is the predicted heading σ and ``method`` says how the heading was found."""
+    """Initial state for :func:`imunav.ins.gins.run_gins`.
+
+    Attributes
+    ----------
+    t : float
+        Time of the alignment, s (first IMU sample, or the GNSS fix used).
+    q_nb : numpy.ndarray, shape (4,)
+        Attitude, Hamilton scalar-first quaternion, body (FRD) -> NED.
+    heading_std : float
+        Predicted heading σ, rad (0 when the heading was given).
+    method : str
+        How the heading was found (``"levelling + gyrocompassing"``, ``"levelling + given heading"``,
+        ``"GNSS velocity (track)"``).
+    lla : numpy.ndarray, shape (3,), or None
+        From a motion alignment, the position of the fix (lat rad, lon rad, h m); None for a static one
+        (use the known position).
+    vel_ned : numpy.ndarray, shape (3,), or None
+        From a motion alignment, the velocity of the fix, NED, m/s; None for a static one (zero velocity).
+    """
 
     t: float
     q_nb: Array
@@ -45,7 +61,13 @@ class Alignment:
     vel_ned: Array | None = None
 
     def euler(self) -> Array:
-        """ZYX Euler angles (roll, pitch, yaw), rad."""
+        """ZYX Euler angles of ``q_nb``.
+
+        Returns
+        -------
+        numpy.ndarray, shape (3,)
+            Roll, pitch, yaw, rad.
+        """
         return euler_from_quat(self.q_nb)
 
 
@@ -55,20 +77,30 @@ def static_alignment(imu: ImuData, lat: float, *, gyro_bias_std: float, yaw: flo
 
     Parameters
     ----------
-    imu : ImuData of a static period (rates, rad/s and m/s²).
-    lat : latitude, rad.
-    gyro_bias_std : 1σ gyro bias the alignment must tolerate, rad/s (e.g. ``GinsConfig.gyro_bias_std``).
-    yaw : known heading, rad, used instead of gyrocompassing (magnetometer or a surveyed heading).
-    max_heading_std : largest predicted heading σ accepted from gyrocompassing, rad.
+    imu : ImuData
+        A static period (rates: rad/s and m/s², body FRD), at least 10 samples.
+    lat : float
+        Latitude, rad.
+    gyro_bias_std : float
+        1σ gyro bias the alignment must tolerate, rad/s (e.g. ``GinsConfig.gyro_bias_std``).
+    yaw : float, optional
+        Known heading, rad, used instead of gyrocompassing (magnetometer or a surveyed heading).
+    max_heading_std : float
+        Largest predicted heading σ accepted from gyrocompassing, rad.
 
     Returns
     -------
     Alignment
+        At the first IMU sample, ``lla`` and ``vel_ned`` None; ``heading_std`` the predicted
+        ``√(b_g² + σ_mean²) / (Ω cos φ)`` (0 with a given ``yaw``).
 
     Raises
     ------
+    InsufficientDataError
+        If ``imu`` is not an ImuData of at least 10 samples.
     InvalidInputError
-        Gyrocompassing predicted worse than ``max_heading_std`` and no ``yaw`` given.
+        A latitude outside (-π/2, π/2), or gyrocompassing predicted worse than ``max_heading_std`` and
+        no ``yaw`` given.
     """
     if not isinstance(imu, ImuData) or imu.n < 10:
         raise InsufficientDataError("static_alignment needs an ImuData with at least 10 samples of a static period")
@@ -98,15 +130,25 @@ def motion_alignment(gnss: GnssData, *, min_speed: float = 5.0, t_start: float |
 
     Parameters
     ----------
-    gnss : GnssData with velocity.
-    min_speed : ground speed from which the track defines the heading, m/s.
-    t_start : first usable time, s (default: the first fix).
+    gnss : GnssData
+        Fixes with velocity (``vel_ned`` and ``vel_std``).
+    min_speed : float
+        Ground speed from which the track defines the heading, m/s (> 0).
+    t_start : float, optional
+        First usable time, s (default: the first fix).
 
     Returns
     -------
     Alignment
         At the first fix at or above ``min_speed``, with its position and velocity; ``heading_std`` from the
         fix's velocity σ (``σ_v / speed``).
+
+    Raises
+    ------
+    InvalidInputError
+        If ``gnss`` has no velocity or ``min_speed`` is not > 0.
+    InsufficientDataError
+        If no usable fix reaches ``min_speed``.
     """
     if gnss.vel_ned is None or gnss.vel_std is None:
         raise InvalidInputError("motion_alignment needs GNSS velocity (a 13-column KF-GINS GNSS file or vel columns)")

@@ -31,7 +31,30 @@ Array = NDArray[np.float64]
 
 @dataclass(frozen=True)
 class OutageReport(Result):
-    """Per-outage drift and its RMS (m, deg); ``contained``: share of outages inside the predicted 3σ."""
+    """Per-outage drift and its RMS (m, deg); ``contained``: whether each outage stayed inside the predicted 3σ.
+
+    One entry per outage in each array, in the order of ``outages``; each is the maximum over the epochs
+    of that outage of the error against the truth.
+
+    Attributes
+    ----------
+    outages : list of tuple of float
+        ``(start s, length s)`` of each outage.
+    horizontal_m : numpy.ndarray, shape (K,)
+        Largest horizontal position error, m.
+    vertical_m : numpy.ndarray, shape (K,)
+        Largest vertical position error, m.
+    drift_3d_m : numpy.ndarray, shape (K,)
+        Largest 3-D position error, m.
+    roll_deg, pitch_deg, heading_deg : numpy.ndarray, shape (K,)
+        Largest absolute ZYX Euler angle errors, deg (wrapped to ±180°).
+    contained : numpy.ndarray of bool, shape (K,)
+        True when the N, E and D position errors stayed within 3 times the filter's predicted σ at every
+        covariance record inside the outage.
+    meta : dict
+        The protocol's settings (``converge_s``, ``every_s``, ``length_s``, ``shifts_s``) when made by
+        :func:`outage_test`.
+    """
 
     outages: list[tuple[float, float]]
     horizontal_m: Array
@@ -44,7 +67,15 @@ class OutageReport(Result):
     meta: dict[str, Any] = field(default_factory=dict)
 
     def rms(self) -> dict[str, float]:
-        """RMS over all outages of the per-outage maxima (the KF-GINS figures), and the 3σ containment share."""
+        """RMS over all outages of the per-outage maxima (the KF-GINS figures), and the 3σ containment share.
+
+        Returns
+        -------
+        dict
+            ``horizontal_m``, ``vertical_m``, ``3d_m`` (m), ``roll_deg``, ``pitch_deg``, ``heading_deg``
+            (deg): RMS over the outages (NaN with none); ``contained_3sigma``: the share of outages
+            inside 3σ, in [0, 1]; ``n_outages``.
+        """
         def r(x: Array) -> float:
             return float(np.sqrt(np.mean(np.square(x)))) if x.size else float("nan")
 
@@ -72,13 +103,17 @@ def outage_drift(res: GinsResult, truth: Any, outages: list[tuple[float, float]]
 
     Parameters
     ----------
-    res : GinsResult of a run whose GNSS had those outages.
-    truth : the true trajectory.
-    outages : list of (start, length), s.
+    res : GinsResult
+        The run of :func:`imunav.ins.gins.run_gins` whose GNSS had those outages.
+    truth : Trajectory
+        The true trajectory, sampled at the IMU time stamps (``t`` s, ``pos_lla``, ``q_nb``).
+    outages : list of tuple of float
+        ``(start s, length s)`` of each outage; one with no epoch of ``res`` is skipped.
 
     Returns
     -------
     OutageReport
+        One entry per outage that holds epochs of ``res``.
     """
     dn, de = _errors(res, truth)
     cidx = np.searchsorted(res.t, res.cov_t)
@@ -111,17 +146,28 @@ def outage_test(imu: ImuData, gnss: GnssData, config: GinsConfig, truth: Any, *,
 
     Parameters
     ----------
-    imu, gnss, config, lla0, vel0, q0 : as :func:`imunav.ins.gins.run_gins`.
-    truth : true trajectory at the IMU stamps.
-    converge_s : time after the first IMU sample before the first outage, s.
-    every_s, length_s : outage period and length, s.
-    shifts_s : shifts of the first outage, s.
-    odometer : wheel speeds for :func:`~imunav.ins.gins.run_gins` (kept through the outages), or None.
+    imu, gnss, config, lla0, vel0, q0 : ImuData, GnssData, GinsConfig, array_like
+        The inputs and initial state, as :func:`imunav.ins.gins.run_gins`.
+    truth : Trajectory
+        True trajectory sampled at the IMU stamps (``t`` s, ``pos_lla``, ``q_nb``).
+    converge_s : float
+        Time after the first IMU sample before the first outage, s.
+    every_s, length_s : float
+        Outage period and length, s (``every_s > length_s > 0``).
+    shifts_s : tuple of float
+        Shifts of the first outage, s; one filter run per shift.
+    odometer : OdometerData, optional
+        Wheel speeds for :func:`~imunav.ins.gins.run_gins` (kept through the outages), or None.
 
     Returns
     -------
     OutageReport
         All outages of all shifts.
+
+    Raises
+    ------
+    InvalidInputError
+        If no outage fits in the recording after the convergence time for a shift.
     """
     t0, t1 = float(imu.t[0]), float(imu.t[-1])
     reports = []

@@ -50,8 +50,8 @@ class StrapdownResult(Result):
     ----------
     t : numpy.ndarray, shape (N,)
         Time, s.
-    quaternion : numpy.ndarray, shape (N, 4)
-        Attitude ``q_nb``, body (FRD) to NED.
+    q_nb : numpy.ndarray, shape (N, 4)
+        Attitude quaternion ``q_nb`` (Hamilton, scalar first), body (FRD) to NED.
     velocity : numpy.ndarray, shape (N, 3)
         Velocity, NED, m/s.
     position : numpy.ndarray, shape (N, 3), or None
@@ -72,7 +72,7 @@ class StrapdownResult(Result):
         Returns
         -------
         dict
-            ``t``, ``quaternion``, ``velocity`` and ``position`` or ``lla`` as lists.
+            ``t``, ``q_nb``, ``velocity`` and ``position`` and/or ``lla`` (those not None) as lists.
         """
         d = {"t": self.t.tolist(), "q_nb": self.q_nb.tolist(), "velocity": self.velocity.tolist()}
         if self.position is not None:

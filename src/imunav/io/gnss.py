@@ -68,12 +68,31 @@ class GnssData:
 
     Parameters
     ----------
-    t : (N,) strictly increasing time, s (seconds of week, or any clock shared with the IMU).
-    lla : (N, 3) geodetic position of the antenna: lat rad, lon rad, ellipsoidal h m.
-    pos_std : (N, 3) or (3,) 1-σ of the position, north/east/down, m (> 0).
-    vel_ned : (N, 3) NED velocity of the antenna, m/s, or None.
-    vel_std : (N, 3) or (3,) 1-σ of the velocity, m/s (> 0); required with ``vel_ned``.
-    meta : free-form metadata (source file, simulated errors, epochs removed ...).
+    t : array_like, shape (N,)
+        Strictly increasing time, s (seconds of week, or any clock shared with the IMU).
+    lla : array_like, shape (N, 3)
+        Geodetic position of the antenna: lat rad (within ±π/2), lon rad (within ±2π), ellipsoidal
+        height m.
+    pos_std : array_like, shape (N, 3) or (3,)
+        1-σ of the position, north/east/down, m (> 0).
+    vel_ned : array_like, shape (N, 3), or None
+        NED velocity of the antenna, m/s.
+    vel_std : array_like, shape (N, 3) or (3,), or None
+        1-σ of the velocity, north/east/down, m/s (> 0); given with ``vel_ned`` and only with it.
+    meta : dict
+        Free-form metadata (``"source"`` file, simulated errors, epochs ``"removed"`` ...).
+
+    Raises
+    ------
+    ShapeError
+        If an array has the wrong shape (or there is no epoch).
+    NonFiniteError
+        If a value is NaN or infinite.
+    TimeOrderError
+        If ``t`` does not strictly increase.
+    InvalidInputError
+        If a latitude or longitude is out of range (degrees given as radians), a σ is <= 0, or only
+        one of ``vel_ned`` / ``vel_std`` is given.
     """
 
     t: Array
@@ -141,7 +160,27 @@ class GnssData:
 
     def select(self, mask: ArrayLike, note: str | None = None) -> "GnssData":
         """The epochs where ``mask`` is true; ``note`` (what removed the others and how many) goes to
-        ``meta["removed"]`` so that nothing is dropped silently."""
+        ``meta["removed"]`` so that nothing is dropped silently.
+
+        Parameters
+        ----------
+        mask : array_like of bool, shape (N,)
+            True for the epochs to keep.
+        note : str, optional
+            Why the other epochs are removed; recorded with their count when some are.
+
+        Returns
+        -------
+        GnssData
+            A new recording with the kept epochs and the updated ``meta``.
+
+        Raises
+        ------
+        ShapeError
+            If ``mask`` does not have the shape of ``t``.
+        InvalidInputError
+            If no epoch is left.
+        """
         m = np.asarray(mask, dtype=bool)
         if m.shape != self.t.shape:
             raise ShapeError(f"mask must have shape {self.t.shape}; got {m.shape}")
@@ -156,6 +195,16 @@ class GnssData:
 
     def within(self, t_start: float, t_end: float) -> "GnssData":
         """The epochs inside ``[t_start, t_end]`` (the IMU span), recorded in ``meta["removed"]``.
+
+        Parameters
+        ----------
+        t_start, t_end : float
+            The span, s, on the clock of ``t`` (bounds included).
+
+        Returns
+        -------
+        GnssData
+            The epochs inside the span (:meth:`select`).
 
         Raises
         ------
@@ -181,7 +230,26 @@ class GnssData:
 def read_table(path: str | os.PathLike[str], ncols: tuple[int, ...], what: str) -> Array:
     """Whitespace- or comma-separated numeric table with one of ``ncols`` columns (``#`` comments).
 
-    Raises :class:`FileFormatError` naming the file for a missing, empty, ragged or non-numeric file.
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The text file.
+    ncols : tuple of int
+        The numbers of columns accepted.
+    what : str
+        What the file holds, for the error messages (e.g. ``"KF-GINS GNSS"``).
+
+    Returns
+    -------
+    numpy.ndarray, shape (rows, columns)
+        The values, one row per data line.
+
+    Raises
+    ------
+    FileFormatError
+        Naming the file, for an empty, ragged or non-numeric file, or another number of columns.
+    NonFiniteError
+        If a value is NaN or infinite.
     """
     src = check_nonempty(path)
     with wrap_read_errors(src, what):
@@ -209,7 +277,22 @@ def read_table(path: str | os.PathLike[str], ncols: tuple[int, ...], what: str) 
 
 
 def write_table(path: str | os.PathLike[str], columns: list[ArrayLike], fmt: str = "%-15.9f") -> Path:
-    """Write columns side by side as a space-separated text table, atomically (KF-GINS's ``%-15.9lf``)."""
+    """Write columns side by side as a space-separated text table, atomically (KF-GINS's ``%-15.9lf``).
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        Output file (replaced atomically: :func:`imunav._atomic.atomic_path`).
+    columns : list of array_like
+        The columns, each of shape (N,) or (N, k) (then k columns), same N.
+    fmt : str
+        ``printf`` format of each value (:func:`numpy.savetxt`).
+
+    Returns
+    -------
+    pathlib.Path
+        ``path``.
+    """
     arr = np.column_stack([np.asarray(c, dtype=float) for c in columns])
     with atomic_path(path) as tmp:
         np.savetxt(tmp, arr, fmt=fmt, delimiter=" ")
@@ -219,8 +302,25 @@ def write_table(path: str | os.PathLike[str], columns: list[ArrayLike], fmt: str
 def lat_lon_radians(lat: Array, lon: Array, angle_unit: str, src: str) -> tuple[Array, Array]:
     """Latitudes and longitudes declared in ``angle_unit`` (:data:`ANGLE_UNITS`) checked and converted to radians.
 
-    Raises :class:`InvalidInputError` (naming ``src`` and the row) for values out of range, degrees declared as
-    radians, or radians declared as degrees (see the module docstring).
+    Parameters
+    ----------
+    lat, lon : numpy.ndarray, shape (N,)
+        Latitudes and longitudes as read, in ``angle_unit``.
+    angle_unit : {"deg", "rad", "deg_small"}
+        The declared unit (``"deg_small"``: degrees, without the looks-like-radians check).
+    src : str
+        The source (file name), for the error messages.
+
+    Returns
+    -------
+    lat, lon : numpy.ndarray, shape (N,)
+        The same angles in radians.
+
+    Raises
+    ------
+    InvalidInputError
+        Naming ``src`` and the row, for an unknown unit, values out of range, degrees declared as
+        radians, or radians declared as degrees (see the module docstring).
     """
     if angle_unit not in ANGLE_UNITS:
         raise InvalidInputError(f"angle_unit {angle_unit!r} is unknown; use one of {ANGLE_UNITS}")
@@ -249,13 +349,23 @@ def read_gnss_text(path: str | os.PathLike[str], *, angle_unit: str = "deg") -> 
 
     Parameters
     ----------
-    path : file with 7 columns (seconds of week, lat, lon, h m, σ_N σ_E σ_D m) or 13 columns
+    path : str or os.PathLike
+        File with 7 columns (seconds of week, lat, lon, h m, σ_N σ_E σ_D m) or 13 columns
         (seconds of week, lat, lon, h, v_N v_E v_D m/s, σ_N σ_E σ_D m, σ_vN σ_vE σ_vD m/s).
-    angle_unit : "deg" (KF-GINS), "rad" or "deg_small" (see the module docstring).
+    angle_unit : {"deg", "rad", "deg_small"}
+        Unit of lat and lon in the file: ``"deg"`` for KF-GINS (see the module docstring).
 
     Returns
     -------
     GnssData
+        The fixes, radians inside, ``meta["source"]`` the file.
+
+    Raises
+    ------
+    FileFormatError
+        If the file is empty, ragged, not numeric, or has another number of columns.
+    InvalidInputError
+        If the angles do not match ``angle_unit``, or a value is not valid for :class:`GnssData`.
     """
     a = read_table(path, (7, 13), "KF-GINS GNSS")
     src = os.fspath(path)
@@ -268,7 +378,22 @@ def read_gnss_text(path: str | os.PathLike[str], *, angle_unit: str = "deg") -> 
 
 
 def write_gnss_text(path: str | os.PathLike[str], gnss: GnssData) -> Path:
-    """Write ``gnss`` as a KF-GINS GNSS text file (7 columns, or 13 with velocity), atomically."""
+    """Write ``gnss`` as a KF-GINS GNSS text file (7 columns, or 13 with velocity), atomically.
+
+    Latitude and longitude are written in degrees, the layout that :func:`read_gnss_text` reads.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        Output file.
+    gnss : GnssData
+        The fixes.
+
+    Returns
+    -------
+    pathlib.Path
+        ``path``.
+    """
     cols: list[ArrayLike] = [gnss.t, np.degrees(gnss.lla[:, 0]), np.degrees(gnss.lla[:, 1]), gnss.lla[:, 2]]
     if gnss.vel_ned is not None and gnss.vel_std is not None:
         cols += [*gnss.vel_ned.T, *gnss.pos_std.T, *gnss.vel_std.T]
@@ -295,16 +420,33 @@ def read_gnss_csv(
 
     Parameters
     ----------
-    path : CSV file (comma separated, header on the first line).
-    time, lat, lon, height : column names of time (s), latitude, longitude (``angle_unit``) and height (m).
-    pos_std : names of the north/east/down position σ columns (m), or None to use ``default_pos_std``.
-    vel, vel_std : names of the NED velocity (m/s) and its σ columns, or None.
-    angle_unit : "deg", "rad" or "deg_small".
-    default_pos_std, default_vel_std : (3,) σ used when the file has no σ columns, m and m/s.
+    path : str or os.PathLike
+        CSV file (comma separated, header on the first line, ``#`` lines skipped).
+    time, lat, lon, height : str
+        Column names of time (s), latitude, longitude (in ``angle_unit``) and ellipsoidal height (m).
+    pos_std : tuple of 3 str, or None
+        Names of the north/east/down position σ columns (m), or None to use ``default_pos_std``.
+    vel, vel_std : tuple of 3 str, or None
+        Names of the NED velocity (m/s) and of its σ columns (m/s), or None.
+    angle_unit : {"deg", "rad", "deg_small"}
+        Unit of the latitude and longitude columns (see the module docstring).
+    default_pos_std, default_vel_std : array_like, shape (3,), optional
+        σ north/east/down used when the file has no σ columns, m and m/s.
 
     Returns
     -------
     GnssData
+        The fixes, radians inside, ``meta["source"]`` the file.
+
+    Raises
+    ------
+    FileFormatError
+        If the file has no data row, lacks a named column, or a value is empty or not a number.
+    NonFiniteError
+        If a value is NaN or infinite.
+    InvalidInputError
+        If no position σ is given (neither columns nor default), velocity has no σ, or the angles do
+        not match ``angle_unit``.
 
     Examples
     --------

@@ -66,11 +66,23 @@ class ImuIncrements:
 
     Parameters
     ----------
-    t : (N,) strictly increasing end time of each interval, s.
-    dtheta : (N, 3) angle increments, rad, body FRD.
-    dvel : (N, 3) velocity increments (integrated specific force), m/s.
-    dt : (N,) interval lengths, s (row 0: ``1 / rate``).
-    meta : source file, rate, gaps found ...
+    t : numpy.ndarray, shape (N,)
+        Strictly increasing end time of each interval, s.
+    dtheta : numpy.ndarray, shape (N, 3)
+        Angle increments (integrated angular rate), rad, body FRD.
+    dvel : numpy.ndarray, shape (N, 3)
+        Velocity increments (integrated specific force), m/s, body FRD.
+    dt : numpy.ndarray, shape (N,)
+        Interval lengths, s (> 0; row 0: ``1 / rate``).
+    meta : dict
+        Source file, rate, gaps found ...
+
+    Raises
+    ------
+    ShapeError
+        If ``dtheta`` or ``dvel`` is not (N, 3).
+    InvalidInputError
+        If ``dt`` is not (N,) or has a length <= 0.
     """
 
     t: Array
@@ -94,7 +106,14 @@ class ImuIncrements:
         return int(self.t.size)
 
     def to_imu_data(self) -> ImuData:
-        """Mean rates over each interval (increment / dt) as an :class:`ImuData` stamped at the interval ends."""
+        """Mean rates over each interval (increment / dt) as an :class:`ImuData` stamped at the interval ends.
+
+        Returns
+        -------
+        ImuData
+            ``gyro = dtheta / dt`` (rad/s) and ``accel = dvel / dt`` (m/s²), body FRD, at times ``t``;
+            ``meta["from_increments"]`` is True.
+        """
         return ImuData(self.t, self.dtheta / self.dt[:, None], self.dvel / self.dt[:, None],
                        meta={**self.meta, "from_increments": True})
 
@@ -104,12 +123,20 @@ class ImuIncrements:
 
         Parameters
         ----------
-        imu : ImuData (rad/s, m/s^2).
-        rate_hz : nominal rate for row 0 (default: the median rate of ``imu``).
+        imu : ImuData
+            Point samples of the angular rate (rad/s) and specific force (m/s²), body FRD, at least 2.
+        rate_hz : float, optional
+            Nominal rate for row 0, Hz (default: the median rate of ``imu``).
 
         Returns
         -------
         ImuIncrements
+            Row k > 0: ``(x_{k-1} + x_k) / 2 · (t_k − t_{k-1})``; row 0: ``x_0 / rate_hz``.
+
+        Raises
+        ------
+        InvalidInputError
+            If ``imu`` has fewer than 2 samples.
         """
         t = np.asarray(imu.t, dtype=float)
         if t.size < 2:
@@ -129,8 +156,10 @@ def read_kfgins_imu(path: str | os.PathLike[str], rate_hz: float) -> ImuIncremen
 
     Parameters
     ----------
-    path : text file with 7 or more columns.
-    rate_hz : the declared IMU rate (KF-GINS's ``imudatarate``), Hz.
+    path : str or os.PathLike
+        Text file with 7 or more columns.
+    rate_hz : float
+        The declared IMU rate (KF-GINS's ``imudatarate``), Hz.
 
     Returns
     -------
@@ -182,7 +211,20 @@ def read_kfgins_imu(path: str | os.PathLike[str], rate_hz: float) -> ImuIncremen
 
 
 def write_kfgins_imu(path: str | os.PathLike[str], inc: ImuIncrements) -> Path:
-    """Write increments as a KF-GINS IMU text file (7 columns), atomically."""
+    """Write increments as a KF-GINS IMU text file (7 columns), atomically.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        Output file.
+    inc : ImuIncrements
+        The increments (time s, Δθ rad, Δv m/s).
+
+    Returns
+    -------
+    pathlib.Path
+        ``path``.
+    """
     return write_table(path, [inc.t, *inc.dtheta.T, *inc.dvel.T])
 
 
@@ -197,12 +239,23 @@ class NavTrack:
 
     Parameters
     ----------
-    t : (N,) s (seconds of week in KF-GINS files).
-    lla : (N, 3) lat rad, lon rad, h m.
-    vel_ned : (N, 3) m/s.
-    q_nb : (N, 4) attitude body -> NED.
-    week : GPS week (KF-GINS writes 0 when unknown).
-    meta : source ...
+    t : numpy.ndarray, shape (N,)
+        Time, s (seconds of week in KF-GINS files).
+    lla : numpy.ndarray, shape (N, 3)
+        Geodetic position: lat rad, lon rad, ellipsoidal height m.
+    vel_ned : numpy.ndarray, shape (N, 3)
+        Velocity, NED, m/s.
+    q_nb : numpy.ndarray, shape (N, 4)
+        Attitude, Hamilton scalar-first quaternion, body (FRD) -> NED.
+    week : int
+        GPS week (KF-GINS writes 0 when unknown).
+    meta : dict
+        Source file, format ...
+
+    Raises
+    ------
+    ShapeError
+        If ``lla``, ``vel_ned`` or ``q_nb`` does not have N rows of 3, 3, 4 columns.
     """
 
     t: Array
@@ -219,16 +272,37 @@ class NavTrack:
                 raise ShapeError(f"NavTrack.{name} must have shape ({n}, {w}); got {np.shape(getattr(self, name))}")
 
     def euler(self) -> Array:
-        """ZYX Euler angles (roll, pitch, yaw), rad, (N, 3)."""
+        """ZYX Euler angles of ``q_nb``.
+
+        Returns
+        -------
+        numpy.ndarray, shape (N, 3)
+            Roll, pitch, yaw, rad.
+        """
         return euler_from_quat(self.q_nb)
 
 
 def read_kfgins_nav(path: str | os.PathLike[str]) -> NavTrack:
     """Read a KF-GINS navigation / truth file (``.nav``: week, seconds, lat °, lon °, h, v NED, roll pitch yaw °).
 
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The 11-column text file.
+
     Returns
     -------
     NavTrack
+        In SI (radians; attitude as ``q_nb`` from the ZYX Euler angles); ``week`` the first week of the file.
+
+    Raises
+    ------
+    FileFormatError
+        If the file is empty, ragged, not numeric, or does not have 11 columns.
+    TimeOrderError
+        If the seconds do not strictly increase.
+    InvalidInputError
+        If a latitude or longitude is out of range for degrees.
     """
     a = read_table(path, (11,), "KF-GINS navigation (.nav)")
     src = os.fspath(path)
@@ -245,7 +319,20 @@ def read_kfgins_nav(path: str | os.PathLike[str]) -> NavTrack:
 
 
 def write_kfgins_nav(path: str | os.PathLike[str], nav: NavTrack) -> Path:
-    """Write a KF-GINS ``.nav`` file (11 columns, degrees), atomically."""
+    """Write a KF-GINS ``.nav`` file (11 columns, degrees), atomically.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        Output file.
+    nav : NavTrack
+        The track; the attitude is written as ZYX Euler angles (roll, pitch, yaw) in degrees.
+
+    Returns
+    -------
+    pathlib.Path
+        ``path``.
+    """
     eul = np.degrees(nav.euler())
     return write_table(path, [np.full(nav.t.size, float(nav.week)), nav.t, np.degrees(nav.lla[:, 0]),
                               np.degrees(nav.lla[:, 1]), nav.lla[:, 2], *nav.vel_ned.T, *eul.T])
@@ -264,9 +351,26 @@ def write_kfgins_imu_errors(path: str | os.PathLike[str], t: ArrayLike, gyro_bia
 
     Parameters
     ----------
-    t : (N,) s.
-    gyro_bias : (N, 3) rad/s.  accel_bias : (N, 3) m/s^2.
-    gyro_scale, accel_scale : (N, 3) dimensionless scale-factor errors.
+    path : str or os.PathLike
+        Output file (13 columns).
+    t : array_like, shape (N,)
+        Time, s.
+    gyro_bias : array_like, shape (N, 3)
+        Gyro biases, rad/s (written in °/h).
+    accel_bias : array_like, shape (N, 3)
+        Accelerometer biases, m/s² (written in mGal, 1 mGal = 1e-5 m/s²).
+    gyro_scale, accel_scale : array_like, shape (N, 3)
+        Dimensionless scale-factor errors (written in ppm).
+
+    Returns
+    -------
+    pathlib.Path
+        ``path``.
+
+    Raises
+    ------
+    ShapeError
+        If an error array is not (N, 3).
     """
     ta = np.asarray(t, dtype=float)
     n = ta.size
@@ -280,7 +384,35 @@ def write_kfgins_std(path: str | os.PathLike[str], t: ArrayLike, pos_std: ArrayL
                      att_std: ArrayLike, gyro_bias_std: ArrayLike, accel_bias_std: ArrayLike,
                      gyro_scale_std: ArrayLike, accel_scale_std: ArrayLike) -> Path:
     """Write KF-GINS's state σ file (22 columns): seconds, pos N E D m, vel m/s, att (roll pitch yaw) °,
-    gyro bias °/h, accel bias mGal, gyro and accel scale ppm.  Inputs in SI (m, m/s, rad, rad/s, m/s^2, 1)."""
+    gyro bias °/h, accel bias mGal, gyro and accel scale ppm.  Inputs in SI (m, m/s, rad, rad/s, m/s^2, 1).
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        Output file.
+    t : array_like, shape (N,)
+        Time, s.
+    pos_std : array_like, shape (N, 3)
+        Position σ north/east/down, m.
+    vel_std : array_like, shape (N, 3)
+        Velocity σ north/east/down, m/s.
+    att_std : array_like, shape (N, 3)
+        Attitude σ (roll, pitch, yaw), rad.
+    gyro_bias_std, accel_bias_std : array_like, shape (N, 3)
+        Bias σ, rad/s and m/s².
+    gyro_scale_std, accel_scale_std : array_like, shape (N, 3)
+        Scale-factor σ, dimensionless.
+
+    Returns
+    -------
+    pathlib.Path
+        ``path``.
+
+    Raises
+    ------
+    ShapeError
+        If a σ array is not (N, 3).
+    """
     ta = np.asarray(t, dtype=float)
     n = ta.size
     return write_table(path, [ta, *_cols(pos_std, n, "pos_std").T, *_cols(vel_std, n, "vel_std").T,
@@ -311,8 +443,21 @@ _NOISE_KEYS = ("arw", "vrw", "gbstd", "abstd", "gsstd", "asstd", "corrtime")
 
 @dataclass(frozen=True)
 class ImuNoise:
-    """IMU noise of the filter in SI: ARW rad/√s, VRW m/s/√s, Gauss–Markov bias σ (rad/s, m/s²) and
-    scale-factor σ (1), correlation time s."""
+    """IMU noise of the filter in SI (KF-GINS's ``imunoise`` block, converted).
+
+    Attributes
+    ----------
+    arw : numpy.ndarray, shape (3,)
+        Gyro angle random walk, rad/√s (``arw`` °/√h in the YAML).
+    vrw : numpy.ndarray, shape (3,)
+        Accelerometer velocity random walk, m/s/√s (``vrw`` m/s/√h).
+    gyro_bias_std, accel_bias_std : numpy.ndarray, shape (3,)
+        Stationary σ of the Gauss–Markov biases, rad/s and m/s² (``gbstd`` °/h, ``abstd`` mGal).
+    gyro_scale_std, accel_scale_std : numpy.ndarray, shape (3,)
+        Stationary σ of the Gauss–Markov scale-factor errors, dimensionless (``gsstd``, ``asstd`` ppm).
+    corr_time : float
+        Correlation time of the biases and scale factors, s (``corrtime`` h).
+    """
 
     arw: Array
     vrw: Array
@@ -327,8 +472,44 @@ class ImuNoise:
 class KfGinsConfig:
     """KF-GINS configuration in SI (angles rad, biases rad/s and m/s², scale factors dimensionless).
 
-    ``end_time`` is None for KF-GINS's ``-1`` (to the end of the IMU file).  ``options`` holds the keys
-    KF-GINS does not know (imunav options such as an odometer file), as written.
+    Built by :func:`load_kfgins_config`; the YAML key of each field is in :data:`KFGINS_KEYS`.
+
+    Attributes
+    ----------
+    source : pathlib.Path
+        The YAML file.
+    imu_path, gnss_path, output_path : pathlib.Path
+        IMU file, GNSS file and output folder, resolved against the YAML file's folder.
+    imu_rate_hz : float
+        IMU rate, Hz.
+    imu_columns : int
+        Number of columns of the IMU file (>= 7).
+    start_time : float
+        First second of week to process, s.
+    end_time : float or None
+        Last second of week, s; None for KF-GINS's ``-1`` (to the end of the IMU file).
+    init_lla : numpy.ndarray, shape (3,)
+        Initial position: lat rad, lon rad, h m.
+    init_vel : numpy.ndarray, shape (3,)
+        Initial velocity, NED, m/s.
+    init_euler : numpy.ndarray, shape (3,)
+        Initial attitude, ZYX Euler (roll, pitch, yaw), rad.
+    init_gyro_bias, init_accel_bias : numpy.ndarray, shape (3,)
+        Initial biases, rad/s and m/s² (zero when absent).
+    init_gyro_scale, init_accel_scale : numpy.ndarray, shape (3,)
+        Initial scale-factor errors, dimensionless (zero when absent).
+    init_pos_std, init_vel_std, init_att_std : numpy.ndarray, shape (3,)
+        Initial σ of position (NED, m), velocity (NED, m/s) and attitude (rad).
+    init_gyro_bias_std, init_accel_bias_std : numpy.ndarray, shape (3,)
+        Initial σ of the biases, rad/s and m/s² (default: those of ``noise``).
+    init_gyro_scale_std, init_accel_scale_std : numpy.ndarray, shape (3,)
+        Initial σ of the scale factors, dimensionless (default: those of ``noise``).
+    noise : ImuNoise
+        The IMU noise of the filter.
+    antenna_lever_arm : numpy.ndarray, shape (3,)
+        GNSS antenna from the IMU, body FRD, m.
+    options : dict
+        The keys KF-GINS does not know (imunav options such as an odometer file), as written.
     """
 
     source: Path
@@ -403,17 +584,25 @@ def load_kfgins_config(path: str | os.PathLike[str]) -> KfGinsConfig:
 
     Parameters
     ----------
-    path : the YAML file; ``imupath``, ``gnsspath`` and ``outputpath`` are relative to its folder.
+    path : str or os.PathLike
+        The YAML file; ``imupath``, ``gnsspath`` and ``outputpath`` are relative to its folder.
 
     Returns
     -------
     KfGinsConfig
+        The configuration in SI.
 
     Raises
     ------
     ConfigError
-        A missing key, a value of the wrong shape, a σ <= 0, an initial position out of range or in
-        radians, a start time outside a GPS week or an end time before it.
+        Not valid YAML, a missing key, a value of the wrong shape, a σ <= 0, a start time outside a
+        GPS week or an end time before it.
+    InvalidInputError
+        An initial position out of range for degrees, or in radians.
+    FileNotFoundError
+        If ``path`` is not a file.
+    MissingDependencyError
+        If PyYAML is not installed (extra ``yaml``).
     """
     try:
         import yaml  # optional: KF-GINS YAML support (extra 'yaml')

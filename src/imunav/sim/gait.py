@@ -55,10 +55,24 @@ GAIT_MODES: dict[str, tuple[float, float, float, float, float, float]] = {
 class GaitSimulation(Result):
     """Simulated foot motion and IMU.
 
-    ``imu`` has the sensor errors, ``ideal`` not; ``position`` / ``velocity``
-    (NED, m, m/s), ``q_nb`` (body → NED) and ``stance`` (bool) are the
-    truth; ``gyro_bias`` / ``accel_bias`` the realised total biases (N, 3)
-    (zero without an error model); ``modes`` the mode of each stride.
+    Attributes
+    ----------
+    imu : ImuData
+        The IMU samples with the sensor errors of the error model (FRD body frame, rad/s, m/s²).
+    ideal : ImuData
+        The same samples without sensor errors.
+    position : numpy.ndarray, shape (N, 3)
+        True foot position, NED, m.
+    velocity : numpy.ndarray, shape (N, 3)
+        True foot velocity, NED, m/s.
+    q_nb : numpy.ndarray, shape (N, 4)
+        True attitude, Hamilton scalar-first quaternion, body (FRD) to NED.
+    stance : numpy.ndarray of bool, shape (N,)
+        True when the foot is flat on the ground (zero velocity).
+    gyro_bias, accel_bias : numpy.ndarray, shape (N, 3)
+        Realised total gyro (rad/s) and accelerometer (m/s²) biases, zero without an error model.
+    modes : list of str
+        The gait mode of each stride (``"walk"``, ``"run"``, ``"stairs"``).
     """
 
     imu: ImuData

@@ -56,13 +56,26 @@ def truth_at(truth: Trajectory, tq: ArrayLike, lever_arm: ArrayLike = (0.0, 0.0,
 
     Parameters
     ----------
-    truth : Trajectory with ``pos_lla`` and ``vel_ned``.
-    tq : (M,) times, s.
-    lever_arm : (3,) body FRD offset of the point from the IMU, m.
+    truth : Trajectory
+        With ``pos_lla`` (lat rad, lon rad, h m), ``vel_ned`` (m/s) and ``q_nb`` (body FRD -> NED).
+    tq : array_like, shape (M,)
+        Times, s, within ``truth.t[0] .. truth.t[-1]``.
+    lever_arm : array_like, shape (3,)
+        Offset of the point from the IMU, body FRD, m.
 
     Returns
     -------
-    lla : (M, 3), vel : (M, 3)
+    lla : numpy.ndarray, shape (M, 3)
+        Geodetic position of the point (lat rad, lon rad, ellipsoidal height m).
+    vel : numpy.ndarray, shape (M, 3)
+        Its velocity, NED, m/s (``v + C_nb (ω_eb^b × l)``).
+
+    Raises
+    ------
+    InvalidInputError
+        If ``truth`` has no ``pos_lla`` or ``vel_ned``, or a time of ``tq`` is outside its span.
+    ShapeError
+        If ``lever_arm`` is not a finite 3-vector.
     """
     if truth.pos_lla is None or truth.vel_ned is None:
         raise InvalidInputError("the truth trajectory needs pos_lla and vel_ned (use imunav.sim.vehicle_trajectory)")
@@ -102,9 +115,26 @@ def outage_schedule(t_start: float, t_end: float, *, every_s: float = 180.0, len
     """Outages ``(start, length)`` of ``length_s`` every ``every_s`` from ``t_start + first_s`` while they
     end before ``t_end`` (the KF-GINS protocol: 60 s every 180 s, first at 0, 60 or 120 s after convergence).
 
+    Parameters
+    ----------
+    t_start, t_end : float
+        Span of the data, s.
+    every_s : float
+        Period of the outages, s (> ``length_s``).
+    length_s : float
+        Length of each outage, s (> 0).
+    first_s : float
+        Start of the first outage after ``t_start``, s.
+
     Returns
     -------
-    list of (start s, length s)
+    list of tuple of float
+        ``(start s, length s)`` of each outage, in time order (empty when none fits).
+
+    Raises
+    ------
+    InvalidInputError
+        Unless ``every_s > length_s > 0``.
     """
     if not (every_s > length_s > 0):
         raise InvalidInputError(f"need every_s > length_s > 0; got every_s={every_s}, length_s={length_s}")
@@ -135,23 +165,41 @@ def simulate_gnss(
 
     Parameters
     ----------
-    truth : Trajectory with ``pos_lla`` and ``vel_ned`` (e.g. :func:`imunav.sim.vehicle.vehicle_trajectory`).
-    rate_hz : fix rate, Hz; stamps ``t_offset + truth.t[0] + k / rate_hz`` (first one after the latency).
-    pos_noise : (3,) white position noise σ_w north/east/down, m (> 0).
-    pos_corr_sigma, pos_corr_tau : (3,) σ_c (m, >= 0) and correlation time T (s) of the Gauss–Markov
-        position error (multipath, atmosphere).
-    vel_noise : (3,) white velocity noise σ_v, m/s (> 0), or None for position-only fixes.
-    latency_s : age of each fix at its time stamp, s (>= 0).
-    lever_arm : (3,) antenna in body FRD from the IMU, m.
-    dropout_prob : probability that an epoch is missing, independently (0 <= p < 1).
-    outages : (start s, length s) pairs with no fix (see :func:`outage_schedule`).
-    t_offset : offset of the stamps from the grid, s (fixes between IMU samples).
-    rng : numpy Generator or seed.
+    truth : Trajectory
+        With ``pos_lla`` and ``vel_ned`` (e.g. :func:`imunav.sim.vehicle.vehicle_trajectory`).
+    rate_hz : float
+        Fix rate, Hz, at most the truth rate; stamps ``truth.t[0] + latency_s + (t_offset mod 1/rate_hz)
+        + k / rate_hz``.
+    pos_noise : array_like, shape (3,)
+        White position noise σ_w north/east/down, m (> 0).
+    pos_corr_sigma, pos_corr_tau : array_like, shape (3,), and float
+        σ_c (m, >= 0) and correlation time T (s) of the Gauss–Markov position error (multipath,
+        atmosphere).
+    vel_noise : array_like, shape (3,), or None
+        White velocity noise σ_v north/east/down, m/s (> 0), or None for position-only fixes.
+    latency_s : float
+        Age of each fix at its time stamp, s (>= 0).
+    lever_arm : array_like, shape (3,)
+        Antenna from the IMU, body FRD, m.
+    dropout_prob : float
+        Probability that an epoch is missing, independently (0 <= p < 1).
+    outages : sequence of (float, float)
+        ``(start s, length s)`` pairs with no fix (see :func:`outage_schedule`).
+    t_offset : float
+        Offset of the stamps from the grid, s (fixes between IMU samples).
+    rng : numpy.random.Generator or int, optional
+        Random generator or seed.
 
     Returns
     -------
     GnssData
         ``meta`` holds the settings, the outages and the epochs removed (``meta["removed"]``).
+
+    Raises
+    ------
+    InvalidInputError
+        If a noise σ, ``rate_hz``, ``latency_s``, ``dropout_prob`` or an outage length is out of range,
+        or the truth is shorter than one fix interval after the latency.
     """
     g = np.random.default_rng(rng)
     pw = np.asarray(pos_noise, dtype=float) * np.ones(3)

@@ -69,12 +69,24 @@ class Maneuver:
 
     Parameters
     ----------
-    kind : "straight", "speed", "turn", "stop" or "hill".
-    duration_s : length, s (> 0).
-    to_speed : speed reached at the end, m/s (kind "speed").
-    dheading : heading change, rad (kind "turn"; positive turns right, towards east from north).
-    grade : road grade reached, rad (kind "hill"; positive climbs).
-    ramp_s : time to reach the grade and to come back, s (kind "hill").
+    kind : {"straight", "speed", "turn", "stop", "hill"}
+        What the manoeuvre does.
+    duration_s : float
+        Length, s (> 0).
+    to_speed : float
+        Speed reached at the end, m/s (kind ``"speed"``).
+    dheading : float
+        Heading change, rad (kind ``"turn"``; positive turns right, towards east from north).
+    grade : float
+        Road grade reached, rad (kind ``"hill"``; positive climbs; ``|grade| < 45°``).
+    ramp_s : float
+        Time to reach the grade and to come back, s (kind ``"hill"``; in ``(0, duration_s / 2]``).
+
+    Raises
+    ------
+    InvalidInputError
+        If ``kind`` is unknown, ``duration_s`` is not a positive number, a value is not finite, or a
+        hill's grade or ramp is out of range.
     """
 
     kind: str
@@ -102,7 +114,18 @@ class Maneuver:
 
 
 def straight(duration_s: float) -> Maneuver:
-    """Constant speed and heading for ``duration_s`` seconds."""
+    """Constant speed and heading for ``duration_s`` seconds.
+
+    Parameters
+    ----------
+    duration_s : float
+        Length, s (> 0).
+
+    Returns
+    -------
+    Maneuver
+        A ``"straight"`` manoeuvre.
+    """
     return Maneuver("straight", float(duration_s))
 
 
@@ -110,6 +133,18 @@ def speed_change(to_speed: float, duration_s: float) -> Maneuver:
     """Accelerate (or brake) smoothly to ``to_speed`` m/s over ``duration_s`` s.
 
     Peak acceleration is ``2 Δs / duration_s`` for a change Δs.
+
+    Parameters
+    ----------
+    to_speed : float
+        Speed at the end, m/s (>= 0; checked by :func:`vehicle_trajectory`).
+    duration_s : float
+        Length, s (> 0).
+
+    Returns
+    -------
+    Maneuver
+        A ``"speed"`` manoeuvre.
     """
     return Maneuver("speed", float(duration_s), to_speed=float(to_speed))
 
@@ -118,19 +153,57 @@ def turn(angle_deg: float, duration_s: float) -> Maneuver:
     """Change heading by ``angle_deg`` (positive: to the right) over ``duration_s`` s at the current speed.
 
     Peak yaw rate ``2 angle / duration_s``; lateral acceleration ``speed × yaw rate``.
+
+    Parameters
+    ----------
+    angle_deg : float
+        Heading change, degrees (positive: clockwise seen from above, to the right).
+    duration_s : float
+        Length, s (> 0).
+
+    Returns
+    -------
+    Maneuver
+        A ``"turn"`` manoeuvre (``dheading`` in rad).
     """
     return Maneuver("turn", float(duration_s), dheading=float(angle_deg) * DEG)
 
 
 def stop(duration_s: float) -> Maneuver:
     """Stand still for ``duration_s`` s (the speed reached so far must be zero: brake first with
-    :func:`speed_change`)."""
+    :func:`speed_change`).
+
+    Parameters
+    ----------
+    duration_s : float
+        Length, s (> 0).
+
+    Returns
+    -------
+    Maneuver
+        A ``"stop"`` manoeuvre.
+    """
     return Maneuver("stop", float(duration_s))
 
 
 def hill(grade_deg: float, duration_s: float, ramp_s: float = 5.0) -> Maneuver:
     """Climb (``grade_deg`` > 0) or descend: the grade rises to ``grade_deg`` over ``ramp_s``,
-    holds, and returns to level over the last ``ramp_s`` of ``duration_s``."""
+    holds, and returns to level over the last ``ramp_s`` of ``duration_s``.
+
+    Parameters
+    ----------
+    grade_deg : float
+        Road grade (pitch) held on the hill, degrees (``|grade_deg| < 45``; positive climbs).
+    duration_s : float
+        Length of the whole manoeuvre, s (> 0).
+    ramp_s : float
+        Time to reach the grade, and to come back to level, s (in ``(0, duration_s / 2]``).
+
+    Returns
+    -------
+    Maneuver
+        A ``"hill"`` manoeuvre (``grade`` in rad).
+    """
     return Maneuver("hill", float(duration_s), grade=float(grade_deg) * DEG, ramp_s=float(ramp_s))
 
 
@@ -235,6 +308,15 @@ def vehicle_trajectory(
     -------
     Trajectory
         With ``pos_lla``, ``vel_ned``, ``q_nb``, exact ``omega_nb_b`` and ``accel_ned``.
+
+    Raises
+    ------
+    InvalidInputError
+        If ``maneuvers`` is empty or holds something else than a :class:`Maneuver`, ``fs`` or ``speed0``
+        is not valid, the origin latitude is beyond ±85° (likely degrees), or the drive reaches a
+        negative speed, stops while moving, or climbs a hill at standstill.
+    ShapeError
+        If ``origin_lla`` is not a finite 3-vector.
     """
     if not maneuvers:
         raise InvalidInputError("vehicle_trajectory: give at least one manoeuvre, e.g. [straight(60)]")
@@ -286,7 +368,25 @@ def vehicle_trajectory(
 
 def demo_drive(duration_s: float = 600.0, *, speed: float = 15.0) -> list[Maneuver]:
     """A drive of about ``duration_s`` seconds: start from rest, then repeated blocks of straights,
-    left and right turns, a hill, a speed change and a stop (the scenario of the tests and benchmarks)."""
+    left and right turns, a hill, a speed change and a stop (the scenario of the tests and benchmarks).
+
+    Parameters
+    ----------
+    duration_s : float
+        Approximate length of the drive, s (>= 120); it ends with a 15 s brake to rest.
+    speed : float
+        Cruise speed, m/s (the blocks also drive at 1.5 × ``speed``).
+
+    Returns
+    -------
+    list of Maneuver
+        The drive, for :func:`vehicle_trajectory`.
+
+    Raises
+    ------
+    InvalidInputError
+        If ``duration_s`` is below 120 s or not finite.
+    """
     if not (math.isfinite(duration_s) and duration_s >= 120):
         raise InvalidInputError(f"demo_drive: duration_s must be at least 120 s; got {duration_s!r}")
     m: list[Maneuver] = [stop(20.0), speed_change(speed, 15.0)]
@@ -315,8 +415,31 @@ def demo_drive(duration_s: float = 600.0, *, speed: float = 15.0) -> list[Maneuv
 def gauss_markov_sequence(t: Array, sigma: ArrayLike, tau: float, rng: np.random.Generator) -> Array:
     """Stationary first-order Gauss–Markov samples at times ``t`` (exact discretisation).
 
-    ``x_k = e^{-Δt/T} x_{k-1} + σ √(1 − e^{-2Δt/T}) w_k``, ``x_0 ~ N(0, σ²)``; ``sigma`` scalar or
-    per column (then the result is (N, m)).  ``tau = inf`` gives a random constant.
+    ``x_k = e^{-Δt/T} x_{k-1} + σ √(1 − e^{-2Δt/T}) w_k``, ``x_0 ~ N(0, σ²)``, ``w_k ~ N(0, 1)``
+    (Brown & Hwang, *Introduction to Random Signals and Applied Kalman Filtering*, 4th ed., Wiley
+    2012, first-order Gauss–Markov process); ``tau = inf`` gives a random constant.
+
+    Parameters
+    ----------
+    t : numpy.ndarray, shape (N,)
+        Sample times, s (increasing; the steps need not be equal).
+    sigma : float or array_like, shape (m,)
+        Stationary standard deviation, one value or one per column (finite, >= 0), in the unit of the
+        output.
+    tau : float
+        Correlation time T, s (> 0; ``inf`` allowed).
+    rng : numpy.random.Generator
+        Source of the normal draws.
+
+    Returns
+    -------
+    numpy.ndarray, shape (N,) or (N, m)
+        The samples: (N,) for a scalar ``sigma``, else one column per entry of ``sigma``.
+
+    Raises
+    ------
+    InvalidInputError
+        If ``sigma`` is negative or not finite, or ``tau`` is not > 0.
     """
     sig = np.atleast_1d(np.asarray(sigma, dtype=float))
     if np.any(sig < 0) or not np.all(np.isfinite(sig)):
@@ -342,7 +465,27 @@ def _lever(x: ArrayLike, name: str) -> Array:
 
 
 def omega_eb_b(truth: Trajectory) -> Array:
-    """Body rate relative to the Earth, ``ω_eb^b = ω_nb^b + C_bn ω_en^n`` (rad/s), per sample."""
+    """Body rate relative to the Earth, ``ω_eb^b = ω_nb^b + C_bn ω_en^n`` (rad/s), per sample.
+
+    ``ω_en^n`` is the transport rate of the NED frame over the ellipsoid (Groves, *Principles of GNSS,
+    Inertial, and Multisensor Integrated Navigation Systems*, 2nd ed., Artech House 2013, §5.4);
+    ``ω_nb^b`` is the trajectory's own, or differentiated from ``q_nb`` when it has none.
+
+    Parameters
+    ----------
+    truth : Trajectory
+        With ``pos_lla`` (lat rad, lon rad, h m), ``vel_ned`` (m/s) and ``q_nb`` (body FRD -> NED).
+
+    Returns
+    -------
+    numpy.ndarray, shape (N, 3)
+        ``ω_eb^b``, body FRD, rad/s.
+
+    Raises
+    ------
+    InvalidInputError
+        If ``truth`` has no ``pos_lla`` or no ``vel_ned``.
+    """
     if truth.pos_lla is None or truth.vel_ned is None:
         raise InvalidInputError("the truth trajectory needs pos_lla and vel_ned (use vehicle_trajectory)")
     w_nb = truth.omega_nb_b
@@ -353,7 +496,21 @@ def omega_eb_b(truth: Trajectory) -> Array:
 
 
 def lever_arm_velocity_body(truth: Trajectory, lever_b: ArrayLike) -> Array:
-    """Body-frame velocity (m/s) of the point at ``lever_b`` (body FRD, m): ``C_bn v^n + ω_eb^b × l``."""
+    """Body-frame velocity (m/s) of the point at ``lever_b`` (body FRD, m): ``C_bn v^n + ω_eb^b × l``.
+
+    Parameters
+    ----------
+    truth : Trajectory
+        With ``pos_lla``, ``vel_ned`` (m/s) and ``q_nb`` (body FRD -> NED), e.g. from
+        :func:`vehicle_trajectory`.
+    lever_b : array_like, shape (3,)
+        The point, from the IMU, in body FRD axes, m.
+
+    Returns
+    -------
+    numpy.ndarray, shape (N, 3)
+        Its velocity relative to the Earth, resolved in body FRD axes, m/s.
+    """
     lb = _lever(lever_b, "lever_b")
     v_b = np.einsum("nji,nj->ni", dcm_from_quat(truth.q_nb), truth.vel_ned)
     return v_b + np.cross(omega_eb_b(truth), lb)
@@ -361,7 +518,17 @@ def lever_arm_velocity_body(truth: Trajectory, lever_b: ArrayLike) -> Array:
 
 @dataclass(frozen=True)
 class OdometerData:
-    """Wheel-odometer forward speed (m/s) at times ``t`` (s); ``meta`` records the simulated errors."""
+    """Wheel-odometer forward speed.
+
+    Attributes
+    ----------
+    t : numpy.ndarray, shape (N,)
+        Sample times, s.
+    speed : numpy.ndarray, shape (N,)
+        Measured forward (body x) speed, m/s.
+    meta : dict
+        The simulated errors (``lever_arm`` m, ``scale_factor``, ``noise_std`` m/s).
+    """
 
     t: Array
     speed: Array
@@ -370,7 +537,17 @@ class OdometerData:
 
 @dataclass(frozen=True)
 class BaroData:
-    """Barometric (ellipsoidal-equivalent) height (m) at times ``t`` (s)."""
+    """Barometric (ellipsoidal-equivalent) height.
+
+    Attributes
+    ----------
+    t : numpy.ndarray, shape (N,)
+        Sample times, s.
+    height : numpy.ndarray, shape (N,)
+        Measured height, m (positive up, the ellipsoidal height plus the sensor's errors).
+    meta : dict
+        The simulated errors (``noise_std`` m, ``bias_std`` m, ``bias_tau`` s, ``bias``: the first bias, m).
+    """
 
     t: Array
     height: Array
@@ -399,16 +576,28 @@ def simulate_odometer(
 
     Parameters
     ----------
-    truth : Trajectory (from :func:`vehicle_trajectory`).
-    lever_arm : (3,) wheel contact point in body FRD, m.
-    scale_factor : k, the odometer scale-factor error (dimensionless, e.g. 0.005).
-    noise_std : white-noise σ of each sample, m/s (>= 0).
-    rate_hz : output rate (default: every truth sample).
-    rng : numpy Generator or seed.
+    truth : Trajectory
+        The truth, from :func:`vehicle_trajectory`.
+    lever_arm : array_like, shape (3,)
+        Wheel contact point from the IMU, body FRD, m.
+    scale_factor : float
+        k, the odometer scale-factor error (dimensionless, e.g. 0.005).
+    noise_std : float
+        White-noise σ of each sample, m/s (>= 0).
+    rate_hz : float, optional
+        Output rate, Hz, at most the truth rate (default: every truth sample).
+    rng : numpy.random.Generator or int, optional
+        Random generator or seed.
 
     Returns
     -------
     OdometerData
+        The speeds, with the simulated errors in ``meta``.
+
+    Raises
+    ------
+    InvalidInputError
+        If ``noise_std`` is negative or not finite, or ``scale_factor`` is not finite.
     """
     if not (math.isfinite(noise_std) and noise_std >= 0) or not math.isfinite(scale_factor):
         raise InvalidInputError(f"noise_std must be >= 0 m/s and scale_factor finite; got {noise_std!r}, {scale_factor!r}")
@@ -431,7 +620,33 @@ def simulate_baro(
     rng: Any = None,
 ) -> BaroData:
     """Barometric height: ``h + b + w`` with a Gauss–Markov bias ``b`` (σ ``bias_std`` m, correlation time
-    ``bias_tau`` s; weather and the geoid–ellipsoid offset) and white noise ``noise_std`` m."""
+    ``bias_tau`` s; weather and the geoid–ellipsoid offset) and white noise ``noise_std`` m.
+
+    Parameters
+    ----------
+    truth : Trajectory
+        The truth, with ``pos_lla`` (from :func:`vehicle_trajectory`).
+    noise_std : float
+        White-noise σ of each sample, m (>= 0).
+    bias_std : float
+        Stationary σ of the bias, m (>= 0).
+    bias_tau : float
+        Correlation time of the bias, s (> 0; ``inf``: a constant bias).
+    rate_hz : float, optional
+        Output rate, Hz, at most the truth rate (None: every truth sample).
+    rng : numpy.random.Generator or int, optional
+        Random generator or seed.
+
+    Returns
+    -------
+    BaroData
+        The heights, with the simulated errors in ``meta``.
+
+    Raises
+    ------
+    InvalidInputError
+        If ``truth`` has no ``pos_lla`` or ``noise_std`` is negative or not finite.
+    """
     if truth.pos_lla is None:
         raise InvalidInputError("the truth trajectory needs pos_lla (use vehicle_trajectory)")
     if not (math.isfinite(noise_std) and noise_std >= 0):
