@@ -54,16 +54,12 @@ NOT_YET_DONE = {
     "imunav.ins.lstm",  # created by the layers branch from learn.lstm
     "imunav.ins.result",  # created by the layers branch from ins.detectors
     "imunav.ins.statistics",  # created by the layers branch from ins.detectors
-    "imunav.lab",
     "imunav.labsteps.*",
     "imunav.learn.*",
     "imunav.montecarlo",
     "imunav.sim.error_model",
     "imunav.timeseries",
     # modules the layers branch creates from code of the modules above
-    "imunav.labconfig",
-    "imunav.report.lab",
-    "imunav.sim.streams",
 }
 
 # Modules whose docstrings still cite the project's private notes instead of the published source (same form).
