@@ -56,7 +56,6 @@ NOT_YET_DONE = {
     "imunav.ins.statistics",  # created by the layers branch from ins.detectors
     "imunav.labsteps.*",
     "imunav.learn.*",
-    "imunav.montecarlo",
     "imunav.sim.error_model",
     "imunav.timeseries",
     # modules the layers branch creates from code of the modules above
