@@ -53,7 +53,6 @@ NOT_YET_DONE = {
     "imunav.ins.lstm",  # created by the layers branch from learn.lstm
     "imunav.ins.result",  # created by the layers branch from ins.detectors
     "imunav.ins.statistics",  # created by the layers branch from ins.detectors
-    "imunav.labsteps.*",
     "imunav.learn.*",
     "imunav.sim.error_model",
     "imunav.timeseries",
