@@ -54,7 +54,6 @@ NOT_YET_DONE = {
     "imunav.ins.result",  # created by the layers branch from ins.detectors
     "imunav.ins.statistics",  # created by the layers branch from ins.detectors
     "imunav.learn.*",
-    "imunav.sim.error_model",
     # modules the layers branch creates from code of the modules above
 }
 
