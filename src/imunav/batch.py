@@ -125,6 +125,16 @@ def find_units(folder: str | os.PathLike[str]) -> list[Path]:
     A folder written by :func:`simulate_batch` is read through its manifest: only the recordings it lists
     count, and a folder without a complete manifest (a killed run) is refused
     (:class:`~imunav.errors.RunFolderError`).
+
+    Parameters
+    ----------
+    folder : str or os.PathLike
+        The batch folder.
+
+    Returns
+    -------
+    list of pathlib.Path
+        One recording per unit, sorted by name.
     """
     return _batch_files(folder)[0]
 
@@ -227,7 +237,49 @@ def simulate_batch(
     of another run stays beside these; ``segments.json``, ``batch.json`` and
     last ``manifest.json`` are written after the units.
 
-    Returns the unit recordings (static tests) written to ``out_dir``.
+    Parameters
+    ----------
+    n_units : int
+        Number of units, >= 1 (named ``unit_001`` ...).
+    out_dir : str or os.PathLike
+        The batch folder to write (a run folder).
+    preset : str
+        Name of the error-model preset (:mod:`imunav.sim.presets`) the units spread around.
+    spread : float
+        Relative 1-sigma unit-to-unit spread of the deterministic parameters, >= 0 (0.2 = 20 %).
+    rng : int
+        Master seed.
+    fs : float
+        Sample rate, Hz.
+    dwell_s : float
+        Duration of each static position / rate step, s.
+    transition_s : float
+        Duration of each transition between positions, s.
+    rate_table : bool
+        Also simulate the rate-table test (``<unit>_rate.<format>`` and ``rate_segments.json``).
+    format : {"npz", "csv", "parquet", "hdf5", "mat"}
+        File format of the recordings.
+    static_s : float, optional
+        Instead of the multi-position test, one level static record of this length, s (for noise batches).
+    executor : {"serial", "processes", "dask"}
+        Where the units are processed (:func:`imunav.montecarlo.run_batch`).
+    n_workers : int, optional
+        Worker processes (default: number of cores).
+    progress : bool
+        Show a progress bar.
+    overwrite : bool
+        Clear a previous run in ``out_dir`` instead of refusing.
+
+    Returns
+    -------
+    list of pathlib.Path
+        The unit recordings (static tests) written to ``out_dir``.
+
+    Raises
+    ------
+    InvalidInputError
+        If ``n_units`` is not a positive integer, ``spread`` is negative or not finite, ``format`` is unknown
+        or ``static_s`` is not positive.
     """
 
     if not isinstance(n_units, (int, np.integer)) or n_units < 1:
@@ -276,13 +328,20 @@ class BatchSummary(Result):
 
     Attributes
     ----------
-    table : one row per unit: ``unit``, ``status`` (ok / error), ``passed``
-        (spec verdict, None without a spec) and per parameter the value
-        (display unit), ``<name>_se`` and ``<name>_err`` (estimate − truth,
-        when the truth is known).
-    units : per unit the full result dict (or the error message).
-    spec_checks : per unit the list of :class:`imunav.report.SpecCheck` dicts.
-    out_dir : folder with the per-unit files and the summary.
+    kind : str
+        ``"calibration"`` or ``"noise"``.
+    table : pandas.DataFrame
+        One row per unit: ``unit``, ``status`` (ok / error), ``passed`` (spec verdict, None without a spec),
+        ``error`` and per parameter the value (display unit), ``<name>_se`` and ``<name>_err``
+        (estimate − truth, when the truth is known).
+    units : dict
+        Per unit the full result dict (or ``{"error": message}``).
+    spec_checks : dict
+        Per unit the list of :class:`imunav.report.SpecCheck` dicts.
+    out_dir : pathlib.Path or None
+        Folder with the per-unit files and the summary.
+    seconds : float
+        Wall-clock duration of the batch, s.
     """
 
     kind: str
@@ -304,12 +363,27 @@ class BatchSummary(Result):
         return None if not v else bool(all(v))
 
     def statistics(self) -> pd.DataFrame:
-        """Mean, standard deviation, min and max over the units of every parameter column."""
+        """Mean, standard deviation, min and max over the units of every parameter column.
+
+        Returns
+        -------
+        pandas.DataFrame
+            One row per value / ``_err`` column (display units; ``_se`` columns left out), columns ``mean``,
+            ``std`` (ddof=1), ``min``, ``max``.
+        """
         num = self.table.drop(columns=[c for c in ("unit", "status", "passed", "error") if c in self.table])
         num = num[[c for c in num.columns if not c.endswith("_se")]].apply(pd.to_numeric, errors="coerce")
         return pd.DataFrame({"mean": num.mean(), "std": num.std(ddof=1), "min": num.min(), "max": num.max()})
 
     def to_dict(self) -> dict[str, Any]:
+        """JSON-ready form (the content of ``summary.json``).
+
+        Returns
+        -------
+        dict
+            ``kind``, ``n_units``, ``n_failed``, ``passed``, ``seconds``, ``table`` (one dict per row) and
+            ``spec_checks``.
+        """
         return {
             "kind": self.kind,
             "n_units": int(len(self.table)),
@@ -362,7 +436,22 @@ def _summarise(kind: str, names: list[str], results: list[Any], spec: Any, out_d
 
 
 def write_summary(summary: BatchSummary, out_dir: Path, title: str) -> dict[str, Path]:
-    """``summary.csv``, ``summary.json`` and ``index.html`` (:func:`imunav.report.batch.write_batch_html`)."""
+    """``summary.csv``, ``summary.json`` and ``index.html`` (:func:`imunav.report.batch.write_batch_html`).
+
+    Parameters
+    ----------
+    summary : BatchSummary
+        The batch's results.
+    out_dir : pathlib.Path
+        Folder to write into (existing).
+    title : str
+        Title of the HTML page.
+
+    Returns
+    -------
+    dict
+        ``{"csv", "json", "html"}`` -> path written.
+    """
 
     paths = {}
     with atomic_path(out_dir / "summary.csv") as tmp:
@@ -407,9 +496,36 @@ def calibrate_unit(
     ``trusted``: the only files of the folder that may be used (its manifest, see :func:`find_units`),
     or None for a plain folder.
 
-    Returns ``{"unit", "method", "estimates": {name: (value_si, se_si)},
-    "truth": {name: value_si} (simulated batches), "files", "residual_rms",
-    "condition"}``.
+    Parameters
+    ----------
+    recording : str or os.PathLike
+        The unit's static multi-position recording.
+    method : {"multiposition", "thesis", "multipose"}
+        Calibration method (module docstring).
+    out_dir : str or os.PathLike, optional
+        Where to write ``<unit>.json`` and ``<unit>_report.json`` (None: nothing written).
+    read_options : Mapping, optional
+        Keyword arguments of :func:`imunav.io.read_imu` (columns, units, ...).
+    latitude : float, optional
+        Geodetic latitude, rad (normal gravity and Earth-rate removal of the multi-position methods).
+    gravity : float, optional
+        Local gravity magnitude, m/s^2 (default: normal gravity at ``latitude``, else 9.80665).
+    trusted : sequence of str, optional
+        The only files of the folder that may be used (its manifest, see :func:`find_units`), or None for a
+        plain folder.
+
+    Returns
+    -------
+    dict
+        ``{"unit", "method", "estimates": {name: (value_si, se_si)}, "truth": {name: value_si}`` (simulated
+        batches, else empty) ``, "files", "residual_rms", "condition"}``.
+
+    Raises
+    ------
+    ConfigError
+        If ``method`` is unknown.
+    InvalidInputError
+        If the segment table (or, for ``thesis``, the rate-table test or its segments) is missing.
     """
 
     rec = Path(recording)
@@ -491,6 +607,43 @@ def calibrate_batch(
     manifest (only the files it lists, checked against their SHA-256; a killed
     run is refused).  ``out_dir`` is a run folder of its own
     (:mod:`imunav.runfolder`; ``overwrite`` clears a previous one).
+
+    Parameters
+    ----------
+    folder : str or os.PathLike
+        The batch folder.
+    method : {"multiposition", "thesis", "multipose"}
+        Calibration method (module docstring).
+    out_dir : str or os.PathLike, optional
+        Output run folder (default ``<folder>/calibration``).
+    spec : str, os.PathLike, Mapping or None
+        Datasheet limits: a spec TOML file or table (:func:`imunav.report.load_spec`), or parsed limits.
+    read_options : Mapping, optional
+        Keyword arguments of :func:`imunav.io.read_imu` (columns, units, ...).
+    latitude : float, optional
+        Geodetic latitude, rad (as in :func:`calibrate_unit`).
+    gravity : float, optional
+        Local gravity magnitude, m/s^2 (as in :func:`calibrate_unit`).
+    executor : {"serial", "processes", "dask"}
+        Where the units are processed (:func:`imunav.montecarlo.run_batch`).
+    n_workers : int, optional
+        Worker processes (default: number of cores).
+    address : str, optional
+        Dask scheduler address (Dask executor only; None: a local cluster).
+    progress : bool
+        Show a progress bar.
+    overwrite : bool
+        Clear a previous run in ``out_dir`` instead of refusing.
+
+    Returns
+    -------
+    BatchSummary
+        One row per unit (also written as ``summary.csv`` / ``summary.json``).
+
+    Raises
+    ------
+    ConfigError
+        If ``method`` is unknown.
     """
 
     if method not in CALIBRATION_METHODS:
@@ -534,6 +687,25 @@ def noise_unit(
     otherwise :class:`~imunav.errors.NotStaticError` unless ``force=True``.
     Writes ``<out_dir>/<unit>_noise.json`` (both :class:`imunav.noise.NoiseFit`) and
     returns ``{"unit", "estimates": {name: (value_si, se_si)}, "files"}``.
+
+    Parameters
+    ----------
+    recording : str or os.PathLike
+        The unit's static recording.
+    out_dir : str or os.PathLike, optional
+        Where to write ``<unit>_noise.json`` (None: nothing written).
+    read_options : Mapping, optional
+        Keyword arguments of :func:`imunav.io.read_imu` (columns, units, ...).
+    terms : sequence of str
+        Allan-variance terms to fit (IEEE Std 952-1997 Annex C): ``Q`` quantisation, ``N`` angle / velocity
+        random walk, ``B`` bias instability, ``K`` rate random walk, ``R`` rate ramp.
+    force : bool
+        Analyse a recording that is not static.
+
+    Returns
+    -------
+    dict
+        ``{"unit", "estimates": {name: (value_si, se_si)}, "truth": {}, "files"}``.
     """
 
     rec = Path(recording)
@@ -578,6 +750,41 @@ def noise_batch(
     batch is refused with :class:`~imunav.errors.NotStaticError` before any
     result is written.  ``force=True`` analyses them anyway.  Folders are read
     and written as in :func:`calibrate_batch` (manifests, ``overwrite``).
+
+    Parameters
+    ----------
+    folder : str or os.PathLike
+        The batch folder.
+    out_dir : str or os.PathLike, optional
+        Output run folder (default ``<folder>/noise``).
+    spec : str, os.PathLike, Mapping or None
+        Datasheet limits (as in :func:`calibrate_batch`).
+    read_options : Mapping, optional
+        Keyword arguments of :func:`imunav.io.read_imu` (columns, units, ...).
+    terms : sequence of str
+        Allan-variance terms to fit (as in :func:`noise_unit`).
+    executor : {"serial", "processes", "dask"}
+        Where the units are processed (:func:`imunav.montecarlo.run_batch`).
+    n_workers : int, optional
+        Worker processes (default: number of cores).
+    address : str, optional
+        Dask scheduler address (Dask executor only; None: a local cluster).
+    progress : bool
+        Show a progress bar.
+    force : bool
+        Analyse recordings that are not static.
+    overwrite : bool
+        Clear a previous run in ``out_dir`` instead of refusing.
+
+    Returns
+    -------
+    BatchSummary
+        One row per unit (also written as ``summary.csv`` / ``summary.json``).
+
+    Raises
+    ------
+    NotStaticError
+        If no unit's recording is static (and ``force`` is False).
     """
 
     limits = _load_spec(spec)

@@ -82,7 +82,21 @@ __all__ = ["STEPS", "SIMULATION_ONLY", "LabConfig", "LabContext", "StepResult", 
 
 @dataclass(frozen=True)
 class StepRecord(Result):
-    """One step's outcome inside a lab run."""
+    """One step's outcome inside a lab run.
+
+    Parameters
+    ----------
+    name : str
+        Step module name (``imunav.labsteps.<name>``).
+    title : str
+        The step's ``TITLE``.
+    result : StepResult or None
+        What the step returned (None when it raised).
+    seconds : float
+        Wall-clock duration of the step, s.
+    error : str, optional
+        Traceback of the exception the step raised (None: it finished).
+    """
 
     name: str
     title: str
@@ -95,6 +109,13 @@ class StepRecord(Result):
         return False if self.error else (self.result.passed if self.result else None)
 
     def to_dict(self) -> dict:
+        """JSON-ready form (the record in ``summary.json``).
+
+        Returns
+        -------
+        dict
+            ``name``, ``title``, ``seconds``, ``passed``, the step result's keys and ``error`` when it failed.
+        """
         d = {"name": self.name, "title": self.title, "seconds": round(self.seconds, 3), "passed": self.passed}
         if self.result is not None:
             d.update(self.result.to_dict())
@@ -106,7 +127,21 @@ class StepRecord(Result):
 
 @dataclass(frozen=True)
 class LabResult(Result):
-    """A lab run: its folder, step records and overall verdict."""
+    """A lab run: its folder, step records and overall verdict.
+
+    Parameters
+    ----------
+    out_dir : pathlib.Path
+        The report folder.
+    seed : int
+        Root seed of the run.
+    steps : list of StepRecord
+        One record per step, in run order.
+    seconds : float
+        Wall-clock duration of the whole lab, s.
+    spec_checks : list of imunav.report.SpecCheck
+        Every estimated parameter checked against the ``[spec]`` limits (empty without a spec).
+    """
 
     out_dir: Path
     seed: int
@@ -132,6 +167,13 @@ class LabResult(Result):
         return [s.name for s in self.steps if s.error]
 
     def to_dict(self) -> dict:
+        """JSON-ready form (the content of ``summary.json``).
+
+        Returns
+        -------
+        dict
+            ``imunav_version``, ``seed``, ``seconds``, ``passed``, ``spec_passed``, ``spec_checks`` and ``steps``.
+        """
         return {
             "imunav_version": __version__,
             "seed": self.seed,
@@ -185,18 +227,31 @@ def run_lab(
 
     Parameters
     ----------
-    out_dir : report folder (created; new, empty, or an imunav run folder with ``overwrite``).
-    config : TOML file or dict (see :func:`load_lab_config`); None = defaults
-        (the built-in virtual IMU).
-    rng : root seed (int) or Generator; ``[lab] seed`` in the config wins.
-    steps : step names to run (default ``[lab] steps`` or :data:`STEPS`).
-    progress : show rich progress bars.
-    console : a :class:`rich.console.Console` to draw on.
-    overwrite : clear a report folder that holds another run instead of refusing.
+    out_dir : str or os.PathLike
+        Report folder (created; new, empty, or an imunav run folder with ``overwrite``).
+    config : str, os.PathLike, Mapping or None
+        TOML file or dict (see :func:`load_lab_config`); None = defaults (the built-in virtual IMU).
+    rng : int or numpy.random.Generator or None
+        Root seed (a Generator contributes one drawn integer; None: 0); ``[lab] seed`` in the config wins.
+    steps : list of str, optional
+        Step names to run (default ``[lab] steps`` or :data:`STEPS`).
+    progress : bool
+        Show rich progress bars.
+    console : rich.console.Console, optional
+        Console to draw the progress on.
+    overwrite : bool
+        Clear a report folder that holds another run instead of refusing.
 
     Returns
     -------
-    LabResult (also written as ``summary.json``).
+    LabResult
+        The run, also written as ``summary.json``.
+
+    Raises
+    ------
+    ConfigError
+        If the configuration is invalid, a step name is unknown, the step list is empty or ``rng`` is a
+        negative integer or of another type.
     """
     typed = parse_lab_config(config)
     cfg = load_lab_config(config)
@@ -271,6 +326,16 @@ def harvest_parameters(objects: Mapping[str, Any]) -> dict[str, tuple[float, flo
     inside dicts, lists and tuples one level down; names as in
     :mod:`imunav.report.catalog`.  Steps that fill ``StepResult.parameters``
     themselves are not harvested.
+
+    Parameters
+    ----------
+    objects : Mapping
+        Artifacts a step added or replaced (name -> object).
+
+    Returns
+    -------
+    dict
+        ``{name: (value_si, sigma_si)}``; objects that are not recognised, or fail to convert, are skipped.
     """
 
     out: dict[str, tuple[float, float | None]] = {}

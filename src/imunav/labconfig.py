@@ -38,7 +38,13 @@ STEPS: list[str] = [
 
 
 def available_steps() -> list[str]:
-    """Names of the step modules present in :mod:`imunav.labsteps`."""
+    """Names of the step modules present in :mod:`imunav.labsteps`.
+
+    Returns
+    -------
+    list of str
+        Sorted public module names of the package (each a valid ``[lab] steps`` entry and option table).
+    """
 
     return sorted(m.name for m in pkgutil.iter_modules(pkg.__path__) if not m.name.startswith("_"))
 
@@ -60,14 +66,20 @@ class LabConfig:
 
     Attributes
     ----------
-    seed : root seed (None: the caller's).
-    title : report title.
-    steps : step names in order (None: the default for the mode).
-    recordings : name -> :class:`imunav.labsteps.recordings.RecordingSpec`
-        (empty: the built-in virtual IMU).
-    spec : parameter name -> :class:`imunav.report.SpecLimit` (datasheet limits).
-    options : step name -> its option table.
-    source : the TOML file (None for a dict).
+    seed : int or None
+        Root seed of the lab's random streams (None: the caller's ``rng``).
+    title : str
+        Report title.
+    steps : tuple of str or None
+        Step names in order (None: :meth:`default_steps` for the mode).
+    recordings : dict
+        Name -> :class:`imunav.labsteps.recordings.RecordingSpec` (empty: the built-in virtual IMU).
+    spec : dict
+        Parameter name -> :class:`imunav.report.SpecLimit` (datasheet limits).
+    options : dict
+        Step name -> its option table.
+    source : pathlib.Path or None
+        The TOML file (None for a dict).
     """
 
     seed: int | None = None
@@ -84,6 +96,14 @@ class LabConfig:
         return "recordings" if self.recordings else "virtual"
 
     def default_steps(self) -> list[str]:
+        """Steps to run: ``steps`` if given, else the defaults for the mode.
+
+        Returns
+        -------
+        list of str
+            ``steps``; else, with recordings, ``"recordings"`` followed by the :data:`STEPS` that are not
+            :data:`SIMULATION_ONLY`; else :data:`STEPS`.
+        """
         if self.steps is not None:
             return list(self.steps)
         if self.recordings:
@@ -113,7 +133,22 @@ def parse_lab_config(config: str | os.PathLike[str] | Mapping[str, Any] | None) 
         [spec.<parameter>]       datasheet limit: min / max, unit, description
         [<step>]                 options of a step (e.g. [simulate_tests], [temperature])
 
-    Raises :class:`~imunav.errors.ConfigError` naming the file, table and key.
+    Parameters
+    ----------
+    config : str, os.PathLike, Mapping or None
+        Path of a TOML file, or its tables as a dict (a ``_base_dir`` key sets the folder relative recording
+        paths are resolved against); None gives the default :class:`LabConfig`.
+
+    Returns
+    -------
+    LabConfig
+        The validated definition.
+
+    Raises
+    ------
+    ConfigError
+        If the file is missing or not TOML, or a table, key, option, step name or value is unknown or of the
+        wrong type; the message names the file, table and key.
     """
     if config is None:
         return LabConfig()
@@ -181,6 +216,16 @@ def load_lab_config(config: str | os.PathLike[str] | Mapping[str, Any] | None) -
 
     The checks are those of :func:`parse_lab_config` (which gives the typed
     form); unknown tables or ``[lab]`` keys raise :class:`~imunav.errors.ConfigError`.
+
+    Parameters
+    ----------
+    config : str, os.PathLike, Mapping or None
+        Path of a TOML file or its tables as a dict; None gives ``{}``.
+
+    Returns
+    -------
+    dict
+        The raw tables; read from a file, with ``_base_dir`` set to the file's folder.
     """
     if config is None:
         return {}

@@ -59,6 +59,20 @@ def spawn_generators(seed: int | np.random.SeedSequence, n: int, start: int = 0)
     """Generators of runs ``start .. start+n-1`` of a Monte Carlo seeded with ``seed``.
 
     Run ``i`` always gets ``Generator(PCG64(SeedSequence(seed).spawn(...)[i]))``.
+
+    Parameters
+    ----------
+    seed : int or numpy.random.SeedSequence
+        Master seed of the Monte Carlo.
+    n : int
+        Number of generators.
+    start : int
+        Index of the first run.
+
+    Returns
+    -------
+    list of numpy.random.Generator
+        ``n`` independent PCG64 generators; run ``i``'s does not depend on ``start`` or ``n``.
     """
     ss = seed if isinstance(seed, np.random.SeedSequence) else np.random.SeedSequence(int(seed))
     # SeedSequence.spawn is stateful; derive children explicitly so that any
@@ -89,10 +103,18 @@ class MonteCarloResult(Result):
 
     Attributes
     ----------
-    metrics : DataFrame with one row per run (index ``run``) and one column per
-        scalar result.
-    arrays : name -> array stacked over runs, shape ``(n_runs, ...)``.
-    seed, n_runs, executor : how it was run.
+    metrics : pandas.DataFrame
+        One row per run (index ``run``) and one column per scalar result.
+    arrays : dict
+        Name -> array stacked over runs, shape ``(n_runs, ...)``.
+    seed : int
+        Master seed.
+    n_runs : int
+        Number of runs.
+    executor : str
+        ``"serial"``, ``"processes"`` or ``"dask"``.
+    meta : dict
+        Scenario name, chunk size and the ``repr`` of the scenario's keyword arguments.
     """
 
     metrics: pd.DataFrame
@@ -103,7 +125,18 @@ class MonteCarloResult(Result):
     meta: dict[str, Any] = field(default_factory=dict)
 
     def summary(self, percentiles: Sequence[float] = (5, 50, 95)) -> pd.DataFrame:
-        """Mean, standard deviation, min / max and percentiles of every scalar metric."""
+        """Mean, standard deviation, min / max and percentiles of every scalar metric.
+
+        Parameters
+        ----------
+        percentiles : sequence of float
+            Percentiles to add, in [0, 100].
+
+        Returns
+        -------
+        pandas.DataFrame
+            Rows ``mean``, ``std`` (ddof=1; NaN for one run), ``min``, ``max``, ``p<q>``; one column per metric.
+        """
         m = self.metrics
         rows = {
             "mean": m.mean(),
@@ -130,12 +163,27 @@ class MonteCarloResult(Result):
         Returns
         -------
         imunav.filters.ConsistencyResult
+            Time-averaged statistic over the runs and its χ² acceptance band (Bar-Shalom, Li & Kirubarajan,
+            "Estimation with Applications to Tracking and Navigation", Wiley 2001, §5.4).
+
+        Raises
+        ------
+        InvalidInputError
+            If ``name`` is not an array result.
         """
         if name not in self.arrays:
             raise InvalidInputError(f"no array result {name!r}; available: {sorted(self.arrays)}")
         return consistency_test(self.arrays[name], dof, confidence)
 
     def to_dict(self) -> dict[str, Any]:
+        """JSON-ready form.
+
+        Returns
+        -------
+        dict
+            ``seed``, ``n_runs``, ``executor``, ``metrics`` (column -> list), ``summary`` (:meth:`summary`),
+            ``arrays`` (nested lists) and ``meta``.
+        """
         return {
             "seed": self.seed,
             "n_runs": self.n_runs,
@@ -230,23 +278,42 @@ def run_montecarlo(
 
     Parameters
     ----------
-    scenario : module-level function ``f(rng, **kwargs) -> {name: scalar | array}``,
-        or with ``batched=True`` ``f([rng, ...], **kwargs) -> [{...}, ...]``.
-    n_runs : number of runs.
-    seed : master seed; run ``i`` uses :func:`spawn_generators` ``(seed, ...)[i]``.
-    executor : ``"serial"``, ``"processes"`` or ``"dask"`` (see module docstring).
-    n_workers : worker processes (default: number of cores).
-    address : Dask scheduler address; if None with ``executor="dask"`` a
-        LocalCluster is started on 127.0.0.1 and closed afterwards.
-    chunk_size : runs per task (default: ``ceil(n_runs / (4 n_workers))``).
-        Chunking does not change the numbers.
-    progress : True for a rich progress bar, or a callable ``progress(done, total)`` called after each
-        chunk (with ``chunk_size=1``, after each run).
-    **kwargs : passed to ``scenario``.
+    scenario : callable
+        Module-level function ``f(rng, **kwargs) -> {name: scalar | array}``, or with ``batched=True``
+        ``f([rng, ...], **kwargs) -> [{...}, ...]``.
+    n_runs : int
+        Number of runs, >= 1.
+    seed : int
+        Master seed; run ``i`` uses :func:`spawn_generators` ``(seed, ...)[i]``.
+    executor : {"serial", "processes", "dask"}
+        Where the runs execute (see module docstring).
+    n_workers : int, optional
+        Worker processes (default: number of cores).
+    address : str, optional
+        Dask scheduler address; if None with ``executor="dask"`` a LocalCluster is started on 127.0.0.1 and
+        closed afterwards.
+    batched : bool
+        ``scenario`` takes a list of generators (one chunk) and returns one mapping per generator.
+    chunk_size : int, optional
+        Runs per task (default: ``ceil(n_runs / (4 n_workers))``). Chunking does not change the numbers.
+    progress : bool or callable
+        True for a rich progress bar, or a callable ``progress(done, total)`` called after each chunk (with
+        ``chunk_size=1``, after each run).
+    description : str
+        Label of the progress bar.
+    **kwargs
+        Passed to ``scenario``.
 
     Returns
     -------
     MonteCarloResult
+        Scalars in ``metrics``, arrays stacked in ``arrays``, in run order.
+
+    Raises
+    ------
+    InvalidInputError
+        If ``n_runs`` < 1, ``scenario`` is not callable, ``address`` is given without the Dask executor or
+        ``executor`` is unknown.
     """
     if n_runs < 1:
         raise InvalidInputError(f"n_runs must be >= 1, got {n_runs}")
@@ -362,6 +429,35 @@ def run_batch(
 
     A failing item does not stop the others: its entry is the exception, so
     the caller can report which unit failed and why.
+
+    Parameters
+    ----------
+    fn : callable
+        Module-level function ``fn(item, **kwargs) -> mapping``.
+    items : sequence
+        The inputs, at least one.
+    executor : {"serial", "processes", "dask"}
+        Where the calls execute (see module docstring).
+    n_workers : int, optional
+        Worker processes (default: number of cores).
+    address : str, optional
+        Dask scheduler address (Dask executor only; None: a local cluster).
+    progress : bool
+        Show a rich progress bar (processes executor).
+    description : str
+        Label of the progress bar.
+    **kwargs
+        Passed to ``fn``.
+
+    Returns
+    -------
+    list
+        One entry per item, in input order: ``fn``'s result or the exception it raised.
+
+    Raises
+    ------
+    InvalidInputError
+        If ``items`` is empty, ``address`` is given without the Dask executor or ``executor`` is unknown.
     """
     items = list(items)
     if not items:

@@ -70,7 +70,19 @@ def _rows(mask: NDArray[np.bool_], limit: int = 10) -> str:
 
 @dataclass(frozen=True)
 class Gap:
-    """A gap in the time stamps: ``t[index + 1] - t[index]`` is ``length_s``."""
+    """A gap in the time stamps: ``t[index + 1] - t[index]`` is ``length_s``.
+
+    Attributes
+    ----------
+    index : int
+        Row before the gap.
+    t_start : float
+        ``t[index]``, s.
+    length_s : float
+        Length of the interval, s.
+    missing_samples : int
+        ``round(length_s / median interval) - 1``: samples that would fill it at the nominal rate.
+    """
 
     index: int
     t_start: float
@@ -84,11 +96,16 @@ class ImuData:
 
     Parameters
     ----------
-    t : (N,) float, s, strictly increasing.
-    gyro : (N, 3) float, rad/s.
-    accel : (N, 3) float, m/s² (specific force).
-    mag : (N, 3) float, optional, in ``mag_unit``.
-    temp : (N,) float, optional, °C.
+    t : array_like, shape (N,)
+        Time, s, finite and strictly increasing.
+    gyro : array_like, shape (N, 3)
+        Angular rate, rad/s, body FRD.
+    accel : array_like, shape (N, 3)
+        Specific force, m/s², body FRD.
+    mag : array_like, shape (N, 3), optional
+        Magnetic field, in ``mag_unit``.
+    temp : array_like, shape (N,), optional
+        Temperature, °C.
     mag_unit : str
         Unit of ``mag`` (kept as given), default ``"uT"``.
     meta : dict
@@ -210,6 +227,52 @@ class ImuData:
         done is recorded in ``meta["nan_policy"]`` (policy, affected rows and
         columns).  With ``t=None`` the samples are at ``t0 + k / fs``.
 
+        Parameters
+        ----------
+        t : array_like, shape (N,), or None
+            Time stamps in ``time_unit`` (None: from ``fs`` and ``t0``).
+        gyro : array_like, shape (N, 3)
+            Angular rate in ``gyro_unit``.
+        accel : array_like, shape (N, 3)
+            Specific force in ``accel_unit``.
+        mag : array_like, shape (N, 3), optional
+            Magnetic field in ``mag_unit`` (kept as given).
+        temp : array_like, shape (N,), optional
+            Temperature, °C.
+        time_unit : str
+            Unit of ``t`` (``"s"``, ``"ms"``, ``"us"``, ``"ns"``, ...; :func:`imunav.units.to_si`).
+        gyro_unit : str
+            ``"rad/s"``, ``"deg/s"``, ``"rpm"`` or ``"counts"``.
+        accel_unit : str
+            ``"m/s^2"``, ``"g"``, ``"mg"`` or ``"counts"``.
+        gyro_scale : float or array_like of shape (3,), optional
+            rad/s per count (required with ``gyro_unit="counts"``).
+        accel_scale : float or array_like of shape (3,), optional
+            m/s² per count (required with ``accel_unit="counts"``).
+        gyro_offset, accel_offset : float or array_like of shape (3,)
+            Zero offset in counts, subtracted before scaling.
+        mag_unit : str
+            Unit of ``mag``.
+        nan_policy : {"raise", "drop", "interpolate"}
+            What to do with NaN samples in the channels.
+        meta : dict, optional
+            Free-form metadata; unit conversion and NaN handling are recorded in it.
+        fs : float, optional
+            Sample rate, Hz, when ``t`` is None (not both).
+        t0 : float
+            Time of the first sample, s, when ``t`` is None.
+
+        Returns
+        -------
+        ImuData
+            The recording in SI units.
+
+        Raises
+        ------
+        InvalidInputError
+            If ``nan_policy`` is unknown, ``t`` is None without a positive ``fs``, or both ``t`` and ``fs`` are
+            given.
+
         Examples
         --------
         >>> d = ImuData.from_arrays(None, [[0, 0, 1.0]] * 4, [[0, 0, -1.0]] * 4,
@@ -283,7 +346,18 @@ class ImuData:
         return f"ImuData({', '.join(parts)})"
 
     def gaps(self, factor: float = 1.5) -> list[Gap]:
-        """Intervals longer than ``factor`` × the median interval."""
+        """Intervals longer than ``factor`` × the median interval.
+
+        Parameters
+        ----------
+        factor : float
+            Threshold as a multiple of the median sample interval.
+
+        Returns
+        -------
+        list of Gap
+            In time order; empty for fewer than 3 samples.
+        """
         if self.n < 3:
             return []
         d = self.dt
@@ -296,11 +370,33 @@ class ImuData:
 
     # -- views / copies -------------------------------------------------------
     def with_(self, **changes: Any) -> "ImuData":
-        """Copy with some fields replaced (validated again)."""
+        """Copy with some fields replaced (validated again).
+
+        Parameters
+        ----------
+        **changes
+            New values of fields (``t``, ``gyro``, ``accel``, ``mag``, ``temp``, ``mag_unit``, ``meta``).
+
+        Returns
+        -------
+        ImuData
+            The copy.
+        """
         return dataclasses.replace(self, **changes)
 
     def slice(self, start: int | None = None, stop: int | None = None) -> "ImuData":
-        """Samples ``start:stop`` (half-open, Python indexing)."""
+        """Samples ``start:stop`` (half-open, Python indexing).
+
+        Parameters
+        ----------
+        start, stop : int, optional
+            Row indices (negative counts from the end; None: the ends).
+
+        Returns
+        -------
+        ImuData
+            The rows, with a copy of ``meta``.
+        """
         s = np.s_[start:stop]
         return ImuData(
             self.t[s],
@@ -313,7 +409,23 @@ class ImuData:
         )
 
     def time_slice(self, t0: float | None = None, t1: float | None = None) -> "ImuData":
-        """Samples with ``t0 <= t < t1``."""
+        """Samples with ``t0 <= t < t1``.
+
+        Parameters
+        ----------
+        t0, t1 : float, optional
+            Time bounds, s (None: the ends).
+
+        Returns
+        -------
+        ImuData
+            The samples in the interval.
+
+        Raises
+        ------
+        InvalidInputError
+            If no sample lies in the interval.
+        """
         i0 = 0 if t0 is None else int(np.searchsorted(self.t, t0, side="left"))
         i1 = self.n if t1 is None else int(np.searchsorted(self.t, t1, side="left"))
         if i1 <= i0:
@@ -326,6 +438,23 @@ class ImuData:
         ``t_new`` must be strictly increasing and inside ``[t[0], t[-1]]``;
         no extrapolation.  Interpolating across a gap (see :meth:`gaps`)
         bridges it linearly: check ``gaps()`` first if that matters.
+
+        Parameters
+        ----------
+        t_new : array_like, shape (M,)
+            New time stamps, s.
+
+        Returns
+        -------
+        ImuData
+            Every channel interpolated at ``t_new``.
+
+        Raises
+        ------
+        ShapeError
+            If ``t_new`` is not a non-empty 1-D array.
+        InvalidInputError
+            If ``t_new`` leaves ``[t[0], t[-1]]``.
         """
         tn = np.asarray(t_new, dtype=np.float64)
         if tn.ndim != 1 or tn.size == 0:
@@ -354,6 +483,21 @@ class ImuData:
         ``meta["provenance"]`` record the original rate.  A rate that would make
         more than max(100 N, 1e7) samples is refused (e.g. ``resample(1e12)``
         meant as a period), as is one that leaves fewer than 2 samples.
+
+        Parameters
+        ----------
+        fs : float
+            New sample rate, Hz.
+
+        Returns
+        -------
+        ImuData
+            Samples at ``t[0] + k / fs``, ``k = 0 .. floor(duration fs)``.
+
+        Raises
+        ------
+        InvalidInputError
+            If ``fs`` is not positive and finite, or gives too many or fewer than 2 samples.
         """
         if not (np.isfinite(fs) and fs > 0):
             raise InvalidInputError(f"fs must be positive and finite, got {fs}")
@@ -378,11 +522,30 @@ class ImuData:
         return out
 
     def static_intervals(self, window_s: float = 1.0, **kwargs: Any) -> "StaticIntervals":
-        """Shortcut for :func:`static_intervals` on this recording."""
+        """Shortcut for :func:`static_intervals` on this recording.
+
+        Parameters
+        ----------
+        window_s : float
+            Moving-variance window, s.
+        **kwargs
+            Other keyword arguments of :func:`static_intervals`.
+
+        Returns
+        -------
+        StaticIntervals
+            The detected rest intervals.
+        """
         return static_intervals(self, window_s=window_s, **kwargs)
 
     def to_dict(self) -> dict[str, Any]:
-        """Plain dict of lists (JSON-friendly)."""
+        """Plain dict of lists (JSON-friendly).
+
+        Returns
+        -------
+        dict
+            ``t``, ``gyro``, ``accel`` (SI), ``mag`` and ``mag_unit`` / ``temp`` when present, ``meta``.
+        """
         d: dict[str, Any] = {"t": self.t.tolist(), "gyro": self.gyro.tolist(), "accel": self.accel.tolist()}
         if self.mag is not None:
             d["mag"] = self.mag.tolist()
@@ -498,6 +661,11 @@ def moving_variance(x: ArrayLike, window: int, *, align: Literal["trailing", "ce
     -------
     numpy.ndarray
         (M,) or, with ``per_column`` and 2-D input, (M, k); M as given by ``align``.
+
+    Raises
+    ------
+    InvalidInputError
+        If ``align`` is unknown, ``window`` < 2, or (trailing) ``x`` has fewer samples than one window.
     """
 
     a = np.asarray(x, dtype=np.float64)
@@ -563,6 +731,14 @@ class StaticIntervals:
         return self.t_stop - self.t_start
 
     def to_dict(self) -> dict[str, Any]:
+        """JSON-ready form.
+
+        Returns
+        -------
+        dict
+            ``starts``, ``stops``, ``t_start``, ``t_stop`` (lists), ``n_static_samples``, the thresholds,
+            ``window`` and ``method``.
+        """
         return {
             "starts": self.starts.tolist(),
             "stops": self.stops.tolist(),
@@ -629,6 +805,7 @@ def static_intervals(
     Parameters
     ----------
     data : ImuData
+        The recording.
     window_s : float
         Window length (s).
     threshold : float or (float, float), optional
@@ -647,11 +824,21 @@ def static_intervals(
         slow drift while still rejecting hand motion.
     use_gyro : bool
         Also require a quiet gyroscope.
-    method : ``"axes"`` or ``"norm"``.
+    method : {"axes", "norm"}
+        Statistic: sum of the per-axis variances, or variance of the norm.
 
     Returns
     -------
     StaticIntervals
+        The intervals, their mask and the thresholds used.
+
+    Raises
+    ------
+    InvalidInputError
+        If ``data`` is not an ImuData, ``method`` is unknown, ``window_s`` or ``factor`` is not positive, or a
+        threshold is negative, not finite or not one or two values.
+    InsufficientDataError
+        If the recording is shorter than one window.
     """
     if not isinstance(data, ImuData):
         raise InvalidInputError(f"static_intervals needs an ImuData, got {type(data).__name__}")
@@ -747,10 +934,28 @@ class Saturation:
         return np.flatnonzero(self.mask.any(axis=1))
 
     def to_dict(self) -> dict[str, Any]:
+        """JSON-ready form.
+
+        Returns
+        -------
+        dict
+            ``method``, ``counts`` per channel and ``n_rows`` (samples with a saturated channel).
+        """
         return {"method": self.method, "counts": dict(self.counts), "n_rows": int(self.rows.size)}
 
     def check(self, where: str = "the recording") -> None:
-        """Raise :class:`~imunav.errors.SaturationError` if any sample is saturated."""
+        """Raise :class:`~imunav.errors.SaturationError` if any sample is saturated.
+
+        Parameters
+        ----------
+        where : str
+            What to name in the message (e.g. the file).
+
+        Raises
+        ------
+        SaturationError
+            If any sample is saturated; the message names the rows and channels.
+        """
         if not self.any:
             return
         chans = ", ".join(f"{k} ({v})" for k, v in self.counts.items() if v)
@@ -793,6 +998,29 @@ def detect_saturation(
     (1.4826·MAD) from the median (a clipped sensor repeats its rail value;
     a quantised static signal's extremes are near its median).
 
+    Parameters
+    ----------
+    data : ImuData
+        The recording.
+    gyro_full_scale : float, optional
+        Gyro range, rad/s.
+    accel_full_scale : float, optional
+        Accelerometer range, m/s².
+    rtol : float
+        Relative margin below the full scale that counts as saturated.
+    min_run : int
+        Shortest run of identical extreme values that counts (without a full scale).
+
+    Returns
+    -------
+    Saturation
+        Per-sample mask and per-channel counts; with one full scale given, the other sensor is not checked.
+
+    Raises
+    ------
+    InvalidInputError
+        If a full scale is not positive and finite.
+
     Examples
     --------
     >>> import numpy as np
@@ -827,6 +1055,31 @@ class RecordingSummary:
 
     ``channels`` rows hold per-channel statistics in display units (gyro
     °/s, accel m/s², mag in ``mag_unit``, temp °C).
+
+    Attributes
+    ----------
+    n : int
+        Number of samples.
+    duration_s : float
+        ``t[-1] - t[0]``, s.
+    fs_hz : float
+        Nominal sample rate (1 / median interval), Hz; NaN for one sample.
+    dt_min_s, dt_max_s, dt_std_s : float
+        Smallest, largest and standard deviation of the sample intervals, s.
+    gaps : list of Gap
+        Intervals longer than 1.5 × the median.
+    saturation : Saturation
+        Saturated samples.
+    static : StaticIntervals or None
+        Rest intervals (None when the record is shorter than one window).
+    channels : list of dict
+        Per channel: ``channel``, ``unit``, ``mean``, ``std``, ``min``, ``max``.
+    mag_unit : str or None
+        Unit of the magnetometer (None without one).
+    meta : dict
+        The recording's metadata.
+    warnings : list of str
+        Problems found (e.g. an implausible specific force at rest).
     """
 
     n: int
@@ -844,6 +1097,13 @@ class RecordingSummary:
     warnings: list[str] = field(default_factory=list)
 
     def to_dict(self) -> dict[str, Any]:
+        """JSON-ready form (the output of ``imunav info --json``).
+
+        Returns
+        -------
+        dict
+            Every field, gaps as dicts, plus ``missing_samples`` (total over the gaps).
+        """
         return {
             "warnings": list(self.warnings),
             "n": self.n,
@@ -911,6 +1171,24 @@ def describe(
     accelerometer in g read as m/s²) is reported in ``warnings`` and with an
     :class:`~imunav.errors.ImunavWarning`.  Full scales are SI (rad/s, m/s²); without them saturation
     is detected from runs at the channels' extreme values.
+
+    Parameters
+    ----------
+    data : ImuData
+        The recording.
+    window_s : float
+        Window of the static detector, s (:func:`static_intervals`).
+    min_duration_s : float, optional
+        Shortest static interval kept, s (default ``window_s``).
+    gyro_full_scale : float, optional
+        Gyro range, rad/s (:func:`detect_saturation`).
+    accel_full_scale : float, optional
+        Accelerometer range, m/s².
+
+    Returns
+    -------
+    RecordingSummary
+        The summary behind ``imunav info``.
     """
 
     n = data.n

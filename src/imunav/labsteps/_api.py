@@ -29,14 +29,19 @@ class StepResult(Result):
 
     Attributes
     ----------
-    summary : JSON-able dict of the step's key figures.
-    figures : PNG files written by the step (embedded in the HTML report).
-    passed : verdict against the step's acceptance, or None when it has none.
-    tables : optional ``(caption, rows)`` pairs (rows: list of dicts) for the report.
-    notes : optional paragraphs for the report.
-    parameters : estimated parameters checked against the lab's ``[spec]``:
-        ``{name: (value_si, sigma_si)}`` with the names of
-        :mod:`imunav.report.catalog` (``gyro_bias_x``, ``accel_vrw_z``, ...).
+    summary : dict
+        JSON-able dict of the step's key figures.
+    figures : list of pathlib.Path
+        PNG files written by the step (embedded in the HTML report).
+    passed : bool or None
+        Verdict against the step's acceptance, or None when it has none.
+    tables : list of (str, list of dict)
+        Optional ``(caption, rows)`` pairs for the report.
+    notes : list of str
+        Optional paragraphs for the report.
+    parameters : dict
+        Estimated parameters checked against the lab's ``[spec]``: ``{name: (value_si, sigma_si)}`` with the
+        names of :mod:`imunav.report.catalog` (``gyro_bias_x``, ``accel_vrw_z``, ...).
     """
 
     summary: dict
@@ -47,6 +52,14 @@ class StepResult(Result):
     parameters: dict[str, tuple[float, float | None]] = field(default_factory=dict)
 
     def to_dict(self) -> dict:
+        """JSON-ready form (NaN / inf as None).
+
+        Returns
+        -------
+        dict
+            ``summary``, ``figures`` (paths as strings), ``passed`` and, when there are any, ``parameters``
+            as ``{name: {"value_si", "sigma_si"}}``.
+        """
         d = {
             "summary": jsonable(self.summary),
             "figures": [str(p) for p in self.figures],
@@ -79,12 +92,20 @@ class LabContext:
 
     Attributes
     ----------
-    out_dir : the report folder (exists).
-    seed : the lab's root seed; use :meth:`rng` for a step's own stream.
-    progress : a :class:`rich.progress.Progress` (or a silent stand-in) for
-        progress bars: ``task = ctx.progress.add_task("…", total=n)``.
-    artifacts : shared objects between steps (recordings, true models, …).
-    config : the whole lab configuration (parsed TOML).
+    out_dir : pathlib.Path
+        The report folder (exists).
+    seed : int
+        The lab's root seed; use :meth:`rng` for a step's own stream.
+    progress : rich.progress.Progress
+        Progress display (or a silent stand-in): ``task = ctx.progress.add_task("…", total=n)``.
+    artifacts : dict
+        Shared objects between steps (recordings, true models, …).
+    config : dict
+        The whole lab configuration (parsed TOML).
+    step : str
+        Name of the running step (set by the runner).
+    lab : imunav.labconfig.LabConfig or None
+        The typed lab definition.
     """
 
     out_dir: Path
@@ -106,19 +127,54 @@ class LabContext:
         return dict(self.config.get(self.step, {}))
 
     def rng(self, *key: int | str) -> np.random.Generator:
-        """Independent, reproducible generator for ``(seed, step, *key)``."""
+        """Independent, reproducible generator for ``(seed, step, *key)``.
+
+        Parameters
+        ----------
+        *key : int or str
+            Sub-stream key (strings hashed with CRC-32, integers taken modulo 2**32).
+
+        Returns
+        -------
+        numpy.random.Generator
+            PCG64 generator seeded with ``SeedSequence([seed, step, *key])``.
+        """
         words = [self.seed] + [_word(k) for k in (self.step, *key)]
         return np.random.default_rng(np.random.SeedSequence(words))
 
     def path(self, *parts: str) -> Path:
-        """A path inside ``out_dir`` (parent folders created)."""
+        """A path inside ``out_dir`` (parent folders created).
+
+        Parameters
+        ----------
+        *parts : str
+            Path components below ``out_dir``.
+
+        Returns
+        -------
+        pathlib.Path
+            ``out_dir / parts...``; its parent folder exists.
+        """
         p = self.out_dir.joinpath(*parts)
         p.parent.mkdir(parents=True, exist_ok=True)
         return p
 
     @contextlib.contextmanager
     def task(self, description: str, total: float | None = None) -> Iterator[Any]:
-        """Progress task as a context manager; yields ``advance(n=1)``."""
+        """Progress task as a context manager; yields ``advance(n=1)``.
+
+        Parameters
+        ----------
+        description : str
+            Label of the task.
+        total : float, optional
+            Total amount of work (None: unknown).
+
+        Yields
+        ------
+        callable
+            ``advance(n=1)``: adds ``n`` to the completed work; on exit the task shows 100 %.
+        """
         tid = self.progress.add_task(description, total=total)
         try:
             yield lambda n=1: self.progress.advance(tid, n)

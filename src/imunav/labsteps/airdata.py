@@ -38,6 +38,24 @@ OPTIONS = ("runs", "p_false_alarm", "robust_methods")
 
 
 def run(ctx: LabContext) -> StepResult:
+    """Run the step: see the module docstring for what it computes, its options, artifacts and files.
+
+    Parameters
+    ----------
+    ctx : LabContext
+        The lab's context: the step's option table ``ctx.options`` (``[airdata]``), the artifacts it reads and
+        sets, the report folder.
+
+    Returns
+    -------
+    StepResult
+        Covariance check against the thesis, Monte Carlo wind errors, robust-filter and detector figures; passed per the acceptance of the module docstring.
+
+    Raises
+    ------
+    ConfigError
+        If ``[airdata]`` has an unknown option or ``robust_methods`` lacks ``gate2`` or ``nis``.
+    """
     opts = ctx.options
     unknown = set(opts) - set(OPTIONS)
     if unknown:

@@ -63,6 +63,19 @@ def _truth(rng: np.random.Generator, n: int, fs: float):
 
 
 def run(ctx: LabContext) -> StepResult:
+    """Run the step: see the module docstring for what it computes, its options, artifacts and files.
+
+    Parameters
+    ----------
+    ctx : LabContext
+        The lab's context: the step's option table ``ctx.options`` (``[attitude]``), the artifacts it reads and
+        sets, the report folder.
+
+    Returns
+    -------
+    StepResult
+        RMSE of each attitude filter (deg) and the Table 2 reproduction; passed per the verdict of the module docstring.
+    """
 
     opt = {**_DEFAULTS, **ctx.options}
     fs = float(opt["fs"])

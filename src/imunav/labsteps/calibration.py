@@ -87,6 +87,24 @@ def _rows(est: Any, truth: Any, stderr: dict, success: dict) -> list[dict]:
 
 
 def run(ctx: LabContext) -> StepResult:
+    """Run the step: see the module docstring for what it computes, its options, artifacts and files.
+
+    Parameters
+    ----------
+    ctx : LabContext
+        The lab's context: the step's option table ``ctx.options`` (``[calibration]``), the artifacts it reads and
+        sets, the report folder.
+
+    Returns
+    -------
+    StepResult
+        Success metric per sensor, parameters within 3 sigma, estimated parameters with their standard errors.
+
+    Raises
+    ------
+    InsufficientDataError
+        If the ``hundred_position`` or ``rate_table`` recording of ``simulate_tests`` is missing.
+    """
 
     opts = _options(ctx)
     recs = ctx.artifacts.get("recordings", {})

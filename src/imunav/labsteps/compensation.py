@@ -95,7 +95,33 @@ def _from_artifacts(ctx: LabContext) -> tuple[Any, dict] | None:
 
 
 def estimate_calibration(ctx: LabContext) -> tuple[Any, dict, str]:
-    """The calibration from the artifacts, else estimated here from the lab's recordings."""
+    """The calibration from the artifacts, else estimated here from the lab's recordings.
+
+    Order: the calibration step's ``calibration_result`` / ``calibration`` artifact; else the thesis method
+    on the ``hundred_position`` (+ ``rate_table``) recordings with their segment tables; else Tedaldi
+    multi-pose on a ``multipose`` session (Tedaldi, Pretto & Menegatti, "A robust and easy to implement
+    method for IMU calibration without external equipments", ICRA 2014).
+
+    Parameters
+    ----------
+    ctx : LabContext
+        The lab's context (artifacts ``calibration_result``, ``calibration``, ``recordings``, ``profiles``,
+        ``sim``, ``recording_specs``).
+
+    Returns
+    -------
+    calibration : imunav.calib.ImuCalibration
+        The calibration.
+    stderr : dict
+        Standard errors of its parameters, SI (same keys and shapes as the parameters).
+    how : str
+        Where it came from, in words (for the report).
+
+    Raises
+    ------
+    ConfigError
+        If there is no calibration and no recording to estimate one from.
+    """
 
     got = _from_artifacts(ctx)
     if got is not None:
@@ -263,6 +289,19 @@ def _real(ctx: LabContext, cal: Any, unit: str | None) -> dict[str, Any]:
 
 
 def run(ctx: LabContext) -> StepResult:
+    """Run the step: see the module docstring for what it computes, its options, artifacts and files.
+
+    Parameters
+    ----------
+    ctx : LabContext
+        The lab's context: the step's option table ``ctx.options`` (``[compensation]``), the artifacts it reads and
+        sets, the report folder.
+
+    Returns
+    -------
+    StepResult
+        Residual errors against the reported uncertainty (virtual IMU) or gravity / Earth-rate checks per static interval (real recordings).
+    """
     opts = _options(ctx)
     with ctx.task("compensation", total=2) as advance:
         cal, stderr, how = estimate_calibration(ctx)
@@ -345,6 +384,17 @@ def _plot_z(v: dict, path: Path) -> None:
 
 
 def report(section: Any, result: StepResult, ctx: LabContext) -> None:
+    """Add the step's tables and figures to its section of the HTML report.
+
+    Parameters
+    ----------
+    section : imunav.report.html.Section
+        The step's section.
+    result : StepResult
+        What :func:`run` returned.
+    ctx : LabContext
+        The lab's context (its ``[spec]`` and artifacts).
+    """
     s = result.summary
     if "accel" in s:
         section.table([

@@ -49,6 +49,24 @@ _DEFAULTS: dict[str, Any] = {"record": "static_long", "terms": ["N", "B", "K"], 
 
 
 def run(ctx: LabContext) -> StepResult:
+    """Run the step: see the module docstring for what it computes, its options, artifacts and files.
+
+    Parameters
+    ----------
+    ctx : LabContext
+        The lab's context: the step's option table ``ctx.options`` (``[noise]``), the artifacts it reads and
+        sets, the report folder.
+
+    Returns
+    -------
+    StepResult
+        Fitted noise terms with their 95 % intervals against the injected truth.
+
+    Raises
+    ------
+    ConfigError
+        If ``[noise]`` has an unknown option, or the record or the true error model is missing.
+    """
     opts = dict(_DEFAULTS)
     unknown = set(ctx.options) - set(_DEFAULTS)
     if unknown:

@@ -78,15 +78,29 @@ class RecordingSpec:
 
     Attributes
     ----------
-    name : the table name.
-    path : resolved file path.
-    test : ``static``, ``multiposition``, ``rate_table`` or ``multipose``.
-    read : options for :func:`imunav.io.read_imu` (format, columns, units, scales, ...).
-    segments : segment table JSON (multiposition / rate_table), resolved.
-    t_start_s, max_duration_s : the part of the file to use.
-    init_s, wait_s : multi-pose session timing.
-    gravity : local gravity, m/s² (None: the method's default).
-    latitude_deg : latitude (Earth rate, normal gravity), or None.
+    name : str
+        The table name.
+    path : pathlib.Path
+        Resolved file path (or ROS 2 bag folder).
+    test : str
+        ``static``, ``multiposition``, ``rate_table`` or ``multipose``.
+    read : dict
+        Options for :func:`imunav.io.read_imu` (format, columns, units, scales, ...).
+    segments : pathlib.Path or None
+        Segment table JSON (multiposition / rate_table), resolved.
+    t_start_s, max_duration_s : float
+        The part of the file to use: from ``t_start_s`` after its first sample, at most ``max_duration_s``
+        long (None: to the end), s.
+    init_s, wait_s : float
+        Multi-pose session timing: initial rest and time per pose, s.
+    gravity : float or None
+        Local gravity, m/s² (None: the method's default).
+    latitude_deg : float or None
+        Geodetic latitude, degrees in [-90, 90] (Earth rate, normal gravity), or None.
+    description : str
+        Free text shown in the report.
+    unit : str
+        The device (a calibration is applied only to recordings of the same unit).
     """
 
     name: str
@@ -109,7 +123,27 @@ class RecordingSpec:
 
 
 def resolve_path(value: str, base_dir: Path, where: str) -> Path:
-    """``shared:<sub/path>`` -> the shared data folder; relative paths -> relative to ``base_dir``."""
+    """``shared:<sub/path>`` -> the shared data folder; relative paths -> relative to ``base_dir``.
+
+    Parameters
+    ----------
+    value : str
+        Path as written in the lab definition.
+    base_dir : pathlib.Path
+        Folder relative paths are resolved against (the TOML file's).
+    where : str
+        Location for error messages (file and table).
+
+    Returns
+    -------
+    pathlib.Path
+        An existing file, or a ROS 2 bag folder (with ``metadata.yaml``).
+
+    Raises
+    ------
+    ConfigError
+        If the shared data folder is not found for a ``shared:`` path, or the file does not exist.
+    """
     if value.startswith("shared:"):
         root = shared_data_dir()
         if root is None:
@@ -137,7 +171,29 @@ def _num(tab: Mapping[str, Any], key: str, where: str, *, positive: bool = True)
 
 
 def parse_recordings(table: Mapping[str, Any], base_dir: Path, where: str = "lab configuration") -> dict[str, RecordingSpec]:
-    """Validate ``[recordings.<name>]`` tables into :class:`RecordingSpec` objects."""
+    """Validate ``[recordings.<name>]`` tables into :class:`RecordingSpec` objects.
+
+    Parameters
+    ----------
+    table : Mapping
+        The ``[recordings]`` table: name -> its table.
+    base_dir : pathlib.Path
+        Folder relative paths are resolved against.
+    where : str
+        Location for error messages.
+
+    Returns
+    -------
+    dict
+        Name -> :class:`RecordingSpec`, in table order.
+
+    Raises
+    ------
+    ConfigError
+        If the table is empty, or an entry is not a table, has an unknown key, no ``path``, an unknown
+        ``test`` or one already given, a missing file or segment table, or an option of the wrong type or
+        range; the message names the table and key.
+    """
     if not table:
         raise ConfigError(f"{where}: [recordings] is empty; add at least one [recordings.<name>] table")
     out: dict[str, RecordingSpec] = {}
@@ -198,6 +254,24 @@ def _segments(path: Path) -> Any:
 
 
 def run(ctx: LabContext) -> StepResult:
+    """Run the step: see the module docstring for what it computes, its options, artifacts and files.
+
+    Parameters
+    ----------
+    ctx : LabContext
+        The lab's context: the step's option table ``ctx.options`` (``[recordings]``), the artifacts it reads and
+        sets, the report folder.
+
+    Returns
+    -------
+    StepResult
+        One row per recording; for a static record its noise terms (``parameters``) for the ``[spec]`` check.
+
+    Raises
+    ------
+    ConfigError
+        If the lab definition has no ``[recordings.<name>]`` table.
+    """
     specs: dict[str, RecordingSpec] = dict(getattr(ctx.lab, "recordings", {}) or {})
     if not specs:
         raise ConfigError("the recordings step needs [recordings.<name>] tables in the lab definition")
@@ -292,6 +366,17 @@ def _characterise_static(ctx: LabContext, data: Any, specs: Mapping[str, Recordi
 
 
 def report(section: Any, result: StepResult, ctx: LabContext) -> None:
+    """Add the step's tables and figures to its section of the HTML report.
+
+    Parameters
+    ----------
+    section : imunav.report.html.Section
+        The step's section.
+    result : StepResult
+        What :func:`run` returned.
+    ctx : LabContext
+        The lab's context (its ``[spec]`` and artifacts).
+    """
     for caption, rows in result.tables[:1]:
         section.table(rows, caption)
     for f in result.figures:

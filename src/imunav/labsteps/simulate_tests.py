@@ -130,6 +130,25 @@ def _true_table(model: Any) -> list[dict]:
 
 
 def run(ctx: LabContext) -> StepResult:
+    """Run the step: see the module docstring for what it computes, its options, artifacts and files.
+
+    Parameters
+    ----------
+    ctx : LabContext
+        The lab's context: the step's option table ``ctx.options`` (``[simulate_tests]``), the artifacts it reads and
+        sets, the report folder.
+
+    Returns
+    -------
+    StepResult
+        The tests simulated (samples, duration, files) and the injected parameters; no verdict.
+
+    Raises
+    ------
+    ConfigError
+        If ``[simulate_tests]`` has an unknown option or test, a non-positive duration or rate, or an
+        invalid ``gravity``.
+    """
 
     opts = _options(ctx)
     model = _error_model(opts)
@@ -229,7 +248,17 @@ def run(ctx: LabContext) -> StepResult:
 
 
 def report(section: Any, result: StepResult, ctx: LabContext) -> None:
-    """HTML: test table, injected parameters, profile figures."""
+    """HTML: test table, injected parameters, profile figures.
+
+    Parameters
+    ----------
+    section : imunav.report.html.Section
+        The step's section.
+    result : StepResult
+        What :func:`run` returned.
+    ctx : LabContext
+        The lab's context (its ``[spec]`` and artifacts).
+    """
 
     for caption, rows in result.tables:
         section.table(rows, caption)

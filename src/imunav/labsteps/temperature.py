@@ -111,6 +111,24 @@ def _calibrate_at(ctx: LabContext, model: Any, temp: float, opts: dict, profiles
 
 
 def run(ctx: LabContext) -> StepResult:
+    """Run the step: see the module docstring for what it computes, its options, artifacts and files.
+
+    Parameters
+    ----------
+    ctx : LabContext
+        The lab's context: the step's option table ``ctx.options`` (``[temperature]``), the artifacts it reads and
+        sets, the report folder.
+
+    Returns
+    -------
+    StepResult
+        Fitted bias and scale-factor temperature curves against the truth; passed when within 4 sigma.
+
+    Raises
+    ------
+    ConfigError
+        If the preset has no temperature terms.
+    """
     opts = _options(ctx)
     model = presets.get(opts["preset"])
     if model.accel.bias_temp_poly is None and model.gyro.bias_temp_poly is None:
@@ -216,6 +234,17 @@ def _figures(ctx: LabContext, thermal: Any, model: Any, temps: np.ndarray, tt: n
 
 
 def report(section: Any, result: StepResult, ctx: LabContext) -> None:
+    """Add the step's tables and figures to its section of the HTML report.
+
+    Parameters
+    ----------
+    section : imunav.report.html.Section
+        The step's section.
+    result : StepResult
+        What :func:`run` returned.
+    ctx : LabContext
+        The lab's context (its ``[spec]`` and artifacts).
+    """
     for f in result.figures:
         embed_png(section, f, "Bias and scale factor against temperature: estimates, fitted curves and truth")
     for caption, rows in result.tables:

@@ -43,7 +43,18 @@ def _flat(d: Mapping[str, Any], prefix: str = "") -> list[tuple[str, Any]]:
 
 
 def lab_markdown(result: Any) -> str:
-    """``summary.md`` of a :class:`~imunav.lab.LabResult`: verdicts, specification table, each step's summary and figures."""
+    """``summary.md`` of a :class:`~imunav.lab.LabResult`: verdicts, specification table, each step's summary and figures.
+
+    Parameters
+    ----------
+    result : imunav.lab.LabResult
+        A finished lab run.
+
+    Returns
+    -------
+    str
+        Markdown text, SI values, figures linked relative to ``result.out_dir``.
+    """
     lines = [
         "# imunav lab",
         "",
@@ -76,7 +87,17 @@ def lab_markdown(result: Any) -> str:
 
 
 def embed_png(section: Any, path: str | os.PathLike[str], caption: str | None = None) -> None:
-    """Embed a PNG file in a report section (thin alias of ``Section.image``)."""
+    """Embed a PNG file in a report section (thin alias of ``Section.image``).
+
+    Parameters
+    ----------
+    section : imunav.report.html.Section
+        Section of the HTML report.
+    path : str or os.PathLike
+        The PNG file.
+    caption : str, optional
+        Caption (default: the file's stem).
+    """
     section.image(path, caption or Path(path).stem)
 
 
@@ -87,8 +108,19 @@ def display_parameters(
 ) -> list[Any]:
     """:class:`imunav.report.Parameter` rows in display units, with limit and verdict from ``spec``.
 
-    ``params``: ``{name: (value_si, sigma_si)}`` (names of :mod:`imunav.report.catalog`);
-    ``truth``: ``{name: value_si}`` (simulations).
+    Parameters
+    ----------
+    params : Mapping
+        ``{name: (value_si, sigma_si)}`` (names of :mod:`imunav.report.catalog`; ``sigma_si`` may be None).
+    spec : Mapping, optional
+        Datasheet limits by parameter name (:func:`imunav.report.load_spec`); None: no verdict.
+    truth : Mapping, optional
+        ``{name: value_si}`` true values (simulations).
+
+    Returns
+    -------
+    list of imunav.report.Parameter
+        One row per entry of ``params``, value, 1-sigma and truth in the catalog's display unit.
     """
 
     lim = expand_spec(spec or {}, list(params)) if spec else {}
@@ -106,7 +138,17 @@ def display_parameters(
 
 
 def write_lab_html(result: Any, ctx: LabContext, title: str) -> None:
-    """``index.html`` of a :class:`~imunav.lab.LabResult` in its ``out_dir``: overview, specification, one section per step."""
+    """``index.html`` of a :class:`~imunav.lab.LabResult` in its ``out_dir``: overview, specification, one section per step.
+
+    Parameters
+    ----------
+    result : imunav.lab.LabResult
+        A finished lab run.
+    ctx : LabContext
+        The run's context (mode, lab definition and its spec).
+    title : str
+        Page title.
+    """
 
     mode = "real recordings" if ctx.mode == "recordings" else "built-in virtual IMU"
     rep = Report(title, f"{mode} · seed {result.seed} · {len(result.steps)} steps · {result.seconds:.1f} s")

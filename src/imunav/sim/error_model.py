@@ -175,6 +175,20 @@ def scale_misalignment_matrix(scale_factor: ArrayLike = 0.0, misalignment: Array
         (M_xy, M_xz, M_yx, M_yz, M_zx, M_zy), or a 3x3 matrix with zero
         diagonal.  ``M[i, j]`` is the response of sensor i to an input on
         axis j (Günhan 2014, eq. 2).
+
+    Returns
+    -------
+    numpy.ndarray, shape (3, 3)
+        T, dimensionless.
+
+    Raises
+    ------
+    ShapeError
+        If ``scale_factor`` is not a scalar or 3 values, or ``misalignment`` not a scalar, 6 values or 3x3.
+    InvalidInputError
+        If a 3x3 ``misalignment`` has a non-zero diagonal, or ``scale_factor`` is not numeric.
+    NonFiniteError
+        If a value is not finite.
     """
     s = _vec3(scale_factor, "scale_factor")
     m = np.asarray(misalignment, dtype=float)
@@ -210,6 +224,20 @@ def allan_variance_gauss_markov(tau: ArrayLike, sigma: float, corr_time: float) 
 
     evaluated by :func:`imunav.allan_models.gauss_markov` (exact series below
     tau / T = 1/2, shared with :mod:`imunav.noise`).
+
+    Parameters
+    ----------
+    tau : array_like
+        Averaging times, s.
+    sigma : float
+        Stationary standard deviation of the process (unit of the signal).
+    corr_time : float
+        Correlation time T, s.
+
+    Returns
+    -------
+    numpy.ndarray
+        sigma_A^2 at each ``tau``, unit².
     """
     return _am.gauss_markov(tau, sigma, corr_time)
 
@@ -219,7 +247,29 @@ def allan_variance_ieee952(
 ) -> NDArray[np.float64]:
     """IEEE-952 sum sigma^2 = 3Q^2/tau^2 + N^2/tau + (2 ln2/pi) B^2 + K^2 tau/3 + R^2 tau^2/2.
 
-    Evaluated by :func:`imunav.allan_models.ieee952` (shared with :mod:`imunav.noise`)."""
+    Evaluated by :func:`imunav.allan_models.ieee952` (shared with :mod:`imunav.noise`); IEEE Std 952-1997,
+    Annex C.
+
+    Parameters
+    ----------
+    tau : array_like
+        Averaging times, s.
+    Q : float
+        Quantization noise coefficient (unit·s).
+    N : float
+        White-noise density, unit/sqrt(Hz).
+    B : float
+        Bias-instability coefficient, unit.
+    K : float
+        Random-walk coefficient, unit/sqrt(s).
+    R : float
+        Rate-ramp coefficient, unit/s.
+
+    Returns
+    -------
+    numpy.ndarray
+        sigma_A^2 at each ``tau``, unit².
+    """
     return _am.ieee952(tau, Q=Q, N=N, B=B, K=K, R=R)
 
 
@@ -246,14 +296,40 @@ class GaussMarkov:
         object.__setattr__(self, "tau", _vec3(self.tau, "GaussMarkov.tau (correlation time, s)", positive=True))
 
     def components(self) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-        """(sigmas, taus), each (n_components, 3): here one component."""
+        """(sigmas, taus), each (n_components, 3): here one component.
+
+        Returns
+        -------
+        sigmas : numpy.ndarray, shape (1, 3)
+            Stationary standard deviation per axis.
+        taus : numpy.ndarray, shape (1, 3)
+            Correlation time per axis, s.
+        """
         return self.sigma[None, :].copy(), self.tau[None, :].copy()
 
     def allan_variance(self, tau: ArrayLike) -> NDArray[np.float64]:
-        """Closed-form Allan variance, shape (3, len(tau))."""
+        """Closed-form Allan variance, shape (3, len(tau)).
+
+        Parameters
+        ----------
+        tau : array_like
+            Averaging times, s.
+
+        Returns
+        -------
+        numpy.ndarray, shape (3, len(tau))
+            sigma_A^2 per axis (:func:`allan_variance_gauss_markov`).
+        """
         return np.stack([allan_variance_gauss_markov(tau, s, t) for s, t in zip(self.sigma, self.tau)])
 
     def to_dict(self) -> dict[str, Any]:
+        """JSON / TOML form (the ``bias_instability`` table of a model file).
+
+        Returns
+        -------
+        dict
+            ``model = "gauss_markov"``, ``sigma`` and ``tau`` (lists of 3).
+        """
         return {"model": "gauss_markov", "sigma": self.sigma.tolist(), "tau": self.tau.tolist()}
 
     def __eq__(self, other: object) -> bool:
@@ -340,13 +416,32 @@ class Flicker:
         return _flicker_weights(self.tau_min, self.tau_max, self.per_decade)[2]
 
     def components(self) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-        """(sigmas, taus), each (n_components, 3)."""
+        """(sigmas, taus), each (n_components, 3).
+
+        Returns
+        -------
+        sigmas : numpy.ndarray, shape (M, 3)
+            Standard deviation of each Gauss-Markov component per axis, ``sqrt(w_j) B``.
+        taus : numpy.ndarray, shape (M, 3)
+            Correlation time of each component, s (the same on the three axes).
+        """
         t_c, w, _ = _flicker_weights(self.tau_min, self.tau_max, self.per_decade)
         sig = np.sqrt(w)[:, None] * self.b[None, :]
         return sig, np.repeat(t_c[:, None], 3, axis=1)
 
     def allan_variance(self, tau: ArrayLike) -> NDArray[np.float64]:
-        """Closed-form Allan variance of the generated GM sum, shape (3, len(tau))."""
+        """Closed-form Allan variance of the generated GM sum, shape (3, len(tau)).
+
+        Parameters
+        ----------
+        tau : array_like
+            Averaging times, s.
+
+        Returns
+        -------
+        numpy.ndarray, shape (3, len(tau))
+            Sum over the components of :func:`allan_variance_gauss_markov`, per axis.
+        """
         sig, tc = self.components()
         tau = np.atleast_1d(np.asarray(tau, dtype=float))
         out = np.zeros((3, tau.size))
@@ -356,6 +451,13 @@ class Flicker:
         return out
 
     def to_dict(self) -> dict[str, Any]:
+        """JSON / TOML form (the ``bias_instability`` table of a model file).
+
+        Returns
+        -------
+        dict
+            ``model = "flicker"``, ``b`` (list of 3), ``tau_min``, ``tau_max``, ``per_decade``.
+        """
         return {
             "model": "flicker",
             "b": self.b.tolist(),
@@ -435,6 +537,7 @@ class TriadErrors:
         White-noise density N (ARW rad/s/sqrt(Hz) = rad/sqrt(s), VRW
         m/s^2/sqrt(Hz) = m/s/sqrt(s)); per-sample sigma = N sqrt(f_s).
     bias_instability : GaussMarkov, Flicker or None
+        Bias-instability process (None: none).
     random_walk : (3,)
         Rate / acceleration random walk K (unit/s/sqrt(s) = unit/sqrt(s)...),
         Allan variance K^2 tau / 3.
@@ -507,11 +610,28 @@ class TriadErrors:
         )
 
     def replace(self, **changes: Any) -> TriadErrors:
-        """Copy with some fields changed (validated again)."""
+        """Copy with some fields changed (validated again).
+
+        Parameters
+        ----------
+        **changes
+            New values of fields.
+
+        Returns
+        -------
+        TriadErrors
+            The copy.
+        """
         return replace(self, **changes)
 
     def deterministic(self) -> TriadErrors:
-        """Copy with only bias, T and the temperature polynomials (no noise, ramp, LSB, saturation)."""
+        """Copy with only bias, T and the temperature polynomials (no noise, ramp, LSB, saturation).
+
+        Returns
+        -------
+        TriadErrors
+            The deterministic part.
+        """
         return TriadErrors(
             bias=self.bias,
             scale_misalignment=self.scale_misalignment,
@@ -527,6 +647,23 @@ class TriadErrors:
         "integrated" mode, or the white term (q^2/12) dt / tau in "rate" mode
         (valid when the signal moves by more than an LSB between samples).
         ``dt`` (sample interval, s) is needed when quantization is on.
+
+        Parameters
+        ----------
+        tau : array_like
+            Averaging times, s.
+        dt : float, optional
+            Sample interval, s (required when quantization is on).
+
+        Returns
+        -------
+        numpy.ndarray, shape (3, len(tau))
+            sigma_A^2 per axis, unit².
+
+        Raises
+        ------
+        InvalidInputError
+            If quantization is on and ``dt`` is not given.
         """
         tau = np.atleast_1d(np.asarray(tau, dtype=float))
         out = np.zeros((3, tau.size))
@@ -549,7 +686,13 @@ class TriadErrors:
 
     # --- serialisation ------------------------------------------------------
     def to_dict(self) -> dict[str, Any]:
-        """JSON / TOML friendly dict of SI values (units: :meth:`si_units`)."""
+        """JSON / TOML friendly dict of SI values (units: :meth:`si_units`).
+
+        Returns
+        -------
+        dict
+            One key per field (lists), ``bias_instability`` and ``full_scale`` only when set.
+        """
         d: dict[str, Any] = {
             "bias": self.bias.tolist(),
             "scale_misalignment": self.scale_misalignment.tolist(),
@@ -569,7 +712,18 @@ class TriadErrors:
 
     @staticmethod
     def si_units(kind: Literal["gyro", "accel"]) -> dict[str, str]:
-        """SI unit of every field for a gyro or accelerometer triad."""
+        """SI unit of every field for a gyro or accelerometer triad.
+
+        Parameters
+        ----------
+        kind : {"gyro", "accel"}
+            The triad.
+
+        Returns
+        -------
+        dict
+            Field name -> SI unit string.
+        """
         return dict(_TRIAD_SI[kind])
 
     @classmethod
@@ -584,6 +738,28 @@ class TriadErrors:
         and the quantity units of :func:`imunav.units.to_si` (``"deg/s"``,
         ``"g"``, ``"mg"``).  Instead of ``scale_misalignment`` one may give
         ``scale_factor`` (3,) and ``misalignment`` (6,) or (3, 3).
+
+        Parameters
+        ----------
+        d : Mapping
+            Field name -> value (or ``{"value", "unit"}`` table); missing fields mean "no error".
+        kind : {"gyro", "accel"}
+            The triad (SI units and quantity of the conversion).
+        units : Mapping, optional
+            Field name -> unit of the values in ``d``.
+
+        Returns
+        -------
+        TriadErrors
+            The model in SI units.
+
+        Raises
+        ------
+        InvalidInputError
+            If ``kind`` is unknown.
+        ConfigError
+            If ``d`` is not a table, has unknown keys or gives both ``scale_misalignment`` and
+            ``scale_factor`` / ``misalignment``, or ``units`` names an unknown field.
         """
         if kind not in _TRIAD_SI:
             raise InvalidInputError(f"TriadErrors.from_dict: kind must be 'gyro' or 'accel', got {kind!r}")
@@ -705,6 +881,7 @@ class ImuErrorModel:
     Parameters
     ----------
     gyro, accel : TriadErrors
+        Error models of the gyro and accelerometer triads.
     g_sensitivity : (3, 3) or (3,)
         Gyro g-sensitivity G (rad/s per m/s^2): w~ += G f (f = true specific
         force).  Three values give the diagonal (the thesis's B_G).
@@ -737,16 +914,39 @@ class ImuErrorModel:
         object.__setattr__(self, "temp_ref_c", float(t))
 
     def deterministic(self) -> ImuErrorModel:
-        """Copy without stochastic terms, ramp, quantization and saturation."""
+        """Copy without stochastic terms, ramp, quantization and saturation.
+
+        Returns
+        -------
+        ImuErrorModel
+            Both triads :meth:`TriadErrors.deterministic`, same G and reference temperature.
+        """
         return replace(self, gyro=self.gyro.deterministic(), accel=self.accel.deterministic())
 
     def replace(self, **changes: Any) -> ImuErrorModel:
-        """Copy with some fields changed (``dataclasses.replace``)."""
+        """Copy with some fields changed (``dataclasses.replace``).
+
+        Parameters
+        ----------
+        **changes
+            New values of fields.
+
+        Returns
+        -------
+        ImuErrorModel
+            The copy (validated again).
+        """
         return replace(self, **changes)
 
     # --- serialisation ------------------------------------------------------
     def to_dict(self) -> dict[str, Any]:
-        """SI values plus a ``units`` block naming the unit of every field."""
+        """SI values plus a ``units`` block naming the unit of every field.
+
+        Returns
+        -------
+        dict
+            ``name``, ``source``, ``temp_ref_c``, ``g_sensitivity``, ``gyro``, ``accel`` and ``units``.
+        """
         return {
             "name": self.name,
             "source": self.source,
@@ -766,7 +966,23 @@ class ImuErrorModel:
         """Inverse of :meth:`to_dict`; also accepts display units (see
         :meth:`TriadErrors.from_dict`), e.g. ``units = {gyro = {noise_density =
         "deg/sqrt(h)", bias_instability = "deg/h"}, accel = {bias = "mg"}}``.
-        Missing triads / fields mean "no error"."""
+        Missing triads / fields mean "no error".
+
+        Parameters
+        ----------
+        d : Mapping
+            The model's tables.
+
+        Returns
+        -------
+        ImuErrorModel
+            The model in SI units.
+
+        Raises
+        ------
+        ConfigError
+            If ``d`` is not a table, has unknown keys, or ``units`` is malformed.
+        """
         if not isinstance(d, Mapping):
             raise ConfigError(f"error model: expected a table, got {type(d).__name__}")
         allowed = {"name", "source", "temp_ref_c", "g_sensitivity", "gyro", "accel", "units"}
@@ -791,7 +1007,25 @@ class ImuErrorModel:
 
     @classmethod
     def from_toml(cls, path: str | os.PathLike[str]) -> ImuErrorModel:
-        """Read a TOML error model (layout of :meth:`to_dict`)."""
+        """Read a TOML error model (layout of :meth:`to_dict`).
+
+        Parameters
+        ----------
+        path : str or os.PathLike
+            The TOML file.
+
+        Returns
+        -------
+        ImuErrorModel
+            The model (:meth:`from_dict`).
+
+        Raises
+        ------
+        FileFormatError
+            If the file does not exist.
+        ConfigError
+            If it is not valid TOML or its tables are invalid (the message names the file).
+        """
         p = Path(path)
         if not p.is_file():
             raise FileFormatError(f"{p}: error-model file not found")
@@ -806,7 +1040,18 @@ class ImuErrorModel:
             raise type(e)(f"{p}: {e}") from e
 
     def to_toml(self, path: str | os.PathLike[str]) -> Path:
-        """Write the model as TOML (atomically: temp file, then rename)."""
+        """Write the model as TOML (atomically: temp file, then rename).
+
+        Parameters
+        ----------
+        path : str or os.PathLike
+            Destination file (overwritten).
+
+        Returns
+        -------
+        pathlib.Path
+            ``path``.
+        """
         p = Path(path)
         text = toml_text(self.to_dict())
         with atomic_path(p) as tmp:
@@ -830,6 +1075,21 @@ class TriadTruth(Result):
     random_walk + rate_ramp (everything but white noise, quantization and
     saturation); ``output - (T(dT) x + G f + bias + white_noise)`` is the
     quantization / saturation error.
+
+    Attributes
+    ----------
+    bias : numpy.ndarray, shape (N, 3)
+        Total additive bias.
+    bias_instability : numpy.ndarray, shape (N, 3)
+        Realised bias-instability process.
+    random_walk : numpy.ndarray, shape (N, 3)
+        Realised random walk.
+    rate_ramp : numpy.ndarray, shape (N, 3)
+        Realised ramp ``R (t - t_0)``.
+    white_noise : numpy.ndarray, shape (N, 3)
+        Realised white noise.
+    n_saturated : numpy.ndarray of int64, shape (3,)
+        Saturated samples per axis.
     """
 
     bias: NDArray[np.float64]
@@ -840,18 +1100,42 @@ class TriadTruth(Result):
     n_saturated: NDArray[np.int64]
 
     def to_dict(self) -> dict[str, Any]:
+        """JSON-ready form.
+
+        Returns
+        -------
+        dict
+            One nested list per field.
+        """
         return {f.name: np.asarray(getattr(self, f.name)).tolist() for f in fields(self)}
 
 
 @dataclass(frozen=True)
 class ImuErrorTruth(Result):
-    """Realised error terms of a simulated recording (``return_truth=True``)."""
+    """Realised error terms of a simulated recording (``return_truth=True``).
+
+    Attributes
+    ----------
+    gyro : TriadTruth
+        Realised errors of the gyro triad, rad/s.
+    accel : TriadTruth
+        Realised errors of the accelerometer triad, m/s².
+    model : ImuErrorModel
+        The model they were drawn from.
+    """
 
     gyro: TriadTruth
     accel: TriadTruth
     model: ImuErrorModel
 
     def to_dict(self) -> dict[str, Any]:
+        """JSON-ready form.
+
+        Returns
+        -------
+        dict
+            ``gyro``, ``accel`` (:meth:`TriadTruth.to_dict`) and ``model`` (:meth:`ImuErrorModel.to_dict`).
+        """
         return {"gyro": self.gyro.to_dict(), "accel": self.accel.to_dict(), "model": self.model.to_dict()}
 
 
@@ -1031,6 +1315,7 @@ def apply_errors(
     ideal : ImuData
         True angular rate (rad/s) and specific force (m/s^2).
     model : ImuErrorModel
+        The errors to apply.
     rng : Generator, int seed, SeedSequence or None
         Seed of the per-(sensor, process, axis) streams; same seed, same output.
     temp_c : float or (N,), optional
@@ -1051,7 +1336,14 @@ def apply_errors(
 
     Returns
     -------
-    ImuData, or (ImuData, ImuErrorTruth)
+    ImuData or tuple of (ImuData, ImuErrorTruth)
+        The recording with errors (``meta["error_model"]`` names the model), and the realised errors with
+        ``return_truth``.
+
+    Raises
+    ------
+    InvalidInputError
+        If ``model`` is not an ImuErrorModel or ``ideal`` lacks ``t``, ``gyro`` or ``accel``.
     """
     if not isinstance(model, ImuErrorModel):
         raise InvalidInputError(f"apply_errors: model must be an ImuErrorModel, got {type(model).__name__}")
@@ -1087,7 +1379,36 @@ def simulate_imu(
     """Virtual IMU: ideal outputs of ``trajectory`` (:func:`imunav.sim.trajectory.ideal_imu`
     with ``ideal_kw``: earth_rate, transport_rate, gravity, lat, h) with the
     errors of ``error_model`` applied (:func:`apply_errors`; same ``rng``,
-    ``temp_c``, ``return_truth`` and ``common_axis_noise``)."""
+    ``temp_c``, ``return_truth`` and ``common_axis_noise``).
+
+    Parameters
+    ----------
+    trajectory : imunav.sim.trajectory.Trajectory
+        Position, velocity and attitude ``q_nb`` over time (NED).
+    error_model : ImuErrorModel
+        The errors to apply (e.g. :func:`imunav.sim.presets.get`).
+    rng : numpy.random.Generator, int, numpy.random.SeedSequence or None
+        Seed of the random streams.
+    temp_c : float or array_like of shape (N,), optional
+        Sensor temperature, °C.
+    return_truth : bool
+        Also return the realised errors.
+    common_axis_noise : bool
+        Same normalised noise realisation on the three axes (see :func:`apply_errors`).
+    **ideal_kw
+        Keyword arguments of :func:`imunav.sim.trajectory.ideal_imu` (earth_rate, transport_rate, gravity,
+        lat, h).
+
+    Returns
+    -------
+    ImuData or tuple of (ImuData, ImuErrorTruth)
+        As :func:`apply_errors`.
+
+    Raises
+    ------
+    InvalidInputError
+        If ``error_model`` is not an ImuErrorModel.
+    """
 
     if not isinstance(error_model, ImuErrorModel):
         raise InvalidInputError(

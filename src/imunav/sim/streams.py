@@ -23,6 +23,22 @@ def seed_sequence(rng: Any) -> np.random.SeedSequence:
 
     A Generator contributes 128 bits drawn from it (so successive calls with
     the same Generator give new, reproducible realisations).
+
+    Parameters
+    ----------
+    rng : numpy.random.Generator, int, numpy.random.SeedSequence or None
+        Source of the root entropy: a Generator (128 bits drawn from it), a non-negative integer seed,
+        a SeedSequence (returned as is) or None (fresh OS entropy, not reproducible).
+
+    Returns
+    -------
+    numpy.random.SeedSequence
+        The root of every stream of one simulation.
+
+    Raises
+    ------
+    InvalidInputError
+        If ``rng`` is a negative integer, a bool or of another type.
     """
     if rng is None:
         return np.random.SeedSequence()
@@ -44,6 +60,19 @@ def stream_state(root: np.random.SeedSequence, *key: int) -> NDArray[np.uint64]:
 
     The stream depends only on the root entropy and on ``key`` =
     (sensor, process, axis, component), never on which other streams exist.
+
+    Parameters
+    ----------
+    root : numpy.random.SeedSequence
+        Root of the simulation (:func:`seed_sequence`).
+    *key : int
+        Non-negative integers appended to the root's spawn key, e.g. (sensor, process, axis, component).
+
+    Returns
+    -------
+    numpy.ndarray of uint64, shape (4,)
+        Generator state, never all-zero (the one invalid xoshiro256++ state; Blackman & Vigna, "Scrambled
+        linear pseudorandom number generators", ACM TOMS 47(4), 2021).
     """
     ss = np.random.SeedSequence(entropy=root.entropy, spawn_key=tuple(root.spawn_key) + tuple(key))
     st = ss.generate_state(4, np.uint64)
@@ -53,7 +82,22 @@ def stream_state(root: np.random.SeedSequence, *key: int) -> NDArray[np.uint64]:
 
 
 def normals(root: np.random.SeedSequence, key: tuple[int, ...], n: int) -> NDArray[np.float64]:
-    """n standard normals of the stream ``key`` (same generator as the IMU kernels)."""
+    """n standard normals of the stream ``key`` (same generator as the IMU kernels).
+
+    Parameters
+    ----------
+    root : numpy.random.SeedSequence
+        Root of the simulation (:func:`seed_sequence`).
+    key : tuple of int
+        Stream key (:func:`stream_state`).
+    n : int
+        Number of samples.
+
+    Returns
+    -------
+    numpy.ndarray, shape (n,)
+        Independent N(0, 1) samples; the same ``root`` and ``key`` always give the same values.
+    """
     out = np.empty(n)
     _k.fill_normal(stream_state(root, *key), out)
     return out
