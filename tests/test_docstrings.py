@@ -46,9 +46,6 @@ NOT_YET_DONE = {
     "imunav.airdata.filter",  # the wind filters, rebuilt on the estimation core
     "imunav.batch",
     "imunav.filters.faults",
-    "imunav.filters.kalman",
-    "imunav.filters.robust",
-    "imunav.filters.gates",  # created by the layers branch from filters.robust
     "imunav.ins.detectors",
     "imunav.ins.zupt",
     "imunav.ins.lstm",  # created by the layers branch from learn.lstm
