@@ -46,11 +46,8 @@ NOT_YET_DONE = {
     "imunav.airdata.filter",  # the wind filters, rebuilt on the estimation core
     "imunav.batch",
     "imunav.filters.faults",
-    "imunav.ins.detectors",
     "imunav.ins.zupt",
     "imunav.ins.lstm",  # created by the layers branch from learn.lstm
-    "imunav.ins.result",  # created by the layers branch from ins.detectors
-    "imunav.ins.statistics",  # created by the layers branch from ins.detectors
     "imunav.lab",
     "imunav.labsteps.*",
     "imunav.learn.*",
