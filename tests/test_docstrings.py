@@ -46,7 +46,6 @@ NOT_YET_DONE = {
     "imunav.airdata.filter",  # the wind filters, rebuilt on the estimation core
     "imunav.batch",
     "imunav.filters.faults",
-    "imunav.ins.lstm",  # created by the layers branch from learn.lstm
     "imunav.lab",
     "imunav.labsteps.*",
     "imunav.learn.*",
