@@ -48,7 +48,6 @@ NOT_YET_DONE = {
     "imunav.filters.faults",
     "imunav.lab",
     "imunav.labsteps.*",
-    "imunav.learn.*",
     "imunav.montecarlo",
     "imunav.sim.error_model",
     "imunav.timeseries",
