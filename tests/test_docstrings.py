@@ -45,7 +45,6 @@ from imunav import errors as _errors  # noqa: E402
 NOT_YET_DONE = {
     "imunav.airdata.filter",  # the wind filters, rebuilt on the estimation core
     "imunav.batch",
-    "imunav.filters.faults",
     "imunav.lab",
     "imunav.labsteps.*",
     "imunav.montecarlo",

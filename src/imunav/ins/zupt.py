@@ -5,7 +5,7 @@ the start, no Earth rate, constant gravity ``(0, 0, g)``), attitude ``q_nb``
 and, with 15 states, accelerometer / gyro biases.  Error state
 ``dx = [dp, dv, dphi, (dba, dbg)]`` with ``p = p̂ + dp``, ``v = v̂ + dv``,
 ``C_nb = exp([dphi×]) Ĉ_nb`` and ``b = b̂ + db``.  Discrete model
-(Şahin 2022 §3.1 with the corrections of the spec; Solà 2017 §6; Foxlin
+(Şahin 2022 §3.1, with its misprints corrected; Solà 2017 §6; Foxlin
 2005)::
 
     Phi = [[I, dt I, 0,              0,        0       ],
