@@ -78,13 +78,29 @@ __all__ = [
 
 Array = NDArray[np.float64]
 
-# Akgün 2002, Table 6.3 (P(4/4) column, optimal filter) - digest §2.5
+# Akgün 2002, Table 6.3 (P(4/4) column, optimal filter)
 THESIS_ITERATIONS = (50, 100, 101, 150, 200, 300, 500)
 THESIS_P44 = (0.0965, 0.0686, 0.0684, 0.0640, 0.0631, 0.0628, 0.0628)
 
 
 def thesis_row(iteration: int | ArrayLike) -> int | Array:
-    """Row of the per-step arrays that matches the thesis's table iteration n (row = n − 2)."""
+    """Row of the per-step arrays that matches the thesis's table iteration n (row = n − 2).
+
+    Parameters
+    ----------
+    iteration : int or array_like of int
+        Thesis iteration number(s), >= 2.
+
+    Returns
+    -------
+    int or numpy.ndarray
+        Row index (or indices) into the per-step arrays.
+
+    Raises
+    ------
+    InvalidInputError
+        If an iteration is below 2.
+    """
     it = np.asarray(iteration)
     if np.any(it < 2):
         raise InvalidInputError("thesis iterations start at 2 (iteration 1 is the initial condition)")
@@ -94,7 +110,32 @@ def thesis_row(iteration: int | ArrayLike) -> int | Array:
 
 @dataclass(frozen=True)
 class ThesisFilterConfig(Result):
-    """Parameters of the thesis filter (defaults: the thesis's values, Akgün 2002, §6.2)."""
+    """Parameters of the thesis filter (defaults: the thesis's values, Akgün 2002, §6.2).
+
+    Attributes
+    ----------
+    dt : float
+        Step T, s (> 0).
+    tau : float
+        Correlation time of the wind states, s (> 0).
+    q : float
+        Process noise variance of the wind states per step, (m/s)², applied directly.
+    sigma_ads : float
+        ADS velocity noise std per axis, m/s (> 0).
+    sigma_doppler : float
+        Doppler velocity noise std per axis, m/s (>= 0).
+    p0 : tuple of float
+        Initial variances of (δX, δY, δZ, W_x, W_y, W_z), m² and (m/s)².
+    x0 : tuple of float
+        Initial state, m and m/s.
+    velocity_decay : bool
+        Use ``1 − T/τ`` on the wind diagonal of Φ (False: the printed 1).
+
+    Raises
+    ------
+    InvalidInputError
+        If a value is out of range or ``p0`` / ``x0`` do not have 6 entries.
+    """
 
     dt: float = 0.001
     tau: float = 600.0
@@ -114,7 +155,18 @@ class ThesisFilterConfig(Result):
 
 
 def thesis_matrices(cfg: ThesisFilterConfig | None = None) -> dict[str, Array]:
-    """F (Φ), G, Q, H, R, P0, x0 of the thesis filter."""
+    """F (Φ), G, Q, H, R, P0, x0 of the thesis filter.
+
+    Parameters
+    ----------
+    cfg : ThesisFilterConfig, optional
+        Filter parameters (default the thesis's).
+
+    Returns
+    -------
+    dict of str to numpy.ndarray
+        ``F`` (6, 6), ``G`` (6, 3), ``Q`` (3, 3), ``H`` (3, 6), ``R`` (3, 3), ``P0`` (6, 6), ``x0`` (6,).
+    """
     c = ThesisFilterConfig() if cfg is None else cfg
     I3 = np.eye(3)
     F = np.eye(6)
@@ -131,10 +183,28 @@ def thesis_matrices(cfg: ThesisFilterConfig | None = None) -> dict[str, Array]:
 class WindFilterResult(Result):
     """One run of the thesis filter.
 
-    x (N, 6) state estimates, cov_diag (N, 6) (the diagonal of P), innovation / normalized (N, 3),
-    weights (N, 3) (1 used, 0 rejected), wind (N, 3) = x[:, 3:],
-    velocity (N, 3) = V_A + Ŵ, position (N, 3) = X_A + δX̂ (when V_A given),
-    difference_loop (N, 3) = z (the raw wind of the difference loop).
+    Attributes
+    ----------
+    x : numpy.ndarray, shape (N, 6)
+        State estimates (δX, δY, δZ in m, W in m/s, body axes).
+    cov_diag : numpy.ndarray, shape (N, 6)
+        Diagonal of P.
+    innovation : numpy.ndarray, shape (N, 3)
+        Innovations, m/s.
+    normalized : numpy.ndarray, shape (N, 3)
+        Normalised innovations ``S^{-1/2} ν``.
+    weights : numpy.ndarray, shape (N, 3)
+        1 used, 0 rejected (Huber weight in between).
+    wind : numpy.ndarray, shape (N, 3)
+        Wind estimate ``x[:, 3:]``, m/s, body axes.
+    difference_loop : numpy.ndarray, shape (N, 3)
+        ``z`` (the raw wind of the difference loop), m/s.
+    velocity : numpy.ndarray, shape (N, 3), or None
+        Ground velocity ``V_A + Ŵ``, m/s (when ``v_ads`` is given).
+    position : numpy.ndarray, shape (N, 3), or None
+        Position ``X_A + δX̂``, m, relative to the start (when ``v_ads`` is given).
+    robust : str or None
+        The robust update used.
     """
 
     x: Array
@@ -161,7 +231,31 @@ def _check_z(z: ArrayLike, batch: bool) -> Array:
 
 def run_thesis_filter_batch(z: ArrayLike, cfg: ThesisFilterConfig | None = None, *, robust: str | None = None,
                             gate_m: float = 2.0, alpha: float = 1e-3, huber_c: float = 1.345) -> BatchRun:
-    """The thesis filter over a batch of difference measurements ``z = V_D − V_A`` (runs, N, 3)."""
+    """The thesis filter over a batch of difference measurements ``z = V_D − V_A`` (runs, N, 3).
+
+    Parameters
+    ----------
+    z : array_like, shape (runs, N, 3)
+        Doppler minus ADS body velocity, m/s (NaN rows: no measurement).
+    cfg : ThesisFilterConfig, optional
+        Filter parameters (default the thesis's).
+    robust : {None, "gate", "isolate", "nis", "huber"}, optional
+        None (optimal), ``"gate"`` (thesis, per channel |ν̃| < gate_m),
+        ``"nis"`` (vector χ² gate at level alpha: rejects whole-sensor
+        outliers, recommended for the ADS), ``"isolate"`` (χ² test + w-test
+        isolation of single channels) or ``"huber"``.
+    gate_m : float, optional
+        Per-channel gate half-width, standard deviations (``"gate"``).
+    alpha : float, optional
+        Test level in (0, 1) (``"isolate"``, ``"nis"``).
+    huber_c : float, optional
+        Huber threshold (``"huber"``).
+
+    Returns
+    -------
+    BatchRun
+        States, covariance diagonals, innovations and weights of every run.
+    """
     m = thesis_matrices(cfg)
     return batch_kalman_filter(m["x0"], m["P0"], m["F"], m["Q"], m["H"], m["R"], _check_z(z, True), G=m["G"],
                                robust=robust, gate_m=gate_m, alpha=alpha, huber_c=huber_c)
@@ -179,13 +273,37 @@ def run_thesis_filter(
 ) -> WindFilterResult:
     """Run the thesis filter on ``z = V_D − V_A`` (N, 3).
 
-    robust : None (optimal), ``"gate"`` (thesis, per channel |ν̃| < gate_m),
+    Parameters
+    ----------
+    z : array_like, shape (N, 3)
+        Doppler minus ADS body velocity, m/s (NaN rows: no measurement).
+    cfg : ThesisFilterConfig, optional
+        Filter parameters (default the thesis's).
+    v_ads : array_like, shape (N, 3), optional
+        ADS body velocity, m/s; gives the corrected ground velocity and
+        position ``X_A + δX̂`` with ``X_A(k) = T Σ_{j≤k} V_A(j)``
+        (positions are relative to the start).
+    robust : {None, "gate", "isolate", "nis", "huber"}, optional
+        None (optimal), ``"gate"`` (thesis, per channel |ν̃| < gate_m),
         ``"nis"`` (vector χ² gate at level alpha: rejects whole-sensor
         outliers, recommended for the ADS), ``"isolate"`` (χ² test + w-test
         isolation of single channels) or ``"huber"``.
-    v_ads : ADS body velocity (N, 3); gives the corrected ground velocity and
-        position ``X_A + δX̂`` with ``X_A(k) = X_A(0) + T Σ_{j≤k} V_A(j)``,
-        ``X_A(0) = δX̂₀``-consistent zero (positions are relative to the start).
+    gate_m : float, optional
+        Per-channel gate half-width, standard deviations (``"gate"``).
+    alpha : float, optional
+        Test level in (0, 1) (``"isolate"``, ``"nis"``).
+    huber_c : float, optional
+        Huber threshold (``"huber"``).
+
+    Returns
+    -------
+    WindFilterResult
+        States, wind, innovations and, with ``v_ads``, ground velocity and position.
+
+    Raises
+    ------
+    ShapeError
+        If ``v_ads`` does not have the shape of ``z``.
     """
     c = ThesisFilterConfig() if cfg is None else cfg
     zz = _check_z(z, False)
@@ -221,7 +339,16 @@ class LongHorizonConfig(Result):
     p0_wind, p0_position : float
         Initial variances (m²/s², m²).
     robust : str or None
-        None, "gate", "isolate" (default) or "huber"; ``alpha`` its test level.
+        None, "gate", "isolate" (default), "nis" or "huber".
+    alpha : float
+        Test level of "isolate" and "nis", in (0, 1).
+    gate_m : float
+        Per-channel gate half-width of "gate", standard deviations.
+
+    Raises
+    ------
+    InvalidInputError
+        If a value is out of range or ``robust`` is unknown.
     """
 
     wind_sigma: float = 10.0
@@ -252,10 +379,26 @@ class LongHorizonConfig(Result):
 class LongHorizonResult(Result):
     """Long-horizon run: estimates at the Doppler epochs ``t``.
 
-    wind (N, 3) NED total-wind estimate (mean + gust) and its std,
-    mean_wind (N, 3) the slowly varying part, position (N, 3) corrected NED
-    position relative to the start and its std, normalized (N, 3) normalised
-    innovations, weights (N, 3) (1 used, 0 rejected).
+    Attributes
+    ----------
+    t : numpy.ndarray, shape (N,)
+        Doppler epochs, s.
+    wind : numpy.ndarray, shape (N, 3)
+        NED total-wind estimate (mean + gust), m/s.
+    wind_std : numpy.ndarray, shape (N, 3)
+        Its standard deviation, m/s.
+    mean_wind : numpy.ndarray, shape (N, 3)
+        The slowly varying part, m/s.
+    position : numpy.ndarray, shape (N, 3)
+        Corrected NED position relative to the start, m.
+    position_std : numpy.ndarray, shape (N, 3)
+        Its standard deviation, m.
+    normalized : numpy.ndarray, shape (N, 3)
+        Normalised innovations.
+    weights : numpy.ndarray, shape (N, 3)
+        1 used, 0 rejected (Huber weight in between).
+    config : LongHorizonConfig
+        Settings used.
     """
 
     t: Array
@@ -293,7 +436,38 @@ def run_long_horizon(
     own time grid (trapezoidal dead reckoning) and interpolated to the
     Doppler epochs; each Doppler sample gives
     ``z = C_nb V_D − C_nb V_A = W + g + noise`` with
-    ``R = C_nb (R_D + R_A) C_nbᵀ``.
+    ``R = C_nb (R_D + R_A) C_nbᵀ``.  Φ and Q are discretised exactly (Van Loan 1978,
+    IEEE Trans. Autom. Control 23(3)).
+
+    Parameters
+    ----------
+    t_ads : array_like, shape (N,)
+        ADS time, s, strictly increasing.
+    v_ads_body : array_like, shape (N, 3)
+        ADS air velocity in body axes (FRD), m/s.
+    t_doppler : array_like, shape (M,)
+        Doppler time, s, strictly increasing, within the ADS span.
+    v_doppler_body : array_like, shape (M, 3)
+        Doppler ground velocity in body axes (FRD), m/s.
+    C_nb_doppler : array_like, shape (M, 3, 3)
+        Body-to-NED rotation matrices at the Doppler epochs.
+    C_nb_ads : array_like, shape (N, 3, 3)
+        Body-to-NED rotation matrices at the ADS epochs.
+    cfg : LongHorizonConfig, optional
+        Settings (default :class:`LongHorizonConfig`).
+
+    Returns
+    -------
+    LongHorizonResult
+        Wind, position and their standard deviations at the Doppler epochs.
+
+    Raises
+    ------
+    ShapeError
+        If an array does not match its time vector.
+    InvalidInputError
+        If a time vector is not strictly increasing, the Doppler epochs leave the ADS span, or an
+        input is not finite.
     """
 
     c = LongHorizonConfig() if cfg is None else cfg

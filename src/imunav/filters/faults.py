@@ -109,7 +109,24 @@ def _check_window(M: int, s: int, N: int | None = None) -> None:
 
 
 def thesis_thresholds(M: int = 20, s: int = 3, confidence: float = 0.95) -> dict[str, float]:
-    """The thresholds as the thesis sets them: χ²(M−s+1) for Alg. 1/2, χ²(Ms) for Alg. 3."""
+    """The thresholds as the thesis sets them: χ²(M−s+1) for Alg. 1/2, χ²(Ms) for Alg. 3.
+
+    Akgün (2002, §4.4); kept for comparison: the module docstring says why they are wrong.
+
+    Parameters
+    ----------
+    M : int, optional
+        Window length in steps.
+    s : int, optional
+        Measurement size.
+    confidence : float, optional
+        Confidence level of the χ² points (default 0.95).
+
+    Returns
+    -------
+    dict of str to float
+        Thresholds of ``"alg1"``, ``"alg2"`` and ``"alg3"``.
+    """
     return {
         "alg1": float(chi2.ppf(confidence, M - s + 1)),
         "alg2": float(chi2.ppf(confidence, M - s + 1)),
@@ -136,7 +153,31 @@ def wishart_largest_root_quantile(q: float, M: int = 20, s: int = 3, n_mc: int =
     """q-quantile of the largest eigenvalue of ``Σ (ν̃ − ν̄)(ν̃ − ν̄)ᵀ`` over M white N(0, I_s).
 
     Seeded Monte Carlo (Roy's largest-root law of W_s(I, M−1)); with the
-    defaults the 0.95 / 0.99 quantiles are ≈ 39.6 / 45.5 for M = 20, s = 3.
+    defaults the 0.95 / 0.99 quantiles are ≈ 39.6 / 45.5 for M = 20, s = 3 (Roy 1953,
+    Ann. Math. Stat. 24(2); Johnstone 2001, Ann. Stat. 29(2)).
+
+    Parameters
+    ----------
+    q : float
+        Quantile, in (0, 1).
+    M : int, optional
+        Window length, > s.
+    s : int, optional
+        Dimension.
+    n_mc : int, optional
+        Number of Monte Carlo samples.
+    seed : int, optional
+        Seed (same seed, same value).
+
+    Returns
+    -------
+    float
+        The q-quantile.
+
+    Raises
+    ------
+    InvalidInputError
+        If ``q`` is not in (0, 1) or ``M <= s``.
     """
     if not 0 < q < 1:
         raise InvalidInputError(f"q must be in (0, 1), got {q}")
@@ -161,6 +202,35 @@ def calibrated_thresholds(M: int = 20, s: int = 3, p_false_alarm: float = 0.01, 
 
     Alg. 2, Alg. 3 and NIS are exact χ² points; Alg. 1 and the CUSUMs are
     seeded Monte Carlo quantiles (same seed, same thresholds).
+
+    Parameters
+    ----------
+    M : int, optional
+        Window length in steps, > s.
+    s : int, optional
+        Measurement size.
+    p_false_alarm : float, optional
+        Per-step false-alarm rate, in (0, 0.5).
+    cusum_rho : float, optional
+        Variance ratio the variance CUSUM is tuned to.
+    cusum_k : float, optional
+        Reference value of the mean CUSUM, standard deviations.
+    n_mc : int, optional
+        Monte Carlo samples for Alg. 1.
+    seed : int, optional
+        Seed of the Monte Carlo quantiles.
+    low_window : int, optional
+        Number of differences of the low-variance statistic.
+
+    Returns
+    -------
+    dict of str to float
+        Threshold per name of :data:`DETECTORS`.
+
+    Raises
+    ------
+    InvalidInputError
+        If ``p_false_alarm`` is not in (0, 0.5) or ``M <= s``.
     """
     if not 0 < p_false_alarm < 0.5:
         raise InvalidInputError(f"p_false_alarm must be in (0, 0.5), got {p_false_alarm}")
@@ -195,7 +265,22 @@ def _low_variance_quantile(s: int, w: int, p: float, n: int, seed: int) -> float
 
 
 def alarms(name: str, statistic: ArrayLike, threshold: float) -> NDArray[np.bool_]:
-    """Raw alarms of detector ``name``: statistic above (below, for :data:`LOWER_TAIL`) the threshold; NaN → no alarm."""
+    """Raw alarms of detector ``name``: statistic above (below, for :data:`LOWER_TAIL`) the threshold; NaN → no alarm.
+
+    Parameters
+    ----------
+    name : str
+        Detector name (one of :data:`DETECTORS`).
+    statistic : array_like
+        Its statistic.
+    threshold : float
+        Its threshold.
+
+    Returns
+    -------
+    numpy.ndarray of bool, same shape as ``statistic``
+        True where the detector alarms.
+    """
     st = np.asarray(statistic, dtype=np.float64)
     if name in LOWER_TAIL:
         return np.nan_to_num(st, nan=np.inf) < threshold
@@ -209,6 +294,31 @@ def window_statistics(normalized: ArrayLike, M: int = 20, P: ArrayLike | None = 
     ``normalized`` is (N, s) or a batch of runs (R, N, s).  Values before the window is full (k < M−1, 0-based) are NaN.
     ``P`` is the covariance of ν̃ under H0 (identity); ``L`` the fixed
     direction of Alg. 2 (all ones).
+
+    Parameters
+    ----------
+    normalized : array_like, shape (N, s) or (R, N, s)
+        Normalised innovations ``ν̃ = S^{-1/2} ν`` of one run or a batch of runs, finite.
+    M : int, optional
+        Window length in steps, > s (default 20).
+    P : array_like, shape (s, s), optional
+        Covariance of ν̃ under H0 (default identity).
+    L : array_like, shape (s,), optional
+        Direction of Alg. 2 (default all ones).
+
+    Returns
+    -------
+    lambda1 : numpy.ndarray, shape (..., N)
+        Alg. 1: largest eigenvalue of ``A P⁻¹``.
+    lambda2 : numpy.ndarray, shape (..., N)
+        Alg. 2: ``Lᵀ P⁻¹ L / Lᵀ A⁻¹ L``.
+    sum3 : numpy.ndarray, shape (..., N)
+        Alg. 3: windowed ``Σ ν̃ᵀ ν̃``.
+
+    Raises
+    ------
+    ShapeError
+        If ``P`` or ``L`` has the wrong shape.
     """
 
     nv = _check_nv(normalized, batch=True)
@@ -222,7 +332,33 @@ def window_statistics(normalized: ArrayLike, M: int = 20, P: ArrayLike | None = 
 
 
 def cusum_statistics(normalized: ArrayLike, rho: float = 4.0, k: float = 0.5) -> tuple[Array, Array]:
-    """Variance CUSUM (tuned to a variance ratio ρ) and two-sided mean CUSUM (reference k)."""
+    """Variance CUSUM (tuned to a variance ratio ρ) and two-sided mean CUSUM (reference k).
+
+    Page (1954, Biometrika 41): ``g_k = max(0, g_(k−1) + ℓ_k)`` with the log-likelihood ratio of
+    N(0, ρI) against N(0, I), ``ℓ = ½(1 − 1/ρ)|ν̃|² − (s/2) ln ρ``, for the variance, and
+    ``g±_i = max(0, g±_i ± ν̃_i − k)`` per channel for the mean (statistic: max over channels and sides).
+
+    Parameters
+    ----------
+    normalized : array_like, shape (N, s)
+        Normalised innovations ``ν̃ = S^{-1/2} ν`` (a 1-D array is one channel), finite.
+    rho : float, optional
+        Variance ratio to detect, > 1.
+    k : float, optional
+        Reference value of the mean CUSUM, standard deviations, >= 0.
+
+    Returns
+    -------
+    variance : numpy.ndarray, shape (N,)
+        Variance CUSUM.
+    mean : numpy.ndarray, shape (N,)
+        Largest two-sided per-channel mean CUSUM.
+
+    Raises
+    ------
+    InvalidInputError
+        If ``rho <= 1`` or ``k < 0``.
+    """
 
     if not rho > 1:
         raise InvalidInputError(f"cusum rho (variance ratio to detect) must be > 1, got {rho}")
@@ -238,6 +374,29 @@ def detector_statistics(normalized: ArrayLike, M: int = 20, *, cusum_rho: float 
     Returns {name: (…, N)} for the names in :data:`DETECTORS` (window ones NaN
     before the window is full).  Compare with the thresholds of
     :func:`calibrated_thresholds` / :func:`thesis_thresholds`.
+
+    Parameters
+    ----------
+    normalized : array_like, shape (N, s) or (R, N, s)
+        Normalised innovations ``ν̃ = S^{-1/2} ν`` of one run or a batch of runs, finite.
+    M : int, optional
+        Window length in steps, > s (default 20).
+    cusum_rho : float, optional
+        Variance ratio of the variance CUSUM, > 1.
+    cusum_k : float, optional
+        Reference value of the mean CUSUM, >= 0.
+    low_window : int, optional
+        Number of differences of the low-variance statistic.
+
+    Returns
+    -------
+    dict of str to numpy.ndarray
+        Statistic per detector name, shape (N,) or (R, N).
+
+    Raises
+    ------
+    InvalidInputError
+        If ``cusum_rho <= 1`` or ``cusum_k < 0``.
     """
 
     nv = _check_nv(normalized, batch=True)
@@ -257,13 +416,37 @@ def detector_statistics(normalized: ArrayLike, M: int = 20, *, cusum_rho: float 
 
 
 def latch(alarm: ArrayLike) -> NDArray[np.bool_]:
-    """Latched alarm: true from the first alarm on (cumulative OR along the last axis)."""
+    """Latched alarm: true from the first alarm on (cumulative OR along the last axis).
+
+    Parameters
+    ----------
+    alarm : array_like of bool
+        Raw alarms, steps along the last axis.
+
+    Returns
+    -------
+    numpy.ndarray of bool, same shape
+        Latched alarms.
+    """
     a = np.asarray(alarm, dtype=bool)
     return np.logical_or.accumulate(a, axis=-1)
 
 
 def first_alarm(alarm: ArrayLike, start: int = 0) -> int:
-    """Index of the first alarm at or after ``start``; -1 if none."""
+    """Index of the first alarm at or after ``start``; -1 if none.
+
+    Parameters
+    ----------
+    alarm : array_like of bool, shape (N,)
+        Alarms.
+    start : int, optional
+        First step considered.
+
+    Returns
+    -------
+    int
+        Step index, or -1.
+    """
     a = np.asarray(alarm, dtype=bool)[start:]
     idx = np.flatnonzero(a)
     return int(idx[0] + start) if idx.size else -1
@@ -279,8 +462,29 @@ def isolate_faulty_channels(normalized: ArrayLike, M: int = 20, p_false_alarm: f
     A channel is isolated when it is flagged on at least ``min_count`` steps
     at or after ``start`` on which ``during`` (e.g. the system alarm) is True
     (all steps if None): a persistent fault keeps flagging its channel, a
-    chance flag does not repeat.  Returns (isolated flags (s,), first flagged
-    step per channel, -1 if none).
+    chance flag does not repeat.
+
+    Parameters
+    ----------
+    normalized : array_like, shape (N, s)
+        Normalised innovations ``ν̃ = S^{-1/2} ν`` (a 1-D array is one channel), finite.
+    M : int, optional
+        Window length in steps, > s (default 20).
+    p_false_alarm : float, optional
+        Per-step level of the two tests together (split by Bonferroni).
+    start : int, optional
+        Flags before this step are ignored.
+    during : array_like of bool, shape (N,), optional
+        Steps on which flags count (default all).
+    min_count : int, optional
+        Least number of flagged steps to isolate a channel.
+
+    Returns
+    -------
+    isolated : numpy.ndarray of bool, shape (s,)
+        True for the faulty channels.
+    first_flag : numpy.ndarray, shape (s,)
+        First flagged step per channel (as float), -1 if none.
     """
     nv = _check_nv(normalized)
     N, s = nv.shape
@@ -307,9 +511,22 @@ class FaultDetectorResult(Result):
     """One fault detector over an innovation sequence (not :class:`imunav.ins.DetectorResult`, the
     zero-velocity detector's flags).
 
-    statistic (N,) (NaN before the window is full), threshold used,
-    thesis_threshold (NaN where the thesis has none), alarm (N,) raw
-    per-step decisions, latched (N,), first_alarm (step index or -1).
+    Attributes
+    ----------
+    name : str
+        Detector name (one of :data:`DETECTORS`).
+    statistic : numpy.ndarray, shape (N,)
+        The statistic (NaN before the window is full).
+    threshold : float
+        Threshold used.
+    thesis_threshold : float
+        Akgün's (2002) threshold (NaN where the thesis has none).
+    alarm : numpy.ndarray of bool, shape (N,)
+        Raw per-step decisions.
+    latched : numpy.ndarray of bool, shape (N,)
+        Alarms latched from the first on.
+    first_alarm : int
+        Step of the first alarm, or -1.
     """
 
     name: str
@@ -323,7 +540,25 @@ class FaultDetectorResult(Result):
 
 @dataclass(frozen=True)
 class FaultDetectionResult(Result):
-    """All detectors on one sequence, plus channel isolation after the first alarm."""
+    """All detectors on one sequence, plus channel isolation after the first alarm.
+
+    Attributes
+    ----------
+    detectors : dict of str to FaultDetectorResult
+        One result per detector name.
+    isolated_channels : numpy.ndarray of bool, shape (s,)
+        Channels isolated as faulty (none without an alarm).
+    channel_first_flag : numpy.ndarray, shape (s,)
+        First flagged step per channel, -1 if none.
+    window : int
+        Window length M, steps.
+    p_false_alarm : float
+        Per-step false-alarm rate of the calibrated thresholds.
+    threshold_mode : str
+        ``"calibrated"`` or ``"thesis"``.
+    extra : dict
+        Further information.
+    """
 
     detectors: dict[str, FaultDetectorResult]
     isolated_channels: NDArray[np.bool_]
@@ -350,14 +585,36 @@ def detect_faults(
 
     Parameters
     ----------
+    normalized : array_like, shape (N, s)
+        Normalised innovations ``ν̃ = S^{-1/2} ν`` (a 1-D array is one channel), finite.
+    M : int, optional
+        Window length in steps, > s (default 20).
+    p_false_alarm : float, optional
+        Per-step false-alarm rate of the calibrated thresholds, in (0, 0.5).
     threshold_mode : str
         ``"calibrated"`` (per-step false-alarm rate ``p_false_alarm``) or ``"thesis"`` (χ² points of the
         thesis for Alg. 1-3; calibrated for the others).  ``thresholds`` overrides.
     start : int
         Alarms before this step are ignored (e.g. filter transient).
+    cusum_rho : float, optional
+        Variance ratio of the variance CUSUM.
+    cusum_k : float, optional
+        Reference value of the mean CUSUM.
+    thresholds : dict of str to float, optional
+        Thresholds overriding those of ``threshold_mode``, by detector name.
     p_isolation : float
         Per-step level of the per-channel isolation tests (a channel is isolated when flagged on >= 3 steps
         with a system alarm).
+
+    Returns
+    -------
+    FaultDetectionResult
+        Every detector's statistic and alarms, and the isolated channels.
+
+    Raises
+    ------
+    InvalidInputError
+        If ``threshold_mode`` or a name in ``thresholds`` is unknown.
     """
     nv = _check_nv(normalized)
     N, s = nv.shape
@@ -406,8 +663,17 @@ class Fault:
         (noise × ``magnitude`` at the single steps ``steps``).
     onset, end : int
         Step range [onset, end) (end None = to the last step).
+    magnitude : float
+        Bias (measurement units), drift (units/s) or noise factor (>= 1).
     channels : tuple of int or None
         Channel indices (None = all).
+    steps : tuple of int
+        Steps of an ``"outlier"`` fault.
+
+    Raises
+    ------
+    InvalidInputError
+        If the kind is unknown, ``onset`` negative or a noise factor below 1.
     """
 
     kind: str
@@ -426,6 +692,13 @@ class Fault:
             raise InvalidInputError(f"{self.kind} fault magnitude is a noise factor >= 1, got {self.magnitude}")
 
     def to_dict(self) -> dict:
+        """The fault as plain JSON types.
+
+        Returns
+        -------
+        dict
+            Keys ``kind``, ``onset``, ``magnitude``, ``channels``, ``end``, ``steps``.
+        """
         return {"kind": self.kind, "onset": self.onset, "magnitude": self.magnitude,
                 "channels": None if self.channels is None else list(self.channels),
                 "end": self.end, "steps": list(self.steps)}
@@ -445,6 +718,32 @@ def inject_faults(
     Noise-type faults scale the known noise realisation ``noise`` (so
     ``z + (f − 1)·noise`` has exactly f × the nominal noise) or, without it,
     add independent noise of std ``σ √(f² − 1)``.
+
+    Parameters
+    ----------
+    z : array_like, shape (N, m)
+        Measurements (a 1-D array is one channel).
+    faults : list or tuple of Fault
+        Faults to apply, in order.
+    noise : array_like, shape (N, m), optional
+        Noise realisation contained in ``z``.
+    sigma : array_like, shape (m,) or scalar, optional
+        Nominal noise std per channel (used without ``noise``).
+    dt : float, optional
+        Step, s (drift faults).
+    rng : numpy.random.Generator or int, optional
+        Random generator or seed.
+
+    Returns
+    -------
+    numpy.ndarray, shape (N, m)
+        The faulty measurements (a copy).
+
+    Raises
+    ------
+    InvalidInputError
+        If a fault's channels, onset or steps are out of range, or a noise fault has neither
+        ``noise`` nor ``sigma``.
     """
     zz = np.array(z, dtype=np.float64)
     if zz.ndim == 1:
@@ -484,7 +783,27 @@ def inject_faults(
 
 
 def false_alarm_rates(alarm: ArrayLike, valid: ArrayLike | None = None) -> tuple[float, float]:
-    """(per-step rate, share of runs with any alarm) for alarms (runs, steps) under H0."""
+    """(per-step rate, share of runs with any alarm) for alarms (runs, steps) under H0.
+
+    Parameters
+    ----------
+    alarm : array_like of bool, shape (runs, steps) or (steps,)
+        Alarms of fault-free runs.
+    valid : array_like of bool, optional
+        Steps counted (broadcast to ``alarm``; default all).
+
+    Returns
+    -------
+    per_step : float
+        Share of valid steps with an alarm.
+    per_run : float
+        Share of runs with any alarm on a valid step.
+
+    Raises
+    ------
+    InvalidInputError
+        If no step is valid.
+    """
     a = np.asarray(alarm, dtype=bool)
     if a.ndim == 1:
         a = a[None]
@@ -499,8 +818,21 @@ def false_alarm_rates(alarm: ArrayLike, valid: ArrayLike | None = None) -> tuple
 def detection_delays(alarm: ArrayLike, onset: int, horizon: int | None = None) -> tuple[Array, float]:
     """Delays (first alarm at or after onset minus onset + 1; the onset sample is delay 1).
 
-    alarm (runs, steps).  Returns (delays with NaN for missed, missed-detection rate
-    within ``horizon`` steps of the onset).
+    Parameters
+    ----------
+    alarm : array_like of bool, shape (runs, steps) or (steps,)
+        Alarms.
+    onset : int
+        Step at which the fault starts.
+    horizon : int, optional
+        Steps after the onset within which a detection counts (default to the end).
+
+    Returns
+    -------
+    delays : numpy.ndarray, shape (runs,)
+        Delay in steps (NaN for a missed detection).
+    missed : float
+        Missed-detection rate within the horizon.
     """
     a = np.asarray(alarm, dtype=bool)
     if a.ndim == 1:

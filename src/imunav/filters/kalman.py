@@ -58,13 +58,20 @@ class UpdateResult(Result):
 
     Attributes
     ----------
-    innovation : (m,) ``ν = z − h(x⁻)``
-    S : (m, m) innovation covariance
-    K : (n, m) gain actually applied (zero columns for rejected channels)
-    normalized : (m,) ``S^{-1/2} ν`` (≈ N(0, I) when the filter is consistent)
-    nis : float, ``νᵀ S⁻¹ ν`` over all channels
-    accepted : (m,) bool, channels used in the update
-    weights : (m,) measurement weights (1 = plain update; Huber weights < 1)
+    innovation : numpy.ndarray, shape (m,)
+        ``ν = z − H x⁻``, in the measurement's units.
+    S : numpy.ndarray, shape (m, m)
+        Innovation covariance ``H P⁻ Hᵀ + R``.
+    K : numpy.ndarray, shape (n, m)
+        Gain actually applied (zero columns for rejected channels).
+    normalized : numpy.ndarray, shape (m,)
+        ``S^{-1/2} ν`` (≈ N(0, I) when the filter is consistent).
+    nis : float
+        Normalised innovation squared ``νᵀ S⁻¹ ν`` over all channels.
+    accepted : numpy.ndarray of bool, shape (m,)
+        Channels used in the update.
+    weights : numpy.ndarray, shape (m,)
+        Measurement weights (1 = plain update, 0 = rejected, Huber weights in between).
     """
 
     innovation: Array
@@ -77,7 +84,24 @@ class UpdateResult(Result):
 
 
 def joseph_update(P_pred: Array, K: Array, H: Array, R: Array) -> Array:
-    """Joseph-form covariance update ``(I−KH)P(I−KH)ᵀ + K R Kᵀ`` (symmetrised)."""
+    """Joseph-form covariance update ``(I−KH)P(I−KH)ᵀ + K R Kᵀ`` (symmetrised; Bucy & Joseph 1968).
+
+    Parameters
+    ----------
+    P_pred : numpy.ndarray, shape (n, n)
+        Prior covariance ``P⁻``.
+    K : numpy.ndarray, shape (n, m)
+        Gain (any gain: the form stays positive semi-definite).
+    H : numpy.ndarray, shape (m, n)
+        Measurement matrix.
+    R : numpy.ndarray, shape (m, m)
+        Measurement noise covariance.
+
+    Returns
+    -------
+    numpy.ndarray, shape (n, n)
+        Posterior covariance, symmetric.
+    """
     n = P_pred.shape[0]
     A = np.eye(n) - K @ H
     return symmetrize(A @ P_pred @ A.T + K @ R @ K.T)
@@ -91,6 +115,24 @@ def riccati_steady_state(F: ArrayLike, Q: ArrayLike, H: ArrayLike, R: ArrayLike,
     (:func:`scipy.linalg.solve_discrete_are` on the dual system) and returns
     ``P = P⁻ − P⁻ Hᵀ S⁻¹ H P⁻``.  For a scalar random walk (F = H = 1) this is
     ``P = (−Q + √(Q² + 4 Q R)) / 2``.
+
+    Parameters
+    ----------
+    F : array_like, shape (n, n)
+        State transition matrix.
+    Q : array_like, shape (q, q)
+        Process noise covariance (of ``w``; q = n without ``G``).
+    H : array_like, shape (m, n)
+        Measurement matrix.
+    R : array_like, shape (m, m)
+        Measurement noise covariance.
+    G : array_like, shape (n, q), optional
+        Noise-input matrix; default identity.
+
+    Returns
+    -------
+    numpy.ndarray, shape (n, n)
+        Steady-state posterior covariance ``P``.
     """
 
     F = as_matrix(F, "F")
@@ -109,12 +151,23 @@ class KalmanFilter:
 
     Parameters
     ----------
-    x0, P0 : initial state (n,) and covariance (n, n) (a vector is a diagonal)
-    F, Q, H, R : default model matrices; each call of :meth:`predict` /
+    x0, P0 : array_like
+        Initial state (n,) and covariance (n, n) (a vector is a diagonal).
+    F, Q, H, R : array_like, optional
+        Default model matrices; each call of :meth:`predict` /
         :meth:`update` may override them (time-varying models).
-    B : optional control matrix (n, p); ``u`` is then passed to :meth:`predict`.
-    G : optional noise-input matrix (n, q); Q is then (q, q) and the process
+    B : array_like, shape (n, p), optional
+        Control matrix; ``u`` is then passed to :meth:`predict`.
+    G : array_like, shape (n, q), optional
+        Noise-input matrix; Q is then (q, q) and the process
         noise covariance is ``G Q Gᵀ``.
+
+    Attributes
+    ----------
+    x : numpy.ndarray, shape (n,)
+        Current state estimate.
+    P : numpy.ndarray, shape (n, n)
+        Current covariance.
 
     Examples
     --------
@@ -157,7 +210,27 @@ class KalmanFilter:
         B: ArrayLike | None = None,
         G: ArrayLike | None = None,
     ) -> tuple[Array, Array]:
-        """Time update ``x⁻ = F x + B u``, ``P⁻ = F P Fᵀ + G Q Gᵀ``; returns (x, P)."""
+        """Time update ``x⁻ = F x + B u``, ``P⁻ = F P Fᵀ + G Q Gᵀ`` (in place).
+
+        Parameters
+        ----------
+        u : array_like, shape (p,), optional
+            Control input (needs ``B``).
+        F, Q, B, G : array_like, optional
+            Model matrices for this step; default those given to the constructor.
+
+        Returns
+        -------
+        x : numpy.ndarray, shape (n,)
+            Predicted state.
+        P : numpy.ndarray, shape (n, n)
+            Predicted covariance.
+
+        Raises
+        ------
+        InvalidInputError
+            If ``F`` or ``Q`` is given neither here nor to the constructor, or ``u`` without ``B``.
+        """
         n = self.n
         Fm = self.F if F is None else as_matrix(F, "F", n, n)
         if Fm is None:
@@ -180,7 +253,31 @@ class KalmanFilter:
 
     def innovation(self, z: ArrayLike, *, H: ArrayLike | None = None, R: ArrayLike | None = None
                    ) -> tuple[Array, Array, Array, Array]:
-        """``(ν, S, H, R)`` for measurement ``z`` without changing the filter."""
+        """``(ν, S, H, R)`` for measurement ``z`` without changing the filter.
+
+        Parameters
+        ----------
+        z : array_like, shape (m,)
+            Measurement.
+        H, R : array_like, optional
+            Measurement matrix (m, n) and noise covariance (m, m); default the constructor's.
+
+        Returns
+        -------
+        nu : numpy.ndarray, shape (m,)
+            Innovation ``z − H x``.
+        S : numpy.ndarray, shape (m, m)
+            Innovation covariance ``H P Hᵀ + R``.
+        H : numpy.ndarray, shape (m, n)
+            The measurement matrix used.
+        R : numpy.ndarray, shape (m, m)
+            The noise covariance used.
+
+        Raises
+        ------
+        InvalidInputError
+            If ``H`` or ``R`` is missing, or their sizes disagree.
+        """
         Hm = self.H if H is None else as_matrix(H, "H", None, self.n)
         if Hm is None:
             raise InvalidInputError("update needs H: pass H= here or to the constructor")
@@ -207,9 +304,25 @@ class KalmanFilter:
 
         Parameters
         ----------
-        form : ``"joseph"`` (default) or ``"standard"`` covariance update.
-        accept : optional (m,) bool; channels set False are not used (their
-            gain column is zero).  All False leaves x and P at the prediction.
+        z : array_like, shape (m,)
+            Measurement.
+        H, R : array_like, optional
+            Measurement matrix (m, n) and noise covariance (m, m); default the constructor's.
+        form : {"joseph", "standard"}, optional
+            Covariance update form (default ``"joseph"``).
+        accept : array_like of bool, shape (m,), optional
+            Channels set False are not used (their gain column is zero).  All
+            False leaves x and P at the prediction.
+
+        Returns
+        -------
+        UpdateResult
+            Innovation, its covariance, the gain applied, NIS and the channels used.
+
+        Raises
+        ------
+        InvalidInputError
+            If ``form`` is unknown or ``accept`` has the wrong length.
         """
         if form not in ("joseph", "standard"):
             raise InvalidInputError(f"form must be 'joseph' or 'standard', got {form!r}")
@@ -238,9 +351,22 @@ class KalmanFilter:
 class KalmanRun(Result):
     """A whole-sequence linear Kalman filter run (see :func:`kalman_filter`).
 
-    ``x_pred``/``P_pred`` are the priors at each step, ``x``/``P`` the
-    posteriors; ``innovation``, ``S`` and ``nis`` are NaN at steps without a
-    measurement.
+    Attributes
+    ----------
+    x_pred : numpy.ndarray, shape (N, n)
+        Prior state at each step.
+    P_pred : numpy.ndarray, shape (N, n, n)
+        Prior covariance at each step.
+    x : numpy.ndarray, shape (N, n)
+        Posterior state.
+    P : numpy.ndarray, shape (N, n, n)
+        Posterior covariance.
+    innovation : numpy.ndarray, shape (N, m)
+        Innovation; NaN at steps without a measurement.
+    S : numpy.ndarray, shape (N, m, m)
+        Innovation covariance; NaN without a measurement.
+    nis : numpy.ndarray, shape (N,)
+        Normalised innovation squared; NaN without a measurement.
     """
 
     x_pred: Array
@@ -284,7 +410,40 @@ def kalman_filter(
     Each step is predict then update (the first measurement is at step 1, one
     prediction after ``x0``).  Rows of ``z`` that are all NaN are skipped
     (prediction only), which is how slower sensors are handled.  Many runs at
-    once: :func:`imunav.filters._batch.batch_filter` (leading batch axis).
+    once: :func:`batch_kalman_filter` (leading batch axis).
+
+    Parameters
+    ----------
+    x0 : array_like, shape (n,)
+        Initial state.
+    P0 : array_like, shape (n, n)
+        Initial covariance.
+    F : array_like, shape (n, n)
+        State transition matrix.
+    Q : array_like, shape (q, q)
+        Process noise covariance (q = n without ``G``).
+    H : array_like, shape (m, n)
+        Measurement matrix.
+    R : array_like, shape (m, m)
+        Measurement noise covariance.
+    z : array_like, shape (N, m)
+        Measurements; all-NaN rows are missing.
+    G : array_like, shape (n, q), optional
+        Noise-input matrix.
+    B : array_like, shape (n, p), optional
+        Control matrix (needed with ``u``).
+    u : array_like, shape (N, p), optional
+        Control input at each step.
+
+    Returns
+    -------
+    KalmanRun
+        Priors, posteriors, innovations and NIS at each step.
+
+    Raises
+    ------
+    InvalidInputError
+        If ``z`` has the wrong shape, contains inf or partly-NaN rows, or ``u`` is given without ``B``.
     """
 
     x0v = as_vector(x0, "x0")
@@ -342,9 +501,18 @@ def kalman_filter(
 class BatchRun(Result):
     """Many independent runs of one linear filter (leading axis = run).
 
-    x, cov_diag (R, N, n) posteriors (the diagonal of P); innovation, normalized (R, N, m) (NaN
-    without measurement); weights (R, N, m): 1 used, 0 rejected, Huber
-    weight in between.
+    Attributes
+    ----------
+    x : numpy.ndarray, shape (R, N, n)
+        Posterior states.
+    cov_diag : numpy.ndarray, shape (R, N, n)
+        Diagonal of the posterior covariance.
+    innovation : numpy.ndarray, shape (R, N, m)
+        Innovations (NaN without measurement).
+    normalized : numpy.ndarray, shape (R, N, m)
+        Normalised innovations ``S^{-1/2} ν`` (NaN without measurement).
+    weights : numpy.ndarray, shape (R, N, m)
+        1 used, 0 rejected, Huber weight in between.
     """
 
     x: Array
@@ -375,6 +543,37 @@ def batch_kalman_filter(
     ``"isolate"`` (χ² + w-test isolation at level ``alpha``), ``"nis"``
     (the whole measurement rejected when its NIS exceeds χ²_{1−alpha}(m)) or
     ``"huber"`` (see :mod:`imunav.filters.robust`).  x0 may be (n,) or per run (R, n).
+
+    Parameters
+    ----------
+    x0 : array_like, shape (n,) or (R, n)
+        Initial state, shared or per run.
+    P0 : array_like, shape (n, n)
+        Initial covariance.
+    F, Q, H, R : array_like
+        Time-invariant model matrices (as in :func:`kalman_filter`).
+    z : array_like, shape (R, N, m)
+        Measurement sequences; all-NaN rows are missing.
+    G : array_like, shape (n, q), optional
+        Noise-input matrix.
+    robust : {None, "gate", "isolate", "nis", "huber"}, optional
+        Robust update (default None: the optimal filter).
+    gate_m : float, optional
+        Per-channel gate half-width, standard deviations (``"gate"``).
+    alpha : float, optional
+        Test level in (0, 1) (``"isolate"``, ``"nis"``).
+    huber_c : float, optional
+        Huber threshold (``"huber"``).
+
+    Returns
+    -------
+    BatchRun
+        Posterior states, covariance diagonals, innovations and weights of every run.
+
+    Raises
+    ------
+    InvalidInputError
+        If ``robust`` is unknown, a tuning value is out of range, or ``x0`` / ``z`` have the wrong shape.
     """
 
     modes = {None: MODE_NONE, "gate": MODE_GATE, "isolate": MODE_ISOLATE, "huber": MODE_HUBER, "nis": MODE_NIS}

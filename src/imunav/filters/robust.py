@@ -54,7 +54,25 @@ HUBER_C = 1.345
 
 
 def huber_weights(r: ArrayLike, c: float = HUBER_C) -> Array:
-    """IRLS weights ``ψ(r)/r = min(1, c/|r|)`` of Huber's loss."""
+    """IRLS weights ``ψ(r)/r = min(1, c/|r|)`` of Huber's loss (Huber 1964, Ann. Math. Stat. 35(1)).
+
+    Parameters
+    ----------
+    r : array_like
+        Whitened residuals (dimensionless).
+    c : float, optional
+        Huber threshold in standard deviations, > 0 (default 1.345, 95 % efficiency at the Gaussian).
+
+    Returns
+    -------
+    numpy.ndarray, same shape as ``r``
+        Weights in (0, 1]: 1 where ``|r| <= c``, ``c/|r|`` elsewhere.
+
+    Raises
+    ------
+    InvalidInputError
+        If ``c`` is not > 0.
+    """
     if not c > 0:
         raise InvalidInputError(f"Huber constant c must be > 0, got {c}")
     a = np.abs(np.asarray(r, dtype=np.float64))
@@ -78,14 +96,48 @@ def huber_update(
     ``M = [Lp⁻¹; Lr⁻¹ H]`` (``P⁻ = Lp Lpᵀ``, ``R = Lr Lrᵀ``); iterate
     ``x = (MᵀΨM)⁻¹ MᵀΨ y`` with ``Ψ = diag(huber_weights(y − M x))``.
 
-    Returns
-    -------
-    x, P, weights (one per measurement channel), iterations.
     With all weights 1 the result is the Kalman update exactly.  By default
     only the measurement rows are re-weighted (``reweight_prior=False``):
     with a single measurement there is no redundancy to tell a bad prior
-    from a bad measurement, and re-weighting the prior (Karlgaard & Schaub)
-    lets an outlier pull the estimate half-way.
+    from a bad measurement, and re-weighting the prior (Karlgaard & Schaub
+    2007, J. Guid. Control Dyn. 30(3)) lets an outlier pull the estimate half-way.
+
+    Parameters
+    ----------
+    x_pred : array_like, shape (n,)
+        Predicted state ``x⁻``.
+    P_pred : array_like, shape (n, n)
+        Predicted covariance ``P⁻``, symmetric positive definite.
+    z : array_like, shape (m,)
+        Measurement.
+    H : array_like, shape (m, n)
+        Measurement matrix.
+    R : array_like, shape (m, m)
+        Measurement noise covariance, symmetric positive definite.
+    c : float, optional
+        Huber threshold in standard deviations, > 0 (default 1.345).
+    max_iter : int, optional
+        Maximum number of IRLS iterations (default 50).
+    tol : float, optional
+        Stop when the state changes by less than this (max abs) between iterations.
+    reweight_prior : bool, optional
+        Also re-weight the prior rows (Karlgaard & Schaub's form); default False.
+
+    Returns
+    -------
+    x : numpy.ndarray, shape (n,)
+        Updated state.
+    P : numpy.ndarray, shape (n, n)
+        Updated covariance ``(MᵀΨM)⁻¹``.
+    weights : numpy.ndarray, shape (m,)
+        Huber weight of each measurement channel, in (0, 1].
+    iterations : int
+        Number of IRLS iterations run.
+
+    Raises
+    ------
+    InvalidInputError
+        If ``c`` is not > 0.
     """
 
     xv = as_vector(x_pred, "x_pred")
@@ -137,9 +189,35 @@ def robust_update(
 ) -> UpdateResult:
     """Robust update of a :class:`KalmanFilter` in place.
 
-    method : ``"gate"`` (per-channel ±m, thesis), ``"isolate"`` (χ² + w-test
-    isolation at level ``alpha``), ``"nis"`` (vector χ² gate) or ``"huber"``
-    (IRLS with constant c).
+    Parameters
+    ----------
+    kf : KalmanFilter
+        The filter to update; its ``x`` and ``P`` are replaced.
+    z : array_like, shape (m,)
+        Measurement.
+    method : {"isolate", "gate", "nis", "huber"}, optional
+        ``"gate"`` (per-channel ±m, Akgün 2002), ``"isolate"`` (χ² + w-test
+        isolation at level ``alpha``), ``"nis"`` (vector χ² gate) or ``"huber"``
+        (IRLS with constant c).
+    m : float, optional
+        Gate half-width for ``"gate"``, in standard deviations.
+    alpha : float, optional
+        False-alarm probability for ``"isolate"`` and ``"nis"``.
+    c : float, optional
+        Huber threshold for ``"huber"``.
+    H, R : array_like, optional
+        Measurement matrix and noise covariance for this update; default those of ``kf``.
+
+    Returns
+    -------
+    UpdateResult
+        Innovation, its covariance, gain, normalised innovation, NIS and the accepted channels
+        (for ``"huber"``: the Huber weights, every channel accepted).
+
+    Raises
+    ------
+    InvalidInputError
+        If ``method`` is unknown.
     """
     nu, S, Hm, Rm = kf.innovation(z, H=H, R=R)
     if method == "gate":

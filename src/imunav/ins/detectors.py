@@ -111,6 +111,23 @@ def shrink_stances(zv: ArrayLike, margin: int) -> NDArray[np.bool_]:
     Detectors tend to fire while the foot still rolls at heel strike and toe
     off; a ZUPT there loses real motion.  Runs shorter than ``2 margin + 1``
     vanish.
+
+    Parameters
+    ----------
+    zv : array_like of bool, shape (N,)
+        Zero-velocity flags.
+    margin : int
+        Samples removed at each end of every stance, >= 0.
+
+    Returns
+    -------
+    numpy.ndarray of bool, shape (N,)
+        The shrunk flags (a copy).
+
+    Raises
+    ------
+    InvalidInputError
+        If ``margin`` is negative.
     """
     z = np.asarray(zv, dtype=bool).copy()
     m = int(margin)
@@ -133,14 +150,34 @@ def detect_zero_velocity(data: Any, detector: str = "shoe", threshold: float | A
     Parameters
     ----------
     data : ImuData
-    detector : ``"shoe"``, ``"ared"``, ``"amvd"``, ``"mbgtd"``, ``"adaptive"``
+        IMU recording (``t`` s, ``accel`` m/s², ``gyro`` rad/s, body FRD).
+    detector : str, optional
+        ``"shoe"``, ``"ared"``, ``"amvd"``, ``"mbgtd"``, ``"adaptive"``
         (:func:`motion_adaptive`), ``"freeacc"`` (:func:`free_acceleration`) or ``"lstm"`` (the shipped
         :class:`imunav.learn.LstmDetector`, or ``model`` when given).
-    threshold : scalar or (N,) per-sample thresholds; default
+    threshold : float or array_like, shape (N,), optional
+        Scalar or per-sample thresholds, > 0, in the statistic's units; default
         :data:`DEFAULT_THRESHOLDS`.  For ``"lstm"`` the probability threshold
-        (default 0.85).
-    margin_s : shrink every detected stance by this much at both ends
+        (default 0.85); for ``"freeacc"`` m/s² (default 3).
+    window : int, optional
+        Window length in samples (default 5).
+    sigma_a, sigma_w, g : float, optional
+        SHOE's accelerometer (m/s²) and gyroscope (rad/s) noise and gravity (m/s²).
+    model : LstmDetector, optional
+        Learned detector used for ``"lstm"`` (default the shipped one).
+    margin_s : float, optional
+        Shrink every detected stance by this much, s, at both ends
         (:func:`shrink_stances`; 0 = the published detector output).
+
+    Returns
+    -------
+    DetectorResult
+        Flags, statistic, thresholds and the settings used.
+
+    Raises
+    ------
+    InvalidInputError
+        If a threshold is not finite and > 0, or ``margin_s`` is negative.
     """
     if threshold is not None:
         th = np.asarray(threshold, dtype=float)
@@ -195,6 +232,33 @@ def motion_adaptive(data: Any, *, thresholds: tuple[float, float] = (1.0e7, 3.5e
     (walking).  The per-sample threshold is then smoothed with a
     ``smooth_s`` moving average, as in the motion-classification adaptive
     detector of Wagstaff et al. (IPIN 2017), with a rule in place of the SVM.
+
+    Parameters
+    ----------
+    data : ImuData
+        IMU recording (``t`` s, ``accel`` m/s², ``gyro`` rad/s, body FRD).
+    thresholds : tuple of float, optional
+        SHOE thresholds (walk, run), > 0.
+    split_rate : float, optional
+        Intensity (RMS angular rate, rad/s) above which the run threshold applies.
+    intensity_window_s : float, optional
+        Window of the moving RMS, s.
+    smooth_s : float, optional
+        Window of the moving average of the threshold, s.
+    window : int, optional
+        SHOE window length in samples.
+    sigma_a, sigma_w, g : float, optional
+        SHOE's accelerometer (m/s²) and gyroscope (rad/s) noise and gravity (m/s²).
+
+    Returns
+    -------
+    DetectorResult
+        Flags, SHOE statistic and the per-sample threshold (``detector = "adaptive"``).
+
+    Raises
+    ------
+    InvalidInputError
+        If ``thresholds`` is not two positive values.
     """
     a, w = _accel_gyro(data)
     t = np.asarray(data.t, dtype=float)
@@ -220,6 +284,27 @@ def free_acceleration(data: Any, *, threshold: float = 3.0, g: float = G_PYSHOE,
     (gain ``kp`` rad/s, no integral term, no magnetometer); only its tilt
     matters, since ``|.|`` ignores the heading.  x-io widens each moving period
     by 0.1 s on both sides: ``detect_zero_velocity(..., margin_s=0.1)``.
+
+    Parameters
+    ----------
+    data : ImuData
+        IMU recording (``t`` s, ``accel`` m/s², ``gyro`` rad/s, body FRD).
+    threshold : float, optional
+        Free-acceleration threshold, m/s², finite and > 0 (default 3).
+    g : float, optional
+        Gravity magnitude, m/s² (NED: gravity is ``[0, 0, g]``).
+    kp : float, optional
+        Proportional gain of the Mahony filter, rad/s.
+
+    Returns
+    -------
+    DetectorResult
+        Flags, ``T`` (m/s²) and the threshold (``detector = "freeacc"``).
+
+    Raises
+    ------
+    InvalidInputError
+        If ``threshold`` is not finite and > 0.
     """
 
     if not (threshold > 0 and np.isfinite(threshold)):
@@ -233,7 +318,23 @@ def free_acceleration(data: Any, *, threshold: float = 3.0, g: float = G_PYSHOE,
 
 @dataclass(frozen=True)
 class ThresholdSearch(Result):
-    """Result of :func:`optimize_threshold`: error per grid threshold and the best one."""
+    """Result of :func:`optimize_threshold`: error per grid threshold and the best one.
+
+    Attributes
+    ----------
+    detector : str
+        Detector name.
+    thresholds : numpy.ndarray, shape (K,)
+        The grid searched, in the statistic's units.
+    errors : numpy.ndarray, shape (K,)
+        Metric value (m for the default 2-D error) at each threshold.
+    best_threshold : float
+        Threshold with the smallest error (ties to the larger).
+    best_error : float
+        Its error.
+    zv : numpy.ndarray of bool, shape (N,)
+        Flags of the best threshold.
+    """
 
     detector: str
     thresholds: Array
@@ -243,6 +344,13 @@ class ThresholdSearch(Result):
     zv: NDArray[np.bool_]
 
     def to_dict(self) -> dict[str, Any]:
+        """The search as plain JSON types (without the flags).
+
+        Returns
+        -------
+        dict
+            Keys ``detector``, ``thresholds``, ``errors``, ``best_threshold``, ``best_error``.
+        """
         return {"detector": self.detector, "thresholds": self.thresholds.tolist(), "errors": self.errors.tolist(),
                 "best_threshold": self.best_threshold, "best_error": self.best_error}
 
@@ -258,6 +366,35 @@ def optimize_threshold(data: Any, reference: ArrayLike, detector: str = "shoe",
     reference)`` (default :func:`imunav.ins.metrics.error_2d`) scores it; ties
     go to the larger threshold (as in the published search).  ``reference``
     is the (N, 3) reference position, one row per IMU sample.
+
+    Parameters
+    ----------
+    data : ImuData
+        IMU recording (``t`` s, ``accel`` m/s², ``gyro`` rad/s, body FRD).
+    reference : array_like, shape (N, 2) or (N, 3)
+        Reference position, m (NED), one row per IMU sample.
+    detector : {"shoe", "ared", "amvd", "mbgtd"}, optional
+        Detector whose threshold is searched.
+    thresholds : sequence of float, optional
+        Grid to search; default :data:`THRESHOLD_GRIDS` of the detector.
+    window : int, optional
+        Window length in samples.
+    metric : callable, optional
+        ``metric(estimate, reference) -> float``; default :func:`imunav.ins.metrics.error_2d`.
+    config : ZuptConfig, optional
+        Settings of the ZUPT INS.
+
+    Returns
+    -------
+    ThresholdSearch
+        Error per threshold and the best one.
+
+    Raises
+    ------
+    InvalidInputError
+        If ``thresholds`` is empty or not 1-D.
+    ShapeError
+        If ``reference`` does not have one row per IMU sample.
     """
 
     name = detector.lower()

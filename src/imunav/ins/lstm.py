@@ -44,7 +44,73 @@ class LstmConfig:
     network: :meth:`thesis`).  ``stance_weight`` weights the stationary class
     in the cross-entropy: a missed stance (unbounded drift) costs far more
     than a false one, and the 0.85 rule already suppresses false stances.  ``time_budget_s`` optionally stops training
-    early (then the result depends on the machine speed).
+    early (then the result depends on the machine speed).  Reference: F. Şahin, *Derin öğrenme yöntemleri ile
+    ataletsel navigasyon sistemlerinde doğruluğun geliştirilmesi*, MSc thesis, Kırıkkale University, 2022, §4.2.
+
+    Attributes
+    ----------
+    layers : int
+        Number of stacked LSTM layers, >= 1.
+    hidden : int
+        Hidden units per layer, >= 1.
+    window : int
+        Window length, samples.
+    burn_in : int
+        Leading samples of each window whose outputs are not used (context), in [0, window).
+    threshold : float
+        Stance when ``P(stationary) > threshold``, in (0, 1).
+    windows_per_trial : int
+        Training windows drawn from each trial per epoch.
+    epochs : int
+        Training epochs.
+    batch_size : int
+        Windows per batch.
+    lr : float
+        Peak learning rate of Adam (one-cycle schedule).
+    max_rotation_deg : float
+        Largest random rotation of the augmentation, degrees.
+    scale : tuple of float
+        (low, high) range of the random scale factor of the augmentation.
+    noise_acc : float
+        Standard deviation of the accelerometer noise added in augmentation, m/s².
+    noise_gyro : float
+        Standard deviation of the gyro noise added in augmentation, rad/s.
+    time_budget_s : float or None
+        Stop training after this many seconds (None: no limit).
+    seed : int
+        Seed of the random generators.
+    features : {"raw+log", "raw"}
+        Network input: the 6 raw channels, plus for ``"raw+log"`` ``log |ω|²`` and ``log (|f| − g)²``.
+    stance_weight : float
+        Weight of the stationary class in the cross-entropy.
+    max_gap_s : float or None
+        Gait prior: inside stance-free runs longer than this, s, ``P > fallback_threshold`` is a
+        stance (None: off).
+    fallback_threshold : float
+        Probability threshold of the gait prior, in (0, 1).
+    speed : tuple of float
+        (low, high) time-warp factors of the training windows.
+    warp_fraction : float
+        Share of training windows that are time-warped, in [0, 1].
+    guard : bool
+        Check the flags against SHOE (:func:`guard_stances`).
+    shoe_threshold : float
+        SHOE threshold of the guard's reference flags.
+    guard_fill_s : float or None
+        ``min_stance_s`` of :func:`guard_stances`, s (None: off).
+    guard_bridge_s : float or None
+        ``max_bridge_s`` of :func:`guard_stances`, s (None: off).
+    guard_min_ratio : float
+        ``min_ratio`` of :func:`guard_stances`, in [0, 1].
+    guard_max_count_ratio : float or None
+        ``max_count_ratio`` of :func:`guard_stances`, >= 1 (None: off).
+    guard_block_s : float
+        ``block_s`` of :func:`guard_stances`, s.
+
+    Raises
+    ------
+    ConfigError
+        If a value is out of range.
     """
 
     layers: int = 2
@@ -111,11 +177,29 @@ class LstmConfig:
             raise ConfigError(f"guard_block_s must be > 0 s; got {self.guard_block_s}")
 
     def to_dict(self) -> dict[str, Any]:
+        """The settings as a plain dict.
+
+        Returns
+        -------
+        dict
+            One key per field.
+        """
         return asdict(self)
 
     @classmethod
     def thesis(cls, **changes: Any) -> LstmConfig:
-        """The thesis's 6 × 80 network (Şahin 2022 §4.2), other defaults unchanged."""
+        """The thesis's 6 × 80 network (Şahin 2022 §4.2), other defaults unchanged.
+
+        Parameters
+        ----------
+        **changes
+            Fields to set (they override the 6 × 80 too).
+
+        Returns
+        -------
+        LstmConfig
+            The settings.
+        """
         return cls(**{"layers": 6, "hidden": 80, **changes})
 
 
@@ -127,7 +211,36 @@ def lstm_forward(weights: Sequence[tuple[Array, Array, Array]], fc_w: Array, fc_
     """Stacked LSTM + linear head in numpy; returns P(stationary) (B, T).
 
     ``weights[l] = (W_ih (4H, in), W_hh (4H, H), b (4H,))`` with the gate
-    order i, f, g, o (PyTorch's); zero initial states.
+    order i, f, g, o (PyTorch's); zero initial states.  The cell is that of Hochreiter &
+    Schmidhuber (Neural Computation 9(8), 1997) with a forget gate (Gers, Schmidhuber & Cummins,
+    Neural Computation 12(10), 2000)::
+
+        i = σ(W_ii x + W_hi h + b_i)    f = σ(W_if x + W_hf h + b_f)
+        g = tanh(W_ig x + W_hg h + b_g) o = σ(W_io x + W_ho h + b_o)
+        c' = f ⊙ c + i ⊙ g              h' = o ⊙ tanh(c')
+
+    and the two-class softmax of the head is ``σ(logit_1 − logit_0)``.
+
+    Parameters
+    ----------
+    weights : sequence of tuple of numpy.ndarray
+        One ``(W_ih, W_hh, b)`` per layer (the two PyTorch biases summed).
+    fc_w : numpy.ndarray, shape (2, H)
+        Weights of the linear head (classes moving, stationary).
+    fc_b : numpy.ndarray, shape (2,)
+        Bias of the linear head.
+    x : numpy.ndarray, shape (B, T, C)
+        Normalised input windows.
+
+    Returns
+    -------
+    numpy.ndarray, shape (B, T)
+        P(stationary) at every step.
+
+    Raises
+    ------
+    ShapeError
+        If ``x`` is not 3-D.
     """
     h_seq = np.asarray(x, dtype=np.float64)
     if h_seq.ndim != 3:
@@ -156,7 +269,25 @@ def lstm_forward(weights: Sequence[tuple[Array, Array, Array]], fc_w: Array, fc_
 
 
 class LstmDetector:
-    """Numpy inference of a trained LSTM zero-velocity classifier."""
+    """Numpy inference of a trained LSTM zero-velocity classifier.
+
+    Parameters
+    ----------
+    weights : list of tuple of numpy.ndarray
+        One ``(W_ih (4H, in), W_hh (4H, H), b (4H,))`` per layer (see :func:`lstm_forward`).
+    fc_w : numpy.ndarray, shape (2, H)
+        Weights of the linear head.
+    fc_b : numpy.ndarray, shape (2,)
+        Bias of the linear head.
+    mean : numpy.ndarray, shape (C,)
+        Mean of the input features (normalisation).
+    std : numpy.ndarray, shape (C,)
+        Standard deviation of the input features (normalisation).
+    config : LstmConfig
+        Architecture and detection settings.
+    info : dict, optional
+        Free-form training information saved with the model.
+    """
 
     def __init__(self, weights: list[tuple[Array, Array, Array]], fc_w: Array, fc_b: Array, mean: Array,
                  std: Array, config: LstmConfig, info: dict[str, Any] | None = None) -> None:
@@ -170,7 +301,18 @@ class LstmDetector:
 
     # -- persistence ---------------------------------------------------------
     def save(self, path: str | Path) -> Path:
-        """Write weights (float32), normalisation and settings to ``.npz`` atomically."""
+        """Write weights (float32), normalisation and settings to ``.npz`` atomically.
+
+        Parameters
+        ----------
+        path : str or pathlib.Path
+            File to write.
+
+        Returns
+        -------
+        pathlib.Path
+            The path written.
+        """
         p = Path(path)
         arrays: dict[str, Any] = {"fc_w": self.fc_w.astype(np.float32), "fc_b": self.fc_b.astype(np.float32),
                                   "mean": self.mean, "std": self.std}
@@ -186,7 +328,23 @@ class LstmDetector:
 
     @classmethod
     def load(cls, path: str | Path | None = None) -> LstmDetector:
-        """Load a model file (default: the shipped model)."""
+        """Load a model file (default: the shipped model).
+
+        Parameters
+        ----------
+        path : str or pathlib.Path, optional
+            Model file written by :meth:`save`; default :data:`DEFAULT_MODEL_PATH`.
+
+        Returns
+        -------
+        LstmDetector
+            The model.
+
+        Raises
+        ------
+        FileFormatError
+            If the file is missing, truncated or not an imunav LSTM model.
+        """
         p = DEFAULT_MODEL_PATH if path is None else Path(path)
         if not p.is_file():
             raise FileFormatError(f"LSTM model file not found: {p}; train one with `imunav zupt train DIR`")
@@ -212,7 +370,19 @@ class LstmDetector:
     # -- inference -----------------------------------------------------------
     def probability(self, data: Any) -> Array:
         """P(stationary) per sample (N,), each from a window with >= ``burn_in`` samples of context
-        (the first window's outputs excepted)."""
+        (the first window's outputs excepted).
+
+        Parameters
+        ----------
+        data : ImuData
+            IMU recording (``t`` s, ``accel`` m/s², ``gyro`` rad/s, body FRD), at the rate of the
+            training data.
+
+        Returns
+        -------
+        numpy.ndarray, shape (N,)
+            Probability that the foot is stationary, in (0, 1).
+        """
         x = _derived(_features(data), self.config.features)
         x = (x - self.mean) / self.std
         n = x.shape[0]
@@ -255,7 +425,34 @@ class LstmDetector:
 
         ``params["guard"]`` reports what the guard did (``fallback_fraction``:
         share of samples that took SHOE's flags; ``fallback``: any block did).
-        ``probability``: ``self.probability(data)`` if already computed (skips the network).
+
+        Parameters
+        ----------
+        data : ImuData
+            IMU recording (``t`` s, ``accel`` m/s², ``gyro`` rad/s, body FRD), at the rate of the
+            training data.
+        threshold : float, optional
+            Probability threshold in (0, 1); default ``config.threshold``.
+        max_gap_s : float or None, optional
+            Gait prior, s (None: off); default ``config.max_gap_s``.
+        fallback_threshold : float, optional
+            Threshold of the gait prior; default ``config.fallback_threshold``.
+        guard : bool, optional
+            Apply the SHOE guard; default ``config.guard``.
+        probability : array_like, shape (N,), optional
+            ``self.probability(data)`` if already computed (skips the network).
+
+        Returns
+        -------
+        DetectorResult
+            Flags, the probability as ``statistic``, the threshold and ``params`` (with ``guard``).
+
+        Raises
+        ------
+        InvalidInputError
+            If ``threshold`` is not in (0, 1).
+        ShapeError
+            If ``probability`` does not have one value per sample.
         """
 
         if isinstance(max_gap_s, str):
@@ -321,9 +518,39 @@ def guard_stances(zv: Any, reference: Any, fs: float, *, min_ratio: float = 0.5,
     ``min_stance_s`` / ``max_bridge_s`` None turn checks 1 / 2 off;
     ``min_ratio`` 0 and ``max_count_ratio`` None turn off the two tests of 3.
 
-    Returns ``(flags, info)`` with ``info``: ``filled_stances``,
-    ``bridged_gaps``, ``fallback_blocks``, ``blocks``, ``fallback_fraction``
-    (share of samples that took the reference) and ``fallback`` (bool).
+    Parameters
+    ----------
+    zv : array_like of bool, shape (N,)
+        Learned stance flags.
+    reference : array_like of bool, shape (N,)
+        Reference flags (e.g. SHOE).
+    fs : float
+        Sample rate, Hz, > 0.
+    min_ratio : float, optional
+        Check 3: least ratio of stationary samples (``zv`` / reference) per block, in [0, 1].
+    max_count_ratio : float or None, optional
+        Check 3: most ratio of stance counts per block, >= 1.
+    block_s : float, optional
+        Block length, s, > 0.
+    min_stance_s : float or None, optional
+        Check 1: shortest reference stance added, s.
+    max_bridge_s : float or None, optional
+        Check 2: longest gap closed, s.
+
+    Returns
+    -------
+    flags : numpy.ndarray of bool, shape (N,)
+        The checked flags.
+    info : dict
+        ``filled_stances``, ``bridged_gaps``, ``fallback_blocks``, ``blocks``, ``fallback_fraction``
+        (share of samples that took the reference) and ``fallback`` (bool).
+
+    Raises
+    ------
+    ShapeError
+        If ``zv`` and ``reference`` are not 1-D of one length.
+    InvalidInputError
+        If ``fs`` or a setting is out of range.
     """
 
     z = np.ascontiguousarray(np.asarray(zv, dtype=bool))
@@ -379,7 +606,21 @@ def _features(data: Any) -> Array:
 
 
 def input_features(data: Any, kind: str = "raw+log") -> Array:
-    """Network input features (N, 6 or 8) of a recording (before normalisation)."""
+    """Network input features (N, 6 or 8) of a recording (before normalisation).
+
+    Parameters
+    ----------
+    data : ImuData
+        IMU recording (``accel`` m/s², ``gyro`` rad/s, body FRD).
+    kind : {"raw+log", "raw"}, optional
+        ``"raw"``: accel then gyro; ``"raw+log"`` adds ``log(|ω|² + 1e-4)`` and
+        ``log((|f| − 9.81)² + 1e-3)``.
+
+    Returns
+    -------
+    numpy.ndarray, shape (N, 6) or (N, 8)
+        The features.
+    """
     return _derived(_features(data), kind)
 
 

@@ -22,10 +22,17 @@ class DetectorResult(Result):
 
     Attributes
     ----------
-    zv : (N,) bool, True where the foot is declared stationary.
-    statistic : (N,) float, test statistic ``T`` (NaN for learned detectors).
-    threshold : (N,) float, threshold applied at each sample.
-    detector : name; ``params`` the settings used.
+    zv : numpy.ndarray of bool, shape (N,)
+        True where the foot is declared stationary.
+    statistic : numpy.ndarray, shape (N,)
+        Test statistic ``T`` in the detector's units (NaN for learned detectors).
+    threshold : numpy.ndarray, shape (N,)
+        Threshold applied at each sample (same units as ``statistic``).
+    detector : str
+        Detector name (``"shoe"``, ``"ared"``, ``"amvd"``, ``"mbgtd"``, ``"adaptive"``,
+        ``"freeacc"`` or ``"lstm"``).
+    params : dict
+        The settings used (window, sigmas, threshold, ...).
     """
 
     zv: NDArray[np.bool_]
@@ -40,5 +47,12 @@ class DetectorResult(Result):
         return float(np.mean(self.zv))
 
     def to_dict(self) -> dict[str, Any]:
+        """The result as plain JSON types (flags as 0/1 lists).
+
+        Returns
+        -------
+        dict
+            Keys ``detector``, ``params``, ``zv``, ``statistic`` and ``threshold``.
+        """
         return {"detector": self.detector, "params": self.params, "zv": self.zv.astype(int).tolist(),
                 "statistic": self.statistic.tolist(), "threshold": self.threshold.tolist()}

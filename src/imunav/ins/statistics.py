@@ -50,7 +50,38 @@ def _window(W: int, n: int) -> int:
 
 def shoe(accel: ArrayLike, gyro: ArrayLike, window: int = 5, *, sigma_a: float = SIGMA_A,
          sigma_w: float = SIGMA_W, g: float = G_PYSHOE) -> Array:
-    """SHOE statistic (N,) on non-overlapping blocks (see module docstring)."""
+    """SHOE statistic (N,) on non-overlapping blocks (Skog et al., IEEE TBME 57(11), 2010, eq. 16).
+
+    ``T = 1/W Σ |y_a,k − g ȳ_a/|ȳ_a||² / σ_a² + |y_w,k|² / σ_w²`` over each block of ``W``
+    samples, held over the block; samples after the last full block get 0.
+
+    Parameters
+    ----------
+    accel : array_like, shape (N, 3)
+        Specific force in the body (FRD) frame, m/s².
+    gyro : array_like, shape (N, 3)
+        Angular rate in the body (FRD) frame, rad/s.
+    window : int, optional
+        Window length ``W`` in samples, >= 2 (default 5).
+    sigma_a : float, optional
+        Accelerometer noise standard deviation, m/s², > 0.
+    sigma_w : float, optional
+        Gyroscope noise standard deviation, rad/s, > 0.
+    g : float, optional
+        Gravity magnitude, m/s², > 0.
+
+    Returns
+    -------
+    numpy.ndarray, shape (N,)
+        The statistic (dimensionless).
+
+    Raises
+    ------
+    ShapeError
+        If ``accel`` and ``gyro`` differ in shape.
+    InvalidInputError
+        If a sigma or ``g`` is not > 0, or ``accel`` has all-zero rows.
+    """
     a = _vec(accel, "accel")
     w = _vec(gyro, "gyro")
     if a.shape != w.shape:
@@ -64,13 +95,39 @@ def shoe(accel: ArrayLike, gyro: ArrayLike, window: int = 5, *, sigma_a: float =
 
 
 def ared(gyro: ArrayLike, window: int = 5) -> Array:
-    """ARED statistic (N,), rad²/s², on non-overlapping blocks."""
+    """ARED statistic (N,), rad²/s², on non-overlapping blocks: ``T = 1/W Σ |y_w,k|²``.
+
+    Parameters
+    ----------
+    gyro : array_like, shape (N, 3)
+        Angular rate in the body (FRD) frame, rad/s.
+    window : int, optional
+        Window length ``W`` in samples, >= 2 (default 5).
+
+    Returns
+    -------
+    numpy.ndarray, shape (N,)
+        The angular-rate energy, rad²/s², held over each block.
+    """
     w = _vec(gyro, "gyro")
     return _k.ared_blocks(w, _window(window, w.shape[0]))
 
 
 def amvd(accel: ArrayLike, window: int = 5) -> Array:
-    """AMVD statistic (N,), (m/s²)², on non-overlapping blocks."""
+    """AMVD statistic (N,), (m/s²)², on non-overlapping blocks: ``T = 1/W Σ |y_a,k − ȳ_a|²``.
+
+    Parameters
+    ----------
+    accel : array_like, shape (N, 3)
+        Specific force in the body (FRD) frame, m/s².
+    window : int, optional
+        Window length ``W`` in samples, >= 2 (default 5).
+
+    Returns
+    -------
+    numpy.ndarray, shape (N,)
+        The acceleration moving variance, (m/s²)², held over each block.
+    """
     a = _vec(accel, "accel")
     return _k.amvd_blocks(a, _window(window, a.shape[0]))
 
@@ -78,7 +135,22 @@ def amvd(accel: ArrayLike, window: int = 5) -> Array:
 def mbgtd(accel: ArrayLike, window: int = 5, *, tail: float = 1.0) -> Array:
     """MBGTD statistic (N,), m/s², on a per-sample sliding window.
 
-    The last ``window - 1`` samples get ``tail`` (published convention: 1).
+    The last ``window - 1`` samples get ``tail`` (published convention: 1).  The statistic is
+    the memory-based graph-theoretic test of Olivares et al. (Sensors 12(7), 2012).
+
+    Parameters
+    ----------
+    accel : array_like, shape (N, 3)
+        Specific force in the body (FRD) frame, m/s².
+    window : int, optional
+        Window length ``W`` in samples, >= 2 (default 5).
+    tail : float, optional
+        Value given to the last ``window - 1`` samples (default 1).
+
+    Returns
+    -------
+    numpy.ndarray, shape (N,)
+        The statistic, m/s².
     """
     a = _vec(accel, "accel")
     return _k.mbgtd_sliding(a, _window(window, a.shape[0]), float(tail))
@@ -95,7 +167,30 @@ def _accel_gyro(data: Any) -> tuple[Array, Array]:
 
 def detector_statistic(data: Any, detector: str = "shoe", *, window: int = 5, sigma_a: float = SIGMA_A,
                        sigma_w: float = SIGMA_W, g: float = G_PYSHOE) -> Array:
-    """Statistic ``T`` (N,) of a named detector on an :class:`~imunav.timeseries.ImuData`."""
+    """Statistic ``T`` (N,) of a named detector on an :class:`~imunav.timeseries.ImuData`.
+
+    Parameters
+    ----------
+    data : ImuData
+        IMU recording (or any object with ``accel`` and ``gyro`` arrays (N, 3), SI, body FRD).
+    detector : {"shoe", "ared", "amvd", "mbgtd"}, optional
+        Detector name (case-insensitive; default ``"shoe"``).
+    window : int, optional
+        Window length in samples, >= 2.
+    sigma_a, sigma_w, g : float, optional
+        SHOE's accelerometer (m/s²) and gyroscope (rad/s) noise and gravity (m/s²).
+
+    Returns
+    -------
+    numpy.ndarray, shape (N,)
+        The statistic (units of the detector: see :func:`shoe`, :func:`ared`, :func:`amvd`,
+        :func:`mbgtd`).
+
+    Raises
+    ------
+    InvalidInputError
+        If the detector name is unknown.
+    """
     name = detector.lower()
     a, w = _accel_gyro(data)
     if name == "shoe":

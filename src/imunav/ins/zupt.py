@@ -5,7 +5,7 @@ the start, no Earth rate, constant gravity ``(0, 0, g)``), attitude ``q_nb``
 and, with 15 states, accelerometer / gyro biases.  Error state
 ``dx = [dp, dv, dphi, (dba, dbg)]`` with ``p = p̂ + dp``, ``v = v̂ + dv``,
 ``C_nb = exp([dphi×]) Ĉ_nb`` and ``b = b̂ + db``.  Discrete model
-(Şahin 2022 §3.1 with the corrections of the spec; Solà 2017 §6; Foxlin
+(Şahin 2022 §3.1, with its misprints corrected; Solà 2017 §6; Foxlin
 2005)::
 
     Phi = [[I, dt I, 0,              0,        0       ],
@@ -61,35 +61,62 @@ class ZuptConfig:
 
     Attributes
     ----------
-    states : 9 (thesis: p, v, attitude) or 15 (+ accel and gyro biases).
-    sigma_acc : accelerometer noise per sample, m/s² (default 0.5).
-    sigma_gyro : gyro noise per sample, rad/s (default 0.5 °/s).
-    sigma_v : ZUPT velocity-measurement noise, m/s (default 0.01).
-    sigma_acc_bias_rw, sigma_gyro_bias_rw : bias random walks (15 states),
-        m/s²/√s and rad/s/√s.
-    p0_pos, p0_vel, p0_att : initial error std (m, m/s, rad).
-    p0_acc_bias, p0_gyro_bias : initial bias std (15 states; m/s², rad/s).
-    g : gravity, m/s²; ``None`` uses the norm of the mean specific force of
+    states : int
+        9 (p, v, attitude) or 15 (+ accel and gyro biases).
+    sigma_acc : float
+        Accelerometer noise per sample, m/s² (default 0.5).
+    sigma_gyro : float
+        Gyro noise per sample, rad/s (default 0.5 °/s).
+    sigma_v : float
+        ZUPT velocity-measurement noise, m/s (default 0.01).
+    sigma_acc_bias_rw, sigma_gyro_bias_rw : float
+        Bias random walks (15 states), m/s²/√s and rad/s/√s, >= 0.
+    p0_pos, p0_vel, p0_att : float
+        Initial error std (m, m/s, rad).
+    p0_acc_bias, p0_gyro_bias : float
+        Initial bias std (15 states; m/s², rad/s).
+    g : float or None
+        Gravity, m/s²; ``None`` uses the norm of the mean specific force of
         the alignment samples.
-    alignment : ``"samples"`` (first ``align_samples`` samples) or
+    alignment : {"samples", "first_stance"}
+        ``"samples"`` (first ``align_samples`` samples) or
         ``"first_stance"`` (the first detected stance, at most
         ``align_samples_max`` samples).
-    initial_yaw : rad.
-    zaru : zero angular-rate update during stance (needs 15 states).
-    sigma_zaru : its noise, rad/s.
-    zaru_min_s : apply the ZARU only in stances lasting at least this long, s.
+    align_samples : int
+        Number of samples averaged for the alignment with ``"samples"``, >= 1.
+    align_samples_max : int
+        Most samples of the first stance averaged with ``"first_stance"``.
+    initial_yaw : float
+        Initial yaw, rad (ZYX).
+    zaru : bool
+        Zero angular-rate update during stance (needs 15 states).
+    sigma_zaru : float
+        Its noise, rad/s.
+    zaru_min_s : float
+        Apply the ZARU only in stances lasting at least this long, s.
         A walking foot rolls during its short stances (heel to toe), so a
         ZARU there biases the gyro estimate; with e.g. 1 s only the truly
         still periods (standing before, between and after walks) calibrate it.
-    heading_hold : no rotation about the vertical during each stance (the nav-frame
+    heading_hold : bool
+        No rotation about the vertical during each stance (the nav-frame
         rotation since the stance's first sample, not a yaw-angle difference,
-        so it holds for a tilted mounting); ``sigma_heading`` rad.
-    level_floor : the walk stays on one level: each stance measures the height
-        as the initial height, std ``sigma_floor`` m (a flat-floor constraint;
-        wrong on stairs or ramps).
-    integration : ``"euler"`` (first order, the thesis and pyshoe: rate of sample k held
+        so it holds for a tilted mounting).
+    sigma_heading : float
+        Noise of the heading hold, rad.
+    level_floor : bool
+        The walk stays on one level: each stance measures the height
+        as the initial height (a flat-floor constraint; wrong on stairs or ramps).
+    sigma_floor : float
+        Noise of the level-floor measurement, m.
+    integration : {"euler", "coning"}
+        ``"euler"`` (first order, the thesis and pyshoe: rate of sample k held
         over interval k) or ``"coning"`` (trapezoid increments of the point samples with
         the two-sample coning / sculling corrections).
+
+    Raises
+    ------
+    ConfigError
+        If a value is out of range or the options are inconsistent (``zaru`` with 9 states).
     """
 
     states: int = 9
@@ -142,6 +169,13 @@ class ZuptConfig:
             raise ConfigError(f"align_samples must be >= 1; got {self.align_samples}")
 
     def to_dict(self) -> dict[str, Any]:
+        """The settings as a plain dict.
+
+        Returns
+        -------
+        dict
+            One key per field.
+        """
         return asdict(self)
 
 
@@ -149,10 +183,32 @@ class ZuptConfig:
 class ZuptResult(Result):
     """Output of :func:`run_zupt` (arrays one row per sample).
 
-    ``innovation`` / ``innovation_var`` hold the ZUPT innovation ``-v̂`` and
-    the diagonal of its covariance ``S`` at the updated samples (NaN
-    elsewhere); ``cov_diag`` is the diagonal of P after each step, ``P`` the
-    final full covariance.
+    Attributes
+    ----------
+    t : numpy.ndarray, shape (N,)
+        Time, s.
+    position : numpy.ndarray, shape (N, 3)
+        Position in the local NED frame, m.
+    velocity : numpy.ndarray, shape (N, 3)
+        Velocity in NED, m/s.
+    q_nb : numpy.ndarray, shape (N, 4)
+        Attitude, scalar-first quaternion body (FRD) -> nav (NED).
+    accel_bias : numpy.ndarray, shape (N, 3)
+        Accelerometer bias estimate, m/s² (zero with 9 states).
+    gyro_bias : numpy.ndarray, shape (N, 3)
+        Gyro bias estimate, rad/s (zero with 9 states).
+    cov_diag : numpy.ndarray, shape (N, 9 or 15)
+        Diagonal of the error covariance P after each step.
+    innovation : numpy.ndarray, shape (N, 3)
+        ZUPT innovation ``-v̂``, m/s, at the updated samples (NaN elsewhere).
+    innovation_var : numpy.ndarray, shape (N, 3)
+        Diagonal of its covariance ``S``, m²/s² (NaN elsewhere).
+    P : numpy.ndarray, shape (9, 9) or (15, 15)
+        Final full error covariance.
+    zv : numpy.ndarray of bool, shape (N,)
+        Stance flags used.
+    config : ZuptConfig
+        Settings used.
     """
 
     t: Array
@@ -169,7 +225,13 @@ class ZuptResult(Result):
     config: ZuptConfig = field(default_factory=ZuptConfig)
 
     def euler(self) -> Array:
-        """(N, 3) roll, pitch, yaw in rad (ZYX) from ``q_nb``: a method, as :meth:`AttitudeResult.euler`."""
+        """Roll, pitch, yaw (ZYX) from ``q_nb``: a method, as :meth:`AttitudeResult.euler`.
+
+        Returns
+        -------
+        numpy.ndarray, shape (N, 3)
+            Roll, pitch, yaw, rad.
+        """
         return euler_from_quat(self.q_nb)
 
     @property
@@ -177,6 +239,14 @@ class ZuptResult(Result):
         return np.sqrt(self.cov_diag[:, 0:3])
 
     def to_dict(self) -> dict[str, Any]:
+        """The track as plain JSON types (biases only with 15 states).
+
+        Returns
+        -------
+        dict
+            Keys ``t``, ``position``, ``velocity``, ``q_nb``, ``cov_diag``, ``zv``, ``config``
+            (and ``accel_bias``, ``gyro_bias``).
+        """
         d = {k: getattr(self, k).tolist() for k in ("t", "position", "velocity", "q_nb", "cov_diag")}
         d["zv"] = self.zv.astype(int).tolist()
         if self.config.states == 15:
@@ -187,7 +257,28 @@ class ZuptResult(Result):
 
 
 def align_from_accel(accel_mean: ArrayLike, yaw: float = 0.0) -> Array:
-    """Quaternion ``q_nb`` levelled from a mean specific force (body FRD)."""
+    """Quaternion ``q_nb`` levelled from a mean specific force (body FRD).
+
+    ``roll = atan2(−f_y, −f_z)``, ``pitch = atan2(f_x, √(f_y² + f_z²))`` (Groves 2013,
+    *Principles of GNSS, Inertial, and Multisensor Integrated Navigation Systems*, 2nd ed., §5.6, leveling).
+
+    Parameters
+    ----------
+    accel_mean : array_like, shape (3,)
+        Mean specific force at rest, m/s², body FRD.
+    yaw : float, optional
+        Yaw to set, rad.
+
+    Returns
+    -------
+    numpy.ndarray, shape (4,)
+        ``q_nb``, scalar first, body -> NED.
+
+    Raises
+    ------
+    InvalidInputError
+        If ``accel_mean`` is not a finite non-zero 3-vector.
+    """
     f = np.asarray(accel_mean, dtype=float)
     if f.shape != (3,) or not np.all(np.isfinite(f)) or np.linalg.norm(f) == 0:
         raise InvalidInputError(f"accel_mean must be a finite non-zero 3-vector; got {f!r}")
@@ -197,7 +288,23 @@ def align_from_accel(accel_mean: ArrayLike, yaw: float = 0.0) -> Array:
 
 
 def first_stance(zv: ArrayLike) -> tuple[int, int]:
-    """Half-open index range of the first run of True in ``zv``."""
+    """Half-open index range of the first run of True in ``zv``.
+
+    Parameters
+    ----------
+    zv : array_like of bool, shape (N,)
+        Stance flags.
+
+    Returns
+    -------
+    start, stop : int
+        Indices of the first stance, ``zv[start:stop]`` all True.
+
+    Raises
+    ------
+    InsufficientDataError
+        If ``zv`` has no True sample.
+    """
     starts, stops = runs(np.ascontiguousarray(np.asarray(zv, dtype=bool)))
     if starts.size == 0:
         raise InsufficientDataError("the detector found no stationary sample; cannot align from a stance "
@@ -206,7 +313,27 @@ def first_stance(zv: ArrayLike) -> tuple[int, int]:
 
 
 def long_stances(t: ArrayLike, zv: ArrayLike, min_s: float) -> NDArray[np.bool_]:
-    """Mask of the samples of ``zv`` that belong to a stance lasting at least ``min_s`` seconds."""
+    """Mask of the samples of ``zv`` that belong to a stance lasting at least ``min_s`` seconds.
+
+    Parameters
+    ----------
+    t : array_like, shape (N,)
+        Time, s.
+    zv : array_like of bool, shape (N,)
+        Stance flags.
+    min_s : float
+        Shortest stance kept, s (first to last sample of the stance).
+
+    Returns
+    -------
+    numpy.ndarray of bool, shape (N,)
+        True on the samples of the long stances.
+
+    Raises
+    ------
+    ShapeError
+        If ``t`` and ``zv`` are not 1-D of the same length.
+    """
     tt = np.asarray(t, dtype=float)
     z = np.asarray(zv, dtype=bool)
     if tt.ndim != 1 or z.shape != tt.shape:
@@ -242,12 +369,29 @@ def run_zupt(data: Any, zv: ArrayLike, config: ZuptConfig | None = None, *,
 
     Parameters
     ----------
-    data : ImuData (t, gyro rad/s, accel m/s², body FRD).
-    zv : (N,) bool stance flags (a detector's ``zv`` or stored labels).
-    config : :class:`ZuptConfig` (default: 9 states, pyshoe noise values).
-    initial_position : (3,) m.
-    initial_quaternion : (4,) ``q_nb`` overriding the alignment (gravity
+    data : ImuData
+        Recording (t s, gyro rad/s, accel m/s², body FRD).
+    zv : array_like of bool, shape (N,), or DetectorResult
+        Stance flags (a detector's ``zv`` or stored labels).
+    config : ZuptConfig, optional
+        Settings (default: 9 states, pyshoe noise values).
+    initial_position : array_like, shape (3,), optional
+        Initial position, m, NED.
+    initial_quaternion : array_like, shape (4,), optional
+        ``q_nb`` (scalar first) overriding the alignment (gravity
         ``g`` is still taken from the config / alignment samples).
+
+    Returns
+    -------
+    ZuptResult
+        Position, velocity, attitude, biases and covariance at every sample.
+
+    Raises
+    ------
+    ShapeError
+        If ``zv`` or ``initial_position`` has the wrong shape.
+    InvalidInputError
+        If ``initial_quaternion`` is not a unit quaternion.
     """
     cfg = ZuptConfig() if config is None else config
     t, a, w = _arrays(data)

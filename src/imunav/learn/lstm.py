@@ -1,10 +1,11 @@
-"""LSTM zero-velocity classifier (Şahin 2022 §3.2 / §4.2; Wagstaff & Kelly 2018).
+"""LSTM zero-velocity classifier (Şahin 2022 §3.2 / §4.2; Wagstaff & Kelly, IPIN 2018).
 
 Architecture (thesis): raw 6-channel IMU windows of 100 samples →
 ``layers`` stacked LSTM layers of ``hidden`` units (thesis 6 × 80,
 :meth:`LstmConfig.thesis`; default 2 × 48 for the CPU budget) → a fully connected layer
 to 2 logits → softmax; the foot is declared stationary when
-``P(stationary) > 0.85``.  Cell (spec §8.1, the thesis's misprint corrected)::
+``P(stationary) > 0.85``.  Cell (Hochreiter & Schmidhuber 1997 with the forget gate of Gers et al.
+2000, as in PyTorch's ``torch.nn.LSTM``; the thesis's misprint corrected)::
 
     i = σ(W_ii x + b_ii + W_hi h + b_hi)     f = σ(W_if x + ... )
     g = tanh(W_ig x + ... )                  o = σ(W_io x + ... )
@@ -95,7 +96,24 @@ Array = NDArray[np.float64]
 
 def random_rotations(n: int, max_angle: float, rng: np.random.Generator) -> Array:
     """``n`` rotation matrices with uniform random axes and angles uniform in [0, max_angle] rad
-    (``max_angle = pi`` gives the whole of SO(3), not uniformly)."""
+    (``max_angle = pi`` gives the whole of SO(3), not uniformly).
+
+    Rodrigues' formula ``R = I + sin θ [k×] + (1 − cos θ) [k×]²``.
+
+    Parameters
+    ----------
+    n : int
+        Number of matrices.
+    max_angle : float
+        Largest rotation angle, rad.
+    rng : numpy.random.Generator
+        Random generator.
+
+    Returns
+    -------
+    numpy.ndarray, shape (n, 3, 3)
+        Rotation matrices.
+    """
     axis = rng.normal(size=(n, 3))
     axis /= np.linalg.norm(axis, axis=1, keepdims=True)
     ang = rng.uniform(0.0, max_angle, n)
@@ -108,7 +126,26 @@ def random_rotations(n: int, max_angle: float, rng: np.random.Generator) -> Arra
 
 
 def augment(x: Array, cfg: LstmConfig, rng: np.random.Generator) -> Array:
-    """Thesis augmentation of raw windows (B, T, 6): rotation, scaling, Gaussian noise."""
+    """Thesis augmentation of raw windows (B, T, 6): rotation, scaling, Gaussian noise.
+
+    Each window gets one random rotation (applied to both triads, at most ``cfg.max_rotation_deg``),
+    one scale factor in ``cfg.scale`` and white noise of ``cfg.noise_acc`` (m/s²) / ``cfg.noise_gyro``
+    (rad/s).
+
+    Parameters
+    ----------
+    x : numpy.ndarray, shape (B, T, 6)
+        Raw windows, accel (m/s²) then gyro (rad/s).
+    cfg : LstmConfig
+        Augmentation settings.
+    rng : numpy.random.Generator
+        Random generator.
+
+    Returns
+    -------
+    numpy.ndarray, shape (B, T, 6)
+        Augmented windows (a new array).
+    """
     B = x.shape[0]
     R = random_rotations(B, np.radians(cfg.max_rotation_deg), rng)
     out = np.empty_like(x)
@@ -132,15 +169,30 @@ def time_warp(x: Array, gravity_body: Array, factor: float, start: float = 0.0,
 
     Parameters
     ----------
-    x : (N, 6) accel (m/s²) then gyro (rad/s).
-    gravity_body : (N, 3) ``f_g`` of each sample (e.g. from the ZUPT INS attitude).
-    factor : ``s`` > 0 (2 = twice as fast: a 0.6 s stance lasts 0.3 s).
-    start : first (fractional) sample; ``length``: samples out (default: as many as fit).
+    x : numpy.ndarray, shape (N, 6)
+        Accel (m/s²) then gyro (rad/s), body FRD.
+    gravity_body : numpy.ndarray, shape (N, 3)
+        ``f_g`` of each sample, m/s² (e.g. from the ZUPT INS attitude, :func:`gravity_in_body`).
+    factor : float
+        Speed-up ``s`` > 0 (2 = twice as fast: a 0.6 s stance lasts 0.3 s).
+    start : float, optional
+        First (fractional) source sample, >= 0.
+    length : int, optional
+        Number of samples out (default: as many as fit).
 
     Returns
     -------
-    (warped (L, 6), u (L,)): the samples and the source positions (to resample labels
-    or a reference track).
+    warped : numpy.ndarray, shape (L, 6)
+        The warped samples.
+    u : numpy.ndarray, shape (L,)
+        Their (fractional) source positions (to resample labels or a reference track).
+
+    Raises
+    ------
+    ShapeError
+        If ``x`` is not (N, 6) or ``gravity_body`` not (N, 3).
+    InvalidInputError
+        If ``factor`` is not finite and > 0, or the samples asked for do not fit.
     """
     xa = np.asarray(x, dtype=float)
     fg = np.asarray(gravity_body, dtype=float)
@@ -168,7 +220,22 @@ def time_warp(x: Array, gravity_body: Array, factor: float, start: float = 0.0,
 
 def gravity_in_body(data: Any, stance: Any, g: float = 9.80665) -> Array:
     """Accelerometer reading at rest ``f_g = −Rᵀ (0, 0, g)`` per sample (N, 3), ``R`` from the ZUPT INS
-    (:func:`imunav.ins.run_zupt`) run with the stance flags ``stance``."""
+    (:func:`imunav.ins.run_zupt`) run with the stance flags ``stance``.
+
+    Parameters
+    ----------
+    data : ImuData
+        IMU recording (SI, body FRD).
+    stance : array_like of bool, shape (N,)
+        Stance flags for the ZUPT INS.
+    g : float, optional
+        Gravity magnitude, m/s².
+
+    Returns
+    -------
+    numpy.ndarray, shape (N, 3)
+        ``f_g`` in the body frame, m/s² (``(0, 0, −g)`` for a level sensor).
+    """
 
     q = run_zupt(data, np.asarray(stance, dtype=bool)).q_nb
     return quat_rotate(quat_conjugate(q), np.broadcast_to(np.array([0.0, 0.0, -g]), (q.shape[0], 3)))
@@ -176,7 +243,23 @@ def gravity_in_body(data: Any, stance: Any, g: float = 9.80665) -> Array:
 
 @dataclass(frozen=True)
 class TrainingReport(Result):
-    """What :func:`train_lstm` did: loss per batch, accuracy on the training windows, time."""
+    """What :func:`train_lstm` did: loss per batch, accuracy on the training windows, time.
+
+    Attributes
+    ----------
+    losses : numpy.ndarray, shape (batches,)
+        Weighted cross-entropy of each batch.
+    n_windows : int
+        Number of training windows used.
+    seconds : float
+        Training time, s.
+    train_accuracy : float
+        Share of the trained steps classified correctly (at ``config.threshold``), in [0, 1].
+    stopped_by_budget : bool
+        True when ``config.time_budget_s`` stopped the training.
+    extra : dict
+        Further entries merged into :meth:`to_dict`.
+    """
 
     losses: Array
     n_windows: int
@@ -186,6 +269,14 @@ class TrainingReport(Result):
     extra: dict[str, Any] = field(default_factory=dict)
 
     def to_dict(self) -> dict[str, Any]:
+        """The report as plain JSON types, ``extra`` merged in.
+
+        Returns
+        -------
+        dict
+            Keys ``losses``, ``n_windows``, ``seconds``, ``train_accuracy``, ``stopped_by_budget`` and those
+            of ``extra``.
+        """
         return {"losses": self.losses.tolist(), "n_windows": self.n_windows, "seconds": self.seconds,
                 "train_accuracy": self.train_accuracy, "stopped_by_budget": self.stopped_by_budget, **self.extra}
 
@@ -200,6 +291,11 @@ def require_torch() -> Any:
     -------
     module
         ``torch``.
+
+    Raises
+    ------
+    MissingDependencyError
+        If torch is not installed.
     """
     try:
         import torch  # optional: the `learn` extra
@@ -215,13 +311,34 @@ def train_lstm(trials: Sequence[Any], labels: Sequence[Any], config: LstmConfig 
 
     Parameters
     ----------
-    trials : ImuData recordings (the same sensor rate as at inference).
-    labels : (N,) bool stance labels per trial (e.g. the best classical
+    trials : sequence of ImuData
+        Recordings (the same sensor rate as at inference), each at least ``config.window`` samples.
+    labels : sequence of array_like of bool
+        (N,) stance labels per trial (e.g. the best classical
         detector's output at its optimal threshold, see
         :func:`imunav.learn.best_labels`).
-    config : :class:`LstmConfig`.
-    progress : called as ``progress(done_batches, total_batches, loss)``.
-    threads : torch CPU threads (default 1: the machine is shared).
+    config : LstmConfig, optional
+        Architecture and training settings (default :class:`LstmConfig`).
+    progress : callable, optional
+        Called as ``progress(done_batches, total_batches, loss)``.
+    threads : int or None, optional
+        Torch CPU threads (default 1: the machine is shared; None leaves torch's default).
+
+    Returns
+    -------
+    detector : LstmDetector
+        The trained model (numpy inference).
+    report : TrainingReport
+        Losses, accuracy and time.
+
+    Raises
+    ------
+    MissingDependencyError
+        If torch is not installed (through :func:`require_torch`).
+    InvalidInputError
+        If there are no trials, not one label array per trial, or a trial is shorter than the window.
+    ShapeError
+        If a label array does not have one flag per sample.
     """
     cfg = LstmConfig() if config is None else config
     torch = require_torch()
@@ -330,7 +447,28 @@ def select_shoe_threshold(trials: Sequence[Any], grid: Any = None, config: Any =
     Each trial (a :class:`imunav.io.foot.FootTrial` with a reference
     ``position``) runs through the ZUPT INS (``config``) with SHOE at every
     ``grid`` value (default :data:`SHOE_GUARD_GRID`) and is scored with
-    :func:`imunav.ins.error_2d`.  Returns ``(threshold, mean error per grid value)``.
+    :func:`imunav.ins.error_2d`.
+
+    Parameters
+    ----------
+    trials : sequence of FootTrial
+        Training trials with a reference ``position``.
+    grid : array_like, optional
+        SHOE thresholds to try, > 0; default :data:`SHOE_GUARD_GRID`.
+    config : ZuptConfig, optional
+        Settings of the ZUPT INS.
+
+    Returns
+    -------
+    threshold : float
+        The grid value with the smallest mean error.
+    errors : numpy.ndarray, shape (K,)
+        Mean 2-D error per grid value, m.
+
+    Raises
+    ------
+    InvalidInputError
+        If the grid is empty or not positive, there are no trials, or a trial has no reference position.
     """
 
     g = SHOE_GUARD_GRID if grid is None else np.asarray(grid, dtype=float)
@@ -355,7 +493,29 @@ def best_labels(trial: Any, detectors: Sequence[str] = ("shoe", "ared", "amvd", 
     ``trial`` is a :class:`imunav.io.foot.FootTrial` with stored labels
     (``labels[name]``) and a reference ``position``; each label set runs
     through the ZUPT INS and is scored with :func:`imunav.ins.error_2d`.
-    Returns ``(labels, detector, error)``.
+
+    Parameters
+    ----------
+    trial : FootTrial
+        Trial with stored labels and a reference position.
+    detectors : sequence of str, optional
+        Label sets to rank (those missing from the trial are skipped).
+    config : ZuptConfig, optional
+        Settings of the ZUPT INS.
+
+    Returns
+    -------
+    labels : numpy.ndarray of bool, shape (N,)
+        The best label set.
+    detector : str
+        Its detector name.
+    error : float
+        Its 2-D error, m.
+
+    Raises
+    ------
+    InvalidInputError
+        If the trial has no reference position or none of the label sets.
     """
 
     if trial.position is None:
