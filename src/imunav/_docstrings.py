@@ -1,0 +1,96 @@
+"""Shared numpydoc fragments, filled into docstrings at import time.
+
+Sibling functions (the file readers, the attitude filters' ``step`` / ``run`` / ``reset``) document the
+same parameters in the same words.  Those words live here once, under a name; a docstring names the
+fragment with a placeholder line ``%(name)s`` and :func:`fill_doc` replaces it, indenting every line of
+the fragment like the placeholder, so the filled ``__doc__`` is what numpydoc and Sphinx parse.
+
+Core layer: imports nothing from imunav.
+"""
+
+from __future__ import annotations
+
+import re
+from typing import TypeVar
+
+__all__ = ["DOCS", "fill_doc"]
+
+F = TypeVar("F")
+
+#: Named fragments, written without indentation (a fragment's lines are indented like its placeholder).
+DOCS: dict[str, str] = {}
+
+DOCS["reader_units"] = """\
+units : mapping of str to str, optional
+    Declared unit of each group (``{"gyro": "deg/s", "accel": "g"}``, or ``"counts"``); default SI.
+scales, offsets : mapping of str to float, optional
+    For ``"counts"``: ``value_si = (counts - offset) * scale``.
+fs : float, optional
+    Sample rate, Hz, when the file has no time (``t = t0 + k / fs``).
+t0 : float
+    Time of the first sample with ``fs``, s."""
+
+DOCS["reader_tail"] = """\
+nan_policy : {"raise", "drop", "interpolate"}
+    What to do with NaN samples.
+mag_unit : str, optional
+    Unit of the magnetometer (kept as stored).
+meta : mapping, optional
+    Entries added to the recording's ``meta``."""
+
+DOCS["reader_options"] = DOCS["reader_units"] + "\n" + DOCS["reader_tail"]
+
+DOCS["reader_returns"] = """\
+Returns
+-------
+ImuData
+    The recording, SI.
+
+Raises
+------
+FileFormatError
+    If the file is missing, unreadable, or lacks a required group (the message lists what was found).
+NonFiniteError, TimeOrderError, ShapeError, UnitError
+    From the validation of the values."""
+
+DOCS["array_columns"] = """\
+columns : mapping of str to str, optional
+    Where each group is stored (e.g. ``{"gyro": "imu/gyr"}``); by default found by name."""
+
+_PLACEHOLDER = re.compile(r"^([ \t]*)%\((\w+)\)s[ \t]*$", re.MULTILINE)
+
+
+def _indent(text: str, prefix: str) -> str:
+    return "\n".join(prefix + line if line else line for line in text.split("\n"))
+
+
+def fill_doc(obj: F) -> F:
+    """Replace each placeholder line ``%(name)s`` of ``obj.__doc__`` by the fragment ``DOCS[name]``.
+
+    Parameters
+    ----------
+    obj : function or class
+        The object whose docstring holds placeholders, each alone on its line.
+
+    Returns
+    -------
+    function or class
+        ``obj`` itself, its ``__doc__`` filled (every line of a fragment indented like its placeholder).
+
+    Raises
+    ------
+    KeyError
+        If a placeholder names no fragment of :data:`DOCS` (a typo in the docstring, found at import).
+    """
+    doc = getattr(obj, "__doc__", None)
+    if doc:
+
+        def sub(m: re.Match[str]) -> str:
+            name = m.group(2)
+            if name not in DOCS:
+                raise KeyError(f"docstring placeholder %({name})s: no such fragment in imunav._docstrings.DOCS")
+            return _indent(DOCS[name], m.group(1))
+
+        obj.__doc__ = _PLACEHOLDER.sub(sub, doc)
+    return obj
+
