@@ -94,3 +94,67 @@ def fill_doc(obj: F) -> F:
         obj.__doc__ = _PLACEHOLDER.sub(sub, doc)
     return obj
 
+
+# --- attitude filters: reset / step / run -------------------------------------------------------------
+DOCS["att_q0"] = """\
+q0 : array_like, shape (4,)
+    Attitude ``q_nb`` [w, x, y, z], body (FRD) to NED (normalised here)."""
+
+DOCS["att_bias"] = """\
+bias : array_like, shape (3,), optional
+    Initial gyro-bias estimate, rad/s (default zero)."""
+
+DOCS["att_reset_raises"] = """\
+Raises
+------
+ShapeError
+    If ``q0`` is not a (4,) quaternion.
+NonFiniteError
+    If ``q0`` is zero or not finite."""
+
+DOCS["att_step_params"] = """\
+gyro : array_like, shape (3,)
+    Angular rate, body axes (FRD), rad/s.
+accel : array_like, shape (3,)
+    Specific force, body axes, m/s² (any unit: only its direction is used).
+mag : array_like, shape (3,), or None
+    Magnetic field, body axes (any unit); None for a 6D update.
+dt : float
+    Time since the previous sample, s, > 0."""
+
+DOCS["att_step_returns"] = """\
+Returns
+-------
+numpy.ndarray, shape (4,)
+    The new attitude ``q_nb``.
+
+Raises
+------
+InvalidInputError
+    If ``dt`` is not finite and positive, or the rate exceeds 1e4 rad/s (not rad/s).
+ShapeError
+    If a sample is not a 3-vector.
+NonFiniteError
+    If a sample is not finite."""
+
+DOCS["att_run_data"] = """\
+data : ImuData
+    The recording (SI: rad/s, m/s²; magnetometer in any unit), body FRD.
+q0 : array_like, shape (4,), optional
+    Initial attitude ``q_nb`` (default: :func:`imunav.attitude.alignment.align` of the first accelerometer
+    / magnetometer sample)."""
+
+DOCS["att_bias0"] = """\
+bias0 : array_like, shape (3,), optional
+    Initial gyro-bias estimate, rad/s (default zero)."""
+
+DOCS["att_use_mag"] = """\
+use_mag : bool, optional
+    Use the magnetometer (9D); default: when the recording has one."""
+
+DOCS["att_run_raises"] = """\
+Raises
+------
+InvalidInputError
+    If ``data`` is not an ImuData with at least 2 samples, ``use_mag=True`` without a magnetometer, or a
+    rate exceeds 1e4 rad/s."""
