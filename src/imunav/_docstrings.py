@@ -158,3 +158,35 @@ Raises
 InvalidInputError
     If ``data`` is not an ImuData with at least 2 samples, ``use_mag=True`` without a magnetometer, or a
     rate exceeds 1e4 rad/s."""
+
+# --- generic Kalman filters: predict / update -----------------------------------------------------------
+DOCS["kf_predict_params"] = """\
+u : array_like, optional
+    Control input passed to ``f``.
+Q : array_like, shape (n, n), optional
+    Process-noise covariance of this step (default: the filter's ``Q``)."""
+
+DOCS["kf_predict_returns"] = """\
+Returns
+-------
+x : numpy.ndarray, shape (n,)
+    Predicted state.
+P : numpy.ndarray, shape (n, n)
+    Predicted covariance."""
+
+DOCS["kf_update_params"] = """\
+z : array_like, shape (m,)
+    Measurement.
+R : array_like, shape (m, m), optional
+    Measurement-noise covariance (default: the filter's ``R``)."""
+
+DOCS["kf_update_returns"] = """\
+Returns
+-------
+UpdateResult
+    Innovation, its covariance, the gain, the normalised innovation and the NIS.
+
+Raises
+------
+InvalidInputError
+    If ``R`` does not match the size of the measurement."""
