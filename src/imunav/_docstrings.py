@@ -190,3 +190,15 @@ Raises
 ------
 InvalidInputError
     If ``R`` does not match the size of the measurement."""
+
+# whole sections, so that a filter's docstring is its summary line and one placeholder
+_PARAMS = "Parameters\n----------\n"
+DOCS["att_reset"] = _PARAMS + DOCS["att_q0"] + "\n\n" + DOCS["att_reset_raises"]
+DOCS["att_reset_bias"] = _PARAMS + DOCS["att_q0"] + "\n" + DOCS["att_bias"] + "\n\n" + DOCS["att_reset_raises"]
+DOCS["att_step"] = _PARAMS + DOCS["att_step_params"] + "\n\n" + DOCS["att_step_returns"]
+DOCS["att_run_params"] = _PARAMS + DOCS["att_run_data"]
+DOCS["kf_predict"] = _PARAMS + DOCS["kf_predict_params"] + "\n\n" + DOCS["kf_predict_returns"]
+DOCS["kf_update_params_head"] = _PARAMS + DOCS["kf_update_params"]
+DOCS["reader_head"] = _PARAMS + """\
+path : str or os.PathLike
+    The file."""

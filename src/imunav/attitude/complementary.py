@@ -51,11 +51,7 @@ class Complementary:
     def reset(self, q0: ArrayLike) -> None:
         """Set the attitude the next :meth:`step` starts from.
 
-        Parameters
-        ----------
-        %(att_q0)s
-
-        %(att_reset_raises)s
+        %(att_reset)s
         """
         self.q = check_q0(q0)
 
@@ -63,11 +59,7 @@ class Complementary:
     def step(self, gyro: ArrayLike, accel: ArrayLike, mag: ArrayLike | None, dt: float) -> np.ndarray:
         """Process one sample: strapdown, then the tilt and heading corrections.
 
-        Parameters
-        ----------
-        %(att_step_params)s
-
-        %(att_step_returns)s
+        %(att_step)s
         """
         self.q = _k.complementary_step(self.q, gyro3(gyro), vec3(accel, "accel"), vec3(mag, "mag"),
                                        step_dt(dt), float(self.k_acc), float(self.k_mag), mag is not None)
@@ -77,9 +69,7 @@ class Complementary:
     def run(self, data: ImuData, *, q0: ArrayLike | None = None, use_mag: bool | None = None) -> AttitudeResult:
         """Filter a whole recording (numba kernel).
 
-        Parameters
-        ----------
-        %(att_run_data)s
+        %(att_run_params)s
         %(att_use_mag)s
 
         Returns

@@ -61,11 +61,7 @@ class Madgwick:
     def reset(self, q0: ArrayLike) -> None:
         """Set the attitude the next :meth:`step` starts from.
 
-        Parameters
-        ----------
-        %(att_q0)s
-
-        %(att_reset_raises)s
+        %(att_reset)s
         """
         self.q = check_q0(q0)
 
@@ -73,11 +69,7 @@ class Madgwick:
     def step(self, gyro: ArrayLike, accel: ArrayLike, mag: ArrayLike | None, dt: float) -> np.ndarray:
         """Process one sample; returns the new q_nb.
 
-        Parameters
-        ----------
-        %(att_step_params)s
-
-        %(att_step_returns)s
+        %(att_step)s
         """
         use_mag = mag is not None
         q = _k.madgwick_step(
@@ -91,9 +83,7 @@ class Madgwick:
     def run(self, data: ImuData, *, q0: ArrayLike | None = None, use_mag: bool | None = None) -> AttitudeResult:
         """Filter a whole recording (numba kernel).
 
-        Parameters
-        ----------
-        %(att_run_data)s
+        %(att_run_params)s
         %(att_use_mag)s
 
         Returns

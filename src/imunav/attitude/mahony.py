@@ -51,12 +51,7 @@ class Mahony:
     def reset(self, q0: ArrayLike, bias: ArrayLike | None = None) -> None:
         """Set the attitude the next :meth:`step` starts from.
 
-        Parameters
-        ----------
-        %(att_q0)s
-        %(att_bias)s
-
-        %(att_reset_raises)s
+        %(att_reset_bias)s
         """
         self.q = check_q0(q0)
         self.integral = -vec3(bias, "bias")
@@ -65,11 +60,7 @@ class Mahony:
     def step(self, gyro: ArrayLike, accel: ArrayLike, mag: ArrayLike | None, dt: float) -> np.ndarray:
         """Process one sample: ``e = â × v̂ + m̂ × ŵ``, ``b̂ ← b̂ − k_i e Δt``, ``q ← q ⊗ exp((ω − b̂ + k_p e) Δt)``.
 
-        Parameters
-        ----------
-        %(att_step_params)s
-
-        %(att_step_returns)s
+        %(att_step)s
         """
         self.q, self.integral = _k.mahony_step(
             self.q, self.integral, gyro3(gyro), vec3(accel, "accel"), vec3(mag, "mag"),
@@ -82,9 +73,7 @@ class Mahony:
             use_mag: bool | None = None) -> AttitudeResult:
         """Filter a whole recording (numba kernel).
 
-        Parameters
-        ----------
-        %(att_run_data)s
+        %(att_run_params)s
         bias0 : array_like, shape (3,), optional
             Initial gyro-bias estimate, rad/s.
         %(att_use_mag)s

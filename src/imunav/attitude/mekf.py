@@ -253,12 +253,7 @@ class MEKF:
     def reset(self, q0: ArrayLike, bias: ArrayLike | None = None) -> None:
         """Set the state the next :meth:`step` starts from (covariance back to ``params.P0()``).
 
-        Parameters
-        ----------
-        %(att_q0)s
-        %(att_bias)s
-
-        %(att_reset_raises)s
+        %(att_reset_bias)s
         """
         self.q = check_q0(q0)
         self.b = vec3(bias, "bias")
@@ -269,11 +264,7 @@ class MEKF:
     def step(self, gyro: ArrayLike, accel: ArrayLike, mag: ArrayLike | None, dt: float) -> np.ndarray:
         """Process one sample; returns q_nb.  ``self.P``, ``self.b`` are updated in place.
 
-        Parameters
-        ----------
-        %(att_step_params)s
-
-        %(att_step_returns)s
+        %(att_step)s
         """
         p = self.params.vector()
         if mag is None:
@@ -300,9 +291,7 @@ class MEKF:
             use_mag: bool | None = None) -> AttitudeResult:
         """Filter a whole recording (numba kernel).
 
-        Parameters
-        ----------
-        %(att_run_data)s
+        %(att_run_params)s
         %(att_bias0)s
         use_mag : bool, optional
             Use the magnetometer (9D); default: ``params.use_mag`` and the recording has one.

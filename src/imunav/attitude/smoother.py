@@ -51,9 +51,7 @@ class Smoother:
             use_mag: bool | None = None) -> AttitudeResult:
         """Forward MEKF pass, then the backward RTS pass (Rauch, Tung & Striebel 1965; module docstring).
 
-        Parameters
-        ----------
-        %(att_run_data)s
+        %(att_run_params)s
         %(att_bias0)s
         %(att_use_mag)s
 

@@ -139,12 +139,7 @@ class UKF:
     def reset(self, q0: ArrayLike, bias: ArrayLike | None = None) -> None:
         """Set the state the next :meth:`step` starts from (covariance back to ``params.P0()``).
 
-        Parameters
-        ----------
-        %(att_q0)s
-        %(att_bias)s
-
-        %(att_reset_raises)s
+        %(att_reset_bias)s
         """
         self.q = check_q0(q0)
         self.b = vec3(bias, "bias")
@@ -160,11 +155,7 @@ class UKF:
     def step(self, gyro: ArrayLike, accel: ArrayLike, mag: ArrayLike | None, dt: float) -> np.ndarray:
         """Process one sample (unscented prediction and updates).
 
-        Parameters
-        ----------
-        %(att_step_params)s
-
-        %(att_step_returns)s
+        %(att_step)s
         """
         pr = self.params
         self.q, self.b, self.P, _, _ = _k.ukf_step(
@@ -177,9 +168,7 @@ class UKF:
             use_mag: bool | None = None) -> AttitudeResult:
         """Filter a whole recording (numba kernel).
 
-        Parameters
-        ----------
-        %(att_run_data)s
+        %(att_run_params)s
         %(att_bias0)s
         %(att_use_mag)s
 

@@ -104,11 +104,7 @@ class ExtendedKalmanFilter:
     def predict(self, u: ArrayLike | None = None, *, Q: ArrayLike | None = None) -> tuple[Array, Array]:
         """``x⁻ = f(x, u)``, ``P⁻ = F P Fᵀ + Q``.
 
-        Parameters
-        ----------
-        %(kf_predict_params)s
-
-        %(kf_predict_returns)s
+        %(kf_predict)s
 
         Raises
         ------
@@ -133,9 +129,7 @@ class ExtendedKalmanFilter:
                H_jac: Callable[[Array], ArrayLike] | None = None) -> UpdateResult:
         """Measurement update with ``h`` (or an override, e.g. another sensor); Joseph-form covariance.
 
-        Parameters
-        ----------
-        %(kf_update_params)s
+        %(kf_update_params_head)s
         h : callable, optional
             Measurement model for this update (default: the filter's ``h``).
         H_jac : callable, optional

@@ -113,11 +113,7 @@ class UnscentedKalmanFilter:
     def predict(self, u: ArrayLike | None = None, *, Q: ArrayLike | None = None) -> tuple[Array, Array]:
         """Propagate the sigma points through f.
 
-        Parameters
-        ----------
-        %(kf_predict_params)s
-
-        %(kf_predict_returns)s
+        %(kf_predict)s
         """
         Qm = self.Q if Q is None else as_covariance(Q, "Q", self.n)
         X, Wm, Wc = self._sigma()
@@ -132,9 +128,7 @@ class UnscentedKalmanFilter:
     def update(self, z: ArrayLike, *, R: ArrayLike | None = None) -> UpdateResult:
         """Measurement update from sigma points redrawn around the prior.
 
-        Parameters
-        ----------
-        %(kf_update_params)s
+        %(kf_update_params_head)s
 
         %(kf_update_returns)s
         """

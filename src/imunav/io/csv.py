@@ -307,10 +307,7 @@ def read_csv(
 ) -> ImuData:
     """Read a CSV (or other delimited text) recording.
 
-    Parameters
-    ----------
-    path : str or os.PathLike
-        The file.
+    %(reader_head)s
     columns : mapping, optional
         Channels / groups to column names (see the module docstring); by default found by name.
     %(reader_units)s

@@ -66,10 +66,7 @@ def read_hdf5(
 ) -> ImuData:
     """Read an HDF5 recording (see the module docstring for the layout).
 
-    Parameters
-    ----------
-    path : str or os.PathLike
-        The file.
+    %(reader_head)s
     group : str
         HDF5 group holding the datasets.
     %(array_columns)s

@@ -139,10 +139,7 @@ def read_mat(
 ) -> ImuData:
     """Read a MAT-file (v5 or v7.3, detected from the header).
 
-    Parameters
-    ----------
-    path : str or os.PathLike
-        The file.
+    %(reader_head)s
     %(array_columns)s
     %(reader_options)s
 

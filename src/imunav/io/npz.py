@@ -42,10 +42,7 @@ def read_npz(
 ) -> ImuData:
     """Read an ``.npz`` recording (see the module docstring).
 
-    Parameters
-    ----------
-    path : str or os.PathLike
-        The file.
+    %(reader_head)s
     %(array_columns)s
     %(reader_options)s
 

@@ -55,10 +55,7 @@ def read_parquet(
 ) -> ImuData:
     """Read a Parquet recording (options as :func:`imunav.io.csv.read_csv`).
 
-    Parameters
-    ----------
-    path : str or os.PathLike
-        The file.
+    %(reader_head)s
     columns : mapping, optional
         Column names of each channel or group (see :func:`imunav.io.csv.read_csv`); by default found by
         name.
