@@ -202,3 +202,27 @@ DOCS["kf_update_params_head"] = _PARAMS + DOCS["kf_update_params"]
 DOCS["reader_head"] = _PARAMS + """\
 path : str or os.PathLike
     The file."""
+
+# --- small kernels and factories ------------------------------------------------------------------------
+DOCS["mat3_product"] = """\
+Parameters
+----------
+A, B : (3, 3) float64 arrays.
+C : (3, 3) float64 array, receives the product.
+
+Returns
+-------
+None"""
+
+DOCS["gravity_factory"] = """\
+Parameters
+----------
+params : GravityKfParams, optional
+    Filter settings (default :class:`GravityKfParams` ()).
+**kw
+    Further :class:`GravityKF` fields (``accel_convention``).
+
+Returns
+-------
+GravityKF
+    The filter."""

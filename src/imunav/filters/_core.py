@@ -27,6 +27,7 @@ import math
 import numpy as np
 from numba import njit
 
+from imunav._docstrings import fill_doc
 from imunav._rotation_kernels import qexp_1, qmul_1, qrot_1
 from imunav.earth import radii_gravity_1
 
@@ -750,17 +751,11 @@ def inv3(A, out):
 
 
 @njit(cache=True)
+@fill_doc
 def mm3(A, B, C):
     """``C = A B`` for 3 × 3 matrices (C distinct from A and B).
 
-    Parameters
-    ----------
-    A, B : (3, 3) float64 arrays.
-    C : (3, 3) float64 array, receives the product.
-
-    Returns
-    -------
-    None
+    %(mat3_product)s
     """
     for i in range(3):
         for j in range(3):
@@ -768,17 +763,11 @@ def mm3(A, B, C):
 
 
 @njit(cache=True)
+@fill_doc
 def mmt3(A, B, C):
     """``C = A Bᵀ`` for 3 × 3 matrices (C distinct from A and B).
 
-    Parameters
-    ----------
-    A, B : (3, 3) float64 arrays.
-    C : (3, 3) float64 array, receives the product.
-
-    Returns
-    -------
-    None
+    %(mat3_product)s
     """
     for i in range(3):
         for j in range(3):
