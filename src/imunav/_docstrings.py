@@ -226,3 +226,9 @@ Returns
 -------
 GravityKF
     The filter."""
+
+DOCS["frame_vectors"] = """\
+Parameters
+----------
+v : array_like, shape (3,) or (N, 3)
+    Vectors."""
