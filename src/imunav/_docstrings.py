@@ -232,3 +232,23 @@ Parameters
 ----------
 v : array_like, shape (3,) or (N, 3)
     Vectors."""
+
+DOCS["calib_pair_raises"] = """\
+Raises
+------
+ShapeError
+    If ``accel`` and ``gyro`` are not both (N, 3).
+NonFiniteError
+    If a sample or temperature is not finite.
+InvalidInputError
+    If the calibration is temperature dependent and ``temp_c`` is missing."""
+
+DOCS["track_pair"] = """\
+Parameters
+----------
+estimate : array_like, shape (N, 2) or (N, 3)
+    Estimated positions, local NED (x, y horizontal), m.
+reference : array_like, shape (N, 2) or (N, 3)
+    Reference positions at the same samples, m, frame with the same x-y handedness.
+align_distance : float
+    Horizontal distance from the start at which the headings are aligned, m."""
