@@ -252,3 +252,28 @@ reference : array_like, shape (N, 2) or (N, 3)
     Reference positions at the same samples, m, frame with the same x-y handedness.
 align_distance : float
     Horizontal distance from the start at which the headings are aligned, m."""
+
+DOCS["fit_get_params"] = """\
+Parameters
+----------
+name : str
+    Term name, one of :attr:`names`.
+channel : int
+    Channel index."""
+
+DOCS["curvefit_tau_adev"] = """\
+Parameters
+----------
+tau : array_like, shape (T,)
+    Cluster times, s (non-positive or non-finite points are left out).
+adev : array_like, shape (T,)
+    Allan deviation of one channel at ``tau`` (rad/s or m/s²)."""
+
+DOCS["figure_title_returns"] = """\
+title : str, optional
+    Figure title.
+
+Returns
+-------
+matplotlib.figure.Figure
+    The figure (not shown; save it with ``fig.savefig``)."""
