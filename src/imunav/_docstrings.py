@@ -243,13 +243,15 @@ NonFiniteError
 InvalidInputError
     If the calibration is temperature dependent and ``temp_c`` is missing."""
 
-DOCS["track_pair"] = """\
+DOCS["track_estimate_reference"] = """\
 Parameters
 ----------
 estimate : array_like, shape (N, 2) or (N, 3)
     Estimated positions, local NED (x, y horizontal), m.
 reference : array_like, shape (N, 2) or (N, 3)
-    Reference positions at the same samples, m, frame with the same x-y handedness.
+    Reference positions at the same samples, m, frame with the same x-y handedness."""
+
+DOCS["track_pair"] = DOCS["track_estimate_reference"] + """
 align_distance : float
     Horizontal distance from the start at which the headings are aligned, m."""
 

@@ -168,6 +168,7 @@ def loop_closure_error(position: ArrayLike) -> LoopClosure:
     return LoopClosure(float(np.linalg.norm(d)), float(np.hypot(d[0], d[1])), float(abs(d[2])), travelled)
 
 
+@fill_doc
 def position_rmse(estimate: ArrayLike, reference: ArrayLike, *, align: str = "yaw", dims: int = 2) -> float:
     """Position RMSE after aligning the estimate to the reference.
 
@@ -176,12 +177,7 @@ def position_rmse(estimate: ArrayLike, reference: ArrayLike, *, align: str = "ya
     ``psi = atan2(sum(x̂ y - ŷ x), sum(x̂ x + ŷ y))``).  ``dims``: 2
     (horizontal) or 3.  RMSE = sqrt(mean_k |e_k|²).
 
-    Parameters
-    ----------
-    estimate : array_like, shape (N, 2) or (N, 3)
-        Estimated positions, local NED (x, y horizontal), m.
-    reference : array_like, shape (N, 2) or (N, 3)
-        Reference positions at the same samples, m, frame with the same x-y handedness.
+    %(track_estimate_reference)s
     align : {"none", "start", "yaw"}
         Alignment before the comparison (see above).
     dims : {2, 3}
