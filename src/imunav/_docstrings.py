@@ -279,3 +279,11 @@ Returns
 -------
 matplotlib.figure.Figure
     The figure (not shown; save it with ``fig.savefig``)."""
+
+DOCS["kf_x0_P0"] = """\
+Parameters
+----------
+x0 : array_like, shape (n,)
+    Initial state.
+P0 : array_like, shape (n, n)
+    Initial covariance."""

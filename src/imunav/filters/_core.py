@@ -382,6 +382,15 @@ def inject_additive(x, dx, i0, n):
         x[j] += dx[i0 + j]
 
 
+@njit(cache=True, inline="always")
+def _angle_error(dx, i0):
+    """A copy of the attitude error ``dx[i0:i0+3]`` (a new (3,) array)."""
+    r = np.empty(3)
+    for j in range(3):
+        r[j] = dx[i0 + j]
+    return r
+
+
 @njit(cache=True)
 def inject_attitude_local(q, dx, i0):
     """Multiplicative injection of a body-frame attitude error: ``q ← q ⊗ exp(δθ)``, normalised.
@@ -398,9 +407,7 @@ def inject_attitude_local(q, dx, i0):
     -------
     (4,) the corrected unit quaternion (new array).
     """
-    r = np.empty(3)
-    for j in range(3):
-        r[j] = dx[i0 + j]
+    r = _angle_error(dx, i0)
     return quat_normalize(qmul_1(q, qexp_1(r)))
 
 
@@ -420,9 +427,7 @@ def inject_attitude_global(q, dx, i0):
     -------
     (4,) the corrected unit quaternion (new array).
     """
-    r = np.empty(3)
-    for j in range(3):
-        r[j] = dx[i0 + j]
+    r = _angle_error(dx, i0)
     return quat_normalize(qmul_1(qexp_1(r), q))
 
 

@@ -54,15 +54,11 @@ def numerical_jacobian(fun: Callable[[Array], ArrayLike], x: Array, eps: float =
     return J
 
 
+@fill_doc
 class ExtendedKalmanFilter:
     """EKF with state ``x`` and covariance ``P`` (module docstring; Gelb 1974, §6.1).
 
-    Parameters
-    ----------
-    x0 : array_like, shape (n,)
-        Initial state.
-    P0 : array_like, shape (n, n)
-        Initial covariance.
+    %(kf_x0_P0)s
     f : callable
         ``f(x, u) -> x_next`` process model (``u`` may be None).
     h : callable

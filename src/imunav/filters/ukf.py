@@ -66,15 +66,11 @@ def sigma_points(x: Array, P: Array, alpha: float, beta: float, kappa: float) ->
     return X, Wm, Wc
 
 
+@fill_doc
 class UnscentedKalmanFilter:
     """UKF with state ``x`` and covariance ``P`` (module docstring).
 
-    Parameters
-    ----------
-    x0 : array_like, shape (n,)
-        Initial state.
-    P0 : array_like, shape (n, n)
-        Initial covariance.
+    %(kf_x0_P0)s
     f : callable
         ``f(x, u) -> x_next`` process model.
     h : callable
