@@ -287,3 +287,43 @@ x0 : array_like, shape (n,)
     Initial state.
 P0 : array_like, shape (n, n)
     Initial covariance."""
+
+# --- rotation, earth, profiles ----------------------------------------------------------------------------
+DOCS["rot_q"] = """\
+q : array_like, shape (4,) or (N, 4)
+    Quaternion(s) ``[w, x, y, z]`` (Hamilton, scalar first), e.g. ``q_nb`` body (FRD) to navigation (NED)."""
+
+DOCS["rot_shape_raises"] = """\
+Raises
+------
+ShapeError
+    If an input does not have the shape given above."""
+
+DOCS["earth_triple_raises"] = """\
+Raises
+------
+ShapeError
+    If a triple is not (3,) / (N, 3).
+NonFiniteError
+    If an input is NaN or infinite."""
+
+DOCS["earth_lat"] = """\
+lat : array_like
+    Geodetic latitude, rad, in [-pi/2, pi/2] (scalar or array)."""
+
+DOCS["profile_position"] = """\
+lat : float, optional
+    Geodetic latitude of the fixed position, rad (None: no position).
+lon : float
+    Longitude, rad.
+h : float
+    Ellipsoidal height, m."""
+
+DOCS["profile_returns"] = """\
+name : str
+    Profile name.
+
+Returns
+-------
+Profile
+    The trajectory (exact body rates) and its segment table."""
