@@ -33,7 +33,7 @@ LAYERS: list[tuple[str, tuple[str, ...]]] = [
     ("core", ("imunav", "imunav.errors", "imunav.units", "imunav.rotation", "imunav._rotation_kernels",
               "imunav.earth", "imunav.allan_models", "imunav.crossval", "imunav._timeseries_kernels",
               "imunav.provenance", "imunav._atomic", "imunav.runfolder", "imunav.filters._common",
-              "imunav.filters._kernels", "imunav.filters._core", "imunav.results")),
+              "imunav.filters._kernels", "imunav.filters._core", "imunav.results", "imunav._docstrings")),
     ("recordings, io", ("imunav.timeseries", "imunav.io")),
     ("noise, calib, filters", ("imunav.noise", "imunav.calib", "imunav.filters")),
     ("sim, attitude, ins, airdata, learn", ("imunav.sim", "imunav.attitude", "imunav.ins", "imunav.airdata",

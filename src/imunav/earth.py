@@ -36,6 +36,7 @@ import numpy as np
 from numba import njit
 from numpy.typing import ArrayLike, NDArray
 
+from imunav._docstrings import fill_doc
 from imunav.errors import InvalidInputError, NonFiniteError, ShapeError
 
 __all__ = [
@@ -120,6 +121,7 @@ def _out(a: Array, single: bool) -> Array:
     return a[0] if single else a
 
 
+@fill_doc
 def normal_gravity(lat: ArrayLike, h: ArrayLike = 0.0) -> Array | float:
     """Magnitude of WGS84 normal gravity (gravitation + centrifugal), m/s².
 
@@ -136,8 +138,7 @@ def normal_gravity(lat: ArrayLike, h: ArrayLike = 0.0) -> Array | float:
 
     Parameters
     ----------
-    lat : array_like
-        Geodetic latitude, rad, in [-pi/2, pi/2] (scalar or array).
+    %(earth_lat)s
     h : array_like
         Ellipsoidal height, m (broadcasts with ``lat``), inside :data:`H_RANGE_M`.
 
@@ -202,6 +203,7 @@ def _radii_gravity(lat: ArrayLike, h: ArrayLike) -> tuple[Array | float, Array |
     return res[0].reshape(la.shape), res[1].reshape(la.shape), res[2].reshape(la.shape)
 
 
+@fill_doc
 def gravity_ned(lat: ArrayLike, h: ArrayLike = 0.0) -> Array:
     """Normal gravity vector in NED, ``(0, 0, +γ(φ, h))`` (m/s²).
 
@@ -210,8 +212,7 @@ def gravity_ned(lat: ArrayLike, h: ArrayLike = 0.0) -> Array:
 
     Parameters
     ----------
-    lat : array_like
-        Geodetic latitude, rad, in [-pi/2, pi/2] (scalar or array).
+    %(earth_lat)s
     h : array_like
         Ellipsoidal height, m (broadcasts with ``lat``).
 
@@ -233,6 +234,7 @@ def gravity_ned(lat: ArrayLike, h: ArrayLike = 0.0) -> Array:
     return out
 
 
+@fill_doc
 def earth_rate_ned(lat: ArrayLike) -> Array:
     """Earth rotation rate resolved in NED, ``ω_ie^n = Ω (cos φ, 0, −sin φ)`` rad/s (Groves 2.123).
 
@@ -240,8 +242,7 @@ def earth_rate_ned(lat: ArrayLike) -> Array:
 
     Parameters
     ----------
-    lat : array_like
-        Geodetic latitude, rad, in [-pi/2, pi/2] (scalar or array).
+    %(earth_lat)s
 
     Returns
     -------
@@ -263,6 +264,7 @@ def earth_rate_ned(lat: ArrayLike) -> Array:
     return out
 
 
+@fill_doc
 def radii(lat: ArrayLike) -> tuple[Array | float, Array | float]:
     """Meridian and prime-vertical radii of curvature ``(R_N, R_E)``, m (Groves 2.105-2.106).
 
@@ -270,8 +272,7 @@ def radii(lat: ArrayLike) -> tuple[Array | float, Array | float]:
 
     Parameters
     ----------
-    lat : array_like
-        Geodetic latitude, rad, in [-pi/2, pi/2] (scalar or array).
+    %(earth_lat)s
 
     Returns
     -------
@@ -291,6 +292,7 @@ def radii(lat: ArrayLike) -> tuple[Array | float, Array | float]:
     return rn, re
 
 
+@fill_doc
 def transport_rate_ned(lat: ArrayLike, h: ArrayLike, vel_ned: ArrayLike) -> Array:
     """Transport rate ``ω_en^n`` (rate of NED w.r.t. ECEF) in NED, rad/s (Groves 5.44).
 
@@ -298,8 +300,7 @@ def transport_rate_ned(lat: ArrayLike, h: ArrayLike, vel_ned: ArrayLike) -> Arra
 
     Parameters
     ----------
-    lat : array_like
-        Geodetic latitude, rad, in [-pi/2, pi/2] (scalar or array).
+    %(earth_lat)s
     h : array_like
         Ellipsoidal height, m.
     vel_ned : array_like, shape (3,) or (N, 3)
@@ -373,6 +374,7 @@ def dcm_en(lat: ArrayLike, lon: ArrayLike) -> Array:
     return C
 
 
+@fill_doc
 def lla_to_ecef(lla: ArrayLike) -> Array:
     """Geodetic ``(lat, lon, h)`` (rad, rad, m) to ECEF position (m) (Groves 2.112).
 
@@ -388,12 +390,7 @@ def lla_to_ecef(lla: ArrayLike) -> Array:
     numpy.ndarray, shape (3,) or (N, 3)
         ECEF position, m.
 
-    Raises
-    ------
-    ShapeError
-        If a triple is not (3,) / (N, 3).
-    NonFiniteError
-        If an input is NaN or infinite.
+    %(earth_triple_raises)s
     """
     p, single = _triple(lla, "lla")
     # evaluated in extended precision (where the platform has it) so that the
@@ -409,6 +406,7 @@ def lla_to_ecef(lla: ArrayLike) -> Array:
     return _out(out, single)
 
 
+@fill_doc
 def ecef_to_lla(ecef: ArrayLike) -> Array:
     """ECEF position (m) to geodetic ``(lat, lon, h)`` (rad, rad, m).
 
@@ -428,12 +426,7 @@ def ecef_to_lla(ecef: ArrayLike) -> Array:
     numpy.ndarray, shape (3,) or (N, 3)
         Geodetic latitude (rad), longitude (rad, in (-pi, pi]), ellipsoidal height (m).
 
-    Raises
-    ------
-    ShapeError
-        If a triple is not (3,) / (N, 3).
-    NonFiniteError
-        If an input is NaN or infinite.
+    %(earth_triple_raises)s
     """
     r, single = _triple(ecef, "ecef")
     x, y, z = r[:, 0], r[:, 1], r[:, 2]
@@ -464,6 +457,7 @@ def _ref(ref_lla: ArrayLike) -> Array:
     return a
 
 
+@fill_doc
 def ecef_to_ned(ecef: ArrayLike, ref_lla: ArrayLike) -> Array:
     """ECEF position(s) to local NED coordinates (m) about the origin ``ref_lla``.
 
@@ -481,12 +475,7 @@ def ecef_to_ned(ecef: ArrayLike, ref_lla: ArrayLike) -> Array:
     numpy.ndarray, shape (3,) or (N, 3)
         North, east, down coordinates, m.
 
-    Raises
-    ------
-    ShapeError
-        If a triple is not (3,) / (N, 3).
-    NonFiniteError
-        If an input is NaN or infinite.
+    %(earth_triple_raises)s
     """
     r, single = _triple(ecef, "ecef")
     ref = _ref(ref_lla)
@@ -495,6 +484,7 @@ def ecef_to_ned(ecef: ArrayLike, ref_lla: ArrayLike) -> Array:
     return _out(d @ C, single)
 
 
+@fill_doc
 def ned_to_ecef(ned: ArrayLike, ref_lla: ArrayLike) -> Array:
     """Local NED coordinates (m) about ``ref_lla`` to ECEF position(s) (m): ``r_e = r_e(ref) + C_en(ref) r_n``.
 
@@ -510,12 +500,7 @@ def ned_to_ecef(ned: ArrayLike, ref_lla: ArrayLike) -> Array:
     numpy.ndarray, shape (3,) or (N, 3)
         ECEF position(s), m.
 
-    Raises
-    ------
-    ShapeError
-        If a triple is not (3,) / (N, 3).
-    NonFiniteError
-        If an input is NaN or infinite.
+    %(earth_triple_raises)s
     """
     n, single = _triple(ned, "ned")
     ref = _ref(ref_lla)
@@ -523,6 +508,7 @@ def ned_to_ecef(ned: ArrayLike, ref_lla: ArrayLike) -> Array:
     return _out(lla_to_ecef(ref) + n @ C.T, single)
 
 
+@fill_doc
 def lla_to_ned(lla: ArrayLike, ref_lla: ArrayLike) -> Array:
     """Geodetic position(s) to local NED coordinates (m) about ``ref_lla`` (via ECEF, exact).
 
@@ -538,16 +524,12 @@ def lla_to_ned(lla: ArrayLike, ref_lla: ArrayLike) -> Array:
     numpy.ndarray, shape (3,) or (N, 3)
         North, east, down coordinates, m.
 
-    Raises
-    ------
-    ShapeError
-        If a triple is not (3,) / (N, 3).
-    NonFiniteError
-        If an input is NaN or infinite.
+    %(earth_triple_raises)s
     """
     return ecef_to_ned(lla_to_ecef(lla), ref_lla)
 
 
+@fill_doc
 def ned_to_lla(ned: ArrayLike, ref_lla: ArrayLike) -> Array:
     """Local NED coordinates (m) about ``ref_lla`` to geodetic position(s) (via ECEF, exact).
 
@@ -563,12 +545,7 @@ def ned_to_lla(ned: ArrayLike, ref_lla: ArrayLike) -> Array:
     numpy.ndarray, shape (3,) or (N, 3)
         Geodetic ``(lat, lon, h)``, rad, rad, m.
 
-    Raises
-    ------
-    ShapeError
-        If a triple is not (3,) / (N, 3).
-    NonFiniteError
-        If an input is NaN or infinite.
+    %(earth_triple_raises)s
     """
     return ecef_to_lla(ned_to_ecef(ned, ref_lla))
 

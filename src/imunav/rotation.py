@@ -34,6 +34,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from imunav import _rotation_kernels as _k
+from imunav._docstrings import fill_doc
 from imunav.errors import InvalidInputError, NonFiniteError, ShapeError, TimeOrderError
 
 __all__ = [
@@ -153,23 +154,20 @@ def quat_multiply(p: ArrayLike, q: ArrayLike) -> Array:
     return _out(_k.qmul_n(pa, qa), sp and sq)
 
 
+@fill_doc
 def quat_conjugate(q: ArrayLike) -> Array:
     """Conjugate ``[w, -x, -y, -z]``; the inverse of a unit quaternion.
 
     Parameters
     ----------
-    q : array_like, shape (4,) or (N, 4)
-        Quaternion(s) ``[w, x, y, z]`` (Hamilton, scalar first), e.g. ``q_nb`` body (FRD) to navigation (NED).
+    %(rot_q)s
 
     Returns
     -------
     numpy.ndarray, shape (4,) or (N, 4)
         ``q*``; for ``q_nb`` this is ``q_bn``.
 
-    Raises
-    ------
-    ShapeError
-        If an input does not have the shape given above.
+    %(rot_shape_raises)s
     """
     a = np.array(q, dtype=float)
     _as(a, (4,), "q")
@@ -177,35 +175,32 @@ def quat_conjugate(q: ArrayLike) -> Array:
     return a
 
 
+@fill_doc
 def quat_inverse(q: ArrayLike) -> Array:
     """Inverse ``q* / |q|^2`` (valid for non-unit quaternions).
 
     Parameters
     ----------
-    q : array_like, shape (4,) or (N, 4)
-        Quaternion(s) ``[w, x, y, z]`` (Hamilton, scalar first), e.g. ``q_nb`` body (FRD) to navigation (NED).
+    %(rot_q)s
 
     Returns
     -------
     numpy.ndarray, shape (4,) or (N, 4)
         ``q^-1`` with ``q ⊗ q^-1 = [1, 0, 0, 0]``.
 
-    Raises
-    ------
-    ShapeError
-        If an input does not have the shape given above.
+    %(rot_shape_raises)s
     """
     a = quat_conjugate(q)
     return a / np.sum(a * a, axis=-1, keepdims=True)
 
 
+@fill_doc
 def quat_normalize(q: ArrayLike) -> Array:
     """Unit quaternion(s) ``q / |q|``.
 
     Parameters
     ----------
-    q : array_like, shape (4,) or (N, 4)
-        Quaternion(s) ``[w, x, y, z]`` (Hamilton, scalar first), e.g. ``q_nb`` body (FRD) to navigation (NED).
+    %(rot_q)s
 
     Returns
     -------
@@ -227,6 +222,7 @@ def quat_normalize(q: ArrayLike) -> Array:
     return _out(a / n, s)
 
 
+@fill_doc
 def quat_canonical(q: ArrayLike) -> Array:
     """Representative with ``w > 0`` (at ``w == 0``: first non-zero vector part > 0).
 
@@ -235,18 +231,14 @@ def quat_canonical(q: ArrayLike) -> Array:
 
     Parameters
     ----------
-    q : array_like, shape (4,) or (N, 4)
-        Quaternion(s) ``[w, x, y, z]`` (Hamilton, scalar first), e.g. ``q_nb`` body (FRD) to navigation (NED).
+    %(rot_q)s
 
     Returns
     -------
     numpy.ndarray, shape (4,) or (N, 4)
         ``q`` or ``-q``, row by row.
 
-    Raises
-    ------
-    ShapeError
-        If an input does not have the shape given above.
+    %(rot_shape_raises)s
     """
     a, single = _as(q, (4,), "q")
     a = a.copy()
@@ -256,6 +248,7 @@ def quat_canonical(q: ArrayLike) -> Array:
     return _out(a, single)
 
 
+@fill_doc
 def quat_rotate(q: ArrayLike, v: ArrayLike) -> Array:
     """Rotate vector(s): ``v_n = q ⊗ [0, v_b] ⊗ q*`` (= ``C(q) v_b``).
 
@@ -264,8 +257,7 @@ def quat_rotate(q: ArrayLike, v: ArrayLike) -> Array:
 
     Parameters
     ----------
-    q : array_like, shape (4,) or (N, 4)
-        Quaternion(s) ``[w, x, y, z]`` (Hamilton, scalar first), e.g. ``q_nb`` body (FRD) to navigation (NED).
+    %(rot_q)s
     v : array_like, shape (3,) or (N, 3)
         Vector(s) in the frame the quaternion rotates from (any unit; the result has the same unit).
 
@@ -285,23 +277,20 @@ def quat_rotate(q: ArrayLike, v: ArrayLike) -> Array:
     return _out(_k.qrot_n(qa, va), sq and sv)
 
 
+@fill_doc
 def dcm_from_quat(q: ArrayLike) -> Array:
     """Direction-cosine matrix ``C_nb`` of a unit quaternion ``q_nb`` (Groves 2013, §2.2).
 
     Parameters
     ----------
-    q : array_like, shape (4,) or (N, 4)
-        Quaternion(s) ``[w, x, y, z]`` (Hamilton, scalar first), e.g. ``q_nb`` body (FRD) to navigation (NED).
+    %(rot_q)s
 
     Returns
     -------
     numpy.ndarray, shape (3, 3) or (N, 3, 3)
         ``C_nb`` with ``v_n = C_nb v_b``.
 
-    Raises
-    ------
-    ShapeError
-        If an input does not have the shape given above.
+    %(rot_shape_raises)s
     """
     a, s = _as(q, (4,), "q")
     return _out(_k.dcm_from_quat_n(a), s)
@@ -401,13 +390,13 @@ def euler_from_dcm(C: ArrayLike) -> Array:
     return _out(_k.euler_from_dcm_n(a), s)
 
 
+@fill_doc
 def euler_from_quat(q: ArrayLike) -> Array:
     """ZYX Euler angles ``(roll, pitch, yaw)`` (rad) of ``q_nb`` (through :func:`euler_from_dcm`).
 
     Parameters
     ----------
-    q : array_like, shape (4,) or (N, 4)
-        Quaternion(s) ``[w, x, y, z]`` (Hamilton, scalar first), e.g. ``q_nb`` body (FRD) to navigation (NED).
+    %(rot_q)s
 
     Returns
     -------
@@ -474,6 +463,7 @@ def quat_from_rotvec(r: ArrayLike) -> Array:
     return _out(_k.qexp_n(a), s)
 
 
+@fill_doc
 def rotvec_from_quat(q: ArrayLike) -> Array:
     """``log`` map: rotation vector (rad, angle in [0, pi]) of unit ``q``.
 
@@ -481,8 +471,7 @@ def rotvec_from_quat(q: ArrayLike) -> Array:
 
     Parameters
     ----------
-    q : array_like, shape (4,) or (N, 4)
-        Quaternion(s) ``[w, x, y, z]`` (Hamilton, scalar first), e.g. ``q_nb`` body (FRD) to navigation (NED).
+    %(rot_q)s
 
     Returns
     -------

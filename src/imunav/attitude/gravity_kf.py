@@ -43,6 +43,7 @@ from typing import Literal
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from imunav._docstrings import fill_doc
 from imunav.attitude import _gravity_kernels as _gk
 from imunav.attitude._base import gyro3, prepare, step_dt, vec3
 from imunav.attitude.result import AttitudeResult
@@ -308,55 +309,28 @@ class GravityKF:
                                                             for f in fields(self.params)}})
 
 
+@fill_doc
 def LeeKF(params: GravityKfConfig | None = None, **kw) -> GravityKF:  # noqa: N802
     """Lee et al. 2012: constant c_a, equal-axis Σ_acc, S = 1.
 
-    Parameters
-    ----------
-    params : GravityKfParams, optional
-        Filter settings (default :class:`GravityKfParams` ()).
-    **kw
-        Further :class:`GravityKF` fields (``accel_convention``).
-
-    Returns
-    -------
-    GravityKF
-        The filter.
+    %(gravity_factory)s
     """
     return GravityKF("lee", params or GravityKfConfig(), **kw)
 
 
+@fill_doc
 def JavedKF(params: GravityKfConfig | None = None, **kw) -> GravityKF:  # noqa: N802
     """Javed et al. 2020 ("Javed-like" reconstruction of its cascaded bias KF; module docstring).
 
-    Parameters
-    ----------
-    params : GravityKfParams, optional
-        Filter settings (default :class:`GravityKfParams` ()).
-    **kw
-        Further :class:`GravityKF` fields (``accel_convention``).
-
-    Returns
-    -------
-    GravityKF
-        The filter.
+    %(gravity_factory)s
     """
     return GravityKF("javed", params or GravityKfConfig(), **kw)
 
 
+@fill_doc
 def ProposedKF(params: GravityKfConfig | None = None, **kw) -> GravityKF:  # noqa: N802
     """Candan & Söken 2020: detector-switched c_a ∈ {0, 1}, diagonal S (mode B).
 
-    Parameters
-    ----------
-    params : GravityKfParams, optional
-        Filter settings (default :class:`GravityKfParams` ()).
-    **kw
-        Further :class:`GravityKF` fields (``accel_convention``).
-
-    Returns
-    -------
-    GravityKF
-        The filter.
+    %(gravity_factory)s
     """
     return GravityKF("proposed", params or GravityKfConfig(), **kw)

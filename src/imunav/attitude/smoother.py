@@ -22,6 +22,7 @@ from dataclasses import dataclass, field, fields
 
 from numpy.typing import ArrayLike
 
+from imunav._docstrings import fill_doc
 from imunav.attitude import _kernels as _k
 from imunav.attitude.adaptive import ADAPTIVE_DEFAULTS
 from imunav.attitude.mekf import FLAG_NAMES, MEKF, MekfConfig
@@ -45,21 +46,14 @@ class Smoother:
 
     name = "smoother"
 
+    @fill_doc
     def run(self, data: ImuData, *, q0: ArrayLike | None = None, bias0: ArrayLike | None = None,
             use_mag: bool | None = None) -> AttitudeResult:
         """Forward MEKF pass, then the backward RTS pass (Rauch, Tung & Striebel 1965; module docstring).
 
-        Parameters
-        ----------
-        data : ImuData
-            The recording (SI: rad/s, m/s²; magnetometer in any unit), body FRD.
-        q0 : array_like, shape (4,), optional
-            Initial attitude ``q_nb`` (default: :func:`imunav.attitude.alignment.align` of the first accelerometer
-            / magnetometer sample).
-        bias0 : array_like, shape (3,), optional
-            Initial gyro-bias estimate, rad/s (default zero).
-        use_mag : bool, optional
-            Use the magnetometer (9D); default: when the recording has one.
+        %(att_run_params)s
+        %(att_bias0)s
+        %(att_use_mag)s
 
         Returns
         -------
@@ -67,11 +61,7 @@ class Smoother:
             Smoothed ``q_nb``, gyro bias (rad/s) and covariance diagonal at every sample, with the forward
             filter's flags.
 
-        Raises
-        ------
-        InvalidInputError
-            If ``data`` is not an ImuData with at least 2 samples, ``use_mag=True`` without a magnetometer, or a
-            rate exceeds 1e4 rad/s.
+        %(att_run_raises)s
         """
         f = MEKF(self.params)
         t, g, dt, um, q_init, b0, P0, out = f._run(data, q0, bias0, use_mag, True)

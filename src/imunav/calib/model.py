@@ -35,6 +35,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from imunav._docstrings import fill_doc
 from imunav.errors import (
     FileFormatError,
     ImunavWarning,
@@ -241,6 +242,7 @@ class ImuCalibration:
         return ba, ta, bg, tg
 
     # ------------------------------------------------------------ apply/invert
+    @fill_doc
     def apply_arrays(
         self, accel: ArrayLike, gyro: ArrayLike, temp_c: ArrayLike | None = None
     ) -> tuple[Array, Array]:
@@ -265,14 +267,7 @@ class ImuCalibration:
         w : numpy.ndarray, shape (N, 3)
             Compensated angular rate, body frame, rad/s.
 
-        Raises
-        ------
-        ShapeError
-            If ``accel`` and ``gyro`` are not both (N, 3).
-        NonFiniteError
-            If a sample or temperature is not finite.
-        InvalidInputError
-            If the calibration is temperature dependent and ``temp_c`` is missing.
+        %(calib_pair_raises)s
         """
         a, g = _pair(accel, gyro)
         n = a.shape[0]
@@ -285,6 +280,7 @@ class ImuCalibration:
         w = np.linalg.solve(tg, (g - bg - f @ self.g_sensitivity.T)[..., None])[..., 0]
         return f, w
 
+    @fill_doc
     def invert_arrays(
         self, accel: ArrayLike, gyro: ArrayLike, temp_c: ArrayLike | None = None
     ) -> tuple[Array, Array]:
@@ -308,14 +304,7 @@ class ImuCalibration:
         g : numpy.ndarray, shape (N, 3)
             Raw gyro output, ``raw_gyro_unit``.
 
-        Raises
-        ------
-        ShapeError
-            If ``accel`` and ``gyro`` are not both (N, 3).
-        NonFiniteError
-            If a sample or temperature is not finite.
-        InvalidInputError
-            If the calibration is temperature dependent and ``temp_c`` is missing.
+        %(calib_pair_raises)s
         """
         f, w = _pair(accel, gyro)
         n = f.shape[0]

@@ -27,6 +27,7 @@ import math
 import numpy as np
 from numba import njit
 
+from imunav._docstrings import fill_doc
 from imunav._rotation_kernels import qexp_1, qmul_1, qrot_1
 from imunav.earth import radii_gravity_1
 
@@ -381,6 +382,15 @@ def inject_additive(x, dx, i0, n):
         x[j] += dx[i0 + j]
 
 
+@njit(cache=True, inline="always")
+def _angle_error(dx, i0):
+    """A copy of the attitude error ``dx[i0:i0+3]`` (a new (3,) array)."""
+    r = np.empty(3)
+    for j in range(3):
+        r[j] = dx[i0 + j]
+    return r
+
+
 @njit(cache=True)
 def inject_attitude_local(q, dx, i0):
     """Multiplicative injection of a body-frame attitude error: ``q ← q ⊗ exp(δθ)``, normalised.
@@ -397,9 +407,7 @@ def inject_attitude_local(q, dx, i0):
     -------
     (4,) the corrected unit quaternion (new array).
     """
-    r = np.empty(3)
-    for j in range(3):
-        r[j] = dx[i0 + j]
+    r = _angle_error(dx, i0)
     return quat_normalize(qmul_1(q, qexp_1(r)))
 
 
@@ -419,9 +427,7 @@ def inject_attitude_global(q, dx, i0):
     -------
     (4,) the corrected unit quaternion (new array).
     """
-    r = np.empty(3)
-    for j in range(3):
-        r[j] = dx[i0 + j]
+    r = _angle_error(dx, i0)
     return quat_normalize(qmul_1(qexp_1(r), q))
 
 
@@ -750,17 +756,11 @@ def inv3(A, out):
 
 
 @njit(cache=True)
+@fill_doc
 def mm3(A, B, C):
     """``C = A B`` for 3 × 3 matrices (C distinct from A and B).
 
-    Parameters
-    ----------
-    A, B : (3, 3) float64 arrays.
-    C : (3, 3) float64 array, receives the product.
-
-    Returns
-    -------
-    None
+    %(mat3_product)s
     """
     for i in range(3):
         for j in range(3):
@@ -768,17 +768,11 @@ def mm3(A, B, C):
 
 
 @njit(cache=True)
+@fill_doc
 def mmt3(A, B, C):
     """``C = A Bᵀ`` for 3 × 3 matrices (C distinct from A and B).
 
-    Parameters
-    ----------
-    A, B : (3, 3) float64 arrays.
-    C : (3, 3) float64 array, receives the product.
-
-    Returns
-    -------
-    None
+    %(mat3_product)s
     """
     for i in range(3):
         for j in range(3):

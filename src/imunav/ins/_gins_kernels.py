@@ -205,6 +205,18 @@ def _inject(dx, q, v, lla, err, nx, prm, acc_dx):
 
 
 @njit(cache=True)
+def _gated_update(P, dx, H, R, nu, innov, S, gate, q, v, lla, err, nx, prm, acc_dx):
+    """Chi-square gate on ``S0 = H P Hᵀ + R``; when accepted, Joseph update (``innov``, ``S``: work arrays) and
+    injection of ``dx``.  Returns (accepted, NIS)."""
+    S0 = H @ P @ H.T + R
+    ok, d = chi2_gate(nu, S0, gate)
+    if ok:
+        joseph_update(P, dx, H, R, nu, innov, S)
+        _inject(dx, q, v, lla, err, nx, prm, acc_dx)
+    return ok, d
+
+
+@njit(cache=True)
 def _gnss_update(P, dx, q, v, lla, err, wb, zp, rp, zv, rv, use_vel, prm, nx, nis_out, acc_out, acc_dx):
     """GNSS position (and velocity) update with the antenna lever arm; χ² gates; NIS recorded."""
     C = dcm_from_quat_1(q)
@@ -223,13 +235,8 @@ def _gnss_update(P, dx, q, v, lla, err, wb, zp, rp, zv, rv, use_vel, prm, nx, ni
         H[j, I_POS + j] = 1.0
         R[j, j] = rp[j]
     _skew(la, H, 0, I_ATT, -1.0)
-    S0 = H @ P @ H.T + R
-    ok, d = chi2_gate(nu, S0, prm[K_GATE_POS])
-    nis_out[N_POS] = d
+    ok, nis_out[N_POS] = _gated_update(P, dx, H, R, nu, innov, S, prm[K_GATE_POS], q, v, lla, err, nx, prm, acc_dx)
     acc_out[N_POS] = 1.0 if ok else 0.0
-    if ok:
-        joseph_update(P, dx, H, R, nu, innov, S)
-        _inject(dx, q, v, lla, err, nx, prm, acc_dx)
     if not use_vel:
         return
     C = dcm_from_quat_1(q)
@@ -254,13 +261,8 @@ def _gnss_update(P, dx, q, v, lla, err, wb, zp, rp, zv, rv, use_vel, prm, nx, ni
             H[i, I_BG + j] = CL[i, j]
             if prm[K_NB] == NX21:
                 H[i, I_SG + j] = CL[i, j] * wb[j]
-    S0 = H @ P @ H.T + R
-    ok, d = chi2_gate(nu, S0, prm[K_GATE_VEL])
-    nis_out[N_VEL] = d
+    ok, nis_out[N_VEL] = _gated_update(P, dx, H, R, nu, innov, S, prm[K_GATE_VEL], q, v, lla, err, nx, prm, acc_dx)
     acc_out[N_VEL] = 1.0 if ok else 0.0
-    if ok:
-        joseph_update(P, dx, H, R, nu, innov, S)
-        _inject(dx, q, v, lla, err, nx, prm, acc_dx)
 
 
 @njit(cache=True)
@@ -318,17 +320,10 @@ def _vehicle_update(P, dx, q, v, lla, err, wb, z_odo, r_odo, prm, nx, out, acc_d
             nu[r] = -vw[a]
             R[r, r] = prm[K_NHC_R]
             r += 1
-    S0 = H @ P @ H.T + R
     gate = prm[K_GATE_VEH] if m == 3 else (prm[K_GATE_VEH2] if m == 2 else prm[K_GATE_VEH1])
-    ok, d = chi2_gate(nu, S0, gate)
-    out[0] = d
+    ok, out[0] = _gated_update(P, dx, H, R, nu, np.empty(m), np.empty((m, m)), gate, q, v, lla, err, nx, prm, acc_dx)
     out[1] = 1.0 if ok else 0.0
     out[2] = m
-    if ok:
-        innov = np.empty(m)
-        S = np.empty((m, m))
-        joseph_update(P, dx, H, R, nu, innov, S)
-        _inject(dx, q, v, lla, err, nx, prm, acc_dx)
 
 
 @njit(cache=True)

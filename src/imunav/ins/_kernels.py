@@ -33,6 +33,27 @@ from imunav.filters._core_models import heading_hold, height, zero_rate, zero_ve
 # --------------------------------------------------------------------------
 
 
+@njit(cache=True, inline="always")
+def _block_mean(acc, k, W):
+    """Mean of acc[k:k+W] per axis (summed in sample order, then divided by W)."""
+    m0 = 0.0
+    m1 = 0.0
+    m2 = 0.0
+    for s in range(k, k + W):
+        m0 += acc[s, 0]
+        m1 += acc[s, 1]
+        m2 += acc[s, 2]
+    return m0 / W, m1 / W, m2 / W
+
+
+@njit(cache=True, inline="always")
+def _hold_block(out, k, W, T):
+    """out[k:k+W] = T / W (a block statistic held over its samples)."""
+    T /= W
+    for s in range(k, k + W):
+        out[s] = T
+
+
 @njit(cache=True)
 def shoe_blocks(acc, gyr, W, sigma_a, sigma_w, g):
     """SHOE statistic on non-overlapping blocks of W samples (Skog et al. 2010).
@@ -46,16 +67,7 @@ def shoe_blocks(acc, gyr, W, sigma_a, sigma_w, g):
     iw = 1.0 / (sigma_w * sigma_w)
     k = 0
     while k + W <= n:
-        m0 = 0.0
-        m1 = 0.0
-        m2 = 0.0
-        for s in range(k, k + W):
-            m0 += acc[s, 0]
-            m1 += acc[s, 1]
-            m2 += acc[s, 2]
-        m0 /= W
-        m1 /= W
-        m2 /= W
+        m0, m1, m2 = _block_mean(acc, k, W)
         nm = math.sqrt(m0 * m0 + m1 * m1 + m2 * m2)
         u0 = g * m0 / nm
         u1 = g * m1 / nm
@@ -67,9 +79,7 @@ def shoe_blocks(acc, gyr, W, sigma_a, sigma_w, g):
             d2 = acc[s, 2] - u2
             T += ia * (d0 * d0 + d1 * d1 + d2 * d2)
             T += iw * (gyr[s, 0] ** 2 + gyr[s, 1] ** 2 + gyr[s, 2] ** 2)
-        T /= W
-        for s in range(k, k + W):
-            out[s] = T
+        _hold_block(out, k, W, T)
         k += W
     return out
 
@@ -84,9 +94,7 @@ def ared_blocks(gyr, W):
         T = 0.0
         for s in range(k, k + W):
             T += gyr[s, 0] ** 2 + gyr[s, 1] ** 2 + gyr[s, 2] ** 2
-        T /= W
-        for s in range(k, k + W):
-            out[s] = T
+        _hold_block(out, k, W, T)
         k += W
     return out
 
@@ -98,22 +106,11 @@ def amvd_blocks(acc, W):
     out = np.zeros(n)
     k = 0
     while k + W <= n:
-        m0 = 0.0
-        m1 = 0.0
-        m2 = 0.0
-        for s in range(k, k + W):
-            m0 += acc[s, 0]
-            m1 += acc[s, 1]
-            m2 += acc[s, 2]
-        m0 /= W
-        m1 /= W
-        m2 /= W
+        m0, m1, m2 = _block_mean(acc, k, W)
         T = 0.0
         for s in range(k, k + W):
             T += (acc[s, 0] - m0) ** 2 + (acc[s, 1] - m1) ** 2 + (acc[s, 2] - m2) ** 2
-        T /= W
-        for s in range(k, k + W):
-            out[s] = T
+        _hold_block(out, k, W, T)
         k += W
     return out
 

@@ -35,6 +35,7 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
+from imunav._docstrings import fill_doc
 from imunav.errors import FileFormatError, InvalidInputError
 from imunav.io._atomic import atomic_path
 from imunav.io._common import build_imu, check_nonempty, header_json, parse_header, wrap_read_errors
@@ -288,6 +289,7 @@ def _last_line(path: str) -> str:
     return lines[-1] if lines else ""
 
 
+@fill_doc
 def read_csv(
     path: str | os.PathLike[str],
     *,
@@ -305,30 +307,15 @@ def read_csv(
 ) -> ImuData:
     """Read a CSV (or other delimited text) recording.
 
-    Parameters
-    ----------
-    path : str or os.PathLike
-        The file.
+    %(reader_head)s
     columns : mapping, optional
         Channels / groups to column names (see the module docstring); by default found by name.
-    units : mapping of str to str, optional
-        Declared unit of each group (``{"gyro": "deg/s", "accel": "g"}``, or ``"counts"``); default SI.
-    scales, offsets : mapping of str to float, optional
-        For ``"counts"``: ``value_si = (counts - offset) * scale``.
-    fs : float, optional
-        Sample rate, Hz, when the file has no time (``t = t0 + k / fs``).
-    t0 : float
-        Time of the first sample with ``fs``, s.
+    %(reader_units)s
     delimiter : str, optional
         Column separator; detected from the header line when None (``,`` ``;`` tab ``|``, else whitespace).
     skiprows : int
         Lines to skip before the header (after ``#`` comment lines).
-    nan_policy : {"raise", "drop", "interpolate"}
-        What to do with NaN samples.
-    mag_unit : str, optional
-        Unit of the magnetometer (kept as stored).
-    meta : mapping, optional
-        Entries added to the recording's ``meta``.
+    %(reader_tail)s
 
     Returns
     -------

@@ -31,6 +31,7 @@ import h5py
 import numpy as np
 import scipy.io
 
+from imunav._docstrings import fill_doc
 from imunav.errors import FileFormatError, InvalidInputError
 from imunav.io._atomic import atomic_path
 from imunav.io._common import build_imu, check_nonempty, find_array_names, header_json, parse_header, wrap_read_errors
@@ -122,6 +123,7 @@ def _vector(a: np.ndarray) -> np.ndarray:
     return a
 
 
+@fill_doc
 def read_mat(
     path: str | os.PathLike[str],
     *,
@@ -137,38 +139,11 @@ def read_mat(
 ) -> ImuData:
     """Read a MAT-file (v5 or v7.3, detected from the header).
 
-    Parameters
-    ----------
-    path : str or os.PathLike
-        The file.
-    columns : mapping of str to str, optional
-        Where each group is stored (e.g. ``{"gyro": "imu/gyr"}``); by default found by name.
-    units : mapping of str to str, optional
-        Declared unit of each group (``{"gyro": "deg/s", "accel": "g"}``, or ``"counts"``); default SI.
-    scales, offsets : mapping of str to float, optional
-        For ``"counts"``: ``value_si = (counts - offset) * scale``.
-    fs : float, optional
-        Sample rate, Hz, when the file has no time (``t = t0 + k / fs``).
-    t0 : float
-        Time of the first sample with ``fs``, s.
-    nan_policy : {"raise", "drop", "interpolate"}
-        What to do with NaN samples.
-    mag_unit : str, optional
-        Unit of the magnetometer (kept as stored).
-    meta : mapping, optional
-        Entries added to the recording's ``meta``.
+    %(reader_head)s
+    %(array_columns)s
+    %(reader_options)s
 
-    Returns
-    -------
-    ImuData
-        The recording, SI.
-
-    Raises
-    ------
-    FileFormatError
-        If the file is missing, unreadable, or lacks a required group (the message lists what was found).
-    NonFiniteError, TimeOrderError, ShapeError, UnitError
-        From the validation of the values.
+    %(reader_returns)s
     """
     source = check_nonempty(path)
     version = mat_version(source)

@@ -20,6 +20,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from imunav._docstrings import fill_doc
 from imunav.errors import FileFormatError, MissingDependencyError, TimeOrderError
 from imunav.rotation import C_ENU_NED, C_FLU_FRD
 
@@ -91,13 +92,11 @@ def require(kind: str, feature: str) -> None:
 
 # -- frames -------------------------------------------------------------------------------------
 # imunav.rotation is imported in the functions: it loads numba kernels, which listing topics does not need
+@fill_doc
 def ros_to_frd(v: Any) -> Array:
     """Body vectors from ROS FLU to imunav FRD: ``(x, -y, -z)`` (REP-103).
 
-    Parameters
-    ----------
-    v : array_like, shape (3,) or (N, 3)
-        Vectors.
+    %(frame_vectors)s
 
     Returns
     -------
@@ -108,13 +107,11 @@ def ros_to_frd(v: Any) -> Array:
     return np.asarray(v, dtype=np.float64) @ C_FLU_FRD.T
 
 
+@fill_doc
 def frd_to_ros(v: Any) -> Array:
     """Body vectors from FRD to ROS FLU (the same flip; its own inverse).
 
-    Parameters
-    ----------
-    v : array_like, shape (3,) or (N, 3)
-        Vectors.
+    %(frame_vectors)s
 
     Returns
     -------
@@ -125,13 +122,11 @@ def frd_to_ros(v: Any) -> Array:
     return np.asarray(v, dtype=np.float64) @ C_FLU_FRD
 
 
+@fill_doc
 def enu_to_ned(v: Any) -> Array:
     """World vectors from ENU to NED: ``(y, x, -z)``.
 
-    Parameters
-    ----------
-    v : array_like, shape (3,) or (N, 3)
-        Vectors.
+    %(frame_vectors)s
 
     Returns
     -------
@@ -142,13 +137,11 @@ def enu_to_ned(v: Any) -> Array:
     return np.asarray(v, dtype=np.float64) @ C_ENU_NED
 
 
+@fill_doc
 def ned_to_enu(v: Any) -> Array:
     """World vectors from NED to ENU (the same swap; its own inverse).
 
-    Parameters
-    ----------
-    v : array_like, shape (3,) or (N, 3)
-        Vectors.
+    %(frame_vectors)s
 
     Returns
     -------

@@ -11,6 +11,7 @@ from typing import TYPE_CHECKING, Sequence
 
 import numpy as np
 
+from imunav._docstrings import fill_doc
 from imunav.noise.allan import AllanResult
 from imunav.noise.fit import NoiseFit, avar_term
 from imunav.noise.psd import PsdFit, PsdResult
@@ -23,11 +24,23 @@ __all__ = ["plot_allan", "plot_psd", "plot_curve_fits"]
 _TERM_STYLE = {"Q": ":", "N": "--", "B": "-.", "K": (0, (5, 1, 1, 1)), "R": (0, (1, 2))}
 
 
-def _grid(n: int) -> tuple[int, int]:
+def _figure(figsize: tuple[float, float]) -> Figure:
+    """A new figure, constrained layout."""
+    # optional: matplotlib loads only when a figure is drawn (import time of imunav and its CLI)
+    from matplotlib.figure import Figure
+
+    return Figure(figsize=figsize, constrained_layout=True)
+
+
+def _panels(n: int) -> tuple[Figure, np.ndarray]:
+    """A figure with ``n`` panels, at most 3 a row; returns the figure and its axes, flat."""
     cols = min(3, n)
-    return int(math.ceil(n / cols)), cols
+    rows = int(math.ceil(n / cols))
+    fig = _figure((4.2 * cols, 3.4 * rows))
+    return fig, fig.subplots(rows, cols, squeeze=False).ravel()
 
 
+@fill_doc
 def plot_allan(result: AllanResult, fit: NoiseFit | None = None, channels: Sequence[int] | None = None,
                title: str | None = None) -> Figure:
     """Allan deviation per channel with its confidence band, the fitted model and each fitted term (dashed).
@@ -40,24 +53,13 @@ def plot_allan(result: AllanResult, fit: NoiseFit | None = None, channels: Seque
         Fitted noise terms to draw (:func:`imunav.noise.fit_noise`).
     channels : sequence of int, optional
         Channels to draw (default: all).
-    title : str, optional
-        Figure title.
-
-    Returns
-    -------
-    matplotlib.figure.Figure
-        The figure (not shown; save it with ``fig.savefig``).
+    %(figure_title_returns)s
     """
-    # optional: matplotlib loads only when a figure is drawn (import time of imunav and its CLI)
-    from matplotlib.figure import Figure
-
     adev = result.adev if result.adev.ndim == 2 else result.adev[:, None]
     lo = result.adev_lo if result.adev_lo.ndim == 2 else result.adev_lo[:, None]
     hi = result.adev_hi if result.adev_hi.ndim == 2 else result.adev_hi[:, None]
     chans = list(range(adev.shape[1])) if channels is None else list(channels)
-    rows, cols = _grid(len(chans))
-    fig = Figure(figsize=(4.2 * cols, 3.4 * rows), constrained_layout=True)
-    axes = fig.subplots(rows, cols, squeeze=False).ravel()
+    fig, axes = _panels(len(chans))
     t = result.tau
     tt = np.logspace(np.log10(t[0]), np.log10(t[-1]), 200)
     for k, c in enumerate(chans):
@@ -84,6 +86,7 @@ def plot_allan(result: AllanResult, fit: NoiseFit | None = None, channels: Seque
     return fig
 
 
+@fill_doc
 def plot_psd(res: PsdResult, fit: PsdFit | None = None, averaged: PsdResult | None = None,
              title: str | None = None) -> Figure:
     """One-sided PSD per channel (raw in grey, averaged in colour) with the fitted model.
@@ -96,22 +99,11 @@ def plot_psd(res: PsdResult, fit: PsdFit | None = None, averaged: PsdResult | No
         Fitted terms to draw.
     averaged : PsdResult, optional
         An averaged PSD to draw over the raw one.
-    title : str, optional
-        Figure title.
-
-    Returns
-    -------
-    matplotlib.figure.Figure
-        The figure (not shown; save it with ``fig.savefig``).
+    %(figure_title_returns)s
     """
-    # optional: matplotlib loads only when a figure is drawn (import time of imunav and its CLI)
-    from matplotlib.figure import Figure
-
     p = res.psd if res.psd.ndim == 2 else res.psd[:, None]
     n_ch = p.shape[1]
-    rows, cols = _grid(n_ch)
-    fig = Figure(figsize=(4.2 * cols, 3.4 * rows), constrained_layout=True)
-    axes = fig.subplots(rows, cols, squeeze=False).ravel()
+    fig, axes = _panels(n_ch)
     for c in range(n_ch):
         ax = axes[c]
         ax.loglog(res.f, p[:, c], color="0.7", lw=0.5, label=res.method)
@@ -134,6 +126,7 @@ def plot_psd(res: PsdResult, fit: PsdFit | None = None, averaged: PsdResult | No
     return fig
 
 
+@fill_doc
 def plot_curve_fits(tau: np.ndarray, adev: np.ndarray, fits: dict, title: str | None = None) -> Figure:
     """An Allan curve with smooth curve fits (Atasoy's thesis, Figs. 7.57-7.60; see :mod:`imunav.noise.curvefit`).
 
@@ -145,18 +138,9 @@ def plot_curve_fits(tau: np.ndarray, adev: np.ndarray, fits: dict, title: str | 
         Allan deviation of one channel at ``tau``.
     fits : dict of str to CurveFit
         The fits (:func:`imunav.noise.curvefit.compare_curve_fits`).
-    title : str, optional
-        Figure title.
-
-    Returns
-    -------
-    matplotlib.figure.Figure
-        The figure (not shown; save it with ``fig.savefig``).
+    %(figure_title_returns)s
     """
-    # optional: matplotlib loads only when a figure is drawn (import time of imunav and its CLI)
-    from matplotlib.figure import Figure
-
-    fig = Figure(figsize=(5, 3.8), constrained_layout=True)
+    fig = _figure((5, 3.8))
     ax = fig.subplots()
     ax.loglog(tau, adev, "ko", ms=3, label="ADEV")
     tt = np.logspace(np.log10(np.min(tau)), np.log10(np.max(tau)), 300)

@@ -32,6 +32,7 @@ from numpy.typing import ArrayLike, NDArray
 from scipy import signal
 from scipy.optimize import nnls
 
+from imunav._docstrings import fill_doc
 from imunav.errors import InsufficientDataError, InvalidInputError, NonFiniteError, ShapeError
 from imunav.noise.allan import check_rows_are_samples
 from imunav.results import Result
@@ -277,15 +278,11 @@ class PsdFit(Result):
     channels: tuple[str, ...]
     f_range: tuple[tuple[float, float], ...]  # per channel
 
+    @fill_doc
     def get(self, name: str, channel: int = 0) -> float:
         """One fitted value, SI.
 
-        Parameters
-        ----------
-        name : str
-            Term name, one of :attr:`names`.
-        channel : int
-            Channel index.
+        %(fit_get_params)s
 
         Returns
         -------

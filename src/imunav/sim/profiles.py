@@ -35,6 +35,7 @@ from typing import Iterator
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from imunav._docstrings import fill_doc
 from imunav.errors import InvalidInputError, ShapeError
 from imunav.io._atomic import atomic_path
 from imunav.rotation import (
@@ -629,6 +630,7 @@ def six_position_orientations() -> Array:
 # ---------------------------------------------------------------------------
 
 
+@fill_doc
 def static_profile(
     duration_s: float,
     fs: float,
@@ -650,21 +652,10 @@ def static_profile(
         Sample rate, Hz.
     orientation : array_like, shape (4,), optional
         Attitude ``q_nb`` (default level, heading north).
-    lat : float, optional
-        Geodetic latitude of the fixed position, rad (None: no position).
-    lon : float
-        Longitude, rad.
-    h : float
-        Ellipsoidal height, m.
+    %(profile_position)s
     t0 : float
         Time of the first sample, s.
-    name : str
-        Profile name.
-
-    Returns
-    -------
-    Profile
-        The trajectory (exact body rates) and its segment table.
+    %(profile_returns)s
 
     Raises
     ------
@@ -689,6 +680,7 @@ def _as_orientations(orientations: ArrayLike) -> Array:
     return quat_normalize(q)
 
 
+@fill_doc
 def multiposition_profile(
     orientations: ArrayLike,
     dwell_s: float | ArrayLike,
@@ -717,22 +709,11 @@ def multiposition_profile(
         Sample rate, Hz.
     transition_s : float
         Duration of each move, s (> 0).
-    lat : float, optional
-        Geodetic latitude of the fixed position, rad (None: no position).
-    lon : float
-        Longitude, rad.
-    h : float
-        Ellipsoidal height, m.
+    %(profile_position)s
 
     t0 : float
         Time of the first sample, s.
-    name : str
-        Profile name.
-
-    Returns
-    -------
-    Profile
-        The trajectory (exact body rates) and its segment table.
+    %(profile_returns)s
 
     Raises
     ------
@@ -755,6 +736,7 @@ def multiposition_profile(
     return b.build(name, fs, t0, lat, lon, h)
 
 
+@fill_doc
 def hundred_position_profile(
     fs: float = 100.0,
     dwell_s: float = 30.0,
@@ -777,12 +759,7 @@ def hundred_position_profile(
         Duration of each move, s.
     step_deg : float
         Turn between consecutive positions, degrees.
-    lat : float, optional
-        Geodetic latitude of the fixed position, rad (None: no position).
-    lon : float
-        Longitude, rad.
-    h : float
-        Ellipsoidal height, m.
+    %(profile_position)s
 
     Returns
     -------
@@ -795,6 +772,7 @@ def hundred_position_profile(
     )
 
 
+@fill_doc
 def six_position_profile(
     fs: float = 100.0,
     dwell_s: float = 30.0,
@@ -814,12 +792,7 @@ def six_position_profile(
         Static time per position, s.
     transition_s : float
         Duration of each move, s.
-    lat : float, optional
-        Geodetic latitude of the fixed position, rad (None: no position).
-    lon : float
-        Longitude, rad.
-    h : float
-        Ellipsoidal height, m.
+    %(profile_position)s
 
     Returns
     -------
@@ -842,6 +815,7 @@ def _axis_vectors(axes: ArrayLike, K: int) -> Array:
     raise ShapeError(f"axes must be (K,) axis indices or (K, 3) body unit vectors with K = {K}; got {a.shape}")
 
 
+@fill_doc
 def rate_table_profile(
     rates: ArrayLike,
     axes: ArrayLike,
@@ -884,21 +858,10 @@ def rate_table_profile(
         Duration of the re-mounting move when the axis changes, s.
     mounting : {"up", "down"}
         Direction of the commanded body axis along the vertical table axis.
-    lat : float, optional
-        Geodetic latitude of the fixed position, rad (None: no position).
-    lon : float
-        Longitude, rad.
-    h : float
-        Ellipsoidal height, m.
+    %(profile_position)s
     t0 : float
         Time of the first sample, s.
-    name : str
-        Profile name.
-
-    Returns
-    -------
-    Profile
-        The trajectory (exact body rates) and its segment table.
+    %(profile_returns)s
 
     Raises
     ------
@@ -969,6 +932,7 @@ def thesis_rate_steps(step_dps: float = 25.0, max_dps: float = 250.0) -> tuple[A
     return rates, axes
 
 
+@fill_doc
 def thesis_rate_table_profile(
     fs: float = 100.0,
     dwell_s: float = 30.0,
@@ -994,12 +958,7 @@ def thesis_rate_table_profile(
         Duration of the re-mounting move when the axis changes, s.
     mounting : {"up", "down"}
         Direction of the commanded body axis along the table axis.
-    lat : float, optional
-        Geodetic latitude of the fixed position, rad (None: no position).
-    lon : float
-        Longitude, rad.
-    h : float
-        Ellipsoidal height, m.
+    %(profile_position)s
 
     Returns
     -------
@@ -1013,6 +972,7 @@ def thesis_rate_table_profile(
     )
 
 
+@fill_doc
 def ferraris_profile(
     fs: float = 100.0,
     dwell_s: float = 30.0,
@@ -1044,12 +1004,7 @@ def ferraris_profile(
         Duration of each turn, s.
     angle : float
         Turn angle, rad.
-    lat : float, optional
-        Geodetic latitude of the fixed position, rad (None: no position).
-    lon : float
-        Longitude, rad.
-    h : float
-        Ellipsoidal height, m.
+    %(profile_position)s
 
     Returns
     -------

@@ -1,0 +1,329 @@
+"""Shared numpydoc fragments, filled into docstrings at import time.
+
+Sibling functions (the file readers, the attitude filters' ``step`` / ``run`` / ``reset``) document the
+same parameters in the same words.  Those words live here once, under a name; a docstring names the
+fragment with a placeholder line ``%(name)s`` and :func:`fill_doc` replaces it, indenting every line of
+the fragment like the placeholder, so the filled ``__doc__`` is what numpydoc and Sphinx parse.
+
+Core layer: imports nothing from imunav.
+"""
+
+from __future__ import annotations
+
+import re
+from typing import TypeVar
+
+__all__ = ["DOCS", "fill_doc"]
+
+F = TypeVar("F")
+
+#: Named fragments, written without indentation (a fragment's lines are indented like its placeholder).
+DOCS: dict[str, str] = {}
+
+DOCS["reader_units"] = """\
+units : mapping of str to str, optional
+    Declared unit of each group (``{"gyro": "deg/s", "accel": "g"}``, or ``"counts"``); default SI.
+scales, offsets : mapping of str to float, optional
+    For ``"counts"``: ``value_si = (counts - offset) * scale``.
+fs : float, optional
+    Sample rate, Hz, when the file has no time (``t = t0 + k / fs``).
+t0 : float
+    Time of the first sample with ``fs``, s."""
+
+DOCS["reader_tail"] = """\
+nan_policy : {"raise", "drop", "interpolate"}
+    What to do with NaN samples.
+mag_unit : str, optional
+    Unit of the magnetometer (kept as stored).
+meta : mapping, optional
+    Entries added to the recording's ``meta``."""
+
+DOCS["reader_options"] = DOCS["reader_units"] + "\n" + DOCS["reader_tail"]
+
+DOCS["reader_returns"] = """\
+Returns
+-------
+ImuData
+    The recording, SI.
+
+Raises
+------
+FileFormatError
+    If the file is missing, unreadable, or lacks a required group (the message lists what was found).
+NonFiniteError, TimeOrderError, ShapeError, UnitError
+    From the validation of the values."""
+
+DOCS["array_columns"] = """\
+columns : mapping of str to str, optional
+    Where each group is stored (e.g. ``{"gyro": "imu/gyr"}``); by default found by name."""
+
+_PLACEHOLDER = re.compile(r"^([ \t]*)%\((\w+)\)s[ \t]*$", re.MULTILINE)
+
+
+def _indent(text: str, prefix: str) -> str:
+    return "\n".join(prefix + line if line else line for line in text.split("\n"))
+
+
+def fill_doc(obj: F) -> F:
+    """Replace each placeholder line ``%(name)s`` of ``obj.__doc__`` by the fragment ``DOCS[name]``.
+
+    Parameters
+    ----------
+    obj : function or class
+        The object whose docstring holds placeholders, each alone on its line.
+
+    Returns
+    -------
+    function or class
+        ``obj`` itself, its ``__doc__`` filled (every line of a fragment indented like its placeholder).
+
+    Raises
+    ------
+    KeyError
+        If a placeholder names no fragment of :data:`DOCS` (a typo in the docstring, found at import).
+    """
+    doc = getattr(obj, "__doc__", None)
+    if doc:
+
+        def sub(m: re.Match[str]) -> str:
+            name = m.group(2)
+            if name not in DOCS:
+                raise KeyError(f"docstring placeholder %({name})s: no such fragment in imunav._docstrings.DOCS")
+            return _indent(DOCS[name], m.group(1))
+
+        obj.__doc__ = _PLACEHOLDER.sub(sub, doc)
+    return obj
+
+
+# --- attitude filters: reset / step / run -------------------------------------------------------------
+DOCS["att_q0"] = """\
+q0 : array_like, shape (4,)
+    Attitude ``q_nb`` [w, x, y, z], body (FRD) to NED (normalised here)."""
+
+DOCS["att_bias"] = """\
+bias : array_like, shape (3,), optional
+    Initial gyro-bias estimate, rad/s (default zero)."""
+
+DOCS["att_reset_raises"] = """\
+Raises
+------
+ShapeError
+    If ``q0`` is not a (4,) quaternion.
+NonFiniteError
+    If ``q0`` is zero or not finite."""
+
+DOCS["att_step_params"] = """\
+gyro : array_like, shape (3,)
+    Angular rate, body axes (FRD), rad/s.
+accel : array_like, shape (3,)
+    Specific force, body axes, m/s² (any unit: only its direction is used).
+mag : array_like, shape (3,), or None
+    Magnetic field, body axes (any unit); None for a 6D update.
+dt : float
+    Time since the previous sample, s, > 0."""
+
+DOCS["att_step_returns"] = """\
+Returns
+-------
+numpy.ndarray, shape (4,)
+    The new attitude ``q_nb``.
+
+Raises
+------
+InvalidInputError
+    If ``dt`` is not finite and positive, or the rate exceeds 1e4 rad/s (not rad/s).
+ShapeError
+    If a sample is not a 3-vector.
+NonFiniteError
+    If a sample is not finite."""
+
+DOCS["att_run_data"] = """\
+data : ImuData
+    The recording (SI: rad/s, m/s²; magnetometer in any unit), body FRD.
+q0 : array_like, shape (4,), optional
+    Initial attitude ``q_nb`` (default: :func:`imunav.attitude.alignment.align` of the first accelerometer
+    / magnetometer sample)."""
+
+DOCS["att_bias0"] = """\
+bias0 : array_like, shape (3,), optional
+    Initial gyro-bias estimate, rad/s (default zero)."""
+
+DOCS["att_use_mag"] = """\
+use_mag : bool, optional
+    Use the magnetometer (9D); default: when the recording has one."""
+
+DOCS["att_run_raises"] = """\
+Raises
+------
+InvalidInputError
+    If ``data`` is not an ImuData with at least 2 samples, ``use_mag=True`` without a magnetometer, or a
+    rate exceeds 1e4 rad/s."""
+
+# --- generic Kalman filters: predict / update -----------------------------------------------------------
+DOCS["kf_predict_params"] = """\
+u : array_like, optional
+    Control input passed to ``f``.
+Q : array_like, shape (n, n), optional
+    Process-noise covariance of this step (default: the filter's ``Q``)."""
+
+DOCS["kf_predict_returns"] = """\
+Returns
+-------
+x : numpy.ndarray, shape (n,)
+    Predicted state.
+P : numpy.ndarray, shape (n, n)
+    Predicted covariance."""
+
+DOCS["kf_update_params"] = """\
+z : array_like, shape (m,)
+    Measurement.
+R : array_like, shape (m, m), optional
+    Measurement-noise covariance (default: the filter's ``R``)."""
+
+DOCS["kf_update_returns"] = """\
+Returns
+-------
+UpdateResult
+    Innovation, its covariance, the gain, the normalised innovation and the NIS.
+
+Raises
+------
+InvalidInputError
+    If ``R`` does not match the size of the measurement."""
+
+# whole sections, so that a filter's docstring is its summary line and one placeholder
+_PARAMS = "Parameters\n----------\n"
+DOCS["att_reset"] = _PARAMS + DOCS["att_q0"] + "\n\n" + DOCS["att_reset_raises"]
+DOCS["att_reset_bias"] = _PARAMS + DOCS["att_q0"] + "\n" + DOCS["att_bias"] + "\n\n" + DOCS["att_reset_raises"]
+DOCS["att_step"] = _PARAMS + DOCS["att_step_params"] + "\n\n" + DOCS["att_step_returns"]
+DOCS["att_run_params"] = _PARAMS + DOCS["att_run_data"]
+DOCS["kf_predict"] = _PARAMS + DOCS["kf_predict_params"] + "\n\n" + DOCS["kf_predict_returns"]
+DOCS["kf_update_params_head"] = _PARAMS + DOCS["kf_update_params"]
+DOCS["reader_head"] = _PARAMS + """\
+path : str or os.PathLike
+    The file."""
+
+# --- small kernels and factories ------------------------------------------------------------------------
+DOCS["mat3_product"] = """\
+Parameters
+----------
+A, B : (3, 3) float64 arrays.
+C : (3, 3) float64 array, receives the product.
+
+Returns
+-------
+None"""
+
+DOCS["gravity_factory"] = """\
+Parameters
+----------
+params : GravityKfParams, optional
+    Filter settings (default :class:`GravityKfParams` ()).
+**kw
+    Further :class:`GravityKF` fields (``accel_convention``).
+
+Returns
+-------
+GravityKF
+    The filter."""
+
+DOCS["frame_vectors"] = """\
+Parameters
+----------
+v : array_like, shape (3,) or (N, 3)
+    Vectors."""
+
+DOCS["calib_pair_raises"] = """\
+Raises
+------
+ShapeError
+    If ``accel`` and ``gyro`` are not both (N, 3).
+NonFiniteError
+    If a sample or temperature is not finite.
+InvalidInputError
+    If the calibration is temperature dependent and ``temp_c`` is missing."""
+
+DOCS["track_estimate_reference"] = """\
+Parameters
+----------
+estimate : array_like, shape (N, 2) or (N, 3)
+    Estimated positions, local NED (x, y horizontal), m.
+reference : array_like, shape (N, 2) or (N, 3)
+    Reference positions at the same samples, m, frame with the same x-y handedness."""
+
+DOCS["track_pair"] = DOCS["track_estimate_reference"] + """
+align_distance : float
+    Horizontal distance from the start at which the headings are aligned, m."""
+
+DOCS["fit_get_params"] = """\
+Parameters
+----------
+name : str
+    Term name, one of :attr:`names`.
+channel : int
+    Channel index."""
+
+DOCS["curvefit_tau_adev"] = """\
+Parameters
+----------
+tau : array_like, shape (T,)
+    Cluster times, s (non-positive or non-finite points are left out).
+adev : array_like, shape (T,)
+    Allan deviation of one channel at ``tau`` (rad/s or m/s²)."""
+
+DOCS["figure_title_returns"] = """\
+title : str, optional
+    Figure title.
+
+Returns
+-------
+matplotlib.figure.Figure
+    The figure (not shown; save it with ``fig.savefig``)."""
+
+DOCS["kf_x0_P0"] = """\
+Parameters
+----------
+x0 : array_like, shape (n,)
+    Initial state.
+P0 : array_like, shape (n, n)
+    Initial covariance."""
+
+# --- rotation, earth, profiles ----------------------------------------------------------------------------
+DOCS["rot_q"] = """\
+q : array_like, shape (4,) or (N, 4)
+    Quaternion(s) ``[w, x, y, z]`` (Hamilton, scalar first), e.g. ``q_nb`` body (FRD) to navigation (NED)."""
+
+DOCS["rot_shape_raises"] = """\
+Raises
+------
+ShapeError
+    If an input does not have the shape given above."""
+
+DOCS["earth_triple_raises"] = """\
+Raises
+------
+ShapeError
+    If a triple is not (3,) / (N, 3).
+NonFiniteError
+    If an input is NaN or infinite."""
+
+DOCS["earth_lat"] = """\
+lat : array_like
+    Geodetic latitude, rad, in [-pi/2, pi/2] (scalar or array)."""
+
+DOCS["profile_position"] = """\
+lat : float, optional
+    Geodetic latitude of the fixed position, rad (None: no position).
+lon : float
+    Longitude, rad.
+h : float
+    Ellipsoidal height, m."""
+
+DOCS["profile_returns"] = """\
+name : str
+    Profile name.
+
+Returns
+-------
+Profile
+    The trajectory (exact body rates) and its segment table."""
