@@ -243,3 +243,10 @@ def test_bad_inputs_raise():
         R.integrate_rate([1, 0, 0, 0], [0.0, 0.1], np.zeros((3, 3)))
     with pytest.raises(ShapeError, match="must match"):
         R.quat_multiply(np.ones((2, 4)), np.ones((3, 4)))
+
+
+def test_frame_constants_are_the_quaternions_of_their_matrices():
+    """Q_ENU_NED / Q_FRD_FLU are written out (no kernel runs at import): they equal quat_from_dcm of their
+    matrices bit for bit."""
+    np.testing.assert_array_equal(R.Q_ENU_NED, R.quat_from_dcm(R.C_ENU_NED))
+    np.testing.assert_array_equal(R.Q_FRD_FLU, R.quat_from_dcm(R.C_FLU_FRD.T))

@@ -744,12 +744,14 @@ def integrate_rate(
 # ---- frame-convention constants -------------------------------------------
 #: ``v_enu = C_ENU_NED @ v_ned`` (swap north/east, negate down).
 C_ENU_NED = np.array([[0.0, 1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, -1.0]])
-#: quaternion of ``C_ENU_NED``.
-Q_ENU_NED = _k.quat_from_dcm_1(C_ENU_NED)
+#: quaternion of ``C_ENU_NED``: a rotation of pi about (1, 1, 0)/sqrt(2), written out (the value
+#: ``quat_from_dcm(C_ENU_NED)`` gives, bit for bit; tests/test_rotation.py checks it) so that importing this
+#: module runs no numba kernel.
+Q_ENU_NED = np.array([0.0, 0.7071067811865476, 0.7071067811865475, 0.0])
 #: ``v_flu = C_FLU_FRD @ v_frd`` (forward-left-up from forward-right-down).
 C_FLU_FRD = np.diag([1.0, -1.0, -1.0])
-#: quaternion ``q_frd_flu`` (rotation of pi about x; its own inverse up to sign).
-Q_FRD_FLU = _k.quat_from_dcm_1(C_FLU_FRD.T)
+#: quaternion ``q_frd_flu`` (rotation of pi about x; its own inverse up to sign), written out as above.
+Q_FRD_FLU = np.array([0.0, 1.0, 0.0, 0.0])
 
 
 # ---- converters to other conventions ----------------------------------------
