@@ -31,7 +31,7 @@ def _strapdown_errors(truth, imu):
     """Horizontal / vertical position error (m) and attitude error (rad), per sample."""
     r = strapdown_ned(imu, truth.q_nb[0], truth.pos_lla[0], v0=truth.vel_ned[0])
     d = earth.lla_to_ned(r.lla, truth.pos_lla[0]) - earth.lla_to_ned(truth.pos_lla, truth.pos_lla[0])
-    ang = np.linalg.norm(rotvec_from_quat(quat_multiply(quat_conjugate(truth.q_nb), r.quaternion)), axis=1)
+    ang = np.linalg.norm(rotvec_from_quat(quat_multiply(quat_conjugate(truth.q_nb), r.q_nb)), axis=1)
     return np.hypot(d[:, 0], d[:, 1]), np.abs(d[:, 2]), ang
 
 
