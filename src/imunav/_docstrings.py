@@ -217,8 +217,8 @@ None"""
 DOCS["gravity_factory"] = """\
 Parameters
 ----------
-params : GravityKfParams, optional
-    Filter settings (default :class:`GravityKfParams` ()).
+params : GravityKfConfig, optional
+    Filter settings (default :class:`GravityKfConfig` ()).
 **kw
     Further :class:`GravityKF` fields (``accel_convention``).
 

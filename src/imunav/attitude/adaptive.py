@@ -103,7 +103,7 @@ class AdaptiveMEKF(MEKF):
 
     Attributes
     ----------
-    params : MekfParams
+    params : MekfConfig
         The tuning; default :data:`ADAPTIVE_DEFAULTS`.
     """
 

@@ -192,7 +192,7 @@ class GravityKF:
     ----------
     kind : {"lee", "javed", "proposed"}
         The filter.
-    params : GravityKfParams
+    params : GravityKfConfig
         Its settings.
     accel_convention : {"specific_force", "paper"}
         ``"specific_force"`` for ordinary accelerometer data (f = a − g, reads −g on z when level), ``"paper"``

@@ -104,11 +104,11 @@ class PaperScenario:
         Parameters
         ----------
         **kw
-            :class:`~imunav.attitude.gravity_kf.GravityKfParams` fields to override.
+            :class:`~imunav.attitude.gravity_kf.GravityKfConfig` fields to override.
 
         Returns
         -------
-        GravityKfParams
+        GravityKfConfig
             ``sigma_g``, ``sigma_a`` per sample and ``g`` of the scenario, with the overrides.
         """
         return replace(GravityKfConfig(sigma_g=self.sigma_gyro, sigma_a=self.sigma_accel, g=self.g), **kw)

@@ -38,7 +38,7 @@ class Smoother:
 
     Attributes
     ----------
-    params : MekfParams
+    params : MekfConfig
         Tuning of the forward MEKF; default :data:`imunav.attitude.adaptive.ADAPTIVE_DEFAULTS`.
     """
 

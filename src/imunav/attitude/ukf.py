@@ -118,7 +118,7 @@ class UKF:
 
     Attributes
     ----------
-    params : UkfParams
+    params : UkfConfig
         The tuning.
     mag_ref_ned : numpy.ndarray, shape (3,), or None
         Reference field direction in NED (normalised); None: learned from the first sample in :meth:`run`,
