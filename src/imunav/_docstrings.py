@@ -327,3 +327,38 @@ Returns
 -------
 Profile
     The trajectory (exact body rates) and its segment table."""
+
+DOCS["robust_tail"] = """\
+gate_m : float, optional
+    Per-channel gate half-width, standard deviations (``"gate"``).
+alpha : float, optional
+    Test level in (0, 1) (``"isolate"``, ``"nis"``).
+huber_c : float, optional
+    Huber threshold (``"huber"``)."""
+
+DOCS["wind_robust"] = """\
+robust : {None, "gate", "isolate", "nis", "huber"}, optional
+    None (optimal), ``"gate"`` (thesis, per channel |ν̃| < gate_m),
+    ``"nis"`` (vector χ² gate at level alpha: rejects whole-sensor
+    outliers, recommended for the ADS), ``"isolate"`` (χ² test + w-test
+    isolation of single channels) or ``"huber"``.
+""" + DOCS["robust_tail"]
+
+DOCS["batch_executor"] = """\
+executor : {"serial", "processes", "dask"}
+    Where the units are processed (:func:`imunav.montecarlo.run_batch`).
+n_workers : int, optional
+    Worker processes (default: number of cores).
+address : str, optional
+    Dask scheduler address (Dask executor only; None: a local cluster).
+progress : bool
+    Show a progress bar."""
+
+DOCS["batch_overwrite_returns"] = """\
+overwrite : bool
+    Clear a previous run in ``out_dir`` instead of refusing.
+
+Returns
+-------
+BatchSummary
+    One row per unit (also written as ``summary.csv`` / ``summary.json``)."""

@@ -55,6 +55,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from imunav._docstrings import fill_doc
 from imunav.errors import InvalidInputError, ShapeError
 from imunav.filters import BatchRun, batch_kalman_filter
 from imunav.filters._batch import huber_batch, inv_sqrt_batch, isolate_batch, masked_update, sym
@@ -229,6 +230,7 @@ def _check_z(z: ArrayLike, batch: bool) -> Array:
     return zz
 
 
+@fill_doc
 def run_thesis_filter_batch(z: ArrayLike, cfg: ThesisFilterConfig | None = None, *, robust: str | None = None,
                             gate_m: float = 2.0, alpha: float = 1e-3, huber_c: float = 1.345) -> BatchRun:
     """The thesis filter over a batch of difference measurements ``z = V_D − V_A`` (runs, N, 3).
@@ -239,17 +241,7 @@ def run_thesis_filter_batch(z: ArrayLike, cfg: ThesisFilterConfig | None = None,
         Doppler minus ADS body velocity, m/s (NaN rows: no measurement).
     cfg : ThesisFilterConfig, optional
         Filter parameters (default the thesis's).
-    robust : {None, "gate", "isolate", "nis", "huber"}, optional
-        None (optimal), ``"gate"`` (thesis, per channel |ν̃| < gate_m),
-        ``"nis"`` (vector χ² gate at level alpha: rejects whole-sensor
-        outliers, recommended for the ADS), ``"isolate"`` (χ² test + w-test
-        isolation of single channels) or ``"huber"``.
-    gate_m : float, optional
-        Per-channel gate half-width, standard deviations (``"gate"``).
-    alpha : float, optional
-        Test level in (0, 1) (``"isolate"``, ``"nis"``).
-    huber_c : float, optional
-        Huber threshold (``"huber"``).
+    %(wind_robust)s
 
     Returns
     -------
@@ -261,6 +253,7 @@ def run_thesis_filter_batch(z: ArrayLike, cfg: ThesisFilterConfig | None = None,
                                robust=robust, gate_m=gate_m, alpha=alpha, huber_c=huber_c)
 
 
+@fill_doc
 def run_thesis_filter(
     z: ArrayLike,
     cfg: ThesisFilterConfig | None = None,
@@ -283,17 +276,7 @@ def run_thesis_filter(
         ADS body velocity, m/s; gives the corrected ground velocity and
         position ``X_A + δX̂`` with ``X_A(k) = T Σ_{j≤k} V_A(j)``
         (positions are relative to the start).
-    robust : {None, "gate", "isolate", "nis", "huber"}, optional
-        None (optimal), ``"gate"`` (thesis, per channel |ν̃| < gate_m),
-        ``"nis"`` (vector χ² gate at level alpha: rejects whole-sensor
-        outliers, recommended for the ADS), ``"isolate"`` (χ² test + w-test
-        isolation of single channels) or ``"huber"``.
-    gate_m : float, optional
-        Per-channel gate half-width, standard deviations (``"gate"``).
-    alpha : float, optional
-        Test level in (0, 1) (``"isolate"``, ``"nis"``).
-    huber_c : float, optional
-        Huber threshold (``"huber"``).
+    %(wind_robust)s
 
     Returns
     -------
