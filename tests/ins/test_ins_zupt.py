@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import glob
 import math
 
@@ -131,7 +132,7 @@ def test_fifteen_state_and_options_run_static(rng):
 def _step_through(f, imu, zv, **kw):
     """Step a filter through a recording; one ZuptState per sample, stacked field by field."""
     states = [f.step(imu.t[k], imu.gyro[k], imu.accel[k], bool(zv[k]), **kw) for k in range(imu.n)]
-    return {name: np.array([getattr(s, name) for s in states]) for name in states[0]._fields}
+    return {f.name: np.array([getattr(s, f.name) for s in states]) for f in dataclasses.fields(states[0])}
 
 
 @pytest.mark.parametrize("cfg", [

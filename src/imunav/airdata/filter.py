@@ -50,8 +50,7 @@ position σ grows and is reported honestly.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
-from typing import NamedTuple
+from dataclasses import dataclass, field, fields
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -233,7 +232,8 @@ def _check_z(z: ArrayLike, batch: bool) -> Array:
     return zz
 
 
-class ThesisState(NamedTuple):
+@dataclass(frozen=True)
+class ThesisState:
     """The thesis filter's estimate after one :meth:`ThesisFilter.step` (one row of :class:`WindFilterResult`).
 
     Attributes
@@ -473,7 +473,8 @@ def _van_loan(dt: float, c: LongHorizonConfig) -> tuple[Array, Array]:
     return van_loan(A, Qc, float(dt))
 
 
-class LongHorizonState(NamedTuple):
+@dataclass(frozen=True)
+class LongHorizonState:
     """The long-horizon filter's estimate after one Doppler epoch (:meth:`LongHorizonFilter.step`).
 
     Attributes
@@ -684,6 +685,6 @@ class LongHorizonFilter:
         R_all = np.einsum("kij,jl,kml->kim", Cd, self._Rb, Cd)
         self.reset()
         st = [self._advance(float(td[k]), z[k], R_all[k]) for k in range(td.size)]
-        col = {name: np.array([getattr(s_, name) for s_ in st]) for name in LongHorizonState._fields[1:]}
+        col = {f.name: np.array([getattr(s_, f.name) for s_ in st]) for f in fields(LongHorizonState)}
         return LongHorizonResult(td, col["wind"], col["wind_std"], col["mean_wind"], pa_d + col["position_correction"],
                                  col["position_std"], col["normalized"], col["weights"], c)

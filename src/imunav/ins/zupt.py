@@ -39,7 +39,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import asdict, dataclass, field
-from typing import Any, Literal, NamedTuple
+from typing import Any, Literal
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -412,7 +412,8 @@ def _sample3(x: ArrayLike, name: str) -> Array:
     return a
 
 
-class ZuptState(NamedTuple):
+@dataclass(frozen=True)
+class ZuptState:
     """The ZUPT filter's estimate after one :meth:`ZuptFilter.step` (the fields of one row of :class:`ZuptResult`).
 
     Attributes
