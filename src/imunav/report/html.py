@@ -23,6 +23,7 @@ import numpy as np
 import pandas as pd
 
 from imunav import __version__
+from imunav._docstrings import fill_doc
 from imunav.io._atomic import atomic_path
 
 __all__ = ["Report", "Section", "Parameter"]
@@ -376,6 +377,7 @@ class Report:
             f"<nav><ul>{toc}</ul></nav>{body}</body></html>"
         )
 
+    @fill_doc
     def write(self, path: str | Path) -> Path:
         """Write the report atomically.
 
@@ -384,10 +386,7 @@ class Report:
         path : str or pathlib.Path
             Output file (``.html``).
 
-        Returns
-        -------
-        pathlib.Path
-            The file written.
+        %(returns_file_written)s
         """
 
         p = Path(path)
