@@ -462,3 +462,29 @@ accel : array_like, shape (N, 3)
     Specific force in the body (FRD) frame, m/s².
 window : int, optional
     Window length ``W`` in samples, >= 2 (default 5)."""
+
+DOCS["strapdown_data_q0"] = """\
+Parameters
+----------
+data : ImuData
+    The recording (SI: rad/s, m/s², specific force), body FRD.
+q0 : array_like, shape (4,)
+    Initial attitude ``q_nb`` (unit quaternion)."""
+
+DOCS["section_chain_returns"] = """\
+Returns
+-------
+Section
+    ``self``, so that calls chain."""
+
+DOCS["axes_drawn_returns"] = """\
+Returns
+-------
+matplotlib.axes.Axes
+    The axes drawn into."""
+
+DOCS["config_to_dict"] = """\
+Returns
+-------
+dict
+    One key per field."""

@@ -120,6 +120,7 @@ class Section:
     passed: bool | None = None
     _parts: list[str] = field(default_factory=list)
 
+    @fill_doc
     def text(self, paragraph: str) -> "Section":
         """A paragraph of plain text (escaped).
 
@@ -128,14 +129,12 @@ class Section:
         paragraph : str
             The text.
 
-        Returns
-        -------
-        Section
-            ``self``, so that calls chain.
+        %(section_chain_returns)s
         """
         self._parts.append(f"<p>{html.escape(paragraph)}</p>")
         return self
 
+    @fill_doc
     def code(self, text: str) -> "Section":
         """Preformatted text (a command line, a configuration).
 
@@ -144,14 +143,12 @@ class Section:
         text : str
             The text (escaped).
 
-        Returns
-        -------
-        Section
-            ``self``, so that calls chain.
+        %(section_chain_returns)s
         """
         self._parts.append(f"<pre>{html.escape(text)}</pre>")
         return self
 
+    @fill_doc
     def table(
         self,
         rows: Sequence[Mapping[str, Any]] | Any,
@@ -172,10 +169,7 @@ class Section:
         digits : int
             Significant digits of floats.
 
-        Returns
-        -------
-        Section
-            ``self``, so that calls chain.
+        %(section_chain_returns)s
         """
         if isinstance(rows, pd.DataFrame):
             df = rows.reset_index() if rows.index.name or not isinstance(rows.index, pd.RangeIndex) else rows
@@ -198,6 +192,7 @@ class Section:
         self._parts.append(f"<table>{cap}<thead><tr>{head}</tr></thead><tbody>{''.join(body)}</tbody></table>")
         return self
 
+    @fill_doc
     def parameters(self, params: Iterable[Parameter], caption: str | None = None) -> "Section":
         """Table of parameters: value ± 1σ, unit, truth (if known), error in σ, limit, verdict.
 
@@ -208,10 +203,7 @@ class Section:
         caption : str, optional
             Caption shown under it.
 
-        Returns
-        -------
-        Section
-            ``self``, so that calls chain.
+        %(section_chain_returns)s
         """
         rows = []
         for p in params:
@@ -240,6 +232,7 @@ class Section:
         ).replace("<td>–</td></tr>", f"<td>{_verdict(None)}</td></tr>")
         return self
 
+    @fill_doc
     def figure(self, fig: Any, caption: str | None = None, dpi: int = 110) -> "Section":
         """Embed a matplotlib figure as a PNG (the figure is closed afterwards).
 
@@ -252,10 +245,7 @@ class Section:
         dpi : int
             Resolution, dots per inch.
 
-        Returns
-        -------
-        Section
-            ``self``, so that calls chain.
+        %(section_chain_returns)s
         """
         # optional: matplotlib loads only when a figure is drawn (import time of imunav and its CLI)
         import matplotlib.pyplot as plt
@@ -269,6 +259,7 @@ class Section:
         self._parts.append(f'<figure><img alt="{alt}" src="data:image/png;base64,{data}">{cap}</figure>')
         return self
 
+    @fill_doc
     def image(self, path: str | Path, caption: str | None = None) -> "Section":
         """Embed a PNG file (e.g. a figure a step already saved).
 
@@ -279,10 +270,7 @@ class Section:
         caption : str, optional
             Caption shown under it.
 
-        Returns
-        -------
-        Section
-            ``self``, so that calls chain.
+        %(section_chain_returns)s
         """
         data = base64.b64encode(Path(path).read_bytes()).decode("ascii")
         cap = f"<figcaption>{html.escape(caption)}</figcaption>" if caption else ""
