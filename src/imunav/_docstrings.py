@@ -488,3 +488,11 @@ Returns
 -------
 dict
     One key per field."""
+
+DOCS["fault_innovations_window"] = """\
+Parameters
+----------
+normalized : array_like, shape (N, s)
+    Normalised innovations ``ν̃ = S^{-1/2} ν`` (a 1-D array is one channel), finite.
+M : int, optional
+    Window length in steps, > s (default 20)."""
