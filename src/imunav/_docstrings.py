@@ -496,3 +496,11 @@ normalized : array_like, shape (N, s)
     Normalised innovations ``ν̃ = S^{-1/2} ν`` (a 1-D array is one channel), finite.
 M : int, optional
     Window length in steps, > s (default 20)."""
+
+DOCS["fault_batch_innovations_window"] = """\
+Parameters
+----------
+normalized : array_like, shape (N, s) or (R, N, s)
+    Normalised innovations ``ν̃ = S^{-1/2} ν`` of one run or a batch of runs, finite.
+M : int, optional
+    Window length in steps, > s (default 20)."""

@@ -291,6 +291,7 @@ def alarms(name: str, statistic: ArrayLike, threshold: float) -> NDArray[np.bool
     return np.nan_to_num(st, nan=-np.inf) > threshold
 
 
+@fill_doc
 def window_statistics(normalized: ArrayLike, M: int = 20, P: ArrayLike | None = None, L: ArrayLike | None = None
                       ) -> tuple[Array, Array, Array]:
     """Sliding-window statistics (λ Alg. 1, λ Alg. 2, Alg. 3 sum) per step.
@@ -299,12 +300,7 @@ def window_statistics(normalized: ArrayLike, M: int = 20, P: ArrayLike | None = 
     ``P`` is the covariance of ν̃ under H0 (identity); ``L`` the fixed
     direction of Alg. 2 (all ones).
 
-    Parameters
-    ----------
-    normalized : array_like, shape (N, s) or (R, N, s)
-        Normalised innovations ``ν̃ = S^{-1/2} ν`` of one run or a batch of runs, finite.
-    M : int, optional
-        Window length in steps, > s (default 20).
+    %(fault_batch_innovations_window)s
     P : array_like, shape (s, s), optional
         Covariance of ν̃ under H0 (default identity).
     L : array_like, shape (s,), optional
@@ -371,6 +367,7 @@ def cusum_statistics(normalized: ArrayLike, rho: float = 4.0, k: float = 0.5) ->
     return cusum_stats(_check_nv(normalized), float(rho), float(k))
 
 
+@fill_doc
 def detector_statistics(normalized: ArrayLike, M: int = 20, *, cusum_rho: float = 4.0, cusum_k: float = 0.5,
                         low_window: int = 5) -> dict[str, Array]:
     """All detector statistics for one run (N, s) or a batch of runs (R, N, s).
@@ -379,12 +376,7 @@ def detector_statistics(normalized: ArrayLike, M: int = 20, *, cusum_rho: float 
     before the window is full).  Compare with the thresholds of
     :func:`calibrated_thresholds` / :func:`thesis_thresholds`.
 
-    Parameters
-    ----------
-    normalized : array_like, shape (N, s) or (R, N, s)
-        Normalised innovations ``ν̃ = S^{-1/2} ν`` of one run or a batch of runs, finite.
-    M : int, optional
-        Window length in steps, > s (default 20).
+    %(fault_batch_innovations_window)s
     cusum_rho : float, optional
         Variance ratio of the variance CUSUM, > 1.
     cusum_k : float, optional
