@@ -11,7 +11,8 @@ Core layer: imports nothing from imunav.
 from __future__ import annotations
 
 import re
-from typing import TypeVar
+from collections.abc import Callable
+from typing import Any, TypeVar, overload
 
 __all__ = ["DOCS", "fill_doc"]
 
@@ -64,24 +65,35 @@ def _indent(text: str, prefix: str) -> str:
     return "\n".join(prefix + line if line else line for line in text.split("\n"))
 
 
-def fill_doc(obj: F) -> F:
+@overload
+def fill_doc(obj: F, /) -> F: ...
+@overload
+def fill_doc(obj: None = None, /, **fields: str) -> Callable[[F], F]: ...
+def fill_doc(obj: Any = None, /, **fields: str) -> Any:
     """Replace each placeholder line ``%(name)s`` of ``obj.__doc__`` by the fragment ``DOCS[name]``.
 
     Parameters
     ----------
-    obj : function or class
-        The object whose docstring holds placeholders, each alone on its line.
+    obj : function or class, optional
+        The object whose docstring holds placeholders, each alone on its line.  Without it (``@fill_doc(step=...)``)
+        the decorator to apply is returned.
+    **fields : str
+        Words a fragment leaves open: ``%(step)s`` inside a fragment's text becomes ``fields["step"]``.
 
     Returns
     -------
     function or class
-        ``obj`` itself, its ``__doc__`` filled (every line of a fragment indented like its placeholder).
+        ``obj`` itself, its ``__doc__`` filled (every line of a fragment indented like its placeholder); without
+        ``obj``, the decorator that fills it.
 
     Raises
     ------
     KeyError
-        If a placeholder names no fragment of :data:`DOCS` (a typo in the docstring, found at import).
+        If a placeholder names no fragment of :data:`DOCS` (a typo in the docstring, found at import), or a
+        fragment leaves open a field that ``fields`` does not give.
     """
+    if obj is None:
+        return lambda o: fill_doc(o, **fields)
     doc = getattr(obj, "__doc__", None)
     if doc:
 
@@ -89,10 +101,20 @@ def fill_doc(obj: F) -> F:
             name = m.group(2)
             if name not in DOCS:
                 raise KeyError(f"docstring placeholder %({name})s: no such fragment in imunav._docstrings.DOCS")
-            return _indent(DOCS[name], m.group(1))
+            text = _FIELD.sub(lambda f: _field(f.group(1), fields, name), DOCS[name])
+            return _indent(text, m.group(1))
 
         obj.__doc__ = _PLACEHOLDER.sub(sub, doc)
     return obj
+
+
+_FIELD = re.compile(r"%\((\w+)\)s")
+
+
+def _field(key: str, fields: dict[str, str], fragment: str) -> str:
+    if key not in fields:
+        raise KeyError(f"fragment {fragment!r} leaves %({key})s open: pass it, e.g. @fill_doc({key}=...)")
+    return fields[key]
 
 
 # --- attitude filters: reset / step / run -------------------------------------------------------------
@@ -362,6 +384,126 @@ Returns
 -------
 BatchSummary
     One row per unit (also written as ``summary.csv`` / ``summary.json``)."""
+
+# --- dedup-io ---
+DOCS["lab_step_run"] = """\
+Parameters
+----------
+ctx : LabContext
+    The lab's context: the step's option table ``ctx.options`` (``[%(step)s]``), the artifacts it reads and
+    sets, the report folder.
+
+Returns
+-------
+StepResult"""
+
+DOCS["lab_step_report"] = """\
+Parameters
+----------
+section : imunav.report.html.Section
+    The step's section.
+result : StepResult
+    What :func:`run` returned.
+ctx : LabContext
+    The lab's context (its ``[spec]`` and artifacts)."""
+
+DOCS["imu_writer_params"] = """\
+Parameters
+----------
+data : ImuData
+    The recording.
+path : str or os.PathLike
+    Output file."""
+
+DOCS["returns_file_written"] = """\
+Returns
+-------
+pathlib.Path
+    The file written."""
+
+DOCS["noise_yaml_fits"] = """\
+Parameters
+----------
+path : path-like
+    The YAML file to write (atomically).
+gyro, accel : NoiseFit
+    Noise fits of the gyroscope (rad/s) and accelerometer (m/s^2) channels."""
+
+DOCS["noise_yaml_rate"] = """\
+update_rate : float
+    IMU sample rate, Hz."""
+
+DOCS["noise_yaml_combine_returns"] = """\
+combine : {"max", "mean"}
+    One value per sensor: the maximum (default) or mean over the axes.
+
+Returns
+-------
+Path
+    ``path``."""
+
+DOCS["topic_returns"] = """\
+Returns
+-------
+TopicData
+    The topic in SI units, body FRD / world NED, ``t`` in s since ``meta["t0_ns"]``."""
+
+DOCS["imu_topic_returns"] = DOCS["topic_returns"] + """
+    Gyro (rad/s) and specific force (m/s²) in body FRD, ``t`` in s since ``meta["t0_ns"]``.
+
+Raises
+------
+InvalidInputError"""
+
+DOCS["accel_window"] = """\
+Parameters
+----------
+accel : array_like, shape (N, 3)
+    Specific force in the body (FRD) frame, m/s².
+window : int, optional
+    Window length ``W`` in samples, >= 2 (default 5)."""
+
+DOCS["strapdown_data_q0"] = """\
+Parameters
+----------
+data : ImuData
+    The recording (SI: rad/s, m/s², specific force), body FRD.
+q0 : array_like, shape (4,)
+    Initial attitude ``q_nb`` (unit quaternion)."""
+
+DOCS["section_chain_returns"] = """\
+Returns
+-------
+Section
+    ``self``, so that calls chain."""
+
+DOCS["axes_drawn_returns"] = """\
+Returns
+-------
+matplotlib.axes.Axes
+    The axes drawn into."""
+
+DOCS["config_to_dict"] = """\
+Returns
+-------
+dict
+    One key per field."""
+
+DOCS["fault_innovations_window"] = """\
+Parameters
+----------
+normalized : array_like, shape (N, s)
+    Normalised innovations ``ν̃ = S^{-1/2} ν`` (a 1-D array is one channel), finite.
+M : int, optional
+    Window length in steps, > s (default 20)."""
+
+DOCS["fault_batch_innovations_window"] = """\
+Parameters
+----------
+normalized : array_like, shape (N, s) or (R, N, s)
+    Normalised innovations ``ν̃ = S^{-1/2} ν`` of one run or a batch of runs, finite.
+M : int, optional
+    Window length in steps, > s (default 20)."""
 
 # --- shape ---
 DOCS["att_run_bias_mag"] = DOCS["att_run_params"] + "\n" + DOCS["att_bias0"] + "\n" + DOCS["att_use_mag"]
