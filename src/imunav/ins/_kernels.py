@@ -381,7 +381,7 @@ def zupt_ekf_kernel(t, acc, gyr, zv, zaru, q0, p0, v0, ba0, bg0, P0, prm):
     return q, v, p, ba, bg, Pd, innov, svar, P, dth_prev, dv_prev, q_ref, stance
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")  # inlined into zupt_ekf_kernel: its arrays stay local there (speed)
 def zupt_ekf_window(t, acc, gyr, zv, zaru, q, v, p, ba, bg, Pd, innov, svar, P, dth_prev, dv_prev, q_ref, stance,
                     floor_height, prm):
     """The loop of :func:`zupt_ekf_kernel` over rows 1..n-1 of a window whose row 0 holds the state.
