@@ -504,3 +504,20 @@ normalized : array_like, shape (N, s) or (R, N, s)
     Normalised innovations ``ν̃ = S^{-1/2} ν`` of one run or a batch of runs, finite.
 M : int, optional
     Window length in steps, > s (default 20)."""
+# --- dedup-core ---
+DOCS["rot_q_params"] = _PARAMS + DOCS["rot_q"]
+
+
+def _finite_shape_raises(name: str, shapes: str) -> str:
+    """A ``Raises`` section for one array input that must be finite and of the given shape(s)."""
+    return f"Raises\n------\nNonFiniteError\n    If ``{name}`` is not finite.\nShapeError\n    If ``{name}`` is not {shapes}."
+
+
+DOCS["rot_C_raises"] = _finite_shape_raises("C", "(3, 3) / (N, 3, 3)")
+DOCS["rot_r_raises"] = _finite_shape_raises("r", "(3,) / (N, 3)")
+
+DOCS["rot_euler_raises"] = """\
+Raises
+------
+ShapeError
+    If only one of ``pitch`` / ``yaw`` is given, or the shapes do not broadcast."""
