@@ -521,3 +521,25 @@ Raises
 ------
 ShapeError
     If only one of ``pitch`` / ``yaw`` is given, or the shapes do not broadcast."""
+
+DOCS["earth_lat_params"] = _PARAMS + DOCS["earth_lat"]
+
+DOCS["earth_lat_h_raises"] = """\
+Raises
+------
+InvalidInputError
+    If a latitude is outside [-pi/2, pi/2] or a height outside :data:`H_RANGE_M`.
+NonFiniteError
+    If an input is NaN or infinite."""
+
+DOCS["earth_ref_lla_returns"] = """\
+ref_lla : array_like, shape (3,)
+    Origin of the local NED frame: geodetic ``(lat, lon, h)``, rad, rad, m.
+
+Returns
+-------
+numpy.ndarray, shape (3,) or (N, 3)"""
+
+DOCS["earth_ned_params"] = _PARAMS + """\
+ned : array_like, shape (3,) or (N, 3)
+    North, east, down coordinates, m."""
