@@ -543,3 +543,38 @@ numpy.ndarray, shape (3,) or (N, 3)"""
 DOCS["earth_ned_params"] = _PARAMS + """\
 ned : array_like, shape (3,) or (N, 3)
     North, east, down coordinates, m."""
+
+DOCS["profile_position_returns"] = DOCS["profile_position"] + """
+
+Returns
+-------
+Profile
+    The trajectory (exact body rates) and its segment table."""
+
+DOCS["profile_t0_returns"] = DOCS["profile_position"] + """
+t0 : float
+    Time of the first sample, s.
+""" + DOCS["profile_returns"]
+
+DOCS["profile_static_params"] = _PARAMS + """\
+fs : float
+    Sample rate, Hz.
+dwell_s : float
+    Static time per position, s.
+transition_s : float
+    Duration of each move, s."""
+
+DOCS["profile_rate_moves"] = """\
+transition_s : float
+    Duration of each rate ramp, s.
+remount_s : float
+    Duration of the re-mounting move when the axis changes, s."""
+
+DOCS["write_path_returns"] = _PARAMS + """\
+path : str or os.PathLike
+    Output file.
+
+Returns
+-------
+pathlib.Path
+    The file written."""

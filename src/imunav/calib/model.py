@@ -529,29 +529,20 @@ class ImuCalibration:
         except KeyError as e:
             raise FileFormatError(f"{source}: calibration JSON lacks the field {e}") from None
 
+    @fill_doc
     def save(self, path: str | os.PathLike[str]) -> Path:
         """Write the calibration as JSON (atomic).
 
-        Parameters
-        ----------
-        path : str or os.PathLike
-            Output file.
-
-        Returns
-        -------
-        pathlib.Path
-            The file written.
+        %(write_path_returns)s
         """
         return write_json(path, self.to_dict())
 
     @classmethod
+    @fill_doc
     def load(cls, path: str | os.PathLike[str]) -> "ImuCalibration":
         """Read a calibration file: imunav's JSON, or an imucal Ferraris JSON.
 
-        Parameters
-        ----------
-        path : str or os.PathLike
-            The file.
+        %(reader_head)s
 
         Returns
         -------
