@@ -578,3 +578,24 @@ Returns
 -------
 pathlib.Path
     The file written."""
+
+
+def _means_fit_raises(units: str, inputs: str) -> str:
+    """The ``Raises`` section of a least-squares fit on per-position / per-step means."""
+    return f"""\
+Raises
+------
+ShapeError
+    If the arrays are not (K, 3) with the same K.
+InsufficientDataError
+    With too few {units} for the parameters.
+DegenerateGeometryError
+    If the {inputs} do not excite every axis."""
+
+
+DOCS["calib_steps_raises"] = _means_fit_raises("steps", "rates")
+DOCS["calib_positions_raises"] = _means_fit_raises("positions", "positions")
+
+DOCS["calib_f_ref_params"] = _PARAMS + """\
+f_ref : array_like, shape (K, 3)
+    Reference specific force of each position, body frame, m/s² (:func:`reference_specific_force`)."""
