@@ -599,3 +599,15 @@ DOCS["calib_positions_raises"] = _means_fit_raises("positions", "positions")
 DOCS["calib_f_ref_params"] = _PARAMS + """\
 f_ref : array_like, shape (K, 3)
     Reference specific force of each position, body frame, m/s² (:func:`reference_specific_force`)."""
+
+DOCS["maneuver_duration_returns"] = """\
+duration_s : float
+    Length, s (> 0).
+
+Returns
+-------
+Maneuver"""
+
+DOCS["sim_rng"] = """\
+rng : numpy.random.Generator or int, optional
+    Random generator or seed."""
