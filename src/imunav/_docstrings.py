@@ -611,3 +611,28 @@ Maneuver"""
 DOCS["sim_rng"] = """\
 rng : numpy.random.Generator or int, optional
     Random generator or seed."""
+
+DOCS["replace_changes"] = _PARAMS + """\
+**changes
+    New values of fields.
+
+Returns
+-------"""
+
+DOCS["allan_tau_returns"] = _PARAMS + """\
+tau : array_like
+    Averaging times, s.
+
+Returns
+-------
+numpy.ndarray, shape (3, len(tau))"""
+
+DOCS["toml_path"] = _PARAMS + """\
+path : str or os.PathLike
+    The TOML file."""
+
+DOCS["thesis_cfg_steps"] = _PARAMS + """\
+cfg : ThesisFilterConfig, optional
+    Filter configuration (default: the thesis's values).
+n_steps : int
+    Number of steps."""
