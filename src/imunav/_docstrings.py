@@ -636,3 +636,15 @@ cfg : ThesisFilterConfig, optional
     Filter configuration (default: the thesis's values).
 n_steps : int
     Number of steps."""
+
+DOCS["doppler_v_beams"] = _PARAMS + """\
+v_body : array_like, shape (3,) or (N, 3)
+    Ground velocity in body axes (FRD), m/s.
+beams : array_like, shape (n_beams, 3)
+    Beam unit vectors in body axes (:func:`janus_beams`)."""
+
+DOCS["traj_t_q_nb"] = _PARAMS + """\
+t : array_like, shape (N,)
+    Strictly increasing time, s.
+q_nb : array_like, shape (N, 4)
+    Attitude, body (FRD) to NED."""
