@@ -648,3 +648,40 @@ t : array_like, shape (N,)
     Strictly increasing time, s.
 q_nb : array_like, shape (N, 4)
     Attitude, body (FRD) to NED."""
+
+DOCS["calib_returns_raises"] = """\
+Returns
+-------
+ImuCalibration
+    The calibration.
+
+Raises
+------
+FileFormatError"""
+
+DOCS["mc_attitude_paper"] = _PARAMS + """\
+mc : imunav.montecarlo.MonteCarloResult
+    The result of ``run_montecarlo(attitude_paper, ...)``.
+
+Returns
+-------
+dict"""
+
+DOCS["mag_h_raw"] = _PARAMS + """\
+h : array_like, shape (N, 3)
+    Raw magnetometer samples, any unit (kept), sensor axes.
+
+Returns
+-------"""
+
+DOCS["to_dict_attributes"] = """\
+Returns
+-------
+dict
+    The attributes by name."""
+
+DOCS["fit_get_returns"] = DOCS["fit_get_params"] + """
+
+Returns
+-------
+float"""

@@ -483,6 +483,7 @@ class ImuCalibration:
         }
 
     @classmethod
+    @fill_doc
     def from_dict(cls, d: dict[str, Any], *, source: str = "<dict>") -> "ImuCalibration":
         """Rebuild a calibration from :meth:`to_dict` (or a parsed calibration file).
 
@@ -493,14 +494,7 @@ class ImuCalibration:
         source : str
             Where it comes from, for error messages.
 
-        Returns
-        -------
-        ImuCalibration
-            The calibration.
-
-        Raises
-        ------
-        FileFormatError
+        %(calib_returns_raises)s
             If the format or its version is not this one, or a field is missing.
         """
         if d.get("format") != _FORMAT:
@@ -544,14 +538,7 @@ class ImuCalibration:
 
         %(reader_head)s
 
-        Returns
-        -------
-        ImuCalibration
-            The calibration.
-
-        Raises
-        ------
-        FileFormatError
+        %(calib_returns_raises)s
             If the file does not exist, is not valid JSON, or is not a calibration of a supported format.
         """
         p = Path(path)
