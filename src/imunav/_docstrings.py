@@ -685,3 +685,36 @@ DOCS["fit_get_returns"] = DOCS["fit_get_params"] + """
 Returns
 -------
 float"""
+
+
+def _negative_raises(value: str) -> str:
+    """The ``Raises`` section of an air-data formula whose input must be finite and >= 0."""
+    return f"""\
+Raises
+------
+InvalidInputError
+    If {value} is negative.
+NonFiniteError
+    If a value is NaN or infinite."""
+
+
+DOCS["airdata_mach_raises"] = _negative_raises("a Mach number")
+DOCS["airdata_qc_raises"] = _negative_raises("an impact pressure")
+
+DOCS["figure_returns"] = """\
+Returns
+-------
+matplotlib.figure.Figure
+    The figure."""
+
+DOCS["figure_title_str_returns"] = """\
+title : str
+    Figure title.
+
+""" + DOCS["figure_returns"]
+
+DOCS["save_fig_path"] = _PARAMS + """\
+fig : matplotlib.figure.Figure
+    The figure.
+path : str or os.PathLike
+    Output file; the format follows its suffix."""
