@@ -718,3 +718,7 @@ fig : matplotlib.figure.Figure
     The figure.
 path : str or os.PathLike
     Output file; the format follows its suffix."""
+
+DOCS["prov_meta_or_data"] = _PARAMS + """\
+meta_or_data : ImuData or mapping
+    A recording (its ``meta`` is read) or its metadata dict."""
