@@ -508,13 +508,13 @@ M : int, optional
 DOCS["rot_q_params"] = _PARAMS + DOCS["rot_q"]
 
 
-def _finite_shape_raises(name: str, shapes: str) -> str:
-    """A ``Raises`` section for one array input that must be finite and of the given shape(s)."""
-    return f"Raises\n------\nNonFiniteError\n    If ``{name}`` is not finite.\nShapeError\n    If ``{name}`` is not {shapes}."
-
-
-DOCS["rot_C_raises"] = _finite_shape_raises("C", "(3, 3) / (N, 3, 3)")
-DOCS["rot_r_raises"] = _finite_shape_raises("r", "(3,) / (N, 3)")
+DOCS["finite_shape_raises"] = """\
+Raises
+------
+NonFiniteError
+    If ``%(arg)s`` is not finite.
+ShapeError
+    If ``%(arg)s`` is not %(shapes)s."""
 
 DOCS["rot_euler_raises"] = """\
 Raises
@@ -574,27 +574,18 @@ DOCS["write_path_returns"] = _PARAMS + """\
 path : str or os.PathLike
     Output file.
 
-Returns
--------
-pathlib.Path
-    The file written."""
+""" + DOCS["returns_file_written"]
 
 
-def _means_fit_raises(units: str, inputs: str) -> str:
-    """The ``Raises`` section of a least-squares fit on per-position / per-step means."""
-    return f"""\
+DOCS["means_fit_raises"] = """\
 Raises
 ------
 ShapeError
     If the arrays are not (K, 3) with the same K.
 InsufficientDataError
-    With too few {units} for the parameters.
+    With too few %(units)s for the parameters.
 DegenerateGeometryError
-    If the {inputs} do not excite every axis."""
-
-
-DOCS["calib_steps_raises"] = _means_fit_raises("steps", "rates")
-DOCS["calib_positions_raises"] = _means_fit_raises("positions", "positions")
+    If the %(inputs)s do not excite every axis."""
 
 DOCS["calib_f_ref_params"] = _PARAMS + """\
 f_ref : array_like, shape (K, 3)
@@ -687,19 +678,13 @@ Returns
 float"""
 
 
-def _negative_raises(value: str) -> str:
-    """The ``Raises`` section of an air-data formula whose input must be finite and >= 0."""
-    return f"""\
+DOCS["negative_raises"] = """\
 Raises
 ------
 InvalidInputError
-    If {value} is negative.
+    If %(value)s is negative.
 NonFiniteError
     If a value is NaN or infinite."""
-
-
-DOCS["airdata_mach_raises"] = _negative_raises("a Mach number")
-DOCS["airdata_qc_raises"] = _negative_raises("an impact pressure")
 
 DOCS["figure_returns"] = """\
 Returns

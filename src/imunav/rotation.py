@@ -284,7 +284,7 @@ def dcm_from_quat(q: ArrayLike) -> Array:
     return _out(_k.dcm_from_quat_n(a), s)
 
 
-@fill_doc
+@fill_doc(arg="C", shapes="(3, 3) / (N, 3, 3)")
 def quat_from_dcm(C: ArrayLike) -> Array:
     """Unit quaternion (``w >= 0``) of a rotation matrix (Shepperd's method).
 
@@ -301,7 +301,7 @@ def quat_from_dcm(C: ArrayLike) -> Array:
     numpy.ndarray, shape (4,) or (N, 4)
         ``q_nb``, scalar first, with ``w >= 0``.
 
-    %(rot_C_raises)s
+    %(finite_shape_raises)s
     """
     a, s = _as(C, (3, 3), "C")
     _finite(a, "C")
@@ -414,7 +414,7 @@ def dcm_from_euler(roll: ArrayLike, pitch: ArrayLike | None = None, yaw: ArrayLi
     return dcm_from_quat(quat_from_euler(roll, pitch, yaw))
 
 
-@fill_doc
+@fill_doc(arg="r", shapes="(3,) / (N, 3)")
 def quat_from_rotvec(r: ArrayLike) -> Array:
     """``exp`` map: quaternion of rotation vector ``r`` (rad).
 
@@ -430,7 +430,7 @@ def quat_from_rotvec(r: ArrayLike) -> Array:
     numpy.ndarray, shape (4,) or (N, 4)
         Unit quaternion(s).
 
-    %(rot_r_raises)s
+    %(finite_shape_raises)s
     """
     a, s = _as(r, (3,), "rotation vector")
     _finite(a, "rotation vector")
@@ -466,7 +466,7 @@ quat_exp = quat_from_rotvec
 quat_log = rotvec_from_quat
 
 
-@fill_doc
+@fill_doc(arg="r", shapes="(3,) / (N, 3)")
 def dcm_from_rotvec(r: ArrayLike) -> Array:
     """Rotation matrix of a rotation vector (Rodrigues' formula, ``C = exp([r]x)``).
 
@@ -480,12 +480,12 @@ def dcm_from_rotvec(r: ArrayLike) -> Array:
     numpy.ndarray, shape (3, 3) or (N, 3, 3)
         The rotation matrix / matrices.
 
-    %(rot_r_raises)s
+    %(finite_shape_raises)s
     """
     return dcm_from_quat(quat_from_rotvec(r))
 
 
-@fill_doc
+@fill_doc(arg="C", shapes="(3, 3) / (N, 3, 3)")
 def rotvec_from_dcm(C: ArrayLike) -> Array:
     """Rotation vector of a rotation matrix (``log``, through the quaternion).
 
@@ -499,7 +499,7 @@ def rotvec_from_dcm(C: ArrayLike) -> Array:
     numpy.ndarray, shape (3,) or (N, 3)
         Rotation vector(s), rad, norm in [0, pi].
 
-    %(rot_C_raises)s
+    %(finite_shape_raises)s
     """
     return rotvec_from_quat(quat_from_dcm(C))
 

@@ -67,7 +67,7 @@ def _arr(x: ArrayLike, name: str, positive: bool = False) -> Array:
     return a
 
 
-@fill_doc
+@fill_doc(value="a Mach number")
 def pitot_ratio(mach: ArrayLike) -> Array:
     """``p_t / p`` for a pitot probe at Mach M (isentropic below 1, Rayleigh above; module docstring).
 
@@ -81,7 +81,7 @@ def pitot_ratio(mach: ArrayLike) -> Array:
     numpy.ndarray
         Ratio of total to static pressure, >= 1.
 
-    %(airdata_mach_raises)s
+    %(negative_raises)s
     """
     M = _arr(mach, "mach")
     if np.any(M < 0):
@@ -147,7 +147,7 @@ def mach_from_pressures(p_total: ArrayLike, p_static: ArrayLike) -> Array:
     return _invert_pitot(np.asarray(pt / ps, dtype=np.float64), "mach_from_pressures")
 
 
-@fill_doc
+@fill_doc(value="an impact pressure")
 def calibrated_airspeed(impact_pressure: ArrayLike) -> Array:
     """Calibrated airspeed (m/s) from impact pressure ``q_c`` (Pa) (the thesis's Table 2.1 d, inverted).
 
@@ -161,7 +161,7 @@ def calibrated_airspeed(impact_pressure: ArrayLike) -> Array:
     numpy.ndarray
         Calibrated airspeed, m/s.
 
-    %(airdata_qc_raises)s
+    %(negative_raises)s
     """
     qc = _arr(impact_pressure, "impact_pressure")
     if np.any(qc < 0):

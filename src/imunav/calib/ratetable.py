@@ -36,7 +36,7 @@ __all__ = ["ratetable_from_means", "ratetable", "combine"]
 Array = NDArray[np.float64]
 
 
-@fill_doc
+@fill_doc(units="steps", inputs="rates")
 def ratetable_from_means(
     rates: ArrayLike,
     gyro_means: ArrayLike,
@@ -81,7 +81,7 @@ def ratetable_from_means(
     CalibrationResult
         ``base`` with the estimated gyro matrix (and bias with ``intercept``), standard errors and residuals.
 
-    %(calib_steps_raises)s
+    %(means_fit_raises)s
     """
     W, Y = paired_means(rates, "rates", gyro_means, "gyro_means")
     base = base if base is not None else ImuCalibration()

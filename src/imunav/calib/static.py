@@ -242,7 +242,7 @@ def fit_gyro_static(
     return b, G, seb, seG, res, cond, pcov
 
 
-@fill_doc
+@fill_doc(units="positions", inputs="positions")
 def multiposition_from_means(
     f_ref: ArrayLike,
     accel_means: ArrayLike,
@@ -284,7 +284,7 @@ def multiposition_from_means(
         Accelerometer bias and matrix, gyro bias and g-sensitivity, with standard errors, residuals and the
         condition of each design.
 
-    %(calib_positions_raises)s
+    %(means_fit_raises)s
     """
     f, A = paired_means(f_ref, "f_ref", accel_means, "accel_means")
     T, b, seT, seb, fit = fit_accel_positions(f, A, serial, accel_covs)
