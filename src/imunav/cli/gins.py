@@ -15,8 +15,15 @@ import numpy as np
 import typer
 
 from imunav.errors import ConfigError, InvalidInputError
-from imunav.ins.gins import GinsResult, run_gins
-from imunav.ins.gins_inputs import GinsInputs, GinsSetup, load_inputs, simulate_drive
+from imunav.ins.gins import GinsResult
+from imunav.ins.gins_inputs import (
+    GinsInputs,
+    GinsSetup,
+    load_inputs,
+    run_setup,
+    simulate_drive,
+    track_rmse,
+)
 from imunav.ins.gins_plot import FIGURE_NAMES, write_gins_figures
 from imunav.ins.outage import outage_test
 from imunav.io._atomic import atomic_path, check_outputs, write_json
@@ -56,9 +63,9 @@ def _v(x: np.ndarray, fmt: str = "{:.10g}") -> str:
 
 
 def _run_filter(inputs: GinsInputs, setup: GinsSetup, *, smoother: bool = False) -> GinsResult:
-    """The one call of the GNSS/INS filter in the command line."""
-    return run_gins(inputs.imu, inputs.gnss, setup.config, lla0=setup.lla0, vel0=setup.vel0, q0=setup.q0,
-                    imu_errors0=setup.imu_errors0, odometer=inputs.odometer, smoother=smoother)
+    """The one call of the GNSS/INS filter in the command line (through :func:`imunav.ins.gins_inputs.run_setup`,
+    which the lab step calls too)."""
+    return run_setup(inputs.imu, inputs.gnss, setup, odometer=inputs.odometer, smoother=smoother)
 
 
 def _figures(folder: Path, **kw) -> list[Path]:
@@ -143,16 +150,6 @@ def simulate_cmd(
 
 
 
-def _rmse(nav: NavTrack, truth: NavTrack) -> dict:
-    """RMSE of position (N E D m), velocity (m/s) and roll / pitch / yaw (deg) at the common stamps."""
-    _, dp, dv, de = nav.difference(truth)
-
-    def r(x: np.ndarray) -> list[float]:
-        return np.sqrt(np.mean(x**2, axis=0)).tolist()
-
-    return {"pos_ned_m": r(dp), "vel_ned_mps": r(dv), "att_rpy_deg": r(np.degrees(de)), "n": int(dp.shape[0])}
-
-
 _IMU_ARG = typer.Argument(None, help="IMU file: KF-GINS increments (7+ columns) or any recording imunav reads "
                                      "(rates, SI, FRD). Omit with a KF-GINS YAML.", show_default=False)
 _GNSS_ARG = typer.Argument(None, help="GNSS file: KF-GINS text (s, lat deg, lon deg, h, sigma N E D) or a CSV "
@@ -215,10 +212,10 @@ def run_cmd(
         s = res.smoothed
         write_kfgins_nav(outs["smoothed"], NavTrack(s.t, s.lla, s.vel_ned, s.q_nb))
     if ref is not None:
-        summary["rmse"] = _rmse(nav, ref)
+        summary["rmse"] = track_rmse(nav, ref)
         if smoother and res.smoothed is not None:
             s = res.smoothed
-            summary["rmse_smoothed"] = _rmse(NavTrack(s.t, s.lla, s.vel_ned, s.q_nb), ref)
+            summary["rmse_smoothed"] = track_rmse(NavTrack(s.t, s.lla, s.vel_ned, s.q_nb), ref)
     if plots:
         summary["figures"] = [p.name for p in _figures(folder, result=res, gnss=inputs.gnss, truth=ref)]
     write_json(outs["summary"], summary)

@@ -50,7 +50,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from imunav.errors import ConfigError, InvalidInputError
-from imunav.ins.gins import GinsConfig
+from imunav.ins.gins import GinsConfig, GinsResult, run_gins
 from imunav.io import read_imu
 from imunav.io.gnss import GnssData, lat_lon_radians, read_gnss_csv, read_gnss_text, read_table
 from imunav.io.kfgins import ImuIncrements, KfGinsConfig, NavTrack, load_kfgins_config, read_kfgins_imu
@@ -62,7 +62,7 @@ from imunav.timeseries import ImuData
 from imunav.units import DEG
 
 __all__ = ["GinsSetup", "GinsInputs", "SimulatedDrive", "load_gins_toml", "setup_from_kfgins", "read_imu_input",
-           "read_gnss_input", "read_odometer", "load_inputs", "simulate_drive", "TOML_TABLES", "KFGINS_LEVER_ARM",
+           "read_gnss_input", "read_odometer", "load_inputs", "simulate_drive", "run_setup", "track_rmse", "TOML_TABLES", "KFGINS_LEVER_ARM",
            "KFGINS_ORIGIN_LLA"]
 
 Array = NDArray[np.float64]
@@ -579,3 +579,61 @@ def simulate_drive(duration_s: float = 600.0, *, preset: str = "mems_adis16465",
     setup = GinsSetup(cfg, truth.pos_lla[0].copy(), truth.vel_ned[0].copy(), truth.q_nb[0].copy(),
                       source=f"preset {preset}")
     return SimulatedDrive(truth, imu, gnss, setup, preset)
+
+
+def run_setup(imu: ImuData | ImuIncrements, gnss: GnssData, setup: GinsSetup, *,
+              odometer: OdometerData | None = None, smoother: bool = False) -> GinsResult:
+    """Run the GNSS/INS filter with a :class:`GinsSetup` (the one call of the filter by the command line and
+    the lab step).
+
+    Parameters
+    ----------
+    imu : ImuData or ImuIncrements
+        Rates or increments.
+    gnss : GnssData
+        The fixes.
+    setup : GinsSetup
+        Configuration and initial state (``setup.has_init`` must be True).
+    odometer : OdometerData, optional
+        Wheel speeds.
+    smoother : bool
+        Also run the RTS smoother.
+
+    Returns
+    -------
+    GinsResult
+        The filter's output (:func:`imunav.ins.gins.run_gins`).
+
+    Raises
+    ------
+    ConfigError
+        If the setup has no initial state.
+    """
+    if not setup.has_init:
+        raise ConfigError(f"{setup.source}: no initial state; give [init] (lla_deg, vel_ned, euler_deg) or a truth")
+    return run_gins(imu, gnss, setup.config, lla0=setup.lla0, vel0=setup.vel0, q0=setup.q0,
+                    imu_errors0=setup.imu_errors0, odometer=odometer, smoother=smoother)
+
+
+def track_rmse(nav: NavTrack, truth: NavTrack) -> dict[str, Any]:
+    """RMSE of a navigation solution against a truth at their common stamps (:meth:`NavTrack.difference`).
+
+    Parameters
+    ----------
+    nav : NavTrack
+        The solution.
+    truth : NavTrack
+        The reference.
+
+    Returns
+    -------
+    dict
+        ``pos_ned_m`` (N, E, D, m), ``vel_ned_mps`` (m/s), ``att_rpy_deg`` (roll, pitch, yaw, deg): RMSE per
+        axis; ``n``: the number of common epochs.
+    """
+    _, dp, dv, de = nav.difference(truth)
+
+    def r(x: Array) -> list[float]:
+        return np.sqrt(np.mean(x**2, axis=0)).tolist()
+
+    return {"pos_ned_m": r(dp), "vel_ned_mps": r(dv), "att_rpy_deg": r(np.degrees(de)), "n": int(dp.shape[0])}
