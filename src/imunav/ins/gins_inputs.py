@@ -387,6 +387,11 @@ def read_gnss_input(path: str | os.PathLike[str], options: dict[str, Any] | None
     -------
     GnssData
         The fixes.
+
+    Raises
+    ------
+    ConfigError
+        If ``format`` is neither, or CSV options are given for a KF-GINS text file.
     """
     opts = dict(options or {})
     fmt = opts.pop("format", "csv" if Path(path).suffix.lower() == ".csv" else "kf-gins")
