@@ -80,8 +80,14 @@ def test_positional_form_with_toml_matches_the_yaml_form(drive, tmp_path):
     assert not list((tmp_path / "t").glob("*.png"))
 
 
-def test_rates_imu_and_gnss_csv_with_the_initial_state_from_the_truth(drive, tmp_path):
-    """IMU as rates in an imunav file (HDF5), GNSS as a CSV with named columns, no [init]: starts from the truth."""
+def test_rates_imu_and_gnss_csv_with_the_initial_state_from_the_truth(drive, tmp_path, monkeypatch):
+    """IMU as rates in an imunav file (HDF5), GNSS as a CSV with named columns, no [init]: starts from the truth.
+    Without matplotlib the figures are skipped with a one-line note."""
+    import importlib.util
+
+    find_spec = importlib.util.find_spec
+    monkeypatch.setattr(importlib.util, "find_spec", lambda name, *a: None if name == "matplotlib"
+                        else find_spec(name, *a))
     inc = read_kfgins_imu(drive / "imu.txt", 50)
     write_imu(inc.to_imu_data(), tmp_path / "imu.h5")
     g = read_gnss_text(drive / "gnss.txt")
@@ -92,10 +98,13 @@ def test_rates_imu_and_gnss_csv_with_the_initial_state_from_the_truth(drive, tmp
     (tmp_path / "g.toml").write_text(
         'preset = "mems_adis16465"\nlever_arm = [0.136, -0.301, -0.184]\nstates = 15\n'
         '[gnss]\ntime = "time"\nlat = "latitude"\nlon = "longitude"\nheight = "height"\npos_std = ["sn", "se", "sd"]\n')
-    _ok(CliRunner().invoke(app, ["gins", "run", str(tmp_path / "imu.h5"), str(tmp_path / "gnss.csv"), "--config",
-                                 str(tmp_path / "g.toml"), "--out", str(tmp_path / "o"), "--truth",
-                                 str(drive / "truth.nav"), "--no-plots"]))
+    res = _ok(CliRunner().invoke(app, ["gins", "run", str(tmp_path / "imu.h5"), str(tmp_path / "gnss.csv"),
+                                       "--config", str(tmp_path / "g.toml"), "--out", str(tmp_path / "o"), "--truth",
+                                       str(drive / "truth.nav")]))
+    assert "note: matplotlib is not installed; no figures written" in res.output
+    assert not list((tmp_path / "o").glob("*.png"))
     s = json.loads((tmp_path / "o" / "summary.json").read_text())
+    assert s["figures"] == []
     assert s["initial_state"] == "truth" and s["states"] == 15 and s["gnss_used"] == 150
     assert np.linalg.norm(s["rmse"]["pos_ned_m"][:2]) < 0.7  # the fixes' own horizontal σ is 0.71 m
 
