@@ -13,6 +13,8 @@ from imunav.cli.main import app
 from imunav.io import write_imu
 from imunav.io.gnss import read_gnss_text, read_table
 from imunav.io.kfgins import DPH, MGAL, PPM, load_kfgins_config, read_kfgins_imu, read_kfgins_nav
+from imunav.sim import Trajectory
+from imunav.sim.vehicle import simulate_odometer
 
 PNG = b"\x89PNG\r\n\x1a\n"
 
@@ -109,6 +111,32 @@ def test_rates_imu_and_gnss_csv_with_the_initial_state_from_the_truth(drive, tmp
     assert np.linalg.norm(s["rmse"]["pos_ned_m"][:2]) < 0.7  # the fixes' own horizontal σ is 0.71 m
 
 
+def test_odometer_file_with_the_yaml_odopath_key(drive, tmp_path):
+    """An odometer (time s, speed m/s) named by ``odopath`` in the KF-GINS YAML, with the NHC added as a further
+    key: the run uses it, and over a 20 s GNSS outage it holds the drift far below the unaided run's."""
+    tr = read_kfgins_nav(drive / "truth.nav")
+    traj = Trajectory(tr.t, tr.q_nb, tr.vel_ned, tr.lla)
+    odo = simulate_odometer(traj, noise_std=0.02, rate_hz=10.0, rng=7)
+    (tmp_path / "odo.txt").write_text("".join(f"{t:.3f} {v:.5f}\n" for t, v in zip(odo.t, odo.speed)))
+    yaml = (drive / "kf-gins.yaml").read_text().replace('"imu.txt"', f'"{drive / "imu.txt"}"').replace(
+        '"gnss.txt"', f'"{drive / "gnss.txt"}"')
+    (tmp_path / "kf.yaml").write_text(yaml + 'odopath: "odo.txt"\nnhc_noise: 0.1\n')
+    drift = {}
+    for name, cfg in (("aided", tmp_path / "kf.yaml"), ("unaided", drive / "kf-gins.yaml")):
+        _ok(CliRunner().invoke(app, ["gins", "outage-test", "--config", str(cfg), "--truth", str(drive / "truth.nav"),
+                                     "--converge", "90", "--every", "60", "--length", "20", "--shifts", "0",
+                                     "--out", str(tmp_path / name), "--no-plots"]))
+        drift[name] = json.loads((tmp_path / name / "outage.json").read_text())["rms"]["horizontal_m"]
+    _ok(CliRunner().invoke(app, ["gins", "run", "--config", str(tmp_path / "kf.yaml"), "--out", str(tmp_path / "r"),
+                                 "--no-plots"]))
+    s = json.loads((tmp_path / "r" / "summary.json").read_text())
+    assert s["odometer"] is True and s["inputs"]["odometer"].endswith("odo.txt")
+    # unaided, the MEMS velocity error (about 0.1 m/s after 90 s of 1 Hz fixes) drifts metres in 20 s; the
+    # wheel speed (0.02 m/s at 10 Hz) and the NHC bound the velocity error and leave the heading error's share
+    # (issue 15 asks 3x over 60 s outages; one 20 s outage here, so a 2x margin)
+    assert drift["aided"] < drift["unaided"] / 2, drift
+
+
 MISTAKES = [
     ("yaml-and-files", ["run", "{d}/imu.txt", "{d}/gnss.txt", "--config", "{d}/kf-gins.yaml"], "either the YAML"),
     ("no-gnss", ["run", "{d}/imu.txt", "--config", "{d}/gins.toml", "--out", "{t}/o"], "IMU and GNSS"),
@@ -130,6 +158,8 @@ MISTAKES = [
      "no column"),
     ("odometer-columns", ["run", "{d}/imu.txt", "{d}/gnss.txt", "--config", "{d}/gins.toml", "--odo", "{d}/imu.txt",
                           "--out", "{t}/o"], "odometer"),
+    ("odometer-kmh", ["run", "{d}/imu.txt", "{d}/gnss.txt", "--config", "{d}/gins.toml", "--odo", "{t}/kmh.txt",
+                      "--out", "{t}/o"], "km/h"),
     ("overwrite-input", ["run", "{d}/imu.txt", "{d}/gnss.txt", "--config", "{d}/gins.toml", "--out", "{d}",
                          "--truth", "{d}/KF_GINS_Navresult.nav"], "KF_GINS_Navresult.nav"),
     ("outage-no-truth", ["outage-test", "--config", "{d}/kf-gins.yaml", "--out", "{t}/o"], "--truth"),
@@ -156,6 +186,7 @@ def test_user_errors_are_one_line_and_exit_2(drive, tmp_path, args, needle):
     (tmp_path / "noinit.toml").write_text(good.split("[init]")[0] + "[imu]" + good.split("[imu]")[1])
     (tmp_path / "rate.toml").write_text(good.replace("rate_hz = 50.0", "rate_hz = 100.0"))
     (tmp_path / "bad.csv").write_text("t,lat,lon\n1,30,114\n")
+    (tmp_path / "kmh.txt").write_text("456300 0\n456301 54\n456302 180\n")
     (drive / "KF_GINS_Navresult.nav").write_text((drive / "truth.nav").read_text())
     argv = ["gins"] + [a.format(d=drive, t=tmp_path) for a in args]
     res = CliRunner().invoke(app, argv)
