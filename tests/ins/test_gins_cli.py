@@ -15,6 +15,7 @@ from imunav.io.gnss import read_gnss_text, read_table
 from imunav.io.kfgins import DPH, MGAL, PPM, load_kfgins_config, read_kfgins_imu, read_kfgins_nav
 from imunav.sim import Trajectory
 from imunav.sim.vehicle import simulate_odometer
+from imunav.timeseries import ImuData
 
 PNG = b"\x89PNG\r\n\x1a\n"
 
@@ -160,6 +161,8 @@ MISTAKES = [
                           "--out", "{t}/o"], "odometer"),
     ("odometer-kmh", ["run", "{d}/imu.txt", "{d}/gnss.txt", "--config", "{d}/gins.toml", "--odo", "{t}/kmh.txt",
                       "--out", "{t}/o"], "km/h"),
+    ("rates-rate", ["run", "{t}/rates.h5", "{d}/gnss.txt", "--config", "{t}/rates.toml", "--out", "{t}/o"],
+     "rate_hz is 50"),
     ("overwrite-input", ["run", "{d}/imu.txt", "{d}/gnss.txt", "--config", "{d}/gins.toml", "--out", "{d}",
                          "--truth", "{d}/KF_GINS_Navresult.nav"], "KF_GINS_Navresult.nav"),
     ("outage-no-truth", ["outage-test", "--config", "{d}/kf-gins.yaml", "--out", "{t}/o"], "--truth"),
@@ -186,6 +189,9 @@ def test_user_errors_are_one_line_and_exit_2(drive, tmp_path, args, needle):
     (tmp_path / "noinit.toml").write_text(good.split("[init]")[0] + "[imu]" + good.split("[imu]")[1])
     (tmp_path / "rate.toml").write_text(good.replace("rate_hz = 50.0", "rate_hz = 100.0"))
     (tmp_path / "bad.csv").write_text("t,lat,lon\n1,30,114\n")
+    write_imu(ImuData(456300 + np.arange(5) / 100, np.zeros((5, 3)), np.tile([0, 0, -9.8], (5, 1))),
+              tmp_path / "rates.h5")
+    (tmp_path / "rates.toml").write_text(good.replace('format = "kf-gins"\n', ""))
     (tmp_path / "kmh.txt").write_text("456300 0\n456301 54\n456302 180\n")
     (drive / "KF_GINS_Navresult.nav").write_text((drive / "truth.nav").read_text())
     argv = ["gins"] + [a.format(d=drive, t=tmp_path) for a in args]

@@ -53,7 +53,14 @@ from imunav.errors import ConfigError, InvalidInputError
 from imunav.ins.gins import GinsConfig, GinsResult, run_gins
 from imunav.io import read_imu
 from imunav.io.gnss import GnssData, lat_lon_radians, read_gnss_csv, read_gnss_text, read_table
-from imunav.io.kfgins import ImuIncrements, KfGinsConfig, NavTrack, load_kfgins_config, read_kfgins_imu
+from imunav.io.kfgins import (
+    RATE_TOLERANCE,
+    ImuIncrements,
+    KfGinsConfig,
+    NavTrack,
+    load_kfgins_config,
+    read_kfgins_imu,
+)
 from imunav.rotation import quat_from_euler
 from imunav.sim import Trajectory, presets, simulate_imu
 from imunav.sim.gnss import simulate_gnss
@@ -348,7 +355,9 @@ def read_imu_input(path: str | os.PathLike[str], options: dict[str, Any] | None 
     Raises
     ------
     ConfigError
-        If the window holds fewer than 2 samples.
+        If the window holds fewer than 2 samples, or a recording of rates contradicts ``rate_hz``.
+    InvalidInputError
+        If a KF-GINS file contradicts ``rate_hz`` or holds no increments (:func:`~imunav.io.kfgins.read_kfgins_imu`).
     """
     opts = options or {}
     p = Path(path)
@@ -357,6 +366,11 @@ def read_imu_input(path: str | os.PathLike[str], options: dict[str, Any] | None 
         data: ImuData | ImuIncrements = read_kfgins_imu(p, opts.get("rate_hz"))
     else:
         data = read_imu(p, fmt)
+        if "rate_hz" in opts:
+            med = float(np.median(np.diff(data.t)))
+            if abs(med * float(opts["rate_hz"]) - 1.0) > RATE_TOLERANCE:
+                raise ConfigError(f"{os.fspath(p)}: the time stamps step by {med:.6g} s ({1 / med:.6g} Hz) but "
+                                  f"[imu] rate_hz is {opts['rate_hz']:g} Hz; fix rate_hz or remove it")
     t = np.asarray(data.t, dtype=float)
     t0 = float(opts.get("start_time", t[0]))
     t1 = float(opts.get("end_time", t[-1]))
