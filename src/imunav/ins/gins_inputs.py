@@ -204,7 +204,17 @@ def _states(value: Any, where: str) -> bool:
     return value == 21
 
 
+def _number_like(v: Any) -> bool:
+    if isinstance(v, (bool, int, float)):
+        return True
+    return isinstance(v, list) and all(isinstance(x, (int, float)) and not isinstance(x, bool) for x in v)
+
+
 def _gins_config(doc: dict[str, Any], where: str, overrides: dict[str, Any]) -> GinsConfig:
+    for k, v in overrides.items():
+        if not _number_like(v):
+            raise ConfigError(f"{where}: '{k}' = {v!r}; a GinsConfig field is a number, a list of numbers (SI) or "
+                              "true / false")
     try:
         if "preset" in doc:
             return GinsConfig.from_preset(str(doc["preset"]), **overrides)
