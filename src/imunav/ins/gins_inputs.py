@@ -631,7 +631,7 @@ def run_setup(imu: ImuData | ImuIncrements, gnss: GnssData, setup: GinsSetup, *,
     Returns
     -------
     GinsResult
-        The filter's output (:func:`imunav.ins.gins.run_gins`).
+        The output of the GNSS/INS filter of :mod:`imunav.ins.gins`.
 
     Raises
     ------
