@@ -147,7 +147,7 @@ MISTAKES = [
     ("states", ["run", "--config", "{d}/kf-gins.yaml", "--states", "17"], "15 or 21"),
     ("unknown-key", ["run", "{d}/imu.txt", "{d}/gnss.txt", "--config", "{t}/unknown.toml", "--out", "{t}/o"],
      "arww"),
-    ("field-type", ["run", "{d}/imu.txt", "{d}/gnss.txt", "--config", "{t}/strarw.toml", "--out", "{t}/o"], "'arw'"),
+    ("field-type", ["run", "{d}/imu.txt", "{d}/gnss.txt", "--config", "{t}/strarw.toml", "--out", "{t}/o"], "'corr_time'"),
     ("no-noise", ["run", "{d}/imu.txt", "{d}/gnss.txt", "--config", "{t}/nonoise.toml", "--out", "{t}/o"], "preset"),
     ("negative-sigma", ["run", "{d}/imu.txt", "{d}/gnss.txt", "--config", "{t}/neg.toml", "--out", "{t}/o"],
      "init_pos_std"),
@@ -182,8 +182,8 @@ def test_user_errors_are_one_line_and_exit_2(drive, tmp_path, args, needle):
     good = (drive / "gins.toml").read_text()
     (tmp_path / "c.json").write_text("{}")
     (tmp_path / "unknown.toml").write_text(good.replace("states = 21", "states = 21\narww = 1e-4"))
-    (tmp_path / "strarw.toml").write_text(good.replace("states = 21", 'states = 21\narw = "0.1 deg/sqrt(h)"'))
-    (tmp_path / "nonoise.toml").write_text(good.replace('preset = "mems_adis16465"', ""))
+    (tmp_path / "strarw.toml").write_text(good.replace("corr_time = ", 'corr_time = "1 h"  # '))
+    (tmp_path / "nonoise.toml").write_text("\n".join(ln for ln in good.splitlines() if not ln.startswith("vrw")))
     (tmp_path / "neg.toml").write_text(good.replace("init_pos_std = [0.5", "init_pos_std = [-0.5"))
     lat = good.split("lla_deg = [")[1].split(",")[0]
     (tmp_path / "rad.toml").write_text(good.replace(f"lla_deg = [{lat}", f"lla_deg = [{np.radians(float(lat))}")

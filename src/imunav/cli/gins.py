@@ -138,7 +138,11 @@ def simulate_cmd(
         f"antlever: {_v(lever)}", ""])
     with atomic_path(names["yaml"]) as tmp:
         tmp.write_text(text, encoding="utf-8")
-    toml = {"preset": preset, "states": 21, "lever_arm": lever.tolist(), "init_pos_std": list(pos_std),
+    # the same configuration as the YAML, field by field in SI (not the preset, whose mapping may differ)
+    noise = {k: np.asarray(getattr(cfg, k)).tolist() for k in ("arw", "vrw", "gyro_bias_std", "accel_bias_std",
+                                                                  "gyro_scale_std", "accel_scale_std")}
+    toml = {"states": 21, **noise, "corr_time": float(cfg.corr_time), "lever_arm": lever.tolist(),
+            "init_pos_std": list(pos_std),
             "init_vel_std": list(vel_std), "init_att_std": (np.radians(att_std_deg)).tolist(),
             "init": {"lla_deg": lla_deg.tolist(), "vel_ned": truth.vel_ned[0].tolist(), "euler_deg": eul.tolist()},
             "imu": {"format": "kf-gins", "rate_hz": fs}}
