@@ -23,7 +23,7 @@ alone until the disturbance ends; so :data:`imunav.attitude.adaptive.ADAPTIVE_DE
 reject the field only when its norm or dip deviate by 10 % or 10°.  The
 smoother bridges a rejected interval from both of its ends, so it can afford to
 reject much smaller deviations.  Those matter: on BROAD, moving the sensor
-through the room changes the field norm by up to 8 % and the dip by 2–3°, and
+through the room changes the field norm by up to 9 % and the dip by 2–3°, and
 the heading of the field by 3–10° (distortion the 10 % / 10° test lets through);
 the real-time tolerances made the smoother *worse* than the forward filter on
 those trials (it fits the distorted field from both sides).  ``SMOOTHER_DEFAULTS``
