@@ -504,6 +504,209 @@ normalized : array_like, shape (N, s) or (R, N, s)
     Normalised innovations ``ν̃ = S^{-1/2} ν`` of one run or a batch of runs, finite.
 M : int, optional
     Window length in steps, > s (default 20)."""
+# --- dedup-core ---
+DOCS["rot_q_params"] = _PARAMS + DOCS["rot_q"]
+
+
+DOCS["finite_shape_raises"] = """\
+Raises
+------
+NonFiniteError
+    If ``%(arg)s`` is not finite.
+ShapeError
+    If ``%(arg)s`` is not %(shapes)s."""
+
+DOCS["rot_euler_raises"] = """\
+Raises
+------
+ShapeError
+    If only one of ``pitch`` / ``yaw`` is given, or the shapes do not broadcast."""
+
+DOCS["earth_lat_params"] = _PARAMS + DOCS["earth_lat"]
+
+DOCS["earth_lat_h_raises"] = """\
+Raises
+------
+InvalidInputError
+    If a latitude is outside [-pi/2, pi/2] or a height outside :data:`H_RANGE_M`.
+NonFiniteError
+    If an input is NaN or infinite."""
+
+DOCS["earth_ref_lla_returns"] = """\
+ref_lla : array_like, shape (3,)
+    Origin of the local NED frame: geodetic ``(lat, lon, h)``, rad, rad, m.
+
+Returns
+-------
+numpy.ndarray, shape (3,) or (N, 3)"""
+
+DOCS["earth_ned_params"] = _PARAMS + """\
+ned : array_like, shape (3,) or (N, 3)
+    North, east, down coordinates, m."""
+
+DOCS["profile_position_returns"] = DOCS["profile_position"] + """
+
+Returns
+-------
+Profile
+    The trajectory (exact body rates) and its segment table."""
+
+DOCS["profile_t0_returns"] = DOCS["profile_position"] + """
+t0 : float
+    Time of the first sample, s.
+""" + DOCS["profile_returns"]
+
+DOCS["profile_static_params"] = _PARAMS + """\
+fs : float
+    Sample rate, Hz.
+dwell_s : float
+    Static time per position, s.
+transition_s : float
+    Duration of each move, s."""
+
+DOCS["profile_rate_moves"] = """\
+transition_s : float
+    Duration of each rate ramp, s.
+remount_s : float
+    Duration of the re-mounting move when the axis changes, s."""
+
+DOCS["write_path_returns"] = _PARAMS + """\
+path : str or os.PathLike
+    Output file.
+
+""" + DOCS["returns_file_written"]
+
+
+DOCS["means_fit_raises"] = """\
+Raises
+------
+ShapeError
+    If the arrays are not (K, 3) with the same K.
+InsufficientDataError
+    With too few %(units)s for the parameters.
+DegenerateGeometryError
+    If the %(inputs)s do not excite every axis."""
+
+DOCS["calib_f_ref_params"] = _PARAMS + """\
+f_ref : array_like, shape (K, 3)
+    Reference specific force of each position, body frame, m/s² (:func:`reference_specific_force`)."""
+
+DOCS["maneuver_duration_returns"] = """\
+duration_s : float
+    Length, s (> 0).
+
+Returns
+-------
+Maneuver"""
+
+DOCS["sim_rng"] = """\
+rng : numpy.random.Generator or int, optional
+    Random generator or seed."""
+
+DOCS["replace_changes"] = _PARAMS + """\
+**changes
+    New values of fields.
+
+Returns
+-------"""
+
+DOCS["allan_tau_returns"] = _PARAMS + """\
+tau : array_like
+    Averaging times, s.
+
+Returns
+-------
+numpy.ndarray, shape (3, len(tau))"""
+
+DOCS["toml_path"] = _PARAMS + """\
+path : str or os.PathLike
+    The TOML file."""
+
+DOCS["thesis_cfg_steps"] = _PARAMS + """\
+cfg : ThesisFilterConfig, optional
+    Filter configuration (default: the thesis's values).
+n_steps : int
+    Number of steps."""
+
+DOCS["doppler_v_beams"] = _PARAMS + """\
+v_body : array_like, shape (3,) or (N, 3)
+    Ground velocity in body axes (FRD), m/s.
+beams : array_like, shape (n_beams, 3)
+    Beam unit vectors in body axes (:func:`janus_beams`)."""
+
+DOCS["traj_t_q_nb"] = _PARAMS + """\
+t : array_like, shape (N,)
+    Strictly increasing time, s.
+q_nb : array_like, shape (N, 4)
+    Attitude, body (FRD) to NED."""
+
+DOCS["calib_returns_raises"] = """\
+Returns
+-------
+ImuCalibration
+    The calibration.
+
+Raises
+------
+FileFormatError"""
+
+DOCS["mc_attitude_paper"] = _PARAMS + """\
+mc : imunav.montecarlo.MonteCarloResult
+    The result of ``run_montecarlo(attitude_paper, ...)``.
+
+Returns
+-------
+dict"""
+
+DOCS["mag_h_raw"] = _PARAMS + """\
+h : array_like, shape (N, 3)
+    Raw magnetometer samples, any unit (kept), sensor axes.
+
+Returns
+-------"""
+
+DOCS["to_dict_attributes"] = """\
+Returns
+-------
+dict
+    The attributes by name."""
+
+DOCS["fit_get_returns"] = DOCS["fit_get_params"] + """
+
+Returns
+-------
+float"""
+
+
+DOCS["negative_raises"] = """\
+Raises
+------
+InvalidInputError
+    If %(value)s is negative.
+NonFiniteError
+    If a value is NaN or infinite."""
+
+DOCS["figure_returns"] = """\
+Returns
+-------
+matplotlib.figure.Figure
+    The figure."""
+
+DOCS["figure_title_str_returns"] = """\
+title : str
+    Figure title.
+
+""" + DOCS["figure_returns"]
+
+DOCS["save_fig_path"] = _PARAMS + """\
+fig : matplotlib.figure.Figure
+    The figure.
+path : str or os.PathLike
+    Output file; the format follows its suffix."""
+
+DOCS["prov_meta_or_data"] = _PARAMS + """\
+meta_or_data : ImuData or mapping
+    A recording (its ``meta`` is read) or its metadata dict."""
 
 # --- shape ---
 DOCS["att_run_bias_mag"] = DOCS["att_run_params"] + "\n" + DOCS["att_bias0"] + "\n" + DOCS["att_use_mag"]
