@@ -14,6 +14,7 @@ import math
 import time
 
 import numpy as np
+from _before_after import report  # the before (a308974) / after lines
 
 from imunav.ins import ZuptConfig, ZuptFilter, detect_zero_velocity
 from imunav.io.datasets import shared_data_path
@@ -92,6 +93,7 @@ def main() -> None:
           f"(acceptance <= 5 us: {'met' if per <= 5 else 'NOT met'}); wall {best_wall / data.n * 1e6:.2f} us/sample")
     print(f"plain Python loop (same filter):        {py:.1f} us/sample CPU time")
     print(f"ratio python / imunav: {py / per:.0f}x; max position difference {np.abs(p_py - ref).max():.2e} m")
+    report("bench_zupt_speed", {"imunav us/sample (CPU)": per, "python loop us/sample (CPU)": py, "final |position| m": np.linalg.norm(res.position[-1]), "max position diff to python loop m": np.abs(p_py - ref).max()}, times=("imunav us/sample (CPU)", "python loop us/sample (CPU)"))
 
 
 if __name__ == "__main__":

@@ -53,9 +53,9 @@ from functools import lru_cache
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
-from scipy.stats import chi2, norm
 
 from imunav._docstrings import fill_doc
+from imunav._quantiles import chi2_isf, chi2_ppf, norm_isf
 from imunav.errors import InvalidInputError, ShapeError
 from imunav.filters._batch import window_stats_batch
 from imunav.filters._kernels import cusum_stats
@@ -136,9 +136,9 @@ def thesis_thresholds(M: int = 20, s: int = 3, confidence: float = 0.95) -> dict
         Thresholds of ``"alg1"``, ``"alg2"`` and ``"alg3"``.
     """
     return {
-        "alg1": float(chi2.ppf(confidence, M - s + 1)),
-        "alg2": float(chi2.ppf(confidence, M - s + 1)),
-        "alg3": float(chi2.ppf(confidence, M * s)),
+        "alg1": float(chi2_ppf(confidence, M - s + 1)),
+        "alg2": float(chi2_ppf(confidence, M - s + 1)),
+        "alg3": float(chi2_ppf(confidence, M * s)),
     }
 
 
@@ -242,9 +242,9 @@ def calibrated_thresholds(M: int = 20, s: int = 3, p_false_alarm: float = 0.01, 
     cv, cm = _cusum_quantiles(s, float(cusum_rho), float(cusum_k), float(p_false_alarm), 50, 4000, seed)
     return {
         "alg1": wishart_largest_root_quantile(1 - p_false_alarm, M, s, n_mc, seed),
-        "alg2": float(chi2.isf(p_false_alarm, M - s)),
-        "alg3": float(chi2.isf(p_false_alarm, M * s)),
-        "nis": float(chi2.isf(p_false_alarm, s)),
+        "alg2": float(chi2_isf(p_false_alarm, M - s)),
+        "alg3": float(chi2_isf(p_false_alarm, M * s)),
+        "nis": float(chi2_isf(p_false_alarm, s)),
         "cusum_var": cv,
         "cusum_mean": cm,
         "low_variance": _low_variance_quantile(s, low_window, float(p_false_alarm), 200_000, seed),
@@ -482,8 +482,8 @@ def isolate_faulty_channels(normalized: ArrayLike, M: int = 20, p_false_alarm: f
     N, s = nv.shape
     _check_window(M, 0, N)
     a = p_false_alarm / (2 * s)
-    thr_sq = chi2.isf(a, M)
-    thr_mu = norm.isf(a / 2)
+    thr_sq = chi2_isf(a, M)
+    thr_mu = norm_isf(a / 2)
     c2 = np.concatenate([np.zeros((1, s)), np.cumsum(nv**2, axis=0)])
     c1 = np.concatenate([np.zeros((1, s)), np.cumsum(nv, axis=0)])
     sq = np.full((N, s), np.nan)

@@ -31,8 +31,8 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-from scipy.stats import chi2
 
+from imunav._quantiles import chi2_ppf
 from imunav.errors import ConfigError
 from imunav.ins.gins_inputs import load_inputs, run_setup, simulate_drive, track_rmse
 from imunav.ins.gins_plot import write_gins_figures
@@ -50,7 +50,7 @@ _FILES = ("config", "imu", "gnss", "truth", "odo")
 
 def _nis_band(n: int, dof: int = 3, p: float = 0.99) -> tuple[float, float]:
     """Two-sided ``p`` band of the mean of ``n`` independent χ²(dof) variables."""
-    return float(chi2.ppf((1 - p) / 2, n * dof) / n), float(chi2.ppf((1 + p) / 2, n * dof) / n)
+    return float(chi2_ppf((1 - p) / 2, n * dof) / n), float(chi2_ppf((1 + p) / 2, n * dof) / n)
 
 
 def _int(opts: dict[str, Any], key: str, default: int) -> int:

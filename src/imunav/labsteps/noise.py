@@ -29,9 +29,9 @@ from __future__ import annotations
 from typing import Any
 
 import numpy as np
-from scipy.stats import norm
 
 from imunav._docstrings import fill_doc
+from imunav._quantiles import norm_ppf
 from imunav.errors import ConfigError
 from imunav.io._atomic import atomic_path, write_json
 from imunav.labsteps._api import LabContext, StepResult
@@ -41,7 +41,7 @@ from imunav.noise.plot import plot_allan
 from imunav.units import to_display
 
 #: two-sided normal quantile for a family-wise 95 % level over six axes (Bonferroni)
-_Z_FAMILY = float(norm.ppf(1 - 0.05 / 12))
+_Z_FAMILY = float(norm_ppf(1 - 0.05 / 12))
 
 TITLE = "Noise identification of the static record (Allan GLS fit, PSD, AR(1))"
 
