@@ -23,7 +23,7 @@ import time
 import numpy as np
 from _before_after import report  # the before (a308974) / after lines
 
-from imunav.airdata.filter import run_thesis_filter_batch, thesis_matrices
+from imunav.airdata.filter import ThesisFilter, thesis_matrices
 from imunav.airdata.scenario import ThesisScenario, covariance_sequence, monte_carlo_thesis, simulate_thesis_batch
 
 
@@ -87,7 +87,7 @@ def main() -> None:
     n = min(a.runs, 200)
     z, _, _ = simulate_thesis_batch(ThesisScenario(), n, a.seed)
     t0 = time.perf_counter()
-    xb = run_thesis_filter_batch(z).x
+    xb = ThesisFilter().run_batch(z).x
     tb = time.perf_counter() - t0
     n_loop = min(n, 20)
     t0 = time.perf_counter()

@@ -41,7 +41,7 @@ import sys
 import numpy as np
 from _before_after import report  # the before (a308974) / after lines
 
-from imunav.ins import ZuptConfig, detect_zero_velocity, loop_closure_error, run_zupt
+from imunav.ins import ZuptConfig, ZuptFilter, detect_zero_velocity, loop_closure_error
 from imunav.io.datasets import shared_data_path
 from imunav.io.foot import read_xio_gait_csv
 
@@ -50,7 +50,7 @@ PUBLISHED = {"short_walk": 0.082, "long_walk": 0.421}
 
 def closure(imu, zv, sigma_acc=2.0, **kw):
     cfg = ZuptConfig(alignment="first_stance", g=None, sigma_acc=sigma_acc, **kw)
-    res = run_zupt(imu, zv, cfg)
+    res = ZuptFilter(cfg).run(imu, zv)
     return loop_closure_error(res.position), res
 
 

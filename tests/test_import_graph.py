@@ -3,7 +3,7 @@ function-level import except of an optional dependency (each commented ``# optio
 
 The graph is read from the source with :mod:`ast` (nothing is imported): every ``import`` and
 ``from ... import`` of a module, at module level or inside a function, relative imports resolved, and a
-name taken from a package (``from imunav.ins import run_zupt``) followed through the package's
+name taken from a package (``from imunav.ins import ZuptFilter``) followed through the package's
 ``__init__`` re-exports to the module that defines it.  Imports under ``if TYPE_CHECKING:`` are
 annotations only (they never run) and are not edges.  Importing ``a.b.c`` also runs ``a/__init__`` and
 ``a/b/__init__`` (unless they are the importer's own packages, already running): those are edges too,

@@ -239,7 +239,7 @@ None"""
 DOCS["gravity_factory"] = """\
 Parameters
 ----------
-params : GravityKfConfig, optional
+config : GravityKfConfig, optional
     Filter settings (default :class:`GravityKfConfig` ()).
 **kw
     Further :class:`GravityKF` fields (``accel_convention``).
@@ -707,3 +707,21 @@ path : str or os.PathLike
 DOCS["prov_meta_or_data"] = _PARAMS + """\
 meta_or_data : ImuData or mapping
     A recording (its ``meta`` is read) or its metadata dict."""
+
+# --- shape ---
+DOCS["att_run_bias_mag"] = DOCS["att_run_params"] + "\n" + DOCS["att_bias0"] + "\n" + DOCS["att_use_mag"]
+
+DOCS["att_run_gain"] = DOCS["att_run_params"] + "\n" + DOCS["att_use_mag"] + """
+
+Returns
+-------
+AttitudeResult
+    ``q_nb`` at every sample, with the filter's name and parameters.
+
+""" + DOCS["att_run_raises"]
+
+DOCS["att_q_est_ref"] = """\
+q_est : array_like, shape (N, 4)
+    Estimated attitude ``q_nb``.
+q_ref : array_like, shape (N, 4)
+    Reference attitude ``q_nb`` (rows with NaN are skipped)."""

@@ -150,5 +150,5 @@ def paper_report(mc: MonteCarloResult, scn: Any, filters: Mapping[str, Any]) -> 
     return {"table": paper_table(mc),
             "paper_table2": {k: {"pitch": v[0], "roll": v[1]} for k, v in PAPER_TABLE2.items()},
             "rmse": {k: v.tolist() for k, v in paper_rmse(mc).items()},
-            "params": {k: f.params.__dict__ | {"kind": f.kind} for k, f in filters.items()},
+            "params": {k: f.config.__dict__ | {"kind": f.kind} for k, f in filters.items()},
             "scenario": {k: getattr(scn, k) for k in scn.__dataclass_fields__}}

@@ -26,7 +26,7 @@ def test_smoother_defaults_are_the_realtime_ones_but_for_the_grid():
     assert changed  # the smoother is tuned for the offline problem, not a copy of the real-time filter
     for k, values in SMOOTHER_GRID.items():
         assert getattr(SMOOTHER_DEFAULTS, k) in values, k
-    assert Smoother().params == SMOOTHER_DEFAULTS
+    assert Smoother().config == SMOOTHER_DEFAULTS
 
 
 @pytest.mark.slow

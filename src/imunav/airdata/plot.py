@@ -32,7 +32,7 @@ def plot_wind(result, data=None, axis_names=("x", "y", "z")):
     Parameters
     ----------
     result : WindFilterResult
-        Output of :func:`imunav.airdata.filter.run_thesis_filter`; wind in m/s, body axes.
+        Output of :meth:`imunav.airdata.filter.ThesisFilter.run`; wind in m/s, body axes.
     data : ThesisData, optional
         The simulated run, for the true wind.
     axis_names : tuple of str
@@ -123,7 +123,7 @@ def plot_long_horizon(result, flight=None):
     Parameters
     ----------
     result : LongHorizonResult
-        Output of :func:`imunav.airdata.filter.run_long_horizon`; wind in m/s, NED.
+        Output of :meth:`imunav.airdata.filter.LongHorizonFilter.run`; wind in m/s, NED.
     flight : object, optional
         The simulated flight (:func:`imunav.sim.flight.simulate_flight`), for the true wind.
 

@@ -74,11 +74,11 @@ class Smoother:
 
     Attributes
     ----------
-    params : MekfConfig
+    config : MekfConfig
         Tuning of the forward MEKF; default :data:`SMOOTHER_DEFAULTS` (module docstring).
     """
 
-    params: MekfConfig = field(default_factory=lambda: SMOOTHER_DEFAULTS)
+    config: MekfConfig = field(default_factory=lambda: SMOOTHER_DEFAULTS)
 
     name = "smoother"
 
@@ -87,9 +87,7 @@ class Smoother:
             use_mag: bool | None = None) -> AttitudeResult:
         """Forward MEKF pass, then the backward RTS pass (Rauch, Tung & Striebel 1965; module docstring).
 
-        %(att_run_params)s
-        %(att_bias0)s
-        %(att_use_mag)s
+        %(att_run_bias_mag)s
 
         Returns
         -------
@@ -99,11 +97,11 @@ class Smoother:
 
         %(att_run_raises)s
         """
-        f = MEKF(self.params)
+        f = MEKF(self.config)
         t, g, dt, um, q_init, b0, P0, out = f._run(data, q0, bias0, use_mag, True)
         qf, bf, _, fl, _, _, Pu, Pp, Ph = out
         qs, bs, pd = _k.rts_smooth(qf, bf, Pu, Pp, Ph, g, dt, P0, q_init, b0)
         flags = {k: (fl & v) > 0 for k, v in FLAG_NAMES.items()}
         return AttitudeResult(t=t, q_nb=qs, bias=bs, cov_diag=pd, flags=flags, name=self.name,
-                              params={**{f_.name: getattr(self.params, f_.name) for f_ in fields(self.params)},
+                              params={**{f_.name: getattr(self.config, f_.name) for f_ in fields(self.config)},
                                       "use_mag": um})

@@ -25,7 +25,7 @@ import numpy as np
 
 from imunav._docstrings import fill_doc
 from imunav.airdata import plot as P
-from imunav.airdata.filter import run_thesis_filter
+from imunav.airdata.filter import ThesisFilter
 from imunav.airdata.scenario import ThesisScenario, simulate_thesis, thesis_report
 from imunav.errors import ConfigError
 from imunav.filters import detect_faults
@@ -71,7 +71,7 @@ def run(ctx: LabContext) -> StepResult:
     write_json(out, rep)
 
     d = simulate_thesis(ThesisScenario(kind="variance"), seed)
-    r = run_thesis_filter(d.z, robust="nis")
+    r = ThesisFilter(robust="nis").run(d.z)
     det = detect_faults(r.normalized, 20, p_false_alarm=pfa, start=d.scenario.onset_row)
     figs = []
     for name, fig in (("wind", P.plot_wind(r, d)), ("innovations", P.plot_innovations(r)),
