@@ -119,7 +119,7 @@ def main() -> int:
                   f"{float(np.hypot(*(pos[-1, :2] - pos[0, :2]))):8.4f} {abs(pos[-1, 2] - pos[0, 2]):8.4f} "
                   f"{1.0:6.2f}")
 
-        def row(label, lc, ref=ref):
+        def row(label, lc, ref=ref, name=name):
             FIGS[f"{name} row {len(FIGS) % 7 + 1} ({label.strip()}) 3-D m"] = lc.error_3d
             print(f"  {label:60s} {lc.error_3d:8.4f} {lc.horizontal:8.4f} {abs(lc.vertical):8.4f} "
                   f"{lc.error_3d / ref:6.2f}")
