@@ -19,9 +19,13 @@ import os
 from pathlib import Path
 from typing import Any
 
-from imunav._atomic import jsonable, write_json
+import numpy as np
+from numpy.typing import NDArray
 
-__all__ = ["Result", "jsonable"]
+from imunav._atomic import jsonable, write_json
+from imunav.rotation import euler_from_quat
+
+__all__ = ["Result", "EulerMixin", "jsonable"]
 
 
 class Result:
@@ -65,3 +69,23 @@ class Result:
             ``path``.
         """
         return write_json(path, self.to_dict(), indent)
+
+
+class EulerMixin:
+    """Mixin of the results that hold an attitude track ``q_nb`` (N, 4): its ZYX Euler angles by :meth:`euler`.
+
+    The naming table of ``docs/design.md`` makes ``euler()`` a method computed from ``q_nb`` on every
+    result; this is its one implementation.
+    """
+
+    __slots__ = ()
+
+    def euler(self) -> NDArray[np.float64]:
+        """ZYX Euler angles (roll, pitch, yaw) of ``q_nb`` (:func:`imunav.rotation.euler_from_quat`).
+
+        Returns
+        -------
+        numpy.ndarray, shape (N, 3)
+            Roll, pitch, yaw, rad.
+        """
+        return euler_from_quat(self.q_nb)  # type: ignore[attr-defined]

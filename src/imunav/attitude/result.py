@@ -8,8 +8,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from imunav.results import Result
-from imunav.rotation import euler_from_quat
+from imunav.results import EulerMixin, Result
 
 Array = NDArray[np.float64]
 
@@ -17,7 +16,7 @@ __all__ = ["AttitudeResult"]
 
 
 @dataclass(frozen=True)
-class AttitudeResult(Result):
+class AttitudeResult(EulerMixin, Result):
     """Attitude estimate over a recording.
 
     Attributes
@@ -50,15 +49,6 @@ class AttitudeResult(Result):
     def n(self) -> int:
         return int(self.q_nb.shape[0])
 
-    def euler(self) -> Array:
-        """ZYX Euler angles (roll, pitch, yaw) of ``q_nb`` (:func:`imunav.rotation.euler_from_quat`).
-
-        Returns
-        -------
-        numpy.ndarray, shape (N, 3)
-            Roll, pitch, yaw, rad.
-        """
-        return euler_from_quat(self.q_nb)
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-ready dictionary (lists of floats).

@@ -54,8 +54,8 @@ from imunav.errors import (
     TimeOrderError,
 )
 from imunav.ins import _kernels as _k
-from imunav.results import Result
-from imunav.rotation import euler_from_quat, quat_from_euler
+from imunav.results import EulerMixin, Result
+from imunav.rotation import quat_from_euler
 
 __all__ = ["ZuptConfig", "ZuptFilter", "ZuptResult", "ZuptState", "align_from_accel", "first_stance", "long_stances"]
 
@@ -187,7 +187,7 @@ class ZuptConfig:
 
 
 @dataclass(frozen=True)
-class ZuptResult(Result):
+class ZuptResult(EulerMixin, Result):
     """Output of :meth:`ZuptFilter.run` (arrays one row per sample).
 
     Attributes
@@ -231,15 +231,6 @@ class ZuptResult(Result):
     zv: NDArray[np.bool_]
     config: ZuptConfig = field(default_factory=ZuptConfig)
 
-    def euler(self) -> Array:
-        """Roll, pitch, yaw (ZYX) from ``q_nb``: a method, as :meth:`AttitudeResult.euler`.
-
-        Returns
-        -------
-        numpy.ndarray, shape (N, 3)
-            Roll, pitch, yaw, rad.
-        """
-        return euler_from_quat(self.q_nb)
 
     @property
     def position_std(self) -> Array:

@@ -33,7 +33,8 @@ from numpy.typing import ArrayLike, NDArray
 from imunav import earth
 from imunav.errors import ConfigError, InvalidInputError, MissingDependencyError, ShapeError, TimeOrderError
 from imunav.io.gnss import lat_lon_radians, read_table, write_table
-from imunav.rotation import euler_from_quat, quat_from_euler
+from imunav.results import EulerMixin
+from imunav.rotation import quat_from_euler
 from imunav.timeseries import ImuData
 from imunav.units import DEG, HOUR
 
@@ -243,7 +244,7 @@ def write_kfgins_imu(path: str | os.PathLike[str], inc: ImuIncrements) -> Path:
 
 
 @dataclass(frozen=True)
-class NavTrack:
+class NavTrack(EulerMixin):
     """A navigation solution or truth: time, geodetic position, NED velocity and attitude (SI).
 
     Parameters
@@ -280,15 +281,6 @@ class NavTrack:
             if np.shape(getattr(self, name)) != (n, w):
                 raise ShapeError(f"NavTrack.{name} must have shape ({n}, {w}); got {np.shape(getattr(self, name))}")
 
-    def euler(self) -> Array:
-        """ZYX Euler angles of ``q_nb``.
-
-        Returns
-        -------
-        numpy.ndarray, shape (N, 3)
-            Roll, pitch, yaw, rad.
-        """
-        return euler_from_quat(self.q_nb)
 
     def difference(self, truth: NavTrack, *, tol_s: float = 1e-6) -> tuple[Array, Array, Array, Array]:
         """Errors of this track against ``truth`` at their common time stamps.
