@@ -149,17 +149,17 @@ def run_pyins(sc: Scenario) -> dict:
 
 
 def run_imunav(sc: Scenario, *, scale_factors: bool = True) -> dict:
-    """imunav's GNSS/INS filter (:func:`imunav.ins.gins.run_gins`, 21 states) on the scenario; the time is that of
+    """imunav's GNSS/INS filter (:class:`imunav.ins.gins.GinsFilter`, 21 states) on the scenario; the time is that of
     a second call (the first compiles the numba kernels, cached on disk afterwards)."""
-    from imunav.ins.gins import GinsConfig, run_gins
+    from imunav.ins.gins import GinsConfig, GinsFilter
 
     cfg = GinsConfig.from_preset(sc.preset, lever_arm=LEVER_ARM, scale_factors=scale_factors,
                                  init_pos_std=INIT_SD["pos"], init_vel_std=INIT_SD["vel"],
                                  init_att_std=np.radians([INIT_SD["level_deg"], INIT_SD["level_deg"],
                                                           INIT_SD["azimuth_deg"]]))
-    run_gins(sc.imu, sc.gnss, cfg, lla0=sc.lla0, vel0=sc.vel0, q0=sc.q0)
+    GinsFilter(cfg).run(sc.imu, sc.gnss, lla0=sc.lla0, vel0=sc.vel0, q0=sc.q0)
     t0 = time.process_time()
-    res = run_gins(sc.imu, sc.gnss, cfg, lla0=sc.lla0, vel0=sc.vel0, q0=sc.q0)
+    res = GinsFilter(cfg).run(sc.imu, sc.gnss, lla0=sc.lla0, vel0=sc.vel0, q0=sc.q0)
     wall = time.process_time() - t0
     out = nav_errors(sc.truth, res.t, res.lla, res.vel_ned, res.q_nb)
     out["us_per_sample"] = wall / sc.imu.t.size * 1e6

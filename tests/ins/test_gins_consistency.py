@@ -16,7 +16,7 @@ import pytest
 from scipy.stats import chi2
 
 from imunav import earth
-from imunav.ins.gins import GinsConfig, run_gins
+from imunav.ins.gins import GinsConfig, GinsFilter
 from imunav.io.gnss import GnssData
 from imunav.rotation import quat_conjugate, quat_from_rotvec, quat_multiply, rotvec_from_quat
 from imunav.sim import apply_errors, ideal_imu
@@ -62,7 +62,7 @@ def _run(truth, seed):
                             -dr[2]]
     v0 = tr.vel_ned[0] - CFG.init_vel_std * rng.standard_normal(3)
     q0 = quat_multiply(quat_from_rotvec(-CFG.init_att_std * rng.standard_normal(3)), tr.q_nb[0])
-    res = run_gins(imu, gnss, CFG, lla0=lla0, vel0=v0, q0=q0)
+    res = GinsFilter(CFG).run(imu, gnss, lla0=lla0, vel0=v0, q0=q0)
     return res, et, (sg, sa)
 
 
@@ -146,6 +146,6 @@ def test_the_nis_check_catches_a_model_error(truth):
                        rng=1)
     g = simulate_gnss(tr, pos_noise=POS_SD, vel_noise=VEL_SD, lever_arm=LEVER, rng=2)
     optimistic = GnssData(g.t, g.lla, g.pos_std / 2, g.vel_ned, g.vel_std, g.meta)
-    bad = run_gins(imu, optimistic, replace(CFG, gate_alpha=0.0), lla0=tr.pos_lla[0], vel0=tr.vel_ned[0],
-                   q0=tr.q_nb[0])
+    bad = GinsFilter(replace(CFG, gate_alpha=0.0)).run(imu, optimistic, lla0=tr.pos_lla[0], vel0=tr.vel_ned[0],
+                                                       q0=tr.q_nb[0])
     assert np.nanmean(bad.nis[:, 0]) > 6.0

@@ -10,7 +10,7 @@ import typer
 
 from imunav import earth
 from imunav.errors import ConfigError, InvalidInputError
-from imunav.ins.gins import GinsConfig, run_gins
+from imunav.ins.gins import GinsConfig, GinsFilter
 from imunav.io._atomic import atomic_path, check_outputs, write_json
 from imunav.io.gnss import read_gnss_text, write_gnss_text
 from imunav.io.kfgins import (
@@ -146,8 +146,8 @@ def run_cmd(
     gnss = read_gnss_text(cfg.gnss_path)
     gcfg = GinsConfig.from_kfgins(cfg, scale_factors=states == 21)
     err0 = np.concatenate([cfg.init_gyro_bias, cfg.init_accel_bias, cfg.init_gyro_scale, cfg.init_accel_scale])
-    res = run_gins(inc, gnss, gcfg, lla0=cfg.init_lla, vel0=cfg.init_vel, q0=quat_from_euler(cfg.init_euler),
-                   imu_errors0=err0, smoother=smoother)
+    res = GinsFilter(gcfg).run(inc, gnss, lla0=cfg.init_lla, vel0=cfg.init_vel, q0=quat_from_euler(cfg.init_euler),
+                               imu_errors0=err0, smoother=smoother)
     nav = NavTrack(res.t, res.lla, res.vel_ned, res.q_nb)
     write_kfgins_nav(outs["nav"], nav)
     write_kfgins_imu_errors(outs["err"], res.t, res.gyro_bias, res.accel_bias, res.gyro_scale, res.accel_scale)
