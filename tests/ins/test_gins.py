@@ -124,8 +124,8 @@ def test_rts_smoother_bridges_an_outage(drive):
 def test_zupt_zaru_and_barometer_updates(drive):
     """While the vehicle stands still (the drive's stops, from the truth) ZUPT + ZARU hold the velocity near zero
     without GNSS; a barometer with white noise (sigma 0.5 m) brings the height error below the GNSS-only one.
-    Open: the barometer's mean NIS is 0.71, not 1 (the filter is pessimistic about its height between fixes);
-    the test bounds it from above only (an optimistic filter would be the dangerous case)."""
+    The barometer's NIS is chi^2(1): its mean within 5 standard errors of 1 (it was 0.71 when the samples were
+    interpolated to the IMU stamps, which averages the white noise of two samples)."""
     truth, _ = drive
     arw, vrw, gb, ab, tc = 0.15 * DEG / 60, 0.012 / 60, 10 * DEG / 3600, 2e-3, 1000.0
     model = ImuErrorModel(gyro=TriadErrors(noise_density=arw, bias_instability=GaussMarkov(gb, tc)),
@@ -141,7 +141,7 @@ def test_zupt_zaru_and_barometer_updates(drive):
     z = res.zupt_nis[~np.isnan(res.zupt_nis)]
     b = res.baro_nis[~np.isnan(res.baro_nis)]
     assert z.size > 100 and b.size > 1000
-    assert b.mean() < 1.0 + 5 * np.sqrt(2.0 / b.size), b.mean()
+    assert abs(b.mean() - 1.0) < 5 * np.sqrt(2.0 / b.size), b.mean()
     plain = GinsFilter(cfg).run(imu, g, **_start(truth))
     hb = np.abs(res.lla[:, 2] - truth.pos_lla[:, 2])[50 * 60:]
     hp = np.abs(plain.lla[:, 2] - truth.pos_lla[:, 2])[50 * 60:]

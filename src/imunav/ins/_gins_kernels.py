@@ -14,7 +14,7 @@ position rows dropped, the vertical gravity gradient kept)::
     δḃ = −δb / T + w_b  (σ² 2/T),   δṡ = −δs / T + w_s
 
 The nominal state is integrated per IMU sample by :func:`imunav.filters._core.strapdown_step_ned`; the covariance
-every ``cov_step`` samples (and at each GNSS epoch) by :func:`imunav.filters._core_gins.propagate_cov_series`.
+every ``cov_step`` samples (and at each GNSS epoch and each barometer sample) by :func:`imunav.filters._core_gins.propagate_cov_series`.
 GNSS epochs between two IMU samples split the increments at their own time stamps.  Updates use
 :func:`imunav.filters._core.chi2_gate` and :func:`imunav.filters._core.joseph_update`; injection uses
 :func:`imunav.filters._core.inject_additive`, :func:`~imunav.filters._core.inject_attitude_global` and
@@ -533,7 +533,7 @@ def gins_run(t, dth, dv, g_t, g_lla, g_rp, g_vel, g_rv, odo, odo_r, q, v, lla, e
                 sw[j] += wb[j] * hh
                 sf[j] += fb[j] * hh
         n_cov += 1
-        if n_cov >= cov_step or (final and k == n - 1):
+        if n_cov >= cov_step or (final and k == n - 1) or not math.isnan(baro[k]):
             dtc = t[k] - t_cov
             if dtc > 0.0:
                 for j in range(3):

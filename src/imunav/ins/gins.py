@@ -495,6 +495,28 @@ def _on_imu_grid(t: Array, aid: Any, kind: type, name: str, field_name: str) -> 
     return out
 
 
+def _at_imu_samples(t: Array, baro: Any) -> Array:
+    """Barometer samples placed at the nearest IMU stamp (not interpolated: interpolating white noise between
+    two samples would shrink its variance below the σ the update assumes), NaN elsewhere."""
+    if not isinstance(baro, BaroData):
+        raise InvalidInputError(f"baro must be a BaroData; got {type(baro).__name__}")
+    bt = np.asarray(baro.t, dtype=float)
+    if bt.size < 2 or np.any(np.diff(bt) <= 0):
+        raise InvalidInputError("baro time stamps must be strictly increasing (at least 2 samples)")
+    half = 0.5 * float(np.median(np.diff(t)))
+    inside = (bt >= t[0] - half) & (bt <= t[-1] + half)
+    if not inside.any():
+        raise InvalidInputError(f"baro time {bt[0]:.3f}..{bt[-1]:.3f} s lies outside the IMU span")
+    k = np.clip(np.searchsorted(t, bt[inside]), 1, t.size - 1)
+    k = np.where(np.abs(t[k - 1] - bt[inside]) < np.abs(t[k] - bt[inside]), k - 1, k)
+    if np.any(np.diff(k) == 0):
+        raise InvalidInputError("baro: two samples fall on one IMU sample (barometer rate above the IMU rate); "
+                                "decimate or average the barometer first")
+    out = np.full(t.size, np.nan)
+    out[k] = np.asarray(baro.height, dtype=float)[inside]
+    return out
+
+
 class GinsFilter:
     """The loosely coupled GNSS/INS filter: :meth:`run` over a recording, or :meth:`reset` then :meth:`step`
     sample by sample (the same numba kernel, :func:`imunav.ins._gins_kernels.gins_run`, for both).
@@ -696,7 +718,8 @@ class GinsFilter:
         static : array_like of bool, shape (N,), optional
             True where the vehicle stands still (e.g. from :mod:`imunav.ins.detectors`): ZUPT + ZARU.
         baro : BaroData, optional
-            Barometric heights (:class:`imunav.sim.vehicle.BaroData`), interpolated to the IMU stamps.
+            Barometric heights (:class:`imunav.sim.vehicle.BaroData`), each used at the nearest IMU stamp (a
+            covariance epoch there).
 
         Returns
         -------
@@ -722,7 +745,7 @@ class GinsFilter:
         st = np.zeros(n) if static is None else np.asarray(static, dtype=bool).astype(float)
         if st.shape != (n,):
             raise ShapeError(f"static must be (N,) = ({n},) booleans, one per IMU sample; got {st.shape}")
-        hb = np.full(n, np.nan) if baro is None else _on_imu_grid(t, baro, BaroData, "baro", "height")
+        hb = np.full(n, np.nan) if baro is None else _at_imu_samples(t, baro)
         self.reset(lla0=lla0, vel0=vel0, q0=q0, t0=float(t[0]), fs=1.0 / float(np.median(np.diff(t))),
                    imu_errors0=imu_errors0, odometer=odometer is not None)
         c = self.config
