@@ -188,9 +188,12 @@ def main() -> None:
     print(f"{'':8s}" + "".join(f"{h:>28s}" for h in head))
     for name, cells in rows.items():
         print(f"{name:8s}" + "".join(f"{c:>28s}" for c in cells))
-    print(f"imunav is {peer['us_per_sample'] / ours['us_per_sample']:.0f}x faster per IMU sample; "
-          f"3-D position RMSE {np.linalg.norm(ours['pos_rmse_ned_m']):.3f} m (imunav) vs "
-          f"{np.linalg.norm(peer['pos_rmse_ned_m']):.3f} m (pyins)")
+    print(f"imunav is {peer['us_per_sample'] / ours['us_per_sample']:.0f}x faster per IMU sample (acceptance >= 20)")
+    for key, name, unit in (("pos_rmse_ned_m", "position", "m"), ("vel_rmse_ned_mps", "velocity", "m/s"),
+                            ("att_rmse_rpy_deg", "attitude", "deg")):
+        a, b = np.linalg.norm(ours[key]), np.linalg.norm(peer[key])
+        print(f"{name:9s} RMSE (norm of the axes): imunav {a:.4f} {unit}, pyins {b:.4f} {unit}, "
+              f"ratio imunav / pyins {a / b:.3f} (acceptance <= 1)")
 
 
 if __name__ == "__main__":

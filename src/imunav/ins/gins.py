@@ -83,7 +83,7 @@ class GinsConfig:
     gyro_scale_std, accel_scale_std : float or array_like, shape (3,)
         Stationary Gauss–Markov σ of the scale-factor errors, dimensionless (> 0).
     corr_time : float
-        Correlation time of all Gauss–Markov states, s (> 0; KF-GINS: ``corrtime``).
+        Correlation time of the bias and odometer-scale Gauss–Markov states, s (> 0; KF-GINS: ``corrtime``).
     scale_factors : bool
         True: 21 states; False: 15 (no scale-factor states).
     init_pos_std, init_vel_std, init_att_std : float or array_like, shape (3,)
@@ -114,6 +114,9 @@ class GinsConfig:
         the vehicle stands still (> 0).
     baro_noise : float
         σ of the barometric height, m (its bias included: no baro-bias state; > 0).
+    scale_corr_time : float or None
+        Correlation time of the IMU scale-factor states, s (> 0; ``inf``: random constants, no process
+        noise; None: ``corr_time``, as KF-GINS).
 
     Raises
     ------
@@ -149,6 +152,7 @@ class GinsConfig:
     zupt_noise: float = 0.01
     zaru_noise: float = 1e-4
     baro_noise: float = 2.0
+    scale_corr_time: float | None = None
 
     def __post_init__(self) -> None:
         s = object.__setattr__
@@ -170,6 +174,9 @@ class GinsConfig:
             raise InvalidInputError(f"GinsConfig.corr_time must be > 0 s; got {self.corr_time!r}")
         if not (0 <= self.gate_alpha < 1):
             raise InvalidInputError(f"GinsConfig.gate_alpha must be in [0, 1); got {self.gate_alpha!r}")
+        if self.scale_corr_time is not None and not (self.scale_corr_time > 0):
+            raise InvalidInputError(f"GinsConfig.scale_corr_time must be > 0 s (inf: constant) or None; "
+                                    f"got {self.scale_corr_time!r}")
         if not (self.cov_interval_s > 0):
             raise InvalidInputError(f"GinsConfig.cov_interval_s must be > 0 s; got {self.cov_interval_s!r}")
 
@@ -211,11 +218,17 @@ class GinsConfig:
 
     @classmethod
     def from_preset(cls, name: str, **overrides: Any) -> GinsConfig:
-        """A configuration matched to an IMU preset of :mod:`imunav.sim.presets` (noise densities; bias σ from
-        the turn-on bias and the bias instability; scale σ from the scale-factor errors; its correlation time).
+        """A configuration matched to what the IMU preset of :mod:`imunav.sim.presets` simulates: white noise
+        densities, biases as a random constant (the turn-on bias) plus the in-run instability, scale factors as
+        random constants.
 
-        The bias σ is ``√(b_0² + Σ σ_i²)`` (turn-on bias and the bias-instability components), the scale σ
-        1.5 times the preset's scale-factor error, the correlation time the longest of the preset's.
+        The initial bias σ is ``√(b_0² + Σ σ_i²)`` (turn-on bias and the bias-instability components
+        ``σ_i``, ``τ_i``), the correlation time ``T`` the longest ``τ_i``, and the Gauss–Markov σ is chosen
+        so that the bias states' driving noise ``2σ²/T`` equals that of the instability, ``Σ 2σ_i²/τ_i``
+        (the rate of growth of the bias uncertainty between fixes; folding the constant turn-on bias into the
+        Gauss–Markov σ instead, as before, made the accelerometer-bias walk about 20 times too strong for the
+        ADIS16465 class: 11 % more position RMSE than pyins tuned this way, ``benchmarks/bench_gins_pyins.py``).
+        The scale σ is 1.5 times the preset's scale-factor error, with ``scale_corr_time = inf``.
 
         Parameters
         ----------
@@ -231,19 +244,22 @@ class GinsConfig:
         """
         m = presets.get(name)
 
-        def bias(te):
+        def parts(te):
             sig, tc = te.bias_instability.components() if te.bias_instability is not None else (np.zeros((1, 3)),
                                                                                                   np.full((1, 3), 3600.0))
-            return np.sqrt(te.bias**2 + np.sum(sig**2, axis=0)), float(np.max(tc))
+            return np.sqrt(te.bias**2 + np.sum(sig**2, axis=0)), np.sum(2.0 * sig**2 / tc, axis=0), float(np.max(tc))
 
-        gb, tg = bias(m.gyro)
-        ab, ta = bias(m.accel)
+        gb0, gq, tg = parts(m.gyro)
+        ab0, aq, ta = parts(m.accel)
+        tc = max(tg, ta)
         kw: dict[str, Any] = dict(
             arw=np.maximum(m.gyro.noise_density, 1e-9), vrw=np.maximum(m.accel.noise_density, 1e-9),
-            gyro_bias_std=np.maximum(gb, 1e-12), accel_bias_std=np.maximum(ab, 1e-12),
+            gyro_bias_std=np.maximum(np.sqrt(gq * tc / 2.0), 1e-12),
+            accel_bias_std=np.maximum(np.sqrt(aq * tc / 2.0), 1e-12),
+            init_gyro_bias_std=np.maximum(gb0, 1e-12), init_accel_bias_std=np.maximum(ab0, 1e-12),
             gyro_scale_std=np.maximum(np.abs(np.diag(m.gyro.scale_misalignment) - 1), 1e-6) * 1.5,
             accel_scale_std=np.maximum(np.abs(np.diag(m.accel.scale_misalignment) - 1), 1e-6) * 1.5,
-            corr_time=max(tg, ta),
+            corr_time=tc, scale_corr_time=np.inf,
         )
         kw.update(overrides)
         return cls(**kw)
@@ -448,10 +464,12 @@ def _params(c: GinsConfig, fs: float, odometer: bool) -> Array:
     prm[_k.K_OMEGA_E] = OMEGA_E
     prm[_k.K_ARW:_k.K_ARW + 3] = c.arw
     prm[_k.K_VRW:_k.K_VRW + 3] = c.vrw
-    for kq, kt, sd in ((_k.K_BG_Q, _k.K_BG_T, c.gyro_bias_std), (_k.K_BA_Q, _k.K_BA_T, c.accel_bias_std),
-                       (_k.K_SG_Q, _k.K_SG_T, c.gyro_scale_std), (_k.K_SA_Q, _k.K_SA_T, c.accel_scale_std)):
-        prm[kq:kq + 3] = 2.0 * sd**2 / c.corr_time
-        prm[kt:kt + 3] = c.corr_time
+    ts = c.corr_time if c.scale_corr_time is None else float(c.scale_corr_time)
+    for kq, kt, sd, tc in ((_k.K_BG_Q, _k.K_BG_T, c.gyro_bias_std, c.corr_time),
+                           (_k.K_BA_Q, _k.K_BA_T, c.accel_bias_std, c.corr_time),
+                           (_k.K_SG_Q, _k.K_SG_T, c.gyro_scale_std, ts), (_k.K_SA_Q, _k.K_SA_T, c.accel_scale_std, ts)):
+        prm[kq:kq + 3] = 2.0 * sd**2 / tc
+        prm[kt:kt + 3] = tc
     prm[_k.K_LEVER:_k.K_LEVER + 3] = c.lever_arm
     big = 1e300
 
