@@ -43,6 +43,7 @@ from imunav.io.kfgins import ImuIncrements, KfGinsConfig
 from imunav.results import Result
 from imunav.rotation import euler_from_quat, quat_from_rotvec, quat_multiply, quat_normalize
 from imunav.sim import presets
+from imunav.sim.gnss import MagnetometerData
 from imunav.sim.vehicle import BaroData, OdometerData
 from imunav.timeseries import ImuData
 
@@ -117,6 +118,11 @@ class GinsConfig:
     scale_corr_time : float or None
         Correlation time of the IMU scale-factor states, s (> 0; ``inf``: random constants, no process
         noise; None: ``corr_time``, as KF-GINS).
+    declination : float
+        Magnetic declination, rad (east positive), for the magnetometer heading.
+    mag_heading_noise : float
+        σ of the magnetometer heading, rad (> 0; about the field noise over its horizontal strength, plus
+        the residual calibration and disturbance errors).
 
     Raises
     ------
@@ -153,6 +159,8 @@ class GinsConfig:
     zaru_noise: float = 1e-4
     baro_noise: float = 2.0
     scale_corr_time: float | None = None
+    declination: float = 0.0
+    mag_heading_noise: float = 0.02
 
     def __post_init__(self) -> None:
         s = object.__setattr__
@@ -165,7 +173,9 @@ class GinsConfig:
             s(self, name, getattr(self, src) if v is None else _v3(v, name, positive=True))
         s(self, "lever_arm", _v3(self.lever_arm, "lever_arm"))
         s(self, "odo_lever_arm", _v3(self.odo_lever_arm, "odo_lever_arm"))
-        for name in ("odo_noise", "odo_scale_std"):
+        if not np.isfinite(self.declination) or abs(self.declination) > np.pi:
+            raise InvalidInputError(f"GinsConfig.declination must be in [-pi, pi] rad; got {self.declination!r}")
+        for name in ("odo_noise", "odo_scale_std", "mag_heading_noise"):
             if not (np.isfinite(getattr(self, name)) and getattr(self, name) > 0):
                 raise InvalidInputError(f"GinsConfig.{name} must be > 0; got {getattr(self, name)!r}")
         if self.nhc_noise is not None and not (np.isfinite(self.nhc_noise) and self.nhc_noise > 0):
@@ -309,9 +319,9 @@ class GinsResult(Result):
         Removed fixes, number of states, gate threshold, covariance step, aids used.
     smoothed : SmoothedTrack or None
         The RTS solution when asked for (``GinsFilter.run(..., smoother=True)``).
-    zupt_nis, baro_nis : numpy.ndarray, shape (N,), or None
-        NIS of the ZUPT + ZARU (6 dof) and barometer (1 dof) updates per IMU sample, NaN where none was
-        applied.
+    zupt_nis, baro_nis, mag_nis : numpy.ndarray, shape (N,), or None
+        NIS of the ZUPT + ZARU (6 dof), barometer (1 dof) and magnetometer-heading (1 dof) updates per IMU
+        sample, NaN where none was applied.
     """
 
     t: Array
@@ -338,6 +348,7 @@ class GinsResult(Result):
     smoothed: SmoothedTrack | None = None
     zupt_nis: Array | None = None
     baro_nis: Array | None = None
+    mag_nis: Array | None = None
 
     def euler(self) -> Array:
         """ZYX Euler angles of ``q_nb``.
@@ -494,6 +505,9 @@ def _params(c: GinsConfig, fs: float, odometer: bool) -> Array:
         prm[key] = sd
     prm[_k.K_GATE_ZUPT] = gate(6)
     prm[_k.K_GATE_BARO] = gate(1)
+    prm[_k.K_DECL] = c.declination
+    prm[_k.K_MAG_SD] = c.mag_heading_noise
+    prm[_k.K_GATE_MAG] = gate(1)
     return prm
 
 
@@ -513,25 +527,26 @@ def _on_imu_grid(t: Array, aid: Any, kind: type, name: str, field_name: str) -> 
     return out
 
 
-def _at_imu_samples(t: Array, baro: Any) -> Array:
-    """Barometer samples placed at the nearest IMU stamp (not interpolated: interpolating white noise between
-    two samples would shrink its variance below the σ the update assumes), NaN elsewhere."""
-    if not isinstance(baro, BaroData):
-        raise InvalidInputError(f"baro must be a BaroData; got {type(baro).__name__}")
-    bt = np.asarray(baro.t, dtype=float)
-    if bt.size < 2 or np.any(np.diff(bt) <= 0):
-        raise InvalidInputError("baro time stamps must be strictly increasing (at least 2 samples)")
+def _at_imu_samples(t: Array, aid: Any, kind: type, name: str, field_name: str) -> Array:
+    """Aiding samples (barometer, magnetometer) placed at the nearest IMU stamp (not interpolated: interpolating
+    white noise between two samples would shrink its variance below the σ the update assumes), NaN elsewhere."""
+    if not isinstance(aid, kind):
+        raise InvalidInputError(f"{name} must be a {kind.__name__}; got {type(aid).__name__}")
+    at = np.asarray(aid.t, dtype=float)
+    if at.size < 2 or np.any(np.diff(at) <= 0):
+        raise InvalidInputError(f"{name} time stamps must be strictly increasing (at least 2 samples)")
     half = 0.5 * float(np.median(np.diff(t)))
-    inside = (bt >= t[0] - half) & (bt <= t[-1] + half)
+    inside = (at >= t[0] - half) & (at <= t[-1] + half)
     if not inside.any():
-        raise InvalidInputError(f"baro time {bt[0]:.3f}..{bt[-1]:.3f} s lies outside the IMU span")
-    k = np.clip(np.searchsorted(t, bt[inside]), 1, t.size - 1)
-    k = np.where(np.abs(t[k - 1] - bt[inside]) < np.abs(t[k] - bt[inside]), k - 1, k)
+        raise InvalidInputError(f"{name} time {at[0]:.3f}..{at[-1]:.3f} s lies outside the IMU span")
+    k = np.clip(np.searchsorted(t, at[inside]), 1, t.size - 1)
+    k = np.where(np.abs(t[k - 1] - at[inside]) < np.abs(t[k] - at[inside]), k - 1, k)
     if np.any(np.diff(k) == 0):
-        raise InvalidInputError("baro: two samples fall on one IMU sample (barometer rate above the IMU rate); "
-                                "decimate or average the barometer first")
-    out = np.full(t.size, np.nan)
-    out[k] = np.asarray(baro.height, dtype=float)[inside]
+        raise InvalidInputError(f"{name}: two samples fall on one IMU sample (rate above the IMU rate); "
+                                "decimate or average it first")
+    val = np.asarray(getattr(aid, field_name), dtype=float)
+    out = np.full((t.size,) + val.shape[1:], np.nan)
+    out[k] = val[inside]
     return out
 
 
@@ -560,7 +575,7 @@ class GinsFilter:
         Current error-state covariance (:data:`STATE_NAMES`, then the odometer scale).
     last_nis : dict
         NIS of the updates of the last :meth:`step`: ``gnss`` (G, 2) position / velocity, ``vehicle``,
-        ``zupt``, ``baro`` (NaN when not applied).
+        ``zupt``, ``baro``, ``mag`` (NaN when not applied).
 
     Raises
     ------
@@ -626,7 +641,8 @@ class GinsFilter:
         self.last_nis = {}
 
     def step(self, t: float, dtheta: ArrayLike, dvel: ArrayLike, *, gnss: GnssData | None = None,
-             odometer_speed: float | None = None, static: bool = False, baro_height: float | None = None) -> None:
+             odometer_speed: float | None = None, static: bool = False, baro_height: float | None = None,
+             mag_field: ArrayLike | None = None) -> None:
         """Process one IMU increment over ``(self.t, t]`` and the aiding measurements of that interval.
 
         The state attributes (``lla``, ``vel_ned``, ``q_nb``, ``imu_errors``, ``P``, ``t``) are updated in
@@ -647,6 +663,8 @@ class GinsFilter:
             The vehicle stands still at ``t``: ZUPT + ZARU.
         baro_height : float, optional
             Barometric height at ``t``, m.
+        mag_field : array_like, shape (3,), optional
+            Calibrated magnetometer sample at ``t``, body frame (any unit): heading update.
 
         Raises
         ------
@@ -681,14 +699,17 @@ class GinsFilter:
         self._prm[_k.K_USE_VEL] = 1.0 if use_vel else 0.0
         odo = np.array([np.nan, np.nan if odometer_speed is None else float(odometer_speed)])
         baro = np.array([np.nan, np.nan if baro_height is None else float(baro_height)])
+        mag = np.full((2, 3), np.nan)
+        if mag_field is not None:
+            mag[1] = _vec3_input(mag_field, "mag_field")
         out = self._kernel(np.array([self.t, t]), dth, dv, gt, glla, grp, gvel, grv, odo,
-                           np.array([0.0, 1.0 if static else 0.0]), baro, 0, False, False)
+                           np.array([0.0, 1.0 if static else 0.0]), baro, mag, 0, False, False)
         self.t = t
-        self.last_nis = {"gnss": out["nis"], "vehicle": float(out["veh"][1, 0]), "zupt": float(out["aid"][1, 0]),
-                         "baro": float(out["aid"][1, 1])}
+        self.last_nis = {"gnss": out["nis"], "vehicle": float(out["veh"][1, 0]), "zupt": float(out["aid"][1, _k.A_ZUPT]),
+                         "baro": float(out["aid"][1, _k.A_BARO]), "mag": float(out["aid"][1, _k.A_MAG])}
 
     def _kernel(self, t: Array, dth: Array, dv: Array, gt: Array, glla: Array, grp: Array, gvel: Array,
-                grv: Array, odo: Array, static: Array, baro: Array, nrec: int, first: bool,
+                grv: Array, odo: Array, static: Array, baro: Array, mag: Array, nrec: int, first: bool,
                 final: bool) -> dict[str, Any]:
         """One call of the kernel from the current state over ``t`` (the state at t[0]), in place."""
         n, ng, nx = t.size, gt.size, self.P.shape[0]
@@ -700,19 +721,20 @@ class GinsFilter:
             nis=np.full((ng, 2), np.nan), acc=np.zeros((ng, 2)), veh=np.full((n, 3), np.nan),
             rec_t=np.zeros(nrec), rec_phi=np.zeros((nrec, nx, nx)), rec_ppri=np.zeros((nrec, nx, nx)),
             rec_ppost=np.zeros((nrec, nx, nx)), rec_inj=np.zeros((nrec, nx)), rec_state=np.zeros((nrec, 10)),
-            aid=np.full((n, 2), np.nan))
+            aid=np.full((n, _k.NA), np.nan))
         c = np.ascontiguousarray
         o["m"], o["r"] = _k.gins_run(
             t, c(dth), c(dv), c(gt), c(glla), c(grp), c(gvel), c(grv), odo, np.full(n, self.config.odo_noise**2),
             self.q_nb, self.vel_ned, self.lla, self.imu_errors, self.P, self._carry, self._prm,
             o["q"], o["v"], o["lla"], o["err"], o["cov_t"], o["cov_diag"], o["cov_nav"], o["nis"], o["acc"], o["veh"],
             o["rec_t"], o["rec_phi"], o["rec_ppri"], o["rec_ppost"], o["rec_inj"], o["rec_state"], static, baro,
-            o["aid"], first, final)
+            c(mag), o["aid"], first, final)
         return o
 
     def run(self, imu: ImuData | ImuIncrements, gnss: GnssData, *, lla0: ArrayLike, vel0: ArrayLike,
             q0: ArrayLike, imu_errors0: ArrayLike | None = None, odometer: OdometerData | None = None,
-            smoother: bool = False, static: ArrayLike | None = None, baro: BaroData | None = None) -> GinsResult:
+            smoother: bool = False, static: ArrayLike | None = None, baro: BaroData | None = None,
+            mag: MagnetometerData | None = None) -> GinsResult:
         """Run the filter forward over the IMU recording (from a :meth:`reset` at its first sample).
 
         Parameters
@@ -738,6 +760,9 @@ class GinsFilter:
         baro : BaroData, optional
             Barometric heights (:class:`imunav.sim.vehicle.BaroData`), each used at the nearest IMU stamp (a
             covariance epoch there).
+        mag : MagnetometerData, optional
+            Calibrated magnetometer (:class:`imunav.sim.gnss.MagnetometerData`): heading updates
+            (``config.declination``, ``config.mag_heading_noise``), each at the nearest IMU stamp.
 
         Returns
         -------
@@ -763,7 +788,8 @@ class GinsFilter:
         st = np.zeros(n) if static is None else np.asarray(static, dtype=bool).astype(float)
         if st.shape != (n,):
             raise ShapeError(f"static must be (N,) = ({n},) booleans, one per IMU sample; got {st.shape}")
-        hb = np.full(n, np.nan) if baro is None else _at_imu_samples(t, baro)
+        hb = np.full(n, np.nan) if baro is None else _at_imu_samples(t, baro, BaroData, "baro", "height")
+        mg = np.full((n, 3), np.nan) if mag is None else _at_imu_samples(t, mag, MagnetometerData, "mag", "field_b")
         self.reset(lla0=lla0, vel0=vel0, q0=q0, t0=float(t[0]), fs=1.0 / float(np.median(np.diff(t))),
                    imu_errors0=imu_errors0, odometer=odometer is not None)
         c = self.config
@@ -772,7 +798,7 @@ class GinsFilter:
         ng = g.n
         nrec = (n // int(self._prm[_k.K_COV_STEP]) + ng + 3) if smoother else 0
         o = self._kernel(t, dth, dv, g.t, g.lla, g.pos_std**2, g.vel_ned if use_vel else np.zeros((ng, 3)),
-                         g.vel_std**2 if use_vel else np.ones((ng, 3)), odo, st, hb, nrec, True, True)
+                         g.vel_std**2 if use_vel else np.ones((ng, 3)), odo, st, hb, mg, nrec, True, True)
         self.t = float(t[-1])
         self._prev = np.vstack([imu.dtheta[-1], imu.dvel[-1]]) if isinstance(imu, ImuIncrements) else np.zeros((2, 3))
         m, r = o["m"], o["r"]
@@ -789,7 +815,8 @@ class GinsFilter:
         return GinsResult(t, o["lla"], o["v"], o["q"], err[:, 0:3], err[:, 3:6], err[:, 6:9], err[:, 9:12],
                           err[:, _k.E_ODO], o["cov_t"][:m], o["cov_diag"][:m], o["cov_nav"][:m], g.t.copy(), o["nis"],
                           o["acc"] > 0.5, t[used], veh[used, 0], veh[used, 2].astype(int), veh[used, 1] > 0.5, c, meta,
-                          smoothed, o["aid"][:, _k.A_ZUPT].copy(), o["aid"][:, _k.A_BARO].copy())
+                          smoothed, o["aid"][:, _k.A_ZUPT].copy(), o["aid"][:, _k.A_BARO].copy(),
+                          o["aid"][:, _k.A_MAG].copy())
 
 
 def _vec3_input(x: ArrayLike, name: str) -> Array:
