@@ -6,7 +6,10 @@ corrections) or increments (:class:`~imunav.io.kfgins.ImuIncrements`) with
 gyro and accelerometer biases) or 21 (plus scale factors), biases and scale factors being first-order
 Gauss–Markov processes with configurable σ and correlation time (:class:`GinsConfig`).  GNSS fixes are used at
 their own time stamps between IMU samples, with the antenna lever arm, behind a χ² gate; every epoch's NIS is
-recorded.  The equations are in :mod:`imunav.ins._gins_kernels`.
+recorded.  Odometer + non-holonomic constraint, ZUPT + ZARU, barometric height and magnetometer heading are
+further aiding models, each with its gate and NIS record.  ``GinsFilter(config).run(imu, gnss, ...)`` filters a
+recording; ``reset(...)`` then ``step(t, dθ, dv, gnss=..., ...)`` runs the same kernel one increment at a time.
+The equations are in :mod:`imunav.ins._gins_kernels`.
 
 Example
 -------
