@@ -84,6 +84,7 @@ def simulate_cmd(
         f"initvel: {_v(truth.vel_ned[0])}", f"initatt: {_v(eul, '{:.8f}')}",
         "initgyrbias: [ 0, 0, 0 ]", "initaccbias: [ 0, 0, 0 ]", "initgyrscale: [ 0, 0, 0 ]", "initaccscale: [ 0, 0, 0 ]",
         "initposstd: [ 0.5, 0.5, 1.0 ]", "initvelstd: [ 0.05, 0.05, 0.05 ]", "initattstd: [ 0.1, 0.1, 0.5 ]",
+        f"initbgstd: {_v(cfg.init_gyro_bias_std / (DEG / HOUR))}", f"initbastd: {_v(cfg.init_accel_bias_std / 1e-5)}",
         "imunoise:",
         f"  arw: {_v(cfg.arw / (DEG / 60))}", f"  vrw: {_v(cfg.vrw * 60)}",
         f"  gbstd: {_v(cfg.gyro_bias_std / (DEG / HOUR))}", f"  abstd: {_v(cfg.accel_bias_std / 1e-5)}",
