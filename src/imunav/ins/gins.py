@@ -311,7 +311,7 @@ class GinsResult(Result):
     odo_scale : numpy.ndarray, shape (N,)
         Estimated odometer scale factor (zero without odometer).
     cov_t : numpy.ndarray, shape (M,)
-        Times of the covariance records, s.
+        Times of the covariance records, s (every covariance step, barometer and magnetometer sample).
     cov_diag : numpy.ndarray, shape (M, n)
         Variances of the error states (:data:`STATE_NAMES`, then the odometer scale), SI squared.
     cov_nav : numpy.ndarray, shape (M, 9, 9)
@@ -731,7 +731,7 @@ class GinsFilter:
         """One call of the kernel from the current state over ``t`` (the state at t[0]), in place."""
         n, ng, nx = t.size, gt.size, self.P.shape[0]
         cs = int(self._prm[_k.K_COV_STEP])
-        mmax = n // cs + 3
+        mmax = n // cs + 3 + int(np.count_nonzero(~np.isnan(baro)) + np.count_nonzero(~np.isnan(mag[:, 0])))
         o: dict[str, Any] = dict(
             q=np.empty((n, 4)), v=np.empty((n, 3)), lla=np.empty((n, 3)), err=np.empty((n, _k.NE)),
             cov_t=np.empty(mmax), cov_diag=np.empty((mmax, nx)), cov_nav=np.empty((mmax, 9, 9)),
@@ -813,7 +813,8 @@ class GinsFilter:
         use_vel = c.use_gnss_velocity and g.vel_ned is not None
         self._prm[_k.K_USE_VEL] = 1.0 if use_vel else 0.0
         ng = g.n
-        nrec = (n // int(self._prm[_k.K_COV_STEP]) + ng + 3) if smoother else 0
+        nrec = (n // int(self._prm[_k.K_COV_STEP]) + ng + 3 + int(np.count_nonzero(~np.isnan(hb))) +
+                int(np.count_nonzero(~np.isnan(mg[:, 0])))) if smoother else 0
         o = self._kernel(t, dth, dv, g.t, g.lla, g.pos_std**2, g.vel_ned if use_vel else np.zeros((ng, 3)),
                          g.vel_std**2 if use_vel else np.ones((ng, 3)), odo, st, hb, mg, nrec, True, True)
         self.t = float(t[-1])
