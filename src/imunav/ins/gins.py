@@ -262,6 +262,11 @@ class GinsConfig:
         -------
         GinsConfig
             The filter configuration.
+
+        Raises
+        ------
+        InvalidInputError
+            If ``white_below_s`` is negative, or a field is out of range (as :class:`GinsConfig`).
         """
         m = presets.get(name)
 
