@@ -21,8 +21,9 @@ import json
 import time
 
 import numpy as np
+from _before_after import report  # the before (a308974) / after lines
 
-from imunav.airdata.filter import run_thesis_filter_batch, thesis_matrices
+from imunav.airdata.filter import ThesisFilter, thesis_matrices
 from imunav.airdata.scenario import ThesisScenario, covariance_sequence, monte_carlo_thesis, simulate_thesis_batch
 
 
@@ -86,7 +87,7 @@ def main() -> None:
     n = min(a.runs, 200)
     z, _, _ = simulate_thesis_batch(ThesisScenario(), n, a.seed)
     t0 = time.perf_counter()
-    xb = run_thesis_filter_batch(z).x
+    xb = ThesisFilter().run_batch(z).x
     tb = time.perf_counter() - t0
     n_loop = min(n, 20)
     t0 = time.perf_counter()
@@ -95,6 +96,7 @@ def main() -> None:
     diff = float(np.max(np.abs(xb[:n_loop] - xl)))
     print(f"\nspeed, {n} runs × 500 steps: batch {tb:.2f} s, per-run loop {tl:.2f} s (extrapolated from "
           f"{n_loop}); ratio {tl / tb:.1f}×; max |Δx| {diff:.1e}")
+    report("bench_airdata_thesis", {"batch filter us/run-step": 1e6 * tb / (n * 500), "textbook loop us/run-step": 1e6 * tl / (n * 500), "Monte Carlo s": t_mc, "P44 max |diff| to thesis": worst, "KF RMS max axis": max(w["kf_rms_per_axis"]), "variance ratio": w["variance_ratio"], **{f"{k} {f}": v[f] for k, v in mc.robust.items() if k != "optimal" for f in ("rejected_anomalous", "rejected_nominal", "nominal_rms_ratio_to_optimal")}}, times=("batch filter us/run-step", "textbook loop us/run-step", "Monte Carlo s"))
     if a.json:
         with open(a.json, "w") as f:
             json.dump({"covariance_sequence": cov, "monte_carlo": mc.to_dict(), "speed_ratio": tl / tb}, f, indent=2)

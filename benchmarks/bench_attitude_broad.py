@@ -34,13 +34,14 @@ import numpy as np
 from imunav.attitude.adaptive import ADAPTIVE_GRID
 from imunav.attitude.benchmark import cv_grid_search, evaluate
 from imunav.attitude.metrics import attitude_rmse
+from imunav.attitude.smoother import SMOOTHER_GRID
 from imunav.io.broad import broad_trials, from_enu, load_broad
 from imunav.io.datasets import shared_data_path
 
 #: grids of the leave-one-trial-out tuning, per filter
 GRIDS = {
     "adaptive": ADAPTIVE_GRID,
-    "smoother": ADAPTIVE_GRID,
+    "smoother": SMOOTHER_GRID,
     "madgwick_c": {"beta": [0.03, 0.06, 0.09, 0.12, 0.15, 0.2]},
     "mahony": {"kp": [0.25, 0.5, 0.74, 1.0, 1.5], "ki": [0.0, 0.0012, 0.005]},
     "mekf": {"sigma_acc": [0.02, 0.05, 0.1], "sigma_mag": [0.05, 0.2, 0.5]},

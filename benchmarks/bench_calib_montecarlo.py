@@ -25,6 +25,7 @@ import dataclasses
 import time
 
 import numpy as np
+from _before_after import report  # the before (a308974) / after lines
 
 
 def build(fs: float, dwell: float, lat: float | None):
@@ -144,6 +145,7 @@ def main() -> None:
         out_cov[k] = dict(zip(names[k], c.tolist()))
         print(f"  {k:8s} " + "  ".join(f"{n}={x:.2f}" for n, x in zip(names[k], c)))
     print(f"lowest coverage: {worst:.2f}")
+    report("bench_calib_montecarlo", {"s per run": dt / a.runs, "mean success accel %": acc.mean(), "mean success gyro %": gyr.mean(), "lowest 3-sigma coverage": worst}, times=("s per run",))
     if getattr(model.accel.bias_instability, "tau", None) is not None:
         r = efficiency_bound(sp, model)
         print("variance of GLS on 1-s bins / GLS on position means (accel T_i1, T_i2, T_i3, b_i): "

@@ -23,6 +23,8 @@ import os
 import sys
 import time
 
+from _before_after import report  # the before (a308974) / after lines
+
 
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
@@ -72,6 +74,7 @@ def main(argv: list[str] | None = None) -> int:
         paper = PAPER_TABLE2.get(fname)
         ref = "" if paper is None else f"   paper Table 2: {paper[0] if ang.startswith('pitch') else paper[1]}"
         print(f"  {col:28s} {s['mean']:.4f} {s['std']:.4f} {s['p5']:.4f} {s['p50']:.4f} {s['p95']:.4f}{ref}")
+    report("bench_lab_montecarlo", {"CPU ms per run": per_run * 1e3, **{f"{c} mean": summ[c]["mean"] for c in mc.metrics.columns}, **{f"{c} std": summ[c]["std"] for c in mc.metrics.columns}}, times=("CPU ms per run",))
     if "dask" in results:
         same = mc.metrics.equals(results["dask"].metrics)
         print(f"\nDask LocalCluster ({a.workers} workers) identical to local processes: {same}")

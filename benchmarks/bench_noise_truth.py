@@ -20,6 +20,7 @@ import sys
 import time
 
 import numpy as np
+from _before_after import report  # the before (a308974) / after lines
 
 from imunav.noise import allan_deviation, fit_noise
 
@@ -39,6 +40,7 @@ def simulate(n_d: float, k: float, rng: np.random.Generator) -> np.ndarray:
 
 def main(n_runs: int = 50) -> None:
     t0 = time.perf_counter()
+    FIGS = {}  # headline figures for the before/after lines
     for name, (n_true, k_true, unit) in SENSORS.items():
         est = []
         inside = []
@@ -65,9 +67,12 @@ def main(n_runs: int = 50) -> None:
         print(f"{'GLS 95% CI coverage':24s}{inside[:, 0].mean():12.0%}{inside[:, 1].mean():12.0%}")
         print(f"{'slope median rel err':24s}{np.median(rel_s[:, 0]):12.2%}{np.median(rel_s[:, 1]):12.2%}")
         print(f"{'slope median |rel err|':24s}{np.median(abs(rel_s[:, 0])):12.2%}{np.median(abs(rel_s[:, 1])):12.2%}")
+        FIGS.update({f"{name} GLS median rel err {p}": np.median(rel[:, i]) for i, p in enumerate("NK")})
+        FIGS.update({f"{name} GLS CI coverage {p}": inside[:, i].mean() for i, p in enumerate("NK")})
         ok = (np.all(np.abs(np.median(rel, axis=0)) <= 0.05) and np.all(inside.mean(axis=0) >= 0.9))
         print(f"acceptance (median rel err <= 5 %, coverage >= 90 %): {'MET' if ok else 'NOT MET'}")
     print(f"\ntotal {time.perf_counter() - t0:.0f} s")
+    report("bench_noise_truth", {"total s": time.perf_counter() - t0, **FIGS}, times=("total s",))
 
 
 if __name__ == "__main__":

@@ -17,10 +17,13 @@ import time
 
 import numpy as np
 import pandas as pd
+from _before_after import report  # the before (a308974) / after lines
 
 from imunav.io import FORMATS, read_imu, write_imu
 from imunav.timeseries import ImuData, static_intervals
 from imunav.units import G0
+
+FIGS: dict[str, float] = {}  # headline figures for the before/after lines
 
 
 def _record(n: int, seed: int = 0) -> ImuData:
@@ -55,6 +58,7 @@ def bench_static(n: int) -> None:
     s2 = static_intervals(d, window_s=1.0, threshold=(si.accel_threshold, si.gyro_threshold), use_gyro=True)
     assert np.array_equal(s2.mask, si.mask)
     print(f"  pandas marks {quiet.mean():.3f} of the windows static; imunav marks {si.mask.mean():.3f} of the samples")
+    FIGS.update({"static_intervals ns/sample": 1e9 * t_imunav / n, "pandas rolling var ns/sample": 1e9 * t_pandas / n, "static intervals found": len(si), "static share": si.mask.mean()})
 
 
 def bench_io(n: int) -> None:
@@ -69,6 +73,7 @@ def bench_io(n: int) -> None:
             back = read_imu(p)
             t2 = time.perf_counter()
             exact = all(np.array_equal(getattr(d, k).view(np.uint64), getattr(back, k).view(np.uint64)) for k in ("t", "gyro", "accel", "temp"))
+            FIGS.update({f"{fmt} write us/sample": 1e6 * (t1 - t0) / n, f"{fmt} read us/sample": 1e6 * (t2 - t1) / n})
             print(f"  {fmt:8s} write {t1 - t0:6.2f} s  read {t2 - t1:6.2f} s  {os.path.getsize(p) / 1e6:7.1f} MB  bit-exact {exact}")
 
 
@@ -77,3 +82,4 @@ if __name__ == "__main__":
     n_io = int(float(sys.argv[2])) if len(sys.argv) > 2 else 1_000_000
     bench_static(n_static)
     bench_io(n_io)
+    report("bench_recordings", FIGS, times=[k for k in FIGS if k.endswith("/sample")])

@@ -12,6 +12,8 @@ from __future__ import annotations
 
 import time
 
+from _before_after import report  # the before (a308974) / after lines
+
 from imunav.sim import hundred_position_profile, ideal_imu, thesis_rate_table_profile
 
 
@@ -32,6 +34,7 @@ def main() -> None:
     print(f"{'profile':<20}{'samples':>10}{'build s':>10}{'ideal s':>10}{'Msamples/s':>12}")
     for name, n, tb, ti in rows:
         print(f"{name:<20}{n:>10}{tb:>10.2f}{ti:>10.2f}{n / (tb + ti) / 1e6:>12.2f}")
+    report("bench_sim_profiles", {f"{r[0]} {k} ns/sample": 1e9 * r[i] / r[1] for r in rows for k, i in (("build", 2), ("ideal", 3))}, times=[f"{r[0]} {k} ns/sample" for r in rows for k in ("build", "ideal")])
 
 
 if __name__ == "__main__":

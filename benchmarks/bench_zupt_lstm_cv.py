@@ -4,7 +4,7 @@ Protocol (issue 12, items 1 and 3), all through :mod:`imunav.crossval`:
 
 * groups: the recording session of each trial (the date in its file name, 5 sessions);
 * classical baseline: every detector x threshold of ``GRIDS`` scored on every
-  trial (run_zupt with the default ZuptConfig, error_2d against VICON);
+  trial (ZuptFilter with the default ZuptConfig, error_2d against VICON);
   :func:`select_by_cv` picks the single fixed (detector, threshold) on the
   training sessions and scores the held-out session with it (out of fold);
 * LSTM: :func:`cross_validate` trains on the training sessions only: labels =
@@ -43,7 +43,7 @@ from pathlib import Path
 import numpy as np
 
 from imunav.crossval import cross_validate, pyshoe_session, select_by_cv
-from imunav.ins import ZuptConfig, detector_statistic, error_2d, run_zupt
+from imunav.ins import ZuptConfig, ZuptFilter, detector_statistic, error_2d
 from imunav.io.datasets import shared_data_path
 from imunav.io.foot import read_pyshoe_mat
 from imunav.learn import (
@@ -80,7 +80,7 @@ RULES = {
 
 
 def _err(tr, zv, cfg) -> float:
-    return error_2d(run_zupt(tr.imu, zv, cfg).position, tr.position)
+    return error_2d(ZuptFilter(cfg).run(tr.imu, zv).position, tr.position)
 
 
 def _train_key(train_names, cfg) -> str:
@@ -201,7 +201,7 @@ def main() -> None:
                          "raw": model.detect(imu, probability=pw, guard=False).zv,
                          "shoe": detector_statistic(imu, "shoe") < model.config.shoe_threshold}
                 for k, zv in flags.items():
-                    extra[f"fast{f}_{k}"][i] = error_2d(run_zupt(imu, zv, cfg_ins).position, ref)
+                    extra[f"fast{f}_{k}"][i] = error_2d(ZuptFilter(cfg_ins).run(imu, zv).position, ref)
                     extra[f"fast{f}_stance_{k}"][i] = float(np.mean(zv))
         return errs
 

@@ -39,8 +39,9 @@ import itertools
 import sys
 
 import numpy as np
+from _before_after import report  # the before (a308974) / after lines
 
-from imunav.ins import ZuptConfig, detect_zero_velocity, loop_closure_error, run_zupt
+from imunav.ins import ZuptConfig, ZuptFilter, detect_zero_velocity, loop_closure_error
 from imunav.io.datasets import shared_data_path
 from imunav.io.foot import read_xio_gait_csv
 
@@ -49,7 +50,7 @@ PUBLISHED = {"short_walk": 0.082, "long_walk": 0.421}
 
 def closure(imu, zv, sigma_acc=2.0, **kw):
     cfg = ZuptConfig(alignment="first_stance", g=None, sigma_acc=sigma_acc, **kw)
-    res = run_zupt(imu, zv, cfg)
+    res = ZuptFilter(cfg).run(imu, zv)
     return loop_closure_error(res.position), res
 
 
@@ -100,6 +101,7 @@ def main() -> int:
     if base is None or not (base / "short_walk.csv").is_file():
         print("x-io walks not found (set IMUNAV_DATA or put the data in ../shared/data); nothing to measure")
         return 0
+    FIGS = {}  # headline figures for the before/after lines
     for name, pub in PUBLISHED.items():
         imu = read_xio_gait_csv(base / f"{name}.csv").imu
         zv = detect_zero_velocity(imu, "shoe", 1e8, margin_s=0.125).zv
@@ -117,7 +119,8 @@ def main() -> int:
                   f"{float(np.hypot(*(pos[-1, :2] - pos[0, :2]))):8.4f} {abs(pos[-1, 2] - pos[0, 2]):8.4f} "
                   f"{1.0:6.2f}")
 
-        def row(label, lc, ref=ref):
+        def row(label, lc, ref=ref, name=name):
+            FIGS[f"{name} row {len(FIGS) % 7 + 1} ({label.strip()}) 3-D m"] = lc.error_3d
             print(f"  {label:60s} {lc.error_3d:8.4f} {lc.horizontal:8.4f} {abs(lc.vertical):8.4f} "
                   f"{lc.error_3d / ref:6.2f}")
 
@@ -145,6 +148,7 @@ def main() -> int:
                 label = "level floor" if floor else "plain"
                 print(f"  sensitivity {det} ({label}, {v.size} settings): median {np.median(v):.3f} m, "
                       f"range {v.min():.3f}-{v.max():.3f} m, below published in {np.mean(v < pub) * 100:.0f} %")
+    report("bench_zupt_xio", FIGS)
     return 0
 
 

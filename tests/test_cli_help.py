@@ -62,7 +62,7 @@ def test_help_lists_the_commands_without_importing_them():
         "from imunav.cli.main import app\n"
         "r = CliRunner().invoke(app, ['--help'])\n"
         "assert r.exit_code == 0 and 'calibrate' in r.output, r.output\n"
-        "heavy = ('numba', 'scipy', 'pandas', 'matplotlib')\n"
+        "heavy = ('numba', 'scipy', 'pandas', 'matplotlib', 'torch', 'dask')\n"
         "print(sorted(m for m in sys.modules if m.split('.')[0] in heavy or (m.startswith('imunav.cli.') and m not in "
         "('imunav.cli.main', 'imunav.cli._lazy', 'imunav.cli._errors'))))\n"
     )

@@ -3,7 +3,7 @@ function-level import except of an optional dependency (each commented ``# optio
 
 The graph is read from the source with :mod:`ast` (nothing is imported): every ``import`` and
 ``from ... import`` of a module, at module level or inside a function, relative imports resolved, and a
-name taken from a package (``from imunav.ins import run_zupt``) followed through the package's
+name taken from a package (``from imunav.ins import ZuptFilter``) followed through the package's
 ``__init__`` re-exports to the module that defines it.  Imports under ``if TYPE_CHECKING:`` are
 annotations only (they never run) and are not edges.  Importing ``a.b.c`` also runs ``a/__init__`` and
 ``a/b/__init__`` (unless they are the importer's own packages, already running): those are edges too,
@@ -33,7 +33,8 @@ LAYERS: list[tuple[str, tuple[str, ...]]] = [
     ("core", ("imunav", "imunav.errors", "imunav.units", "imunav.rotation", "imunav._rotation_kernels",
               "imunav.earth", "imunav.allan_models", "imunav.crossval", "imunav._timeseries_kernels",
               "imunav.provenance", "imunav._atomic", "imunav.runfolder", "imunav.filters._common",
-              "imunav.filters._kernels", "imunav.filters._core", "imunav.results", "imunav._docstrings")),
+              "imunav.filters._kernels", "imunav.filters._core", "imunav.results", "imunav._docstrings",
+              "imunav._quantiles")),
     ("recordings, io", ("imunav.timeseries", "imunav.io")),
     ("noise, calib, filters", ("imunav.noise", "imunav.calib", "imunav.filters")),
     ("sim, attitude, ins, airdata, learn", ("imunav.sim", "imunav.attitude", "imunav.ins", "imunav.airdata",
@@ -264,16 +265,43 @@ def test_function_level_imports_only_for_optional_dependencies(graph):
     assert function_level_problems(graph) == []
 
 
-def test_importing_the_packages_does_not_load_matplotlib():
-    """matplotlib is imported inside the drawing functions only: every package (plot modules included) imports
-    without it, in a fresh interpreter."""
-    packages = sorted(m for m, p in build_graph(SRC, "imunav").modules.items()
-                      if p.name == "__init__.py" or m.endswith(".plot") or m in ("imunav.lab", "imunav.batch"))
-    code = f"import sys\nimport {', '.join(packages)}\nprint('matplotlib' in sys.modules)\n"
+#: never loaded by importing a package or a CLI command module: drawing and optional extras, imported inside
+#: the functions that need them
+NOT_AT_IMPORT = ("matplotlib", "torch", "dask", "distributed")
+
+#: prints the optional packages loaded and the numba kernels compiled or loaded from the cache so far
+_LOADED = (
+    "import sys\n"
+    "from numba.core.dispatcher import Dispatcher\n"
+    "mods = sorted({{m.split('.')[0] for m in sys.modules}} & set({heavy!r}))\n"
+    "ran = sorted(f'{{n}}.{{k}}' for n, m in list(sys.modules.items()) if n.startswith('imunav') "
+    "for k, v in vars(m).items() if isinstance(v, Dispatcher) and v.signatures)\n"
+    "print(mods, ran)\n"
+)
+
+
+def _run_python(code: str) -> str:
     env = {**os.environ, "PYTHONPATH": os.pathsep.join(p for p in (str(SRC), os.environ.get("PYTHONPATH")) if p)}
     r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=env, timeout=300)
     assert r.returncode == 0, r.stderr[-3000:]
-    assert r.stdout.strip() == "False"
+    return r.stdout.strip()
+
+
+def test_importing_the_packages_loads_no_optional_package_and_runs_no_kernel():
+    """matplotlib, torch and dask are imported inside the functions that need them: every package (plot modules
+    included) and every CLI command module (what ``imunav CMD --help`` imports) imports without them, in a fresh
+    interpreter, and no numba kernel runs (or is loaded from the cache) at import: a module-level constant
+    computed by a kernel costs a compilation on a cold cache."""
+    modules = build_graph(SRC, "imunav").modules
+    packages = sorted(m for m, p in modules.items() if p.name == "__init__.py" or m.endswith(".plot")
+                      or m in ("imunav.lab", "imunav.batch") or m.startswith("imunav.cli."))
+    code = f"import {', '.join(packages)}\n" + _LOADED.format(heavy=NOT_AT_IMPORT)
+    assert _run_python(code) == "[] []"
+
+
+def test_import_imunav_is_light():
+    """``import imunav`` loads neither pandas nor the drawing / optional packages."""
+    assert _run_python("import imunav\n" + _LOADED.format(heavy=("pandas", *NOT_AT_IMPORT))) == "[] []"
 
 
 def _write_package(root: Path, files: dict[str, str]) -> Path:

@@ -97,10 +97,10 @@ def test_a_dask_scheduler_that_does_not_answer_fails_fast(tmp_path):
 
 @pytest.mark.parametrize("gate", ["0", "-1", "nan"])
 def test_gate_m_must_be_positive(tmp_path, gate):
-    from imunav.airdata.filter import run_thesis_filter
+    from imunav.airdata.filter import ThesisFilter
 
     with pytest.raises(InvalidInputError, match="gate_m"):
-        run_thesis_filter(np.zeros((20, 3)), robust="gate", gate_m=float(gate))
+        ThesisFilter(robust="gate", gate_m=float(gate)).run(np.zeros((20, 3)))
     assert _cli("airdata", "simulate", "cruise", "--duration", "20", "--out", tmp_path / "a.npz").exit_code == 0
     assert "gate" in _one_line(_cli("airdata", "run", tmp_path / "a.npz", "--robust", "gate", "--gate-m", gate))
 

@@ -11,7 +11,8 @@ Core layer: imports nothing from imunav.
 from __future__ import annotations
 
 import re
-from typing import TypeVar
+from collections.abc import Callable
+from typing import Any, TypeVar, overload
 
 __all__ = ["DOCS", "fill_doc"]
 
@@ -64,24 +65,35 @@ def _indent(text: str, prefix: str) -> str:
     return "\n".join(prefix + line if line else line for line in text.split("\n"))
 
 
-def fill_doc(obj: F) -> F:
+@overload
+def fill_doc(obj: F, /) -> F: ...
+@overload
+def fill_doc(obj: None = None, /, **fields: str) -> Callable[[F], F]: ...
+def fill_doc(obj: Any = None, /, **fields: str) -> Any:
     """Replace each placeholder line ``%(name)s`` of ``obj.__doc__`` by the fragment ``DOCS[name]``.
 
     Parameters
     ----------
-    obj : function or class
-        The object whose docstring holds placeholders, each alone on its line.
+    obj : function or class, optional
+        The object whose docstring holds placeholders, each alone on its line.  Without it (``@fill_doc(step=...)``)
+        the decorator to apply is returned.
+    **fields : str
+        Words a fragment leaves open: ``%(step)s`` inside a fragment's text becomes ``fields["step"]``.
 
     Returns
     -------
     function or class
-        ``obj`` itself, its ``__doc__`` filled (every line of a fragment indented like its placeholder).
+        ``obj`` itself, its ``__doc__`` filled (every line of a fragment indented like its placeholder); without
+        ``obj``, the decorator that fills it.
 
     Raises
     ------
     KeyError
-        If a placeholder names no fragment of :data:`DOCS` (a typo in the docstring, found at import).
+        If a placeholder names no fragment of :data:`DOCS` (a typo in the docstring, found at import), or a
+        fragment leaves open a field that ``fields`` does not give.
     """
+    if obj is None:
+        return lambda o: fill_doc(o, **fields)
     doc = getattr(obj, "__doc__", None)
     if doc:
 
@@ -89,10 +101,20 @@ def fill_doc(obj: F) -> F:
             name = m.group(2)
             if name not in DOCS:
                 raise KeyError(f"docstring placeholder %({name})s: no such fragment in imunav._docstrings.DOCS")
-            return _indent(DOCS[name], m.group(1))
+            text = _FIELD.sub(lambda f: _field(f.group(1), fields, name), DOCS[name])
+            return _indent(text, m.group(1))
 
         obj.__doc__ = _PLACEHOLDER.sub(sub, doc)
     return obj
+
+
+_FIELD = re.compile(r"%\((\w+)\)s")
+
+
+def _field(key: str, fields: dict[str, str], fragment: str) -> str:
+    if key not in fields:
+        raise KeyError(f"fragment {fragment!r} leaves %({key})s open: pass it, e.g. @fill_doc({key}=...)")
+    return fields[key]
 
 
 # --- attitude filters: reset / step / run -------------------------------------------------------------
@@ -217,7 +239,7 @@ None"""
 DOCS["gravity_factory"] = """\
 Parameters
 ----------
-params : GravityKfConfig, optional
+config : GravityKfConfig, optional
     Filter settings (default :class:`GravityKfConfig` ()).
 **kw
     Further :class:`GravityKF` fields (``accel_convention``).
@@ -362,3 +384,344 @@ Returns
 -------
 BatchSummary
     One row per unit (also written as ``summary.csv`` / ``summary.json``)."""
+
+# --- dedup-io ---
+DOCS["lab_step_run"] = """\
+Parameters
+----------
+ctx : LabContext
+    The lab's context: the step's option table ``ctx.options`` (``[%(step)s]``), the artifacts it reads and
+    sets, the report folder.
+
+Returns
+-------
+StepResult"""
+
+DOCS["lab_step_report"] = """\
+Parameters
+----------
+section : imunav.report.html.Section
+    The step's section.
+result : StepResult
+    What :func:`run` returned.
+ctx : LabContext
+    The lab's context (its ``[spec]`` and artifacts)."""
+
+DOCS["imu_writer_params"] = """\
+Parameters
+----------
+data : ImuData
+    The recording.
+path : str or os.PathLike
+    Output file."""
+
+DOCS["returns_file_written"] = """\
+Returns
+-------
+pathlib.Path
+    The file written."""
+
+DOCS["noise_yaml_fits"] = """\
+Parameters
+----------
+path : path-like
+    The YAML file to write (atomically).
+gyro, accel : NoiseFit
+    Noise fits of the gyroscope (rad/s) and accelerometer (m/s^2) channels."""
+
+DOCS["noise_yaml_rate"] = """\
+update_rate : float
+    IMU sample rate, Hz."""
+
+DOCS["noise_yaml_combine_returns"] = """\
+combine : {"max", "mean"}
+    One value per sensor: the maximum (default) or mean over the axes.
+
+Returns
+-------
+Path
+    ``path``."""
+
+DOCS["topic_returns"] = """\
+Returns
+-------
+TopicData
+    The topic in SI units, body FRD / world NED, ``t`` in s since ``meta["t0_ns"]``."""
+
+DOCS["imu_topic_returns"] = DOCS["topic_returns"] + """
+    Gyro (rad/s) and specific force (m/s²) in body FRD, ``t`` in s since ``meta["t0_ns"]``.
+
+Raises
+------
+InvalidInputError"""
+
+DOCS["accel_window"] = """\
+Parameters
+----------
+accel : array_like, shape (N, 3)
+    Specific force in the body (FRD) frame, m/s².
+window : int, optional
+    Window length ``W`` in samples, >= 2 (default 5)."""
+
+DOCS["strapdown_data_q0"] = """\
+Parameters
+----------
+data : ImuData
+    The recording (SI: rad/s, m/s², specific force), body FRD.
+q0 : array_like, shape (4,)
+    Initial attitude ``q_nb`` (unit quaternion)."""
+
+DOCS["section_chain_returns"] = """\
+Returns
+-------
+Section
+    ``self``, so that calls chain."""
+
+DOCS["axes_drawn_returns"] = """\
+Returns
+-------
+matplotlib.axes.Axes
+    The axes drawn into."""
+
+DOCS["config_to_dict"] = """\
+Returns
+-------
+dict
+    One key per field."""
+
+DOCS["fault_innovations_window"] = """\
+Parameters
+----------
+normalized : array_like, shape (N, s)
+    Normalised innovations ``ν̃ = S^{-1/2} ν`` (a 1-D array is one channel), finite.
+M : int, optional
+    Window length in steps, > s (default 20)."""
+
+DOCS["fault_batch_innovations_window"] = """\
+Parameters
+----------
+normalized : array_like, shape (N, s) or (R, N, s)
+    Normalised innovations ``ν̃ = S^{-1/2} ν`` of one run or a batch of runs, finite.
+M : int, optional
+    Window length in steps, > s (default 20)."""
+# --- dedup-core ---
+DOCS["rot_q_params"] = _PARAMS + DOCS["rot_q"]
+
+
+DOCS["finite_shape_raises"] = """\
+Raises
+------
+NonFiniteError
+    If ``%(arg)s`` is not finite.
+ShapeError
+    If ``%(arg)s`` is not %(shapes)s."""
+
+DOCS["rot_euler_raises"] = """\
+Raises
+------
+ShapeError
+    If only one of ``pitch`` / ``yaw`` is given, or the shapes do not broadcast."""
+
+DOCS["earth_lat_params"] = _PARAMS + DOCS["earth_lat"]
+
+DOCS["earth_lat_h_raises"] = """\
+Raises
+------
+InvalidInputError
+    If a latitude is outside [-pi/2, pi/2] or a height outside :data:`H_RANGE_M`.
+NonFiniteError
+    If an input is NaN or infinite."""
+
+DOCS["earth_ref_lla_returns"] = """\
+ref_lla : array_like, shape (3,)
+    Origin of the local NED frame: geodetic ``(lat, lon, h)``, rad, rad, m.
+
+Returns
+-------
+numpy.ndarray, shape (3,) or (N, 3)"""
+
+DOCS["earth_ned_params"] = _PARAMS + """\
+ned : array_like, shape (3,) or (N, 3)
+    North, east, down coordinates, m."""
+
+DOCS["profile_position_returns"] = DOCS["profile_position"] + """
+
+Returns
+-------
+Profile
+    The trajectory (exact body rates) and its segment table."""
+
+DOCS["profile_t0_returns"] = DOCS["profile_position"] + """
+t0 : float
+    Time of the first sample, s.
+""" + DOCS["profile_returns"]
+
+DOCS["profile_static_params"] = _PARAMS + """\
+fs : float
+    Sample rate, Hz.
+dwell_s : float
+    Static time per position, s.
+transition_s : float
+    Duration of each move, s."""
+
+DOCS["profile_rate_moves"] = """\
+transition_s : float
+    Duration of each rate ramp, s.
+remount_s : float
+    Duration of the re-mounting move when the axis changes, s."""
+
+DOCS["write_path_returns"] = _PARAMS + """\
+path : str or os.PathLike
+    Output file.
+
+""" + DOCS["returns_file_written"]
+
+
+DOCS["means_fit_raises"] = """\
+Raises
+------
+ShapeError
+    If the arrays are not (K, 3) with the same K.
+InsufficientDataError
+    With too few %(units)s for the parameters.
+DegenerateGeometryError
+    If the %(inputs)s do not excite every axis."""
+
+DOCS["calib_f_ref_params"] = _PARAMS + """\
+f_ref : array_like, shape (K, 3)
+    Reference specific force of each position, body frame, m/s² (:func:`reference_specific_force`)."""
+
+DOCS["maneuver_duration_returns"] = """\
+duration_s : float
+    Length, s (> 0).
+
+Returns
+-------
+Maneuver"""
+
+DOCS["sim_rng"] = """\
+rng : numpy.random.Generator or int, optional
+    Random generator or seed."""
+
+DOCS["replace_changes"] = _PARAMS + """\
+**changes
+    New values of fields.
+
+Returns
+-------"""
+
+DOCS["allan_tau_returns"] = _PARAMS + """\
+tau : array_like
+    Averaging times, s.
+
+Returns
+-------
+numpy.ndarray, shape (3, len(tau))"""
+
+DOCS["toml_path"] = _PARAMS + """\
+path : str or os.PathLike
+    The TOML file."""
+
+DOCS["thesis_cfg_steps"] = _PARAMS + """\
+cfg : ThesisFilterConfig, optional
+    Filter configuration (default: the thesis's values).
+n_steps : int
+    Number of steps."""
+
+DOCS["doppler_v_beams"] = _PARAMS + """\
+v_body : array_like, shape (3,) or (N, 3)
+    Ground velocity in body axes (FRD), m/s.
+beams : array_like, shape (n_beams, 3)
+    Beam unit vectors in body axes (:func:`janus_beams`)."""
+
+DOCS["traj_t_q_nb"] = _PARAMS + """\
+t : array_like, shape (N,)
+    Strictly increasing time, s.
+q_nb : array_like, shape (N, 4)
+    Attitude, body (FRD) to NED."""
+
+DOCS["calib_returns_raises"] = """\
+Returns
+-------
+ImuCalibration
+    The calibration.
+
+Raises
+------
+FileFormatError"""
+
+DOCS["mc_attitude_paper"] = _PARAMS + """\
+mc : imunav.montecarlo.MonteCarloResult
+    The result of ``run_montecarlo(attitude_paper, ...)``.
+
+Returns
+-------
+dict"""
+
+DOCS["mag_h_raw"] = _PARAMS + """\
+h : array_like, shape (N, 3)
+    Raw magnetometer samples, any unit (kept), sensor axes.
+
+Returns
+-------"""
+
+DOCS["to_dict_attributes"] = """\
+Returns
+-------
+dict
+    The attributes by name."""
+
+DOCS["fit_get_returns"] = DOCS["fit_get_params"] + """
+
+Returns
+-------
+float"""
+
+
+DOCS["negative_raises"] = """\
+Raises
+------
+InvalidInputError
+    If %(value)s is negative.
+NonFiniteError
+    If a value is NaN or infinite."""
+
+DOCS["figure_returns"] = """\
+Returns
+-------
+matplotlib.figure.Figure
+    The figure."""
+
+DOCS["figure_title_str_returns"] = """\
+title : str
+    Figure title.
+
+""" + DOCS["figure_returns"]
+
+DOCS["save_fig_path"] = _PARAMS + """\
+fig : matplotlib.figure.Figure
+    The figure.
+path : str or os.PathLike
+    Output file; the format follows its suffix."""
+
+DOCS["prov_meta_or_data"] = _PARAMS + """\
+meta_or_data : ImuData or mapping
+    A recording (its ``meta`` is read) or its metadata dict."""
+
+# --- shape ---
+DOCS["att_run_bias_mag"] = DOCS["att_run_params"] + "\n" + DOCS["att_bias0"] + "\n" + DOCS["att_use_mag"]
+
+DOCS["att_run_gain"] = DOCS["att_run_params"] + "\n" + DOCS["att_use_mag"] + """
+
+Returns
+-------
+AttitudeResult
+    ``q_nb`` at every sample, with the filter's name and parameters.
+
+""" + DOCS["att_run_raises"]
+
+DOCS["att_q_est_ref"] = """\
+q_est : array_like, shape (N, 4)
+    Estimated attitude ``q_nb``.
+q_ref : array_like, shape (N, 4)
+    Reference attitude ``q_nb`` (rows with NaN are skipped)."""

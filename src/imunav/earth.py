@@ -136,9 +136,7 @@ def normal_gravity(lat: ArrayLike, h: ArrayLike = 0.0) -> Array | float:
 
     The height series is accurate to about 1e-6 m/s² up to 20 km.
 
-    Parameters
-    ----------
-    %(earth_lat)s
+    %(earth_lat_params)s
     h : array_like
         Ellipsoidal height, m (broadcasts with ``lat``), inside :data:`H_RANGE_M`.
 
@@ -147,12 +145,7 @@ def normal_gravity(lat: ArrayLike, h: ArrayLike = 0.0) -> Array | float:
     float or numpy.ndarray
         γ(φ, h), m/s², positive (pointing down in NED); a float for scalar inputs.
 
-    Raises
-    ------
-    InvalidInputError
-        If a latitude is outside [-pi/2, pi/2] or a height outside :data:`H_RANGE_M`.
-    NonFiniteError
-        If an input is NaN or infinite.
+    %(earth_lat_h_raises)s
     """
     return _radii_gravity(lat, h)[2]
 
@@ -210,9 +203,7 @@ def gravity_ned(lat: ArrayLike, h: ArrayLike = 0.0) -> Array:
     The small north component of the gravity vector above the ellipsoid
     (≈ −8.08e-9 h sin 2φ m/s², Groves 2.140) is neglected.
 
-    Parameters
-    ----------
-    %(earth_lat)s
+    %(earth_lat_params)s
     h : array_like
         Ellipsoidal height, m (broadcasts with ``lat``).
 
@@ -221,12 +212,7 @@ def gravity_ned(lat: ArrayLike, h: ArrayLike = 0.0) -> Array:
     numpy.ndarray, shape (3,) or (..., 3)
         ``g_n`` in NED, m/s², one vector per latitude.
 
-    Raises
-    ------
-    InvalidInputError
-        If a latitude is outside [-pi/2, pi/2] or a height outside :data:`H_RANGE_M`.
-    NonFiniteError
-        If an input is NaN or infinite.
+    %(earth_lat_h_raises)s
     """
     g = np.asarray(normal_gravity(lat, h))
     out = np.zeros(g.shape + (3,))
@@ -240,21 +226,14 @@ def earth_rate_ned(lat: ArrayLike) -> Array:
 
     Ω = :data:`OMEGA_E` = 7.292115e-5 rad/s (TR8350.2).
 
-    Parameters
-    ----------
-    %(earth_lat)s
+    %(earth_lat_params)s
 
     Returns
     -------
     numpy.ndarray, shape (3,) or (..., 3)
         ``ω_ie^n``, rad/s.
 
-    Raises
-    ------
-    InvalidInputError
-        If a latitude is outside [-pi/2, pi/2] or a height outside :data:`H_RANGE_M`.
-    NonFiniteError
-        If an input is NaN or infinite.
+    %(earth_lat_h_raises)s
     """
     lat = np.asarray(_f(lat))
     _check_lat_h(lat, np.zeros(()))
@@ -270,9 +249,7 @@ def radii(lat: ArrayLike) -> tuple[Array | float, Array | float]:
 
     R_N = a (1 − e²) / (1 − e² sin²φ)^{3/2},   R_E = a / √(1 − e² sin²φ).
 
-    Parameters
-    ----------
-    %(earth_lat)s
+    %(earth_lat_params)s
 
     Returns
     -------
@@ -281,12 +258,7 @@ def radii(lat: ArrayLike) -> tuple[Array | float, Array | float]:
     R_E : float or numpy.ndarray
         Prime-vertical (transverse) radius of curvature, m.
 
-    Raises
-    ------
-    InvalidInputError
-        If a latitude is outside [-pi/2, pi/2] or a height outside :data:`H_RANGE_M`.
-    NonFiniteError
-        If an input is NaN or infinite.
+    %(earth_lat_h_raises)s
     """
     rn, re, _ = _radii_gravity(lat, 0.0)
     return rn, re
@@ -298,9 +270,7 @@ def transport_rate_ned(lat: ArrayLike, h: ArrayLike, vel_ned: ArrayLike) -> Arra
 
     ω_en^n = ( v_E/(R_E+h), −v_N/(R_N+h), −v_E tan φ/(R_E+h) ).
 
-    Parameters
-    ----------
-    %(earth_lat)s
+    %(earth_lat_params)s
     h : array_like
         Ellipsoidal height, m.
     vel_ned : array_like, shape (3,) or (N, 3)
@@ -311,12 +281,7 @@ def transport_rate_ned(lat: ArrayLike, h: ArrayLike, vel_ned: ArrayLike) -> Arra
     numpy.ndarray, shape (3,) or (N, 3)
         ``ω_en^n``, rad/s.
 
-    Raises
-    ------
-    InvalidInputError
-        If a latitude is outside [-pi/2, pi/2] or a height outside :data:`H_RANGE_M`.
-    NonFiniteError
-        If an input is NaN or infinite.
+    %(earth_lat_h_raises)s
     ShapeError
         If ``vel_ned`` is not (3,) / (N, 3).
     """
@@ -467,12 +432,7 @@ def ecef_to_ned(ecef: ArrayLike, ref_lla: ArrayLike) -> Array:
     ----------
     ecef : array_like, shape (3,) or (N, 3)
         ECEF position(s), m.
-    ref_lla : array_like, shape (3,)
-        Origin of the local NED frame: geodetic ``(lat, lon, h)``, rad, rad, m.
-
-    Returns
-    -------
-    numpy.ndarray, shape (3,) or (N, 3)
+    %(earth_ref_lla_returns)s
         North, east, down coordinates, m.
 
     %(earth_triple_raises)s
@@ -488,16 +448,8 @@ def ecef_to_ned(ecef: ArrayLike, ref_lla: ArrayLike) -> Array:
 def ned_to_ecef(ned: ArrayLike, ref_lla: ArrayLike) -> Array:
     """Local NED coordinates (m) about ``ref_lla`` to ECEF position(s) (m): ``r_e = r_e(ref) + C_en(ref) r_n``.
 
-    Parameters
-    ----------
-    ned : array_like, shape (3,) or (N, 3)
-        North, east, down coordinates, m.
-    ref_lla : array_like, shape (3,)
-        Origin of the local NED frame: geodetic ``(lat, lon, h)``, rad, rad, m.
-
-    Returns
-    -------
-    numpy.ndarray, shape (3,) or (N, 3)
+    %(earth_ned_params)s
+    %(earth_ref_lla_returns)s
         ECEF position(s), m.
 
     %(earth_triple_raises)s
@@ -516,12 +468,7 @@ def lla_to_ned(lla: ArrayLike, ref_lla: ArrayLike) -> Array:
     ----------
     lla : array_like, shape (3,) or (N, 3)
         Geodetic ``(lat, lon, h)``, rad, rad, m.
-    ref_lla : array_like, shape (3,)
-        Origin of the local NED frame: geodetic ``(lat, lon, h)``, rad, rad, m.
-
-    Returns
-    -------
-    numpy.ndarray, shape (3,) or (N, 3)
+    %(earth_ref_lla_returns)s
         North, east, down coordinates, m.
 
     %(earth_triple_raises)s
@@ -533,16 +480,8 @@ def lla_to_ned(lla: ArrayLike, ref_lla: ArrayLike) -> Array:
 def ned_to_lla(ned: ArrayLike, ref_lla: ArrayLike) -> Array:
     """Local NED coordinates (m) about ``ref_lla`` to geodetic position(s) (via ECEF, exact).
 
-    Parameters
-    ----------
-    ned : array_like, shape (3,) or (N, 3)
-        North, east, down coordinates, m.
-    ref_lla : array_like, shape (3,)
-        Origin of the local NED frame: geodetic ``(lat, lon, h)``, rad, rad, m.
-
-    Returns
-    -------
-    numpy.ndarray, shape (3,) or (N, 3)
+    %(earth_ned_params)s
+    %(earth_ref_lla_returns)s
         Geodetic ``(lat, lon, h)``, rad, rad, m.
 
     %(earth_triple_raises)s

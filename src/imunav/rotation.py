@@ -28,6 +28,7 @@ Navigation Systems*, 2nd ed., Artech House, 2013, §2.2 (DCM, Euler).
 from __future__ import annotations
 
 import itertools
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -104,9 +105,14 @@ def _out(a: Array, single: bool) -> Array:
     return a[0] if single else a
 
 
-def _broadcast_pair(a: Array, b: Array, na: str, nb: str) -> None:
-    if a.shape[0] != b.shape[0] and a.shape[0] != 1 and b.shape[0] != 1:
-        raise ShapeError(f"{na} has {a.shape[0]} rows and {nb} has {b.shape[0]}; they must match (or one be single)")
+def _pairwise(kernel: Callable[[Array, Array], Array], a: ArrayLike, last_a: tuple[int, ...], na: str,
+              b: ArrayLike, last_b: tuple[int, ...], nb: str) -> Array:
+    """``kernel`` on two batches checked by :func:`_as`, a single one broadcasting; single if both are."""
+    aa, sa = _as(a, last_a, na)
+    ba, sb = _as(b, last_b, nb)
+    if aa.shape[0] != ba.shape[0] and aa.shape[0] != 1 and ba.shape[0] != 1:
+        raise ShapeError(f"{na} has {aa.shape[0]} rows and {nb} has {ba.shape[0]}; they must match (or one be single)")
+    return _out(kernel(aa, ba), sa and sb)
 
 
 def quat_identity(n: int | None = None) -> Array:
@@ -148,19 +154,14 @@ def quat_multiply(p: ArrayLike, q: ArrayLike) -> Array:
     ShapeError
         If a shape is not (4,) / (N, 4), or two batches differ in length.
     """
-    pa, sp = _as(p, (4,), "p")
-    qa, sq = _as(q, (4,), "q")
-    _broadcast_pair(pa, qa, "p", "q")
-    return _out(_k.qmul_n(pa, qa), sp and sq)
+    return _pairwise(_k.qmul_n, p, (4,), "p", q, (4,), "q")
 
 
 @fill_doc
 def quat_conjugate(q: ArrayLike) -> Array:
     """Conjugate ``[w, -x, -y, -z]``; the inverse of a unit quaternion.
 
-    Parameters
-    ----------
-    %(rot_q)s
+    %(rot_q_params)s
 
     Returns
     -------
@@ -179,9 +180,7 @@ def quat_conjugate(q: ArrayLike) -> Array:
 def quat_inverse(q: ArrayLike) -> Array:
     """Inverse ``q* / |q|^2`` (valid for non-unit quaternions).
 
-    Parameters
-    ----------
-    %(rot_q)s
+    %(rot_q_params)s
 
     Returns
     -------
@@ -198,9 +197,7 @@ def quat_inverse(q: ArrayLike) -> Array:
 def quat_normalize(q: ArrayLike) -> Array:
     """Unit quaternion(s) ``q / |q|``.
 
-    Parameters
-    ----------
-    %(rot_q)s
+    %(rot_q_params)s
 
     Returns
     -------
@@ -229,9 +226,7 @@ def quat_canonical(q: ArrayLike) -> Array:
     ``q`` and ``-q`` are the same rotation; this picks one of the two, so that quaternions can be compared
     component by component.
 
-    Parameters
-    ----------
-    %(rot_q)s
+    %(rot_q_params)s
 
     Returns
     -------
@@ -255,9 +250,7 @@ def quat_rotate(q: ArrayLike, v: ArrayLike) -> Array:
     For ``q = q_nb`` this maps body-frame vectors to the navigation frame; use
     ``quat_rotate(quat_conjugate(q), v_n)`` for the reverse (Solà 2017).
 
-    Parameters
-    ----------
-    %(rot_q)s
+    %(rot_q_params)s
     v : array_like, shape (3,) or (N, 3)
         Vector(s) in the frame the quaternion rotates from (any unit; the result has the same unit).
 
@@ -271,19 +264,14 @@ def quat_rotate(q: ArrayLike, v: ArrayLike) -> Array:
     ShapeError
         If a shape is wrong or two batches differ in length.
     """
-    qa, sq = _as(q, (4,), "q")
-    va, sv = _as(v, (3,), "v")
-    _broadcast_pair(qa, va, "q", "v")
-    return _out(_k.qrot_n(qa, va), sq and sv)
+    return _pairwise(_k.qrot_n, q, (4,), "q", v, (3,), "v")
 
 
 @fill_doc
 def dcm_from_quat(q: ArrayLike) -> Array:
     """Direction-cosine matrix ``C_nb`` of a unit quaternion ``q_nb`` (Groves 2013, §2.2).
 
-    Parameters
-    ----------
-    %(rot_q)s
+    %(rot_q_params)s
 
     Returns
     -------
@@ -296,6 +284,7 @@ def dcm_from_quat(q: ArrayLike) -> Array:
     return _out(_k.dcm_from_quat_n(a), s)
 
 
+@fill_doc(arg="C", shapes="(3, 3) / (N, 3, 3)")
 def quat_from_dcm(C: ArrayLike) -> Array:
     """Unit quaternion (``w >= 0``) of a rotation matrix (Shepperd's method).
 
@@ -312,12 +301,7 @@ def quat_from_dcm(C: ArrayLike) -> Array:
     numpy.ndarray, shape (4,) or (N, 4)
         ``q_nb``, scalar first, with ``w >= 0``.
 
-    Raises
-    ------
-    NonFiniteError
-        If ``C`` is not finite.
-    ShapeError
-        If ``C`` is not (3, 3) / (N, 3, 3).
+    %(finite_shape_raises)s
     """
     a, s = _as(C, (3, 3), "C")
     _finite(a, "C")
@@ -335,6 +319,7 @@ def _euler_args(roll: ArrayLike, pitch: ArrayLike | None, yaw: ArrayLike | None)
     return e, single
 
 
+@fill_doc
 def quat_from_euler(roll: ArrayLike, pitch: ArrayLike | None = None, yaw: ArrayLike | None = None) -> Array:
     """Quaternion ``q_nb`` of ZYX Euler angles (rad).
 
@@ -356,10 +341,7 @@ def quat_from_euler(roll: ArrayLike, pitch: ArrayLike | None = None, yaw: ArrayL
     numpy.ndarray, shape (4,) or (N, 4)
         ``q_nb``, body (FRD) to navigation (NED).
 
-    Raises
-    ------
-    ShapeError
-        If only one of ``pitch`` / ``yaw`` is given, or the shapes do not broadcast.
+    %(rot_euler_raises)s
     """
     e, s = _euler_args(roll, pitch, yaw)
     return _out(_k.quat_from_euler_n(e), s)
@@ -394,9 +376,7 @@ def euler_from_dcm(C: ArrayLike) -> Array:
 def euler_from_quat(q: ArrayLike) -> Array:
     """ZYX Euler angles ``(roll, pitch, yaw)`` (rad) of ``q_nb`` (through :func:`euler_from_dcm`).
 
-    Parameters
-    ----------
-    %(rot_q)s
+    %(rot_q_params)s
 
     Returns
     -------
@@ -413,6 +393,7 @@ def euler_from_quat(q: ArrayLike) -> Array:
     return euler_from_dcm(dcm_from_quat(quat_normalize(q)))
 
 
+@fill_doc
 def dcm_from_euler(roll: ArrayLike, pitch: ArrayLike | None = None, yaw: ArrayLike | None = None) -> Array:
     """``C_nb = Rz(yaw) Ry(pitch) Rx(roll)`` (Groves 2013, §2.2).
 
@@ -428,14 +409,12 @@ def dcm_from_euler(roll: ArrayLike, pitch: ArrayLike | None = None, yaw: ArrayLi
     numpy.ndarray, shape (3, 3) or (N, 3, 3)
         ``C_nb``, body (FRD) to navigation (NED).
 
-    Raises
-    ------
-    ShapeError
-        If only one of ``pitch`` / ``yaw`` is given, or the shapes do not broadcast.
+    %(rot_euler_raises)s
     """
     return dcm_from_quat(quat_from_euler(roll, pitch, yaw))
 
 
+@fill_doc(arg="r", shapes="(3,) / (N, 3)")
 def quat_from_rotvec(r: ArrayLike) -> Array:
     """``exp`` map: quaternion of rotation vector ``r`` (rad).
 
@@ -451,12 +430,7 @@ def quat_from_rotvec(r: ArrayLike) -> Array:
     numpy.ndarray, shape (4,) or (N, 4)
         Unit quaternion(s).
 
-    Raises
-    ------
-    NonFiniteError
-        If ``r`` is not finite.
-    ShapeError
-        If ``r`` is not (3,) / (N, 3).
+    %(finite_shape_raises)s
     """
     a, s = _as(r, (3,), "rotation vector")
     _finite(a, "rotation vector")
@@ -469,9 +443,7 @@ def rotvec_from_quat(q: ArrayLike) -> Array:
 
     ``r = 2 atan2(|q_v|, q_w) q_v / |q_v|`` on the canonical (``w >= 0``) representative (Solà 2017).
 
-    Parameters
-    ----------
-    %(rot_q)s
+    %(rot_q_params)s
 
     Returns
     -------
@@ -494,6 +466,7 @@ quat_exp = quat_from_rotvec
 quat_log = rotvec_from_quat
 
 
+@fill_doc(arg="r", shapes="(3,) / (N, 3)")
 def dcm_from_rotvec(r: ArrayLike) -> Array:
     """Rotation matrix of a rotation vector (Rodrigues' formula, ``C = exp([r]x)``).
 
@@ -507,16 +480,12 @@ def dcm_from_rotvec(r: ArrayLike) -> Array:
     numpy.ndarray, shape (3, 3) or (N, 3, 3)
         The rotation matrix / matrices.
 
-    Raises
-    ------
-    NonFiniteError
-        If ``r`` is not finite.
-    ShapeError
-        If ``r`` is not (3,) / (N, 3).
+    %(finite_shape_raises)s
     """
     return dcm_from_quat(quat_from_rotvec(r))
 
 
+@fill_doc(arg="C", shapes="(3, 3) / (N, 3, 3)")
 def rotvec_from_dcm(C: ArrayLike) -> Array:
     """Rotation vector of a rotation matrix (``log``, through the quaternion).
 
@@ -530,12 +499,7 @@ def rotvec_from_dcm(C: ArrayLike) -> Array:
     numpy.ndarray, shape (3,) or (N, 3)
         Rotation vector(s), rad, norm in [0, pi].
 
-    Raises
-    ------
-    NonFiniteError
-        If ``C`` is not finite.
-    ShapeError
-        If ``C`` is not (3, 3) / (N, 3, 3).
+    %(finite_shape_raises)s
     """
     return rotvec_from_quat(quat_from_dcm(C))
 

@@ -14,6 +14,7 @@ from typing import TYPE_CHECKING, Any, Literal, Sequence
 import numpy as np
 from numpy.typing import NDArray
 
+from imunav._docstrings import fill_doc
 from imunav.attitude.gravity_kf import roll_pitch_from_x
 from imunav.attitude.metrics import euler_rmse
 from imunav.attitude.scenario import PAPER_TABLE2, PaperScenario, default_filters, simulate
@@ -98,18 +99,12 @@ def attitude_paper(
     return out
 
 
+@fill_doc
 def paper_rmse(mc: MonteCarloResult) -> dict[str, NDArray[np.float64]]:
     """Per-run RMSE [deg] of each filter, ``(n_runs, 2)`` = (pitch, roll), from a Monte Carlo of
     :func:`imunav.scenarios.attitude_paper` (its ``<filter>_pitch_rmse_deg`` / ``_roll_rmse_deg`` columns).
 
-    Parameters
-    ----------
-    mc : imunav.montecarlo.MonteCarloResult
-        The result of ``run_montecarlo(attitude_paper, ...)``.
-
-    Returns
-    -------
-    dict
+    %(mc_attitude_paper)s
         Filter name (in the order of the columns) to its ``(n_runs, 2)`` array.
     """
     m = mc.metrics
@@ -118,18 +113,12 @@ def paper_rmse(mc: MonteCarloResult) -> dict[str, NDArray[np.float64]]:
             for k in names}
 
 
+@fill_doc
 def paper_table(mc: MonteCarloResult) -> dict[str, dict[str, float]]:
     """The paper's Table 2 from a Monte Carlo: mean, standard deviation (ddof 0) and 95th percentile
     of the pitch and roll RMSE [deg] of each filter.
 
-    Parameters
-    ----------
-    mc : imunav.montecarlo.MonteCarloResult
-        The result of ``run_montecarlo(attitude_paper, ...)``.
-
-    Returns
-    -------
-    dict
+    %(mc_attitude_paper)s
         ``{filter: {"pitch_mean", "pitch_std", "pitch_p95", "roll_mean", "roll_std", "roll_p95"}}``.
     """
     out = {}
@@ -161,5 +150,5 @@ def paper_report(mc: MonteCarloResult, scn: Any, filters: Mapping[str, Any]) -> 
     return {"table": paper_table(mc),
             "paper_table2": {k: {"pitch": v[0], "roll": v[1]} for k, v in PAPER_TABLE2.items()},
             "rmse": {k: v.tolist() for k, v in paper_rmse(mc).items()},
-            "params": {k: f.params.__dict__ | {"kind": f.kind} for k, f in filters.items()},
+            "params": {k: f.config.__dict__ | {"kind": f.kind} for k, f in filters.items()},
             "scenario": {k: getattr(scn, k) for k in scn.__dataclass_fields__}}

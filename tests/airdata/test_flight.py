@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from imunav.airdata.filter import LongHorizonConfig, run_long_horizon
+from imunav.airdata.filter import LongHorizonConfig, LongHorizonFilter
 from imunav.errors import InvalidInputError, ShapeError
 from imunav.sim.flight import (
     FlightConfig,
@@ -59,7 +59,7 @@ def test_flight_sensors_consistent_with_truth():
 def test_long_horizon_filter_consistent_and_robust():
     f = simulate_flight(FlightConfig(profile="turns", duration=200.0, turbulence="light"), rng=5)
     C_d, C_a = f.C_nb("doppler"), f.C_nb("ads")
-    r = run_long_horizon(f.t_ads, f.v_ads_body, f.t_doppler, f.v_doppler_body, C_d, C_a)
+    r = LongHorizonFilter().run(f.t_ads, f.v_ads_body, f.t_doppler, f.v_doppler_body, C_d, C_a)
     wt = np.stack([np.interp(r.t, f.t, f.wind_ned[:, i]) for i in range(3)], 1)
     e = (r.wind - wt)[100:]
     nees = np.mean((e / r.wind_std[100:]) ** 2, axis=0)
@@ -69,9 +69,9 @@ def test_long_horizon_filter_consistent_and_robust():
     va = f.v_ads_body.copy()
     spikes = np.searchsorted(f.t_ads, r.t[[300, 700, 1100, 1500, 1900]])
     va[spikes] += [30.0, -25.0, 20.0]
-    rr = run_long_horizon(f.t_ads, va, f.t_doppler, f.v_doppler_body, C_d, C_a, LongHorizonConfig(robust="nis"))
+    rr = LongHorizonFilter(LongHorizonConfig(robust="nis")).run(f.t_ads, va, f.t_doppler, f.v_doppler_body, C_d, C_a)
     assert np.all(rr.weights[[300, 700, 1100, 1500, 1900]] == 0)
-    ro = run_long_horizon(f.t_ads, va, f.t_doppler, f.v_doppler_body, C_d, C_a, LongHorizonConfig(robust=None))
+    ro = LongHorizonFilter(LongHorizonConfig(robust=None)).run(f.t_ads, va, f.t_doppler, f.v_doppler_body, C_d, C_a)
     assert np.abs(rr.wind - r.wind).max() < np.abs(ro.wind - r.wind).max() / 3
 
 
@@ -83,10 +83,31 @@ def test_flight_bad_inputs():
     with pytest.raises(InvalidInputError, match="turbulence must be one of"):
         FlightConfig(turbulence="extreme")
     with pytest.raises(ShapeError, match="ADS arrays must be"):
-        run_long_horizon(np.arange(3.0), np.zeros((2, 3)), np.arange(2.0), np.zeros((2, 3)),
-                         np.tile(np.eye(3), (2, 1, 1)), np.tile(np.eye(3), (3, 1, 1)))
+        LongHorizonFilter().run(np.arange(3.0), np.zeros((2, 3)), np.arange(2.0), np.zeros((2, 3)),
+                                np.tile(np.eye(3), (2, 1, 1)), np.tile(np.eye(3), (3, 1, 1)))
     with pytest.raises(InvalidInputError, match="strictly increasing"):
-        run_long_horizon(np.zeros(3), np.zeros((3, 3)), np.arange(2.0), np.zeros((2, 3)),
-                         np.tile(np.eye(3), (2, 1, 1)), np.tile(np.eye(3), (3, 1, 1)))
+        LongHorizonFilter().run(np.zeros(3), np.zeros((3, 3)), np.arange(2.0), np.zeros((2, 3)),
+                                np.tile(np.eye(3), (2, 1, 1)), np.tile(np.eye(3), (3, 1, 1)))
     with pytest.raises(InvalidInputError, match="robust must be"):
         LongHorizonConfig(robust="median")
+
+
+def test_long_horizon_step_gives_run():
+    """Stepping the Doppler epochs (state carried) gives run's wind, σ, weights to 1e-12 (robust "isolate")."""
+    f = simulate_flight(FlightConfig(profile="turns", duration=60.0, turbulence="light"), rng=8)
+    C_d, C_a = f.C_nb("doppler"), f.C_nb("ads")
+    va = f.v_ads_body.copy()
+    va[np.searchsorted(f.t_ads, f.t_doppler[[100, 300]])] += [30.0, -25.0, 20.0]  # two rejected epochs
+    filt = LongHorizonFilter()
+    r = filt.run(f.t_ads, va, f.t_doppler, f.v_doppler_body, C_d, C_a)
+    assert np.any(r.weights == 0)
+    # the ADS NED air velocity interpolated to the Doppler epochs, as run does it
+    va_n = np.einsum("kij,kj->ki", C_a, va)
+    va_d = np.stack([np.interp(f.t_doppler, f.t_ads, va_n[:, i]) for i in range(3)], axis=1)
+    filt.reset()
+    st = [filt.step(f.t_doppler[k], f.v_doppler_body[k], C_d[k], va_d[k]) for k in range(f.t_doppler.size)]
+    for name in ("wind", "wind_std", "mean_wind", "position_std", "normalized", "weights"):
+        np.testing.assert_allclose(np.array([getattr(s, name) for s in st]), getattr(r, name), rtol=0, atol=1e-12,
+                                   err_msg=name)
+    with pytest.raises(InvalidInputError, match="after the previous epoch"):
+        filt.step(f.t_doppler[-1], f.v_doppler_body[-1], C_d[-1], va_d[-1])

@@ -12,9 +12,8 @@ from scipy.stats import norm
 from imunav.airdata.filter import (
     THESIS_ITERATIONS,
     THESIS_P44,
+    ThesisFilter,
     ThesisFilterConfig,
-    run_thesis_filter,
-    run_thesis_filter_batch,
     thesis_matrices,
     thesis_row,
 )
@@ -57,12 +56,12 @@ def test_steady_state_closed_form():
     Pss = riccati_steady_state(m["F"][3:4, 3:4], [[q]], [[1.0]], [[r]])[0, 0]
     assert (-q + np.sqrt(q * q + 4 * q * r)) / 2 == pytest.approx(0.06283, abs=1e-5)
     assert Pss == pytest.approx(0.06283, abs=2e-5)  # 1 − T/τ decay shifts it by < 1e-5
-    assert run_thesis_filter(np.zeros((3000, 3))).cov_diag[-1, 3] == pytest.approx(Pss, rel=1e-6)
+    assert ThesisFilter().run(np.zeros((3000, 3))).cov_diag[-1, 3] == pytest.approx(Pss, rel=1e-6)
 
 
 def test_sign_convention_wind_converges_to_plus_w():
     d = simulate_thesis(ThesisScenario(), rng=1)
-    r = run_thesis_filter(d.z, v_ads=d.v_ads)
+    r = ThesisFilter().run(d.z, v_ads=d.v_ads)
     # V_G = V_A + W: the estimate goes from (12, 7, 5) to the true wind (7, 5, 1.7)
     assert np.all(np.abs(r.wind[-50:].mean(axis=0) - d.wind_true[-1]) < 0.5)
     np.testing.assert_allclose(d.v_ads + d.wind_true, d.v_true + d.ads_noise, atol=1e-12)
@@ -84,7 +83,7 @@ def test_wind_error_below_02_and_variance_ratio():
     assert 4.01 / E[K0:, 3:].mean() > 10 * 10  # ≈ 124×, far above the required 10×
     # seeded Monte Carlo agrees with the exact value (60 runs, ~6 independent 64-step blocks each)
     z, xt, _ = simulate_thesis_batch(ThesisScenario(), 60, rng=11)
-    r = run_thesis_filter_batch(z)
+    r = ThesisFilter().run_batch(z)
     e = r.x[:, K0:, 3:] - xt[None, K0:, 3:]
     rms = float(np.sqrt(np.mean(e**2)))
     assert rms == pytest.approx(rms_theory, rel=0.06)
@@ -102,12 +101,12 @@ def test_robust_filters_reject_outliers_and_keep_nominal_accuracy():
     zn, xtn, _ = simulate_thesis_batch(ThesisScenario(), runs, rng=6)
     mask = sc.anomaly_mask()
     assert mask.sum() == 12  # 4 steps × 3 channels, as in the thesis
-    opt = run_thesis_filter_batch(zn)
+    opt = ThesisFilter().run_batch(zn)
     rms_opt = np.sqrt(np.mean((opt.x[:, K0:, 3:] - xtn[None, K0:, 3:]) ** 2))
     out = {}
     for name, kw in {"nis": {"robust": "nis"}, "gate2": {"robust": "gate", "gate_m": 2.0}}.items():
-        r = run_thesis_filter_batch(z, **kw)
-        rn = run_thesis_filter_batch(zn, **kw)
+        r = ThesisFilter(**kw).run_batch(z)
+        rn = ThesisFilter(**kw).run_batch(zn)
         out[name] = (float((r.weights[:, mask] == 0).mean()),
                      float(np.sqrt(np.mean((rn.x[:, K0:, 3:] - xtn[None, K0:, 3:]) ** 2)) / rms_opt))
     # vector χ² gate: P(reject a ×15 all-channel outlier) ≈ 0.995
@@ -121,7 +120,7 @@ def test_robust_filters_reject_outliers_and_keep_nominal_accuracy():
 def test_gate_rejection_signature_p_equals_prior():
     # a rejected channel keeps P = P⁻ (the thesis's 0.0638 signature): check one rejection
     d = simulate_thesis(ThesisScenario(kind="outliers"), rng=2)
-    r = run_thesis_filter(d.z, robust="gate", gate_m=2.0)
+    r = ThesisFilter(robust="gate", gate_m=2.0).run(d.z)
     rej = np.argwhere(r.weights[98:] == 0)
     k, ch = rej[0]
     k += 98
@@ -135,7 +134,7 @@ def test_detectors_false_alarms_and_variance_fault_detection():
     thr = calibrated_thresholds(M, 3, 0.01)
     th = thesis_thresholds(M, 3)
     zn, _, _ = simulate_thesis_batch(ThesisScenario(), runs, rng=21)
-    st = detector_statistics(run_thesis_filter_batch(zn).normalized, M)
+    st = detector_statistics(ThesisFilter().run_batch(zn).normalized, M)
     for name, s in st.items():
         rate, _ = false_alarm_rates(alarms(name, s[:, M - 1:], thr[name]))
         assert rate <= 0.05, name  # nominal 1 %
@@ -143,24 +142,24 @@ def test_detectors_false_alarms_and_variance_fault_detection():
     assert rate_thesis > 0.3  # the thesis's χ²₁₈ threshold for the maximised statistic: ≈ 43 %
     sc = ThesisScenario(kind="variance")
     zf, _, _ = simulate_thesis_batch(sc, runs, rng=22)
-    sf = detector_statistics(run_thesis_filter_batch(zf).normalized, M)
+    sf = detector_statistics(ThesisFilter().run_batch(zf).normalized, M)
     for name in ("alg1", "alg3", "nis", "cusum_var"):
         d, missed = detection_delays(sf[name] > thr[name], sc.onset_row, horizon=10)
         assert missed == 0.0, name  # every run detected within 10 steps of the onset
     zb, _, _ = simulate_thesis_batch(ThesisScenario(kind="bias"), runs, rng=23)
-    sb = detector_statistics(run_thesis_filter_batch(zb).normalized, M)
+    sb = detector_statistics(ThesisFilter().run_batch(zb).normalized, M)
     d, missed = detection_delays(sb["alg3"] > thr["alg3"], sc.onset_row, horizon=2)
     assert missed == 0.0  # thesis: bias detected by Alg. 3 within 2 steps
     # a stuck ADS removes its own noise from the innovation: only the lower-tail test sees it
     zs, _, _ = simulate_thesis_batch(ThesisScenario(kind="stuck"), runs, rng=24)
-    ss = detector_statistics(run_thesis_filter_batch(zs).normalized, M)
+    ss = detector_statistics(ThesisFilter().run_batch(zs).normalized, M)
     d, missed = detection_delays(alarms("low_variance", ss["low_variance"], thr["low_variance"]), sc.onset_row, 10)
     assert missed <= 0.1 and np.nanmedian(d) <= 6
 
 
 def test_bias_is_absorbed_so_detection_must_latch():
     d = simulate_thesis(ThesisScenario(kind="bias", channels=(0,)), rng=4)
-    r = run_thesis_filter(d.z)
+    r = ThesisFilter().run(d.z)
     # z = V_D − V_A gets −10 on x: the wind estimate drifts towards W − 10 (digest: −9.7 by step 400)
     assert r.wind[thesis_row(400), 0] - d.wind_true[thesis_row(400), 0] < -8.0
     from imunav.filters import detect_faults
@@ -177,13 +176,37 @@ def test_scenario_and_filter_bad_inputs():
     with pytest.raises(InvalidInputError, match="fault_step"):
         ThesisScenario(fault_step=900)
     with pytest.raises(ShapeError, match=r"z must have shape \(N, 3\)"):
-        run_thesis_filter(np.zeros((10, 2)))
+        ThesisFilter().run(np.zeros((10, 2)))
     with pytest.raises(InvalidInputError, match="robust must be"):
-        run_thesis_filter(np.zeros((10, 3)), robust="magic")
+        ThesisFilter(robust="magic").run(np.zeros((10, 3)))
     with pytest.raises(InvalidInputError, match="invalid filter parameters"):
         ThesisFilterConfig(dt=0.0)
     with pytest.raises(InvalidInputError, match="iterations start at 2"):
         thesis_row(1)
     with pytest.raises(ShapeError, match="v_ads must have the shape"):
-        run_thesis_filter(np.zeros((10, 3)), v_ads=np.zeros((9, 3)))
+        ThesisFilter().run(np.zeros((10, 3)), v_ads=np.zeros((9, 3)))
     assert replace(ThesisScenario(), kind="drift").faults()[0].kind == "drift"
+
+
+@pytest.mark.parametrize("robust", [None, "gate", "isolate", "nis", "huber"])
+def test_step_gives_run(robust):
+    """Stepping one measurement at a time (state carried) gives run's states to 1e-12, outliers and gaps included.
+
+    With robust=None and no gap, run takes the vectorised optimal path (K computed once for all runs) and step
+    the general masked Joseph update: the same equations, rounded differently, hence a tolerance, not equality.
+    """
+    rng = np.random.default_rng(7)
+    z = rng.normal(size=(600, 3)) * 2.0 + [12.0, 7.0, 5.0]
+    z[200:205] += 30.0
+    if robust is not None:
+        z[300:310] = np.nan
+    f = ThesisFilter(robust=robust)
+    r = f.run(z)
+    st = [f.step(zk) for zk in z]
+    for name in ("x", "cov_diag", "innovation", "normalized", "weights"):
+        np.testing.assert_allclose(np.array([getattr(s, name) for s in st]), getattr(r, name), rtol=0, atol=1e-12,
+                                   err_msg=name)
+    f.reset()
+    np.testing.assert_array_equal(f.step(z[0]).x, r.x[0])
+    with pytest.raises(ShapeError):
+        f.step(np.zeros(2))

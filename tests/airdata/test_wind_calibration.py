@@ -20,8 +20,8 @@ from scipy.signal import lfilter
 
 from imunav.airdata.filter import (
     LongHorizonConfig,
+    LongHorizonFilter,
     ThesisFilterConfig,
-    run_long_horizon,
     thesis_matrices,
 )
 
@@ -52,7 +52,7 @@ def _run(seed, cfg=CFG):
     va = va_true + rng.normal(scale=cfg.sigma_ads, size=(n, 3))
     vd = (va_true + v)[id_] + rng.normal(scale=cfg.sigma_doppler, size=(id_.size, 3))
     C = np.tile(np.eye(3), (n, 1, 1))
-    r = run_long_horizon(t, va, t[id_], vd, C[id_], C, cfg)
+    r = LongHorizonFilter(cfg).run(t, va, t[id_], vd, C[id_], C)
     x_true = t[id_][:, None] * va_true[id_] + dp[id_]  # true NED position relative to the DR start
     return r, x_true, v[id_]
 
@@ -91,7 +91,7 @@ def test_thesis_filter_nis_and_nees_on_its_own_model():
     process noise q assumes, so its NEES there is not chi-square by design): x0 ~ N(x0, P0),
     x_k+1 = F x_k + G w, z = H x + v.  Normalised innovations over 40 runs x 3000 steps x 3 axes, and the
     wind and position errors at the last epoch against cov_diag."""
-    from imunav.airdata.filter import run_thesis_filter_batch
+    from imunav.airdata.filter import ThesisFilter
 
     cfg = ThesisFilterConfig(dt=0.01, tau=60.0, q=0.05, sigma_ads=0.5, sigma_doppler=0.1)
     m = thesis_matrices(cfg)
@@ -102,7 +102,7 @@ def test_thesis_filter_nis_and_nees_on_its_own_model():
     for k in range(n):
         x = x @ m["F"].T + rng.normal(scale=np.sqrt(cfg.q), size=(runs, 3)) @ m["G"].T
         z[:, k] = x @ m["H"].T + rng.normal(scale=np.sqrt(m["R"][0, 0]), size=(runs, 3))
-    r = run_thesis_filter_batch(z, cfg)
+    r = ThesisFilter(cfg).run_batch(z)
     assert_rms_calibrated(r.normalized.ravel() / sigma_scale(), "thesis filter normalised innovations")
     zw = z_scores(r.x[:, -1, 3:], x[:, 3:], np.sqrt(r.cov_diag[:, -1, 3:]))
     zp = z_scores(r.x[:, -1, :3], x[:, :3], np.sqrt(r.cov_diag[:, -1, :3]))

@@ -189,7 +189,7 @@ def test_ukf_public_covariance_calibrated_rotating_with_magnetometer():
 def _smoother(**param_kw):
     from imunav.attitude.smoother import Smoother
 
-    return Smoother(_mekf(**param_kw).params)
+    return Smoother(_mekf(**param_kw).config)
 
 
 def test_smoother_public_covariance_calibrated_rotating_with_magnetometer():

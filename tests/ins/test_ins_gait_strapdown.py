@@ -9,7 +9,7 @@ import pytest
 
 from imunav.earth import radii_gravity_1
 from imunav.errors import InvalidInputError
-from imunav.ins import ZuptConfig, coning_sculling_increments, run_zupt, strapdown_local, strapdown_ned
+from imunav.ins import ZuptConfig, ZuptFilter, coning_sculling_increments, strapdown_local, strapdown_ned
 from imunav.sim.gait import simulate_gait
 from imunav.timeseries import ImuData
 
@@ -18,7 +18,7 @@ def test_fifteen_state_biases_inside_3sigma():
     """Simulated walk/run/stairs with MEMS errors: estimated biases within 3 sigma of the truth."""
     for seed in (0, 1):
         sim = simulate_gait(["walk", "run", "stairs"], 30, error_model="foot_mems", rng=seed, turn_deg=12)
-        res = run_zupt(sim.imu, sim.stance, ZuptConfig(g=9.80665, states=15, zaru=True, integration="coning"))
+        res = ZuptFilter(ZuptConfig(g=9.80665, states=15, zaru=True, integration="coning")).run(sim.imu, sim.stance)
         sd = np.sqrt(res.cov_diag[-1])
         np.testing.assert_array_less(np.abs(res.gyro_bias[-1] - sim.gyro_bias[-1]), 3 * sd[12:15])
         np.testing.assert_array_less(np.abs(res.accel_bias[-1] - sim.accel_bias[-1]), 3 * sd[9:12])
@@ -30,7 +30,7 @@ def test_ideal_gait_zupt_exact_and_stairs_height():
     sim = simulate_gait("stairs", 10, error_model=None, rng=3)
     assert sim.position[-1, 2] == pytest.approx(-10 * 0.34)  # NED: up is negative
     assert np.all(np.linalg.norm(sim.velocity[sim.stance], axis=1) == 0)
-    res = run_zupt(sim.imu, sim.stance, ZuptConfig(g=9.80665, integration="coning"))
+    res = ZuptFilter(ZuptConfig(g=9.80665, integration="coning")).run(sim.imu, sim.stance)
     np.testing.assert_allclose(res.position[-1], sim.position[-1], atol=5e-3)
     with pytest.raises(InvalidInputError, match="gait mode"):
         simulate_gait("crawl")
@@ -96,7 +96,7 @@ def test_plots_run(tmp_path):
     from imunav.ins.plot import plot_trajectory, plot_zero_velocity
 
     sim = simulate_gait("walk", 4, error_model=None, rng=0)
-    res = run_zupt(sim.imu, sim.stance)
+    res = ZuptFilter().run(sim.imu, sim.stance)
     ax = plot_trajectory(res, sim.position)
     assert len(ax.lines) == 3
     ax = plot_zero_velocity(sim.imu, {"truth": sim.stance, "shoe": detect_zero_velocity(sim.imu, "shoe")})

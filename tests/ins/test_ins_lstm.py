@@ -180,7 +180,7 @@ def _constant_model(p_stance: float, **cfg) -> LstmDetector:
 
 def test_detector_that_marks_nothing_falls_back_to_shoe():
     """An LSTM that never fires: the detector a user gets still finds SHOE's stances and reports the guard."""
-    from imunav.ins import detect_zero_velocity, detector_statistic, error_2d, run_zupt
+    from imunav.ins import ZuptFilter, detect_zero_velocity, detector_statistic, error_2d
 
     sim = simulate_gait("walk", 10, rng=3, error_model="foot_mems")
     model = _constant_model(1e-6)
@@ -197,9 +197,9 @@ def test_detector_that_marks_nothing_falls_back_to_shoe():
     assert abs(filled.stance_fraction - shoe.mean()) < 0.02
     raw = model.detect(sim.imu, guard=False)
     assert not raw.zv.any() and "guard" not in raw.params
-    e = error_2d(run_zupt(sim.imu, res.zv).position, sim.position)
+    e = error_2d(ZuptFilter().run(sim.imu, res.zv).position, sim.position)
     assert e < 0.5  # bounded; without any stance the INS drifts by metres
-    assert error_2d(run_zupt(sim.imu, raw.zv).position, sim.position) > 5 * e
+    assert error_2d(ZuptFilter().run(sim.imu, raw.zv).position, sim.position) > 5 * e
 
 
 # --- time warp --------------------------------------------------------------------------------------------------
@@ -257,7 +257,7 @@ def _shipped() -> LstmDetector:
 
 def test_shipped_detector_on_simulated_running():
     """Running (0.25 s stances, faster than any training trial): stance fraction near SHOE's, error bounded."""
-    from imunav.ins import detector_statistic, error_2d, run_zupt
+    from imunav.ins import ZuptFilter, detector_statistic, error_2d
 
     model = _shipped()
     sim = simulate_gait("run", 12, rng=5, error_model="foot_mems")
@@ -265,8 +265,8 @@ def test_shipped_detector_on_simulated_running():
     shoe = detector_statistic(sim.imu, "shoe") < model.config.shoe_threshold
     assert abs(res.stance_fraction - shoe.mean()) < 0.1
     assert np.mean(res.zv[sim.stance]) > 0.5 and np.mean(res.zv[~sim.stance]) < 0.1
-    e_lstm = error_2d(run_zupt(sim.imu, res.zv).position, sim.position)
-    e_shoe = error_2d(run_zupt(sim.imu, shoe).position, sim.position)
+    e_lstm = error_2d(ZuptFilter().run(sim.imu, res.zv).position, sim.position)
+    e_shoe = error_2d(ZuptFilter().run(sim.imu, shoe).position, sim.position)
     assert e_lstm < max(2 * e_shoe, 0.3)
 
 
@@ -292,7 +292,7 @@ def test_shipped_detector_on_a_real_trial_played_faster(name, factor, bound):
     trials, at their own pace, in training; the out-of-fold figures are in benchmarks/bench_zupt_lstm_cv.py."""
     from shared_data import data_path
 
-    from imunav.ins import detector_statistic, error_2d, run_zupt
+    from imunav.ins import ZuptFilter, detector_statistic, error_2d
     from imunav.io.foot import read_pyshoe_mat
 
     model = _shipped()
@@ -301,13 +301,13 @@ def test_shipped_detector_on_a_real_trial_played_faster(name, factor, bound):
     res = model.detect(imu)
     shoe = detector_statistic(imu, "shoe") < model.config.shoe_threshold
     assert abs(res.stance_fraction - shoe.mean()) < 0.1
-    assert error_2d(run_zupt(imu, res.zv).position, ref) < bound
+    assert error_2d(ZuptFilter().run(imu, res.zv).position, ref) < bound
 
 
 def test_select_shoe_threshold_is_the_argmin_of_the_mean_error():
     from shared_data import data_path
 
-    from imunav.ins import detector_statistic, error_2d, run_zupt
+    from imunav.ins import ZuptFilter, detector_statistic, error_2d
     from imunav.io.foot import read_pyshoe_mat
     from imunav.learn import select_shoe_threshold
 
@@ -315,7 +315,7 @@ def test_select_shoe_threshold_is_the_argmin_of_the_mean_error():
     grid = [1e6, 1e8, 1e9]
     best, E = select_shoe_threshold([trial], grid)
     T = detector_statistic(trial.imu, "shoe")
-    ref = [error_2d(run_zupt(trial.imu, T < g).position, trial.position) for g in grid]
+    ref = [error_2d(ZuptFilter().run(trial.imu, T < g).position, trial.position) for g in grid]
     np.testing.assert_allclose(E, ref)
     assert best == grid[int(np.argmin(ref))]
     with pytest.raises(InvalidInputError, match="at least one trial"):

@@ -7,7 +7,7 @@ import pytest
 from shared_data import data_path
 
 from imunav.errors import FileFormatError, InsufficientDataError, InvalidInputError, ShapeError
-from imunav.ins import ZuptConfig, detect_zero_velocity, error_2d, loop_closure_error, position_rmse, run_zupt
+from imunav.ins import ZuptConfig, ZuptFilter, detect_zero_velocity, error_2d, loop_closure_error, position_rmse
 from imunav.ins.metrics import align_heading, vertical_error
 
 
@@ -57,7 +57,7 @@ def test_pyshoe_adapter_flip_needed():
 
     tr = read_pyshoe_mat(data_path("foot", "pyshoe_vicon", "2017-11-22-11-22-03.mat"))
     assert tr.imu.accel[:20, 2].mean() < -9.0  # body z down
-    res = run_zupt(tr.imu, tr.labels["shoe"])
+    res = ZuptFilter().run(tr.imu, tr.labels["shoe"])
     good = error_2d(res.position, tr.position)
     mirrored = error_2d(res.position, tr.position * [1, -1, 1])
     assert good < 0.05 and mirrored > 5 * good
@@ -85,13 +85,13 @@ def test_xio_reader_units_frames_and_loop_closure():
         assert d.accel[:50, 2].mean() < -7.0
         assert abs(np.linalg.norm(d.accel[:50].mean(0)) - 9.8) < 0.3  # g -> m/s^2
         zv = detect_zero_velocity(d, "shoe", 1e8, margin_s=0.125)
-        res = run_zupt(d, zv.zv, ZuptConfig(alignment="first_stance", g=None, sigma_acc=2.0))
+        res = ZuptFilter(ZuptConfig(alignment="first_stance", g=None, sigma_acc=2.0)).run(d, zv.zv)
         lc = loop_closure_error(res.position)
         assert lc.error_3d < bound, f"{name}: {lc.error_3d:.3f} m"
         assert lc.horizontal < 0.2
         zx = detect_zero_velocity(d, "freeacc", 3.0, margin_s=0.1)
         cfg = ZuptConfig(alignment="first_stance", g=None, level_floor=True)
-        lc = loop_closure_error(run_zupt(d, zx.zv, cfg).position)
+        lc = loop_closure_error(ZuptFilter(cfg).run(d, zx.zv).position)
         published = 0.082 if name.startswith("short") else 0.421
         assert lc.error_3d < published, f"{name}: {lc.error_3d:.3f} m with freeacc + level floor"
         assert lc.vertical < 0.005  # the constraint holds the height
@@ -104,7 +104,7 @@ def test_fgo_adapter():
     tr = read_fgo_csv(base / "imuMeasRight.csv", base / "positionGt.csv")
     assert tr.imu.fs == pytest.approx(60.0)
     assert tr.imu.accel[:20, 2].mean() < -9.0
-    res = run_zupt(tr.imu, tr.labels["authors"], ZuptConfig(alignment="first_stance", g=None))
+    res = ZuptFilter(ZuptConfig(alignment="first_stance", g=None)).run(tr.imu, tr.labels["authors"])
     good = error_2d(res.position, tr.position)
     assert good < 0.3
     assert error_2d(res.position, tr.position * [1, -1, 1]) > 3 * good

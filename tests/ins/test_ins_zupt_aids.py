@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from imunav.errors import ConfigError
-from imunav.ins import ZuptConfig, long_stances, run_zupt
+from imunav.ins import ZuptConfig, ZuptFilter, long_stances
 from imunav.rotation import dcm_from_quat, quat_error_angle, quat_from_euler, quat_multiply
 from imunav.sim.gait import simulate_gait
 from imunav.timeseries import ImuData
@@ -52,7 +52,7 @@ def test_heading_hold_exact_for_tilted_sensor_rocking_in_stance():
     yaw_swing = np.ptp(np.unwrap(euler_from_quat(q_true)[:, 2]))
     assert yaw_swing > math.radians(10)  # a yaw-angle hold would be badly wrong here
     cfg = ZuptConfig(heading_hold=True, sigma_heading=math.radians(0.1), g=G)
-    res = run_zupt(data, np.ones(data.n, bool), cfg, initial_quaternion=q_true[0])
+    res = ZuptFilter(cfg).run(data, np.ones(data.n, bool), initial_quaternion=q_true[0])
     err = np.degrees(quat_error_angle(res.q_nb, q_true))
     # integration is exact for this motion; what is left is the rounding of 1200 steps
     assert err.max() < 1e-6
@@ -70,8 +70,8 @@ def test_heading_hold_removes_gyro_bias_heading_drift():
     fs, n = 200.0, 2001
     b = math.radians(0.5)  # °/s about body z (= nav down for a level foot)
     data = ImuData(np.arange(n) / fs, np.tile([0.0, 0.0, b], (n, 1)), np.tile([0.0, 0.0, -G], (n, 1)))
-    free = run_zupt(data, np.ones(n, bool), ZuptConfig(g=G), initial_quaternion=[1, 0, 0, 0])
-    held = run_zupt(data, np.ones(n, bool), ZuptConfig(g=G, heading_hold=True), initial_quaternion=[1, 0, 0, 0])
+    free = ZuptFilter(ZuptConfig(g=G)).run(data, np.ones(n, bool), initial_quaternion=[1, 0, 0, 0])
+    held = ZuptFilter(ZuptConfig(g=G, heading_hold=True)).run(data, np.ones(n, bool), initial_quaternion=[1, 0, 0, 0])
     from imunav.rotation import euler_from_quat
 
     yaw_free = euler_from_quat(free.q_nb[-1])[2]
@@ -91,9 +91,9 @@ def test_level_floor_removes_vertical_drift_on_flat_walk():
     worst_free, worst_floor = [], []
     for seed in (0, 1, 2):
         sim = simulate_gait("walk", 30, error_model="foot_mems", rng=seed, turn_deg=12)
-        free = run_zupt(sim.imu, sim.stance, ZuptConfig(g=G, integration="coning"))
+        free = ZuptFilter(ZuptConfig(g=G, integration="coning")).run(sim.imu, sim.stance)
         cfg = ZuptConfig(g=G, integration="coning", level_floor=True, sigma_floor=0.01)
-        floor = run_zupt(sim.imu, sim.stance, cfg)
+        floor = ZuptFilter(cfg).run(sim.imu, sim.stance)
         worst_free.append(np.abs(free.position[sim.stance, 2]).max())
         worst_floor.append(np.abs(floor.position[sim.stance, 2]).max())
         # the constraint does not harm the horizontal solution
@@ -121,7 +121,7 @@ def test_zaru_in_long_stances_recovers_gyro_bias():
         sim = simulate_gait("walk", 20, error_model="foot_mems", rng=seed, turn_deg=18,
                             initial_stance_s=4.0, final_stance_s=4.0)
         cfg = ZuptConfig(g=G, states=15, zaru=True, zaru_min_s=1.0, integration="coning")
-        res = run_zupt(sim.imu, sim.stance, cfg)
+        res = ZuptFilter(cfg).run(sim.imu, sim.stance)
         sd = np.sqrt(res.cov_diag[-1])
         np.testing.assert_array_less(np.abs(res.gyro_bias[-1] - sim.gyro_bias[-1]), 3 * sd[12:15])
         assert np.linalg.norm(res.position[-1] - sim.position[-1]) < 0.1

@@ -1,4 +1,4 @@
-"""Calibration of the covariance that :func:`imunav.ins.run_zupt` reports (``ZuptResult.P`` / ``cov_diag``).
+"""Calibration of the covariance that :meth:`imunav.ins.ZuptFilter.run` reports (``ZuptResult.P`` / ``cov_diag``).
 
 One gait trajectory is simulated without sensor errors (:func:`imunav.sim.gait.simulate_gait`);
 each run adds what the filter's model assumes and nothing else: white noise of the
@@ -36,7 +36,7 @@ import numpy as np
 import pytest
 from _calibration import assert_nees_calibrated, assert_rms_calibrated, z_scores
 
-from imunav.ins import ZuptConfig, run_zupt
+from imunav.ins import ZuptConfig, ZuptFilter
 from imunav.rotation import quat_from_rotvec, quat_multiply
 from imunav.sim.gait import simulate_gait
 from imunav.timeseries import ImuData
@@ -72,7 +72,7 @@ def _runs(states: int, seed: int):
         dphi = rng.normal(scale=cfg.p0_att, size=3)
         # C_true = exp([dphi x]) C_hat  =>  q_hat = q(-dphi) * q_true (nav-frame error)
         q0 = quat_multiply(quat_from_rotvec(-dphi), sim.q_nb[0])
-        res = run_zupt(imu, sim.stance, cfg, initial_quaternion=q0)
+        res = ZuptFilter(cfg).run(imu, sim.stance, initial_quaternion=q0)
         e = sim.position[-1] - res.position[-1]
         nees.append(float(e @ np.linalg.solve(res.P[:3, :3], e)))
         sd = np.sqrt(res.cov_diag[k_mid])

@@ -13,7 +13,7 @@ import numpy as np
 import scipy.io as sio
 from shared_data import data_path
 
-from imunav.ins import ZuptConfig, error_2d, run_zupt
+from imunav.ins import ZuptConfig, ZuptFilter, error_2d
 from imunav.io import foot
 
 
@@ -22,7 +22,7 @@ def test_median_ratio_to_published_error_within_5_percent():
     ratios = []
     for f in sorted(d.glob("*.mat")):
         tr = foot.read_pyshoe_mat(f)
-        res = run_zupt(tr.imu, tr.labels["shoe"], ZuptConfig(g=9.8029))
+        res = ZuptFilter(ZuptConfig(g=9.8029)).run(tr.imu, tr.labels["shoe"])
         ratios.append(error_2d(res.position, tr.position) / float(sio.loadmat(f)["trial_error"].ravel()[0]))
     ratios = np.array(ratios)
     assert ratios.size == 42

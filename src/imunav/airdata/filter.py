@@ -35,8 +35,8 @@ initial condition at index 1), so its table values at iterations
 50/100/101/150/200/≥300 are rows 48/98/99/148/198/≥298
 (:func:`thesis_row`).  The thesis's measurement step s is row s − 1.
 
-Long-horizon variant (:func:`run_long_horizon`)
------------------------------------------------
+Long-horizon variant (:class:`LongHorizonFilter`)
+-------------------------------------------------
 For real flights: the wind in the *navigation* frame (it does not rotate
 with the aircraft in turns) as first-order Gauss-Markov (σ_w, τ_w; discrete
 ``φ = e^{−Δt/τ}``, ``q = σ_w²(1 − φ²)``), NED dead-reckoning position
@@ -50,7 +50,7 @@ position σ grows and is reported honestly.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, fields
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -58,9 +58,10 @@ from numpy.typing import ArrayLike, NDArray
 from imunav._docstrings import fill_doc
 from imunav.errors import InvalidInputError, ShapeError
 from imunav.filters import BatchRun, batch_kalman_filter
-from imunav.filters._batch import huber_batch, inv_sqrt_batch, isolate_batch, masked_update, sym
+from imunav.filters._batch import batch_filter, huber_batch, inv_sqrt_batch, isolate_batch, masked_update, sym
 from imunav.filters._core import van_loan
 from imunav.filters.gates import isolation_thresholds
+from imunav.filters.kalman import _lti_model, robust_mode
 from imunav.results import Result
 
 __all__ = [
@@ -70,11 +71,12 @@ __all__ = [
     "THESIS_ITERATIONS",
     "THESIS_P44",
     "WindFilterResult",
-    "run_thesis_filter",
-    "run_thesis_filter_batch",
+    "ThesisFilter",
+    "ThesisState",
     "LongHorizonConfig",
     "LongHorizonResult",
-    "run_long_horizon",
+    "LongHorizonFilter",
+    "LongHorizonState",
 ]
 
 Array = NDArray[np.float64]
@@ -230,77 +232,145 @@ def _check_z(z: ArrayLike, batch: bool) -> Array:
     return zz
 
 
-@fill_doc
-def run_thesis_filter_batch(z: ArrayLike, cfg: ThesisFilterConfig | None = None, *, robust: str | None = None,
-                            gate_m: float = 2.0, alpha: float = 1e-3, huber_c: float = 1.345) -> BatchRun:
-    """The thesis filter over a batch of difference measurements ``z = V_D − V_A`` (runs, N, 3).
+@dataclass(frozen=True)
+class ThesisState:
+    """The thesis filter's estimate after one :meth:`ThesisFilter.step` (one row of :class:`WindFilterResult`).
 
-    Parameters
+    Attributes
     ----------
-    z : array_like, shape (runs, N, 3)
-        Doppler minus ADS body velocity, m/s (NaN rows: no measurement).
-    cfg : ThesisFilterConfig, optional
-        Filter parameters (default the thesis's).
-    %(wind_robust)s
-
-    Returns
-    -------
-    BatchRun
-        States, covariance diagonals, innovations and weights of every run.
+    x : numpy.ndarray, shape (6,)
+        State (δX, δY, δZ in m, W in m/s, body axes).
+    cov_diag : numpy.ndarray, shape (6,)
+        Diagonal of P.
+    innovation, normalized, weights : numpy.ndarray, shape (3,)
+        Innovation (m/s), normalised innovation, weights (1 used, 0 rejected); NaN / 0 without a measurement.
     """
-    m = thesis_matrices(cfg)
-    return batch_kalman_filter(m["x0"], m["P0"], m["F"], m["Q"], m["H"], m["R"], _check_z(z, True), G=m["G"],
-                               robust=robust, gate_m=gate_m, alpha=alpha, huber_c=huber_c)
+
+    x: Array
+    cov_diag: Array
+    innovation: Array
+    normalized: Array
+    weights: Array
 
 
 @fill_doc
-def run_thesis_filter(
-    z: ArrayLike,
-    cfg: ThesisFilterConfig | None = None,
-    *,
-    v_ads: ArrayLike | None = None,
-    robust: str | None = None,
-    gate_m: float = 2.0,
-    alpha: float = 1e-3,
-    huber_c: float = 1.345,
-) -> WindFilterResult:
-    """Run the thesis filter on ``z = V_D − V_A`` (N, 3).
+class ThesisFilter:
+    """The thesis wind filter (Akgün 2002; module docstring) on ``z = V_D − V_A``.
+
+    ``run(z)`` filters one sequence, ``run_batch(z)`` many at once (vectorised over runs),
+    ``step(z_k)`` one measurement, with the same update code, the state carried between calls.
 
     Parameters
     ----------
-    z : array_like, shape (N, 3)
-        Doppler minus ADS body velocity, m/s (NaN rows: no measurement).
-    cfg : ThesisFilterConfig, optional
+    config : ThesisFilterConfig, optional
         Filter parameters (default the thesis's).
-    v_ads : array_like, shape (N, 3), optional
-        ADS body velocity, m/s; gives the corrected ground velocity and
-        position ``X_A + δX̂`` with ``X_A(k) = T Σ_{j≤k} V_A(j)``
-        (positions are relative to the start).
     %(wind_robust)s
-
-    Returns
-    -------
-    WindFilterResult
-        States, wind, innovations and, with ``v_ads``, ground velocity and position.
 
     Raises
     ------
-    ShapeError
-        If ``v_ads`` does not have the shape of ``z``.
+    InvalidInputError
+        If ``robust`` is unknown or a tuning value is out of range.
     """
-    c = ThesisFilterConfig() if cfg is None else cfg
-    zz = _check_z(z, False)
-    r = run_thesis_filter_batch(zz[None], c, robust=robust, gate_m=gate_m, alpha=alpha, huber_c=huber_c)
-    x = r.x[0]
-    vel = pos = None
-    if v_ads is not None:
-        va = np.asarray(v_ads, dtype=np.float64)
-        if va.shape != zz.shape:
-            raise ShapeError(f"v_ads must have the shape of z {zz.shape}, got {va.shape}")
-        vel = va + x[:, 3:]
-        pos = c.dt * np.cumsum(va, axis=0) + x[:, :3]
-    return WindFilterResult(x, r.cov_diag[0], r.innovation[0], r.normalized[0], r.weights[0], x[:, 3:].copy(), zz,
-                            vel, pos, robust)
+
+    name = "thesis"
+
+    def __init__(self, config: ThesisFilterConfig | None = None, *, robust: str | None = None, gate_m: float = 2.0,
+                 alpha: float = 1e-3, huber_c: float = 1.345) -> None:
+        self.config = ThesisFilterConfig() if config is None else config
+        self._mode = robust_mode(robust, gate_m, alpha, huber_c)
+        self.robust, self.gate_m, self.alpha, self.huber_c = robust, gate_m, alpha, huber_c
+        self._m = thesis_matrices(self.config)
+        m = self._m
+        self._lti = _lti_model(6, m["F"], m["Q"], m["H"], m["R"], m["G"])  # (F, G Q Gᵀ, H, R) as run_batch has them
+        self.reset()
+
+    def reset(self) -> None:
+        """Back to the initial state ``config.x0``, ``diag(config.p0)``: the next :meth:`step` is the first."""
+        self.x = self._m["x0"].copy()
+        self.P = self._m["P0"].copy()
+
+    def run_batch(self, z: ArrayLike) -> BatchRun:
+        """The filter over a batch of difference measurements ``z = V_D − V_A`` (runs, N, 3).
+
+        Parameters
+        ----------
+        z : array_like, shape (runs, N, 3)
+            Doppler minus ADS body velocity, m/s (NaN rows: no measurement).
+
+        Returns
+        -------
+        BatchRun
+            States, covariance diagonals, innovations and weights of every run.
+        """
+        m = self._m
+        return batch_kalman_filter(m["x0"], m["P0"], m["F"], m["Q"], m["H"], m["R"], _check_z(z, True), G=m["G"],
+                                   robust=self.robust, gate_m=self.gate_m, alpha=self.alpha, huber_c=self.huber_c)
+
+    def run(self, z: ArrayLike, *, v_ads: ArrayLike | None = None) -> WindFilterResult:
+        """Run the filter on ``z = V_D − V_A`` (N, 3) from the initial state.
+
+        Parameters
+        ----------
+        z : array_like, shape (N, 3)
+            Doppler minus ADS body velocity, m/s (NaN rows: no measurement).
+        v_ads : array_like, shape (N, 3), optional
+            ADS body velocity, m/s; gives the corrected ground velocity and
+            position ``X_A + δX̂`` with ``X_A(k) = T Σ_{j≤k} V_A(j)``
+            (positions are relative to the start).
+
+        Returns
+        -------
+        WindFilterResult
+            States, wind, innovations and, with ``v_ads``, ground velocity and position.
+
+        Raises
+        ------
+        ShapeError
+            If ``z`` is not (N, 3) or ``v_ads`` does not have the shape of ``z``.
+        """
+        c = self.config
+        zz = _check_z(z, False)
+        r = self.run_batch(zz[None])
+        x = r.x[0]
+        vel = pos = None
+        if v_ads is not None:
+            va = np.asarray(v_ads, dtype=np.float64)
+            if va.shape != zz.shape:
+                raise ShapeError(f"v_ads must have the shape of z {zz.shape}, got {va.shape}")
+            vel = va + x[:, 3:]
+            pos = c.dt * np.cumsum(va, axis=0) + x[:, :3]
+        return WindFilterResult(x, r.cov_diag[0], r.innovation[0], r.normalized[0], r.weights[0], x[:, 3:].copy(),
+                                zz, vel, pos, self.robust)
+
+    def step(self, z_k: ArrayLike) -> ThesisState:
+        """One prediction over ``config.dt`` and the update with one measurement (the loop of :meth:`run_batch`).
+
+        Parameters
+        ----------
+        z_k : array_like, shape (3,)
+            Doppler minus ADS body velocity, m/s (all NaN: no measurement, prediction only).
+
+        Returns
+        -------
+        ThesisState
+            The estimate after this step; ``self.x``, ``self.P`` hold it for the next.
+
+        Raises
+        ------
+        ShapeError
+            If ``z_k`` is not a 3-vector.
+        InvalidInputError
+            If ``z_k`` holds inf.
+        """
+        zk = _check_z(np.asarray(z_k, dtype=np.float64)[None], False)
+        if zk.shape != (1, 3):
+            raise ShapeError(f"z_k must be one measurement of shape (3,), got {np.shape(z_k)}")
+        F, Qn, H, R = self._lti
+        o = batch_filter(self.x, self.P, F, Qn, H, R, zk[None], self._mode, float(self.gate_m),
+                         isolation_thresholds(3, self.alpha), float(self.huber_c), store_full=True)
+        self.x, self.P = o["x"][0, 0].copy(), o["P"][0, 0].copy()
+        return ThesisState(self.x.copy(), o["P_diag"][0, 0], o["innovation"][0, 0], o["normalized"][0, 0],
+                           o["weights"][0, 0])
 
 
 # ----------------------------------------------------------------------------------------------
@@ -403,126 +473,218 @@ def _van_loan(dt: float, c: LongHorizonConfig) -> tuple[Array, Array]:
     return van_loan(A, Qc, float(dt))
 
 
-def run_long_horizon(
-    t_ads: ArrayLike,
-    v_ads_body: ArrayLike,
-    t_doppler: ArrayLike,
-    v_doppler_body: ArrayLike,
-    C_nb_doppler: ArrayLike,
-    C_nb_ads: ArrayLike,
-    cfg: LongHorizonConfig | None = None,
-) -> LongHorizonResult:
-    """Long-horizon wind filter on multi-rate ADS and Doppler data.
+@dataclass(frozen=True)
+class LongHorizonState:
+    """The long-horizon filter's estimate after one Doppler epoch (:meth:`LongHorizonFilter.step`).
 
-    State per NED axis: DR position correction δp, mean wind W, gust g
-    (9 states).  The ADS NED air velocity ``C_nb V_A`` is integrated on its
-    own time grid (trapezoidal dead reckoning) and interpolated to the
-    Doppler epochs; each Doppler sample gives
-    ``z = C_nb V_D − C_nb V_A = W + g + noise`` with
-    ``R = C_nb (R_D + R_A) C_nbᵀ``.  Φ and Q are discretised exactly (Van Loan 1978,
-    IEEE Trans. Autom. Control 23(3)).
+    Attributes
+    ----------
+    t : float
+        Doppler epoch, s.
+    wind, wind_std, mean_wind : numpy.ndarray, shape (3,)
+        NED total wind (mean + gust), its standard deviation and the mean part, m/s.
+    position_correction, position_std : numpy.ndarray, shape (3,)
+        Correction δp of the ADS dead-reckoning position and its standard deviation, m.
+    normalized, weights : numpy.ndarray, shape (3,)
+        Normalised innovation and weights (1 used, 0 rejected, Huber weight in between).
+    """
+
+    t: float
+    wind: Array
+    wind_std: Array
+    mean_wind: Array
+    position_correction: Array
+    position_std: Array
+    normalized: Array
+    weights: Array
+
+
+class LongHorizonFilter:
+    """Navigation-frame wind filter for real flights on multi-rate ADS and Doppler data (module docstring).
+
+    ``run(...)`` filters a whole flight; ``step(t, v_doppler_body, C_nb, v_air_ned)`` one Doppler epoch, with
+    the same prediction and update code, the state carried between calls.
 
     Parameters
     ----------
-    t_ads : array_like, shape (N,)
-        ADS time, s, strictly increasing.
-    v_ads_body : array_like, shape (N, 3)
-        ADS air velocity in body axes (FRD), m/s.
-    t_doppler : array_like, shape (M,)
-        Doppler time, s, strictly increasing, within the ADS span.
-    v_doppler_body : array_like, shape (M, 3)
-        Doppler ground velocity in body axes (FRD), m/s.
-    C_nb_doppler : array_like, shape (M, 3, 3)
-        Body-to-NED rotation matrices at the Doppler epochs.
-    C_nb_ads : array_like, shape (N, 3, 3)
-        Body-to-NED rotation matrices at the ADS epochs.
-    cfg : LongHorizonConfig, optional
+    config : LongHorizonConfig, optional
         Settings (default :class:`LongHorizonConfig`).
-
-    Returns
-    -------
-    LongHorizonResult
-        Wind, position and their standard deviations at the Doppler epochs.
-
-    Raises
-    ------
-    ShapeError
-        If an array does not match its time vector.
-    InvalidInputError
-        If a time vector is not strictly increasing, the Doppler epochs leave the ADS span, or an
-        input is not finite.
     """
 
-    c = LongHorizonConfig() if cfg is None else cfg
-    ta = np.asarray(t_ads, dtype=np.float64)
-    td = np.asarray(t_doppler, dtype=np.float64)
-    va = np.asarray(v_ads_body, dtype=np.float64)
-    vd = np.asarray(v_doppler_body, dtype=np.float64)
-    Cd = np.asarray(C_nb_doppler, dtype=np.float64)
-    Ca = np.asarray(C_nb_ads, dtype=np.float64)
-    if va.shape != (ta.size, 3) or Ca.shape != (ta.size, 3, 3):
-        raise ShapeError(f"ADS arrays must be (N, 3) and (N, 3, 3) for {ta.size} times; got {va.shape}, {Ca.shape}")
-    if vd.shape != (td.size, 3) or Cd.shape != (td.size, 3, 3):
-        raise ShapeError(f"Doppler arrays must be (M, 3) and (M, 3, 3) for {td.size} times; got {vd.shape}, {Cd.shape}")
-    for name, tt in (("t_ads", ta), ("t_doppler", td)):
-        if tt.size < 2 or np.any(np.diff(tt) <= 0):
-            raise InvalidInputError(f"{name} must be strictly increasing with >= 2 samples")
-    if td[0] < ta[0] or td[-1] > ta[-1]:
-        raise InvalidInputError("Doppler epochs must lie within the ADS time span (the ADS is interpolated)")
-    for name, a in (("v_ads_body", va), ("v_doppler_body", vd), ("C_nb_ads", Ca), ("C_nb_doppler", Cd)):
-        if not np.all(np.isfinite(a)):
-            raise InvalidInputError(f"{name} contains NaN or inf at row {int(np.argwhere(~np.isfinite(a))[0, 0])}")
-    va_n = np.einsum("kij,kj->ki", Ca, va)
-    pa = np.concatenate([np.zeros((1, 3)), np.cumsum(0.5 * (va_n[1:] + va_n[:-1]) * np.diff(ta)[:, None], axis=0)])
-    va_d = np.stack([np.interp(td, ta, va_n[:, i]) for i in range(3)], axis=1)
-    pa_d = np.stack([np.interp(td, ta, pa[:, i]) for i in range(3)], axis=1)
-    z = np.einsum("kij,kj->ki", Cd, vd) - va_d
-    Rb = np.diag(np.asarray(c.sigma_ads, dtype=np.float64) ** 2 + np.asarray(c.sigma_doppler, dtype=np.float64) ** 2)
-    R_all = np.einsum("kij,jl,kml->kim", Cd, Rb, Cd)
-    I3 = np.eye(3)
-    H = np.hstack([np.zeros((3, 3)), I3, I3])
-    x = np.zeros((1, 9))
-    P = np.diag([c.p0_position] * 3 + [c.p0_wind] * 3 + [max(c.turbulence_sigma, 1e-3) ** 2] * 3)[None]
-    thr = isolation_thresholds(3, c.alpha)
-    N = td.size
-    xs = np.empty((N, 9))
-    pd = np.empty((N, 9))
-    wv = np.empty((N, 3))
-    nn = np.full((N, 3), np.nan)
-    w = np.zeros((N, 3))
-    cache: dict[float, tuple[Array, Array]] = {}
-    ones = np.ones((1, 3), dtype=bool)
-    for k in range(N):
-        if k > 0:
-            dt = round(float(td[k] - td[k - 1]), 9)
-            if dt not in cache:
+    name = "long_horizon"
+
+    def __init__(self, config: LongHorizonConfig | None = None) -> None:
+        self.config = LongHorizonConfig() if config is None else config
+        c = self.config
+        self._Rb = np.diag(np.asarray(c.sigma_ads, dtype=np.float64) ** 2
+                           + np.asarray(c.sigma_doppler, dtype=np.float64) ** 2)
+        self._H = np.hstack([np.zeros((3, 3)), np.eye(3), np.eye(3)])
+        self._thr = isolation_thresholds(3, c.alpha)
+        self._cache: dict[float, tuple[Array, Array]] = {}
+        self.reset()
+
+    def reset(self) -> None:
+        """Back to the initial state: the next :meth:`step` is the first epoch (it initialises the wind)."""
+        c = self.config
+        self.x = np.zeros((1, 9))
+        self.P = np.diag([c.p0_position] * 3 + [c.p0_wind] * 3 + [max(c.turbulence_sigma, 1e-3) ** 2] * 3)[None]
+        self._t: float | None = None
+
+    def _advance(self, tk: float, zk: Array, R: Array) -> LongHorizonState:
+        """Predict from the previous epoch to ``tk`` and update with ``zk`` (NED, m/s), covariance ``R``."""
+        c = self.config
+        x, P, H = self.x, self.P, self._H
+        first = self._t is None
+        if not first:
+            dt = round(float(tk - self._t), 9)
+            if dt not in self._cache:
                 Phi3, Q3 = _van_loan(dt, c)
-                cache[dt] = (np.kron(Phi3, I3), np.kron(Q3, I3))
-            F, Q = cache[dt]
+                self._cache[dt] = (np.kron(Phi3, np.eye(3)), np.kron(Q3, np.eye(3)))
+            F, Q = self._cache[dt]
             x = x @ F.T
             P = sym(F @ P @ F.T + Q)
-        R = R_all[k]
-        nu = z[k][None] - x @ H.T
+        nu = zk[None] - x @ H.T
         S = sym(H @ P @ H.T + R)
-        nn[k] = (inv_sqrt_batch(S) @ nu[0])[0]
-        mode = None if k == 0 else c.robust  # the first difference initialises the wind
+        nn = (inv_sqrt_batch(S) @ nu[0])[0]
+        mode = None if first else c.robust  # the first difference initialises the wind
         if mode == "huber":
-            x, P, wk, _ = huber_batch(x, P, z[k][None], H, R, 1.345, ones)
+            x, P, wk, _ = huber_batch(x, P, zk[None], H, R, 1.345, np.ones((1, 3), dtype=bool))
         else:
             if mode == "gate":
-                acc = np.abs(nn[k][None]) < c.gate_m
+                acc = np.abs(nn[None]) < c.gate_m
             elif mode == "isolate":
-                acc = isolate_batch(nu, S, thr)
+                acc = isolate_batch(nu, S, self._thr)
             elif mode == "nis":
-                acc = np.full((1, 3), float(nn[k] @ nn[k]) <= thr[-1])
+                acc = np.full((1, 3), float(nn @ nn) <= self._thr[-1])
             else:
-                acc = ones
+                acc = np.ones((1, 3), dtype=bool)
             x, P, _ = masked_update(x, P, nu, H, R, acc)
             wk = acc.astype(np.float64)
-        w[k] = wk[0]
-        xs[k] = x[0]
-        pd[k] = np.diag(P[0])
-        wv[k] = np.diag(H @ P[0] @ H.T)  # variance of W + g (includes their covariance)
-    wind = xs[:, 3:6] + xs[:, 6:9]
-    return LongHorizonResult(td, wind, np.sqrt(wv), xs[:, 3:6].copy(), pa_d + xs[:, :3],
-                             np.sqrt(pd[:, :3]), nn, w, c)
+        self.x, self.P, self._t = x, P, tk
+        xs, pd = x[0], np.diag(P[0])
+        wv = np.diag(H @ P[0] @ H.T)  # variance of W + g (includes their covariance)
+        return LongHorizonState(tk, xs[3:6] + xs[6:9], np.sqrt(wv), xs[3:6].copy(), xs[:3].copy(),
+                                np.sqrt(pd[:3]), nn, wk[0].copy())
+
+    def step(self, t: float, v_doppler_body: ArrayLike, C_nb: ArrayLike, v_air_ned: ArrayLike) -> LongHorizonState:
+        """One Doppler epoch: predict to ``t`` (Van Loan), update with ``z = C_nb V_D − V_A^n``.
+
+        Parameters
+        ----------
+        t : float
+            Doppler epoch, s, after the previous one.
+        v_doppler_body : array_like, shape (3,)
+            Doppler ground velocity in body axes (FRD), m/s.
+        C_nb : array_like, shape (3, 3)
+            Body-to-NED rotation at the epoch.
+        v_air_ned : array_like, shape (3,)
+            ADS air velocity in NED at the epoch (``C_nb V_A``, interpolated to ``t``), m/s.
+
+        Returns
+        -------
+        LongHorizonState
+            The estimate after this epoch.
+
+        Raises
+        ------
+        ShapeError
+            If an input has the wrong shape.
+        InvalidInputError
+            If an input is not finite or ``t`` is not after the previous epoch.
+        """
+        vd = np.asarray(v_doppler_body, dtype=np.float64)
+        C = np.asarray(C_nb, dtype=np.float64)
+        va = np.asarray(v_air_ned, dtype=np.float64)
+        if vd.shape != (3,) or va.shape != (3,) or C.shape != (3, 3):
+            raise ShapeError(f"v_doppler_body, v_air_ned must be (3,) and C_nb (3, 3); got {vd.shape}, {va.shape}, "
+                             f"{C.shape}")
+        for name, arr in (("v_doppler_body", vd), ("C_nb", C), ("v_air_ned", va)):
+            if not np.all(np.isfinite(arr)):
+                raise InvalidInputError(f"{name} contains NaN or inf: {arr!r}")
+        tk = float(t)
+        if not np.isfinite(tk) or (self._t is not None and not tk > self._t):
+            raise InvalidInputError(f"t = {t!r} s must be finite and after the previous epoch ({self._t!r} s)")
+        z = np.einsum("kij,kj->ki", C[None], vd[None])[0] - va
+        R = np.einsum("kij,jl,kml->kim", C[None], self._Rb, C[None])[0]
+        return self._advance(tk, z, R)
+
+    def run(
+        self,
+        t_ads: ArrayLike,
+        v_ads_body: ArrayLike,
+        t_doppler: ArrayLike,
+        v_doppler_body: ArrayLike,
+        C_nb_doppler: ArrayLike,
+        C_nb_ads: ArrayLike,
+    ) -> LongHorizonResult:
+        """Long-horizon wind filter on multi-rate ADS and Doppler data, from the initial state.
+
+        State per NED axis: DR position correction δp, mean wind W, gust g
+        (9 states).  The ADS NED air velocity ``C_nb V_A`` is integrated on its
+        own time grid (trapezoidal dead reckoning) and interpolated to the
+        Doppler epochs; each Doppler sample gives
+        ``z = C_nb V_D − C_nb V_A = W + g + noise`` with
+        ``R = C_nb (R_D + R_A) C_nbᵀ``.  Φ and Q are discretised exactly (Van Loan 1978,
+        IEEE Trans. Autom. Control 23(3)).
+
+        Parameters
+        ----------
+        t_ads : array_like, shape (N,)
+            ADS time, s, strictly increasing.
+        v_ads_body : array_like, shape (N, 3)
+            ADS air velocity in body axes (FRD), m/s.
+        t_doppler : array_like, shape (M,)
+            Doppler time, s, strictly increasing, within the ADS span.
+        v_doppler_body : array_like, shape (M, 3)
+            Doppler ground velocity in body axes (FRD), m/s.
+        C_nb_doppler : array_like, shape (M, 3, 3)
+            Body-to-NED rotation matrices at the Doppler epochs.
+        C_nb_ads : array_like, shape (N, 3, 3)
+            Body-to-NED rotation matrices at the ADS epochs.
+
+        Returns
+        -------
+        LongHorizonResult
+            Wind, position and their standard deviations at the Doppler epochs.
+
+        Raises
+        ------
+        ShapeError
+            If an array does not match its time vector.
+        InvalidInputError
+            If a time vector is not strictly increasing, the Doppler epochs leave the ADS span, or an
+            input is not finite.
+        """
+        c = self.config
+        ta = np.asarray(t_ads, dtype=np.float64)
+        td = np.asarray(t_doppler, dtype=np.float64)
+        va = np.asarray(v_ads_body, dtype=np.float64)
+        vd = np.asarray(v_doppler_body, dtype=np.float64)
+        Cd = np.asarray(C_nb_doppler, dtype=np.float64)
+        Ca = np.asarray(C_nb_ads, dtype=np.float64)
+        if va.shape != (ta.size, 3) or Ca.shape != (ta.size, 3, 3):
+            raise ShapeError(f"ADS arrays must be (N, 3) and (N, 3, 3) for {ta.size} times; got {va.shape}, "
+                             f"{Ca.shape}")
+        if vd.shape != (td.size, 3) or Cd.shape != (td.size, 3, 3):
+            raise ShapeError(f"Doppler arrays must be (M, 3) and (M, 3, 3) for {td.size} times; got {vd.shape}, "
+                             f"{Cd.shape}")
+        for name, tt in (("t_ads", ta), ("t_doppler", td)):
+            if tt.size < 2 or np.any(np.diff(tt) <= 0):
+                raise InvalidInputError(f"{name} must be strictly increasing with >= 2 samples")
+        if td[0] < ta[0] or td[-1] > ta[-1]:
+            raise InvalidInputError("Doppler epochs must lie within the ADS time span (the ADS is interpolated)")
+        for name, a in (("v_ads_body", va), ("v_doppler_body", vd), ("C_nb_ads", Ca), ("C_nb_doppler", Cd)):
+            if not np.all(np.isfinite(a)):
+                raise InvalidInputError(f"{name} contains NaN or inf at row {int(np.argwhere(~np.isfinite(a))[0, 0])}")
+        va_n = np.einsum("kij,kj->ki", Ca, va)
+        pa = np.concatenate([np.zeros((1, 3)),
+                             np.cumsum(0.5 * (va_n[1:] + va_n[:-1]) * np.diff(ta)[:, None], axis=0)])
+        va_d = np.stack([np.interp(td, ta, va_n[:, i]) for i in range(3)], axis=1)
+        pa_d = np.stack([np.interp(td, ta, pa[:, i]) for i in range(3)], axis=1)
+        z = np.einsum("kij,kj->ki", Cd, vd) - va_d
+        R_all = np.einsum("kij,jl,kml->kim", Cd, self._Rb, Cd)
+        self.reset()
+        st = [self._advance(float(td[k]), z[k], R_all[k]) for k in range(td.size)]
+        col = {f.name: np.array([getattr(s_, f.name) for s_ in st]) for f in fields(LongHorizonState)}
+        return LongHorizonResult(td, col["wind"], col["wind_std"], col["mean_wind"], pa_d + col["position_correction"],
+                                 col["position_std"], col["normalized"], col["weights"], c)

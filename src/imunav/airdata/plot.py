@@ -9,6 +9,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from imunav._docstrings import fill_doc
+
 __all__ = ["plot_wind", "plot_innovations", "plot_detectors", "plot_long_horizon"]
 
 
@@ -23,22 +25,20 @@ def _plt():
     return plt
 
 
+@fill_doc
 def plot_wind(result, data=None, axis_names=("x", "y", "z")):
     """Wind estimate vs truth and the difference-loop wind (the thesis's Figs. 6.1, 6.3, 6.8), with ±σ.
 
     Parameters
     ----------
     result : WindFilterResult
-        Output of :func:`imunav.airdata.filter.run_thesis_filter`; wind in m/s, body axes.
+        Output of :meth:`imunav.airdata.filter.ThesisFilter.run`; wind in m/s, body axes.
     data : ThesisData, optional
         The simulated run, for the true wind.
     axis_names : tuple of str
         Labels of the three axes.
 
-    Returns
-    -------
-    matplotlib.figure.Figure
-        The figure.
+    %(figure_returns)s
     """
     plt = _plt()
     fig, axes = plt.subplots(3, 1, figsize=(8, 8), sharex=True)
@@ -57,6 +57,7 @@ def plot_wind(result, data=None, axis_names=("x", "y", "z")):
     return fig
 
 
+@fill_doc
 def plot_innovations(result, bound: float = 3.0):
     """Normalised innovations with ±bound lines and rejected samples marked (the thesis's Figs. 6.7, 6.10, 6.13).
 
@@ -67,10 +68,7 @@ def plot_innovations(result, bound: float = 3.0):
     bound : float
         Bound drawn at ±``bound`` (in standard deviations).
 
-    Returns
-    -------
-    matplotlib.figure.Figure
-        The figure.
+    %(figure_returns)s
     """
     plt = _plt()
     fig, axes = plt.subplots(3, 1, figsize=(8, 7), sharex=True)
@@ -87,6 +85,7 @@ def plot_innovations(result, bound: float = 3.0):
     return fig
 
 
+@fill_doc
 def plot_detectors(detection, names=("alg1", "alg2", "alg3")):
     """Detector statistics with their thresholds (calibrated solid, thesis dashed) (the thesis's Figs. 6.14, 6.16).
 
@@ -97,10 +96,7 @@ def plot_detectors(detection, names=("alg1", "alg2", "alg3")):
     names : tuple of str
         The detectors drawn.
 
-    Returns
-    -------
-    matplotlib.figure.Figure
-        The figure.
+    %(figure_returns)s
     """
     plt = _plt()
     fig, axes = plt.subplots(len(names), 1, figsize=(8, 2.4 * len(names)), sharex=True)
@@ -120,20 +116,18 @@ def plot_detectors(detection, names=("alg1", "alg2", "alg3")):
     return fig
 
 
+@fill_doc
 def plot_long_horizon(result, flight=None):
     """Long-horizon wind estimate (NED) with ±σ and, when given, the flight's true wind.
 
     Parameters
     ----------
     result : LongHorizonResult
-        Output of :func:`imunav.airdata.filter.run_long_horizon`; wind in m/s, NED.
+        Output of :meth:`imunav.airdata.filter.LongHorizonFilter.run`; wind in m/s, NED.
     flight : object, optional
         The simulated flight (:func:`imunav.sim.flight.simulate_flight`), for the true wind.
 
-    Returns
-    -------
-    matplotlib.figure.Figure
-        The figure.
+    %(figure_returns)s
     """
     plt = _plt()
     fig, axes = plt.subplots(3, 1, figsize=(9, 7), sharex=True)

@@ -29,13 +29,13 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import NDArray
 
+from imunav._docstrings import fill_doc
 from imunav.airdata.doppler import DopplerErrors
 from imunav.airdata.filter import (
     THESIS_ITERATIONS,
     THESIS_P44,
+    ThesisFilter,
     ThesisFilterConfig,
-    run_thesis_filter,
-    run_thesis_filter_batch,
     thesis_matrices,
     thesis_row,
 )
@@ -356,7 +356,7 @@ def simulate_detector_statistics(
     for i in range(0, n_runs, chunk):
         n = min(chunk, n_runs - i)
         z, _, _ = simulate_thesis_batch(sc, n, gen)
-        st = detector_statistics(run_thesis_filter_batch(z, cfg).normalized, window)
+        st = detector_statistics(ThesisFilter(cfg).run_batch(z).normalized, window)
         for d in DETECTORS:
             out[d].append(st[d])
         if on_chunk is not None:
@@ -397,27 +397,24 @@ def delay_summary(alarm: NDArray[np.bool_], onset_row: int, horizon: int = 10) -
     }
 
 
+@fill_doc
 def covariance_sequence(cfg: ThesisFilterConfig | None = None, n_steps: int = 500) -> dict[str, list[float]]:
     """P44 and P11 at the thesis's table iterations, beside the thesis's P44 values (Akgün 2002, Table 6.3).
 
-    Parameters
-    ----------
-    cfg : ThesisFilterConfig, optional
-        Filter configuration (default: the thesis's values).
-    n_steps : int
-        Number of steps.
+    %(thesis_cfg_steps)s
 
     Returns
     -------
     dict of str to list of float
         ``iteration``, ``P44`` and ``P11`` of the filter, and the thesis's column ``P44_thesis``.
     """
-    r = run_thesis_filter(np.zeros((n_steps, 3)), cfg)
+    r = ThesisFilter(cfg).run(np.zeros((n_steps, 3)))
     rows = thesis_row(np.asarray(THESIS_ITERATIONS))
     return {"iteration": list(THESIS_ITERATIONS), "P44": [float(r.cov_diag[k, 3]) for k in rows],
             "P11": [float(r.cov_diag[k, 0]) for k in rows], "P44_thesis": list(THESIS_P44)}
 
 
+@fill_doc
 def actual_error_covariance(cfg: ThesisFilterConfig | None = None, n_steps: int = 500,
                             x_error0: tuple[float, ...] = (0.0, 0.0, 0.0, 5.0, 2.0, 3.3),
                             sigma_ads: float = 2.0, sigma_doppler: float = 0.1) -> tuple[Array, Array]:
@@ -429,12 +426,7 @@ def actual_error_covariance(cfg: ThesisFilterConfig | None = None, n_steps: int 
     ``E⁺ = (I−KH) F E Fᵀ (I−KH)ᵀ + K R_true Kᵀ`` and mean ``(I−KH) F μ``
     (initial error = x̂₀ − x_g(0)).
 
-    Parameters
-    ----------
-    cfg : ThesisFilterConfig, optional
-        Filter configuration (default: the thesis's values).
-    n_steps : int
-        Number of steps.
+    %(thesis_cfg_steps)s
     x_error0 : tuple of float
         Initial estimation error, m and m/s.
     sigma_ads, sigma_doppler : float
@@ -567,7 +559,7 @@ def monte_carlo_thesis(
 
     # ---- nominal: optimal filter accuracy
     z, xt, _ = simulate_thesis_batch(base, n_runs, seeds["nominal"])
-    opt = run_thesis_filter_batch(z, cfg)
+    opt = ThesisFilter(cfg).run_batch(z)
     ew = opt.x[:, k0:, 3:] - xt[None, k0:, 3:]
     ed = z[:, k0:] - xt[None, k0:, 3:]
     ep = opt.x[:, -1, :3] - xt[None, -1, :3]
@@ -588,7 +580,7 @@ def monte_carlo_thesis(
     # ---- robust filters
     zo, xto, _ = simulate_thesis_batch(replace(base, kind="outliers"), n_runs, seeds["outliers"])
     mask = replace(base, kind="outliers").anomaly_mask()
-    opt_o = run_thesis_filter_batch(zo, cfg)
+    opt_o = ThesisFilter(cfg).run_batch(zo)
     after = np.zeros(base.n_steps, dtype=bool)
     for s in base.outlier_steps:
         after[s - 1:s - 1 + 50] = True
@@ -609,8 +601,8 @@ def monte_carlo_thesis(
             kw = {"robust": "huber"}
         else:
             raise InvalidInputError(f"unknown robust method {meth!r}: use gate<m>, nis, isolate or huber")
-        ro = run_thesis_filter_batch(zo, cfg, **kw)
-        rn = run_thesis_filter_batch(z, cfg, **kw)
+        ro = ThesisFilter(cfg, **kw).run_batch(zo)
+        rn = ThesisFilter(cfg, **kw).run_batch(z)
         rej = ro.weights < (0.1 if meth == "huber" else 0.5)
         rejn = rn.weights < (0.1 if meth == "huber" else 0.5)
         nom_rms = float(_rms(rn.x[:, k0:, 3:] - xt[None, k0:, 3:]))
@@ -645,7 +637,7 @@ def monte_carlo_thesis(
     for kind in ("variance", "bias", "drift", "stuck"):
         sc = replace(base, kind=kind)
         zf, _, _ = simulate_thesis_batch(sc, n_runs, seeds[kind])
-        rf = run_thesis_filter_batch(zf, cfg)
+        rf = ThesisFilter(cfg).run_batch(zf)
         st = detector_statistics(rf.normalized, M)
         o = sc.onset_row
         det[kind] = {"onset_row": o}
@@ -685,7 +677,7 @@ def thesis_report(n_runs: int = 200, rng: int = 0, **kw) -> dict:
     single = {}
     for kind in ("variance", "bias"):
         d = simulate_thesis(ThesisScenario(kind=kind), rng)
-        r = run_thesis_filter(d.z)
+        r = ThesisFilter().run(d.z)
         out = {}
         for mode in ("calibrated", "thesis"):
             res = detect_faults(r.normalized, 20, threshold_mode=mode, start=d.scenario.onset_row)
@@ -719,14 +711,14 @@ def thesis_tables(rng: int = 0) -> dict:
     """
     its1 = list(range(50, 501, 50))
     d = simulate_thesis(ThesisScenario(), rng)
-    r = run_thesis_filter(d.z)
+    r = ThesisFilter().run(d.z)
     rows = thesis_row(np.asarray(its1))
     t61 = [{"iteration": i, "difference_loop": float(d.z[k, 0] - d.wind_true[k, 0]),
             "kf": float(r.wind[k, 0] - d.wind_true[k, 0])} for i, k in zip(its1, rows)]
     its3 = [50, 100, 101, 150, 200, 201, 250, 300, 301, 350, 400, 401, 450, 500]
     do = simulate_thesis(ThesisScenario(kind="outliers"), rng)
-    runs = {"optimal": run_thesis_filter(do.z), "gate2": run_thesis_filter(do.z, robust="gate", gate_m=2.0),
-            "nis": run_thesis_filter(do.z, robust="nis")}
+    runs = {"optimal": ThesisFilter().run(do.z), "gate2": ThesisFilter(robust="gate", gate_m=2.0).run(do.z),
+            "nis": ThesisFilter(robust="nis").run(do.z)}
     t63 = []
     for i, k in zip(its3, thesis_row(np.asarray(its3))):
         row = {"iteration": i}
@@ -737,6 +729,7 @@ def thesis_tables(rng: int = 0) -> dict:
     return {"table_6_1": t61, "table_6_3": t63, "seed": int(rng)}
 
 
+@fill_doc
 def load_config(path) -> "ThesisScenario | object":
     """Read a TOML scenario.
 
@@ -744,10 +737,7 @@ def load_config(path) -> "ThesisScenario | object":
     :class:`imunav.airdata.flight.FlightConfig` (tuples given as arrays; ``doppler`` as a sub-table of
     :class:`~imunav.airdata.doppler.DopplerErrors` fields).
 
-    Parameters
-    ----------
-    path : str or os.PathLike
-        The TOML file.
+    %(toml_path)s
 
     Returns
     -------

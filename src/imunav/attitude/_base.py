@@ -8,6 +8,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from imunav._docstrings import fill_doc
 from imunav.attitude.alignment import align
 from imunav.errors import InvalidInputError, NonFiniteError, ShapeError
 from imunav.timeseries import ImuData
@@ -120,3 +121,15 @@ def params_dict(obj: Any) -> dict[str, Any]:
         return {f.name: getattr(obj, f.name) for f in fields(obj)}
     except TypeError:
         return asdict(obj)
+
+
+class AttitudeReset:
+    """Mixin of the filters whose whole state is the attitude (``Complementary``, ``Madgwick``): their ``reset``."""
+
+    @fill_doc
+    def reset(self, q0: ArrayLike) -> None:
+        """Set the attitude the next :meth:`step` starts from.
+
+        %(att_reset)s
+        """
+        self.q = check_q0(q0)

@@ -103,10 +103,10 @@ class AdaptiveMEKF(MEKF):
 
     Attributes
     ----------
-    params : MekfConfig
+    config : MekfConfig
         The tuning; default :data:`ADAPTIVE_DEFAULTS`.
     """
 
-    params: MekfConfig = field(default_factory=lambda: ADAPTIVE_DEFAULTS)
+    config: MekfConfig = field(default_factory=lambda: ADAPTIVE_DEFAULTS)
 
     name = "adaptive"

@@ -74,7 +74,7 @@ def make_filter(name: str, params: dict[str, Any] | None = None) -> Any:
         if name == "adaptive":
             return adaptive.AdaptiveMEKF(replace(adaptive.ADAPTIVE_DEFAULTS, **p))
         if name == "smoother":
-            return smoother.Smoother(replace(adaptive.ADAPTIVE_DEFAULTS, **p))
+            return smoother.Smoother(replace(smoother.SMOOTHER_DEFAULTS, **p))
         if name == "ukf":
             return ukf.UKF(replace(ukf.UkfConfig(), **p))
     except TypeError as exc:

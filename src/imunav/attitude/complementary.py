@@ -19,7 +19,7 @@ from numpy.typing import ArrayLike
 
 from imunav._docstrings import fill_doc
 from imunav.attitude import _kernels as _k
-from imunav.attitude._base import check_positive, check_q0, gyro3, initial_q, prepare, step_dt, vec3
+from imunav.attitude._base import AttitudeReset, check_positive, gyro3, initial_q, prepare, step_dt, vec3
 from imunav.attitude.result import AttitudeResult
 from imunav.timeseries import ImuData
 
@@ -27,7 +27,7 @@ __all__ = ["Complementary"]
 
 
 @dataclass
-class Complementary:
+class Complementary(AttitudeReset):
     """Complementary filter with time constants 1/k_acc and 1/k_mag [s] (module docstring).
 
     Attributes
@@ -48,14 +48,6 @@ class Complementary:
         self.q = np.array([1.0, 0.0, 0.0, 0.0])
 
     @fill_doc
-    def reset(self, q0: ArrayLike) -> None:
-        """Set the attitude the next :meth:`step` starts from.
-
-        %(att_reset)s
-        """
-        self.q = check_q0(q0)
-
-    @fill_doc
     def step(self, gyro: ArrayLike, accel: ArrayLike, mag: ArrayLike | None, dt: float) -> np.ndarray:
         """Process one sample: strapdown, then the tilt and heading corrections.
 
@@ -69,15 +61,7 @@ class Complementary:
     def run(self, data: ImuData, *, q0: ArrayLike | None = None, use_mag: bool | None = None) -> AttitudeResult:
         """Filter a whole recording (numba kernel).
 
-        %(att_run_params)s
-        %(att_use_mag)s
-
-        Returns
-        -------
-        AttitudeResult
-            ``q_nb`` at every sample, with the filter's name and parameters.
-
-        %(att_run_raises)s
+        %(att_run_gain)s
         """
         t, g, a, m, dt, um = prepare(data, use_mag)
         q = _k.complementary_run(initial_q(a, m, um, q0), g, a, m, dt, float(self.k_acc), float(self.k_mag), um)

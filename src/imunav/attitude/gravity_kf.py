@@ -192,7 +192,7 @@ class GravityKF:
     ----------
     kind : {"lee", "javed", "proposed"}
         The filter.
-    params : GravityKfConfig
+    config : GravityKfConfig
         Its settings.
     accel_convention : {"specific_force", "paper"}
         ``"specific_force"`` for ordinary accelerometer data (f = a − g, reads −g on z when level), ``"paper"``
@@ -205,7 +205,7 @@ class GravityKF:
     """
 
     kind: Literal["lee", "javed", "proposed"] = "proposed"
-    params: GravityKfConfig = field(default_factory=GravityKfConfig)
+    config: GravityKfConfig = field(default_factory=GravityKfConfig)
     accel_convention: Literal["specific_force", "paper"] = "specific_force"
 
     def __post_init__(self) -> None:
@@ -227,7 +227,7 @@ class GravityKF:
             Initial gravity direction in body axes (default level, [0, 0, 1]).
         """
         self.x = np.array([0.0, 0.0, 1.0]) if x0 is None else np.asarray(x0, float).reshape(3).copy()
-        self.P = np.eye(3) * self.params.p0**2
+        self.P = np.eye(3) * self.config.p0**2
         self._sv = np.zeros(_gk.N_SV)
         self._Pb = np.eye(3) * 1e-6
         self._gprev: np.ndarray | None = None
@@ -270,7 +270,7 @@ class GravityKF:
         if self._gprev is not None:
             gp = self._gprev
             _gk.gravity_step(_KINDS[self.kind], self.x, self.P, self._sv, self._Pb, gp, np.ascontiguousarray(ya),
-                             dt, self.params.vector(), self._S, self._work)
+                             dt, self.config.vector(), self._S, self._work)
         self._gprev = g.copy()
         return roll_pitch_from_x(self.x[None, :])[0]
 
@@ -298,39 +298,39 @@ class GravityKF:
         t, g, a, _, dt, _ = prepare(data, False)
         ya = -a if self.accel_convention == "specific_force" else a
         x_init = np.array([0.0, 0.0, 1.0]) if x0 is None else np.asarray(x0, float).reshape(3)
-        P0 = np.eye(3) * self.params.p0**2
+        P0 = np.eye(3) * self.config.p0**2
         xs, al, S, ap, bb = _gk.gravity_run(_KINDS[self.kind], x_init, P0, np.ascontiguousarray(g), np.ascontiguousarray(ya),
-                                            np.ascontiguousarray(dt), self.params.vector())
+                                            np.ascontiguousarray(dt), self.config.vector())
         rp = roll_pitch_from_x(xs)
         q = quat_from_euler(rp[:, 0], rp[:, 1], np.zeros(len(rp)))
         return AttitudeResult(t=t, q_nb=q, bias=bb if self.kind == "javed" else None, name=self.name,
                               flags={"x": xs, "alpha": al.astype(bool), "S": S, "a_plus": ap},
-                              params={"kind": self.kind, **{f.name: getattr(self.params, f.name)
-                                                            for f in fields(self.params)}})
+                              params={"kind": self.kind, **{f.name: getattr(self.config, f.name)
+                                                            for f in fields(self.config)}})
 
 
 @fill_doc
-def LeeKF(params: GravityKfConfig | None = None, **kw) -> GravityKF:  # noqa: N802
+def LeeKF(config: GravityKfConfig | None = None, **kw) -> GravityKF:  # noqa: N802
     """Lee et al. 2012: constant c_a, equal-axis Σ_acc, S = 1.
 
     %(gravity_factory)s
     """
-    return GravityKF("lee", params or GravityKfConfig(), **kw)
+    return GravityKF("lee", config or GravityKfConfig(), **kw)
 
 
 @fill_doc
-def JavedKF(params: GravityKfConfig | None = None, **kw) -> GravityKF:  # noqa: N802
+def JavedKF(config: GravityKfConfig | None = None, **kw) -> GravityKF:  # noqa: N802
     """Javed et al. 2020 ("Javed-like" reconstruction of its cascaded bias KF; module docstring).
 
     %(gravity_factory)s
     """
-    return GravityKF("javed", params or GravityKfConfig(), **kw)
+    return GravityKF("javed", config or GravityKfConfig(), **kw)
 
 
 @fill_doc
-def ProposedKF(params: GravityKfConfig | None = None, **kw) -> GravityKF:  # noqa: N802
+def ProposedKF(config: GravityKfConfig | None = None, **kw) -> GravityKF:  # noqa: N802
     """Candan & Söken 2020: detector-switched c_a ∈ {0, 1}, diagonal S (mode B).
 
     %(gravity_factory)s
     """
-    return GravityKF("proposed", params or GravityKfConfig(), **kw)
+    return GravityKF("proposed", config or GravityKfConfig(), **kw)

@@ -27,7 +27,7 @@ from numpy.typing import ArrayLike
 
 from imunav._docstrings import fill_doc
 from imunav.attitude import _kernels as _k
-from imunav.attitude._base import check_positive, check_q0, gyro3, initial_q, prepare, step_dt, vec3
+from imunav.attitude._base import AttitudeReset, check_positive, gyro3, initial_q, prepare, step_dt, vec3
 from imunav.attitude.result import AttitudeResult
 from imunav.timeseries import ImuData
 
@@ -35,7 +35,7 @@ __all__ = ["Madgwick"]
 
 
 @dataclass
-class Madgwick:
+class Madgwick(AttitudeReset):
     """Madgwick filter.
 
     Attributes
@@ -58,14 +58,6 @@ class Madgwick:
         return "madgwick_c" if self.original_c else "madgwick"
 
     @fill_doc
-    def reset(self, q0: ArrayLike) -> None:
-        """Set the attitude the next :meth:`step` starts from.
-
-        %(att_reset)s
-        """
-        self.q = check_q0(q0)
-
-    @fill_doc
     def step(self, gyro: ArrayLike, accel: ArrayLike, mag: ArrayLike | None, dt: float) -> np.ndarray:
         """Process one sample; returns the new q_nb.
 
@@ -83,15 +75,7 @@ class Madgwick:
     def run(self, data: ImuData, *, q0: ArrayLike | None = None, use_mag: bool | None = None) -> AttitudeResult:
         """Filter a whole recording (numba kernel).
 
-        %(att_run_params)s
-        %(att_use_mag)s
-
-        Returns
-        -------
-        AttitudeResult
-            ``q_nb`` at every sample, with the filter's name and parameters.
-
-        %(att_run_raises)s
+        %(att_run_gain)s
         """
         t, g, a, m, dt, um = prepare(data, use_mag)
         q_init = initial_q(a, m, um, q0)

@@ -220,19 +220,19 @@ class MEKF:
 
     Parameters
     ----------
-    params : MekfConfig
+    config : MekfConfig
         Noise densities, gates and initial uncertainties (default :class:`MekfConfig`); see
         :meth:`with_params` to replace a few of them.
     """
 
-    params: MekfConfig = field(default_factory=MekfConfig)
+    config: MekfConfig = field(default_factory=MekfConfig)
 
     name = "mekf"
 
     def __post_init__(self) -> None:
         self.q = np.array([1.0, 0.0, 0.0, 0.0])
         self.b = np.zeros(3)
-        self.P = self.params.P0()
+        self.P = self.config.P0()
         self._st = np.zeros(_k.N_STATE)
         self._phi = np.eye(6)
 
@@ -255,7 +255,7 @@ class MEKF:
         ConfigError
             If a name is not a parameter, or a value is invalid.
         """
-        base = cls().params
+        base = cls().config
         try:
             return cls(replace(base, **kw))
         except TypeError as exc:
@@ -263,13 +263,13 @@ class MEKF:
 
     @fill_doc
     def reset(self, q0: ArrayLike, bias: ArrayLike | None = None) -> None:
-        """Set the state the next :meth:`step` starts from (covariance back to ``params.P0()``).
+        """Set the state the next :meth:`step` starts from (covariance back to ``config.P0()``).
 
         %(att_reset_bias)s
         """
         self.q = check_q0(q0)
         self.b = vec3(bias, "bias")
-        self.P = self.params.P0()
+        self.P = self.config.P0()
         self._st = np.zeros(_k.N_STATE)
 
     @fill_doc
@@ -278,20 +278,20 @@ class MEKF:
 
         %(att_step)s
         """
-        p = self.params.vector()
+        p = self.config.vector()
         if mag is None:
-            p[17] = 0.0
+            p[_k.P_USE_MAG] = 0.0
         self.q, self.b = _k.mekf_step(self.q, self.b, self.P, self._st, gyro3(gyro), vec3(accel, "accel"),
                                       vec3(mag, "mag"), step_dt(dt), p, self._phi)
         return self.q.copy()
 
     def _run(self, data: ImuData, q0: ArrayLike | None, bias0: ArrayLike | None, use_mag: bool | None,
              store: bool):
-        prm = self.params
+        prm = self.config
         um_req = prm.use_mag if use_mag is None else use_mag
         t, g, a, m, dt, um = prepare(data, um_req and data.mag is not None if use_mag is None else use_mag)
         p = prm.vector()
-        p[17] = 1.0 if um else 0.0
+        p[_k.P_USE_MAG] = 1.0 if um else 0.0
         q_init = initial_q(a, m, um, q0)
         P0 = prm.P0()
         b0 = vec3(bias0, "bias0")
@@ -306,7 +306,7 @@ class MEKF:
         %(att_run_params)s
         %(att_bias0)s
         use_mag : bool, optional
-            Use the magnetometer (9D); default: ``params.use_mag`` and the recording has one.
+            Use the magnetometer (9D); default: ``config.use_mag`` and the recording has one.
 
         Returns
         -------
@@ -322,5 +322,5 @@ class MEKF:
         flags["nis"] = nis
         flags["nis_dof"] = dof
         return AttitudeResult(t=t, q_nb=q, bias=b, cov_diag=pd, flags=flags, name=self.name,
-                              params={**{f.name: getattr(self.params, f.name) for f in fields(self.params)},
+                              params={**{f.name: getattr(self.config, f.name) for f in fields(self.config)},
                                       "use_mag": um})

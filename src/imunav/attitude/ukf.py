@@ -118,14 +118,14 @@ class UKF:
 
     Attributes
     ----------
-    params : UkfConfig
+    config : UkfConfig
         The tuning.
     mag_ref_ned : numpy.ndarray, shape (3,), or None
         Reference field direction in NED (normalised); None: learned from the first sample in :meth:`run`,
         north in :meth:`step`.
     """
 
-    params: UkfConfig = field(default_factory=UkfConfig)
+    config: UkfConfig = field(default_factory=UkfConfig)
     mag_ref_ned: np.ndarray | None = None
 
     name = "ukf"
@@ -133,17 +133,17 @@ class UKF:
     def __post_init__(self) -> None:
         self.q = np.array([1.0, 0.0, 0.0, 0.0])
         self.b = np.zeros(3)
-        self.P = self.params.P0()
+        self.P = self.config.P0()
 
     @fill_doc
     def reset(self, q0: ArrayLike, bias: ArrayLike | None = None) -> None:
-        """Set the state the next :meth:`step` starts from (covariance back to ``params.P0()``).
+        """Set the state the next :meth:`step` starts from (covariance back to ``config.P0()``).
 
         %(att_reset_bias)s
         """
         self.q = check_q0(q0)
         self.b = vec3(bias, "bias")
-        self.P = self.params.P0()
+        self.P = self.config.P0()
 
     def _ref(self) -> np.ndarray:
         if self.mag_ref_ned is None:
@@ -157,7 +157,7 @@ class UKF:
 
         %(att_step)s
         """
-        pr = self.params
+        pr = self.config
         self.q, self.b, self.P, _, _ = _k.ukf_step(
             self.q, self.b, self.P, gyro3(gyro), vec3(accel, "accel"), vec3(mag, "mag"), step_dt(dt),
             pr.vector(mag is not None), pr.alpha, pr.beta, pr.kappa, self._ref())
@@ -168,9 +168,7 @@ class UKF:
             use_mag: bool | None = None) -> AttitudeResult:
         """Filter a whole recording (numba kernel).
 
-        %(att_run_params)s
-        %(att_bias0)s
-        %(att_use_mag)s
+        %(att_run_bias_mag)s
 
         Returns
         -------
@@ -181,7 +179,7 @@ class UKF:
         %(att_run_raises)s
         """
         t, g, a, m, dt, um = prepare(data, use_mag)
-        pr = self.params
+        pr = self.config
         q_init = initial_q(a, m, um, q0)
         if self.mag_ref_ned is None and um:
             ref = quat_rotate(q_init, m[0])

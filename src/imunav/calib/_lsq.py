@@ -18,9 +18,9 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from numpy.typing import NDArray
+from numpy.typing import ArrayLike, NDArray
 
-from imunav.errors import DegenerateGeometryError, InsufficientDataError
+from imunav.errors import DegenerateGeometryError, InsufficientDataError, ShapeError
 
 Array = NDArray[np.float64]
 
@@ -35,6 +35,33 @@ class LinearFit:
     cond: float  # condition number of the column-scaled design
     dof: int
     rho: Array | None = None  # lag-1 residual autocorrelation used (serial fits)
+
+
+def paired_means(x: ArrayLike, x_name: str, y: ArrayLike, y_name: str) -> tuple[Array, Array]:
+    """The known inputs and the means of a fit as float arrays, both checked to be (K, 3) with the same K.
+
+    Parameters
+    ----------
+    x, y : array_like, shape (K, 3)
+        Known input per position / step (reference force, table rate) and the mean sensor output.
+    x_name, y_name : str
+        Their argument names, for the message.
+
+    Returns
+    -------
+    x, y : numpy.ndarray, shape (K, 3)
+        The two arrays as float.
+
+    Raises
+    ------
+    ShapeError
+        If they are not both (K, 3) with the same K.
+    """
+    xa = np.asarray(x, float)
+    ya = np.asarray(y, float)
+    if xa.shape != ya.shape or xa.ndim != 2 or xa.shape[1] != 3:
+        raise ShapeError(f"{x_name} {xa.shape} and {y_name} {ya.shape} must both be (K, 3)")
+    return xa, ya
 
 
 def design_condition(X: Array) -> float:

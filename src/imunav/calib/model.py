@@ -483,6 +483,7 @@ class ImuCalibration:
         }
 
     @classmethod
+    @fill_doc
     def from_dict(cls, d: dict[str, Any], *, source: str = "<dict>") -> "ImuCalibration":
         """Rebuild a calibration from :meth:`to_dict` (or a parsed calibration file).
 
@@ -493,14 +494,7 @@ class ImuCalibration:
         source : str
             Where it comes from, for error messages.
 
-        Returns
-        -------
-        ImuCalibration
-            The calibration.
-
-        Raises
-        ------
-        FileFormatError
+        %(calib_returns_raises)s
             If the format or its version is not this one, or a field is missing.
         """
         if d.get("format") != _FORMAT:
@@ -529,38 +523,22 @@ class ImuCalibration:
         except KeyError as e:
             raise FileFormatError(f"{source}: calibration JSON lacks the field {e}") from None
 
+    @fill_doc
     def save(self, path: str | os.PathLike[str]) -> Path:
         """Write the calibration as JSON (atomic).
 
-        Parameters
-        ----------
-        path : str or os.PathLike
-            Output file.
-
-        Returns
-        -------
-        pathlib.Path
-            The file written.
+        %(write_path_returns)s
         """
         return write_json(path, self.to_dict())
 
     @classmethod
+    @fill_doc
     def load(cls, path: str | os.PathLike[str]) -> "ImuCalibration":
         """Read a calibration file: imunav's JSON, or an imucal Ferraris JSON.
 
-        Parameters
-        ----------
-        path : str or os.PathLike
-            The file.
+        %(reader_head)s
 
-        Returns
-        -------
-        ImuCalibration
-            The calibration.
-
-        Raises
-        ------
-        FileFormatError
+        %(calib_returns_raises)s
             If the file does not exist, is not valid JSON, or is not a calibration of a supported format.
         """
         p = Path(path)

@@ -8,6 +8,7 @@ from typing import Any
 
 import numpy as np
 
+from imunav._docstrings import fill_doc
 from imunav.io._atomic import atomic_path
 
 __all__ = ["plot_residuals", "plot_temperature_fit", "plot_magnetometer", "save_figure"]
@@ -24,15 +25,11 @@ def _plt() -> Any:
     return plt
 
 
+@fill_doc
 def save_figure(fig: Any, path: str | os.PathLike[str], dpi: int = 110) -> Path:
     """Save a figure atomically (temp file in the same folder, then rename) and close it.
 
-    Parameters
-    ----------
-    fig : matplotlib.figure.Figure
-        The figure.
-    path : str or os.PathLike
-        Output file; the format follows its suffix.
+    %(save_fig_path)s
     dpi : int
         Resolution, dots per inch.
 
@@ -50,6 +47,7 @@ def save_figure(fig: Any, path: str | os.PathLike[str], dpi: int = 110) -> Path:
     return Path(path)
 
 
+@fill_doc
 def plot_residuals(result: Any) -> Any:
     """One panel per fit: residual of every position / step and axis (raw units).
 
@@ -58,10 +56,7 @@ def plot_residuals(result: Any) -> Any:
     result : CalibrationResult
         A calibration result.
 
-    Returns
-    -------
-    matplotlib.figure.Figure
-        The figure.
+    %(figure_returns)s
     """
     plt = _plt()
     res = {k: np.atleast_2d(np.asarray(v, float).T).T for k, v in result.residuals.items()}
@@ -82,6 +77,7 @@ def plot_residuals(result: Any) -> Any:
     return fig
 
 
+@fill_doc
 def plot_temperature_fit(fit: Any, title: str = "") -> Any:
     """Parameter vs temperature with every fitted order, and the residuals (after Günhan 2014, Figs. 6.1-6.10).
 
@@ -89,13 +85,7 @@ def plot_temperature_fit(fit: Any, title: str = "") -> Any:
     ----------
     fit : TemperatureFit
         The fits of one parameter (temperature in °C).
-    title : str
-        Figure title.
-
-    Returns
-    -------
-    matplotlib.figure.Figure
-        The figure.
+    %(figure_title_str_returns)s
     """
     plt = _plt()
     fig, (a1, a2) = plt.subplots(2, 1, figsize=(7, 6), sharex=True)
@@ -115,6 +105,7 @@ def plot_temperature_fit(fit: Any, title: str = "") -> Any:
     return fig
 
 
+@fill_doc
 def plot_magnetometer(h: Any, cal: Any) -> Any:
     """Y-Z, Z-X, X-Y projections before and after calibration (after Atasoy's thesis, Figs. 7.61-7.69).
 
@@ -125,10 +116,7 @@ def plot_magnetometer(h: Any, cal: Any) -> Any:
     cal : MagCalibration
         The calibration applied.
 
-    Returns
-    -------
-    matplotlib.figure.Figure
-        The figure.
+    %(figure_returns)s
     """
     plt = _plt()
     h = np.asarray(h, float)

@@ -21,7 +21,8 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from imunav.calib._lsq import linear_fit
+from imunav._docstrings import fill_doc
+from imunav.calib._lsq import linear_fit, paired_means
 from imunav.calib._noisecov import segment_mean_covariances
 from imunav.calib._segments import as_time, assign_to_windows, check_saturation, segment_means, steady_segments
 from imunav.calib.model import ImuCalibration
@@ -35,6 +36,7 @@ __all__ = ["ratetable_from_means", "ratetable", "combine"]
 Array = NDArray[np.float64]
 
 
+@fill_doc(units="steps", inputs="rates")
 def ratetable_from_means(
     rates: ArrayLike,
     gyro_means: ArrayLike,
@@ -79,19 +81,9 @@ def ratetable_from_means(
     CalibrationResult
         ``base`` with the estimated gyro matrix (and bias with ``intercept``), standard errors and residuals.
 
-    Raises
-    ------
-    ShapeError
-        If the arrays are not (K, 3) with the same K.
-    InsufficientDataError
-        With too few steps for the parameters.
-    DegenerateGeometryError
-        If the rates do not excite every axis.
+    %(means_fit_raises)s
     """
-    W = np.asarray(rates, float)
-    Y = np.asarray(gyro_means, float)
-    if W.shape != Y.shape or W.ndim != 2 or W.shape[1] != 3:
-        raise ShapeError(f"rates {W.shape} and gyro_means {Y.shape} must both be (K, 3)")
+    W, Y = paired_means(rates, "rates", gyro_means, "gyro_means")
     base = base if base is not None else ImuCalibration()
     K = W.shape[0]
     if f_ref is not None:

@@ -13,7 +13,7 @@ from rich.progress import Progress
 from rich.table import Table
 
 from imunav.airdata import plot as P
-from imunav.airdata.filter import LongHorizonConfig, run_long_horizon, run_thesis_filter, thesis_row
+from imunav.airdata.filter import LongHorizonConfig, LongHorizonFilter, ThesisFilter, thesis_row
 from imunav.airdata.flight import FlightConfig, simulate_flight
 from imunav.airdata.scenario import (
     ThesisScenario,
@@ -174,7 +174,7 @@ Example: imunav airdata run flight.npz --robust nis --json run.json
                 meta = json.loads(str(z["meta"]))
                 data = {k: z[k] for k in z.files if k != "meta"}
             if meta["type"] == "thesis":
-                r = run_thesis_filter(data["z"], v_ads=data["v_ads"], robust=rb, gate_m=gate_m, alpha=alpha)
+                r = ThesisFilter(robust=rb, gate_m=gate_m, alpha=alpha).run(data["z"], v_ads=data["v_ads"])
                 k0 = thesis_row(100)
                 e = r.wind[k0:] - data["wind_true"][k0:]
                 ed = data["z"][k0:] - data["wind_true"][k0:]
@@ -185,9 +185,9 @@ Example: imunav airdata run flight.npz --robust nis --json run.json
                            "P44_final": float(r.cov_diag[-1, 3])}
                 arrays = {"wind": r.wind, "P_diag": r.cov_diag, "normalized": r.normalized, "weights": r.weights}
             elif meta["type"] == "flight":
-                r = run_long_horizon(data["t_ads"], data["v_ads_body"], data["t_doppler"], data["v_doppler_body"],
-                                     dcm_from_euler(data["euler_doppler"]), dcm_from_euler(data["euler_ads"]),
-                                     LongHorizonConfig(robust=rb, alpha=alpha, gate_m=gate_m))
+                r = LongHorizonFilter(LongHorizonConfig(robust=rb, alpha=alpha, gate_m=gate_m)).run(
+                        data["t_ads"], data["v_ads_body"], data["t_doppler"], data["v_doppler_body"],
+                        dcm_from_euler(data["euler_doppler"]), dcm_from_euler(data["euler_ads"]))
                 wt = np.stack([np.interp(r.t, data["t"], data["wind_ned"][:, i]) for i in range(3)], 1)
                 pt = np.stack([np.interp(r.t, data["t"], data["position_ned"][:, i]) for i in range(3)], 1)
                 skip = min(r.t.size - 1, 100)

@@ -18,10 +18,10 @@ from imunav.ins import (
     DEFAULT_THRESHOLDS,
     DETECTORS,
     ZuptConfig,
+    ZuptFilter,
     detect_zero_velocity,
     error_2d,
     loop_closure_error,
-    run_zupt,
 )
 from imunav.io import foot, read_imu
 from imunav.io._atomic import atomic_path, check_outputs, write_json
@@ -119,7 +119,7 @@ def run_cmd(
         cfg = ZuptConfig(states=states, zaru=zaru, zaru_min_s=zaru_min_s, heading_hold=heading_hold,
                          level_floor=level_floor, sigma_acc=sigma_acc,
                          alignment="first_stance" if xio_like else "samples", g=None if xio_like else 9.8029)
-        res = run_zupt(trial.imu, zv, cfg)
+        res = ZuptFilter(cfg).run(trial.imu, zv)
     except ImunavError as exc:
         _fail(exc)
     lc = loop_closure_error(res.position)
@@ -234,7 +234,7 @@ def benchmark_cmd(
             for name in names:
                 zv = (lstm.detect(tr.imu).zv if name == "lstm"
                       else detect_zero_velocity(tr.imu, name, DEFAULT_THRESHOLDS[name]).zv)
-                row[name] = error_2d(run_zupt(tr.imu, zv).position, tr.position)
+                row[name] = error_2d(ZuptFilter().run(tr.imu, zv).position, tr.position)
             rows.append(row)
     except ImunavError as exc:
         _fail(exc)

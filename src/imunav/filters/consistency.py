@@ -13,8 +13,8 @@ from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
-from scipy.stats import chi2
 
+from imunav._quantiles import chi2_ppf
 from imunav.errors import InvalidInputError, ShapeError
 from imunav.results import Result
 
@@ -99,7 +99,7 @@ def chi2_bounds(dof: int, n_samples: int = 1, confidence: float = 0.95) -> tuple
         raise InvalidInputError(f"confidence must be in (0, 1), got {confidence}")
     a = (1.0 - confidence) / 2.0
     k = dof * n_samples
-    return float(chi2.ppf(a, k) / n_samples), float(chi2.ppf(1 - a, k) / n_samples)
+    return float(chi2_ppf(a, k) / n_samples), float(chi2_ppf(1 - a, k) / n_samples)
 
 
 @dataclass(frozen=True)

@@ -53,8 +53,9 @@ from functools import lru_cache
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
-from scipy.stats import chi2, norm
 
+from imunav._docstrings import fill_doc
+from imunav._quantiles import chi2_isf, chi2_ppf, norm_isf
 from imunav.errors import InvalidInputError, ShapeError
 from imunav.filters._batch import window_stats_batch
 from imunav.filters._kernels import cusum_stats
@@ -108,6 +109,13 @@ def _check_window(M: int, s: int, N: int | None = None) -> None:
         raise InvalidInputError(f"need at least M = {M} innovations, got {N}")
 
 
+def _check_level(name: str, value: float, upper: float, M: int, s: int) -> None:
+    """``0 < value < upper`` (a quantile or false-alarm rate) and a window ``M > s``."""
+    if not 0 < value < upper:
+        raise InvalidInputError(f"{name} must be in (0, {upper:g}), got {value}")
+    _check_window(M, s)
+
+
 def thesis_thresholds(M: int = 20, s: int = 3, confidence: float = 0.95) -> dict[str, float]:
     """The thresholds as the thesis sets them: χ²(M−s+1) for Alg. 1/2, χ²(Ms) for Alg. 3.
 
@@ -128,9 +136,9 @@ def thesis_thresholds(M: int = 20, s: int = 3, confidence: float = 0.95) -> dict
         Thresholds of ``"alg1"``, ``"alg2"`` and ``"alg3"``.
     """
     return {
-        "alg1": float(chi2.ppf(confidence, M - s + 1)),
-        "alg2": float(chi2.ppf(confidence, M - s + 1)),
-        "alg3": float(chi2.ppf(confidence, M * s)),
+        "alg1": float(chi2_ppf(confidence, M - s + 1)),
+        "alg2": float(chi2_ppf(confidence, M - s + 1)),
+        "alg3": float(chi2_ppf(confidence, M * s)),
     }
 
 
@@ -179,9 +187,7 @@ def wishart_largest_root_quantile(q: float, M: int = 20, s: int = 3, n_mc: int =
     InvalidInputError
         If ``q`` is not in (0, 1) or ``M <= s``.
     """
-    if not 0 < q < 1:
-        raise InvalidInputError(f"q must be in (0, 1), got {q}")
-    _check_window(M, s)
+    _check_level("q", q, 1, M, s)
     return float(np.quantile(_largest_root_samples(M, s, n_mc, seed), q))
 
 
@@ -232,15 +238,13 @@ def calibrated_thresholds(M: int = 20, s: int = 3, p_false_alarm: float = 0.01, 
     InvalidInputError
         If ``p_false_alarm`` is not in (0, 0.5) or ``M <= s``.
     """
-    if not 0 < p_false_alarm < 0.5:
-        raise InvalidInputError(f"p_false_alarm must be in (0, 0.5), got {p_false_alarm}")
-    _check_window(M, s)
+    _check_level("p_false_alarm", p_false_alarm, 0.5, M, s)
     cv, cm = _cusum_quantiles(s, float(cusum_rho), float(cusum_k), float(p_false_alarm), 50, 4000, seed)
     return {
         "alg1": wishart_largest_root_quantile(1 - p_false_alarm, M, s, n_mc, seed),
-        "alg2": float(chi2.isf(p_false_alarm, M - s)),
-        "alg3": float(chi2.isf(p_false_alarm, M * s)),
-        "nis": float(chi2.isf(p_false_alarm, s)),
+        "alg2": float(chi2_isf(p_false_alarm, M - s)),
+        "alg3": float(chi2_isf(p_false_alarm, M * s)),
+        "nis": float(chi2_isf(p_false_alarm, s)),
         "cusum_var": cv,
         "cusum_mean": cm,
         "low_variance": _low_variance_quantile(s, low_window, float(p_false_alarm), 200_000, seed),
@@ -287,6 +291,7 @@ def alarms(name: str, statistic: ArrayLike, threshold: float) -> NDArray[np.bool
     return np.nan_to_num(st, nan=-np.inf) > threshold
 
 
+@fill_doc
 def window_statistics(normalized: ArrayLike, M: int = 20, P: ArrayLike | None = None, L: ArrayLike | None = None
                       ) -> tuple[Array, Array, Array]:
     """Sliding-window statistics (λ Alg. 1, λ Alg. 2, Alg. 3 sum) per step.
@@ -295,12 +300,7 @@ def window_statistics(normalized: ArrayLike, M: int = 20, P: ArrayLike | None = 
     ``P`` is the covariance of ν̃ under H0 (identity); ``L`` the fixed
     direction of Alg. 2 (all ones).
 
-    Parameters
-    ----------
-    normalized : array_like, shape (N, s) or (R, N, s)
-        Normalised innovations ``ν̃ = S^{-1/2} ν`` of one run or a batch of runs, finite.
-    M : int, optional
-        Window length in steps, > s (default 20).
+    %(fault_batch_innovations_window)s
     P : array_like, shape (s, s), optional
         Covariance of ν̃ under H0 (default identity).
     L : array_like, shape (s,), optional
@@ -367,6 +367,7 @@ def cusum_statistics(normalized: ArrayLike, rho: float = 4.0, k: float = 0.5) ->
     return cusum_stats(_check_nv(normalized), float(rho), float(k))
 
 
+@fill_doc
 def detector_statistics(normalized: ArrayLike, M: int = 20, *, cusum_rho: float = 4.0, cusum_k: float = 0.5,
                         low_window: int = 5) -> dict[str, Array]:
     """All detector statistics for one run (N, s) or a batch of runs (R, N, s).
@@ -375,12 +376,7 @@ def detector_statistics(normalized: ArrayLike, M: int = 20, *, cusum_rho: float 
     before the window is full).  Compare with the thresholds of
     :func:`calibrated_thresholds` / :func:`thesis_thresholds`.
 
-    Parameters
-    ----------
-    normalized : array_like, shape (N, s) or (R, N, s)
-        Normalised innovations ``ν̃ = S^{-1/2} ν`` of one run or a batch of runs, finite.
-    M : int, optional
-        Window length in steps, > s (default 20).
+    %(fault_batch_innovations_window)s
     cusum_rho : float, optional
         Variance ratio of the variance CUSUM, > 1.
     cusum_k : float, optional
@@ -452,6 +448,7 @@ def first_alarm(alarm: ArrayLike, start: int = 0) -> int:
     return int(idx[0] + start) if idx.size else -1
 
 
+@fill_doc
 def isolate_faulty_channels(normalized: ArrayLike, M: int = 20, p_false_alarm: float = 1e-3, start: int = 0,
                             during: ArrayLike | None = None, min_count: int = 3
                             ) -> tuple[NDArray[np.bool_], Array]:
@@ -464,12 +461,7 @@ def isolate_faulty_channels(normalized: ArrayLike, M: int = 20, p_false_alarm: f
     (all steps if None): a persistent fault keeps flagging its channel, a
     chance flag does not repeat.
 
-    Parameters
-    ----------
-    normalized : array_like, shape (N, s)
-        Normalised innovations ``ν̃ = S^{-1/2} ν`` (a 1-D array is one channel), finite.
-    M : int, optional
-        Window length in steps, > s (default 20).
+    %(fault_innovations_window)s
     p_false_alarm : float, optional
         Per-step level of the two tests together (split by Bonferroni).
     start : int, optional
@@ -490,8 +482,8 @@ def isolate_faulty_channels(normalized: ArrayLike, M: int = 20, p_false_alarm: f
     N, s = nv.shape
     _check_window(M, 0, N)
     a = p_false_alarm / (2 * s)
-    thr_sq = chi2.isf(a, M)
-    thr_mu = norm.isf(a / 2)
+    thr_sq = chi2_isf(a, M)
+    thr_mu = norm_isf(a / 2)
     c2 = np.concatenate([np.zeros((1, s)), np.cumsum(nv**2, axis=0)])
     c1 = np.concatenate([np.zeros((1, s)), np.cumsum(nv, axis=0)])
     sq = np.full((N, s), np.nan)
@@ -569,6 +561,7 @@ class FaultDetectionResult(Result):
     extra: dict = field(default_factory=dict)
 
 
+@fill_doc
 def detect_faults(
     normalized: ArrayLike,
     M: int = 20,
@@ -583,12 +576,7 @@ def detect_faults(
 ) -> FaultDetectionResult:
     """Run Alg. 1-3, NIS and both CUSUMs on normalised innovations (N, s).
 
-    Parameters
-    ----------
-    normalized : array_like, shape (N, s)
-        Normalised innovations ``ν̃ = S^{-1/2} ν`` (a 1-D array is one channel), finite.
-    M : int, optional
-        Window length in steps, > s (default 20).
+    %(fault_innovations_window)s
     p_false_alarm : float, optional
         Per-step false-alarm rate of the calibrated thresholds, in (0, 0.5).
     threshold_mode : str

@@ -17,8 +17,8 @@ from __future__ import annotations
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
-from scipy.stats import chi2
 
+from imunav._quantiles import chi2_isf
 from imunav.errors import InvalidInputError
 from imunav.filters._common import as_covariance, as_vector
 
@@ -75,7 +75,7 @@ def isolation_thresholds(m: int, alpha: float = 1e-3) -> Array:
     """
     if not 0 < alpha < 1:
         raise InvalidInputError(f"alpha must be in (0, 1), got {alpha}")
-    return np.asarray(chi2.isf(alpha, np.arange(1, m + 1)), dtype=np.float64)
+    return np.asarray(chi2_isf(alpha, np.arange(1, m + 1)), dtype=np.float64)
 
 
 def isolate_channels(innovation: ArrayLike, S: ArrayLike, alpha: float = 1e-3) -> NDArray[np.bool_]:

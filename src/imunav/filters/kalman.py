@@ -523,6 +523,38 @@ class BatchRun(Result):
     weights: Array
 
 
+def robust_mode(robust: str | None, gate_m: float, alpha: float, huber_c: float) -> int:
+    """The batch loop's mode code of a robust update, after checking its tuning values.
+
+    Parameters
+    ----------
+    robust : {None, "gate", "isolate", "nis", "huber"}
+        Robust update (None: the optimal filter).
+    gate_m, alpha, huber_c : float
+        Gate half-width (standard deviations), test level in (0, 1), Huber constant.
+
+    Returns
+    -------
+    int
+        One of the ``MODE_*`` codes of :func:`imunav.filters._batch.batch_filter`.
+
+    Raises
+    ------
+    InvalidInputError
+        If ``robust`` is unknown or a tuning value is out of range.
+    """
+    modes = {None: MODE_NONE, "gate": MODE_GATE, "isolate": MODE_ISOLATE, "huber": MODE_HUBER, "nis": MODE_NIS}
+    if robust not in modes:
+        raise InvalidInputError(f"robust must be None, 'gate', 'isolate', 'nis' or 'huber', got {robust!r}")
+    for name, v in (("gate_m", gate_m), ("huber_c", huber_c)):
+        if not (np.isfinite(v) and v > 0):
+            raise InvalidInputError(f"{name} must be positive and finite (a gate of {v!r} normalised innovations "
+                                    "rejects every measurement or none), e.g. gate_m=2 (command line: --gate-m 2)")
+    if not 0.0 < alpha < 1.0:
+        raise InvalidInputError(f"alpha must be a test level in (0, 1), got {alpha!r}")
+    return modes[robust]
+
+
 @fill_doc
 def batch_kalman_filter(
     x0: ArrayLike,
@@ -573,15 +605,7 @@ def batch_kalman_filter(
         If ``robust`` is unknown, a tuning value is out of range, or ``x0`` / ``z`` have the wrong shape.
     """
 
-    modes = {None: MODE_NONE, "gate": MODE_GATE, "isolate": MODE_ISOLATE, "huber": MODE_HUBER, "nis": MODE_NIS}
-    if robust not in modes:
-        raise InvalidInputError(f"robust must be None, 'gate', 'isolate', 'nis' or 'huber', got {robust!r}")
-    for name, v in (("gate_m", gate_m), ("huber_c", huber_c)):
-        if not (np.isfinite(v) and v > 0):
-            raise InvalidInputError(f"{name} must be positive and finite (a gate of {v!r} normalised innovations "
-                                    "rejects every measurement or none), e.g. gate_m=2 (command line: --gate-m 2)")
-    if not 0.0 < alpha < 1.0:
-        raise InvalidInputError(f"alpha must be a test level in (0, 1), got {alpha!r}")
+    mode = robust_mode(robust, gate_m, alpha, huber_c)
     P0m = as_covariance(P0, "P0")
     n = P0m.shape[0]
     x0a = np.asarray(x0, dtype=np.float64)
@@ -594,6 +618,6 @@ def batch_kalman_filter(
         raise InvalidInputError(f"z must have shape (runs, N, {m}), got {zz.shape}")
     if x0a.ndim == 2 and x0a.shape[0] != zz.shape[0]:
         raise InvalidInputError(f"x0 has {x0a.shape[0]} runs but z has {zz.shape[0]}")
-    o = batch_filter(x0a, P0m, Fm, Qn, Hm, Rm, zz, modes[robust], float(gate_m),
+    o = batch_filter(x0a, P0m, Fm, Qn, Hm, Rm, zz, mode, float(gate_m),
                      isolation_thresholds(m, alpha), float(huber_c))
     return BatchRun(o["x"], o["P_diag"], o["innovation"], o["normalized"], o["weights"])

@@ -4,10 +4,10 @@ the ZUPT-aided pedestrian INS (error-state EKF), with position metrics.
 Quick use::
 
     from imunav.io.foot import read_pyshoe_mat
-    from imunav.ins import detect_zero_velocity, run_zupt, error_2d
+    from imunav.ins import ZuptFilter, detect_zero_velocity, error_2d
     trial = read_pyshoe_mat("trial.mat")
     zv = detect_zero_velocity(trial.imu, "shoe", 1e8)
-    res = run_zupt(trial.imu, zv.zv)
+    res = ZuptFilter().run(trial.imu, zv.zv)
     print(error_2d(res.position, trial.position))
 """
 
@@ -28,12 +28,20 @@ from imunav.ins.detectors import (
 )
 from imunav.ins.metrics import LoopClosure, align_heading, error_2d, loop_closure_error, position_rmse, vertical_error
 from imunav.ins.strapdown import StrapdownResult, coning_sculling_increments, strapdown_local, strapdown_ned
-from imunav.ins.zupt import ZuptConfig, ZuptResult, align_from_accel, first_stance, long_stances, run_zupt
+from imunav.ins.zupt import (
+    ZuptConfig,
+    ZuptFilter,
+    ZuptResult,
+    ZuptState,
+    align_from_accel,
+    first_stance,
+    long_stances,
+)
 
 __all__ = [
     "DEFAULT_THRESHOLDS", "DETECTORS", "DetectorResult", "ThresholdSearch", "amvd", "ared",
     "detect_zero_velocity", "detector_statistic", "free_acceleration", "mbgtd", "motion_adaptive", "optimize_threshold", "shoe",
     "LoopClosure", "align_heading", "error_2d", "loop_closure_error", "position_rmse", "vertical_error",
     "StrapdownResult", "coning_sculling_increments", "strapdown_local", "strapdown_ned",
-    "ZuptConfig", "ZuptResult", "align_from_accel", "first_stance", "long_stances", "run_zupt",
+    "ZuptConfig", "ZuptFilter", "ZuptResult", "ZuptState", "align_from_accel", "first_stance", "long_stances",
 ]

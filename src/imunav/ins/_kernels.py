@@ -349,6 +349,10 @@ def zupt_ekf_kernel(t, acc, gyr, zv, zaru, q0, p0, v0, ba0, bg0, P0, prm):
     the nav vertical since its first sample is measured as 0 (std sigma_heading).
     Level floor (``level_floor``): each stance sample measures the height as the
     initial height p0[2] (std sigma_floor).
+
+    The loop is :func:`zupt_ekf_window`; this wrapper allocates the outputs and the state carried
+    from sample to sample (``dth_prev, dv_prev, q_ref, stance``), which it returns after the outputs so that
+    :meth:`imunav.ins.ZuptFilter.step` can go on from the last sample.
     """
     n = t.shape[0]
     nx = prm.nx
@@ -368,6 +372,28 @@ def zupt_ekf_kernel(t, acc, gyr, zv, zaru, q0, p0, v0, ba0, bg0, P0, prm):
     P = P0.copy()
     for i in range(nx):
         Pd[0, i] = P[i, i]
+    dth_prev = np.zeros(3)
+    dv_prev = np.zeros(3)
+    q_ref = q0.copy()
+    stance = np.zeros(1, dtype=np.bool_)
+    zupt_ekf_window(t, acc, gyr, zv, zaru, q, v, p, ba, bg, Pd, innov, svar, P, dth_prev, dv_prev, q_ref, stance,
+                    p0[2], prm)
+    return q, v, p, ba, bg, Pd, innov, svar, P, dth_prev, dv_prev, q_ref, stance
+
+
+@njit(cache=True, inline="always")  # inlined into zupt_ekf_kernel: its arrays stay local there (speed)
+def zupt_ekf_window(t, acc, gyr, zv, zaru, q, v, p, ba, bg, Pd, innov, svar, P, dth_prev, dv_prev, q_ref, stance,
+                    floor_height, prm):
+    """The loop of :func:`zupt_ekf_kernel` over rows 1..n-1 of a window whose row 0 holds the state.
+
+    Writes rows 1..n-1 of the state arrays ``q, v, p, ba, bg``, ``Pd``, ``innov``, ``svar``; updates in place
+    the covariance ``P`` and the state carried from one sample to the next: the previous compensated
+    increments ``dth_prev``, ``dv_prev`` (coning), the heading-hold reference ``q_ref`` and
+    ``stance[0]`` (the previous sample was a stance).  ``floor_height`` is the level-floor height.
+    A window of 2 rows is one sample (:meth:`imunav.ins.ZuptFilter.step`).
+    """
+    n = t.shape[0]
+    nx = prm.nx
     Phi = np.eye(nx)
     Qd = np.zeros((nx, nx))
     M = np.empty((nx, nx))
@@ -386,12 +412,9 @@ def zupt_ekf_kernel(t, acc, gyr, zv, zaru, q0, p0, v0, ba0, bg0, P0, prm):
     tmp1 = np.empty(1)
     s3 = np.empty(3)
     s1_ = np.empty(1)
-    dth_prev = np.zeros(3)
-    dv_prev = np.zeros(3)
     dth = np.empty(3)
     dvb = np.empty(3)
-    in_stance = False
-    q_ref = q0.copy()
+    in_stance = stance[0]
     for k in range(1, n):
         h = t[k] - t[k - 1]
         for j in range(3):
@@ -445,7 +468,7 @@ def zupt_ekf_kernel(t, acc, gyr, zv, zaru, q0, p0, v0, ba0, bg0, P0, prm):
                     joseph_update_rows(P, dx, idx_psi, z1, r1, tmp1, s1_)
                     _inject(dx, k, p, v, q, ba, bg, nx)
             if prm.level_floor:
-                height(p[k, 2], p0[2], prm.sigma_floor, z1, r1)
+                height(p[k, 2], floor_height, prm.sigma_floor, z1, r1)
                 joseph_update_rows(P, dx, idx_z, z1, r1, tmp1, s1_)
                 _inject(dx, k, p, v, q, ba, bg, nx)
             in_stance = True
@@ -453,7 +476,7 @@ def zupt_ekf_kernel(t, acc, gyr, zv, zaru, q0, p0, v0, ba0, bg0, P0, prm):
             in_stance = False
         for i in range(nx):
             Pd[k, i] = P[i, i]
-    return q, v, p, ba, bg, Pd, innov, svar, P
+    stance[0] = in_stance
 
 
 @njit(cache=True)

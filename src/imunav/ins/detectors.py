@@ -58,7 +58,7 @@ from imunav.ins.statistics import (
     mbgtd,
     shoe,
 )
-from imunav.ins.zupt import run_zupt
+from imunav.ins.zupt import ZuptFilter
 from imunav.results import Result
 from imunav.rotation import quat_rotate
 
@@ -361,7 +361,7 @@ def optimize_threshold(data: Any, reference: ArrayLike, detector: str = "shoe",
                        config: Any = None) -> ThresholdSearch:
     """Grid-search the detector threshold that minimises the position error.
 
-    For each threshold the ZUPT INS (:func:`imunav.ins.zupt.run_zupt`, with
+    For each threshold the ZUPT INS (:meth:`imunav.ins.ZuptFilter.run`, with
     ``config``) runs with the detector output and ``metric(estimate,
     reference)`` (default :func:`imunav.ins.metrics.error_2d`) scores it; ties
     go to the larger threshold (as in the published search).  ``reference``
@@ -410,7 +410,7 @@ def optimize_threshold(data: Any, reference: ArrayLike, detector: str = "shoe",
     best = (np.inf, 0.0, None)
     for i, gam in enumerate(grid):
         zv = T < gam
-        res = run_zupt(data, zv, config)
+        res = ZuptFilter(config).run(data, zv)
         errs[i] = metric(res.position, ref)
         if errs[i] <= best[0]:
             best = (errs[i], float(gam), zv)

@@ -6,11 +6,23 @@ from typing import Any
 
 import numpy as np
 
+from imunav._docstrings import fill_doc
 from imunav.ins.metrics import align_heading
 
 __all__ = ["plot_trajectory", "plot_zero_velocity"]
 
 
+def _axes(ax: Any, figsize: tuple[float, float]) -> Any:
+    """``ax``, or the axes of a new figure ``figsize`` inches wide and high."""
+    if ax is None:
+        # optional: matplotlib loads only when a figure is drawn (import time of imunav and its CLI)
+        import matplotlib.pyplot as plt
+
+        _, ax = plt.subplots(figsize=figsize)
+    return ax
+
+
+@fill_doc
 def plot_trajectory(result: Any, reference: Any = None, *, ax: Any = None, label: str = "INS") -> Any:
     """Top view (north up, east right) of a :class:`~imunav.ins.ZuptResult` and an optional reference.
 
@@ -28,16 +40,9 @@ def plot_trajectory(result: Any, reference: Any = None, *, ax: Any = None, label
     label : str
         Legend label of the estimate.
 
-    Returns
-    -------
-    matplotlib.axes.Axes
-        The axes drawn into.
+    %(axes_drawn_returns)s
     """
-    # optional: matplotlib loads only when a figure is drawn (import time of imunav and its CLI)
-    import matplotlib.pyplot as plt
-
-    if ax is None:
-        _, ax = plt.subplots(figsize=(6, 6))
+    ax = _axes(ax, (6, 6))
     p = np.asarray(result.position)
     if reference is not None:
         ref = np.asarray(reference, dtype=float)
@@ -54,6 +59,7 @@ def plot_trajectory(result: Any, reference: Any = None, *, ax: Any = None, label
     return ax
 
 
+@fill_doc
 def plot_zero_velocity(data: Any, detections: dict[str, Any], *, ax: Any = None) -> Any:
     """Zero-velocity timeline: |ω| and |f| - g with each detector's stance flags underneath.
 
@@ -66,16 +72,9 @@ def plot_zero_velocity(data: Any, detections: dict[str, Any], *, ax: Any = None)
     ax : matplotlib.axes.Axes, optional
         Axes to draw into (default: a new figure).
 
-    Returns
-    -------
-    matplotlib.axes.Axes
-        The axes drawn into.
+    %(axes_drawn_returns)s
     """
-    # optional: matplotlib loads only when a figure is drawn (import time of imunav and its CLI)
-    import matplotlib.pyplot as plt
-
-    if ax is None:
-        _, ax = plt.subplots(figsize=(10, 4))
+    ax = _axes(ax, (10, 4))
     t = np.asarray(data.t)
     ax.plot(t, np.linalg.norm(data.gyro, axis=1), lw=0.7, label="|gyro| (rad/s)")
     ax.plot(t, np.abs(np.linalg.norm(data.accel, axis=1) - 9.81), lw=0.7, label="| |f| - g | (m/s²)")

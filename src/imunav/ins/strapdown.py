@@ -31,6 +31,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from imunav._docstrings import fill_doc
 from imunav.errors import InvalidInputError, ShapeError
 from imunav.ins import _kernels as _k
 from imunav.results import Result
@@ -132,16 +133,27 @@ def coning_sculling_increments(data: Any, corrected: bool = True) -> tuple[Array
     return _k.increments(t, w, a, bool(corrected))
 
 
+def _start(data: Any, q0: ArrayLike) -> tuple[Array, Array]:
+    """Sample times of ``data`` and the initial attitude, checked to be a unit quaternion."""
+    t, _, _ = _arrays(data)
+    q = np.asarray(q0, dtype=float)
+    if q.shape != (4,) or abs(np.linalg.norm(q) - 1) > 1e-6:
+        raise InvalidInputError(f"q0 must be a unit quaternion [w, x, y, z]; got {q!r}")
+    return t, q
+
+
+def _increments(data: Any, t: Array, corrected: bool) -> tuple[Array, Array, Array]:
+    """Angle and velocity increments and the step before each sample (0 for the first)."""
+    dth, dv = coning_sculling_increments(data, corrected)
+    return dth, dv, np.concatenate([[0.0], np.diff(t)])
+
+
+@fill_doc
 def strapdown_local(data: Any, q0: ArrayLike, *, v0: ArrayLike = (0, 0, 0), p0: ArrayLike = (0, 0, 0),
                     g: float = 9.80665, corrected: bool = True) -> StrapdownResult:
     """Free-inertial integration in a local-level NED frame (no Earth rate; module docstring).
 
-    Parameters
-    ----------
-    data : ImuData
-        The recording (SI: rad/s, m/s², specific force), body FRD.
-    q0 : array_like, shape (4,)
-        Initial attitude ``q_nb`` (unit quaternion).
+    %(strapdown_data_q0)s
     v0 : array_like, shape (3,)
         Initial velocity, NED, m/s.
     p0 : array_like, shape (3,)
@@ -161,16 +173,13 @@ def strapdown_local(data: Any, q0: ArrayLike, *, v0: ArrayLike = (0, 0, 0), p0: 
     InvalidInputError
         If ``q0`` is not a unit quaternion or ``data`` not an ImuData.
     """
-    t, _, _ = _arrays(data)
-    q = np.asarray(q0, dtype=float)
-    if q.shape != (4,) or abs(np.linalg.norm(q) - 1) > 1e-6:
-        raise InvalidInputError(f"q0 must be a unit quaternion [w, x, y, z]; got {q!r}")
-    dth, dv = coning_sculling_increments(data, corrected)
-    dt = np.concatenate([[0.0], np.diff(t)])
+    t, q = _start(data, q0)
+    dth, dv, dt = _increments(data, t, corrected)
     qq, v, p = _k.strapdown_local_kernel(dth, dv, dt, q, _v3(v0, "v0"), _v3(p0, "p0"), float(g), bool(corrected))
     return StrapdownResult(t, qq, v, position=p)
 
 
+@fill_doc
 def strapdown_ned(data: Any, q0: ArrayLike, lla0: ArrayLike, *, v0: ArrayLike = (0, 0, 0),
                   corrected: bool = True, omega_e: float = OMEGA_E) -> StrapdownResult:
     """Free-inertial NED mechanization with Earth and transport rate.
@@ -178,12 +187,7 @@ def strapdown_ned(data: Any, q0: ArrayLike, lla0: ArrayLike, *, v0: ArrayLike = 
     ``lla0`` = (lat rad, lon rad, h m).  The IMU measures rates with respect
     to inertial space (include the Earth rate in ``gyro``).
 
-    Parameters
-    ----------
-    data : ImuData
-        The recording (SI: rad/s, m/s², specific force), body FRD.
-    q0 : array_like, shape (4,)
-        Initial attitude ``q_nb`` (unit quaternion).
+    %(strapdown_data_q0)s
     lla0 : array_like, shape (3,)
         Initial geodetic position (lat rad, lon rad, h m).
     v0 : array_like, shape (3,)
@@ -203,15 +207,11 @@ def strapdown_ned(data: Any, q0: ArrayLike, lla0: ArrayLike, *, v0: ArrayLike = 
     InvalidInputError
         If ``q0`` is not a unit quaternion, ``data`` not an ImuData, or the latitude is at a pole.
     """
-    t, _, _ = _arrays(data)
-    q = np.asarray(q0, dtype=float)
-    if q.shape != (4,) or abs(np.linalg.norm(q) - 1) > 1e-6:
-        raise InvalidInputError(f"q0 must be a unit quaternion [w, x, y, z]; got {q!r}")
+    t, q = _start(data, q0)
     lla = _v3(lla0, "lla0")
     if abs(lla[0]) >= np.pi / 2:
         raise InvalidInputError(f"latitude {lla[0]} rad is at or beyond a pole; the NED frame is singular there")
-    dth, dv = coning_sculling_increments(data, corrected)
-    dt = np.concatenate([[0.0], np.diff(t)])
+    dth, dv, dt = _increments(data, t, corrected)
     qq, v, out = _k.strapdown_ned_kernel(dth, dv, dt, q, _v3(v0, "v0"), lla[0], lla[1], lla[2], float(omega_e),
                                        bool(corrected))
     return StrapdownResult(t, qq, v, lla=out)

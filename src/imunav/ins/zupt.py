@@ -45,12 +45,19 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from imunav._timeseries_kernels import runs
-from imunav.errors import ConfigError, InsufficientDataError, InvalidInputError, ShapeError, TimeOrderError
+from imunav.errors import (
+    ConfigError,
+    InsufficientDataError,
+    InvalidInputError,
+    NonFiniteError,
+    ShapeError,
+    TimeOrderError,
+)
 from imunav.ins import _kernels as _k
 from imunav.results import Result
 from imunav.rotation import euler_from_quat, quat_from_euler
 
-__all__ = ["ZuptConfig", "ZuptResult", "run_zupt", "align_from_accel", "first_stance", "long_stances"]
+__all__ = ["ZuptConfig", "ZuptFilter", "ZuptResult", "ZuptState", "align_from_accel", "first_stance", "long_stances"]
 
 Array = NDArray[np.float64]
 
@@ -181,7 +188,7 @@ class ZuptConfig:
 
 @dataclass(frozen=True)
 class ZuptResult(Result):
-    """Output of :func:`run_zupt` (arrays one row per sample).
+    """Output of :meth:`ZuptFilter.run` (arrays one row per sample).
 
     Attributes
     ----------
@@ -362,75 +369,291 @@ def _arrays(data: Any) -> tuple[Array, Array, Array]:
     return t, a, w
 
 
-def run_zupt(data: Any, zv: ArrayLike, config: ZuptConfig | None = None, *,
-             initial_position: ArrayLike = (0.0, 0.0, 0.0),
-             initial_quaternion: ArrayLike | None = None) -> ZuptResult:
-    """Run the ZUPT-aided INS over a recording.
-
-    Parameters
-    ----------
-    data : ImuData
-        Recording (t s, gyro rad/s, accel m/s², body FRD).
-    zv : array_like of bool, shape (N,), or DetectorResult
-        Stance flags (a detector's ``zv`` or stored labels).
-    config : ZuptConfig, optional
-        Settings (default: 9 states, pyshoe noise values).
-    initial_position : array_like, shape (3,), optional
-        Initial position, m, NED.
-    initial_quaternion : array_like, shape (4,), optional
-        ``q_nb`` (scalar first) overriding the alignment (gravity
-        ``g`` is still taken from the config / alignment samples).
-
-    Returns
-    -------
-    ZuptResult
-        Position, velocity, attitude, biases and covariance at every sample.
-
-    Raises
-    ------
-    ShapeError
-        If ``zv`` or ``initial_position`` has the wrong shape.
-    InvalidInputError
-        If ``initial_quaternion`` is not a unit quaternion.
-    """
-    cfg = ZuptConfig() if config is None else config
-    t, a, w = _arrays(data)
-    z = np.asarray(getattr(zv, "zv", zv))
-    if z.shape != t.shape:
-        raise ShapeError(f"zv must have shape ({t.size},) like the recording; got {z.shape}")
-    z = np.ascontiguousarray(z.astype(bool))
-    if cfg.alignment == "samples":
-        i0, i1 = 0, min(cfg.align_samples, t.size)
-    else:
-        i0, i1 = first_stance(z)
-        i1 = min(i1, i0 + cfg.align_samples_max)
-    fmean = a[i0:i1].mean(axis=0)
-    if initial_quaternion is None:
-        q0 = align_from_accel(fmean, cfg.initial_yaw)
-    else:
-        q0 = np.asarray(initial_quaternion, dtype=float)
-        if q0.shape != (4,) or abs(np.linalg.norm(q0) - 1.0) > 1e-6:
-            raise InvalidInputError(f"initial_quaternion must be a unit quaternion [w, x, y, z]; got {q0!r}")
-    g = float(np.linalg.norm(fmean)) if cfg.g is None else float(cfg.g)
-    nx = cfg.states
-    p0 = [cfg.p0_pos] * 3 + [cfg.p0_vel] * 3 + [cfg.p0_att] * 3
-    if nx == 15:
-        p0 += [cfg.p0_acc_bias] * 3 + [cfg.p0_gyro_bias] * 3
-    P0 = np.diag(np.square(p0))
-    pos0 = np.asarray(initial_position, dtype=float)
-    if pos0.shape != (3,):
-        raise ShapeError(f"initial_position must be a 3-vector; got shape {pos0.shape}")
-    # fresh, writable, contiguous float64 arrays: one compiled signature for every caller
-    q0 = np.array(q0, dtype=np.float64)
-    pos0 = np.array(pos0, dtype=np.float64)
-    t, a, w = (np.array(x, dtype=np.float64, order="C") for x in (t, a, w))
-    zaru_mask = long_stances(t, z, cfg.zaru_min_s) if cfg.zaru else np.zeros(t.size, dtype=bool)
-    prm = _k.ZuptKernelParams(
-        nx=nx, g=g, sigma_acc=float(cfg.sigma_acc), sigma_gyro=float(cfg.sigma_gyro),
+def _kernel_params(cfg: ZuptConfig, g: float) -> Any:
+    """The kernel's parameter record for ``cfg`` and gravity ``g``."""
+    return _k.ZuptKernelParams(
+        nx=cfg.states, g=g, sigma_acc=float(cfg.sigma_acc), sigma_gyro=float(cfg.sigma_gyro),
         sigma_acc_bias_rw=float(cfg.sigma_acc_bias_rw), sigma_gyro_bias_rw=float(cfg.sigma_gyro_bias_rw),
         sigma_v=float(cfg.sigma_v), sigma_zaru=float(cfg.sigma_zaru), heading_hold=bool(cfg.heading_hold),
         sigma_heading=float(cfg.sigma_heading), coning=cfg.integration == "coning",
         level_floor=bool(cfg.level_floor), sigma_floor=float(cfg.sigma_floor))
-    q, v, p, ba, bg, Pd, innov, svar, P = _k.zupt_ekf_kernel(
-        t, a, w, z, zaru_mask, q0, pos0, np.zeros(3), np.zeros(3), np.zeros(3), P0, prm)
-    return ZuptResult(t, p, v, q, ba, bg, Pd, innov, svar, P, z, cfg)
+
+
+def _initial_cov(cfg: ZuptConfig) -> Array:
+    """``P0 = diag(p0_pos², p0_vel², p0_att² (, p0_acc_bias², p0_gyro_bias²))``."""
+    p0 = [cfg.p0_pos] * 3 + [cfg.p0_vel] * 3 + [cfg.p0_att] * 3
+    if cfg.states == 15:
+        p0 += [cfg.p0_acc_bias] * 3 + [cfg.p0_gyro_bias] * 3
+    return np.diag(np.square(p0))
+
+
+def _position(initial_position: ArrayLike) -> Array:
+    pos0 = np.asarray(initial_position, dtype=float)
+    if pos0.shape != (3,):
+        raise ShapeError(f"initial_position must be a 3-vector; got shape {pos0.shape}")
+    if not np.all(np.isfinite(pos0)):
+        raise NonFiniteError(f"initial_position must be finite; got {pos0!r}")
+    return np.array(pos0, dtype=np.float64)
+
+
+def _quaternion(q: ArrayLike) -> Array:
+    q0 = np.asarray(q, dtype=float)
+    if q0.shape != (4,) or not abs(np.linalg.norm(q0) - 1.0) <= 1e-6:
+        raise InvalidInputError(f"initial_quaternion must be a unit quaternion [w, x, y, z]; got {q0!r}")
+    return np.array(q0, dtype=np.float64)
+
+
+def _sample3(x: ArrayLike, name: str) -> Array:
+    a = np.asarray(x, dtype=np.float64)
+    if a.shape != (3,):
+        raise ShapeError(f"{name} must be a 3-vector (one sample, body FRD); got shape {a.shape}")
+    if not np.all(np.isfinite(a)):
+        raise NonFiniteError(f"{name} contains NaN or inf: {a!r}; a step needs a valid sample")
+    return a
+
+
+@dataclass(frozen=True)
+class ZuptState:
+    """The ZUPT filter's estimate after one :meth:`ZuptFilter.step` (the fields of one row of :class:`ZuptResult`).
+
+    Attributes
+    ----------
+    t : float
+        Time, s.
+    position, velocity : numpy.ndarray, shape (3,)
+        Position (m) and velocity (m/s), local NED.
+    q_nb : numpy.ndarray, shape (4,)
+        Attitude, scalar first, body (FRD) -> NED.
+    accel_bias, gyro_bias : numpy.ndarray, shape (3,)
+        Bias estimates, m/s² and rad/s (zero with 9 states).
+    cov_diag : numpy.ndarray, shape (9 or 15,)
+        Diagonal of the error covariance.
+    innovation, innovation_var : numpy.ndarray, shape (3,)
+        ZUPT innovation ``-v̂`` (m/s) and the diagonal of its covariance (m²/s²); NaN when no ZUPT applied.
+    """
+
+    t: float
+    position: Array
+    velocity: Array
+    q_nb: Array
+    accel_bias: Array
+    gyro_bias: Array
+    cov_diag: Array
+    innovation: Array
+    innovation_var: Array
+
+
+class ZuptFilter:
+    """Zero-velocity-aided INS (error-state EKF, 9 or 15 states; equations in the module docstring).
+
+    ``run(data, zv)`` filters a whole recording with the fused numba kernel; ``step(t, gyro, accel, zv)``
+    processes one sample with the same kernel (a window of one sample, the filter state carried between
+    calls), so that stepping through a recording gives the trajectory of ``run``.
+
+    Parameters
+    ----------
+    config : ZuptConfig, optional
+        Settings (default: 9 states, pyshoe noise values).
+
+    Raises
+    ------
+    ConfigError
+        If ``config`` is not a :class:`ZuptConfig`.
+
+    Examples
+    --------
+    >>> from imunav.ins import ZuptConfig, ZuptFilter
+    >>> res = ZuptFilter(ZuptConfig(states=15)).run(imu, zv)          # doctest: +SKIP
+    >>> f = ZuptFilter(); f.reset(q_nb=res.q_nb[0])                    # doctest: +SKIP
+    >>> state = f.step(imu.t[0], imu.gyro[0], imu.accel[0], zv[0])     # doctest: +SKIP
+    """
+
+    name = "zupt"
+
+    def __init__(self, config: ZuptConfig | None = None) -> None:
+        cfg = ZuptConfig() if config is None else config
+        if not isinstance(cfg, ZuptConfig):
+            raise ConfigError(f"config must be a ZuptConfig; got {type(cfg).__name__}")
+        self.config = cfg
+        self.reset()
+
+    def reset(self, q_nb: ArrayLike | None = None, *, position: ArrayLike = (0.0, 0.0, 0.0),
+              g: float | None = None) -> None:
+        """Forget the state: the next :meth:`step` is the first sample of a recording.
+
+        Parameters
+        ----------
+        q_nb : array_like, shape (4,), optional
+            Initial attitude (scalar first); default: levelled from the first sample's specific force
+            (:func:`align_from_accel`, yaw ``config.initial_yaw``), as :meth:`run` with ``align_samples=1``.
+        position : array_like, shape (3,), optional
+            Initial position, m, NED.
+        g : float, optional
+            Gravity, m/s²; default ``config.g``, or the norm of the first sample's specific force when that is None.
+
+        Raises
+        ------
+        InvalidInputError
+            If ``q_nb`` is not a unit quaternion or ``g`` is not finite and > 0.
+        ShapeError
+            If ``position`` is not a 3-vector.
+        """
+        self._q_init = None if q_nb is None else _quaternion(q_nb)
+        self._pos_init = _position(position)
+        if g is not None and not (math.isfinite(g) and g > 0):
+            raise InvalidInputError(f"g must be finite and > 0 m/s²; got {g!r}")
+        self._g_init = g
+        self._prev: dict[str, Any] | None = None
+
+    def _carry(self, t: float, accel: Array, gyro: Array, q: Array, v: Array, p: Array, ba: Array, bg: Array,
+               P: Array, dth: Array, dv: Array, q_ref: Array, stance: NDArray[np.bool_], floor: float,
+               prm: Any) -> None:
+        self._prev = {"t": t, "accel": accel, "gyro": gyro, "q": q, "v": v, "p": p, "ba": ba, "bg": bg, "P": P,
+                      "dth": dth, "dv": dv, "q_ref": q_ref, "stance": stance, "floor": floor, "prm": prm}
+
+    def step(self, t: float, gyro: ArrayLike, accel: ArrayLike, zv: bool = False, *,
+             zaru: bool | None = None) -> ZuptState:
+        """Process one sample: propagate with it and, if ``zv``, apply the stance updates.
+
+        The first call after construction or :meth:`reset` only sets the initial state (as row 0 of
+        :meth:`run`); each later call is one iteration of the kernel of :meth:`run`.
+
+        Parameters
+        ----------
+        t : float
+            Time of the sample, s, after the previous one.
+        gyro : array_like, shape (3,)
+            Angular rate, rad/s, body FRD.
+        accel : array_like, shape (3,)
+            Specific force, m/s², body FRD.
+        zv : bool, optional
+            The foot is stationary at this sample (ZUPT and the enabled stance aids).
+        zaru : bool, optional
+            Apply the ZARU at this sample; default ``config.zaru and zv``.  With ``config.zaru_min_s`` > 0
+            it must be given (the stance's length is known only at its end: e.g. from :func:`long_stances`).
+
+        Returns
+        -------
+        ZuptState
+            The estimate after this sample.
+
+        Raises
+        ------
+        TimeOrderError
+            If ``t`` is not finite or not after the previous sample.
+        ShapeError
+            If ``gyro`` or ``accel`` is not a 3-vector.
+        NonFiniteError
+            If a sample holds NaN or inf.
+        ConfigError
+            If ``zaru`` is needed but not given, or given while ``config.zaru`` is False.
+        """
+        cfg = self.config
+        tk = float(t)
+        w = _sample3(gyro, "gyro")
+        a = _sample3(accel, "accel")
+        if zaru is None:
+            if cfg.zaru and cfg.zaru_min_s > 0:
+                raise ConfigError("with zaru_min_s > 0 a step cannot know the stance's length: pass zaru=True/False "
+                                  "(e.g. from imunav.ins.long_stances over the recording)")
+            zaru = bool(cfg.zaru and zv)
+        elif zaru and not cfg.zaru:
+            raise ConfigError("zaru=True in step() needs ZuptConfig(zaru=True, states=15)")
+        prev = self._prev
+        if prev is None:
+            if not math.isfinite(tk):
+                raise TimeOrderError(f"t must be finite; got {t!r}")
+            q0 = align_from_accel(a, cfg.initial_yaw) if self._q_init is None else self._q_init
+            g = self._g_init if self._g_init is not None else (float(np.linalg.norm(a)) if cfg.g is None
+                                                                   else float(cfg.g))
+            P = _initial_cov(cfg)
+            z3 = np.zeros(3)
+            self._carry(tk, a, w, np.array(q0, dtype=np.float64), z3, self._pos_init.copy(), z3, z3, P, np.zeros(3),
+                        np.zeros(3), np.array(q0, dtype=np.float64), np.zeros(1, dtype=np.bool_),
+                        float(self._pos_init[2]), _kernel_params(cfg, g))
+            nan3 = np.full(3, np.nan)
+            return ZuptState(tk, self._pos_init.copy(), z3.copy(), np.array(q0, dtype=np.float64), z3.copy(),
+                             z3.copy(), np.diag(P).copy(), nan3, nan3.copy())
+        if not (math.isfinite(tk) and tk > prev["t"]):
+            raise TimeOrderError(f"t = {t!r} s is not after the previous sample's {prev['t']!r} s; "
+                                 "samples must come in strictly increasing time")
+        nx = cfg.states
+        rows = {k: np.stack([prev[k], np.zeros_like(prev[k])]) for k in ("q", "v", "p", "ba", "bg")}
+        Pd = np.empty((2, nx))
+        innov = np.full((2, 3), np.nan)
+        svar = np.full((2, 3), np.nan)
+        _k.zupt_ekf_window(np.array([prev["t"], tk]), np.stack([prev["accel"], a]), np.stack([prev["gyro"], w]),
+                           np.array([False, bool(zv)]), np.array([False, bool(zaru)]), rows["q"], rows["v"],
+                           rows["p"], rows["ba"], rows["bg"], Pd, innov, svar, prev["P"], prev["dth"], prev["dv"],
+                           prev["q_ref"], prev["stance"], prev["floor"], prev["prm"])
+        self._carry(tk, a, w, rows["q"][1], rows["v"][1], rows["p"][1], rows["ba"][1], rows["bg"][1], prev["P"],
+                    prev["dth"], prev["dv"], prev["q_ref"], prev["stance"], prev["floor"], prev["prm"])
+        return ZuptState(tk, rows["p"][1].copy(), rows["v"][1].copy(), rows["q"][1].copy(), rows["ba"][1].copy(),
+                         rows["bg"][1].copy(), Pd[1], innov[1], svar[1])
+
+    @property
+    def P(self) -> Array | None:
+        """Error covariance after the last sample (None before the first :meth:`step` / :meth:`run`).
+
+        Returns
+        -------
+        numpy.ndarray or None
+            (9, 9) or (15, 15).
+        """
+        return None if self._prev is None else self._prev["P"].copy()
+
+    def run(self, data: Any, zv: ArrayLike, *, initial_position: ArrayLike = (0.0, 0.0, 0.0),
+            initial_quaternion: ArrayLike | None = None) -> ZuptResult:
+        """Run the ZUPT-aided INS over a recording (the fused numba kernel).
+
+        Afterwards :meth:`step` goes on from the recording's last sample.
+
+        Parameters
+        ----------
+        data : ImuData
+            Recording (t s, gyro rad/s, accel m/s², body FRD).
+        zv : array_like of bool, shape (N,), or DetectorResult
+            Stance flags (a detector's ``zv`` or stored labels).
+        initial_position : array_like, shape (3,), optional
+            Initial position, m, NED.
+        initial_quaternion : array_like, shape (4,), optional
+            ``q_nb`` (scalar first) overriding the alignment (gravity
+            ``g`` is still taken from the config / alignment samples).
+
+        Returns
+        -------
+        ZuptResult
+            Position, velocity, attitude, biases and covariance at every sample.
+
+        Raises
+        ------
+        ShapeError
+            If ``zv`` or ``initial_position`` has the wrong shape.
+        InvalidInputError
+            If ``initial_quaternion`` is not a unit quaternion.
+        """
+        cfg = self.config
+        t, a, w = _arrays(data)
+        z = np.asarray(getattr(zv, "zv", zv))
+        if z.shape != t.shape:
+            raise ShapeError(f"zv must have shape ({t.size},) like the recording; got {z.shape}")
+        z = np.ascontiguousarray(z.astype(bool))
+        if cfg.alignment == "samples":
+            i0, i1 = 0, min(cfg.align_samples, t.size)
+        else:
+            i0, i1 = first_stance(z)
+            i1 = min(i1, i0 + cfg.align_samples_max)
+        fmean = a[i0:i1].mean(axis=0)
+        q0 = align_from_accel(fmean, cfg.initial_yaw) if initial_quaternion is None else _quaternion(initial_quaternion)
+        g = float(np.linalg.norm(fmean)) if cfg.g is None else float(cfg.g)
+        pos0 = _position(initial_position)
+        # fresh, writable, contiguous float64 arrays: one compiled signature for every caller
+        q0 = np.array(q0, dtype=np.float64)
+        t, a, w = (np.array(x, dtype=np.float64, order="C") for x in (t, a, w))
+        zaru_mask = long_stances(t, z, cfg.zaru_min_s) if cfg.zaru else np.zeros(t.size, dtype=bool)
+        prm = _kernel_params(cfg, g)
+        q, v, p, ba, bg, Pd, innov, svar, P, dth, dv, q_ref, stance = _k.zupt_ekf_kernel(
+            t, a, w, z, zaru_mask, q0, pos0, np.zeros(3), np.zeros(3), np.zeros(3), _initial_cov(cfg), prm)
+        self._carry(float(t[-1]), a[-1].copy(), w[-1].copy(), q[-1].copy(), v[-1].copy(), p[-1].copy(),
+                    ba[-1].copy(), bg[-1].copy(), P.copy(), dth, dv, q_ref, stance, float(pos0[2]), prm)
+        return ZuptResult(t, p, v, q, ba, bg, Pd, innov, svar, P, z, cfg)

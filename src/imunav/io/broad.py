@@ -31,15 +31,17 @@ from numpy.typing import NDArray
 from scipy.io import loadmat
 
 from imunav.errors import FileFormatError, InvalidInputError
-from imunav.rotation import C_ENU_NED, from_convention, quat_from_dcm, to_convention
+from imunav.rotation import Q_ENU_NED, from_convention, to_convention
 from imunav.timeseries import ImuData
 
 Array = NDArray[np.float64]
 
 __all__ = ["BroadTrial", "load_broad", "broad_trials", "Q_NED_ENU", "to_enu", "from_enu"]
 
-#: q_ned_enu: v_ned = q ⊗ v_enu ⊗ q* (swap x/y, negate z); its own inverse up to sign.
-Q_NED_ENU = quat_from_dcm(C_ENU_NED.T)
+#: q_ned_enu: v_ned = q ⊗ v_enu ⊗ q* (swap x/y, negate z); its own inverse up to sign.  C_ENU_NED is
+#: symmetric, so this is rotation.Q_ENU_NED (bit for bit ``quat_from_dcm(C_ENU_NED.T)``), a constant:
+#: importing this module runs no numba kernel.
+Q_NED_ENU = Q_ENU_NED
 
 _KEYS = ("imu_gyr", "imu_acc", "imu_mag", "opt_quat", "movement", "sampling_rate")
 

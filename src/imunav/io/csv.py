@@ -401,25 +401,18 @@ def read_csv(
     )  # fmt: skip
 
 
+@fill_doc
 def write_csv(data: ImuData, path: str | os.PathLike[str], *, delimiter: str = ",") -> Path:
     """Write ``data`` (SI) as CSV with exact (``repr``) floats; atomic.
 
     The first line is a ``# imunav {json}`` header (units, ``mag_unit``, ``meta``), read back by
     :func:`read_csv`.
 
-    Parameters
-    ----------
-    data : ImuData
-        The recording.
-    path : str or os.PathLike
-        Output file.
+    %(imu_writer_params)s
     delimiter : str
         Column separator.
 
-    Returns
-    -------
-    pathlib.Path
-        The file written.
+    %(returns_file_written)s
     """
     names, block = imu_to_table(data)
     head = f"# imunav {header_json(data)}\n{delimiter.join(names)}\n"

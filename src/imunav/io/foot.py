@@ -3,7 +3,7 @@
 Every reader returns a :class:`FootTrial` whose IMU is in the imunav
 conventions (SI units, body FRD: at rest and level ``f_b = (0, 0, -g)``) and
 whose reference positions, if any, are in the local NED frame in which
-:func:`imunav.ins.zupt.run_zupt` integrates (x, y horizontal, z down), so the
+:meth:`imunav.ins.ZuptFilter.run` integrates (x, y horizontal, z down), so the
 two can be compared directly by :mod:`imunav.ins.metrics`.
 
 Frame adapters (each tested against the data):

@@ -93,26 +93,19 @@ def read_hdf5(
     )  # fmt: skip
 
 
+@fill_doc
 def write_hdf5(
     data: ImuData, path: str | os.PathLike[str], *, group: str = "/", compression: str | None = None
 ) -> Path:
     """Write ``data`` (SI, float64) to HDF5 atomically (layout in the module docstring).
 
-    Parameters
-    ----------
-    data : ImuData
-        The recording.
-    path : str or os.PathLike
-        Output file.
+    %(imu_writer_params)s
     group : str
         HDF5 group to write into.
     compression : str, optional
         h5py dataset compression (e.g. ``"gzip"``).
 
-    Returns
-    -------
-    pathlib.Path
-        The file written.
+    %(returns_file_written)s
     """
     units = dict(SI_UNITS)
     if data.mag is not None:

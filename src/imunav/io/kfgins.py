@@ -6,8 +6,13 @@ plain text tables (columns separated by spaces):
 * IMU: seconds of week; Δθ x y z (rad); Δv x y z (m/s), body FRD;
 * GNSS: see :mod:`imunav.io.gnss` (seconds of week, lat °, lon °, h, σ N E D);
 * navigation ``.nav``: week; seconds of week; lat °, lon °, h m; v N E D (m/s); roll pitch yaw (°);
-* IMU errors: seconds; gyro bias (°/h); accel bias (mGal); gyro scale (ppm); accel scale (ppm);
-* state σ: seconds; σ pos N E D (m); σ vel (m/s); σ att (°); σ biases; σ scale factors.
+* IMU errors (``KF_GINS_IMU_ERR.txt``, 13 columns, as KF-GINS's ``writeNavResult``): seconds; gyro bias x y z
+  (°/h); accel bias x y z (mGal, 1e-5 m/s²); gyro scale x y z (ppm); accel scale x y z (ppm);
+* state σ (``KF_GINS_STD.txt``, 22 columns, as KF-GINS's ``writeSTD``): seconds; σ position error N E D (m);
+  σ velocity error N E D (m/s); σ attitude error φ about N E D (°: the navigation-frame rotation-vector error,
+  KF-GINS's ``PHI_ID`` states, *not* the σ of roll / pitch / yaw, which differ from it away from level);
+  σ gyro bias x y z (°/h); σ accel bias x y z (mGal); σ gyro scale x y z (ppm); σ accel scale x y z (ppm).
+  KF-GINS writes one row per IMU sample; imunav writes one per covariance record of the filter.
 
 :func:`load_kfgins_config` reads KF-GINS's own YAML configuration with its
 keys and units into a typed :class:`KfGinsConfig` in SI; paths are relative to
@@ -25,6 +30,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from imunav import earth
 from imunav.errors import ConfigError, InvalidInputError, MissingDependencyError, ShapeError, TimeOrderError
 from imunav.io.gnss import lat_lon_radians, read_table, write_table
 from imunav.rotation import euler_from_quat, quat_from_euler
@@ -151,15 +157,16 @@ class ImuIncrements:
         return cls(t, dth, dv, dt, {"rate_hz": rate, "source": imu.meta.get("source", "ImuData")})
 
 
-def read_kfgins_imu(path: str | os.PathLike[str], rate_hz: float) -> ImuIncrements:
+def read_kfgins_imu(path: str | os.PathLike[str], rate_hz: float | None = None) -> ImuIncrements:
     """Read a KF-GINS IMU text file (seconds of week, Δθ rad, Δv m/s; extra columns such as odometer ignored).
 
     Parameters
     ----------
     path : str or os.PathLike
         Text file with 7 or more columns.
-    rate_hz : float
-        The declared IMU rate (KF-GINS's ``imudatarate``), Hz.
+    rate_hz : float, optional
+        The declared IMU rate (KF-GINS's ``imudatarate``), Hz, checked against the time stamps; None: the rate
+        of the median time step.
 
     Returns
     -------
@@ -174,8 +181,8 @@ def read_kfgins_imu(path: str | os.PathLike[str], rate_hz: float) -> ImuIncremen
         A declared rate that the time stamps contradict (median step off by more than 1 %), or
         values that are not increments (rates or degrees).
     """
-    rate = float(rate_hz)
-    if not (math.isfinite(rate) and rate > 0):
+    rate = float("nan") if rate_hz is None else float(rate_hz)
+    if rate_hz is not None and not (math.isfinite(rate) and rate > 0):
         raise InvalidInputError(f"rate_hz (imudatarate) must be a positive rate in Hz; got {rate_hz!r}")
     a = read_table(path, tuple(range(7, 40)), "KF-GINS IMU")
     src = os.fspath(path)
@@ -189,7 +196,9 @@ def read_kfgins_imu(path: str | os.PathLike[str], rate_hz: float) -> ImuIncremen
         raise TimeOrderError(f"{src}: IMU time is not strictly increasing at data row {k + 1} "
                              f"({t[k - 1]!r} then {t[k]!r}); sort the file and remove duplicates")
     med = float(np.median(d))
-    if abs(med * rate - 1.0) > RATE_TOLERANCE:
+    if rate_hz is None:
+        rate = 1.0 / med
+    elif abs(med * rate - 1.0) > RATE_TOLERANCE:
         raise InvalidInputError(
             f"{src}: the time stamps step by {med:.6g} s ({1 / med:.6g} Hz) but the declared rate is {rate:g} Hz; "
             "fix imudatarate (or rate_hz) to the file's rate"
@@ -280,6 +289,46 @@ class NavTrack:
             Roll, pitch, yaw, rad.
         """
         return euler_from_quat(self.q_nb)
+
+    def difference(self, truth: NavTrack, *, tol_s: float = 1e-6) -> tuple[Array, Array, Array, Array]:
+        """Errors of this track against ``truth`` at their common time stamps.
+
+        Parameters
+        ----------
+        truth : NavTrack
+            The reference, sampled on (some of) the same time stamps.
+        tol_s : float
+            Two stamps closer than this are the same epoch, s (a KF-GINS file keeps 9 decimals).
+
+        Returns
+        -------
+        t : numpy.ndarray, shape (M,)
+            The common time stamps, s.
+        pos_ned : numpy.ndarray, shape (M, 3)
+            Position error (this minus truth) north, east, down, m (local radii of the truth).
+        vel_ned : numpy.ndarray, shape (M, 3)
+            Velocity error, NED, m/s.
+        euler : numpy.ndarray, shape (M, 3)
+            Roll, pitch, yaw error, rad, wrapped to [-π, π).
+
+        Raises
+        ------
+        InvalidInputError
+            If the two tracks share no time stamp.
+        """
+        j = np.clip(np.searchsorted(truth.t, self.t - tol_s), 0, truth.t.size - 1)
+        ia = np.flatnonzero(np.abs(truth.t[j] - self.t) <= tol_s)
+        if ia.size == 0:
+            src = truth.meta.get("source", "the truth")
+            raise InvalidInputError(f"{src} shares no time stamp with the navigation solution "
+                                    f"({self.t[0]:.3f}..{self.t[-1]:.3f} s); sample the truth on the IMU stamps")
+        ib = j[ia]
+        a, b = self.lla[ia], truth.lla[ib]
+        rn, re = earth.radii(b[:, 0])
+        d = np.column_stack([(a[:, 0] - b[:, 0]) * (rn + b[:, 2]),
+                             (a[:, 1] - b[:, 1]) * (re + b[:, 2]) * np.cos(b[:, 0]), -(a[:, 2] - b[:, 2])])
+        de = self.euler()[ia] - truth.euler()[ib]
+        return self.t[ia], d, self.vel_ned[ia] - truth.vel_ned[ib], (de + np.pi) % (2 * np.pi) - np.pi
 
 
 def read_kfgins_nav(path: str | os.PathLike[str]) -> NavTrack:
@@ -383,8 +432,9 @@ def write_kfgins_imu_errors(path: str | os.PathLike[str], t: ArrayLike, gyro_bia
 def write_kfgins_std(path: str | os.PathLike[str], t: ArrayLike, pos_std: ArrayLike, vel_std: ArrayLike,
                      att_std: ArrayLike, gyro_bias_std: ArrayLike, accel_bias_std: ArrayLike,
                      gyro_scale_std: ArrayLike, accel_scale_std: ArrayLike) -> Path:
-    """Write KF-GINS's state σ file (22 columns): seconds, pos N E D m, vel m/s, att (roll pitch yaw) °,
-    gyro bias °/h, accel bias mGal, gyro and accel scale ppm.  Inputs in SI (m, m/s, rad, rad/s, m/s^2, 1).
+    """Write KF-GINS's state σ file (22 columns, the columns of KF-GINS's ``writeSTD``): seconds, σ pos N E D m,
+    σ vel N E D m/s, σ attitude error φ about N E D °, σ gyro bias °/h, σ accel bias mGal, σ gyro and accel
+    scale ppm.  Inputs in SI (m, m/s, rad, rad/s, m/s^2, 1).
 
     Parameters
     ----------
@@ -397,7 +447,8 @@ def write_kfgins_std(path: str | os.PathLike[str], t: ArrayLike, pos_std: ArrayL
     vel_std : array_like, shape (N, 3)
         Velocity σ north/east/down, m/s.
     att_std : array_like, shape (N, 3)
-        Attitude σ (roll, pitch, yaw), rad.
+        σ of the attitude error φ (navigation-frame rotation vector) about north, east, down, rad; KF-GINS
+        writes the same states (``PHI_ID``), not the σ of roll / pitch / yaw.
     gyro_bias_std, accel_bias_std : array_like, shape (N, 3)
         Bias σ, rad/s and m/s².
     gyro_scale_std, accel_scale_std : array_like, shape (N, 3)

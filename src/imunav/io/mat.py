@@ -197,22 +197,15 @@ def _write_v73(data: ImuData, tmp: Path) -> None:
         fh.write(_v73_header())
 
 
+@fill_doc
 def write_mat(data: ImuData, path: str | os.PathLike[str], *, version: str = "5") -> Path:
     """Write a MAT-file, ``version="5"`` (scipy) or ``"7.3"`` (HDF5), atomically.
 
-    Parameters
-    ----------
-    data : ImuData
-        The recording.
-    path : str or os.PathLike
-        Output file.
+    %(imu_writer_params)s
     version : {"5", "7.3"}
         MAT-file version.
 
-    Returns
-    -------
-    pathlib.Path
-        The file written.
+    %(returns_file_written)s
 
     Raises
     ------

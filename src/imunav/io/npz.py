@@ -62,22 +62,15 @@ def read_npz(
     )  # fmt: skip
 
 
+@fill_doc
 def write_npz(data: ImuData, path: str | os.PathLike[str], *, compress: bool = False) -> Path:
     """Write ``data`` as ``.npz`` (float64 SI arrays + JSON header), atomically.
 
-    Parameters
-    ----------
-    data : ImuData
-        The recording.
-    path : str or os.PathLike
-        Output file.
+    %(imu_writer_params)s
     compress : bool
         Use ``numpy.savez_compressed``.
 
-    Returns
-    -------
-    pathlib.Path
-        The file written.
+    %(returns_file_written)s
     """
     arrays: dict[str, np.ndarray] = {"t": data.t, "gyro": data.gyro, "accel": data.accel}
     if data.mag is not None:

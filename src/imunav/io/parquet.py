@@ -83,22 +83,15 @@ def read_parquet(
     )  # fmt: skip
 
 
+@fill_doc
 def write_parquet(data: ImuData, path: str | os.PathLike[str], *, compression: str = "zstd") -> Path:
     """Write ``data`` (SI) as Parquet, float64 columns, atomically.
 
-    Parameters
-    ----------
-    data : ImuData
-        The recording.
-    path : str or os.PathLike
-        Output file.
+    %(imu_writer_params)s
     compression : str
         Parquet codec (``"zstd"``, ``"snappy"``, ``"gzip"``, ``"none"``).
 
-    Returns
-    -------
-    pathlib.Path
-        The file written.
+    %(returns_file_written)s
 
     Raises
     ------

@@ -305,6 +305,7 @@ def time_axis(stamps_ns: NDArray[np.int64], source: str, what: str) -> tuple[NDA
     return order, rep
 
 
+@fill_doc
 def topic_data(topic: str, kind: str, stamps_ns: Any, values: Mapping[str, np.ndarray], units: Mapping[str, str],
                source: str, *, receive_ns: Any = None, instance: int | None = None,
                meta: Mapping[str, Any] | None = None) -> TopicData:
@@ -331,10 +332,7 @@ def topic_data(topic: str, kind: str, stamps_ns: Any, values: Mapping[str, np.nd
     meta : mapping, optional
         Entries of the result's ``meta``.
 
-    Returns
-    -------
-    TopicData
-        The topic in SI units, body FRD / world NED, ``t`` in s since ``meta["t0_ns"]``.
+    %(topic_returns)s
         Sorted by stamp, ``t`` in s since ``meta["t0_ns"]``.
 
     Raises

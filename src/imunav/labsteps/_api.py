@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import contextlib
 import zlib
-from collections.abc import Iterator
+from collections.abc import Iterable, Iterator, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -18,6 +18,7 @@ from typing import Any
 import numpy as np
 
 from imunav._atomic import jsonable
+from imunav.errors import ConfigError
 from imunav.results import Result
 
 __all__ = ["StepResult", "LabContext"]
@@ -125,6 +126,36 @@ class LabContext:
     def options(self) -> dict:
         """The TOML table of the running step (``[<step name>]``), or {}."""
         return dict(self.config.get(self.step, {}))
+
+    def step_options(self, defaults: Mapping[str, Any], positive: Iterable[str] = ()) -> dict[str, Any]:
+        """The step's option table over its defaults, checked.
+
+        Parameters
+        ----------
+        defaults : mapping
+            Every option the step knows, with its default value.
+        positive : iterable of str
+            Options that must be positive numbers.
+
+        Returns
+        -------
+        dict
+            ``defaults`` updated with :attr:`options`.
+
+        Raises
+        ------
+        ConfigError
+            If the table has an option not in ``defaults``, or an option of ``positive`` is not a positive number.
+        """
+        given = self.options
+        unknown = set(given) - set(defaults)
+        if unknown:
+            raise ConfigError(f"[{self.step}]: unknown option(s) {sorted(unknown)}; allowed: {sorted(defaults)}")
+        opts = {**defaults, **given}
+        for k in positive:
+            if not isinstance(opts[k], (int, float)) or opts[k] <= 0:
+                raise ConfigError(f"[{self.step}] {k} must be a positive number, got {opts[k]!r}")
+        return opts
 
     def rng(self, *key: int | str) -> np.random.Generator:
         """Independent, reproducible generator for ``(seed, step, *key)``.

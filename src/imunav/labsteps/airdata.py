@@ -23,8 +23,9 @@ from pathlib import Path
 
 import numpy as np
 
+from imunav._docstrings import fill_doc
 from imunav.airdata import plot as P
-from imunav.airdata.filter import run_thesis_filter
+from imunav.airdata.filter import ThesisFilter
 from imunav.airdata.scenario import ThesisScenario, simulate_thesis, thesis_report
 from imunav.errors import ConfigError
 from imunav.filters import detect_faults
@@ -37,18 +38,11 @@ TITLE = "Air data + Doppler radar: wind filter, robust filtering, fault detectio
 OPTIONS = ("runs", "p_false_alarm", "robust_methods")
 
 
+@fill_doc(step="airdata")
 def run(ctx: LabContext) -> StepResult:
     """Run the step: see the module docstring for what it computes, its options, artifacts and files.
 
-    Parameters
-    ----------
-    ctx : LabContext
-        The lab's context: the step's option table ``ctx.options`` (``[airdata]``), the artifacts it reads and
-        sets, the report folder.
-
-    Returns
-    -------
-    StepResult
+    %(lab_step_run)s
         Covariance check against the thesis, Monte Carlo wind errors, robust-filter and detector figures; passed per the acceptance of the module docstring.
 
     Raises
@@ -77,7 +71,7 @@ def run(ctx: LabContext) -> StepResult:
     write_json(out, rep)
 
     d = simulate_thesis(ThesisScenario(kind="variance"), seed)
-    r = run_thesis_filter(d.z, robust="nis")
+    r = ThesisFilter(robust="nis").run(d.z)
     det = detect_faults(r.normalized, 20, p_false_alarm=pfa, start=d.scenario.onset_row)
     figs = []
     for name, fig in (("wind", P.plot_wind(r, d)), ("innovations", P.plot_innovations(r)),

@@ -32,6 +32,7 @@ from typing import Any
 
 import numpy as np
 
+from imunav._docstrings import fill_doc
 from imunav.calib import (
     ImuCalibration,
     calibration_parameters,
@@ -43,7 +44,7 @@ from imunav.calib import (
 )
 from imunav.calib.model import parameter_names
 from imunav.calib.plot import plot_residuals, save_figure
-from imunav.errors import ConfigError, InsufficientDataError
+from imunav.errors import InsufficientDataError
 from imunav.io._atomic import write_json
 from imunav.labsteps._api import LabContext, StepResult
 from imunav.units import DEG, G0
@@ -52,15 +53,6 @@ TITLE = "Deterministic calibration (100-position + 120-step tests)"
 
 _DEFAULTS: dict[str, Any] = {"use_noise_model": True, "figures": True}
 _UNITS = {"S": ("ppm", 1e6), "M": ("mrad", 1e3)}
-
-
-def _options(ctx: LabContext) -> dict[str, Any]:
-    opts = dict(_DEFAULTS)
-    unknown = set(ctx.options) - set(_DEFAULTS)
-    if unknown:
-        raise ConfigError(f"[calibration]: unknown option(s) {sorted(unknown)}; allowed: {sorted(_DEFAULTS)}")
-    opts.update(ctx.options)
-    return opts
 
 
 def _rows(est: Any, truth: Any, stderr: dict, success: dict) -> list[dict]:
@@ -86,18 +78,11 @@ def _rows(est: Any, truth: Any, stderr: dict, success: dict) -> list[dict]:
     return rows
 
 
+@fill_doc(step="calibration")
 def run(ctx: LabContext) -> StepResult:
     """Run the step: see the module docstring for what it computes, its options, artifacts and files.
 
-    Parameters
-    ----------
-    ctx : LabContext
-        The lab's context: the step's option table ``ctx.options`` (``[calibration]``), the artifacts it reads and
-        sets, the report folder.
-
-    Returns
-    -------
-    StepResult
+    %(lab_step_run)s
         Success metric per sensor, parameters within 3 sigma, estimated parameters with their standard errors.
 
     Raises
@@ -106,7 +91,7 @@ def run(ctx: LabContext) -> StepResult:
         If the ``hundred_position`` or ``rate_table`` recording of ``simulate_tests`` is missing.
     """
 
-    opts = _options(ctx)
+    opts = ctx.step_options(_DEFAULTS)
     recs = ctx.artifacts.get("recordings", {})
     profs = ctx.artifacts.get("profiles", {})
     if "hundred_position" not in recs or "rate_table" not in recs:

@@ -43,6 +43,7 @@ from typing import Any
 import numpy as np
 
 from imunav import calib
+from imunav._docstrings import fill_doc
 from imunav.calib import ImuCalibration
 from imunav.errors import ConfigError
 from imunav.io._atomic import atomic_path
@@ -62,18 +63,10 @@ _DEFAULTS = {"positions": 12, "dwell_s": 10.0, "rate_steps": 6, "rate_dps": 100.
 
 
 def _options(ctx: LabContext) -> dict[str, Any]:
-    o = dict(_DEFAULTS)
-    given = ctx.options
-    bad = set(given) - set(_DEFAULTS)
-    if bad:
-        raise ConfigError(f"[compensation]: unknown option(s) {sorted(bad)}; allowed: {sorted(_DEFAULTS)}")
-    o.update(given)
+    o = ctx.step_options(_DEFAULTS, positive=("dwell_s", "rate_dps", "trim_s"))
     for k in ("positions", "rate_steps"):
         if not isinstance(o[k], int) or o[k] < 0:
             raise ConfigError(f"[compensation] {k} must be a non-negative integer, got {o[k]!r}")
-    for k in ("dwell_s", "rate_dps", "trim_s"):
-        if not isinstance(o[k], (int, float)) or o[k] <= 0:
-            raise ConfigError(f"[compensation] {k} must be a positive number, got {o[k]!r}")
     if o["dwell_s"] <= 2 * o["trim_s"]:
         raise ConfigError(f"[compensation] dwell_s ({o['dwell_s']}) must exceed 2 trim_s ({2 * o['trim_s']})")
     return o
@@ -288,18 +281,11 @@ def _real(ctx: LabContext, cal: Any, unit: str | None) -> dict[str, Any]:
     return {"rows": rows}
 
 
+@fill_doc(step="compensation")
 def run(ctx: LabContext) -> StepResult:
     """Run the step: see the module docstring for what it computes, its options, artifacts and files.
 
-    Parameters
-    ----------
-    ctx : LabContext
-        The lab's context: the step's option table ``ctx.options`` (``[compensation]``), the artifacts it reads and
-        sets, the report folder.
-
-    Returns
-    -------
-    StepResult
+    %(lab_step_run)s
         Residual errors against the reported uncertainty (virtual IMU) or gravity / Earth-rate checks per static interval (real recordings).
     """
     opts = _options(ctx)
@@ -383,17 +369,11 @@ def _plot_z(v: dict, path: Path) -> None:
     plt.close(fig)
 
 
+@fill_doc
 def report(section: Any, result: StepResult, ctx: LabContext) -> None:
     """Add the step's tables and figures to its section of the HTML report.
 
-    Parameters
-    ----------
-    section : imunav.report.html.Section
-        The step's section.
-    result : StepResult
-        What :func:`run` returned.
-    ctx : LabContext
-        The lab's context (its ``[spec]`` and artifacts).
+    %(lab_step_report)s
     """
     s = result.summary
     if "accel" in s:

@@ -29,8 +29,9 @@ from __future__ import annotations
 from typing import Any
 
 import numpy as np
-from scipy.stats import norm
 
+from imunav._docstrings import fill_doc
+from imunav._quantiles import norm_ppf
 from imunav.errors import ConfigError
 from imunav.io._atomic import atomic_path, write_json
 from imunav.labsteps._api import LabContext, StepResult
@@ -40,7 +41,7 @@ from imunav.noise.plot import plot_allan
 from imunav.units import to_display
 
 #: two-sided normal quantile for a family-wise 95 % level over six axes (Bonferroni)
-_Z_FAMILY = float(norm.ppf(1 - 0.05 / 12))
+_Z_FAMILY = float(norm_ppf(1 - 0.05 / 12))
 
 TITLE = "Noise identification of the static record (Allan GLS fit, PSD, AR(1))"
 
@@ -48,18 +49,11 @@ _DEFAULTS: dict[str, Any] = {"record": "static_long", "terms": ["N", "B", "K"], 
                              "decimate_s": 1.0}
 
 
+@fill_doc(step="noise")
 def run(ctx: LabContext) -> StepResult:
     """Run the step: see the module docstring for what it computes, its options, artifacts and files.
 
-    Parameters
-    ----------
-    ctx : LabContext
-        The lab's context: the step's option table ``ctx.options`` (``[noise]``), the artifacts it reads and
-        sets, the report folder.
-
-    Returns
-    -------
-    StepResult
+    %(lab_step_run)s
         Fitted noise terms with their 95 % intervals against the injected truth.
 
     Raises
@@ -67,11 +61,7 @@ def run(ctx: LabContext) -> StepResult:
     ConfigError
         If ``[noise]`` has an unknown option, or the record or the true error model is missing.
     """
-    opts = dict(_DEFAULTS)
-    unknown = set(ctx.options) - set(_DEFAULTS)
-    if unknown:
-        raise ConfigError(f"[noise]: unknown option(s) {sorted(unknown)}; known: {sorted(_DEFAULTS)}")
-    opts.update(ctx.options)
+    opts = ctx.step_options(_DEFAULTS)
     recs = ctx.artifacts.get("recordings", {})
     model = ctx.artifacts.get("error_model")
     if opts["record"] not in recs or model is None:

@@ -49,6 +49,7 @@ from typing import Any
 
 import numpy as np
 
+from imunav._docstrings import fill_doc
 from imunav.earth import normal_gravity
 from imunav.errors import ConfigError
 from imunav.io import write_imu
@@ -88,18 +89,10 @@ _DEFAULTS: dict[str, Any] = {
 
 
 def _options(ctx: LabContext) -> dict[str, Any]:
-    opts = dict(_DEFAULTS)
-    given = ctx.options
-    unknown = set(given) - set(_DEFAULTS)
-    if unknown:
-        raise ConfigError(f"[simulate_tests]: unknown option(s) {sorted(unknown)}; allowed: {sorted(_DEFAULTS)}")
-    opts.update(given)
+    opts = ctx.step_options(_DEFAULTS, positive=("fs", "dwell_s", "transition_s", "remount_s", "static_duration_s"))
     bad = [t for t in opts["tests"] if t not in _TESTS]
     if bad:
         raise ConfigError(f"[simulate_tests] tests: unknown test(s) {bad}; choose from {list(_TESTS)}")
-    for k in ("fs", "dwell_s", "transition_s", "remount_s", "static_duration_s"):
-        if not isinstance(opts[k], (int, float)) or opts[k] <= 0:
-            raise ConfigError(f"[simulate_tests] {k} must be a positive number, got {opts[k]!r}")
     return opts
 
 
@@ -129,18 +122,11 @@ def _true_table(model: Any) -> list[dict]:
     return rows
 
 
+@fill_doc(step="simulate_tests")
 def run(ctx: LabContext) -> StepResult:
     """Run the step: see the module docstring for what it computes, its options, artifacts and files.
 
-    Parameters
-    ----------
-    ctx : LabContext
-        The lab's context: the step's option table ``ctx.options`` (``[simulate_tests]``), the artifacts it reads and
-        sets, the report folder.
-
-    Returns
-    -------
-    StepResult
+    %(lab_step_run)s
         The tests simulated (samples, duration, files) and the injected parameters; no verdict.
 
     Raises
@@ -247,17 +233,11 @@ def run(ctx: LabContext) -> StepResult:
     )
 
 
+@fill_doc
 def report(section: Any, result: StepResult, ctx: LabContext) -> None:
     """HTML: test table, injected parameters, profile figures.
 
-    Parameters
-    ----------
-    section : imunav.report.html.Section
-        The step's section.
-    result : StepResult
-        What :func:`run` returned.
-    ctx : LabContext
-        The lab's context (its ``[spec]`` and artifacts).
+    %(lab_step_report)s
     """
 
     for caption, rows in result.tables:

@@ -35,6 +35,7 @@ from typing import Any
 import numpy as np
 
 from imunav import calib
+from imunav._docstrings import fill_doc
 from imunav.calib import thermal_calibration
 from imunav.errors import ConfigError
 from imunav.io._atomic import atomic_path
@@ -62,20 +63,12 @@ _UNITS = {"accel_bias": ("mg", 1e3 / G0), "gyro_bias": ("deg/h", 3600 / DEG), "a
 
 
 def _options(ctx: LabContext) -> dict[str, Any]:
-    o = dict(_DEFAULTS)
-    given = ctx.options
-    bad = set(given) - set(_DEFAULTS)
-    if bad:
-        raise ConfigError(f"[temperature]: unknown option(s) {sorted(bad)}; allowed: {sorted(_DEFAULTS)}")
-    o.update(given)
+    o = ctx.step_options(_DEFAULTS, positive=("fs", "dwell_s", "transition_s"))
     t = o["temps_c"]
     if not isinstance(t, list) or len(t) < 3 or not all(isinstance(x, (int, float)) for x in t):
         raise ConfigError(f"[temperature] temps_c must be a list of at least 3 temperatures (°C), got {t!r}")
     if len(set(t)) != len(t):
         raise ConfigError("[temperature] temps_c has repeated temperatures")
-    for k in ("fs", "dwell_s", "transition_s"):
-        if not isinstance(o[k], (int, float)) or o[k] <= 0:
-            raise ConfigError(f"[temperature] {k} must be a positive number, got {o[k]!r}")
     if o["dwell_s"] < 4.0:
         raise ConfigError(f"[temperature] dwell_s must be at least 4 s (static detector), got {o['dwell_s']}")
     if not o["orders"] or max(o["orders"]) >= len(t) - 1:
@@ -110,18 +103,11 @@ def _calibrate_at(ctx: LabContext, model: Any, temp: float, opts: dict, profiles
     return res.calibration.with_(stderr=dict(res.stderr)), dict(res.stderr)
 
 
+@fill_doc(step="temperature")
 def run(ctx: LabContext) -> StepResult:
     """Run the step: see the module docstring for what it computes, its options, artifacts and files.
 
-    Parameters
-    ----------
-    ctx : LabContext
-        The lab's context: the step's option table ``ctx.options`` (``[temperature]``), the artifacts it reads and
-        sets, the report folder.
-
-    Returns
-    -------
-    StepResult
+    %(lab_step_run)s
         Fitted bias and scale-factor temperature curves against the truth; passed when within 4 sigma.
 
     Raises
@@ -233,17 +219,11 @@ def _figures(ctx: LabContext, thermal: Any, model: Any, temps: np.ndarray, tt: n
     return [path]
 
 
+@fill_doc
 def report(section: Any, result: StepResult, ctx: LabContext) -> None:
     """Add the step's tables and figures to its section of the HTML report.
 
-    Parameters
-    ----------
-    section : imunav.report.html.Section
-        The step's section.
-    result : StepResult
-        What :func:`run` returned.
-    ctx : LabContext
-        The lab's context (its ``[spec]`` and artifacts).
+    %(lab_step_report)s
     """
     for f in result.figures:
         embed_png(section, f, "Bias and scale factor against temperature: estimates, fitted curves and truth")

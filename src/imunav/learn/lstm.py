@@ -69,7 +69,7 @@ from imunav.ins.lstm import (
 )
 from imunav.ins.metrics import error_2d
 from imunav.ins.statistics import detector_statistic
-from imunav.ins.zupt import run_zupt
+from imunav.ins.zupt import ZuptFilter
 from imunav.results import Result
 from imunav.rotation import quat_conjugate, quat_rotate
 
@@ -220,7 +220,7 @@ def time_warp(x: Array, gravity_body: Array, factor: float, start: float = 0.0,
 
 def gravity_in_body(data: Any, stance: Any, g: float = 9.80665) -> Array:
     """Accelerometer reading at rest ``f_g = −Rᵀ (0, 0, g)`` per sample (N, 3), ``R`` from the ZUPT INS
-    (:func:`imunav.ins.run_zupt`) run with the stance flags ``stance``.
+    (:meth:`imunav.ins.ZuptFilter.run`) run with the stance flags ``stance``.
 
     Parameters
     ----------
@@ -237,7 +237,7 @@ def gravity_in_body(data: Any, stance: Any, g: float = 9.80665) -> Array:
         ``f_g`` in the body frame, m/s² (``(0, 0, −g)`` for a level sensor).
     """
 
-    q = run_zupt(data, np.asarray(stance, dtype=bool)).q_nb
+    q = ZuptFilter().run(data, np.asarray(stance, dtype=bool)).q_nb
     return quat_rotate(quat_conjugate(q), np.broadcast_to(np.array([0.0, 0.0, -g]), (q.shape[0], 3)))
 
 
@@ -481,7 +481,7 @@ def select_shoe_threshold(trials: Sequence[Any], grid: Any = None, config: Any =
         if tr.position is None:
             raise InvalidInputError(f"trial {tr.name!r} has no reference position to score SHOE thresholds")
         T = detector_statistic(tr.imu, "shoe")
-        E += [error_2d(run_zupt(tr.imu, T < x, config).position, tr.position) for x in g]
+        E += [error_2d(ZuptFilter(config).run(tr.imu, T < x).position, tr.position) for x in g]
     E /= len(trials)
     return float(g[int(np.argmin(E))]), E
 
@@ -524,7 +524,7 @@ def best_labels(trial: Any, detectors: Sequence[str] = ("shoe", "ared", "amvd", 
     for name in detectors:
         if name not in trial.labels:
             continue
-        e = error_2d(run_zupt(trial.imu, trial.labels[name], config).position, trial.position)
+        e = error_2d(ZuptFilter(config).run(trial.imu, trial.labels[name]).position, trial.position)
         if e < best[0]:
             best = (e, name, trial.labels[name])
     if best[2] is None:

@@ -102,11 +102,7 @@ def diff_sums(x, ms, order, overlapping):  # pragma: no cover - numba
                         v = x[i + 3 * m] - 3.0 * x[i + 2 * m] + 3.0 * x[i + m] - x[i]
                         s += v * v
             part[b, j] = s
-    out = np.zeros(nt)
-    # pairwise-ish reduction over blocks (each partial is already O(BLOCK) terms)
-    for j in range(nt):
-        out[j] = _pairwise_sum(part[:, j].copy())
-    return out
+    return _column_sums(part)
 
 
 @njit(cache=True)
@@ -122,6 +118,15 @@ def _pairwise_sum(a):  # pragma: no cover - numba
         else:
             n = h
     return a[0] if a.size > 0 else 0.0
+
+
+@njit(cache=True)
+def _column_sums(part):  # pragma: no cover - numba
+    # pairwise-ish reduction over blocks of each column (each partial is already O(BLOCK) terms)
+    out = np.zeros(part.shape[1])
+    for j in range(part.shape[1]):
+        out[j] = _pairwise_sum(part[:, j].copy())
+    return out
 
 
 @njit(parallel=True, cache=True, fastmath=True)
@@ -191,10 +196,7 @@ def tot_sums(x, ms):  # pragma: no cover - numba
                     v = _refl(x, i - m, n) - 2.0 * x[i] + _refl(x, i + m, n)
                 s += v * v
             part[b, j] = s
-    out = np.zeros(nt)
-    for j in range(nt):
-        out[j] = _pairwise_sum(part[:, j].copy())
-    return out
+    return _column_sums(part)
 
 
 @njit(cache=True)

@@ -23,8 +23,8 @@ from functools import lru_cache
 
 import numpy as np
 from scipy.special import comb
-from scipy.stats import chi2
 
+from imunav._quantiles import chi2_ppf
 from imunav.noise._allan_kernels import detrend_quadratic, lag1_acf
 
 __all__ = ["edf_greenhall", "edf_totdev", "noise_id_lag1", "chi2_interval", "ONE_SIGMA"]
@@ -277,6 +277,6 @@ def chi2_interval(dev: np.ndarray, edf: np.ndarray, ci: float) -> tuple[np.ndarr
     dev = np.asarray(dev, dtype=float)
     edf = np.asarray(edf, dtype=float)
     with np.errstate(invalid="ignore", divide="ignore"):
-        lo = dev * np.sqrt(edf / chi2.ppf(0.5 + ci / 2.0, edf))
-        hi = dev * np.sqrt(edf / chi2.ppf(0.5 - ci / 2.0, edf))
+        lo = dev * np.sqrt(edf / chi2_ppf(0.5 + ci / 2.0, edf))
+        hi = dev * np.sqrt(edf / chi2_ppf(0.5 - ci / 2.0, edf))
     return lo, hi

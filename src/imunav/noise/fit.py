@@ -264,11 +264,7 @@ class NoiseFit(Result):
     def get(self, name: str, channel: int = 0) -> float:
         """One fitted value, SI.
 
-        %(fit_get_params)s
-
-        Returns
-        -------
-        float
+        %(fit_get_returns)s
             The estimate, in the SI unit of that term.
 
         Raises

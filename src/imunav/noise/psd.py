@@ -282,11 +282,7 @@ class PsdFit(Result):
     def get(self, name: str, channel: int = 0) -> float:
         """One fitted value, SI.
 
-        %(fit_get_params)s
-
-        Returns
-        -------
-        float
+        %(fit_get_returns)s
             The estimate.
         """
         return float(self.value[self.names.index(name), channel])

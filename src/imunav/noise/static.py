@@ -53,8 +53,8 @@ from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
-from scipy.stats import chi2
 
+from imunav._quantiles import chi2_isf
 from imunav.errors import InvalidInputError, NotStaticError
 from imunav.io._atomic import jsonable
 from imunav.results import Result
@@ -134,7 +134,7 @@ def _window_test(x: np.ndarray, w: int, k: int, alpha: float) -> tuple[np.ndarra
     d = np.linalg.norm(means - np.median(means, axis=0), axis=1)
     s0 = _sigma0(x)
     s = float(s0.max()) * math.sqrt(1.0 / w + math.pi / (2.0 * k * w))
-    limit = s * math.sqrt(float(chi2.isf(alpha / k, 3)))
+    limit = s * math.sqrt(float(chi2_isf(alpha / k, 3)))
     # Allan deviation at tau0 (sigma0) and at the window (non-overlapping window means): slope in log-log
     adev_w = np.sqrt(0.5 * np.mean(np.diff(means, axis=0) ** 2, axis=0))
     with np.errstate(divide="ignore", invalid="ignore"):

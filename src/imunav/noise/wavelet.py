@@ -35,6 +35,7 @@ import pywt
 from numba import njit
 from numpy.typing import ArrayLike, NDArray
 
+from imunav._docstrings import fill_doc
 from imunav.errors import InsufficientDataError, InvalidInputError, NonFiniteError, ShapeError
 from imunav.noise.allan import check_rows_are_samples
 from imunav.results import Result
@@ -275,13 +276,11 @@ class HybridComparison(Result):
     r_hybrid: float
     level: int
 
+    @fill_doc
     def to_dict(self) -> dict[str, Any]:
         """JSON-ready dictionary of the comparison.
 
-        Returns
-        -------
-        dict
-            The attributes by name.
+        %(to_dict_attributes)s
         """
         return dict(self.__dict__)
 

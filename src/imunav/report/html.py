@@ -23,6 +23,7 @@ import numpy as np
 import pandas as pd
 
 from imunav import __version__
+from imunav._docstrings import fill_doc
 from imunav.io._atomic import atomic_path
 
 __all__ = ["Report", "Section", "Parameter"]
@@ -119,6 +120,7 @@ class Section:
     passed: bool | None = None
     _parts: list[str] = field(default_factory=list)
 
+    @fill_doc
     def text(self, paragraph: str) -> "Section":
         """A paragraph of plain text (escaped).
 
@@ -127,14 +129,12 @@ class Section:
         paragraph : str
             The text.
 
-        Returns
-        -------
-        Section
-            ``self``, so that calls chain.
+        %(section_chain_returns)s
         """
         self._parts.append(f"<p>{html.escape(paragraph)}</p>")
         return self
 
+    @fill_doc
     def code(self, text: str) -> "Section":
         """Preformatted text (a command line, a configuration).
 
@@ -143,14 +143,12 @@ class Section:
         text : str
             The text (escaped).
 
-        Returns
-        -------
-        Section
-            ``self``, so that calls chain.
+        %(section_chain_returns)s
         """
         self._parts.append(f"<pre>{html.escape(text)}</pre>")
         return self
 
+    @fill_doc
     def table(
         self,
         rows: Sequence[Mapping[str, Any]] | Any,
@@ -171,10 +169,7 @@ class Section:
         digits : int
             Significant digits of floats.
 
-        Returns
-        -------
-        Section
-            ``self``, so that calls chain.
+        %(section_chain_returns)s
         """
         if isinstance(rows, pd.DataFrame):
             df = rows.reset_index() if rows.index.name or not isinstance(rows.index, pd.RangeIndex) else rows
@@ -197,6 +192,7 @@ class Section:
         self._parts.append(f"<table>{cap}<thead><tr>{head}</tr></thead><tbody>{''.join(body)}</tbody></table>")
         return self
 
+    @fill_doc
     def parameters(self, params: Iterable[Parameter], caption: str | None = None) -> "Section":
         """Table of parameters: value ± 1σ, unit, truth (if known), error in σ, limit, verdict.
 
@@ -207,10 +203,7 @@ class Section:
         caption : str, optional
             Caption shown under it.
 
-        Returns
-        -------
-        Section
-            ``self``, so that calls chain.
+        %(section_chain_returns)s
         """
         rows = []
         for p in params:
@@ -239,6 +232,7 @@ class Section:
         ).replace("<td>–</td></tr>", f"<td>{_verdict(None)}</td></tr>")
         return self
 
+    @fill_doc
     def figure(self, fig: Any, caption: str | None = None, dpi: int = 110) -> "Section":
         """Embed a matplotlib figure as a PNG (the figure is closed afterwards).
 
@@ -251,10 +245,7 @@ class Section:
         dpi : int
             Resolution, dots per inch.
 
-        Returns
-        -------
-        Section
-            ``self``, so that calls chain.
+        %(section_chain_returns)s
         """
         # optional: matplotlib loads only when a figure is drawn (import time of imunav and its CLI)
         import matplotlib.pyplot as plt
@@ -268,6 +259,7 @@ class Section:
         self._parts.append(f'<figure><img alt="{alt}" src="data:image/png;base64,{data}">{cap}</figure>')
         return self
 
+    @fill_doc
     def image(self, path: str | Path, caption: str | None = None) -> "Section":
         """Embed a PNG file (e.g. a figure a step already saved).
 
@@ -278,10 +270,7 @@ class Section:
         caption : str, optional
             Caption shown under it.
 
-        Returns
-        -------
-        Section
-            ``self``, so that calls chain.
+        %(section_chain_returns)s
         """
         data = base64.b64encode(Path(path).read_bytes()).decode("ascii")
         cap = f"<figcaption>{html.escape(caption)}</figcaption>" if caption else ""
@@ -376,6 +365,7 @@ class Report:
             f"<nav><ul>{toc}</ul></nav>{body}</body></html>"
         )
 
+    @fill_doc
     def write(self, path: str | Path) -> Path:
         """Write the report atomically.
 
@@ -384,10 +374,7 @@ class Report:
         path : str or pathlib.Path
             Output file (``.html``).
 
-        Returns
-        -------
-        pathlib.Path
-            The file written.
+        %(returns_file_written)s
         """
 
         p = Path(path)

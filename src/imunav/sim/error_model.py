@@ -59,6 +59,7 @@ from scipy.optimize import nnls
 
 from imunav import allan_models as _am
 from imunav import units as _units
+from imunav._docstrings import fill_doc
 from imunav.errors import (
     ConfigError,
     FileFormatError,
@@ -307,17 +308,11 @@ class GaussMarkov:
         """
         return self.sigma[None, :].copy(), self.tau[None, :].copy()
 
+    @fill_doc
     def allan_variance(self, tau: ArrayLike) -> NDArray[np.float64]:
         """Closed-form Allan variance, shape (3, len(tau)).
 
-        Parameters
-        ----------
-        tau : array_like
-            Averaging times, s.
-
-        Returns
-        -------
-        numpy.ndarray, shape (3, len(tau))
+        %(allan_tau_returns)s
             sigma_A^2 per axis (:func:`allan_variance_gauss_markov`).
         """
         return np.stack([allan_variance_gauss_markov(tau, s, t) for s, t in zip(self.sigma, self.tau)])
@@ -429,17 +424,11 @@ class Flicker:
         sig = np.sqrt(w)[:, None] * self.b[None, :]
         return sig, np.repeat(t_c[:, None], 3, axis=1)
 
+    @fill_doc
     def allan_variance(self, tau: ArrayLike) -> NDArray[np.float64]:
         """Closed-form Allan variance of the generated GM sum, shape (3, len(tau)).
 
-        Parameters
-        ----------
-        tau : array_like
-            Averaging times, s.
-
-        Returns
-        -------
-        numpy.ndarray, shape (3, len(tau))
+        %(allan_tau_returns)s
             Sum over the components of :func:`allan_variance_gauss_markov`, per axis.
         """
         sig, tc = self.components()
@@ -609,16 +598,11 @@ class TriadErrors:
             or (self.bias_instability is not None and np.any(self.bias_instability.components()[0] > 0))
         )
 
+    @fill_doc
     def replace(self, **changes: Any) -> TriadErrors:
         """Copy with some fields changed (validated again).
 
-        Parameters
-        ----------
-        **changes
-            New values of fields.
-
-        Returns
-        -------
+        %(replace_changes)s
         TriadErrors
             The copy.
         """
@@ -923,16 +907,11 @@ class ImuErrorModel:
         """
         return replace(self, gyro=self.gyro.deterministic(), accel=self.accel.deterministic())
 
+    @fill_doc
     def replace(self, **changes: Any) -> ImuErrorModel:
         """Copy with some fields changed (``dataclasses.replace``).
 
-        Parameters
-        ----------
-        **changes
-            New values of fields.
-
-        Returns
-        -------
+        %(replace_changes)s
         ImuErrorModel
             The copy (validated again).
         """
@@ -1006,13 +985,11 @@ class ImuErrorModel:
         return cls(**kw)
 
     @classmethod
+    @fill_doc
     def from_toml(cls, path: str | os.PathLike[str]) -> ImuErrorModel:
         """Read a TOML error model (layout of :meth:`to_dict`).
 
-        Parameters
-        ----------
-        path : str or os.PathLike
-            The TOML file.
+        %(toml_path)s
 
         Returns
         -------

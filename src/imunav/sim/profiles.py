@@ -190,20 +190,13 @@ class Segments:
         """
         return {f.name: getattr(self, f.name).tolist() for f in fields(self)}
 
+    @fill_doc
     def write_csv(self, path: str | os.PathLike[str]) -> Path:
         """Write the table as CSV (atomically).
 
         One row per segment, rates and angles in degrees, ``up``/``axis``/``q`` split into columns.
 
-        Parameters
-        ----------
-        path : str or os.PathLike
-            Output file.
-
-        Returns
-        -------
-        pathlib.Path
-            The file written.
+        %(write_path_returns)s
         """
 
         cols = ["kind", "step", "t_start", "t_stop", "i_start", "i_stop", "up_x", "up_y", "up_z",
@@ -652,10 +645,7 @@ def static_profile(
         Sample rate, Hz.
     orientation : array_like, shape (4,), optional
         Attitude ``q_nb`` (default level, heading north).
-    %(profile_position)s
-    t0 : float
-        Time of the first sample, s.
-    %(profile_returns)s
+    %(profile_t0_returns)s
 
     Raises
     ------
@@ -749,22 +739,10 @@ def hundred_position_profile(
 ) -> Profile:
     """The 100-position static test (Günhan 2014, §4.1.1): 30 s per position by default.
 
-    Parameters
-    ----------
-    fs : float
-        Sample rate, Hz.
-    dwell_s : float
-        Static time per position, s.
-    transition_s : float
-        Duration of each move, s.
+    %(profile_static_params)s
     step_deg : float
         Turn between consecutive positions, degrees.
-    %(profile_position)s
-
-    Returns
-    -------
-    Profile
-        The trajectory (exact body rates) and its segment table.
+    %(profile_position_returns)s
     """
     return multiposition_profile(
         hundred_position_orientations(step_deg), dwell_s, fs, transition_s, lat=lat, lon=lon, h=h,
@@ -784,20 +762,8 @@ def six_position_profile(
 ) -> Profile:
     """The six-position test (Günhan 2014, Appendix A): each axis up then down.
 
-    Parameters
-    ----------
-    fs : float
-        Sample rate, Hz.
-    dwell_s : float
-        Static time per position, s.
-    transition_s : float
-        Duration of each move, s.
-    %(profile_position)s
-
-    Returns
-    -------
-    Profile
-        The trajectory (exact body rates) and its segment table.
+    %(profile_static_params)s
+    %(profile_position_returns)s
     """
     return multiposition_profile(
         six_position_orientations(), dwell_s, fs, transition_s, lat=lat, lon=lon, h=h, name="six_position"
@@ -852,16 +818,10 @@ def rate_table_profile(
     fs : float
         Sample rate, Hz.
 
-    transition_s : float
-        Duration of each rate ramp, s.
-    remount_s : float
-        Duration of the re-mounting move when the axis changes, s.
+    %(profile_rate_moves)s
     mounting : {"up", "down"}
         Direction of the commanded body axis along the vertical table axis.
-    %(profile_position)s
-    t0 : float
-        Time of the first sample, s.
-    %(profile_returns)s
+    %(profile_t0_returns)s
 
     Raises
     ------
@@ -952,18 +912,10 @@ def thesis_rate_table_profile(
         Sample rate, Hz.
     dwell_s : float
         Time at each constant rate, s.
-    transition_s : float
-        Duration of each rate ramp, s.
-    remount_s : float
-        Duration of the re-mounting move when the axis changes, s.
+    %(profile_rate_moves)s
     mounting : {"up", "down"}
         Direction of the commanded body axis along the table axis.
-    %(profile_position)s
-
-    Returns
-    -------
-    Profile
-        The trajectory (exact body rates) and its segment table.
+    %(profile_position_returns)s
     """
     rates, axes = thesis_rate_steps()
     return rate_table_profile(
@@ -1004,12 +956,7 @@ def ferraris_profile(
         Duration of each turn, s.
     angle : float
         Turn angle, rad.
-    %(profile_position)s
-
-    Returns
-    -------
-    Profile
-        The trajectory (exact body rates) and its segment table.
+    %(profile_position_returns)s
     """
     rs = _positive(rotation_s, "rotation_s")
     tr = _positive(transition_s, "transition_s")

@@ -29,6 +29,7 @@ from scipy.interpolate import CubicSpline
 from scipy.spatial.transform import Rotation, RotationSpline
 
 from imunav import earth
+from imunav._docstrings import fill_doc
 from imunav.errors import InvalidInputError, NonFiniteError, ShapeError, TimeOrderError
 from imunav.rotation import (
     dcm_from_quat,
@@ -166,6 +167,7 @@ class Trajectory:
 # ---------------------------------------------------------------------------
 
 
+@fill_doc
 def body_rate_from_attitude(t: ArrayLike, q_nb: ArrayLike) -> Array:
     """Body rate ``ω_nb^b`` (rad/s) of a sampled attitude by central differences.
 
@@ -178,12 +180,7 @@ def body_rate_from_attitude(t: ArrayLike, q_nb: ArrayLike) -> Array:
     interval (first order).  Pass exact rates to :class:`Trajectory` where the
     motion is known analytically.
 
-    Parameters
-    ----------
-    t : array_like, shape (N,)
-        Strictly increasing time, s.
-    q_nb : array_like, shape (N, 4)
-        Attitude, body (FRD) to NED.
+    %(traj_t_q_nb)s
 
     Returns
     -------
@@ -367,6 +364,7 @@ def _fixed_position(n: int, lat: float | None, lon: float, h: float) -> Array | 
     return np.tile(np.array([lat, lon, h], dtype=float), (n, 1))
 
 
+@fill_doc
 def trajectory_from_attitude(
     t: ArrayLike,
     q_nb: ArrayLike,
@@ -381,12 +379,7 @@ def trajectory_from_attitude(
     ``omega_nb_b`` is derived from ``q_nb`` (:func:`body_rate_from_attitude`)
     unless given; ``lat``/``lon`` (rad) and ``h`` (m) set a constant position.
 
-    Parameters
-    ----------
-    t : array_like, shape (N,)
-        Strictly increasing time, s.
-    q_nb : array_like, shape (N, 4)
-        Attitude, body (FRD) to NED.
+    %(traj_t_q_nb)s
     omega_nb_b : array_like, shape (N, 3), optional
         Exact body rate relative to NED, rad/s.
     lat : float, optional

@@ -39,6 +39,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from imunav import earth
+from imunav._docstrings import fill_doc
 from imunav.errors import InvalidInputError, ShapeError
 from imunav.rotation import dcm_from_quat, quat_from_euler
 from imunav.sim.trajectory import Trajectory, body_rate_from_attitude
@@ -113,22 +114,19 @@ class Maneuver:
                 )
 
 
+@fill_doc
 def straight(duration_s: float) -> Maneuver:
     """Constant speed and heading for ``duration_s`` seconds.
 
     Parameters
     ----------
-    duration_s : float
-        Length, s (> 0).
-
-    Returns
-    -------
-    Maneuver
+    %(maneuver_duration_returns)s
         A ``"straight"`` manoeuvre.
     """
     return Maneuver("straight", float(duration_s))
 
 
+@fill_doc
 def speed_change(to_speed: float, duration_s: float) -> Maneuver:
     """Accelerate (or brake) smoothly to ``to_speed`` m/s over ``duration_s`` s.
 
@@ -138,17 +136,13 @@ def speed_change(to_speed: float, duration_s: float) -> Maneuver:
     ----------
     to_speed : float
         Speed at the end, m/s (>= 0; checked by :func:`vehicle_trajectory`).
-    duration_s : float
-        Length, s (> 0).
-
-    Returns
-    -------
-    Maneuver
+    %(maneuver_duration_returns)s
         A ``"speed"`` manoeuvre.
     """
     return Maneuver("speed", float(duration_s), to_speed=float(to_speed))
 
 
+@fill_doc
 def turn(angle_deg: float, duration_s: float) -> Maneuver:
     """Change heading by ``angle_deg`` (positive: to the right) over ``duration_s`` s at the current speed.
 
@@ -158,29 +152,20 @@ def turn(angle_deg: float, duration_s: float) -> Maneuver:
     ----------
     angle_deg : float
         Heading change, degrees (positive: clockwise seen from above, to the right).
-    duration_s : float
-        Length, s (> 0).
-
-    Returns
-    -------
-    Maneuver
+    %(maneuver_duration_returns)s
         A ``"turn"`` manoeuvre (``dheading`` in rad).
     """
     return Maneuver("turn", float(duration_s), dheading=float(angle_deg) * DEG)
 
 
+@fill_doc
 def stop(duration_s: float) -> Maneuver:
     """Stand still for ``duration_s`` s (the speed reached so far must be zero: brake first with
     :func:`speed_change`).
 
     Parameters
     ----------
-    duration_s : float
-        Length, s (> 0).
-
-    Returns
-    -------
-    Maneuver
+    %(maneuver_duration_returns)s
         A ``"stop"`` manoeuvre.
     """
     return Maneuver("stop", float(duration_s))
@@ -563,6 +548,7 @@ def _decimate(truth: Trajectory, rate_hz: float | None) -> Array:
     return np.arange(0, truth.n, step)
 
 
+@fill_doc
 def simulate_odometer(
     truth: Trajectory,
     *,
@@ -586,8 +572,7 @@ def simulate_odometer(
         White-noise σ of each sample, m/s (>= 0).
     rate_hz : float, optional
         Output rate, Hz, at most the truth rate (default: every truth sample).
-    rng : numpy.random.Generator or int, optional
-        Random generator or seed.
+    %(sim_rng)s
 
     Returns
     -------
@@ -610,6 +595,7 @@ def simulate_odometer(
     return OdometerData(truth.t[idx].copy(), speed, meta)
 
 
+@fill_doc
 def simulate_baro(
     truth: Trajectory,
     *,
@@ -634,8 +620,7 @@ def simulate_baro(
         Correlation time of the bias, s (> 0; ``inf``: a constant bias).
     rate_hz : float, optional
         Output rate, Hz, at most the truth rate (None: every truth sample).
-    rng : numpy.random.Generator or int, optional
-        Random generator or seed.
+    %(sim_rng)s
 
     Returns
     -------
