@@ -17,14 +17,21 @@ the other, with their ratio.
 
 Times are CPU seconds of this process (time.process_time): the figures hold on a shared, loaded machine.
 
+With ``--outages``: also the outage protocol of :mod:`imunav.ins.outage` (60 s outages every 180 s after
+``--converge`` s, first outage shifted by 0, 60 and 120 s) on the same IMU and GNSS, through both filters, and the
+RMS over outages of the per-outage maximum horizontal, vertical and 3-D drift and attitude errors of each
+(:func:`imunav.ins.outage.outage_drift` on both tracks; pyins costs about 4 filter runs more).
+
 Run:  PYTHONPATH=src python benchmarks/bench_gins_pyins.py [--duration 600] [--preset mems_adis16465] [--seed 1]
+      [--outages [--converge 300]]
 """
 
 from __future__ import annotations
 
 import argparse
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
+from types import SimpleNamespace
 
 import numpy as np
 
@@ -114,8 +121,9 @@ def _pyins_sensor(te: TriadErrors):
     return bias_sd, te.noise_density, bias_walk, scale_sd
 
 
-def run_pyins(sc: Scenario) -> dict:
-    """pyins' feedback EKF on the scenario: errors and µs per IMU sample (pyins is imported here: a peer)."""
+def run_pyins(sc: Scenario, *, track: bool = False) -> dict:
+    """pyins' feedback EKF on the scenario: errors and µs per IMU sample (pyins is imported here: a peer);
+    with ``track`` also its track (``t``, ``lla``, ``q_nb``, ``euler()``, ``cov_t``, ``cov_diag``) under "track"."""
     import pandas as pd  # pyins works on DataFrames
     from pyins import filters, inertial_sensor, measurements, strapdown  # optional peer (test extra)
     from pyins.util import ACCEL_COLS, GYRO_COLS, LLA_COLS, RPH_COLS, VEL_COLS
@@ -145,21 +153,57 @@ def run_pyins(sc: Scenario) -> dict:
     q = quat_from_euler(np.radians(tr[RPH_COLS].to_numpy()))
     out = nav_errors(sc.truth, tr.index.to_numpy(), lla, tr[VEL_COLS].to_numpy(), q)
     out["us_per_sample"] = wall / sc.imu.t.size * 1e6
+    if track:
+        sd = res.trajectory_sd
+        cov = np.zeros((len(sd), 21))
+        cov[:, 0:3] = sd[["north", "east", "down"]].to_numpy() ** 2
+        out["track"] = SimpleNamespace(t=tr.index.to_numpy(), lla=lla, q_nb=q, euler=lambda: euler_from_quat(q),
+                                       cov_t=sd.index.to_numpy(), cov_diag=cov)
     return out
 
 
-def run_imunav(sc: Scenario, *, scale_factors: bool = True) -> dict:
-    """imunav's GNSS/INS filter (:func:`imunav.ins.gins.run_gins`, 21 states) on the scenario; the time is that of
-    a second call (the first compiles the numba kernels, cached on disk afterwards)."""
-    from imunav.ins.gins import GinsConfig, run_gins
+def outages(sc: Scenario, converge_s: float) -> dict:
+    """The outage protocol (60 s every 180 s, shifts 0 / 60 / 120 s) through both filters on the same data."""
+    from imunav.ins.gins import GinsFilter
+    from imunav.ins.outage import OutageReport, outage_drift
+    from imunav.sim.gnss import outage_schedule
 
-    cfg = GinsConfig.from_preset(sc.preset, lever_arm=LEVER_ARM, scale_factors=scale_factors,
-                                 init_pos_std=INIT_SD["pos"], init_vel_std=INIT_SD["vel"],
-                                 init_att_std=np.radians([INIT_SD["level_deg"], INIT_SD["level_deg"],
-                                                          INIT_SD["azimuth_deg"]]))
-    run_gins(sc.imu, sc.gnss, cfg, lla0=sc.lla0, vel0=sc.vel0, q0=sc.q0)
+    cfg = _imunav_config(sc)
+    reps: dict[str, list] = {"pyins": [], "imunav": []}
+    t0, t1 = float(sc.imu.t[0]), float(sc.imu.t[-1])
+    for shift in (0.0, 60.0, 120.0):
+        sched = outage_schedule(t0 + converge_s, t1, every_s=180.0, length_s=60.0, first_s=shift)
+        keep = np.ones(sc.gnss.n, dtype=bool)
+        for s, d in sched:
+            keep &= ~((sc.gnss.t >= s) & (sc.gnss.t < s + d))
+        cut = replace(sc, gnss=sc.gnss.select(keep, "outage protocol"))
+        res = GinsFilter(cfg).run(cut.imu, cut.gnss, lla0=sc.lla0, vel0=sc.vel0, q0=sc.q0)
+        reps["imunav"].append(outage_drift(res, sc.truth, sched))
+        reps["pyins"].append(outage_drift(run_pyins(cut, track=True)["track"], sc.truth, sched))
+    keys = ("horizontal_m", "vertical_m", "drift_3d_m", "roll_deg", "pitch_deg", "heading_deg", "contained")
+    return {name: OutageReport([o for r in rs for o in r.outages],
+                               *(np.concatenate([getattr(r, k) for r in rs]) for k in keys)).rms()
+            for name, rs in reps.items()}
+
+
+def _imunav_config(sc: Scenario, scale_factors: bool = True):
+    from imunav.ins.gins import GinsConfig
+
+    return GinsConfig.from_preset(sc.preset, lever_arm=LEVER_ARM, scale_factors=scale_factors,
+                                  init_pos_std=INIT_SD["pos"], init_vel_std=INIT_SD["vel"],
+                                  init_att_std=np.radians([INIT_SD["level_deg"], INIT_SD["level_deg"],
+                                                           INIT_SD["azimuth_deg"]]))
+
+
+def run_imunav(sc: Scenario, *, scale_factors: bool = True) -> dict:
+    """imunav's GNSS/INS filter (:class:`imunav.ins.gins.GinsFilter`, 21 states) on the scenario; the time is that of
+    a second call (the first compiles the numba kernels, cached on disk afterwards)."""
+    from imunav.ins.gins import GinsFilter
+
+    cfg = _imunav_config(sc, scale_factors)
+    GinsFilter(cfg).run(sc.imu, sc.gnss, lla0=sc.lla0, vel0=sc.vel0, q0=sc.q0)
     t0 = time.process_time()
-    res = run_gins(sc.imu, sc.gnss, cfg, lla0=sc.lla0, vel0=sc.vel0, q0=sc.q0)
+    res = GinsFilter(cfg).run(sc.imu, sc.gnss, lla0=sc.lla0, vel0=sc.vel0, q0=sc.q0)
     wall = time.process_time() - t0
     out = nav_errors(sc.truth, res.t, res.lla, res.vel_ned, res.q_nb)
     out["us_per_sample"] = wall / sc.imu.t.size * 1e6
@@ -177,6 +221,8 @@ def main() -> None:
     ap.add_argument("--preset", default="mems_adis16465", help="IMU preset (imunav.sim.presets)")
     ap.add_argument("--seed", type=int, default=1)
     ap.add_argument("--fs", type=float, default=100.0, help="IMU rate, Hz")
+    ap.add_argument("--outages", action="store_true", help="also the outage protocol through both filters")
+    ap.add_argument("--converge", type=float, default=300.0, help="convergence before the first outage, s")
     a = ap.parse_args()
     sc = make_scenario(a.duration, a.preset, a.seed, a.fs)
     print(f"drive {a.duration:.0f} s, {sc.imu.t.size} IMU samples at {a.fs:g} Hz, preset {a.preset}, "
@@ -188,9 +234,24 @@ def main() -> None:
     print(f"{'':8s}" + "".join(f"{h:>28s}" for h in head))
     for name, cells in rows.items():
         print(f"{name:8s}" + "".join(f"{c:>28s}" for c in cells))
-    print(f"imunav is {peer['us_per_sample'] / ours['us_per_sample']:.0f}x faster per IMU sample; "
-          f"3-D position RMSE {np.linalg.norm(ours['pos_rmse_ned_m']):.3f} m (imunav) vs "
-          f"{np.linalg.norm(peer['pos_rmse_ned_m']):.3f} m (pyins)")
+    print(f"imunav is {peer['us_per_sample'] / ours['us_per_sample']:.0f}x faster per IMU sample (acceptance >= 20)")
+    for key, name, unit in (("pos_rmse_ned_m", "position", "m"), ("vel_rmse_ned_mps", "velocity", "m/s"),
+                            ("att_rmse_rpy_deg", "attitude", "deg")):
+        x, y = np.linalg.norm(ours[key]), np.linalg.norm(peer[key])
+        print(f"{name:9s} RMSE (norm of the axes): imunav {x:.4f} {unit}, pyins {y:.4f} {unit}, "
+              f"ratio imunav / pyins {x / y:.3f} (acceptance <= 1)")
+    if a.outages:
+        rms = outages(sc, a.converge)
+        print(f"outage protocol (60 s every 180 s after {a.converge:g} s, shifts 0 / 60 / 120 s): "
+              f"{rms['imunav']['n_outages']} outages; RMS over outages of the per-outage maximum")
+        print(f"{'':14s}" + "".join(f"{k:>14s}" for k in ("horizontal_m", "vertical_m", "3d_m", "roll_deg",
+                                                         "pitch_deg", "heading_deg")))
+        for name in ("pyins", "imunav"):
+            r = rms[name]
+            print(f"{name:14s}" + "".join(f"{r[k]:>14.4f}" for k in ("horizontal_m", "vertical_m", "3d_m",
+                                                                     "roll_deg", "pitch_deg", "heading_deg")))
+        print("drift ratio imunav / pyins (acceptance <= 1): " + ", ".join(
+            f"{k} {rms['imunav'][k] / rms['pyins'][k]:.3f}" for k in ("horizontal_m", "vertical_m", "3d_m")))
 
 
 if __name__ == "__main__":

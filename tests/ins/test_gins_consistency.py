@@ -16,7 +16,7 @@ import pytest
 from scipy.stats import chi2
 
 from imunav import earth
-from imunav.ins.gins import GinsConfig, run_gins
+from imunav.ins.gins import GinsConfig, GinsFilter
 from imunav.io.gnss import GnssData
 from imunav.rotation import quat_conjugate, quat_from_rotvec, quat_multiply, rotvec_from_quat
 from imunav.sim import apply_errors, ideal_imu
@@ -62,7 +62,7 @@ def _run(truth, seed):
                             -dr[2]]
     v0 = tr.vel_ned[0] - CFG.init_vel_std * rng.standard_normal(3)
     q0 = quat_multiply(quat_from_rotvec(-CFG.init_att_std * rng.standard_normal(3)), tr.q_nb[0])
-    res = run_gins(imu, gnss, CFG, lla0=lla0, vel0=v0, q0=q0)
+    res = GinsFilter(CFG).run(imu, gnss, lla0=lla0, vel0=v0, q0=q0)
     return res, et, (sg, sa)
 
 
@@ -107,7 +107,8 @@ def monte_carlo(truth):
 def test_nees_of_position_velocity_attitude_in_the_95_band(monte_carlo):
     """Mean NEES over the runs at each second lies in the two-sided 95 % chi^2(3R)/R band for >= 90 % of the
     epochs (about 5 % outside is expected by construction; epochs are correlated, so the margin is generous),
-    and its average over the drive lies within +-10 % of 3."""
+    and its average over the drive lies within +-10 % of 3.  The bounds are tight enough to catch a filter
+    whose reported sigma is 1.5 times too large: the same statistic on NEES / 1.5^2 fails."""
     nees, _, _ = monte_carlo
     lo, hi = chi2.ppf([0.025, 0.975], 3 * RUNS) / RUNS
     anees = nees.mean(axis=0)  # (3 blocks, epochs)
@@ -115,6 +116,8 @@ def test_nees_of_position_velocity_attitude_in_the_95_band(monte_carlo):
         inside = np.mean((a >= lo) & (a <= hi))
         assert inside >= 0.9, (name, inside, a.mean())
         assert 2.7 <= a.mean() <= 3.3, (name, a.mean())
+        wide = a / 1.5**2  # the covariance reported 1.5^2 times too large
+        assert not (np.mean((wide >= lo) & (wide <= hi)) >= 0.9 and 2.7 <= wide.mean() <= 3.3), name
 
 
 def test_nis_of_gnss_position_and_velocity(monte_carlo):
@@ -129,11 +132,16 @@ def test_nis_of_gnss_position_and_velocity(monte_carlo):
 
 def test_biases_and_scale_factors_inside_3_sigma(monte_carlo):
     """At the end of each run the gyro / accel biases and scale factors are inside 3 sigma of the truth:
-    >= 97 % of all the (runs x 12) normalised errors (99.7 % expected for a Gaussian), and their RMS near 1."""
+    >= 97 % of all the (runs x 12) normalised errors (99.7 % expected for a Gaussian), and their RMS near 1:
+    below 1.5 per state, and pooled over all within [0.8, 1.25] (standard error 1/sqrt(2 x 600) = 0.03; the
+    margin allows for the states' correlation), which a sigma reported 1.5 times too large (RMS 0.67) fails."""
     _, _, z = monte_carlo
     assert np.mean(np.abs(z) <= 3) >= 0.97, np.mean(np.abs(z) <= 3)
     rms = np.sqrt(np.mean(z**2, axis=0))
     assert np.all(rms < 1.5), rms
+    pooled = float(np.sqrt(np.mean(z**2)))
+    assert 0.8 <= pooled <= 1.25, pooled
+    assert not 0.8 <= pooled / 1.5 <= 1.25
 
 
 def test_the_nis_check_catches_a_model_error(truth):
@@ -146,6 +154,6 @@ def test_the_nis_check_catches_a_model_error(truth):
                        rng=1)
     g = simulate_gnss(tr, pos_noise=POS_SD, vel_noise=VEL_SD, lever_arm=LEVER, rng=2)
     optimistic = GnssData(g.t, g.lla, g.pos_std / 2, g.vel_ned, g.vel_std, g.meta)
-    bad = run_gins(imu, optimistic, replace(CFG, gate_alpha=0.0), lla0=tr.pos_lla[0], vel0=tr.vel_ned[0],
-                   q0=tr.q_nb[0])
+    bad = GinsFilter(replace(CFG, gate_alpha=0.0)).run(imu, optimistic, lla0=tr.pos_lla[0], vel0=tr.vel_ned[0],
+                                                       q0=tr.q_nb[0])
     assert np.nanmean(bad.nis[:, 0]) > 6.0

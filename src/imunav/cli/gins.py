@@ -130,6 +130,7 @@ def simulate_cmd(
         f"initvel: {_v(truth.vel_ned[0])}", f"initatt: {_v(eul, '{:.8f}')}",
         "initgyrbias: [ 0, 0, 0 ]", "initaccbias: [ 0, 0, 0 ]", "initgyrscale: [ 0, 0, 0 ]", "initaccscale: [ 0, 0, 0 ]",
         f"initposstd: {_v(pos_std)}", f"initvelstd: {_v(vel_std)}", f"initattstd: {_v(att_std_deg)}",
+        f"initbgstd: {_v(cfg.init_gyro_bias_std / (DEG / HOUR))}", f"initbastd: {_v(cfg.init_accel_bias_std / 1e-5)}",
         "imunoise:",
         f"  arw: {_v(cfg.arw / (DEG / 60))}", f"  vrw: {_v(cfg.vrw * 60)}",
         f"  gbstd: {_v(cfg.gyro_bias_std / (DEG / HOUR))}", f"  abstd: {_v(cfg.accel_bias_std / 1e-5)}",
@@ -140,7 +141,8 @@ def simulate_cmd(
         tmp.write_text(text, encoding="utf-8")
     # the same configuration as the YAML, field by field in SI (not the preset, whose mapping may differ)
     noise = {k: np.asarray(getattr(cfg, k)).tolist() for k in ("arw", "vrw", "gyro_bias_std", "accel_bias_std",
-                                                                  "gyro_scale_std", "accel_scale_std")}
+                                                                  "gyro_scale_std", "accel_scale_std",
+                                                                  "init_gyro_bias_std", "init_accel_bias_std")}
     toml = {"states": 21, **noise, "corr_time": float(cfg.corr_time), "lever_arm": lever.tolist(),
             "init_pos_std": list(pos_std),
             "init_vel_std": list(vel_std), "init_att_std": (np.radians(att_std_deg)).tolist(),

@@ -5,6 +5,7 @@
   and the trapezoidal ``Q_d = (Φ Q Φᵀ + Q) Δt / 2`` — the cheap discretisation of a 15/21-state INS error model
   over a covariance step of ~0.1 s (:func:`imunav.filters._core.van_loan` is exact but costs a 2n-matrix
   exponential per step).
+* :func:`mag_heading`: the magnetometer heading model (innovation, Jacobian row, variance).
 
 Same conventions and stability promise as :mod:`imunav.filters._core`.
 """
@@ -71,3 +72,40 @@ def propagate_cov_series(P, F, Q, dt):
             P[i, j] = v
             P[j, i] = v
     return Phi
+
+
+@njit(cache=True)
+def mag_heading(C, mb, declination, sigma, h, i_att):
+    """Magnetometer heading: the rotation about the vertical that brings the horizontal part of the measured
+    field ``m̂ⁿ = Ĉ m^b`` (calibrated 3-axis magnetometer, body frame) onto the magnetic meridian, whose azimuth
+    is the ``declination`` (east positive).
+
+    ``ν = wrap(D − atan2(m̂_E, m̂_N))``; with the global attitude error (``C = exp([φ×]) Ĉ``) and the field's
+    inclination ``I`` (``tan I = m̂_D / |m̂_h|``, from the measurement), ``ν = φ_D − tan I (cos D φ_N + sin D φ_E)
+    + n``: the row ``h`` on the attitude error is ``[−tan I cos D, −tan I sin D, 1]`` (the levelling error
+    enters through the inclination; Groves 2013, §6.1.1 and §16.2.1).  ``R = σ²`` (σ: heading noise, rad).
+
+    Parameters
+    ----------
+    C : (3, 3) nominal ``C_nb``.
+    mb : (3,) magnetometer sample, body frame (any unit).
+    declination : float, rad.
+    sigma : float, heading noise std, rad.
+    h : (n,) receives the Jacobian row (zeroed here).
+    i_att : int, index of φ_N in the error state.
+
+    Returns
+    -------
+    nu : float, innovation, rad.
+    r : float, variance, rad².
+    """
+    mn = C @ mb
+    bh = math.sqrt(mn[0] * mn[0] + mn[1] * mn[1])
+    tan_i = mn[2] / bh
+    nu = declination - math.atan2(mn[1], mn[0])
+    nu = (nu + math.pi) % (2.0 * math.pi) - math.pi
+    h[:] = 0.0
+    h[i_att] = -tan_i * math.cos(declination)
+    h[i_att + 1] = -tan_i * math.sin(declination)
+    h[i_att + 2] = 1.0
+    return nu, sigma * sigma

@@ -14,7 +14,8 @@ position rows dropped, the vertical gravity gradient kept)::
     δḃ = −δb / T + w_b  (σ² 2/T),   δṡ = −δs / T + w_s
 
 The nominal state is integrated per IMU sample by :func:`imunav.filters._core.strapdown_step_ned`; the covariance
-every ``cov_step`` samples (and at each GNSS epoch) by :func:`imunav.filters._core_gins.propagate_cov_series`.
+every ``cov_step`` samples (and at each GNSS epoch and each barometer or magnetometer sample) by
+:func:`imunav.filters._core_gins.propagate_cov_series`.
 GNSS epochs between two IMU samples split the increments at their own time stamps.  Updates use
 :func:`imunav.filters._core.chi2_gate` and :func:`imunav.filters._core.joseph_update`; injection uses
 :func:`imunav.filters._core.inject_additive`, :func:`~imunav.filters._core.inject_attitude_global` and
@@ -39,7 +40,7 @@ from imunav.filters._core import (
     joseph_update_rows,
     strapdown_step_ned,
 )
-from imunav.filters._core_gins import inject_position_lla, propagate_cov_series
+from imunav.filters._core_gins import inject_position_lla, mag_heading, propagate_cov_series
 from imunav.filters._core_models import height, zero_velocity
 
 # error-state layout
@@ -92,11 +93,16 @@ K_ZARU_SD = 50  # ZARU rate σ, rad/s
 K_BARO_SD = 51  # barometric height σ, m
 K_GATE_ZUPT = 52  # χ²(6)
 K_GATE_BARO = 53  # χ²(1)
-NK = 54
+K_DECL = 54  # magnetic declination, rad (east positive)
+K_MAG_SD = 55  # magnetometer heading σ, rad
+K_GATE_MAG = 56  # χ²(1)
+NK = 57
 
 # aiding NIS record columns (per IMU sample, NaN when not applied)
 A_ZUPT = 0
 A_BARO = 1
+A_MAG = 2
+NA = 3
 
 # NIS record columns
 N_POS = 0
@@ -377,6 +383,17 @@ def _rest_and_baro_update(P, dx, q, v, lla, err, gyr, static, h_baro, prm, nx, o
 
 
 @njit(cache=True)
+def _mag_update(P, dx, q, v, lla, err, mb, prm, nx, out, acc_dx):
+    """Gated magnetometer-heading update (:func:`imunav.filters._core_gins.mag_heading`); NIS into ``out[A_MAG]``."""
+    H = np.zeros((1, nx))
+    nu = np.empty(1)
+    R = np.empty((1, 1))
+    nu[0], R[0, 0] = mag_heading(dcm_from_quat_1(q), mb, prm[K_DECL], prm[K_MAG_SD], H[0], I_ATT)
+    _, out[A_MAG] = _gated_update(P, dx, H, R, nu, np.empty(1), np.empty((1, 1)), prm[K_GATE_MAG], q, v, lla, err,
+                                  nx, prm, acc_dx)
+
+
+@njit(cache=True)
 def _step(q, v, lla, dth, dv, h, err, nx, om, qn, vn, llan, wb, fb):
     """Compensate the increments for the estimated IMU errors and run one NED strapdown step in place;
     ``wb``, ``fb`` receive the compensated mean rate and specific force."""
@@ -410,11 +427,38 @@ def _rec_post(r, tr, P, q, v, lla, acc_dx, rec_t, rec_ppost, rec_inj, rec_state)
         rec_state[r, 6 + j] = q[j]
 
 
+# carried filter state between calls of gins_run (GinsFilter.step): covariance clock and mean-rate accumulators
+C_T_COV = 0  # time of the last covariance propagation, s
+C_N_COV = 1  # samples since then
+C_SW = 2  # 3: Σ ω^b h since then, rad
+C_SF = 5  # 3: Σ f^b h since then, m/s
+NC = 8
+
+
 @njit(cache=True)
-def gins_run(t, dth, dv, g_t, g_lla, g_rp, g_vel, g_rv, odo, odo_r, q0, v0, lla0, err0, P0, prm,
+def _record_cov(m, tk, P, cov_t, cov_diag, cov_nav):
+    """Write covariance record m (time, diagonal, navigation block) when there is room; returns the new count."""
+    if m < cov_t.shape[0]:
+        for j in range(P.shape[0]):
+            cov_diag[m, j] = P[j, j]
+        for a in range(9):
+            for b in range(9):
+                cov_nav[m, a, b] = P[a, b]
+        cov_t[m] = tk
+        return m + 1
+    return m
+
+
+@njit(cache=True)
+def gins_run(t, dth, dv, g_t, g_lla, g_rp, g_vel, g_rv, odo, odo_r, q, v, lla, err, P, carry, prm,
              q_out, v_out, lla_out, err_out, cov_t, cov_diag, cov_nav, nis, acc, veh,
-             rec_t, rec_phi, rec_ppri, rec_ppost, rec_inj, rec_state, static, baro, aid):
-    """Forward filter over all IMU samples (row k: increments over [t[k-1], t[k]]).
+             rec_t, rec_phi, rec_ppri, rec_ppost, rec_inj, rec_state, static, baro, mag, aid, first, final):
+    """Filter over the IMU samples 1..N-1 (row k: increments over [t[k-1], t[k]]), from the state at t[0].
+
+    ``q, v, lla, err, P`` (nominal state, IMU errors, covariance) and ``carry`` (covariance clock, layout
+    ``C_*``) are the state at t[0] and are updated in place, so that consecutive calls continue one filter
+    (:class:`imunav.ins.gins.GinsFilter`.step calls it with N = 2).  ``first``: write the records of t[0]
+    (covariance, smoother); ``final``: propagate the covariance at the last sample whatever the clock says.
 
     With ``rec_*`` of length R > 0 it also records, per covariance epoch r, what the RTS smoother needs: the
     transition Φ_r into r, the prior and posterior covariances, the error injected at r and the posterior nominal
@@ -423,20 +467,15 @@ def gins_run(t, dth, dv, g_t, g_lla, g_rp, g_vel, g_rv, odo, odo_r, q0, v0, lla0
     Returns the number of covariance records written and the number of smoother epochs recorded.
     """
     n = t.shape[0]
-    nx = P0.shape[0]
-    P = P0.copy()
+    nx = P.shape[0]
     dx = np.zeros(nx)
-    q = q0.copy()
-    v = v0.copy()
-    lla = lla0.copy()
-    err = err0.copy()
     qn = np.empty(4)
     vn = np.empty(3)
     llan = np.empty(3)
     wb = np.zeros(3)
     fb = np.zeros(3)
-    sw = np.zeros(3)
-    sf = np.zeros(3)
+    sw = carry[C_SW:C_SW + 3]
+    sf = carry[C_SF:C_SF + 3]
     F = np.zeros((nx, nx))
     Q = np.zeros((nx, nx))
     rem_th = np.empty(3)
@@ -454,20 +493,15 @@ def gins_run(t, dth, dv, g_t, g_lla, g_rp, g_vel, g_rv, odo, odo_r, q0, v0, lla0
     ng = g_t.shape[0]
     while gi < ng and g_t[gi] <= t[0]:
         gi += 1  # epochs before the first sample have no state to update (the wrapper trims them)
-    t_cov = t[0]
-    n_cov = 0
+    t_cov = carry[C_T_COV]
+    n_cov = int(carry[C_N_COV])
     m = 0
-    for j in range(nx):
-        cov_diag[m, j] = P[j, j]
-    for a in range(9):
-        for b in range(9):
-            cov_nav[m, a, b] = P[a, b]
-    cov_t[m] = t[0]
-    m += 1
+    if first:
+        m = _record_cov(m, t[0], P, cov_t, cov_diag, cov_nav)
     acc_dx = np.zeros(nx)
     rec = rec_t.shape[0] > 0
     r = 0
-    if rec:
+    if rec and first:
         _rec_post(r, t[0], P, q, v, lla, acc_dx, rec_t, rec_ppost, rec_inj, rec_state)
     for k in range(1, n):
         t_cur = t[k - 1]
@@ -516,7 +550,7 @@ def gins_run(t, dth, dv, g_t, g_lla, g_rp, g_vel, g_rv, odo, odo_r, q0, v0, lla0
                 sw[j] += wb[j] * hh
                 sf[j] += fb[j] * hh
         n_cov += 1
-        if n_cov >= cov_step or k == n - 1:
+        if n_cov >= cov_step or (final and k == n - 1) or not math.isnan(baro[k]) or not math.isnan(mag[k, 0]):
             dtc = t[k] - t_cov
             if dtc > 0.0:
                 for j in range(3):
@@ -540,18 +574,15 @@ def gins_run(t, dth, dv, g_t, g_lla, g_rp, g_vel, g_rv, odo, odo_r, q0, v0, lla0
                 for j in range(3):
                     wb[j] = dth[k, j] / (t[k] - t[k - 1])
                 _rest_and_baro_update(P, dx, q, v, lla, err, wb, static[k] > 0.5, baro[k], prm, nx, aid[k], acc_dx)
+            if not math.isnan(mag[k, 0]):
+                _mag_update(P, dx, q, v, lla, err, mag[k], prm, nx, aid[k], acc_dx)
             if rec:
                 _rec_post(r, t[k], P, q, v, lla, acc_dx, rec_t, rec_ppost, rec_inj, rec_state)
-            if m < cov_t.shape[0]:
-                for j in range(nx):
-                    cov_diag[m, j] = P[j, j]
-                for a in range(9):
-                    for b in range(9):
-                        cov_nav[m, a, b] = P[a, b]
-                cov_t[m] = t[k]
-                m += 1
+            m = _record_cov(m, t[k], P, cov_t, cov_diag, cov_nav)
         q_out[k] = q
         v_out[k] = v
         lla_out[k] = lla
         err_out[k] = err
+    carry[C_T_COV] = t_cov
+    carry[C_N_COV] = n_cov
     return m, (r + 1 if rec else 0)

@@ -33,7 +33,7 @@ Array = NDArray[np.float64]
 
 @dataclass(frozen=True)
 class Alignment:
-    """Initial state for :func:`imunav.ins.gins.run_gins`.
+    """Initial state for :meth:`imunav.ins.gins.GinsFilter.run`.
 
     Attributes
     ----------

@@ -50,7 +50,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from imunav.errors import ConfigError, InvalidInputError
-from imunav.ins.gins import GinsConfig, GinsResult, run_gins
+from imunav.ins.gins import GinsConfig, GinsFilter, GinsResult
 from imunav.io import read_imu
 from imunav.io.gnss import GnssData, lat_lon_radians, read_gnss_csv, read_gnss_text, read_table
 from imunav.io.kfgins import (
@@ -640,8 +640,8 @@ def run_setup(imu: ImuData | ImuIncrements, gnss: GnssData, setup: GinsSetup, *,
     """
     if not setup.has_init:
         raise ConfigError(f"{setup.source}: no initial state; give [init] (lla_deg, vel_ned, euler_deg) or a truth")
-    return run_gins(imu, gnss, setup.config, lla0=setup.lla0, vel0=setup.vel0, q0=setup.q0,
-                    imu_errors0=setup.imu_errors0, odometer=odometer, smoother=smoother)
+    return GinsFilter(setup.config).run(imu, gnss, lla0=setup.lla0, vel0=setup.vel0, q0=setup.q0,
+                                        imu_errors0=setup.imu_errors0, odometer=odometer, smoother=smoother)
 
 
 def track_rmse(nav: NavTrack, truth: NavTrack) -> dict[str, Any]:

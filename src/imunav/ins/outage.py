@@ -1,4 +1,4 @@
-"""GNSS outage protocol of the KF-GINS paper (Tang et al., GPS Solutions 2025) for :func:`imunav.ins.gins.run_gins`.
+"""GNSS outage protocol of the KF-GINS paper (Tang et al., GPS Solutions 2025) for :class:`imunav.ins.gins.GinsFilter`.
 
 After a convergence period, a ``length_s`` GNSS outage every ``every_s`` seconds; the run is repeated with the
 first outage shifted by each of ``shifts_s`` (KF-GINS: 60 s every 180 s, shifts 0, 60 and 120 s).  For every
@@ -17,7 +17,7 @@ from numpy.typing import NDArray
 
 from imunav import earth
 from imunav.errors import InvalidInputError
-from imunav.ins.gins import GinsConfig, GinsResult, run_gins
+from imunav.ins.gins import GinsConfig, GinsFilter, GinsResult
 from imunav.io.gnss import GnssData
 from imunav.results import Result
 from imunav.rotation import euler_from_quat
@@ -104,7 +104,7 @@ def outage_drift(res: GinsResult, truth: Any, outages: list[tuple[float, float]]
     Parameters
     ----------
     res : GinsResult
-        The run of :func:`imunav.ins.gins.run_gins` whose GNSS had those outages.
+        The run of :meth:`imunav.ins.gins.GinsFilter.run` whose GNSS had those outages.
     truth : Trajectory
         The true trajectory, sampled at the IMU time stamps (``t`` s, ``pos_lla``, ``q_nb``).
     outages : list of tuple of float
@@ -147,7 +147,7 @@ def outage_test(imu: ImuData, gnss: GnssData, config: GinsConfig, truth: Any, *,
     Parameters
     ----------
     imu, gnss, config, lla0, vel0, q0 : ImuData, GnssData, GinsConfig, array_like
-        The inputs and initial state, as :func:`imunav.ins.gins.run_gins`.
+        The inputs and initial state, as :meth:`imunav.ins.gins.GinsFilter.run`.
     truth : Trajectory
         True trajectory sampled at the IMU stamps (``t`` s, ``pos_lla``, ``q_nb``).
     converge_s : float
@@ -157,7 +157,7 @@ def outage_test(imu: ImuData, gnss: GnssData, config: GinsConfig, truth: Any, *,
     shifts_s : tuple of float
         Shifts of the first outage, s; one filter run per shift.
     odometer : OdometerData, optional
-        Wheel speeds for :func:`~imunav.ins.gins.run_gins` (kept through the outages), or None.
+        Wheel speeds for :meth:`~imunav.ins.gins.GinsFilter.run` (kept through the outages), or None.
 
     Returns
     -------
@@ -179,8 +179,8 @@ def outage_test(imu: ImuData, gnss: GnssData, config: GinsConfig, truth: Any, *,
         keep = np.ones(gnss.n, dtype=bool)
         for s, d in sched:
             keep &= ~((gnss.t >= s) & (gnss.t < s + d))
-        res = run_gins(imu, gnss.select(keep, "outage protocol"), config, lla0=lla0, vel0=vel0, q0=q0,
-                       odometer=odometer)
+        res = GinsFilter(config).run(imu, gnss.select(keep, "outage protocol"), lla0=lla0, vel0=vel0, q0=q0,
+                                     odometer=odometer)
         reports.append(outage_drift(res, truth, sched))
     return OutageReport(
         [o for r in reports for o in r.outages],

@@ -21,6 +21,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
+from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
@@ -31,9 +32,9 @@ from imunav.errors import InvalidInputError, ShapeError
 from imunav.io.gnss import GnssData
 from imunav.rotation import dcm_from_quat, quat_interp
 from imunav.sim.trajectory import Trajectory
-from imunav.sim.vehicle import gauss_markov_sequence, omega_eb_b
+from imunav.sim.vehicle import _decimate, gauss_markov_sequence, omega_eb_b
 
-__all__ = ["simulate_gnss", "outage_schedule", "truth_at"]
+__all__ = ["MagnetometerData", "simulate_gnss", "simulate_magnetometer", "outage_schedule", "truth_at"]
 
 Array = NDArray[np.float64]
 
@@ -245,3 +246,71 @@ def simulate_gnss(
     }
     full = GnssData(t, lla, np.sqrt(pw**2 + pc**2), None if vstd is None else vel, vstd, meta)
     return full.select(keep_drop, "random dropout").select(~in_outage[keep_drop], "scheduled outage")
+
+
+@dataclass(frozen=True)
+class MagnetometerData:
+    """Calibrated 3-axis magnetometer samples (hard / soft iron removed), body frame.
+
+    Attributes
+    ----------
+    t : numpy.ndarray, shape (N,)
+        Sample times, s.
+    field_b : numpy.ndarray, shape (N, 3)
+        Measured field, body FRD, µT (any unit: the heading uses its direction).
+    meta : dict
+        The simulated field and errors.
+    """
+
+    t: Array
+    field_b: Array
+    meta: dict[str, Any] = field(default_factory=dict)
+
+
+def simulate_magnetometer(truth: Trajectory, *, declination: float = 0.0, inclination: float = math.radians(45.0),
+                          strength: float = 50.0, noise_std: float = 0.2, rate_hz: float | None = 10.0,
+                          rng: Any = None) -> MagnetometerData:
+    """A calibrated magnetometer on the truth: ``m^b = C_nbᵀ mⁿ + w`` with a uniform Earth field
+    ``mⁿ = B (cos I cos D, cos I sin D, sin I)`` and white noise (σ ``noise_std`` per axis).
+
+    The heading noise is then about ``noise_std / (B cos I)`` rad (0.2 / 35.4 µT: 0.32°).
+
+    Parameters
+    ----------
+    truth : Trajectory
+        With ``q_nb`` (e.g. :func:`imunav.sim.vehicle.vehicle_trajectory`).
+    declination, inclination : float
+        Declination D (east positive) and inclination I (down positive) of the field, rad (|I| < pi/2).
+    strength : float
+        Field strength B, µT (> 0).
+    noise_std : float
+        White noise σ per axis, µT (>= 0).
+    rate_hz : float, optional
+        Output rate, Hz, at most the truth rate (None: every truth sample).
+    rng : numpy.random.Generator or int, optional
+        Random generator or seed.
+
+    Returns
+    -------
+    MagnetometerData
+        The samples; ``meta`` holds the field and the noise.
+
+    Raises
+    ------
+    InvalidInputError
+        If the inclination is not inside (-pi/2, pi/2), the strength is not > 0, the noise is negative or the
+        rate is out of range.
+    """
+    if not (math.isfinite(inclination) and abs(inclination) < math.pi / 2):
+        raise InvalidInputError(f"inclination must be in (-pi/2, pi/2) rad; got {inclination!r}")
+    if not (math.isfinite(strength) and strength > 0):
+        raise InvalidInputError(f"strength must be > 0 (uT); got {strength!r}")
+    if not (math.isfinite(noise_std) and noise_std >= 0):
+        raise InvalidInputError(f"noise_std must be >= 0 (uT); got {noise_std!r}")
+    g = np.random.default_rng(rng)
+    idx = _decimate(truth, rate_hz)
+    mn = strength * np.array([math.cos(inclination) * math.cos(declination),
+                              math.cos(inclination) * math.sin(declination), math.sin(inclination)])
+    mb = np.einsum("nji,j->ni", dcm_from_quat(truth.q_nb[idx]), mn) + noise_std * g.standard_normal((idx.size, 3))
+    return MagnetometerData(truth.t[idx].copy(), mb, {"field_ned": mn.tolist(), "noise_std": noise_std,
+                                                       "declination": declination, "inclination": inclination})
