@@ -76,3 +76,34 @@ def test_every_result_dataclass_derives_from_the_base():
     assert len(found) >= 15  # the walk did find the package's results
     missing = sorted(k for k, c in found.items() if not issubclass(c, Result))
     assert not missing, f"result dataclasses without imunav.results.Result: {missing}"
+
+
+def test_every_attitude_track_has_the_one_euler_method():
+    """A dataclass holding ``q_nb`` gets ``euler()`` from EulerMixin (naming table: a method, ZYX, rad)."""
+    from imunav.results import EulerMixin
+    from imunav.rotation import euler_from_quat
+
+    with_q = {}
+    for mod in pkgutil.walk_packages(imunav.__path__, "imunav."):
+        if ".cli" in mod.name or mod.name.endswith("__main__"):
+            continue
+        try:
+            m = importlib.import_module(mod.name)
+        except ImportError:  # optional extras absent
+            continue
+        for name, obj in inspect.getmembers(m, inspect.isclass):
+            if (obj.__module__ == m.__name__ and dataclasses.is_dataclass(obj) and issubclass(obj, Result)
+                    and "q_nb" in {f.name for f in dataclasses.fields(obj)}):
+                with_q[f"{m.__name__}.{name}"] = obj
+    assert {"imunav.attitude.result.AttitudeResult", "imunav.ins.zupt.ZuptResult",
+            "imunav.ins.gins.GinsResult"} <= set(with_q)
+    missing = sorted(k for k, c in with_q.items() if not issubclass(c, EulerMixin))
+    assert not missing, f"results with q_nb but without EulerMixin.euler: {missing}"
+
+    @dataclasses.dataclass(frozen=True)
+    class Track(EulerMixin, Result):
+        q_nb: np.ndarray
+
+    q = np.random.default_rng(3).normal(size=(50, 4))
+    q /= np.linalg.norm(q, axis=1, keepdims=True)
+    np.testing.assert_array_equal(Track(q).euler(), euler_from_quat(q))

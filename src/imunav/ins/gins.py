@@ -43,8 +43,8 @@ from imunav.ins import _gins_kernels as _k
 from imunav.ins.strapdown import coning_sculling_increments
 from imunav.io.gnss import GnssData
 from imunav.io.kfgins import ImuIncrements, KfGinsConfig
-from imunav.results import Result
-from imunav.rotation import euler_from_quat, quat_from_rotvec, quat_multiply, quat_normalize
+from imunav.results import EulerMixin, Result
+from imunav.rotation import quat_from_rotvec, quat_multiply, quat_normalize
 from imunav.sim import presets
 from imunav.sim.gnss import MagnetometerData
 from imunav.sim.vehicle import BaroData, OdometerData
@@ -298,7 +298,7 @@ class GinsConfig:
 
 
 @dataclass(frozen=True)
-class GinsResult(Result):
+class GinsResult(EulerMixin, Result):
     """Output of :class:`GinsFilter` (SI).
 
     Attributes
@@ -372,19 +372,9 @@ class GinsResult(Result):
     baro_nis: Array | None = None
     mag_nis: Array | None = None
 
-    def euler(self) -> Array:
-        """ZYX Euler angles of ``q_nb``.
-
-        Returns
-        -------
-        numpy.ndarray, shape (N, 3)
-            Roll, pitch, yaw, rad.
-        """
-        return euler_from_quat(self.q_nb)
-
 
 @dataclass(frozen=True)
-class SmoothedTrack(Result):
+class SmoothedTrack(EulerMixin, Result):
     """RTS-smoothed navigation (Rauch, Tung & Striebel, "Maximum likelihood estimates of linear dynamic
     systems", AIAA Journal 3(8), 1965), SI.
 
@@ -410,16 +400,6 @@ class SmoothedTrack(Result):
     q_nb: Array
     cov_t: Array
     cov_nav: Array
-
-    def euler(self) -> Array:
-        """ZYX Euler angles of ``q_nb``.
-
-        Returns
-        -------
-        numpy.ndarray, shape (N, 3)
-            Roll, pitch, yaw, rad.
-        """
-        return euler_from_quat(self.q_nb)
 
 
 def _rts(t: Array, lla: Array, vel: Array, q: Array, rec_t: Array, phi: Array, ppri: Array, ppost: Array,

@@ -34,7 +34,7 @@ from numpy.typing import ArrayLike, NDArray
 from imunav._docstrings import fill_doc
 from imunav.errors import InvalidInputError, ShapeError
 from imunav.ins import _kernels as _k
-from imunav.results import Result
+from imunav.results import EulerMixin, Result
 
 __all__ = ["StrapdownResult", "coning_sculling_increments", "strapdown_local", "strapdown_ned", "OMEGA_E"]
 
@@ -44,7 +44,7 @@ OMEGA_E = 7.292115e-5
 
 
 @dataclass(frozen=True)
-class StrapdownResult(Result):
+class StrapdownResult(EulerMixin, Result):
     """Integrated trajectory.
 
     Attributes

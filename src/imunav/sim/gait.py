@@ -34,7 +34,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from imunav.errors import InvalidInputError
-from imunav.results import Result
+from imunav.results import EulerMixin, Result
 from imunav.rotation import quat_from_euler
 from imunav.sim import GaussMarkov, ImuErrorModel, Trajectory, TriadErrors, apply_errors, ideal_imu
 from imunav.timeseries import ImuData
@@ -52,7 +52,7 @@ GAIT_MODES: dict[str, tuple[float, float, float, float, float, float]] = {
 
 
 @dataclass(frozen=True)
-class GaitSimulation(Result):
+class GaitSimulation(EulerMixin, Result):
     """Simulated foot motion and IMU.
 
     Attributes
