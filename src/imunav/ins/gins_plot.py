@@ -93,6 +93,27 @@ def _sigma_at(t: np.ndarray, cov_t: np.ndarray, var: np.ndarray) -> np.ndarray:
     return np.column_stack([np.interp(t, cov_t, sd[:, j]) for j in range(sd.shape[1])])
 
 
+
+def _band(ax: Any, t: np.ndarray, y: np.ndarray, tb: np.ndarray, centre: np.ndarray | float, s: np.ndarray,
+          ylabel: str, label: str) -> None:
+    """One panel: ``y`` over ``t`` and the band ``centre ± 3 s`` over ``tb``."""
+    ax.plot(t, y, lw=0.8, label=label)
+    ax.plot(tb, centre + 3 * s, "r--", lw=0.7, label="±3σ")
+    ax.plot(tb, centre - 3 * s, "r--", lw=0.7)
+    ax.set_ylabel(ylabel)
+    ax.grid(True)
+
+
+def _finish(fig: Any, axs: Any, t0: float, title: str) -> Any:
+    """Legend on the first panel, time labels on the last row, the title; returns ``fig``."""
+    axs[0, 0].legend(loc="upper right")
+    for ax in axs[-1]:
+        ax.set_xlabel(f"time since {t0:.3f} s (s)")
+    fig.suptitle(title)
+    fig.tight_layout()
+    return fig
+
+
 def plot_errors(result: GinsResult, truth: NavTrack) -> Any:
     """Position (N E D, m), velocity (N E D, m/s) and attitude (roll, pitch, yaw, deg) errors against the truth,
     with the filter's ±3σ (attitude: σ of the error angle φ about N, E, D).
@@ -119,18 +140,8 @@ def plot_errors(result: GinsResult, truth: NavTrack) -> Any:
             ("attitude", np.degrees(de), np.degrees(sd[:, 6:9]), "deg", ("roll", "pitch", "yaw")))
     for i, (what, err, s, unit, axes) in enumerate(rows):
         for j in range(3):
-            ax = axs[i, j]
-            ax.plot(t - t0, err[:, j], lw=0.8, label="error")
-            ax.plot(t - t0, 3 * s[:, j], "r--", lw=0.8, label="±3σ")
-            ax.plot(t - t0, -3 * s[:, j], "r--", lw=0.8)
-            ax.set_ylabel(f"{what} {axes[j]} ({unit})")
-            ax.grid(True)
-    axs[0, 0].legend(loc="upper right")
-    for ax in axs[-1]:
-        ax.set_xlabel(f"time since {t0:.3f} s (s)")
-    fig.suptitle("GNSS/INS errors against the truth")
-    fig.tight_layout()
-    return fig
+            _band(axs[i, j], t - t0, err[:, j], t - t0, 0.0, s[:, j], f"{what} {axes[j]} ({unit})", "error")
+    return _finish(fig, axs, t0, "GNSS/INS errors against the truth")
 
 
 def plot_imu_errors(result: GinsResult) -> Any:
@@ -157,18 +168,9 @@ def plot_imu_errors(result: GinsResult) -> Any:
         sd = np.sqrt(np.maximum(result.cov_diag[:, k:k + 3], 0.0)) / unit
         ci = np.clip(np.searchsorted(result.t, result.cov_t), 0, result.t.size - 1)
         for j in range(3):
-            ax = axs[i, j]
-            ax.plot(result.t - t0, est[:, j] / unit, lw=0.8, label="estimate")
-            ax.plot(result.cov_t - t0, est[ci, j] / unit + 3 * sd[:, j], "r--", lw=0.6, label="±3σ")
-            ax.plot(result.cov_t - t0, est[ci, j] / unit - 3 * sd[:, j], "r--", lw=0.6)
-            ax.set_ylabel(f"{what} {'xyz'[j]} ({label})")
-            ax.grid(True)
-    axs[0, 0].legend(loc="upper right")
-    for ax in axs[-1]:
-        ax.set_xlabel(f"time since {t0:.3f} s (s)")
-    fig.suptitle("Estimated IMU errors")
-    fig.tight_layout()
-    return fig
+            _band(axs[i, j], result.t - t0, est[:, j] / unit, result.cov_t - t0, est[ci, j] / unit, sd[:, j],
+                  f"{what} {'xyz'[j]} ({label})", "estimate")
+    return _finish(fig, axs, t0, "Estimated IMU errors")
 
 
 def plot_outage_drift(report: OutageReport) -> Any:
