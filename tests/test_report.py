@@ -58,7 +58,7 @@ def test_spec_load_and_check(tmp_path):
 
 
 def test_spec_errors(tmp_path):
-    with pytest.raises(ConfigError, match="does not exist"):
+    with pytest.raises(ConfigError, match="specification file not found"):
         load_spec(tmp_path / "nope.toml")
     bad = tmp_path / "bad.toml"
     bad.write_text("[spec.x]\nmax = 1\nunit = 'furlongs'\n")
@@ -68,6 +68,6 @@ def test_spec_errors(tmp_path):
         load_spec({"spec": {"x": {"unit": "ppm"}}})
     with pytest.raises(ConfigError, match="unknown keys"):
         load_spec({"x": {"max": 1, "maxx": 2}})
-    with pytest.raises(ConfigError, match="invalid TOML"):
+    with pytest.raises(ConfigError, match="not valid TOML"):
         (tmp_path / "t.toml").write_text("[spec\n")
         load_spec(tmp_path / "t.toml")

@@ -414,7 +414,7 @@ def test_bad_files_and_call_arguments(tmp_path):
         ImuErrorModel.from_toml(tmp_path / "missing.toml")
     bad = tmp_path / "bad.toml"
     bad.write_text("[gyro\nbias = 1")
-    with pytest.raises(ConfigError, match="bad.toml.*invalid TOML"):
+    with pytest.raises(ConfigError, match="bad.toml.*not valid TOML"):
         ImuErrorModel.from_toml(bad)
     wrong = tmp_path / "wrong.toml"
     wrong.write_text("[gyro]\nbias = [1, 2]\n")

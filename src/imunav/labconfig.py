@@ -11,7 +11,6 @@ from __future__ import annotations
 import importlib
 import os
 import pkgutil
-import tomllib
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -21,6 +20,7 @@ import imunav.labsteps as pkg
 from imunav.errors import ConfigError
 from imunav.labsteps.recordings import parse_recordings
 from imunav.report import load_spec
+from imunav.toml import read_toml
 
 __all__ = ["STEPS", "SIMULATION_ONLY", "LabConfig", "available_steps", "parse_lab_config", "load_lab_config"]
 
@@ -115,12 +115,7 @@ def _read_toml(config: str | os.PathLike[str] | Mapping[str, Any]) -> tuple[dict
     if isinstance(config, Mapping):
         return dict(config), "lab configuration", None
     p = Path(config)
-    if not p.is_file():
-        raise ConfigError(f"lab configuration file not found: {p}")
-    try:
-        return tomllib.loads(p.read_text(encoding="utf-8")), str(p), p
-    except tomllib.TOMLDecodeError as exc:
-        raise ConfigError(f"{p} is not valid TOML: {exc}") from exc
+    return read_toml(p, "lab configuration"), str(p), p
 
 
 def parse_lab_config(config: str | os.PathLike[str] | Mapping[str, Any] | None) -> LabConfig:

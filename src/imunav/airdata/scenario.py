@@ -21,7 +21,6 @@ Thesis step s is row s − 1 of the arrays.
 from __future__ import annotations
 
 import dataclasses
-import tomllib
 from collections.abc import Callable
 from dataclasses import dataclass, field, replace
 from pathlib import Path
@@ -53,6 +52,7 @@ from imunav.filters.faults import (
     thesis_thresholds,
 )
 from imunav.results import Result
+from imunav.toml import read_toml
 
 __all__ = [
     "KINDS",
@@ -751,12 +751,7 @@ def load_config(path) -> "ThesisScenario | object":
     """
 
     p = Path(path)
-    try:
-        doc = tomllib.loads(p.read_text())
-    except FileNotFoundError as exc:
-        raise ConfigError(f"{p}: no such file") from exc
-    except tomllib.TOMLDecodeError as exc:
-        raise ConfigError(f"{p}: not valid TOML ({exc})") from exc
+    doc = read_toml(p, "scenario")
     keys = [k for k in ("thesis", "flight") if k in doc]
     if len(keys) != 1:
         raise ConfigError(f"{p}: needs exactly one [thesis] or [flight] table, found {list(doc) or 'none'}")

@@ -37,9 +37,9 @@ from imunav.io.kfgins import (
     write_kfgins_nav,
     write_kfgins_std,
 )
-from imunav.io.toml import toml_text
 from imunav.rotation import euler_from_quat
 from imunav.sim import Trajectory
+from imunav.toml import toml_text
 from imunav.units import DEG, HOUR
 
 gins_app = typer.Typer(

@@ -41,7 +41,6 @@ from __future__ import annotations
 
 import dataclasses
 import os
-import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -66,6 +65,7 @@ from imunav.sim import Trajectory, presets, simulate_imu
 from imunav.sim.gnss import simulate_gnss
 from imunav.sim.vehicle import OdometerData, demo_drive, vehicle_trajectory
 from imunav.timeseries import ImuData
+from imunav.toml import read_toml
 from imunav.units import DEG
 
 __all__ = ["GinsSetup", "GinsInputs", "SimulatedDrive", "load_gins_toml", "setup_from_kfgins", "read_imu_input",
@@ -253,12 +253,7 @@ def load_gins_toml(path: str | os.PathLike[str], *, states: int | None = None) -
     """
     p = Path(path)
     src = os.fspath(p)
-    if not p.is_file():
-        raise FileNotFoundError(f"{src}: no such configuration file")
-    try:
-        doc = tomllib.loads(p.read_text(encoding="utf-8"))
-    except tomllib.TOMLDecodeError as exc:
-        raise ConfigError(f"{src}: not valid TOML ({exc})") from None
+    doc = read_toml(p, "GNSS/INS configuration", missing=FileNotFoundError)
     _check_keys(doc, ("preset", "states", *TOML_TABLES, *_CONFIG_FIELDS), src)
     for name, keys in TOML_TABLES.items():
         if not isinstance(doc.get(name, {}), dict):

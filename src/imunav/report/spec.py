@@ -18,7 +18,6 @@ the limits too, so that a pass is a statement with confidence.
 
 from __future__ import annotations
 
-import tomllib
 from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
@@ -26,6 +25,7 @@ from typing import Any
 
 from imunav.errors import ConfigError
 from imunav.results import Result
+from imunav.toml import read_toml
 from imunav.units import from_display, to_display
 
 __all__ = ["SpecLimit", "SpecCheck", "load_spec", "check_spec"]
@@ -150,12 +150,7 @@ def load_spec(source: str | Path | Mapping[str, Any]) -> dict[str, SpecLimit]:
         where = "spec"
     else:
         p = Path(source)
-        if not p.is_file():
-            raise ConfigError(f"specification file {p} does not exist")
-        try:
-            data = tomllib.loads(p.read_text(encoding="utf-8"))
-        except tomllib.TOMLDecodeError as e:
-            raise ConfigError(f"{p}: invalid TOML ({e})") from e
+        data = read_toml(p, "specification")
         where = str(p)
     table = data.get("spec", data)
     if not isinstance(table, Mapping):

@@ -45,7 +45,6 @@ from __future__ import annotations
 import math
 import numbers
 import os
-import tomllib
 from collections.abc import Mapping
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field, fields, replace
@@ -70,11 +69,11 @@ from imunav.errors import (
     UnitError,
 )
 from imunav.io._atomic import atomic_path
-from imunav.io.toml import toml_text
 from imunav.results import Result
 from imunav.sim import _kernels as _k
 from imunav.sim.streams import normals, seed_sequence, stream_state
 from imunav.sim.trajectory import ideal_imu
+from imunav.toml import read_toml, toml_text
 
 if TYPE_CHECKING:  # pragma: no cover
     from imunav.timeseries import ImuData
@@ -1004,13 +1003,7 @@ class ImuErrorModel:
             If it is not valid TOML or its tables are invalid (the message names the file).
         """
         p = Path(path)
-        if not p.is_file():
-            raise FileFormatError(f"{p}: error-model file not found")
-        try:
-            with p.open("rb") as fh:
-                d = tomllib.load(fh)
-        except tomllib.TOMLDecodeError as e:
-            raise ConfigError(f"{p}: invalid TOML: {e}") from e
+        d = read_toml(p, "error-model", missing=FileFormatError)
         try:
             return cls.from_dict(d)
         except InvalidInputError as e:

@@ -1,4 +1,4 @@
-"""TOML text of a configuration: the writer beside :mod:`tomllib`, which only reads.
+"""TOML configurations: the one reader (:func:`read_toml`) and the writer beside :mod:`tomllib`, which only reads.
 
 Tables of strings, numbers (``inf`` kept), booleans and arrays, nested tables as
 ``[a.b]`` sections; what :func:`tomllib.loads` reads back to the same dict.
@@ -15,10 +15,51 @@ True
 from __future__ import annotations
 
 import math
+import os
+import tomllib
 from collections.abc import Mapping
+from pathlib import Path
 from typing import Any
 
-__all__ = ["toml_text"]
+from imunav.errors import ConfigError
+
+__all__ = ["read_toml", "toml_text"]
+
+
+def read_toml(path: str | os.PathLike[str], what: str = "configuration",
+              missing: type[Exception] = ConfigError) -> dict[str, Any]:
+    """Read a TOML file, with the one pair of messages every imunav TOML reader gives.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The file (UTF-8).
+    what : str
+        What the file is, for the message when it is missing (e.g. ``"lab configuration"``).
+    missing : type of Exception
+        The exception raised when the file does not exist (default :class:`~imunav.errors.ConfigError`;
+        readers whose contract is :class:`FileNotFoundError` or
+        :class:`~imunav.errors.FileFormatError` pass theirs).
+
+    Returns
+    -------
+    dict
+        The document.
+
+    Raises
+    ------
+    ConfigError
+        If the file is not valid TOML (the message names the file and the parser's reason).
+    Exception
+        ``missing``, if the file does not exist: ``"<what> file not found: <path>"``.
+    """
+    p = Path(path)
+    if not p.is_file():
+        raise missing(f"{what} file not found: {p}")
+    try:
+        return tomllib.loads(p.read_text(encoding="utf-8"))
+    except tomllib.TOMLDecodeError as exc:
+        raise ConfigError(f"{p}: not valid TOML ({exc})") from None
 
 
 def toml_text(d: Mapping[str, Any]) -> str:
