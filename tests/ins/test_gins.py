@@ -86,6 +86,30 @@ def test_odometer_and_nhc_shrink_mems_outage_drift(drive):
     assert abs(res.odo_scale[-1] - 0.005) < 3 * np.sqrt(res.cov_diag[-1, -1])
 
 
+def test_each_aiding_model_has_its_own_nis_record(drive):
+    """The odometer, NHC, ZUPT and ZARU NIS are recorded apart (the marginals of the joint updates' innovation):
+    with the odometer alone the vehicle update has one row and its NIS is the odometer's; with the NHC alone, two
+    rows and the NHC's; the ZUPT and ZARU records sit exactly where the joint rest update was applied."""
+    truth, imu = drive
+    g = simulate_gnss(truth, rng=7)
+    odo = simulate_odometer(truth, lever_arm=WHEEL, noise_std=0.05, rng=8)
+    static = np.linalg.norm(truth.vel_ned, axis=1) < 1e-9
+    base = GinsConfig.from_preset("mems_adis16465", odo_lever_arm=WHEEL)
+    only_odo = GinsFilter(base).run(imu, g, **_start(truth), odometer=odo, static=static)
+    used = np.isin(truth.t, only_odo.vehicle_t)
+    assert used.sum() > 1000 and np.all(only_odo.vehicle_dof == 1)
+    np.testing.assert_allclose(only_odo.odo_nis[used], only_odo.vehicle_nis, rtol=1e-9)
+    assert np.all(np.isnan(only_odo.odo_nis[~used])) and np.all(np.isnan(only_odo.nhc_nis))
+    rest = ~np.isnan(only_odo.zupt_nis)
+    assert rest.sum() > 100 and np.array_equal(rest, ~np.isnan(only_odo.zupt_vel_nis))
+    assert np.array_equal(rest, ~np.isnan(only_odo.zaru_nis))
+    only_nhc = GinsFilter(GinsConfig.from_preset("mems_adis16465", odo_lever_arm=WHEEL, nhc_noise=0.1)).run(
+        imu, g, **_start(truth))
+    used = np.isin(truth.t, only_nhc.vehicle_t)
+    assert np.all(only_nhc.vehicle_dof == 2) and np.all(np.isnan(only_nhc.odo_nis))
+    np.testing.assert_allclose(only_nhc.nhc_nis[used], only_nhc.vehicle_nis, rtol=1e-9)
+
+
 def test_bad_inputs_are_refused(drive):
     truth, imu = drive
     g = simulate_gnss(truth, rng=6)

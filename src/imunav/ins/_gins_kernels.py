@@ -38,6 +38,7 @@ from imunav.filters._core import (
     inject_attitude_global,
     joseph_update,
     joseph_update_rows,
+    nis,
     strapdown_step_ned,
 )
 from imunav.filters._core_gins import inject_position_lla, mag_heading, propagate_cov_series
@@ -99,10 +100,14 @@ K_GATE_MAG = 56  # χ²(1)
 NK = 57
 
 # aiding NIS record columns (per IMU sample, NaN when not applied)
-A_ZUPT = 0
+A_ZUPT = 0  # ZUPT + ZARU together (6 dof), the statistic of their gate
 A_BARO = 1
 A_MAG = 2
-NA = 3
+A_ODO = 3  # odometer row alone (1 dof), from the joint innovation covariance of the vehicle update
+A_NHC = 4  # NHC rows alone (2 dof)
+A_ZUPT_V = 5  # ZUPT velocity rows alone (3 dof)
+A_ZARU = 6  # ZARU rate rows alone (3 dof)
+NA = 7
 
 # NIS record columns
 N_POS = 0
@@ -272,9 +277,11 @@ def _gnss_update(P, dx, q, v, lla, err, wb, zp, rp, zv, rv, use_vel, prm, nx, ni
 
 
 @njit(cache=True)
-def _vehicle_update(P, dx, q, v, lla, err, wb, z_odo, r_odo, prm, nx, out, acc_dx):
+def _vehicle_update(P, dx, q, v, lla, err, wb, z_odo, r_odo, prm, nx, out, acc_dx, aid):
     """Odometer (forward wheel speed, scale-factor state) and non-holonomic constraint (zero lateral and vertical
-    velocity of the wheel point) as one update of up to 3 rows; ``out`` receives (NIS, accepted, rows).
+    velocity of the wheel point) as one update of up to 3 rows; ``out`` receives (NIS, accepted, rows), ``aid``
+    the NIS of the odometer row and of the NHC rows alone (``A_ODO``, ``A_NHC``: the marginals of the joint
+    innovation, χ²(1) and χ²(2) for a consistent filter; record only, the update is the joint one).
 
     Wheel-point body velocity ``v_w = Ĉᵀ v + ω × l``; with ``C = exp([φ×]) Ĉ``:
     ``∂v_w/∂δv = Ĉᵀ``, ``∂v_w/∂φ = Ĉᵀ [v×]``, ``∂v_w/∂δb_g = [l×]``, ``∂v_w/∂δs_g = [l×] diag(ω)``;
@@ -326,6 +333,11 @@ def _vehicle_update(P, dx, q, v, lla, err, wb, z_odo, r_odo, prm, nx, out, acc_d
             nu[r] = -vw[a]
             R[r, r] = prm[K_NHC_R]
             r += 1
+    S0 = H @ P @ H.T + R
+    if use_odo:
+        aid[A_ODO] = nu[0] * nu[0] / S0[0, 0]
+    if use_nhc:
+        aid[A_NHC] = nis(nu[m - 2:], S0[m - 2:, m - 2:])
     gate = prm[K_GATE_VEH] if m == 3 else (prm[K_GATE_VEH2] if m == 2 else prm[K_GATE_VEH1])
     ok, out[0] = _gated_update(P, dx, H, R, nu, np.empty(m), np.empty((m, m)), gate, q, v, lla, err, nx, prm, acc_dx)
     out[1] = 1.0 if ok else 0.0
@@ -373,6 +385,13 @@ def _rest_and_baro_update(P, dx, q, v, lla, err, gyr, static, h_baro, prm, nx, o
             idx[3 + j] = I_BG + j
             z[3 + j] = gyr[j] - w_ie_b[j] - err[E_BG + j]
             r[3 + j] = prm[K_ZARU_SD] ** 2
+        S3 = np.empty((3, 3))
+        for a in range(2):  # the marginal NIS of the ZUPT rows and of the ZARU rows (record only)
+            for i in range(3):
+                for j in range(3):
+                    S3[i, j] = P[idx[3 * a + i], idx[3 * a + j]]
+                S3[i, i] += r[3 * a + i]
+            out[A_ZUPT_V if a == 0 else A_ZARU] = nis(z[3 * a:3 * a + 3], S3)
         out[A_ZUPT] = _rows_update(P, dx, idx, z, r, prm[K_GATE_ZUPT], q, v, lla, err, nx, prm, acc_dx)
     if not math.isnan(h_baro):
         nu1 = np.empty(1)
@@ -569,7 +588,7 @@ def gins_run(t, dth, dv, g_t, g_lla, g_rp, g_vel, g_rv, odo, odo_r, q, v, lla, e
             if not math.isnan(odo[k]) or prm[K_NHC_R] > 0.0:
                 for j in range(3):
                     wb[j] = dth[k, j] / (t[k] - t[k - 1]) - err[E_BG + j]
-                _vehicle_update(P, dx, q, v, lla, err, wb, odo[k], odo_r[k], prm, nx, veh[k], acc_dx)
+                _vehicle_update(P, dx, q, v, lla, err, wb, odo[k], odo_r[k], prm, nx, veh[k], acc_dx, aid[k])
             if static[k] > 0.5 or not math.isnan(baro[k]):
                 for j in range(3):
                     wb[j] = dth[k, j] / (t[k] - t[k - 1])

@@ -344,6 +344,11 @@ class GinsResult(EulerMixin, Result):
     zupt_nis, baro_nis, mag_nis : numpy.ndarray, shape (N,), or None
         NIS of the ZUPT + ZARU (6 dof), barometer (1 dof) and magnetometer-heading (1 dof) updates per IMU
         sample, NaN where none was applied.
+    odo_nis, nhc_nis, zupt_vel_nis, zaru_nis : numpy.ndarray, shape (N,), or None
+        Each aiding model's own NIS per IMU sample (NaN where it was not applied): the odometer row (1 dof)
+        and the NHC rows (2 dof) of the joint vehicle update, the ZUPT velocity rows (3 dof) and the ZARU
+        rate rows (3 dof) of the joint rest update — the marginals of the joint innovation before the
+        update, χ²(dof) for a consistent filter.
     """
 
     t: Array
@@ -371,6 +376,10 @@ class GinsResult(EulerMixin, Result):
     zupt_nis: Array | None = None
     baro_nis: Array | None = None
     mag_nis: Array | None = None
+    odo_nis: Array | None = None
+    nhc_nis: Array | None = None
+    zupt_vel_nis: Array | None = None
+    zaru_nis: Array | None = None
 
 
 @dataclass(frozen=True)
@@ -577,7 +586,8 @@ class GinsFilter:
         Current error-state covariance (:data:`STATE_NAMES`, then the odometer scale).
     last_nis : dict
         NIS of the updates of the last :meth:`step`: ``gnss`` (G, 2) position / velocity, ``vehicle``,
-        ``zupt``, ``baro``, ``mag`` (NaN when not applied).
+        ``zupt``, ``baro``, ``mag``, and each model alone: ``odo``, ``nhc``, ``zupt_vel``, ``zaru`` (NaN when
+        not applied).
 
     Raises
     ------
@@ -707,8 +717,8 @@ class GinsFilter:
         out = self._kernel(np.array([self.t, t]), dth, dv, gt, glla, grp, gvel, grv, odo,
                            np.array([0.0, 1.0 if static else 0.0]), baro, mag, 0, False, False)
         self.t = t
-        self.last_nis = {"gnss": out["nis"], "vehicle": float(out["veh"][1, 0]), "zupt": float(out["aid"][1, _k.A_ZUPT]),
-                         "baro": float(out["aid"][1, _k.A_BARO]), "mag": float(out["aid"][1, _k.A_MAG])}
+        self.last_nis = {"gnss": out["nis"], "vehicle": float(out["veh"][1, 0])}
+        self.last_nis.update({name: float(out["aid"][1, col]) for name, col in _AID_COLUMNS.items()})
 
     def _kernel(self, t: Array, dth: Array, dv: Array, gt: Array, glla: Array, grp: Array, gvel: Array,
                 grv: Array, odo: Array, static: Array, baro: Array, mag: Array, nrec: int, first: bool,
@@ -818,8 +828,12 @@ class GinsFilter:
         return GinsResult(t, o["lla"], o["v"], o["q"], err[:, 0:3], err[:, 3:6], err[:, 6:9], err[:, 9:12],
                           err[:, _k.E_ODO], o["cov_t"][:m], o["cov_diag"][:m], o["cov_nav"][:m], g.t.copy(), o["nis"],
                           o["acc"] > 0.5, t[used], veh[used, 0], veh[used, 2].astype(int), veh[used, 1] > 0.5, c, meta,
-                          smoothed, o["aid"][:, _k.A_ZUPT].copy(), o["aid"][:, _k.A_BARO].copy(),
-                          o["aid"][:, _k.A_MAG].copy())
+                          smoothed, **{f"{name}_nis": o["aid"][:, col].copy() for name, col in _AID_COLUMNS.items()})
+
+
+#: The per-sample aiding NIS records of the kernel: GinsResult field ``<name>_nis`` / ``last_nis`` key -> column.
+_AID_COLUMNS = {"zupt": _k.A_ZUPT, "baro": _k.A_BARO, "mag": _k.A_MAG, "odo": _k.A_ODO, "nhc": _k.A_NHC,
+                "zupt_vel": _k.A_ZUPT_V, "zaru": _k.A_ZARU}
 
 
 def _vec3_input(x: ArrayLike, name: str) -> Array:
