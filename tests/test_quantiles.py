@@ -28,7 +28,24 @@ def test_normal_quantiles_equal_scipy_stats(ours, theirs):
 
 
 def test_filters_gates_do_not_import_scipy_stats():
-    code = ("import sys, imunav.filters, imunav.attitude, imunav.ins.zupt; "
+    code = ("import sys, imunav.filters, imunav.attitude, imunav.ins.zupt, imunav.ins.gins, imunav.cli.gins; "
             "print('scipy.stats' in sys.modules)")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     assert out.stdout.strip() == "False", out.stderr
+
+
+def test_no_module_of_the_package_imports_scipy_stats():
+    import ast
+    from pathlib import Path
+
+    src = Path(__file__).resolve().parents[1] / "src" / "imunav"
+    found = []
+    for f in sorted(src.rglob("*.py")):
+        for node in ast.walk(ast.parse(f.read_text(encoding="utf-8"))):
+            names = ([a.name for a in node.names] if isinstance(node, ast.Import)
+                     else [node.module or ""] if isinstance(node, ast.ImportFrom) else [])
+            if any(n == "scipy.stats" or n.startswith("scipy.stats.") for n in names) or (
+                    isinstance(node, ast.ImportFrom) and node.module == "scipy"
+                    and any(a.name == "stats" for a in node.names)):
+                found.append(f"{f.relative_to(src)}:{node.lineno}")
+    assert not found, f"use imunav._quantiles instead of scipy.stats (a second at import): {found}"

@@ -34,8 +34,8 @@ from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
-from scipy.stats import chi2
 
+from imunav._quantiles import chi2_ppf
 from imunav.earth import OMEGA_E
 from imunav.earth import radii as earth_radii
 from imunav.errors import InvalidInputError, ShapeError
@@ -496,7 +496,7 @@ def _params(c: GinsConfig, fs: float, odometer: bool) -> Array:
     big = 1e300
 
     def gate(dof: int) -> float:
-        return float(chi2.ppf(1 - c.gate_alpha, dof)) if c.gate_alpha > 0 else big
+        return float(chi2_ppf(1 - c.gate_alpha, dof)) if c.gate_alpha > 0 else big
 
     prm[_k.K_GATE_POS] = gate(3)
     prm[_k.K_GATE_VEL] = gate(3)
