@@ -90,6 +90,9 @@ def _mc(filt: str, label: str, pitch: float, pitch_sd: float, roll: float, roll_
     )
 
 
+_GINS_ROW = r"\n{k}\s+(-?[\d.]+)"  # a row of bench_gins_outage.py's table: first column
+
+
 FIGURES: tuple[Figure, ...] = (
     Figure(
         "install_footprint",
@@ -203,6 +206,38 @@ FIGURES: tuple[Figure, ...] = (
                   if not (w == "long" and k == "shoe horiz.")},
         tol=dict.fromkeys([f"{w} {k}" for w in ("short", "long") for k in _XIO_ROWS], 5e-4),
         note="the settings sweep below the table is printed by the same command (sensitivity lines)",
+    ),
+    Figure(
+        "gins_outage_nav",
+        "RMS of the per-outage maximum drift 0.35 m horizontal, 0.15 m vertical, 0.38 m 3-D, roll / pitch / heading "
+        "0.0017° / 0.0014° / 0.0024°, 49 of the 50 outages (98 %) inside the predicted 3σ",
+        "{python} benchmarks/bench_gins_outage.py", 5.0,
+        values={"outages": 50, "horizontal m": 0.35, "vertical m": 0.15, "3-D m": 0.38, "roll deg": 0.0017,
+                "pitch deg": 0.0014, "heading deg": 0.0024, "inside 3σ %": 98},
+        patterns={"outages": r"(\d+) outages of 60 s", "horizontal m": _GINS_ROW.format(k="horizontal_m"),
+                  "vertical m": _GINS_ROW.format(k="vertical_m"), "3-D m": _GINS_ROW.format(k="3d_m"),
+                  "roll deg": _GINS_ROW.format(k="roll_deg"), "pitch deg": _GINS_ROW.format(k="pitch_deg"),
+                  "heading deg": _GINS_ROW.format(k="heading_deg"), "inside 3σ %": r"predicted 3 sigma[^:]*: (\d+) %"},
+        note="seeded (--seed 1): navigation_a15, 1 h at 200 Hz, 3 filter runs (about 1 min CPU)",
+    ),
+    Figure(
+        "gins_outage_mems",
+        "odometer + NHC shrink the horizontal outage drift from 10.06 m to 0.71 m (14.2×)",
+        "{python} benchmarks/bench_gins_outage.py --mems", 2.0,
+        values={"GNSS only m": 10.06, "ODO + NHC m": 0.71, "ratio": 14.2},
+        patterns={"GNSS only m": (r"\nhorizontal_m\s+([\d.]+)\s+([\d.]+)", 1),
+                  "ODO + NHC m": (r"\nhorizontal_m\s+([\d.]+)\s+([\d.]+)", 2),
+                  "ratio": r"horizontal drift ([\d.]+)x smaller"},
+        note="seeded (--seed 1): mems_adis16465, 1 h at 100 Hz, 55 outages; acceptance >= 3x",
+    ),
+    Figure(
+        "gins_speed",
+        "2.26 µs per IMU sample for 21 states at 200 Hz with GNSS at 1 Hz (one hour, 720,001 samples, in 1.63 s CPU",
+        "{python} benchmarks/bench_gins_speed.py", 1.0,
+        values={"us per sample": 2.26, "CPU s": 1.63},
+        patterns={"us per sample": r"\(([\d.]+) us per sample", "CPU s": r"min CPU ([\d.]+) s"},
+        info=("us per sample", "CPU s"),
+        note="CPU time (time.process_time), best of 3 after a warm-up; acceptance <= 3 us per sample, < 10 s wall",
     ),
     Figure(
         "airdata_robust",
