@@ -93,6 +93,20 @@ def _mc(filt: str, label: str, pitch: float, pitch_sd: float, roll: float, roll_
 _GINS_ROW = r"\n{k}\s+(-?[\d.]+)"  # a row of bench_gins_outage.py's table: first column
 
 
+_PYINS_ROW = r"\n{f}\s+" + r"\s+".join([r"([\d.]+) ([\d.]+) ([\d.]+)"] * 3) + r"\s+([\d.]+)"  # bench_gins_pyins
+_PYINS_COLS = ("pos N", "pos E", "pos D", "vel N", "vel E", "vel D", "roll", "pitch", "yaw", "us/sample")
+
+
+def _pyins_row(f: str, values: tuple[float, ...]) -> tuple[dict, dict]:
+    """README values and patterns of one row of bench_gins_pyins.py's table (``f``: pyins or imunav)."""
+    keys = [f"{f} {c}" for c in _PYINS_COLS]
+    return dict(zip(keys, values)), {k: (_PYINS_ROW.format(f=f), i + 1) for i, k in enumerate(keys)}
+
+
+_PYINS_IMUNAV = _pyins_row("imunav", (0.166, 0.161, 0.241, 0.0204, 0.0237, 0.0116, 0.0512, 0.0375, 0.2319, 1.9))
+_PYINS_PYINS = _pyins_row("pyins", (0.162, 0.151, 0.262, 0.0269, 0.0299, 0.0167, 0.0603, 0.0499, 0.3313, 6705.0))
+
+
 FIGURES: tuple[Figure, ...] = (
     Figure(
         "install_footprint",
@@ -238,6 +252,23 @@ FIGURES: tuple[Figure, ...] = (
         patterns={"us per sample": r"\(([\d.]+) us per sample", "CPU s": r"min CPU ([\d.]+) s"},
         info=("us per sample", "CPU s"),
         note="CPU time (time.process_time), best of 3 after a warm-up; acceptance <= 3 us per sample, < 10 s wall",
+    ),
+    Figure(
+        "gins_pyins",
+        "RMSE of position N / E / D 0.166 / 0.161 / 0.241 m (pyins 0.162 / 0.151 / 0.262 m), velocity 0.0204 / 0.0237 "
+        "/ 0.0116 m/s (pyins 0.0269 / 0.0299 / 0.0167 m/s), roll / pitch / yaw 0.0512° / 0.0375° / 0.2319° (pyins "
+        "0.0603° / 0.0499° / 0.3313°); imunav / pyins ratio of the norms of the axes 0.973 (position), 0.766 "
+        "(velocity), 0.706 (attitude).",
+        "{python} benchmarks/bench_gins_pyins.py", 25.0,
+        values={**_PYINS_IMUNAV[0], **_PYINS_PYINS[0], "position ratio": 0.973, "velocity ratio": 0.766,
+                "attitude ratio": 0.706, "speed-up": 3447},
+        patterns={**_PYINS_IMUNAV[1], **_PYINS_PYINS[1],
+                  **{f"{k} ratio": rf"{k}\s+RMSE[^\n]*ratio imunav / pyins ([\d.]+)"
+                     for k in ("position", "velocity", "attitude")},
+                  "speed-up": r"imunav is (\d+)x faster"},
+        info=("imunav us/sample", "pyins us/sample", "speed-up"),
+        note="seeded (--seed 1; pyins is deterministic); pyins runs 6.7 ms of CPU per IMU sample (about 7 min CPU, "
+             "15-25 min on the loaded 2-core machine)",
     ),
     Figure(
         "airdata_robust",
