@@ -20,10 +20,13 @@ Times are CPU seconds of this process (time.process_time): the figures hold on a
 With ``--outages``: also the outage protocol of :mod:`imunav.ins.outage` (60 s outages every 180 s after
 ``--converge`` s, first outage shifted by 0, 60 and 120 s) on the same IMU and GNSS, through both filters, and the
 RMS over outages of the per-outage maximum horizontal, vertical and 3-D drift and attitude errors of each
-(:func:`imunav.ins.outage.outage_drift` on both tracks; pyins costs about 4 filter runs more).
+(:func:`imunav.ins.outage.outage_drift` on both tracks; pyins costs about 4 filter runs more;
+``--outages-only`` skips the full-GNSS comparison and so one pyins run).  pyins takes milliseconds per IMU
+sample: ``--outages --outages-only --duration 425 --converge 60 --fs 50`` is the smallest run with 6 outages
+(2 per shift).
 
 Run:  PYTHONPATH=src python benchmarks/bench_gins_pyins.py [--duration 600] [--preset mems_adis16465] [--seed 1]
-      [--outages [--converge 300]]
+      [--outages [--converge 300] [--outages-only]]
 """
 
 from __future__ import annotations
@@ -215,20 +218,8 @@ def _fmt(r: dict) -> list[str]:
             " ".join(f"{v:.4f}" for v in r["att_rmse_rpy_deg"]), f"{r['us_per_sample']:.1f}"]
 
 
-def main() -> None:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--duration", type=float, default=600.0, help="drive length, s")
-    ap.add_argument("--preset", default="mems_adis16465", help="IMU preset (imunav.sim.presets)")
-    ap.add_argument("--seed", type=int, default=1)
-    ap.add_argument("--fs", type=float, default=100.0, help="IMU rate, Hz")
-    ap.add_argument("--outages", action="store_true", help="also the outage protocol through both filters")
-    ap.add_argument("--converge", type=float, default=300.0, help="convergence before the first outage, s")
-    a = ap.parse_args()
-    sc = make_scenario(a.duration, a.preset, a.seed, a.fs)
-    print(f"drive {a.duration:.0f} s, {sc.imu.t.size} IMU samples at {a.fs:g} Hz, preset {a.preset}, "
-          f"{sc.gnss.n} GNSS fixes (1 Hz, lever arm {LEVER_ARM.tolist()} m), seed {a.seed}")
-    ours = run_imunav(sc)
-    peer = run_pyins(sc)
+def _compare(ours: dict, peer: dict) -> None:
+    """Print both filters' errors and speeds with full GNSS, and the ratios."""
     rows = {"pyins": _fmt(peer), "imunav": _fmt(ours)}
     head = ["pos RMSE N E D (m)", "vel RMSE N E D (m/s)", "att RMSE r p y (deg)", "us/sample"]
     print(f"{'':8s}" + "".join(f"{h:>28s}" for h in head))
@@ -240,6 +231,26 @@ def main() -> None:
         x, y = np.linalg.norm(ours[key]), np.linalg.norm(peer[key])
         print(f"{name:9s} RMSE (norm of the axes): imunav {x:.4f} {unit}, pyins {y:.4f} {unit}, "
               f"ratio imunav / pyins {x / y:.3f} (acceptance <= 1)")
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--duration", type=float, default=600.0, help="drive length, s")
+    ap.add_argument("--preset", default="mems_adis16465", help="IMU preset (imunav.sim.presets)")
+    ap.add_argument("--seed", type=int, default=1)
+    ap.add_argument("--fs", type=float, default=100.0, help="IMU rate, Hz")
+    ap.add_argument("--outages", action="store_true", help="also the outage protocol through both filters")
+    ap.add_argument("--converge", type=float, default=300.0, help="convergence before the first outage, s")
+    ap.add_argument("--outages-only", action="store_true",
+                    help="with --outages: skip the full-GNSS comparison (saves one pyins run)")
+    a = ap.parse_args()
+    if a.outages_only and not a.outages:
+        ap.error("--outages-only needs --outages")
+    sc = make_scenario(a.duration, a.preset, a.seed, a.fs)
+    print(f"drive {a.duration:.0f} s, {sc.imu.t.size} IMU samples at {a.fs:g} Hz, preset {a.preset}, "
+          f"{sc.gnss.n} GNSS fixes (1 Hz, lever arm {LEVER_ARM.tolist()} m), seed {a.seed}")
+    if not a.outages_only:
+        _compare(run_imunav(sc), run_pyins(sc))
     if a.outages:
         rms = outages(sc, a.converge)
         print(f"outage protocol (60 s every 180 s after {a.converge:g} s, shifts 0 / 60 / 120 s): "
