@@ -54,7 +54,7 @@ browser:
 
 test: $(STAMP_TEST) browser
 	$(BIN)/python -m ruff check .
-	$(BIN)/python -m pytest -n 2 -q
+	$(BIN)/python -m pytest -n 2 --dist loadgroup -q
 
 # API reference + gallery into docs/_build/html, warnings as errors.  The gallery's figures come
 # from a shortened lab run that docs/conf.py starts (docs/gallery.py, docs/gallery_lab.toml), kept

@@ -25,6 +25,20 @@ def rng():
 FAULT_LOG_ENV = "IMUNAV_FAULT_LOG_DIR"
 
 
+#: Test files (and README examples) that run the GNSS/INS kernels: they share one xdist worker
+#: (``--dist loadgroup`` in the Makefile), so that a fresh checkout compiles those numba kernels
+#: (about a minute and a half of CPU) once, not once per worker; later runs load numba's cache.
+GINS_GROUP = "gins"
+
+
+def pytest_collection_modifyitems(config, items):
+    for item in items:
+        block = getattr(item, "callspec", None) and item.callspec.params.get("block")
+        text = getattr(block, "text", "")
+        if "test_gins" in item.nodeid or "gins" in text.lower():
+            item.add_marker(pytest.mark.xdist_group(GINS_GROUP))
+
+
 def pytest_configure(config):
     import os
     import tempfile
