@@ -56,7 +56,8 @@ def test_package_results_serialise_through_the_base(tmp_path):
     np.testing.assert_array_equal(back["mean_per_step"], c.mean_per_step)
 
 
-def _result_classes():
+def _package_dataclasses():
+    """Every dataclass defined in the package (CLI modules aside), by qualified name."""
     found = {}
     for mod in pkgutil.walk_packages(imunav.__path__, "imunav."):
         if ".cli" in mod.name or mod.name.endswith("__main__"):
@@ -66,9 +67,13 @@ def _result_classes():
         except ImportError:  # optional extras (torch, rosbags, ...) absent
             continue
         for name, obj in inspect.getmembers(m, inspect.isclass):
-            if obj.__module__ == m.__name__ and dataclasses.is_dataclass(obj) and name.endswith("Result"):
+            if obj.__module__ == m.__name__ and dataclasses.is_dataclass(obj):
                 found[f"{m.__name__}.{name}"] = obj
     return found
+
+
+def _result_classes():
+    return {k: c for k, c in _package_dataclasses().items() if k.endswith("Result")}
 
 
 def test_every_result_dataclass_derives_from_the_base():
@@ -83,18 +88,8 @@ def test_every_attitude_track_has_the_one_euler_method():
     from imunav.results import EulerMixin
     from imunav.rotation import euler_from_quat
 
-    with_q = {}
-    for mod in pkgutil.walk_packages(imunav.__path__, "imunav."):
-        if ".cli" in mod.name or mod.name.endswith("__main__"):
-            continue
-        try:
-            m = importlib.import_module(mod.name)
-        except ImportError:  # optional extras absent
-            continue
-        for name, obj in inspect.getmembers(m, inspect.isclass):
-            if (obj.__module__ == m.__name__ and dataclasses.is_dataclass(obj) and issubclass(obj, Result)
-                    and "q_nb" in {f.name for f in dataclasses.fields(obj)}):
-                with_q[f"{m.__name__}.{name}"] = obj
+    with_q = {k: c for k, c in _package_dataclasses().items()
+              if issubclass(c, Result) and "q_nb" in {f.name for f in dataclasses.fields(c)}}
     assert {"imunav.attitude.result.AttitudeResult", "imunav.ins.zupt.ZuptResult",
             "imunav.ins.gins.GinsResult"} <= set(with_q)
     missing = sorted(k for k, c in with_q.items() if not issubclass(c, EulerMixin))
