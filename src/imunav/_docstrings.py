@@ -532,6 +532,14 @@ InvalidInputError
 NonFiniteError
     If an input is NaN or infinite."""
 
+DOCS["earth_lat_raises"] = """\
+Raises
+------
+InvalidInputError
+    If a latitude is outside [-pi/2, pi/2].
+NonFiniteError
+    If an input is NaN or infinite."""
+
 DOCS["earth_ref_lla_returns"] = """\
 ref_lla : array_like, shape (3,)
     Origin of the local NED frame: geodetic ``(lat, lon, h)``, rad, rad, m.

@@ -233,7 +233,7 @@ def earth_rate_ned(lat: ArrayLike) -> Array:
     numpy.ndarray, shape (3,) or (..., 3)
         ``ω_ie^n``, rad/s.
 
-    %(earth_lat_h_raises)s
+    %(earth_lat_raises)s
     """
     lat = np.asarray(_f(lat))
     _check_lat_h(lat, np.zeros(()))
@@ -258,7 +258,7 @@ def radii(lat: ArrayLike) -> tuple[Array | float, Array | float]:
     R_E : float or numpy.ndarray
         Prime-vertical (transverse) radius of curvature, m.
 
-    %(earth_lat_h_raises)s
+    %(earth_lat_raises)s
     """
     rn, re, _ = _radii_gravity(lat, 0.0)
     return rn, re

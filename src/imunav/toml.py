@@ -49,7 +49,7 @@ def read_toml(path: str | os.PathLike[str], what: str = "configuration",
     Raises
     ------
     ConfigError
-        If the file is not valid TOML (the message names the file and the parser's reason).
+        If the file is not valid TOML or not UTF-8 text (the message names the file and the reason).
     Exception
         ``missing``, if the file does not exist: ``"<what> file not found: <path>"``.
     """
@@ -58,7 +58,7 @@ def read_toml(path: str | os.PathLike[str], what: str = "configuration",
         raise missing(f"{what} file not found: {p}")
     try:
         return tomllib.loads(p.read_text(encoding="utf-8"))
-    except tomllib.TOMLDecodeError as exc:
+    except (tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
         raise ConfigError(f"{p}: not valid TOML ({exc})") from None
 
 

@@ -154,8 +154,6 @@ def simulate_cmd(
     typer.echo(f"{truth.n} IMU samples ({duration:g} s at {fs:g} Hz, preset {preset}), {gnss.n} GNSS fixes -> {out}")
 
 
-
-
 _IMU_ARG = typer.Argument(None, help="IMU file: KF-GINS increments (7+ columns) or any recording imunav reads "
                                      "(rates, SI, FRD). Omit with a KF-GINS YAML.", show_default=False)
 _GNSS_ARG = typer.Argument(None, help="GNSS file: KF-GINS text (s, lat deg, lon deg, h, sigma N E D) or a CSV "
@@ -203,7 +201,10 @@ def run_cmd(
     nav = NavTrack(res.t, res.lla, res.vel_ned, res.q_nb)
     write_kfgins_nav(outs["nav"], nav)
     write_kfgins_imu_errors(outs["err"], res.t, res.gyro_bias, res.accel_bias, res.gyro_scale, res.accel_scale)
-    sd = np.sqrt(np.pad(res.cov_diag, ((0, 0), (0, max(0, 21 - res.cov_diag.shape[1]))))[:, :21])
+    # the filter's own states only (an odometer scale state follows them); a 15-state filter does not estimate
+    # the scale factors: their sigma columns are written as 0, as the README says
+    nx = setup.config.n_states
+    sd = np.sqrt(np.pad(res.cov_diag[:, :nx], ((0, 0), (0, 21 - nx))))
     write_kfgins_std(outs["std"], res.cov_t, sd[:, 0:3], sd[:, 3:6], sd[:, 6:9], sd[:, 9:12], sd[:, 12:15],
                      sd[:, 15:18], sd[:, 18:21])
     summary: dict = {"config": str(config) if config is not None else None,

@@ -9,6 +9,7 @@ the runner that imports it.
 from __future__ import annotations
 
 import contextlib
+import math
 import zlib
 from collections.abc import Iterable, Iterator, Mapping
 from dataclasses import dataclass, field
@@ -135,7 +136,7 @@ class LabContext:
         defaults : mapping
             Every option the step knows, with its default value.
         positive : iterable of str
-            Options that must be positive numbers.
+            Options that must be positive finite numbers (not booleans).
 
         Returns
         -------
@@ -153,7 +154,8 @@ class LabContext:
             raise ConfigError(f"[{self.step}]: unknown option(s) {sorted(unknown)}; allowed: {sorted(defaults)}")
         opts = {**defaults, **given}
         for k in positive:
-            if not isinstance(opts[k], (int, float)) or opts[k] <= 0:
+            v = opts[k]
+            if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v) or v <= 0:
                 raise ConfigError(f"[{self.step}] {k} must be a positive number, got {opts[k]!r}")
         return opts
 

@@ -83,7 +83,7 @@ def run(ctx: LabContext) -> StepResult:
     unknown = set(opts) - set(OPTIONS)
     if unknown:
         raise ConfigError(f"[gins] unknown option(s) {sorted(unknown)}; known: {', '.join(OPTIONS)}")
-    states = _int(opts, "states", 21)
+    states = _int(opts, "states", 21) if "states" in opts or not any(k in opts for k in _FILES) else None
     base = Path(str(ctx.config.get("_base_dir", ".")))
     paths = {k: resolve_path(str(opts[k]), base, f"[gins] {k}") for k in _FILES if k in opts}
     sim_keys = sorted({"preset", "duration", "fs", "seed"} & set(opts))

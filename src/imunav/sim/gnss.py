@@ -32,7 +32,7 @@ from imunav.errors import InvalidInputError, ShapeError
 from imunav.io.gnss import GnssData
 from imunav.rotation import dcm_from_quat, quat_interp
 from imunav.sim.trajectory import Trajectory
-from imunav.sim.vehicle import _decimate, gauss_markov_sequence, omega_eb_b
+from imunav.sim.vehicle import _decimate, check_samples, gauss_markov_sequence, omega_eb_b
 
 __all__ = ["MagnetometerData", "simulate_gnss", "simulate_magnetometer", "outage_schedule", "truth_at"]
 
@@ -265,6 +265,11 @@ class MagnetometerData:
     t: Array
     field_b: Array
     meta: dict[str, Any] = field(default_factory=dict)
+
+    def __post_init__(self) -> None:
+        t, v = check_samples("MagnetometerData", self.t, self.field_b, "field_b", width=3)
+        object.__setattr__(self, "t", t)
+        object.__setattr__(self, "field_b", v)
 
 
 def simulate_magnetometer(truth: Trajectory, *, declination: float = 0.0, inclination: float = math.radians(45.0),
