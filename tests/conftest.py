@@ -7,6 +7,8 @@ data_path``, which skips with the missing path named when they are absent.
 
 from __future__ import annotations
 
+import re
+
 import pytest
 from shared_data import ROOT, data_path  # noqa: E402,F401  (re-exported for old imports)
 
@@ -35,7 +37,7 @@ def pytest_collection_modifyitems(config, items):
     for item in items:
         block = getattr(item, "callspec", None) and item.callspec.params.get("block")
         text = getattr(block, "text", "")
-        if "test_gins" in item.nodeid or "gins" in text.lower():
+        if "test_gins" in item.nodeid or re.search(r"\bgins\b|GinsFilter|lab_gins", text):
             item.add_marker(pytest.mark.xdist_group(GINS_GROUP))
 
 

@@ -84,16 +84,15 @@ def test_every_result_dataclass_derives_from_the_base():
 
 
 def test_every_attitude_track_has_the_one_euler_method():
-    """A dataclass holding ``q_nb`` gets ``euler()`` from EulerMixin (naming table: a method, ZYX, rad)."""
+    """Every dataclass holding ``q_nb`` (results, states, trajectories) gets ``euler()`` from EulerMixin."""
     from imunav.results import EulerMixin
     from imunav.rotation import euler_from_quat
 
-    with_q = {k: c for k, c in _package_dataclasses().items()
-              if issubclass(c, Result) and "q_nb" in {f.name for f in dataclasses.fields(c)}}
+    with_q = {k: c for k, c in _package_dataclasses().items() if "q_nb" in {f.name for f in dataclasses.fields(c)}}
     assert {"imunav.attitude.result.AttitudeResult", "imunav.ins.zupt.ZuptResult",
             "imunav.ins.gins.GinsResult"} <= set(with_q)
     missing = sorted(k for k, c in with_q.items() if not issubclass(c, EulerMixin))
-    assert not missing, f"results with q_nb but without EulerMixin.euler: {missing}"
+    assert not missing, f"dataclasses with q_nb but without EulerMixin.euler: {missing}"
 
     @dataclasses.dataclass(frozen=True)
     class Track(EulerMixin, Result):

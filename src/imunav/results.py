@@ -72,7 +72,7 @@ class Result:
 
 
 class EulerMixin:
-    """Mixin of the results that hold an attitude track ``q_nb`` (N, 4): its ZYX Euler angles by :meth:`euler`.
+    """Mixin of the types that hold an attitude ``q_nb`` ((N, 4) or (4,)): its ZYX Euler angles by :meth:`euler`.
 
     The naming table of ``docs/design.md`` makes ``euler()`` a method computed from ``q_nb`` on every
     result; this is its one implementation.
@@ -85,7 +85,7 @@ class EulerMixin:
 
         Returns
         -------
-        numpy.ndarray, shape (N, 3)
+        numpy.ndarray, shape (N, 3), or (3,) for one attitude ``q_nb`` (4,)
             Roll, pitch, yaw, rad.
         """
         return euler_from_quat(self.q_nb)  # type: ignore[attr-defined]

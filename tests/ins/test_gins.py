@@ -253,3 +253,19 @@ def test_covariance_records_cover_the_whole_run_with_fast_aiding(drive):
         mag=simulate_magnetometer(truth, rate_hz=10, rng=15))
     assert res.cov_t[-1] == truth.t[-1] and np.all(np.diff(res.cov_t) > 0)
     assert res.cov_t.size == 10 * 900 + 1  # every 0.1 s (the aiding stamps, the 0.2 s steps among them) and t0
+
+
+def test_aiding_samples_are_checked():
+    """Aiding data types refuse what the kernel would read as 'no sample' or crash on (review finding)."""
+    from imunav.errors import NonFiniteError, ShapeError
+    from imunav.sim.gnss import MagnetometerData
+    from imunav.sim.vehicle import BaroData
+
+    with pytest.raises(ShapeError, match="field_b"):
+        MagnetometerData(np.arange(3.0), np.zeros(3))
+    with pytest.raises(ShapeError, match="height"):
+        BaroData(np.arange(3.0), np.zeros(4))
+    with pytest.raises(NonFiniteError, match=r"rows \[1\]"):
+        OdometerData(np.arange(3.0), np.array([1.0, np.nan, 1.0]))
+    with pytest.raises(InvalidInputError, match="strictly increase"):
+        BaroData(np.array([0.0, 1.0, 1.0]), np.zeros(3))

@@ -15,11 +15,11 @@ from imunav.attitude.mahony import Mahony
 from imunav.attitude.mekf import MEKF, MekfConfig
 from imunav.attitude.metrics import attitude_rmse, error_angles, euler_rmse
 from imunav.attitude.result import AttitudeResult
-from imunav.attitude.smoother import Smoother
+from imunav.attitude.smoother import SMOOTHER_DEFAULTS, Smoother
 from imunav.attitude.ukf import UKF, UkfConfig
 
 __all__ = [
     "ADAPTIVE_DEFAULTS", "AdaptiveMEKF", "AttitudeResult", "Complementary", "GravityKF", "GravityKfConfig",
-    "JavedKF", "LeeKF", "MEKF", "Madgwick", "Mahony", "MekfConfig", "ProposedKF", "Smoother", "UKF", "UkfConfig",
+    "JavedKF", "LeeKF", "MEKF", "Madgwick", "Mahony", "MekfConfig", "ProposedKF", "SMOOTHER_DEFAULTS", "Smoother", "UKF", "UkfConfig",
     "align", "attitude_rmse", "broad_reference_start", "error_angles", "euler_rmse", "tilt_from_accel",
 ]

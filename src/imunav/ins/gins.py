@@ -29,6 +29,7 @@ True
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -38,7 +39,7 @@ from numpy.typing import ArrayLike, NDArray
 from imunav._quantiles import chi2_ppf
 from imunav.earth import OMEGA_E
 from imunav.earth import radii as earth_radii
-from imunav.errors import InvalidInputError, ShapeError
+from imunav.errors import InvalidInputError, NonFiniteError, ShapeError
 from imunav.ins import _gins_kernels as _k
 from imunav.ins.strapdown import coning_sculling_increments
 from imunav.io.gnss import GnssData
@@ -685,6 +686,8 @@ class GinsFilter:
             odometer state.
         ShapeError
             If an increment is not a finite 3-vector.
+        NonFiniteError
+            If ``odometer_speed`` or ``baro_height`` is given but not finite.
         """
         if self._prm is None:
             raise InvalidInputError("GinsFilter.step before reset(): call reset(lla0=..., t0=..., fs=...) first")
@@ -709,6 +712,10 @@ class GinsFilter:
             gvel = gnss.vel_ned[sl] if use_vel else np.zeros((gt.size, 3))
             grv = gnss.vel_std[sl] ** 2 if use_vel else np.ones((gt.size, 3))
         self._prm[_k.K_USE_VEL] = 1.0 if use_vel else 0.0
+        for name, v in (("odometer_speed", odometer_speed), ("baro_height", baro_height)):
+            if v is not None and not math.isfinite(float(v)):
+                raise NonFiniteError(f"GinsFilter.step: {name} = {v!r} is not finite; pass None when there is no "
+                                     "sample at this time")
         odo = np.array([np.nan, np.nan if odometer_speed is None else float(odometer_speed)])
         baro = np.array([np.nan, np.nan if baro_height is None else float(baro_height)])
         mag = np.full((2, 3), np.nan)

@@ -23,7 +23,8 @@ from imunav.attitude.alignment import align
 from imunav.earth import OMEGA_E
 from imunav.errors import InsufficientDataError, InvalidInputError
 from imunav.io.gnss import GnssData
-from imunav.rotation import euler_from_quat, quat_from_euler
+from imunav.results import EulerMixin
+from imunav.rotation import quat_from_euler
 from imunav.timeseries import ImuData
 
 __all__ = ["Alignment", "static_alignment", "motion_alignment"]
@@ -32,7 +33,7 @@ Array = NDArray[np.float64]
 
 
 @dataclass(frozen=True)
-class Alignment:
+class Alignment(EulerMixin):
     """Initial state for :meth:`imunav.ins.gins.GinsFilter.run`.
 
     Attributes
@@ -59,16 +60,6 @@ class Alignment:
     method: str
     lla: Array | None = None
     vel_ned: Array | None = None
-
-    def euler(self) -> Array:
-        """ZYX Euler angles of ``q_nb``.
-
-        Returns
-        -------
-        numpy.ndarray, shape (3,)
-            Roll, pitch, yaw, rad.
-        """
-        return euler_from_quat(self.q_nb)
 
 
 def static_alignment(imu: ImuData, lat: float, *, gyro_bias_std: float, yaw: float | None = None,

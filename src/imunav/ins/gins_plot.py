@@ -261,4 +261,3 @@ def write_gins_figures(folder: str | os.PathLike[str], result: GinsResult | None
             plt.close(fig)
         written.append(path)
     return written
-

@@ -404,7 +404,7 @@ def _sample3(x: ArrayLike, name: str) -> Array:
 
 
 @dataclass(frozen=True)
-class ZuptState:
+class ZuptState(EulerMixin):
     """The ZUPT filter's estimate after one :meth:`ZuptFilter.step` (the fields of one row of :class:`ZuptResult`).
 
     Attributes

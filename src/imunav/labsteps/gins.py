@@ -27,6 +27,7 @@ with a truth, ``figures/gins_errors.png``.  Artifacts set: ``"gins"`` (the summa
 
 from __future__ import annotations
 
+import math
 from pathlib import Path
 from typing import Any
 
@@ -58,6 +59,13 @@ def _int(opts: dict[str, Any], key: str, default: int) -> int:
     if isinstance(v, bool) or not isinstance(v, int):
         raise ConfigError(f"[gins] {key} must be an integer; got {v!r}")
     return v
+
+
+def _positive(opts: dict[str, Any], key: str, default: float) -> float:
+    v = opts.get(key, default)
+    if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v) or v <= 0:
+        raise ConfigError(f"[gins] {key} must be a positive number; got {v!r}")
+    return float(v)
 
 
 def run(ctx: LabContext) -> StepResult:
@@ -101,7 +109,7 @@ def run(ctx: LabContext) -> StepResult:
         else:
             preset = str(opts.get("preset", "mems_adis16465"))
             seed = _int(opts, "seed", int(ctx.rng().integers(2**31)))
-            drive = simulate_drive(float(opts.get("duration", 300.0)), preset=preset, fs=float(opts.get("fs", 100.0)),
+            drive = simulate_drive(_positive(opts, "duration", 300.0), preset=preset, fs=_positive(opts, "fs", 100.0),
                                    seed=seed, states=states)
             imu, gnss, setup, odometer, truth = drive.imu, drive.gnss, drive.setup, None, drive.truth_track()
             source = {"simulated": preset, "duration_s": float(drive.truth.duration), "seed": seed}

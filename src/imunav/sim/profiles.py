@@ -38,6 +38,7 @@ from numpy.typing import ArrayLike, NDArray
 from imunav._docstrings import fill_doc
 from imunav.errors import InvalidInputError, ShapeError
 from imunav.io._atomic import atomic_path
+from imunav.results import EulerMixin
 from imunav.rotation import (
     quat_conjugate,
     quat_from_rotvec,
@@ -78,7 +79,7 @@ _UP_N = np.array([0.0, 0.0, -1.0])  # local vertical (up) in NED
 
 
 @dataclass(frozen=True)
-class Segments:
+class Segments(EulerMixin):
     """Segment table of a profile (one row per static position, rate step, move).
 
     Attributes

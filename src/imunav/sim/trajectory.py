@@ -31,6 +31,7 @@ from scipy.spatial.transform import Rotation, RotationSpline
 from imunav import earth
 from imunav._docstrings import fill_doc
 from imunav.errors import InvalidInputError, NonFiniteError, ShapeError, TimeOrderError
+from imunav.results import EulerMixin
 from imunav.rotation import (
     dcm_from_quat,
     quat_conjugate,
@@ -67,7 +68,7 @@ def _vec(x: ArrayLike | None, n: int, name: str) -> Array | None:
 
 
 @dataclass(frozen=True)
-class Trajectory:
+class Trajectory(EulerMixin):
     """True motion sampled at times ``t``.
 
     Parameters
