@@ -26,7 +26,7 @@ sample: ``--outages --outages-only --duration 425 --converge 60 --fs 50`` is the
 (2 per shift).
 
 Run:  PYTHONPATH=src python benchmarks/bench_gins_pyins.py [--duration 600] [--preset mems_adis16465] [--seed 1]
-      [--outages [--converge 300] [--outages-only]]
+      [--outages [--converge 300] [--outages-only] [--pyins-cache FILE.npz]]
 """
 
 from __future__ import annotations
@@ -165,13 +165,46 @@ def run_pyins(sc: Scenario, *, track: bool = False) -> dict:
     return out
 
 
-def outages(sc: Scenario, converge_s: float) -> dict:
-    """The outage protocol (60 s every 180 s, shifts 0 / 60 / 120 s) through both filters on the same data."""
+_KEYS = ("horizontal_m", "vertical_m", "drift_3d_m", "roll_deg", "pitch_deg", "heading_deg", "contained")
+
+
+def _load_cache(path: str | None, tag: str) -> list | None:
+    """pyins' outage reports of an earlier run on the same scenario (``tag``), or None."""
+    import os
+
+    from imunav.ins.outage import OutageReport
+
+    if path is None or not os.path.exists(path):
+        return None
+    z = np.load(path, allow_pickle=False)
+    if str(z["tag"]) != tag:
+        print(f"{path}: made for another scenario ({z['tag']}); running pyins again")
+        return None
+    n = int(z["n_shifts"])
+    return [OutageReport([tuple(o) for o in z[f"outages{i}"]], *(z[f"{k}{i}"] for k in _KEYS)) for i in range(n)]
+
+
+def _save_cache(path: str, tag: str, reps: list) -> None:
+    """Write pyins' outage reports atomically (pyins is the slow half of the protocol)."""
+    from imunav.io._atomic import atomic_path
+
+    arrays = {"tag": np.array(tag), "n_shifts": np.array(len(reps))}
+    for i, r in enumerate(reps):
+        arrays[f"outages{i}"] = np.array(r.outages, dtype=float).reshape(-1, 2)
+        arrays.update({f"{k}{i}": np.asarray(getattr(r, k)) for k in _KEYS})
+    with atomic_path(path) as tmp, open(tmp, "wb") as fh:
+        np.savez(fh, **arrays)
+
+
+def outages(sc: Scenario, converge_s: float, cache: str | None = None, tag: str = "") -> dict:
+    """The outage protocol (60 s every 180 s, shifts 0 / 60 / 120 s) through both filters on the same data;
+    pyins' reports are read from / written to ``cache`` (an ``.npz`` file) when given."""
     from imunav.ins.gins import GinsFilter
     from imunav.ins.outage import OutageReport, outage_drift
     from imunav.sim.gnss import outage_schedule
 
     cfg = _imunav_config(sc)
+    cached = _load_cache(cache, tag)
     reps: dict[str, list] = {"pyins": [], "imunav": []}
     t0, t1 = float(sc.imu.t[0]), float(sc.imu.t[-1])
     for shift in (0.0, 60.0, 120.0):
@@ -182,10 +215,15 @@ def outages(sc: Scenario, converge_s: float) -> dict:
         cut = replace(sc, gnss=sc.gnss.select(keep, "outage protocol"))
         res = GinsFilter(cfg).run(cut.imu, cut.gnss, lla0=sc.lla0, vel0=sc.vel0, q0=sc.q0)
         reps["imunav"].append(outage_drift(res, sc.truth, sched))
-        reps["pyins"].append(outage_drift(run_pyins(cut, track=True)["track"], sc.truth, sched))
-    keys = ("horizontal_m", "vertical_m", "drift_3d_m", "roll_deg", "pitch_deg", "heading_deg", "contained")
+        if cached is None:
+            reps["pyins"].append(outage_drift(run_pyins(cut, track=True)["track"], sc.truth, sched))
+    if cached is not None:
+        print(f"pyins' outage reports read from {cache}")
+        reps["pyins"] = cached
+    elif cache is not None:
+        _save_cache(cache, tag, reps["pyins"])
     return {name: OutageReport([o for r in rs for o in r.outages],
-                               *(np.concatenate([getattr(r, k) for r in rs]) for k in keys)).rms()
+                               *(np.concatenate([getattr(r, k) for r in rs]) for k in _KEYS)).rms()
             for name, rs in reps.items()}
 
 
@@ -243,6 +281,9 @@ def main() -> None:
     ap.add_argument("--converge", type=float, default=300.0, help="convergence before the first outage, s")
     ap.add_argument("--outages-only", action="store_true",
                     help="with --outages: skip the full-GNSS comparison (saves one pyins run)")
+    ap.add_argument("--pyins-cache", metavar="FILE.npz",
+                    help="with --outages: read pyins' outage reports from FILE when it was made for the same "
+                         "scenario, else write them there (pyins takes most of the time)")
     a = ap.parse_args()
     if a.outages_only and not a.outages:
         ap.error("--outages-only needs --outages")
@@ -252,7 +293,8 @@ def main() -> None:
     if not a.outages_only:
         _compare(run_imunav(sc), run_pyins(sc))
     if a.outages:
-        rms = outages(sc, a.converge)
+        tag = f"duration={a.duration:g} preset={a.preset} seed={a.seed} fs={a.fs:g} converge={a.converge:g}"
+        rms = outages(sc, a.converge, a.pyins_cache, tag)
         print(f"outage protocol (60 s every 180 s after {a.converge:g} s, shifts 0 / 60 / 120 s): "
               f"{rms['imunav']['n_outages']} outages; RMS over outages of the per-outage maximum")
         print(f"{'':14s}" + "".join(f"{k:>14s}" for k in ("horizontal_m", "vertical_m", "3d_m", "roll_deg",
