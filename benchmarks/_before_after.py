@@ -29,6 +29,8 @@ import time
 from collections.abc import Iterable, Mapping
 from pathlib import Path
 
+from imunav._atomic import atomic_path
+
 BEFORE = Path(__file__).with_name("before_a308974.json")
 COMMIT = "a308974"
 #: |now - before| <= TOL * max(1, |before|): a deterministic figure is unchanged
@@ -55,7 +57,8 @@ def _record(path: Path, bench: str, figures: Mapping[str, float], times: set[str
         "times": sorted(times & set(figures)),
         "figures": merged,
     }
-    path.write_text(json.dumps(data, indent=1, sort_keys=True, allow_nan=False) + "\n", encoding="utf-8")
+    with atomic_path(path) as tmp:  # a benchmark killed half-way leaves the record as it was
+        tmp.write_text(json.dumps(data, indent=1, sort_keys=True, allow_nan=False) + "\n", encoding="utf-8")
 
 
 def report(bench: str, figures: Mapping[str, float], times: Iterable[str] = ()) -> None:

@@ -21,6 +21,8 @@ from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
+import numpy as np
+
 from imunav.errors import ConfigError
 
 __all__ = ["read_toml", "toml_text"]
@@ -68,7 +70,8 @@ def toml_text(d: Mapping[str, Any]) -> str:
     Parameters
     ----------
     d : mapping
-        Keys to values (str, int, float, bool, lists of them) or to nested mappings (tables).
+        Keys to values (str, int, float, bool, numpy scalars and arrays, lists of them) or to nested mappings
+        (tables).
 
     Returns
     -------
@@ -84,6 +87,10 @@ def toml_text(d: Mapping[str, Any]) -> str:
 
 
 def _toml_value(v: Any) -> str:
+    if isinstance(v, np.ndarray):
+        v = v.tolist()
+    elif isinstance(v, np.generic):
+        v = v.item()  # numpy scalars (np.int64, np.float64, np.bool_) as the Python value they hold
     if isinstance(v, bool):
         return "true" if v else "false"
     if isinstance(v, (int, float)):

@@ -108,7 +108,7 @@ def test_rates_imu_and_gnss_csv_with_the_initial_state_from_the_truth(drive, tmp
     assert not list((tmp_path / "o").glob("*.png"))
     s = json.loads((tmp_path / "o" / "summary.json").read_text())
     assert s["figures"] == []
-    assert s["initial_state"] == "truth" and s["states"] == 15 and s["gnss_used"] == 150
+    assert s["initial_state"] == "truth" and s["states"] == 15 and s["gnss_used"] == s["gnss_fixes"] == 150
     assert np.linalg.norm(s["rmse"]["pos_ned_m"][:2]) < 0.7  # the fixes' own horizontal σ is 0.71 m
 
 
@@ -174,6 +174,8 @@ MISTAKES = [
     ("outage-no-truth", ["outage-test", "--config", "{d}/kf-gins.yaml", "--out", "{t}/o"], "--truth"),
     ("outage-preset-and-files", ["outage-test", "--config", "{d}/kf-gins.yaml", "--preset", "navigation_a15",
                                  "--out", "{t}/o"], "either --preset"),
+    ("outage-sim-options-with-files", ["outage-test", "--config", "{d}/kf-gins.yaml", "--truth", "{d}/truth.nav",
+                                       "--duration", "600", "--spp", "--out", "{t}/o"], "--duration, --rtk/--spp"),
     ("outage-shifts", ["outage-test", "--shifts", "0,a", "--out", "{t}/o"], "--shifts"),
     ("outage-too-short", ["outage-test", "--duration", "150", "--converge", "140", "--fs", "20", "--out", "{t}/o"],
      "no 60 s outage fits"),

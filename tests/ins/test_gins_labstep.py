@@ -29,6 +29,7 @@ def test_gins_step_on_a_simulated_drive(tmp_path):
     for name in ("track", "errors", "imu_errors"):
         assert (tmp_path / "figures" / f"gins_{name}.png").stat().st_size > 20_000
     assert json.loads((tmp_path / "data" / "gins_summary.json").read_text())["gnss_used"] == n
+    assert summ["gnss_fixes"] == n and summ["gnss_accepted_share"] == 1.0  # every fix evaluated, none gated
 
 
 def test_gins_step_on_files_of_the_lab_toml(tmp_path):

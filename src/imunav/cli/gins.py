@@ -210,11 +210,9 @@ def run_cmd(
     summary: dict = {"config": str(config) if config is not None else None,
                      "inputs": {k: str(v) for k, v in inputs.paths.items()},
                      "initial_state": "configuration" if inputs.setup.has_init else "truth",
-                     "imu_samples": int(res.t.size), "gnss_used": int(res.gnss_t.size),
+                     "imu_samples": int(res.t.size), **res.gnss_summary(),
                      "gnss_removed": res.meta["removed_gnss"], "states": setup.config.n_states,
-                     "odometer": inputs.odometer is not None,
-                     "gnss_position_nis_mean": float(np.nanmean(res.nis[:, 0])) if res.nis.size else None,
-                     "gnss_accepted_share": float(res.accepted[:, 0].mean()) if res.nis.size else None}
+                     "odometer": inputs.odometer is not None}
     if smoother and res.smoothed is not None:
         s = res.smoothed
         write_kfgins_nav(outs["smoothed"], NavTrack(s.t, s.lla, s.vel_ned, s.q_nb))
@@ -253,11 +251,11 @@ def outage_cmd(
     out: Path = typer.Option(..., "--out", help="Output folder: outage.json and the drift figure."),
     preset: Optional[str] = typer.Option(None, "--preset", help="Without files: simulate a drive with this IMU "
                                                                 "preset (default navigation_a15)."),
-    duration: float = typer.Option(1200.0, "--duration", help="Simulated drive length, s."),
-    fs: float = typer.Option(100.0, "--fs", help="Simulated IMU rate, Hz."),
-    seed: int = typer.Option(1, "--seed", help="Seed of the simulated drive."),
-    rtk: bool = typer.Option(True, "--rtk/--spp", help="Simulated fixes: RTK (2 / 2 / 3 cm) or SPP-like "
-                                                       "(0.5 / 0.5 / 1 m)."),
+    duration: Optional[float] = typer.Option(None, "--duration", help="Simulated drive length, s [default: 1200]."),
+    fs: Optional[float] = typer.Option(None, "--fs", help="Simulated IMU rate, Hz [default: 100]."),
+    seed: Optional[int] = typer.Option(None, "--seed", help="Seed of the simulated drive [default: 1]."),
+    rtk: Optional[bool] = typer.Option(None, "--rtk/--spp", help="Simulated fixes: RTK (2 / 2 / 3 cm) or SPP-like "
+                                                                 "(0.5 / 0.5 / 1 m) [default: --rtk]."),
     converge: float = typer.Option(300.0, "--converge", help="Convergence time before the first outage, s."),
     every: float = typer.Option(180.0, "--every", help="Outage period, s."),
     length: float = typer.Option(60.0, "--length", help="Outage length, s."),
@@ -279,6 +277,11 @@ def outage_cmd(
         raise ConfigError("--preset simulates a drive; give either --preset or files (IMU GNSS --config, or a "
                           "KF-GINS YAML), not both")
     if files:
+        sim_only = [name for name, v in (("--duration", duration), ("--fs", fs), ("--seed", seed),
+                                          ("--rtk/--spp", rtk)) if v is not None]
+        if sim_only:
+            raise ConfigError(f"{', '.join(sim_only)} set(s) the simulated drive; with files the drive is the "
+                              "files' own: leave it out")
         if truth is None:
             raise ConfigError("the outage test measures drift against a truth: give --truth FILE.nav")
         inputs, setup, ref = _inputs(imu, gnss, config, odo, truth, states)
@@ -289,6 +292,10 @@ def outage_cmd(
         if odo is not None:
             raise ConfigError("--odo needs IMU and GNSS files; the simulated drive has no odometer")
         name = preset or "navigation_a15"
+        duration = 1200.0 if duration is None else duration
+        fs = 100.0 if fs is None else fs
+        seed = 1 if seed is None else seed
+        rtk = True if rtk is None else rtk
         drive = simulate_drive(duration, preset=name, fs=fs, seed=seed,
                                pos_noise=(0.02, 0.02, 0.03) if rtk else (0.5, 0.5, 1.0),
                                states=21 if states is None else states)

@@ -382,6 +382,24 @@ class GinsResult(EulerMixin, Result):
     zupt_vel_nis: Array | None = None
     zaru_nis: Array | None = None
 
+    def gnss_summary(self) -> dict[str, Any]:
+        """How the GNSS fixes were used: one definition for the CLI summary and the lab step.
+
+        Returns
+        -------
+        dict
+            ``gnss_fixes``: fixes the filter processed (after the first IMU sample); ``gnss_used``: those whose position
+            update was evaluated (finite NIS); ``gnss_position_nis_mean``: the mean NIS of those (χ²(3) mean 3
+            for a consistent filter; None when there is none); ``gnss_accepted_share``: the share of them that
+            passed the χ² gate (None when there is none).
+        """
+        nis = self.nis[:, 0] if self.nis.size else np.zeros(0)
+        used = np.isfinite(nis)
+        n = int(used.sum())
+        return {"gnss_fixes": int(self.gnss_t.size), "gnss_used": n,
+                "gnss_position_nis_mean": float(np.mean(nis[used])) if n else None,
+                "gnss_accepted_share": float(np.mean(self.accepted[used, 0])) if n else None}
+
 
 @dataclass(frozen=True)
 class SmoothedTrack(EulerMixin, Result):

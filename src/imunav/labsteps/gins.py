@@ -31,8 +31,6 @@ import math
 from pathlib import Path
 from typing import Any
 
-import numpy as np
-
 from imunav._quantiles import chi2_ppf
 from imunav.errors import ConfigError
 from imunav.ins.gins_inputs import load_inputs, run_setup, simulate_drive, track_rmse
@@ -116,15 +114,13 @@ def run(ctx: LabContext) -> StepResult:
         advance()
         res = run_setup(imu, gnss, setup, odometer=odometer)
         advance()
-    nis = res.nis[:, 0]
-    used = np.isfinite(nis)
-    n = int(used.sum())
+    gs = res.gnss_summary()
+    n = gs["gnss_used"]
     lo, hi = _nis_band(max(n, 1))
-    nis_mean = float(np.mean(nis[used])) if n else float("nan")
-    accepted = float(np.mean(res.accepted[used, 0])) if n else float("nan")
+    nis_mean = float("nan") if gs["gnss_position_nis_mean"] is None else gs["gnss_position_nis_mean"]
+    accepted = float("nan") if gs["gnss_accepted_share"] is None else gs["gnss_accepted_share"]
     summary: dict[str, Any] = {"source": source, "states": setup.config.n_states, "imu_samples": int(res.t.size),
-                               "gnss_used": n, "gnss_position_nis_mean": nis_mean, "nis_band_99": [lo, hi],
-                               "gnss_accepted_share": accepted}
+                               **gs, "nis_band_99": [lo, hi]}
     nav = NavTrack(res.t, res.lla, res.vel_ned, res.q_nb)
     if truth is not None:
         summary["rmse"] = track_rmse(nav, truth)
