@@ -53,6 +53,21 @@ def test_simulate_then_run_a_kfgins_configuration(drive):
     assert sorted(s["figures"]) == ["gins_errors.png", "gins_imu_errors.png", "gins_track.png"]
 
 
+def test_std_file_one_row_per_imu_sample_as_kfgins(drive, tmp_path):
+    """KF-GINS writes one σ row per IMU sample; imunav one per covariance step (0.2 s by default).  The YAML key
+    ``cov_interval_s`` set to the IMU interval gives KF-GINS's rows: the σ file then has the .nav file's times."""
+    yaml = (drive / "kf-gins.yaml").read_text()
+    (tmp_path / "k.yaml").write_text(yaml.replace("outputpath:", "cov_interval_s: 0.02\noutputpath:", 1)
+                                     .replace('"imu.txt"', f'"{drive}/imu.txt"')
+                                     .replace('"gnss.txt"', f'"{drive}/gnss.txt"'))
+    _ok(CliRunner().invoke(app, ["gins", "run", "--config", str(tmp_path / "k.yaml"), "--out", str(tmp_path / "o"),
+                                 "--no-plots"]))
+    nav = read_kfgins_nav(tmp_path / "o" / "KF_GINS_Navresult.nav")
+    std = read_table(tmp_path / "o" / "KF_GINS_STD.txt", (22,), "x")
+    assert std.shape[0] == nav.t.size == 7501
+    np.testing.assert_allclose(std[:, 0], nav.t, atol=1e-6)
+
+
 def test_std_file_holds_kfgins_units(drive):
     """The first σ record is the YAML's initial σ (initattstd °, initbgstd °/h, mGal, ppm) barely propagated:
     the columns are in KF-GINS's units and the attitude columns are the φ states that initattstd initialises."""
