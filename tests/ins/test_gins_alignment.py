@@ -6,11 +6,14 @@ import math
 
 import numpy as np
 import pytest
+from scipy.stats import chi2
 
-from imunav.errors import InvalidInputError
-from imunav.ins.gins_alignment import motion_alignment, static_alignment
-from imunav.rotation import euler_from_quat
-from imunav.sim import presets, simulate_imu
+from imunav.errors import InvalidInputError, ShapeError
+from imunav.ins.gins import GinsConfig
+from imunav.ins.gins_alignment import fine_alignment, motion_alignment, static_alignment
+from imunav.rotation import euler_from_quat, quat_conjugate, quat_multiply, rotvec_from_quat
+from imunav.sim import apply_errors, ideal_imu, presets, simulate_imu
+from imunav.sim.error_model import GaussMarkov, ImuErrorModel, TriadErrors
 from imunav.sim.gnss import simulate_gnss
 from imunav.sim.vehicle import demo_drive, stop, vehicle_trajectory
 from imunav.units import DEG
@@ -55,3 +58,89 @@ def test_motion_alignment_from_gnss_velocity():
     assert abs(e) < 3 * math.degrees(al.heading_std) + 1e-6
     with pytest.raises(InvalidInputError, match="velocity"):
         motion_alignment(simulate_gnss(tr, vel_noise=None, rng=4))
+
+
+def _band(n):
+    """Two-sided 95 % band of the mean of n chi^2(1) values."""
+    return chi2.ppf([0.025, 0.975], n) / n
+
+
+def _calibrated(z2, what):
+    """Mean z^2 inside the 95 % band, and a sigma reported 1.5 times too large or too small outside it."""
+    lo, hi = _band(z2.size)
+    m = float(z2.mean())
+    assert lo <= m <= hi, (what, m, (lo, hi))
+    assert not lo <= m / 1.5**2 <= hi and not lo <= m * 1.5**2 <= hi, (what, m)
+
+
+def test_motion_alignment_heading_sigma_is_calibrated():
+    """Over 200 seeded GNSS velocity draws the heading z = error / heading_std has mean z^2 in the chi^2 band: the
+    sigma is the cross-track velocity sigma over the speed.  Heading 75 deg with sigma_N 0.05 and sigma_E 0.3 m/s:
+    the cross-track sigma is 0.09 m/s, hypot(sigma_N, sigma_E) 0.30 m/s (the former formula, z^2 ~ 0.09, fails)."""
+    tr = vehicle_trajectory(demo_drive(120), fs=20, origin_lla=(LAT, 114.47 * DEG, 20.0), heading0_deg=75.0)
+    z = []
+    for seed in range(200):
+        al = motion_alignment(simulate_gnss(tr, vel_noise=(0.05, 0.3, 0.1), rng=seed), min_speed=5.0)
+        k = np.searchsorted(tr.t, al.t)
+        z.append((euler_from_quat(tr.q_nb[k])[2] - al.euler()[2]) / al.heading_std)
+    _calibrated(np.array(z) ** 2, "motion heading")
+
+
+FINE_RUNS, FINE_S, FINE_FS = 60, 120.0, 20.0
+
+
+@pytest.mark.parametrize("name", ["navigation_a15", "tactical", "mems_adis16465"])
+def test_fine_alignment_attitude_sigma_is_calibrated(name):
+    """Static coarse + fine alignment over FINE_RUNS seeded runs of a FINE_S s stand, the IMU errors drawn from the
+    filter's model (turn-on bias + Gauss-Markov + white noise): the errors of phi N, E, D over the reported
+    att_std have mean z^2 in the chi^2 band, each axis.  navigation_a15 gyrocompasses (heading sigma ~0.15 deg:
+    the east gyro bias over the horizontal Earth rate, which the filter cannot separate from the heading: without
+    the attitude column of the ZARU row it claimed 0.085 deg, z^2 near 9); the others get a heading drawn from
+    the given 2 deg sigma, which fine alignment keeps.  The level sigma is the accel bias over g (the turn-on
+    bias kept as a random constant: as a Gauss-Markov state it would lose variance, z^2 ~ 1.6 for tactical)."""
+    tr = vehicle_trajectory([stop(FINE_S)], fs=FINE_FS, origin_lla=(LAT, 114.47 * DEG, 20.0), heading0_deg=37.0)
+    ideal = ideal_imu(tr)
+    cfg = GinsConfig.from_preset(name)
+    gyrocompass = name == "navigation_a15"
+    z2, zc = [], []
+    for seed in range(FINE_RUNS):
+        rng = np.random.default_rng(seed)
+
+        def triad(white, gm, init, rng=rng):
+            const = np.sqrt(np.maximum(init**2 - gm**2, 0.0)) * rng.standard_normal(3)
+            return TriadErrors(bias=const, noise_density=white, bias_instability=GaussMarkov(gm, cfg.corr_time))
+
+        model = ImuErrorModel(gyro=triad(cfg.arw, cfg.gyro_bias_std, cfg.init_gyro_bias_std),
+                              accel=triad(cfg.vrw, cfg.accel_bias_std, cfg.init_accel_bias_std), name="matched")
+        imu = apply_errors(ideal, model, rng=seed)
+        true_yaw = euler_from_quat(tr.q_nb[0])[2]
+        if gyrocompass:
+            coarse = static_alignment(imu, LAT, gyro_bias_std=float(np.max(cfg.init_gyro_bias_std)))
+            fine = fine_alignment(imu, tr.pos_lla[0], coarse, cfg)
+            zc.append((true_yaw - coarse.euler()[2]) / coarse.heading_std)
+        else:
+            coarse = static_alignment(imu, LAT, gyro_bias_std=float(np.max(cfg.init_gyro_bias_std)),
+                                      yaw=true_yaw + 2 * DEG * rng.standard_normal())
+            fine = fine_alignment(imu, tr.pos_lla[0], coarse, cfg, heading_std=2 * DEG)
+        phi = rotvec_from_quat(quat_multiply(tr.q_nb[-1], quat_conjugate(fine.q_nb)))
+        z2.append((phi / fine.att_std) ** 2)
+        assert fine.heading_std == fine.att_std[2] and fine.imu_errors.shape == (12,)
+    z2 = np.array(z2)
+    for j, axis in enumerate("NED"):
+        _calibrated(z2[:, j], f"{name} fine phi_{axis}")
+    if gyrocompass:
+        _calibrated(np.array(zc) ** 2, f"{name} coarse heading")
+
+
+def test_fine_alignment_refuses_bad_input():
+    tr, imu = _static("navigation_a15", seconds=10.0)
+    cfg = GinsConfig.from_preset("navigation_a15")
+    coarse = static_alignment(imu, LAT, gyro_bias_std=0.0, yaw=0.5)
+    with pytest.raises(InvalidInputError, match="heading_std"):
+        fine_alignment(imu, tr.pos_lla[0], coarse, cfg)
+    with pytest.raises(InvalidInputError, match="pos_std"):
+        fine_alignment(imu, tr.pos_lla[0], coarse, cfg, heading_std=0.01, pos_std=0.0)
+    with pytest.raises(ShapeError, match="lla"):
+        fine_alignment(imu, tr.pos_lla[0, :2], coarse, cfg, heading_std=0.01)
+    with pytest.raises(InvalidInputError, match="at least 2 s"):
+        fine_alignment(imu.slice(0, 10), tr.pos_lla[0], coarse, cfg, heading_std=0.01)

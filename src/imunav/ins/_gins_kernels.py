@@ -364,35 +364,50 @@ def _rows_update(P, dx, idx, z, r, gate, q, v, lla, err, nx, prm, acc_dx):
 
 @njit(cache=True)
 def _rest_and_baro_update(P, dx, q, v, lla, err, gyr, static, h_baro, prm, nx, out, acc_dx):
-    """ZUPT + ZARU while ``static`` (zero velocity; the gyro measures Earth rate plus its bias:
-    ``ν = ω̃ − Ĉᵀ ω_ie − b̂_g`` on the gyro-bias error) and barometric height (``ν = −h_b + ĥ`` on δr_D, through
-    :func:`~imunav.filters._core_models.height`).  ZARU's innovation is written here: the core's
+    """ZUPT + ZARU while ``static`` and barometric height (``ν = −h_b + ĥ`` on δr_D, through
+    :func:`~imunav.filters._core_models.height`).
+
+    ZUPT: ``ν = −v̂`` on δv.  ZARU: at rest the gyros measure the Earth rate, ``ω̃ = (1 + s) Cᵀ ω_ie^n + b``
+    (``gyr``: the raw rate of the last increment), so with ``C = exp([φ×]) Ĉ``::
+
+        ν = ω̃ − (1 + ŝ) Ĉᵀ ω_ie^n − b̂ ≈ δb_g + (1 + ŝ) Ĉᵀ [ω_ie^n ×] φ + diag(Ĉᵀ ω_ie^n) δs_g
+
+    The attitude column is what makes a static alignment's heading and east gyro bias one observable
+    combination, ``ε_E + Ω cos φ · φ_D`` (Groves 2013, §5.6.3, §14.2.2): without it the filter would count
+    the Earth rate as a direct measurement of the bias and report a heading σ it does not have.  The core's
     :func:`~imunav.filters._core_models.zero_rate` is the local-level model without Earth rate."""
     if static and prm[K_ZUPT_SD] > 0.0:
-        idx = np.empty(6, dtype=np.int64)
-        z = np.empty(6)
-        r = np.empty(6)
         nu3 = np.empty(3)
         r3 = np.empty(3)
         zero_velocity(v, prm[K_ZUPT_SD], nu3, r3)
         C = dcm_from_quat_1(q)
         om = prm[K_OMEGA_E]
-        w_ie_b = C.T @ np.array([om * math.cos(lla[0]), 0.0, -om * math.sin(lla[0])])
+        w_ie_n = np.array([om * math.cos(lla[0]), 0.0, -om * math.sin(lla[0])])
+        w_ie_b = C.T @ w_ie_n
+        Wx = np.zeros((3, 3))
+        _skew(w_ie_n, Wx, 0, 0, 1.0)
+        CtW = C.T @ Wx
+        H = np.zeros((6, nx))
+        R = np.zeros((6, 6))
+        z = np.empty(6)
         for j in range(3):
-            idx[j] = I_VEL + j
+            sg = err[E_SG + j] if prm[K_NB] == NX21 else 0.0
+            H[j, I_VEL + j] = 1.0
             z[j] = nu3[j]
-            r[j] = r3[j]
-            idx[3 + j] = I_BG + j
-            z[3 + j] = gyr[j] - w_ie_b[j] - err[E_BG + j]
-            r[3 + j] = prm[K_ZARU_SD] ** 2
-        S3 = np.empty((3, 3))
-        for a in range(2):  # the marginal NIS of the ZUPT rows and of the ZARU rows (record only)
+            R[j, j] = r3[j]
+            H[3 + j, I_BG + j] = 1.0
             for i in range(3):
-                for j in range(3):
-                    S3[i, j] = P[idx[3 * a + i], idx[3 * a + j]]
-                S3[i, i] += r[3 * a + i]
-            out[A_ZUPT_V if a == 0 else A_ZARU] = nis(z[3 * a:3 * a + 3], S3)
-        out[A_ZUPT] = _rows_update(P, dx, idx, z, r, prm[K_GATE_ZUPT], q, v, lla, err, nx, prm, acc_dx)
+                H[3 + j, I_ATT + i] = (1.0 + sg) * CtW[j, i]
+            if prm[K_NB] == NX21:
+                H[3 + j, I_SG + j] = w_ie_b[j]
+            z[3 + j] = gyr[j] - (1.0 + sg) * w_ie_b[j] - err[E_BG + j]
+            R[3 + j, 3 + j] = prm[K_ZARU_SD] ** 2
+        S0 = H @ P @ H.T + R
+        # the marginal NIS of the ZUPT rows and of the ZARU rows (record only; the update is the joint one)
+        out[A_ZUPT_V] = nis(z[0:3], S0[0:3, 0:3])
+        out[A_ZARU] = nis(z[3:6], S0[3:6, 3:6])
+        _, out[A_ZUPT] = _gated_update(P, dx, H, R, z, np.empty(6), np.empty((6, 6)), prm[K_GATE_ZUPT], q, v, lla,
+                                       err, nx, prm, acc_dx)
     if not math.isnan(h_baro):
         nu1 = np.empty(1)
         r1 = np.empty(1)

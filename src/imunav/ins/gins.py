@@ -88,7 +88,9 @@ class GinsConfig:
     gyro_scale_std, accel_scale_std : float or array_like, shape (3,)
         Stationary Gauss–Markov σ of the scale-factor errors, dimensionless (> 0).
     corr_time : float
-        Correlation time of the bias and odometer-scale Gauss–Markov states, s (> 0; KF-GINS: ``corrtime``).
+        Correlation time of the bias and odometer-scale Gauss–Markov states, s (> 0; KF-GINS: ``corrtime``;
+        ``inf``: random constants, no process noise — a state's variance then keeps its initial value, where a
+        Gauss–Markov state's initial variance above its stationary σ² decays as ``exp(−2t/T)``).
     scale_factors : bool
         True: 21 states; False: 15 (no scale-factor states).
     init_pos_std, init_vel_std, init_att_std : float or array_like, shape (3,)
@@ -184,8 +186,8 @@ class GinsConfig:
                 raise InvalidInputError(f"GinsConfig.{name} must be > 0; got {getattr(self, name)!r}")
         if self.nhc_noise is not None and not (np.isfinite(self.nhc_noise) and self.nhc_noise > 0):
             raise InvalidInputError(f"GinsConfig.nhc_noise must be > 0 m/s or None; got {self.nhc_noise!r}")
-        if not (np.isfinite(self.corr_time) and self.corr_time > 0):
-            raise InvalidInputError(f"GinsConfig.corr_time must be > 0 s; got {self.corr_time!r}")
+        if not (self.corr_time > 0):
+            raise InvalidInputError(f"GinsConfig.corr_time must be > 0 s (inf: constant); got {self.corr_time!r}")
         if not (0 <= self.gate_alpha < 1):
             raise InvalidInputError(f"GinsConfig.gate_alpha must be in [0, 1); got {self.gate_alpha!r}")
         if self.scale_corr_time is not None and not (self.scale_corr_time > 0):

@@ -9,25 +9,32 @@
 * :func:`motion_alignment`: for a land vehicle that cannot gyrocompass, heading and pitch from the GNSS velocity
   once the speed exceeds ``min_speed`` (the non-holonomic vehicle moves along its body x axis), roll zero;
   the filter starts at that fix (Groves 2013, §14.4.1).
+* :func:`fine_alignment`: after a static coarse alignment, the GNSS/INS filter itself over the static period
+  (zero-velocity and zero-angular-rate updates, the known position) refines the attitude and estimates the IMU
+  biases, and reports the attitude σ of its covariance (Groves 2013, §14.2.2: "fine alignment" by Kalman
+  filtering).
 """
 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
+from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 
 from imunav.attitude.alignment import align
 from imunav.earth import OMEGA_E
-from imunav.errors import InsufficientDataError, InvalidInputError
+from imunav.errors import InsufficientDataError, InvalidInputError, ShapeError
+from imunav.ins.gins import GinsConfig, GinsFilter
 from imunav.io.gnss import GnssData
+from imunav.io.kfgins import ImuIncrements
 from imunav.results import EulerMixin
 from imunav.rotation import quat_from_euler
 from imunav.timeseries import ImuData
 
-__all__ = ["Alignment", "static_alignment", "motion_alignment"]
+__all__ = ["Alignment", "static_alignment", "motion_alignment", "fine_alignment"]
 
 Array = NDArray[np.float64]
 
@@ -46,12 +53,18 @@ class Alignment(EulerMixin):
         Predicted heading σ, rad (0 when the heading was given).
     method : str
         How the heading was found (``"levelling + gyrocompassing"``, ``"levelling + given heading"``,
-        ``"GNSS velocity (track)"``).
+        ``"GNSS velocity (track)"``, and ``" + fine (Kalman filter)"`` after :func:`fine_alignment`).
     lla : numpy.ndarray, shape (3,), or None
         From a motion alignment, the position of the fix (lat rad, lon rad, h m); None for a static one
         (use the known position).
     vel_ned : numpy.ndarray, shape (3,), or None
         From a motion alignment, the velocity of the fix, NED, m/s; None for a static one (zero velocity).
+    att_std : numpy.ndarray, shape (3,), or None
+        From :func:`fine_alignment`: σ of the attitude error φ about N, E, D, rad (the filter's covariance; pass
+        it as ``GinsConfig.init_att_std``).
+    imu_errors : numpy.ndarray, shape (12,), or None
+        From :func:`fine_alignment`: gyro bias (rad/s), accel bias (m/s²), gyro and accel scale estimated over
+        the static period (pass it as ``imu_errors0``).
     """
 
     t: float
@@ -60,6 +73,8 @@ class Alignment(EulerMixin):
     method: str
     lla: Array | None = None
     vel_ned: Array | None = None
+    att_std: Array | None = None
+    imu_errors: Array | None = None
 
 
 def static_alignment(imu: ImuData, lat: float, *, gyro_bias_std: float, yaw: float | None = None,
@@ -132,7 +147,7 @@ def motion_alignment(gnss: GnssData, *, min_speed: float = 5.0, t_start: float |
     -------
     Alignment
         At the first fix at or above ``min_speed``, with its position and velocity; ``heading_std`` from the
-        fix's velocity σ (``σ_v / speed``).
+        fix's cross-track velocity σ, ``√(σ_N² sin²ψ + σ_E² cos²ψ) / speed``.
 
     Raises
     ------
@@ -156,5 +171,83 @@ def motion_alignment(gnss: GnssData, *, min_speed: float = 5.0, t_start: float |
     yaw = math.atan2(v[k, 1], v[k, 0])
     pitch = math.atan2(-v[k, 2], sp[k])
     q = quat_from_euler(0.0, pitch, yaw)
-    sd = float(np.hypot(gnss.vel_std[k, 0], gnss.vel_std[k, 1]) / sp[k])
+    # the heading error is the cross-track velocity error over the speed: σ_ψ² = (σ_N² sin²ψ + σ_E² cos²ψ) / s²
+    sd = float(np.hypot(gnss.vel_std[k, 0] * math.sin(yaw), gnss.vel_std[k, 1] * math.cos(yaw)) / sp[k])
     return Alignment(float(gnss.t[k]), np.asarray(q), sd, "GNSS velocity (track)", gnss.lla[k].copy(), v[k].copy())
+
+
+def fine_alignment(imu: ImuData | ImuIncrements, lla: Any, coarse: Alignment, config: GinsConfig, *,
+                   pos_std: float = 1.0, heading_std: float | None = None) -> Alignment:
+    """Fine alignment over a static period: the GNSS/INS filter with ZUPT, ZARU and the known position.
+
+    The filter starts from the coarse attitude and runs over the whole static period with zero-velocity and
+    zero-angular-rate updates (the gyros measure ``C_b^n ᵀ ω_ie^n`` plus their bias: gyrocompassing inside the
+    filter) and 1 Hz fixes of the known position.  Levelling and gyrocompassing used the same samples, so the
+    coarse attitude is not information independent of the biases: the filter starts from a diffuse attitude
+    (level σ 1°, heading σ 5°, or ``heading_std`` for a given heading) and its covariance then holds the
+    limits of a static alignment, ``δθ_level ≈ b_a / g`` and ``δψ ≈ ε_E / (Ω cos φ)`` (Groves 2013, §5.6.3,
+    §14.2.2), instead of counting the data twice.
+
+    Parameters
+    ----------
+    imu : ImuData or ImuIncrements
+        The static period (the one given to :func:`static_alignment`).
+    lla : array_like, shape (3,)
+        Known position: lat rad, lon rad, ellipsoidal height m.
+    coarse : Alignment
+        The result of :func:`static_alignment` on the same period.
+    config : GinsConfig
+        The filter's IMU model; over the static period the biases and scale factors are random constants of
+        its initial σ (``corr_time = inf``), ``zaru_noise`` is the white noise of one sample's rate (``ARW²
+        f_s / 2`` for rates with trapezoidal increments, ``ARW² f_s`` for increments), the lever arm zero and
+        the initial attitude σ as said above.
+    pos_std : float
+        σ of the known position, m (> 0).
+    heading_std : float, optional
+        σ of the heading given to :func:`static_alignment` (``yaw=``), rad (> 0); required then.  When the
+        gyros can gyrocompass, the filter refines that heading.
+
+    Returns
+    -------
+    Alignment
+        At the last sample: ``q_nb``, the filter's ``att_std`` (φ N/E/D, rad) and ``heading_std`` (its D
+        component), the estimated ``imu_errors``, ``lla`` the known position, ``vel_ned`` zero.
+
+    Raises
+    ------
+    InvalidInputError
+        If ``imu`` is not rates or increments of at least 2 s, ``pos_std`` / ``heading_std`` are not > 0, or a
+        given heading has no ``heading_std``.
+    ShapeError
+        If ``lla`` is not a finite 3-vector.
+    """
+    if not isinstance(imu, (ImuData, ImuIncrements)) or imu.t[-1] - imu.t[0] < 2.0:
+        raise InvalidInputError("fine_alignment needs the static period as ImuData or ImuIncrements of at least 2 s")
+    p = np.asarray(lla, dtype=float)
+    if p.shape != (3,) or not np.all(np.isfinite(p)):
+        raise ShapeError(f"lla must be a finite 3-vector (lat rad, lon rad, h m); got {lla!r}")
+    if not (pos_std > 0 and math.isfinite(pos_std)):
+        raise InvalidInputError(f"pos_std must be > 0 m; got {pos_std!r}")
+    given = coarse.method.startswith("levelling + given heading")
+    if given and heading_std is None:
+        raise InvalidInputError("the coarse heading was given (yaw=): give heading_std, its sigma in rad")
+    if heading_std is not None and not (heading_std > 0 and math.isfinite(heading_std)):
+        raise InvalidInputError(f"heading_std must be > 0 rad; got {heading_std!r}")
+    fs = 1.0 / float(np.median(np.diff(imu.t)))
+    rate_var = float(np.max(config.arw)) ** 2 * fs * (0.5 if isinstance(imu, ImuData) else 1.0)
+    # over the static period the biases are random constants (Groves 2013, §14.2.2): a Gauss-Markov state whose
+    # initial sigma (the turn-on bias) exceeds its stationary sigma would lose variance as exp(-2t/T) while the
+    # turn-on bias stays, and the filter would claim a level and heading better than the data hold
+    cfg = replace(config, corr_time=math.inf, scale_corr_time=math.inf, lever_arm=np.zeros(3),
+                  use_gnss_velocity=False, zaru_noise=math.sqrt(rate_var),
+                  init_att_std=np.radians([1.0, 1.0, 5.0]) if heading_std is None
+                  else np.array([math.radians(1.0), math.radians(1.0), heading_std]))
+    tg = imu.t[0] + np.arange(1.0, math.floor(imu.t[-1] - imu.t[0]) + 1.0)
+    fixes = GnssData(tg, np.tile(p, (tg.size, 1)), np.full((tg.size, 3), float(pos_std)),
+                     meta={"source": "fine alignment: the known position"})
+    res = GinsFilter(cfg).run(imu, fixes, lla0=p, vel0=np.zeros(3), q0=coarse.q_nb,
+                              static=np.ones(imu.t.size, dtype=bool))
+    att_std = np.sqrt(np.diag(res.cov_nav[-1][6:9, 6:9]))
+    err = np.concatenate([res.gyro_bias[-1], res.accel_bias[-1], res.gyro_scale[-1], res.accel_scale[-1]])
+    return Alignment(float(imu.t[-1]), res.q_nb[-1].copy(), float(att_std[2]), coarse.method + " + fine (Kalman filter)",
+                     p.copy(), np.zeros(3), att_std, err)
