@@ -1,9 +1,7 @@
 """RTS smoother of the GNSS/INS filter: its covariance is calibrated over seeded Monte Carlo runs.
 
-The IMU errors follow the filter's model (as in ``test_gins_consistency``: white noise of the configured ARW /
-VRW, biases a random constant plus a Gauss-Markov process of the configured sigma, scale factors random
-constants), GNSS errors are white with the reported sigma, the initial state is drawn from the initial
-covariance, and a 40 s GNSS outage makes the backward pass matter.  Then the smoothed normalised estimation
+The IMU errors and the initial state follow the filter's model (:mod:`imunav.ins.gins_truth`), GNSS errors are
+white with the reported sigma, and a 40 s GNSS outage makes the backward pass matter.  Then the smoothed normalised estimation
 error squared of position, velocity and attitude is chi^2(3) at every epoch (Bar-Shalom, Li & Kirubarajan 2001,
 section 5.4; the RTS covariance: Rauch, Tung & Striebel 1965).
 """
@@ -16,9 +14,9 @@ from scipy.stats import chi2
 
 from imunav import earth
 from imunav.ins.gins import GinsConfig, GinsFilter
-from imunav.rotation import quat_conjugate, quat_from_rotvec, quat_multiply, rotvec_from_quat
+from imunav.ins.gins_truth import initial_state_draw, matched_errors
+from imunav.rotation import quat_conjugate, quat_multiply, rotvec_from_quat
 from imunav.sim import apply_errors, ideal_imu
-from imunav.sim.error_model import GaussMarkov, ImuErrorModel, TriadErrors, scale_misalignment_matrix
 from imunav.sim.gnss import simulate_gnss
 from imunav.sim.vehicle import speed_change, stop, straight, turn, vehicle_trajectory
 from imunav.units import DEG
@@ -37,12 +35,6 @@ def truth():
     return tr, ideal_imu(tr)
 
 
-def _triad(white, gm_sd, init_sd, scale_sd, tc, rng):
-    const = np.sqrt(np.maximum(init_sd**2 - gm_sd**2, 0.0)) * rng.standard_normal(3)
-    return TriadErrors(bias=const, scale_misalignment=scale_misalignment_matrix(scale_sd * rng.standard_normal(3)),
-                       noise_density=white, bias_instability=GaussMarkov(gm_sd, tc))
-
-
 def _smoothed_nees(truth, name):
     """(runs, 3 blocks, epochs) smoothed NEES of position, velocity and attitude, every 5 s."""
     tr, ideal = truth
@@ -51,19 +43,10 @@ def _smoothed_nees(truth, name):
     out = []
     for seed in range(RUNS):
         rng = np.random.default_rng(seed)
-        model = ImuErrorModel(
-            gyro=_triad(cfg.arw, cfg.gyro_bias_std, cfg.init_gyro_bias_std, cfg.init_gyro_scale_std, cfg.corr_time, rng),
-            accel=_triad(cfg.vrw, cfg.accel_bias_std, cfg.init_accel_bias_std, cfg.init_accel_scale_std,
-                         cfg.corr_time, rng), name="matched")
-        imu = apply_errors(ideal, model, rng=seed)
+        imu = apply_errors(ideal, matched_errors(cfg, rng).model, rng=seed)
         gnss = simulate_gnss(tr, pos_noise=(0.5, 0.5, 1.0), vel_noise=(0.05, 0.05, 0.1), lever_arm=LEVER,
                              rng=seed + 10_000, outages=[(tr.t[0] + OUTAGE[0], OUTAGE[1])])
-        dr = cfg.init_pos_std * rng.standard_normal(3)
-        lat, h = tr.pos_lla[0, 0], tr.pos_lla[0, 2]
-        rn, re = earth.radii(lat)
-        lla0 = tr.pos_lla[0] - [dr[0] / (rn + h), dr[1] / ((re + h) * np.cos(lat)), -dr[2]]
-        v0 = tr.vel_ned[0] - cfg.init_vel_std * rng.standard_normal(3)
-        q0 = quat_multiply(quat_from_rotvec(-cfg.init_att_std * rng.standard_normal(3)), tr.q_nb[0])
+        lla0, v0, q0 = initial_state_draw(tr.pos_lla[0], tr.vel_ned[0], tr.q_nb[0], cfg, rng)
         s = GinsFilter(cfg).run(imu, gnss, lla0=lla0, vel0=v0, q0=q0, smoother=True).smoothed
         at = tr.t[0] + np.arange(5.0, tr.duration + 1e-9, 5.0)
         keep = np.searchsorted(s.cov_t, at - 1e-9)  # the smoother epoch at or just after

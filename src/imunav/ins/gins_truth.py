@@ -1,0 +1,114 @@
+"""A truth that follows the GNSS/INS filter's own error model: the Monte Carlo under which it must be consistent.
+
+The normalised estimation error squared (NEES) of a Kalman filter is χ²(n) only when the truth is drawn from
+the filter's model (Bar-Shalom, Li & Kirubarajan 2001, §5.4).  For :class:`~imunav.ins.gins.GinsConfig` that
+is, per axis:
+
+* white rate / specific-force noise of density ``arw`` / ``vrw``;
+* a bias that is a random constant of σ ``√(init² − σ_GM²)`` plus a stationary first-order Gauss–Markov
+  process of σ ``gyro_bias_std`` / ``accel_bias_std`` and time constant ``corr_time`` — together of the
+  initial σ ``init_gyro_bias_std`` / ``init_accel_bias_std``;
+* scale-factor errors that are random constants of the initial σ (the presets' scale factors are constants,
+  ``scale_corr_time = inf``);
+* an initial position, velocity and attitude error drawn from ``init_pos_std``, ``init_vel_std`` and
+  ``init_att_std`` (attitude: φ about N, E, D with ``C = exp([φ×]) Ĉ``).
+
+The presets' flicker noise, misalignment and g-sensitivity are not in the filter's model; a run on
+``simulate_imu(truth, presets.get(name))`` measures robustness, one on :func:`matched_errors` consistency.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import NDArray
+
+from imunav import earth
+from imunav.ins.gins import GinsConfig
+from imunav.rotation import quat_from_rotvec, quat_multiply
+from imunav.sim.error_model import GaussMarkov, ImuErrorModel, TriadErrors, scale_misalignment_matrix
+
+__all__ = ["MatchedErrors", "matched_errors", "initial_state_draw"]
+
+Array = NDArray[np.float64]
+
+
+@dataclass(frozen=True)
+class MatchedErrors:
+    """IMU errors drawn from a :class:`~imunav.ins.gins.GinsConfig`'s model.
+
+    Attributes
+    ----------
+    model : ImuErrorModel
+        For :func:`imunav.sim.apply_errors` (with ``return_truth=True`` it gives the bias at every sample).
+    gyro_scale, accel_scale : numpy.ndarray, shape (3,)
+        The drawn scale-factor errors, dimensionless (the filter's scale states).
+    """
+
+    model: ImuErrorModel
+    gyro_scale: Array
+    accel_scale: Array
+
+
+def _triad(white: Array, gm_sd: Array, init_sd: Array, scale_sd: Array, tc: float,
+           rng: np.random.Generator) -> tuple[TriadErrors, Array]:
+    """One triad's errors and its scale factors; with ``tc = inf`` the bias is a random constant of ``init_sd``."""
+    z = rng.standard_normal(3)
+    s = scale_sd * rng.standard_normal(3)
+    if not np.isfinite(tc):
+        return TriadErrors(bias=init_sd * z, scale_misalignment=scale_misalignment_matrix(s), noise_density=white), s
+    return TriadErrors(bias=np.sqrt(np.maximum(init_sd**2 - gm_sd**2, 0.0)) * z,
+                       scale_misalignment=scale_misalignment_matrix(s), noise_density=white,
+                       bias_instability=GaussMarkov(gm_sd, tc)), s
+
+
+def matched_errors(cfg: GinsConfig, rng: np.random.Generator) -> MatchedErrors:
+    """Draw gyro and accelerometer errors from the model of ``cfg`` (see the module docstring).
+
+    Parameters
+    ----------
+    cfg : GinsConfig
+        The filter's configuration.
+    rng : numpy.random.Generator
+        Draws the constants (gyro, then accel: bias, then scale factors).  The Gauss–Markov and white noise
+        sequences are drawn by :func:`imunav.sim.apply_errors` from its own ``rng``.
+
+    Returns
+    -------
+    MatchedErrors
+        The error model and its scale factors.
+    """
+    gyro, sg = _triad(cfg.arw, cfg.gyro_bias_std, cfg.init_gyro_bias_std, cfg.init_gyro_scale_std, cfg.corr_time,
+                      rng)
+    acc, sa = _triad(cfg.vrw, cfg.accel_bias_std, cfg.init_accel_bias_std, cfg.init_accel_scale_std, cfg.corr_time,
+                     rng)
+    return MatchedErrors(ImuErrorModel(gyro=gyro, accel=acc, name="matched to the filter"), sg, sa)
+
+
+def initial_state_draw(lla: Array, vel_ned: Array, q_nb: Array, cfg: GinsConfig,
+                       rng: np.random.Generator) -> tuple[Array, Array, Array]:
+    """An initial state whose error against the true one is drawn from the initial covariance of ``cfg``.
+
+    Parameters
+    ----------
+    lla, vel_ned, q_nb : numpy.ndarray, shapes (3,), (3,), (4,)
+        The true initial position (lat rad, lon rad, h m), NED velocity (m/s) and attitude (body FRD -> NED).
+    cfg : GinsConfig
+        ``init_pos_std`` (N, E, D m), ``init_vel_std`` (m/s), ``init_att_std`` (φ N, E, D rad).
+    rng : numpy.random.Generator
+        Draws position, then velocity, then attitude.
+
+    Returns
+    -------
+    tuple of numpy.ndarray
+        ``(lla0, vel0, q0)`` for :meth:`imunav.ins.gins.GinsFilter.run`: true minus the drawn error (the
+        filter's error states are true minus estimate).
+    """
+    dr = cfg.init_pos_std * rng.standard_normal(3)
+    lat, h = float(lla[0]), float(lla[2])
+    rn, re = earth.radii(lat)
+    lla0 = np.asarray(lla, dtype=float) - [dr[0] / (rn + h), dr[1] / ((re + h) * np.cos(lat)), -dr[2]]
+    v0 = np.asarray(vel_ned, dtype=float) - cfg.init_vel_std * rng.standard_normal(3)
+    q0 = quat_multiply(quat_from_rotvec(-cfg.init_att_std * rng.standard_normal(3)), np.asarray(q_nb, dtype=float))
+    return lla0, v0, q0
