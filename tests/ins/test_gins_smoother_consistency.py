@@ -12,10 +12,8 @@ import numpy as np
 import pytest
 from scipy.stats import chi2
 
-from imunav import earth
 from imunav.ins.gins import GinsConfig, GinsFilter
-from imunav.ins.gins_truth import initial_state_draw, matched_errors
-from imunav.rotation import quat_conjugate, quat_multiply, rotvec_from_quat
+from imunav.ins.gins_truth import initial_state_draw, matched_errors, navigation_errors, nees_blocks
 from imunav.sim import apply_errors, ideal_imu
 from imunav.sim.gnss import simulate_gnss
 from imunav.sim.vehicle import speed_change, stop, straight, turn, vehicle_trajectory
@@ -52,17 +50,7 @@ def _smoothed_nees(truth, name):
         keep = np.searchsorted(s.cov_t, at - 1e-9)  # the smoother epoch at or just after
         keep = keep[keep < s.cov_t.size]
         idx = np.searchsorted(tr.t, s.cov_t[keep] - 1e-9)
-        ref = tr.pos_lla[idx]
-        rn, re = earth.radii(ref[:, 0])
-        est = s.lla[idx]
-        e = np.hstack([np.column_stack([(ref[:, 0] - est[:, 0]) * (rn + ref[:, 2]),
-                                        (ref[:, 1] - est[:, 1]) * (re + ref[:, 2]) * np.cos(ref[:, 0]),
-                                        -(ref[:, 2] - est[:, 2])]),
-                       tr.vel_ned[idx] - s.vel_ned[idx],
-                       rotvec_from_quat(quat_multiply(tr.q_nb[idx], quat_conjugate(s.q_nb[idx])))])
-        P = s.cov_nav[keep]
-        out.append([np.einsum("ni,nij,nj->n", e[:, b], np.linalg.inv(P[:, b, b]), e[:, b])
-                    for b in (slice(0, 3), slice(3, 6), slice(6, 9))])
+        out.append(nees_blocks(navigation_errors(tr, idx, s), s.cov_nav[keep]))
     return np.array(out)
 
 

@@ -14,22 +14,24 @@ is, per axis:
   ``init_att_std`` (attitude: φ about N, E, D with ``C = exp([φ×]) Ĉ``).
 
 The presets' flicker noise, misalignment and g-sensitivity are not in the filter's model; a run on
-``simulate_imu(truth, presets.get(name))`` measures robustness, one on :func:`matched_errors` consistency.
+``simulate_imu(truth, presets.get(name))`` measures robustness, one on :func:`matched_errors` consistency,
+with :func:`navigation_errors` and :func:`nees_blocks`.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
-from numpy.typing import NDArray
+from numpy.typing import ArrayLike, NDArray
 
 from imunav import earth
 from imunav.ins.gins import GinsConfig
-from imunav.rotation import quat_from_rotvec, quat_multiply
+from imunav.rotation import quat_conjugate, quat_from_rotvec, quat_multiply, rotvec_from_quat
 from imunav.sim.error_model import GaussMarkov, ImuErrorModel, TriadErrors, scale_misalignment_matrix
 
-__all__ = ["MatchedErrors", "matched_errors", "initial_state_draw"]
+__all__ = ["MatchedErrors", "matched_errors", "initial_state_draw", "navigation_errors", "nees_blocks"]
 
 Array = NDArray[np.float64]
 
@@ -112,3 +114,50 @@ def initial_state_draw(lla: Array, vel_ned: Array, q_nb: Array, cfg: GinsConfig,
     v0 = np.asarray(vel_ned, dtype=float) - cfg.init_vel_std * rng.standard_normal(3)
     q0 = quat_multiply(quat_from_rotvec(-cfg.init_att_std * rng.standard_normal(3)), np.asarray(q_nb, dtype=float))
     return lla0, v0, q0
+
+
+def navigation_errors(truth: Any, idx: ArrayLike, est: Any) -> Array:
+    """True minus estimated position, velocity and attitude at truth samples ``idx``: the filter's error states.
+
+    Parameters
+    ----------
+    truth : Trajectory
+        ``pos_lla`` (lat rad, lon rad, h m), ``vel_ned`` (m/s) and ``q_nb`` on its time grid.
+    idx : array_like of int, shape (K,)
+        Indices of the compared samples, the same in ``truth`` and ``est``.
+    est : GinsResult or SmoothedTrack
+        ``lla``, ``vel_ned`` and ``q_nb`` on the same grid.
+
+    Returns
+    -------
+    numpy.ndarray, shape (K, 9)
+        NED position error (m, ``δr_N = δlat (R_N + h)``, ``δr_E = δlon (R_E + h) cos lat``, ``δr_D = −δh``),
+        NED velocity error (m/s) and the attitude error φ (rad) with ``C = exp([φ×]) Ĉ``: the order and the
+        convention of :attr:`imunav.ins.gins.GinsResult.cov_nav`, so that ``eᵀ P⁻¹ e`` is the NEES.
+    """
+    i = np.asarray(idx, dtype=np.int64)
+    ref, lla = truth.pos_lla[i], est.lla[i]
+    rn, re = earth.radii(ref[:, 0])
+    dr = np.column_stack([(ref[:, 0] - lla[:, 0]) * (rn + ref[:, 2]),
+                          (ref[:, 1] - lla[:, 1]) * (re + ref[:, 2]) * np.cos(ref[:, 0]), -(ref[:, 2] - lla[:, 2])])
+    phi = rotvec_from_quat(quat_multiply(truth.q_nb[i], quat_conjugate(est.q_nb[i])))
+    return np.hstack([dr, truth.vel_ned[i] - est.vel_ned[i], phi])
+
+
+def nees_blocks(e: Array, P: Array) -> Array:
+    """NEES of position, velocity and attitude, each with its own 3x3 block of ``P``.
+
+    Parameters
+    ----------
+    e : numpy.ndarray, shape (K, 9)
+        Errors from :func:`navigation_errors`.
+    P : numpy.ndarray, shape (K, 9, 9)
+        The matching covariance records (``cov_nav``).
+
+    Returns
+    -------
+    numpy.ndarray, shape (3, K)
+        ``e_bᵀ P_bb⁻¹ e_b`` per block: χ²(3) each for a consistent filter.
+    """
+    return np.array([np.einsum("ni,nij,nj->n", e[:, b], np.linalg.inv(P[:, b, b]), e[:, b])
+                     for b in (slice(0, 3), slice(3, 6), slice(6, 9))])
