@@ -263,6 +263,81 @@ def _half_grid(x: Array, xd: Array, dt: float) -> Array:
     return out
 
 
+#: sinusoids per axis of the body-velocity perturbation, and the Hann ramp (s) between the moving and resting σ
+_N_TONES = 32
+_REST_RAMP_S = 0.5
+
+
+def _rest_weight(maneuvers: Sequence[Maneuver], total: float) -> _Signal:
+    """r(t): 1 during the stops, 0 in motion, Hann steps of up to ``_REST_RAMP_S`` just outside each stop."""
+    spans: list[list[float]] = []
+    t = 0.0
+    for m in maneuvers:
+        if m.kind == "stop":
+            if spans and spans[-1][1] == t:
+                spans[-1][1] = t + m.duration_s
+            else:
+                spans.append([t, t + m.duration_s])
+        t += m.duration_s
+    r = _Signal(0.0)
+    for i, (a, b) in enumerate(spans):
+        before = a - (spans[i - 1][1] if i else 0.0)
+        after = (spans[i + 1][0] if i + 1 < len(spans) else total) - b
+        if a <= 0.0:
+            r.x0 = 1.0
+        else:
+            d = min(_REST_RAMP_S, before)
+            r.pulses.append((a - d, d, 1.0))
+        if after > 0.0:
+            d = min(_REST_RAMP_S, after)
+            r.pulses.append((b, d, -1.0))
+    return r
+
+
+def _tones(t: Array, band: tuple[float, float], g: np.random.Generator) -> tuple[Array, Array]:
+    """Three unit-variance sums of ``_N_TONES`` sinusoids (one per column) and their derivatives at ``t``."""
+    lo, hi = band
+    m = _N_TONES
+    f = lo + (np.arange(m)[:, None] + g.random((m, 3))) * ((hi - lo) / m)  # one frequency per sub-band
+    phase = 2.0 * np.pi * g.random((m, 3))
+    u = np.zeros((t.size, 3))
+    ud = np.zeros((t.size, 3))
+    a = math.sqrt(2.0 / m)
+    for k in range(m):
+        w = 2.0 * np.pi * f[k]
+        arg = np.multiply.outer(t, w) + phase[k]
+        u += a * np.cos(arg)
+        ud -= (a * w) * np.sin(arg)
+    return u, ud
+
+
+def _body_velocity_perturbation(maneuvers: Sequence[Maneuver], total: float, th: Array, slip: Array, idle: float,
+                                band: tuple[float, float], rng: Any) -> tuple[Array, Array]:
+    """δv^b and its derivative at ``th``: amplitude ``A(t) = σ_move + (σ_rest − σ_move) r(t)`` times the tones."""
+    g = np.random.default_rng(rng)
+    u, ud = _tones(th - th[0], band, g)
+    r, rd, _ = _rest_weight(maneuvers, total).eval(th)
+    s_move = np.array([0.0, slip[0], slip[1]])
+    ds = np.full(3, idle) - s_move
+    amp = s_move + np.multiply.outer(r, ds)
+    return amp * u, np.multiply.outer(rd, ds) * u + amp * ud
+
+
+def _check_perturbation(slip_std: ArrayLike, idle_vibration_std: float, band_hz: ArrayLike,
+                        fs: float) -> tuple[Array, float, tuple[float, float]]:
+    slip = np.asarray(slip_std, dtype=float)
+    if slip.shape != (2,) or not np.all(np.isfinite(slip)) or np.any(slip < 0):
+        raise InvalidInputError(f"slip_std must be (lateral, vertical) sigmas >= 0 m/s, finite; got {slip_std!r}")
+    if not (math.isfinite(idle_vibration_std) and idle_vibration_std >= 0):
+        raise InvalidInputError(f"idle_vibration_std must be a sigma >= 0 m/s, finite; got {idle_vibration_std!r}")
+    band = np.asarray(band_hz, dtype=float)
+    if band.shape != (2,) or not np.all(np.isfinite(band)) or not (0 < band[0] < band[1] < fs / 2):
+        raise InvalidInputError(f"vibration_band_hz must be (low, high) Hz with 0 < low < high < fs/2 = {fs / 2:g} "
+                                f"(the samples must resolve it); got {band_hz!r}")
+    return slip, float(idle_vibration_std), (float(band[0]), float(band[1]))
+
+
+@fill_doc
 def vehicle_trajectory(
     maneuvers: Sequence[Maneuver],
     *,
@@ -271,6 +346,10 @@ def vehicle_trajectory(
     heading0_deg: float = 0.0,
     speed0: float = 0.0,
     t0: float = 0.0,
+    slip_std: ArrayLike = (0.0, 0.0),
+    idle_vibration_std: float = 0.0,
+    vibration_band_hz: ArrayLike = (0.5, 5.5),
+    rng: Any = None,
 ) -> Trajectory:
     """Truth trajectory of a drive, sampled at the IMU rate.
 
@@ -288,6 +367,16 @@ def vehicle_trajectory(
         Initial speed, m/s.
     t0 : float
         Time of the first sample, s (e.g. a GPS second of week).
+    slip_std : array_like, shape (2,)
+        σ of the body's lateral (side slip) and vertical (suspension) velocity while the vehicle moves, m/s
+        (>= 0; default none: the non-holonomic constraint holds exactly).
+    idle_vibration_std : float
+        σ of the body's velocity on each axis during the :func:`stop` manoeuvres (engine idle), m/s (>= 0;
+        default none: the vehicle stands exactly still).
+    vibration_band_hz : array_like, shape (2,)
+        Frequency band (low, high) of both perturbations, Hz (``0 < low < high < fs / 2``).
+    %(sim_rng)s
+        Draws the perturbations' frequencies and phases (unused when both are off).
 
     Returns
     -------
@@ -298,10 +387,36 @@ def vehicle_trajectory(
     ------
     InvalidInputError
         If ``maneuvers`` is empty or holds something else than a :class:`Maneuver`, ``fs`` or ``speed0``
-        is not valid, the origin latitude is beyond ±85° (likely degrees), or the drive reaches a
-        negative speed, stops while moving, or climbs a hill at standstill.
+        is not valid, the origin latitude is beyond ±85° (likely degrees), the drive reaches a
+        negative speed, stops while moving, or climbs a hill at standstill, or a perturbation σ or the
+        band is out of range.
     ShapeError
         If ``origin_lla`` is not a finite 3-vector.
+
+    Notes
+    -----
+    Body-velocity perturbations (on when a σ is > 0).  The attitude and body rate stay those of the
+    manoeuvres; the body velocity gains ``δv^b(t) = A(t) ∘ u(t)``::
+
+        v^n = C_nb (s e_x + δv^b),      v̇^n = C_nb (ω_nb^b × (s e_x + δv^b) + ṡ e_x + δv̇^b),
+        A(t) = σ_move + (σ_rest − σ_move) r(t),   σ_move = (0, σ_lat, σ_vert),   σ_rest = σ_idle (1, 1, 1),
+
+    with ``r(t)`` 1 during the stops, 0 in motion, and Hann steps of 0.5 s just outside each stop (in the
+    last 0.5 s of the braking and the first 0.5 s of driving away, where the speed is a few mm/s).  Each
+    component of ``u`` is ``√(2/M) Σ_m cos(2π f_m t + φ_m)`` with M = 32 sinusoids, one frequency drawn
+    uniformly in each of M equal sub-bands of the band and uniform phases: zero mean, unit time-averaged
+    variance, no DC part (the position stays within ``σ / (2π f_low)`` of the unperturbed path at rest),
+    and closed-form derivatives, so that ``vel_ned``, ``accel_ned`` and ``omega_nb_b`` stay exact,
+    :func:`~imunav.sim.trajectory.ideal_imu` stays exact and the position integrates the perturbed
+    ``v^n``.  Its autocorrelation is ``ρ(τ) = (sin 2π f_high τ − sin 2π f_low τ) / (2π (f_high − f_low) τ)``
+    on average over the draws: with the default band of 5 Hz width, ``ρ(0.2 s) = ρ(0.4 s) = … = 0``
+    (values 0.2 s apart, the default covariance step of :class:`~imunav.ins.gins.GinsFilter` where NHC and
+    ZUPT are applied, are uncorrelated: the frequencies folded at 5 Hz cover its Nyquist band evenly),
+    and the stratified frequencies leave at the first lags a residual of the order of
+    ``2π k / M / √(2M)`` (≈ 0.02 at k = 1).  Such a perturbation is then a white measurement noise of
+    σ ``σ_lat``, ``σ_vert`` for the non-holonomic constraint and ``σ_idle`` for the ZUPT, as the filter
+    models it.  Choose ``fs`` well above ``f_high`` (≥ 100 Hz for the default band): an IMU sampled at
+    ``fs`` integrated trapezoidally sees a sinusoid of frequency f scaled by about ``1 − (2π f / fs)² / 12``.
     """
     if not maneuvers:
         raise InvalidInputError("vehicle_trajectory: give at least one manoeuvre, e.g. [straight(60)]")
@@ -314,6 +429,7 @@ def vehicle_trajectory(
         raise ShapeError(f"origin_lla must be (lat rad, lon rad, h m); got {origin_lla!r}")
     if abs(o[0]) > math.radians(85):
         raise InvalidInputError(f"origin latitude {math.degrees(o[0]):.4g} deg: give it in radians, within +-85 deg")
+    slip, idle, band = _check_perturbation(slip_std, idle_vibration_std, vibration_band_hz, float(fs))
     speed, heading, grade, total = _plan(maneuvers, float(speed0))
     heading.x0 = float(heading0_deg) * DEG
     dt = 1.0 / float(fs)
@@ -332,6 +448,13 @@ def vehicle_trajectory(
         sd * cg * sp - s * (sg * gamd * sp - cg * cp * psid),
         -sd * sg - s * cg * gamd,
     ], axis=1)
+    if np.any(slip > 0) or idle > 0:
+        dvb, dvb_dot = _body_velocity_perturbation(maneuvers, total, th, slip, idle, band, rng)
+        c_nb = np.stack([np.stack([cg * cp, cg * sp, -sg], axis=1), np.stack([-sp, cp, 0.0 * sp], axis=1),
+                         np.stack([sg * cp, sg * sp, cg], axis=1)], axis=2)  # columns: body x, y, z in NED
+        w_h = np.stack([-psid * sg, gamd, psid * cg], axis=1)
+        vel = vel + np.einsum("nij,nj->ni", c_nb, dvb)
+        acc = acc + np.einsum("nij,nj->ni", c_nb, np.cross(w_h, dvb) + dvb_dot)
     # geodetic position: h first, then latitude by fixed-point iteration (R_N depends weakly on lat), then lon
     h = o[2] + _simpson_cumulative(-vel[:, 2], dt)
     h_half = _half_grid(h, -vel[0::2, 2], dt)
