@@ -294,28 +294,37 @@ def _rest_weight(maneuvers: Sequence[Maneuver], total: float) -> _Signal:
     return r
 
 
-def _tones(t: Array, band: tuple[float, float], g: np.random.Generator) -> tuple[Array, Array]:
-    """Three unit-variance sums of ``_N_TONES`` sinusoids (one per column) and their derivatives at ``t``."""
+def _tones(n: int, h: float, band: tuple[float, float], g: np.random.Generator) -> tuple[Array, Array]:
+    """Three unit-variance sums of ``_N_TONES`` sinusoids (one per column) and their derivatives at ``t = k h``,
+    ``k < n``.  With ``t = T_b + τ_i`` (blocks of L samples), ``cos(ω t + φ) = cos(ω T_b + φ) cos ω τ_i −
+    sin(ω T_b + φ) sin ω τ_i``: the sum over the sinusoids is a matrix product, exact to rounding."""
     lo, hi = band
     m = _N_TONES
     f = lo + (np.arange(m)[:, None] + g.random((m, 3))) * ((hi - lo) / m)  # one frequency per sub-band
     phase = 2.0 * np.pi * g.random((m, 3))
-    u = np.zeros((t.size, 3))
-    ud = np.zeros((t.size, 3))
+    w = 2.0 * np.pi * f
     a = math.sqrt(2.0 / m)
-    for k in range(m):
-        w = 2.0 * np.pi * f[k]
-        arg = np.multiply.outer(t, w) + phase[k]
-        u += a * np.cos(arg)
-        ud -= (a * w) * np.sin(arg)
-    return u, ud
+    L = max(1, math.isqrt(n))
+    nb = -(-n // L)
+    tb = np.arange(nb) * (L * h)
+    ti = np.arange(L) * h
+    u = np.empty((nb * L, 3))
+    ud = np.empty((nb * L, 3))
+    for j in range(3):
+        A = np.multiply.outer(tb, w[:, j]) + phase[:, j]
+        B = np.multiply.outer(ti, w[:, j])
+        ca, sa, cb, sb = a * np.cos(A), a * np.sin(A), np.cos(B), np.sin(B)
+        u[:, j] = (ca @ cb.T - sa @ sb.T).ravel()
+        ud[:, j] = -((sa * w[:, j]) @ cb.T + (ca * w[:, j]) @ sb.T).ravel()
+    return u[:n], ud[:n]
 
 
-def _body_velocity_perturbation(maneuvers: Sequence[Maneuver], total: float, th: Array, slip: Array, idle: float,
-                                band: tuple[float, float], rng: Any) -> tuple[Array, Array]:
-    """δv^b and its derivative at ``th``: amplitude ``A(t) = σ_move + (σ_rest − σ_move) r(t)`` times the tones."""
+def _body_velocity_perturbation(maneuvers: Sequence[Maneuver], total: float, th: Array, h: float, slip: Array,
+                                idle: float, band: tuple[float, float], rng: Any) -> tuple[Array, Array]:
+    """δv^b and its derivative at ``th = k h``: amplitude ``A(t) = σ_move + (σ_rest − σ_move) r(t)`` times the
+    tones."""
     g = np.random.default_rng(rng)
-    u, ud = _tones(th - th[0], band, g)
+    u, ud = _tones(th.size, h, band, g)
     r, rd, _ = _rest_weight(maneuvers, total).eval(th)
     s_move = np.array([0.0, slip[0], slip[1]])
     ds = np.full(3, idle) - s_move
@@ -331,10 +340,11 @@ def _check_perturbation(slip_std: ArrayLike, idle_vibration_std: float, band_hz:
     if not (math.isfinite(idle_vibration_std) and idle_vibration_std >= 0):
         raise InvalidInputError(f"idle_vibration_std must be a sigma >= 0 m/s, finite; got {idle_vibration_std!r}")
     band = np.asarray(band_hz, dtype=float)
-    if band.shape != (2,) or not np.all(np.isfinite(band)) or not (0 < band[0] < band[1] < fs / 2):
+    on = bool(np.any(slip > 0) or idle_vibration_std > 0)  # the band matters only with a perturbation
+    if on and (band.shape != (2,) or not np.all(np.isfinite(band)) or not (0 < band[0] < band[1] < fs / 2)):
         raise InvalidInputError(f"vibration_band_hz must be (low, high) Hz with 0 < low < high < fs/2 = {fs / 2:g} "
                                 f"(the samples must resolve it); got {band_hz!r}")
-    return slip, float(idle_vibration_std), (float(band[0]), float(band[1]))
+    return slip, float(idle_vibration_std), ((float(band[0]), float(band[1])) if on else (0.0, 0.0))
 
 
 @fill_doc
@@ -348,7 +358,7 @@ def vehicle_trajectory(
     t0: float = 0.0,
     slip_std: ArrayLike = (0.0, 0.0),
     idle_vibration_std: float = 0.0,
-    vibration_band_hz: ArrayLike = (0.5, 5.5),
+    vibration_band_hz: ArrayLike = (0.5, 10.5),
     rng: Any = None,
 ) -> Trajectory:
     """Truth trajectory of a drive, sampled at the IMU rate.
@@ -374,7 +384,8 @@ def vehicle_trajectory(
         σ of the body's velocity on each axis during the :func:`stop` manoeuvres (engine idle), m/s (>= 0;
         default none: the vehicle stands exactly still).
     vibration_band_hz : array_like, shape (2,)
-        Frequency band (low, high) of both perturbations, Hz (``0 < low < high < fs / 2``).
+        Frequency band (low, high) of both perturbations, Hz (``0 < low < high < fs / 2``; checked when a
+        perturbation is on).
     %(sim_rng)s
         Draws the perturbations' frequencies and phases (unused when both are off).
 
@@ -409,14 +420,17 @@ def vehicle_trajectory(
     and closed-form derivatives, so that ``vel_ned``, ``accel_ned`` and ``omega_nb_b`` stay exact,
     :func:`~imunav.sim.trajectory.ideal_imu` stays exact and the position integrates the perturbed
     ``v^n``.  Its autocorrelation is ``ρ(τ) = (sin 2π f_high τ − sin 2π f_low τ) / (2π (f_high − f_low) τ)``
-    on average over the draws: with the default band of 5 Hz width, ``ρ(0.2 s) = ρ(0.4 s) = … = 0``
-    (values 0.2 s apart, the default covariance step of :class:`~imunav.ins.gins.GinsFilter` where NHC and
-    ZUPT are applied, are uncorrelated: the frequencies folded at 5 Hz cover its Nyquist band evenly),
-    and the stratified frequencies leave at the first lags a residual of the order of
-    ``2π k / M / √(2M)`` (≈ 0.02 at k = 1).  Such a perturbation is then a white measurement noise of
-    σ ``σ_lat``, ``σ_vert`` for the non-holonomic constraint and ``σ_idle`` for the ZUPT, as the filter
-    models it.  Choose ``fs`` well above ``f_high`` (≥ 100 Hz for the default band): an IMU sampled at
-    ``fs`` integrated trapezoidally sees a sinusoid of frequency f scaled by about ``1 − (2π f / fs)² / 12``.
+    on average over the draws: with the default band of 10 Hz width, ``ρ(k 0.1 s) = 0`` for every k ≥ 1, so
+    that values 0.1 s or 0.2 s apart are uncorrelated (0.2 s is the default covariance step of
+    :class:`~imunav.ins.gins.GinsFilter`, where NHC and ZUPT are applied; a barometer or magnetometer at
+    10 Hz adds steps 0.1 s apart): folded at 10 Hz the frequencies cover the samples' Nyquist band evenly,
+    the sampled sequence is white.  The stratified frequencies leave at the first lags a residual of the
+    order of ``2π k / M / √(2M)`` (≈ 0.02 at k = 1).  Such a perturbation is then a white measurement noise
+    of σ ``σ_lat``, ``σ_vert`` for the non-holonomic constraint and ``σ_idle`` for the ZUPT, as the filter
+    models it, and the filter's error, made of earlier samples, is uncorrelated with the current one: no
+    bias on their NIS.  Choose ``fs`` well above ``f_high`` (≥ 200 Hz for the default band): an IMU
+    sampled at ``fs`` and integrated trapezoidally sees a sinusoid of frequency f scaled by about
+    ``1 − (2π f / fs)² / 12`` (−0.3 % on average over the default band at 200 Hz).
     """
     if not maneuvers:
         raise InvalidInputError("vehicle_trajectory: give at least one manoeuvre, e.g. [straight(60)]")
@@ -449,7 +463,7 @@ def vehicle_trajectory(
         -sd * sg - s * cg * gamd,
     ], axis=1)
     if np.any(slip > 0) or idle > 0:
-        dvb, dvb_dot = _body_velocity_perturbation(maneuvers, total, th, slip, idle, band, rng)
+        dvb, dvb_dot = _body_velocity_perturbation(maneuvers, total, th, dt / 2.0, slip, idle, band, rng)
         c_nb = np.stack([np.stack([cg * cp, cg * sp, -sg], axis=1), np.stack([-sp, cp, 0.0 * sp], axis=1),
                          np.stack([sg * cp, sg * sp, cg], axis=1)], axis=2)  # columns: body x, y, z in NED
         w_h = np.stack([-psid * sg, gamd, psid * cg], axis=1)
