@@ -16,6 +16,14 @@ zero, pitch is the road grade γ and yaw the heading ψ::
     v^n = s (cos γ cos ψ, cos γ sin ψ, −sin γ),
     ω_nb^b = (−ψ̇ sin γ, γ̇, ψ̇ cos γ)          (ZYX Euler rates at zero roll).
 
+Optionally (``slip_std``, ``idle_vibration_std`` of :func:`vehicle_trajectory`)
+the body of a real car also moves sideways and vertically while it drives (side
+slip, suspension) and vibrates at rest (engine idle): a zero-mean, band-limited
+body velocity ``δv^b`` in closed form, added to ``v^n`` through ``C_nb`` with
+its exact derivative, the attitude and body rate unchanged.  Then the
+non-holonomic constraint and the zero-velocity update have in the truth the
+white measurement noise their σ stands for.
+
 Every manoeuvre shapes a rate (acceleration ṡ, yaw rate ψ̇, grade rate γ̇)
 with Hann pulses ``A/T (1 − cos 2πu)``, ``u = (t − t0)/T``: rates, values and
 their derivatives are closed-form and continuous, and the IMU signals have no
@@ -753,6 +761,11 @@ def simulate_odometer(
     rng: Any = None,
 ) -> OdometerData:
     """Wheel speed: forward body velocity at the wheel, ``(1 + k) (C_bn v^n + ω_eb^b × l)_x + w``.
+
+    With the body-velocity perturbations of :func:`vehicle_trajectory`, the side slip and suspension velocity
+    are perpendicular to the body x axis: in motion the reading is the forward speed as without them.  At rest
+    it is the body's fore-aft idle velocity at the wheel (a sensor of the body's forward velocity, as the
+    GNSS/INS filter models it; a real wheel encoder would read 0 there).
 
     Parameters
     ----------
