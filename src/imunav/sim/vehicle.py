@@ -424,7 +424,8 @@ def vehicle_trajectory(
     last 0.5 s of the braking and the first 0.5 s of driving away, where the speed is a few mm/s).  Each
     component of ``u`` is ``√(2/M) Σ_m cos(2π f_m t + φ_m)`` with M = 32 sinusoids, one frequency drawn
     uniformly in each of M equal sub-bands of the band and uniform phases: zero mean, unit time-averaged
-    variance, no DC part (the position stays within ``σ / (2π f_low)`` of the unperturbed path at rest),
+    variance, no DC part (at rest the position stays within ``√(2M) σ / (2π f_low)`` of where it stood,
+    with an rms of ``σ / (2π √(f_low f_high))``),
     and closed-form derivatives, so that ``vel_ned``, ``accel_ned`` and ``omega_nb_b`` stay exact,
     :func:`~imunav.sim.trajectory.ideal_imu` stays exact and the position integrates the perturbed
     ``v^n``.  Its autocorrelation is ``ρ(τ) = (sin 2π f_high τ − sin 2π f_low τ) / (2π (f_high − f_low) τ)``
@@ -472,7 +473,7 @@ def vehicle_trajectory(
     ], axis=1)
     if np.any(slip > 0) or idle > 0:
         dvb, dvb_dot = _body_velocity_perturbation(maneuvers, total, th, dt / 2.0, slip, idle, band, rng)
-        c_nb = np.stack([np.stack([cg * cp, cg * sp, -sg], axis=1), np.stack([-sp, cp, 0.0 * sp], axis=1),
+        c_nb = np.stack([np.stack([cg * cp, cg * sp, -sg], axis=1), np.stack([-sp, cp, np.zeros_like(sp)], axis=1),
                          np.stack([sg * cp, sg * sp, cg], axis=1)], axis=2)  # columns: body x, y, z in NED
         w_h = np.stack([-psid * sg, gamd, psid * cg], axis=1)
         vel = vel + np.einsum("nij,nj->ni", c_nb, dvb)
