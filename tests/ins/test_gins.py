@@ -89,7 +89,8 @@ def test_odometer_and_nhc_shrink_mems_outage_drift(drive):
 def test_each_aiding_model_has_its_own_nis_record(drive):
     """The odometer, NHC, ZUPT and ZARU NIS are recorded apart (the marginals of the joint updates' innovation):
     with the odometer alone the vehicle update has one row and its NIS is the odometer's; with the NHC alone, two
-    rows and the NHC's; the ZUPT and ZARU records sit exactly where the joint rest update was applied."""
+    rows and the NHC's; the ZUPT and ZARU records sit exactly where the joint rest update was applied, and there
+    the NHC is not applied."""
     truth, imu = drive
     g = simulate_gnss(truth, rng=7)
     odo = simulate_odometer(truth, lever_arm=WHEEL, noise_std=0.05, rng=8)
@@ -108,6 +109,12 @@ def test_each_aiding_model_has_its_own_nis_record(drive):
     used = np.isin(truth.t, only_nhc.vehicle_t)
     assert np.all(only_nhc.vehicle_dof == 2) and np.all(np.isnan(only_nhc.odo_nis))
     np.testing.assert_allclose(only_nhc.nhc_nis[used], only_nhc.vehicle_nis, rtol=1e-9)
+    # at rest the ZUPT replaces the NHC (the same velocity is not used twice)
+    rest_nhc = GinsFilter(GinsConfig.from_preset("mems_adis16465", odo_lever_arm=WHEEL, nhc_noise=0.1)).run(
+        imu, g, **_start(truth), static=static)
+    nhc = ~np.isnan(rest_nhc.nhc_nis)
+    assert not np.any(nhc & static) and np.array_equal(nhc, used & ~static)
+    assert np.array_equal(~np.isnan(rest_nhc.zupt_nis), used & static)
 
 
 def test_bad_inputs_are_refused(drive):

@@ -115,10 +115,13 @@ class GinsConfig:
     odo_scale_std : float
         σ of the odometer scale-factor state (Gauss–Markov with ``corr_time``), dimensionless (> 0).
     nhc_noise : float or None
-        σ of the non-holonomic constraint (zero lateral and vertical wheel velocity), m/s; None: off.
+        σ of the non-holonomic constraint (zero lateral and vertical wheel velocity), m/s: the side slip and
+        suspension velocity of the body in motion; None: off.  Not applied while ``static`` says the vehicle
+        stands still: the ZUPT constrains the same velocity then (with ``zupt_noise``), and the one velocity
+        used twice as two independent measurements would make the filter overconfident.
     zupt_noise, zaru_noise : float
-        σ of the zero-velocity (m/s) and zero-angular-rate (rad/s) updates applied while ``static`` says
-        the vehicle stands still (> 0).
+        σ of the zero-velocity (m/s: the body's vibration at rest, e.g. engine idle) and zero-angular-rate
+        (rad/s) updates applied while ``static`` says the vehicle stands still (> 0).
     baro_noise : float
         σ of the barometric height, m (its bias included: no baro-bias state; > 0).
     scale_corr_time : float or None

@@ -16,6 +16,14 @@ zero, pitch is the road grade γ and yaw the heading ψ::
     v^n = s (cos γ cos ψ, cos γ sin ψ, −sin γ),
     ω_nb^b = (−ψ̇ sin γ, γ̇, ψ̇ cos γ)          (ZYX Euler rates at zero roll).
 
+Optionally (``slip_std``, ``idle_vibration_std`` of :func:`vehicle_trajectory`)
+the body of a real car also moves sideways and vertically while it drives (side
+slip, suspension) and vibrates at rest (engine idle): a zero-mean, band-limited
+body velocity ``δv^b`` in closed form, added to ``v^n`` through ``C_nb`` with
+its exact derivative, the attitude and body rate unchanged.  Then the
+non-holonomic constraint and the zero-velocity update have in the truth the
+white measurement noise their σ stands for.
+
 Every manoeuvre shapes a rate (acceleration ṡ, yaw rate ψ̇, grade rate γ̇)
 with Hann pulses ``A/T (1 − cos 2πu)``, ``u = (t − t0)/T``: rates, values and
 their derivatives are closed-form and continuous, and the IMU signals have no
@@ -263,6 +271,91 @@ def _half_grid(x: Array, xd: Array, dt: float) -> Array:
     return out
 
 
+#: sinusoids per axis of the body-velocity perturbation, and the Hann ramp (s) between the moving and resting σ
+_N_TONES = 32
+_REST_RAMP_S = 0.5
+
+
+def _rest_weight(maneuvers: Sequence[Maneuver], total: float) -> _Signal:
+    """r(t): 1 during the stops, 0 in motion, Hann steps of up to ``_REST_RAMP_S`` just outside each stop."""
+    spans: list[list[float]] = []
+    t = 0.0
+    for m in maneuvers:
+        if m.kind == "stop":
+            if spans and spans[-1][1] == t:
+                spans[-1][1] = t + m.duration_s
+            else:
+                spans.append([t, t + m.duration_s])
+        t += m.duration_s
+    r = _Signal(0.0)
+    for i, (a, b) in enumerate(spans):
+        before = a - (spans[i - 1][1] if i else 0.0)
+        after = (spans[i + 1][0] if i + 1 < len(spans) else total) - b
+        if a <= 0.0:
+            r.x0 = 1.0
+        else:
+            d = min(_REST_RAMP_S, before)
+            r.pulses.append((a - d, d, 1.0))
+        if after > 0.0:
+            d = min(_REST_RAMP_S, after)
+            r.pulses.append((b, d, -1.0))
+    return r
+
+
+def _tones(n: int, h: float, band: tuple[float, float], g: np.random.Generator) -> tuple[Array, Array]:
+    """Three unit-variance sums of ``_N_TONES`` sinusoids (one per column) and their derivatives at ``t = k h``,
+    ``k < n``.  With ``t = T_b + τ_i`` (blocks of L samples), ``cos(ω t + φ) = cos(ω T_b + φ) cos ω τ_i −
+    sin(ω T_b + φ) sin ω τ_i``: the sum over the sinusoids is a matrix product, exact to rounding."""
+    lo, hi = band
+    m = _N_TONES
+    f = lo + (np.arange(m)[:, None] + g.random((m, 3))) * ((hi - lo) / m)  # one frequency per sub-band
+    phase = 2.0 * np.pi * g.random((m, 3))
+    w = 2.0 * np.pi * f
+    a = math.sqrt(2.0 / m)
+    L = max(1, math.isqrt(n))
+    nb = -(-n // L)
+    tb = np.arange(nb) * (L * h)
+    ti = np.arange(L) * h
+    u = np.empty((nb * L, 3))
+    ud = np.empty((nb * L, 3))
+    for j in range(3):
+        A = np.multiply.outer(tb, w[:, j]) + phase[:, j]
+        B = np.multiply.outer(ti, w[:, j])
+        ca, sa, cb, sb = a * np.cos(A), a * np.sin(A), np.cos(B), np.sin(B)
+        u[:, j] = (ca @ cb.T - sa @ sb.T).ravel()
+        ud[:, j] = -((sa * w[:, j]) @ cb.T + (ca * w[:, j]) @ sb.T).ravel()
+    return u[:n], ud[:n]
+
+
+def _body_velocity_perturbation(maneuvers: Sequence[Maneuver], total: float, th: Array, h: float, slip: Array,
+                                idle: float, band: tuple[float, float], rng: Any) -> tuple[Array, Array]:
+    """δv^b and its derivative at ``th = k h``: amplitude ``A(t) = σ_move + (σ_rest − σ_move) r(t)`` times the
+    tones."""
+    g = np.random.default_rng(rng)
+    u, ud = _tones(th.size, h, band, g)
+    r, rd, _ = _rest_weight(maneuvers, total).eval(th)
+    s_move = np.array([0.0, slip[0], slip[1]])
+    ds = np.full(3, idle) - s_move
+    amp = s_move + np.multiply.outer(r, ds)
+    return amp * u, np.multiply.outer(rd, ds) * u + amp * ud
+
+
+def _check_perturbation(slip_std: ArrayLike, idle_vibration_std: float, band_hz: ArrayLike,
+                        fs: float) -> tuple[Array, float, tuple[float, float]]:
+    slip = np.asarray(slip_std, dtype=float)
+    if slip.shape != (2,) or not np.all(np.isfinite(slip)) or np.any(slip < 0):
+        raise InvalidInputError(f"slip_std must be (lateral, vertical) sigmas >= 0 m/s, finite; got {slip_std!r}")
+    if not (math.isfinite(idle_vibration_std) and idle_vibration_std >= 0):
+        raise InvalidInputError(f"idle_vibration_std must be a sigma >= 0 m/s, finite; got {idle_vibration_std!r}")
+    band = np.asarray(band_hz, dtype=float)
+    on = bool(np.any(slip > 0) or idle_vibration_std > 0)  # the band matters only with a perturbation
+    if on and (band.shape != (2,) or not np.all(np.isfinite(band)) or not (0 < band[0] < band[1] < fs / 2)):
+        raise InvalidInputError(f"vibration_band_hz must be (low, high) Hz with 0 < low < high < fs/2 = {fs / 2:g} "
+                                f"(the samples must resolve it); got {band_hz!r}")
+    return slip, float(idle_vibration_std), ((float(band[0]), float(band[1])) if on else (0.0, 0.0))
+
+
+@fill_doc
 def vehicle_trajectory(
     maneuvers: Sequence[Maneuver],
     *,
@@ -271,6 +364,10 @@ def vehicle_trajectory(
     heading0_deg: float = 0.0,
     speed0: float = 0.0,
     t0: float = 0.0,
+    slip_std: ArrayLike = (0.0, 0.0),
+    idle_vibration_std: float = 0.0,
+    vibration_band_hz: ArrayLike = (0.5, 10.5),
+    rng: Any = None,
 ) -> Trajectory:
     """Truth trajectory of a drive, sampled at the IMU rate.
 
@@ -288,6 +385,17 @@ def vehicle_trajectory(
         Initial speed, m/s.
     t0 : float
         Time of the first sample, s (e.g. a GPS second of week).
+    slip_std : array_like, shape (2,)
+        σ of the body's lateral (side slip) and vertical (suspension) velocity while the vehicle moves, m/s
+        (>= 0; default none: the non-holonomic constraint holds exactly).
+    idle_vibration_std : float
+        σ of the body's velocity on each axis during the :func:`stop` manoeuvres (engine idle), m/s (>= 0;
+        default none: the vehicle stands exactly still).
+    vibration_band_hz : array_like, shape (2,)
+        Frequency band (low, high) of both perturbations, Hz (``0 < low < high < fs / 2``; checked when a
+        perturbation is on).
+    %(sim_rng)s
+        Draws the perturbations' frequencies and phases (unused when both are off).
 
     Returns
     -------
@@ -298,10 +406,40 @@ def vehicle_trajectory(
     ------
     InvalidInputError
         If ``maneuvers`` is empty or holds something else than a :class:`Maneuver`, ``fs`` or ``speed0``
-        is not valid, the origin latitude is beyond ±85° (likely degrees), or the drive reaches a
-        negative speed, stops while moving, or climbs a hill at standstill.
+        is not valid, the origin latitude is beyond ±85° (likely degrees), the drive reaches a
+        negative speed, stops while moving, or climbs a hill at standstill, or a perturbation σ or the
+        band is out of range.
     ShapeError
         If ``origin_lla`` is not a finite 3-vector.
+
+    Notes
+    -----
+    Body-velocity perturbations (on when a σ is > 0).  The attitude and body rate stay those of the
+    manoeuvres; the body velocity gains ``δv^b(t) = A(t) ∘ u(t)``::
+
+        v^n = C_nb (s e_x + δv^b),      v̇^n = C_nb (ω_nb^b × (s e_x + δv^b) + ṡ e_x + δv̇^b),
+        A(t) = σ_move + (σ_rest − σ_move) r(t),   σ_move = (0, σ_lat, σ_vert),   σ_rest = σ_idle (1, 1, 1),
+
+    with ``r(t)`` 1 during the stops, 0 in motion, and Hann steps of 0.5 s just outside each stop (in the
+    last 0.5 s of the braking and the first 0.5 s of driving away, where the speed is a few mm/s).  Each
+    component of ``u`` is ``√(2/M) Σ_m cos(2π f_m t + φ_m)`` with M = 32 sinusoids, one frequency drawn
+    uniformly in each of M equal sub-bands of the band and uniform phases: zero mean, unit time-averaged
+    variance, no DC part (at rest the position stays within ``√(2M) σ / (2π f_low)`` of where it stood,
+    with an rms of ``σ / (2π √(f_low f_high))``),
+    and closed-form derivatives, so that ``vel_ned``, ``accel_ned`` and ``omega_nb_b`` stay exact,
+    :func:`~imunav.sim.trajectory.ideal_imu` stays exact and the position integrates the perturbed
+    ``v^n``.  Its autocorrelation is ``ρ(τ) = (sin 2π f_high τ − sin 2π f_low τ) / (2π (f_high − f_low) τ)``
+    on average over the draws: with the default band of 10 Hz width, ``ρ(k 0.1 s) = 0`` for every k ≥ 1, so
+    that values 0.1 s or 0.2 s apart are uncorrelated (0.2 s is the default covariance step of
+    :class:`~imunav.ins.gins.GinsFilter`, where NHC and ZUPT are applied; a barometer or magnetometer at
+    10 Hz adds steps 0.1 s apart): folded at 10 Hz the frequencies cover the samples' Nyquist band evenly,
+    the sampled sequence is white.  The stratified frequencies leave at the first lags a residual of the
+    order of ``2π k / M / √(2M)`` (≈ 0.02 at k = 1).  Such a perturbation is then a white measurement noise
+    of σ ``σ_lat``, ``σ_vert`` for the non-holonomic constraint and ``σ_idle`` for the ZUPT, as the filter
+    models it, and the filter's error, made of earlier samples, is uncorrelated with the current one: no
+    bias on their NIS.  Choose ``fs`` well above ``f_high`` (≥ 200 Hz for the default band): an IMU
+    sampled at ``fs`` and integrated trapezoidally sees a sinusoid of frequency f scaled by about
+    ``1 − (2π f / fs)² / 12`` (−0.3 % on average over the default band at 200 Hz).
     """
     if not maneuvers:
         raise InvalidInputError("vehicle_trajectory: give at least one manoeuvre, e.g. [straight(60)]")
@@ -314,6 +452,7 @@ def vehicle_trajectory(
         raise ShapeError(f"origin_lla must be (lat rad, lon rad, h m); got {origin_lla!r}")
     if abs(o[0]) > math.radians(85):
         raise InvalidInputError(f"origin latitude {math.degrees(o[0]):.4g} deg: give it in radians, within +-85 deg")
+    slip, idle, band = _check_perturbation(slip_std, idle_vibration_std, vibration_band_hz, float(fs))
     speed, heading, grade, total = _plan(maneuvers, float(speed0))
     heading.x0 = float(heading0_deg) * DEG
     dt = 1.0 / float(fs)
@@ -332,6 +471,13 @@ def vehicle_trajectory(
         sd * cg * sp - s * (sg * gamd * sp - cg * cp * psid),
         -sd * sg - s * cg * gamd,
     ], axis=1)
+    if np.any(slip > 0) or idle > 0:
+        dvb, dvb_dot = _body_velocity_perturbation(maneuvers, total, th, dt / 2.0, slip, idle, band, rng)
+        c_nb = np.stack([np.stack([cg * cp, cg * sp, -sg], axis=1), np.stack([-sp, cp, np.zeros_like(sp)], axis=1),
+                         np.stack([sg * cp, sg * sp, cg], axis=1)], axis=2)  # columns: body x, y, z in NED
+        w_h = np.stack([-psid * sg, gamd, psid * cg], axis=1)
+        vel = vel + np.einsum("nij,nj->ni", c_nb, dvb)
+        acc = acc + np.einsum("nij,nj->ni", c_nb, np.cross(w_h, dvb) + dvb_dot)
     # geodetic position: h first, then latitude by fixed-point iteration (R_N depends weakly on lat), then lon
     h = o[2] + _simpson_cumulative(-vel[:, 2], dt)
     h_half = _half_grid(h, -vel[0::2, 2], dt)
@@ -616,6 +762,11 @@ def simulate_odometer(
     rng: Any = None,
 ) -> OdometerData:
     """Wheel speed: forward body velocity at the wheel, ``(1 + k) (C_bn v^n + ω_eb^b × l)_x + w``.
+
+    With the body-velocity perturbations of :func:`vehicle_trajectory`, the side slip and suspension velocity
+    are perpendicular to the body x axis: in motion the reading is the forward speed as without them.  At rest
+    it is the body's fore-aft idle velocity at the wheel (a sensor of the body's forward velocity, as the
+    GNSS/INS filter models it; a real wheel encoder would read 0 there).
 
     Parameters
     ----------
