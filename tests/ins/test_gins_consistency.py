@@ -20,12 +20,11 @@ import numpy as np
 import pytest
 from scipy.stats import binom, chi2
 
-from imunav import earth
 from imunav.ins.gins import GinsConfig, GinsFilter
+from imunav.ins.gins_truth import initial_state_draw, matched_errors, navigation_errors, nees_blocks
 from imunav.io.gnss import GnssData
-from imunav.rotation import quat_conjugate, quat_from_rotvec, quat_multiply, rotvec_from_quat
 from imunav.sim import apply_errors, ideal_imu
-from imunav.sim.error_model import GaussMarkov, ImuErrorModel, TriadErrors, scale_misalignment_matrix
+from imunav.sim.error_model import ImuErrorModel, TriadErrors
 from imunav.sim.gnss import simulate_gnss, simulate_magnetometer
 from imunav.sim.vehicle import (
     simulate_baro,
@@ -61,43 +60,18 @@ def truth():
     return tr, ideal_imu(tr)
 
 
-def _triad(white, gm_sd, init_sd, scale_sd, tc, rng):
-    """Errors of one triad drawn from the filter's model; returns the triad and its scale factors."""
-    const = np.sqrt(np.maximum(init_sd**2 - gm_sd**2, 0.0)) * rng.standard_normal(3)
-    s = scale_sd * rng.standard_normal(3)
-    return TriadErrors(bias=const, scale_misalignment=scale_misalignment_matrix(s), noise_density=white,
-                       bias_instability=GaussMarkov(gm_sd, tc)), s
-
-
 def _run(truth, cfg, seed, **aids):
-    """One seeded run: IMU and GNSS errors and the initial state drawn from the model of ``cfg``."""
+    """One seeded run on ``truth`` (trajectory, ideal IMU): IMU and GNSS errors and the initial state drawn from
+    the model of ``cfg`` (:mod:`imunav.ins.gins_truth`)."""
     tr, ideal = truth
     rng = np.random.default_rng(seed)
-    gyro, sg = _triad(cfg.arw, cfg.gyro_bias_std, cfg.init_gyro_bias_std, cfg.init_gyro_scale_std, cfg.corr_time, rng)
-    acc, sa = _triad(cfg.vrw, cfg.accel_bias_std, cfg.init_accel_bias_std, cfg.init_accel_scale_std, cfg.corr_time,
-                     rng)
-    imu, et = apply_errors(ideal, ImuErrorModel(gyro=gyro, accel=acc, name="matched"), rng=seed, return_truth=True)
+    drawn = matched_errors(cfg, rng)
+    imu, et = apply_errors(ideal, drawn.model, rng=seed, return_truth=True)
     gnss = simulate_gnss(tr, pos_noise=POS_SD, vel_noise=VEL_SD, lever_arm=LEVER, rng=seed + 10_000)
-    dr = cfg.init_pos_std * rng.standard_normal(3)
-    lat, h = tr.pos_lla[0, 0], tr.pos_lla[0, 2]
-    rn, re = earth.radii(lat)
-    lla0 = tr.pos_lla[0] - [dr[0] / (rn + h), dr[1] / ((re + h) * np.cos(lat)), -dr[2]]
-    v0 = tr.vel_ned[0] - cfg.init_vel_std * rng.standard_normal(3)
-    q0 = quat_multiply(quat_from_rotvec(-cfg.init_att_std * rng.standard_normal(3)), tr.q_nb[0])
+    lla0, v0, q0 = initial_state_draw(tr.pos_lla[0], tr.vel_ned[0], tr.q_nb[0], cfg, rng)
     res = GinsFilter(cfg).run(imu, gnss, lla0=lla0, vel0=v0, q0=q0, **aids)
-    true = np.hstack([et.gyro.bias[-1], et.accel.bias[-1], sg, sa])
+    true = np.hstack([et.gyro.bias[-1], et.accel.bias[-1], drawn.gyro_scale, drawn.accel_scale])
     return res, true
-
-
-def _nav_errors(tr, res, idx):
-    """true - estimate: NED position (m), velocity, navigation-frame attitude error phi (C = exp(phi) C_hat)."""
-    ref, est = tr.pos_lla[idx], res.lla[idx]
-    rn, re = earth.radii(ref[:, 0])
-    dr = np.column_stack([(ref[:, 0] - est[:, 0]) * (rn + ref[:, 2]),
-                          (ref[:, 1] - est[:, 1]) * (re + ref[:, 2]) * np.cos(ref[:, 0]), -(ref[:, 2] - est[:, 2])])
-    dv = tr.vel_ned[idx] - res.vel_ned[idx]
-    phi = rotvec_from_quat(quat_multiply(tr.q_nb[idx], quat_conjugate(res.q_nb[idx])))
-    return np.hstack([dr, dv, phi])
 
 
 _CACHE: dict[str, tuple] = {}
@@ -114,10 +88,8 @@ def _monte_carlo(truth, name):
             res, true = _run(truth, cfg, seed)
             at = np.arange(EVERY_S, tr.t[-1] + 1e-9, EVERY_S)
             keep = np.searchsorted(res.cov_t, at, side="right") - 1  # the last covariance record at or before
-            e = _nav_errors(tr, res, np.searchsorted(tr.t, res.cov_t[keep] - 1e-9))
-            P = res.cov_nav[keep]
-            nees.append([np.einsum("ni,nij,nj->n", e[:, b], np.linalg.inv(P[:, b, b]), e[:, b])
-                         for b in (slice(0, 3), slice(3, 6), slice(6, 9))])
+            e = navigation_errors(tr, np.searchsorted(tr.t, res.cov_t[keep] - 1e-9), res)
+            nees.append(nees_blocks(e, res.cov_nav[keep]))
             est = np.hstack([res.gyro_bias[-1], res.accel_bias[-1], res.gyro_scale[-1], res.accel_scale[-1]])
             z.append((true - est) / np.sqrt(res.cov_diag[-1, 9:21]))
         _CACHE[name] = np.array(nees), np.array(z)
