@@ -363,7 +363,8 @@ def main() -> None:
     if not a.outages_only:
         _compare(run_imunav(sc), run_pyins(sc))
     if a.outages:
-        tag = f"duration={a.duration:g} preset={a.preset} seed={a.seed} fs={a.fs:g} converge={a.converge:g}"
+        tag = (f"duration={a.duration:g} preset={a.preset} seed={a.seed} fs={a.fs:g} converge={a.converge:g} "
+               "pyins-fixes=after-first-imu-sample")
         rms = outages(sc, a.converge, a.pyins_cache, tag)
         print(f"outage protocol (60 s every 180 s after {a.converge:g} s, shifts 0 / 60 / 120 s): "
               f"{rms['imunav']['n_outages']} outages; RMS over outages of the per-outage maximum")
