@@ -41,7 +41,7 @@ from imunav.filters._core import (
     nis,
     strapdown_step_ned,
 )
-from imunav.filters._core_gins import inject_position_lla, mag_heading, propagate_cov_series
+from imunav.filters._core_gins import earth_rate_rows, inject_position_lla, mag_heading, propagate_cov_series
 from imunav.filters._core_models import height, zero_velocity
 
 # error-state layout
@@ -370,40 +370,31 @@ def _rest_and_baro_update(P, dx, q, v, lla, err, gyr, static, h_baro, prm, nx, o
     """ZUPT + ZARU while ``static`` and barometric height (``ν = −h_b + ĥ`` on δr_D, through
     :func:`~imunav.filters._core_models.height`).
 
-    ZUPT: ``ν = −v̂`` on δv.  ZARU: at rest the gyros measure the Earth rate, ``ω̃ = (1 + s) Cᵀ ω_ie^n + b``
-    (``gyr``: the raw rate of the last increment), so with ``C = exp([φ×]) Ĉ``::
-
-        ν = ω̃ − (1 + ŝ) Ĉᵀ ω_ie^n − b̂ ≈ δb_g + (1 + ŝ) Ĉᵀ [ω_ie^n ×] φ + diag(Ĉᵀ ω_ie^n) δs_g
-
-    The attitude column is what makes a static alignment's heading and east gyro bias one observable
-    combination, ``ε_E + Ω cos φ · φ_D`` (Groves 2013, §5.6.3, §14.2.2): without it the filter would count
-    the Earth rate as a direct measurement of the bias and report a heading σ it does not have.  The core's
-    :func:`~imunav.filters._core_models.zero_rate` is the local-level model without Earth rate."""
+    ZUPT: ``ν = −v̂`` on δv.  ZARU: at rest the gyros read the Earth rate (``gyr``: the raw rate of the last
+    increment), :func:`~imunav.filters._core_gins.earth_rate_rows`, whose attitude columns make a static
+    alignment's heading and east gyro bias one observable combination (Groves 2013, §14.2.2): without them the
+    filter would count the Earth rate as a direct measurement of the bias and report a heading σ it does not
+    have.  The core's :func:`~imunav.filters._core_models.zero_rate` is the local-level model without Earth
+    rate."""
     if static and prm[K_ZUPT_SD] > 0.0:
         nu3 = np.empty(3)
         r3 = np.empty(3)
         zero_velocity(v, prm[K_ZUPT_SD], nu3, r3)
-        C = dcm_from_quat_1(q)
         om = prm[K_OMEGA_E]
         w_ie_n = np.array([om * math.cos(lla[0]), 0.0, -om * math.sin(lla[0])])
-        w_ie_b = C.T @ w_ie_n
-        Wx = np.zeros((3, 3))
-        _skew(w_ie_n, Wx, 0, 0, 1.0)
-        CtW = C.T @ Wx
         H = np.zeros((6, nx))
         R = np.zeros((6, 6))
         z = np.empty(6)
+        full = prm[K_NB] == NX21
+        sg = np.zeros(3)
+        if full:
+            sg[:] = err[E_SG:E_SG + 3]
+        earth_rate_rows(dcm_from_quat_1(q), gyr, err[E_BG:E_BG + 3], sg, w_ie_n, z, H, 3, I_ATT, I_BG,
+                        I_SG if full else -1)
         for j in range(3):
-            sg = err[E_SG + j] if prm[K_NB] == NX21 else 0.0
             H[j, I_VEL + j] = 1.0
             z[j] = nu3[j]
             R[j, j] = r3[j]
-            H[3 + j, I_BG + j] = 1.0
-            for i in range(3):
-                H[3 + j, I_ATT + i] = (1.0 + sg) * CtW[j, i]
-            if prm[K_NB] == NX21:
-                H[3 + j, I_SG + j] = w_ie_b[j]
-            z[3 + j] = gyr[j] - (1.0 + sg) * w_ie_b[j] - err[E_BG + j]
             R[3 + j, 3 + j] = prm[K_ZARU_SD] ** 2
         S0 = H @ P @ H.T + R
         # the marginal NIS of the ZUPT rows and of the ZARU rows (record only; the update is the joint one)
