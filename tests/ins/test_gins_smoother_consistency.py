@@ -10,17 +10,15 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from scipy.stats import chi2
+from gins_mc import LEVER, matched_run, mean_band
 
-from imunav.ins.gins import GinsConfig, GinsFilter
-from imunav.ins.gins_truth import initial_state_draw, matched_errors, navigation_errors, nees_blocks
-from imunav.sim import apply_errors, ideal_imu
-from imunav.sim.gnss import simulate_gnss
+from imunav.ins.gins import GinsConfig
+from imunav.ins.gins_truth import navigation_errors, nees_blocks
+from imunav.sim import ideal_imu
 from imunav.sim.vehicle import speed_change, stop, straight, turn, vehicle_trajectory
 from imunav.units import DEG
 
 RUNS, FS = 40, 20.0
-LEVER = np.array([0.5, -0.3, -1.2])
 OUTAGE = (50.0, 40.0)  # s from the start, length s
 
 
@@ -35,17 +33,13 @@ def truth():
 
 def _smoothed_nees(truth, name):
     """(runs, 3 blocks, epochs) smoothed NEES of position, velocity and attitude, every 5 s."""
-    tr, ideal = truth
+    tr, _ = truth
     cfg = GinsConfig.from_preset(name, lever_arm=LEVER, init_pos_std=1.0, init_vel_std=0.1,
                                  init_att_std=np.radians([0.05, 0.05, 0.5]))
     out = []
     for seed in range(RUNS):
-        rng = np.random.default_rng(seed)
-        imu = apply_errors(ideal, matched_errors(cfg, rng).model, rng=seed)
-        gnss = simulate_gnss(tr, pos_noise=(0.5, 0.5, 1.0), vel_noise=(0.05, 0.05, 0.1), lever_arm=LEVER,
-                             rng=seed + 10_000, outages=[(tr.t[0] + OUTAGE[0], OUTAGE[1])])
-        lla0, v0, q0 = initial_state_draw(tr.pos_lla[0], tr.vel_ned[0], tr.q_nb[0], cfg, rng)
-        s = GinsFilter(cfg).run(imu, gnss, lla0=lla0, vel0=v0, q0=q0, smoother=True).smoothed
+        res, _ = matched_run(truth, cfg, seed, outages=[(tr.t[0] + OUTAGE[0], OUTAGE[1])], smoother=True)
+        s = res.smoothed
         at = tr.t[0] + np.arange(5.0, tr.duration + 1e-9, 5.0)
         keep = np.searchsorted(s.cov_t, at - 1e-9)  # the smoother epoch at or just after
         keep = keep[keep < s.cov_t.size]
@@ -57,12 +51,11 @@ def _smoothed_nees(truth, name):
 @pytest.mark.parametrize("name", ["navigation_a15", "mems_adis16465"])
 def test_smoothed_nees_in_the_95_band(truth, name):
     """Per preset over RUNS runs: the mean smoothed NEES of position, velocity and attitude (over the runs and
-    epochs 5 s apart, the outage included) lies in the two-sided 95 % band of chi^2(3 RUNS) / RUNS, the band of
-    one epoch's mean (the average of correlated means spreads at most as much); a covariance 1.5^2 times off
-    either way leaves it."""
+    epochs 5 s apart, the outage included) lies in the two-sided band of chi^2(3 RUNS) / RUNS at 5 % over the six
+    checks (Bonferroni), the band of one epoch's mean (the average of correlated means spreads at most as much);
+    a covariance 1.5^2 times off either way leaves it."""
     nees = _smoothed_nees(truth, name)
-    lo, hi = chi2.ppf([0.025, 0.975], 3 * RUNS) / RUNS
+    lo, hi = mean_band(3 * RUNS, RUNS, checks=6)
     for j, block in enumerate(("position", "velocity", "attitude")):
         m = float(nees[:, j].mean())
         assert lo <= m <= hi, (name, block, m, (lo, hi))
-        assert not lo <= m / 1.5**2 <= hi and not lo <= m * 1.5**2 <= hi, (name, block, m)

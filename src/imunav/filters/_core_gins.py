@@ -6,6 +6,8 @@
   over a covariance step of ~0.1 s (:func:`imunav.filters._core.van_loan` is exact but costs a 2n-matrix
   exponential per step).
 * :func:`mag_heading`: the magnetometer heading model (innovation, Jacobian row, variance).
+* :func:`earth_rate_rows`: the zero-angular-rate model of a platform at rest on the rotating Earth (innovation and
+  Jacobian rows).
 
 Same conventions and stability promise as :mod:`imunav.filters._core`.
 """
@@ -109,3 +111,50 @@ def mag_heading(C, mb, declination, sigma, h, i_att):
     h[i_att + 1] = -tan_i * math.sin(declination)
     h[i_att + 2] = 1.0
     return nu, sigma * sigma
+
+
+@njit(cache=True)
+def earth_rate_rows(C, gyr, bg, sg, w_ie_n, nu, H, r0, i_att, i_bg, i_sg):
+    """Zero angular rate on the rotating Earth (ZARU of a vehicle at rest): the gyros read the Earth rate.
+
+    Measured ``ω̃ = (1 + s) ⊙ Cᵀ ω_ie^n + b_g + n`` (``s``: gyro scale factors, ``⊙`` per axis).  With the
+    global attitude error ``C = exp([φ×]) Ĉ``, ``Cᵀ ≈ Ĉᵀ (I − [φ×])`` and ``−[φ×] ω = [ω×] φ``::
+
+        ν = ω̃ − (1 + ŝ) ⊙ Ĉᵀ ω_ie^n − b̂_g
+          ≈ diag(1 + ŝ) Ĉᵀ [ω_ie^n ×] φ + δb_g + diag(Ĉᵀ ω_ie^n) δs_g + n
+
+    (error states true minus estimate; Groves 2013, §5.6.3 and §14.2.2).  The attitude columns tie the heading to
+    the gyro bias along east: a static filter can only estimate ``ε_E − Ω cos L φ_D``, the limit of
+    gyrocompassing.
+
+    Parameters
+    ----------
+    C : (3, 3) nominal ``C_nb``.
+    gyr : (3,) measured rate, rad/s (raw, before the bias and scale correction).
+    bg, sg : (3,) estimated gyro bias (rad/s) and scale factors.
+    w_ie_n : (3,) Earth rate in the navigation frame, rad/s (``Ω (cos L, 0, −sin L)``).
+    nu : (m,) receives the innovation in ``nu[r0:r0 + 3]``.
+    H : (m, n) receives the rows ``r0 .. r0 + 2`` (only the attitude, bias and scale columns are written; zero
+        the others first).
+    r0 : int, first row.
+    i_att, i_bg : int, indices of φ_N and of the x gyro bias in the error state.
+    i_sg : int, index of the x gyro scale factor, or −1 without scale-factor states.
+    """
+    w_b = C.T @ w_ie_n
+    # Ĉᵀ [ω×]: column j of [ω×] is ω × e_j
+    wx = np.zeros((3, 3))
+    wx[0, 1] = -w_ie_n[2]
+    wx[0, 2] = w_ie_n[1]
+    wx[1, 0] = w_ie_n[2]
+    wx[1, 2] = -w_ie_n[0]
+    wx[2, 0] = -w_ie_n[1]
+    wx[2, 1] = w_ie_n[0]
+    ctw = C.T @ wx
+    for j in range(3):
+        k = 1.0 + sg[j]
+        nu[r0 + j] = gyr[j] - k * w_b[j] - bg[j]
+        for i in range(3):
+            H[r0 + j, i_att + i] = k * ctw[j, i]
+        H[r0 + j, i_bg + j] = 1.0
+        if i_sg >= 0:
+            H[r0 + j, i_sg + j] = w_b[j]

@@ -41,7 +41,7 @@ from imunav.filters._core import (
     nis,
     strapdown_step_ned,
 )
-from imunav.filters._core_gins import inject_position_lla, mag_heading, propagate_cov_series
+from imunav.filters._core_gins import earth_rate_rows, inject_position_lla, mag_heading, propagate_cov_series
 from imunav.filters._core_models import height, zero_velocity
 
 # error-state layout
@@ -366,45 +366,38 @@ def _rows_update(P, dx, idx, z, r, gate, q, v, lla, err, nx, prm, acc_dx):
 
 
 @njit(cache=True)
-def _rest_and_baro_update(P, dx, q, v, lla, err, gyr, static, h_baro, prm, nx, out, acc_dx):
+def _rest_and_baro_update(P, dx, q, v, lla, err, gyr, dt_rate, static, h_baro, prm, nx, out, acc_dx):
     """ZUPT + ZARU while ``static`` and barometric height (``ν = −h_b + ĥ`` on δr_D, through
     :func:`~imunav.filters._core_models.height`).
 
-    ZUPT: ``ν = −v̂`` on δv.  ZARU: at rest the gyros measure the Earth rate, ``ω̃ = (1 + s) Cᵀ ω_ie^n + b``
-    (``gyr``: the raw rate of the last increment), so with ``C = exp([φ×]) Ĉ``::
-
-        ν = ω̃ − (1 + ŝ) Ĉᵀ ω_ie^n − b̂ ≈ δb_g + (1 + ŝ) Ĉᵀ [ω_ie^n ×] φ + diag(Ĉᵀ ω_ie^n) δs_g
-
-    The attitude column is what makes a static alignment's heading and east gyro bias one observable
-    combination, ``ε_E + Ω cos φ · φ_D`` (Groves 2013, §5.6.3, §14.2.2): without it the filter would count
-    the Earth rate as a direct measurement of the bias and report a heading σ it does not have.  The core's
-    :func:`~imunav.filters._core_models.zero_rate` is the local-level model without Earth rate."""
+    ZUPT: ``ν = −v̂`` on δv.  ZARU: at rest the gyros read the Earth rate (``gyr``: the raw mean rate over the
+    last ``dt_rate`` seconds, the covariance step; white noise of density ARW gives it the variance
+    ``ARW² / dt_rate`` per axis, added to ``zaru_noise²``, the rate disturbance at rest such as engine vibration),
+    :func:`~imunav.filters._core_gins.earth_rate_rows`, whose attitude columns make a static
+    alignment's heading and east gyro bias one observable combination (Groves 2013, §14.2.2): without them the
+    filter would count the Earth rate as a direct measurement of the bias and report a heading σ it does not
+    have.  The core's :func:`~imunav.filters._core_models.zero_rate` is the local-level model without Earth
+    rate."""
     if static and prm[K_ZUPT_SD] > 0.0:
         nu3 = np.empty(3)
         r3 = np.empty(3)
         zero_velocity(v, prm[K_ZUPT_SD], nu3, r3)
-        C = dcm_from_quat_1(q)
         om = prm[K_OMEGA_E]
         w_ie_n = np.array([om * math.cos(lla[0]), 0.0, -om * math.sin(lla[0])])
-        w_ie_b = C.T @ w_ie_n
-        Wx = np.zeros((3, 3))
-        _skew(w_ie_n, Wx, 0, 0, 1.0)
-        CtW = C.T @ Wx
         H = np.zeros((6, nx))
         R = np.zeros((6, 6))
         z = np.empty(6)
+        full = prm[K_NB] == NX21
+        sg = np.zeros(3)
+        if full:
+            sg[:] = err[E_SG:E_SG + 3]
+        earth_rate_rows(dcm_from_quat_1(q), gyr, err[E_BG:E_BG + 3], sg, w_ie_n, z, H, 3, I_ATT, I_BG,
+                        I_SG if full else -1)
         for j in range(3):
-            sg = err[E_SG + j] if prm[K_NB] == NX21 else 0.0
             H[j, I_VEL + j] = 1.0
             z[j] = nu3[j]
             R[j, j] = r3[j]
-            H[3 + j, I_BG + j] = 1.0
-            for i in range(3):
-                H[3 + j, I_ATT + i] = (1.0 + sg) * CtW[j, i]
-            if prm[K_NB] == NX21:
-                H[3 + j, I_SG + j] = w_ie_b[j]
-            z[3 + j] = gyr[j] - (1.0 + sg) * w_ie_b[j] - err[E_BG + j]
-            R[3 + j, 3 + j] = prm[K_ZARU_SD] ** 2
+            R[3 + j, 3 + j] = prm[K_ZARU_SD] ** 2 + prm[K_ARW + j] ** 2 / dt_rate
         S0 = H @ P @ H.T + R
         # the marginal NIS of the ZUPT rows and of the ZARU rows (record only; the update is the joint one)
         out[A_ZUPT_V] = nis(z[0:3], S0[0:3, 0:3])
@@ -469,7 +462,9 @@ C_T_COV = 0  # time of the last covariance propagation, s
 C_N_COV = 1  # samples since then
 C_SW = 2  # 3: Σ ω^b h since then, rad
 C_SF = 5  # 3: Σ f^b h since then, m/s
-NC = 8
+C_RAW = 8  # 3: Σ raw gyro increments since the last covariance step, rad (the ZARU's mean rate)
+C_T_RAW = 11  # time of that step, s
+NC = 12
 
 
 @njit(cache=True)
@@ -513,6 +508,7 @@ def gins_run(t, dth, dv, g_t, g_lla, g_rp, g_vel, g_rv, odo, odo_r, q, v, lla, e
     fb = np.zeros(3)
     sw = carry[C_SW:C_SW + 3]
     sf = carry[C_SF:C_SF + 3]
+    raw = carry[C_RAW:C_RAW + 3]
     F = np.zeros((nx, nx))
     Q = np.zeros((nx, nx))
     rem_th = np.empty(3)
@@ -587,6 +583,8 @@ def gins_run(t, dth, dv, g_t, g_lla, g_rp, g_vel, g_rv, odo, odo_r, q, v, lla, e
                 sw[j] += wb[j] * hh
                 sf[j] += fb[j] * hh
         n_cov += 1
+        for j in range(3):
+            raw[j] += dth[k, j]
         if n_cov >= cov_step or (final and k == n - 1) or not math.isnan(baro[k]) or not math.isnan(mag[k, 0]):
             dtc = t[k] - t_cov
             if dtc > 0.0:
@@ -609,9 +607,13 @@ def gins_run(t, dth, dv, g_t, g_lla, g_rp, g_vel, g_rv, odo, odo_r, q, v, lla, e
                 _vehicle_update(P, dx, q, v, lla, err, wb, odo[k], odo_r[k], prm, nx, veh[k], acc_dx, aid[k],
                                 static[k] <= 0.5)
             if static[k] > 0.5 or not math.isnan(baro[k]):
+                dt_rate = t[k] - carry[C_T_RAW]
                 for j in range(3):
-                    wb[j] = dth[k, j] / (t[k] - t[k - 1])
-                _rest_and_baro_update(P, dx, q, v, lla, err, wb, static[k] > 0.5, baro[k], prm, nx, aid[k], acc_dx)
+                    wb[j] = raw[j] / dt_rate
+                _rest_and_baro_update(P, dx, q, v, lla, err, wb, dt_rate, static[k] > 0.5, baro[k], prm, nx, aid[k],
+                                      acc_dx)
+            raw[:] = 0.0
+            carry[C_T_RAW] = t[k]
             if not math.isnan(mag[k, 0]):
                 _mag_update(P, dx, q, v, lla, err, mag[k], prm, nx, aid[k], acc_dx)
             if rec:

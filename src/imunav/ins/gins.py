@@ -119,9 +119,13 @@ class GinsConfig:
         suspension velocity of the body in motion; None: off.  Not applied while ``static`` says the vehicle
         stands still: the ZUPT constrains the same velocity then (with ``zupt_noise``), and the one velocity
         used twice as two independent measurements would make the filter overconfident.
-    zupt_noise, zaru_noise : float
-        σ of the zero-velocity (m/s: the body's vibration at rest, e.g. engine idle) and zero-angular-rate
-        (rad/s) updates applied while ``static`` says the vehicle stands still (> 0).
+    zupt_noise : float
+        σ of the zero-velocity update applied while ``static`` says the vehicle stands still, m/s: the body's
+        vibration at rest, e.g. engine idle (> 0).
+    zaru_noise : float
+        σ of the angular-rate disturbance at rest (vibration), rad/s (>= 0).  The zero-angular-rate update reads
+        the mean raw rate over the covariance step Δt; the gyros' white noise adds ``ARW² / Δt`` per axis to
+        its variance by itself.
     baro_noise : float
         σ of the barometric height, m (its bias included: no baro-bias state; > 0).
     scale_corr_time : float or None
@@ -534,10 +538,13 @@ def _params(c: GinsConfig, fs: float, odometer: bool) -> Array:
     prm[_k.K_NHC_R] = 0.0 if c.nhc_noise is None else c.nhc_noise**2
     for key, dof in ((_k.K_GATE_VEH, 3), (_k.K_GATE_VEH2, 2), (_k.K_GATE_VEH1, 1)):
         prm[key] = gate(dof)
-    for key, sd in ((_k.K_ZUPT_SD, c.zupt_noise), (_k.K_ZARU_SD, c.zaru_noise), (_k.K_BARO_SD, c.baro_noise)):
+    for key, sd in ((_k.K_ZUPT_SD, c.zupt_noise), (_k.K_BARO_SD, c.baro_noise)):
         if not (np.isfinite(sd) and sd > 0):
-            raise InvalidInputError(f"GinsConfig zupt_noise / zaru_noise / baro_noise must be > 0; got {sd!r}")
+            raise InvalidInputError(f"GinsConfig zupt_noise / baro_noise must be > 0; got {sd!r}")
         prm[key] = sd
+    if not (np.isfinite(c.zaru_noise) and c.zaru_noise >= 0):
+        raise InvalidInputError(f"GinsConfig.zaru_noise must be >= 0 rad/s; got {c.zaru_noise!r}")
+    prm[_k.K_ZARU_SD] = c.zaru_noise
     prm[_k.K_GATE_ZUPT] = gate(6)
     prm[_k.K_GATE_BARO] = gate(1)
     prm[_k.K_DECL] = c.declination
@@ -669,6 +676,7 @@ class GinsFilter:
         self.t = float(t0)
         self._carry = np.zeros(_k.NC)
         self._carry[_k.C_T_COV] = self.t
+        self._carry[_k.C_T_RAW] = self.t
         self._prev = np.zeros((2, 3))
         for row, x, name in ((0, dtheta0, "dtheta0"), (1, dvel0, "dvel0")):
             if x is not None:

@@ -65,6 +65,8 @@ class Alignment(EulerMixin):
     imu_errors : numpy.ndarray, shape (12,), or None
         From :func:`fine_alignment`: gyro bias (rad/s), accel bias (m/s²), gyro and accel scale estimated over
         the static period (pass it as ``imu_errors0``).
+    heading_given : bool
+        True when the heading was given (``static_alignment(..., yaw=...)``), not found by the gyros.
     """
 
     t: float
@@ -75,6 +77,7 @@ class Alignment(EulerMixin):
     vel_ned: Array | None = None
     att_std: Array | None = None
     imu_errors: Array | None = None
+    heading_given: bool = False
 
 
 def static_alignment(imu: ImuData, lat: float, *, gyro_bias_std: float, yaw: float | None = None,
@@ -114,7 +117,7 @@ def static_alignment(imu: ImuData, lat: float, *, gyro_bias_std: float, yaw: flo
         raise InvalidInputError(f"lat must be a latitude in radians inside (-pi/2, pi/2); got {lat!r}")
     if yaw is not None:
         q = align(imu.accel, yaw=float(yaw))
-        return Alignment(float(imu.t[0]), q, 0.0, "levelling + given heading")
+        return Alignment(float(imu.t[0]), q, 0.0, "levelling + given heading", heading_given=True)
     horiz = OMEGA_E * math.cos(lat)
     T = float(imu.t[-1] - imu.t[0])
     w = imu.gyro.mean(axis=0)
@@ -198,9 +201,9 @@ def fine_alignment(imu: ImuData | ImuIncrements, lla: Any, coarse: Alignment, co
         The result of :func:`static_alignment` on the same period.
     config : GinsConfig
         The filter's IMU model; over the static period the biases and scale factors are random constants of
-        its initial σ (``corr_time = inf``), ``zaru_noise`` is the white noise of one sample's rate (``ARW²
-        f_s / 2`` for rates with trapezoidal increments, ``ARW² f_s`` for increments), the lever arm zero and
-        the initial attitude σ as said above.
+        its initial σ (``corr_time = inf``), ``zaru_noise`` is zero (the ZARU's variance is the gyro white noise
+        of the mean rate over each covariance step, ``ARW² / Δt``: a stand without vibration), the lever arm zero
+        and the initial attitude σ as said above.
     pos_std : float
         σ of the known position, m (> 0).
     heading_std : float, optional
@@ -211,35 +214,42 @@ def fine_alignment(imu: ImuData | ImuIncrements, lla: Any, coarse: Alignment, co
     -------
     Alignment
         At the last sample: ``q_nb``, the filter's ``att_std`` (φ N/E/D, rad) and ``heading_std`` (its D
-        component), the estimated ``imu_errors``, ``lla`` the known position, ``vel_ned`` zero.
+        component), the estimated ``imu_errors``; ``lla`` and ``vel_ned`` None (the known position, at rest).
+        Its σ are marginals: the heading error and the east gyro bias stay correlated (``δψ ≈ ε_E / (Ω cos L)``),
+        which a restart from ``att_std`` and the configuration's bias σ does not carry.
 
     Raises
     ------
     InvalidInputError
-        If ``imu`` is not rates or increments of at least 2 s, ``pos_std`` / ``heading_std`` are not > 0, or a
-        given heading has no ``heading_std``.
+        If ``imu`` is not rates or increments, ``coarse`` was made in motion, ``pos_std`` / ``heading_std`` are
+        not > 0, or a given heading has no ``heading_std``.
+    InsufficientDataError
+        If the static period is shorter than 2 s.
     ShapeError
         If ``lla`` is not a finite 3-vector.
     """
-    if not isinstance(imu, (ImuData, ImuIncrements)) or imu.t[-1] - imu.t[0] < 2.0:
-        raise InvalidInputError("fine_alignment needs the static period as ImuData or ImuIncrements of at least 2 s")
+    if not isinstance(imu, (ImuData, ImuIncrements)):
+        raise InvalidInputError(f"fine_alignment needs the static period as ImuData or ImuIncrements; got "
+                                f"{type(imu).__name__}")
+    if imu.t[-1] - imu.t[0] < 2.0:
+        raise InsufficientDataError("fine_alignment needs a static period of at least 2 s")
+    if coarse.lla is not None:
+        raise InvalidInputError("fine_alignment refines a static alignment (static_alignment); this one was made "
+                                "in motion")
     p = np.asarray(lla, dtype=float)
     if p.shape != (3,) or not np.all(np.isfinite(p)):
         raise ShapeError(f"lla must be a finite 3-vector (lat rad, lon rad, h m); got {lla!r}")
     if not (pos_std > 0 and math.isfinite(pos_std)):
         raise InvalidInputError(f"pos_std must be > 0 m; got {pos_std!r}")
-    given = coarse.method.startswith("levelling + given heading")
-    if given and heading_std is None:
+    if coarse.heading_given and heading_std is None:
         raise InvalidInputError("the coarse heading was given (yaw=): give heading_std, its sigma in rad")
     if heading_std is not None and not (heading_std > 0 and math.isfinite(heading_std)):
         raise InvalidInputError(f"heading_std must be > 0 rad; got {heading_std!r}")
-    fs = 1.0 / float(np.median(np.diff(imu.t)))
-    rate_var = float(np.max(config.arw)) ** 2 * fs * (0.5 if isinstance(imu, ImuData) else 1.0)
     # over the static period the biases are random constants (Groves 2013, §14.2.2): a Gauss-Markov state whose
     # initial sigma (the turn-on bias) exceeds its stationary sigma would lose variance as exp(-2t/T) while the
     # turn-on bias stays, and the filter would claim a level and heading better than the data hold
     cfg = replace(config, corr_time=math.inf, scale_corr_time=math.inf, lever_arm=np.zeros(3),
-                  use_gnss_velocity=False, zaru_noise=math.sqrt(rate_var),
+                  use_gnss_velocity=False, zaru_noise=0.0,
                   init_att_std=np.radians([1.0, 1.0, 5.0]) if heading_std is None
                   else np.array([math.radians(1.0), math.radians(1.0), heading_std]))
     tg = imu.t[0] + np.arange(1.0, math.floor(imu.t[-1] - imu.t[0]) + 1.0)
@@ -250,4 +260,4 @@ def fine_alignment(imu: ImuData | ImuIncrements, lla: Any, coarse: Alignment, co
     att_std = np.sqrt(np.diag(res.cov_nav[-1][6:9, 6:9]))
     err = np.concatenate([res.gyro_bias[-1], res.accel_bias[-1], res.gyro_scale[-1], res.accel_scale[-1]])
     return Alignment(float(imu.t[-1]), res.q_nb[-1].copy(), float(att_std[2]), coarse.method + " + fine (Kalman filter)",
-                     p.copy(), np.zeros(3), att_std, err)
+                     None, None, att_std, err, coarse.heading_given)
