@@ -90,7 +90,7 @@ def test_each_aiding_model_has_its_own_nis_record(drive):
     """The odometer, NHC, ZUPT and ZARU NIS are recorded apart (the marginals of the joint updates' innovation):
     with the odometer alone the vehicle update has one row and its NIS is the odometer's; with the NHC alone, two
     rows and the NHC's; the ZUPT and ZARU records sit exactly where the joint rest update was applied, and there
-    the NHC is not applied."""
+    neither the NHC nor the odometer is applied."""
     truth, imu = drive
     g = simulate_gnss(truth, rng=7)
     odo = simulate_odometer(truth, lever_arm=WHEEL, noise_std=0.05, rng=8)
@@ -102,6 +102,7 @@ def test_each_aiding_model_has_its_own_nis_record(drive):
     np.testing.assert_allclose(only_odo.odo_nis[used], only_odo.vehicle_nis, rtol=1e-9)
     assert np.all(np.isnan(only_odo.odo_nis[~used])) and np.all(np.isnan(only_odo.nhc_nis))
     rest = ~np.isnan(only_odo.zupt_nis)
+    assert not np.any(used & rest)  # at rest the ZUPT replaces the odometer too
     assert rest.sum() > 100 and np.array_equal(rest, ~np.isnan(only_odo.zupt_vel_nis))
     assert np.array_equal(rest, ~np.isnan(only_odo.zaru_nis))
     only_nhc = GinsFilter(GinsConfig.from_preset("mems_adis16465", odo_lever_arm=WHEEL, nhc_noise=0.1)).run(

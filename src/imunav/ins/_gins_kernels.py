@@ -282,15 +282,16 @@ def _vehicle_update(P, dx, q, v, lla, err, wb, z_odo, r_odo, prm, nx, out, acc_d
     velocity of the wheel point) as one update of up to 3 rows; ``out`` receives (NIS, accepted, rows), ``aid``
     the NIS of the odometer row and of the NHC rows alone (``A_ODO``, ``A_NHC``: the marginals of the joint
     innovation, χ²(1) and χ²(2) for a consistent filter; record only, the update is the joint one).
-    The NHC rows are left out while the vehicle is declared static (``moving`` False): the ZUPT then
-    constrains the same lateral and vertical velocity with the rest σ, and using the one velocity twice, as if
-    the two measurements had independent noises, would make the filter overconfident.
+    The NHC rows and the odometer are left out while the vehicle is declared static (``moving`` False): the ZUPT
+    then constrains the same velocity with the rest σ (a wheel encoder reads 0 while the body idles), and using
+    the one velocity twice, as if the two measurements had independent noises, would make the filter
+    overconfident.
 
     Wheel-point body velocity ``v_w = Ĉᵀ v + ω × l``; with ``C = exp([φ×]) Ĉ``:
     ``∂v_w/∂δv = Ĉᵀ``, ``∂v_w/∂φ = Ĉᵀ [v×]``, ``∂v_w/∂δb_g = [l×]``, ``∂v_w/∂δs_g = [l×] diag(ω)``;
     the odometer reads ``(1 + k) v_w,x`` (Groves 2013, §16.3; Niu et al. 2007 for the NHC).
     """
-    use_odo = not math.isnan(z_odo)
+    use_odo = not math.isnan(z_odo) and moving
     use_nhc = prm[K_NHC_R] > 0.0 and moving
     m = (1 if use_odo else 0) + (2 if use_nhc else 0)
     if m == 0:

@@ -111,7 +111,8 @@ class GinsConfig:
     odo_lever_arm : array_like, shape (3,)
         Wheel contact point from the IMU, body FRD, m (odometer and non-holonomic constraint).
     odo_noise : float
-        Odometer speed σ, m/s (> 0).  The odometer and the NHC are applied at the covariance steps.
+        Odometer speed σ, m/s (> 0).  The odometer and the NHC are applied at the covariance steps, not while
+        ``static`` says the vehicle stands still (the ZUPT holds the velocity then; a wheel encoder reads 0).
     odo_scale_std : float
         σ of the odometer scale-factor state (Gauss–Markov with ``corr_time``), dimensionless (> 0).
     nhc_noise : float or None

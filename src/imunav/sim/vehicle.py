@@ -765,8 +765,9 @@ def simulate_odometer(
 
     With the body-velocity perturbations of :func:`vehicle_trajectory`, the side slip and suspension velocity
     are perpendicular to the body x axis: in motion the reading is the forward speed as without them.  At rest
-    it is the body's fore-aft idle velocity at the wheel (a sensor of the body's forward velocity, as the
-    GNSS/INS filter models it; a real wheel encoder would read 0 there).
+    it is the body's fore-aft idle velocity at the wheel (a sensor of the body's forward velocity; a real wheel
+    encoder would read 0 there).  The GNSS/INS filter does not use the odometer while ``static`` says the
+    vehicle stands still: the ZUPT holds that velocity then.
 
     Parameters
     ----------
