@@ -81,7 +81,7 @@ def toml_text(d: Mapping[str, Any]) -> str:
     Raises
     ------
     TypeError
-        For a value TOML cannot hold (e.g. None).
+        For a value TOML cannot hold (e.g. None, which TOML has no word for), naming its key.
     """
     return _to_toml(d)
 
@@ -105,8 +105,15 @@ def _toml_value(v: Any) -> str:
     raise TypeError(f"cannot write {type(v).__name__} as TOML")
 
 
+def _key_value(k: str, v: Any, prefix: str) -> str:
+    try:
+        return f"{k} = {_toml_value(v)}"
+    except TypeError as exc:  # name the key: TOML has no null, a None must be left out by the caller
+        raise TypeError(f"{prefix + '.' if prefix else ''}{k}: {exc}") from None
+
+
 def _to_toml(d: Mapping[str, Any], prefix: str = "") -> str:
-    lines = [f"{k} = {_toml_value(v)}" for k, v in d.items() if not isinstance(v, Mapping)]
+    lines = [_key_value(k, v, prefix) for k, v in d.items() if not isinstance(v, Mapping)]
     out = "\n".join(lines)
     for k, v in d.items():
         if isinstance(v, Mapping):

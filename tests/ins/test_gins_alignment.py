@@ -150,3 +150,27 @@ def test_fine_alignment_uses_every_sample_at_200_hz():
     assert 0.95 <= fine.heading_std / coarse.heading_std <= 1.01, (np.degrees(fine.heading_std),
                                                                     np.degrees(coarse.heading_std))
     assert fine.lla is None and fine.heading_given is False
+
+
+def test_motion_alignment_heading_sigma_with_side_slip():
+    """A car that slips sideways (sigma 0.2 m/s, :func:`vehicle_trajectory`'s slip) under precise GNSS velocity
+    (0.02 m/s): the track misses the heading by v_lat / speed; with ``slip_std`` given, z^2 over 300 drives is in
+    the chi^2 band (without it the sigma would be about 10 times too small)."""
+    z = []
+    for seed in range(300):
+        tr = vehicle_trajectory(demo_drive(120), fs=25, origin_lla=(LAT, 114.47 * DEG, 20.0), heading0_deg=75.0,
+                                slip_std=(0.2, 0.0), rng=seed)
+        al = motion_alignment(simulate_gnss(tr, vel_noise=(0.02, 0.02, 0.02), rng=seed), min_speed=5.0,
+                              slip_std=0.2)
+        k = np.searchsorted(tr.t, al.t)
+        z.append((euler_from_quat(tr.q_nb[k])[2] - al.euler()[2]) / al.heading_std)
+    _calibrated(np.array(z) ** 2, "motion heading with slip")
+    with pytest.raises(InvalidInputError, match="slip_std"):
+        motion_alignment(simulate_gnss(tr, vel_noise=(0.02, 0.02, 0.02), rng=1), slip_std=-0.1)
+
+
+def test_matched_errors_refuses_a_model_it_cannot_draw():
+    with pytest.raises(InvalidInputError, match="scale_corr_time"):
+        matched_errors(GinsConfig.from_preset("mems_adis16465", scale_corr_time=None), np.random.default_rng(0))
+    with pytest.raises(InvalidInputError, match="below the stationary"):
+        matched_errors(GinsConfig.from_preset("mems_adis16465", init_gyro_bias_std=1e-9), np.random.default_rng(0))

@@ -134,7 +134,8 @@ def static_alignment(imu: ImuData, lat: float, *, gyro_bias_std: float, yaw: flo
     return Alignment(float(imu.t[0]), q, sd, "levelling + gyrocompassing")
 
 
-def motion_alignment(gnss: GnssData, *, min_speed: float = 5.0, t_start: float | None = None) -> Alignment:
+def motion_alignment(gnss: GnssData, *, min_speed: float = 5.0, t_start: float | None = None,
+                     slip_std: float = 0.0) -> Alignment:
     """In-motion alignment of a land vehicle from GNSS velocity: yaw = track, pitch = climb angle, roll 0.
 
     Parameters
@@ -145,17 +146,20 @@ def motion_alignment(gnss: GnssData, *, min_speed: float = 5.0, t_start: float |
         Ground speed from which the track defines the heading, m/s (> 0).
     t_start : float, optional
         First usable time, s (default: the first fix).
+    slip_std : float
+        σ of the vehicle's lateral (side-slip) velocity, m/s (>= 0; e.g. ``GinsConfig.nhc_noise``): the track
+        differs from the heading by ``v_lat / speed``.
 
     Returns
     -------
     Alignment
         At the first fix at or above ``min_speed``, with its position and velocity; ``heading_std`` from the
-        fix's cross-track velocity σ, ``√(σ_N² sin²ψ + σ_E² cos²ψ) / speed``.
+        fix's cross-track velocity σ and the side slip, ``√(σ_N² sin²ψ + σ_E² cos²ψ + σ_slip²) / speed``.
 
     Raises
     ------
     InvalidInputError
-        If ``gnss`` has no velocity or ``min_speed`` is not > 0.
+        If ``gnss`` has no velocity, ``min_speed`` is not > 0 or ``slip_std`` is negative.
     InsufficientDataError
         If no usable fix reaches ``min_speed``.
     """
@@ -163,6 +167,8 @@ def motion_alignment(gnss: GnssData, *, min_speed: float = 5.0, t_start: float |
         raise InvalidInputError("motion_alignment needs GNSS velocity (a 13-column KF-GINS GNSS file or vel columns)")
     if not (min_speed > 0):
         raise InvalidInputError(f"min_speed must be > 0 m/s; got {min_speed!r}")
+    if not (math.isfinite(slip_std) and slip_std >= 0):
+        raise InvalidInputError(f"slip_std must be >= 0 m/s; got {slip_std!r}")
     v = gnss.vel_ned
     sp = np.hypot(v[:, 0], v[:, 1])
     ok = sp >= min_speed
@@ -174,8 +180,9 @@ def motion_alignment(gnss: GnssData, *, min_speed: float = 5.0, t_start: float |
     yaw = math.atan2(v[k, 1], v[k, 0])
     pitch = math.atan2(-v[k, 2], sp[k])
     q = quat_from_euler(0.0, pitch, yaw)
-    # the heading error is the cross-track velocity error over the speed: σ_ψ² = (σ_N² sin²ψ + σ_E² cos²ψ) / s²
-    sd = float(np.hypot(gnss.vel_std[k, 0] * math.sin(yaw), gnss.vel_std[k, 1] * math.cos(yaw)) / sp[k])
+    # the heading error is the cross-track velocity error (and the slip) over the speed
+    cross = np.hypot(gnss.vel_std[k, 0] * math.sin(yaw), gnss.vel_std[k, 1] * math.cos(yaw))
+    sd = float(np.hypot(cross, slip_std) / sp[k])
     return Alignment(float(gnss.t[k]), np.asarray(q), sd, "GNSS velocity (track)", gnss.lla[k].copy(), v[k].copy())
 
 

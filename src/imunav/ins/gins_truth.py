@@ -27,6 +27,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from imunav import earth
+from imunav.errors import InvalidInputError
 from imunav.ins.gins import GinsConfig
 from imunav.rotation import quat_conjugate, quat_from_rotvec, quat_multiply, rotvec_from_quat
 from imunav.sim.error_model import GaussMarkov, ImuErrorModel, TriadErrors, scale_misalignment_matrix
@@ -80,7 +81,22 @@ def matched_errors(cfg: GinsConfig, rng: np.random.Generator) -> MatchedErrors:
     -------
     MatchedErrors
         The error model and its scale factors.
+
+    Raises
+    ------
+    InvalidInputError
+        If the configuration has Gauss–Markov scale factors (``scale_corr_time`` not ``inf``), or an initial
+        bias σ below the stationary one: the draw would not follow the filter's model.
     """
+    if cfg.scale_factors and not (cfg.scale_corr_time is not None and np.isinf(cfg.scale_corr_time)):
+        raise InvalidInputError("matched_errors draws the scale factors as random constants: give a configuration "
+                                "with scale_corr_time=inf (as GinsConfig.from_preset does) or scale_factors=False")
+    for name, init, gm in (("gyro", cfg.init_gyro_bias_std, cfg.gyro_bias_std),
+                           ("accel", cfg.init_accel_bias_std, cfg.accel_bias_std)):
+        if np.isfinite(cfg.corr_time) and np.any(init < gm * (1 - 1e-12)):
+            raise InvalidInputError(f"init_{name}_bias_std {init} is below the stationary {name}_bias_std {gm}: a "
+                                    "Gauss-Markov bias cannot start with less variance than it keeps; the truth "
+                                    "would not follow the filter's model")
     gyro, sg = _triad(cfg.arw, cfg.gyro_bias_std, cfg.init_gyro_bias_std, cfg.init_gyro_scale_std, cfg.corr_time,
                       rng)
     acc, sa = _triad(cfg.vrw, cfg.accel_bias_std, cfg.init_accel_bias_std, cfg.init_accel_scale_std, cfg.corr_time,
