@@ -41,8 +41,10 @@ Run:  PYTHONPATH=src python benchmarks/bench_gins_pyins.py [--duration 600] [--p
 from __future__ import annotations
 
 import argparse
+import hashlib
 import json
 import os
+import sys
 import time
 from dataclasses import dataclass, replace
 from types import SimpleNamespace
@@ -100,6 +102,19 @@ def make_scenario(duration: float, preset: str, seed: int, fs: float = 100.0) ->
     dphi = np.radians([INIT_SD["level_deg"], INIT_SD["level_deg"], INIT_SD["azimuth_deg"]]) * rng.standard_normal(3)
     q0 = quat_multiply(quat_from_rotvec(dphi), truth.q_nb[0])
     return Scenario(truth, imu, gnss, lla0, vel0, q0, preset)
+
+
+def scenario_tag(sc: Scenario, **settings) -> str:
+    """The key of pyins' cached results: the settings, pyins' version, the fix set it gets and a hash of every array
+    both filters get (IMU, GNSS, initial state), so that a changed scenario or peer never reuses stale errors."""
+    from importlib.metadata import version
+
+    h = hashlib.sha1()
+    for a in (sc.imu.t, sc.imu.gyro, sc.imu.accel, sc.gnss.t, sc.gnss.lla, sc.gnss.pos_std, sc.gnss.vel_ned,
+              sc.gnss.vel_std, sc.lla0, sc.vel0, sc.q0):
+        h.update(np.ascontiguousarray(a, dtype=float).tobytes())
+    head = " ".join(f"{k}={v:g}" if isinstance(v, float) else f"{k}={v}" for k, v in settings.items())
+    return f"{head} pyins={version('python-ins')} pyins-fixes=after-first-imu-sample sha1={h.hexdigest()[:16]}"
 
 
 def nav_errors(truth: Trajectory, t: np.ndarray, lla: np.ndarray, vel: np.ndarray, q: np.ndarray) -> dict:
@@ -179,26 +194,34 @@ def run_pyins(sc: Scenario, *, track: bool = False) -> dict:
 _KEYS = ("horizontal_m", "vertical_m", "drift_3d_m", "roll_deg", "pitch_deg", "heading_deg", "contained")
 
 
+def _cache_kind(z, path: str, kind: str) -> None:
+    """Refuse a cache file of the other kind (outage reports / per-seed errors): one line, nothing overwritten."""
+    got = str(z["kind"]) if "kind" in z.files else "unknown"
+    if got != kind:
+        raise SystemExit(f"{path} holds pyins {got} results, not {kind}: give another --pyins-cache file")
+
+
 def _load_cache(path: str | None, tag: str) -> list | None:
     """pyins' outage reports of an earlier run on the same scenario (``tag``), or None."""
     from imunav.ins.outage import OutageReport
 
     if path is None or not os.path.exists(path):
         return None
-    z = np.load(path, allow_pickle=False)
-    if "tag" not in z or str(z["tag"]) != tag:
-        print(f"{path}: made for another scenario ({z['tag'] if 'tag' in z else 'per-seed errors'}); "
-              "running pyins again")
-        return None
-    n = int(z["n_shifts"])
-    return [OutageReport([tuple(o) for o in z[f"outages{i}"]], *(z[f"{k}{i}"] for k in _KEYS)) for i in range(n)]
+    with np.load(path, allow_pickle=False) as z:
+        _cache_kind(z, path, "outages")
+        if str(z["tag"]) != tag:
+            print(f"{path}: made for another scenario ({z['tag']}); running pyins again")
+            return None
+        n = int(z["n_shifts"])
+        return [OutageReport([tuple(o) for o in z[f"outages{i}"]], *(np.array(z[f"{k}{i}"]) for k in _KEYS))
+                for i in range(n)]
 
 
 def _save_cache(path: str, tag: str, reps: list) -> None:
     """Write pyins' outage reports atomically (pyins is the slow half of the protocol)."""
     from imunav.io._atomic import atomic_path
 
-    arrays = {"tag": np.array(tag), "n_shifts": np.array(len(reps))}
+    arrays = {"kind": np.array("outages"), "tag": np.array(tag), "n_shifts": np.array(len(reps))}
     for i, r in enumerate(reps):
         arrays[f"outages{i}"] = np.array(r.outages, dtype=float).reshape(-1, 2)
         arrays.update({f"{k}{i}": np.asarray(getattr(r, k)) for k in _KEYS})
@@ -289,14 +312,15 @@ def _cached_pyins(sc: Scenario, cache: str | None, tag: str) -> dict:
     entries: dict[str, str] = {}
     if cache is not None and os.path.exists(cache):
         with np.load(cache, allow_pickle=False) as z:
-            entries = {k: str(z[k]) for k in z.files if k != "tag"}
+            _cache_kind(z, cache, "per-seed errors")
+            entries = {k: str(z[k]) for k in z.files if k != "kind"}
     if tag in entries:
         return json.loads(entries[tag])
     out = run_pyins(sc)
     if cache is not None:
         entries[tag] = json.dumps(out)
         with atomic_path(cache) as tmp, open(tmp, "wb") as fh:
-            np.savez(fh, **{k: np.array(v) for k, v in entries.items()})
+            np.savez(fh, kind=np.array("per-seed errors"), **{k: np.array(v) for k, v in entries.items()})
     return out
 
 
@@ -314,7 +338,7 @@ def seeds(a: argparse.Namespace) -> None:
     ours, peer = [], []
     for seed in range(a.seed, a.seed + a.seeds):
         sc = make_scenario(a.duration, a.preset, seed, a.fs)
-        tag = f"duration={a.duration:g} preset={a.preset} seed={seed} fs={a.fs:g}"
+        tag = scenario_tag(sc, duration=a.duration, preset=a.preset, seed=seed, fs=a.fs)
         r, p = run_imunav(sc), _cached_pyins(sc, a.pyins_cache, tag)
         ours.append(_table(r))
         peer.append(_table(p))
@@ -332,7 +356,19 @@ def seeds(a: argparse.Namespace) -> None:
         print(f"{n:8s}{x[:, j].mean():>12.4f}{y[:, j].mean():>12.4f}{ratio[:, j].mean():>10.3f}{se[j]:>8.3f}  {u}")
 
 
+_THREADS = ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS")
+
+
+def _single_threaded() -> None:
+    """Run again with one BLAS thread unless the environment sets them: pyins' CPU time per sample
+    (time.process_time) counts every BLAS thread, and the threads must be set before numpy is loaded."""
+    if any(v not in os.environ for v in _THREADS):
+        env = {**os.environ, **{v: os.environ.get(v, "1") for v in _THREADS}}
+        os.execve(sys.executable, [sys.executable, *sys.argv], env)
+
+
 def main() -> None:
+    _single_threaded()
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--duration", type=float, default=600.0, help="drive length, s")
     ap.add_argument("--preset", default="mems_adis16465", help="IMU preset (imunav.sim.presets)")
@@ -363,8 +399,7 @@ def main() -> None:
     if not a.outages_only:
         _compare(run_imunav(sc), run_pyins(sc))
     if a.outages:
-        tag = (f"duration={a.duration:g} preset={a.preset} seed={a.seed} fs={a.fs:g} converge={a.converge:g} "
-               "pyins-fixes=after-first-imu-sample")
+        tag = scenario_tag(sc, duration=a.duration, preset=a.preset, seed=a.seed, fs=a.fs, converge=a.converge)
         rms = outages(sc, a.converge, a.pyins_cache, tag)
         print(f"outage protocol (60 s every 180 s after {a.converge:g} s, shifts 0 / 60 / 120 s): "
               f"{rms['imunav']['n_outages']} outages; RMS over outages of the per-outage maximum")
