@@ -390,7 +390,8 @@ def vehicle_trajectory(
         (>= 0; default none: the non-holonomic constraint holds exactly).
     idle_vibration_std : float
         σ of the body's velocity on each axis during the :func:`stop` manoeuvres (engine idle), m/s (>= 0;
-        default none: the vehicle stands exactly still).
+        default none: the vehicle stands exactly still).  Only ``stop`` manoeuvres idle: a drive that starts at
+        rest with a ``speed_change`` has the in-motion ``slip_std`` until it moves — start it with a ``stop``.
     vibration_band_hz : array_like, shape (2,)
         Frequency band (low, high) of both perturbations, Hz (``0 < low < high < fs / 2``; checked when a
         perturbation is on).
