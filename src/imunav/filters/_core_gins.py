@@ -19,6 +19,7 @@ import math
 import numpy as np
 from numba import njit
 
+from imunav._rotation_kernels import skew_1
 from imunav.earth import radii_gravity_1
 
 
@@ -141,15 +142,7 @@ def earth_rate_rows(C, gyr, bg, sg, w_ie_n, nu, H, r0, i_att, i_bg, i_sg):
     i_sg : int, index of the x gyro scale factor, or −1 without scale-factor states.
     """
     w_b = C.T @ w_ie_n
-    # Ĉᵀ [ω×]: column j of [ω×] is ω × e_j
-    wx = np.zeros((3, 3))
-    wx[0, 1] = -w_ie_n[2]
-    wx[0, 2] = w_ie_n[1]
-    wx[1, 0] = w_ie_n[2]
-    wx[1, 2] = -w_ie_n[0]
-    wx[2, 0] = -w_ie_n[1]
-    wx[2, 1] = w_ie_n[0]
-    ctw = C.T @ wx
+    ctw = C.T @ skew_1(w_ie_n)  # Ĉᵀ [ω×]
     for j in range(3):
         k = 1.0 + sg[j]
         nu[r0 + j] = gyr[j] - k * w_b[j] - bg[j]
