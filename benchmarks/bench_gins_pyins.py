@@ -123,9 +123,7 @@ def nav_errors(truth: Trajectory, t: np.ndarray, lla: np.ndarray, vel: np.ndarra
     ok = (idx < truth.n) & (np.abs(truth.t[np.minimum(idx, truth.n - 1)] - t) < 1e-6)
     idx, t = idx[ok], t[ok]
     ref = truth.pos_lla[idx]
-    rn, re = earth.radii(ref[:, 0])
-    d = lla[ok] - ref
-    dn = np.column_stack([d[:, 0] * (rn + ref[:, 2]), d[:, 1] * (re + ref[:, 2]) * np.cos(ref[:, 0]), -d[:, 2]])
+    dn = earth.dlla_to_ned(lla[ok] - ref, ref)
     dv = vel[ok] - truth.vel_ned[idx]
     dphi = rotvec_from_quat(quat_multiply(q[ok], quat_conjugate(truth.q_nb[idx])))  # NED frame error
     # in roll/pitch/yaw: compare Euler angles (wrapped)

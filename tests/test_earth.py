@@ -166,3 +166,18 @@ def test_round_trips_property(lat, lon, h, dn, de, dd):
     assert abs(back[2] - h) < 1e-8  # 1e-8 m up to 1000 km altitude (ulp of ECEF there is 1.9e-9 m)
     ned = np.array([dn, de, dd])
     np.testing.assert_allclose(earth.lla_to_ned(earth.ned_to_lla(ned, lla), lla), ned, rtol=0, atol=1e-7)
+
+
+def test_small_differences_in_local_metres_agree_with_the_exact_ned():
+    """dlla_to_ned / ned_to_dlla (curvilinear radii) against the exact ECEF route for offsets of ~10 m: the same
+    to second order (within 2 |d|^2 / R, ~3e-4 m here), and each the inverse of the other to the rounding of
+    geodetic coordinates (1e-16 x 6.4e6 m, a few 1e-9 m)."""
+    from imunav.earth import dlla_to_ned, lla_to_ned, ned_to_dlla
+
+    rng = np.random.default_rng(3)
+    lla = np.column_stack([rng.uniform(-1.4, 1.4, 50), rng.uniform(-3, 3, 50), rng.uniform(-100, 3000, 50)])
+    d = 10.0 * rng.standard_normal((50, 3))
+    moved = lla + ned_to_dlla(d, lla)
+    np.testing.assert_allclose(dlla_to_ned(moved - lla, lla), d, rtol=0, atol=5e-9)
+    exact = np.array([lla_to_ned(m, p) for m, p in zip(moved, lla)])
+    np.testing.assert_allclose(exact, d, rtol=0, atol=2 * np.max(np.sum(d**2, axis=1)) / 6.3e6)

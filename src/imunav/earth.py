@@ -54,6 +54,8 @@ __all__ = [
     "earth_rate_ned",
     "radii",
     "radii_gravity_1",
+    "dlla_to_ned",
+    "ned_to_dlla",
     "transport_rate_ned",
     "dcm_en",
     "lla_to_ecef",
@@ -262,6 +264,49 @@ def radii(lat: ArrayLike) -> tuple[Array | float, Array | float]:
     """
     rn, re, _ = _radii_gravity(lat, 0.0)
     return rn, re
+
+
+def dlla_to_ned(dlla: ArrayLike, lla: ArrayLike) -> Array:
+    """A small geodetic difference in local metres, on the curvilinear radii at ``lla`` (Groves 2013, eq. 2.119).
+
+    ``δN = δφ (R_N + h)``, ``δE = δλ (R_E + h) cos φ``, ``δD = −δh``: the position error states of a NED
+    error-state filter.  :func:`lla_to_ned` is the exact (ECEF) form for any distance.
+
+    Parameters
+    ----------
+    dlla : array_like, shape (N, 3)
+        Differences ``(δlat rad, δlon rad, δh m)``.
+    lla : array_like, shape (N, 3)
+        Where they are taken: lat rad, lon rad, h m.
+
+    Returns
+    -------
+    numpy.ndarray, shape (N, 3)
+        North, east, down, m.
+    """
+    d, p = np.asarray(dlla, dtype=float), np.asarray(lla, dtype=float)
+    rn, re = radii(p[:, 0])
+    return np.column_stack([d[:, 0] * (rn + p[:, 2]), d[:, 1] * (re + p[:, 2]) * np.cos(p[:, 0]), -d[:, 2]])
+
+
+def ned_to_dlla(dned: ArrayLike, lla: ArrayLike) -> Array:
+    """Local NED metres as a small geodetic difference at ``lla``: the inverse of :func:`dlla_to_ned`.
+
+    Parameters
+    ----------
+    dned : array_like, shape (N, 3)
+        North, east, down, m.
+    lla : array_like, shape (N, 3)
+        Where they are applied: lat rad, lon rad, h m.
+
+    Returns
+    -------
+    numpy.ndarray, shape (N, 3)
+        ``(δlat rad, δlon rad, δh m)``; ``lla + ned_to_dlla(d, lla)`` moves ``lla`` by ``d``.
+    """
+    d, p = np.asarray(dned, dtype=float), np.asarray(lla, dtype=float)
+    rn, re = radii(p[:, 0])
+    return np.column_stack([d[:, 0] / (rn + p[:, 2]), d[:, 1] / ((re + p[:, 2]) * np.cos(p[:, 0])), -d[:, 2]])
 
 
 @fill_doc

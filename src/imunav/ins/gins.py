@@ -37,8 +37,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from imunav._quantiles import chi2_ppf
-from imunav.earth import OMEGA_E
-from imunav.earth import radii as earth_radii
+from imunav.earth import OMEGA_E, ned_to_dlla
 from imunav.errors import InvalidInputError, NonFiniteError, ShapeError
 from imunav.ins import _gins_kernels as _k
 from imunav.ins.strapdown import coning_sculling_increments
@@ -466,9 +465,7 @@ def _rts(t: Array, lla: Array, vel: Array, q: Array, rec_t: Array, phi: Array, p
     span = rec_t[j] - rec_t[i]
     w = np.where(span > 0, (t - rec_t[i]) / np.where(span > 0, span, 1.0), 0.0)[:, None]
     corr = (1 - w) * ds[i] + w * before[j]
-    rn, re = earth_radii(lla[:, 0])
-    out_lla = lla + np.column_stack([corr[:, 0] / (rn + lla[:, 2]), corr[:, 1] / ((re + lla[:, 2]) * np.cos(lla[:, 0])),
-                                     -corr[:, 2]])
+    out_lla = lla + ned_to_dlla(corr[:, 0:3], lla)
     out_q = quat_multiply(quat_from_rotvec(corr[:, 6:9]), q)
     return SmoothedTrack(t, out_lla, vel + corr[:, 3:6], quat_normalize(out_q), rec_t.copy(), Ps)
 

@@ -124,9 +124,7 @@ def initial_state_draw(lla: Array, vel_ned: Array, q_nb: Array, cfg: GinsConfig,
         filter's error states are true minus estimate).
     """
     dr = cfg.init_pos_std * rng.standard_normal(3)
-    lat, h = float(lla[0]), float(lla[2])
-    rn, re = earth.radii(lat)
-    lla0 = np.asarray(lla, dtype=float) - [dr[0] / (rn + h), dr[1] / ((re + h) * np.cos(lat)), -dr[2]]
+    lla0 = np.asarray(lla, dtype=float) - earth.ned_to_dlla(dr[None], np.asarray(lla, dtype=float)[None])[0]
     v0 = np.asarray(vel_ned, dtype=float) - cfg.init_vel_std * rng.standard_normal(3)
     q0 = quat_multiply(quat_from_rotvec(-cfg.init_att_std * rng.standard_normal(3)), np.asarray(q_nb, dtype=float))
     return lla0, v0, q0
@@ -153,9 +151,7 @@ def navigation_errors(truth: Any, idx: ArrayLike, est: Any) -> Array:
     """
     i = np.asarray(idx, dtype=np.int64)
     ref, lla = truth.pos_lla[i], est.lla[i]
-    rn, re = earth.radii(ref[:, 0])
-    dr = np.column_stack([(ref[:, 0] - lla[:, 0]) * (rn + ref[:, 2]),
-                          (ref[:, 1] - lla[:, 1]) * (re + ref[:, 2]) * np.cos(ref[:, 0]), -(ref[:, 2] - lla[:, 2])])
+    dr = earth.dlla_to_ned(ref - lla, ref)
     phi = rotvec_from_quat(quat_multiply(truth.q_nb[i], quat_conjugate(est.q_nb[i])))
     return np.hstack([dr, truth.vel_ned[i] - est.vel_ned[i], phi])
 

@@ -90,9 +90,7 @@ def _errors(res: GinsResult, truth: Any) -> tuple[Array, Array]:
     if np.any(idx >= truth.t.size) or np.any(np.abs(truth.t[np.minimum(idx, truth.t.size - 1)] - res.t) > 1e-6):
         raise InvalidInputError("the truth must be sampled at the IMU time stamps (the simulator's trajectory)")
     ref = truth.pos_lla[idx]
-    rn, re = earth.radii(ref[:, 0])
-    d = res.lla - ref
-    dn = np.column_stack([d[:, 0] * (rn + ref[:, 2]), d[:, 1] * (re + ref[:, 2]) * np.cos(ref[:, 0]), -d[:, 2]])
+    dn = earth.dlla_to_ned(res.lla - ref, ref)
     de = np.degrees(res.euler() - euler_from_quat(truth.q_nb[idx]))
     return dn, (de + 180.0) % 360.0 - 180.0
 

@@ -316,9 +316,7 @@ class NavTrack(EulerMixin):
                                     f"({self.t[0]:.3f}..{self.t[-1]:.3f} s); sample the truth on the IMU stamps")
         ib = j[ia]
         a, b = self.lla[ia], truth.lla[ib]
-        rn, re = earth.radii(b[:, 0])
-        d = np.column_stack([(a[:, 0] - b[:, 0]) * (rn + b[:, 2]),
-                             (a[:, 1] - b[:, 1]) * (re + b[:, 2]) * np.cos(b[:, 0]), -(a[:, 2] - b[:, 2])])
+        d = earth.dlla_to_ned(a - b, b)
         de = self.euler()[ia] - truth.euler()[ib]
         return self.t[ia], d, self.vel_ned[ia] - truth.vel_ned[ib], (de + np.pi) % (2 * np.pi) - np.pi
 

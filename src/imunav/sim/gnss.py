@@ -104,9 +104,7 @@ def truth_at(truth: Trajectory, tq: ArrayLike, lever_arm: ArrayLike = (0.0, 0.0,
         w = omega_eb_b(truth)
         wq = np.stack([np.interp(tq, truth.t, w[:, j]) for j in range(3)], axis=1)
         d_n = np.einsum("nij,j->ni", C, la)
-        rn, re = earth.radii(lla[:, 0])
-        lla = lla + np.column_stack([d_n[:, 0] / (rn + lla[:, 2]),
-                                     d_n[:, 1] / ((re + lla[:, 2]) * np.cos(lla[:, 0])), -d_n[:, 2]])
+        lla = lla + earth.ned_to_dlla(d_n, lla)
         vq = vq + np.einsum("nij,nj->ni", C, np.cross(wq, la))
     return lla, vq
 
@@ -222,9 +220,7 @@ def simulate_gnss(
     err = pw * g.standard_normal((n, 3))
     if np.any(pc > 0):
         err += gauss_markov_sequence(t, pc, float(pos_corr_tau), g)
-    rn, re = earth.radii(lla[:, 0])
-    lla = lla + np.column_stack([err[:, 0] / (rn + lla[:, 2]), err[:, 1] / ((re + lla[:, 2]) * np.cos(lla[:, 0])),
-                                 -err[:, 2]])
+    lla = lla + earth.ned_to_dlla(err, lla)
     vstd = None
     if vel_noise is not None:
         vstd = np.asarray(vel_noise, dtype=float) * np.ones(3)
