@@ -109,14 +109,15 @@ _PYINS_PYINS = _pyins_row("pyins", (0.168, 0.162, 0.266, 0.0274, 0.0299, 0.0161,
 
 _DRIFT_ROW = r"\n{f}\s+" + r"\s+".join([r"([\d.]+)"] * 6)  # bench_gins_pyins.py --outages: h v 3d r p y
 _DRIFT_COLS = ("horizontal m", "vertical m", "3-D m", "roll deg", "pitch deg", "heading deg")
-_DRIFT = {f: ({f"{f} {c}": v for c, v in zip(_DRIFT_COLS, vals)},
-              {f"{f} {c}": (_DRIFT_ROW.format(f=f), i + 1) for i, c in enumerate(_DRIFT_COLS)})
-          for f, vals in (("imunav", (10.01, 1.30, 10.08, 0.069, 0.077, 0.58)),
-                          ("pyins", (34.38, 2.15, 34.45, 0.175, 0.202, 0.95)))}
-_DRIFT25 = {f: ({f"{f} {c}": v for c, v in zip(_DRIFT_COLS, vals)},
+def _drift(imunav: tuple[float, ...], pyins: tuple[float, ...]) -> dict[str, tuple[dict, dict]]:
+    """README values and output patterns of the two rows of a ``bench_gins_pyins.py --outages`` table."""
+    return {f: ({f"{f} {c}": v for c, v in zip(_DRIFT_COLS, vals)},
                 {f"{f} {c}": (_DRIFT_ROW.format(f=f), i + 1) for i, c in enumerate(_DRIFT_COLS)})
-            for f, vals in (("imunav", (13.20, 0.93, 13.23, 0.087, 0.067, 0.15)),
-                            ("pyins", (41.59, 2.02, 41.63, 0.247, 0.223, 0.48)))}
+            for f, vals in (("imunav", imunav), ("pyins", pyins))}
+
+
+_DRIFT = _drift((10.01, 1.30, 10.08, 0.069, 0.077, 0.58), (34.38, 2.15, 34.45, 0.175, 0.202, 0.95))
+_DRIFT25 = _drift((13.20, 0.93, 13.23, 0.087, 0.067, 0.15), (41.59, 2.02, 41.63, 0.247, 0.223, 0.48))
 
 
 FIGURES: tuple[Figure, ...] = (
