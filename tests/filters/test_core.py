@@ -269,36 +269,3 @@ def test_sparse_covariance_propagation_matches_numpy(rng):
     core.propagate_cov_sparse(Phi, P, Q, np.empty((n, n)), np.empty((n, n), np.int64), np.empty(n, np.int64))
     np.testing.assert_allclose(P, ref, rtol=0, atol=RTOL * np.abs(ref).max())
     assert np.array_equal(P, P.T)
-
-
-def test_earth_rate_rows_are_the_jacobian_of_the_model(rng):
-    """ZARU on the rotating Earth: ``h(x) = (1 + s) ⊙ C(φ)ᵀ ω_ie + b`` with ``C = exp([φ×]) Ĉ``; the rows of
-    :func:`earth_rate_rows` on φ, δb and δs are its central-difference Jacobian, and ``ν`` is ``ω̃ − h(x̂)``."""
-    from imunav.filters._core_gins import earth_rate_rows
-    from imunav.rotation import dcm_from_quat
-
-    C = dcm_from_quat(quat_normalize(rng.normal(size=4)))
-    lat, om = 0.53, 7.292115e-5
-    w = om * np.array([math.cos(lat), 0.0, -math.sin(lat)])
-    bg, sg, gyr = 1e-4 * rng.normal(size=3), 1e-3 * rng.normal(size=3), 1e-4 * rng.normal(size=3)
-
-    def h(x):  # x = (phi, b, s)
-        Ct = (scipy_expm(np.array([[0, -x[2], x[1]], [x[2], 0, -x[0]], [-x[1], x[0], 0]])) @ C).T
-        return (1 + x[6:9]) * (Ct @ w) + x[3:6]
-
-    x0 = np.concatenate([np.zeros(3), bg, sg])
-    eps = 1e-6
-    J = np.column_stack([(h(x0 + eps * e) - h(x0 - eps * e)) / (2 * eps) for e in np.eye(9)])
-    n, i_att, i_bg, i_sg = 15, 2, 7, 11
-    nu, H = np.zeros(5), np.zeros((5, n))
-    earth_rate_rows(C, gyr, bg, sg, w, nu, H, 1, i_att, i_bg, i_sg)
-    np.testing.assert_allclose(nu[1:4], gyr - h(x0), rtol=0, atol=1e-18)
-    cols = np.r_[i_att:i_att + 3, i_bg:i_bg + 3, i_sg:i_sg + 3]
-    # rounding of h (~1e-4) over 2 eps: ~1e-14; a wrong sign or factor errs by ~Ω ~ 1e-5
-    np.testing.assert_allclose(H[1:4][:, cols], J, rtol=0, atol=5e-14)
-    mask = np.ones(n, dtype=bool)
-    mask[cols] = False
-    assert not H[1:4][:, mask].any() and not H[[0, 4]].any()
-    H2 = np.zeros((5, n))
-    earth_rate_rows(C, gyr, bg, sg, w, nu, H2, 1, i_att, i_bg, -1)  # without scale-factor states
-    np.testing.assert_array_equal(H2[1:4, i_sg:i_sg + 3], 0.0)

@@ -5,9 +5,11 @@
   and the trapezoidal ``Q_d = (Φ Q Φᵀ + Q) Δt / 2`` — the cheap discretisation of a 15/21-state INS error model
   over a covariance step of ~0.1 s (:func:`imunav.filters._core.van_loan` is exact but costs a 2n-matrix
   exponential per step).
-* :func:`mag_heading`: the magnetometer heading model (innovation, Jacobian row, variance).
-* :func:`earth_rate_rows`: the zero-angular-rate model of a platform at rest on the rotating Earth (innovation and
-  Jacobian rows).
+* :func:`write_skew`, :func:`write_mat3`, :func:`cross3`: the 3×3 blocks of the error dynamics and of the aid
+  models' Jacobians, written in place.
+
+The aid models themselves (GNSS, odometer, NHC, ZUPT, ZARU, barometer, magnetometer heading, ...) are one module
+each in :mod:`imunav.ins.gins.aids`.
 
 Same conventions and stability promise as :mod:`imunav.filters._core`.
 """
@@ -19,7 +21,6 @@ import math
 import numpy as np
 from numba import njit
 
-from imunav._rotation_kernels import skew_1
 from imunav.earth import radii_gravity_1
 
 
@@ -78,76 +79,62 @@ def propagate_cov_series(P, F, Q, dt):
 
 
 @njit(cache=True)
-def mag_heading(C, mb, declination, sigma, h, i_att):
-    """Magnetometer heading: the rotation about the vertical that brings the horizontal part of the measured
-    field ``m̂ⁿ = Ĉ m^b`` (calibrated 3-axis magnetometer, body frame) onto the magnetic meridian, whose azimuth
-    is the ``declination`` (east positive).
-
-    ``ν = wrap(D − atan2(m̂_E, m̂_N))``; with the global attitude error (``C = exp([φ×]) Ĉ``) and the field's
-    inclination ``I`` (``tan I = m̂_D / |m̂_h|``, from the measurement), ``ν = φ_D − tan I (cos D φ_N + sin D φ_E)
-    + n``: the row ``h`` on the attitude error is ``[−tan I cos D, −tan I sin D, 1]`` (the levelling error
-    enters through the inclination; Groves 2013, §6.1.1 and §16.2.1).  ``R = σ²`` (σ: heading noise, rad).
+def write_skew(a, M, r0, c0, sign):
+    """Write ``sign [a×]`` into ``M[r0:r0+3, c0:c0+3]`` (the cross-product matrix, ``[a×] b = a × b``).
 
     Parameters
     ----------
-    C : (3, 3) nominal ``C_nb``.
-    mb : (3,) magnetometer sample, body frame (any unit).
-    declination : float, rad.
-    sigma : float, heading noise std, rad.
-    h : (n,) receives the Jacobian row (zeroed here).
-    i_att : int, index of φ_N in the error state.
+    a : (3,) vector.
+    M : (m, n) matrix, written in place.
+    r0, c0 : int, first row and column of the block.
+    sign : float, factor (±1).
 
     Returns
     -------
-    nu : float, innovation, rad.
-    r : float, variance, rad².
+    None
     """
-    mn = C @ mb
-    bh = math.sqrt(mn[0] * mn[0] + mn[1] * mn[1])
-    tan_i = mn[2] / bh
-    nu = declination - math.atan2(mn[1], mn[0])
-    nu = (nu + math.pi) % (2.0 * math.pi) - math.pi
-    h[:] = 0.0
-    h[i_att] = -tan_i * math.cos(declination)
-    h[i_att + 1] = -tan_i * math.sin(declination)
-    h[i_att + 2] = 1.0
-    return nu, sigma * sigma
+    M[r0, c0] = 0.0
+    M[r0, c0 + 1] = -sign * a[2]
+    M[r0, c0 + 2] = sign * a[1]
+    M[r0 + 1, c0] = sign * a[2]
+    M[r0 + 1, c0 + 1] = 0.0
+    M[r0 + 1, c0 + 2] = -sign * a[0]
+    M[r0 + 2, c0] = -sign * a[1]
+    M[r0 + 2, c0 + 1] = sign * a[0]
+    M[r0 + 2, c0 + 2] = 0.0
 
 
 @njit(cache=True)
-def earth_rate_rows(C, gyr, bg, sg, w_ie_n, nu, H, r0, i_att, i_bg, i_sg):
-    """Zero angular rate on the rotating Earth (ZARU of a vehicle at rest): the gyros read the Earth rate.
-
-    Measured ``ω̃ = (1 + s) ⊙ Cᵀ ω_ie^n + b_g + n`` (``s``: gyro scale factors, ``⊙`` per axis).  With the
-    global attitude error ``C = exp([φ×]) Ĉ``, ``Cᵀ ≈ Ĉᵀ (I − [φ×])`` and ``−[φ×] ω = [ω×] φ``::
-
-        ν = ω̃ − (1 + ŝ) ⊙ Ĉᵀ ω_ie^n − b̂_g
-          ≈ diag(1 + ŝ) Ĉᵀ [ω_ie^n ×] φ + δb_g + diag(Ĉᵀ ω_ie^n) δs_g + n
-
-    (error states true minus estimate; Groves 2013, §5.6.3 and §14.2.2).  The attitude columns tie the heading to
-    the gyro bias along east: a static filter can only estimate ``ε_E − Ω cos L φ_D``, the limit of
-    gyrocompassing.
+def write_mat3(C, M, r0, c0, sign, d):
+    """Write ``sign C diag(d)`` into ``M[r0:r0+3, c0:c0+3]``.
 
     Parameters
     ----------
-    C : (3, 3) nominal ``C_nb``.
-    gyr : (3,) measured rate, rad/s (raw, before the bias and scale correction).
-    bg, sg : (3,) estimated gyro bias (rad/s) and scale factors.
-    w_ie_n : (3,) Earth rate in the navigation frame, rad/s (``Ω (cos L, 0, −sin L)``).
-    nu : (m,) receives the innovation in ``nu[r0:r0 + 3]``.
-    H : (m, n) receives the rows ``r0 .. r0 + 2`` (only the attitude, bias and scale columns are written; zero
-        the others first).
-    r0 : int, first row.
-    i_att, i_bg : int, indices of φ_N and of the x gyro bias in the error state.
-    i_sg : int, index of the x gyro scale factor, or −1 without scale-factor states.
+    C : (3, 3) matrix.
+    M : (m, n) matrix, written in place.
+    r0, c0 : int, first row and column of the block.
+    sign : float, factor (±1).
+    d : (3,) column scales.
+
+    Returns
+    -------
+    None
     """
-    w_b = C.T @ w_ie_n
-    ctw = C.T @ skew_1(w_ie_n)  # Ĉᵀ [ω×]
-    for j in range(3):
-        k = 1.0 + sg[j]
-        nu[r0 + j] = gyr[j] - k * w_b[j] - bg[j]
-        for i in range(3):
-            H[r0 + j, i_att + i] = k * ctw[j, i]
-        H[r0 + j, i_bg + j] = 1.0
-        if i_sg >= 0:
-            H[r0 + j, i_sg + j] = w_b[j]
+    for i in range(3):
+        for j in range(3):
+            M[r0 + i, c0 + j] = sign * C[i, j] * d[j]
+
+
+@njit(cache=True)
+def cross3(a, b):
+    """``a × b`` of two 3-vectors (allocation of one 3-vector; the component order of the textbook formula).
+
+    Parameters
+    ----------
+    a, b : (3,) vectors.
+
+    Returns
+    -------
+    (3,) array
+    """
+    return np.array([a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]])

@@ -1,0 +1,60 @@
+"""Non-holonomic constraint: a ground vehicle's wheel contact point does not move sideways or vertically.
+
+``0 = v_w,y + n``, ``0 = v_w,z + n`` (``v_w``: :mod:`._wheel`), so ``ν = −v̂_w,(y,z)``, ``H = ∂v_w,(y,z)/∂δx``,
+``R = σ² I`` with σ the body's side slip and suspension velocity in motion (Niu et al. 2007; Groves 2013, §16.3.2).
+Applied at the covariance epochs while the vehicle moves: at rest the ZUPT constrains the same velocity, and using
+it twice as two independent measurements would make the filter overconfident.
+
+Measurement ``z``: one placeholder column (0 where the constraint applies, NaN elsewhere).
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+from numba import njit
+
+from imunav.filters._layout import named_layout
+from imunav.ins.gins.aids._wheel import wheel_velocity
+from imunav.ins.gins.layout import LAY
+
+NAME = "nhc"
+ROWS = 2
+WIDTH = 1
+#: own parameters: the wheel contact point (body FRD, m) and the constraint's variance ((m/s)²)
+PARAMS, N_PARAMS = named_layout("NhcParams", (("lever", 3), ("var", 1)))
+
+
+def params(config: Any) -> np.ndarray:
+    """This aid's parameter block from a :class:`~imunav.ins.gins.GinsConfig` (``odo_lever_arm`` m,
+    ``nhc_noise`` m/s)."""
+    p = np.zeros(N_PARAMS)
+    p[PARAMS.lever:PARAMS.lever + 3] = config.odo_lever_arm
+    p[PARAMS.var] = 0.0 if config.nhc_noise is None else config.nhc_noise**2
+    return p
+
+
+@njit(cache=True)
+def rows(xs, ctx, z, r, p, lay, H, R, nu, row):
+    """Write the two NHC rows at ``row``.
+
+    Parameters
+    ----------
+    xs : nominal state (layout ``NOM``).
+    ctx : update context (layout ``CTX``; ``w_sample``).
+    z : (1,) placeholder.
+    r : not used.
+    p : parameter block (layout :data:`PARAMS`).
+    lay : int state layout (``LAY``).
+    H, R, nu : Jacobian, covariance and innovation of the update, written at ``row``.
+    row : int, first row.
+    """
+    nx = lay[LAY.nx]
+    Hv = np.zeros((3, nx))
+    vw = wheel_velocity(xs, ctx, p[PARAMS.lever:PARAMS.lever + 3], lay, Hv)
+    for a in range(2):
+        for j in range(nx):
+            H[row + a, j] = Hv[1 + a, j]
+        nu[row + a] = -vw[1 + a]
+        R[row + a, row + a] = p[PARAMS.var]

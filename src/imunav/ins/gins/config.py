@@ -1,0 +1,275 @@
+"""Configuration of the GNSS/INS filter (:class:`GinsConfig`): noise model, initial σ, lever arms, aids, gates.
+
+Every field is SI.  A scalar given for a 3-vector applies to the three axes.  :meth:`GinsConfig.from_kfgins` reads
+a KF-GINS YAML's configuration, :meth:`GinsConfig.from_preset` one matched to an IMU preset of
+:mod:`imunav.sim.presets`.  The TOML and KF-GINS-YAML keys of ``imunav gins run`` are the field names
+(:mod:`imunav.ins.gins.setup`).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from imunav.errors import InvalidInputError, ShapeError
+from imunav.io.kfgins import KfGinsConfig
+from imunav.sim import presets
+
+__all__ = ["GinsConfig", "STATE_NAMES"]
+
+Array = NDArray[np.float64]
+
+#: Names of the error states, in filter order (the first 15 of the 21-state filter are the 15-state filter).
+STATE_NAMES = tuple(f"{g}_{a}" for g in ("pos", "vel", "att", "gyro_bias", "accel_bias", "gyro_scale",
+                                           "accel_scale") for a in "xyz")
+
+
+def _v3(x: ArrayLike, name: str, *, positive: bool = False, nonneg: bool = False) -> Array:
+    a = np.asarray(x, dtype=float) * np.ones(3)
+    if a.shape != (3,) or not np.all(np.isfinite(a)):
+        raise ShapeError(f"GinsConfig.{name} must be a finite scalar or 3-vector; got {x!r}")
+    if positive and np.any(a <= 0):
+        raise InvalidInputError(f"GinsConfig.{name} = {a.tolist()}: a standard deviation / time must be > 0")
+    if nonneg and np.any(a < 0):
+        raise InvalidInputError(f"GinsConfig.{name} = {a.tolist()}: must be >= 0")
+    return a
+
+
+@dataclass(frozen=True)
+class GinsConfig:
+    """Configuration of :class:`GinsFilter`, SI units.
+
+    A scalar given for a 3-vector applies to the three axes.
+
+    Parameters
+    ----------
+    arw : float or array_like, shape (3,)
+        Gyro white noise (angle random walk), rad/√s (> 0).
+    vrw : float or array_like, shape (3,)
+        Accelerometer white noise (velocity random walk), m/s/√s (> 0).
+    gyro_bias_std, accel_bias_std : float or array_like, shape (3,)
+        Stationary Gauss–Markov σ of the biases, rad/s and m/s² (> 0).
+    gyro_scale_std, accel_scale_std : float or array_like, shape (3,)
+        Stationary Gauss–Markov σ of the scale-factor errors, dimensionless (> 0).
+    corr_time : float
+        Correlation time of the bias and odometer-scale Gauss–Markov states, s (> 0; KF-GINS: ``corrtime``;
+        ``inf``: random constants, no process noise — a state's variance then keeps its initial value, where a
+        Gauss–Markov state's initial variance above its stationary σ² decays as ``exp(−2t/T)``).
+    scale_factors : bool
+        True: 21 states; False: 15 (no scale-factor states).
+    init_pos_std, init_vel_std, init_att_std : float or array_like, shape (3,)
+        Initial σ of position (m, NED), velocity (m/s, NED) and attitude (rad, about N/E/D: roll, pitch,
+        yaw at level).
+    init_gyro_bias_std, init_accel_bias_std : float or array_like, shape (3,), optional
+        Initial σ of the bias states, rad/s and m/s² (default: their Gauss–Markov σ).
+    init_gyro_scale_std, init_accel_scale_std : float or array_like, shape (3,), optional
+        Initial σ of the scale-factor states, dimensionless (default: their Gauss–Markov σ).
+    lever_arm : array_like, shape (3,)
+        GNSS antenna from the IMU, body FRD, m.
+    use_gnss_velocity : bool
+        Use the fixes' velocity when they have one.
+    gate_alpha : float
+        False-alarm probability of the χ² gates, in [0, 1) (0 disables the gates).
+    cov_interval_s : float
+        Covariance propagation step, s (> 0; the nominal state is integrated every sample).
+    odo_lever_arm : array_like, shape (3,)
+        Wheel contact point from the IMU, body FRD, m (odometer and non-holonomic constraint).
+    odo_noise : float
+        Odometer speed σ, m/s (> 0).  The odometer and the NHC are applied at the covariance steps, not while
+        ``static`` says the vehicle stands still (the ZUPT holds the velocity then; a wheel encoder reads 0).
+    odo_scale_std : float
+        σ of the odometer scale-factor state (Gauss–Markov with ``corr_time``), dimensionless (> 0).
+    nhc_noise : float or None
+        σ of the non-holonomic constraint (zero lateral and vertical wheel velocity), m/s: the side slip and
+        suspension velocity of the body in motion; None: off.  Not applied while ``static`` says the vehicle
+        stands still: the ZUPT constrains the same velocity then (with ``zupt_noise``), and the one velocity
+        used twice as two independent measurements would make the filter overconfident.
+    zupt_noise : float
+        σ of the zero-velocity update applied while ``static`` says the vehicle stands still, m/s: the body's
+        vibration at rest, e.g. engine idle (> 0).
+    zaru_noise : float
+        σ of the angular-rate disturbance at rest (vibration), rad/s (>= 0).  The zero-angular-rate update reads
+        the mean raw rate over the covariance step Δt; the gyros' white noise adds ``ARW² / Δt`` per axis to
+        its variance by itself.
+    baro_noise : float
+        σ of the barometric height, m (its bias included: no baro-bias state; > 0).
+    scale_corr_time : float or None
+        Correlation time of the IMU scale-factor states, s (> 0; ``inf``: random constants, no process
+        noise; None: ``corr_time``, as KF-GINS).
+    declination : float
+        Magnetic declination, rad (east positive), for the magnetometer heading.
+    mag_heading_noise : float
+        σ of the magnetometer heading, rad (> 0; about the field noise over its horizontal strength, plus
+        the residual calibration and disturbance errors).
+
+    Raises
+    ------
+    ShapeError
+        If a vector field is neither a finite scalar nor a finite 3-vector.
+    InvalidInputError
+        If a σ, a time or the gate probability is out of range.
+    """
+
+    arw: Any
+    vrw: Any
+    gyro_bias_std: Any
+    accel_bias_std: Any
+    gyro_scale_std: Any = 1e-3
+    accel_scale_std: Any = 1e-3
+    corr_time: float = 3600.0
+    scale_factors: bool = True
+    init_pos_std: Any = 1.0
+    init_vel_std: Any = 0.1
+    init_att_std: Any = (1e-3, 1e-3, 1e-2)
+    init_gyro_bias_std: Any = None
+    init_accel_bias_std: Any = None
+    init_gyro_scale_std: Any = None
+    init_accel_scale_std: Any = None
+    lever_arm: Any = (0.0, 0.0, 0.0)
+    use_gnss_velocity: bool = True
+    gate_alpha: float = 1e-6
+    cov_interval_s: float = 0.2
+    odo_lever_arm: Any = (0.0, 0.0, 0.0)
+    odo_noise: float = 0.05
+    odo_scale_std: float = 0.01
+    nhc_noise: float | None = None
+    zupt_noise: float = 0.01
+    zaru_noise: float = 1e-4
+    baro_noise: float = 2.0
+    scale_corr_time: float | None = None
+    declination: float = 0.0
+    mag_heading_noise: float = 0.02
+
+    def __post_init__(self) -> None:
+        s = object.__setattr__
+        for name in ("arw", "vrw", "gyro_bias_std", "accel_bias_std", "gyro_scale_std", "accel_scale_std",
+                     "init_pos_std", "init_vel_std", "init_att_std"):
+            s(self, name, _v3(getattr(self, name), name, positive=True))
+        for name, src in (("init_gyro_bias_std", "gyro_bias_std"), ("init_accel_bias_std", "accel_bias_std"),
+                          ("init_gyro_scale_std", "gyro_scale_std"), ("init_accel_scale_std", "accel_scale_std")):
+            v = getattr(self, name)
+            s(self, name, getattr(self, src) if v is None else _v3(v, name, positive=True))
+        s(self, "lever_arm", _v3(self.lever_arm, "lever_arm"))
+        s(self, "odo_lever_arm", _v3(self.odo_lever_arm, "odo_lever_arm"))
+        if not np.isfinite(self.declination) or abs(self.declination) > np.pi:
+            raise InvalidInputError(f"GinsConfig.declination must be in [-pi, pi] rad; got {self.declination!r}")
+        for name in ("odo_noise", "odo_scale_std", "mag_heading_noise"):
+            if not (np.isfinite(getattr(self, name)) and getattr(self, name) > 0):
+                raise InvalidInputError(f"GinsConfig.{name} must be > 0; got {getattr(self, name)!r}")
+        if self.nhc_noise is not None and not (np.isfinite(self.nhc_noise) and self.nhc_noise > 0):
+            raise InvalidInputError(f"GinsConfig.nhc_noise must be > 0 m/s or None; got {self.nhc_noise!r}")
+        if not (self.corr_time > 0):
+            raise InvalidInputError(f"GinsConfig.corr_time must be > 0 s (inf: constant); got {self.corr_time!r}")
+        if not (0 <= self.gate_alpha < 1):
+            raise InvalidInputError(f"GinsConfig.gate_alpha must be in [0, 1); got {self.gate_alpha!r}")
+        if self.scale_corr_time is not None and not (self.scale_corr_time > 0):
+            raise InvalidInputError(f"GinsConfig.scale_corr_time must be > 0 s (inf: constant) or None; "
+                                    f"got {self.scale_corr_time!r}")
+        if not (self.cov_interval_s > 0):
+            raise InvalidInputError(f"GinsConfig.cov_interval_s must be > 0 s; got {self.cov_interval_s!r}")
+
+    @property
+    def n_states(self) -> int:
+        """Navigation and IMU-error states: 15, or 21 with the scale factors (an odometer adds one)."""
+        return 21 if self.scale_factors else 15
+
+    @classmethod
+    def from_kfgins(cls, cfg: KfGinsConfig, **overrides: Any) -> GinsConfig:
+        """The filter configuration of a KF-GINS YAML (:func:`imunav.io.kfgins.load_kfgins_config`).
+
+        Noise densities, Gauss–Markov σ and correlation time, initial σ and the antenna lever arm are
+        taken from ``cfg``; the other fields keep their defaults.
+
+        Parameters
+        ----------
+        cfg : KfGinsConfig
+            The configuration read by :func:`~imunav.io.kfgins.load_kfgins_config` (SI).
+        **overrides
+            Any field of :class:`GinsConfig`, replacing the value taken from ``cfg``.
+
+        Returns
+        -------
+        GinsConfig
+            The filter configuration.
+        """
+        n = cfg.noise
+        kw: dict[str, Any] = dict(
+            arw=n.arw, vrw=n.vrw, gyro_bias_std=n.gyro_bias_std, accel_bias_std=n.accel_bias_std,
+            gyro_scale_std=n.gyro_scale_std, accel_scale_std=n.accel_scale_std, corr_time=n.corr_time,
+            init_pos_std=cfg.init_pos_std, init_vel_std=cfg.init_vel_std, init_att_std=cfg.init_att_std,
+            init_gyro_bias_std=cfg.init_gyro_bias_std, init_accel_bias_std=cfg.init_accel_bias_std,
+            init_gyro_scale_std=cfg.init_gyro_scale_std, init_accel_scale_std=cfg.init_accel_scale_std,
+            lever_arm=cfg.antenna_lever_arm,
+        )
+        kw.update(overrides)
+        return cls(**kw)
+
+    @classmethod
+    def from_preset(cls, name: str, *, white_below_s: float = 100.0, **overrides: Any) -> GinsConfig:
+        """A configuration matched to what the IMU preset of :mod:`imunav.sim.presets` simulates: white noise
+        densities, biases as a random constant (the turn-on bias) plus the in-run instability, scale factors as
+        random constants.
+
+        The initial bias σ is ``√(b_0² + Σ σ_i²)`` (turn-on bias and the bias-instability components
+        ``σ_i``, ``τ_i``) and the correlation time ``T`` the longest ``τ_i``.  Components with
+        ``τ_i < white_below_s`` average out within the spans the filter bridges and are modelled as white
+        noise added to the ARW / VRW (PSD ``2σ_i²τ_i``); the Gauss–Markov σ of the bias states is chosen so
+        that their driving noise ``2σ²/T`` equals that of the slower ones, ``Σ 2σ_i²/τ_i``.  Folding the
+        constant turn-on bias into the Gauss–Markov σ instead (before) made the ADIS16465-class accelerometer
+        bias walk about 20 times too strong (position RMSE 1.10 x pyins' in ``benchmarks/bench_gins_pyins.py``);
+        driving the bias with every component (``white_below_s = 0``) makes the gyro bias walk too fast
+        (outage drift 33.6 m vs 8.7 m).  Measured on the ADIS16465 preset (pyins-bench position RMSE m /
+        60 s outage horizontal drift m, GNSS only, 900 s drive) for ``white_below_s`` = 0, 1, 10, 30, 100, 300,
+        3000 s: 0.354 / 33.6, 0.337 / 18.7, 0.330 / 11.7, 0.331 / 9.3, 0.334 / 8.7, 0.339 / 11.5, 0.354 / 24.1:
+        100 s is kept.  The scale σ is 1.5 times the preset's scale-factor error, with
+        ``scale_corr_time = inf`` (the presets' scale factors are constants).
+
+        Parameters
+        ----------
+        name : str
+            Preset name (:func:`imunav.sim.presets.get`, e.g. ``"navigation_a15"``).
+        white_below_s : float
+            Bias-instability components with a shorter correlation time are modelled as white noise, s (>= 0).
+        **overrides
+            Any field of :class:`GinsConfig`, replacing the value derived from the preset.
+
+        Returns
+        -------
+        GinsConfig
+            The filter configuration.
+
+        Raises
+        ------
+        InvalidInputError
+            If ``white_below_s`` is negative, or a field is out of range (as :class:`GinsConfig`).
+        """
+        m = presets.get(name)
+
+        if not (white_below_s >= 0):
+            raise InvalidInputError(f"white_below_s must be >= 0 s; got {white_below_s!r}")
+
+        def parts(te):
+            sig, tc = te.bias_instability.components() if te.bias_instability is not None else (np.zeros((1, 3)),
+                                                                                                  np.full((1, 3), 3600.0))
+            slow = tc >= white_below_s
+            walk = np.sum(np.where(slow, 2.0 * sig**2 / tc, 0.0), axis=0)
+            white = np.sqrt(te.noise_density**2 + np.sum(np.where(slow, 0.0, 2.0 * sig**2 * tc), axis=0))
+            return np.sqrt(te.bias**2 + np.sum(sig**2, axis=0)), walk, float(np.max(tc)), white
+
+        gb0, gq, tg, gw = parts(m.gyro)
+        ab0, aq, ta, aw = parts(m.accel)
+        tc = max(tg, ta)
+        kw: dict[str, Any] = dict(
+            arw=np.maximum(gw, 1e-9), vrw=np.maximum(aw, 1e-9),
+            gyro_bias_std=np.maximum(np.sqrt(gq * tc / 2.0), 1e-12),
+            accel_bias_std=np.maximum(np.sqrt(aq * tc / 2.0), 1e-12),
+            init_gyro_bias_std=np.maximum(gb0, 1e-12), init_accel_bias_std=np.maximum(ab0, 1e-12),
+            gyro_scale_std=np.maximum(np.abs(np.diag(m.gyro.scale_misalignment) - 1), 1e-6) * 1.5,
+            accel_scale_std=np.maximum(np.abs(np.diag(m.accel.scale_misalignment) - 1), 1e-6) * 1.5,
+            corr_time=tc, scale_corr_time=np.inf,
+        )
+        kw.update(overrides)
+        return cls(**kw)

@@ -1,0 +1,662 @@
+"""Loosely coupled GNSS/INS: an error-state Kalman filter on the NED strapdown, aided by GNSS and vehicle sensors.
+
+:class:`GinsFilter` integrates IMU rates (:class:`~imunav.timeseries.ImuData`, with two-sample coning / sculling
+corrections) or increments (:class:`~imunav.io.kfgins.ImuIncrements`) with
+:func:`imunav.filters._core.strapdown_step_ned` and estimates 15 error states (position, velocity, attitude,
+gyro and accelerometer biases) or 21 (plus scale factors), biases and scale factors being first-order
+Gauss–Markov processes with configurable σ and correlation time (:class:`~imunav.ins.gins.GinsConfig`).  The aids
+are the models of :mod:`imunav.ins.gins.aids` (GNSS position and velocity with the antenna lever arm at their own
+time stamps; odometer + non-holonomic constraint, ZUPT + ZARU, barometric height and magnetometer heading on the
+IMU grid), each behind a χ² gate with its NIS recorded.  ``GinsFilter(config).run(imu, gnss, ...)`` filters a
+recording; ``reset(...)`` then ``step(t, dθ, dv, gnss=..., ...)`` runs the same kernel one increment at a time.
+The equations are in :mod:`imunav.ins.gins.kernels` and in each aid's module.
+
+Example
+-------
+>>> import numpy as np
+>>> from imunav.ins.gins import GinsConfig, GinsFilter
+>>> from imunav.sim import presets, simulate_imu
+>>> from imunav.sim.gnss import simulate_gnss
+>>> from imunav.sim.vehicle import demo_drive, vehicle_trajectory
+>>> truth = vehicle_trajectory(demo_drive(120), fs=100)
+>>> imu = simulate_imu(truth, presets.get("navigation_a15"), rng=1)
+>>> gnss = simulate_gnss(truth, rng=2)
+>>> cfg = GinsConfig.from_preset("navigation_a15")
+>>> res = GinsFilter(cfg).run(imu, gnss, lla0=truth.pos_lla[0], vel0=truth.vel_ned[0], q0=truth.q_nb[0])
+>>> bool(np.all(np.isfinite(res.lla)))
+True
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from imunav._quantiles import chi2_ppf
+from imunav.earth import OMEGA_E
+from imunav.errors import InvalidInputError, NonFiniteError, ShapeError
+from imunav.ins.gins import aids, kernels
+from imunav.ins.gins.config import GinsConfig
+from imunav.ins.gins.layout import (
+    CARRY,
+    LAY,
+    MAX_GROUP,
+    MAX_ROWS,
+    N_CARRY,
+    N_CARRY_N,
+    N_LAY,
+    N_NOM,
+    N_PRM,
+    NOM,
+    PRM,
+    REQUIRED_BLOCKS,
+    STATE_BLOCKS,
+)
+from imunav.ins.gins.result import AidRecord, GinsResult
+from imunav.ins.gins.smoother import rts_smooth
+from imunav.ins.strapdown import coning_sculling_increments
+from imunav.io.gnss import GnssData
+from imunav.io.kfgins import ImuIncrements
+from imunav.rotation import quat_normalize
+from imunav.sim.gnss import MagnetometerData
+from imunav.sim.vehicle import BaroData, OdometerData
+from imunav.timeseries import ImuData
+
+__all__ = ["GinsFilter"]
+
+Array = NDArray[np.float64]
+
+
+def _initial_state(lla0: ArrayLike, vel0: ArrayLike, q0: ArrayLike, imu_errors0: ArrayLike | None) -> Array:
+    """The nominal state vector (layout ``NOM``) at the start."""
+    lla = np.array(lla0, dtype=float)
+    if lla.shape != (3,) or not np.all(np.isfinite(lla)) or abs(lla[0]) >= np.pi / 2:
+        raise InvalidInputError(f"lla0 must be (lat rad, lon rad, h m) with |lat| < pi/2; got {lla0!r}")
+    v = np.array(vel0, dtype=float)
+    if v.shape != (3,) or not np.all(np.isfinite(v)):
+        raise ShapeError(f"vel0 must be a finite 3-vector (NED m/s); got {vel0!r}")
+    xs = np.zeros(N_NOM)
+    xs[NOM.lla:NOM.lla + 3] = lla
+    xs[NOM.vel:NOM.vel + 3] = v
+    xs[NOM.q:NOM.q + 4] = quat_normalize(np.array(q0, dtype=float))
+    if imu_errors0 is not None:
+        e0 = np.asarray(imu_errors0, dtype=float)
+        if e0.shape != (12,):
+            raise ShapeError(f"imu_errors0 must have 12 values (bg, ba, sg, sa); got shape {e0.shape}")
+        xs[NOM.gyro_bias:NOM.gyro_bias + 12] = e0
+    return xs
+
+
+def _state_blocks(c: GinsConfig, odometer: bool) -> tuple[str, ...]:
+    """The error-state blocks a configuration estimates, in filter order."""
+    use = set(REQUIRED_BLOCKS) | ({"gyro_scale", "accel_scale"} if c.scale_factors else set())
+    if odometer:
+        use.add("odo_scale")
+    return tuple(name for name, _ in STATE_BLOCKS if name in use)
+
+
+def _kernel_setup(c: GinsConfig, fs: float, odometer: bool) -> tuple[Array, NDArray[np.int64], Array]:
+    """The kernel's core and aid parameters ``prm``, its integer layout ``lay`` and the initial σ of each state.
+
+    ``lay`` holds the first index of each state block (−1 when not estimated), the state size, the covariance step
+    in samples, then the offset of each aid's parameter block in ``prm`` (``lay[N_LAY + kind]``).
+    """
+    sizes = dict(STATE_BLOCKS)
+    lay = np.full(N_LAY + aids.N_AIDS, -1, dtype=np.int64)
+    sd0: dict[str, Any] = {"pos": c.init_pos_std, "vel": c.init_vel_std, "att": c.init_att_std,
+                           "gyro_bias": c.init_gyro_bias_std, "accel_bias": c.init_accel_bias_std,
+                           "gyro_scale": c.init_gyro_scale_std, "accel_scale": c.init_accel_scale_std,
+                           "odo_scale": [c.odo_scale_std]}
+    nx = 0
+    sd = []
+    for name in _state_blocks(c, odometer):
+        lay[getattr(LAY, name)] = nx
+        nx += sizes[name]
+        sd.append(np.asarray(sd0[name], dtype=float))
+    lay[LAY.nx] = nx
+    lay[LAY.cov_step] = max(1, int(round(c.cov_interval_s * fs)))
+    prm = np.zeros(N_PRM)
+    prm[PRM.omega_e] = OMEGA_E
+    prm[PRM.arw:PRM.arw + 3] = c.arw
+    prm[PRM.vrw:PRM.vrw + 3] = c.vrw
+    ts = c.corr_time if c.scale_corr_time is None else float(c.scale_corr_time)
+    for name, sdv, tc in (("gyro_bias", c.gyro_bias_std, c.corr_time), ("accel_bias", c.accel_bias_std, c.corr_time),
+                          ("gyro_scale", c.gyro_scale_std, ts), ("accel_scale", c.accel_scale_std, ts),
+                          ("odo_scale", c.odo_scale_std, c.corr_time)):
+        n = sizes[name]
+        q0, t0 = getattr(PRM, name + "_q"), getattr(PRM, name + "_t")
+        prm[q0:q0 + n] = 2.0 * np.asarray(sdv) ** 2 / tc
+        prm[t0:t0 + n] = tc
+    for dof in range(1, MAX_ROWS + 1):
+        prm[PRM.gate + dof - 1] = float(chi2_ppf(1 - c.gate_alpha, dof)) if c.gate_alpha > 0 else 1e300
+    blocks = [prm]
+    off = N_PRM
+    for kind, model in enumerate(aids.MODELS):
+        lay[N_LAY + kind] = off
+        p = np.asarray(model.params(c), dtype=float)
+        blocks.append(p)
+        off += p.size
+    return np.concatenate(blocks), lay, np.concatenate(sd)
+
+
+class _Timed:
+    """Collects the timed aid measurements of a run and packs them in time order for the kernel."""
+
+    def __init__(self) -> None:
+        self.parts: list[tuple[int, Array, Array, Array, NDArray[np.int64]]] = []
+
+    def add(self, name: str, t: Array, z: Array, r: Array, source: NDArray[np.int64] | None = None) -> None:
+        """Measurements of the aid ``name`` at times ``t``: ``z`` (k, w <= 3), covariance ``r`` (k, w, w);
+        ``source``: the index of each in its input (default 0..k-1)."""
+        k = t.size
+        zz = np.zeros((k, 3))
+        rr = np.zeros((k, 3, 3))
+        w = z.shape[1]
+        zz[:, :w] = z
+        rr[:, :w, :w] = r
+        src = np.arange(k, dtype=np.int64) if source is None else source
+        self.parts.append((getattr(aids.AID, name), np.asarray(t, dtype=float), zz, rr, src))
+
+    def pack(self) -> tuple[kernels.TimedInput, NDArray[np.int64]]:
+        """The kernel input (stable time order: measurements at one stamp in the order they were added) and the
+        source index of each."""
+        if not self.parts:
+            return kernels.TimedInput(np.zeros(0), np.zeros(0, dtype=np.int64), np.zeros((0, 3)),
+                                      np.zeros((0, 3, 3))), np.zeros(0, dtype=np.int64)
+        t = np.concatenate([p[1] for p in self.parts])
+        order = np.argsort(t, kind="stable")
+        kind = np.concatenate([np.full(p[1].size, p[0], dtype=np.int64) for p in self.parts])
+        z = np.concatenate([p[2] for p in self.parts])
+        r = np.concatenate([p[3] for p in self.parts])
+        src = np.concatenate([p[4] for p in self.parts])
+        return (kernels.TimedInput(np.ascontiguousarray(t[order]), kind[order], np.ascontiguousarray(z[order]),
+                                   np.ascontiguousarray(r[order])), src[order])
+
+
+def _sampled(n: int, columns: dict[str, Array], force: Array) -> kernels.SampledInput:
+    """The sampled aids' kernel input from ``columns`` (aid name -> (N, WIDTH) array, NaN where the aid has no
+    measurement), in the group order of :data:`imunav.ins.gins.aids.SAMPLED` (aids absent from ``columns`` are
+    left out)."""
+    kind, col, group, blocks = [], [], [], []
+    c = 0
+    for g, names in enumerate(aids.SAMPLED):
+        for name in names:
+            if name in columns:
+                a = np.asarray(columns[name], dtype=float).reshape(n, -1)
+                kind.append(getattr(aids.AID, name))
+                col.append(c)
+                group.append(g)
+                blocks.append(a)
+                c += a.shape[1]
+    z = np.ascontiguousarray(np.hstack(blocks)) if blocks else np.zeros((n, 0))
+    as_int = lambda x: np.asarray(x, dtype=np.int64)  # noqa: E731
+    return kernels.SampledInput(z, np.ascontiguousarray(force, dtype=bool), as_int(kind), as_int(col), as_int(group))
+
+
+def _output(n: int, nx: int, mmax: int, nlog: int, nrec: int) -> kernels.KernelOutput:
+    """Preallocated kernel outputs."""
+    return kernels.KernelOutput(
+        xs=np.empty((n, N_NOM)), cov_t=np.empty(mmax), cov_diag=np.empty((mmax, nx)), cov_nav=np.empty((mmax, 9, 9)),
+        log_t=np.empty(nlog), log_k=np.empty(nlog, dtype=np.int64), log_src=np.empty(nlog, dtype=np.int64),
+        log_rows=np.empty(nlog, dtype=np.int64), log_ok=np.empty(nlog, dtype=np.bool_), log_nis=np.empty(nlog),
+        log_blk=np.empty((nlog, MAX_GROUP)), rec_t=np.zeros(nrec), rec_phi=np.zeros((nrec, nx, nx)),
+        rec_ppri=np.zeros((nrec, nx, nx)), rec_ppost=np.zeros((nrec, nx, nx)), rec_inj=np.zeros((nrec, nx)),
+        rec_state=np.zeros((nrec, 10)))
+
+
+@dataclass
+class _Log:
+    """The kernel's update log, split by aid: one :class:`~imunav.ins.gins.result.AidRecord` per aid that was
+    applied, and the joint record of each sampled group."""
+
+    aids: dict[str, AidRecord] = field(default_factory=dict)
+    groups: dict[tuple[str, ...], AidRecord] = field(default_factory=dict)
+    timed_index: dict[str, NDArray[np.int64]] = field(default_factory=dict)
+
+
+def _split_log(o: kernels.KernelOutput, nlog: int, timed_kind: NDArray[np.int64], timed_src: NDArray[np.int64],
+               sampled: kernels.SampledInput) -> _Log:
+    """Split the update log into per-aid records (a model in a joint update: the NIS of its own rows, the gate
+    decision of the joint update)."""
+    out = _Log()
+    t, k, src = o.log_t[:nlog], o.log_k[:nlog], o.log_src[:nlog]
+    rows, ok, d, blk = o.log_rows[:nlog], o.log_ok[:nlog], o.log_nis[:nlog], o.log_blk[:nlog]
+    timed = src >= 0
+    kind_t = np.where(timed, timed_kind[np.where(timed, src, 0)] if timed_kind.size else -1, -1)
+    for name in aids.TIMED:
+        sel = timed & (kind_t == getattr(aids.AID, name))
+        if sel.any():
+            out.aids[name] = AidRecord(t[sel], d[sel], rows[sel], ok[sel], k[sel])
+            out.timed_index[name] = timed_src[src[sel]]
+    for g, names in enumerate(aids.SAMPLED):
+        sel = src == -1 - g
+        if not sel.any():
+            continue
+        out.groups[names] = AidRecord(t[sel], d[sel], rows[sel], ok[sel], k[sel])
+        present = [nm for nm in names if getattr(aids.AID, nm) in sampled.kind]
+        for pos, name in enumerate(present):
+            s = sel & np.isfinite(blk[:, pos])
+            if s.any():
+                w = int(aids.ROWS[getattr(aids.AID, name)])
+                out.aids[name] = AidRecord(t[s], blk[s, pos], np.full(int(s.sum()), w), ok[s], k[s])
+    return out
+
+
+def _per_sample(n: int, rec: AidRecord | None) -> Array:
+    """An aid's NIS per IMU sample, NaN where it was not applied."""
+    a = np.full(n, np.nan)
+    if rec is not None:
+        a[rec.sample] = rec.nis
+    return a
+
+
+#: GinsResult's per-sample NIS fields: field prefix -> (sampled group, aid name or None for the joint statistic)
+_SAMPLE_NIS = {"zupt": (("zupt", "zaru"), None), "baro": (("baro",), None), "mag": (("mag_heading",), None),
+               "odo": (("odometer", "nhc"), "odometer"), "nhc": (("odometer", "nhc"), "nhc"),
+               "zupt_vel": (("zupt", "zaru"), "zupt"), "zaru": (("zupt", "zaru"), "zaru")}
+
+
+def _increments(imu: ImuData | ImuIncrements) -> tuple[Array, Array, Array]:
+    if isinstance(imu, ImuIncrements):
+        dth = np.array(imu.dtheta, dtype=float)
+        dv = np.array(imu.dvel, dtype=float)
+        # two-sample coning / sculling and rotation compensation on the increments (Savage 1998)
+        c = np.zeros_like(dth)
+        s = np.zeros_like(dv)
+        c[1:] = np.cross(dth[:-1], dth[1:]) / 12.0
+        s[1:] = (np.cross(dth[:-1], dv[1:]) + np.cross(dv[:-1], dth[1:])) / 12.0
+        dv_out = dv + 0.5 * np.cross(dth, dv) + s
+        return np.ascontiguousarray(imu.t, dtype=float), dth + c, dv_out
+    if isinstance(imu, ImuData):
+        dth, dv = coning_sculling_increments(imu, True)
+        return np.ascontiguousarray(imu.t, dtype=float), dth, dv
+    raise InvalidInputError(f"imu must be an ImuData (rates) or ImuIncrements; got {type(imu).__name__}")
+
+
+def _on_imu_grid(t: Array, aid: Any, kind: type, name: str, field_name: str) -> Array:
+    """An aiding series (odometer speed, barometric height) interpolated to the IMU stamps inside its span,
+    NaN outside."""
+    out = np.full(t.size, np.nan)
+    if not isinstance(aid, kind):
+        raise InvalidInputError(f"{name} must be a {kind.__name__}; got {type(aid).__name__}")
+    at = np.asarray(aid.t, dtype=float)
+    if at.size < 2 or np.any(np.diff(at) <= 0):
+        raise InvalidInputError(f"{name} time stamps must be strictly increasing (at least 2 samples)")
+    inside = (t >= at[0]) & (t <= at[-1])
+    if not inside.any():
+        raise InvalidInputError(f"{name} time {at[0]:.3f}..{at[-1]:.3f} s lies outside the IMU span")
+    out[inside] = np.interp(t[inside], at, np.asarray(getattr(aid, field_name), dtype=float))
+    return out
+
+
+def _at_imu_samples(t: Array, aid: Any, kind: type, name: str, field_name: str) -> Array:
+    """Aiding samples (barometer, magnetometer) placed at the nearest IMU stamp (not interpolated: interpolating
+    white noise between two samples would shrink its variance below the σ the update assumes), NaN elsewhere."""
+    if not isinstance(aid, kind):
+        raise InvalidInputError(f"{name} must be a {kind.__name__}; got {type(aid).__name__}")
+    at = np.asarray(aid.t, dtype=float)
+    if at.size < 2 or np.any(np.diff(at) <= 0):
+        raise InvalidInputError(f"{name} time stamps must be strictly increasing (at least 2 samples)")
+    half = 0.5 * float(np.median(np.diff(t)))
+    inside = (at >= t[0] - half) & (at <= t[-1] + half)
+    if not inside.any():
+        raise InvalidInputError(f"{name} time {at[0]:.3f}..{at[-1]:.3f} s lies outside the IMU span")
+    k = np.clip(np.searchsorted(t, at[inside]), 1, t.size - 1)
+    k = np.where(np.abs(t[k - 1] - at[inside]) < np.abs(t[k] - at[inside]), k - 1, k)
+    if np.any(np.diff(k) == 0):
+        raise InvalidInputError(f"{name}: two samples fall on one IMU sample (rate above the IMU rate); "
+                                "decimate or average it first")
+    val = np.asarray(getattr(aid, field_name), dtype=float)
+    out = np.full((t.size,) + val.shape[1:], np.nan)
+    out[k] = val[inside]
+    return out
+
+
+def _vec3_input(x: ArrayLike, name: str) -> Array:
+    a = np.asarray(x, dtype=float)
+    if a.shape != (3,) or not np.all(np.isfinite(a)):
+        raise ShapeError(f"GinsFilter: {name} must be a finite 3-vector; got {x!r}")
+    return a
+
+
+class GinsFilter:
+    """The loosely coupled GNSS/INS filter: :meth:`run` over a recording, or :meth:`reset` then :meth:`step`
+    sample by sample (the same numba kernel, :func:`imunav.ins.gins.kernels.gins_run`, for both).
+
+    The loosely coupled INS/GNSS integration of Groves (*Principles of GNSS, Inertial, and Multisensor
+    Integrated Navigation Systems*, 2nd ed., Artech House 2013, ch. 14): closed-loop error-state Kalman
+    filter, the estimated errors fed back into the nominal state after each update.
+
+    Parameters
+    ----------
+    config : GinsConfig
+        Noise model, initial σ, lever arms, aids and gates.
+
+    Attributes
+    ----------
+    t : float
+        Time of the current state, s (after :meth:`reset` / :meth:`step` / :meth:`run`).
+    lla, vel_ned, q_nb : numpy.ndarray
+        Current position (lat rad, lon rad, h m), NED velocity (m/s), attitude (body FRD -> NED).
+    imu_errors : numpy.ndarray, shape (13,)
+        Current gyro bias, accel bias, gyro scale, accel scale, odometer scale.
+    P : numpy.ndarray, shape (n, n)
+        Current error-state covariance (:data:`~imunav.ins.gins.STATE_NAMES`, then the odometer scale).
+    last_nis : dict
+        NIS of the updates of the last :meth:`step`: ``gnss`` (G, 2) position / velocity, ``vehicle``,
+        ``zupt``, ``baro``, ``mag``, and each model alone: ``odo``, ``nhc``, ``zupt_vel``, ``zaru`` (NaN when
+        not applied).
+
+    Raises
+    ------
+    InvalidInputError
+        If ``config`` is not a :class:`GinsConfig`.
+    """
+
+    def __init__(self, config: GinsConfig) -> None:
+        if not isinstance(config, GinsConfig):
+            raise InvalidInputError(f"GinsFilter needs a GinsConfig; got {type(config).__name__}")
+        self.config = config
+        self._prm: Array | None = None
+        self._xs = np.zeros(N_NOM)
+        self.last_nis: dict[str, Any] = {}
+
+    @property
+    def lla(self) -> Array:
+        """Current position: lat rad, lon rad, ellipsoidal height m."""
+        return self._xs[NOM.lla:NOM.lla + 3]
+
+    @property
+    def vel_ned(self) -> Array:
+        """Current NED velocity, m/s."""
+        return self._xs[NOM.vel:NOM.vel + 3]
+
+    @property
+    def q_nb(self) -> Array:
+        """Current attitude, body FRD -> NED, scalar first."""
+        return self._xs[NOM.q:NOM.q + 4]
+
+    @property
+    def imu_errors(self) -> Array:
+        """Current gyro bias (rad/s), accel bias (m/s²), gyro scale, accel scale, odometer scale (13 values)."""
+        return self._xs[NOM.gyro_bias:]
+
+    def reset(self, *, lla0: ArrayLike, vel0: ArrayLike, q0: ArrayLike, t0: float, fs: float,
+              imu_errors0: ArrayLike | None = None, odometer: bool = False, dtheta0: ArrayLike | None = None,
+              dvel0: ArrayLike | None = None) -> None:
+        """Set the state the next :meth:`step` starts from (covariance back to the configured initial σ).
+
+        Parameters
+        ----------
+        lla0, vel0, q0 : array_like, shapes (3,), (3,), (4,)
+            Initial position (lat rad, lon rad, h m), NED velocity (m/s) and ``q_nb`` (body FRD -> NED,
+            scalar first) at ``t0``.
+        t0 : float
+            Time of the initial state, s.
+        fs : float
+            IMU rate, Hz (> 0): sets the covariance step ``cov_interval_s`` in samples.
+        imu_errors0 : array_like, shape (12,), optional
+            Initial gyro bias (rad/s), accel bias (m/s²), gyro scale, accel scale (default zeros).
+        odometer : bool
+            Add the odometer scale-factor state (to use ``odometer_speed`` in :meth:`step`).
+        dtheta0, dvel0 : array_like, shape (3,), optional
+            The raw increments ending at ``t0`` (for the two-sample coning / sculling of the first step;
+            default zeros).
+
+        Raises
+        ------
+        InvalidInputError
+            If ``lla0`` is not a position in radians or ``fs`` is not > 0.
+        ShapeError
+            If ``vel0`` or ``imu_errors0`` has the wrong shape.
+        """
+        if not (np.isfinite(fs) and fs > 0):
+            raise InvalidInputError(f"GinsFilter.reset: fs must be > 0 Hz; got {fs!r}")
+        self._xs = _initial_state(lla0, vel0, q0, imu_errors0)
+        self._prm, self._lay, sd0 = _kernel_setup(self.config, float(fs), odometer)
+        self.P = np.diag(sd0**2)
+        self.t = float(t0)
+        self._carry = np.zeros(N_CARRY)
+        self._carry_n = np.zeros(N_CARRY_N, dtype=np.int64)
+        self._carry[CARRY.t_cov] = self.t
+        self._carry[CARRY.t_raw] = self.t
+        self._prev = np.zeros((2, 3))
+        for row, x, name in ((0, dtheta0, "dtheta0"), (1, dvel0, "dvel0")):
+            if x is not None:
+                self._prev[row] = _vec3_input(x, name)
+        self._odometer = bool(odometer)
+        self.last_nis = {}
+
+    def step(self, t: float, dtheta: ArrayLike, dvel: ArrayLike, *, gnss: GnssData | None = None,
+             odometer_speed: float | None = None, static: bool = False, baro_height: float | None = None,
+             mag_field: ArrayLike | None = None) -> None:
+        """Process one IMU increment over ``(self.t, t]`` and the aiding measurements of that interval.
+
+        The state attributes (``lla``, ``vel_ned``, ``q_nb``, ``imu_errors``, ``P``, ``t``) are updated in
+        place; :meth:`run` over the same increments gives the same result.
+
+        Parameters
+        ----------
+        t : float
+            End time of the increment, s (> ``self.t``).
+        dtheta, dvel : array_like, shape (3,)
+            Raw angle (rad) and velocity (m/s) increments over ``(self.t, t]``, body FRD (coning / sculling
+            applied here, as :meth:`run` does for :class:`~imunav.io.kfgins.ImuIncrements`).
+        gnss : GnssData, optional
+            Fixes; those stamped inside ``(self.t, t]`` are used at their own time stamps.
+        odometer_speed : float, optional
+            Wheel speed at ``t``, m/s (needs ``reset(..., odometer=True)``).
+        static : bool
+            The vehicle stands still at ``t``: ZUPT + ZARU.
+        baro_height : float, optional
+            Barometric height at ``t``, m.
+        mag_field : array_like, shape (3,), optional
+            Calibrated magnetometer sample at ``t``, body frame (any unit): heading update.
+
+        Raises
+        ------
+        InvalidInputError
+            Before :meth:`reset`, if ``t`` is not after the current time, or with an odometer speed and no
+            odometer state.
+        ShapeError
+            If an increment is not a finite 3-vector.
+        NonFiniteError
+            If ``odometer_speed`` or ``baro_height`` is given but not finite.
+        """
+        if self._prm is None:
+            raise InvalidInputError("GinsFilter.step before reset(): call reset(lla0=..., t0=..., fs=...) first")
+        t = float(t)
+        if not t > self.t:
+            raise InvalidInputError(f"GinsFilter.step: t = {t!r} s is not after the current time {self.t!r} s")
+        if odometer_speed is not None and not self._odometer:
+            raise InvalidInputError("GinsFilter.step: odometer_speed needs reset(..., odometer=True)")
+        raw = np.vstack([self._prev, _vec3_input(dtheta, "dtheta"), _vec3_input(dvel, "dvel")])
+        dth = np.array([raw[0], raw[2]])
+        dv = np.array([raw[1], raw[3]])
+        _, dth, dv = _increments(ImuIncrements(np.array([self.t, t]), dth, dv, np.full(2, t - self.t)))
+        self._prev = raw[2:]
+        for name, v in (("odometer_speed", odometer_speed), ("baro_height", baro_height)):
+            if v is not None and not math.isfinite(float(v)):
+                raise NonFiniteError(f"GinsFilter.step: {name} = {v!r} is not finite; pass None when there is no "
+                                     "sample at this time")
+        sl = slice(0, 0)
+        if gnss is not None:
+            i0, i1 = np.searchsorted(gnss.t, [self.t, t], side="right")
+            sl = slice(int(i0), int(i1))
+        odo = np.array([np.nan, np.nan if odometer_speed is None else float(odometer_speed)])
+        baro = np.array([np.nan, np.nan if baro_height is None else float(baro_height)])
+        mag = np.full((2, 3), np.nan)
+        if mag_field is not None:
+            mag[1] = _vec3_input(mag_field, "mag_field")
+        tt = np.array([self.t, t])
+        timed = self._timed(gnss, sl)
+        sampled = self._sampled(2, odo if self._odometer else None, np.array([False, bool(static)]), baro, mag)
+        log, _ = self._kernel(tt, dth, dv, timed, sampled, 0, False, False)
+        self.t = t
+        nis = np.full((sl.stop - sl.start, 2), np.nan)
+        for col, name in enumerate(aids.TIMED[:2]):
+            if name in log.aids:
+                nis[log.timed_index[name], col] = log.aids[name].nis
+        veh = log.groups.get(("odometer", "nhc"))
+        self.last_nis = {"gnss": nis, "vehicle": float(veh.nis[0]) if veh is not None else math.nan}
+        self.last_nis.update({name: float(_sample_nis(log, name, 2)[1]) for name in _SAMPLE_NIS})
+
+    def _timed(self, g: GnssData | None, sl: slice) -> tuple[kernels.TimedInput, NDArray[np.int64],
+                                                             NDArray[np.int64]]:
+        """The GNSS fixes ``g[sl]`` as timed aid measurements (position, then velocity when configured and given),
+        their kinds and their indices in ``sl``."""
+        tm = _Timed()
+        if g is not None and sl.stop > sl.start:
+            tm.add("gnss_position", g.t[sl], g.lla[sl], _diag(g.pos_std[sl] ** 2))
+            if self.config.use_gnss_velocity and g.vel_ned is not None:
+                tm.add("gnss_velocity", g.t[sl], g.vel_ned[sl], _diag(g.vel_std[sl] ** 2))
+        packed, src = tm.pack()
+        return packed, packed.kind, src
+
+    def _sampled(self, n: int, odo: Array | None, static: Array, baro: Array, mag: Array) -> kernels.SampledInput:
+        """The aids on the IMU grid: odometer (speed, variance) and NHC while moving, ZUPT + ZARU while static,
+        barometer and magnetometer where they have a sample (which forces a covariance epoch there)."""
+        c = self.config
+        cols: dict[str, Array] = {}
+        moving = np.where(static, np.nan, 0.0)
+        if odo is not None:
+            cols["odometer"] = np.column_stack([odo + moving, np.full(n, c.odo_noise**2)])
+        if c.nhc_noise is not None:
+            cols["nhc"] = moving
+        if static.any():
+            rest = np.where(static, 0.0, np.nan)
+            cols["zupt"] = rest
+            cols["zaru"] = rest
+        has_baro = ~np.isnan(baro)
+        has_mag = ~np.isnan(mag[:, 0])
+        if has_baro.any():
+            cols["baro"] = baro
+        if has_mag.any():
+            cols["mag_heading"] = mag
+        return _sampled(n, cols, has_baro | has_mag)
+
+    def _kernel(self, t: Array, dth: Array, dv: Array, timed: tuple[kernels.TimedInput, Any, Any],
+                sampled: kernels.SampledInput, nrec: int, first: bool, final: bool) -> tuple[_Log, Any]:
+        """One call of the kernel from the current state over ``t`` (the state at t[0]), in place."""
+        packed, kind, src = timed
+        n, nx = t.size, self.P.shape[0]
+        cs = int(self._lay[LAY.cov_step])
+        nforce = int(np.count_nonzero(sampled.force))
+        mmax = n // cs + 3 + nforce
+        nlog = packed.t.size + (mmax + packed.t.size) * len(aids.SAMPLED)
+        o = _output(n, nx, mmax, nlog, nrec)
+        c = np.ascontiguousarray
+        m, r, L = kernels.gins_run(kernels.ImuInput(c(t), c(dth), c(dv)), packed, sampled, self._xs, self.P,
+                                   self._carry, self._carry_n, self._prm, self._lay, o, first, final)
+        return _split_log(o, L, kind, src, sampled), (o, m, r)
+
+    def run(self, imu: ImuData | ImuIncrements, gnss: GnssData, *, lla0: ArrayLike, vel0: ArrayLike,
+            q0: ArrayLike, imu_errors0: ArrayLike | None = None, odometer: OdometerData | None = None,
+            smoother: bool = False, static: ArrayLike | None = None, baro: BaroData | None = None,
+            mag: MagnetometerData | None = None) -> GinsResult:
+        """Run the filter forward over the IMU recording (from a :meth:`reset` at its first sample).
+
+        Parameters
+        ----------
+        imu : ImuData or ImuIncrements
+            Rates (rad/s, m/s², body FRD; coning / sculling applied) or increments (Δθ rad, Δv m/s).
+        gnss : GnssData
+            The fixes; those outside the IMU span, or at its first sample, are removed (recorded in ``meta``),
+            none inside is an error.
+        lla0, vel0, q0 : array_like, shapes (3,), (3,), (4,)
+            Initial position (lat rad, lon rad, h m), NED velocity (m/s) and ``q_nb`` (body FRD -> NED,
+            scalar first) at ``imu.t[0]``.
+        imu_errors0 : array_like, shape (12,), optional
+            Initial gyro bias (rad/s), accel bias (m/s²), gyro scale, accel scale (default zeros).
+        odometer : OdometerData, optional
+            Wheel speeds (:class:`imunav.sim.vehicle.OdometerData`), interpolated to the IMU stamps inside
+            their span; adds the odometer scale-factor state.
+        smoother : bool
+            Also run the RTS smoother (``result.smoothed``); keeps three n x n matrices per covariance epoch
+            (about 190 MB per hour at 200 Hz with 21 states and the default 0.2 s step).
+        static : array_like of bool, shape (N,), optional
+            True where the vehicle stands still (e.g. from :mod:`imunav.ins.detectors`): ZUPT + ZARU.
+        baro : BaroData, optional
+            Barometric heights (:class:`imunav.sim.vehicle.BaroData`), each used at the nearest IMU stamp (a
+            covariance epoch there).
+        mag : MagnetometerData, optional
+            Calibrated magnetometer (:class:`imunav.sim.gnss.MagnetometerData`): heading updates
+            (``config.declination``, ``config.mag_heading_noise``), each at the nearest IMU stamp.
+
+        Returns
+        -------
+        GinsResult
+            The filtered trajectory, IMU errors, covariance records and the NIS of every update.
+
+        Raises
+        ------
+        InvalidInputError
+            If there are fewer than 2 IMU samples, ``lla0`` is not a position in radians, the odometer or
+            barometer is not of its type or does not overlap the IMU span, or an aiding σ is not > 0 (also:
+            no GNSS fix inside the IMU span).
+        ShapeError
+            If ``vel0``, ``imu_errors0`` or ``static`` has the wrong shape.
+        """
+        t, dth, dv = _increments(imu)
+        if t.size < 2:
+            raise InvalidInputError("GinsFilter.run needs at least 2 IMU samples")
+        g = gnss.within(float(t[0]), float(t[-1]))
+        g = g.select(g.t > t[0], "at the first IMU sample (the initial state stands for it)")
+        n = t.size
+        odo = None if odometer is None else _on_imu_grid(t, odometer, OdometerData, "odometer", "speed")
+        st = np.zeros(n, dtype=bool) if static is None else np.asarray(static, dtype=bool)
+        if st.shape != (n,):
+            raise ShapeError(f"static must be (N,) = ({n},) booleans, one per IMU sample; got {st.shape}")
+        hb = np.full(n, np.nan) if baro is None else _at_imu_samples(t, baro, BaroData, "baro", "height")
+        mg = np.full((n, 3), np.nan) if mag is None else _at_imu_samples(t, mag, MagnetometerData, "mag", "field_b")
+        self.reset(lla0=lla0, vel0=vel0, q0=q0, t0=float(t[0]), fs=1.0 / float(np.median(np.diff(t))),
+                   imu_errors0=imu_errors0, odometer=odometer is not None)
+        c = self.config
+        use_vel = c.use_gnss_velocity and g.vel_ned is not None
+        timed = self._timed(g, slice(0, g.n))
+        sampled = self._sampled(n, odo, st, hb, mg)
+        nrec = (n // int(self._lay[LAY.cov_step]) + g.n + 3 + int(np.count_nonzero(sampled.force))) if smoother else 0
+        log, (o, m, r) = self._kernel(t, dth, dv, timed, sampled, nrec, True, True)
+        self.t = float(t[-1])
+        self._prev = np.vstack([imu.dtheta[-1], imu.dvel[-1]]) if isinstance(imu, ImuIncrements) else np.zeros((2, 3))
+        smoothed = None
+        if smoother:
+            smoothed = rts_smooth(t, o.xs[:, NOM.lla:NOM.lla + 3], o.xs[:, NOM.vel:NOM.vel + 3],
+                                  o.xs[:, NOM.q:NOM.q + 4], o.rec_t[:r], o.rec_phi[:r], o.rec_ppri[:r],
+                                  o.rec_ppost[:r], o.rec_inj[:r], o.rec_state[:r])
+        nis = np.full((g.n, 2), np.nan)
+        acc = np.zeros((g.n, 2), dtype=bool)
+        for col, name in enumerate(aids.TIMED[:2]):
+            if name in log.aids:
+                nis[log.timed_index[name], col] = log.aids[name].nis
+                acc[log.timed_index[name], col] = log.aids[name].accepted
+        veh = log.groups.get(("odometer", "nhc"), AidRecord.empty())
+        xs = o.xs
+        meta = {"removed_gnss": g.meta.get("removed", []), "n_states": self.P.shape[0],
+                "gate_threshold": float(self._prm[PRM.gate + 2]), "cov_step_samples": int(self._lay[LAY.cov_step]),
+                "gnss_velocity": bool(use_vel), "odometer": odometer is not None, "nhc": c.nhc_noise is not None}
+        col3 = lambda a: np.ascontiguousarray(xs[:, a:a + 3])  # noqa: E731
+        return GinsResult(t, col3(NOM.lla), col3(NOM.vel), np.ascontiguousarray(xs[:, NOM.q:NOM.q + 4]),
+                          col3(NOM.gyro_bias), col3(NOM.accel_bias), col3(NOM.gyro_scale), col3(NOM.accel_scale),
+                          xs[:, NOM.odo_scale].copy(), o.cov_t[:m], o.cov_diag[:m], o.cov_nav[:m], g.t.copy(), nis,
+                          acc, veh.t, veh.nis, veh.dof, veh.accepted, c, meta, smoothed,
+                          aids=log.aids,
+                          **{f"{name}_nis": _sample_nis(log, name, n) for name in _SAMPLE_NIS})
+
+
+def _sample_nis(log: _Log, name: str, n: int) -> Array:
+    """GinsResult's ``<name>_nis`` per IMU sample (:data:`_SAMPLE_NIS`)."""
+    group, aid = _SAMPLE_NIS[name]
+    return _per_sample(n, log.groups.get(group) if aid is None else log.aids.get(aid))
+
+
+def _diag(var: Array) -> Array:
+    """(k, w) variances -> (k, w, w) diagonal covariances."""
+    k, w = var.shape
+    out = np.zeros((k, w, w))
+    out[:, np.arange(w), np.arange(w)] = var
+    return out

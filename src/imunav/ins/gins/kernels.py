@@ -1,0 +1,418 @@
+"""Numba kernel of the loosely coupled GNSS/INS error-state filter (private; public API in
+:mod:`imunav.ins.gins.filter`).
+
+Error state (blocks of :data:`imunav.ins.gins.layout.STATE_BLOCKS`): NED position error δr (m), velocity error δv
+(m/s), navigation-frame attitude error φ with ``C_nb = exp([φ×]) Ĉ_nb`` (the global convention of
+:mod:`imunav.filters._core`), gyro and accelerometer biases, and optionally gyro and accelerometer scale factors
+and the odometer scale factor (first-order Gauss–Markov each).  Errors are ``true − estimate``.  The IMU model is
+``ω̃ = (1 + s_g) ω + b_g + w_g``, ``f̃ = (1 + s_a) f + b_a + w_a``.
+
+Continuous error dynamics (Groves 2013, §14.2.4, in this sign convention; small Earth-curvature terms of the
+position rows dropped, the vertical gravity gradient kept)::
+
+    δṙ = δv
+    δv̇ = −[fⁿ×] φ − [(2ω_ie + ω_en)×] δv − Ĉ δb_a − Ĉ diag(f^b) δs_a + (0, 0, 2g/R δr_D) − Ĉ w_a
+    φ̇  = −[ω_in×] φ − δω_en(δv) − Ĉ δb_g − Ĉ diag(ω^b) δs_g − Ĉ w_g
+    δḃ = −δb / T + w_b  (σ² 2/T),   δṡ = −δs / T + w_s
+
+The nominal state is integrated per IMU sample by :func:`imunav.filters._core.strapdown_step_ned`; the covariance
+every ``cov_step`` samples, at each timed aid's stamp and at each sample that carries a forcing sampled aid
+(barometer, magnetometer) by :func:`imunav.filters._core_gins.propagate_cov_series`.  Timed measurements between
+two IMU samples split the increments at their own stamps.  Every update is one call of the aid models of
+:mod:`imunav.ins.gins.aids` (through :func:`~imunav.ins.gins.aids.evaluate`), then
+:func:`imunav.filters._core.chi2_gate` on the stacked innovation, :func:`imunav.filters._core.joseph_update` and
+the injection of the error estimate into the nominal state.
+"""
+
+from __future__ import annotations
+
+import math
+from collections import namedtuple
+
+import numpy as np
+from numba import njit
+
+from imunav._rotation_kernels import dcm_from_quat_1
+from imunav.earth import radii_gravity_1
+from imunav.filters._core import (
+    ATT_START,
+    chi2_gate,
+    inject_additive,
+    inject_attitude_global,
+    joseph_update,
+    nis,
+    strapdown_step_ned,
+)
+from imunav.filters._core_gins import inject_position_lla, propagate_cov_series, write_mat3, write_skew
+from imunav.ins.gins.aids import ROWS, WIDTH, evaluate
+from imunav.ins.gins.layout import CARRY, CARRY_N, CTX, LAY, MAX_GROUP, MAX_WIDTH, N_CTX, N_LAY, NOM, PRM
+
+#: IMU increments: times (N,), Δθ (N, 3) rad, Δv (N, 3) m/s; row k covers [t[k-1], t[k]].
+ImuInput = namedtuple("ImuInput", ("t", "dtheta", "dvel"))
+#: Timed aid measurements in time order: stamp (E,), aid kind (E,) int64, z (E, 3), covariance r (E, 3, 3).
+TimedInput = namedtuple("TimedInput", ("t", "kind", "z", "r"))
+#: Sampled aids: columns z (N, W) on the IMU grid (NaN: no measurement), force (N,) bool (a covariance epoch at that
+#: sample), and per slot s: aid kind, first column, joint-update group (slots of one group are consecutive).
+SampledInput = namedtuple("SampledInput", ("z", "force", "kind", "col", "group"))
+#: Outputs: per-sample nominal state ``xs`` (N, N_NOM); covariance records (time, diagonal, 9×9 navigation block);
+#: the update log (time, IMU sample, source: timed index >= 0 or −1 − group, rows, accepted, NIS, each model's NIS
+#: alone); the smoother records (time, Φ into the epoch, prior and posterior P, injected error, posterior nominal
+#: state lat, lon, h, v, q).
+KernelOutput = namedtuple("KernelOutput", (
+    "xs", "cov_t", "cov_diag", "cov_nav", "log_t", "log_k", "log_src", "log_rows", "log_ok", "log_nis", "log_blk",
+    "rec_t", "rec_phi", "rec_ppri", "rec_ppost", "rec_inj", "rec_state"))
+
+
+@njit(cache=True)
+def _system(xs, fb, wb, prm, lay, F, Q):
+    """Fill F and Q (= G Q Gᵀ) of the error dynamics at the nominal state with mean ``f^b`` and ``ω^b``."""
+    F[:, :] = 0.0
+    Q[:, :] = 0.0
+    C = dcm_from_quat_1(xs[NOM.q:NOM.q + 4])
+    lat = xs[NOM.lla]
+    alt = xs[NOM.lla + 2]
+    v = xs[NOM.vel:NOM.vel + 3]
+    RN, RE, g = radii_gravity_1(lat, alt)
+    om = prm[PRM.omega_e]
+    w_ie = np.array([om * math.cos(lat), 0.0, -om * math.sin(lat)])
+    w_en = np.array([v[1] / (RE + alt), -v[0] / (RN + alt), -v[1] * math.tan(lat) / (RE + alt)])
+    fn = C @ fb
+    ones = np.ones(3)
+    ip, iv, ia = lay[LAY.pos], lay[LAY.vel], lay[LAY.att]
+    ibg, iba = lay[LAY.gyro_bias], lay[LAY.accel_bias]
+    for j in range(3):
+        F[ip + j, iv + j] = 1.0
+    F[iv + 2, ip + 2] = 2.0 * g / (math.sqrt(RN * RE) + alt)
+    write_skew(fn, F, iv, ia, -1.0)
+    write_skew(2.0 * w_ie + w_en, F, iv, iv, -1.0)
+    write_mat3(C, F, iv, iba, -1.0, ones)
+    write_skew(w_ie + w_en, F, ia, ia, -1.0)
+    F[ia, iv + 1] = -1.0 / (RE + alt)
+    F[ia + 1, iv] = 1.0 / (RN + alt)
+    F[ia + 2, iv + 1] = math.tan(lat) / (RE + alt)
+    write_mat3(C, F, ia, ibg, -1.0, ones)
+    for j in range(3):
+        F[ibg + j, ibg + j] = -1.0 / prm[PRM.gyro_bias_t + j]
+        F[iba + j, iba + j] = -1.0 / prm[PRM.accel_bias_t + j]
+        Q[ibg + j, ibg + j] = prm[PRM.gyro_bias_q + j]
+        Q[iba + j, iba + j] = prm[PRM.accel_bias_q + j]
+    io = lay[LAY.odo_scale]
+    if io >= 0:
+        F[io, io] = -1.0 / prm[PRM.odo_scale_t]
+        Q[io, io] = prm[PRM.odo_scale_q]
+    isg, isa = lay[LAY.gyro_scale], lay[LAY.accel_scale]
+    if isa >= 0:
+        write_mat3(C, F, iv, isa, -1.0, fb)
+    if isg >= 0:
+        write_mat3(C, F, ia, isg, -1.0, wb)
+    for j in range(3):
+        if isg >= 0:
+            F[isg + j, isg + j] = -1.0 / prm[PRM.gyro_scale_t + j]
+            Q[isg + j, isg + j] = prm[PRM.gyro_scale_q + j]
+        if isa >= 0:
+            F[isa + j, isa + j] = -1.0 / prm[PRM.accel_scale_t + j]
+            Q[isa + j, isa + j] = prm[PRM.accel_scale_q + j]
+    # white noise through C: C diag(n²) Cᵀ
+    for i in range(3):
+        for j in range(3):
+            a = 0.0
+            b = 0.0
+            for l in range(3):
+                a += C[i, l] * prm[PRM.vrw + l] ** 2 * C[j, l]
+                b += C[i, l] * prm[PRM.arw + l] ** 2 * C[j, l]
+            Q[iv + i, iv + j] = a
+            Q[ia + i, ia + j] = b
+
+
+# (state block, nominal offset) of the additive sensor-error blocks
+_ADDITIVE = ((LAY.gyro_bias, NOM.gyro_bias, 3), (LAY.accel_bias, NOM.accel_bias, 3),
+             (LAY.gyro_scale, NOM.gyro_scale, 3), (LAY.accel_scale, NOM.accel_scale, 3),
+             (LAY.odo_scale, NOM.odo_scale, 1))
+
+
+@njit(cache=True)
+def _inject(dx, xs, lay, acc_dx):
+    """Feed the error estimate back into the nominal state, add it to ``acc_dx`` and zero it."""
+    lla = xs[NOM.lla:NOM.lla + 3]
+    inject_position_lla(lla, dx, lay[LAY.pos])
+    v = xs[NOM.vel:NOM.vel + 3]
+    inject_additive(v, dx, lay[LAY.vel], 3)
+    qn = inject_attitude_global(xs[NOM.q:NOM.q + 4], dx, lay[LAY.att])
+    for j in range(4):
+        xs[NOM.q + j] = qn[j]
+    for blk, off, n in _ADDITIVE:
+        i0 = lay[blk]
+        if i0 >= 0:
+            e = xs[off:off + n]
+            inject_additive(e, dx, i0, n)
+    for j in range(dx.shape[0]):
+        acc_dx[j] += dx[j]
+    dx[:] = 0.0
+
+
+@njit(cache=True)
+def _update(kinds, n_models, zs, rs, xs, ctx, P, prm, lay, acc_dx, blk):
+    """One (joint) update of ``n_models`` aid models: stack their rows, gate the whole, Joseph update, inject.
+
+    ``kinds[i]``, ``zs[i]``, ``rs[i]``: kind, measurement and covariance of model i.  ``blk[i]`` receives the NIS of
+    model i's rows alone (the marginal of the joint innovation, χ²(rows) for a consistent filter; record only;
+    NaN past ``n_models``).  Returns (rows, accepted, NIS).
+    """
+    nx = P.shape[0]
+    m = 0
+    for i in range(n_models):
+        m += ROWS[kinds[i]]
+    H = np.zeros((m, nx))
+    R = np.zeros((m, m))
+    nu = np.empty(m)
+    row = 0
+    for i in range(n_models):
+        k = kinds[i]
+        # zs[i], rs[i]: the padded measurement and covariance buffers of model i
+        evaluate(k, xs, ctx, zs[i], rs[i], prm[lay[N_LAY + k]:], lay, H, R, nu, row)
+        row += ROWS[k]
+    S0 = H @ P @ H.T + R
+    blk[:] = np.nan
+    row = 0
+    for i in range(n_models):
+        w = ROWS[kinds[i]]
+        blk[i] = nis(nu[row:row + w], S0[row:row + w, row:row + w])
+        row += w
+    ok, d = chi2_gate(nu, S0, prm[PRM.gate + m - 1])
+    if ok:
+        dx = np.zeros(nx)
+        joseph_update(P, dx, H, R, nu, np.empty(m), np.empty((m, m)))
+        _inject(dx, xs, lay, acc_dx)
+    return m, ok, d
+
+
+@njit(cache=True)
+def _log(out, L, t, k, src, m, ok, d, blk):
+    """Append one row to the update log when there is room; returns the new count."""
+    if L < out.log_t.shape[0]:
+        out.log_t[L] = t
+        out.log_k[L] = k
+        out.log_src[L] = src
+        out.log_rows[L] = m
+        out.log_ok[L] = ok
+        out.log_nis[L] = d
+        for i in range(blk.shape[0]):
+            out.log_blk[L, i] = blk[i]
+        return L + 1
+    return L
+
+
+@njit(cache=True)
+def _step(xs, dth, dv, h, lay, om, wb, fb):
+    """Compensate the increments for the estimated IMU errors and run one NED strapdown step in place;
+    ``wb``, ``fb`` receive the compensated mean rate and specific force."""
+    dthc = np.empty(3)
+    dvc = np.empty(3)
+    scale_g = lay[LAY.gyro_scale] >= 0
+    scale_a = lay[LAY.accel_scale] >= 0
+    for j in range(3):
+        sg = xs[NOM.gyro_scale + j] if scale_g else 0.0
+        sa = xs[NOM.accel_scale + j] if scale_a else 0.0
+        dthc[j] = (dth[j] - xs[NOM.gyro_bias + j] * h) / (1.0 + sg)
+        dvc[j] = (dv[j] - xs[NOM.accel_bias + j] * h) / (1.0 + sa)
+        wb[j] = dthc[j] / h
+        fb[j] = dvc[j] / h
+    q = xs[NOM.q:NOM.q + 4]
+    v = xs[NOM.vel:NOM.vel + 3]
+    lla = xs[NOM.lla:NOM.lla + 3]
+    qn = np.empty(4)
+    vn = np.empty(3)
+    llan = np.empty(3)
+    strapdown_step_ned(q, v, lla, dthc, dvc, h, om, ATT_START, qn, vn, llan)
+    q[:] = qn
+    v[:] = vn
+    lla[:] = llan
+
+
+@njit(cache=True)
+def _rec_post(out, r, tr, P, xs, acc_dx):
+    """Smoother record of epoch r after its updates: time, posterior P, injected error (added), nominal state."""
+    out.rec_t[r] = tr
+    out.rec_ppost[r] = P
+    for j in range(acc_dx.shape[0]):
+        out.rec_inj[r, j] += acc_dx[j]
+        acc_dx[j] = 0.0
+    for j in range(3):
+        out.rec_state[r, j] = xs[NOM.lla + j]
+        out.rec_state[r, 3 + j] = xs[NOM.vel + j]
+    for j in range(4):
+        out.rec_state[r, 6 + j] = xs[NOM.q + j]
+
+
+@njit(cache=True)
+def _record_cov(out, m, tk, P):
+    """Write covariance record m (time, diagonal, navigation block) when there is room; returns the new count."""
+    if m < out.cov_t.shape[0]:
+        for j in range(P.shape[0]):
+            out.cov_diag[m, j] = P[j, j]
+        for a in range(9):
+            for b in range(9):
+                out.cov_nav[m, a, b] = P[a, b]
+        out.cov_t[m] = tk
+        return m + 1
+    return m
+
+
+@njit(cache=True)
+def _propagate(xs, carry, t_now, P, prm, lay, F, Q, wb, fb, out, r):
+    """Covariance propagation over ``(t_cov, t_now]`` with the mean rate and specific force of that span; returns
+    the new smoother epoch count (Φ and the prior recorded) — nothing when the span is empty."""
+    dtc = t_now - carry[CARRY.t_cov]
+    if dtc > 0.0:
+        for j in range(3):
+            wb[j] = carry[CARRY.sum_w + j] / dtc
+            fb[j] = carry[CARRY.sum_f + j] / dtc
+        _system(xs, fb, wb, prm, lay, F, Q)
+        Phi = propagate_cov_series(P, F, Q, dtc)
+        if out.rec_t.shape[0] > 0 and r + 1 < out.rec_t.shape[0]:
+            r += 1
+            out.rec_phi[r] = Phi
+            out.rec_ppri[r] = P
+    return r
+
+
+@njit(cache=True)
+def gins_run(imu, timed, sampled, xs, P, carry, carry_n, prm, lay, out, first, final):
+    """Filter over the IMU samples 1..N-1 (row k: increments over [t[k-1], t[k]]), from the state at t[0].
+
+    ``xs`` (nominal state, layout ``NOM``), ``P`` and ``carry`` / ``carry_n`` (covariance clock) are the state at
+    t[0] and are updated in place, so that consecutive calls continue one filter
+    (:meth:`imunav.ins.gins.GinsFilter.step` calls it with N = 2).  ``first``: write the records of t[0]
+    (covariance, smoother); ``final``: propagate the covariance at the last sample whatever the clock says.
+    Inputs and outputs: :data:`ImuInput`, :data:`TimedInput`, :data:`SampledInput`, :data:`KernelOutput` (smoother
+    records of length R > 0 ask for them: per covariance epoch r the transition Φ_r into r, the prior and
+    posterior covariances, the error injected at r and the posterior nominal state).
+
+    Returns the numbers of covariance records, smoother epochs and update-log rows written.
+    """
+    t = imu.t
+    n = t.shape[0]
+    nx = P.shape[0]
+    wb = np.zeros(3)
+    fb = np.zeros(3)
+    F = np.zeros((nx, nx))
+    Q = np.zeros((nx, nx))
+    rem_th = np.empty(3)
+    rem_v = np.empty(3)
+    pth = np.empty(3)
+    pv = np.empty(3)
+    ctx = np.zeros(N_CTX)
+    blk = np.full(MAX_GROUP, np.nan)
+    blk_slot = np.full(MAX_GROUP, np.nan)
+    kinds = np.empty(MAX_GROUP, dtype=np.int64)
+    slot = np.empty(MAX_GROUP, dtype=np.int64)
+    zs = np.zeros((MAX_GROUP, MAX_WIDTH))
+    rs = np.zeros((MAX_GROUP, 3, 3))
+    om = prm[PRM.omega_e]
+    cov_step = lay[LAY.cov_step]
+    n_slots = sampled.kind.shape[0]
+    out.xs[0] = xs
+    ei = 0
+    ne = timed.t.shape[0]
+    while ei < ne and timed.t[ei] <= t[0]:
+        ei += 1  # measurements before the first sample have no state to update (the wrapper trims them)
+    m = 0
+    L = 0
+    if first:
+        m = _record_cov(out, m, t[0], P)
+    acc_dx = np.zeros(nx)
+    rec = out.rec_t.shape[0] > 0
+    r = 0
+    if rec and first:
+        _rec_post(out, r, t[0], P, xs, acc_dx)
+    for k in range(1, n):
+        t_cur = t[k - 1]
+        for j in range(3):
+            rem_th[j] = imu.dtheta[k, j]
+            rem_v[j] = imu.dvel[k, j]
+        # timed measurements inside (t[k-1], t[k]]: integrate to their stamp, propagate P, update
+        while ei < ne and timed.t[ei] <= t[k]:
+            te = timed.t[ei]
+            hh = te - t_cur
+            if hh > 0.0:
+                frac = hh / (t[k] - t_cur)
+                for j in range(3):
+                    pth[j] = frac * rem_th[j]
+                    pv[j] = frac * rem_v[j]
+                    rem_th[j] -= pth[j]
+                    rem_v[j] -= pv[j]
+                _step(xs, pth, pv, hh, lay, om, wb, fb)
+                for j in range(3):
+                    carry[CARRY.sum_w + j] += wb[j] * hh
+                    carry[CARRY.sum_f + j] += fb[j] * hh
+                t_cur = te
+            if t_cur - carry[CARRY.t_cov] > 0.0:
+                r = _propagate(xs, carry, t_cur, P, prm, lay, F, Q, wb, fb, out, r)
+                carry[CARRY.t_cov] = t_cur
+                for j in range(3):
+                    carry[CARRY.sum_w + j] = 0.0
+                    carry[CARRY.sum_f + j] = 0.0
+                carry_n[CARRY_N.n_cov] = 0
+            for j in range(3):
+                ctx[CTX.w_mean + j] = wb[j]
+            kinds[0] = timed.kind[ei]
+            for i in range(3):
+                zs[0, i] = timed.z[ei, i]
+                for j in range(3):
+                    rs[0, i, j] = timed.r[ei, i, j]
+            mm, ok, d = _update(kinds, 1, zs, rs, xs, ctx, P, prm, lay, acc_dx, blk)
+            L = _log(out, L, te, k, ei, mm, ok, d, blk)
+            if rec:
+                _rec_post(out, r, t_cur, P, xs, acc_dx)
+            ei += 1
+        hh = t[k] - t_cur
+        if hh > 0.0:
+            _step(xs, rem_th, rem_v, hh, lay, om, wb, fb)
+            for j in range(3):
+                carry[CARRY.sum_w + j] += wb[j] * hh
+                carry[CARRY.sum_f + j] += fb[j] * hh
+        carry_n[CARRY_N.n_cov] += 1
+        for j in range(3):
+            carry[CARRY.sum_raw + j] += imu.dtheta[k, j]
+        if carry_n[CARRY_N.n_cov] >= cov_step or (final and k == n - 1) or sampled.force[k]:
+            r = _propagate(xs, carry, t[k], P, prm, lay, F, Q, wb, fb, out, r)
+            carry[CARRY.t_cov] = t[k]
+            for j in range(3):
+                carry[CARRY.sum_w + j] = 0.0
+                carry[CARRY.sum_f + j] = 0.0
+            carry_n[CARRY_N.n_cov] = 0
+            # the context of the sampled aids: this sample's rate, the raw mean rate since the last epoch
+            dt_raw = t[k] - carry[CARRY.t_raw]
+            for j in range(3):
+                ctx[CTX.w_sample + j] = imu.dtheta[k, j] / (t[k] - t[k - 1]) - xs[NOM.gyro_bias + j]
+                ctx[CTX.w_raw + j] = carry[CARRY.sum_raw + j] / dt_raw
+            ctx[CTX.dt_raw] = dt_raw
+            s = 0
+            while s < n_slots:
+                g = sampled.group[s]
+                s0 = s
+                nm = 0
+                while s < n_slots and sampled.group[s] == g:
+                    c0 = sampled.col[s]
+                    if not math.isnan(sampled.z[k, c0]):
+                        kinds[nm] = sampled.kind[s]
+                        slot[nm] = s - s0
+                        for i in range(WIDTH[kinds[nm]]):
+                            zs[nm, i] = sampled.z[k, c0 + i]
+                        nm += 1
+                    s += 1
+                if nm > 0:
+                    mm, ok, d = _update(kinds, nm, zs, rs, xs, ctx, P, prm, lay, acc_dx, blk)
+                    # each model's own NIS at its slot position in the group
+                    blk_slot[:] = np.nan
+                    for i in range(nm):
+                        blk_slot[slot[i]] = blk[i]
+                    L = _log(out, L, t[k], k, -1 - g, mm, ok, d, blk_slot)
+            for j in range(3):
+                carry[CARRY.sum_raw + j] = 0.0
+            carry[CARRY.t_raw] = t[k]
+            if rec:
+                _rec_post(out, r, t[k], P, xs, acc_dx)
+            m = _record_cov(out, m, t[k], P)
+        out.xs[k] = xs
+    return m, (r + 1 if rec else 0), L
