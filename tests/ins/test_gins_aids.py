@@ -19,6 +19,9 @@ EPS = {"pos": 1e-2, "vel": 1e-3, "att": 1e-4, "gyro_bias": 1e-6, "accel_bias": 1
        "accel_scale": 1e-4, "odo_scale": 1e-4}
 
 
+BASELINE = (1.2, -0.4, 0.15)
+
+
 def _state(rng):
     xs = np.zeros(N_NOM)
     xs[NOM.lla:NOM.lla + 3] = (0.53, 1.99, 35.0)
@@ -57,6 +60,10 @@ def _measurement(name, rng, xs):
         inc = np.radians(60.0)
         mn = 48.0 * np.array([np.cos(inc) * np.cos(0.1), np.cos(inc) * np.sin(0.1), np.sin(inc)])
         return dcm_from_quat(xs[NOM.q:NOM.q + 4]).T @ mn, np.zeros((3, 3))
+    if name == "dual_antenna":  # heading and pitch of the configured baseline at the state's attitude
+        bn = dcm_from_quat(xs[NOM.q:NOM.q + 4]) @ np.array(BASELINE)
+        z = np.array([np.arctan2(bn[1], bn[0]), np.arctan2(-bn[2], np.hypot(bn[0], bn[1]))])
+        return z, np.diag([1e-5, 4e-5, 0.0])
     return np.zeros(1), np.zeros((3, 3))  # placeholders of NHC, ZUPT, ZARU
 
 
@@ -76,7 +83,7 @@ def test_every_aid_jacobian_is_the_derivative_of_its_innovation(name, scale_fact
     factor error in any column errs by the size of that column, far above the tolerance."""
     cfg = GinsConfig(arw=1e-3, vrw=1e-2, gyro_bias_std=1e-4, accel_bias_std=1e-3, nhc_noise=0.1,
                      lever_arm=(0.4, -0.3, -1.2), odo_lever_arm=(-0.5, 0.6, 0.4), scale_factors=scale_factors,
-                     declination=0.1)
+                     declination=0.1, dual_antenna_baseline=BASELINE)
     prm, lay, _ = _kernel_setup(cfg, 100.0, True)
     kind = getattr(aids.AID, name)
     xs = _state(rng)

@@ -104,6 +104,9 @@ class GinsConfig:
     mag_heading_noise : float
         σ of the magnetometer heading, rad (> 0; about the field noise over its horizontal strength, plus
         the residual calibration and disturbance errors).
+    dual_antenna_baseline : array_like, shape (3,), or None
+        Dual-antenna GNSS heading: the secondary antenna from the primary, body FRD, m (at least 1 cm); needed
+        to use :class:`~imunav.ins.gins.aids.dual_antenna.DualAntennaData`.
 
     Raises
     ------
@@ -142,6 +145,7 @@ class GinsConfig:
     scale_corr_time: float | None = None
     declination: float = 0.0
     mag_heading_noise: float = 0.02
+    dual_antenna_baseline: Any = None
 
     def __post_init__(self) -> None:
         s = object.__setattr__
@@ -154,6 +158,8 @@ class GinsConfig:
             s(self, name, getattr(self, src) if v is None else _v3(v, name, positive=True))
         s(self, "lever_arm", _v3(self.lever_arm, "lever_arm"))
         s(self, "odo_lever_arm", _v3(self.odo_lever_arm, "odo_lever_arm"))
+        if self.dual_antenna_baseline is not None:
+            s(self, "dual_antenna_baseline", _v3(self.dual_antenna_baseline, "dual_antenna_baseline"))
         if not np.isfinite(self.declination) or abs(self.declination) > np.pi:
             raise InvalidInputError(f"GinsConfig.declination must be in [-pi, pi] rad; got {self.declination!r}")
         for name in ("odo_noise", "odo_scale_std", "mag_heading_noise"):

@@ -40,6 +40,7 @@ from imunav._quantiles import chi2_ppf
 from imunav.earth import OMEGA_E
 from imunav.errors import InvalidInputError, NonFiniteError, ShapeError
 from imunav.ins.gins import aids, kernels
+from imunav.ins.gins.aids.dual_antenna import DualAntennaData
 from imunav.ins.gins.config import GinsConfig
 from imunav.ins.gins.layout import (
     CARRY,
@@ -505,15 +506,24 @@ class GinsFilter:
         self.last_nis = {"gnss": nis, "vehicle": float(veh.nis[0]) if veh is not None else math.nan}
         self.last_nis.update({name: float(_sample_nis(log, name, 2)[1]) for name in _SAMPLE_NIS})
 
-    def _timed(self, g: GnssData | None, sl: slice) -> tuple[kernels.TimedInput, NDArray[np.int64],
-                                                             NDArray[np.int64]]:
-        """The GNSS fixes ``g[sl]`` as timed aid measurements (position, then velocity when configured and given),
-        their kinds and their indices in ``sl``."""
+    def _timed(self, g: GnssData | None, sl: slice, dual: DualAntennaData | None = None, t0: float = 0.0,
+               t1: float = 0.0) -> tuple[kernels.TimedInput, NDArray[np.int64], NDArray[np.int64]]:
+        """The GNSS fixes ``g[sl]`` (position, then velocity when configured and given) and the dual-antenna
+        epochs inside ``(t0, t1]`` as timed aid measurements, their kinds and their indices in their inputs."""
         tm = _Timed()
         if g is not None and sl.stop > sl.start:
             tm.add("gnss_position", g.t[sl], g.lla[sl], _diag(g.pos_std[sl] ** 2))
             if self.config.use_gnss_velocity and g.vel_ned is not None:
                 tm.add("gnss_velocity", g.t[sl], g.vel_ned[sl], _diag(g.vel_std[sl] ** 2))
+        if dual is not None:
+            if not isinstance(dual, DualAntennaData):
+                raise InvalidInputError(f"dual_antenna must be a DualAntennaData; got {type(dual).__name__}")
+            z, r = dual.measurements(self.config.dual_antenna_baseline)
+            idx = np.flatnonzero((dual.t > t0) & (dual.t <= t1))
+            if idx.size == 0:
+                raise InvalidInputError(f"dual_antenna time {dual.t[0]:.3f}..{dual.t[-1]:.3f} s lies outside the IMU "
+                                        f"span {t0:.3f}..{t1:.3f} s")
+            tm.add("dual_antenna", dual.t[idx], z[idx], r[idx], idx)
         packed, src = tm.pack()
         return packed, packed.kind, src
 
@@ -557,7 +567,7 @@ class GinsFilter:
     def run(self, imu: ImuData | ImuIncrements, gnss: GnssData, *, lla0: ArrayLike, vel0: ArrayLike,
             q0: ArrayLike, imu_errors0: ArrayLike | None = None, odometer: OdometerData | None = None,
             smoother: bool = False, static: ArrayLike | None = None, baro: BaroData | None = None,
-            mag: MagnetometerData | None = None) -> GinsResult:
+            mag: MagnetometerData | None = None, dual_antenna: DualAntennaData | None = None) -> GinsResult:
         """Run the filter forward over the IMU recording (from a :meth:`reset` at its first sample).
 
         Parameters
@@ -586,6 +596,9 @@ class GinsFilter:
         mag : MagnetometerData, optional
             Calibrated magnetometer (:class:`imunav.sim.gnss.MagnetometerData`): heading updates
             (``config.declination``, ``config.mag_heading_noise``), each at the nearest IMU stamp.
+        dual_antenna : DualAntennaData, optional
+            Baseline heading and pitch of a dual-antenna GNSS receiver at its own time stamps (needs
+            ``config.dual_antenna_baseline``); those outside the IMU span or at its first sample are not used.
 
         Returns
         -------
@@ -617,7 +630,7 @@ class GinsFilter:
                    imu_errors0=imu_errors0, odometer=odometer is not None)
         c = self.config
         use_vel = c.use_gnss_velocity and g.vel_ned is not None
-        timed = self._timed(g, slice(0, g.n))
+        timed = self._timed(g, slice(0, g.n), dual_antenna, float(t[0]), float(t[-1]))
         sampled = self._sampled(n, odo, st, hb, mg)
         nrec = (n // int(self._lay[LAY.cov_step]) + g.n + 3 + int(np.count_nonzero(sampled.force))) if smoother else 0
         log, (o, m, r) = self._kernel(t, dth, dv, timed, sampled, nrec, True, True)

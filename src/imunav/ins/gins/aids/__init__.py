@@ -31,10 +31,20 @@ from collections import namedtuple
 import numpy as np
 from numba import njit
 
-from imunav.ins.gins.aids import baro, gnss_position, gnss_velocity, mag_heading, nhc, odometer, zaru, zupt
+from imunav.ins.gins.aids import (
+    baro,
+    dual_antenna,
+    gnss_position,
+    gnss_velocity,
+    mag_heading,
+    nhc,
+    odometer,
+    zaru,
+    zupt,
+)
 
 #: Registered models, in kind order (the kind of an aid is its index here).
-MODELS = (gnss_position, gnss_velocity, odometer, nhc, zupt, zaru, baro, mag_heading)
+MODELS = (gnss_position, gnss_velocity, odometer, nhc, zupt, zaru, baro, mag_heading, dual_antenna)
 AID_NAMES = tuple(m.NAME for m in MODELS)
 #: Kind of each aid by name (``AID.gnss_position`` == 0 ...), a compile-time constant in the kernels.
 AID = namedtuple("AidKind", AID_NAMES)(*range(len(MODELS)))
@@ -44,7 +54,7 @@ ROWS = np.array([m.ROWS for m in MODELS], dtype=np.int64)
 WIDTH = np.array([m.WIDTH for m in MODELS], dtype=np.int64)
 
 #: Aids at their own time stamps, one update each.
-TIMED = ("gnss_position", "gnss_velocity")
+TIMED = ("gnss_position", "gnss_velocity", "dual_antenna")
 #: Aids on the IMU grid, applied at the covariance epochs in this order; one tuple is one joint update.
 SAMPLED = (("odometer", "nhc"), ("zupt", "zaru"), ("baro",), ("mag_heading",))
 
@@ -68,3 +78,5 @@ def evaluate(kind, xs, ctx, z, r, p, lay, H, R, nu, row):
         baro.rows(xs, ctx, z, r, p, lay, H, R, nu, row)
     elif kind == AID.mag_heading:
         mag_heading.rows(xs, ctx, z, r, p, lay, H, R, nu, row)
+    elif kind == AID.dual_antenna:
+        dual_antenna.rows(xs, ctx, z, r, p, lay, H, R, nu, row)
