@@ -9,10 +9,10 @@ from gins_mc import LEVER, matched_run, mean_band
 
 from imunav.errors import InvalidInputError
 from imunav.ins.gins import GinsConfig
-from imunav.ins.gins.aids.dual_antenna import DualAntennaData
 from imunav.ins.gins_truth import navigation_errors, nees_blocks
-from imunav.rotation import dcm_from_quat
+from imunav.io.gnss_heading import DualAntennaData
 from imunav.sim import ideal_imu
+from imunav.sim.gnss import simulate_dual_antenna
 from imunav.sim.vehicle import speed_change, stop, straight, turn, vehicle_trajectory
 from imunav.units import DEG
 
@@ -20,15 +20,6 @@ FS = 20.0
 RUNS = 10
 BASELINE = np.array([1.5, -0.2, 0.1])  # secondary antenna from the primary, body FRD, m
 SIGMA = np.radians([0.3, 0.8])  # heading, pitch
-
-
-def simulate_dual_antenna(truth, baseline, sigma, rate_hz, rng):
-    """Heading and pitch of ``C_nb b`` at the truth's samples every 1 / rate_hz, with white noise σ."""
-    idx = np.arange(0, truth.n, int(round(truth.fs / rate_hz)))[1:]
-    bn = np.einsum("kij,j->ki", dcm_from_quat(truth.q_nb[idx]), baseline)
-    heading = np.arctan2(bn[:, 1], bn[:, 0]) + rng.normal(0, sigma[0], idx.size)
-    pitch = np.arctan2(-bn[:, 2], np.hypot(bn[:, 0], bn[:, 1])) + rng.normal(0, sigma[1], idx.size)
-    return DualAntennaData(truth.t[idx], (heading + np.pi) % (2 * np.pi) - np.pi, pitch, sigma[0], sigma[1])
 
 
 def _config(**kw):
@@ -52,7 +43,7 @@ def test_dual_antenna_nis_and_attitude_nees_are_in_their_bands(truth):
     cfg = _config()
     nis, nees = [], []
     for seed in range(RUNS):
-        dual = simulate_dual_antenna(tr, BASELINE, SIGMA, 5.0, np.random.default_rng(seed + 500))
+        dual = simulate_dual_antenna(tr, BASELINE, heading_std=SIGMA[0], pitch_std=SIGMA[1], rng=seed + 500)
         res, _ = matched_run(truth, cfg, seed, dual_antenna=dual)
         rec = res.aids["dual_antenna"]
         assert rec.t.size == dual.t.size and rec.accepted.all() and np.all(rec.dof == 2)
@@ -79,7 +70,7 @@ def test_dual_antenna_makes_the_heading_observable_on_a_straight_drive():
     truth = (tr, ideal_imu(tr))
     cfg = _config()
     plain, _ = matched_run(truth, cfg, 3)
-    dual = simulate_dual_antenna(tr, BASELINE, SIGMA, 5.0, np.random.default_rng(7))
+    dual = simulate_dual_antenna(tr, BASELINE, heading_std=SIGMA[0], pitch_std=SIGMA[1], rng=7)
     aided, _ = matched_run(truth, cfg, 3, dual_antenna=dual)
     sd_plain = np.degrees(np.sqrt(plain.cov_nav[-1, 8, 8]))
     sd_aided = np.degrees(np.sqrt(aided.cov_nav[-1, 8, 8]))

@@ -40,7 +40,6 @@ from imunav._quantiles import chi2_ppf
 from imunav.earth import OMEGA_E
 from imunav.errors import InvalidInputError, NonFiniteError, ShapeError
 from imunav.ins.gins import aids, kernels
-from imunav.ins.gins.aids.dual_antenna import DualAntennaData
 from imunav.ins.gins.config import GinsConfig
 from imunav.ins.gins.layout import (
     CARRY,
@@ -61,6 +60,7 @@ from imunav.ins.gins.result import AidRecord, GinsResult
 from imunav.ins.gins.smoother import rts_smooth
 from imunav.ins.strapdown import coning_sculling_increments
 from imunav.io.gnss import GnssData
+from imunav.io.gnss_heading import DualAntennaData
 from imunav.io.kfgins import ImuIncrements
 from imunav.rotation import quat_normalize
 from imunav.sim.gnss import MagnetometerData
