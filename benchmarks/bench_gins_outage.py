@@ -32,7 +32,7 @@ import time
 import numpy as np
 
 from imunav.ins.gins import GinsConfig
-from imunav.ins.outage import outage_test
+from imunav.ins.gins.outage import outage_test
 from imunav.sim import presets, simulate_imu
 from imunav.sim.gnss import simulate_gnss
 from imunav.sim.vehicle import demo_drive, simulate_odometer, vehicle_trajectory

@@ -20,10 +20,10 @@ the other, with their ratio.
 
 Times are CPU seconds of this process (time.process_time): the figures hold on a shared, loaded machine.
 
-With ``--outages``: also the outage protocol of :mod:`imunav.ins.outage` (60 s outages every 180 s after
+With ``--outages``: also the outage protocol of :mod:`imunav.ins.gins.outage` (60 s outages every 180 s after
 ``--converge`` s, first outage shifted by 0, 60 and 120 s) on the same IMU and GNSS, through both filters, and the
 RMS over outages of the per-outage maximum horizontal, vertical and 3-D drift and attitude errors of each
-(:func:`imunav.ins.outage.outage_drift` on both tracks; pyins costs about 4 filter runs more;
+(:func:`imunav.ins.gins.outage.outage_drift` on both tracks; pyins costs about 4 filter runs more;
 ``--outages-only`` skips the full-GNSS comparison and so one pyins run).  pyins takes milliseconds per IMU
 sample: ``--outages --outages-only --duration 425 --converge 60 --fs 50`` is the smallest run with 6 outages
 (2 per shift).
@@ -201,7 +201,7 @@ def _cache_kind(z, path: str, kind: str) -> None:
 
 def _load_cache(path: str | None, tag: str) -> list | None:
     """pyins' outage reports of an earlier run on the same scenario (``tag``), or None."""
-    from imunav.ins.outage import OutageReport
+    from imunav.ins.gins.outage import OutageReport
 
     if path is None or not os.path.exists(path):
         return None
@@ -231,7 +231,7 @@ def outages(sc: Scenario, converge_s: float, cache: str | None = None, tag: str 
     """The outage protocol (60 s every 180 s, shifts 0 / 60 / 120 s) through both filters on the same data;
     pyins' reports are read from / written to ``cache`` (an ``.npz`` file) when given."""
     from imunav.ins.gins import GinsFilter
-    from imunav.ins.outage import OutageReport, outage_drift
+    from imunav.ins.gins.outage import OutageReport, outage_drift
     from imunav.sim.gnss import outage_schedule
 
     cfg = _imunav_config(sc)

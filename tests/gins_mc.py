@@ -1,6 +1,6 @@
 """Shared pieces of the GNSS/INS Monte Carlo consistency tests (tests/ins/test_gins_*.py).
 
-``matched_run`` draws one run whose truth follows the filter's own model (:mod:`imunav.ins.gins_truth`), and
+``matched_run`` draws one run whose truth follows the filter's own model (:mod:`imunav.ins.gins.truth`), and
 ``mean_band`` gives the two-sided band of a mean of χ² values at a level corrected for the number of checks a
 test makes on its fixed seeds (Bonferroni: the test fails by chance at most 5 % of the time over all its checks),
 after asserting that the band is narrow enough for a covariance 1.5² times off either way to leave it.
@@ -12,7 +12,7 @@ import numpy as np
 from scipy.stats import chi2
 
 from imunav.ins.gins import GinsFilter
-from imunav.ins.gins_truth import initial_state_draw, matched_errors
+from imunav.ins.gins.truth import initial_state_draw, matched_errors
 from imunav.sim import apply_errors
 from imunav.sim.gnss import simulate_gnss
 

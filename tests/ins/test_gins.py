@@ -8,7 +8,7 @@ import pytest
 from imunav import earth
 from imunav.errors import InvalidInputError
 from imunav.ins.gins import GinsConfig, GinsFilter
-from imunav.ins.outage import outage_test
+from imunav.ins.gins.outage import outage_test
 from imunav.io.kfgins import ImuIncrements
 from imunav.rotation import quat_conjugate, quat_from_rotvec, quat_multiply, rotvec_from_quat
 from imunav.sim import presets, simulate_imu

@@ -10,8 +10,8 @@ from gins_mc import mean_band
 
 from imunav.errors import InsufficientDataError, InvalidInputError, ShapeError
 from imunav.ins.gins import GinsConfig
-from imunav.ins.gins_alignment import fine_alignment, motion_alignment, static_alignment
-from imunav.ins.gins_truth import matched_errors
+from imunav.ins.gins.alignment import fine_alignment, motion_alignment, static_alignment
+from imunav.ins.gins.truth import matched_errors
 from imunav.rotation import euler_from_quat, quat_conjugate, quat_multiply, rotvec_from_quat
 from imunav.sim import apply_errors, ideal_imu, presets, simulate_imu
 from imunav.sim.gnss import simulate_gnss
@@ -87,7 +87,7 @@ FINE_RUNS, FINE_S, FINE_FS, FINE_SEED = 150, 60.0, 10.0, 1000
 @pytest.mark.parametrize("name", ["navigation_a15", "tactical", "mems_adis16465"])
 def test_fine_alignment_attitude_sigma_is_calibrated(name):
     """Static coarse + fine alignment over FINE_RUNS seeded runs of a FINE_S s stand, the IMU errors drawn from the
-    filter's model (:func:`imunav.ins.gins_truth.matched_errors`): the errors of phi N, E, D over the reported
+    filter's model (:func:`imunav.ins.gins.truth.matched_errors`): the errors of phi N, E, D over the reported
     att_std have mean z^2 in the chi^2 band, each axis.  navigation_a15 gyrocompasses (heading sigma ~0.15 deg:
     the east gyro bias over the horizontal Earth rate, which the filter cannot separate from the heading: without
     the attitude column of the ZARU row it claimed 0.085 deg, z^2 near 9); the others get a heading drawn from

@@ -22,7 +22,7 @@ from gins_mc import LEVER, POS_SD, VEL_SD, matched_run, mean_band
 from scipy.stats import binom, chi2
 
 from imunav.ins.gins import GinsConfig, GinsFilter
-from imunav.ins.gins_truth import navigation_errors, nees_blocks
+from imunav.ins.gins.truth import navigation_errors, nees_blocks
 from imunav.io.gnss import GnssData
 from imunav.sim import apply_errors, ideal_imu
 from imunav.sim.error_model import ImuErrorModel, TriadErrors

@@ -9,7 +9,7 @@ from gins_mc import LEVER, matched_run, mean_band
 
 from imunav.errors import InvalidInputError
 from imunav.ins.gins import GinsConfig
-from imunav.ins.gins_truth import navigation_errors, nees_blocks
+from imunav.ins.gins.truth import navigation_errors, nees_blocks
 from imunav.io.gnss_heading import DualAntennaData
 from imunav.sim import ideal_imu
 from imunav.sim.gnss import simulate_dual_antenna

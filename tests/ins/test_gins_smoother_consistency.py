@@ -1,6 +1,6 @@
 """RTS smoother of the GNSS/INS filter: its covariance is calibrated over seeded Monte Carlo runs.
 
-The IMU errors and the initial state follow the filter's model (:mod:`imunav.ins.gins_truth`), GNSS errors are
+The IMU errors and the initial state follow the filter's model (:mod:`imunav.ins.gins.truth`), GNSS errors are
 white with the reported sigma, and a 40 s GNSS outage makes the backward pass matter.  Then the smoothed normalised estimation
 error squared of position, velocity and attitude is chi^2(3) at every epoch (Bar-Shalom, Li & Kirubarajan 2001,
 section 5.4; the RTS covariance: Rauch, Tung & Striebel 1965).
@@ -13,7 +13,7 @@ import pytest
 from gins_mc import LEVER, matched_run, mean_band
 
 from imunav.ins.gins import GinsConfig
-from imunav.ins.gins_truth import navigation_errors, nees_blocks
+from imunav.ins.gins.truth import navigation_errors, nees_blocks
 from imunav.sim import ideal_imu
 from imunav.sim.vehicle import speed_change, stop, straight, turn, vehicle_trajectory
 from imunav.units import DEG

@@ -14,7 +14,7 @@ import numpy as np
 from gins_mc import LEVER, matched_run, mean_band
 
 from imunav.ins.gins import GinsConfig
-from imunav.ins.gins_truth import navigation_errors, nees_blocks
+from imunav.ins.gins.truth import navigation_errors, nees_blocks
 from imunav.sim import ideal_imu
 from imunav.sim.vehicle import speed_change, stop, straight, vehicle_trajectory
 from imunav.units import DEG

@@ -20,6 +20,7 @@ from imunav.io.kfgins import (
     load_kfgins_config,
     read_kfgins_imu,
     read_kfgins_nav,
+    write_kfgins_config,
     write_kfgins_imu,
     write_kfgins_imu_errors,
     write_kfgins_nav,
@@ -214,6 +215,31 @@ def test_kfgins_yaml_is_read_in_si(tmp_path):
     np.testing.assert_allclose(c.init_att_std, np.array([0.003, 0.003, 0.023]) * DEG)
     np.testing.assert_allclose(c.antenna_lever_arm, [0.136, -0.301, -0.184])
     assert c.options == {"odopath": "odo.txt"}
+
+
+def test_kfgins_yaml_writer_round_trips(tmp_path):
+    """write_kfgins_config is the inverse of load_kfgins_config: every field back to 10 significant digits (the
+    initial latitude / longitude to 1e-10 deg, the attitude to 1e-8 deg), paths relative to the YAML."""
+    pytest.importorskip("yaml")
+    d = tmp_path / "run"
+    d.mkdir()
+    (d / "kf-gins.yaml").write_text(KFGINS_YAML.replace("endtime: -1", "endtime: 457000.5"))
+    a = load_kfgins_config(d / "kf-gins.yaml")
+    out = tmp_path / "copy" / "written.yaml"
+    out.parent.mkdir()
+    write_kfgins_config(out, a, comment="a copy")
+    b = load_kfgins_config(out)
+    assert out.read_text().startswith("# a copy\n") and "../run/dataset/Leador-A15.txt" not in out.read_text()
+    assert b.imu_path == a.imu_path and b.output_path == a.output_path and b.end_time == 457000.5
+    for name in ("init_vel", "init_gyro_bias", "init_pos_std", "init_vel_std", "init_att_std", "init_gyro_bias_std",
+                 "init_accel_bias_std", "init_gyro_scale_std", "init_accel_scale_std", "antenna_lever_arm"):
+        np.testing.assert_allclose(getattr(b, name), getattr(a, name), rtol=1e-10, err_msg=name)
+    for name in ("arw", "vrw", "gyro_bias_std", "accel_bias_std", "gyro_scale_std", "accel_scale_std"):
+        np.testing.assert_allclose(getattr(b.noise, name), getattr(a.noise, name), rtol=1e-10, err_msg=name)
+    np.testing.assert_allclose(b.init_lla[:2], a.init_lla[:2], rtol=0, atol=1e-10 * DEG)
+    np.testing.assert_allclose(b.init_euler, a.init_euler, rtol=0, atol=1e-8 * DEG)
+    assert (b.imu_rate_hz, b.imu_columns, b.start_time, b.noise.corr_time) == (a.imu_rate_hz, a.imu_columns,
+                                                                                 a.start_time, a.noise.corr_time)
 
 
 @pytest.mark.parametrize(

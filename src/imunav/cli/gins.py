@@ -1,8 +1,8 @@
 """``imunav gins``: loosely coupled GNSS/INS on KF-GINS files and configurations.
 
 Commands: ``simulate`` (a drive in KF-GINS's formats), ``run`` (the filter on a KF-GINS YAML, or on IMU and
-GNSS files with an imunav TOML; :mod:`imunav.ins.gins_inputs`) and ``outage-test`` (the KF-GINS paper's outage
-protocol, :mod:`imunav.ins.outage`).  The filter is called from one place, :func:`_run_filter`.
+GNSS files with an imunav TOML; :mod:`imunav.ins.gins.setup`) and ``outage-test`` (the KF-GINS paper's outage
+protocol, :mod:`imunav.ins.gins.outage`).  The filter is called from one place, :func:`_run_filter`.
 """
 
 from __future__ import annotations
@@ -16,31 +16,20 @@ import typer
 
 from imunav.errors import ConfigError, InvalidInputError
 from imunav.ins.gins import GinsResult
-from imunav.ins.gins_inputs import (
-    GinsInputs,
-    GinsSetup,
-    load_inputs,
-    run_setup,
-    simulate_drive,
-    track_rmse,
+from imunav.ins.gins.outage import outage_test
+from imunav.ins.gins.outputs import (
+    DRIVE_FILES,
+    outage_document,
+    run_output_paths,
+    write_figures,
+    write_run_outputs,
+    write_simulated_drive,
 )
-from imunav.ins.gins_plot import FIGURE_NAMES, write_gins_figures
-from imunav.ins.outage import outage_test
-from imunav.io._atomic import atomic_path, check_outputs, write_json
-from imunav.io.gnss import write_gnss_text
-from imunav.io.kfgins import (
-    ImuIncrements,
-    NavTrack,
-    read_kfgins_nav,
-    write_kfgins_imu,
-    write_kfgins_imu_errors,
-    write_kfgins_nav,
-    write_kfgins_std,
-)
-from imunav.rotation import euler_from_quat
+from imunav.ins.gins.plot import FIGURE_NAMES
+from imunav.ins.gins.setup import GinsInputs, GinsSetup, load_inputs, run_setup, simulate_drive
+from imunav.io._atomic import check_outputs, write_json
+from imunav.io.kfgins import NavTrack, read_kfgins_nav
 from imunav.sim import Trajectory
-from imunav.toml import toml_text
-from imunav.units import DEG, HOUR
 
 gins_app = typer.Typer(
     help=("Loosely coupled GNSS/INS (error-state Kalman filter) on KF-GINS files.\n\n"
@@ -49,8 +38,6 @@ gins_app = typer.Typer(
     no_args_is_help=True,
 )
 
-NAV_NAME, ERR_NAME, STD_NAME, SUMMARY_NAME = "KF_GINS_Navresult.nav", "KF_GINS_IMU_ERR.txt", "KF_GINS_STD.txt", \
-    "summary.json"
 OUTAGE_NAME = "outage.json"
 
 
@@ -58,26 +45,15 @@ def register(app: typer.Typer) -> None:
     app.add_typer(gins_app, name="gins")
 
 
-def _v(x: np.ndarray, fmt: str = "{:.10g}") -> str:
-    return "[ " + ", ".join(fmt.format(float(a)) for a in x) + " ]"
-
-
 def _run_filter(inputs: GinsInputs, setup: GinsSetup, *, smoother: bool = False) -> GinsResult:
-    """The one call of the GNSS/INS filter in the command line (through :func:`imunav.ins.gins_inputs.run_setup`,
+    """The one call of the GNSS/INS filter in the command line (through :func:`imunav.ins.gins.setup.run_setup`,
     which the lab step calls too)."""
     return run_setup(inputs.imu, inputs.gnss, setup, odometer=inputs.odometer, smoother=smoother)
 
 
-def _figures(folder: Path, **kw) -> list[Path]:
-    """Write the figures when matplotlib is installed, else say so in one line."""
-    if importlib.util.find_spec("matplotlib") is None:
+def _say_no_matplotlib(plots: bool) -> None:
+    if plots and importlib.util.find_spec("matplotlib") is None:
         typer.echo("note: matplotlib is not installed; no figures written (pip install matplotlib)")
-        return []
-    return write_gins_figures(folder, **kw)
-
-
-def _figure_paths(folder: Path, names: tuple[str, ...]) -> list[Path]:
-    return [folder / FIGURE_NAMES[n] for n in names]
 
 
 def _inputs(imu: Optional[Path], gnss: Optional[Path], config: Optional[Path], odo: Optional[Path],
@@ -110,47 +86,10 @@ def simulate_cmd(
 
     Example: imunav gins simulate --out drive --duration 600 --preset mems_adis16465
     """
-    names = {k: out / v for k, v in (("imu", "imu.txt"), ("gnss", "gnss.txt"), ("truth", "truth.nav"),
-                                     ("yaml", "kf-gins.yaml"), ("toml", "gins.toml"))}
-    check_outputs([], names.values())
+    check_outputs([], [out / name for name in DRIVE_FILES.values()])
     drive = simulate_drive(duration, preset=preset, fs=fs, seed=seed, t0=sow0)
-    truth, imu, gnss, cfg = drive.truth, drive.imu, drive.gnss, drive.setup.config
-    lever = cfg.lever_arm
-    write_kfgins_imu(names["imu"], ImuIncrements.from_imu_data(imu, fs))
-    write_gnss_text(names["gnss"], gnss)
-    write_kfgins_nav(names["truth"], drive.truth_track())
-    eul = np.degrees(euler_from_quat(truth.q_nb[0]))
-    lla_deg = np.r_[np.degrees(truth.pos_lla[0, :2]), truth.pos_lla[0, 2]]
-    pos_std, vel_std, att_std_deg = (0.5, 0.5, 1.0), (0.05, 0.05, 0.05), (0.1, 0.1, 0.5)
-    text = "\n".join([
-        "# KF-GINS configuration written by 'imunav gins simulate' (keys and units of KF-GINS's dataset/kf-gins.yaml)",
-        'imupath: "imu.txt"', 'gnsspath: "gnss.txt"', 'outputpath: "result"', "imudatalen: 7",
-        f"imudatarate: {fs:g}", f"starttime: {sow0:.3f}", "endtime: -1",
-        f"initpos: {_v(lla_deg, '{:.10f}')}",
-        f"initvel: {_v(truth.vel_ned[0])}", f"initatt: {_v(eul, '{:.8f}')}",
-        "initgyrbias: [ 0, 0, 0 ]", "initaccbias: [ 0, 0, 0 ]", "initgyrscale: [ 0, 0, 0 ]", "initaccscale: [ 0, 0, 0 ]",
-        f"initposstd: {_v(pos_std)}", f"initvelstd: {_v(vel_std)}", f"initattstd: {_v(att_std_deg)}",
-        f"initbgstd: {_v(cfg.init_gyro_bias_std / (DEG / HOUR))}", f"initbastd: {_v(cfg.init_accel_bias_std / 1e-5)}",
-        "imunoise:",
-        f"  arw: {_v(cfg.arw / (DEG / 60))}", f"  vrw: {_v(cfg.vrw * 60)}",
-        f"  gbstd: {_v(cfg.gyro_bias_std / (DEG / HOUR))}", f"  abstd: {_v(cfg.accel_bias_std / 1e-5)}",
-        f"  gsstd: {_v(cfg.gyro_scale_std / 1e-6)}", f"  asstd: {_v(cfg.accel_scale_std / 1e-6)}",
-        f"  corrtime: {cfg.corr_time / HOUR:.6g}",
-        f"antlever: {_v(lever)}", ""])
-    with atomic_path(names["yaml"]) as tmp:
-        tmp.write_text(text, encoding="utf-8")
-    # the same configuration as the YAML, field by field in SI (not the preset, whose mapping may differ)
-    noise = {k: np.asarray(getattr(cfg, k)).tolist() for k in ("arw", "vrw", "gyro_bias_std", "accel_bias_std",
-                                                                  "gyro_scale_std", "accel_scale_std",
-                                                                  "init_gyro_bias_std", "init_accel_bias_std")}
-    toml = {"states": 21, **noise, "corr_time": float(cfg.corr_time), "lever_arm": lever.tolist(),
-            "init_pos_std": list(pos_std),
-            "init_vel_std": list(vel_std), "init_att_std": (np.radians(att_std_deg)).tolist(),
-            "init": {"lla_deg": lla_deg.tolist(), "vel_ned": truth.vel_ned[0].tolist(), "euler_deg": eul.tolist()},
-            "imu": {"format": "kf-gins", "rate_hz": fs}}
-    with atomic_path(names["toml"]) as tmp:
-        tmp.write_text("# imunav GNSS/INS configuration written by 'imunav gins simulate' (SI; "
-                       "see imunav.ins.gins_inputs)\n" + toml_text(toml), encoding="utf-8")
+    write_simulated_drive(drive, out)
+    truth, gnss = drive.truth, drive.gnss
     typer.echo(f"{truth.n} IMU samples ({duration:g} s at {fs:g} Hz, preset {preset}), {gnss.n} GNSS fixes -> {out}")
 
 
@@ -191,39 +130,16 @@ def run_cmd(
     folder = out if out is not None else inputs.output_path
     if folder is None:
         raise ConfigError("give --out DIR, the folder for the results")
-    outs = {k: folder / v for k, v in (("nav", NAV_NAME), ("err", ERR_NAME), ("std", STD_NAME),
-                                       ("summary", SUMMARY_NAME))}
-    if smoother:
-        outs["smoothed"] = folder / NAV_NAME.replace(".nav", "_smoothed.nav")
-    figs = _figure_paths(folder, ("track", "errors", "imu_errors")) if plots else []
-    check_outputs([*inputs.paths.values(), truth], [*outs.values(), *figs])
+    outs = run_output_paths(folder, smoother=smoother, plots=plots, truth=ref is not None)
+    check_outputs([*inputs.paths.values(), truth], outs.values())
     res = _run_filter(inputs, setup, smoother=smoother)
-    nav = NavTrack(res.t, res.lla, res.vel_ned, res.q_nb)
-    write_kfgins_nav(outs["nav"], nav)
-    write_kfgins_imu_errors(outs["err"], res.t, res.gyro_bias, res.accel_bias, res.gyro_scale, res.accel_scale)
-    # the filter's own states only (an odometer scale state follows them); a 15-state filter does not estimate
-    # the scale factors: their sigma columns are written as 0, as the README says
-    nx = setup.config.n_states
-    sd = np.sqrt(np.pad(res.cov_diag[:, :nx], ((0, 0), (0, 21 - nx))))
-    write_kfgins_std(outs["std"], res.cov_t, sd[:, 0:3], sd[:, 3:6], sd[:, 6:9], sd[:, 9:12], sd[:, 12:15],
-                     sd[:, 15:18], sd[:, 18:21])
-    summary: dict = {"config": str(config) if config is not None else None,
-                     "inputs": {k: str(v) for k, v in inputs.paths.items()},
-                     "initial_state": "configuration" if inputs.setup.has_init else "truth",
-                     "imu_samples": int(res.t.size), **res.gnss_summary(),
-                     "gnss_removed": res.meta["removed_gnss"], "states": setup.config.n_states,
-                     "odometer": inputs.odometer is not None}
-    if smoother and res.smoothed is not None:
-        s = res.smoothed
-        write_kfgins_nav(outs["smoothed"], NavTrack(s.t, s.lla, s.vel_ned, s.q_nb))
-    if ref is not None:
-        summary["rmse"] = track_rmse(nav, ref)
-        if smoother and res.smoothed is not None:
-            s = res.smoothed
-            summary["rmse_smoothed"] = track_rmse(NavTrack(s.t, s.lla, s.vel_ned, s.q_nb), ref)
-    if plots:
-        summary["figures"] = [p.name for p in _figures(folder, result=res, gnss=inputs.gnss, truth=ref)]
-    write_json(outs["summary"], summary)
+    summary = write_run_outputs(
+        folder, res, setup, gnss=inputs.gnss, truth=ref, plots=plots,
+        extra={"config": str(config) if config is not None else None,
+               "inputs": {k: str(v) for k, v in inputs.paths.items()},
+               "initial_state": "configuration" if inputs.setup.has_init else "truth",
+               "odometer": inputs.odometer is not None})
+    _say_no_matplotlib(plots)
     line = f"{res.t.size} IMU samples, {res.gnss_t.size} GNSS fixes -> {folder}"
     if "rmse" in summary:
         line += "; position RMSE N E D " + " ".join(f"{x:.3f}" for x in summary["rmse"]["pos_ned_m"]) + " m"
@@ -302,19 +218,15 @@ def outage_cmd(
         data, fixes, setup, traj, odometer = drive.imu, drive.gnss, drive.setup, drive.truth, None
         source, in_paths = f"simulated: preset {name}, {duration:g} s at {fs:g} Hz, seed {seed}", []
     json_path = out / OUTAGE_NAME
-    figs = _figure_paths(out, ("outage",)) if plots else []
+    figs = [out / FIGURE_NAMES["outage"]] if plots else []
     check_outputs(in_paths, [json_path, *figs])
     rep = outage_test(data, fixes, setup.config, traj, lla0=setup.lla0, vel0=setup.vel0, q0=setup.q0,
                       converge_s=converge, every_s=every, length_s=length, shifts_s=sh, odometer=odometer)
     rms = rep.rms()
-    doc = {"source": source, "protocol": rep.meta, "states": setup.config.n_states, "rms": rms,
-           "outages": [{"start_s": s, "length_s": d, "horizontal_m": h, "vertical_m": v, "drift_3d_m": d3,
-                        "roll_deg": r, "pitch_deg": p, "heading_deg": y, "inside_3sigma": bool(c)}
-                       for (s, d), h, v, d3, r, p, y, c in zip(rep.outages, rep.horizontal_m, rep.vertical_m,
-                                                               rep.drift_3d_m, rep.roll_deg, rep.pitch_deg,
-                                                               rep.heading_deg, rep.contained)]}
+    doc = outage_document(rep, source=source, states=setup.config.n_states)
     if plots:
-        doc["figures"] = [p.name for p in _figures(out, outage=rep)]
+        doc["figures"] = [p.name for p in write_figures(out, outage=rep)]
+        _say_no_matplotlib(plots)
     write_json(json_path, doc)
     n_in = int(np.sum(rep.contained))
     typer.echo(f"{rms['n_outages']} outages of {length:g} s; RMS of the per-outage maximum drift: horizontal "

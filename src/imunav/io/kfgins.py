@@ -32,6 +32,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from imunav import earth
 from imunav.errors import ConfigError, InvalidInputError, MissingDependencyError, ShapeError, TimeOrderError
+from imunav.io._atomic import atomic_path
 from imunav.io.gnss import lat_lon_radians, read_table, write_table
 from imunav.results import EulerMixin
 from imunav.rotation import quat_from_euler
@@ -50,6 +51,7 @@ __all__ = [
     "write_kfgins_imu_errors",
     "write_kfgins_std",
     "load_kfgins_config",
+    "write_kfgins_config",
     "KFGINS_KEYS",
 ]
 
@@ -618,6 +620,67 @@ def _path(doc: dict[str, Any], key: str, base: Path, src: str) -> Path:
         raise ConfigError(f"{src}: '{key}' must be a file path (relative to the YAML file); got {doc.get(key)!r}")
     p = Path(doc[key])
     return p if p.is_absolute() else (base / p)
+
+
+def _yaml_vec(x: ArrayLike, fmt: str = "{:.10g}") -> str:
+    return "[ " + ", ".join(fmt.format(float(a)) for a in np.asarray(x, dtype=float)) + " ]"
+
+
+def write_kfgins_config(path: str | os.PathLike[str], cfg: KfGinsConfig, *, comment: str | None = None) -> Path:
+    """Write a :class:`KfGinsConfig` (SI) as KF-GINS's YAML (its keys and units), atomically.
+
+    The inverse of :func:`load_kfgins_config`: reading the file back gives ``cfg`` to 10 significant digits
+    (the initial latitude and longitude to 1e-10 degree, the initial attitude to 1e-8 degree).  The paths are
+    written relative to the YAML's folder when they lie below it.  Keys KF-GINS does not know (``cfg.options``)
+    are not written.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The YAML file to write.
+    cfg : KfGinsConfig
+        The configuration, SI.
+    comment : str, optional
+        A first comment line (without ``#``).
+
+    Returns
+    -------
+    pathlib.Path
+        ``path``.
+    """
+    p = Path(path)
+    base = p.resolve().parent
+
+    def rel(q: Path) -> str:
+        q = Path(q).resolve()
+        return q.relative_to(base).as_posix() if q.is_relative_to(base) else q.as_posix()
+
+    n = cfg.noise
+    lla_deg = np.r_[np.degrees(cfg.init_lla[:2]), cfg.init_lla[2]]
+    lines = [] if comment is None else [f"# {comment}"]
+    lines += [
+        f'imupath: "{rel(cfg.imu_path)}"', f'gnsspath: "{rel(cfg.gnss_path)}"', f'outputpath: "{rel(cfg.output_path)}"',
+        f"imudatalen: {cfg.imu_columns:d}", f"imudatarate: {cfg.imu_rate_hz:g}", f"starttime: {cfg.start_time:.3f}",
+        "endtime: -1" if cfg.end_time is None else f"endtime: {cfg.end_time:.3f}",
+        f"initpos: {_yaml_vec(lla_deg, '{:.10f}')}", f"initvel: {_yaml_vec(cfg.init_vel)}",
+        f"initatt: {_yaml_vec(np.degrees(cfg.init_euler), '{:.8f}')}",
+        f"initgyrbias: {_yaml_vec(cfg.init_gyro_bias / DPH)}", f"initaccbias: {_yaml_vec(cfg.init_accel_bias / MGAL)}",
+        f"initgyrscale: {_yaml_vec(cfg.init_gyro_scale / PPM)}",
+        f"initaccscale: {_yaml_vec(cfg.init_accel_scale / PPM)}",
+        f"initposstd: {_yaml_vec(cfg.init_pos_std)}", f"initvelstd: {_yaml_vec(cfg.init_vel_std)}",
+        f"initattstd: {_yaml_vec(np.degrees(cfg.init_att_std))}",
+        f"initbgstd: {_yaml_vec(cfg.init_gyro_bias_std / DPH)}", f"initbastd: {_yaml_vec(cfg.init_accel_bias_std / MGAL)}",
+        f"initsgstd: {_yaml_vec(cfg.init_gyro_scale_std / PPM)}",
+        f"initsastd: {_yaml_vec(cfg.init_accel_scale_std / PPM)}",
+        "imunoise:",
+        f"  arw: {_yaml_vec(n.arw / (DEG / 60.0))}", f"  vrw: {_yaml_vec(n.vrw * 60.0)}",
+        f"  gbstd: {_yaml_vec(n.gyro_bias_std / DPH)}", f"  abstd: {_yaml_vec(n.accel_bias_std / MGAL)}",
+        f"  gsstd: {_yaml_vec(n.gyro_scale_std / PPM)}", f"  asstd: {_yaml_vec(n.accel_scale_std / PPM)}",
+        f"  corrtime: {n.corr_time / HOUR:.6g}",
+        f"antlever: {_yaml_vec(cfg.antenna_lever_arm)}", ""]
+    with atomic_path(p) as tmp:
+        tmp.write_text("\n".join(lines), encoding="utf-8")
+    return p
 
 
 def load_kfgins_config(path: str | os.PathLike[str]) -> KfGinsConfig:

@@ -1,7 +1,7 @@
 """Lab step: GNSS/INS navigation (loosely coupled error-state filter) on a configured IMU + GNSS set.
 
-The set is either files, read as ``imunav gins run`` reads them (:mod:`imunav.ins.gins_inputs`), or, without
-files, a simulated land-vehicle drive (:func:`imunav.ins.gins_inputs.simulate_drive`).  Not among the
+The set is either files, read as ``imunav gins run`` reads them (:mod:`imunav.ins.gins.setup`), or, without
+files, a simulated land-vehicle drive (:func:`imunav.ins.gins.setup.simulate_drive`).  Not among the
 default steps: name it in ``[lab] steps`` (``steps = ["gins"]``).
 
 Options (TOML table ``[gins]``; paths relative to the lab TOML, or ``shared:<folder>/<file>``)::
@@ -33,8 +33,9 @@ from typing import Any
 
 from imunav._quantiles import chi2_ppf
 from imunav.errors import ConfigError
-from imunav.ins.gins_inputs import load_inputs, run_setup, simulate_drive, track_rmse
-from imunav.ins.gins_plot import write_gins_figures
+from imunav.ins.gins.outputs import run_summary
+from imunav.ins.gins.plot import write_gins_figures
+from imunav.ins.gins.setup import load_inputs, run_setup, simulate_drive
 from imunav.io._atomic import write_json
 from imunav.io.kfgins import NavTrack, read_kfgins_nav
 from imunav.labsteps._api import LabContext, StepResult
@@ -119,11 +120,7 @@ def run(ctx: LabContext) -> StepResult:
     lo, hi = _nis_band(max(n, 1))
     nis_mean = float("nan") if gs["gnss_position_nis_mean"] is None else gs["gnss_position_nis_mean"]
     accepted = float("nan") if gs["gnss_accepted_share"] is None else gs["gnss_accepted_share"]
-    summary: dict[str, Any] = {"source": source, "states": setup.config.n_states, "imu_samples": int(res.t.size),
-                               **gs, "nis_band_99": [lo, hi]}
-    nav = NavTrack(res.t, res.lla, res.vel_ned, res.q_nb)
-    if truth is not None:
-        summary["rmse"] = track_rmse(nav, truth)
+    summary: dict[str, Any] = {"source": source, **run_summary(res, setup, truth=truth), "nis_band_99": [lo, hi]}
     write_json(ctx.path("data", "gins_summary.json"), summary)
     figs = write_gins_figures(Path(ctx.out_dir) / "figures", res, gnss=gnss, truth=truth)
     ctx.artifacts["gins"] = summary

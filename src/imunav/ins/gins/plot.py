@@ -5,7 +5,7 @@
 * :func:`plot_errors`: position, velocity and attitude errors against a truth with the filter's ±3σ;
 * :func:`plot_imu_errors`: gyro / accelerometer biases and scale factors with ±3σ;
 * :func:`plot_outage_drift`: per-outage drift of the KF-GINS outage protocol
-  (:class:`imunav.ins.outage.OutageReport`);
+  (:class:`imunav.ins.gins.outage.OutageReport`);
 * :func:`write_gins_figures`: all that apply, written atomically as PNG files into a folder.
 """
 
@@ -19,7 +19,7 @@ import numpy as np
 
 from imunav import earth
 from imunav.ins.gins import GinsResult
-from imunav.ins.outage import OutageReport
+from imunav.ins.gins.outage import OutageReport
 from imunav.io._atomic import atomic_path
 from imunav.io.gnss import GnssData
 from imunav.io.kfgins import DPH, MGAL, PPM, NavTrack
@@ -180,7 +180,7 @@ def plot_outage_drift(report: OutageReport) -> Any:
     Parameters
     ----------
     report : OutageReport
-        The result of :func:`imunav.ins.outage.outage_test`.
+        The result of :func:`imunav.ins.gins.outage.outage_test`.
 
     Returns
     -------

@@ -541,6 +541,8 @@ class SimulatedDrive:
         The preset's filter configuration with the antenna lever arm, initial state from the truth.
     preset : str
         The IMU preset.
+    fs : float
+        The nominal IMU rate, Hz (the truth's median interval may differ from ``1 / fs`` in the last digits).
     """
 
     truth: Trajectory
@@ -548,6 +550,7 @@ class SimulatedDrive:
     gnss: GnssData
     setup: GinsSetup
     preset: str
+    fs: float
 
     def truth_track(self) -> NavTrack:
         """The truth as a :class:`~imunav.io.kfgins.NavTrack`.
@@ -602,7 +605,7 @@ def simulate_drive(duration_s: float = 600.0, *, preset: str = "mems_adis16465",
                                  scale_factors=_states(states, "simulate_drive"))
     setup = GinsSetup(cfg, truth.pos_lla[0].copy(), truth.vel_ned[0].copy(), truth.q_nb[0].copy(),
                       source=f"preset {preset}")
-    return SimulatedDrive(truth, imu, gnss, setup, preset)
+    return SimulatedDrive(truth, imu, gnss, setup, preset, float(fs))
 
 
 def run_setup(imu: ImuData | ImuIncrements, gnss: GnssData, setup: GinsSetup, *,

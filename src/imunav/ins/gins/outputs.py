@@ -1,0 +1,252 @@
+"""Files of a GNSS/INS run, written by the library for the command line and the lab alike.
+
+* :func:`write_simulated_drive`: a simulated drive in KF-GINS's formats (IMU increments, GNSS text, truth ``.nav``,
+  KF-GINS YAML) plus the same configuration as an imunav TOML.
+* :func:`run_summary`: the one definition of a run's summary (the keys of ``summary.json`` and of the lab step's
+  ``gins_summary.json``).
+* :func:`run_output_paths` / :func:`write_run_outputs`: KF-GINS's outputs of a filter run (``.nav``, IMU errors,
+  state σ, the smoothed ``.nav``), its summary and figures.
+* :func:`outage_document`: the outage test's JSON document.
+"""
+
+from __future__ import annotations
+
+import importlib.util
+import os
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from imunav.ins.gins.outage import OutageReport
+from imunav.ins.gins.plot import FIGURE_NAMES, write_gins_figures
+from imunav.ins.gins.result import GinsResult
+from imunav.ins.gins.setup import GinsSetup, SimulatedDrive, track_rmse
+from imunav.io._atomic import atomic_path, write_json
+from imunav.io.gnss import GnssData, write_gnss_text
+from imunav.io.kfgins import (
+    ImuIncrements,
+    ImuNoise,
+    KfGinsConfig,
+    NavTrack,
+    write_kfgins_config,
+    write_kfgins_imu,
+    write_kfgins_imu_errors,
+    write_kfgins_nav,
+    write_kfgins_std,
+)
+from imunav.rotation import euler_from_quat
+from imunav.toml import toml_text
+
+__all__ = ["DRIVE_FILES", "RUN_FILES", "outage_document", "run_output_paths", "run_summary",
+           "write_run_outputs", "write_simulated_drive"]
+
+#: Files of a simulated drive (key -> name in its folder).
+DRIVE_FILES = {"imu": "imu.txt", "gnss": "gnss.txt", "truth": "truth.nav", "yaml": "kf-gins.yaml",
+               "toml": "gins.toml"}
+#: Files of a filter run (KF-GINS's names for its outputs).
+RUN_FILES = {"nav": "KF_GINS_Navresult.nav", "err": "KF_GINS_IMU_ERR.txt", "std": "KF_GINS_STD.txt",
+             "summary": "summary.json", "smoothed": "KF_GINS_Navresult_smoothed.nav"}
+
+#: Initial σ written into a simulated drive's configurations: position (m), velocity (m/s), attitude (deg).
+_DRIVE_INIT_STD = ((0.5, 0.5, 1.0), (0.05, 0.05, 0.05), (0.1, 0.1, 0.5))
+
+
+def write_simulated_drive(drive: SimulatedDrive, folder: str | os.PathLike[str]) -> dict[str, Path]:
+    """Write a simulated drive in KF-GINS's formats, and its configuration as a KF-GINS YAML and an imunav TOML.
+
+    The YAML holds the preset's noise model in KF-GINS's units, the truth's first sample as the initial state and
+    the initial σ of :data:`_DRIVE_INIT_STD`; the TOML the same fields in SI (``GinsConfig`` names).
+
+    Parameters
+    ----------
+    drive : SimulatedDrive
+        From :func:`imunav.ins.gins.setup.simulate_drive`.
+    folder : str or os.PathLike
+        Output folder (created); the files are named by :data:`DRIVE_FILES`.
+
+    Returns
+    -------
+    dict of str to pathlib.Path
+        The files written.
+    """
+    out = Path(folder)
+    names = {k: out / v for k, v in DRIVE_FILES.items()}
+    truth, cfg = drive.truth, drive.setup.config
+    fs = drive.fs
+    write_kfgins_imu(names["imu"], ImuIncrements.from_imu_data(drive.imu, fs))
+    write_gnss_text(names["gnss"], drive.gnss)
+    write_kfgins_nav(names["truth"], drive.truth_track())
+    pos_std, vel_std, att_std_deg = (np.array(x, dtype=float) for x in _DRIVE_INIT_STD)
+    euler = euler_from_quat(truth.q_nb[0])
+    zero = np.zeros(3)
+    kf = KfGinsConfig(
+        source=names["yaml"], imu_path=names["imu"], gnss_path=names["gnss"], output_path=out / "result",
+        imu_rate_hz=fs, imu_columns=7, start_time=float(truth.t[0]), end_time=None,
+        init_lla=truth.pos_lla[0].copy(), init_vel=truth.vel_ned[0].copy(), init_euler=euler, init_gyro_bias=zero,
+        init_accel_bias=zero, init_gyro_scale=zero, init_accel_scale=zero, init_pos_std=pos_std,
+        init_vel_std=vel_std, init_att_std=np.radians(att_std_deg), init_gyro_bias_std=cfg.init_gyro_bias_std,
+        init_accel_bias_std=cfg.init_accel_bias_std, init_gyro_scale_std=cfg.gyro_scale_std,
+        init_accel_scale_std=cfg.accel_scale_std,
+        noise=ImuNoise(cfg.arw, cfg.vrw, cfg.gyro_bias_std, cfg.accel_bias_std, cfg.gyro_scale_std,
+                       cfg.accel_scale_std, float(cfg.corr_time)),
+        antenna_lever_arm=np.asarray(cfg.lever_arm, dtype=float))
+    write_kfgins_config(names["yaml"], kf, comment="KF-GINS configuration written by 'imunav gins simulate' (keys "
+                                                   "and units of KF-GINS's dataset/kf-gins.yaml)")
+    # the same configuration as the YAML, field by field in SI (not the preset, whose mapping may differ)
+    noise = {k: np.asarray(getattr(cfg, k)).tolist() for k in ("arw", "vrw", "gyro_bias_std", "accel_bias_std",
+                                                                  "gyro_scale_std", "accel_scale_std",
+                                                                  "init_gyro_bias_std", "init_accel_bias_std")}
+    doc = {"states": cfg.n_states, **noise, "corr_time": float(cfg.corr_time),
+           "lever_arm": np.asarray(cfg.lever_arm).tolist(), "init_pos_std": pos_std.tolist(),
+           "init_vel_std": vel_std.tolist(), "init_att_std": np.radians(att_std_deg).tolist(),
+           "init": {"lla_deg": np.r_[np.degrees(truth.pos_lla[0, :2]), truth.pos_lla[0, 2]].tolist(),
+                    "vel_ned": truth.vel_ned[0].tolist(), "euler_deg": np.degrees(euler).tolist()},
+           "imu": {"format": "kf-gins", "rate_hz": fs}}
+    with atomic_path(names["toml"]) as tmp:
+        tmp.write_text("# imunav GNSS/INS configuration written by 'imunav gins simulate' (SI; "
+                       "see imunav.ins.gins.setup)\n" + toml_text(doc), encoding="utf-8")
+    return names
+
+
+def run_summary(res: GinsResult, setup: GinsSetup, *, truth: NavTrack | None = None) -> dict[str, Any]:
+    """The summary of a filter run: the one definition behind ``imunav gins run``'s ``summary.json`` and the lab
+    step's ``gins_summary.json``.
+
+    Parameters
+    ----------
+    res : GinsResult
+        The run.
+    setup : GinsSetup
+        Its configuration and initial state.
+    truth : NavTrack, optional
+        A reference: RMSE of the forward (and smoothed) solution against it.
+
+    Returns
+    -------
+    dict
+        ``states``, ``imu_samples``, the GNSS use of :meth:`GinsResult.gnss_summary`, ``gnss_removed`` (fixes left
+        out and why), ``aids`` (per aid: updates, mean NIS, accepted share; null when none) and, with a truth,
+        ``rmse`` (and ``rmse_smoothed``) of :func:`~imunav.ins.gins.setup.track_rmse`.
+    """
+    aids = {}
+    for name, rec in res.aids.items():
+        ok = np.isfinite(rec.nis)
+        aids[name] = {"updates": int(rec.t.size), "nis_mean": float(np.mean(rec.nis[ok])) if ok.any() else None,
+                      "dof": int(rec.dof[0]) if rec.dof.size else None,
+                      "accepted_share": float(np.mean(rec.accepted)) if rec.t.size else None}
+    out: dict[str, Any] = {"states": setup.config.n_states, "imu_samples": int(res.t.size), **res.gnss_summary(),
+                           "gnss_removed": res.meta.get("removed_gnss", []), "aids": aids}
+    if truth is not None:
+        out["rmse"] = track_rmse(NavTrack(res.t, res.lla, res.vel_ned, res.q_nb), truth)
+        if res.smoothed is not None:
+            s = res.smoothed
+            out["rmse_smoothed"] = track_rmse(NavTrack(s.t, s.lla, s.vel_ned, s.q_nb), truth)
+    return out
+
+
+def run_output_paths(folder: str | os.PathLike[str], *, smoother: bool = False, plots: bool = True,
+                     truth: bool = False) -> dict[str, Path]:
+    """The files :func:`write_run_outputs` writes into ``folder`` (to check them before a run).
+
+    Parameters
+    ----------
+    folder : str or os.PathLike
+        The output folder.
+    smoother : bool
+        With the smoothed ``.nav``.
+    plots : bool
+        With the figures (track, IMU errors; errors with a truth).
+    truth : bool
+        A truth is given (the error figure).
+
+    Returns
+    -------
+    dict of str to pathlib.Path
+        Key (:data:`RUN_FILES` keys, figure names of :data:`~imunav.ins.gins.plot.FIGURE_NAMES`) -> path.
+    """
+    out = Path(folder)
+    keys = ["nav", "err", "std", "summary"] + (["smoothed"] if smoother else [])
+    paths = {k: out / RUN_FILES[k] for k in keys}
+    if plots:
+        paths.update({k: out / FIGURE_NAMES[k] for k in ("track", "imu_errors") + (("errors",) if truth else ())})
+    return paths
+
+
+def write_run_outputs(folder: str | os.PathLike[str], res: GinsResult, setup: GinsSetup, *,
+                      gnss: GnssData | None = None, truth: NavTrack | None = None, plots: bool = True,
+                      extra: dict[str, Any] | None = None) -> dict[str, Any]:
+    """Write KF-GINS's outputs of a run (``.nav``; IMU errors; state σ, the 15-state filter's scale-factor σ
+    columns 0; the smoothed ``.nav`` when the run has one), its figures and ``summary.json``.
+
+    Parameters
+    ----------
+    folder : str or os.PathLike
+        Output folder (created); names of :data:`RUN_FILES`.
+    res : GinsResult
+        The run.
+    setup : GinsSetup
+        Its configuration and initial state.
+    gnss : GnssData, optional
+        The fixes, drawn on the track figure.
+    truth : NavTrack, optional
+        A reference: RMSE in the summary and the error figure.
+    plots : bool
+        Write the figures (when matplotlib is installed; the summary says which were written).
+    extra : dict, optional
+        Keys added to the summary first (the command's inputs).
+
+    Returns
+    -------
+    dict
+        The summary written (:func:`run_summary` plus ``extra`` and ``figures``).
+    """
+    names = run_output_paths(folder, smoother=res.smoothed is not None, plots=False)
+    write_kfgins_nav(names["nav"], NavTrack(res.t, res.lla, res.vel_ned, res.q_nb))
+    write_kfgins_imu_errors(names["err"], res.t, res.gyro_bias, res.accel_bias, res.gyro_scale, res.accel_scale)
+    nx = setup.config.n_states  # the filter's own states only (an odometer scale state follows them)
+    sd = np.sqrt(np.pad(res.cov_diag[:, :nx], ((0, 0), (0, 21 - nx))))
+    write_kfgins_std(names["std"], res.cov_t, sd[:, 0:3], sd[:, 3:6], sd[:, 6:9], sd[:, 9:12], sd[:, 12:15],
+                     sd[:, 15:18], sd[:, 18:21])
+    if res.smoothed is not None:
+        s = res.smoothed
+        write_kfgins_nav(names["smoothed"], NavTrack(s.t, s.lla, s.vel_ned, s.q_nb))
+    summary = {**(extra or {}), **run_summary(res, setup, truth=truth)}
+    if plots:
+        summary["figures"] = [p.name for p in write_figures(folder, result=res, gnss=gnss, truth=truth)]
+    write_json(names["summary"], summary)
+    return summary
+
+
+def write_figures(folder: str | os.PathLike[str], **kw: Any) -> list[Path]:
+    """:func:`~imunav.ins.gins.plot.write_gins_figures` when matplotlib is installed, else none (the caller says
+    so)."""
+    if importlib.util.find_spec("matplotlib") is None:
+        return []
+    return write_gins_figures(folder, **kw)
+
+
+def outage_document(rep: OutageReport, *, source: str, states: int) -> dict[str, Any]:
+    """The outage test's JSON document: the protocol, the RMS over outages and every outage's drift.
+
+    Parameters
+    ----------
+    rep : OutageReport
+        From :func:`imunav.ins.gins.outage.outage_test`.
+    source : str
+        Where the drive came from (a configuration file, or the simulation's parameters).
+    states : int
+        The filter's navigation and IMU-error states (15 or 21).
+
+    Returns
+    -------
+    dict
+        ``source``, ``protocol``, ``states``, ``rms`` (:meth:`OutageReport.rms`) and ``outages`` (start and length
+        s, horizontal / vertical / 3-D drift m, roll / pitch / heading deg, inside the predicted 3σ).
+    """
+    return {"source": source, "protocol": rep.meta, "states": states, "rms": rep.rms(),
+            "outages": [{"start_s": s, "length_s": d, "horizontal_m": h, "vertical_m": v, "drift_3d_m": d3,
+                         "roll_deg": r, "pitch_deg": p, "heading_deg": y, "inside_3sigma": bool(c)}
+                        for (s, d), h, v, d3, r, p, y, c in zip(rep.outages, rep.horizontal_m, rep.vertical_m,
+                                                                rep.drift_3d_m, rep.roll_deg, rep.pitch_deg,
+                                                                rep.heading_deg, rep.contained)]}
