@@ -1,6 +1,6 @@
 """Air data, Doppler radar and wind estimation.
 
-* :mod:`~imunav.airdata.atmosphere` - ISA (0-47 km), pressure altitude.
+* the ISA (0-47 km) and pressure altitude are :mod:`imunav.atmosphere` (core: the log readers need them), re-exported here.
 * :mod:`~imunav.airdata.airdata` - air-data computer: Mach (subsonic and
   Rayleigh supersonic pitot), CAS, TAS, SAT, density, α/β, TAS into body axes.
 * :mod:`~imunav.airdata.doppler` - 3/4-beam Janus geometry, Doppler shifts,
@@ -27,7 +27,7 @@ from imunav.airdata.airdata import (
     total_temperature,
     true_airspeed,
 )
-from imunav.airdata.atmosphere import IsaState, isa, pressure_altitude
+from imunav.atmosphere import IsaState, isa, pressure_altitude
 from imunav.airdata.doppler import (
     DopplerErrors,
     DopplerMeasurement,
