@@ -27,7 +27,6 @@ from imunav.airdata.airdata import (
     total_temperature,
     true_airspeed,
 )
-from imunav.atmosphere import IsaState, isa, pressure_altitude
 from imunav.airdata.doppler import (
     DopplerErrors,
     DopplerMeasurement,
@@ -57,6 +56,7 @@ from imunav.airdata.scenario import (
     thesis_report,
 )
 from imunav.airdata.wind import heading_for_course, wind_from_speeds, wind_from_velocities, wind_speed_direction
+from imunav.atmosphere import IsaState, isa, pressure_altitude
 
 __all__ = [
     "isa",
