@@ -454,6 +454,8 @@ def read_static_tf(path: str | os.PathLike[str]) -> list[StaticTransform]:
     out: dict[str, StaticTransform] = {}
     with _Bag(path) as reader:
         conns = [c for c in reader.connections if c.topic in TF_STATIC_TOPICS]
+        if not conns:  # messages(connections=[]) would read every topic
+            return []
         for conn, _, raw in reader.messages(connections=conns):
             try:
                 msg = reader.deserialize(raw, conn.msgtype)
