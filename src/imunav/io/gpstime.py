@@ -82,20 +82,24 @@ class GpsTime:
     is_utc: bool
 
 
-def utc_to_gps(unix_s: ArrayLike) -> GpsTime:
-    """GPS week and seconds of week of UTC stamps (``GPS = UTC + leap seconds``, module docstring).
+def utc_to_gps(t: ArrayLike, t0_ns: int = 0) -> GpsTime:
+    """GPS week and seconds of week of UTC stamps ``t0_ns · 1e-9 + t`` (``GPS = UTC + leap seconds``).
+
+    The integer origin keeps the result exact to float64 of ``t``: a UTC time of 1.7e9 s as one float64
+    has a resolution of 0.24 µs, seconds of week 1e-10 s.
 
     Parameters
     ----------
-    unix_s : array_like, shape (N,)
-        The log's stamps, s since 1970-01-01 UTC (ROS ``header.stamp``); a float64 keeps about 0.2 µs
-        at today's dates.
+    t : array_like, shape (N,)
+        Stamps, s: since ``t0_ns`` (or since 1970-01-01 UTC with the default ``t0_ns = 0``).
+    t0_ns : int
+        Origin of ``t`` in ns since 1970-01-01 UTC (e.g. ``NavSources.t0_ns``).
 
     Returns
     -------
     GpsTime
         Week and seconds of week; when the first stamp lies before the GPS epoch the stamps are not UTC:
-        ``is_utc`` is False, the week 0 and ``sow`` the stamps unchanged.
+        ``is_utc`` is False, the week 0 and ``sow`` the stamps ``t0_ns · 1e-9 + t``.
 
     Examples
     --------
@@ -103,10 +107,13 @@ def utc_to_gps(unix_s: ArrayLike) -> GpsTime:
     >>> int(g.week[0]), float(g.sow[0]), g.leap_s
     (1930, 18.0, 18)
     """
-    u = np.atleast_1d(np.asarray(unix_s, dtype=np.float64))
-    if u.size == 0 or u[0] < GPS_EPOCH_UNIX:
-        return GpsTime(np.zeros(u.size, dtype=np.int64), u.copy(), 0, False)
-    leap = leap_seconds(u)
-    g = u - GPS_EPOCH_UNIX + leap
-    week = np.floor(g / _WEEK).astype(np.int64)
-    return GpsTime(week, g - week * _WEEK, int(leap[0]), True)
+    u = np.atleast_1d(np.asarray(t, dtype=np.float64))
+    t0 = int(t0_ns)
+    if u.size == 0 or t0 * 1e-9 + u[0] < GPS_EPOCH_UNIX:
+        return GpsTime(np.zeros(u.size, dtype=np.int64), t0 * 1e-9 + u, 0, False)
+    leap = leap_seconds(t0 * 1e-9 + u)
+    base = t0 - GPS_EPOCH_UNIX * 1_000_000_000  # ns of the origin after the GPS epoch, UTC scale
+    week0 = base // (_WEEK * 1_000_000_000)
+    sow = (base - week0 * _WEEK * 1_000_000_000) * 1e-9 + u + leap
+    carry = np.floor(sow / _WEEK).astype(np.int64)
+    return GpsTime(week0 + carry, sow - carry * _WEEK, int(leap[0]), True)

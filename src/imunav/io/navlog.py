@@ -181,6 +181,14 @@ class NavSources:
     meta: dict[str, Any] = field(default_factory=dict)
 
     @property
+    def utc_t0_ns(self) -> int:
+        """UTC of ``t0_ns`` in integer ns since 1970 (``t0_ns`` itself for UTC stamps; PX4: shifted by the
+        receiver's offset, to the ns); raises when the time is not UTC."""
+        if self.t0_unix is None:
+            raise InvalidInputError(f"{self.source}: the log's time is not UTC")
+        return int(self.meta.get("utc_offset_ns", 0)) + self.t0_ns
+
+    @property
     def time_is_utc(self) -> bool:
         """True when the stamps are UTC (``t0_unix`` known and after 1980-01-06)."""
         return self.t0_unix is not None and self.t0_unix >= GPS_EPOCH_UNIX
@@ -202,8 +210,7 @@ class NavSources:
         ta = np.atleast_1d(np.asarray(t, dtype=np.float64))
         if not self.time_is_utc:
             return GpsTime(np.zeros(ta.size, dtype=np.int64), self.t0_ns * 1e-9 + ta, 0, False)
-        assert self.t0_unix is not None
-        return utc_to_gps(self.t0_unix + ta)
+        return utc_to_gps(ta, self.utc_t0_ns)
 
     def to_dict(self) -> dict[str, Any]:
         """What a run's summary reports about its inputs (JSON-ready).
@@ -583,8 +590,10 @@ def read_nav_sources(path: str | os.PathLike[str], *, imu_topic: str | None = No
             aids[role] = g
             meta[role] = {"faults": g.meta["faults"], "removed": g.meta.get("removed", []), **cut}
             if log_kind(path) == "ulog" and "time_utc_us" in td.values:
-                t0_unix = _utc_of_boot(td, t0_ns)
-                if t0_unix is not None:
+                off = _utc_offset_ns(td)
+                t0_unix = None if off is None else (t0_ns + off) * 1e-9
+                if off is not None:
+                    meta["utc_offset_ns"] = off
                     meta["time"] = "PX4 boot time shifted to UTC by the receiver's time_utc_usec"
             data_t = g.t
         else:
@@ -600,12 +609,11 @@ def read_nav_sources(path: str | os.PathLike[str], *, imu_topic: str | None = No
                       t0_unix, q_mount, lever, meta)
 
 
-def _utc_of_boot(td: TopicData, t0_ns: int) -> float | None:
-    """UTC (s since 1970) of ``t0_ns`` on a PX4 log's boot clock, from the receiver's ``time_utc_usec``."""
+def _utc_offset_ns(td: TopicData) -> int | None:
+    """UTC − boot time (ns) of a PX4 log, from the receiver's ``time_utc_usec`` (median over the fixes)."""
     utc = np.asarray(td.values["time_utc_us"], dtype=np.int64)
     ok = utc > int(GPS_EPOCH_UNIX * 1_000_000)
     if not ok.any():
         return None
     boot_ns = int(td.meta["t0_ns"]) + np.round(td.t[ok] * 1e9).astype(np.int64)
-    offset_ns = int(np.median(utc[ok] * 1000 - boot_ns))
-    return (t0_ns + offset_ns) * 1e-9
+    return int(np.median(utc[ok] * 1000 - boot_ns))

@@ -331,10 +331,10 @@ def _write_kfgins(log: RobotLog, folder: Path) -> Path:
     if folder.exists():
         raise InvalidInputError(f"{folder} exists; outputs never overwrite - choose another folder")
     folder.mkdir()
-    t0 = log.truth.t0_ns * 1e-9
+    t0_ns = log.truth.t0_ns
 
     def sow(t: Array) -> Array:
-        return utc_to_gps(t0 + np.asarray(t, dtype=np.float64)).sow
+        return utc_to_gps(t, t0_ns).sow
 
     inc = ImuIncrements.from_imu_data(log.imu)
     write_kfgins_imu(folder / "imu.txt", ImuIncrements(sow(inc.t), inc.dtheta, inc.dvel, inc.dt, inc.meta))
@@ -342,7 +342,7 @@ def _write_kfgins(log: RobotLog, folder: Path) -> Path:
     write_gnss_text(folder / "gnss.txt", GnssData(sow(g.t), g.lla, g.pos_std, meta=dict(g.meta)))
     write_table(folder / "odo.txt", [sow(log.odometer.t), log.odometer.speed])
     nav = log.truth.nav_track()
-    week = int(utc_to_gps([t0]).week[0])
+    week = int(utc_to_gps([0.0], t0_ns).week[0])
     write_kfgins_nav(folder / "truth.nav", NavTrack(sow(nav.t), nav.lla, nav.vel_ned, nav.q_nb, week, nav.meta))
     return folder
 
