@@ -16,7 +16,9 @@ import pytest
 from shared_data import data_path
 
 from imunav import earth
+from imunav.atmosphere import isa, pressure_altitude
 from imunav.errors import FileFormatError, InvalidInputError
+from imunav.io.aiding import MagnetometerData
 from imunav.io.gnss import GnssData, read_gnss_text
 from imunav.io.kfgins import read_kfgins_imu
 from imunav.io.navlog import choose_nav_topics, gnss_fixes, nav_topics, read_nav_sources
@@ -224,3 +226,22 @@ def test_px4_sitl_gnss_against_groundtruth():
     assert np.all(horiz < 3 * s.gnss.pos_std[:, 0] * np.sqrt(2))  # inside 3 sigma of the receiver's eph
     with pytest.raises(InvalidInputError, match="no vehicle_global_position_groundtruth"):
         read_px4_groundtruth(data_path("px4_ulog", "sample_log_small.ulg"))
+
+
+def test_ros_magnetometer_and_barometer(robot, tmp_path):
+    log, _ = robot
+    t = np.arange(50) * 0.1
+    mag = MagnetometerData(t, np.column_stack([20 + t, -3 + 0 * t, 40 - t]), {"t0_ns": ROBOT_T0_NS})
+    p = 95000.0 + 10 * t
+    baro = TopicData("/pressure", "pressure", t, {"pressure": p, "variance": np.full(t.size, 4.0)}, {},
+                     meta={"t0_ns": ROBOT_T0_NS})
+    path = write_bag(tmp_path / "mb.bag", {"/imu/data": log.imu, "/mag": mag, "/pressure": baro}, storage="ros1")
+    s = read_nav_sources(path)
+    np.testing.assert_allclose(s.mag.field_b, mag.field_b, rtol=1e-15)  # uT -> T -> uT
+    np.testing.assert_allclose(s.baro.t, t, atol=1e-9)
+    np.testing.assert_array_equal(s.baro.height, pressure_altitude(p))
+    # sigma of the height from the pressure's: |dh/dp| * 2 Pa, dh/dp by central difference of the ISA
+    h = pressure_altitude(p)
+    dhdp = (pressure_altitude(p + 0.5) - pressure_altitude(p - 0.5)) / 1.0
+    np.testing.assert_allclose(s.baro.height_std, 2.0 * np.abs(dhdp), rtol=1e-4)
+    assert isa(h).pressure == pytest.approx(p, rel=1e-9)
