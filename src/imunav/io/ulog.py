@@ -43,17 +43,20 @@ parses the file once (pyulog), keeping only each topic's time stamps.
 from __future__ import annotations
 
 import os
+import struct
+from pathlib import Path
 from typing import Any
 
 import numpy as np
 
+from imunav._atomic import atomic_path
 from imunav._docstrings import fill_doc
 from imunav.errors import FileFormatError, InvalidInputError
 from imunav.io.kfgins import NavTrack
 from imunav.io.topics import TopicData, TopicInfo, merge_onto, topic_data
 from imunav.rotation import quat_interp
 
-__all__ = ["list_topics", "read_topic", "read_imu_topic", "read_px4_groundtruth", "IMU_TOPICS", "GROUNDTRUTH_TOPICS"]
+__all__ = ["list_topics", "read_topic", "read_imu_topic", "read_px4_groundtruth", "write_ulog", "IMU_TOPICS", "GROUNDTRUTH_TOPICS"]
 
 #: ULog topics that give an IMU (gyro + accel); ``sensor_combined`` is the default.
 IMU_TOPICS = ("sensor_combined", "vehicle_imu", "sensor_gyro", "sensor_accel")
@@ -417,3 +420,91 @@ def read_px4_groundtruth(path: str | os.PathLike[str], *, t0_ns: int = 0) -> Nav
             "missing": missing, "t0_ns": int(t0_ns), "clock": "PX4 boot time",
             "altitude_filled": bool(np.any(alt != 0.0))}
     return NavTrack(t, np.column_stack([lat, lon, alt]), vel, q, 0, meta)
+
+
+# -- writing ------------------------------------------------------------------------------------
+_ULOG_TYPES = {np.dtype(np.uint64): "uint64_t", np.dtype(np.int64): "int64_t", np.dtype(np.uint32): "uint32_t",
+               np.dtype(np.int32): "int32_t", np.dtype(np.uint16): "uint16_t", np.dtype(np.int16): "int16_t",
+               np.dtype(np.uint8): "uint8_t", np.dtype(np.int8): "int8_t", np.dtype(np.float32): "float",
+               np.dtype(np.float64): "double", np.dtype(np.bool_): "bool"}
+
+
+def _ulog_msg(kind: bytes, payload: bytes) -> bytes:
+    return struct.pack("<HB", len(payload), kind[0]) + payload
+
+
+def write_ulog(path: str | os.PathLike[str], topics: Any, *, info: Any = None, t_start_us: int = 0) -> Path:
+    """Write topics as a PX4 ULog file (format version 1) that :func:`read_topic` and ``pyulog`` read, atomically.
+
+    A minimal logger: one format definition and one subscription (``multi_id`` 0) per topic, then every
+    data message in time order.  Each topic is a mapping of field name to array, one row per message,
+    with ``timestamp`` (µs, integer) first; a 2-D array ``(N, k)`` is a ``type[k] name`` field (read back
+    as ``name[0]`` ... ``name[k-1]``).  The array dtype is the field type (``float32`` → ``float``,
+    ``float64`` → ``double``, ``int32`` → ``int32_t`` ...): write PX4's own types to test a reader on what
+    PX4 logs.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The ``.ulg`` file to write (never an existing one).
+    topics : mapping
+        Topic name -> mapping of field name -> array; ``timestamp`` is required.
+    info : mapping of str to str, optional
+        Information messages (``sys_name``, ``ver_sw`` ...), written as ``char[n]`` values.
+    t_start_us : int
+        The header's start time, µs.
+
+    Returns
+    -------
+    pathlib.Path
+        The file written.
+
+    Raises
+    ------
+    InvalidInputError
+        If the file exists, a topic has no ``timestamp``, its fields differ in length, or a dtype has no
+        ULog type.
+    """
+    target = Path(path)
+    if target.exists():
+        raise InvalidInputError(f"{target} exists; outputs never overwrite - choose another path")
+    head = b"ULog\x01\x12\x35" + bytes([1]) + struct.pack("<Q", int(t_start_us))
+    out = [head, _ulog_msg(b"B", bytes(16) + bytes(24))]
+    for k, v in dict(info or {}).items():
+        val = str(v).encode()
+        key = f"char[{len(val)}] {k}".encode()
+        out.append(_ulog_msg(b"I", bytes([len(key)]) + key + val))
+    rows: list[tuple[int, int, bytes]] = []  # (timestamp, order, message)
+    subs = []
+    for msg_id, (name, fields) in enumerate(dict(topics).items()):
+        cols = {k: np.asarray(a) for k, a in dict(fields).items()}
+        if next(iter(cols), None) != "timestamp":
+            raise InvalidInputError(f"write_ulog: topic {name!r} must have 'timestamp' (us) as its first field")
+        cols["timestamp"] = cols["timestamp"].astype(np.uint64)
+        n = cols["timestamp"].shape[0]
+        spec, dt = [], []
+        for k, a in cols.items():
+            if a.shape[0] != n:
+                raise InvalidInputError(f"write_ulog: {name}.{k} has {a.shape[0]} rows, timestamp {n}")
+            typ = _ULOG_TYPES.get(a.dtype)
+            if typ is None:
+                raise InvalidInputError(f"write_ulog: {name}.{k} has dtype {a.dtype}, which ULog has no type for")
+            width = a.shape[1] if a.ndim == 2 else 0
+            spec.append(f"{typ}[{width}] {k}" if width else f"{typ} {k}")
+            dt.append((k, a.dtype.newbyteorder("<"), (width,)) if width else (k, a.dtype.newbyteorder("<")))
+        out.append(_ulog_msg(b"F", f"{name}:{';'.join(spec)};".encode()))
+        rec = np.empty(n, dtype=np.dtype(dt, align=False))
+        for k, a in cols.items():
+            rec[k] = a
+        subs.append(_ulog_msg(b"A", struct.pack("<BH", 0, msg_id) + name.encode()))
+        prefix = struct.pack("<H", msg_id)
+        raw = rec.tobytes()
+        size = rec.dtype.itemsize
+        for i, ts in enumerate(cols["timestamp"].tolist()):
+            rows.append((int(ts), msg_id, _ulog_msg(b"D", prefix + raw[i * size:(i + 1) * size])))
+    rows.sort(key=lambda r: (r[0], r[1]))
+    out += subs
+    out += [r[2] for r in rows]
+    with atomic_path(target) as tmp:
+        Path(tmp).write_bytes(b"".join(out))
+    return target
