@@ -245,3 +245,21 @@ def test_ros_magnetometer_and_barometer(robot, tmp_path):
     dhdp = (pressure_altitude(p + 0.5) - pressure_altitude(p - 0.5)) / 1.0
     np.testing.assert_allclose(s.baro.height_std, 2.0 * np.abs(dhdp), rtol=1e-4)
     assert isa(h).pressure == pytest.approx(p, rel=1e-9)
+
+
+def test_twist_stamped_odometry_when_the_bag_has_no_odometry(robot, tmp_path):
+    log, _ = robot
+    speeds = np.array([0.0, 0.5, 1.0, 0.75])
+    t = 0.5 * np.arange(1, 5)
+    tw = TopicData("/wheel/twist", "gnss_velocity", t, {"linear_raw": np.column_stack([speeds, 0 * t, 0 * t])}, {},
+                   meta={"t0_ns": ROBOT_T0_NS})
+    p = write_bag(tmp_path / "twist", {"/imu/data": log.imu, "/wheel/twist": tw}, frame_ids={"/wheel/twist": "base_link"})
+    s = read_nav_sources(p)
+    assert s.topics["odometer"].topic == "/wheel/twist" and s.odometer.speed_std is None
+    np.testing.assert_array_equal(s.odometer.speed, speeds)
+    np.testing.assert_allclose(s.odometer.t, t, atol=1e-9)
+    assert "no covariance" in s.meta["odometer"]["speed"]
+    # beside a nav_msgs/Odometry topic, the TwistStamped is no candidate (it may be a GNSS velocity) unless named
+    p2 = write_bag(tmp_path / "both", {"/imu/data": log.imu, "/wheel/twist": tw, "/odom": log.odometer})
+    assert read_nav_sources(p2).topics["odometer"].topic == "/odom"
+    assert read_nav_sources(p2, odo_topic="/wheel/twist").odometer.t.size == 4

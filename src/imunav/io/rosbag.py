@@ -53,7 +53,16 @@ from imunav._docstrings import fill_doc
 from imunav.errors import FileFormatError, InvalidInputError
 from imunav.io.aiding import MagnetometerData, OdometerData
 from imunav.io.gnss import GnssData
-from imunav.io.topics import TopicData, TopicInfo, enu_to_ned, frd_to_ros, require, ros_to_frd, topic_data
+from imunav.io.topics import (
+    TopicData,
+    TopicInfo,
+    enu_to_ned,
+    frd_to_ros,
+    ned_to_enu,
+    require,
+    ros_to_frd,
+    topic_data,
+)
 from imunav.rotation import from_convention
 from imunav.timeseries import ImuData
 
@@ -474,8 +483,9 @@ STORAGES = ("ros1", "sqlite3", "mcap")
 _DEFAULT_T0_NS = 1_700_000_000_000_000_000  # 2023-11-14T22:13:20Z, when a recording has no t0_ns
 _MSGTYPE = {"imu": "sensor_msgs/msg/Imu", "mag": "sensor_msgs/msg/MagneticField",
             "temperature": "sensor_msgs/msg/Temperature", "gnss": "sensor_msgs/msg/NavSatFix",
-            "odometry": "nav_msgs/msg/Odometry", "pressure": "sensor_msgs/msg/FluidPressure"}
-_TOPIC_KINDS = ("imu", "mag", "temperature", "gnss", "pressure")
+            "odometry": "nav_msgs/msg/Odometry", "pressure": "sensor_msgs/msg/FluidPressure",
+            "gnss_velocity": "geometry_msgs/msg/TwistStamped"}
+_TOPIC_KINDS = ("imu", "mag", "temperature", "gnss", "pressure", "gnss_velocity")
 
 
 def _stamps(d: Any) -> np.ndarray:
@@ -520,10 +530,11 @@ def write_bag(path: str | os.PathLike[str], topics: Any, *, storage: str = "mcap
                                                              ``base_link``): twist.linear.x = speed, covariance[0]
                                                              = ``speed_std²`` (0: unknown); the pose is not written
     :class:`~imunav.io.aiding.MagnetometerData`              ``sensor_msgs/MagneticField``
-    TopicData of kind imu, mag, temperature, gnss, pressure  the message the reader reads it from (values as the
-                                                             reader returns them: a ``gnss`` TopicData writes its
+    TopicData of kind imu, mag, temperature, gnss,           the message the reader reads it from (values as the
+    pressure, gnss_velocity                                  reader returns them: a ``gnss`` TopicData writes its
                                                              ``fix_status``, covariance and type as given, so that
-                                                             receiver faults can be written)
+                                                             receiver faults can be written; a ``gnss_velocity``
+                                                             one its ``linear_raw``, else ``vel_ned`` as ENU)
     =======================================================  ==================================================
 
     Body vectors go FRD → FLU, µT → T, NED → ENU; the stamps are ``meta["t0_ns"] + round(t · 1e9)`` ns (a
@@ -600,6 +611,10 @@ def _rows(kind: str, d: Any) -> list[tuple]:
         if kind == "pressure":
             var = v.get("variance", np.zeros(d.n))
             return list(zip(np.asarray(v["pressure"], float).tolist(), np.asarray(var, float).tolist(), strict=True))
+        if kind == "gnss_velocity":
+            lin = np.asarray(v["linear_raw"], float) if "linear_raw" in v else ned_to_enu(v["vel_ned"])
+            ang = frd_to_ros(v["rate_frd"]) if "rate_frd" in v else np.zeros((d.n, 3))
+            return list(zip(lin.tolist(), ang.tolist(), strict=True))
         cov = np.asarray(v["pos_cov_enu_diag"], dtype=float)
         return list(zip(np.asarray(v["lat_deg"], float).tolist(), np.asarray(v["lon_deg"], float).tolist(),
                         np.asarray(v["alt_m"], float).tolist(), np.asarray(v["fix_status"]).astype(int).tolist(),
@@ -665,6 +680,9 @@ def _write(path: Path, streams: list[tuple[str, str, Any]], storage: str, frames
             return T[_MSGTYPE[kind]](header=hdr, temperature=r[0], variance=0.0)
         if kind == "pressure":
             return T[_MSGTYPE[kind]](header=hdr, fluid_pressure=r[0], variance=r[1])
+        if kind == "gnss_velocity":
+            return T[_MSGTYPE[kind]](header=hdr, twist=T["geometry_msgs/msg/Twist"](linear=Vec(*r[0]),
+                                                                                    angular=Vec(*r[1])))
         if kind == "gnss":
             cov = np.zeros(9)
             cov[[0, 4, 8]] = r[4]
