@@ -30,7 +30,7 @@ SRC = ROOT / "src"
 #: Low -> high.  A module belongs to the layer of the longest prefix listed; a module may import from
 #: its own layer or a lower one.  Keep in step with the table of docs/design.md section 1.
 LAYERS: list[tuple[str, tuple[str, ...]]] = [
-    ("core", ("imunav", "imunav.errors", "imunav.units", "imunav.rotation", "imunav._rotation_kernels",
+    ("core", ("imunav", "imunav.errors", "imunav.units", "imunav.rotation", "imunav._rotation_kernels", "imunav.atmosphere",
               "imunav.earth", "imunav.allan_models", "imunav.crossval", "imunav._timeseries_kernels",
               "imunav.provenance", "imunav._atomic", "imunav.runfolder", "imunav.toml", "imunav.filters._common",
               "imunav.filters._kernels", "imunav.filters._core", "imunav.results", "imunav._docstrings",

@@ -107,7 +107,7 @@ def test_vehicle_imu_increments_become_the_rates_of_sensor_combined():
 @pytest.mark.parametrize("name", [SMALL, SITL])
 def test_barometer_and_gnss_units(name):
     """hPa (old logs) and Pa (newer) both give the ISA pressure of the GNSS altitude within the weather."""
-    from imunav.airdata.atmosphere import isa
+    from imunav.atmosphere import isa
 
     p = _log(name)
     baro = read_topic(p, "sensor_baro:0")

@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from imunav.airdata import airdata as ad
-from imunav.airdata.atmosphere import A0, RHO0, geopotential_altitude, isa, pressure_altitude, speed_of_sound
+from imunav.atmosphere import A0, RHO0, geopotential_altitude, isa, pressure_altitude, speed_of_sound
 from imunav.errors import InvalidInputError, NonFiniteError, ShapeError
 
 

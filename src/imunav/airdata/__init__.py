@@ -1,6 +1,6 @@
 """Air data, Doppler radar and wind estimation.
 
-* :mod:`~imunav.airdata.atmosphere` - ISA (0-47 km), pressure altitude.
+* the ISA (0-47 km) and pressure altitude are :mod:`imunav.atmosphere` (core: the log readers need them), re-exported here.
 * :mod:`~imunav.airdata.airdata` - air-data computer: Mach (subsonic and
   Rayleigh supersonic pitot), CAS, TAS, SAT, density, α/β, TAS into body axes.
 * :mod:`~imunav.airdata.doppler` - 3/4-beam Janus geometry, Doppler shifts,
@@ -27,7 +27,6 @@ from imunav.airdata.airdata import (
     total_temperature,
     true_airspeed,
 )
-from imunav.airdata.atmosphere import IsaState, isa, pressure_altitude
 from imunav.airdata.doppler import (
     DopplerErrors,
     DopplerMeasurement,
@@ -57,6 +56,7 @@ from imunav.airdata.scenario import (
     thesis_report,
 )
 from imunav.airdata.wind import heading_for_course, wind_from_speeds, wind_from_velocities, wind_speed_direction
+from imunav.atmosphere import IsaState, isa, pressure_altitude
 
 __all__ = [
     "isa",

@@ -32,7 +32,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from imunav._docstrings import fill_doc
-from imunav.airdata.atmosphere import A0, GAMMA, P0, R_AIR, RHO0, pressure_altitude
+from imunav.atmosphere import A0, GAMMA, P0, R_AIR, RHO0, pressure_altitude
 from imunav.errors import ConvergenceError, InvalidInputError, NonFiniteError, ShapeError
 from imunav.results import Result
 

@@ -39,8 +39,8 @@ from scipy.linalg import cholesky, solve_discrete_lyapunov
 from scipy.signal import lfilter, ss2tf, tf2ss
 
 from imunav.airdata.airdata import air_data, aoa_sideslip, pitot_ratio, tas_to_body, total_temperature
-from imunav.airdata.atmosphere import G0, isa
 from imunav.airdata.doppler import DopplerErrors, janus_beams, simulate_doppler
+from imunav.atmosphere import G0, isa
 from imunav.errors import InvalidInputError
 from imunav.filters._core import van_loan
 from imunav.results import Result

@@ -18,9 +18,19 @@ type                                      kind               values
                                                              (ellipsoid), ``fix_status``, ``pos_cov``
 ``geometry_msgs/msg/TwistStamped``        ``gnss_velocity``  ``vel_ned`` (twist.linear taken as ENU,
                                                              as GNSS drivers publish it), ``rate_frd``
+                                                             and ``linear_raw`` (twist.linear as published)
+``nav_msgs/msg/Odometry``                 ``odometry``       ``speed`` (twist.linear.x in the child frame,
+                                                             REP-105: the forward speed), ``vel_body``
+                                                             (FRD), ``rate_frd``, ``speed_var``
+                                                             (twist covariance[0]); ``child_frame_id`` in
+                                                             ``meta``
 ``sensor_msgs/msg/FluidPressure``         ``pressure``       ``pressure`` (Pa), ``variance``
 ``sensor_msgs/msg/Temperature``           ``temperature``    ``temp`` (°C), ``variance``
 ========================================  =================  =========================================
+
+GNSS topics (``gnss``) keep the first of messages that repeat a stamp and count the others in
+``meta["time"]["duplicates_dropped"]`` (a receiver driver re-publishing a fix); every other kind refuses
+duplicated stamps.  :func:`read_static_tf` reads ``/tf_static``.
 
 A topic whose messages name more than one ``header.frame_id`` is refused: its samples would mix
 sensor frames.  ROS 1 ``header.seq`` gaps are counted in ``meta["seq_gaps"]`` (dropped messages).
@@ -32,7 +42,8 @@ import heapq
 import os
 import shutil
 import tempfile
-from collections.abc import Callable, Iterable
+from collections.abc import Callable, Iterable, Sequence
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -40,11 +51,23 @@ import numpy as np
 
 from imunav._docstrings import fill_doc
 from imunav.errors import FileFormatError, InvalidInputError
-from imunav.io.topics import TopicData, TopicInfo, enu_to_ned, frd_to_ros, require, ros_to_frd, topic_data
+from imunav.io.aiding import MagnetometerData, OdometerData
+from imunav.io.gnss import GnssData
+from imunav.io.topics import (
+    TopicData,
+    TopicInfo,
+    enu_to_ned,
+    frd_to_ros,
+    ned_to_enu,
+    require,
+    ros_to_frd,
+    topic_data,
+)
 from imunav.rotation import from_convention
 from imunav.timeseries import ImuData
 
-__all__ = ["list_topics", "read_topic", "read_imu_topic", "KINDS"]
+__all__ = ["list_topics", "read_topic", "read_imu_topic", "read_static_tf", "StaticTransform", "write_bag", "KINDS",
+           "STORAGES"]
 
 #: Message type -> kind read by imunav.
 KINDS = {
@@ -52,6 +75,7 @@ KINDS = {
     "sensor_msgs/msg/MagneticField": "mag",
     "sensor_msgs/msg/NavSatFix": "gnss",
     "geometry_msgs/msg/TwistStamped": "gnss_velocity",
+    "nav_msgs/msg/Odometry": "odometry",
     "sensor_msgs/msg/FluidPressure": "pressure",
     "sensor_msgs/msg/Temperature": "temperature",
 }
@@ -170,6 +194,7 @@ _FIELDS: dict[str, tuple[Callable[[Any], tuple], int, tuple[str, ...]]] = {
     "gnss": (lambda m: (m.latitude, m.longitude, m.altitude, m.status.status, m.position_covariance[0],
                         m.position_covariance[4], m.position_covariance[8], m.position_covariance_type), 8, ()),
     "gnss_velocity": (lambda m: (*_vec(m.twist.linear), *_vec(m.twist.angular)), 6, ()),
+    "odometry": (lambda m: (*_vec(m.twist.twist.linear), *_vec(m.twist.twist.angular), m.twist.covariance[0]), 7, ()),
     "pressure": (lambda m: (m.fluid_pressure, m.variance), 2, ()),
     "temperature": (lambda m: (m.temperature, m.variance), 2, ()),
 }
@@ -190,6 +215,8 @@ def _collect(reader: Any, conns: list[Any], kind: str, source: str, topic: str) 
     cf: list[tuple] = []
     n = 0
     deser = reader.deserialize
+    odo = kind == "odometry"
+    children: dict[str, int] = {}
 
     def flush() -> None:
         nonlocal n, ints, flts
@@ -214,6 +241,9 @@ def _collect(reader: Any, conns: list[Any], kind: str, source: str, topic: str) 
         cf.append(extract(msg))
         fid = h.frame_id
         frames[fid] = frames.get(fid, 0) + 1
+        if odo:
+            cid = msg.child_frame_id
+            children[cid] = children.get(cid, 0) + 1
         if cov_names:
             if not cov_first:
                 cov_first = {c: np.array(getattr(msg, c), dtype=np.float64) for c in cov_names}
@@ -230,7 +260,13 @@ def _collect(reader: Any, conns: list[Any], kind: str, source: str, topic: str) 
             f"{source}: topic {topic!r} mixes frame_ids {frames} (messages per frame); its samples come from "
             "different sensor frames - record one topic per sensor, or split the topic by frame_id first"
         )
-    info = {"frame_id": next(iter(frames)), "cov": cov_first, "cov_varies": cov_varies}
+    if len(children) > 1:
+        raise FileFormatError(
+            f"{source}: topic {topic!r} mixes child_frame_ids {children} (messages per frame); its twists are in "
+            "different frames - record one odometry topic per frame"
+        )
+    info = {"frame_id": next(iter(frames)), "cov": cov_first, "cov_varies": cov_varies,
+            "child_frame_id": next(iter(children)) if children else None}
     return ints[:n], flts[:n], info
 
 
@@ -270,9 +306,17 @@ def _values(kind: str, f: np.ndarray, info: dict) -> tuple[dict[str, np.ndarray]
                  "pos_cov_type": "1"}
         meta["altitude"] = "above the WGS 84 ellipsoid (sensor_msgs/NavSatFix)"
     elif kind == "gnss_velocity":
-        vals = {"vel_ned": enu_to_ned(f[:, 0:3]), "rate_frd": ros_to_frd(f[:, 3:6])}
-        units = {"vel_ned": "m/s", "rate_frd": "rad/s"}
-        meta["frames"] = "twist.linear taken as ENU -> NED (y, x, -z); twist.angular FLU -> FRD"
+        vals = {"vel_ned": enu_to_ned(f[:, 0:3]), "rate_frd": ros_to_frd(f[:, 3:6]), "linear_raw": f[:, 0:3]}
+        units = {"vel_ned": "m/s", "rate_frd": "rad/s", "linear_raw": "m/s"}
+        meta["frames"] = ("twist.linear taken as ENU -> NED (y, x, -z); twist.angular FLU -> FRD; linear_raw: "
+                          "twist.linear as published (a wheel driver's body-frame twist: x is the forward speed)")
+    elif kind == "odometry":
+        vals = {"speed": f[:, 0], "vel_body": ros_to_frd(f[:, 0:3]), "rate_frd": ros_to_frd(f[:, 3:6]),
+                "speed_var": f[:, 6]}
+        units = {"speed": "m/s", "vel_body": "m/s", "rate_frd": "rad/s", "speed_var": "m^2/s^2"}
+        meta["child_frame_id"] = info["child_frame_id"]
+        meta["frames"] = ("twist in the child frame (REP-105), FLU -> FRD (x, -y, -z); speed = twist.linear.x; "
+                          "speed_var = twist.covariance[0] (0 or -1: unknown)")
     elif kind == "pressure":
         vals, units = {"pressure": f[:, 0], "variance": f[:, 1]}, {"pressure": "Pa", "variance": "Pa^2"}
     else:
@@ -340,7 +384,8 @@ def read_topic(path: str | os.PathLike[str], topic: str, *, instance: int | None
         seq = ints[:, 3]
         ds = np.diff(seq)
         meta["seq_gaps"] = {"gaps": int(np.sum(ds > 1)), "missing": int(np.sum(ds[ds > 1] - 1))}
-    return topic_data(name, kind, stamps, vals, units, source, receive_ns=ints[:, 2], meta=meta)
+    return topic_data(name, kind, stamps, vals, units, source, receive_ns=ints[:, 2], meta=meta,
+                      duplicates="drop" if kind == "gnss" else "raise")
 
 
 @fill_doc
@@ -366,10 +411,81 @@ def read_imu_topic(path: str | os.PathLike[str], topic: str | None, *, instance:
     return d
 
 
+# -- static transforms --------------------------------------------------------------------------
+#: Topics read by :func:`read_static_tf`.
+TF_STATIC_TOPICS = ("/tf_static", "tf_static")
+
+
+@dataclass(frozen=True)
+class StaticTransform:
+    """One ``/tf_static`` transform, as published (ROS frames, REP-103).
+
+    Attributes
+    ----------
+    parent : str
+        ``header.frame_id`` (e.g. ``base_link``).
+    child : str
+        ``child_frame_id`` (e.g. ``imu_link``).
+    q : numpy.ndarray, shape (4,)
+        Rotation of the child frame in the parent, Hamilton scalar-first ``(w, x, y, z)``: it maps vectors
+        resolved in the child frame to the parent frame.
+    translation : numpy.ndarray, shape (3,)
+        Origin of the child frame in the parent frame, m.
+    """
+
+    parent: str
+    child: str
+    q: np.ndarray
+    translation: np.ndarray
+
+
+def read_static_tf(path: str | os.PathLike[str]) -> list[StaticTransform]:
+    """The static transforms of a bag (``/tf_static``, ``tf2_msgs/TFMessage``); empty when it has none.
+
+    A transform published again replaces the earlier one (as tf2 does).
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The bag.
+
+    Returns
+    -------
+    list of StaticTransform
+        In the order of their child frames.
+
+    Raises
+    ------
+    FileFormatError
+        If the bag cannot be read or a transform cannot be decoded.
+    """
+    source = os.fspath(path)
+    out: dict[str, StaticTransform] = {}
+    with _Bag(path) as reader:
+        conns = [c for c in reader.connections if c.topic in TF_STATIC_TOPICS]
+        if not conns:  # messages(connections=[]) would read every topic
+            return []
+        for conn, _, raw in reader.messages(connections=conns):
+            try:
+                msg = reader.deserialize(raw, conn.msgtype)
+            except Exception as e:  # rosbags raises several types for a damaged message
+                raise FileFormatError(f"{source}: {conn.topic}: a message cannot be decoded ({e})") from None
+            for tr in msg.transforms:
+                r, v = tr.transform.rotation, tr.transform.translation
+                out[tr.child_frame_id] = StaticTransform(tr.header.frame_id, tr.child_frame_id,
+                                                         np.array([r.w, r.x, r.y, r.z]), np.array([v.x, v.y, v.z]))
+    return [out[k] for k in sorted(out)]
+
+
 # -- writing ------------------------------------------------------------------------------------
 #: Storage names of :func:`write_bag`.
 STORAGES = ("ros1", "sqlite3", "mcap")
 _DEFAULT_T0_NS = 1_700_000_000_000_000_000  # 2023-11-14T22:13:20Z, when a recording has no t0_ns
+_MSGTYPE = {"imu": "sensor_msgs/msg/Imu", "mag": "sensor_msgs/msg/MagneticField",
+            "temperature": "sensor_msgs/msg/Temperature", "gnss": "sensor_msgs/msg/NavSatFix",
+            "odometry": "nav_msgs/msg/Odometry", "pressure": "sensor_msgs/msg/FluidPressure",
+            "gnss_velocity": "geometry_msgs/msg/TwistStamped"}
+_TOPIC_KINDS = ("imu", "mag", "temperature", "gnss", "pressure", "gnss_velocity")
 
 
 def _stamps(d: Any) -> np.ndarray:
@@ -377,28 +493,69 @@ def _stamps(d: Any) -> np.ndarray:
     return t0 + np.round(np.asarray(d.t, dtype=np.float64) * 1e9).astype(np.int64)
 
 
-def write_bag(path: str | os.PathLike[str], topics: Any, *, storage: str = "mcap", frame_id: str = "imu",
-              mag_suffix: str = "/mag") -> Path:
-    """Write IMU recordings as a ROS bag (``sensor_msgs/Imu``, ``MagneticField``, ``Temperature``), atomically.
+def _stream(name: str, d: Any, mag_suffix: str) -> list[tuple[str, str, Any]]:
+    """(topic, kind, data) of what ``write_bag`` writes for one entry of its mapping."""
+    if isinstance(d, ImuData):
+        out = [(name, "imu", d)]
+        if d.mag is not None:
+            out.append((name + mag_suffix, "mag", d))
+        if d.temp is not None:
+            out.append((name + "/temperature", "temperature", d))
+        return out
+    if isinstance(d, TopicData) and d.kind in _TOPIC_KINDS:
+        return [(name, d.kind, d)]
+    if isinstance(d, GnssData):
+        return [(name, "gnss", d)]
+    if isinstance(d, OdometerData):
+        return [(name, "odometry", d)]
+    if isinstance(d, MagnetometerData):
+        return [(name, "mag", d)]
+    raise InvalidInputError(f"write_bag: topic {name!r} must be an ImuData, GnssData, OdometerData, MagnetometerData "
+                            f"or a TopicData of kind {', '.join(_TOPIC_KINDS)}; got {type(d).__name__}")
 
-    The inverse of the reader: body vectors go FRD → FLU, µT → T, and the stamps are
-    ``meta["t0_ns"] + round(t · 1e9)`` ns (a fixed 2023 date when there is no ``t0_ns``); the record time
-    equals the stamp.
+
+def write_bag(path: str | os.PathLike[str], topics: Any, *, storage: str = "mcap", frame_id: str = "imu",
+              mag_suffix: str = "/mag", frame_ids: Any = None,
+              static_tf: Sequence[StaticTransform] = ()) -> Path:
+    """Write recordings as a ROS bag, atomically: the inverse of the readers.
+
+    =======================================================  ==================================================
+    data                                                     written as
+    =======================================================  ==================================================
+    :class:`~imunav.timeseries.ImuData`                      ``sensor_msgs/Imu`` (+ ``MagneticField`` on
+                                                             ``topic + mag_suffix``, ``Temperature``)
+    :class:`~imunav.io.gnss.GnssData`                        ``sensor_msgs/NavSatFix``: status FIX, service GPS,
+                                                             diagonal ENU covariance (type DIAGONAL_KNOWN)
+    :class:`~imunav.io.aiding.OdometerData`                  ``nav_msgs/Odometry`` (frame ``odom``, child
+                                                             ``base_link``): twist.linear.x = speed, covariance[0]
+                                                             = ``speed_std²`` (0: unknown); the pose is not written
+    :class:`~imunav.io.aiding.MagnetometerData`              ``sensor_msgs/MagneticField``
+    TopicData of kind imu, mag, temperature, gnss,           the message the reader reads it from (values as the
+    pressure, gnss_velocity                                  reader returns them: a ``gnss`` TopicData writes its
+                                                             ``fix_status``, covariance and type as given, so that
+                                                             receiver faults can be written; a ``gnss_velocity``
+                                                             one its ``linear_raw``, else ``vel_ned`` as ENU)
+    =======================================================  ==================================================
+
+    Body vectors go FRD → FLU, µT → T, NED → ENU; the stamps are ``meta["t0_ns"] + round(t · 1e9)`` ns (a
+    fixed 2023 date when there is no ``t0_ns``); the record time equals the stamp.
 
     Parameters
     ----------
     path : str or os.PathLike
         ``.bag`` for ``storage="ros1"``; for ROS 2 a folder (``metadata.yaml`` + storage file).
     topics : mapping
-        Mapping topic -> :class:`~imunav.timeseries.ImuData` (an ``Imu`` topic, plus
-        ``topic + mag_suffix`` with its magnetometer) or :class:`~imunav.io.logs.TopicData` of kind
-        ``imu``, ``mag`` or ``temperature``.
+        Mapping topic -> data (table above).
     storage : str
         ``"ros1"``, ``"sqlite3"`` or ``"mcap"``.
     frame_id : str
-        ``header.frame_id`` of every message.
+        ``header.frame_id`` of every message whose topic is not in ``frame_ids``.
     mag_suffix : str
         Suffix of the magnetometer topic written beside each ImuData's IMU topic.
+    frame_ids : mapping, optional
+        Topic -> ``header.frame_id`` (an odometry topic's header frame stays ``odom``).
+    static_tf : sequence of StaticTransform
+        Transforms written once on ``/tf_static`` at the first stamp (:func:`read_static_tf` reads them).
 
     Returns
     -------
@@ -408,8 +565,7 @@ def write_bag(path: str | os.PathLike[str], topics: Any, *, storage: str = "mcap
     Raises
     ------
     InvalidInputError
-        If ``storage`` is unknown, the ROS 2 folder exists, or a topic's data is neither an ImuData nor a
-        TopicData of kind imu, mag or temperature.
+        If ``storage`` is unknown, the ROS 2 folder exists, or a topic's data is none of the table's.
 
     Examples
     --------
@@ -426,37 +582,71 @@ def write_bag(path: str | os.PathLike[str], topics: Any, *, storage: str = "mcap
         raise InvalidInputError(f"storage={storage!r}: choose one of {list(STORAGES)}")
     streams: list[tuple[str, str, Any]] = []  # (topic, kind, data)
     for name, d in dict(topics).items():
-        if isinstance(d, ImuData):
-            streams.append((name, "imu", d))
-            if d.mag is not None:
-                streams.append((name + mag_suffix, "mag", d))
-            if d.temp is not None:
-                streams.append((name + "/temperature", "temperature", d))
-        elif isinstance(d, TopicData) and d.kind in ("imu", "mag", "temperature"):
-            streams.append((name, d.kind, d))
-        else:
-            raise InvalidInputError(f"write_bag: topic {name!r} must be an ImuData or a TopicData of kind imu, mag "
-                                    f"or temperature, got {type(d).__name__}")
+        streams.extend(_stream(name, d, mag_suffix))
+    fids = dict(frame_ids or {})
+    frames = {t: fids.get(t, "odom" if k == "odometry" else frame_id) for t, k, _ in streams}
     target = Path(path)
     if storage != "ros1" and target.exists():
         raise InvalidInputError(f"{target} exists; a ROS 2 bag is a new folder - remove it or choose another path")
     # written in a temporary folder beside the target, then renamed onto it (atomic on one file system)
     tmpdir = Path(tempfile.mkdtemp(prefix=f".{target.name}.", dir=target.parent if target.parent.exists() else None))
     try:
-        _write(tmpdir / target.name, streams, storage, frame_id)
+        _write(tmpdir / target.name, streams, storage, frames, list(static_tf))
         os.replace(tmpdir / target.name, target)
     finally:
         shutil.rmtree(tmpdir, ignore_errors=True)
     return target
 
 
-def _write(path: Path, streams: list[tuple[str, str, Any]], storage: str, frame_id: str) -> None:
+def _rows(kind: str, d: Any) -> list[tuple]:
+    """One tuple of message fields per sample, in ROS frames and units."""
+    if isinstance(d, TopicData):
+        v = d.values
+        if kind == "imu":
+            return list(zip(frd_to_ros(v["gyro"]).tolist(), frd_to_ros(v["accel"]).tolist(), strict=True))
+        if kind == "mag":
+            return [(m,) for m in (frd_to_ros(v["mag"]) * 1e-6).tolist()]
+        if kind == "temperature":
+            return [(x,) for x in np.asarray(v["temp"], dtype=float).tolist()]
+        if kind == "pressure":
+            var = v.get("variance", np.zeros(d.n))
+            return list(zip(np.asarray(v["pressure"], float).tolist(), np.asarray(var, float).tolist(), strict=True))
+        if kind == "gnss_velocity":
+            lin = np.asarray(v["linear_raw"], float) if "linear_raw" in v else ned_to_enu(v["vel_ned"])
+            ang = frd_to_ros(v["rate_frd"]) if "rate_frd" in v else np.zeros((d.n, 3))
+            return list(zip(lin.tolist(), ang.tolist(), strict=True))
+        cov = np.asarray(v["pos_cov_enu_diag"], dtype=float)
+        return list(zip(np.asarray(v["lat_deg"], float).tolist(), np.asarray(v["lon_deg"], float).tolist(),
+                        np.asarray(v["alt_m"], float).tolist(), np.asarray(v["fix_status"]).astype(int).tolist(),
+                        cov.tolist(), np.asarray(v["pos_cov_type"]).astype(int).tolist(), strict=True))
+    if isinstance(d, GnssData):
+        deg = np.degrees(d.lla[:, :2])
+        cov = d.pos_std[:, [1, 0, 2]] ** 2  # NED sigma -> ENU variances
+        return list(zip(deg[:, 0].tolist(), deg[:, 1].tolist(), d.lla[:, 2].tolist(), [0] * d.n, cov.tolist(),
+                        [2] * d.n, strict=True))
+    if isinstance(d, OdometerData):
+        var = np.zeros(d.t.size) if d.speed_std is None else d.speed_std ** 2
+        return list(zip(d.speed.tolist(), var.tolist(), strict=True))
+    if isinstance(d, MagnetometerData):
+        return [(m,) for m in (frd_to_ros(d.field_b) * 1e-6).tolist()]
+    if kind == "imu":  # ImuData
+        return list(zip(frd_to_ros(d.gyro).tolist(), frd_to_ros(d.accel).tolist(), strict=True))
+    if kind == "mag":
+        return [(m,) for m in (frd_to_ros(d.mag) * 1e-6).tolist()]
+    return [(x,) for x in np.asarray(d.temp, dtype=float).tolist()]
+
+
+def _write(path: Path, streams: list[tuple[str, str, Any]], storage: str, frames: dict[str, str],
+           static_tf: list[StaticTransform]) -> None:
     # optional: rosbags (imunav[ros]) only to read or write a bag
-    from rosbags.typesys import Stores, get_typestore
+    from rosbags.typesys import Stores, get_types_from_msg, get_typestore
 
     ts = get_typestore(Stores.ROS1_NOETIC if storage == "ros1" else Stores.LATEST)
+    if "tf2_msgs/msg/TFMessage" not in ts.types:  # the ROS 1 store lacks it
+        ts.register(get_types_from_msg("geometry_msgs/TransformStamped[] transforms", "tf2_msgs/msg/TFMessage"))
     T = ts.types
     Time, Header, Vec = T["builtin_interfaces/msg/Time"], T["std_msgs/msg/Header"], T["geometry_msgs/msg/Vector3"]
+    Quat = T["geometry_msgs/msg/Quaternion"]
     ros1 = storage == "ros1"
     if ros1:
         # optional: rosbags (imunav[ros]) only to read or write a bag
@@ -470,40 +660,67 @@ def _write(path: Path, streams: list[tuple[str, str, Any]], storage: str, frame_
 
         writer = Writer(path, version=9, storage_plugin=StoragePlugin[storage.upper()])
         ser = ts.serialize_cdr
-    zero9 = np.zeros(9)
+    zero9, zero36 = np.zeros(9), np.zeros(36)
     unknown = np.r_[-1.0, np.zeros(8)]
-    msgtype = {"imu": "sensor_msgs/msg/Imu", "mag": "sensor_msgs/msg/MagneticField",
-               "temperature": "sensor_msgs/msg/Temperature"}
+
+    def header(i: int, s: int, fid: str) -> Any:
+        sec, nsec = divmod(s, 1_000_000_000)
+        return Header(seq=i, stamp=Time(sec=sec, nanosec=nsec), frame_id=fid) if ros1 else \
+            Header(stamp=Time(sec=sec, nanosec=nsec), frame_id=fid)
+
+    def message(kind: str, hdr: Any, r: tuple) -> Any:
+        if kind == "imu":
+            return T[_MSGTYPE[kind]](header=hdr, orientation=Quat(x=0.0, y=0.0, z=0.0, w=1.0),
+                                     orientation_covariance=unknown, angular_velocity=Vec(*r[0]),
+                                     angular_velocity_covariance=zero9, linear_acceleration=Vec(*r[1]),
+                                     linear_acceleration_covariance=zero9)
+        if kind == "mag":
+            return T[_MSGTYPE[kind]](header=hdr, magnetic_field=Vec(*r[0]), magnetic_field_covariance=zero9)
+        if kind == "temperature":
+            return T[_MSGTYPE[kind]](header=hdr, temperature=r[0], variance=0.0)
+        if kind == "pressure":
+            return T[_MSGTYPE[kind]](header=hdr, fluid_pressure=r[0], variance=r[1])
+        if kind == "gnss_velocity":
+            return T[_MSGTYPE[kind]](header=hdr, twist=T["geometry_msgs/msg/Twist"](linear=Vec(*r[0]),
+                                                                                    angular=Vec(*r[1])))
+        if kind == "gnss":
+            cov = np.zeros(9)
+            cov[[0, 4, 8]] = r[4]
+            return T[_MSGTYPE[kind]](header=hdr, status=T["sensor_msgs/msg/NavSatStatus"](status=r[3], service=1),
+                                     latitude=r[0], longitude=r[1], altitude=r[2], position_covariance=cov,
+                                     position_covariance_type=r[5])
+        tw_cov = zero36.copy()
+        tw_cov[0] = r[1]
+        pose = T["geometry_msgs/msg/PoseWithCovariance"](
+            pose=T["geometry_msgs/msg/Pose"](position=T["geometry_msgs/msg/Point"](x=0.0, y=0.0, z=0.0),
+                                             orientation=Quat(x=0.0, y=0.0, z=0.0, w=1.0)), covariance=zero36)
+        twist = T["geometry_msgs/msg/TwistWithCovariance"](
+            twist=T["geometry_msgs/msg/Twist"](linear=Vec(x=r[0], y=0.0, z=0.0), angular=Vec(x=0.0, y=0.0, z=0.0)),
+            covariance=tw_cov)
+        return T[_MSGTYPE[kind]](header=hdr, child_frame_id="base_link", pose=pose, twist=twist)
 
     def gen(topic: str, kind: str, d: Any, conn: Any):
-        st = _stamps(d)
-        vals = d.values if isinstance(d, TopicData) else {"gyro": d.gyro, "accel": d.accel, "mag": d.mag, "temp": d.temp}
-        if kind == "imu":
-            g = frd_to_ros(vals["gyro"]).tolist()
-            a = frd_to_ros(vals["accel"]).tolist()
-        elif kind == "mag":
-            m = (frd_to_ros(vals["mag"]) * 1e-6).tolist()
-        else:
-            tp = np.asarray(vals["temp"]).tolist()
-        for i, s in enumerate(st.tolist()):
-            sec, nsec = divmod(s, 1_000_000_000)
-            hdr = Header(seq=i, stamp=Time(sec=sec, nanosec=nsec), frame_id=frame_id) if ros1 else \
-                Header(stamp=Time(sec=sec, nanosec=nsec), frame_id=frame_id)
-            if kind == "imu":
-                msg = T[msgtype[kind]](header=hdr, orientation=T["geometry_msgs/msg/Quaternion"](x=0.0, y=0.0, z=0.0, w=1.0),
-                                       orientation_covariance=unknown, angular_velocity=Vec(*g[i]),
-                                       angular_velocity_covariance=zero9, linear_acceleration=Vec(*a[i]),
-                                       linear_acceleration_covariance=zero9)
-            elif kind == "mag":
-                msg = T[msgtype[kind]](header=hdr, magnetic_field=Vec(*m[i]), magnetic_field_covariance=zero9)
-            else:
-                msg = T[msgtype[kind]](header=hdr, temperature=tp[i], variance=0.0)
-            yield s, conn, ser(msg, msgtype[kind])
+        fid = frames[topic]
+        for i, (s, r) in enumerate(zip(_stamps(d).tolist(), _rows(kind, d), strict=True)):
+            yield s, conn, ser(message(kind, header(i, s, fid), r), _MSGTYPE[kind])
 
     with writer:
         gens = []
+        first = None
         for topic, kind, d in streams:
-            conn = writer.add_connection(topic, msgtype[kind], typestore=ts)
+            conn = writer.add_connection(topic, _MSGTYPE[kind], typestore=ts)
             gens.append(gen(topic, kind, d, conn))
+            s0 = int(_stamps(d)[0])
+            first = s0 if first is None else min(first, s0)
+        if static_tf:
+            conn = writer.add_connection("/tf_static", "tf2_msgs/msg/TFMessage", typestore=ts)
+            trs = [T["geometry_msgs/msg/TransformStamped"](
+                header=header(0, first or _DEFAULT_T0_NS, tr.parent), child_frame_id=tr.child,
+                transform=T["geometry_msgs/msg/Transform"](translation=Vec(*map(float, tr.translation)),
+                                                           rotation=Quat(w=float(tr.q[0]), x=float(tr.q[1]),
+                                                                         y=float(tr.q[2]), z=float(tr.q[3]))))
+                for tr in static_tf]
+            raw = ser(T["tf2_msgs/msg/TFMessage"](transforms=trs), "tf2_msgs/msg/TFMessage")
+            gens.append(iter([(first or _DEFAULT_T0_NS, conn, raw)]))
         for s, conn, raw in heapq.merge(*gens, key=lambda x: x[0]):
             writer.write(conn, s, raw)

@@ -308,7 +308,7 @@ def time_axis(stamps_ns: NDArray[np.int64], source: str, what: str) -> tuple[NDA
 @fill_doc
 def topic_data(topic: str, kind: str, stamps_ns: Any, values: Mapping[str, np.ndarray], units: Mapping[str, str],
                source: str, *, receive_ns: Any = None, instance: int | None = None,
-               meta: Mapping[str, Any] | None = None) -> TopicData:
+               meta: Mapping[str, Any] | None = None, duplicates: str = "raise") -> TopicData:
     """Build a :class:`TopicData` from integer-ns stamps: sort/check them, set the origin, report.
 
     Parameters
@@ -331,6 +331,10 @@ def topic_data(topic: str, kind: str, stamps_ns: Any, values: Mapping[str, np.nd
         PX4 ``multi_id``.
     meta : mapping, optional
         Entries of the result's ``meta``.
+    duplicates : {"raise", "drop"}
+        Messages that repeat an earlier stamp: refused (a sensor cannot sample twice at one instant), or
+        dropped, keeping the first published, with their count in ``meta["time"]["duplicates_dropped"]``
+        (GNSS drivers re-publish a fix).
 
     %(topic_returns)s
         Sorted by stamp, ``t`` in s since ``meta["t0_ns"]``.
@@ -340,15 +344,30 @@ def topic_data(topic: str, kind: str, stamps_ns: Any, values: Mapping[str, np.nd
     FileFormatError
         If the topic has no message.
     TimeOrderError
-        On duplicated stamps.
+        On duplicated stamps with ``duplicates="raise"``.
     """
     stamps = np.asarray(stamps_ns, dtype=np.int64)
     if stamps.size == 0:
         raise FileFormatError(f"{source}: topic {topic!r} has no messages")
     what = f"topic {topic!r}" + ("" if instance is None else f" instance {instance}")
-    order, rep = time_axis(stamps, source, what)
     vals = {k: np.asarray(v) for k, v in values.items()}
     recv = None if receive_ns is None else np.asarray(receive_ns, dtype=np.int64)
+    n_dup = 0
+    if duplicates == "drop":
+        o = np.argsort(stamps, kind="stable")
+        dup = o[1:][np.diff(stamps[o]) == 0]
+        n_dup = int(dup.size)
+        if n_dup:
+            keep = np.ones(stamps.size, dtype=bool)
+            keep[dup] = False
+            stamps = stamps[keep]
+            vals = {k: v[keep] for k, v in vals.items()}
+            recv = None if recv is None else recv[keep]
+    elif duplicates != "raise":
+        raise ValueError(f"duplicates must be 'raise' or 'drop'; got {duplicates!r}")
+    order, rep = time_axis(stamps, source, what)
+    if duplicates == "drop":
+        rep["duplicates_dropped"] = n_dup
     if order is not None:
         stamps = stamps[order]
         vals = {k: v[order] for k, v in vals.items()}

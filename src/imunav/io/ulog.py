@@ -31,22 +31,32 @@ topic                                      kind           values
 =========================================  =============  =============================================
 
 Time: ``timestamp_sample`` when the topic fills it (the sensor's sample time), else ``timestamp``; the
-publication ``timestamp`` is then kept as the receive time.  ULog has no index: listing the topics
+publication ``timestamp`` is then kept as the receive time.  Every topic shares the log's clock (PX4
+boot time).  The logger's dropouts (messages it lost when its buffer overflowed) are reported in
+``meta["logger_dropouts"]`` (count, total and longest in ms), not refused.  GNSS topics keep the first of
+messages that repeat a stamp (count in ``meta["time"]["duplicates_dropped"]``).  ``vehicle_air_data``
+gives ``pressure`` (``baro_pressure_pa``), ``baro_alt_m`` and ``temp``; GNSS topics also give
+``alt_ellipsoid_m``, ``speed_std`` (``s_variance_m_s``), ``vel_ned_valid`` and ``time_utc_us``.  ULog has no index: listing the topics
 parses the file once (pyulog), keeping only each topic's time stamps.
 """
 
 from __future__ import annotations
 
 import os
+import struct
+from pathlib import Path
 from typing import Any
 
 import numpy as np
 
+from imunav._atomic import atomic_path
 from imunav._docstrings import fill_doc
 from imunav.errors import FileFormatError, InvalidInputError
+from imunav.io.kfgins import NavTrack
 from imunav.io.topics import TopicData, TopicInfo, merge_onto, topic_data
+from imunav.rotation import quat_interp
 
-__all__ = ["list_topics", "read_topic", "read_imu_topic", "IMU_TOPICS"]
+__all__ = ["list_topics", "read_topic", "read_imu_topic", "read_px4_groundtruth", "write_ulog", "IMU_TOPICS", "GROUNDTRUTH_TOPICS"]
 
 #: ULog topics that give an IMU (gyro + accel); ``sensor_combined`` is the default.
 IMU_TOPICS = ("sensor_combined", "vehicle_imu", "sensor_gyro", "sensor_accel")
@@ -92,7 +102,7 @@ def kind_of(name: str, fields: set[str]) -> str | None:
         return "accel"
     if name in ("sensor_mag", "vehicle_magnetometer"):
         return "mag"
-    if name == "sensor_baro":
+    if name in ("sensor_baro", "vehicle_air_data"):
         return "pressure"
     if "q[0]" in fields and "attitude" in name and "setpoint" not in name:
         return "attitude"
@@ -203,6 +213,13 @@ def _values(name: str, kind: str, data: dict[str, np.ndarray], source: str) -> t
     elif kind == "mag":
         vals = {"mag": (_cols(f, "magnetometer_ga") if "magnetometer_ga[0]" in f else _xyz(f)) * _GAUSS_TO_UT}
         units = {"mag": "uT"}
+    elif kind == "pressure" and name == "vehicle_air_data":
+        vals = {"pressure": np.asarray(f["baro_pressure_pa"], dtype=np.float64),
+                "baro_alt_m": np.asarray(f["baro_alt_meter"], dtype=np.float64)}
+        units = {"pressure": "Pa", "baro_alt_m": "m"}
+        if "baro_temp_celcius" in f:
+            vals["temp"], units["temp"] = np.asarray(f["baro_temp_celcius"], dtype=np.float64), "degC"
+        meta["baro_alt_m"] = "PX4's pressure altitude (its QNH parameter SENS_BARO_QNH)"
     elif kind == "pressure":
         p = np.asarray(f["pressure"], dtype=np.float64)
         hpa = bool(np.median(p) < 2000.0)
@@ -224,13 +241,20 @@ def _values(name: str, kind: str, data: dict[str, np.ndarray], source: str) -> t
         vals = {"lat_deg": lat, "lon_deg": lon, "alt_m": alt}
         units = {"lat_deg": "deg", "lon_deg": "deg", "alt_m": "m"}
         meta["altitude"] = "above mean sea level (PX4 alt)"
+        if "alt_ellipsoid" in f:
+            a = f["alt_ellipsoid"]
+            vals["alt_ellipsoid_m"] = np.asarray(a, dtype=np.float64) * (1e-3 if a.dtype.kind == "i" else 1.0)
+            units["alt_ellipsoid_m"] = "m"
         if "vel_n_m_s" in f:
             vals["vel_ned"] = np.column_stack([np.asarray(f[f"vel_{a}_m_s"], dtype=np.float64) for a in "ned"])
             units["vel_ned"] = "m/s"
-        for k, unit in (("fix_type", "1"), ("eph", "m"), ("epv", "m"), ("satellites_used", "1")):
+        for k, key, unit in (("fix_type", "fix_type", "1"), ("eph", "eph_m", "m"), ("epv", "epv_m", "m"),
+                             ("satellites_used", "satellites_used", "1"), ("vel_ned_valid", "vel_ned_valid", "1"),
+                             ("s_variance_m_s", "speed_std", "m/s"), ("time_utc_usec", "time_utc_us", "us")):
             if k in f:
-                vals[k if unit == "1" else f"{k}_m"] = np.asarray(f[k])
-                units[k if unit == "1" else f"{k}_m"] = unit
+                vals[key], units[key] = np.asarray(f[k]), unit
+        if "s_variance_m_s" in f:
+            meta["speed_std"] = "s_variance_m_s: PX4's speed accuracy, a 1-sigma in m/s despite its name"
     elif kind == "position":
         vals = {"pos_ned": _xyz(f)}
         units = {"pos_ned": "m"}
@@ -262,8 +286,11 @@ def _read(ulog: Any, d: Any, source: str) -> TopicData:
     sys_name = ulog.msg_info_dict.get("sys_name")
     if sys_name is not None:
         meta["system"] = {k: str(ulog.msg_info_dict[k]) for k in ("sys_name", "ver_hw", "ver_sw") if k in ulog.msg_info_dict}
+    drops = [float(x.duration) for x in getattr(ulog, "dropouts", [])]
+    meta["logger_dropouts"] = {"count": len(drops), "total_ms": float(sum(drops)),
+                               "longest_ms": max(drops) if drops else 0.0}
     return topic_data(d.name, kind, stamps_us * 1000, vals, units, source, receive_ns=recv,
-                      instance=int(d.multi_id), meta=meta)
+                      instance=int(d.multi_id), meta=meta, duplicates="drop" if kind == "gnss" else "raise")
 
 
 @fill_doc
@@ -326,3 +353,158 @@ def read_imu_topic(path: str | os.PathLike[str], topic: str | None, *, instance:
         imu.meta["accel_from"] = note
         return imu
     return read_topic(path, name, instance=inst)
+
+
+#: Ground-truth topics of PX4's simulator, read by :func:`read_px4_groundtruth`.
+GROUNDTRUTH_TOPICS = ("vehicle_global_position_groundtruth", "vehicle_local_position_groundtruth",
+                      "vehicle_attitude_groundtruth")
+
+
+def read_px4_groundtruth(path: str | os.PathLike[str], *, t0_ns: int = 0) -> NavTrack:
+    """The simulator's ground truth of a PX4 SITL log, as a reference track.
+
+    Position from ``vehicle_global_position_groundtruth`` (lat / lon in degrees, ``alt_ellipsoid``), on
+    its own stamps; NED velocity from ``vehicle_local_position_groundtruth`` (``vx, vy, vz``, linear) and
+    attitude from ``vehicle_attitude_groundtruth`` (``q``, slerp) interpolated onto them (zero / identity
+    where the log lacks the topic, said in ``meta["missing"]``).  Stamps outside the span of a topic take
+    its nearest value.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The ``.ulg`` file of a simulated flight.
+    t0_ns : int
+        Origin of the returned time on the log's clock, ns since boot (e.g. ``NavSources.t0_ns`` to compare
+        with a navigation solution from the same log).
+
+    Returns
+    -------
+    NavTrack
+        ``t`` in s since ``t0_ns``; ``meta`` holds the topics used and ``altitude_filled`` (False when the
+        simulator left the altitudes at 0, as PX4 1.13 SITL does: compare horizontally then).
+
+    Raises
+    ------
+    InvalidInputError
+        If the log has no ``vehicle_global_position_groundtruth`` (not a simulated flight).
+    MissingDependencyError
+        If ``pyulog`` is not installed.
+    """
+    source = os.fspath(path)
+    ulog = _load(path, list(GROUNDTRUTH_TOPICS))
+    got = {d.name: d.data for d in ulog.data_list if int(d.multi_id) == 0}
+    if GROUNDTRUTH_TOPICS[0] not in got:
+        raise InvalidInputError(f"{source}: no {GROUNDTRUTH_TOPICS[0]} topic: the log is not from PX4's simulator "
+                                "(SITL), it has no ground truth")
+    g = got[GROUNDTRUTH_TOPICS[0]]
+    ts = np.asarray(g["timestamp"], dtype=np.int64) * 1000
+    t = (ts - int(t0_ns)) * 1e-9
+    lat, lon = (np.radians(np.asarray(g[k], dtype=np.float64)) for k in ("lat", "lon"))
+    alt = np.asarray(g.get("alt_ellipsoid", g["alt"]), dtype=np.float64)
+    missing = []
+    vel = np.zeros((t.size, 3))
+    loc = got.get(GROUNDTRUTH_TOPICS[1])
+    if loc is not None:
+        tl = (np.asarray(loc["timestamp"], dtype=np.int64) * 1000 - int(t0_ns)) * 1e-9
+        vel = np.column_stack([np.interp(t, tl, np.asarray(loc[k], dtype=np.float64)) for k in ("vx", "vy", "vz")])
+    else:
+        missing.append(GROUNDTRUTH_TOPICS[1])
+    q = np.tile([1.0, 0.0, 0.0, 0.0], (t.size, 1))
+    att = got.get(GROUNDTRUTH_TOPICS[2])
+    if att is not None:
+        ta = (np.asarray(att["timestamp"], dtype=np.int64) * 1000 - int(t0_ns)) * 1e-9
+        q = quat_interp(ta, _cols(att, "q", 4), np.clip(t, ta[0], ta[-1]))
+    else:
+        missing.append(GROUNDTRUTH_TOPICS[2])
+    meta = {"source": source, "format": "ulog", "topics": [k for k in GROUNDTRUTH_TOPICS if k in got],
+            "missing": missing, "t0_ns": int(t0_ns), "clock": "PX4 boot time",
+            "altitude_filled": bool(np.any(alt != 0.0))}
+    return NavTrack(t, np.column_stack([lat, lon, alt]), vel, q, 0, meta)
+
+
+# -- writing ------------------------------------------------------------------------------------
+_ULOG_TYPES = {np.dtype(np.uint64): "uint64_t", np.dtype(np.int64): "int64_t", np.dtype(np.uint32): "uint32_t",
+               np.dtype(np.int32): "int32_t", np.dtype(np.uint16): "uint16_t", np.dtype(np.int16): "int16_t",
+               np.dtype(np.uint8): "uint8_t", np.dtype(np.int8): "int8_t", np.dtype(np.float32): "float",
+               np.dtype(np.float64): "double", np.dtype(np.bool_): "bool"}
+
+
+def _ulog_msg(kind: bytes, payload: bytes) -> bytes:
+    return struct.pack("<HB", len(payload), kind[0]) + payload
+
+
+def write_ulog(path: str | os.PathLike[str], topics: Any, *, info: Any = None, t_start_us: int = 0) -> Path:
+    """Write topics as a PX4 ULog file (format version 1) that :func:`read_topic` and ``pyulog`` read, atomically.
+
+    A minimal logger: one format definition and one subscription (``multi_id`` 0) per topic, then every
+    data message in time order.  Each topic is a mapping of field name to array, one row per message,
+    with ``timestamp`` (µs, integer) first; a 2-D array ``(N, k)`` is a ``type[k] name`` field (read back
+    as ``name[0]`` ... ``name[k-1]``).  The array dtype is the field type (``float32`` → ``float``,
+    ``float64`` → ``double``, ``int32`` → ``int32_t`` ...): write PX4's own types to test a reader on what
+    PX4 logs.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The ``.ulg`` file to write (never an existing one).
+    topics : mapping
+        Topic name -> mapping of field name -> array; ``timestamp`` is required.
+    info : mapping of str to str, optional
+        Information messages (``sys_name``, ``ver_sw`` ...), written as ``char[n]`` values.
+    t_start_us : int
+        The header's start time, µs.
+
+    Returns
+    -------
+    pathlib.Path
+        The file written.
+
+    Raises
+    ------
+    InvalidInputError
+        If the file exists, a topic has no ``timestamp``, its fields differ in length, or a dtype has no
+        ULog type.
+    """
+    target = Path(path)
+    if target.exists():
+        raise InvalidInputError(f"{target} exists; outputs never overwrite - choose another path")
+    head = b"ULog\x01\x12\x35" + bytes([1]) + struct.pack("<Q", int(t_start_us))
+    out = [head, _ulog_msg(b"B", bytes(16) + bytes(24))]
+    for k, v in dict(info or {}).items():
+        val = str(v).encode()
+        key = f"char[{len(val)}] {k}".encode()
+        out.append(_ulog_msg(b"I", bytes([len(key)]) + key + val))
+    rows: list[tuple[int, int, bytes]] = []  # (timestamp, order, message)
+    subs = []
+    for msg_id, (name, fields) in enumerate(dict(topics).items()):
+        cols = {k: np.asarray(a) for k, a in dict(fields).items()}
+        if next(iter(cols), None) != "timestamp":
+            raise InvalidInputError(f"write_ulog: topic {name!r} must have 'timestamp' (us) as its first field")
+        cols["timestamp"] = cols["timestamp"].astype(np.uint64)
+        n = cols["timestamp"].shape[0]
+        spec, dt = [], []
+        for k, a in cols.items():
+            if a.shape[0] != n:
+                raise InvalidInputError(f"write_ulog: {name}.{k} has {a.shape[0]} rows, timestamp {n}")
+            typ = _ULOG_TYPES.get(a.dtype)
+            if typ is None:
+                raise InvalidInputError(f"write_ulog: {name}.{k} has dtype {a.dtype}, which ULog has no type for")
+            width = a.shape[1] if a.ndim == 2 else 0
+            spec.append(f"{typ}[{width}] {k}" if width else f"{typ} {k}")
+            dt.append((k, a.dtype.newbyteorder("<"), (width,)) if width else (k, a.dtype.newbyteorder("<")))
+        out.append(_ulog_msg(b"F", f"{name}:{';'.join(spec)};".encode()))
+        rec = np.empty(n, dtype=np.dtype(dt, align=False))
+        for k, a in cols.items():
+            rec[k] = a
+        subs.append(_ulog_msg(b"A", struct.pack("<BH", 0, msg_id) + name.encode()))
+        prefix = struct.pack("<H", msg_id)
+        raw = rec.tobytes()
+        size = rec.dtype.itemsize
+        for i, ts in enumerate(cols["timestamp"].tolist()):
+            rows.append((int(ts), msg_id, _ulog_msg(b"D", prefix + raw[i * size:(i + 1) * size])))
+    rows.sort(key=lambda r: (r[0], r[1]))
+    out += subs
+    out += [r[2] for r in rows]
+    with atomic_path(target) as tmp:
+        Path(tmp).write_bytes(b"".join(out))
+    return target

@@ -21,7 +21,6 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
-from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
@@ -29,11 +28,12 @@ from numpy.typing import ArrayLike, NDArray
 
 from imunav import earth
 from imunav.errors import InvalidInputError, ShapeError
+from imunav.io.aiding import MagnetometerData
 from imunav.io.gnss import GnssData
 from imunav.io.gnss_heading import DualAntennaData
 from imunav.rotation import dcm_from_quat, quat_interp
 from imunav.sim.trajectory import Trajectory
-from imunav.sim.vehicle import _decimate, check_samples, gauss_markov_sequence, omega_eb_b
+from imunav.sim.vehicle import _decimate, gauss_markov_sequence, omega_eb_b
 
 __all__ = ["MagnetometerData", "simulate_dual_antenna", "simulate_gnss", "simulate_magnetometer", "outage_schedule",
            "truth_at"]
@@ -244,30 +244,6 @@ def simulate_gnss(
     }
     full = GnssData(t, lla, np.sqrt(pw**2 + pc**2), None if vstd is None else vel, vstd, meta)
     return full.select(keep_drop, "random dropout").select(~in_outage[keep_drop], "scheduled outage")
-
-
-@dataclass(frozen=True)
-class MagnetometerData:
-    """Calibrated 3-axis magnetometer samples (hard / soft iron removed), body frame.
-
-    Attributes
-    ----------
-    t : numpy.ndarray, shape (N,)
-        Sample times, s.
-    field_b : numpy.ndarray, shape (N, 3)
-        Measured field, body FRD, µT (any unit: the heading uses its direction).
-    meta : dict
-        The simulated field and errors.
-    """
-
-    t: Array
-    field_b: Array
-    meta: dict[str, Any] = field(default_factory=dict)
-
-    def __post_init__(self) -> None:
-        t, v = check_samples("MagnetometerData", self.t, self.field_b, "field_b", width=3)
-        object.__setattr__(self, "t", t)
-        object.__setattr__(self, "field_b", v)
 
 
 def simulate_magnetometer(truth: Trajectory, *, declination: float = 0.0, inclination: float = math.radians(45.0),

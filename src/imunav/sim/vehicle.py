@@ -48,7 +48,8 @@ from numpy.typing import ArrayLike, NDArray
 
 from imunav import earth
 from imunav._docstrings import fill_doc
-from imunav.errors import InvalidInputError, NonFiniteError, ShapeError
+from imunav.errors import InvalidInputError, ShapeError
+from imunav.io.aiding import BaroData, OdometerData
 from imunav.rotation import dcm_from_quat, quat_from_euler
 from imunav.sim.trajectory import Trajectory, body_rate_from_attitude
 from imunav.units import DEG
@@ -647,100 +648,6 @@ def lever_arm_velocity_body(truth: Trajectory, lever_b: ArrayLike) -> Array:
     v_b = np.einsum("nji,nj->ni", dcm_from_quat(truth.q_nb), truth.vel_ned)
     return v_b + np.cross(omega_eb_b(truth), lb)
 
-
-
-def check_samples(owner: str, t: ArrayLike, values: ArrayLike, name: str, width: int | None = None) -> tuple[Array, Array]:
-    """Validate time-stamped aiding samples: a strictly increasing finite ``t`` and one finite value (row) per stamp.
-
-    Parameters
-    ----------
-    owner : str
-        The data type, for messages (e.g. ``"BaroData"``).
-    t : array_like, shape (N,)
-        Sample times, s.
-    values : array_like, shape (N,) or (N, width)
-        The samples.
-    name : str
-        The samples' field name, for messages.
-    width : int, optional
-        Columns of ``values`` (None: one value per stamp).
-
-    Returns
-    -------
-    tuple of numpy.ndarray
-        ``t`` and ``values`` as float arrays.
-
-    Raises
-    ------
-    ShapeError
-        If ``t`` is not 1-D or ``values`` does not have one value (row) per stamp.
-    NonFiniteError
-        If a time or a value is NaN or infinite (rows named).
-    InvalidInputError
-        If ``t`` does not strictly increase.
-    """
-    ta = np.asarray(t, dtype=float)
-    va = np.asarray(values, dtype=float)
-    shape = (ta.size,) if width is None else (ta.size, width)
-    if ta.ndim != 1 or va.shape != shape:
-        raise ShapeError(f"{owner}.{name} must have shape {shape} (one per time stamp; t has shape {ta.shape}); "
-                         f"got {va.shape}")
-    bad = ~np.isfinite(ta) | (~np.isfinite(va) if width is None else ~np.all(np.isfinite(va), axis=1))
-    if bad.any():
-        raise NonFiniteError(f"{owner}: non-finite time or {name} at rows {np.flatnonzero(bad)[:10].tolist()}; "
-                             "remove those samples (a missing sample is an absent row, not NaN)")
-    step = np.flatnonzero(np.diff(ta) <= 0)
-    if step.size:
-        raise InvalidInputError(f"{owner}.t must strictly increase; it does not at row {int(step[0]) + 1}")
-    return ta, va
-
-
-@dataclass(frozen=True)
-class OdometerData:
-    """Wheel-odometer forward speed.
-
-    Attributes
-    ----------
-    t : numpy.ndarray, shape (N,)
-        Sample times, s.
-    speed : numpy.ndarray, shape (N,)
-        Measured forward (body x) speed, m/s.
-    meta : dict
-        The simulated errors (``lever_arm`` m, ``scale_factor``, ``noise_std`` m/s).
-    """
-
-    t: Array
-    speed: Array
-    meta: dict[str, Any] = field(default_factory=dict)
-
-    def __post_init__(self) -> None:
-        t, v = check_samples("OdometerData", self.t, self.speed, "speed")
-        object.__setattr__(self, "t", t)
-        object.__setattr__(self, "speed", v)
-
-
-@dataclass(frozen=True)
-class BaroData:
-    """Barometric (ellipsoidal-equivalent) height.
-
-    Attributes
-    ----------
-    t : numpy.ndarray, shape (N,)
-        Sample times, s.
-    height : numpy.ndarray, shape (N,)
-        Measured height, m (positive up, the ellipsoidal height plus the sensor's errors).
-    meta : dict
-        The simulated errors (``noise_std`` m, ``bias_std`` m, ``bias_tau`` s, ``bias``: the first bias, m).
-    """
-
-    t: Array
-    height: Array
-    meta: dict[str, Any] = field(default_factory=dict)
-
-    def __post_init__(self) -> None:
-        t, v = check_samples("BaroData", self.t, self.height, "height")
-        object.__setattr__(self, "t", t)
-        object.__setattr__(self, "height", v)
 
 
 def _decimate(truth: Trajectory, rate_hz: float | None) -> Array:

@@ -1,0 +1,348 @@
+"""A simulated ground robot's own log, with its truth: the scenario of the log-to-trajectory tests.
+
+:func:`simulate_robot_log` drives a small robot about 400 m in rectangular loops at 1 m/s with stops
+(:func:`robot_loops`, :func:`~imunav.sim.vehicle.vehicle_trajectory`) and records what its ROS stack
+would: a consumer IMU (:func:`~imunav.sim.presets.get` ``"consumer_mems"``) at 30 Hz screwed in at an
+angle, wheel odometry at 10 Hz reading 9 % short with noise, and GNSS fixes at 2.5 Hz (σ 0.8 m) stamped
+0.15 s late, 2 % of them jumping 10–30 m; stamps in UTC of a real date.  :func:`write_robot_log` writes
+the same drive as a ROS 1 bag, a ROS 2 bag and KF-GINS text files.
+
+Frames.  The vehicle (ROS ``base_link``) is FRD in imunav terms; the IMU sits at its origin.  The IMU's
+own axes, those of the values in its ``sensor_msgs/Imu`` messages, point **x right, y up, z backward**
+of the vehicle.  imunav's readers flip ROS vectors ``(x, -y, -z)`` (REP-103 FLU → FRD) at the edge, so
+the IMU frame a filter sees (the reader's, written ``b`` here) points x right, y down, z forward; the
+truth's :attr:`RobotLogTruth.q_base_imu` is the rotation from that frame to the vehicle FRD frame
+(``v_base = C(q_base_imu) v_b``), :attr:`RobotLogTruth.c_base_sensor_flu` the raw sensor axes in the
+vehicle's FLU frame (what a ROS ``/tf_static`` from ``base_link`` to the IMU frame would hold).
+
+Time.  Every stamp is ``t0_ns + round(t · 1e9)`` with ``t`` the truth's time (0 at the first IMU
+sample): a GNSS fix stamped ``t`` holds the antenna's position at ``t − 0.15 s``.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from imunav import earth
+from imunav.errors import InvalidInputError
+from imunav.io.aiding import OdometerData
+from imunav.io.gnss import GnssData, write_gnss_text, write_table
+from imunav.io.gpstime import utc_to_gps
+from imunav.io.kfgins import ImuIncrements, NavTrack, write_kfgins_imu, write_kfgins_nav
+from imunav.io.rosbag import StaticTransform, write_bag
+from imunav.rotation import C_FLU_FRD, euler_from_quat, quat_from_dcm, quat_multiply
+from imunav.sim import presets
+from imunav.sim.error_model import simulate_imu
+from imunav.sim.gnss import simulate_gnss
+from imunav.sim.trajectory import Trajectory
+from imunav.sim.vehicle import Maneuver, simulate_odometer, speed_change, stop, straight, turn, vehicle_trajectory
+from imunav.timeseries import ImuData
+from imunav.units import DEG
+
+__all__ = ["RobotLogTruth", "RobotLog", "robot_loops", "simulate_robot_log", "write_robot_log",
+           "C_BASE_IMU", "ROBOT_T0_NS"]
+
+Array = NDArray[np.float64]
+
+#: The reader's IMU frame (x right, y down, z forward of the vehicle) in the vehicle's FRD frame: its
+#: columns are the IMU axes resolved in the vehicle frame, ``v_base = C_BASE_IMU @ v_imu``.
+C_BASE_IMU = np.array([[0.0, 0.0, 1.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]])
+#: 2024-05-14T09:30:00Z, ns since 1970: the UTC stamp of the first IMU sample.
+ROBOT_T0_NS = 1_715_679_000 * 1_000_000_000
+
+
+def robot_loops(distance_m: float = 400.0, *, speed: float = 1.0) -> list[Maneuver]:
+    """Rectangular loops (20 m × 10 m, left turns of 90°) at ``speed`` with a 5 s stop after each, from rest.
+
+    Parameters
+    ----------
+    distance_m : float
+        Approximate distance driven, m (at least one loop, about 80 m).
+    speed : float
+        Cruise speed, m/s (> 0).
+
+    Returns
+    -------
+    list of Maneuver
+        The drive, for :func:`~imunav.sim.vehicle.vehicle_trajectory`; it starts and ends with 10 s at rest.
+
+    Raises
+    ------
+    InvalidInputError
+        If ``distance_m`` is shorter than one loop or ``speed`` is not positive.
+    """
+    if not (math.isfinite(speed) and speed > 0):
+        raise InvalidInputError(f"robot_loops: speed must be > 0 m/s; got {speed!r}")
+    turn_s = 0.5 * math.pi * 4.0 / speed  # a 4 m radius
+    side = (20.0 / speed, 10.0 / speed)
+    loop = [straight(side[0]), turn(90.0, turn_s), straight(side[1]), turn(90.0, turn_s), straight(side[0]),
+            turn(90.0, turn_s), straight(side[1]), turn(90.0, turn_s)]
+    loop_m = speed * sum(m.duration_s for m in loop)
+    n = int(round(distance_m / loop_m))
+    if n < 1:
+        raise InvalidInputError(f"robot_loops: distance_m must be at least one loop ({loop_m:.0f} m); got {distance_m!r}")
+    ramp = 3.0
+    m: list[Maneuver] = [stop(10.0)]
+    for _ in range(n):
+        m += [speed_change(speed, ramp), *loop, speed_change(0.0, ramp), stop(5.0)]
+    m.append(stop(5.0))
+    return m
+
+
+@dataclass(frozen=True)
+class RobotLogTruth:
+    """What the robot's log does not say: its true motion and the sensors' errors.
+
+    Attributes
+    ----------
+    trajectory : Trajectory
+        The vehicle base frame (FRD) at the IMU's stamps (t = 0 at the first one).
+    q_base_imu : numpy.ndarray, shape (4,)
+        Rotation from the reader's IMU frame (FRD flip of the sensor axes) to the vehicle FRD frame,
+        Hamilton scalar-first (:data:`C_BASE_IMU`); as ZYX Euler (roll, pitch, yaw): ``mounting_euler_deg``.
+    mounting_euler_deg : tuple of float
+        ``q_base_imu`` as ZYX Euler angles, degrees.
+    c_base_sensor_flu : numpy.ndarray, shape (3, 3)
+        The raw sensor axes (x right, y up, z backward) as columns in the vehicle's FLU frame.
+    odometer_scale : float
+        Odometer reading / true forward speed (0.91: 9 % short).
+    odometer_noise_std : float
+        White noise of each odometer sample, m/s.
+    gnss_latency_s : float
+        A fix stamped t holds the antenna at t − latency, s.
+    gnss_lever_arm_base : numpy.ndarray, shape (3,)
+        Antenna from the vehicle origin (= the IMU), vehicle FRD, m.
+    gnss_outlier : numpy.ndarray of bool, shape (M,)
+        Which written fixes jump.
+    gnss_outlier_offset_ned : numpy.ndarray, shape (M, 3)
+        The jump of each fix (zero for the others), NED, m.
+    t0_ns : int
+        UTC of t = 0, ns since 1970.
+    meta : dict
+        Seed, IMU model, noise levels.
+    """
+
+    trajectory: Trajectory
+    q_base_imu: Array
+    mounting_euler_deg: tuple[float, float, float]
+    c_base_sensor_flu: Array
+    odometer_scale: float
+    odometer_noise_std: float
+    gnss_latency_s: float
+    gnss_lever_arm_base: Array
+    gnss_outlier: NDArray[np.bool_]
+    gnss_outlier_offset_ned: Array
+    t0_ns: int
+    meta: dict[str, Any] = field(default_factory=dict)
+
+    def nav_track(self) -> NavTrack:
+        """The vehicle truth as a :class:`~imunav.io.kfgins.NavTrack` on the sources' time origin (t = 0 at the
+        first IMU stamp).
+
+        Returns
+        -------
+        NavTrack
+            Position, velocity and attitude of the vehicle base frame.
+        """
+        tr = self.trajectory
+        assert tr.pos_lla is not None and tr.vel_ned is not None
+        return NavTrack(tr.t.copy(), tr.pos_lla.copy(), tr.vel_ned.copy(), tr.q_nb.copy(), 0,
+                        {"source": "imunav.sim.robot_log truth", "frame": "vehicle base (FRD)"})
+
+
+@dataclass(frozen=True)
+class RobotLog:
+    """The robot's recorded streams (as its log holds them, on the truth's time axis) and the truth.
+
+    Attributes
+    ----------
+    imu : ImuData
+        In the reader's IMU frame (module docstring), ``meta["t0_ns"]`` the UTC of t = 0.
+    gnss : GnssData
+        The fixes as stamped (antenna positions 0.15 s older), outliers included.
+    odometer : OdometerData
+        Forward speeds of the base frame with ``speed_std``.
+    truth : RobotLogTruth
+        What the log does not say.
+    """
+
+    imu: ImuData
+    gnss: GnssData
+    odometer: OdometerData
+    truth: RobotLogTruth
+
+
+def _imu_trajectory(base: Trajectory, c_base_imu: Array) -> Trajectory:
+    """The truth of a sensor frame rotated by ``c_base_imu`` from the base frame, at the base origin."""
+    q_bi = quat_from_dcm(c_base_imu)
+    q = quat_multiply(base.q_nb, q_bi)
+    assert base.omega_nb_b is not None
+    w = base.omega_nb_b @ c_base_imu  # C_ib w_b, row-wise: w_i = C_base_imu^T w_b
+    return Trajectory(base.t, q, vel_ned=base.vel_ned, pos_lla=base.pos_lla, omega_nb_b=w, accel_ned=base.accel_ned)
+
+
+def simulate_robot_log(seed: int = 0, *, distance_m: float = 400.0, speed: float = 1.0, imu_rate_hz: float = 30.0,
+                       odometer_rate_hz: float = 10.0, odometer_scale: float = 0.91, odometer_noise_std: float = 0.02,
+                       gnss_rate_hz: float = 2.5, gnss_std_m: float = 0.8, gnss_latency_s: float = 0.15,
+                       outlier_fraction: float = 0.02, outlier_range_m: tuple[float, float] = (10.0, 30.0),
+                       gnss_lever_arm_base: tuple[float, float, float] = (0.0, 0.0, -0.3),
+                       origin_lla: tuple[float, float, float] = (48.137 * DEG, 11.575 * DEG, 520.0),
+                       t0_ns: int = ROBOT_T0_NS) -> RobotLog:
+    """The robot scenario (module docstring), seeded.
+
+    Parameters
+    ----------
+    seed : int
+        Seed of every random draw (IMU errors, odometer and GNSS noise, the outliers).
+    distance_m, speed : float
+        Approximate distance (m) and cruise speed (m/s) of :func:`robot_loops`.
+    imu_rate_hz, odometer_rate_hz, gnss_rate_hz : float
+        Rates, Hz (the odometer's and the GNSS's at most the IMU's).
+    odometer_scale : float
+        Odometer reading / true forward speed.
+    odometer_noise_std : float
+        White noise σ of each odometer sample, m/s (also written as its covariance).
+    gnss_std_m : float
+        White position noise σ north, east and down, m.
+    gnss_latency_s : float
+        Age of each fix at its stamp, s.
+    outlier_fraction : float
+        Share of the fixes that jump (round(fraction × fixes) of them, drawn without replacement).
+    outlier_range_m : tuple of float
+        Horizontal jump size, uniform in this range, m, in a uniform direction.
+    gnss_lever_arm_base : tuple of float
+        Antenna from the vehicle origin, vehicle FRD, m.
+    origin_lla : tuple of float
+        Start position (lat rad, lon rad, ellipsoidal height m).
+    t0_ns : int
+        UTC of the first IMU stamp, ns since 1970.
+
+    Returns
+    -------
+    RobotLog
+        The streams and the truth.
+
+    Raises
+    ------
+    InvalidInputError
+        If a rate or σ is out of range (from the simulators).
+    """
+    rng = np.random.default_rng(seed)
+    seeds = rng.integers(0, 2**63 - 1, size=4)
+    base = vehicle_trajectory(robot_loops(distance_m, speed=speed), fs=imu_rate_hz, origin_lla=origin_lla,
+                              heading0_deg=30.0)
+    model = presets.get("consumer_mems")
+    imu = simulate_imu(_imu_trajectory(base, C_BASE_IMU), model, rng=int(seeds[0]))
+    assert isinstance(imu, ImuData)
+    imu = ImuData(imu.t, imu.gyro, imu.accel, meta={"t0_ns": int(t0_ns), "source": "imunav.sim.robot_log",
+                                                     "frame": "IMU (reader's FRD flip of x right, y up, z backward)"})
+    odo = simulate_odometer(base, scale_factor=odometer_scale - 1.0, noise_std=odometer_noise_std,
+                            rate_hz=odometer_rate_hz, rng=int(seeds[1]))
+    odo = OdometerData(odo.t, odo.speed, {**odo.meta, "t0_ns": int(t0_ns)},
+                       np.full(odo.t.size, float(odometer_noise_std)))
+    lever = np.asarray(gnss_lever_arm_base, dtype=np.float64)
+    g = simulate_gnss(base, rate_hz=gnss_rate_hz, pos_noise=(gnss_std_m,) * 3, vel_noise=None,
+                      latency_s=gnss_latency_s, lever_arm=lever, rng=int(seeds[2]))
+    r3 = np.random.default_rng(int(seeds[3]))
+    k = int(round(outlier_fraction * g.n))
+    idx = np.sort(r3.choice(g.n, size=k, replace=False)) if k else np.zeros(0, dtype=np.intp)
+    off = np.zeros((g.n, 3))
+    size = r3.uniform(*outlier_range_m, size=k)
+    ang = r3.uniform(0.0, 2.0 * math.pi, size=k)
+    off[idx, 0], off[idx, 1] = size * np.cos(ang), size * np.sin(ang)
+    outlier = np.zeros(g.n, dtype=bool)
+    outlier[idx] = True
+    lla = g.lla + earth.ned_to_dlla(off, g.lla)
+    gnss = GnssData(g.t, lla, g.pos_std, meta={**g.meta, "t0_ns": int(t0_ns), "outliers": int(k)})
+    c_sensor_flu = C_FLU_FRD @ C_BASE_IMU @ C_FLU_FRD  # raw sensor axes in the vehicle's FLU frame
+    q_bi = quat_from_dcm(C_BASE_IMU)
+    e = np.degrees(euler_from_quat(q_bi))
+    truth = RobotLogTruth(base, q_bi, (float(e[0]), float(e[1]), float(e[2])), c_sensor_flu, float(odometer_scale),
+                          float(odometer_noise_std), float(gnss_latency_s), lever, outlier, off, int(t0_ns),
+                          {"seed": int(seed), "imu_model": "consumer_mems", "imu_rate_hz": float(imu_rate_hz),
+                           "gnss_std_m": float(gnss_std_m), "outlier_range_m": list(outlier_range_m)})
+    return RobotLog(imu, gnss, odo, truth)
+
+
+def write_robot_log(log: RobotLog, folder: str | os.PathLike[str], *, formats: tuple[str, ...] = ("ros1", "ros2", "kfgins"),
+                    ros2_storage: str = "mcap", static_tf: bool = False) -> dict[str, Path]:
+    """Write the robot's log as a ROS 1 bag, a ROS 2 bag and KF-GINS text files (same stamps, same values).
+
+    Bags: ``/imu/data`` (``sensor_msgs/Imu``, frame ``imu_link``), ``/odom`` (``nav_msgs/Odometry``,
+    ``odom`` → ``base_link``), ``/gps/fix`` (``sensor_msgs/NavSatFix``, frame ``gps``); with ``static_tf``
+    also ``/tf_static`` ``base_link`` → ``imu_link`` (the mounting; without it the mounting must be
+    estimated).  KF-GINS text (time: GPS seconds of week of the UTC stamps): ``imu.txt`` (increments,
+    trapezoid of the 30 Hz samples), ``gnss.txt`` (the fixes with their σ), ``odo.txt`` (time, speed) and
+    ``truth.nav`` (the vehicle truth).
+
+    Parameters
+    ----------
+    log : RobotLog
+        From :func:`simulate_robot_log`.
+    folder : str or os.PathLike
+        An existing folder; the files are ``robot.bag``, ``robot_ros2/`` and ``kfgins/``.
+    formats : tuple of str
+        Any of ``"ros1"``, ``"ros2"``, ``"kfgins"``.
+    ros2_storage : str
+        ``"mcap"`` or ``"sqlite3"``.
+    static_tf : bool
+        Write the mounting on ``/tf_static``.
+
+    Returns
+    -------
+    dict of str to pathlib.Path
+        Format -> what was written (the KF-GINS entry is the folder).
+
+    Raises
+    ------
+    InvalidInputError
+        If a format is unknown or a target exists.
+    """
+    out_dir = Path(folder)
+    unknown = set(formats) - {"ros1", "ros2", "kfgins"}
+    if unknown:
+        raise InvalidInputError(f"write_robot_log: unknown formats {sorted(unknown)}; choose among ros1, ros2, kfgins")
+    topics = {"/imu/data": log.imu, "/odom": log.odometer, "/gps/fix": log.gnss}
+    frames = {"/imu/data": "imu_link", "/gps/fix": "gps"}
+    tf = [StaticTransform("base_link", "imu_link", quat_from_dcm(log.truth.c_base_sensor_flu), np.zeros(3))] \
+        if static_tf else []
+    out: dict[str, Path] = {}
+    for fmt in formats:
+        if fmt == "ros1":
+            target = out_dir / "robot.bag"
+            if target.exists():
+                raise InvalidInputError(f"{target} exists; outputs never overwrite - choose another folder")
+            out[fmt] = write_bag(target, topics, storage="ros1", frame_ids=frames, static_tf=tf)
+        elif fmt == "ros2":
+            out[fmt] = write_bag(out_dir / "robot_ros2", topics, storage=ros2_storage, frame_ids=frames, static_tf=tf)
+        else:
+            out[fmt] = _write_kfgins(log, out_dir / "kfgins")
+    return out
+
+
+def _write_kfgins(log: RobotLog, folder: Path) -> Path:
+    if folder.exists():
+        raise InvalidInputError(f"{folder} exists; outputs never overwrite - choose another folder")
+    folder.mkdir()
+    t0_ns = log.truth.t0_ns
+
+    def sow(t: Array) -> Array:
+        return utc_to_gps(t, t0_ns).sow
+
+    inc = ImuIncrements.from_imu_data(log.imu)
+    write_kfgins_imu(folder / "imu.txt", ImuIncrements(sow(inc.t), inc.dtheta, inc.dvel, inc.dt, inc.meta))
+    g = log.gnss
+    write_gnss_text(folder / "gnss.txt", GnssData(sow(g.t), g.lla, g.pos_std, meta=dict(g.meta)))
+    write_table(folder / "odo.txt", [sow(log.odometer.t), log.odometer.speed])
+    nav = log.truth.nav_track()
+    week = int(utc_to_gps([0.0], t0_ns).week[0])
+    write_kfgins_nav(folder / "truth.nav", NavTrack(sow(nav.t), nav.lla, nav.vel_ned, nav.q_nb, week, nav.meta))
+    return folder
+
