@@ -59,12 +59,11 @@ from imunav.ins.gins.layout import (
 from imunav.ins.gins.result import AidRecord, GinsResult
 from imunav.ins.gins.smoother import rts_smooth
 from imunav.ins.strapdown import coning_sculling_increments
+from imunav.io.aiding import BaroData, MagnetometerData, OdometerData
 from imunav.io.gnss import GnssData
 from imunav.io.gnss_heading import DualAntennaData
 from imunav.io.kfgins import ImuIncrements
 from imunav.rotation import quat_normalize
-from imunav.sim.gnss import MagnetometerData
-from imunav.sim.vehicle import BaroData, OdometerData
 from imunav.timeseries import ImuData
 
 __all__ = ["GinsFilter"]
