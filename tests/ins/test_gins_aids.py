@@ -16,10 +16,11 @@ from imunav.rotation import dcm_from_quat, quat_normalize
 #: central-difference step per state block (SI): large enough that rounding of the innovation (a position of
 #: ~6e6 m in radians: ~1e-9 m) stays far below the Jacobian's entries, small enough that the curvature is negligible
 EPS = {"pos": 1e-2, "vel": 1e-3, "att": 1e-4, "gyro_bias": 1e-6, "accel_bias": 1e-4, "gyro_scale": 1e-4,
-       "accel_scale": 1e-4, "odo_scale": 1e-4}
+       "accel_scale": 1e-4, "odo_scale": 1e-4, "mount": 1e-4, "odo_lever": 1e-3, "gnss_delay": 1e-4}
 
 
 BASELINE = (1.2, -0.4, 0.15)
+VEHICLE_BLOCKS = {"mounting_std": 0.01, "odo_lever_arm_std": 0.1, "gnss_delay_std": 0.05}
 
 
 def _state(rng):
@@ -32,6 +33,9 @@ def _state(rng):
     xs[NOM.gyro_scale:NOM.gyro_scale + 3] = rng.normal(0, 1e-3, 3)
     xs[NOM.accel_scale:NOM.accel_scale + 3] = rng.normal(0, 1e-3, 3)
     xs[NOM.odo_scale] = 0.02
+    xs[NOM.q_vb:NOM.q_vb + 4] = quat_normalize(rng.normal(size=4))
+    xs[NOM.odo_lever:NOM.odo_lever + 3] = (-0.5, 0.6, 0.4)
+    xs[NOM.gnss_delay] = 0.12
     return xs
 
 
@@ -80,15 +84,18 @@ def _rows(kind, xs, ctx, z, r, prm, lay):
 @pytest.mark.parametrize("name", aids.AID_NAMES)
 def test_every_aid_jacobian_is_the_derivative_of_its_innovation(name, scale_factors, rng):
     """``H[:, j] = −∂ν/∂δx_j`` with ``x̂ ⊕ δx`` the filter's own injection (errors are true − estimate); a sign or
-    factor error in any column errs by the size of that column, far above the tolerance."""
+    factor error in any column errs by the size of that column, far above the tolerance.  Every state block
+    present (21 states and the vehicle blocks: mounting, wheel lever arm, GNSS latency), or 15 + odometer scale."""
     cfg = GinsConfig(arw=1e-3, vrw=1e-2, gyro_bias_std=1e-4, accel_bias_std=1e-3, nhc_noise=0.1,
                      lever_arm=(0.4, -0.3, -1.2), odo_lever_arm=(-0.5, 0.6, 0.4), scale_factors=scale_factors,
-                     declination=0.1, dual_antenna_baseline=BASELINE)
+                     declination=0.1, dual_antenna_baseline=BASELINE,
+                     **(VEHICLE_BLOCKS if scale_factors else {}))
     prm, lay, _ = _kernel_setup(cfg, 100.0, True)
     kind = getattr(aids.AID, name)
     xs = _state(rng)
     if not scale_factors:  # a 15-state filter treats the scale factors as zero
         xs[NOM.gyro_scale:NOM.accel_scale + 3] = 0.0
+    assert (lay[LAY.mount] >= 0) == scale_factors
     w_raw = rng.normal(0, 0.3, 3)
     z, r = _measurement(name, rng, xs)
     nu0, H, R = _rows(kind, xs, _context(xs, w_raw), z, r, prm, lay)

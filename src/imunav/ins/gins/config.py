@@ -104,6 +104,19 @@ class GinsConfig:
     mag_heading_noise : float
         σ of the magnetometer heading, rad (> 0; about the field noise over its horizontal strength, plus
         the residual calibration and disturbance errors).
+    mounting : array_like, shape (3,)
+        The IMU's attitude in the vehicle frame, ZYX Euler (roll, pitch, yaw), rad: ``C_vb`` turns IMU axes into
+        vehicle FRD axes (the odometer and the NHC act on the vehicle's axes; default: the IMU is aligned with the
+        vehicle).
+    mounting_std : array_like, shape (3,), or None
+        Initial σ of the mounting error states (roll, pitch, yaw about the vehicle axes), rad (> 0); None: the
+        mounting is not estimated.  Random constants.
+    odo_lever_arm_std : array_like, shape (3,), or None
+        Initial σ of the wheel lever-arm states, m (> 0); None: not estimated.  Random constants.
+    gnss_delay : float
+        GNSS receiver latency, s: a fix stamped ``t`` is the position at ``t − gnss_delay`` (|value| < 1 s).
+    gnss_delay_std : float or None
+        Initial σ of the latency state, s (> 0); None: not estimated.  A random constant.
     dual_antenna_baseline : array_like, shape (3,), or None
         Dual-antenna GNSS heading: the secondary antenna from the primary, body FRD, m (at least 1 cm); needed
         to use :class:`~imunav.ins.gins.aids.dual_antenna.DualAntennaData`.
@@ -146,6 +159,11 @@ class GinsConfig:
     declination: float = 0.0
     mag_heading_noise: float = 0.02
     dual_antenna_baseline: Any = None
+    mounting: Any = (0.0, 0.0, 0.0)
+    mounting_std: Any = None
+    odo_lever_arm_std: Any = None
+    gnss_delay: float = 0.0
+    gnss_delay_std: float | None = None
 
     def __post_init__(self) -> None:
         s = object.__setattr__
@@ -158,6 +176,17 @@ class GinsConfig:
             s(self, name, getattr(self, src) if v is None else _v3(v, name, positive=True))
         s(self, "lever_arm", _v3(self.lever_arm, "lever_arm"))
         s(self, "odo_lever_arm", _v3(self.odo_lever_arm, "odo_lever_arm"))
+        s(self, "mounting", _v3(self.mounting, "mounting"))
+        if np.any(np.abs(self.mounting) > np.pi):
+            raise InvalidInputError(f"GinsConfig.mounting = {self.mounting.tolist()} rad; angles lie in [-pi, pi] "
+                                    "(given in degrees?)")
+        for name in ("mounting_std", "odo_lever_arm_std"):
+            if getattr(self, name) is not None:
+                s(self, name, _v3(getattr(self, name), name, positive=True))
+        if not (np.isfinite(self.gnss_delay) and abs(self.gnss_delay) < 1.0):
+            raise InvalidInputError(f"GinsConfig.gnss_delay must be a latency in (-1, 1) s; got {self.gnss_delay!r}")
+        if self.gnss_delay_std is not None and not (np.isfinite(self.gnss_delay_std) and self.gnss_delay_std > 0):
+            raise InvalidInputError(f"GinsConfig.gnss_delay_std must be > 0 s or None; got {self.gnss_delay_std!r}")
         if self.dual_antenna_baseline is not None:
             s(self, "dual_antenna_baseline", _v3(self.dual_antenna_baseline, "dual_antenna_baseline"))
         if not np.isfinite(self.declination) or abs(self.declination) > np.pi:

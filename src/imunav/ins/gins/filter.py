@@ -51,6 +51,7 @@ from imunav.ins.gins.layout import (
     N_LAY,
     N_NOM,
     N_PRM,
+    N_SENSOR_ERRORS,
     NOM,
     PRM,
     REQUIRED_BLOCKS,
@@ -63,7 +64,7 @@ from imunav.io.aiding import BaroData, MagnetometerData, OdometerData
 from imunav.io.gnss import GnssData
 from imunav.io.gnss_heading import DualAntennaData
 from imunav.io.kfgins import ImuIncrements
-from imunav.rotation import quat_normalize
+from imunav.rotation import quat_from_euler, quat_normalize
 from imunav.timeseries import ImuData
 
 __all__ = ["GinsFilter"]
@@ -71,8 +72,10 @@ __all__ = ["GinsFilter"]
 Array = NDArray[np.float64]
 
 
-def _initial_state(lla0: ArrayLike, vel0: ArrayLike, q0: ArrayLike, imu_errors0: ArrayLike | None) -> Array:
-    """The nominal state vector (layout ``NOM``) at the start."""
+def _initial_state(lla0: ArrayLike, vel0: ArrayLike, q0: ArrayLike, imu_errors0: ArrayLike | None,
+                   config: GinsConfig) -> Array:
+    """The nominal state vector (layout ``NOM``) at the start (mounting, wheel lever arm and GNSS latency from
+    ``config``)."""
     lla = np.array(lla0, dtype=float)
     if lla.shape != (3,) or not np.all(np.isfinite(lla)) or abs(lla[0]) >= np.pi / 2:
         raise InvalidInputError(f"lla0 must be (lat rad, lon rad, h m) with |lat| < pi/2; got {lla0!r}")
@@ -88,6 +91,9 @@ def _initial_state(lla0: ArrayLike, vel0: ArrayLike, q0: ArrayLike, imu_errors0:
         if e0.shape != (12,):
             raise ShapeError(f"imu_errors0 must have 12 values (bg, ba, sg, sa); got shape {e0.shape}")
         xs[NOM.gyro_bias:NOM.gyro_bias + 12] = e0
+    xs[NOM.q_vb:NOM.q_vb + 4] = quat_from_euler(config.mounting)
+    xs[NOM.odo_lever:NOM.odo_lever + 3] = config.odo_lever_arm
+    xs[NOM.gnss_delay] = config.gnss_delay
     return xs
 
 
@@ -96,6 +102,9 @@ def _state_blocks(c: GinsConfig, odometer: bool) -> tuple[str, ...]:
     use = set(REQUIRED_BLOCKS) | ({"gyro_scale", "accel_scale"} if c.scale_factors else set())
     if odometer:
         use.add("odo_scale")
+    for block, sd in (("mount", c.mounting_std), ("odo_lever", c.odo_lever_arm_std), ("gnss_delay", c.gnss_delay_std)):
+        if sd is not None:
+            use.add(block)
     return tuple(name for name, _ in STATE_BLOCKS if name in use)
 
 
@@ -110,7 +119,8 @@ def _kernel_setup(c: GinsConfig, fs: float, odometer: bool) -> tuple[Array, NDAr
     sd0: dict[str, Any] = {"pos": c.init_pos_std, "vel": c.init_vel_std, "att": c.init_att_std,
                            "gyro_bias": c.init_gyro_bias_std, "accel_bias": c.init_accel_bias_std,
                            "gyro_scale": c.init_gyro_scale_std, "accel_scale": c.init_accel_scale_std,
-                           "odo_scale": [c.odo_scale_std]}
+                           "odo_scale": [c.odo_scale_std], "mount": c.mounting_std, "odo_lever": c.odo_lever_arm_std,
+                           "gnss_delay": [c.gnss_delay_std]}
     nx = 0
     sd = []
     for name in _state_blocks(c, odometer):
@@ -383,7 +393,12 @@ class GinsFilter:
     @property
     def imu_errors(self) -> Array:
         """Current gyro bias (rad/s), accel bias (m/s²), gyro scale, accel scale, odometer scale (13 values)."""
-        return self._xs[NOM.gyro_bias:]
+        return self._xs[NOM.gyro_bias:NOM.gyro_bias + N_SENSOR_ERRORS]
+
+    @property
+    def mounting(self) -> Array:
+        """Current IMU mounting ``q_vb`` (IMU FRD -> vehicle FRD, scalar first)."""
+        return self._xs[NOM.q_vb:NOM.q_vb + 4]
 
     def reset(self, *, lla0: ArrayLike, vel0: ArrayLike, q0: ArrayLike, t0: float, fs: float,
               imu_errors0: ArrayLike | None = None, odometer: bool = False, dtheta0: ArrayLike | None = None,
@@ -416,7 +431,7 @@ class GinsFilter:
         """
         if not (np.isfinite(fs) and fs > 0):
             raise InvalidInputError(f"GinsFilter.reset: fs must be > 0 Hz; got {fs!r}")
-        self._xs = _initial_state(lla0, vel0, q0, imu_errors0)
+        self._xs = _initial_state(lla0, vel0, q0, imu_errors0, self.config)
         self._prm, self._lay, sd0 = _kernel_setup(self.config, float(fs), odometer)
         self.P = np.diag(sd0**2)
         self.t = float(t0)
@@ -656,7 +671,8 @@ class GinsFilter:
                           col3(NOM.gyro_bias), col3(NOM.accel_bias), col3(NOM.gyro_scale), col3(NOM.accel_scale),
                           xs[:, NOM.odo_scale].copy(), o.cov_t[:m], o.cov_diag[:m], o.cov_nav[:m], g.t.copy(), nis,
                           acc, veh.t, veh.nis, veh.dof, veh.accepted, c, meta, smoothed,
-                          aids=log.aids,
+                          aids=log.aids, q_vb=np.ascontiguousarray(xs[:, NOM.q_vb:NOM.q_vb + 4]),
+                          odo_lever_arm=col3(NOM.odo_lever), gnss_delay=xs[:, NOM.gnss_delay].copy(),
                           **{f"{name}_nis": _sample_nis(log, name, n) for name in _SAMPLE_NIS})
 
 

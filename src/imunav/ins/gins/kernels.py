@@ -127,7 +127,7 @@ def _system(xs, fb, wb, prm, lay, F, Q):
 # (state block, nominal offset) of the additive sensor-error blocks
 _ADDITIVE = ((LAY.gyro_bias, NOM.gyro_bias, 3), (LAY.accel_bias, NOM.accel_bias, 3),
              (LAY.gyro_scale, NOM.gyro_scale, 3), (LAY.accel_scale, NOM.accel_scale, 3),
-             (LAY.odo_scale, NOM.odo_scale, 1))
+             (LAY.odo_scale, NOM.odo_scale, 1), (LAY.odo_lever, NOM.odo_lever, 3), (LAY.gnss_delay, NOM.gnss_delay, 1))
 
 
 @njit(cache=True)
@@ -145,6 +145,11 @@ def _inject(dx, xs, lay, acc_dx):
         if i0 >= 0:
             e = xs[off:off + n]
             inject_additive(e, dx, i0, n)
+    im = lay[LAY.mount]
+    if im >= 0:  # C_vb = exp([μ×]) Ĉ_vb
+        qm = inject_attitude_global(xs[NOM.q_vb:NOM.q_vb + 4], dx, im)
+        for j in range(4):
+            xs[NOM.q_vb + j] = qm[j]
     for j in range(dx.shape[0]):
         acc_dx[j] += dx[j]
     dx[:] = 0.0

@@ -29,6 +29,9 @@ STATE_BLOCKS = (
     ("gyro_scale", 3),  # δs_g, optional
     ("accel_scale", 3),  # δs_a, optional
     ("odo_scale", 1),  # δk of the odometer, optional
+    ("mount", 3),  # μ: IMU mounting error, vehicle frame (C_vb = exp([μ×]) Ĉ_vb), rad, optional
+    ("odo_lever", 3),  # δl: wheel contact point from the IMU, body FRD, m, optional
+    ("gnss_delay", 1),  # δτ: GNSS receiver latency (stamp − true time of the fix), s, optional
 )
 #: Blocks every configuration estimates.
 REQUIRED_BLOCKS = ("pos", "vel", "att", "gyro_bias", "accel_bias")
@@ -38,10 +41,13 @@ REQUIRED_BLOCKS = ("pos", "vel", "att", "gyro_bias", "accel_bias")
 LAY, N_LAY = named_layout("GinsLayout", tuple((name, 1) for name, _ in STATE_BLOCKS) + (("nx", 1), ("cov_step", 1)))
 
 #: ``xs`` (float): nominal navigation state and sensor errors.
+#: ``q_vb``: the IMU's attitude in the vehicle frame (IMU FRD -> vehicle FRD, scalar first); ``odo_lever``: the wheel
+#: contact point from the IMU, body FRD, m; ``gnss_delay``: the GNSS latency, s.
 NOM, N_NOM = named_layout("GinsNominal", (("lla", 3), ("vel", 3), ("q", 4), ("gyro_bias", 3), ("accel_bias", 3),
-                                          ("gyro_scale", 3), ("accel_scale", 3), ("odo_scale", 1)))
-#: first element of the sensor errors in ``xs`` (GinsFilter.imu_errors: 13 values)
-N_SENSOR_ERRORS = N_NOM - NOM.gyro_bias
+                                          ("gyro_scale", 3), ("accel_scale", 3), ("odo_scale", 1), ("q_vb", 4),
+                                          ("odo_lever", 3), ("gnss_delay", 1)))
+#: the sensor errors of ``xs`` (GinsFilter.imu_errors: 13 values)
+N_SENSOR_ERRORS = NOM.odo_scale + 1 - NOM.gyro_bias
 
 #: Largest number of rows of one update (joint updates included); gate thresholds exist for 1 .. MAX_ROWS.
 MAX_ROWS = 9

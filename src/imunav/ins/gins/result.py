@@ -100,6 +100,12 @@ class GinsResult(EulerMixin, Result):
         and the NHC rows (2 dof) of the joint vehicle update, the ZUPT velocity rows (3 dof) and the ZARU
         rate rows (3 dof) of the joint rest update — the marginals of the joint innovation before the
         update, χ²(dof) for a consistent filter.
+    q_vb : numpy.ndarray, shape (N, 4), or None
+        Estimated IMU mounting (IMU FRD -> vehicle FRD, scalar first; constant where not estimated).
+    odo_lever_arm : numpy.ndarray, shape (N, 3), or None
+        Wheel contact point from the IMU, body FRD, m.
+    gnss_delay : numpy.ndarray, shape (N,), or None
+        GNSS receiver latency, s.
     aids : dict of str to AidRecord
         Every update of each aid model of :mod:`imunav.ins.gins.aids` that was applied, by aid name
         (``gnss_position``, ``gnss_velocity``, ``odometer``, ``nhc``, ``zupt``, ``zaru``, ``baro``,
@@ -136,6 +142,9 @@ class GinsResult(EulerMixin, Result):
     zupt_vel_nis: Array | None = None
     zaru_nis: Array | None = None
     aids: dict[str, AidRecord] = field(default_factory=dict)
+    q_vb: Array | None = None
+    odo_lever_arm: Array | None = None
+    gnss_delay: Array | None = None
 
     def gnss_summary(self) -> dict[str, Any]:
         """How the GNSS fixes were used: one definition for the CLI summary and the lab step.

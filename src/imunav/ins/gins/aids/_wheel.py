@@ -1,8 +1,14 @@
-"""The wheel contact point's body velocity and its Jacobian, shared by the odometer and the NHC (private).
+"""The wheel contact point's velocity in the vehicle frame and its Jacobian, shared by the odometer and the NHC
+(private).
 
-``v_w = Ĉᵀ v + ω × l`` (``l``: wheel contact point from the IMU, body FRD, m; ``ω``: the compensated rate of the
-current IMU sample, context ``w_sample``).  With ``C = exp([φ×]) Ĉ``: ``∂v_w/∂δv = Ĉᵀ``, ``∂v_w/∂φ = Ĉᵀ [v×]``,
-``∂v_w/∂δb_g = [l×]``, ``∂v_w/∂δs_g = [l×] diag(ω)`` (Groves 2013, §16.3).
+In the IMU body frame the wheel contact point moves with ``u = Ĉ_nbᵀ v + ω × l`` (``l``: the contact point from the
+IMU, body FRD, m, nominal state ``odo_lever``; ``ω``: the compensated rate of the current IMU sample, context
+``w_sample``); in the vehicle frame with ``w = C_vb u`` (``C_vb``: the IMU's mounting, nominal ``q_vb``).  With the
+global attitude error ``C_nb = exp([φ×]) Ĉ_nb``, the mounting error ``C_vb = exp([μ×]) Ĉ_vb`` and the lever-arm
+error ``δl`` (Groves 2013, §16.3; Niu et al. 2007 and Chen et al. 2020 for the mounting)::
+
+    ∂u/∂δv = Ĉ_nbᵀ,   ∂u/∂φ = Ĉ_nbᵀ [v×],   ∂u/∂δb_g = [l×],   ∂u/∂δs_g = [l×] diag(ω),   ∂u/∂δl = [ω×]
+    ∂w/∂(·) = Ĉ_vb ∂u/∂(·),                  ∂w/∂μ = −[ŵ×]
 """
 
 from __future__ import annotations
@@ -16,25 +22,27 @@ from imunav.ins.gins.layout import CTX, LAY, NOM
 
 
 @njit(cache=True)
-def wheel_velocity(xs, ctx, lever, lay, Hv):
-    """Wheel-point body velocity (m/s) and its rows on the error state.
+def wheel_velocity(xs, ctx, lay, Hw):
+    """Wheel-point velocity in the vehicle frame (m/s) and its rows on the error state.
 
     Parameters
     ----------
     xs : nominal state (layout ``NOM``).
     ctx : update context (layout ``CTX``; ``w_sample``).
-    lever : (3,) wheel contact point, body FRD, m.
     lay : int state layout (``LAY``).
-    Hv : (3, nx) receives ``∂v_w/∂δx`` (must be zero on entry).
+    Hw : (3, nx) receives ``∂w/∂δx`` (must be zero on entry).
 
     Returns
     -------
-    (3,) array, the wheel-point velocity in body axes, m/s.
+    (3,) array, the wheel-point velocity in vehicle axes, m/s.
     """
+    nx = Hw.shape[1]
     C = dcm_from_quat_1(xs[NOM.q:NOM.q + 4])
     v = xs[NOM.vel:NOM.vel + 3]
+    lever = xs[NOM.odo_lever:NOM.odo_lever + 3]
     wb = ctx[CTX.w_sample:CTX.w_sample + 3]
-    vw = C.T @ v + cross3(wb, lever)
+    u = C.T @ v + cross3(wb, lever)
+    Hv = np.zeros((3, nx))
     iv = lay[LAY.vel]
     for i in range(3):
         for j in range(3):
@@ -47,10 +55,19 @@ def wheel_velocity(xs, ctx, lever, lay, Hv):
     ia = lay[LAY.att]
     ib = lay[LAY.gyro_bias]
     isg = lay[LAY.gyro_scale]
+    il = lay[LAY.odo_lever]
     for i in range(3):
         for j in range(3):
             Hv[i, ia + j] = CtV[i, j]
             Hv[i, ib + j] = Lx[i, j]
             if isg >= 0:
                 Hv[i, isg + j] = Lx[i, j] * wb[j]
-    return vw
+    if il >= 0:
+        write_skew(wb, Hv, 0, il, 1.0)
+    Cvb = dcm_from_quat_1(xs[NOM.q_vb:NOM.q_vb + 4])
+    w = Cvb @ u
+    Hw[:, :] = Cvb @ Hv
+    im = lay[LAY.mount]
+    if im >= 0:
+        write_skew(w, Hw, 0, im, -1.0)
+    return w

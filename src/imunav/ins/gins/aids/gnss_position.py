@@ -4,8 +4,12 @@ The antenna sits at ``l`` (body FRD, m) from the IMU: ``r_ant = r + C l``.  With
 the global attitude error φ (``C = exp([φ×]) Ĉ``, so ``C l ≈ Ĉ l + φ × Ĉ l = Ĉ l − [Ĉl ×] φ``), the innovation in
 metres along N, E, D is (Groves 2013, §14.3.1, eq. 14.124 in this sign convention)::
 
-    ν = ( (φ_f − φ̂)(R_N + ĥ),  (λ_f − λ̂)(R_E + ĥ) cos φ̂,  −(h_f − ĥ) ) − Ĉ l
-    H = [ I  0  −[Ĉl ×]  0 … ],     R = the fix's NED position covariance (m²).
+    ν = ( (φ_f − φ̂)(R_N + ĥ),  (λ_f − λ̂)(R_E + ĥ) cos φ̂,  −(h_f − ĥ) ) − Ĉ l + v̂ τ̂
+    H = [ I  −τ̂ I  −[Ĉl ×]  0 …  −v̂ (on δτ) ],     R = the fix's NED position covariance (m²).
+
+``τ`` is the receiver's latency: a fix stamped ``t`` holds the position of ``t − τ``, ``r(t − τ) ≈ r(t) − v τ``
+(first order in τ, the velocity of the antenna taken as the IMU's; nominal state ``gnss_delay``, a state when the
+error state has the ``gnss_delay`` block).
 
 Measurement ``z``: latitude (rad), longitude (rad), ellipsoidal height (m); ``r``: 3×3 covariance, m².
 """
@@ -63,6 +67,15 @@ def rows(xs, ctx, z, r, p, lay, H, R, nu, row):
     nu[row] = (z[0] - lla[0]) * (RN + lla[2]) - la[0]
     nu[row + 1] = (z[1] - lla[1]) * (RE + lla[2]) * math.cos(lla[0]) - la[1]
     nu[row + 2] = -(z[2] - lla[2]) - la[2]
+    tau = xs[NOM.gnss_delay]
+    idl = lay[LAY.gnss_delay]
+    iv = lay[LAY.vel]
+    if tau != 0.0 or idl >= 0:
+        for j in range(3):
+            nu[row + j] += xs[NOM.vel + j] * tau
+            H[row + j, iv + j] = -tau
+            if idl >= 0:
+                H[row + j, idl] = -xs[NOM.vel + j]
     ip = lay[LAY.pos]
     for j in range(3):
         H[row + j, ip + j] = 1.0

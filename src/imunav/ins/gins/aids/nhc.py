@@ -1,6 +1,7 @@
 """Non-holonomic constraint: a ground vehicle's wheel contact point does not move sideways or vertically.
 
-``0 = v_w,y + n``, ``0 = v_w,z + n`` (``v_w``: :mod:`._wheel`), so ``ν = −v̂_w,(y,z)``, ``H = ∂v_w,(y,z)/∂δx``,
+``0 = w_y + n``, ``0 = w_z + n`` (``w``: the contact point's velocity in the vehicle frame, :mod:`._wheel`), so
+``ν = −ŵ_(y,z)``, ``H = ∂w_(y,z)/∂δx``,
 ``R = σ² I`` with σ the body's side slip and suspension velocity in motion (Niu et al. 2007; Groves 2013, §16.3.2).
 Applied at the covariance epochs while the vehicle moves: at rest the ZUPT constrains the same velocity, and using
 it twice as two independent measurements would make the filter overconfident.
@@ -22,15 +23,13 @@ from imunav.ins.gins.layout import LAY
 NAME = "nhc"
 ROWS = 2
 WIDTH = 1
-#: own parameters: the wheel contact point (body FRD, m) and the constraint's variance ((m/s)²)
-PARAMS, N_PARAMS = named_layout("NhcParams", (("lever", 3), ("var", 1)))
+#: own parameters: the constraint's variance ((m/s)²)
+PARAMS, N_PARAMS = named_layout("NhcParams", (("var", 1),))
 
 
 def params(config: Any) -> np.ndarray:
-    """This aid's parameter block from a :class:`~imunav.ins.gins.GinsConfig` (``odo_lever_arm`` m,
-    ``nhc_noise`` m/s)."""
+    """This aid's parameter block from a :class:`~imunav.ins.gins.GinsConfig` (``nhc_noise``, m/s)."""
     p = np.zeros(N_PARAMS)
-    p[PARAMS.lever:PARAMS.lever + 3] = config.odo_lever_arm
     p[PARAMS.var] = 0.0 if config.nhc_noise is None else config.nhc_noise**2
     return p
 
@@ -52,7 +51,7 @@ def rows(xs, ctx, z, r, p, lay, H, R, nu, row):
     """
     nx = lay[LAY.nx]
     Hv = np.zeros((3, nx))
-    vw = wheel_velocity(xs, ctx, p[PARAMS.lever:PARAMS.lever + 3], lay, Hv)
+    vw = wheel_velocity(xs, ctx, lay, Hv)
     for a in range(2):
         for j in range(nx):
             H[row + a, j] = Hv[1 + a, j]

@@ -1,9 +1,10 @@
 """Odometer aid: the forward speed of the wheel contact point, with a scale-factor state.
 
-The odometer reads ``(1 + k) v_w,x`` (``v_w``: :mod:`._wheel`; ``k``: the scale-factor error, estimated when the
-error state has the ``odo_scale`` block), so (Groves 2013, §16.3.1)::
+The odometer reads ``(1 + k) w_x`` (``w``: the wheel contact point's velocity in the vehicle frame, :mod:`._wheel`;
+``k``: the scale-factor error, estimated when the error state has the ``odo_scale`` block), so (Groves 2013,
+§16.3.1)::
 
-    ν = s − (1 + k̂) v̂_w,x,   H = (1 + k̂) ∂v_w,x/∂δx  (+ v̂_w,x on δk),   R = σ_s².
+    ν = s − (1 + k̂) ŵ_x,   H = (1 + k̂) ∂w_x/∂δx  (+ ŵ_x on δk),   R = σ_s².
 
 Measurement ``z``: speed (m/s) and its variance ((m/s)²), one pair per IMU sample; applied at the covariance
 epochs while the vehicle moves (a wheel encoder reads 0 while the body idles: the ZUPT holds the velocity then).
@@ -23,15 +24,13 @@ from imunav.ins.gins.layout import LAY, NOM
 NAME = "odometer"
 ROWS = 1
 WIDTH = 2
-#: own parameters: the wheel contact point, body FRD, m
-PARAMS, N_PARAMS = named_layout("OdometerParams", (("lever", 3),))
+#: own parameters: none (the wheel contact point and the mounting are in the nominal state)
+PARAMS, N_PARAMS = named_layout("OdometerParams", ())
 
 
 def params(config: Any) -> np.ndarray:
-    """This aid's parameter block from a :class:`~imunav.ins.gins.GinsConfig` (``odo_lever_arm``, m)."""
-    p = np.zeros(N_PARAMS)
-    p[PARAMS.lever:PARAMS.lever + 3] = config.odo_lever_arm
-    return p
+    """This aid's parameter block (empty: the lever arm and mounting are states or nominal values)."""
+    return np.zeros(N_PARAMS)
 
 
 @njit(cache=True)
@@ -51,7 +50,7 @@ def rows(xs, ctx, z, r, p, lay, H, R, nu, row):
     """
     nx = lay[LAY.nx]
     Hv = np.zeros((3, nx))
-    vw = wheel_velocity(xs, ctx, p[PARAMS.lever:PARAMS.lever + 3], lay, Hv)
+    vw = wheel_velocity(xs, ctx, lay, Hv)
     io = lay[LAY.odo_scale]
     k = xs[NOM.odo_scale] if io >= 0 else 0.0
     for j in range(nx):
