@@ -17,7 +17,7 @@ import numpy as np
 from numpy.lib.stride_tricks import sliding_window_view
 from numpy.typing import NDArray
 
-from imunav.filters._common import symmetrize
+from imunav.filters._common import inv_sqrt_spd, symmetrize
 
 Array = NDArray[np.float64]
 
@@ -26,12 +26,6 @@ MODE_GATE = 1  # per-channel normalised-innovation gate |ν̃_i| < m (Akgün 200
 MODE_ISOLATE = 2  # NIS χ² test + sequential isolation of the worst channel (w-test)
 MODE_HUBER = 3  # Huber M-estimation of the measurement channels by IRLS
 MODE_NIS = 4  # vector χ² gate: the whole measurement is rejected when its NIS fails the test
-
-
-def inv_sqrt_batch(S: Array) -> Array:
-    """Symmetric ``S^{-1/2}`` for a stack (..., m, m)."""
-    w, V = np.linalg.eigh(S)
-    return np.einsum("...ij,...j,...kj->...ik", V, 1.0 / np.sqrt(w), V)
 
 
 def masked_update(x: Array, P: Array, nu: Array, H: Array, R: Array, acc: Array) -> tuple[Array, Array, Array]:
@@ -161,7 +155,7 @@ def batch_filter(
             zz = np.where(has[:, None], zk, 0.0)
             nu = zz - x @ H.T
             S = symmetrize(H @ P @ H.T + R)
-            nn = np.einsum("bij,bj->bi", inv_sqrt_batch(S), nu)
+            nn = np.einsum("bij,bj->bi", inv_sqrt_spd(S), nu)
             valid = np.broadcast_to(has[:, None], (B, m))
             if mode == MODE_NONE:
                 acc = valid.copy()

@@ -69,12 +69,13 @@ def symmetrize(P: Array) -> Array:
 
 
 def inv_sqrt_spd(S: Array) -> Array:
-    """Symmetric inverse square root ``S^{-1/2}`` of a positive definite matrix."""
+    """Symmetric inverse square root ``S^{-1/2} = V diag(w)^{-1/2} Vᵀ`` of a positive definite matrix, or of each
+    matrix of a stack (..., m, m) (``S = V diag(w) Vᵀ``)."""
     w, V = np.linalg.eigh(S)
-    if w[0] <= 0.0:
-        raise InvalidInputError(f"innovation covariance is not positive definite (eigenvalue {w[0]:.3g}); "
-                                "R must be positive definite")
-    return (V / np.sqrt(w)) @ V.T
+    if np.any(w[..., 0] <= 0.0):
+        raise InvalidInputError(f"innovation covariance is not positive definite (eigenvalue {np.min(w[..., 0]):.3g});"
+                                " R must be positive definite")
+    return np.einsum("...ij,...j,...kj->...ik", V, 1.0 / np.sqrt(w), V)
 
 
 def predict_covariance(P: Array, F: Array, Qn: Array) -> Array:
