@@ -37,6 +37,25 @@ def qmul_1(p, q):
     return out
 
 
+@njit(cache=True)
+def qconj_1(q):
+    """Conjugate ``q*`` of a scalar-first quaternion (the inverse of a unit quaternion)."""
+    out = np.empty(4)
+    out[0] = q[0]
+    out[1] = -q[1]
+    out[2] = -q[2]
+    out[3] = -q[3]
+    return out
+
+
+@njit(cache=True, inline="always")
+def qnormalize_t(a0, a1, a2, a3):
+    """Unit quaternion ``a / |a|`` on scalars (no allocation; the array form is
+    :func:`imunav.filters._core.quat_normalize`)."""
+    n = 1.0 / math.sqrt(a0 * a0 + a1 * a1 + a2 * a2 + a3 * a3)
+    return a0 * n, a1 * n, a2 * n, a3 * n
+
+
 @njit(cache=True, inline="always")
 def qrot_t(w, x, y, z, v0, v1, v2):
     """Rotate (v0, v1, v2) by unit (w, x, y, z): q ⊗ [0, v] ⊗ q* on scalars."""
@@ -89,6 +108,32 @@ def skew_1(v):
     S[2, 0] = -v[1]
     S[2, 1] = v[0]
     return S
+
+
+@njit(cache=True)
+def dcm_exp_into(R, r0, r1, r2):
+    """DCM ``exp([r×]) = I + a [r×] + b [r×]²`` of rotation vector (r0, r1, r2) (rad), written into R (3, 3).
+
+    Rodrigues' formula with ``a = sin θ / θ``, ``b = (1 − cos θ) / θ²`` (θ = |r|), and their series
+    ``a = 1 − θ²/6``, ``b = ½ − θ²/24`` for θ² < 1e-12, where the closed forms lose digits to cancellation.
+    """
+    th2 = r0 * r0 + r1 * r1 + r2 * r2
+    if th2 < 1e-12:
+        a = 1.0 - th2 / 6.0
+        b = 0.5 - th2 / 24.0
+    else:
+        th = math.sqrt(th2)
+        a = math.sin(th) / th
+        b = (1.0 - math.cos(th)) / th2
+    R[0, 0] = 1.0 - b * (r1 * r1 + r2 * r2)
+    R[1, 1] = 1.0 - b * (r0 * r0 + r2 * r2)
+    R[2, 2] = 1.0 - b * (r0 * r0 + r1 * r1)
+    R[0, 1] = -a * r2 + b * r0 * r1
+    R[1, 0] = a * r2 + b * r0 * r1
+    R[0, 2] = a * r1 + b * r0 * r2
+    R[2, 0] = -a * r1 + b * r0 * r2
+    R[1, 2] = -a * r0 + b * r1 * r2
+    R[2, 1] = a * r0 + b * r1 * r2
 
 
 @njit(cache=True)

@@ -87,6 +87,60 @@ def test_vector_joseph_update_matches_numpy(rng, m):
     assert np.array_equal(P, P.T)
 
 
+def test_joseph_update_gain_is_joseph_update_and_returns_the_gain(rng):
+    n, m = 6, 3
+    P = _spd(rng, n, 0.1)
+    dx = rng.normal(size=n) * 0.1
+    H = rng.normal(size=(m, n))
+    R = _spd(rng, m, 0.05)
+    nu = rng.normal(size=m)
+    Pa, dxa, Pb, dxb = P.copy(), dx.copy(), P.copy(), dx.copy()
+    da = core.joseph_update(Pa, dxa, H, R, nu, np.empty(m), np.empty((m, m)))
+    K = np.empty((n, m))
+    db = core.joseph_update_gain(Pb, dxb, H, R, nu, np.empty(m), np.empty((m, m)), K)
+    assert np.array_equal(Pa, Pb) and np.array_equal(dxa, dxb) and da == db  # one arithmetic
+    np.testing.assert_allclose(K, P @ H.T @ np.linalg.inv(H @ P @ H.T + R), rtol=1e-10)
+
+
+@pytest.mark.parametrize("n", [1, 3, 6])
+def test_cholesky_and_spd_inverse_match_numpy(rng, n):
+    A = _spd(rng, n)
+    L = core.cholesky_small(A)
+    np.testing.assert_allclose(L, np.linalg.cholesky(A), rtol=1e-12, atol=1e-14 * np.abs(A).max())
+    Ai = core.inv_spd_cholesky(A)
+    np.testing.assert_allclose(Ai, np.linalg.inv(A), rtol=1e-10)
+    assert np.array_equal(Ai, Ai.T)
+
+
+def test_unscented_transform_of_a_linear_map_is_exact(rng):
+    # sigma points of (x, P) through z = H x: mean H x, covariance H P Hᵀ, cross-covariance P Hᵀ; the update is
+    # then the Kalman update P − K S Kᵀ with K = P Hᵀ S⁻¹
+    n, m = 4, 2
+    P = _spd(rng, n, 0.1)
+    H = rng.normal(size=(m, n))
+    R = _spd(rng, m, 0.05)
+    x = rng.normal(size=n)
+    lam, wm0, wc0, wi = core.unscented_weights(n, 0.5, 2.0, 1.0)
+    assert wm0 + 2 * n * wi == pytest.approx(1.0, abs=1e-12)
+    X = np.empty((2 * n + 1, n))
+    core.sigma_offsets(P, lam, X)
+    Z = (x + X) @ H.T
+    zm = core.unscented_mean(Z, wm0, wi)
+    np.testing.assert_allclose(zm, H @ x, rtol=1e-12, atol=1e-12)
+    Dz = Z - zm
+    S = core.unscented_cov(Dz, Dz, wc0, wi) + R
+    Pxz = core.unscented_cov(X, Dz, wc0, wi)
+    np.testing.assert_allclose(S, H @ P @ H.T + R, rtol=1e-10)
+    np.testing.assert_allclose(Pxz, P @ H.T, rtol=1e-10, atol=1e-12)
+    nu = rng.normal(size=m)
+    Pu, dx, K = P.copy(), np.empty(n), np.empty((n, m))
+    d = core.unscented_update(Pu, Pxz, S, nu, dx, K)
+    Pref, dxref, _, _ = _joseph_ref(P, np.zeros(n), H, R, nu)
+    np.testing.assert_allclose(Pu, Pref, rtol=0, atol=1e-10 * np.abs(Pref).max())
+    np.testing.assert_allclose(dx, dxref, rtol=1e-10)
+    assert d == pytest.approx(nu @ np.linalg.solve(H @ P @ H.T + R, nu), rel=1e-10)
+
+
 def test_unit_row_joseph_update_matches_numpy(rng):
     n = 15
     P = _spd(rng, n, 0.1)

@@ -1,4 +1,5 @@
-"""Generic filters against closed forms (scalar Riccati, linear UKF = KF, Joseph = standard)."""
+"""The public filters (on the numba core) against closed forms: scalar and 2-state Riccati steady states, the
+Kalman update of a Gaussian prior, EKF = KF and UKF = KF on a linear model, sigma-point moments."""
 
 import numpy as np
 import pytest
@@ -8,9 +9,9 @@ from imunav.filters import (
     ExtendedKalmanFilter,
     KalmanFilter,
     UnscentedKalmanFilter,
-    joseph_update,
     kalman_filter,
     riccati_steady_state,
+    sigma_points,
 )
 
 
@@ -27,7 +28,8 @@ def test_scalar_random_walk_steady_state_matches_closed_form():
     assert riccati_steady_state([[1.0]], [[Q]], [[1.0]], [[R]])[0, 0] == pytest.approx(closed, rel=1e-9)
 
 
-def test_joseph_equals_standard_for_optimal_gain_and_stays_symmetric(rng):
+def test_update_is_the_gaussian_conditional_and_keeps_p_symmetric(rng):
+    # one update = the conditional of the joint Gaussian (x, z): x + P Hᵀ S⁻¹ ν, P − P Hᵀ S⁻¹ H P
     n, m = 4, 2
     A = rng.standard_normal((n, n))
     P = A @ A.T + np.eye(n)
@@ -35,16 +37,27 @@ def test_joseph_equals_standard_for_optimal_gain_and_stays_symmetric(rng):
     R = np.diag([0.5, 2.0])
     x0 = rng.standard_normal(n)
     z = rng.standard_normal(m)
-    kj = KalmanFilter(x0, P, H=H, R=R)
-    ks = KalmanFilter(x0, P, H=H, R=R)
-    kj.update(z, form="joseph")
-    ks.update(z, form="standard")
-    np.testing.assert_allclose(kj.P, ks.P, rtol=1e-10, atol=1e-12)
-    np.testing.assert_allclose(kj.x, ks.x, rtol=1e-12)
-    assert np.array_equal(kj.P, kj.P.T)
-    # with a sub-optimal gain the Joseph form remains positive definite
-    K = 3.0 * np.linalg.solve(H @ P @ H.T + R, H @ P).T
-    assert np.linalg.eigvalsh(joseph_update(P, K, H, R))[0] > 0
+    kf = KalmanFilter(x0, P, H=H, R=R)
+    r = kf.update(z)
+    S = H @ P @ H.T + R
+    K = P @ H.T @ np.linalg.inv(S)
+    nu = z - H @ x0
+    np.testing.assert_allclose(kf.x, x0 + K @ nu, rtol=1e-12, atol=1e-12)
+    np.testing.assert_allclose(kf.P, P - K @ S @ K.T, rtol=1e-10, atol=1e-12)
+    np.testing.assert_allclose(r.K, K, rtol=1e-10, atol=1e-12)
+    assert r.nis == pytest.approx(nu @ np.linalg.solve(S, nu), rel=1e-12)
+    np.testing.assert_allclose(r.normalized @ r.normalized, r.nis, rtol=1e-12)
+    assert np.array_equal(kf.P, kf.P.T)
+
+
+def test_two_state_steady_state_matches_the_riccati_equation():
+    # constant-velocity model: the recursion converges to the DARE solution (scipy, independent of the core)
+    F, Q, H, R = _cv_model()
+    kf = KalmanFilter([0.0, 0.0], np.eye(2) * 100.0, F=F, Q=Q, H=H, R=R)
+    for _ in range(2000):
+        kf.predict()
+        kf.update([0.0])
+    np.testing.assert_allclose(kf.P, riccati_steady_state(F, Q, H, R), rtol=1e-9)
 
 
 def _cv_model(dt=0.1, q=0.05, r=0.3):
@@ -71,6 +84,37 @@ def test_ukf_and_ekf_equal_kf_on_linear_model(rng):
         np.testing.assert_allclose(ukf3.x, kf.x, rtol=1e-5, atol=1e-6)
         np.testing.assert_allclose(ekf.x, kf.x, rtol=1e-7, atol=1e-8)
         np.testing.assert_allclose(ekf.P, kf.P, rtol=1e-7, atol=1e-10)
+
+
+def test_ekf_with_analytic_jacobians_is_the_kf_on_a_linear_model(rng):
+    # same model, same core steps: EKF and KF agree to rounding
+    F, Q, H, R = _cv_model()
+    x0, P0 = np.array([0.0, 1.0]), np.diag([1.0, 0.5])
+    kf = KalmanFilter(x0, P0, F=F, Q=Q, H=H, R=R)
+    ekf = ExtendedKalmanFilter(x0, P0, lambda x, u: F @ x, lambda x: H @ x, Q, R, F_jac=lambda x, u: F,
+                               H_jac=lambda x: H)
+    for k in range(50):
+        z = np.array([0.1 * k + rng.standard_normal() * 0.5])
+        kf.predict()
+        ekf.predict()
+        rk, re = kf.update(z), ekf.update(z)
+        np.testing.assert_allclose(ekf.x, kf.x, rtol=1e-12, atol=1e-14)
+        np.testing.assert_allclose(ekf.P, kf.P, rtol=1e-12, atol=1e-16)
+        assert re.nis == pytest.approx(rk.nis, rel=1e-12)
+
+
+def test_sigma_points_reproduce_mean_and_covariance(rng):
+    A = rng.standard_normal((3, 3))
+    P = A @ A.T + 0.1 * np.eye(3)
+    x = rng.standard_normal(3)
+    for alpha, kappa in ((1e-3, 0.0), (0.5, 1.0), (1.0, 2.0)):
+        chi, Wm, Wc = sigma_points(x, P, alpha, 2.0, kappa)
+        assert chi.shape == (7, 3) and Wm.sum() == pytest.approx(1.0, abs=1e-9)
+        np.testing.assert_allclose(Wm @ chi, x, atol=1e-9)
+        D = chi - x
+        np.testing.assert_allclose((D * Wc[:, None]).T @ D, P, rtol=1e-9, atol=1e-9 * np.abs(P).max())
+    with pytest.raises(InvalidInputError, match="not positive definite"):
+        sigma_points(x, -np.eye(3), 0.5, 2.0, 0.0)
 
 
 def test_ekf_nonlinear_range_measurement_converges(rng):
@@ -124,8 +168,6 @@ def test_bad_inputs_raise():
     kf = KalmanFilter([0.0], [[1.0]])
     with pytest.raises(InvalidInputError, match="predict needs F"):
         kf.predict()
-    with pytest.raises(InvalidInputError, match="form must be"):
-        kf.update([1.0], H=[[1.0]], R=[[1.0]], form="fast")
     with pytest.raises(ShapeError, match="z must have length 1"):
         kf.update([1.0, 2.0], H=[[1.0]], R=[[1.0]])
     with pytest.raises(InvalidInputError, match="alpha must be > 0"):

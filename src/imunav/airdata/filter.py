@@ -58,7 +58,8 @@ from numpy.typing import ArrayLike, NDArray
 from imunav._docstrings import fill_doc
 from imunav.errors import InvalidInputError, ShapeError
 from imunav.filters import BatchRun, batch_kalman_filter
-from imunav.filters._batch import batch_filter, huber_batch, inv_sqrt_batch, isolate_batch, masked_update, sym
+from imunav.filters._batch import batch_filter, huber_batch, isolate_batch, masked_update
+from imunav.filters._common import inv_sqrt_spd, symmetrize
 from imunav.filters._core import van_loan
 from imunav.filters.gates import isolation_thresholds
 from imunav.filters.kalman import _lti_model, robust_mode
@@ -542,10 +543,10 @@ class LongHorizonFilter:
                 self._cache[dt] = (np.kron(Phi3, np.eye(3)), np.kron(Q3, np.eye(3)))
             F, Q = self._cache[dt]
             x = x @ F.T
-            P = sym(F @ P @ F.T + Q)
+            P = symmetrize(F @ P @ F.T + Q)
         nu = zk[None] - x @ H.T
-        S = sym(H @ P @ H.T + R)
-        nn = (inv_sqrt_batch(S) @ nu[0])[0]
+        S = symmetrize(H @ P @ H.T + R)
+        nn = (inv_sqrt_spd(S) @ nu[0])[0]
         mode = None if first else c.robust  # the first difference initialises the wind
         if mode == "huber":
             x, P, wk, _ = huber_batch(x, P, zk[None], H, R, 1.345, np.ones((1, 3), dtype=bool))

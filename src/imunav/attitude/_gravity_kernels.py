@@ -20,6 +20,7 @@ import math
 import numpy as np
 from numba import njit
 
+from imunav._rotation_kernels import dcm_exp_into
 from imunav.filters._core import inv3, joseph_cov3, mm3, mmt3
 
 #: parameter vector ``gp``: GravityKfConfig.vector() packs these fields in this order; G_* index it
@@ -59,25 +60,7 @@ def gravity_step(kind, x, P, sv, Pb, yg, ya, h, gp, S, W):
     w0, w1, w2 = yg0 - bh0, yg1 - bh1, yg2 - bh2
     # F = I − h [y_g]× (eq. 11), or exp(−h [y_g]×) (Rodrigues) when exact
     if gp[G_EXACT] > 0.5:
-        r0, r1, r2 = -w0 * h, -w1 * h, -w2 * h
-        th2 = r0 * r0 + r1 * r1 + r2 * r2
-        th = math.sqrt(th2)
-        if th < 1e-8:
-            a = 1.0
-            b = 0.5
-        else:
-            a = math.sin(th) / th
-            b = (1.0 - math.cos(th)) / th2
-        # I + a [r]× + b ([r]×)², ([r]×)² = r rᵀ − |r|² I
-        F[0, 0] = 1.0 + b * (r0 * r0 - th2)
-        F[1, 1] = 1.0 + b * (r1 * r1 - th2)
-        F[2, 2] = 1.0 + b * (r2 * r2 - th2)
-        F[0, 1] = -a * r2 + b * r0 * r1
-        F[1, 0] = a * r2 + b * r0 * r1
-        F[0, 2] = a * r1 + b * r0 * r2
-        F[2, 0] = -a * r1 + b * r0 * r2
-        F[1, 2] = -a * r0 + b * r1 * r2
-        F[2, 1] = a * r0 + b * r1 * r2
+        dcm_exp_into(F, -w0 * h, -w1 * h, -w2 * h)
     else:
         F[0, 0] = 1.0
         F[0, 1] = h * w2

@@ -18,75 +18,41 @@ import math
 import numpy as np
 from numba import njit
 
-from imunav._rotation_kernels import dcm_from_quat_1, qexp_1, qexp_t, qlog_1, qmul_1, qmul_t, qrot_1, qrot_t
-from imunav.filters._core import inject_attitude_local, reset_attitude_cov, scalar_update
+from imunav._rotation_kernels import (
+    dcm_exp_into,
+    dcm_from_quat_1,
+    qconj_1,
+    qexp_1,
+    qexp_t,
+    qlog_1,
+    qmul_1,
+    qmul_t,
+    qnormalize_t,
+    qrot_1,
+    qrot_t,
+)
+from imunav.filters._core import (
+    inject_attitude_local,
+    inv_spd_cholesky,
+    quat_normalize,
+    reset_attitude_cov,
+    scalar_update,
+    sigma_offsets,
+    unscented_cov,
+    unscented_mean,
+    unscented_update,
+    unscented_weights,
+)
 from imunav.filters._core_models import gravity_direction_row, gyro_rest_row
 
 # ---------------------------------------------------------------------------
-# small helpers
-
-
-@njit(cache=True)
-def _qconj(q):
-    out = np.empty(4)
-    out[0] = q[0]
-    out[1] = -q[1]
-    out[2] = -q[2]
-    out[3] = -q[3]
-    return out
-
-
-@njit(cache=True)
-def _qnorm(q):
-    n = math.sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3])
-    return q / n
-
-
-@njit(cache=True)
-def _qrot_inv(q, v):
-    """q* ⊗ v ⊗ q: nav vector -> body."""
-    return qrot_1(_qconj(q), v)
+# small helpers (quaternion, DCM and SPD helpers: imunav._rotation_kernels and imunav.filters._core)
 
 
 @njit(cache=True)
 def _norm3(v):
+    """Euclidean norm of a 3-vector."""
     return math.sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2])
-
-
-@njit(cache=True)
-def _rodrigues(r):
-    """DCM exp([r]x) (exact; series for small angles)."""
-    R = np.empty((3, 3))
-    _rodrigues_into(R, r[0], r[1], r[2])
-    return R
-
-
-@njit(cache=True, inline="always")
-def _tnorm(a0, a1, a2, a3):
-    n = 1.0 / math.sqrt(a0 * a0 + a1 * a1 + a2 * a2 + a3 * a3)
-    return a0 * n, a1 * n, a2 * n, a3 * n
-
-
-@njit(cache=True)
-def _rodrigues_into(R, r0, r1, r2):
-    """R = exp([r]x) written in place."""
-    th2 = r0 * r0 + r1 * r1 + r2 * r2
-    if th2 < 1e-12:
-        a = 1.0 - th2 / 6.0
-        b = 0.5 - th2 / 24.0
-    else:
-        th = math.sqrt(th2)
-        a = math.sin(th) / th
-        b = (1.0 - math.cos(th)) / th2
-    R[0, 0] = 1.0 - b * (r1 * r1 + r2 * r2)
-    R[1, 1] = 1.0 - b * (r0 * r0 + r2 * r2)
-    R[2, 2] = 1.0 - b * (r0 * r0 + r1 * r1)
-    R[0, 1] = -a * r2 + b * r0 * r1
-    R[1, 0] = a * r2 + b * r0 * r1
-    R[0, 2] = a * r1 + b * r0 * r2
-    R[2, 0] = -a * r1 + b * r0 * r2
-    R[1, 2] = -a * r0 + b * r1 * r2
-    R[2, 1] = a * r0 + b * r1 * r2
 
 
 # ---------------------------------------------------------------------------
@@ -101,7 +67,7 @@ def _grad_term(q, d, s):
     Equivalent to Madgwick's J^T f (Madgwick 2010, eqs. 20-34) for any
     reference direction d.
     """
-    v = _qrot_inv(q, d)
+    v = qrot_1(qconj_1(q), d)
     e = np.empty(4)
     e[0] = 0.0
     e[1] = v[0] - s[0]
@@ -174,7 +140,7 @@ def madgwick_step(q, gyr, acc, mag, dt, beta, use_mag, mag_scale):
     out[1] = q1 + qd1 * dt
     out[2] = q2 + qd2 * dt
     out[3] = q3 + qd3 * dt
-    return _qnorm(out)
+    return quat_normalize(out)
 
 
 @njit(cache=True)
@@ -250,7 +216,7 @@ def mahony_step(q, bint, gyr, acc, mag, dt, kp, ki, use_mag):
     d0, d1, d2, d3 = qmul_t(qw, qx, qy, qz, 0.0, gx, gy, gz)
     h = 0.5 * dt
     out = np.empty(4)
-    out[0], out[1], out[2], out[3] = _tnorm(qw + h * d0, qx + h * d1, qy + h * d2, qz + h * d3)
+    out[0], out[1], out[2], out[3] = qnormalize_t(qw + h * d0, qx + h * d1, qy + h * d2, qz + h * d3)
     return out, bo
 
 
@@ -278,7 +244,7 @@ def complementary_step(q, gyr, acc, mag, dt, k_acc, k_mag, use_mag):
     (accelerometer in nav frame vs. up) and of the heading error (horizontal
     field vs. north).  Gains are first-order time constants: fraction = k dt.
     """
-    q = _qnorm(qmul_1(q, qexp_1(gyr * dt)))
+    q = quat_normalize(qmul_1(q, qexp_1(gyr * dt)))
     an = _norm3(acc)
     if an > 0.0 and k_acc > 0.0:
         fn = qrot_1(q, acc / an)  # should be (0, 0, -1)
@@ -291,7 +257,7 @@ def complementary_step(q, gyr, acc, mag, dt, k_acc, k_mag, use_mag):
         if s > 1e-12:
             ang = math.atan2(s, -fn[2])
             frac = min(k_acc * dt, 1.0)
-            q = _qnorm(qmul_1(qexp_1(ax / s * ang * frac), q))
+            q = quat_normalize(qmul_1(qexp_1(ax / s * ang * frac), q))
     if use_mag and k_mag > 0.0:
         mn = _norm3(mag)
         if mn > 0.0:
@@ -299,7 +265,7 @@ def complementary_step(q, gyr, acc, mag, dt, k_acc, k_mag, use_mag):
             psi = math.atan2(h[1], h[0])  # should be 0 (magnetic north)
             r = np.zeros(3)
             r[2] = -psi * min(k_mag * dt, 1.0)
-            q = _qnorm(qmul_1(qexp_1(r), q))
+            q = quat_normalize(qmul_1(qexp_1(r), q))
     return q
 
 
@@ -487,7 +453,7 @@ def mekf_step(q, b, P, st, gyr, acc, mag, dt, p, out_phi):
     w0 = gyr[0] - b[0]
     w1 = gyr[1] - b[1]
     w2 = gyr[2] - b[2]
-    _rodrigues_into(W, -w0 * dt, -w1 * dt, -w2 * dt)  # δθ_k+1 = exp(-[ω]dt) δθ_k - dt δb
+    dcm_exp_into(W, -w0 * dt, -w1 * dt, -w2 * dt)  # δθ_k+1 = exp(-[ω]dt) δθ_k - dt δb
     R = W[0:3, 0:3].copy()
     for i in range(3):
         for j in range(3):
@@ -497,7 +463,7 @@ def mekf_step(q, b, P, st, gyr, acc, mag, dt, p, out_phi):
             out_phi[3 + i, 3 + j] = 1.0 if i == j else 0.0
     e0, e1, e2, e3 = qexp_t(w0 * dt, w1 * dt, w2 * dt)
     t0, t1, t2, t3 = qmul_t(q[0], q[1], q[2], q[3], e0, e1, e2, e3)
-    qw, qx, qy, qz = _tnorm(t0, t1, t2, t3)
+    qw, qx, qy, qz = qnormalize_t(t0, t1, t2, t3)
     # gyro noise grows with the rate (scale-factor and misalignment errors of an
     # uncalibrated gyro act in proportion to |ω|): σ² = σ_g² + (k_ω |ω̄|)²
     wn2 = w0 * w0 + w1 * w1 + w2 * w2
@@ -581,7 +547,7 @@ def mekf_step(q, b, P, st, gyr, acc, mag, dt, p, out_phi):
     reset_attitude_cov(P, dx, I_ATT)
     e0, e1, e2, e3 = qexp_t(dx[0], dx[1], dx[2])
     t0, t1, t2, t3 = qmul_t(qw, qx, qy, qz, e0, e1, e2, e3)
-    qw, qx, qy, qz = _tnorm(t0, t1, t2, t3)
+    qw, qx, qy, qz = qnormalize_t(t0, t1, t2, t3)
     bo = np.empty(3)
     bo[0] = b[0] + dx[3]
     bo[1] = b[1] + dx[4]
@@ -644,7 +610,7 @@ def mekf_step(q, b, P, st, gyr, acc, mag, dt, p, out_phi):
                 reset_attitude_cov(P, dx, I_ATT)
                 e0, e1, e2, e3 = qexp_t(dx[0], dx[1], dx[2])
                 t0, t1, t2, t3 = qmul_t(qw, qx, qy, qz, e0, e1, e2, e3)
-                qw, qx, qy, qz = _tnorm(t0, t1, t2, t3)
+                qw, qx, qy, qz = qnormalize_t(t0, t1, t2, t3)
                 bo[0] += dx[3]
                 bo[1] += dx[4]
                 bo[2] += dx[5]
@@ -731,11 +697,11 @@ def rts_smooth(qf, bf, Pu, Pp, Ph, gyr, dt, P0, q0, b0):
     for k in range(n - 2, -1, -1):
         # prediction from the filtered state at k to k+1
         w = gyr[k + 1] - bf[k]
-        qp = _qnorm(qmul_1(qf[k], qexp_1(w * dt[k + 1])))
+        qp = quat_normalize(qmul_1(qf[k], qexp_1(w * dt[k + 1])))
         e = np.empty(6)
-        e[0:3] = qlog_1(qmul_1(_qconj(qp), qs[k + 1]))
+        e[0:3] = qlog_1(qmul_1(qconj_1(qp), qs[k + 1]))
         e[3:6] = bs[k + 1] - bf[k]
-        C = Pu[k] @ Ph[k + 1].T @ _inv_spd(Pp[k + 1])
+        C = Pu[k] @ Ph[k + 1].T @ inv_spd_cholesky(Pp[k + 1])
         dx = C @ e
         qs[k] = inject_attitude_local(qf[k], dx, I_ATT)
         bs[k] = bf[k] + dx[3:6]
@@ -751,81 +717,35 @@ def rts_smooth(qf, bf, Pu, Pp, Ph, gyr, dt, P0, q0, b0):
 
 
 @njit(cache=True)
-def _chol(A):
-    n = A.shape[0]
-    L = np.zeros((n, n))
-    for i in range(n):
-        for j in range(i + 1):
-            s = A[i, j]
-            for k in range(j):
-                s -= L[i, k] * L[j, k]
-            if i == j:
-                L[i, i] = math.sqrt(max(s, 1e-300))
-            else:
-                L[i, j] = s / L[j, j]
-    return L
-
-
-@njit(cache=True)
-def _inv_spd(A):
-    """Inverse of a symmetric positive-definite matrix via Cholesky (no LAPACK)."""
-    n = A.shape[0]
-    L = _chol(A)
-    Li = np.zeros((n, n))
-    for j in range(n):
-        Li[j, j] = 1.0 / L[j, j]
-        for i in range(j + 1, n):
-            acc = 0.0
-            for k in range(j, i):
-                acc -= L[i, k] * Li[k, j]
-            Li[i, j] = acc / L[i, i]
-    out = np.zeros((n, n))
-    for i in range(n):
-        for j in range(i + 1):
-            acc = 0.0
-            for k in range(i, n):
-                acc += Li[k, i] * Li[k, j]
-            out[i, j] = acc
-            out[j, i] = acc
-    return out
-
-
-@njit(cache=True)
 def ukf_step(q, b, P, gyr, acc, mag, dt, p, alpha, beta_u, kappa, mag_ref):
-    """One error-state UKF step (Crassidis & Markley 2003, USQUE, with the
-    Hamilton body-error convention).  Returns (q, b, nis, dof)."""
+    """One error-state UKF step (Crassidis & Markley 2003, USQUE, with the Hamilton body-error convention).
+
+    The sigma points, their moments and the sigma-point update are the core's unscented transform
+    (:func:`imunav.filters._core.sigma_offsets`, ``unscented_mean``, ``unscented_cov``, ``unscented_update``),
+    the same primitives as :class:`imunav.filters.UnscentedKalmanFilter`.  Returns (q, b, P, nis, dof).
+    """
     nx = 6
-    lam = alpha * alpha * (nx + kappa) - nx
-    wm0 = lam / (nx + lam)
-    wc0 = wm0 + (1.0 - alpha * alpha + beta_u)
-    wi = 0.5 / (nx + lam)
+    lam, wm0, wc0, wi = unscented_weights(nx, alpha, beta_u, kappa)
     g = p[P_G]
     # ---- predict: sigma points of the error around (q, b)
-    L = _chol((nx + lam) * P)
     ns = 2 * nx + 1
-    X = np.zeros((ns, nx))
-    for i in range(nx):
-        X[1 + i] = L[:, i]
-        X[1 + nx + i] = -L[:, i]
-    qp0 = _qnorm(qmul_1(q, qexp_1((gyr - b) * dt)))
+    X = np.empty((ns, nx))
+    sigma_offsets(P, lam, X)
+    qp0 = quat_normalize(qmul_1(q, qexp_1((gyr - b) * dt)))
     Y = np.zeros((ns, nx))
     for s in range(ns):
         qs_ = qmul_1(q, qexp_1(X[s, 0:3]))
         bs_ = b + X[s, 3:6]
         qps = qmul_1(qs_, qexp_1((gyr - bs_) * dt))
-        Y[s, 0:3] = qlog_1(qmul_1(_qconj(qp0), qps))
+        Y[s, 0:3] = qlog_1(qmul_1(qconj_1(qp0), qps))
         Y[s, 3:6] = bs_ - b
-    ym = wm0 * Y[0]
-    for s in range(1, ns):
-        ym += wi * Y[s]
-    Pn = np.zeros((nx, nx))
-    for s in range(ns):
-        d = Y[s] - ym
-        Pn += (wc0 if s == 0 else wi) * np.outer(d, d)
+    ym = unscented_mean(Y, wm0, wi)
+    D = Y - ym
+    Pn = unscented_cov(D, D, wc0, wi)
     for i in range(3):
         Pn[i, i] += p[P_SIGMA_GYRO] * p[P_SIGMA_GYRO] * dt
         Pn[3 + i, 3 + i] += p[P_SIGMA_BIAS] * p[P_SIGMA_BIAS] * dt
-    q = _qnorm(qmul_1(qp0, qexp_1(ym[0:3])))
+    q = quat_normalize(qmul_1(qp0, qexp_1(ym[0:3])))
     b = b + ym[3:6]
     P = Pn
     nis = 0.0
@@ -836,32 +756,22 @@ def ukf_step(q, b, P, gyr, acc, mag, dt, p, alpha, beta_u, kappa, mag_ref):
     use_mag = p[P_USE_MAG] > 0.5 and _norm3(mag) > 0.0
     nz = (3 if use_acc else 0) + (3 if use_mag else 0)
     if nz > 0:
-        L = _chol((nx + lam) * P)
-        X = np.zeros((ns, nx))
-        for i in range(nx):
-            X[1 + i] = L[:, i]
-            X[1 + nx + i] = -L[:, i]
+        sigma_offsets(P, lam, X)
         Z = np.zeros((ns, nz))
         dg = np.zeros(3)
         dg[2] = -1.0
         for s in range(ns):
-            qs_ = qmul_1(q, qexp_1(X[s, 0:3]))
+            qsc = qconj_1(qmul_1(q, qexp_1(X[s, 0:3])))
             j = 0
             if use_acc:
-                Z[s, 0:3] = _qrot_inv(qs_, dg)
+                Z[s, 0:3] = qrot_1(qsc, dg)
                 j = 3
             if use_mag:
-                Z[s, j:j + 3] = _qrot_inv(qs_, mag_ref)
-        zm = wm0 * Z[0]
-        for s in range(1, ns):
-            zm += wi * Z[s]
-        Pzz = np.zeros((nz, nz))
-        Pxz = np.zeros((nx, nz))
-        for s in range(ns):
-            dz = Z[s] - zm
-            wgt = wc0 if s == 0 else wi
-            Pzz += wgt * np.outer(dz, dz)
-            Pxz += wgt * np.outer(X[s], dz)
+                Z[s, j:j + 3] = qrot_1(qsc, mag_ref)
+        zm = unscented_mean(Z, wm0, wi)
+        Dz = Z - zm
+        Pzz = unscented_cov(Dz, Dz, wc0, wi)
+        Pxz = unscented_cov(X, Dz, wc0, wi)
         z = np.zeros(nz)
         j = 0
         if use_acc:
@@ -873,13 +783,9 @@ def ukf_step(q, b, P, gyr, acc, mag, dt, p, alpha, beta_u, kappa, mag_ref):
             z[j:j + 3] = mag / _norm3(mag)
             for i in range(3):
                 Pzz[j + i, j + i] += p[P_SIGMA_MAG] * p[P_SIGMA_MAG]
-        Si = _inv_spd(Pzz)
-        K = Pxz @ Si
-        nu = z - zm
-        dx = K @ nu
-        P = P - K @ Pzz @ K.T
-        P = 0.5 * (P + P.T)
-        nis = nu @ Si @ nu
+        dx = np.empty(nx)
+        K = np.empty((nx, nz))
+        nis = unscented_update(P, Pxz, Pzz, z - zm, dx, K)
         dof = nz
         q = inject_attitude_local(q, dx, I_ATT)
         b = b + dx[3:6]

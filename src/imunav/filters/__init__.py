@@ -3,8 +3,12 @@
 * :class:`KalmanFilter`, :class:`ExtendedKalmanFilter`,
   :class:`UnscentedKalmanFilter` share ``x``, ``P``, ``predict`` and
   ``update`` (``F``, ``Q``, ``H``, ``R``; ``B``/``u`` optional); Joseph-form
-  updates, symmetric P; ``update`` returns an :class:`UpdateResult`.
-* :func:`kalman_filter` runs a whole sequence in a numba kernel.
+  updates, symmetric P; ``update`` returns an :class:`UpdateResult`.  Their steps are the
+  primitives of the numba estimation core (:mod:`imunav.filters._core`: ``propagate_cov_sparse``,
+  ``joseph_update``, ``nis``, the unscented transform) that the attitude, INS and GNSS/INS filters are
+  built from.
+* :func:`kalman_filter` runs :class:`KalmanFilter` over a whole sequence;
+  :func:`batch_kalman_filter` runs many sequences at once, vectorised over the runs.
 * :mod:`~imunav.filters.consistency`: NIS / NEES and χ² bounds.
 * :mod:`~imunav.filters.robust`: per-channel gate, χ² isolation, Huber IRLS.
 * :mod:`~imunav.filters.faults`: window χ² detectors, NIS test, CUSUM,
@@ -37,7 +41,6 @@ from imunav.filters.kalman import (
     KalmanRun,
     UpdateResult,
     batch_kalman_filter,
-    joseph_update,
     kalman_filter,
     riccati_steady_state,
 )
@@ -53,7 +56,6 @@ __all__ = [
     "kalman_filter",
     "batch_kalman_filter",
     "BatchRun",
-    "joseph_update",
     "riccati_steady_state",
     "numerical_jacobian",
     "sigma_points",

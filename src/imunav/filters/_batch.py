@@ -17,6 +17,8 @@ import numpy as np
 from numpy.lib.stride_tricks import sliding_window_view
 from numpy.typing import NDArray
 
+from imunav.filters._common import inv_sqrt_spd, symmetrize
+
 Array = NDArray[np.float64]
 
 MODE_NONE = 0  # optimal filter, every channel used
@@ -24,16 +26,6 @@ MODE_GATE = 1  # per-channel normalised-innovation gate |ν̃_i| < m (Akgün 200
 MODE_ISOLATE = 2  # NIS χ² test + sequential isolation of the worst channel (w-test)
 MODE_HUBER = 3  # Huber M-estimation of the measurement channels by IRLS
 MODE_NIS = 4  # vector χ² gate: the whole measurement is rejected when its NIS fails the test
-
-
-def sym(P: Array) -> Array:
-    return 0.5 * (P + np.swapaxes(P, -1, -2))
-
-
-def inv_sqrt_batch(S: Array) -> Array:
-    """Symmetric ``S^{-1/2}`` for a stack (..., m, m)."""
-    w, V = np.linalg.eigh(S)
-    return np.einsum("...ij,...j,...kj->...ik", V, 1.0 / np.sqrt(w), V)
 
 
 def masked_update(x: Array, P: Array, nu: Array, H: Array, R: Array, acc: Array) -> tuple[Array, Array, Array]:
@@ -53,7 +45,7 @@ def masked_update(x: Array, P: Array, nu: Array, H: Array, R: Array, acc: Array)
     K = np.swapaxes(np.linalg.solve(Sa, np.swapaxes(PHt, 1, 2)), 1, 2)  # S symmetric
     x = x + np.einsum("bij,bj->bi", K, nua)
     IKH = np.eye(n)[None] - K @ Ha
-    P = sym(IKH @ P @ np.swapaxes(IKH, 1, 2) + K @ Ra @ np.swapaxes(K, 1, 2))
+    P = symmetrize(IKH @ P @ np.swapaxes(IKH, 1, 2) + K @ Ra @ np.swapaxes(K, 1, 2))
     return x, P, K
 
 
@@ -153,7 +145,7 @@ def batch_filter(
         return _batch_plain(x, P0, F, Qn, H, R, z, out)
     for k in range(N):
         x = x @ Ft
-        P = sym(F @ P @ Ft + Qn)
+        P = symmetrize(F @ P @ Ft + Qn)
         if store_full:
             out["x_pred"][:, k] = x
             out["P_pred"][:, k] = P
@@ -162,8 +154,8 @@ def batch_filter(
         if has.any():
             zz = np.where(has[:, None], zk, 0.0)
             nu = zz - x @ H.T
-            S = sym(H @ P @ H.T + R)
-            nn = np.einsum("bij,bj->bi", inv_sqrt_batch(S), nu)
+            S = symmetrize(H @ P @ H.T + R)
+            nn = np.einsum("bij,bj->bi", inv_sqrt_spd(S), nu)
             valid = np.broadcast_to(has[:, None], (B, m))
             if mode == MODE_NONE:
                 acc = valid.copy()
@@ -202,13 +194,13 @@ def _batch_plain(x: Array, P0: Array, F: Array, Qn: Array, H: Array, R: Array, z
     I = np.eye(n)
     for k in range(z.shape[1]):
         x = x @ F.T
-        P = sym(F @ P @ F.T + Qn)
-        S = sym(H @ P @ H.T + R)
+        P = symmetrize(F @ P @ F.T + Qn)
+        S = symmetrize(H @ P @ H.T + R)
         K = np.linalg.solve(S, H @ P).T
         nu = z[:, k] - x @ H.T
         x = x + nu @ K.T
         A = I - K @ H
-        P = sym(A @ P @ A.T + K @ R @ K.T)
+        P = symmetrize(A @ P @ A.T + K @ R @ K.T)
         w, V = np.linalg.eigh(S)
         out["innovation"][:, k] = nu
         out["normalized"][:, k] = nu @ ((V / np.sqrt(w)) @ V.T).T

@@ -1,4 +1,5 @@
-"""Shared helpers of :mod:`imunav.filters`: input checks."""
+"""Shared helpers of :mod:`imunav.filters`: input checks, and the predict / update steps of the public filters on
+the numba core (:mod:`imunav.filters._core`)."""
 
 from __future__ import annotations
 
@@ -6,6 +7,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from imunav.errors import InvalidInputError, NonFiniteError, ShapeError
+from imunav.filters._core import joseph_update_gain, propagate_cov_sparse
 
 Array = NDArray[np.float64]
 
@@ -62,14 +64,78 @@ def as_covariance(P: ArrayLike, name: str, n: int | None = None) -> Array:
 
 
 def symmetrize(P: Array) -> Array:
-    return 0.5 * (P + P.T)
+    """``½ (P + Pᵀ)`` of a matrix, or of each matrix of a stack (..., n, n)."""
+    return 0.5 * (P + np.swapaxes(P, -1, -2))
 
 
 def inv_sqrt_spd(S: Array) -> Array:
-    """Symmetric inverse square root ``S^{-1/2}`` of a positive definite matrix."""
+    """Symmetric inverse square root ``S^{-1/2} = V diag(w)^{-1/2} Vᵀ`` of a positive definite matrix, or of each
+    matrix of a stack (..., m, m) (``S = V diag(w) Vᵀ``)."""
     w, V = np.linalg.eigh(S)
-    if w[0] <= 0.0:
-        raise InvalidInputError(f"innovation covariance is not positive definite (eigenvalue {w[0]:.3g}); "
-                                "R must be positive definite")
-    return (V / np.sqrt(w)) @ V.T
+    if np.any(w[..., 0] <= 0.0):
+        raise InvalidInputError(f"innovation covariance is not positive definite (eigenvalue {np.min(w[..., 0]):.3g});"
+                                " R must be positive definite")
+    return np.einsum("...ij,...j,...kj->...ik", V, 1.0 / np.sqrt(w), V)
 
+
+def predict_covariance(P: Array, F: Array, Qn: Array) -> Array:
+    """``F P Fᵀ + Qn`` by the core's :func:`~imunav.filters._core.propagate_cov_sparse` (exactly symmetric).
+
+    Parameters
+    ----------
+    P : numpy.ndarray, shape (n, n)
+        Covariance (not modified).
+    F : numpy.ndarray, shape (n, n)
+        Transition matrix (or its Jacobian).
+    Qn : numpy.ndarray, shape (n, n)
+        Process-noise covariance in the state space.
+
+    Returns
+    -------
+    numpy.ndarray, shape (n, n)
+        Predicted covariance.
+    """
+    n = P.shape[0]
+    Pn = np.array(P, dtype=np.float64, order="C")
+    propagate_cov_sparse(np.ascontiguousarray(F, dtype=np.float64), Pn, np.ascontiguousarray(Qn, dtype=np.float64),
+                         np.empty((n, n)), np.empty((n, n), dtype=np.int64), np.empty(n, dtype=np.int64))
+    return Pn
+
+
+def joseph_step(x: Array, P: Array, nu: Array, H: Array, R: Array) -> tuple[Array, Array, Array, Array, float]:
+    """One Joseph-form update by the core's ``joseph_update_gain`` (copies; the inputs are not modified).
+
+    Parameters
+    ----------
+    x : numpy.ndarray, shape (n,)
+        Prior state.
+    P : numpy.ndarray, shape (n, n)
+        Prior covariance.
+    nu : numpy.ndarray, shape (m,)
+        Innovation at ``x``.
+    H : numpy.ndarray, shape (m, n)
+        Measurement matrix (or its Jacobian).
+    R : numpy.ndarray, shape (m, m)
+        Measurement-noise covariance.
+
+    Returns
+    -------
+    x : numpy.ndarray, shape (n,)
+        Posterior state ``x + K ν``.
+    P : numpy.ndarray, shape (n, n)
+        Posterior covariance (Joseph form, symmetric).
+    K : numpy.ndarray, shape (n, m)
+        Gain applied.
+    S : numpy.ndarray, shape (m, m)
+        Innovation covariance ``H P Hᵀ + R``.
+    nis : float
+        ``νᵀ S⁻¹ ν``.
+    """
+    n, m = P.shape[0], H.shape[0]
+    Pn = np.array(P, dtype=np.float64, order="C")
+    dx = np.zeros(n)
+    K = np.empty((n, m))
+    S = np.empty((m, m))
+    d = joseph_update_gain(Pn, dx, np.ascontiguousarray(H, dtype=np.float64), np.ascontiguousarray(R, dtype=np.float64),
+                           np.ascontiguousarray(nu, dtype=np.float64), np.empty(m), S, K)
+    return x + dx, Pn, K, S, float(d)

@@ -1,7 +1,8 @@
 """numba estimation core: the primitives every imunav filter is built from (private).
 
-Measurement updates (scalar and vector, Joseph form, Schmidt consider states), the χ² innovation gate, error-state
-injection and covariance reset, Van Loan discretisation and the strapdown step (local level and NED).  Every
+Small SPD algebra (Gauss–Jordan and Cholesky inverses), measurement updates (scalar and vector, Joseph form, Schmidt
+consider states; the unscented sigma-point update), the χ² innovation gate, error-state injection and covariance
+reset, Van Loan discretisation and the strapdown step (local level and NED).  Every
 function is ``@njit(cache=True)`` and works in place on caller-owned buffers, so the fused per-sample loops of
 :mod:`imunav.attitude`, :mod:`imunav.ins` and :mod:`imunav.airdata` stay allocation-light.  Measurement models
 (the ``(innovation, H, R)`` of one sensor) live in :mod:`imunav.filters._core_models`.
@@ -65,6 +66,73 @@ def inv_small(S, Si):
                     for j in range(m):
                         A[r, j] -= fct * A[c, j]
                         Si[r, j] -= fct * Si[c, j]
+
+
+@njit(cache=True)
+def cholesky_small(A):
+    """Lower Cholesky factor ``L`` (``A = L Lᵀ``) of a small symmetric positive-definite matrix (new array).
+
+    Cholesky–Banachiewicz, row by row (Golub & Van Loan 2013, Algorithm 4.2.1).  A pivot that rounding makes
+    non-positive is clamped to 1e-300 (its root to 1e-150) instead of failing inside a filter loop; a caller that
+    must refuse a non-positive-definite matrix checks ``min(diag(L)) > 1e-150``.
+
+    Parameters
+    ----------
+    A : (n, n) float64 array, SPD (only its lower triangle is read).
+
+    Returns
+    -------
+    (n, n) float64 array, lower triangular.
+    """
+    n = A.shape[0]
+    L = np.zeros((n, n))
+    for i in range(n):
+        for j in range(i + 1):
+            s = A[i, j]
+            for k in range(j):
+                s -= L[i, k] * L[j, k]
+            if i == j:
+                L[i, i] = math.sqrt(max(s, 1e-300))
+            else:
+                L[i, j] = s / L[j, j]
+    return L
+
+
+@njit(cache=True)
+def inv_spd_cholesky(A):
+    """Inverse of a small symmetric positive-definite matrix through its Cholesky factor (new array).
+
+    ``A⁻¹ = L⁻ᵀ L⁻¹`` with ``L`` from :func:`cholesky_small` and ``L⁻¹`` by forward substitution; the result is
+    exactly symmetric.  The unscented update and the RTS smoother use it; :func:`inv_small` (Gauss–Jordan) is the
+    one of the Joseph updates.  Both are kept so that every filter's figures stay bit-identical.
+
+    Parameters
+    ----------
+    A : (n, n) float64 array, SPD.
+
+    Returns
+    -------
+    (n, n) float64 array, ``A⁻¹``.
+    """
+    n = A.shape[0]
+    L = cholesky_small(A)
+    Li = np.zeros((n, n))
+    for j in range(n):
+        Li[j, j] = 1.0 / L[j, j]
+        for i in range(j + 1, n):
+            acc = 0.0
+            for k in range(j, i):
+                acc -= L[i, k] * Li[k, j]
+            Li[i, j] = acc / L[i, i]
+    out = np.zeros((n, n))
+    for i in range(n):
+        for j in range(i + 1):
+            acc = 0.0
+            for k in range(i, n):
+                acc += Li[k, i] * Li[k, j]
+            out[i, j] = acc
+            out[j, i] = acc
+    return out
 
 
 # ---------------------------------------------------------------------------------------------------------------
@@ -178,6 +246,7 @@ def joseph_update(P, dx, H, R, nu, innov_out, S_out):
         P ← (I − K H) P (I − K H)ᵀ + K R Kᵀ          (Bucy & Joseph 1968)
 
     P is symmetrised.  Writes ``ν'`` and ``S`` for NIS records (:func:`nis`, :func:`chi2_gate`).
+    :func:`joseph_update_gain` is the same update that also hands back the gain.
 
     Parameters
     ----------
@@ -188,6 +257,29 @@ def joseph_update(P, dx, H, R, nu, innov_out, S_out):
     nu : (m,) innovation at the nominal state.
     innov_out : (m,) receives ``ν'``.
     S_out : (m, m) receives ``S``.
+
+    Returns
+    -------
+    nis : float, ``ν'ᵀ S⁻¹ ν'``.
+    """
+    K = np.empty((P.shape[0], H.shape[0]))
+    return joseph_update_gain(P, dx, H, R, nu, innov_out, S_out, K)
+
+
+@njit(cache=True)
+def joseph_update_gain(P, dx, H, R, nu, innov_out, S_out, K_out):
+    """:func:`joseph_update` that also writes the gain ``K = P Hᵀ S⁻¹`` it applied into ``K_out``.
+
+    Parameters
+    ----------
+    P : (n, n) covariance, updated in place.
+    dx : (n,) error-state estimate, updated in place.
+    H : (m, n) measurement matrix.
+    R : (m, m) measurement covariance.
+    nu : (m,) innovation at the nominal state.
+    innov_out : (m,) receives ``ν'``.
+    S_out : (m, m) receives ``S``.
+    K_out : (n, m) receives ``K``.
 
     Returns
     -------
@@ -214,7 +306,7 @@ def joseph_update(P, dx, H, R, nu, innov_out, S_out):
             S_out[i, j] = acc
     Si = np.empty((m, m))
     inv_small(S_out, Si)
-    K = PHt @ Si
+    K_out[:, :] = PHt @ Si
     out = 0.0
     for i in range(m):
         for j in range(m):
@@ -222,10 +314,10 @@ def joseph_update(P, dx, H, R, nu, innov_out, S_out):
     for i in range(n):
         acc = 0.0
         for j in range(m):
-            acc += K[i, j] * innov_out[j]
+            acc += K_out[i, j] * innov_out[j]
         dx[i] += acc
-    A = np.eye(n) - K @ H
-    Pn = A @ P @ A.T + K @ R @ K.T
+    A = np.eye(n) - K_out @ H
+    Pn = A @ P @ A.T + K_out @ R @ K_out.T
     for i in range(n):
         for j in range(n):
             P[i, j] = 0.5 * (Pn[i, j] + Pn[j, i])
@@ -341,6 +433,135 @@ def chi2_gate(nu, S, threshold):
     """
     d = nis(nu, S)
     return d <= threshold, d
+
+
+# ---------------------------------------------------------------------------------------------------------------
+# Unscented transform (scaled sigma points; Julier 2002, Wan & van der Merwe 2000)
+
+
+@njit(cache=True)
+def unscented_weights(n, alpha, beta, kappa):
+    """Spread and weights of the 2n + 1 scaled sigma points.
+
+    ``λ = α² (n + κ) − n``;  ``Wm₀ = λ / (n + λ)``,  ``Wc₀ = Wm₀ + 1 − α² + β``,  ``W_i = 1 / (2 (n + λ))`` for
+    i ≥ 1 (Julier 2002; Wan & van der Merwe 2000).
+
+    Parameters
+    ----------
+    n : int, state dimension.
+    alpha, beta, kappa : float, spread, prior-distribution and secondary scaling parameters (n + λ > 0).
+
+    Returns
+    -------
+    lam : float, λ.
+    wm0 : float, mean weight of the centre point.
+    wc0 : float, covariance weight of the centre point.
+    wi : float, weight of every other point (mean and covariance).
+    """
+    lam = alpha * alpha * (n + kappa) - n
+    wm0 = lam / (n + lam)
+    wc0 = wm0 + (1.0 - alpha * alpha + beta)
+    wi = 0.5 / (n + lam)
+    return lam, wm0, wc0, wi
+
+
+@njit(cache=True)
+def sigma_offsets(P, lam, X):
+    """Sigma-point offsets from the mean: ``X₀ = 0``, ``X_i = L_i``, ``X_{n+i} = −L_i`` with ``L_i`` the columns of
+    the Cholesky factor of ``(n + λ) P`` (:func:`cholesky_small`), written into X.
+
+    Parameters
+    ----------
+    P : (n, n) covariance.
+    lam : float, λ of :func:`unscented_weights`.
+    X : (2n + 1, n) receives the offsets.
+
+    Returns
+    -------
+    (n, n) float64 array, the Cholesky factor used.
+    """
+    n = P.shape[0]
+    L = cholesky_small((n + lam) * P)
+    for j in range(n):
+        X[0, j] = 0.0
+    for i in range(n):
+        X[1 + i] = L[:, i]
+        X[1 + n + i] = -L[:, i]
+    return L
+
+
+@njit(cache=True)
+def unscented_mean(Y, wm0, wi):
+    """Weighted mean ``Wm₀ Y₀ + Σ_{s≥1} W_i Y_s`` of transformed sigma points.
+
+    Parameters
+    ----------
+    Y : (2n + 1, m) transformed points, centre first.
+    wm0, wi : float, weights of :func:`unscented_weights`.
+
+    Returns
+    -------
+    (m,) float64 array.
+    """
+    ym = wm0 * Y[0]
+    for s in range(1, Y.shape[0]):
+        ym += wi * Y[s]
+    return ym
+
+
+@njit(cache=True)
+def unscented_cov(A, B, wc0, wi):
+    """Weighted outer-product sum ``Wc₀ A₀ B₀ᵀ + Σ_{s≥1} W_i A_s B_sᵀ`` of deviations from the means.
+
+    ``unscented_cov(D, D, …)`` is the covariance of the points ``D`` (e.g. ``P_zz``), ``unscented_cov(X, D, …)``
+    the cross-covariance (``P_xz``).
+
+    Parameters
+    ----------
+    A : (2n + 1, p) deviations, centre first.
+    B : (2n + 1, q) deviations, centre first.
+    wc0, wi : float, weights of :func:`unscented_weights`.
+
+    Returns
+    -------
+    (p, q) float64 array.
+    """
+    C = np.zeros((A.shape[1], B.shape[1]))
+    for s in range(A.shape[0]):
+        C += (wc0 if s == 0 else wi) * np.outer(A[s], B[s])
+    return C
+
+
+@njit(cache=True)
+def unscented_update(P, Pxz, Pzz, nu, dx, K_out):
+    """Sigma-point measurement update, in place on ``P``: the gain comes from the cross- and innovation
+    covariances of the sigma points, no Jacobian is formed (Julier 2002; Crassidis & Markley 2003)::
+
+        K = P_xz P_zz⁻¹,   dx = K ν,   P ← P − K P_zz Kᵀ (symmetrised)
+
+    ``P_zz⁻¹`` by :func:`inv_spd_cholesky`, used for the gain and the NIS alike.  For the optimal gain
+    ``P − K P_zz Kᵀ`` equals the Joseph form of a linear model.
+
+    Parameters
+    ----------
+    P : (n, n) prior covariance, updated in place.
+    Pxz : (n, m) state–measurement cross-covariance.
+    Pzz : (m, m) innovation covariance (measurement noise included).
+    nu : (m,) innovation ``z − ẑ``.
+    dx : (n,) receives the correction ``K ν`` (overwritten: a fresh error state).
+    K_out : (n, m) receives the gain.
+
+    Returns
+    -------
+    nis : float, ``νᵀ P_zz⁻¹ ν``.
+    """
+    Si = inv_spd_cholesky(Pzz)
+    K = Pxz @ Si
+    K_out[:, :] = K
+    dx[:] = K @ nu
+    Pn = P - K @ Pzz @ K.T
+    P[:, :] = 0.5 * (Pn + Pn.T)
+    return nu @ Si @ nu
 
 
 # ---------------------------------------------------------------------------------------------------------------

@@ -13,10 +13,9 @@ navigation-frame error for the INS / ZUPT filters).
 
 from __future__ import annotations
 
-import numpy as np
 from numba import njit
 
-from imunav._rotation_kernels import qlog_1, qmul_1
+from imunav._rotation_kernels import qconj_1, qlog_1, qmul_1
 
 # ---------------------------------------------------------------------------------------------------------------
 # INS / ZUPT models (global attitude error; H are unit rows on the layout indices the caller passes)
@@ -80,11 +79,7 @@ def vertical_rotation(q, q_ref):
     -------
     float, rad.
     """
-    qc = np.empty(4)
-    qc[0] = q_ref[0]
-    for j in range(3):
-        qc[1 + j] = -q_ref[1 + j]
-    return qlog_1(qmul_1(q, qc))[2]
+    return qlog_1(qmul_1(q, qconj_1(q_ref)))[2]
 
 
 @njit(cache=True)

@@ -4,7 +4,9 @@ Predict: ``x⁻ = f(x, u)``, ``P⁻ = F P Fᵀ + Q`` with ``F = ∂f/∂x``; upd
 ``ν = z − h(x⁻)`` (or ``residual(z, h(x⁻))`` for angles), ``H = ∂h/∂x``,
 ``S = H P⁻ Hᵀ + R``, ``K = P⁻ Hᵀ S⁻¹``, ``x = x⁻ + K ν`` and the Joseph-form
 covariance (Gelb 1974, §6.1).  Jacobians not supplied are formed by central
-differences.
+differences.  The covariance steps are those of :class:`~imunav.filters.KalmanFilter`, on the numba core
+(:func:`imunav.filters._core.propagate_cov_sparse`, :func:`imunav.filters._core.joseph_update`): on a linear
+model the two filters give the same numbers.
 """
 
 from __future__ import annotations
@@ -14,10 +16,9 @@ from typing import Callable
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from imunav._docstrings import fill_doc
 from imunav.errors import InvalidInputError, ShapeError
-from imunav.filters._common import as_covariance, as_matrix, as_vector, inv_sqrt_spd, symmetrize
-from imunav.filters.kalman import UpdateResult, joseph_update
+from imunav.filters._common import as_covariance, as_matrix, as_vector, inv_sqrt_spd, joseph_step, predict_covariance
+from imunav.filters.kalman import UpdateResult
 
 __all__ = ["ExtendedKalmanFilter", "numerical_jacobian"]
 
@@ -54,11 +55,15 @@ def numerical_jacobian(fun: Callable[[Array], ArrayLike], x: Array, eps: float =
     return J
 
 
-@fill_doc
 class ExtendedKalmanFilter:
     """EKF with state ``x`` and covariance ``P`` (module docstring; Gelb 1974, §6.1).
 
-    %(kf_x0_P0)s
+    Parameters
+    ----------
+    x0 : array_like, shape (n,)
+        Initial state.
+    P0 : array_like, shape (n, n)
+        Initial covariance.
     f : callable
         ``f(x, u) -> x_next`` process model (``u`` may be None).
     h : callable
@@ -96,11 +101,22 @@ class ExtendedKalmanFilter:
     def n(self) -> int:
         return int(self.x.shape[0])
 
-    @fill_doc
     def predict(self, u: ArrayLike | None = None, *, Q: ArrayLike | None = None) -> tuple[Array, Array]:
-        """``x⁻ = f(x, u)``, ``P⁻ = F P Fᵀ + Q``.
+        """``x⁻ = f(x, u)``, ``P⁻ = F P Fᵀ + Q`` with ``F = ∂f/∂x`` at the current ``x``.
 
-        %(kf_predict)s
+        Parameters
+        ----------
+        u : array_like, optional
+            Control input passed to ``f``.
+        Q : array_like, shape (n, n), optional
+            Process-noise covariance of this step (default: the filter's ``Q``).
+
+        Returns
+        -------
+        x : numpy.ndarray, shape (n,)
+            Predicted state.
+        P : numpy.ndarray, shape (n, n)
+            Predicted covariance.
 
         Raises
         ------
@@ -117,21 +133,33 @@ class ExtendedKalmanFilter:
         if xn.shape[0] != self.n:
             raise ShapeError(f"f(x, u) returned {xn.shape[0]} values, the state has {self.n}")
         self.x = xn
-        self.P = symmetrize(F @ self.P @ F.T + Qm)
+        self.P = predict_covariance(self.P, F, Qm)
         return self.x, self.P
 
-    @fill_doc
     def update(self, z: ArrayLike, *, R: ArrayLike | None = None, h: Callable[[Array], ArrayLike] | None = None,
                H_jac: Callable[[Array], ArrayLike] | None = None) -> UpdateResult:
         """Measurement update with ``h`` (or an override, e.g. another sensor); Joseph-form covariance.
 
-        %(kf_update_params_head)s
+        Parameters
+        ----------
+        z : array_like, shape (m,)
+            Measurement.
+        R : array_like, shape (m, m), optional
+            Measurement-noise covariance (default: the filter's ``R``).
         h : callable, optional
             Measurement model for this update (default: the filter's ``h``).
         H_jac : callable, optional
             Its Jacobian (numerical when omitted).
 
-        %(kf_update_returns)s
+        Returns
+        -------
+        UpdateResult
+            Innovation, its covariance, the gain, the normalised innovation and the NIS.
+
+        Raises
+        ------
+        InvalidInputError
+            If ``R`` does not match the size of the measurement.
         """
         hf = self.h if h is None else h
         Hj = self.H_jac if h is None else H_jac
@@ -142,10 +170,6 @@ class ExtendedKalmanFilter:
             raise InvalidInputError(f"R is {Rm.shape} but the measurement has {zp.shape[0]} values")
         H = as_matrix(Hj(self.x), "H_jac(x)", zp.shape[0], self.n) if Hj is not None else numerical_jacobian(hf, self.x)
         nu = zv - zp if self.residual is None else np.asarray(self.residual(zv, zp), dtype=np.float64)
-        S = symmetrize(H @ self.P @ H.T + Rm)
-        K = np.linalg.solve(S, H @ self.P).T
-        self.x = self.x + K @ nu
-        self.P = joseph_update(self.P, K, H, Rm)
+        self.x, self.P, K, S, nis = joseph_step(self.x, self.P, nu, H, Rm)
         m = nu.shape[0]
-        return UpdateResult(nu, S, K, inv_sqrt_spd(S) @ nu, float(nu @ np.linalg.solve(S, nu)),
-                            np.ones(m, dtype=bool), np.ones(m))
+        return UpdateResult(nu, S, K, inv_sqrt_spd(S) @ nu, nis, np.ones(m, dtype=bool), np.ones(m))

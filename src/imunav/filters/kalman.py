@@ -9,9 +9,12 @@ Predict:  ``x⁻ = F x + B u``,  ``P⁻ = F P Fᵀ + G Q Gᵀ``.
 Update:   ``ν = z − H x⁻``,  ``S = H P⁻ Hᵀ + R``,  ``K = P⁻ Hᵀ S⁻¹``,
 ``x = x⁻ + K ν`` and, in Joseph form (Bucy & Joseph 1968),
 ``P = (I − K H) P⁻ (I − K H)ᵀ + K R Kᵀ``, which stays symmetric positive
-semi-definite for any gain; the "standard" form ``P = (I − K H) P⁻`` is
-algebraically equal for the optimal gain.  P is re-symmetrised after every
-step.
+semi-definite for any gain.
+
+The steps are those of every imunav filter: the covariance prediction is the core's
+:func:`imunav.filters._core.propagate_cov_sparse` and the update its
+:func:`imunav.filters._core.joseph_update` (through ``joseph_update_gain``, which also returns the gain),
+the numba primitives of the attitude, INS and GNSS/INS filters.
 
 A measurement may be used partially: ``accept`` (one flag per channel) keeps
 only the accepted rows of H, R and z, which is how the robust gates of
@@ -34,8 +37,11 @@ from imunav.filters._common import (
     as_matrix,
     as_vector,
     inv_sqrt_spd,
+    joseph_step,
+    predict_covariance,
     symmetrize,
 )
+from imunav.filters._core import nis as core_nis
 from imunav.filters.gates import isolation_thresholds
 from imunav.results import Result
 
@@ -46,7 +52,6 @@ __all__ = [
     "kalman_filter",
     "batch_kalman_filter",
     "BatchRun",
-    "joseph_update",
     "riccati_steady_state",
 ]
 
@@ -82,30 +87,6 @@ class UpdateResult(Result):
     nis: float
     accepted: NDArray[np.bool_]
     weights: Array
-
-
-def joseph_update(P_pred: Array, K: Array, H: Array, R: Array) -> Array:
-    """Joseph-form covariance update ``(I−KH)P(I−KH)ᵀ + K R Kᵀ`` (symmetrised; Bucy & Joseph 1968).
-
-    Parameters
-    ----------
-    P_pred : numpy.ndarray, shape (n, n)
-        Prior covariance ``P⁻``.
-    K : numpy.ndarray, shape (n, m)
-        Gain (any gain: the form stays positive semi-definite).
-    H : numpy.ndarray, shape (m, n)
-        Measurement matrix.
-    R : numpy.ndarray, shape (m, m)
-        Measurement noise covariance.
-
-    Returns
-    -------
-    numpy.ndarray, shape (n, n)
-        Posterior covariance, symmetric.
-    """
-    n = P_pred.shape[0]
-    A = np.eye(n) - K @ H
-    return symmetrize(A @ P_pred @ A.T + K @ R @ K.T)
 
 
 def riccati_steady_state(F: ArrayLike, Q: ArrayLike, H: ArrayLike, R: ArrayLike, G: ArrayLike | None = None) -> Array:
@@ -249,7 +230,7 @@ class KalmanFilter:
             x = x + Bm @ as_vector(u, "u", Bm.shape[1])
         Qn = Qm if Gm is None else Gm @ Qm @ Gm.T
         self.x = x
-        self.P = symmetrize(Fm @ self.P @ Fm.T + Qn)
+        self.P = predict_covariance(self.P, Fm, Qn)
         return self.x, self.P
 
     def innovation(self, z: ArrayLike, *, H: ArrayLike | None = None, R: ArrayLike | None = None
@@ -298,19 +279,18 @@ class KalmanFilter:
         *,
         H: ArrayLike | None = None,
         R: ArrayLike | None = None,
-        form: str = "joseph",
         accept: ArrayLike | None = None,
     ) -> UpdateResult:
-        """Measurement update; returns an :class:`UpdateResult`.
+        """Measurement update in Joseph form (the core's ``joseph_update``); returns an :class:`UpdateResult`.
 
         Parameters
         ----------
         z : array_like, shape (m,)
             Measurement.
-        H, R : array_like, optional
-            Measurement matrix (m, n) and noise covariance (m, m); default the constructor's.
-        form : {"joseph", "standard"}, optional
-            Covariance update form (default ``"joseph"``).
+        H : array_like, shape (m, n), optional
+            Measurement matrix; default the constructor's.
+        R : array_like, shape (m, m), optional
+            Measurement noise covariance; default the constructor's.
         accept : array_like of bool, shape (m,), optional
             Channels set False are not used (their gain column is zero).  All
             False leaves x and P at the prediction.
@@ -318,33 +298,24 @@ class KalmanFilter:
         Returns
         -------
         UpdateResult
-            Innovation, its covariance, the gain applied, NIS and the channels used.
+            Innovation, its covariance, the gain applied, NIS (over all channels) and the channels used.
 
         Raises
         ------
         InvalidInputError
-            If ``form`` is unknown or ``accept`` has the wrong length.
+            If ``H`` or ``R`` is missing or of the wrong size, or ``accept`` has the wrong length.
         """
-        if form not in ("joseph", "standard"):
-            raise InvalidInputError(f"form must be 'joseph' or 'standard', got {form!r}")
         nu, S, Hm, Rm = self.innovation(z, H=H, R=R)
         m = nu.shape[0]
         acc = np.ones(m, dtype=bool) if accept is None else np.asarray(accept, dtype=bool).reshape(-1)
         if acc.shape[0] != m:
             raise InvalidInputError(f"accept must have {m} flags (one per channel), got {acc.shape[0]}")
         normalized = inv_sqrt_spd(S) @ nu
-        nis = float(nu @ np.linalg.solve(S, nu))
+        nis = float(core_nis(nu, S))
         K = np.zeros((self.n, m))
         if acc.any():
             idx = np.flatnonzero(acc)
-            Ha, Ra, Sa = Hm[idx], Rm[np.ix_(idx, idx)], S[np.ix_(idx, idx)]
-            Ka = np.linalg.solve(Sa, Ha @ self.P).T  # P Hᵀ S⁻¹ (S symmetric)
-            self.x = self.x + Ka @ nu[idx]
-            if form == "joseph":
-                self.P = joseph_update(self.P, Ka, Ha, Ra)
-            else:
-                self.P = symmetrize((np.eye(self.n) - Ka @ Ha) @ self.P)
-            K[:, idx] = Ka
+            self.x, self.P, K[:, idx], _, _ = joseph_step(self.x, self.P, nu[idx], Hm[idx], Rm[np.ix_(idx, idx)])
         return UpdateResult(nu, S, K, normalized, nis, acc, acc.astype(np.float64))
 
 
@@ -408,10 +379,10 @@ def kalman_filter(
 ) -> KalmanRun:
     """Run a time-invariant linear filter over measurements ``z`` (N, m).
 
-    Each step is predict then update (the first measurement is at step 1, one
+    Each step is predict then update of :class:`KalmanFilter` (the first measurement is at step 1, one
     prediction after ``x0``).  Rows of ``z`` that are all NaN are skipped
     (prediction only), which is how slower sensors are handled.  Many runs at
-    once: :func:`batch_kalman_filter` (leading batch axis).
+    once: :func:`batch_kalman_filter` (leading batch axis, vectorised over the runs).
 
     Parameters
     ----------
@@ -469,33 +440,24 @@ def kalman_filter(
         Bm = as_matrix(B, "B", n)
         uu = np.array(u, dtype=np.float64).reshape(zz.shape[0], Bm.shape[1])
         Bu = uu @ Bm.T
-    if u is not None:
-        # control input: step by step with the class (B u changes every step)
-        kf = KalmanFilter(x0v, P0m, F=Fm, Q=Qn, H=Hm, R=Rm, B=np.eye(n))
-        res = {k: [] for k in ("x_pred", "P_pred", "x", "P", "innovation", "S", "nis")}
-        for k in range(zz.shape[0]):
-            kf.predict(Bu[k])
-            res["x_pred"].append(kf.x.copy())
-            res["P_pred"].append(kf.P.copy())
-            if np.isnan(zz[k, 0]):
-                res["innovation"].append(np.full(m, np.nan))
-                res["S"].append(np.full((m, m), np.nan))
-                res["nis"].append(np.nan)
-            else:
-                r = kf.update(zz[k])
-                res["innovation"].append(r.innovation)
-                res["S"].append(r.S)
-                res["nis"].append(r.nis)
-            res["x"].append(kf.x.copy())
-            res["P"].append(kf.P.copy())
-        return KalmanRun(*(np.asarray(res[k]) for k in ("x_pred", "P_pred", "x", "P", "innovation", "S", "nis")))
-    o = batch_filter(x0v, P0m, Fm, Qn, Hm, Rm, zz[None], store_full=True)
-    nu = o["innovation"][0]
-    S = o["S"][0]
-    nis = np.full(zz.shape[0], np.nan)
-    ok = ~np.isnan(nu[:, 0])
-    nis[ok] = np.einsum("ki,ki->k", nu[ok], np.linalg.solve(S[ok], nu[ok][..., None])[..., 0])
-    return KalmanRun(o["x_pred"][0], o["P_pred"][0], o["x"][0], o["P"][0], nu, S, nis)
+    kf = KalmanFilter(x0v, P0m, F=Fm, Q=Qn, H=Hm, R=Rm, B=np.eye(n))
+    res: dict[str, list] = {k: [] for k in ("x_pred", "P_pred", "x", "P", "innovation", "S", "nis")}
+    for k in range(zz.shape[0]):
+        kf.predict(None if u is None else Bu[k])
+        res["x_pred"].append(kf.x.copy())
+        res["P_pred"].append(kf.P.copy())
+        if np.isnan(zz[k, 0]):
+            res["innovation"].append(np.full(m, np.nan))
+            res["S"].append(np.full((m, m), np.nan))
+            res["nis"].append(np.nan)
+        else:
+            r = kf.update(zz[k])
+            res["innovation"].append(r.innovation)
+            res["S"].append(r.S)
+            res["nis"].append(r.nis)
+        res["x"].append(kf.x.copy())
+        res["P"].append(kf.P.copy())
+    return KalmanRun(*(np.asarray(res[k]) for k in ("x_pred", "P_pred", "x", "P", "innovation", "S", "nis")))
 
 
 @dataclass(frozen=True)

@@ -35,6 +35,7 @@ from numpy.typing import ArrayLike, NDArray
 from imunav.errors import InvalidInputError
 from imunav.filters._batch import huber_batch
 from imunav.filters._common import as_covariance, as_matrix, as_vector, inv_sqrt_spd
+from imunav.filters._core import nis as core_nis
 from imunav.filters.gates import gate_channels, isolate_channels, isolation_thresholds, nis_gate
 from imunav.filters.kalman import KalmanFilter, UpdateResult
 
@@ -230,5 +231,5 @@ def robust_update(
         x, P, w, _ = huber_update(kf.x, kf.P, z, Hm, Rm, c)
         K = np.linalg.solve(S, Hm @ kf.P).T
         kf.x, kf.P = x, P
-        return UpdateResult(nu, S, K, inv_sqrt_spd(S) @ nu, float(nu @ np.linalg.solve(S, nu)), w > 0, w)
+        return UpdateResult(nu, S, K, inv_sqrt_spd(S) @ nu, float(core_nis(nu, S)), w > 0, w)
     raise InvalidInputError(f"method must be 'gate', 'isolate', 'nis' or 'huber', got {method!r}")
