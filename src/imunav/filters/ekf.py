@@ -14,7 +14,6 @@ from typing import Callable
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from imunav._docstrings import fill_doc
 from imunav.errors import InvalidInputError, ShapeError
 from imunav.filters._common import as_covariance, as_matrix, as_vector, inv_sqrt_spd, symmetrize
 from imunav.filters.kalman import UpdateResult, joseph_update
@@ -54,11 +53,15 @@ def numerical_jacobian(fun: Callable[[Array], ArrayLike], x: Array, eps: float =
     return J
 
 
-@fill_doc
 class ExtendedKalmanFilter:
     """EKF with state ``x`` and covariance ``P`` (module docstring; Gelb 1974, §6.1).
 
-    %(kf_x0_P0)s
+    Parameters
+    ----------
+    x0 : array_like, shape (n,)
+        Initial state.
+    P0 : array_like, shape (n, n)
+        Initial covariance.
     f : callable
         ``f(x, u) -> x_next`` process model (``u`` may be None).
     h : callable
@@ -96,11 +99,22 @@ class ExtendedKalmanFilter:
     def n(self) -> int:
         return int(self.x.shape[0])
 
-    @fill_doc
     def predict(self, u: ArrayLike | None = None, *, Q: ArrayLike | None = None) -> tuple[Array, Array]:
         """``x⁻ = f(x, u)``, ``P⁻ = F P Fᵀ + Q``.
 
-        %(kf_predict)s
+        Parameters
+        ----------
+        u : array_like, optional
+            Control input passed to ``f``.
+        Q : array_like, shape (n, n), optional
+            Process-noise covariance of this step (default: the filter's ``Q``).
+
+        Returns
+        -------
+        x : numpy.ndarray, shape (n,)
+            Predicted state.
+        P : numpy.ndarray, shape (n, n)
+            Predicted covariance.
 
         Raises
         ------
@@ -120,18 +134,30 @@ class ExtendedKalmanFilter:
         self.P = symmetrize(F @ self.P @ F.T + Qm)
         return self.x, self.P
 
-    @fill_doc
     def update(self, z: ArrayLike, *, R: ArrayLike | None = None, h: Callable[[Array], ArrayLike] | None = None,
                H_jac: Callable[[Array], ArrayLike] | None = None) -> UpdateResult:
         """Measurement update with ``h`` (or an override, e.g. another sensor); Joseph-form covariance.
 
-        %(kf_update_params_head)s
+        Parameters
+        ----------
+        z : array_like, shape (m,)
+            Measurement.
+        R : array_like, shape (m, m), optional
+            Measurement-noise covariance (default: the filter's ``R``).
         h : callable, optional
             Measurement model for this update (default: the filter's ``h``).
         H_jac : callable, optional
             Its Jacobian (numerical when omitted).
 
-        %(kf_update_returns)s
+        Returns
+        -------
+        UpdateResult
+            Innovation, its covariance, the gain, the normalised innovation and the NIS.
+
+        Raises
+        ------
+        InvalidInputError
+            If ``R`` does not match the size of the measurement.
         """
         hf = self.h if h is None else h
         Hj = self.H_jac if h is None else H_jac

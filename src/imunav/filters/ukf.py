@@ -14,7 +14,6 @@ from typing import Callable
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from imunav._docstrings import fill_doc
 from imunav.errors import InvalidInputError
 from imunav.filters._common import as_covariance, as_vector, inv_sqrt_spd, symmetrize
 from imunav.filters.kalman import UpdateResult
@@ -66,11 +65,15 @@ def sigma_points(x: Array, P: Array, alpha: float, beta: float, kappa: float) ->
     return X, Wm, Wc
 
 
-@fill_doc
 class UnscentedKalmanFilter:
     """UKF with state ``x`` and covariance ``P`` (module docstring).
 
-    %(kf_x0_P0)s
+    Parameters
+    ----------
+    x0 : array_like, shape (n,)
+        Initial state.
+    P0 : array_like, shape (n, n)
+        Initial covariance.
     f : callable
         ``f(x, u) -> x_next`` process model.
     h : callable
@@ -105,11 +108,22 @@ class UnscentedKalmanFilter:
     def _sigma(self) -> tuple[Array, Array, Array]:
         return sigma_points(self.x, self.P, self.alpha, self.beta, self.kappa)
 
-    @fill_doc
     def predict(self, u: ArrayLike | None = None, *, Q: ArrayLike | None = None) -> tuple[Array, Array]:
         """Propagate the sigma points through f.
 
-        %(kf_predict)s
+        Parameters
+        ----------
+        u : array_like, optional
+            Control input passed to ``f``.
+        Q : array_like, shape (n, n), optional
+            Process-noise covariance of this step (default: the filter's ``Q``).
+
+        Returns
+        -------
+        x : numpy.ndarray, shape (n,)
+            Predicted state.
+        P : numpy.ndarray, shape (n, n)
+            Predicted covariance.
         """
         Qm = self.Q if Q is None else as_covariance(Q, "Q", self.n)
         X, Wm, Wc = self._sigma()
@@ -120,13 +134,25 @@ class UnscentedKalmanFilter:
         self.P = symmetrize((D * Wc[:, None]).T @ D + Qm)
         return self.x, self.P
 
-    @fill_doc
     def update(self, z: ArrayLike, *, R: ArrayLike | None = None) -> UpdateResult:
         """Measurement update from sigma points redrawn around the prior.
 
-        %(kf_update_params_head)s
+        Parameters
+        ----------
+        z : array_like, shape (m,)
+            Measurement.
+        R : array_like, shape (m, m), optional
+            Measurement-noise covariance (default: the filter's ``R``).
 
-        %(kf_update_returns)s
+        Returns
+        -------
+        UpdateResult
+            Innovation, its covariance, the gain, the normalised innovation and the NIS.
+
+        Raises
+        ------
+        InvalidInputError
+            If ``R`` does not match the size of the measurement.
         """
         X, Wm, Wc = self._sigma()
         Z = np.array([np.atleast_1d(np.asarray(self.h(xi), dtype=np.float64)) for xi in X])

@@ -38,7 +38,6 @@ from typing import Any
 
 import numpy as np
 
-from imunav._docstrings import fill_doc
 from imunav.errors import FileFormatError, InvalidInputError
 from imunav.io.topics import TopicData, TopicInfo, enu_to_ned, frd_to_ros, require, ros_to_frd, topic_data
 from imunav.rotation import from_convention
@@ -296,7 +295,6 @@ def _choose(topics: dict[str, Any], topic: str | None, source: str, want: Iterab
                             f"topic=... (CLI: --topic)")
 
 
-@fill_doc
 def read_topic(path: str | os.PathLike[str], topic: str, *, instance: int | None = None,
                _want: Iterable[str] | None = None) -> TopicData:
     """Read one topic of a bag (see the module docstring for the types and conversions).
@@ -310,7 +308,10 @@ def read_topic(path: str | os.PathLike[str], topic: str, *, instance: int | None
     instance : int, optional
         Must be None (ROS topics have no instances).
 
-    %(topic_returns)s
+    Returns
+    -------
+    TopicData
+        The topic in SI units, body FRD / world NED, ``t`` in s since ``meta["t0_ns"]``.
 
     Raises
     ------
@@ -343,7 +344,6 @@ def read_topic(path: str | os.PathLike[str], topic: str, *, instance: int | None
     return topic_data(name, kind, stamps, vals, units, source, receive_ns=ints[:, 2], meta=meta)
 
 
-@fill_doc
 def read_imu_topic(path: str | os.PathLike[str], topic: str | None, *, instance: int | None = None) -> TopicData:
     """The IMU topic ``topic`` (or the only ``sensor_msgs/Imu`` topic); errors list the candidates.
 
@@ -356,7 +356,15 @@ def read_imu_topic(path: str | os.PathLike[str], topic: str | None, *, instance:
     instance : None
         Must be None (ROS topics have no instances).
 
-    %(imu_topic_returns)s
+    Returns
+    -------
+    TopicData
+        The IMU topic in SI units: gyro (rad/s) and specific force (m/s²) in body FRD, ``t`` in s since
+        ``meta["t0_ns"]``.
+
+    Raises
+    ------
+    InvalidInputError
         If the topic is not an IMU topic, or there are none or several and none is chosen.
     """
     d = read_topic(path, topic, instance=instance, _want=("imu",))
