@@ -1,18 +1,99 @@
-"""Small numpy simulators for the calibration tests (independent of imunav.sim)."""
+"""Synthetic recordings for the tests, in one place (small numpy builders, independent of imunav.sim).
+
+- :func:`static_imu`: the seeded IMU recording at rest, level (white noise about zero rate and ``(0, 0, -g)``);
+- :func:`rotating_imu`: a smooth random rotation with magnetometer, and the truth (attitude tests);
+- the calibration sessions: :func:`multipose_session`, :func:`hand_session`, :func:`unsigned_count_session`,
+  the thesis's truth (:func:`thesis_truth`) and its positions / rate steps.
+
+Every builder takes its seed (or generator) and draws in a fixed order, so a test's data are the same on every run.
+"""
 
 from __future__ import annotations
 
 import numpy as np
+from numpy.typing import ArrayLike
 
+from imunav.calib.model import ImuCalibration
+from imunav.calib.multipose import accel_tedaldi_matrix, gyro_tedaldi_matrix
 from imunav.rotation import (
     dcm_from_quat,
+    quat_conjugate,
+    quat_exp,
+    quat_from_euler,
     quat_from_rotvec,
     quat_inverse,
     quat_multiply,
+    quat_rotate,
     rotvec_from_quat,
 )
+from imunav.timeseries import ImuData
+from imunav.units import G0
 
-G = 9.80665
+G = G0  # standard gravity, m/s^2: the calibration sessions' and static_imu's default
+
+
+# ---------------------------------------------------------------- IMU recordings
+def static_imu(n: int = 1000, fs: float = 100.0, *, seed: int | np.random.Generator | None = 0,
+               accel: ArrayLike = (0.0, 0.0, -G0), gyro_sd: float = 0.01, accel_sd: float = 0.01,
+               mag: ArrayLike | None = None, mag_sd: float = 0.0, temp: float | None = None, temp_sd: float = 0.0,
+               **fields) -> ImuData:
+    """A recording at rest: ``n`` samples at ``fs`` Hz from ``t = 0``, SI, body FRD.
+
+    Gyro ``N(0, gyro_sd)``, specific force ``N(accel, accel_sd)`` (level by default: ``(0, 0, -g)``), then, when
+    given, a magnetometer ``N(mag, mag_sd)`` and a temperature ``N(temp, temp_sd)``, drawn in that order from
+    ``numpy.random.default_rng(seed)`` (a generator is used as it is); a zero σ gives the constant itself, with
+    nothing drawn.  ``fields`` go to :class:`ImuData` (``mag_unit``, ``meta``).
+    """
+    r = np.random.default_rng(seed)
+
+    def draw(mean, sd, shape):
+        mean = np.asarray(mean, float)
+        return r.normal(mean, sd, shape) if sd else np.broadcast_to(mean, shape).copy()
+
+    gyro = draw(0.0, gyro_sd, (n, 3))
+    f = draw(accel, accel_sd, (n, 3))
+    m = None if mag is None else draw(mag, mag_sd, (n, 3))
+    tc = None if temp is None else draw(temp, temp_sd, (n,))
+    return ImuData(np.arange(n) / fs, gyro, f, m, tc, **fields)
+
+
+G_ROTATING = 9.81  # gravity of rotating_imu, m/s^2
+MAG_NED = np.array([18.0, 0.0, 45.0])  # µT, north / down
+
+
+def rotating_imu(rng, *, duration=60.0, fs=100.0, rate_amp=0.6, bias=(0.01, -0.02, 0.015), sg=0.002, sa=0.05,
+                 sm=0.3, q0=None):
+    """Smooth random rotation; ZOH gyro (sample k held over (t_{k-1}, t_k]).
+
+    Returns ImuData, true q_nb (N, 4), per-sample noise stds (sg [rad/s], sa [m/s²], sm [µT]).
+    """
+    r = np.random.default_rng(rng)
+    n = int(duration * fs)
+    t = np.arange(n) / fs
+    dt = 1.0 / fs
+    f = r.uniform(0.05, 0.3, 3)
+    ph = r.uniform(0, 2 * np.pi, 3)
+    w = rate_amp * np.sin(2 * np.pi * f[None, :] * t[:, None] + ph[None, :])
+    q = np.empty((n, 4))
+    qk = quat_from_euler(0.2, -0.1, 1.0) if q0 is None else np.asarray(q0, float)
+    for k in range(n):
+        if k > 0:
+            qk = quat_multiply(qk, quat_exp(w[k] * dt))
+        q[k] = qk
+    qc = quat_conjugate(q)
+    fb = quat_rotate(qc, np.tile([0.0, 0.0, -G_ROTATING], (n, 1))) + r.normal(0, sa, (n, 3))
+    mb = quat_rotate(qc, np.tile(MAG_NED, (n, 1))) + r.normal(0, sm, (n, 3))
+    gyr = w + np.asarray(bias) + r.normal(0, sg, (n, 3))
+    return ImuData(t=t, gyro=gyr, accel=fb, mag=mb), q
+
+
+def angle_err_deg(q_est, q_true):
+    """Angle of the rotation between two attitudes, deg, per row."""
+    d = quat_multiply(quat_conjugate(q_true), q_est)
+    return np.degrees(2 * np.arccos(np.clip(np.abs(d[:, 0]), 0, 1)))
+
+
+# ---------------------------------------------------------------- calibration sessions
 
 
 def random_poses(n: int, rng: np.random.Generator) -> np.ndarray:
@@ -72,8 +153,6 @@ def hundred_positions() -> np.ndarray:
 
 def thesis_truth():
     """Tables 5.1 / 5.2 parameters as an ImuCalibration (SI)."""
-    from imunav.calib.model import ImuCalibration
-
     g, d = G, np.pi / 180
     Sa = np.array([21283, 17592, 18409]) * 1e-6
     Ba = np.array([0.3945, 0.2899, -0.3371]) * g
@@ -145,3 +224,38 @@ def hand_session(poses, fs, rng, *, rest_s=50.0, static_s=(7.0, 10.0), move_s=(2
         w_list.append(w)
         static(poses[k], rng.uniform(*static_s))
     return np.vstack(f_list), np.vstack(w_list)
+
+
+# A 16-bit IMU read as unsigned counts (zero near 32768): 415 counts per m/s², 4,778 counts per rad/s,
+# misalignments of about 0.01 rad; white noise 8 counts (accel) and 3 counts (gyro) per sample, then
+# rounded to integers within 0..65535.
+SA, SG = 1 / 415.0, 1 / 4778.0
+PA_U = np.array([0.011, -0.009, 0.012, 1.004 * SA, 0.997 * SA, 1.002 * SA, -32768 - 40, -32768 + 25, -32768 + 60.0])
+PG_U = np.array([-0.01, 0.009, -0.012, 0.011, -0.0098, 0.0105, 1.003 * SG, 0.996 * SG, 1.001 * SG])
+BG_U = np.array([32768 - 30, 32768 + 12, 32768 + 5.0])
+
+
+def unsigned_count_session(seed, n_poses=40):
+    """Hand-rotated session: 50 s rest, 40 poses held 7-10 s, minimum-jerk turns of 2.5-4 s (~51,000 samples)."""
+    truth = ImuCalibration(
+        accel_bias=-PA_U[6:], accel_matrix=np.linalg.inv(accel_tedaldi_matrix(PA_U)), gyro_bias=BG_U,
+        gyro_matrix=np.linalg.inv(gyro_tedaldi_matrix(PG_U)), raw_accel_unit="counts", raw_gyro_unit="counts",
+    )
+    rng = np.random.default_rng(seed)
+    f, w = hand_session(random_poses(n_poses, rng), 100.0, rng, rest_s=50.0)
+    a, g = truth.invert_arrays(f, w)
+    a = np.round(a + rng.normal(scale=8.0, size=a.shape))
+    g = np.round(g + rng.normal(scale=3.0, size=g.shape))
+    assert a.min() >= 0 and a.max() <= 65535 and g.min() >= 0 and g.max() <= 65535  # plausible raw counts
+    return a, g
+
+
+def degenerate_mag_clouds() -> dict[str, np.ndarray]:
+    """Magnetometer samples that span no volume: a point, a line and a plane (200 samples each, seeded)."""
+    rng = np.random.default_rng(0)
+    point = np.tile([20.0, -5.0, 40.0], (200, 1))
+    t = rng.uniform(-1, 1, 200)
+    line = np.outer(t, [1.0, 2.0, 0.5]) * 30 + [3, 4, 5]
+    ang = rng.uniform(0, 2 * np.pi, 200)
+    plane = np.c_[30 * np.cos(ang), 30 * np.sin(ang), np.zeros(200)] + [1, 2, 3]
+    return {"point": point, "line": line, "plane": plane}

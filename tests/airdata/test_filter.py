@@ -12,6 +12,8 @@ from scipy.stats import norm
 from imunav.airdata.filter import (
     THESIS_ITERATIONS,
     THESIS_P44,
+    LongHorizonConfig,
+    LongHorizonFilter,
     ThesisFilter,
     ThesisFilterConfig,
     thesis_matrices,
@@ -34,6 +36,7 @@ from imunav.filters import (
     riccati_steady_state,
     thesis_thresholds,
 )
+from imunav.sim.flight import FlightConfig, simulate_flight
 
 K0 = thesis_row(100)
 
@@ -210,3 +213,43 @@ def test_step_gives_run(robust):
     np.testing.assert_array_equal(f.step(z[0]).x, r.x[0])
     with pytest.raises(ShapeError):
         f.step(np.zeros(2))
+
+
+def test_long_horizon_filter_consistent_and_robust():
+    f = simulate_flight(FlightConfig(profile="turns", duration=200.0, turbulence="light"), rng=5)
+    C_d, C_a = f.C_nb("doppler"), f.C_nb("ads")
+    r = LongHorizonFilter().run(f.t_ads, f.v_ads_body, f.t_doppler, f.v_doppler_body, C_d, C_a)
+    wt = np.stack([np.interp(r.t, f.t, f.wind_ned[:, i]) for i in range(3)], 1)
+    e = (r.wind - wt)[100:]
+    nees = np.mean((e / r.wind_std[100:]) ** 2, axis=0)
+    assert np.all((nees > 0.5) & (nees < 2.0))  # errors consistent with the reported σ
+    assert np.all(np.sqrt(np.mean(e**2, axis=0)) < 0.6)
+    # an ADS spike of 30 m/s on 5 epochs: rejected by the NIS gate, ignored by the estimate
+    va = f.v_ads_body.copy()
+    spikes = np.searchsorted(f.t_ads, r.t[[300, 700, 1100, 1500, 1900]])
+    va[spikes] += [30.0, -25.0, 20.0]
+    rr = LongHorizonFilter(LongHorizonConfig(robust="nis")).run(f.t_ads, va, f.t_doppler, f.v_doppler_body, C_d, C_a)
+    assert np.all(rr.weights[[300, 700, 1100, 1500, 1900]] == 0)
+    ro = LongHorizonFilter(LongHorizonConfig(robust=None)).run(f.t_ads, va, f.t_doppler, f.v_doppler_body, C_d, C_a)
+    assert np.abs(rr.wind - r.wind).max() < np.abs(ro.wind - r.wind).max() / 3
+
+
+def test_long_horizon_step_gives_run():
+    """Stepping the Doppler epochs (state carried) gives run's wind, σ, weights to 1e-12 (robust "isolate")."""
+    f = simulate_flight(FlightConfig(profile="turns", duration=60.0, turbulence="light"), rng=8)
+    C_d, C_a = f.C_nb("doppler"), f.C_nb("ads")
+    va = f.v_ads_body.copy()
+    va[np.searchsorted(f.t_ads, f.t_doppler[[100, 300]])] += [30.0, -25.0, 20.0]  # two rejected epochs
+    filt = LongHorizonFilter()
+    r = filt.run(f.t_ads, va, f.t_doppler, f.v_doppler_body, C_d, C_a)
+    assert np.any(r.weights == 0)
+    # the ADS NED air velocity interpolated to the Doppler epochs, as run does it
+    va_n = np.einsum("kij,kj->ki", C_a, va)
+    va_d = np.stack([np.interp(f.t_doppler, f.t_ads, va_n[:, i]) for i in range(3)], axis=1)
+    filt.reset()
+    st = [filt.step(f.t_doppler[k], f.v_doppler_body[k], C_d[k], va_d[k]) for k in range(f.t_doppler.size)]
+    for name in ("wind", "wind_std", "mean_wind", "position_std", "normalized", "weights"):
+        np.testing.assert_allclose(np.array([getattr(s, name) for s in st]), getattr(r, name), rtol=0, atol=1e-12,
+                                   err_msg=name)
+    with pytest.raises(InvalidInputError, match="after the previous epoch"):
+        filt.step(f.t_doppler[-1], f.v_doppler_body[-1], C_d[-1], va_d[-1])

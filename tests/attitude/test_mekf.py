@@ -9,6 +9,7 @@ from dataclasses import replace
 
 import numpy as np
 import pytest
+from builders import MAG_NED, angle_err_deg, rotating_imu
 
 from imunav.attitude import AdaptiveMEKF
 from imunav.attitude.adaptive import ADAPTIVE_DEFAULTS
@@ -16,8 +17,6 @@ from imunav.attitude.mekf import MEKF, MekfConfig
 from imunav.errors import ConfigError, InvalidInputError
 from imunav.rotation import quat_conjugate, quat_exp, quat_from_euler, quat_rotate
 from imunav.timeseries import ImuData
-
-from ._sim import MAG_NED, angle_err_deg, simulate
 
 
 def _static(n, fs, *, q=None, bias=(0.0, 0.0, 0.0), sg=0.0, sa=0.0, sm=0.0, acc_scale=1.0, seed=0):
@@ -133,7 +132,7 @@ def test_new_parameters_validated():
 
 def test_defaults_track_a_moving_sensor():
     """The shipped adaptive defaults on the shared simulated motion: converge and stay within 1.5°."""
-    data, q = simulate(5, duration=60.0, fs=100.0)
+    data, q = rotating_imu(5, duration=60.0, fs=100.0)
     e = angle_err_deg(AdaptiveMEKF().run(data).q_nb, q)
     assert np.sqrt(np.mean(e[2000:] ** 2)) < 1.5
 

@@ -4,9 +4,11 @@ import json
 
 import numpy as np
 import pytest
+from cli_contract import invoke, one_error_line
 from typer.testing import CliRunner
 
 from imunav.cli.main import app
+from imunav.errors import InvalidInputError
 
 runner = CliRunner()
 
@@ -73,3 +75,18 @@ def test_toml_config(tmp_path):
     bad.write_text("[other]\n")
     with pytest.raises(ConfigError, match="exactly one"):
         load_config(bad)
+
+
+@pytest.mark.parametrize("gate", ["0", "-1", "nan"])
+def test_gate_m_must_be_positive(tmp_path, gate):
+    from imunav.airdata.filter import ThesisFilter
+
+    with pytest.raises(InvalidInputError, match="gate_m"):
+        ThesisFilter(robust="gate", gate_m=float(gate)).run(np.zeros((20, 3)))
+    assert invoke("airdata", "simulate", "cruise", "--duration", "20", "--out", tmp_path / "a.npz").exit_code == 0
+    assert "gate" in one_error_line(invoke("airdata", "run", tmp_path / "a.npz", "--robust", "gate", "--gate-m", gate))
+
+
+def test_airdata_simulate_out_csv_is_refused(tmp_path):
+    assert ".npz" in one_error_line(invoke("airdata", "simulate", "cruise", "--duration", "20", "--out", tmp_path / "x.csv"))
+    assert not (tmp_path / "x.csv").exists()

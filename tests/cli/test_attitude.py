@@ -5,6 +5,7 @@ from __future__ import annotations
 import json
 
 import pytest
+from cli_contract import invoke, one_error_line
 from shared_data import data_path
 from typer.testing import CliRunner
 
@@ -112,3 +113,8 @@ def test_grid_search_cli_reports_leave_one_trial_out(tmp_path):
         beta = min({b for b, _ in score}, key=lambda b: score[(b, other)])
         assert item["oof"] == pytest.approx(score[(beta, item["item"])], abs=1e-12)
     assert d["cv"]["oof_mean"] >= d["cv"]["in_sample_mean"] - 1e-12
+
+
+def test_attitude_montecarlo_address_without_dask_is_refused():
+    r = invoke("attitude", "montecarlo", "--runs", "1", "--executor", "serial", "--address", "tcp://127.0.0.1:1")
+    assert "--executor dask" in one_error_line(r)

@@ -6,6 +6,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from builders import degenerate_mag_clouds
 from typer.testing import CliRunner
 
 from imunav.cli.main import app
@@ -96,7 +97,7 @@ def test_temperature_command(demo, tmp_path):
 
 
 def test_ferraris_command_on_imucal_session(tmp_path):
-    from conftest_data import data_path
+    from shared_data import data_path
 
     sess = data_path("imucal", "example_ferraris_session.csv")
     secs = data_path("imucal", "example_ferraris_session_list.json")
@@ -113,12 +114,12 @@ def test_bad_temperature_argument(tmp_path):
 
 def test_multipose_command_on_unsigned_counts_with_defaults(tmp_path):
     """A raw unsigned-count session (zero near 32768) calibrates with only --fs and --init-s."""
-    from test_multipose import PA_U, PG_U, _unsigned_session
+    from builders import PA_U, PG_U, unsigned_count_session
 
     from imunav.calib import ImuCalibration
     from imunav.calib.multipose import accel_tedaldi_matrix, gyro_tedaldi_matrix
 
-    a, g = _unsigned_session(21)
+    a, g = unsigned_count_session(21)
     csv = tmp_path / "session.csv"
     np.savetxt(csv, np.c_[a, g], delimiter=",", fmt="%d", header="ax,ay,az,gx,gy,gz", comments="")
     _run("calibrate", "multipose", csv, "--fs", 100, "--init-s", 50, "--out", tmp_path / "cal.json")
@@ -127,3 +128,16 @@ def test_multipose_command_on_unsigned_counts_with_defaults(tmp_path):
     np.testing.assert_allclose(np.diag(cal.accel_matrix), np.diag(np.linalg.inv(accel_tedaldi_matrix(PA_U))), rtol=3e-3)
     np.testing.assert_allclose(np.diag(cal.gyro_matrix), np.diag(np.linalg.inv(gyro_tedaldi_matrix(PG_U))), rtol=3e-3)
     np.testing.assert_allclose(cal.accel_bias, -PA_U[6:], atol=5.0)
+
+
+@pytest.mark.parametrize("kind", ["point", "line", "plane"])
+def test_cli_minmax_degenerate_is_an_error_not_nan(tmp_path, kind):
+    from typer.testing import CliRunner
+
+    from imunav.cli.main import app
+
+    np.savez(tmp_path / "m.npz", mag=degenerate_mag_clouds()[kind])
+    r = CliRunner().invoke(app, ["calibrate", "mag", str(tmp_path / "m.npz"), "--method", "minmax",
+                                 "--out", str(tmp_path / "c.json")])
+    assert r.exit_code == 2 and "Traceback" not in r.stderr, r.stderr
+    assert not (tmp_path / "c.json").exists()

@@ -16,6 +16,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from builders import static_imu
 from typer.testing import CliRunner
 
 from imunav.cli.main import app
@@ -186,12 +187,9 @@ def test_bad_output(tmp_path, name, argv, in_suffix, outs, fault):
 @pytest.fixture(scope="module")
 def files(tmp_path_factory):
     from imunav.io import write_imu
-    from imunav.timeseries import ImuData
 
     d = tmp_path_factory.mktemp("faults")
-    rng = np.random.default_rng(0)
-    n = 3000
-    data = ImuData.from_arrays(None, rng.normal(0, 0.01, (n, 3)), rng.normal([0, 0, -9.81], 0.01, (n, 3)), fs=100)
+    data = static_imu(3000, accel=(0.0, 0.0, -9.81))
     write_imu(data, d / "st.csv")
     write_imu(data, d / "st.npz")
     (d / "bad.json").write_text("{bad")

@@ -7,6 +7,7 @@ import re
 
 import numpy as np
 import pytest
+from builders import static_imu
 from typer.testing import CliRunner
 
 from imunav.cli.main import app
@@ -19,11 +20,9 @@ runner = CliRunner()
 
 def _recording(path):
     """20 s at 100 Hz: rest 0-8 s, motion 8-12 s (gyro clipped at 250 °/s), rest 12-20 s; 3 samples lost at 5 s."""
-    r = np.random.default_rng(7)
     n = 2000
-    t = np.arange(n) / 100.0
-    gyro = r.normal(0, 1e-3, (n, 3))
-    accel = r.normal(0, 1e-2, (n, 3)) + [0, 0, -G0]
+    rest = static_imu(n, seed=7, gyro_sd=1e-3, accel_sd=1e-2)
+    t, gyro, accel = rest.t, rest.gyro.copy(), rest.accel.copy()
     k = np.arange(400) / 100.0
     gyro[800:1200] += np.column_stack([np.sin(2 * k), np.cos(3 * k), np.sin(k)]) * 2.0
     accel[800:1200] += np.column_stack([np.sin(5 * k), np.cos(4 * k), np.sin(3 * k)]) * 3.0

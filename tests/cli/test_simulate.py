@@ -67,3 +67,14 @@ def test_simulate_bad_inputs(tmp_path):
     assert res.exit_code == 2 and "nope" in res.output
     res = runner.invoke(app, ["simulate", "static", "--gravity", "heavy", "--out", str(tmp_path / "x.npz")])
     assert res.exit_code == 2 and "--gravity" in res.output
+
+
+def test_cli_simulate_refuses_bad_latitude_and_height(tmp_path):
+    from typer.testing import CliRunner
+
+    from imunav.cli.main import app
+
+    for extra in (["--lat-deg", "100"], ["--lat-deg", "45", "--h-m", "1e12"]):
+        r = CliRunner().invoke(app, ["simulate", "static", "--duration", "2", "--out", str(tmp_path / "s.csv"), *extra])
+        assert r.exit_code == 2 and len(r.stderr.strip().splitlines()) == 1, r.stderr
+        assert not (tmp_path / "s.csv").exists()

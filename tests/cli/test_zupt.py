@@ -4,7 +4,9 @@ from __future__ import annotations
 
 import json
 
+import numpy as np
 import pytest
+from cli_contract import invoke, one_error_line
 from shared_data import data_path
 from typer.testing import CliRunner
 
@@ -22,7 +24,7 @@ def test_zupt_run_reproduces_published_error(tmp_path):
     assert r.exit_code == 0, r.output
     summary = json.loads(out.read_text())
     # trial_error[0] of the file (published, pyshoe's own EKF, rounded to 1 mm): imunav gives 0.0290 m, -9.4 %;
-    # over all 42 trials the ratio has median 0.973 (test_ins_zupt_reference.py)
+    # over all 42 trials the ratio has median 0.973 (tests/ins/test_zupt_reference.py)
     assert summary["error_2d_m"] == pytest.approx(0.032, rel=0.10)
     assert (tmp_path / "traj.npz").stat().st_size > 0
     r = runner.invoke(app, ["zupt", "run", str(f), "--detector", "labels:nothing"])
@@ -72,3 +74,21 @@ def test_zupt_run_lstm_reports_its_guard(tmp_path):
     assert r.exit_code == 0, r.output
     s = json.loads(out.read_text())
     assert 0.0 <= s["guard_fallback_fraction"] <= 1.0 and s["error_2d_m"] < 0.1
+
+
+@pytest.mark.parametrize("limit", ["-1", "0"])
+def test_zupt_benchmark_limit_must_be_positive(tmp_path, limit):
+    line = one_error_line(invoke("zupt", "benchmark", tmp_path, "--limit", limit))
+    assert "--limit" in line
+
+
+def test_failed_zupt_run_out_leaves_no_temp_file(tmp_path, monkeypatch):
+    trial = sorted(data_path("foot", "pyshoe_vicon").glob("*.mat"))[0]
+
+    def disk_full(*a, **k):
+        raise OSError(28, "No space left on device")
+
+    monkeypatch.setattr(np, "savez_compressed", disk_full)
+    r = invoke("zupt", "run", trial, "--out", tmp_path / "z.npz")
+    assert "No space left" in one_error_line(r)
+    assert list(tmp_path.iterdir()) == []

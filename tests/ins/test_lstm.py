@@ -394,4 +394,4 @@ def test_zupt_run_lstm_cli_without_torch(monkeypatch, tmp_path):
     monkeypatch.setitem(sys.modules, "torch", None)
     r = CliRunner().invoke(app, ["zupt", "run", str(f), "--detector", "lstm", "--json", str(tmp_path / "z.json")])
     assert r.exit_code == 0, r.output
-    assert json.loads((tmp_path / "z.json").read_text())["error_2d_m"] < 0.1  # as with torch (test_ins_cli.py)
+    assert json.loads((tmp_path / "z.json").read_text())["error_2d_m"] < 0.1  # as with torch (tests/cli/test_zupt.py)

@@ -8,6 +8,7 @@ import math
 
 import numpy as np
 import pytest
+from builders import static_imu
 from shared_data import data_path
 
 from imunav.errors import (
@@ -23,11 +24,9 @@ from imunav.rotation import euler_from_quat, quat_from_euler
 from imunav.timeseries import ImuData
 
 
-def _static(n=2000, fs=200.0, g=9.8029, rng=None, noise=(0.0, 0.0)):
-    rng = np.random.default_rng(rng)
-    acc = np.tile([0.0, 0.0, -g], (n, 1)) + rng.normal(0, noise[0], (n, 3))
-    gyr = rng.normal(0, noise[1], (n, 3))
-    return ImuData(np.arange(n) / fs, gyr, acc)
+def _static(n=2000, rng=None, noise=(0.0, 0.0)):
+    """At rest at 200 Hz under the filter's gravity, 9.8029 m/s², with white noise of σ ``noise`` (accel, gyro)."""
+    return static_imu(n, 200.0, seed=rng, accel=(0.0, 0.0, -9.8029), accel_sd=noise[0], gyro_sd=noise[1])
 
 
 def test_published_trial_error_reproduced_all_trials():

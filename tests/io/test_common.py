@@ -4,19 +4,16 @@ import json
 
 import numpy as np
 import pytest
+from builders import static_imu
 from typer.testing import CliRunner
 
 from imunav.cli.main import app
 from imunav.errors import UnitError
 from imunav.io import read_imu, write_imu
-from imunav.timeseries import ImuData
 
 
-def _rec(n=200, fs=100.0):
-    rng = np.random.default_rng(0)
-    return ImuData(t=np.arange(n) / fs, gyro=rng.normal(0, 0.01, (n, 3)),
-                   accel=np.tile([0.0, 0.0, -9.81], (n, 1)) + rng.normal(0, 0.01, (n, 3)),
-                   mag=np.tile([20.0, 0.0, 40.0], (n, 1)), mag_unit="uT")
+def _rec():
+    return static_imu(200, accel=(0.0, 0.0, -9.81), mag=(20.0, 0.0, 40.0), mag_unit="uT")
 
 
 @pytest.mark.parametrize("ext", ["csv", "parquet", "h5", "npz", "mat"])

@@ -8,6 +8,8 @@ import h5py
 import numpy as np
 import pytest
 import scipy.io
+from builders import static_imu
+from cli_contract import invoke, one_error_line
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 from hypothesis.extra import numpy as hnp
@@ -366,3 +368,11 @@ def test_parquet_without_pyarrow_names_the_extra(tmp_path, monkeypatch):
         write_imu(data, tmp_path / "s.parquet")
     assert not (tmp_path / "s.parquet").exists()
     np.testing.assert_array_equal(read_imu(write_imu(data, tmp_path / "r.npz")).accel, data.accel)
+
+
+def test_fs_contradicting_the_time_column_is_an_error(tmp_path):
+    p = write_imu(static_imu(3000), tmp_path / "rec.csv")
+    with pytest.raises(InvalidInputError, match=r"time column \(samples at 100 Hz\).*fs=50"):
+        read_imu(p, fs=50.0)
+    assert read_imu(p, fs=100.0).n == 3000  # agreeing: accepted
+    assert "fs=50" in one_error_line(invoke("info", p, "--fs", "50"))

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from builders import static_imu
 from typer.testing import CliRunner
 
 from imunav.cli.main import app
@@ -63,8 +64,7 @@ def test_white_noise_far_above_the_physical_allowance_is_not_refused():
     scatter beyond 2 deg, so the statistical limit (chi-square, alpha = 1e-6) must take over: 200 seeds, 0 refused."""
     refused = 0
     for seed in range(200):
-        r = np.random.default_rng(seed)
-        d = ImuData.from_arrays(None, r.normal(0, 0.5, (600, 3)), r.normal([0, 0, -9.81], 0.5, (600, 3)), fs=10.0)
+        d = static_imu(600, 10.0, seed=seed, accel=(0.0, 0.0, -9.81), gyro_sd=0.5, accel_sd=0.5)
         c = check_static(d)
         refused += not c.static
         assert c.tilt_limit_deg > 2.0 and c.rotation_limit_deg > 2.0

@@ -14,6 +14,7 @@ import math
 
 import numpy as np
 import pytest
+from builders import static_imu
 
 from imunav.errors import (
     ConfigError,
@@ -42,8 +43,8 @@ allantools = pytest.importorskip("allantools")
 
 
 def static(n: int, fs: float, accel=(0.0, 0.0, -G0)) -> ImuData:
-    t = np.arange(n) / fs
-    return ImuData(t, np.zeros((n, 3)), np.tile(np.asarray(accel, float), (n, 1)))
+    """The ideal (noise-free) recording at rest."""
+    return static_imu(n, fs, accel=accel, gyro_sd=0.0, accel_sd=0.0)
 
 
 def oavar(y: np.ndarray, fs: float, m: int) -> float:

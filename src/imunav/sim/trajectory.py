@@ -585,7 +585,7 @@ def trajectory_from_waypoints(
     # scipy Rotation: scalar-last quaternions of the active rotation, so
     # as_matrix() of q_nb is C_nb; RotationSpline's first derivative is the
     # angular rate resolved in body axes (checked against
-    # body_rate_from_attitude in tests/test_trajectory.py)
+    # body_rate_from_attitude in tests/sim/test_trajectory.py)
     rot = Rotation.from_quat(qk[:, [1, 2, 3, 0]])
     spl = RotationSpline(tk, rot)
     r_t = spl(ta)
