@@ -17,6 +17,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 from builders import static_imu
+from shared_data import ROOT
 from typer.testing import CliRunner
 
 from imunav.cli.main import app
@@ -511,7 +512,6 @@ def test_debug_shows_the_traceback_in_commands_that_report_errors_themselves(tmp
 
 
 # ---------------------------------------------------------------- interrupt and concurrent runs (subprocesses)
-_ROOT = Path(__file__).resolve().parents[1]
 SLOW_RUNS = {
     # a lab whose first step writes data files for a while (a 2 h static record at 50 Hz, in one piece)
     "lab": (["lab", "--out", "{DIR}", "--config", "{CFG}", "--quiet"],
@@ -539,7 +539,7 @@ def test_concurrent_run_refused_and_sigint_leaves_no_manifest(tmp_path, name):
     if cfg_text:
         cfg.write_text(cfg_text)
     args = _fill(argv, {"DIR": str(d), "CFG": str(cfg)})
-    env = dict(os.environ, PYTHONPATH=str(_ROOT / "src"))
+    env = dict(os.environ, PYTHONPATH=str(ROOT / "src"))
     proc = subprocess.Popen([sys.executable, "-m", "imunav.cli.main", *args], env=env, cwd=tmp_path,
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     try:

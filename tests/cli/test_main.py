@@ -5,14 +5,12 @@ from __future__ import annotations
 import os
 import subprocess
 import sys
-from pathlib import Path
 
+from shared_data import ROOT
 from typer.main import get_command
 from typer.testing import CliRunner
 
 from imunav.cli.main import COMMANDS, app
-
-ROOT = Path(__file__).resolve().parents[1]
 
 
 def _leaves(cmd, path, groups=False):

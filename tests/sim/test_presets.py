@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from shared_data import ROOT
 
 from imunav.errors import InvalidInputError
 from imunav.sim import presets
@@ -105,11 +106,9 @@ def test_unknown_preset():
 
 
 def test_example_toml_loads_with_display_units():
-    from pathlib import Path
-
     from imunav.units import from_display
 
-    p = Path(__file__).resolve().parents[1] / "examples" / "imu_error_model.toml"
+    p = ROOT / "examples" / "imu_error_model.toml"
     m = ImuErrorModel.from_toml(p)
     assert m.name == "example_mems"
     assert m.gyro.noise_density[0] == pytest.approx(from_display(0.15, "deg/sqrt(h)"))
