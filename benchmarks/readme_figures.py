@@ -131,7 +131,7 @@ FIGURES: tuple[Figure, ...] = (
     Figure(
         "ulog_px4_agreement",
         "agrees with PX4's onboard `vehicle_attitude` after 10 s to 0.02° / 0.04° / 0.22° RMS in roll / pitch / yaw",
-        "{python} -m pytest tests/test_io_ulog.py -q -s", 1.0,
+        "{python} -m pytest tests/io/test_ulog.py -q -s", 1.0,
         note="that test asserts < 0.05 / 0.1 / 0.5 deg and prints the measured RMS",
     ),
     Figure(

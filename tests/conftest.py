@@ -21,7 +21,7 @@ def rng():
 
 
 # -- the fault suite's captured stderr (issue 16: `grep -c Traceback` over it must be 0) ---------------
-# tests/test_cli_faults.py appends every case's stderr to <dir>/<worker>.log; the controller counts the
+# tests/cli/test_errors.py appends every case's stderr to <dir>/<worker>.log; the controller counts the
 # lines with "Traceback" over all workers at the end, fails the session if there is one, and prints
 # the count.  Set IMUNAV_FAULT_LOG_DIR to keep the logs (then: grep -c Traceback $IMUNAV_FAULT_LOG_DIR/*.log).
 FAULT_LOG_ENV = "IMUNAV_FAULT_LOG_DIR"
@@ -37,7 +37,7 @@ def pytest_collection_modifyitems(config, items):
     for item in items:
         block = getattr(item, "callspec", None) and item.callspec.params.get("block")
         text = getattr(block, "text", "")
-        if "test_gins" in item.nodeid or re.search(r"\bgins\b|GinsFilter|lab_gins", text):
+        if "test_gins" in item.nodeid or "ins/gins/" in item.nodeid or re.search(r"\bgins\b|GinsFilter|lab_gins", text):
             item.add_marker(pytest.mark.xdist_group(GINS_GROUP))
 
 

@@ -1,4 +1,4 @@
-"""Shared pieces of the GNSS/INS Monte Carlo consistency tests (tests/ins/test_gins_*.py).
+"""Shared pieces of the GNSS/INS Monte Carlo consistency tests (tests/ins/gins/test_*.py).
 
 ``matched_run`` draws one run whose truth follows the filter's own model (:mod:`imunav.ins.gins.truth`), and
 ``mean_band`` gives the two-sided band of a mean of χ² values at a level corrected for the number of checks a

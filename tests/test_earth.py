@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from imunav import earth
-from imunav.errors import NonFiniteError, ShapeError
+from imunav.errors import InvalidInputError, NonFiniteError, ShapeError
 
 
 def test_constants_match_tr8350():
@@ -181,3 +181,21 @@ def test_small_differences_in_local_metres_agree_with_the_exact_ned():
     np.testing.assert_allclose(dlla_to_ned(moved - lla, lla), d, rtol=0, atol=5e-9)
     exact = np.array([lla_to_ned(m, p) for m, p in zip(moved, lla)])
     np.testing.assert_allclose(exact, d, rtol=0, atol=2 * np.max(np.sum(d**2, axis=1)) / 6.3e6)
+
+
+@pytest.mark.parametrize("lat_deg,h", [(100.0, 0.0), (-90.5, 0.0), (45.0, 1e12), (45.0, -2e4), (45.0, 1.5e5)])
+def test_earth_refuses_out_of_range_lat_h(lat_deg, h):
+    with pytest.raises(InvalidInputError):
+        earth.normal_gravity(np.radians(lat_deg), h)
+    with pytest.raises(InvalidInputError):
+        earth.gravity_ned(np.radians(lat_deg), h)
+
+
+def test_earth_rate_refuses_latitude_beyond_pole():
+    with pytest.raises(InvalidInputError, match="latitude"):
+        earth.earth_rate_ned(np.radians(100.0))
+
+
+@pytest.mark.parametrize("lat_deg,h", [(90.0, 0.0), (-90.0, 0.0), (0.0, -1e4), (45.0, 1e5)])
+def test_earth_accepts_the_range_ends(lat_deg, h):
+    assert 9.0 < earth.normal_gravity(np.radians(lat_deg), h) < 10.0

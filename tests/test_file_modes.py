@@ -8,6 +8,10 @@ import stat
 
 import numpy as np
 import pytest
+from builders import static_imu
+from cli_contract import invoke
+
+from imunav.io import write_imu
 
 
 @pytest.fixture
@@ -50,3 +54,28 @@ def test_attitude_figure_mode(tmp_path, umask_022):
     assert _mode(out) == umask_022
     assert out.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     assert [p.name for p in tmp_path.iterdir()] == ["mc.png"]
+
+
+def test_json_and_figure_outputs_follow_the_umask(tmp_path):
+    """--plot / --yaml / --json files were created 0600 by mkstemp; they must get 0666 & ~umask like the rest."""
+    old = os.umask(0o022)
+    try:
+        write_imu(static_imu(3000), tmp_path / "st.csv")
+        assert invoke("noise", tmp_path / "st.csv", "--terms", "N,K", "--yaml", tmp_path / "imu.yaml",
+                    "--json", tmp_path / "n.json").exit_code == 0
+        assert invoke("airdata", "simulate", "cruise", "--duration", "20", "--out", tmp_path / "a.npz",
+                    "--json", tmp_path / "as.json").exit_code == 0
+        assert invoke("airdata", "run", tmp_path / "a.npz", "--plot", tmp_path / "ar.png",
+                    "--json", tmp_path / "ar.json").exit_code == 0
+        import matplotlib
+
+        from imunav.attitude.plot import save
+
+        matplotlib.use("Agg")
+        import matplotlib.pyplot as plt
+
+        save(plt.figure(), tmp_path / "fig.png")
+    finally:
+        os.umask(old)
+    modes = {p.name: p.stat().st_mode & 0o777 for p in tmp_path.iterdir()}
+    assert set(modes.values()) == {0o644}, modes

@@ -174,3 +174,34 @@ def test_example_lab_configs_are_valid():
             continue  # real-data labs need the shared data (tests/test_lab_steps.py)
         cfg = load_lab_config(f)
         assert "simulate_tests" in cfg
+
+
+def test_lab_tasks_end_at_100_percent_and_the_monte_carlo_reports_progress(tmp_path):
+    from imunav.lab import LabContext
+    from imunav.montecarlo import run_montecarlo
+    from imunav.scenarios import attitude_paper
+
+    class Recorder:
+        def __init__(self):
+            self.tasks = {}
+
+        def add_task(self, description, total=None, **kw):
+            self.tasks[description] = {"total": total, "completed": 0}
+            return description
+
+        def advance(self, tid, n=1):
+            self.tasks[tid]["completed"] += n
+
+        def update(self, tid, **kw):
+            self.tasks[tid].update({k: v for k, v in kw.items() if k in ("total", "completed")})
+
+    rec = Recorder()
+    ctx = LabContext(out_dir=tmp_path, seed=0, progress=rec)
+    with ctx.task("unknown length", total=None):
+        pass
+    t = rec.tasks["unknown length"]
+    assert t["total"] and t["completed"] == t["total"]
+    seen = []
+    run_montecarlo(attitude_paper, 3, seed=0, executor="serial", batched=True, chunk_size=1, duration=5.0,
+                   progress=lambda done, total: seen.append((done, total)))
+    assert seen == [(1, 3), (2, 3), (3, 3)]

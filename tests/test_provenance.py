@@ -11,6 +11,7 @@ import warnings
 
 import numpy as np
 import pytest
+from builders import static_imu
 from typer.testing import CliRunner
 
 from imunav.calib import ImuCalibration
@@ -23,9 +24,8 @@ from imunav.timeseries import ImuData
 G = 9.80665
 
 
-def _raw(n=400, fs=100.0):
-    rng = np.random.default_rng(3)
-    return ImuData.from_arrays(None, rng.normal(0, 0.01, (n, 3)), rng.normal([0, 0, -G], 0.01, (n, 3)), fs=fs)
+def _raw():
+    return static_imu(400, seed=3)
 
 
 CAL = ImuCalibration(accel_bias=[0.1, -0.05, 0.02], accel_matrix=np.diag([1.01, 0.99, 1.0]),

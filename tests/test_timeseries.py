@@ -4,12 +4,16 @@ saturation and static-interval detection."""
 from __future__ import annotations
 
 import json
+import warnings
 
 import numpy as np
 import pytest
+from builders import static_imu
+from cli_contract import invoke
 from shared_data import data_path
 
 from imunav.errors import (
+    ImunavWarning,
     InsufficientDataError,
     InvalidInputError,
     NonFiniteError,
@@ -18,28 +22,21 @@ from imunav.errors import (
     TimeOrderError,
     UnitError,
 )
+from imunav.io import write_imu
 from imunav.io.dataframe import from_dataframe, to_dataframe
-from imunav.timeseries import ImuData, StaticIntervals, detect_saturation, moving_variance, static_intervals
+from imunav.timeseries import ImuData, StaticIntervals, describe, detect_saturation, moving_variance, static_intervals
 from imunav.units import DEG, G0
 
-
-def make(n=100, fs=100.0, mag=False, temp=False, seed=0):
-    r = np.random.default_rng(seed)
-    t = np.arange(n) / fs
-    return ImuData(
-        t,
-        r.normal(0, 1e-3, (n, 3)),
-        r.normal(0, 1e-2, (n, 3)) + [0, 0, -G0],
-        r.normal(0, 1, (n, 3)) if mag else None,
-        r.normal(25, 0.1, n) if temp else None,
-    )
+# at rest, with a magnetometer and a temperature when asked
+QUIET = {"gyro_sd": 1e-3, "accel_sd": 1e-2}
+SENSORS = {"mag": (0.0, 0.0, 0.0), "mag_sd": 1.0, "temp": 25.0, "temp_sd": 0.1}
 
 
 # -- validation ----------------------------------------------------------------
 
 
 def test_properties_and_immutability():
-    d = make(201, fs=200.0)
+    d = static_imu(201, 200.0, **QUIET)
     assert d.n == len(d) == 201
     assert d.fs == pytest.approx(200.0, rel=1e-12)
     assert d.duration == pytest.approx(1.0)
@@ -175,11 +172,11 @@ def test_gaps_reported():
     (gap,) = d.gaps()
     assert gap.index == 49 and gap.t_start == pytest.approx(0.49)
     assert gap.length_s == pytest.approx(0.06) and gap.missing_samples == 5
-    assert make().gaps() == []
+    assert static_imu(100, **QUIET).gaps() == []
 
 
 def test_slice_time_slice_with():
-    d = make(100, mag=True, temp=True)
+    d = static_imu(100, **QUIET, **SENSORS)
     s = d.slice(10, 20)
     assert s.n == 10 and s.t[0] == d.t[10] and s.mag is not None and s.temp.shape == (10,)
     ts = d.time_slice(0.25, 0.5)
@@ -208,7 +205,7 @@ def test_interp_and_resample_linear_signals_exactly():
 
 
 def test_dataframe_round_trip_exact():
-    d = make(50, mag=True, temp=True).with_(meta={"sensor": "unit"}, mag_unit="nT")
+    d = static_imu(50, **QUIET, **SENSORS).with_(meta={"sensor": "unit"}, mag_unit="nT")
     df = to_dataframe(d)
     assert list(df.columns)[:4] == ["t", "gyro_x", "gyro_y", "gyro_z"]
     r = from_dataframe(df)
@@ -224,7 +221,7 @@ def test_dataframe_round_trip_exact():
 
 
 def test_saturation_full_scale_and_runs():
-    d = make(200)
+    d = static_imu(200, **QUIET)
     g = d.gyro.copy()
     rail = 250 * DEG
     g[50:54, 0] = rail  # clipped for 4 samples
@@ -412,3 +409,27 @@ def test_static_intervals_vqf_sample_rest_motion_rest():
     assert len(si) == 2
     assert si.t_start[0] == 0.0 and si.t_stop[0] == pytest.approx(9.3, abs=1.0)
     assert si.t_start[1] == pytest.approx(41.6, abs=1.0) and si.stops[1] == d.n
+
+
+def test_std_of_a_constant_1e300_signal_is_zero():
+    d = ImuData.from_arrays(None, np.full((100, 3), 1e300), np.tile([0, 0, -G0], (100, 1)), fs=100)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", RuntimeWarning)
+        ch = {c["channel"]: c for c in describe(d).channels}
+    assert ch["gyro_x"]["std"] == 0.0 and ch["gyro_x"]["mean"] == pytest.approx(np.degrees(1e300), rel=1e-12)
+    assert ch["accel_z"]["std"] == 0.0
+
+
+def test_accelerometer_in_g_at_rest_warns(tmp_path):
+    d = static_imu(3000, accel=(0.0, 0.0, -1.0), accel_sd=0.01 / G0)  # |f| = 1 at rest: the file was in g
+    with pytest.warns(ImunavWarning, match="in g"):
+        s = describe(d)
+    assert s.warnings and "--accel-unit g" in s.warnings[0]
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", ImunavWarning)
+        assert describe(static_imu(3000)).warnings == []  # m/s^2: no warning
+    p = write_imu(d, tmp_path / "ing.csv")
+    r = invoke("info", p, "--json", tmp_path / "i.json")
+    assert r.exit_code == 0
+    lines = r.stderr.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("warning: ") and "in g" in lines[0]

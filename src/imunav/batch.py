@@ -45,7 +45,6 @@ import numpy as np
 import pandas as pd
 
 from imunav import calib
-from imunav._docstrings import fill_doc
 from imunav.calib import ImuCalibration
 from imunav.errors import ConfigError, FileFormatError, InvalidInputError, NotStaticError
 from imunav.io import read_imu, write_imu
@@ -581,7 +580,6 @@ def _load_spec(spec: Any) -> Any:
     return spec if isinstance(spec, Mapping) and all(hasattr(v, "max_si") for v in spec.values()) else load_spec(spec)
 
 
-@fill_doc
 def calibrate_batch(
     folder: str | os.PathLike[str],
     *,
@@ -626,8 +624,21 @@ def calibrate_batch(
         Geodetic latitude, rad (as in :func:`calibrate_unit`).
     gravity : float, optional
         Local gravity magnitude, m/s^2 (as in :func:`calibrate_unit`).
-    %(batch_executor)s
-    %(batch_overwrite_returns)s
+    executor : {"serial", "processes", "dask"}
+        Where the units are processed (:func:`imunav.montecarlo.run_batch`).
+    n_workers : int, optional
+        Worker processes (default: number of cores).
+    address : str, optional
+        Dask scheduler address (Dask executor only; None: a local cluster).
+    progress : bool
+        Show a progress bar.
+    overwrite : bool
+        Clear a previous run in ``out_dir`` instead of refusing.
+
+    Returns
+    -------
+    BatchSummary
+        One row per unit (also written as ``summary.csv`` / ``summary.json``).
 
     Raises
     ------
@@ -716,7 +727,6 @@ def noise_unit(
     return {"unit": rec.stem, "estimates": est, "truth": {}, "files": files}
 
 
-@fill_doc
 def noise_batch(
     folder: str | os.PathLike[str],
     *,
@@ -753,10 +763,23 @@ def noise_batch(
         Keyword arguments of :func:`imunav.io.read_imu` (columns, units, ...).
     terms : sequence of str
         Allan-variance terms to fit (as in :func:`noise_unit`).
-    %(batch_executor)s
+    executor : {"serial", "processes", "dask"}
+        Where the units are processed (:func:`imunav.montecarlo.run_batch`).
+    n_workers : int, optional
+        Worker processes (default: number of cores).
+    address : str, optional
+        Dask scheduler address (Dask executor only; None: a local cluster).
+    progress : bool
+        Show a progress bar.
     force : bool
         Analyse recordings that are not static.
-    %(batch_overwrite_returns)s
+    overwrite : bool
+        Clear a previous run in ``out_dir`` instead of refusing.
+
+    Returns
+    -------
+    BatchSummary
+        One row per unit (also written as ``summary.csv`` / ``summary.json``).
 
     Raises
     ------

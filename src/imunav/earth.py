@@ -36,7 +36,6 @@ import numpy as np
 from numba import njit
 from numpy.typing import ArrayLike, NDArray
 
-from imunav._docstrings import fill_doc
 from imunav.errors import InvalidInputError, NonFiniteError, ShapeError
 
 __all__ = [
@@ -123,7 +122,6 @@ def _out(a: Array, single: bool) -> Array:
     return a[0] if single else a
 
 
-@fill_doc
 def normal_gravity(lat: ArrayLike, h: ArrayLike = 0.0) -> Array | float:
     """Magnitude of WGS84 normal gravity (gravitation + centrifugal), m/s².
 
@@ -138,7 +136,10 @@ def normal_gravity(lat: ArrayLike, h: ArrayLike = 0.0) -> Array | float:
 
     The height series is accurate to about 1e-6 m/s² up to 20 km.
 
-    %(earth_lat_params)s
+    Parameters
+    ----------
+    lat : array_like
+        Geodetic latitude, rad, in [-pi/2, pi/2] (scalar or array).
     h : array_like
         Ellipsoidal height, m (broadcasts with ``lat``), inside :data:`H_RANGE_M`.
 
@@ -147,7 +148,12 @@ def normal_gravity(lat: ArrayLike, h: ArrayLike = 0.0) -> Array | float:
     float or numpy.ndarray
         γ(φ, h), m/s², positive (pointing down in NED); a float for scalar inputs.
 
-    %(earth_lat_h_raises)s
+    Raises
+    ------
+    InvalidInputError
+        If a latitude is outside [-pi/2, pi/2] or a height outside :data:`H_RANGE_M`.
+    NonFiniteError
+        If an input is NaN or infinite.
     """
     return _radii_gravity(lat, h)[2]
 
@@ -198,14 +204,16 @@ def _radii_gravity(lat: ArrayLike, h: ArrayLike) -> tuple[Array | float, Array |
     return res[0].reshape(la.shape), res[1].reshape(la.shape), res[2].reshape(la.shape)
 
 
-@fill_doc
 def gravity_ned(lat: ArrayLike, h: ArrayLike = 0.0) -> Array:
     """Normal gravity vector in NED, ``(0, 0, +γ(φ, h))`` (m/s²).
 
     The small north component of the gravity vector above the ellipsoid
     (≈ −8.08e-9 h sin 2φ m/s², Groves 2.140) is neglected.
 
-    %(earth_lat_params)s
+    Parameters
+    ----------
+    lat : array_like
+        Geodetic latitude, rad, in [-pi/2, pi/2] (scalar or array).
     h : array_like
         Ellipsoidal height, m (broadcasts with ``lat``).
 
@@ -214,7 +222,12 @@ def gravity_ned(lat: ArrayLike, h: ArrayLike = 0.0) -> Array:
     numpy.ndarray, shape (3,) or (..., 3)
         ``g_n`` in NED, m/s², one vector per latitude.
 
-    %(earth_lat_h_raises)s
+    Raises
+    ------
+    InvalidInputError
+        If a latitude is outside [-pi/2, pi/2] or a height outside :data:`H_RANGE_M`.
+    NonFiniteError
+        If an input is NaN or infinite.
     """
     g = np.asarray(normal_gravity(lat, h))
     out = np.zeros(g.shape + (3,))
@@ -222,20 +235,27 @@ def gravity_ned(lat: ArrayLike, h: ArrayLike = 0.0) -> Array:
     return out
 
 
-@fill_doc
 def earth_rate_ned(lat: ArrayLike) -> Array:
     """Earth rotation rate resolved in NED, ``ω_ie^n = Ω (cos φ, 0, −sin φ)`` rad/s (Groves 2.123).
 
     Ω = :data:`OMEGA_E` = 7.292115e-5 rad/s (TR8350.2).
 
-    %(earth_lat_params)s
+    Parameters
+    ----------
+    lat : array_like
+        Geodetic latitude, rad, in [-pi/2, pi/2] (scalar or array).
 
     Returns
     -------
     numpy.ndarray, shape (3,) or (..., 3)
         ``ω_ie^n``, rad/s.
 
-    %(earth_lat_raises)s
+    Raises
+    ------
+    InvalidInputError
+        If a latitude is outside [-pi/2, pi/2].
+    NonFiniteError
+        If an input is NaN or infinite.
     """
     lat = np.asarray(_f(lat))
     _check_lat_h(lat, np.zeros(()))
@@ -245,13 +265,15 @@ def earth_rate_ned(lat: ArrayLike) -> Array:
     return out
 
 
-@fill_doc
 def radii(lat: ArrayLike) -> tuple[Array | float, Array | float]:
     """Meridian and prime-vertical radii of curvature ``(R_N, R_E)``, m (Groves 2.105-2.106).
 
     R_N = a (1 − e²) / (1 − e² sin²φ)^{3/2},   R_E = a / √(1 − e² sin²φ).
 
-    %(earth_lat_params)s
+    Parameters
+    ----------
+    lat : array_like
+        Geodetic latitude, rad, in [-pi/2, pi/2] (scalar or array).
 
     Returns
     -------
@@ -260,7 +282,12 @@ def radii(lat: ArrayLike) -> tuple[Array | float, Array | float]:
     R_E : float or numpy.ndarray
         Prime-vertical (transverse) radius of curvature, m.
 
-    %(earth_lat_raises)s
+    Raises
+    ------
+    InvalidInputError
+        If a latitude is outside [-pi/2, pi/2].
+    NonFiniteError
+        If an input is NaN or infinite.
     """
     rn, re, _ = _radii_gravity(lat, 0.0)
     return rn, re
@@ -309,13 +336,15 @@ def ned_to_dlla(dned: ArrayLike, lla: ArrayLike) -> Array:
     return np.column_stack([d[:, 0] / (rn + p[:, 2]), d[:, 1] / ((re + p[:, 2]) * np.cos(p[:, 0])), -d[:, 2]])
 
 
-@fill_doc
 def transport_rate_ned(lat: ArrayLike, h: ArrayLike, vel_ned: ArrayLike) -> Array:
     """Transport rate ``ω_en^n`` (rate of NED w.r.t. ECEF) in NED, rad/s (Groves 5.44).
 
     ω_en^n = ( v_E/(R_E+h), −v_N/(R_N+h), −v_E tan φ/(R_E+h) ).
 
-    %(earth_lat_params)s
+    Parameters
+    ----------
+    lat : array_like
+        Geodetic latitude, rad, in [-pi/2, pi/2] (scalar or array).
     h : array_like
         Ellipsoidal height, m.
     vel_ned : array_like, shape (3,) or (N, 3)
@@ -326,7 +355,12 @@ def transport_rate_ned(lat: ArrayLike, h: ArrayLike, vel_ned: ArrayLike) -> Arra
     numpy.ndarray, shape (3,) or (N, 3)
         ``ω_en^n``, rad/s.
 
-    %(earth_lat_h_raises)s
+    Raises
+    ------
+    InvalidInputError
+        If a latitude is outside [-pi/2, pi/2] or a height outside :data:`H_RANGE_M`.
+    NonFiniteError
+        If an input is NaN or infinite.
     ShapeError
         If ``vel_ned`` is not (3,) / (N, 3).
     """
@@ -384,7 +418,6 @@ def dcm_en(lat: ArrayLike, lon: ArrayLike) -> Array:
     return C
 
 
-@fill_doc
 def lla_to_ecef(lla: ArrayLike) -> Array:
     """Geodetic ``(lat, lon, h)`` (rad, rad, m) to ECEF position (m) (Groves 2.112).
 
@@ -400,7 +433,12 @@ def lla_to_ecef(lla: ArrayLike) -> Array:
     numpy.ndarray, shape (3,) or (N, 3)
         ECEF position, m.
 
-    %(earth_triple_raises)s
+    Raises
+    ------
+    ShapeError
+        If a triple is not (3,) / (N, 3).
+    NonFiniteError
+        If an input is NaN or infinite.
     """
     p, single = _triple(lla, "lla")
     # evaluated in extended precision (where the platform has it) so that the
@@ -416,7 +454,6 @@ def lla_to_ecef(lla: ArrayLike) -> Array:
     return _out(out, single)
 
 
-@fill_doc
 def ecef_to_lla(ecef: ArrayLike) -> Array:
     """ECEF position (m) to geodetic ``(lat, lon, h)`` (rad, rad, m).
 
@@ -436,7 +473,12 @@ def ecef_to_lla(ecef: ArrayLike) -> Array:
     numpy.ndarray, shape (3,) or (N, 3)
         Geodetic latitude (rad), longitude (rad, in (-pi, pi]), ellipsoidal height (m).
 
-    %(earth_triple_raises)s
+    Raises
+    ------
+    ShapeError
+        If a triple is not (3,) / (N, 3).
+    NonFiniteError
+        If an input is NaN or infinite.
     """
     r, single = _triple(ecef, "ecef")
     x, y, z = r[:, 0], r[:, 1], r[:, 2]
@@ -467,7 +509,6 @@ def _ref(ref_lla: ArrayLike) -> Array:
     return a
 
 
-@fill_doc
 def ecef_to_ned(ecef: ArrayLike, ref_lla: ArrayLike) -> Array:
     """ECEF position(s) to local NED coordinates (m) about the origin ``ref_lla``.
 
@@ -477,10 +518,20 @@ def ecef_to_ned(ecef: ArrayLike, ref_lla: ArrayLike) -> Array:
     ----------
     ecef : array_like, shape (3,) or (N, 3)
         ECEF position(s), m.
-    %(earth_ref_lla_returns)s
+    ref_lla : array_like, shape (3,)
+        Origin of the local NED frame: geodetic ``(lat, lon, h)``, rad, rad, m.
+
+    Returns
+    -------
+    numpy.ndarray, shape (3,) or (N, 3)
         North, east, down coordinates, m.
 
-    %(earth_triple_raises)s
+    Raises
+    ------
+    ShapeError
+        If a triple is not (3,) / (N, 3).
+    NonFiniteError
+        If an input is NaN or infinite.
     """
     r, single = _triple(ecef, "ecef")
     ref = _ref(ref_lla)
@@ -489,15 +540,27 @@ def ecef_to_ned(ecef: ArrayLike, ref_lla: ArrayLike) -> Array:
     return _out(d @ C, single)
 
 
-@fill_doc
 def ned_to_ecef(ned: ArrayLike, ref_lla: ArrayLike) -> Array:
     """Local NED coordinates (m) about ``ref_lla`` to ECEF position(s) (m): ``r_e = r_e(ref) + C_en(ref) r_n``.
 
-    %(earth_ned_params)s
-    %(earth_ref_lla_returns)s
+    Parameters
+    ----------
+    ned : array_like, shape (3,) or (N, 3)
+        North, east, down coordinates, m.
+    ref_lla : array_like, shape (3,)
+        Origin of the local NED frame: geodetic ``(lat, lon, h)``, rad, rad, m.
+
+    Returns
+    -------
+    numpy.ndarray, shape (3,) or (N, 3)
         ECEF position(s), m.
 
-    %(earth_triple_raises)s
+    Raises
+    ------
+    ShapeError
+        If a triple is not (3,) / (N, 3).
+    NonFiniteError
+        If an input is NaN or infinite.
     """
     n, single = _triple(ned, "ned")
     ref = _ref(ref_lla)
@@ -505,7 +568,6 @@ def ned_to_ecef(ned: ArrayLike, ref_lla: ArrayLike) -> Array:
     return _out(lla_to_ecef(ref) + n @ C.T, single)
 
 
-@fill_doc
 def lla_to_ned(lla: ArrayLike, ref_lla: ArrayLike) -> Array:
     """Geodetic position(s) to local NED coordinates (m) about ``ref_lla`` (via ECEF, exact).
 
@@ -513,23 +575,45 @@ def lla_to_ned(lla: ArrayLike, ref_lla: ArrayLike) -> Array:
     ----------
     lla : array_like, shape (3,) or (N, 3)
         Geodetic ``(lat, lon, h)``, rad, rad, m.
-    %(earth_ref_lla_returns)s
+    ref_lla : array_like, shape (3,)
+        Origin of the local NED frame: geodetic ``(lat, lon, h)``, rad, rad, m.
+
+    Returns
+    -------
+    numpy.ndarray, shape (3,) or (N, 3)
         North, east, down coordinates, m.
 
-    %(earth_triple_raises)s
+    Raises
+    ------
+    ShapeError
+        If a triple is not (3,) / (N, 3).
+    NonFiniteError
+        If an input is NaN or infinite.
     """
     return ecef_to_ned(lla_to_ecef(lla), ref_lla)
 
 
-@fill_doc
 def ned_to_lla(ned: ArrayLike, ref_lla: ArrayLike) -> Array:
     """Local NED coordinates (m) about ``ref_lla`` to geodetic position(s) (via ECEF, exact).
 
-    %(earth_ned_params)s
-    %(earth_ref_lla_returns)s
+    Parameters
+    ----------
+    ned : array_like, shape (3,) or (N, 3)
+        North, east, down coordinates, m.
+    ref_lla : array_like, shape (3,)
+        Origin of the local NED frame: geodetic ``(lat, lon, h)``, rad, rad, m.
+
+    Returns
+    -------
+    numpy.ndarray, shape (3,) or (N, 3)
         Geodetic ``(lat, lon, h)``, rad, rad, m.
 
-    %(earth_triple_raises)s
+    Raises
+    ------
+    ShapeError
+        If a triple is not (3,) / (N, 3).
+    NonFiniteError
+        If an input is NaN or infinite.
     """
     return ecef_to_lla(ned_to_ecef(ned, ref_lla))
 

@@ -32,7 +32,6 @@ from typing import Any
 
 from imunav import __version__
 from imunav._atomic import jsonable
-from imunav._docstrings import fill_doc
 
 __all__ = ["PROVENANCE_KEY", "add_step", "steps", "fingerprint", "net_compensations"]
 
@@ -72,11 +71,13 @@ def add_step(meta: Mapping[str, Any] | None, op: str, parameters: Mapping[str, A
     return out
 
 
-@fill_doc
 def steps(meta_or_data: Any, op: str | None = None) -> list[dict[str, Any]]:
     """The provenance steps of a recording (or of its ``meta`` dict), optionally only those of ``op``.
 
-    %(prov_meta_or_data)s
+    Parameters
+    ----------
+    meta_or_data : ImuData or mapping
+        A recording (its ``meta`` is read) or its metadata dict.
     op : str, optional
         Keep only the steps of this operation (e.g. ``"compensate"``).
 
@@ -111,11 +112,13 @@ def fingerprint(obj: Mapping[str, Any]) -> str:
     return hashlib.sha256(text.encode("utf-8")).hexdigest()
 
 
-@fill_doc
 def net_compensations(meta_or_data: Any, sha256: str | None = None) -> list[dict[str, Any]]:
     """Compensation steps not undone by a later ``uncompensate`` with the same calibration.
 
-    %(prov_meta_or_data)s
+    Parameters
+    ----------
+    meta_or_data : ImuData or mapping
+        A recording (its ``meta`` is read) or its metadata dict.
     sha256 : str, optional
         Keep only the steps of the calibration with this fingerprint (:func:`fingerprint`).
 

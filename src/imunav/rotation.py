@@ -35,7 +35,6 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from imunav import _rotation_kernels as _k
-from imunav._docstrings import fill_doc
 from imunav.errors import InvalidInputError, NonFiniteError, ShapeError, TimeOrderError
 
 __all__ = [
@@ -157,18 +156,23 @@ def quat_multiply(p: ArrayLike, q: ArrayLike) -> Array:
     return _pairwise(_k.qmul_n, p, (4,), "p", q, (4,), "q")
 
 
-@fill_doc
 def quat_conjugate(q: ArrayLike) -> Array:
     """Conjugate ``[w, -x, -y, -z]``; the inverse of a unit quaternion.
 
-    %(rot_q_params)s
+    Parameters
+    ----------
+    q : array_like, shape (4,) or (N, 4)
+        Quaternion(s) ``[w, x, y, z]`` (Hamilton, scalar first), e.g. ``q_nb`` body (FRD) to navigation (NED).
 
     Returns
     -------
     numpy.ndarray, shape (4,) or (N, 4)
         ``q*``; for ``q_nb`` this is ``q_bn``.
 
-    %(rot_shape_raises)s
+    Raises
+    ------
+    ShapeError
+        If an input does not have the shape given above.
     """
     a = np.array(q, dtype=float)
     _as(a, (4,), "q")
@@ -176,28 +180,35 @@ def quat_conjugate(q: ArrayLike) -> Array:
     return a
 
 
-@fill_doc
 def quat_inverse(q: ArrayLike) -> Array:
     """Inverse ``q* / |q|^2`` (valid for non-unit quaternions).
 
-    %(rot_q_params)s
+    Parameters
+    ----------
+    q : array_like, shape (4,) or (N, 4)
+        Quaternion(s) ``[w, x, y, z]`` (Hamilton, scalar first), e.g. ``q_nb`` body (FRD) to navigation (NED).
 
     Returns
     -------
     numpy.ndarray, shape (4,) or (N, 4)
         ``q^-1`` with ``q ⊗ q^-1 = [1, 0, 0, 0]``.
 
-    %(rot_shape_raises)s
+    Raises
+    ------
+    ShapeError
+        If an input does not have the shape given above.
     """
     a = quat_conjugate(q)
     return a / np.sum(a * a, axis=-1, keepdims=True)
 
 
-@fill_doc
 def quat_normalize(q: ArrayLike) -> Array:
     """Unit quaternion(s) ``q / |q|``.
 
-    %(rot_q_params)s
+    Parameters
+    ----------
+    q : array_like, shape (4,) or (N, 4)
+        Quaternion(s) ``[w, x, y, z]`` (Hamilton, scalar first), e.g. ``q_nb`` body (FRD) to navigation (NED).
 
     Returns
     -------
@@ -219,21 +230,26 @@ def quat_normalize(q: ArrayLike) -> Array:
     return _out(a / n, s)
 
 
-@fill_doc
 def quat_canonical(q: ArrayLike) -> Array:
     """Representative with ``w > 0`` (at ``w == 0``: first non-zero vector part > 0).
 
     ``q`` and ``-q`` are the same rotation; this picks one of the two, so that quaternions can be compared
     component by component.
 
-    %(rot_q_params)s
+    Parameters
+    ----------
+    q : array_like, shape (4,) or (N, 4)
+        Quaternion(s) ``[w, x, y, z]`` (Hamilton, scalar first), e.g. ``q_nb`` body (FRD) to navigation (NED).
 
     Returns
     -------
     numpy.ndarray, shape (4,) or (N, 4)
         ``q`` or ``-q``, row by row.
 
-    %(rot_shape_raises)s
+    Raises
+    ------
+    ShapeError
+        If an input does not have the shape given above.
     """
     a, single = _as(q, (4,), "q")
     a = a.copy()
@@ -243,14 +259,16 @@ def quat_canonical(q: ArrayLike) -> Array:
     return _out(a, single)
 
 
-@fill_doc
 def quat_rotate(q: ArrayLike, v: ArrayLike) -> Array:
     """Rotate vector(s): ``v_n = q ⊗ [0, v_b] ⊗ q*`` (= ``C(q) v_b``).
 
     For ``q = q_nb`` this maps body-frame vectors to the navigation frame; use
     ``quat_rotate(quat_conjugate(q), v_n)`` for the reverse (Solà 2017).
 
-    %(rot_q_params)s
+    Parameters
+    ----------
+    q : array_like, shape (4,) or (N, 4)
+        Quaternion(s) ``[w, x, y, z]`` (Hamilton, scalar first), e.g. ``q_nb`` body (FRD) to navigation (NED).
     v : array_like, shape (3,) or (N, 3)
         Vector(s) in the frame the quaternion rotates from (any unit; the result has the same unit).
 
@@ -267,24 +285,28 @@ def quat_rotate(q: ArrayLike, v: ArrayLike) -> Array:
     return _pairwise(_k.qrot_n, q, (4,), "q", v, (3,), "v")
 
 
-@fill_doc
 def dcm_from_quat(q: ArrayLike) -> Array:
     """Direction-cosine matrix ``C_nb`` of a unit quaternion ``q_nb`` (Groves 2013, §2.2).
 
-    %(rot_q_params)s
+    Parameters
+    ----------
+    q : array_like, shape (4,) or (N, 4)
+        Quaternion(s) ``[w, x, y, z]`` (Hamilton, scalar first), e.g. ``q_nb`` body (FRD) to navigation (NED).
 
     Returns
     -------
     numpy.ndarray, shape (3, 3) or (N, 3, 3)
         ``C_nb`` with ``v_n = C_nb v_b``.
 
-    %(rot_shape_raises)s
+    Raises
+    ------
+    ShapeError
+        If an input does not have the shape given above.
     """
     a, s = _as(q, (4,), "q")
     return _out(_k.dcm_from_quat_n(a), s)
 
 
-@fill_doc(arg="C", shapes="(3, 3) / (N, 3, 3)")
 def quat_from_dcm(C: ArrayLike) -> Array:
     """Unit quaternion (``w >= 0``) of a rotation matrix (Shepperd's method).
 
@@ -301,7 +323,12 @@ def quat_from_dcm(C: ArrayLike) -> Array:
     numpy.ndarray, shape (4,) or (N, 4)
         ``q_nb``, scalar first, with ``w >= 0``.
 
-    %(finite_shape_raises)s
+    Raises
+    ------
+    NonFiniteError
+        If ``C`` is not finite.
+    ShapeError
+        If ``C`` is not (3, 3) / (N, 3, 3).
     """
     a, s = _as(C, (3, 3), "C")
     _finite(a, "C")
@@ -319,7 +346,6 @@ def _euler_args(roll: ArrayLike, pitch: ArrayLike | None, yaw: ArrayLike | None)
     return e, single
 
 
-@fill_doc
 def quat_from_euler(roll: ArrayLike, pitch: ArrayLike | None = None, yaw: ArrayLike | None = None) -> Array:
     """Quaternion ``q_nb`` of ZYX Euler angles (rad).
 
@@ -341,7 +367,10 @@ def quat_from_euler(roll: ArrayLike, pitch: ArrayLike | None = None, yaw: ArrayL
     numpy.ndarray, shape (4,) or (N, 4)
         ``q_nb``, body (FRD) to navigation (NED).
 
-    %(rot_euler_raises)s
+    Raises
+    ------
+    ShapeError
+        If only one of ``pitch`` / ``yaw`` is given, or the shapes do not broadcast.
     """
     e, s = _euler_args(roll, pitch, yaw)
     return _out(_k.quat_from_euler_n(e), s)
@@ -372,11 +401,13 @@ def euler_from_dcm(C: ArrayLike) -> Array:
     return _out(_k.euler_from_dcm_n(a), s)
 
 
-@fill_doc
 def euler_from_quat(q: ArrayLike) -> Array:
     """ZYX Euler angles ``(roll, pitch, yaw)`` (rad) of ``q_nb`` (through :func:`euler_from_dcm`).
 
-    %(rot_q_params)s
+    Parameters
+    ----------
+    q : array_like, shape (4,) or (N, 4)
+        Quaternion(s) ``[w, x, y, z]`` (Hamilton, scalar first), e.g. ``q_nb`` body (FRD) to navigation (NED).
 
     Returns
     -------
@@ -393,7 +424,6 @@ def euler_from_quat(q: ArrayLike) -> Array:
     return euler_from_dcm(dcm_from_quat(quat_normalize(q)))
 
 
-@fill_doc
 def dcm_from_euler(roll: ArrayLike, pitch: ArrayLike | None = None, yaw: ArrayLike | None = None) -> Array:
     """``C_nb = Rz(yaw) Ry(pitch) Rx(roll)`` (Groves 2013, §2.2).
 
@@ -409,12 +439,14 @@ def dcm_from_euler(roll: ArrayLike, pitch: ArrayLike | None = None, yaw: ArrayLi
     numpy.ndarray, shape (3, 3) or (N, 3, 3)
         ``C_nb``, body (FRD) to navigation (NED).
 
-    %(rot_euler_raises)s
+    Raises
+    ------
+    ShapeError
+        If only one of ``pitch`` / ``yaw`` is given, or the shapes do not broadcast.
     """
     return dcm_from_quat(quat_from_euler(roll, pitch, yaw))
 
 
-@fill_doc(arg="r", shapes="(3,) / (N, 3)")
 def quat_from_rotvec(r: ArrayLike) -> Array:
     """``exp`` map: quaternion of rotation vector ``r`` (rad).
 
@@ -430,20 +462,27 @@ def quat_from_rotvec(r: ArrayLike) -> Array:
     numpy.ndarray, shape (4,) or (N, 4)
         Unit quaternion(s).
 
-    %(finite_shape_raises)s
+    Raises
+    ------
+    NonFiniteError
+        If ``r`` is not finite.
+    ShapeError
+        If ``r`` is not (3,) / (N, 3).
     """
     a, s = _as(r, (3,), "rotation vector")
     _finite(a, "rotation vector")
     return _out(_k.qexp_n(a), s)
 
 
-@fill_doc
 def rotvec_from_quat(q: ArrayLike) -> Array:
     """``log`` map: rotation vector (rad, angle in [0, pi]) of unit ``q``.
 
     ``r = 2 atan2(|q_v|, q_w) q_v / |q_v|`` on the canonical (``w >= 0``) representative (Solà 2017).
 
-    %(rot_q_params)s
+    Parameters
+    ----------
+    q : array_like, shape (4,) or (N, 4)
+        Quaternion(s) ``[w, x, y, z]`` (Hamilton, scalar first), e.g. ``q_nb`` body (FRD) to navigation (NED).
 
     Returns
     -------
@@ -466,7 +505,6 @@ quat_exp = quat_from_rotvec
 quat_log = rotvec_from_quat
 
 
-@fill_doc(arg="r", shapes="(3,) / (N, 3)")
 def dcm_from_rotvec(r: ArrayLike) -> Array:
     """Rotation matrix of a rotation vector (Rodrigues' formula, ``C = exp([r]x)``).
 
@@ -480,12 +518,16 @@ def dcm_from_rotvec(r: ArrayLike) -> Array:
     numpy.ndarray, shape (3, 3) or (N, 3, 3)
         The rotation matrix / matrices.
 
-    %(finite_shape_raises)s
+    Raises
+    ------
+    NonFiniteError
+        If ``r`` is not finite.
+    ShapeError
+        If ``r`` is not (3,) / (N, 3).
     """
     return dcm_from_quat(quat_from_rotvec(r))
 
 
-@fill_doc(arg="C", shapes="(3, 3) / (N, 3, 3)")
 def rotvec_from_dcm(C: ArrayLike) -> Array:
     """Rotation vector of a rotation matrix (``log``, through the quaternion).
 
@@ -499,7 +541,12 @@ def rotvec_from_dcm(C: ArrayLike) -> Array:
     numpy.ndarray, shape (3,) or (N, 3)
         Rotation vector(s), rad, norm in [0, pi].
 
-    %(finite_shape_raises)s
+    Raises
+    ------
+    NonFiniteError
+        If ``C`` is not finite.
+    ShapeError
+        If ``C`` is not (3, 3) / (N, 3, 3).
     """
     return rotvec_from_quat(quat_from_dcm(C))
 

@@ -50,7 +50,6 @@ from typing import Any
 
 from imunav import __version__
 from imunav._atomic import jsonable, read_json, write_json
-from imunav._docstrings import fill_doc
 from imunav.errors import RunFolderError
 
 __all__ = ["MANIFEST", "MARKER", "Manifest", "RunFolder", "read_manifest", "trusted_files", "sha256_file"]
@@ -65,11 +64,13 @@ def _now() -> str:
     return _dt.datetime.now(_dt.timezone.utc).isoformat(timespec="seconds")
 
 
-@fill_doc
 def sha256_file(path: str | os.PathLike[str]) -> str:
     """SHA-256 (hex) of a file's bytes (FIPS 180-4).
 
-    %(reader_head)s
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The file.
 
     Returns
     -------

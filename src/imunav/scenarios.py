@@ -14,7 +14,6 @@ from typing import TYPE_CHECKING, Any, Literal, Sequence
 import numpy as np
 from numpy.typing import NDArray
 
-from imunav._docstrings import fill_doc
 from imunav.attitude.gravity_kf import roll_pitch_from_x
 from imunav.attitude.metrics import euler_rmse
 from imunav.attitude.scenario import PAPER_TABLE2, PaperScenario, default_filters, simulate
@@ -99,12 +98,18 @@ def attitude_paper(
     return out
 
 
-@fill_doc
 def paper_rmse(mc: MonteCarloResult) -> dict[str, NDArray[np.float64]]:
     """Per-run RMSE [deg] of each filter, ``(n_runs, 2)`` = (pitch, roll), from a Monte Carlo of
     :func:`imunav.scenarios.attitude_paper` (its ``<filter>_pitch_rmse_deg`` / ``_roll_rmse_deg`` columns).
 
-    %(mc_attitude_paper)s
+    Parameters
+    ----------
+    mc : imunav.montecarlo.MonteCarloResult
+        The result of ``run_montecarlo(attitude_paper, ...)``.
+
+    Returns
+    -------
+    dict
         Filter name (in the order of the columns) to its ``(n_runs, 2)`` array.
     """
     m = mc.metrics
@@ -113,12 +118,18 @@ def paper_rmse(mc: MonteCarloResult) -> dict[str, NDArray[np.float64]]:
             for k in names}
 
 
-@fill_doc
 def paper_table(mc: MonteCarloResult) -> dict[str, dict[str, float]]:
     """The paper's Table 2 from a Monte Carlo: mean, standard deviation (ddof 0) and 95th percentile
     of the pitch and roll RMSE [deg] of each filter.
 
-    %(mc_attitude_paper)s
+    Parameters
+    ----------
+    mc : imunav.montecarlo.MonteCarloResult
+        The result of ``run_montecarlo(attitude_paper, ...)``.
+
+    Returns
+    -------
+    dict
         ``{filter: {"pitch_mean", "pitch_std", "pitch_p95", "roll_mean", "roll_std", "roll_p95"}}``.
     """
     out = {}

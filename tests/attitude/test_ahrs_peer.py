@@ -13,11 +13,10 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from builders import rotating_imu
 
 from imunav.attitude import Madgwick, Mahony
 from imunav.rotation import find_convention, quat_canonical, to_convention
-
-from ._sim import simulate
 
 ahrs_filters = pytest.importorskip("ahrs.filters")
 
@@ -26,7 +25,7 @@ TOL = 1e-9
 
 
 def _data():
-    data, q_true = simulate(3, duration=N / 100.0, fs=100.0, rate_amp=1.5)
+    data, q_true = rotating_imu(3, duration=N / 100.0, fs=100.0, rate_amp=1.5)
     return data, q_true
 
 

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from builders import G_ROTATING, angle_err_deg, rotating_imu
 
 from imunav.attitude.adaptive import AdaptiveMEKF
 from imunav.attitude.complementary import Complementary
@@ -14,19 +15,17 @@ from imunav.attitude.smoother import Smoother
 from imunav.attitude.ukf import UKF, UkfConfig
 from imunav.errors import ConfigError, InvalidInputError, ShapeError
 
-from ._sim import G, angle_err_deg, simulate
-
 BIAS = np.array([0.01, -0.02, 0.015])
 
 
 @pytest.fixture(scope="module")
 def sim():
-    return simulate(7)
+    return rotating_imu(7)
 
 
 def _mekf_params(**kw):
     # matched to the simulation: gyro density = 0.002/sqrt(100), accel direction 0.05/g, heading 0.3/|m|
-    return MekfConfig(sigma_gyro=0.0002, sigma_bias=1e-6, sigma_acc=0.05 / G, sigma_mag=0.3 / 48.5, **kw)
+    return MekfConfig(sigma_gyro=0.0002, sigma_bias=1e-6, sigma_acc=0.05 / G_ROTATING, sigma_mag=0.3 / 48.5, **kw)
 
 
 @pytest.mark.parametrize(
@@ -37,7 +36,7 @@ def _mekf_params(**kw):
         (Complementary(k_acc=2.0, k_mag=2.0), 2.0),
         (MEKF(_mekf_params()), 0.5),
         (AdaptiveMEKF(), 1.5),
-        (UKF(UkfConfig(sigma_gyro=0.0002, sigma_bias=1e-6, sigma_acc=0.05 / G, sigma_mag=0.3 / 48.5)), 0.5),
+        (UKF(UkfConfig(sigma_gyro=0.0002, sigma_bias=1e-6, sigma_acc=0.05 / G_ROTATING, sigma_mag=0.3 / 48.5)), 0.5),
         (Smoother(_mekf_params()), 0.3),
     ],
     ids=lambda x: getattr(x, "name", str(x)),
@@ -64,7 +63,7 @@ def test_mahony_integral_estimates_bias(sim):
 
 
 def test_6d_inclination_only():
-    data, q = simulate(3, duration=40.0)
+    data, q = rotating_imu(3, duration=40.0)
     r = MEKF(_mekf_params(use_mag=False)).run(data, use_mag=False)
     # tilt (inclination) converges; heading is unobservable in 6D
     from imunav.attitude.metrics import error_angles

@@ -3,14 +3,13 @@
 from __future__ import annotations
 
 import numpy as np
+from builders import G_ROTATING, rotating_imu
 from scipy.stats import chi2
 
 from imunav.attitude import _kernels as _k
 from imunav.attitude.mekf import MekfConfig
 from imunav.attitude.ukf import UkfConfig
 from imunav.rotation import quat_conjugate, quat_multiply, rotvec_from_quat
-
-from ._sim import G, simulate
 
 BIAS = np.array([0.01, -0.02, 0.015])
 N_RUNS = 12
@@ -25,17 +24,17 @@ def _nees(q_est, b_est, P, q_true):
 def _runs(kind):
     out = []
     for seed in range(N_RUNS):
-        data, q = simulate(100 + seed, duration=30.0)
+        data, q = rotating_imu(100 + seed, duration=30.0)
         d = np.full(data.n, 0.01)
         q0 = q[0]  # start at the truth with a consistent P0
         mag = np.ascontiguousarray(data.mag)
         if kind == "ekf":
-            p = MekfConfig(sigma_gyro=0.0002, sigma_bias=1e-6, sigma_acc=0.05 / G, sigma_mag=0.3 / 48.5,
+            p = MekfConfig(sigma_gyro=0.0002, sigma_bias=1e-6, sigma_acc=0.05 / G_ROTATING, sigma_mag=0.3 / 48.5,
                            p0_att=0.02, p0_bias=0.03)
             qs, bs, _, _, _, _, Pu, _, _ = _k.mekf_run(q0, np.zeros(3), p.P0(), data.gyro, data.accel, mag, d,
                                                        p.vector(), True)
         else:
-            p = UkfConfig(sigma_gyro=0.0002, sigma_bias=1e-6, sigma_acc=0.05 / G, sigma_mag=0.3 / 48.5,
+            p = UkfConfig(sigma_gyro=0.0002, sigma_bias=1e-6, sigma_acc=0.05 / G_ROTATING, sigma_mag=0.3 / 48.5,
                           p0_att=0.02, p0_bias=0.03)
             ref = np.array([18.0, 0.0, 45.0]) / np.hypot(18.0, 45.0)
             qs, bs, _, Pu, _, _ = _k.ukf_run(q0, np.zeros(3), p.P0(), data.gyro, data.accel, mag, d,
@@ -66,7 +65,7 @@ def test_ukf_nees_in_band():
 def _mekf(**param_kw):
     from imunav.attitude import MEKF
 
-    return MEKF.with_params(sigma_gyro=0.0002, sigma_bias=1e-6, sigma_acc=0.05 / G, p0_att=0.02, p0_bias=0.03,
+    return MEKF.with_params(sigma_gyro=0.0002, sigma_bias=1e-6, sigma_acc=0.05 / G_ROTATING, p0_att=0.02, p0_bias=0.03,
                             **param_kw)
 
 
@@ -80,7 +79,7 @@ def _public_last_z(sim_seed, draw_seed, sim_kw, param_kw, use_mag, make=_mekf, a
     pa, pb = 0.02, 0.03
     za, zb = [], []
     for seed in range(100):
-        data, q = simulate(sim_seed + seed, **sim_kw)
+        data, q = rotating_imu(sim_seed + seed, **sim_kw)
         r = np.random.default_rng(draw_seed + seed)
         q0 = quat_multiply(q[0], quat_exp(r.normal(0, pa, 3)))
         b0 = BIAS + r.normal(0, pb, 3)
@@ -156,7 +155,7 @@ def test_mekf_public_covariance_calibrated_rotating_with_magnetometer():
 def _ukf(mag_ref_ned=None, **param_kw):
     from imunav.attitude.ukf import UKF
 
-    p = UkfConfig(sigma_gyro=0.0002, sigma_bias=1e-6, sigma_acc=0.05 / G, p0_att=0.02, p0_bias=0.03, **param_kw)
+    p = UkfConfig(sigma_gyro=0.0002, sigma_bias=1e-6, sigma_acc=0.05 / G_ROTATING, p0_att=0.02, p0_bias=0.03, **param_kw)
     return UKF(p, mag_ref_ned=mag_ref_ned)
 
 
@@ -177,8 +176,7 @@ def test_ukf_public_covariance_calibrated_rotating_with_magnetometer():
     inherits the initial attitude error, which the 6-state UKF cannot represent, so its heading is then
     over-confident by design (documented on ``UKF``)."""
     from _calibration import assert_rms_calibrated
-
-    from ._sim import MAG_NED
+    from builders import MAG_NED
 
     za, zb = _public_last_z(3000, 8000, dict(duration=10.0), dict(sigma_mag=0.3 / 48.5, mag_ref_ned=MAG_NED),
                             use_mag=None, make=_ukf)

@@ -4,11 +4,11 @@ import json
 
 import numpy as np
 import pytest
-from _simulate import thesis_truth
-from conftest_data import data_path
+from builders import thesis_truth
+from shared_data import data_path
 
 from imunav.calib import FERRARIS_SECTIONS, ImuCalibration, ferraris, ferraris_from_session
-from imunav.errors import InsufficientDataError, SaturationError
+from imunav.errors import DegenerateGeometryError, InsufficientDataError, SaturationError
 
 
 def _annotated():
@@ -101,3 +101,26 @@ def test_refusals():
     secs["z_rot"] = (np.zeros((5, 3)), np.full((5, 3), 40.0))
     with pytest.raises(SaturationError, match="z_rot"):
         ferraris(secs, 100.0, full_scale=(None, 35.0))
+
+
+def _ferraris_sections(rng):
+    secs = {}
+    for i, a in enumerate("xyz"):
+        e = np.eye(3)[i] * 9.81
+        secs[f"{a}_p"] = (rng.normal(e, 0.01, (200, 3)), rng.normal(0, 1e-3, (200, 3)))
+        secs[f"{a}_a"] = (rng.normal(-e, 0.01, (200, 3)), rng.normal(0, 1e-3, (200, 3)))
+        w = np.zeros((360, 3))
+        w[:, i] = -np.radians(360) / 3.6  # one turn in 3.6 s at 100 Hz
+        secs[f"{a}_rot"] = (rng.normal([0, 0, 9.81], 0.01, (360, 3)), w)
+    return secs
+
+
+def test_ferraris_identical_or_empty_sections_are_refused():
+    secs = _ferraris_sections(np.random.default_rng(0))
+    np.testing.assert_allclose(ferraris(secs, 100.0).calibration.gyro_matrix, np.eye(3), atol=1e-3)
+    with pytest.raises(DegenerateGeometryError, match="accelerometer matrix is degenerate"):
+        ferraris({k: secs["x_p"] for k in FERRARIS_SECTIONS}, 100.0)
+    with pytest.raises(DegenerateGeometryError, match="y_rot"):
+        ferraris({**secs, "y_rot": secs["x_p"]}, 100.0)  # a "rotation" without rotation
+    with pytest.raises(DegenerateGeometryError, match="x_p, x_a"):
+        ferraris({**secs, "x_p": secs["x_a"], "x_a": secs["x_p"]}, 100.0)  # swapped poses

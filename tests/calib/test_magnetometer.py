@@ -2,9 +2,10 @@
 
 import numpy as np
 import pytest
+from builders import degenerate_mag_clouds
 
 from imunav.calib import fit_ellipsoid, hard_iron_minmax, soft_iron_rotation_scale, sphere_coverage
-from imunav.errors import DegenerateGeometryError, InsufficientDataError
+from imunav.errors import DegenerateGeometryError, InsufficientDataError, InvalidInputError
 
 
 def _sphere(n, rng):
@@ -87,3 +88,35 @@ def test_degenerate_data_refused(rng):
     with pytest.raises(InsufficientDataError, match="at least 10"):
         fit_ellipsoid(u[:5])
     assert sphere_coverage(u) == 1.0
+
+
+@pytest.mark.parametrize("kind", ["repeated", "zeros", "denormals"])
+def test_fit_ellipsoid_refuses_degenerate_clouds(kind):
+    h = {"repeated": np.tile([20.0, -5.0, 40.0], (200, 1)), "zeros": np.zeros((200, 3)),
+         "denormals": _sphere(500, np.random.default_rng(1)) * 1e-310}[kind]
+    with pytest.raises(DegenerateGeometryError):
+        fit_ellipsoid(h)
+
+
+def test_fit_ellipsoid_refuses_values_beyond_any_unit():
+    with pytest.raises(InvalidInputError, match="no unit"):
+        fit_ellipsoid(_sphere(500, np.random.default_rng(1)) * 1e200)
+
+
+def test_fit_ellipsoid_fits_a_perfect_noise_free_sphere():
+    for field_norm in (None, 50.0):
+        c = fit_ellipsoid(50.0 * _sphere(500, np.random.default_rng(1)) + [10.0, -5.0, 3.0], field_norm=field_norm)
+        np.testing.assert_allclose(c.b, [10.0, -5.0, 3.0], atol=1e-9)
+        np.testing.assert_allclose(c.A, np.eye(3), atol=1e-9)
+        assert c.field_norm == pytest.approx(50.0, rel=1e-12)
+
+
+@pytest.mark.parametrize("kind", ["point", "line", "plane"])
+def test_minmax_refuses_degenerate_geometry(kind):
+    with pytest.raises(DegenerateGeometryError):
+        hard_iron_minmax(degenerate_mag_clouds()[kind])
+
+
+def test_minmax_accepts_a_sphere():
+    u = _sphere(500, np.random.default_rng(1))
+    assert np.allclose(hard_iron_minmax(30 * u + [5, -3, 2]), [5, -3, 2], atol=1.0)

@@ -4,7 +4,7 @@ import json
 
 import numpy as np
 import pytest
-from _simulate import thesis_truth
+from builders import thesis_truth
 
 from imunav.calib import ImuCalibration, TempCurve, calibration_parameters, success_percentages
 from imunav.errors import FileFormatError, InvalidInputError, NonFiniteError, ShapeError, UnitError

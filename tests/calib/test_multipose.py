@@ -4,10 +4,10 @@ import time
 
 import numpy as np
 import pytest
-from _simulate import hand_session, multipose_session, random_poses
-from conftest_data import data_path
+from builders import BG_U, PA_U, PG_U, multipose_session, random_poses, unsigned_count_session
 from scipy.stats import chi2, norm
 from scipy.stats import t as student_t
+from shared_data import data_path
 
 from imunav.calib import ImuCalibration, multipose
 from imunav.calib.multipose import accel_tedaldi_matrix, gyro_tedaldi_matrix
@@ -139,30 +139,6 @@ def test_mpu6050_session_compared_with_published():
 
 
 # ---------------------------------------------------------------- raw unsigned counts, default options
-# A 16-bit IMU read as unsigned counts (zero near 32768): 415 counts per m/s², 4,778 counts per rad/s,
-# misalignments of about 0.01 rad; white noise 8 counts (accel) and 3 counts (gyro) per sample, then
-# rounded to integers within 0..65535.
-SA, SG = 1 / 415.0, 1 / 4778.0
-PA_U = np.array([0.011, -0.009, 0.012, 1.004 * SA, 0.997 * SA, 1.002 * SA, -32768 - 40, -32768 + 25, -32768 + 60.0])
-PG_U = np.array([-0.01, 0.009, -0.012, 0.011, -0.0098, 0.0105, 1.003 * SG, 0.996 * SG, 1.001 * SG])
-BG_U = np.array([32768 - 30, 32768 + 12, 32768 + 5.0])
-
-
-def _unsigned_session(seed, n_poses=40):
-    """Hand-rotated session: 50 s rest, 40 poses held 7-10 s, minimum-jerk turns of 2.5-4 s (~51,000 samples)."""
-    truth = ImuCalibration(
-        accel_bias=-PA_U[6:], accel_matrix=np.linalg.inv(accel_tedaldi_matrix(PA_U)), gyro_bias=BG_U,
-        gyro_matrix=np.linalg.inv(gyro_tedaldi_matrix(PG_U)), raw_accel_unit="counts", raw_gyro_unit="counts",
-    )
-    rng = np.random.default_rng(seed)
-    f, w = hand_session(random_poses(n_poses, rng), 100.0, rng, rest_s=50.0)
-    a, g = truth.invert_arrays(f, w)
-    a = np.round(a + rng.normal(scale=8.0, size=a.shape))
-    g = np.round(g + rng.normal(scale=3.0, size=g.shape))
-    assert a.min() >= 0 and a.max() <= 65535 and g.min() >= 0 and g.max() <= 65535  # plausible raw counts
-    return a, g
-
-
 def _z(r):
     """Errors of scales and misalignments (accel 6, gyro 9) in units of the reported stderr, and their dof."""
     t = r.info["tedaldi"]
@@ -172,7 +148,7 @@ def _z(r):
 
 
 def test_unsigned_counts_with_default_options():
-    a, g = _unsigned_session(11)
+    a, g = unsigned_count_session(11)
     assert 48_000 < len(a) < 54_000 and a.min() > 20_000  # unsigned: every raw value far from 0
     t0 = time.perf_counter()
     r = multipose(a, g, 100.0, init_s=50)
@@ -198,7 +174,7 @@ def test_unsigned_counts_with_default_options():
 
 def test_offset_of_32768_counts_changes_nothing():
     """Signed and unsigned versions of the same sessions: same coverage verdict, same result."""
-    a, g = _unsigned_session(12)
+    a, g = unsigned_count_session(12)
     ru = multipose(a, g, 100.0, init_s=50)
     rs = multipose(a - 32768, g - 32768, 100.0, init_s=50)
     tu, ts = ru.info["tedaldi"], rs.info["tedaldi"]
@@ -234,7 +210,7 @@ def test_reported_uncertainty_is_calibrated_on_unsigned_sessions():
     """
     zs = []
     for seed in range(100, 120):
-        za, zg, dof_a, dof_g = _z(multipose(*_unsigned_session(seed), 100.0, init_s=50))
+        za, zg, dof_a, dof_g = _z(multipose(*unsigned_count_session(seed), 100.0, init_s=50))
         zs += [norm.ppf(student_t.cdf(za, dof_a)), norm.ppf(student_t.cdf(zg, dof_g))]
     z = np.concatenate(zs)
     lo, hi = np.sqrt(chi2.ppf([0.005, 0.995], z.size) / z.size)

@@ -2,7 +2,7 @@
 
 import numpy as np
 import pytest
-from _simulate import G, thesis_rate_steps, thesis_truth
+from builders import G, thesis_rate_steps, thesis_truth
 
 from imunav.calib import combine, multiposition, ratetable, ratetable_from_means, success_percentages
 from imunav.errors import DegenerateGeometryError, InsufficientDataError

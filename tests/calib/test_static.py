@@ -2,7 +2,7 @@
 
 import numpy as np
 import pytest
-from _simulate import G, hundred_positions, thesis_truth
+from builders import G, hundred_positions, thesis_truth
 
 from imunav.calib import multiposition, multiposition_from_means, parameter_stderr, six_position, success_percentages
 from imunav.errors import DegenerateGeometryError, InsufficientDataError, SaturationError

@@ -16,7 +16,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 from _calibration import assert_rms_calibrated, z_scores
-from _simulate import (
+from builders import (
     G,
     hundred_positions,
     multipose_session,

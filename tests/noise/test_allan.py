@@ -220,3 +220,14 @@ def test_bad_inputs():
         allan_deviation(np.ones(100), 1.0, taus="weird")
     with pytest.raises(InvalidInputError, match="input"):
         allan_deviation(np.ones(100), 1.0, input="volts")
+
+
+def test_channels_in_rows_are_refused():
+    from imunav.noise import allan_deviation, psd
+
+    x = np.random.default_rng(0).normal(size=(6, 5000))
+    with pytest.raises(ShapeError, match=r"transposed: pass x\.T"):
+        allan_deviation(x, 100.0)
+    with pytest.raises(ShapeError, match="transposed"):
+        psd(x, 100.0)
+    assert allan_deviation(x.T, 100.0).adev.shape[1] == 6

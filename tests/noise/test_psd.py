@@ -57,7 +57,7 @@ def test_psd_and_allan_agree_on_simulated_imu(rng):
 
 
 # The real-data agreement (ADIS16405, all six channels, full record) is checked end to end in
-# tests/noise/test_cli_noise.py::test_cli_noise_adis16405.
+# tests/cli/test_noise.py::test_cli_noise_adis16405.
 
 
 def test_bad_inputs():

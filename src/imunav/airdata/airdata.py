@@ -31,7 +31,6 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from imunav._docstrings import fill_doc
 from imunav.atmosphere import A0, GAMMA, P0, R_AIR, RHO0, pressure_altitude
 from imunav.errors import ConvergenceError, InvalidInputError, NonFiniteError, ShapeError
 from imunav.results import Result
@@ -67,7 +66,6 @@ def _arr(x: ArrayLike, name: str, positive: bool = False) -> Array:
     return a
 
 
-@fill_doc(value="a Mach number")
 def pitot_ratio(mach: ArrayLike) -> Array:
     """``p_t / p`` for a pitot probe at Mach M (isentropic below 1, Rayleigh above; module docstring).
 
@@ -81,7 +79,12 @@ def pitot_ratio(mach: ArrayLike) -> Array:
     numpy.ndarray
         Ratio of total to static pressure, >= 1.
 
-    %(negative_raises)s
+    Raises
+    ------
+    InvalidInputError
+        If a Mach number is negative.
+    NonFiniteError
+        If a value is NaN or infinite.
     """
     M = _arr(mach, "mach")
     if np.any(M < 0):
@@ -147,7 +150,6 @@ def mach_from_pressures(p_total: ArrayLike, p_static: ArrayLike) -> Array:
     return _invert_pitot(np.asarray(pt / ps, dtype=np.float64), "mach_from_pressures")
 
 
-@fill_doc(value="an impact pressure")
 def calibrated_airspeed(impact_pressure: ArrayLike) -> Array:
     """Calibrated airspeed (m/s) from impact pressure ``q_c`` (Pa) (the thesis's Table 2.1 d, inverted).
 
@@ -161,7 +163,12 @@ def calibrated_airspeed(impact_pressure: ArrayLike) -> Array:
     numpy.ndarray
         Calibrated airspeed, m/s.
 
-    %(negative_raises)s
+    Raises
+    ------
+    InvalidInputError
+        If an impact pressure is negative.
+    NonFiniteError
+        If a value is NaN or infinite.
     """
     qc = _arr(impact_pressure, "impact_pressure")
     if np.any(qc < 0):

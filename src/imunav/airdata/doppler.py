@@ -32,7 +32,6 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from imunav._docstrings import fill_doc
 from imunav.errors import DegenerateGeometryError, InvalidInputError, NonFiniteError, ShapeError
 from imunav.results import Result
 
@@ -115,11 +114,15 @@ def _vel(v: ArrayLike, name: str) -> Array:
     return a
 
 
-@fill_doc
 def beam_velocities(v_body: ArrayLike, beams: ArrayLike) -> Array:
     """Velocity along each beam ``b_i · v``.
 
-    %(doppler_v_beams)s
+    Parameters
+    ----------
+    v_body : array_like, shape (3,) or (N, 3)
+        Ground velocity in body axes (FRD), m/s.
+    beams : array_like, shape (n_beams, 3)
+        Beam unit vectors in body axes (:func:`janus_beams`).
 
     Returns
     -------
@@ -129,11 +132,15 @@ def beam_velocities(v_body: ArrayLike, beams: ArrayLike) -> Array:
     return _vel(v_body, "v_body") @ _beams(beams).T
 
 
-@fill_doc
 def doppler_shift(v_body: ArrayLike, beams: ArrayLike, wavelength: float) -> Array:
     """Two-way Doppler shifts ``2 b_i·v / λ`` (Akgün 2002, eq. 3.3).
 
-    %(doppler_v_beams)s
+    Parameters
+    ----------
+    v_body : array_like, shape (3,) or (N, 3)
+        Ground velocity in body axes (FRD), m/s.
+    beams : array_like, shape (n_beams, 3)
+        Beam unit vectors in body axes (:func:`janus_beams`).
     wavelength : float
         Radar wavelength λ, m, > 0 (13.3 GHz: 0.0225 m).
 

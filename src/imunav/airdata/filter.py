@@ -55,7 +55,6 @@ from dataclasses import dataclass, field, fields
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from imunav._docstrings import fill_doc
 from imunav.errors import InvalidInputError, ShapeError
 from imunav.filters import BatchRun, batch_kalman_filter
 from imunav.filters._batch import batch_filter, huber_batch, isolate_batch, masked_update
@@ -254,7 +253,6 @@ class ThesisState:
     weights: Array
 
 
-@fill_doc
 class ThesisFilter:
     """The thesis wind filter (Akgün 2002; module docstring) on ``z = V_D − V_A``.
 
@@ -265,7 +263,17 @@ class ThesisFilter:
     ----------
     config : ThesisFilterConfig, optional
         Filter parameters (default the thesis's).
-    %(wind_robust)s
+    robust : {None, "gate", "isolate", "nis", "huber"}, optional
+        None (optimal), ``"gate"`` (thesis, per channel |ν̃| < gate_m),
+        ``"nis"`` (vector χ² gate at level alpha: rejects whole-sensor
+        outliers, recommended for the ADS), ``"isolate"`` (χ² test + w-test
+        isolation of single channels) or ``"huber"``.
+    gate_m : float, optional
+        Per-channel gate half-width, standard deviations (``"gate"``).
+    alpha : float, optional
+        Test level in (0, 1) (``"isolate"``, ``"nis"``).
+    huber_c : float, optional
+        Huber threshold (``"huber"``).
 
     Raises
     ------

@@ -9,8 +9,6 @@ from __future__ import annotations
 
 import numpy as np
 
-from imunav._docstrings import fill_doc
-
 __all__ = ["plot_wind", "plot_innovations", "plot_detectors", "plot_long_horizon"]
 
 
@@ -25,7 +23,6 @@ def _plt():
     return plt
 
 
-@fill_doc
 def plot_wind(result, data=None, axis_names=("x", "y", "z")):
     """Wind estimate vs truth and the difference-loop wind (the thesis's Figs. 6.1, 6.3, 6.8), with ±σ.
 
@@ -38,7 +35,10 @@ def plot_wind(result, data=None, axis_names=("x", "y", "z")):
     axis_names : tuple of str
         Labels of the three axes.
 
-    %(figure_returns)s
+    Returns
+    -------
+    matplotlib.figure.Figure
+        The figure.
     """
     plt = _plt()
     fig, axes = plt.subplots(3, 1, figsize=(8, 8), sharex=True)
@@ -57,7 +57,6 @@ def plot_wind(result, data=None, axis_names=("x", "y", "z")):
     return fig
 
 
-@fill_doc
 def plot_innovations(result, bound: float = 3.0):
     """Normalised innovations with ±bound lines and rejected samples marked (the thesis's Figs. 6.7, 6.10, 6.13).
 
@@ -68,7 +67,10 @@ def plot_innovations(result, bound: float = 3.0):
     bound : float
         Bound drawn at ±``bound`` (in standard deviations).
 
-    %(figure_returns)s
+    Returns
+    -------
+    matplotlib.figure.Figure
+        The figure.
     """
     plt = _plt()
     fig, axes = plt.subplots(3, 1, figsize=(8, 7), sharex=True)
@@ -85,7 +87,6 @@ def plot_innovations(result, bound: float = 3.0):
     return fig
 
 
-@fill_doc
 def plot_detectors(detection, names=("alg1", "alg2", "alg3")):
     """Detector statistics with their thresholds (calibrated solid, thesis dashed) (the thesis's Figs. 6.14, 6.16).
 
@@ -96,7 +97,10 @@ def plot_detectors(detection, names=("alg1", "alg2", "alg3")):
     names : tuple of str
         The detectors drawn.
 
-    %(figure_returns)s
+    Returns
+    -------
+    matplotlib.figure.Figure
+        The figure.
     """
     plt = _plt()
     fig, axes = plt.subplots(len(names), 1, figsize=(8, 2.4 * len(names)), sharex=True)
@@ -116,7 +120,6 @@ def plot_detectors(detection, names=("alg1", "alg2", "alg3")):
     return fig
 
 
-@fill_doc
 def plot_long_horizon(result, flight=None):
     """Long-horizon wind estimate (NED) with ±σ and, when given, the flight's true wind.
 
@@ -127,7 +130,10 @@ def plot_long_horizon(result, flight=None):
     flight : object, optional
         The simulated flight (:func:`imunav.sim.flight.simulate_flight`), for the true wind.
 
-    %(figure_returns)s
+    Returns
+    -------
+    matplotlib.figure.Figure
+        The figure.
     """
     plt = _plt()
     fig, axes = plt.subplots(3, 1, figsize=(9, 7), sharex=True)

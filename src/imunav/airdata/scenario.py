@@ -28,7 +28,6 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import NDArray
 
-from imunav._docstrings import fill_doc
 from imunav.airdata.doppler import DopplerErrors
 from imunav.airdata.filter import (
     THESIS_ITERATIONS,
@@ -397,11 +396,15 @@ def delay_summary(alarm: NDArray[np.bool_], onset_row: int, horizon: int = 10) -
     }
 
 
-@fill_doc
 def covariance_sequence(cfg: ThesisFilterConfig | None = None, n_steps: int = 500) -> dict[str, list[float]]:
     """P44 and P11 at the thesis's table iterations, beside the thesis's P44 values (Akgün 2002, Table 6.3).
 
-    %(thesis_cfg_steps)s
+    Parameters
+    ----------
+    cfg : ThesisFilterConfig, optional
+        Filter configuration (default: the thesis's values).
+    n_steps : int
+        Number of steps.
 
     Returns
     -------
@@ -414,7 +417,6 @@ def covariance_sequence(cfg: ThesisFilterConfig | None = None, n_steps: int = 50
             "P11": [float(r.cov_diag[k, 0]) for k in rows], "P44_thesis": list(THESIS_P44)}
 
 
-@fill_doc
 def actual_error_covariance(cfg: ThesisFilterConfig | None = None, n_steps: int = 500,
                             x_error0: tuple[float, ...] = (0.0, 0.0, 0.0, 5.0, 2.0, 3.3),
                             sigma_ads: float = 2.0, sigma_doppler: float = 0.1) -> tuple[Array, Array]:
@@ -426,7 +428,12 @@ def actual_error_covariance(cfg: ThesisFilterConfig | None = None, n_steps: int 
     ``E⁺ = (I−KH) F E Fᵀ (I−KH)ᵀ + K R_true Kᵀ`` and mean ``(I−KH) F μ``
     (initial error = x̂₀ − x_g(0)).
 
-    %(thesis_cfg_steps)s
+    Parameters
+    ----------
+    cfg : ThesisFilterConfig, optional
+        Filter configuration (default: the thesis's values).
+    n_steps : int
+        Number of steps.
     x_error0 : tuple of float
         Initial estimation error, m and m/s.
     sigma_ads, sigma_doppler : float
@@ -729,7 +736,6 @@ def thesis_tables(rng: int = 0) -> dict:
     return {"table_6_1": t61, "table_6_3": t63, "seed": int(rng)}
 
 
-@fill_doc
 def load_config(path) -> "ThesisScenario | object":
     """Read a TOML scenario.
 
@@ -737,7 +743,10 @@ def load_config(path) -> "ThesisScenario | object":
     :class:`imunav.airdata.flight.FlightConfig` (tuples given as arrays; ``doppler`` as a sub-table of
     :class:`~imunav.airdata.doppler.DopplerErrors` fields).
 
-    %(toml_path)s
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The TOML file.
 
     Returns
     -------

@@ -8,7 +8,6 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from imunav._docstrings import fill_doc
 from imunav.attitude.alignment import align
 from imunav.errors import InvalidInputError, NonFiniteError, ShapeError
 from imunav.timeseries import ImuData
@@ -126,10 +125,19 @@ def params_dict(obj: Any) -> dict[str, Any]:
 class AttitudeReset:
     """Mixin of the filters whose whole state is the attitude (``Complementary``, ``Madgwick``): their ``reset``."""
 
-    @fill_doc
     def reset(self, q0: ArrayLike) -> None:
         """Set the attitude the next :meth:`step` starts from.
 
-        %(att_reset)s
+        Parameters
+        ----------
+        q0 : array_like, shape (4,)
+            Attitude ``q_nb`` [w, x, y, z], body (FRD) to NED (normalised here).
+
+        Raises
+        ------
+        ShapeError
+            If ``q0`` is not a (4,) quaternion.
+        NonFiniteError
+            If ``q0`` is zero or not finite.
         """
         self.q = check_q0(q0)

@@ -17,7 +17,6 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike
 
-from imunav._docstrings import fill_doc
 from imunav.attitude import _kernels as _k
 from imunav.attitude._base import AttitudeReset, check_positive, gyro3, initial_q, prepare, step_dt, vec3
 from imunav.attitude.result import AttitudeResult
@@ -47,21 +46,61 @@ class Complementary(AttitudeReset):
         check_positive(k_acc=self.k_acc, k_mag=self.k_mag)
         self.q = np.array([1.0, 0.0, 0.0, 0.0])
 
-    @fill_doc
     def step(self, gyro: ArrayLike, accel: ArrayLike, mag: ArrayLike | None, dt: float) -> np.ndarray:
         """Process one sample: strapdown, then the tilt and heading corrections.
 
-        %(att_step)s
+        Parameters
+        ----------
+        gyro : array_like, shape (3,)
+            Angular rate, body axes (FRD), rad/s.
+        accel : array_like, shape (3,)
+            Specific force, body axes, m/s² (any unit: only its direction is used).
+        mag : array_like, shape (3,), or None
+            Magnetic field, body axes (any unit); None for a 6D update.
+        dt : float
+            Time since the previous sample, s, > 0.
+
+        Returns
+        -------
+        numpy.ndarray, shape (4,)
+            The new attitude ``q_nb``.
+
+        Raises
+        ------
+        InvalidInputError
+            If ``dt`` is not finite and positive, or the rate exceeds 1e4 rad/s (not rad/s).
+        ShapeError
+            If a sample is not a 3-vector.
+        NonFiniteError
+            If a sample is not finite.
         """
         self.q = _k.complementary_step(self.q, gyro3(gyro), vec3(accel, "accel"), vec3(mag, "mag"),
                                        step_dt(dt), float(self.k_acc), float(self.k_mag), mag is not None)
         return self.q.copy()
 
-    @fill_doc
     def run(self, data: ImuData, *, q0: ArrayLike | None = None, use_mag: bool | None = None) -> AttitudeResult:
         """Filter a whole recording (numba kernel).
 
-        %(att_run_gain)s
+        Parameters
+        ----------
+        data : ImuData
+            The recording (SI: rad/s, m/s²; magnetometer in any unit), body FRD.
+        q0 : array_like, shape (4,), optional
+            Initial attitude ``q_nb`` (default: :func:`imunav.attitude.alignment.align` of the first accelerometer
+            / magnetometer sample).
+        use_mag : bool, optional
+            Use the magnetometer (9D); default: when the recording has one.
+
+        Returns
+        -------
+        AttitudeResult
+            ``q_nb`` at every sample, with the filter's name and parameters.
+
+        Raises
+        ------
+        InvalidInputError
+            If ``data`` is not an ImuData with at least 2 samples, ``use_mag=True`` without a magnetometer, or a
+            rate exceeds 1e4 rad/s.
         """
         t, g, a, m, dt, um = prepare(data, use_mag)
         q = _k.complementary_run(initial_q(a, m, um, q0), g, a, m, dt, float(self.k_acc), float(self.k_mag), um)

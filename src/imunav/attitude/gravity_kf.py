@@ -43,7 +43,6 @@ from typing import Literal
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from imunav._docstrings import fill_doc
 from imunav.attitude import _gravity_kernels as _gk
 from imunav.attitude._base import gyro3, prepare, step_dt, vec3
 from imunav.attitude.result import AttitudeResult
@@ -309,28 +308,55 @@ class GravityKF:
                                                             for f in fields(self.config)}})
 
 
-@fill_doc
 def LeeKF(config: GravityKfConfig | None = None, **kw) -> GravityKF:  # noqa: N802
     """Lee et al. 2012: constant c_a, equal-axis Σ_acc, S = 1.
 
-    %(gravity_factory)s
+    Parameters
+    ----------
+    config : GravityKfConfig, optional
+        Filter settings (default :class:`GravityKfConfig` ()).
+    **kw
+        Further :class:`GravityKF` fields (``accel_convention``).
+
+    Returns
+    -------
+    GravityKF
+        The filter.
     """
     return GravityKF("lee", config or GravityKfConfig(), **kw)
 
 
-@fill_doc
 def JavedKF(config: GravityKfConfig | None = None, **kw) -> GravityKF:  # noqa: N802
     """Javed et al. 2020 ("Javed-like" reconstruction of its cascaded bias KF; module docstring).
 
-    %(gravity_factory)s
+    Parameters
+    ----------
+    config : GravityKfConfig, optional
+        Filter settings (default :class:`GravityKfConfig` ()).
+    **kw
+        Further :class:`GravityKF` fields (``accel_convention``).
+
+    Returns
+    -------
+    GravityKF
+        The filter.
     """
     return GravityKF("javed", config or GravityKfConfig(), **kw)
 
 
-@fill_doc
 def ProposedKF(config: GravityKfConfig | None = None, **kw) -> GravityKF:  # noqa: N802
     """Candan & Söken 2020: detector-switched c_a ∈ {0, 1}, diagonal S (mode B).
 
-    %(gravity_factory)s
+    Parameters
+    ----------
+    config : GravityKfConfig, optional
+        Filter settings (default :class:`GravityKfConfig` ()).
+    **kw
+        Further :class:`GravityKF` fields (``accel_convention``).
+
+    Returns
+    -------
+    GravityKF
+        The filter.
     """
     return GravityKF("proposed", config or GravityKfConfig(), **kw)

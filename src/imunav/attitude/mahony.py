@@ -16,7 +16,6 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike
 
-from imunav._docstrings import fill_doc
 from imunav.attitude import _kernels as _k
 from imunav.attitude._base import check_positive, check_q0, gyro3, initial_q, prepare, step_dt, vec3
 from imunav.attitude.result import AttitudeResult
@@ -47,20 +46,53 @@ class Mahony:
         self.q = np.array([1.0, 0.0, 0.0, 0.0])
         self.integral = np.zeros(3)
 
-    @fill_doc
     def reset(self, q0: ArrayLike, bias: ArrayLike | None = None) -> None:
         """Set the attitude the next :meth:`step` starts from.
 
-        %(att_reset_bias)s
+        Parameters
+        ----------
+        q0 : array_like, shape (4,)
+            Attitude ``q_nb`` [w, x, y, z], body (FRD) to NED (normalised here).
+        bias : array_like, shape (3,), optional
+            Initial gyro-bias estimate, rad/s (default zero).
+
+        Raises
+        ------
+        ShapeError
+            If ``q0`` is not a (4,) quaternion.
+        NonFiniteError
+            If ``q0`` is zero or not finite.
         """
         self.q = check_q0(q0)
         self.integral = -vec3(bias, "bias")
 
-    @fill_doc
     def step(self, gyro: ArrayLike, accel: ArrayLike, mag: ArrayLike | None, dt: float) -> np.ndarray:
         """Process one sample: ``e = â × v̂ + m̂ × ŵ``, ``b̂ ← b̂ − k_i e Δt``, ``q ← q ⊗ exp((ω − b̂ + k_p e) Δt)``.
 
-        %(att_step)s
+        Parameters
+        ----------
+        gyro : array_like, shape (3,)
+            Angular rate, body axes (FRD), rad/s.
+        accel : array_like, shape (3,)
+            Specific force, body axes, m/s² (any unit: only its direction is used).
+        mag : array_like, shape (3,), or None
+            Magnetic field, body axes (any unit); None for a 6D update.
+        dt : float
+            Time since the previous sample, s, > 0.
+
+        Returns
+        -------
+        numpy.ndarray, shape (4,)
+            The new attitude ``q_nb``.
+
+        Raises
+        ------
+        InvalidInputError
+            If ``dt`` is not finite and positive, or the rate exceeds 1e4 rad/s (not rad/s).
+        ShapeError
+            If a sample is not a 3-vector.
+        NonFiniteError
+            If a sample is not finite.
         """
         self.q, self.integral = _k.mahony_step(
             self.q, self.integral, gyro3(gyro), vec3(accel, "accel"), vec3(mag, "mag"),
@@ -68,22 +100,32 @@ class Mahony:
         )
         return self.q.copy()
 
-    @fill_doc
     def run(self, data: ImuData, *, q0: ArrayLike | None = None, bias0: ArrayLike | None = None,
             use_mag: bool | None = None) -> AttitudeResult:
         """Filter a whole recording (numba kernel).
 
-        %(att_run_params)s
+        Parameters
+        ----------
+        data : ImuData
+            The recording (SI: rad/s, m/s²; magnetometer in any unit), body FRD.
+        q0 : array_like, shape (4,), optional
+            Initial attitude ``q_nb`` (default: :func:`imunav.attitude.alignment.align` of the first accelerometer
+            / magnetometer sample).
         bias0 : array_like, shape (3,), optional
             Initial gyro-bias estimate, rad/s.
-        %(att_use_mag)s
+        use_mag : bool, optional
+            Use the magnetometer (9D); default: when the recording has one.
 
         Returns
         -------
         AttitudeResult
             ``q_nb`` and the gyro-bias estimate (rad/s) at every sample, with the filter's name and parameters.
 
-        %(att_run_raises)s
+        Raises
+        ------
+        InvalidInputError
+            If ``data`` is not an ImuData with at least 2 samples, ``use_mag=True`` without a magnetometer, or a
+            rate exceeds 1e4 rad/s.
         """
         t, g, a, m, dt, um = prepare(data, use_mag)
         q_init = initial_q(a, m, um, q0)

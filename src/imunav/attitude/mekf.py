@@ -65,7 +65,6 @@ from dataclasses import dataclass, field, fields, replace
 import numpy as np
 from numpy.typing import ArrayLike
 
-from imunav._docstrings import fill_doc
 from imunav.attitude import _kernels as _k
 from imunav.attitude._base import check_q0, gyro3, initial_q, prepare, step_dt, vec3
 from imunav.attitude.result import AttitudeResult
@@ -261,22 +260,55 @@ class MEKF:
         except TypeError as exc:
             raise ConfigError(f"unknown MEKF parameter in {sorted(kw)}: {exc}") from exc
 
-    @fill_doc
     def reset(self, q0: ArrayLike, bias: ArrayLike | None = None) -> None:
         """Set the state the next :meth:`step` starts from (covariance back to ``config.P0()``).
 
-        %(att_reset_bias)s
+        Parameters
+        ----------
+        q0 : array_like, shape (4,)
+            Attitude ``q_nb`` [w, x, y, z], body (FRD) to NED (normalised here).
+        bias : array_like, shape (3,), optional
+            Initial gyro-bias estimate, rad/s (default zero).
+
+        Raises
+        ------
+        ShapeError
+            If ``q0`` is not a (4,) quaternion.
+        NonFiniteError
+            If ``q0`` is zero or not finite.
         """
         self.q = check_q0(q0)
         self.b = vec3(bias, "bias")
         self.P = self.config.P0()
         self._st = np.zeros(_k.N_STATE)
 
-    @fill_doc
     def step(self, gyro: ArrayLike, accel: ArrayLike, mag: ArrayLike | None, dt: float) -> np.ndarray:
         """Process one sample; returns q_nb.  ``self.P``, ``self.b`` are updated in place.
 
-        %(att_step)s
+        Parameters
+        ----------
+        gyro : array_like, shape (3,)
+            Angular rate, body axes (FRD), rad/s.
+        accel : array_like, shape (3,)
+            Specific force, body axes, m/s² (any unit: only its direction is used).
+        mag : array_like, shape (3,), or None
+            Magnetic field, body axes (any unit); None for a 6D update.
+        dt : float
+            Time since the previous sample, s, > 0.
+
+        Returns
+        -------
+        numpy.ndarray, shape (4,)
+            The new attitude ``q_nb``.
+
+        Raises
+        ------
+        InvalidInputError
+            If ``dt`` is not finite and positive, or the rate exceeds 1e4 rad/s (not rad/s).
+        ShapeError
+            If a sample is not a 3-vector.
+        NonFiniteError
+            If a sample is not finite.
         """
         p = self.config.vector()
         if mag is None:
@@ -298,13 +330,19 @@ class MEKF:
         out = _k.mekf_run(q_init, b0, P0, g, a, m, dt, p, store)
         return t, g, dt, um, q_init, b0, P0, out
 
-    @fill_doc
     def run(self, data: ImuData, *, q0: ArrayLike | None = None, bias0: ArrayLike | None = None,
             use_mag: bool | None = None) -> AttitudeResult:
         """Filter a whole recording (numba kernel).
 
-        %(att_run_params)s
-        %(att_bias0)s
+        Parameters
+        ----------
+        data : ImuData
+            The recording (SI: rad/s, m/s²; magnetometer in any unit), body FRD.
+        q0 : array_like, shape (4,), optional
+            Initial attitude ``q_nb`` (default: :func:`imunav.attitude.alignment.align` of the first accelerometer
+            / magnetometer sample).
+        bias0 : array_like, shape (3,), optional
+            Initial gyro-bias estimate, rad/s (default zero).
         use_mag : bool, optional
             Use the magnetometer (9D); default: ``config.use_mag`` and the recording has one.
 
@@ -314,7 +352,11 @@ class MEKF:
             ``q_nb``, gyro bias (rad/s) and covariance diagonal at every sample; ``flags`` holds
             ``acc_rejected``, ``mag_disturbed``, ``rest`` (bool per sample) and ``nis``, ``nis_dof``.
 
-        %(att_run_raises)s
+        Raises
+        ------
+        InvalidInputError
+            If ``data`` is not an ImuData with at least 2 samples, ``use_mag=True`` without a magnetometer, or a
+            rate exceeds 1e4 rad/s.
         """
         t, _, _, um, _, _, _, (q, b, pd, fl, nis, dof, *_rest) = self._run(data, q0, bias0, use_mag, False)
         self.q, self.b = q[-1].copy(), b[-1].copy()

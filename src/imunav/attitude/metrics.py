@@ -24,7 +24,6 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from imunav._docstrings import fill_doc
 from imunav.errors import InsufficientDataError, ShapeError
 from imunav.results import Result
 from imunav.rotation import quat_conjugate, quat_multiply
@@ -93,13 +92,15 @@ def _quats(q: ArrayLike, name: str) -> Array:
     return a / np.linalg.norm(a, axis=1)[:, None]
 
 
-@fill_doc
 def error_angles(q_est: ArrayLike, q_ref: ArrayLike) -> ErrorAngles:
     """Total, heading and inclination error angles of the Earth-frame error quaternion (Laidig et al. 2021).
 
     Parameters
     ----------
-    %(att_q_est_ref)s
+    q_est : array_like, shape (N, 4)
+        Estimated attitude ``q_nb``.
+    q_ref : array_like, shape (N, 4)
+        Reference attitude ``q_nb`` (rows with NaN are skipped).
 
     Returns
     -------
@@ -126,13 +127,15 @@ def error_angles(q_est: ArrayLike, q_ref: ArrayLike) -> ErrorAngles:
     return ErrorAngles(total, heading, incl)
 
 
-@fill_doc
 def attitude_rmse(q_est: ArrayLike, q_ref: ArrayLike, mask: ArrayLike | None = None) -> AttitudeRmse:
     """BROAD RMSE over ``mask`` (all samples if None), NaN references skipped (Laidig et al. 2021).
 
     Parameters
     ----------
-    %(att_q_est_ref)s
+    q_est : array_like, shape (N, 4)
+        Estimated attitude ``q_nb``.
+    q_ref : array_like, shape (N, 4)
+        Reference attitude ``q_nb`` (rows with NaN are skipped).
     mask : array_like of bool, shape (N,), optional
         Samples scored (BROAD: the ``movement`` samples).
 

@@ -41,7 +41,6 @@ from dataclasses import dataclass, field, fields, replace
 import numpy as np
 from numpy.typing import ArrayLike
 
-from imunav._docstrings import fill_doc
 from imunav.attitude import _kernels as _k
 from imunav.attitude.adaptive import ADAPTIVE_DEFAULTS
 from imunav.attitude.mekf import FLAG_NAMES, MEKF, MekfConfig
@@ -82,12 +81,21 @@ class Smoother:
 
     name = "smoother"
 
-    @fill_doc
     def run(self, data: ImuData, *, q0: ArrayLike | None = None, bias0: ArrayLike | None = None,
             use_mag: bool | None = None) -> AttitudeResult:
         """Forward MEKF pass, then the backward RTS pass (Rauch, Tung & Striebel 1965; module docstring).
 
-        %(att_run_bias_mag)s
+        Parameters
+        ----------
+        data : ImuData
+            The recording (SI: rad/s, m/s²; magnetometer in any unit), body FRD.
+        q0 : array_like, shape (4,), optional
+            Initial attitude ``q_nb`` (default: :func:`imunav.attitude.alignment.align` of the first accelerometer
+            / magnetometer sample).
+        bias0 : array_like, shape (3,), optional
+            Initial gyro-bias estimate, rad/s (default zero).
+        use_mag : bool, optional
+            Use the magnetometer (9D); default: when the recording has one.
 
         Returns
         -------
@@ -95,7 +103,11 @@ class Smoother:
             Smoothed ``q_nb``, gyro bias (rad/s) and covariance diagonal at every sample, with the forward
             filter's flags.
 
-        %(att_run_raises)s
+        Raises
+        ------
+        InvalidInputError
+            If ``data`` is not an ImuData with at least 2 samples, ``use_mag=True`` without a magnetometer, or a
+            rate exceeds 1e4 rad/s.
         """
         f = MEKF(self.config)
         t, g, dt, um, q_init, b0, P0, out = f._run(data, q0, bias0, use_mag, True)

@@ -20,7 +20,6 @@ from dataclasses import dataclass, field, fields
 import numpy as np
 from numpy.typing import ArrayLike
 
-from imunav._docstrings import fill_doc
 from imunav.attitude import _kernels as _k
 from imunav.attitude._base import check_q0, gyro3, initial_q, prepare, step_dt, vec3
 from imunav.attitude.result import AttitudeResult
@@ -135,11 +134,22 @@ class UKF:
         self.b = np.zeros(3)
         self.P = self.config.P0()
 
-    @fill_doc
     def reset(self, q0: ArrayLike, bias: ArrayLike | None = None) -> None:
         """Set the state the next :meth:`step` starts from (covariance back to ``config.P0()``).
 
-        %(att_reset_bias)s
+        Parameters
+        ----------
+        q0 : array_like, shape (4,)
+            Attitude ``q_nb`` [w, x, y, z], body (FRD) to NED (normalised here).
+        bias : array_like, shape (3,), optional
+            Initial gyro-bias estimate, rad/s (default zero).
+
+        Raises
+        ------
+        ShapeError
+            If ``q0`` is not a (4,) quaternion.
+        NonFiniteError
+            If ``q0`` is zero or not finite.
         """
         self.q = check_q0(q0)
         self.b = vec3(bias, "bias")
@@ -151,11 +161,33 @@ class UKF:
         m = vec3(self.mag_ref_ned, "mag_ref_ned")
         return m / np.linalg.norm(m)
 
-    @fill_doc
     def step(self, gyro: ArrayLike, accel: ArrayLike, mag: ArrayLike | None, dt: float) -> np.ndarray:
         """Process one sample (unscented prediction and updates).
 
-        %(att_step)s
+        Parameters
+        ----------
+        gyro : array_like, shape (3,)
+            Angular rate, body axes (FRD), rad/s.
+        accel : array_like, shape (3,)
+            Specific force, body axes, m/s² (any unit: only its direction is used).
+        mag : array_like, shape (3,), or None
+            Magnetic field, body axes (any unit); None for a 6D update.
+        dt : float
+            Time since the previous sample, s, > 0.
+
+        Returns
+        -------
+        numpy.ndarray, shape (4,)
+            The new attitude ``q_nb``.
+
+        Raises
+        ------
+        InvalidInputError
+            If ``dt`` is not finite and positive, or the rate exceeds 1e4 rad/s (not rad/s).
+        ShapeError
+            If a sample is not a 3-vector.
+        NonFiniteError
+            If a sample is not finite.
         """
         pr = self.config
         self.q, self.b, self.P, _, _ = _k.ukf_step(
@@ -163,12 +195,21 @@ class UKF:
             pr.vector(mag is not None), pr.alpha, pr.beta, pr.kappa, self._ref())
         return self.q.copy()
 
-    @fill_doc
     def run(self, data: ImuData, *, q0: ArrayLike | None = None, bias0: ArrayLike | None = None,
             use_mag: bool | None = None) -> AttitudeResult:
         """Filter a whole recording (numba kernel).
 
-        %(att_run_bias_mag)s
+        Parameters
+        ----------
+        data : ImuData
+            The recording (SI: rad/s, m/s²; magnetometer in any unit), body FRD.
+        q0 : array_like, shape (4,), optional
+            Initial attitude ``q_nb`` (default: :func:`imunav.attitude.alignment.align` of the first accelerometer
+            / magnetometer sample).
+        bias0 : array_like, shape (3,), optional
+            Initial gyro-bias estimate, rad/s (default zero).
+        use_mag : bool, optional
+            Use the magnetometer (9D); default: when the recording has one.
 
         Returns
         -------
@@ -176,7 +217,11 @@ class UKF:
             ``q_nb``, gyro bias (rad/s) and covariance diagonal at every sample; ``flags`` holds ``nis``
             and ``nis_dof``.
 
-        %(att_run_raises)s
+        Raises
+        ------
+        InvalidInputError
+            If ``data`` is not an ImuData with at least 2 samples, ``use_mag=True`` without a magnetometer, or a
+            rate exceeds 1e4 rad/s.
         """
         t, g, a, m, dt, um = prepare(data, use_mag)
         pr = self.config

@@ -31,7 +31,6 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy.optimize import least_squares
 
-from imunav._docstrings import fill_doc
 from imunav.errors import (
     DegenerateGeometryError,
     InsufficientDataError,
@@ -83,11 +82,16 @@ class MagCalibration(Result):
     quality: dict[str, float] = field(default_factory=dict)
     extra: dict[str, Any] = field(default_factory=dict)
 
-    @fill_doc
     def apply(self, h: ArrayLike) -> Array:
         """Calibrated field ``A (h − b)``.
 
-        %(mag_h_raw)s
+        Parameters
+        ----------
+        h : array_like, shape (N, 3)
+            Raw magnetometer samples, any unit (kept), sensor axes.
+
+        Returns
+        -------
         numpy.ndarray, shape (N, 3)
             The calibrated field, same unit.
         """
@@ -193,11 +197,16 @@ def _check_planar(h: Array, tol: float) -> None:
         )
 
 
-@fill_doc
 def hard_iron_minmax(h: ArrayLike) -> Array:
     """Hard iron as the per-axis mid-range ``(max + min)/2`` (Atasoy, eqs. 6.1-6.3).
 
-    %(mag_h_raw)s
+    Parameters
+    ----------
+    h : array_like, shape (N, 3)
+        Raw magnetometer samples, any unit (kept), sensor axes.
+
+    Returns
+    -------
     numpy.ndarray, shape (3,)
         The hard-iron offset, in the data's unit.
 

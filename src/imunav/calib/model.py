@@ -35,7 +35,6 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from imunav._docstrings import fill_doc
 from imunav.errors import (
     FileFormatError,
     ImunavWarning,
@@ -242,7 +241,6 @@ class ImuCalibration:
         return ba, ta, bg, tg
 
     # ------------------------------------------------------------ apply/invert
-    @fill_doc
     def apply_arrays(
         self, accel: ArrayLike, gyro: ArrayLike, temp_c: ArrayLike | None = None
     ) -> tuple[Array, Array]:
@@ -267,7 +265,14 @@ class ImuCalibration:
         w : numpy.ndarray, shape (N, 3)
             Compensated angular rate, body frame, rad/s.
 
-        %(calib_pair_raises)s
+        Raises
+        ------
+        ShapeError
+            If ``accel`` and ``gyro`` are not both (N, 3).
+        NonFiniteError
+            If a sample or temperature is not finite.
+        InvalidInputError
+            If the calibration is temperature dependent and ``temp_c`` is missing.
         """
         a, g = _pair(accel, gyro)
         n = a.shape[0]
@@ -280,7 +285,6 @@ class ImuCalibration:
         w = np.linalg.solve(tg, (g - bg - f @ self.g_sensitivity.T)[..., None])[..., 0]
         return f, w
 
-    @fill_doc
     def invert_arrays(
         self, accel: ArrayLike, gyro: ArrayLike, temp_c: ArrayLike | None = None
     ) -> tuple[Array, Array]:
@@ -304,7 +308,14 @@ class ImuCalibration:
         g : numpy.ndarray, shape (N, 3)
             Raw gyro output, ``raw_gyro_unit``.
 
-        %(calib_pair_raises)s
+        Raises
+        ------
+        ShapeError
+            If ``accel`` and ``gyro`` are not both (N, 3).
+        NonFiniteError
+            If a sample or temperature is not finite.
+        InvalidInputError
+            If the calibration is temperature dependent and ``temp_c`` is missing.
         """
         f, w = _pair(accel, gyro)
         n = f.shape[0]
@@ -483,7 +494,6 @@ class ImuCalibration:
         }
 
     @classmethod
-    @fill_doc
     def from_dict(cls, d: dict[str, Any], *, source: str = "<dict>") -> "ImuCalibration":
         """Rebuild a calibration from :meth:`to_dict` (or a parsed calibration file).
 
@@ -494,7 +504,14 @@ class ImuCalibration:
         source : str
             Where it comes from, for error messages.
 
-        %(calib_returns_raises)s
+        Returns
+        -------
+        ImuCalibration
+            The calibration.
+
+        Raises
+        ------
+        FileFormatError
             If the format or its version is not this one, or a field is missing.
         """
         if d.get("format") != _FORMAT:
@@ -523,22 +540,38 @@ class ImuCalibration:
         except KeyError as e:
             raise FileFormatError(f"{source}: calibration JSON lacks the field {e}") from None
 
-    @fill_doc
     def save(self, path: str | os.PathLike[str]) -> Path:
         """Write the calibration as JSON (atomic).
 
-        %(write_path_returns)s
+        Parameters
+        ----------
+        path : str or os.PathLike
+            Output file.
+
+        Returns
+        -------
+        pathlib.Path
+            The file written.
         """
         return write_json(path, self.to_dict())
 
     @classmethod
-    @fill_doc
     def load(cls, path: str | os.PathLike[str]) -> "ImuCalibration":
         """Read a calibration file: imunav's JSON, or an imucal Ferraris JSON.
 
-        %(reader_head)s
+        Parameters
+        ----------
+        path : str or os.PathLike
+            The file.
 
-        %(calib_returns_raises)s
+        Returns
+        -------
+        ImuCalibration
+            The calibration.
+
+        Raises
+        ------
+        FileFormatError
             If the file does not exist, is not valid JSON, or is not a calibration of a supported format.
         """
         p = Path(path)

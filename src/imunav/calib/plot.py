@@ -8,7 +8,6 @@ from typing import Any
 
 import numpy as np
 
-from imunav._docstrings import fill_doc
 from imunav.io._atomic import atomic_path
 
 __all__ = ["plot_residuals", "plot_temperature_fit", "plot_magnetometer", "save_figure"]
@@ -25,11 +24,15 @@ def _plt() -> Any:
     return plt
 
 
-@fill_doc
 def save_figure(fig: Any, path: str | os.PathLike[str], dpi: int = 110) -> Path:
     """Save a figure atomically (temp file in the same folder, then rename) and close it.
 
-    %(save_fig_path)s
+    Parameters
+    ----------
+    fig : matplotlib.figure.Figure
+        The figure.
+    path : str or os.PathLike
+        Output file; the format follows its suffix.
     dpi : int
         Resolution, dots per inch.
 
@@ -47,7 +50,6 @@ def save_figure(fig: Any, path: str | os.PathLike[str], dpi: int = 110) -> Path:
     return Path(path)
 
 
-@fill_doc
 def plot_residuals(result: Any) -> Any:
     """One panel per fit: residual of every position / step and axis (raw units).
 
@@ -56,7 +58,10 @@ def plot_residuals(result: Any) -> Any:
     result : CalibrationResult
         A calibration result.
 
-    %(figure_returns)s
+    Returns
+    -------
+    matplotlib.figure.Figure
+        The figure.
     """
     plt = _plt()
     res = {k: np.atleast_2d(np.asarray(v, float).T).T for k, v in result.residuals.items()}
@@ -77,7 +82,6 @@ def plot_residuals(result: Any) -> Any:
     return fig
 
 
-@fill_doc
 def plot_temperature_fit(fit: Any, title: str = "") -> Any:
     """Parameter vs temperature with every fitted order, and the residuals (after Günhan 2014, Figs. 6.1-6.10).
 
@@ -85,7 +89,13 @@ def plot_temperature_fit(fit: Any, title: str = "") -> Any:
     ----------
     fit : TemperatureFit
         The fits of one parameter (temperature in °C).
-    %(figure_title_str_returns)s
+    title : str
+        Figure title.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        The figure.
     """
     plt = _plt()
     fig, (a1, a2) = plt.subplots(2, 1, figsize=(7, 6), sharex=True)
@@ -105,7 +115,6 @@ def plot_temperature_fit(fit: Any, title: str = "") -> Any:
     return fig
 
 
-@fill_doc
 def plot_magnetometer(h: Any, cal: Any) -> Any:
     """Y-Z, Z-X, X-Y projections before and after calibration (after Atasoy's thesis, Figs. 7.61-7.69).
 
@@ -116,7 +125,10 @@ def plot_magnetometer(h: Any, cal: Any) -> Any:
     cal : MagCalibration
         The calibration applied.
 
-    %(figure_returns)s
+    Returns
+    -------
+    matplotlib.figure.Figure
+        The figure.
     """
     plt = _plt()
     h = np.asarray(h, float)

@@ -21,7 +21,6 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from imunav._docstrings import fill_doc
 from imunav.calib._lsq import linear_fit, paired_means
 from imunav.calib._noisecov import segment_mean_covariances
 from imunav.calib._segments import as_time, assign_to_windows, check_saturation, segment_means, steady_segments
@@ -36,7 +35,6 @@ __all__ = ["ratetable_from_means", "ratetable", "combine"]
 Array = NDArray[np.float64]
 
 
-@fill_doc(units="steps", inputs="rates")
 def ratetable_from_means(
     rates: ArrayLike,
     gyro_means: ArrayLike,
@@ -81,7 +79,14 @@ def ratetable_from_means(
     CalibrationResult
         ``base`` with the estimated gyro matrix (and bias with ``intercept``), standard errors and residuals.
 
-    %(means_fit_raises)s
+    Raises
+    ------
+    ShapeError
+        If the arrays are not (K, 3) with the same K.
+    InsufficientDataError
+        With too few steps for the parameters.
+    DegenerateGeometryError
+        If the rates do not excite every axis.
     """
     W, Y = paired_means(rates, "rates", gyro_means, "gyro_means")
     base = base if base is not None else ImuCalibration()

@@ -26,7 +26,6 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from imunav._docstrings import fill_doc
 from imunav.calib._lsq import design_condition, linear_fit, paired_means
 from imunav.calib._noisecov import segment_mean_covariances
 from imunav.calib._segments import (
@@ -130,13 +129,15 @@ def earth_rate_body(orientations: ArrayLike, latitude: float | None) -> Array | 
     return OMEGA_E * np.sin(latitude) * u
 
 
-@fill_doc
 def fit_accel_positions(
     f_ref: Array, accel_means: Array, serial: bool = True, covs: list[Array] | None = None
 ) -> tuple[Array, Array, Array, Array, Any]:
     """Least squares of ``ã = T f + b`` over the positions (Günhan 2014, eq. 18).
 
-    %(calib_f_ref_params)s
+    Parameters
+    ----------
+    f_ref : array_like, shape (K, 3)
+        Reference specific force of each position, body frame, m/s² (:func:`reference_specific_force`).
     accel_means : numpy.ndarray, shape (K, 3)
         Mean accelerometer output of each position, raw units.
     serial : bool
@@ -163,7 +164,6 @@ def fit_accel_positions(
     return T, b, fit.stderr[:3].T, fit.stderr[3], fit
 
 
-@fill_doc
 def fit_gyro_static(
     f_ref: Array,
     gyro_means: Array,
@@ -175,7 +175,10 @@ def fit_gyro_static(
 ) -> tuple[Array, Array, Array, Array, Array, float, Array]:
     """Static gyro fit (Günhan 2014, eq. 19): bias and g-sensitivity.
 
-    %(calib_f_ref_params)s
+    Parameters
+    ----------
+    f_ref : array_like, shape (K, 3)
+        Reference specific force of each position, body frame, m/s² (:func:`reference_specific_force`).
     gyro_means : numpy.ndarray, shape (K, 3)
         Mean gyro output of each position, raw units.
     g_sensitivity : {"diagonal", "full", "none"}
@@ -242,7 +245,6 @@ def fit_gyro_static(
     return b, G, seb, seG, res, cond, pcov
 
 
-@fill_doc(units="positions", inputs="positions")
 def multiposition_from_means(
     f_ref: ArrayLike,
     accel_means: ArrayLike,
@@ -260,7 +262,10 @@ def multiposition_from_means(
     The gyro matrix stays identity (a static test cannot excite it); combine
     with :func:`imunav.calib.ratetable.ratetable` for the full model.
 
-    %(calib_f_ref_params)s
+    Parameters
+    ----------
+    f_ref : array_like, shape (K, 3)
+        Reference specific force of each position, body frame, m/s² (:func:`reference_specific_force`).
     accel_means : array_like, shape (K, 3)
         Mean accelerometer output of each position, raw units.
     gyro_means : array_like, shape (K, 3), optional
@@ -284,7 +289,14 @@ def multiposition_from_means(
         Accelerometer bias and matrix, gyro bias and g-sensitivity, with standard errors, residuals and the
         condition of each design.
 
-    %(means_fit_raises)s
+    Raises
+    ------
+    ShapeError
+        If the arrays are not (K, 3) with the same K.
+    InsufficientDataError
+        With too few positions for the parameters.
+    DegenerateGeometryError
+        If the positions do not excite every axis.
     """
     f, A = paired_means(f_ref, "f_ref", accel_means, "accel_means")
     T, b, seT, seb, fit = fit_accel_positions(f, A, serial, accel_covs)

@@ -19,7 +19,7 @@ from imunav.cli._lazy import LazyGroup
 
 #: The commands, in the order ``imunav --help`` lists them: name (the module ``imunav.cli.<name>``, with a
 #: ``register(app)`` function) -> the first sentence of the command's help, listed without importing the
-#: module (tests/test_cli_help.py checks each against the command's own help).
+#: module (tests/cli/test_main.py checks each against the command's own help).
 COMMANDS: dict[str, str] = {
     "info": "Rate, duration, gaps, saturation, static intervals and per-channel mean/std of a recording.",
     "convert": "Read one IMU (SI, FRD, magnetometer in µT) and write it as an imunav table, atomically.",

@@ -28,7 +28,6 @@ import math
 import numpy as np
 from numba import njit
 
-from imunav._docstrings import fill_doc
 from imunav._rotation_kernels import qexp_1, qmul_1, qrot_1
 from imunav.earth import radii_gravity_1
 
@@ -977,11 +976,19 @@ def inv3(A, out):
 
 
 @njit(cache=True)
-@fill_doc
 def mm3(A, B, C):
     """``C = A B`` for 3 × 3 matrices (C distinct from A and B).
 
-    %(mat3_product)s
+    Parameters
+    ----------
+    A, B : numpy.ndarray, shape (3, 3)
+        The factors, float64.
+    C : numpy.ndarray, shape (3, 3)
+        Receives the product, float64.
+
+    Returns
+    -------
+    None
     """
     for i in range(3):
         for j in range(3):
@@ -989,11 +996,19 @@ def mm3(A, B, C):
 
 
 @njit(cache=True)
-@fill_doc
 def mmt3(A, B, C):
     """``C = A Bᵀ`` for 3 × 3 matrices (C distinct from A and B).
 
-    %(mat3_product)s
+    Parameters
+    ----------
+    A, B : numpy.ndarray, shape (3, 3)
+        The factors, float64.
+    C : numpy.ndarray, shape (3, 3)
+        Receives the product, float64.
+
+    Returns
+    -------
+    None
     """
     for i in range(3):
         for j in range(3):

@@ -54,7 +54,6 @@ from functools import lru_cache
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from imunav._docstrings import fill_doc
 from imunav._quantiles import chi2_isf, chi2_ppf, norm_isf
 from imunav.errors import InvalidInputError, ShapeError
 from imunav.filters._batch import window_stats_batch
@@ -291,7 +290,6 @@ def alarms(name: str, statistic: ArrayLike, threshold: float) -> NDArray[np.bool
     return np.nan_to_num(st, nan=-np.inf) > threshold
 
 
-@fill_doc
 def window_statistics(normalized: ArrayLike, M: int = 20, P: ArrayLike | None = None, L: ArrayLike | None = None
                       ) -> tuple[Array, Array, Array]:
     """Sliding-window statistics (λ Alg. 1, λ Alg. 2, Alg. 3 sum) per step.
@@ -300,7 +298,12 @@ def window_statistics(normalized: ArrayLike, M: int = 20, P: ArrayLike | None = 
     ``P`` is the covariance of ν̃ under H0 (identity); ``L`` the fixed
     direction of Alg. 2 (all ones).
 
-    %(fault_batch_innovations_window)s
+    Parameters
+    ----------
+    normalized : array_like, shape (N, s) or (R, N, s)
+        Normalised innovations ``ν̃ = S^{-1/2} ν`` of one run or a batch of runs, finite.
+    M : int, optional
+        Window length in steps, > s (default 20).
     P : array_like, shape (s, s), optional
         Covariance of ν̃ under H0 (default identity).
     L : array_like, shape (s,), optional
@@ -367,7 +370,6 @@ def cusum_statistics(normalized: ArrayLike, rho: float = 4.0, k: float = 0.5) ->
     return cusum_stats(_check_nv(normalized), float(rho), float(k))
 
 
-@fill_doc
 def detector_statistics(normalized: ArrayLike, M: int = 20, *, cusum_rho: float = 4.0, cusum_k: float = 0.5,
                         low_window: int = 5) -> dict[str, Array]:
     """All detector statistics for one run (N, s) or a batch of runs (R, N, s).
@@ -376,7 +378,12 @@ def detector_statistics(normalized: ArrayLike, M: int = 20, *, cusum_rho: float 
     before the window is full).  Compare with the thresholds of
     :func:`calibrated_thresholds` / :func:`thesis_thresholds`.
 
-    %(fault_batch_innovations_window)s
+    Parameters
+    ----------
+    normalized : array_like, shape (N, s) or (R, N, s)
+        Normalised innovations ``ν̃ = S^{-1/2} ν`` of one run or a batch of runs, finite.
+    M : int, optional
+        Window length in steps, > s (default 20).
     cusum_rho : float, optional
         Variance ratio of the variance CUSUM, > 1.
     cusum_k : float, optional
@@ -448,7 +455,6 @@ def first_alarm(alarm: ArrayLike, start: int = 0) -> int:
     return int(idx[0] + start) if idx.size else -1
 
 
-@fill_doc
 def isolate_faulty_channels(normalized: ArrayLike, M: int = 20, p_false_alarm: float = 1e-3, start: int = 0,
                             during: ArrayLike | None = None, min_count: int = 3
                             ) -> tuple[NDArray[np.bool_], Array]:
@@ -461,7 +467,12 @@ def isolate_faulty_channels(normalized: ArrayLike, M: int = 20, p_false_alarm: f
     (all steps if None): a persistent fault keeps flagging its channel, a
     chance flag does not repeat.
 
-    %(fault_innovations_window)s
+    Parameters
+    ----------
+    normalized : array_like, shape (N, s)
+        Normalised innovations ``ν̃ = S^{-1/2} ν`` (a 1-D array is one channel), finite.
+    M : int, optional
+        Window length in steps, > s (default 20).
     p_false_alarm : float, optional
         Per-step level of the two tests together (split by Bonferroni).
     start : int, optional
@@ -561,7 +572,6 @@ class FaultDetectionResult(Result):
     extra: dict = field(default_factory=dict)
 
 
-@fill_doc
 def detect_faults(
     normalized: ArrayLike,
     M: int = 20,
@@ -576,7 +586,12 @@ def detect_faults(
 ) -> FaultDetectionResult:
     """Run Alg. 1-3, NIS and both CUSUMs on normalised innovations (N, s).
 
-    %(fault_innovations_window)s
+    Parameters
+    ----------
+    normalized : array_like, shape (N, s)
+        Normalised innovations ``ν̃ = S^{-1/2} ν`` (a 1-D array is one channel), finite.
+    M : int, optional
+        Window length in steps, > s (default 20).
     p_false_alarm : float, optional
         Per-step false-alarm rate of the calibrated thresholds, in (0, 0.5).
     threshold_mode : str

@@ -29,7 +29,6 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy.linalg import solve_discrete_are
 
-from imunav._docstrings import fill_doc
 from imunav.errors import InvalidInputError
 from imunav.filters._batch import MODE_GATE, MODE_HUBER, MODE_ISOLATE, MODE_NIS, MODE_NONE, batch_filter
 from imunav.filters._common import (
@@ -517,7 +516,6 @@ def robust_mode(robust: str | None, gate_m: float, alpha: float, huber_c: float)
     return modes[robust]
 
 
-@fill_doc
 def batch_kalman_filter(
     x0: ArrayLike,
     P0: ArrayLike,
@@ -554,7 +552,12 @@ def batch_kalman_filter(
         Noise-input matrix.
     robust : {None, "gate", "isolate", "nis", "huber"}, optional
         Robust update (default None: the optimal filter).
-    %(robust_tail)s
+    gate_m : float, optional
+        Per-channel gate half-width, standard deviations (``"gate"``).
+    alpha : float, optional
+        Test level in (0, 1) (``"isolate"``, ``"nis"``).
+    huber_c : float, optional
+        Huber threshold (``"huber"``).
 
     Returns
     -------

@@ -21,7 +21,6 @@ import numpy as np
 from numpy.typing import NDArray
 
 from imunav._atomic import atomic_path
-from imunav._docstrings import fill_doc
 from imunav.errors import ConfigError, FileFormatError, InvalidInputError, ShapeError
 from imunav.ins import _lstm_kernels as _lk
 from imunav.ins.result import DetectorResult
@@ -177,11 +176,13 @@ class LstmConfig:
         if not self.guard_block_s > 0:
             raise ConfigError(f"guard_block_s must be > 0 s; got {self.guard_block_s}")
 
-    @fill_doc
     def to_dict(self) -> dict[str, Any]:
         """The settings as a plain dict.
 
-        %(config_to_dict)s
+        Returns
+        -------
+        dict
+            One key per field.
         """
         return asdict(self)
 

@@ -22,7 +22,6 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from imunav._docstrings import fill_doc
 from imunav.errors import InsufficientDataError, InvalidInputError, ShapeError
 from imunav.results import Result
 
@@ -50,11 +49,17 @@ def _pos(x: ArrayLike, name: str, min_cols: int = 2) -> Array:
     return a
 
 
-@fill_doc
 def align_heading(estimate: ArrayLike, reference: ArrayLike, align_distance: float = 0.8) -> Array:
     """Estimate shifted to the origin and rotated about z as in :func:`error_2d`.
 
-    %(track_pair)s
+    Parameters
+    ----------
+    estimate : array_like, shape (N, 2) or (N, 3)
+        Estimated positions, local NED (x, y horizontal), m.
+    reference : array_like, shape (N, 2) or (N, 3)
+        Reference positions at the same samples, m, frame with the same x-y handedness.
+    align_distance : float
+        Horizontal distance from the start at which the headings are aligned, m.
 
     Returns
     -------
@@ -84,7 +89,6 @@ def align_heading(estimate: ArrayLike, reference: ArrayLike, align_distance: flo
     return out
 
 
-@fill_doc
 def error_2d(estimate: ArrayLike, reference: ArrayLike, align_distance: float = 0.8) -> float:
     """Published 2-D error (m) of an estimated track against a time-aligned reference.
 
@@ -93,7 +97,14 @@ def error_2d(estimate: ArrayLike, reference: ArrayLike, align_distance: float = 
     expressed in frames whose x-y axes have the same handedness (use the
     adapters of :mod:`imunav.io.foot`).
 
-    %(track_pair)s
+    Parameters
+    ----------
+    estimate : array_like, shape (N, 2) or (N, 3)
+        Estimated positions, local NED (x, y horizontal), m.
+    reference : array_like, shape (N, 2) or (N, 3)
+        Reference positions at the same samples, m, frame with the same x-y handedness.
+    align_distance : float
+        Horizontal distance from the start at which the headings are aligned, m.
 
     Returns
     -------
@@ -168,7 +179,6 @@ def loop_closure_error(position: ArrayLike) -> LoopClosure:
     return LoopClosure(float(np.linalg.norm(d)), float(np.hypot(d[0], d[1])), float(abs(d[2])), travelled)
 
 
-@fill_doc
 def position_rmse(estimate: ArrayLike, reference: ArrayLike, *, align: str = "yaw", dims: int = 2) -> float:
     """Position RMSE after aligning the estimate to the reference.
 
@@ -177,7 +187,12 @@ def position_rmse(estimate: ArrayLike, reference: ArrayLike, *, align: str = "ya
     ``psi = atan2(sum(x̂ y - ŷ x), sum(x̂ x + ŷ y))``).  ``dims``: 2
     (horizontal) or 3.  RMSE = sqrt(mean_k |e_k|²).
 
-    %(track_estimate_reference)s
+    Parameters
+    ----------
+    estimate : array_like, shape (N, 2) or (N, 3)
+        Estimated positions, local NED (x, y horizontal), m.
+    reference : array_like, shape (N, 2) or (N, 3)
+        Reference positions at the same samples, m, frame with the same x-y handedness.
     align : {"none", "start", "yaw"}
         Alignment before the comparison (see above).
     dims : {2, 3}

@@ -6,7 +6,6 @@ from typing import Any
 
 import numpy as np
 
-from imunav._docstrings import fill_doc
 from imunav.ins.metrics import align_heading
 
 __all__ = ["plot_trajectory", "plot_zero_velocity"]
@@ -22,7 +21,6 @@ def _axes(ax: Any, figsize: tuple[float, float]) -> Any:
     return ax
 
 
-@fill_doc
 def plot_trajectory(result: Any, reference: Any = None, *, ax: Any = None, label: str = "INS") -> Any:
     """Top view (north up, east right) of a :class:`~imunav.ins.ZuptResult` and an optional reference.
 
@@ -40,7 +38,10 @@ def plot_trajectory(result: Any, reference: Any = None, *, ax: Any = None, label
     label : str
         Legend label of the estimate.
 
-    %(axes_drawn_returns)s
+    Returns
+    -------
+    matplotlib.axes.Axes
+        The axes drawn into.
     """
     ax = _axes(ax, (6, 6))
     p = np.asarray(result.position)
@@ -59,7 +60,6 @@ def plot_trajectory(result: Any, reference: Any = None, *, ax: Any = None, label
     return ax
 
 
-@fill_doc
 def plot_zero_velocity(data: Any, detections: dict[str, Any], *, ax: Any = None) -> Any:
     """Zero-velocity timeline: |ω| and |f| - g with each detector's stance flags underneath.
 
@@ -72,7 +72,10 @@ def plot_zero_velocity(data: Any, detections: dict[str, Any], *, ax: Any = None)
     ax : matplotlib.axes.Axes, optional
         Axes to draw into (default: a new figure).
 
-    %(axes_drawn_returns)s
+    Returns
+    -------
+    matplotlib.axes.Axes
+        The axes drawn into.
     """
     ax = _axes(ax, (10, 4))
     t = np.asarray(data.t)

@@ -15,7 +15,6 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from imunav._docstrings import fill_doc
 from imunav.errors import InvalidInputError, ShapeError
 from imunav.ins import _kernels as _k
 
@@ -114,11 +113,15 @@ def ared(gyro: ArrayLike, window: int = 5) -> Array:
     return _k.ared_blocks(w, _window(window, w.shape[0]))
 
 
-@fill_doc
 def amvd(accel: ArrayLike, window: int = 5) -> Array:
     """AMVD statistic (N,), (m/s²)², on non-overlapping blocks: ``T = 1/W Σ |y_a,k − ȳ_a|²``.
 
-    %(accel_window)s
+    Parameters
+    ----------
+    accel : array_like, shape (N, 3)
+        Specific force in the body (FRD) frame, m/s².
+    window : int, optional
+        Window length ``W`` in samples, >= 2 (default 5).
 
     Returns
     -------
@@ -129,14 +132,18 @@ def amvd(accel: ArrayLike, window: int = 5) -> Array:
     return _k.amvd_blocks(a, _window(window, a.shape[0]))
 
 
-@fill_doc
 def mbgtd(accel: ArrayLike, window: int = 5, *, tail: float = 1.0) -> Array:
     """MBGTD statistic (N,), m/s², on a per-sample sliding window.
 
     The last ``window - 1`` samples get ``tail`` (published convention: 1).  The statistic is
     the memory-based graph-theoretic test of Olivares et al. (Sensors 12(7), 2012).
 
-    %(accel_window)s
+    Parameters
+    ----------
+    accel : array_like, shape (N, 3)
+        Specific force in the body (FRD) frame, m/s².
+    window : int, optional
+        Window length ``W`` in samples, >= 2 (default 5).
     tail : float, optional
         Value given to the last ``window - 1`` samples (default 1).
 

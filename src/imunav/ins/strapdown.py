@@ -31,7 +31,6 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from imunav._docstrings import fill_doc
 from imunav.errors import InvalidInputError, ShapeError
 from imunav.ins import _kernels as _k
 from imunav.results import EulerMixin, Result
@@ -148,12 +147,16 @@ def _increments(data: Any, t: Array, corrected: bool) -> tuple[Array, Array, Arr
     return dth, dv, np.concatenate([[0.0], np.diff(t)])
 
 
-@fill_doc
 def strapdown_local(data: Any, q0: ArrayLike, *, v0: ArrayLike = (0, 0, 0), p0: ArrayLike = (0, 0, 0),
                     g: float = 9.80665, corrected: bool = True) -> StrapdownResult:
     """Free-inertial integration in a local-level NED frame (no Earth rate; module docstring).
 
-    %(strapdown_data_q0)s
+    Parameters
+    ----------
+    data : ImuData
+        The recording (SI: rad/s, m/s², specific force), body FRD.
+    q0 : array_like, shape (4,)
+        Initial attitude ``q_nb`` (unit quaternion).
     v0 : array_like, shape (3,)
         Initial velocity, NED, m/s.
     p0 : array_like, shape (3,)
@@ -179,7 +182,6 @@ def strapdown_local(data: Any, q0: ArrayLike, *, v0: ArrayLike = (0, 0, 0), p0: 
     return StrapdownResult(t, qq, v, position=p)
 
 
-@fill_doc
 def strapdown_ned(data: Any, q0: ArrayLike, lla0: ArrayLike, *, v0: ArrayLike = (0, 0, 0),
                   corrected: bool = True, omega_e: float = OMEGA_E) -> StrapdownResult:
     """Free-inertial NED mechanization with Earth and transport rate.
@@ -187,7 +189,12 @@ def strapdown_ned(data: Any, q0: ArrayLike, lla0: ArrayLike, *, v0: ArrayLike = 
     ``lla0`` = (lat rad, lon rad, h m).  The IMU measures rates with respect
     to inertial space (include the Earth rate in ``gyro``).
 
-    %(strapdown_data_q0)s
+    Parameters
+    ----------
+    data : ImuData
+        The recording (SI: rad/s, m/s², specific force), body FRD.
+    q0 : array_like, shape (4,)
+        Initial attitude ``q_nb`` (unit quaternion).
     lla0 : array_like, shape (3,)
         Initial geodetic position (lat rad, lon rad, h m).
     v0 : array_like, shape (3,)

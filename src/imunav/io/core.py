@@ -25,7 +25,6 @@ import os
 from pathlib import Path
 from typing import Any
 
-from imunav._docstrings import fill_doc
 from imunav.errors import InvalidInputError
 from imunav.io import csv, hdf5, mat, npz, parquet
 from imunav.io._common import call_reader
@@ -146,20 +145,27 @@ def read_imu(path: str | os.PathLike[str], format: str | None = None, *, layout:
     return call_reader(reader, f"read_imu(format={fmt!r})", path, **options)
 
 
-@fill_doc
 def write_imu(data: ImuData, path: str | os.PathLike[str], format: str | None = None, **options: Any) -> Path:
     """Write ``data`` atomically (temporary file in the same folder, then rename).
 
     SI values, ``mag_unit`` and ``meta`` are stored; every reader gives back the same bits.
 
-    %(imu_writer_params)s
+    Parameters
+    ----------
+    data : ImuData
+        The recording.
+    path : str or os.PathLike
+        Output file.
     format : str, optional
         As in :func:`read_imu`, plus ``"mat73"`` for MAT v7.3 (or ``format="mat", version="7.3"``); from the
         suffix when None.  Bags and logs cannot be written.
     **options
         Writer options (e.g. ``compression`` for HDF5, ``version`` for MAT).
 
-    %(returns_file_written)s
+    Returns
+    -------
+    pathlib.Path
+        The file written.
 
     Raises
     ------

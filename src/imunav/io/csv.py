@@ -35,7 +35,6 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
-from imunav._docstrings import fill_doc
 from imunav.errors import FileFormatError, InvalidInputError
 from imunav.io._atomic import atomic_path
 from imunav.io._common import build_imu, check_nonempty, header_json, parse_header, wrap_read_errors
@@ -289,7 +288,6 @@ def _last_line(path: str) -> str:
     return lines[-1] if lines else ""
 
 
-@fill_doc
 def read_csv(
     path: str | os.PathLike[str],
     *,
@@ -307,15 +305,30 @@ def read_csv(
 ) -> ImuData:
     """Read a CSV (or other delimited text) recording.
 
-    %(reader_head)s
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The file.
     columns : mapping, optional
         Channels / groups to column names (see the module docstring); by default found by name.
-    %(reader_units)s
+    units : mapping of str to str, optional
+        Declared unit of each group (``{"gyro": "deg/s", "accel": "g"}``, or ``"counts"``); default SI.
+    scales, offsets : mapping of str to float, optional
+        For ``"counts"``: ``value_si = (counts - offset) * scale``.
+    fs : float, optional
+        Sample rate, Hz, when the file has no time (``t = t0 + k / fs``).
+    t0 : float
+        Time of the first sample with ``fs``, s.
     delimiter : str, optional
         Column separator; detected from the header line when None (``,`` ``;`` tab ``|``, else whitespace).
     skiprows : int
         Lines to skip before the header (after ``#`` comment lines).
-    %(reader_tail)s
+    nan_policy : {"raise", "drop", "interpolate"}
+        What to do with NaN samples.
+    mag_unit : str, optional
+        Unit of the magnetometer (kept as stored).
+    meta : mapping, optional
+        Entries added to the recording's ``meta``.
 
     Returns
     -------
@@ -401,18 +414,25 @@ def read_csv(
     )  # fmt: skip
 
 
-@fill_doc
 def write_csv(data: ImuData, path: str | os.PathLike[str], *, delimiter: str = ",") -> Path:
     """Write ``data`` (SI) as CSV with exact (``repr``) floats; atomic.
 
     The first line is a ``# imunav {json}`` header (units, ``mag_unit``, ``meta``), read back by
     :func:`read_csv`.
 
-    %(imu_writer_params)s
+    Parameters
+    ----------
+    data : ImuData
+        The recording.
+    path : str or os.PathLike
+        Output file.
     delimiter : str
         Column separator.
 
-    %(returns_file_written)s
+    Returns
+    -------
+    pathlib.Path
+        The file written.
     """
     names, block = imu_to_table(data)
     head = f"# imunav {header_json(data)}\n{delimiter.join(names)}\n"

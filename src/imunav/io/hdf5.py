@@ -21,7 +21,6 @@ from typing import Any
 import h5py
 import numpy as np
 
-from imunav._docstrings import fill_doc
 from imunav.errors import FileFormatError
 from imunav.io._atomic import atomic_path
 from imunav.io._common import (
@@ -49,7 +48,6 @@ def _datasets(group: h5py.Group) -> list[str]:
     return names
 
 
-@fill_doc
 def read_hdf5(
     path: str | os.PathLike[str],
     *,
@@ -66,13 +64,40 @@ def read_hdf5(
 ) -> ImuData:
     """Read an HDF5 recording (see the module docstring for the layout).
 
-    %(reader_head)s
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The file.
     group : str
         HDF5 group holding the datasets.
-    %(array_columns)s
-    %(reader_options)s
+    columns : mapping of str to str, optional
+        Where each group is stored (e.g. ``{"gyro": "imu/gyr"}``); by default found by name.
+    units : mapping of str to str, optional
+        Declared unit of each group (``{"gyro": "deg/s", "accel": "g"}``, or ``"counts"``); default SI.
+    scales, offsets : mapping of str to float, optional
+        For ``"counts"``: ``value_si = (counts - offset) * scale``.
+    fs : float, optional
+        Sample rate, Hz, when the file has no time (``t = t0 + k / fs``).
+    t0 : float
+        Time of the first sample with ``fs``, s.
+    nan_policy : {"raise", "drop", "interpolate"}
+        What to do with NaN samples.
+    mag_unit : str, optional
+        Unit of the magnetometer (kept as stored).
+    meta : mapping, optional
+        Entries added to the recording's ``meta``.
 
-    %(reader_returns)s
+    Returns
+    -------
+    ImuData
+        The recording, SI.
+
+    Raises
+    ------
+    FileFormatError
+        If the file is missing, unreadable, or lacks a required group (the message lists what was found).
+    NonFiniteError, TimeOrderError, ShapeError, UnitError
+        From the validation of the values.
     """
     source = check_nonempty(path)
     with wrap_read_errors(source, "HDF5"):
@@ -93,19 +118,26 @@ def read_hdf5(
     )  # fmt: skip
 
 
-@fill_doc
 def write_hdf5(
     data: ImuData, path: str | os.PathLike[str], *, group: str = "/", compression: str | None = None
 ) -> Path:
     """Write ``data`` (SI, float64) to HDF5 atomically (layout in the module docstring).
 
-    %(imu_writer_params)s
+    Parameters
+    ----------
+    data : ImuData
+        The recording.
+    path : str or os.PathLike
+        Output file.
     group : str
         HDF5 group to write into.
     compression : str, optional
         h5py dataset compression (e.g. ``"gzip"``).
 
-    %(returns_file_written)s
+    Returns
+    -------
+    pathlib.Path
+        The file written.
     """
     units = dict(SI_UNITS)
     if data.mag is not None:

@@ -14,7 +14,6 @@ import os
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from imunav._docstrings import fill_doc
 from imunav.io._noise import KALIBR_KEYS, check_rate, imu_noise_values, value_lines, write_text
 
 if TYPE_CHECKING:  # annotations only
@@ -26,13 +25,18 @@ __all__ = ["KALIBR_IMU_KEYS", "write_kalibr_yaml"]
 KALIBR_IMU_KEYS = tuple(k for k, _ in KALIBR_KEYS) + ("rostopic", "update_rate")
 
 
-@fill_doc
 def write_kalibr_yaml(path: str | os.PathLike[str], gyro: NoiseFit, accel: NoiseFit, update_rate: float,
                       rostopic: str = "/imu0", combine: str = "max") -> Path:
     """Write Kalibr's ``imu.yaml``: noise densities ``N`` and random walks ``K`` (SI, continuous time).
 
-    %(noise_yaml_fits)s
-    %(noise_yaml_rate)s
+    Parameters
+    ----------
+    path : path-like
+        The YAML file to write (atomically).
+    gyro, accel : NoiseFit
+        Noise fits of the gyroscope (rad/s) and accelerometer (m/s^2) channels.
+    update_rate : float
+        IMU sample rate, Hz.
     rostopic : str
         The IMU topic of the bag Kalibr will read.
     combine : {"max", "mean"}

@@ -49,7 +49,6 @@ from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
-from imunav._docstrings import fill_doc
 from imunav.errors import FileFormatError, InvalidInputError
 from imunav.io import rosbag, ulog
 from imunav.io.topics import (
@@ -117,7 +116,6 @@ def list_topics(path: str | os.PathLike[str]) -> list[TopicInfo]:
     return mod.list_topics(path)
 
 
-@fill_doc
 def read_topic(path: str | os.PathLike[str], topic: str, *, instance: int | None = None) -> TopicData:
     """Read one topic (any supported message type) into SI / FRD / NED.
 
@@ -130,7 +128,10 @@ def read_topic(path: str | os.PathLike[str], topic: str, *, instance: int | None
     instance : int, optional
         PX4 ``multi_id`` when the topic has several instances.
 
-    %(topic_returns)s
+    Returns
+    -------
+    TopicData
+        The topic in SI units, body FRD / world NED, ``t`` in s since ``meta["t0_ns"]``.
     """
     mod, _ = _module(path, f"reading {os.fspath(path)}")
     return mod.read_topic(path, topic, instance=instance)

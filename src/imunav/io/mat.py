@@ -31,7 +31,6 @@ import h5py
 import numpy as np
 import scipy.io
 
-from imunav._docstrings import fill_doc
 from imunav.errors import FileFormatError, InvalidInputError
 from imunav.io._atomic import atomic_path
 from imunav.io._common import build_imu, check_nonempty, find_array_names, header_json, parse_header, wrap_read_errors
@@ -123,7 +122,6 @@ def _vector(a: np.ndarray) -> np.ndarray:
     return a
 
 
-@fill_doc
 def read_mat(
     path: str | os.PathLike[str],
     *,
@@ -139,11 +137,38 @@ def read_mat(
 ) -> ImuData:
     """Read a MAT-file (v5 or v7.3, detected from the header).
 
-    %(reader_head)s
-    %(array_columns)s
-    %(reader_options)s
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The file.
+    columns : mapping of str to str, optional
+        Where each group is stored (e.g. ``{"gyro": "imu/gyr"}``); by default found by name.
+    units : mapping of str to str, optional
+        Declared unit of each group (``{"gyro": "deg/s", "accel": "g"}``, or ``"counts"``); default SI.
+    scales, offsets : mapping of str to float, optional
+        For ``"counts"``: ``value_si = (counts - offset) * scale``.
+    fs : float, optional
+        Sample rate, Hz, when the file has no time (``t = t0 + k / fs``).
+    t0 : float
+        Time of the first sample with ``fs``, s.
+    nan_policy : {"raise", "drop", "interpolate"}
+        What to do with NaN samples.
+    mag_unit : str, optional
+        Unit of the magnetometer (kept as stored).
+    meta : mapping, optional
+        Entries added to the recording's ``meta``.
 
-    %(reader_returns)s
+    Returns
+    -------
+    ImuData
+        The recording, SI.
+
+    Raises
+    ------
+    FileFormatError
+        If the file is missing, unreadable, or lacks a required group (the message lists what was found).
+    NonFiniteError, TimeOrderError, ShapeError, UnitError
+        From the validation of the values.
     """
     source = check_nonempty(path)
     version = mat_version(source)
@@ -197,15 +222,22 @@ def _write_v73(data: ImuData, tmp: Path) -> None:
         fh.write(_v73_header())
 
 
-@fill_doc
 def write_mat(data: ImuData, path: str | os.PathLike[str], *, version: str = "5") -> Path:
     """Write a MAT-file, ``version="5"`` (scipy) or ``"7.3"`` (HDF5), atomically.
 
-    %(imu_writer_params)s
+    Parameters
+    ----------
+    data : ImuData
+        The recording.
+    path : str or os.PathLike
+        Output file.
     version : {"5", "7.3"}
         MAT-file version.
 
-    %(returns_file_written)s
+    Returns
+    -------
+    pathlib.Path
+        The file written.
 
     Raises
     ------

@@ -18,7 +18,6 @@ from typing import Any
 
 import numpy as np
 
-from imunav._docstrings import fill_doc
 from imunav.io._atomic import atomic_path
 from imunav.io._common import build_imu, check_nonempty, find_array_names, header_json, parse_header, wrap_read_errors
 from imunav.timeseries import ImuData
@@ -26,7 +25,6 @@ from imunav.timeseries import ImuData
 __all__ = ["read_npz", "write_npz"]
 
 
-@fill_doc
 def read_npz(
     path: str | os.PathLike[str],
     *,
@@ -42,11 +40,38 @@ def read_npz(
 ) -> ImuData:
     """Read an ``.npz`` recording (see the module docstring).
 
-    %(reader_head)s
-    %(array_columns)s
-    %(reader_options)s
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The file.
+    columns : mapping of str to str, optional
+        Where each group is stored (e.g. ``{"gyro": "imu/gyr"}``); by default found by name.
+    units : mapping of str to str, optional
+        Declared unit of each group (``{"gyro": "deg/s", "accel": "g"}``, or ``"counts"``); default SI.
+    scales, offsets : mapping of str to float, optional
+        For ``"counts"``: ``value_si = (counts - offset) * scale``.
+    fs : float, optional
+        Sample rate, Hz, when the file has no time (``t = t0 + k / fs``).
+    t0 : float
+        Time of the first sample with ``fs``, s.
+    nan_policy : {"raise", "drop", "interpolate"}
+        What to do with NaN samples.
+    mag_unit : str, optional
+        Unit of the magnetometer (kept as stored).
+    meta : mapping, optional
+        Entries added to the recording's ``meta``.
 
-    %(reader_returns)s
+    Returns
+    -------
+    ImuData
+        The recording, SI.
+
+    Raises
+    ------
+    FileFormatError
+        If the file is missing, unreadable, or lacks a required group (the message lists what was found).
+    NonFiniteError, TimeOrderError, ShapeError, UnitError
+        From the validation of the values.
     """
     source = check_nonempty(path)
     # open the file ourselves: np.load leaks its handle when the zip is damaged
@@ -62,15 +87,22 @@ def read_npz(
     )  # fmt: skip
 
 
-@fill_doc
 def write_npz(data: ImuData, path: str | os.PathLike[str], *, compress: bool = False) -> Path:
     """Write ``data`` as ``.npz`` (float64 SI arrays + JSON header), atomically.
 
-    %(imu_writer_params)s
+    Parameters
+    ----------
+    data : ImuData
+        The recording.
+    path : str or os.PathLike
+        Output file.
     compress : bool
         Use ``numpy.savez_compressed``.
 
-    %(returns_file_written)s
+    Returns
+    -------
+    pathlib.Path
+        The file written.
     """
     arrays: dict[str, np.ndarray] = {"t": data.t, "gyro": data.gyro, "accel": data.accel}
     if data.mag is not None:

@@ -16,7 +16,6 @@ import os
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from imunav._docstrings import fill_doc
 from imunav.io._noise import KALIBR_KEYS, check_rate, imu_noise_values, value_lines, write_text
 
 if TYPE_CHECKING:  # annotations only
@@ -35,16 +34,27 @@ def _matrix(name: str, n: int, diag: float) -> list[str]:
     return [f"  {name}:"] + ["    - [ " + ", ".join(f"{v:.1f}" for v in r) + " ]" for r in rows]
 
 
-@fill_doc
 def write_openvins_yaml(path: str | os.PathLike[str], gyro: NoiseFit, accel: NoiseFit, update_rate: float,
                         rostopic: str = "/imu0", combine: str = "max") -> Path:
     """Write OpenVINS's ``kalibr_imu_chain.yaml`` with the identified IMU noise.
 
-    %(noise_yaml_fits)s
-    %(noise_yaml_rate)s
+    Parameters
+    ----------
+    path : path-like
+        The YAML file to write (atomically).
+    gyro, accel : NoiseFit
+        Noise fits of the gyroscope (rad/s) and accelerometer (m/s^2) channels.
+    update_rate : float
+        IMU sample rate, Hz.
     rostopic : str
         The IMU topic OpenVINS subscribes to.
-    %(noise_yaml_combine_returns)s
+    combine : {"max", "mean"}
+        One value per sensor: the maximum (default) or mean over the axes.
+
+    Returns
+    -------
+    Path
+        ``path``.
 
     Notes
     -----

@@ -16,7 +16,6 @@ from typing import Any
 
 import numpy as np
 
-from imunav._docstrings import fill_doc
 from imunav.errors import FileFormatError, MissingDependencyError
 from imunav.io._atomic import atomic_path
 from imunav.io._common import build_imu, check_nonempty, header_json, parse_header, wrap_read_errors
@@ -39,7 +38,6 @@ def _pyarrow() -> tuple[Any, Any]:
 _META_KEY = b"imunav"
 
 
-@fill_doc
 def read_parquet(
     path: str | os.PathLike[str],
     *,
@@ -55,13 +53,39 @@ def read_parquet(
 ) -> ImuData:
     """Read a Parquet recording (options as :func:`imunav.io.csv.read_csv`).
 
-    %(reader_head)s
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The file.
     columns : mapping, optional
         Column names of each channel or group (see :func:`imunav.io.csv.read_csv`); by default found by
         name.
-    %(reader_options)s
+    units : mapping of str to str, optional
+        Declared unit of each group (``{"gyro": "deg/s", "accel": "g"}``, or ``"counts"``); default SI.
+    scales, offsets : mapping of str to float, optional
+        For ``"counts"``: ``value_si = (counts - offset) * scale``.
+    fs : float, optional
+        Sample rate, Hz, when the file has no time (``t = t0 + k / fs``).
+    t0 : float
+        Time of the first sample with ``fs``, s.
+    nan_policy : {"raise", "drop", "interpolate"}
+        What to do with NaN samples.
+    mag_unit : str, optional
+        Unit of the magnetometer (kept as stored).
+    meta : mapping, optional
+        Entries added to the recording's ``meta``.
 
-    %(reader_returns)s
+    Returns
+    -------
+    ImuData
+        The recording, SI.
+
+    Raises
+    ------
+    FileFormatError
+        If the file is missing, unreadable, or lacks a required group (the message lists what was found).
+    NonFiniteError, TimeOrderError, ShapeError, UnitError
+        From the validation of the values.
     MissingDependencyError
         If pyarrow is not installed (``pip install 'imunav[parquet]'``).
     """
@@ -83,15 +107,22 @@ def read_parquet(
     )  # fmt: skip
 
 
-@fill_doc
 def write_parquet(data: ImuData, path: str | os.PathLike[str], *, compression: str = "zstd") -> Path:
     """Write ``data`` (SI) as Parquet, float64 columns, atomically.
 
-    %(imu_writer_params)s
+    Parameters
+    ----------
+    data : ImuData
+        The recording.
+    path : str or os.PathLike
+        Output file.
     compression : str
         Parquet codec (``"zstd"``, ``"snappy"``, ``"gzip"``, ``"none"``).
 
-    %(returns_file_written)s
+    Returns
+    -------
+    pathlib.Path
+        The file written.
 
     Raises
     ------

@@ -48,7 +48,6 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from imunav import __version__
-from imunav._docstrings import fill_doc
 from imunav.errors import InvalidInputError, UnitError
 from imunav.io._atomic import atomic_path
 from imunav.units import unit_factor
@@ -128,7 +127,6 @@ class Px4Parameters:
                 for k in sorted(self.values)]
         return "\n".join(head + rows) + "\n"
 
-    @fill_doc
     def write(self, path: str | os.PathLike[str], vehicle_id: int = 1, component_id: int = 1) -> Path:
         """Write :meth:`text` to ``path`` atomically.
 
@@ -139,7 +137,10 @@ class Px4Parameters:
         vehicle_id, component_id : int
             MAVLink system and component ids of the first two columns (1, 1 for a single vehicle).
 
-        %(returns_file_written)s
+        Returns
+        -------
+        pathlib.Path
+            The file written.
         """
 
         with atomic_path(path) as tmp:

@@ -49,7 +49,6 @@ from typing import Any
 
 import numpy as np
 
-from imunav._docstrings import fill_doc
 from imunav.errors import FileFormatError, InvalidInputError
 from imunav.io.aiding import MagnetometerData, OdometerData
 from imunav.io.gnss import GnssData
@@ -340,7 +339,6 @@ def _choose(topics: dict[str, Any], topic: str | None, source: str, want: Iterab
                             f"topic=... (CLI: --topic)")
 
 
-@fill_doc
 def read_topic(path: str | os.PathLike[str], topic: str, *, instance: int | None = None,
                _want: Iterable[str] | None = None) -> TopicData:
     """Read one topic of a bag (see the module docstring for the types and conversions).
@@ -354,7 +352,10 @@ def read_topic(path: str | os.PathLike[str], topic: str, *, instance: int | None
     instance : int, optional
         Must be None (ROS topics have no instances).
 
-    %(topic_returns)s
+    Returns
+    -------
+    TopicData
+        The topic in SI units, body FRD / world NED, ``t`` in s since ``meta["t0_ns"]``.
 
     Raises
     ------
@@ -388,7 +389,6 @@ def read_topic(path: str | os.PathLike[str], topic: str, *, instance: int | None
                       duplicates="drop" if kind == "gnss" else "raise")
 
 
-@fill_doc
 def read_imu_topic(path: str | os.PathLike[str], topic: str | None, *, instance: int | None = None) -> TopicData:
     """The IMU topic ``topic`` (or the only ``sensor_msgs/Imu`` topic); errors list the candidates.
 
@@ -401,7 +401,15 @@ def read_imu_topic(path: str | os.PathLike[str], topic: str | None, *, instance:
     instance : None
         Must be None (ROS topics have no instances).
 
-    %(imu_topic_returns)s
+    Returns
+    -------
+    TopicData
+        The IMU topic in SI units: gyro (rad/s) and specific force (m/s²) in body FRD, ``t`` in s since
+        ``meta["t0_ns"]``.
+
+    Raises
+    ------
+    InvalidInputError
         If the topic is not an IMU topic, or there are none or several and none is chosen.
     """
     d = read_topic(path, topic, instance=instance, _want=("imu",))

@@ -20,7 +20,6 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from imunav._docstrings import fill_doc
 from imunav.errors import FileFormatError, MissingDependencyError, TimeOrderError
 from imunav.rotation import C_ENU_NED, C_FLU_FRD
 
@@ -92,11 +91,13 @@ def require(kind: str, feature: str) -> None:
 
 # -- frames -------------------------------------------------------------------------------------
 # imunav.rotation is imported in the functions: it loads numba kernels, which listing topics does not need
-@fill_doc
 def ros_to_frd(v: Any) -> Array:
     """Body vectors from ROS FLU to imunav FRD: ``(x, -y, -z)`` (REP-103).
 
-    %(frame_vectors)s
+    Parameters
+    ----------
+    v : array_like, shape (3,) or (N, 3)
+        Vectors.
 
     Returns
     -------
@@ -107,11 +108,13 @@ def ros_to_frd(v: Any) -> Array:
     return np.asarray(v, dtype=np.float64) @ C_FLU_FRD.T
 
 
-@fill_doc
 def frd_to_ros(v: Any) -> Array:
     """Body vectors from FRD to ROS FLU (the same flip; its own inverse).
 
-    %(frame_vectors)s
+    Parameters
+    ----------
+    v : array_like, shape (3,) or (N, 3)
+        Vectors.
 
     Returns
     -------
@@ -122,11 +125,13 @@ def frd_to_ros(v: Any) -> Array:
     return np.asarray(v, dtype=np.float64) @ C_FLU_FRD
 
 
-@fill_doc
 def enu_to_ned(v: Any) -> Array:
     """World vectors from ENU to NED: ``(y, x, -z)``.
 
-    %(frame_vectors)s
+    Parameters
+    ----------
+    v : array_like, shape (3,) or (N, 3)
+        Vectors.
 
     Returns
     -------
@@ -137,11 +142,13 @@ def enu_to_ned(v: Any) -> Array:
     return np.asarray(v, dtype=np.float64) @ C_ENU_NED
 
 
-@fill_doc
 def ned_to_enu(v: Any) -> Array:
     """World vectors from NED to ENU (the same swap; its own inverse).
 
-    %(frame_vectors)s
+    Parameters
+    ----------
+    v : array_like, shape (3,) or (N, 3)
+        Vectors.
 
     Returns
     -------
@@ -305,7 +312,6 @@ def time_axis(stamps_ns: NDArray[np.int64], source: str, what: str) -> tuple[NDA
     return order, rep
 
 
-@fill_doc
 def topic_data(topic: str, kind: str, stamps_ns: Any, values: Mapping[str, np.ndarray], units: Mapping[str, str],
                source: str, *, receive_ns: Any = None, instance: int | None = None,
                meta: Mapping[str, Any] | None = None, duplicates: str = "raise") -> TopicData:
@@ -336,7 +342,10 @@ def topic_data(topic: str, kind: str, stamps_ns: Any, values: Mapping[str, np.nd
         dropped, keeping the first published, with their count in ``meta["time"]["duplicates_dropped"]``
         (GNSS drivers re-publish a fix).
 
-    %(topic_returns)s
+    Returns
+    -------
+    TopicData
+        The topic in SI units, body FRD / world NED, ``t`` in s since ``meta["t0_ns"]``.
         Sorted by stamp, ``t`` in s since ``meta["t0_ns"]``.
 
     Raises

@@ -50,7 +50,6 @@ from typing import Any
 import numpy as np
 
 from imunav._atomic import atomic_path
-from imunav._docstrings import fill_doc
 from imunav.errors import FileFormatError, InvalidInputError
 from imunav.io.kfgins import NavTrack
 from imunav.io.topics import TopicData, TopicInfo, merge_onto, topic_data
@@ -293,7 +292,6 @@ def _read(ulog: Any, d: Any, source: str) -> TopicData:
                       instance=int(d.multi_id), meta=meta, duplicates="drop" if kind == "gnss" else "raise")
 
 
-@fill_doc
 def read_topic(path: str | os.PathLike[str], topic: str, *, instance: int | None = None) -> TopicData:
     """Read one topic instance of a ULog (see the module docstring).
 
@@ -306,13 +304,15 @@ def read_topic(path: str | os.PathLike[str], topic: str, *, instance: int | None
     instance : int, optional
         ``multi_id`` when the topic has several instances.
 
-    %(topic_returns)s
+    Returns
+    -------
+    TopicData
+        The topic in SI units, body FRD / world NED, ``t`` in s since ``meta["t0_ns"]``.
     """
     ulog, d = _dataset(path, topic, instance)
     return _read(ulog, d, os.fspath(path))
 
 
-@fill_doc
 def read_imu_topic(path: str | os.PathLike[str], topic: str | None, *, instance: int | None = None) -> TopicData:
     """The IMU of a ULog: ``sensor_combined`` by default, else ``vehicle_imu`` / a gyro + accel instance pair.
 
@@ -325,7 +325,15 @@ def read_imu_topic(path: str | os.PathLike[str], topic: str | None, *, instance:
     instance : int, optional
         ``multi_id`` of the topic.
 
-    %(imu_topic_returns)s
+    Returns
+    -------
+    TopicData
+        The IMU topic in SI units: gyro (rad/s) and specific force (m/s²) in body FRD, ``t`` in s since
+        ``meta["t0_ns"]``.
+
+    Raises
+    ------
+    InvalidInputError
         If the topic is not an IMU topic, or several candidates exist and none is chosen.
     FileFormatError
         If the log has no IMU topic at all, or a gyro / accel pair cannot be matched in time.

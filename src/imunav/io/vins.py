@@ -20,7 +20,6 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from imunav._docstrings import fill_doc
 from imunav.errors import InvalidInputError
 from imunav.io._noise import imu_noise_values, value_lines, write_text
 from imunav.units import G0
@@ -34,18 +33,28 @@ __all__ = ["VINS_IMU_KEYS", "write_vins_yaml"]
 VINS_IMU_KEYS = ("imu", "imu_topic", "acc_n", "gyr_n", "acc_w", "gyr_w", "g_norm")
 
 
-@fill_doc
 def write_vins_yaml(path: str | os.PathLike[str], gyro: NoiseFit, accel: NoiseFit, imu_topic: str = "/imu0",
                     g_norm: float = G0, combine: str = "max") -> Path:
     """Write the VINS-Fusion IMU parameter block with the identified noise (not inflated).
 
-    %(noise_yaml_fits)s
+    Parameters
+    ----------
+    path : path-like
+        The YAML file to write (atomically).
+    gyro, accel : NoiseFit
+        Noise fits of the gyroscope (rad/s) and accelerometer (m/s^2) channels.
     imu_topic : str
         The IMU topic.
     g_norm : float
         Local gravity magnitude, m/s^2 (default standard gravity 9.80665; use
         :func:`imunav.earth.normal_gravity` for the site).
-    %(noise_yaml_combine_returns)s
+    combine : {"max", "mean"}
+        One value per sensor: the maximum (default) or mean over the axes.
+
+    Returns
+    -------
+    Path
+        ``path``.
 
     Raises
     ------

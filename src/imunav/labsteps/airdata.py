@@ -23,7 +23,6 @@ from pathlib import Path
 
 import numpy as np
 
-from imunav._docstrings import fill_doc
 from imunav.airdata import plot as P
 from imunav.airdata.filter import ThesisFilter
 from imunav.airdata.scenario import ThesisScenario, simulate_thesis, thesis_report
@@ -38,11 +37,18 @@ TITLE = "Air data + Doppler radar: wind filter, robust filtering, fault detectio
 OPTIONS = ("runs", "p_false_alarm", "robust_methods")
 
 
-@fill_doc(step="airdata")
 def run(ctx: LabContext) -> StepResult:
     """Run the step: see the module docstring for what it computes, its options, artifacts and files.
 
-    %(lab_step_run)s
+    Parameters
+    ----------
+    ctx : LabContext
+        The lab's context: the step's option table ``ctx.options`` (``[airdata]``), the artifacts it reads and
+        sets, the report folder.
+
+    Returns
+    -------
+    StepResult
         Covariance check against the thesis, Monte Carlo wind errors, robust-filter and detector figures; passed per the acceptance of the module docstring.
 
     Raises

@@ -33,7 +33,6 @@ from typing import Any
 
 import numpy as np
 
-from imunav._docstrings import fill_doc
 from imunav.attitude.benchmark import make_filter
 from imunav.attitude.metrics import attitude_rmse
 from imunav.attitude.plot import plot_montecarlo_box, save
@@ -63,11 +62,18 @@ def _truth(rng: np.random.Generator, n: int, fs: float):
     return t, w, q
 
 
-@fill_doc(step="attitude")
 def run(ctx: LabContext) -> StepResult:
     """Run the step: see the module docstring for what it computes, its options, artifacts and files.
 
-    %(lab_step_run)s
+    Parameters
+    ----------
+    ctx : LabContext
+        The lab's context: the step's option table ``ctx.options`` (``[attitude]``), the artifacts it reads and
+        sets, the report folder.
+
+    Returns
+    -------
+    StepResult
         RMSE of each attitude filter (deg) and the Table 2 reproduction; passed per the verdict of the module docstring.
     """
 

@@ -32,7 +32,6 @@ from typing import Any
 
 import numpy as np
 
-from imunav._docstrings import fill_doc
 from imunav.calib import (
     ImuCalibration,
     calibration_parameters,
@@ -78,11 +77,18 @@ def _rows(est: Any, truth: Any, stderr: dict, success: dict) -> list[dict]:
     return rows
 
 
-@fill_doc(step="calibration")
 def run(ctx: LabContext) -> StepResult:
     """Run the step: see the module docstring for what it computes, its options, artifacts and files.
 
-    %(lab_step_run)s
+    Parameters
+    ----------
+    ctx : LabContext
+        The lab's context: the step's option table ``ctx.options`` (``[calibration]``), the artifacts it reads and
+        sets, the report folder.
+
+    Returns
+    -------
+    StepResult
         Success metric per sensor, parameters within 3 sigma, estimated parameters with their standard errors.
 
     Raises

@@ -43,7 +43,6 @@ from typing import Any
 import numpy as np
 
 from imunav import calib
-from imunav._docstrings import fill_doc
 from imunav.calib import ImuCalibration
 from imunav.errors import ConfigError
 from imunav.io._atomic import atomic_path
@@ -281,11 +280,18 @@ def _real(ctx: LabContext, cal: Any, unit: str | None) -> dict[str, Any]:
     return {"rows": rows}
 
 
-@fill_doc(step="compensation")
 def run(ctx: LabContext) -> StepResult:
     """Run the step: see the module docstring for what it computes, its options, artifacts and files.
 
-    %(lab_step_run)s
+    Parameters
+    ----------
+    ctx : LabContext
+        The lab's context: the step's option table ``ctx.options`` (``[compensation]``), the artifacts it reads and
+        sets, the report folder.
+
+    Returns
+    -------
+    StepResult
         Residual errors against the reported uncertainty (virtual IMU) or gravity / Earth-rate checks per static interval (real recordings).
     """
     opts = _options(ctx)
@@ -369,11 +375,17 @@ def _plot_z(v: dict, path: Path) -> None:
     plt.close(fig)
 
 
-@fill_doc
 def report(section: Any, result: StepResult, ctx: LabContext) -> None:
     """Add the step's tables and figures to its section of the HTML report.
 
-    %(lab_step_report)s
+    Parameters
+    ----------
+    section : imunav.report.html.Section
+        The step's section.
+    result : StepResult
+        What :func:`run` returned.
+    ctx : LabContext
+        The lab's context (its ``[spec]`` and artifacts).
     """
     s = result.summary
     if "accel" in s:

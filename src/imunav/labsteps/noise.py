@@ -30,7 +30,6 @@ from typing import Any
 
 import numpy as np
 
-from imunav._docstrings import fill_doc
 from imunav._quantiles import norm_ppf
 from imunav.errors import ConfigError
 from imunav.io._atomic import atomic_path, write_json
@@ -49,11 +48,18 @@ _DEFAULTS: dict[str, Any] = {"record": "static_long", "terms": ["N", "B", "K"], 
                              "decimate_s": 1.0}
 
 
-@fill_doc(step="noise")
 def run(ctx: LabContext) -> StepResult:
     """Run the step: see the module docstring for what it computes, its options, artifacts and files.
 
-    %(lab_step_run)s
+    Parameters
+    ----------
+    ctx : LabContext
+        The lab's context: the step's option table ``ctx.options`` (``[noise]``), the artifacts it reads and
+        sets, the report folder.
+
+    Returns
+    -------
+    StepResult
         Fitted noise terms with their 95 % intervals against the injected truth.
 
     Raises

@@ -46,7 +46,6 @@ from typing import Any, Mapping
 
 import numpy as np
 
-from imunav._docstrings import fill_doc
 from imunav.batch import _read_segments
 from imunav.errors import ConfigError, InvalidInputError
 from imunav.io import read_imu
@@ -254,11 +253,18 @@ def _segments(path: Path) -> Any:
     return _read_segments(path)
 
 
-@fill_doc(step="recordings")
 def run(ctx: LabContext) -> StepResult:
     """Run the step: see the module docstring for what it computes, its options, artifacts and files.
 
-    %(lab_step_run)s
+    Parameters
+    ----------
+    ctx : LabContext
+        The lab's context: the step's option table ``ctx.options`` (``[recordings]``), the artifacts it reads and
+        sets, the report folder.
+
+    Returns
+    -------
+    StepResult
         One row per recording; for a static record its noise terms (``parameters``) for the ``[spec]`` check.
 
     Raises
@@ -359,11 +365,17 @@ def _characterise_static(ctx: LabContext, data: Any, specs: Mapping[str, Recordi
     return params, figs, rows
 
 
-@fill_doc
 def report(section: Any, result: StepResult, ctx: LabContext) -> None:
     """Add the step's tables and figures to its section of the HTML report.
 
-    %(lab_step_report)s
+    Parameters
+    ----------
+    section : imunav.report.html.Section
+        The step's section.
+    result : StepResult
+        What :func:`run` returned.
+    ctx : LabContext
+        The lab's context (its ``[spec]`` and artifacts).
     """
     for caption, rows in result.tables[:1]:
         section.table(rows, caption)

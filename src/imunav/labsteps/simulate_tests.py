@@ -49,7 +49,6 @@ from typing import Any
 
 import numpy as np
 
-from imunav._docstrings import fill_doc
 from imunav.earth import normal_gravity
 from imunav.errors import ConfigError
 from imunav.io import write_imu
@@ -122,11 +121,18 @@ def _true_table(model: Any) -> list[dict]:
     return rows
 
 
-@fill_doc(step="simulate_tests")
 def run(ctx: LabContext) -> StepResult:
     """Run the step: see the module docstring for what it computes, its options, artifacts and files.
 
-    %(lab_step_run)s
+    Parameters
+    ----------
+    ctx : LabContext
+        The lab's context: the step's option table ``ctx.options`` (``[simulate_tests]``), the artifacts it reads and
+        sets, the report folder.
+
+    Returns
+    -------
+    StepResult
         The tests simulated (samples, duration, files) and the injected parameters; no verdict.
 
     Raises
@@ -233,11 +239,17 @@ def run(ctx: LabContext) -> StepResult:
     )
 
 
-@fill_doc
 def report(section: Any, result: StepResult, ctx: LabContext) -> None:
     """HTML: test table, injected parameters, profile figures.
 
-    %(lab_step_report)s
+    Parameters
+    ----------
+    section : imunav.report.html.Section
+        The step's section.
+    result : StepResult
+        What :func:`run` returned.
+    ctx : LabContext
+        The lab's context (its ``[spec]`` and artifacts).
     """
 
     for caption, rows in result.tables:

@@ -35,7 +35,6 @@ from typing import Any
 import numpy as np
 
 from imunav import calib
-from imunav._docstrings import fill_doc
 from imunav.calib import thermal_calibration
 from imunav.errors import ConfigError
 from imunav.io._atomic import atomic_path
@@ -103,11 +102,18 @@ def _calibrate_at(ctx: LabContext, model: Any, temp: float, opts: dict, profiles
     return res.calibration.with_(stderr=dict(res.stderr)), dict(res.stderr)
 
 
-@fill_doc(step="temperature")
 def run(ctx: LabContext) -> StepResult:
     """Run the step: see the module docstring for what it computes, its options, artifacts and files.
 
-    %(lab_step_run)s
+    Parameters
+    ----------
+    ctx : LabContext
+        The lab's context: the step's option table ``ctx.options`` (``[temperature]``), the artifacts it reads and
+        sets, the report folder.
+
+    Returns
+    -------
+    StepResult
         Fitted bias and scale-factor temperature curves against the truth; passed when within 4 sigma.
 
     Raises
@@ -219,11 +225,17 @@ def _figures(ctx: LabContext, thermal: Any, model: Any, temps: np.ndarray, tt: n
     return [path]
 
 
-@fill_doc
 def report(section: Any, result: StepResult, ctx: LabContext) -> None:
     """Add the step's tables and figures to its section of the HTML report.
 
-    %(lab_step_report)s
+    Parameters
+    ----------
+    section : imunav.report.html.Section
+        The step's section.
+    result : StepResult
+        What :func:`run` returned.
+    ctx : LabContext
+        The lab's context (its ``[spec]`` and artifacts).
     """
     for f in result.figures:
         embed_png(section, f, "Bias and scale factor against temperature: estimates, fitted curves and truth")

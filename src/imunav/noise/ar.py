@@ -33,7 +33,6 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy.linalg import solve_toeplitz
 
-from imunav._docstrings import fill_doc
 from imunav.errors import InsufficientDataError, InvalidInputError, NonFiniteError, ShapeError
 from imunav.results import Result
 
@@ -346,11 +345,13 @@ class GaussMarkovFit(Result):
     T_acf: float  # 1/e-rule correlation time, s
     decimate: int
 
-    @fill_doc
     def to_dict(self) -> dict[str, Any]:
         """JSON-ready dictionary of the fit.
 
-        %(to_dict_attributes)s
+        Returns
+        -------
+        dict
+            The attributes by name.
         """
         return dict(self.__dict__)
 

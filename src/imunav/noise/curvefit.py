@@ -26,7 +26,6 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy.optimize import least_squares
 
-from imunav._docstrings import fill_doc
 from imunav.errors import InsufficientDataError, InvalidInputError
 from imunav.noise.fit import BI_FACTOR
 from imunav.results import Result
@@ -120,13 +119,17 @@ def _prep(tau: ArrayLike, adev: ArrayLike) -> tuple[np.ndarray, np.ndarray, floa
     return (lt - c) / sc, np.log10(s), c, sc
 
 
-@fill_doc
 def fit_polynomial(tau: ArrayLike, adev: ArrayLike, degree: int) -> CurveFit:
     """Least-squares polynomial of ``degree`` in log-log space (Atasoy, eq. 5.33).
 
     Solved in the Chebyshev basis (well conditioned at degree 20), converted to power form.
 
-    %(curvefit_tau_adev)s
+    Parameters
+    ----------
+    tau : array_like, shape (T,)
+        Cluster times, s (non-positive or non-finite points are left out).
+    adev : array_like, shape (T,)
+        Allan deviation of one channel at ``tau`` (rad/s or m/s²).
     degree : int
         Polynomial degree, >= 0.
 
@@ -155,11 +158,15 @@ def fit_polynomial(tau: ArrayLike, adev: ArrayLike, degree: int) -> CurveFit:
                     tau_range=(float(t.min()), float(t.max())))
 
 
-@fill_doc
 def fit_rational(tau: ArrayLike, adev: ArrayLike, num_degree: int = 4, den_degree: int = 2) -> CurveFit:
     """Rational fit with monic denominator (Atasoy, eq. 5.34, ``rat42`` by default).
 
-    %(curvefit_tau_adev)s
+    Parameters
+    ----------
+    tau : array_like, shape (T,)
+        Cluster times, s (non-positive or non-finite points are left out).
+    adev : array_like, shape (T,)
+        Allan deviation of one channel at ``tau`` (rad/s or m/s²).
     num_degree : int
         Degree of the numerator.
     den_degree : int
@@ -205,13 +212,17 @@ def fit_rational(tau: ArrayLike, adev: ArrayLike, num_degree: int = 4, den_degre
                     tau_range=(float(t.min()), float(t.max())))
 
 
-@fill_doc
 def compare_curve_fits(tau: ArrayLike, adev: ArrayLike, degrees: tuple[int, ...] = (5, 10, 20),
                        rational: tuple[int, int] = (4, 2)) -> dict[str, CurveFit]:
     """The thesis's comparison: polynomials of the given degrees (skipped when there are too few points) and the
     rational fit.
 
-    %(curvefit_tau_adev)s
+    Parameters
+    ----------
+    tau : array_like, shape (T,)
+        Cluster times, s (non-positive or non-finite points are left out).
+    adev : array_like, shape (T,)
+        Allan deviation of one channel at ``tau`` (rad/s or m/s²).
     degrees : tuple of int
         Polynomial degrees.
     rational : tuple of int

@@ -57,7 +57,6 @@ from numpy.typing import ArrayLike, NDArray
 from scipy.optimize import minimize_scalar, nnls
 
 from imunav import allan_models as _am
-from imunav._docstrings import fill_doc
 from imunav.errors import ConvergenceError, InsufficientDataError, InvalidInputError
 from imunav.noise import _allan_kernels as _ak
 from imunav.noise.allan import AllanResult
@@ -260,11 +259,19 @@ class NoiseFit(Result):
     tau_min: NDArray[np.float64] = field(default_factory=lambda: np.zeros(0))
     ci_level: float = 0.95
 
-    @fill_doc
     def get(self, name: str, channel: int = 0) -> float:
         """One fitted value, SI.
 
-        %(fit_get_returns)s
+        Parameters
+        ----------
+        name : str
+            Term name, one of :attr:`names`.
+        channel : int
+            Channel index.
+
+        Returns
+        -------
+        float
             The estimate, in the SI unit of that term.
 
         Raises

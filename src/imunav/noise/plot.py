@@ -11,7 +11,6 @@ from typing import TYPE_CHECKING, Sequence
 
 import numpy as np
 
-from imunav._docstrings import fill_doc
 from imunav.noise.allan import AllanResult
 from imunav.noise.fit import NoiseFit, avar_term
 from imunav.noise.psd import PsdFit, PsdResult
@@ -40,7 +39,6 @@ def _panels(n: int) -> tuple[Figure, np.ndarray]:
     return fig, fig.subplots(rows, cols, squeeze=False).ravel()
 
 
-@fill_doc
 def plot_allan(result: AllanResult, fit: NoiseFit | None = None, channels: Sequence[int] | None = None,
                title: str | None = None) -> Figure:
     """Allan deviation per channel with its confidence band, the fitted model and each fitted term (dashed).
@@ -53,7 +51,13 @@ def plot_allan(result: AllanResult, fit: NoiseFit | None = None, channels: Seque
         Fitted noise terms to draw (:func:`imunav.noise.fit_noise`).
     channels : sequence of int, optional
         Channels to draw (default: all).
-    %(figure_title_returns)s
+    title : str, optional
+        Figure title.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        The figure (not shown; save it with ``fig.savefig``).
     """
     adev = result.adev if result.adev.ndim == 2 else result.adev[:, None]
     lo = result.adev_lo if result.adev_lo.ndim == 2 else result.adev_lo[:, None]
@@ -86,7 +90,6 @@ def plot_allan(result: AllanResult, fit: NoiseFit | None = None, channels: Seque
     return fig
 
 
-@fill_doc
 def plot_psd(res: PsdResult, fit: PsdFit | None = None, averaged: PsdResult | None = None,
              title: str | None = None) -> Figure:
     """One-sided PSD per channel (raw in grey, averaged in colour) with the fitted model.
@@ -99,7 +102,13 @@ def plot_psd(res: PsdResult, fit: PsdFit | None = None, averaged: PsdResult | No
         Fitted terms to draw.
     averaged : PsdResult, optional
         An averaged PSD to draw over the raw one.
-    %(figure_title_returns)s
+    title : str, optional
+        Figure title.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        The figure (not shown; save it with ``fig.savefig``).
     """
     p = res.psd if res.psd.ndim == 2 else res.psd[:, None]
     n_ch = p.shape[1]
@@ -126,7 +135,6 @@ def plot_psd(res: PsdResult, fit: PsdFit | None = None, averaged: PsdResult | No
     return fig
 
 
-@fill_doc
 def plot_curve_fits(tau: np.ndarray, adev: np.ndarray, fits: dict, title: str | None = None) -> Figure:
     """An Allan curve with smooth curve fits (Atasoy's thesis, Figs. 7.57-7.60; see :mod:`imunav.noise.curvefit`).
 
@@ -138,7 +146,13 @@ def plot_curve_fits(tau: np.ndarray, adev: np.ndarray, fits: dict, title: str | 
         Allan deviation of one channel at ``tau``.
     fits : dict of str to CurveFit
         The fits (:func:`imunav.noise.curvefit.compare_curve_fits`).
-    %(figure_title_returns)s
+    title : str, optional
+        Figure title.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        The figure (not shown; save it with ``fig.savefig``).
     """
     fig = _figure((5, 3.8))
     ax = fig.subplots()

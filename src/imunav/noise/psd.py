@@ -32,7 +32,6 @@ from numpy.typing import ArrayLike, NDArray
 from scipy import signal
 from scipy.optimize import nnls
 
-from imunav._docstrings import fill_doc
 from imunav.errors import InsufficientDataError, InvalidInputError, NonFiniteError, ShapeError
 from imunav.noise.allan import check_rows_are_samples
 from imunav.results import Result
@@ -278,11 +277,19 @@ class PsdFit(Result):
     channels: tuple[str, ...]
     f_range: tuple[tuple[float, float], ...]  # per channel
 
-    @fill_doc
     def get(self, name: str, channel: int = 0) -> float:
         """One fitted value, SI.
 
-        %(fit_get_returns)s
+        Parameters
+        ----------
+        name : str
+            Term name, one of :attr:`names`.
+        channel : int
+            Channel index.
+
+        Returns
+        -------
+        float
             The estimate.
         """
         return float(self.value[self.names.index(name), channel])

@@ -35,7 +35,6 @@ import pywt
 from numba import njit
 from numpy.typing import ArrayLike, NDArray
 
-from imunav._docstrings import fill_doc
 from imunav.errors import InsufficientDataError, InvalidInputError, NonFiniteError, ShapeError
 from imunav.noise.allan import check_rows_are_samples
 from imunav.results import Result
@@ -276,11 +275,13 @@ class HybridComparison(Result):
     r_hybrid: float
     level: int
 
-    @fill_doc
     def to_dict(self) -> dict[str, Any]:
         """JSON-ready dictionary of the comparison.
 
-        %(to_dict_attributes)s
+        Returns
+        -------
+        dict
+            The attributes by name.
         """
         return dict(self.__dict__)
 

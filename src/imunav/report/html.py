@@ -23,7 +23,6 @@ import numpy as np
 import pandas as pd
 
 from imunav import __version__
-from imunav._docstrings import fill_doc
 from imunav.io._atomic import atomic_path
 
 __all__ = ["Report", "Section", "Parameter"]
@@ -120,7 +119,6 @@ class Section:
     passed: bool | None = None
     _parts: list[str] = field(default_factory=list)
 
-    @fill_doc
     def text(self, paragraph: str) -> "Section":
         """A paragraph of plain text (escaped).
 
@@ -129,12 +127,14 @@ class Section:
         paragraph : str
             The text.
 
-        %(section_chain_returns)s
+        Returns
+        -------
+        Section
+            ``self``, so that calls chain.
         """
         self._parts.append(f"<p>{html.escape(paragraph)}</p>")
         return self
 
-    @fill_doc
     def code(self, text: str) -> "Section":
         """Preformatted text (a command line, a configuration).
 
@@ -143,12 +143,14 @@ class Section:
         text : str
             The text (escaped).
 
-        %(section_chain_returns)s
+        Returns
+        -------
+        Section
+            ``self``, so that calls chain.
         """
         self._parts.append(f"<pre>{html.escape(text)}</pre>")
         return self
 
-    @fill_doc
     def table(
         self,
         rows: Sequence[Mapping[str, Any]] | Any,
@@ -169,7 +171,10 @@ class Section:
         digits : int
             Significant digits of floats.
 
-        %(section_chain_returns)s
+        Returns
+        -------
+        Section
+            ``self``, so that calls chain.
         """
         if isinstance(rows, pd.DataFrame):
             df = rows.reset_index() if rows.index.name or not isinstance(rows.index, pd.RangeIndex) else rows
@@ -192,7 +197,6 @@ class Section:
         self._parts.append(f"<table>{cap}<thead><tr>{head}</tr></thead><tbody>{''.join(body)}</tbody></table>")
         return self
 
-    @fill_doc
     def parameters(self, params: Iterable[Parameter], caption: str | None = None) -> "Section":
         """Table of parameters: value ± 1σ, unit, truth (if known), error in σ, limit, verdict.
 
@@ -203,7 +207,10 @@ class Section:
         caption : str, optional
             Caption shown under it.
 
-        %(section_chain_returns)s
+        Returns
+        -------
+        Section
+            ``self``, so that calls chain.
         """
         rows = []
         for p in params:
@@ -232,7 +239,6 @@ class Section:
         ).replace("<td>–</td></tr>", f"<td>{_verdict(None)}</td></tr>")
         return self
 
-    @fill_doc
     def figure(self, fig: Any, caption: str | None = None, dpi: int = 110) -> "Section":
         """Embed a matplotlib figure as a PNG (the figure is closed afterwards).
 
@@ -245,7 +251,10 @@ class Section:
         dpi : int
             Resolution, dots per inch.
 
-        %(section_chain_returns)s
+        Returns
+        -------
+        Section
+            ``self``, so that calls chain.
         """
         # optional: matplotlib loads only when a figure is drawn (import time of imunav and its CLI)
         import matplotlib.pyplot as plt
@@ -259,7 +268,6 @@ class Section:
         self._parts.append(f'<figure><img alt="{alt}" src="data:image/png;base64,{data}">{cap}</figure>')
         return self
 
-    @fill_doc
     def image(self, path: str | Path, caption: str | None = None) -> "Section":
         """Embed a PNG file (e.g. a figure a step already saved).
 
@@ -270,7 +278,10 @@ class Section:
         caption : str, optional
             Caption shown under it.
 
-        %(section_chain_returns)s
+        Returns
+        -------
+        Section
+            ``self``, so that calls chain.
         """
         data = base64.b64encode(Path(path).read_bytes()).decode("ascii")
         cap = f"<figcaption>{html.escape(caption)}</figcaption>" if caption else ""
@@ -365,7 +376,6 @@ class Report:
             f"<nav><ul>{toc}</ul></nav>{body}</body></html>"
         )
 
-    @fill_doc
     def write(self, path: str | Path) -> Path:
         """Write the report atomically.
 
@@ -374,7 +384,10 @@ class Report:
         path : str or pathlib.Path
             Output file (``.html``).
 
-        %(returns_file_written)s
+        Returns
+        -------
+        pathlib.Path
+            The file written.
         """
 
         p = Path(path)

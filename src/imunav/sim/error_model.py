@@ -58,7 +58,6 @@ from scipy.optimize import nnls
 
 from imunav import allan_models as _am
 from imunav import units as _units
-from imunav._docstrings import fill_doc
 from imunav.errors import (
     ConfigError,
     FileFormatError,
@@ -307,11 +306,17 @@ class GaussMarkov:
         """
         return self.sigma[None, :].copy(), self.tau[None, :].copy()
 
-    @fill_doc
     def allan_variance(self, tau: ArrayLike) -> NDArray[np.float64]:
         """Closed-form Allan variance, shape (3, len(tau)).
 
-        %(allan_tau_returns)s
+        Parameters
+        ----------
+        tau : array_like
+            Averaging times, s.
+
+        Returns
+        -------
+        numpy.ndarray, shape (3, len(tau))
             sigma_A^2 per axis (:func:`allan_variance_gauss_markov`).
         """
         return np.stack([allan_variance_gauss_markov(tau, s, t) for s, t in zip(self.sigma, self.tau)])
@@ -423,11 +428,17 @@ class Flicker:
         sig = np.sqrt(w)[:, None] * self.b[None, :]
         return sig, np.repeat(t_c[:, None], 3, axis=1)
 
-    @fill_doc
     def allan_variance(self, tau: ArrayLike) -> NDArray[np.float64]:
         """Closed-form Allan variance of the generated GM sum, shape (3, len(tau)).
 
-        %(allan_tau_returns)s
+        Parameters
+        ----------
+        tau : array_like
+            Averaging times, s.
+
+        Returns
+        -------
+        numpy.ndarray, shape (3, len(tau))
             Sum over the components of :func:`allan_variance_gauss_markov`, per axis.
         """
         sig, tc = self.components()
@@ -597,11 +608,16 @@ class TriadErrors:
             or (self.bias_instability is not None and np.any(self.bias_instability.components()[0] > 0))
         )
 
-    @fill_doc
     def replace(self, **changes: Any) -> TriadErrors:
         """Copy with some fields changed (validated again).
 
-        %(replace_changes)s
+        Parameters
+        ----------
+        **changes
+            New values of fields.
+
+        Returns
+        -------
         TriadErrors
             The copy.
         """
@@ -906,11 +922,16 @@ class ImuErrorModel:
         """
         return replace(self, gyro=self.gyro.deterministic(), accel=self.accel.deterministic())
 
-    @fill_doc
     def replace(self, **changes: Any) -> ImuErrorModel:
         """Copy with some fields changed (``dataclasses.replace``).
 
-        %(replace_changes)s
+        Parameters
+        ----------
+        **changes
+            New values of fields.
+
+        Returns
+        -------
         ImuErrorModel
             The copy (validated again).
         """
@@ -984,11 +1005,13 @@ class ImuErrorModel:
         return cls(**kw)
 
     @classmethod
-    @fill_doc
     def from_toml(cls, path: str | os.PathLike[str]) -> ImuErrorModel:
         """Read a TOML error model (layout of :meth:`to_dict`).
 
-        %(toml_path)s
+        Parameters
+        ----------
+        path : str or os.PathLike
+            The TOML file.
 
         Returns
         -------

@@ -35,7 +35,6 @@ from typing import Iterator
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from imunav._docstrings import fill_doc
 from imunav.errors import InvalidInputError, ShapeError
 from imunav.io._atomic import atomic_path
 from imunav.results import EulerMixin
@@ -191,13 +190,20 @@ class Segments(EulerMixin):
         """
         return {f.name: getattr(self, f.name).tolist() for f in fields(self)}
 
-    @fill_doc
     def write_csv(self, path: str | os.PathLike[str]) -> Path:
         """Write the table as CSV (atomically).
 
         One row per segment, rates and angles in degrees, ``up``/``axis``/``q`` split into columns.
 
-        %(write_path_returns)s
+        Parameters
+        ----------
+        path : str or os.PathLike
+            Output file.
+
+        Returns
+        -------
+        pathlib.Path
+            The file written.
         """
 
         cols = ["kind", "step", "t_start", "t_stop", "i_start", "i_stop", "up_x", "up_y", "up_z",
@@ -624,7 +630,6 @@ def six_position_orientations() -> Array:
 # ---------------------------------------------------------------------------
 
 
-@fill_doc
 def static_profile(
     duration_s: float,
     fs: float,
@@ -646,7 +651,21 @@ def static_profile(
         Sample rate, Hz.
     orientation : array_like, shape (4,), optional
         Attitude ``q_nb`` (default level, heading north).
-    %(profile_t0_returns)s
+    lat : float, optional
+        Geodetic latitude of the fixed position, rad (None: no position).
+    lon : float
+        Longitude, rad.
+    h : float
+        Ellipsoidal height, m.
+    t0 : float
+        Time of the first sample, s.
+    name : str
+        Profile name.
+
+    Returns
+    -------
+    Profile
+        The trajectory (exact body rates) and its segment table.
 
     Raises
     ------
@@ -671,7 +690,6 @@ def _as_orientations(orientations: ArrayLike) -> Array:
     return quat_normalize(q)
 
 
-@fill_doc
 def multiposition_profile(
     orientations: ArrayLike,
     dwell_s: float | ArrayLike,
@@ -700,11 +718,22 @@ def multiposition_profile(
         Sample rate, Hz.
     transition_s : float
         Duration of each move, s (> 0).
-    %(profile_position)s
+    lat : float, optional
+        Geodetic latitude of the fixed position, rad (None: no position).
+    lon : float
+        Longitude, rad.
+    h : float
+        Ellipsoidal height, m.
 
     t0 : float
         Time of the first sample, s.
-    %(profile_returns)s
+    name : str
+        Profile name.
+
+    Returns
+    -------
+    Profile
+        The trajectory (exact body rates) and its segment table.
 
     Raises
     ------
@@ -727,7 +756,6 @@ def multiposition_profile(
     return b.build(name, fs, t0, lat, lon, h)
 
 
-@fill_doc
 def hundred_position_profile(
     fs: float = 100.0,
     dwell_s: float = 30.0,
@@ -740,10 +768,27 @@ def hundred_position_profile(
 ) -> Profile:
     """The 100-position static test (Günhan 2014, §4.1.1): 30 s per position by default.
 
-    %(profile_static_params)s
+    Parameters
+    ----------
+    fs : float
+        Sample rate, Hz.
+    dwell_s : float
+        Static time per position, s.
+    transition_s : float
+        Duration of each move, s.
     step_deg : float
         Turn between consecutive positions, degrees.
-    %(profile_position_returns)s
+    lat : float, optional
+        Geodetic latitude of the fixed position, rad (None: no position).
+    lon : float
+        Longitude, rad.
+    h : float
+        Ellipsoidal height, m.
+
+    Returns
+    -------
+    Profile
+        The trajectory (exact body rates) and its segment table.
     """
     return multiposition_profile(
         hundred_position_orientations(step_deg), dwell_s, fs, transition_s, lat=lat, lon=lon, h=h,
@@ -751,7 +796,6 @@ def hundred_position_profile(
     )
 
 
-@fill_doc
 def six_position_profile(
     fs: float = 100.0,
     dwell_s: float = 30.0,
@@ -763,8 +807,25 @@ def six_position_profile(
 ) -> Profile:
     """The six-position test (Günhan 2014, Appendix A): each axis up then down.
 
-    %(profile_static_params)s
-    %(profile_position_returns)s
+    Parameters
+    ----------
+    fs : float
+        Sample rate, Hz.
+    dwell_s : float
+        Static time per position, s.
+    transition_s : float
+        Duration of each move, s.
+    lat : float, optional
+        Geodetic latitude of the fixed position, rad (None: no position).
+    lon : float
+        Longitude, rad.
+    h : float
+        Ellipsoidal height, m.
+
+    Returns
+    -------
+    Profile
+        The trajectory (exact body rates) and its segment table.
     """
     return multiposition_profile(
         six_position_orientations(), dwell_s, fs, transition_s, lat=lat, lon=lon, h=h, name="six_position"
@@ -782,7 +843,6 @@ def _axis_vectors(axes: ArrayLike, K: int) -> Array:
     raise ShapeError(f"axes must be (K,) axis indices or (K, 3) body unit vectors with K = {K}; got {a.shape}")
 
 
-@fill_doc
 def rate_table_profile(
     rates: ArrayLike,
     axes: ArrayLike,
@@ -819,10 +879,27 @@ def rate_table_profile(
     fs : float
         Sample rate, Hz.
 
-    %(profile_rate_moves)s
+    transition_s : float
+        Duration of each rate ramp, s.
+    remount_s : float
+        Duration of the re-mounting move when the axis changes, s.
     mounting : {"up", "down"}
         Direction of the commanded body axis along the vertical table axis.
-    %(profile_t0_returns)s
+    lat : float, optional
+        Geodetic latitude of the fixed position, rad (None: no position).
+    lon : float
+        Longitude, rad.
+    h : float
+        Ellipsoidal height, m.
+    t0 : float
+        Time of the first sample, s.
+    name : str
+        Profile name.
+
+    Returns
+    -------
+    Profile
+        The trajectory (exact body rates) and its segment table.
 
     Raises
     ------
@@ -893,7 +970,6 @@ def thesis_rate_steps(step_dps: float = 25.0, max_dps: float = 250.0) -> tuple[A
     return rates, axes
 
 
-@fill_doc
 def thesis_rate_table_profile(
     fs: float = 100.0,
     dwell_s: float = 30.0,
@@ -913,10 +989,23 @@ def thesis_rate_table_profile(
         Sample rate, Hz.
     dwell_s : float
         Time at each constant rate, s.
-    %(profile_rate_moves)s
+    transition_s : float
+        Duration of each rate ramp, s.
+    remount_s : float
+        Duration of the re-mounting move when the axis changes, s.
     mounting : {"up", "down"}
         Direction of the commanded body axis along the table axis.
-    %(profile_position_returns)s
+    lat : float, optional
+        Geodetic latitude of the fixed position, rad (None: no position).
+    lon : float
+        Longitude, rad.
+    h : float
+        Ellipsoidal height, m.
+
+    Returns
+    -------
+    Profile
+        The trajectory (exact body rates) and its segment table.
     """
     rates, axes = thesis_rate_steps()
     return rate_table_profile(
@@ -925,7 +1014,6 @@ def thesis_rate_table_profile(
     )
 
 
-@fill_doc
 def ferraris_profile(
     fs: float = 100.0,
     dwell_s: float = 30.0,
@@ -957,7 +1045,17 @@ def ferraris_profile(
         Duration of each turn, s.
     angle : float
         Turn angle, rad.
-    %(profile_position_returns)s
+    lat : float, optional
+        Geodetic latitude of the fixed position, rad (None: no position).
+    lon : float
+        Longitude, rad.
+    h : float
+        Ellipsoidal height, m.
+
+    Returns
+    -------
+    Profile
+        The trajectory (exact body rates) and its segment table.
     """
     rs = _positive(rotation_s, "rotation_s")
     tr = _positive(transition_s, "transition_s")

@@ -29,7 +29,6 @@ from scipy.interpolate import CubicSpline
 from scipy.spatial.transform import Rotation, RotationSpline
 
 from imunav import earth
-from imunav._docstrings import fill_doc
 from imunav.errors import InvalidInputError, NonFiniteError, ShapeError, TimeOrderError
 from imunav.results import EulerMixin
 from imunav.rotation import (
@@ -168,7 +167,6 @@ class Trajectory(EulerMixin):
 # ---------------------------------------------------------------------------
 
 
-@fill_doc
 def body_rate_from_attitude(t: ArrayLike, q_nb: ArrayLike) -> Array:
     """Body rate ``ω_nb^b`` (rad/s) of a sampled attitude by central differences.
 
@@ -181,7 +179,12 @@ def body_rate_from_attitude(t: ArrayLike, q_nb: ArrayLike) -> Array:
     interval (first order).  Pass exact rates to :class:`Trajectory` where the
     motion is known analytically.
 
-    %(traj_t_q_nb)s
+    Parameters
+    ----------
+    t : array_like, shape (N,)
+        Strictly increasing time, s.
+    q_nb : array_like, shape (N, 4)
+        Attitude, body (FRD) to NED.
 
     Returns
     -------
@@ -365,7 +368,6 @@ def _fixed_position(n: int, lat: float | None, lon: float, h: float) -> Array | 
     return np.tile(np.array([lat, lon, h], dtype=float), (n, 1))
 
 
-@fill_doc
 def trajectory_from_attitude(
     t: ArrayLike,
     q_nb: ArrayLike,
@@ -380,7 +382,12 @@ def trajectory_from_attitude(
     ``omega_nb_b`` is derived from ``q_nb`` (:func:`body_rate_from_attitude`)
     unless given; ``lat``/``lon`` (rad) and ``h`` (m) set a constant position.
 
-    %(traj_t_q_nb)s
+    Parameters
+    ----------
+    t : array_like, shape (N,)
+        Strictly increasing time, s.
+    q_nb : array_like, shape (N, 4)
+        Attitude, body (FRD) to NED.
     omega_nb_b : array_like, shape (N, 3), optional
         Exact body rate relative to NED, rad/s.
     lat : float, optional
@@ -578,7 +585,7 @@ def trajectory_from_waypoints(
     # scipy Rotation: scalar-last quaternions of the active rotation, so
     # as_matrix() of q_nb is C_nb; RotationSpline's first derivative is the
     # angular rate resolved in body axes (checked against
-    # body_rate_from_attitude in tests/test_trajectory.py)
+    # body_rate_from_attitude in tests/sim/test_trajectory.py)
     rot = Rotation.from_quat(qk[:, [1, 2, 3, 0]])
     spl = RotationSpline(tk, rot)
     r_t = spl(ta)

@@ -47,7 +47,6 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from imunav import earth
-from imunav._docstrings import fill_doc
 from imunav.errors import InvalidInputError, ShapeError
 from imunav.io.aiding import BaroData, OdometerData
 from imunav.rotation import dcm_from_quat, quat_from_euler
@@ -123,19 +122,22 @@ class Maneuver:
                 )
 
 
-@fill_doc
 def straight(duration_s: float) -> Maneuver:
     """Constant speed and heading for ``duration_s`` seconds.
 
     Parameters
     ----------
-    %(maneuver_duration_returns)s
+    duration_s : float
+        Length, s (> 0).
+
+    Returns
+    -------
+    Maneuver
         A ``"straight"`` manoeuvre.
     """
     return Maneuver("straight", float(duration_s))
 
 
-@fill_doc
 def speed_change(to_speed: float, duration_s: float) -> Maneuver:
     """Accelerate (or brake) smoothly to ``to_speed`` m/s over ``duration_s`` s.
 
@@ -145,13 +147,17 @@ def speed_change(to_speed: float, duration_s: float) -> Maneuver:
     ----------
     to_speed : float
         Speed at the end, m/s (>= 0; checked by :func:`vehicle_trajectory`).
-    %(maneuver_duration_returns)s
+    duration_s : float
+        Length, s (> 0).
+
+    Returns
+    -------
+    Maneuver
         A ``"speed"`` manoeuvre.
     """
     return Maneuver("speed", float(duration_s), to_speed=float(to_speed))
 
 
-@fill_doc
 def turn(angle_deg: float, duration_s: float) -> Maneuver:
     """Change heading by ``angle_deg`` (positive: to the right) over ``duration_s`` s at the current speed.
 
@@ -161,20 +167,29 @@ def turn(angle_deg: float, duration_s: float) -> Maneuver:
     ----------
     angle_deg : float
         Heading change, degrees (positive: clockwise seen from above, to the right).
-    %(maneuver_duration_returns)s
+    duration_s : float
+        Length, s (> 0).
+
+    Returns
+    -------
+    Maneuver
         A ``"turn"`` manoeuvre (``dheading`` in rad).
     """
     return Maneuver("turn", float(duration_s), dheading=float(angle_deg) * DEG)
 
 
-@fill_doc
 def stop(duration_s: float) -> Maneuver:
     """Stand still for ``duration_s`` s (the speed reached so far must be zero: brake first with
     :func:`speed_change`).
 
     Parameters
     ----------
-    %(maneuver_duration_returns)s
+    duration_s : float
+        Length, s (> 0).
+
+    Returns
+    -------
+    Maneuver
         A ``"stop"`` manoeuvre.
     """
     return Maneuver("stop", float(duration_s))
@@ -356,7 +371,6 @@ def _check_perturbation(slip_std: ArrayLike, idle_vibration_std: float, band_hz:
     return slip, float(idle_vibration_std), ((float(band[0]), float(band[1])) if on else (0.0, 0.0))
 
 
-@fill_doc
 def vehicle_trajectory(
     maneuvers: Sequence[Maneuver],
     *,
@@ -396,7 +410,8 @@ def vehicle_trajectory(
     vibration_band_hz : array_like, shape (2,)
         Frequency band (low, high) of both perturbations, Hz (``0 < low < high < fs / 2``; checked when a
         perturbation is on).
-    %(sim_rng)s
+    rng : numpy.random.Generator or int, optional
+        Random generator or seed.
         Draws the perturbations' frequencies and phases (unused when both are off).
 
     Returns
@@ -659,7 +674,6 @@ def _decimate(truth: Trajectory, rate_hz: float | None) -> Array:
     return np.arange(0, truth.n, step)
 
 
-@fill_doc
 def simulate_odometer(
     truth: Trajectory,
     *,
@@ -689,7 +703,8 @@ def simulate_odometer(
         White-noise σ of each sample, m/s (>= 0).
     rate_hz : float, optional
         Output rate, Hz, at most the truth rate (default: every truth sample).
-    %(sim_rng)s
+    rng : numpy.random.Generator or int, optional
+        Random generator or seed.
 
     Returns
     -------
@@ -712,7 +727,6 @@ def simulate_odometer(
     return OdometerData(truth.t[idx].copy(), speed, meta)
 
 
-@fill_doc
 def simulate_baro(
     truth: Trajectory,
     *,
@@ -737,7 +751,8 @@ def simulate_baro(
         Correlation time of the bias, s (> 0; ``inf``: a constant bias).
     rate_hz : float, optional
         Output rate, Hz, at most the truth rate (None: every truth sample).
-    %(sim_rng)s
+    rng : numpy.random.Generator or int, optional
+        Random generator or seed.
 
     Returns
     -------
