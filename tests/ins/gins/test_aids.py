@@ -88,7 +88,7 @@ def test_every_aid_jacobian_is_the_derivative_of_its_innovation(name, scale_fact
     present (21 states and the vehicle blocks: mounting, wheel lever arm, GNSS latency), or 15 + odometer scale."""
     cfg = GinsConfig(arw=1e-3, vrw=1e-2, gyro_bias_std=1e-4, accel_bias_std=1e-3, nhc_noise=0.1,
                      lever_arm=(0.4, -0.3, -1.2), odo_lever_arm=(-0.5, 0.6, 0.4), scale_factors=scale_factors,
-                     declination=0.1, dual_antenna_baseline=BASELINE,
+                     declination=0.1, dual_antenna_baseline=BASELINE, level_std=0.03,
                      **(VEHICLE_BLOCKS if scale_factors else {}))
     prm, lay, _ = _kernel_setup(cfg, 100.0, True)
     kind = getattr(aids.AID, name)

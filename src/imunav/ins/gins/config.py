@@ -113,6 +113,9 @@ class GinsConfig:
         mounting is not estimated.  Random constants.
     odo_lever_arm_std : array_like, shape (3,), or None
         Initial σ of the wheel lever-arm states, m (> 0); None: not estimated.  Random constants.
+    level_std : float or None
+        σ of the vehicle's roll and pitch while it stands still (the ground's slope where it stops), rad (> 0);
+        None: no levelling update at rest.  Ties the mounting's roll, which the odometer and NHC do not see.
     gnss_delay : float
         GNSS receiver latency, s: a fix stamped ``t`` is the position at ``t − gnss_delay`` (|value| < 1 s).
     gnss_delay_std : float or None
@@ -162,6 +165,7 @@ class GinsConfig:
     mounting: Any = (0.0, 0.0, 0.0)
     mounting_std: Any = None
     odo_lever_arm_std: Any = None
+    level_std: float | None = None
     gnss_delay: float = 0.0
     gnss_delay_std: float | None = None
 
@@ -185,6 +189,8 @@ class GinsConfig:
                 s(self, name, _v3(getattr(self, name), name, positive=True))
         if not (np.isfinite(self.gnss_delay) and abs(self.gnss_delay) < 1.0):
             raise InvalidInputError(f"GinsConfig.gnss_delay must be a latency in (-1, 1) s; got {self.gnss_delay!r}")
+        if self.level_std is not None and not (np.isfinite(self.level_std) and 0 < self.level_std < 1.0):
+            raise InvalidInputError(f"GinsConfig.level_std must be in (0, 1) rad or None; got {self.level_std!r}")
         if self.gnss_delay_std is not None and not (np.isfinite(self.gnss_delay_std) and self.gnss_delay_std > 0):
             raise InvalidInputError(f"GinsConfig.gnss_delay_std must be > 0 s or None; got {self.gnss_delay_std!r}")
         if self.dual_antenna_baseline is not None:

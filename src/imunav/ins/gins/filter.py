@@ -555,6 +555,8 @@ class GinsFilter:
             rest = np.where(static, 0.0, np.nan)
             cols["zupt"] = rest
             cols["zaru"] = rest
+            if c.level_std is not None:
+                cols["vehicle_level"] = rest
         has_baro = ~np.isnan(baro)
         has_mag = ~np.isnan(mag[:, 0])
         if has_baro.any():

@@ -39,12 +39,13 @@ from imunav.ins.gins.aids import (
     mag_heading,
     nhc,
     odometer,
+    vehicle_level,
     zaru,
     zupt,
 )
 
 #: Registered models, in kind order (the kind of an aid is its index here).
-MODELS = (gnss_position, gnss_velocity, odometer, nhc, zupt, zaru, baro, mag_heading, dual_antenna)
+MODELS = (gnss_position, gnss_velocity, odometer, nhc, zupt, zaru, baro, mag_heading, dual_antenna, vehicle_level)
 AID_NAMES = tuple(m.NAME for m in MODELS)
 #: Kind of each aid by name (``AID.gnss_position`` == 0 ...), a compile-time constant in the kernels.
 AID = namedtuple("AidKind", AID_NAMES)(*range(len(MODELS)))
@@ -56,7 +57,7 @@ WIDTH = np.array([m.WIDTH for m in MODELS], dtype=np.int64)
 #: Aids at their own time stamps, one update each.
 TIMED = ("gnss_position", "gnss_velocity", "dual_antenna")
 #: Aids on the IMU grid, applied at the covariance epochs in this order; one tuple is one joint update.
-SAMPLED = (("odometer", "nhc"), ("zupt", "zaru"), ("baro",), ("mag_heading",))
+SAMPLED = (("odometer", "nhc"), ("zupt", "zaru", "vehicle_level"), ("baro",), ("mag_heading",))
 
 
 @njit(cache=True)
@@ -80,3 +81,5 @@ def evaluate(kind, xs, ctx, z, r, p, lay, H, R, nu, row):
         mag_heading.rows(xs, ctx, z, r, p, lay, H, R, nu, row)
     elif kind == AID.dual_antenna:
         dual_antenna.rows(xs, ctx, z, r, p, lay, H, R, nu, row)
+    elif kind == AID.vehicle_level:
+        vehicle_level.rows(xs, ctx, z, r, p, lay, H, R, nu, row)
