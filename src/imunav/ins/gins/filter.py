@@ -264,10 +264,11 @@ def _per_sample(n: int, rec: AidRecord | None) -> Array:
     return a
 
 
-#: GinsResult's per-sample NIS fields: field prefix -> (sampled group, aid name or None for the joint statistic)
-_SAMPLE_NIS = {"zupt": (("zupt", "zaru"), None), "baro": (("baro",), None), "mag": (("mag_heading",), None),
-               "odo": (("odometer", "nhc"), "odometer"), "nhc": (("odometer", "nhc"), "nhc"),
-               "zupt_vel": (("zupt", "zaru"), "zupt"), "zaru": (("zupt", "zaru"), "zaru")}
+#: GinsResult's per-sample NIS fields: field prefix -> (an aid of the sampled group, the aid whose own NIS it is or
+#: None for the group's joint statistic)
+_SAMPLE_NIS = {"zupt": ("zupt", None), "baro": ("baro", None), "mag": ("mag_heading", None),
+               "odo": ("odometer", "odometer"), "nhc": ("odometer", "nhc"), "zupt_vel": ("zupt", "zupt"),
+               "zaru": ("zupt", "zaru")}
 
 
 def _increments(imu: ImuData | ImuIncrements) -> tuple[Array, Array, Array]:
@@ -516,7 +517,7 @@ class GinsFilter:
         for col, name in enumerate(aids.TIMED[:2]):
             if name in log.aids:
                 nis[log.timed_index[name], col] = log.aids[name].nis
-        veh = log.groups.get(("odometer", "nhc"))
+        veh = log.groups.get(next(g for g in aids.SAMPLED if "odometer" in g))
         self.last_nis = {"gnss": nis, "vehicle": float(veh.nis[0]) if veh is not None else math.nan}
         self.last_nis.update({name: float(_sample_nis(log, name, 2)[1]) for name in _SAMPLE_NIS})
 
@@ -541,14 +542,16 @@ class GinsFilter:
         packed, src = tm.pack()
         return packed, packed.kind, src
 
-    def _sampled(self, n: int, odo: Array | None, static: Array, baro: Array, mag: Array) -> kernels.SampledInput:
+    def _sampled(self, n: int, odo: Array | None, static: Array, baro: Array, mag: Array,
+                 odo_var: Array | None = None) -> kernels.SampledInput:
         """The aids on the IMU grid: odometer (speed, variance) and NHC while moving, ZUPT + ZARU while static,
         barometer and magnetometer where they have a sample (which forces a covariance epoch there)."""
         c = self.config
         cols: dict[str, Array] = {}
         moving = np.where(static, np.nan, 0.0)
         if odo is not None:
-            cols["odometer"] = np.column_stack([odo + moving, np.full(n, c.odo_noise**2)])
+            var = np.full(n, c.odo_noise**2) if odo_var is None else np.where(np.isnan(odo_var), c.odo_noise**2, odo_var)
+            cols["odometer"] = np.column_stack([odo + moving, var])
         if c.nhc_noise is not None:
             cols["nhc"] = moving
         if static.any():
@@ -580,7 +583,7 @@ class GinsFilter:
                                    self._carry, self._carry_n, self._prm, self._lay, o, first, final)
         return _split_log(o, L, kind, src, sampled), (o, m, r)
 
-    def run(self, imu: ImuData | ImuIncrements, gnss: GnssData, *, lla0: ArrayLike, vel0: ArrayLike,
+    def run(self, imu: ImuData | ImuIncrements, gnss: GnssData | None, *, lla0: ArrayLike, vel0: ArrayLike,
             q0: ArrayLike, imu_errors0: ArrayLike | None = None, odometer: OdometerData | None = None,
             smoother: bool = False, static: ArrayLike | None = None, baro: BaroData | None = None,
             mag: MagnetometerData | None = None, dual_antenna: DualAntennaData | None = None) -> GinsResult:
@@ -590,17 +593,18 @@ class GinsFilter:
         ----------
         imu : ImuData or ImuIncrements
             Rates (rad/s, m/s², body FRD; coning / sculling applied) or increments (Δθ rad, Δv m/s).
-        gnss : GnssData
+        gnss : GnssData or None
             The fixes; those outside the IMU span, or at its first sample, are removed (recorded in ``meta``),
-            none inside is an error.
+            none inside is an error.  None: no GNSS (dead reckoning with the other aids).
         lla0, vel0, q0 : array_like, shapes (3,), (3,), (4,)
             Initial position (lat rad, lon rad, h m), NED velocity (m/s) and ``q_nb`` (body FRD -> NED,
             scalar first) at ``imu.t[0]``.
         imu_errors0 : array_like, shape (12,), optional
             Initial gyro bias (rad/s), accel bias (m/s²), gyro scale, accel scale (default zeros).
         odometer : OdometerData, optional
-            Wheel speeds (:class:`imunav.sim.vehicle.OdometerData`), interpolated to the IMU stamps inside
-            their span; adds the odometer scale-factor state.
+            Wheel speeds (:class:`imunav.io.aiding.OdometerData`), interpolated to the IMU stamps inside
+            their span; adds the odometer scale-factor state.  Their ``speed_std`` (when given) is each
+            sample's σ, else ``config.odo_noise``.
         smoother : bool
             Also run the RTS smoother (``result.smoothed``); keeps three n x n matrices per covariance epoch
             (about 190 MB per hour at 200 Hz with 21 states and the default 0.2 s step).
@@ -633,10 +637,16 @@ class GinsFilter:
         t, dth, dv = _increments(imu)
         if t.size < 2:
             raise InvalidInputError("GinsFilter.run needs at least 2 IMU samples")
-        g = gnss.within(float(t[0]), float(t[-1]))
-        g = g.select(g.t > t[0], "at the first IMU sample (the initial state stands for it)")
+        g: GnssData | None = None
+        if gnss is not None:
+            g = gnss.within(float(t[0]), float(t[-1]))
+            g = g.select(g.t > t[0], "at the first IMU sample (the initial state stands for it)")
+        ng = 0 if g is None else g.n
         n = t.size
         odo = None if odometer is None else _on_imu_grid(t, odometer, OdometerData, "odometer", "speed")
+        odo_var = None
+        if odometer is not None and odometer.speed_std is not None:
+            odo_var = _on_imu_grid(t, odometer, OdometerData, "odometer", "speed_std") ** 2
         st = np.zeros(n, dtype=bool) if static is None else np.asarray(static, dtype=bool)
         if st.shape != (n,):
             raise ShapeError(f"static must be (N,) = ({n},) booleans, one per IMU sample; got {st.shape}")
@@ -645,10 +655,10 @@ class GinsFilter:
         self.reset(lla0=lla0, vel0=vel0, q0=q0, t0=float(t[0]), fs=1.0 / float(np.median(np.diff(t))),
                    imu_errors0=imu_errors0, odometer=odometer is not None)
         c = self.config
-        use_vel = c.use_gnss_velocity and g.vel_ned is not None
-        timed = self._timed(g, slice(0, g.n), dual_antenna, float(t[0]), float(t[-1]))
-        sampled = self._sampled(n, odo, st, hb, mg)
-        nrec = (n // int(self._lay[LAY.cov_step]) + g.n + 3 + int(np.count_nonzero(sampled.force))) if smoother else 0
+        use_vel = c.use_gnss_velocity and g is not None and g.vel_ned is not None
+        timed = self._timed(g, slice(0, ng), dual_antenna, float(t[0]), float(t[-1]))
+        sampled = self._sampled(n, odo, st, hb, mg, odo_var)
+        nrec = (n // int(self._lay[LAY.cov_step]) + ng + 3 + int(np.count_nonzero(sampled.force))) if smoother else 0
         log, (o, m, r) = self._kernel(t, dth, dv, timed, sampled, nrec, True, True)
         self.t = float(t[-1])
         self._prev = np.vstack([imu.dtheta[-1], imu.dvel[-1]]) if isinstance(imu, ImuIncrements) else np.zeros((2, 3))
@@ -657,21 +667,22 @@ class GinsFilter:
             smoothed = rts_smooth(t, o.xs[:, NOM.lla:NOM.lla + 3], o.xs[:, NOM.vel:NOM.vel + 3],
                                   o.xs[:, NOM.q:NOM.q + 4], o.rec_t[:r], o.rec_phi[:r], o.rec_ppri[:r],
                                   o.rec_ppost[:r], o.rec_inj[:r], o.rec_state[:r])
-        nis = np.full((g.n, 2), np.nan)
-        acc = np.zeros((g.n, 2), dtype=bool)
+        nis = np.full((ng, 2), np.nan)
+        acc = np.zeros((ng, 2), dtype=bool)
         for col, name in enumerate(aids.TIMED[:2]):
             if name in log.aids:
                 nis[log.timed_index[name], col] = log.aids[name].nis
                 acc[log.timed_index[name], col] = log.aids[name].accepted
-        veh = log.groups.get(("odometer", "nhc"), AidRecord.empty())
+        veh = log.groups.get(next(g for g in aids.SAMPLED if "odometer" in g), AidRecord.empty())
         xs = o.xs
-        meta = {"removed_gnss": g.meta.get("removed", []), "n_states": self.P.shape[0],
+        meta = {"removed_gnss": [] if g is None else g.meta.get("removed", []), "n_states": self.P.shape[0],
                 "gate_threshold": float(self._prm[PRM.gate + 2]), "cov_step_samples": int(self._lay[LAY.cov_step]),
                 "gnss_velocity": bool(use_vel), "odometer": odometer is not None, "nhc": c.nhc_noise is not None}
         col3 = lambda a: np.ascontiguousarray(xs[:, a:a + 3])  # noqa: E731
         return GinsResult(t, col3(NOM.lla), col3(NOM.vel), np.ascontiguousarray(xs[:, NOM.q:NOM.q + 4]),
                           col3(NOM.gyro_bias), col3(NOM.accel_bias), col3(NOM.gyro_scale), col3(NOM.accel_scale),
-                          xs[:, NOM.odo_scale].copy(), o.cov_t[:m], o.cov_diag[:m], o.cov_nav[:m], g.t.copy(), nis,
+                          xs[:, NOM.odo_scale].copy(), o.cov_t[:m], o.cov_diag[:m], o.cov_nav[:m],
+                          np.zeros(0) if g is None else g.t.copy(), nis,
                           acc, veh.t, veh.nis, veh.dof, veh.accepted, c, meta, smoothed,
                           aids=log.aids, q_vb=np.ascontiguousarray(xs[:, NOM.q_vb:NOM.q_vb + 4]),
                           odo_lever_arm=col3(NOM.odo_lever), gnss_delay=xs[:, NOM.gnss_delay].copy(),
@@ -680,7 +691,8 @@ class GinsFilter:
 
 def _sample_nis(log: _Log, name: str, n: int) -> Array:
     """GinsResult's ``<name>_nis`` per IMU sample (:data:`_SAMPLE_NIS`)."""
-    group, aid = _SAMPLE_NIS[name]
+    member, aid = _SAMPLE_NIS[name]
+    group = next(g for g in aids.SAMPLED if member in g)
     return _per_sample(n, log.groups.get(group) if aid is None else log.aids.get(aid))
 
 
