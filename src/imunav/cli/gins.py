@@ -16,12 +16,15 @@ import typer
 
 from imunav.errors import ConfigError, InvalidInputError
 from imunav.ins.gins import GinsResult
+from imunav.ins.gins.logrun import LogRunOptions, parse_rotation, parse_vector, run_log
 from imunav.ins.gins.outage import outage_test
 from imunav.ins.gins.outputs import (
     DRIVE_FILES,
+    LOG_FILES,
     outage_document,
     run_output_paths,
     write_figures,
+    write_log_outputs,
     write_run_outputs,
     write_simulated_drive,
 )
@@ -29,6 +32,8 @@ from imunav.ins.gins.plot import FIGURE_NAMES
 from imunav.ins.gins.setup import GinsInputs, GinsSetup, load_inputs, run_setup, simulate_drive
 from imunav.io._atomic import check_outputs, write_json
 from imunav.io.kfgins import NavTrack, read_kfgins_nav
+from imunav.io.logs import log_kind
+from imunav.io.navlog import read_nav_sources
 from imunav.sim import Trajectory
 
 gins_app = typer.Typer(
@@ -118,14 +123,63 @@ def run_cmd(
     smoother: bool = typer.Option(False, "--smoother", help="Also write the RTS-smoothed solution (*_smoothed.nav)."),
     states: Optional[int] = _STATES_OPT,
     plots: bool = typer.Option(True, "--plots/--no-plots", help="Write the figures (track, errors, IMU errors)."),
+    imu_topic: Optional[str] = typer.Option(None, "--imu-topic", help="With a log: the IMU topic (sensor_msgs/Imu, "
+                                                                      "PX4 sensor_combined)."),
+    gnss_topic: Optional[str] = typer.Option(None, "--gnss-topic", help="With a log: the GNSS topic (NavSatFix, PX4 "
+                                                                        "vehicle_gps_position / sensor_gps)."),
+    odo_topic: Optional[str] = typer.Option(None, "--odo-topic", help="With a log: the wheel odometry topic "
+                                                                      "(nav_msgs/Odometry, TwistStamped)."),
+    mag_topic: Optional[str] = typer.Option(None, "--mag-topic", help="With a log: the magnetometer topic."),
+    baro_topic: Optional[str] = typer.Option(None, "--baro-topic", help="With a log: the barometer topic."),
+    imu_rotation: Optional[str] = typer.Option(None, "--imu-rotation", help="With a log: the IMU's mounting in the "
+                                                                            "vehicle, 'qw,qx,qy,qz' or ZYX 'roll,pitch,"
+                                                                            "yaw' in degrees (default: the bag's "
+                                                                            "/tf_static, else estimated)."),
+    gnss_lever_arm: Optional[str] = typer.Option(None, "--gnss-lever-arm", help="With a log: the GNSS antenna from "
+                                                                                "the IMU, vehicle FRD, m: 'x,y,z'."),
+    preset: str = typer.Option("consumer_mems", "--preset", help="With a log: the IMU error preset whose noise "
+                                                                 "model the filter uses."),
 ) -> None:
-    """Run the GNSS/INS filter on a KF-GINS YAML, or on IMU and GNSS files with a TOML; write KF-GINS's outputs
-    (.nav, IMU errors, state sigma), summary.json and figures.
+    """Run the GNSS/INS filter on a robot's or a drone's log (ROS 1 bag, ROS 2 bag folder, PX4 ULog), on a KF-GINS
+    YAML, or on IMU and GNSS files with a TOML; write KF-GINS's outputs (.nav, IMU errors, state sigma),
+    summary.json and figures (a log: also track.geojson, the mounting, odometer scale and GNSS latency found).
+
+    Example: imunav gins run robot.bag --out robot-run
 
     Example: imunav gins run --config drive/kf-gins.yaml --out drive/result --truth drive/truth.nav
 
     Example: imunav gins run drive/imu.txt drive/gnss.txt --config drive/gins.toml --out res --truth drive/truth.nav
     """
+    if imu is not None and log_kind(imu) is not None:
+        if gnss is not None or config is not None or odo is not None or truth is not None or states is not None:
+            raise ConfigError(f"{imu} is a log: it names its own sources; choose topics with --imu-topic / "
+                              "--gnss-topic / --odo-topic / --mag-topic / --baro-topic instead of files")
+        if out is None:
+            raise ConfigError("give --out DIR, the folder for the results")
+        outs = [*run_output_paths(out, smoother=smoother, plots=plots).values(), out / LOG_FILES["geojson"]]
+        check_outputs([imu], outs)
+        sources = read_nav_sources(imu, imu_topic=imu_topic, gnss_topic=gnss_topic, odo_topic=odo_topic,
+                                   mag_topic=mag_topic, baro_topic=baro_topic)
+        opts = LogRunOptions(preset=preset, mounting=parse_rotation(imu_rotation, "--imu-rotation"),
+                             gnss_lever_arm=parse_vector(gnss_lever_arm, "--gnss-lever-arm"), smoother=smoother)
+        summary = write_log_outputs(out, run_log(sources, opts), sources, plots=plots)
+        _say_no_matplotlib(plots)
+        m = summary["mounting"]
+        line = (f"{summary['imu_samples']} IMU samples, {summary.get('gnss_used', 0)} GNSS fixes used -> {out}; "
+                f"mounting roll {m['roll_deg']:.2f} pitch {m['pitch_deg']:.2f} yaw {m['yaw_deg']:.2f} deg "
+                f"({m['source']})")
+        if summary["odometer_scale"] is not None:
+            line += f"; odometer scale {1 + summary['odometer_scale']['value']:.4f}"
+        if summary["gnss_time_offset_s"] is not None:
+            line += f"; GNSS latency {summary['gnss_time_offset_s']['value']:.3f} s"
+        typer.echo(line)
+        return
+    rot_opts = [k for k, v in (("--imu-topic", imu_topic), ("--gnss-topic", gnss_topic), ("--odo-topic", odo_topic),
+                               ("--mag-topic", mag_topic), ("--baro-topic", baro_topic),
+                               ("--imu-rotation", imu_rotation), ("--gnss-lever-arm", gnss_lever_arm)) if v is not None]
+    if rot_opts:
+        raise ConfigError(f"{', '.join(rot_opts)} go with a log (a .bag, a ROS 2 bag folder or a .ulg); the files of "
+                          "this run name their own inputs")
     inputs, setup, ref = _inputs(imu, gnss, config, odo, truth, states)
     folder = out if out is not None else inputs.output_path
     if folder is None:

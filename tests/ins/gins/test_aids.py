@@ -8,7 +8,7 @@ import pytest
 
 from imunav.earth import OMEGA_E
 from imunav.ins.gins import GinsConfig, aids
-from imunav.ins.gins.filter import _kernel_setup
+from imunav.ins.gins.filter import kernel_setup
 from imunav.ins.gins.kernels import _inject
 from imunav.ins.gins.layout import CTX, LAY, N_CTX, N_LAY, N_NOM, NOM, STATE_BLOCKS
 from imunav.rotation import dcm_from_quat, quat_normalize
@@ -90,7 +90,7 @@ def test_every_aid_jacobian_is_the_derivative_of_its_innovation(name, scale_fact
                      lever_arm=(0.4, -0.3, -1.2), odo_lever_arm=(-0.5, 0.6, 0.4), scale_factors=scale_factors,
                      declination=0.1, dual_antenna_baseline=BASELINE, level_std=0.03,
                      **(VEHICLE_BLOCKS if scale_factors else {}))
-    prm, lay, _ = _kernel_setup(cfg, 100.0, True)
+    prm, lay, _ = kernel_setup(cfg, 100.0, True)
     kind = getattr(aids.AID, name)
     xs = _state(rng)
     if not scale_factors:  # a 15-state filter treats the scale factors as zero
@@ -135,7 +135,7 @@ def test_kernel_layouts_are_contiguous_and_follow_their_tuples():
     # the 15 / 21 / 22-state layouts: blocks back to back in STATE_BLOCKS order, absent ones -1
     for scale, odo, nx in ((False, False, 15), (True, False, 21), (True, True, 22), (False, True, 16)):
         cfg = GinsConfig(arw=1e-3, vrw=1e-2, gyro_bias_std=1e-4, accel_bias_std=1e-3, scale_factors=scale)
-        prm, lay, sd = _kernel_setup(cfg, 100.0, odo)
+        prm, lay, sd = kernel_setup(cfg, 100.0, odo)
         assert lay[LAY.nx] == nx == sd.size
         i = 0
         for block, size in STATE_BLOCKS:

@@ -104,6 +104,9 @@ class GinsConfig:
     mag_heading_noise : float
         σ of the magnetometer heading, rad (> 0; about the field noise over its horizontal strength, plus
         the residual calibration and disturbance errors).
+    odo_scale_corr_time : float or None
+        Correlation time of the odometer scale-factor state, s (> 0; ``inf``: a random constant, a tyre's
+        scale; None: ``corr_time``).
     mounting : array_like, shape (3,)
         The IMU's attitude in the vehicle frame, ZYX Euler (roll, pitch, yaw), rad: ``C_vb`` turns IMU axes into
         vehicle FRD axes (the odometer and the NHC act on the vehicle's axes; default: the IMU is aligned with the
@@ -162,6 +165,7 @@ class GinsConfig:
     declination: float = 0.0
     mag_heading_noise: float = 0.02
     dual_antenna_baseline: Any = None
+    odo_scale_corr_time: float | None = None
     mounting: Any = (0.0, 0.0, 0.0)
     mounting_std: Any = None
     odo_lever_arm_std: Any = None
@@ -180,6 +184,9 @@ class GinsConfig:
             s(self, name, getattr(self, src) if v is None else _v3(v, name, positive=True))
         s(self, "lever_arm", _v3(self.lever_arm, "lever_arm"))
         s(self, "odo_lever_arm", _v3(self.odo_lever_arm, "odo_lever_arm"))
+        if self.odo_scale_corr_time is not None and not (self.odo_scale_corr_time > 0):
+            raise InvalidInputError(f"GinsConfig.odo_scale_corr_time must be > 0 s (inf: constant) or None; "
+                                    f"got {self.odo_scale_corr_time!r}")
         s(self, "mounting", _v3(self.mounting, "mounting"))
         if np.any(np.abs(self.mounting) > np.pi):
             raise InvalidInputError(f"GinsConfig.mounting = {self.mounting.tolist()} rad; angles lie in [-pi, pi] "
@@ -235,6 +242,11 @@ class GinsConfig:
         -------
         GinsConfig
             The filter configuration.
+
+        Raises
+        ------
+        InvalidInputError
+            If a field is out of range (as :class:`GinsConfig`).
         """
         n = cfg.noise
         kw: dict[str, Any] = dict(

@@ -108,11 +108,29 @@ def _state_blocks(c: GinsConfig, odometer: bool) -> tuple[str, ...]:
     return tuple(name for name, _ in STATE_BLOCKS if name in use)
 
 
-def _kernel_setup(c: GinsConfig, fs: float, odometer: bool) -> tuple[Array, NDArray[np.int64], Array]:
+def kernel_setup(c: GinsConfig, fs: float, odometer: bool) -> tuple[Array, NDArray[np.int64], Array]:
     """The kernel's core and aid parameters ``prm``, its integer layout ``lay`` and the initial σ of each state.
 
     ``lay`` holds the first index of each state block (−1 when not estimated), the state size, the covariance step
     in samples, then the offset of each aid's parameter block in ``prm`` (``lay[N_LAY + kind]``).
+
+    Parameters
+    ----------
+    c : GinsConfig
+        The configuration.
+    fs : float
+        IMU rate, Hz (sets the covariance step in samples).
+    odometer : bool
+        With the odometer scale-factor state.
+
+    Returns
+    -------
+    prm : numpy.ndarray
+        Core parameters (layout ``PRM``) followed by each aid's block.
+    lay : numpy.ndarray of int
+        The integer layout.
+    sd0 : numpy.ndarray
+        Initial σ of the error states, in state order.
     """
     sizes = dict(STATE_BLOCKS)
     lay = np.full(N_LAY + aids.N_AIDS, -1, dtype=np.int64)
@@ -136,7 +154,8 @@ def _kernel_setup(c: GinsConfig, fs: float, odometer: bool) -> tuple[Array, NDAr
     ts = c.corr_time if c.scale_corr_time is None else float(c.scale_corr_time)
     for name, sdv, tc in (("gyro_bias", c.gyro_bias_std, c.corr_time), ("accel_bias", c.accel_bias_std, c.corr_time),
                           ("gyro_scale", c.gyro_scale_std, ts), ("accel_scale", c.accel_scale_std, ts),
-                          ("odo_scale", c.odo_scale_std, c.corr_time)):
+                          ("odo_scale", c.odo_scale_std,
+                           c.corr_time if c.odo_scale_corr_time is None else float(c.odo_scale_corr_time))):
         n = sizes[name]
         q0, t0 = getattr(PRM, name + "_q"), getattr(PRM, name + "_t")
         prm[q0:q0 + n] = 2.0 * np.asarray(sdv) ** 2 / tc
@@ -433,7 +452,7 @@ class GinsFilter:
         if not (np.isfinite(fs) and fs > 0):
             raise InvalidInputError(f"GinsFilter.reset: fs must be > 0 Hz; got {fs!r}")
         self._xs = _initial_state(lla0, vel0, q0, imu_errors0, self.config)
-        self._prm, self._lay, sd0 = _kernel_setup(self.config, float(fs), odometer)
+        self._prm, self._lay, sd0 = kernel_setup(self.config, float(fs), odometer)
         self.P = np.diag(sd0**2)
         self.t = float(t0)
         self._carry = np.zeros(N_CARRY)
@@ -545,7 +564,9 @@ class GinsFilter:
     def _sampled(self, n: int, odo: Array | None, static: Array, baro: Array, mag: Array,
                  odo_var: Array | None = None) -> kernels.SampledInput:
         """The aids on the IMU grid: odometer (speed, variance) and NHC while moving, ZUPT + ZARU while static,
-        barometer and magnetometer where they have a sample (which forces a covariance epoch there)."""
+        barometer and magnetometer where they have a sample (which forces a covariance epoch there); the levelling
+        at rest once per rest interval, at its middle sample (a covariance epoch there): the slope of one stop is
+        one measurement, however long the vehicle stands."""
         c = self.config
         cols: dict[str, Array] = {}
         moving = np.where(static, np.nan, 0.0)
@@ -558,15 +579,21 @@ class GinsFilter:
             rest = np.where(static, 0.0, np.nan)
             cols["zupt"] = rest
             cols["zaru"] = rest
-            if c.level_std is not None:
-                cols["vehicle_level"] = rest
+        force = np.zeros(n, dtype=bool)
+        if static.any() and c.level_std is not None:
+            edges = np.flatnonzero(np.diff(np.r_[0, static.astype(np.int8), 0]))
+            mid = (edges[0::2] + edges[1::2] - 1) // 2
+            level = np.full(n, np.nan)
+            level[mid] = 0.0
+            force[mid] = True
+            cols["vehicle_level"] = level
         has_baro = ~np.isnan(baro)
         has_mag = ~np.isnan(mag[:, 0])
         if has_baro.any():
             cols["baro"] = baro
         if has_mag.any():
             cols["mag_heading"] = mag
-        return _sampled(n, cols, has_baro | has_mag)
+        return _sampled(n, cols, force | has_baro | has_mag)
 
     def _kernel(self, t: Array, dth: Array, dv: Array, timed: tuple[kernels.TimedInput, Any, Any],
                 sampled: kernels.SampledInput, nrec: int, first: bool, final: bool) -> tuple[_Log, Any]:

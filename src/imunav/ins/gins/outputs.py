@@ -13,11 +13,15 @@ from __future__ import annotations
 
 import importlib.util
 import os
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 import numpy as np
+from numpy.typing import NDArray
 
+from imunav.ins.gins.layout import LAY
+from imunav.ins.gins.logrun import LogRun
 from imunav.ins.gins.outage import OutageReport
 from imunav.ins.gins.plot import FIGURE_NAMES, write_gins_figures
 from imunav.ins.gins.result import GinsResult
@@ -35,11 +39,12 @@ from imunav.io.kfgins import (
     write_kfgins_nav,
     write_kfgins_std,
 )
-from imunav.rotation import euler_from_quat
+from imunav.io.navlog import NavSources
+from imunav.rotation import euler_from_quat, quat_conjugate, quat_multiply
 from imunav.toml import toml_text
 
-__all__ = ["DRIVE_FILES", "RUN_FILES", "outage_document", "run_output_paths", "run_summary",
-           "write_run_outputs", "write_simulated_drive"]
+__all__ = ["DRIVE_FILES", "LOG_FILES", "RUN_FILES", "log_summary", "outage_document", "run_output_paths",
+           "run_summary", "track_geojson", "write_log_outputs", "write_run_outputs", "write_simulated_drive"]
 
 #: Files of a simulated drive (key -> name in its folder).
 DRIVE_FILES = {"imu": "imu.txt", "gnss": "gnss.txt", "truth": "truth.nav", "yaml": "kf-gins.yaml",
@@ -109,7 +114,7 @@ def write_simulated_drive(drive: SimulatedDrive, folder: str | os.PathLike[str])
     return names
 
 
-def run_summary(res: GinsResult, setup: GinsSetup, *, truth: NavTrack | None = None) -> dict[str, Any]:
+def run_summary(res: GinsResult, setup: Any, *, truth: NavTrack | None = None) -> dict[str, Any]:
     """The summary of a filter run: the one definition behind ``imunav gins run``'s ``summary.json`` and the lab
     step's ``gins_summary.json``.
 
@@ -118,7 +123,7 @@ def run_summary(res: GinsResult, setup: GinsSetup, *, truth: NavTrack | None = N
     res : GinsResult
         The run.
     setup : GinsSetup
-        Its configuration and initial state.
+        Its configuration and initial state (only ``setup.config`` is read).
     truth : NavTrack, optional
         A reference: RMSE of the forward (and smoothed) solution against it.
 
@@ -220,7 +225,20 @@ def write_run_outputs(folder: str | os.PathLike[str], res: GinsResult, setup: Gi
 
 def write_figures(folder: str | os.PathLike[str], **kw: Any) -> list[Path]:
     """:func:`~imunav.ins.gins.plot.write_gins_figures` when matplotlib is installed, else none (the caller says
-    so)."""
+    so).
+
+    Parameters
+    ----------
+    folder : str or os.PathLike
+        Output folder.
+    **kw
+        ``result``, ``gnss``, ``truth``, ``outage`` of :func:`~imunav.ins.gins.plot.write_gins_figures`.
+
+    Returns
+    -------
+    list of pathlib.Path
+        The figures written.
+    """
     if importlib.util.find_spec("matplotlib") is None:
         return []
     return write_gins_figures(folder, **kw)
@@ -250,3 +268,162 @@ def outage_document(rep: OutageReport, *, source: str, states: int) -> dict[str,
                         for (s, d), h, v, d3, r, p, y, c in zip(rep.outages, rep.horizontal_m, rep.vertical_m,
                                                                 rep.drift_3d_m, rep.roll_deg, rep.pitch_deg,
                                                                 rep.heading_deg, rep.contained)]}
+
+
+#: Files of a run on a log (besides :data:`RUN_FILES`).
+LOG_FILES = {"geojson": "track.geojson"}
+
+
+def log_summary(run: LogRun, sources: NavSources) -> dict[str, Any]:
+    """What a run on a log found: the one definition of its ``summary.json`` keys beyond :func:`run_summary`.
+
+    Parameters
+    ----------
+    run : LogRun
+        From :func:`imunav.ins.gins.logrun.run_log`.
+    sources : NavSources
+        The log's sources.
+
+    Returns
+    -------
+    dict
+        ``t0_unix`` (UTC of the first row, s since 1970; null when the log's clock is not UTC) and ``time_note``;
+        ``sources`` (per role: topic, type, count, rate, what the reader refused); ``static_share``; ``mounting``
+        (roll, pitch, yaw of the IMU in the vehicle, deg, with σ; its source: given, tf_static, estimated or
+        identity; the coarse estimate before the filter); ``odometer_scale`` (reading / true speed − 1, with σ);
+        ``gnss_time_offset_s`` (the receiver's latency, with σ); ``gnss_rejected`` (share of the fixes the
+        reader refused or the χ² gate rejected, and why); ``initial`` (how the initial state was found).
+    """
+    res = run.result
+    lay = run.state_layout()
+    sd = np.sqrt(res.cov_diag[-1])
+
+    def state(block: str, value: float) -> dict[str, Any]:
+        i = int(lay[getattr(LAY, block)])
+        return {"value": float(value), "std": float(sd[i]) if i >= 0 else None, "estimated": i >= 0}
+
+    e, esd = run.mounting_euler()
+    mount = {"roll_deg": float(np.degrees(e[0])), "pitch_deg": float(np.degrees(e[1])),
+             "yaw_deg": float(np.degrees(e[2])), "std_deg": np.degrees(esd).tolist(), "source": run.mounting_source,
+             "q_vb": res.q_vb[-1].tolist() if res.q_vb is not None else None}
+    if run.mounting_coarse is not None:
+        mount["coarse_deg"] = np.degrees(run.mounting_coarse.euler).tolist()
+        mount["coarse_std_deg"] = np.degrees(run.mounting_coarse.std).tolist()
+    g_meta = sources.meta.get("gnss", {}) if isinstance(sources.meta.get("gnss"), dict) else {}
+    rec = res.aids.get("gnss_position")
+    n_gate = int(np.sum(~rec.accepted)) if rec is not None else 0
+    n_used = int(rec.t.size) if rec is not None else 0
+    refused = g_meta.get("removed", g_meta.get("faults", {}))
+    n_refused = int(sum(v for v in refused.values() if isinstance(v, (int, np.integer)))) if isinstance(refused, dict) else 0
+    total = n_used + n_refused
+    return {
+        "t0_unix": sources.t0_unix if sources.time_is_utc else None,
+        "time_note": ("the .nav time columns are GPS week and seconds of week" if sources.time_is_utc else
+                      "the log's stamps are not UTC (a clock that starts at boot): the .nav week column is 0 and its "
+                      "seconds column the log's own time"),
+        "sources": sources.to_dict(),
+        "static_share": float(np.mean(run.static)),
+        "mounting": mount,
+        "odometer_scale": state("odo_scale", res.odo_scale[-1]) if sources.odometer is not None else None,
+        "gnss_time_offset_s": state("gnss_delay", res.gnss_delay[-1]) if sources.gnss is not None else None,
+        "gnss_rejected": {"share": (n_gate + n_refused) / total if total else None, "by_gate": n_gate,
+                          "by_reader": refused, "fixes": total},
+        "initial": run.initial,
+    }
+
+
+def track_geojson(res: GinsResult, gnss: GnssData | None, *, every_s: float = 1.0) -> dict[str, Any]:
+    """The trajectory (one point every ``every_s`` s) as a GeoJSON LineString and the fixes as Points (with
+    ``accepted`` by the χ² gate), in WGS84 longitude / latitude degrees and ellipsoidal height (RFC 7946).
+
+    Parameters
+    ----------
+    res : GinsResult
+        The run.
+    gnss : GnssData or None
+        The fixes it used.
+    every_s : float
+        Spacing of the track's points, s.
+
+    Returns
+    -------
+    dict
+        A FeatureCollection.
+    """
+    t = res.t
+    keep = np.unique(np.r_[np.searchsorted(t, np.arange(t[0], t[-1], every_s)), t.size - 1])
+    coords = [[float(np.degrees(res.lla[i, 1])), float(np.degrees(res.lla[i, 0])), float(res.lla[i, 2])]
+              for i in keep]
+    feats: list[dict[str, Any]] = [{"type": "Feature", "geometry": {"type": "LineString", "coordinates": coords},
+                                    "properties": {"name": "GNSS/INS track", "t0_s": float(t[0]),
+                                                   "t1_s": float(t[-1])}}]
+    rec = res.aids.get("gnss_position")
+    if gnss is not None and rec is not None:
+        acc = dict(zip(np.round(rec.t, 9).tolist(), rec.accepted.tolist()))
+        for i in range(gnss.n):
+            feats.append({"type": "Feature",
+                          "geometry": {"type": "Point", "coordinates": [float(np.degrees(gnss.lla[i, 1])),
+                                                                        float(np.degrees(gnss.lla[i, 0])),
+                                                                        float(gnss.lla[i, 2])]},
+                          "properties": {"t_s": float(gnss.t[i]),
+                                         "accepted": acc.get(round(float(gnss.t[i]), 9))}})
+    return {"type": "FeatureCollection", "features": feats}
+
+
+def write_log_outputs(folder: str | os.PathLike[str], run: LogRun, sources: NavSources, *,
+                      plots: bool = True) -> dict[str, Any]:
+    """Write a run on a log: KF-GINS's ``.nav`` (the vehicle's attitude, GPS week and seconds of week from the
+    log's UTC stamps), IMU errors, state σ, the smoothed ``.nav``, ``track.geojson``, the figures and
+    ``summary.json`` (:func:`run_summary` and :func:`log_summary`).
+
+    Parameters
+    ----------
+    folder : str or os.PathLike
+        Output folder (created).
+    run : LogRun
+        From :func:`imunav.ins.gins.logrun.run_log`.
+    sources : NavSources
+        The log's sources.
+    plots : bool
+        Write the figures.
+
+    Returns
+    -------
+    dict
+        The summary written.
+    """
+    out = Path(folder)
+    res = run.result
+    gt = sources.gps_time(res.t)
+    week = int(gt.week[0]) if gt.week.size else 0
+    sow = np.asarray(gt.sow, dtype=float) + (np.asarray(gt.week, dtype=float) - week) * 604800.0
+
+    def vehicle_q(q_nb: NDArray[np.float64], q_vb: NDArray[np.float64]) -> NDArray[np.float64]:
+        return quat_multiply(q_nb, quat_conjugate(q_vb))
+
+    q_vb = res.q_vb if res.q_vb is not None else np.tile([1.0, 0, 0, 0], (res.t.size, 1))
+    names = run_output_paths(out, smoother=res.smoothed is not None, plots=False)
+    write_kfgins_nav(names["nav"], NavTrack(sow, res.lla, res.vel_ned, vehicle_q(res.q_nb, q_vb), week))
+    write_kfgins_imu_errors(names["err"], sow, res.gyro_bias, res.accel_bias, res.gyro_scale, res.accel_scale)
+    nx = run.config.n_states
+    sd = np.sqrt(np.pad(res.cov_diag[:, :nx], ((0, 0), (0, 21 - nx))))
+    sow_cov = np.interp(res.cov_t, res.t, sow)
+    write_kfgins_std(names["std"], sow_cov, sd[:, 0:3], sd[:, 3:6], sd[:, 6:9], sd[:, 9:12], sd[:, 12:15],
+                     sd[:, 15:18], sd[:, 18:21])
+    if res.smoothed is not None:
+        s = res.smoothed
+        write_kfgins_nav(names["smoothed"], NavTrack(sow, s.lla, s.vel_ned, vehicle_q(s.q_nb, q_vb), week))
+    write_json(out / LOG_FILES["geojson"], track_geojson(res, sources.gnss))
+    summary = {"log": sources.source, **run_summary(res, _LogSetup(run.config)), **log_summary(run, sources),
+               "frames": "position of the IMU, attitude of the vehicle (IMU attitude composed with its mounting)"}
+    if plots:
+        summary["figures"] = [p.name for p in write_figures(out, result=res, gnss=sources.gnss)]
+    write_json(out / RUN_FILES["summary"], summary)
+    return summary
+
+
+@dataclass(frozen=True)
+class _LogSetup:
+    """The part of a :class:`GinsSetup` that :func:`run_summary` reads."""
+
+    config: Any

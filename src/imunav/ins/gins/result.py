@@ -44,7 +44,13 @@ class AidRecord(Result):
 
     @classmethod
     def empty(cls) -> AidRecord:
-        """A record without updates."""
+        """A record without updates.
+
+        Returns
+        -------
+        AidRecord
+            Empty arrays.
+        """
         return cls(np.zeros(0), np.zeros(0), np.zeros(0, dtype=int), np.zeros(0, dtype=bool), np.zeros(0, dtype=int))
 
 

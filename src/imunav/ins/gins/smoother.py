@@ -22,6 +22,28 @@ def rts_smooth(t: Array, lla: Array, vel: Array, q: Array, rec_t: Array, phi: Ar
     posterior nominal at r) obeys ``δs_r = A_r (δs_{r+1} + δx_inj,{r+1})``, ``A_r = P_r⁺ Φ_{r+1}ᵀ (P_{r+1}⁻)⁻¹``,
     ``P_r^s = P_r⁺ + A_r (P_{r+1}^s − P_{r+1}⁻) A_rᵀ``; between epochs the correction is interpolated in time
     from ``δs_r`` (after r) to ``δs_{r+1} + δx_inj,{r+1}`` (before the injection at r+1).
+
+    Parameters
+    ----------
+    t : numpy.ndarray, shape (N,)
+        IMU times, s.
+    lla, vel, q : numpy.ndarray, shapes (N, 3), (N, 3), (N, 4)
+        The forward filter's nominal trajectory (lat rad, lon rad, h m; NED m/s; ``q_nb``).
+    rec_t : numpy.ndarray, shape (M,)
+        Times of the covariance epochs, s.
+    phi : numpy.ndarray, shape (M, n, n)
+        Transition matrix into each epoch.
+    ppri, ppost : numpy.ndarray, shape (M, n, n)
+        Prior and posterior error covariance at each epoch.
+    inj : numpy.ndarray, shape (M, n)
+        Error state injected into the nominal state at each epoch.
+    state : numpy.ndarray, shape (M, 10)
+        Posterior nominal state at each epoch (lat, lon, h, v, q).
+
+    Returns
+    -------
+    SmoothedTrack
+        The smoothed trajectory and the navigation block of its covariance.
     """
     M, n = inj.shape
     ds = np.zeros((M, n))

@@ -26,7 +26,18 @@ PARAMS, N_PARAMS = named_layout("BaroParams", (("sigma", 1),))
 
 
 def params(config: Any) -> np.ndarray:
-    """This aid's parameter block from a :class:`~imunav.ins.gins.GinsConfig` (``baro_noise``, m)."""
+    """This aid's parameter block from a :class:`~imunav.ins.gins.GinsConfig` (``baro_noise``, m).
+
+    Parameters
+    ----------
+    config : GinsConfig
+        The filter configuration.
+
+    Returns
+    -------
+    numpy.ndarray, shape (N_PARAMS,)
+        The block, layout :data:`PARAMS`.
+    """
     return np.array([config.baro_noise], dtype=float)
 
 

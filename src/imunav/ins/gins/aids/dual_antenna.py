@@ -41,7 +41,18 @@ PARAMS, N_PARAMS = named_layout("DualAntennaParams", (("baseline", 3),))
 
 def params(config: Any) -> np.ndarray:
     """This aid's parameter block from a :class:`~imunav.ins.gins.GinsConfig` (``dual_antenna_baseline``, m;
-    zeros when it is None)."""
+    zeros when it is None).
+
+    Parameters
+    ----------
+    config : GinsConfig
+        The filter configuration.
+
+    Returns
+    -------
+    numpy.ndarray, shape (N_PARAMS,)
+        The block, layout :data:`PARAMS`.
+    """
     p = np.zeros(N_PARAMS)
     if config.dual_antenna_baseline is not None:
         p[PARAMS.baseline:PARAMS.baseline + 3] = config.dual_antenna_baseline

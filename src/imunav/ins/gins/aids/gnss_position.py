@@ -37,7 +37,18 @@ PARAMS, N_PARAMS = named_layout("GnssPositionParams", (("lever", 3),))
 
 
 def params(config: Any) -> np.ndarray:
-    """This aid's parameter block from a :class:`~imunav.ins.gins.GinsConfig` (``lever_arm``, m)."""
+    """This aid's parameter block from a :class:`~imunav.ins.gins.GinsConfig` (``lever_arm``, m).
+
+    Parameters
+    ----------
+    config : GinsConfig
+        The filter configuration.
+
+    Returns
+    -------
+    numpy.ndarray, shape (N_PARAMS,)
+        The block, layout :data:`PARAMS`.
+    """
     p = np.zeros(N_PARAMS)
     p[PARAMS.lever:PARAMS.lever + 3] = config.lever_arm
     return p

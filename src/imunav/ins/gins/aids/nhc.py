@@ -28,7 +28,18 @@ PARAMS, N_PARAMS = named_layout("NhcParams", (("var", 1),))
 
 
 def params(config: Any) -> np.ndarray:
-    """This aid's parameter block from a :class:`~imunav.ins.gins.GinsConfig` (``nhc_noise``, m/s)."""
+    """This aid's parameter block from a :class:`~imunav.ins.gins.GinsConfig` (``nhc_noise``, m/s).
+
+    Parameters
+    ----------
+    config : GinsConfig
+        The filter configuration.
+
+    Returns
+    -------
+    numpy.ndarray, shape (N_PARAMS,)
+        The block, layout :data:`PARAMS`.
+    """
     p = np.zeros(N_PARAMS)
     p[PARAMS.var] = 0.0 if config.nhc_noise is None else config.nhc_noise**2
     return p

@@ -29,7 +29,18 @@ PARAMS, N_PARAMS = named_layout("OdometerParams", ())
 
 
 def params(config: Any) -> np.ndarray:
-    """This aid's parameter block (empty: the lever arm and mounting are states or nominal values)."""
+    """This aid's parameter block (empty: the lever arm and mounting are states or nominal values).
+
+    Parameters
+    ----------
+    config : GinsConfig
+        The filter configuration.
+
+    Returns
+    -------
+    numpy.ndarray, shape (N_PARAMS,)
+        The block, layout :data:`PARAMS`.
+    """
     return np.zeros(N_PARAMS)
 
 

@@ -35,7 +35,18 @@ PARAMS, N_PARAMS = named_layout("VehicleLevelParams", (("var", 1),))
 
 
 def params(config: Any) -> np.ndarray:
-    """This aid's parameter block from a :class:`~imunav.ins.gins.GinsConfig` (``level_std``, rad; 0 when None)."""
+    """This aid's parameter block from a :class:`~imunav.ins.gins.GinsConfig` (``level_std``, rad; 0 when None).
+
+    Parameters
+    ----------
+    config : GinsConfig
+        The filter configuration.
+
+    Returns
+    -------
+    numpy.ndarray, shape (N_PARAMS,)
+        The block, layout :data:`PARAMS`.
+    """
     return np.array([0.0 if config.level_std is None else config.level_std**2])
 
 

@@ -39,7 +39,18 @@ PARAMS, N_PARAMS = named_layout("ZaruParams", (("sigma", 1), ("arw", 3)))
 
 
 def params(config: Any) -> np.ndarray:
-    """This aid's parameter block from a :class:`~imunav.ins.gins.GinsConfig` (``zaru_noise`` rad/s, ``arw``)."""
+    """This aid's parameter block from a :class:`~imunav.ins.gins.GinsConfig` (``zaru_noise`` rad/s, ``arw``).
+
+    Parameters
+    ----------
+    config : GinsConfig
+        The filter configuration.
+
+    Returns
+    -------
+    numpy.ndarray, shape (N_PARAMS,)
+        The block, layout :data:`PARAMS`.
+    """
     p = np.zeros(N_PARAMS)
     p[PARAMS.sigma] = config.zaru_noise
     p[PARAMS.arw:PARAMS.arw + 3] = config.arw

@@ -1,0 +1,426 @@
+"""GNSS/INS on a robot's or a drone's own log: the sources of :func:`imunav.io.navlog.read_nav_sources` in, the
+trajectory with its uncertainty out, the IMU mounting, the odometer scale and the GNSS latency estimated on the way.
+
+:func:`run_log` does what a user would otherwise do by hand:
+
+1. **Rest.**  The vehicle stands still where its odometer reads zero and its IMU is quiet (without an odometer:
+   where the IMU is quiet with the gyro test; :func:`imunav.timeseries.static_intervals`).  ZUPT + ZARU there, and
+   the levelling at rest when the mounting is estimated.
+2. **Mounting.**  Given (``mounting``, e.g. from the command line or the bag's ``/tf_static``), or estimated by
+   :func:`imunav.ins.gins.mounting.estimate_mounting` for a wheeled vehicle (an odometer), then refined in the
+   filter as three error states; without an odometer the IMU is taken as aligned with the vehicle (a PX4 log's
+   ``sensor_combined`` is in the body frame).
+3. **Initial state.**  Roll and pitch from the specific force at the start; the vehicle's heading and position by
+   fitting the odometry dead reckoning (gyro heading, odometer speed) to the first GNSS fixes (a 2-D similarity
+   with outlier rejection), or from the magnetometer / GNSS course without an odometer; without GNSS the local
+   frame of the dead reckoning (heading 0 at the start, position (0, 0)).
+4. **Filter.**  :class:`~imunav.ins.gins.GinsFilter` with the IMU preset's noise model, the odometer's scale
+   factor as a state, the NHC for a wheeled vehicle, the GNSS latency as a state, the χ² gates (jumps of tens of
+   metres are rejected and counted), and optionally the RTS smoother.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from imunav.earth import lla_to_ned, ned_to_lla
+from imunav.errors import InsufficientDataError, InvalidInputError
+from imunav.ins.gins.config import GinsConfig
+from imunav.ins.gins.filter import GinsFilter, kernel_setup
+from imunav.ins.gins.layout import LAY
+from imunav.ins.gins.mounting import MountingEstimate, _levelling, estimate_mounting
+from imunav.ins.gins.result import GinsResult
+from imunav.io.navlog import NavSources
+from imunav.results import Result
+from imunav.rotation import dcm_from_quat, euler_from_dcm, quat_from_dcm, quat_from_euler
+from imunav.sim import presets
+from imunav.timeseries import static_intervals
+
+__all__ = ["LogRun", "LogRunOptions", "parse_rotation", "parse_vector", "run_log"]
+
+Array = NDArray[np.float64]
+
+#: Default σ of the GNSS latency state (s), the odometer scale (dimensionless) and the vehicle's slope at rest (rad).
+GNSS_DELAY_STD = 0.2
+ODO_SCALE_STD = 0.1
+LEVEL_STD = math.radians(1.0)
+
+
+@dataclass(frozen=True)
+class LogRunOptions:
+    """Choices of :func:`run_log` (SI).
+
+    Parameters
+    ----------
+    preset : str
+        IMU error preset of :mod:`imunav.sim.presets` whose noise model the filter uses.
+    mounting : array_like, shape (4,), or None
+        The IMU's mounting ``q_vb`` (IMU FRD -> vehicle FRD); None: the bag's ``/tf_static`` when it has one,
+        else estimated (wheeled vehicle) or the identity.
+    gnss_lever_arm : array_like, shape (3,)
+        GNSS antenna from the IMU, vehicle FRD axes, m.
+    odo_lever_arm : array_like, shape (3,) or None
+        Wheel contact point (the odometer's reference) from the IMU, vehicle FRD axes, m; None: the bag's
+        ``/tf_static`` IMU position when it has one, else zero.
+    estimate_odo_lever_arm : bool
+        Estimate the wheel lever arm as states (σ 0.3 m).
+    nhc : bool or None
+        Non-holonomic constraint; None: on with an odometer (a wheeled ground vehicle).
+    nhc_std : float
+        σ of the NHC, m/s.
+    smoother : bool
+        Also run the RTS smoother.
+    gnss_pos_std : float or None
+        σ of a fix whose covariance the log does not give, m.
+    overrides : dict
+        Any other :class:`~imunav.ins.gins.GinsConfig` field.
+    """
+
+    preset: str = "consumer_mems"
+    mounting: Any = None
+    gnss_lever_arm: Any = (0.0, 0.0, 0.0)
+    odo_lever_arm: Any = None
+    estimate_odo_lever_arm: bool = False
+    nhc: bool | None = None
+    nhc_std: float = 0.05
+    smoother: bool = False
+    gnss_pos_std: float | None = None
+    overrides: dict[str, Any] = field(default_factory=dict)
+
+
+@dataclass(frozen=True)
+class LogRun(Result):
+    """What :func:`run_log` did and found.
+
+    Attributes
+    ----------
+    result : GinsResult
+        The filter run (the IMU's trajectory; ``q_vb`` its mounting).
+    config : GinsConfig
+        The configuration used.
+    static : numpy.ndarray of bool, shape (N,)
+        The samples declared at rest.
+    mounting_coarse : MountingEstimate or None
+        The estimate before the filter (None when the mounting was given or taken as the identity).
+    mounting_source : str
+        ``"given"``, ``"tf_static"``, ``"estimated"`` or ``"identity"``.
+    initial : dict
+        The initial state and how it was found.
+    meta_preset : str
+        The IMU preset whose noise model the filter used.
+    """
+
+    result: GinsResult
+    config: GinsConfig
+    static: NDArray[np.bool_]
+    mounting_coarse: MountingEstimate | None
+    mounting_source: str
+    initial: dict[str, Any]
+    meta_preset: str = "consumer_mems"
+
+    def state_layout(self) -> NDArray[np.int64]:
+        """The run's error-state layout (``lay``: first index of each block of
+        :data:`~imunav.ins.gins.layout.STATE_BLOCKS`, −1 when absent) to read ``result.cov_diag``.
+
+        Returns
+        -------
+        numpy.ndarray of int
+            The layout ``lay`` of the run's configuration.
+        """
+        return kernel_setup(self.config, 1.0, bool(self.result.meta.get("odometer", False)))[1]
+
+    def mounting_euler(self) -> tuple[Array, Array]:
+        """The final mounting as ZYX Euler angles (roll, pitch, yaw of the IMU in the vehicle) and their σ, rad.
+
+        The σ maps the filter's mounting-error covariance (small rotations about the vehicle axes), plus the
+        preset's accelerometer axis misalignment (which the filter does not model: the accelerometers' own axes
+        are off the IMU's nominal ones by that much), through the Jacobian of the Euler angles; zero where the
+        mounting was not estimated.
+
+        Returns
+        -------
+        euler : numpy.ndarray, shape (3,)
+            Roll, pitch, yaw of the IMU in the vehicle, rad.
+        std : numpy.ndarray, shape (3,)
+            Their σ, rad.
+        """
+        res = self.result
+        C = dcm_from_quat(res.q_vb[-1])
+        e0 = np.asarray(euler_from_dcm(C), dtype=float)
+        im = int(self.state_layout()[LAY.mount])
+        if im < 0:
+            return e0, np.zeros(3)
+        m = presets.get(self.meta_preset).accel.scale_misalignment
+        off = m - np.diag(np.diag(m))
+        mis = float(np.sqrt(np.mean(off[off != 0] ** 2))) if np.any(off) else 0.0
+        P = np.diag(res.cov_diag[-1, im:im + 3] + mis**2)
+        J = np.zeros((3, 3))
+        h = 1e-6
+        for j in range(3):
+            mu = np.zeros(3)
+            mu[j] = h
+            K = np.array([[0.0, -mu[2], mu[1]], [mu[2], 0.0, -mu[0]], [-mu[1], mu[0], 0.0]])
+            e1 = np.asarray(euler_from_dcm((np.eye(3) + K) @ C), dtype=float)
+            J[:, j] = np.remainder(e1 - e0 + np.pi, 2 * np.pi) - np.pi
+        J /= h
+        return e0, np.sqrt(np.diag(J @ P @ J.T))
+
+
+def _static(src: NavSources) -> NDArray[np.bool_]:
+    """Rest: the odometer reads zero and the IMU is quiet, or (no odometer) the IMU and its gyro are quiet."""
+    imu = src.imu
+    try:
+        quiet = static_intervals(imu, window_s=1.0, use_gyro=True).mask
+    except InsufficientDataError:
+        quiet = np.zeros(imu.n, dtype=bool)
+    if src.odometer is None:
+        return quiet
+    o = src.odometer
+    spd = np.interp(imu.t, o.t, np.abs(o.speed), left=np.nan, right=np.nan)
+    return quiet & (spd < 0.02)
+
+
+def _initial_tilt(src: NavSources, static: NDArray[np.bool_]) -> tuple[Array, float, int]:
+    """The down direction in IMU axes at the start (the first rest, else the first second) and its σ (rad)."""
+    imu = src.imu
+    fs = 1.0 / float(np.median(np.diff(imu.t)))
+    idx = np.flatnonzero(static[: int(60 * fs)])
+    if idx.size >= fs:
+        run = idx[: int(np.argmax(np.diff(idx) > 1)) + 1] if np.any(np.diff(idx) > 1) else idx
+        f = imu.accel[run].mean(axis=0)
+        sd = math.radians(0.5)
+    else:
+        run = np.arange(min(imu.n, max(2, int(fs))))
+        f = imu.accel[run].mean(axis=0)
+        sd = math.radians(5.0)
+    return -f / np.linalg.norm(f), sd, int(run[-1])
+
+
+def _dead_reckoning(src: NavSources, C_vb: Array, bias: Array) -> tuple[Array, Array]:
+    """Vehicle heading (rad, 0 at the start) and 2-D position (m, in the start's heading frame) at the IMU stamps
+    from the gyro's vertical rate and the odometer speed."""
+    imu = src.imu
+    o = src.odometer
+    assert o is not None
+    wz = ((imu.gyro - bias) @ C_vb.T)[:, 2]
+    dt = np.diff(imu.t, prepend=imu.t[0])
+    psi = np.cumsum(wz * dt)
+    v = np.interp(imu.t, o.t, o.speed)
+    p = np.cumsum(np.column_stack([v * np.cos(psi), v * np.sin(psi)]) * dt[:, None], axis=0)
+    return psi, p
+
+
+def _fit_heading(src: NavSources, p_dr: Array, lla_ref: Array) -> tuple[float, Array, float, int]:
+    """Rotation ψ0 (and translation, scale) fitting the dead reckoning to the GNSS fixes over the first stretch
+    of the drive with at least 30 m of travel; two passes reject fixes more than 3 robust σ off.
+    Returns (ψ0, start position N E in m from ``lla_ref``, σ of ψ0, fixes used)."""
+    g = src.gnss
+    assert g is not None
+    imu = src.imu
+    ned = lla_to_ned(g.lla, lla_ref)[:, :2]
+    pd = np.column_stack([np.interp(g.t, imu.t, p_dr[:, 0]), np.interp(g.t, imu.t, p_dr[:, 1])])
+    travel = np.r_[0.0, np.cumsum(np.hypot(*np.diff(pd, axis=0).T))]
+    end = int(np.searchsorted(travel, max(30.0, 0.25 * travel[-1]))) + 1
+    use = np.zeros(g.n, dtype=bool)
+    use[:end] = True
+    psi = 0.0
+    T = ned[0]
+    for _ in range(3):
+        a, b = pd[use], ned[use]
+        am, bm = a.mean(axis=0), b.mean(axis=0)
+        A, B = a - am, b - bm
+        psi = math.atan2(float(np.sum(A[:, 0] * B[:, 1] - A[:, 1] * B[:, 0])), float(np.sum(A[:, 0] * B[:, 0] +
+                                                                                          A[:, 1] * B[:, 1])))
+        R = np.array([[math.cos(psi), -math.sin(psi)], [math.sin(psi), math.cos(psi)]])
+        s = float(np.sum((A @ R.T) * B) / max(np.sum(A**2), 1e-9))
+        T = bm - s * (R @ am)
+        res = np.hypot(*(ned - (T + s * pd @ R.T)).T)
+        mad = 1.4826 * float(np.median(res[use]))
+        use = (np.arange(g.n) < end) & (res < 3.0 * mad + 1.0)
+    spread = float(np.sqrt(np.sum((pd[use] - pd[use].mean(axis=0)) ** 2)))
+    sd = float(np.sqrt(np.mean(res[use] ** 2))) / max(spread, 1e-6)
+    if use.sum() < 5 or spread < 10.0:
+        raise InsufficientDataError(f"{src.source}: the first {travel[min(end, g.n) - 1]:.0f} m of the drive "
+                                    "hold too few fixes to find the heading; give the initial heading")
+    return psi, T, sd, int(use.sum())
+
+
+def run_log(src: NavSources, options: LogRunOptions | None = None) -> LogRun:
+    """Run the GNSS/INS filter on a log's navigation sources (module docstring).
+
+    Parameters
+    ----------
+    src : NavSources
+        From :func:`imunav.io.navlog.read_nav_sources`.
+    options : LogRunOptions, optional
+        Preset, mounting, lever arms, NHC, smoother, configuration overrides.
+
+    Returns
+    -------
+    LogRun
+        The filter run, its configuration, the rest mask, the mounting and the initial state.
+
+    Raises
+    ------
+    InsufficientDataError
+        If the log is too short to level the IMU or find the heading.
+    InvalidInputError
+        If an option is out of range (a mounting that is not a rotation, ...).
+    """
+    o = options or LogRunOptions()
+    imu = src.imu
+    static = _static(src)
+    model = presets.get(o.preset)
+    wheeled = src.odometer is not None
+    # -- mounting
+    coarse = None
+    if o.mounting is not None:
+        q_vb = np.asarray(o.mounting, dtype=float)
+        if q_vb.shape != (4,) or not np.all(np.isfinite(q_vb)) or abs(np.linalg.norm(q_vb) - 1) > 1e-6:
+            raise InvalidInputError(f"mounting must be a unit quaternion (w, x, y, z); got {o.mounting!r}")
+        source, mount_sd = "given", None
+    elif src.imu_to_base is not None:
+        q_vb, source, mount_sd = np.asarray(src.imu_to_base, dtype=float), "tf_static", None
+    elif wheeled:
+        od = src.odometer
+        assert od is not None
+        ba_sd = float(np.max(np.abs(model.accel.bias))) if np.any(model.accel.bias) else 0.05
+        coarse = estimate_mounting(imu, static, speed_t=od.t, speed=od.speed, accel_bias_std=ba_sd,
+                                   level_std=LEVEL_STD)
+        q_vb, source, mount_sd = coarse.q_vb, "estimated", coarse.std
+    else:
+        q_vb, source, mount_sd = np.array([1.0, 0.0, 0.0, 0.0]), "identity", None
+    C_vb = dcm_from_quat(q_vb)
+    # -- initial attitude, heading and position
+    d_b, tilt_sd, i_rest = _initial_tilt(src, static)
+    bias0 = imu.gyro[static].mean(axis=0) if static.sum() > 10 else np.zeros(3)
+    ref = np.array([0.0, 0.0, 0.0]) if src.gnss is None else src.gnss.lla[0].copy()
+    initial: dict[str, Any] = {}
+    if wheeled and src.gnss is not None:
+        _, p_dr = _dead_reckoning(src, C_vb, bias0)
+        psi0, T, psi_sd, used = _fit_heading(src, p_dr, ref)
+        pos0 = np.array([T[0], T[1], 0.0])
+        initial.update(heading="odometry dead reckoning fitted to the first GNSS fixes", fixes=used)
+        pos_sd = 2.0
+    elif src.gnss is not None:
+        psi0, psi_sd, pos0, pos_sd = 0.0, math.pi / 2, np.zeros(3), 5.0
+        v = src.gnss.vel_ned
+        if v is not None:
+            k = int(np.argmax(np.hypot(v[:, 0], v[:, 1]) > 2.0))
+            if np.hypot(*v[k, :2]) > 2.0:
+                psi0, psi_sd = math.atan2(v[k, 1], v[k, 0]), math.radians(10.0)
+        initial.update(heading="GNSS course" if psi_sd < 1 else "unknown (0, sigma 90 deg)")
+    else:
+        psi0, psi_sd, pos0, pos_sd = 0.0, math.radians(0.01), np.zeros(3), 0.01
+        initial.update(heading="dead-reckoning frame: heading 0 and position (0, 0) at the start")
+    g_v = C_vb @ d_b
+    C_nv = np.array([[math.cos(psi0), -math.sin(psi0), 0.0], [math.sin(psi0), math.cos(psi0), 0.0],
+                     [0.0, 0.0, 1.0]]) @ _levelling(g_v)
+    q0 = quat_from_dcm(C_nv @ C_vb)
+    lla0 = ned_to_lla(pos0[None, :], ref)[0] if src.gnss is not None else ref
+    initial.update(lla0=lla0.tolist(), heading_deg=math.degrees(psi0), heading_std_deg=math.degrees(psi_sd))
+    # -- configuration
+    cfg_kw: dict[str, Any] = dict(
+        lever_arm=C_vb.T @ np.asarray(o.gnss_lever_arm, dtype=float),
+        mounting=np.asarray(euler_from_dcm(C_vb), dtype=float), init_pos_std=pos_sd,
+        init_vel_std=0.05 if static[0] else 0.5, init_att_std=(tilt_sd, tilt_sd, max(psi_sd, math.radians(0.5))),
+        )
+    if mount_sd is not None:
+        cfg_kw.update(mounting_std=np.maximum(mount_sd, math.radians(0.05)), level_std=LEVEL_STD)
+    if wheeled:
+        lever_v = o.odo_lever_arm
+        if lever_v is None:
+            lever_v = (-np.asarray(src.imu_lever_base, dtype=float) if src.imu_lever_base is not None
+                       else np.zeros(3))
+        cfg_kw.update(odo_lever_arm=C_vb.T @ np.asarray(lever_v, dtype=float), odo_scale_std=ODO_SCALE_STD,
+                      odo_scale_corr_time=np.inf)
+        if o.estimate_odo_lever_arm:
+            cfg_kw["odo_lever_arm_std"] = 0.3
+    if (o.nhc if o.nhc is not None else wheeled):
+        cfg_kw["nhc_noise"] = o.nhc_std
+    if src.gnss is not None:
+        cfg_kw["gnss_delay_std"] = GNSS_DELAY_STD
+    cfg_kw.update(o.overrides)
+    cfg = GinsConfig.from_preset(o.preset, **cfg_kw)
+    res = GinsFilter(cfg).run(imu, src.gnss, lla0=lla0, vel0=np.zeros(3), q0=q0, odometer=src.odometer,
+                              static=static, baro=None, smoother=o.smoother)
+    return LogRun(res, cfg, static, coarse, source, initial, o.preset)
+
+
+
+def parse_rotation(text: str | None, flag: str = "--imu-rotation") -> Array | None:
+    """A rotation given as text: a unit quaternion ``"qw,qx,qy,qz"`` or ZYX Euler angles ``"roll,pitch,yaw"`` in
+    degrees (IMU FRD -> vehicle FRD).
+
+    Parameters
+    ----------
+    text : str or None
+        The text (None: no rotation).
+    flag : str
+        The option's name, for the message.
+
+    Returns
+    -------
+    numpy.ndarray, shape (4,), or None
+        The quaternion, scalar first.
+
+    Raises
+    ------
+    InvalidInputError
+        If it is not 3 or 4 finite numbers, or 4 numbers that are not a unit quaternion (within 1e-6).
+    """
+    if text is None:
+        return None
+    try:
+        v = np.array([float(x) for x in text.replace(" ", "").split(",") if x], dtype=float)
+    except ValueError:
+        raise InvalidInputError(f"{flag} {text!r}: give 'qw,qx,qy,qz' or 'roll,pitch,yaw' in degrees") from None
+    if v.size not in (3, 4) or not np.all(np.isfinite(v)):
+        raise InvalidInputError(f"{flag} {text!r}: give 4 numbers (a unit quaternion qw,qx,qy,qz) or 3 (ZYX roll,"
+                                "pitch,yaw in degrees)")
+    if v.size == 4:
+        if abs(float(np.linalg.norm(v)) - 1.0) > 1e-6:
+            raise InvalidInputError(f"{flag} {text!r}: a quaternion of norm {np.linalg.norm(v):.6g} is not a "
+                                    "rotation (its norm must be 1)")
+        return v / np.linalg.norm(v)
+    if np.any(np.abs(v) > 360.0):
+        raise InvalidInputError(f"{flag} {text!r}: angles in degrees lie within +-360")
+    return quat_from_euler(np.radians(v))
+
+
+def parse_vector(text: str | None, flag: str, default: tuple[float, float, float] = (0.0, 0.0, 0.0)) -> Array:
+    """A 3-vector given as text ``"x,y,z"`` (SI).
+
+    Parameters
+    ----------
+    text : str or None
+        The text (None: ``default``).
+    flag : str
+        The option's name, for the message.
+    default : tuple of float
+        The value without text.
+
+    Returns
+    -------
+    numpy.ndarray, shape (3,)
+        The vector.
+
+    Raises
+    ------
+    InvalidInputError
+        If it is not 3 finite numbers.
+    """
+    if text is None:
+        return np.array(default, dtype=float)
+    try:
+        v = np.array([float(x) for x in text.replace(" ", "").split(",") if x], dtype=float)
+    except ValueError:
+        v = np.zeros(0)
+    if v.size != 3 or not np.all(np.isfinite(v)):
+        raise InvalidInputError(f"{flag} {text!r}: give 3 finite numbers 'x,y,z' in metres")
+    return v
