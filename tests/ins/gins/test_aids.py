@@ -148,3 +148,5 @@ def test_kernel_layouts_are_contiguous_and_follow_their_tuples():
             off = lay[N_LAY + kind]
             np.testing.assert_array_equal(prm[off:off + model.N_PARAMS], model.params(cfg))
     assert set(aids.TIMED) | {a for g in aids.SAMPLED for a in g} == set(aids.AID_NAMES)
+    assert aids.N_AIDS + len(aids.SAMPLED) <= layout.MAX_SOURCES  # a rejection counter per update source
+    assert max(len(g) for g in aids.SAMPLED) <= layout.MAX_GROUP

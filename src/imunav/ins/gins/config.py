@@ -73,6 +73,10 @@ class GinsConfig:
         Use the fixes' velocity when they have one.
     gate_alpha : float
         False-alarm probability of the χ² gates, in [0, 1) (0 disables the gates).
+    gate_max_rejections : int
+        After this many gate rejections in a row of one aid (or joint group of aids), its next update is applied
+        anyway, so that a filter that has drifted off comes back on a continuous aid (odometer, NHC, ZUPT); 0:
+        never (>= 0).
     cov_interval_s : float
         Covariance propagation step, s (> 0; the nominal state is integrated every sample).
     odo_lever_arm : array_like, shape (3,)
@@ -153,6 +157,7 @@ class GinsConfig:
     lever_arm: Any = (0.0, 0.0, 0.0)
     use_gnss_velocity: bool = True
     gate_alpha: float = 1e-6
+    gate_max_rejections: int = 0
     cov_interval_s: float = 0.2
     odo_lever_arm: Any = (0.0, 0.0, 0.0)
     odo_noise: float = 0.05
@@ -211,6 +216,10 @@ class GinsConfig:
             raise InvalidInputError(f"GinsConfig.nhc_noise must be > 0 m/s or None; got {self.nhc_noise!r}")
         if not (self.corr_time > 0):
             raise InvalidInputError(f"GinsConfig.corr_time must be > 0 s (inf: constant); got {self.corr_time!r}")
+        if isinstance(self.gate_max_rejections, bool) or not isinstance(self.gate_max_rejections, (int, np.integer)) \
+                or self.gate_max_rejections < 0:
+            raise InvalidInputError(f"GinsConfig.gate_max_rejections must be an integer >= 0; got "
+                                    f"{self.gate_max_rejections!r}")
         if not (0 <= self.gate_alpha < 1):
             raise InvalidInputError(f"GinsConfig.gate_alpha must be in [0, 1); got {self.gate_alpha!r}")
         if self.scale_corr_time is not None and not (self.scale_corr_time > 0):

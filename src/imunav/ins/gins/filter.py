@@ -147,6 +147,7 @@ def kernel_setup(c: GinsConfig, fs: float, odometer: bool) -> tuple[Array, NDArr
         sd.append(np.asarray(sd0[name], dtype=float))
     lay[LAY.nx] = nx
     lay[LAY.cov_step] = max(1, int(round(c.cov_interval_s * fs)))
+    lay[LAY.max_rejections] = c.gate_max_rejections
     prm = np.zeros(N_PRM)
     prm[PRM.omega_e] = OMEGA_E
     prm[PRM.arw:PRM.arw + 3] = c.arw

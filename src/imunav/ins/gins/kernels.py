@@ -44,7 +44,7 @@ from imunav.filters._core import (
     strapdown_step_ned,
 )
 from imunav.filters._core_gins import inject_position_lla, propagate_cov_series, write_mat3, write_skew
-from imunav.ins.gins.aids import ROWS, WIDTH, evaluate
+from imunav.ins.gins.aids import N_AIDS, ROWS, WIDTH, evaluate
 from imunav.ins.gins.layout import CARRY, CARRY_N, CTX, LAY, MAX_GROUP, MAX_WIDTH, N_CTX, N_LAY, NOM, PRM
 
 #: IMU increments: times (N,), Δθ (N, 3) rad, Δv (N, 3) m/s; row k covers [t[k-1], t[k]].
@@ -156,12 +156,13 @@ def _inject(dx, xs, lay, acc_dx):
 
 
 @njit(cache=True)
-def _update(kinds, n_models, zs, rs, xs, ctx, P, prm, lay, acc_dx, blk):
+def _update(kinds, n_models, zs, rs, xs, ctx, P, prm, lay, acc_dx, blk, force):
     """One (joint) update of ``n_models`` aid models: stack their rows, gate the whole, Joseph update, inject.
 
     ``kinds[i]``, ``zs[i]``, ``rs[i]``: kind, measurement and covariance of model i.  ``blk[i]`` receives the NIS of
     model i's rows alone (the marginal of the joint innovation, χ²(rows) for a consistent filter; record only;
-    NaN past ``n_models``).  Returns (rows, accepted, NIS).
+    NaN past ``n_models``).  ``force``: apply the update whatever the gate says (after too many rejections in a
+    row).  Returns (rows, accepted by the gate, NIS).
     """
     nx = P.shape[0]
     m = 0
@@ -184,11 +185,26 @@ def _update(kinds, n_models, zs, rs, xs, ctx, P, prm, lay, acc_dx, blk):
         blk[i] = nis(nu[row:row + w], S0[row:row + w, row:row + w])
         row += w
     ok, d = chi2_gate(nu, S0, prm[PRM.gate + m - 1])
-    if ok:
+    if ok or force:
         dx = np.zeros(nx)
         joseph_update(P, dx, H, R, nu, np.empty(m), np.empty((m, m)))
         _inject(dx, xs, lay, acc_dx)
     return m, ok, d
+
+
+@njit(cache=True)
+def _forced(carry_n, lay, src):
+    """After ``lay[LAY.max_rejections]`` (> 0) gate rejections in a row of one source (a timed aid kind, or
+    ``N_AIDS + group``), its next update is applied whatever the gate says: a filter that has drifted off would
+    otherwise reject every later measurement of a continuous aid (odometer, NHC, ZUPT) and never come back."""
+    mx = lay[LAY.max_rejections]
+    return mx > 0 and carry_n[CARRY_N.rejections + src] >= mx
+
+
+@njit(cache=True)
+def _count(carry_n, src, ok):
+    """Count the gate rejections in a row of a source (reset by an acceptance)."""
+    carry_n[CARRY_N.rejections + src] = 0 if ok else carry_n[CARRY_N.rejections + src] + 1
 
 
 @njit(cache=True)
@@ -365,7 +381,9 @@ def gins_run(imu, timed, sampled, xs, P, carry, carry_n, prm, lay, out, first, f
                 zs[0, i] = timed.z[ei, i]
                 for j in range(3):
                     rs[0, i, j] = timed.r[ei, i, j]
-            mm, ok, d = _update(kinds, 1, zs, rs, xs, ctx, P, prm, lay, acc_dx, blk)
+            src = kinds[0]
+            mm, ok, d = _update(kinds, 1, zs, rs, xs, ctx, P, prm, lay, acc_dx, blk, _forced(carry_n, lay, src))
+            _count(carry_n, src, ok)
             L = _log(out, L, te, k, ei, mm, ok, d, blk)
             if rec:
                 _rec_post(out, r, t_cur, P, xs, acc_dx)
@@ -407,7 +425,10 @@ def gins_run(imu, timed, sampled, xs, P, carry, carry_n, prm, lay, out, first, f
                         nm += 1
                     s += 1
                 if nm > 0:
-                    mm, ok, d = _update(kinds, nm, zs, rs, xs, ctx, P, prm, lay, acc_dx, blk)
+                    src = N_AIDS + g
+                    mm, ok, d = _update(kinds, nm, zs, rs, xs, ctx, P, prm, lay, acc_dx, blk,
+                                        _forced(carry_n, lay, src))
+                    _count(carry_n, src, ok)
                     # each model's own NIS at its slot position in the group
                     blk_slot[:] = np.nan
                     for i in range(nm):

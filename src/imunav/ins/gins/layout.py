@@ -37,8 +37,10 @@ STATE_BLOCKS = (
 REQUIRED_BLOCKS = ("pos", "vel", "att", "gyro_bias", "accel_bias")
 
 #: ``lay`` (int64): first index of each state block (−1: not estimated), the error-state size, samples per
-#: covariance step; the aid models' parameter offsets follow (``lay[N_LAY + kind]``).
-LAY, N_LAY = named_layout("GinsLayout", tuple((name, 1) for name, _ in STATE_BLOCKS) + (("nx", 1), ("cov_step", 1)))
+#: covariance step, the gate rejections in a row after which an update is forced (0: never); the aid models'
+#: parameter offsets follow (``lay[N_LAY + kind]``).
+LAY, N_LAY = named_layout("GinsLayout", tuple((name, 1) for name, _ in STATE_BLOCKS) + (("nx", 1), ("cov_step", 1),
+                                                                                      ("max_rejections", 1)))
 
 #: ``xs`` (float): nominal navigation state and sensor errors.
 #: ``q_vb``: the IMU's attitude in the vehicle frame (IMU FRD -> vehicle FRD, scalar first); ``odo_lever``: the wheel
@@ -70,7 +72,9 @@ CTX, N_CTX = named_layout("GinsContext", (("w_mean", 3), ("w_sample", 3), ("w_ra
 #: last covariance epoch and its time.  ``carry_n`` (int): samples since the last propagation.
 CARRY, N_CARRY = named_layout("GinsCarry", (("t_cov", 1), ("sum_w", 3), ("sum_f", 3), ("sum_raw", 3),
                                             ("t_raw", 1)))
-CARRY_N, N_CARRY_N = named_layout("GinsCarryN", (("n_cov", 1),))
+#: ``carry_n`` also counts each update source's gate rejections in a row (timed kind, or N_AIDS + sampled group).
+MAX_SOURCES = 32
+CARRY_N, N_CARRY_N = named_layout("GinsCarryN", (("n_cov", 1), ("rejections", MAX_SOURCES)))
 
 #: Largest number of models in one joint update (the update log keeps the NIS of each model's rows alone).
 MAX_GROUP = 3

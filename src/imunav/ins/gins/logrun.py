@@ -14,7 +14,8 @@ trajectory with its uncertainty out, the IMU mounting, the odometer scale and th
    fitting the odometry dead reckoning (gyro heading, odometer speed) to the first GNSS fixes (a 2-D similarity
    with outlier rejection), or from the magnetometer / GNSS course without an odometer; without GNSS the local
    frame of the dead reckoning (heading 0 at the start, position (0, 0)).
-4. **Filter.**  :class:`~imunav.ins.gins.GinsFilter` with the IMU preset's noise model, the odometer's scale
+4. **Filter.**  :class:`~imunav.ins.gins.GinsFilter` with the IMU preset's noise model (its white-noise densities
+   raised to what the log's rests show, vibration included), the odometer's scale
    factor as a state, the NHC for a wheeled vehicle, the GNSS latency as a state, the χ² gates (jumps of tens of
    metres are rejected and counted), and optionally the RTS smoother.
 """
@@ -35,6 +36,7 @@ from imunav.ins.gins.filter import GinsFilter, kernel_setup
 from imunav.ins.gins.layout import LAY
 from imunav.ins.gins.mounting import MountingEstimate, _levelling, estimate_mounting
 from imunav.ins.gins.result import GinsResult
+from imunav.io.aiding import OdometerData
 from imunav.io.navlog import NavSources
 from imunav.results import Result
 from imunav.rotation import dcm_from_quat, euler_from_dcm, quat_from_dcm, quat_from_euler
@@ -49,6 +51,10 @@ Array = NDArray[np.float64]
 GNSS_DELAY_STD = 0.2
 ODO_SCALE_STD = 0.1
 LEVEL_STD = math.radians(1.0)
+#: Gate rejections in a row after which an aid's update is applied anyway (a log's filter must not drift away).
+MAX_REJECTIONS = 5
+#: Smallest σ of an odometer sample, m/s (a driver's twist covariance is a guess; wheels slip and lag).
+ODO_STD_FLOOR = 0.05
 
 
 @dataclass(frozen=True)
@@ -185,6 +191,26 @@ def _static(src: NavSources) -> NDArray[np.bool_]:
     return quiet & (spd < 0.02)
 
 
+def _noise_at_rest(src: NavSources, static: NDArray[np.bool_]) -> tuple[Array, Array, str]:
+    """White-noise densities of the gyro (rad/√s) and accelerometer (m/s/√s) measured at rest: the per-sample σ of
+    each rest interval of at least 1 s about its own mean, pooled, times ``√Δt`` (a real vehicle's vibration at
+    rest is part of what the filter must expect).  Zeros when the log has no such rest."""
+    imu = src.imu
+    dt = float(np.median(np.diff(imu.t)))
+    edges = np.flatnonzero(np.diff(np.r_[0, static.astype(np.int8), 0]))
+    gv, av, n = np.zeros(3), np.zeros(3), 0
+    for a, b in zip(edges[0::2], edges[1::2]):
+        if (b - a) * dt >= 1.0:
+            gv += imu.gyro[a:b].var(axis=0, ddof=1) * (b - a - 1)
+            av += imu.accel[a:b].var(axis=0, ddof=1) * (b - a - 1)
+            n += b - a - 1
+    if n == 0:
+        return np.zeros(3), np.zeros(3), "no rest of 1 s: the preset's noise densities"
+    arw, vrw = np.sqrt(gv / n * dt), np.sqrt(av / n * dt)
+    return arw, vrw, (f"measured at rest over {n * dt:.1f} s: gyro {np.degrees(arw).max() * 60:.3f} deg/sqrt(h), "
+                      f"accelerometer {vrw.max() * 60:.4f} m/s/sqrt(h) (the larger of these and the preset's is used)")
+
+
 def _initial_tilt(src: NavSources, static: NDArray[np.bool_]) -> tuple[Array, float, int]:
     """The down direction in IMU axes at the start (the first rest, else the first second) and its σ (rad)."""
     imu = src.imu
@@ -199,6 +225,20 @@ def _initial_tilt(src: NavSources, static: NDArray[np.bool_]) -> tuple[Array, fl
         f = imu.accel[run].mean(axis=0)
         sd = math.radians(5.0)
     return -f / np.linalg.norm(f), sd, int(run[-1])
+
+
+def _mag_heading(src: NavSources, d_b: Array, C_vb: Array) -> float:
+    """The vehicle's magnetic heading at the start from the mean of the first second of the magnetometer,
+    levelled with the IMU's down direction ``d_b`` (rad)."""
+    m = src.mag
+    assert m is not None
+    k = max(2, int(np.searchsorted(m.t, m.t[0] + 1.0)))
+    mb = m.field_b[:k].mean(axis=0)
+    L = _levelling(d_b)  # IMU -> a level frame (heading of the IMU's projection)
+    mh = L @ mb
+    psi_imu = math.atan2(-mh[1], mh[0])
+    # the vehicle's heading: the IMU's, less the mounting's yaw
+    return psi_imu - math.atan2(C_vb[1, 0], C_vb[0, 0])
 
 
 def _dead_reckoning(src: NavSources, C_vb: Array, bias: Array) -> tuple[Array, Array]:
@@ -309,12 +349,16 @@ def run_log(src: NavSources, options: LogRunOptions | None = None) -> LogRun:
         pos_sd = 2.0
     elif src.gnss is not None:
         psi0, psi_sd, pos0, pos_sd = 0.0, math.pi / 2, np.zeros(3), 5.0
+        how = "unknown (0, sigma 90 deg)"
         v = src.gnss.vel_ned
-        if v is not None:
+        if src.mag is not None:
+            psi0, psi_sd, how = _mag_heading(src, d_b, C_vb), math.radians(15.0), \
+                "magnetometer (tilt-compensated, no declination applied)"
+        elif v is not None:
             k = int(np.argmax(np.hypot(v[:, 0], v[:, 1]) > 2.0))
             if np.hypot(*v[k, :2]) > 2.0:
-                psi0, psi_sd = math.atan2(v[k, 1], v[k, 0]), math.radians(10.0)
-        initial.update(heading="GNSS course" if psi_sd < 1 else "unknown (0, sigma 90 deg)")
+                psi0, psi_sd, how = math.atan2(v[k, 1], v[k, 0]), math.radians(10.0), "GNSS course"
+        initial.update(heading=how)
     else:
         psi0, psi_sd, pos0, pos_sd = 0.0, math.radians(0.01), np.zeros(3), 0.01
         initial.update(heading="dead-reckoning frame: heading 0 and position (0, 0) at the start")
@@ -337,17 +381,27 @@ def run_log(src: NavSources, options: LogRunOptions | None = None) -> LogRun:
         if lever_v is None:
             lever_v = (-np.asarray(src.imu_lever_base, dtype=float) if src.imu_lever_base is not None
                        else np.zeros(3))
-        cfg_kw.update(odo_lever_arm=C_vb.T @ np.asarray(lever_v, dtype=float), odo_scale_std=ODO_SCALE_STD,
-                      odo_scale_corr_time=np.inf)
+        # without GNSS nothing measures the odometer's scale: it is taken as 1 (a state of negligible σ)
+        cfg_kw.update(odo_lever_arm=C_vb.T @ np.asarray(lever_v, dtype=float),
+                      odo_scale_std=ODO_SCALE_STD if src.gnss is not None else 1e-6, odo_scale_corr_time=np.inf,
+                      odo_noise=ODO_STD_FLOOR)
         if o.estimate_odo_lever_arm:
             cfg_kw["odo_lever_arm_std"] = 0.3
     if (o.nhc if o.nhc is not None else wheeled):
         cfg_kw["nhc_noise"] = o.nhc_std
     if src.gnss is not None:
         cfg_kw["gnss_delay_std"] = GNSS_DELAY_STD
+    cfg_kw["gate_max_rejections"] = MAX_REJECTIONS
+    arw, vrw, noise_note = _noise_at_rest(src, static)
+    base = GinsConfig.from_preset(o.preset)
+    cfg_kw.update(arw=np.maximum(base.arw, arw), vrw=np.maximum(base.vrw, vrw))
+    initial["noise"] = noise_note
     cfg_kw.update(o.overrides)
     cfg = GinsConfig.from_preset(o.preset, **cfg_kw)
-    res = GinsFilter(cfg).run(imu, src.gnss, lla0=lla0, vel0=np.zeros(3), q0=q0, odometer=src.odometer,
+    odo = src.odometer
+    if odo is not None and odo.speed_std is not None:
+        odo = OdometerData(odo.t, odo.speed, odo.meta, np.maximum(odo.speed_std, ODO_STD_FLOOR))
+    res = GinsFilter(cfg).run(imu, src.gnss, lla0=lla0, vel0=np.zeros(3), q0=q0, odometer=odo,
                               static=static, baro=None, smoother=o.smoother)
     return LogRun(res, cfg, static, coarse, source, initial, o.preset)
 
