@@ -237,12 +237,12 @@ def test_debug_shows_the_traceback(files):
 
 
 def test_unexpected_exception_exits_1_with_how_to_report(monkeypatch, files):
-    import imunav.cli.info  # the command module holds its own binding of read_imu (imported at module level)
+    import imunav.io  # the command module looks read_imu up in imunav.io when it runs (imunav.cli._lazy.lazy)
 
     def boom(*a, **k):
         raise ZeroDivisionError("boom")
 
-    monkeypatch.setattr(imunav.cli.info, "read_imu", boom)
+    monkeypatch.setattr(imunav.io, "read_imu", boom)
     r = runner.invoke(app, ["info", str(files / "st.csv")])
     assert r.exit_code == 1
     lines = r.stderr.strip().splitlines()

@@ -6,6 +6,11 @@ command by name and first help sentence (:data:`imunav.cli.main.COMMANDS`) and i
 ``imunav.cli.<name>`` (and calls its ``register(app)``) the first time the command is looked up:
 to run it, to show its ``--help``, or when its object is asked for (``group.commands[name]``).
 ``imunav --help`` lists the commands from the table alone.
+
+A command module, in turn, names the library modules it drives with :func:`lazy` instead of importing
+them: ``imunav CMD --help`` builds the help from the command's signature, so it imports typer and the
+command module but none of numba, scipy, pandas or the command's library, which load when the command
+runs (tests/test_cli_help.py checks ``sys.modules`` after each ``--help``).
 """
 
 from __future__ import annotations
@@ -20,7 +25,38 @@ from typer.main import get_group
 
 from imunav.cli._errors import ImunavGroup, click
 
-__all__ = ["LazyGroup", "LazyCommands", "plain_help"]
+__all__ = ["LazyGroup", "LazyCommands", "LazyModule", "lazy", "plain_help"]
+
+
+class LazyModule:
+    """Stand-in for a module that imports it on the first attribute access.
+
+    ``lazy("imunav.noise").fit_noise`` is ``imunav.noise.fit_noise``; building the stand-in imports
+    nothing.
+    """
+
+    __slots__ = ("_name",)
+
+    def __init__(self, name: str) -> None:
+        object.__setattr__(self, "_name", name)
+
+    def __getattr__(self, attr: str) -> Any:
+        return getattr(importlib.import_module(self._name), attr)
+
+    def __setattr__(self, attr: str, value: Any) -> None:
+        raise AttributeError(f"{self._name} is imported lazily; it cannot be assigned to")
+
+    def __repr__(self) -> str:
+        return f"<lazy module {self._name!r}>"
+
+
+def lazy(name: str) -> Any:
+    """The module ``name``, imported when the command first uses one of its attributes.
+
+    This is the command modules' way to name the library they drive (see the module docstring); the
+    return is typed ``Any`` since a type checker cannot follow the stand-in.
+    """
+    return LazyModule(name)
 
 
 def plain_help(t: typer.Typer) -> None:

@@ -12,23 +12,18 @@ from rich.console import Console
 from rich.progress import Progress
 from rich.table import Table
 
-from imunav.airdata import plot as P
-from imunav.airdata.filter import LongHorizonConfig, LongHorizonFilter, ThesisFilter, thesis_row
-from imunav.airdata.flight import FlightConfig, simulate_flight
-from imunav.airdata.scenario import (
-    ThesisScenario,
-    delay_summary,
-    load_config,
-    simulate_detector_statistics,
-    simulate_thesis,
-    thesis_report,
-)
+from imunav._atomic import atomic_path, check_outputs, write_json
 from imunav.cli._errors import check_figure_path, check_suffix, fail
+from imunav.cli._lazy import lazy
 from imunav.errors import FileFormatError, InvalidInputError
-from imunav.filters.faults import DETECTORS, alarms, calibrated_thresholds, false_alarm_rates, thesis_thresholds
-from imunav.io._atomic import atomic_path, check_outputs, write_json
-from imunav.io._common import wrap_read_errors
-from imunav.rotation import dcm_from_euler
+
+P = lazy("imunav.airdata.plot")
+_common = lazy("imunav.io._common")
+airdata_filter = lazy("imunav.airdata.filter")
+filters_faults = lazy("imunav.filters.faults")
+flight = lazy("imunav.airdata.flight")
+rotation = lazy("imunav.rotation")
+scenario = lazy("imunav.airdata.scenario")
 
 _HELP = """Air data + Doppler radar integration: wind-estimating Kalman filter, robust filtering, fault detection.
 
@@ -107,21 +102,21 @@ Example: imunav airdata simulate turns --duration 120 --wind 8,-12,0 --turbulenc
         try:
             loaded = None
             if config is not None:
-                loaded = load_config(config)
-                profile = "thesis" if isinstance(loaded, ThesisScenario) else loaded.profile
+                loaded = scenario.load_config(config)
+                profile = "thesis" if isinstance(loaded, scenario.ThesisScenario) else loaded.profile
             if profile == "thesis":
-                sc = loaded if loaded is not None else ThesisScenario(kind=kind)
+                sc = loaded if loaded is not None else scenario.ThesisScenario(kind=kind)
                 kind = sc.kind
-                d = simulate_thesis(sc, rng=seed)
+                d = scenario.simulate_thesis(sc, rng=seed)
                 arrays = {k: getattr(d, k) for k in ("t", "x_true", "wind_true", "v_true", "v_ads", "v_doppler", "z",
                                                      "ads_noise", "anomaly")}
                 meta = {"type": "thesis", "scenario": d.scenario.to_dict(), "seed": seed}
                 summary = {"file": str(out), "type": "thesis", "kind": kind, "steps": int(d.t.size), "seed": seed}
             else:
-                cfg = loaded if loaded is not None else FlightConfig(
+                cfg = loaded if loaded is not None else flight.FlightConfig(
                     profile=profile, duration=duration, tas=tas, altitude=altitude, wind_ned=_vec3(wind, "--wind"),
                     turbulence=turbulence, rate_ads=rate_ads, rate_doppler=rate_doppler)
-                f = simulate_flight(cfg, rng=seed)
+                f = flight.simulate_flight(cfg, rng=seed)
                 arrays = {k: v for k, v in f.__dict__.items() if isinstance(v, np.ndarray)}
                 meta = {"type": "flight", "config": cfg.to_dict(), "seed": seed}
                 summary = {"file": str(out), "type": "flight", "profile": cfg.profile, "duration_s": cfg.duration,
@@ -167,15 +162,15 @@ Example: imunav airdata run flight.npz --robust nis --json run.json
             if not path.exists():
                 raise FileFormatError(f"{path}: no such file; create one with `imunav airdata simulate`")
 
-            with wrap_read_errors(str(path), "an `imunav airdata simulate` .npz file"), open(path, "rb") as fh, \
+            with _common.wrap_read_errors(str(path), "an `imunav airdata simulate` .npz file"), open(path, "rb") as fh, \
                     np.load(fh, allow_pickle=False) as z:
                 if "meta" not in z:
                     raise FileFormatError(f"{path}: not an `imunav airdata simulate` file (no 'meta' entry)")
                 meta = json.loads(str(z["meta"]))
                 data = {k: z[k] for k in z.files if k != "meta"}
             if meta["type"] == "thesis":
-                r = ThesisFilter(robust=rb, gate_m=gate_m, alpha=alpha).run(data["z"], v_ads=data["v_ads"])
-                k0 = thesis_row(100)
+                r = airdata_filter.ThesisFilter(robust=rb, gate_m=gate_m, alpha=alpha).run(data["z"], v_ads=data["v_ads"])
+                k0 = airdata_filter.thesis_row(100)
                 e = r.wind[k0:] - data["wind_true"][k0:]
                 ed = data["z"][k0:] - data["wind_true"][k0:]
                 summary = {"type": "thesis", "robust": robust, "wind_rms_per_axis": np.sqrt(np.mean(e**2, 0)).tolist(),
@@ -185,9 +180,9 @@ Example: imunav airdata run flight.npz --robust nis --json run.json
                            "P44_final": float(r.cov_diag[-1, 3])}
                 arrays = {"wind": r.wind, "P_diag": r.cov_diag, "normalized": r.normalized, "weights": r.weights}
             elif meta["type"] == "flight":
-                r = LongHorizonFilter(LongHorizonConfig(robust=rb, alpha=alpha, gate_m=gate_m)).run(
+                r = airdata_filter.LongHorizonFilter(airdata_filter.LongHorizonConfig(robust=rb, alpha=alpha, gate_m=gate_m)).run(
                         data["t_ads"], data["v_ads_body"], data["t_doppler"], data["v_doppler_body"],
-                        dcm_from_euler(data["euler_doppler"]), dcm_from_euler(data["euler_ads"]))
+                        rotation.dcm_from_euler(data["euler_doppler"]), rotation.dcm_from_euler(data["euler_ads"]))
                 wt = np.stack([np.interp(r.t, data["t"], data["wind_ned"][:, i]) for i in range(3)], 1)
                 pt = np.stack([np.interp(r.t, data["t"], data["position_ned"][:, i]) for i in range(3)], 1)
                 skip = min(r.t.size - 1, 100)
@@ -245,11 +240,11 @@ Example: imunav airdata faults --kind variance --magnitude 3.5 --runs 100 --seed
                 if key is None:
                     raise InvalidInputError(f"--magnitude does not apply to kind {kind!r}")
                 kw[key] = magnitude
-            sc = ThesisScenario(**kw)
+            sc = scenario.ThesisScenario(**kw)
             if runs < 1:
                 raise InvalidInputError(f"--runs must be >= 1, got {runs}")
-            thr = calibrated_thresholds(window, 3, pfa)
-            th = thesis_thresholds(window, 3)
+            thr = filters_faults.calibrated_thresholds(window, 3, pfa)
+            th = filters_faults.thesis_thresholds(window, 3)
             ss = np.random.SeedSequence(seed).spawn(2)
             chunk = max(1, min(50, runs))
             with Progress(console=Console(stderr=True), transient=True) as prog:
@@ -258,22 +253,22 @@ Example: imunav airdata faults --kind variance --magnitude 3.5 --runs 100 --seed
                 def tick(n: int) -> None:
                     prog.update(task, advance=n)
 
-                stats_f = simulate_detector_statistics(sc, runs, np.random.default_rng(ss[0]), window,
+                stats_f = scenario.simulate_detector_statistics(sc, runs, np.random.default_rng(ss[0]), window,
                                                        chunk=chunk, on_chunk=tick)
-                stats_n = simulate_detector_statistics(ThesisScenario(kind="nominal"), runs,
+                stats_n = scenario.simulate_detector_statistics(scenario.ThesisScenario(kind="nominal"), runs,
                                                        np.random.default_rng(ss[1]), window, chunk=chunk, on_chunk=tick)
         except InvalidInputError as exc:
             _fail(exc)
             return
         o = sc.onset_row
         rows = []
-        for d in DETECTORS:
+        for d in filters_faults.DETECTORS:
             sn = stats_n[d][:, window - 1:]
             for label, t in (("calibrated", thr[d]), ("thesis", th.get(d))):
                 if t is None:
                     continue
-                summary = delay_summary(alarms(d, stats_f[d], t), o, horizon)
-                fa_step, fa_run = false_alarm_rates(alarms(d, sn, t))
+                summary = scenario.delay_summary(filters_faults.alarms(d, stats_f[d], t), o, horizon)
+                fa_step, fa_run = filters_faults.false_alarm_rates(filters_faults.alarms(d, sn, t))
                 rows.append({"detector": d, "threshold_mode": label, "threshold": float(t),
                              **{k: summary[k] for k in ("median_delay", "p90_delay", f"detected_within_{horizon}", "missed")},
                              "false_alarm_per_step": fa_step, "false_alarm_per_run": fa_run})
@@ -316,7 +311,7 @@ Example: imunav airdata thesis --runs 50 --json thesis.json
             if "gate2" not in methods or "nis" not in methods:
                 raise InvalidInputError("--robust-methods must include gate2 and nis (the thesis gate and the χ² gate)")
             with Console(stderr=True).status(f"thesis scenarios, {runs} Monte Carlo runs"):
-                rep = thesis_report(runs, seed, p_false_alarm=pfa, robust_methods=methods)
+                rep = scenario.thesis_report(runs, seed, p_false_alarm=pfa, robust_methods=methods)
         except InvalidInputError as exc:
             _fail(exc)
             return

@@ -12,20 +12,22 @@ from rich.console import Console
 from rich.progress import Progress
 from rich.table import Table
 
-from imunav.attitude.alignment import broad_reference_start
-from imunav.attitude.benchmark import FILTERS, cv_grid_search, evaluate, grid_search, make_filter, reference_start
-from imunav.attitude.metrics import attitude_rmse
-from imunav.attitude.plot import plot_montecarlo_box, save
-from imunav.attitude.scenario import PAPER_TABLE2, PaperScenario, default_filters
+from imunav._atomic import check_outputs, write_json
 from imunav.cli._errors import check_figure_path
+from imunav.cli._lazy import lazy
 from imunav.cli._options import INSTANCE, LAYOUT, MAG_TOPIC, TOPIC, reader_options
 from imunav.errors import ConfigError
-from imunav.io import read_imu
-from imunav.io._atomic import check_outputs, write_json
-from imunav.io.broad import broad_trials, load_broad
-from imunav.io.datasets import shared_data_path
-from imunav.montecarlo import run_montecarlo
-from imunav.scenarios import attitude_paper, paper_report, paper_rmse, paper_table
+
+alignment = lazy("imunav.attitude.alignment")
+attitude_plot = lazy("imunav.attitude.plot")
+benchmark = lazy("imunav.attitude.benchmark")
+broad = lazy("imunav.io.broad")
+datasets = lazy("imunav.io.datasets")
+io = lazy("imunav.io")
+metrics = lazy("imunav.attitude.metrics")
+montecarlo = lazy("imunav.montecarlo")
+scenario = lazy("imunav.attitude.scenario")
+scenarios = lazy("imunav.scenarios")
 
 app = typer.Typer(help="Attitude filters (Madgwick, Mahony, MEKF, UKF, adaptive, smoother, paper KFs).\n\n"
                   "Example: imunav attitude run 05_undisturbed_slow_rotation_with_breaks_B.mat --filter madgwick_c",
@@ -61,7 +63,7 @@ def _resolve(path: Path, is_dir: bool) -> Path:
     if path.exists():
         return path
 
-    cand = shared_data_path("broad") if is_dir and path.name == "broad" else shared_data_path("broad", path.name)
+    cand = datasets.shared_data_path("broad") if is_dir and path.name == "broad" else datasets.shared_data_path("broad", path.name)
     if cand is not None and cand.exists():
         return cand
     raise ConfigError(f"{path} not found (nor in the shared BROAD folder); set IMUNAV_DATA or pass an existing path")
@@ -97,20 +99,20 @@ def run_cmd(
     con = Console()
 
     file = _resolve(file, False)
-    f = make_filter(filter, _parse_params(param))
+    f = benchmark.make_filter(filter, _parse_params(param))
     ref = None
     opts = reader_options(topic=topic, instance=instance, mag_topic=mag_topic, layout=layout)
     if file.suffix.lower() == ".mat" and not opts:
-        tr = load_broad(file)
+        tr = broad.load_broad(file)
         data, ref, mask = tr.imu, tr.q_ref_nb, tr.movement
     else:
-        data = read_imu(file, **opts)
+        data = io.read_imu(file, **opts)
     kw: dict[str, Any] = {"use_mag": False if no_mag else None}
 
-    if ref is not None and reference_start(filter) and not no_mag:
+    if ref is not None and benchmark.reference_start(filter) and not no_mag:
         # start like the BROAD reference runs (first accelerometer / magnetometer sample)
 
-        kw["q0"] = broad_reference_start(data.accel[0], data.mag[0])
+        kw["q0"] = alignment.broad_reference_start(data.accel[0], data.mag[0])
     res = f.run(data, **kw)
 
     e = np.degrees(res.euler()[-1])
@@ -118,7 +120,7 @@ def run_cmd(
               f"{e[0]:.2f} / {e[1]:.2f} / {e[2]:.2f} deg")
     summary: dict[str, Any] = {"filter": res.name, "params": res.params}
     if ref is not None:
-        r = attitude_rmse(res.q_nb, ref, mask)
+        r = metrics.attitude_rmse(res.q_nb, ref, mask)
         con.print(f"BROAD RMSE over movement: total {r.total_rmse_deg:.3f}, heading {r.heading_rmse_deg:.3f}, "
                   f"inclination {r.inclination_rmse_deg:.3f} deg")
         summary["rmse"] = r.to_dict()
@@ -145,11 +147,11 @@ def benchmark_cmd(
     check_outputs([], [json_out])  # before the benchmark
 
     con = Console()
-    files = broad_trials(_resolve(directory, True))
+    files = broad.broad_trials(_resolve(directory, True))
     names = filter or ["adaptive", "smoother"]
     for n in names:
-        if n not in FILTERS:
-            raise ConfigError(f"unknown filter {n!r}; choose from {', '.join(FILTERS)}")
+        if n not in benchmark.FILTERS:
+            raise ConfigError(f"unknown filter {n!r}; choose from {', '.join(benchmark.FILTERS)}")
     params = _parse_params(param)
     out: dict[str, Any] = {"trials": [f.stem for f in files], "filters": {}}
     if grid:
@@ -162,7 +164,7 @@ def benchmark_cmd(
         g = {**{k: [v] for k, v in params.items()}, **g}
         with Progress(console=con) as prog:
             task = prog.add_task(f"grid {names[0]}", total=None)
-            res = grid_search(names[0], g, files, workers=workers or None,
+            res = benchmark.grid_search(names[0], g, files, workers=workers or None,
                               progress=lambda i, n: prog.update(task, completed=i, total=n))
         t = Table(title=f"grid search {names[0]} (best first)")
         for c in ("params", "total", "heading", "inclination"):
@@ -174,7 +176,7 @@ def benchmark_cmd(
         con.print(t)
         out["grid"] = [r.to_dict() for r in res]
         if len(files) >= 2:
-            cv, _ = cv_grid_search(names[0], g, files, results=res)
+            cv, _ = benchmark.cv_grid_search(names[0], g, files, results=res)
             con.print(f"best set in sample {cv.in_sample_mean:.3f} deg; leave-one-trial-out (each trial scored with "
                       f"the set best on the others) {cv.oof_mean:.3f} deg: expect the latter on new recordings")
             out["cv"] = cv.to_dict()
@@ -184,7 +186,7 @@ def benchmark_cmd(
         with Progress(console=con) as prog:
             task = prog.add_task("filters", total=len(names))
             for n in names:
-                results.append(evaluate(n, params, files))
+                results.append(benchmark.evaluate(n, params, files))
                 prog.advance(task)
     t = Table(title="BROAD RMSE [deg] (total / heading / inclination)")
     t.add_column("trial")
@@ -234,28 +236,28 @@ def montecarlo_cmd(
 
     con = Console()
     names = tuple(f.strip() for f in filters.split(",") if f.strip())
-    scn = PaperScenario(gyro_noise_unit=gyro_noise_unit, duration=duration)  # type: ignore[arg-type]
-    every = default_filters(scn)
+    scn = scenario.PaperScenario(gyro_noise_unit=gyro_noise_unit, duration=duration)  # type: ignore[arg-type]
+    every = scenario.default_filters(scn)
     unknown = [f for f in names if f not in every]
     if unknown or not names:
         raise ConfigError(f"--filters {filters!r}: unknown filter(s) {unknown}; choose from {sorted(every)}")
-    res = run_montecarlo(attitude_paper, runs, seed=seed, batched=True, executor=executor,  # type: ignore[arg-type]
+    res = montecarlo.run_montecarlo(scenarios.attitude_paper, runs, seed=seed, batched=True, executor=executor,  # type: ignore[arg-type]
                          n_workers=workers, address=address, progress=True,
                          description="attitude Monte Carlo", filters=names, duration=duration,
                          gyro_noise_unit=gyro_noise_unit)
     t = Table(title=f"RMSE [deg] over {runs} runs (mean ± std); paper Table 2 in brackets")
     for c in ("filter", "pitch", "roll"):
         t.add_column(c)
-    for k, v in paper_table(res).items():
-        p = PAPER_TABLE2.get(k, (float("nan"),) * 2)
+    for k, v in scenarios.paper_table(res).items():
+        p = scenario.PAPER_TABLE2.get(k, (float("nan"),) * 2)
         t.add_row(k, f"{v['pitch_mean']:.4f} ± {v['pitch_std']:.4f} [{p[0]}]",
                   f"{v['roll_mean']:.4f} ± {v['roll_std']:.4f} [{p[1]}]")
     con.print(t)
     if json_out:
-        _write_json(paper_report(res, scn, {k: every[k] for k in names}), json_out)
+        _write_json(scenarios.paper_report(res, scn, {k: every[k] for k in names}), json_out)
         con.print(f"wrote {json_out}")
     if plot:
-        save(plot_montecarlo_box(paper_rmse(res)), plot)
+        attitude_plot.save(attitude_plot.plot_montecarlo_box(scenarios.paper_rmse(res)), plot)
         con.print(f"wrote {plot}")
 
 

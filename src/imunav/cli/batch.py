@@ -13,11 +13,13 @@ from rich.console import Console
 from rich.markup import escape
 from rich.table import Table
 
-from imunav.batch import calibrate_batch, noise_batch, simulate_batch
+from imunav._atomic import check_outputs, write_json
 from imunav.cli._errors import fail
+from imunav.cli._lazy import lazy
 from imunav.errors import InvalidInputError
-from imunav.io._atomic import check_outputs, write_json
-from imunav.report.catalog import display_unit
+
+batch = lazy("imunav.batch")
+catalog = lazy("imunav.report.catalog")
 
 app = typer.Typer(
     help="Process a folder of recordings (one per unit of a production batch) in parallel, "
@@ -72,7 +74,7 @@ def _print_summary(summary: Any, families: list[str], title: str) -> None:
     tab.add_column("unit")
     tab.add_column("verdict")
     for f in fams:
-        tab.add_column(escape(f"{f} x, y, z [{display_unit(f)}]"), justify="right")
+        tab.add_column(escape(f"{f} x, y, z [{catalog.display_unit(f)}]"), justify="right")
     if errs:
         tab.add_column("max |err|/σ", justify="right")
     for r in t.to_dict(orient="records"):
@@ -122,7 +124,7 @@ def simulate_cmd(
     """
 
     try:
-        files = simulate_batch(n_units, out, preset=preset, spread=spread, rng=seed, fs=fs, dwell_s=dwell,
+        files = batch.simulate_batch(n_units, out, preset=preset, spread=spread, rng=seed, fs=fs, dwell_s=dwell,
                                transition_s=transition, rate_table=rate_table, format=fmt, static_s=static,
                                executor=executor, n_workers=workers, progress=not quiet,
                                overwrite=overwrite)  # type: ignore[arg-type]
@@ -155,7 +157,7 @@ def calibrate_cmd(
     check_outputs([spec], [json_out])
 
     try:
-        s = calibrate_batch(folder, method=method, out_dir=out, spec=spec,
+        s = batch.calibrate_batch(folder, method=method, out_dir=out, spec=spec,
                             read_options=_read_options(fs, accel_unit, gyro_unit, columns),
                             latitude=None if latitude_deg is None else math.radians(latitude_deg), gravity=gravity,
                             executor=executor, n_workers=workers, address=address, progress=not quiet,
@@ -192,7 +194,7 @@ def noise_cmd(
     check_outputs([spec], [json_out])
 
     try:
-        s = noise_batch(folder, out_dir=out, spec=spec, read_options=_read_options(fs, accel_unit, gyro_unit, columns),
+        s = batch.noise_batch(folder, out_dir=out, spec=spec, read_options=_read_options(fs, accel_unit, gyro_unit, columns),
                         terms=tuple(t.strip() for t in terms.split(",") if t.strip()), executor=executor, n_workers=workers, address=address, progress=not quiet, force=force, overwrite=overwrite)  # type: ignore[arg-type]
     except InvalidInputError as exc:
         _fail(exc)

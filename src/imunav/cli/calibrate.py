@@ -12,25 +12,26 @@ from pathlib import Path
 from typing import Any, Optional
 
 import numpy as np
-import pandas as pd
 import typer
 from rich.console import Console
 from rich.table import Table
 
-from imunav import calib
-from imunav.calib import ImuCalibration, combine, ferraris_from_session
-from imunav.calib.magnetometer import MagCalibration, fit_ellipsoid, hard_iron_minmax, soft_iron_rotation_scale
-from imunav.calib.multipose import undetermined_misalignment_error
-from imunav.calib.plot import plot_magnetometer, plot_residuals, plot_temperature_fit, save_figure
-from imunav.calib.temperature import thermal_calibration
+from imunav._atomic import check_outputs, check_writable, read_json, write_json
+from imunav.cli._lazy import lazy
 from imunav.cli._options import INSTANCE, LAYOUT, TOPIC, reader_options
 from imunav.errors import FileFormatError, InvalidInputError
-from imunav.io import read_imu
-from imunav.io._atomic import check_outputs, check_writable, read_json, write_json
-from imunav.io._common import check_nonempty, wrap_read_errors
-from imunav.io.logs import log_kind, read_topic
-from imunav.io.px4params import px4_parameters
-from imunav.sim import ImuErrorModel, Segments
+
+_common = lazy("imunav.io._common")
+calib = lazy("imunav.calib")
+calib_multipose = lazy("imunav.calib.multipose")
+calib_temperature = lazy("imunav.calib.temperature")
+io = lazy("imunav.io")
+logs = lazy("imunav.io.logs")
+magnetometer = lazy("imunav.calib.magnetometer")
+pd = lazy("pandas")
+plot = lazy("imunav.calib.plot")
+px4params = lazy("imunav.io.px4params")
+sim = lazy("imunav.sim")
 
 app = typer.Typer(
     help="Calibrate an IMU or magnetometer from a recording; writes the calibration JSON.\n\n"
@@ -48,7 +49,7 @@ def _read(path: Path, fs: Optional[float], accel_unit: Optional[str], gyro_unit:
           accel_scale: Optional[float], gyro_scale: Optional[float], skiprows: Optional[int],
           columns: Optional[str], topic: Optional[str] = None, instance: Optional[int] = None,
           layout: Optional[str] = None) -> Any:
-    return read_imu(path, **reader_options(
+    return io.read_imu(path, **reader_options(
         units={k: v for k, v in (("accel", accel_unit), ("gyro", gyro_unit)) if v},
         scales={k: v for k, v in (("accel", accel_scale), ("gyro", gyro_scale)) if v},
         fs=fs or None, skiprows=skiprows, columns=_columns(columns) if columns else None,
@@ -70,7 +71,7 @@ def _segments(path: Path) -> Any:
         raise FileFormatError(f"{path}: a segment table JSON is an object with the columns of Segments")
     d = d.get("segment_table", d)
     try:
-        return Segments(**{k: np.asarray(d[k]) for k in Segments.__dataclass_fields__})
+        return sim.Segments(**{k: np.asarray(d[k]) for k in sim.Segments.__dataclass_fields__})
     except KeyError as e:
         raise FileFormatError(f"{path}: segment table lacks the column {e} (write it with Profile.to_dict())") from None
 
@@ -87,7 +88,7 @@ def _px4(px4_params: Optional[Path], **calibration: Any) -> Any:
     if px4_params is None:
         return None
 
-    return px4_parameters(**calibration)
+    return px4params.px4_parameters(**calibration)
 
 
 def _write_px4(params: Any, path: Optional[Path]) -> None:
@@ -113,7 +114,7 @@ def _finish(result: Any, out: Path, report: Optional[Path], *, save: Any = None,
     con = Console()
     if report is not None:
         write_json(report / "report.json", result.to_dict())
-        save_figure(plot_residuals(result), report / "residuals.png")
+        plot.save_figure(plot.plot_residuals(result), report / "residuals.png")
     tab = Table(title=f"{result.method}: residual RMS and design condition")
     tab.add_column("fit")
     tab.add_column("residual RMS (x, y, z)")
@@ -143,7 +144,7 @@ def _noise_model(path: Optional[Path]) -> Any:
     if path is None:
         return None
 
-    return ImuErrorModel.from_toml(path)
+    return sim.ImuErrorModel.from_toml(path)
 _REP = typer.Option(None, help="Folder for report.json and residual plots.")
 _PX4 = typer.Option(None, "--px4-params", help="Also write the calibration as PX4 parameters (QGroundControl "
                     ".params file: CAL_ACC0_*, CAL_GYRO0_*, CAL_MAG0_*); terms PX4 cannot express are dropped and "
@@ -219,11 +220,11 @@ def ratetable(
         st = calib.multiposition(_read(static, *rd), _segments(static_segments), latitude=lat, noise_model=nm)
         b = st.calibration
     else:
-        b = ImuCalibration.load(base) if base is not None else None
+        b = calib.ImuCalibration.load(base) if base is not None else None
     res = calib.ratetable(_read(recording, *rd), _segments(segments), base=b, latitude=lat, intercept=intercept,
                           noise_model=nm)
     if st is not None:
-        res = combine(st, res)
+        res = calib.combine(st, res)
     _finish(res, out, report, px4=px4_params)
 
 
@@ -255,7 +256,7 @@ def ferraris(
                  layout)
 
     secs = read_json(sections, "imucal section list JSON")
-    res = ferraris_from_session(data.accel, data.gyro, secs, data.fs, gravity=gravity,
+    res = calib.ferraris_from_session(data.accel, data.gyro, secs, data.fs, gravity=gravity,
                                 expected_angle_deg=expected_angle_deg)
     _finish(res, out, report, px4=px4_params)
     if imucal_out is not None:
@@ -291,7 +292,7 @@ def multipose(
     res = calib.multipose(data.accel, data.gyro, data.fs, init_s=init_s, wait_s=wait_s, gravity=gravity, strict=False,
                           accel_misalignment=accel_misalignment, raw_accel_unit="m/s^2", raw_gyro_unit="rad/s")
     if strict and res.info["weak_parameters"]:  # the library's refusal, naming this command's flags
-        raise undetermined_misalignment_error(
+        raise calib_multipose.undetermined_misalignment_error(
             res.info["n_poses"], res.info["weak_parameters"], res.info["max_misalignment_stderr"],
             no_accel_misalignment="--no-accel-misalignment", not_strict="--no-strict",
         )
@@ -325,9 +326,9 @@ def temperature(
         if "@" not in item:
             raise InvalidInputError(f"argument {item!r}: write each calibration as FILE@TEMP_C, e.g. cal.json@25")
         f, t = item.rsplit("@", 1)
-        cals.append(ImuCalibration.load(f))
+        cals.append(calib.ImuCalibration.load(f))
         temps.append(float(t))
-    res = thermal_calibration(
+    res = calib_temperature.thermal_calibration(
         temps, cals, params=[p.strip() for p in params.split(",")], orders=[int(o) for o in orders.split(",")],
         order=order, model=model,
     )
@@ -346,7 +347,7 @@ def temperature(
         write_json(report / "report.json", res.to_dict())
         for k, fits in res.fits.items():
             for i, f in enumerate(fits):
-                save_figure(plot_temperature_fit(f, f"{k} {'xyz'[i]}"), report / f"{k}_{'xyz'[i]}.png")
+                plot.save_figure(plot.plot_temperature_fit(f, f"{k} {'xyz'[i]}"), report / f"{k}_{'xyz'[i]}.png")
     typer.echo(f"calibration with temperature model written to {out}")
 
 
@@ -379,23 +380,23 @@ def mag(
 
     h = _read_mag(recording, topic, instance)
     if method == "ellipsoid":
-        cal = fit_ellipsoid(h, field_norm, min_coverage=min_coverage)
+        cal = magnetometer.fit_ellipsoid(h, field_norm, min_coverage=min_coverage)
     elif method == "rotation-scale":
-        cal = soft_iron_rotation_scale(h)
+        cal = magnetometer.soft_iron_rotation_scale(h)
     elif method == "minmax":
-        b = hard_iron_minmax(h)
+        b = magnetometer.hard_iron_minmax(h)
         n = np.linalg.norm(h - b, axis=1)
-        cal = MagCalibration(b, np.eye(3), float(np.mean(n)), "minmax", {}, {"norm_spread_after": float(np.std(n) / np.mean(n))})
+        cal = magnetometer.MagCalibration(b, np.eye(3), float(np.mean(n)), "minmax", {}, {"norm_spread_after": float(np.std(n) / np.mean(n))})
     else:
         raise InvalidInputError(f"--method must be ellipsoid, rotation-scale or minmax, not {method!r}")
     if mag_unit is None:
-        mag_unit = "uT" if log_kind(recording) is not None else "gauss"
+        mag_unit = "uT" if logs.log_kind(recording) is not None else "gauss"
     px4_values = _px4(px4_params, mag=cal, mag_unit=mag_unit)
     write_json(out, cal.to_dict())
     if report is not None:
         report.mkdir(parents=True, exist_ok=True)
         write_json(report / "report.json", cal.to_dict())
-        save_figure(plot_magnetometer(h, cal), report / "projections.png")
+        plot.save_figure(plot.plot_magnetometer(h, cal), report / "projections.png")
     Console().print({"b": cal.b.round(6).tolist(), "field_norm": round(cal.field_norm, 6), "quality": cal.quality})
     typer.echo(f"magnetometer calibration written to {out}")
     _write_px4(px4_values, px4_params)
@@ -403,19 +404,19 @@ def mag(
 
 def _read_mag(path: Path, topic: Optional[str] = None, instance: Optional[int] = None) -> np.ndarray:
     p = Path(path)
-    if p.exists() and log_kind(p) is not None:
+    if p.exists() and logs.log_kind(p) is not None:
         if topic is None:
             raise InvalidInputError(f"{p}: name the magnetometer topic with --topic (`imunav info {p}` lists them)")
-        d = read_topic(p, topic, instance=instance)
+        d = logs.read_topic(p, topic, instance=instance)
         if "mag" not in d.values:
             raise InvalidInputError(f"{p}: topic {topic!r} is a {d.kind} topic, not a magnetometer")
         return np.asarray(d.values["mag"], float)
     if topic is not None or instance is not None:
         raise InvalidInputError(f"{p}: --topic / --instance apply to ROS bags and PX4 ULogs only")
 
-    check_nonempty(p)
+    _common.check_nonempty(p)
     if p.suffix == ".npz":
-        with wrap_read_errors(str(p), "NPZ"), open(p, "rb") as fh, np.load(fh, allow_pickle=False) as z:
+        with _common.wrap_read_errors(str(p), "NPZ"), open(p, "rb") as fh, np.load(fh, allow_pickle=False) as z:
             for k in ("mag", "h", "m"):
                 if k in z:
                     return np.asarray(z[k], float)

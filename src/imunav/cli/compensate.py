@@ -8,10 +8,12 @@ from typing import Optional
 import numpy as np
 import typer
 
-from imunav.calib import ImuCalibration
+from imunav._atomic import check_outputs
+from imunav.cli._lazy import lazy
 from imunav.cli.calibrate import _read
-from imunav.io import write_imu
-from imunav.io._atomic import check_outputs
+
+calib = lazy("imunav.calib")
+io = lazy("imunav.io")
 
 
 def register(root: typer.Typer) -> None:
@@ -41,7 +43,7 @@ def compensate(
     check_outputs([recording, cal], [out])
 
     data = _read(recording, fs, accel_unit, gyro_unit, None, None, None, None)
-    c = ImuCalibration.load(cal)
+    c = calib.ImuCalibration.load(cal)
     t = None if temp_c is None else np.full(data.n, temp_c)
-    write_imu(c.apply(data, temp_c=t, force=force, source=str(cal)), out)
+    io.write_imu(c.apply(data, temp_c=t, force=force, source=str(cal)), out)
     typer.echo(f"compensated {data.n} samples -> {out}")

@@ -8,9 +8,11 @@ from typing import Optional
 
 import typer
 
+from imunav._atomic import check_outputs
+from imunav.cli._lazy import lazy
 from imunav.cli._options import INSTANCE, LAYOUT, MAG_TOPIC, TOPIC, reader_options
-from imunav.io import read_imu, write_imu
-from imunav.io._atomic import check_outputs
+
+io = lazy("imunav.io")
 
 _EXAMPLE = (
     "Examples:\n\n"
@@ -37,9 +39,9 @@ def convert(
     frame conversion, time report); OUT may not be SRC."""
 
     check_outputs([src], [out])
-    data = read_imu(src, **reader_options(topic=topic, instance=instance, mag_topic=mag_topic, layout=layout,
+    data = io.read_imu(src, **reader_options(topic=topic, instance=instance, mag_topic=mag_topic, layout=layout,
                                           nan_policy=nan_policy))
-    path = write_imu(data, out, format=format)
+    path = io.write_imu(data, out, format=format)
     typer.echo(f"{data.n} samples ({data.duration:.6g} s, {data.fs:.6g} Hz) written to {path}")
 
 

@@ -11,13 +11,15 @@ import typer
 from rich.console import Console
 from rich.table import Table
 
+from imunav._atomic import check_outputs, write_json
+from imunav.cli._lazy import lazy
 from imunav.cli._options import INSTANCE, LAYOUT, MAG_TOPIC, TOPIC, reader_options
 from imunav.errors import InvalidInputError
-from imunav.io import read_imu
-from imunav.io._atomic import check_outputs, write_json
-from imunav.io.logs import list_topics, log_kind
-from imunav.timeseries import describe
 from imunav.units import DEG, G0
+
+io = lazy("imunav.io")
+logs = lazy("imunav.io.logs")
+timeseries = lazy("imunav.timeseries")
 
 _EXAMPLE = (
     "Example:\n\n"
@@ -80,7 +82,7 @@ def info(
     if min_static_s is not None and not (math.isfinite(min_static_s) and min_static_s > 0):
         raise InvalidInputError(f"--min-static {min_static_s}: must be a finite number of seconds > 0")
 
-    if topic is None and format in (None, "rosbag", "ulog") and file.exists() and log_kind(file) is not None:
+    if topic is None and format in (None, "rosbag", "ulog") and file.exists() and logs.log_kind(file) is not None:
         _list_topics(console, file, json_out)
         return
     opts = reader_options(
@@ -89,8 +91,8 @@ def info(
         fs=fs, skiprows=skiprows, columns=_parse_columns(column) if column else None, nan_policy=nan_policy,
         topic=topic, instance=instance, mag_topic=mag_topic, layout=layout,
     )
-    data = read_imu(file, format=format, **opts)
-    s = describe(
+    data = io.read_imu(file, format=format, **opts)
+    s = timeseries.describe(
         data,
         window_s=window_s,
         min_duration_s=min_static_s,
@@ -163,7 +165,7 @@ def _list_topics(console: Any, file: Path, json_out: Path | None) -> None:
     """The topics of a bag / ULog as a table (and JSON), with the time the listing took."""
 
     t0 = time.perf_counter()
-    topics = list_topics(file)
+    topics = logs.list_topics(file)
     took = time.perf_counter() - t0
     ulog = all(ti.instance is not None for ti in topics)  # a ULog: the type is the topic name
     tab = Table(title=f"{file}: {len(topics)} topics (listed in {took:.2f} s)", title_justify="left")

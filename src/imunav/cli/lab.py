@@ -10,10 +10,12 @@ from rich.console import Console
 from rich.markup import escape
 from rich.table import Table
 
+from imunav._atomic import check_outputs, read_json, write_json
 from imunav.cli._errors import fail
+from imunav.cli._lazy import lazy
 from imunav.errors import InvalidInputError
-from imunav.io._atomic import check_outputs, read_json, write_json
-from imunav.lab import run_lab
+
+imunav_lab = lazy("imunav.lab")
 
 _HELP = """Run the lab and write a report folder (index.html, summary.md, summary.json, data/, figures/).
 
@@ -43,7 +45,7 @@ def register(app: typer.Typer) -> None:
 
         console = Console(stderr=True)
         try:
-            result = run_lab(
+            result = imunav_lab.run_lab(
                 out, config, seed, steps=None if steps is None else [s.strip() for s in steps.split(",") if s.strip()],
                 progress=not quiet, console=console, overwrite=overwrite,
             )

@@ -10,19 +10,21 @@ from rich.console import Console
 from rich.progress import Progress
 from rich.table import Table
 
+from imunav._atomic import atomic_path, check_outputs, write_json
 from imunav.cli._errors import check_figure_path
+from imunav.cli._lazy import lazy
 from imunav.cli._options import INSTANCE, LAYOUT, TOPIC, reader_options
 from imunav.errors import InvalidInputError
-from imunav.io import read_imu
-from imunav.io._atomic import atomic_path, check_outputs, write_json
-from imunav.io.kalibr import write_kalibr_yaml
-from imunav.io.openvins import write_openvins_yaml
-from imunav.io.vins import write_vins_yaml
-from imunav.noise import allan_deviation, compare_psd_allan, fit_noise, fit_psd, log_average, psd
-from imunav.noise.curvefit import compare_curve_fits
-from imunav.noise.plot import plot_allan, plot_psd
-from imunav.noise.static import require_static
 from imunav.units import to_display
+
+curvefit = lazy("imunav.noise.curvefit")
+imunav_noise = lazy("imunav.noise")
+io = lazy("imunav.io")
+kalibr = lazy("imunav.io.kalibr")
+noise_plot = lazy("imunav.noise.plot")
+openvins = lazy("imunav.io.openvins")
+static = lazy("imunav.noise.static")
+vins = lazy("imunav.io.vins")
 
 _EXAMPLE = (
     "Example:\n\n"
@@ -57,7 +59,7 @@ def _curve_fits(r: Any) -> dict[str, Any]:
     for c, name in enumerate(r.channels):
         a = r.channel(c)
         try:
-            fits = compare_curve_fits(a.tau, a.adev)
+            fits = curvefit.compare_curve_fits(a.tau, a.adev)
             out[name] = {k: {"rms_log10": v.rms_log10, "max_log10": v.max_log10, "has_pole": v.has_pole,
                              "readout": v.readout()} for k, v in fits.items()}
         except (InvalidInputError, ValueError, RuntimeError) as e:  # too few tau points, LM failure
@@ -119,7 +121,7 @@ def noise(
         raise InvalidInputError(f"--select {select!r}: use bic, aic or none")
     opts = reader_options(units={k: v for k, v in (("gyro", gyro_unit), ("accel", accel_unit)) if v}, fs=fs,
                           skiprows=skiprows, topic=topic, instance=instance, layout=layout)
-    data = read_imu(file, format=format, **opts)
+    data = io.read_imu(file, format=format, **opts)
     rate = float(data.fs)
     if fs is None and abs(rate - round(rate)) < 1e-6 * rate:
         rate = float(round(rate))  # time stamps built from an integer rate
@@ -129,7 +131,7 @@ def noise(
                                 "with nan_policy='segments')")
 
     # gyro-only analyses skip the mean-specific-force test: the accelerometer's unit may be undeclared
-    require_static(data, force=force, where=str(file), mean_force=any(c.startswith("a") for c in chans))
+    static.require_static(data, force=force, where=str(file), mean_force=any(c.startswith("a") for c in chans))
     groups = []
     for sensor, arr, unit, names in (("gyro", data.gyro, "rad/s", _CH[:3]), ("accel", data.accel, "m/s^2", _CH[3:])):
         idx = [i for i, n in enumerate(names) if n in chans]
@@ -139,17 +141,17 @@ def noise(
     with Progress(console=console, transient=True) as prog:
         task = prog.add_task("noise analysis", total=3 * len(groups))
         for sensor, arr, unit, names in groups:
-            r = allan_deviation(arr, rate, tau_spec, kind, units=unit, channels=names)
+            r = imunav_noise.allan_deviation(arr, rate, tau_spec, kind, units=unit, channels=names)
             prog.advance(task)
-            f = fit_noise(r, terms=term_list, gauss_markov=gm, select=None if select == "none" else select,
+            f = imunav_noise.fit_noise(r, terms=term_list, gauss_markov=gm, select=None if select == "none" else select,
                           quantity=sensor)
             prog.advance(task)
-            p = psd(arr, rate, "welch", nperseg=min(arr.shape[0], 2**14), units=unit, channels=names)
-            pa = log_average(p, 10)
+            p = imunav_noise.psd(arr, rate, "welch", nperseg=min(arr.shape[0], 2**14), units=unit, channels=names)
+            pa = imunav_noise.log_average(p, 10)
             # same band as the Allan fit: below 1/(2 tau_min), clear of the sensor's own filter
-            pf = fit_psd(pa, f_range=[(pa.f[0], min(0.4 * rate, 0.5 / float(tm))) for tm in f.tau_min])
+            pf = imunav_noise.fit_psd(pa, f_range=[(pa.f[0], min(0.4 * rate, 0.5 / float(tm))) for tm in f.tau_min])
             prog.advance(task)
-            results[sensor] = (r, f, p, pa, pf, compare_psd_allan(pf, f))
+            results[sensor] = (r, f, p, pa, pf, imunav_noise.compare_psd_allan(pf, f))
 
     console.print(f"[bold]{file}[/bold]: {data.n:,} samples at {rate:g} Hz ({data.n / rate:.6g} s), "
                   f"kind={kind}, taus={taus}")
@@ -189,7 +191,7 @@ def noise(
                 continue
             figs = []
             for sensor, (r, f, p, pa, pf, _) in results.items():
-                figs.append(plot_allan(r, f, title=sensor) if which == "allan" else plot_psd(p, pf, pa, title=sensor))
+                figs.append(noise_plot.plot_allan(r, f, title=sensor) if which == "allan" else noise_plot.plot_psd(p, pf, pa, title=sensor))
             for k, fig in enumerate(figs):
                 target = Path(path) if len(figs) == 1 else Path(path).with_name(
                     f"{Path(path).stem}_{list(results)[k]}{Path(path).suffix}")
@@ -198,8 +200,8 @@ def noise(
                 console.print(f"figure written to {target}")
     if wanted:
         fg, fa = results["gyro"][1], results["accel"][1]
-        writers = (lambda p: write_kalibr_yaml(p, fg, fa, rate), lambda p: write_openvins_yaml(p, fg, fa, rate),
-                   lambda p: write_vins_yaml(p, fg, fa))
+        writers = (lambda p: kalibr.write_kalibr_yaml(p, fg, fa, rate), lambda p: openvins.write_openvins_yaml(p, fg, fa, rate),
+                   lambda p: vins.write_vins_yaml(p, fg, fa))
         for (what, path), write in zip(exports.items(), writers):
             if path is not None:
                 write(path)

@@ -10,21 +10,14 @@ from rich.console import Console
 from rich.markup import escape
 from rich.progress import Progress
 
+from imunav._atomic import check_outputs, write_json
+from imunav.cli._lazy import lazy
 from imunav.errors import ConfigError, InvalidInputError
-from imunav.io import write_imu
-from imunav.io._atomic import check_outputs, write_json
-from imunav.sim import (
-    ImuErrorModel,
-    ferraris_profile,
-    hundred_position_profile,
-    ideal_imu,
-    presets,
-    simulate_imu,
-    six_position_profile,
-    static_profile,
-    thesis_rate_table_profile,
-)
 from imunav.units import DEG
+
+io = lazy("imunav.io")
+presets = lazy("imunav.sim.presets")
+sim = lazy("imunav.sim")
 
 PROFILES = ("static", "multiposition", "ratetable", "sixposition", "ferraris")
 
@@ -114,11 +107,11 @@ def run_simulate(
         raise InvalidInputError("Earth rate and normal gravity need --lat-deg (or use --no-earth-rate --gravity constant)")
     kw = {"lat": lat, "h": h_m}
     builders = {
-        "static": lambda: static_profile(duration, fs, **kw),
-        "multiposition": lambda: hundred_position_profile(fs, dwell, transition, **kw),
-        "ratetable": lambda: thesis_rate_table_profile(fs, dwell, transition, **kw),
-        "sixposition": lambda: six_position_profile(fs, dwell, transition, **kw),
-        "ferraris": lambda: ferraris_profile(fs, dwell, transition, **kw),
+        "static": lambda: sim.static_profile(duration, fs, **kw),
+        "multiposition": lambda: sim.hundred_position_profile(fs, dwell, transition, **kw),
+        "ratetable": lambda: sim.thesis_rate_table_profile(fs, dwell, transition, **kw),
+        "sixposition": lambda: sim.six_position_profile(fs, dwell, transition, **kw),
+        "ferraris": lambda: sim.ferraris_profile(fs, dwell, transition, **kw),
     }
     ideal_kw = {"earth_rate": bool(earth_rate), "transport_rate": False, "gravity": g}
     with Progress(console=console, transient=True) as prog:
@@ -127,16 +120,16 @@ def run_simulate(
         prog.advance(task)
         name = preset or "thesis_sim"
         if model is not None:
-            em = ImuErrorModel.from_toml(model)
+            em = sim.ImuErrorModel.from_toml(model)
             data = _simulate(prof, em, seed, ideal_kw)
             name = em.name or Path(model).stem
         elif name == "ideal":
-            data = ideal_imu(prof.trajectory, **ideal_kw)
+            data = sim.ideal_imu(prof.trajectory, **ideal_kw)
         else:
             data = _simulate(prof, presets.get(name), seed, ideal_kw)
         prog.advance(task)
         data = data.with_(meta={**dict(data.meta or {}), "profile": profile, "error_model": name, "seed": seed})
-        path = write_imu(data, out)
+        path = io.write_imu(data, out)
         seg_path = segments if segments is not None else Path(out).with_name(Path(out).stem + "_segments.csv")
         prof.segments.write_csv(seg_path)
         prog.advance(task)
@@ -157,4 +150,4 @@ def run_simulate(
 
 
 def _simulate(prof, model, seed, ideal_kw):
-    return simulate_imu(prof.trajectory, model, seed, **ideal_kw)
+    return sim.simulate_imu(prof.trajectory, model, seed, **ideal_kw)
