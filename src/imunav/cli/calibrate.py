@@ -66,14 +66,7 @@ def _columns(text: str) -> Any:
 
 
 def _segments(path: Path) -> Any:
-    d = read_json(path, "segment table JSON (write it with Profile.to_dict() / Segments.to_dict())")
-    if not isinstance(d, dict):
-        raise FileFormatError(f"{path}: a segment table JSON is an object with the columns of Segments")
-    d = d.get("segment_table", d)
-    try:
-        return sim.Segments(**{k: np.asarray(d[k]) for k in sim.Segments.__dataclass_fields__})
-    except KeyError as e:
-        raise FileFormatError(f"{path}: segment table lacks the column {e} (write it with Profile.to_dict())") from None
+    return sim.Segments.read(path)
 
 
 def _check_report(report: Optional[Path]) -> None:
@@ -155,7 +148,7 @@ _PX4 = typer.Option(None, "--px4-params", help="Also write the calibration as PX
 @app.command()
 def multiposition(
     recording: Path = typer.Argument(..., help="Static multi-position recording (any read_imu format)."),
-    segments: Path = typer.Option(..., help="Segment table JSON (Profile.to_dict() / Segments.to_dict())."),
+    segments: Path = typer.Option(..., help="Segment table, .json or .csv (as imunav simulate writes it next to the recording)."),
     out: Path = _OUT,
     report: Optional[Path] = _REP,
     px4_params: Optional[Path] = _PX4,
@@ -187,10 +180,10 @@ def multiposition(
 @app.command()
 def ratetable(
     recording: Path = typer.Argument(..., help="Rate-table recording."),
-    segments: Path = typer.Option(..., help="Segment table JSON of the rate-table run."),
+    segments: Path = typer.Option(..., help="Segment table (.json or .csv) of the rate-table run."),
     out: Path = _OUT,
     static: Optional[Path] = typer.Option(None, help="Static multi-position recording (gives bias and g-sensitivity)."),
-    static_segments: Optional[Path] = typer.Option(None, help="Segment table JSON of the static recording."),
+    static_segments: Optional[Path] = typer.Option(None, help="Segment table (.json or .csv) of the static recording."),
     base: Optional[Path] = typer.Option(None, help="Existing calibration JSON to take bias / g-sensitivity from."),
     intercept: bool = typer.Option(False, help="Estimate a separate gyro bias in the rate fit."),
     report: Optional[Path] = _REP,

@@ -23,7 +23,7 @@ PROFILES = ("static", "multiposition", "ratetable", "sixposition", "ferraris")
 
 _HELP = f"""Simulate a test PROFILE ({", ".join(PROFILES)}) with a virtual IMU and write the recording.
 
-multiposition is the 100-position static test, ratetable the 120-step +-250 deg/s rate-table test (Günhan 2014, section 4.1), sixposition each axis up then down, ferraris six poses plus a full turn about each axis, static one level position for --duration seconds.  The error model is a preset (--preset, 'ideal' = no errors) or a TOML file (--model).  The format follows the suffix of --out (.csv .parquet .h5 .mat .npz); the segment table goes next to it as <name>_segments.csv.  Earth rate and normal gravity are used when --lat-deg is given (else constant 9.80665 m/s^2).
+multiposition is the 100-position static test, ratetable the 120-step +-250 deg/s rate-table test (Günhan 2014, section 4.1), sixposition each axis up then down, ferraris six poses plus a full turn about each axis, static one level position for --duration seconds.  The error model is a preset (--preset, 'ideal' = no errors) or a TOML file (--model).  The format follows the suffix of --out (.csv .parquet .h5 .mat .npz); the segment table goes next to it as <name>_segments.json (what imunav calibrate --segments reads).  Earth rate and normal gravity are used when --lat-deg is given (else constant 9.80665 m/s^2).
 
 Example: imunav simulate multiposition --preset thesis_sim --fs 100 --seed 1 --out hundred.npz
 """
@@ -45,7 +45,7 @@ def register(app: typer.Typer) -> None:
         h_m: float = typer.Option(0.0, "--h-m", help="Height above the ellipsoid, m."),
         earth_rate: Optional[bool] = typer.Option(None, "--earth-rate/--no-earth-rate", help="Earth rate in the gyros (default: on iff --lat-deg)."),
         gravity: Optional[str] = typer.Option(None, "--gravity", help="'normal', 'constant' or m/s^2 (default: normal iff --lat-deg)."),
-        segments: Optional[Path] = typer.Option(None, "--segments", help="Segment-table CSV (default <out stem>_segments.csv)."),
+        segments: Optional[Path] = typer.Option(None, "--segments", help="Segment table to write, .json or .csv (default <out stem>_segments.json)."),
         json_out: Optional[Path] = typer.Option(None, "--json", help="Also write a JSON summary here."),
     ) -> None:
         check_outputs([model], [out, segments, json_out])
@@ -130,8 +130,8 @@ def run_simulate(
         prog.advance(task)
         data = data.with_(meta={**dict(data.meta or {}), "profile": profile, "error_model": name, "seed": seed})
         path = io.write_imu(data, out)
-        seg_path = segments if segments is not None else Path(out).with_name(Path(out).stem + "_segments.csv")
-        prof.segments.write_csv(seg_path)
+        seg_path = segments if segments is not None else Path(out).with_name(Path(out).stem + "_segments.json")
+        prof.segments.write(seg_path)
         prog.advance(task)
     s = prof.summary()
     return {
