@@ -16,6 +16,7 @@ runs (tests/test_cli_help.py checks ``sys.modules`` after each ``--help``).
 from __future__ import annotations
 
 import importlib
+import sys
 from collections.abc import Iterator, Mapping
 from typing import Any
 
@@ -41,13 +42,21 @@ class LazyModule:
         object.__setattr__(self, "_name", name)
 
     def __getattr__(self, attr: str) -> Any:
-        return getattr(importlib.import_module(self._name), attr)
+        module = importlib.import_module(self._name)
+        _after_library_import()
+        return getattr(module, attr)
 
     def __setattr__(self, attr: str, value: Any) -> None:
         raise AttributeError(f"{self._name} is imported lazily; it cannot be assigned to")
 
     def __repr__(self) -> str:
         return f"<lazy module {self._name!r}>"
+
+
+def _after_library_import() -> None:
+    """Once a command's library has loaded numba, have a first compilation said on screen (imunav.cli._compile)."""
+    if "numba" in sys.modules and "imunav.cli._compile" not in sys.modules:
+        importlib.import_module("imunav.cli._compile").watch_compilation()
 
 
 def lazy(name: str) -> Any:

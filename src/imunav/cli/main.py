@@ -39,6 +39,7 @@ COMMANDS: dict[str, str] = {
                "detection.",
     "batch": "Process a folder of recordings (one per unit of a production batch) in parallel, with a summary "
              "table and per-unit result files.",
+    "warmup": "Compile the numba kernels of the quick-tour commands and write their bytecode, once, ahead of use.",
 }
 
 
