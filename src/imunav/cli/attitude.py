@@ -15,7 +15,7 @@ from rich.table import Table
 from imunav._atomic import check_outputs, write_json
 from imunav.cli._errors import check_figure_path
 from imunav.cli._lazy import lazy
-from imunav.cli._options import INSTANCE, LAYOUT, MAG_TOPIC, TOPIC, reader_options
+from imunav.cli._options import END, INSTANCE, LAYOUT, MAG_TOPIC, START, TOPIC, reader_options, window
 from imunav.errors import ConfigError
 
 alignment = lazy("imunav.attitude.alignment")
@@ -85,6 +85,8 @@ def run_cmd(
     instance: Optional[int] = INSTANCE,
     mag_topic: Optional[str] = MAG_TOPIC,
     layout: Optional[str] = LAYOUT,
+    start: Optional[float] = START,
+    end: Optional[float] = END,
 ) -> None:
     """Run one filter over a whole recording and print a summary (BROAD RMSE when a reference exists).
 
@@ -107,6 +109,12 @@ def run_cmd(
         data, ref, mask = tr.imu, tr.q_ref_nb, tr.movement
     else:
         data = io.read_imu(file, **opts)
+    if start is not None or end is not None:
+        cut = window(data, start, end)
+        if ref is not None:  # the BROAD reference and movement mask, cut alike
+            i0 = int(np.searchsorted(data.t, cut.t[0]))
+            ref, mask = ref[i0:i0 + cut.n], mask[i0:i0 + cut.n]
+        data = cut
     kw: dict[str, Any] = {"use_mag": False if no_mag else None}
 
     if ref is not None and benchmark.reference_start(filter) and not no_mag:

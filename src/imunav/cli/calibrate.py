@@ -18,7 +18,7 @@ from rich.table import Table
 
 from imunav._atomic import check_outputs, check_writable, read_json, write_json
 from imunav.cli._lazy import lazy
-from imunav.cli._options import INSTANCE, LAYOUT, TOPIC, reader_options
+from imunav.cli._options import END, INSTANCE, LAYOUT, START, TOPIC, reader_options, window
 from imunav.errors import FileFormatError, InvalidInputError
 
 _common = lazy("imunav.io._common")
@@ -270,7 +270,7 @@ def multipose(
     fs: Optional[float] = _FS, accel_unit: Optional[str] = _AU, gyro_unit: Optional[str] = _GU,
     accel_scale: Optional[float] = _AS, gyro_scale: Optional[float] = _GS, skiprows: Optional[int] = _SK,
     columns: Optional[str] = _COL, topic: Optional[str] = TOPIC, instance: Optional[int] = INSTANCE,
-    layout: Optional[str] = LAYOUT,
+    layout: Optional[str] = LAYOUT, start: Optional[float] = START, end: Optional[float] = END,
 ) -> None:
     """Tedaldi et al. (2014) multi-pose calibration without a rate table.
 
@@ -280,8 +280,8 @@ def multipose(
     check_outputs([recording], [out, px4_params])
     _check_report(report)
 
-    data = _read(recording, fs, accel_unit, gyro_unit, accel_scale, gyro_scale, skiprows, columns, topic, instance,
-                 layout)
+    data = window(_read(recording, fs, accel_unit, gyro_unit, accel_scale, gyro_scale, skiprows, columns, topic,
+                        instance, layout), start, end)
     res = calib.multipose(data.accel, data.gyro, data.fs, init_s=init_s, wait_s=wait_s, gravity=gravity, strict=False,
                           accel_misalignment=accel_misalignment, raw_accel_unit="m/s^2", raw_gyro_unit="rad/s")
     if strict and res.info["weak_parameters"]:  # the library's refusal, naming this command's flags

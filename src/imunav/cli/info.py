@@ -13,7 +13,7 @@ from rich.table import Table
 
 from imunav._atomic import check_outputs, write_json
 from imunav.cli._lazy import lazy
-from imunav.cli._options import INSTANCE, LAYOUT, MAG_TOPIC, TOPIC, reader_options
+from imunav.cli._options import END, INSTANCE, LAYOUT, MAG_TOPIC, START, TOPIC, reader_options, window
 from imunav.errors import InvalidInputError
 from imunav.units import DEG, G0
 
@@ -53,6 +53,8 @@ def info(
     instance: int | None = INSTANCE,
     mag_topic: str | None = MAG_TOPIC,
     layout: str | None = LAYOUT,
+    start: float | None = START,
+    end: float | None = END,
     json_out: Path | None = typer.Option(None, "--json", help="Also write the summary as JSON to this file."),
     window_s: float = typer.Option(1.0, "--window", help="Static detector window (s)."),
     min_static_s: float | None = typer.Option(None, "--min-static", help="Shortest static interval kept (s); default = window."),
@@ -91,7 +93,7 @@ def info(
         fs=fs, skiprows=skiprows, columns=_parse_columns(column) if column else None, nan_policy=nan_policy,
         topic=topic, instance=instance, mag_topic=mag_topic, layout=layout,
     )
-    data = io.read_imu(file, format=format, **opts)
+    data = window(io.read_imu(file, format=format, **opts), start, end)
     s = timeseries.describe(
         data,
         window_s=window_s,

@@ -7,13 +7,14 @@ from typing import Any
 
 import typer
 from rich.console import Console
+from rich.markup import escape
 from rich.progress import Progress
 from rich.table import Table
 
 from imunav._atomic import atomic_path, check_outputs, write_json
 from imunav.cli._errors import check_figure_path
 from imunav.cli._lazy import lazy
-from imunav.cli._options import INSTANCE, LAYOUT, TOPIC, reader_options
+from imunav.cli._options import END, INSTANCE, LAYOUT, START, TOPIC, reader_options, window
 from imunav.errors import InvalidInputError
 from imunav.units import to_display
 
@@ -93,6 +94,8 @@ def noise(
     topic: str | None = TOPIC,
     instance: int | None = INSTANCE,
     layout: str | None = LAYOUT,
+    start: float | None = START,
+    end: float | None = END,
     force: bool = typer.Option(False, "--force", help="Analyse a recording that is not static (moved or rotated)."),
 ) -> None:
     """Identify the stochastic errors of a static IMU recording: overlapping Allan
@@ -121,14 +124,16 @@ def noise(
         raise InvalidInputError(f"--select {select!r}: use bic, aic or none")
     opts = reader_options(units={k: v for k, v in (("gyro", gyro_unit), ("accel", accel_unit)) if v}, fs=fs,
                           skiprows=skiprows, topic=topic, instance=instance, layout=layout)
-    data = io.read_imu(file, format=format, **opts)
+    data = window(io.read_imu(file, format=format, **opts), start, end)
     rate = float(data.fs)
     if fs is None and abs(rate - round(rate)) < 1e-6 * rate:
         rate = float(round(rate))  # time stamps built from an integer rate
-    if data.gaps():
-        raise InvalidInputError(f"{file}: the record has {len(data.gaps())} time gap(s); the noise analysis "
-                                "needs one gap-free static record (split it, or use imunav.noise.allan_deviation "
-                                "with nan_policy='segments')")
+    gaps = data.gaps()
+    if gaps:  # logger dropouts: the Allan statistics use the contiguous segments between them
+        lost = sum(g.length_s for g in gaps)
+        console.print(f"{len(gaps)} time gap(s) (logger dropouts, {lost:.3g} s in all, longest "
+                      f"{max(g.length_s for g in gaps):.3g} s): Allan statistics over the {len(gaps) + 1} contiguous "
+                      "segments, pooled; the PSD over the samples as they come")
 
     # gyro-only analyses skip the mean-specific-force test: the accelerometer's unit may be undeclared
     static.require_static(data, force=force, where=str(file), mean_force=any(c.startswith("a") for c in chans))
@@ -141,7 +146,8 @@ def noise(
     with Progress(console=console, transient=True) as prog:
         task = prog.add_task("noise analysis", total=3 * len(groups))
         for sensor, arr, unit, names in groups:
-            r = imunav_noise.allan_deviation(arr, rate, tau_spec, kind, units=unit, channels=names)
+            r = imunav_noise.allan_deviation(arr, rate, tau_spec, kind, units=unit, channels=names, t=data.t,
+                                             nan_policy="segments")
             prog.advance(task)
             f = imunav_noise.fit_noise(r, terms=term_list, gauss_markov=gm, select=None if select == "none" else select,
                           quantity=sensor)
@@ -160,9 +166,9 @@ def noise(
         t.add_column("channel")
         shown = [i for i, nm in enumerate(f.names) if f.selected[i].any() or nm in ("N", "B", "K")]
         for i in shown:
-            t.add_column(f"{f.names[i]} [{f.display_units[i]}]", justify="right")
+            t.add_column(escape(f"{f.names[i]} [{f.display_units[i]}]"), justify="right")
         t.add_column("N (PSD) / N (Allan) - 1", justify="right")
-        t.add_column(f"slope read-out N [{f.display_units[f.names.index('N')]}]", justify="right")
+        t.add_column(escape(f"slope read-out N [{f.display_units[f.names.index('N')]}]"), justify="right")
         t.add_column("fit from tau (s)", justify="right")
         for c, name in enumerate(r.channels):
             row = [name]
@@ -178,8 +184,22 @@ def noise(
             row.append(f"{f.tau_min[c]:.3g}")
             t.add_row(*row)
         console.print(t)
+    span = float(data.t[-1] - data.t[0]) - sum(g.length_s for g in gaps)
+    ident = {sensor: imunav_noise.identifiability(f, span) for sensor, (_r, f, *_rest) in results.items()}
+    for sensor, terms_ in ident.items():
+        for term, rows in terms_.items():
+            short = [(results[sensor][0].channels[c], row["needs_s"]) for c, row in enumerate(rows)
+                     if row["identifiable"] is False]
+            if short:
+                needs = [n for _, n in short if n is not None]
+                console.print(f"{sensor} {term}: not identifiable from this {span:.4g} s record on "
+                              f"{', '.join(c for c, _ in short)} (it shows only above the white noise"
+                              + (f"; it would need about {max(needs):.3g} s" if needs else ", at no cluster time")
+                              + "): the value in the table is an extrapolation")
     if json_out is not None:
-        out = {"file": str(file), "fs": rate, "n_samples": int(data.n)}
+        out = {"file": str(file), "fs": rate, "n_samples": int(data.n), "start_s": start, "end_s": end,
+               "gaps": [{"t_start": g.t_start, "length_s": g.length_s, "missing_samples": g.missing_samples}
+                        for g in gaps], "identifiability": ident}
         for sensor, (r, f, _p, _pa, pf, cmp) in results.items():
             out[sensor] = {"allan": r.to_dict(), "fit": f.to_dict(), "psd_fit": pf.to_dict(), "psd_vs_allan": cmp,
                            "curve_fits": _curve_fits(r)}
