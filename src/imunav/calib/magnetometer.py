@@ -343,7 +343,7 @@ def _raise_coverage(cov: float, min_coverage: float) -> None:
     raise DegenerateGeometryError(
         f"magnetometer data cover only {100 * cov:.0f} % of the sphere (minimum {100 * min_coverage:.0f} %): "
         "partial coverage leaves the ellipsoid undetermined; rotate the sensor through all orientations "
-        "(or lower min_coverage at your own risk)"
+        "(or lower min_coverage=... (command line: --min-coverage) at your own risk)"
     )
 
 
