@@ -24,10 +24,14 @@ benchmark = lazy("imunav.attitude.benchmark")
 broad = lazy("imunav.io.broad")
 datasets = lazy("imunav.io.datasets")
 io = lazy("imunav.io")
+logs = lazy("imunav.io.logs")
 metrics = lazy("imunav.attitude.metrics")
 montecarlo = lazy("imunav.montecarlo")
+px4 = lazy("imunav.attitude.px4")
+rotation = lazy("imunav.rotation")
 scenario = lazy("imunav.attitude.scenario")
 scenarios = lazy("imunav.scenarios")
+
 
 app = typer.Typer(help="Attitude filters (Madgwick, Mahony, MEKF, UKF, adaptive, smoother, paper KFs).\n\n"
                   "Example: imunav attitude run 05_undisturbed_slow_rotation_with_breaks_B.mat --filter madgwick_c",
@@ -109,6 +113,18 @@ def run_cmd(
         data, ref, mask = tr.imu, tr.q_ref_nb, tr.movement
     else:
         data = io.read_imu(file, **opts)
+    px4_log = logs.log_kind(file) == "ulog"
+    px4_out: dict[str, Any] = {}
+    if px4_log and not no_mag and mag_topic is None:
+        # the magnetometer topic that holds data (sensor_combined of newer logs carries none)
+        mt = px4.magnetometer_topic(file, data)
+        if mt is not None:
+            data = io.read_imu(file, **{**opts, "mag_topic": mt})
+            con.print(f"magnetometer: {mt}, interpolated onto the IMU stamps on the log's clock (--mag-topic to "
+                      "choose another)")
+        px4_out["mag_topic"] = mt if mt is not None else ("in the IMU topic" if data.mag is not None else None)
+        if data.mag is None:
+            con.print("no magnetometer data in this log: 6D, the yaw is not observable")
     if start is not None or end is not None:
         cut = window(data, start, end)
         if ref is not None:  # the BROAD reference and movement mask, cut alike
@@ -123,10 +139,39 @@ def run_cmd(
         kw["q0"] = alignment.broad_reference_start(data.accel[0], data.mag[0])
     res = f.run(data, **kw)
 
-    e = np.degrees(res.euler()[-1])
+    q_final = res.q_nb
+    decl = None
+    if px4_log:
+        used_mag = data.mag is not None and not no_mag
+        decl, key = px4.declination(data.meta)
+        if decl is not None and used_mag:
+            q_final = px4.to_true_north(res.q_nb, decl)
+            con.print(f"declination: {key} = {decl:.2f} deg added to the yaw (PX4 references true north, the "
+                      "magnetometer magnetic north)")
+        elif used_mag:
+            con.print("declination: the log has no EKF2_MAG_DECL / ATT_MAG_DECL; the yaw is referenced to "
+                      "magnetic north")
+        else:
+            decl = None
+        px4_out["declination_deg"] = decl if used_mag else None
+        px4_out["declination_parameter"] = key if used_mag and decl is not None else None
+    e = np.degrees(rotation.euler_from_quat(q_final[-1]))
     con.print(f"[bold]{res.name}[/bold]: {res.n} samples, final roll/pitch/yaw = "
-              f"{e[0]:.2f} / {e[1]:.2f} / {e[2]:.2f} deg")
+              f"{e[0]:.2f} / {e[1]:.2f} / {e[2]:.2f} deg" + (" (true north)" if decl is not None else ""))
     summary: dict[str, Any] = {"filter": res.name, "params": res.params}
+    if px4_log:
+        names = {ti.topic for ti in logs.list_topics(file)}
+        ref_topic = next((t for t in px4.REFERENCE_TOPICS if t in names), None)
+        if ref_topic is None:
+            con.print("the log has no vehicle_attitude: no comparison with PX4's estimate")
+        else:
+            cmp = px4.compare(data, res.q_nb, logs.read_topic(file, ref_topic), t_from=min(10.0, 0.3 * data.duration),
+                              declination_deg=decl)
+            r = cmp.rms_deg
+            con.print(f"RMS difference to the log's {ref_topic} from {cmp.t_from_s:.3g} s on ({cmp.samples} samples): "
+                      f"roll {r['roll']:.3f}, pitch {r['pitch']:.3f}, yaw {r['yaw']:.3f} deg")
+            px4_out["reference"] = cmp.to_dict()
+        summary["px4"] = px4_out
     if ref is not None:
         r = metrics.attitude_rmse(res.q_nb, ref, mask)
         con.print(f"BROAD RMSE over movement: total {r.total_rmse_deg:.3f}, heading {r.heading_rmse_deg:.3f}, "
