@@ -351,7 +351,7 @@ def mag(
     out: Path = _OUT,
     method: str = typer.Option("ellipsoid", help="ellipsoid (Li & Griffiths), rotation-scale (thesis) or minmax."),
     field_norm: Optional[float] = typer.Option(None, help="Known field magnitude (data unit); default det(A) = 1."),
-    min_coverage: float = typer.Option(0.3, help="Smallest accepted sphere coverage (ellipsoid)."),
+    min_coverage: float = typer.Option(0.3, help="Smallest accepted sphere coverage, 0-1 (ellipsoid and minmax)."),
     report: Optional[Path] = _REP,
     topic: Optional[str] = TOPIC, instance: Optional[int] = INSTANCE,
     px4_params: Optional[Path] = _PX4,
@@ -377,9 +377,7 @@ def mag(
     elif method == "rotation-scale":
         cal = magnetometer.soft_iron_rotation_scale(h)
     elif method == "minmax":
-        b = magnetometer.hard_iron_minmax(h)
-        n = np.linalg.norm(h - b, axis=1)
-        cal = magnetometer.MagCalibration(b, np.eye(3), float(np.mean(n)), "minmax", {}, {"norm_spread_after": float(np.std(n) / np.mean(n))})
+        cal = magnetometer.fit_minmax(h, min_coverage=min_coverage)
     else:
         raise InvalidInputError(f"--method must be ellipsoid, rotation-scale or minmax, not {method!r}")
     if mag_unit is None:
