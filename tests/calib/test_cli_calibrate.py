@@ -127,3 +127,29 @@ def test_multipose_command_on_unsigned_counts_with_defaults(tmp_path):
     np.testing.assert_allclose(np.diag(cal.accel_matrix), np.diag(np.linalg.inv(accel_tedaldi_matrix(PA_U))), rtol=3e-3)
     np.testing.assert_allclose(np.diag(cal.gyro_matrix), np.diag(np.linalg.inv(gyro_tedaldi_matrix(PG_U))), rtol=3e-3)
     np.testing.assert_allclose(cal.accel_bias, -PA_U[6:], atol=5.0)
+
+
+def test_imucal_export_round_trips_through_imucal(tmp_path):
+    """--imucal-out on imucal's shared continuous session (°/s in the file): imucal's own reader loads the file and
+    it agrees with imucal's own Ferraris on the same session (issue 26: K_g came out 0.0179 for 1.028)."""
+    imucal = pytest.importorskip("imucal")
+    import pandas as pd
+    from conftest_data import data_path
+    from imucal.management import load_calibration_info
+
+    csv, secs = data_path("imucal", "example_ferraris_session.csv"), data_path("imucal", "example_ferraris_session_list.json")
+    out = tmp_path / "imucal.json"
+    r = CliRunner().invoke(app, ["calibrate", "ferraris", str(csv), "--sections", str(secs), "--fs", "102.4",
+                                 "--gyro-unit", "deg/s", "--out", str(tmp_path / "cal.json"), "--imucal-out", str(out)])
+    assert r.exit_code == 0, r.output
+    assert "raw data in m/s^2 and deg/s, calibrated in m/s^2 and deg/s" in " ".join(r.output.split())
+    mine = load_calibration_info(out)
+    df = pd.read_csv(csv).set_index("n_samples")
+    regions = imucal.ferraris_regions_from_section_list(df, pd.DataFrame(json.loads(Path(secs).read_text())).T)
+    peer = imucal.FerrarisCalibration().compute(regions, sampling_rate_hz=102.4, from_acc_unit="m/s^2",
+                                               from_gyr_unit="deg/s")
+    assert (mine.from_gyr_unit, mine.gyr_unit, mine.from_acc_unit) == ("deg/s", "deg/s", "m/s^2")
+    for k in ("K_a", "R_a", "b_a", "K_g", "R_g", "K_ga", "b_g"):
+        a, b = np.asarray(getattr(mine, k)), np.asarray(getattr(peer, k))
+        assert np.max(np.abs(a - b)) <= 1e-9 * np.max(np.abs(b)), (k, a, b)
+    assert np.diag(mine.K_g) == pytest.approx([1.028, 0.982, 0.998], abs=1e-3)

@@ -226,7 +226,7 @@ def ferraris(
     recording: Path = typer.Argument(..., help="Continuous Ferraris session (6 poses + 3 turns)."),
     sections: Path = typer.Option(..., help='imucal section list JSON: {"x_p": {"start": i0, "end": i1}, ...}.'),
     out: Path = _OUT,
-    imucal_out: Optional[Path] = typer.Option(None, help="Also write the imucal FerrarisCalibrationInfo JSON."),
+    imucal_out: Optional[Path] = typer.Option(None, help="Also write the imucal FerrarisCalibrationInfo JSON, for the raw data in the units of the file (--accel-unit, --gyro-unit)."),
     gravity: float = typer.Option(9.81, help="Gravity used by the method (imucal default 9.81)."),
     expected_angle_deg: float = typer.Option(-360.0, help="Angle measured per turn (imucal default -360)."),
     report: Optional[Path] = _REP,
@@ -253,7 +253,12 @@ def ferraris(
                                 expected_angle_deg=expected_angle_deg)
     _finish(res, out, report, px4=px4_params)
     if imucal_out is not None:
-        write_json(imucal_out, res.calibration.to_imucal())
+        # for the raw data as the file holds them (imucal applies its calibration to those)
+        info = res.calibration.to_imucal(from_acc_unit=accel_unit if accel_unit in ("m/s^2", "g") else None,
+                                         from_gyr_unit=gyro_unit if gyro_unit in ("rad/s", "deg/s") else None)
+        write_json(imucal_out, info)
+        typer.echo(f"imucal FerrarisCalibrationInfo written to {imucal_out} (raw data in {info['from_acc_unit']} and "
+                   f"{info['from_gyr_unit']}, calibrated in {info['acc_unit']} and {info['gyr_unit']})")
 
 
 @app.command()
