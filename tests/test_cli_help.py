@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import functools
 import os
+import re
 import subprocess
 import sys
 from pathlib import Path
@@ -126,3 +127,21 @@ def test_command_help_imports_no_library(name):
     dt, loaded = _help_run(name, "--help")
     assert loaded == [], f"imunav {name} --help imported {loaded[:10]}"
     assert dt <= floor + 0.5, (name, dt, floor)
+
+
+def test_help_texts_are_plain_prose():
+    """No Sphinx markup and no runs of spaces in any help text; listings keep whole first sentences (issue 26)."""
+    markup = ("``", ":func:", ":class:", ":meth:", ":mod:", ":data:")
+    problems = []
+    for path, cmd in _leaves(get_command(app), [], groups=True):
+        texts = [("help", cmd.help)] + [(p.name, getattr(p, "help", None)) for p in cmd.params]
+        for what, text in texts:
+            for line in (text or "").splitlines():
+                if any(m in line for m in markup) or re.search(r"\S {2,}\S", line):
+                    problems.append((" ".join(path), what, line.strip()[:80]))
+        res = CliRunner().invoke(app, [*path, "--help"], env={"COLUMNS": "200"})
+        if any(m in res.output for m in markup):
+            problems.append((" ".join(path), "--help output", "markup"))
+    assert problems == []
+    listing = CliRunner().invoke(app, ["calibrate", "--help"], env={"COLUMNS": "200"}).output
+    assert "Tedaldi et al. (2014) multi-pose calibration without a rate table." in " ".join(listing.split())

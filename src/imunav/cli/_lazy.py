@@ -16,6 +16,8 @@ runs (tests/test_cli_help.py checks ``sys.modules`` after each ``--help``).
 from __future__ import annotations
 
 import importlib
+import inspect
+import re
 import sys
 from collections.abc import Iterator, Mapping
 from typing import Any
@@ -76,12 +78,72 @@ def plain_help(t: typer.Typer) -> None:
             plain_help(group.typer_instance)
 
 
+#: Sphinx roles and literals of docstrings used as help: ":func:`x`" and "``x``" read "x" on a terminal
+_ROLE = re.compile(r":(?:func|class|meth|mod|data|attr|obj|exc|ref|doc|py:\w+):`~?([^`<]*?)(?:\s*<[^>]*>)?`")
+_LITERAL = re.compile(r"``(.+?)``")
+#: where a sentence does not end although a full stop and a space follow
+_NOT_AN_END = ("al", "e.g", "i.e", "cf", "vs", "approx", "Fig", "eq", "eqs", "No", "resp")
+
+
+def clean_help(text: str | None) -> str | None:
+    """A docstring as ``--help`` prints it: no Sphinx markup, no indentation or runs of spaces inside lines.
+
+    Parameters
+    ----------
+    text : str or None
+        The help text (a command's docstring or an option's help).
+
+    Returns
+    -------
+    str or None
+        The text with ``:func:`x``` / ````x```` as ``x``, the docstring's indentation removed
+        (:func:`inspect.cleandoc`) and runs of spaces inside a line made one; leading indentation (example
+        blocks) is kept.
+    """
+    if not text:
+        return text
+    text = _LITERAL.sub(r"\1", _ROLE.sub(r"\1", inspect.cleandoc(text)))
+    paragraphs = []
+    for para in re.split(r"\n[ \t]*\n", text):
+        lines = [re.sub(r"(?<=\S) {2,}(?=\S)", " ", line.rstrip()) for line in para.splitlines()]
+        if lines and not lines[0].lstrip().startswith("\b"):
+            # click joins a paragraph's lines and keeps the first one's indentation: the others' is a run
+            lines = lines[:1] + [line.lstrip() for line in lines[1:]]
+        paragraphs.append("\n".join(lines))
+    return "\n\n".join(paragraphs)
+
+
+def first_sentence(text: str | None) -> str:
+    """The first sentence of a help text, not cut at "et al." or "e.g." (click's own cut is)."""
+    flat = " ".join((text or "").split())
+    for m in re.finditer(r"\.(?:\s|$)", flat):
+        words = flat[:m.start()].split()
+        if words and words[-1].rstrip(".") in _NOT_AN_END:
+            continue
+        return flat[:m.start() + 1]
+    return flat
+
+
+def _clean_command(cmd: Any) -> None:
+    cmd.help = clean_help(cmd.help)
+    if cmd.help and not getattr(cmd, "short_help", None):
+        cmd.short_help = first_sentence(cmd.help.split("\n\n")[0])
+    for p in getattr(cmd, "params", []):
+        if getattr(p, "help", None):
+            p.help = " ".join(clean_help(p.help).split())  # type: ignore[union-attr]
+    for sub in getattr(cmd, "commands", {}).values():
+        _clean_command(sub)
+
+
 def load_command(name: str) -> Any:
-    """The click command (or group) that ``imunav.cli.<name>.register`` adds, as ``imunav`` runs it."""
+    """The click command (or group) that ``imunav.cli.<name>.register`` adds, as ``imunav`` runs it: its help
+    texts cleaned of docstring markup (:func:`clean_help`)."""
     sub = typer.Typer(add_completion=False)
     importlib.import_module(f"imunav.cli.{name}").register(sub)
     plain_help(sub)
-    return get_group(sub).commands[name]
+    cmd = get_group(sub).commands[name]
+    _clean_command(cmd)
+    return cmd
 
 
 class LazyCommands(dict):

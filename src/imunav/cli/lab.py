@@ -23,7 +23,7 @@ With no arguments it runs every step on the built-in virtual IMU (preset thesis_
 
 The report folder gets a manifest.json (run id, seed, configuration, every file with its size and SHA-256), written last; a folder that holds another run is refused unless --overwrite, which clears that run first.
 
-With a TOML lab definition (--config) that has [recordings.<name>] tables it runs on real recordings instead (path, format, column mapping, units, which test). A [spec.<parameter>] table gives datasheet limits (pass / fail in the report); a table named after a step sets its options; [lab] sets seed, title and steps. See examples/lab_real.toml and examples/lab_spec.toml. Exit status 1 when a step fails with an error, 2 for a bad lab definition.
+With a TOML lab definition (--config) that has [recordings.<name>] tables it runs on real recordings instead (path, format, column mapping, units, which test). A [spec.<parameter>] table gives datasheet limits (pass / fail in the report); a table named after a step sets its options; [lab] sets seed, title and steps. See examples/lab_real.toml and examples/lab_spec.toml. Exit status 1 when a step fails with an error or a [spec] check fails (unless --no-fail), 2 for a bad lab definition.
 
 Example: imunav lab --out lab-report --seed 0
 """
@@ -40,6 +40,8 @@ def register(app: typer.Typer) -> None:
         json_out: Optional[Path] = typer.Option(None, "--json", help="Also copy summary.json here."),
         overwrite: bool = typer.Option(False, "--overwrite", help="Clear a report folder that holds another run "
                                        "(only files of imunav runs) instead of refusing."),
+        no_fail: bool = typer.Option(False, "--no-fail", help="Exit 0 even when a [spec] check fails (the report "
+                                     "still marks it)."),
     ) -> None:
         check_outputs([config], [json_out])
 
@@ -60,6 +62,7 @@ def register(app: typer.Typer) -> None:
             table.add_row(s.title, verdict, f"{s.seconds:.1f}")
         Console().print(table)
         checks = [c for c in result.spec_checks if c.limit is not None]
+        spec_failed = any(c.passed is False for c in checks)
         if checks:
             failed = [c.name for c in checks if c.passed is False]
             Console().print(f"specification: {len(checks)} checks, {len(failed)} failed"
@@ -72,4 +75,7 @@ def register(app: typer.Typer) -> None:
             write_json(json_out, read_json(Path(out) / "summary.json"))
         typer.echo(f"report: {Path(out) / 'index.html'}")
         if result.failed_steps:
+            raise typer.Exit(1)
+        if spec_failed and not no_fail:  # as imunav batch does; --no-fail to go on
+            typer.echo("exit status 1: a [spec] check failed (--no-fail: exit 0)", err=True)
             raise typer.Exit(1)

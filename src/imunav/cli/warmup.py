@@ -7,19 +7,39 @@ import io
 import sys
 import tempfile
 import time
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from pathlib import Path
 
+import numpy as np
 import typer
 
 from imunav.cli._lazy import lazy
 
 _compile = lazy("imunav.cli._compile")
+io_lib = lazy("imunav.io")
 main = lazy("imunav.cli.main")
+rotation = lazy("imunav.rotation")
 
-#: The quick tour, on small inputs: (what, imunav arguments).  Paths are relative to a scratch folder.
-#: Each step compiles the kernels its command uses, with the array types a real run passes.
-TOUR: tuple[tuple[str, tuple[str, ...]], ...] = (
+def add_magnetometer(src: str = "still.npz", dst: str = "still_mag.npz") -> None:
+    """Write ``src`` with a magnetometer (a constant field, 0.1 µT noise): attitude filters compile their
+    magnetometer updates on it, as on a PX4 log or a BROAD trial."""
+    data = io_lib.read_imu(src)
+    rng = np.random.default_rng(0)
+    mag = np.array([20.0, 1.0, 45.0]) + 0.1 * rng.standard_normal((data.n, 3))
+    io_lib.write_imu(data.with_(mag=mag, mag_unit="uT"), dst)
+
+
+def rotation_kernels() -> None:
+    """Compile the rotation kernels a comparison of attitudes uses (slerp, Euler angles)."""
+    t = np.linspace(0.0, 1.0, 11)
+    q = rotation.quat_from_euler(0.1 * t, 0.2 * t, 0.3 * t)
+    rotation.euler_from_quat(rotation.quat_interp(t, q, t[:-1] + 0.05))
+    rotation.quat_multiply(q[:1], q)
+
+
+#: The quick tour, on small inputs: (what, imunav arguments or a function).  Paths are relative to a scratch
+#: folder.  Each step compiles the kernels its command uses, with the array types a real run passes.
+TOUR: tuple[tuple[str, tuple[str, ...] | Callable[[], None]], ...] = (
     ("simulate", ("simulate", "static", "--preset", "thesis_sim", "--duration", "300", "--fs", "100",
                   "--out", "still.npz")),
     ("info", ("info", "still.npz")),
@@ -32,6 +52,11 @@ TOUR: tuple[tuple[str, tuple[str, ...]], ...] = (
     ("attitude run (adaptive)", ("attitude", "run", "still.npz", "--filter", "adaptive")),
     ("attitude run (madgwick_c)", ("attitude", "run", "still.npz", "--filter", "madgwick_c")),
     ("attitude run (mekf)", ("attitude", "run", "still.npz", "--filter", "mekf")),
+    ("magnetometer recording", add_magnetometer),
+    ("attitude run 9D (adaptive)", ("attitude", "run", "still_mag.npz", "--filter", "adaptive")),
+    ("attitude run 9D (madgwick_c)", ("attitude", "run", "still_mag.npz", "--filter", "madgwick_c")),
+    ("attitude run 9D (mekf)", ("attitude", "run", "still_mag.npz", "--filter", "mekf")),
+    ("rotation kernels", rotation_kernels),
     ("gins simulate", ("gins", "simulate", "--out", "drive", "--duration", "120", "--fs", "50")),
     ("gins run", ("gins", "run", "--config", "drive/kf-gins.yaml", "--out", "drive-run")),
 )
@@ -44,8 +69,14 @@ Example: imunav warmup
 """
 
 
-def _run_step(argv: Sequence[str]) -> str | None:
-    """Run one imunav command in-process, output swallowed; the last error line on failure, else None."""
+def _run_step(argv: Sequence[str] | Callable[[], None]) -> str | None:
+    """Run one imunav command (or function) in-process, output swallowed; the last error line on failure."""
+    if callable(argv):
+        try:
+            argv()
+        except Exception as e:  # noqa: BLE001 - a failed step is reported; its kernels compile on first use
+            return f"{type(e).__name__}: {e}"
+        return None
     out, err = io.StringIO(), io.StringIO()
     code: object = 0
     with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
