@@ -4,15 +4,16 @@ from __future__ import annotations
 
 import json
 from pathlib import Path
+from types import SimpleNamespace
 from typing import Optional
 
 import numpy as np
 import typer
-from rich.console import Console
 from rich.progress import Progress
 from rich.table import Table
 
 from imunav._atomic import atomic_path, check_outputs, write_json
+from imunav.cli._console import make_console
 from imunav.cli._errors import check_figure_path, check_suffix, fail
 from imunav.cli._lazy import lazy
 from imunav.errors import FileFormatError, InvalidInputError
@@ -204,7 +205,11 @@ Example: imunav airdata run flight.npz --robust nis --json run.json
             with atomic_path(out) as tmp, open(tmp, "wb") as fh:
                 np.savez_compressed(fh, **arrays)
         if plot is not None:
-            fig = P.plot_wind(r) if meta["type"] == "thesis" else P.plot_long_horizon(r)
+            # with the true wind the file holds (a simulated run)
+            if meta["type"] == "thesis":
+                fig = P.plot_wind(r, SimpleNamespace(wind_true=data["wind_true"]))
+            else:
+                fig = P.plot_long_horizon(r, SimpleNamespace(t=data["t"], wind_ned=data["wind_ned"]))
             _write_atomic(plot, lambda tmp: fig.savefig(tmp, dpi=100, format=plot.suffix.lstrip(".") or "png"))
         if json_out is not None:
             _write_json(json_out, summary)
@@ -247,7 +252,7 @@ Example: imunav airdata faults --kind variance --magnitude 3.5 --runs 100 --seed
             th = filters_faults.thesis_thresholds(window, 3)
             ss = np.random.SeedSequence(seed).spawn(2)
             chunk = max(1, min(50, runs))
-            with Progress(console=Console(stderr=True), transient=True) as prog:
+            with Progress(console=make_console(stderr=True), transient=True) as prog:
                 task = prog.add_task("Monte Carlo", total=2 * runs)
 
                 def tick(n: int) -> None:
@@ -281,7 +286,7 @@ Example: imunav airdata faults --kind variance --magnitude 3.5 --runs 100 --seed
                           "-" if r["median_delay"] is None else f"{r['median_delay']:.0f}",
                           f"{r[f'detected_within_{horizon}']:.2f}", f"{r['missed']:.2f}",
                           f"{r['false_alarm_per_step']:.3f}")
-        Console().print(table)
+        make_console().print(table)
         if json_out is not None:
             _write_json(json_out, result)
 
@@ -310,7 +315,7 @@ Example: imunav airdata thesis --runs 50 --json thesis.json
             methods = tuple(m.strip() for m in robust_methods.split(",") if m.strip())
             if "gate2" not in methods or "nis" not in methods:
                 raise InvalidInputError("--robust-methods must include gate2 and nis (the thesis gate and the χ² gate)")
-            with Console(stderr=True).status(f"thesis scenarios, {runs} Monte Carlo runs"):
+            with make_console(stderr=True).status(f"thesis scenarios, {runs} Monte Carlo runs"):
                 rep = scenario.thesis_report(runs, seed, p_false_alarm=pfa, robust_methods=methods)
         except InvalidInputError as exc:
             _fail(exc)

@@ -8,11 +8,11 @@ from typing import Any, Optional
 
 import numpy as np
 import typer
-from rich.console import Console
 from rich.progress import Progress
 from rich.table import Table
 
 from imunav._atomic import check_outputs, write_json
+from imunav.cli._console import make_console
 from imunav.cli._errors import check_figure_path
 from imunav.cli._lazy import lazy
 from imunav.cli._options import END, INSTANCE, LAYOUT, MAG_TOPIC, START, TOPIC, reader_options, window
@@ -102,7 +102,7 @@ def run_cmd(
 
     check_outputs([file], [json_out])
 
-    con = Console()
+    con = make_console()
 
     file = _resolve(file, False)
     f = benchmark.make_filter(filter, _parse_params(param))
@@ -199,7 +199,7 @@ def benchmark_cmd(
 
     check_outputs([], [json_out])  # before the benchmark
 
-    con = Console()
+    con = make_console()
     files = broad.broad_trials(_resolve(directory, True))
     names = filter or ["adaptive", "smoother"]
     for n in names:
@@ -287,7 +287,7 @@ def montecarlo_cmd(
     check_figure_path(plot, "--plot")
 
 
-    con = Console()
+    con = make_console()
     names = tuple(f.strip() for f in filters.split(",") if f.strip())
     scn = scenario.PaperScenario(gyro_noise_unit=gyro_noise_unit, duration=duration)  # type: ignore[arg-type]
     every = scenario.default_filters(scn)

@@ -9,11 +9,11 @@ from typing import Any, Optional
 
 import numpy as np
 import typer
-from rich.console import Console
 from rich.markup import escape
 from rich.table import Table
 
 from imunav._atomic import check_outputs, write_json
+from imunav.cli._console import make_console
 from imunav.cli._errors import fail
 from imunav.cli._lazy import lazy
 from imunav.errors import InvalidInputError
@@ -93,7 +93,7 @@ def _print_summary(summary: Any, families: list[str], title: str) -> None:
                  if isinstance(r.get(c), float) and isinstance(r.get(c[:-4] + "_se"), float) and r[c[:-4] + "_se"] > 0]
             cells.append(f"{np.nanmax(z):.2f}" if z else "–")
         tab.add_row(r["unit"], verdict, *cells)
-    con = Console()
+    con = make_console()
     con.width = max(con.width, 150)  # a wide table reads better wrapped by the terminal than squeezed
     con.print(tab)
     for r in t.to_dict(orient="records"):

@@ -13,10 +13,10 @@ from typing import Any, Optional
 
 import numpy as np
 import typer
-from rich.console import Console
 from rich.table import Table
 
 from imunav._atomic import check_outputs, check_writable, read_json, write_json
+from imunav.cli._console import make_console
 from imunav.cli._lazy import lazy
 from imunav.cli._options import END, INSTANCE, LAYOUT, START, TOPIC, reader_options, window
 from imunav.errors import FileFormatError, InvalidInputError
@@ -104,7 +104,7 @@ def _finish(result: Any, out: Path, report: Optional[Path], *, save: Any = None,
         report.mkdir(parents=True, exist_ok=True)
         check_writable(report / "report.json")
     (save or result.calibration.save)(out)
-    con = Console()
+    con = make_console()
     if report is not None:
         write_json(report / "report.json", result.to_dict())
         plot.save_figure(plot.plot_residuals(result), report / "residuals.png")
@@ -299,6 +299,11 @@ def multipose(
         typer.echo("weakly determined: " + "; ".join(res.info["weak_parameters"]), err=True)
 
 
+#: units of the parameters a thermal calibration models (SI, as the calibration JSON stores them)
+_THERMAL_UNITS = {"accel_bias": "m/s^2", "gyro_bias": "rad/s", "accel_scale": "1 (scale factor)",
+                  "gyro_scale": "1 (scale factor)"}
+
+
 @app.command()
 def temperature(
     calibrations: list[str] = typer.Argument(..., help="Calibration JSON files as FILE@TEMP_C (one per temperature)."),
@@ -331,21 +336,25 @@ def temperature(
         order=order, model=model,
     )
     res.calibration.save(out)
-    tab = Table(title="temperature fits: MSE per order (chosen order marked *)")
+    tab = Table(title="temperature fits: MSE per order, in the parameter's unit squared (chosen order marked *)")
     tab.add_column("parameter")
     ords = [f.order for f in next(iter(res.fits.values()))[0].fits]
     for o in ords:
         tab.add_column(f"order {o}")
     for k, fits in res.fits.items():
         for i, f in enumerate(fits):
-            tab.add_row(f"{k}[{'xyz'[i]}]", *[f"{m.mse:.3g}" + ("*" if m.order == f.chosen_order else "") for m in f.fits])
-    Console().print(tab)
+            tab.add_row(f"{k}[{'xyz'[i]}] [{_THERMAL_UNITS.get(k, 'SI')}]", *[f"{m.mse:.3g}" + ("*" if m.order == f.chosen_order else "") for m in f.fits])
+    make_console().print(tab)
     if report is not None:
         report.mkdir(parents=True, exist_ok=True)
         write_json(report / "report.json", res.to_dict())
         for k, fits in res.fits.items():
             for i, f in enumerate(fits):
-                plot.save_figure(plot.plot_temperature_fit(f, f"{k} {'xyz'[i]}"), report / f"{k}_{'xyz'[i]}.png")
+                fig = plot.plot_temperature_fit(f, f"{k} {'xyz'[i]}")
+                unit = _THERMAL_UNITS.get(k, "SI")
+                fig.axes[0].set_ylabel(f"{k} {'xyz'[i]}, {unit}")
+                fig.axes[1].set_ylabel(f"residual, {unit}")
+                plot.save_figure(fig, report / f"{k}_{'xyz'[i]}.png")
     typer.echo(f"calibration with temperature model written to {out}")
 
 
@@ -393,7 +402,7 @@ def mag(
         report.mkdir(parents=True, exist_ok=True)
         write_json(report / "report.json", cal.to_dict())
         plot.save_figure(plot.plot_magnetometer(h, cal), report / "projections.png")
-    Console().print({"b": cal.b.round(6).tolist(), "field_norm": round(cal.field_norm, 6), "quality": cal.quality})
+    make_console().print({"b": cal.b.round(6).tolist(), "field_norm": round(cal.field_norm, 6), "quality": cal.quality})
     typer.echo(f"magnetometer calibration written to {out}")
     _write_px4(px4_values, px4_params)
 

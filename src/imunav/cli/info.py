@@ -8,10 +8,10 @@ from pathlib import Path
 from typing import Any
 
 import typer
-from rich.console import Console
 from rich.table import Table
 
 from imunav._atomic import check_outputs, write_json
+from imunav.cli._console import make_console
 from imunav.cli._lazy import lazy
 from imunav.cli._options import END, INSTANCE, LAYOUT, MAG_TOPIC, START, TOPIC, reader_options, window
 from imunav.errors import InvalidInputError
@@ -77,7 +77,7 @@ def info(
     duration, from the index, without reading the messages; with --topic: that IMU as above, plus
     the jitter, drops and out-of-order stamps of its messages."""
 
-    console = Console()
+    console = make_console()
     check_outputs([file], [json_out])
     if not (math.isfinite(window_s) and window_s > 0):
         raise InvalidInputError(f"--window {window_s}: the static-detector window must be a finite number of seconds > 0")

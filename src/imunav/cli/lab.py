@@ -6,11 +6,11 @@ from pathlib import Path
 from typing import Optional
 
 import typer
-from rich.console import Console
 from rich.markup import escape
 from rich.table import Table
 
 from imunav._atomic import check_outputs, read_json, write_json
+from imunav.cli._console import make_console
 from imunav.cli._errors import fail
 from imunav.cli._lazy import lazy
 from imunav.errors import InvalidInputError
@@ -45,7 +45,7 @@ def register(app: typer.Typer) -> None:
     ) -> None:
         check_outputs([config], [json_out])
 
-        console = Console(stderr=True)
+        console = make_console(stderr=True)
         try:
             result = imunav_lab.run_lab(
                 out, config, seed, steps=None if steps is None else [s.strip() for s in steps.split(",") if s.strip()],
@@ -60,12 +60,12 @@ def register(app: typer.Typer) -> None:
         for s in result.steps:
             verdict = "ERROR" if s.error else {None: "n/a", True: "PASS", False: "FAIL"}[s.passed]
             table.add_row(s.title, verdict, f"{s.seconds:.1f}")
-        Console().print(table)
+        make_console().print(table)
         checks = [c for c in result.spec_checks if c.limit is not None]
         spec_failed = any(c.passed is False for c in checks)
         if checks:
             failed = [c.name for c in checks if c.passed is False]
-            Console().print(f"specification: {len(checks)} checks, {len(failed)} failed"
+            make_console().print(f"specification: {len(checks)} checks, {len(failed)} failed"
                             + (f" ({escape(', '.join(failed[:8]))}{' …' if len(failed) > 8 else ''})" if failed else ""),
                             soft_wrap=True, highlight=False)
         for s in result.steps:

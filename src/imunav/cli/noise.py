@@ -6,12 +6,12 @@ from pathlib import Path
 from typing import Any
 
 import typer
-from rich.console import Console
 from rich.markup import escape
 from rich.progress import Progress
 from rich.table import Table
 
 from imunav._atomic import atomic_path, check_outputs, write_json
+from imunav.cli._console import make_console
 from imunav.cli._errors import check_figure_path
 from imunav.cli._lazy import lazy
 from imunav.cli._options import END, INSTANCE, LAYOUT, START, TOPIC, reader_options, window
@@ -106,7 +106,7 @@ def noise(
     The recording must be static (one pose, no rotation): a recording whose mean specific force is far from g,
     or whose 1 s window means change pose or rotate, is refused unless --force."""
 
-    console = Console()
+    console = make_console()
     exports = {"Kalibr imu.yaml": kalibr_out, "OpenVINS IMU file": openvins_out, "VINS-Fusion IMU block": vins_out}
     check_outputs([file], [json_out, plot, psd_plot, *exports.values()])
     check_figure_path(plot, "--plot")

@@ -6,11 +6,11 @@ from pathlib import Path
 from typing import Optional
 
 import typer
-from rich.console import Console
 from rich.markup import escape
 from rich.progress import Progress
 
 from imunav._atomic import check_outputs, write_json
+from imunav.cli._console import make_console
 from imunav.cli._lazy import lazy
 from imunav.errors import ConfigError, InvalidInputError
 from imunav.units import DEG
@@ -50,7 +50,7 @@ def register(app: typer.Typer) -> None:
     ) -> None:
         check_outputs([model], [out, segments, json_out])
 
-        console = Console(stderr=True)
+        console = make_console(stderr=True)
         try:
             summary = run_simulate(
                 profile, out, preset=preset, model=model, fs=fs, seed=seed, dwell=dwell, transition=transition,

@@ -7,11 +7,11 @@ from typing import Any, Optional
 
 import numpy as np
 import typer
-from rich.console import Console
 from rich.progress import Progress, track
 from rich.table import Table
 
 from imunav._atomic import atomic_path, check_outputs, write_json
+from imunav.cli._console import make_console
 from imunav.cli._errors import check_suffix, fail
 from imunav.cli._lazy import lazy
 from imunav.cli._options import INSTANCE, LAYOUT, TOPIC, reader_options
@@ -240,7 +240,7 @@ def benchmark_cmd(
         table.add_row(r["trial"], *[f"{r[n]:.3f}" for n in names])
     means = {n: float(np.mean([r[n] for r in rows])) for n in names}
     table.add_row("mean", *[f"{means[n]:.3f}" for n in names])
-    Console().print(table)
+    make_console().print(table)
     if json_out is not None:
         _write_json(json_out, {"thresholds": {k: ins.DEFAULT_THRESHOLDS[k] for k in ins.DETECTORS}, "trials": rows,
                                "mean": means})
