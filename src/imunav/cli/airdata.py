@@ -9,13 +9,13 @@ from typing import Optional
 
 import numpy as np
 import typer
-from rich.progress import Progress
 from rich.table import Table
 
 from imunav._atomic import atomic_path, check_outputs, write_json
 from imunav.cli._console import make_console
 from imunav.cli._errors import check_figure_path, check_suffix, fail
 from imunav.cli._lazy import lazy
+from imunav.cli._progress import progress
 from imunav.errors import FileFormatError, InvalidInputError
 
 P = lazy("imunav.airdata.plot")
@@ -252,11 +252,12 @@ Example: imunav airdata faults --kind variance --magnitude 3.5 --runs 100 --seed
             th = filters_faults.thesis_thresholds(window, 3)
             ss = np.random.SeedSequence(seed).spawn(2)
             chunk = max(1, min(50, runs))
-            with Progress(console=make_console(stderr=True), transient=True) as prog:
-                task = prog.add_task("Monte Carlo", total=2 * runs)
+            with progress("Monte Carlo", total=2 * runs) as report:
+                done = [0]
 
                 def tick(n: int) -> None:
-                    prog.update(task, advance=n)
+                    done[0] += n
+                    report(done[0], 2 * runs)
 
                 stats_f = scenario.simulate_detector_statistics(sc, runs, np.random.default_rng(ss[0]), window,
                                                        chunk=chunk, on_chunk=tick)
@@ -315,8 +316,10 @@ Example: imunav airdata thesis --runs 50 --json thesis.json
             methods = tuple(m.strip() for m in robust_methods.split(",") if m.strip())
             if "gate2" not in methods or "nis" not in methods:
                 raise InvalidInputError("--robust-methods must include gate2 and nis (the thesis gate and the χ² gate)")
-            with make_console(stderr=True).status(f"thesis scenarios, {runs} Monte Carlo runs"):
+            with progress(f"thesis scenarios, {runs} Monte Carlo runs") as report:
+                report(0, 1)
                 rep = scenario.thesis_report(runs, seed, p_false_alarm=pfa, robust_methods=methods)
+                report(1, 1)
         except InvalidInputError as exc:
             _fail(exc)
             return

@@ -8,6 +8,7 @@ from typing import Any, Optional
 
 import numpy as np
 import typer
+from rich.markup import escape
 from rich.progress import Progress
 from rich.table import Table
 
@@ -241,7 +242,7 @@ def benchmark_cmd(
             for n in names:
                 results.append(benchmark.evaluate(n, params, files))
                 prog.advance(task)
-    t = Table(title="BROAD RMSE [deg] (total / heading / inclination)")
+    t = Table(title=escape("BROAD RMSE [deg] (total / heading / inclination)"))
     t.add_column("trial")
     for r in results:
         t.add_column(r.filter)
@@ -298,7 +299,7 @@ def montecarlo_cmd(
                          n_workers=workers, address=address, progress=True,
                          description="attitude Monte Carlo", filters=names, duration=duration,
                          gyro_noise_unit=gyro_noise_unit)
-    t = Table(title=f"RMSE [deg] over {runs} runs (mean ± std); paper Table 2 in brackets")
+    t = Table(title=escape(f"RMSE [deg] over {runs} runs (mean ± std); paper Table 2 in brackets"))
     for c in ("filter", "pitch", "roll"):
         t.add_column(c)
     for k, v in scenarios.paper_table(res).items():

@@ -16,6 +16,7 @@ from imunav._atomic import check_outputs, write_json
 from imunav.cli._console import make_console
 from imunav.cli._errors import fail
 from imunav.cli._lazy import lazy
+from imunav.cli._progress import shows_progress
 from imunav.errors import InvalidInputError
 
 batch = lazy("imunav.batch")
@@ -36,7 +37,13 @@ def register(root: typer.Typer) -> None:
 _EXEC = typer.Option("processes", "--executor", help="processes, dask or serial.")
 _WORKERS = typer.Option(None, "--workers", "-j", help="Worker processes (default: all cores).")
 _ADDR = typer.Option(None, "--address", help="Dask scheduler address (tcp://host:8786) for --executor dask.")
-_QUIET = typer.Option(False, "--quiet", "-q", help="No progress bar.")
+_QUIET = typer.Option(False, "--quiet", "-q", help="No progress bar (none either when standard error is not a "
+                      "terminal).")
+
+
+def _bar(quiet: bool) -> bool:
+    """The library's own bar (imunav.montecarlo) on a terminal only, as imunav.cli._progress draws it."""
+    return shows_progress(quiet)
 _SPEC = typer.Option(None, "--spec", help="Datasheet spec (TOML with a [spec] table) for pass / fail per unit.")
 _JSON = typer.Option(None, "--json", help="Also write the summary (JSON) here.")
 _COLS = typer.Option(None, "--columns", help='CSV column mapping as JSON, e.g. \'{"gyro": ["gx","gy","gz"]}\'.')
@@ -126,7 +133,7 @@ def simulate_cmd(
     try:
         files = batch.simulate_batch(n_units, out, preset=preset, spread=spread, rng=seed, fs=fs, dwell_s=dwell,
                                transition_s=transition, rate_table=rate_table, format=fmt, static_s=static,
-                               executor=executor, n_workers=workers, progress=not quiet,
+                               executor=executor, n_workers=workers, progress=_bar(quiet),
                                overwrite=overwrite)  # type: ignore[arg-type]
     except InvalidInputError as exc:
         _fail(exc)
@@ -160,7 +167,7 @@ def calibrate_cmd(
         s = batch.calibrate_batch(folder, method=method, out_dir=out, spec=spec,
                             read_options=_read_options(fs, accel_unit, gyro_unit, columns),
                             latitude=None if latitude_deg is None else math.radians(latitude_deg), gravity=gravity,
-                            executor=executor, n_workers=workers, address=address, progress=not quiet,
+                            executor=executor, n_workers=workers, address=address, progress=_bar(quiet),
                             overwrite=overwrite)  # type: ignore[arg-type]
     except InvalidInputError as exc:
         _fail(exc)
@@ -195,7 +202,7 @@ def noise_cmd(
 
     try:
         s = batch.noise_batch(folder, out_dir=out, spec=spec, read_options=_read_options(fs, accel_unit, gyro_unit, columns),
-                        terms=tuple(t.strip() for t in terms.split(",") if t.strip()), executor=executor, n_workers=workers, address=address, progress=not quiet, force=force, overwrite=overwrite)  # type: ignore[arg-type]
+                        terms=tuple(t.strip() for t in terms.split(",") if t.strip()), executor=executor, n_workers=workers, address=address, progress=_bar(quiet), force=force, overwrite=overwrite)  # type: ignore[arg-type]
     except InvalidInputError as exc:
         _fail(exc)
     cols = ["gyro_arw", "gyro_bias_instability", "accel_vrw", "accel_bias_instability"]

@@ -13,6 +13,7 @@ from typing import Any, Optional
 
 import numpy as np
 import typer
+from rich.markup import escape
 from rich.table import Table
 
 from imunav._atomic import check_outputs, check_writable, read_json, write_json
@@ -343,7 +344,7 @@ def temperature(
         tab.add_column(f"order {o}")
     for k, fits in res.fits.items():
         for i, f in enumerate(fits):
-            tab.add_row(f"{k}[{'xyz'[i]}] [{_THERMAL_UNITS.get(k, 'SI')}]", *[f"{m.mse:.3g}" + ("*" if m.order == f.chosen_order else "") for m in f.fits])
+            tab.add_row(escape(f"{k}[{'xyz'[i]}] [{_THERMAL_UNITS.get(k, 'SI')}]"), *[f"{m.mse:.3g}" + ("*" if m.order == f.chosen_order else "") for m in f.fits])
     make_console().print(tab)
     if report is not None:
         report.mkdir(parents=True, exist_ok=True)

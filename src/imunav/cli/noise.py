@@ -7,7 +7,6 @@ from typing import Any
 
 import typer
 from rich.markup import escape
-from rich.progress import Progress
 from rich.table import Table
 
 from imunav._atomic import atomic_path, check_outputs, write_json
@@ -15,6 +14,7 @@ from imunav.cli._console import make_console
 from imunav.cli._errors import check_figure_path
 from imunav.cli._lazy import lazy
 from imunav.cli._options import END, INSTANCE, LAYOUT, START, TOPIC, reader_options, window
+from imunav.cli._progress import progress
 from imunav.errors import InvalidInputError
 from imunav.units import to_display
 
@@ -97,6 +97,8 @@ def noise(
     start: float | None = START,
     end: float | None = END,
     force: bool = typer.Option(False, "--force", help="Analyse a recording that is not static (moved or rotated)."),
+    quiet: bool = typer.Option(False, "--quiet", "-q", help="No progress bar (none either when standard error is "
+                               "not a terminal)."),
 ) -> None:
     """Identify the stochastic errors of a static IMU recording: overlapping Allan
     deviation with confidence intervals, GLS fit of quantization Q, white noise N,
@@ -143,20 +145,26 @@ def noise(
         if idx:
             groups.append((sensor, arr[:, idx], unit, tuple(names[i] for i in idx)))
     results: dict[str, Any] = {}
-    with Progress(console=console, transient=True) as prog:
-        task = prog.add_task("noise analysis", total=3 * len(groups))
+    with progress("noise analysis", quiet=quiet, total=3 * len(groups)) as report:
+        done = 0
+
+        def advance() -> None:
+            nonlocal done
+            done += 1
+            report(done, 3 * len(groups))
+
         for sensor, arr, unit, names in groups:
             r = imunav_noise.allan_deviation(arr, rate, tau_spec, kind, units=unit, channels=names, t=data.t,
                                              nan_policy="segments")
-            prog.advance(task)
+            advance()
             f = imunav_noise.fit_noise(r, terms=term_list, gauss_markov=gm, select=None if select == "none" else select,
                           quantity=sensor)
-            prog.advance(task)
+            advance()
             p = imunav_noise.psd(arr, rate, "welch", nperseg=min(arr.shape[0], 2**14), units=unit, channels=names)
             pa = imunav_noise.log_average(p, 10)
             # same band as the Allan fit: below 1/(2 tau_min), clear of the sensor's own filter
             pf = imunav_noise.fit_psd(pa, f_range=[(pa.f[0], min(0.4 * rate, 0.5 / float(tm))) for tm in f.tau_min])
-            prog.advance(task)
+            advance()
             results[sensor] = (r, f, p, pa, pf, imunav_noise.compare_psd_allan(pf, f))
 
     console.print(f"[bold]{file}[/bold]: {data.n:,} samples at {rate:g} Hz ({data.n / rate:.6g} s), "
