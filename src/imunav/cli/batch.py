@@ -127,7 +127,7 @@ def simulate_cmd(
 
     Writes <unit>.<format>, <unit>_rate.<format>, segments.json, rate_segments.json, truth/<unit>.json, batch.json and, last, manifest.json (run id, seed, every file with its SHA-256). A folder that holds another run is refused unless --overwrite, which clears it first; batch calibrate / noise trust only the files of a complete manifest.
 
-    Example: imunav batch simulate 4 --out batch --fs 20 --dwell 4
+    Example: imunav batch simulate 4 --out batch --fs 20 --dwell 4 --overwrite
     """
 
     try:
@@ -158,7 +158,7 @@ def calibrate_cmd(
 
     Writes per unit <unit>.json (calibration) and <unit>_report.json, plus summary.csv, summary.json, index.html and manifest.json (the result folder is a run folder: --overwrite to replace one). A batch folder written by batch simulate is read through its manifest (a killed run is refused). Exit status 1 when a unit fails to process or fails the spec.
 
-    Example: imunav batch calibrate batch --method thesis --spec examples/lab_spec.toml --json batch_cal.json
+    Example: imunav batch calibrate batch --method thesis --out batch_thesis --json batch_cal.json
     """
 
     check_outputs([spec], [json_out])
