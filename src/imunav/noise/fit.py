@@ -762,6 +762,11 @@ def identifiability(fit: NoiseFit, duration: float, clusters: float = 9.0) -> di
         For each of B, K, R among ``fit.names``: one dict per channel with ``selected`` (bool),
         ``identifiable`` (bool, or None when the term was not selected), ``tau_x_s`` and ``needs_s`` (the
         record length the term needs, s; None when not selected or without a white-noise term).
+
+    Raises
+    ------
+    InvalidInputError
+        If ``duration`` is not a positive number of seconds.
     """
     if not (np.isfinite(duration) and duration > 0):
         raise InvalidInputError(f"duration={duration}: give the record length in seconds (> 0)")
