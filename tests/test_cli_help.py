@@ -126,7 +126,12 @@ def test_command_help_imports_no_library(name):
     floor = _floor()
     dt, loaded = _help_run(name, "--help")
     assert loaded == [], f"imunav {name} --help imported {loaded[:10]}"
-    assert dt <= floor + 0.5, (name, dt, floor)
+    # generous, for a loaded machine (numpy + typer take the floor; a library import adds seconds): a second
+    # try before failing on a spike of load
+    bound = max(floor + 0.5, 3 * floor)
+    if dt > bound:
+        dt = min(dt, _help_run(name, "--help")[0])
+    assert dt <= bound, (name, dt, floor)
 
 
 def test_help_texts_are_plain_prose():
