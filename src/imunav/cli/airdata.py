@@ -280,7 +280,8 @@ Example: imunav airdata faults --kind variance --magnitude 3.5 --runs 100 --seed
                              "false_alarm_per_step": fa_step, "false_alarm_per_run": fa_run})
         result = {"scenario": sc.to_dict(), "runs": runs, "seed": seed, "window": window, "pfa": pfa, "rows": rows}
         table = Table(title=f"{kind} fault at thesis step {onset}, {runs} runs")
-        for col in ("detector", "thresholds", "threshold", "median delay", f"within {horizon}", "missed", "FA/step"):
+        for col in ("detector", "thresholds", "threshold (statistic)", "median delay (steps)",
+                    f"detected within {horizon} steps (share)", "missed (share)", "false alarms per step (share)"):
             table.add_column(col)
         for r in rows:
             table.add_row(r["detector"], r["threshold_mode"], f"{r['threshold']:.2f}",

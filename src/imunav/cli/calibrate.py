@@ -112,11 +112,14 @@ def _finish(result: Any, out: Path, report: Optional[Path], *, save: Any = None,
     tab = Table(title=f"{result.method}: residual RMS and design condition")
     tab.add_column("fit")
     tab.add_column("residual RMS (x, y, z)")
-    tab.add_column("condition")
+    tab.add_column("unit")
+    tab.add_column("condition number")
+    cal = result.calibration
     for k, r in result.residuals.items():
         rms = np.sqrt(np.mean(np.asarray(r, float) ** 2, axis=0))
         c = result.condition.get(k, result.condition.get(k.split("_")[0], float("nan")))
-        tab.add_row(k, np.array2string(np.atleast_1d(rms), precision=4), f"{c:.3g}")
+        unit = cal.raw_accel_unit if k.startswith("accel") else cal.raw_gyro_unit if k.startswith("gyro") else "raw"
+        tab.add_row(k, np.array2string(np.atleast_1d(rms), precision=4), unit, f"{c:.3g}")
     con.print(tab)
     con.print(f"calibration written to {out}" + (f", report in {report}" if report else ""))
     _write_px4(px4_values, px4)
