@@ -109,6 +109,9 @@ def clean_help(text: str | None) -> str | None:
         if lines and not lines[0].lstrip().startswith("\b"):
             # click joins a paragraph's lines and keeps the first one's indentation: the others' is a run
             lines = lines[:1] + [line.lstrip() for line in lines[1:]]
+            if lines[0].lstrip().startswith("Example") and "imunav " in para:
+                # an example is printed as written: click's wrapping would cut a command at a hyphen
+                lines = ["\b", *lines]
         paragraphs.append("\n".join(lines))
     return "\n\n".join(paragraphs)
 

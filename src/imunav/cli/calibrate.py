@@ -36,7 +36,8 @@ sim = lazy("imunav.sim")
 
 app = typer.Typer(
     help="Calibrate an IMU or magnetometer from a recording; writes the calibration JSON.\n\n"
-    "Example: imunav calibrate multiposition rec.npz --segments segments.json --out cal.json",
+    "Example (after imunav simulate's): imunav calibrate multiposition static.npz --segments static_segments.json "
+    "--out cal.json",
     no_args_is_help=True,
 )
 
@@ -201,7 +202,7 @@ def ratetable(
 ) -> None:
     """Rate-table least squares for the gyro matrix (with the static test: the full thesis model).
 
-    Example: imunav calibrate ratetable rate.npz --segments rate_segments.json --static static.npz --static-segments static_segments.json --out cal.json
+    Example: imunav simulate ratetable --preset thesis_sim --out rate.npz && imunav calibrate ratetable rate.npz --segments rate_segments.json --static static.npz --static-segments static_segments.json --out cal.json
     """
 
     check_outputs([recording, segments, static, static_segments, base, noise_model], [out, px4_params])
@@ -242,7 +243,7 @@ def ferraris(
 ) -> None:
     """Ferraris six-pose + three-turn calibration (imucal-compatible).
 
-    Example: imunav calibrate ferraris session.csv --sections sections.json --fs 102.4 --gyro-unit deg/s --out cal.json
+    Example (imucal's session in the shared data): imunav calibrate ferraris ../shared/data/imucal/example_ferraris_session.csv --sections ../shared/data/imucal/example_ferraris_session_list.json --fs 102.4 --gyro-unit deg/s --out ferraris_cal.json --imucal-out ferraris_imucal.json
     """
 
     check_outputs([recording, sections], [out, px4_params, imucal_out])
@@ -283,7 +284,7 @@ def multipose(
 ) -> None:
     """Tedaldi et al. (2014) multi-pose calibration without a rate table.
 
-    Example: imunav calibrate multipose session.csv --fs 100 --init-s 36.5 --no-accel-misalignment --out cal.json
+    Example (the MPU-6050 session in the shared data): imunav calibrate multipose ../shared/data/mpu6050_tedaldi/example_data_calibration.csv --skiprows 4 --fs 100 --accel-unit counts --accel-scale 5.9855e-4 --gyro-unit counts --gyro-scale 1.3323e-4 --init-s 36.5 --no-accel-misalignment --out mpu_cal.json
     """
 
     check_outputs([recording], [out, px4_params])
@@ -320,7 +321,7 @@ def temperature(
 ) -> None:
     """Bias and scale factor as polynomials of temperature (order by leave-one-out CV).
 
-    Example: imunav calibrate temperature cal_m30.json@-30 cal_0.json@0 cal_20.json@20 cal_50.json@50 --orders 1,2 --out thermal_cal.json
+    Example (the calibrations of the examples above standing for three temperatures): imunav calibrate temperature static_cal.json@-10 cal.json@25 static_cal.json@40 --orders 1 --params accel_bias --out thermal_cal.json
     """
 
     check_outputs([c.rsplit("@", 1)[0] for c in calibrations], [out])

@@ -29,9 +29,9 @@ COMMANDS: dict[str, str] = {
              "cross-check.",
     "simulate": "Simulate a test PROFILE (static, multiposition, ratetable, sixposition, ferraris) with a virtual "
                 "IMU and write the recording.",
-    "lab": "Run the lab and write a report folder (index.html, summary.md, summary.json, data/, figures/).",
-    "compensate": "Compensate a recording with a calibration (accelerometer first, then gyro).",
     "calibrate": "Calibrate an IMU or magnetometer from a recording; writes the calibration JSON.",
+    "compensate": "Compensate a recording with a calibration (accelerometer first, then gyro).",
+    "lab": "Run the lab and write a report folder (index.html, summary.md, summary.json, data/, figures/).",
     "attitude": "Attitude filters (Madgwick, Mahony, MEKF, UKF, adaptive, smoother, paper KFs).",
     "zupt": "Foot-mounted INS with zero-velocity updates.",
     "gins": "Loosely coupled GNSS/INS (error-state Kalman filter) on KF-GINS files.",

@@ -25,7 +25,7 @@ _HELP = f"""Simulate a test PROFILE ({", ".join(PROFILES)}) with a virtual IMU a
 
 multiposition is the 100-position static test, ratetable the 120-step +-250 deg/s rate-table test (Günhan 2014, section 4.1), sixposition each axis up then down, ferraris six poses plus a full turn about each axis, static one level position for --duration seconds.  The error model is a preset (--preset, 'ideal' = no errors) or a TOML file (--model).  The format follows the suffix of --out (.csv .parquet .h5 .mat .npz); the segment table goes next to it as <name>_segments.json (what imunav calibrate --segments reads).  Earth rate and normal gravity are used when --lat-deg is given (else constant 9.80665 m/s^2).
 
-Example: imunav simulate multiposition --preset thesis_sim --fs 100 --seed 1 --out hundred.npz
+Example: imunav simulate multiposition --preset thesis_sim --fs 100 --seed 1 --out static.npz
 """
 
 
