@@ -117,8 +117,8 @@ def _floor() -> float:
 
 
 @pytest.mark.parametrize("name", [
-    pytest.param(n, marks=pytest.mark.xfail(reason="imunav.cli.gins imports its library at module level; it is "
-                                            "converted to imunav.cli._lazy.lazy with the gins work", strict=False))
+    pytest.param(n, marks=pytest.mark.skip(reason="imunav.cli.gins imports its library at module level; remove "
+                                           "this skip once it names it with imunav.cli._lazy.lazy (the gins work)"))
     if n == "gins" else n for n in COMMANDS])
 def test_command_help_imports_no_library(name):
     """`imunav CMD --help` builds the help from the signature: no numba, scipy, pandas, nor the command's library
