@@ -131,6 +131,19 @@ def build_graph(src: Path, package: str) -> Graph:
 
     graph = Graph(modules)
     for m, tree in trees.items():
+        # the CLI's lazy imports (imunav.cli._lazy.lazy): `alias = lazy("imunav.x")` at module level, then
+        # `alias.name` resolved like `from imunav.x import name`
+        aliases = {node.targets[0].id: node.value.args[0].value for node in tree.body
+                   if isinstance(node, ast.Assign) and len(node.targets) == 1 and isinstance(node.targets[0], ast.Name)
+                   and isinstance(node.value, ast.Call) and isinstance(node.value.func, ast.Name)
+                   and node.value.func.id == "lazy" and node.value.args and isinstance(node.value.args[0], ast.Constant)
+                   and str(node.value.args[0].value).startswith(package + ".")}
+        for node in ast.walk(tree) if aliases else ():
+            if isinstance(node, ast.Attribute) and isinstance(node.value, ast.Name) and node.value.id in aliases:
+                base = aliases[node.value.id]
+                if base in modules:
+                    graph.edges.append(Import(m, resolve(base, node.attr), node.lineno, False))
+    for m, tree in trees.items():
         for node, in_fn in _imports(tree):
             if isinstance(node, ast.Import):
                 targets = [(a.name, None) for a in node.names]

@@ -62,7 +62,8 @@ def test_lab_end_to_end_reduced_renders_in_chromium(tmp_path):
     cfg.write_text(REDUCED)
     out = tmp_path / "report"
     res = runner.invoke(app, ["lab", "--out", str(out), "--config", str(cfg), "--quiet"])
-    assert res.exit_code == 0, res.output  # no step errors (a failed spec is a verdict, not an error)
+    # no step errors; the failed spec lines give exit status 1, as imunav batch (issue 26), and say so
+    assert res.exit_code == 1 and "a [spec] check failed" in res.stderr, res.output
     s = json.loads((out / "summary.json").read_text())
     steps = {st["name"]: st for st in s["steps"]}
     assert list(steps) == ["simulate_tests", "calibration", "temperature", "compensation"]

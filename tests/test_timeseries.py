@@ -433,3 +433,15 @@ def test_accelerometer_in_g_at_rest_warns(tmp_path):
     assert r.exit_code == 0
     lines = r.stderr.strip().splitlines()
     assert len(lines) == 1 and lines[0].startswith("warning: ") and "in g" in lines[0]
+
+
+def test_window_counts_seconds_from_the_first_sample():
+    t = 1000.0 + np.arange(100) / 10.0  # a clock that does not start at 0 (boot time, GPS week)
+    d = ImuData(t, np.zeros((100, 3)), np.tile([0.0, 0.0, -G0], (100, 1)))
+    w = d.window(2.0, 5.0)
+    assert w.n == 30 and w.t[0] == pytest.approx(1002.0) and w.t[-1] == pytest.approx(1004.9)
+    assert w.meta["provenance"][-1]["op"] == "window"
+    assert d.window(None, None) is d and d.window(9.0).n == 10
+    for bad in ((-1.0, None), (5.0, 5.0), (20.0, None), (float("nan"), None)):
+        with pytest.raises(InvalidInputError):
+            d.window(*bad)

@@ -46,7 +46,7 @@ import pandas as pd
 
 from imunav import calib
 from imunav.calib import ImuCalibration
-from imunav.errors import ConfigError, FileFormatError, InvalidInputError, NotStaticError
+from imunav.errors import ConfigError, InvalidInputError, NotStaticError
 from imunav.io import read_imu, write_imu
 from imunav.io._atomic import atomic_path, write_json
 from imunav.montecarlo import Executor, run_batch, spawn_generators
@@ -149,18 +149,6 @@ def _sidecar(rec: Path, suffix: str, shared: str, trusted: Sequence[str] | None 
         return own
     common = rec.parent / shared
     return common if _usable(common, trusted) else None
-
-
-def _read_segments(path: Path) -> Any:
-    try:
-        d = json.loads(path.read_text(encoding="utf-8"))
-    except json.JSONDecodeError as e:
-        raise FileFormatError(f"{path}: not valid JSON ({e})") from e
-    d = d.get("segment_table", d)
-    try:
-        return Segments(**{k: np.asarray(d[k]) for k in Segments.__dataclass_fields__})
-    except KeyError as e:
-        raise FileFormatError(f"{path}: segment table lacks the column {e} (write it with Profile.to_dict())") from None
 
 
 # ---------------------------------------------------------------------------
@@ -540,7 +528,7 @@ def calibrate_unit(
                 f"{rec}: no segment table for the multi-position test; put {rec.stem}_segments.json or "
                 "segments.json (Profile.to_dict() format) next to the recordings"
             )
-        res = calib.multiposition(data, _read_segments(seg), latitude=latitude, gravity=gravity)
+        res = calib.multiposition(data, Segments.read(seg), latitude=latitude, gravity=gravity)
         if method == "thesis":
             rate = next((p for p in sorted(rec.parent.glob(f"{rec.stem}_rate.*"))
                          if p.suffix.lower() in RECORDING_SUFFIXES and _usable(p, trusted)), None)
@@ -550,7 +538,7 @@ def calibrate_unit(
                     f"{rec}: method 'thesis' needs the rate-table test {rec.stem}_rate.<ext> and its segment table "
                     "rate_segments.json (or use --method multiposition)"
                 )
-            rres = calib.ratetable(read_imu(rate, **opts), _read_segments(rseg), base=res.calibration,
+            rres = calib.ratetable(read_imu(rate, **opts), Segments.read(rseg), base=res.calibration,
                                    latitude=latitude, gravity=gravity)
             res = calib.combine(res, rres)
     else:

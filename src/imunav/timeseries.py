@@ -432,6 +432,51 @@ class ImuData:
             raise InvalidInputError(f"no samples in [{t0}, {t1}); the recording spans [{self.t[0]}, {self.t[-1]}]")
         return self.slice(i0, i1)
 
+    def window(self, start: float | None = None, end: float | None = None) -> "ImuData":
+        """The samples from ``start`` to ``end`` seconds after the recording's first sample.
+
+        Times count from ``t[0]`` whatever the clock (a PX4 log's boot time, a GPS week): ``start=60,
+        end=120`` is the second minute of the recording.  A ``window`` step in ``meta["provenance"]``
+        records the cut (in seconds from the start and on the recording's clock).
+
+        Parameters
+        ----------
+        start, end : float, optional
+            Window, s from the first sample (``start <= t - t[0] < end``; None: the ends).
+
+        Returns
+        -------
+        ImuData
+            The samples of the window (the recording itself when both are None).
+
+        Raises
+        ------
+        InvalidInputError
+            If a bound is not a finite number, ``start`` is negative or not before ``end``, or the window
+            holds fewer than 2 samples (the message gives the recording's duration).
+        """
+        if start is None and end is None:
+            return self
+        for name, v in (("start", start), ("end", end)):
+            if v is not None and not np.isfinite(v):
+                raise InvalidInputError(f"window {name}={v}: give a finite number of seconds from the recording's start")
+        if start is not None and start < 0:
+            raise InvalidInputError(f"window start {start:g} s is before the recording's start (0 s)")
+        if start is not None and end is not None and end <= start:
+            raise InvalidInputError(f"window end {end:g} s is not after its start {start:g} s")
+        rel = self.t - self.t[0]
+        i0 = 0 if start is None else int(np.searchsorted(rel, start, side="left"))
+        i1 = self.n if end is None else int(np.searchsorted(rel, end, side="left"))
+        if i1 - i0 < 2:
+            raise InvalidInputError(
+                f"the window [{start or 0:g}, {'end' if end is None else f'{end:g}'}) s holds {max(i1 - i0, 0)} "
+                f"samples; the recording lasts {self.duration:.6g} s from its start")
+        out = self.slice(i0, i1)
+        out.meta.update(add_step(out.meta, "window", {
+            "start_s": float(rel[i0]), "end_s": float(rel[i1 - 1]), "t0": float(self.t[i0]), "t1": float(self.t[i1 - 1]),
+            "samples": int(i1 - i0)}))
+        return out
+
     def interp(self, t_new: ArrayLike) -> "ImuData":
         """Linear interpolation of every channel at the times ``t_new`` (s).
 

@@ -120,3 +120,40 @@ def test_minmax_refuses_degenerate_geometry(kind):
 def test_minmax_accepts_a_sphere():
     u = _sphere(500, np.random.default_rng(1))
     assert np.allclose(hard_iron_minmax(30 * u + [5, -3, 2]), [5, -3, 2], atol=1.0)
+
+
+def _cap(n=600, deg=16.0, seed=0):
+    """A cap of the sphere (about 2 % of it for 16 deg) around +z: field 45, hard iron (10, -5, 3)."""
+    rng = np.random.default_rng(seed)
+    cz = rng.uniform(np.cos(np.deg2rad(deg)), 1.0, n)
+    ph = rng.uniform(0.0, 2 * np.pi, n)
+    d = np.c_[np.sqrt(1 - cz**2) * np.cos(ph), np.sqrt(1 - cz**2) * np.sin(ph), cz]
+    return d * 45.0 + [10.0, -5.0, 3.0] + 0.3 * rng.standard_normal((n, 3))
+
+
+def test_minmax_refuses_the_coverage_the_ellipsoid_refuses(tmp_path):
+    """On a cap the mid-range is the field, not the hard iron (issue 26): refused, and no PX4 file written."""
+    import warnings
+
+    from typer.testing import CliRunner
+
+    from imunav.calib.magnetometer import fit_ellipsoid, fit_minmax
+    from imunav.cli.main import app
+    from imunav.errors import DegenerateGeometryError
+
+    h = _cap()
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # no leaked RuntimeWarning either
+        for fit in (fit_ellipsoid, fit_minmax):
+            with pytest.raises(DegenerateGeometryError, match="cover only"):
+                fit(h)
+    np.savez(tmp_path / "cap.npz", mag=h)
+    r = CliRunner().invoke(app, ["calibrate", "mag", str(tmp_path / "cap.npz"), "--method", "minmax", "--out",
+                                 str(tmp_path / "m.json"), "--px4-params", str(tmp_path / "m.params")])
+    assert r.exit_code == 2 and "--min-coverage" in r.stderr and "min_coverage" not in r.stderr
+    assert not (tmp_path / "m.json").exists() and not (tmp_path / "m.params").exists()
+    # a whole sphere passes, and the mid-range finds the hard iron
+    rng = np.random.default_rng(1)
+    d = rng.standard_normal((800, 3))
+    full = d / np.linalg.norm(d, axis=1, keepdims=True) * 45.0 + [10.0, -5.0, 3.0]
+    np.testing.assert_allclose(fit_minmax(full).b, [10.0, -5.0, 3.0], atol=1.0)

@@ -141,3 +141,63 @@ def test_cli_minmax_degenerate_is_an_error_not_nan(tmp_path, kind):
                                  "--out", str(tmp_path / "c.json")])
     assert r.exit_code == 2 and "Traceback" not in r.stderr, r.stderr
     assert not (tmp_path / "c.json").exists()
+
+
+def test_imucal_export_round_trips_through_imucal(tmp_path):
+    """--imucal-out on imucal's shared continuous session (°/s in the file): imucal's own reader loads the file and
+    it agrees with imucal's own Ferraris on the same session (issue 26: K_g came out 0.0179 for 1.028)."""
+    imucal = pytest.importorskip("imucal")
+    import pandas as pd
+    from imucal.management import load_calibration_info
+    from shared_data import data_path
+
+    csv, secs = data_path("imucal", "example_ferraris_session.csv"), data_path("imucal", "example_ferraris_session_list.json")
+    out = tmp_path / "imucal.json"
+    r = CliRunner().invoke(app, ["calibrate", "ferraris", str(csv), "--sections", str(secs), "--fs", "102.4",
+                                 "--gyro-unit", "deg/s", "--out", str(tmp_path / "cal.json"), "--imucal-out", str(out)])
+    assert r.exit_code == 0, r.output
+    assert "raw data in m/s^2 and deg/s, calibrated in m/s^2 and deg/s" in " ".join(r.output.split())
+    mine = load_calibration_info(out)
+    df = pd.read_csv(csv).set_index("n_samples")
+    regions = imucal.ferraris_regions_from_section_list(df, pd.DataFrame(json.loads(Path(secs).read_text())).T)
+    peer = imucal.FerrarisCalibration().compute(regions, sampling_rate_hz=102.4, from_acc_unit="m/s^2",
+                                               from_gyr_unit="deg/s")
+    assert (mine.from_gyr_unit, mine.gyr_unit, mine.from_acc_unit) == ("deg/s", "deg/s", "m/s^2")
+    for k in ("K_a", "R_a", "b_a", "K_g", "R_g", "K_ga", "b_g"):
+        a, b = np.asarray(getattr(mine, k)), np.asarray(getattr(peer, k))
+        assert np.max(np.abs(a - b)) <= 1e-9 * np.max(np.abs(b)), (k, a, b)
+    assert np.diag(mine.K_g) == pytest.approx([1.028, 0.982, 0.998], abs=1e-3)
+
+
+def test_the_calibration_help_examples_chain_in_an_empty_folder(tmp_path, monkeypatch):
+    """simulate -> calibrate (every method) -> compensate: each --help example runs as written after the one
+    before it, in the order `imunav --help` lists the commands, in an empty folder (issue 26).  Examples on a
+    file of the user's own (a magnetometer CSV, a flight log) are the only ones left out."""
+    import re
+    import shlex
+
+    from shared_data import data_path
+
+    shared = data_path("imucal", "example_ferraris_session.csv").parents[1]
+    work = tmp_path / "work"
+    work.mkdir()
+    (tmp_path / "shared").mkdir()
+    (tmp_path / "shared" / "data").symlink_to(shared)
+    runner = CliRunner()
+    examples = []
+    for path in (["simulate"], ["calibrate"], ["calibrate", "multiposition"], ["calibrate", "ratetable"],
+                 ["calibrate", "ferraris"], ["calibrate", "multipose"], ["calibrate", "temperature"],
+                 ["calibrate", "mag"], ["compensate"]):
+        text = " ".join(runner.invoke(app, [*path, "--help"], env={"COLUMNS": "200"}).output.split())
+        examples += re.findall(r"Example(?: \([^)]*\))?: (imunav .*?)(?= Example| Arguments:| Options:|$)", text)
+    own_files = ("mag.csv", "flight.ulg")
+    run = [e for e in examples if not any(f in e for f in own_files)]
+    assert len(run) == 8 and len(examples) == 10, examples
+    monkeypatch.chdir(work)
+    for example in run:
+        for command in example.split(" && "):
+            r = runner.invoke(app, shlex.split(command)[1:])
+            assert r.exit_code == 0, (command, r.output)
+    assert {"static.npz", "static_segments.json", "cal.json", "static_cal.json", "static_cal.params",
+            "static_compensated.npz", "thermal_cal.json", "ferraris_imucal.json", "mpu_cal.json"} <= {
+        p.name for p in work.iterdir()}

@@ -2,10 +2,13 @@
 
 from __future__ import annotations
 
+import functools
 import os
+import re
 import subprocess
 import sys
 
+import pytest
 from shared_data import ROOT
 from typer.main import get_command
 from typer.testing import CliRunner
@@ -76,3 +79,69 @@ def test_the_listed_summary_is_the_first_sentence_of_each_commands_help():
     for name, summary in COMMANDS.items():
         own = " ".join((group.commands[name].help or "").split())
         assert own.startswith(" ".join(summary.split())), (name, own[:120])
+
+
+#: what `imunav CMD --help` may import of the package: the CLI, and the core that `import imunav` loads
+_HELP_MODULES = ("imunav", "imunav.errors", "imunav.units", "imunav._atomic")
+_HEAVY = ("numba", "scipy", "pandas", "matplotlib", "torch", "dask", "pyulog", "rosbags", "yaml", "sklearn")
+_HELP_CODE = (
+    "import sys, time\n"
+    "t = time.perf_counter()\n"
+    "from imunav.cli.main import app\n"
+    "try:\n"
+    "    app(sys.argv[1:], standalone_mode=False)\n"
+    "except SystemExit:\n"
+    "    pass\n"
+    "dt = time.perf_counter() - t\n"
+    f"heavy = {_HEAVY!r}\n"
+    f"own = {_HELP_MODULES!r}\n"
+    "bad = sorted(m for m in sys.modules if m.split('.')[0] in heavy\n"
+    "             or (m.startswith('imunav.') and m not in own and not m.startswith('imunav.cli')))\n"
+    "print(repr((dt, bad)), file=sys.stderr)\n"
+)
+
+
+def _help_run(*argv: str) -> tuple[float, list[str]]:
+    """(seconds from the first import of imunav to the printed help, heavy / library modules then loaded)."""
+    env = {**os.environ, "PYTHONPATH": os.pathsep.join(p for p in (str(ROOT / "src"), os.environ.get("PYTHONPATH")) if p)}
+    r = subprocess.run([sys.executable, "-c", _HELP_CODE, *argv], capture_output=True, text=True, env=env, timeout=120)
+    assert r.returncode == 0, r.stderr
+    return eval(r.stderr.strip().splitlines()[-1])  # noqa: S307 - our own repr
+
+
+@functools.cache
+def _floor() -> float:
+    return _help_run("--help")[0]
+
+
+@pytest.mark.parametrize("name", list(COMMANDS))
+def test_command_help_imports_no_library(name):
+    """`imunav CMD --help` builds the help from the signature: no numba, scipy, pandas, nor the command's library
+    (issue 26: it took 2-7 s).  The time is a generous bound over the floor of `imunav --help` (typer, numpy)."""
+    floor = _floor()
+    dt, loaded = _help_run(name, "--help")
+    assert loaded == [], f"imunav {name} --help imported {loaded[:10]}"
+    # generous, for a loaded machine (numpy + typer take the floor; a library import adds seconds): a second
+    # try before failing on a spike of load
+    bound = max(floor + 0.5, 3 * floor)
+    if dt > bound:
+        dt = min(dt, _help_run(name, "--help")[0])
+    assert dt <= bound, (name, dt, floor)
+
+
+def test_help_texts_are_plain_prose():
+    """No Sphinx markup and no runs of spaces in any help text; listings keep whole first sentences (issue 26)."""
+    markup = ("``", ":func:", ":class:", ":meth:", ":mod:", ":data:")
+    problems = []
+    for path, cmd in _leaves(get_command(app), [], groups=True):
+        texts = [("help", cmd.help)] + [(p.name, getattr(p, "help", None)) for p in cmd.params]
+        for what, text in texts:
+            for line in (text or "").splitlines():
+                if any(m in line for m in markup) or re.search(r"\S {2,}\S", line):
+                    problems.append((" ".join(path), what, line.strip()[:80]))
+        res = CliRunner().invoke(app, [*path, "--help"], env={"COLUMNS": "200"})
+        if any(m in res.output for m in markup):
+            problems.append((" ".join(path), "--help output", "markup"))
+    assert problems == []
+    listing = CliRunner().invoke(app, ["calibrate", "--help"], env={"COLUMNS": "200"}).output
+    assert "Tedaldi et al. (2014) multi-pose calibration without a rate table." in " ".join(listing.split())

@@ -91,3 +91,16 @@ def test_adis16405_arw_against_welch_psd():
     f = fit_noise(allan_deviation(np.deg2rad(d["gyro"]), float(d["fs"]), units="rad/s"), tau_range=(0.15, 1e5))
     ref = adis_welch_arw(p)
     np.testing.assert_allclose(f.display("N"), ref, rtol=0.03)
+
+
+def test_cli_noise_on_a_px4_log_with_dropouts_in_a_window(tmp_path):
+    """sample.ulg has logger dropouts: a window of its static stretch is analysed, gaps reported (issue 26)."""
+    ulg = data_path("px4_ulog", "sample.ulg")
+    out = tmp_path / "n.json"
+    r = CliRunner().invoke(app, ["noise", str(ulg), "--topic", "sensor_combined", "--start", "6", "--end", "68",
+                            "--channels", "gx,gy,gz", "--json", str(out)])
+    assert r.exit_code == 0, r.output
+    assert "time gap(s)" in r.output
+    d = json.loads(out.read_text())
+    assert d["start_s"] == 6 and len(d["gaps"]) >= 1 and 15000 < d["n_samples"] < 15600
+    assert "identifiability" in d and set(d["identifiability"]["gyro"]) <= {"B", "K", "R"}

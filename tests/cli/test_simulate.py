@@ -27,7 +27,7 @@ def test_simulate_ideal_static_with_earth_rate(tmp_path):
     np.testing.assert_allclose(data.gyro[:, 0], earth.OMEGA_E * np.cos(np.pi / 4), rtol=1e-12)
     summary = json.loads((tmp_path / "s.json").read_text())
     assert summary["earth_rate"] is True and summary["segments"] == {"static": 1}
-    assert (tmp_path / "static_segments.csv").read_text().startswith("kind,step,")
+    assert json.loads((tmp_path / "static_segments.json").read_text())["segment_table"]["kind"] == ["static"]
 
 
 def test_simulate_rate_table_with_preset_is_seeded(tmp_path):
@@ -39,6 +39,8 @@ def test_simulate_rate_table_with_preset_is_seeded(tmp_path):
     a, b, c = (read_imu(tmp_path / f"{k}.npz") for k in "abc")
     np.testing.assert_array_equal(a.gyro, b.gyro)
     assert not np.array_equal(a.gyro, c.gyro)
+    assert runner.invoke(app, args + ["--seed", "3", "--out", str(tmp_path / "d.npz"), "--segments",
+                                      str(tmp_path / "a_segments.csv")]).exit_code == 0
     seg = np.genfromtxt(tmp_path / "a_segments.csv", delimiter=",", names=True, dtype=None, encoding="utf-8")
     assert np.sum(seg["kind"] == "rate") == 120
     # during the +250 deg/s step about x the x gyro reads about (1 + S_x) * 250 deg/s + bias
@@ -78,3 +80,19 @@ def test_cli_simulate_refuses_bad_latitude_and_height(tmp_path):
         r = CliRunner().invoke(app, ["simulate", "static", "--duration", "2", "--out", str(tmp_path / "s.csv"), *extra])
         assert r.exit_code == 2 and len(r.stderr.strip().splitlines()) == 1, r.stderr
         assert not (tmp_path / "s.csv").exists()
+
+
+def test_simulate_segments_chain_into_calibrate(tmp_path):
+    """What `simulate --segments` writes (JSON by default, or CSV) is what `calibrate --segments` reads (issue 26)."""
+    from imunav.sim import Segments
+
+    args = ["simulate", "ratetable", "--preset", "ideal", "--fs", "10", "--dwell", "1", "--transition", "0.5"]
+    assert runner.invoke(app, args + ["--out", str(tmp_path / "r.npz")]).exit_code == 0
+    assert runner.invoke(app, args + ["--out", str(tmp_path / "r2.npz"), "--segments", str(tmp_path / "r.csv")]
+                         ).exit_code == 0
+    a, b = Segments.read(tmp_path / "r_segments.json"), Segments.read(tmp_path / "r.csv")
+    assert len(a) == len(b) > 120
+    for f in ("kind", "step", "i_start", "i_stop"):
+        np.testing.assert_array_equal(getattr(a, f), getattr(b, f))
+    for f in ("t_start", "t_stop", "q_nb", "up_b", "axis_b", "rate", "angle"):
+        np.testing.assert_allclose(getattr(a, f), getattr(b, f), rtol=1e-15, atol=1e-15)

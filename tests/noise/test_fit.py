@@ -143,3 +143,22 @@ def test_bad_inputs(rng):
         fit_noise(r, tau_range=(1e5, 1e6))
     with pytest.raises(InvalidInputError, match="AllanResult"):
         fit_noise(np.ones(3))
+
+
+def test_a_term_the_record_is_too_short_for_is_not_identifiable():
+    """White noise N plus rate random walk K: K rises above N from tau_x = sqrt(3) N / K; a record shorter than
+    about 9 tau_x cannot estimate it (issue 26)."""
+    from imunav.noise import allan_deviation, fit_noise, identifiability
+
+    fs, n_white, k_rw = 10.0, 1e-3, 2e-5  # tau_x = sqrt(3) * 50 = 87 s: needs about 780 s
+    rng = np.random.default_rng(3)
+    for seconds, expected in ((120.0, False), (6000.0, True)):
+        n = int(seconds * fs)
+        x = n_white * np.sqrt(fs) * rng.standard_normal(n) + np.cumsum(k_rw / np.sqrt(fs) * rng.standard_normal(n))
+        f = fit_noise(allan_deviation(x, fs), terms=("N", "K"), select=None)
+        row = identifiability(f, seconds)["K"][0]
+        assert row["identifiable"] is expected, (seconds, row)
+        if expected is False:
+            assert row["needs_s"] > seconds
+        else:
+            assert row["needs_s"] == pytest.approx(9 * np.sqrt(3) * n_white / k_rw, rel=0.5)

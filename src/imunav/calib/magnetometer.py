@@ -44,6 +44,7 @@ from imunav.rotation import euler_from_dcm
 __all__ = [
     "MagCalibration",
     "fit_ellipsoid",
+    "fit_minmax",
     "hard_iron_minmax",
     "soft_iron_rotation_scale",
     "sphere_coverage",
@@ -163,7 +164,10 @@ def sphere_coverage(directions: ArrayLike) -> float:
         Coverage in [0, 1].
     """
     d = np.asarray(directions, float)
-    d = d / np.linalg.norm(d, axis=1)[:, None]
+    n = np.linalg.norm(d, axis=1)
+    d = d[n > 0] / n[n > 0, None]
+    if d.shape[0] == 0:
+        return 0.0
     cell = np.argmax(d @ _CELLS.T, axis=1)
     return float(np.unique(cell).size / len(_CELLS))
 
@@ -351,9 +355,59 @@ def _sym(v: Array) -> Array:
 def _raise_coverage(cov: float, min_coverage: float) -> None:
     raise DegenerateGeometryError(
         f"magnetometer data cover only {100 * cov:.0f} % of the sphere (minimum {100 * min_coverage:.0f} %): "
-        "partial coverage leaves the ellipsoid undetermined; rotate the sensor through all orientations "
-        "(or lower min_coverage at your own risk)"
+        "partial coverage leaves the hard and soft iron undetermined; rotate the sensor through all orientations "
+        "(or lower min_coverage=... (command line: --min-coverage) at your own risk)"
     )
+
+
+def _covering_ellipsoid(a: Array, min_coverage: float) -> tuple[Array, Array, float]:
+    """Li & Griffiths centre ``c0`` and ``L0`` (``|L0 (h - c0)| = 1``) and condition, after refusing data that
+    cover less than ``min_coverage`` of the sphere around it: the one coverage test of every method."""
+    try:
+        c0, M, cond = _li_griffiths(a)
+    except np.linalg.LinAlgError as exc:
+        raise DegenerateGeometryError(f"ellipsoid fit: the linear algebra failed ({exc}); the data do not describe "
+                                      "an ellipsoid: rotate the sensor over the whole sphere") from None
+    L0 = _sqrtm_spd(M)
+    cov0 = sphere_coverage((a - c0) @ L0.T)
+    if cov0 < min_coverage:
+        _raise_coverage(cov0, min_coverage)
+    return c0, L0, cond
+
+
+def fit_minmax(h: ArrayLike, *, min_coverage: float = 0.3, planar_tol: float = 0.02) -> MagCalibration:
+    """Hard iron only, by the per-axis mid-range (:func:`hard_iron_minmax`), on data that cover the sphere.
+
+    The mid-range of an axis is the hard iron only when the sensor was turned through both ends of that
+    axis; data are refused on the same coverage test as :func:`fit_ellipsoid` (so a cap of the sphere,
+    whose mid-range is the field itself, gives no calibration).
+
+    Parameters
+    ----------
+    h : array_like
+        (N, 3) raw magnetometer samples, any unit (kept).
+    min_coverage : float
+        Smallest accepted fraction of the sphere covered (60 cells), as for :func:`fit_ellipsoid`.
+    planar_tol : float
+        Smallest accepted thickness/span of the raw cloud.
+
+    Returns
+    -------
+    MagCalibration
+        ``b``, ``A = I``, ``field_norm`` (mean ``|h - b|``) and ``quality`` (coverage, spread of ``|h - b|``).
+
+    Raises
+    ------
+    InsufficientDataError : fewer than 10 samples.
+    DegenerateGeometryError : planar data or partial coverage.
+    """
+    a = _points(h, minimum=10)
+    _check_planar(a, planar_tol)
+    _covering_ellipsoid(a, min_coverage)
+    b = hard_iron_minmax(a)
+    F = float(np.mean(np.linalg.norm(a - b, axis=1)))
+    q = _quality(a, b, np.eye(3), F, float("nan"))
+    return MagCalibration(b, np.eye(3), F, "minmax", {}, q)
 
 
 def fit_ellipsoid(
@@ -393,15 +447,7 @@ def fit_ellipsoid(
     """
     a = _points(h, minimum=10)
     _check_planar(a, planar_tol)
-    try:
-        c0, M, cond = _li_griffiths(a)
-    except np.linalg.LinAlgError as exc:
-        raise DegenerateGeometryError(f"ellipsoid fit: the linear algebra failed ({exc}); the data do not describe "
-                                      "an ellipsoid: rotate the sensor over the whole sphere") from None
-    L0 = _sqrtm_spd(M)  # |L0 (h - c0)| = 1
-    cov0 = sphere_coverage((a - c0) @ L0.T)
-    if cov0 < min_coverage:
-        _raise_coverage(cov0, min_coverage)
+    c0, L0, cond = _covering_ellipsoid(a, min_coverage)
     stderr: dict[str, Array] = {}
     b, L = c0, L0
     if refine:

@@ -46,7 +46,7 @@ from imunav.errors import (
 )
 from imunav.io._atomic import write_json
 from imunav.provenance import add_step, fingerprint, net_compensations
-from imunav.units import DEG
+from imunav.units import DEG, G0
 
 __all__ = [
     "TempCurve",
@@ -586,14 +586,18 @@ class ImuCalibration:
         return cls.from_dict(d, source=str(p))
 
     # ----------------------------------------------------- imucal (Ferraris)
-    def to_imucal(self, *, acc_unit: str = "m/s^2", gyr_unit: str = "deg/s") -> dict[str, Any]:
-        """The imucal ``FerrarisCalibrationInfo`` JSON (format 2.0).
+    def to_imucal(self, *, acc_unit: str = "m/s^2", gyr_unit: str = "deg/s", from_acc_unit: str | None = None,
+                  from_gyr_unit: str | None = None) -> dict[str, Any]:
+        """The imucal ``FerrarisCalibrationInfo`` JSON (format 2.0), in the units imucal's user works in.
 
         imucal: ``a_c = R_a⁻¹ K_a⁻¹ (a_r − b_a)``,
         ``ω_c = R_g⁻¹ K_g⁻¹ (ω_r − K_ga a_c − b_g)``; hence ``T_a = K_a R_a``
         with ``K_a`` the row norms of ``T_a`` and unit-norm rows in ``R_a`` (the model of F. Ferraris,
         U. Grimaldi, M. Parvis, "Procedure for effortless in-field calibration of three-axial rate gyro and
-        accelerometers", Sensors and Materials 7(5), 1995).
+        accelerometers", Sensors and Materials 7(5), 1995).  imucal applies the calibration to the raw data
+        as they were recorded: a calibration estimated on SI data that were read from a file in °/s (or g) is
+        written for raw data in that unit (``from_gyr_unit="deg/s"``): ``b_g`` and ``K_ga`` in °/s, ``K_g``
+        near 1 -- what imucal's own Ferraris computes on that file.
 
         Parameters
         ----------
@@ -601,42 +605,51 @@ class ImuCalibration:
             Output accelerometer unit, ``"m/s^2"``.
         gyr_unit : {"deg/s", "rad/s"}
             Output gyro unit.
+        from_acc_unit : {"m/s^2", "g"}, optional
+            Unit of the raw accelerometer data the file is for; default: the calibration's raw unit. Only for
+            a calibration of SI raw data.
+        from_gyr_unit : {"rad/s", "deg/s"}, optional
+            Unit of the raw gyro data the file is for; default: the calibration's raw unit. Only for a
+            calibration of SI raw data.
 
         Returns
         -------
         dict
-            The imucal JSON content.
+            The imucal JSON content (units in ``acc_unit``, ``gyr_unit``, ``from_acc_unit``, ``from_gyr_unit``).
 
         Raises
         ------
         InvalidInputError
             If the calibration has a thermal part (imucal has none).
         UnitError
-            If a unit is not supported.
+            If a unit is not supported, or a raw unit is asked of a calibration of raw counts.
         """
         if self.thermal:
             raise InvalidInputError("imucal has no temperature model; drop the thermal part first")
-        ga = {"m/s^2": 1.0}.get(acc_unit)
-        gg = {"deg/s": DEG, "rad/s": 1.0}.get(gyr_unit)
-        if ga is None or gg is None:
+        fo_a = {"m/s^2": 1.0}.get(acc_unit)
+        fo_g = {"deg/s": DEG, "rad/s": 1.0}.get(gyr_unit)
+        if fo_a is None or fo_g is None:
             raise UnitError("to_imucal: acc_unit must be 'm/s^2' and gyr_unit 'deg/s' or 'rad/s'")
-        ta = self.accel_matrix * ga
-        tg = self.gyro_matrix * gg
+        fr_a = _raw_factor(self.raw_accel_unit, from_acc_unit, _SI_ACCEL, {"m/s^2": 1.0, "g": G0})
+        fr_g = _raw_factor(self.raw_gyro_unit, from_gyr_unit, _SI_GYRO, {"rad/s": 1.0, "deg/s": DEG})
+        # raw_r = raw / fr = (T fo / fr) x_o + b / fr (+ G / fr_g a_c for the gyro)
+        ta = self.accel_matrix * fo_a / fr_a
+        tg = self.gyro_matrix * fo_g / fr_g
         ka = np.linalg.norm(ta, axis=1)
         kg = np.linalg.norm(tg, axis=1)
         return {
             "acc_unit": acc_unit,
             "gyr_unit": gyr_unit,
-            "from_acc_unit": _imucal_unit(self.raw_accel_unit),
-            "from_gyr_unit": _imucal_unit(self.raw_gyro_unit),
+            "from_acc_unit": _imucal_unit(from_acc_unit or self.raw_accel_unit),
+            "from_gyr_unit": _imucal_unit(from_gyr_unit or self.raw_gyro_unit),
             "comment": self.meta.get("comment"),
             "K_a": np.diag(ka).tolist(),
             "R_a": (ta / ka[:, None]).tolist(),
-            "b_a": self.accel_bias.tolist(),
+            "b_a": (self.accel_bias / fr_a).tolist(),
             "K_g": np.diag(kg).tolist(),
             "R_g": (tg / kg[:, None]).tolist(),
-            "K_ga": self.g_sensitivity.tolist(),
-            "b_g": self.gyro_bias.tolist(),
+            "K_ga": (self.g_sensitivity * fo_a / fr_g).tolist(),
+            "b_g": (self.gyro_bias / fr_g).tolist(),
             "cal_type": "Ferraris",
             "_format_version": "2.0",
         }
@@ -644,6 +657,9 @@ class ImuCalibration:
     @classmethod
     def from_imucal(cls, d: dict[str, Any] | str | os.PathLike[str]) -> "ImuCalibration":
         """Build from an imucal Ferraris JSON (dict or path).
+
+        Raw data in °/s or g (``from_gyr_unit`` / ``from_acc_unit``) give a calibration of SI raw data
+        (imunav's readers convert them); raw counts (``"a.u."``) stay counts.
 
         Parameters
         ----------
@@ -670,17 +686,21 @@ class ImuCalibration:
             raise UnitError(
                 f"imucal output units {d.get('acc_unit')!r}/{d.get('gyr_unit')!r} unsupported (need m/s^2, deg/s)"
             )
-        gg = DEG if d["gyr_unit"] == "deg/s" else 1.0
-        ta = np.asarray(d["K_a"], float) @ np.asarray(d["R_a"], float)
-        tg = np.asarray(d["K_g"], float) @ np.asarray(d["R_g"], float) / gg
+        fo_g = DEG if d["gyr_unit"] == "deg/s" else 1.0
+        fr_a = {"m/s^2": 1.0, "g": G0}.get(d.get("from_acc_unit") or "", 1.0)
+        fr_g = {"rad/s": 1.0, "deg/s": DEG}.get(d.get("from_gyr_unit") or "", 1.0)
+        raw_a = _from_imucal_unit(d.get("from_acc_unit"), _SI_ACCEL)
+        raw_g = _from_imucal_unit(d.get("from_gyr_unit"), _SI_GYRO)
+        ta = np.asarray(d["K_a"], float) @ np.asarray(d["R_a"], float) * fr_a
+        tg = np.asarray(d["K_g"], float) @ np.asarray(d["R_g"], float) / fo_g * fr_g
         return cls(
-            accel_bias=d["b_a"],
+            accel_bias=np.asarray(d["b_a"], float) * fr_a,
             accel_matrix=ta,
-            gyro_bias=d["b_g"],
+            gyro_bias=np.asarray(d["b_g"], float) * fr_g,
             gyro_matrix=tg,
-            g_sensitivity=d["K_ga"],
-            raw_accel_unit=_from_imucal_unit(d.get("from_acc_unit"), _SI_ACCEL),
-            raw_gyro_unit=_from_imucal_unit(d.get("from_gyr_unit"), _SI_GYRO),
+            g_sensitivity=np.asarray(d["K_ga"], float) * fr_g,
+            raw_accel_unit=_SI_ACCEL if raw_a in ("g",) else raw_a,
+            raw_gyro_unit=_SI_GYRO if raw_g in ("deg/s",) else raw_g,
             meta={"source": "imucal", "comment": d.get("comment")},
         )
 
@@ -721,6 +741,16 @@ class ImuCalibration:
             The new calibration (validated again).
         """
         return replace(self, **changes)
+
+
+def _raw_factor(raw: str, wanted: str | None, si: str, factors: dict[str, float]) -> float:
+    """SI per unit of the raw data imucal will get: 1 unless an SI calibration is written for raw °/s or g."""
+    if wanted is None or wanted == raw:
+        return 1.0
+    if raw != si or wanted not in factors:
+        raise UnitError(f"to_imucal: raw data in {wanted!r} for a calibration of raw {raw!r}: only a calibration "
+                        f"of SI raw data is written for raw {' or '.join(factors)}")
+    return factors[wanted]
 
 
 def _imucal_unit(u: str) -> str:

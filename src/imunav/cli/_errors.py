@@ -20,6 +20,7 @@ one line, ``warning: <message>``, and the command goes on.
 from __future__ import annotations
 
 import os
+import re
 import sys
 import traceback
 import warnings
@@ -55,12 +56,50 @@ def one_line(text: str) -> str:
     return " ".join(str(text).split())
 
 
+#: library wording -> command-line wording.  The library names its keywords and, in brackets, the flag
+#: ("pass force=True (command line: --force)", "instance=... (CLI: --instance)"); a person at the command
+#: line reads the flag alone.
+_KEYWORD_FLAG = re.compile(r"[\w.]+=\S*? \((?:command line|CLI): ([^)]*)\)")
+_API_FLAG = re.compile(r"\(([^;()]*); (?:command line|CLI): ([^)]*)\)")
+_READER = re.compile(r"\b(read|write)_imu\((?:format|layout)='([\w-]+)'\)")
+_OPTION_LIST = re.compile(r"(options?\(s\)|accepts) \[([^\]]*)\]")
+
+
+def _flags(names: str) -> str:
+    return ", ".join("--" + n.strip().strip("'\"").replace("_", "-") for n in names.split(",") if n.strip())
+
+
+def command_line_words(msg: str) -> str:
+    """A library message as the command line says it: flags instead of Python keywords and call syntax.
+
+    Parameters
+    ----------
+    msg : str
+        The message of an :class:`imunav.errors.ImunavError`.
+
+    Returns
+    -------
+    str
+        ``"pass force=True (command line: --force)"`` -> ``"pass --force"``, ``"(ImuData.window; command
+        line: --start / --end)"`` -> ``"(--start / --end)"``, ``"read_imu(format='csv') does not take
+        option(s) ['topic']"`` -> ``"the csv reader does not take option(s) --topic"``.
+    """
+    msg = _KEYWORD_FLAG.sub(r"\1", msg)
+    msg = _API_FLAG.sub(r"(\2)", msg)
+    if _READER.search(msg):
+        msg = _READER.sub(lambda m: f"the {m.group(2)} {'reader' if m.group(1) == 'read' else 'writer'}", msg)
+        msg = _OPTION_LIST.sub(lambda m: f"{m.group(1)} {_flags(m.group(2))}", msg)
+    return msg
+
+
 def _message(exc: BaseException) -> str:
     if isinstance(exc, OSError) and exc.strerror:
         where = f"{exc.filename}: " if exc.filename is not None else ""
         two = f" -> {exc.filename2}" if getattr(exc, "filename2", None) else ""
         return one_line(f"{where}{exc.strerror}{two}")
     msg = str(exc) or type(exc).__name__
+    if isinstance(exc, ImunavError):
+        msg = command_line_words(msg)
     if isinstance(exc, OSError) and exc.filename is not None and str(exc.filename) not in msg:
         msg = f"{exc.filename}: {msg}"
     return one_line(msg)

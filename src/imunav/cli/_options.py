@@ -47,3 +47,17 @@ def reader_options(*, units: dict[str, str] | None = None, scales: dict[str, flo
         if v is not None:
             opts[k] = v
     return opts
+
+
+# ---------------------------------------------------------------- time window (issue 26: first hour)
+#: ``--start``: start of the window, s from the recording's first sample.
+START = typer.Option(None, "--start", help="Analyse from this many seconds after the recording's first sample.")
+#: ``--end``: end of the window, s from the recording's first sample.
+END = typer.Option(None, "--end", help="Analyse up to this many seconds after the recording's first sample.")
+
+
+def window(data: Any, start: float | None, end: float | None) -> Any:
+    """``data`` cut to ``--start`` / ``--end`` (:meth:`imunav.timeseries.ImuData.window`), or ``data`` itself."""
+    if start is None and end is None:
+        return data
+    return data.window(start, end)

@@ -4,31 +4,27 @@ from __future__ import annotations
 
 import json
 from pathlib import Path
+from types import SimpleNamespace
 from typing import Optional
 
 import numpy as np
 import typer
-from rich.console import Console
-from rich.progress import Progress
 from rich.table import Table
 
-from imunav.airdata import plot as P
-from imunav.airdata.filter import LongHorizonConfig, LongHorizonFilter, ThesisFilter, thesis_row
-from imunav.airdata.flight import FlightConfig, simulate_flight
-from imunav.airdata.scenario import (
-    ThesisScenario,
-    delay_summary,
-    load_config,
-    simulate_detector_statistics,
-    simulate_thesis,
-    thesis_report,
-)
+from imunav._atomic import atomic_path, check_outputs, write_json
+from imunav.cli._console import make_console
 from imunav.cli._errors import check_figure_path, check_suffix, fail
+from imunav.cli._lazy import lazy
+from imunav.cli._progress import progress
 from imunav.errors import FileFormatError, InvalidInputError
-from imunav.filters.faults import DETECTORS, alarms, calibrated_thresholds, false_alarm_rates, thesis_thresholds
-from imunav.io._atomic import atomic_path, check_outputs, write_json
-from imunav.io._common import wrap_read_errors
-from imunav.rotation import dcm_from_euler
+
+P = lazy("imunav.airdata.plot")
+_common = lazy("imunav.io._common")
+airdata_filter = lazy("imunav.airdata.filter")
+filters_faults = lazy("imunav.filters.faults")
+flight = lazy("imunav.airdata.flight")
+rotation = lazy("imunav.rotation")
+scenario = lazy("imunav.airdata.scenario")
 
 _HELP = """Air data + Doppler radar integration: wind-estimating Kalman filter, robust filtering, fault detection.
 
@@ -107,21 +103,21 @@ Example: imunav airdata simulate turns --duration 120 --wind 8,-12,0 --turbulenc
         try:
             loaded = None
             if config is not None:
-                loaded = load_config(config)
-                profile = "thesis" if isinstance(loaded, ThesisScenario) else loaded.profile
+                loaded = scenario.load_config(config)
+                profile = "thesis" if isinstance(loaded, scenario.ThesisScenario) else loaded.profile
             if profile == "thesis":
-                sc = loaded if loaded is not None else ThesisScenario(kind=kind)
+                sc = loaded if loaded is not None else scenario.ThesisScenario(kind=kind)
                 kind = sc.kind
-                d = simulate_thesis(sc, rng=seed)
+                d = scenario.simulate_thesis(sc, rng=seed)
                 arrays = {k: getattr(d, k) for k in ("t", "x_true", "wind_true", "v_true", "v_ads", "v_doppler", "z",
                                                      "ads_noise", "anomaly")}
                 meta = {"type": "thesis", "scenario": d.scenario.to_dict(), "seed": seed}
                 summary = {"file": str(out), "type": "thesis", "kind": kind, "steps": int(d.t.size), "seed": seed}
             else:
-                cfg = loaded if loaded is not None else FlightConfig(
+                cfg = loaded if loaded is not None else flight.FlightConfig(
                     profile=profile, duration=duration, tas=tas, altitude=altitude, wind_ned=_vec3(wind, "--wind"),
                     turbulence=turbulence, rate_ads=rate_ads, rate_doppler=rate_doppler)
-                f = simulate_flight(cfg, rng=seed)
+                f = flight.simulate_flight(cfg, rng=seed)
                 arrays = {k: v for k, v in f.__dict__.items() if isinstance(v, np.ndarray)}
                 meta = {"type": "flight", "config": cfg.to_dict(), "seed": seed}
                 summary = {"file": str(out), "type": "flight", "profile": cfg.profile, "duration_s": cfg.duration,
@@ -167,15 +163,15 @@ Example: imunav airdata run flight.npz --robust nis --json run.json
             if not path.exists():
                 raise FileFormatError(f"{path}: no such file; create one with `imunav airdata simulate`")
 
-            with wrap_read_errors(str(path), "an `imunav airdata simulate` .npz file"), open(path, "rb") as fh, \
+            with _common.wrap_read_errors(str(path), "an `imunav airdata simulate` .npz file"), open(path, "rb") as fh, \
                     np.load(fh, allow_pickle=False) as z:
                 if "meta" not in z:
                     raise FileFormatError(f"{path}: not an `imunav airdata simulate` file (no 'meta' entry)")
                 meta = json.loads(str(z["meta"]))
                 data = {k: z[k] for k in z.files if k != "meta"}
             if meta["type"] == "thesis":
-                r = ThesisFilter(robust=rb, gate_m=gate_m, alpha=alpha).run(data["z"], v_ads=data["v_ads"])
-                k0 = thesis_row(100)
+                r = airdata_filter.ThesisFilter(robust=rb, gate_m=gate_m, alpha=alpha).run(data["z"], v_ads=data["v_ads"])
+                k0 = airdata_filter.thesis_row(100)
                 e = r.wind[k0:] - data["wind_true"][k0:]
                 ed = data["z"][k0:] - data["wind_true"][k0:]
                 summary = {"type": "thesis", "robust": robust, "wind_rms_per_axis": np.sqrt(np.mean(e**2, 0)).tolist(),
@@ -185,9 +181,9 @@ Example: imunav airdata run flight.npz --robust nis --json run.json
                            "P44_final": float(r.cov_diag[-1, 3])}
                 arrays = {"wind": r.wind, "P_diag": r.cov_diag, "normalized": r.normalized, "weights": r.weights}
             elif meta["type"] == "flight":
-                r = LongHorizonFilter(LongHorizonConfig(robust=rb, alpha=alpha, gate_m=gate_m)).run(
+                r = airdata_filter.LongHorizonFilter(airdata_filter.LongHorizonConfig(robust=rb, alpha=alpha, gate_m=gate_m)).run(
                         data["t_ads"], data["v_ads_body"], data["t_doppler"], data["v_doppler_body"],
-                        dcm_from_euler(data["euler_doppler"]), dcm_from_euler(data["euler_ads"]))
+                        rotation.dcm_from_euler(data["euler_doppler"]), rotation.dcm_from_euler(data["euler_ads"]))
                 wt = np.stack([np.interp(r.t, data["t"], data["wind_ned"][:, i]) for i in range(3)], 1)
                 pt = np.stack([np.interp(r.t, data["t"], data["position_ned"][:, i]) for i in range(3)], 1)
                 skip = min(r.t.size - 1, 100)
@@ -209,7 +205,11 @@ Example: imunav airdata run flight.npz --robust nis --json run.json
             with atomic_path(out) as tmp, open(tmp, "wb") as fh:
                 np.savez_compressed(fh, **arrays)
         if plot is not None:
-            fig = P.plot_wind(r) if meta["type"] == "thesis" else P.plot_long_horizon(r)
+            # with the true wind the file holds (a simulated run)
+            if meta["type"] == "thesis":
+                fig = P.plot_wind(r, SimpleNamespace(wind_true=data["wind_true"]))
+            else:
+                fig = P.plot_long_horizon(r, SimpleNamespace(t=data["t"], wind_ned=data["wind_ned"]))
             _write_atomic(plot, lambda tmp: fig.savefig(tmp, dpi=100, format=plot.suffix.lstrip(".") or "png"))
         if json_out is not None:
             _write_json(json_out, summary)
@@ -245,48 +245,50 @@ Example: imunav airdata faults --kind variance --magnitude 3.5 --runs 100 --seed
                 if key is None:
                     raise InvalidInputError(f"--magnitude does not apply to kind {kind!r}")
                 kw[key] = magnitude
-            sc = ThesisScenario(**kw)
+            sc = scenario.ThesisScenario(**kw)
             if runs < 1:
                 raise InvalidInputError(f"--runs must be >= 1, got {runs}")
-            thr = calibrated_thresholds(window, 3, pfa)
-            th = thesis_thresholds(window, 3)
+            thr = filters_faults.calibrated_thresholds(window, 3, pfa)
+            th = filters_faults.thesis_thresholds(window, 3)
             ss = np.random.SeedSequence(seed).spawn(2)
             chunk = max(1, min(50, runs))
-            with Progress(console=Console(stderr=True), transient=True) as prog:
-                task = prog.add_task("Monte Carlo", total=2 * runs)
+            with progress("Monte Carlo", total=2 * runs) as report:
+                done = [0]
 
                 def tick(n: int) -> None:
-                    prog.update(task, advance=n)
+                    done[0] += n
+                    report(done[0], 2 * runs)
 
-                stats_f = simulate_detector_statistics(sc, runs, np.random.default_rng(ss[0]), window,
+                stats_f = scenario.simulate_detector_statistics(sc, runs, np.random.default_rng(ss[0]), window,
                                                        chunk=chunk, on_chunk=tick)
-                stats_n = simulate_detector_statistics(ThesisScenario(kind="nominal"), runs,
+                stats_n = scenario.simulate_detector_statistics(scenario.ThesisScenario(kind="nominal"), runs,
                                                        np.random.default_rng(ss[1]), window, chunk=chunk, on_chunk=tick)
         except InvalidInputError as exc:
             _fail(exc)
             return
         o = sc.onset_row
         rows = []
-        for d in DETECTORS:
+        for d in filters_faults.DETECTORS:
             sn = stats_n[d][:, window - 1:]
             for label, t in (("calibrated", thr[d]), ("thesis", th.get(d))):
                 if t is None:
                     continue
-                summary = delay_summary(alarms(d, stats_f[d], t), o, horizon)
-                fa_step, fa_run = false_alarm_rates(alarms(d, sn, t))
+                summary = scenario.delay_summary(filters_faults.alarms(d, stats_f[d], t), o, horizon)
+                fa_step, fa_run = filters_faults.false_alarm_rates(filters_faults.alarms(d, sn, t))
                 rows.append({"detector": d, "threshold_mode": label, "threshold": float(t),
                              **{k: summary[k] for k in ("median_delay", "p90_delay", f"detected_within_{horizon}", "missed")},
                              "false_alarm_per_step": fa_step, "false_alarm_per_run": fa_run})
         result = {"scenario": sc.to_dict(), "runs": runs, "seed": seed, "window": window, "pfa": pfa, "rows": rows}
         table = Table(title=f"{kind} fault at thesis step {onset}, {runs} runs")
-        for col in ("detector", "thresholds", "threshold", "median delay", f"within {horizon}", "missed", "FA/step"):
+        for col in ("detector", "thresholds", "threshold (statistic)", "median delay (steps)",
+                    f"detected within {horizon} steps (share)", "missed (share)", "false alarms per step (share)"):
             table.add_column(col)
         for r in rows:
             table.add_row(r["detector"], r["threshold_mode"], f"{r['threshold']:.2f}",
                           "-" if r["median_delay"] is None else f"{r['median_delay']:.0f}",
                           f"{r[f'detected_within_{horizon}']:.2f}", f"{r['missed']:.2f}",
                           f"{r['false_alarm_per_step']:.3f}")
-        Console().print(table)
+        make_console().print(table)
         if json_out is not None:
             _write_json(json_out, result)
 
@@ -315,8 +317,10 @@ Example: imunav airdata thesis --runs 50 --json thesis.json
             methods = tuple(m.strip() for m in robust_methods.split(",") if m.strip())
             if "gate2" not in methods or "nis" not in methods:
                 raise InvalidInputError("--robust-methods must include gate2 and nis (the thesis gate and the χ² gate)")
-            with Console(stderr=True).status(f"thesis scenarios, {runs} Monte Carlo runs"):
-                rep = thesis_report(runs, seed, p_false_alarm=pfa, robust_methods=methods)
+            with progress(f"thesis scenarios, {runs} Monte Carlo runs") as report:
+                report(0, 1)
+                rep = scenario.thesis_report(runs, seed, p_false_alarm=pfa, robust_methods=methods)
+                report(1, 1)
         except InvalidInputError as exc:
             _fail(exc)
             return

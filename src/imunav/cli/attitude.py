@@ -8,24 +8,31 @@ from typing import Any, Optional
 
 import numpy as np
 import typer
-from rich.console import Console
+from rich.markup import escape
 from rich.progress import Progress
 from rich.table import Table
 
-from imunav.attitude.alignment import broad_reference_start
-from imunav.attitude.benchmark import FILTERS, cv_grid_search, evaluate, grid_search, make_filter, reference_start
-from imunav.attitude.metrics import attitude_rmse
-from imunav.attitude.plot import plot_montecarlo_box, save
-from imunav.attitude.scenario import PAPER_TABLE2, PaperScenario, default_filters
+from imunav._atomic import check_outputs, write_json
+from imunav.cli._console import make_console
 from imunav.cli._errors import check_figure_path
-from imunav.cli._options import INSTANCE, LAYOUT, MAG_TOPIC, TOPIC, reader_options
+from imunav.cli._lazy import lazy
+from imunav.cli._options import END, INSTANCE, LAYOUT, MAG_TOPIC, START, TOPIC, reader_options, window
 from imunav.errors import ConfigError
-from imunav.io import read_imu
-from imunav.io._atomic import check_outputs, write_json
-from imunav.io.broad import broad_trials, load_broad
-from imunav.io.datasets import shared_data_path
-from imunav.montecarlo import run_montecarlo
-from imunav.scenarios import attitude_paper, paper_report, paper_rmse, paper_table
+
+alignment = lazy("imunav.attitude.alignment")
+attitude_plot = lazy("imunav.attitude.plot")
+benchmark = lazy("imunav.attitude.benchmark")
+broad = lazy("imunav.io.broad")
+datasets = lazy("imunav.io.datasets")
+io = lazy("imunav.io")
+logs = lazy("imunav.io.logs")
+metrics = lazy("imunav.attitude.metrics")
+montecarlo = lazy("imunav.montecarlo")
+px4 = lazy("imunav.attitude.px4")
+rotation = lazy("imunav.rotation")
+scenario = lazy("imunav.attitude.scenario")
+scenarios = lazy("imunav.scenarios")
+
 
 app = typer.Typer(help="Attitude filters (Madgwick, Mahony, MEKF, UKF, adaptive, smoother, paper KFs).\n\n"
                   "Example: imunav attitude run 05_undisturbed_slow_rotation_with_breaks_B.mat --filter madgwick_c",
@@ -61,7 +68,7 @@ def _resolve(path: Path, is_dir: bool) -> Path:
     if path.exists():
         return path
 
-    cand = shared_data_path("broad") if is_dir and path.name == "broad" else shared_data_path("broad", path.name)
+    cand = datasets.shared_data_path("broad") if is_dir and path.name == "broad" else datasets.shared_data_path("broad", path.name)
     if cand is not None and cand.exists():
         return cand
     raise ConfigError(f"{path} not found (nor in the shared BROAD folder); set IMUNAV_DATA or pass an existing path")
@@ -83,6 +90,8 @@ def run_cmd(
     instance: Optional[int] = INSTANCE,
     mag_topic: Optional[str] = MAG_TOPIC,
     layout: Optional[str] = LAYOUT,
+    start: Optional[float] = START,
+    end: Optional[float] = END,
 ) -> None:
     """Run one filter over a whole recording and print a summary (BROAD RMSE when a reference exists).
 
@@ -94,31 +103,78 @@ def run_cmd(
 
     check_outputs([file], [json_out])
 
-    con = Console()
+    con = make_console()
 
     file = _resolve(file, False)
-    f = make_filter(filter, _parse_params(param))
+    f = benchmark.make_filter(filter, _parse_params(param))
     ref = None
     opts = reader_options(topic=topic, instance=instance, mag_topic=mag_topic, layout=layout)
     if file.suffix.lower() == ".mat" and not opts:
-        tr = load_broad(file)
+        tr = broad.load_broad(file)
         data, ref, mask = tr.imu, tr.q_ref_nb, tr.movement
     else:
-        data = read_imu(file, **opts)
+        data = io.read_imu(file, **opts)
+    px4_log = logs.log_kind(file) == "ulog"
+    px4_out: dict[str, Any] = {}
+    if px4_log and not no_mag and mag_topic is None:
+        # the magnetometer topic that holds data (sensor_combined of newer logs carries none)
+        mt = px4.magnetometer_topic(file, data)
+        if mt is not None:
+            data = io.read_imu(file, **{**opts, "mag_topic": mt})
+            con.print(f"magnetometer: {mt}, interpolated onto the IMU stamps on the log's clock (--mag-topic to "
+                      "choose another)")
+        px4_out["mag_topic"] = mt if mt is not None else ("in the IMU topic" if data.mag is not None else None)
+        if data.mag is None:
+            con.print("no magnetometer data in this log: 6D, the yaw is not observable")
+    if start is not None or end is not None:
+        cut = window(data, start, end)
+        if ref is not None:  # the BROAD reference and movement mask, cut alike
+            i0 = int(np.searchsorted(data.t, cut.t[0]))
+            ref, mask = ref[i0:i0 + cut.n], mask[i0:i0 + cut.n]
+        data = cut
     kw: dict[str, Any] = {"use_mag": False if no_mag else None}
 
-    if ref is not None and reference_start(filter) and not no_mag:
+    if ref is not None and benchmark.reference_start(filter) and not no_mag:
         # start like the BROAD reference runs (first accelerometer / magnetometer sample)
 
-        kw["q0"] = broad_reference_start(data.accel[0], data.mag[0])
+        kw["q0"] = alignment.broad_reference_start(data.accel[0], data.mag[0])
     res = f.run(data, **kw)
 
-    e = np.degrees(res.euler()[-1])
+    q_final = res.q_nb
+    decl = None
+    if px4_log:
+        used_mag = data.mag is not None and not no_mag
+        decl, key = px4.declination(data.meta)
+        if decl is not None and used_mag:
+            q_final = px4.to_true_north(res.q_nb, decl)
+            con.print(f"declination: {key} = {decl:.2f} deg added to the yaw (PX4 references true north, the "
+                      "magnetometer magnetic north)")
+        elif used_mag:
+            con.print("declination: the log has no EKF2_MAG_DECL / ATT_MAG_DECL; the yaw is referenced to "
+                      "magnetic north")
+        else:
+            decl = None
+        px4_out["declination_deg"] = decl if used_mag else None
+        px4_out["declination_parameter"] = key if used_mag and decl is not None else None
+    e = np.degrees(rotation.euler_from_quat(q_final[-1]))
     con.print(f"[bold]{res.name}[/bold]: {res.n} samples, final roll/pitch/yaw = "
-              f"{e[0]:.2f} / {e[1]:.2f} / {e[2]:.2f} deg")
+              f"{e[0]:.2f} / {e[1]:.2f} / {e[2]:.2f} deg" + (" (true north)" if decl is not None else ""))
     summary: dict[str, Any] = {"filter": res.name, "params": res.params}
+    if px4_log:
+        names = {ti.topic for ti in logs.list_topics(file)}
+        ref_topic = next((t for t in px4.REFERENCE_TOPICS if t in names), None)
+        if ref_topic is None:
+            con.print("the log has no vehicle_attitude: no comparison with PX4's estimate")
+        else:
+            cmp = px4.compare(data, res.q_nb, logs.read_topic(file, ref_topic), t_from=min(10.0, 0.3 * data.duration),
+                              declination_deg=decl)
+            r = cmp.rms_deg
+            con.print(f"RMS difference to the log's {ref_topic} from {cmp.t_from_s:.3g} s on ({cmp.samples} samples): "
+                      f"roll {r['roll']:.3f}, pitch {r['pitch']:.3f}, yaw {r['yaw']:.3f} deg")
+            px4_out["reference"] = cmp.to_dict()
+        summary["px4"] = px4_out
     if ref is not None:
-        r = attitude_rmse(res.q_nb, ref, mask)
+        r = metrics.attitude_rmse(res.q_nb, ref, mask)
         con.print(f"BROAD RMSE over movement: total {r.total_rmse_deg:.3f}, heading {r.heading_rmse_deg:.3f}, "
                   f"inclination {r.inclination_rmse_deg:.3f} deg")
         summary["rmse"] = r.to_dict()
@@ -144,12 +200,12 @@ def benchmark_cmd(
 
     check_outputs([], [json_out])  # before the benchmark
 
-    con = Console()
-    files = broad_trials(_resolve(directory, True))
+    con = make_console()
+    files = broad.broad_trials(_resolve(directory, True))
     names = filter or ["adaptive", "smoother"]
     for n in names:
-        if n not in FILTERS:
-            raise ConfigError(f"unknown filter {n!r}; choose from {', '.join(FILTERS)}")
+        if n not in benchmark.FILTERS:
+            raise ConfigError(f"unknown filter {n!r}; choose from {', '.join(benchmark.FILTERS)}")
     params = _parse_params(param)
     out: dict[str, Any] = {"trials": [f.stem for f in files], "filters": {}}
     if grid:
@@ -162,7 +218,7 @@ def benchmark_cmd(
         g = {**{k: [v] for k, v in params.items()}, **g}
         with Progress(console=con) as prog:
             task = prog.add_task(f"grid {names[0]}", total=None)
-            res = grid_search(names[0], g, files, workers=workers or None,
+            res = benchmark.grid_search(names[0], g, files, workers=workers or None,
                               progress=lambda i, n: prog.update(task, completed=i, total=n))
         t = Table(title=f"grid search {names[0]} (best first)")
         for c in ("params", "total", "heading", "inclination"):
@@ -174,7 +230,7 @@ def benchmark_cmd(
         con.print(t)
         out["grid"] = [r.to_dict() for r in res]
         if len(files) >= 2:
-            cv, _ = cv_grid_search(names[0], g, files, results=res)
+            cv, _ = benchmark.cv_grid_search(names[0], g, files, results=res)
             con.print(f"best set in sample {cv.in_sample_mean:.3f} deg; leave-one-trial-out (each trial scored with "
                       f"the set best on the others) {cv.oof_mean:.3f} deg: expect the latter on new recordings")
             out["cv"] = cv.to_dict()
@@ -184,9 +240,9 @@ def benchmark_cmd(
         with Progress(console=con) as prog:
             task = prog.add_task("filters", total=len(names))
             for n in names:
-                results.append(evaluate(n, params, files))
+                results.append(benchmark.evaluate(n, params, files))
                 prog.advance(task)
-    t = Table(title="BROAD RMSE [deg] (total / heading / inclination)")
+    t = Table(title=escape("BROAD RMSE [deg] (total / heading / inclination)"))
     t.add_column("trial")
     for r in results:
         t.add_column(r.filter)
@@ -232,30 +288,30 @@ def montecarlo_cmd(
     check_figure_path(plot, "--plot")
 
 
-    con = Console()
+    con = make_console()
     names = tuple(f.strip() for f in filters.split(",") if f.strip())
-    scn = PaperScenario(gyro_noise_unit=gyro_noise_unit, duration=duration)  # type: ignore[arg-type]
-    every = default_filters(scn)
+    scn = scenario.PaperScenario(gyro_noise_unit=gyro_noise_unit, duration=duration)  # type: ignore[arg-type]
+    every = scenario.default_filters(scn)
     unknown = [f for f in names if f not in every]
     if unknown or not names:
         raise ConfigError(f"--filters {filters!r}: unknown filter(s) {unknown}; choose from {sorted(every)}")
-    res = run_montecarlo(attitude_paper, runs, seed=seed, batched=True, executor=executor,  # type: ignore[arg-type]
+    res = montecarlo.run_montecarlo(scenarios.attitude_paper, runs, seed=seed, batched=True, executor=executor,  # type: ignore[arg-type]
                          n_workers=workers, address=address, progress=True,
                          description="attitude Monte Carlo", filters=names, duration=duration,
                          gyro_noise_unit=gyro_noise_unit)
-    t = Table(title=f"RMSE [deg] over {runs} runs (mean ± std); paper Table 2 in brackets")
+    t = Table(title=escape(f"RMSE [deg] over {runs} runs (mean ± std); paper Table 2 in brackets"))
     for c in ("filter", "pitch", "roll"):
         t.add_column(c)
-    for k, v in paper_table(res).items():
-        p = PAPER_TABLE2.get(k, (float("nan"),) * 2)
+    for k, v in scenarios.paper_table(res).items():
+        p = scenario.PAPER_TABLE2.get(k, (float("nan"),) * 2)
         t.add_row(k, f"{v['pitch_mean']:.4f} ± {v['pitch_std']:.4f} [{p[0]}]",
                   f"{v['roll_mean']:.4f} ± {v['roll_std']:.4f} [{p[1]}]")
     con.print(t)
     if json_out:
-        _write_json(paper_report(res, scn, {k: every[k] for k in names}), json_out)
+        _write_json(scenarios.paper_report(res, scn, {k: every[k] for k in names}), json_out)
         con.print(f"wrote {json_out}")
     if plot:
-        save(plot_montecarlo_box(paper_rmse(res)), plot)
+        attitude_plot.save(attitude_plot.plot_montecarlo_box(scenarios.paper_rmse(res)), plot)
         con.print(f"wrote {plot}")
 
 

@@ -9,15 +9,18 @@ from typing import Any, Optional
 
 import numpy as np
 import typer
-from rich.console import Console
 from rich.markup import escape
 from rich.table import Table
 
-from imunav.batch import calibrate_batch, noise_batch, simulate_batch
+from imunav._atomic import check_outputs, write_json
+from imunav.cli._console import make_console
 from imunav.cli._errors import fail
+from imunav.cli._lazy import lazy
+from imunav.cli._progress import shows_progress
 from imunav.errors import InvalidInputError
-from imunav.io._atomic import check_outputs, write_json
-from imunav.report.catalog import display_unit
+
+batch = lazy("imunav.batch")
+catalog = lazy("imunav.report.catalog")
 
 app = typer.Typer(
     help="Process a folder of recordings (one per unit of a production batch) in parallel, "
@@ -34,7 +37,13 @@ def register(root: typer.Typer) -> None:
 _EXEC = typer.Option("processes", "--executor", help="processes, dask or serial.")
 _WORKERS = typer.Option(None, "--workers", "-j", help="Worker processes (default: all cores).")
 _ADDR = typer.Option(None, "--address", help="Dask scheduler address (tcp://host:8786) for --executor dask.")
-_QUIET = typer.Option(False, "--quiet", "-q", help="No progress bar.")
+_QUIET = typer.Option(False, "--quiet", "-q", help="No progress bar (none either when standard error is not a "
+                      "terminal).")
+
+
+def _bar(quiet: bool) -> bool:
+    """The library's own bar (imunav.montecarlo) on a terminal only, as imunav.cli._progress draws it."""
+    return shows_progress(quiet)
 _SPEC = typer.Option(None, "--spec", help="Datasheet spec (TOML with a [spec] table) for pass / fail per unit.")
 _JSON = typer.Option(None, "--json", help="Also write the summary (JSON) here.")
 _COLS = typer.Option(None, "--columns", help='CSV column mapping as JSON, e.g. \'{"gyro": ["gx","gy","gz"]}\'.')
@@ -72,7 +81,7 @@ def _print_summary(summary: Any, families: list[str], title: str) -> None:
     tab.add_column("unit")
     tab.add_column("verdict")
     for f in fams:
-        tab.add_column(escape(f"{f} x, y, z [{display_unit(f)}]"), justify="right")
+        tab.add_column(escape(f"{f} x, y, z [{catalog.display_unit(f)}]"), justify="right")
     if errs:
         tab.add_column("max |err|/σ", justify="right")
     for r in t.to_dict(orient="records"):
@@ -91,7 +100,7 @@ def _print_summary(summary: Any, families: list[str], title: str) -> None:
                  if isinstance(r.get(c), float) and isinstance(r.get(c[:-4] + "_se"), float) and r[c[:-4] + "_se"] > 0]
             cells.append(f"{np.nanmax(z):.2f}" if z else "–")
         tab.add_row(r["unit"], verdict, *cells)
-    con = Console()
+    con = make_console()
     con.width = max(con.width, 150)  # a wide table reads better wrapped by the terminal than squeezed
     con.print(tab)
     for r in t.to_dict(orient="records"):
@@ -118,13 +127,13 @@ def simulate_cmd(
 
     Writes <unit>.<format>, <unit>_rate.<format>, segments.json, rate_segments.json, truth/<unit>.json, batch.json and, last, manifest.json (run id, seed, every file with its SHA-256). A folder that holds another run is refused unless --overwrite, which clears it first; batch calibrate / noise trust only the files of a complete manifest.
 
-    Example: imunav batch simulate 4 --out batch --fs 20 --dwell 4
+    Example: imunav batch simulate 4 --out batch --fs 20 --dwell 4 --overwrite
     """
 
     try:
-        files = simulate_batch(n_units, out, preset=preset, spread=spread, rng=seed, fs=fs, dwell_s=dwell,
+        files = batch.simulate_batch(n_units, out, preset=preset, spread=spread, rng=seed, fs=fs, dwell_s=dwell,
                                transition_s=transition, rate_table=rate_table, format=fmt, static_s=static,
-                               executor=executor, n_workers=workers, progress=not quiet,
+                               executor=executor, n_workers=workers, progress=_bar(quiet),
                                overwrite=overwrite)  # type: ignore[arg-type]
     except InvalidInputError as exc:
         _fail(exc)
@@ -149,16 +158,16 @@ def calibrate_cmd(
 
     Writes per unit <unit>.json (calibration) and <unit>_report.json, plus summary.csv, summary.json, index.html and manifest.json (the result folder is a run folder: --overwrite to replace one). A batch folder written by batch simulate is read through its manifest (a killed run is refused). Exit status 1 when a unit fails to process or fails the spec.
 
-    Example: imunav batch calibrate batch --method thesis --spec examples/lab_spec.toml --json batch_cal.json
+    Example: imunav batch calibrate batch --method thesis --out batch_thesis --json batch_cal.json
     """
 
     check_outputs([spec], [json_out])
 
     try:
-        s = calibrate_batch(folder, method=method, out_dir=out, spec=spec,
+        s = batch.calibrate_batch(folder, method=method, out_dir=out, spec=spec,
                             read_options=_read_options(fs, accel_unit, gyro_unit, columns),
                             latitude=None if latitude_deg is None else math.radians(latitude_deg), gravity=gravity,
-                            executor=executor, n_workers=workers, address=address, progress=not quiet,
+                            executor=executor, n_workers=workers, address=address, progress=_bar(quiet),
                             overwrite=overwrite)  # type: ignore[arg-type]
     except InvalidInputError as exc:
         _fail(exc)
@@ -192,8 +201,8 @@ def noise_cmd(
     check_outputs([spec], [json_out])
 
     try:
-        s = noise_batch(folder, out_dir=out, spec=spec, read_options=_read_options(fs, accel_unit, gyro_unit, columns),
-                        terms=tuple(t.strip() for t in terms.split(",") if t.strip()), executor=executor, n_workers=workers, address=address, progress=not quiet, force=force, overwrite=overwrite)  # type: ignore[arg-type]
+        s = batch.noise_batch(folder, out_dir=out, spec=spec, read_options=_read_options(fs, accel_unit, gyro_unit, columns),
+                        terms=tuple(t.strip() for t in terms.split(",") if t.strip()), executor=executor, n_workers=workers, address=address, progress=_bar(quiet), force=force, overwrite=overwrite)  # type: ignore[arg-type]
     except InvalidInputError as exc:
         _fail(exc)
     cols = ["gyro_arw", "gyro_bias_instability", "accel_vrw", "accel_bias_instability"]

@@ -12,29 +12,32 @@ from pathlib import Path
 from typing import Any, Optional
 
 import numpy as np
-import pandas as pd
 import typer
-from rich.console import Console
+from rich.markup import escape
 from rich.table import Table
 
-from imunav import calib
-from imunav.calib import ImuCalibration, combine, ferraris_from_session
-from imunav.calib.magnetometer import MagCalibration, fit_ellipsoid, hard_iron_minmax, soft_iron_rotation_scale
-from imunav.calib.multipose import undetermined_misalignment_error
-from imunav.calib.plot import plot_magnetometer, plot_residuals, plot_temperature_fit, save_figure
-from imunav.calib.temperature import thermal_calibration
-from imunav.cli._options import INSTANCE, LAYOUT, TOPIC, reader_options
+from imunav._atomic import check_outputs, check_writable, read_json, write_json
+from imunav.cli._console import make_console
+from imunav.cli._lazy import lazy
+from imunav.cli._options import END, INSTANCE, LAYOUT, START, TOPIC, reader_options, window
 from imunav.errors import FileFormatError, InvalidInputError
-from imunav.io import read_imu
-from imunav.io._atomic import check_outputs, check_writable, read_json, write_json
-from imunav.io._common import check_nonempty, wrap_read_errors
-from imunav.io.logs import log_kind, read_topic
-from imunav.io.px4params import px4_parameters
-from imunav.sim import ImuErrorModel, Segments
+
+_common = lazy("imunav.io._common")
+calib = lazy("imunav.calib")
+calib_multipose = lazy("imunav.calib.multipose")
+calib_temperature = lazy("imunav.calib.temperature")
+io = lazy("imunav.io")
+logs = lazy("imunav.io.logs")
+magnetometer = lazy("imunav.calib.magnetometer")
+pd = lazy("pandas")
+plot = lazy("imunav.calib.plot")
+px4params = lazy("imunav.io.px4params")
+sim = lazy("imunav.sim")
 
 app = typer.Typer(
     help="Calibrate an IMU or magnetometer from a recording; writes the calibration JSON.\n\n"
-    "Example: imunav calibrate multiposition rec.npz --segments segments.json --out cal.json",
+    "Example (after imunav simulate's): imunav calibrate multiposition static.npz --segments static_segments.json "
+    "--out cal.json",
     no_args_is_help=True,
 )
 
@@ -48,7 +51,7 @@ def _read(path: Path, fs: Optional[float], accel_unit: Optional[str], gyro_unit:
           accel_scale: Optional[float], gyro_scale: Optional[float], skiprows: Optional[int],
           columns: Optional[str], topic: Optional[str] = None, instance: Optional[int] = None,
           layout: Optional[str] = None) -> Any:
-    return read_imu(path, **reader_options(
+    return io.read_imu(path, **reader_options(
         units={k: v for k, v in (("accel", accel_unit), ("gyro", gyro_unit)) if v},
         scales={k: v for k, v in (("accel", accel_scale), ("gyro", gyro_scale)) if v},
         fs=fs or None, skiprows=skiprows, columns=_columns(columns) if columns else None,
@@ -65,14 +68,7 @@ def _columns(text: str) -> Any:
 
 
 def _segments(path: Path) -> Any:
-    d = read_json(path, "segment table JSON (write it with Profile.to_dict() / Segments.to_dict())")
-    if not isinstance(d, dict):
-        raise FileFormatError(f"{path}: a segment table JSON is an object with the columns of Segments")
-    d = d.get("segment_table", d)
-    try:
-        return Segments(**{k: np.asarray(d[k]) for k in Segments.__dataclass_fields__})
-    except KeyError as e:
-        raise FileFormatError(f"{path}: segment table lacks the column {e} (write it with Profile.to_dict())") from None
+    return sim.Segments.read(path)
 
 
 def _check_report(report: Optional[Path]) -> None:
@@ -87,7 +83,7 @@ def _px4(px4_params: Optional[Path], **calibration: Any) -> Any:
     if px4_params is None:
         return None
 
-    return px4_parameters(**calibration)
+    return px4params.px4_parameters(**calibration)
 
 
 def _write_px4(params: Any, path: Optional[Path]) -> None:
@@ -110,18 +106,21 @@ def _finish(result: Any, out: Path, report: Optional[Path], *, save: Any = None,
         report.mkdir(parents=True, exist_ok=True)
         check_writable(report / "report.json")
     (save or result.calibration.save)(out)
-    con = Console()
+    con = make_console()
     if report is not None:
         write_json(report / "report.json", result.to_dict())
-        save_figure(plot_residuals(result), report / "residuals.png")
+        plot.save_figure(plot.plot_residuals(result), report / "residuals.png")
     tab = Table(title=f"{result.method}: residual RMS and design condition")
     tab.add_column("fit")
     tab.add_column("residual RMS (x, y, z)")
-    tab.add_column("condition")
+    tab.add_column("unit")
+    tab.add_column("condition number")
+    cal = result.calibration
     for k, r in result.residuals.items():
         rms = np.sqrt(np.mean(np.asarray(r, float) ** 2, axis=0))
         c = result.condition.get(k, result.condition.get(k.split("_")[0], float("nan")))
-        tab.add_row(k, np.array2string(np.atleast_1d(rms), precision=4), f"{c:.3g}")
+        unit = cal.raw_accel_unit if k.startswith("accel") else cal.raw_gyro_unit if k.startswith("gyro") else "raw"
+        tab.add_row(k, np.array2string(np.atleast_1d(rms), precision=4), unit, f"{c:.3g}")
     con.print(tab)
     con.print(f"calibration written to {out}" + (f", report in {report}" if report else ""))
     _write_px4(px4_values, px4)
@@ -143,7 +142,7 @@ def _noise_model(path: Optional[Path]) -> Any:
     if path is None:
         return None
 
-    return ImuErrorModel.from_toml(path)
+    return sim.ImuErrorModel.from_toml(path)
 _REP = typer.Option(None, help="Folder for report.json and residual plots.")
 _PX4 = typer.Option(None, "--px4-params", help="Also write the calibration as PX4 parameters (QGroundControl "
                     ".params file: CAL_ACC0_*, CAL_GYRO0_*, CAL_MAG0_*); terms PX4 cannot express are dropped and "
@@ -154,7 +153,7 @@ _PX4 = typer.Option(None, "--px4-params", help="Also write the calibration as PX
 @app.command()
 def multiposition(
     recording: Path = typer.Argument(..., help="Static multi-position recording (any read_imu format)."),
-    segments: Path = typer.Option(..., help="Segment table JSON (Profile.to_dict() / Segments.to_dict())."),
+    segments: Path = typer.Option(..., help="Segment table, .json or .csv (as imunav simulate writes it next to the recording)."),
     out: Path = _OUT,
     report: Optional[Path] = _REP,
     px4_params: Optional[Path] = _PX4,
@@ -186,10 +185,10 @@ def multiposition(
 @app.command()
 def ratetable(
     recording: Path = typer.Argument(..., help="Rate-table recording."),
-    segments: Path = typer.Option(..., help="Segment table JSON of the rate-table run."),
+    segments: Path = typer.Option(..., help="Segment table (.json or .csv) of the rate-table run."),
     out: Path = _OUT,
     static: Optional[Path] = typer.Option(None, help="Static multi-position recording (gives bias and g-sensitivity)."),
-    static_segments: Optional[Path] = typer.Option(None, help="Segment table JSON of the static recording."),
+    static_segments: Optional[Path] = typer.Option(None, help="Segment table (.json or .csv) of the static recording."),
     base: Optional[Path] = typer.Option(None, help="Existing calibration JSON to take bias / g-sensitivity from."),
     intercept: bool = typer.Option(False, help="Estimate a separate gyro bias in the rate fit."),
     report: Optional[Path] = _REP,
@@ -203,7 +202,7 @@ def ratetable(
 ) -> None:
     """Rate-table least squares for the gyro matrix (with the static test: the full thesis model).
 
-    Example: imunav calibrate ratetable rate.npz --segments rate_segments.json --static static.npz --static-segments static_segments.json --out cal.json
+    Example: imunav simulate ratetable --preset thesis_sim --out rate.npz && imunav calibrate ratetable rate.npz --segments rate_segments.json --static static.npz --static-segments static_segments.json --out cal.json
     """
 
     check_outputs([recording, segments, static, static_segments, base, noise_model], [out, px4_params])
@@ -219,11 +218,11 @@ def ratetable(
         st = calib.multiposition(_read(static, *rd), _segments(static_segments), latitude=lat, noise_model=nm)
         b = st.calibration
     else:
-        b = ImuCalibration.load(base) if base is not None else None
+        b = calib.ImuCalibration.load(base) if base is not None else None
     res = calib.ratetable(_read(recording, *rd), _segments(segments), base=b, latitude=lat, intercept=intercept,
                           noise_model=nm)
     if st is not None:
-        res = combine(st, res)
+        res = calib.combine(st, res)
     _finish(res, out, report, px4=px4_params)
 
 
@@ -232,7 +231,7 @@ def ferraris(
     recording: Path = typer.Argument(..., help="Continuous Ferraris session (6 poses + 3 turns)."),
     sections: Path = typer.Option(..., help='imucal section list JSON: {"x_p": {"start": i0, "end": i1}, ...}.'),
     out: Path = _OUT,
-    imucal_out: Optional[Path] = typer.Option(None, help="Also write the imucal FerrarisCalibrationInfo JSON."),
+    imucal_out: Optional[Path] = typer.Option(None, help="Also write the imucal FerrarisCalibrationInfo JSON, for the raw data in the units of the file (--accel-unit, --gyro-unit)."),
     gravity: float = typer.Option(9.81, help="Gravity used by the method (imucal default 9.81)."),
     expected_angle_deg: float = typer.Option(-360.0, help="Angle measured per turn (imucal default -360)."),
     report: Optional[Path] = _REP,
@@ -244,7 +243,7 @@ def ferraris(
 ) -> None:
     """Ferraris six-pose + three-turn calibration (imucal-compatible).
 
-    Example: imunav calibrate ferraris session.csv --sections sections.json --fs 102.4 --gyro-unit deg/s --out cal.json
+    Example (imucal's session in the shared data): imunav calibrate ferraris ../shared/data/imucal/example_ferraris_session.csv --sections ../shared/data/imucal/example_ferraris_session_list.json --fs 102.4 --gyro-unit deg/s --out ferraris_cal.json --imucal-out ferraris_imucal.json
     """
 
     check_outputs([recording, sections], [out, px4_params, imucal_out])
@@ -255,11 +254,16 @@ def ferraris(
                  layout)
 
     secs = read_json(sections, "imucal section list JSON")
-    res = ferraris_from_session(data.accel, data.gyro, secs, data.fs, gravity=gravity,
+    res = calib.ferraris_from_session(data.accel, data.gyro, secs, data.fs, gravity=gravity,
                                 expected_angle_deg=expected_angle_deg)
     _finish(res, out, report, px4=px4_params)
     if imucal_out is not None:
-        write_json(imucal_out, res.calibration.to_imucal())
+        # for the raw data as the file holds them (imucal applies its calibration to those)
+        info = res.calibration.to_imucal(from_acc_unit=accel_unit if accel_unit in ("m/s^2", "g") else None,
+                                         from_gyr_unit=gyro_unit if gyro_unit in ("rad/s", "deg/s") else None)
+        write_json(imucal_out, info)
+        typer.echo(f"imucal FerrarisCalibrationInfo written to {imucal_out} (raw data in {info['from_acc_unit']} and "
+                   f"{info['from_gyr_unit']}, calibrated in {info['acc_unit']} and {info['gyr_unit']})")
 
 
 @app.command()
@@ -276,28 +280,33 @@ def multipose(
     fs: Optional[float] = _FS, accel_unit: Optional[str] = _AU, gyro_unit: Optional[str] = _GU,
     accel_scale: Optional[float] = _AS, gyro_scale: Optional[float] = _GS, skiprows: Optional[int] = _SK,
     columns: Optional[str] = _COL, topic: Optional[str] = TOPIC, instance: Optional[int] = INSTANCE,
-    layout: Optional[str] = LAYOUT,
+    layout: Optional[str] = LAYOUT, start: Optional[float] = START, end: Optional[float] = END,
 ) -> None:
     """Tedaldi et al. (2014) multi-pose calibration without a rate table.
 
-    Example: imunav calibrate multipose session.csv --fs 100 --init-s 36.5 --no-accel-misalignment --out cal.json
+    Example (the MPU-6050 session in the shared data): imunav calibrate multipose ../shared/data/mpu6050_tedaldi/example_data_calibration.csv --skiprows 4 --fs 100 --accel-unit counts --accel-scale 5.9855e-4 --gyro-unit counts --gyro-scale 1.3323e-4 --init-s 36.5 --no-accel-misalignment --out mpu_cal.json
     """
 
     check_outputs([recording], [out, px4_params])
     _check_report(report)
 
-    data = _read(recording, fs, accel_unit, gyro_unit, accel_scale, gyro_scale, skiprows, columns, topic, instance,
-                 layout)
+    data = window(_read(recording, fs, accel_unit, gyro_unit, accel_scale, gyro_scale, skiprows, columns, topic,
+                        instance, layout), start, end)
     res = calib.multipose(data.accel, data.gyro, data.fs, init_s=init_s, wait_s=wait_s, gravity=gravity, strict=False,
                           accel_misalignment=accel_misalignment, raw_accel_unit="m/s^2", raw_gyro_unit="rad/s")
     if strict and res.info["weak_parameters"]:  # the library's refusal, naming this command's flags
-        raise undetermined_misalignment_error(
+        raise calib_multipose.undetermined_misalignment_error(
             res.info["n_poses"], res.info["weak_parameters"], res.info["max_misalignment_stderr"],
             no_accel_misalignment="--no-accel-misalignment", not_strict="--no-strict",
         )
     _finish(res, out, report, px4=px4_params)
     if res.info["weak_parameters"]:
         typer.echo("weakly determined: " + "; ".join(res.info["weak_parameters"]), err=True)
+
+
+#: units of the parameters a thermal calibration models (SI, as the calibration JSON stores them)
+_THERMAL_UNITS = {"accel_bias": "m/s^2", "gyro_bias": "rad/s", "accel_scale": "1 (scale factor)",
+                  "gyro_scale": "1 (scale factor)"}
 
 
 @app.command()
@@ -312,7 +321,7 @@ def temperature(
 ) -> None:
     """Bias and scale factor as polynomials of temperature (order by leave-one-out CV).
 
-    Example: imunav calibrate temperature cal_m30.json@-30 cal_0.json@0 cal_20.json@20 cal_50.json@50 --orders 1,2 --out thermal_cal.json
+    Example (the calibrations of the examples above standing for three temperatures): imunav calibrate temperature static_cal.json@-10 cal.json@25 static_cal.json@40 --orders 1 --params accel_bias --out thermal_cal.json
     """
 
     check_outputs([c.rsplit("@", 1)[0] for c in calibrations], [out])
@@ -325,28 +334,32 @@ def temperature(
         if "@" not in item:
             raise InvalidInputError(f"argument {item!r}: write each calibration as FILE@TEMP_C, e.g. cal.json@25")
         f, t = item.rsplit("@", 1)
-        cals.append(ImuCalibration.load(f))
+        cals.append(calib.ImuCalibration.load(f))
         temps.append(float(t))
-    res = thermal_calibration(
+    res = calib_temperature.thermal_calibration(
         temps, cals, params=[p.strip() for p in params.split(",")], orders=[int(o) for o in orders.split(",")],
         order=order, model=model,
     )
     res.calibration.save(out)
-    tab = Table(title="temperature fits: MSE per order (chosen order marked *)")
+    tab = Table(title="temperature fits: MSE per order, in the parameter's unit squared (chosen order marked *)")
     tab.add_column("parameter")
     ords = [f.order for f in next(iter(res.fits.values()))[0].fits]
     for o in ords:
         tab.add_column(f"order {o}")
     for k, fits in res.fits.items():
         for i, f in enumerate(fits):
-            tab.add_row(f"{k}[{'xyz'[i]}]", *[f"{m.mse:.3g}" + ("*" if m.order == f.chosen_order else "") for m in f.fits])
-    Console().print(tab)
+            tab.add_row(escape(f"{k}[{'xyz'[i]}] [{_THERMAL_UNITS.get(k, 'SI')}]"), *[f"{m.mse:.3g}" + ("*" if m.order == f.chosen_order else "") for m in f.fits])
+    make_console().print(tab)
     if report is not None:
         report.mkdir(parents=True, exist_ok=True)
         write_json(report / "report.json", res.to_dict())
         for k, fits in res.fits.items():
             for i, f in enumerate(fits):
-                save_figure(plot_temperature_fit(f, f"{k} {'xyz'[i]}"), report / f"{k}_{'xyz'[i]}.png")
+                fig = plot.plot_temperature_fit(f, f"{k} {'xyz'[i]}")
+                unit = _THERMAL_UNITS.get(k, "SI")
+                fig.axes[0].set_ylabel(f"{k} {'xyz'[i]}, {unit}")
+                fig.axes[1].set_ylabel(f"residual, {unit}")
+                plot.save_figure(fig, report / f"{k}_{'xyz'[i]}.png")
     typer.echo(f"calibration with temperature model written to {out}")
 
 
@@ -357,7 +370,7 @@ def mag(
     out: Path = _OUT,
     method: str = typer.Option("ellipsoid", help="ellipsoid (Li & Griffiths), rotation-scale (thesis) or minmax."),
     field_norm: Optional[float] = typer.Option(None, help="Known field magnitude (data unit); default det(A) = 1."),
-    min_coverage: float = typer.Option(0.3, help="Smallest accepted sphere coverage (ellipsoid)."),
+    min_coverage: float = typer.Option(0.3, help="Smallest accepted sphere coverage, 0-1 (ellipsoid and minmax)."),
     report: Optional[Path] = _REP,
     topic: Optional[str] = TOPIC, instance: Optional[int] = INSTANCE,
     px4_params: Optional[Path] = _PX4,
@@ -379,43 +392,41 @@ def mag(
 
     h = _read_mag(recording, topic, instance)
     if method == "ellipsoid":
-        cal = fit_ellipsoid(h, field_norm, min_coverage=min_coverage)
+        cal = magnetometer.fit_ellipsoid(h, field_norm, min_coverage=min_coverage)
     elif method == "rotation-scale":
-        cal = soft_iron_rotation_scale(h)
+        cal = magnetometer.soft_iron_rotation_scale(h)
     elif method == "minmax":
-        b = hard_iron_minmax(h)
-        n = np.linalg.norm(h - b, axis=1)
-        cal = MagCalibration(b, np.eye(3), float(np.mean(n)), "minmax", {}, {"norm_spread_after": float(np.std(n) / np.mean(n))})
+        cal = magnetometer.fit_minmax(h, min_coverage=min_coverage)
     else:
         raise InvalidInputError(f"--method must be ellipsoid, rotation-scale or minmax, not {method!r}")
     if mag_unit is None:
-        mag_unit = "uT" if log_kind(recording) is not None else "gauss"
+        mag_unit = "uT" if logs.log_kind(recording) is not None else "gauss"
     px4_values = _px4(px4_params, mag=cal, mag_unit=mag_unit)
     write_json(out, cal.to_dict())
     if report is not None:
         report.mkdir(parents=True, exist_ok=True)
         write_json(report / "report.json", cal.to_dict())
-        save_figure(plot_magnetometer(h, cal), report / "projections.png")
-    Console().print({"b": cal.b.round(6).tolist(), "field_norm": round(cal.field_norm, 6), "quality": cal.quality})
+        plot.save_figure(plot.plot_magnetometer(h, cal), report / "projections.png")
+    make_console().print({"b": cal.b.round(6).tolist(), "field_norm": round(cal.field_norm, 6), "quality": cal.quality})
     typer.echo(f"magnetometer calibration written to {out}")
     _write_px4(px4_values, px4_params)
 
 
 def _read_mag(path: Path, topic: Optional[str] = None, instance: Optional[int] = None) -> np.ndarray:
     p = Path(path)
-    if p.exists() and log_kind(p) is not None:
+    if p.exists() and logs.log_kind(p) is not None:
         if topic is None:
             raise InvalidInputError(f"{p}: name the magnetometer topic with --topic (`imunav info {p}` lists them)")
-        d = read_topic(p, topic, instance=instance)
+        d = logs.read_topic(p, topic, instance=instance)
         if "mag" not in d.values:
             raise InvalidInputError(f"{p}: topic {topic!r} is a {d.kind} topic, not a magnetometer")
         return np.asarray(d.values["mag"], float)
     if topic is not None or instance is not None:
         raise InvalidInputError(f"{p}: --topic / --instance apply to ROS bags and PX4 ULogs only")
 
-    check_nonempty(p)
+    _common.check_nonempty(p)
     if p.suffix == ".npz":
-        with wrap_read_errors(str(p), "NPZ"), open(p, "rb") as fh, np.load(fh, allow_pickle=False) as z:
+        with _common.wrap_read_errors(str(p), "NPZ"), open(p, "rb") as fh, np.load(fh, allow_pickle=False) as z:
             for k in ("mag", "h", "m"):
                 if k in z:
                     return np.asarray(z[k], float)

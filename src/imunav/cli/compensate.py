@@ -8,10 +8,13 @@ from typing import Optional
 import numpy as np
 import typer
 
-from imunav.calib import ImuCalibration
+from imunav._atomic import check_outputs
+from imunav.cli._lazy import lazy
+from imunav.cli._options import END, START, window
 from imunav.cli.calibrate import _read
-from imunav.io import write_imu
-from imunav.io._atomic import check_outputs
+
+calib = lazy("imunav.calib")
+io = lazy("imunav.io")
 
 
 def register(root: typer.Typer) -> None:
@@ -26,6 +29,8 @@ def compensate(
     accel_unit: Optional[str] = typer.Option(None, help="Accelerometer unit in the file."),
     gyro_unit: Optional[str] = typer.Option(None, help="Gyro unit in the file."),
     temp_c: Optional[float] = typer.Option(None, help="Constant temperature, °C, when the file has none."),
+    start: Optional[float] = START,
+    end: Optional[float] = END,
     force: bool = typer.Option(False, "--force", help="Compensate even if the recording's provenance says it "
                                "was already compensated with this calibration."),
 ) -> None:
@@ -40,8 +45,8 @@ def compensate(
 
     check_outputs([recording, cal], [out])
 
-    data = _read(recording, fs, accel_unit, gyro_unit, None, None, None, None)
-    c = ImuCalibration.load(cal)
+    data = window(_read(recording, fs, accel_unit, gyro_unit, None, None, None, None), start, end)
+    c = calib.ImuCalibration.load(cal)
     t = None if temp_c is None else np.full(data.n, temp_c)
-    write_imu(c.apply(data, temp_c=t, force=force, source=str(cal)), out)
+    io.write_imu(c.apply(data, temp_c=t, force=force, source=str(cal)), out)
     typer.echo(f"compensated {data.n} samples -> {out}")

@@ -8,9 +8,11 @@ from typing import Optional
 
 import typer
 
-from imunav.cli._options import INSTANCE, LAYOUT, MAG_TOPIC, TOPIC, reader_options
-from imunav.io import read_imu, write_imu
-from imunav.io._atomic import check_outputs
+from imunav._atomic import check_outputs
+from imunav.cli._lazy import lazy
+from imunav.cli._options import END, INSTANCE, LAYOUT, MAG_TOPIC, START, TOPIC, reader_options, window
+
+io = lazy("imunav.io")
 
 _EXAMPLE = (
     "Examples:\n\n"
@@ -28,6 +30,8 @@ def convert(
     instance: Optional[int] = INSTANCE,
     mag_topic: Optional[str] = MAG_TOPIC,
     layout: Optional[str] = LAYOUT,
+    start: Optional[float] = START,
+    end: Optional[float] = END,
     format: Optional[str] = typer.Option(None, "--format", help="Output format (default: from OUT's suffix)."),
     nan_policy: str = typer.Option("raise", "--nan-policy", help="raise, drop or interpolate."),
 ) -> None:
@@ -37,9 +41,9 @@ def convert(
     frame conversion, time report); OUT may not be SRC."""
 
     check_outputs([src], [out])
-    data = read_imu(src, **reader_options(topic=topic, instance=instance, mag_topic=mag_topic, layout=layout,
-                                          nan_policy=nan_policy))
-    path = write_imu(data, out, format=format)
+    data = window(io.read_imu(src, **reader_options(topic=topic, instance=instance, mag_topic=mag_topic,
+                                                    layout=layout, nan_policy=nan_policy)), start, end)
+    path = io.write_imu(data, out, format=format)
     typer.echo(f"{data.n} samples ({data.duration:.6g} s, {data.fs:.6g} Hz) written to {path}")
 
 

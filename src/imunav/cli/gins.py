@@ -9,32 +9,29 @@ from __future__ import annotations
 
 import importlib.util
 from pathlib import Path
-from typing import Optional
+from typing import TYPE_CHECKING, Optional
 
 import numpy as np
 import typer
 
+from imunav._atomic import check_outputs, write_json
+from imunav.cli._lazy import lazy
 from imunav.errors import ConfigError, InvalidInputError
-from imunav.ins.gins import GinsResult
-from imunav.ins.gins.logrun import LogRunOptions, parse_rotation, parse_vector, run_log
-from imunav.ins.gins.outage import outage_test
-from imunav.ins.gins.outputs import (
-    DRIVE_FILES,
-    LOG_FILES,
-    outage_document,
-    run_output_paths,
-    write_figures,
-    write_log_outputs,
-    write_run_outputs,
-    write_simulated_drive,
-)
-from imunav.ins.gins.plot import FIGURE_NAMES
-from imunav.ins.gins.setup import GinsInputs, GinsSetup, load_inputs, run_setup, simulate_drive
-from imunav.io._atomic import check_outputs, write_json
-from imunav.io.kfgins import NavTrack, read_kfgins_nav
-from imunav.io.logs import log_kind
-from imunav.io.navlog import read_nav_sources
-from imunav.sim import Trajectory
+
+if TYPE_CHECKING:
+    from imunav.ins.gins import GinsResult
+    from imunav.ins.gins.setup import GinsInputs, GinsSetup
+    from imunav.io.kfgins import NavTrack
+
+logrun = lazy("imunav.ins.gins.logrun")
+outage = lazy("imunav.ins.gins.outage")
+outputs = lazy("imunav.ins.gins.outputs")
+gins_plot = lazy("imunav.ins.gins.plot")
+gins_setup = lazy("imunav.ins.gins.setup")
+kfgins = lazy("imunav.io.kfgins")
+logs = lazy("imunav.io.logs")
+navlog = lazy("imunav.io.navlog")
+sim = lazy("imunav.sim")
 
 gins_app = typer.Typer(
     help=("Loosely coupled GNSS/INS (error-state Kalman filter) on KF-GINS files.\n\n"
@@ -53,7 +50,7 @@ def register(app: typer.Typer) -> None:
 def _run_filter(inputs: GinsInputs, setup: GinsSetup, *, smoother: bool = False) -> GinsResult:
     """The one call of the GNSS/INS filter in the command line (through :func:`imunav.ins.gins.setup.run_setup`,
     which the lab step calls too)."""
-    return run_setup(inputs.imu, inputs.gnss, setup, odometer=inputs.odometer, smoother=smoother)
+    return gins_setup.run_setup(inputs.imu, inputs.gnss, setup, odometer=inputs.odometer, smoother=smoother)
 
 
 def _say_no_matplotlib(plots: bool) -> None:
@@ -66,8 +63,8 @@ def _inputs(imu: Optional[Path], gnss: Optional[Path], config: Optional[Path], o
     """Read the inputs of ``run`` / ``outage-test``; the initial state from the truth when none is configured."""
     if states is not None and states not in (15, 21):
         raise ConfigError(f"--states must be 15 or 21; got {states}")
-    inputs = load_inputs(imu, gnss, config, odometer=odo, states=states)
-    ref = read_kfgins_nav(truth) if truth is not None else None
+    inputs = gins_setup.load_inputs(imu, gnss, config, odometer=odo, states=states)
+    ref = kfgins.read_kfgins_nav(truth) if truth is not None else None
     setup = inputs.setup
     if not setup.has_init:
         if ref is None:
@@ -91,9 +88,9 @@ def simulate_cmd(
 
     Example: imunav gins simulate --out drive --duration 600 --preset mems_adis16465
     """
-    check_outputs([], [out / name for name in DRIVE_FILES.values()])
-    drive = simulate_drive(duration, preset=preset, fs=fs, seed=seed, t0=sow0)
-    write_simulated_drive(drive, out)
+    check_outputs([], [out / name for name in outputs.DRIVE_FILES.values()])
+    drive = gins_setup.simulate_drive(duration, preset=preset, fs=fs, seed=seed, t0=sow0)
+    outputs.write_simulated_drive(drive, out)
     truth, gnss = drive.truth, drive.gnss
     typer.echo(f"{truth.n} IMU samples ({duration:g} s at {fs:g} Hz, preset {preset}), {gnss.n} GNSS fixes -> {out}")
 
@@ -150,19 +147,19 @@ def run_cmd(
 
     Example: imunav gins run drive/imu.txt drive/gnss.txt --config drive/gins.toml --out res --truth drive/truth.nav
     """
-    if imu is not None and log_kind(imu) is not None:
+    if imu is not None and logs.log_kind(imu) is not None:
         if gnss is not None or config is not None or odo is not None or truth is not None or states is not None:
             raise ConfigError(f"{imu} is a log: it names its own sources; choose topics with --imu-topic / "
                               "--gnss-topic / --odo-topic / --mag-topic / --baro-topic instead of files")
         if out is None:
             raise ConfigError("give --out DIR, the folder for the results")
-        outs = [*run_output_paths(out, smoother=smoother, plots=plots).values(), out / LOG_FILES["geojson"]]
+        outs = [*outputs.run_output_paths(out, smoother=smoother, plots=plots).values(), out / outputs.LOG_FILES["geojson"]]
         check_outputs([imu], outs)
-        sources = read_nav_sources(imu, imu_topic=imu_topic, gnss_topic=gnss_topic, odo_topic=odo_topic,
+        sources = navlog.read_nav_sources(imu, imu_topic=imu_topic, gnss_topic=gnss_topic, odo_topic=odo_topic,
                                    mag_topic=mag_topic, baro_topic=baro_topic)
-        opts = LogRunOptions(preset=preset, mounting=parse_rotation(imu_rotation, "--imu-rotation"),
-                             gnss_lever_arm=parse_vector(gnss_lever_arm, "--gnss-lever-arm"), smoother=smoother)
-        summary = write_log_outputs(out, run_log(sources, opts), sources, plots=plots)
+        opts = logrun.LogRunOptions(preset=preset, mounting=logrun.parse_rotation(imu_rotation, "--imu-rotation"),
+                             gnss_lever_arm=logrun.parse_vector(gnss_lever_arm, "--gnss-lever-arm"), smoother=smoother)
+        summary = outputs.write_log_outputs(out, logrun.run_log(sources, opts), sources, plots=plots)
         _say_no_matplotlib(plots)
         m = summary["mounting"]
         line = (f"{summary['imu_samples']} IMU samples, {summary.get('gnss_used', 0)} GNSS fixes used -> {out}; "
@@ -184,10 +181,10 @@ def run_cmd(
     folder = out if out is not None else inputs.output_path
     if folder is None:
         raise ConfigError("give --out DIR, the folder for the results")
-    outs = run_output_paths(folder, smoother=smoother, plots=plots, truth=ref is not None)
+    outs = outputs.run_output_paths(folder, smoother=smoother, plots=plots, truth=ref is not None)
     check_outputs([*inputs.paths.values(), truth], outs.values())
     res = _run_filter(inputs, setup, smoother=smoother)
-    summary = write_run_outputs(
+    summary = outputs.write_run_outputs(
         folder, res, setup, gnss=inputs.gnss, truth=ref, plots=plots,
         extra={"config": str(config) if config is not None else None,
                "inputs": {k: str(v) for k, v in inputs.paths.items()},
@@ -255,7 +252,7 @@ def outage_cmd(
         if truth is None:
             raise ConfigError("the outage test measures drift against a truth: give --truth FILE.nav")
         inputs, setup, ref = _inputs(imu, gnss, config, odo, truth, states)
-        traj = Trajectory(ref.t, ref.q_nb, ref.vel_ned, ref.lla)
+        traj = sim.Trajectory(ref.t, ref.q_nb, ref.vel_ned, ref.lla)
         data, fixes, odometer, source = inputs.imu, inputs.gnss, inputs.odometer, str(config)
         in_paths = [*inputs.paths.values(), truth]
     else:
@@ -266,20 +263,20 @@ def outage_cmd(
         fs = 100.0 if fs is None else fs
         seed = 1 if seed is None else seed
         rtk = True if rtk is None else rtk
-        drive = simulate_drive(duration, preset=name, fs=fs, seed=seed,
+        drive = gins_setup.simulate_drive(duration, preset=name, fs=fs, seed=seed,
                                pos_noise=(0.02, 0.02, 0.03) if rtk else (0.5, 0.5, 1.0),
                                states=21 if states is None else states)
         data, fixes, setup, traj, odometer = drive.imu, drive.gnss, drive.setup, drive.truth, None
         source, in_paths = f"simulated: preset {name}, {duration:g} s at {fs:g} Hz, seed {seed}", []
     json_path = out / OUTAGE_NAME
-    figs = [out / FIGURE_NAMES["outage"]] if plots else []
+    figs = [out / gins_plot.FIGURE_NAMES["outage"]] if plots else []
     check_outputs(in_paths, [json_path, *figs])
-    rep = outage_test(data, fixes, setup.config, traj, lla0=setup.lla0, vel0=setup.vel0, q0=setup.q0,
+    rep = outage.outage_test(data, fixes, setup.config, traj, lla0=setup.lla0, vel0=setup.vel0, q0=setup.q0,
                       converge_s=converge, every_s=every, length_s=length, shifts_s=sh, odometer=odometer)
     rms = rep.rms()
-    doc = outage_document(rep, source=source, states=setup.config.n_states)
+    doc = outputs.outage_document(rep, source=source, states=setup.config.n_states)
     if plots:
-        doc["figures"] = [p.name for p in write_figures(out, outage=rep)]
+        doc["figures"] = [p.name for p in outputs.write_figures(out, outage=rep)]
         _say_no_matplotlib(plots)
     write_json(json_path, doc)
     n_in = int(np.sum(rep.contained))

@@ -8,16 +8,18 @@ from pathlib import Path
 from typing import Any
 
 import typer
-from rich.console import Console
 from rich.table import Table
 
-from imunav.cli._options import INSTANCE, LAYOUT, MAG_TOPIC, TOPIC, reader_options
+from imunav._atomic import check_outputs, write_json
+from imunav.cli._console import make_console
+from imunav.cli._lazy import lazy
+from imunav.cli._options import END, INSTANCE, LAYOUT, MAG_TOPIC, START, TOPIC, reader_options, window
 from imunav.errors import InvalidInputError
-from imunav.io import read_imu
-from imunav.io._atomic import check_outputs, write_json
-from imunav.io.logs import list_topics, log_kind
-from imunav.timeseries import describe
 from imunav.units import DEG, G0
+
+io = lazy("imunav.io")
+logs = lazy("imunav.io.logs")
+timeseries = lazy("imunav.timeseries")
 
 _EXAMPLE = (
     "Example:\n\n"
@@ -51,6 +53,8 @@ def info(
     instance: int | None = INSTANCE,
     mag_topic: str | None = MAG_TOPIC,
     layout: str | None = LAYOUT,
+    start: float | None = START,
+    end: float | None = END,
     json_out: Path | None = typer.Option(None, "--json", help="Also write the summary as JSON to this file."),
     window_s: float = typer.Option(1.0, "--window", help="Static detector window (s)."),
     min_static_s: float | None = typer.Option(None, "--min-static", help="Shortest static interval kept (s); default = window."),
@@ -73,14 +77,14 @@ def info(
     duration, from the index, without reading the messages; with --topic: that IMU as above, plus
     the jitter, drops and out-of-order stamps of its messages."""
 
-    console = Console()
+    console = make_console()
     check_outputs([file], [json_out])
     if not (math.isfinite(window_s) and window_s > 0):
         raise InvalidInputError(f"--window {window_s}: the static-detector window must be a finite number of seconds > 0")
     if min_static_s is not None and not (math.isfinite(min_static_s) and min_static_s > 0):
         raise InvalidInputError(f"--min-static {min_static_s}: must be a finite number of seconds > 0")
 
-    if topic is None and format in (None, "rosbag", "ulog") and file.exists() and log_kind(file) is not None:
+    if topic is None and format in (None, "rosbag", "ulog") and file.exists() and logs.log_kind(file) is not None:
         _list_topics(console, file, json_out)
         return
     opts = reader_options(
@@ -89,8 +93,8 @@ def info(
         fs=fs, skiprows=skiprows, columns=_parse_columns(column) if column else None, nan_policy=nan_policy,
         topic=topic, instance=instance, mag_topic=mag_topic, layout=layout,
     )
-    data = read_imu(file, format=format, **opts)
-    s = describe(
+    data = window(io.read_imu(file, format=format, **opts), start, end)
+    s = timeseries.describe(
         data,
         window_s=window_s,
         min_duration_s=min_static_s,
@@ -163,7 +167,7 @@ def _list_topics(console: Any, file: Path, json_out: Path | None) -> None:
     """The topics of a bag / ULog as a table (and JSON), with the time the listing took."""
 
     t0 = time.perf_counter()
-    topics = list_topics(file)
+    topics = logs.list_topics(file)
     took = time.perf_counter() - t0
     ulog = all(ti.instance is not None for ti in topics)  # a ULog: the type is the topic name
     tab = Table(title=f"{file}: {len(topics)} topics (listed in {took:.2f} s)", title_justify="left")

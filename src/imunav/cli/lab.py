@@ -6,14 +6,16 @@ from pathlib import Path
 from typing import Optional
 
 import typer
-from rich.console import Console
 from rich.markup import escape
 from rich.table import Table
 
+from imunav._atomic import check_outputs, read_json, write_json
+from imunav.cli._console import make_console
 from imunav.cli._errors import fail
+from imunav.cli._lazy import lazy
 from imunav.errors import InvalidInputError
-from imunav.io._atomic import check_outputs, read_json, write_json
-from imunav.lab import run_lab
+
+imunav_lab = lazy("imunav.lab")
 
 _HELP = """Run the lab and write a report folder (index.html, summary.md, summary.json, data/, figures/).
 
@@ -21,7 +23,7 @@ With no arguments it runs every step on the built-in virtual IMU (preset thesis_
 
 The report folder gets a manifest.json (run id, seed, configuration, every file with its size and SHA-256), written last; a folder that holds another run is refused unless --overwrite, which clears that run first.
 
-With a TOML lab definition (--config) that has [recordings.<name>] tables it runs on real recordings instead (path, format, column mapping, units, which test). A [spec.<parameter>] table gives datasheet limits (pass / fail in the report); a table named after a step sets its options; [lab] sets seed, title and steps. See examples/lab_real.toml and examples/lab_spec.toml. Exit status 1 when a step fails with an error, 2 for a bad lab definition.
+With a TOML lab definition (--config) that has [recordings.<name>] tables it runs on real recordings instead (path, format, column mapping, units, which test). A [spec.<parameter>] table gives datasheet limits (pass / fail in the report); a table named after a step sets its options; [lab] sets seed, title and steps. See examples/lab_real.toml and examples/lab_spec.toml. Exit status 1 when a step fails with an error or a [spec] check fails (unless --no-fail), 2 for a bad lab definition.
 
 Example: imunav lab --out lab-report --seed 0
 """
@@ -38,12 +40,14 @@ def register(app: typer.Typer) -> None:
         json_out: Optional[Path] = typer.Option(None, "--json", help="Also copy summary.json here."),
         overwrite: bool = typer.Option(False, "--overwrite", help="Clear a report folder that holds another run "
                                        "(only files of imunav runs) instead of refusing."),
+        no_fail: bool = typer.Option(False, "--no-fail", help="Exit 0 even when a [spec] check fails (the report "
+                                     "still marks it)."),
     ) -> None:
         check_outputs([config], [json_out])
 
-        console = Console(stderr=True)
+        console = make_console(stderr=True)
         try:
-            result = run_lab(
+            result = imunav_lab.run_lab(
                 out, config, seed, steps=None if steps is None else [s.strip() for s in steps.split(",") if s.strip()],
                 progress=not quiet, console=console, overwrite=overwrite,
             )
@@ -56,11 +60,12 @@ def register(app: typer.Typer) -> None:
         for s in result.steps:
             verdict = "ERROR" if s.error else {None: "n/a", True: "PASS", False: "FAIL"}[s.passed]
             table.add_row(s.title, verdict, f"{s.seconds:.1f}")
-        Console().print(table)
+        make_console().print(table)
         checks = [c for c in result.spec_checks if c.limit is not None]
+        spec_failed = any(c.passed is False for c in checks)
         if checks:
             failed = [c.name for c in checks if c.passed is False]
-            Console().print(f"specification: {len(checks)} checks, {len(failed)} failed"
+            make_console().print(f"specification: {len(checks)} checks, {len(failed)} failed"
                             + (f" ({escape(', '.join(failed[:8]))}{' …' if len(failed) > 8 else ''})" if failed else ""),
                             soft_wrap=True, highlight=False)
         for s in result.steps:
@@ -70,4 +75,7 @@ def register(app: typer.Typer) -> None:
             write_json(json_out, read_json(Path(out) / "summary.json"))
         typer.echo(f"report: {Path(out) / 'index.html'}")
         if result.failed_steps:
+            raise typer.Exit(1)
+        if spec_failed and not no_fail:  # as imunav batch does; --no-fail to go on
+            typer.echo("exit status 1: a [spec] check failed (--no-fail: exit 0)", err=True)
             raise typer.Exit(1)

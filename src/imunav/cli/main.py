@@ -29,9 +29,9 @@ COMMANDS: dict[str, str] = {
              "cross-check.",
     "simulate": "Simulate a test PROFILE (static, multiposition, ratetable, sixposition, ferraris) with a virtual "
                 "IMU and write the recording.",
-    "lab": "Run the lab and write a report folder (index.html, summary.md, summary.json, data/, figures/).",
-    "compensate": "Compensate a recording with a calibration (accelerometer first, then gyro).",
     "calibrate": "Calibrate an IMU or magnetometer from a recording; writes the calibration JSON.",
+    "compensate": "Compensate a recording with a calibration (accelerometer first, then gyro).",
+    "lab": "Run the lab and write a report folder (index.html, summary.md, summary.json, data/, figures/).",
     "attitude": "Attitude filters (Madgwick, Mahony, MEKF, UKF, adaptive, smoother, paper KFs).",
     "zupt": "Foot-mounted INS with zero-velocity updates.",
     "gins": "Loosely coupled GNSS/INS (error-state Kalman filter) on KF-GINS files.",
@@ -39,6 +39,7 @@ COMMANDS: dict[str, str] = {
                "detection.",
     "batch": "Process a folder of recordings (one per unit of a production batch) in parallel, with a summary "
              "table and per-unit result files.",
+    "warmup": "Compile the numba kernels of the quick-tour commands and write their bytecode, once, ahead of use.",
 }
 
 

@@ -6,23 +6,26 @@ from pathlib import Path
 from typing import Any
 
 import typer
-from rich.console import Console
-from rich.progress import Progress
+from rich.markup import escape
 from rich.table import Table
 
+from imunav._atomic import atomic_path, check_outputs, write_json
+from imunav.cli._console import make_console
 from imunav.cli._errors import check_figure_path
-from imunav.cli._options import INSTANCE, LAYOUT, TOPIC, reader_options
+from imunav.cli._lazy import lazy
+from imunav.cli._options import END, INSTANCE, LAYOUT, START, TOPIC, reader_options, window
+from imunav.cli._progress import progress
 from imunav.errors import InvalidInputError
-from imunav.io import read_imu
-from imunav.io._atomic import atomic_path, check_outputs, write_json
-from imunav.io.kalibr import write_kalibr_yaml
-from imunav.io.openvins import write_openvins_yaml
-from imunav.io.vins import write_vins_yaml
-from imunav.noise import allan_deviation, compare_psd_allan, fit_noise, fit_psd, log_average, psd
-from imunav.noise.curvefit import compare_curve_fits
-from imunav.noise.plot import plot_allan, plot_psd
-from imunav.noise.static import require_static
 from imunav.units import to_display
+
+curvefit = lazy("imunav.noise.curvefit")
+imunav_noise = lazy("imunav.noise")
+io = lazy("imunav.io")
+kalibr = lazy("imunav.io.kalibr")
+noise_plot = lazy("imunav.noise.plot")
+openvins = lazy("imunav.io.openvins")
+static = lazy("imunav.noise.static")
+vins = lazy("imunav.io.vins")
 
 _EXAMPLE = (
     "Example:\n\n"
@@ -57,7 +60,7 @@ def _curve_fits(r: Any) -> dict[str, Any]:
     for c, name in enumerate(r.channels):
         a = r.channel(c)
         try:
-            fits = compare_curve_fits(a.tau, a.adev)
+            fits = curvefit.compare_curve_fits(a.tau, a.adev)
             out[name] = {k: {"rms_log10": v.rms_log10, "max_log10": v.max_log10, "has_pole": v.has_pole,
                              "readout": v.readout()} for k, v in fits.items()}
         except (InvalidInputError, ValueError, RuntimeError) as e:  # too few tau points, LM failure
@@ -91,7 +94,11 @@ def noise(
     topic: str | None = TOPIC,
     instance: int | None = INSTANCE,
     layout: str | None = LAYOUT,
+    start: float | None = START,
+    end: float | None = END,
     force: bool = typer.Option(False, "--force", help="Analyse a recording that is not static (moved or rotated)."),
+    quiet: bool = typer.Option(False, "--quiet", "-q", help="No progress bar (none either when standard error is "
+                               "not a terminal)."),
 ) -> None:
     """Identify the stochastic errors of a static IMU recording: overlapping Allan
     deviation with confidence intervals, GLS fit of quantization Q, white noise N,
@@ -101,7 +108,7 @@ def noise(
     The recording must be static (one pose, no rotation): a recording whose mean specific force is far from g,
     or whose 1 s window means change pose or rotate, is refused unless --force."""
 
-    console = Console()
+    console = make_console()
     exports = {"Kalibr imu.yaml": kalibr_out, "OpenVINS IMU file": openvins_out, "VINS-Fusion IMU block": vins_out}
     check_outputs([file], [json_out, plot, psd_plot, *exports.values()])
     check_figure_path(plot, "--plot")
@@ -119,37 +126,46 @@ def noise(
         raise InvalidInputError(f"--select {select!r}: use bic, aic or none")
     opts = reader_options(units={k: v for k, v in (("gyro", gyro_unit), ("accel", accel_unit)) if v}, fs=fs,
                           skiprows=skiprows, topic=topic, instance=instance, layout=layout)
-    data = read_imu(file, format=format, **opts)
+    data = window(io.read_imu(file, format=format, **opts), start, end)
     rate = float(data.fs)
     if fs is None and abs(rate - round(rate)) < 1e-6 * rate:
         rate = float(round(rate))  # time stamps built from an integer rate
-    if data.gaps():
-        raise InvalidInputError(f"{file}: the record has {len(data.gaps())} time gap(s); the noise analysis "
-                                "needs one gap-free static record (split it, or use imunav.noise.allan_deviation "
-                                "with nan_policy='segments')")
+    gaps = data.gaps()
+    if gaps:  # logger dropouts: the Allan statistics use the contiguous segments between them
+        lost = sum(g.length_s for g in gaps)
+        console.print(f"{len(gaps)} time gap(s) (logger dropouts, {lost:.3g} s in all, longest "
+                      f"{max(g.length_s for g in gaps):.3g} s): Allan statistics over the {len(gaps) + 1} contiguous "
+                      "segments, pooled; the PSD over the samples as they come")
 
     # gyro-only analyses skip the mean-specific-force test: the accelerometer's unit may be undeclared
-    require_static(data, force=force, where=str(file), mean_force=any(c.startswith("a") for c in chans))
+    static.require_static(data, force=force, where=str(file), mean_force=any(c.startswith("a") for c in chans))
     groups = []
     for sensor, arr, unit, names in (("gyro", data.gyro, "rad/s", _CH[:3]), ("accel", data.accel, "m/s^2", _CH[3:])):
         idx = [i for i, n in enumerate(names) if n in chans]
         if idx:
             groups.append((sensor, arr[:, idx], unit, tuple(names[i] for i in idx)))
     results: dict[str, Any] = {}
-    with Progress(console=console, transient=True) as prog:
-        task = prog.add_task("noise analysis", total=3 * len(groups))
+    with progress("noise analysis", quiet=quiet, total=3 * len(groups)) as report:
+        done = 0
+
+        def advance() -> None:
+            nonlocal done
+            done += 1
+            report(done, 3 * len(groups))
+
         for sensor, arr, unit, names in groups:
-            r = allan_deviation(arr, rate, tau_spec, kind, units=unit, channels=names)
-            prog.advance(task)
-            f = fit_noise(r, terms=term_list, gauss_markov=gm, select=None if select == "none" else select,
+            r = imunav_noise.allan_deviation(arr, rate, tau_spec, kind, units=unit, channels=names, t=data.t,
+                                             nan_policy="segments")
+            advance()
+            f = imunav_noise.fit_noise(r, terms=term_list, gauss_markov=gm, select=None if select == "none" else select,
                           quantity=sensor)
-            prog.advance(task)
-            p = psd(arr, rate, "welch", nperseg=min(arr.shape[0], 2**14), units=unit, channels=names)
-            pa = log_average(p, 10)
+            advance()
+            p = imunav_noise.psd(arr, rate, "welch", nperseg=min(arr.shape[0], 2**14), units=unit, channels=names)
+            pa = imunav_noise.log_average(p, 10)
             # same band as the Allan fit: below 1/(2 tau_min), clear of the sensor's own filter
-            pf = fit_psd(pa, f_range=[(pa.f[0], min(0.4 * rate, 0.5 / float(tm))) for tm in f.tau_min])
-            prog.advance(task)
-            results[sensor] = (r, f, p, pa, pf, compare_psd_allan(pf, f))
+            pf = imunav_noise.fit_psd(pa, f_range=[(pa.f[0], min(0.4 * rate, 0.5 / float(tm))) for tm in f.tau_min])
+            advance()
+            results[sensor] = (r, f, p, pa, pf, imunav_noise.compare_psd_allan(pf, f))
 
     console.print(f"[bold]{file}[/bold]: {data.n:,} samples at {rate:g} Hz ({data.n / rate:.6g} s), "
                   f"kind={kind}, taus={taus}")
@@ -158,9 +174,9 @@ def noise(
         t.add_column("channel")
         shown = [i for i, nm in enumerate(f.names) if f.selected[i].any() or nm in ("N", "B", "K")]
         for i in shown:
-            t.add_column(f"{f.names[i]} [{f.display_units[i]}]", justify="right")
+            t.add_column(escape(f"{f.names[i]} [{f.display_units[i]}]"), justify="right")
         t.add_column("N (PSD) / N (Allan) - 1", justify="right")
-        t.add_column(f"slope read-out N [{f.display_units[f.names.index('N')]}]", justify="right")
+        t.add_column(escape(f"slope read-out N [{f.display_units[f.names.index('N')]}]"), justify="right")
         t.add_column("fit from tau (s)", justify="right")
         for c, name in enumerate(r.channels):
             row = [name]
@@ -176,8 +192,22 @@ def noise(
             row.append(f"{f.tau_min[c]:.3g}")
             t.add_row(*row)
         console.print(t)
+    span = float(data.t[-1] - data.t[0]) - sum(g.length_s for g in gaps)
+    ident = {sensor: imunav_noise.identifiability(f, span) for sensor, (_r, f, *_rest) in results.items()}
+    for sensor, terms_ in ident.items():
+        for term, rows in terms_.items():
+            short = [(results[sensor][0].channels[c], row["needs_s"]) for c, row in enumerate(rows)
+                     if row["identifiable"] is False]
+            if short:
+                needs = [n for _, n in short if n is not None]
+                console.print(f"{sensor} {term}: not identifiable from this {span:.4g} s record on "
+                              f"{', '.join(c for c, _ in short)} (it shows only above the white noise"
+                              + (f"; it would need about {max(needs):.3g} s" if needs else ", at no cluster time")
+                              + "): the value in the table is an extrapolation")
     if json_out is not None:
-        out = {"file": str(file), "fs": rate, "n_samples": int(data.n)}
+        out = {"file": str(file), "fs": rate, "n_samples": int(data.n), "start_s": start, "end_s": end,
+               "gaps": [{"t_start": g.t_start, "length_s": g.length_s, "missing_samples": g.missing_samples}
+                        for g in gaps], "identifiability": ident}
         for sensor, (r, f, _p, _pa, pf, cmp) in results.items():
             out[sensor] = {"allan": r.to_dict(), "fit": f.to_dict(), "psd_fit": pf.to_dict(), "psd_vs_allan": cmp,
                            "curve_fits": _curve_fits(r)}
@@ -189,7 +219,7 @@ def noise(
                 continue
             figs = []
             for sensor, (r, f, p, pa, pf, _) in results.items():
-                figs.append(plot_allan(r, f, title=sensor) if which == "allan" else plot_psd(p, pf, pa, title=sensor))
+                figs.append(noise_plot.plot_allan(r, f, title=sensor) if which == "allan" else noise_plot.plot_psd(p, pf, pa, title=sensor))
             for k, fig in enumerate(figs):
                 target = Path(path) if len(figs) == 1 else Path(path).with_name(
                     f"{Path(path).stem}_{list(results)[k]}{Path(path).suffix}")
@@ -198,8 +228,8 @@ def noise(
                 console.print(f"figure written to {target}")
     if wanted:
         fg, fa = results["gyro"][1], results["accel"][1]
-        writers = (lambda p: write_kalibr_yaml(p, fg, fa, rate), lambda p: write_openvins_yaml(p, fg, fa, rate),
-                   lambda p: write_vins_yaml(p, fg, fa))
+        writers = (lambda p: kalibr.write_kalibr_yaml(p, fg, fa, rate), lambda p: openvins.write_openvins_yaml(p, fg, fa, rate),
+                   lambda p: vins.write_vins_yaml(p, fg, fa))
         for (what, path), write in zip(exports.items(), writers):
             if path is not None:
                 write(path)

@@ -6,33 +6,26 @@ from pathlib import Path
 from typing import Optional
 
 import typer
-from rich.console import Console
 from rich.markup import escape
 from rich.progress import Progress
 
+from imunav._atomic import check_outputs, write_json
+from imunav.cli._console import make_console
+from imunav.cli._lazy import lazy
 from imunav.errors import ConfigError, InvalidInputError
-from imunav.io import write_imu
-from imunav.io._atomic import check_outputs, write_json
-from imunav.sim import (
-    ImuErrorModel,
-    ferraris_profile,
-    hundred_position_profile,
-    ideal_imu,
-    presets,
-    simulate_imu,
-    six_position_profile,
-    static_profile,
-    thesis_rate_table_profile,
-)
 from imunav.units import DEG
+
+io = lazy("imunav.io")
+presets = lazy("imunav.sim.presets")
+sim = lazy("imunav.sim")
 
 PROFILES = ("static", "multiposition", "ratetable", "sixposition", "ferraris")
 
 _HELP = f"""Simulate a test PROFILE ({", ".join(PROFILES)}) with a virtual IMU and write the recording.
 
-multiposition is the 100-position static test, ratetable the 120-step +-250 deg/s rate-table test (Günhan 2014, section 4.1), sixposition each axis up then down, ferraris six poses plus a full turn about each axis, static one level position for --duration seconds.  The error model is a preset (--preset, 'ideal' = no errors) or a TOML file (--model).  The format follows the suffix of --out (.csv .parquet .h5 .mat .npz); the segment table goes next to it as <name>_segments.csv.  Earth rate and normal gravity are used when --lat-deg is given (else constant 9.80665 m/s^2).
+multiposition is the 100-position static test, ratetable the 120-step +-250 deg/s rate-table test (Günhan 2014, section 4.1), sixposition each axis up then down, ferraris six poses plus a full turn about each axis, static one level position for --duration seconds.  The error model is a preset (--preset, 'ideal' = no errors) or a TOML file (--model).  The format follows the suffix of --out (.csv .parquet .h5 .mat .npz); the segment table goes next to it as <name>_segments.json (what imunav calibrate --segments reads).  Earth rate and normal gravity are used when --lat-deg is given (else constant 9.80665 m/s^2).
 
-Example: imunav simulate multiposition --preset thesis_sim --fs 100 --seed 1 --out hundred.npz
+Example: imunav simulate multiposition --preset thesis_sim --fs 100 --seed 1 --out static.npz
 """
 
 
@@ -52,12 +45,12 @@ def register(app: typer.Typer) -> None:
         h_m: float = typer.Option(0.0, "--h-m", help="Height above the ellipsoid, m."),
         earth_rate: Optional[bool] = typer.Option(None, "--earth-rate/--no-earth-rate", help="Earth rate in the gyros (default: on iff --lat-deg)."),
         gravity: Optional[str] = typer.Option(None, "--gravity", help="'normal', 'constant' or m/s^2 (default: normal iff --lat-deg)."),
-        segments: Optional[Path] = typer.Option(None, "--segments", help="Segment-table CSV (default <out stem>_segments.csv)."),
+        segments: Optional[Path] = typer.Option(None, "--segments", help="Segment table to write, .json or .csv (default <out stem>_segments.json)."),
         json_out: Optional[Path] = typer.Option(None, "--json", help="Also write a JSON summary here."),
     ) -> None:
         check_outputs([model], [out, segments, json_out])
 
-        console = Console(stderr=True)
+        console = make_console(stderr=True)
         try:
             summary = run_simulate(
                 profile, out, preset=preset, model=model, fs=fs, seed=seed, dwell=dwell, transition=transition,
@@ -114,11 +107,11 @@ def run_simulate(
         raise InvalidInputError("Earth rate and normal gravity need --lat-deg (or use --no-earth-rate --gravity constant)")
     kw = {"lat": lat, "h": h_m}
     builders = {
-        "static": lambda: static_profile(duration, fs, **kw),
-        "multiposition": lambda: hundred_position_profile(fs, dwell, transition, **kw),
-        "ratetable": lambda: thesis_rate_table_profile(fs, dwell, transition, **kw),
-        "sixposition": lambda: six_position_profile(fs, dwell, transition, **kw),
-        "ferraris": lambda: ferraris_profile(fs, dwell, transition, **kw),
+        "static": lambda: sim.static_profile(duration, fs, **kw),
+        "multiposition": lambda: sim.hundred_position_profile(fs, dwell, transition, **kw),
+        "ratetable": lambda: sim.thesis_rate_table_profile(fs, dwell, transition, **kw),
+        "sixposition": lambda: sim.six_position_profile(fs, dwell, transition, **kw),
+        "ferraris": lambda: sim.ferraris_profile(fs, dwell, transition, **kw),
     }
     ideal_kw = {"earth_rate": bool(earth_rate), "transport_rate": False, "gravity": g}
     with Progress(console=console, transient=True) as prog:
@@ -127,18 +120,18 @@ def run_simulate(
         prog.advance(task)
         name = preset or "thesis_sim"
         if model is not None:
-            em = ImuErrorModel.from_toml(model)
+            em = sim.ImuErrorModel.from_toml(model)
             data = _simulate(prof, em, seed, ideal_kw)
             name = em.name or Path(model).stem
         elif name == "ideal":
-            data = ideal_imu(prof.trajectory, **ideal_kw)
+            data = sim.ideal_imu(prof.trajectory, **ideal_kw)
         else:
             data = _simulate(prof, presets.get(name), seed, ideal_kw)
         prog.advance(task)
         data = data.with_(meta={**dict(data.meta or {}), "profile": profile, "error_model": name, "seed": seed})
-        path = write_imu(data, out)
-        seg_path = segments if segments is not None else Path(out).with_name(Path(out).stem + "_segments.csv")
-        prof.segments.write_csv(seg_path)
+        path = io.write_imu(data, out)
+        seg_path = segments if segments is not None else Path(out).with_name(Path(out).stem + "_segments.json")
+        prof.segments.write(seg_path)
         prog.advance(task)
     s = prof.summary()
     return {
@@ -157,4 +150,4 @@ def run_simulate(
 
 
 def _simulate(prof, model, seed, ideal_kw):
-    return simulate_imu(prof.trajectory, model, seed, **ideal_kw)
+    return sim.simulate_imu(prof.trajectory, model, seed, **ideal_kw)

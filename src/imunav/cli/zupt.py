@@ -7,29 +7,23 @@ from typing import Any, Optional
 
 import numpy as np
 import typer
-from rich.console import Console
 from rich.progress import Progress, track
 from rich.table import Table
 
+from imunav._atomic import atomic_path, check_outputs, write_json
+from imunav.cli._console import make_console
 from imunav.cli._errors import check_suffix, fail
+from imunav.cli._lazy import lazy
 from imunav.cli._options import INSTANCE, LAYOUT, TOPIC, reader_options
 from imunav.errors import FileFormatError, ImunavError
-from imunav.ins import (
-    DEFAULT_THRESHOLDS,
-    DETECTORS,
-    ZuptConfig,
-    ZuptFilter,
-    detect_zero_velocity,
-    error_2d,
-    loop_closure_error,
-)
-from imunav.io import foot, read_imu
-from imunav.io._atomic import atomic_path, check_outputs, write_json
-from imunav.io._common import check_nonempty
-from imunav.io.foot import read_pyshoe_mat
-from imunav.io.logs import log_kind
-from imunav.learn import LstmConfig, LstmDetector, best_labels, select_shoe_threshold, train_lstm
-from imunav.learn.lstm import require_torch
+
+_common = lazy("imunav.io._common")
+foot = lazy("imunav.io.foot")
+ins = lazy("imunav.ins")
+io = lazy("imunav.io")
+learn = lazy("imunav.learn")
+learn_lstm = lazy("imunav.learn.lstm")
+logs = lazy("imunav.io.logs")
 
 zupt_app = typer.Typer(
     help="Foot-mounted INS with zero-velocity updates.\n\nExample: imunav zupt run trial.mat --detector shoe",
@@ -49,9 +43,9 @@ def load_foot_file(path: Path, **read: Any) -> Any:
     """Read a foot recording by its format: pyshoe ``.mat``, x-io or FGO ``.csv``; a ROS bag / PX4 ULog (or
     any file with ``read`` options such as ``topic`` / ``layout``) through :func:`imunav.io.read_imu`."""
 
-    if read or (path.exists() and log_kind(path) is not None):
-        return foot.FootTrial(read_imu(path, **read), name=path.stem)
-    check_nonempty(path)
+    if read or (path.exists() and logs.log_kind(path) is not None):
+        return foot.FootTrial(io.read_imu(path, **read), name=path.stem)
+    _common.check_nonempty(path)
     if path.suffix.lower() == ".mat":
         return foot.read_pyshoe_mat(path)
     if path.suffix.lower() == ".csv":
@@ -111,24 +105,24 @@ def run_cmd(
         else:
             m = None
             if model is not None:
-                m = LstmDetector.load(model)
-            det_res = detect_zero_velocity(trial.imu, detector, threshold, model=m, margin_s=margin_s)
+                m = learn.LstmDetector.load(model)
+            det_res = ins.detect_zero_velocity(trial.imu, detector, threshold, model=m, margin_s=margin_s)
             zv = det_res.zv
             guard = det_res.params.get("guard")
         xio_like = trial.position is None
-        cfg = ZuptConfig(states=states, zaru=zaru, zaru_min_s=zaru_min_s, heading_hold=heading_hold,
+        cfg = ins.ZuptConfig(states=states, zaru=zaru, zaru_min_s=zaru_min_s, heading_hold=heading_hold,
                          level_floor=level_floor, sigma_acc=sigma_acc,
                          alignment="first_stance" if xio_like else "samples", g=None if xio_like else 9.8029)
-        res = ZuptFilter(cfg).run(trial.imu, zv)
+        res = ins.ZuptFilter(cfg).run(trial.imu, zv)
     except ImunavError as exc:
         _fail(exc)
-    lc = loop_closure_error(res.position)
+    lc = ins.loop_closure_error(res.position)
     summary: dict[str, Any] = {"file": str(file), "detector": detector, "samples": int(trial.imu.n),
                                "stance_fraction": float(np.mean(zv)), "distance_m": lc.distance_travelled,
                                "loop_closure_m": lc.error_3d, "loop_closure_horizontal_m": lc.horizontal,
                                "loop_closure_vertical_m": lc.vertical}
     if trial.position is not None:
-        summary["error_2d_m"] = error_2d(res.position, trial.position)
+        summary["error_2d_m"] = ins.error_2d(res.position, trial.position)
     if guard is not None:  # the LSTM's SHOE guard: share of samples that took SHOE's flags
         summary["guard_fallback_fraction"] = float(guard["fallback_fraction"])
     for k, v in summary.items():
@@ -166,7 +160,7 @@ def train_cmd(
     check_suffix(out, "--out", (".npz",), "the model (NumPy archive)")
 
     try:
-        require_torch()  # before the slow label selection: training is the one command that needs torch
+        learn_lstm.require_torch()  # before the slow label selection: training is the one command that needs torch
     except ImunavError as exc:
         _fail(exc)
     files = sorted(directory.glob("*.mat"))
@@ -178,16 +172,16 @@ def train_cmd(
         if v is not None:
             kw[k] = v
     try:
-        LstmConfig(**kw)  # validate the options before the slow part
-        trials = [read_pyshoe_mat(f) for f in files]
+        learn.LstmConfig(**kw)  # validate the options before the slow part
+        trials = [foot.read_pyshoe_mat(f) for f in files]
         if shoe_threshold is None:
-            shoe_threshold, _ = select_shoe_threshold(trials)
+            shoe_threshold, _ = learn.select_shoe_threshold(trials)
             typer.echo(f"guard: SHOE threshold {shoe_threshold:.4g} (smallest mean 2-D error over the {len(trials)} trials)")
-        cfg = LstmConfig(**kw, shoe_threshold=shoe_threshold)
+        cfg = learn.LstmConfig(**kw, shoe_threshold=shoe_threshold)
         labels = []
         audit = []
         for tr in trials:
-            y, det, err = best_labels(tr)
+            y, det, err = learn.best_labels(tr)
             labels.append(y)
             audit.append({"trial": tr.name, "detector": det, "error_2d_m": err})
         with Progress() as prog:
@@ -196,7 +190,7 @@ def train_cmd(
             def cb(done: int, total: int, loss: float) -> None:
                 prog.update(task, completed=done, total=total, description=f"training (loss {loss:.3f})")
 
-            model, rep = train_lstm([t.imu for t in trials], labels, cfg, progress=cb, threads=threads)
+            model, rep = learn.train_lstm([t.imu for t in trials], labels, cfg, progress=cb, threads=threads)
         model.info["label_audit"] = audit
         model.save(out)
     except ImunavError as exc:
@@ -223,18 +217,18 @@ def benchmark_cmd(
     if not files:
         _fail(FileNotFoundError(f"no *.mat trials in {directory}"))
     try:
-        lstm = LstmDetector.load(model)
-        names = list(DETECTORS) + ["lstm"]
+        lstm = learn.LstmDetector.load(model)
+        names = list(ins.DETECTORS) + ["lstm"]
         rows = []
         for f in track(files, description="trials"):
-            tr = read_pyshoe_mat(f)
+            tr = foot.read_pyshoe_mat(f)
             if tr.position is None:
                 raise ImunavError(f"{f}: no ground truth 'gt'; the benchmark needs it")
             row: dict[str, Any] = {"trial": tr.name}
             for name in names:
                 zv = (lstm.detect(tr.imu).zv if name == "lstm"
-                      else detect_zero_velocity(tr.imu, name, DEFAULT_THRESHOLDS[name]).zv)
-                row[name] = error_2d(ZuptFilter().run(tr.imu, zv).position, tr.position)
+                      else ins.detect_zero_velocity(tr.imu, name, ins.DEFAULT_THRESHOLDS[name]).zv)
+                row[name] = ins.error_2d(ins.ZuptFilter().run(tr.imu, zv).position, tr.position)
             rows.append(row)
     except ImunavError as exc:
         _fail(exc)
@@ -246,7 +240,7 @@ def benchmark_cmd(
         table.add_row(r["trial"], *[f"{r[n]:.3f}" for n in names])
     means = {n: float(np.mean([r[n] for r in rows])) for n in names}
     table.add_row("mean", *[f"{means[n]:.3f}" for n in names])
-    Console().print(table)
+    make_console().print(table)
     if json_out is not None:
-        _write_json(json_out, {"thresholds": {k: DEFAULT_THRESHOLDS[k] for k in DETECTORS}, "trials": rows,
+        _write_json(json_out, {"thresholds": {k: ins.DEFAULT_THRESHOLDS[k] for k in ins.DETECTORS}, "trials": rows,
                                "mean": means})

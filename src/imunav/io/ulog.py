@@ -164,7 +164,7 @@ def _dataset(path: str | os.PathLike[str], topic: str, instance: int | None) -> 
         if len(found) > 1:
             raise InvalidInputError(
                 f"{source}: topic {name!r} has {len(found)} instances {ids}; choose one with instance=... "
-                f"(CLI: --instance) or topic='{name}:{ids[0]}'"
+                f"(CLI: --instance), or topic='{name}:{ids[0]}' (CLI: --topic {name}:{ids[0]})"
             )
         return ulog, found[0]
     for d in found:
@@ -351,8 +351,14 @@ def read_imu_topic(path: str | os.PathLike[str], topic: str | None, *, instance:
     if name not in IMU_TOPICS:
         raise InvalidInputError(f"{source}: topic {name!r} is not an IMU topic; choose one of {', '.join(IMU_TOPICS)}")
     if name in ("sensor_gyro", "sensor_accel"):
-        g = read_topic(path, "sensor_gyro", instance=inst)
-        a = read_topic(path, "sensor_accel", instance=g.instance)
+        # the topic named first, so that a missing topic or an ambiguous instance is reported as asked for
+        other = "sensor_accel" if name == "sensor_gyro" else "sensor_gyro"
+        first = read_topic(path, name, instance=inst)
+        try:
+            second = read_topic(path, other, instance=first.instance)
+        except InvalidInputError as e:
+            raise InvalidInputError(f"{name} as an IMU needs {other} of the same instance ({first.instance}): {e}") from None
+        g, a = (first, second) if name == "sensor_gyro" else (second, first)
         g = TopicData(g.topic, "imu", g.t, {"gyro": g.values["gyro"]}, {"gyro": "rad/s"}, g.t_receive, g.instance,
                       dict(g.meta))
         imu, note = merge_onto(g, a, "accel", source)

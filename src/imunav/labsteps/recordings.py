@@ -46,7 +46,6 @@ from typing import Any, Mapping
 
 import numpy as np
 
-from imunav.batch import _read_segments
 from imunav.errors import ConfigError, InvalidInputError
 from imunav.io import read_imu
 from imunav.io._atomic import atomic_path
@@ -56,6 +55,7 @@ from imunav.noise import allan_deviation, fit_noise
 from imunav.noise.plot import plot_allan
 from imunav.report.catalog import noise_estimates
 from imunav.report.lab import display_parameters, embed_png
+from imunav.sim import Segments
 from imunav.units import to_display
 
 #: The report hook shows the parameters itself.
@@ -250,7 +250,7 @@ def parse_recordings(table: Mapping[str, Any], base_dir: Path, where: str = "lab
 
 
 def _segments(path: Path) -> Any:
-    return _read_segments(path)
+    return Segments.read(path)
 
 
 def run(ctx: LabContext) -> StepResult:

@@ -12,7 +12,7 @@ from imunav.io.kalibr import write_kalibr_yaml  # re-export: the README's noise 
 from imunav.noise.allan import KINDS, AllanResult, allan_deviation, allan_variance, tau_grid
 from imunav.noise.ar import GaussMarkovFit, autocorrelation, fit_gauss_markov, gm_discrete, yule_walker
 from imunav.noise.curvefit import CurveFit, compare_curve_fits, fit_polynomial, fit_rational
-from imunav.noise.fit import NoiseFit, SlopeReadout, avar_model, fit_noise, slope_readout
+from imunav.noise.fit import NoiseFit, SlopeReadout, avar_model, fit_noise, identifiability, slope_readout
 from imunav.noise.psd import (
     PsdFit,
     PsdResult,
@@ -28,7 +28,7 @@ from imunav.noise.wavelet import compare_hybrid, wavelet_denoise
 
 __all__ = [
     "KINDS", "AllanResult", "allan_deviation", "allan_variance", "tau_grid",
-    "NoiseFit", "SlopeReadout", "avar_model", "fit_noise", "slope_readout", "write_kalibr_yaml",
+    "NoiseFit", "SlopeReadout", "avar_model", "fit_noise", "identifiability", "slope_readout", "write_kalibr_yaml",
     "PsdFit", "PsdResult", "compare_psd_allan", "fit_psd", "frequency_average", "log_average", "psd", "psd_readout",
     "GaussMarkovFit", "autocorrelation", "fit_gauss_markov", "gm_discrete", "yule_walker",
     "CurveFit", "compare_curve_fits", "fit_polynomial", "fit_rational",

@@ -70,6 +70,7 @@ __all__ = [
     "avar_model",
     "avar_term",
     "fit_noise",
+    "identifiability",
     "slope_readout",
 ]
 
@@ -743,3 +744,61 @@ def slope_readout(result: AllanResult, tol: float = 0.1) -> SlopeReadout:
             tlo[p, c] = 10 ** lt[pick].min()
             thi[p, c] = 10 ** lt[pick].max()
     return SlopeReadout(names=names, value=val, tau_lo=tlo, tau_hi=thi, found=found)
+
+
+def identifiability(fit: NoiseFit, duration: float, clusters: float = 9.0) -> dict[str, list[dict[str, Any]]]:
+    """Which fitted long-term terms (B, K, R) a record of ``duration`` seconds can tell apart from white noise.
+
+    A term shows in an Allan curve only from the cluster time ``tau_x`` where its Allan variance exceeds that of
+    every other selected term (the white noise ``N^2 / tau`` first); an Allan point at ``tau`` rests on about ``duration / tau`` independent
+    clusters, so the term needs ``duration >= clusters * tau_x`` (about 9 clusters: +-25 % on the deviation
+    at one sigma).  A term the fit selected on a shorter record is an extrapolation, not an estimate.
+
+    Parameters
+    ----------
+    fit : NoiseFit
+        The fit (:func:`fit_noise`); its N term (or, without it, Q) is the white-noise reference.
+    duration : float
+        Length of the record the fit came from, s (without its gaps).
+    clusters : float
+        Independent clusters wanted at ``tau_x`` (default 9).
+
+    Returns
+    -------
+    dict
+        For each of B, K, R among ``fit.names``: one dict per channel with ``selected`` (bool),
+        ``identifiable`` (bool, or None when the term was not selected), ``tau_x_s`` and ``needs_s`` (the
+        record length the term needs, s; None when not selected or without a white-noise term).
+
+    Raises
+    ------
+    InvalidInputError
+        If ``duration`` is not a positive number of seconds.
+    """
+    if not (np.isfinite(duration) and duration > 0):
+        raise InvalidInputError(f"duration={duration}: give the record length in seconds (> 0)")
+    ref = "N" if "N" in fit.names else ("Q" if "Q" in fit.names else None)
+    grid = np.logspace(-4, 9, 1301)
+    out: dict[str, list[dict[str, Any]]] = {}
+    for name in ("B", "K", "R"):
+        if name not in fit.names:
+            continue
+        i = fit.names.index(name)
+        rows = []
+        for c in range(fit.value.shape[1]):
+            sel = bool(fit.selected[i, c]) and fit.value[i, c] > 0
+            row: dict[str, Any] = {"selected": sel, "identifiable": None, "tau_x_s": None, "needs_s": None}
+            if sel and ref is not None and fit.selected[fit.names.index(ref), c]:
+                # the term must exceed every other selected term (white noise below, the steeper ones above)
+                v = fit.value[i, c] ** 2 * avar_term(name, grid)
+                others = [fit.value[j, c] ** 2 * avar_term(fit.names[j], grid) for j in range(len(fit.names))
+                          if j != i and fit.names[j] in TERMS and fit.selected[j, c] and fit.value[j, c] > 0]
+                above = np.flatnonzero(np.all([v >= w for w in others], axis=0)) if others else np.arange(grid.size)
+                if above.size:  # else the term stays under the white noise at every cluster time
+                    tau_x = float(grid[above[0]])
+                    row.update(tau_x_s=tau_x, needs_s=clusters * tau_x, identifiable=bool(duration >= clusters * tau_x))
+                else:
+                    row["identifiable"] = False
+            rows.append(row)
+        out[name] = rows
+    return out

@@ -263,7 +263,7 @@ def require_static(data: Any, *, force: bool = False, where: str = "the recordin
         raise NotStaticError(
             f"{where} is not static, and noise identification needs a recording at rest in one pose: "
             + "; ".join(res.reasons)
-            + ". Record the sensor at rest, cut the static part (ImuData.time_slice), or pass force=True "
-            "(command line: --force) to analyse it anyway"
+            + ". Record the sensor at rest, cut the static part (ImuData.window; command line: --start / --end), "
+            "or pass force=True (command line: --force) to analyse it anyway"
         )
     return res

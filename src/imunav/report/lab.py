@@ -67,10 +67,16 @@ def lab_markdown(result: Any) -> str:
         lines.append(f"| {s.title} (`{s.name}`) | {_verdict_word(s.passed)} | {s.seconds:.1f} |")
     checks = [c for c in result.spec_checks if c.limit is not None]
     if checks:
-        lines += ["", "## Specification", "", "| parameter | value (SI) | ±1σ (SI) | limit | verdict |", "|---|---|---|---|---|"]
+        # value, its sigma and the limit in one unit: the limit's
+        lines += ["", "## Specification", "", "| parameter | value | ±1σ | unit | limit | verdict |",
+                  "|---|---|---|---|---|---|"]
         for c in sorted(checks, key=lambda c: (c.passed is not False, c.name)):
-            lines.append(f"| {c.name} | {c.value_si:.6g} | {'' if c.sigma_si is None else f'{c.sigma_si:.3g}'} | "
-                         f"{c.limit.describe()} | {_verdict_word(c.passed)} |")
+            u = c.limit.unit if c.limit.unit else display_unit(c.name)
+            v = _to_unit(c.value_si, u) if c.limit.unit else to_display_value(c.name, c.value_si)
+            sd = None if c.sigma_si is None else (_to_unit(c.sigma_si, u) if c.limit.unit
+                                                  else to_display_value(c.name, c.sigma_si))
+            lines.append(f"| {c.name} | {'' if v is None else f'{v:.6g}'} | {'' if sd is None else f'{sd:.3g}'} | "
+                         f"{u} | {c.limit.describe()} | {_verdict_word(c.passed)} |")
     for s in result.steps:
         lines += ["", f"## {s.title}", ""]
         if s.error:

@@ -30,13 +30,13 @@ import csv
 import os
 from dataclasses import dataclass, fields
 from pathlib import Path
-from typing import Iterator
+from typing import Any, Iterator
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from imunav.errors import InvalidInputError, ShapeError
-from imunav.io._atomic import atomic_path
+from imunav._atomic import atomic_path, read_json, write_json
+from imunav.errors import FileFormatError, InvalidInputError, ShapeError
 from imunav.results import EulerMixin
 from imunav.rotation import (
     quat_conjugate,
@@ -220,6 +220,100 @@ class Segments(EulerMixin):
                     repr(float(np.rad2deg(self.angle[k]))), *(repr(float(x)) for x in self.q_nb[k]),
                 ])
         return p
+
+    def write(self, path: str | os.PathLike[str]) -> Path:
+        """Write the table in the format of the suffix (atomically): ``.json`` or ``.csv``.
+
+        JSON holds :meth:`to_dict` (SI: s, rad, rad/s), CSV the table of :meth:`write_csv` (degrees);
+        :meth:`read` reads both, so what ``imunav simulate --segments`` writes, ``imunav calibrate
+        multiposition --segments`` reads.
+
+        Parameters
+        ----------
+        path : str or os.PathLike
+            File to write, ending in ``.json`` or ``.csv``.
+
+        Returns
+        -------
+        pathlib.Path
+            The path written.
+
+        Raises
+        ------
+        InvalidInputError
+            If the suffix is neither ``.json`` nor ``.csv``.
+        """
+        p = Path(path)
+        suffix = p.suffix.lower()
+        if suffix == ".csv":
+            return self.write_csv(p)
+        if suffix != ".json":
+            raise InvalidInputError(f"{p}: a segment table is written as .json or .csv, not {p.suffix or 'no suffix'!r}")
+        write_json(p, {"segment_table": self.to_dict()}, indent=1)
+        return p
+
+    @classmethod
+    def read(cls, path: str | os.PathLike[str]) -> "Segments":
+        """Read a segment table written by :meth:`write` (JSON or CSV) or by ``Profile.to_dict()`` (JSON).
+
+        Parameters
+        ----------
+        path : str or os.PathLike
+            ``.json`` (the columns of :meth:`to_dict`, alone or under ``segment_table``) or ``.csv``
+            (the columns of :meth:`write_csv`).
+
+        Returns
+        -------
+        Segments
+            The table, in SI units.
+
+        Raises
+        ------
+        FileFormatError
+            If the file is not a segment table (not valid JSON / CSV, a column missing).
+        """
+        p = Path(path)
+        if p.suffix.lower() == ".csv":
+            return cls._read_csv(p)
+        d = read_json(p, "segment table JSON (imunav simulate --segments, Segments.write or Profile.to_dict())")
+        if isinstance(d, dict):
+            d = d.get("segment_table", d)
+        if not isinstance(d, dict):
+            raise FileFormatError(f"{p}: a segment table JSON is an object with the columns of Segments")
+        try:
+            # strict JSON writes NaN (the rate of a transition) as null: float columns read it back as NaN
+            types = {"kind": str, "step": np.int64, "i_start": np.int64, "i_stop": np.int64}
+            return cls(**{k: np.asarray(d[k], dtype=types.get(k, float)) for k in cls.__dataclass_fields__})
+        except KeyError as e:
+            raise FileFormatError(f"{p}: segment table lacks the column {e} (write it with Segments.write)") from None
+        except (TypeError, ValueError) as e:
+            raise FileFormatError(f"{p}: segment table with a non-numeric value ({e})") from None
+
+    @classmethod
+    def _read_csv(cls, p: Path) -> "Segments":
+        try:
+            with open(p, newline="", encoding="utf-8") as fh:
+                rows = list(csv.DictReader(fh))
+        except UnicodeDecodeError as e:
+            raise FileFormatError(f"{p}: not a text segment table ({e})") from None
+        if not rows:
+            raise FileFormatError(f"{p}: the segment table has no rows")
+
+        def col(*names: str, dtype: Any = float) -> NDArray[Any]:
+            try:
+                return np.array([[r[n] for n in names] for r in rows], dtype=dtype).squeeze(axis=1) \
+                    if len(names) == 1 else np.array([[r[n] for n in names] for r in rows], dtype=dtype)
+            except KeyError as e:
+                raise FileFormatError(f"{p}: segment table lacks the column {e} (write it with "
+                                      "Segments.write)") from None
+            except ValueError as e:
+                raise FileFormatError(f"{p}: segment table column {names}: {e}") from None
+
+        return cls(kind=col("kind", dtype=str), step=col("step", dtype=np.int64), t_start=col("t_start"),
+                   t_stop=col("t_stop"), i_start=col("i_start", dtype=np.int64), i_stop=col("i_stop", dtype=np.int64),
+                   up_b=col("up_x", "up_y", "up_z"), axis_b=col("axis_x", "axis_y", "axis_z"),
+                   rate=np.deg2rad(col("rate_dps")), angle=np.deg2rad(col("angle_deg")),
+                   q_nb=col("qw", "qx", "qy", "qz"))
 
     def to_records(self) -> list[dict]:
         """One dict per segment (for tables / CSV).

@@ -1,0 +1,63 @@
+"""imunav warmup's pieces: the compile notice and the bytecode writer (the full warmup takes a minute: not here)."""
+
+from __future__ import annotations
+
+import importlib.util
+import io
+import os
+import sys
+
+import numba
+import numpy as np
+from numba.core import event
+from typer.testing import CliRunner
+
+from imunav.cli._compile import NOTICE, CompileWatch, write_bytecode
+from imunav.cli.main import app
+
+
+def test_a_compilation_is_said_once_and_recorded():
+    stream = io.StringIO()
+    watch = CompileWatch(stream)
+
+    @numba.njit(cache=False)
+    def twice(x):
+        return 2.0 * x
+
+    @numba.njit(cache=False)
+    def thrice(x):
+        return 3.0 * x
+
+    event.register("numba:compile", watch)
+    try:
+        assert twice(np.ones(3)).sum() == 6.0 and thrice(1.0) == 3.0
+        twice(np.ones(3))  # compiled already: no event
+    finally:
+        event.unregister("numba:compile", watch)
+    assert stream.getvalue() == NOTICE + "\n"  # once, however many kernels
+    names = [k.rsplit(".", 1)[-1] for k in watch.kernels]  # with numba's own helpers they call
+    assert names[0] == "twice" and "thrice" in names
+    assert watch.seconds > 0
+
+
+def test_bytecode_is_written_for_imported_modules(tmp_path, monkeypatch):
+    """What PYTHONDONTWRITEBYTECODE=1 prevents at import, write_bytecode writes, where Python then reads it."""
+    src = tmp_path / "fh_warm_mod.py"
+    src.write_text("VALUE = 3\n")
+    monkeypatch.setattr(sys, "dont_write_bytecode", True)
+    monkeypatch.syspath_prepend(str(tmp_path))
+    import fh_warm_mod  # noqa: F401
+
+    cached = importlib.util.cache_from_source(str(src))
+    assert fh_warm_mod.__spec__.cached == cached
+    assert not os.path.exists(cached)
+    out = write_bytecode()
+    assert os.path.exists(cached) and out.written >= 1 and str(src) not in out.failed
+    again = write_bytecode()
+    assert again.written == 0 and again.current >= out.current + out.written - len(out.failed)
+    monkeypatch.delitem(sys.modules, "fh_warm_mod")
+
+
+def test_warmup_is_listed_with_an_example():
+    r = CliRunner().invoke(app, ["warmup", "--help"], env={"COLUMNS": "200"})
+    assert r.exit_code == 0 and "Example: imunav warmup" in r.output
