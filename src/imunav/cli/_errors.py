@@ -1,6 +1,9 @@
 """The one error path of the ``imunav`` command.
 
-Every command runs inside :class:`ImunavGroup`, whose ``invoke`` turns
+Every command runs inside :class:`ImunavGroup`, whose ``invoke`` runs it in
+one output transaction (:func:`imunav._atomic.output_transaction`: its output
+files are moved in only when it completes; a command that fails leaves nothing
+new) and turns
 
 * an :class:`imunav.errors.ImunavError` or an :class:`OSError` (input or output
   file missing, unreadable, not writable, a folder where a file is expected)
@@ -29,6 +32,7 @@ from typing import Any, NoReturn
 import typer
 from typer.core import TyperGroup
 
+from imunav._atomic import output_transaction
 from imunav.errors import ImunavError, ImunavWarning, InvalidInputError
 
 try:  # typer >= 0.20 carries its own copy of click (and no longer installs the click package)
@@ -113,6 +117,12 @@ def _show_warning(message: Any, category: Any, filename: str, lineno: int, file:
         _showwarning(message, category, filename, lineno, file, line)
 
 
+def _completed(exc: BaseException) -> bool:
+    """An exit that ends a command whose outputs are complete: status 0, or 1 (failing units, spec fails)."""
+    exits = tuple(e for e in (typer.Exit, getattr(getattr(click, "exceptions", None), "Exit", None)) if e is not None)
+    return isinstance(exc, exits) and getattr(exc, "exit_code", 0) in (0, 1)
+
+
 class ImunavGroup(TyperGroup):
     """Root command group: the single place where exceptions become messages and exit codes."""
 
@@ -121,7 +131,8 @@ class ImunavGroup(TyperGroup):
             with warnings.catch_warnings():
                 warnings.simplefilter("default", ImunavWarning)
                 warnings.showwarning = _show_warning
-                return super().invoke(ctx)
+                with output_transaction(keep=_completed):
+                    return super().invoke(ctx)
         except (*_PASS_THROUGH, KeyboardInterrupt, SystemExit):  # usage errors are reported by main()
             raise
         except (ImunavError, OSError) as exc:

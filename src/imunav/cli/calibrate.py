@@ -172,7 +172,7 @@ def multiposition(
     Example: imunav calibrate multiposition static.npz --segments static_segments.json --out static_cal.json --report rep --px4-params static_cal.params
     """
 
-    check_outputs([recording, segments, noise_model], [out, px4_params])
+    check_outputs([recording, segments, noise_model], [out, px4_params], folders=[report])
     _check_report(report)
 
     data = _read(recording, fs, accel_unit, gyro_unit, accel_scale, gyro_scale, skiprows, columns, topic, instance,
@@ -206,7 +206,8 @@ def ratetable(
     Example: imunav calibrate ratetable rate.npz --segments rate_segments.json --static static.npz --static-segments static_segments.json --out cal.json
     """
 
-    check_outputs([recording, segments, static, static_segments, base, noise_model], [out, px4_params])
+    check_outputs([recording, segments, static, static_segments, base, noise_model], [out, px4_params],
+                  folders=[report])
     _check_report(report)
 
     lat = None if latitude_deg is None else np.deg2rad(latitude_deg)
@@ -247,7 +248,7 @@ def ferraris(
     Example: imunav calibrate ferraris session.csv --sections sections.json --fs 102.4 --gyro-unit deg/s --out cal.json
     """
 
-    check_outputs([recording, sections], [out, px4_params, imucal_out])
+    check_outputs([recording, sections], [out, px4_params, imucal_out], folders=[report])
     _check_report(report)
 
 
@@ -283,7 +284,7 @@ def multipose(
     Example: imunav calibrate multipose session.csv --fs 100 --init-s 36.5 --no-accel-misalignment --out cal.json
     """
 
-    check_outputs([recording], [out, px4_params])
+    check_outputs([recording], [out, px4_params], folders=[report])
     _check_report(report)
 
     data = _read(recording, fs, accel_unit, gyro_unit, accel_scale, gyro_scale, skiprows, columns, topic, instance,
@@ -315,7 +316,7 @@ def temperature(
     Example: imunav calibrate temperature cal_m30.json@-30 cal_0.json@0 cal_20.json@20 cal_50.json@50 --orders 1,2 --out thermal_cal.json
     """
 
-    check_outputs([c.rsplit("@", 1)[0] for c in calibrations], [out])
+    check_outputs([c.rsplit("@", 1)[0] for c in calibrations], [out], folders=[report])
     _check_report(report)
 
 
@@ -372,7 +373,7 @@ def mag(
     Example: imunav calibrate mag flight.ulg --topic sensor_mag --instance 0 --out mag_cal.json
     """
 
-    check_outputs([recording], [out, px4_params])
+    check_outputs([recording], [out, px4_params], folders=[report])
     _check_report(report)
 
 

@@ -12,7 +12,7 @@ from rich.table import Table
 
 from imunav.cli._errors import fail
 from imunav.errors import InvalidInputError
-from imunav.io._atomic import check_outputs, read_json, write_json
+from imunav.io._atomic import check_outputs, write_json
 from imunav.lab import run_lab
 
 _HELP = """Run the lab and write a report folder (index.html, summary.md, summary.json, data/, figures/).
@@ -39,7 +39,7 @@ def register(app: typer.Typer) -> None:
         overwrite: bool = typer.Option(False, "--overwrite", help="Clear a report folder that holds another run "
                                        "(only files of imunav runs) instead of refusing."),
     ) -> None:
-        check_outputs([config], [json_out])
+        check_outputs([config], [json_out], run_folders=[out])
 
         console = Console(stderr=True)
         try:
@@ -67,7 +67,7 @@ def register(app: typer.Typer) -> None:
             if s.error:
                 console.print(f"[red]{s.name} failed:[/red]\n{escape(s.error)}", soft_wrap=True, highlight=False)
         if json_out is not None:
-            write_json(json_out, read_json(Path(out) / "summary.json"))
+            write_json(json_out, result.to_dict())
         typer.echo(f"report: {Path(out) / 'index.html'}")
         if result.failed_steps:
             raise typer.Exit(1)

@@ -55,7 +55,11 @@ def register(app: typer.Typer) -> None:
         segments: Optional[Path] = typer.Option(None, "--segments", help="Segment-table CSV (default <out stem>_segments.csv)."),
         json_out: Optional[Path] = typer.Option(None, "--json", help="Also write a JSON summary here."),
     ) -> None:
-        check_outputs([model], [out, segments, json_out])
+        seg_path = segments if segments is not None else default_segments_path(out)
+        if segments is None and model is not None and seg_path.resolve() == model.expanduser().resolve():
+            raise InvalidInputError(f"the default segment table {seg_path} (named after --out) is the --model file "
+                                    f"{model}; give --segments another path, or another --out")
+        check_outputs([model], [out, seg_path, json_out])
 
         console = Console(stderr=True)
         try:
@@ -73,6 +77,11 @@ def register(app: typer.Typer) -> None:
             f"wrote {summary['file']}: {summary['samples']} samples, {summary['duration_s']:.1f} s at "
             f"{summary['fs_hz']:g} Hz, {summary['segments']} ({summary['error_model']})"
         )
+
+
+def default_segments_path(out: Path) -> Path:
+    """The segment table written beside a recording when ``--segments`` is not given: ``<out stem>_segments.csv``."""
+    return Path(out).with_name(Path(out).stem + "_segments.csv")
 
 
 def run_simulate(
@@ -137,7 +146,7 @@ def run_simulate(
         prog.advance(task)
         data = data.with_(meta={**dict(data.meta or {}), "profile": profile, "error_model": name, "seed": seed})
         path = write_imu(data, out)
-        seg_path = segments if segments is not None else Path(out).with_name(Path(out).stem + "_segments.csv")
+        seg_path = segments if segments is not None else default_segments_path(out)
         prof.segments.write_csv(seg_path)
         prog.advance(task)
     s = prof.summary()
