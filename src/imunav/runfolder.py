@@ -34,7 +34,8 @@ A run (:class:`RunFolder`, a context manager) owns its folder, and only what it 
   exception, SIGINT) removes every file it wrote and leaves only ``FAILED``,
   a text file with the run id, the time and the error message (and the
   hidden marker that says ``FAILED`` is the run's): no partial result looks
-  complete.
+  complete.  A run that fails before writing any file, in a folder that was
+  new or empty, leaves the folder as it found it.
 
 Readers (:func:`trusted_files`, used by ``batch calibrate`` / ``batch noise``)
 trust only the files of a complete manifest, checked against their size and
@@ -423,6 +424,7 @@ class RunFolder:
         self.created = ""
         self.manifest: Manifest | None = None
         self._made = False
+        self._cleared = False
 
     # ------------------------------------------------------------------ start
     def start(self) -> "RunFolder":
@@ -453,6 +455,7 @@ class RunFolder:
             if not self.overwrite:
                 raise RunFolderError(self._busy_message())
             _clear(root, self.inputs)
+            self._cleared = True
         _remove_temp_files(root)
         self.created = _now()
         marker = {"run_id": self.run_id, "kind": self.kind, "pid": os.getpid(), "host": socket.gethostname(),
@@ -546,6 +549,14 @@ class RunFolder:
             return
         logged = sorted(_logged(root))
         _remove(root, [_inside(root, rel) for rel in logged if rel != FAILED])
+        if not logged and not self._cleared:
+            # it wrote nothing into a folder that was new or empty: leave the folder as it was found
+            for name in (MARKER, FILES):
+                with contextlib.suppress(FileNotFoundError):
+                    (root / name).unlink()
+            if self._made and not any(root.iterdir()):
+                root.rmdir()
+            return
         when = _now()
         msg = " ".join(str(message).split()) or "failed"
         (root / FAILED).write_text(
