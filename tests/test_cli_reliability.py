@@ -7,8 +7,6 @@ CLI generates from its own options) they check the contract of the README's "Rel
 from __future__ import annotations
 
 import json
-import os
-import sys
 from pathlib import Path
 
 import numpy as np
@@ -16,8 +14,8 @@ import pytest
 from typer.testing import CliRunner
 
 from imunav.cli.main import app
-from imunav.io import read_imu, write_imu
-from imunav.runfolder import FAILED, FILES, MANIFEST, MARKER
+from imunav.io import write_imu
+from imunav.runfolder import FILES, MANIFEST, MARKER
 from imunav.timeseries import ImuData
 
 runner = CliRunner()
