@@ -3,7 +3,9 @@
 Every command runs inside :class:`ImunavGroup`, whose ``invoke`` runs it in
 one output transaction (:func:`imunav._atomic.output_transaction`: its output
 files are moved in only when it completes; a command that fails leaves nothing
-new) and turns
+new), after checking every numeric option against its declared domain
+(:mod:`imunav.cli._domains`) and refusing FIFOs, devices and link loops given
+as paths (:func:`install_checks`), and turns
 
 * an :class:`imunav.errors.ImunavError` or an :class:`OSError` (input or output
   file missing, unreadable, not writable, a folder where a file is expected)
@@ -22,7 +24,10 @@ one line, ``warning: <message>``, and the command goes on.
 
 from __future__ import annotations
 
+import errno
+import functools
 import os
+import stat
 import sys
 import traceback
 import warnings
@@ -33,6 +38,7 @@ import typer
 from typer.core import TyperGroup
 
 from imunav._atomic import output_transaction
+from imunav.cli._domains import check_params, flag_of
 from imunav.errors import ImunavError, ImunavWarning, InvalidInputError
 
 try:  # typer >= 0.20 carries its own copy of click (and no longer installs the click package)
@@ -49,7 +55,7 @@ _PASS_THROUGH = tuple({e for e in (typer.Exit, typer.Abort, getattr(typer, "Type
                                    getattr(getattr(click, "exceptions", None), "Exit", None)) if e is not None})
 _ABORTS = tuple({e for e in (typer.Abort, getattr(click, "Abort", None)) if e is not None})
 
-__all__ = ["ImunavGroup", "check_figure_path", "check_suffix", "fail", "one_line"]
+__all__ = ["ImunavGroup", "check_figure_path", "check_suffix", "fail", "install_checks", "one_line"]
 
 REPORT_TO = "the imunav issue tracker"
 
@@ -123,8 +129,66 @@ def _completed(exc: BaseException) -> bool:
     return isinstance(exc, exits) and getattr(exc, "exit_code", 0) in (0, 1)
 
 
+def _special_file(flag: str, value: Any) -> None:
+    """Refuse a path option that names a FIFO, a device or a socket (reading it could block forever), or a
+    symbolic-link loop."""
+    for v in (value if isinstance(value, (list, tuple)) else [value]):
+        if not isinstance(v, (str, os.PathLike)):
+            continue
+        try:
+            st = os.stat(v)
+        except FileNotFoundError:
+            continue
+        except OSError as exc:
+            if exc.errno == errno.ELOOP:
+                raise InvalidInputError(f"{flag} {v}: a loop of symbolic links, not a file; give the file itself") from None
+            continue
+        if stat.S_ISFIFO(st.st_mode) or stat.S_ISCHR(st.st_mode) or stat.S_ISBLK(st.st_mode) or stat.S_ISSOCK(st.st_mode):
+            kind = ("a FIFO (named pipe)" if stat.S_ISFIFO(st.st_mode) else
+                    "a socket" if stat.S_ISSOCK(st.st_mode) else "a device")
+            raise InvalidInputError(f"{flag} {v}: is {kind}, not a regular file; imunav reads and writes regular files "
+                                    "only (copy the data to a file first)")
+
+
+def _is_path(param: Any) -> bool:
+    ann = getattr(getattr(param, "type_descriptor", None), "annotation", None)
+    return ann is Path or "Path" in str(ann)
+
+
+def install_checks(cmd: Any, path: str) -> Any:
+    """Wrap the callback of ``cmd`` (and of every command below it) so that, before it runs, every numeric
+    option is checked against its declared domain (:func:`imunav.cli._domains.check_params`) and no path
+    option names a FIFO, a device or a link loop.  Idempotent; returns ``cmd``."""
+    if cmd is None or getattr(cmd, "_imunav_checked", False):
+        return cmd
+    cmd._imunav_checked = True
+    subs = getattr(cmd, "commands", None)
+    if subs is not None:
+        for name in list(subs):
+            install_checks(subs[name], f"{path} {name}".strip())
+        return cmd
+    callback = cmd.callback
+    if callback is None:
+        return cmd
+
+    @functools.wraps(callback)
+    def checked(*args: Any, **kwargs: Any) -> Any:
+        check_params(path, cmd.params, kwargs)
+        for p in cmd.params:
+            if _is_path(p) and kwargs.get(p.name) is not None:
+                _special_file(flag_of(p), kwargs[p.name])
+        return callback(*args, **kwargs)
+
+    cmd.callback = checked
+    return cmd
+
+
 class ImunavGroup(TyperGroup):
     """Root command group: the single place where exceptions become messages and exit codes."""
+
+    def get_command(self, ctx: click.Context, cmd_name: str) -> Any:
+        """The command, with the option checks of :func:`install_checks` installed."""
+        return install_checks(super().get_command(ctx, cmd_name), cmd_name)
 
     def invoke(self, ctx: click.Context) -> Any:
         try:
