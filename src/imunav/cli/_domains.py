@@ -115,10 +115,11 @@ def _nonneg(unit: str = "", hi: float | None = None) -> Domain:
 
 _SEED = _int(0, 2**63 - 1)
 _COUNT = _int(1, 10**9)
+_RUNS = _int(1, 10**9)
 _WORKERS = _int(1, 4096)
 _LAT = _real(-90.0, 90.0, unit="deg")
 _GRAVITY = _real(0.0, 100.0, lo_open=True, unit="m/s^2")
-_SCALE = _real(nonzero=True)
+_SCALE = _real(-1e6, 1e6, nonzero=True)
 _PROB = _real(0.0, 1.0, lo_open=True, hi_open=True)
 
 #: flag (or "<command path> <flag>") -> domain; see the module docstring.
@@ -131,31 +132,31 @@ DOMAINS: dict[str, Domain] = {
     "--accel-scale": _SCALE,
     "--seed": _SEED,
     # info
-    "info --window": _pos("s"),
-    "--min-static": _pos("s"),
-    "--gyro-full-scale-dps": _pos("deg/s"),
-    "--accel-full-scale-g": _pos("g"),
+    "info --window": _pos("s", 1e6),
+    "--min-static": _pos("s", 1e6),
+    "--gyro-full-scale-dps": _pos("deg/s", 1e6),
+    "--accel-full-scale-g": _pos("g", 1e6),
     "--max-rows": _int(0, 10**6),
     # noise
     "--gm": _int(0, 10),
     # simulate / batch simulate / attitude montecarlo / gins / airdata
-    "--dwell": _pos("s"),
-    "--transition": _nonneg("s"),
-    "--duration": _pos("s"),
+    "--dwell": _pos("s", 1e7),
+    "--transition": _nonneg("s", 1e7),
+    "--duration": _pos("s", 1e9),
     "--lat-deg": _LAT,
     "--latitude-deg": _LAT,
     "--h-m": _real(-12000.0, 1e6, unit="m"),
-    "--spread": _nonneg(),
-    "--static": _pos("s"),
+    "--spread": _nonneg("relative, 1 = 100 %", 10.0),
+    "--static": _pos("s", 1e9),
     "n_units": _COUNT,
     "--start-sow": _real(0.0, 604800.0, hi_open=True, unit="s of GPS week"),
     # calibrate
     "--gravity": _GRAVITY,
     "--expected-angle-deg": _real(-3600.0, 3600.0, nonzero=True, unit="deg"),
-    "--init-s": _pos("s"),
-    "--wait-s": _pos("s"),
+    "--init-s": _pos("s", 1e7),
+    "--wait-s": _pos("s", 1e7),
     "--order": _int(0, 20),
-    "--field-norm": _pos("the data's unit"),
+    "--field-norm": _pos("the data's unit", 1e12),
     "--min-coverage": _real(0.0, 1.0),
     "--temp-c": _real(-273.15, 1000.0, unit="degC"),
     # workers and runs
@@ -164,32 +165,32 @@ DOMAINS: dict[str, Domain] = {
     "--runs": _COUNT,
     "--threads": _int(1, 4096),
     # zupt
-    "--threshold": _pos(),
+    "--threshold": _pos("", 1e12),
     "zupt run --states": _int(9, 15),
-    "--zaru-min-s": _nonneg("s"),
-    "--margin-s": _nonneg("s"),
-    "--sigma-acc": _pos("m/s^2"),
+    "--zaru-min-s": _nonneg("s", 1e6),
+    "--margin-s": _nonneg("s", 1e6),
+    "--sigma-acc": _pos("m/s^2", 1e6),
     "--windows-per-trial": _COUNT,
     "--epochs": _COUNT,
     "--layers": _int(1, 100),
     "--hidden": _int(1, 100000),
-    "--budget-s": _pos("s"),
-    "--shoe-threshold": _pos(),
+    "--budget-s": _pos("s", 1e7),
+    "--shoe-threshold": _pos("", 1e12),
     "--limit": _COUNT,
     # gins
     "gins run --states": _int(15, 21),
     "gins outage-test --states": _int(15, 21),
-    "--converge": _nonneg("s"),
-    "--every": _pos("s"),
-    "--length": _pos("s"),
+    "--converge": _nonneg("s", 1e7),
+    "--every": _pos("s", 1e7),
+    "--length": _pos("s", 1e7),
     # airdata
     "--tas": _pos("m/s", 1000.0),
     "--altitude": _real(-500.0, 30000.0, unit="m"),
     "--rate-ads": _pos("Hz", 1e4),
     "--rate-doppler": _pos("Hz", 1e4),
-    "--gate-m": _pos(),
+    "--gate-m": _pos("", 1e6),
     "--alpha": _PROB,
-    "--magnitude": _real(),
+    "--magnitude": _real(-1e6, 1e6),
     "--onset": _int(1, 10**7),
     "airdata faults --window": _int(1, 10**6),
     "--pfa": _PROB,

@@ -35,10 +35,12 @@ from pathlib import Path
 from typing import Any, NoReturn
 
 import typer
+import typer.main
 from typer.core import TyperGroup
 
 from imunav._atomic import output_transaction
 from imunav.cli._domains import check_params, flag_of
+from imunav.cli._limits import ESTIMATORS, check_limits
 from imunav.errors import ImunavError, ImunavWarning, InvalidInputError
 
 try:  # typer >= 0.20 carries its own copy of click (and no longer installs the click package)
@@ -155,10 +157,26 @@ def _is_path(param: Any) -> bool:
     return ann is Path or "Path" in str(ann)
 
 
+@functools.cache
+def _force_option() -> Any:
+    """The ``--force`` option added to commands with a limits estimator (built by typer, like every option)."""
+    t = typer.Typer()
+
+    @t.command()
+    def _cmd(force: bool = typer.Option(False, "--force", help="Run even when the request's estimated memory or "
+                                        "time is far beyond the machine (refused otherwise, with the estimate).")
+             ) -> None:
+        pass  # pragma: no cover
+
+    return typer.main.get_command(t).params[0]
+
+
 def install_checks(cmd: Any, path: str) -> Any:
     """Wrap the callback of ``cmd`` (and of every command below it) so that, before it runs, every numeric
-    option is checked against its declared domain (:func:`imunav.cli._domains.check_params`) and no path
-    option names a FIFO, a device or a link loop.  Idempotent; returns ``cmd``."""
+    option is checked against its declared domain (:func:`imunav.cli._domains.check_params`), no path
+    option names a FIFO, a device or a link loop, and the request's estimated memory and time are within
+    the machine (:func:`imunav.cli._limits.check_limits`; a ``--force`` option is added where the command
+    has none).  Idempotent; returns ``cmd``."""
     if cmd is None or getattr(cmd, "_imunav_checked", False):
         return cmd
     cmd._imunav_checked = True
@@ -170,6 +188,9 @@ def install_checks(cmd: Any, path: str) -> Any:
     callback = cmd.callback
     if callback is None:
         return cmd
+    added_force = path in ESTIMATORS and not any(p.name == "force" for p in cmd.params)
+    if added_force:
+        cmd.params.append(_force_option())
 
     @functools.wraps(callback)
     def checked(*args: Any, **kwargs: Any) -> Any:
@@ -177,6 +198,9 @@ def install_checks(cmd: Any, path: str) -> Any:
         for p in cmd.params:
             if _is_path(p) and kwargs.get(p.name) is not None:
                 _special_file(flag_of(p), kwargs[p.name])
+        check_limits(path, kwargs)
+        if added_force:
+            kwargs.pop("force", None)
         return callback(*args, **kwargs)
 
     cmd.callback = checked

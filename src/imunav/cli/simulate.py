@@ -119,6 +119,9 @@ def run_simulate(
             g = float(gravity)
         except ValueError as exc:
             raise InvalidInputError(f"--gravity must be 'normal', 'constant' or a number in m/s^2, not {gravity!r}") from exc
+        if not (0 < g <= 100):  # NaN fails too
+            raise InvalidInputError(f"--gravity {gravity}: must be 'normal', 'constant' or a finite number in (0, 100] "
+                                    "(m/s^2)")
     if (earth_rate or g == "normal") and lat is None:
         raise InvalidInputError("Earth rate and normal gravity need --lat-deg (or use --no-earth-rate --gravity constant)")
     kw = {"lat": lat, "h": h_m}
