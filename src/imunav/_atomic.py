@@ -343,7 +343,7 @@ def _within(inner: Path, outer: Path) -> bool:
 def check_outputs(inputs: Iterable[str | os.PathLike[str] | None],
                   outputs: Iterable[str | os.PathLike[str] | None], *,
                   folders: Iterable[str | os.PathLike[str] | None] = (),
-                  run_folders: Iterable[str | os.PathLike[str] | None] = ()) -> None:
+                  run_folders: Iterable[str | os.PathLike[str] | None] = (), inputs_exist: bool = True) -> None:
     """The one check of a command's outputs against its inputs, done before any work.
 
     No output may equal, contain or sit inside an input of the same command, and no two outputs may be
@@ -355,7 +355,9 @@ def check_outputs(inputs: Iterable[str | os.PathLike[str] | None],
       may not be an input, nor hold an input file or folder;
     * an output file may not sit inside a run folder (the run would list it as its own, or
       ``--overwrite`` would remove it);
-    * each output file must be writable (:func:`check_writable`).
+    * each output file must be writable (:func:`check_writable`);
+    * (``inputs_exist``) every input given exists: a missing input is refused before any work, even one
+      the command would read last or not at all with the other options.
 
     Parameters
     ----------
@@ -367,6 +369,8 @@ def check_outputs(inputs: Iterable[str | os.PathLike[str] | None],
         The folders it writes files into.
     run_folders : iterable of str or os.PathLike or None
         The run folders it writes.
+    inputs_exist : bool
+        Refuse an input that does not exist (False for a command that looks a missing input up elsewhere).
 
     Raises
     ------
@@ -388,6 +392,8 @@ def check_outputs(inputs: Iterable[str | os.PathLike[str] | None],
     for p in inputs:
         if p is not None:
             ins.append((_key(p), p))
+            if inputs_exist and not os.path.lexists(p):
+                raise FileNotFoundError(errno.ENOENT, "no such file or folder (an input of this command)", str(p))
     for o in outs:
         k = _key(o)
         for ik, p in ins:

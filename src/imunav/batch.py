@@ -47,7 +47,7 @@ import pandas as pd
 from imunav import calib
 from imunav._docstrings import fill_doc
 from imunav.calib import ImuCalibration
-from imunav.errors import ConfigError, FileFormatError, InvalidInputError, NotStaticError
+from imunav.errors import ConfigError, InvalidInputError, NotStaticError
 from imunav.io import read_imu, write_imu
 from imunav.io._atomic import atomic_path, write_json
 from imunav.montecarlo import Executor, run_batch, spawn_generators
@@ -57,6 +57,7 @@ from imunav.noise.static import require_static
 from imunav.report import check_spec, load_spec
 from imunav.report.batch import write_batch_html
 from imunav.report.catalog import (
+    DISPLAY_UNIT,
     base_name,
     calibration_estimates,
     expand_spec,
@@ -67,9 +68,9 @@ from imunav.results import Result
 from imunav.runfolder import RunFolder, trusted_files
 from imunav.sim import (
     ImuErrorModel,
-    Segments,
     hundred_position_profile,
     presets,
+    read_segments,
     simulate_imu,
     static_profile,
     thesis_rate_table_profile,
@@ -153,15 +154,7 @@ def _sidecar(rec: Path, suffix: str, shared: str, trusted: Sequence[str] | None 
 
 
 def _read_segments(path: Path) -> Any:
-    try:
-        d = json.loads(path.read_text(encoding="utf-8"))
-    except json.JSONDecodeError as e:
-        raise FileFormatError(f"{path}: not valid JSON ({e})") from e
-    d = d.get("segment_table", d)
-    try:
-        return Segments(**{k: np.asarray(d[k]) for k in Segments.__dataclass_fields__})
-    except KeyError as e:
-        raise FileFormatError(f"{path}: segment table lacks the column {e} (write it with Profile.to_dict())") from None
+    return read_segments(path)
 
 
 # ---------------------------------------------------------------------------
@@ -576,9 +569,16 @@ def calibrate_unit(
 
 
 def _load_spec(spec: Any) -> Any:
+    """The limits of a batch: a spec whose parameter a batch never estimates is refused, listing the known ones."""
     if spec is None:
         return None
-    return spec if isinstance(spec, Mapping) and all(hasattr(v, "max_si") for v in spec.values()) else load_spec(spec)
+    limits = spec if isinstance(spec, Mapping) and all(hasattr(v, "max_si") for v in spec.values()) else load_spec(spec)
+    unknown = sorted(n for n in limits if base_name(n) not in DISPLAY_UNIT)
+    if unknown:
+        raise ConfigError(f"{spec if isinstance(spec, (str, os.PathLike)) else 'spec'}: no batch estimates "
+                          f"{', '.join(unknown)}; the parameters are {', '.join(sorted(DISPLAY_UNIT))} "
+                          "(with _x / _y / _z for one axis)")
+    return limits
 
 
 @fill_doc

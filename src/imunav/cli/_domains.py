@@ -275,10 +275,12 @@ def check_params(command_path: str, params: list[Any], values: Mapping[str, Any]
     Raises
     ------
     InvalidInputError
-        Naming the flag, the value and the domain.
+        Naming the flag, the value and the domain; or naming a text option given an empty value.
     """
     for p in params:
         v = values.get(p.name)
+        if isinstance(v, str) and not v.strip() and getattr(p, "default", None) not in ("",):
+            raise InvalidInputError(f"{flag_of(p)} is empty; give a value (see --help) or leave the option out")
         if v is None or not numeric(p):
             continue
         d = domain_of(command_path, p)

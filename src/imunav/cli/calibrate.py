@@ -30,7 +30,7 @@ from imunav.io._atomic import check_outputs, check_writable, read_json, write_js
 from imunav.io._common import check_nonempty, wrap_read_errors
 from imunav.io.logs import log_kind, read_topic
 from imunav.io.px4params import px4_parameters
-from imunav.sim import ImuErrorModel, Segments
+from imunav.sim import ImuErrorModel, read_segments
 
 app = typer.Typer(
     help="Calibrate an IMU or magnetometer from a recording; writes the calibration JSON.\n\n"
@@ -65,14 +65,7 @@ def _columns(text: str) -> Any:
 
 
 def _segments(path: Path) -> Any:
-    d = read_json(path, "segment table JSON (write it with Profile.to_dict() / Segments.to_dict())")
-    if not isinstance(d, dict):
-        raise FileFormatError(f"{path}: a segment table JSON is an object with the columns of Segments")
-    d = d.get("segment_table", d)
-    try:
-        return Segments(**{k: np.asarray(d[k]) for k in Segments.__dataclass_fields__})
-    except KeyError as e:
-        raise FileFormatError(f"{path}: segment table lacks the column {e} (write it with Profile.to_dict())") from None
+    return read_segments(path)
 
 
 def _check_report(report: Optional[Path]) -> None:

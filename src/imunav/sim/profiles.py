@@ -35,8 +35,9 @@ from typing import Iterator
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from imunav._atomic import read_json
 from imunav._docstrings import fill_doc
-from imunav.errors import InvalidInputError, ShapeError
+from imunav.errors import FileFormatError, InvalidInputError, ShapeError
 from imunav.io._atomic import atomic_path
 from imunav.results import EulerMixin
 from imunav.rotation import (
@@ -53,6 +54,7 @@ from imunav.units import DEG
 __all__ = [
     "Profile",
     "Segments",
+    "read_segments",
     "static_profile",
     "multiposition_profile",
     "orientations_from_up",
@@ -226,6 +228,64 @@ class Segments(EulerMixin):
         d = self.to_dict()
         return [{k: d[k][i] for k in d} for i in range(len(self))]
 
+
+
+def _nulls_to_nan(v: object) -> object:
+    if isinstance(v, list):
+        return [_nulls_to_nan(x) for x in v]
+    return np.nan if v is None else v
+
+
+def read_segments(path: str | os.PathLike[str]) -> Segments:
+    """Read a segment table JSON (:meth:`Segments.to_dict`, or a profile's ``to_dict`` with ``segment_table``).
+
+    Checked against its schema before use: an object whose columns are the fields of :class:`Segments`,
+    ``kind`` text, every other column numbers (null read as NaN), all of one length.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The JSON file.
+
+    Returns
+    -------
+    Segments
+        The table.
+
+    Raises
+    ------
+    FileFormatError
+        Naming the file and the column, for text that is not JSON (a truncated file), a document that is not
+        an object, a missing column, a column of the wrong type or length.
+    """
+    d = read_json(path, "segment table JSON (write it with Profile.to_dict() / Segments.to_dict())")
+    if isinstance(d, dict):
+        d = d.get("segment_table", d)
+    if not isinstance(d, dict):
+        raise FileFormatError(f"{path}: a segment table JSON is an object with the columns of Segments "
+                              f"({', '.join(f.name for f in fields(Segments))}), not {type(d).__name__}")
+    cols = {}
+    for f in fields(Segments):
+        if f.name not in d:
+            raise FileFormatError(f"{path}: segment table lacks the column {f.name!r} (write it with Profile.to_dict())")
+        v = d[f.name]
+        if f.name == "kind":
+            a = np.asarray(v)
+            ok = a.dtype.kind in "US" and a.ndim == 1
+        else:  # numbers; null is a NaN (strict JSON has no NaN token)
+            a = np.asarray(_nulls_to_nan(v))
+            ok = a.dtype.kind in "fiu" and a.ndim >= 1
+        if not ok:
+            raise FileFormatError(f"{path}: segment table column {f.name!r} must be a list of "
+                                  f"{'names' if f.name == 'kind' else 'numbers (or null)'}, got {v!r:.80}")
+        cols[f.name] = a
+    lengths = {k: len(v) for k, v in cols.items()}
+    if len(set(lengths.values())) > 1:
+        raise FileFormatError(f"{path}: segment table columns differ in length {lengths}; the file is damaged")
+    try:
+        return Segments(**cols)
+    except (InvalidInputError, ValueError) as e:
+        raise FileFormatError(f"{path}: not a valid segment table ({e})") from None
 
 @dataclass(frozen=True)
 class Profile:
