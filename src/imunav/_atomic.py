@@ -234,6 +234,13 @@ def atomic_path(path: str | os.PathLike[str]) -> Iterator[Path]:
             tr.pending.append((tmp, target))  # moved in when the whole command has succeeded
         else:
             os.replace(tmp, target)
+    except OSError as exc:
+        with contextlib.suppress(OSError):
+            tmp.unlink()
+        if exc.filename is None or str(exc.filename) == str(tmp):
+            # "File too large", "No space left on device" ...: name the output, not the temporary file
+            raise type(exc)(exc.errno, f"cannot write the output ({exc.strerror or exc})", str(target)) from None
+        raise
     except BaseException:
         with contextlib.suppress(OSError):
             tmp.unlink()
@@ -393,7 +400,7 @@ def check_outputs(inputs: Iterable[str | os.PathLike[str] | None],
         if p is not None:
             ins.append((_key(p), p))
             if inputs_exist and not os.path.lexists(p):
-                raise FileNotFoundError(errno.ENOENT, "no such file or folder (an input of this command)", str(p))
+                raise FileNotFoundError(errno.ENOENT, "does not exist (no such file or folder)", str(p))
     for o in outs:
         k = _key(o)
         for ik, p in ins:

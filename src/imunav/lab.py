@@ -305,6 +305,8 @@ def _run_steps(out: Path, names: list[str], seed: int, cfg: dict, typed: LabConf
                     if found:
                         res = replace(res, parameters=found)
                 records.append(StepRecord(name, title, res, time.perf_counter() - t0))
+            except ConfigError:
+                raise  # the lab is configured wrongly: a user error, not a step's result (the run folder fails)
             except Exception:  # a failing step is reported; the others still run
                 records.append(StepRecord(name, title, None, time.perf_counter() - t0, traceback.format_exc()))
             prog.advance(overall)
