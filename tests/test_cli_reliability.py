@@ -7,15 +7,19 @@ CLI generates from its own options) they check the contract of the README's "Rel
 from __future__ import annotations
 
 import json
+import os
+import subprocess
+import sys
 from pathlib import Path
 
 import numpy as np
 import pytest
 from typer.testing import CliRunner
 
+from imunav._atomic import json_text
 from imunav.cli.main import app
 from imunav.io import write_imu
-from imunav.runfolder import FILES, MANIFEST, MARKER
+from imunav.runfolder import FAILED, FILES, MANIFEST, MARKER
 from imunav.timeseries import ImuData
 
 runner = CliRunner()
@@ -114,3 +118,168 @@ def test_default_segments_name_never_replaces_the_model(tmp_path):
                                       str(tmp_path / "rec.npz")]))
     assert "--segments" in msg and "--model" in msg
     assert model.read_text() == 'name = "m"\n' and not (tmp_path / "rec.npz").exists()
+
+
+# --------------------------------------------------------------------------- partial results that look complete
+def test_a_lab_configuration_error_leaves_no_report(tmp_path):
+    cfg = tmp_path / "lab.toml"
+    cfg.write_text('[lab]\nsteps = ["simulate_tests"]\n[simulate_tests]\nfs = -1.0\n')
+    out = tmp_path / "rep"
+    msg = _exit_2(runner.invoke(app, ["lab", "--config", str(cfg), "--out", str(out), "--quiet"]))
+    assert "fs must be a positive number" in msg
+    assert not (out / "index.html").exists() and not (out / MANIFEST).exists() and not (out / "summary.json").exists()
+
+
+def test_a_failed_batch_leaves_only_failed(tmp_path):
+    """`batch noise` of a folder of multi-position tests (nothing static) fails: its result folder keeps only FAILED."""
+    b = tmp_path / "b"
+    assert runner.invoke(app, ["batch", "simulate", "2", "--out", str(b), "--fs", "10", "--dwell", "2",
+                               "--no-rate-table", "--executor", "serial", "--quiet"]).exit_code == 0
+    msg = _exit_2(runner.invoke(app, ["batch", "noise", str(b), "--executor", "serial", "--quiet"]))
+    assert "static" in msg
+    left = sorted(p.name for p in (b / "noise").iterdir() if not p.name.startswith(".")) if (b / "noise").exists() else []
+    assert left in ([], [FAILED]), left
+
+
+def test_gins_run_with_a_bad_truth_leaves_no_result(tmp_path):
+    """`gins run --truth` that fails after the filter ran: no .nav, IMU-error or sigma file is left (all or nothing)."""
+    d = tmp_path / "sim"
+    r = runner.invoke(app, ["gins", "simulate", "--duration", "120", "--out", str(d)])
+    assert r.exit_code == 0, r.stderr
+    truth = tmp_path / "bad_truth.nav"
+    truth.write_text("0 1 2\n")
+    out = tmp_path / "res"
+    _exit_2(runner.invoke(app, ["gins", "run", str(d / "imu.txt"), str(d / "gnss.txt"), "--config", str(d / "gins.toml"),
+                                "--truth", str(truth), "--out", str(out)]))
+    assert not out.exists() or not any(out.iterdir()), sorted(p.name for p in out.iterdir())
+
+
+# --------------------------------------------------------------------------- work started that cannot end
+@pytest.mark.parametrize("argv, words", [
+    (["simulate", "static", "--duration", "1e9", "--out", "{tmp}/x.npz"], "--force"),
+    (["attitude", "montecarlo", "--runs", "100000000", "--json", "{tmp}/mc.json"], "--force"),
+    (["airdata", "simulate", "cruise", "--duration", "1e9", "--out", "{tmp}/f.npz"], "--force"),
+    (["noise", "{rec}", "--taus", "log:1000000000"], "--force"),
+])
+def test_requests_far_beyond_the_machine_are_refused_with_the_estimate(tmp_path, argv, words):
+    rec = write_imu(_rec(), tmp_path / "rec.npz")
+    args = [a.format(tmp=tmp_path, rec=rec) for a in argv]
+    msg = _exit_2(runner.invoke(app, args))
+    assert words in msg and "memory" in msg and "24 GiB" in msg
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["rec.npz"]
+
+
+def test_a_fifo_input_is_refused_not_waited_on(tmp_path):
+    fifo = tmp_path / "rec.csv"
+    os.mkfifo(fifo)
+    env = dict(os.environ, PYTHONPATH=str(Path(__file__).resolve().parents[1] / "src"))
+    r = subprocess.run([sys.executable, "-m", "imunav.cli.main", "info", str(fifo)], capture_output=True, text=True,
+                       env=env, timeout=120)
+    assert r.returncode == 2 and "FIFO" in r.stderr and len(r.stderr.strip().splitlines()) == 1
+
+
+# --------------------------------------------------------------------------- bare internal errors
+@pytest.mark.parametrize("argv, flag", [
+    (["calibrate", "multiposition", "{rec}", "--segments", "{seg}", "--out", "{tmp}/c.json", "--gravity", "nan"],
+     "--gravity"),
+    (["calibrate", "multipose", "{rec}", "--out", "{tmp}/c.json", "--init-s", "nan"], "--init-s"),
+    (["batch", "calibrate", "{tmp}", "--workers", "-1"], "--workers"),
+    (["compensate", "{rec}", "--cal", "{cal}", "--out", "{tmp}/o.npz", "--temp-c", "nan"], "--temp-c"),
+    (["simulate", "static", "--duration", "2", "--gravity", "nan", "--out", "{tmp}/s.npz"], "--gravity"),
+])
+def test_nan_negative_or_zero_options_are_user_errors(tmp_path, argv, flag):
+    from imunav.calib import ImuCalibration
+
+    rec = write_imu(_rec(), tmp_path / "rec.npz")
+    seg = tmp_path / "seg.json"
+    seg.write_text("{}")
+    cal = ImuCalibration().save(tmp_path / "cal.json")
+    args = [a.format(tmp=tmp_path, rec=rec, seg=seg, cal=cal) for a in argv]
+    assert flag in _exit_2(runner.invoke(app, args))
+
+
+@pytest.mark.parametrize("content, words", [
+    ("[1, 2]", "not list"),
+    ('{"format": "imunav-calibration", "format_version": 1, "accel": {"bias": ["a", "b", "c"]}}', "accel.bias"),
+])
+def test_json_inputs_of_the_wrong_shape_name_file_and_key(tmp_path, content, words):
+    rec = write_imu(_rec(), tmp_path / "rec.npz")
+    cal = tmp_path / "cal.json"
+    cal.write_text(content)
+    from imunav.calib import ImuCalibration
+
+    good = json.loads(json_text(ImuCalibration().to_dict()))
+    if "accel" in content:
+        cal.write_text(json.dumps({**good, "accel": {"bias": ["a", "b", "c"], "matrix": good["accel"]["matrix"]}}))
+    msg = _exit_2(runner.invoke(app, ["compensate", str(rec), "--cal", str(cal), "--out", str(tmp_path / "o.npz")]))
+    assert "cal.json" in msg and words in msg
+
+
+def test_segment_table_with_text_for_numbers_names_the_column(tmp_path):
+    from imunav.sim import hundred_position_profile
+
+    rec = write_imu(_rec(), tmp_path / "rec.npz")
+    d = hundred_position_profile(10.0, 2.0, 1.0).to_dict()
+    table = d.get("segment_table", d)
+    table["t_start"] = ["soon"] * len(table["t_start"])
+    seg = tmp_path / "seg.json"
+    seg.write_text(json.dumps(d))
+    msg = _exit_2(runner.invoke(app, ["calibrate", "multiposition", str(rec), "--segments", str(seg), "--out",
+                                      str(tmp_path / "c.json")]))
+    assert "seg.json" in msg and "t_start" in msg
+
+
+def test_a_symlink_loop_is_a_user_error(tmp_path):
+    os.symlink(tmp_path / "b.csv", tmp_path / "a.csv")
+    os.symlink(tmp_path / "a.csv", tmp_path / "b.csv")
+    assert "a.csv" in _exit_2(runner.invoke(app, ["info", str(tmp_path / "a.csv")]))
+
+
+# --------------------------------------------------------------------------- accepted nonsense
+@pytest.mark.parametrize("argv, flag", [
+    (["calibrate", "mag", "{rec}", "--out", "{tmp}/m.json", "--min-coverage", "-0.5"], "--min-coverage"),
+    (["simulate", "static", "--duration", "2", "--seed", "-3", "--out", "{tmp}/s.npz"], "--seed"),
+    (["info", "{rec}", "--skiprows", "-2"], "--skiprows"),
+    (["airdata", "simulate", "cruise", "--duration", "5", "--wind", "1e9,0,0", "--out", "{tmp}/f.npz"], "--wind"),
+    (["info", "{rec}", "--gyro-unit", ""], "--gyro-unit"),
+])
+def test_nonsense_options_are_refused(tmp_path, argv, flag):
+    rec = write_imu(_rec(), tmp_path / "rec.npz")
+    args = [a.format(tmp=tmp_path, rec=rec) for a in argv]
+    assert flag in _exit_2(runner.invoke(app, args))
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["rec.npz"]
+
+
+@pytest.mark.parametrize("spec, words", [("[spec.bogus_param]\nmax = 1\n", "bogus_param"),
+                                         ("[spec.gyro_bias]\nmax = nan\n", "not a finite number")])
+def test_a_spec_with_an_unknown_parameter_or_a_nan_limit_is_refused(tmp_path, spec, words):
+    b = tmp_path / "b"
+    assert runner.invoke(app, ["batch", "simulate", "1", "--out", str(b), "--fs", "10", "--dwell", "2",
+                               "--no-rate-table", "--executor", "serial", "--quiet"]).exit_code == 0
+    s = tmp_path / "spec.toml"
+    s.write_text(spec)
+    msg = _exit_2(runner.invoke(app, ["batch", "calibrate", str(b), "--spec", str(s), "--executor", "serial",
+                                      "--quiet"]))
+    assert "spec.toml" in msg and words in msg and not (b / "calibration").exists()
+
+
+# --------------------------------------------------------------------------- messages that leak Python
+def test_unknown_filter_parameter_lists_the_known_ones(tmp_path):
+    rec = write_imu(_rec(), tmp_path / "rec.npz")
+    msg = _exit_2(runner.invoke(app, ["attitude", "run", str(rec), "--filter", "mekf", "--param", "bogus=1"]))
+    assert "bogus" in msg and "sigma_gyro" in msg and "__init__" not in msg and "keyword argument" not in msg
+
+
+def test_file_too_large_names_the_file(tmp_path):
+    import resource
+
+    def small_files():
+        resource.setrlimit(resource.RLIMIT_FSIZE, (20000, 20000))
+
+    env = dict(os.environ, PYTHONPATH=str(Path(__file__).resolve().parents[1] / "src"))
+    out = tmp_path / "big.csv"
+    r = subprocess.run([sys.executable, "-m", "imunav.cli.main", "simulate", "static", "--duration", "60", "--out",
+                        str(out)], capture_output=True, text=True, env=env, timeout=300, preexec_fn=small_files)
+    assert r.returncode == 2, r.stderr
+    assert "big.csv" in r.stderr and "Traceback" not in r.stderr and len(r.stderr.strip().splitlines()) == 1
+    assert not out.exists()
