@@ -79,6 +79,14 @@ BASELINE: dict[str, list[str]] = {
                     "--json", "{OUT}.json"],
 }
 
+#: Violations inside code this work may not change (the GNSS/INS command is another engineer's), reported to the
+#: lead: ``gins run`` / ``outage-test`` check their output FILES against the inputs, not their ``--out`` FOLDER, so
+#: a result folder that holds the inputs is accepted (nothing is overwritten, but results land among the inputs).
+KNOWN: dict[str, str] = {
+    "gins-run--out:holds-an-input": "cli/gins.py: check_outputs(..., folders=[out]) missing",
+    "gins-outage-test--out:holds-an-input": "cli/gins.py: check_outputs(..., folders=[out]) missing",
+}
+
 _FILE_OUTPUTS = {"--json", "--plot", "--psd-plot", "--kalibr", "--openvins", "--vins", "--px4-params",
                  "--imucal-out", "out"}
 _INPUT_FOLDERS = {"directory", "folder"}

@@ -202,6 +202,10 @@ def ratetable(
     check_outputs([recording, segments, static, static_segments, base, noise_model], [out, px4_params],
                   folders=[report])
     _check_report(report)
+    if static is not None and base is not None:
+        raise InvalidInputError("--base and --static both give the bias / g-sensitivity: give one of them")
+    if static_segments is not None and static is None:
+        raise InvalidInputError("--static-segments is the segment table of --static: give --static too, or drop it")
 
     lat = None if latitude_deg is None else np.deg2rad(latitude_deg)
     rd = (fs, accel_unit, gyro_unit, accel_scale, gyro_scale, skiprows, columns, topic, instance, layout)
