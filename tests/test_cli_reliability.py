@@ -130,15 +130,18 @@ def test_a_lab_configuration_error_leaves_no_report(tmp_path):
     assert not (out / "index.html").exists() and not (out / MANIFEST).exists() and not (out / "summary.json").exists()
 
 
-def test_a_failed_batch_leaves_only_failed(tmp_path):
-    """`batch noise` of a folder of multi-position tests (nothing static) fails: its result folder keeps only FAILED."""
-    b = tmp_path / "b"
-    assert runner.invoke(app, ["batch", "simulate", "2", "--out", str(b), "--fs", "10", "--dwell", "2",
-                               "--no-rate-table", "--executor", "serial", "--quiet"]).exit_code == 0
-    msg = _exit_2(runner.invoke(app, ["batch", "noise", str(b), "--executor", "serial", "--quiet"]))
-    assert "static" in msg
-    left = sorted(p.name for p in (b / "noise").iterdir() if not p.name.startswith(".")) if (b / "noise").exists() else []
-    assert left in ([], [FAILED]), left
+def test_a_lab_that_fails_after_writing_leaves_only_failed(tmp_path):
+    """The first step writes its recordings, the second is misconfigured: the run's files go, FAILED stays
+    (was: a complete-looking report folder with a manifest, exit 1)."""
+    cfg = tmp_path / "lab.toml"
+    cfg.write_text('[lab]\nsteps = ["simulate_tests", "noise"]\n[simulate_tests]\nfs = 10.0\ndwell_s = 2.0\n'
+                   'transition_s = 1.0\nstatic_duration_s = 20.0\ntests = ["static_long"]\nfigures = false\n'
+                   '[noise]\nrecord = "nope"\n')
+    out = tmp_path / "rep"
+    msg = _exit_2(runner.invoke(app, ["lab", "--config", str(cfg), "--out", str(out), "--quiet"]))
+    assert "nope" in msg
+    assert sorted(p.name for p in out.iterdir() if not p.name.startswith(".")) == [FAILED]
+    assert "ConfigError" in (out / FAILED).read_text()
 
 
 def test_gins_run_with_a_bad_truth_leaves_no_result(tmp_path):
@@ -146,8 +149,9 @@ def test_gins_run_with_a_bad_truth_leaves_no_result(tmp_path):
     d = tmp_path / "sim"
     r = runner.invoke(app, ["gins", "simulate", "--duration", "120", "--out", str(d)])
     assert r.exit_code == 0, r.stderr
-    truth = tmp_path / "bad_truth.nav"
-    truth.write_text("0 1 2\n")
+    truth = tmp_path / "other_day.nav"  # a valid truth of another time: found out after the filter ran
+    rows = [ln.split() for ln in (d / "truth.nav").read_text().splitlines() if ln.strip()]
+    truth.write_text("".join(" ".join([r[0], f"{float(r[1]) + 1e5:.9f}", *r[2:]]) + "\n" for r in rows))
     out = tmp_path / "res"
     _exit_2(runner.invoke(app, ["gins", "run", str(d / "imu.txt"), str(d / "gnss.txt"), "--config", str(d / "gins.toml"),
                                 "--truth", str(truth), "--out", str(out)]))

@@ -425,6 +425,7 @@ class RunFolder:
         self.manifest: Manifest | None = None
         self._made = False
         self._cleared = False
+        self._dirs_before: set[Path] = set()
 
     # ------------------------------------------------------------------ start
     def start(self) -> "RunFolder":
@@ -457,6 +458,7 @@ class RunFolder:
             _clear(root, self.inputs)
             self._cleared = True
         _remove_temp_files(root)
+        self._dirs_before = {Path(d) for d, _, _ in os.walk(root)}
         self.created = _now()
         marker = {"run_id": self.run_id, "kind": self.kind, "pid": os.getpid(), "host": socket.gethostname(),
                   "started": self.created}
@@ -549,6 +551,10 @@ class RunFolder:
             return
         logged = sorted(_logged(root))
         _remove(root, [_inside(root, rel) for rel in logged if rel != FAILED])
+        for d, _, _ in sorted(os.walk(root), key=lambda w: -len(Path(w[0]).parts)):
+            # folders the run made and left empty (e.g. figures/ before its first figure)
+            if Path(d) not in self._dirs_before and not os.listdir(d):
+                os.rmdir(d)
         if not logged and not self._cleared:
             # it wrote nothing into a folder that was new or empty: leave the folder as it was found
             for name in (MARKER, FILES):
