@@ -416,10 +416,12 @@ def check_outputs(inputs: Iterable[str | os.PathLike[str] | None],
                                         "choose a path outside it")
     for d in [*dirs, *runs]:
         dk = _key(d)
-        for ik, p in ins:
-            if _within(ik, dk):
-                raise InvalidInputError(f"the output folder {d} {'is' if ik == dk else 'holds'} the input {p}: "
-                                        "writing it could replace the input; choose another output folder")
+        held = [p for ik, p in ins if _within(ik, dk)]
+        if held:
+            what = "is the input" if any(_key(p) == dk for p in held) else \
+                f"holds the input{'s' if len(held) > 1 else ''}"
+            raise InvalidInputError(f"the output folder {d} {what} {', '.join(map(str, held[:6]))}: writing it could "
+                                    "replace an input; choose another output folder")
     for o in outs:
         check_writable(o)
     for d in [*dirs, *runs]:

@@ -13,6 +13,12 @@ and are refused here.
 different commands; :func:`domain_of` looks the command's key up first.  The
 hostile-case tests (``tests/test_cli_hostile.py``) derive their cases from
 these domains and check that every numeric option has one.
+
+Path options have a declared role (:func:`path_role`: input, input folder,
+output file, report folder, run folder), and :func:`check_paths` applies the
+one output check (:func:`imunav._atomic.check_outputs`) to every command from
+these roles, before the command runs: no output may equal, contain or sit
+inside an input, whatever the command itself checks later.
 """
 
 from __future__ import annotations
@@ -22,9 +28,10 @@ from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any
 
+from imunav._atomic import check_outputs
 from imunav.errors import InvalidInputError
 
-__all__ = ["DOMAINS", "Domain", "check_params", "domain_of", "flag_of"]
+__all__ = ["DOMAINS", "Domain", "check_params", "check_paths", "domain_of", "flag_of", "path_role"]
 
 
 @dataclass(frozen=True)
@@ -289,3 +296,84 @@ def check_params(command_path: str, params: list[Any], values: Mapping[str, Any]
         for x in (v if isinstance(v, (list, tuple)) else [v]):
             if not d.contains(x):
                 raise InvalidInputError(f"{flag_of(p)} {x!r}: must be {d.describe()}")
+
+
+_FILE_OUTPUTS = {"--json", "--plot", "--psd-plot", "--kalibr", "--openvins", "--vins", "--px4-params",
+                 "--imucal-out", "out", "--out", "simulate --segments"}
+_INPUT_FOLDERS = {"directory", "folder"}
+_RUN_FOLDERS = {"lab --out", "batch simulate --out", "batch calibrate --out", "batch noise --out"}
+_REPORT_FOLDERS = {"--report", "gins simulate --out", "gins run --out", "gins outage-test --out"}
+
+
+def path_role(command_path: str, flag: str) -> str:
+    """The role of a path option: ``input``, ``input-folder``, ``output``, ``report-folder`` or ``run-folder``.
+
+    Parameters
+    ----------
+    command_path : str
+        The command's words after ``imunav`` (``"calibrate mag"``).
+    flag : str
+        The option's flag (:func:`flag_of`).
+
+    Returns
+    -------
+    str
+        The role.
+    """
+    key = f"{command_path} {flag}"
+    if key in _RUN_FOLDERS:
+        return "run-folder"
+    if key in _REPORT_FOLDERS or flag in _REPORT_FOLDERS:
+        return "report-folder"
+    if flag in _INPUT_FOLDERS:
+        return "input-folder"
+    if flag in _FILE_OUTPUTS or key in _FILE_OUTPUTS:
+        return "output"
+    return "input"
+
+
+def is_path(param: Any) -> bool:
+    """Whether a parameter takes a file system path.
+
+    Parameters
+    ----------
+    param : click.Parameter
+        The parameter.
+
+    Returns
+    -------
+    bool
+        True for ``pathlib.Path`` parameters (optional or not).
+    """
+    ann = getattr(getattr(param, "type_descriptor", None), "annotation", None)
+    return ann is not None and "Path" in str(ann)
+
+
+def check_paths(command_path: str, params: list[Any], values: Mapping[str, Any]) -> None:
+    """The output check of :func:`imunav._atomic.check_outputs` from the declared path roles, before the command.
+
+    Parameters
+    ----------
+    command_path : str
+        The command's words after ``imunav``.
+    params : list of click.Parameter
+        The command's parameters.
+    values : mapping
+        Parameter name -> parsed value (None: not given).
+
+    Raises
+    ------
+    InvalidInputError
+        When an output would equal, hold or sit inside an input (see :func:`imunav._atomic.check_outputs`).
+    OSError
+        When an output cannot be written there.
+    """
+    roles: dict[str, list[Any]] = {}
+    for p in params:
+        v = values.get(p.name)
+        if v is None or not is_path(p):
+            continue
+        roles.setdefault(path_role(command_path, flag_of(p)), []).extend(v if isinstance(v, (list, tuple)) else [v])
+    check_outputs([*roles.get("input", []), *roles.get("input-folder", [])], roles.get("output", []),
+                  folders=roles.get("report-folder", []), run_folders=roles.get("run-folder", []),
+                  inputs_exist=False)

@@ -39,7 +39,7 @@ import typer.main
 from typer.core import TyperGroup
 
 from imunav._atomic import output_transaction
-from imunav.cli._domains import check_params, flag_of
+from imunav.cli._domains import check_params, check_paths, flag_of, is_path
 from imunav.cli._limits import ESTIMATORS, check_limits
 from imunav.errors import ImunavError, ImunavWarning, InvalidInputError
 
@@ -152,11 +152,6 @@ def _special_file(flag: str, value: Any) -> None:
                                     "only (copy the data to a file first)")
 
 
-def _is_path(param: Any) -> bool:
-    ann = getattr(getattr(param, "type_descriptor", None), "annotation", None)
-    return ann is Path or "Path" in str(ann)
-
-
 @functools.cache
 def _force_option() -> Any:
     """The ``--force`` option added to commands with a limits estimator (built by typer, like every option)."""
@@ -174,7 +169,8 @@ def _force_option() -> Any:
 def install_checks(cmd: Any, path: str) -> Any:
     """Wrap the callback of ``cmd`` (and of every command below it) so that, before it runs, every numeric
     option is checked against its declared domain (:func:`imunav.cli._domains.check_params`), no path
-    option names a FIFO, a device or a link loop, and the request's estimated memory and time are within
+    option names a FIFO, a device or a link loop, the outputs are checked against the inputs by their
+    declared roles (:func:`imunav.cli._domains.check_paths`), and the request's estimated memory and time are within
     the machine (:func:`imunav.cli._limits.check_limits`; a ``--force`` option is added where the command
     has none).  Idempotent; returns ``cmd``."""
     if cmd is None or getattr(cmd, "_imunav_checked", False):
@@ -196,8 +192,9 @@ def install_checks(cmd: Any, path: str) -> Any:
     def checked(*args: Any, **kwargs: Any) -> Any:
         check_params(path, cmd.params, kwargs)
         for p in cmd.params:
-            if _is_path(p) and kwargs.get(p.name) is not None:
+            if is_path(p) and kwargs.get(p.name) is not None:
                 _special_file(flag_of(p), kwargs[p.name])
+        check_paths(path, cmd.params, kwargs)
         check_limits(path, kwargs)
         if added_force:
             kwargs.pop("force", None)
