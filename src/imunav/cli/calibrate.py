@@ -313,6 +313,9 @@ def temperature(
     Example: imunav calibrate temperature cal_m30.json@-30 cal_0.json@0 cal_20.json@20 cal_50.json@50 --orders 1,2 --out thermal_cal.json
     """
 
+    for item in calibrations:
+        if "@" not in item:
+            raise InvalidInputError(f"argument {item!r}: write each calibration as FILE@TEMP_C, e.g. cal.json@25")
     check_outputs([c.rsplit("@", 1)[0] for c in calibrations], [out], folders=[report])
     _check_report(report)
 
