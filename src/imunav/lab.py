@@ -220,10 +220,12 @@ def run_lab(
     """Run the lab steps and write the report folder.
 
     The report folder is a run folder (:mod:`imunav.runfolder`): a folder that
-    holds another run is refused unless ``overwrite`` (which clears it first),
-    and ``manifest.json`` (run id, seed, configuration, every file with its
-    size and SHA-256) is written last; an interrupted or failed lab leaves no
-    manifest.
+    holds another run is refused unless ``overwrite`` (which removes only the
+    files imunav runs wrote), and ``manifest.json`` (run id, seed,
+    configuration, every file with its size and SHA-256) is written last; an
+    interrupted or failed lab removes its files and leaves ``FAILED``.  A
+    :class:`~imunav.errors.ConfigError` raised by a step (a misconfigured
+    lab) ends the lab; any other failing step is reported and the others run.
 
     Parameters
     ----------
