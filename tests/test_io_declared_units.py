@@ -4,12 +4,15 @@ import json
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 from typer.testing import CliRunner
 
 from imunav.cli.main import app
 from imunav.errors import UnitError
 from imunav.io import read_imu, write_imu
 from imunav.timeseries import ImuData
+from imunav.units import unit_factor
 
 
 def _rec(n=200, fs=100.0):
@@ -178,3 +181,29 @@ def test_cli_applies_the_declared_units(tmp_path):
     err = r.stderr if hasattr(r, "stderr") else r.output
     assert r.exit_code == 2 and "furlongs" in err and len(err.strip().splitlines()) == 1
     assert not (tmp_path / "x.npz").exists()
+
+
+_SPELLINGS = {"gyro": ["rad/s", "deg/s", "dps", "°/s", "deg/h", "rpm", "mrad/s", "Deg / Sec"],
+              "accel": ["m/s^2", "m/s2", "m/s**2", "g", "mg", "ug", "µg", "ft/s^2"]}
+
+
+@settings(max_examples=25, deadline=None, derandomize=True)
+@given(gu=st.sampled_from(_SPELLINGS["gyro"]), au=st.sampled_from(_SPELLINGS["accel"]),
+       tu=st.sampled_from(["s", "ms", "us", "ns"]), style=st.sampled_from(["[{}]", " ({})", "header"]))
+def test_any_accepted_spelling_declared_in_a_csv_is_applied(tmp_path_factory, gu, au, tu, style):
+    """Property: whatever accepted unit a CSV declares (header or column names), reading gives SI."""
+    d = _rec(50)
+    fg, fa, ft = unit_factor(gu, "gyro"), unit_factor(au, "accel"), unit_factor(tu, "time")
+    block = np.column_stack([d.t / ft, d.gyro / fg, d.accel / fa])
+    p = tmp_path_factory.mktemp("spell") / "r.csv"
+    names = ["t", "gx", "gy", "gz", "ax", "ay", "az"]
+    units = [tu] + [gu] * 3 + [au] * 3
+    if style == "header":
+        head = f"# imunav {json.dumps({'units': {'t': tu, 'gyro': gu, 'accel': au}})}\n{','.join(names)}\n"
+    else:
+        head = ",".join(n + style.format(u) for n, u in zip(names, units)) + "\n"
+    p.write_text(head + "".join(",".join(map(repr, r)) + "\n" for r in block.tolist()), encoding="utf-8")
+    got = read_imu(p)
+    np.testing.assert_allclose(got.gyro, d.gyro, rtol=1e-12, atol=1e-300)
+    np.testing.assert_allclose(got.accel, d.accel, rtol=1e-12)
+    np.testing.assert_allclose(got.t, d.t, rtol=1e-12, atol=1e-15)
