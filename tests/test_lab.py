@@ -126,12 +126,13 @@ def test_config_errors(tmp_path):
         load_lab_config(bad)
     res = runner.invoke(app, ["lab", "--out", str(tmp_path / "o"), "--config", str(bad), "--quiet"])
     assert res.exit_code == 2 and "not valid TOML" in res.output
-    # an invalid step option fails that step (exit 1) but the report is still written
+    # an invalid step option is a configuration error (issue 27): one line, exit 2, no report that looks complete
     opt = tmp_path / "opt.toml"
     opt.write_text("[lab]\nsteps = [\"simulate_tests\"]\n[simulate_tests]\nfs = -1.0\n")
     res = runner.invoke(app, ["lab", "--out", str(tmp_path / "p"), "--config", str(opt), "--quiet"])
-    assert res.exit_code == 1 and "fs must be a positive number" in res.output
-    assert (tmp_path / "p" / "index.html").is_file()
+    assert res.exit_code == 2 and "fs must be a positive number" in res.stderr
+    assert len(res.stderr.strip().splitlines()) == 1 and "Traceback" not in res.output
+    assert not (tmp_path / "p" / "index.html").exists()
 
 
 def test_simulate_tests_options_earth_rate_and_format(tmp_path, monkeypatch):

@@ -22,11 +22,12 @@ from typer.testing import CliRunner
 
 from imunav import batch as batch_mod
 from imunav import lab as lab_mod
+from imunav._atomic import atomic_path
 from imunav.batch import calibrate_batch, find_units, simulate_batch
 from imunav.cli.main import app
 from imunav.errors import RunFolderError
 from imunav.lab import StepResult, run_lab
-from imunav.runfolder import MANIFEST, MARKER, RunFolder, read_manifest, sha256_file
+from imunav.runfolder import FAILED, FILES, MANIFEST, MARKER, RunFolder, read_manifest, sha256_file
 
 ROOT = Path(__file__).resolve().parents[1]
 SIM = dict(fs=10.0, dwell_s=2.0, transition_s=1.0, rate_table=False, executor="serial")
@@ -71,7 +72,7 @@ def test_a_folder_holding_another_run_is_refused(tmp_path):
     (other / "notes.txt").write_text("keep me")
     with pytest.raises(RunFolderError):
         simulate_batch(1, other, **SIM)
-    with pytest.raises(RunFolderError, match="no imunav run manifest lists"):
+    with pytest.raises(RunFolderError, match="no imunav run manifest or file log lists.*notes.txt"):
         simulate_batch(1, other, overwrite=True, **SIM)
     assert (other / "notes.txt").read_text() == "keep me"
 
@@ -100,15 +101,23 @@ def test_batch_json_comes_after_the_units_and_a_failed_run_has_no_manifest(tmp_p
     out = tmp_path / "b"
     with pytest.raises(MemoryError):
         simulate_batch(3, out, **SIM)
-    assert (out / "unit_001.npz").exists()  # a partial run ...
-    assert not (out / "batch.json").exists() and not (out / MANIFEST).exists()  # ... without its summary
-    assert (out / MARKER).exists()
-    # readers refuse the incomplete run with a clear message
-    with pytest.raises(RunFolderError, match="incomplete run"):
+    # all or nothing: the unit written before the failure is gone; FAILED says why
+    assert sorted(p.name for p in out.iterdir() if not p.name.startswith(".")) == [FAILED]
+    assert "MemoryError: killed" in (out / FAILED).read_text()
+    assert (out / MARKER).exists() and not (out / MANIFEST).exists()
+    # readers refuse the failed run with a clear message
+    with pytest.raises(RunFolderError, match="failed"):
         find_units(out)
     r = CliRunner().invoke(app, ["batch", "calibrate", str(out), "--executor", "serial", "--quiet"])
-    assert "incomplete run" in _one_line_exit_2(r)
+    assert "failed" in _one_line_exit_2(r)
     assert not (out / "calibration").exists()
+    # a new run needs --overwrite, which removes FAILED (the run's own) and nothing else
+    (out / "notes.txt").write_text("mine")
+    with pytest.raises(RunFolderError, match="notes.txt"):
+        simulate_batch(1, out, overwrite=True, **SIM)
+    (out / "notes.txt").unlink()
+    simulate_batch(1, out, overwrite=True, **SIM)
+    assert read_manifest(out).kind == "batch-simulate" and not (out / FAILED).exists()
 
 
 def test_readers_trust_only_the_manifest(tmp_path):
@@ -148,7 +157,8 @@ def test_concurrent_runs_second_refused_or_takeover_detected(tmp_path):
     # the first finds the marker is not its own and writes no manifest
     out2 = tmp_path / "run2"
     a = RunFolder(out2, "demo-a").start()
-    (out2 / "a.txt").write_text("a")
+    with atomic_path(out2 / "a.txt") as tmp:  # written the way imunav writes: recorded in the run's file log
+        tmp.write_text("a")
     with RunFolder(out2, "demo-b", overwrite=True):
         (out2 / "b.txt").write_text("b")
     with pytest.raises(RunFolderError, match="took over"):
@@ -210,8 +220,10 @@ def test_an_interrupted_lab_leaves_no_manifest(tmp_path, fast_step, monkeypatch)
     out = tmp_path / "rep"
     with pytest.raises(KeyboardInterrupt):
         run_lab(out, {}, steps=["zz_fast", "zz_interrupt"], progress=False)
-    assert (out / "data" / "x.json").exists() and not (out / MANIFEST).exists() and (out / MARKER).exists()
-    with pytest.raises(RunFolderError, match="incomplete run"):
+    # the step's file is removed (all or nothing); FAILED says the lab was interrupted
+    assert not (out / "data").exists() and not (out / MANIFEST).exists() and (out / MARKER).exists()
+    assert "interrupted" in (out / FAILED).read_text()
+    with pytest.raises(RunFolderError, match="failed"):
         read_manifest(out)
 
 
@@ -244,11 +256,20 @@ def test_a_killed_batch_run_is_refused_then_cleared_by_overwrite(tmp_path):
         proc.wait(30)
     (out / ".unit_009.npz.abcd.tmp.npz").write_bytes(b"half")  # what a kill during a write leaves
     assert (out / MARKER).exists() and not (out / MANIFEST).exists() and not (out / "batch.json").exists()
+    assert "unit_001.npz" in (out / FILES).read_text()  # the file log names the run's files
     r = CliRunner().invoke(app, ["batch", "calibrate", str(out), "--executor", "serial", "--quiet"])
     assert "incomplete run" in _one_line_exit_2(r)
     r = CliRunner().invoke(app, ["batch", "simulate", "2", "--out", str(out), "--fs", "10", "--dwell", "2",
                                  "--no-rate-table", "--executor", "serial", "--quiet"])
     assert "still going or was killed" in _one_line_exit_2(r)
+    # the user keeps notes in the killed run's folder: --overwrite refuses, naming them, and deletes nothing
+    (out / "notes.txt").write_text("my notes")
+    n_before = len(list(out.rglob("*")))
+    r = CliRunner().invoke(app, ["batch", "simulate", "2", "--out", str(out), "--fs", "10", "--dwell", "2",
+                                 "--no-rate-table", "--executor", "serial", "--quiet", "--overwrite"])
+    assert "notes.txt" in _one_line_exit_2(r)
+    assert (out / "notes.txt").read_text() == "my notes" and len(list(out.rglob("*"))) == n_before
+    (out / "notes.txt").unlink()
     r = CliRunner().invoke(app, ["batch", "simulate", "2", "--out", str(out), "--fs", "10", "--dwell", "2",
                                  "--no-rate-table", "--executor", "serial", "--quiet", "--overwrite"])
     assert r.exit_code == 0, r.stderr

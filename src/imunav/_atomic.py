@@ -4,18 +4,33 @@ A reader never sees a half-written file: the data go to a temporary file in
 the *same directory* (so that :func:`os.replace` is an atomic rename on the
 same file system) and replace the target only once they are complete.  On any
 error the temporary file is removed and the target is left untouched.
+
+Two more guarantees are kept here, in the one place every writer goes through:
+
+* **All or nothing** (:func:`output_transaction`).  Inside a transaction (the
+  ``imunav`` command runs each command in one) a completed temporary file is
+  not renamed at once: every output is moved in when the whole command has
+  succeeded, and on any failure the temporary files and the folders created
+  for them are removed, so a failed command leaves nothing new behind.
+* **Run folders own what they wrote** (:func:`claim_run_file`).  A file
+  written inside a run folder that is being written (:mod:`imunav.runfolder`:
+  a hidden marker ``.imunav-run.json`` of this process or its parent) is
+  recorded in the run's file log ``.imunav-run.files`` before it appears, so
+  that a killed run's folder says which files are the run's and which are
+  not.
 """
 
 from __future__ import annotations
 
 import contextlib
+import contextvars
 import dataclasses
 import errno
 import json
 import math
 import os
 import tempfile
-from collections.abc import Iterable, Iterator, Mapping
+from collections.abc import Callable, Iterable, Iterator, Mapping
 from pathlib import Path
 from typing import Any
 
@@ -23,7 +38,141 @@ import numpy as np
 
 from imunav.errors import FileFormatError, InvalidInputError
 
-__all__ = ["atomic_path", "check_outputs", "check_writable", "json_text", "jsonable", "read_json", "write_json"]
+__all__ = ["RUN_FILES", "RUN_MARKER", "atomic_path", "check_outputs", "check_writable", "claim_run_file",
+           "json_text", "jsonable", "output_transaction", "read_json", "write_json"]
+
+#: The hidden marker of a run folder being written (:mod:`imunav.runfolder`).
+RUN_MARKER = ".imunav-run.json"
+#: The run's file log: one relative path per line, appended before each file appears.
+RUN_FILES = ".imunav-run.files"
+_RUN_DEPTH = 8  # how many folders up a run folder is looked for
+
+
+def _run_root(target: Path) -> Path | None:
+    """The run folder being written by this process (or its parent) that holds ``target``, if any."""
+    for parent in list(target.parents)[:_RUN_DEPTH]:
+        mk = parent / RUN_MARKER
+        if mk.is_file():
+            try:
+                d = json.loads(mk.read_text(encoding="utf-8"))
+            except (OSError, ValueError):
+                return None
+            if isinstance(d, dict) and d.get("pid") in (os.getpid(), os.getppid()) and not d.get("failed"):
+                return parent
+            return None
+    return None
+
+
+def claim_run_file(path: str | os.PathLike[str]) -> Path | None:
+    """Record ``path`` in the file log of the run folder being written that holds it.
+
+    Called before the file appears (by :func:`atomic_path`, and by
+    :meth:`imunav.labsteps.LabContext.path`), so that a killed run's folder
+    lists every file the run may have written.  Lines are appended with one
+    ``write`` on a file opened for appending, safe across worker processes.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        A file about to be written.
+
+    Returns
+    -------
+    pathlib.Path or None
+        The run folder, or None when ``path`` is not inside a run folder being written.
+    """
+    target = Path(os.path.abspath(path))
+    root = _run_root(target)
+    if root is not None:
+        rel = target.relative_to(root).as_posix()
+        fd = os.open(root / RUN_FILES, os.O_WRONLY | os.O_APPEND | os.O_CREAT, 0o644)
+        try:
+            os.write(fd, (json.dumps(rel) + "\n").encode("utf-8"))
+        finally:
+            os.close(fd)
+    return root
+
+
+class _Transaction:
+    """The outputs of one command: completed temporary files waiting for the command to succeed."""
+
+    def __init__(self) -> None:
+        self.pending: list[tuple[Path, Path]] = []  # (temporary file, target)
+        self.made: list[Path] = []  # folders created for the outputs, outermost first
+
+    def mkdirs(self, directory: Path) -> None:
+        missing = [d for d in (directory, *directory.parents) if not d.exists()]
+        directory.mkdir(parents=True, exist_ok=True)
+        self.made += list(reversed(missing))
+
+    def commit(self) -> None:
+        for tmp, target in self.pending:
+            os.replace(tmp, target)
+        self.pending.clear()
+        self.made.clear()
+
+    def abort(self) -> None:
+        for tmp, _target in self.pending:
+            with contextlib.suppress(OSError):
+                tmp.unlink()
+        self.pending.clear()
+        for d in reversed(self.made):
+            with contextlib.suppress(OSError):
+                d.rmdir()  # only when empty
+        self.made.clear()
+
+
+_TRANSACTION: contextvars.ContextVar[_Transaction | None] = contextvars.ContextVar("imunav_outputs", default=None)
+
+
+@contextlib.contextmanager
+def output_transaction(keep: Callable[[BaseException], bool] | None = None) -> Iterator[None]:
+    """All or nothing for the outputs written inside the block (see the module docstring).
+
+    Every :func:`atomic_path` write inside the block is kept as a completed temporary file beside its
+    target and moved in when the block ends without an exception; on an exception (or an interrupt) the
+    temporary files, and the folders created for them, are removed.  Files inside a run folder being
+    written are not deferred (the run folder has its own all-or-nothing rule, :mod:`imunav.runfolder`).
+    Nested blocks join the outermost one.
+
+    Parameters
+    ----------
+    keep : callable, optional
+        ``keep(exc)`` True for an exception that ends a command that did complete (e.g. an exit status that
+        reports failing units after every output was written): the outputs are moved in, then it propagates.
+
+    Examples
+    --------
+    >>> import tempfile, pathlib
+    >>> d = pathlib.Path(tempfile.mkdtemp())
+    >>> with output_transaction():
+    ...     _ = write_json(d / "a.json", {"a": 1})
+    ...     (d / "a.json").exists()
+    False
+    >>> (d / "a.json").exists()
+    True
+    """
+    if _TRANSACTION.get() is not None:
+        yield
+        return
+    tr = _Transaction()
+    token = _TRANSACTION.set(tr)
+    try:
+        yield
+    except BaseException as exc:
+        if keep is not None and keep(exc):
+            tr.commit()
+        else:
+            tr.abort()
+        raise
+    else:
+        try:
+            tr.commit()
+        except BaseException:
+            tr.abort()
+            raise
+    finally:
+        _TRANSACTION.reset(token)
 
 
 def _output_target(path: str | os.PathLike[str]) -> tuple[Path, Path, Path | None]:
@@ -59,8 +208,13 @@ def atomic_path(path: str | os.PathLike[str]) -> Iterator[Path]:
     'hello'
     """
     target, directory, _ = _output_target(path)
+    tr = _TRANSACTION.get()
     try:
-        directory.mkdir(parents=True, exist_ok=True)
+        if tr is not None:
+            tr.mkdirs(directory)
+        else:
+            directory.mkdir(parents=True, exist_ok=True)
+        run = claim_run_file(target)
         fd, tmp_name = tempfile.mkstemp(prefix=f".{target.name}.", suffix=f".tmp{target.suffix}", dir=directory)
     except OSError as exc:
         # Name the target, not the temporary file, in the message.
@@ -76,7 +230,17 @@ def atomic_path(path: str | os.PathLike[str]) -> Iterator[Path]:
         # Make sure the bytes are on disk before the rename publishes them.
         with open(tmp, "rb+") as fh:
             os.fsync(fh.fileno())
-        os.replace(tmp, target)
+        if tr is not None and run is None:
+            tr.pending.append((tmp, target))  # moved in when the whole command has succeeded
+        else:
+            os.replace(tmp, target)
+    except OSError as exc:
+        with contextlib.suppress(OSError):
+            tmp.unlink()
+        if exc.filename is None or str(exc.filename) == str(tmp):
+            # "File too large", "No space left on device" ...: name the output, not the temporary file
+            raise type(exc)(exc.errno, f"cannot write the output ({exc.strerror or exc})", str(target)) from None
+        raise
     except BaseException:
         with contextlib.suppress(OSError):
             tmp.unlink()
@@ -175,37 +339,98 @@ def check_writable(path: str | os.PathLike[str]) -> None:
         raise type(exc)(exc.errno, f"cannot write the output in {parent} ({exc.strerror})", str(target)) from None
 
 
+def _key(p: str | os.PathLike[str]) -> Path:
+    return Path(p).expanduser().resolve()
+
+
+def _within(inner: Path, outer: Path) -> bool:
+    return inner == outer or outer in inner.parents
+
+
 def check_outputs(inputs: Iterable[str | os.PathLike[str] | None],
-                  outputs: Iterable[str | os.PathLike[str] | None]) -> None:
-    """Refuse an output path that resolves to an input file (it would replace the input),
-    and two outputs that resolve to the same file.
+                  outputs: Iterable[str | os.PathLike[str] | None], *,
+                  folders: Iterable[str | os.PathLike[str] | None] = (),
+                  run_folders: Iterable[str | os.PathLike[str] | None] = (), inputs_exist: bool = True) -> None:
+    """The one check of a command's outputs against its inputs, done before any work.
 
-    ``None`` entries are skipped.  Raises :class:`~imunav.errors.InvalidInputError`.
+    No output may equal, contain or sit inside an input of the same command, and no two outputs may be
+    the same file:
+
+    * an output file may not be an input file, nor a file inside an input folder, nor be inside an input
+      file (a path whose parent is a file);
+    * an output folder (``folders``: report folders; ``run_folders``: run folders, :mod:`imunav.runfolder`)
+      may not be an input, nor hold an input file or folder;
+    * an output file may not sit inside a run folder (the run would list it as its own, or
+      ``--overwrite`` would remove it);
+    * each output file must be writable (:func:`check_writable`);
+    * (``inputs_exist``) every input given exists: a missing input is refused before any work, even one
+      the command would read last or not at all with the other options.
+
+    Parameters
+    ----------
+    inputs : iterable of str or os.PathLike or None
+        The files and folders the command reads (None entries skipped).
+    outputs : iterable of str or os.PathLike or None
+        The files it writes (None entries skipped).
+    folders : iterable of str or os.PathLike or None
+        The folders it writes files into.
+    run_folders : iterable of str or os.PathLike or None
+        The run folders it writes.
+    inputs_exist : bool
+        Refuse an input that does not exist (False for a command that looks a missing input up elsewhere).
+
+    Raises
+    ------
+    InvalidInputError
+        Naming both paths, when an output would replace or hold an input, or two outputs are the same.
+    OSError
+        When an output cannot be written there (a folder where a file is expected, a parent that is a file).
     """
-
-    def key(p: str | os.PathLike[str]) -> Path:
-        return Path(p).expanduser().resolve()
-
+    outs = [o for o in outputs if o is not None]
+    dirs = [d for d in folders if d is not None]
+    runs = [d for d in run_folders if d is not None]
     seen: dict[Path, str | os.PathLike[str]] = {}
-    outputs = list(outputs)
-    for o in outputs:
-        if o is None:
-            continue
-        k = key(o)
+    for o in [*outs, *dirs, *runs]:
+        k = _key(o)
         if k in seen:
-            raise InvalidInputError(f"two outputs are the same file ({seen[k]} and {o}); give each its own path")
+            raise InvalidInputError(f"two outputs are the same path ({seen[k]} and {o}); give each its own path")
         seen[k] = o
-    for o in outputs:
-        if o is not None:
-            check_writable(o)
-    ins = {}
+    ins: list[tuple[Path, str | os.PathLike[str]]] = []
     for p in inputs:
         if p is not None:
-            ins.setdefault(key(p), p)
-    for o in outputs:
-        if o is None:
-            continue
-        k = key(o)
-        if k in ins:
-            raise InvalidInputError(f"output {o} is the input file {ins[k]}: writing it would destroy the input; "
-                                    "choose another output path")
+            ins.append((_key(p), p))
+            if inputs_exist and not os.path.lexists(p):
+                raise FileNotFoundError(errno.ENOENT, "does not exist (no such file or folder)", str(p))
+    for o in outs:
+        k = _key(o)
+        for ik, p in ins:
+            if k == ik:
+                raise InvalidInputError(f"output {o} is the input file {p}: writing it would destroy the input; "
+                                        "choose another output path")
+            if ik.is_dir() and ik in k.parents and k.exists():
+                raise InvalidInputError(f"output {o} is a file of the input folder {p}: writing it would replace "
+                                        "an input; choose a path outside that folder")
+        for r in runs:
+            if _within(k, _key(r)):
+                raise InvalidInputError(f"output {o} is inside the run folder {r} that the same command writes; "
+                                        "choose a path outside it")
+    for d in [*dirs, *runs]:
+        dk = _key(d)
+        held = [p for ik, p in ins if _within(ik, dk)]
+        if held:
+            what = "is the input" if any(_key(p) == dk for p in held) else \
+                f"holds the input{'s' if len(held) > 1 else ''}"
+            raise InvalidInputError(f"the output folder {d} {what} {', '.join(map(str, held[:6]))}: writing it could "
+                                    "replace an input; choose another output folder")
+    for o in outs:
+        check_writable(o)
+    for d in [*dirs, *runs]:
+        dk = _key(d)
+        if dk.exists() and not dk.is_dir():
+            raise NotADirectoryError(errno.ENOTDIR, "the output folder is a file; give a folder", str(d))
+        for a in dk.parents:
+            if a.exists():
+                if not a.is_dir():
+                    raise NotADirectoryError(errno.ENOTDIR, f"cannot write the output folder: {a} is a file, "
+                                             "not a folder", str(d))
+                break

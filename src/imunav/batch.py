@@ -56,6 +56,7 @@ from imunav.noise.static import require_static
 from imunav.report import check_spec, load_spec
 from imunav.report.batch import write_batch_html
 from imunav.report.catalog import (
+    DISPLAY_UNIT,
     base_name,
     calibration_estimates,
     expand_spec,
@@ -66,9 +67,9 @@ from imunav.results import Result
 from imunav.runfolder import RunFolder, trusted_files
 from imunav.sim import (
     ImuErrorModel,
-    Segments,
     hundred_position_profile,
     presets,
+    read_segments,
     simulate_imu,
     static_profile,
     thesis_rate_table_profile,
@@ -528,7 +529,7 @@ def calibrate_unit(
                 f"{rec}: no segment table for the multi-position test; put {rec.stem}_segments.json or "
                 "segments.json (Profile.to_dict() format) next to the recordings"
             )
-        res = calib.multiposition(data, Segments.read(seg), latitude=latitude, gravity=gravity)
+        res = calib.multiposition(data, read_segments(seg), latitude=latitude, gravity=gravity)
         if method == "thesis":
             rate = next((p for p in sorted(rec.parent.glob(f"{rec.stem}_rate.*"))
                          if p.suffix.lower() in RECORDING_SUFFIXES and _usable(p, trusted)), None)
@@ -538,7 +539,7 @@ def calibrate_unit(
                     f"{rec}: method 'thesis' needs the rate-table test {rec.stem}_rate.<ext> and its segment table "
                     "rate_segments.json (or use --method multiposition)"
                 )
-            rres = calib.ratetable(read_imu(rate, **opts), Segments.read(rseg), base=res.calibration,
+            rres = calib.ratetable(read_imu(rate, **opts), read_segments(rseg), base=res.calibration,
                                    latitude=latitude, gravity=gravity)
             res = calib.combine(res, rres)
     else:
@@ -563,9 +564,16 @@ def calibrate_unit(
 
 
 def _load_spec(spec: Any) -> Any:
+    """The limits of a batch: a spec whose parameter a batch never estimates is refused, listing the known ones."""
     if spec is None:
         return None
-    return spec if isinstance(spec, Mapping) and all(hasattr(v, "max_si") for v in spec.values()) else load_spec(spec)
+    limits = spec if isinstance(spec, Mapping) and all(hasattr(v, "max_si") for v in spec.values()) else load_spec(spec)
+    unknown = sorted(n for n in limits if base_name(n) not in DISPLAY_UNIT)
+    if unknown:
+        raise ConfigError(f"{spec if isinstance(spec, (str, os.PathLike)) else 'spec'}: no batch estimates "
+                          f"{', '.join(unknown)}; the parameters are {', '.join(sorted(DISPLAY_UNIT))} "
+                          "(with _x / _y / _z for one axis)")
+    return limits
 
 
 def calibrate_batch(

@@ -220,10 +220,12 @@ def run_lab(
     """Run the lab steps and write the report folder.
 
     The report folder is a run folder (:mod:`imunav.runfolder`): a folder that
-    holds another run is refused unless ``overwrite`` (which clears it first),
-    and ``manifest.json`` (run id, seed, configuration, every file with its
-    size and SHA-256) is written last; an interrupted or failed lab leaves no
-    manifest.
+    holds another run is refused unless ``overwrite`` (which removes only the
+    files imunav runs wrote), and ``manifest.json`` (run id, seed,
+    configuration, every file with its size and SHA-256) is written last; an
+    interrupted or failed lab removes its files and leaves ``FAILED``.  A
+    :class:`~imunav.errors.ConfigError` raised by a step (a misconfigured
+    lab) ends the lab; any other failing step is reported and the others run.
 
     Parameters
     ----------
@@ -305,6 +307,8 @@ def _run_steps(out: Path, names: list[str], seed: int, cfg: dict, typed: LabConf
                     if found:
                         res = replace(res, parameters=found)
                 records.append(StepRecord(name, title, res, time.perf_counter() - t0))
+            except ConfigError:
+                raise  # the lab is configured wrongly: a user error, not a step's result (the run folder fails)
             except Exception:  # a failing step is reported; the others still run
                 records.append(StepRecord(name, title, None, time.perf_counter() - t0, traceback.format_exc()))
             prog.advance(overall)

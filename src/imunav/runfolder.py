@@ -1,34 +1,47 @@
 """Run folders: the output folders of ``imunav lab`` and ``imunav batch`` carry a manifest.
 
-A run (:class:`RunFolder`, a context manager) owns its folder:
+A run (:class:`RunFolder`, a context manager) owns its folder, and only what it wrote there:
 
 * **Start.**  The folder must be new, empty, or hold only hidden files.  A
   folder that holds another run -- a ``manifest.json``, the hidden marker
-  ``.imunav-run.json`` of a run that is still going or was killed, or any
-  other non-hidden file -- is refused (:class:`~imunav.errors.RunFolderError`)
-  unless ``overwrite=True``, which clears it first, and only what belongs to
-  imunav runs: the files listed in the manifest (and nested run folders such
-  as ``batch/calibration``), or everything in a folder whose marker shows it
-  was an imunav run that did not finish.  A folder with files that no
-  manifest lists is never cleared; nothing outside the folder is touched, and
-  a folder that is the file system's root, the home folder, the working
-  folder (or one of its parents) or that holds an input of the run is never
-  cleared.  Hidden temporary files (``.<name>.*.tmp*``, left by a killed
-  atomic write) are removed.  The marker is created exclusively
-  (``O_EXCL``): of two runs started together on one folder, one is refused.
+  ``.imunav-run.json`` of a run that is still going or was killed, a
+  ``FAILED`` file -- or any other non-hidden file is refused
+  (:class:`~imunav.errors.RunFolderError`) unless ``overwrite=True``, which
+  removes only the files that belong to imunav runs: those listed in the
+  manifest (and nested run folders such as ``batch/calibration``), or, for a
+  run that did not finish, those listed in its file log.  When the folder
+  holds any file no run lists (a user's notes put into a killed run's
+  folder, say), ``overwrite`` refuses and names them; nothing outside the
+  folder is touched, and a folder that is the file system's root, the home
+  folder, the working folder (or one of its parents) or that holds an input
+  of the run is never cleared.  Hidden temporary files (``.<name>.*.tmp*``,
+  left by a killed atomic write) are removed.  The marker is created
+  exclusively (``O_EXCL``): of two runs started together on one folder, one
+  is refused.
+* **During the run.**  Every file the run writes (through
+  :func:`imunav._atomic.atomic_path`, or a path from
+  :meth:`imunav.labsteps.LabContext.path`) is first recorded in the hidden file
+  log ``.imunav-run.files`` (:func:`imunav._atomic.claim_run_file`): a run
+  killed at any point (SIGKILL included) leaves a folder that says which
+  files are its own.
 * **Finish.**  The run checks that the marker is still its own (a concurrent
   run with ``overwrite`` would have replaced it: the folder then holds mixed
   files, and no manifest is written), lists every non-hidden file with its
   size and SHA-256, and writes ``manifest.json`` LAST and atomically (run id,
   kind, seed, parameters, command line, start and end times, files); then
-  it removes the marker.  A run that fails or is interrupted (SIGINT) leaves
-  the marker and no manifest (or nothing at all if it had written no file).
+  it removes the marker and the file log.
+* **Failure (all or nothing).**  A run that fails or is interrupted (an
+  exception, SIGINT) removes every file it wrote and leaves only ``FAILED``,
+  a text file with the run id, the time and the error message (and the
+  hidden marker that says ``FAILED`` is the run's): no partial result looks
+  complete.  A run that fails before writing any file, in a folder that was
+  new or empty, leaves the folder as it found it.
 
 Readers (:func:`trusted_files`, used by ``batch calibrate`` / ``batch noise``)
 trust only the files of a complete manifest, checked against their size and
-SHA-256; a folder with a marker and no manifest (a killed or running run) is
-refused; a folder with neither is a plain folder of the user's files (hidden
-files ignored).
+SHA-256; a folder with a marker and no manifest (a killed, failed or running
+run) is refused; a folder with neither is a plain folder of the user's files
+(hidden files ignored).
 """
 
 from __future__ import annotations
@@ -49,13 +62,17 @@ from pathlib import Path
 from typing import Any
 
 from imunav import __version__
-from imunav._atomic import jsonable, read_json, write_json
+from imunav._atomic import RUN_FILES, RUN_MARKER, jsonable, read_json, write_json
 from imunav.errors import RunFolderError
 
-__all__ = ["MANIFEST", "MARKER", "Manifest", "RunFolder", "read_manifest", "trusted_files", "sha256_file"]
+__all__ = ["FAILED", "FILES", "MANIFEST", "MARKER", "Manifest", "RunFolder", "read_manifest", "trusted_files", "sha256_file"]
 
 MANIFEST = "manifest.json"
-MARKER = ".imunav-run.json"
+MARKER = RUN_MARKER
+#: The run's file log (hidden): the files a run that has not finished wrote, one JSON string a line.
+FILES = RUN_FILES
+#: What a failed or interrupted run leaves: a text file with the run id, the time and the message.
+FAILED = "FAILED"
 _FORMAT = "imunav-run-manifest"
 _VERSION = 1
 
@@ -86,7 +103,7 @@ def sha256_file(path: str | os.PathLike[str]) -> str:
 
 def _is_temp(name: str) -> bool:
     """A hidden temporary file of :func:`imunav._atomic.atomic_path` (``.<name>.<random>.tmp<suffix>``)."""
-    return name.startswith(".") and ".tmp" in name and name != MARKER
+    return name.startswith(".") and ".tmp" in name and name not in (MARKER, FILES)
 
 
 def _visible_files(root: Path) -> list[Path]:
@@ -200,7 +217,12 @@ def read_manifest(folder: str | os.PathLike[str], *, verify: bool = True) -> Man
     mp = root / MANIFEST
     if not mp.is_file():
         if (root / MARKER).exists():
-            started = _marker(root).get("started", "?")
+            mk = _marker(root)
+            started = mk.get("started", "?")
+            if mk.get("failed") is not None:
+                raise RunFolderError(
+                    f"{root} holds a run that failed (started {started}): {mk.get('failed')}; its files were removed "
+                    f"({FAILED} says why): re-run it with --overwrite (overwrite=True)")
             raise RunFolderError(
                 f"{root} holds an incomplete run (started {started}, no {MANIFEST}): it was killed, failed, or is "
                 "still running, and its files may be partial or mixed; re-run it with --overwrite (overwrite=True)"
@@ -258,13 +280,27 @@ def _marker(root: Path) -> dict[str, Any]:
         return {}
 
 
+def _logged(root: Path) -> set[str]:
+    """The relative paths of a run's file log (a line cut by a kill is skipped)."""
+    try:
+        text = (root / FILES).read_text(encoding="utf-8")
+    except OSError:
+        return set()
+    out = set()
+    for line in text.splitlines():
+        try:
+            rel = json.loads(line)
+        except ValueError:
+            continue
+        if isinstance(rel, str) and rel:
+            out.add(Path(os.path.normpath(rel)).as_posix())
+    return out
+
+
 def _owned(root: Path) -> tuple[list[Path], list[Path]]:
     """(paths that belong to imunav runs and may be removed, non-hidden files that belong to none)."""
     mine: list[Path] = []
     foreign: list[Path] = []
-    if (root / MARKER).exists() and not (root / MANIFEST).exists():
-        # a run that did not finish: every non-hidden entry is its (it started in a folder without any)
-        return [p for p in root.iterdir() if not p.name.startswith(".") or _is_temp(p.name) or p.name == MARKER], []
     listed: set[str] = set()
     if (root / MANIFEST).is_file():
         try:
@@ -276,11 +312,16 @@ def _owned(root: Path) -> tuple[list[Path], list[Path]]:
         # compared as written (relative, not resolved): a user's symlink to a listed file is not listed
         listed = {Path(os.path.normpath(f["path"])).as_posix() for f in m.files}
         mine.append(root / MANIFEST)
+    elif (root / MARKER).exists():
+        # a run that did not finish: only the files its log names (and FAILED when it failed) are its own
+        listed = _logged(root)
+        if _marker(root).get("failed") is not None:
+            listed.add(FAILED)
     for entry in sorted(root.iterdir()):
         if entry.name == MANIFEST:
             continue  # listed in ``mine`` above when valid
         if entry.name.startswith("."):
-            if _is_temp(entry.name) or entry.name == MARKER:
+            if _is_temp(entry.name) or entry.name in (MARKER, FILES):
                 mine.append(entry)
             continue
         if entry.is_dir() and not entry.is_symlink():
@@ -321,11 +362,16 @@ def _clear(root: Path, inputs: Iterable[str | os.PathLike[str] | None]) -> None:
     if foreign:
         shown = ", ".join(str(p.relative_to(root)) for p in foreign[:5]) + (" ..." if len(foreign) > 5 else "")
         raise RunFolderError(
-            f"{root} holds {len(foreign)} file(s) that no imunav run manifest lists ({shown}); --overwrite clears only "
-            "imunav run folders: move those files away or choose another output folder"
+            f"{root} holds {len(foreign)} file(s) that no imunav run manifest or file log lists ({shown}); --overwrite "
+            "removes only the files imunav runs wrote: move those files away or choose another output folder"
         )
+    _remove(root, mine)
+
+
+def _remove(root: Path, paths: Iterable[Path]) -> None:
+    """Remove ``paths`` (files, links, folders) inside ``root``, then the folders they leave empty."""
     emptied: set[Path] = set()
-    for p in mine:
+    for p in paths:
         if p.is_symlink() or p.is_file():
             with contextlib.suppress(FileNotFoundError):
                 p.unlink()
@@ -379,6 +425,8 @@ class RunFolder:
         self.created = ""
         self.manifest: Manifest | None = None
         self._made = False
+        self._cleared = False
+        self._dirs_before: set[Path] = set()
 
     # ------------------------------------------------------------------ start
     def start(self) -> "RunFolder":
@@ -409,7 +457,9 @@ class RunFolder:
             if not self.overwrite:
                 raise RunFolderError(self._busy_message())
             _clear(root, self.inputs)
+            self._cleared = True
         _remove_temp_files(root)
+        self._dirs_before = {Path(d) for d, _, _ in os.walk(root)}
         self.created = _now()
         marker = {"run_id": self.run_id, "kind": self.kind, "pid": os.getpid(), "host": socket.gethostname(),
                   "started": self.created}
@@ -420,6 +470,7 @@ class RunFolder:
                                  "or choose another folder") from None
         with os.fdopen(fd, "w", encoding="utf-8") as fh:
             json.dump(marker, fh)
+        (root / FILES).write_text("", encoding="utf-8")
         return self
 
     def _busy_message(self) -> str:
@@ -430,6 +481,9 @@ class RunFolder:
                 m = read_manifest(root, verify=False)
                 if m is not None:
                     what = f"the finished run {m.run_id} ({m.kind}, {m.finished})"
+        elif (root / MARKER).exists() and _marker(root).get("failed") is not None:
+            mk = _marker(root)
+            what = f"a run that failed (run {mk.get('run_id', '?')}, {mk.get('kind', '?')}: {mk.get('failed')})"
         elif (root / MARKER).exists():
             mk = _marker(root)
             what = (f"a run that is still going or was killed (run {mk.get('run_id', '?')}, {mk.get('kind', '?')}, "
@@ -474,10 +528,54 @@ class RunFolder:
         d = m.to_dict()
         d["imunav"] = __version__
         write_json(root / MANIFEST, d)
-        with contextlib.suppress(FileNotFoundError):
-            (root / MARKER).unlink()
+        for name in (MARKER, FILES):
+            with contextlib.suppress(FileNotFoundError):
+                (root / name).unlink()
         self.manifest = m
         return m
+
+    def fail(self, message: str) -> None:
+        """Remove every file this run wrote (its file log) and leave ``FAILED`` with ``message``.
+
+        Called when the ``with`` block ends with an exception or an interrupt.  Nothing happens when another
+        run took the folder over (its marker is not this run's).
+
+        Parameters
+        ----------
+        message : str
+            Why the run failed (one line).
+        """
+        root = self.folder
+        _remove_temp_files(root)
+        mk = _marker(root)
+        if mk.get("run_id") != self.run_id:
+            return
+        logged = sorted(_logged(root))
+        _remove(root, [_inside(root, rel) for rel in logged if rel != FAILED])
+        for d, _, _ in sorted(os.walk(root), key=lambda w: -len(Path(w[0]).parts)):
+            # folders the run made and left empty (e.g. figures/ before its first figure)
+            if Path(d) not in self._dirs_before and not os.listdir(d):
+                os.rmdir(d)
+        if not logged and not self._cleared:
+            # it wrote nothing into a folder that was new or empty: leave the folder as it was found
+            for name in (MARKER, FILES):
+                with contextlib.suppress(FileNotFoundError):
+                    (root / name).unlink()
+            if self._made and not any(root.iterdir()):
+                root.rmdir()
+            return
+        when = _now()
+        msg = " ".join(str(message).split()) or "failed"
+        (root / FAILED).write_text(
+            f"imunav run {self.run_id} ({self.kind}) started {self.created} failed at {when}: {msg}\n"
+            f"Its files were removed. Re-run with --overwrite (overwrite=True) to replace this folder.\n",
+            encoding="utf-8")
+        mk.update({"failed": msg, "finished": when})
+        tmp = root / f".{MARKER}.tmp"
+        tmp.write_text(json.dumps(mk), encoding="utf-8")
+        os.replace(tmp, root / MARKER)
+        with contextlib.suppress(FileNotFoundError):
+            (root / FILES).unlink()
 
     def __enter__(self) -> "RunFolder":
         return self.start()
@@ -486,14 +584,8 @@ class RunFolder:
         if et is None:
             self.finish()
             return False
-        # on an error or an interrupt: no manifest; the marker stays to show the folder holds an
-        # incomplete run, unless the run wrote nothing (then the folder is left as it was found)
-        with contextlib.suppress(OSError):
-            root = self.folder
-            _remove_temp_files(root)
-            if _marker(root).get("run_id") == self.run_id and not any(
-                    not p.name.startswith(".") for p in root.iterdir()):
-                (root / MARKER).unlink()
-                if self._made and not any(root.iterdir()):
-                    root.rmdir()
+        # on an error or an interrupt: the files of this run go, FAILED stays (all or nothing)
+        why = "interrupted" if isinstance(ev, KeyboardInterrupt) else f"{et.__name__}: {ev}"
+        with contextlib.suppress(OSError, RunFolderError):
+            self.fail(why)
         return False

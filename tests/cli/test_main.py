@@ -65,7 +65,7 @@ def test_help_lists_the_commands_without_importing_them():
         "assert r.exit_code == 0 and 'calibrate' in r.output, r.output\n"
         "heavy = ('numba', 'scipy', 'pandas', 'matplotlib', 'torch', 'dask')\n"
         "print(sorted(m for m in sys.modules if m.split('.')[0] in heavy or (m.startswith('imunav.cli.') and m not in "
-        "('imunav.cli.main', 'imunav.cli._lazy', 'imunav.cli._errors'))))\n"
+        "('imunav.cli.main', 'imunav.cli._lazy', 'imunav.cli._errors', 'imunav.cli._domains', 'imunav.cli._limits'))))\n"
     )
     env = {**os.environ, "PYTHONPATH": os.pathsep.join(p for p in (str(ROOT / "src"), os.environ.get("PYTHONPATH")) if p)}
     r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=env, timeout=120)

@@ -48,6 +48,8 @@ def test_gins_step_on_files_of_the_lab_toml(tmp_path):
 def test_gins_step_options_are_checked(tmp_path):
     with pytest.raises(ConfigError, match="durations"):
         parse_lab_config({"lab": {"steps": ["gins"]}, "gins": {"durations": 100}})
-    res = run_lab(tmp_path, {"lab": {"steps": ["gins"]}, "gins": {"config": str(tmp_path / "none.toml")}},
-                  progress=False)
-    assert res.failed_steps and "does not exist" in res.steps[0].error
+    # a misconfigured step ends the lab as a user error (issue 27): no report that looks complete
+    with pytest.raises(ConfigError, match="does not exist"):
+        run_lab(tmp_path / "rep", {"lab": {"steps": ["gins"]}, "gins": {"config": str(tmp_path / "none.toml")}},
+                progress=False)
+    assert not (tmp_path / "rep").exists()

@@ -12,11 +12,13 @@ the figure to expect on trials the parameters never saw.
 
 from __future__ import annotations
 
+import inspect
 import itertools
+import math
 import os
 import time
 from concurrent.futures import ProcessPoolExecutor
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, fields, replace
 from pathlib import Path
 from typing import Any, Callable, Iterable
 
@@ -60,6 +62,8 @@ def make_filter(name: str, params: dict[str, Any] | None = None) -> Any:
     """
 
     p = dict(params or {})
+    if name in FILTERS:
+        _check_params(name, p)
     try:
         if name == "madgwick":
             return madgwick.Madgwick(**{"beta": 0.1, **p})
@@ -80,6 +84,58 @@ def make_filter(name: str, params: dict[str, Any] | None = None) -> Any:
     except TypeError as exc:
         raise ConfigError(f"bad parameter for filter {name!r}: {exc}") from exc
     raise ConfigError(f"unknown filter {name!r}; choose one of {', '.join(FILTERS)}")
+
+
+def filter_parameters(name: str) -> dict[str, Any]:
+    """The parameters a filter takes (``--param NAME=VALUE``), with their defaults.
+
+    Parameters
+    ----------
+    name : str
+        A filter name of :data:`FILTERS`.
+
+    Returns
+    -------
+    dict
+        Parameter name -> default value (``inspect.Parameter.empty`` when it has none).
+
+    Raises
+    ------
+    ConfigError
+        If the name is unknown.
+    """
+    configs = {"mekf": lambda: mekf.MekfConfig(), "adaptive": lambda: adaptive.ADAPTIVE_DEFAULTS,
+               "smoother": lambda: smoother.SMOOTHER_DEFAULTS, "ukf": lambda: ukf.UkfConfig()}
+    classes = {"madgwick": madgwick.Madgwick, "madgwick_c": madgwick.Madgwick, "mahony": mahony.Mahony,
+               "complementary": complementary.Complementary}
+    if name in configs:
+        cfg = configs[name]()
+        return {f.name: getattr(cfg, f.name) for f in fields(cfg)}
+    if name in classes:
+        sig = inspect.signature(classes[name])
+        out = {k: v.default for k, v in sig.parameters.items()
+               if v.kind in (v.POSITIONAL_OR_KEYWORD, v.KEYWORD_ONLY)}
+        if name == "madgwick_c":
+            out.pop("original_c", None)
+        return out
+    raise ConfigError(f"unknown filter {name!r}; choose one of {', '.join(FILTERS)}")
+
+
+def _check_params(name: str, p: dict[str, Any]) -> None:
+    """Unknown parameters are listed with the known ones; a number where the default is a number must be finite."""
+    known = filter_parameters(name)
+    unknown = sorted(set(p) - set(known))
+    if unknown:
+        raise ConfigError(f"filter {name!r} has no parameter {', '.join(map(repr, unknown))}; its parameters are: "
+                          f"{', '.join(sorted(known))}")
+    for k, v in p.items():
+        d = known[k]
+        if isinstance(d, bool):
+            if not isinstance(v, bool):
+                raise ConfigError(f"filter {name!r} parameter {k!r} is true or false, got {v!r}")
+        elif isinstance(d, (int, float)) and d is not None:
+            if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v):
+                raise ConfigError(f"filter {name!r} parameter {k!r} is a finite number (default {d!r}), got {v!r}")
 
 
 def reference_start(name: str) -> bool:

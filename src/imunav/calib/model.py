@@ -514,6 +514,9 @@ class ImuCalibration:
         FileFormatError
             If the format or its version is not this one, or a field is missing.
         """
+        if not isinstance(d, dict):
+            raise FileFormatError(f"{source}: a calibration JSON is an object (format, accel, gyro, units), "
+                                  f"not {type(d).__name__}")
         if d.get("format") != _FORMAT:
             raise FileFormatError(f"{source}: not an imunav calibration (field 'format' is {d.get('format')!r})")
         v = d.get("format_version")
@@ -521,6 +524,20 @@ class ImuCalibration:
             raise FileFormatError(
                 f"{source}: calibration format_version {v!r} is not supported (this imunav reads {FORMAT_VERSION})"
             )
+        for group, key, shape in (("accel", "bias", (3,)), ("accel", "matrix", (3, 3)), ("gyro", "bias", (3,)),
+                                  ("gyro", "matrix", (3, 3)), ("gyro", "g_sensitivity", (3, 3))):
+            g = d.get(group)
+            if not isinstance(g, dict) or key not in g:
+                raise FileFormatError(f"{source}: calibration JSON lacks {group}.{key} (numbers, shape {shape})")
+            try:
+                ok = np.asarray(g[key], dtype=float).shape == shape
+            except (TypeError, ValueError):
+                ok = False
+            if not ok:
+                raise FileFormatError(f"{source}: {group}.{key} must be numbers of shape {shape}, got {g[key]!r:.80}")
+        if not isinstance(d.get("units"), dict) or not all(isinstance(d["units"].get(k), str)
+                                                           for k in ("raw_accel", "raw_gyro")):
+            raise FileFormatError(f"{source}: calibration JSON needs units.raw_accel and units.raw_gyro (unit strings)")
         try:
             u = d["units"]
             return cls(
@@ -539,6 +556,9 @@ class ImuCalibration:
             )
         except KeyError as e:
             raise FileFormatError(f"{source}: calibration JSON lacks the field {e}") from None
+        except (TypeError, ValueError, AttributeError) as e:
+            raise FileFormatError(f"{source}: a field of the calibration JSON (thermal, stderr or meta) has the "
+                                  f"wrong shape or type ({e})") from None
 
     def save(self, path: str | os.PathLike[str]) -> Path:
         """Write the calibration as JSON (atomic).

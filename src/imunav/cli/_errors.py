@@ -1,6 +1,11 @@
 """The one error path of the ``imunav`` command.
 
-Every command runs inside :class:`ImunavGroup`, whose ``invoke`` turns
+Every command runs inside :class:`ImunavGroup`, whose ``invoke`` runs it in
+one output transaction (:func:`imunav._atomic.output_transaction`: its output
+files are moved in only when it completes; a command that fails leaves nothing
+new), after checking every numeric option against its declared domain
+(:mod:`imunav.cli._domains`) and refusing FIFOs, devices and link loops given
+as paths (:func:`install_checks`), and turns
 
 * an :class:`imunav.errors.ImunavError` or an :class:`OSError` (input or output
   file missing, unreadable, not writable, a folder where a file is expected)
@@ -19,8 +24,11 @@ one line, ``warning: <message>``, and the command goes on.
 
 from __future__ import annotations
 
+import errno
+import functools
 import os
 import re
+import stat
 import sys
 import traceback
 import warnings
@@ -28,8 +36,12 @@ from pathlib import Path
 from typing import Any, NoReturn
 
 import typer
+import typer.main
 from typer.core import TyperGroup
 
+from imunav._atomic import output_transaction
+from imunav.cli._domains import check_params, check_paths, flag_of, is_path
+from imunav.cli._limits import ESTIMATORS, check_limits
 from imunav.errors import ImunavError, ImunavWarning, InvalidInputError
 
 try:  # typer >= 0.20 carries its own copy of click (and no longer installs the click package)
@@ -46,7 +58,7 @@ _PASS_THROUGH = tuple({e for e in (typer.Exit, typer.Abort, getattr(typer, "Type
                                    getattr(getattr(click, "exceptions", None), "Exit", None)) if e is not None})
 _ABORTS = tuple({e for e in (typer.Abort, getattr(click, "Abort", None)) if e is not None})
 
-__all__ = ["ImunavGroup", "check_figure_path", "check_suffix", "fail", "one_line"]
+__all__ = ["ImunavGroup", "check_figure_path", "check_suffix", "fail", "install_checks", "one_line"]
 
 REPORT_TO = "the imunav issue tracker"
 
@@ -152,15 +164,99 @@ def _show_warning(message: Any, category: Any, filename: str, lineno: int, file:
         _showwarning(message, category, filename, lineno, file, line)
 
 
+def _completed(exc: BaseException) -> bool:
+    """An exit that ends a command whose outputs are complete: status 0, or 1 (failing units, spec fails)."""
+    exits = tuple(e for e in (typer.Exit, getattr(getattr(click, "exceptions", None), "Exit", None)) if e is not None)
+    return isinstance(exc, exits) and getattr(exc, "exit_code", 0) in (0, 1)
+
+
+def _special_file(flag: str, value: Any) -> None:
+    """Refuse a path option that names a FIFO, a device or a socket (reading it could block forever), or a
+    symbolic-link loop."""
+    for v in (value if isinstance(value, (list, tuple)) else [value]):
+        if not isinstance(v, (str, os.PathLike)):
+            continue
+        try:
+            st = os.stat(v)
+        except FileNotFoundError:
+            continue
+        except OSError as exc:
+            if exc.errno == errno.ELOOP:
+                raise InvalidInputError(f"{flag} {v}: a loop of symbolic links, not a file; give the file itself") from None
+            continue
+        if stat.S_ISFIFO(st.st_mode) or stat.S_ISCHR(st.st_mode) or stat.S_ISBLK(st.st_mode) or stat.S_ISSOCK(st.st_mode):
+            kind = ("a FIFO (named pipe)" if stat.S_ISFIFO(st.st_mode) else
+                    "a socket" if stat.S_ISSOCK(st.st_mode) else "a device")
+            raise InvalidInputError(f"{flag} {v}: is {kind}, not a regular file; imunav reads and writes regular files "
+                                    "only (copy the data to a file first)")
+
+
+@functools.cache
+def _force_option() -> Any:
+    """The ``--force`` option added to commands with a limits estimator (built by typer, like every option)."""
+    t = typer.Typer()
+
+    @t.command()
+    def _cmd(force: bool = typer.Option(False, "--force", help="Run even when the request's estimated memory or "
+                                        "time is far beyond the machine (refused otherwise, with the estimate).")
+             ) -> None:
+        pass  # pragma: no cover
+
+    return typer.main.get_command(t).params[0]
+
+
+def install_checks(cmd: Any, path: str) -> Any:
+    """Wrap the callback of ``cmd`` (and of every command below it) so that, before it runs, every numeric
+    option is checked against its declared domain (:func:`imunav.cli._domains.check_params`), no path
+    option names a FIFO, a device or a link loop, the outputs are checked against the inputs by their
+    declared roles (:func:`imunav.cli._domains.check_paths`), and the request's estimated memory and time are within
+    the machine (:func:`imunav.cli._limits.check_limits`; a ``--force`` option is added where the command
+    has none).  Idempotent; returns ``cmd``."""
+    if cmd is None or getattr(cmd, "_imunav_checked", False):
+        return cmd
+    cmd._imunav_checked = True
+    subs = getattr(cmd, "commands", None)
+    if subs is not None:
+        for name in list(subs):
+            install_checks(subs[name], f"{path} {name}".strip())
+        return cmd
+    callback = cmd.callback
+    if callback is None:
+        return cmd
+    added_force = path in ESTIMATORS and not any(p.name == "force" for p in cmd.params)
+    if added_force:
+        cmd.params.append(_force_option())
+
+    @functools.wraps(callback)
+    def checked(*args: Any, **kwargs: Any) -> Any:
+        check_params(path, cmd.params, kwargs)
+        for p in cmd.params:
+            if is_path(p) and kwargs.get(p.name) is not None:
+                _special_file(flag_of(p), kwargs[p.name])
+        check_paths(path, cmd.params, kwargs)
+        check_limits(path, kwargs)
+        if added_force:
+            kwargs.pop("force", None)
+        return callback(*args, **kwargs)
+
+    cmd.callback = checked
+    return cmd
+
+
 class ImunavGroup(TyperGroup):
     """Root command group: the single place where exceptions become messages and exit codes."""
+
+    def get_command(self, ctx: click.Context, cmd_name: str) -> Any:
+        """The command, with the option checks of :func:`install_checks` installed."""
+        return install_checks(super().get_command(ctx, cmd_name), cmd_name)
 
     def invoke(self, ctx: click.Context) -> Any:
         try:
             with warnings.catch_warnings():
                 warnings.simplefilter("default", ImunavWarning)
                 warnings.showwarning = _show_warning
-                return super().invoke(ctx)
+                with output_transaction(keep=_completed):
+                    return super().invoke(ctx)
         except (*_PASS_THROUGH, KeyboardInterrupt, SystemExit):  # usage errors are reported by main()
             raise
         except (ImunavError, OSError) as exc:

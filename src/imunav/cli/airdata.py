@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import math
 from pathlib import Path
 from types import SimpleNamespace
 from typing import Optional
@@ -54,6 +55,9 @@ def _channels(text: Optional[str]) -> tuple[int, ...] | None:
     return ch
 
 
+_MAX_WIND = 150.0  # m/s
+
+
 def _vec3(text: str, name: str) -> tuple[float, float, float]:
     try:
         v = tuple(float(x) for x in text.split(","))
@@ -61,6 +65,9 @@ def _vec3(text: str, name: str) -> tuple[float, float, float]:
         raise InvalidInputError(f"{name} must be three comma-separated numbers, got {text!r}") from exc
     if len(v) != 3:
         raise InvalidInputError(f"{name} must be three comma-separated numbers (N,E,D), got {text!r}")
+    if not all(math.isfinite(x) for x in v) or math.hypot(*v) > _MAX_WIND:
+        raise InvalidInputError(f"{name} {text}: each component must be finite and the wind at most {_MAX_WIND:g} m/s "
+                                "(the strongest jet-stream winds are about 110 m/s)")
     return v  # type: ignore[return-value]
 
 

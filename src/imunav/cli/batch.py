@@ -130,6 +130,7 @@ def simulate_cmd(
     Example: imunav batch simulate 4 --out batch --fs 20 --dwell 4 --overwrite
     """
 
+    check_outputs([], [], run_folders=[out])
     try:
         files = batch.simulate_batch(n_units, out, preset=preset, spread=spread, rng=seed, fs=fs, dwell_s=dwell,
                                transition_s=transition, rate_table=rate_table, format=fmt, static_s=static,
@@ -161,7 +162,7 @@ def calibrate_cmd(
     Example: imunav batch calibrate batch --method thesis --out batch_thesis --json batch_cal.json
     """
 
-    check_outputs([spec], [json_out])
+    check_outputs([spec, folder], [json_out], run_folders=[out if out is not None else folder / "calibration"])
 
     try:
         s = batch.calibrate_batch(folder, method=method, out_dir=out, spec=spec,
@@ -198,7 +199,7 @@ def noise_cmd(
     Example: imunav batch simulate 3 --static 600 --out static_batch && imunav batch noise static_batch --terms N,B,K
     """
 
-    check_outputs([spec], [json_out])
+    check_outputs([spec, folder], [json_out], run_folders=[out if out is not None else folder / "noise"])
 
     try:
         s = batch.noise_batch(folder, out_dir=out, spec=spec, read_options=_read_options(fs, accel_unit, gyro_unit, columns),

@@ -171,7 +171,7 @@ def multiposition(
     Example: imunav calibrate multiposition static.npz --segments static_segments.json --out static_cal.json --report rep --px4-params static_cal.params
     """
 
-    check_outputs([recording, segments, noise_model], [out, px4_params])
+    check_outputs([recording, segments, noise_model], [out, px4_params], folders=[report])
     _check_report(report)
 
     data = _read(recording, fs, accel_unit, gyro_unit, accel_scale, gyro_scale, skiprows, columns, topic, instance,
@@ -205,8 +205,13 @@ def ratetable(
     Example: imunav simulate ratetable --preset thesis_sim --out rate.npz && imunav calibrate ratetable rate.npz --segments rate_segments.json --static static.npz --static-segments static_segments.json --out cal.json
     """
 
-    check_outputs([recording, segments, static, static_segments, base, noise_model], [out, px4_params])
+    check_outputs([recording, segments, static, static_segments, base, noise_model], [out, px4_params],
+                  folders=[report])
     _check_report(report)
+    if static is not None and base is not None:
+        raise InvalidInputError("--base and --static both give the bias / g-sensitivity: give one of them")
+    if static_segments is not None and static is None:
+        raise InvalidInputError("--static-segments is the segment table of --static: give --static too, or drop it")
 
     lat = None if latitude_deg is None else np.deg2rad(latitude_deg)
     rd = (fs, accel_unit, gyro_unit, accel_scale, gyro_scale, skiprows, columns, topic, instance, layout)
@@ -246,7 +251,7 @@ def ferraris(
     Example (imucal's session in the shared data): imunav calibrate ferraris ../shared/data/imucal/example_ferraris_session.csv --sections ../shared/data/imucal/example_ferraris_session_list.json --fs 102.4 --gyro-unit deg/s --out ferraris_cal.json --imucal-out ferraris_imucal.json
     """
 
-    check_outputs([recording, sections], [out, px4_params, imucal_out])
+    check_outputs([recording, sections], [out, px4_params, imucal_out], folders=[report])
     _check_report(report)
 
 
@@ -287,7 +292,7 @@ def multipose(
     Example (the MPU-6050 session in the shared data): imunav calibrate multipose ../shared/data/mpu6050_tedaldi/example_data_calibration.csv --skiprows 4 --fs 100 --accel-unit counts --accel-scale 5.9855e-4 --gyro-unit counts --gyro-scale 1.3323e-4 --init-s 36.5 --no-accel-misalignment --out mpu_cal.json
     """
 
-    check_outputs([recording], [out, px4_params])
+    check_outputs([recording], [out, px4_params], folders=[report])
     _check_report(report)
 
     data = window(_read(recording, fs, accel_unit, gyro_unit, accel_scale, gyro_scale, skiprows, columns, topic,
@@ -324,7 +329,10 @@ def temperature(
     Example (the calibrations of the examples above standing for three temperatures): imunav calibrate temperature static_cal.json@-10 cal.json@25 static_cal.json@40 --orders 1 --params accel_bias --out thermal_cal.json
     """
 
-    check_outputs([c.rsplit("@", 1)[0] for c in calibrations], [out])
+    for item in calibrations:
+        if "@" not in item:
+            raise InvalidInputError(f"argument {item!r}: write each calibration as FILE@TEMP_C, e.g. cal.json@25")
+    check_outputs([c.rsplit("@", 1)[0] for c in calibrations], [out], folders=[report])
     _check_report(report)
 
 
@@ -385,7 +393,7 @@ def mag(
     Example: imunav calibrate mag flight.ulg --topic sensor_mag --instance 0 --out mag_cal.json
     """
 
-    check_outputs([recording], [out, px4_params])
+    check_outputs([recording], [out, px4_params], folders=[report])
     _check_report(report)
 
 

@@ -9,7 +9,7 @@ import typer
 from rich.markup import escape
 from rich.table import Table
 
-from imunav._atomic import check_outputs, read_json, write_json
+from imunav._atomic import check_outputs, write_json
 from imunav.cli._console import make_console
 from imunav.cli._errors import fail
 from imunav.cli._lazy import lazy
@@ -43,7 +43,7 @@ def register(app: typer.Typer) -> None:
         no_fail: bool = typer.Option(False, "--no-fail", help="Exit 0 even when a [spec] check fails (the report "
                                      "still marks it)."),
     ) -> None:
-        check_outputs([config], [json_out])
+        check_outputs([config], [json_out], run_folders=[out])
 
         console = make_console(stderr=True)
         try:
@@ -72,7 +72,7 @@ def register(app: typer.Typer) -> None:
             if s.error:
                 console.print(f"[red]{s.name} failed:[/red]\n{escape(s.error)}", soft_wrap=True, highlight=False)
         if json_out is not None:
-            write_json(json_out, read_json(Path(out) / "summary.json"))
+            write_json(json_out, result.to_dict())
         typer.echo(f"report: {Path(out) / 'index.html'}")
         if result.failed_steps:
             raise typer.Exit(1)

@@ -48,7 +48,11 @@ def register(app: typer.Typer) -> None:
         segments: Optional[Path] = typer.Option(None, "--segments", help="Segment table to write, .json or .csv (default <out stem>_segments.json)."),
         json_out: Optional[Path] = typer.Option(None, "--json", help="Also write a JSON summary here."),
     ) -> None:
-        check_outputs([model], [out, segments, json_out])
+        seg_path = segments if segments is not None else default_segments_path(out)
+        if segments is None and model is not None and seg_path.resolve() == model.expanduser().resolve():
+            raise InvalidInputError(f"the default segment table {seg_path} (named after --out) is the --model file "
+                                    f"{model}; give --segments another path, or another --out")
+        check_outputs([model], [out, seg_path, json_out])
 
         console = make_console(stderr=True)
         try:
@@ -66,6 +70,11 @@ def register(app: typer.Typer) -> None:
             f"wrote {summary['file']}: {summary['samples']} samples, {summary['duration_s']:.1f} s at "
             f"{summary['fs_hz']:g} Hz, {summary['segments']} ({summary['error_model']})"
         )
+
+
+def default_segments_path(out: Path) -> Path:
+    """The segment table written beside a recording when ``--segments`` is not given: ``<out stem>_segments.json``."""
+    return Path(out).with_name(Path(out).stem + "_segments.json")
 
 
 def run_simulate(
@@ -103,6 +112,9 @@ def run_simulate(
             g = float(gravity)
         except ValueError as exc:
             raise InvalidInputError(f"--gravity must be 'normal', 'constant' or a number in m/s^2, not {gravity!r}") from exc
+        if not (0 < g <= 100):  # NaN fails too
+            raise InvalidInputError(f"--gravity {gravity}: must be 'normal', 'constant' or a finite number in (0, 100] "
+                                    "(m/s^2)")
     if (earth_rate or g == "normal") and lat is None:
         raise InvalidInputError("Earth rate and normal gravity need --lat-deg (or use --no-earth-rate --gravity constant)")
     kw = {"lat": lat, "h": h_m}
@@ -130,7 +142,7 @@ def run_simulate(
         prog.advance(task)
         data = data.with_(meta={**dict(data.meta or {}), "profile": profile, "error_model": name, "seed": seed})
         path = io.write_imu(data, out)
-        seg_path = segments if segments is not None else Path(out).with_name(Path(out).stem + "_segments.json")
+        seg_path = segments if segments is not None else default_segments_path(out)
         prof.segments.write(seg_path)
         prog.advance(task)
     s = prof.summary()

@@ -156,7 +156,7 @@ def train_cmd(
     Example: imunav zupt train ../shared/data/foot/pyshoe_vicon --out zupt_lstm.npz
     """
 
-    check_outputs([], [out])  # before the long training
+    check_outputs([directory], [out])  # before the long training
     check_suffix(out, "--out", (".npz",), "the model (NumPy archive)")
 
     try:
@@ -211,7 +211,7 @@ def benchmark_cmd(
     Example: imunav zupt benchmark ../shared/data/foot/pyshoe_vicon --limit 3 --json zupt-bench.json
     """
 
-    check_outputs([model], [json_out])
+    check_outputs([directory, model], [json_out])
 
     files = sorted(directory.glob("*.mat"))[:limit]
     if not files:

@@ -6,6 +6,20 @@ column) and hands it to :func:`build_imu`, which applies the declared units,
 scales and offsets (:meth:`imunav.timeseries.ImuData.from_arrays`) and names the
 file in any validation error.  Every writer stores SI values plus a JSON
 header (:func:`header_json`) holding ``mag_unit`` and ``meta``.
+
+Declared units
+--------------
+Units declared in a file win and are applied, with the same rules in every
+format: the imunav header's ``units`` (CSV ``# imunav {...}`` line, HDF5 /
+Parquet / NPZ / MAT header), unit annotations in column names (``gx[deg/s]``,
+``gx (deg/s)``, ``t[ms]``: :func:`column_units`), and unit attributes (HDF5
+dataset ``unit`` / ``units`` attributes and the group's ``units`` JSON,
+Parquet field metadata ``unit``, MAT char variables ``units`` (JSON) or
+``<name>_unit``).  Every declared unit must be a known unit of its quantity
+(``deg/s`` for a gyro, not ``g``); two declarations of one group that
+disagree, or a reader option that contradicts a declaration, are errors
+(:class:`~imunav.errors.UnitError`) naming both.  A reader option only fills
+in the unit of a group the file does not declare.
 """
 
 from __future__ import annotations
@@ -13,6 +27,7 @@ from __future__ import annotations
 import inspect
 import json
 import os
+import re
 from collections.abc import Callable, Mapping
 from typing import Any
 
@@ -32,6 +47,9 @@ __all__ = [
     "find_array_names",
     "wrap_read_errors",
     "check_nonempty",
+    "check_unit",
+    "column_units",
+    "merge_declared",
 ]
 
 #: The channel groups of an :class:`ImuData`, in file order.
@@ -119,6 +137,148 @@ _QUANTITY_OF = {"t": "time", "gyro": "angular_rate", "accel": "acceleration", "m
                 "temp": "temperature"}
 
 
+_COUNTS = ("counts", "count", "lsb", "raw")
+
+
+def check_unit(unit: Any, group: str, where: str) -> str:
+    """A declared unit of ``group`` checked: a non-empty string that is a known unit of the group's quantity.
+
+    Parameters
+    ----------
+    unit : object
+        The declared unit.
+    group : str
+        ``"t"``, ``"gyro"``, ``"accel"``, ``"mag"`` or ``"temp"``.
+    where : str
+        Where it is declared (file and place), for the message.
+
+    Returns
+    -------
+    str
+        ``unit``, stripped.
+
+    Raises
+    ------
+    UnitError
+        If the unit is not a string, is empty, or is not a unit of the group's quantity (the message lists
+        the accepted spellings).
+    """
+    if not isinstance(unit, str) or not unit.strip():
+        raise UnitError(f"{where}: the unit of {group} must be a unit string such as "
+                        f"{SI_UNITS.get(group, 'uT')!r}, got {unit!r}")
+    u = re.sub(r"\s*s\^-1$", "/s", re.sub(r"\s*s\^-2$", "/s^2", unit.strip()))  # "rad s^-1" (EuRoC)
+    if normalize_unit(u) in _COUNTS:
+        return u
+    try:
+        unit_factor(u, _QUANTITY_OF[group])
+    except UnitError as e:
+        raise UnitError(f"{where}: {group} is declared in {u!r}, which is not a unit of {_QUANTITY_OF[group]}; "
+                        f"{e}") from None
+    return u
+
+
+_ANNOTATION = re.compile(r"^(?P<name>.*?)\s*(?:\[(?P<b>[^\]]*)\]|\((?P<p>[^)]*)\))\s*$")
+
+
+def column_units(cols: Mapping[str, Any], source: str,
+                 attributes: Mapping[str, Any] | None = None) -> dict[str, str]:
+    """Group units declared by the columns of a table: name annotations and per-column unit attributes.
+
+    Parameters
+    ----------
+    cols : mapping
+        Channel (``t``, ``gx`` ... ``temp``) -> column label.
+    source : str
+        The file, for messages.
+    attributes : mapping, optional
+        Column label -> unit attribute (e.g. Parquet field metadata ``unit``).
+
+    Returns
+    -------
+    dict
+        Group -> unit, for the groups whose columns declare one.
+
+    Raises
+    ------
+    UnitError
+        If a declared unit is empty, unknown or of another quantity, if the columns of one group declare
+        different units, or some declare one and others none.
+    """
+    group_of = {"t": "t", "temp": "temp", **{f"{g}{a}": n for g, n in (("g", "gyro"), ("a", "accel"), ("m", "mag"))
+                                             for a in "xyz"}}
+    per: dict[str, dict[Any, str | None]] = {}
+    for ch, label in cols.items():
+        g = group_of.get(ch)
+        if g is None:
+            continue
+        unit = None
+        m = _ANNOTATION.match(str(label))
+        if m is not None and m.group("name"):
+            unit = m.group("b") if m.group("b") is not None else m.group("p")
+            # an index (``gyro_rad[0]``, PX4) is not a unit
+            unit = None if unit.strip().isdigit() else check_unit(unit, g, f"{source}: column {label!r}")
+        attr = (attributes or {}).get(label)
+        if attr is not None:
+            attr = check_unit(attr, g, f"{source}: the unit attribute of column {label!r}")
+            if unit is not None and not _same_unit(unit, attr, g):
+                raise UnitError(f"{source}: column {label!r} says {unit!r} in its name but {attr!r} in its unit "
+                                "attribute; fix one of them")
+            unit = unit or attr
+        per.setdefault(g, {})[label] = unit
+    out: dict[str, str] = {}
+    for g, units in per.items():
+        given = {lab: u for lab, u in units.items() if u is not None}
+        if not given:
+            continue
+        first_label, first = next(iter(given.items()))
+        for lab, u in units.items():
+            if u is None or not _same_unit(first, u, g):
+                raise UnitError(f"{source}: the {g} columns declare different units ({first_label!r}: {first!r}, "
+                                f"{lab!r}: {u!r}); declare one unit for all of them")
+        out[g] = first
+    return out
+
+
+def merge_declared(source: str, *declarations: tuple[str, Any]) -> dict[str, str]:
+    """The units a file declares, from several places (header, names, attributes), checked and merged.
+
+    Parameters
+    ----------
+    source : str
+        The file, for messages.
+    *declarations : tuple of (str, mapping or None)
+        ``(where, {group: unit})`` for each place that declares units (None: that place declares none).
+
+    Returns
+    -------
+    dict
+        Group -> unit.
+
+    Raises
+    ------
+    UnitError
+        If a unit is empty, unknown or of another quantity, or two places declare different units for one group.
+    FileFormatError
+        If a declaration is not a mapping of groups to units.
+    """
+    out: dict[str, tuple[str, str]] = {}
+    for where, decl in declarations:
+        if decl is None:
+            continue
+        if not isinstance(decl, Mapping):
+            raise FileFormatError(f"{source}: {where} must map groups to unit strings, got {decl!r}")
+        for k, v in decl.items():
+            g = {"time": "t", "acc": "accel", "gyr": "gyro", "temperature": "temp"}.get(k, k)
+            if g not in _QUANTITY_OF:
+                continue  # units of other data (e.g. position) are not ours to check
+            u = check_unit(v, g, f"{source}: {where}")
+            if g in out and not _same_unit(out[g][1], u, g):
+                raise UnitError(f"{source}: {out[g][0]} declares {g} in {out[g][1]!r} but {where} says {u!r}; "
+                                "the file contradicts itself: fix one of them")
+            out.setdefault(g, (where, u))
+    return {g: u for g, (_, u) in out.items()}
+
+
 def _same_unit(a: str, b: str, group: str) -> bool:
     q = _QUANTITY_OF.get(group)
     raw = normalize_unit(b) in ("counts", "count", "lsb", "raw")
@@ -154,6 +314,7 @@ def build_imu(
     source: str,
     *,
     stored: Mapping[str, Any] | None = None,
+    declared: Mapping[str, str] | None = None,
     units: Mapping[str, str] | None = None,
     scales: Mapping[str, float] | None = None,
     offsets: Mapping[str, float] | None = None,
@@ -169,7 +330,10 @@ def build_imu(
     ``mag`` / ``temp``.  ``units``/``scales``/``offsets`` are keyed by group
     (``"t"``, ``"gyro"``, ``"accel"``, ``"mag"``); raw counts are declared as
     ``units={"gyro": "counts"}, scales={"gyro": <rad/s per count>}``.  ``mag``
-    stays in its unit (``mag_unit``), optionally scaled from counts.
+    stays in its unit (``mag_unit``), optionally scaled from counts.  Units the
+    file declares (``stored["units"]``, the imunav header, and ``declared``, from
+    column names and attributes: module docstring) win and are applied; an option
+    only fills in an undeclared group.
     """
     stored = dict(stored or {})
     u = _group_option(units, "units")
@@ -178,7 +342,10 @@ def build_imu(
     for k, v in u.items():
         if not isinstance(v, str):
             raise UnitError(f"units[{k!r}] must be a unit string such as 'deg/s', got {v!r}")
-    _check_declared_units(stored.get("units"), u, source)
+    decl = merge_declared(source, ("the imunav header", stored.get("units")),
+                          ("the column names / unit attributes", declared))
+    _check_declared_units(decl, u, source)
+    u = {**u, **decl}  # the file's declaration wins (and is applied)
     for k in sc:
         if k == "t":
             raise InvalidInputError("scales['t'] is not supported; declare the time unit with units={'t': 'ms'}")
@@ -214,7 +381,7 @@ def build_imu(
         elif mu is not None and mag_unit is None:
             mag_unit = mu
     tp = arrays.get("temp")
-    if tp is not None and u.get("temp") not in (None, "degC", "degc", "C", "°C", "c"):
+    if tp is not None and u.get("temp") is not None and normalize_unit(u["temp"]) not in ("degc", "c", "°c"):
         raise UnitError(f"{source}: temperature must be in degC (°C); got units['temp']={u['temp']!r}")
     out_meta = dict(stored.get("meta") or {})
     if arrays.get("t_origin") is not None:

@@ -3,7 +3,8 @@
 Reading
 -------
 Columns are found by name (case-insensitive, ignoring ``_``, spaces, dots and
-unit annotations such as ``[deg/s]``): ``t``/``time``/``timestamp``,
+unit annotations such as ``[deg/s]``; an annotation declares the unit of its
+column and is applied, :mod:`imunav.io._common`): ``t``/``time``/``timestamp``,
 ``gyro_x``/``gyr_x``/``gx``/``wx``, ``accel_x``/``acc_x``/``ax``,
 ``mag_x``/``mx``, ``temp``/``temperature``.  Any other naming is mapped
 explicitly with ``columns={"t": "time_s", "gx": "GyrX", ...}`` (channel keys
@@ -37,7 +38,7 @@ import pandas as pd
 
 from imunav.errors import FileFormatError, InvalidInputError
 from imunav.io._atomic import atomic_path
-from imunav.io._common import build_imu, check_nonempty, header_json, parse_header, wrap_read_errors
+from imunav.io._common import build_imu, check_nonempty, column_units, header_json, parse_header, wrap_read_errors
 from imunav.timeseries import ImuData
 
 __all__ = ["read_csv", "write_csv", "CHANNELS", "DEFAULT_NAMES", "resolve_columns"]
@@ -409,7 +410,7 @@ def read_csv(
     cols = resolve_columns(list(df.columns), columns, source)
     arrays = table_to_arrays(df, cols, source)
     return build_imu(
-        arrays, source, stored=stored, units=units, scales=scales, offsets=offsets, fs=fs, t0=t0,
+        arrays, source, stored=stored, declared=column_units(cols, source), units=units, scales=scales, offsets=offsets, fs=fs, t0=t0,
         nan_policy=nan_policy, mag_unit=mag_unit, meta=meta,
     )  # fmt: skip
 

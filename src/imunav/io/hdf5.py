@@ -7,7 +7,9 @@ all float64 SI; attributes ``units`` (JSON: unit of each dataset),
 finds datasets by name (``t``/``time``, ``gyro``/``gyr``/``imu_gyr``,
 ``accel``/``acc``/``imu_acc``, ``mag``, ``temp``, or a scalar ``fs``) or by an
 explicit ``columns={"gyro": "imu/gyr"}`` mapping; ``units`` / ``scales``
-declare non-SI content as in the CSV reader.
+declare non-SI content as in the CSV reader.  Unit attributes (a dataset's
+``unit`` / ``units``, the group's ``units`` JSON) declare the units of the
+file and are applied (:mod:`imunav.io._common`).
 """
 
 from __future__ import annotations
@@ -29,12 +31,19 @@ from imunav.io._common import (
     check_nonempty,
     find_array_names,
     header_json,
+    merge_declared,
     parse_header,
     wrap_read_errors,
 )
 from imunav.timeseries import ImuData
 
 __all__ = ["read_hdf5", "write_hdf5"]
+
+
+def _text(v: Any) -> Any:
+    """An HDF5 string attribute as text (bytes and 0-d arrays unpacked)."""
+    v = v.item() if isinstance(v, np.ndarray) and v.ndim == 0 else v
+    return v.decode("utf-8", errors="replace") if isinstance(v, bytes) else v
 
 
 def _datasets(group: h5py.Group) -> list[str]:
@@ -110,10 +119,19 @@ def read_hdf5(
         found = find_array_names(names, columns, source, kind="dataset")
         stored = parse_header(g.attrs.get("imunav"), source)
         arrays: dict[str, Any] = {}
+        attrs: dict[str, Any] = {}
         for key, name in found.items():
             arrays[key] = np.asarray(g[name][()])
+            for a in ("unit", "units"):
+                if a in g[name].attrs and key != "fs":
+                    attrs[key] = _text(g[name].attrs[a])
+        group_units = g.attrs.get("units")
+        group_units = None if group_units is None else parse_header(_text(group_units), f"{source} (units attribute)")
     return build_imu(
-        arrays, source, stored=stored, units=units, scales=scales, offsets=offsets, fs=fs, t0=t0,
+        arrays, source, stored=stored,
+        declared=merge_declared(source, ("the units attribute of the group", group_units or None),
+                                ("the unit attributes of the datasets", attrs)),
+        units=units, scales=scales, offsets=offsets, fs=fs, t0=t0,
         nan_policy=nan_policy, mag_unit=mag_unit, meta=meta,
     )  # fmt: skip
 

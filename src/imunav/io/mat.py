@@ -16,7 +16,9 @@ chars are uint16 code units with ``MATLAB_int_decode = 2``).
 Reading detects the version from the file header; variables are found by
 name (``t``/``time``, ``gyro``/``gyr``/``imu_gyr``, ``accel``/``acc``/
 ``imu_acc``, ``mag``/``imu_mag``, ``temp``, scalar ``fs`` / ``rate``) or an
-explicit ``columns`` mapping.
+explicit ``columns`` mapping.  Char variables ``units`` (JSON: group -> unit)
+and ``<name>_unit`` (e.g. ``gyro_unit = 'deg/s'``) declare the units of the
+file and are applied (:mod:`imunav.io._common`).
 """
 
 from __future__ import annotations
@@ -33,7 +35,15 @@ import scipy.io
 
 from imunav.errors import FileFormatError, InvalidInputError
 from imunav.io._atomic import atomic_path
-from imunav.io._common import build_imu, check_nonempty, find_array_names, header_json, parse_header, wrap_read_errors
+from imunav.io._common import (
+    build_imu,
+    check_nonempty,
+    find_array_names,
+    header_json,
+    merge_declared,
+    parse_header,
+    wrap_read_errors,
+)
 from imunav.timeseries import ImuData
 
 __all__ = ["read_mat", "write_mat", "mat_version"]
@@ -181,8 +191,13 @@ def read_mat(
     stored = parse_header(strings.get("imunav_meta"), source)
     if "mag_unit" in strings and not stored:
         stored = {"mag_unit": strings["mag_unit"]}
+    per_var = {key: strings[f"{name}_unit"] for key, name in found.items() if f"{name}_unit" in strings}
+    units_var = parse_header(strings["units"], f"{source} (variable 'units')") if "units" in strings else None
     return build_imu(
-        arrays, source, stored=stored, units=units, scales=scales, offsets=offsets, fs=fs, t0=t0,
+        arrays, source, stored=stored,
+        declared=merge_declared(source, ("the variable 'units'", units_var),
+                                ("the <name>_unit variables", per_var)),
+        units=units, scales=scales, offsets=offsets, fs=fs, t0=t0,
         nan_policy=nan_policy, mag_unit=mag_unit, meta=meta,
     )  # fmt: skip
 

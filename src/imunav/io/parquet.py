@@ -18,7 +18,7 @@ import numpy as np
 
 from imunav.errors import FileFormatError, MissingDependencyError
 from imunav.io._atomic import atomic_path
-from imunav.io._common import build_imu, check_nonempty, header_json, parse_header, wrap_read_errors
+from imunav.io._common import build_imu, check_nonempty, column_units, header_json, parse_header, wrap_read_errors
 from imunav.io.csv import imu_to_table, resolve_columns, table_to_arrays
 from imunav.timeseries import ImuData
 
@@ -101,8 +101,13 @@ def read_parquet(
         df = table.to_pandas()
     cols = resolve_columns(list(df.columns), columns, source)
     arrays = table_to_arrays(df, cols, source)
+    attrs = {}
+    for f in table.schema:
+        unit = (f.metadata or {}).get(b"unit", (f.metadata or {}).get(b"units"))
+        if unit is not None:
+            attrs[f.name] = unit.decode("utf-8", errors="replace")
     return build_imu(
-        arrays, source, stored=stored, units=units, scales=scales, offsets=offsets, fs=fs, t0=t0,
+        arrays, source, stored=stored, declared=column_units(cols, source, attrs), units=units, scales=scales, offsets=offsets, fs=fs, t0=t0,
         nan_policy=nan_policy, mag_unit=mag_unit, meta=meta,
     )  # fmt: skip
 

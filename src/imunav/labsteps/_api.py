@@ -18,7 +18,7 @@ from typing import Any
 
 import numpy as np
 
-from imunav._atomic import jsonable
+from imunav._atomic import claim_run_file, jsonable
 from imunav.errors import ConfigError
 from imunav.results import Result
 
@@ -186,10 +186,12 @@ class LabContext:
         Returns
         -------
         pathlib.Path
-            ``out_dir / parts...``; its parent folder exists.
+            ``out_dir / parts...``; its parent folder exists, and the path is recorded as the run's
+            (:func:`imunav._atomic.claim_run_file`: a failed or killed lab's folder knows it).
         """
         p = self.out_dir.joinpath(*parts)
         p.parent.mkdir(parents=True, exist_ok=True)
+        claim_run_file(p)
         return p
 
     @contextlib.contextmanager

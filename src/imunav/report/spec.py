@@ -18,6 +18,7 @@ the limits too, so that a pass is a statement with confidence.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
@@ -116,6 +117,8 @@ def _conv(v: Any, unit: str, where: str) -> float:
         x = float(v)
     except (TypeError, ValueError) as e:
         raise ConfigError(f"{where}: limit {v!r} is not a number") from e
+    if isinstance(v, bool) or not math.isfinite(x):
+        raise ValueError(f"limit {v!r} is not a finite number")
     if unit in ("", "si", "SI"):
         return x
     if unit == "abs_ppm":

@@ -52,6 +52,7 @@ from imunav.units import DEG
 __all__ = [
     "Profile",
     "Segments",
+    "read_segments",
     "static_profile",
     "multiposition_profile",
     "orientations_from_up",
@@ -272,22 +273,7 @@ class Segments(EulerMixin):
         FileFormatError
             If the file is not a segment table (not valid JSON / CSV, a column missing).
         """
-        p = Path(path)
-        if p.suffix.lower() == ".csv":
-            return cls._read_csv(p)
-        d = read_json(p, "segment table JSON (imunav simulate --segments, Segments.write or Profile.to_dict())")
-        if isinstance(d, dict):
-            d = d.get("segment_table", d)
-        if not isinstance(d, dict):
-            raise FileFormatError(f"{p}: a segment table JSON is an object with the columns of Segments")
-        try:
-            # strict JSON writes NaN (the rate of a transition) as null: float columns read it back as NaN
-            types = {"kind": str, "step": np.int64, "i_start": np.int64, "i_stop": np.int64}
-            return cls(**{k: np.asarray(d[k], dtype=types.get(k, float)) for k in cls.__dataclass_fields__})
-        except KeyError as e:
-            raise FileFormatError(f"{p}: segment table lacks the column {e} (write it with Segments.write)") from None
-        except (TypeError, ValueError) as e:
-            raise FileFormatError(f"{p}: segment table with a non-numeric value ({e})") from None
+        return read_segments(path)
 
     @classmethod
     def _read_csv(cls, p: Path) -> "Segments":
@@ -326,6 +312,67 @@ class Segments(EulerMixin):
         d = self.to_dict()
         return [{k: d[k][i] for k in d} for i in range(len(self))]
 
+
+
+def _nulls_to_nan(v: object) -> object:
+    if isinstance(v, list):
+        return [_nulls_to_nan(x) for x in v]
+    return np.nan if v is None else v
+
+
+def read_segments(path: str | os.PathLike[str]) -> Segments:
+    """Read a segment table: a CSV of :meth:`Segments.write_csv`, or a JSON (:meth:`Segments.to_dict`, or a
+    profile's ``to_dict`` with ``segment_table``); the one reader behind :meth:`Segments.read`.
+
+    A JSON is checked against its schema before use: an object whose columns are the fields of
+    :class:`Segments`, ``kind`` text, every other column numbers (null read as NaN), all of one length.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The ``.csv`` or JSON file.
+
+    Returns
+    -------
+    Segments
+        The table.
+
+    Raises
+    ------
+    FileFormatError
+        Naming the file and the column, for text that is not JSON (a truncated file), a document that is not
+        an object, a missing column, a column of the wrong type or length.
+    """
+    if Path(path).suffix.lower() == ".csv":
+        return Segments._read_csv(Path(path))
+    d = read_json(path, "segment table JSON (write it with Profile.to_dict() / Segments.to_dict())")
+    if isinstance(d, dict):
+        d = d.get("segment_table", d)
+    if not isinstance(d, dict):
+        raise FileFormatError(f"{path}: a segment table JSON is an object with the columns of Segments "
+                              f"({', '.join(f.name for f in fields(Segments))}), not {type(d).__name__}")
+    cols = {}
+    for f in fields(Segments):
+        if f.name not in d:
+            raise FileFormatError(f"{path}: segment table lacks the column {f.name!r} (write it with Profile.to_dict())")
+        v = d[f.name]
+        if f.name == "kind":
+            a = np.asarray(v)
+            ok = a.dtype.kind in "US" and a.ndim == 1
+        else:  # numbers; null is a NaN (strict JSON has no NaN token)
+            a = np.asarray(_nulls_to_nan(v))
+            ok = a.dtype.kind in "fiu" and a.ndim >= 1
+        if not ok:
+            raise FileFormatError(f"{path}: segment table column {f.name!r} must be a list of "
+                                  f"{'names' if f.name == 'kind' else 'numbers (or null)'}, got {v!r:.80}")
+        cols[f.name] = a
+    lengths = {k: len(v) for k, v in cols.items()}
+    if len(set(lengths.values())) > 1:
+        raise FileFormatError(f"{path}: segment table columns differ in length {lengths}; the file is damaged")
+    try:
+        return Segments(**cols)
+    except (InvalidInputError, ValueError) as e:
+        raise FileFormatError(f"{path}: not a valid segment table ({e})") from None
 
 @dataclass(frozen=True)
 class Profile:

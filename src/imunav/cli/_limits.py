@@ -1,0 +1,195 @@
+"""Limits before work: the memory and time a request needs, estimated from its options, checked first.
+
+A command whose options ask for far more than the machine can give (``simulate
+--duration 1e12``, ``noise --taus log:1000000000``, ``attitude montecarlo --runs
+100000000``) is refused before any work with the estimate, unless ``--force``:
+
+``error: simulate static --duration 1e+12 s at --fs 100 Hz: about 1e+14 samples, 45 PiB of memory and 16 years
+on the reference machine (24 GiB, 2 cores); reduce the request, or pass --force to run it anyway``
+
+The estimates are deliberately rough (an order of magnitude): bytes and seconds per sample
+measured on the reference machine, times the number of samples, runs and terms the options
+ask for.  A request is refused when it needs more memory than :data:`MEMORY` or more time than
+:data:`TIME` (both far beyond what any test or README example asks).  :data:`ESTIMATORS` maps a
+command path to its estimator; every command listed there has a ``--force`` option
+(:func:`imunav.cli._errors.install_checks` adds one where the command has none).
+"""
+
+from __future__ import annotations
+
+import math
+import os
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass
+from typing import Any
+
+from imunav.errors import InvalidInputError
+
+__all__ = ["ESTIMATORS", "Estimate", "MEMORY", "TIME", "check_limits"]
+
+#: The reference machine: memory (bytes) and cores.
+MACHINE_MEMORY = 24 * 2**30
+MACHINE_CORES = 2
+#: Refused above: the machine's memory, or 12 hours on its cores.
+MEMORY = MACHINE_MEMORY
+TIME = 12 * 3600.0
+
+
+@dataclass(frozen=True)
+class Estimate:
+    """What a request needs.
+
+    Attributes
+    ----------
+    what : str
+        The request in words (options and the counts derived from them).
+    bytes : float
+        Peak memory, bytes.
+    seconds : float
+        Wall time on the reference machine, s.
+    """
+
+    what: str
+    bytes: float
+    seconds: float
+
+
+def _size(b: float) -> str:
+    for unit in ("B", "KiB", "MiB", "GiB", "TiB", "PiB", "EiB"):
+        if b < 1024 or unit == "EiB":
+            return f"{b:.3g} {unit}"
+        b /= 1024
+    return f"{b:.3g} EiB"
+
+
+def _time(s: float) -> str:
+    for unit, k in (("years", 365.25 * 86400), ("days", 86400), ("hours", 3600), ("minutes", 60)):
+        if s >= k:
+            return f"{s / k:.3g} {unit}"
+    return f"{s:.3g} s"
+
+
+# bytes and seconds per sample (measured orders of magnitude on the reference machine)
+_SIM_BYTES, _SIM_SECONDS = 600.0, 4e-6  # trajectory + sensor model + recording, per IMU sample
+_INS_BYTES, _INS_SECONDS = 4000.0, 3e-5  # GNSS/INS: states, covariance, outputs per epoch
+_ATT_BYTES, _ATT_SECONDS = 400.0, 3e-6  # attitude filter, per sample and filter
+_POSITIONS = {"static": 0, "multiposition": 100, "ratetable": 120, "sixposition": 6, "ferraris": 8}
+
+
+def _simulate(v: Mapping[str, Any]) -> Estimate | None:
+    prof = v.get("profile")
+    fs = float(v.get("fs") or 0)
+    if prof == "static":
+        seconds = float(v.get("duration") or 0)
+    else:
+        seconds = _POSITIONS.get(prof, 120) * (float(v.get("dwell") or 0) + float(v.get("transition") or 0))
+    n = fs * seconds
+    return Estimate(f"simulate {prof}: {seconds:.3g} s at --fs {fs:g} Hz = {n:.3g} samples",
+                    n * _SIM_BYTES, n * _SIM_SECONDS)
+
+
+def _batch_simulate(v: Mapping[str, Any]) -> Estimate | None:
+    units = int(v.get("n_units") or 0)
+    fs = float(v.get("fs") or 0)
+    if v.get("static"):
+        seconds = float(v["static"])
+    else:
+        steps = 100 + (120 if v.get("rate_table") else 0)
+        seconds = steps * (float(v.get("dwell") or 0) + float(v.get("transition") or 0))
+    n = fs * seconds
+    workers = max(1, min(units, int(v.get("workers") or MACHINE_CORES)))
+    return Estimate(f"batch simulate: {units} units x {seconds:.3g} s at --fs {fs:g} Hz = {units * n:.3g} samples",
+                    workers * n * _SIM_BYTES, units * n * _SIM_SECONDS / min(workers, MACHINE_CORES))
+
+
+def _gins(v: Mapping[str, Any]) -> Estimate | None:
+    if v.get("duration") is None or v.get("fs") is None:
+        return None
+    n = float(v["duration"]) * float(v["fs"])
+    return Estimate(f"{v['duration']:g} s at --fs {v['fs']:g} Hz = {n:.3g} epochs", n * _INS_BYTES, n * _INS_SECONDS)
+
+
+def _attitude_mc(v: Mapping[str, Any]) -> Estimate | None:
+    runs = int(v.get("runs") or 0)
+    n = float(v.get("duration") or 0) * 100.0  # the paper's scenario runs at 100 Hz
+    k = max(1, len([f for f in str(v.get("filters") or "x").split(",") if f.strip()]))
+    return Estimate(f"attitude montecarlo: {runs} runs x {n:.3g} samples x {k} filters",
+                    min(runs, 64) * n * _ATT_BYTES * k, runs * n * k * _ATT_SECONDS / MACHINE_CORES)
+
+
+def _airdata_simulate(v: Mapping[str, Any]) -> Estimate | None:
+    n = float(v.get("duration") or 0) * (float(v.get("rate_ads") or 0) + float(v.get("rate_doppler") or 0))
+    return Estimate(f"airdata simulate: {n:.3g} samples", n * _SIM_BYTES, n * _SIM_SECONDS)
+
+
+def _airdata_runs(seconds_per_run: float) -> Callable[[Mapping[str, Any]], Estimate | None]:
+    def est(v: Mapping[str, Any]) -> Estimate | None:
+        runs = int(v.get("runs") or 0)
+        return Estimate(f"{runs} Monte Carlo runs", 1e6 + runs * 1e3, runs * seconds_per_run)
+
+    return est
+
+
+def _noise(v: Mapping[str, Any]) -> Estimate | None:
+    spec = str(v.get("taus") or "")
+    if not spec.startswith("log:") or not spec[4:].strip().isdigit():
+        return None
+    n_tau = int(spec[4:].strip())
+    try:
+        size = os.stat(v["file"]).st_size
+    except (OSError, KeyError, TypeError):
+        size = 0
+    samples = max(size / 8.0, 1.0)  # at most one sample per 8 bytes of file
+    return Estimate(f"noise --taus {spec}: {n_tau:.3g} averaging times", n_tau * 6 * 8 * 16.0,
+                    n_tau * 6 * min(samples, 1e7) * 1e-9)
+
+
+#: command path -> estimator of its request (None: nothing to estimate for these options).
+ESTIMATORS: dict[str, Callable[[Mapping[str, Any]], Estimate | None]] = {
+    "simulate": _simulate,
+    "batch simulate": _batch_simulate,
+    "gins simulate": _gins,
+    "gins outage-test": _gins,
+    "attitude montecarlo": _attitude_mc,
+    "airdata simulate": _airdata_simulate,
+    "airdata faults": _airdata_runs(2e-3),
+    "airdata thesis": _airdata_runs(5e-2),
+    "noise": _noise,
+}
+
+
+def check_limits(command_path: str, values: Mapping[str, Any]) -> Estimate | None:
+    """Refuse a request that needs far more memory or time than the reference machine has.
+
+    Parameters
+    ----------
+    command_path : str
+        The command's words after ``imunav``.
+    values : mapping
+        Parameter name -> parsed value; ``force`` True skips the refusal.
+
+    Returns
+    -------
+    Estimate or None
+        The estimate (None for a command without an estimator).
+
+    Raises
+    ------
+    InvalidInputError
+        With the estimate, when the request is beyond :data:`MEMORY` or :data:`TIME` and ``force`` is not set.
+    """
+    fn = ESTIMATORS.get(command_path)
+    if fn is None:
+        return None
+    try:
+        est = fn(values)
+    except (TypeError, ValueError, OverflowError):
+        return None
+    if est is None or values.get("force"):
+        return est
+    what = est.what if est.what.startswith(command_path) else f"{command_path}: {est.what}"
+    if not (est.bytes <= MEMORY and est.seconds <= TIME) or not (math.isfinite(est.bytes) and math.isfinite(est.seconds)):
+        raise InvalidInputError(
+            f"{what}: about {_size(est.bytes)} of memory and {_time(est.seconds)} on the reference machine "
+            f"({_size(MACHINE_MEMORY)}, {MACHINE_CORES} cores); reduce the request, or pass --force to run it anyway")
+    return est
