@@ -16,6 +16,7 @@ import typer
 
 from imunav._atomic import check_outputs, write_json
 from imunav.cli._lazy import lazy
+from imunav.cli._progress import progress
 from imunav.errors import ConfigError, InvalidInputError
 
 if TYPE_CHECKING:
@@ -136,6 +137,7 @@ def run_cmd(
                                                                                 "the IMU, vehicle FRD, m: 'x,y,z'."),
     preset: str = typer.Option("consumer_mems", "--preset", help="With a log: the IMU error preset whose noise "
                                                                  "model the filter uses."),
+    quiet: bool = typer.Option(False, "--quiet", "-q", help="No progress bar."),
 ) -> None:
     """Run the GNSS/INS filter on a robot's or a drone's log (ROS 1 bag, ROS 2 bag folder, PX4 ULog), on a KF-GINS
     YAML, or on IMU and GNSS files with a TOML; write KF-GINS's outputs (.nav, IMU errors, state sigma),
@@ -155,11 +157,17 @@ def run_cmd(
             raise ConfigError("give --out DIR, the folder for the results")
         outs = [*outputs.run_output_paths(out, smoother=smoother, plots=plots).values(), out / outputs.LOG_FILES["geojson"]]
         check_outputs([imu], outs)
-        sources = navlog.read_nav_sources(imu, imu_topic=imu_topic, gnss_topic=gnss_topic, odo_topic=odo_topic,
-                                   mag_topic=mag_topic, baro_topic=baro_topic)
         opts = logrun.LogRunOptions(preset=preset, mounting=logrun.parse_rotation(imu_rotation, "--imu-rotation"),
-                             gnss_lever_arm=logrun.parse_vector(gnss_lever_arm, "--gnss-lever-arm"), smoother=smoother)
-        summary = outputs.write_log_outputs(out, logrun.run_log(sources, opts), sources, plots=plots)
+                                    gnss_lever_arm=logrun.parse_vector(gnss_lever_arm, "--gnss-lever-arm"),
+                                    smoother=smoother)
+        with progress("gins run: read / filter / write", quiet=quiet, total=3) as report:
+            sources = navlog.read_nav_sources(imu, imu_topic=imu_topic, gnss_topic=gnss_topic, odo_topic=odo_topic,
+                                              mag_topic=mag_topic, baro_topic=baro_topic)
+            report(1, 3)
+            run = logrun.run_log(sources, opts)
+            report(2, 3)
+            summary = outputs.write_log_outputs(out, run, sources, plots=plots)
+            report(3, 3)
         _say_no_matplotlib(plots)
         m = summary["mounting"]
         line = (f"{summary['imu_samples']} IMU samples, {summary.get('gnss_used', 0)} GNSS fixes used -> {out}; "
@@ -183,7 +191,9 @@ def run_cmd(
         raise ConfigError("give --out DIR, the folder for the results")
     outs = outputs.run_output_paths(folder, smoother=smoother, plots=plots, truth=ref is not None)
     check_outputs([*inputs.paths.values(), truth], outs.values())
-    res = _run_filter(inputs, setup, smoother=smoother)
+    with progress("gins run: filter", quiet=quiet, total=1) as report:
+        res = _run_filter(inputs, setup, smoother=smoother)
+        report(1, 1)
     summary = outputs.write_run_outputs(
         folder, res, setup, gnss=inputs.gnss, truth=ref, plots=plots,
         extra={"config": str(config) if config is not None else None,
@@ -229,6 +239,7 @@ def outage_cmd(
     shifts: str = typer.Option("0,60,120", "--shifts", help="Start shifts of the first outage, s (one run each)."),
     states: Optional[int] = _STATES_OPT,
     plots: bool = typer.Option(True, "--plots/--no-plots", help="Write the outage drift figure."),
+    quiet: bool = typer.Option(False, "--quiet", "-q", help="No progress bar."),
 ) -> None:
     """The KF-GINS paper's outage protocol: after convergence a GNSS outage every period, one run per start shift;
     RMS over outages of the largest horizontal / vertical / 3-D drift and roll / pitch / heading errors, and the
@@ -271,8 +282,10 @@ def outage_cmd(
     json_path = out / OUTAGE_NAME
     figs = [out / gins_plot.FIGURE_NAMES["outage"]] if plots else []
     check_outputs(in_paths, [json_path, *figs])
-    rep = outage.outage_test(data, fixes, setup.config, traj, lla0=setup.lla0, vel0=setup.vel0, q0=setup.q0,
-                      converge_s=converge, every_s=every, length_s=length, shifts_s=sh, odometer=odometer)
+    with progress("gins outage-test: one run per shift", quiet=quiet, total=len(sh)) as report:
+        rep = outage.outage_test(data, fixes, setup.config, traj, lla0=setup.lla0, vel0=setup.vel0, q0=setup.q0,
+                                 converge_s=converge, every_s=every, length_s=length, shifts_s=sh, odometer=odometer,
+                                 progress=report)
     rms = rep.rms()
     doc = outputs.outage_document(rep, source=source, states=setup.config.n_states)
     if plots:

@@ -139,7 +139,8 @@ def outage_drift(res: GinsResult, truth: Any, outages: list[tuple[float, float]]
 
 def outage_test(imu: ImuData, gnss: GnssData, config: GinsConfig, truth: Any, *, lla0: Any, vel0: Any, q0: Any,
                 converge_s: float = 300.0, every_s: float = 180.0, length_s: float = 60.0,
-                shifts_s: tuple[float, ...] = (0.0, 60.0, 120.0), odometer: Any = None) -> OutageReport:
+                shifts_s: tuple[float, ...] = (0.0, 60.0, 120.0), odometer: Any = None,
+                progress: Any = None) -> OutageReport:
     """The KF-GINS outage protocol: one run per shift with the scheduled outages removed from ``gnss``.
 
     Parameters
@@ -156,6 +157,8 @@ def outage_test(imu: ImuData, gnss: GnssData, config: GinsConfig, truth: Any, *,
         Shifts of the first outage, s; one filter run per shift.
     odometer : OdometerData, optional
         Wheel speeds for :meth:`~imunav.ins.gins.GinsFilter.run` (kept through the outages), or None.
+    progress : callable, optional
+        ``progress(done, total)`` after each shift's run.
 
     Returns
     -------
@@ -169,7 +172,7 @@ def outage_test(imu: ImuData, gnss: GnssData, config: GinsConfig, truth: Any, *,
     """
     t0, t1 = float(imu.t[0]), float(imu.t[-1])
     reports = []
-    for sh in shifts_s:
+    for i, sh in enumerate(shifts_s):
         sched = outage_schedule(t0 + converge_s, t1, every_s=every_s, length_s=length_s, first_s=sh)
         if not sched:
             raise InvalidInputError(f"no {length_s:g} s outage fits after {converge_s:g} s of convergence "
@@ -180,10 +183,13 @@ def outage_test(imu: ImuData, gnss: GnssData, config: GinsConfig, truth: Any, *,
         res = GinsFilter(config).run(imu, gnss.select(keep, "outage protocol"), lla0=lla0, vel0=vel0, q0=q0,
                                      odometer=odometer)
         reports.append(outage_drift(res, truth, sched))
+        if progress is not None:
+            progress(i + 1, len(shifts_s))
     return OutageReport(
         [o for r in reports for o in r.outages],
         *(np.concatenate([getattr(r, k) for r in reports]) for k in ("horizontal_m", "vertical_m", "drift_3d_m",
                                                                     "roll_deg", "pitch_deg", "heading_deg",
                                                                     "contained")),
-        meta={"converge_s": converge_s, "every_s": every_s, "length_s": length_s, "shifts_s": list(shifts_s)},
+        meta={"converge_s": converge_s, "every_s": every_s, "length_s": length_s, "shifts_s": list(shifts_s),
+              "t0_s": t0},
     )

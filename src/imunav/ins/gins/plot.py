@@ -74,6 +74,11 @@ def plot_track(result: GinsResult | NavTrack, gnss: GnssData | None = None, trut
     if gnss is not None:
         g = earth.lla_to_ned(gnss.lla, origin)
         ax.plot(g[:, 1], g[:, 0], ".", ms=3, color="tab:orange", label=f"GNSS ({gnss.n} fixes)")
+        rec = getattr(result, "aids", {}).get("gnss_position")
+        if rec is not None and not rec.accepted.all():
+            bad = np.isin(np.round(gnss.t, 9), np.round(rec.t[~rec.accepted], 9))
+            ax.plot(g[bad, 1], g[bad, 0], "x", ms=6, color="tab:red",
+                    label=f"rejected by the χ² gate ({int(bad.sum())})")
     p = earth.lla_to_ned(nav.lla, origin)
     ax.plot(p[:, 1], p[:, 0], "-", lw=1, color="tab:blue", label="GNSS/INS")
     ax.plot(p[0, 1], p[0, 0], "go", label="start")
@@ -188,7 +193,8 @@ def plot_outage_drift(report: OutageReport) -> Any:
         The figure (not shown; save it with ``fig.savefig``).
     """
     plt = _plt()
-    start = np.array([s for s, _ in report.outages[:report.horizontal_m.size]])
+    t0 = float(report.meta.get("t0_s", 0.0))
+    start = np.array([s for s, _ in report.outages[:report.horizontal_m.size]]) - t0
     order = np.argsort(start, kind="stable")
     x = np.arange(start.size)
     fig, (a1, a2) = plt.subplots(2, 1, figsize=(9, 6), sharex=True)
@@ -207,7 +213,8 @@ def plot_outage_drift(report: OutageReport) -> Any:
     a2.bar(x, report.heading_deg[order], 0.6, color="tab:green")
     a2.set_ylabel("max heading error (deg)")
     a2.set_xticks(x, [f"{s:.0f}" for s in start[order]], rotation=60, fontsize=7)
-    a2.set_xlabel("outage start (s)")
+    a2.set_xlabel("outage start (s from the start of the recording)" if "t0_s" in report.meta else
+                  "outage start (s)")
     a2.grid(True, axis="y")
     length = report.meta.get("length_s")
     fig.suptitle(f"GNSS outages{f' of {length:g} s' if length else ''}: largest drift in each "
