@@ -294,6 +294,20 @@ ZuptKernelParams = namedtuple(
      "heading_hold", "sigma_heading", "coning", "level_floor", "sigma_floor"],
 )
 
+#: The recording a ZUPT EKF window runs over: times ``t`` (N,), specific force ``acc`` and rate ``gyr`` (N, 3),
+#: the stance flags ``zv`` and the ZARU mask ``zaru`` (N,) bool.
+ZuptInput = namedtuple("ZuptInput", ["t", "acc", "gyr", "zv", "zaru"])
+
+#: Per-sample outputs of a ZUPT EKF window (row 0 holds the state the window starts from): ``q`` (N, 4),
+#: ``v``, ``p``, ``ba``, ``bg`` (N, 3), the covariance diagonal ``Pd`` (N, nx), the ZUPT innovation ``innov`` and
+#: its variance ``svar`` (N, 3; NaN off stance).
+ZuptRows = namedtuple("ZuptRows", ["q", "v", "p", "ba", "bg", "Pd", "innov", "svar"])
+
+#: The state carried from one sample to the next (updated in place): the covariance ``P`` (nx, nx), the previous
+#: compensated increments ``dth_prev``, ``dv_prev`` (3,) (coning), the heading-hold reference ``q_ref`` (4,),
+#: ``stance`` (1,) bool (the previous sample was a stance) and the level-floor height ``floor_height`` (float).
+ZuptCarry = namedtuple("ZuptCarry", ["P", "dth_prev", "dv_prev", "q_ref", "stance", "floor_height"])
+
 
 @njit(cache=True)
 def _zupt_transition(Phi, Qd, C, dvn, h, prm):
@@ -333,8 +347,9 @@ def _zupt_transition(Phi, Qd, C, dvn, h, prm):
 
 
 @njit(cache=True)
-def zupt_ekf_kernel(t, acc, gyr, zv, zaru, q0, p0, v0, ba0, bg0, P0, prm):
-    """Run the error-state ZUPT EKF over a whole recording (``prm``: :data:`ZuptKernelParams`).
+def zupt_ekf_kernel(inp, q0, p0, v0, ba0, bg0, P0, prm):
+    """Run the error-state ZUPT EKF over a whole recording ``inp`` (:data:`ZuptInput`; ``prm``:
+    :data:`ZuptKernelParams`).
 
     Sample 0 carries the initial state; for k >= 1 the nominal state is
     propagated with sample k over t_k - t_{k-1} (:func:`imunav.filters._core.strapdown_step_local`), the
@@ -350,11 +365,11 @@ def zupt_ekf_kernel(t, acc, gyr, zv, zaru, q0, p0, v0, ba0, bg0, P0, prm):
     Level floor (``level_floor``): each stance sample measures the height as the
     initial height p0[2] (std sigma_floor).
 
-    The loop is :func:`zupt_ekf_window`; this wrapper allocates the outputs and the state carried
-    from sample to sample (``dth_prev, dv_prev, q_ref, stance``), which it returns after the outputs so that
+    The loop is :func:`zupt_ekf_window`; this wrapper allocates the outputs (:data:`ZuptRows`) and the state
+    carried from sample to sample (:data:`ZuptCarry`), which it returns after the outputs so that
     :meth:`imunav.ins.ZuptFilter.step` can go on from the last sample.
     """
-    n = t.shape[0]
+    n = inp.t.shape[0]
     nx = prm.nx
     q = np.empty((n, 4))
     v = np.empty((n, 3))
@@ -376,22 +391,28 @@ def zupt_ekf_kernel(t, acc, gyr, zv, zaru, q0, p0, v0, ba0, bg0, P0, prm):
     dv_prev = np.zeros(3)
     q_ref = q0.copy()
     stance = np.zeros(1, dtype=np.bool_)
-    zupt_ekf_window(t, acc, gyr, zv, zaru, q, v, p, ba, bg, Pd, innov, svar, P, dth_prev, dv_prev, q_ref, stance,
-                    p0[2], prm)
-    return q, v, p, ba, bg, Pd, innov, svar, P, dth_prev, dv_prev, q_ref, stance
+    rows = ZuptRows(q, v, p, ba, bg, Pd, innov, svar)
+    carry = ZuptCarry(P, dth_prev, dv_prev, q_ref, stance, p0[2])
+    zupt_ekf_window(inp, rows, carry, prm)
+    return rows, carry
 
 
 @njit(cache=True, inline="always")  # inlined into zupt_ekf_kernel: its arrays stay local there (speed)
-def zupt_ekf_window(t, acc, gyr, zv, zaru, q, v, p, ba, bg, Pd, innov, svar, P, dth_prev, dv_prev, q_ref, stance,
-                    floor_height, prm):
-    """The loop of :func:`zupt_ekf_kernel` over rows 1..n-1 of a window whose row 0 holds the state.
+def zupt_ekf_window(inp, rows, carry, prm):
+    """The loop of :func:`zupt_ekf_kernel` over rows 1..n-1 of a window ``inp`` (:data:`ZuptInput`) whose row 0
+    holds the state.
 
-    Writes rows 1..n-1 of the state arrays ``q, v, p, ba, bg``, ``Pd``, ``innov``, ``svar``; updates in place
-    the covariance ``P`` and the state carried from one sample to the next: the previous compensated
-    increments ``dth_prev``, ``dv_prev`` (coning), the heading-hold reference ``q_ref`` and
-    ``stance[0]`` (the previous sample was a stance).  ``floor_height`` is the level-floor height.
-    A window of 2 rows is one sample (:meth:`imunav.ins.ZuptFilter.step`).
+    Writes rows 1..n-1 of the arrays of ``rows`` (:data:`ZuptRows`: ``q, v, p, ba, bg``, ``Pd``, ``innov``,
+    ``svar``); updates in place the state ``carry`` (:data:`ZuptCarry`) carried from one sample to the next:
+    the covariance ``P``, the previous compensated increments ``dth_prev``, ``dv_prev`` (coning), the
+    heading-hold reference ``q_ref`` and ``stance[0]`` (the previous sample was a stance); its
+    ``floor_height`` is the level-floor height.  A window of 2 rows is one sample
+    (:meth:`imunav.ins.ZuptFilter.step`).
     """
+    t, acc, gyr, zv, zaru = inp.t, inp.acc, inp.gyr, inp.zv, inp.zaru
+    q, v, p, ba, bg, Pd, innov, svar = rows.q, rows.v, rows.p, rows.ba, rows.bg, rows.Pd, rows.innov, rows.svar
+    P, dth_prev, dv_prev, q_ref, stance = carry.P, carry.dth_prev, carry.dv_prev, carry.q_ref, carry.stance
+    floor_height = carry.floor_height
     n = t.shape[0]
     nx = prm.nx
     Phi = np.eye(nx)

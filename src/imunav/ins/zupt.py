@@ -573,10 +573,11 @@ class ZuptFilter:
         Pd = np.empty((2, nx))
         innov = np.full((2, 3), np.nan)
         svar = np.full((2, 3), np.nan)
-        _k.zupt_ekf_window(np.array([prev["t"], tk]), np.stack([prev["accel"], a]), np.stack([prev["gyro"], w]),
-                           np.array([False, bool(zv)]), np.array([False, bool(zaru)]), rows["q"], rows["v"],
-                           rows["p"], rows["ba"], rows["bg"], Pd, innov, svar, prev["P"], prev["dth"], prev["dv"],
-                           prev["q_ref"], prev["stance"], prev["floor"], prev["prm"])
+        inp = _k.ZuptInput(np.array([prev["t"], tk]), np.stack([prev["accel"], a]), np.stack([prev["gyro"], w]),
+                           np.array([False, bool(zv)]), np.array([False, bool(zaru)]))
+        out = _k.ZuptRows(rows["q"], rows["v"], rows["p"], rows["ba"], rows["bg"], Pd, innov, svar)
+        carry = _k.ZuptCarry(prev["P"], prev["dth"], prev["dv"], prev["q_ref"], prev["stance"], prev["floor"])
+        _k.zupt_ekf_window(inp, out, carry, prev["prm"])
         self._carry(tk, a, w, rows["q"][1], rows["v"][1], rows["p"][1], rows["ba"][1], rows["bg"][1], prev["P"],
                     prev["dth"], prev["dv"], prev["q_ref"], prev["stance"], prev["floor"], prev["prm"])
         return ZuptState(tk, rows["p"][1].copy(), rows["v"][1].copy(), rows["q"][1].copy(), rows["ba"][1].copy(),
@@ -643,8 +644,10 @@ class ZuptFilter:
         t, a, w = (np.array(x, dtype=np.float64, order="C") for x in (t, a, w))
         zaru_mask = long_stances(t, z, cfg.zaru_min_s) if cfg.zaru else np.zeros(t.size, dtype=bool)
         prm = _kernel_params(cfg, g)
-        q, v, p, ba, bg, Pd, innov, svar, P, dth, dv, q_ref, stance = _k.zupt_ekf_kernel(
-            t, a, w, z, zaru_mask, q0, pos0, np.zeros(3), np.zeros(3), np.zeros(3), _initial_cov(cfg), prm)
+        rows, carry = _k.zupt_ekf_kernel(_k.ZuptInput(t, a, w, z, zaru_mask), q0, pos0, np.zeros(3), np.zeros(3),
+                                         np.zeros(3), _initial_cov(cfg), prm)
+        q, v, p, ba, bg, Pd, innov, svar = rows
+        P, dth, dv, q_ref, stance = carry.P, carry.dth_prev, carry.dv_prev, carry.q_ref, carry.stance
         self._carry(float(t[-1]), a[-1].copy(), w[-1].copy(), q[-1].copy(), v[-1].copy(), p[-1].copy(),
                     ba[-1].copy(), bg[-1].copy(), P.copy(), dth, dv, q_ref, stance, float(pos0[2]), prm)
         return ZuptResult(t, p, v, q, ba, bg, Pd, innov, svar, P, z, cfg)
