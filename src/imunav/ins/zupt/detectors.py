@@ -42,11 +42,12 @@ from numpy.typing import ArrayLike, NDArray
 from imunav._timeseries_kernels import runs
 from imunav.attitude import Mahony
 from imunav.errors import InvalidInputError, ShapeError
-from imunav.ins import _kernels as _k
-from imunav.ins.lstm import LstmDetector
-from imunav.ins.metrics import error_2d
-from imunav.ins.result import DetectorResult
-from imunav.ins.statistics import (
+from imunav.ins.zupt import kernels as _k
+from imunav.ins.zupt.filter import ZuptFilter
+from imunav.ins.zupt.lstm import LstmDetector
+from imunav.ins.zupt.metrics import error_2d
+from imunav.ins.zupt.result import DetectorResult
+from imunav.ins.zupt.statistics import (
     DETECTORS,
     G_PYSHOE,
     SIGMA_A,
@@ -58,7 +59,6 @@ from imunav.ins.statistics import (
     mbgtd,
     shoe,
 )
-from imunav.ins.zupt import ZuptFilter
 from imunav.results import Result
 from imunav.rotation import quat_rotate
 
@@ -363,7 +363,7 @@ def optimize_threshold(data: Any, reference: ArrayLike, detector: str = "shoe",
 
     For each threshold the ZUPT INS (:meth:`imunav.ins.ZuptFilter.run`, with
     ``config``) runs with the detector output and ``metric(estimate,
-    reference)`` (default :func:`imunav.ins.metrics.error_2d`) scores it; ties
+    reference)`` (default :func:`imunav.ins.zupt.metrics.error_2d`) scores it; ties
     go to the larger threshold (as in the published search).  ``reference``
     is the (N, 3) reference position, one row per IMU sample.
 
@@ -380,7 +380,7 @@ def optimize_threshold(data: Any, reference: ArrayLike, detector: str = "shoe",
     window : int, optional
         Window length in samples.
     metric : callable, optional
-        ``metric(estimate, reference) -> float``; default :func:`imunav.ins.metrics.error_2d`.
+        ``metric(estimate, reference) -> float``; default :func:`imunav.ins.zupt.metrics.error_2d`.
     config : ZuptConfig, optional
         Settings of the ZUPT INS.
 

@@ -53,7 +53,7 @@ from imunav.errors import (
     ShapeError,
     TimeOrderError,
 )
-from imunav.ins import _kernels as _k
+from imunav.ins.zupt import kernels as _k
 from imunav.results import EulerMixin, Result
 from imunav.rotation import quat_from_euler
 

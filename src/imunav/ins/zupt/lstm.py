@@ -23,16 +23,16 @@ from numpy.typing import NDArray
 from imunav._atomic import atomic_path
 from imunav._docstrings import fill_doc
 from imunav.errors import ConfigError, FileFormatError, InvalidInputError, ShapeError
-from imunav.ins import _lstm_kernels as _lk
-from imunav.ins.result import DetectorResult
-from imunav.ins.statistics import detector_statistic
+from imunav.ins.zupt import _lstm_kernels as _lk
+from imunav.ins.zupt.result import DetectorResult
+from imunav.ins.zupt.statistics import detector_statistic
 
 __all__ = ["DEFAULT_MODEL_PATH", "LstmConfig", "LstmDetector", "guard_stances", "input_features", "lstm_forward"]
 
 Array = NDArray[np.float64]
 
 #: The model trained on the shared pyshoe VICON trials (see README, section ins).
-DEFAULT_MODEL_PATH = Path(__file__).resolve().parents[1] / "data" / "zupt_lstm.npz"
+DEFAULT_MODEL_PATH = Path(__file__).resolve().parents[2] / "data" / "zupt_lstm.npz"
 
 
 @dataclass(frozen=True)

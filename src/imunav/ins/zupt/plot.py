@@ -7,7 +7,7 @@ from typing import Any
 import numpy as np
 
 from imunav._docstrings import fill_doc
-from imunav.ins.metrics import align_heading
+from imunav.ins.zupt.metrics import align_heading
 
 __all__ = ["plot_trajectory", "plot_zero_velocity"]
 

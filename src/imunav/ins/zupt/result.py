@@ -1,4 +1,4 @@
-"""Result type of the zero-velocity detectors (classical in :mod:`imunav.ins.detectors`,
+"""Result type of the zero-velocity detectors (classical in :mod:`imunav.ins.zupt.detectors`,
 learned in :mod:`imunav.learn.lstm`): one module below both, so that neither imports the other for it."""
 
 from __future__ import annotations

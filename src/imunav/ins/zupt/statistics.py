@@ -1,7 +1,7 @@
 """Zero-velocity test statistics of foot-mounted IMUs: SHOE, ARED, AMVD and MBGTD.
 
 The formulas, the block conventions and the published default sigmas are
-stated in :mod:`imunav.ins.detectors`, which thresholds these statistics.
+stated in :mod:`imunav.ins.zupt.detectors`, which thresholds these statistics.
 They sit in their own module so that the learned detector
 (:mod:`imunav.learn.lstm`, which checks its flags with SHOE) and the
 classical ones (which can dispatch to the learned one) share them without
@@ -17,7 +17,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from imunav._docstrings import fill_doc
 from imunav.errors import InvalidInputError, ShapeError
-from imunav.ins import _kernels as _k
+from imunav.ins.zupt import kernels as _k
 
 __all__ = ["DETECTORS", "SIGMA_A", "SIGMA_W", "G_PYSHOE", "detector_statistic", "shoe", "ared", "amvd", "mbgtd"]
 
