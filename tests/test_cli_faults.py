@@ -396,7 +396,7 @@ RUN_FOLDER_FAULTS = ("is-a-file", "unwritable", "parent-is-file", "holds-another
 
 
 def _run_folder(tmp: Path, fault: str) -> tuple[Path, list[str]]:
-    from imunav.runfolder import RunFolder
+    from imunav.lab.runfolder import RunFolder
 
     d = tmp / "run"
     if fault == "is-a-file":
@@ -533,7 +533,7 @@ def test_concurrent_run_refused_and_sigint_leaves_no_manifest(tmp_path, name):
     import sys
     import time
 
-    from imunav.runfolder import MANIFEST, MARKER
+    from imunav.lab.runfolder import MANIFEST, MARKER
 
     argv, cfg_text = SLOW_RUNS[name]
     d = tmp_path / "run"

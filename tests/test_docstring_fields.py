@@ -7,7 +7,7 @@ import inspect
 import pytest
 
 from imunav._docstrings import DOCS, fill_doc
-from imunav.labsteps import noise, temperature
+from imunav.lab.steps import noise, temperature
 
 
 def test_each_lab_step_run_names_its_own_option_table():

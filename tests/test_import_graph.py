@@ -32,15 +32,14 @@ SRC = ROOT / "src"
 LAYERS: list[tuple[str, tuple[str, ...]]] = [
     ("core", ("imunav", "imunav.errors", "imunav.units", "imunav.rotation", "imunav._rotation_kernels", "imunav.atmosphere",
               "imunav.earth", "imunav.allan_models", "imunav.crossval", "imunav._timeseries_kernels",
-              "imunav.provenance", "imunav._atomic", "imunav.runfolder", "imunav.toml", "imunav.filters._common",
+              "imunav.provenance", "imunav._atomic", "imunav.toml", "imunav.filters._common",
               "imunav.filters._kernels", "imunav.filters._core", "imunav.results", "imunav._docstrings",
               "imunav._quantiles")),
     ("recordings, io", ("imunav.timeseries", "imunav.io")),
     ("noise, calib, filters", ("imunav.noise", "imunav.calib", "imunav.filters")),
     ("sim, attitude, ins, airdata, learn", ("imunav.sim", "imunav.attitude", "imunav.ins", "imunav.airdata",
                                             "imunav.learn", "imunav.scenarios")),
-    ("montecarlo, batch, lab, labsteps, report", ("imunav.montecarlo", "imunav.batch", "imunav.lab",
-                                                  "imunav.labconfig", "imunav.labsteps", "imunav.report")),
+    ("lab: runner, config, steps, batch, montecarlo, runfolder, report", ("imunav.lab",)),
     ("cli", ("imunav.cli",)),
 ]
 
@@ -294,7 +293,7 @@ def test_importing_the_packages_loads_no_optional_package_and_runs_no_kernel():
     computed by a kernel costs a compilation on a cold cache."""
     modules = build_graph(SRC, "imunav").modules
     packages = sorted(m for m, p in modules.items() if p.name == "__init__.py" or m.endswith(".plot")
-                      or m in ("imunav.lab", "imunav.batch") or m.startswith("imunav.cli."))
+                      or m in ("imunav.lab.runner", "imunav.lab.batch") or m.startswith("imunav.cli."))
     code = f"import {', '.join(packages)}\n" + _LOADED.format(heavy=NOT_AT_IMPORT)
     assert _run_python(code) == "[] []"
 

@@ -74,7 +74,7 @@ def test_address_without_the_dask_executor_is_refused(tmp_path, cmd):
     write_imu(_static(), tmp_path / "u1.npz")
     assert "--executor dask" in _one_line(_cli(*cmd, tmp_path, "--address", "tcp://127.0.0.1:1", "--quiet"))
     assert not (tmp_path / "calibration").exists() and not (tmp_path / "noise").exists()
-    from imunav.montecarlo import run_batch
+    from imunav.lab.montecarlo import run_batch
 
     with pytest.raises(InvalidInputError, match="dask"):
         run_batch(abs, [1], executor="serial", address="tcp://x:1")
@@ -246,8 +246,8 @@ def test_fit_ellipsoid_fits_a_perfect_noise_free_sphere():
 
 # ---------------------------------------------------------------- progress of the lab
 def test_lab_tasks_end_at_100_percent_and_the_monte_carlo_reports_progress(tmp_path):
-    from imunav.lab import LabContext
-    from imunav.montecarlo import run_montecarlo
+    from imunav.lab.montecarlo import run_montecarlo
+    from imunav.lab.runner import LabContext
     from imunav.scenarios import attitude_paper
 
     class Recorder:

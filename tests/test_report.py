@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from imunav.errors import ConfigError
-from imunav.report import Parameter, Report, check_spec, load_spec
+from imunav.lab.report import Parameter, Report, check_spec, load_spec
 from imunav.units import from_display
 
 

@@ -368,7 +368,7 @@ robust : {None, "gate", "isolate", "nis", "huber"}, optional
 
 DOCS["batch_executor"] = """\
 executor : {"serial", "processes", "dask"}
-    Where the units are processed (:func:`imunav.montecarlo.run_batch`).
+    Where the units are processed (:func:`imunav.lab.montecarlo.run_batch`).
 n_workers : int, optional
     Worker processes (default: number of cores).
 address : str, optional
@@ -400,7 +400,7 @@ StepResult"""
 DOCS["lab_step_report"] = """\
 Parameters
 ----------
-section : imunav.report.html.Section
+section : imunav.lab.report.html.Section
     The step's section.
 result : StepResult
     What :func:`run` returned.
@@ -659,7 +659,7 @@ Raises
 FileFormatError"""
 
 DOCS["mc_attitude_paper"] = _PARAMS + """\
-mc : imunav.montecarlo.MonteCarloResult
+mc : imunav.lab.montecarlo.MonteCarloResult
     The result of ``run_montecarlo(attitude_paper, ...)``.
 
 Returns

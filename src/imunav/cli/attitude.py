@@ -24,7 +24,7 @@ from imunav.io import read_imu
 from imunav.io._atomic import check_outputs, write_json
 from imunav.io.broad import broad_trials, load_broad
 from imunav.io.datasets import shared_data_path
-from imunav.montecarlo import run_montecarlo
+from imunav.lab.montecarlo import run_montecarlo
 from imunav.scenarios import attitude_paper, paper_report, paper_rmse, paper_table
 
 app = typer.Typer(help="Attitude filters (Madgwick, Mahony, MEKF, UKF, adaptive, smoother, paper KFs).\n\n"
@@ -205,7 +205,7 @@ def benchmark_cmd(
 @app.command("montecarlo")
 def montecarlo_cmd(
     runs: int = typer.Option(100, "--runs", "-n", help="Number of seeded runs."),
-    seed: int = typer.Option(0, "--seed", help="Root seed (run i uses imunav.montecarlo.spawn_generators(seed)[i])."),
+    seed: int = typer.Option(0, "--seed", help="Root seed (run i uses imunav.lab.montecarlo.spawn_generators(seed)[i])."),
     gyro_noise_unit: str = typer.Option("deg/s/sqrt(Hz)", "--gyro-noise-unit",
                                         help="Reading of the paper's 0.005 gyro noise: deg/s/sqrt(Hz) or deg/sqrt(h)."),
     filters: str = typer.Option("lee,javed,proposed", "--filters", "-f",
@@ -223,7 +223,7 @@ def montecarlo_cmd(
     """The Candan & Söken scenario (245 s, 100 Hz, external-acceleration windows): Table 2 of the paper.
 
     Runs are batched (:func:`imunav.scenarios.attitude_paper`) and spread over
-    :func:`imunav.montecarlo.run_montecarlo`'s executor.
+    :func:`imunav.lab.montecarlo.run_montecarlo`'s executor.
 
     Example: imunav attitude montecarlo --runs 5 --executor serial --json mc.json
     """

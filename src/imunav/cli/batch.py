@@ -13,11 +13,11 @@ from rich.console import Console
 from rich.markup import escape
 from rich.table import Table
 
-from imunav.batch import calibrate_batch, noise_batch, simulate_batch
 from imunav.cli._errors import fail
 from imunav.errors import InvalidInputError
 from imunav.io._atomic import check_outputs, write_json
-from imunav.report.catalog import display_unit
+from imunav.lab.batch import calibrate_batch, noise_batch, simulate_batch
+from imunav.lab.report.catalog import display_unit
 
 app = typer.Typer(
     help="Process a folder of recordings (one per unit of a production batch) in parallel, "

@@ -14,7 +14,7 @@ format), named after the unit::
 :func:`simulate_batch` writes such a folder for N virtual IMUs whose
 parameters spread from unit to unit around a preset; :func:`calibrate_batch`
 and :func:`noise_batch` process every unit in parallel with
-:func:`imunav.montecarlo.run_batch`, write one result file per unit and
+:func:`imunav.lab.montecarlo.run_batch`, write one result file per unit and
 return a :class:`BatchSummary` (one row per unit: every parameter with its
 standard error, its error against the truth when known, pass / fail against
 an optional datasheet spec).
@@ -50,21 +50,21 @@ from imunav.calib import ImuCalibration
 from imunav.errors import ConfigError, FileFormatError, InvalidInputError, NotStaticError
 from imunav.io import read_imu, write_imu
 from imunav.io._atomic import atomic_path, write_json
-from imunav.montecarlo import Executor, run_batch, spawn_generators
-from imunav.noise.allan import allan_deviation
-from imunav.noise.fit import fit_noise
-from imunav.noise.static import require_static
-from imunav.report import check_spec, load_spec
-from imunav.report.batch import write_batch_html
-from imunav.report.catalog import (
+from imunav.lab.montecarlo import Executor, run_batch, spawn_generators
+from imunav.lab.report import check_spec, load_spec
+from imunav.lab.report.batch import write_batch_html
+from imunav.lab.report.catalog import (
     base_name,
     calibration_estimates,
     expand_spec,
     noise_estimates,
     to_display_value,
 )
+from imunav.lab.runfolder import RunFolder, trusted_files
+from imunav.noise.allan import allan_deviation
+from imunav.noise.fit import fit_noise
+from imunav.noise.static import require_static
 from imunav.results import Result
-from imunav.runfolder import RunFolder, trusted_files
 from imunav.sim import (
     ImuErrorModel,
     Segments,
@@ -100,7 +100,7 @@ def _batch_files(folder: str | os.PathLike[str]) -> tuple[list[Path], list[str] 
     """(unit recordings, trusted files or None).
 
     A run folder (written by :func:`simulate_batch`) is read through its verified manifest
-    (:func:`imunav.runfolder.trusted_files`): only the files it lists are used, and an incomplete run
+    (:func:`imunav.lab.runfolder.trusted_files`): only the files it lists are used, and an incomplete run
     (killed, or still running) is refused.  A plain folder of recordings is used as it is, hidden files
     (temporary files of a killed writer) ignored.
     """
@@ -224,7 +224,7 @@ def simulate_batch(
 ) -> list[Path]:
     """Simulate a production batch of ``n_units`` IMUs (seeded, unit-to-unit spread).
 
-    Unit ``k`` gets the generator :func:`imunav.montecarlo.spawn_generators`
+    Unit ``k`` gets the generator :func:`imunav.lab.montecarlo.spawn_generators`
     ``(rng, ...)[k]``; its biases, scale factors, misalignments and
     g-sensitivities are the preset's, each multiplied by ``1 + spread·z``
     with ``z ~ N(0, 1)`` (the noise parameters stay the preset's).  Each unit
@@ -233,7 +233,7 @@ def simulate_batch(
     with ``static_s`` each unit instead records one level static test of that
     length (for noise identification).
 
-    ``out_dir`` is a run folder (:mod:`imunav.runfolder`): new or empty, or
+    ``out_dir`` is a run folder (:mod:`imunav.lab.runfolder`): new or empty, or
     (``overwrite=True``) a previous run that is cleared first, so that no unit
     of another run stays beside these; ``segments.json``, ``batch.json`` and
     last ``manifest.json`` are written after the units.
@@ -263,7 +263,7 @@ def simulate_batch(
     static_s : float, optional
         Instead of the multi-position test, one level static record of this length, s (for noise batches).
     executor : {"serial", "processes", "dask"}
-        Where the units are processed (:func:`imunav.montecarlo.run_batch`).
+        Where the units are processed (:func:`imunav.lab.montecarlo.run_batch`).
     n_workers : int, optional
         Worker processes (default: number of cores).
     progress : bool
@@ -338,7 +338,7 @@ class BatchSummary(Result):
     units : dict
         Per unit the full result dict (or ``{"error": message}``).
     spec_checks : dict
-        Per unit the list of :class:`imunav.report.SpecCheck` dicts.
+        Per unit the list of :class:`imunav.lab.report.SpecCheck` dicts.
     out_dir : pathlib.Path or None
         Folder with the per-unit files and the summary.
     seconds : float
@@ -437,7 +437,7 @@ def _summarise(kind: str, names: list[str], results: list[Any], spec: Any, out_d
 
 
 def write_summary(summary: BatchSummary, out_dir: Path, title: str) -> dict[str, Path]:
-    """``summary.csv``, ``summary.json`` and ``index.html`` (:func:`imunav.report.batch.write_batch_html`).
+    """``summary.csv``, ``summary.json`` and ``index.html`` (:func:`imunav.lab.report.batch.write_batch_html`).
 
     Parameters
     ----------
@@ -608,7 +608,7 @@ def calibrate_batch(
     A batch folder written by :func:`simulate_batch` is read through its
     manifest (only the files it lists, checked against their SHA-256; a killed
     run is refused).  ``out_dir`` is a run folder of its own
-    (:mod:`imunav.runfolder`; ``overwrite`` clears a previous one).
+    (:mod:`imunav.lab.runfolder`; ``overwrite`` clears a previous one).
 
     Parameters
     ----------
@@ -619,7 +619,7 @@ def calibrate_batch(
     out_dir : str or os.PathLike, optional
         Output run folder (default ``<folder>/calibration``).
     spec : str, os.PathLike, Mapping or None
-        Datasheet limits: a spec TOML file or table (:func:`imunav.report.load_spec`), or parsed limits.
+        Datasheet limits: a spec TOML file or table (:func:`imunav.lab.report.load_spec`), or parsed limits.
     read_options : Mapping, optional
         Keyword arguments of :func:`imunav.io.read_imu` (columns, units, ...).
     latitude : float, optional

@@ -1,9 +1,9 @@
 """The lab definition: a TOML file (or dict) validated into a :class:`LabConfig`.
 
 Tables: ``[lab]`` (seed, title, steps), ``[recordings.<name>]`` (real recordings,
-:mod:`imunav.labsteps.recordings`), ``[spec.<parameter>]`` (datasheet limits,
-:mod:`imunav.report.spec`) and one table of options per step.  The runner is
-:func:`imunav.lab.run_lab`, which re-exports everything here.
+:mod:`imunav.lab.steps.recordings`), ``[spec.<parameter>]`` (datasheet limits,
+:mod:`imunav.lab.report.spec`) and one table of options per step.  The runner is
+:func:`imunav.lab.runner.run_lab`, which re-exports everything here.
 """
 
 from __future__ import annotations
@@ -16,16 +16,16 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-import imunav.labsteps as pkg
+import imunav.lab.steps as pkg
 from imunav.errors import ConfigError
-from imunav.labsteps.recordings import parse_recordings
-from imunav.report import load_spec
+from imunav.lab.report import load_spec
+from imunav.lab.steps.recordings import parse_recordings
 from imunav.toml import read_toml
 
 __all__ = ["STEPS", "SIMULATION_ONLY", "LabConfig", "available_steps", "parse_lab_config", "load_lab_config"]
 
 
-#: Step modules (``imunav.labsteps.<name>``) run by default, in order.
+#: Step modules (``imunav.lab.steps.<name>``) run by default, in order.
 STEPS: list[str] = [
     "simulate_tests",
     "calibration",
@@ -38,7 +38,7 @@ STEPS: list[str] = [
 
 
 def available_steps() -> list[str]:
-    """Names of the step modules present in :mod:`imunav.labsteps`.
+    """Names of the step modules present in :mod:`imunav.lab.steps`.
 
     Returns
     -------
@@ -73,9 +73,9 @@ class LabConfig:
     steps : tuple of str or None
         Step names in order (None: :meth:`default_steps` for the mode).
     recordings : dict
-        Name -> :class:`imunav.labsteps.recordings.RecordingSpec` (empty: the built-in virtual IMU).
+        Name -> :class:`imunav.lab.steps.recordings.RecordingSpec` (empty: the built-in virtual IMU).
     spec : dict
-        Parameter name -> :class:`imunav.report.SpecLimit` (datasheet limits).
+        Parameter name -> :class:`imunav.lab.report.SpecLimit` (datasheet limits).
     options : dict
         Step name -> its option table.
     source : pathlib.Path or None
@@ -124,7 +124,7 @@ def parse_lab_config(config: str | os.PathLike[str] | Mapping[str, Any] | None) 
     Schema (every table optional)::
 
         [lab]                    seed = 0, title = "...", steps = ["recordings", ...]
-        [recordings.<name>]      a real recording (see imunav.labsteps.recordings)
+        [recordings.<name>]      a real recording (see imunav.lab.steps.recordings)
         [spec.<parameter>]       datasheet limit: min / max, unit, description
         [<step>]                 options of a step (e.g. [simulate_tests], [temperature])
 
@@ -199,7 +199,7 @@ def parse_lab_config(config: str | os.PathLike[str] | Mapping[str, Any] | None) 
 
 def _step_options(name: str) -> list[str] | None:
     """Option names a step accepts in its table: its ``OPTIONS`` or the keys of its ``_DEFAULTS`` (None: unchecked)."""
-    mod = importlib.import_module(f"imunav.labsteps.{name}")
+    mod = importlib.import_module(f"imunav.lab.steps.{name}")
     opts = getattr(mod, "OPTIONS", None)
     if opts is None and isinstance(getattr(mod, "_DEFAULTS", None), Mapping):
         opts = list(mod._DEFAULTS)

@@ -1,7 +1,7 @@
 """The lab: imunav's main job, a sequence of steps writing one report folder.
 
 ``run_lab(out_dir)`` runs the steps named in :data:`STEPS` in order.  A step
-is a module ``imunav.labsteps.<name>`` with
+is a module ``imunav.lab.steps.<name>`` with
 
 * ``TITLE: str`` and
 * ``run(ctx: LabContext) -> StepResult``,
@@ -21,26 +21,26 @@ Two modes (:func:`parse_lab_config` validates the TOML into a
   recordings with the built-in virtual IMU, the other steps analyse them;
 * **real recordings**: ``[recordings.<name>]`` tables name files, their format,
   column mapping and units, and which test each one is (see
-  :mod:`imunav.labsteps.recordings`); the ``recordings`` step loads them into
+  :mod:`imunav.lab.steps.recordings`); the ``recordings`` step loads them into
   the same artifacts and the simulation-only steps (:data:`SIMULATION_ONLY`)
   are left out of the default step list.
 
 A ``[spec.<parameter>]`` table (min / max, unit; names of
-:mod:`imunav.report.catalog`) is a datasheet-style specification: every
+:mod:`imunav.lab.report.catalog`) is a datasheet-style specification: every
 parameter the steps report in ``StepResult.parameters`` is checked against
 it and the report opens with the pass / fail table.
 
 Outputs in ``out_dir`` (each written atomically): ``summary.json`` (machine
 readable: every step's summary, timing, verdict, error), ``summary.md`` and
 ``index.html`` (the report), plus whatever the steps write (``data/``,
-``figures/``), and last ``manifest.json`` (:mod:`imunav.runfolder`: run id,
+``figures/``), and last ``manifest.json`` (:mod:`imunav.lab.runfolder`: run id,
 seed, configuration, every file with size and SHA-256).  A folder holding
 another run is refused unless ``overwrite=True``.  A step that raises is
 recorded with its traceback and the remaining steps still run.
 
 Example
 -------
->>> from imunav.lab import run_lab                                # doctest: +SKIP
+>>> from imunav.lab.runner import run_lab                         # doctest: +SKIP
 >>> result = run_lab("lab-report", rng=0)                         # doctest: +SKIP
 """
 
@@ -61,7 +61,7 @@ from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
 from imunav import __version__
 from imunav.errors import ConfigError
 from imunav.io._atomic import atomic_path, json_text, jsonable
-from imunav.labconfig import (
+from imunav.lab.config import (
     SIMULATION_ONLY,
     STEPS,
     LabConfig,
@@ -69,12 +69,12 @@ from imunav.labconfig import (
     load_lab_config,
     parse_lab_config,
 )
-from imunav.labsteps._api import LabContext, StepResult, _NullProgress
-from imunav.report.catalog import calibration_estimates, expand_spec, noise_estimates
-from imunav.report.lab import display_parameters, embed_png, lab_markdown, write_lab_html
-from imunav.report.spec import check_spec
+from imunav.lab.report.catalog import calibration_estimates, expand_spec, noise_estimates
+from imunav.lab.report.lab import display_parameters, embed_png, lab_markdown, write_lab_html
+from imunav.lab.report.spec import check_spec
+from imunav.lab.runfolder import RunFolder
+from imunav.lab.steps._api import LabContext, StepResult, _NullProgress
 from imunav.results import Result
-from imunav.runfolder import RunFolder
 
 __all__ = ["STEPS", "SIMULATION_ONLY", "LabConfig", "LabContext", "StepResult", "StepRecord", "LabResult", "run_lab",
            "load_lab_config", "parse_lab_config", "available_steps", "embed_png", "display_parameters",
@@ -87,7 +87,7 @@ class StepRecord(Result):
     Parameters
     ----------
     name : str
-        Step module name (``imunav.labsteps.<name>``).
+        Step module name (``imunav.lab.steps.<name>``).
     title : str
         The step's ``TITLE``.
     result : StepResult or None
@@ -139,7 +139,7 @@ class LabResult(Result):
         One record per step, in run order.
     seconds : float
         Wall-clock duration of the whole lab, s.
-    spec_checks : list of imunav.report.SpecCheck
+    spec_checks : list of imunav.lab.report.SpecCheck
         Every estimated parameter checked against the ``[spec]`` limits (empty without a spec).
     """
 
@@ -219,7 +219,7 @@ def run_lab(
 ) -> LabResult:
     """Run the lab steps and write the report folder.
 
-    The report folder is a run folder (:mod:`imunav.runfolder`): a folder that
+    The report folder is a run folder (:mod:`imunav.lab.runfolder`): a folder that
     holds another run is refused unless ``overwrite`` (which clears it first),
     and ``manifest.json`` (run id, seed, configuration, every file with its
     size and SHA-256) is written last; an interrupted or failed lab leaves no
@@ -290,7 +290,7 @@ def _run_steps(out: Path, names: list[str], seed: int, cfg: dict, typed: LabConf
         ctx = LabContext(out_dir=out, seed=seed, progress=prog, config=cfg, lab=typed)
         overall = prog.add_task(f"lab ({len(names)} steps)", total=len(names))
         for name in names:
-            mod = importlib.import_module(f"imunav.labsteps.{name}")
+            mod = importlib.import_module(f"imunav.lab.steps.{name}")
             title = getattr(mod, "TITLE", name)
             ctx.step = name
             prog.update(overall, description=f"lab: {title}")
@@ -324,7 +324,7 @@ def harvest_parameters(objects: Mapping[str, Any]) -> dict[str, tuple[float, flo
     :class:`imunav.calib.ImuCalibration` with standard errors) and noise fits
     (:class:`imunav.noise.NoiseFit` of a gyro or accelerometer triad), also
     inside dicts, lists and tuples one level down; names as in
-    :mod:`imunav.report.catalog`.  Steps that fill ``StepResult.parameters``
+    :mod:`imunav.lab.report.catalog`.  Steps that fill ``StepResult.parameters``
     themselves are not harvested.
 
     Parameters

@@ -1,7 +1,7 @@
 """The HTML report of a production batch (``imunav batch``): the units table, the unit-to-unit spread with
 its figure, estimate against truth for a simulated batch, and the specification checks.
 
-:func:`imunav.batch.write_summary` writes the data files (``summary.csv``, ``summary.json``) and calls
+:func:`imunav.lab.batch.write_summary` writes the data files (``summary.csv``, ``summary.json``) and calls
 :func:`write_batch_html` for ``index.html``.
 """
 
@@ -13,8 +13,8 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
-from imunav.report.catalog import base_name, display_unit, to_display_value
-from imunav.report.html import Report
+from imunav.lab.report.catalog import base_name, display_unit, to_display_value
+from imunav.lab.report.html import Report
 
 __all__ = ["write_batch_html"]
 
@@ -25,7 +25,7 @@ def write_batch_html(summary: Any, out_dir: Path, title: str) -> Path:
     Parameters
     ----------
     summary : BatchSummary
-        The batch (:class:`imunav.batch.BatchSummary`: table, statistics, spec checks, timing).
+        The batch (:class:`imunav.lab.batch.BatchSummary`: table, statistics, spec checks, timing).
     out_dir : Path
         The batch's output folder.
     title : str

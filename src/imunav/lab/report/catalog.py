@@ -34,7 +34,7 @@ from typing import Any
 
 import numpy as np
 
-from imunav.report.spec import SpecLimit
+from imunav.lab.report.spec import SpecLimit
 from imunav.units import to_display
 
 __all__ = ["DISPLAY_UNIT", "display_unit", "to_display_value", "calibration_estimates", "noise_estimates",
@@ -201,12 +201,12 @@ def expand_spec(spec: Mapping[str, SpecLimit], names: list[str] | tuple[str, ...
     """Limits per concrete parameter name: axis-less entries apply to every axis.
 
     Spec entries that match no estimated name are kept under their own name
-    (so that :func:`imunav.report.check_spec` reports them as not measured).
+    (so that :func:`imunav.lab.report.check_spec` reports them as not measured).
 
     Parameters
     ----------
     spec : mapping of str to SpecLimit
-        Limits as loaded (:func:`imunav.report.load_spec`).
+        Limits as loaded (:func:`imunav.lab.report.load_spec`).
     names : sequence of str
         The concrete names estimated.
 

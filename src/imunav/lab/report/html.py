@@ -90,7 +90,7 @@ class Parameter:
     truth : float or None
         True value (simulation), in ``unit``.
     limit : str or None
-        The limit as text (:meth:`imunav.report.spec.SpecLimit.describe`).
+        The limit as text (:meth:`imunav.lab.report.spec.SpecLimit.describe`).
     passed : bool or None
         Verdict against the limit.
     """

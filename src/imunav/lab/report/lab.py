@@ -1,8 +1,8 @@
 """The lab's report: ``summary.md`` and the HTML page ``index.html`` of a lab run, and the helpers steps use to
 add to it (:func:`embed_png`, :func:`display_parameters`).
 
-The runner (:func:`imunav.lab.run_lab`) calls :func:`lab_markdown` and :func:`write_lab_html` on its
-:class:`~imunav.lab.LabResult`; a step module may add its own section content with ``report(section, result, ctx)``.
+The runner (:func:`imunav.lab.runner.run_lab`) calls :func:`lab_markdown` and :func:`write_lab_html` on its
+:class:`~imunav.lab.runner.LabResult`; a step module may add its own section content with ``report(section, result, ctx)``.
 """
 
 from __future__ import annotations
@@ -16,10 +16,10 @@ from typing import Any
 import numpy as np
 
 from imunav._atomic import jsonable
-from imunav.labsteps._api import LabContext
-from imunav.report.catalog import display_unit, expand_spec, to_display_value
-from imunav.report.html import Parameter, Report
-from imunav.report.spec import check_spec
+from imunav.lab.report.catalog import display_unit, expand_spec, to_display_value
+from imunav.lab.report.html import Parameter, Report
+from imunav.lab.report.spec import check_spec
+from imunav.lab.steps._api import LabContext
 from imunav.units import to_display
 
 __all__ = ["lab_markdown", "write_lab_html", "embed_png", "display_parameters"]
@@ -43,11 +43,11 @@ def _flat(d: Mapping[str, Any], prefix: str = "") -> list[tuple[str, Any]]:
 
 
 def lab_markdown(result: Any) -> str:
-    """``summary.md`` of a :class:`~imunav.lab.LabResult`: verdicts, specification table, each step's summary and figures.
+    """``summary.md`` of a :class:`~imunav.lab.runner.LabResult`: verdicts, specification table, each step's summary and figures.
 
     Parameters
     ----------
-    result : imunav.lab.LabResult
+    result : imunav.lab.runner.LabResult
         A finished lab run.
 
     Returns
@@ -91,7 +91,7 @@ def embed_png(section: Any, path: str | os.PathLike[str], caption: str | None = 
 
     Parameters
     ----------
-    section : imunav.report.html.Section
+    section : imunav.lab.report.html.Section
         Section of the HTML report.
     path : str or os.PathLike
         The PNG file.
@@ -106,20 +106,20 @@ def display_parameters(
     spec: Mapping[str, Any] | None = None,
     truth: Mapping[str, float] | None = None,
 ) -> list[Any]:
-    """:class:`imunav.report.Parameter` rows in display units, with limit and verdict from ``spec``.
+    """:class:`imunav.lab.report.Parameter` rows in display units, with limit and verdict from ``spec``.
 
     Parameters
     ----------
     params : Mapping
-        ``{name: (value_si, sigma_si)}`` (names of :mod:`imunav.report.catalog`; ``sigma_si`` may be None).
+        ``{name: (value_si, sigma_si)}`` (names of :mod:`imunav.lab.report.catalog`; ``sigma_si`` may be None).
     spec : Mapping, optional
-        Datasheet limits by parameter name (:func:`imunav.report.load_spec`); None: no verdict.
+        Datasheet limits by parameter name (:func:`imunav.lab.report.load_spec`); None: no verdict.
     truth : Mapping, optional
         ``{name: value_si}`` true values (simulations).
 
     Returns
     -------
-    list of imunav.report.Parameter
+    list of imunav.lab.report.Parameter
         One row per entry of ``params``, value, 1-sigma and truth in the catalog's display unit.
     """
 
@@ -138,11 +138,11 @@ def display_parameters(
 
 
 def write_lab_html(result: Any, ctx: LabContext, title: str) -> None:
-    """``index.html`` of a :class:`~imunav.lab.LabResult` in its ``out_dir``: overview, specification, one section per step.
+    """``index.html`` of a :class:`~imunav.lab.runner.LabResult` in its ``out_dir``: overview, specification, one section per step.
 
     Parameters
     ----------
-    result : imunav.lab.LabResult
+    result : imunav.lab.runner.LabResult
         A finished lab run.
     ctx : LabContext
         The run's context (mode, lab definition and its spec).
@@ -183,7 +183,7 @@ def write_lab_html(result: Any, ctx: LabContext, title: str) -> None:
             sec.code(s.error)
             continue
         assert s.result is not None
-        mod = importlib.import_module(f"imunav.labsteps.{s.name}")
+        mod = importlib.import_module(f"imunav.lab.steps.{s.name}")
         for para in s.result.notes:
             sec.text(para)
         custom = getattr(mod, "report", None)

@@ -38,7 +38,7 @@ class SpecLimit:
     Attributes
     ----------
     name : str
-        Parameter name (see :mod:`imunav.report.catalog`), with or without axis.
+        Parameter name (see :mod:`imunav.lab.report.catalog`), with or without axis.
     min_si, max_si : float or None
         Lower and upper limits, SI.
     unit : str
@@ -196,7 +196,7 @@ def check_spec(
     estimates : mapping of str to float or (float, float or None)
         ``{name: value_si | (value_si, sigma_si)}``.
     spec : mapping of str to SpecLimit
-        Limits per concrete name (:func:`imunav.report.catalog.expand_spec`).
+        Limits per concrete name (:func:`imunav.lab.report.catalog.expand_spec`).
     conservative : bool
         Require the 95 % bound inside the limits.
 

@@ -1,7 +1,7 @@
 """The lab step API: what every step of ``imunav lab`` gets (:class:`LabContext`) and returns (:class:`StepResult`).
 
-A step is a module ``imunav.labsteps.<name>`` with ``TITLE: str`` and
-``run(ctx: LabContext) -> StepResult`` (see :mod:`imunav.lab`).  These types
+A step is a module ``imunav.lab.steps.<name>`` with ``TITLE: str`` and
+``run(ctx: LabContext) -> StepResult`` (see :mod:`imunav.lab.runner`).  These types
 sit here, below both the steps and the runner, so that a step never imports
 the runner that imports it.
 """
@@ -43,7 +43,7 @@ class StepResult(Result):
         Optional paragraphs for the report.
     parameters : dict
         Estimated parameters checked against the lab's ``[spec]``: ``{name: (value_si, sigma_si)}`` with the
-        names of :mod:`imunav.report.catalog` (``gyro_bias_x``, ``accel_vrw_z``, ...).
+        names of :mod:`imunav.lab.report.catalog` (``gyro_bias_x``, ``accel_vrw_z``, ...).
     """
 
     summary: dict
@@ -106,7 +106,7 @@ class LabContext:
         The whole lab configuration (parsed TOML).
     step : str
         Name of the running step (set by the runner).
-    lab : imunav.labconfig.LabConfig or None
+    lab : imunav.lab.config.LabConfig or None
         The typed lab definition.
     """
 

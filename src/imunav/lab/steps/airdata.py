@@ -30,7 +30,7 @@ from imunav.airdata.scenario import ThesisScenario, simulate_thesis, thesis_repo
 from imunav.errors import ConfigError
 from imunav.filters import detect_faults
 from imunav.io._atomic import atomic_path, write_json
-from imunav.labsteps._api import LabContext, StepResult
+from imunav.lab.steps._api import LabContext, StepResult
 
 TITLE = "Air data + Doppler radar: wind filter, robust filtering, fault detection"
 

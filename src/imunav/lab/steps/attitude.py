@@ -38,8 +38,8 @@ from imunav.attitude.benchmark import make_filter
 from imunav.attitude.metrics import attitude_rmse
 from imunav.attitude.plot import plot_montecarlo_box, save
 from imunav.attitude.scenario import PAPER_TABLE2
-from imunav.labsteps._api import LabContext, StepResult
-from imunav.montecarlo import run_montecarlo
+from imunav.lab.montecarlo import run_montecarlo
+from imunav.lab.steps._api import LabContext, StepResult
 from imunav.rotation import integrate_rate, quat_conjugate, quat_from_euler, quat_rotate
 from imunav.scenarios import attitude_paper, paper_rmse, paper_table
 from imunav.sim import apply_errors, presets

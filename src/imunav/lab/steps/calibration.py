@@ -46,7 +46,7 @@ from imunav.calib.model import parameter_names
 from imunav.calib.plot import plot_residuals, save_figure
 from imunav.errors import InsufficientDataError
 from imunav.io._atomic import write_json
-from imunav.labsteps._api import LabContext, StepResult
+from imunav.lab.steps._api import LabContext, StepResult
 from imunav.units import DEG, G0
 
 TITLE = "Deterministic calibration (100-position + 120-step tests)"

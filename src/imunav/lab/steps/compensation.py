@@ -47,9 +47,9 @@ from imunav._docstrings import fill_doc
 from imunav.calib import ImuCalibration
 from imunav.errors import ConfigError
 from imunav.io._atomic import atomic_path
-from imunav.labsteps._api import LabContext, StepResult
-from imunav.report.catalog import calibration_estimates
-from imunav.report.lab import display_parameters, embed_png
+from imunav.lab.report.catalog import calibration_estimates
+from imunav.lab.report.lab import display_parameters, embed_png
+from imunav.lab.steps._api import LabContext, StepResult
 from imunav.sim import ideal_imu, multiposition_profile, rate_table_profile, simulate_imu
 from imunav.timeseries import static_intervals
 from imunav.units import DEG, G0

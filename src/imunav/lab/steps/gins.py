@@ -38,8 +38,8 @@ from imunav.ins.gins.plot import write_gins_figures
 from imunav.ins.gins.setup import load_inputs, run_setup, simulate_drive
 from imunav.io._atomic import write_json
 from imunav.io.kfgins import NavTrack, read_kfgins_nav
-from imunav.labsteps._api import LabContext, StepResult
-from imunav.labsteps.recordings import resolve_path
+from imunav.lab.steps._api import LabContext, StepResult
+from imunav.lab.steps.recordings import resolve_path
 
 TITLE = "GNSS/INS: loosely coupled error-state filter"
 

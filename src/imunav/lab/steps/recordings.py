@@ -29,7 +29,7 @@ deviation and the IEEE-952 terms N, B, K of both triads with their 95 %
 intervals, checked against the ``[spec]`` (the virtual IMU's ``noise`` step
 does the same with the comparison against the injected truth).
 
-Artifacts set (the same keys as :mod:`imunav.labsteps.simulate_tests`, so the
+Artifacts set (the same keys as :mod:`imunav.lab.steps.simulate_tests`, so the
 analysis steps work on either): ``recordings`` (test name -> ImuData, test
 names ``static_long`` for ``static``, ``hundred_position`` for
 ``multiposition``, ``rate_table``, ``multipose``), ``profiles`` (test name ->
@@ -47,16 +47,16 @@ from typing import Any, Mapping
 import numpy as np
 
 from imunav._docstrings import fill_doc
-from imunav.batch import _read_segments
 from imunav.errors import ConfigError, InvalidInputError
 from imunav.io import read_imu
 from imunav.io._atomic import atomic_path
 from imunav.io.datasets import shared_data_dir
-from imunav.labsteps._api import LabContext, StepResult
+from imunav.lab.batch import _read_segments
+from imunav.lab.report.catalog import noise_estimates
+from imunav.lab.report.lab import display_parameters, embed_png
+from imunav.lab.steps._api import LabContext, StepResult
 from imunav.noise import allan_deviation, fit_noise
 from imunav.noise.plot import plot_allan
-from imunav.report.catalog import noise_estimates
-from imunav.report.lab import display_parameters, embed_png
 from imunav.units import to_display
 
 #: The report hook shows the parameters itself.

@@ -54,8 +54,8 @@ from imunav.earth import normal_gravity
 from imunav.errors import ConfigError
 from imunav.io import write_imu
 from imunav.io._atomic import atomic_path, write_json
-from imunav.labsteps._api import LabContext, StepResult
-from imunav.report.lab import embed_png
+from imunav.lab.report.lab import embed_png
+from imunav.lab.steps._api import LabContext, StepResult
 from imunav.sim import (
     ImuErrorModel,
     hundred_position_profile,

@@ -39,8 +39,8 @@ from imunav._docstrings import fill_doc
 from imunav.calib import thermal_calibration
 from imunav.errors import ConfigError
 from imunav.io._atomic import atomic_path
-from imunav.labsteps._api import LabContext, StepResult
-from imunav.report.lab import embed_png
+from imunav.lab.report.lab import embed_png
+from imunav.lab.steps._api import LabContext, StepResult
 from imunav.sim import hundred_position_profile, presets, rate_table_profile, simulate_imu
 from imunav.units import DEG, G0
 
