@@ -281,7 +281,7 @@ def test_every_cli_json_is_standard(files, tmp_path):
 
 
 def test_json_writer_nulls_non_finite(tmp_path):
-    from imunav.io._atomic import write_json
+    from imunav.files import write_json
 
     p = write_json(tmp_path / "x.json", {"a": float("nan"), "b": [np.inf, -np.inf, 1.5], "c": np.float32("nan"),
                                          "d": np.array([1.0, np.nan]), "e": np.int64(3), "f": Path("p")})

@@ -32,7 +32,7 @@ SRC = ROOT / "src"
 LAYERS: list[tuple[str, tuple[str, ...]]] = [
     ("core", ("imunav", "imunav.errors", "imunav.units", "imunav.rotation", "imunav._rotation_kernels", "imunav.atmosphere",
               "imunav.earth", "imunav.allan_models", "imunav.crossval", "imunav._timeseries_kernels",
-              "imunav.provenance", "imunav._atomic", "imunav.toml", "imunav.filters._common",
+              "imunav.provenance", "imunav.files", "imunav.toml", "imunav.filters._common",
               "imunav.filters._kernels", "imunav.filters._core", "imunav.results", "imunav._docstrings",
               "imunav._quantiles")),
     ("recordings, io", ("imunav.timeseries", "imunav.io")),

@@ -31,8 +31,8 @@ from collections.abc import Mapping
 from typing import Any
 
 from imunav import __version__
-from imunav._atomic import jsonable
 from imunav._docstrings import fill_doc
+from imunav.files import jsonable
 
 __all__ = ["PROVENANCE_KEY", "add_step", "steps", "fingerprint", "net_compensations"]
 

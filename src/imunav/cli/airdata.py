@@ -25,8 +25,8 @@ from imunav.airdata.scenario import (
 )
 from imunav.cli._errors import check_figure_path, check_suffix, fail
 from imunav.errors import FileFormatError, InvalidInputError
+from imunav.files import atomic_path, check_outputs, write_json
 from imunav.filters.faults import DETECTORS, alarms, calibrated_thresholds, false_alarm_rates, thesis_thresholds
-from imunav.io._atomic import atomic_path, check_outputs, write_json
 from imunav.io._common import wrap_read_errors
 from imunav.rotation import dcm_from_euler
 

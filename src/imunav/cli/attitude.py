@@ -20,8 +20,8 @@ from imunav.attitude.scenario import PAPER_TABLE2, PaperScenario, default_filter
 from imunav.cli._errors import check_figure_path
 from imunav.cli._options import INSTANCE, LAYOUT, MAG_TOPIC, TOPIC, reader_options
 from imunav.errors import ConfigError
+from imunav.files import check_outputs, write_json
 from imunav.io import read_imu
-from imunav.io._atomic import check_outputs, write_json
 from imunav.io.broad import broad_trials, load_broad
 from imunav.io.datasets import shared_data_path
 from imunav.lab.montecarlo import run_montecarlo

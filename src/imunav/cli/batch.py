@@ -15,7 +15,7 @@ from rich.table import Table
 
 from imunav.cli._errors import fail
 from imunav.errors import InvalidInputError
-from imunav.io._atomic import check_outputs, write_json
+from imunav.files import check_outputs, write_json
 from imunav.lab.batch import calibrate_batch, noise_batch, simulate_batch
 from imunav.lab.report.catalog import display_unit
 

@@ -25,8 +25,8 @@ from imunav.calib.plot import plot_magnetometer, plot_residuals, plot_temperatur
 from imunav.calib.temperature import thermal_calibration
 from imunav.cli._options import INSTANCE, LAYOUT, TOPIC, reader_options
 from imunav.errors import FileFormatError, InvalidInputError
+from imunav.files import check_outputs, check_writable, read_json, write_json
 from imunav.io import read_imu
-from imunav.io._atomic import check_outputs, check_writable, read_json, write_json
 from imunav.io._common import check_nonempty, wrap_read_errors
 from imunav.io.logs import log_kind, read_topic
 from imunav.io.px4params import px4_parameters

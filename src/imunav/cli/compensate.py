@@ -10,8 +10,8 @@ import typer
 
 from imunav.calib import ImuCalibration
 from imunav.cli.calibrate import _read
+from imunav.files import check_outputs
 from imunav.io import write_imu
-from imunav.io._atomic import check_outputs
 
 
 def register(root: typer.Typer) -> None:

@@ -9,8 +9,8 @@ from typing import Optional
 import typer
 
 from imunav.cli._options import INSTANCE, LAYOUT, MAG_TOPIC, TOPIC, reader_options
+from imunav.files import check_outputs
 from imunav.io import read_imu, write_imu
-from imunav.io._atomic import check_outputs
 
 _EXAMPLE = (
     "Examples:\n\n"

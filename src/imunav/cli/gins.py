@@ -15,6 +15,7 @@ import numpy as np
 import typer
 
 from imunav.errors import ConfigError, InvalidInputError
+from imunav.files import check_outputs, write_json
 from imunav.ins.gins import GinsResult
 from imunav.ins.gins.outage import outage_test
 from imunav.ins.gins.outputs import (
@@ -27,7 +28,6 @@ from imunav.ins.gins.outputs import (
 )
 from imunav.ins.gins.plot import FIGURE_NAMES
 from imunav.ins.gins.setup import GinsInputs, GinsSetup, load_inputs, run_setup, simulate_drive
-from imunav.io._atomic import check_outputs, write_json
 from imunav.io.kfgins import NavTrack, read_kfgins_nav
 from imunav.sim import Trajectory
 

@@ -13,8 +13,8 @@ from rich.table import Table
 
 from imunav.cli._options import INSTANCE, LAYOUT, MAG_TOPIC, TOPIC, reader_options
 from imunav.errors import InvalidInputError
+from imunav.files import check_outputs, write_json
 from imunav.io import read_imu
-from imunav.io._atomic import check_outputs, write_json
 from imunav.io.logs import list_topics, log_kind
 from imunav.timeseries import describe
 from imunav.units import DEG, G0

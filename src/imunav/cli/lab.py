@@ -12,7 +12,7 @@ from rich.table import Table
 
 from imunav.cli._errors import fail
 from imunav.errors import InvalidInputError
-from imunav.io._atomic import check_outputs, read_json, write_json
+from imunav.files import check_outputs, read_json, write_json
 from imunav.lab.runner import run_lab
 
 _HELP = """Run the lab and write a report folder (index.html, summary.md, summary.json, data/, figures/).

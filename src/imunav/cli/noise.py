@@ -13,8 +13,8 @@ from rich.table import Table
 from imunav.cli._errors import check_figure_path
 from imunav.cli._options import INSTANCE, LAYOUT, TOPIC, reader_options
 from imunav.errors import InvalidInputError
+from imunav.files import atomic_path, check_outputs, write_json
 from imunav.io import read_imu
-from imunav.io._atomic import atomic_path, check_outputs, write_json
 from imunav.io.kalibr import write_kalibr_yaml
 from imunav.io.openvins import write_openvins_yaml
 from imunav.io.vins import write_vins_yaml

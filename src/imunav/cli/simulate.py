@@ -11,8 +11,8 @@ from rich.markup import escape
 from rich.progress import Progress
 
 from imunav.errors import ConfigError, InvalidInputError
+from imunav.files import check_outputs, write_json
 from imunav.io import write_imu
-from imunav.io._atomic import check_outputs, write_json
 from imunav.sim import (
     ImuErrorModel,
     ferraris_profile,

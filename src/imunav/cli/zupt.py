@@ -14,6 +14,7 @@ from rich.table import Table
 from imunav.cli._errors import check_suffix, fail
 from imunav.cli._options import INSTANCE, LAYOUT, TOPIC, reader_options
 from imunav.errors import FileFormatError, ImunavError
+from imunav.files import atomic_path, check_outputs, write_json
 from imunav.ins import (
     DEFAULT_THRESHOLDS,
     DETECTORS,
@@ -24,7 +25,6 @@ from imunav.ins import (
     loop_closure_error,
 )
 from imunav.io import foot, read_imu
-from imunav.io._atomic import atomic_path, check_outputs, write_json
 from imunav.io._common import check_nonempty
 from imunav.io.foot import read_pyshoe_mat
 from imunav.io.logs import log_kind

@@ -37,7 +37,7 @@ import pandas as pd
 
 from imunav._docstrings import fill_doc
 from imunav.errors import FileFormatError, InvalidInputError
-from imunav.io._atomic import atomic_path
+from imunav.files import atomic_path
 from imunav.io._common import build_imu, check_nonempty, header_json, parse_header, wrap_read_errors
 from imunav.timeseries import ImuData
 

@@ -23,7 +23,7 @@ import numpy as np
 
 from imunav._docstrings import fill_doc
 from imunav.errors import FileFormatError
-from imunav.io._atomic import atomic_path
+from imunav.files import atomic_path
 from imunav.io._common import (
     SI_UNITS,
     build_imu,

@@ -18,7 +18,7 @@ import numpy as np
 
 from imunav._docstrings import fill_doc
 from imunav.errors import FileFormatError, MissingDependencyError
-from imunav.io._atomic import atomic_path
+from imunav.files import atomic_path
 from imunav.io._common import build_imu, check_nonempty, header_json, parse_header, wrap_read_errors
 from imunav.io.csv import imu_to_table, resolve_columns, table_to_arrays
 from imunav.timeseries import ImuData

@@ -49,9 +49,9 @@ from typing import Any
 
 import numpy as np
 
-from imunav._atomic import atomic_path
 from imunav._docstrings import fill_doc
 from imunav.errors import FileFormatError, InvalidInputError
+from imunav.files import atomic_path
 from imunav.io.kfgins import NavTrack
 from imunav.io.topics import TopicData, TopicInfo, merge_onto, topic_data
 from imunav.rotation import quat_interp

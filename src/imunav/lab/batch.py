@@ -48,8 +48,8 @@ from imunav import calib
 from imunav._docstrings import fill_doc
 from imunav.calib import ImuCalibration
 from imunav.errors import ConfigError, FileFormatError, InvalidInputError, NotStaticError
+from imunav.files import atomic_path, write_json
 from imunav.io import read_imu, write_imu
-from imunav.io._atomic import atomic_path, write_json
 from imunav.lab.montecarlo import Executor, run_batch, spawn_generators
 from imunav.lab.report import check_spec, load_spec
 from imunav.lab.report.batch import write_batch_html

@@ -49,9 +49,9 @@ from pathlib import Path
 from typing import Any
 
 from imunav import __version__
-from imunav._atomic import jsonable, read_json, write_json
 from imunav._docstrings import fill_doc
 from imunav.errors import RunFolderError
+from imunav.files import jsonable, read_json, write_json
 
 __all__ = ["MANIFEST", "MARKER", "Manifest", "RunFolder", "read_manifest", "trusted_files", "sha256_file"]
 
@@ -84,7 +84,7 @@ def sha256_file(path: str | os.PathLike[str]) -> str:
 
 
 def _is_temp(name: str) -> bool:
-    """A hidden temporary file of :func:`imunav._atomic.atomic_path` (``.<name>.<random>.tmp<suffix>``)."""
+    """A hidden temporary file of :func:`imunav.files.atomic_path` (``.<name>.<random>.tmp<suffix>``)."""
     return name.startswith(".") and ".tmp" in name and name != MARKER
 
 

@@ -60,7 +60,7 @@ from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
 
 from imunav import __version__
 from imunav.errors import ConfigError
-from imunav.io._atomic import atomic_path, json_text, jsonable
+from imunav.files import atomic_path, json_text, jsonable
 from imunav.lab.config import (
     SIMULATION_ONLY,
     STEPS,

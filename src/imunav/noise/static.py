@@ -56,7 +56,7 @@ import numpy as np
 
 from imunav._quantiles import chi2_isf
 from imunav.errors import InvalidInputError, NotStaticError
-from imunav.io._atomic import jsonable
+from imunav.files import jsonable
 from imunav.results import Result
 from imunav.timeseries import G_REF, ImuData, rest_force_problem
 

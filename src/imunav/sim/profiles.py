@@ -37,7 +37,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from imunav._docstrings import fill_doc
 from imunav.errors import InvalidInputError, ShapeError
-from imunav.io._atomic import atomic_path
+from imunav.files import atomic_path
 from imunav.results import EulerMixin
 from imunav.rotation import (
     quat_conjugate,

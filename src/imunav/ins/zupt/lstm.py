@@ -20,9 +20,9 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from imunav._atomic import atomic_path
 from imunav._docstrings import fill_doc
 from imunav.errors import ConfigError, FileFormatError, InvalidInputError, ShapeError
+from imunav.files import atomic_path
 from imunav.ins.zupt import _lstm_kernels as _lk
 from imunav.ins.zupt.result import DetectorResult
 from imunav.ins.zupt.statistics import detector_statistic

@@ -24,7 +24,7 @@ import pandas as pd
 
 from imunav import __version__
 from imunav._docstrings import fill_doc
-from imunav.io._atomic import atomic_path
+from imunav.files import atomic_path
 
 __all__ = ["Report", "Section", "Parameter"]
 

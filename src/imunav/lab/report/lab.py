@@ -15,7 +15,7 @@ from typing import Any
 
 import numpy as np
 
-from imunav._atomic import jsonable
+from imunav.files import jsonable
 from imunav.lab.report.catalog import display_unit, expand_spec, to_display_value
 from imunav.lab.report.html import Parameter, Report
 from imunav.lab.report.spec import check_spec

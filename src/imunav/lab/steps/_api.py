@@ -18,8 +18,8 @@ from typing import Any
 
 import numpy as np
 
-from imunav._atomic import jsonable
 from imunav.errors import ConfigError
+from imunav.files import jsonable
 from imunav.results import Result
 
 __all__ = ["StepResult", "LabContext"]

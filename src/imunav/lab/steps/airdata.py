@@ -28,8 +28,8 @@ from imunav.airdata import plot as P
 from imunav.airdata.filter import ThesisFilter
 from imunav.airdata.scenario import ThesisScenario, simulate_thesis, thesis_report
 from imunav.errors import ConfigError
+from imunav.files import atomic_path, write_json
 from imunav.filters import detect_faults
-from imunav.io._atomic import atomic_path, write_json
 from imunav.lab.steps._api import LabContext, StepResult
 
 TITLE = "Air data + Doppler radar: wind filter, robust filtering, fault detection"

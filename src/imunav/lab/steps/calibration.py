@@ -45,7 +45,7 @@ from imunav.calib import (
 from imunav.calib.model import parameter_names
 from imunav.calib.plot import plot_residuals, save_figure
 from imunav.errors import InsufficientDataError
-from imunav.io._atomic import write_json
+from imunav.files import write_json
 from imunav.lab.steps._api import LabContext, StepResult
 from imunav.units import DEG, G0
 

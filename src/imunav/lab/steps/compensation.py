@@ -46,7 +46,7 @@ from imunav import calib
 from imunav._docstrings import fill_doc
 from imunav.calib import ImuCalibration
 from imunav.errors import ConfigError
-from imunav.io._atomic import atomic_path
+from imunav.files import atomic_path
 from imunav.lab.report.catalog import calibration_estimates
 from imunav.lab.report.lab import display_parameters, embed_png
 from imunav.lab.steps._api import LabContext, StepResult

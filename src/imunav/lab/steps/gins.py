@@ -33,10 +33,10 @@ from typing import Any
 
 from imunav._quantiles import chi2_ppf
 from imunav.errors import ConfigError
+from imunav.files import write_json
 from imunav.ins.gins.outputs import run_summary
 from imunav.ins.gins.plot import write_gins_figures
 from imunav.ins.gins.setup import load_inputs, run_setup, simulate_drive
-from imunav.io._atomic import write_json
 from imunav.io.kfgins import NavTrack, read_kfgins_nav
 from imunav.lab.steps._api import LabContext, StepResult
 from imunav.lab.steps.recordings import resolve_path

@@ -33,7 +33,7 @@ import numpy as np
 from imunav._docstrings import fill_doc
 from imunav._quantiles import norm_ppf
 from imunav.errors import ConfigError
-from imunav.io._atomic import atomic_path, write_json
+from imunav.files import atomic_path, write_json
 from imunav.lab.steps._api import LabContext, StepResult
 from imunav.noise import allan_deviation, compare_psd_allan, fit_noise, fit_psd, log_average, psd
 from imunav.noise.ar import fit_gauss_markov

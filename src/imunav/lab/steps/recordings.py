@@ -48,8 +48,8 @@ import numpy as np
 
 from imunav._docstrings import fill_doc
 from imunav.errors import ConfigError, InvalidInputError
+from imunav.files import atomic_path
 from imunav.io import read_imu
-from imunav.io._atomic import atomic_path
 from imunav.io.datasets import shared_data_dir
 from imunav.lab.batch import _read_segments
 from imunav.lab.report.catalog import noise_estimates

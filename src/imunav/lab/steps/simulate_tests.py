@@ -52,8 +52,8 @@ import numpy as np
 from imunav._docstrings import fill_doc
 from imunav.earth import normal_gravity
 from imunav.errors import ConfigError
+from imunav.files import atomic_path, write_json
 from imunav.io import write_imu
-from imunav.io._atomic import atomic_path, write_json
 from imunav.lab.report.lab import embed_png
 from imunav.lab.steps._api import LabContext, StepResult
 from imunav.sim import (

@@ -38,7 +38,7 @@ from imunav import calib
 from imunav._docstrings import fill_doc
 from imunav.calib import thermal_calibration
 from imunav.errors import ConfigError
-from imunav.io._atomic import atomic_path
+from imunav.files import atomic_path
 from imunav.lab.report.lab import embed_png
 from imunav.lab.steps._api import LabContext, StepResult
 from imunav.sim import hundred_position_profile, presets, rate_table_profile, simulate_imu
