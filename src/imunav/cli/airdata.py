@@ -6,29 +6,29 @@ import json
 from pathlib import Path
 from typing import Optional
 
-import numpy as np
 import typer
 from rich.console import Console
 from rich.progress import Progress
 from rich.table import Table
 
 from imunav.airdata import plot as P
-from imunav.airdata.filter import LongHorizonConfig, LongHorizonFilter, ThesisFilter, thesis_row
-from imunav.airdata.flight import FlightConfig, simulate_flight
+from imunav.airdata.flight import FlightConfig
+from imunav.airdata.flightfile import (
+    read_flight_file,
+    simulate_flight_file,
+    wind_errors,
+    write_flight_file,
+    write_wind_estimates,
+)
 from imunav.airdata.scenario import (
     ThesisScenario,
-    delay_summary,
+    fault_detection_table,
     load_config,
-    simulate_detector_statistics,
-    simulate_thesis,
     thesis_report,
 )
 from imunav.cli._errors import check_figure_path, check_suffix, fail
-from imunav.errors import FileFormatError, InvalidInputError
+from imunav.errors import InvalidInputError
 from imunav.files import atomic_path, check_outputs, write_json
-from imunav.filters.faults import DETECTORS, alarms, calibrated_thresholds, false_alarm_rates, thesis_thresholds
-from imunav.io._common import wrap_read_errors
-from imunav.rotation import dcm_from_euler
 
 _HELP = """Air data + Doppler radar integration: wind-estimating Kalman filter, robust filtering, fault detection.
 
@@ -105,36 +105,20 @@ Example: imunav airdata simulate turns --duration 120 --wind 8,-12,0 --turbulenc
         check_suffix(out, "--out", (".npz",), "the simulated flight (NumPy archive)")
 
         try:
-            loaded = None
             if config is not None:
-                loaded = load_config(config)
-                profile = "thesis" if isinstance(loaded, ThesisScenario) else loaded.profile
-            if profile == "thesis":
-                sc = loaded if loaded is not None else ThesisScenario(kind=kind)
-                kind = sc.kind
-                d = simulate_thesis(sc, rng=seed)
-                arrays = {k: getattr(d, k) for k in ("t", "x_true", "wind_true", "v_true", "v_ads", "v_doppler", "z",
-                                                     "ads_noise", "anomaly")}
-                meta = {"type": "thesis", "scenario": d.scenario.to_dict(), "seed": seed}
-                summary = {"file": str(out), "type": "thesis", "kind": kind, "steps": int(d.t.size), "seed": seed}
+                scenario = load_config(config)
+            elif profile == "thesis":
+                scenario = ThesisScenario(kind=kind)
             else:
-                cfg = loaded if loaded is not None else FlightConfig(
+                scenario = FlightConfig(
                     profile=profile, duration=duration, tas=tas, altitude=altitude, wind_ned=_vec3(wind, "--wind"),
                     turbulence=turbulence, rate_ads=rate_ads, rate_doppler=rate_doppler)
-                f = simulate_flight(cfg, rng=seed)
-                arrays = {k: v for k, v in f.__dict__.items() if isinstance(v, np.ndarray)}
-                meta = {"type": "flight", "config": cfg.to_dict(), "seed": seed}
-                summary = {"file": str(out), "type": "flight", "profile": cfg.profile, "duration_s": cfg.duration,
-                           "ads_samples": int(f.t_ads.size), "doppler_samples": int(f.t_doppler.size), "seed": seed}
+            content = simulate_flight_file(scenario, seed)
         except InvalidInputError as exc:
             _fail(exc)
             return
-
-        def w(tmp: str) -> None:
-            with open(tmp, "wb") as fh:
-                np.savez_compressed(fh, meta=np.array(json.dumps(meta)), **arrays)
-
-        _write_atomic(out, w)
+        summary = content.summary(out)
+        write_flight_file(out, content)
         if json_out is not None:
             _write_json(json_out, summary)
         typer.echo(json.dumps(summary))
@@ -164,56 +148,18 @@ Example: imunav airdata run flight.npz --robust nis --json run.json
 
         rb = None if robust == "none" else robust
         try:
-            if not path.exists():
-                raise FileFormatError(f"{path}: no such file; create one with `imunav airdata simulate`")
-
-            with wrap_read_errors(str(path), "an `imunav airdata simulate` .npz file"), open(path, "rb") as fh, \
-                    np.load(fh, allow_pickle=False) as z:
-                if "meta" not in z:
-                    raise FileFormatError(f"{path}: not an `imunav airdata simulate` file (no 'meta' entry)")
-                meta = json.loads(str(z["meta"]))
-                data = {k: z[k] for k in z.files if k != "meta"}
-            if meta["type"] == "thesis":
-                r = ThesisFilter(robust=rb, gate_m=gate_m, alpha=alpha).run(data["z"], v_ads=data["v_ads"])
-                k0 = thesis_row(100)
-                e = r.wind[k0:] - data["wind_true"][k0:]
-                ed = data["z"][k0:] - data["wind_true"][k0:]
-                summary = {"type": "thesis", "robust": robust, "wind_rms_per_axis": np.sqrt(np.mean(e**2, 0)).tolist(),
-                           "difference_loop_rms_per_axis": np.sqrt(np.mean(ed**2, 0)).tolist(),
-                           "rejected_samples": int((r.weights == 0).sum()),
-                           "final_wind": r.wind[-1].tolist(), "true_wind": data["wind_true"][-1].tolist(),
-                           "P44_final": float(r.cov_diag[-1, 3])}
-                arrays = {"wind": r.wind, "P_diag": r.cov_diag, "normalized": r.normalized, "weights": r.weights}
-            elif meta["type"] == "flight":
-                r = LongHorizonFilter(LongHorizonConfig(robust=rb, alpha=alpha, gate_m=gate_m)).run(
-                        data["t_ads"], data["v_ads_body"], data["t_doppler"], data["v_doppler_body"],
-                        dcm_from_euler(data["euler_doppler"]), dcm_from_euler(data["euler_ads"]))
-                wt = np.stack([np.interp(r.t, data["t"], data["wind_ned"][:, i]) for i in range(3)], 1)
-                pt = np.stack([np.interp(r.t, data["t"], data["position_ned"][:, i]) for i in range(3)], 1)
-                skip = min(r.t.size - 1, 100)
-                e = r.wind[skip:] - wt[skip:]
-                summary = {"type": "flight", "robust": robust, "epochs": int(r.t.size),
-                           "wind_rms_per_axis": np.sqrt(np.mean(e**2, 0)).tolist(),
-                           "wind_std_mean": r.wind_std[skip:].mean(0).tolist(),
-                           "position_error_end": (r.position[-1] - pt[-1]).tolist(),
-                           "position_std_end": r.position_std[-1].tolist(),
-                           "rejected_samples": int((r.weights == 0).sum())}
-                arrays = {"t": r.t, "wind": r.wind, "wind_std": r.wind_std, "position": r.position,
-                          "normalized": r.normalized, "weights": r.weights}
-            else:
-                raise FileFormatError(f"{path}: unknown file type {meta.get('type')!r}")
-        except (InvalidInputError, KeyError) as exc:
-            _fail(exc if isinstance(exc, InvalidInputError) else FileFormatError(f"{path}: missing entry {exc}"))
+            run = wind_errors(read_flight_file(path), robust=rb, gate_m=gate_m, alpha=alpha)
+        except InvalidInputError as exc:
+            _fail(exc)
             return
         if out is not None:
-            with atomic_path(out) as tmp, open(tmp, "wb") as fh:
-                np.savez_compressed(fh, **arrays)
+            write_wind_estimates(out, run)
         if plot is not None:
-            fig = P.plot_wind(r) if meta["type"] == "thesis" else P.plot_long_horizon(r)
+            fig = P.plot_wind(run.result) if run.kind == "thesis" else P.plot_long_horizon(run.result)
             _write_atomic(plot, lambda tmp: fig.savefig(tmp, dpi=100, format=plot.suffix.lstrip(".") or "png"))
         if json_out is not None:
-            _write_json(json_out, summary)
-        typer.echo(json.dumps(summary))
+            _write_json(json_out, run.summary)
+        typer.echo(json.dumps(run.summary))
 
     @sub.command("faults", help="""Monte Carlo fault detection on the thesis scenario: inject a fault, run every detector.
 
@@ -246,38 +192,18 @@ Example: imunav airdata faults --kind variance --magnitude 3.5 --runs 100 --seed
                     raise InvalidInputError(f"--magnitude does not apply to kind {kind!r}")
                 kw[key] = magnitude
             sc = ThesisScenario(**kw)
-            if runs < 1:
-                raise InvalidInputError(f"--runs must be >= 1, got {runs}")
-            thr = calibrated_thresholds(window, 3, pfa)
-            th = thesis_thresholds(window, 3)
-            ss = np.random.SeedSequence(seed).spawn(2)
-            chunk = max(1, min(50, runs))
             with Progress(console=Console(stderr=True), transient=True) as prog:
                 task = prog.add_task("Monte Carlo", total=2 * runs)
 
                 def tick(n: int) -> None:
                     prog.update(task, advance=n)
 
-                stats_f = simulate_detector_statistics(sc, runs, np.random.default_rng(ss[0]), window,
-                                                       chunk=chunk, on_chunk=tick)
-                stats_n = simulate_detector_statistics(ThesisScenario(kind="nominal"), runs,
-                                                       np.random.default_rng(ss[1]), window, chunk=chunk, on_chunk=tick)
+                result = fault_detection_table(sc, runs, seed, window=window, p_false_alarm=pfa, horizon=horizon,
+                                               on_chunk=tick)
         except InvalidInputError as exc:
             _fail(exc)
             return
-        o = sc.onset_row
-        rows = []
-        for d in DETECTORS:
-            sn = stats_n[d][:, window - 1:]
-            for label, t in (("calibrated", thr[d]), ("thesis", th.get(d))):
-                if t is None:
-                    continue
-                summary = delay_summary(alarms(d, stats_f[d], t), o, horizon)
-                fa_step, fa_run = false_alarm_rates(alarms(d, sn, t))
-                rows.append({"detector": d, "threshold_mode": label, "threshold": float(t),
-                             **{k: summary[k] for k in ("median_delay", "p90_delay", f"detected_within_{horizon}", "missed")},
-                             "false_alarm_per_step": fa_step, "false_alarm_per_run": fa_run})
-        result = {"scenario": sc.to_dict(), "runs": runs, "seed": seed, "window": window, "pfa": pfa, "rows": rows}
+        rows = result["rows"]
         table = Table(title=f"{kind} fault at thesis step {onset}, {runs} runs")
         for col in ("detector", "thresholds", "threshold", "median delay", f"within {horizon}", "missed", "FA/step"):
             table.add_column(col)
