@@ -3,8 +3,15 @@
 import numpy as np
 import pytest
 
-from imunav.calib import fit_ellipsoid, hard_iron_minmax, soft_iron_rotation_scale, sphere_coverage
-from imunav.errors import DegenerateGeometryError, InsufficientDataError
+from imunav.calib import (
+    calibrate_magnetometer,
+    fit_ellipsoid,
+    hard_iron_minmax,
+    minmax_calibration,
+    soft_iron_rotation_scale,
+    sphere_coverage,
+)
+from imunav.errors import DegenerateGeometryError, InsufficientDataError, InvalidInputError
 
 
 def _sphere(n, rng):
@@ -87,3 +94,20 @@ def test_degenerate_data_refused(rng):
     with pytest.raises(InsufficientDataError, match="at least 10"):
         fit_ellipsoid(u[:5])
     assert sphere_coverage(u) == 1.0
+
+
+def test_minmax_calibration_and_the_method_dispatch(rng):
+    """Min-max: the mid-range hard iron, no soft iron; its norm spread shows the soft iron it leaves."""
+    u = _sphere(4000, rng)
+    sphere = 40.0 * u + [5.0, -3.0, 2.0]
+    c = minmax_calibration(sphere)
+    # the mid-range of 4000 points on a sphere misses the extremes by < 1 % of the radius
+    np.testing.assert_allclose(c.b, [5, -3, 2], atol=0.4)
+    assert c.method == "minmax" and np.array_equal(c.A, np.eye(3))
+    assert c.field_norm == pytest.approx(40.0, rel=0.01) and c.quality["norm_spread_after"] < 0.01
+    squashed = u * [40.0, 40.0, 20.0]  # soft iron (a z axis half as long): the spread stays
+    assert minmax_calibration(squashed).quality["norm_spread_after"] > 0.1
+    assert calibrate_magnetometer(sphere, "minmax").to_dict() == c.to_dict()
+    np.testing.assert_allclose(calibrate_magnetometer(sphere).b, [5, -3, 2], atol=1e-9)
+    with pytest.raises(InvalidInputError, match="ellipsoid, rotation-scale or minmax"):
+        calibrate_magnetometer(sphere, "median")

@@ -12,14 +12,13 @@ from pathlib import Path
 from typing import Any, Optional
 
 import numpy as np
-import pandas as pd
 import typer
 from rich.console import Console
 from rich.table import Table
 
 from imunav import calib
 from imunav.calib import ImuCalibration, combine, ferraris_from_session
-from imunav.calib.magnetometer import MagCalibration, fit_ellipsoid, hard_iron_minmax, soft_iron_rotation_scale
+from imunav.calib.magnetometer import calibrate_magnetometer
 from imunav.calib.multipose import undetermined_misalignment_error
 from imunav.calib.plot import plot_magnetometer, plot_residuals, plot_temperature_fit, save_figure
 from imunav.calib.temperature import thermal_calibration
@@ -27,8 +26,8 @@ from imunav.cli._options import INSTANCE, LAYOUT, TOPIC, reader_options
 from imunav.errors import FileFormatError, InvalidInputError
 from imunav.files import check_outputs, check_writable, read_json, write_json
 from imunav.io import read_imu
-from imunav.io._common import check_nonempty, wrap_read_errors
-from imunav.io.logs import log_kind, read_topic
+from imunav.io.logs import log_kind
+from imunav.io.magnetometer import read_mag_samples
 from imunav.io.px4params import px4_parameters
 from imunav.sim import ImuErrorModel, Segments
 
@@ -377,17 +376,8 @@ def mag(
 
 
 
-    h = _read_mag(recording, topic, instance)
-    if method == "ellipsoid":
-        cal = fit_ellipsoid(h, field_norm, min_coverage=min_coverage)
-    elif method == "rotation-scale":
-        cal = soft_iron_rotation_scale(h)
-    elif method == "minmax":
-        b = hard_iron_minmax(h)
-        n = np.linalg.norm(h - b, axis=1)
-        cal = MagCalibration(b, np.eye(3), float(np.mean(n)), "minmax", {}, {"norm_spread_after": float(np.std(n) / np.mean(n))})
-    else:
-        raise InvalidInputError(f"--method must be ellipsoid, rotation-scale or minmax, not {method!r}")
+    h = read_mag_samples(recording, topic=topic, instance=instance)
+    cal = calibrate_magnetometer(h, method, field_norm=field_norm, min_coverage=min_coverage)
     if mag_unit is None:
         mag_unit = "uT" if log_kind(recording) is not None else "gauss"
     px4_values = _px4(px4_params, mag=cal, mag_unit=mag_unit)
@@ -399,32 +389,3 @@ def mag(
     Console().print({"b": cal.b.round(6).tolist(), "field_norm": round(cal.field_norm, 6), "quality": cal.quality})
     typer.echo(f"magnetometer calibration written to {out}")
     _write_px4(px4_values, px4_params)
-
-
-def _read_mag(path: Path, topic: Optional[str] = None, instance: Optional[int] = None) -> np.ndarray:
-    p = Path(path)
-    if p.exists() and log_kind(p) is not None:
-        if topic is None:
-            raise InvalidInputError(f"{p}: name the magnetometer topic with --topic (`imunav info {p}` lists them)")
-        d = read_topic(p, topic, instance=instance)
-        if "mag" not in d.values:
-            raise InvalidInputError(f"{p}: topic {topic!r} is a {d.kind} topic, not a magnetometer")
-        return np.asarray(d.values["mag"], float)
-    if topic is not None or instance is not None:
-        raise InvalidInputError(f"{p}: --topic / --instance apply to ROS bags and PX4 ULogs only")
-
-    check_nonempty(p)
-    if p.suffix == ".npz":
-        with wrap_read_errors(str(p), "NPZ"), open(p, "rb") as fh, np.load(fh, allow_pickle=False) as z:
-            for k in ("mag", "h", "m"):
-                if k in z:
-                    return np.asarray(z[k], float)
-            names = list(z.files)
-        raise FileFormatError(f"{p}: no 'mag' array (found {names})")
-
-    df = pd.read_csv(p, comment="#")
-    low = {c.lower().replace("_", ""): c for c in df.columns}
-    for names in (("magx", "magy", "magz"), ("mx", "my", "mz"), ("hx", "hy", "hz")):
-        if all(n in low for n in names):
-            return df[[low[n] for n in names]].to_numpy(float)
-    raise FileFormatError(f"{p}: needs columns mag_x, mag_y, mag_z (or mx, my, mz); found {list(df.columns)}")
