@@ -13,7 +13,7 @@ from rich.table import Table
 
 from imunav.cli._errors import check_suffix, fail
 from imunav.cli._options import INSTANCE, LAYOUT, TOPIC, reader_options
-from imunav.errors import FileFormatError, ImunavError
+from imunav.errors import ImunavError
 from imunav.files import atomic_path, check_outputs, write_json
 from imunav.ins import (
     DEFAULT_THRESHOLDS,
@@ -24,10 +24,8 @@ from imunav.ins import (
     error_2d,
     loop_closure_error,
 )
-from imunav.io import foot, read_imu
-from imunav.io._common import check_nonempty
 from imunav.io.foot import read_pyshoe_mat
-from imunav.io.logs import log_kind
+from imunav.io.foot_recording import read_foot_trial
 from imunav.learn import LstmConfig, LstmDetector, best_labels, select_shoe_threshold, train_lstm
 from imunav.learn.lstm import require_torch
 
@@ -43,27 +41,6 @@ def register(app: typer.Typer) -> None:
 
 def _write_json(path: Path, obj: Any) -> None:
     write_json(path, obj, indent=1)
-
-
-def load_foot_file(path: Path, **read: Any) -> Any:
-    """Read a foot recording by its format: pyshoe ``.mat``, x-io or FGO ``.csv``; a ROS bag / PX4 ULog (or
-    any file with ``read`` options such as ``topic`` / ``layout``) through :func:`imunav.io.read_imu`."""
-
-    if read or (path.exists() and log_kind(path) is not None):
-        return foot.FootTrial(read_imu(path, **read), name=path.stem)
-    check_nonempty(path)
-    if path.suffix.lower() == ".mat":
-        return foot.read_pyshoe_mat(path)
-    if path.suffix.lower() == ".csv":
-        with open(path) as fh:
-            header = fh.readline()
-        if "Gyroscope X (deg/s)" in header:
-            return foot.read_xio_gait_csv(path)
-        if "time_index" in header and "acc_x" in header:
-            gt = path.with_name("positionGt.csv")
-            return foot.read_fgo_csv(path, gt if gt.is_file() else None)
-    raise FileFormatError(f"{path}: unknown foot-recording format (pyshoe .mat, x-io Gait-Tracking .csv or "
-                          "Constrained-ZUPT-FGO imuMeas*.csv)")
 
 
 def _fail(exc: Exception) -> None:
@@ -101,7 +78,7 @@ def run_cmd(
     check_suffix(out, "--out", (".npz",), "the trajectory (NumPy archive)")
 
     try:
-        trial = load_foot_file(file, **reader_options(topic=topic, instance=instance, layout=layout))
+        trial = read_foot_trial(file, **reader_options(topic=topic, instance=instance, layout=layout))
         guard = None
         if detector.startswith("labels:"):
             key = detector.split(":", 1)[1]
