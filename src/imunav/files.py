@@ -49,6 +49,21 @@ def atomic_path(path: str | os.PathLike[str]) -> Iterator[Path]:
     The temporary name keeps the target's suffix, so libraries that look at
     the extension (numpy, scipy, pyarrow) behave as for the final name.
 
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The file to write (its folder is created).
+
+    Yields
+    ------
+    pathlib.Path
+        The temporary file to write; on an error it is removed and ``path`` is left untouched.
+
+    Raises
+    ------
+    OSError
+        If the folder cannot be created or written, naming ``path``.
+
     Examples
     --------
     >>> import tempfile, pathlib
@@ -132,7 +147,20 @@ def jsonable(obj: Any) -> Any:
 
 
 def json_text(obj: Any, indent: int | None = 2) -> str:
-    """Standard JSON text of ``obj`` (no ``NaN`` / ``Infinity`` tokens: those are null)."""
+    """Standard JSON text of ``obj`` (no ``NaN`` / ``Infinity`` tokens: those are null).
+
+    Parameters
+    ----------
+    obj : object
+        Any value :func:`jsonable` converts.
+    indent : int or None, optional
+        Indentation (None: one line).
+
+    Returns
+    -------
+    str
+        The JSON text, ending with a newline.
+    """
     return json.dumps(jsonable(obj), indent=indent, allow_nan=False) + "\n"
 
 
@@ -140,6 +168,20 @@ def write_json(path: str | os.PathLike[str], obj: Any, indent: int | None = 2) -
     """Write ``obj`` as standard JSON (see :func:`json_text`) to ``path`` atomically.
 
     Every JSON file the command line writes goes through here.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        Output file.
+    obj : object
+        Any value :func:`jsonable` converts.
+    indent : int or None, optional
+        Indentation (None: one line).
+
+    Returns
+    -------
+    pathlib.Path
+        ``path``.
     """
     text = json_text(obj, indent)
     with atomic_path(path) as tmp:
@@ -148,7 +190,25 @@ def write_json(path: str | os.PathLike[str], obj: Any, indent: int | None = 2) -
 
 
 def read_json(path: str | os.PathLike[str], what: str = "JSON file") -> Any:
-    """Load a JSON file; a syntax error becomes a :class:`~imunav.errors.FileFormatError` naming the file."""
+    """Load a JSON file; a syntax error becomes a :class:`~imunav.errors.FileFormatError` naming the file.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The file.
+    what : str, optional
+        What the file is, for the error message.
+
+    Returns
+    -------
+    object
+        The parsed JSON.
+
+    Raises
+    ------
+    FileFormatError
+        If the file is not valid JSON.
+    """
 
     text = Path(path).read_text(encoding="utf-8")
     try:
@@ -164,6 +224,16 @@ def check_writable(path: str | os.PathLike[str]) -> None:
     Checked before any work is done: the path is not a folder, no existing
     ancestor is a file, and a file can be created in the nearest existing
     ancestor folder (a probe file, removed at once).
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The output file.
+
+    Raises
+    ------
+    OSError
+        If a file cannot be written there.
     """
     target, _, parent = _output_target(path)
     if parent is None:
@@ -180,7 +250,21 @@ def check_outputs(inputs: Iterable[str | os.PathLike[str] | None],
     """Refuse an output path that resolves to an input file (it would replace the input),
     and two outputs that resolve to the same file.
 
-    ``None`` entries are skipped.  Raises :class:`~imunav.errors.InvalidInputError`.
+    ``None`` entries are skipped.  Each output is also checked with :func:`check_writable`.
+
+    Parameters
+    ----------
+    inputs : iterable of str, os.PathLike or None
+        The files a command reads.
+    outputs : iterable of str, os.PathLike or None
+        The files it writes.
+
+    Raises
+    ------
+    InvalidInputError
+        If an output is an input file, or two outputs are the same file.
+    OSError
+        If an output cannot be written.
     """
 
     def key(p: str | os.PathLike[str]) -> Path:
