@@ -29,7 +29,7 @@ import time
 from collections.abc import Iterable, Mapping
 from pathlib import Path
 
-from imunav._atomic import atomic_path
+from imunav.files import atomic_path
 
 BEFORE = Path(__file__).with_name("before_a308974.json")
 COMMIT = "a308974"

@@ -151,7 +151,7 @@ def main() -> None:
         print("variance of GLS on 1-s bins / GLS on position means (accel T_i1, T_i2, T_i3, b_i): "
               + ", ".join(f"{x:.3f}" for x in r) + "  (the most any linear estimator could gain)")
     if a.json:
-        from imunav.io._atomic import write_json
+        from imunav.files import write_json
 
         write_json(a.json, {"runs": a.runs, "fs": a.fs, "tc": a.tc, "accel_success": acc.tolist(),
                             "gyro_success": gyr.tolist(), "coverage": out_cov})

@@ -217,7 +217,7 @@ def _load_cache(path: str | None, tag: str) -> list | None:
 
 def _save_cache(path: str, tag: str, reps: list) -> None:
     """Write pyins' outage reports atomically (pyins is the slow half of the protocol)."""
-    from imunav.io._atomic import atomic_path
+    from imunav.files import atomic_path
 
     arrays = {"kind": np.array("outages"), "tag": np.array(tag), "n_shifts": np.array(len(reps))}
     for i, r in enumerate(reps):
@@ -305,7 +305,7 @@ def _compare(ours: dict, peer: dict) -> None:
 def _cached_pyins(sc: Scenario, cache: str | None, tag: str) -> dict:
     """pyins' errors on the scenario ``tag``: read from ``cache`` (an ``.npz`` of JSON strings keyed by scenario)
     when there, else run and added to it (written atomically)."""
-    from imunav.io._atomic import atomic_path
+    from imunav.files import atomic_path
 
     entries: dict[str, str] = {}
     if cache is not None and os.path.exists(cache):

@@ -1,4 +1,4 @@
-"""Monte Carlo of the attitude paper's scenario through imunav.montecarlo: processes vs Dask.
+"""Monte Carlo of the attitude paper's scenario through imunav.lab.montecarlo: processes vs Dask.
 
 Acceptance (issue 8): 1,000 Monte Carlo runs of the Candan & Söken scenario
 (:mod:`imunav.attitude.scenario`, 245 s at 100 Hz, gravity-vector KF) in under
@@ -39,7 +39,7 @@ def main(argv: list[str] | None = None) -> int:
     import numpy as np
 
     from imunav.attitude.scenario import PAPER_TABLE2
-    from imunav.montecarlo import run_montecarlo
+    from imunav.lab.montecarlo import run_montecarlo
     from imunav.scenarios import attitude_paper
 
     filters = tuple(f.strip() for f in a.filters.split(",") if f.strip())

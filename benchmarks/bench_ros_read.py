@@ -143,7 +143,7 @@ def main(argv: list[str] | None = None) -> dict:
         print(f"memory: {res['imunav_extra_bytes_per_imu_message']:.0f} B per selected message over the baseline, "
               f"vs {res['bag_bytes_per_imu_message']:.0f} B per message in the bag (ImuData: 7 float64 = 56 B)")
         if a.json is not None:
-            from imunav.io._atomic import write_json
+            from imunav.files import write_json
 
             write_json(a.json, res)
         return res

@@ -139,7 +139,7 @@ MUTANTS = [
            "covth[np.ix_(keep, keep)] = cj[:nk, :nk]",
            "covth[np.ix_(keep, keep)] = np.linalg.inv(Jw[:, :nk].T @ Jw[:, :nk])",
            ("tests/noise/test_fit_calibration.py",)),
-    Mutant("ZUPT attitude Jacobian from C_{k-1} f_k (not the increment)", "ZUPT", "ins/_kernels.py",
+    Mutant("ZUPT attitude Jacobian from C_{k-1} f_k (not the increment)", "ZUPT", "ins/zupt/kernels.py",
            "_zupt_transition(Phi, Qd, dcm_from_quat_1(q[k - 1]), dvn, h, prm)",
            "_zupt_transition(Phi, Qd, dcm_from_quat_1(q[k - 1]), dcm_from_quat_1(q[k - 1]) @ (acc[k] - ba[k - 1]) * h, "
            "h, prm)",

@@ -86,7 +86,7 @@ def _mc(filt: str, label: str, pitch: float, pitch_sd: float, roll: float, roll_
         values={"pitch": pitch, "pitch sd": pitch_sd, "roll": roll, "roll sd": roll_sd},
         patterns={k: (row, i + 1) for i, k in enumerate(("pitch", "pitch sd", "roll", "roll sd"))},
         tol=dict.fromkeys(("pitch", "pitch sd", "roll", "roll sd"), 5e-5),  # the README shows 4 decimals
-        note="seeded (--seed 0, run i uses imunav.montecarlo.spawn_generators(0)[i]); same numbers on every executor",
+        note="seeded (--seed 0, run i uses imunav.lab.montecarlo.spawn_generators(0)[i]); same numbers on every executor",
     )
 
 

@@ -29,7 +29,7 @@ def write_gallery_page(out: str | Path) -> Path:
     Path
         The Markdown page.
     """
-    from imunav.lab import run_lab
+    from imunav.lab.runner import run_lab
 
     out = Path(out)
     report = out / "lab"

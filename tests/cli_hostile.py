@@ -285,9 +285,9 @@ def make_fixtures(root: Path) -> dict[str, str]:
 
     import numpy as np
 
-    from imunav.batch import simulate_batch
     from imunav.calib import ImuCalibration
     from imunav.io import write_imu
+    from imunav.lab.batch import simulate_batch
     from imunav.sim import hundred_position_profile
     from imunav.timeseries import ImuData
 

@@ -8,9 +8,9 @@ import numpy as np
 import pytest
 from typer.testing import CliRunner
 
-from imunav.batch import calibrate_batch, find_units, noise_batch, simulate_batch
 from imunav.cli.main import app
 from imunav.errors import InvalidInputError
+from imunav.lab.batch import calibrate_batch, find_units, noise_batch, simulate_batch
 from imunav.sim import ImuErrorModel, presets
 
 runner = CliRunner()

@@ -22,7 +22,7 @@ import pytest
 
 import imunav.attitude
 import imunav.io
-import imunav.labsteps
+import imunav.lab.steps
 
 #: name -> (canonical block, written without indentation; the docstrings that carry it, by qualified name)
 FRAGMENTS: dict[str, tuple[str, set[str]]] = {}
@@ -182,8 +182,8 @@ def test_a_copy_edited_in_one_place_only_is_caught():
 
 
 def test_each_lab_step_run_names_its_own_option_table():
-    steps = [i.name for i in pkgutil.iter_modules(imunav.labsteps.__path__) if not i.name.startswith("_")]
+    steps = [i.name for i in pkgutil.iter_modules(imunav.lab.steps.__path__) if not i.name.startswith("_")]
     assert len(steps) >= 8
     for step in steps:
-        doc = inspect.getdoc(importlib.import_module(f"imunav.labsteps.{step}").run)
+        doc = inspect.getdoc(importlib.import_module(f"imunav.lab.steps.{step}").run)
         assert f"``ctx.options`` (``[{step}]``)" in doc, step

@@ -47,7 +47,7 @@ NOTES_NOT_YET_DONE: set[str] = set()
 
 # The two modules that locate the shared data folder document where they look: ``../shared/data`` is their
 # behaviour there, not a reference.
-SHARED_DATA_LOOKUP = {"imunav.io.datasets", "imunav.labsteps.recordings"}
+SHARED_DATA_LOOKUP = {"imunav.io.datasets", "imunav.lab.steps.recordings"}
 
 # ``../shared``, ``specs/``, "digest", and the file names of the project's digests of its sources
 PRIVATE_NOTES = re.compile(r"\.\./shared|\bspecs/|\bdigest\b|references\.md|ahrs-sensor-errors|airdata-doppler-wind"

@@ -10,7 +10,10 @@ annotations only (they never run) and are not edges.  Importing ``a.b.c`` also r
 since a package ``__init__`` that re-exports its submodules imports them all (importing
 ``imunav.io.csv`` runs ``imunav/io/__init__``, which imports every format).
 
-The layers are those of ``docs/design.md`` section 1 (:data:`LAYERS`).
+The layers are those of ``docs/design.md`` section 1 (:data:`LAYERS`).  Beyond them: the command line
+(``imunav.cli``) imports only public library modules and names (no ``_private`` module or name outside
+``cli`` itself), nothing outside ``cli`` imports it, and nothing below the orchestration package ``imunav.lab``
+imports that.
 """
 
 from __future__ import annotations
@@ -32,14 +35,13 @@ SRC = ROOT / "src"
 LAYERS: list[tuple[str, tuple[str, ...]]] = [
     ("core", ("imunav", "imunav.errors", "imunav.units", "imunav.rotation", "imunav._rotation_kernels", "imunav.atmosphere",
               "imunav.earth", "imunav.allan_models", "imunav.crossval", "imunav._timeseries_kernels",
-              "imunav.provenance", "imunav._atomic", "imunav.runfolder", "imunav.toml", "imunav.filters._common",
+              "imunav.provenance", "imunav.files", "imunav.lab.runfolder", "imunav.toml", "imunav.filters._common",
               "imunav.filters._kernels", "imunav.filters._core", "imunav.results", "imunav._quantiles")),
     ("recordings, io", ("imunav.timeseries", "imunav.io")),
     ("noise, calib, filters", ("imunav.noise", "imunav.calib", "imunav.filters")),
     ("sim, attitude, ins, airdata, learn", ("imunav.sim", "imunav.attitude", "imunav.ins", "imunav.airdata",
                                             "imunav.learn", "imunav.scenarios")),
-    ("montecarlo, batch, lab, labsteps, report", ("imunav.montecarlo", "imunav.batch", "imunav.lab",
-                                                  "imunav.labconfig", "imunav.labsteps", "imunav.report")),
+    ("lab: runner, config, steps, batch, montecarlo, runfolder, report", ("imunav.lab",)),
     ("cli", ("imunav.cli",)),
 ]
 
@@ -251,6 +253,44 @@ def function_level_problems(graph: Graph, optional: frozenset[str] = OPTIONAL_IM
     return sorted(out, key=lambda s: (s.split(":")[0], int(s.split(":")[1].split()[0])))
 
 
+def _is_private(name: str) -> bool:
+    return name.startswith("_") and not (name.startswith("__") and name.endswith("__"))
+
+
+def private_imports(src: Path, package: str, importer: str) -> list[str]:
+    """Imports by the modules of ``importer`` (a subpackage such as ``imunav.cli``) of a private module or name of
+    the rest of ``package``: a module path with a part, or an imported name, that starts with ``_`` (dunders
+    such as ``__version__`` aside)."""
+    out = []
+    root = src / Path(*importer.split("."))
+    for path in sorted(root.rglob("*.py")):
+        m = _module_name(path, src)
+        pkg = m if path.name == "__init__.py" else m.rpartition(".")[0]
+        for node, _ in _imports(ast.parse(path.read_text(encoding="utf-8"), str(path))):
+            if isinstance(node, ast.Import):
+                pairs = [(a.name, None) for a in node.names]
+            else:
+                base = pkg
+                for _ in range(node.level - 1):
+                    base = base.rpartition(".")[0]
+                mod = (f"{base}.{node.module}" if node.module else base) if node.level else (node.module or "")
+                pairs = [(mod, a.name) for a in node.names]
+            for mod, name in pairs:
+                if mod.partition(".")[0] != package or mod == importer or mod.startswith(importer + "."):
+                    continue
+                if any(_is_private(part) for part in mod.split(".")) or (name is not None and _is_private(name)):
+                    out.append(f"{m}:{node.lineno} imports {mod}" + (f" {name}" if name else ""))
+    return out
+
+
+def importers_of(graph: Graph, target: str, allowed: tuple[str, ...] = ()) -> list[str]:
+    """Edges into ``target`` (a module or package, with its submodules) from outside it and outside ``allowed``."""
+    def under(m: str, p: str) -> bool:
+        return m == p or m.startswith(p + ".")
+    return [f"{e.source}:{e.line} imports {e.target}" for e in graph.edges
+            if under(e.target, target) and not under(e.source, target) and not any(under(e.source, a) for a in allowed)]
+
+
 @pytest.fixture(scope="module")
 def graph() -> Graph:
     return build_graph(SRC, "imunav")
@@ -262,7 +302,7 @@ def test_graph_sees_the_package(graph):
     assert Import("imunav.io.csv", "imunav.timeseries", 0, False) in {
         Import(e.source, e.target, 0, e.in_function) for e in graph.edges}
     # a name imported from a package resolves to the module that defines it
-    assert any(e.source == "imunav.cli.zupt" and e.target == "imunav.ins.zupt" for e in graph.edges)
+    assert any(e.source == "imunav.cli.zupt" and e.target == "imunav.ins.zupt.filter" for e in graph.edges)
 
 
 def test_no_import_cycles(graph):
@@ -275,6 +315,53 @@ def test_no_import_from_a_lower_layer_to_a_higher_one(graph):
 
 def test_function_level_imports_only_for_optional_dependencies(graph):
     assert function_level_problems(graph) == []
+
+
+def test_the_cli_imports_only_public_library_names():
+    assert private_imports(SRC, "imunav", "imunav.cli") == []
+
+
+def test_nothing_imports_the_cli_and_nothing_below_the_lab_imports_the_lab(graph):
+    assert importers_of(graph, "imunav.cli") == []
+    assert importers_of(graph, "imunav.lab", allowed=("imunav.cli",)) == []
+
+
+def test_a_command_module_registers_module_level_commands():
+    """One way to register a command: each command (or command group) is defined at module level and
+    ``register(app)`` only adds it (``app.command(NAME)(fn)`` or ``app.add_typer(group, name=NAME)``); no command
+    is defined inside ``register``."""
+    nested = []
+    for path in sorted((SRC / "imunav" / "cli").glob("*.py")):
+        tree = ast.parse(path.read_text(encoding="utf-8"))
+        for node in tree.body:
+            if isinstance(node, ast.FunctionDef) and node.name == "register":
+                nested += [f"{path.name}: {n.name}" for n in ast.walk(node) if n is not node
+                           and isinstance(n, (ast.FunctionDef, ast.AsyncFunctionDef))]
+    assert nested == []
+
+
+def test_the_checks_fail_on_a_private_import_and_on_an_upward_import(tmp_path):
+    src = _write_package(tmp_path, {
+        "__init__.py": "__version__ = '1'\n",
+        "_atomic.py": "def write():\n    pass\n",
+        "io/__init__.py": "",
+        "io/_common.py": "def helper():\n    pass\n",
+        "io/csv.py": "def read():\n    pass\n\ndef _parse():\n    pass\n",
+        "lab/__init__.py": "",
+        "lab/runner.py": "from pkg.cli._errors import fail\n",
+        "low.py": "import pkg.lab.runner\n",
+        "cli/__init__.py": "",
+        "cli/_errors.py": "def fail():\n    pass\n",
+        "cli/cmd.py": "from pkg import __version__\nfrom pkg.io.csv import read, _parse\nfrom pkg.io import _common\n"
+                      "import pkg._atomic\nfrom ._errors import fail\nfrom ..io.csv import read as r\n",
+    })
+    assert private_imports(src, "pkg", "pkg.cli") == [
+        "pkg.cli.cmd:2 imports pkg.io.csv _parse", "pkg.cli.cmd:3 imports pkg.io _common",
+        "pkg.cli.cmd:4 imports pkg._atomic"]
+    g = build_graph(src, "pkg")
+    assert importers_of(g, "pkg.cli") == ["pkg.lab.runner:1 imports pkg.cli", "pkg.lab.runner:1 imports pkg.cli._errors"]
+    assert importers_of(g, "pkg.lab", allowed=("pkg.cli",)) == ["pkg.low:1 imports pkg.lab",
+                                                               "pkg.low:1 imports pkg.lab.runner"]
 
 
 #: never loaded by importing a package or a CLI command module: drawing and optional extras, imported inside
@@ -306,7 +393,7 @@ def test_importing_the_packages_loads_no_optional_package_and_runs_no_kernel():
     computed by a kernel costs a compilation on a cold cache."""
     modules = build_graph(SRC, "imunav").modules
     packages = sorted(m for m, p in modules.items() if p.name == "__init__.py" or m.endswith(".plot")
-                      or m in ("imunav.lab", "imunav.batch") or m.startswith("imunav.cli."))
+                      or m in ("imunav.lab.runner", "imunav.lab.batch") or m.startswith("imunav.cli."))
     code = f"import {', '.join(packages)}\n" + _LOADED.format(heavy=NOT_AT_IMPORT)
     assert _run_python(code) == "[] []"
 

@@ -8,11 +8,11 @@ import numpy as np
 import pytest
 from typer.testing import CliRunner
 
-from imunav import lab as lab_mod
 from imunav.cli.main import app
 from imunav.errors import ConfigError
 from imunav.io import read_imu
-from imunav.lab import LabContext, StepResult, load_lab_config, run_lab
+from imunav.lab import runner as lab_mod
+from imunav.lab.runner import LabContext, StepResult, load_lab_config, run_lab
 from imunav.sim import ImuErrorModel, presets
 
 runner = CliRunner()
@@ -98,9 +98,9 @@ def test_step_context_shares_artifacts(tmp_path, monkeypatch):
         raise RuntimeError("deliberate failure")
 
     for name, fn in (("zz_probe", run), ("zz_boom", boom)):
-        mod = types.ModuleType(f"imunav.labsteps.{name}")
+        mod = types.ModuleType(f"imunav.lab.steps.{name}")
         mod.TITLE, mod.run = name, fn
-        monkeypatch.setitem(sys.modules, f"imunav.labsteps.{name}", mod)
+        monkeypatch.setitem(sys.modules, f"imunav.lab.steps.{name}", mod)
     monkeypatch.setattr(lab_mod, "available_steps", lambda: ["simulate_tests", "zz_boom", "zz_probe"])
     res = run_lab(tmp_path / "r", _cfg(tmp_path), steps=["simulate_tests", "zz_boom", "zz_probe"], progress=False)
     assert seen["n"] == 201 and seen["g"] == 9.80665 and seen["model"] == "thesis_sim"
@@ -148,9 +148,9 @@ def test_simulate_tests_options_earth_rate_and_format(tmp_path, monkeypatch):
         captured.update(ctx.artifacts)
         return StepResult({})
 
-    mod = types.ModuleType("imunav.labsteps.zz_probe2")
+    mod = types.ModuleType("imunav.lab.steps.zz_probe2")
     mod.TITLE, mod.run = "probe", probe
-    monkeypatch.setitem(sys.modules, "imunav.labsteps.zz_probe2", mod)
+    monkeypatch.setitem(sys.modules, "imunav.lab.steps.zz_probe2", mod)
     monkeypatch.setattr(lab_mod, "available_steps", lambda: ["simulate_tests", "zz_probe2"])
     res = run_lab(tmp_path / "e", cfg, steps=["simulate_tests", "zz_probe2"], progress=False)
     assert not res.failed_steps
@@ -178,8 +178,8 @@ def test_example_lab_configs_are_valid():
 
 
 def test_lab_tasks_end_at_100_percent_and_the_monte_carlo_reports_progress(tmp_path):
-    from imunav.lab import LabContext
-    from imunav.montecarlo import run_montecarlo
+    from imunav.lab.montecarlo import run_montecarlo
+    from imunav.lab.runner import LabContext
     from imunav.scenarios import attitude_paper
 
     class Recorder:

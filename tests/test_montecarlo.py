@@ -8,7 +8,7 @@ import pytest
 
 from imunav.errors import InvalidInputError
 from imunav.filters import ConsistencyResult, consistency_test
-from imunav.montecarlo import run_batch, run_montecarlo, spawn_generators
+from imunav.lab.montecarlo import run_batch, run_montecarlo, spawn_generators
 
 
 def test_same_seed_same_numbers_whatever_the_chunking():

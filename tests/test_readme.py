@@ -299,7 +299,7 @@ def test_shim_runs_this_tree(tmp_path: Path) -> None:
 def test_lab_quick_lists_every_option() -> None:
     """The README says examples/lab_quick.toml lists every option of the simulation step; it missed remount_s
     and figures (issue 16, item 7).  An option may be shown commented out (``# or: model = ...``)."""
-    from imunav.labsteps.simulate_tests import _DEFAULTS
+    from imunav.lab.steps.simulate_tests import _DEFAULTS
 
     text = (ROOT / "examples" / "lab_quick.toml").read_text(encoding="utf-8")
     table = tomllib.loads(text)["simulate_tests"]

@@ -89,8 +89,8 @@ def test_every_attitude_track_has_the_one_euler_method():
     from imunav.rotation import euler_from_quat
 
     with_q = {k: c for k, c in _package_dataclasses().items() if "q_nb" in {f.name for f in dataclasses.fields(c)}}
-    assert {"imunav.attitude.result.AttitudeResult", "imunav.ins.zupt.ZuptResult",
-            "imunav.ins.gins.GinsResult"} <= set(with_q)
+    assert {"imunav.attitude.result.AttitudeResult", "imunav.ins.zupt.filter.ZuptResult",
+            "imunav.ins.gins.result.GinsResult"} <= set(with_q)
     missing = sorted(k for k, c in with_q.items() if not issubclass(c, EulerMixin))
     assert not missing, f"dataclasses with q_nb but without EulerMixin.euler: {missing}"
 

@@ -20,14 +20,14 @@ import numpy as np
 import pytest
 from typer.testing import CliRunner
 
-from imunav import batch as batch_mod
-from imunav import lab as lab_mod
-from imunav._atomic import atomic_path
-from imunav.batch import calibrate_batch, find_units, simulate_batch
 from imunav.cli.main import app
 from imunav.errors import RunFolderError
-from imunav.lab import StepResult, run_lab
-from imunav.runfolder import FAILED, FILES, MANIFEST, MARKER, RunFolder, read_manifest, sha256_file
+from imunav.files import atomic_path
+from imunav.lab import batch as batch_mod
+from imunav.lab import runner as lab_mod
+from imunav.lab.batch import calibrate_batch, find_units, simulate_batch
+from imunav.lab.runfolder import FAILED, FILES, MANIFEST, MARKER, RunFolder, read_manifest, sha256_file
+from imunav.lab.runner import StepResult, run_lab
 
 ROOT = Path(__file__).resolve().parents[1]
 SIM = dict(fs=10.0, dwell_s=2.0, transition_s=1.0, rate_table=False, executor="serial")
@@ -187,9 +187,9 @@ def fast_step(monkeypatch):
         p.write_text(json.dumps({"seed": ctx.seed}))
         return StepResult({"ok": 1}, passed=True)
 
-    mod = types.ModuleType("imunav.labsteps.zz_fast")
+    mod = types.ModuleType("imunav.lab.steps.zz_fast")
     mod.TITLE, mod.run = "fast", run
-    monkeypatch.setitem(sys.modules, "imunav.labsteps.zz_fast", mod)
+    monkeypatch.setitem(sys.modules, "imunav.lab.steps.zz_fast", mod)
     monkeypatch.setattr(lab_mod, "available_steps", lambda: ["zz_fast", "zz_interrupt"])
     return mod
 
@@ -214,9 +214,9 @@ def test_an_interrupted_lab_leaves_no_manifest(tmp_path, fast_step, monkeypatch)
     def interrupt(ctx):
         raise KeyboardInterrupt
 
-    mod = types.ModuleType("imunav.labsteps.zz_interrupt")
+    mod = types.ModuleType("imunav.lab.steps.zz_interrupt")
     mod.TITLE, mod.run = "interrupt", interrupt
-    monkeypatch.setitem(sys.modules, "imunav.labsteps.zz_interrupt", mod)
+    monkeypatch.setitem(sys.modules, "imunav.lab.steps.zz_interrupt", mod)
     out = tmp_path / "rep"
     with pytest.raises(KeyboardInterrupt):
         run_lab(out, {}, steps=["zz_fast", "zz_interrupt"], progress=False)
@@ -282,7 +282,7 @@ def test_overwrite_keeps_what_no_manifest_lists(tmp_path):
     """A user's symlink to a listed file is not listed (paths compared as written, not resolved): --overwrite refuses
     rather than delete it; an empty folder of the user's survives, a folder that held listed files goes (review)."""
     from imunav.errors import RunFolderError
-    from imunav.runfolder import RunFolder
+    from imunav.lab.runfolder import RunFolder
 
     d = tmp_path / "run"
     with RunFolder(d, "demo"):

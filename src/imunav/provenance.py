@@ -31,7 +31,7 @@ from collections.abc import Mapping
 from typing import Any
 
 from imunav import __version__
-from imunav._atomic import jsonable
+from imunav.files import jsonable
 
 __all__ = ["PROVENANCE_KEY", "add_step", "steps", "fingerprint", "net_compensations"]
 

@@ -2,14 +2,14 @@
 
 Every result dataclass of imunav derives from :class:`Result`.  ``to_dict()``
 gives plain JSON types (arrays become lists, NaN / ±inf become ``None``:
-strict JSON, never a ``NaN`` token) through :func:`imunav._atomic.jsonable`;
+strict JSON, never a ``NaN`` token) through :func:`imunav.files.jsonable`;
 ``to_json(path)`` writes that dictionary through
-:func:`imunav._atomic.write_json` (temporary file beside the target, then
+:func:`imunav.files.write_json` (temporary file beside the target, then
 an atomic rename).  A result whose JSON shape is not simply its fields
 overrides ``to_dict()``; ``to_json()`` follows the override.
 
 This module sits at the bottom of the package: it imports nothing above
-:mod:`imunav._atomic`.
+:mod:`imunav.files`.
 """
 
 from __future__ import annotations
@@ -22,7 +22,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from imunav._atomic import jsonable, write_json
+from imunav.files import jsonable, write_json
 from imunav.rotation import euler_from_quat
 
 __all__ = ["Result", "EulerMixin", "jsonable"]

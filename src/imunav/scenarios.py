@@ -1,4 +1,4 @@
-"""Monte Carlo scenario functions for :func:`imunav.montecarlo.run_montecarlo`.
+"""Monte Carlo scenario functions for :func:`imunav.lab.montecarlo.run_montecarlo`.
 
 Scenario functions must be module-level (workers import them by name).  This
 module adapts scenarios that live in the capability packages to the
@@ -20,7 +20,7 @@ from imunav.attitude.scenario import PAPER_TABLE2, PaperScenario, default_filter
 from imunav.errors import ConfigError, InvalidInputError
 
 if TYPE_CHECKING:  # the type only: montecarlo is a layer above the scenarios it runs
-    from imunav.montecarlo import MonteCarloResult
+    from imunav.lab.montecarlo import MonteCarloResult
 
 __all__ = ["attitude_paper", "paper_rmse", "paper_table", "paper_report"]
 
@@ -44,7 +44,7 @@ def attitude_paper(
     Parameters
     ----------
     rngs : sequence of numpy.random.Generator
-        One generator per run (from :func:`imunav.montecarlo.spawn_generators`).
+        One generator per run (from :func:`imunav.lab.montecarlo.spawn_generators`).
     filters : sequence of str
         Filter names, in the order of the result columns.
     duration : float, optional
@@ -104,7 +104,7 @@ def paper_rmse(mc: MonteCarloResult) -> dict[str, NDArray[np.float64]]:
 
     Parameters
     ----------
-    mc : imunav.montecarlo.MonteCarloResult
+    mc : imunav.lab.montecarlo.MonteCarloResult
         The result of ``run_montecarlo(attitude_paper, ...)``.
 
     Returns
@@ -124,7 +124,7 @@ def paper_table(mc: MonteCarloResult) -> dict[str, dict[str, float]]:
 
     Parameters
     ----------
-    mc : imunav.montecarlo.MonteCarloResult
+    mc : imunav.lab.montecarlo.MonteCarloResult
         The result of ``run_montecarlo(attitude_paper, ...)``.
 
     Returns
@@ -146,7 +146,7 @@ def paper_report(mc: MonteCarloResult, scn: Any, filters: Mapping[str, Any]) -> 
 
     Parameters
     ----------
-    mc : imunav.montecarlo.MonteCarloResult
+    mc : imunav.lab.montecarlo.MonteCarloResult
         The result of ``run_montecarlo(attitude_paper, ...)``.
     scn : PaperScenario
         The scenario that was run.

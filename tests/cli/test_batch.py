@@ -17,7 +17,7 @@ def test_address_without_the_dask_executor_is_refused(tmp_path, cmd):
     write_imu(static_imu(3000), tmp_path / "u1.npz")
     assert "--executor dask" in one_error_line(invoke(*cmd, tmp_path, "--address", "tcp://127.0.0.1:1", "--quiet"))
     assert not (tmp_path / "calibration").exists() and not (tmp_path / "noise").exists()
-    from imunav.montecarlo import run_batch
+    from imunav.lab.montecarlo import run_batch
 
     with pytest.raises(InvalidInputError, match="dask"):
         run_batch(abs, [1], executor="serial", address="tcp://x:1")

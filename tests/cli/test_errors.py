@@ -280,7 +280,7 @@ def test_every_cli_json_is_standard(files, tmp_path):
 
 
 def test_json_writer_nulls_non_finite(tmp_path):
-    from imunav.io._atomic import write_json
+    from imunav.files import write_json
 
     p = write_json(tmp_path / "x.json", {"a": float("nan"), "b": [np.inf, -np.inf, 1.5], "c": np.float32("nan"),
                                          "d": np.array([1.0, np.nan]), "e": np.int64(3), "f": Path("p")})
@@ -395,7 +395,7 @@ RUN_FOLDER_FAULTS = ("is-a-file", "unwritable", "parent-is-file", "holds-another
 
 
 def _run_folder(tmp: Path, fault: str) -> tuple[Path, list[str]]:
-    from imunav.runfolder import RunFolder
+    from imunav.lab.runfolder import RunFolder
 
     d = tmp / "run"
     if fault == "is-a-file":
@@ -531,7 +531,7 @@ def test_concurrent_run_refused_and_sigint_leaves_no_manifest(tmp_path, name):
     import sys
     import time
 
-    from imunav.runfolder import MANIFEST, MARKER
+    from imunav.lab.runfolder import MANIFEST, MARKER
 
     argv, cfg_text = SLOW_RUNS[name]
     d = tmp_path / "run"

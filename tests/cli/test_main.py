@@ -82,7 +82,7 @@ def test_the_listed_summary_is_the_first_sentence_of_each_commands_help():
 
 
 #: what `imunav CMD --help` may import of the package: the CLI, and the core that `import imunav` loads
-_HELP_MODULES = ("imunav", "imunav.errors", "imunav.units", "imunav._atomic")
+_HELP_MODULES = ("imunav", "imunav.errors", "imunav.units", "imunav.files")
 _HEAVY = ("numba", "scipy", "pandas", "matplotlib", "torch", "dask", "pyulog", "rosbags", "yaml", "sklearn")
 _HELP_CODE = (
     "import sys, time\n"

@@ -16,10 +16,10 @@ import numpy as np
 import pytest
 from typer.testing import CliRunner
 
-from imunav._atomic import json_text
 from imunav.cli.main import app
+from imunav.files import json_text
 from imunav.io import write_imu
-from imunav.runfolder import FAILED, FILES, MANIFEST, MARKER
+from imunav.lab.runfolder import FAILED, FILES, MANIFEST, MARKER
 from imunav.timeseries import ImuData
 
 runner = CliRunner()

@@ -11,8 +11,8 @@ import numpy as np
 from imunav.attitude import _kernels as ak
 from imunav.attitude.mekf import MekfConfig
 from imunav.attitude.ukf import UkfConfig
-from imunav.ins import _kernels as ik
 from imunav.ins.zupt import ZuptConfig
+from imunav.ins.zupt import kernels as ik
 
 
 def test_mekf_parameter_constants_index_the_packed_config():

@@ -10,7 +10,7 @@ from shared_data import data_path
 
 from imunav.errors import InvalidInputError, ShapeError
 from imunav.ins import amvd, ared, detect_zero_velocity, detector_statistic, mbgtd, motion_adaptive, shoe
-from imunav.ins.detectors import optimize_threshold
+from imunav.ins.zupt.detectors import optimize_threshold
 from imunav.timeseries import ImuData
 
 

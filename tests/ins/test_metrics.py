@@ -8,7 +8,7 @@ from shared_data import data_path
 
 from imunav.errors import FileFormatError, InsufficientDataError, InvalidInputError, ShapeError
 from imunav.ins import ZuptConfig, ZuptFilter, detect_zero_velocity, error_2d, loop_closure_error, position_rmse
-from imunav.ins.metrics import align_heading, vertical_error
+from imunav.ins.zupt.metrics import align_heading, vertical_error
 
 
 def _track(n=500):

@@ -93,7 +93,7 @@ def test_plots_run(tmp_path):
 
     matplotlib.use("Agg")
     from imunav.ins import detect_zero_velocity
-    from imunav.ins.plot import plot_trajectory, plot_zero_velocity
+    from imunav.ins.zupt.plot import plot_trajectory, plot_zero_velocity
 
     sim = simulate_gait("walk", 4, error_model=None, rng=0)
     res = ZuptFilter().run(sim.imu, sim.stance)

@@ -251,7 +251,7 @@ def test_convert_ulog_to_parquet(tmp_path):
 def test_lab_recording_declares_a_topic(tmp_path):
     """[recordings.*] takes topic / instance / mag_topic / layout; the lab reads the log with them."""
     from imunav.errors import ConfigError
-    from imunav.labsteps.recordings import parse_recordings
+    from imunav.lab.steps.recordings import parse_recordings
 
     p = _log(SMALL)
     specs = parse_recordings({"vimu": {"path": str(p), "test": "static", "topic": "vehicle_imu", "instance": 1}},

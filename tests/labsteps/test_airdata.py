@@ -2,7 +2,7 @@
 
 import json
 
-from imunav.lab import run_lab
+from imunav.lab.runner import run_lab
 
 
 def test_airdata_lab_step(tmp_path):

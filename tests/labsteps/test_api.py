@@ -5,7 +5,7 @@ from __future__ import annotations
 import pytest
 
 from imunav.errors import ConfigError
-from imunav.labsteps._api import LabContext
+from imunav.lab.steps._api import LabContext
 
 _DEFAULTS = {"fs": 100.0, "dwell_s": 30.0, "figures": True}
 

@@ -11,7 +11,7 @@ from typer.testing import CliRunner
 
 from imunav.cli.main import app
 from imunav.errors import ConfigError
-from imunav.lab import parse_lab_config, run_lab
+from imunav.lab.runner import parse_lab_config, run_lab
 
 
 def test_gins_step_on_a_simulated_drive(tmp_path):

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import json
 
-from imunav.lab import run_lab
+from imunav.lab.runner import run_lab
 
 CFG = """
 [lab]

@@ -142,7 +142,7 @@ def test_cli_noise_refuses_a_multiposition_record_unless_forced(tmp_path):
 
 def test_batch_noise_of_a_multiposition_batch_is_refused(tmp_path):
     """The issue's case: `batch noise` on `batch simulate` output (100-position tests) reported ARW 320 deg/sqrt(h)."""
-    from imunav.batch import noise_batch, noise_unit, simulate_batch
+    from imunav.lab.batch import noise_batch, noise_unit, simulate_batch
 
     simulate_batch(2, tmp_path / "b", fs=10.0, dwell_s=2.0, transition_s=1.0, rate_table=False, executor="serial")
     with pytest.raises(NotStaticError, match="no unit"):

@@ -6,9 +6,9 @@ import numpy as np
 import pytest
 
 from imunav.calib import CalibrationResult, ImuCalibration
-from imunav.lab import display_parameters, harvest_parameters
-from imunav.report import check_spec, load_spec
-from imunav.report.catalog import base_name, calibration_estimates, display_unit, expand_spec, to_display_value
+from imunav.lab.report import check_spec, load_spec
+from imunav.lab.report.catalog import base_name, calibration_estimates, display_unit, expand_spec, to_display_value
+from imunav.lab.runner import display_parameters, harvest_parameters
 from imunav.units import DEG, G0
 
 

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import re
 
-from imunav.report import Parameter, Report
+from imunav.lab.report import Parameter, Report
 
 
 def test_report_is_self_contained(tmp_path):

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import browser
 
-from imunav.report import Parameter, Report
+from imunav.lab.report import Parameter, Report
 
 
 def test_report_renders_in_chromium(tmp_path):

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from imunav.errors import ConfigError
-from imunav.report import check_spec, load_spec
+from imunav.lab.report import check_spec, load_spec
 from imunav.units import from_display
 
 

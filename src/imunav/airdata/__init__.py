@@ -10,6 +10,8 @@
   2002) with a fixed sign convention (``V_G = V_A + W``, ``z = V_D − V_A``)
   and a long-horizon navigation-frame variant for real flights.
 * :mod:`~imunav.airdata.scenario` - the thesis scenarios and Monte Carlo.
+* :mod:`~imunav.airdata.flightfile` - the flight file of ``imunav airdata simulate`` / ``run`` and the wind
+  errors of a filter run over one.
 * :mod:`~imunav.airdata.plot` - figures (compute code never plots).
 """
 

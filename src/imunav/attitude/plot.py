@@ -9,7 +9,7 @@ from typing import Any
 import numpy as np
 
 from imunav.attitude.result import AttitudeResult
-from imunav.io._atomic import atomic_path
+from imunav.files import atomic_path
 
 __all__ = ["plot_euler", "plot_errors", "plot_montecarlo_box", "save"]
 
@@ -110,7 +110,7 @@ def plot_montecarlo_box(rmse: Mapping[str, np.ndarray]):
 
 
 def save(fig: Any, path: str | Path) -> Path:
-    """Save atomically (:func:`imunav._atomic.atomic_path`: hidden temp file, usual file mode, rename).
+    """Save atomically (:func:`imunav.files.atomic_path`: hidden temp file, usual file mode, rename).
 
     Parameters
     ----------

@@ -11,9 +11,12 @@
 
 from imunav.calib.ferraris import FERRARIS_SECTIONS, ferraris, ferraris_from_session
 from imunav.calib.magnetometer import (
+    MAG_METHODS,
     MagCalibration,
+    calibrate_magnetometer,
     fit_ellipsoid,
     hard_iron_minmax,
+    minmax_calibration,
     soft_iron_rotation_scale,
     sphere_coverage,
 )
@@ -55,8 +58,11 @@ __all__ = [
     "fit_temperature_curve",
     "thermal_calibration",
     "MagCalibration",
+    "MAG_METHODS",
+    "calibrate_magnetometer",
     "fit_ellipsoid",
     "hard_iron_minmax",
+    "minmax_calibration",
     "soft_iron_rotation_scale",
     "sphere_coverage",
 ]

@@ -43,9 +43,12 @@ from imunav.rotation import euler_from_dcm
 
 __all__ = [
     "MagCalibration",
+    "MAG_METHODS",
+    "calibrate_magnetometer",
     "fit_ellipsoid",
     "fit_minmax",
     "hard_iron_minmax",
+    "minmax_calibration",
     "soft_iron_rotation_scale",
     "sphere_coverage",
 ]
@@ -229,6 +232,80 @@ def hard_iron_minmax(h: ArrayLike) -> Array:
     a = _points(h, minimum=2)
     _check_planar(a, 0.02)
     return (a.max(0) + a.min(0)) / 2.0
+
+
+def minmax_calibration(h: ArrayLike) -> MagCalibration:
+    """Hard iron only: the per-axis mid-range of :func:`hard_iron_minmax`, soft iron the identity.
+
+    The field magnitude is the mean norm of the corrected samples, and the quality record holds the spread of
+    that norm (its standard deviation over its mean), which a soft iron left uncorrected widens.
+
+    Parameters
+    ----------
+    h : array_like, shape (N, 3)
+        Raw magnetometer samples (any unit, kept), sweeping the sphere.
+
+    Returns
+    -------
+    MagCalibration
+        ``b`` the mid-range, ``A`` the identity, ``method = "minmax"``, quality ``norm_spread_after``.
+
+    Raises
+    ------
+    DegenerateGeometryError
+        For a single repeated point, a line or a plane (:func:`hard_iron_minmax`).
+    InsufficientDataError
+        With too few samples.
+    ShapeError
+        If ``h`` is not (N, 3).
+    NonFiniteError
+        If ``h`` has NaN or infinite values.
+    """
+    b = hard_iron_minmax(h)
+    n = np.linalg.norm(np.asarray(h, dtype=float) - b, axis=1)
+    return MagCalibration(b, np.eye(3), float(np.mean(n)), "minmax", {},
+                          {"norm_spread_after": float(np.std(n) / np.mean(n))})
+
+
+#: Methods of :func:`calibrate_magnetometer`.
+MAG_METHODS = ("ellipsoid", "rotation-scale", "minmax")
+
+
+def calibrate_magnetometer(h: ArrayLike, method: str = "ellipsoid", *, field_norm: float | None = None,
+                           min_coverage: float = 0.3) -> MagCalibration:
+    """Hard- and soft-iron calibration of magnetometer samples by one of :data:`MAG_METHODS` (``imunav calibrate
+    mag``).
+
+    Parameters
+    ----------
+    h : array_like, shape (N, 3)
+        Raw magnetometer samples (any unit, kept), sweeping the sphere.
+    method : {"ellipsoid", "rotation-scale", "minmax"}, optional
+        ``"ellipsoid"``: the ellipsoid fit of Li & Griffiths (:func:`fit_ellipsoid`); ``"rotation-scale"``: the
+        thesis's mid-range, principal axes and scales (:func:`soft_iron_rotation_scale`); ``"minmax"``: hard iron
+        only (:func:`minmax_calibration`).
+    field_norm : float, optional
+        Known field magnitude in the data's unit (ellipsoid; default: ``det(A) = 1``).
+    min_coverage : float, optional
+        Smallest accepted sphere coverage (ellipsoid).
+
+    Returns
+    -------
+    MagCalibration
+        ``h_cal = A (h − b)``.
+
+    Raises
+    ------
+    InvalidInputError
+        If ``method`` is none of :data:`MAG_METHODS` (and the errors of the method's function).
+    """
+    if method == "ellipsoid":
+        return fit_ellipsoid(h, field_norm, min_coverage=min_coverage)
+    if method == "rotation-scale":
+        return soft_iron_rotation_scale(h)
+    if method == "minmax":
+        return minmax_calibration(h)
+    raise InvalidInputError(f"--method must be ellipsoid, rotation-scale or minmax, not {method!r}")
 
 
 def soft_iron_rotation_scale(h: ArrayLike, *, planar_tol: float = 0.02) -> MagCalibration:

@@ -44,7 +44,7 @@ from imunav.errors import (
     ShapeError,
     UnitError,
 )
-from imunav.io._atomic import write_json
+from imunav.files import write_json
 from imunav.provenance import add_step, fingerprint, net_compensations
 from imunav.units import DEG, G0
 

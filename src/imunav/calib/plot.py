@@ -8,7 +8,7 @@ from typing import Any
 
 import numpy as np
 
-from imunav.io._atomic import atomic_path
+from imunav.files import atomic_path
 
 __all__ = ["plot_residuals", "plot_temperature_fit", "plot_magnetometer", "save_figure"]
 

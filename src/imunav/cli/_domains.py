@@ -16,7 +16,7 @@ these domains and check that every numeric option has one.
 
 Path options have a declared role (:func:`path_role`: input, input folder,
 output file, report folder, run folder), and :func:`check_paths` applies the
-one output check (:func:`imunav._atomic.check_outputs`) to every command from
+one output check (:func:`imunav.files.check_outputs`) to every command from
 these roles, before the command runs: no output may equal, contain or sit
 inside an input, whatever the command itself checks later.
 """
@@ -28,8 +28,8 @@ from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any
 
-from imunav._atomic import check_outputs
 from imunav.errors import InvalidInputError
+from imunav.files import check_outputs
 
 __all__ = ["DOMAINS", "Domain", "check_params", "check_paths", "domain_of", "flag_of", "path_role"]
 
@@ -352,7 +352,7 @@ def is_path(param: Any) -> bool:
 
 
 def check_paths(command_path: str, params: list[Any], values: Mapping[str, Any]) -> None:
-    """The output check of :func:`imunav._atomic.check_outputs` from the declared path roles, before the command.
+    """The output check of :func:`imunav.files.check_outputs` from the declared path roles, before the command.
 
     Parameters
     ----------
@@ -366,7 +366,7 @@ def check_paths(command_path: str, params: list[Any], values: Mapping[str, Any])
     Raises
     ------
     InvalidInputError
-        When an output would equal, hold or sit inside an input (see :func:`imunav._atomic.check_outputs`).
+        When an output would equal, hold or sit inside an input (see :func:`imunav.files.check_outputs`).
     OSError
         When an output cannot be written there.
     """

@@ -1,7 +1,7 @@
 """The one error path of the ``imunav`` command.
 
 Every command runs inside :class:`ImunavGroup`, whose ``invoke`` runs it in
-one output transaction (:func:`imunav._atomic.output_transaction`: its output
+one output transaction (:func:`imunav.files.output_transaction`: its output
 files are moved in only when it completes; a command that fails leaves nothing
 new), after checking every numeric option against its declared domain
 (:mod:`imunav.cli._domains`) and refusing FIFOs, devices and link loops given
@@ -39,10 +39,10 @@ import typer
 import typer.main
 from typer.core import TyperGroup
 
-from imunav._atomic import output_transaction
 from imunav.cli._domains import check_params, check_paths, flag_of, is_path
 from imunav.cli._limits import ESTIMATORS, check_limits
 from imunav.errors import ImunavError, ImunavWarning, InvalidInputError
+from imunav.files import output_transaction
 
 try:  # typer >= 0.20 carries its own copy of click (and no longer installs the click package)
     from typer import _click as click

@@ -2,7 +2,7 @@
 
 A command that can run for more than a few seconds wraps its work in :func:`progress` and hands the
 callable it yields to the library (every long-running library function takes ``progress=callable(done,
-total)``, e.g. :func:`imunav.montecarlo.run_montecarlo`, :func:`imunav.batch.calibrate_batch`) or calls it
+total)``, e.g. :func:`imunav.lab.montecarlo.run_montecarlo`, :func:`imunav.lab.batch.calibrate_batch`) or calls it
 itself between stages::
 
     with progress("noise analysis", quiet=quiet) as report:

@@ -12,12 +12,12 @@ import numpy as np
 import typer
 from rich.table import Table
 
-from imunav._atomic import atomic_path, check_outputs, write_json
 from imunav.cli._console import make_console
 from imunav.cli._errors import check_figure_path, check_suffix, fail
 from imunav.cli._lazy import lazy
 from imunav.cli._progress import progress
 from imunav.errors import FileFormatError, InvalidInputError
+from imunav.files import atomic_path, check_outputs, write_json
 
 P = lazy("imunav.airdata.plot")
 _common = lazy("imunav.io._common")

@@ -12,12 +12,12 @@ from rich.markup import escape
 from rich.progress import Progress
 from rich.table import Table
 
-from imunav._atomic import check_outputs, write_json
 from imunav.cli._console import make_console
 from imunav.cli._errors import check_figure_path
 from imunav.cli._lazy import lazy
 from imunav.cli._options import END, INSTANCE, LAYOUT, MAG_TOPIC, START, TOPIC, reader_options, window
 from imunav.errors import ConfigError
+from imunav.files import check_outputs, write_json
 
 alignment = lazy("imunav.attitude.alignment")
 attitude_plot = lazy("imunav.attitude.plot")
@@ -27,7 +27,7 @@ datasets = lazy("imunav.io.datasets")
 io = lazy("imunav.io")
 logs = lazy("imunav.io.logs")
 metrics = lazy("imunav.attitude.metrics")
-montecarlo = lazy("imunav.montecarlo")
+montecarlo = lazy("imunav.lab.montecarlo")
 px4 = lazy("imunav.attitude.px4")
 rotation = lazy("imunav.rotation")
 scenario = lazy("imunav.attitude.scenario")
@@ -261,7 +261,7 @@ def benchmark_cmd(
 @app.command("montecarlo")
 def montecarlo_cmd(
     runs: int = typer.Option(100, "--runs", "-n", help="Number of seeded runs."),
-    seed: int = typer.Option(0, "--seed", help="Root seed (run i uses imunav.montecarlo.spawn_generators(seed)[i])."),
+    seed: int = typer.Option(0, "--seed", help="Root seed (run i uses imunav.lab.montecarlo.spawn_generators(seed)[i])."),
     gyro_noise_unit: str = typer.Option("deg/s/sqrt(Hz)", "--gyro-noise-unit",
                                         help="Reading of the paper's 0.005 gyro noise: deg/s/sqrt(Hz) or deg/sqrt(h)."),
     filters: str = typer.Option("lee,javed,proposed", "--filters", "-f",
@@ -279,7 +279,7 @@ def montecarlo_cmd(
     """The Candan & Söken scenario (245 s, 100 Hz, external-acceleration windows): Table 2 of the paper.
 
     Runs are batched (:func:`imunav.scenarios.attitude_paper`) and spread over
-    :func:`imunav.montecarlo.run_montecarlo`'s executor.
+    :func:`imunav.lab.montecarlo.run_montecarlo`'s executor.
 
     Example: imunav attitude montecarlo --runs 5 --executor serial --json mc.json
     """

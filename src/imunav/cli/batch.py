@@ -12,15 +12,15 @@ import typer
 from rich.markup import escape
 from rich.table import Table
 
-from imunav._atomic import check_outputs, write_json
 from imunav.cli._console import make_console
 from imunav.cli._errors import fail
 from imunav.cli._lazy import lazy
 from imunav.cli._progress import shows_progress
 from imunav.errors import InvalidInputError
+from imunav.files import check_outputs, write_json
 
-batch = lazy("imunav.batch")
-catalog = lazy("imunav.report.catalog")
+batch = lazy("imunav.lab.batch")
+catalog = lazy("imunav.lab.report.catalog")
 
 app = typer.Typer(
     help="Process a folder of recordings (one per unit of a production batch) in parallel, "
@@ -42,7 +42,7 @@ _QUIET = typer.Option(False, "--quiet", "-q", help="No progress bar (none either
 
 
 def _bar(quiet: bool) -> bool:
-    """The library's own bar (imunav.montecarlo) on a terminal only, as imunav.cli._progress draws it."""
+    """The library's own bar (imunav.lab.montecarlo) on a terminal only, as imunav.cli._progress draws it."""
     return shows_progress(quiet)
 _SPEC = typer.Option(None, "--spec", help="Datasheet spec (TOML with a [spec] table) for pass / fail per unit.")
 _JSON = typer.Option(None, "--json", help="Also write the summary (JSON) here.")

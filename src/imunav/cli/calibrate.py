@@ -16,11 +16,11 @@ import typer
 from rich.markup import escape
 from rich.table import Table
 
-from imunav._atomic import check_outputs, check_writable, read_json, write_json
 from imunav.cli._console import make_console
 from imunav.cli._lazy import lazy
 from imunav.cli._options import END, INSTANCE, LAYOUT, START, TOPIC, reader_options, window
 from imunav.errors import FileFormatError, InvalidInputError
+from imunav.files import check_outputs, check_writable, read_json, write_json
 
 _common = lazy("imunav.io._common")
 calib = lazy("imunav.calib")

@@ -8,10 +8,10 @@ from typing import Optional
 import numpy as np
 import typer
 
-from imunav._atomic import check_outputs
 from imunav.cli._lazy import lazy
 from imunav.cli._options import END, START, window
 from imunav.cli.calibrate import _read
+from imunav.files import check_outputs
 
 calib = lazy("imunav.calib")
 io = lazy("imunav.io")

@@ -8,9 +8,9 @@ from typing import Optional
 
 import typer
 
-from imunav._atomic import check_outputs
 from imunav.cli._lazy import lazy
 from imunav.cli._options import END, INSTANCE, LAYOUT, MAG_TOPIC, START, TOPIC, reader_options, window
+from imunav.files import check_outputs
 
 io = lazy("imunav.io")
 

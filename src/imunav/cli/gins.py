@@ -14,10 +14,10 @@ from typing import TYPE_CHECKING, Optional
 import numpy as np
 import typer
 
-from imunav._atomic import check_outputs, write_json
 from imunav.cli._lazy import lazy
 from imunav.cli._progress import progress
 from imunav.errors import ConfigError, InvalidInputError
+from imunav.files import check_outputs, write_json
 
 if TYPE_CHECKING:
     from imunav.ins.gins import GinsResult

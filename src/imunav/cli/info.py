@@ -10,11 +10,11 @@ from typing import Any
 import typer
 from rich.table import Table
 
-from imunav._atomic import check_outputs, write_json
 from imunav.cli._console import make_console
 from imunav.cli._lazy import lazy
 from imunav.cli._options import END, INSTANCE, LAYOUT, MAG_TOPIC, START, TOPIC, reader_options, window
 from imunav.errors import InvalidInputError
+from imunav.files import check_outputs, write_json
 from imunav.units import DEG, G0
 
 io = lazy("imunav.io")

@@ -9,13 +9,13 @@ import typer
 from rich.markup import escape
 from rich.table import Table
 
-from imunav._atomic import check_outputs, write_json
 from imunav.cli._console import make_console
 from imunav.cli._errors import fail
 from imunav.cli._lazy import lazy
 from imunav.errors import InvalidInputError
+from imunav.files import check_outputs, write_json
 
-imunav_lab = lazy("imunav.lab")
+imunav_lab = lazy("imunav.lab.runner")
 
 _HELP = """Run the lab and write a report folder (index.html, summary.md, summary.json, data/, figures/).
 

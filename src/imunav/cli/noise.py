@@ -9,13 +9,13 @@ import typer
 from rich.markup import escape
 from rich.table import Table
 
-from imunav._atomic import atomic_path, check_outputs, write_json
 from imunav.cli._console import make_console
 from imunav.cli._errors import check_figure_path
 from imunav.cli._lazy import lazy
 from imunav.cli._options import END, INSTANCE, LAYOUT, START, TOPIC, reader_options, window
 from imunav.cli._progress import progress
 from imunav.errors import InvalidInputError
+from imunav.files import atomic_path, check_outputs, write_json
 from imunav.units import to_display
 
 curvefit = lazy("imunav.noise.curvefit")

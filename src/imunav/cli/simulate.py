@@ -9,10 +9,10 @@ import typer
 from rich.markup import escape
 from rich.progress import Progress
 
-from imunav._atomic import check_outputs, write_json
 from imunav.cli._console import make_console
 from imunav.cli._lazy import lazy
 from imunav.errors import ConfigError, InvalidInputError
+from imunav.files import check_outputs, write_json
 from imunav.units import DEG
 
 io = lazy("imunav.io")

@@ -10,12 +10,12 @@ import typer
 from rich.progress import Progress, track
 from rich.table import Table
 
-from imunav._atomic import atomic_path, check_outputs, write_json
 from imunav.cli._console import make_console
 from imunav.cli._errors import check_suffix, fail
 from imunav.cli._lazy import lazy
 from imunav.cli._options import INSTANCE, LAYOUT, TOPIC, reader_options
 from imunav.errors import FileFormatError, ImunavError
+from imunav.files import atomic_path, check_outputs, write_json
 
 _common = lazy("imunav.io._common")
 foot = lazy("imunav.io.foot")

@@ -835,7 +835,7 @@ def strapdown_step_local(q, v, p, dth, dv, h, g, att, q_out, v_out, p_out):
 
     with ``q_a`` the attitude of ``att``: ``ATT_START`` (q), ``ATT_MID`` (q ⊗ exp(Δθ/2)) or ``ATT_END`` (q⁺)
     (Savage 2000, *Strapdown Analytics*, §7; Groves 2013, §5.5).  Δθ and Δv may carry coning / sculling
-    corrections (:func:`imunav.ins._kernels.increments`).
+    corrections (:func:`imunav.ins._strapdown_kernels.increments`).
 
     Parameters
     ----------

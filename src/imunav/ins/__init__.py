@@ -1,5 +1,6 @@
-"""Inertial navigation: strapdown mechanization, zero-velocity detectors and
-the ZUPT-aided pedestrian INS (error-state EKF), with position metrics.
+"""Inertial navigation: strapdown mechanization, the ZUPT-aided pedestrian INS (:mod:`imunav.ins.zupt`:
+zero-velocity detectors, error-state EKF, position metrics) and the loosely coupled GNSS/INS
+(:mod:`imunav.ins.gins`).
 
 Quick use::
 
@@ -11,31 +12,34 @@ Quick use::
     print(error_2d(res.position, trial.position))
 """
 
-from imunav.ins.detectors import (
+from imunav.ins.strapdown import StrapdownResult, coning_sculling_increments, strapdown_local, strapdown_ned
+from imunav.ins.zupt import (
     DEFAULT_THRESHOLDS,
     DETECTORS,
     DetectorResult,
+    LoopClosure,
     ThresholdSearch,
-    amvd,
-    ared,
-    detect_zero_velocity,
-    detector_statistic,
-    free_acceleration,
-    mbgtd,
-    motion_adaptive,
-    optimize_threshold,
-    shoe,
-)
-from imunav.ins.metrics import LoopClosure, align_heading, error_2d, loop_closure_error, position_rmse, vertical_error
-from imunav.ins.strapdown import StrapdownResult, coning_sculling_increments, strapdown_local, strapdown_ned
-from imunav.ins.zupt import (
     ZuptConfig,
     ZuptFilter,
     ZuptResult,
     ZuptState,
     align_from_accel,
+    align_heading,
+    amvd,
+    ared,
+    detect_zero_velocity,
+    detector_statistic,
+    error_2d,
     first_stance,
+    free_acceleration,
     long_stances,
+    loop_closure_error,
+    mbgtd,
+    motion_adaptive,
+    optimize_threshold,
+    position_rmse,
+    shoe,
+    vertical_error,
 )
 
 __all__ = [

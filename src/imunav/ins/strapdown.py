@@ -32,7 +32,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from imunav.errors import InvalidInputError, ShapeError
-from imunav.ins import _kernels as _k
+from imunav.ins import _strapdown_kernels as _k
 from imunav.results import EulerMixin, Result
 
 __all__ = ["StrapdownResult", "coning_sculling_increments", "strapdown_local", "strapdown_ned", "OMEGA_E"]

@@ -16,7 +16,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from imunav.errors import InvalidInputError
-from imunav.io._atomic import atomic_path
+from imunav.files import atomic_path
 
 if TYPE_CHECKING:  # only for the annotations: the writers take the fits the user already has
     from imunav.noise.fit import NoiseFit

@@ -37,7 +37,7 @@ import numpy as np
 import pandas as pd
 
 from imunav.errors import FileFormatError, InvalidInputError
-from imunav.io._atomic import atomic_path
+from imunav.files import atomic_path
 from imunav.io._common import build_imu, check_nonempty, column_units, header_json, parse_header, wrap_read_errors
 from imunav.timeseries import ImuData
 

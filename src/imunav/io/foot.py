@@ -4,7 +4,7 @@ Every reader returns a :class:`FootTrial` whose IMU is in the imunav
 conventions (SI units, body FRD: at rest and level ``f_b = (0, 0, -g)``) and
 whose reference positions, if any, are in the local NED frame in which
 :meth:`imunav.ins.ZuptFilter.run` integrates (x, y horizontal, z down), so the
-two can be compared directly by :mod:`imunav.ins.metrics`.
+two can be compared directly by :mod:`imunav.ins.zupt.metrics`.
 
 Frame adapters (each tested against the data):
 

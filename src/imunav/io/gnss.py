@@ -35,7 +35,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from imunav.errors import FileFormatError, InvalidInputError, NonFiniteError, ShapeError, TimeOrderError
-from imunav.io._atomic import atomic_path
+from imunav.files import atomic_path
 from imunav.io._common import check_nonempty, wrap_read_errors
 
 __all__ = ["GnssData", "read_gnss_text", "read_gnss_csv", "write_gnss_text", "read_table", "write_table",
@@ -282,7 +282,7 @@ def write_table(path: str | os.PathLike[str], columns: list[ArrayLike], fmt: str
     Parameters
     ----------
     path : str or os.PathLike
-        Output file (replaced atomically: :func:`imunav._atomic.atomic_path`).
+        Output file (replaced atomically: :func:`imunav.files.atomic_path`).
     columns : list of array_like
         The columns, each of shape (N,) or (N, k) (then k columns), same N.
     fmt : str

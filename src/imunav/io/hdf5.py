@@ -24,7 +24,7 @@ import h5py
 import numpy as np
 
 from imunav.errors import FileFormatError
-from imunav.io._atomic import atomic_path
+from imunav.files import atomic_path
 from imunav.io._common import (
     SI_UNITS,
     build_imu,

@@ -16,7 +16,7 @@ plain text tables (columns separated by spaces):
 
 :func:`load_kfgins_config` reads KF-GINS's own YAML configuration with its
 keys and units into a typed :class:`KfGinsConfig` in SI; paths are relative to
-the YAML file.  Writers write atomically (:func:`imunav.io._atomic.atomic_path`).
+the YAML file.  Writers write atomically (:func:`imunav.files.atomic_path`).
 """
 
 from __future__ import annotations
@@ -32,7 +32,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from imunav import earth
 from imunav.errors import ConfigError, InvalidInputError, MissingDependencyError, ShapeError, TimeOrderError
-from imunav.io._atomic import atomic_path
+from imunav.files import atomic_path
 from imunav.io.gnss import lat_lon_radians, read_table, write_table
 from imunav.results import EulerMixin
 from imunav.rotation import quat_from_euler

@@ -34,7 +34,7 @@ import numpy as np
 import scipy.io
 
 from imunav.errors import FileFormatError, InvalidInputError
-from imunav.io._atomic import atomic_path
+from imunav.files import atomic_path
 from imunav.io._common import (
     build_imu,
     check_nonempty,

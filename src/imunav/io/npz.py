@@ -18,7 +18,7 @@ from typing import Any
 
 import numpy as np
 
-from imunav.io._atomic import atomic_path
+from imunav.files import atomic_path
 from imunav.io._common import build_imu, check_nonempty, find_array_names, header_json, parse_header, wrap_read_errors
 from imunav.timeseries import ImuData
 

@@ -17,7 +17,7 @@ from typing import Any
 import numpy as np
 
 from imunav.errors import FileFormatError, MissingDependencyError
-from imunav.io._atomic import atomic_path
+from imunav.files import atomic_path
 from imunav.io._common import build_imu, check_nonempty, column_units, header_json, parse_header, wrap_read_errors
 from imunav.io.csv import imu_to_table, resolve_columns, table_to_arrays
 from imunav.timeseries import ImuData

@@ -49,7 +49,7 @@ import numpy as np
 
 from imunav import __version__
 from imunav.errors import InvalidInputError, UnitError
-from imunav.io._atomic import atomic_path
+from imunav.files import atomic_path
 from imunav.units import unit_factor
 
 if TYPE_CHECKING:  # annotations only

@@ -49,8 +49,8 @@ from typing import Any
 
 import numpy as np
 
-from imunav._atomic import atomic_path
 from imunav.errors import FileFormatError, InvalidInputError
+from imunav.files import atomic_path
 from imunav.io.kfgins import NavTrack
 from imunav.io.topics import TopicData, TopicInfo, merge_onto, topic_data
 from imunav.rotation import quat_interp

@@ -57,7 +57,8 @@ from imunav.errors import (
     MissingDependencyError,
     ShapeError,
 )
-from imunav.ins.lstm import (
+from imunav.ins.zupt.filter import ZuptFilter
+from imunav.ins.zupt.lstm import (
     DEFAULT_MODEL_PATH,
     LstmConfig,
     LstmDetector,
@@ -67,9 +68,8 @@ from imunav.ins.lstm import (
     input_features,
     lstm_forward,
 )
-from imunav.ins.metrics import error_2d
-from imunav.ins.statistics import detector_statistic
-from imunav.ins.zupt import ZuptFilter
+from imunav.ins.zupt.metrics import error_2d
+from imunav.ins.zupt.statistics import detector_statistic
 from imunav.results import Result
 from imunav.rotation import quat_conjugate, quat_rotate
 

@@ -42,7 +42,7 @@ The Allan slope between ``τ0`` and ``window_s`` is reported for each sensor
 
 Not detected: a rotation at one constant rate about the vertical for the whole
 record (indistinguishable from a gyro bias).  The command line and
-:func:`imunav.batch.noise_unit` call :func:`require_static`, which raises
+:func:`imunav.lab.batch.noise_unit` call :func:`require_static`, which raises
 :class:`~imunav.errors.NotStaticError` unless ``force=True``.
 """
 
@@ -56,7 +56,7 @@ import numpy as np
 
 from imunav._quantiles import chi2_isf
 from imunav.errors import InvalidInputError, NotStaticError
-from imunav.io._atomic import jsonable
+from imunav.files import jsonable
 from imunav.results import Result
 from imunav.timeseries import G_REF, ImuData, rest_force_problem
 

@@ -67,7 +67,7 @@ from imunav.errors import (
     ShapeError,
     UnitError,
 )
-from imunav.io._atomic import atomic_path
+from imunav.files import atomic_path
 from imunav.results import Result
 from imunav.sim import _kernels as _k
 from imunav.sim.streams import normals, seed_sequence, stream_state

@@ -35,8 +35,8 @@ from typing import Any, Iterator
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from imunav._atomic import atomic_path, read_json, write_json
 from imunav.errors import FileFormatError, InvalidInputError, ShapeError
+from imunav.files import atomic_path, read_json, write_json
 from imunav.results import EulerMixin
 from imunav.rotation import (
     quat_conjugate,

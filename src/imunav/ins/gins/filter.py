@@ -637,7 +637,7 @@ class GinsFilter:
             Also run the RTS smoother (``result.smoothed``); keeps three n x n matrices per covariance epoch
             (about 190 MB per hour at 200 Hz with 21 states and the default 0.2 s step).
         static : array_like of bool, shape (N,), optional
-            True where the vehicle stands still (e.g. from :mod:`imunav.ins.detectors`): ZUPT + ZARU.
+            True where the vehicle stands still (e.g. from :mod:`imunav.ins.zupt.detectors`): ZUPT + ZARU.
         baro : BaroData, optional
             Barometric heights (:class:`imunav.sim.vehicle.BaroData`), each used at the nearest IMU stamp (a
             covariance epoch there).

@@ -20,13 +20,13 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from imunav.files import atomic_path, write_json
 from imunav.ins.gins.layout import LAY
 from imunav.ins.gins.logrun import LogRun
 from imunav.ins.gins.outage import OutageReport
 from imunav.ins.gins.plot import FIGURE_NAMES, write_gins_figures
 from imunav.ins.gins.result import GinsResult
 from imunav.ins.gins.setup import GinsSetup, SimulatedDrive, track_rmse
-from imunav.io._atomic import atomic_path, write_json
 from imunav.io.gnss import GnssData, write_gnss_text
 from imunav.io.kfgins import (
     ImuIncrements,

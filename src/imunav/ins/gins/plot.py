@@ -18,9 +18,9 @@ from typing import Any
 import numpy as np
 
 from imunav import earth
+from imunav.files import atomic_path
 from imunav.ins.gins import GinsResult
 from imunav.ins.gins.outage import OutageReport
-from imunav.io._atomic import atomic_path
 from imunav.io.gnss import GnssData
 from imunav.io.kfgins import DPH, MGAL, PPM, NavTrack
 

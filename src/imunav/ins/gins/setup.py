@@ -1,6 +1,8 @@
-"""Inputs of a GNSS/INS run from files: IMU, GNSS, odometer, and the configuration (imunav TOML or KF-GINS YAML).
+"""The setup of a GNSS/INS run: its configuration (imunav TOML or KF-GINS YAML) and its inputs, read from files or
+simulated.
 
-What ``imunav gins run``, ``imunav gins outage-test`` and the ``gins`` lab step read, in one place:
+What ``imunav gins run``, ``imunav gins outage-test`` and the ``gins`` lab step read, in one place
+(:func:`load_inputs`): the files are read by :mod:`imunav.io.navinputs`
 
 * IMU: a KF-GINS text file of increments (seconds of week, Δθ rad, Δv m/s, FRD; recognised by its first line
   of 7 or more numbers, or declared with ``[imu] format = "kf-gins"``), or any recording
@@ -8,7 +10,8 @@ What ``imunav gins run``, ``imunav gins outage-test`` and the ``gins`` lab step 
 * GNSS: the KF-GINS text file (:func:`imunav.io.gnss.read_gnss_text`) or, for a ``.csv``, a generic CSV
   (:func:`imunav.io.gnss.read_gnss_csv`, its column names in the ``[gnss]`` table);
 * odometer: a text file of two columns, time (s, the IMU's clock) and forward speed (m/s);
-* configuration: an imunav TOML (:func:`load_gins_toml`) or KF-GINS's own YAML (:func:`setup_from_kfgins`).
+
+and the configuration is an imunav TOML (:func:`load_gins_toml`) or KF-GINS's own YAML (:func:`setup_from_kfgins`).
 
 The TOML holds :class:`~imunav.ins.gins.GinsConfig` fields at its top level, in SI (``arw``, ``vrw``,
 ``gyro_bias_std``, ..., ``lever_arm``, ``nhc_noise``, ...), optionally on top of an IMU preset, and three tables::
@@ -50,26 +53,19 @@ from numpy.typing import NDArray
 
 from imunav.errors import ConfigError, InvalidInputError
 from imunav.ins.gins import GinsConfig, GinsFilter, GinsResult
-from imunav.io import read_imu
-from imunav.io.gnss import GnssData, lat_lon_radians, read_gnss_csv, read_gnss_text, read_table
-from imunav.io.kfgins import (
-    RATE_TOLERANCE,
-    ImuIncrements,
-    KfGinsConfig,
-    NavTrack,
-    load_kfgins_config,
-    read_kfgins_imu,
-)
+from imunav.io.aiding import OdometerData
+from imunav.io.gnss import GnssData, lat_lon_radians
+from imunav.io.kfgins import ImuIncrements, KfGinsConfig, NavTrack, load_kfgins_config
+from imunav.io.navinputs import read_gnss_input, read_imu_input, read_odometer
 from imunav.rotation import quat_from_euler
 from imunav.sim import Trajectory, presets, simulate_imu
 from imunav.sim.gnss import simulate_gnss
-from imunav.sim.vehicle import OdometerData, demo_drive, vehicle_trajectory
+from imunav.sim.vehicle import demo_drive, vehicle_trajectory
 from imunav.timeseries import ImuData
 from imunav.toml import read_toml
 from imunav.units import DEG
 
-__all__ = ["GinsSetup", "GinsInputs", "SimulatedDrive", "load_gins_toml", "setup_from_kfgins", "read_imu_input",
-           "read_gnss_input", "read_odometer", "load_inputs", "simulate_drive", "run_setup", "track_rmse", "TOML_TABLES", "KFGINS_LEVER_ARM",
+__all__ = ["GinsSetup", "GinsInputs", "SimulatedDrive", "load_gins_toml", "setup_from_kfgins", "load_inputs", "simulate_drive", "run_setup", "track_rmse", "TOML_TABLES", "KFGINS_LEVER_ARM",
            "KFGINS_ORIGIN_LLA"]
 
 Array = NDArray[np.float64]
@@ -325,140 +321,6 @@ def setup_from_kfgins(cfg: KfGinsConfig, *, states: int = 21) -> GinsSetup:
                      {}, src)
 
 
-def _looks_like_kfgins(path: Path) -> bool:
-    """First data line of 7 or more numbers (KF-GINS's IMU file has no header)."""
-    if path.suffix.lower() not in (".txt", ".imu", ".dat", ""):
-        return False
-    try:
-        with open(path, encoding="utf-8") as fh:
-            for line in fh:
-                words = line.split("#", 1)[0].replace(",", " ").split()
-                if words:
-                    [float(w) for w in words]
-                    return len(words) >= 7
-    except (ValueError, UnicodeDecodeError):
-        return False
-    return False
-
-
-def read_imu_input(path: str | os.PathLike[str], options: dict[str, Any] | None = None) -> ImuData | ImuIncrements:
-    """Read the IMU of a GNSS/INS run: KF-GINS increments or any recording of :func:`imunav.io.read_imu`.
-
-    Parameters
-    ----------
-    path : str or os.PathLike
-        The IMU file.
-    options : dict, optional
-        The ``[imu]`` options: ``format`` (``"kf-gins"`` or a :func:`~imunav.io.read_imu` format; default:
-        KF-GINS when the first line is 7 or more numbers), ``rate_hz``, ``start_time``, ``end_time`` (s).
-
-    Returns
-    -------
-    ImuData or ImuIncrements
-        The samples inside the window.
-
-    Raises
-    ------
-    ConfigError
-        If the window holds fewer than 2 samples, or a recording of rates contradicts ``rate_hz``.
-    InvalidInputError
-        If a KF-GINS file contradicts ``rate_hz`` or holds no increments (:func:`~imunav.io.kfgins.read_kfgins_imu`).
-    """
-    opts = options or {}
-    p = Path(path)
-    fmt = opts.get("format")
-    if fmt == "kf-gins" or (fmt is None and p.is_file() and _looks_like_kfgins(p)):
-        data: ImuData | ImuIncrements = read_kfgins_imu(p, opts.get("rate_hz"))
-    else:
-        data = read_imu(p, fmt)
-        if "rate_hz" in opts:
-            med = float(np.median(np.diff(data.t)))
-            if abs(med * float(opts["rate_hz"]) - 1.0) > RATE_TOLERANCE:
-                raise ConfigError(f"{os.fspath(p)}: the time stamps step by {med:.6g} s ({1 / med:.6g} Hz) but "
-                                  f"[imu] rate_hz is {opts['rate_hz']:g} Hz; fix rate_hz or remove it")
-    t = np.asarray(data.t, dtype=float)
-    t0 = float(opts.get("start_time", t[0]))
-    t1 = float(opts.get("end_time", t[-1]))
-    keep = (t >= t0) & (t <= t1)
-    if keep.sum() < 2:
-        raise ConfigError(f"{os.fspath(p)}: no IMU samples between start_time {t0} and end_time {t1} "
-                          f"(the file spans {t[0]:.3f}..{t[-1]:.3f} s)")
-    if keep.all():
-        return data
-    if isinstance(data, ImuIncrements):
-        return ImuIncrements(data.t[keep], data.dtheta[keep], data.dvel[keep], data.dt[keep], data.meta)
-    i = np.flatnonzero(keep)
-    return data.slice(int(i[0]), int(i[-1]) + 1)
-
-
-def read_gnss_input(path: str | os.PathLike[str], options: dict[str, Any] | None = None) -> GnssData:
-    """Read the GNSS of a GNSS/INS run: KF-GINS text, or a CSV (``.csv`` or ``format = "csv"``).
-
-    Parameters
-    ----------
-    path : str or os.PathLike
-        The GNSS file.
-    options : dict, optional
-        The ``[gnss]`` options: ``format`` (``"kf-gins"`` or ``"csv"``), ``angle_unit`` and, for a CSV, the
-        keyword arguments of :func:`imunav.io.gnss.read_gnss_csv`.
-
-    Returns
-    -------
-    GnssData
-        The fixes.
-
-    Raises
-    ------
-    ConfigError
-        If ``format`` is neither, or CSV options are given for a KF-GINS text file.
-    """
-    opts = dict(options or {})
-    fmt = opts.pop("format", "csv" if Path(path).suffix.lower() == ".csv" else "kf-gins")
-    if fmt == "csv":
-        for k in ("pos_std", "vel", "vel_std"):
-            if k in opts and opts[k] is not None:
-                opts[k] = tuple(opts[k])
-        return read_gnss_csv(path, **opts)
-    if fmt != "kf-gins":
-        raise ConfigError(f"[gnss] format must be 'kf-gins' or 'csv'; got {fmt!r}")
-    extra = sorted(set(opts) - {"angle_unit"})
-    if extra:
-        raise ConfigError(f"[gnss] {extra} apply to a CSV only; {os.fspath(path)} is read as KF-GINS text")
-    return read_gnss_text(path, **opts)
-
-
-def read_odometer(path: str | os.PathLike[str]) -> OdometerData:
-    """Read an odometer text file: two columns, time (s, the IMU's clock) and forward speed (m/s).
-
-    Parameters
-    ----------
-    path : str or os.PathLike
-        Whitespace- or comma-separated text (``#`` comments).
-
-    Returns
-    -------
-    OdometerData
-        The wheel speeds.
-
-    Raises
-    ------
-    FileFormatError
-        If the file does not have 2 numeric columns.
-    InvalidInputError
-        If the time does not strictly increase or a speed exceeds 150 m/s.
-    """
-    a = read_table(path, (2,), "odometer (time s, speed m/s)")
-    src = os.fspath(path)
-    bad = np.flatnonzero(np.diff(a[:, 0]) <= 0)
-    if bad.size:
-        raise InvalidInputError(f"{src}: odometer time is not strictly increasing at data row {int(bad[0]) + 2}; "
-                                "sort the file and remove duplicates")
-    if np.max(np.abs(a[:, 1])) > 150.0:
-        raise InvalidInputError(f"{src}: an odometer speed reaches {np.max(np.abs(a[:, 1])):.4g}; the column must "
-                                "be the forward speed in m/s (not km/h, not wheel ticks)")
-    return OdometerData(a[:, 0], a[:, 1], {"source": src})
-
-
 def load_inputs(imu: str | os.PathLike[str] | None, gnss: str | os.PathLike[str] | None,
                 config: str | os.PathLike[str] | None, *, odometer: str | os.PathLike[str] | None = None,
                 states: int | None = None) -> GinsInputs:
@@ -475,7 +337,7 @@ def load_inputs(imu: str | os.PathLike[str] | None, gnss: str | os.PathLike[str]
     config : str or os.PathLike, or None
         The YAML (KF-GINS form) or TOML (imunav form).
     odometer : str or os.PathLike, optional
-        Odometer file (:func:`read_odometer`); with a YAML, its ``odopath`` key is used when this is None.
+        Odometer file (:func:`imunav.io.navinputs.read_odometer`); with a YAML, its ``odopath`` key is used when this is None.
     states : int, optional
         15 or 21, overriding the configuration's (default: the TOML's ``states``, or 21 with a YAML).
 

@@ -1,2 +1,0 @@
-"""Steps of ``imunav lab`` (see :mod:`imunav.lab`): one module per step with
-``TITLE`` and ``run(ctx) -> StepResult``."""

@@ -1,7 +1,0 @@
-"""Self-contained HTML reports: sections, tables, figures, parameters with
-uncertainty and pass / fail against a datasheet-style specification."""
-
-from imunav.report.html import Parameter, Report, Section
-from imunav.report.spec import SpecCheck, SpecLimit, check_spec, load_spec
-
-__all__ = ["Report", "Section", "Parameter", "SpecLimit", "SpecCheck", "check_spec", "load_spec"]
