@@ -29,53 +29,55 @@ Example: imunav lab --out lab-report --seed 0
 """
 
 
-def register(app: typer.Typer) -> None:
-    @app.command("lab", help=_HELP)
-    def lab(
-        out: Path = typer.Option(Path("lab-report"), "--out", "-o", help="Report folder to write."),
-        config: Optional[Path] = typer.Option(None, "--config", "-c", help="Lab definition (TOML)."),
-        seed: int = typer.Option(0, "--seed", help="Root random seed (the seed in --config wins)."),
-        steps: Optional[str] = typer.Option(None, "--steps", help="Comma-separated step names to run (default: all)."),
-        quiet: bool = typer.Option(False, "--quiet", "-q", help="No progress bars."),
-        json_out: Optional[Path] = typer.Option(None, "--json", help="Also copy summary.json here."),
-        overwrite: bool = typer.Option(False, "--overwrite", help="Clear a report folder that holds another run "
-                                       "(only files of imunav runs) instead of refusing."),
-        no_fail: bool = typer.Option(False, "--no-fail", help="Exit 0 even when a [spec] check fails (the report "
-                                     "still marks it)."),
-    ) -> None:
-        check_outputs([config], [json_out], run_folders=[out])
+def lab(
+    out: Path = typer.Option(Path("lab-report"), "--out", "-o", help="Report folder to write."),
+    config: Optional[Path] = typer.Option(None, "--config", "-c", help="Lab definition (TOML)."),
+    seed: int = typer.Option(0, "--seed", help="Root random seed (the seed in --config wins)."),
+    steps: Optional[str] = typer.Option(None, "--steps", help="Comma-separated step names to run (default: all)."),
+    quiet: bool = typer.Option(False, "--quiet", "-q", help="No progress bars."),
+    json_out: Optional[Path] = typer.Option(None, "--json", help="Also copy summary.json here."),
+    overwrite: bool = typer.Option(False, "--overwrite", help="Clear a report folder that holds another run "
+                                   "(only files of imunav runs) instead of refusing."),
+    no_fail: bool = typer.Option(False, "--no-fail", help="Exit 0 even when a [spec] check fails (the report "
+                                 "still marks it)."),
+) -> None:
+    check_outputs([config], [json_out], run_folders=[out])
 
-        console = make_console(stderr=True)
-        try:
-            result = imunav_lab.run_lab(
-                out, config, seed, steps=None if steps is None else [s.strip() for s in steps.split(",") if s.strip()],
-                progress=not quiet, console=console, overwrite=overwrite,
-            )
-        except InvalidInputError as exc:
-            fail(exc)
-        table = Table(title=f"imunav lab → {out}")
-        table.add_column("step")
-        table.add_column("verdict")
-        table.add_column("time (s)", justify="right")
-        for s in result.steps:
-            verdict = "ERROR" if s.error else {None: "n/a", True: "PASS", False: "FAIL"}[s.passed]
-            table.add_row(s.title, verdict, f"{s.seconds:.1f}")
-        make_console().print(table)
-        checks = [c for c in result.spec_checks if c.limit is not None]
-        spec_failed = any(c.passed is False for c in checks)
-        if checks:
-            failed = [c.name for c in checks if c.passed is False]
-            make_console().print(f"specification: {len(checks)} checks, {len(failed)} failed"
-                            + (f" ({escape(', '.join(failed[:8]))}{' …' if len(failed) > 8 else ''})" if failed else ""),
-                            soft_wrap=True, highlight=False)
-        for s in result.steps:
-            if s.error:
-                console.print(f"[red]{s.name} failed:[/red]\n{escape(s.error)}", soft_wrap=True, highlight=False)
-        if json_out is not None:
-            write_json(json_out, result.to_dict())
-        typer.echo(f"report: {Path(out) / 'index.html'}")
-        if result.failed_steps:
-            raise typer.Exit(1)
-        if spec_failed and not no_fail:  # as imunav batch does; --no-fail to go on
-            typer.echo("exit status 1: a [spec] check failed (--no-fail: exit 0)", err=True)
-            raise typer.Exit(1)
+    console = make_console(stderr=True)
+    try:
+        result = imunav_lab.run_lab(
+            out, config, seed, steps=None if steps is None else [s.strip() for s in steps.split(",") if s.strip()],
+            progress=not quiet, console=console, overwrite=overwrite,
+        )
+    except InvalidInputError as exc:
+        fail(exc)
+    table = Table(title=f"imunav lab → {out}")
+    table.add_column("step")
+    table.add_column("verdict")
+    table.add_column("time (s)", justify="right")
+    for s in result.steps:
+        verdict = "ERROR" if s.error else {None: "n/a", True: "PASS", False: "FAIL"}[s.passed]
+        table.add_row(s.title, verdict, f"{s.seconds:.1f}")
+    make_console().print(table)
+    checks = [c for c in result.spec_checks if c.limit is not None]
+    spec_failed = any(c.passed is False for c in checks)
+    if checks:
+        failed = [c.name for c in checks if c.passed is False]
+        make_console().print(f"specification: {len(checks)} checks, {len(failed)} failed"
+                        + (f" ({escape(', '.join(failed[:8]))}{' …' if len(failed) > 8 else ''})" if failed else ""),
+                        soft_wrap=True, highlight=False)
+    for s in result.steps:
+        if s.error:
+            console.print(f"[red]{s.name} failed:[/red]\n{escape(s.error)}", soft_wrap=True, highlight=False)
+    if json_out is not None:
+        write_json(json_out, result.to_dict())
+    typer.echo(f"report: {Path(out) / 'index.html'}")
+    if result.failed_steps:
+        raise typer.Exit(1)
+    if spec_failed and not no_fail:  # as imunav batch does; --no-fail to go on
+        typer.echo("exit status 1: a [spec] check failed (--no-fail: exit 0)", err=True)
+        raise typer.Exit(1)
+
+
+def register(app: typer.Typer) -> None:
+    app.command("lab", help=_HELP)(lab)

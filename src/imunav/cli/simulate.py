@@ -29,47 +29,49 @@ Example: imunav simulate multiposition --preset thesis_sim --fs 100 --seed 1 --o
 """
 
 
-def register(app: typer.Typer) -> None:
-    @app.command("simulate", help=_HELP)
-    def simulate(
-        profile: str = typer.Argument(..., help=f"Test profile: {' | '.join(PROFILES)}."),
-        out: Path = typer.Option(..., "--out", "-o", help="Recording file to write (format from the suffix)."),
-        preset: Optional[str] = typer.Option(None, "--preset", help="Error-model preset (default thesis_sim; 'ideal' = none)."),
-        model: Optional[Path] = typer.Option(None, "--model", help="Error model TOML file (instead of --preset)."),
-        fs: float = typer.Option(100.0, "--fs", help="Sample rate, Hz."),
-        seed: int = typer.Option(0, "--seed", help="Random seed (same seed, same numbers)."),
-        dwell: float = typer.Option(30.0, "--dwell", help="Seconds per position / rate step."),
-        transition: float = typer.Option(2.0, "--transition", help="Seconds per move / rate ramp."),
-        duration: float = typer.Option(600.0, "--duration", help="Duration of the 'static' profile, s."),
-        lat_deg: Optional[float] = typer.Option(None, "--lat-deg", help="Latitude, deg (turns on Earth rate and normal gravity)."),
-        h_m: float = typer.Option(0.0, "--h-m", help="Height above the ellipsoid, m."),
-        earth_rate: Optional[bool] = typer.Option(None, "--earth-rate/--no-earth-rate", help="Earth rate in the gyros (default: on iff --lat-deg)."),
-        gravity: Optional[str] = typer.Option(None, "--gravity", help="'normal', 'constant' or m/s^2 (default: normal iff --lat-deg)."),
-        segments: Optional[Path] = typer.Option(None, "--segments", help="Segment table to write, .json or .csv (default <out stem>_segments.json)."),
-        json_out: Optional[Path] = typer.Option(None, "--json", help="Also write a JSON summary here."),
-    ) -> None:
-        seg_path = segments if segments is not None else default_segments_path(out)
-        if segments is None and model is not None and seg_path.resolve() == model.expanduser().resolve():
-            raise InvalidInputError(f"the default segment table {seg_path} (named after --out) is the --model file "
-                                    f"{model}; give --segments another path, or another --out")
-        check_outputs([model], [out, seg_path, json_out])
+def simulate(
+    profile: str = typer.Argument(..., help=f"Test profile: {' | '.join(PROFILES)}."),
+    out: Path = typer.Option(..., "--out", "-o", help="Recording file to write (format from the suffix)."),
+    preset: Optional[str] = typer.Option(None, "--preset", help="Error-model preset (default thesis_sim; 'ideal' = none)."),
+    model: Optional[Path] = typer.Option(None, "--model", help="Error model TOML file (instead of --preset)."),
+    fs: float = typer.Option(100.0, "--fs", help="Sample rate, Hz."),
+    seed: int = typer.Option(0, "--seed", help="Random seed (same seed, same numbers)."),
+    dwell: float = typer.Option(30.0, "--dwell", help="Seconds per position / rate step."),
+    transition: float = typer.Option(2.0, "--transition", help="Seconds per move / rate ramp."),
+    duration: float = typer.Option(600.0, "--duration", help="Duration of the 'static' profile, s."),
+    lat_deg: Optional[float] = typer.Option(None, "--lat-deg", help="Latitude, deg (turns on Earth rate and normal gravity)."),
+    h_m: float = typer.Option(0.0, "--h-m", help="Height above the ellipsoid, m."),
+    earth_rate: Optional[bool] = typer.Option(None, "--earth-rate/--no-earth-rate", help="Earth rate in the gyros (default: on iff --lat-deg)."),
+    gravity: Optional[str] = typer.Option(None, "--gravity", help="'normal', 'constant' or m/s^2 (default: normal iff --lat-deg)."),
+    segments: Optional[Path] = typer.Option(None, "--segments", help="Segment table to write, .json or .csv (default <out stem>_segments.json)."),
+    json_out: Optional[Path] = typer.Option(None, "--json", help="Also write a JSON summary here."),
+) -> None:
+    seg_path = segments if segments is not None else default_segments_path(out)
+    if segments is None and model is not None and seg_path.resolve() == model.expanduser().resolve():
+        raise InvalidInputError(f"the default segment table {seg_path} (named after --out) is the --model file "
+                                f"{model}; give --segments another path, or another --out")
+    check_outputs([model], [out, seg_path, json_out])
 
-        console = make_console(stderr=True)
-        try:
-            summary = run_simulate(
-                profile, out, preset=preset, model=model, fs=fs, seed=seed, dwell=dwell, transition=transition,
-                duration=duration, lat_deg=lat_deg, h_m=h_m, earth_rate=earth_rate, gravity=gravity,
-                segments=segments, console=console,
-            )
-        except InvalidInputError as exc:
-            console.print(f"[red]error:[/red] {escape(str(exc))}", soft_wrap=True)
-            raise typer.Exit(2) from exc
-        if json_out is not None:
-            write_json(json_out, summary)
-        typer.echo(
-            f"wrote {summary['file']}: {summary['samples']} samples, {summary['duration_s']:.1f} s at "
-            f"{summary['fs_hz']:g} Hz, {summary['segments']} ({summary['error_model']})"
+    console = make_console(stderr=True)
+    try:
+        summary = run_simulate(
+            profile, out, preset=preset, model=model, fs=fs, seed=seed, dwell=dwell, transition=transition,
+            duration=duration, lat_deg=lat_deg, h_m=h_m, earth_rate=earth_rate, gravity=gravity,
+            segments=segments, console=console,
         )
+    except InvalidInputError as exc:
+        console.print(f"[red]error:[/red] {escape(str(exc))}", soft_wrap=True)
+        raise typer.Exit(2) from exc
+    if json_out is not None:
+        write_json(json_out, summary)
+    typer.echo(
+        f"wrote {summary['file']}: {summary['samples']} samples, {summary['duration_s']:.1f} s at "
+        f"{summary['fs_hz']:g} Hz, {summary['segments']} ({summary['error_model']})"
+    )
+
+
+def register(app: typer.Typer) -> None:
+    app.command("simulate", help=_HELP)(simulate)
 
 
 def default_segments_path(out: Path) -> Path:

@@ -90,38 +90,40 @@ def _run_step(argv: Sequence[str] | Callable[[], None]) -> str | None:
     return None
 
 
+def warmup(
+    quiet: bool = typer.Option(False, "--quiet", "-q", help="Print only the summary line."),
+) -> None:
+    watch = _compile.watch_compilation()
+    t_all = time.perf_counter()
+    failed: list[str] = []
+    with tempfile.TemporaryDirectory(prefix="imunav-warmup-") as tmp:
+        with contextlib.chdir(tmp):
+            for what, argv in TOUR:
+                t0, n0 = time.perf_counter(), len(watch.kernels)
+                error = _run_step(argv)
+                if error is not None:
+                    failed.append(what)
+                if not quiet:
+                    state = f"failed: {error}" if error else f"{len(watch.kernels) - n0} kernels compiled"
+                    typer.echo(f"  {what:<28} {time.perf_counter() - t0:6.1f} s  {state}")
+    bc = _compile.write_bytecode()
+    typer.echo(f"warmup: {len(watch.kernels)} numba kernels compiled in {watch.seconds:.1f} s, "
+               f"bytecode of {bc.written} modules written ({bc.current} already current), "
+               f"{time.perf_counter() - t_all:.1f} s in all")
+    if watch.cache_dirs and not quiet:
+        shown = sorted({str(Path(d).parent) if Path(d).name == "__pycache__" else d for d in watch.cache_dirs})
+        typer.echo("numba cache: " + ", ".join(shown[:3]) + (f" and {len(shown) - 3} more" if len(shown) > 3 else ""))
+    if bc.failed:
+        typer.echo(f"warning: no bytecode written for {len(bc.failed)} modules (read-only, e.g. "
+                   f"{bc.failed[0]}); set PYTHONPYCACHEPREFIX to a folder you can write and run imunav warmup "
+                   "again", err=True)
+    if failed:
+        typer.echo(f"warning: {len(failed)} warmup step(s) failed ({', '.join(failed)}): their kernels compile "
+                   "on first use", err=True)
+    sys.stdout.flush()
+
+
 def register(app: typer.Typer) -> None:
     """Add ``imunav warmup`` to the app."""
 
-    @app.command("warmup", help=_HELP)
-    def warmup(
-        quiet: bool = typer.Option(False, "--quiet", "-q", help="Print only the summary line."),
-    ) -> None:
-        watch = _compile.watch_compilation()
-        t_all = time.perf_counter()
-        failed: list[str] = []
-        with tempfile.TemporaryDirectory(prefix="imunav-warmup-") as tmp:
-            with contextlib.chdir(tmp):
-                for what, argv in TOUR:
-                    t0, n0 = time.perf_counter(), len(watch.kernels)
-                    error = _run_step(argv)
-                    if error is not None:
-                        failed.append(what)
-                    if not quiet:
-                        state = f"failed: {error}" if error else f"{len(watch.kernels) - n0} kernels compiled"
-                        typer.echo(f"  {what:<28} {time.perf_counter() - t0:6.1f} s  {state}")
-        bc = _compile.write_bytecode()
-        typer.echo(f"warmup: {len(watch.kernels)} numba kernels compiled in {watch.seconds:.1f} s, "
-                   f"bytecode of {bc.written} modules written ({bc.current} already current), "
-                   f"{time.perf_counter() - t_all:.1f} s in all")
-        if watch.cache_dirs and not quiet:
-            shown = sorted({str(Path(d).parent) if Path(d).name == "__pycache__" else d for d in watch.cache_dirs})
-            typer.echo("numba cache: " + ", ".join(shown[:3]) + (f" and {len(shown) - 3} more" if len(shown) > 3 else ""))
-        if bc.failed:
-            typer.echo(f"warning: no bytecode written for {len(bc.failed)} modules (read-only, e.g. "
-                       f"{bc.failed[0]}); set PYTHONPYCACHEPREFIX to a folder you can write and run imunav warmup "
-                       "again", err=True)
-        if failed:
-            typer.echo(f"warning: {len(failed)} warmup step(s) failed ({', '.join(failed)}): their kernels compile "
-                       "on first use", err=True)
-        sys.stdout.flush()
+    app.command("warmup", help=_HELP)(warmup)
