@@ -112,7 +112,7 @@ def test_batch_json_over_a_file_of_the_batch_is_refused(tmp_path):
 
 
 def test_default_segments_name_never_replaces_the_model(tmp_path):
-    model = tmp_path / "rec_segments.csv"
+    model = tmp_path / "rec_segments.json"
     model.write_text('name = "m"\n')
     msg = _exit_2(runner.invoke(app, ["simulate", "static", "--duration", "2", "--model", str(model), "--out",
                                       str(tmp_path / "rec.npz")]))

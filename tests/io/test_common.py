@@ -15,8 +15,8 @@ from imunav.io import read_imu, write_imu
 from imunav.units import unit_factor
 
 
-def _rec():
-    return static_imu(200, accel=(0.0, 0.0, -9.81), mag=(20.0, 0.0, 40.0), mag_unit="uT")
+def _rec(n=200):
+    return static_imu(n, accel=(0.0, 0.0, -9.81), mag=(20.0, 0.0, 40.0), mag_unit="uT")
 
 
 @pytest.mark.parametrize("ext", ["csv", "parquet", "h5", "npz", "mat"])

@@ -370,11 +370,8 @@ class GinsFilter:
     Attributes
     ----------
     t : float
-        Time of the current state, s (after :meth:`reset` / :meth:`step` / :meth:`run`).
-    lla, vel_ned, q_nb : numpy.ndarray
-        Current position (lat rad, lon rad, h m), NED velocity (m/s), attitude (body FRD -> NED).
-    imu_errors : numpy.ndarray, shape (13,)
-        Current gyro bias, accel bias, gyro scale, accel scale, odometer scale.
+        Time of the current state, s (after :meth:`reset` / :meth:`step` / :meth:`run`); the state itself is in
+        the properties :attr:`lla`, :attr:`vel_ned`, :attr:`q_nb`, :attr:`imu_errors` and :attr:`mounting`.
     P : numpy.ndarray, shape (n, n)
         Current error-state covariance (:data:`~imunav.ins.gins.STATE_NAMES`, then the odometer scale).
     last_nis : dict
