@@ -141,6 +141,11 @@ def output_transaction(keep: Callable[[BaseException], bool] | None = None) -> I
         ``keep(exc)`` True for an exception that ends a command that did complete (e.g. an exit status that
         reports failing units after every output was written): the outputs are moved in, then it propagates.
 
+    Yields
+    ------
+    None
+        The block runs inside the transaction.
+
     Examples
     --------
     >>> import tempfile, pathlib
