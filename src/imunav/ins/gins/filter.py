@@ -703,14 +703,14 @@ class GinsFilter:
         meta = {"removed_gnss": [] if g is None else g.meta.get("removed", []), "n_states": self.P.shape[0],
                 "gate_threshold": float(self._prm[PRM.gate + 2]), "cov_step_samples": int(self._lay[LAY.cov_step]),
                 "gnss_velocity": bool(use_vel), "odometer": odometer is not None, "nhc": c.nhc_noise is not None}
-        col3 = lambda a: np.ascontiguousarray(xs[:, a:a + 3])  # noqa: E731
-        return GinsResult(t, col3(NOM.lla), col3(NOM.vel), np.ascontiguousarray(xs[:, NOM.q:NOM.q + 4]),
+        col3 = lambda a: xs[:, a:a + 3]  # noqa: E731  (views of the kernel's output, no copies)
+        return GinsResult(t, col3(NOM.lla), col3(NOM.vel), xs[:, NOM.q:NOM.q + 4],
                           col3(NOM.gyro_bias), col3(NOM.accel_bias), col3(NOM.gyro_scale), col3(NOM.accel_scale),
-                          xs[:, NOM.odo_scale].copy(), o.cov_t[:m], o.cov_diag[:m], o.cov_nav[:m],
+                          xs[:, NOM.odo_scale], o.cov_t[:m], o.cov_diag[:m], o.cov_nav[:m],
                           np.zeros(0) if g is None else g.t.copy(), nis,
                           acc, veh.t, veh.nis, veh.dof, veh.accepted, c, meta, smoothed,
-                          aids=log.aids, q_vb=np.ascontiguousarray(xs[:, NOM.q_vb:NOM.q_vb + 4]),
-                          odo_lever_arm=col3(NOM.odo_lever), gnss_delay=xs[:, NOM.gnss_delay].copy(),
+                          aids=log.aids, q_vb=xs[:, NOM.q_vb:NOM.q_vb + 4],
+                          odo_lever_arm=col3(NOM.odo_lever), gnss_delay=xs[:, NOM.gnss_delay],
                           **{f"{name}_nis": _sample_nis(log, name, n) for name in _SAMPLE_NIS})
 
 

@@ -224,11 +224,12 @@ def _log(out, L, t, k, src, m, ok, d, blk):
 
 
 @njit(cache=True)
-def _step(xs, dth, dv, h, lay, om, wb, fb):
+def _step(xs, dth, dv, h, lay, om, wb, fb, work):
     """Compensate the increments for the estimated IMU errors and run one NED strapdown step in place;
-    ``wb``, ``fb`` receive the compensated mean rate and specific force."""
-    dthc = np.empty(3)
-    dvc = np.empty(3)
+    ``wb``, ``fb`` receive the compensated mean rate and specific force; ``work``: 16 floats of scratch (allocated
+    once per kernel call: a heap allocation per sample would cost a tenth of the step)."""
+    dthc = work[0:3]
+    dvc = work[3:6]
     scale_g = lay[LAY.gyro_scale] >= 0
     scale_a = lay[LAY.accel_scale] >= 0
     for j in range(3):
@@ -241,9 +242,9 @@ def _step(xs, dth, dv, h, lay, om, wb, fb):
     q = xs[NOM.q:NOM.q + 4]
     v = xs[NOM.vel:NOM.vel + 3]
     lla = xs[NOM.lla:NOM.lla + 3]
-    qn = np.empty(4)
-    vn = np.empty(3)
-    llan = np.empty(3)
+    qn = work[6:10]
+    vn = work[10:13]
+    llan = work[13:16]
     strapdown_step_ned(q, v, lla, dthc, dvc, h, om, ATT_START, qn, vn, llan)
     q[:] = qn
     v[:] = vn
@@ -320,6 +321,7 @@ def gins_run(imu, timed, sampled, xs, P, carry, carry_n, prm, lay, out, first, f
     Q = np.zeros((nx, nx))
     rem_th = np.empty(3)
     rem_v = np.empty(3)
+    work = np.empty(16)
     pth = np.empty(3)
     pv = np.empty(3)
     ctx = np.zeros(N_CTX)
@@ -362,7 +364,7 @@ def gins_run(imu, timed, sampled, xs, P, carry, carry_n, prm, lay, out, first, f
                     pv[j] = frac * rem_v[j]
                     rem_th[j] -= pth[j]
                     rem_v[j] -= pv[j]
-                _step(xs, pth, pv, hh, lay, om, wb, fb)
+                _step(xs, pth, pv, hh, lay, om, wb, fb, work)
                 for j in range(3):
                     carry[CARRY.sum_w + j] += wb[j] * hh
                     carry[CARRY.sum_f + j] += fb[j] * hh
@@ -390,7 +392,7 @@ def gins_run(imu, timed, sampled, xs, P, carry, carry_n, prm, lay, out, first, f
             ei += 1
         hh = t[k] - t_cur
         if hh > 0.0:
-            _step(xs, rem_th, rem_v, hh, lay, om, wb, fb)
+            _step(xs, rem_th, rem_v, hh, lay, om, wb, fb, work)
             for j in range(3):
                 carry[CARRY.sum_w + j] += wb[j] * hh
                 carry[CARRY.sum_f + j] += fb[j] * hh
