@@ -248,8 +248,37 @@ def outage_cmd(
     Example: imunav gins outage-test --preset navigation_a15 --duration 1200 --seed 1 --out outage
 
     Example: imunav gins outage-test --config drive/kf-gins.yaml --truth drive/truth.nav --out outage
+
+    Example: imunav gins outage-test robot.bag --converge 60 --every 120 --length 60 --shifts 0,30,60 --out outage
     """
     sh = _shifts(shifts)
+    if imu is not None and logs.log_kind(imu) is not None:
+        extra = [n for n, v in (("GNSS file", gnss), ("--config", config), ("--odo", odo), ("--truth", truth),
+                                ("--preset", preset), ("--duration", duration), ("--fs", fs), ("--seed", seed),
+                                ("--rtk/--spp", rtk), ("--states", states)) if v is not None]
+        if extra:
+            raise ConfigError(f"{imu} is a log: the fixes removed during each outage are the reference; leave out "
+                              f"{', '.join(extra)}")
+        json_path = out / OUTAGE_NAME
+        check_outputs([imu], [json_path])
+        sources = navlog.read_nav_sources(imu)
+        with progress("gins outage-test: the run with every fix, then one per shift", quiet=quiet,
+                      total=len(sh) + 1) as report:
+            rep = logrun.log_outage_test(sources, converge_s=converge, every_s=every, length_s=length,
+                                         shifts_s=sh, progress=report)
+        rms = rep.rms()
+        write_json(json_path, {"source": str(imu), "protocol": rep.meta, "rms": rms,
+                               "outages": [{"start_s": s0, "length_s": d, "end_m": e, "max_m": m,
+                                            "inside_3sigma": bool(c), "dead_reckoning_end_m": r, "fixes": int(n)}
+                                           for (s0, d), e, m, c, r, n in zip(rep.outages, rep.end_m, rep.max_m,
+                                                                             rep.contained, rep.dead_reckoning_end_m,
+                                                                             rep.fixes)]})
+        ratio, dr = rms["ratio_to_dead_reckoning"], rms["dead_reckoning_end_m"]
+        dr_text = "no odometer" if dr is None else f"odometry dead reckoning {dr:.3f} m (ratio {ratio:.2f})"
+        typer.echo(f"{rms['n_outages']} outages of {length:g} s against the removed fixes: RMS horizontal error at "
+                   f"their end {rms['end_m']:.3f} m, largest {rms['max_m']:.3f} m; {dr_text}; "
+                   f"{100 * rms['contained_3sigma']:.0f} % inside the predicted 3 sigma -> {json_path}")
+        return
     files = imu is not None or gnss is not None or config is not None
     if files and preset is not None:
         raise ConfigError("--preset simulates a drive; give either --preset or files (IMU GNSS --config, or a "

@@ -91,6 +91,24 @@ def test_track_is_within_half_a_metre_and_the_jumps_are_rejected(robot):
     assert s["gnss_rejected"]["by_gate"] == int(np.sum(~accepted))
 
 
+def test_outage_test_without_truth_against_the_removed_fixes(robot):
+    """60 s outages every 120 s after 60 s (shifts 0, 30, 60 s), the removed fixes as the reference: RMS of the
+    end-of-outage horizontal error <= 3 m, every outage inside its predicted 3 sigma (the fixes' own sigma
+    included), better than the wheel-odometry dead reckoning started from the filter's state.  The error includes
+    the reference fixes' own noise (sigma 0.8 m per axis: 1.1 m horizontal RMS)."""
+    _, d, _ = robot
+    r = invoke("gins", "outage-test", d / "robot.bag", "--converge", "60", "--every", "120", "--length", "60",
+               "--shifts", "0,30,60", "--out", d / "outage", "--quiet")
+    assert r.exit_code == 0, r.stderr
+    doc = json.loads((d / "outage" / "outage.json").read_text())
+    rms = doc["rms"]
+    print(f"outages: end RMS {rms['end_m']:.3f} m, dead reckoning {rms['dead_reckoning_end_m']:.3f} m, ratio "
+          f"{rms['ratio_to_dead_reckoning']:.2f}")
+    assert rms["n_outages"] >= 9 and rms["end_m"] <= 3.0 and rms["contained_3sigma"] == 1.0
+    assert rms["ratio_to_dead_reckoning"] < 1.0
+    assert all(o["fixes"] >= 100 for o in doc["outages"])
+
+
 def test_ros1_and_ros2_bags_give_the_same_trajectory(robot):
     _, d, _ = robot
     a = run_log(read_nav_sources(d / "robot.bag")).result

@@ -22,6 +22,7 @@ trajectory with its uncertainty out, the IMU mounting, the odometer scale and th
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass, field
 from typing import Any
@@ -43,7 +44,7 @@ from imunav.rotation import dcm_from_quat, euler_from_dcm, quat_from_dcm, quat_f
 from imunav.sim import presets
 from imunav.timeseries import static_intervals
 
-__all__ = ["LogRun", "LogRunOptions", "parse_rotation", "parse_vector", "run_log"]
+__all__ = ["LogOutageReport", "LogRun", "LogRunOptions", "log_outage_test", "parse_rotation", "parse_vector", "run_log"]
 
 Array = NDArray[np.float64]
 
@@ -478,3 +479,169 @@ def parse_vector(text: str | None, flag: str, default: tuple[float, float, float
     if v.size != 3 or not np.all(np.isfinite(v)):
         raise InvalidInputError(f"{flag} {text!r}: give 3 finite numbers 'x,y,z' in metres")
     return v
+
+
+@dataclass(frozen=True)
+class LogOutageReport(Result):
+    """The outage test of a log without a truth: the fixes removed during each outage are the reference.
+
+    Attributes
+    ----------
+    outages : list of (float, float)
+        Start (s on the sources' time axis) and length of each outage, every shift's in turn.
+    end_m : numpy.ndarray, shape (K,)
+        Horizontal error at the end of each outage against the last fix removed in it, m.
+    max_m : numpy.ndarray, shape (K,)
+        Largest horizontal error against the fixes removed in it, m.
+    contained : numpy.ndarray of bool, shape (K,)
+        Every removed fix of the outage inside the predicted 3σ inflated by the fix's own σ
+        (``3 √(σ_N² + σ_E² + σ_fix,N² + σ_fix,E²)``).
+    dead_reckoning_end_m : numpy.ndarray, shape (K,)
+        The same end error of wheel-odometry dead reckoning (odometer speed as read, gyro heading) started from
+        the filter's state at the outage's start, m (NaN without an odometer).
+    fixes : numpy.ndarray of int, shape (K,)
+        Reference fixes in each outage (those the run with every fix did not reject as faulty).
+    meta : dict
+        The protocol.
+    """
+
+    outages: list[tuple[float, float]]
+    end_m: Array
+    max_m: Array
+    contained: NDArray[np.bool_]
+    dead_reckoning_end_m: Array
+    fixes: NDArray[np.int64]
+    meta: dict[str, Any] = field(default_factory=dict)
+
+    def rms(self) -> dict[str, Any]:
+        """RMS over the outages of the end and largest errors, the dead reckoning's end error and their ratio.
+
+        Returns
+        -------
+        dict
+            ``n_outages``, ``end_m``, ``max_m``, ``dead_reckoning_end_m``, ``ratio_to_dead_reckoning`` (null
+            without an odometer), ``contained_3sigma`` (share).
+        """
+        def r(x: Array) -> float | None:
+            x = x[np.isfinite(x)]
+            return float(np.sqrt(np.mean(x**2))) if x.size else None
+
+        e, d = r(self.end_m), r(self.dead_reckoning_end_m)
+        return {"n_outages": int(self.end_m.size), "end_m": e, "max_m": r(self.max_m), "dead_reckoning_end_m": d,
+                "ratio_to_dead_reckoning": (e / d) if (e is not None and d) else None,
+                "contained_3sigma": float(np.mean(self.contained)) if self.contained.size else None}
+
+
+def _horizontal(lla: Array, ref: Array) -> Array:
+    return lla_to_ned(lla, ref)[:, :2]
+
+
+def _odometry_dr(src: NavSources, res: GinsResult, C_vb: Array, i0: int, i1: int) -> Array:
+    """Wheel-odometry dead reckoning over IMU samples i0..i1 from the filter's position and vehicle heading at i0,
+    with the gyro's vertical rate less the filter's bias estimate at i0; N, E in metres from the start position."""
+    imu = src.imu
+    od = src.odometer
+    assert od is not None
+    C_nv = dcm_from_quat(res.q_nb[i0]) @ C_vb.T
+    psi0 = math.atan2(C_nv[1, 0], C_nv[0, 0])
+    w = (imu.gyro[i0:i1 + 1] - res.gyro_bias[i0]) @ C_vb.T
+    dt = np.diff(imu.t[i0:i1 + 1], prepend=imu.t[i0])
+    psi = psi0 + np.cumsum(w[:, 2] * dt)
+    v = np.interp(imu.t[i0:i1 + 1], od.t, od.speed)
+    return np.cumsum(np.column_stack([v * np.cos(psi), v * np.sin(psi)]) * dt[:, None], axis=0)
+
+
+def log_outage_test(src: NavSources, options: LogRunOptions | None = None, *, converge_s: float = 60.0,
+                    every_s: float = 120.0, length_s: float = 60.0, shifts_s: tuple[float, ...] = (0.0, 30.0, 60.0),
+                    progress: Any = None) -> LogOutageReport:
+    """GNSS outages on a log without a truth: the fixes removed during each outage are the reference.
+
+    One :func:`run_log` with every fix tells which fixes are faulty (rejected by the gate); then, per shift, the
+    scheduled outages (:func:`imunav.sim.gnss.outage_schedule`) remove the fixes, the run is repeated, and each
+    outage's horizontal error is measured against its removed good fixes at their stamps (the latency the run
+    estimated taken into account).  Beside it, the dead reckoning of the wheel odometry as read and the gyro
+    heading from the filter's state at the outage's start: what the filter adds to the odometer.
+
+    Parameters
+    ----------
+    src : NavSources
+        The log's sources (with GNSS).
+    options : LogRunOptions, optional
+        As :func:`run_log`.
+    converge_s : float
+        Time before the first outage, s.
+    every_s, length_s : float
+        Outage period and length, s (``every_s > length_s > 0``).
+    shifts_s : tuple of float
+        Shifts of the first outage, s; one run per shift.
+    progress : callable, optional
+        ``progress(done, total)`` after each run.
+
+    Returns
+    -------
+    LogOutageReport
+        Per outage: end and largest errors, containment, the dead reckoning's end error.
+
+    Raises
+    ------
+    InvalidInputError
+        Without GNSS, or when no outage fits after the convergence time.
+    """
+    from imunav.sim.gnss import outage_schedule
+
+    if src.gnss is None:
+        raise InvalidInputError(f"{src.source}: the outage test removes GNSS fixes; the log has none")
+    o = options or LogRunOptions()
+    full = run_log(src, o)
+    rec = full.result.aids.get("gnss_position")
+    good = np.ones(src.gnss.n, dtype=bool)
+    if rec is not None:
+        t_bad = rec.t[~rec.accepted]
+        good &= ~np.isin(src.gnss.t, t_bad)
+    t0, t1 = float(src.imu.t[0]), float(src.imu.t[-1])
+    outs, end, mx, cont, dr, nfix = [], [], [], [], [], []
+    total = len(shifts_s) + 1
+    if progress is not None:
+        progress(1, total)
+    for k, sh in enumerate(shifts_s):
+        sched = outage_schedule(t0 + converge_s, t1, every_s=every_s, length_s=length_s, first_s=sh)
+        if not sched:
+            raise InvalidInputError(f"no {length_s:g} s outage fits after {converge_s:g} s of convergence (shift "
+                                    f"{sh:g} s) in a {t1 - t0:g} s log")
+        keep = np.ones(src.gnss.n, dtype=bool)
+        for s, d in sched:
+            keep &= ~((src.gnss.t >= s) & (src.gnss.t < s + d))
+        run = run_log(dataclasses.replace(src, gnss=src.gnss.select(keep, "outage test")), o)
+        res = run.result
+        C_vb = dcm_from_quat(res.q_vb[-1])
+        tau = float(res.gnss_delay[-1])
+        for s, d in sched:
+            idx = np.flatnonzero((src.gnss.t >= s) & (src.gnss.t < s + d) & good)
+            if idx.size == 0:
+                continue
+            tf = src.gnss.t[idx] - tau  # the fixes hold the antenna at their stamp less the latency
+            lla = np.column_stack([np.interp(tf, res.t, res.lla[:, j]) for j in range(3)])
+            ref = src.gnss.lla[idx[0]]
+            e = _horizontal(lla, ref) - _horizontal(src.gnss.lla[idx], ref)
+            err = np.hypot(e[:, 0], e[:, 1])
+            j = np.clip(np.searchsorted(res.cov_t, tf), 0, res.cov_t.size - 1)
+            var = res.cov_diag[j, 0] + res.cov_diag[j, 1] + np.sum(src.gnss.pos_std[idx, :2] ** 2, axis=1)
+            outs.append((float(s), float(d)))
+            end.append(float(err[-1]))
+            mx.append(float(err.max()))
+            cont.append(bool(np.all(err <= 3.0 * np.sqrt(var))))
+            nfix.append(int(idx.size))
+            if src.odometer is not None:
+                i0 = int(np.searchsorted(res.t, s))
+                i1 = int(np.searchsorted(res.t, tf[-1]))
+                p = _odometry_dr(src, res, C_vb, i0, i1)
+                start = _horizontal(res.lla[i0:i0 + 1], ref)[0]
+                dr.append(float(np.hypot(*(start + p[-1] - _horizontal(src.gnss.lla[idx[-1]:idx[-1] + 1], ref)[0]))))
+            else:
+                dr.append(math.nan)
+        if progress is not None:
+            progress(k + 2, total)
+    return LogOutageReport(outs, np.array(end), np.array(mx), np.array(cont, dtype=bool), np.array(dr),
+                           np.array(nfix, dtype=np.int64),
+                           {"converge_s": converge_s, "every_s": every_s, "length_s": length_s,
+                            "shifts_s": list(shifts_s), "t0_s": t0, "faulty_fixes": int(np.sum(~good))})
