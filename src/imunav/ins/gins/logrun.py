@@ -42,6 +42,7 @@ from imunav.io.navlog import NavSources
 from imunav.results import Result
 from imunav.rotation import dcm_from_quat, euler_from_dcm, quat_from_dcm, quat_from_euler
 from imunav.sim import presets
+from imunav.sim.gnss import outage_schedule
 from imunav.timeseries import static_intervals
 
 __all__ = ["LogOutageReport", "LogRun", "LogRunOptions", "log_outage_test", "parse_rotation", "parse_vector", "run_log"]
@@ -587,8 +588,6 @@ def log_outage_test(src: NavSources, options: LogRunOptions | None = None, *, co
     InvalidInputError
         Without GNSS, or when no outage fits after the convergence time.
     """
-    from imunav.sim.gnss import outage_schedule
-
     if src.gnss is None:
         raise InvalidInputError(f"{src.source}: the outage test removes GNSS fixes; the log has none")
     o = options or LogRunOptions()
