@@ -65,7 +65,7 @@ def plot_innovations(result, bound: float = 3.0):
     result : WindFilterResult
         A filter output with normalised innovations and robust weights.
     bound : float
-        Bound drawn at ±``bound`` (in standard deviations).
+        Bound drawn at ± ``bound`` (in standard deviations).
 
     Returns
     -------

@@ -74,7 +74,7 @@ class GravityKfConfig:
     tau : float
         Detector threshold on ``| |y_a| − g |``, m/s².
     s_mode : {"A", "B", "C"}
-        Scale factor S: literal ×``s_fixed`` (A), diagonal Söken-Hajiyev (B), none (C).
+        Scale factor S: literal × ``s_fixed`` (A), diagonal Söken-Hajiyev (B), none (C).
     s_fixed : float
         S of mode A during detected acceleration.
     hold_s : float

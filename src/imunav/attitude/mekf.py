@@ -42,7 +42,7 @@ disturbance).  Rest detection adds a zero-rate pseudo-measurement
 Two rest tests exist.  The plain one needs |ω − b̂| < ``rest_gyro`` and
 | |f| − g | < ``rest_acc`` on every sample for ``rest_time``.  With
 ``rest_lpf_tau`` > 0 it uses instead the deviations from first-order low-passes
-of the raw signals, |ω − ω̄|² < ``rest_gyro``² and |f − f̄|² < ``rest_acc``²,
+of the raw signals, |ω − ω̄|² < ``rest_gyro``\\ ² and |f − f̄|² < ``rest_acc``\\ ²,
 plus |ω̄_i| < ``bias_clip`` (Laidig & Seel, "VQF", Information Fusion 91,
 2023, §4.2): it does not depend on the accelerometer's scale factor or on the
 current bias estimate, and one noisy sample does not reset it.

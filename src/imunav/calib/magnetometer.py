@@ -4,8 +4,8 @@ Model: ``h_raw = A⁻¹ h_true + b`` so that ``h_cal = A (h_raw − b)`` lies on
 sphere of radius ``|h_true|`` (the field norm).  Magnetic field stays in the
 user's unit throughout.
 
-Methods
--------
+The estimators:
+
 - :func:`hard_iron_minmax`: per-axis mid-range ``(max + min) / 2`` (E. Atasoy, *Estimation and analysis
   of error parameters of attitude-heading reference system sensors* (in Turkish), MSc thesis, Başkent
   University, ch. 6, eqs. 6.1-6.4).

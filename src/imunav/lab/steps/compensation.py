@@ -30,7 +30,7 @@ local gravity and the gyro mean the (negligible) Earth rate.  The table
 shows both before and after compensation.
 
 Options (``[compensation]``): ``positions`` (12), ``dwell_s`` (10), ``rate_steps``
-(6: ±``rate_dps`` about x, y, z), ``rate_dps`` (100), ``fs`` (the
+(6: ± ``rate_dps`` about x, y, z), ``rate_dps`` (100), ``fs`` (the
 simulated tests' rate).  Artifacts set: ``compensation`` (dict of the
 residual tables) and ``calibration`` when the step estimated it.
 """
