@@ -148,6 +148,10 @@ def test_px4_sitl_log_agrees_with_its_ground_truth():
     tru = np.column_stack([np.interp(res.t[inside], gt.t, gt.lla[:, j]) for j in range(2)] + [np.zeros(inside.sum())])
     h = np.hypot(*(lla_to_ned(est, ref) - lla_to_ned(tru, ref))[:, :2].T)
     print(f"PX4 SITL: horizontal RMS {np.sqrt(np.mean(h**2)):.4f} m over {inside.sum()} samples")
+    from imunav.ins.gins.outputs import log_summary
+
+    rej = log_summary(run_log(src), src)["gnss_rejected"]
+    assert rej["fixes"] == 190 and rej["by_reader"][0]["epochs"] == 160 and rej["share"] == pytest.approx(160 / 190)
     assert np.sqrt(np.mean(h**2)) < 0.1 and inside.sum() > 1000
 
 

@@ -313,8 +313,8 @@ def log_summary(run: LogRun, sources: NavSources) -> dict[str, Any]:
     rec = res.aids.get("gnss_position")
     n_gate = int(np.sum(~rec.accepted)) if rec is not None else 0
     n_used = int(rec.t.size) if rec is not None else 0
-    refused = g_meta.get("removed", g_meta.get("faults", {}))
-    n_refused = int(sum(v for v in refused.values() if isinstance(v, (int, np.integer)))) if isinstance(refused, dict) else 0
+    refused = list(g_meta.get("removed", []))  # [{"reason": ..., "epochs": n}, ...] of the reader
+    n_refused = int(sum(int(r.get("epochs", 0)) for r in refused))
     total = n_used + n_refused
     return {
         "t0_unix": sources.t0_unix if sources.time_is_utc else None,
