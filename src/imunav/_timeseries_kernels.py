@@ -142,3 +142,21 @@ def covered(quiet: np.ndarray, n: int, w: int) -> np.ndarray:
             last = i
         out[i] = i - last < w
     return out
+
+
+@njit(cache=True)
+def moving_average(x, L):
+    """Centred moving average of length L (shrinking at the edges): the mean of ``x[i − L//2 : i − L//2 + L]``
+    clipped to the array, one value per sample (the ZUPT detectors' smoothing, the mounting estimate's low-pass)."""
+    n = x.shape[0]
+    c = np.zeros(n + 1)
+    for i in range(n):
+        c[i + 1] = c[i] + x[i]
+    out = np.empty(n)
+    h0 = L // 2
+    h1 = L - h0
+    for i in range(n):
+        a = max(0, i - h0)
+        b = min(n, i + h1)
+        out[i] = (c[b] - c[a]) / (b - a)
+    return out

@@ -243,18 +243,20 @@ def _mag_heading(src: NavSources, d_b: Array, C_vb: Array) -> float:
     return psi_imu - math.atan2(C_vb[1, 0], C_vb[0, 0])
 
 
-def _dead_reckoning(src: NavSources, C_vb: Array, bias: Array) -> tuple[Array, Array]:
-    """Vehicle heading (rad, 0 at the start) and 2-D position (m, in the start's heading frame) at the IMU stamps
-    from the gyro's vertical rate and the odometer speed."""
+def _dead_reckoning(src: NavSources, C_vb: Array, bias: Array, *, psi0: float = 0.0, i0: int = 0,
+                    i1: int | None = None) -> Array:
+    """Wheel-odometry dead reckoning over IMU samples ``i0 .. i1``: the vehicle's heading from ``psi0`` by the gyro's
+    vertical rate (less ``bias``, in vehicle axes through ``C_vb``), the odometer speed as read along it; N, E in
+    metres from the position at ``i0``, one row per sample."""
     imu = src.imu
     o = src.odometer
     assert o is not None
-    wz = ((imu.gyro - bias) @ C_vb.T)[:, 2]
-    dt = np.diff(imu.t, prepend=imu.t[0])
-    psi = np.cumsum(wz * dt)
-    v = np.interp(imu.t, o.t, o.speed)
-    p = np.cumsum(np.column_stack([v * np.cos(psi), v * np.sin(psi)]) * dt[:, None], axis=0)
-    return psi, p
+    sl = slice(i0, imu.n if i1 is None else i1 + 1)
+    wz = ((imu.gyro[sl] - bias) @ C_vb.T)[:, 2]
+    dt = np.diff(imu.t[sl], prepend=imu.t[sl][0])
+    psi = psi0 + np.cumsum(wz * dt)
+    v = np.interp(imu.t[sl], o.t, o.speed)
+    return np.cumsum(np.column_stack([v * np.cos(psi), v * np.sin(psi)]) * dt[:, None], axis=0)
 
 
 def _fit_heading(src: NavSources, p_dr: Array, lla_ref: Array) -> tuple[float, Array, float, int]:
@@ -344,7 +346,7 @@ def run_log(src: NavSources, options: LogRunOptions | None = None) -> LogRun:
     ref = np.array([0.0, 0.0, 0.0]) if src.gnss is None else src.gnss.lla[0].copy()
     initial: dict[str, Any] = {}
     if wheeled and src.gnss is not None:
-        _, p_dr = _dead_reckoning(src, C_vb, bias0)
+        p_dr = _dead_reckoning(src, C_vb, bias0)
         psi0, T, psi_sd, used = _fit_heading(src, p_dr, ref)
         pos0 = np.array([T[0], T[1], 0.0])
         initial.update(heading="odometry dead reckoning fitted to the first GNSS fixes", fixes=used)
@@ -537,21 +539,6 @@ def _horizontal(lla: Array, ref: Array) -> Array:
     return lla_to_ned(lla, ref)[:, :2]
 
 
-def _odometry_dr(src: NavSources, res: GinsResult, C_vb: Array, i0: int, i1: int) -> Array:
-    """Wheel-odometry dead reckoning over IMU samples i0..i1 from the filter's position and vehicle heading at i0,
-    with the gyro's vertical rate less the filter's bias estimate at i0; N, E in metres from the start position."""
-    imu = src.imu
-    od = src.odometer
-    assert od is not None
-    C_nv = dcm_from_quat(res.q_nb[i0]) @ C_vb.T
-    psi0 = math.atan2(C_nv[1, 0], C_nv[0, 0])
-    w = (imu.gyro[i0:i1 + 1] - res.gyro_bias[i0]) @ C_vb.T
-    dt = np.diff(imu.t[i0:i1 + 1], prepend=imu.t[i0])
-    psi = psi0 + np.cumsum(w[:, 2] * dt)
-    v = np.interp(imu.t[i0:i1 + 1], od.t, od.speed)
-    return np.cumsum(np.column_stack([v * np.cos(psi), v * np.sin(psi)]) * dt[:, None], axis=0)
-
-
 def log_outage_test(src: NavSources, options: LogRunOptions | None = None, *, converge_s: float = 60.0,
                     every_s: float = 120.0, length_s: float = 60.0, shifts_s: tuple[float, ...] = (0.0, 30.0, 60.0),
                     progress: Any = None) -> LogOutageReport:
@@ -633,7 +620,9 @@ def log_outage_test(src: NavSources, options: LogRunOptions | None = None, *, co
             if src.odometer is not None:
                 i0 = int(np.searchsorted(res.t, s))
                 i1 = int(np.searchsorted(res.t, tf[-1]))
-                p = _odometry_dr(src, res, C_vb, i0, i1)
+                C_nv = dcm_from_quat(res.q_nb[i0]) @ C_vb.T  # the vehicle's heading in the filter at i0
+                p = _dead_reckoning(src, C_vb, res.gyro_bias[i0], psi0=math.atan2(C_nv[1, 0], C_nv[0, 0]),
+                                    i0=i0, i1=i1)
                 start = _horizontal(res.lla[i0:i0 + 1], ref)[0]
                 dr.append(float(np.hypot(*(start + p[-1] - _horizontal(src.gnss.lla[idx[-1]:idx[-1] + 1], ref)[0]))))
             else:

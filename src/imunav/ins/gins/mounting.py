@@ -30,6 +30,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from imunav._timeseries_kernels import moving_average
 from imunav.errors import InsufficientDataError, InvalidInputError, ShapeError
 from imunav.results import Result
 from imunav.rotation import euler_from_dcm, quat_from_dcm
@@ -79,15 +80,10 @@ def _levelling(d: Array) -> Array:
 
 
 def _moving_mean(x: Array, w: int) -> Array:
-    """Centred moving mean of ``w`` samples along axis 0 (edges: the available samples)."""
-    if w <= 1:
-        return x
-    c = np.cumsum(np.concatenate([np.zeros((1,) + x.shape[1:]), x]), axis=0)
-    n = x.shape[0]
-    i = np.arange(n)
-    lo = np.clip(i - w // 2, 0, n)
-    hi = np.clip(i - w // 2 + w, 0, n)
-    return (c[hi] - c[lo]) / (hi - lo).reshape((-1,) + (1,) * (x.ndim - 1))
+    """Centred moving mean of ``w`` samples along axis 0, column by column (edges: the available samples)."""
+    if x.ndim == 1:
+        return moving_average(np.ascontiguousarray(x, dtype=float), w)
+    return np.column_stack([moving_average(np.ascontiguousarray(x[:, j], dtype=float), w) for j in range(x.shape[1])])
 
 
 def estimate_mounting(imu: ImuData, static: ArrayLike, *, speed_t: ArrayLike | None = None,

@@ -150,6 +150,26 @@ def run_summary(res: GinsResult, setup: Any, *, truth: NavTrack | None = None) -
     return out
 
 
+def _write_kfgins_files(names: dict[str, Path], res: GinsResult, n_states: int, t_nav: NDArray[np.float64],
+                        week: int, q_vb: NDArray[np.float64] | None = None) -> None:
+    """KF-GINS's ``.nav`` (and the smoothed one), IMU-error and state-σ files of a run, with the time column
+    ``t_nav`` (one per IMU sample; the σ rows at the covariance epochs interpolated on it) and GPS ``week``.
+    With ``q_vb`` (the IMU's mounting per sample) the ``.nav`` attitude is the vehicle's, ``q_nb ⊗ q_vbᵀ``.  The
+    σ file holds the filter's own 15 or 21 states (a 15-state filter's scale-factor σ written 0)."""
+    def attitude(q_nb: NDArray[np.float64]) -> NDArray[np.float64]:
+        return q_nb if q_vb is None else quat_multiply(q_nb, quat_conjugate(q_vb))
+
+    write_kfgins_nav(names["nav"], NavTrack(t_nav, res.lla, res.vel_ned, attitude(res.q_nb), week))
+    write_kfgins_imu_errors(names["err"], t_nav, res.gyro_bias, res.accel_bias, res.gyro_scale, res.accel_scale)
+    sd = np.sqrt(np.pad(res.cov_diag[:, :n_states], ((0, 0), (0, 21 - n_states))))
+    t_cov = res.cov_t if t_nav is res.t else np.interp(res.cov_t, res.t, t_nav)
+    write_kfgins_std(names["std"], t_cov, sd[:, 0:3], sd[:, 3:6], sd[:, 6:9], sd[:, 9:12], sd[:, 12:15],
+                     sd[:, 15:18], sd[:, 18:21])
+    if res.smoothed is not None:
+        s = res.smoothed
+        write_kfgins_nav(names["smoothed"], NavTrack(t_nav, s.lla, s.vel_ned, attitude(s.q_nb), week))
+
+
 def run_output_paths(folder: str | os.PathLike[str], *, smoother: bool = False, plots: bool = True,
                      truth: bool = False) -> dict[str, Path]:
     """The files :func:`write_run_outputs` writes into ``folder`` (to check them before a run).
@@ -207,15 +227,7 @@ def write_run_outputs(folder: str | os.PathLike[str], res: GinsResult, setup: Gi
         The summary written (:func:`run_summary` plus ``extra`` and ``figures``).
     """
     names = run_output_paths(folder, smoother=res.smoothed is not None, plots=False)
-    write_kfgins_nav(names["nav"], NavTrack(res.t, res.lla, res.vel_ned, res.q_nb))
-    write_kfgins_imu_errors(names["err"], res.t, res.gyro_bias, res.accel_bias, res.gyro_scale, res.accel_scale)
-    nx = setup.config.n_states  # the filter's own states only (an odometer scale state follows them)
-    sd = np.sqrt(np.pad(res.cov_diag[:, :nx], ((0, 0), (0, 21 - nx))))
-    write_kfgins_std(names["std"], res.cov_t, sd[:, 0:3], sd[:, 3:6], sd[:, 6:9], sd[:, 9:12], sd[:, 12:15],
-                     sd[:, 15:18], sd[:, 18:21])
-    if res.smoothed is not None:
-        s = res.smoothed
-        write_kfgins_nav(names["smoothed"], NavTrack(s.t, s.lla, s.vel_ned, s.q_nb))
+    _write_kfgins_files(names, res, setup.config.n_states, res.t, 0)
     summary = {**(extra or {}), **run_summary(res, setup, truth=truth)}
     if plots:
         summary["figures"] = [p.name for p in write_figures(folder, result=res, gnss=gnss, truth=truth)]
@@ -398,21 +410,8 @@ def write_log_outputs(folder: str | os.PathLike[str], run: LogRun, sources: NavS
     week = int(gt.week[0]) if gt.week.size else 0
     sow = np.asarray(gt.sow, dtype=float) + (np.asarray(gt.week, dtype=float) - week) * 604800.0
 
-    def vehicle_q(q_nb: NDArray[np.float64], q_vb: NDArray[np.float64]) -> NDArray[np.float64]:
-        return quat_multiply(q_nb, quat_conjugate(q_vb))
-
-    q_vb = res.q_vb if res.q_vb is not None else np.tile([1.0, 0, 0, 0], (res.t.size, 1))
     names = run_output_paths(out, smoother=res.smoothed is not None, plots=False)
-    write_kfgins_nav(names["nav"], NavTrack(sow, res.lla, res.vel_ned, vehicle_q(res.q_nb, q_vb), week))
-    write_kfgins_imu_errors(names["err"], sow, res.gyro_bias, res.accel_bias, res.gyro_scale, res.accel_scale)
-    nx = run.config.n_states
-    sd = np.sqrt(np.pad(res.cov_diag[:, :nx], ((0, 0), (0, 21 - nx))))
-    sow_cov = np.interp(res.cov_t, res.t, sow)
-    write_kfgins_std(names["std"], sow_cov, sd[:, 0:3], sd[:, 3:6], sd[:, 6:9], sd[:, 9:12], sd[:, 12:15],
-                     sd[:, 15:18], sd[:, 18:21])
-    if res.smoothed is not None:
-        s = res.smoothed
-        write_kfgins_nav(names["smoothed"], NavTrack(sow, s.lla, s.vel_ned, vehicle_q(s.q_nb, q_vb), week))
+    _write_kfgins_files(names, res, run.config.n_states, sow, week, q_vb=res.q_vb)
     write_json(out / LOG_FILES["geojson"], track_geojson(res, sources.gnss))
     summary = {"log": sources.source, **run_summary(res, _LogSetup(run.config)), **log_summary(run, sources),
                "frames": "position of the IMU, attitude of the vehicle (IMU attitude composed with its mounting)"}

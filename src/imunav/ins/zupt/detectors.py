@@ -39,10 +39,9 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from imunav._timeseries_kernels import runs
+from imunav._timeseries_kernels import moving_average, runs
 from imunav.attitude import Mahony
 from imunav.errors import InvalidInputError, ShapeError
-from imunav.ins.zupt import kernels as _k
 from imunav.ins.zupt.filter import ZuptFilter
 from imunav.ins.zupt.lstm import LstmDetector
 from imunav.ins.zupt.metrics import error_2d
@@ -266,9 +265,9 @@ def motion_adaptive(data: Any, *, thresholds: tuple[float, float] = (1.0e7, 3.5e
         raise InvalidInputError(f"thresholds must be two positive values (walk, run); got {thresholds!r}")
     fs = 1.0 / float(np.median(np.diff(t))) if t.size > 1 else 1.0
     L = max(1, int(round(intensity_window_s * fs)))
-    intensity = np.sqrt(_k.moving_average(np.sum(w * w, axis=1), L))
+    intensity = np.sqrt(moving_average(np.sum(w * w, axis=1), L))
     gam = np.where(intensity > split_rate, thresholds[1], thresholds[0]).astype(float)
-    gam = _k.moving_average(gam, max(1, int(round(smooth_s * fs))))
+    gam = moving_average(gam, max(1, int(round(smooth_s * fs))))
     T = shoe(a, w, window, sigma_a=sigma_a, sigma_w=sigma_w, g=g)
     params = {"window": int(window), "thresholds": list(thresholds), "split_rate": split_rate,
               "intensity_window_s": intensity_window_s, "smooth_s": smooth_s}

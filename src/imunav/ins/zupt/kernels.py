@@ -145,23 +145,6 @@ def mbgtd_sliding(acc, W, tail):
     return out
 
 
-@njit(cache=True)
-def moving_average(x, L):
-    """Centred moving average of length L (shrinking at the edges)."""
-    n = x.shape[0]
-    c = np.zeros(n + 1)
-    for i in range(n):
-        c[i + 1] = c[i] + x[i]
-    out = np.empty(n)
-    h0 = L // 2
-    h1 = L - h0
-    for i in range(n):
-        a = max(0, i - h0)
-        b = min(n, i + h1)
-        out[i] = (c[b] - c[a]) / (b - a)
-    return out
-
-
 # --------------------------------------------------------------------------
 # Error-state ZUPT EKF
 # --------------------------------------------------------------------------
