@@ -180,6 +180,12 @@ def test_log_refusals(tmp_path):
     line = one_error_line(invoke("gins", "run", tmp_path / "good.bag", "--out", tmp_path / "o", "--imu-rotation",
                                  "10,20"))
     assert "--imu-rotation" in line
+    line = one_error_line(invoke("gins", "outage-test", tmp_path / "good.bag", "--truth", tmp_path / "good.bag",
+                                 "--out", tmp_path / "o2"))
+    assert "--truth" in line and not (tmp_path / "o2").exists()
+    before = (tmp_path / "good.bag").read_bytes()
+    line = one_error_line(invoke("gins", "run", tmp_path / "good.bag", "--out", tmp_path))  # the log's own folder
+    assert (tmp_path / "good.bag").read_bytes() == before
 
 
 def test_rotation_flag_accepts_euler_degrees_and_unit_quaternions(tmp_path):
