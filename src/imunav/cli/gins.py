@@ -224,7 +224,8 @@ def outage_cmd(
     config: Optional[Path] = _CONFIG_OPT,
     odo: Optional[Path] = _ODO_OPT,
     truth: Optional[Path] = typer.Option(None, "--truth", help="Truth .nav file on the IMU stamps (required with "
-                                                               "files)."),
+                                                               "files; with a log, the reference instead of the "
+                                                               "removed fixes)."),
     out: Path = typer.Option(..., "--out", help="Output folder: outage.json and the drift figure."),
     preset: Optional[str] = typer.Option(None, "--preset", help="Without files: simulate a drive with this IMU "
                                                                 "preset (default navigation_a15)."),
@@ -250,33 +251,35 @@ def outage_cmd(
     Example: imunav gins outage-test --config drive/kf-gins.yaml --truth drive/truth.nav --out outage
 
     Example: imunav gins outage-test robot.bag --converge 60 --every 120 --length 60 --shifts 0,30,60 --out outage
+
+    Example: imunav gins outage-test robot.bag --truth kfgins/truth.nav --converge 60 --every 120 --length 60 --out outage2
     """
     sh = _shifts(shifts)
     if imu is not None and logs.log_kind(imu) is not None:
-        extra = [n for n, v in (("GNSS file", gnss), ("--config", config), ("--odo", odo), ("--truth", truth),
-                                ("--preset", preset), ("--duration", duration), ("--fs", fs), ("--seed", seed),
+        extra = [n for n, v in (("GNSS file", gnss), ("--config", config), ("--odo", odo), ("--preset", preset), ("--duration", duration), ("--fs", fs), ("--seed", seed),
                                 ("--rtk/--spp", rtk), ("--states", states)) if v is not None]
         if extra:
-            raise ConfigError(f"{imu} is a log: the fixes removed during each outage are the reference; leave out "
-                              f"{', '.join(extra)}")
+            raise ConfigError(f"{imu} is a log: the fixes removed during each outage (or --truth) are the "
+                              f"reference; leave out {', '.join(extra)}")
         json_path = out / OUTAGE_NAME
-        check_outputs([imu], [json_path])
+        check_outputs([p for p in (imu, truth) if p is not None], [json_path])
         sources = navlog.read_nav_sources(imu)
+        ref = kfgins.read_kfgins_nav(truth) if truth is not None else None
         with progress("gins outage-test: the run with every fix, then one per shift", quiet=quiet,
                       total=len(sh) + 1) as report:
             rep = logrun.log_outage_test(sources, converge_s=converge, every_s=every, length_s=length,
-                                         shifts_s=sh, progress=report)
-        rms = rep.rms()
-        write_json(json_path, {"source": str(imu), "protocol": rep.meta, "rms": rms,
-                               "outages": [{"start_s": s0, "length_s": d, "end_m": e, "max_m": m,
-                                            "inside_3sigma": bool(c), "dead_reckoning_end_m": r, "fixes": int(n)}
-                                           for (s0, d), e, m, c, r, n in zip(rep.outages, rep.end_m, rep.max_m,
-                                                                             rep.contained, rep.dead_reckoning_end_m,
-                                                                             rep.fixes)]})
+                                         shifts_s=sh, truth=ref, progress=report)
+        doc = outputs.log_outage_document(rep, source=str(imu))
+        write_json(json_path, doc)
+        rms = doc["rms"]
         ratio, dr = rms["ratio_to_dead_reckoning"], rms["dead_reckoning_end_m"]
         dr_text = "no odometer" if dr is None else f"odometry dead reckoning {dr:.3f} m (ratio {ratio:.2f})"
-        typer.echo(f"{rms['n_outages']} outages of {length:g} s against the removed fixes: RMS horizontal error at "
-                   f"their end {rms['end_m']:.3f} m, largest {rms['max_m']:.3f} m; {dr_text}; "
+        noise = rms["reference_noise_m"]
+        floor = "" if not noise or dr is None else (
+            f"; less the fixes' own noise ({noise:.2f} m): {rms['end_above_noise_m']:.3f} m vs "
+            f"{rms['dead_reckoning_above_noise_m']:.3f} m (ratio {rms['ratio_above_noise']:.2f})")
+        typer.echo(f"{rms['n_outages']} outages of {length:g} s against the {rms['reference']}: RMS horizontal "
+                   f"error at their end {rms['end_m']:.3f} m, largest {rms['max_m']:.3f} m; {dr_text}{floor}; "
                    f"{100 * rms['contained_3sigma']:.0f} % inside the predicted 3 sigma -> {json_path}")
         return
     files = imu is not None or gnss is not None or config is not None

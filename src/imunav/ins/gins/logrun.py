@@ -38,6 +38,7 @@ from imunav.ins.gins.layout import LAY
 from imunav.ins.gins.mounting import MountingEstimate, _levelling, estimate_mounting
 from imunav.ins.gins.result import GinsResult
 from imunav.io.aiding import OdometerData
+from imunav.io.kfgins import NavTrack
 from imunav.io.navlog import NavSources
 from imunav.results import Result
 from imunav.rotation import dcm_from_quat, euler_from_dcm, quat_from_dcm, quat_from_euler
@@ -45,7 +46,8 @@ from imunav.sim import presets
 from imunav.sim.gnss import outage_schedule
 from imunav.timeseries import static_intervals
 
-__all__ = ["LogOutageReport", "LogRun", "LogRunOptions", "log_outage_test", "parse_rotation", "parse_vector", "run_log"]
+__all__ = ["LogOutageReport", "LogRun", "LogRunOptions", "log_outage_test", "parse_rotation", "parse_vector", "run_log",
+           "truth_on_sources"]
 
 Array = NDArray[np.float64]
 
@@ -486,26 +488,29 @@ def parse_vector(text: str | None, flag: str, default: tuple[float, float, float
 
 @dataclass(frozen=True)
 class LogOutageReport(Result):
-    """The outage test of a log without a truth: the fixes removed during each outage are the reference.
+    """The outage test of a log: the fixes removed during each outage are the reference, or a truth when given.
 
     Attributes
     ----------
     outages : list of (float, float)
         Start (s on the sources' time axis) and length of each outage, every shift's in turn.
     end_m : numpy.ndarray, shape (K,)
-        Horizontal error at the end of each outage against the last fix removed in it, m.
+        Horizontal error at the end of each outage against the reference there (the last fix removed in it, or
+        the truth at the last IMU sample of the outage), m.
     max_m : numpy.ndarray, shape (K,)
-        Largest horizontal error against the fixes removed in it, m.
+        Largest horizontal error against the outage's reference points, m.
     contained : numpy.ndarray of bool, shape (K,)
-        Every removed fix of the outage inside the predicted 3σ inflated by the fix's own σ
-        (``3 √(σ_N² + σ_E² + σ_fix,N² + σ_fix,E²)``).
+        Every reference point of the outage inside the predicted 3σ, inflated by the fix's own σ when the fixes
+        are the reference (``3 √(σ_N² + σ_E² + σ_fix,N² + σ_fix,E²)``).
     dead_reckoning_end_m : numpy.ndarray, shape (K,)
         The same end error of wheel-odometry dead reckoning (odometer speed as read, gyro heading) started from
         the filter's state at the outage's start, m (NaN without an odometer).
     fixes : numpy.ndarray of int, shape (K,)
-        Reference fixes in each outage (those the run with every fix did not reject as faulty).
+        Reference points in each outage: the fixes the run with every fix did not reject as faulty, or the IMU
+        samples compared with the truth.
     meta : dict
-        The protocol.
+        The protocol; ``reference`` (``"removed fixes"`` or ``"truth"``) and ``reference_noise_m`` (RMS
+        horizontal σ of the reference points: √(mean(σ_N² + σ_E²)) of the fixes, 0 for a truth).
     """
 
     outages: list[tuple[float, float]]
@@ -519,19 +524,33 @@ class LogOutageReport(Result):
     def rms(self) -> dict[str, Any]:
         """RMS over the outages of the end and largest errors, the dead reckoning's end error and their ratio.
 
+        Against removed fixes, each end error holds the fix's own noise: ``E[e²] = e_true² + σ_ref²`` with
+        ``σ_ref`` = ``reference_noise_m``, a floor that no filter goes under; ``end_above_noise_m`` and
+        ``dead_reckoning_above_noise_m`` remove it (``√max(RMS² − σ_ref², 0)``) and ``ratio_above_noise`` is
+        their ratio.  With a truth the two pairs are equal.
+
         Returns
         -------
         dict
-            ``n_outages``, ``end_m``, ``max_m``, ``dead_reckoning_end_m``, ``ratio_to_dead_reckoning`` (null
-            without an odometer), ``contained_3sigma`` (share).
+            ``n_outages``, ``reference``, ``reference_noise_m``, ``end_m``, ``max_m``, ``dead_reckoning_end_m``,
+            ``ratio_to_dead_reckoning`` (null without an odometer), ``end_above_noise_m``,
+            ``dead_reckoning_above_noise_m``, ``ratio_above_noise``, ``contained_3sigma`` (share).
         """
         def r(x: Array) -> float | None:
             x = x[np.isfinite(x)]
             return float(np.sqrt(np.mean(x**2))) if x.size else None
 
+        def above(x: float | None) -> float | None:
+            return None if x is None else math.sqrt(max(x * x - noise * noise, 0.0))
+
+        noise = float(self.meta.get("reference_noise_m", 0.0))
         e, d = r(self.end_m), r(self.dead_reckoning_end_m)
-        return {"n_outages": int(self.end_m.size), "end_m": e, "max_m": r(self.max_m), "dead_reckoning_end_m": d,
+        ea, da = above(e), above(d)
+        return {"n_outages": int(self.end_m.size), "reference": self.meta.get("reference", "removed fixes"),
+                "reference_noise_m": noise, "end_m": e, "max_m": r(self.max_m), "dead_reckoning_end_m": d,
                 "ratio_to_dead_reckoning": (e / d) if (e is not None and d) else None,
+                "end_above_noise_m": ea, "dead_reckoning_above_noise_m": da,
+                "ratio_above_noise": (ea / da) if (ea is not None and da) else None,
                 "contained_3sigma": float(np.mean(self.contained)) if self.contained.size else None}
 
 
@@ -539,16 +558,54 @@ def _horizontal(lla: Array, ref: Array) -> Array:
     return lla_to_ned(lla, ref)[:, :2]
 
 
+def truth_on_sources(truth: NavTrack, src: NavSources) -> NavTrack:
+    """A truth's times moved onto the sources' time axis (s since the IMU's first stamp).
+
+    A KF-GINS ``.nav`` truth is stamped in GPS week and seconds of week; a log whose stamps are UTC maps its time
+    onto that (:meth:`~imunav.io.navlog.NavSources.gps_time`), one whose clock is not UTC onto its own seconds
+    (week 0), as ``imunav gins run LOG`` writes its ``.nav``.
+
+    Parameters
+    ----------
+    truth : NavTrack
+        The reference trajectory (KF-GINS ``.nav`` convention: ``t`` seconds of week of ``week``).
+    src : NavSources
+        The log's sources.
+
+    Returns
+    -------
+    NavTrack
+        The truth with ``t`` in s since ``src.t0_ns``.
+
+    Raises
+    ------
+    InvalidInputError
+        If the truth does not overlap the log's IMU span.
+    """
+    g0 = src.gps_time([0.0])
+    t = (int(truth.week) - int(g0.week[0])) * 604800.0 + np.asarray(truth.t, dtype=float) - float(g0.sow[0])
+    if t.size < 2 or t[-1] < src.imu.t[0] or t[0] > src.imu.t[-1]:
+        raise InvalidInputError(f"the truth ({truth.meta.get('source', 'given')}, week {truth.week}, "
+                                f"{truth.t[0]:.3f}-{truth.t[-1]:.3f} s of week) does not overlap {src.source} "
+                                f"(week {int(g0.week[0])}, from {float(g0.sow[0]):.3f} s of week): give the truth "
+                                "of this log, stamped as its .nav output")
+    return dataclasses.replace(truth, t=t)
+
+
 def log_outage_test(src: NavSources, options: LogRunOptions | None = None, *, converge_s: float = 60.0,
                     every_s: float = 120.0, length_s: float = 60.0, shifts_s: tuple[float, ...] = (0.0, 30.0, 60.0),
-                    progress: Any = None) -> LogOutageReport:
-    """GNSS outages on a log without a truth: the fixes removed during each outage are the reference.
+                    truth: NavTrack | None = None, progress: Any = None) -> LogOutageReport:
+    """GNSS outages on a log: the fixes removed during each outage are the reference, or a truth when given.
 
     One :func:`run_log` with every fix tells which fixes are faulty (rejected by the gate); then, per shift, the
     scheduled outages (:func:`imunav.sim.gnss.outage_schedule`) remove the fixes, the run is repeated, and each
     outage's horizontal error is measured against its removed good fixes at their stamps (the latency the run
-    estimated taken into account).  Beside it, the dead reckoning of the wheel odometry as read and the gyro
-    heading from the filter's state at the outage's start: what the filter adds to the odometer.
+    estimated taken into account), or, with ``truth``, against the truth at the run's IMU samples in the outage.
+    Beside it, the dead reckoning of the wheel odometry as read and the gyro heading from the filter's state at the
+    outage's start: what the filter adds to the odometer.
+
+    The removed fixes carry their own noise, ``E[e²] = e_true² + σ_fix²`` at each: a floor the report states
+    (:meth:`LogOutageReport.rms`), which a truth does not have.
 
     Parameters
     ----------
@@ -562,6 +619,8 @@ def log_outage_test(src: NavSources, options: LogRunOptions | None = None, *, co
         Outage period and length, s (``every_s > length_s > 0``).
     shifts_s : tuple of float
         Shifts of the first outage, s; one run per shift.
+    truth : NavTrack, optional
+        Reference trajectory of the IMU's position (KF-GINS ``.nav`` time convention, :func:`truth_on_sources`).
     progress : callable, optional
         ``progress(done, total)`` after each run.
 
@@ -573,10 +632,11 @@ def log_outage_test(src: NavSources, options: LogRunOptions | None = None, *, co
     Raises
     ------
     InvalidInputError
-        Without GNSS, or when no outage fits after the convergence time.
+        Without GNSS, when no outage fits after the convergence time, or when the truth does not overlap the log.
     """
     if src.gnss is None:
         raise InvalidInputError(f"{src.source}: the outage test removes GNSS fixes; the log has none")
+    ref_truth = truth_on_sources(truth, src) if truth is not None else None
     o = options or LogRunOptions()
     full = run_log(src, o)
     rec = full.result.aids.get("gnss_position")
@@ -585,7 +645,7 @@ def log_outage_test(src: NavSources, options: LogRunOptions | None = None, *, co
         t_bad = rec.t[~rec.accepted]
         good &= ~np.isin(src.gnss.t, t_bad)
     t0, t1 = float(src.imu.t[0]), float(src.imu.t[-1])
-    outs, end, mx, cont, dr, nfix = [], [], [], [], [], []
+    outs, end, mx, cont, dr, nfix, ref_var = [], [], [], [], [], [], []
     total = len(shifts_s) + 1
     if progress is not None:
         progress(1, total)
@@ -602,21 +662,31 @@ def log_outage_test(src: NavSources, options: LogRunOptions | None = None, *, co
         C_vb = dcm_from_quat(res.q_vb[-1])
         tau = float(res.gnss_delay[-1])
         for s, d in sched:
-            idx = np.flatnonzero((src.gnss.t >= s) & (src.gnss.t < s + d) & good)
-            if idx.size == 0:
-                continue
-            tf = src.gnss.t[idx] - tau  # the fixes hold the antenna at their stamp less the latency
-            lla = np.column_stack([np.interp(tf, res.t, res.lla[:, j]) for j in range(3)])
-            ref = src.gnss.lla[idx[0]]
-            e = _horizontal(lla, ref) - _horizontal(src.gnss.lla[idx], ref)
+            if ref_truth is None:
+                idx = np.flatnonzero((src.gnss.t >= s) & (src.gnss.t < s + d) & good)
+                if idx.size == 0:
+                    continue
+                tf = src.gnss.t[idx] - tau  # the fixes hold the antenna at their stamp less the latency
+                lla = np.column_stack([np.interp(tf, res.t, res.lla[:, j]) for j in range(3)])
+                ref_lla, fix_var = src.gnss.lla[idx], np.sum(src.gnss.pos_std[idx, :2] ** 2, axis=1)
+            else:
+                tf = res.t[(res.t >= max(s, ref_truth.t[0])) & (res.t < min(s + d, ref_truth.t[-1]))]
+                if tf.size == 0:
+                    continue
+                lla = np.column_stack([np.interp(tf, res.t, res.lla[:, j]) for j in range(3)])
+                ref_lla = np.column_stack([np.interp(tf, ref_truth.t, ref_truth.lla[:, j]) for j in range(3)])
+                fix_var = np.zeros(tf.size)
+            ref = ref_lla[0]
+            e = _horizontal(lla, ref) - _horizontal(ref_lla, ref)
             err = np.hypot(e[:, 0], e[:, 1])
             j = np.clip(np.searchsorted(res.cov_t, tf), 0, res.cov_t.size - 1)
-            var = res.cov_diag[j, 0] + res.cov_diag[j, 1] + np.sum(src.gnss.pos_std[idx, :2] ** 2, axis=1)
+            var = res.cov_diag[j, 0] + res.cov_diag[j, 1] + fix_var
             outs.append((float(s), float(d)))
             end.append(float(err[-1]))
             mx.append(float(err.max()))
             cont.append(bool(np.all(err <= 3.0 * np.sqrt(var))))
-            nfix.append(int(idx.size))
+            nfix.append(int(tf.size))
+            ref_var.append(float(fix_var[-1]))
             if src.odometer is not None:
                 i0 = int(np.searchsorted(res.t, s))
                 i1 = int(np.searchsorted(res.t, tf[-1]))
@@ -624,7 +694,7 @@ def log_outage_test(src: NavSources, options: LogRunOptions | None = None, *, co
                 p = _dead_reckoning(src, C_vb, res.gyro_bias[i0], psi0=math.atan2(C_nv[1, 0], C_nv[0, 0]),
                                     i0=i0, i1=i1)
                 start = _horizontal(res.lla[i0:i0 + 1], ref)[0]
-                dr.append(float(np.hypot(*(start + p[-1] - _horizontal(src.gnss.lla[idx[-1]:idx[-1] + 1], ref)[0]))))
+                dr.append(float(np.hypot(*(start + p[-1] - _horizontal(ref_lla[-1:], ref)[0]))))
             else:
                 dr.append(math.nan)
         if progress is not None:
@@ -632,4 +702,6 @@ def log_outage_test(src: NavSources, options: LogRunOptions | None = None, *, co
     return LogOutageReport(outs, np.array(end), np.array(mx), np.array(cont, dtype=bool), np.array(dr),
                            np.array(nfix, dtype=np.int64),
                            {"converge_s": converge_s, "every_s": every_s, "length_s": length_s,
-                            "shifts_s": list(shifts_s), "t0_s": t0, "faulty_fixes": int(np.sum(~good))})
+                            "shifts_s": list(shifts_s), "t0_s": t0, "faulty_fixes": int(np.sum(~good)),
+                            "reference": "removed fixes" if ref_truth is None else "truth",
+                            "reference_noise_m": math.sqrt(float(np.mean(ref_var))) if ref_var else 0.0})

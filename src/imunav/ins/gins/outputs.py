@@ -22,7 +22,7 @@ from numpy.typing import NDArray
 
 from imunav.files import atomic_path, write_json
 from imunav.ins.gins.layout import LAY
-from imunav.ins.gins.logrun import LogRun
+from imunav.ins.gins.logrun import LogOutageReport, LogRun
 from imunav.ins.gins.outage import OutageReport
 from imunav.ins.gins.plot import FIGURE_NAMES, write_gins_figures
 from imunav.ins.gins.result import GinsResult
@@ -43,7 +43,7 @@ from imunav.io.navlog import NavSources
 from imunav.rotation import euler_from_quat, quat_conjugate, quat_multiply
 from imunav.toml import toml_text
 
-__all__ = ["DRIVE_FILES", "LOG_FILES", "RUN_FILES", "log_summary", "outage_document", "run_output_paths",
+__all__ = ["DRIVE_FILES", "LOG_FILES", "RUN_FILES", "log_outage_document", "log_summary", "outage_document", "run_output_paths",
            "run_summary", "track_geojson", "write_log_outputs", "write_run_outputs", "write_simulated_drive"]
 
 #: Files of a simulated drive (key -> name in its folder).
@@ -280,6 +280,31 @@ def outage_document(rep: OutageReport, *, source: str, states: int) -> dict[str,
                         for (s, d), h, v, d3, r, p, y, c in zip(rep.outages, rep.horizontal_m, rep.vertical_m,
                                                                 rep.drift_3d_m, rep.roll_deg, rep.pitch_deg,
                                                                 rep.heading_deg, rep.contained)]}
+
+
+def log_outage_document(rep: LogOutageReport, *, source: str) -> dict[str, Any]:
+    """The JSON document of the outage test on a log: the protocol, the RMS over outages and every outage.
+
+    Parameters
+    ----------
+    rep : LogOutageReport
+        From :func:`imunav.ins.gins.logrun.log_outage_test`.
+    source : str
+        The log.
+
+    Returns
+    -------
+    dict
+        ``source``, ``protocol``, ``rms`` (:meth:`LogOutageReport.rms`: the reference, its own noise, the end and
+        largest horizontal errors, the odometry dead reckoning's and their ratios) and ``outages`` (start and
+        length s, end and largest horizontal error m, inside the predicted 3σ, the dead reckoning's end error m,
+        reference points).
+    """
+    return {"source": source, "protocol": rep.meta, "rms": rep.rms(),
+            "outages": [{"start_s": s0, "length_s": d, "end_m": e, "max_m": m, "inside_3sigma": bool(c),
+                         "dead_reckoning_end_m": None if not np.isfinite(r) else float(r), "fixes": int(n)}
+                        for (s0, d), e, m, c, r, n in zip(rep.outages, rep.end_m, rep.max_m, rep.contained,
+                                                          rep.dead_reckoning_end_m, rep.fixes)]}
 
 
 #: Files of a run on a log (besides :data:`RUN_FILES`).
