@@ -39,7 +39,7 @@ from imunav.io.kfgins import ImuIncrements, NavTrack, write_kfgins_imu, write_kf
 from imunav.io.rosbag import StaticTransform, write_bag
 from imunav.rotation import C_FLU_FRD, euler_from_quat, quat_from_dcm, quat_multiply
 from imunav.sim import presets
-from imunav.sim.error_model import simulate_imu
+from imunav.sim.error_model import ImuErrorModel, simulate_imu
 from imunav.sim.gnss import simulate_gnss
 from imunav.sim.trajectory import Trajectory
 from imunav.sim.vehicle import Maneuver, simulate_odometer, speed_change, stop, straight, turn, vehicle_trajectory
@@ -194,7 +194,9 @@ def simulate_robot_log(seed: int = 0, *, distance_m: float = 400.0, speed: float
                        outlier_fraction: float = 0.02, outlier_range_m: tuple[float, float] = (10.0, 30.0),
                        gnss_lever_arm_base: tuple[float, float, float] = (0.0, 0.0, -0.3),
                        origin_lla: tuple[float, float, float] = (48.137 * DEG, 11.575 * DEG, 520.0),
-                       t0_ns: int = ROBOT_T0_NS) -> RobotLog:
+                       t0_ns: int = ROBOT_T0_NS, imu_model: str | ImuErrorModel = "consumer_mems",
+                       slip_std: tuple[float, float] = (0.0, 0.0), idle_vibration_std: float = 0.0,
+                       vibration_band_hz: tuple[float, float] = (0.1, 2.6)) -> RobotLog:
     """The robot scenario (module docstring), seeded.
 
     Parameters
@@ -223,6 +225,19 @@ def simulate_robot_log(seed: int = 0, *, distance_m: float = 400.0, speed: float
         Start position (lat rad, lon rad, ellipsoidal height m).
     t0_ns : int
         UTC of the first IMU stamp, ns since 1970.
+    imu_model : str or ImuErrorModel
+        The IMU's errors: a preset name of :mod:`imunav.sim.presets`, or a model (e.g. one drawn from a filter's
+        own model by :func:`imunav.ins.gins.truth.matched_errors`, for consistency tests).
+    slip_std : tuple of float
+        σ of the base's lateral (wheel slip) and vertical (suspension) velocity while it moves, m/s (what the
+        non-holonomic constraint's σ stands for; default none: the constraint holds exactly).
+    idle_vibration_std : float
+        σ of the base's velocity on each axis during the stops, m/s (default none: exactly still).
+    vibration_band_hz : tuple of float
+        Band of both perturbations, Hz (:func:`~imunav.sim.vehicle.vehicle_trajectory`); the default
+        0.1-2.6 Hz is white on a 0.4 s grid (correlation −0.08 at the filter's 0.2 s epochs) and far enough
+        below the 30 Hz IMU's Nyquist frequency for its trapezoidal integration (a sinusoid of f Hz comes out
+        ``(x/2) cot(x/2)``, ``x = 2π f / 30``, times its amplitude: 2.5 % small at 2.6 Hz).
 
     Returns
     -------
@@ -236,9 +251,11 @@ def simulate_robot_log(seed: int = 0, *, distance_m: float = 400.0, speed: float
     """
     rng = np.random.default_rng(seed)
     seeds = rng.integers(0, 2**63 - 1, size=4)
+    vib = int(rng.integers(0, 2**63 - 1))  # drawn after the others: the drive without perturbations is unchanged
     base = vehicle_trajectory(robot_loops(distance_m, speed=speed), fs=imu_rate_hz, origin_lla=origin_lla,
-                              heading0_deg=30.0)
-    model = presets.get("consumer_mems")
+                              heading0_deg=30.0, slip_std=slip_std, idle_vibration_std=idle_vibration_std,
+                              vibration_band_hz=vibration_band_hz, rng=vib)
+    model = presets.get(imu_model) if isinstance(imu_model, str) else imu_model
     imu = simulate_imu(_imu_trajectory(base, C_BASE_IMU), model, rng=int(seeds[0]))
     assert isinstance(imu, ImuData)
     imu = ImuData(imu.t, imu.gyro, imu.accel, meta={"t0_ns": int(t0_ns), "source": "imunav.sim.robot_log",
@@ -266,7 +283,8 @@ def simulate_robot_log(seed: int = 0, *, distance_m: float = 400.0, speed: float
     e = np.degrees(euler_from_quat(q_bi))
     truth = RobotLogTruth(base, q_bi, (float(e[0]), float(e[1]), float(e[2])), c_sensor_flu, float(odometer_scale),
                           float(odometer_noise_std), float(gnss_latency_s), lever, outlier, off, int(t0_ns),
-                          {"seed": int(seed), "imu_model": "consumer_mems", "imu_rate_hz": float(imu_rate_hz),
+                          {"seed": int(seed), "imu_model": model.name, "slip_std": list(slip_std),
+                           "idle_vibration_std": float(idle_vibration_std), "imu_rate_hz": float(imu_rate_hz),
                            "gnss_std_m": float(gnss_std_m), "outlier_range_m": list(outlier_range_m)})
     return RobotLog(imu, gnss, odo, truth)
 

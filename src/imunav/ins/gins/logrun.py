@@ -30,7 +30,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from imunav.earth import lla_to_ned, ned_to_lla
+from imunav.earth import lla_to_ned, ned_to_lla, normal_gravity
 from imunav.errors import InsufficientDataError, InvalidInputError
 from imunav.ins.gins.config import GinsConfig
 from imunav.ins.gins.filter import GinsFilter, kernel_setup
@@ -375,10 +375,18 @@ def run_log(src: NavSources, options: LogRunOptions | None = None) -> LogRun:
     lla0 = ned_to_lla(pos0[None, :], ref)[0] if src.gnss is not None else ref
     initial.update(lla0=lla0.tolist(), heading_deg=math.degrees(psi0), heading_std_deg=math.degrees(psi_sd))
     # -- configuration
+    # the levelling reads the accelerometer bias as tilt: φ_N ≈ b_E / g, φ_E ≈ −b_N / g (Groves 2013, §5.6.2), so
+    # the tilt's σ is the levelling's and the bias's together (the measurements build their correlation)
+    ba_sd = np.asarray(o.overrides.get("init_accel_bias_std", GinsConfig.from_preset(o.preset).init_accel_bias_std),
+                       dtype=float) * np.ones(3)
+    Pb_n = (C_nv @ C_vb) @ np.diag(ba_sd**2) @ (C_nv @ C_vb).T
+    g0 = float(normal_gravity(ref[0], ref[2])) if src.gnss is not None else float(normal_gravity(0.0))
+    tilt_n = np.sqrt(tilt_sd**2 + np.array([Pb_n[1, 1], Pb_n[0, 0]]) / g0**2)
     cfg_kw: dict[str, Any] = dict(
         lever_arm=C_vb.T @ np.asarray(o.gnss_lever_arm, dtype=float),
         mounting=np.asarray(euler_from_dcm(C_vb), dtype=float), init_pos_std=pos_sd,
-        init_vel_std=0.05 if static[0] else 0.5, init_att_std=(tilt_sd, tilt_sd, max(psi_sd, math.radians(0.5))),
+        init_vel_std=0.05 if static[0] else 0.5,
+        init_att_std=(float(tilt_n[0]), float(tilt_n[1]), max(psi_sd, math.radians(0.5))),
         )
     if mount_sd is not None:
         cfg_kw.update(mounting_std=np.maximum(mount_sd, math.radians(0.05)), level_std=LEVEL_STD)
