@@ -143,7 +143,7 @@ def run_cmd(
     YAML, or on IMU and GNSS files with a TOML; write KF-GINS's outputs (.nav, IMU errors, state sigma),
     summary.json and figures (a log: also track.geojson, the mounting, odometer scale and GNSS latency found).
 
-    Example: imunav gins run robot.bag --out robot-run
+    Example: imunav gins run robot.bag --gnss-lever-arm 0,0,-0.3 --out robot-run
 
     Example: imunav gins run --config drive/kf-gins.yaml --out drive/result --truth drive/truth.nav
 
@@ -239,6 +239,8 @@ def outage_cmd(
     length: float = typer.Option(60.0, "--length", help="Outage length, s."),
     shifts: str = typer.Option("0,60,120", "--shifts", help="Start shifts of the first outage, s (one run each)."),
     states: Optional[int] = _STATES_OPT,
+    gnss_lever_arm: Optional[str] = typer.Option(None, "--gnss-lever-arm", help="With a log: the GNSS antenna from "
+                                                                                "the IMU, vehicle FRD, m: 'x,y,z'."),
     plots: bool = typer.Option(True, "--plots/--no-plots", help="Write the outage drift figure."),
     quiet: bool = typer.Option(False, "--quiet", "-q", help="No progress bar."),
 ) -> None:
@@ -250,9 +252,9 @@ def outage_cmd(
 
     Example: imunav gins outage-test --config drive/kf-gins.yaml --truth drive/truth.nav --out outage
 
-    Example: imunav gins outage-test robot.bag --converge 60 --every 120 --length 60 --shifts 0,30,60 --out outage
+    Example: imunav gins outage-test robot.bag --gnss-lever-arm 0,0,-0.3 --converge 60 --every 120 --length 60 --shifts 0,30,60 --out outage
 
-    Example: imunav gins outage-test robot.bag --truth kfgins/truth.nav --converge 60 --every 120 --length 60 --out outage2
+    Example: imunav gins outage-test robot.bag --gnss-lever-arm 0,0,-0.3 --truth kfgins/truth.nav --converge 60 --every 120 --length 60 --out outage2
     """
     sh = _shifts(shifts)
     if imu is not None and logs.log_kind(imu) is not None:
@@ -267,7 +269,8 @@ def outage_cmd(
         ref = kfgins.read_kfgins_nav(truth) if truth is not None else None
         with progress("gins outage-test: the run with every fix, then one per shift", quiet=quiet,
                       total=len(sh) + 1) as report:
-            rep = logrun.log_outage_test(sources, converge_s=converge, every_s=every, length_s=length,
+            opts = logrun.LogRunOptions(gnss_lever_arm=logrun.parse_vector(gnss_lever_arm, "--gnss-lever-arm"))
+            rep = logrun.log_outage_test(sources, opts, converge_s=converge, every_s=every, length_s=length,
                                          shifts_s=sh, truth=ref, progress=report)
         doc = outputs.log_outage_document(rep, source=str(imu))
         write_json(json_path, doc)
@@ -282,6 +285,9 @@ def outage_cmd(
                    f"error at their end {rms['end_m']:.3f} m, largest {rms['max_m']:.3f} m; {dr_text}{floor}; "
                    f"{100 * rms['contained_3sigma']:.0f} % inside the predicted 3 sigma -> {json_path}")
         return
+    if gnss_lever_arm is not None:
+        raise ConfigError("--gnss-lever-arm goes with a log (a .bag, a ROS 2 bag folder or a .ulg); files and the "
+                          "simulated drive name their own lever arm")
     files = imu is not None or gnss is not None or config is not None
     if files and preset is not None:
         raise ConfigError("--preset simulates a drive; give either --preset or files (IMU GNSS --config, or a "

@@ -18,7 +18,7 @@ from cli_contract import invoke, one_error_line
 from shared_data import data_path
 
 from imunav.earth import lla_to_ned
-from imunav.ins.gins.logrun import run_log
+from imunav.ins.gins.logrun import LogRunOptions, run_log
 from imunav.io.aiding import OdometerData
 from imunav.io.kfgins import read_kfgins_nav, write_kfgins_nav
 from imunav.io.logs import TopicData
@@ -36,7 +36,7 @@ def robot(request, tmp_path_factory):
     log = simulate_robot_log(request.param)
     d = tmp_path_factory.mktemp(f"robot{request.param}")
     write_robot_log(log, d, formats=("ros1", "ros2", "kfgins"))
-    r = invoke("gins", "run", d / "robot.bag", "--out", d / "run", "--no-plots")
+    r = invoke("gins", "run", d / "robot.bag", "--gnss-lever-arm", "0,0,-0.3", "--out", d / "run", "--no-plots")
     assert r.exit_code == 0, r.stderr
     summary = json.loads((d / "run" / "summary.json").read_text())
     return log, d, summary
@@ -98,7 +98,7 @@ def test_outage_test_without_truth_against_the_removed_fixes(robot):
     the reference fixes' own noise (sigma 0.8 m per axis: 1.13 m horizontal RMS), which the report states and
     removes (sqrt(RMS^2 - 1.13^2))."""
     _, d, _ = robot
-    r = invoke("gins", "outage-test", d / "robot.bag", "--converge", "60", "--every", "120", "--length", "60",
+    r = invoke("gins", "outage-test", d / "robot.bag", "--gnss-lever-arm", "0,0,-0.3", "--converge", "60", "--every", "120", "--length", "60",
                "--shifts", "0,30,60", "--out", d / "outage", "--quiet")
     assert r.exit_code == 0, r.stderr
     doc = json.loads((d / "outage" / "outage.json").read_text())
@@ -118,7 +118,8 @@ def test_outage_test_against_the_truth(robot):
     RMS of the end-of-outage horizontal error <= 3 m and <= 0.3x that of the wheel-odometry dead reckoning (odometer
     as read, gyro heading from the filter's state at the outage's start), every outage inside its 3 sigma."""
     log, d, _ = robot
-    r = invoke("gins", "outage-test", d / "robot.bag", "--truth", d / "kfgins" / "truth.nav", "--converge", "60",
+    r = invoke("gins", "outage-test", d / "robot.bag", "--gnss-lever-arm", "0,0,-0.3", "--truth",
+               d / "kfgins" / "truth.nav", "--converge", "60",
                "--every", "120", "--length", "60", "--shifts", "0,30,60", "--out", d / "outage_truth", "--quiet")
     assert r.exit_code == 0, r.stderr
     rms = json.loads((d / "outage_truth" / "outage.json").read_text())["rms"]
@@ -130,8 +131,9 @@ def test_outage_test_against_the_truth(robot):
 
 def test_ros1_and_ros2_bags_give_the_same_trajectory(robot):
     _, d, _ = robot
-    a = run_log(read_nav_sources(d / "robot.bag")).result
-    b = run_log(read_nav_sources(d / "robot_ros2")).result
+    o = LogRunOptions(gnss_lever_arm=(0.0, 0.0, -0.3))
+    a = run_log(read_nav_sources(d / "robot.bag"), o).result
+    b = run_log(read_nav_sources(d / "robot_ros2"), o).result
     np.testing.assert_allclose(a.t, b.t, rtol=0, atol=1e-9)
     np.testing.assert_allclose(lla_to_ned(b.lla, a.lla[0]), lla_to_ned(a.lla, a.lla[0]), rtol=0, atol=1e-9)
     np.testing.assert_allclose(b.q_nb, a.q_nb, rtol=0, atol=1e-12)
