@@ -58,6 +58,12 @@ class GinsConfig:
         Correlation time of the bias and odometer-scale Gauss–Markov states, s (> 0; KF-GINS: ``corrtime``;
         ``inf``: random constants, no process noise — a state's variance then keeps its initial value, where a
         Gauss–Markov state's initial variance above its stationary σ² decays as ``exp(−2t/T)``).
+    bias_constant : bool
+        The biases are a random constant (the turn-on bias, of σ ``init_*_bias_std``) plus the Gauss–Markov
+        instability, as a real IMU's are: the bias error states are propagated as random walks driven by the
+        Gauss–Markov's noise (density ``√(2σ²/T)``) instead of decaying with ``corr_time`` (a decaying state
+        forgets the constant part within a few ``T`` and the filter grows overconfident in the biases and the
+        tilt).  Default False: KF-GINS's model.
     scale_factors : bool
         True: 21 states; False: 15 (no scale-factor states).
     init_pos_std, init_vel_std, init_att_std : float or array_like, shape (3,)
@@ -177,6 +183,7 @@ class GinsConfig:
     level_std: float | None = None
     gnss_delay: float = 0.0
     gnss_delay_std: float | None = None
+    bias_constant: bool = False
 
     def __post_init__(self) -> None:
         s = object.__setattr__

@@ -406,6 +406,7 @@ def run_log(src: NavSources, options: LogRunOptions | None = None) -> LogRun:
     if src.gnss is not None:
         cfg_kw["gnss_delay_std"] = GNSS_DELAY_STD
     cfg_kw["gate_max_rejections"] = MAX_REJECTIONS
+    cfg_kw["bias_constant"] = True  # a log's IMU has an unknown turn-on bias that does not decay
     arw, vrw, noise_note = _noise_at_rest(src, static)
     base = GinsConfig.from_preset(o.preset)
     cfg_kw.update(arw=np.maximum(base.arw, arw), vrw=np.maximum(base.vrw, vrw))
