@@ -499,8 +499,17 @@ class ZuptFilter:
     def _carry(self, t: float, accel: Array, gyro: Array, q: Array, v: Array, p: Array, ba: Array, bg: Array,
                P: Array, dth: Array, dv: Array, q_ref: Array, stance: NDArray[np.bool_], floor: float,
                prm: Any) -> None:
-        self._prev = {"t": t, "accel": accel, "gyro": gyro, "q": q, "v": v, "p": p, "ba": ba, "bg": bg, "P": P,
-                      "dth": dth, "dv": dv, "q_ref": q_ref, "stance": stance, "floor": floor, "prm": prm}
+        # The two-row window that each later step runs the kernel over, allocated once: row 1 holds the last
+        # sample and its state; a step moves row 1 to row 0 and writes the new sample into row 1, in place
+        # (building the arrays and named tuples afresh at every step cost ~10 % of a step).
+        nx = P.shape[0]
+        inp = _k.ZuptInput(np.array([t, t]), np.stack([accel, accel]), np.stack([gyro, gyro]),
+                           np.zeros(2, dtype=np.bool_), np.zeros(2, dtype=np.bool_))
+        rows = _k.ZuptRows(np.stack([q, q]), np.stack([v, v]), np.stack([p, p]), np.stack([ba, ba]),
+                           np.stack([bg, bg]), np.empty((2, nx)), np.full((2, 3), np.nan), np.full((2, 3), np.nan))
+        carry = _k.ZuptCarry(P, dth, dv, q_ref, stance, floor)
+        self._prev = {"t": t, "inp": inp, "rows": rows, "carry": carry, "prm": prm,
+                      "shift": (inp.t, inp.acc, inp.gyr, rows.q, rows.v, rows.p, rows.ba, rows.bg)}
 
     def step(self, t: float, gyro: ArrayLike, accel: ArrayLike, zv: bool = False, *,
              zaru: bool | None = None) -> ZuptState:
@@ -568,20 +577,20 @@ class ZuptFilter:
         if not (math.isfinite(tk) and tk > prev["t"]):
             raise TimeOrderError(f"t = {t!r} s is not after the previous sample's {prev['t']!r} s; "
                                  "samples must come in strictly increasing time")
-        nx = cfg.states
-        rows = {k: np.stack([prev[k], np.zeros_like(prev[k])]) for k in ("q", "v", "p", "ba", "bg")}
-        Pd = np.empty((2, nx))
-        innov = np.full((2, 3), np.nan)
-        svar = np.full((2, 3), np.nan)
-        inp = _k.ZuptInput(np.array([prev["t"], tk]), np.stack([prev["accel"], a]), np.stack([prev["gyro"], w]),
-                           np.array([False, bool(zv)]), np.array([False, bool(zaru)]))
-        out = _k.ZuptRows(rows["q"], rows["v"], rows["p"], rows["ba"], rows["bg"], Pd, innov, svar)
-        carry = _k.ZuptCarry(prev["P"], prev["dth"], prev["dv"], prev["q_ref"], prev["stance"], prev["floor"])
-        _k.zupt_ekf_window(inp, out, carry, prev["prm"])
-        self._carry(tk, a, w, rows["q"][1], rows["v"][1], rows["p"][1], rows["ba"][1], rows["bg"][1], prev["P"],
-                    prev["dth"], prev["dv"], prev["q_ref"], prev["stance"], prev["floor"], prev["prm"])
-        return ZuptState(tk, rows["p"][1].copy(), rows["v"][1].copy(), rows["q"][1].copy(), rows["ba"][1].copy(),
-                         rows["bg"][1].copy(), Pd[1], innov[1], svar[1])
+        for x in prev["shift"]:
+            x[0] = x[1]
+        inp, rows = prev["inp"], prev["rows"]
+        inp.t[1] = tk
+        inp.acc[1] = a
+        inp.gyr[1] = w
+        inp.zv[1] = zv
+        inp.zaru[1] = zaru
+        rows.innov[1] = np.nan
+        rows.svar[1] = np.nan
+        prev["t"] = tk
+        _k.zupt_ekf_window(inp, rows, prev["carry"], prev["prm"])
+        return ZuptState(tk, rows.p[1].copy(), rows.v[1].copy(), rows.q[1].copy(), rows.ba[1].copy(),
+                         rows.bg[1].copy(), rows.Pd[1].copy(), rows.innov[1].copy(), rows.svar[1].copy())
 
     @property
     def P(self) -> Array | None:
@@ -592,7 +601,7 @@ class ZuptFilter:
         numpy.ndarray or None
             (9, 9) or (15, 15).
         """
-        return None if self._prev is None else self._prev["P"].copy()
+        return None if self._prev is None else self._prev["carry"].P.copy()
 
     def run(self, data: Any, zv: ArrayLike, *, initial_position: ArrayLike = (0.0, 0.0, 0.0),
             initial_quaternion: ArrayLike | None = None) -> ZuptResult:
