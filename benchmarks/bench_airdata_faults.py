@@ -20,7 +20,7 @@ import numpy as np
 from _before_after import report  # the before (a308974) / after lines
 
 from imunav.airdata.scenario import ThesisScenario, delay_summary, simulate_detector_statistics
-from imunav.filters.faults import DETECTORS, alarms, calibrated_thresholds, false_alarm_rates, thesis_thresholds
+from imunav.filters.faults import DETECTORS, alarms, calibrated_thresholds, false_alarm_rates, window_chi2_thresholds
 
 
 def main() -> None:
@@ -33,7 +33,7 @@ def main() -> None:
     FIGS = {}  # headline figures for the before/after lines
     t0 = time.perf_counter()
     thr = calibrated_thresholds(M, 3, a.pfa)
-    th = thesis_thresholds(M, 3)
+    th = window_chi2_thresholds(M, 3)
     base = ThesisScenario()
     nominal = simulate_detector_statistics(base, a.runs, a.seed, M)
     print(f"false alarms under nominal data, {a.runs} runs × {base.n_steps - M + 1} steps (window full):")

@@ -23,13 +23,13 @@ import time
 import numpy as np
 from _before_after import report  # the before (a308974) / after lines
 
-from imunav.airdata.filter import ThesisFilter, thesis_matrices
+from imunav.airdata.filter import BodyWindFilter, body_wind_matrices
 from imunav.airdata.scenario import ThesisScenario, covariance_sequence, monte_carlo_thesis, simulate_thesis_batch
 
 
 def textbook_loop(z: np.ndarray) -> np.ndarray:
     """Per-run textbook KF (predict / gain / update / (I − KH)P), as the thesis's MATLAB would do it."""
-    m = thesis_matrices()
+    m = body_wind_matrices()
     F, G, Q, H, R = m["F"], m["G"], m["Q"], m["H"], m["R"]
     out = np.empty((z.shape[0], z.shape[1], 6))
     for r in range(z.shape[0]):
@@ -87,7 +87,7 @@ def main() -> None:
     n = min(a.runs, 200)
     z, _, _ = simulate_thesis_batch(ThesisScenario(), n, a.seed)
     t0 = time.perf_counter()
-    xb = ThesisFilter().run_batch(z).x
+    xb = BodyWindFilter().run_batch(z).x
     tb = time.perf_counter() - t0
     n_loop = min(n, 20)
     t0 = time.perf_counter()

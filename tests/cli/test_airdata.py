@@ -79,10 +79,10 @@ def test_toml_config(tmp_path):
 
 @pytest.mark.parametrize("gate", ["0", "-1", "nan"])
 def test_gate_m_must_be_positive(tmp_path, gate):
-    from imunav.airdata.filter import ThesisFilter
+    from imunav.airdata.filter import BodyWindFilter
 
     with pytest.raises(InvalidInputError, match="gate_m"):
-        ThesisFilter(robust="gate", gate_m=float(gate)).run(np.zeros((20, 3)))
+        BodyWindFilter(robust="gate", gate_m=float(gate)).run(np.zeros((20, 3)))
     assert invoke("airdata", "simulate", "cruise", "--duration", "20", "--out", tmp_path / "a.npz").exit_code == 0
     assert "gate" in one_error_line(invoke("airdata", "run", tmp_path / "a.npz", "--robust", "gate", "--gate-m", gate))
 

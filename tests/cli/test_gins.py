@@ -205,7 +205,7 @@ def test_user_errors_are_one_line_and_exit_2(drive, tmp_path, args, needle):
     (tmp_path / "c.json").write_text("{}")
     (tmp_path / "unknown.toml").write_text(good.replace("states = 21", "states = 21\narww = 1e-4"))
     (tmp_path / "strarw.toml").write_text(good.replace("corr_time = ", 'corr_time = "1 h"  # '))
-    (tmp_path / "nonoise.toml").write_text("\n".join(ln for ln in good.splitlines() if not ln.startswith("vrw")))
+    (tmp_path / "nonoise.toml").write_text("\n".join(ln for ln in good.splitlines() if not ln.startswith("accel_noise_density")))
     (tmp_path / "neg.toml").write_text(good.replace("init_pos_std = [0.5", "init_pos_std = [-0.5"))
     lat = good.split("lla_deg = [")[1].split(",")[0]
     (tmp_path / "rad.toml").write_text(good.replace(f"lla_deg = [{lat}", f"lla_deg = [{np.radians(float(lat))}")

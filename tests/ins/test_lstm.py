@@ -42,7 +42,7 @@ def test_augmentation_rotations_are_rotations():
     np.testing.assert_allclose(np.linalg.det(R), 1.0, atol=1e-12)
     x = np.zeros((4, 10, 6))
     x[..., 2] = -9.8
-    cfg = LstmConfig(noise_acc=0.0, noise_gyro=0.0, scale=(1.0, 1.0))
+    cfg = LstmConfig(accel_noise_std=0.0, gyro_noise_std=0.0, scale=(1.0, 1.0))
     y = augment(x, cfg, rng)
     np.testing.assert_allclose(np.linalg.norm(y[..., :3], axis=-1), 9.8, atol=1e-12)  # rotation keeps |f|
 

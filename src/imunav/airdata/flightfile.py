@@ -31,7 +31,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from imunav.airdata.filter import LongHorizonConfig, LongHorizonFilter, ThesisFilter, thesis_row
+from imunav.airdata.filter import BodyWindFilter, LongHorizonConfig, LongHorizonFilter, iteration_row
 from imunav.airdata.flight import FlightConfig, simulate_flight
 from imunav.airdata.scenario import ThesisScenario, simulate_thesis
 from imunav.errors import FileFormatError
@@ -181,7 +181,7 @@ class WindErrors:
     ----------
     kind : {"thesis", "flight"}
         The file's type: the thesis's 6-state filter, or the long-horizon navigation-frame filter.
-    result : ThesisFilterResult or LongHorizonResult
+    result : WindFilterResult or LongHorizonResult
         The filter's output (what :func:`imunav.airdata.plot.plot_wind` / ``plot_long_horizon`` draw).
     summary : dict
         The error statistics (the JSON of ``imunav airdata run``). Thesis: ``type``, ``robust``,
@@ -217,7 +217,7 @@ def wind_errors(content: FlightFile, *, robust: str | None = None, gate_m: float
                 alpha: float = 1e-3) -> WindErrors:
     """Run the wind filter of a flight file's type over it and score it against the file's truth.
 
-    A thesis file runs :class:`~imunav.airdata.filter.ThesisFilter` on ``z`` (with ``v_ads``); a flight file runs
+    A thesis file runs :class:`~imunav.airdata.filter.BodyWindFilter` on ``z`` (with ``v_ads``); a flight file runs
     :class:`~imunav.airdata.filter.LongHorizonFilter` on the multi-rate air-data and Doppler velocities.
 
     Parameters
@@ -246,8 +246,8 @@ def wind_errors(content: FlightFile, *, robust: str | None = None, gate_m: float
     d = content.arrays
     try:
         if content.kind == "thesis":
-            r = ThesisFilter(robust=robust, gate_m=gate_m, alpha=alpha).run(d["z"], v_ads=d["v_ads"])
-            k0 = thesis_row(100)
+            r = BodyWindFilter(robust=robust, gate_m=gate_m, alpha=alpha).run(d["z"], v_ads=d["v_ads"])
+            k0 = iteration_row(100)
             summary = {"type": "thesis", "robust": robust or "none", "wind_rms_per_axis": _rms(r.wind[k0:] - d["wind_true"][k0:]),
                        "difference_loop_rms_per_axis": _rms(d["z"][k0:] - d["wind_true"][k0:]),
                        "rejected_samples": int((r.weights == 0).sum()),

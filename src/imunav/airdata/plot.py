@@ -29,7 +29,7 @@ def plot_wind(result, data=None, axis_names=("x", "y", "z")):
     Parameters
     ----------
     result : WindFilterResult
-        Output of :meth:`imunav.airdata.filter.ThesisFilter.run`; wind in m/s, body axes.
+        Output of :meth:`imunav.airdata.filter.BodyWindFilter.run`; wind in m/s, body axes.
     data : ThesisData, optional
         The simulated run, for the true wind.
     axis_names : tuple of str

@@ -33,10 +33,10 @@ from imunav.airdata.doppler import DopplerErrors
 from imunav.airdata.filter import (
     THESIS_ITERATIONS,
     THESIS_P44,
-    ThesisFilter,
-    ThesisFilterConfig,
-    thesis_matrices,
-    thesis_row,
+    BodyWindFilter,
+    BodyWindFilterConfig,
+    body_wind_matrices,
+    iteration_row,
 )
 from imunav.airdata.flight import FlightConfig, simulate_thesis_aircraft
 from imunav.errors import ConfigError, InvalidInputError
@@ -49,7 +49,7 @@ from imunav.filters.faults import (
     detection_delays,
     detector_statistics,
     false_alarm_rates,
-    thesis_thresholds,
+    window_chi2_thresholds,
 )
 from imunav.results import Result
 from imunav.toml import read_toml
@@ -88,9 +88,9 @@ class ThesisScenario(Result):
         Number of filter steps.
     dt : float
         Step, s.
-    sigma_ads, sigma_doppler : float
+    ads_noise_std, doppler_noise_std : float
         Noise standard deviation per body axis of the air-data and Doppler velocities, m/s.
-    tau : float
+    wind_corr_time : float
         Correlation time of the Gauss-Markov wind, s.
     x_true0 : tuple of float
         Initial true state ``(δX, W)``: position error (m) and wind (m/s), body axes.
@@ -108,16 +108,16 @@ class ThesisScenario(Result):
         Drift fault rate, m/s per s.
     channels : tuple of int or None
         Body axes affected by the fault (None: all).
-    filter : ThesisFilterConfig
+    filter : BodyWindFilterConfig
         The filter run on the scenario.
     """
 
     kind: str = "nominal"
     n_steps: int = 500
     dt: float = 0.001
-    sigma_ads: float = 2.0
-    sigma_doppler: float = 0.1
-    tau: float = 600.0
+    ads_noise_std: float = 2.0
+    doppler_noise_std: float = 0.1
+    wind_corr_time: float = 600.0
     x_true0: tuple[float, ...] = (0.1, 0.1, 0.1, 7.0, 5.0, 1.7)
     outlier_steps: tuple[int, ...] = (100, 200, 300, 400)
     outlier_factor: float = 15.0
@@ -126,7 +126,7 @@ class ThesisScenario(Result):
     bias: float = 10.0
     drift_rate: float = 200.0  # m/s per s (0.2 m/s per 1 ms step)
     channels: tuple[int, ...] | None = None
-    filter: ThesisFilterConfig = field(default_factory=ThesisFilterConfig)
+    filter: BodyWindFilterConfig = field(default_factory=BodyWindFilterConfig)
 
     def __post_init__(self) -> None:
         if self.kind not in KINDS:
@@ -227,8 +227,8 @@ class ThesisData(Result):
 
 
 def _truth(sc: ThesisScenario) -> Array:
-    cfg = replace(sc.filter, dt=sc.dt, tau=sc.tau)
-    F = thesis_matrices(cfg)["F"]
+    cfg = replace(sc.filter, dt=sc.dt, wind_corr_time=sc.wind_corr_time)
+    F = body_wind_matrices(cfg)["F"]
     x = np.asarray(sc.x_true0, dtype=np.float64)
     out = np.empty((sc.n_steps, 6))
     for k in range(sc.n_steps):
@@ -244,8 +244,8 @@ def _simulate(s: ThesisScenario, n_runs: int, rng: np.random.Generator | int | N
     xt = _truth(s)
     N = s.n_steps
     v = simulate_thesis_aircraft(N, s.dt).velocity  # same deterministic flight for every run
-    na = s.sigma_ads * gen.standard_normal((n_runs, N, 3))
-    nd = s.sigma_doppler * gen.standard_normal((n_runs, N, 3))
+    na = s.ads_noise_std * gen.standard_normal((n_runs, N, 3))
+    nd = s.doppler_noise_std * gen.standard_normal((n_runs, N, 3))
     va = v[None] - xt[None, :, 3:] + na  # eq. 5.9; faults act on the ADS output
     faults = s.faults()
     if faults:
@@ -315,7 +315,7 @@ def simulate_detector_statistics(
     window: int,
     *,
     chunk: int = 250,
-    cfg: ThesisFilterConfig | None = None,
+    cfg: BodyWindFilterConfig | None = None,
     on_chunk: Callable[[int], None] | None = None,
 ) -> dict[str, Array]:
     """Detector statistics of many simulated runs through the thesis filter.
@@ -335,7 +335,7 @@ def simulate_detector_statistics(
         Detector window, steps.
     chunk : int
         Runs simulated at a time.
-    cfg : ThesisFilterConfig, optional
+    cfg : BodyWindFilterConfig, optional
         Filter configuration (default: the thesis's values).
     on_chunk : callable, optional
         Called as ``on_chunk(n)`` after each chunk of ``n`` runs (progress).
@@ -357,7 +357,7 @@ def simulate_detector_statistics(
     for i in range(0, n_runs, chunk):
         n = min(chunk, n_runs - i)
         z, _, _ = simulate_thesis_batch(sc, n, gen)
-        st = detector_statistics(ThesisFilter(cfg).run_batch(z).normalized, window)
+        st = detector_statistics(BodyWindFilter(cfg).run_batch(z).normalized, window)
         for d in DETECTORS:
             out[d].append(st[d])
         if on_chunk is not None:
@@ -444,7 +444,7 @@ def fault_detection_table(sc: ThesisScenario, runs: int, seed: int, *, window: i
     if runs < 1:
         raise InvalidInputError(f"--runs must be >= 1, got {runs}")
     thr = calibrated_thresholds(window, 3, p_false_alarm)
-    th = thesis_thresholds(window, 3)
+    th = window_chi2_thresholds(window, 3)
     ss = np.random.SeedSequence(seed).spawn(2)
     chunk = max(1, min(chunk, runs))
     stats_f = simulate_detector_statistics(sc, runs, np.random.default_rng(ss[0]), window, chunk=chunk,
@@ -466,12 +466,12 @@ def fault_detection_table(sc: ThesisScenario, runs: int, seed: int, *, window: i
     return {"scenario": sc.to_dict(), "runs": runs, "seed": seed, "window": window, "pfa": p_false_alarm, "rows": rows}
 
 
-def covariance_sequence(cfg: ThesisFilterConfig | None = None, n_steps: int = 500) -> dict[str, list[float]]:
+def covariance_sequence(cfg: BodyWindFilterConfig | None = None, n_steps: int = 500) -> dict[str, list[float]]:
     """P44 and P11 at the thesis's table iterations, beside the thesis's P44 values (Akgün 2002, Table 6.3).
 
     Parameters
     ----------
-    cfg : ThesisFilterConfig, optional
+    cfg : BodyWindFilterConfig, optional
         Filter configuration (default: the thesis's values).
     n_steps : int
         Number of steps.
@@ -481,15 +481,15 @@ def covariance_sequence(cfg: ThesisFilterConfig | None = None, n_steps: int = 50
     dict of str to list of float
         ``iteration``, ``P44`` and ``P11`` of the filter, and the thesis's column ``P44_thesis``.
     """
-    r = ThesisFilter(cfg).run(np.zeros((n_steps, 3)))
-    rows = thesis_row(np.asarray(THESIS_ITERATIONS))
+    r = BodyWindFilter(cfg).run(np.zeros((n_steps, 3)))
+    rows = iteration_row(np.asarray(THESIS_ITERATIONS))
     return {"iteration": list(THESIS_ITERATIONS), "P44": [float(r.cov_diag[k, 3]) for k in rows],
             "P11": [float(r.cov_diag[k, 0]) for k in rows], "P44_thesis": list(THESIS_P44)}
 
 
-def actual_error_covariance(cfg: ThesisFilterConfig | None = None, n_steps: int = 500,
+def actual_error_covariance(cfg: BodyWindFilterConfig | None = None, n_steps: int = 500,
                             x_error0: tuple[float, ...] = (0.0, 0.0, 0.0, 5.0, 2.0, 3.3),
-                            sigma_ads: float = 2.0, sigma_doppler: float = 0.1) -> tuple[Array, Array]:
+                            ads_noise_std: float = 2.0, doppler_noise_std: float = 0.1) -> tuple[Array, Array]:
     """Exact mean and covariance of the estimation error when the truth has no process noise.
 
     The thesis's truth (eq. 5.5) has no process noise while the filter assumes
@@ -500,13 +500,13 @@ def actual_error_covariance(cfg: ThesisFilterConfig | None = None, n_steps: int 
 
     Parameters
     ----------
-    cfg : ThesisFilterConfig, optional
+    cfg : BodyWindFilterConfig, optional
         Filter configuration (default: the thesis's values).
     n_steps : int
         Number of steps.
     x_error0 : tuple of float
         Initial estimation error, m and m/s.
-    sigma_ads, sigma_doppler : float
+    ads_noise_std, doppler_noise_std : float
         True noise standard deviations, m/s.
 
     Returns
@@ -516,9 +516,9 @@ def actual_error_covariance(cfg: ThesisFilterConfig | None = None, n_steps: int 
     var : numpy.ndarray, shape (N, 6)
         Diagonal of the error covariance.
     """
-    m = thesis_matrices(cfg)
+    m = body_wind_matrices(cfg)
     F, H, G, Q, R = m["F"], m["H"], m["G"], m["Q"], m["R"]
-    Rt = (sigma_ads**2 + sigma_doppler**2) * np.eye(3)
+    Rt = (ads_noise_std**2 + doppler_noise_std**2) * np.eye(3)
     P = m["P0"].copy()
     E = np.zeros((6, 6))
     mu = np.asarray(x_error0, dtype=np.float64)
@@ -568,7 +568,7 @@ class ThesisMonteCarlo(Result):
     thresholds: dict
 
 
-def _rms_theory(cfg: ThesisFilterConfig, n_steps: int, k0: int) -> float:
+def _rms_theory(cfg: BodyWindFilterConfig, n_steps: int, k0: int) -> float:
     mu, E = actual_error_covariance(cfg, n_steps)
     return float(np.sqrt(np.mean(mu[k0:, 3:] ** 2 + E[k0:, 3:])))
 
@@ -632,11 +632,11 @@ def monte_carlo_thesis(
     seeds = {k: int(s.generate_state(1)[0]) for k, s in zip(KINDS, ss.spawn(len(KINDS)))}
     base = ThesisScenario()
     cfg = base.filter
-    k0 = thesis_row(100)
+    k0 = iteration_row(100)
 
     # ---- nominal: optimal filter accuracy
     z, xt, _ = simulate_thesis_batch(base, n_runs, seeds["nominal"])
-    opt = ThesisFilter(cfg).run_batch(z)
+    opt = BodyWindFilter(cfg).run_batch(z)
     ew = opt.x[:, k0:, 3:] - xt[None, k0:, 3:]
     ed = z[:, k0:] - xt[None, k0:, 3:]
     ep = opt.x[:, -1, :3] - xt[None, -1, :3]
@@ -657,7 +657,7 @@ def monte_carlo_thesis(
     # ---- robust filters
     zo, xto, _ = simulate_thesis_batch(replace(base, kind="outliers"), n_runs, seeds["outliers"])
     mask = replace(base, kind="outliers").anomaly_mask()
-    opt_o = ThesisFilter(cfg).run_batch(zo)
+    opt_o = BodyWindFilter(cfg).run_batch(zo)
     after = np.zeros(base.n_steps, dtype=bool)
     for s in base.outlier_steps:
         after[s - 1:s - 1 + 50] = True
@@ -678,8 +678,8 @@ def monte_carlo_thesis(
             kw = {"robust": "huber"}
         else:
             raise InvalidInputError(f"unknown robust method {meth!r}: use gate<m>, nis, isolate or huber")
-        ro = ThesisFilter(cfg, **kw).run_batch(zo)
-        rn = ThesisFilter(cfg, **kw).run_batch(z)
+        ro = BodyWindFilter(cfg, **kw).run_batch(zo)
+        rn = BodyWindFilter(cfg, **kw).run_batch(z)
         rej = ro.weights < (0.1 if meth == "huber" else 0.5)
         rejn = rn.weights < (0.1 if meth == "huber" else 0.5)
         nom_rms = float(_rms(rn.x[:, k0:, 3:] - xt[None, k0:, 3:]))
@@ -695,7 +695,7 @@ def monte_carlo_thesis(
     # ---- detectors: thresholds, false alarms on nominal data
     M = window
     thr = calibrated_thresholds(M, 3, p_false_alarm)
-    th = thesis_thresholds(M, 3)
+    th = window_chi2_thresholds(M, 3)
     stats_n = detector_statistics(opt.normalized, M)
     valid = np.zeros(base.n_steps, dtype=bool)
     valid[M - 1:] = True
@@ -714,7 +714,7 @@ def monte_carlo_thesis(
     for kind in ("variance", "bias", "drift", "stuck"):
         sc = replace(base, kind=kind)
         zf, _, _ = simulate_thesis_batch(sc, n_runs, seeds[kind])
-        rf = ThesisFilter(cfg).run_batch(zf)
+        rf = BodyWindFilter(cfg).run_batch(zf)
         st = detector_statistics(rf.normalized, M)
         o = sc.onset_row
         det[kind] = {"onset_row": o}
@@ -754,7 +754,7 @@ def thesis_report(n_runs: int = 200, rng: int = 0, **kw) -> dict:
     single = {}
     for kind in ("variance", "bias"):
         d = simulate_thesis(ThesisScenario(kind=kind), rng)
-        r = ThesisFilter().run(d.z)
+        r = BodyWindFilter().run(d.z)
         out = {}
         for mode in ("calibrated", "thesis"):
             res = detect_faults(r.normalized, 20, threshold_mode=mode, start=d.scenario.onset_row)
@@ -788,16 +788,16 @@ def thesis_tables(rng: int = 0) -> dict:
     """
     its1 = list(range(50, 501, 50))
     d = simulate_thesis(ThesisScenario(), rng)
-    r = ThesisFilter().run(d.z)
-    rows = thesis_row(np.asarray(its1))
+    r = BodyWindFilter().run(d.z)
+    rows = iteration_row(np.asarray(its1))
     t61 = [{"iteration": i, "difference_loop": float(d.z[k, 0] - d.wind_true[k, 0]),
             "kf": float(r.wind[k, 0] - d.wind_true[k, 0])} for i, k in zip(its1, rows)]
     its3 = [50, 100, 101, 150, 200, 201, 250, 300, 301, 350, 400, 401, 450, 500]
     do = simulate_thesis(ThesisScenario(kind="outliers"), rng)
-    runs = {"optimal": ThesisFilter().run(do.z), "gate2": ThesisFilter(robust="gate", gate_m=2.0).run(do.z),
-            "nis": ThesisFilter(robust="nis").run(do.z)}
+    runs = {"optimal": BodyWindFilter().run(do.z), "gate2": BodyWindFilter(robust="gate", gate_m=2.0).run(do.z),
+            "nis": BodyWindFilter(robust="nis").run(do.z)}
     t63 = []
-    for i, k in zip(its3, thesis_row(np.asarray(its3))):
+    for i, k in zip(its3, iteration_row(np.asarray(its3))):
         row = {"iteration": i}
         for name, rr in runs.items():
             row[f"{name}_err"] = float(rr.wind[k, 0] - do.wind_true[k, 0])

@@ -176,8 +176,8 @@ def run(
             meta = json.loads(str(z["meta"]))
             data = {k: z[k] for k in z.files if k != "meta"}
         if meta["type"] == "thesis":
-            r = airdata_filter.ThesisFilter(robust=rb, gate_m=gate_m, alpha=alpha).run(data["z"], v_ads=data["v_ads"])
-            k0 = airdata_filter.thesis_row(100)
+            r = airdata_filter.BodyWindFilter(robust=rb, gate_m=gate_m, alpha=alpha).run(data["z"], v_ads=data["v_ads"])
+            k0 = airdata_filter.iteration_row(100)
             e = r.wind[k0:] - data["wind_true"][k0:]
             ed = data["z"][k0:] - data["wind_true"][k0:]
             summary = {"type": "thesis", "robust": robust, "wind_rms_per_axis": np.sqrt(np.mean(e**2, 0)).tolist(),
@@ -255,7 +255,7 @@ def faults(
         if runs < 1:
             raise InvalidInputError(f"--runs must be >= 1, got {runs}")
         thr = filters_faults.calibrated_thresholds(window, 3, pfa)
-        th = filters_faults.thesis_thresholds(window, 3)
+        th = filters_faults.window_chi2_thresholds(window, 3)
         ss = np.random.SeedSequence(seed).spawn(2)
         chunk = max(1, min(50, runs))
         with progress("Monte Carlo", total=2 * runs) as report:

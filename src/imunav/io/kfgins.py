@@ -490,10 +490,10 @@ class ImuNoise:
 
     Attributes
     ----------
-    arw : numpy.ndarray, shape (3,)
+    gyro_noise_density : numpy.ndarray, shape (3,)
         Gyro angle random walk, rad/√s (``arw`` °/√h in the YAML).
-    vrw : numpy.ndarray, shape (3,)
-        Accelerometer velocity random walk, m/s/√s (``vrw`` m/s/√h).
+    accel_noise_density : numpy.ndarray, shape (3,)
+        Accelerometer velocity random walk, m/s/√s (``accel_noise_density`` m/s/√h).
     gyro_bias_std, accel_bias_std : numpy.ndarray, shape (3,)
         Stationary σ of the Gauss–Markov biases, rad/s and m/s² (``gbstd`` °/h, ``abstd`` mGal).
     gyro_scale_std, accel_scale_std : numpy.ndarray, shape (3,)
@@ -502,8 +502,8 @@ class ImuNoise:
         Correlation time of the biases and scale factors, s (``corrtime`` h).
     """
 
-    arw: Array
-    vrw: Array
+    gyro_noise_density: Array
+    accel_noise_density: Array
     gyro_bias_std: Array
     accel_bias_std: Array
     gyro_scale_std: Array
@@ -673,7 +673,7 @@ def write_kfgins_config(path: str | os.PathLike[str], cfg: KfGinsConfig, *, comm
         f"initsgstd: {_yaml_vec(cfg.init_gyro_scale_std / PPM)}",
         f"initsastd: {_yaml_vec(cfg.init_accel_scale_std / PPM)}",
         "imunoise:",
-        f"  arw: {_yaml_vec(n.arw / (DEG / 60.0))}", f"  vrw: {_yaml_vec(n.vrw * 60.0)}",
+        f"  arw: {_yaml_vec(n.gyro_noise_density / (DEG / 60.0))}", f"  vrw: {_yaml_vec(n.accel_noise_density * 60.0)}",
         f"  gbstd: {_yaml_vec(n.gyro_bias_std / DPH)}", f"  abstd: {_yaml_vec(n.accel_bias_std / MGAL)}",
         f"  gsstd: {_yaml_vec(n.gyro_scale_std / PPM)}", f"  asstd: {_yaml_vec(n.accel_scale_std / PPM)}",
         f"  corrtime: {n.corr_time / HOUR:.6g}",
@@ -731,8 +731,8 @@ def load_kfgins_config(path: str | os.PathLike[str]) -> KfGinsConfig:
     if corr <= 0:
         raise ConfigError(f"{nsrc}: 'corrtime' = {corr!r} h; a correlation time must be > 0 hours")
     noise = ImuNoise(
-        arw=_vec(noise_doc, "arw", nsrc, scale=DEG / 60.0, positive=True),
-        vrw=_vec(noise_doc, "vrw", nsrc, scale=1.0 / 60.0, positive=True),
+        gyro_noise_density=_vec(noise_doc, "arw", nsrc, scale=DEG / 60.0, positive=True),
+        accel_noise_density=_vec(noise_doc, "vrw", nsrc, scale=1.0 / 60.0, positive=True),
         gyro_bias_std=_vec(noise_doc, "gbstd", nsrc, scale=DPH, positive=True),
         accel_bias_std=_vec(noise_doc, "abstd", nsrc, scale=MGAL, positive=True),
         gyro_scale_std=_vec(noise_doc, "gsstd", nsrc, scale=PPM, positive=True),

@@ -13,8 +13,8 @@ What ``imunav gins run``, ``imunav gins outage-test`` and the ``gins`` lab step 
 
 and the configuration is an imunav TOML (:func:`load_gins_toml`) or KF-GINS's own YAML (:func:`setup_from_kfgins`).
 
-The TOML holds :class:`~imunav.ins.gins.GinsConfig` fields at its top level, in SI (``arw``, ``vrw``,
-``gyro_bias_std``, ..., ``lever_arm``, ``nhc_noise``, ...), optionally on top of an IMU preset, and three tables::
+The TOML holds :class:`~imunav.ins.gins.GinsConfig` fields at its top level, in SI (``gyro_noise_density``, ``accel_noise_density``,
+``gyro_bias_std``, ..., ``lever_arm``, ``nhc_noise_std``, ...), optionally on top of an IMU preset, and three tables::
 
     preset = "mems_adis16465"      # optional: GinsConfig.from_preset(preset), the fields below override it
     states = 21                    # 15 or 21 (default 21)
@@ -214,7 +214,7 @@ def _gins_config(doc: dict[str, Any], where: str, overrides: dict[str, Any]) -> 
     try:
         if "preset" in doc:
             return GinsConfig.from_preset(str(doc["preset"]), **overrides)
-        missing = [k for k in ("arw", "vrw", "gyro_bias_std", "accel_bias_std") if k not in overrides]
+        missing = [k for k in ("gyro_noise_density", "accel_noise_density", "gyro_bias_std", "accel_bias_std") if k not in overrides]
         if missing:
             raise ConfigError(f"{where}: give the IMU noise {missing} (SI: rad/sqrt(s), m/s/sqrt(s), rad/s, m/s^2) "
                               "or a preset = \"<name>\" of imunav.sim.presets to start from")

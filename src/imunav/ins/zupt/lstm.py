@@ -71,9 +71,9 @@ class LstmConfig:
         Largest random rotation of the augmentation, degrees.
     scale : tuple of float
         (low, high) range of the random scale factor of the augmentation.
-    noise_acc : float
+    accel_noise_std : float
         Standard deviation of the accelerometer noise added in augmentation, m/s².
-    noise_gyro : float
+    gyro_noise_std : float
         Standard deviation of the gyro noise added in augmentation, rad/s.
     time_budget_s : float or None
         Stop training after this many seconds (None: no limit).
@@ -124,8 +124,8 @@ class LstmConfig:
     lr: float = 3e-3
     max_rotation_deg: float = 10.0
     scale: tuple[float, float] = (0.9, 1.1)
-    noise_acc: float = 0.075
-    noise_gyro: float = 0.01
+    accel_noise_std: float = 0.075
+    gyro_noise_std: float = 0.01
     time_budget_s: float | None = None
     seed: int = 0
     features: str = "raw+log"

@@ -24,7 +24,7 @@ from pathlib import Path
 import numpy as np
 
 from imunav.airdata import plot as P
-from imunav.airdata.filter import ThesisFilter
+from imunav.airdata.filter import BodyWindFilter
 from imunav.airdata.scenario import ThesisScenario, simulate_thesis, thesis_report
 from imunav.errors import ConfigError
 from imunav.files import atomic_path, write_json
@@ -77,7 +77,7 @@ def run(ctx: LabContext) -> StepResult:
     write_json(out, rep)
 
     d = simulate_thesis(ThesisScenario(kind="variance"), seed)
-    r = ThesisFilter(robust="nis").run(d.z)
+    r = BodyWindFilter(robust="nis").run(d.z)
     det = detect_faults(r.normalized, 20, p_false_alarm=pfa, start=d.scenario.onset_row)
     figs = []
     for name, fig in (("wind", P.plot_wind(r, d)), ("innovations", P.plot_innovations(r)),
