@@ -1,7 +1,7 @@
 """Wind-estimating air-data / Doppler Kalman filters.
 
-Thesis filter (Akgün 2002, §5.2-5.3, 6.2a)
-------------------------------------------
+Body-axis wind filter :class:`BodyWindFilter` (Akgün 2002, §5.2-5.3, 6.2a)
+--------------------------------------------------------------------------
 
 O. Akgün, *Hava verileri sistemi ile Doppler radarının Kalman süzgeci temelinde tümleştirilmesi*
 (Integration of an air data system and a Doppler radar via Kalman filtering), MSc thesis, Istanbul
@@ -87,7 +87,7 @@ THESIS_P44 = (0.0965, 0.0686, 0.0684, 0.0640, 0.0631, 0.0628, 0.0628)
 
 
 def iteration_row(iteration: int | ArrayLike) -> int | Array:
-    """Row of the per-step arrays that matches the thesis's table iteration n (row = n − 2).
+    """Row of the per-step arrays that matches iteration n of the source's tables (row = n − 2; Akgün 2002).
 
     Parameters
     ----------
@@ -113,7 +113,7 @@ def iteration_row(iteration: int | ArrayLike) -> int | Array:
 
 @dataclass(frozen=True)
 class BodyWindFilterConfig(Result):
-    """Parameters of the thesis filter (defaults: the thesis's values, Akgün 2002, §6.2).
+    """Parameters of :class:`BodyWindFilter` (defaults: the values of its source, Akgün 2002, §6.2).
 
     Attributes
     ----------
@@ -122,7 +122,7 @@ class BodyWindFilterConfig(Result):
     wind_corr_time : float
         Correlation time of the wind states, s (> 0).
     wind_step_var : float
-        Process noise variance of the wind states per step, (m/s)², applied directly.
+        Process noise variance of the wind states per step, (m/s)², applied directly (> = 0).
     ads_noise_std : float
         ADS velocity noise std per axis, m/s (> 0).
     doppler_noise_std : float
@@ -138,6 +138,12 @@ class BodyWindFilterConfig(Result):
     ------
     InvalidInputError
         If a value is out of range or ``init_var`` / ``x0`` do not have 6 entries.
+
+    References
+    ----------
+    O. Akgün, *Hava verileri sistemi ile Doppler radarının Kalman süzgeci temelinde tümleştirilmesi* (Integration
+    of an air data system and a Doppler radar via Kalman filtering), MSc thesis, Istanbul Technical University,
+    2002, §5.2-5.3, 6.2a.
     """
 
     dt: float = 0.001
@@ -158,7 +164,7 @@ class BodyWindFilterConfig(Result):
 
 
 def body_wind_matrices(cfg: BodyWindFilterConfig | None = None) -> dict[str, Array]:
-    """F (Φ), G, Q, H, R, P0, x0 of the thesis filter.
+    """F (Φ), G, Q, H, R, P0, x0 of the body-axis wind filter (:class:`BodyWindFilter`).
 
     Parameters
     ----------
@@ -254,7 +260,8 @@ class ThesisState:
 
 
 class BodyWindFilter:
-    """The thesis wind filter (Akgün 2002; module docstring) on ``z = V_D − V_A``.
+    """Body-axis wind and position-correction filter on ``z = V_D − V_A`` (Doppler minus air-data velocity; module
+    docstring).
 
     ``run(z)`` filters one sequence, ``run_batch(z)`` many at once (vectorised over runs),
     ``step(z_k)`` one measurement, with the same update code, the state carried between calls.

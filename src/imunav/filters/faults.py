@@ -116,9 +116,10 @@ def _check_level(name: str, value: float, upper: float, M: int, s: int) -> None:
 
 
 def window_chi2_thresholds(M: int = 20, s: int = 3, confidence: float = 0.95) -> dict[str, float]:
-    """The thresholds as the thesis sets them: χ²(M−s+1) for Alg. 1/2, χ²(Ms) for Alg. 3.
+    """Nominal χ² thresholds of the window tests: χ²(M−s+1) for Alg. 1/2, χ²(Ms) for Alg. 3.
 
-    Akgün (2002, §4.4); kept for comparison: the module docstring says why they are wrong.
+    The degrees of freedom a window of ``M`` steps of size-``s`` measurements suggests, as the source of the
+    algorithms sets them; kept for comparison: the module docstring says why they are wrong.
 
     Parameters
     ----------
@@ -133,6 +134,11 @@ def window_chi2_thresholds(M: int = 20, s: int = 3, confidence: float = 0.95) ->
     -------
     dict of str to float
         Thresholds of ``"alg1"``, ``"alg2"`` and ``"alg3"``.
+
+    References
+    ----------
+    O. Akgün, *Integration of an air data system and a Doppler radar via Kalman filtering*, MSc thesis, Istanbul
+    Technical University, 2002, §4.4.
     """
     return {
         "alg1": float(chi2_ppf(confidence, M - s + 1)),

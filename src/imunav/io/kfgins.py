@@ -544,10 +544,10 @@ class KfGinsConfig:
     init_pos_std, init_vel_std, init_att_std : numpy.ndarray, shape (3,)
         Initial σ of position (NED, m), velocity (NED, m/s) and attitude (rad).
     init_gyro_bias_std, init_accel_bias_std : numpy.ndarray, shape (3,)
-        Initial σ of the biases, rad/s and m/s² (default: those of ``noise``).
+        Initial σ of the biases, rad/s and m/s² (default: those of ``imu_noise_model``).
     init_gyro_scale_std, init_accel_scale_std : numpy.ndarray, shape (3,)
-        Initial σ of the scale factors, dimensionless (default: those of ``noise``).
-    noise : ImuNoise
+        Initial σ of the scale factors, dimensionless (default: those of ``imu_noise_model``).
+    imu_noise_model : ImuNoise
         The IMU noise of the filter.
     antenna_lever_arm : numpy.ndarray, shape (3,)
         GNSS antenna from the IMU, body FRD, m.
@@ -577,9 +577,9 @@ class KfGinsConfig:
     init_accel_bias_std: Array
     init_gyro_scale_std: Array
     init_accel_scale_std: Array
-    noise: ImuNoise
+    imu_noise_model: ImuNoise
     antenna_lever_arm: Array
-    options: dict[str, Any] = field(default_factory=dict)
+    options: dict[str, object] = field(default_factory=dict)
 
 
 def _vec(doc: dict[str, Any], key: str, src: str, *, scale: float = 1.0, positive: bool = False,
@@ -655,7 +655,7 @@ def write_kfgins_config(path: str | os.PathLike[str], cfg: KfGinsConfig, *, comm
         q = Path(q).resolve()
         return q.relative_to(base).as_posix() if q.is_relative_to(base) else q.as_posix()
 
-    n = cfg.noise
+    n = cfg.imu_noise_model
     lla_deg = np.r_[np.degrees(cfg.init_lla[:2]), cfg.init_lla[2]]
     lines = [] if comment is None else [f"# {comment}"]
     lines += [
@@ -782,7 +782,7 @@ def load_kfgins_config(path: str | os.PathLike[str]) -> KfGinsConfig:
                                  default=noise.gyro_scale_std / PPM),
         init_accel_scale_std=_vec(doc, "initsastd", src, scale=PPM, positive=True,
                                   default=noise.accel_scale_std / PPM),
-        noise=noise,
+        imu_noise_model=noise,
         antenna_lever_arm=_vec(doc, "antlever", src),
         options=options,
     )

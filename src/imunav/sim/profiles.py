@@ -1076,11 +1076,11 @@ def rate_table_profile(
 
 
 def rate_table_steps(step_dps: float = 25.0, max_dps: float = 250.0) -> tuple[Array, NDArray[np.int64]]:
-    """The 120-step rate-table test (Günhan 2014, §4.1.2): rates and axis indices.
+    """The rates and axes of the 120-step rate-table test (:func:`rate_table_step_profile`).
 
     Per axis (x, then y, then z):
     ``[0, 25, …, 250, 225, …, 25, 0, −25, …, −250, −225, …, −25]`` °/s
-    (11 + 9 + 1 + 10 + 9 = 40 rates), 30 s each in the thesis.
+    (11 + 9 + 1 + 10 + 9 = 40 rates), 30 s each in the source.
 
     Parameters
     ----------
@@ -1100,6 +1100,10 @@ def rate_table_steps(step_dps: float = 25.0, max_dps: float = 250.0) -> tuple[Ar
     ------
     InvalidInputError
         If ``max_dps`` is not a positive multiple of ``step_dps``.
+
+    References
+    ----------
+    Günhan 2014, §4.1.2.
     """
     n = int(round(max_dps / step_dps))
     if n < 1 or abs(n * step_dps - max_dps) > 1e-9:
@@ -1122,7 +1126,7 @@ def rate_table_step_profile(
     lon: float = 0.0,
     h: float = 0.0,
 ) -> Profile:
-    """The 120-step ±250 °/s rate-table test (Günhan 2014, §4.1.2), 30 s per step by default.
+    """The 120-step ±250 °/s rate-table test: 40 rate steps about each axis in turn, 30 s per step by default.
 
     Parameters
     ----------
@@ -1147,6 +1151,10 @@ def rate_table_step_profile(
     -------
     Profile
         The trajectory (exact body rates) and its segment table.
+
+    References
+    ----------
+    Günhan 2014, §4.1.2 (the test's rate sequence).
     """
     rates, axes = rate_table_steps()
     return rate_table_profile(

@@ -47,9 +47,9 @@ class GinsConfig:
     Parameters
     ----------
     gyro_noise_density : float or array_like, shape (3,)
-        Gyro white-noise density (the angle random walk, KF-GINS's ``arw``), rad/s/√Hz = rad/√s (> 0).
+        Gyro white-noise density (the angle random walk, KF-GINS's ``gyro_noise_density``), rad/s/√Hz = rad/√s (> 0).
     accel_noise_density : float or array_like, shape (3,)
-        Accelerometer white-noise density (the velocity random walk, KF-GINS's ``vrw``), m/s²/√Hz = m/s/√s (> 0).
+        Accelerometer white-noise density (the velocity random walk, KF-GINS's ``accel_noise_density``), m/s²/√Hz = m/s/√s (> 0).
     gyro_bias_std, accel_bias_std : float or array_like, shape (3,)
         Stationary Gauss–Markov σ of the biases, rad/s and m/s² (> 0).
     gyro_scale_std, accel_scale_std : float or array_like, shape (3,)
@@ -259,7 +259,7 @@ class GinsConfig:
         InvalidInputError
             If a field is out of range (as :class:`GinsConfig`).
         """
-        n = cfg.noise
+        n = cfg.imu_noise_model
         kw: dict[str, Any] = dict(
             gyro_noise_density=n.gyro_noise_density, accel_noise_density=n.accel_noise_density,
             gyro_bias_std=n.gyro_bias_std, accel_bias_std=n.accel_bias_std,

@@ -93,7 +93,7 @@ def write_simulated_drive(drive: SimulatedDrive, folder: str | os.PathLike[str])
         init_vel_std=vel_std, init_att_std=np.radians(att_std_deg), init_gyro_bias_std=cfg.init_gyro_bias_std,
         init_accel_bias_std=cfg.init_accel_bias_std, init_gyro_scale_std=cfg.gyro_scale_std,
         init_accel_scale_std=cfg.accel_scale_std,
-        noise=ImuNoise(cfg.gyro_noise_density, cfg.accel_noise_density, cfg.gyro_bias_std, cfg.accel_bias_std, cfg.gyro_scale_std,
+        imu_noise_model=ImuNoise(cfg.gyro_noise_density, cfg.accel_noise_density, cfg.gyro_bias_std, cfg.accel_bias_std, cfg.gyro_scale_std,
                        cfg.accel_scale_std, float(cfg.corr_time)),
         antenna_lever_arm=np.asarray(cfg.lever_arm, dtype=float))
     write_kfgins_config(names["yaml"], kf, comment="KF-GINS configuration written by 'imunav gins simulate' (keys "

@@ -31,7 +31,7 @@ pseudo-measurement with unit-row H:
 * level floor: ``z = p_z0 - p̂_z = δp_z + ν`` (every stance at the start height).
 
 The initial roll and pitch come from the mean specific force of the first
-stance (or of the first ``align_samples`` samples), yaw = ``initial_yaw``:
+stance (or of the first ``align_samples`` samples), yaw = ``init_yaw``:
 ``roll = atan2(-f_y, -f_z)``, ``pitch = atan2(f_x, sqrt(f_y² + f_z²))``.
 """
 
@@ -96,7 +96,7 @@ class ZuptConfig:
         Number of samples averaged for the alignment with ``"samples"``, >= 1.
     align_samples_max : int
         Most samples of the first stance averaged with ``"first_stance"``.
-    initial_yaw : float
+    init_yaw : float
         Initial yaw, rad (ZYX).
     zaru : bool
         Zero angular-rate update during stance (needs 15 states).
@@ -144,7 +144,7 @@ class ZuptConfig:
     alignment: Literal["samples", "first_stance"] = "samples"
     align_samples: int = 20
     align_samples_max: int = 400
-    initial_yaw: float = 0.0
+    init_yaw: float = 0.0
     zaru: bool = False
     zaru_noise_std: float = 0.01
     zaru_min_s: float = 0.0
@@ -479,7 +479,7 @@ class ZuptFilter:
         ----------
         q_nb : array_like, shape (4,), optional
             Initial attitude (scalar first); default: levelled from the first sample's specific force
-            (:func:`align_from_accel`, yaw ``config.initial_yaw``), as :meth:`run` with ``align_samples=1``.
+            (:func:`align_from_accel`, yaw ``config.init_yaw``), as :meth:`run` with ``align_samples=1``.
         position : array_like, shape (3,), optional
             Initial position, m, NED.
         g : float, optional
@@ -566,7 +566,7 @@ class ZuptFilter:
         if prev is None:
             if not math.isfinite(tk):
                 raise TimeOrderError(f"t must be finite; got {t!r}")
-            q0 = align_from_accel(a, cfg.initial_yaw) if self._q_init is None else self._q_init
+            q0 = align_from_accel(a, cfg.init_yaw) if self._q_init is None else self._q_init
             g = self._g_init if self._g_init is not None else (float(np.linalg.norm(a)) if cfg.g is None
                                                                    else float(cfg.g))
             P = _initial_cov(cfg)
@@ -648,7 +648,7 @@ class ZuptFilter:
             i0, i1 = first_stance(z)
             i1 = min(i1, i0 + cfg.align_samples_max)
         fmean = a[i0:i1].mean(axis=0)
-        q0 = align_from_accel(fmean, cfg.initial_yaw) if initial_quaternion is None else _quaternion(initial_quaternion)
+        q0 = align_from_accel(fmean, cfg.init_yaw) if initial_quaternion is None else _quaternion(initial_quaternion)
         g = float(np.linalg.norm(fmean)) if cfg.g is None else float(cfg.g)
         pos0 = _position(initial_position)
         # fresh, writable, contiguous float64 arrays: one compiled signature for every caller
