@@ -17,8 +17,8 @@ from __future__ import annotations
 import dataclasses
 from typing import NamedTuple
 
-__all__ = ["NamingRule", "NAMING_TABLE", "FORBIDDEN_WORDS", "UNIT_SUFFIXES", "check_field_name",
-           "check_config_class"]
+__all__ = ["NamingRule", "NAMING_TABLE", "FORBIDDEN_WORDS", "UNIT_SUFFIXES", "RENAMED_FIELDS", "check_field_name",
+           "check_config_class", "renamed_hint"]
 
 
 class NamingRule(NamedTuple):
@@ -90,6 +90,67 @@ FORBIDDEN_WORDS: dict[str, str] = {
 
 #: Unit words a field name may end with after a pattern (non-SI units, or seconds of a plain duration).
 UNIT_SUFFIXES: tuple[str, ...] = ("deg", "dps", "hz", "s", "c", "m", "ppm", "mg", "ug")
+
+
+#: The configuration fields issue 25 renamed, by class: old name -> new name.  Only for the messages that refuse an
+#: old name in a TOML file or a ``--param`` option (:func:`renamed_hint`); the old names are not accepted.
+RENAMED_FIELDS: dict[str, dict[str, str]] = {
+    "GinsConfig": {"arw": "gyro_noise_density", "vrw": "accel_noise_density", "odo_noise": "odo_noise_std",
+                   "nhc_noise": "nhc_noise_std", "zupt_noise": "zupt_noise_std", "zaru_noise": "zaru_noise_std",
+                   "baro_noise": "baro_noise_std", "mag_heading_noise": "mag_heading_noise_std",
+                   "level_std": "level_noise_std"},
+    "MekfConfig": {"sigma_gyro": "gyro_noise_density", "sigma_bias": "gyro_bias_random_walk",
+                   "sigma_acc": "accel_direction_noise_std", "k_acc": "k_accel", "acc_reject": "accel_reject_threshold",
+                   "sigma_mag": "heading_noise_std", "mag_norm_tol": "mag_norm_threshold",
+                   "mag_dip_tol": "mag_dip_threshold", "rest_gyro": "rest_gyro_threshold",
+                   "rest_acc": "rest_accel_threshold", "sigma_rest": "zaru_noise_std",
+                   "ref_tau": "mag_ref_time_constant", "acc_lpf_tau": "accel_lpf_time_constant",
+                   "rest_lpf_tau": "rest_lpf_time_constant", "mag_lpf_tau": "mag_lpf_time_constant",
+                   "bias_clip": "lpf_gyro_threshold", "tau_acc": "tilt_time_constant",
+                   "tau_mag": "heading_time_constant", "p0_att": "init_att_std", "p0_bias": "init_gyro_bias_std"},
+    "UkfConfig": {"sigma_gyro": "gyro_noise_density", "sigma_bias": "gyro_bias_random_walk",
+                  "sigma_acc": "accel_direction_noise_std", "sigma_mag": "mag_direction_noise_std",
+                  "acc_reject": "accel_reject_threshold", "p0_att": "init_att_std", "p0_bias": "init_gyro_bias_std"},
+    "GravityKfConfig": {"sigma_g": "gyro_noise_std", "sigma_a": "accel_noise_std", "tau": "accel_norm_threshold",
+                        "sigma_b": "gyro_bias_random_walk", "r_b": "bias_pseudo_noise_std", "p0": "init_std"},
+    "ZuptConfig": {"sigma_acc": "accel_noise_std", "sigma_gyro": "gyro_noise_std", "sigma_v": "zupt_noise_std",
+                   "sigma_acc_bias_rw": "accel_bias_random_walk", "sigma_gyro_bias_rw": "gyro_bias_random_walk",
+                   "p0_pos": "init_pos_std", "p0_vel": "init_vel_std", "p0_att": "init_att_std",
+                   "p0_acc_bias": "init_accel_bias_std", "p0_gyro_bias": "init_gyro_bias_std",
+                   "initial_yaw": "init_yaw", "sigma_zaru": "zaru_noise_std", "sigma_heading": "heading_noise_std",
+                   "sigma_floor": "floor_noise_std"},
+    "LstmConfig": {"noise_acc": "accel_noise_std", "noise_gyro": "gyro_noise_std"},
+    "BodyWindFilterConfig": {"tau": "wind_corr_time", "q": "wind_step_var", "p0": "init_var",
+                             "sigma_ads": "ads_noise_std", "sigma_doppler": "doppler_noise_std"},
+    "LongHorizonConfig": {"wind_sigma": "wind_std", "wind_tau": "wind_corr_time", "turbulence_sigma": "turbulence_std",
+                          "turbulence_tau": "turbulence_corr_time", "sigma_ads": "ads_noise_std",
+                          "sigma_doppler": "doppler_noise_std", "p0_wind": "init_wind_var",
+                          "p0_position": "init_position_var"},
+    "FlightConfig": {"sigma_ps": "ps_noise_std", "sigma_qc": "qc_noise_std", "sigma_tat": "tat_noise_std",
+                     "sigma_alpha_deg": "alpha_noise_std_deg", "sigma_beta_deg": "beta_noise_std_deg",
+                     "sigma_attitude_deg": "attitude_noise_std_deg"},
+    "KfGinsConfig": {"noise": "imu_noise_model"},
+}
+
+
+def renamed_hint(config: str, names: object) -> str:
+    """The part of an error message that says which of ``names`` were renamed, and to what ("" if none).
+
+    Parameters
+    ----------
+    config : str
+        The configuration class's name (a key of :data:`RENAMED_FIELDS`).
+    names : iterable of str
+        The unknown names a user gave.
+
+    Returns
+    -------
+    str
+        ``" (renamed: arw -> gyro_noise_density, ...)"``, or ``""``.
+    """
+    table = RENAMED_FIELDS.get(config, {})
+    hits = [f"{n} -> {table[n]}" for n in names if n in table]  # type: ignore[attr-defined]
+    return f" (renamed: {', '.join(hits)})" if hits else ""
 
 
 def _tail_ok(words: list[str], i: int) -> bool:

@@ -64,6 +64,7 @@ from imunav.sim.vehicle import demo_drive, vehicle_trajectory
 from imunav.timeseries import ImuData
 from imunav.toml import read_toml
 from imunav.units import DEG
+from imunav.vocabulary import renamed_hint
 
 __all__ = ["GinsSetup", "GinsInputs", "SimulatedDrive", "load_gins_toml", "setup_from_kfgins", "load_inputs", "simulate_drive", "run_setup", "track_rmse", "TOML_TABLES", "KFGINS_LEVER_ARM",
            "KFGINS_ORIGIN_LLA"]
@@ -191,7 +192,8 @@ def _vector(value: Any, n: int, where: str, unit: str) -> Array:
 def _check_keys(table: dict[str, Any], allowed: tuple[str, ...], where: str) -> None:
     unknown = sorted(set(table) - set(allowed))
     if unknown:
-        raise ConfigError(f"{where}: unknown key(s) {unknown}; allowed: {', '.join(allowed)}")
+        raise ConfigError(f"{where}: unknown key(s) {unknown}{renamed_hint('GinsConfig', unknown)}; "
+                          f"allowed: {', '.join(allowed)}")
 
 
 def _states(value: Any, where: str) -> bool:

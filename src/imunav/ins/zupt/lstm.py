@@ -34,6 +34,12 @@ Array = NDArray[np.float64]
 DEFAULT_MODEL_PATH = Path(__file__).resolve().parents[2] / "data" / "zupt_lstm.npz"
 
 
+# vocab_rename: off (the old spellings a saved model file holds)
+#: LstmConfig fields renamed by issue 25 (one vocabulary), as a model file saved before may spell them
+_RENAMED_FIELDS = {"noise_acc": "accel_noise_std", "noise_gyro": "gyro_noise_std"}
+# vocab_rename: on
+
+
 @dataclass(frozen=True)
 class LstmConfig:
     """Architecture and training settings.
@@ -358,6 +364,10 @@ class LstmDetector:
                 # a model saved before the SHOE guard existed has no guard threshold chosen on its own
                 # training trials: keep its behaviour (no guard) rather than borrow the shipped model's
                 cfgd.setdefault("guard", False)
+                # a model saved before issue 25's renames names two fields the old way
+                for old, new in _RENAMED_FIELDS.items():
+                    if old in cfgd:
+                        cfgd[new] = cfgd.pop(old)
                 cfg = LstmConfig(**cfgd)
                 weights = [(z[f"w_ih_{l}"].astype(float), z[f"w_hh_{l}"].astype(float), z[f"b_{l}"].astype(float))
                            for l in range(cfg.layers)]
