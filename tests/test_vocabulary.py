@@ -14,7 +14,7 @@ from dataclasses import dataclass
 import pytest
 
 import imunav
-from imunav.vocabulary import NAMING_TABLE, check_config_class, check_field_name
+from imunav.vocabulary import NAMING_TABLE, RENAMED_FIELDS, check_config_class, check_field_name, renamed_hint
 
 
 def _public_config_classes() -> list[type]:
@@ -85,3 +85,13 @@ def test_each_pattern_of_the_table_passes_its_examples():
             assert check_field_name(field) == [], example
             cls = next(c for c in CONFIGS if c.__name__ == cls_name)
             assert field in {f.name for f in dataclasses.fields(cls)}, example
+
+
+def test_the_renamed_table_names_fields_that_exist_and_old_names_that_do_not():
+    by_name = {c.__name__: {f.name for f in dataclasses.fields(c)} for c in CONFIGS}
+    for cls_name, table in RENAMED_FIELDS.items():
+        for old, new in table.items():
+            assert new in by_name[cls_name], f"{cls_name}.{new}"
+            assert old not in by_name[cls_name], f"{cls_name}.{old}"
+    assert renamed_hint("GinsConfig", ["arw", "bogus"]) == " (renamed: arw -> gyro_noise_density)"
+    assert renamed_hint("GinsConfig", ["bogus"]) == ""

@@ -75,7 +75,7 @@ def test_config_and_file_errors(tmp_path):
         LstmConfig(burn_in=100)
     with pytest.raises(ConfigError, match="threshold"):
         LstmConfig(threshold=1.0)
-    assert LstmConfig.thesis().layers == 6 and LstmConfig.thesis().hidden == 80
+    assert LstmConfig.large_network().layers == 6 and LstmConfig.large_network().hidden == 80
     with pytest.raises(ConfigError, match="max_gap_s"):
         LstmConfig(max_gap_s=0.0)
     with pytest.raises(FileFormatError, match="not found"):

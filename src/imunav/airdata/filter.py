@@ -72,7 +72,7 @@ __all__ = [
     "THESIS_P44",
     "WindFilterResult",
     "BodyWindFilter",
-    "ThesisState",
+    "BodyWindState",
     "LongHorizonConfig",
     "LongHorizonResult",
     "LongHorizonFilter",
@@ -239,8 +239,8 @@ def _check_z(z: ArrayLike, batch: bool) -> Array:
 
 
 @dataclass(frozen=True)
-class ThesisState:
-    """The thesis filter's estimate after one :meth:`BodyWindFilter.step` (one row of :class:`WindFilterResult`).
+class BodyWindState:
+    """The body-axis wind filter's estimate after one :meth:`BodyWindFilter.step` (one row of :class:`WindFilterResult`).
 
     Attributes
     ----------
@@ -358,7 +358,7 @@ class BodyWindFilter:
         return WindFilterResult(x, r.cov_diag[0], r.innovation[0], r.normalized[0], r.weights[0], x[:, 3:].copy(),
                                 zz, vel, pos, self.robust)
 
-    def step(self, z_k: ArrayLike) -> ThesisState:
+    def step(self, z_k: ArrayLike) -> BodyWindState:
         """One prediction over ``config.dt`` and the update with one measurement (the loop of :meth:`run_batch`).
 
         Parameters
@@ -368,7 +368,7 @@ class BodyWindFilter:
 
         Returns
         -------
-        ThesisState
+        BodyWindState
             The estimate after this step; ``self.x``, ``self.P`` hold it for the next.
 
         Raises
@@ -385,7 +385,7 @@ class BodyWindFilter:
         o = batch_filter(self.x, self.P, F, Qn, H, R, zk[None], self._mode, float(self.gate_m),
                          isolation_thresholds(3, self.alpha), float(self.huber_c), store_full=True)
         self.x, self.P = o["x"][0, 0].copy(), o["P"][0, 0].copy()
-        return ThesisState(self.x.copy(), o["P_diag"][0, 0], o["innovation"][0, 0], o["normalized"][0, 0],
+        return BodyWindState(self.x.copy(), o["P_diag"][0, 0], o["innovation"][0, 0], o["normalized"][0, 0],
                            o["weights"][0, 0])
 
 

@@ -49,8 +49,8 @@ from imunav.rotation import dcm_from_euler
 __all__ = [
     "CHARLIE_STATES",
     "charlie_model",
-    "ThesisFlight",
-    "simulate_thesis_aircraft",
+    "LinearAircraftFlight",
+    "simulate_linear_aircraft",
     "dryden_gusts",
     "TURBULENCE_SIGMA",
     "FlightConfig",
@@ -104,8 +104,8 @@ def charlie_model(dt: float = 0.001, u0: float = 250.0) -> tuple[Array, Array]:
 
 
 @dataclass(frozen=True)
-class ThesisFlight(Result):
-    """Thesis aircraft run.
+class LinearAircraftFlight(Result):
+    """A run of the linear aircraft model (:func:`simulate_linear_aircraft`).
 
     Attributes
     ----------
@@ -125,10 +125,11 @@ class ThesisFlight(Result):
     position: Array
 
 
-def simulate_thesis_aircraft(n_steps: int = 500, dt: float = 0.001, u0: float = 250.0,
+def simulate_linear_aircraft(n_steps: int = 500, dt: float = 0.001, u0: float = 250.0,
                              beta0: float = 0.1, phi0_deg: float = 5.0, psi0: float = 0.1,
-                             x0: float = 0.1, y0: float = 0.1, altitude: float = 12200.0) -> ThesisFlight:
-    """Free response (u = 0) of the thesis aircraft from the thesis's initial state (Akgün 2002, §5.3.2).
+                             x0: float = 0.1, y0: float = 0.1, altitude: float = 12200.0) -> LinearAircraftFlight:
+    """Free response (u = 0) of the linear aircraft model (the Charlie model) from the initial state of Akgün 2002,
+    §5.3.2.
 
     Parameters
     ----------
@@ -151,7 +152,7 @@ def simulate_thesis_aircraft(n_steps: int = 500, dt: float = 0.001, u0: float = 
 
     Returns
     -------
-    ThesisFlight
+    LinearAircraftFlight
         States, body velocity and position at every step.
 
     Raises
@@ -170,7 +171,7 @@ def simulate_thesis_aircraft(n_steps: int = 500, dt: float = 0.001, u0: float = 
         S[k] = s
     vel = np.stack([u0 + S[:, 0], u0 * S[:, 4], S[:, 1]], axis=1)
     pos = np.array([x0, y0, 0.0]) + dt * np.cumsum(vel, axis=0)
-    return ThesisFlight(dt * np.arange(1, n_steps + 1), S, vel, pos)
+    return LinearAircraftFlight(dt * np.arange(1, n_steps + 1), S, vel, pos)
 
 
 # ----------------------------------------------------------------------------------------------

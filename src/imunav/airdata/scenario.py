@@ -1,4 +1,5 @@
-"""The thesis scenarios and their Monte Carlo evaluation.
+"""The air-data / Doppler wind scenarios (simulated flights of the body-axis wind filter) and their Monte Carlo
+evaluation.
 
 After O. Akgün, *Hava verileri sistemi ile Doppler radarının Kalman süzgeci temelinde tümleştirilmesi*
 (Integration of an air data system and a Doppler radar via Kalman filtering), MSc thesis, Istanbul
@@ -38,7 +39,7 @@ from imunav.airdata.filter import (
     body_wind_matrices,
     iteration_row,
 )
-from imunav.airdata.flight import FlightConfig, simulate_thesis_aircraft
+from imunav.airdata.flight import FlightConfig, simulate_linear_aircraft
 from imunav.errors import ConfigError, InvalidInputError
 from imunav.filters import Fault, inject_faults
 from imunav.filters.faults import (
@@ -56,20 +57,20 @@ from imunav.toml import read_toml
 
 __all__ = [
     "KINDS",
-    "ThesisScenario",
-    "ThesisData",
-    "simulate_thesis",
-    "simulate_thesis_batch",
+    "WindScenario",
+    "WindScenarioData",
+    "simulate_wind_scenario",
+    "simulate_wind_scenario_batch",
     "simulate_detector_statistics",
     "delay_summary",
     "fault_detection_table",
     "covariance_sequence",
     "actual_error_covariance",
-    "ThesisMonteCarlo",
-    "monte_carlo_thesis",
-    "thesis_report",
+    "WindMonteCarlo",
+    "wind_monte_carlo",
+    "wind_scenario_report",
     "load_config",
-    "thesis_tables",
+    "wind_scenario_tables",
 ]
 
 Array = NDArray[np.float64]
@@ -77,8 +78,8 @@ KINDS = ("nominal", "outliers", "variance", "bias", "drift", "stuck")
 
 
 @dataclass(frozen=True)
-class ThesisScenario(Result):
-    """Thesis scenario parameters (defaults from the thesis; steps are the thesis's 1-based steps).
+class WindScenario(Result):
+    """Wind-scenario parameters (defaults and 1-based steps as in the source, Akgün 2002, §6.2).
 
     Attributes
     ----------
@@ -187,8 +188,8 @@ class ThesisScenario(Result):
 
 
 @dataclass(frozen=True)
-class ThesisData(Result):
-    """One simulated thesis run: truth and sensors, (N, 3) per body axis unless noted.
+class WindScenarioData(Result):
+    """One simulated run of a wind scenario: truth and sensors, (N, 3) per body axis unless noted.
 
     Attributes
     ----------
@@ -209,8 +210,8 @@ class ThesisData(Result):
     ads_noise : numpy.ndarray
         Air-data noise drawn, m/s.
     anomaly : numpy.ndarray of bool
-        :meth:`ThesisScenario.anomaly_mask`.
-    scenario : ThesisScenario
+        :meth:`WindScenario.anomaly_mask`.
+    scenario : WindScenario
         The scenario simulated.
     """
 
@@ -223,10 +224,10 @@ class ThesisData(Result):
     z: Array
     ads_noise: Array
     anomaly: NDArray[np.bool_]
-    scenario: ThesisScenario
+    scenario: WindScenario
 
 
-def _truth(sc: ThesisScenario) -> Array:
+def _truth(sc: WindScenario) -> Array:
     cfg = replace(sc.filter, dt=sc.dt, wind_corr_time=sc.wind_corr_time)
     F = body_wind_matrices(cfg)["F"]
     x = np.asarray(sc.x_true0, dtype=np.float64)
@@ -237,13 +238,13 @@ def _truth(sc: ThesisScenario) -> Array:
     return out
 
 
-def _simulate(s: ThesisScenario, n_runs: int, rng: np.random.Generator | int | None) -> tuple[Array, ...]:
+def _simulate(s: WindScenario, n_runs: int, rng: np.random.Generator | int | None) -> tuple[Array, ...]:
     """Truth x (N, 6), aircraft velocity v (N, 3), ADS va, Doppler vd and ADS noise (runs, N, 3)."""
 
     gen = np.random.default_rng(rng)
     xt = _truth(s)
     N = s.n_steps
-    v = simulate_thesis_aircraft(N, s.dt).velocity  # same deterministic flight for every run
+    v = simulate_linear_aircraft(N, s.dt).velocity  # same deterministic flight for every run
     na = s.ads_noise_std * gen.standard_normal((n_runs, N, 3))
     nd = s.doppler_noise_std * gen.standard_normal((n_runs, N, 3))
     va = v[None] - xt[None, :, 3:] + na  # eq. 5.9; faults act on the ADS output
@@ -253,13 +254,13 @@ def _simulate(s: ThesisScenario, n_runs: int, rng: np.random.Generator | int | N
     return xt, v, va, v[None] + nd, na
 
 
-def simulate_thesis_batch(sc: ThesisScenario | None = None, n_runs: int = 100,
+def simulate_wind_scenario_batch(sc: WindScenario | None = None, n_runs: int = 100,
                           rng: np.random.Generator | int | None = None) -> tuple[Array, Array, Array]:
     """Measurements of many runs of a scenario at once, for Monte Carlo.
 
     Parameters
     ----------
-    sc : ThesisScenario, optional
+    sc : WindScenario, optional
         The scenario (default: the nominal one).
     n_runs : int
         Number of runs, >= 1.
@@ -280,36 +281,36 @@ def simulate_thesis_batch(sc: ThesisScenario | None = None, n_runs: int = 100,
     InvalidInputError
         If ``n_runs < 1``.
     """
-    s = ThesisScenario() if sc is None else sc
+    s = WindScenario() if sc is None else sc
     if n_runs < 1:
         raise InvalidInputError(f"n_runs must be >= 1, got {n_runs}")
     xt, _, va, vd, na = _simulate(s, n_runs, rng)
     return vd - va, xt, na
 
 
-def simulate_thesis(sc: ThesisScenario | None = None, rng: np.random.Generator | int | None = None) -> ThesisData:
-    """One thesis run with the aircraft truth (Charlie model) and both sensors.
+def simulate_wind_scenario(sc: WindScenario | None = None, rng: np.random.Generator | int | None = None) -> WindScenarioData:
+    """One run of a wind scenario with the aircraft truth (Charlie model) and both sensors.
 
     Parameters
     ----------
-    sc : ThesisScenario, optional
+    sc : WindScenario, optional
         The scenario (default: the nominal one).
     rng : numpy.random.Generator or int, optional
         Random generator or seed.
 
     Returns
     -------
-    ThesisData
+    WindScenarioData
         Truth and sensor outputs.
     """
-    s = ThesisScenario() if sc is None else sc
+    s = WindScenario() if sc is None else sc
     xt, v, va, vd, na = _simulate(s, 1, rng)
-    return ThesisData(s.dt * np.arange(1, s.n_steps + 1), xt, xt[:, 3:].copy(), v, va[0], vd[0], vd[0] - va[0], na[0],
+    return WindScenarioData(s.dt * np.arange(1, s.n_steps + 1), xt, xt[:, 3:].copy(), v, va[0], vd[0], vd[0] - va[0], na[0],
                       s.anomaly_mask(), s)
 
 
 def simulate_detector_statistics(
-    sc: ThesisScenario,
+    sc: WindScenario,
     n_runs: int,
     rng: np.random.Generator | int | None,
     window: int,
@@ -325,7 +326,7 @@ def simulate_detector_statistics(
 
     Parameters
     ----------
-    sc : ThesisScenario
+    sc : WindScenario
         The scenario.
     n_runs : int
         Number of runs.
@@ -356,7 +357,7 @@ def simulate_detector_statistics(
     out: dict[str, list[Array]] = {d: [] for d in DETECTORS}
     for i in range(0, n_runs, chunk):
         n = min(chunk, n_runs - i)
-        z, _, _ = simulate_thesis_batch(sc, n, gen)
+        z, _, _ = simulate_wind_scenario_batch(sc, n, gen)
         st = detector_statistics(BodyWindFilter(cfg).run_batch(z).normalized, window)
         for d in DETECTORS:
             out[d].append(st[d])
@@ -398,7 +399,7 @@ def delay_summary(alarm: NDArray[np.bool_], onset_row: int, horizon: int = 10) -
     }
 
 
-def fault_detection_table(sc: ThesisScenario, runs: int, seed: int, *, window: int = 20, p_false_alarm: float = 0.01,
+def fault_detection_table(sc: WindScenario, runs: int, seed: int, *, window: int = 20, p_false_alarm: float = 0.01,
                           horizon: int = 10, chunk: int = 50,
                           on_chunk: Callable[[int], None] | None = None) -> dict[str, Any]:
     """Monte Carlo fault detection on a thesis scenario: every detector's delay, misses and false alarms.
@@ -410,7 +411,7 @@ def fault_detection_table(sc: ThesisScenario, runs: int, seed: int, *, window: i
 
     Parameters
     ----------
-    sc : ThesisScenario
+    sc : WindScenario
         The fault scenario.
     runs : int
         Monte Carlo runs of the fault and of the nominal scenario (>= 1).
@@ -449,7 +450,7 @@ def fault_detection_table(sc: ThesisScenario, runs: int, seed: int, *, window: i
     chunk = max(1, min(chunk, runs))
     stats_f = simulate_detector_statistics(sc, runs, np.random.default_rng(ss[0]), window, chunk=chunk,
                                            on_chunk=on_chunk)
-    stats_n = simulate_detector_statistics(ThesisScenario(kind="nominal"), runs, np.random.default_rng(ss[1]), window,
+    stats_n = simulate_detector_statistics(WindScenario(kind="nominal"), runs, np.random.default_rng(ss[1]), window,
                                            chunk=chunk, on_chunk=on_chunk)
     o = sc.onset_row
     rows = []
@@ -538,8 +539,8 @@ def actual_error_covariance(cfg: BodyWindFilterConfig | None = None, n_steps: in
 
 
 @dataclass(frozen=True)
-class ThesisMonteCarlo(Result):
-    """Monte Carlo figures of the thesis scenarios (see :func:`monte_carlo_thesis`).
+class WindMonteCarlo(Result):
+    """Monte Carlo figures of the wind scenarios (see :func:`wind_monte_carlo`).
 
     Attributes
     ----------
@@ -577,7 +578,7 @@ def _rms(e: Array, axis=None) -> Array:
     return np.sqrt(np.mean(e**2, axis=axis))
 
 
-def monte_carlo_thesis(
+def wind_monte_carlo(
     n_runs: int = 200,
     rng: int = 0,
     *,
@@ -585,7 +586,7 @@ def monte_carlo_thesis(
     window: int = 20,
     robust_methods: tuple[str, ...] = ("gate2", "gate3", "nis", "isolate", "huber"),
     horizon: int = 10,
-) -> ThesisMonteCarlo:
+) -> WindMonteCarlo:
     """Seeded Monte Carlo of all thesis scenarios.
 
     * wind: per-axis RMS wind error of the KF over thesis iterations ≥ 100
@@ -619,7 +620,7 @@ def monte_carlo_thesis(
 
     Returns
     -------
-    ThesisMonteCarlo
+    WindMonteCarlo
         The figures above.
 
     Raises
@@ -630,12 +631,12 @@ def monte_carlo_thesis(
     seed = int(rng)
     ss = np.random.SeedSequence(seed)
     seeds = {k: int(s.generate_state(1)[0]) for k, s in zip(KINDS, ss.spawn(len(KINDS)))}
-    base = ThesisScenario()
+    base = WindScenario()
     cfg = base.filter
     k0 = iteration_row(100)
 
     # ---- nominal: optimal filter accuracy
-    z, xt, _ = simulate_thesis_batch(base, n_runs, seeds["nominal"])
+    z, xt, _ = simulate_wind_scenario_batch(base, n_runs, seeds["nominal"])
     opt = BodyWindFilter(cfg).run_batch(z)
     ew = opt.x[:, k0:, 3:] - xt[None, k0:, 3:]
     ed = z[:, k0:] - xt[None, k0:, 3:]
@@ -655,7 +656,7 @@ def monte_carlo_thesis(
     nominal_rms = float(_rms(ew))
 
     # ---- robust filters
-    zo, xto, _ = simulate_thesis_batch(replace(base, kind="outliers"), n_runs, seeds["outliers"])
+    zo, xto, _ = simulate_wind_scenario_batch(replace(base, kind="outliers"), n_runs, seeds["outliers"])
     mask = replace(base, kind="outliers").anomaly_mask()
     opt_o = BodyWindFilter(cfg).run_batch(zo)
     after = np.zeros(base.n_steps, dtype=bool)
@@ -713,7 +714,7 @@ def monte_carlo_thesis(
     det = {}
     for kind in ("variance", "bias", "drift", "stuck"):
         sc = replace(base, kind=kind)
-        zf, _, _ = simulate_thesis_batch(sc, n_runs, seeds[kind])
+        zf, _, _ = simulate_wind_scenario_batch(sc, n_runs, seeds[kind])
         rf = BodyWindFilter(cfg).run_batch(zf)
         st = detector_statistics(rf.normalized, M)
         o = sc.onset_row
@@ -728,10 +729,10 @@ def monte_carlo_thesis(
                                 ("median_delay", "p90_delay", "max_delay", f"detected_within_{horizon}", "missed")}
             det[kind][d] = entry
     thr_out = {"calibrated": thr, "thesis": th, "p_false_alarm": p_false_alarm, "window": M}
-    return ThesisMonteCarlo(n_runs, seed, wind, robust, fa, det, thr_out)
+    return WindMonteCarlo(n_runs, seed, wind, robust, fa, det, thr_out)
 
 
-def thesis_report(n_runs: int = 200, rng: int = 0, **kw) -> dict:
+def wind_scenario_report(n_runs: int = 200, rng: int = 0, **kw) -> dict:
     """Everything ``imunav airdata thesis`` writes: covariance sequence, Monte Carlo, one seeded run's detection steps.
 
     Parameters
@@ -741,7 +742,7 @@ def thesis_report(n_runs: int = 200, rng: int = 0, **kw) -> dict:
     rng : int
         Seed.
     **kw
-        Keywords of :func:`monte_carlo_thesis`.
+        Keywords of :func:`wind_monte_carlo`.
 
     Returns
     -------
@@ -750,10 +751,10 @@ def thesis_report(n_runs: int = 200, rng: int = 0, **kw) -> dict:
     """
 
     cov = covariance_sequence()
-    mc = monte_carlo_thesis(n_runs, rng, **kw)
+    mc = wind_monte_carlo(n_runs, rng, **kw)
     single = {}
     for kind in ("variance", "bias"):
-        d = simulate_thesis(ThesisScenario(kind=kind), rng)
+        d = simulate_wind_scenario(WindScenario(kind=kind), rng)
         r = BodyWindFilter().run(d.z)
         out = {}
         for mode in ("calibrated", "thesis"):
@@ -764,11 +765,11 @@ def thesis_report(n_runs: int = 200, rng: int = 0, **kw) -> dict:
                         "thesis_detection_step": {"variance": {"alg1": 152, "alg2": 160, "alg3": 153},
                                                   "bias": {"alg3": 152}}[kind]}
     return {"covariance_sequence": cov, "monte_carlo": mc.to_dict(), "single_run_detection": single,
-            "thesis_tables": thesis_tables(rng)}
+            "wind_scenario_tables": wind_scenario_tables(rng)}
 
 
-def thesis_tables(rng: int = 0) -> dict:
-    """One seeded run laid out like the thesis's Tables 6.1 and 6.3 (x axis).
+def wind_scenario_tables(rng: int = 0) -> dict:
+    """One seeded run laid out like Tables 6.1 and 6.3 of the source (Akgün 2002; x axis).
 
     Table 6.1: wind x error of the difference loop and of the KF at iterations
     50…500.  Table 6.3: x wind error and P44 of the optimal and the robust
@@ -787,13 +788,13 @@ def thesis_tables(rng: int = 0) -> dict:
         ``table_6_1`` and ``table_6_3`` (columns of the tables) and ``seed``.
     """
     its1 = list(range(50, 501, 50))
-    d = simulate_thesis(ThesisScenario(), rng)
+    d = simulate_wind_scenario(WindScenario(), rng)
     r = BodyWindFilter().run(d.z)
     rows = iteration_row(np.asarray(its1))
     t61 = [{"iteration": i, "difference_loop": float(d.z[k, 0] - d.wind_true[k, 0]),
             "kf": float(r.wind[k, 0] - d.wind_true[k, 0])} for i, k in zip(its1, rows)]
     its3 = [50, 100, 101, 150, 200, 201, 250, 300, 301, 350, 400, 401, 450, 500]
-    do = simulate_thesis(ThesisScenario(kind="outliers"), rng)
+    do = simulate_wind_scenario(WindScenario(kind="outliers"), rng)
     runs = {"optimal": BodyWindFilter().run(do.z), "gate2": BodyWindFilter(robust="gate", gate_m=2.0).run(do.z),
             "nis": BodyWindFilter(robust="nis").run(do.z)}
     t63 = []
@@ -806,10 +807,10 @@ def thesis_tables(rng: int = 0) -> dict:
     return {"table_6_1": t61, "table_6_3": t63, "seed": int(rng)}
 
 
-def load_config(path) -> "ThesisScenario | object":
+def load_config(path) -> "WindScenario | object":
     """Read a TOML scenario.
 
-    A ``[thesis]`` table gives a :class:`ThesisScenario`, a ``[flight]`` table a
+    A ``[thesis]`` table gives a :class:`WindScenario`, a ``[flight]`` table a
     :class:`imunav.airdata.flight.FlightConfig` (tuples given as arrays; ``doppler`` as a sub-table of
     :class:`~imunav.airdata.doppler.DopplerErrors` fields).
 
@@ -820,7 +821,7 @@ def load_config(path) -> "ThesisScenario | object":
 
     Returns
     -------
-    ThesisScenario or FlightConfig
+    WindScenario or FlightConfig
         The scenario.
 
     Raises
@@ -836,7 +837,7 @@ def load_config(path) -> "ThesisScenario | object":
         raise ConfigError(f"{p}: needs exactly one [thesis] or [flight] table, found {list(doc) or 'none'}")
     table = dict(doc[keys[0]])
     if keys[0] == "thesis":
-        cls = ThesisScenario
+        cls = WindScenario
     else:
         cls = FlightConfig
         if "doppler" in table:

@@ -193,8 +193,8 @@ class LstmConfig:
         return asdict(self)
 
     @classmethod
-    def thesis(cls, **changes: Any) -> LstmConfig:
-        """The thesis's 6 × 80 network (Şahin 2022 §4.2), other defaults unchanged.
+    def large_network(cls, **changes: Any) -> LstmConfig:
+        """The large 6 × 80 network of the source (Şahin 2022 §4.2), other defaults unchanged.
 
         Parameters
         ----------
