@@ -156,9 +156,11 @@ class BodyWindFilterConfig(Result):
     velocity_decay: bool = True
 
     def __post_init__(self) -> None:
-        if not (self.dt > 0 and self.wind_corr_time > 0 and self.wind_step_var >= 0 and self.ads_noise_std > 0 and self.doppler_noise_std >= 0):
-            raise InvalidInputError(f"invalid filter parameters: dt={self.dt}, wind_corr_time={self.wind_corr_time}, wind_step_var={self.wind_step_var}, "
-                                    f"ads_noise_std={self.ads_noise_std}, doppler_noise_std={self.doppler_noise_std} (need > 0)")
+        if not (self.dt > 0 and self.wind_corr_time > 0 and self.wind_step_var >= 0 and self.ads_noise_std > 0
+                and self.doppler_noise_std >= 0):
+            raise InvalidInputError(f"invalid filter parameters: dt={self.dt}, wind_corr_time={self.wind_corr_time}, "
+                                    f"wind_step_var={self.wind_step_var}, ads_noise_std={self.ads_noise_std}, "
+                                    f"doppler_noise_std={self.doppler_noise_std} (need > 0)")
         if len(self.init_var) != 6 or len(self.x0) != 6:
             raise InvalidInputError("init_var and x0 must have 6 entries (δX, δY, δZ, W_x, W_y, W_z)")
 
@@ -433,8 +435,10 @@ class LongHorizonConfig(Result):
     gate_m: float = 3.0
 
     def __post_init__(self) -> None:
-        if not (self.wind_std > 0 and self.wind_corr_time > 0 and self.turbulence_std >= 0 and self.turbulence_corr_time > 0):
-            raise InvalidInputError("wind_std, wind_corr_time, turbulence_corr_time must be > 0 and turbulence_std >= 0")
+        if not (self.wind_std > 0 and self.wind_corr_time > 0 and self.turbulence_std >= 0
+                and self.turbulence_corr_time > 0):
+            raise InvalidInputError("wind_std, wind_corr_time, turbulence_corr_time must be > 0 and "
+                                    "turbulence_std >= 0")
         if self.robust not in (None, "gate", "isolate", "nis", "huber"):
             raise InvalidInputError(f"robust must be None, 'gate', 'isolate', 'nis' or 'huber', got {self.robust!r}")
         if not (np.isfinite(self.gate_m) and self.gate_m > 0):
@@ -543,7 +547,8 @@ class LongHorizonFilter:
         """Back to the initial state: the next :meth:`step` is the first epoch (it initialises the wind)."""
         c = self.config
         self.x = np.zeros((1, 9))
-        self.P = np.diag([c.init_position_var] * 3 + [c.init_wind_var] * 3 + [max(c.turbulence_std, 1e-3) ** 2] * 3)[None]
+        self.P = np.diag([c.init_position_var] * 3 + [c.init_wind_var] * 3
+                         + [max(c.turbulence_std, 1e-3) ** 2] * 3)[None]
         self._t: float | None = None
 
     def _advance(self, tk: float, zk: Array, R: Array) -> LongHorizonState:

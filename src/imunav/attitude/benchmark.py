@@ -127,7 +127,8 @@ def _check_params(name: str, p: dict[str, Any]) -> None:
     known = filter_parameters(name)
     unknown = sorted(set(p) - set(known))
     if unknown:
-        cls = {"mekf": "MekfConfig", "adaptive": "MekfConfig", "smoother": "MekfConfig", "ukf": "UkfConfig"}.get(name, "")
+        cls = {"mekf": "MekfConfig", "adaptive": "MekfConfig", "smoother": "MekfConfig",
+               "ukf": "UkfConfig"}.get(name, "")
         raise ConfigError(f"filter {name!r} has no parameter {', '.join(map(repr, unknown))}"
                           f"{renamed_hint(cls, unknown)}; its parameters are: {', '.join(sorted(known))}")
     for k, v in p.items():

@@ -174,8 +174,8 @@ class MekfConfig:
     mag_bias: bool = True  # False: the heading update corrects the attitude only (bias as consider states)
     lpf_gyro_threshold: float = 1e9  # rad/s; no rest while a low-passed gyro axis exceeds it
     k_gyro_rate: float = 0.0  # √s; gyro noise density grows as sqrt(σ_g² + (k |ω|)²)
-    tilt_time_constant: float = 0.0  # s; > 0: tilt-correction time constant, replaces accel_direction_noise_std (rate-independent)
-    heading_time_constant: float = 0.0  # s; > 0: heading-correction time constant, replaces heading_noise_std (rate-independent)
+    tilt_time_constant: float = 0.0  # s; > 0: replaces accel_direction_noise_std (rate-independent)
+    heading_time_constant: float = 0.0  # s; > 0: replaces heading_noise_std (rate-independent)
 
     def __post_init__(self) -> None:
         for f in fields(self):

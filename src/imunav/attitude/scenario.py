@@ -112,7 +112,8 @@ class PaperScenario:
         GravityKfConfig
             ``gyro_noise_std``, ``accel_noise_std`` per sample and ``g`` of the scenario, with the overrides.
         """
-        return replace(GravityKfConfig(gyro_noise_std=self.gyro_noise_std, accel_noise_std=self.accel_noise_std, g=self.g), **kw)
+        return replace(GravityKfConfig(gyro_noise_std=self.gyro_noise_std, accel_noise_std=self.accel_noise_std,
+                                       g=self.g), **kw)
 
 
 def simulate(scn: PaperScenario, rng: np.random.Generator | int | None = None) -> tuple[ImuData, NDArray]:

@@ -47,9 +47,10 @@ class GinsConfig:
     Parameters
     ----------
     gyro_noise_density : float or array_like, shape (3,)
-        Gyro white-noise density (the angle random walk, KF-GINS's ``gyro_noise_density``), rad/s/√Hz = rad/√s (> 0).
+        Gyro white-noise density (the angle random walk; ``arw`` in KF-GINS's YAML), rad/s/√Hz = rad/√s (> 0).
     accel_noise_density : float or array_like, shape (3,)
-        Accelerometer white-noise density (the velocity random walk, KF-GINS's ``accel_noise_density``), m/s²/√Hz = m/s/√s (> 0).
+        Accelerometer white-noise density (the velocity random walk; ``vrw`` in KF-GINS's YAML), m/s²/√Hz =
+        m/s/√s (> 0).
     gyro_bias_std, accel_bias_std : float or array_like, shape (3,)
         Stationary Gauss–Markov σ of the biases, rad/s and m/s² (> 0).
     gyro_scale_std, accel_scale_std : float or array_like, shape (3,)
