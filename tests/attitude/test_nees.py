@@ -178,7 +178,7 @@ def test_ukf_public_covariance_calibrated_rotating_with_magnetometer():
     from _calibration import assert_rms_calibrated
     from builders import MAG_NED
 
-    za, zb = _public_last_z(3000, 8000, dict(duration=10.0), dict(heading_noise_std=0.3 / 48.5, mag_ref_ned=MAG_NED),
+    za, zb = _public_last_z(3000, 8000, dict(duration=10.0), dict(mag_direction_noise_std=0.3 / 48.5, mag_ref_ned=MAG_NED),
                             use_mag=None, make=_ukf)
     assert_rms_calibrated(za, "UKF attitude (rotating, magnetometer)")
     assert_rms_calibrated(zb, "UKF gyro bias (rotating, magnetometer)")

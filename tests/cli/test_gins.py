@@ -142,7 +142,7 @@ def test_odometer_file_with_the_yaml_odopath_key(drive, tmp_path):
     (tmp_path / "odo.txt").write_text("".join(f"{t:.3f} {v:.5f}\n" for t, v in zip(odo.t, odo.speed)))
     yaml = (drive / "kf-gins.yaml").read_text().replace('"imu.txt"', f'"{drive / "imu.txt"}"').replace(
         '"gnss.txt"', f'"{drive / "gnss.txt"}"')
-    (tmp_path / "kf.yaml").write_text(yaml + 'odopath: "odo.txt"\nnhc_noise: 0.1\n')
+    (tmp_path / "kf.yaml").write_text(yaml + 'odopath: "odo.txt"\nnhc_noise_std: 0.1\n')
     drift = {}
     for name, cfg in (("aided", tmp_path / "kf.yaml"), ("unaided", drive / "kf-gins.yaml")):
         _ok(CliRunner().invoke(app, ["gins", "outage-test", "--config", str(cfg), "--truth", str(drive / "truth.nav"),
