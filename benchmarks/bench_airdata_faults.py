@@ -19,8 +19,8 @@ from dataclasses import replace
 import numpy as np
 from _before_after import report  # the before (a308974) / after lines
 
-from imunav.airdata.scenario import ThesisScenario, delay_summary, simulate_detector_statistics
-from imunav.filters.faults import DETECTORS, alarms, calibrated_thresholds, false_alarm_rates, thesis_thresholds
+from imunav.airdata.scenario import WindScenario, delay_summary, simulate_detector_statistics
+from imunav.filters.faults import DETECTORS, alarms, calibrated_thresholds, false_alarm_rates, window_chi2_thresholds
 
 
 def main() -> None:
@@ -33,8 +33,8 @@ def main() -> None:
     FIGS = {}  # headline figures for the before/after lines
     t0 = time.perf_counter()
     thr = calibrated_thresholds(M, 3, a.pfa)
-    th = thesis_thresholds(M, 3)
-    base = ThesisScenario()
+    th = window_chi2_thresholds(M, 3)
+    base = WindScenario()
     nominal = simulate_detector_statistics(base, a.runs, a.seed, M)
     print(f"false alarms under nominal data, {a.runs} runs × {base.n_steps - M + 1} steps (window full):")
     print(f"  {'detector':10s} {'threshold':>9s} {'per step':>9s} {'per run':>8s}   {'thesis thr':>10s} "

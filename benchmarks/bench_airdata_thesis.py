@@ -23,13 +23,13 @@ import time
 import numpy as np
 from _before_after import report  # the before (a308974) / after lines
 
-from imunav.airdata.filter import ThesisFilter, thesis_matrices
-from imunav.airdata.scenario import ThesisScenario, covariance_sequence, monte_carlo_thesis, simulate_thesis_batch
+from imunav.airdata.filter import BodyWindFilter, body_wind_matrices
+from imunav.airdata.scenario import WindScenario, covariance_sequence, simulate_wind_scenario_batch, wind_monte_carlo
 
 
 def textbook_loop(z: np.ndarray) -> np.ndarray:
     """Per-run textbook KF (predict / gain / update / (I − KH)P), as the thesis's MATLAB would do it."""
-    m = thesis_matrices()
+    m = body_wind_matrices()
     F, G, Q, H, R = m["F"], m["G"], m["Q"], m["H"], m["R"]
     out = np.empty((z.shape[0], z.shape[1], 6))
     for r in range(z.shape[0]):
@@ -59,7 +59,7 @@ def main() -> None:
     print(f"  max |diff| = {worst:.1e}  -> {'MET' if worst <= 1e-4 else 'NOT MET'} (<= 1e-4)")
 
     t0 = time.perf_counter()
-    mc = monte_carlo_thesis(a.runs, a.seed, robust_methods=("gate2", "gate3", "nis", "isolate", "huber"))
+    mc = wind_monte_carlo(a.runs, a.seed, robust_methods=("gate2", "gate3", "nis", "isolate", "huber"))
     t_mc = time.perf_counter() - t0
     w = mc.wind
     print(f"\nwind, {a.runs} runs (thesis iterations >= 100):")
@@ -85,9 +85,9 @@ def main() -> None:
 
     # speed against the per-run loop
     n = min(a.runs, 200)
-    z, _, _ = simulate_thesis_batch(ThesisScenario(), n, a.seed)
+    z, _, _ = simulate_wind_scenario_batch(WindScenario(), n, a.seed)
     t0 = time.perf_counter()
-    xb = ThesisFilter().run_batch(z).x
+    xb = BodyWindFilter().run_batch(z).x
     tb = time.perf_counter() - t0
     n_loop = min(n, 20)
     t0 = time.perf_counter()

@@ -44,7 +44,7 @@ GRIDS = {
     "smoother": SMOOTHER_GRID,
     "madgwick_c": {"beta": [0.03, 0.06, 0.09, 0.12, 0.15, 0.2]},
     "mahony": {"kp": [0.25, 0.5, 0.74, 1.0, 1.5], "ki": [0.0, 0.0012, 0.005]},
-    "mekf": {"sigma_acc": [0.02, 0.05, 0.1], "sigma_mag": [0.05, 0.2, 0.5]},
+    "mekf": {"accel_direction_noise_std": [0.02, 0.05, 0.1], "heading_noise_std": [0.05, 0.2, 0.5]},
 }
 
 

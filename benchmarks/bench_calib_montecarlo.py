@@ -29,10 +29,10 @@ from _before_after import report  # the before (a308974) / after lines
 
 
 def build(fs: float, dwell: float, lat: float | None):
-    from imunav.sim import hundred_position_profile, ideal_imu, thesis_rate_table_profile
+    from imunav.sim import hundred_position_profile, ideal_imu, rate_table_step_profile
 
     sp = hundred_position_profile(fs=fs, dwell_s=dwell, lat=lat)
-    rp = thesis_rate_table_profile(fs=fs, dwell_s=dwell, lat=lat)
+    rp = rate_table_step_profile(fs=fs, dwell_s=dwell, lat=lat)
     kw = {} if lat is not None else {"earth_rate": False, "transport_rate": False, "gravity": "constant"}
     return sp, rp, ideal_imu(sp.trajectory, **kw), ideal_imu(rp.trajectory, **kw)
 

@@ -45,16 +45,16 @@ def main(mode, path):
     baro = simulate_baro(truth, rng=6)
     mag = simulate_magnetometer(truth, rng=7)
     static = np.linalg.norm(truth.vel_ned, axis=1) < 1e-3
-    cfg2 = GinsConfig.from_preset("mems_adis16465", lever_arm=LEVER, nhc_noise=0.1, odo_lever_arm=WHEEL,
+    cfg2 = GinsConfig.from_preset("mems_adis16465", lever_arm=LEVER, nhc_noise_std=0.1, odo_lever_arm=WHEEL,
                                   scale_factors=False)
     flat(GinsFilter(cfg2).run(imu, g, odometer=odo, baro=baro, mag=mag, static=static, smoother=True, **st), "b", out)
-    cfg3 = GinsConfig.from_preset("mems_adis16465", lever_arm=LEVER, nhc_noise=0.1, odo_lever_arm=WHEEL,
+    cfg3 = GinsConfig.from_preset("mems_adis16465", lever_arm=LEVER, nhc_noise_std=0.1, odo_lever_arm=WHEEL,
                                   use_gnss_velocity=False, cov_interval_s=0.05)
     flat(GinsFilter(cfg3).run(ImuIncrements.from_imu_data(imu, 100.0), g, odometer=odo, baro=baro, mag=mag,
                               static=static, **st), "c", out)
     cfg4 = GinsConfig.from_preset("mems_adis16465", lever_arm=LEVER, odo_lever_arm=WHEEL)
     flat(GinsFilter(cfg4).run(imu, g, odometer=odo, static=static, **st), "d", out)
-    cfg5 = GinsConfig.from_preset("mems_adis16465", nhc_noise=0.05, gate_alpha=0.05)
+    cfg5 = GinsConfig.from_preset("mems_adis16465", nhc_noise_std=0.05, gate_alpha=0.05)
     flat(GinsFilter(cfg5).run(imu, g, static=static, **st), "e", out)
     # 3: step mode
     f = GinsFilter(cfg)

@@ -55,7 +55,7 @@ def mems(a: argparse.Namespace) -> None:
                 init_att_std=np.radians([0.1, 0.1, 0.5]))
     out = {}
     for name, kw, o in (("GNSS only", {}, None),
-                        ("GNSS + ODO + NHC", dict(nhc_noise=0.1, odo_lever_arm=WHEEL, odo_noise=0.05,
+                        ("GNSS + ODO + NHC", dict(nhc_noise_std=0.1, odo_lever_arm=WHEEL, odo_noise_std=0.05,
                                                   odo_scale_std=0.01), odo)):
         cfg = GinsConfig.from_preset("mems_adis16465", **base, **kw)
         out[name] = outage_test(imu, gnss, cfg, truth, lla0=truth.pos_lla[0], vel0=truth.vel_ned[0],

@@ -14,7 +14,7 @@ import time
 
 from _before_after import report  # the before (a308974) / after lines
 
-from imunav.sim import hundred_position_profile, ideal_imu, thesis_rate_table_profile
+from imunav.sim import hundred_position_profile, ideal_imu, rate_table_step_profile
 
 
 def main() -> None:
@@ -23,7 +23,7 @@ def main() -> None:
               gravity="constant")
     rows = []
     for name, build in (("hundred_position", lambda: hundred_position_profile(fs=1000.0)),
-                        ("thesis_rate_table", lambda: thesis_rate_table_profile(fs=1000.0))):
+                        ("thesis_rate_table", lambda: rate_table_step_profile(fs=1000.0))):
         t0 = time.perf_counter()
         prof = build()
         t1 = time.perf_counter()

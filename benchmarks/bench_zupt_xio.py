@@ -14,7 +14,7 @@ Printed, for both walks:
    period removed linearly, then integrated to position), on the raw file;
 
 1. the ZUPT INS (9 states) with the README's settings (SHOE, threshold 1e8,
-   stances shrunk by 0.125 s, sigma_acc 2 m/s^2) and with each aid:
+   stances shrunk by 0.125 s, accel_noise_std 2 m/s^2) and with each aid:
    heading hold (no rotation about the vertical in stance), level floor
    (each stance at the initial height: valid here, both walks are on one
    floor), and both;
@@ -48,8 +48,8 @@ from imunav.io.foot import read_xio_gait_csv
 PUBLISHED = {"short_walk": 0.082, "long_walk": 0.421}
 
 
-def closure(imu, zv, sigma_acc=2.0, **kw):
-    cfg = ZuptConfig(alignment="first_stance", g=None, sigma_acc=sigma_acc, **kw)
+def closure(imu, zv, accel_noise_std=2.0, **kw):
+    cfg = ZuptConfig(alignment="first_stance", g=None, accel_noise_std=accel_noise_std, **kw)
     res = ZuptFilter(cfg).run(imu, zv)
     return loop_closure_error(res.position), res
 
@@ -130,9 +130,9 @@ def main() -> int:
         row("  + level floor", closure(imu, zv, level_floor=True)[0])
         row("  + heading hold + level floor", closure(imu, zv, heading_hold=True, level_floor=True)[0])
         zx = detect_zero_velocity(imu, "freeacc", 3.0, margin_s=0.1).zv
-        row("freeacc 3 m/s^2, margin 0.1 s (x-io's rule; CLI defaults)", closure(imu, zx, sigma_acc=0.5)[0])
-        row("  + level floor", closure(imu, zx, sigma_acc=0.5, level_floor=True)[0])
-        row("  + level floor, sigma_acc 2", closure(imu, zx, level_floor=True)[0])
+        row("freeacc 3 m/s^2, margin 0.1 s (x-io's rule; CLI defaults)", closure(imu, zx, accel_noise_std=0.5)[0])
+        row("  + level floor", closure(imu, zx, accel_noise_std=0.5, level_floor=True)[0])
+        row("  + level floor, accel_noise_std 2", closure(imu, zx, level_floor=True)[0])
         sweeps = {"shoe": itertools.product((3e7, 1e8, 3e8), (0.0, 0.05, 0.1, 0.125, 0.15)),
                   "freeacc": itertools.product((2.0, 3.0, 4.0), (0.05, 0.1, 0.15))}
         if front is not None:

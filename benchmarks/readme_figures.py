@@ -234,7 +234,7 @@ FIGURES: tuple[Figure, ...] = (
         "zupt_xio",
         "| x-io's method (imufusion), run by the benchmark | 0.082 m | 0.421 m | | `freeacc --margin-s 0.1 "
         "--level-floor` | 0.057 m | 0.227 m | | `freeacc --margin-s 0.1` (no floor constraint) | 0.130 m (horizontal "
-        "0.057) | 0.366 m (horizontal 0.225) | | `shoe --threshold 1e8 --margin-s 0.125 --sigma-acc 2` | 0.138 m "
+        "0.057) | 0.366 m (horizontal 0.225) | | `shoe --threshold 1e8 --margin-s 0.125 --accel-noise-std 2` | 0.138 m "
         "(horizontal 0.082) | 0.186 m |",
         "{python} benchmarks/bench_zupt_xio.py", 1.0,
         values={f"{w} {k}": v for w, vals in (("short", (0.082, 0.057, 0.130, 0.057, 0.138, 0.082)),

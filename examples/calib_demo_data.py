@@ -23,7 +23,7 @@ import numpy as np
 def main(out: str | Path, fs: float = 20.0, dwell_s: float = 8.0, seed: int = 0) -> Path:
     from imunav.calib import ImuCalibration
     from imunav.io import write_imu
-    from imunav.sim import apply_errors, hundred_position_profile, ideal_imu, presets, thesis_rate_table_profile
+    from imunav.sim import apply_errors, hundred_position_profile, ideal_imu, presets, rate_table_step_profile
 
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
@@ -34,7 +34,7 @@ def main(out: str | Path, fs: float = 20.0, dwell_s: float = 8.0, seed: int = 0)
     lat = np.deg2rad(40.0)
     for k, (name, prof) in enumerate((
         ("static", hundred_position_profile(fs=fs, dwell_s=dwell_s, lat=lat)),
-        ("rate", thesis_rate_table_profile(fs=fs, dwell_s=dwell_s, lat=lat)),
+        ("rate", rate_table_step_profile(fs=fs, dwell_s=dwell_s, lat=lat)),
     )):
         ideal = ideal_imu(prof.trajectory)
         write_imu(apply_errors(ideal, model, rng=seed * 2 + k), out / f"{name}.npz")

@@ -170,7 +170,7 @@ def thesis_truth():
     return ImuCalibration(accel_bias=Ba, accel_matrix=T(Sa, Ma), gyro_bias=Bg, gyro_matrix=T(Sg, Mg), g_sensitivity=np.diag(BG))
 
 
-def thesis_rate_steps() -> tuple[np.ndarray, np.ndarray]:
+def rate_table_steps() -> tuple[np.ndarray, np.ndarray]:
     """120 steps: body rate vectors (rad/s) and up vectors (rotated axis up)."""
     seq = np.r_[np.arange(0, 251, 25), np.arange(225, 0, -25), 0, np.arange(-25, -251, -25), np.arange(-225, 0, 25)]
     assert seq.size == 40

@@ -34,6 +34,7 @@ from numpy.typing import ArrayLike, NDArray
 from imunav.errors import UnitError
 
 __all__ = [
+    "DEFAULT_GRAVITY",
     "G0",
     "DEG",
     "ARCSEC",
@@ -52,6 +53,11 @@ __all__ = [
 #: Standard gravity, m/s^2 (CGPM 1901; used for g <-> m/s^2 conversions only,
 #: not as a model of local gravity -- see :mod:`imunav.earth`).
 G0: Final[float] = 9.80665
+#: The gravity magnitude every filter configuration and simulation assumes when none is given, m/s^2 (a rounded
+#: mid-latitude value: normal gravity runs from 9.780 at the equator to 9.832 at the poles, and
+#: :func:`imunav.earth.normal_gravity` gives the local one).  A method that needs another value for compatibility
+#: names it explicitly (the ZUPT INS: pyshoe's :data:`imunav.ins.zupt.statistics.G_PYSHOE`).
+DEFAULT_GRAVITY: Final[float] = 9.81
 #: One degree in radians.
 DEG: Final[float] = math.pi / 180.0
 #: One arc second in radians.

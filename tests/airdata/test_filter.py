@@ -12,19 +12,19 @@ from scipy.stats import norm
 from imunav.airdata.filter import (
     THESIS_ITERATIONS,
     THESIS_P44,
+    BodyWindFilter,
+    BodyWindFilterConfig,
     LongHorizonConfig,
     LongHorizonFilter,
-    ThesisFilter,
-    ThesisFilterConfig,
-    thesis_matrices,
-    thesis_row,
+    body_wind_matrices,
+    iteration_row,
 )
 from imunav.airdata.scenario import (
-    ThesisScenario,
+    WindScenario,
     actual_error_covariance,
     covariance_sequence,
-    simulate_thesis,
-    simulate_thesis_batch,
+    simulate_wind_scenario,
+    simulate_wind_scenario_batch,
 )
 from imunav.errors import InvalidInputError, ShapeError
 from imunav.filters import (
@@ -34,16 +34,16 @@ from imunav.filters import (
     detector_statistics,
     false_alarm_rates,
     riccati_steady_state,
-    thesis_thresholds,
+    window_chi2_thresholds,
 )
 from imunav.sim.flight import FlightConfig, simulate_flight
 
-K0 = thesis_row(100)
+K0 = iteration_row(100)
 
 
 @pytest.mark.parametrize("decay", [True, False])
 def test_covariance_sequence_matches_thesis_to_1e4(decay):
-    cov = covariance_sequence(ThesisFilterConfig(velocity_decay=decay))
+    cov = covariance_sequence(BodyWindFilterConfig(velocity_decay=decay))
     assert cov["iteration"] == list(THESIS_ITERATIONS)
     np.testing.assert_allclose(cov["P44"], THESIS_P44, atol=1e-4)
     # P11 = 100.0002 + 0.0002 per 50 steps (digest §2.5)
@@ -55,16 +55,16 @@ def test_steady_state_closed_form():
     # the position states have no steady state (integrated wind, never measured); the wind block
     # is a scalar filter per axis: P = (−Q + √(Q² + 4QR))/2 = 0.06283 (digest §2.5)
     q, r = 0.001, 4.01
-    m = thesis_matrices()
+    m = body_wind_matrices()
     Pss = riccati_steady_state(m["F"][3:4, 3:4], [[q]], [[1.0]], [[r]])[0, 0]
     assert (-q + np.sqrt(q * q + 4 * q * r)) / 2 == pytest.approx(0.06283, abs=1e-5)
     assert Pss == pytest.approx(0.06283, abs=2e-5)  # 1 − T/τ decay shifts it by < 1e-5
-    assert ThesisFilter().run(np.zeros((3000, 3))).cov_diag[-1, 3] == pytest.approx(Pss, rel=1e-6)
+    assert BodyWindFilter().run(np.zeros((3000, 3))).cov_diag[-1, 3] == pytest.approx(Pss, rel=1e-6)
 
 
 def test_sign_convention_wind_converges_to_plus_w():
-    d = simulate_thesis(ThesisScenario(), rng=1)
-    r = ThesisFilter().run(d.z, v_ads=d.v_ads)
+    d = simulate_wind_scenario(WindScenario(), rng=1)
+    r = BodyWindFilter().run(d.z, v_ads=d.v_ads)
     # V_G = V_A + W: the estimate goes from (12, 7, 5) to the true wind (7, 5, 1.7)
     assert np.all(np.abs(r.wind[-50:].mean(axis=0) - d.wind_true[-1]) < 0.5)
     np.testing.assert_allclose(d.v_ads + d.wind_true, d.v_true + d.ads_noise, atol=1e-12)
@@ -85,8 +85,8 @@ def test_wind_error_below_02_and_variance_ratio():
     assert rms_theory < 0.2
     assert 4.01 / E[K0:, 3:].mean() > 10 * 10  # ≈ 124×, far above the required 10×
     # seeded Monte Carlo agrees with the exact value (60 runs, ~6 independent 64-step blocks each)
-    z, xt, _ = simulate_thesis_batch(ThesisScenario(), 60, rng=11)
-    r = ThesisFilter().run_batch(z)
+    z, xt, _ = simulate_wind_scenario_batch(WindScenario(), 60, rng=11)
+    r = BodyWindFilter().run_batch(z)
     e = r.x[:, K0:, 3:] - xt[None, K0:, 3:]
     rms = float(np.sqrt(np.mean(e**2)))
     assert rms == pytest.approx(rms_theory, rel=0.06)
@@ -99,17 +99,17 @@ def test_wind_error_below_02_and_variance_ratio():
 
 def test_robust_filters_reject_outliers_and_keep_nominal_accuracy():
     runs = 30
-    sc = ThesisScenario(kind="outliers")
-    z, xt, _ = simulate_thesis_batch(sc, runs, rng=5)
-    zn, xtn, _ = simulate_thesis_batch(ThesisScenario(), runs, rng=6)
+    sc = WindScenario(kind="outliers")
+    z, xt, _ = simulate_wind_scenario_batch(sc, runs, rng=5)
+    zn, xtn, _ = simulate_wind_scenario_batch(WindScenario(), runs, rng=6)
     mask = sc.anomaly_mask()
     assert mask.sum() == 12  # 4 steps × 3 channels, as in the thesis
-    opt = ThesisFilter().run_batch(zn)
+    opt = BodyWindFilter().run_batch(zn)
     rms_opt = np.sqrt(np.mean((opt.x[:, K0:, 3:] - xtn[None, K0:, 3:]) ** 2))
     out = {}
     for name, kw in {"nis": {"robust": "nis"}, "gate2": {"robust": "gate", "gate_m": 2.0}}.items():
-        r = ThesisFilter(**kw).run_batch(z)
-        rn = ThesisFilter(**kw).run_batch(zn)
+        r = BodyWindFilter(**kw).run_batch(z)
+        rn = BodyWindFilter(**kw).run_batch(zn)
         out[name] = (float((r.weights[:, mask] == 0).mean()),
                      float(np.sqrt(np.mean((rn.x[:, K0:, 3:] - xtn[None, K0:, 3:]) ** 2)) / rms_opt))
     # vector χ² gate: P(reject a ×15 all-channel outlier) ≈ 0.995
@@ -122,8 +122,8 @@ def test_robust_filters_reject_outliers_and_keep_nominal_accuracy():
 
 def test_gate_rejection_signature_p_equals_prior():
     # a rejected channel keeps P = P⁻ (the thesis's 0.0638 signature): check one rejection
-    d = simulate_thesis(ThesisScenario(kind="outliers"), rng=2)
-    r = ThesisFilter(robust="gate", gate_m=2.0).run(d.z)
+    d = simulate_wind_scenario(WindScenario(kind="outliers"), rng=2)
+    r = BodyWindFilter(robust="gate", gate_m=2.0).run(d.z)
     rej = np.argwhere(r.weights[98:] == 0)
     k, ch = rej[0]
     k += 98
@@ -135,36 +135,36 @@ def test_detectors_false_alarms_and_variance_fault_detection():
     runs = 30
     M = 20
     thr = calibrated_thresholds(M, 3, 0.01)
-    th = thesis_thresholds(M, 3)
-    zn, _, _ = simulate_thesis_batch(ThesisScenario(), runs, rng=21)
-    st = detector_statistics(ThesisFilter().run_batch(zn).normalized, M)
+    th = window_chi2_thresholds(M, 3)
+    zn, _, _ = simulate_wind_scenario_batch(WindScenario(), runs, rng=21)
+    st = detector_statistics(BodyWindFilter().run_batch(zn).normalized, M)
     for name, s in st.items():
         rate, _ = false_alarm_rates(alarms(name, s[:, M - 1:], thr[name]))
         assert rate <= 0.05, name  # nominal 1 %
     rate_thesis, _ = false_alarm_rates(st["alg1"][:, M - 1:] > th["alg1"])
     assert rate_thesis > 0.3  # the thesis's χ²₁₈ threshold for the maximised statistic: ≈ 43 %
-    sc = ThesisScenario(kind="variance")
-    zf, _, _ = simulate_thesis_batch(sc, runs, rng=22)
-    sf = detector_statistics(ThesisFilter().run_batch(zf).normalized, M)
+    sc = WindScenario(kind="variance")
+    zf, _, _ = simulate_wind_scenario_batch(sc, runs, rng=22)
+    sf = detector_statistics(BodyWindFilter().run_batch(zf).normalized, M)
     for name in ("alg1", "alg3", "nis", "cusum_var"):
         d, missed = detection_delays(sf[name] > thr[name], sc.onset_row, horizon=10)
         assert missed == 0.0, name  # every run detected within 10 steps of the onset
-    zb, _, _ = simulate_thesis_batch(ThesisScenario(kind="bias"), runs, rng=23)
-    sb = detector_statistics(ThesisFilter().run_batch(zb).normalized, M)
+    zb, _, _ = simulate_wind_scenario_batch(WindScenario(kind="bias"), runs, rng=23)
+    sb = detector_statistics(BodyWindFilter().run_batch(zb).normalized, M)
     d, missed = detection_delays(sb["alg3"] > thr["alg3"], sc.onset_row, horizon=2)
     assert missed == 0.0  # thesis: bias detected by Alg. 3 within 2 steps
     # a stuck ADS removes its own noise from the innovation: only the lower-tail test sees it
-    zs, _, _ = simulate_thesis_batch(ThesisScenario(kind="stuck"), runs, rng=24)
-    ss = detector_statistics(ThesisFilter().run_batch(zs).normalized, M)
+    zs, _, _ = simulate_wind_scenario_batch(WindScenario(kind="stuck"), runs, rng=24)
+    ss = detector_statistics(BodyWindFilter().run_batch(zs).normalized, M)
     d, missed = detection_delays(alarms("low_variance", ss["low_variance"], thr["low_variance"]), sc.onset_row, 10)
     assert missed <= 0.1 and np.nanmedian(d) <= 6
 
 
 def test_bias_is_absorbed_so_detection_must_latch():
-    d = simulate_thesis(ThesisScenario(kind="bias", channels=(0,)), rng=4)
-    r = ThesisFilter().run(d.z)
+    d = simulate_wind_scenario(WindScenario(kind="bias", channels=(0,)), rng=4)
+    r = BodyWindFilter().run(d.z)
     # z = V_D − V_A gets −10 on x: the wind estimate drifts towards W − 10 (digest: −9.7 by step 400)
-    assert r.wind[thesis_row(400), 0] - d.wind_true[thesis_row(400), 0] < -8.0
+    assert r.wind[iteration_row(400), 0] - d.wind_true[iteration_row(400), 0] < -8.0
     from imunav.filters import detect_faults
 
     res = detect_faults(r.normalized, 20, start=d.scenario.onset_row)
@@ -175,20 +175,20 @@ def test_bias_is_absorbed_so_detection_must_latch():
 
 def test_scenario_and_filter_bad_inputs():
     with pytest.raises(InvalidInputError, match="kind must be one of"):
-        ThesisScenario(kind="icing")
+        WindScenario(kind="icing")
     with pytest.raises(InvalidInputError, match="fault_step"):
-        ThesisScenario(fault_step=900)
+        WindScenario(fault_step=900)
     with pytest.raises(ShapeError, match=r"z must have shape \(N, 3\)"):
-        ThesisFilter().run(np.zeros((10, 2)))
+        BodyWindFilter().run(np.zeros((10, 2)))
     with pytest.raises(InvalidInputError, match="robust must be"):
-        ThesisFilter(robust="magic").run(np.zeros((10, 3)))
+        BodyWindFilter(robust="magic").run(np.zeros((10, 3)))
     with pytest.raises(InvalidInputError, match="invalid filter parameters"):
-        ThesisFilterConfig(dt=0.0)
+        BodyWindFilterConfig(dt=0.0)
     with pytest.raises(InvalidInputError, match="iterations start at 2"):
-        thesis_row(1)
+        iteration_row(1)
     with pytest.raises(ShapeError, match="v_ads must have the shape"):
-        ThesisFilter().run(np.zeros((10, 3)), v_ads=np.zeros((9, 3)))
-    assert replace(ThesisScenario(), kind="drift").faults()[0].kind == "drift"
+        BodyWindFilter().run(np.zeros((10, 3)), v_ads=np.zeros((9, 3)))
+    assert replace(WindScenario(), kind="drift").faults()[0].kind == "drift"
 
 
 @pytest.mark.parametrize("robust", [None, "gate", "isolate", "nis", "huber"])
@@ -203,7 +203,7 @@ def test_step_gives_run(robust):
     z[200:205] += 30.0
     if robust is not None:
         z[300:310] = np.nan
-    f = ThesisFilter(robust=robust)
+    f = BodyWindFilter(robust=robust)
     r = f.run(z)
     st = [f.step(zk) for zk in z]
     for name in ("x", "cov_diag", "innovation", "normalized", "weights"):

@@ -6,12 +6,12 @@ import numpy as np
 import pytest
 
 from imunav.airdata.flightfile import read_flight_file, simulate_flight_file, wind_errors, write_flight_file
-from imunav.airdata.scenario import ThesisScenario
+from imunav.airdata.scenario import WindScenario
 from imunav.errors import FileFormatError
 
 
 def test_thesis_file_round_trip_and_wind_errors(tmp_path):
-    made = simulate_flight_file(ThesisScenario(kind="outliers"), seed=3)
+    made = simulate_flight_file(WindScenario(kind="outliers"), seed=3)
     path = write_flight_file(tmp_path / "th.npz", made)
     back = read_flight_file(path)
     assert back.kind == "thesis" and back.meta == made.meta and back.source == str(path)
@@ -37,7 +37,7 @@ def test_a_file_that_is_not_a_flight_file_is_refused(tmp_path):
         read_flight_file(bad)
     with pytest.raises(FileFormatError, match="no such file"):
         read_flight_file(tmp_path / "missing.npz")
-    made = simulate_flight_file(ThesisScenario(), seed=0)
+    made = simulate_flight_file(WindScenario(), seed=0)
     made.arrays.pop("v_ads")
     with pytest.raises(FileFormatError, match="missing entry 'v_ads'"):
         wind_errors(made)

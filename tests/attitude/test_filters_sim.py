@@ -25,7 +25,7 @@ def sim():
 
 def _mekf_params(**kw):
     # matched to the simulation: gyro density = 0.002/sqrt(100), accel direction 0.05/g, heading 0.3/|m|
-    return MekfConfig(sigma_gyro=0.0002, sigma_bias=1e-6, sigma_acc=0.05 / G_ROTATING, sigma_mag=0.3 / 48.5, **kw)
+    return MekfConfig(gyro_noise_density=0.0002, gyro_bias_random_walk=1e-6, accel_direction_noise_std=0.05 / G_ROTATING, heading_noise_std=0.3 / 48.5, **kw)
 
 
 @pytest.mark.parametrize(
@@ -33,10 +33,10 @@ def _mekf_params(**kw):
     [
         (Madgwick(beta=0.05), 2.0),
         (Mahony(kp=2.0, ki=0.2), 1.5),
-        (Complementary(k_acc=2.0, k_mag=2.0), 2.0),
+        (Complementary(k_accel=2.0, k_mag=2.0), 2.0),
         (MEKF(_mekf_params()), 0.5),
         (AdaptiveMEKF(), 1.5),
-        (UKF(UkfConfig(sigma_gyro=0.0002, sigma_bias=1e-6, sigma_acc=0.05 / G_ROTATING, sigma_mag=0.3 / 48.5)), 0.5),
+        (UKF(UkfConfig(gyro_noise_density=0.0002, gyro_bias_random_walk=1e-6, accel_direction_noise_std=0.05 / G_ROTATING, mag_direction_noise_std=0.3 / 48.5)), 0.5),
         (Smoother(_mekf_params()), 0.3),
     ],
     ids=lambda x: getattr(x, "name", str(x)),
@@ -100,8 +100,8 @@ def test_bad_inputs(sim):
     data, _ = sim
     with pytest.raises(InvalidInputError, match="beta"):
         Madgwick(beta=-1.0)
-    with pytest.raises(ConfigError, match="sigma_acc"):
-        MekfConfig(sigma_acc=-1.0)
+    with pytest.raises(ConfigError, match="accel_direction_noise_std"):
+        MekfConfig(accel_direction_noise_std=-1.0)
     with pytest.raises(ShapeError, match="q0"):
         Madgwick().run(data, q0=[1.0, 0.0])
     with pytest.raises(InvalidInputError, match="ImuData"):

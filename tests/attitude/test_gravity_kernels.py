@@ -27,7 +27,7 @@ def _skew(v):
 
 def _reference(kind, x0, P0, gyr, ya, dt, p: GravityKfConfig):
     """Plain numpy, one equation per line (same conventions as gravity_kf)."""
-    g, sa2, sg2 = p.g, p.sigma_a**2, p.sigma_g**2
+    g, sa2, sg2 = p.g, p.accel_noise_std**2, p.gyro_noise_std**2
     x, P = x0.copy(), P0.copy()
     ap, bh, hold = np.zeros(3), np.zeros(3), 0.0
     Pb, zsum, nz = np.eye(3) * 1e-6, np.zeros(3), 0
@@ -46,7 +46,7 @@ def _reference(kind, x0, P0, gyr, ya, dt, p: GravityKfConfig):
         Q = -h * h * sg2 * X @ X  # eq. 14
         xprev = x
         xp, Pp = F @ x, F @ P @ F.T + Q
-        det = abs(np.linalg.norm(ya[t]) - g) > p.tau
+        det = abs(np.linalg.norm(ya[t]) - g) > p.accel_norm_threshold
         if det:
             hold = p.hold_s
         elif hold > 0:
@@ -78,8 +78,8 @@ def _reference(kind, x0, P0, gyr, ya, dt, p: GravityKfConfig):
             zsum = zsum + (x - xprev) / h - X @ gyr[t - 1]
             nz += 1
             if nz >= p.bias_window:
-                Hb, Rb = -X, np.eye(3) * p.r_b**2 / nz
-                Pb = Pb + np.eye(3) * p.sigma_b**2 * h * nz
+                Hb, Rb = -X, np.eye(3) * p.bias_pseudo_noise_std**2 / nz
+                Pb = Pb + np.eye(3) * p.gyro_bias_random_walk**2 * h * nz
                 Kb = Pb @ Hb.T @ np.linalg.inv(Hb @ Pb @ Hb.T + Rb)
                 bh = bh + Kb @ (zsum / nz - Hb @ bh)
                 IK = np.eye(3) - Kb @ Hb
@@ -105,7 +105,7 @@ def _inputs(n, seed=3):
 def test_kernel_equals_numpy_reference(kind, extra):
     p = replace(GravityKfConfig(c_a=0.1), bias_window=10, **extra)
     data, ya, dt = _inputs(300)
-    x0, P0 = np.array([0.0, 0.0, 1.0]), np.eye(3) * p.p0**2
+    x0, P0 = np.array([0.0, 0.0, 1.0]), np.eye(3) * p.init_std**2
     xs, al, S, ap, bb = G.gravity_run(_KIND[kind], x0, P0, data.gyro, ya, dt, p.vector())
     xr, Sr = _reference(_KIND[kind], x0, P0, data.gyro, ya, dt, p)
     assert al[100:180].all() and not al[1:100].any()
@@ -134,7 +134,7 @@ def test_javed_cascade_is_rounding_sensitive():
     kernel too); no re-implementation can match to 1e-12 over a whole run."""
     data, ya, dt = _inputs(1000)
     p = GravityKfConfig(c_a=0.1)
-    x0, P0 = np.array([0.0, 0.0, 1.0]), np.eye(3) * p.p0**2
+    x0, P0 = np.array([0.0, 0.0, 1.0]), np.eye(3) * p.init_std**2
     a = G.gravity_run(1, x0, P0, data.gyro, ya, dt, p.vector())[0]
     a2 = G.gravity_run(1, x0 + [0, 1e-16, 0], P0, data.gyro, ya, dt, p.vector())[0]
     assert np.abs(a2 - a).max() > 1e-12

@@ -35,8 +35,8 @@ def test_rate_dependent_gyro_noise_matches_closed_form():
     sg, k, p0, p0b, sb = 0.002, 0.004, 0.01, 0.001, 1e-4
     data = ImuData(t=np.arange(n) / fs, gyro=np.tile([0.0, 0.0, w], (n, 1)),
                    accel=np.tile([0.0, 0.0, -9.81], (n, 1)))
-    prm = MekfConfig(sigma_gyro=sg, k_gyro_rate=k, sigma_bias=sb, acc_reject=0.0, use_mag=False,
-                     p0_att=p0, p0_bias=p0b)
+    prm = MekfConfig(gyro_noise_density=sg, k_gyro_rate=k, gyro_bias_random_walk=sb, accel_reject_threshold=0.0, use_mag=False,
+                     init_att_std=p0, init_gyro_bias_std=p0b)
     r = MEKF(prm).run(data, q0=[1.0, 0, 0, 0])
     # the discrete z-axis recursion of δθ_{k+1} = δθ_k − Δt δb_k + w_k, δb_{k+1} = δb_k + w_b,k
     # (rotation about z leaves the z row alone), Var w_k = (σ_g² + k² ω²) Δt, Var w_b = σ_b² Δt
@@ -65,20 +65,20 @@ def test_lowpass_rest_test_ignores_accel_scale_and_noise():
     fs, n = 200.0, 4000
     bias = np.radians([0.5, -0.3, 0.45])
     data, q = _static(n, fs, bias=bias, sg=0.005, sa=0.02, sm=0.1, acc_scale=1.03, seed=3)
-    plain = MEKF(MekfConfig(rest_gyro=0.02, rest_acc=0.2, rest_time=1.5, sigma_gyro=0.003)).run(data)
-    # sigma_rest is the gyro's per-sample noise: the zero-rate measurement is then modelled correctly
-    lp = MEKF(MekfConfig(rest_gyro=0.035, rest_acc=0.5, rest_time=1.5, rest_lpf_tau=0.5, bias_clip=0.035,
-                         sigma_gyro=0.003, sigma_rest=0.005)).run(data)
+    plain = MEKF(MekfConfig(rest_gyro_threshold=0.02, rest_accel_threshold=0.2, rest_time=1.5, gyro_noise_density=0.003)).run(data)
+    # zaru_noise_std is the gyro's per-sample noise: the zero-rate measurement is then modelled correctly
+    lp = MEKF(MekfConfig(rest_gyro_threshold=0.035, rest_accel_threshold=0.5, rest_time=1.5, rest_lpf_time_constant=0.5, lpf_gyro_threshold=0.035,
+                         gyro_noise_density=0.003, zaru_noise_std=0.005)).run(data)
     assert plain.flags["rest"].mean() < 0.05
     assert lp.flags["rest"][int(2.5 * fs):].all()
     z = (lp.bias[-1] - bias) / np.sqrt(lp.cov_diag[-1, 3:])
     assert np.all(np.abs(z) < 3.5), z
-    # a rotation as slow as a bias but above bias_clip is not rest
+    # a rotation as slow as a bias but above lpf_gyro_threshold is not rest
     fast = replace(data, gyro=data.gyro + [0.0, 0.0, 0.05])
-    clip = MekfConfig(rest_gyro=0.035, rest_acc=0.5, rest_lpf_tau=0.5, bias_clip=0.035, use_mag=False)
+    clip = MekfConfig(rest_gyro_threshold=0.035, rest_accel_threshold=0.5, rest_lpf_time_constant=0.5, lpf_gyro_threshold=0.035, use_mag=False)
     assert not MEKF(clip).run(fast).flags["rest"].any()
     # the same steady 0.05 rad/s without the clip passes the deviation test: the clip is what refused it
-    assert MEKF(replace(clip, bias_clip=1e9)).run(fast).flags["rest"][int(2.5 * fs):].all()
+    assert MEKF(replace(clip, lpf_gyro_threshold=1e9)).run(fast).flags["rest"][int(2.5 * fs):].all()
 
 
 def _flicker_disturbance(n, fs, seed):
@@ -98,7 +98,7 @@ def _flicker_disturbance(n, fs, seed):
 def test_min_undisturbed_time_rejects_chance_passes():
     fs, n = 100.0, 5000
     data, q = _flicker_disturbance(n, fs, 1)
-    base = replace(ADAPTIVE_DEFAULTS, mag_min_undisturbed=0.0, tau_mag=2.0)  # a fast heading shows it best
+    base = replace(ADAPTIVE_DEFAULTS, mag_min_undisturbed=0.0, heading_time_constant=2.0)  # a fast heading shows it best
     e0 = angle_err_deg(AdaptiveMEKF(base).run(data).q_nb, np.tile(q, (n, 1)))
     e1 = angle_err_deg(AdaptiveMEKF(replace(base, mag_min_undisturbed=0.5)).run(data).q_nb, np.tile(q, (n, 1)))
     seg = slice(int(15 * fs), int(40 * fs))
@@ -115,7 +115,7 @@ def test_consider_heading_update_leaves_the_bias_alone():
     m = data.mag.copy()
     m[2000:] = quat_rotate(qc, quat_rotate(quat_exp(np.array([0, 0, np.radians(20.0)])), MAG_NED))
     d = replace(data, mag=m)
-    prm = MekfConfig(sigma_gyro=0.003, sigma_bias=1e-4, sigma_acc=0.05, sigma_mag=0.3)
+    prm = MekfConfig(gyro_noise_density=0.003, gyro_bias_random_walk=1e-4, accel_direction_noise_std=0.05, heading_noise_std=0.3)
     b_on = MEKF(prm).run(d).bias[:, 2]
     b_off = MEKF(replace(prm, mag_bias=False)).run(d).bias[:, 2]
     moved_on = np.max(np.abs(b_on[2000:] - b_on[1999]))
@@ -144,7 +144,7 @@ def test_time_constants_give_rate_independent_steady_state():
     field is nearly horizontal, larger at a steep dip, and the same at every rate.  (That the larger heading
     variance is the true one is checked by the calibration tests in test_nees.py.)"""
     sg, ta, tm = 0.003, 2.0, 10.0
-    prm = MekfConfig(sigma_gyro=sg, tau_acc=ta, tau_mag=tm, sigma_bias=0.0, p0_bias=1e-12)
+    prm = MekfConfig(gyro_noise_density=sg, tilt_time_constant=ta, heading_time_constant=tm, gyro_bias_random_walk=0.0, init_gyro_bias_std=1e-12)
     heading = {}
     for fs in (50.0, 400.0):
         n = int(12 * tm * fs)

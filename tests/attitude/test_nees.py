@@ -29,13 +29,13 @@ def _runs(kind):
         q0 = q[0]  # start at the truth with a consistent P0
         mag = np.ascontiguousarray(data.mag)
         if kind == "ekf":
-            p = MekfConfig(sigma_gyro=0.0002, sigma_bias=1e-6, sigma_acc=0.05 / G_ROTATING, sigma_mag=0.3 / 48.5,
-                           p0_att=0.02, p0_bias=0.03)
+            p = MekfConfig(gyro_noise_density=0.0002, gyro_bias_random_walk=1e-6, accel_direction_noise_std=0.05 / G_ROTATING, heading_noise_std=0.3 / 48.5,
+                           init_att_std=0.02, init_gyro_bias_std=0.03)
             qs, bs, _, _, _, _, Pu, _, _ = _k.mekf_run(q0, np.zeros(3), p.P0(), data.gyro, data.accel, mag, d,
                                                        p.vector(), True)
         else:
-            p = UkfConfig(sigma_gyro=0.0002, sigma_bias=1e-6, sigma_acc=0.05 / G_ROTATING, sigma_mag=0.3 / 48.5,
-                          p0_att=0.02, p0_bias=0.03)
+            p = UkfConfig(gyro_noise_density=0.0002, gyro_bias_random_walk=1e-6, accel_direction_noise_std=0.05 / G_ROTATING, mag_direction_noise_std=0.3 / 48.5,
+                          init_att_std=0.02, init_gyro_bias_std=0.03)
             ref = np.array([18.0, 0.0, 45.0]) / np.hypot(18.0, 45.0)
             qs, bs, _, Pu, _, _ = _k.ukf_run(q0, np.zeros(3), p.P0(), data.gyro, data.accel, mag, d,
                                              p.vector(True), p.alpha, p.beta, p.kappa, ref)
@@ -65,7 +65,7 @@ def test_ukf_nees_in_band():
 def _mekf(**param_kw):
     from imunav.attitude import MEKF
 
-    return MEKF.with_params(sigma_gyro=0.0002, sigma_bias=1e-6, sigma_acc=0.05 / G_ROTATING, p0_att=0.02, p0_bias=0.03,
+    return MEKF.with_params(gyro_noise_density=0.0002, gyro_bias_random_walk=1e-6, accel_direction_noise_std=0.05 / G_ROTATING, init_att_std=0.02, init_gyro_bias_std=0.03,
                             **param_kw)
 
 
@@ -111,14 +111,14 @@ def test_mekf_public_covariance_calibrated_static():
 def test_mekf_public_covariance_is_the_kalman_recursion():
     """Static level sensor, noise-free data, accelerometer only: ``cov_diag`` equals an independent
     6-state Kalman recursion (predict P <- F P F' + Q, F = [[I, -dt I], [0, I]], Q = diag(sg^2 dt, sb^2 dt),
-    then the gravity-direction update with H = [[h]x, 0], h = (0, 0, -1), R = sigma_acc^2 I) to 1e-12."""
+    then the gravity-direction update with H = [[h]x, 0], h = (0, 0, -1), R = accel_direction_noise_std^2 I) to 1e-12."""
     from imunav.attitude import MEKF
     from imunav.timeseries import ImuData
 
     n, dt, g = 400, 0.01, 9.81
     data = ImuData(t=dt * np.arange(n), gyro=np.zeros((n, 3)), accel=np.tile([0.0, 0.0, -g], (n, 1)), mag=None)
     sg, sb, sa, pa, pb = 2e-4, 1e-4, 0.05 / g, 0.02, 0.03
-    res = MEKF.with_params(sigma_gyro=sg, sigma_bias=sb, sigma_acc=sa, p0_att=pa, p0_bias=pb).run(
+    res = MEKF.with_params(gyro_noise_density=sg, gyro_bias_random_walk=sb, accel_direction_noise_std=sa, init_att_std=pa, init_gyro_bias_std=pb).run(
         data, q0=[1.0, 0.0, 0.0, 0.0], bias0=np.zeros(3), use_mag=False)
     P = np.diag([pa**2] * 3 + [pb**2] * 3)
     F = np.eye(6)
@@ -147,7 +147,7 @@ def test_mekf_public_covariance_calibrated_rotating_with_magnetometer():
     """
     from _calibration import assert_rms_calibrated
 
-    za, zb = _public_last_z(3000, 8000, dict(duration=10.0), dict(sigma_mag=0.3 / 48.5), use_mag=None)
+    za, zb = _public_last_z(3000, 8000, dict(duration=10.0), dict(heading_noise_std=0.3 / 48.5), use_mag=None)
     assert_rms_calibrated(za, "MEKF attitude (rotating, magnetometer)")
     assert_rms_calibrated(zb, "MEKF gyro bias (rotating, magnetometer)")
 
@@ -155,7 +155,7 @@ def test_mekf_public_covariance_calibrated_rotating_with_magnetometer():
 def _ukf(mag_ref_ned=None, **param_kw):
     from imunav.attitude.ukf import UKF
 
-    p = UkfConfig(sigma_gyro=0.0002, sigma_bias=1e-6, sigma_acc=0.05 / G_ROTATING, p0_att=0.02, p0_bias=0.03, **param_kw)
+    p = UkfConfig(gyro_noise_density=0.0002, gyro_bias_random_walk=1e-6, accel_direction_noise_std=0.05 / G_ROTATING, init_att_std=0.02, init_gyro_bias_std=0.03, **param_kw)
     return UKF(p, mag_ref_ned=mag_ref_ned)
 
 
@@ -178,7 +178,7 @@ def test_ukf_public_covariance_calibrated_rotating_with_magnetometer():
     from _calibration import assert_rms_calibrated
     from builders import MAG_NED
 
-    za, zb = _public_last_z(3000, 8000, dict(duration=10.0), dict(sigma_mag=0.3 / 48.5, mag_ref_ned=MAG_NED),
+    za, zb = _public_last_z(3000, 8000, dict(duration=10.0), dict(mag_direction_noise_std=0.3 / 48.5, mag_ref_ned=MAG_NED),
                             use_mag=None, make=_ukf)
     assert_rms_calibrated(za, "UKF attitude (rotating, magnetometer)")
     assert_rms_calibrated(zb, "UKF gyro bias (rotating, magnetometer)")
@@ -197,7 +197,7 @@ def test_smoother_public_covariance_calibrated_rotating_with_magnetometer():
     (Measured over 400 runs: attitude z RMS 1.01 / 0.95 / 1.00, bias 0.95 / 1.02 / 1.04 per axis.)"""
     from _calibration import assert_rms_calibrated
 
-    za, zb = _public_last_z(3000, 8000, dict(duration=10.0), dict(sigma_mag=0.3 / 48.5), use_mag=None,
+    za, zb = _public_last_z(3000, 8000, dict(duration=10.0), dict(heading_noise_std=0.3 / 48.5), use_mag=None,
                             make=_smoother, at=500)
     assert_rms_calibrated(za, "Smoother attitude (rotating, magnetometer, mid-run)")
     assert_rms_calibrated(zb, "Smoother gyro bias (rotating, magnetometer, mid-run)")

@@ -15,12 +15,12 @@ from imunav.units import G0
 
 
 def test_thesis_monte_carlo_small():
-    from imunav.sim import apply_errors, hundred_position_profile, ideal_imu, presets, thesis_rate_table_profile
+    from imunav.sim import apply_errors, hundred_position_profile, ideal_imu, presets, rate_table_step_profile
 
     model = presets.get("thesis_sim")  # GM bias instability, T_c = 5 s
     kw = {"earth_rate": False, "transport_rate": False, "gravity": "constant"}
     sp = hundred_position_profile(fs=5.0)
-    rp = thesis_rate_table_profile(fs=5.0)
+    rp = rate_table_step_profile(fs=5.0)
     ids, idr = ideal_imu(sp.trajectory, **kw), ideal_imu(rp.trajectory, **kw)
     truth = ImuCalibration.from_error_model(model)
     pt = calibration_parameters(truth)
@@ -47,11 +47,11 @@ def test_compensated_imu_errors_consistent_with_reported_uncertainty():
     errors of the compensated outputs match the parameter uncertainty plus the noise of the means."""
     from imunav.calib._noisecov import segment_mean_covariances
     from imunav.calib._segments import segment_means
-    from imunav.sim import apply_errors, hundred_position_profile, ideal_imu, presets, thesis_rate_table_profile
+    from imunav.sim import apply_errors, hundred_position_profile, ideal_imu, presets, rate_table_step_profile
 
     model = presets.get("thesis_sim")
     kw = {"earth_rate": False, "transport_rate": False, "gravity": "constant"}
-    sp, rp = hundred_position_profile(fs=5.0), thesis_rate_table_profile(fs=5.0)
+    sp, rp = hundred_position_profile(fs=5.0), rate_table_step_profile(fs=5.0)
     ids, idr = ideal_imu(sp.trajectory, **kw), ideal_imu(rp.trajectory, **kw)
     st = multiposition(apply_errors(ids, model, rng=101), sp.segments, gravity=G0, noise_model=model)
     res = combine(st, ratetable(apply_errors(idr, model, rng=102), rp.segments, base=st.calibration, gravity=G0,
@@ -88,7 +88,7 @@ def test_noise_model_sets_the_covariance_of_the_fit():
     model would leave them at the residual scatter, equal in both fits."""
     import dataclasses
 
-    from imunav.sim import apply_errors, hundred_position_profile, ideal_imu, presets, thesis_rate_table_profile
+    from imunav.sim import apply_errors, hundred_position_profile, ideal_imu, presets, rate_table_step_profile
 
     base = presets.get("thesis_sim")
     white = dataclasses.replace(base, accel=dataclasses.replace(base.accel, bias_instability=None),
@@ -100,7 +100,7 @@ def test_noise_model_sets_the_covariance_of_the_fit():
             gyro=dataclasses.replace(white.gyro, noise_density=white.gyro.noise_density * k))
 
     kw = {"earth_rate": False, "transport_rate": False, "gravity": "constant"}
-    sp, rp = hundred_position_profile(fs=5.0), thesis_rate_table_profile(fs=5.0)
+    sp, rp = hundred_position_profile(fs=5.0), rate_table_step_profile(fs=5.0)
     ds = apply_errors(ideal_imu(sp.trajectory, **kw), white, rng=7)
     dr = apply_errors(ideal_imu(rp.trajectory, **kw), white, rng=8)
     se = {}

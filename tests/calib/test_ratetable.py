@@ -2,7 +2,7 @@
 
 import numpy as np
 import pytest
-from builders import G, thesis_rate_steps, thesis_truth
+from builders import G, rate_table_steps, thesis_truth
 
 from imunav.calib import combine, multiposition, ratetable, ratetable_from_means, success_percentages
 from imunav.errors import DegenerateGeometryError, InsufficientDataError
@@ -10,7 +10,7 @@ from imunav.errors import DegenerateGeometryError, InsufficientDataError
 
 def test_rate_steps_noise_free_exact():
     truth = thesis_truth()
-    W, U = thesis_rate_steps()
+    W, U = rate_table_steps()
     f = G * U
     _, g = truth.invert_arrays(f, W)
     r = ratetable_from_means(W, g, f, base=truth.with_(gyro_matrix=np.eye(3)))
@@ -20,7 +20,7 @@ def test_rate_steps_noise_free_exact():
 
 def test_intercept_absorbs_turn_on_bias(rng):
     truth = thesis_truth()
-    W, U = thesis_rate_steps()
+    W, U = rate_table_steps()
     f = G * U
     _, g = truth.invert_arrays(f, W)
     g = g + np.array([1e-3, -2e-3, 5e-4])  # a different power-up
@@ -32,7 +32,7 @@ def test_intercept_absorbs_turn_on_bias(rng):
 
 def test_vertical_earth_rate_is_handled():
     truth = thesis_truth()
-    W, U = thesis_rate_steps()
+    W, U = rate_table_steps()
     # positive rates only: with the symmetric thesis list the Earth rate cancels from T_g anyway
     keep = W.sum(1) > 0
     W, U = W[keep], U[keep]
@@ -48,7 +48,7 @@ def test_vertical_earth_rate_is_handled():
 
 def test_rate_uncertainty_covers_truth():
     truth = thesis_truth()
-    W, U = thesis_rate_steps()
+    W, U = rate_table_steps()
     rng = np.random.default_rng(11)
     base = truth.with_(gyro_matrix=np.eye(3))
     _, g0 = truth.invert_arrays(G * U, W)
@@ -62,12 +62,12 @@ def test_rate_uncertainty_covers_truth():
 
 def test_full_pipeline_on_sim_profiles_noise_free():
     """imunav.sim profiles (transitions, Earth rate, normal gravity) through the estimators."""
-    from imunav.sim import hundred_position_profile, ideal_imu, thesis_rate_table_profile
+    from imunav.sim import hundred_position_profile, ideal_imu, rate_table_step_profile
 
     truth = thesis_truth()
     lat = np.deg2rad(40.0)
     sp = hundred_position_profile(fs=10.0, dwell_s=4.0, transition_s=1.0, lat=lat)
-    rp = thesis_rate_table_profile(fs=10.0, dwell_s=4.0, transition_s=1.0, remount_s=2.0, lat=lat)
+    rp = rate_table_step_profile(fs=10.0, dwell_s=4.0, transition_s=1.0, remount_s=2.0, lat=lat)
     out = []
     for p in (sp, rp):
         d = ideal_imu(p.trajectory)
@@ -87,7 +87,7 @@ def test_full_pipeline_on_sim_profiles_noise_free():
 
 
 def test_refusals():
-    W, U = thesis_rate_steps()
+    W, U = rate_table_steps()
     x_only = W[:40]
     with pytest.raises(DegenerateGeometryError, match="ill-conditioned"):
         ratetable_from_means(x_only, x_only, G * U[:40])

@@ -56,7 +56,7 @@ def test_cli_bad_inputs(tmp_path):
 
 
 def test_toml_config(tmp_path):
-    from imunav.airdata.scenario import ThesisScenario, load_config
+    from imunav.airdata.scenario import WindScenario, load_config
     from imunav.errors import ConfigError
     from imunav.sim.flight import FlightConfig
 
@@ -64,7 +64,7 @@ def test_toml_config(tmp_path):
     fc = load_config(root / "examples" / "airdata_flight.toml")
     assert isinstance(fc, FlightConfig) and fc.over_water == ((100.0, 200.0),) and fc.doppler.scale == 0.002
     tc = load_config(root / "examples" / "airdata_thesis_bias.toml")
-    assert isinstance(tc, ThesisScenario) and tc.channels == (0,) and tc.kind == "bias"
+    assert isinstance(tc, WindScenario) and tc.channels == (0,) and tc.kind == "bias"
     bad = tmp_path / "bad.toml"
     bad.write_text("[thesis]\nkind = 'bias'\nbias_mps = 3\n")
     with pytest.raises(ConfigError, match=r"unknown key\(s\) \['bias_mps'\]"):
@@ -79,10 +79,10 @@ def test_toml_config(tmp_path):
 
 @pytest.mark.parametrize("gate", ["0", "-1", "nan"])
 def test_gate_m_must_be_positive(tmp_path, gate):
-    from imunav.airdata.filter import ThesisFilter
+    from imunav.airdata.filter import BodyWindFilter
 
     with pytest.raises(InvalidInputError, match="gate_m"):
-        ThesisFilter(robust="gate", gate_m=float(gate)).run(np.zeros((20, 3)))
+        BodyWindFilter(robust="gate", gate_m=float(gate)).run(np.zeros((20, 3)))
     assert invoke("airdata", "simulate", "cruise", "--duration", "20", "--out", tmp_path / "a.npz").exit_code == 0
     assert "gate" in one_error_line(invoke("airdata", "run", tmp_path / "a.npz", "--robust", "gate", "--gate-m", gate))
 

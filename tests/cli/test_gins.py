@@ -142,7 +142,7 @@ def test_odometer_file_with_the_yaml_odopath_key(drive, tmp_path):
     (tmp_path / "odo.txt").write_text("".join(f"{t:.3f} {v:.5f}\n" for t, v in zip(odo.t, odo.speed)))
     yaml = (drive / "kf-gins.yaml").read_text().replace('"imu.txt"', f'"{drive / "imu.txt"}"').replace(
         '"gnss.txt"', f'"{drive / "gnss.txt"}"')
-    (tmp_path / "kf.yaml").write_text(yaml + 'odopath: "odo.txt"\nnhc_noise: 0.1\n')
+    (tmp_path / "kf.yaml").write_text(yaml + 'odopath: "odo.txt"\nnhc_noise_std: 0.1\n')
     drift = {}
     for name, cfg in (("aided", tmp_path / "kf.yaml"), ("unaided", drive / "kf-gins.yaml")):
         _ok(CliRunner().invoke(app, ["gins", "outage-test", "--config", str(cfg), "--truth", str(drive / "truth.nav"),
@@ -205,7 +205,7 @@ def test_user_errors_are_one_line_and_exit_2(drive, tmp_path, args, needle):
     (tmp_path / "c.json").write_text("{}")
     (tmp_path / "unknown.toml").write_text(good.replace("states = 21", "states = 21\narww = 1e-4"))
     (tmp_path / "strarw.toml").write_text(good.replace("corr_time = ", 'corr_time = "1 h"  # '))
-    (tmp_path / "nonoise.toml").write_text("\n".join(ln for ln in good.splitlines() if not ln.startswith("vrw")))
+    (tmp_path / "nonoise.toml").write_text("\n".join(ln for ln in good.splitlines() if not ln.startswith("accel_noise_density")))
     (tmp_path / "neg.toml").write_text(good.replace("init_pos_std = [0.5", "init_pos_std = [-0.5"))
     lat = good.split("lla_deg = [")[1].split(",")[0]
     (tmp_path / "rad.toml").write_text(good.replace(f"lla_deg = [{lat}", f"lla_deg = [{np.radians(float(lat))}")

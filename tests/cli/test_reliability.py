@@ -271,7 +271,7 @@ def test_a_spec_with_an_unknown_parameter_or_a_nan_limit_is_refused(tmp_path, sp
 def test_unknown_filter_parameter_lists_the_known_ones(tmp_path):
     rec = write_imu(_rec(), tmp_path / "rec.npz")
     msg = _exit_2(runner.invoke(app, ["attitude", "run", str(rec), "--filter", "mekf", "--param", "bogus=1"]))
-    assert "bogus" in msg and "sigma_gyro" in msg and "__init__" not in msg and "keyword argument" not in msg
+    assert "bogus" in msg and "gyro_noise_density" in msg and "__init__" not in msg and "keyword argument" not in msg
 
 
 def test_file_too_large_names_the_file(tmp_path):

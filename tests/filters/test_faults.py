@@ -13,14 +13,14 @@ from imunav.filters import (
     false_alarm_rates,
     inject_faults,
     latch,
-    thesis_thresholds,
+    window_chi2_thresholds,
     window_statistics,
 )
 from imunav.filters.faults import wishart_largest_root_quantile
 
 
-def test_thesis_thresholds_match_digest():
-    th = thesis_thresholds(20, 3)
+def test_window_chi2_thresholds_match_digest():
+    th = window_chi2_thresholds(20, 3)
     assert th["alg1"] == pytest.approx(28.869, abs=1e-3)
     assert th["alg3"] == pytest.approx(79.082, abs=1e-3)
 
@@ -58,7 +58,7 @@ def test_false_alarm_rates_of_calibrated_thresholds_on_white_noise():
     l1, l2, a3 = window_statistics(nv, 20)  # window detectors batched over all runs
     for k, st in (("alg1", l1), ("alg2", l2), ("alg3", a3)):
         alarms[k] = st[:, 100:] > thr[k]
-    thesis_alg1 = l1[:, 100:] > thesis_thresholds()["alg1"]
+    thesis_alg1 = l1[:, 100:] > window_chi2_thresholds()["alg1"]
     for k, a in alarms.items():
         rate, _ = false_alarm_rates(np.array(a))
         assert rate < 0.025, k  # nominal 1 %

@@ -1,6 +1,6 @@
 """Named kernel layouts: the index constants of the kernels follow the configuration dataclasses.
 
-A kernel reads its parameters through constants (``p[P_SIGMA_GYRO]``, ``st[S_REST_TIMER]``, ``dx[I_VEL]``); these
+A kernel reads its parameters through constants (``p[P_GYRO_NOISE_DENSITY]``, ``st[S_REST_TIMER]``, ``dx[I_VEL]``); these
 tests fail when a field is added, removed or reordered on one side only.
 """
 
@@ -18,7 +18,7 @@ from imunav.ins.zupt import kernels as ik
 def test_mekf_parameter_constants_index_the_packed_config():
     names = {f.name for f in fields(MekfConfig)}
     assert set(ak.MEKF_PARAMS) <= names
-    assert names - set(ak.MEKF_PARAMS) == {"p0_att", "p0_bias"}  # initial covariance, not a kernel parameter
+    assert names - set(ak.MEKF_PARAMS) == {"init_att_std", "init_gyro_bias_std"}  # initial covariance, not a kernel parameter
     # distinct values per field: each constant must pick its own field out of vector()
     kw = {n: 0.5 + i for i, n in enumerate(ak.MEKF_PARAMS) if n not in ("use_mag", "mag_bias")}
     vec = MekfConfig(**kw, use_mag=True, mag_bias=False).vector()
@@ -29,8 +29,8 @@ def test_mekf_parameter_constants_index_the_packed_config():
 
 
 def test_ukf_vector_uses_the_same_layout():
-    v = UkfConfig(sigma_gyro=1.0, sigma_bias=2.0, sigma_acc=3.0, acc_reject=4.0, sigma_mag=5.0, g=6.0).vector(True)
-    picked = v[[ak.P_SIGMA_GYRO, ak.P_SIGMA_BIAS, ak.P_SIGMA_ACC, ak.P_ACC_REJECT, ak.P_SIGMA_MAG, ak.P_G]]
+    v = UkfConfig(gyro_noise_density=1.0, gyro_bias_random_walk=2.0, accel_direction_noise_std=3.0, accel_reject_threshold=4.0, mag_direction_noise_std=5.0, g=6.0).vector(True)
+    picked = v[[ak.P_GYRO_NOISE_DENSITY, ak.P_GYRO_BIAS_RANDOM_WALK, ak.P_ACCEL_DIRECTION_NOISE_STD, ak.P_ACCEL_REJECT_THRESHOLD, ak.P_HEADING_NOISE_STD, ak.P_G]]
     np.testing.assert_array_equal(picked, [1, 2, 3, 4, 5, 6])
     assert v[ak.P_USE_MAG] == 1.0
 
@@ -54,12 +54,12 @@ def test_gravity_parameter_constants_index_the_packed_config():
     from imunav.attitude.gravity_kf import GravityKfConfig
 
     names = {f.name for f in fields(GravityKfConfig)}
-    assert set(gk.GRAVITY_PARAMS) <= names and names - set(gk.GRAVITY_PARAMS) == {"p0"}
-    p = GravityKfConfig(sigma_g=1.0, sigma_a=2.0, c_a=3.0, g=4.0, tau=5.0, s_mode="C", s_fixed=7.0, hold_s=8.0,
-                        normalize=True, exact=False, sigma_b=11.0, r_b=12.0, bias_window=13)
+    assert set(gk.GRAVITY_PARAMS) <= names and names - set(gk.GRAVITY_PARAMS) == {"init_std"}
+    p = GravityKfConfig(gyro_noise_std=1.0, accel_noise_std=2.0, c_a=3.0, g=4.0, accel_norm_threshold=5.0, s_mode="C", s_fixed=7.0, hold_s=8.0,
+                        normalize=True, exact=False, gyro_bias_random_walk=11.0, bias_pseudo_noise_std=12.0, bias_window=13)
     v = p.vector()
-    for name, want in (("sigma_g", 1), ("sigma_a", 2), ("c_a", 3), ("g", 4), ("tau", 5), ("s_mode", 2),
-                       ("s_fixed", 7), ("hold_s", 8), ("normalize", 1), ("exact", 0), ("sigma_b", 11), ("r_b", 12),
+    for name, want in (("gyro_noise_std", 1), ("accel_noise_std", 2), ("c_a", 3), ("g", 4), ("accel_norm_threshold", 5), ("s_mode", 2),
+                       ("s_fixed", 7), ("hold_s", 8), ("normalize", 1), ("exact", 0), ("gyro_bias_random_walk", 11), ("bias_pseudo_noise_std", 12),
                        ("bias_window", 13)):
         assert v[getattr(gk, "G_" + name.upper())] == want, name
     assert gk.SV_BIAS_COUNT == gk.N_SV - 1

@@ -42,7 +42,7 @@ def test_augmentation_rotations_are_rotations():
     np.testing.assert_allclose(np.linalg.det(R), 1.0, atol=1e-12)
     x = np.zeros((4, 10, 6))
     x[..., 2] = -9.8
-    cfg = LstmConfig(noise_acc=0.0, noise_gyro=0.0, scale=(1.0, 1.0))
+    cfg = LstmConfig(accel_noise_std=0.0, gyro_noise_std=0.0, scale=(1.0, 1.0))
     y = augment(x, cfg, rng)
     np.testing.assert_allclose(np.linalg.norm(y[..., :3], axis=-1), 9.8, atol=1e-12)  # rotation keeps |f|
 
@@ -75,7 +75,7 @@ def test_config_and_file_errors(tmp_path):
         LstmConfig(burn_in=100)
     with pytest.raises(ConfigError, match="threshold"):
         LstmConfig(threshold=1.0)
-    assert LstmConfig.thesis().layers == 6 and LstmConfig.thesis().hidden == 80
+    assert LstmConfig.large_network().layers == 6 and LstmConfig.large_network().hidden == 80
     with pytest.raises(ConfigError, match="max_gap_s"):
         LstmConfig(max_gap_s=0.0)
     with pytest.raises(FileFormatError, match="not found"):

@@ -85,7 +85,7 @@ def test_xio_reader_units_frames_and_loop_closure():
         assert d.accel[:50, 2].mean() < -7.0
         assert abs(np.linalg.norm(d.accel[:50].mean(0)) - 9.8) < 0.3  # g -> m/s^2
         zv = detect_zero_velocity(d, "shoe", 1e8, margin_s=0.125)
-        res = ZuptFilter(ZuptConfig(alignment="first_stance", g=None, sigma_acc=2.0)).run(d, zv.zv)
+        res = ZuptFilter(ZuptConfig(alignment="first_stance", g=None, accel_noise_std=2.0)).run(d, zv.zv)
         lc = loop_closure_error(res.position)
         assert lc.error_3d < bound, f"{name}: {lc.error_3d:.3f} m"
         assert lc.horizontal < 0.2

@@ -50,7 +50,7 @@ def test_tilt_error_shrinks_under_zupt():
     """Attitude-error sign check (spec §5.3): a 2° roll error decays while static."""
     data = _static(n=4000)
     q0 = quat_from_euler(math.radians(2.0), 0.0, 0.0)
-    res = ZuptFilter(ZuptConfig(p0_att=math.radians(3.0))).run(data, np.ones(data.n, bool), initial_quaternion=q0)
+    res = ZuptFilter(ZuptConfig(init_att_std=math.radians(3.0))).run(data, np.ones(data.n, bool), initial_quaternion=q0)
     roll = euler_from_quat(res.q_nb)[:, 0]
     assert abs(roll[-1]) < 0.1 * math.radians(2.0)
     # the filter is consistent: the final error is inside 3 sigma of its attitude variance
@@ -103,8 +103,8 @@ def test_config_and_input_errors():
         ZuptConfig(states=12)
     with pytest.raises(ConfigError, match="states=15"):
         ZuptConfig(zaru=True)
-    with pytest.raises(ConfigError, match="sigma_v"):
-        ZuptConfig(sigma_v=0.0)
+    with pytest.raises(ConfigError, match="zupt_noise_std"):
+        ZuptConfig(zupt_noise_std=0.0)
     with pytest.raises(ConfigError, match="integration"):
         ZuptConfig(integration="rk4")
     data = _static(n=50)
@@ -121,7 +121,7 @@ def test_fifteen_state_and_options_run_static(rng):
     data = _static(n=4000, rng=rng, noise=(0.01, 0.001))
     bias = np.array([0.01, -0.02, 0.015])
     data = data.with_(gyro=data.gyro + bias)
-    cfg = ZuptConfig(states=15, zaru=True, heading_hold=True, sigma_zaru=0.005)
+    cfg = ZuptConfig(states=15, zaru=True, heading_hold=True, zaru_noise_std=0.005)
     res = ZuptFilter(cfg).run(data, np.ones(data.n, bool))
     sd = np.sqrt(res.cov_diag[-1, 12:15])
     np.testing.assert_array_less(np.abs(res.gyro_bias[-1] - bias), 3 * sd + 1e-5)

@@ -51,7 +51,7 @@ def test_heading_hold_exact_for_tilted_sensor_rocking_in_stance():
 
     yaw_swing = np.ptp(np.unwrap(euler_from_quat(q_true)[:, 2]))
     assert yaw_swing > math.radians(10)  # a yaw-angle hold would be badly wrong here
-    cfg = ZuptConfig(heading_hold=True, sigma_heading=math.radians(0.1), g=G)
+    cfg = ZuptConfig(heading_hold=True, heading_noise_std=math.radians(0.1), g=G)
     res = ZuptFilter(cfg).run(data, np.ones(data.n, bool), initial_quaternion=q_true[0])
     err = np.degrees(quat_error_angle(res.q_nb, q_true))
     # integration is exact for this motion; what is left is the rounding of 1200 steps
@@ -63,7 +63,7 @@ def test_heading_hold_removes_gyro_bias_heading_drift():
     """A vertical-gyro bias turns a standing foot; the hold stops the drift.
 
     Level and static, the yaw error decouples: a random walk with
-    q = (sigma_gyro h)^2 per step, measured with r = sigma_heading^2.  The
+    q = (gyro_noise_std h)^2 per step, measured with r = heading_noise_std^2.  The
     steady-state prior variance solves P^2 - q P - q r = 0, K = P / (P + r),
     and a ramp of d = b h per step settles at the lag e = (1 - K) d / K.
     """
@@ -79,7 +79,7 @@ def test_heading_hold_removes_gyro_bias_heading_drift():
     assert yaw_free == pytest.approx(b * data.t[-1], rel=1e-6)  # 5°
     cfg = ZuptConfig()
     h = 1.0 / fs
-    q, r = (cfg.sigma_gyro * h) ** 2, cfg.sigma_heading**2
+    q, r = (cfg.gyro_noise_std * h) ** 2, cfg.heading_noise_std**2
     P = 0.5 * (q + math.sqrt(q * q + 4 * q * r))
     K = P / (P + r)
     lag = (1 - K) * b * h / K
@@ -87,12 +87,12 @@ def test_heading_hold_removes_gyro_bias_heading_drift():
 
 
 def test_level_floor_removes_vertical_drift_on_flat_walk():
-    """Flat simulated walk, MEMS errors: stance heights stay at 0 within a few sigma_floor."""
+    """Flat simulated walk, MEMS errors: stance heights stay at 0 within a few floor_noise_std."""
     worst_free, worst_floor = [], []
     for seed in (0, 1, 2):
         sim = simulate_gait("walk", 30, error_model="foot_mems", rng=seed, turn_deg=12)
         free = ZuptFilter(ZuptConfig(g=G, integration="coning")).run(sim.imu, sim.stance)
-        cfg = ZuptConfig(g=G, integration="coning", level_floor=True, sigma_floor=0.01)
+        cfg = ZuptConfig(g=G, integration="coning", level_floor=True, floor_noise_std=0.01)
         floor = ZuptFilter(cfg).run(sim.imu, sim.stance)
         worst_free.append(np.abs(free.position[sim.stance, 2]).max())
         worst_floor.append(np.abs(floor.position[sim.stance, 2]).max())

@@ -3,9 +3,9 @@
 One gait trajectory is simulated without sensor errors (:func:`imunav.sim.gait.simulate_gait`);
 each run adds what the filter's model assumes and nothing else: white noise of the
 configured per-sample standard deviation on every accelerometer and gyro sample, an
-initial attitude error drawn from ``p0_att`` (the filter is started from the perturbed
+initial attitude error drawn from ``init_att_std`` (the filter is started from the perturbed
 quaternion through the public ``initial_quaternion``) and, with 15 states, constant
-biases drawn from ``p0_acc_bias`` / ``p0_gyro_bias`` (bias random walks set to 0).
+biases drawn from ``init_accel_bias_std`` / ``init_gyro_bias_std`` (bias random walks set to 0).
 Over the runs
 
 * the final-position NEES e^T P_pp^-1 e (full 3x3 block of ``ZuptResult.P``) must have
@@ -19,8 +19,8 @@ IMUNAV_SIGMA_SCALE=1.5 or 0.6667 to see the tests fail.
 
 What is left out, and why: the velocity *during a stance*.  The simulated foot is
 exactly still there, while the ZUPT models its velocity as measured with noise
-``sigma_v``, so the stance velocity variance is an upper bound by design (the tests use
-``sigma_v`` = 0.1 mm/s so that this pessimism stays far below the swing uncertainty).
+``zupt_noise_std``, so the stance velocity variance is an upper bound by design (the tests use
+``zupt_noise_std`` = 0.1 mm/s so that this pessimism stays far below the swing uncertainty).
 
 The attitude Jacobian of the velocity must be -[dv^n x] with the increment dv^n that the
 nominal integration adds; it used C_{k-1} f_k dt, which at foot rotation rates differs by
@@ -53,9 +53,9 @@ SIGMA_V = 1e-4
 def _runs(states: int, seed: int):
     sim = simulate_gait(["walk", "run", "stairs"], 12, error_model=None, rng=seed, turn_deg=15.0, g=9.80665,
                         fs=FS)
-    cfg = ZuptConfig(states=states, g=9.80665, sigma_acc=0.1, sigma_gyro=math.radians(0.6), sigma_v=SIGMA_V,
-                     p0_att=math.radians(0.5), p0_acc_bias=0.02, p0_gyro_bias=math.radians(0.05),
-                     sigma_acc_bias_rw=0.0, sigma_gyro_bias_rw=0.0, integration="coning")
+    cfg = ZuptConfig(states=states, g=9.80665, accel_noise_std=0.1, gyro_noise_std=math.radians(0.6), zupt_noise_std=SIGMA_V,
+                     init_att_std=math.radians(0.5), init_accel_bias_std=0.02, init_gyro_bias_std=math.radians(0.05),
+                     accel_bias_random_walk=0.0, gyro_bias_random_walk=0.0, integration="coning")
     n = sim.imu.t.size
     # the middle sample of the middle swing (the foot at speed)
     edges = np.flatnonzero(np.diff(sim.stance.astype(np.int8)))
@@ -65,11 +65,11 @@ def _runs(states: int, seed: int):
     rng = np.random.default_rng(seed)
     nees, zp, zv, zba, zbg = [], [], [], [], []
     for _ in range(RUNS):
-        ba = rng.normal(scale=cfg.p0_acc_bias, size=3) if states == 15 else np.zeros(3)
-        bg = rng.normal(scale=cfg.p0_gyro_bias, size=3) if states == 15 else np.zeros(3)
-        imu = ImuData(sim.imu.t, sim.ideal.gyro + bg + rng.normal(scale=cfg.sigma_gyro, size=(n, 3)),
-                      sim.ideal.accel + ba + rng.normal(scale=cfg.sigma_acc, size=(n, 3)))
-        dphi = rng.normal(scale=cfg.p0_att, size=3)
+        ba = rng.normal(scale=cfg.init_accel_bias_std, size=3) if states == 15 else np.zeros(3)
+        bg = rng.normal(scale=cfg.init_gyro_bias_std, size=3) if states == 15 else np.zeros(3)
+        imu = ImuData(sim.imu.t, sim.ideal.gyro + bg + rng.normal(scale=cfg.gyro_noise_std, size=(n, 3)),
+                      sim.ideal.accel + ba + rng.normal(scale=cfg.accel_noise_std, size=(n, 3)))
+        dphi = rng.normal(scale=cfg.init_att_std, size=3)
         # C_true = exp([dphi x]) C_hat  =>  q_hat = q(-dphi) * q_true (nav-frame error)
         q0 = quat_multiply(quat_from_rotvec(-dphi), sim.q_nb[0])
         res = ZuptFilter(cfg).run(imu, sim.stance, initial_quaternion=q0)

@@ -203,15 +203,15 @@ def test_kfgins_yaml_is_read_in_si(tmp_path):
     assert c.imu_rate_hz == 200 and c.imu_columns == 7 and c.start_time == 456300 and c.end_time is None
     np.testing.assert_allclose(c.init_lla, [30.4447873701 * DEG, 114.4718632047 * DEG, 20.899], rtol=1e-15)
     np.testing.assert_allclose(c.init_euler[2], 185.70235133 * DEG, rtol=1e-15)
-    np.testing.assert_allclose(c.noise.arw, 0.003 * DEG / 60)  # deg/sqrt(h) -> rad/sqrt(s)
-    np.testing.assert_allclose(c.noise.vrw, 0.03 / 60)  # m/s/sqrt(h) -> m/s/sqrt(s)
-    np.testing.assert_allclose(c.noise.gyro_bias_std, 0.027 * DEG / 3600)
-    np.testing.assert_allclose(c.noise.accel_bias_std, 15e-5)  # mGal
-    np.testing.assert_allclose(c.noise.gyro_scale_std, 300e-6)
-    assert c.noise.corr_time == 4 * 3600.0
+    np.testing.assert_allclose(c.imu_noise_model.gyro_noise_density, 0.003 * DEG / 60)  # deg/sqrt(h) -> rad/sqrt(s)
+    np.testing.assert_allclose(c.imu_noise_model.accel_noise_density, 0.03 / 60)  # m/s/sqrt(h) -> m/s/sqrt(s)
+    np.testing.assert_allclose(c.imu_noise_model.gyro_bias_std, 0.027 * DEG / 3600)
+    np.testing.assert_allclose(c.imu_noise_model.accel_bias_std, 15e-5)  # mGal
+    np.testing.assert_allclose(c.imu_noise_model.gyro_scale_std, 300e-6)
+    assert c.imu_noise_model.corr_time == 4 * 3600.0
     # initbgstd ... absent: KF-GINS takes the imunoise sigmas
-    np.testing.assert_allclose(c.init_gyro_bias_std, c.noise.gyro_bias_std)
-    np.testing.assert_allclose(c.init_accel_scale_std, c.noise.accel_scale_std)
+    np.testing.assert_allclose(c.init_gyro_bias_std, c.imu_noise_model.gyro_bias_std)
+    np.testing.assert_allclose(c.init_accel_scale_std, c.imu_noise_model.accel_scale_std)
     np.testing.assert_allclose(c.init_att_std, np.array([0.003, 0.003, 0.023]) * DEG)
     np.testing.assert_allclose(c.antenna_lever_arm, [0.136, -0.301, -0.184])
     assert c.options == {"odopath": "odo.txt"}
@@ -234,12 +234,12 @@ def test_kfgins_yaml_writer_round_trips(tmp_path):
     for name in ("init_vel", "init_gyro_bias", "init_pos_std", "init_vel_std", "init_att_std", "init_gyro_bias_std",
                  "init_accel_bias_std", "init_gyro_scale_std", "init_accel_scale_std", "antenna_lever_arm"):
         np.testing.assert_allclose(getattr(b, name), getattr(a, name), rtol=1e-10, err_msg=name)
-    for name in ("arw", "vrw", "gyro_bias_std", "accel_bias_std", "gyro_scale_std", "accel_scale_std"):
-        np.testing.assert_allclose(getattr(b.noise, name), getattr(a.noise, name), rtol=1e-10, err_msg=name)
+    for name in ("gyro_noise_density", "accel_noise_density", "gyro_bias_std", "accel_bias_std", "gyro_scale_std", "accel_scale_std"):
+        np.testing.assert_allclose(getattr(b.imu_noise_model, name), getattr(a.imu_noise_model, name), rtol=1e-10, err_msg=name)
     np.testing.assert_allclose(b.init_lla[:2], a.init_lla[:2], rtol=0, atol=1e-10 * DEG)
     np.testing.assert_allclose(b.init_euler, a.init_euler, rtol=0, atol=1e-8 * DEG)
-    assert (b.imu_rate_hz, b.imu_columns, b.start_time, b.noise.corr_time) == (a.imu_rate_hz, a.imu_columns,
-                                                                                 a.start_time, a.noise.corr_time)
+    assert (b.imu_rate_hz, b.imu_columns, b.start_time, b.imu_noise_model.corr_time) == (a.imu_rate_hz, a.imu_columns,
+                                                                                 a.start_time, a.imu_noise_model.corr_time)
 
 
 @pytest.mark.parametrize(

@@ -11,7 +11,7 @@ def test_airdata_lab_step(tmp_path):
     text = json.dumps(summary)
     assert "airdata" in text
     rep = json.loads((tmp_path / "data" / "airdata_thesis.json").read_text())
-    assert len(rep["thesis_tables"]["table_6_3"]) == 14
+    assert len(rep["wind_scenario_tables"]["table_6_3"]) == 14
     for name in ("wind", "innovations", "detectors"):  # imunav.airdata.plot renders from results
         assert (tmp_path / "figures" / f"airdata_{name}.png").stat().st_size > 5000
     assert res is not None

@@ -20,9 +20,9 @@ from imunav.rotation import quat_from_euler
 from imunav.sim import (
     hundred_position_profile,
     presets,
+    rate_table_step_profile,
     simulate_imu,
     static_profile,
-    thesis_rate_table_profile,
 )
 from imunav.timeseries import ImuData
 
@@ -74,7 +74,7 @@ def test_white_noise_far_above_the_physical_allowance_is_not_refused():
 @pytest.mark.parametrize("preset", presets.names())
 def test_multiposition_and_rate_table_records_are_refused(preset):
     m = presets.get(preset)
-    for prof in (hundred_position_profile(50.0, 5.0, 1.0), thesis_rate_table_profile(50.0, 5.0, 1.0)):
+    for prof in (hundred_position_profile(50.0, 5.0, 1.0), rate_table_step_profile(50.0, 5.0, 1.0)):
         d = simulate_imu(prof.trajectory, m, np.random.default_rng(0), **_SIM)
         c = check_static(d)
         assert not c.static and c.reasons

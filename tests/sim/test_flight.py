@@ -10,7 +10,7 @@ from imunav.sim.flight import (
     charlie_model,
     dryden_gusts,
     simulate_flight,
-    simulate_thesis_aircraft,
+    simulate_linear_aircraft,
 )
 
 
@@ -19,7 +19,7 @@ def test_thesis_aircraft_kinematics():
     np.testing.assert_allclose(Ad, np.eye(12) + 0.001 * A)
     assert Ad[1, 2] == pytest.approx(0.25)  # U0 T in the w row (printed 0.2499)
     assert Ad[10, 4] == pytest.approx(0.25)  # Y row: U0 β T
-    f = simulate_thesis_aircraft()
+    f = simulate_linear_aircraft()
     assert f.velocity.shape == (500, 3)
     assert f.velocity[0, 0] == pytest.approx(250.0, abs=0.1) and f.velocity[0, 1] == pytest.approx(25.0, rel=0.01)
     # positions are the running sum of the kinematic velocity

@@ -14,10 +14,10 @@ from imunav.sim import (
     multiposition_profile,
     orientations_from_up,
     rate_table_profile,
+    rate_table_step_profile,
+    rate_table_steps,
     six_position_profile,
     static_profile,
-    thesis_rate_steps,
-    thesis_rate_table_profile,
     up_from_orientations,
 )
 from imunav.units import G0
@@ -66,8 +66,8 @@ def test_hundred_position_profile_and_ideal_accel():
     assert prof.summary()["segments"] == {"static": 100, "transition": 99}
 
 
-def test_thesis_rate_steps_exact():
-    rates, axes = thesis_rate_steps()
+def test_rate_table_steps_exact():
+    rates, axes = rate_table_steps()
     assert rates.shape == (120,) and axes.shape == (120,)
     digest = (
         list(range(0, 251, 25)) + list(range(225, 0, -25)) + [0] + list(range(-25, -251, -25)) + list(range(-225, 0, 25))
@@ -80,11 +80,11 @@ def test_thesis_rate_steps_exact():
 
 
 def test_rate_table_profile_exact_commanded_rates():
-    prof = thesis_rate_table_profile(fs=10.0, dwell_s=2.0, transition_s=0.5, remount_s=1.0)
+    prof = rate_table_step_profile(fs=10.0, dwell_s=2.0, transition_s=0.5, remount_s=1.0)
     traj, seg = prof
     _check_cover(seg, traj.n)
     rs = seg.select("rate")
-    rates, axes = thesis_rate_steps()
+    rates, axes = rate_table_steps()
     assert len(rs) == 120
     np.testing.assert_array_equal(rs.rate, rates)
     np.testing.assert_array_equal(rs.axis_b, np.eye(3)[axes])

@@ -1,7 +1,7 @@
 """Wind-estimating air-data / Doppler Kalman filters.
 
-Thesis filter (Akgün 2002, §5.2-5.3, 6.2a)
-------------------------------------------
+Body-axis wind filter :class:`BodyWindFilter` (Akgün 2002, §5.2-5.3, 6.2a)
+--------------------------------------------------------------------------
 
 O. Akgün, *Hava verileri sistemi ile Doppler radarının Kalman süzgeci temelinde tümleştirilmesi*
 (Integration of an air data system and a Doppler radar via Kalman filtering), MSc thesis, Istanbul
@@ -33,7 +33,7 @@ Index convention: row k of every per-step array is the estimate after k + 1
 updates; the thesis's "iteration n" is row ``n − 2`` (MATLAB stores the
 initial condition at index 1), so its table values at iterations
 50/100/101/150/200/≥300 are rows 48/98/99/148/198/≥298
-(:func:`thesis_row`).  The thesis's measurement step s is row s − 1.
+(:func:`iteration_row`).  The thesis's measurement step s is row s − 1.
 
 Long-horizon variant (:class:`LongHorizonFilter`)
 -------------------------------------------------
@@ -65,14 +65,14 @@ from imunav.filters.kalman import _lti_model, robust_mode
 from imunav.results import Result
 
 __all__ = [
-    "ThesisFilterConfig",
-    "thesis_matrices",
-    "thesis_row",
+    "BodyWindFilterConfig",
+    "body_wind_matrices",
+    "iteration_row",
     "THESIS_ITERATIONS",
     "THESIS_P44",
     "WindFilterResult",
-    "ThesisFilter",
-    "ThesisState",
+    "BodyWindFilter",
+    "BodyWindState",
     "LongHorizonConfig",
     "LongHorizonResult",
     "LongHorizonFilter",
@@ -86,8 +86,8 @@ THESIS_ITERATIONS = (50, 100, 101, 150, 200, 300, 500)
 THESIS_P44 = (0.0965, 0.0686, 0.0684, 0.0640, 0.0631, 0.0628, 0.0628)
 
 
-def thesis_row(iteration: int | ArrayLike) -> int | Array:
-    """Row of the per-step arrays that matches the thesis's table iteration n (row = n − 2).
+def iteration_row(iteration: int | ArrayLike) -> int | Array:
+    """Row of the per-step arrays that matches iteration n of the source's tables (row = n − 2; Akgün 2002).
 
     Parameters
     ----------
@@ -112,22 +112,22 @@ def thesis_row(iteration: int | ArrayLike) -> int | Array:
 
 
 @dataclass(frozen=True)
-class ThesisFilterConfig(Result):
-    """Parameters of the thesis filter (defaults: the thesis's values, Akgün 2002, §6.2).
+class BodyWindFilterConfig(Result):
+    """Parameters of :class:`BodyWindFilter` (defaults: the values of its source, Akgün 2002, §6.2).
 
     Attributes
     ----------
     dt : float
         Step T, s (> 0).
-    tau : float
+    wind_corr_time : float
         Correlation time of the wind states, s (> 0).
-    q : float
-        Process noise variance of the wind states per step, (m/s)², applied directly.
-    sigma_ads : float
+    wind_step_var : float
+        Process noise variance of the wind states per step, (m/s)², applied directly (> = 0).
+    ads_noise_std : float
         ADS velocity noise std per axis, m/s (> 0).
-    sigma_doppler : float
+    doppler_noise_std : float
         Doppler velocity noise std per axis, m/s (>= 0).
-    p0 : tuple of float
+    init_var : tuple of float
         Initial variances of (δX, δY, δZ, W_x, W_y, W_z), m² and (m/s)².
     x0 : tuple of float
         Initial state, m and m/s.
@@ -137,32 +137,40 @@ class ThesisFilterConfig(Result):
     Raises
     ------
     InvalidInputError
-        If a value is out of range or ``p0`` / ``x0`` do not have 6 entries.
+        If a value is out of range or ``init_var`` / ``x0`` do not have 6 entries.
+
+    References
+    ----------
+    O. Akgün, *Hava verileri sistemi ile Doppler radarının Kalman süzgeci temelinde tümleştirilmesi* (Integration
+    of an air data system and a Doppler radar via Kalman filtering), MSc thesis, Istanbul Technical University,
+    2002, §5.2-5.3, 6.2a.
     """
 
     dt: float = 0.001
-    tau: float = 600.0
-    q: float = 0.001
-    sigma_ads: float = 2.0
-    sigma_doppler: float = 0.1
-    p0: tuple[float, ...] = (100.0, 100.0, 100.0, 10.0, 10.0, 10.0)
+    wind_corr_time: float = 600.0
+    wind_step_var: float = 0.001
+    ads_noise_std: float = 2.0
+    doppler_noise_std: float = 0.1
+    init_var: tuple[float, ...] = (100.0, 100.0, 100.0, 10.0, 10.0, 10.0)
     x0: tuple[float, ...] = (0.1, 0.1, 0.1, 12.0, 7.0, 5.0)
     velocity_decay: bool = True
 
     def __post_init__(self) -> None:
-        if not (self.dt > 0 and self.tau > 0 and self.q >= 0 and self.sigma_ads > 0 and self.sigma_doppler >= 0):
-            raise InvalidInputError(f"invalid filter parameters: dt={self.dt}, tau={self.tau}, q={self.q}, "
-                                    f"sigma_ads={self.sigma_ads}, sigma_doppler={self.sigma_doppler} (need > 0)")
-        if len(self.p0) != 6 or len(self.x0) != 6:
-            raise InvalidInputError("p0 and x0 must have 6 entries (δX, δY, δZ, W_x, W_y, W_z)")
+        if not (self.dt > 0 and self.wind_corr_time > 0 and self.wind_step_var >= 0 and self.ads_noise_std > 0
+                and self.doppler_noise_std >= 0):
+            raise InvalidInputError(f"invalid filter parameters: dt={self.dt}, wind_corr_time={self.wind_corr_time}, "
+                                    f"wind_step_var={self.wind_step_var}, ads_noise_std={self.ads_noise_std}, "
+                                    f"doppler_noise_std={self.doppler_noise_std} (need > 0)")
+        if len(self.init_var) != 6 or len(self.x0) != 6:
+            raise InvalidInputError("init_var and x0 must have 6 entries (δX, δY, δZ, W_x, W_y, W_z)")
 
 
-def thesis_matrices(cfg: ThesisFilterConfig | None = None) -> dict[str, Array]:
-    """F (Φ), G, Q, H, R, P0, x0 of the thesis filter.
+def body_wind_matrices(cfg: BodyWindFilterConfig | None = None) -> dict[str, Array]:
+    """F (Φ), G, Q, H, R, P0, x0 of the body-axis wind filter (:class:`BodyWindFilter`).
 
     Parameters
     ----------
-    cfg : ThesisFilterConfig, optional
+    cfg : BodyWindFilterConfig, optional
         Filter parameters (default the thesis's).
 
     Returns
@@ -170,16 +178,16 @@ def thesis_matrices(cfg: ThesisFilterConfig | None = None) -> dict[str, Array]:
     dict of str to numpy.ndarray
         ``F`` (6, 6), ``G`` (6, 3), ``Q`` (3, 3), ``H`` (3, 6), ``R`` (3, 3), ``P0`` (6, 6), ``x0`` (6,).
     """
-    c = ThesisFilterConfig() if cfg is None else cfg
+    c = BodyWindFilterConfig() if cfg is None else cfg
     I3 = np.eye(3)
     F = np.eye(6)
     F[:3, 3:] = c.dt * I3
     if c.velocity_decay:
-        F[3:, 3:] = (1.0 - c.dt / c.tau) * I3
+        F[3:, 3:] = (1.0 - c.dt / c.wind_corr_time) * I3
     G = np.vstack([np.zeros((3, 3)), I3])
     H = np.hstack([np.zeros((3, 3)), I3])
-    return {"F": F, "G": G, "Q": c.q * I3, "H": H, "R": (c.sigma_ads**2 + c.sigma_doppler**2) * I3,
-            "P0": np.diag(np.asarray(c.p0, dtype=np.float64)), "x0": np.asarray(c.x0, dtype=np.float64)}
+    return {"F": F, "G": G, "Q": c.wind_step_var * I3, "H": H, "R": (c.ads_noise_std**2 + c.doppler_noise_std**2) * I3,
+            "P0": np.diag(np.asarray(c.init_var, dtype=np.float64)), "x0": np.asarray(c.x0, dtype=np.float64)}
 
 
 @dataclass(frozen=True)
@@ -233,8 +241,8 @@ def _check_z(z: ArrayLike, batch: bool) -> Array:
 
 
 @dataclass(frozen=True)
-class ThesisState:
-    """The thesis filter's estimate after one :meth:`ThesisFilter.step` (one row of :class:`WindFilterResult`).
+class BodyWindState:
+    """The body-axis wind filter's estimate after one :meth:`BodyWindFilter.step` (one row of :class:`WindFilterResult`).
 
     Attributes
     ----------
@@ -253,15 +261,16 @@ class ThesisState:
     weights: Array
 
 
-class ThesisFilter:
-    """The thesis wind filter (Akgün 2002; module docstring) on ``z = V_D − V_A``.
+class BodyWindFilter:
+    """Body-axis wind and position-correction filter on ``z = V_D − V_A`` (Doppler minus air-data velocity; module
+    docstring).
 
     ``run(z)`` filters one sequence, ``run_batch(z)`` many at once (vectorised over runs),
     ``step(z_k)`` one measurement, with the same update code, the state carried between calls.
 
     Parameters
     ----------
-    config : ThesisFilterConfig, optional
+    config : BodyWindFilterConfig, optional
         Filter parameters (default the thesis's).
     robust : {None, "gate", "isolate", "nis", "huber"}, optional
         None (optimal), ``"gate"`` (thesis, per channel |ν̃| < gate_m),
@@ -283,18 +292,18 @@ class ThesisFilter:
 
     name = "thesis"
 
-    def __init__(self, config: ThesisFilterConfig | None = None, *, robust: str | None = None, gate_m: float = 2.0,
+    def __init__(self, config: BodyWindFilterConfig | None = None, *, robust: str | None = None, gate_m: float = 2.0,
                  alpha: float = 1e-3, huber_c: float = 1.345) -> None:
-        self.config = ThesisFilterConfig() if config is None else config
+        self.config = BodyWindFilterConfig() if config is None else config
         self._mode = robust_mode(robust, gate_m, alpha, huber_c)
         self.robust, self.gate_m, self.alpha, self.huber_c = robust, gate_m, alpha, huber_c
-        self._m = thesis_matrices(self.config)
+        self._m = body_wind_matrices(self.config)
         m = self._m
         self._lti = _lti_model(6, m["F"], m["Q"], m["H"], m["R"], m["G"])  # (F, G Q Gᵀ, H, R) as run_batch has them
         self.reset()
 
     def reset(self) -> None:
-        """Back to the initial state ``config.x0``, ``diag(config.p0)``: the next :meth:`step` is the first."""
+        """Back to the initial state ``config.x0``, ``diag(config.init_var)``: the next :meth:`step` is the first."""
         self.x = self._m["x0"].copy()
         self.P = self._m["P0"].copy()
 
@@ -351,7 +360,7 @@ class ThesisFilter:
         return WindFilterResult(x, r.cov_diag[0], r.innovation[0], r.normalized[0], r.weights[0], x[:, 3:].copy(),
                                 zz, vel, pos, self.robust)
 
-    def step(self, z_k: ArrayLike) -> ThesisState:
+    def step(self, z_k: ArrayLike) -> BodyWindState:
         """One prediction over ``config.dt`` and the update with one measurement (the loop of :meth:`run_batch`).
 
         Parameters
@@ -361,7 +370,7 @@ class ThesisFilter:
 
         Returns
         -------
-        ThesisState
+        BodyWindState
             The estimate after this step; ``self.x``, ``self.P`` hold it for the next.
 
         Raises
@@ -378,7 +387,7 @@ class ThesisFilter:
         o = batch_filter(self.x, self.P, F, Qn, H, R, zk[None], self._mode, float(self.gate_m),
                          isolation_thresholds(3, self.alpha), float(self.huber_c), store_full=True)
         self.x, self.P = o["x"][0, 0].copy(), o["P"][0, 0].copy()
-        return ThesisState(self.x.copy(), o["P_diag"][0, 0], o["innovation"][0, 0], o["normalized"][0, 0],
+        return BodyWindState(self.x.copy(), o["P_diag"][0, 0], o["innovation"][0, 0], o["normalized"][0, 0],
                            o["weights"][0, 0])
 
 
@@ -392,13 +401,13 @@ class LongHorizonConfig(Result):
 
     Attributes
     ----------
-    wind_sigma, wind_tau : float
+    wind_std, wind_corr_time : float
         Gauss-Markov mean-wind std (m/s) and correlation time (s).
-    turbulence_sigma, turbulence_tau : float
+    turbulence_std, turbulence_corr_time : float
         Gauss-Markov gust std (m/s) and correlation time (s, ≈ L_u / V = 533 m / 200 m/s for Dryden at altitude).
-    sigma_ads, sigma_doppler : float
+    ads_noise_std, doppler_noise_std : float
         Body-axis velocity noise std (m/s) per axis.
-    p0_wind, p0_position : float
+    init_wind_var, init_position_var : float
         Initial variances (m²/s², m²).
     robust : str or None
         None, "gate", "isolate" (default), "nis" or "huber".
@@ -413,21 +422,23 @@ class LongHorizonConfig(Result):
         If a value is out of range or ``robust`` is unknown.
     """
 
-    wind_sigma: float = 10.0
-    wind_tau: float = 1800.0
-    turbulence_sigma: float = 1.5
-    turbulence_tau: float = 2.7
-    sigma_ads: tuple[float, float, float] = (0.3, 0.4, 0.4)
-    sigma_doppler: tuple[float, float, float] = (0.17, 0.17, 0.06)  # 4-beam LS, 0.1 m/s per beam, 65° depression
-    p0_wind: float = 400.0
-    p0_position: float = 1.0
+    wind_std: float = 10.0
+    wind_corr_time: float = 1800.0
+    turbulence_std: float = 1.5
+    turbulence_corr_time: float = 2.7
+    ads_noise_std: tuple[float, float, float] = (0.3, 0.4, 0.4)
+    doppler_noise_std: tuple[float, float, float] = (0.17, 0.17, 0.06)  # 4-beam LS, 0.1 m/s per beam, 65° depression
+    init_wind_var: float = 400.0
+    init_position_var: float = 1.0
     robust: str | None = "isolate"
     alpha: float = 1e-3
     gate_m: float = 3.0
 
     def __post_init__(self) -> None:
-        if not (self.wind_sigma > 0 and self.wind_tau > 0 and self.turbulence_sigma >= 0 and self.turbulence_tau > 0):
-            raise InvalidInputError("wind_sigma, wind_tau, turbulence_tau must be > 0 and turbulence_sigma >= 0")
+        if not (self.wind_std > 0 and self.wind_corr_time > 0 and self.turbulence_std >= 0
+                and self.turbulence_corr_time > 0):
+            raise InvalidInputError("wind_std, wind_corr_time, turbulence_corr_time must be > 0 and "
+                                    "turbulence_std >= 0")
         if self.robust not in (None, "gate", "isolate", "nis", "huber"):
             raise InvalidInputError(f"robust must be None, 'gate', 'isolate', 'nis' or 'huber', got {self.robust!r}")
         if not (np.isfinite(self.gate_m) and self.gate_m > 0):
@@ -477,8 +488,8 @@ class LongHorizonResult(Result):
 def _van_loan(dt: float, c: LongHorizonConfig) -> tuple[Array, Array]:
     """Exact discrete (Φ, Q) per axis of ``δṗ = W + g``, ``Ẇ = −W/τ_w + w₁``, ``ġ = −g/τ_g + w₂``."""
 
-    A = np.array([[0.0, 1.0, 1.0], [0.0, -1.0 / c.wind_tau, 0.0], [0.0, 0.0, -1.0 / c.turbulence_tau]])
-    Qc = np.diag([0.0, 2.0 * c.wind_sigma**2 / c.wind_tau, 2.0 * c.turbulence_sigma**2 / c.turbulence_tau])
+    A = np.array([[0.0, 1.0, 1.0], [0.0, -1.0 / c.wind_corr_time, 0.0], [0.0, 0.0, -1.0 / c.turbulence_corr_time]])
+    Qc = np.diag([0.0, 2.0 * c.wind_std**2 / c.wind_corr_time, 2.0 * c.turbulence_std**2 / c.turbulence_corr_time])
     return van_loan(A, Qc, float(dt))
 
 
@@ -525,8 +536,8 @@ class LongHorizonFilter:
     def __init__(self, config: LongHorizonConfig | None = None) -> None:
         self.config = LongHorizonConfig() if config is None else config
         c = self.config
-        self._Rb = np.diag(np.asarray(c.sigma_ads, dtype=np.float64) ** 2
-                           + np.asarray(c.sigma_doppler, dtype=np.float64) ** 2)
+        self._Rb = np.diag(np.asarray(c.ads_noise_std, dtype=np.float64) ** 2
+                           + np.asarray(c.doppler_noise_std, dtype=np.float64) ** 2)
         self._H = np.hstack([np.zeros((3, 3)), np.eye(3), np.eye(3)])
         self._thr = isolation_thresholds(3, c.alpha)
         self._cache: dict[float, tuple[Array, Array]] = {}
@@ -536,7 +547,8 @@ class LongHorizonFilter:
         """Back to the initial state: the next :meth:`step` is the first epoch (it initialises the wind)."""
         c = self.config
         self.x = np.zeros((1, 9))
-        self.P = np.diag([c.p0_position] * 3 + [c.p0_wind] * 3 + [max(c.turbulence_sigma, 1e-3) ** 2] * 3)[None]
+        self.P = np.diag([c.init_position_var] * 3 + [c.init_wind_var] * 3
+                         + [max(c.turbulence_std, 1e-3) ** 2] * 3)[None]
         self._t: float | None = None
 
     def _advance(self, tk: float, zk: Array, R: Array) -> LongHorizonState:

@@ -49,8 +49,8 @@ from imunav.rotation import dcm_from_euler
 __all__ = [
     "CHARLIE_STATES",
     "charlie_model",
-    "ThesisFlight",
-    "simulate_thesis_aircraft",
+    "LinearAircraftFlight",
+    "simulate_linear_aircraft",
     "dryden_gusts",
     "TURBULENCE_SIGMA",
     "FlightConfig",
@@ -104,8 +104,8 @@ def charlie_model(dt: float = 0.001, u0: float = 250.0) -> tuple[Array, Array]:
 
 
 @dataclass(frozen=True)
-class ThesisFlight(Result):
-    """Thesis aircraft run.
+class LinearAircraftFlight(Result):
+    """A run of the linear aircraft model (:func:`simulate_linear_aircraft`).
 
     Attributes
     ----------
@@ -125,10 +125,11 @@ class ThesisFlight(Result):
     position: Array
 
 
-def simulate_thesis_aircraft(n_steps: int = 500, dt: float = 0.001, u0: float = 250.0,
+def simulate_linear_aircraft(n_steps: int = 500, dt: float = 0.001, u0: float = 250.0,
                              beta0: float = 0.1, phi0_deg: float = 5.0, psi0: float = 0.1,
-                             x0: float = 0.1, y0: float = 0.1, altitude: float = 12200.0) -> ThesisFlight:
-    """Free response (u = 0) of the thesis aircraft from the thesis's initial state (Akgün 2002, §5.3.2).
+                             x0: float = 0.1, y0: float = 0.1, altitude: float = 12200.0) -> LinearAircraftFlight:
+    """Free response (u = 0) of the linear aircraft model (the Charlie model) from the initial state of Akgün 2002,
+    §5.3.2.
 
     Parameters
     ----------
@@ -151,7 +152,7 @@ def simulate_thesis_aircraft(n_steps: int = 500, dt: float = 0.001, u0: float = 
 
     Returns
     -------
-    ThesisFlight
+    LinearAircraftFlight
         States, body velocity and position at every step.
 
     Raises
@@ -170,7 +171,7 @@ def simulate_thesis_aircraft(n_steps: int = 500, dt: float = 0.001, u0: float = 
         S[k] = s
     vel = np.stack([u0 + S[:, 0], u0 * S[:, 4], S[:, 1]], axis=1)
     pos = np.array([x0, y0, 0.0]) + dt * np.cumsum(vel, axis=0)
-    return ThesisFlight(dt * np.arange(1, n_steps + 1), S, vel, pos)
+    return LinearAircraftFlight(dt * np.arange(1, n_steps + 1), S, vel, pos)
 
 
 # ----------------------------------------------------------------------------------------------
@@ -286,7 +287,7 @@ class FlightConfig(Result):
         "none", "light", "moderate", "severe" (Dryden σ 0/1.5/3/6.5 m/s).
     rate_truth, rate_ads, rate_doppler : float
         Hz (truth must be a multiple of the sensor rates).
-    sigma_ps, sigma_qc, sigma_tat, sigma_alpha_deg, sigma_beta_deg : float
+    ps_noise_std, qc_noise_std, tat_noise_std, alpha_noise_std_deg, beta_noise_std_deg : float
         Air-data system noise: static and impact pressure (Pa), total air temperature (K), angles (deg).
     alpha_trim_deg : float
         Trim angle of attack, degrees.
@@ -298,7 +299,7 @@ class FlightConfig(Result):
         Beam-level error model.
     over_water : tuple of (float, float)
         ``[(t0, t1), ...]`` intervals over water, s.
-    sigma_attitude_deg : float
+    attitude_noise_std_deg : float
         Attitude-reference noise (per Euler angle), degrees.
     """
 
@@ -312,17 +313,17 @@ class FlightConfig(Result):
     rate_truth: float = 100.0
     rate_ads: float = 50.0
     rate_doppler: float = 10.0
-    sigma_ps: float = 10.0
-    sigma_qc: float = 10.0
-    sigma_tat: float = 0.25
-    sigma_alpha_deg: float = 0.1
-    sigma_beta_deg: float = 0.1
+    ps_noise_std: float = 10.0
+    qc_noise_std: float = 10.0
+    tat_noise_std: float = 0.25
+    alpha_noise_std_deg: float = 0.1
+    beta_noise_std_deg: float = 0.1
     alpha_trim_deg: float = 2.0
     n_beams: int = 4
     depression_deg: float = 65.0
     doppler: DopplerErrors = field(default_factory=lambda: DopplerErrors(noise=0.1, scale=0.0))
     over_water: tuple[tuple[float, float], ...] = ()
-    sigma_attitude_deg: float = 0.0
+    attitude_noise_std_deg: float = 0.0
 
     def __post_init__(self) -> None:
         if self.profile not in ("cruise", "turns", "manoeuvre"):
@@ -511,15 +512,15 @@ def simulate_flight(cfg: FlightConfig | None = None, rng: np.random.Generator | 
     ps_true = atm.pressure
     pt_true = ps_true * pitot_ratio(M)
     na = ia.size
-    ps_m = ps_true + c.sigma_ps * gen.standard_normal(na)
-    pt_m = ps_m + (pt_true - ps_true) + c.sigma_qc * gen.standard_normal(na)
-    tat_m = total_temperature(atm.temperature, M) + c.sigma_tat * gen.standard_normal(na)
+    ps_m = ps_true + c.ps_noise_std * gen.standard_normal(na)
+    pt_m = ps_m + (pt_true - ps_true) + c.qc_noise_std * gen.standard_normal(na)
+    tat_m = total_temperature(atm.temperature, M) + c.tat_noise_std * gen.standard_normal(na)
     ad = air_data(pt_m, ps_m, tat_m)
     al_t, be_t = aoa_sideslip(v_air_body[ia])
-    al_m = al_t + np.deg2rad(c.sigma_alpha_deg) * gen.standard_normal(na)
-    be_m = be_t + np.deg2rad(c.sigma_beta_deg) * gen.standard_normal(na)
+    al_m = al_t + np.deg2rad(c.alpha_noise_std_deg) * gen.standard_normal(na)
+    be_m = be_t + np.deg2rad(c.beta_noise_std_deg) * gen.standard_normal(na)
     v_ads = tas_to_body(ad.tas, al_m, be_m)
-    eul_a = euler[ia] + np.deg2rad(c.sigma_attitude_deg) * gen.standard_normal((na, 3))
+    eul_a = euler[ia] + np.deg2rad(c.attitude_noise_std_deg) * gen.standard_normal((na, 3))
 
     # ---- Doppler at rate_doppler
     idd = np.arange(0, n, int(round(c.rate_truth / c.rate_doppler)))
@@ -528,7 +529,7 @@ def simulate_flight(cfg: FlightConfig | None = None, rng: np.random.Generator | 
     for t0, t1 in c.over_water:
         water[(t[idd] >= t0) & (t[idd] < t1)] = 1.0
     dm = simulate_doppler(v_g_body, janus_beams(c.n_beams, c.depression_deg), c.doppler, water, gen)
-    eul_d = euler[idd] + np.deg2rad(c.sigma_attitude_deg) * gen.standard_normal((idd.size, 3))
+    eul_d = euler[idd] + np.deg2rad(c.attitude_noise_std_deg) * gen.standard_normal((idd.size, 3))
     return FlightData(t, pos, v_ground, wind, euler, v_air_body, tas, alt,
                       t[ia], ps_m, pt_m, tat_m, al_m, be_m, ad.tas, v_ads, eul_a,
                       t[idd], dm.velocity, dm.beam_velocity, eul_d, water.astype(bool), c)

@@ -4,11 +4,11 @@ A flight file is what ``imunav airdata simulate`` writes and ``imunav airdata ru
 archive (``.npz``, no pickled objects) holding
 
 * ``meta``: a JSON string ``{"type": "thesis" | "flight", "scenario" | "config": {...}, "seed": int}``: the
-  scenario (:meth:`ThesisScenario.to_dict <imunav.airdata.scenario.ThesisScenario>`) of a thesis run, the
+  scenario (:meth:`WindScenario.to_dict <imunav.airdata.scenario.WindScenario>`) of a thesis run, the
   :class:`~imunav.airdata.flight.FlightConfig` of a flight;
 * the arrays of the run, in SI, angles in rad:
 
-  - thesis (:class:`~imunav.airdata.scenario.ThesisData`): ``t``, ``x_true``, ``wind_true``, ``v_true``, ``v_ads``,
+  - thesis (:class:`~imunav.airdata.scenario.WindScenarioData`): ``t``, ``x_true``, ``wind_true``, ``v_true``, ``v_ads``,
     ``v_doppler``, ``z``, ``ads_noise``, ``anomaly``;
   - flight (:class:`~imunav.airdata.flight.FlightData`): every array of the flight (``t``, ``position_ned``,
     ``velocity_ned``, ``wind_ned``, ``euler``, ..., ``t_ads``, ``v_ads_body``, ``euler_ads``, ``t_doppler``,
@@ -31,9 +31,9 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from imunav.airdata.filter import LongHorizonConfig, LongHorizonFilter, ThesisFilter, thesis_row
+from imunav.airdata.filter import BodyWindFilter, LongHorizonConfig, LongHorizonFilter, iteration_row
 from imunav.airdata.flight import FlightConfig, simulate_flight
-from imunav.airdata.scenario import ThesisScenario, simulate_thesis
+from imunav.airdata.scenario import WindScenario, simulate_wind_scenario
 from imunav.errors import FileFormatError
 from imunav.files import atomic_path
 from imunav.io._common import wrap_read_errors
@@ -46,7 +46,7 @@ Array = NDArray[np.float64]
 
 #: The two kinds of flight file.
 FILE_TYPES = ("thesis", "flight")
-#: Arrays of a thesis file (the array fields of :class:`~imunav.airdata.scenario.ThesisData`).
+#: Arrays of a thesis file (the array fields of :class:`~imunav.airdata.scenario.WindScenarioData`).
 THESIS_ARRAYS = ("t", "x_true", "wind_true", "v_true", "v_ads", "v_doppler", "z", "ads_noise", "anomaly")
 
 
@@ -95,13 +95,13 @@ class FlightFile:
                 "seed": seed}
 
 
-def simulate_flight_file(scenario: ThesisScenario | FlightConfig, seed: int = 0) -> FlightFile:
+def simulate_flight_file(scenario: WindScenario | FlightConfig, seed: int = 0) -> FlightFile:
     """Simulate the run of a flight file: a thesis scenario or a flight.
 
     Parameters
     ----------
-    scenario : ThesisScenario or FlightConfig
-        A thesis scenario (:func:`~imunav.airdata.scenario.simulate_thesis`) or a flight
+    scenario : WindScenario or FlightConfig
+        A thesis scenario (:func:`~imunav.airdata.scenario.simulate_wind_scenario`) or a flight
         (:func:`~imunav.airdata.flight.simulate_flight`).
     seed : int, optional
         Random seed (stored in ``meta``).
@@ -111,8 +111,8 @@ def simulate_flight_file(scenario: ThesisScenario | FlightConfig, seed: int = 0)
     FlightFile
         Its ``meta`` and arrays.
     """
-    if isinstance(scenario, ThesisScenario):
-        d = simulate_thesis(scenario, rng=seed)
+    if isinstance(scenario, WindScenario):
+        d = simulate_wind_scenario(scenario, rng=seed)
         return FlightFile("thesis", {"type": "thesis", "scenario": d.scenario.to_dict(), "seed": seed},
                           {k: getattr(d, k) for k in THESIS_ARRAYS})
     f = simulate_flight(scenario, rng=seed)
@@ -181,7 +181,7 @@ class WindErrors:
     ----------
     kind : {"thesis", "flight"}
         The file's type: the thesis's 6-state filter, or the long-horizon navigation-frame filter.
-    result : ThesisFilterResult or LongHorizonResult
+    result : WindFilterResult or LongHorizonResult
         The filter's output (what :func:`imunav.airdata.plot.plot_wind` / ``plot_long_horizon`` draw).
     summary : dict
         The error statistics (the JSON of ``imunav airdata run``). Thesis: ``type``, ``robust``,
@@ -217,7 +217,7 @@ def wind_errors(content: FlightFile, *, robust: str | None = None, gate_m: float
                 alpha: float = 1e-3) -> WindErrors:
     """Run the wind filter of a flight file's type over it and score it against the file's truth.
 
-    A thesis file runs :class:`~imunav.airdata.filter.ThesisFilter` on ``z`` (with ``v_ads``); a flight file runs
+    A thesis file runs :class:`~imunav.airdata.filter.BodyWindFilter` on ``z`` (with ``v_ads``); a flight file runs
     :class:`~imunav.airdata.filter.LongHorizonFilter` on the multi-rate air-data and Doppler velocities.
 
     Parameters
@@ -246,8 +246,8 @@ def wind_errors(content: FlightFile, *, robust: str | None = None, gate_m: float
     d = content.arrays
     try:
         if content.kind == "thesis":
-            r = ThesisFilter(robust=robust, gate_m=gate_m, alpha=alpha).run(d["z"], v_ads=d["v_ads"])
-            k0 = thesis_row(100)
+            r = BodyWindFilter(robust=robust, gate_m=gate_m, alpha=alpha).run(d["z"], v_ads=d["v_ads"])
+            k0 = iteration_row(100)
             summary = {"type": "thesis", "robust": robust or "none", "wind_rms_per_axis": _rms(r.wind[k0:] - d["wind_true"][k0:]),
                        "difference_loop_rms_per_axis": _rms(d["z"][k0:] - d["wind_true"][k0:]),
                        "rejected_samples": int((r.weights == 0).sum()),

@@ -29,8 +29,8 @@ def plot_wind(result, data=None, axis_names=("x", "y", "z")):
     Parameters
     ----------
     result : WindFilterResult
-        Output of :meth:`imunav.airdata.filter.ThesisFilter.run`; wind in m/s, body axes.
-    data : ThesisData, optional
+        Output of :meth:`imunav.airdata.filter.BodyWindFilter.run`; wind in m/s, body axes.
+    data : WindScenarioData, optional
         The simulated run, for the true wind.
     axis_names : tuple of str
         Labels of the three axes.

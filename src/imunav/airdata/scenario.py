@@ -1,4 +1,5 @@
-"""The thesis scenarios and their Monte Carlo evaluation.
+"""The air-data / Doppler wind scenarios (simulated flights of the body-axis wind filter) and their Monte Carlo
+evaluation.
 
 After O. Akgün, *Hava verileri sistemi ile Doppler radarının Kalman süzgeci temelinde tümleştirilmesi*
 (Integration of an air data system and a Doppler radar via Kalman filtering), MSc thesis, Istanbul
@@ -33,12 +34,12 @@ from imunav.airdata.doppler import DopplerErrors
 from imunav.airdata.filter import (
     THESIS_ITERATIONS,
     THESIS_P44,
-    ThesisFilter,
-    ThesisFilterConfig,
-    thesis_matrices,
-    thesis_row,
+    BodyWindFilter,
+    BodyWindFilterConfig,
+    body_wind_matrices,
+    iteration_row,
 )
-from imunav.airdata.flight import FlightConfig, simulate_thesis_aircraft
+from imunav.airdata.flight import FlightConfig, simulate_linear_aircraft
 from imunav.errors import ConfigError, InvalidInputError
 from imunav.filters import Fault, inject_faults
 from imunav.filters.faults import (
@@ -49,27 +50,27 @@ from imunav.filters.faults import (
     detection_delays,
     detector_statistics,
     false_alarm_rates,
-    thesis_thresholds,
+    window_chi2_thresholds,
 )
 from imunav.results import Result
 from imunav.toml import read_toml
 
 __all__ = [
     "KINDS",
-    "ThesisScenario",
-    "ThesisData",
-    "simulate_thesis",
-    "simulate_thesis_batch",
+    "WindScenario",
+    "WindScenarioData",
+    "simulate_wind_scenario",
+    "simulate_wind_scenario_batch",
     "simulate_detector_statistics",
     "delay_summary",
     "fault_detection_table",
     "covariance_sequence",
     "actual_error_covariance",
-    "ThesisMonteCarlo",
-    "monte_carlo_thesis",
-    "thesis_report",
+    "WindMonteCarlo",
+    "wind_monte_carlo",
+    "wind_scenario_report",
     "load_config",
-    "thesis_tables",
+    "wind_scenario_tables",
 ]
 
 Array = NDArray[np.float64]
@@ -77,8 +78,8 @@ KINDS = ("nominal", "outliers", "variance", "bias", "drift", "stuck")
 
 
 @dataclass(frozen=True)
-class ThesisScenario(Result):
-    """Thesis scenario parameters (defaults from the thesis; steps are the thesis's 1-based steps).
+class WindScenario(Result):
+    """Wind-scenario parameters (defaults and 1-based steps as in the source, Akgün 2002, §6.2).
 
     Attributes
     ----------
@@ -88,9 +89,9 @@ class ThesisScenario(Result):
         Number of filter steps.
     dt : float
         Step, s.
-    sigma_ads, sigma_doppler : float
+    ads_noise_std, doppler_noise_std : float
         Noise standard deviation per body axis of the air-data and Doppler velocities, m/s.
-    tau : float
+    wind_corr_time : float
         Correlation time of the Gauss-Markov wind, s.
     x_true0 : tuple of float
         Initial true state ``(δX, W)``: position error (m) and wind (m/s), body axes.
@@ -108,16 +109,16 @@ class ThesisScenario(Result):
         Drift fault rate, m/s per s.
     channels : tuple of int or None
         Body axes affected by the fault (None: all).
-    filter : ThesisFilterConfig
+    filter : BodyWindFilterConfig
         The filter run on the scenario.
     """
 
     kind: str = "nominal"
     n_steps: int = 500
     dt: float = 0.001
-    sigma_ads: float = 2.0
-    sigma_doppler: float = 0.1
-    tau: float = 600.0
+    ads_noise_std: float = 2.0
+    doppler_noise_std: float = 0.1
+    wind_corr_time: float = 600.0
     x_true0: tuple[float, ...] = (0.1, 0.1, 0.1, 7.0, 5.0, 1.7)
     outlier_steps: tuple[int, ...] = (100, 200, 300, 400)
     outlier_factor: float = 15.0
@@ -126,7 +127,7 @@ class ThesisScenario(Result):
     bias: float = 10.0
     drift_rate: float = 200.0  # m/s per s (0.2 m/s per 1 ms step)
     channels: tuple[int, ...] | None = None
-    filter: ThesisFilterConfig = field(default_factory=ThesisFilterConfig)
+    filter: BodyWindFilterConfig = field(default_factory=BodyWindFilterConfig)
 
     def __post_init__(self) -> None:
         if self.kind not in KINDS:
@@ -187,8 +188,8 @@ class ThesisScenario(Result):
 
 
 @dataclass(frozen=True)
-class ThesisData(Result):
-    """One simulated thesis run: truth and sensors, (N, 3) per body axis unless noted.
+class WindScenarioData(Result):
+    """One simulated run of a wind scenario: truth and sensors, (N, 3) per body axis unless noted.
 
     Attributes
     ----------
@@ -209,8 +210,8 @@ class ThesisData(Result):
     ads_noise : numpy.ndarray
         Air-data noise drawn, m/s.
     anomaly : numpy.ndarray of bool
-        :meth:`ThesisScenario.anomaly_mask`.
-    scenario : ThesisScenario
+        :meth:`WindScenario.anomaly_mask`.
+    scenario : WindScenario
         The scenario simulated.
     """
 
@@ -223,12 +224,12 @@ class ThesisData(Result):
     z: Array
     ads_noise: Array
     anomaly: NDArray[np.bool_]
-    scenario: ThesisScenario
+    scenario: WindScenario
 
 
-def _truth(sc: ThesisScenario) -> Array:
-    cfg = replace(sc.filter, dt=sc.dt, tau=sc.tau)
-    F = thesis_matrices(cfg)["F"]
+def _truth(sc: WindScenario) -> Array:
+    cfg = replace(sc.filter, dt=sc.dt, wind_corr_time=sc.wind_corr_time)
+    F = body_wind_matrices(cfg)["F"]
     x = np.asarray(sc.x_true0, dtype=np.float64)
     out = np.empty((sc.n_steps, 6))
     for k in range(sc.n_steps):
@@ -237,15 +238,15 @@ def _truth(sc: ThesisScenario) -> Array:
     return out
 
 
-def _simulate(s: ThesisScenario, n_runs: int, rng: np.random.Generator | int | None) -> tuple[Array, ...]:
+def _simulate(s: WindScenario, n_runs: int, rng: np.random.Generator | int | None) -> tuple[Array, ...]:
     """Truth x (N, 6), aircraft velocity v (N, 3), ADS va, Doppler vd and ADS noise (runs, N, 3)."""
 
     gen = np.random.default_rng(rng)
     xt = _truth(s)
     N = s.n_steps
-    v = simulate_thesis_aircraft(N, s.dt).velocity  # same deterministic flight for every run
-    na = s.sigma_ads * gen.standard_normal((n_runs, N, 3))
-    nd = s.sigma_doppler * gen.standard_normal((n_runs, N, 3))
+    v = simulate_linear_aircraft(N, s.dt).velocity  # same deterministic flight for every run
+    na = s.ads_noise_std * gen.standard_normal((n_runs, N, 3))
+    nd = s.doppler_noise_std * gen.standard_normal((n_runs, N, 3))
     va = v[None] - xt[None, :, 3:] + na  # eq. 5.9; faults act on the ADS output
     faults = s.faults()
     if faults:
@@ -253,13 +254,13 @@ def _simulate(s: ThesisScenario, n_runs: int, rng: np.random.Generator | int | N
     return xt, v, va, v[None] + nd, na
 
 
-def simulate_thesis_batch(sc: ThesisScenario | None = None, n_runs: int = 100,
+def simulate_wind_scenario_batch(sc: WindScenario | None = None, n_runs: int = 100,
                           rng: np.random.Generator | int | None = None) -> tuple[Array, Array, Array]:
     """Measurements of many runs of a scenario at once, for Monte Carlo.
 
     Parameters
     ----------
-    sc : ThesisScenario, optional
+    sc : WindScenario, optional
         The scenario (default: the nominal one).
     n_runs : int
         Number of runs, >= 1.
@@ -280,42 +281,42 @@ def simulate_thesis_batch(sc: ThesisScenario | None = None, n_runs: int = 100,
     InvalidInputError
         If ``n_runs < 1``.
     """
-    s = ThesisScenario() if sc is None else sc
+    s = WindScenario() if sc is None else sc
     if n_runs < 1:
         raise InvalidInputError(f"n_runs must be >= 1, got {n_runs}")
     xt, _, va, vd, na = _simulate(s, n_runs, rng)
     return vd - va, xt, na
 
 
-def simulate_thesis(sc: ThesisScenario | None = None, rng: np.random.Generator | int | None = None) -> ThesisData:
-    """One thesis run with the aircraft truth (Charlie model) and both sensors.
+def simulate_wind_scenario(sc: WindScenario | None = None, rng: np.random.Generator | int | None = None) -> WindScenarioData:
+    """One run of a wind scenario with the aircraft truth (Charlie model) and both sensors.
 
     Parameters
     ----------
-    sc : ThesisScenario, optional
+    sc : WindScenario, optional
         The scenario (default: the nominal one).
     rng : numpy.random.Generator or int, optional
         Random generator or seed.
 
     Returns
     -------
-    ThesisData
+    WindScenarioData
         Truth and sensor outputs.
     """
-    s = ThesisScenario() if sc is None else sc
+    s = WindScenario() if sc is None else sc
     xt, v, va, vd, na = _simulate(s, 1, rng)
-    return ThesisData(s.dt * np.arange(1, s.n_steps + 1), xt, xt[:, 3:].copy(), v, va[0], vd[0], vd[0] - va[0], na[0],
+    return WindScenarioData(s.dt * np.arange(1, s.n_steps + 1), xt, xt[:, 3:].copy(), v, va[0], vd[0], vd[0] - va[0], na[0],
                       s.anomaly_mask(), s)
 
 
 def simulate_detector_statistics(
-    sc: ThesisScenario,
+    sc: WindScenario,
     n_runs: int,
     rng: np.random.Generator | int | None,
     window: int,
     *,
     chunk: int = 250,
-    cfg: ThesisFilterConfig | None = None,
+    cfg: BodyWindFilterConfig | None = None,
     on_chunk: Callable[[int], None] | None = None,
 ) -> dict[str, Array]:
     """Detector statistics of many simulated runs through the thesis filter.
@@ -325,7 +326,7 @@ def simulate_detector_statistics(
 
     Parameters
     ----------
-    sc : ThesisScenario
+    sc : WindScenario
         The scenario.
     n_runs : int
         Number of runs.
@@ -335,7 +336,7 @@ def simulate_detector_statistics(
         Detector window, steps.
     chunk : int
         Runs simulated at a time.
-    cfg : ThesisFilterConfig, optional
+    cfg : BodyWindFilterConfig, optional
         Filter configuration (default: the thesis's values).
     on_chunk : callable, optional
         Called as ``on_chunk(n)`` after each chunk of ``n`` runs (progress).
@@ -356,8 +357,8 @@ def simulate_detector_statistics(
     out: dict[str, list[Array]] = {d: [] for d in DETECTORS}
     for i in range(0, n_runs, chunk):
         n = min(chunk, n_runs - i)
-        z, _, _ = simulate_thesis_batch(sc, n, gen)
-        st = detector_statistics(ThesisFilter(cfg).run_batch(z).normalized, window)
+        z, _, _ = simulate_wind_scenario_batch(sc, n, gen)
+        st = detector_statistics(BodyWindFilter(cfg).run_batch(z).normalized, window)
         for d in DETECTORS:
             out[d].append(st[d])
         if on_chunk is not None:
@@ -398,7 +399,7 @@ def delay_summary(alarm: NDArray[np.bool_], onset_row: int, horizon: int = 10) -
     }
 
 
-def fault_detection_table(sc: ThesisScenario, runs: int, seed: int, *, window: int = 20, p_false_alarm: float = 0.01,
+def fault_detection_table(sc: WindScenario, runs: int, seed: int, *, window: int = 20, p_false_alarm: float = 0.01,
                           horizon: int = 10, chunk: int = 50,
                           on_chunk: Callable[[int], None] | None = None) -> dict[str, Any]:
     """Monte Carlo fault detection on a thesis scenario: every detector's delay, misses and false alarms.
@@ -410,7 +411,7 @@ def fault_detection_table(sc: ThesisScenario, runs: int, seed: int, *, window: i
 
     Parameters
     ----------
-    sc : ThesisScenario
+    sc : WindScenario
         The fault scenario.
     runs : int
         Monte Carlo runs of the fault and of the nominal scenario (>= 1).
@@ -444,12 +445,12 @@ def fault_detection_table(sc: ThesisScenario, runs: int, seed: int, *, window: i
     if runs < 1:
         raise InvalidInputError(f"--runs must be >= 1, got {runs}")
     thr = calibrated_thresholds(window, 3, p_false_alarm)
-    th = thesis_thresholds(window, 3)
+    th = window_chi2_thresholds(window, 3)
     ss = np.random.SeedSequence(seed).spawn(2)
     chunk = max(1, min(chunk, runs))
     stats_f = simulate_detector_statistics(sc, runs, np.random.default_rng(ss[0]), window, chunk=chunk,
                                            on_chunk=on_chunk)
-    stats_n = simulate_detector_statistics(ThesisScenario(kind="nominal"), runs, np.random.default_rng(ss[1]), window,
+    stats_n = simulate_detector_statistics(WindScenario(kind="nominal"), runs, np.random.default_rng(ss[1]), window,
                                            chunk=chunk, on_chunk=on_chunk)
     o = sc.onset_row
     rows = []
@@ -466,12 +467,12 @@ def fault_detection_table(sc: ThesisScenario, runs: int, seed: int, *, window: i
     return {"scenario": sc.to_dict(), "runs": runs, "seed": seed, "window": window, "pfa": p_false_alarm, "rows": rows}
 
 
-def covariance_sequence(cfg: ThesisFilterConfig | None = None, n_steps: int = 500) -> dict[str, list[float]]:
+def covariance_sequence(cfg: BodyWindFilterConfig | None = None, n_steps: int = 500) -> dict[str, list[float]]:
     """P44 and P11 at the thesis's table iterations, beside the thesis's P44 values (Akgün 2002, Table 6.3).
 
     Parameters
     ----------
-    cfg : ThesisFilterConfig, optional
+    cfg : BodyWindFilterConfig, optional
         Filter configuration (default: the thesis's values).
     n_steps : int
         Number of steps.
@@ -481,15 +482,15 @@ def covariance_sequence(cfg: ThesisFilterConfig | None = None, n_steps: int = 50
     dict of str to list of float
         ``iteration``, ``P44`` and ``P11`` of the filter, and the thesis's column ``P44_thesis``.
     """
-    r = ThesisFilter(cfg).run(np.zeros((n_steps, 3)))
-    rows = thesis_row(np.asarray(THESIS_ITERATIONS))
+    r = BodyWindFilter(cfg).run(np.zeros((n_steps, 3)))
+    rows = iteration_row(np.asarray(THESIS_ITERATIONS))
     return {"iteration": list(THESIS_ITERATIONS), "P44": [float(r.cov_diag[k, 3]) for k in rows],
             "P11": [float(r.cov_diag[k, 0]) for k in rows], "P44_thesis": list(THESIS_P44)}
 
 
-def actual_error_covariance(cfg: ThesisFilterConfig | None = None, n_steps: int = 500,
+def actual_error_covariance(cfg: BodyWindFilterConfig | None = None, n_steps: int = 500,
                             x_error0: tuple[float, ...] = (0.0, 0.0, 0.0, 5.0, 2.0, 3.3),
-                            sigma_ads: float = 2.0, sigma_doppler: float = 0.1) -> tuple[Array, Array]:
+                            ads_noise_std: float = 2.0, doppler_noise_std: float = 0.1) -> tuple[Array, Array]:
     """Exact mean and covariance of the estimation error when the truth has no process noise.
 
     The thesis's truth (eq. 5.5) has no process noise while the filter assumes
@@ -500,13 +501,13 @@ def actual_error_covariance(cfg: ThesisFilterConfig | None = None, n_steps: int 
 
     Parameters
     ----------
-    cfg : ThesisFilterConfig, optional
+    cfg : BodyWindFilterConfig, optional
         Filter configuration (default: the thesis's values).
     n_steps : int
         Number of steps.
     x_error0 : tuple of float
         Initial estimation error, m and m/s.
-    sigma_ads, sigma_doppler : float
+    ads_noise_std, doppler_noise_std : float
         True noise standard deviations, m/s.
 
     Returns
@@ -516,9 +517,9 @@ def actual_error_covariance(cfg: ThesisFilterConfig | None = None, n_steps: int 
     var : numpy.ndarray, shape (N, 6)
         Diagonal of the error covariance.
     """
-    m = thesis_matrices(cfg)
+    m = body_wind_matrices(cfg)
     F, H, G, Q, R = m["F"], m["H"], m["G"], m["Q"], m["R"]
-    Rt = (sigma_ads**2 + sigma_doppler**2) * np.eye(3)
+    Rt = (ads_noise_std**2 + doppler_noise_std**2) * np.eye(3)
     P = m["P0"].copy()
     E = np.zeros((6, 6))
     mu = np.asarray(x_error0, dtype=np.float64)
@@ -538,8 +539,8 @@ def actual_error_covariance(cfg: ThesisFilterConfig | None = None, n_steps: int 
 
 
 @dataclass(frozen=True)
-class ThesisMonteCarlo(Result):
-    """Monte Carlo figures of the thesis scenarios (see :func:`monte_carlo_thesis`).
+class WindMonteCarlo(Result):
+    """Monte Carlo figures of the wind scenarios (see :func:`wind_monte_carlo`).
 
     Attributes
     ----------
@@ -568,7 +569,7 @@ class ThesisMonteCarlo(Result):
     thresholds: dict
 
 
-def _rms_theory(cfg: ThesisFilterConfig, n_steps: int, k0: int) -> float:
+def _rms_theory(cfg: BodyWindFilterConfig, n_steps: int, k0: int) -> float:
     mu, E = actual_error_covariance(cfg, n_steps)
     return float(np.sqrt(np.mean(mu[k0:, 3:] ** 2 + E[k0:, 3:])))
 
@@ -577,7 +578,7 @@ def _rms(e: Array, axis=None) -> Array:
     return np.sqrt(np.mean(e**2, axis=axis))
 
 
-def monte_carlo_thesis(
+def wind_monte_carlo(
     n_runs: int = 200,
     rng: int = 0,
     *,
@@ -585,7 +586,7 @@ def monte_carlo_thesis(
     window: int = 20,
     robust_methods: tuple[str, ...] = ("gate2", "gate3", "nis", "isolate", "huber"),
     horizon: int = 10,
-) -> ThesisMonteCarlo:
+) -> WindMonteCarlo:
     """Seeded Monte Carlo of all thesis scenarios.
 
     * wind: per-axis RMS wind error of the KF over thesis iterations ≥ 100
@@ -619,7 +620,7 @@ def monte_carlo_thesis(
 
     Returns
     -------
-    ThesisMonteCarlo
+    WindMonteCarlo
         The figures above.
 
     Raises
@@ -630,13 +631,13 @@ def monte_carlo_thesis(
     seed = int(rng)
     ss = np.random.SeedSequence(seed)
     seeds = {k: int(s.generate_state(1)[0]) for k, s in zip(KINDS, ss.spawn(len(KINDS)))}
-    base = ThesisScenario()
+    base = WindScenario()
     cfg = base.filter
-    k0 = thesis_row(100)
+    k0 = iteration_row(100)
 
     # ---- nominal: optimal filter accuracy
-    z, xt, _ = simulate_thesis_batch(base, n_runs, seeds["nominal"])
-    opt = ThesisFilter(cfg).run_batch(z)
+    z, xt, _ = simulate_wind_scenario_batch(base, n_runs, seeds["nominal"])
+    opt = BodyWindFilter(cfg).run_batch(z)
     ew = opt.x[:, k0:, 3:] - xt[None, k0:, 3:]
     ed = z[:, k0:] - xt[None, k0:, 3:]
     ep = opt.x[:, -1, :3] - xt[None, -1, :3]
@@ -655,9 +656,9 @@ def monte_carlo_thesis(
     nominal_rms = float(_rms(ew))
 
     # ---- robust filters
-    zo, xto, _ = simulate_thesis_batch(replace(base, kind="outliers"), n_runs, seeds["outliers"])
+    zo, xto, _ = simulate_wind_scenario_batch(replace(base, kind="outliers"), n_runs, seeds["outliers"])
     mask = replace(base, kind="outliers").anomaly_mask()
-    opt_o = ThesisFilter(cfg).run_batch(zo)
+    opt_o = BodyWindFilter(cfg).run_batch(zo)
     after = np.zeros(base.n_steps, dtype=bool)
     for s in base.outlier_steps:
         after[s - 1:s - 1 + 50] = True
@@ -678,8 +679,8 @@ def monte_carlo_thesis(
             kw = {"robust": "huber"}
         else:
             raise InvalidInputError(f"unknown robust method {meth!r}: use gate<m>, nis, isolate or huber")
-        ro = ThesisFilter(cfg, **kw).run_batch(zo)
-        rn = ThesisFilter(cfg, **kw).run_batch(z)
+        ro = BodyWindFilter(cfg, **kw).run_batch(zo)
+        rn = BodyWindFilter(cfg, **kw).run_batch(z)
         rej = ro.weights < (0.1 if meth == "huber" else 0.5)
         rejn = rn.weights < (0.1 if meth == "huber" else 0.5)
         nom_rms = float(_rms(rn.x[:, k0:, 3:] - xt[None, k0:, 3:]))
@@ -695,7 +696,7 @@ def monte_carlo_thesis(
     # ---- detectors: thresholds, false alarms on nominal data
     M = window
     thr = calibrated_thresholds(M, 3, p_false_alarm)
-    th = thesis_thresholds(M, 3)
+    th = window_chi2_thresholds(M, 3)
     stats_n = detector_statistics(opt.normalized, M)
     valid = np.zeros(base.n_steps, dtype=bool)
     valid[M - 1:] = True
@@ -713,8 +714,8 @@ def monte_carlo_thesis(
     det = {}
     for kind in ("variance", "bias", "drift", "stuck"):
         sc = replace(base, kind=kind)
-        zf, _, _ = simulate_thesis_batch(sc, n_runs, seeds[kind])
-        rf = ThesisFilter(cfg).run_batch(zf)
+        zf, _, _ = simulate_wind_scenario_batch(sc, n_runs, seeds[kind])
+        rf = BodyWindFilter(cfg).run_batch(zf)
         st = detector_statistics(rf.normalized, M)
         o = sc.onset_row
         det[kind] = {"onset_row": o}
@@ -728,10 +729,10 @@ def monte_carlo_thesis(
                                 ("median_delay", "p90_delay", "max_delay", f"detected_within_{horizon}", "missed")}
             det[kind][d] = entry
     thr_out = {"calibrated": thr, "thesis": th, "p_false_alarm": p_false_alarm, "window": M}
-    return ThesisMonteCarlo(n_runs, seed, wind, robust, fa, det, thr_out)
+    return WindMonteCarlo(n_runs, seed, wind, robust, fa, det, thr_out)
 
 
-def thesis_report(n_runs: int = 200, rng: int = 0, **kw) -> dict:
+def wind_scenario_report(n_runs: int = 200, rng: int = 0, **kw) -> dict:
     """Everything ``imunav airdata thesis`` writes: covariance sequence, Monte Carlo, one seeded run's detection steps.
 
     Parameters
@@ -741,7 +742,7 @@ def thesis_report(n_runs: int = 200, rng: int = 0, **kw) -> dict:
     rng : int
         Seed.
     **kw
-        Keywords of :func:`monte_carlo_thesis`.
+        Keywords of :func:`wind_monte_carlo`.
 
     Returns
     -------
@@ -750,11 +751,11 @@ def thesis_report(n_runs: int = 200, rng: int = 0, **kw) -> dict:
     """
 
     cov = covariance_sequence()
-    mc = monte_carlo_thesis(n_runs, rng, **kw)
+    mc = wind_monte_carlo(n_runs, rng, **kw)
     single = {}
     for kind in ("variance", "bias"):
-        d = simulate_thesis(ThesisScenario(kind=kind), rng)
-        r = ThesisFilter().run(d.z)
+        d = simulate_wind_scenario(WindScenario(kind=kind), rng)
+        r = BodyWindFilter().run(d.z)
         out = {}
         for mode in ("calibrated", "thesis"):
             res = detect_faults(r.normalized, 20, threshold_mode=mode, start=d.scenario.onset_row)
@@ -764,11 +765,11 @@ def thesis_report(n_runs: int = 200, rng: int = 0, **kw) -> dict:
                         "thesis_detection_step": {"variance": {"alg1": 152, "alg2": 160, "alg3": 153},
                                                   "bias": {"alg3": 152}}[kind]}
     return {"covariance_sequence": cov, "monte_carlo": mc.to_dict(), "single_run_detection": single,
-            "thesis_tables": thesis_tables(rng)}
+            "wind_scenario_tables": wind_scenario_tables(rng)}
 
 
-def thesis_tables(rng: int = 0) -> dict:
-    """One seeded run laid out like the thesis's Tables 6.1 and 6.3 (x axis).
+def wind_scenario_tables(rng: int = 0) -> dict:
+    """One seeded run laid out like Tables 6.1 and 6.3 of the source (Akgün 2002; x axis).
 
     Table 6.1: wind x error of the difference loop and of the KF at iterations
     50…500.  Table 6.3: x wind error and P44 of the optimal and the robust
@@ -787,17 +788,17 @@ def thesis_tables(rng: int = 0) -> dict:
         ``table_6_1`` and ``table_6_3`` (columns of the tables) and ``seed``.
     """
     its1 = list(range(50, 501, 50))
-    d = simulate_thesis(ThesisScenario(), rng)
-    r = ThesisFilter().run(d.z)
-    rows = thesis_row(np.asarray(its1))
+    d = simulate_wind_scenario(WindScenario(), rng)
+    r = BodyWindFilter().run(d.z)
+    rows = iteration_row(np.asarray(its1))
     t61 = [{"iteration": i, "difference_loop": float(d.z[k, 0] - d.wind_true[k, 0]),
             "kf": float(r.wind[k, 0] - d.wind_true[k, 0])} for i, k in zip(its1, rows)]
     its3 = [50, 100, 101, 150, 200, 201, 250, 300, 301, 350, 400, 401, 450, 500]
-    do = simulate_thesis(ThesisScenario(kind="outliers"), rng)
-    runs = {"optimal": ThesisFilter().run(do.z), "gate2": ThesisFilter(robust="gate", gate_m=2.0).run(do.z),
-            "nis": ThesisFilter(robust="nis").run(do.z)}
+    do = simulate_wind_scenario(WindScenario(kind="outliers"), rng)
+    runs = {"optimal": BodyWindFilter().run(do.z), "gate2": BodyWindFilter(robust="gate", gate_m=2.0).run(do.z),
+            "nis": BodyWindFilter(robust="nis").run(do.z)}
     t63 = []
-    for i, k in zip(its3, thesis_row(np.asarray(its3))):
+    for i, k in zip(its3, iteration_row(np.asarray(its3))):
         row = {"iteration": i}
         for name, rr in runs.items():
             row[f"{name}_err"] = float(rr.wind[k, 0] - do.wind_true[k, 0])
@@ -806,10 +807,10 @@ def thesis_tables(rng: int = 0) -> dict:
     return {"table_6_1": t61, "table_6_3": t63, "seed": int(rng)}
 
 
-def load_config(path) -> "ThesisScenario | object":
+def load_config(path) -> "WindScenario | object":
     """Read a TOML scenario.
 
-    A ``[thesis]`` table gives a :class:`ThesisScenario`, a ``[flight]`` table a
+    A ``[thesis]`` table gives a :class:`WindScenario`, a ``[flight]`` table a
     :class:`imunav.airdata.flight.FlightConfig` (tuples given as arrays; ``doppler`` as a sub-table of
     :class:`~imunav.airdata.doppler.DopplerErrors` fields).
 
@@ -820,7 +821,7 @@ def load_config(path) -> "ThesisScenario | object":
 
     Returns
     -------
-    ThesisScenario or FlightConfig
+    WindScenario or FlightConfig
         The scenario.
 
     Raises
@@ -836,7 +837,7 @@ def load_config(path) -> "ThesisScenario | object":
         raise ConfigError(f"{p}: needs exactly one [thesis] or [flight] table, found {list(doc) or 'none'}")
     table = dict(doc[keys[0]])
     if keys[0] == "thesis":
-        cls = ThesisScenario
+        cls = WindScenario
     else:
         cls = FlightConfig
         if "doppler" in table:

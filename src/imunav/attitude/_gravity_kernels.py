@@ -24,10 +24,14 @@ from imunav._rotation_kernels import dcm_exp_into
 from imunav.filters._core import inv3, joseph_cov3, mm3, mmt3
 
 #: parameter vector ``gp``: GravityKfConfig.vector() packs these fields in this order; G_* index it
-GRAVITY_PARAMS = ("sigma_g", "sigma_a", "c_a", "g", "tau", "s_mode", "s_fixed", "hold_s", "normalize", "exact",
-                  "sigma_b", "r_b", "bias_window")
-(G_SIGMA_G, G_SIGMA_A, G_C_A, G_G, G_TAU, G_S_MODE, G_S_FIXED, G_HOLD_S, G_NORMALIZE, G_EXACT, G_SIGMA_B, G_R_B,
- G_BIAS_WINDOW) = range(len(GRAVITY_PARAMS))
+GRAVITY_PARAMS = (
+    "gyro_noise_std", "accel_noise_std", "c_a", "g", "accel_norm_threshold", "s_mode", "s_fixed", "hold_s",
+    "normalize", "exact", "gyro_bias_random_walk", "bias_pseudo_noise_std", "bias_window",
+)
+(
+    G_GYRO_NOISE_STD, G_ACCEL_NOISE_STD, G_C_A, G_G, G_ACCEL_NORM_THRESHOLD, G_S_MODE, G_S_FIXED, G_HOLD_S,
+    G_NORMALIZE, G_EXACT, G_GYRO_BIAS_RANDOM_WALK, G_BIAS_PSEUDO_NOISE_STD, G_BIAS_WINDOW,
+) = range(len(GRAVITY_PARAMS))
 
 #: filter state ``sv``: a⁺_{t−1} (3), detector hold timer, Javed bias estimate (3), bias pseudo-measurement sum (3),
 #: its count
@@ -52,8 +56,8 @@ def gravity_step(kind, x, P, sv, Pb, yg, ya, h, gp, S, W):
     F, T, Pp, K, A, Ai = W[0], W[1], W[2], W[3], W[4], W[5]
     yg0, yg1, yg2 = yg[0], yg[1], yg[2]
     ya0, ya1, ya2 = ya[0], ya[1], ya[2]
-    sg2 = gp[G_SIGMA_G] * gp[G_SIGMA_G]
-    sa2 = gp[G_SIGMA_A] * gp[G_SIGMA_A]
+    sg2 = gp[G_GYRO_NOISE_STD] * gp[G_GYRO_NOISE_STD]
+    sa2 = gp[G_ACCEL_NOISE_STD] * gp[G_ACCEL_NOISE_STD]
     g = gp[G_G]
     ap0, ap1, ap2 = sv[SV_A_PLUS], sv[SV_A_PLUS + 1], sv[SV_A_PLUS + 2]
     bh0, bh1, bh2 = sv[SV_BIAS], sv[SV_BIAS + 1], sv[SV_BIAS + 2]
@@ -90,7 +94,7 @@ def gravity_step(kind, x, P, sv, Pb, yg, ya, h, gp, S, W):
     Pp[1, 2] -= q * xq1 * xq2
     Pp[2, 1] -= q * xq2 * xq1
     # detector D1 with hold time
-    det = abs(math.sqrt(ya0 * ya0 + ya1 * ya1 + ya2 * ya2) - g) > gp[G_TAU]
+    det = abs(math.sqrt(ya0 * ya0 + ya1 * ya1 + ya2 * ya2) - g) > gp[G_ACCEL_NORM_THRESHOLD]
     if det:
         sv[SV_HOLD] = gp[G_HOLD_S]
     elif sv[SV_HOLD] > 0.0:
@@ -202,8 +206,8 @@ def _javed_bias(x, xq0, xq1, xq2, yg0, yg1, yg2, h, gp, sv, Pb, W):
     Hb[2, 0] = xq1
     Hb[2, 1] = -xq0
     Hb[2, 2] = 0.0
-    qb = gp[G_SIGMA_B] * gp[G_SIGMA_B] * h * nb
-    rb = gp[G_R_B] * gp[G_R_B] / nb
+    qb = gp[G_GYRO_BIAS_RANDOM_WALK] * gp[G_GYRO_BIAS_RANDOM_WALK] * h * nb
+    rb = gp[G_BIAS_PSEUDO_NOISE_STD] * gp[G_BIAS_PSEUDO_NOISE_STD] / nb
     for i in range(3):
         Pb[i, i] += qb
     # Sb = Hb Pb Hbᵀ + Rb ; Kb = Pb Hbᵀ Sb⁻¹

@@ -239,14 +239,14 @@ def mahony_run(q0, b0, gyr, acc, mag, dt, kp, ki, use_mag):
 
 
 @njit(cache=True)
-def complementary_step(q, gyr, acc, mag, dt, k_acc, k_mag, use_mag):
+def complementary_step(q, gyr, acc, mag, dt, k_accel, k_mag, use_mag):
     """q ⊗ exp(ω dt), then rotate the estimate by a fraction of the tilt error
     (accelerometer in nav frame vs. up) and of the heading error (horizontal
     field vs. north).  Gains are first-order time constants: fraction = k dt.
     """
     q = quat_normalize(qmul_1(q, qexp_1(gyr * dt)))
     an = _norm3(acc)
-    if an > 0.0 and k_acc > 0.0:
+    if an > 0.0 and k_accel > 0.0:
         fn = qrot_1(q, acc / an)  # should be (0, 0, -1)
         # rotation that takes fn to -e3: axis fn × (-e3), angle acos(-fn_z)
         ax = np.empty(3)
@@ -256,7 +256,7 @@ def complementary_step(q, gyr, acc, mag, dt, k_acc, k_mag, use_mag):
         s = _norm3(ax)
         if s > 1e-12:
             ang = math.atan2(s, -fn[2])
-            frac = min(k_acc * dt, 1.0)
+            frac = min(k_accel * dt, 1.0)
             q = quat_normalize(qmul_1(qexp_1(ax / s * ang * frac), q))
     if use_mag and k_mag > 0.0:
         mn = _norm3(mag)
@@ -270,12 +270,12 @@ def complementary_step(q, gyr, acc, mag, dt, k_acc, k_mag, use_mag):
 
 
 @njit(cache=True)
-def complementary_run(q0, gyr, acc, mag, dt, k_acc, k_mag, use_mag):
+def complementary_run(q0, gyr, acc, mag, dt, k_accel, k_mag, use_mag):
     n = gyr.shape[0]
     out = np.empty((n, 4))
     q = q0.copy()
     for k in range(n):
-        q = complementary_step(q, gyr[k], acc[k], mag[k], dt[k], k_acc, k_mag, use_mag)
+        q = complementary_step(q, gyr[k], acc[k], mag[k], dt[k], k_accel, k_mag, use_mag)
         out[k] = q
     return out
 
@@ -286,46 +286,50 @@ def complementary_run(q0, gyr, acc, mag, dt, k_acc, k_mag, use_mag):
 # Parameter vector ``p`` (float64): one entry per name of MEKF_PARAMS, in that order; the kernels read it through
 # the P_* constants generated from the tuple (numba freezes module-level integers at compile time).  The names are
 # the fields of :class:`imunav.attitude.mekf.MekfConfig` (``vector()`` packs them in this order):
-#   sigma_gyro        gyro white noise [rad/s/sqrt(Hz)]
-#   sigma_bias        gyro bias random walk [rad/s/sqrt(s)]
-#   sigma_acc         accelerometer direction noise [unitless, per sample]
-#   k_acc             R_acc inflation per (| |f| - g | / g)^2   (adaptive R)
-#   acc_reject        reject accelerometer when | |f| - g | / g > acc_reject
-#   sigma_mag         heading noise from the magnetometer [rad, per sample]
-#   mag_norm_tol      relative field-norm tolerance for disturbance detection
-#   mag_dip_tol       dip-angle tolerance [rad]
-#   k_mag             R_mag inflation per normalised (norm, dip) deviation^2
-#   rest_gyro         rest detection: max |ω - b̂| [rad/s] (<= 0 disables)
-#   rest_acc          rest detection: max | |f| - g | [m/s^2]
-#   rest_time         rest detection: minimum duration [s]
-#   sigma_rest        zero-rate pseudo-measurement noise [rad/s]
-#   g                 gravity magnitude [m/s^2]
-#   mag_ref_time      after this long continuously disturbed [s], accept the
-#                     current field as the new reference (<= 0: never)
-#   k_rate            extra accelerometer noise per rad/s of |ω| (centripetal)
-#   ref_tau           time constant [s] of the slow field-reference update
-#   use_mag           (> 0.5) use the magnetometer
-#   acc_lpf_tau       [s] low-pass of the nav-frame specific force (0: off)
-#   rest_lpf_tau      [s] > 0: rest test on deviations from low-passes (rest_gyro, rest_acc are then deviation bounds)
-#   mag_lpf_tau       [s] low-pass of field norm and dip before the disturbance test (0: off)
-#   mag_min_undisturbed [s] continuous undisturbed field required before the field is used
-#   mag_bias          (> 0.5) heading update also corrects the bias (else consider states)
-#   bias_clip         [rad/s] no rest while a low-passed gyro axis exceeds it
-#   k_gyro_rate       [sqrt(s)] gyro noise density grows as sqrt(sigma_gyro^2 + (k |ω|)^2)
-#   tau_acc           [s] > 0: tilt-correction time constant, replaces sigma_acc (variance (tau sigma_gyro)^2 / dt)
-#   tau_mag           [s] > 0: heading-correction time constant, replaces sigma_mag (whatever the dip)
+#   gyro_noise_density        gyro white noise [rad/s/sqrt(Hz)]
+#   gyro_bias_random_walk     gyro bias random walk [rad/s/sqrt(s)]
+#   accel_direction_noise_std accelerometer direction noise [unitless, per sample]
+#   k_accel                   R_acc inflation per (| |f| - g | / g)^2   (adaptive R)
+#   accel_reject_threshold    reject accelerometer when | |f| - g | / g > accel_reject_threshold
+#   heading_noise_std         heading noise from the magnetometer [rad, per sample]
+#   mag_norm_threshold        relative field-norm tolerance for disturbance detection
+#   mag_dip_threshold         dip-angle tolerance [rad]
+#   k_mag                     R_mag inflation per normalised (norm, dip) deviation^2
+#   rest_gyro_threshold       rest detection: max |ω - b̂| [rad/s] (<= 0 disables)
+#   rest_accel_threshold      rest detection: max | |f| - g | [m/s^2]
+#   rest_time                 rest detection: minimum duration [s]
+#   zaru_noise_std            zero-rate pseudo-measurement noise [rad/s]
+#   g                         gravity magnitude [m/s^2]
+#   mag_ref_time              after this long continuously disturbed [s], accept the
+#                             current field as the new reference (<= 0: never)
+#   k_rate                    extra accelerometer noise per rad/s of |ω| (centripetal)
+#   mag_ref_time_constant     time constant [s] of the slow field-reference update
+#   use_mag                   (> 0.5) use the magnetometer
+#   accel_lpf_time_constant   [s] low-pass of the nav-frame specific force (0: off)
+#   rest_lpf_time_constant    [s] > 0: rest test on deviations from low-passes (the
+#                             rest thresholds are then deviation bounds)
+#   mag_lpf_time_constant     [s] low-pass of field norm and dip before the disturbance test (0: off)
+#   mag_min_undisturbed       [s] continuous undisturbed field required before the field is used
+#   mag_bias                  (> 0.5) heading update also corrects the bias (else consider states)
+#   lpf_gyro_threshold        [rad/s] no rest while a low-passed gyro axis exceeds it
+#   k_gyro_rate               [sqrt(s)] gyro noise density grows as sqrt(gyro_noise_density^2 + (k |ω|)^2)
+#   tilt_time_constant        [s] > 0: tilt-correction time constant, replaces
+#                             accel_direction_noise_std (variance (T gyro_noise_density)^2 / dt)
+#   heading_time_constant     [s] > 0: heading-correction time constant, replaces heading_noise_std (whatever the dip)
 
 MEKF_PARAMS = (
-    "sigma_gyro", "sigma_bias", "sigma_acc", "k_acc", "acc_reject", "sigma_mag", "mag_norm_tol", "mag_dip_tol",
-    "k_mag", "rest_gyro", "rest_acc", "rest_time", "sigma_rest", "g", "mag_ref_time", "k_rate", "ref_tau",
-    "use_mag", "acc_lpf_tau", "rest_lpf_tau", "mag_lpf_tau", "mag_min_undisturbed", "mag_bias", "bias_clip",
-    "k_gyro_rate", "tau_acc", "tau_mag",
+    "gyro_noise_density", "gyro_bias_random_walk", "accel_direction_noise_std", "k_accel", "accel_reject_threshold",
+    "heading_noise_std", "mag_norm_threshold", "mag_dip_threshold", "k_mag", "rest_gyro_threshold",
+    "rest_accel_threshold", "rest_time", "zaru_noise_std", "g", "mag_ref_time", "k_rate", "mag_ref_time_constant",
+    "use_mag", "accel_lpf_time_constant", "rest_lpf_time_constant", "mag_lpf_time_constant", "mag_min_undisturbed",
+    "mag_bias", "lpf_gyro_threshold", "k_gyro_rate", "tilt_time_constant", "heading_time_constant",
 )
 (
-    P_SIGMA_GYRO, P_SIGMA_BIAS, P_SIGMA_ACC, P_K_ACC, P_ACC_REJECT, P_SIGMA_MAG, P_MAG_NORM_TOL, P_MAG_DIP_TOL,
-    P_K_MAG, P_REST_GYRO, P_REST_ACC, P_REST_TIME, P_SIGMA_REST, P_G, P_MAG_REF_TIME, P_K_RATE, P_REF_TAU,
-    P_USE_MAG, P_ACC_LPF_TAU, P_REST_LPF_TAU, P_MAG_LPF_TAU, P_MAG_MIN_UNDISTURBED, P_MAG_BIAS, P_BIAS_CLIP,
-    P_K_GYRO_RATE, P_TAU_ACC, P_TAU_MAG,
+    P_GYRO_NOISE_DENSITY, P_GYRO_BIAS_RANDOM_WALK, P_ACCEL_DIRECTION_NOISE_STD, P_K_ACCEL, P_ACCEL_REJECT_THRESHOLD,
+    P_HEADING_NOISE_STD, P_MAG_NORM_THRESHOLD, P_MAG_DIP_THRESHOLD, P_K_MAG, P_REST_GYRO_THRESHOLD,
+    P_REST_ACCEL_THRESHOLD, P_REST_TIME, P_ZARU_NOISE_STD, P_G, P_MAG_REF_TIME, P_K_RATE, P_MAG_REF_TIME_CONSTANT,
+    P_USE_MAG, P_ACCEL_LPF_TIME_CONSTANT, P_REST_LPF_TIME_CONSTANT, P_MAG_LPF_TIME_CONSTANT, P_MAG_MIN_UNDISTURBED,
+    P_MAG_BIAS, P_LPF_GYRO_THRESHOLD, P_K_GYRO_RATE, P_TILT_TIME_CONSTANT, P_HEADING_TIME_CONSTANT,
 ) = range(len(MEKF_PARAMS))
 N_PARAMS = len(MEKF_PARAMS)
 
@@ -467,9 +471,9 @@ def mekf_step(q, b, P, st, gyr, acc, mag, dt, p, out_phi):
     # gyro noise grows with the rate (scale-factor and misalignment errors of an
     # uncalibrated gyro act in proportion to |ω|): σ² = σ_g² + (k_ω |ω̄|)²
     wn2 = w0 * w0 + w1 * w1 + w2 * w2
-    sg2 = (p[P_SIGMA_GYRO] * p[P_SIGMA_GYRO] + p[P_K_GYRO_RATE] * p[P_K_GYRO_RATE] * wn2) * dt
+    sg2 = (p[P_GYRO_NOISE_DENSITY] * p[P_GYRO_NOISE_DENSITY] + p[P_K_GYRO_RATE] * p[P_K_GYRO_RATE] * wn2) * dt
     st[S_ATT_Q] = sg2
-    _mekf_predict(P, R, dt, sg2, p[P_SIGMA_BIAS] * p[P_SIGMA_BIAS] * dt, W)
+    _mekf_predict(P, R, dt, sg2, p[P_GYRO_BIAS_RANDOM_WALK] * p[P_GYRO_BIAS_RANDOM_WALK] * dt, W)
     flags = 0
     nis = 0.0
     ndof = 0.0
@@ -478,14 +482,14 @@ def mekf_step(q, b, P, st, gyr, acc, mag, dt, p, out_phi):
     a0, a1, a2 = acc[0], acc[1], acc[2]
     an = math.sqrt(a0 * a0 + a1 * a1 + a2 * a2)
     wn = math.sqrt(w0 * w0 + w1 * w1 + w2 * w2)
-    if p[P_REST_LPF_TAU] > 0.0:
+    if p[P_REST_LPF_TIME_CONSTANT] > 0.0:
         # rest from the deviation of gyro and accelerometer from their low-pass
-        # (time constant p[P_REST_LPF_TAU]) plus a bias-size bound on the low-passed rate
+        # (time constant p[P_REST_LPF_TIME_CONSTANT]) plus a bias-size bound on the low-passed rate
         # (Laidig & Seel 2023, §4.2): independent of the accelerometer's
         # scale and of the current bias estimate, robust to per-sample noise
         first = st[S_REST_LP_INIT] < 0.5
         st[S_REST_LP_INIT] = 1.0
-        c = 1.0 - math.exp(-dt / p[P_REST_LPF_TAU])
+        c = 1.0 - math.exp(-dt / p[P_REST_LPF_TIME_CONSTANT])
         dg = 0.0
         da = 0.0
         big = False
@@ -494,17 +498,17 @@ def mekf_step(q, b, P, st, gyr, acc, mag, dt, p, out_phi):
             _lowpass(st, S_ACC_LP + i, acc[i], c, first)
             dg += (gyr[i] - st[S_GYR_LP + i]) ** 2
             da += (acc[i] - st[S_ACC_LP + i]) ** 2
-            if abs(st[S_GYR_LP + i]) > p[P_BIAS_CLIP]:
+            if abs(st[S_GYR_LP + i]) > p[P_LPF_GYRO_THRESHOLD]:
                 big = True
-        if p[P_REST_GYRO] > 0.0 and dg < p[P_REST_GYRO] * p[P_REST_GYRO] and da < p[P_REST_ACC] * p[P_REST_ACC] and not big:
+        if p[P_REST_GYRO_THRESHOLD] > 0.0 and dg < p[P_REST_GYRO_THRESHOLD] * p[P_REST_GYRO_THRESHOLD] and da < p[P_REST_ACCEL_THRESHOLD] * p[P_REST_ACCEL_THRESHOLD] and not big:
             st[S_REST_TIMER] += dt
         else:
             st[S_REST_TIMER] = 0.0
-    elif p[P_REST_GYRO] > 0.0 and wn < p[P_REST_GYRO] and abs(an - g) < p[P_REST_ACC]:
+    elif p[P_REST_GYRO_THRESHOLD] > 0.0 and wn < p[P_REST_GYRO_THRESHOLD] and abs(an - g) < p[P_REST_ACCEL_THRESHOLD]:
         st[S_REST_TIMER] += dt
     else:
         st[S_REST_TIMER] = 0.0
-    if p[P_ACC_LPF_TAU] > 0.0:
+    if p[P_ACCEL_LPF_TIME_CONSTANT] > 0.0:
         # low-pass of the specific force in the nav frame; the stored vector is
         # rotated with every correction below, so this is the low-pass in the
         # gyro-integrated frame: translational accelerations average out
@@ -512,19 +516,19 @@ def mekf_step(q, b, P, st, gyr, acc, mag, dt, p, out_phi):
         f0, f1, f2 = qrot_t(qw, qx, qy, qz, a0, a1, a2)
         first = st[S_F_LP_INIT] < 0.5
         st[S_F_LP_INIT] = 1.0
-        c = 1.0 - math.exp(-dt / p[P_ACC_LPF_TAU])
+        c = 1.0 - math.exp(-dt / p[P_ACCEL_LPF_TIME_CONSTANT])
         _lowpass(st, S_F_LP, f0, c, first)
         _lowpass(st, S_F_LP + 1, f1, c, first)
         _lowpass(st, S_F_LP + 2, f2, c, first)
         a0, a1, a2 = qrot_t(qw, -qx, -qy, -qz, st[S_F_LP], st[S_F_LP + 1], st[S_F_LP + 2])
         an = math.sqrt(a0 * a0 + a1 * a1 + a2 * a2)
     dev = abs(an - g) / g
-    if an > 0.0 and dev < p[P_ACC_REJECT]:
+    if an > 0.0 and dev < p[P_ACCEL_REJECT_THRESHOLD]:
         # per-sample variance: σ_a², or from the time constant τ_a of the tilt
         # correction, (τ_a σ_g)² / Δt (steady state of a random walk of density
         # σ_g seen through white noise of density τ_a σ_g: gain 1/τ_a)
-        sa2 = (p[P_TAU_ACC] * p[P_SIGMA_GYRO]) ** 2 / dt if p[P_TAU_ACC] > 0.0 else p[P_SIGMA_ACC] * p[P_SIGMA_ACC]
-        r = sa2 * (1.0 + p[P_K_ACC] * (dev / 0.01) ** 2) + (p[P_K_RATE] * wn) ** 2
+        sa2 = (p[P_TILT_TIME_CONSTANT] * p[P_GYRO_NOISE_DENSITY]) ** 2 / dt if p[P_TILT_TIME_CONSTANT] > 0.0 else p[P_ACCEL_DIRECTION_NOISE_STD] * p[P_ACCEL_DIRECTION_NOISE_STD]
+        r = sa2 * (1.0 + p[P_K_ACCEL] * (dev / 0.01) ** 2) + (p[P_K_RATE] * wn) ** 2
         # gravity-direction model, one scalar row at a time (H = [ĥ]x rows for the body error)
         for i in range(3):
             a_i = a0 if i == 0 else (a1 if i == 1 else a2)
@@ -535,9 +539,9 @@ def mekf_step(q, b, P, st, gyr, acc, mag, dt, p, out_phi):
     else:
         flags |= 1
     # ---- rest: zero-rate pseudo measurement ω_meas - b = 0 (+ noise)
-    if p[P_REST_GYRO] > 0.0 and st[S_REST_TIMER] >= p[P_REST_TIME]:
+    if p[P_REST_GYRO_THRESHOLD] > 0.0 and st[S_REST_TIMER] >= p[P_REST_TIME]:
         flags |= 4
-        r = p[P_SIGMA_REST] * p[P_SIGMA_REST]
+        r = p[P_ZARU_NOISE_STD] * p[P_ZARU_NOISE_STD]
         for i in range(3):
             nu = gyro_rest_row(gyr[i], b[i], i, H)
             nu, s = scalar_update(P, dx, H, r, nu, PH, NX)
@@ -559,11 +563,11 @@ def mekf_step(q, b, P, st, gyr, acc, mag, dt, p, out_phi):
             n0, n1, n2 = qrot_t(qw, qx, qy, qz, mag[0], mag[1], mag[2])
             hh = math.sqrt(n0 * n0 + n1 * n1)
             dip = math.atan2(n2, hh)
-            if p[P_MAG_LPF_TAU] > 0.0:
-                # norm and dip low-passed (time constant p[P_MAG_LPF_TAU]) before the disturbance test
+            if p[P_MAG_LPF_TIME_CONSTANT] > 0.0:
+                # norm and dip low-passed (time constant p[P_MAG_LPF_TIME_CONSTANT]) before the disturbance test
                 first = st[S_MAG_LP_INIT] < 0.5
                 st[S_MAG_LP_INIT] = 1.0
-                c = 1.0 - math.exp(-dt / p[P_MAG_LPF_TAU])
+                c = 1.0 - math.exp(-dt / p[P_MAG_LPF_TIME_CONSTANT])
                 _lowpass(st, S_MAG_NORM_LP, mn, c, first)
                 _lowpass(st, S_MAG_DIP_LP, dip, c, first)
                 mn_t = st[S_MAG_NORM_LP]
@@ -577,7 +581,7 @@ def mekf_step(q, b, P, st, gyr, acc, mag, dt, p, out_phi):
                 st[S_MAG_REF_VALID] = 1.0
             dn = (mn_t - st[S_MAG_REF_NORM]) / st[S_MAG_REF_NORM]
             dd = dip_t - st[S_MAG_REF_DIP]
-            disturbed = abs(dn) > p[P_MAG_NORM_TOL] or abs(dd) > p[P_MAG_DIP_TOL]
+            disturbed = abs(dn) > p[P_MAG_NORM_THRESHOLD] or abs(dd) > p[P_MAG_DIP_THRESHOLD]
             if disturbed:
                 st[S_UNDISTURBED] = 0.0
             else:
@@ -591,8 +595,8 @@ def mekf_step(q, b, P, st, gyr, acc, mag, dt, p, out_phi):
                     st[S_DISTURBED_TIMER] = 0.0
             else:
                 st[S_DISTURBED_TIMER] = 0.0
-                if p[P_REF_TAU] > 0.0:
-                    c = dt / p[P_REF_TAU]
+                if p[P_MAG_REF_TIME_CONSTANT] > 0.0:
+                    c = dt / p[P_MAG_REF_TIME_CONSTANT]
                     st[S_MAG_REF_NORM] += c * (mn_t - st[S_MAG_REF_NORM])
                     st[S_MAG_REF_DIP] += c * (dip_t - st[S_MAG_REF_DIP])
             # used only after p[P_MAG_MIN_UNDISTURBED] s of continuous undisturbed field: the few
@@ -601,8 +605,8 @@ def mekf_step(q, b, P, st, gyr, acc, mag, dt, p, out_phi):
                 psi = math.atan2(n1, n0)
                 # σ_mag is field-vector noise, so the heading noise is σ_mag |m| / |m_h|;
                 # τ_mag is the time constant of the heading itself (whatever the dip)
-                sm2 = (p[P_TAU_MAG] * p[P_SIGMA_GYRO]) ** 2 / dt if p[P_TAU_MAG] > 0.0 else (p[P_SIGMA_MAG] * mn / hh) ** 2
-                r = sm2 * (1.0 + p[P_K_MAG] * ((dn / p[P_MAG_NORM_TOL]) ** 2 + (dd / p[P_MAG_DIP_TOL]) ** 2))
+                sm2 = (p[P_HEADING_TIME_CONSTANT] * p[P_GYRO_NOISE_DENSITY]) ** 2 / dt if p[P_HEADING_TIME_CONSTANT] > 0.0 else (p[P_HEADING_NOISE_STD] * mn / hh) ** 2
+                r = sm2 * (1.0 + p[P_K_MAG] * ((dn / p[P_MAG_NORM_THRESHOLD]) ** 2 + (dd / p[P_MAG_DIP_THRESHOLD]) ** 2))
                 for j in range(6):
                     dx[j] = 0.0
                 nis += _heading_update(P, dx, qw, qx, qy, qz, math.tan(st[S_MAG_REF_DIP]), r, psi, PH, p[P_MAG_BIAS] > 0.5)
@@ -614,7 +618,7 @@ def mekf_step(q, b, P, st, gyr, acc, mag, dt, p, out_phi):
                 bo[0] += dx[3]
                 bo[1] += dx[4]
                 bo[2] += dx[5]
-    if p[P_ACC_LPF_TAU] > 0.0:
+    if p[P_ACCEL_LPF_TIME_CONSTANT] > 0.0:
         # rotate the low-passed nav-frame vector with the total correction q ⊗ q_before*
         d0, d1, d2, d3 = qmul_t(qw, qx, qy, qz, qbw, -qbx, -qby, -qbz)
         st[S_F_LP], st[S_F_LP + 1], st[S_F_LP + 2] = qrot_t(d0, d1, d2, d3, st[S_F_LP], st[S_F_LP + 1], st[S_F_LP + 2])
@@ -661,7 +665,7 @@ def mekf_run(q0, b0, P0, gyr, acc, mag, dt, p, store):
             Q = np.zeros((6, 6))
             for i in range(3):
                 Q[i, i] = st[S_ATT_Q]
-                Q[3 + i, 3 + i] = p[P_SIGMA_BIAS] * p[P_SIGMA_BIAS] * dt[k]
+                Q[3 + i, 3 + i] = p[P_GYRO_BIAS_RANDOM_WALK] * p[P_GYRO_BIAS_RANDOM_WALK] * dt[k]
             Pp[k] = phi @ Pprev @ phi.T + Q
             Pu[k] = P
         qs[k] = q
@@ -743,8 +747,8 @@ def ukf_step(q, b, P, gyr, acc, mag, dt, p, alpha, beta_u, kappa, mag_ref):
     D = Y - ym
     Pn = unscented_cov(D, D, wc0, wi)
     for i in range(3):
-        Pn[i, i] += p[P_SIGMA_GYRO] * p[P_SIGMA_GYRO] * dt
-        Pn[3 + i, 3 + i] += p[P_SIGMA_BIAS] * p[P_SIGMA_BIAS] * dt
+        Pn[i, i] += p[P_GYRO_NOISE_DENSITY] * p[P_GYRO_NOISE_DENSITY] * dt
+        Pn[3 + i, 3 + i] += p[P_GYRO_BIAS_RANDOM_WALK] * p[P_GYRO_BIAS_RANDOM_WALK] * dt
     q = quat_normalize(qmul_1(qp0, qexp_1(ym[0:3])))
     b = b + ym[3:6]
     P = Pn
@@ -752,7 +756,7 @@ def ukf_step(q, b, P, gyr, acc, mag, dt, p, alpha, beta_u, kappa, mag_ref):
     dof = 0.0
     # ---- update: stacked accelerometer direction (+ field direction)
     an = _norm3(acc)
-    use_acc = an > 0.0 and abs(an - g) / g < p[P_ACC_REJECT]
+    use_acc = an > 0.0 and abs(an - g) / g < p[P_ACCEL_REJECT_THRESHOLD]
     use_mag = p[P_USE_MAG] > 0.5 and _norm3(mag) > 0.0
     nz = (3 if use_acc else 0) + (3 if use_mag else 0)
     if nz > 0:
@@ -777,12 +781,13 @@ def ukf_step(q, b, P, gyr, acc, mag, dt, p, alpha, beta_u, kappa, mag_ref):
         if use_acc:
             z[0:3] = acc / an
             for i in range(3):
-                Pzz[i, i] += p[P_SIGMA_ACC] * p[P_SIGMA_ACC]
+                Pzz[i, i] += p[P_ACCEL_DIRECTION_NOISE_STD] * p[P_ACCEL_DIRECTION_NOISE_STD]
             j = 3
         if use_mag:
             z[j:j + 3] = mag / _norm3(mag)
             for i in range(3):
-                Pzz[j + i, j + i] += p[P_SIGMA_MAG] * p[P_SIGMA_MAG]
+                # the UKF keeps its field-direction σ (UkfConfig.mag_direction_noise_std) in this slot
+                Pzz[j + i, j + i] += p[P_HEADING_NOISE_STD] * p[P_HEADING_NOISE_STD]
         dx = np.empty(nx)
         K = np.empty((nx, nz))
         nis = unscented_update(P, Pxz, Pzz, z - zm, dx, K)

@@ -31,6 +31,7 @@ from imunav.crossval import CvResult, select_by_cv
 from imunav.errors import ConfigError
 from imunav.io.broad import load_broad
 from imunav.results import Result
+from imunav.vocabulary import renamed_hint
 
 __all__ = ["FILTERS", "REALTIME", "make_filter", "evaluate", "grid_search", "cv_grid_search", "TrialScore",
            "BenchResult", "reference_start"]
@@ -126,8 +127,10 @@ def _check_params(name: str, p: dict[str, Any]) -> None:
     known = filter_parameters(name)
     unknown = sorted(set(p) - set(known))
     if unknown:
-        raise ConfigError(f"filter {name!r} has no parameter {', '.join(map(repr, unknown))}; its parameters are: "
-                          f"{', '.join(sorted(known))}")
+        cls = {"mekf": "MekfConfig", "adaptive": "MekfConfig", "smoother": "MekfConfig",
+               "ukf": "UkfConfig"}.get(name, "")
+        raise ConfigError(f"filter {name!r} has no parameter {', '.join(map(repr, unknown))}"
+                          f"{renamed_hint(cls, unknown)}; its parameters are: {', '.join(sorted(known))}")
     for k, v in p.items():
         d = known[k]
         if isinstance(d, bool):

@@ -49,6 +49,7 @@ from imunav.attitude.result import AttitudeResult
 from imunav.errors import ConfigError, ShapeError
 from imunav.rotation import quat_from_euler
 from imunav.timeseries import ImuData
+from imunav.units import DEFAULT_GRAVITY
 
 __all__ = ["GravityKfConfig", "GravityKF", "LeeKF", "JavedKF", "ProposedKF", "roll_pitch_from_x",
            "process_noise"]
@@ -63,15 +64,15 @@ class GravityKfConfig:
 
     Attributes
     ----------
-    sigma_g : float
+    gyro_noise_std : float
         Gyro noise per sample, rad/s.
-    sigma_a : float
+    accel_noise_std : float
         Accelerometer noise per sample, m/s².
     c_a : float
         Lee / Javed external-acceleration constant (eq. 20).
     g : float
         Gravity magnitude, m/s².
-    tau : float
+    accel_norm_threshold : float
         Detector threshold on ``| |y_a| − g |``, m/s².
     s_mode : {"A", "B", "C"}
         Scale factor S: literal × ``s_fixed`` (A), diagonal Söken-Hajiyev (B), none (C).
@@ -83,14 +84,14 @@ class GravityKfConfig:
         Re-normalise the state to unit length after each update.
     exact : bool
         Propagate with the exact rotation ``exp(−Δt [y_g]×)`` instead of ``I − Δt [y_g]×``.
-    sigma_b : float
+    gyro_bias_random_walk : float
         Javed bias-KF random walk, rad/s/√s.
-    r_b : float
+    bias_pseudo_noise_std : float
         Javed bias pseudo-measurement noise, rad/s.
     bias_window : int
         Samples averaged per Javed bias update, >= 1.
-    p0 : float
-        Initial standard deviation of each state (P0 = p0² I; the paper gives none).
+    init_std : float
+        Initial standard deviation of each state (P0 = init_std² I; the paper gives none).
 
     Raises
     ------
@@ -98,20 +99,20 @@ class GravityKfConfig:
         If ``s_mode`` is unknown, a value is negative or not finite, or ``bias_window < 1``.
     """
 
-    sigma_g: float = 8.7266e-4  # rad/s per sample (0.05 °/s: reading (ii) at 100 Hz)
-    sigma_a: float = 4.4145e-3  # m/s² per sample (45 µg/√Hz at 100 Hz)
+    gyro_noise_std: float = 8.7266e-4  # rad/s per sample (0.05 °/s: reading (ii) at 100 Hz)
+    accel_noise_std: float = 4.4145e-3  # m/s² per sample (45 µg/√Hz at 100 Hz)
     c_a: float = 0.1  # Lee / Javed constant
-    g: float = 9.81
-    tau: float = 0.02  # detector D1 threshold on | |y_a| − g | [m/s²]
+    g: float = DEFAULT_GRAVITY
+    accel_norm_threshold: float = 0.02  # detector D1 threshold on | |y_a| − g | [m/s²]
     s_mode: Literal["A", "B", "C"] = "B"
     s_fixed: float = 1e4
     hold_s: float = 0.0
     normalize: bool = False
     exact: bool = False
-    sigma_b: float = 1e-6  # Javed bias KF random walk [rad/s/√s]
-    r_b: float = 5e-3  # Javed bias pseudo-measurement noise [rad/s]
+    gyro_bias_random_walk: float = 1e-6  # Javed bias KF random walk [rad/s/√s]
+    bias_pseudo_noise_std: float = 5e-3  # Javed bias pseudo-measurement noise [rad/s]
     bias_window: int = 50
-    p0: float = 1e-3  # initial std of each state (P0 = p0² I; digest default 1e-6 I)
+    init_std: float = 1e-3  # initial std of each state (P0 = init_std² I; digest default 1e-6 I)
 
     def __post_init__(self) -> None:
         if self.s_mode not in _SMODES:
@@ -161,14 +162,14 @@ def roll_pitch_from_x(x: ArrayLike) -> NDArray[np.float64]:
     return np.column_stack([np.arctan2(a[:, 1], a[:, 2]), np.arctan2(-a[:, 0], np.hypot(a[:, 1], a[:, 2]))])
 
 
-def process_noise(x: ArrayLike, sigma_g: float, dt: float) -> NDArray[np.float64]:
+def process_noise(x: ArrayLike, gyro_noise_std: float, dt: float) -> NDArray[np.float64]:
     """Q = −Δt² [x]× Σ_g [x]× with Σ_g = σ_g² I (the paper's eq. 14).
 
     Parameters
     ----------
     x : array_like, shape (3,)
         Gravity-direction state.
-    sigma_g : float
+    gyro_noise_std : float
         Gyro noise per sample, rad/s.
     dt : float
         Step, s.
@@ -180,7 +181,7 @@ def process_noise(x: ArrayLike, sigma_g: float, dt: float) -> NDArray[np.float64
     """
     v = np.asarray(x, float).reshape(3)
     S = np.array([[0, -v[2], v[1]], [v[2], 0, -v[0]], [-v[1], v[0], 0]])
-    return -dt * dt * sigma_g**2 * S @ S
+    return -dt * dt * gyro_noise_std**2 * S @ S
 
 
 @dataclass
@@ -226,7 +227,7 @@ class GravityKF:
             Initial gravity direction in body axes (default level, [0, 0, 1]).
         """
         self.x = np.array([0.0, 0.0, 1.0]) if x0 is None else np.asarray(x0, float).reshape(3).copy()
-        self.P = np.eye(3) * self.config.p0**2
+        self.P = np.eye(3) * self.config.init_std**2
         self._sv = np.zeros(_gk.N_SV)
         self._Pb = np.eye(3) * 1e-6
         self._gprev: np.ndarray | None = None
@@ -297,7 +298,7 @@ class GravityKF:
         t, g, a, _, dt, _ = prepare(data, False)
         ya = -a if self.accel_convention == "specific_force" else a
         x_init = np.array([0.0, 0.0, 1.0]) if x0 is None else np.asarray(x0, float).reshape(3)
-        P0 = np.eye(3) * self.config.p0**2
+        P0 = np.eye(3) * self.config.init_std**2
         xs, al, S, ap, bb = _gk.gravity_run(_KINDS[self.kind], x_init, P0, np.ascontiguousarray(g), np.ascontiguousarray(ya),
                                             np.ascontiguousarray(dt), self.config.vector())
         rp = roll_pitch_from_x(xs)

@@ -10,11 +10,11 @@ Prediction over Δt with ω̄ = ω − b̂::
     Q = diag((σ_g² + k_ω² |ω̄|²) Δt I, σ_b² Δt I).
 
 The accelerometer and magnetometer noise can be given per sample
-(``sigma_acc``, ``sigma_mag``) or, independent of the sampling rate, as the
-time constants of the corrections they make: with ``tau_acc`` > 0 the
+(``accel_direction_noise_std``, ``heading_noise_std``) or, independent of the sampling rate, as the
+time constants of the corrections they make: with ``tilt_time_constant`` > 0 the
 per-sample variance is (τ_a σ_g)² / Δt, the white measurement noise whose
 steady-state Kalman gain on a random walk of density σ_g is 1/τ_a (likewise
-``tau_mag`` for the heading).  These are the time constants of VQF (Laidig &
+``heading_time_constant`` for the heading).  These are the time constants of VQF (Laidig &
 Seel 2023), which hold across sensors and rates.
 
 The rate term (``k_gyro_rate``, default 0) stands for the scale-factor and
@@ -25,8 +25,8 @@ the gyro less and the references more.
 Accelerometer (gravity direction, unit vectors): h = q̂* ⊗ (0,0,−1) ⊗ q̂,
 H = [[h]×, 0], three sequential scalar updates, P ← P − K s Kᵀ (the symmetric form of
 (I − K H) P for a scalar update; not the Joseph form).  Adaptive R:
-R_acc = σ_a² (1 + k_acc (| |f| − g | / 0.01 g)²) + (k_ω |ω̄|)², and the sample
-is rejected when | |f| − g | / g exceeds ``acc_reject``.
+R_acc = σ_a² (1 + k_accel (| |f| − g | / 0.01 g)²) + (k_ω |ω̄|)², and the sample
+is rejected when | |f| − g | / g exceeds ``accel_reject_threshold``.
 Magnetometer: heading only (the horizontal field in the nav frame, yaw
 ψ_m = atan2(h_E, h_N)), so field disturbances never tilt the estimate.  The
 measured yaw is computed with the estimated tilt, so a tilt error φ leaks into
@@ -39,15 +39,15 @@ reference (learned at start, tracked slowly, re-acquired after a long
 disturbance).  Rest detection adds a zero-rate pseudo-measurement
 ω_meas − b = 0 for gyro-bias estimation at rest.
 
-Two rest tests exist.  The plain one needs |ω − b̂| < ``rest_gyro`` and
-| |f| − g | < ``rest_acc`` on every sample for ``rest_time``.  With
-``rest_lpf_tau`` > 0 it uses instead the deviations from first-order low-passes
-of the raw signals, |ω − ω̄|² < ``rest_gyro``\\ ² and |f − f̄|² < ``rest_acc``\\ ²,
-plus |ω̄_i| < ``bias_clip`` (Laidig & Seel, "VQF", Information Fusion 91,
+Two rest tests exist.  The plain one needs |ω − b̂| < ``rest_gyro_threshold`` and
+| |f| − g | < ``rest_accel_threshold`` on every sample for ``rest_time``.  With
+``rest_lpf_time_constant`` > 0 it uses instead the deviations from first-order low-passes
+of the raw signals, |ω − ω̄|² < ``rest_gyro_threshold``\\ ² and |f − f̄|² < ``rest_accel_threshold``\\ ²,
+plus |ω̄_i| < ``lpf_gyro_threshold`` (Laidig & Seel, "VQF", Information Fusion 91,
 2023, §4.2): it does not depend on the accelerometer's scale factor or on the
 current bias estimate, and one noisy sample does not reset it.
 
-The field norm and dip can be low-passed (``mag_lpf_tau``) before the
+The field norm and dip can be low-passed (``mag_lpf_time_constant``) before the
 disturbance test, and the field is used only after ``mag_min_undisturbed`` s of
 continuous undisturbed field, so that the samples of a disturbance that pass
 the test by chance are not used.  With ``mag_bias=False`` the heading update
@@ -70,6 +70,7 @@ from imunav.attitude._base import check_q0, gyro3, initial_q, prepare, step_dt, 
 from imunav.attitude.result import AttitudeResult
 from imunav.errors import ConfigError
 from imunav.timeseries import ImuData
+from imunav.units import DEFAULT_GRAVITY
 
 __all__ = ["MekfConfig", "MEKF"]
 
@@ -80,31 +81,31 @@ class MekfConfig:
 
     Attributes
     ----------
-    sigma_gyro : float
+    gyro_noise_density : float
         Gyro white-noise density σ_g, rad/s/√Hz.
-    sigma_bias : float
+    gyro_bias_random_walk : float
         Gyro-bias random-walk density σ_b, rad/s/√s.
-    sigma_acc : float
+    accel_direction_noise_std : float
         Noise of the measured gravity direction (unit vector) per sample.
-    k_acc : float
-        Inflation of R_acc with the specific-force norm deviation, ``(1 + k_acc (| |f| − g | / 0.01 g)²)``.
-    acc_reject : float
+    k_accel : float
+        Inflation of R_acc with the specific-force norm deviation, ``(1 + k_accel (| |f| − g | / 0.01 g)²)``.
+    accel_reject_threshold : float
         Accelerometer sample rejected when ``| |f| − g | / g`` exceeds it.
-    sigma_mag : float
+    heading_noise_std : float
         Heading noise per sample, rad (at a horizontal field of |m|).
-    mag_norm_tol : float
+    mag_norm_threshold : float
         Relative field-norm deviation from the reference that marks a disturbance.
-    mag_dip_tol : float
+    mag_dip_threshold : float
         Dip deviation from the reference that marks a disturbance, rad.
     k_mag : float
         Inflation of the heading R with the norm and dip deviations.
-    rest_gyro : float
+    rest_gyro_threshold : float
         Rest threshold on the gyro, rad/s (0 disables rest detection).
-    rest_acc : float
+    rest_accel_threshold : float
         Rest threshold on the accelerometer, m/s².
     rest_time : float
         Time at rest before the zero-rate pseudo-measurement, s.
-    sigma_rest : float
+    zaru_noise_std : float
         Noise of the zero-rate pseudo-measurement, rad/s.
     g : float
         Gravity magnitude, m/s², > 0.
@@ -112,33 +113,33 @@ class MekfConfig:
         Continuous disturbance after which the field reference is re-acquired, s (0: never).
     k_rate : float
         Adds ``(k_rate |ω̄|)²`` to the accelerometer variance, s.
-    ref_tau : float
+    mag_ref_time_constant : float
         Time constant of the slow tracking of the field reference while undisturbed, s (0: fixed).
     use_mag : bool
         Use the magnetometer when the recording has one.
-    acc_lpf_tau : float
+    accel_lpf_time_constant : float
         Low-pass time constant of the specific force in the gyro-integrated navigation frame, s
         (Laidig & Seel 2023, §4.1; 0: off).
-    p0_att : float
+    init_att_std : float
         Initial attitude standard deviation, rad.
-    p0_bias : float
+    init_gyro_bias_std : float
         Initial gyro-bias standard deviation, rad/s.
-    rest_lpf_tau : float
+    rest_lpf_time_constant : float
         > 0: rest test on the deviations from low-passes of this time constant, s (module docstring).
-    mag_lpf_tau : float
+    mag_lpf_time_constant : float
         Low-pass time constant of the field norm and dip before the disturbance test, s.
     mag_min_undisturbed : float
         Continuous undisturbed field needed before the field is used again, s.
     mag_bias : bool
         False: the heading update corrects the attitude only (bias as consider states).
-    bias_clip : float
+    lpf_gyro_threshold : float
         No rest while a low-passed gyro axis exceeds it, rad/s.
     k_gyro_rate : float
         Gyro noise density grows as ``sqrt(σ_g² + (k |ω|)²)``, √s.
-    tau_acc : float
-        > 0: tilt-correction time constant, s, replacing ``sigma_acc`` (rate-independent).
-    tau_mag : float
-        > 0: heading-correction time constant, s, replacing ``sigma_mag`` (rate-independent).
+    tilt_time_constant : float
+        > 0: tilt-correction time constant, s, replacing ``accel_direction_noise_std`` (rate-independent).
+    heading_time_constant : float
+        > 0: heading-correction time constant, s, replacing ``heading_noise_std`` (rate-independent).
 
     Raises
     ------
@@ -146,35 +147,35 @@ class MekfConfig:
         If a value is negative or not finite, or ``g`` is not positive.
     """
 
-    sigma_gyro: float = 0.005  # rad/s/√Hz
-    sigma_bias: float = 1e-5  # rad/s/√s
-    sigma_acc: float = 0.02  # unit-vector noise per sample
-    k_acc: float = 0.0
-    acc_reject: float = 1e9
-    sigma_mag: float = 0.05  # rad per sample (at a horizontal field of |m|)
-    mag_norm_tol: float = 1e9
-    mag_dip_tol: float = 1e9
+    gyro_noise_density: float = 0.005  # rad/s/√Hz
+    gyro_bias_random_walk: float = 1e-5  # rad/s/√s
+    accel_direction_noise_std: float = 0.02  # unit-vector noise per sample
+    k_accel: float = 0.0
+    accel_reject_threshold: float = 1e9
+    heading_noise_std: float = 0.05  # rad per sample (at a horizontal field of |m|)
+    mag_norm_threshold: float = 1e9
+    mag_dip_threshold: float = 1e9
     k_mag: float = 0.0
-    rest_gyro: float = 0.0  # rad/s, 0 disables rest detection
-    rest_acc: float = 0.2
+    rest_gyro_threshold: float = 0.0  # rad/s, 0 disables rest detection
+    rest_accel_threshold: float = 0.2
     rest_time: float = 1.0
-    sigma_rest: float = 0.002
-    g: float = 9.81
+    zaru_noise_std: float = 0.002
+    g: float = DEFAULT_GRAVITY
     mag_ref_time: float = 0.0
     k_rate: float = 0.0
-    ref_tau: float = 0.0
+    mag_ref_time_constant: float = 0.0
     use_mag: bool = True
-    acc_lpf_tau: float = 0.0
-    p0_att: float = 0.1  # rad (initial attitude std)
-    p0_bias: float = 0.01  # rad/s (initial bias std)
-    rest_lpf_tau: float = 0.0  # s; > 0: rest test on deviations from a low-pass (see module docstring)
-    mag_lpf_tau: float = 0.0  # s; low-pass of field norm and dip before the disturbance test
+    accel_lpf_time_constant: float = 0.0
+    init_att_std: float = 0.1  # rad (initial attitude std)
+    init_gyro_bias_std: float = 0.01  # rad/s (initial bias std)
+    rest_lpf_time_constant: float = 0.0  # s; > 0: rest test on deviations from a low-pass (see module docstring)
+    mag_lpf_time_constant: float = 0.0  # s; low-pass of field norm and dip before the disturbance test
     mag_min_undisturbed: float = 0.0  # s of continuous undisturbed field before the field is used again
     mag_bias: bool = True  # False: the heading update corrects the attitude only (bias as consider states)
-    bias_clip: float = 1e9  # rad/s; no rest while a low-passed gyro axis exceeds it
+    lpf_gyro_threshold: float = 1e9  # rad/s; no rest while a low-passed gyro axis exceeds it
     k_gyro_rate: float = 0.0  # √s; gyro noise density grows as sqrt(σ_g² + (k |ω|)²)
-    tau_acc: float = 0.0  # s; > 0: tilt-correction time constant, replaces sigma_acc (rate-independent)
-    tau_mag: float = 0.0  # s; > 0: heading-correction time constant, replaces sigma_mag (rate-independent)
+    tilt_time_constant: float = 0.0  # s; > 0: replaces accel_direction_noise_std (rate-independent)
+    heading_time_constant: float = 0.0  # s; > 0: replaces heading_noise_std (rate-independent)
 
     def __post_init__(self) -> None:
         for f in fields(self):
@@ -195,14 +196,14 @@ class MekfConfig:
         return np.array([float(getattr(self, name)) for name in _k.MEKF_PARAMS], dtype=np.float64)
 
     def P0(self) -> np.ndarray:
-        """Initial error covariance ``diag(p0_att² I₃, p0_bias² I₃)``.
+        """Initial error covariance ``diag(init_att_std² I₃, init_gyro_bias_std² I₃)``.
 
         Returns
         -------
         numpy.ndarray, shape (6, 6)
             Covariance of ``[δθ (rad), δb (rad/s)]``.
         """
-        return np.diag([self.p0_att**2] * 3 + [self.p0_bias**2] * 3)
+        return np.diag([self.init_att_std**2] * 3 + [self.init_gyro_bias_std**2] * 3)
 
 
 FLAG_NAMES = {"acc_rejected": 1, "mag_disturbed": 2, "rest": 4}

@@ -29,6 +29,7 @@ from numpy.typing import NDArray
 from imunav.attitude.gravity_kf import GravityKF, GravityKfConfig
 from imunav.errors import ConfigError
 from imunav.timeseries import ImuData
+from imunav.units import DEFAULT_GRAVITY
 
 __all__ = ["PaperScenario", "simulate", "default_filters", "PAPER_TABLE2"]
 
@@ -72,7 +73,7 @@ class PaperScenario:
     duration: float = 245.0
     # (t_start, t_end, north acceleration m/s²)
     segments: tuple[tuple[float, float, float], ...] = ((30.0, 40.0, 1.0), (100.0, 110.0, 2.0), (170.0, 180.0, -3.0))
-    g: float = 9.81
+    g: float = DEFAULT_GRAVITY
     gyro_bias_dph: tuple[float, float, float] = (50.0, 50.0, 50.0)
     accel_noise_ug_rthz: float = 45.0
     gyro_noise: float = 0.005
@@ -86,7 +87,7 @@ class PaperScenario:
             raise ConfigError("fs and duration must be > 0")
 
     @property
-    def sigma_gyro(self) -> float:
+    def gyro_noise_std(self) -> float:
         """Per-sample gyro noise std [rad/s]."""
         if self.gyro_noise_unit == "deg/sqrt(h)":
             dens = self.gyro_noise * DEG / 60.0  # rad/√s
@@ -95,7 +96,7 @@ class PaperScenario:
         return dens * np.sqrt(self.fs)
 
     @property
-    def sigma_accel(self) -> float:
+    def accel_noise_std(self) -> float:
         return self.accel_noise_ug_rthz * 1e-6 * 9.80665 * np.sqrt(self.fs)
 
     def filter_params(self, **kw: Any) -> GravityKfConfig:
@@ -109,9 +110,10 @@ class PaperScenario:
         Returns
         -------
         GravityKfConfig
-            ``sigma_g``, ``sigma_a`` per sample and ``g`` of the scenario, with the overrides.
+            ``gyro_noise_std``, ``accel_noise_std`` per sample and ``g`` of the scenario, with the overrides.
         """
-        return replace(GravityKfConfig(sigma_g=self.sigma_gyro, sigma_a=self.sigma_accel, g=self.g), **kw)
+        return replace(GravityKfConfig(gyro_noise_std=self.gyro_noise_std, accel_noise_std=self.accel_noise_std,
+                                       g=self.g), **kw)
 
 
 def simulate(scn: PaperScenario, rng: np.random.Generator | int | None = None) -> tuple[ImuData, NDArray]:
@@ -139,8 +141,8 @@ def simulate(scn: PaperScenario, rng: np.random.Generator | int | None = None) -
         aN[(t >= t0) & (t < t1)] = a
     f = np.column_stack([aN, np.zeros(n), np.full(n, -scn.g)])  # f = a − g, NED = body
     f[:, 2] += -scn.accel_bias_mg * 1e-3 * 9.80665
-    f += r.normal(0.0, scn.sigma_accel, (n, 3))
-    w = np.tile(np.asarray(scn.gyro_bias_dph) * DEG / 3600.0, (n, 1)) + r.normal(0.0, scn.sigma_gyro, (n, 3))
+    f += r.normal(0.0, scn.accel_noise_std, (n, 3))
+    w = np.tile(np.asarray(scn.gyro_bias_dph) * DEG / 3600.0, (n, 1)) + r.normal(0.0, scn.gyro_noise_std, (n, 3))
     return ImuData(t=t, gyro=w, accel=f), np.zeros((n, 3))
 
 

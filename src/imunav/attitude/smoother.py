@@ -51,18 +51,18 @@ __all__ = ["Smoother", "SMOOTHER_DEFAULTS", "SMOOTHER_GRID"]
 
 #: the values searched for SMOOTHER_DEFAULTS (all other parameters are ADAPTIVE_DEFAULTS'; module docstring)
 SMOOTHER_GRID: dict[str, list[float]] = {
-    "tau_mag": [18.0, 27.0],
-    "mag_norm_tol": [0.05, 0.1],
-    "mag_dip_tol": [float(np.radians(5.0)), float(np.radians(10.0))],
+    "heading_time_constant": [18.0, 27.0],
+    "mag_norm_threshold": [0.05, 0.1],
+    "mag_dip_threshold": [float(np.radians(5.0)), float(np.radians(10.0))],
     "mag_min_undisturbed": [0.5, 2.0],
 }
 
 #: forward-pass tuning of the smoother: ADAPTIVE_DEFAULTS with the values chosen over SMOOTHER_GRID
 SMOOTHER_DEFAULTS = replace(
     ADAPTIVE_DEFAULTS,
-    tau_mag=18.0,
-    mag_norm_tol=0.05,
-    mag_dip_tol=float(np.radians(5.0)),
+    heading_time_constant=18.0,
+    mag_norm_threshold=0.05,
+    mag_dip_threshold=float(np.radians(5.0)),
     mag_min_undisturbed=0.5,
 )
 

@@ -26,8 +26,16 @@ from imunav.attitude.result import AttitudeResult
 from imunav.errors import ConfigError
 from imunav.rotation import quat_rotate
 from imunav.timeseries import ImuData
+from imunav.units import DEFAULT_GRAVITY
 
 __all__ = ["UkfConfig", "UKF"]
+
+
+#: (index into the MEKF parameter layout, UkfConfig field) of the parameters the UKF kernel reads
+_KERNEL_SLOTS = ((_k.P_GYRO_NOISE_DENSITY, "gyro_noise_density"), (_k.P_GYRO_BIAS_RANDOM_WALK, "gyro_bias_random_walk"),
+                 (_k.P_ACCEL_DIRECTION_NOISE_STD, "accel_direction_noise_std"),
+                 (_k.P_ACCEL_REJECT_THRESHOLD, "accel_reject_threshold"),
+                 (_k.P_HEADING_NOISE_STD, "mag_direction_noise_std"), (_k.P_G, "g"))
 
 
 @dataclass(frozen=True)
@@ -36,24 +44,24 @@ class UkfConfig:
 
     Attributes
     ----------
-    sigma_gyro : float
+    gyro_noise_density : float
         Gyro white-noise density, rad/s/√Hz.
-    sigma_bias : float
+    gyro_bias_random_walk : float
         Gyro-bias random-walk density, rad/s/√s.
-    sigma_acc : float
+    accel_direction_noise_std : float
         Noise of the measured gravity direction (unit vector) per sample.
-    sigma_mag : float
+    mag_direction_noise_std : float
         Noise of the measured field direction (unit vector) per sample.
-    acc_reject : float
+    accel_reject_threshold : float
         Accelerometer sample rejected when ``| |f| − g | / g`` exceeds it.
     g : float
         Gravity magnitude, m/s².
     alpha, beta, kappa : float
         Scaled unscented transform parameters (spread, prior-distribution and secondary scaling; E. A. Wan,
         R. van der Merwe, "The unscented Kalman filter for nonlinear estimation", IEEE AS-SPCC 2000).
-    p0_att : float
+    init_att_std : float
         Initial attitude standard deviation, rad.
-    p0_bias : float
+    init_gyro_bias_std : float
         Initial gyro-bias standard deviation, rad/s.
 
     Raises
@@ -61,17 +69,17 @@ class UkfConfig:
     ConfigError
         If a value is out of range.
     """
-    sigma_gyro: float = 0.005  # rad/s/√Hz
-    sigma_bias: float = 1e-5  # rad/s/√s
-    sigma_acc: float = 0.05  # unit-vector noise per sample
-    sigma_mag: float = 0.05  # unit-vector noise per sample
-    acc_reject: float = 1e9  # reject when | |f| - g | / g above
-    g: float = 9.81
+    gyro_noise_density: float = 0.005  # rad/s/√Hz
+    gyro_bias_random_walk: float = 1e-5  # rad/s/√s
+    accel_direction_noise_std: float = 0.05  # unit-vector noise per sample
+    mag_direction_noise_std: float = 0.05  # unit-vector noise per sample
+    accel_reject_threshold: float = 1e9  # reject when | |f| - g | / g above
+    g: float = DEFAULT_GRAVITY
     alpha: float = 1e-1
     beta: float = 2.0
     kappa: float = 0.0
-    p0_att: float = 0.1
-    p0_bias: float = 0.01
+    init_att_std: float = 0.1
+    init_gyro_bias_std: float = 0.01
 
     def __post_init__(self) -> None:
         for f in fields(self):
@@ -95,20 +103,21 @@ class UkfConfig:
             The parameters as float64.
         """
         p = np.zeros(_k.N_PARAMS)
-        for name in ("sigma_gyro", "sigma_bias", "sigma_acc", "acc_reject", "sigma_mag", "g"):
-            p[_k.MEKF_PARAMS.index(name)] = getattr(self, name)
+        # the MEKF layout's slots, by this config's fields: the field direction's σ takes the heading-noise slot
+        for slot, name in _KERNEL_SLOTS:
+            p[slot] = getattr(self, name)
         p[_k.P_USE_MAG] = 1.0 if use_mag else 0.0
         return p
 
     def P0(self) -> np.ndarray:
-        """Initial error covariance ``diag(p0_att² I₃, p0_bias² I₃)``.
+        """Initial error covariance ``diag(init_att_std² I₃, init_gyro_bias_std² I₃)``.
 
         Returns
         -------
         numpy.ndarray, shape (6, 6)
             Covariance of ``[δθ (rad), δb (rad/s)]``.
         """
-        return np.diag([self.p0_att**2] * 3 + [self.p0_bias**2] * 3)
+        return np.diag([self.init_att_std**2] * 3 + [self.init_gyro_bias_std**2] * 3)
 
 
 @dataclass

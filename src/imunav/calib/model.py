@@ -444,8 +444,9 @@ class ImuCalibration:
             )
 
     # ------------------------------------------------------------ thesis view
-    def thesis_parameters(self) -> dict[str, Array]:
-        """Parameters in the thesis parameterisation (SI raw units required; Günhan 2014, eqs. 2 and 4).
+    def split_parameters(self) -> dict[str, Array]:
+        """Parameters split into scale factors, misalignments, bias and g-sensitivity (the parameterisation of
+        Günhan 2014, eqs. 2 and 4; SI raw units required).
 
         ``S_i = T_ii − 1``, ``M_ij = T_ij`` (i ≠ j), ``B``, ``B_G = diag(G)``.
 
@@ -459,7 +460,7 @@ class ImuCalibration:
         UnitError
             If the raw units are not SI.
         """
-        self._require_si("thesis_parameters")
+        self._require_si("split_parameters")
         return calibration_parameters(self)
 
     # --------------------------------------------------------------- JSON I/O

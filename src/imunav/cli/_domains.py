@@ -178,7 +178,7 @@ DOMAINS: dict[str, Domain] = {
     "zupt run --states": _int(9, 15),
     "--zaru-min-s": _nonneg("s", 1e6),
     "--margin-s": _nonneg("s", 1e6),
-    "--sigma-acc": _pos("m/s^2", 1e6),
+    "--accel-noise-std": _pos("m/s^2", 1e6),
     "--windows-per-trial": _COUNT,
     "--epochs": _COUNT,
     "--layers": _int(1, 100),

@@ -110,11 +110,11 @@ def simulate(
         loaded = None
         if config is not None:
             loaded = scenario.load_config(config)
-            profile = "thesis" if isinstance(loaded, scenario.ThesisScenario) else loaded.profile
+            profile = "thesis" if isinstance(loaded, scenario.WindScenario) else loaded.profile
         if profile == "thesis":
-            sc = loaded if loaded is not None else scenario.ThesisScenario(kind=kind)
+            sc = loaded if loaded is not None else scenario.WindScenario(kind=kind)
             kind = sc.kind
-            d = scenario.simulate_thesis(sc, rng=seed)
+            d = scenario.simulate_wind_scenario(sc, rng=seed)
             arrays = {k: getattr(d, k) for k in ("t", "x_true", "wind_true", "v_true", "v_ads", "v_doppler", "z",
                                                  "ads_noise", "anomaly")}
             meta = {"type": "thesis", "scenario": d.scenario.to_dict(), "seed": seed}
@@ -176,8 +176,8 @@ def run(
             meta = json.loads(str(z["meta"]))
             data = {k: z[k] for k in z.files if k != "meta"}
         if meta["type"] == "thesis":
-            r = airdata_filter.ThesisFilter(robust=rb, gate_m=gate_m, alpha=alpha).run(data["z"], v_ads=data["v_ads"])
-            k0 = airdata_filter.thesis_row(100)
+            r = airdata_filter.BodyWindFilter(robust=rb, gate_m=gate_m, alpha=alpha).run(data["z"], v_ads=data["v_ads"])
+            k0 = airdata_filter.iteration_row(100)
             e = r.wind[k0:] - data["wind_true"][k0:]
             ed = data["z"][k0:] - data["wind_true"][k0:]
             summary = {"type": "thesis", "robust": robust, "wind_rms_per_axis": np.sqrt(np.mean(e**2, 0)).tolist(),
@@ -251,11 +251,11 @@ def faults(
             if key is None:
                 raise InvalidInputError(f"--magnitude does not apply to kind {kind!r}")
             kw[key] = magnitude
-        sc = scenario.ThesisScenario(**kw)
+        sc = scenario.WindScenario(**kw)
         if runs < 1:
             raise InvalidInputError(f"--runs must be >= 1, got {runs}")
         thr = filters_faults.calibrated_thresholds(window, 3, pfa)
-        th = filters_faults.thesis_thresholds(window, 3)
+        th = filters_faults.window_chi2_thresholds(window, 3)
         ss = np.random.SeedSequence(seed).spawn(2)
         chunk = max(1, min(50, runs))
         with progress("Monte Carlo", total=2 * runs) as report:
@@ -267,7 +267,7 @@ def faults(
 
             stats_f = scenario.simulate_detector_statistics(sc, runs, np.random.default_rng(ss[0]), window,
                                                    chunk=chunk, on_chunk=tick)
-            stats_n = scenario.simulate_detector_statistics(scenario.ThesisScenario(kind="nominal"), runs,
+            stats_n = scenario.simulate_detector_statistics(scenario.WindScenario(kind="nominal"), runs,
                                                    np.random.default_rng(ss[1]), window, chunk=chunk, on_chunk=tick)
     except InvalidInputError as exc:
         _fail(exc)
@@ -325,7 +325,7 @@ def thesis(
             raise InvalidInputError("--robust-methods must include gate2 and nis (the thesis gate and the χ² gate)")
         with progress(f"thesis scenarios, {runs} Monte Carlo runs") as report:
             report(0, 1)
-            rep = scenario.thesis_report(runs, seed, p_false_alarm=pfa, robust_methods=methods)
+            rep = scenario.wind_scenario_report(runs, seed, p_false_alarm=pfa, robust_methods=methods)
             report(1, 1)
     except InvalidInputError as exc:
         _fail(exc)

@@ -123,7 +123,7 @@ def run_simulate(
     builders = {
         "static": lambda: sim.static_profile(duration, fs, **kw),
         "multiposition": lambda: sim.hundred_position_profile(fs, dwell, transition, **kw),
-        "ratetable": lambda: sim.thesis_rate_table_profile(fs, dwell, transition, **kw),
+        "ratetable": lambda: sim.rate_table_step_profile(fs, dwell, transition, **kw),
         "sixposition": lambda: sim.six_position_profile(fs, dwell, transition, **kw),
         "ferraris": lambda: sim.ferraris_profile(fs, dwell, transition, **kw),
     }

@@ -75,7 +75,7 @@ def run_cmd(
     heading_hold: bool = typer.Option(False, help="No rotation about the vertical during each stance."),
     level_floor: bool = typer.Option(False, help="Flat-floor constraint: every stance at the initial height (not for stairs or ramps)."),
     margin_s: float = typer.Option(0.0, help="Shrink each detected stance by this many seconds at both ends."),
-    sigma_acc: float = typer.Option(0.5, help="Accelerometer noise per sample, m/s^2."),
+    accel_noise_std: float = typer.Option(0.5, help="Accelerometer noise per sample, m/s^2."),
     model: Optional[Path] = typer.Option(None, help="LSTM model file (default: the shipped one)."),
     out: Optional[Path] = typer.Option(None, help="Write the trajectory (t, position, velocity, quaternion, zv) to .npz."),
     json_out: Optional[Path] = typer.Option(None, "--json", help="Write the summary as JSON."),
@@ -111,8 +111,9 @@ def run_cmd(
             guard = det_res.params.get("guard")
         xio_like = trial.position is None
         cfg = ins.ZuptConfig(states=states, zaru=zaru, zaru_min_s=zaru_min_s, heading_hold=heading_hold,
-                         level_floor=level_floor, sigma_acc=sigma_acc,
-                         alignment="first_stance" if xio_like else "samples", g=None if xio_like else 9.8029)
+                         level_floor=level_floor, accel_noise_std=accel_noise_std,
+                         alignment="first_stance" if xio_like else "samples",
+                         **({"g": None} if xio_like else {}))  # else ZuptConfig's default, pyshoe's gravity
         res = ins.ZuptFilter(cfg).run(trial.imu, zv)
     except ImunavError as exc:
         _fail(exc)

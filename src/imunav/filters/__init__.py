@@ -31,7 +31,7 @@ from imunav.filters.faults import (
     false_alarm_rates,
     inject_faults,
     latch,
-    thesis_thresholds,
+    window_chi2_thresholds,
     window_statistics,
 )
 from imunav.filters.gates import gate_channels, isolate_channels, nis_gate
@@ -77,7 +77,7 @@ __all__ = [
     "FaultDetectorResult",
     "FaultDetectionResult",
     "calibrated_thresholds",
-    "thesis_thresholds",
+    "window_chi2_thresholds",
     "window_statistics",
     "latch",
     "false_alarm_rates",

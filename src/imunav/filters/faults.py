@@ -62,7 +62,7 @@ from imunav.results import Result
 
 __all__ = [
     "DETECTORS",
-    "thesis_thresholds",
+    "window_chi2_thresholds",
     "calibrated_thresholds",
     "wishart_largest_root_quantile",
     "window_statistics",
@@ -115,10 +115,11 @@ def _check_level(name: str, value: float, upper: float, M: int, s: int) -> None:
     _check_window(M, s)
 
 
-def thesis_thresholds(M: int = 20, s: int = 3, confidence: float = 0.95) -> dict[str, float]:
-    """The thresholds as the thesis sets them: χ²(M−s+1) for Alg. 1/2, χ²(Ms) for Alg. 3.
+def window_chi2_thresholds(M: int = 20, s: int = 3, confidence: float = 0.95) -> dict[str, float]:
+    """Nominal χ² thresholds of the window tests: χ²(M−s+1) for Alg. 1/2, χ²(Ms) for Alg. 3.
 
-    Akgün (2002, §4.4); kept for comparison: the module docstring says why they are wrong.
+    The degrees of freedom a window of ``M`` steps of size-``s`` measurements suggests, as the source of the
+    algorithms sets them; kept for comparison: the module docstring says why they are wrong.
 
     Parameters
     ----------
@@ -133,6 +134,11 @@ def thesis_thresholds(M: int = 20, s: int = 3, confidence: float = 0.95) -> dict
     -------
     dict of str to float
         Thresholds of ``"alg1"``, ``"alg2"`` and ``"alg3"``.
+
+    References
+    ----------
+    O. Akgün, *Integration of an air data system and a Doppler radar via Kalman filtering*, MSc thesis, Istanbul
+    Technical University, 2002, §4.4.
     """
     return {
         "alg1": float(chi2_ppf(confidence, M - s + 1)),
@@ -376,7 +382,7 @@ def detector_statistics(normalized: ArrayLike, M: int = 20, *, cusum_rho: float 
 
     Returns {name: (…, N)} for the names in :data:`DETECTORS` (window ones NaN
     before the window is full).  Compare with the thresholds of
-    :func:`calibrated_thresholds` / :func:`thesis_thresholds`.
+    :func:`calibrated_thresholds` / :func:`window_chi2_thresholds`.
 
     Parameters
     ----------
@@ -625,7 +631,7 @@ def detect_faults(
     if threshold_mode not in ("calibrated", "thesis"):
         raise InvalidInputError(f"threshold_mode must be 'calibrated' or 'thesis', got {threshold_mode!r}")
     thr = calibrated_thresholds(M, s, p_false_alarm, cusum_rho=cusum_rho, cusum_k=cusum_k)
-    th = thesis_thresholds(M, s)
+    th = window_chi2_thresholds(M, s)
     if threshold_mode == "thesis":
         thr.update(th)
     if thresholds:

@@ -490,10 +490,10 @@ class ImuNoise:
 
     Attributes
     ----------
-    arw : numpy.ndarray, shape (3,)
+    gyro_noise_density : numpy.ndarray, shape (3,)
         Gyro angle random walk, rad/√s (``arw`` °/√h in the YAML).
-    vrw : numpy.ndarray, shape (3,)
-        Accelerometer velocity random walk, m/s/√s (``vrw`` m/s/√h).
+    accel_noise_density : numpy.ndarray, shape (3,)
+        Accelerometer velocity random walk, m/s/√s (``accel_noise_density`` m/s/√h).
     gyro_bias_std, accel_bias_std : numpy.ndarray, shape (3,)
         Stationary σ of the Gauss–Markov biases, rad/s and m/s² (``gbstd`` °/h, ``abstd`` mGal).
     gyro_scale_std, accel_scale_std : numpy.ndarray, shape (3,)
@@ -502,8 +502,8 @@ class ImuNoise:
         Correlation time of the biases and scale factors, s (``corrtime`` h).
     """
 
-    arw: Array
-    vrw: Array
+    gyro_noise_density: Array
+    accel_noise_density: Array
     gyro_bias_std: Array
     accel_bias_std: Array
     gyro_scale_std: Array
@@ -544,10 +544,10 @@ class KfGinsConfig:
     init_pos_std, init_vel_std, init_att_std : numpy.ndarray, shape (3,)
         Initial σ of position (NED, m), velocity (NED, m/s) and attitude (rad).
     init_gyro_bias_std, init_accel_bias_std : numpy.ndarray, shape (3,)
-        Initial σ of the biases, rad/s and m/s² (default: those of ``noise``).
+        Initial σ of the biases, rad/s and m/s² (default: those of ``imu_noise_model``).
     init_gyro_scale_std, init_accel_scale_std : numpy.ndarray, shape (3,)
-        Initial σ of the scale factors, dimensionless (default: those of ``noise``).
-    noise : ImuNoise
+        Initial σ of the scale factors, dimensionless (default: those of ``imu_noise_model``).
+    imu_noise_model : ImuNoise
         The IMU noise of the filter.
     antenna_lever_arm : numpy.ndarray, shape (3,)
         GNSS antenna from the IMU, body FRD, m.
@@ -577,9 +577,9 @@ class KfGinsConfig:
     init_accel_bias_std: Array
     init_gyro_scale_std: Array
     init_accel_scale_std: Array
-    noise: ImuNoise
+    imu_noise_model: ImuNoise
     antenna_lever_arm: Array
-    options: dict[str, Any] = field(default_factory=dict)
+    options: dict[str, object] = field(default_factory=dict)
 
 
 def _vec(doc: dict[str, Any], key: str, src: str, *, scale: float = 1.0, positive: bool = False,
@@ -655,7 +655,7 @@ def write_kfgins_config(path: str | os.PathLike[str], cfg: KfGinsConfig, *, comm
         q = Path(q).resolve()
         return q.relative_to(base).as_posix() if q.is_relative_to(base) else q.as_posix()
 
-    n = cfg.noise
+    n = cfg.imu_noise_model
     lla_deg = np.r_[np.degrees(cfg.init_lla[:2]), cfg.init_lla[2]]
     lines = [] if comment is None else [f"# {comment}"]
     lines += [
@@ -673,7 +673,7 @@ def write_kfgins_config(path: str | os.PathLike[str], cfg: KfGinsConfig, *, comm
         f"initsgstd: {_yaml_vec(cfg.init_gyro_scale_std / PPM)}",
         f"initsastd: {_yaml_vec(cfg.init_accel_scale_std / PPM)}",
         "imunoise:",
-        f"  arw: {_yaml_vec(n.arw / (DEG / 60.0))}", f"  vrw: {_yaml_vec(n.vrw * 60.0)}",
+        f"  arw: {_yaml_vec(n.gyro_noise_density / (DEG / 60.0))}", f"  vrw: {_yaml_vec(n.accel_noise_density * 60.0)}",
         f"  gbstd: {_yaml_vec(n.gyro_bias_std / DPH)}", f"  abstd: {_yaml_vec(n.accel_bias_std / MGAL)}",
         f"  gsstd: {_yaml_vec(n.gyro_scale_std / PPM)}", f"  asstd: {_yaml_vec(n.accel_scale_std / PPM)}",
         f"  corrtime: {n.corr_time / HOUR:.6g}",
@@ -731,8 +731,8 @@ def load_kfgins_config(path: str | os.PathLike[str]) -> KfGinsConfig:
     if corr <= 0:
         raise ConfigError(f"{nsrc}: 'corrtime' = {corr!r} h; a correlation time must be > 0 hours")
     noise = ImuNoise(
-        arw=_vec(noise_doc, "arw", nsrc, scale=DEG / 60.0, positive=True),
-        vrw=_vec(noise_doc, "vrw", nsrc, scale=1.0 / 60.0, positive=True),
+        gyro_noise_density=_vec(noise_doc, "arw", nsrc, scale=DEG / 60.0, positive=True),
+        accel_noise_density=_vec(noise_doc, "vrw", nsrc, scale=1.0 / 60.0, positive=True),
         gyro_bias_std=_vec(noise_doc, "gbstd", nsrc, scale=DPH, positive=True),
         accel_bias_std=_vec(noise_doc, "abstd", nsrc, scale=MGAL, positive=True),
         gyro_scale_std=_vec(noise_doc, "gsstd", nsrc, scale=PPM, positive=True),
@@ -782,7 +782,7 @@ def load_kfgins_config(path: str | os.PathLike[str]) -> KfGinsConfig:
                                  default=noise.gyro_scale_std / PPM),
         init_accel_scale_std=_vec(doc, "initsastd", src, scale=PPM, positive=True,
                                   default=noise.accel_scale_std / PPM),
-        noise=noise,
+        imu_noise_model=noise,
         antenna_lever_arm=_vec(doc, "antlever", src),
         options=options,
     )

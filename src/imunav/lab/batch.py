@@ -69,10 +69,10 @@ from imunav.sim import (
     ImuErrorModel,
     hundred_position_profile,
     presets,
+    rate_table_step_profile,
     read_segments,
     simulate_imu,
     static_profile,
-    thesis_rate_table_profile,
 )
 
 __all__ = [
@@ -184,7 +184,7 @@ def _simulate_unit(item: tuple[int, str], *, out_dir: str, preset: str, spread: 
     data = simulate_imu(prof.trajectory, model, rng, earth_rate=False, transport_rate=False, gravity="constant")
     files = [write_imu(data.with_(meta={"unit": name, "preset": preset, "seed": seed}), out / f"{name}.{fmt}")]
     if rate_table and not static_s:
-        rp = thesis_rate_table_profile(fs, dwell_s, transition_s)
+        rp = rate_table_step_profile(fs, dwell_s, transition_s)
         rd = simulate_imu(rp.trajectory, model, rng, earth_rate=False, transport_rate=False, gravity="constant")
         files.append(write_imu(rd.with_(meta={"unit": name}), out / f"{name}_rate.{fmt}"))
     (out / "truth").mkdir(exist_ok=True)
@@ -301,7 +301,7 @@ def simulate_batch(
         if not static_s:
             write_json(out / "segments.json", hundred_position_profile(fs, dwell_s, transition_s).to_dict())
         if rate_table and not static_s:
-            write_json(out / "rate_segments.json", thesis_rate_table_profile(fs, dwell_s, transition_s).to_dict())
+            write_json(out / "rate_segments.json", rate_table_step_profile(fs, dwell_s, transition_s).to_dict())
         write_json(out / "batch.json", params)
     return [out / f"{n}.{format}" for n in names]
 

@@ -18,8 +18,8 @@ from typing import Any
 
 import imunav.lab.steps as pkg
 from imunav.errors import ConfigError
-from imunav.lab.report import load_spec
-from imunav.lab.steps.recordings import parse_recordings
+from imunav.lab.report import SpecLimit, load_spec
+from imunav.lab.steps.recordings import RecordingSpec, parse_recordings
 from imunav.toml import read_toml
 
 __all__ = ["STEPS", "SIMULATION_ONLY", "LabConfig", "available_steps", "parse_lab_config", "load_lab_config"]
@@ -85,9 +85,9 @@ class LabConfig:
     seed: int | None = None
     title: str = "imunav lab"
     steps: tuple[str, ...] | None = None
-    recordings: dict[str, Any] = field(default_factory=dict)
-    spec: dict[str, Any] = field(default_factory=dict)
-    options: dict[str, dict] = field(default_factory=dict)
+    recordings: dict[str, RecordingSpec] = field(default_factory=dict)
+    spec: dict[str, SpecLimit] = field(default_factory=dict)
+    options: dict[str, dict[str, object]] = field(default_factory=dict)
     source: Path | None = None
 
     @property

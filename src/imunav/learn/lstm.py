@@ -129,7 +129,7 @@ def augment(x: Array, cfg: LstmConfig, rng: np.random.Generator) -> Array:
     """Thesis augmentation of raw windows (B, T, 6): rotation, scaling, Gaussian noise.
 
     Each window gets one random rotation (applied to both triads, at most ``cfg.max_rotation_deg``),
-    one scale factor in ``cfg.scale`` and white noise of ``cfg.noise_acc`` (m/s²) / ``cfg.noise_gyro``
+    one scale factor in ``cfg.scale`` and white noise of ``cfg.accel_noise_std`` (m/s²) / ``cfg.gyro_noise_std``
     (rad/s).
 
     Parameters
@@ -152,8 +152,8 @@ def augment(x: Array, cfg: LstmConfig, rng: np.random.Generator) -> Array:
     out[..., :3] = np.einsum("bij,btj->bti", R, x[..., :3])
     out[..., 3:] = np.einsum("bij,btj->bti", R, x[..., 3:])
     out *= rng.uniform(cfg.scale[0], cfg.scale[1], (B, 1, 1))
-    out[..., :3] += rng.normal(0.0, cfg.noise_acc, out[..., :3].shape)
-    out[..., 3:] += rng.normal(0.0, cfg.noise_gyro, out[..., 3:].shape)
+    out[..., :3] += rng.normal(0.0, cfg.accel_noise_std, out[..., :3].shape)
+    out[..., 3:] += rng.normal(0.0, cfg.gyro_noise_std, out[..., 3:].shape)
     return out
 
 

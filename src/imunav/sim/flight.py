@@ -6,12 +6,12 @@ from imunav.airdata.flight import (
     TURBULENCE_SIGMA,
     FlightConfig,
     FlightData,
-    ThesisFlight,
+    LinearAircraftFlight,
     charlie_model,
     dryden_gusts,
     simulate_flight,
-    simulate_thesis_aircraft,
+    simulate_linear_aircraft,
 )
 
-__all__ = ["CHARLIE_STATES", "charlie_model", "ThesisFlight", "simulate_thesis_aircraft", "dryden_gusts",
+__all__ = ["CHARLIE_STATES", "charlie_model", "LinearAircraftFlight", "simulate_linear_aircraft", "dryden_gusts",
            "TURBULENCE_SIGMA", "FlightConfig", "FlightData", "simulate_flight"]

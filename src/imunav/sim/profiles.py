@@ -18,7 +18,7 @@ calibration code needs.
 Test designs follow Y. Günhan, *Ataletsel ölçüm birimi hatalarının belirlenmesi ve düzeltilmesi*
 (Detection and compensation of inertial measurement unit errors), MSc thesis, Hacettepe University, 2014,
 §4.1: the reconstructed 100-position static test (§4.1.1, :func:`hundred_position_up_vectors`),
-the exact 120-step ±250 °/s rate-table test (§4.1.2, :func:`thesis_rate_steps`), the
+the exact 120-step ±250 °/s rate-table test (§4.1.2, :func:`rate_table_steps`), the
 six-position test (Appendix A), and a Ferraris-style test (six static poses plus a
 full turn about each axis; Ferraris et al., Sensors and Actuators A 46-47,
 1995).
@@ -64,8 +64,8 @@ __all__ = [
     "six_position_orientations",
     "six_position_profile",
     "rate_table_profile",
-    "thesis_rate_steps",
-    "thesis_rate_table_profile",
+    "rate_table_steps",
+    "rate_table_step_profile",
     "ferraris_profile",
 ]
 
@@ -1075,12 +1075,12 @@ def rate_table_profile(
     return b.build(name, fs, t0, lat, lon, h)
 
 
-def thesis_rate_steps(step_dps: float = 25.0, max_dps: float = 250.0) -> tuple[Array, NDArray[np.int64]]:
-    """The 120-step rate-table test (Günhan 2014, §4.1.2): rates and axis indices.
+def rate_table_steps(step_dps: float = 25.0, max_dps: float = 250.0) -> tuple[Array, NDArray[np.int64]]:
+    """The rates and axes of the 120-step rate-table test (:func:`rate_table_step_profile`).
 
     Per axis (x, then y, then z):
     ``[0, 25, …, 250, 225, …, 25, 0, −25, …, −250, −225, …, −25]`` °/s
-    (11 + 9 + 1 + 10 + 9 = 40 rates), 30 s each in the thesis.
+    (11 + 9 + 1 + 10 + 9 = 40 rates), 30 s each in the source.
 
     Parameters
     ----------
@@ -1100,6 +1100,10 @@ def thesis_rate_steps(step_dps: float = 25.0, max_dps: float = 250.0) -> tuple[A
     ------
     InvalidInputError
         If ``max_dps`` is not a positive multiple of ``step_dps``.
+
+    References
+    ----------
+    Günhan 2014, §4.1.2.
     """
     n = int(round(max_dps / step_dps))
     if n < 1 or abs(n * step_dps - max_dps) > 1e-9:
@@ -1111,7 +1115,7 @@ def thesis_rate_steps(step_dps: float = 25.0, max_dps: float = 250.0) -> tuple[A
     return rates, axes
 
 
-def thesis_rate_table_profile(
+def rate_table_step_profile(
     fs: float = 100.0,
     dwell_s: float = 30.0,
     transition_s: float = 2.0,
@@ -1122,7 +1126,7 @@ def thesis_rate_table_profile(
     lon: float = 0.0,
     h: float = 0.0,
 ) -> Profile:
-    """The 120-step ±250 °/s rate-table test (Günhan 2014, §4.1.2), 30 s per step by default.
+    """The 120-step ±250 °/s rate-table test: 40 rate steps about each axis in turn, 30 s per step by default.
 
     Parameters
     ----------
@@ -1147,8 +1151,12 @@ def thesis_rate_table_profile(
     -------
     Profile
         The trajectory (exact body rates) and its segment table.
+
+    References
+    ----------
+    Günhan 2014, §4.1.2 (the test's rate sequence).
     """
-    rates, axes = thesis_rate_steps()
+    rates, axes = rate_table_steps()
     return rate_table_profile(
         rates, axes, dwell_s, fs, transition_s, remount_s=remount_s, mounting=mounting,
         lat=lat, lon=lon, h=h, name="thesis_rate_table",

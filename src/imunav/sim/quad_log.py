@@ -34,7 +34,7 @@ from imunav.sim.gnss import simulate_gnss, simulate_magnetometer
 from imunav.sim.trajectory import Trajectory, trajectory_from_functions
 from imunav.sim.vehicle import simulate_baro
 from imunav.timeseries import ImuData
-from imunav.units import DEG
+from imunav.units import DEFAULT_GRAVITY, DEG
 
 __all__ = ["QuadTruth", "QuadLog", "quadrotor_flight", "simulate_quad_log", "write_quad_ulog", "QUAD_T0_NS"]
 
@@ -42,7 +42,7 @@ Array = NDArray[np.float64]
 
 #: 2024-05-14T10:00:00Z, ns since 1970: the UTC of the first IMU sample.
 QUAD_T0_NS = 1_715_680_800 * 1_000_000_000
-_G = 9.81
+_G = DEFAULT_GRAVITY
 
 
 def _ramp(x: Array) -> tuple[Array, Array, Array, Array]:

@@ -86,9 +86,9 @@ def test_every_aid_jacobian_is_the_derivative_of_its_innovation(name, scale_fact
     """``H[:, j] = −∂ν/∂δx_j`` with ``x̂ ⊕ δx`` the filter's own injection (errors are true − estimate); a sign or
     factor error in any column errs by the size of that column, far above the tolerance.  Every state block
     present (21 states and the vehicle blocks: mounting, wheel lever arm, GNSS latency), or 15 + odometer scale."""
-    cfg = GinsConfig(arw=1e-3, vrw=1e-2, gyro_bias_std=1e-4, accel_bias_std=1e-3, nhc_noise=0.1,
+    cfg = GinsConfig(gyro_noise_density=1e-3, accel_noise_density=1e-2, gyro_bias_std=1e-4, accel_bias_std=1e-3, nhc_noise_std=0.1,
                      lever_arm=(0.4, -0.3, -1.2), odo_lever_arm=(-0.5, 0.6, 0.4), scale_factors=scale_factors,
-                     declination=0.1, dual_antenna_baseline=BASELINE, level_std=0.03,
+                     declination=0.1, dual_antenna_baseline=BASELINE, level_noise_std=0.03,
                      **(VEHICLE_BLOCKS if scale_factors else {}))
     prm, lay, _ = kernel_setup(cfg, 100.0, True)
     kind = getattr(aids.AID, name)
@@ -134,7 +134,7 @@ def test_kernel_layouts_are_contiguous_and_follow_their_tuples():
     assert layout.LAY._fields[:len(STATE_BLOCKS)] == tuple(b for b, _ in STATE_BLOCKS)
     # the 15 / 21 / 22-state layouts: blocks back to back in STATE_BLOCKS order, absent ones -1
     for scale, odo, nx in ((False, False, 15), (True, False, 21), (True, True, 22), (False, True, 16)):
-        cfg = GinsConfig(arw=1e-3, vrw=1e-2, gyro_bias_std=1e-4, accel_bias_std=1e-3, scale_factors=scale)
+        cfg = GinsConfig(gyro_noise_density=1e-3, accel_noise_density=1e-2, gyro_bias_std=1e-4, accel_bias_std=1e-3, scale_factors=scale)
         prm, lay, sd = kernel_setup(cfg, 100.0, odo)
         assert lay[LAY.nx] == nx == sd.size
         i = 0

@@ -74,7 +74,7 @@ def test_odometer_and_nhc_shrink_mems_outage_drift(drive):
                 init_att_std=np.radians([0.1, 0.1, 0.5]))
     plain = outage_test(imu, g, GinsConfig.from_preset("mems_adis16465", **base), truth, **_start(truth),
                         shifts_s=(0.0,))
-    cfg = GinsConfig.from_preset("mems_adis16465", nhc_noise=0.1, odo_lever_arm=WHEEL, odo_noise=0.05, **base)
+    cfg = GinsConfig.from_preset("mems_adis16465", nhc_noise_std=0.1, odo_lever_arm=WHEEL, odo_noise_std=0.05, **base)
     aided = outage_test(imu, g, cfg, truth, **_start(truth), shifts_s=(0.0,), odometer=odo)
     p, q = plain.rms(), aided.rms()
     assert p["n_outages"] == q["n_outages"] == 4
@@ -105,13 +105,13 @@ def test_each_aiding_model_has_its_own_nis_record(drive):
     assert not np.any(used & rest)  # at rest the ZUPT replaces the odometer too
     assert rest.sum() > 100 and np.array_equal(rest, ~np.isnan(only_odo.zupt_vel_nis))
     assert np.array_equal(rest, ~np.isnan(only_odo.zaru_nis))
-    only_nhc = GinsFilter(GinsConfig.from_preset("mems_adis16465", odo_lever_arm=WHEEL, nhc_noise=0.1)).run(
+    only_nhc = GinsFilter(GinsConfig.from_preset("mems_adis16465", odo_lever_arm=WHEEL, nhc_noise_std=0.1)).run(
         imu, g, **_start(truth))
     used = np.isin(truth.t, only_nhc.vehicle_t)
     assert np.all(only_nhc.vehicle_dof == 2) and np.all(np.isnan(only_nhc.odo_nis))
     np.testing.assert_allclose(only_nhc.nhc_nis[used], only_nhc.vehicle_nis, rtol=1e-9)
     # at rest the ZUPT replaces the NHC (the same velocity is not used twice)
-    rest_nhc = GinsFilter(GinsConfig.from_preset("mems_adis16465", odo_lever_arm=WHEEL, nhc_noise=0.1)).run(
+    rest_nhc = GinsFilter(GinsConfig.from_preset("mems_adis16465", odo_lever_arm=WHEEL, nhc_noise_std=0.1)).run(
         imu, g, **_start(truth), static=static)
     nhc = ~np.isnan(rest_nhc.nhc_nis)
     assert not np.any(nhc & static) and np.array_equal(nhc, used & ~static)
@@ -160,12 +160,12 @@ def test_zupt_zaru_and_barometer_updates(drive):
     The barometer's NIS is chi^2(1): its mean within 5 standard errors of 1 (it was 0.71 when the samples were
     interpolated to the IMU stamps, which averages the white noise of two samples)."""
     truth, _ = drive
-    arw, vrw, gb, ab, tc = 0.15 * DEG / 60, 0.012 / 60, 10 * DEG / 3600, 2e-3, 1000.0
-    model = ImuErrorModel(gyro=TriadErrors(noise_density=arw, bias_instability=GaussMarkov(gb, tc)),
-                          accel=TriadErrors(noise_density=vrw, bias_instability=GaussMarkov(ab, tc)))
+    gyro_noise_density, accel_noise_density, gb, ab, tc = 0.15 * DEG / 60, 0.012 / 60, 10 * DEG / 3600, 2e-3, 1000.0
+    model = ImuErrorModel(gyro=TriadErrors(noise_density=gyro_noise_density, bias_instability=GaussMarkov(gb, tc)),
+                          accel=TriadErrors(noise_density=accel_noise_density, bias_instability=GaussMarkov(ab, tc)))
     imu = simulate_imu(truth, model, rng=10)
-    cfg = GinsConfig(arw=arw, vrw=vrw, gyro_bias_std=gb, accel_bias_std=ab, corr_time=tc, scale_factors=False,
-                     baro_noise=0.5)
+    cfg = GinsConfig(gyro_noise_density=gyro_noise_density, accel_noise_density=accel_noise_density, gyro_bias_std=gb, accel_bias_std=ab, corr_time=tc, scale_factors=False,
+                     baro_noise_std=0.5)
     static = np.linalg.norm(truth.vel_ned, axis=1) < 1e-9
     assert static[: 20 * 50].all()  # the 20 s stop at the start
     g = simulate_gnss(truth, rng=8, outages=[(0.0, 20.0)])
@@ -193,7 +193,7 @@ def test_step_by_step_equals_run(drive):
     inc = ImuIncrements(inc.t[:n], inc.dtheta[:n], inc.dvel[:n], inc.dt[:n])
     g = simulate_gnss(truth, lever_arm=LEVER, t_offset=0.0073, rng=7).within(inc.t[0], inc.t[-1])
     odo = simulate_odometer(truth, lever_arm=WHEEL, scale_factor=0.005, noise_std=0.05, rng=8)
-    cfg = GinsConfig.from_preset("mems_adis16465", lever_arm=LEVER, nhc_noise=0.1, odo_lever_arm=WHEEL)
+    cfg = GinsConfig.from_preset("mems_adis16465", lever_arm=LEVER, nhc_noise_std=0.1, odo_lever_arm=WHEEL)
     f = GinsFilter(cfg)
     ref = f.run(inc, g, **_start(truth), odometer=odo)
     f.reset(**_start(truth), t0=inc.t[0], fs=50.0, odometer=True, dtheta0=inc.dtheta[0], dvel0=inc.dvel[0])
@@ -229,7 +229,7 @@ def test_magnetometer_heading_aiding(drive):
     mag = simulate_magnetometer(truth, declination=decl, inclination=incl, strength=50.0, noise_std=0.2, rng=11)
     g = simulate_gnss(truth, vel_noise=None, rng=12)
     sd = 0.2 / (50.0 * np.cos(incl))
-    cfg = GinsConfig.from_preset("mems_adis16465", use_gnss_velocity=False, declination=decl, mag_heading_noise=sd,
+    cfg = GinsConfig.from_preset("mems_adis16465", use_gnss_velocity=False, declination=decl, mag_heading_noise_std=sd,
                                  init_att_std=np.radians([0.1, 0.1, 5.0]))
     start = _start(truth)
     start["q0"] = quat_multiply(quat_from_rotvec(np.radians([0.0, 0.0, 3.0])), truth.q_nb[0])

@@ -154,15 +154,15 @@ def _aided_nis(aided_truths, name, **kw):
     idle vibration sigma)."""
     truths, static = aided_truths
     # ZARU reads the mean rate over the covariance step, whose white noise the filter adds by itself (ARW^2 / dt):
-    # the simulated vehicle has no angular vibration at rest, zaru_noise = 0
-    cfg = _config(name, odo_lever_arm=ODO_LEVER, nhc_noise=SLIP_SD, zupt_noise=IDLE_SD, zaru_noise=0.0,
-                  baro_noise=BARO_SD,
-                  mag_heading_noise=MAG_SD_UT / (MAG_B_UT * np.cos(MAG_INC)), **kw)
+    # the simulated vehicle has no angular vibration at rest, zaru_noise_std = 0
+    cfg = _config(name, odo_lever_arm=ODO_LEVER, nhc_noise_std=SLIP_SD, zupt_noise_std=IDLE_SD, zaru_noise_std=0.0,
+                  baro_noise_std=BARO_SD,
+                  mag_heading_noise_std=MAG_SD_UT / (MAG_B_UT * np.cos(MAG_INC)), **kw)
     out: dict[str, list] = {k: [] for k in AIDS}
     for seed in range(AID_RUNS):
         tr = truths[seed][0]
         k = cfg.odo_scale_std * np.random.default_rng(seed + 20_000).standard_normal()
-        aids = dict(odometer=simulate_odometer(tr, lever_arm=ODO_LEVER, scale_factor=k, noise_std=cfg.odo_noise,
+        aids = dict(odometer=simulate_odometer(tr, lever_arm=ODO_LEVER, scale_factor=k, noise_std=cfg.odo_noise_std,
                                                rng=seed + 30_000),
                     static=static,
                     baro=simulate_baro(tr, noise_std=BARO_SD, bias_std=0.0, rng=seed + 40_000),
@@ -200,8 +200,8 @@ def test_the_nis_check_catches_a_model_error(truth):
     tr, ideal = truth
     g = simulate_gnss(tr, pos_noise=2 * POS_SD, vel_noise=VEL_SD, lever_arm=LEVER, rng=3)
     bad = GinsFilter(cfg).run(
-        apply_errors(ideal, ImuErrorModel(gyro=TriadErrors(noise_density=cfg.arw),
-                                          accel=TriadErrors(noise_density=cfg.vrw)), rng=1),
+        apply_errors(ideal, ImuErrorModel(gyro=TriadErrors(noise_density=cfg.gyro_noise_density),
+                                          accel=TriadErrors(noise_density=cfg.accel_noise_density)), rng=1),
         GnssData(g.t, g.lla, g.pos_std / 2, g.vel_ned, g.vel_std, g.meta), lla0=tr.pos_lla[0], vel0=tr.vel_ned[0],
         q0=tr.q_nb[0], odometer=simulate_odometer(tr, noise_std=3 * 0.05, rng=4))
     n = np.count_nonzero(~np.isnan(bad.nis[:, 0]))

@@ -147,7 +147,7 @@ def motion_alignment(gnss: GnssData, *, min_speed: float = 5.0, t_start: float |
     t_start : float, optional
         First usable time, s (default: the first fix).
     slip_std : float
-        σ of the vehicle's lateral (side-slip) velocity, m/s (>= 0; e.g. ``GinsConfig.nhc_noise``): the track
+        σ of the vehicle's lateral (side-slip) velocity, m/s (>= 0; e.g. ``GinsConfig.nhc_noise_std``): the track
         differs from the heading by ``v_lat / speed``.
 
     Returns
@@ -208,7 +208,7 @@ def fine_alignment(imu: ImuData | ImuIncrements, lla: Any, coarse: Alignment, co
         The result of :func:`static_alignment` on the same period.
     config : GinsConfig
         The filter's IMU model; over the static period the biases and scale factors are random constants of
-        its initial σ (``corr_time = inf``), ``zaru_noise`` is zero (the ZARU's variance is the gyro white noise
+        its initial σ (``corr_time = inf``), ``zaru_noise_std`` is zero (the ZARU's variance is the gyro white noise
         of the mean rate over each covariance step, ``ARW² / Δt``: a stand without vibration), the lever arm zero
         and the initial attitude σ as said above.
     pos_std : float
@@ -256,7 +256,7 @@ def fine_alignment(imu: ImuData | ImuIncrements, lla: Any, coarse: Alignment, co
     # initial sigma (the turn-on bias) exceeds its stationary sigma would lose variance as exp(-2t/T) while the
     # turn-on bias stays, and the filter would claim a level and heading better than the data hold
     cfg = replace(config, corr_time=math.inf, scale_corr_time=math.inf, lever_arm=np.zeros(3),
-                  use_gnss_velocity=False, zaru_noise=0.0,
+                  use_gnss_velocity=False, zaru_noise_std=0.0,
                   init_att_std=np.radians([1.0, 1.0, 5.0]) if heading_std is None
                   else np.array([math.radians(1.0), math.radians(1.0), heading_std]))
     tg = imu.t[0] + np.arange(1.0, math.floor(imu.t[-1] - imu.t[0]) + 1.0)

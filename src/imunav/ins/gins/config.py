@@ -46,10 +46,11 @@ class GinsConfig:
 
     Parameters
     ----------
-    arw : float or array_like, shape (3,)
-        Gyro white noise (angle random walk), rad/√s (> 0).
-    vrw : float or array_like, shape (3,)
-        Accelerometer white noise (velocity random walk), m/s/√s (> 0).
+    gyro_noise_density : float or array_like, shape (3,)
+        Gyro white-noise density (the angle random walk; ``arw`` in KF-GINS's YAML), rad/s/√Hz = rad/√s (> 0).
+    accel_noise_density : float or array_like, shape (3,)
+        Accelerometer white-noise density (the velocity random walk; ``vrw`` in KF-GINS's YAML), m/s²/√Hz =
+        m/s/√s (> 0).
     gyro_bias_std, accel_bias_std : float or array_like, shape (3,)
         Stationary Gauss–Markov σ of the biases, rad/s and m/s² (> 0).
     gyro_scale_std, accel_scale_std : float or array_like, shape (3,)
@@ -87,31 +88,31 @@ class GinsConfig:
         Covariance propagation step, s (> 0; the nominal state is integrated every sample).
     odo_lever_arm : array_like, shape (3,)
         Wheel contact point from the IMU, body FRD, m (odometer and non-holonomic constraint).
-    odo_noise : float
+    odo_noise_std : float
         Odometer speed σ, m/s (> 0).  The odometer and the NHC are applied at the covariance steps, not while
         ``static`` says the vehicle stands still (the ZUPT holds the velocity then; a wheel encoder reads 0).
     odo_scale_std : float
         σ of the odometer scale-factor state (Gauss–Markov with ``corr_time``), dimensionless (> 0).
-    nhc_noise : float or None
+    nhc_noise_std : float or None
         σ of the non-holonomic constraint (zero lateral and vertical wheel velocity), m/s: the side slip and
         suspension velocity of the body in motion; None: off.  Not applied while ``static`` says the vehicle
-        stands still: the ZUPT constrains the same velocity then (with ``zupt_noise``), and the one velocity
+        stands still: the ZUPT constrains the same velocity then (with ``zupt_noise_std``), and the one velocity
         used twice as two independent measurements would make the filter overconfident.
-    zupt_noise : float
+    zupt_noise_std : float
         σ of the zero-velocity update applied while ``static`` says the vehicle stands still, m/s: the body's
         vibration at rest, e.g. engine idle (> 0).
-    zaru_noise : float
+    zaru_noise_std : float
         σ of the angular-rate disturbance at rest (vibration), rad/s (>= 0).  The zero-angular-rate update reads
-        the mean raw rate over the covariance step Δt; the gyros' white noise adds ``ARW² / Δt`` per axis to
-        its variance by itself.
-    baro_noise : float
+        the mean raw rate over the covariance step Δt; the gyros' white noise adds ``gyro_noise_density² / Δt``
+        per axis to its variance by itself.
+    baro_noise_std : float
         σ of the barometric height, m (its bias included: no baro-bias state; > 0).
     scale_corr_time : float or None
         Correlation time of the IMU scale-factor states, s (> 0; ``inf``: random constants, no process
         noise; None: ``corr_time``, as KF-GINS).
     declination : float
         Magnetic declination, rad (east positive), for the magnetometer heading.
-    mag_heading_noise : float
+    mag_heading_noise_std : float
         σ of the magnetometer heading, rad (> 0; about the field noise over its horizontal strength, plus
         the residual calibration and disturbance errors).
     odo_scale_corr_time : float or None
@@ -126,7 +127,7 @@ class GinsConfig:
         mounting is not estimated.  Random constants.
     odo_lever_arm_std : array_like, shape (3,), or None
         Initial σ of the wheel lever-arm states, m (> 0); None: not estimated.  Random constants.
-    level_std : float or None
+    level_noise_std : float or None
         σ of the vehicle's roll and pitch while it stands still (the ground's slope where it stops), rad (> 0);
         None: no levelling update at rest.  Ties the mounting's roll, which the odometer and NHC do not see.
     gnss_delay : float
@@ -145,50 +146,50 @@ class GinsConfig:
         If a σ, a time or the gate probability is out of range.
     """
 
-    arw: Any
-    vrw: Any
-    gyro_bias_std: Any
-    accel_bias_std: Any
-    gyro_scale_std: Any = 1e-3
-    accel_scale_std: Any = 1e-3
+    gyro_noise_density: ArrayLike
+    accel_noise_density: ArrayLike
+    gyro_bias_std: ArrayLike
+    accel_bias_std: ArrayLike
+    gyro_scale_std: ArrayLike = 1e-3
+    accel_scale_std: ArrayLike = 1e-3
     corr_time: float = 3600.0
     scale_factors: bool = True
-    init_pos_std: Any = 1.0
-    init_vel_std: Any = 0.1
-    init_att_std: Any = (1e-3, 1e-3, 1e-2)
-    init_gyro_bias_std: Any = None
-    init_accel_bias_std: Any = None
-    init_gyro_scale_std: Any = None
-    init_accel_scale_std: Any = None
-    lever_arm: Any = (0.0, 0.0, 0.0)
+    init_pos_std: ArrayLike = 1.0
+    init_vel_std: ArrayLike = 0.1
+    init_att_std: ArrayLike = (1e-3, 1e-3, 1e-2)
+    init_gyro_bias_std: ArrayLike | None = None
+    init_accel_bias_std: ArrayLike | None = None
+    init_gyro_scale_std: ArrayLike | None = None
+    init_accel_scale_std: ArrayLike | None = None
+    lever_arm: ArrayLike = (0.0, 0.0, 0.0)
     use_gnss_velocity: bool = True
     gate_alpha: float = 1e-6
     gate_max_rejections: int = 0
     cov_interval_s: float = 0.2
-    odo_lever_arm: Any = (0.0, 0.0, 0.0)
-    odo_noise: float = 0.05
+    odo_lever_arm: ArrayLike = (0.0, 0.0, 0.0)
+    odo_noise_std: float = 0.05
     odo_scale_std: float = 0.01
-    nhc_noise: float | None = None
-    zupt_noise: float = 0.01
-    zaru_noise: float = 1e-4
-    baro_noise: float = 2.0
+    nhc_noise_std: float | None = None
+    zupt_noise_std: float = 0.01
+    zaru_noise_std: float = 1e-4
+    baro_noise_std: float = 2.0
     scale_corr_time: float | None = None
     declination: float = 0.0
-    mag_heading_noise: float = 0.02
-    dual_antenna_baseline: Any = None
+    mag_heading_noise_std: float = 0.02
+    dual_antenna_baseline: ArrayLike | None = None
     odo_scale_corr_time: float | None = None
-    mounting: Any = (0.0, 0.0, 0.0)
-    mounting_std: Any = None
-    odo_lever_arm_std: Any = None
-    level_std: float | None = None
+    mounting: ArrayLike = (0.0, 0.0, 0.0)
+    mounting_std: ArrayLike | None = None
+    odo_lever_arm_std: ArrayLike | None = None
+    level_noise_std: float | None = None
     gnss_delay: float = 0.0
     gnss_delay_std: float | None = None
     bias_constant: bool = False
 
     def __post_init__(self) -> None:
         s = object.__setattr__
-        for name in ("arw", "vrw", "gyro_bias_std", "accel_bias_std", "gyro_scale_std", "accel_scale_std",
-                     "init_pos_std", "init_vel_std", "init_att_std"):
+        for name in ("gyro_noise_density", "accel_noise_density", "gyro_bias_std", "accel_bias_std", "gyro_scale_std",
+                     "accel_scale_std", "init_pos_std", "init_vel_std", "init_att_std"):
             s(self, name, _v3(getattr(self, name), name, positive=True))
         for name, src in (("init_gyro_bias_std", "gyro_bias_std"), ("init_accel_bias_std", "accel_bias_std"),
                           ("init_gyro_scale_std", "gyro_scale_std"), ("init_accel_scale_std", "accel_scale_std")):
@@ -208,19 +209,21 @@ class GinsConfig:
                 s(self, name, _v3(getattr(self, name), name, positive=True))
         if not (np.isfinite(self.gnss_delay) and abs(self.gnss_delay) < 1.0):
             raise InvalidInputError(f"GinsConfig.gnss_delay must be a latency in (-1, 1) s; got {self.gnss_delay!r}")
-        if self.level_std is not None and not (np.isfinite(self.level_std) and 0 < self.level_std < 1.0):
-            raise InvalidInputError(f"GinsConfig.level_std must be in (0, 1) rad or None; got {self.level_std!r}")
+        if self.level_noise_std is not None and not (np.isfinite(self.level_noise_std)
+                                                     and 0 < self.level_noise_std < 1.0):
+            raise InvalidInputError(f"GinsConfig.level_noise_std must be in (0, 1) rad or None; "
+                                    f"got {self.level_noise_std!r}")
         if self.gnss_delay_std is not None and not (np.isfinite(self.gnss_delay_std) and self.gnss_delay_std > 0):
             raise InvalidInputError(f"GinsConfig.gnss_delay_std must be > 0 s or None; got {self.gnss_delay_std!r}")
         if self.dual_antenna_baseline is not None:
             s(self, "dual_antenna_baseline", _v3(self.dual_antenna_baseline, "dual_antenna_baseline"))
         if not np.isfinite(self.declination) or abs(self.declination) > np.pi:
             raise InvalidInputError(f"GinsConfig.declination must be in [-pi, pi] rad; got {self.declination!r}")
-        for name in ("odo_noise", "odo_scale_std", "mag_heading_noise"):
+        for name in ("odo_noise_std", "odo_scale_std", "mag_heading_noise_std"):
             if not (np.isfinite(getattr(self, name)) and getattr(self, name) > 0):
                 raise InvalidInputError(f"GinsConfig.{name} must be > 0; got {getattr(self, name)!r}")
-        if self.nhc_noise is not None and not (np.isfinite(self.nhc_noise) and self.nhc_noise > 0):
-            raise InvalidInputError(f"GinsConfig.nhc_noise must be > 0 m/s or None; got {self.nhc_noise!r}")
+        if self.nhc_noise_std is not None and not (np.isfinite(self.nhc_noise_std) and self.nhc_noise_std > 0):
+            raise InvalidInputError(f"GinsConfig.nhc_noise_std must be > 0 m/s or None; got {self.nhc_noise_std!r}")
         if not (self.corr_time > 0):
             raise InvalidInputError(f"GinsConfig.corr_time must be > 0 s (inf: constant); got {self.corr_time!r}")
         if isinstance(self.gate_max_rejections, bool) or not isinstance(self.gate_max_rejections, (int, np.integer)) \
@@ -264,9 +267,10 @@ class GinsConfig:
         InvalidInputError
             If a field is out of range (as :class:`GinsConfig`).
         """
-        n = cfg.noise
+        n = cfg.imu_noise_model
         kw: dict[str, Any] = dict(
-            arw=n.arw, vrw=n.vrw, gyro_bias_std=n.gyro_bias_std, accel_bias_std=n.accel_bias_std,
+            gyro_noise_density=n.gyro_noise_density, accel_noise_density=n.accel_noise_density,
+            gyro_bias_std=n.gyro_bias_std, accel_bias_std=n.accel_bias_std,
             gyro_scale_std=n.gyro_scale_std, accel_scale_std=n.accel_scale_std, corr_time=n.corr_time,
             init_pos_std=cfg.init_pos_std, init_vel_std=cfg.init_vel_std, init_att_std=cfg.init_att_std,
             init_gyro_bias_std=cfg.init_gyro_bias_std, init_accel_bias_std=cfg.init_accel_bias_std,
@@ -332,7 +336,7 @@ class GinsConfig:
         ab0, aq, ta, aw = parts(m.accel)
         tc = max(tg, ta)
         kw: dict[str, Any] = dict(
-            arw=np.maximum(gw, 1e-9), vrw=np.maximum(aw, 1e-9),
+            gyro_noise_density=np.maximum(gw, 1e-9), accel_noise_density=np.maximum(aw, 1e-9),
             gyro_bias_std=np.maximum(np.sqrt(gq * tc / 2.0), 1e-12),
             accel_bias_std=np.maximum(np.sqrt(aq * tc / 2.0), 1e-12),
             init_gyro_bias_std=np.maximum(gb0, 1e-12), init_accel_bias_std=np.maximum(ab0, 1e-12),

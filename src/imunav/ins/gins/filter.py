@@ -150,8 +150,8 @@ def kernel_setup(c: GinsConfig, fs: float, odometer: bool) -> tuple[Array, NDArr
     lay[LAY.max_rejections] = c.gate_max_rejections
     prm = np.zeros(N_PRM)
     prm[PRM.omega_e] = OMEGA_E
-    prm[PRM.arw:PRM.arw + 3] = c.arw
-    prm[PRM.vrw:PRM.vrw + 3] = c.vrw
+    prm[PRM.gyro_noise_density:PRM.gyro_noise_density + 3] = c.gyro_noise_density
+    prm[PRM.accel_noise_density:PRM.accel_noise_density + 3] = c.accel_noise_density
     ts = c.corr_time if c.scale_corr_time is None else float(c.scale_corr_time)
     for name, sdv, tc in (("gyro_bias", c.gyro_bias_std, c.corr_time), ("accel_bias", c.accel_bias_std, c.corr_time),
                           ("gyro_scale", c.gyro_scale_std, ts), ("accel_scale", c.accel_scale_std, ts),
@@ -584,16 +584,17 @@ class GinsFilter:
         cols: dict[str, Array] = {}
         moving = np.where(static, np.nan, 0.0)
         if odo is not None:
-            var = np.full(n, c.odo_noise**2) if odo_var is None else np.where(np.isnan(odo_var), c.odo_noise**2, odo_var)
+            v0 = c.odo_noise_std**2
+            var = np.full(n, v0) if odo_var is None else np.where(np.isnan(odo_var), v0, odo_var)
             cols["odometer"] = np.column_stack([odo + moving, var])
-        if c.nhc_noise is not None:
+        if c.nhc_noise_std is not None:
             cols["nhc"] = moving
         if static.any():
             rest = np.where(static, 0.0, np.nan)
             cols["zupt"] = rest
             cols["zaru"] = rest
         force = np.zeros(n, dtype=bool)
-        if static.any() and c.level_std is not None:
+        if static.any() and c.level_noise_std is not None:
             edges = np.flatnonzero(np.diff(np.r_[0, static.astype(np.int8), 0]))
             mid = (edges[0::2] + edges[1::2] - 1) // 2
             level = np.full(n, np.nan)
@@ -644,7 +645,7 @@ class GinsFilter:
         odometer : OdometerData, optional
             Wheel speeds (:class:`imunav.io.aiding.OdometerData`), interpolated to the IMU stamps inside
             their span; adds the odometer scale-factor state.  Their ``speed_std`` (when given) is each
-            sample's σ, else ``config.odo_noise``; an interpolated speed has the variance of the interpolation,
+            sample's σ, else ``config.odo_noise_std``; an interpolated speed has the variance of the interpolation,
             ``(1 − w)² σ_k² + w² σ_{k+1}²``.
         smoother : bool
             Also run the RTS smoother (``result.smoothed``); keeps three n x n matrices per covariance epoch
@@ -656,7 +657,7 @@ class GinsFilter:
             covariance epoch there).
         mag : MagnetometerData, optional
             Calibrated magnetometer (:class:`imunav.sim.gnss.MagnetometerData`): heading updates
-            (``config.declination``, ``config.mag_heading_noise``), each at the nearest IMU stamp.
+            (``config.declination``, ``config.mag_heading_noise_std``), each at the nearest IMU stamp.
         dual_antenna : DualAntennaData, optional
             Baseline heading and pitch of a dual-antenna GNSS receiver at its own time stamps (needs
             ``config.dual_antenna_baseline``); those outside the IMU span or at its first sample are not used.
@@ -687,7 +688,7 @@ class GinsFilter:
         odo = None if odometer is None else _on_imu_grid(t, odometer, OdometerData, "odometer", "speed")
         odo_var = None
         if odometer is not None:
-            sd = self.config.odo_noise if odometer.speed_std is None else np.asarray(odometer.speed_std, dtype=float)
+            sd = self.config.odo_noise_std if odometer.speed_std is None else np.asarray(odometer.speed_std, dtype=float)
             ot = np.asarray(odometer.t, dtype=float)
             odo_var = _interpolated_variance(t, ot, np.square(sd) * np.ones(ot.size))
         st = np.zeros(n, dtype=bool) if static is None else np.asarray(static, dtype=bool)
@@ -720,7 +721,7 @@ class GinsFilter:
         xs = o.xs
         meta = {"removed_gnss": [] if g is None else g.meta.get("removed", []), "n_states": self.P.shape[0],
                 "gate_threshold": float(self._prm[PRM.gate + 2]), "cov_step_samples": int(self._lay[LAY.cov_step]),
-                "gnss_velocity": bool(use_vel), "odometer": odometer is not None, "nhc": c.nhc_noise is not None}
+                "gnss_velocity": bool(use_vel), "odometer": odometer is not None, "nhc": c.nhc_noise_std is not None}
         col3 = lambda a: xs[:, a:a + 3]  # noqa: E731  (views of the kernel's output, no copies)
         return GinsResult(t, col3(NOM.lla), col3(NOM.vel), xs[:, NOM.q:NOM.q + 4],
                           col3(NOM.gyro_bias), col3(NOM.accel_bias), col3(NOM.gyro_scale), col3(NOM.accel_scale),

@@ -118,8 +118,8 @@ def _system(xs, fb, wb, prm, lay, F, Q):
             a = 0.0
             b = 0.0
             for l in range(3):
-                a += C[i, l] * prm[PRM.vrw + l] ** 2 * C[j, l]
-                b += C[i, l] * prm[PRM.arw + l] ** 2 * C[j, l]
+                a += C[i, l] * prm[PRM.accel_noise_density + l] ** 2 * C[j, l]
+                b += C[i, l] * prm[PRM.gyro_noise_density + l] ** 2 * C[j, l]
             Q[iv + i, iv + j] = a
             Q[ia + i, ia + j] = b
 

@@ -57,7 +57,7 @@ MAX_ROWS = 9
 #: ``prm`` (float): core parameters.  ``*_q``: driving-noise PSD 2σ²/T of a Gauss–Markov state; ``*_t``: its
 #: correlation time, s; ``gate``: χ²(m) thresholds, ``prm[PRM.gate + m − 1]``.
 PRM, N_PRM = named_layout("GinsParams", (
-    ("omega_e", 1), ("arw", 3), ("vrw", 3),
+    ("omega_e", 1), ("gyro_noise_density", 3), ("accel_noise_density", 3),
     ("gyro_bias_q", 3), ("accel_bias_q", 3), ("gyro_scale_q", 3), ("accel_scale_q", 3), ("odo_scale_q", 1),
     ("gyro_bias_t", 3), ("accel_bias_t", 3), ("gyro_scale_t", 3), ("accel_scale_t", 3), ("odo_scale_t", 1),
     ("gate", MAX_ROWS),

@@ -210,9 +210,10 @@ def _noise_at_rest(src: NavSources, static: NDArray[np.bool_]) -> tuple[Array, A
             n += b - a - 1
     if n == 0:
         return np.zeros(3), np.zeros(3), "no rest of 1 s: the preset's noise densities"
-    arw, vrw = np.sqrt(gv / n * dt), np.sqrt(av / n * dt)
-    return arw, vrw, (f"measured at rest over {n * dt:.1f} s: gyro {np.degrees(arw).max() * 60:.3f} deg/sqrt(h), "
-                      f"accelerometer {vrw.max() * 60:.4f} m/s/sqrt(h) (the larger of these and the preset's is used)")
+    gyro_nd, accel_nd = np.sqrt(gv / n * dt), np.sqrt(av / n * dt)
+    return gyro_nd, accel_nd, (f"measured at rest over {n * dt:.1f} s: gyro {np.degrees(gyro_nd).max() * 60:.3f} "
+                               f"deg/sqrt(h), accelerometer {accel_nd.max() * 60:.4f} m/s/sqrt(h) (the larger of these "
+                               "and the preset's is used)")
 
 
 def _initial_tilt(src: NavSources, static: NDArray[np.bool_]) -> tuple[Array, float, int]:
@@ -337,7 +338,7 @@ def run_log(src: NavSources, options: LogRunOptions | None = None) -> LogRun:
         assert od is not None
         ba_sd = float(np.max(np.abs(model.accel.bias))) if np.any(model.accel.bias) else 0.05
         coarse = estimate_mounting(imu, static, speed_t=od.t, speed=od.speed, accel_bias_std=ba_sd,
-                                   level_std=LEVEL_STD)
+                                   level_noise_std=LEVEL_STD)
         q_vb, source, mount_sd = coarse.q_vb, "estimated", coarse.std
     else:
         q_vb, source, mount_sd = np.array([1.0, 0.0, 0.0, 0.0]), "identity", None
@@ -389,7 +390,7 @@ def run_log(src: NavSources, options: LogRunOptions | None = None) -> LogRun:
         init_att_std=(float(tilt_n[0]), float(tilt_n[1]), max(psi_sd, math.radians(0.5))),
         )
     if mount_sd is not None:
-        cfg_kw.update(mounting_std=np.maximum(mount_sd, math.radians(0.05)), level_std=LEVEL_STD)
+        cfg_kw.update(mounting_std=np.maximum(mount_sd, math.radians(0.05)), level_noise_std=LEVEL_STD)
     if wheeled:
         lever_v = o.odo_lever_arm
         if lever_v is None:
@@ -398,18 +399,19 @@ def run_log(src: NavSources, options: LogRunOptions | None = None) -> LogRun:
         # without GNSS nothing measures the odometer's scale: it is taken as 1 (a state of negligible σ)
         cfg_kw.update(odo_lever_arm=C_vb.T @ np.asarray(lever_v, dtype=float),
                       odo_scale_std=ODO_SCALE_STD if src.gnss is not None else 1e-6, odo_scale_corr_time=np.inf,
-                      odo_noise=ODO_STD_FLOOR)
+                      odo_noise_std=ODO_STD_FLOOR)
         if o.estimate_odo_lever_arm:
             cfg_kw["odo_lever_arm_std"] = 0.3
     if (o.nhc if o.nhc is not None else wheeled):
-        cfg_kw["nhc_noise"] = o.nhc_std
+        cfg_kw["nhc_noise_std"] = o.nhc_std
     if src.gnss is not None:
         cfg_kw["gnss_delay_std"] = GNSS_DELAY_STD
     cfg_kw["gate_max_rejections"] = MAX_REJECTIONS
     cfg_kw["bias_constant"] = True  # a log's IMU has an unknown turn-on bias that does not decay
-    arw, vrw, noise_note = _noise_at_rest(src, static)
+    gyro_nd, accel_nd, noise_note = _noise_at_rest(src, static)
     base = GinsConfig.from_preset(o.preset)
-    cfg_kw.update(arw=np.maximum(base.arw, arw), vrw=np.maximum(base.vrw, vrw))
+    cfg_kw.update(gyro_noise_density=np.maximum(base.gyro_noise_density, gyro_nd),
+                  accel_noise_density=np.maximum(base.accel_noise_density, accel_nd))
     initial["noise"] = noise_note
     cfg_kw.update(o.overrides)
     cfg = GinsConfig.from_preset(o.preset, **cfg_kw)

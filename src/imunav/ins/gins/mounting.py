@@ -8,7 +8,7 @@ al. 2010):
 1. **Levelling at rest.**  Standing on level ground, the vehicle's down axis is gravity's: the mean specific force
    ``f̄`` of the static samples gives it in IMU axes, ``d = −f̄ / |f̄|``, and ``C_Lb`` is the smallest rotation that
    takes ``d`` to ``e_z``.  Its error is the ground's slope and the accelerometer bias over g (σ per axis
-   ``√(level_std² + (σ_ba / g)²)``).
+   ``√(level_noise_std² + (σ_ba / g)²)``).
 2. **Yaw from the vehicle's own accelerations.**  Moving, a wheeled vehicle accelerates along its x axis
    (``a_x = dv/dt``, ``v`` the odometer or GNSS speed) and, turning, along y (``a_y = v ω_z``); in the levelled
    frame the horizontal specific force is the same vector turned by the mounting's yaw ψ, so
@@ -18,7 +18,7 @@ al. 2010):
 
 ``C_vb = R_z(ψ) C_Lb``.  The GNSS/INS filter takes it as its initial mounting with these σ and refines it
 (``GinsConfig.mounting_std``): the NHC and the odometer observe pitch and yaw, the levelling at rest
-(``level_std``) the roll.
+(``level_noise_std``) the roll.
 """
 
 from __future__ import annotations
@@ -88,7 +88,7 @@ def _moving_mean(x: Array, w: int) -> Array:
 
 def estimate_mounting(imu: ImuData, static: ArrayLike, *, speed_t: ArrayLike | None = None,
                       speed: ArrayLike | None = None, accel_bias_std: float = 0.0,
-                      level_std: float = math.radians(1.0), window_s: float = 1.0, chunks: int = 10,
+                      level_noise_std: float = math.radians(1.0), window_s: float = 1.0, chunks: int = 10,
                       min_accel: float = 0.05) -> MountingEstimate:
     """The IMU's mounting in a wheeled vehicle from its rest and its accelerations (module docstring).
 
@@ -103,7 +103,7 @@ def estimate_mounting(imu: ImuData, static: ArrayLike, *, speed_t: ArrayLike | N
         yaw is not estimated (0 with σ π).
     accel_bias_std : float
         σ of the accelerometer bias, m/s² (its share of the levelling error).
-    level_std : float
+    level_noise_std : float
         σ of the ground's slope where the vehicle stands, rad.
     window_s : float
         Moving-mean window of the yaw fit, s.
@@ -129,8 +129,8 @@ def estimate_mounting(imu: ImuData, static: ArrayLike, *, speed_t: ArrayLike | N
     st = np.asarray(static, dtype=bool)
     if st.shape != (imu.n,):
         raise ShapeError(f"static must have one value per IMU sample ({imu.n}); got shape {st.shape}")
-    if not (chunks >= 3 and window_s > 0 and accel_bias_std >= 0 and level_std >= 0):
-        raise InvalidInputError("estimate_mounting: chunks >= 3, window_s > 0, accel_bias_std and level_std >= 0")
+    if not (chunks >= 3 and window_s > 0 and accel_bias_std >= 0 and level_noise_std >= 0):
+        raise InvalidInputError("estimate_mounting: chunks >= 3, window_s > 0, accel_bias_std and level_noise_std >= 0")
     fs = 1.0 / float(np.median(np.diff(imu.t)))
     if st.sum() < fs:
         raise InsufficientDataError(f"estimate_mounting: {int(st.sum())} samples at rest ({st.sum() / fs:.2f} s); "
@@ -138,7 +138,7 @@ def estimate_mounting(imu: ImuData, static: ArrayLike, *, speed_t: ArrayLike | N
     f_rest = imu.accel[st].mean(axis=0)
     g = float(np.linalg.norm(f_rest))
     C_Lb = _levelling(-f_rest / g)
-    tilt_sd = math.sqrt(level_std**2 + (accel_bias_std / g) ** 2 + float(np.mean(imu.accel[st].var(axis=0))) /
+    tilt_sd = math.sqrt(level_noise_std**2 + (accel_bias_std / g) ** 2 + float(np.mean(imu.accel[st].var(axis=0))) /
                         (g**2 * st.sum()))
     psi, psi_sd, nmov, batches = 0.0, math.pi, 0, []
     if speed is not None:

@@ -93,13 +93,13 @@ def write_simulated_drive(drive: SimulatedDrive, folder: str | os.PathLike[str])
         init_vel_std=vel_std, init_att_std=np.radians(att_std_deg), init_gyro_bias_std=cfg.init_gyro_bias_std,
         init_accel_bias_std=cfg.init_accel_bias_std, init_gyro_scale_std=cfg.gyro_scale_std,
         init_accel_scale_std=cfg.accel_scale_std,
-        noise=ImuNoise(cfg.arw, cfg.vrw, cfg.gyro_bias_std, cfg.accel_bias_std, cfg.gyro_scale_std,
+        imu_noise_model=ImuNoise(cfg.gyro_noise_density, cfg.accel_noise_density, cfg.gyro_bias_std, cfg.accel_bias_std, cfg.gyro_scale_std,
                        cfg.accel_scale_std, float(cfg.corr_time)),
         antenna_lever_arm=np.asarray(cfg.lever_arm, dtype=float))
     write_kfgins_config(names["yaml"], kf, comment="KF-GINS configuration written by 'imunav gins simulate' (keys "
                                                    "and units of KF-GINS's dataset/kf-gins.yaml)")
     # the same configuration as the YAML, field by field in SI (not the preset, whose mapping may differ)
-    noise = {k: np.asarray(getattr(cfg, k)).tolist() for k in ("arw", "vrw", "gyro_bias_std", "accel_bias_std",
+    noise = {k: np.asarray(getattr(cfg, k)).tolist() for k in ("gyro_noise_density", "accel_noise_density", "gyro_bias_std", "accel_bias_std",
                                                                   "gyro_scale_std", "accel_scale_std",
                                                                   "init_gyro_bias_std", "init_accel_bias_std")}
     doc = {"states": cfg.n_states, **noise, "corr_time": float(cfg.corr_time),

@@ -13,8 +13,8 @@ What ``imunav gins run``, ``imunav gins outage-test`` and the ``gins`` lab step 
 
 and the configuration is an imunav TOML (:func:`load_gins_toml`) or KF-GINS's own YAML (:func:`setup_from_kfgins`).
 
-The TOML holds :class:`~imunav.ins.gins.GinsConfig` fields at its top level, in SI (``arw``, ``vrw``,
-``gyro_bias_std``, ..., ``lever_arm``, ``nhc_noise``, ...), optionally on top of an IMU preset, and three tables::
+The TOML holds :class:`~imunav.ins.gins.GinsConfig` fields at its top level, in SI (``gyro_noise_density``, ``accel_noise_density``,
+``gyro_bias_std``, ..., ``lever_arm``, ``nhc_noise_std``, ...), optionally on top of an IMU preset, and three tables::
 
     preset = "mems_adis16465"      # optional: GinsConfig.from_preset(preset), the fields below override it
     states = 21                    # 15 or 21 (default 21)
@@ -64,6 +64,7 @@ from imunav.sim.vehicle import demo_drive, vehicle_trajectory
 from imunav.timeseries import ImuData
 from imunav.toml import read_toml
 from imunav.units import DEG
+from imunav.vocabulary import renamed_hint
 
 __all__ = ["GinsSetup", "GinsInputs", "SimulatedDrive", "load_gins_toml", "setup_from_kfgins", "load_inputs", "simulate_drive", "run_setup", "track_rmse", "TOML_TABLES", "KFGINS_LEVER_ARM",
            "KFGINS_ORIGIN_LLA"]
@@ -191,7 +192,8 @@ def _vector(value: Any, n: int, where: str, unit: str) -> Array:
 def _check_keys(table: dict[str, Any], allowed: tuple[str, ...], where: str) -> None:
     unknown = sorted(set(table) - set(allowed))
     if unknown:
-        raise ConfigError(f"{where}: unknown key(s) {unknown}; allowed: {', '.join(allowed)}")
+        raise ConfigError(f"{where}: unknown key(s) {unknown}{renamed_hint('GinsConfig', unknown)}; "
+                          f"allowed: {', '.join(allowed)}")
 
 
 def _states(value: Any, where: str) -> bool:
@@ -214,7 +216,7 @@ def _gins_config(doc: dict[str, Any], where: str, overrides: dict[str, Any]) -> 
     try:
         if "preset" in doc:
             return GinsConfig.from_preset(str(doc["preset"]), **overrides)
-        missing = [k for k in ("arw", "vrw", "gyro_bias_std", "accel_bias_std") if k not in overrides]
+        missing = [k for k in ("gyro_noise_density", "accel_noise_density", "gyro_bias_std", "accel_bias_std") if k not in overrides]
         if missing:
             raise ConfigError(f"{where}: give the IMU noise {missing} (SI: rad/sqrt(s), m/s/sqrt(s), rad/s, m/s^2) "
                               "or a preset = \"<name>\" of imunav.sim.presets to start from")

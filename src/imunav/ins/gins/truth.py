@@ -4,7 +4,7 @@ The normalised estimation error squared (NEES) of a Kalman filter is χ²(n) onl
 the filter's model (Bar-Shalom, Li & Kirubarajan 2001, §5.4).  For :class:`~imunav.ins.gins.GinsConfig` that
 is, per axis:
 
-* white rate / specific-force noise of density ``arw`` / ``vrw``;
+* white rate / specific-force noise of density ``gyro_noise_density`` / ``accel_noise_density``;
 * a bias that is a random constant of σ ``√(init² − σ_GM²)`` plus a stationary first-order Gauss–Markov
   process of σ ``gyro_bias_std`` / ``accel_bias_std`` and time constant ``corr_time`` — together of the
   initial σ ``init_gyro_bias_std`` / ``init_accel_bias_std``;
@@ -97,9 +97,9 @@ def matched_errors(cfg: GinsConfig, rng: np.random.Generator) -> MatchedErrors:
             raise InvalidInputError(f"init_{name}_bias_std {init} is below the stationary {name}_bias_std {gm}: a "
                                     "Gauss-Markov bias cannot start with less variance than it keeps; the truth "
                                     "would not follow the filter's model")
-    gyro, sg = _triad(cfg.arw, cfg.gyro_bias_std, cfg.init_gyro_bias_std, cfg.init_gyro_scale_std, cfg.corr_time,
+    gyro, sg = _triad(cfg.gyro_noise_density, cfg.gyro_bias_std, cfg.init_gyro_bias_std, cfg.init_gyro_scale_std, cfg.corr_time,
                       rng)
-    acc, sa = _triad(cfg.vrw, cfg.accel_bias_std, cfg.init_accel_bias_std, cfg.init_accel_scale_std, cfg.corr_time,
+    acc, sa = _triad(cfg.accel_noise_density, cfg.accel_bias_std, cfg.init_accel_bias_std, cfg.init_accel_scale_std, cfg.corr_time,
                      rng)
     return MatchedErrors(ImuErrorModel(gyro=gyro, accel=acc, name="matched to the filter"), sg, sa)
 

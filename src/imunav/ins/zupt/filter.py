@@ -13,12 +13,12 @@ and, with 15 states, accelerometer / gyro biases.  Error state
            [0, 0,    I,              0,       -dt Ĉ    ],
            [0, 0,    0,              I,        0       ],
            [0, 0,    0,              0,        I       ]]
-    Q_d = diag(0, sigma_acc² dt², sigma_gyro² dt², sigma_ba² dt, sigma_bg² dt)
+    Q_d = diag(0, accel_noise_std² dt², gyro_noise_std² dt², sigma_ba² dt, sigma_bg² dt)
 
-``sigma_acc`` / ``sigma_gyro`` are per-sample noise standard deviations (the
+``accel_noise_std`` / ``gyro_noise_std`` are per-sample noise standard deviations (the
 OpenShoe / pyshoe convention).  When the detector declares the foot
 stationary the ZUPT pseudo-measurement ``z = 0 - v̂ = H dx + nu``,
-``H = [0 I 0 ...]``, ``R = sigma_v² I`` is applied in Joseph form, the error
+``H = [0 I 0 ...]``, ``R = zupt_noise_std² I`` is applied in Joseph form, the error
 is injected into the nominal state and reset.  Options, each a stance
 pseudo-measurement with unit-row H:
 
@@ -31,7 +31,7 @@ pseudo-measurement with unit-row H:
 * level floor: ``z = p_z0 - p̂_z = δp_z + ν`` (every stance at the start height).
 
 The initial roll and pitch come from the mean specific force of the first
-stance (or of the first ``align_samples`` samples), yaw = ``initial_yaw``:
+stance (or of the first ``align_samples`` samples), yaw = ``init_yaw``:
 ``roll = atan2(-f_y, -f_z)``, ``pitch = atan2(f_x, sqrt(f_y² + f_z²))``.
 """
 
@@ -54,6 +54,7 @@ from imunav.errors import (
     TimeOrderError,
 )
 from imunav.ins.zupt import kernels as _k
+from imunav.ins.zupt.statistics import G_PYSHOE
 from imunav.results import EulerMixin, Result
 from imunav.rotation import quat_from_euler
 
@@ -70,21 +71,23 @@ class ZuptConfig:
     ----------
     states : int
         9 (p, v, attitude) or 15 (+ accel and gyro biases).
-    sigma_acc : float
+    accel_noise_std : float
         Accelerometer noise per sample, m/s² (default 0.5).
-    sigma_gyro : float
+    gyro_noise_std : float
         Gyro noise per sample, rad/s (default 0.5 °/s).
-    sigma_v : float
+    zupt_noise_std : float
         ZUPT velocity-measurement noise, m/s (default 0.01).
-    sigma_acc_bias_rw, sigma_gyro_bias_rw : float
+    accel_bias_random_walk, gyro_bias_random_walk : float
         Bias random walks (15 states), m/s²/√s and rad/s/√s, >= 0.
-    p0_pos, p0_vel, p0_att : float
+    init_pos_std, init_vel_std, init_att_std : float
         Initial error std (m, m/s, rad).
-    p0_acc_bias, p0_gyro_bias : float
+    init_accel_bias_std, init_gyro_bias_std : float
         Initial bias std (15 states; m/s², rad/s).
     g : float or None
         Gravity, m/s²; ``None`` uses the norm of the mean specific force of
-        the alignment samples.
+        the alignment samples.  Default :data:`~imunav.ins.zupt.statistics.G_PYSHOE` (9.8029 m/s²), pyshoe's
+        value, not the package's :data:`~imunav.units.DEFAULT_GRAVITY`: the ZUPT INS keeps pyshoe's defaults so
+        that its published results reproduce.
     alignment : {"samples", "first_stance"}
         ``"samples"`` (first ``align_samples`` samples) or
         ``"first_stance"`` (the first detected stance, at most
@@ -93,11 +96,11 @@ class ZuptConfig:
         Number of samples averaged for the alignment with ``"samples"``, >= 1.
     align_samples_max : int
         Most samples of the first stance averaged with ``"first_stance"``.
-    initial_yaw : float
+    init_yaw : float
         Initial yaw, rad (ZYX).
     zaru : bool
         Zero angular-rate update during stance (needs 15 states).
-    sigma_zaru : float
+    zaru_noise_std : float
         Its noise, rad/s.
     zaru_min_s : float
         Apply the ZARU only in stances lasting at least this long, s.
@@ -108,12 +111,12 @@ class ZuptConfig:
         No rotation about the vertical during each stance (the nav-frame
         rotation since the stance's first sample, not a yaw-angle difference,
         so it holds for a tilted mounting).
-    sigma_heading : float
+    heading_noise_std : float
         Noise of the heading hold, rad.
     level_floor : bool
         The walk stays on one level: each stance measures the height
         as the initial height (a flat-floor constraint; wrong on stairs or ramps).
-    sigma_floor : float
+    floor_noise_std : float
         Noise of the level-floor measurement, m.
     integration : {"euler", "coning"}
         ``"euler"`` (first order, the thesis and pyshoe: rate of sample k held
@@ -127,39 +130,39 @@ class ZuptConfig:
     """
 
     states: int = 9
-    sigma_acc: float = 0.5
-    sigma_gyro: float = 0.5 * math.pi / 180.0
-    sigma_v: float = 0.01
-    sigma_acc_bias_rw: float = 1e-3
-    sigma_gyro_bias_rw: float = 1e-5
-    p0_pos: float = 1e-5
-    p0_vel: float = 1e-5
-    p0_att: float = 0.1 * math.pi / 180.0
-    p0_acc_bias: float = 0.1
-    p0_gyro_bias: float = 0.01
-    g: float | None = 9.8029
+    accel_noise_std: float = 0.5
+    gyro_noise_std: float = 0.5 * math.pi / 180.0
+    zupt_noise_std: float = 0.01
+    accel_bias_random_walk: float = 1e-3
+    gyro_bias_random_walk: float = 1e-5
+    init_pos_std: float = 1e-5
+    init_vel_std: float = 1e-5
+    init_att_std: float = 0.1 * math.pi / 180.0
+    init_accel_bias_std: float = 0.1
+    init_gyro_bias_std: float = 0.01
+    g: float | None = G_PYSHOE
     alignment: Literal["samples", "first_stance"] = "samples"
     align_samples: int = 20
     align_samples_max: int = 400
-    initial_yaw: float = 0.0
+    init_yaw: float = 0.0
     zaru: bool = False
-    sigma_zaru: float = 0.01
+    zaru_noise_std: float = 0.01
     zaru_min_s: float = 0.0
     heading_hold: bool = False
-    sigma_heading: float = 0.5 * math.pi / 180.0
+    heading_noise_std: float = 0.5 * math.pi / 180.0
     level_floor: bool = False
-    sigma_floor: float = 0.01
+    floor_noise_std: float = 0.01
     integration: Literal["euler", "coning"] = "euler"
 
     def __post_init__(self) -> None:
         if self.states not in (9, 15):
             raise ConfigError(f"states must be 9 or 15; got {self.states}")
-        for name in ("sigma_acc", "sigma_gyro", "sigma_v", "p0_pos", "p0_vel", "p0_att", "sigma_zaru",
-                     "sigma_heading", "sigma_floor", "p0_acc_bias", "p0_gyro_bias"):
+        for name in ("accel_noise_std", "gyro_noise_std", "zupt_noise_std", "init_pos_std", "init_vel_std", "init_att_std", "zaru_noise_std",
+                     "heading_noise_std", "floor_noise_std", "init_accel_bias_std", "init_gyro_bias_std"):
             val = getattr(self, name)
             if not (val > 0 and math.isfinite(val)):
                 raise ConfigError(f"{name} must be finite and > 0; got {val!r}")
-        for name in ("sigma_acc_bias_rw", "sigma_gyro_bias_rw"):
+        for name in ("accel_bias_random_walk", "gyro_bias_random_walk"):
             if not getattr(self, name) >= 0:
                 raise ConfigError(f"{name} must be >= 0; got {getattr(self, name)!r}")
         if self.g is not None and not self.g > 0:
@@ -363,18 +366,18 @@ def _arrays(data: Any) -> tuple[Array, Array, Array]:
 def _kernel_params(cfg: ZuptConfig, g: float) -> Any:
     """The kernel's parameter record for ``cfg`` and gravity ``g``."""
     return _k.ZuptKernelParams(
-        nx=cfg.states, g=g, sigma_acc=float(cfg.sigma_acc), sigma_gyro=float(cfg.sigma_gyro),
-        sigma_acc_bias_rw=float(cfg.sigma_acc_bias_rw), sigma_gyro_bias_rw=float(cfg.sigma_gyro_bias_rw),
-        sigma_v=float(cfg.sigma_v), sigma_zaru=float(cfg.sigma_zaru), heading_hold=bool(cfg.heading_hold),
-        sigma_heading=float(cfg.sigma_heading), coning=cfg.integration == "coning",
-        level_floor=bool(cfg.level_floor), sigma_floor=float(cfg.sigma_floor))
+        nx=cfg.states, g=g, accel_noise_std=float(cfg.accel_noise_std), gyro_noise_std=float(cfg.gyro_noise_std),
+        accel_bias_random_walk=float(cfg.accel_bias_random_walk), gyro_bias_random_walk=float(cfg.gyro_bias_random_walk),
+        zupt_noise_std=float(cfg.zupt_noise_std), zaru_noise_std=float(cfg.zaru_noise_std), heading_hold=bool(cfg.heading_hold),
+        heading_noise_std=float(cfg.heading_noise_std), coning=cfg.integration == "coning",
+        level_floor=bool(cfg.level_floor), floor_noise_std=float(cfg.floor_noise_std))
 
 
 def _initial_cov(cfg: ZuptConfig) -> Array:
-    """``P0 = diag(p0_pos², p0_vel², p0_att² (, p0_acc_bias², p0_gyro_bias²))``."""
-    p0 = [cfg.p0_pos] * 3 + [cfg.p0_vel] * 3 + [cfg.p0_att] * 3
+    """``P0 = diag(init_pos_std², init_vel_std², init_att_std² (, init_accel_bias_std², init_gyro_bias_std²))``."""
+    p0 = [cfg.init_pos_std] * 3 + [cfg.init_vel_std] * 3 + [cfg.init_att_std] * 3
     if cfg.states == 15:
-        p0 += [cfg.p0_acc_bias] * 3 + [cfg.p0_gyro_bias] * 3
+        p0 += [cfg.init_accel_bias_std] * 3 + [cfg.init_gyro_bias_std] * 3
     return np.diag(np.square(p0))
 
 
@@ -476,7 +479,7 @@ class ZuptFilter:
         ----------
         q_nb : array_like, shape (4,), optional
             Initial attitude (scalar first); default: levelled from the first sample's specific force
-            (:func:`align_from_accel`, yaw ``config.initial_yaw``), as :meth:`run` with ``align_samples=1``.
+            (:func:`align_from_accel`, yaw ``config.init_yaw``), as :meth:`run` with ``align_samples=1``.
         position : array_like, shape (3,), optional
             Initial position, m, NED.
         g : float, optional
@@ -499,8 +502,17 @@ class ZuptFilter:
     def _carry(self, t: float, accel: Array, gyro: Array, q: Array, v: Array, p: Array, ba: Array, bg: Array,
                P: Array, dth: Array, dv: Array, q_ref: Array, stance: NDArray[np.bool_], floor: float,
                prm: Any) -> None:
-        self._prev = {"t": t, "accel": accel, "gyro": gyro, "q": q, "v": v, "p": p, "ba": ba, "bg": bg, "P": P,
-                      "dth": dth, "dv": dv, "q_ref": q_ref, "stance": stance, "floor": floor, "prm": prm}
+        # The two-row window that each later step runs the kernel over, allocated once: row 1 holds the last
+        # sample and its state; a step moves row 1 to row 0 and writes the new sample into row 1, in place
+        # (building the arrays and named tuples afresh at every step cost ~10 % of a step).
+        nx = P.shape[0]
+        inp = _k.ZuptInput(np.array([t, t]), np.stack([accel, accel]), np.stack([gyro, gyro]),
+                           np.zeros(2, dtype=np.bool_), np.zeros(2, dtype=np.bool_))
+        rows = _k.ZuptRows(np.stack([q, q]), np.stack([v, v]), np.stack([p, p]), np.stack([ba, ba]),
+                           np.stack([bg, bg]), np.empty((2, nx)), np.full((2, 3), np.nan), np.full((2, 3), np.nan))
+        carry = _k.ZuptCarry(P, dth, dv, q_ref, stance, floor)
+        self._prev = {"t": t, "inp": inp, "rows": rows, "carry": carry, "prm": prm,
+                      "shift": (inp.t, inp.acc, inp.gyr, rows.q, rows.v, rows.p, rows.ba, rows.bg)}
 
     def step(self, t: float, gyro: ArrayLike, accel: ArrayLike, zv: bool = False, *,
              zaru: bool | None = None) -> ZuptState:
@@ -554,7 +566,7 @@ class ZuptFilter:
         if prev is None:
             if not math.isfinite(tk):
                 raise TimeOrderError(f"t must be finite; got {t!r}")
-            q0 = align_from_accel(a, cfg.initial_yaw) if self._q_init is None else self._q_init
+            q0 = align_from_accel(a, cfg.init_yaw) if self._q_init is None else self._q_init
             g = self._g_init if self._g_init is not None else (float(np.linalg.norm(a)) if cfg.g is None
                                                                    else float(cfg.g))
             P = _initial_cov(cfg)
@@ -568,20 +580,20 @@ class ZuptFilter:
         if not (math.isfinite(tk) and tk > prev["t"]):
             raise TimeOrderError(f"t = {t!r} s is not after the previous sample's {prev['t']!r} s; "
                                  "samples must come in strictly increasing time")
-        nx = cfg.states
-        rows = {k: np.stack([prev[k], np.zeros_like(prev[k])]) for k in ("q", "v", "p", "ba", "bg")}
-        Pd = np.empty((2, nx))
-        innov = np.full((2, 3), np.nan)
-        svar = np.full((2, 3), np.nan)
-        inp = _k.ZuptInput(np.array([prev["t"], tk]), np.stack([prev["accel"], a]), np.stack([prev["gyro"], w]),
-                           np.array([False, bool(zv)]), np.array([False, bool(zaru)]))
-        out = _k.ZuptRows(rows["q"], rows["v"], rows["p"], rows["ba"], rows["bg"], Pd, innov, svar)
-        carry = _k.ZuptCarry(prev["P"], prev["dth"], prev["dv"], prev["q_ref"], prev["stance"], prev["floor"])
-        _k.zupt_ekf_window(inp, out, carry, prev["prm"])
-        self._carry(tk, a, w, rows["q"][1], rows["v"][1], rows["p"][1], rows["ba"][1], rows["bg"][1], prev["P"],
-                    prev["dth"], prev["dv"], prev["q_ref"], prev["stance"], prev["floor"], prev["prm"])
-        return ZuptState(tk, rows["p"][1].copy(), rows["v"][1].copy(), rows["q"][1].copy(), rows["ba"][1].copy(),
-                         rows["bg"][1].copy(), Pd[1], innov[1], svar[1])
+        for x in prev["shift"]:
+            x[0] = x[1]
+        inp, rows = prev["inp"], prev["rows"]
+        inp.t[1] = tk
+        inp.acc[1] = a
+        inp.gyr[1] = w
+        inp.zv[1] = zv
+        inp.zaru[1] = zaru
+        rows.innov[1] = np.nan
+        rows.svar[1] = np.nan
+        prev["t"] = tk
+        _k.zupt_ekf_window(inp, rows, prev["carry"], prev["prm"])
+        return ZuptState(tk, rows.p[1].copy(), rows.v[1].copy(), rows.q[1].copy(), rows.ba[1].copy(),
+                         rows.bg[1].copy(), rows.Pd[1].copy(), rows.innov[1].copy(), rows.svar[1].copy())
 
     @property
     def P(self) -> Array | None:
@@ -592,7 +604,7 @@ class ZuptFilter:
         numpy.ndarray or None
             (9, 9) or (15, 15).
         """
-        return None if self._prev is None else self._prev["P"].copy()
+        return None if self._prev is None else self._prev["carry"].P.copy()
 
     def run(self, data: Any, zv: ArrayLike, *, initial_position: ArrayLike = (0.0, 0.0, 0.0),
             initial_quaternion: ArrayLike | None = None) -> ZuptResult:
@@ -636,7 +648,7 @@ class ZuptFilter:
             i0, i1 = first_stance(z)
             i1 = min(i1, i0 + cfg.align_samples_max)
         fmean = a[i0:i1].mean(axis=0)
-        q0 = align_from_accel(fmean, cfg.initial_yaw) if initial_quaternion is None else _quaternion(initial_quaternion)
+        q0 = align_from_accel(fmean, cfg.init_yaw) if initial_quaternion is None else _quaternion(initial_quaternion)
         g = float(np.linalg.norm(fmean)) if cfg.g is None else float(cfg.g)
         pos0 = _position(initial_position)
         # fresh, writable, contiguous float64 arrays: one compiled signature for every caller

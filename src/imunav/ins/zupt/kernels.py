@@ -167,8 +167,8 @@ NX_BIAS = 15
 #: by value, its fields are compile-time typed).
 ZuptKernelParams = namedtuple(
     "ZuptKernelParams",
-    ["nx", "g", "sigma_acc", "sigma_gyro", "sigma_acc_bias_rw", "sigma_gyro_bias_rw", "sigma_v", "sigma_zaru",
-     "heading_hold", "sigma_heading", "coning", "level_floor", "sigma_floor"],
+    ["nx", "g", "accel_noise_std", "gyro_noise_std", "accel_bias_random_walk", "gyro_bias_random_walk", "zupt_noise_std", "zaru_noise_std",
+     "heading_hold", "heading_noise_std", "coning", "level_floor", "floor_noise_std"],
 )
 
 #: The recording a ZUPT EKF window runs over: times ``t`` (N,), specific force ``acc`` and rate ``gyr`` (N, 3),
@@ -212,15 +212,15 @@ def _zupt_transition(Phi, Qd, C, dvn, h, prm):
                 Phi[I_VEL + i, I_BA + j] = -C[i, j] * h
                 Phi[I_ATT + i, I_BG + j] = -C[i, j] * h
     # G Q G^T with G = dt C blocks: C diag(s^2) C^T = s^2 I for isotropic s
-    qa = prm.sigma_acc * prm.sigma_acc * h * h
-    qg = prm.sigma_gyro * prm.sigma_gyro * h * h
+    qa = prm.accel_noise_std * prm.accel_noise_std * h * h
+    qg = prm.gyro_noise_std * prm.gyro_noise_std * h * h
     for i in range(3):
         Qd[I_VEL + i, I_VEL + i] = qa
         Qd[I_ATT + i, I_ATT + i] = qg
     if nx == NX_BIAS:
         for i in range(3):
-            Qd[I_BA + i, I_BA + i] = prm.sigma_acc_bias_rw * prm.sigma_acc_bias_rw * h
-            Qd[I_BG + i, I_BG + i] = prm.sigma_gyro_bias_rw * prm.sigma_gyro_bias_rw * h
+            Qd[I_BA + i, I_BA + i] = prm.accel_bias_random_walk * prm.accel_bias_random_walk * h
+            Qd[I_BG + i, I_BG + i] = prm.gyro_bias_random_walk * prm.gyro_bias_random_walk * h
 
 
 @njit(cache=True)
@@ -238,9 +238,9 @@ def zupt_ekf_kernel(inp, q0, p0, v0, ba0, bg0, P0, prm):
     injection of the error estimate.
 
     Heading hold: from the second sample of a stance on, the rotation about
-    the nav vertical since its first sample is measured as 0 (std sigma_heading).
+    the nav vertical since its first sample is measured as 0 (std heading_noise_std).
     Level floor (``level_floor``): each stance sample measures the height as the
-    initial height p0[2] (std sigma_floor).
+    initial height p0[2] (std floor_noise_std).
 
     The loop is :func:`zupt_ekf_window`; this wrapper allocates the outputs (:data:`ZuptRows`) and the state
     carried from sample to sample (:data:`ZuptCarry`), which it returns after the outputs so that
@@ -347,14 +347,14 @@ def zupt_ekf_window(inp, rows, carry, prm):
         propagate_cov_sparse(Phi, P, Qd, M, nzc, nzn)
         # ---- updates
         if zv[k]:
-            zero_velocity(v[k], prm.sigma_v, z3, r3)
+            zero_velocity(v[k], prm.zupt_noise_std, z3, r3)
             joseph_update_rows(P, dx, idx_v, z3, r3, tmp3, s3)
             for j in range(3):
                 innov[k, j] = tmp3[j]
                 svar[k, j] = s3[j]
             _inject(dx, k, p, v, q, ba, bg, nx)
             if zaru[k] and nx == NX_BIAS:
-                zero_rate(gyr[k], bg[k], prm.sigma_zaru, z3, r3)
+                zero_rate(gyr[k], bg[k], prm.zaru_noise_std, z3, r3)
                 joseph_update_rows(P, dx, idx_b, z3, r3, tmp3, s3)
                 _inject(dx, k, p, v, q, ba, bg, nx)
             if prm.heading_hold:
@@ -362,11 +362,11 @@ def zupt_ekf_window(inp, rows, carry, prm):
                     for j in range(4):
                         q_ref[j] = q[k, j]
                 else:
-                    heading_hold(q[k], q_ref, prm.sigma_heading, z1, r1)
+                    heading_hold(q[k], q_ref, prm.heading_noise_std, z1, r1)
                     joseph_update_rows(P, dx, idx_psi, z1, r1, tmp1, s1_)
                     _inject(dx, k, p, v, q, ba, bg, nx)
             if prm.level_floor:
-                height(p[k, 2], floor_height, prm.sigma_floor, z1, r1)
+                height(p[k, 2], floor_height, prm.floor_noise_std, z1, r1)
                 joseph_update_rows(P, dx, idx_z, z1, r1, tmp1, s1_)
                 _inject(dx, k, p, v, q, ba, bg, nx)
             in_stance = True

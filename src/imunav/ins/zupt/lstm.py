@@ -34,6 +34,12 @@ Array = NDArray[np.float64]
 DEFAULT_MODEL_PATH = Path(__file__).resolve().parents[2] / "data" / "zupt_lstm.npz"
 
 
+# vocab_rename: off (the old spellings a saved model file holds)
+#: LstmConfig fields renamed by issue 25 (one vocabulary), as a model file saved before may spell them
+_RENAMED_FIELDS = {"noise_acc": "accel_noise_std", "noise_gyro": "gyro_noise_std"}
+# vocab_rename: on
+
+
 @dataclass(frozen=True)
 class LstmConfig:
     """Architecture and training settings.
@@ -71,9 +77,9 @@ class LstmConfig:
         Largest random rotation of the augmentation, degrees.
     scale : tuple of float
         (low, high) range of the random scale factor of the augmentation.
-    noise_acc : float
+    accel_noise_std : float
         Standard deviation of the accelerometer noise added in augmentation, m/s².
-    noise_gyro : float
+    gyro_noise_std : float
         Standard deviation of the gyro noise added in augmentation, rad/s.
     time_budget_s : float or None
         Stop training after this many seconds (None: no limit).
@@ -124,8 +130,8 @@ class LstmConfig:
     lr: float = 3e-3
     max_rotation_deg: float = 10.0
     scale: tuple[float, float] = (0.9, 1.1)
-    noise_acc: float = 0.075
-    noise_gyro: float = 0.01
+    accel_noise_std: float = 0.075
+    gyro_noise_std: float = 0.01
     time_budget_s: float | None = None
     seed: int = 0
     features: str = "raw+log"
@@ -187,8 +193,8 @@ class LstmConfig:
         return asdict(self)
 
     @classmethod
-    def thesis(cls, **changes: Any) -> LstmConfig:
-        """The thesis's 6 × 80 network (Şahin 2022 §4.2), other defaults unchanged.
+    def large_network(cls, **changes: Any) -> LstmConfig:
+        """The large 6 × 80 network of the source (Şahin 2022 §4.2), other defaults unchanged.
 
         Parameters
         ----------
@@ -358,6 +364,10 @@ class LstmDetector:
                 # a model saved before the SHOE guard existed has no guard threshold chosen on its own
                 # training trials: keep its behaviour (no guard) rather than borrow the shipped model's
                 cfgd.setdefault("guard", False)
+                # a model saved before issue 25's renames names two fields the old way
+                for old, new in _RENAMED_FIELDS.items():
+                    if old in cfgd:
+                        cfgd[new] = cfgd.pop(old)
                 cfg = LstmConfig(**cfgd)
                 weights = [(z[f"w_ih_{l}"].astype(float), z[f"w_hh_{l}"].astype(float), z[f"b_{l}"].astype(float))
                            for l in range(cfg.layers)]

@@ -7,6 +7,7 @@ from typing import Any
 import numpy as np
 
 from imunav.ins.zupt.metrics import align_heading
+from imunav.units import DEFAULT_GRAVITY
 
 __all__ = ["plot_trajectory", "plot_zero_velocity"]
 
@@ -80,7 +81,7 @@ def plot_zero_velocity(data: Any, detections: dict[str, Any], *, ax: Any = None)
     ax = _axes(ax, (10, 4))
     t = np.asarray(data.t)
     ax.plot(t, np.linalg.norm(data.gyro, axis=1), lw=0.7, label="|gyro| (rad/s)")
-    ax.plot(t, np.abs(np.linalg.norm(data.accel, axis=1) - 9.81), lw=0.7, label="| |f| - g | (m/s²)")
+    ax.plot(t, np.abs(np.linalg.norm(data.accel, axis=1) - DEFAULT_GRAVITY), lw=0.7, label="| |f| - g | (m/s²)")
     for i, (name, det) in enumerate(detections.items()):
         zv = np.asarray(getattr(det, "zv", det), dtype=float)
         ax.fill_between(t, -1.0 - 1.2 * i, -1.0 - 1.2 * i + zv, step="mid", alpha=0.5, label=f"{name} stance")

@@ -27,6 +27,8 @@ DETECTORS: tuple[str, ...] = ("shoe", "ared", "amvd", "mbgtd")
 
 SIGMA_A = 0.00098
 SIGMA_W = 8.7266463e-5
+#: pyshoe's gravity, m/s² (the ZUPT detectors' and INS's default, so that pyshoe's published results reproduce;
+#: elsewhere the package assumes :data:`imunav.units.DEFAULT_GRAVITY`).
 G_PYSHOE = 9.8029
 
 

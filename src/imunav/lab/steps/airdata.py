@@ -24,8 +24,8 @@ from pathlib import Path
 import numpy as np
 
 from imunav.airdata import plot as P
-from imunav.airdata.filter import ThesisFilter
-from imunav.airdata.scenario import ThesisScenario, simulate_thesis, thesis_report
+from imunav.airdata.filter import BodyWindFilter
+from imunav.airdata.scenario import WindScenario, simulate_wind_scenario, wind_scenario_report
 from imunav.errors import ConfigError
 from imunav.files import atomic_path, write_json
 from imunav.filters import detect_faults
@@ -67,7 +67,7 @@ def run(ctx: LabContext) -> StepResult:
         raise ConfigError("[airdata] robust_methods must include 'gate2' and 'nis' (the thesis gate and the χ² gate)")
     seed = int(ctx.rng().integers(2**31))
     task = ctx.progress.add_task("air data: thesis scenarios", total=2)
-    rep = thesis_report(runs, seed, p_false_alarm=pfa, robust_methods=methods)
+    rep = wind_scenario_report(runs, seed, p_false_alarm=pfa, robust_methods=methods)
     ctx.progress.update(task, advance=1)
     data_dir = Path(ctx.out_dir) / "data"
     fig_dir = Path(ctx.out_dir) / "figures"
@@ -76,8 +76,8 @@ def run(ctx: LabContext) -> StepResult:
     out = data_dir / "airdata_thesis.json"
     write_json(out, rep)
 
-    d = simulate_thesis(ThesisScenario(kind="variance"), seed)
-    r = ThesisFilter(robust="nis").run(d.z)
+    d = simulate_wind_scenario(WindScenario(kind="variance"), seed)
+    r = BodyWindFilter(robust="nis").run(d.z)
     det = detect_faults(r.normalized, 20, p_false_alarm=pfa, start=d.scenario.onset_row)
     figs = []
     for name, fig in (("wind", P.plot_wind(r, d)), ("innovations", P.plot_innovations(r)),

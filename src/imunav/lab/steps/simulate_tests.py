@@ -59,9 +59,9 @@ from imunav.sim import (
     ImuErrorModel,
     hundred_position_profile,
     presets,
+    rate_table_step_profile,
     simulate_imu,
     static_profile,
-    thesis_rate_table_profile,
 )
 from imunav.sim.plot import plot_test_recording
 from imunav.units import DEG, G0
@@ -159,7 +159,7 @@ def run(ctx: LabContext) -> StepResult:
     builders = {
         "hundred_position": lambda: hundred_position_profile(
             fs, opts["dwell_s"], opts["transition_s"], lat=lat, h=h),
-        "rate_table": lambda: thesis_rate_table_profile(
+        "rate_table": lambda: rate_table_step_profile(
             fs, opts["dwell_s"], opts["transition_s"], remount_s=opts["remount_s"], lat=lat, h=h),
         "static_long": lambda: static_profile(opts["static_duration_s"], fs, lat=lat, h=h, name="static_long"),
     }

@@ -26,7 +26,7 @@ PARAMS, N_PARAMS = named_layout("BaroParams", (("sigma", 1),))
 
 
 def params(config: Any) -> np.ndarray:
-    """This aid's parameter block from a :class:`~imunav.ins.gins.GinsConfig` (``baro_noise``, m).
+    """This aid's parameter block from a :class:`~imunav.ins.gins.GinsConfig` (``baro_noise_std``, m).
 
     Parameters
     ----------
@@ -38,7 +38,7 @@ def params(config: Any) -> np.ndarray:
     numpy.ndarray, shape (N_PARAMS,)
         The block, layout :data:`PARAMS`.
     """
-    return np.array([config.baro_noise], dtype=float)
+    return np.array([config.baro_noise_std], dtype=float)
 
 
 @njit(cache=True)

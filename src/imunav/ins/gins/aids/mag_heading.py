@@ -34,7 +34,7 @@ PARAMS, N_PARAMS = named_layout("MagHeadingParams", (("declination", 1), ("sigma
 
 def params(config: Any) -> np.ndarray:
     """This aid's parameter block from a :class:`~imunav.ins.gins.GinsConfig` (``declination``,
-    ``mag_heading_noise``, rad).
+    ``mag_heading_noise_std``, rad).
 
     Parameters
     ----------
@@ -46,7 +46,7 @@ def params(config: Any) -> np.ndarray:
     numpy.ndarray, shape (N_PARAMS,)
         The block, layout :data:`PARAMS`.
     """
-    return np.array([config.declination, config.mag_heading_noise], dtype=float)
+    return np.array([config.declination, config.mag_heading_noise_std], dtype=float)
 
 
 @njit(cache=True)

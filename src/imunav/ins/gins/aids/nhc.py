@@ -28,7 +28,7 @@ PARAMS, N_PARAMS = named_layout("NhcParams", (("var", 1),))
 
 
 def params(config: Any) -> np.ndarray:
-    """This aid's parameter block from a :class:`~imunav.ins.gins.GinsConfig` (``nhc_noise``, m/s).
+    """This aid's parameter block from a :class:`~imunav.ins.gins.GinsConfig` (``nhc_noise_std``, m/s).
 
     Parameters
     ----------
@@ -41,7 +41,7 @@ def params(config: Any) -> np.ndarray:
         The block, layout :data:`PARAMS`.
     """
     p = np.zeros(N_PARAMS)
-    p[PARAMS.var] = 0.0 if config.nhc_noise is None else config.nhc_noise**2
+    p[PARAMS.var] = 0.0 if config.nhc_noise_std is None else config.nhc_noise_std**2
     return p
 
 

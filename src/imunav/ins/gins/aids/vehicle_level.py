@@ -8,7 +8,7 @@ With the global attitude error ``C_nb = exp([φ×]) Ĉ_nb`` and the mounting err
     ∂g/∂φ = Ĉ_vb Ĉ_nbᵀ [e_D×],   ∂g/∂μ = −[ĝ×]
     ν = −(roll̂, pitcĥ),   H = J [∂g/∂φ | ∂g/∂μ],   J = ∂(roll, pitch)/∂g,   R = σ² I
 
-with σ the ground's slope where the vehicle stops (configuration ``level_std``).  This is what ties the mounting's
+with σ the ground's slope where the vehicle stops (configuration ``level_noise_std``).  This is what ties the mounting's
 roll, which neither the odometer nor the NHC see, to the accelerometers, whose bias the filter separates from
 the tilt while the vehicle turns.  Applied with the ZUPT while the vehicle is declared static.
 
@@ -35,7 +35,7 @@ PARAMS, N_PARAMS = named_layout("VehicleLevelParams", (("var", 1),))
 
 
 def params(config: Any) -> np.ndarray:
-    """This aid's parameter block from a :class:`~imunav.ins.gins.GinsConfig` (``level_std``, rad; 0 when None).
+    """This aid's parameter block from a :class:`~imunav.ins.gins.GinsConfig` (``level_noise_std``, rad; 0 when None).
 
     Parameters
     ----------
@@ -47,7 +47,7 @@ def params(config: Any) -> np.ndarray:
     numpy.ndarray, shape (N_PARAMS,)
         The block, layout :data:`PARAMS`.
     """
-    return np.array([0.0 if config.level_std is None else config.level_std**2])
+    return np.array([0.0 if config.level_noise_std is None else config.level_noise_std**2])
 
 
 @njit(cache=True)

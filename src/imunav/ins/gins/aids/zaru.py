@@ -35,11 +35,11 @@ NAME = "zaru"
 ROWS = 3
 WIDTH = 1
 #: own parameters: the rate disturbance at rest (rad/s) and the gyro white noise density ARW (rad/√s)
-PARAMS, N_PARAMS = named_layout("ZaruParams", (("sigma", 1), ("arw", 3)))
+PARAMS, N_PARAMS = named_layout("ZaruParams", (("sigma", 1), ("gyro_noise_density", 3)))
 
 
 def params(config: Any) -> np.ndarray:
-    """This aid's parameter block from a :class:`~imunav.ins.gins.GinsConfig` (``zaru_noise`` rad/s, ``arw``).
+    """This aid's parameter block from a :class:`~imunav.ins.gins.GinsConfig` (``zaru_noise_std`` rad/s, ``gyro_noise_density``).
 
     Parameters
     ----------
@@ -52,8 +52,8 @@ def params(config: Any) -> np.ndarray:
         The block, layout :data:`PARAMS`.
     """
     p = np.zeros(N_PARAMS)
-    p[PARAMS.sigma] = config.zaru_noise
-    p[PARAMS.arw:PARAMS.arw + 3] = config.arw
+    p[PARAMS.sigma] = config.zaru_noise_std
+    p[PARAMS.gyro_noise_density:PARAMS.gyro_noise_density + 3] = config.gyro_noise_density
     return p
 
 
@@ -111,4 +111,4 @@ def rows(xs, ctx, z, r, p, lay, H, R, nu, row):
                     xs[NOM.gyro_bias:NOM.gyro_bias + 3], sg, w_ie_n, nu, H, row, lay[LAY.att], lay[LAY.gyro_bias], isg)
     dt = ctx[CTX.dt_raw]
     for j in range(3):
-        R[row + j, row + j] = p[PARAMS.sigma] ** 2 + p[PARAMS.arw + j] ** 2 / dt
+        R[row + j, row + j] = p[PARAMS.sigma] ** 2 + p[PARAMS.gyro_noise_density + j] ** 2 / dt

@@ -26,7 +26,7 @@ PARAMS, N_PARAMS = named_layout("ZuptParams", (("sigma", 1),))
 
 
 def params(config: Any) -> np.ndarray:
-    """This aid's parameter block from a :class:`~imunav.ins.gins.GinsConfig` (``zupt_noise``, m/s).
+    """This aid's parameter block from a :class:`~imunav.ins.gins.GinsConfig` (``zupt_noise_std``, m/s).
 
     Parameters
     ----------
@@ -38,7 +38,7 @@ def params(config: Any) -> np.ndarray:
     numpy.ndarray, shape (N_PARAMS,)
         The block, layout :data:`PARAMS`.
     """
-    return np.array([config.zupt_noise], dtype=float)
+    return np.array([config.zupt_noise_std], dtype=float)
 
 
 @njit(cache=True)
