@@ -68,3 +68,26 @@ def test_latency_and_mounting_inside_their_3_sigma(runs):
         err = np.degrees(e) - np.asarray(log.truth.mounting_euler_deg)
         err = np.remainder(err + 180.0, 360.0) - 180.0
         assert np.all(np.abs(err) < 3 * np.degrees(s)), (err, np.degrees(s))
+
+
+def test_bias_model_is_checked_and_changes_only_the_bias_dynamics():
+    """An unknown bias model is refused, naming the choices; the constant-and-Gauss-Markov model keeps the bias
+    states' variance from decaying (no measurement: the gyro bias sigma stays at its initial value instead of
+    falling to the stationary one)."""
+    from imunav.errors import InvalidInputError
+    from imunav.ins.gins import GinsFilter
+    from imunav.timeseries import ImuData
+
+    with pytest.raises(InvalidInputError, match="constant_and_gauss_markov"):
+        GinsConfig.from_preset("consumer_mems", bias_model="constant")
+    n = 3001  # 300 s at 10 Hz, three correlation times of the preset's 100 s
+    imu = ImuData(np.arange(n) / 10.0, np.zeros((n, 3)), np.tile([0.0, 0.0, -9.80], (n, 1)))
+    sd = {}
+    for model in ("gauss_markov", "constant_and_gauss_markov"):
+        cfg = GinsConfig.from_preset("consumer_mems", bias_model=model)
+        res = GinsFilter(cfg).run(imu, None, lla0=np.array([0.8, 0.2, 100.0]), vel0=np.zeros(3),
+                                  q0=np.array([1.0, 0.0, 0.0, 0.0]))
+        sd[model] = np.sqrt(res.cov_diag[-1, 9:12])
+    init = GinsConfig.from_preset("consumer_mems").init_gyro_bias_std
+    assert np.all(sd["constant_and_gauss_markov"] >= init * (1 - 1e-9))
+    assert np.all(sd["gauss_markov"] < 0.2 * init)

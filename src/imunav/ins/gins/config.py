@@ -18,7 +18,7 @@ from imunav.errors import InvalidInputError, ShapeError
 from imunav.io.kfgins import KfGinsConfig
 from imunav.sim import presets
 
-__all__ = ["GinsConfig", "STATE_NAMES"]
+__all__ = ["BIAS_MODELS", "GinsConfig", "STATE_NAMES"]
 
 Array = NDArray[np.float64]
 
@@ -36,6 +36,10 @@ def _v3(x: ArrayLike, name: str, *, positive: bool = False, nonneg: bool = False
     if nonneg and np.any(a < 0):
         raise InvalidInputError(f"GinsConfig.{name} = {a.tolist()}: must be >= 0")
     return a
+
+
+#: The bias models of :attr:`GinsConfig.bias_model`.
+BIAS_MODELS = ("gauss_markov", "constant_and_gauss_markov")
 
 
 @dataclass(frozen=True)
@@ -59,12 +63,13 @@ class GinsConfig:
         Correlation time of the bias and odometer-scale Gauss–Markov states, s (> 0; KF-GINS: ``corrtime``;
         ``inf``: random constants, no process noise — a state's variance then keeps its initial value, where a
         Gauss–Markov state's initial variance above its stationary σ² decays as ``exp(−2t/T)``).
-    bias_constant : bool
-        The biases are a random constant (the turn-on bias, of σ ``init_*_bias_std``) plus the Gauss–Markov
-        instability, as a real IMU's are: the bias error states are propagated as random walks driven by the
-        Gauss–Markov's noise (density ``√(2σ²/T)``) instead of decaying with ``corr_time`` (a decaying state
-        forgets the constant part within a few ``T`` and the filter grows overconfident in the biases and the
-        tilt).  Default False: KF-GINS's model.
+    bias_model : str
+        ``"gauss_markov"`` (default, KF-GINS's model): each bias error state is a first-order Gauss–Markov
+        process of ``corr_time``; its initial variance decays to the stationary one within a few ``T``.
+        ``"constant_and_gauss_markov"``: the biases are a random constant (the turn-on bias, of σ
+        ``init_*_bias_std``) plus the Gauss–Markov instability, as a real IMU's are; the bias error states are
+        propagated as random walks driven by the Gauss–Markov's noise (density ``√(2σ²/T)``), so that the
+        filter does not forget the constant part and grow overconfident in the biases and the tilt.
     scale_factors : bool
         True: 21 states; False: 15 (no scale-factor states).
     init_pos_std, init_vel_std, init_att_std : float or array_like, shape (3,)
@@ -184,10 +189,13 @@ class GinsConfig:
     level_noise_std: float | None = None
     gnss_delay: float = 0.0
     gnss_delay_std: float | None = None
-    bias_constant: bool = False
+    bias_model: str = "gauss_markov"
 
     def __post_init__(self) -> None:
         s = object.__setattr__
+        if self.bias_model not in BIAS_MODELS:
+            raise InvalidInputError(f"GinsConfig.bias_model must be one of {', '.join(BIAS_MODELS)}; "
+                                    f"got {self.bias_model!r}")
         for name in ("gyro_noise_density", "accel_noise_density", "gyro_bias_std", "accel_bias_std", "gyro_scale_std",
                      "accel_scale_std", "init_pos_std", "init_vel_std", "init_att_std"):
             s(self, name, _v3(getattr(self, name), name, positive=True))

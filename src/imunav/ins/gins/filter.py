@@ -161,7 +161,7 @@ def kernel_setup(c: GinsConfig, fs: float, odometer: bool) -> tuple[Array, NDArr
         q0, t0 = getattr(PRM, name + "_q"), getattr(PRM, name + "_t")
         prm[q0:q0 + n] = 2.0 * np.asarray(sdv) ** 2 / tc
         # a bias with a constant part: F = -1/inf = 0 (a random walk driven by the Gauss-Markov's noise)
-        prm[t0:t0 + n] = np.inf if (c.bias_constant and name in ("gyro_bias", "accel_bias")) else tc
+        prm[t0:t0 + n] = np.inf if (c.bias_model != "gauss_markov" and name in ("gyro_bias", "accel_bias")) else tc
     for dof in range(1, MAX_ROWS + 1):
         prm[PRM.gate + dof - 1] = float(chi2_ppf(1 - c.gate_alpha, dof)) if c.gate_alpha > 0 else 1e300
     blocks = [prm]

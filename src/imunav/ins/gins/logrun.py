@@ -407,7 +407,7 @@ def run_log(src: NavSources, options: LogRunOptions | None = None) -> LogRun:
     if src.gnss is not None:
         cfg_kw["gnss_delay_std"] = GNSS_DELAY_STD
     cfg_kw["gate_max_rejections"] = MAX_REJECTIONS
-    cfg_kw["bias_constant"] = True  # a log's IMU has an unknown turn-on bias that does not decay
+    cfg_kw["bias_model"] = "constant_and_gauss_markov"  # a log's IMU: a turn-on bias that does not decay
     gyro_nd, accel_nd, noise_note = _noise_at_rest(src, static)
     base = GinsConfig.from_preset(o.preset)
     cfg_kw.update(gyro_noise_density=np.maximum(base.gyro_noise_density, gyro_nd),
