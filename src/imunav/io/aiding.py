@@ -96,18 +96,26 @@ class OdometerData:
     speed_std : numpy.ndarray, shape (N,), or None
         1-σ of each sample, m/s (> 0), when the source states it (a ``nav_msgs/Odometry`` twist
         covariance); None: the filter's configured σ applies.
+    yaw_rate : numpy.ndarray, shape (N,), or None
+        The wheels' yaw rate about the body's down axis, rad/s (FRD; a ``nav_msgs/Odometry`` or
+        ``TwistStamped`` ``twist.angular.z`` with its sign flipped), when the source gives it: a skid-steer
+        robot turning on the spot reads zero speed but not zero yaw rate.
     """
 
     t: Array
     speed: Array
     meta: dict[str, Any] = field(default_factory=dict)
     speed_std: Array | None = None
+    yaw_rate: Array | None = None
 
     def __post_init__(self) -> None:
         t, v = check_samples("OdometerData", self.t, self.speed, "speed")
         object.__setattr__(self, "t", t)
         object.__setattr__(self, "speed", v)
         object.__setattr__(self, "speed_std", _sigma("OdometerData", t, self.speed_std, "speed_std"))
+        if self.yaw_rate is not None:
+            _, w = check_samples("OdometerData", t, self.yaw_rate, "yaw_rate")
+            object.__setattr__(self, "yaw_rate", w)
 
 
 @dataclass(frozen=True)

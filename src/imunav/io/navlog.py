@@ -473,8 +473,12 @@ def _odometer(td: TopicData, t0_ns: int, t_end: float, source: str) -> tuple[Odo
     else:
         raise InvalidInputError(f"{source}: topic {td.topic!r} is {td.kind}; odometry needs nav_msgs/Odometry or "
                                 "geometry_msgs/TwistStamped")
+    rate = td.values.get("rate_frd")
+    yaw_rate = None if rate is None else np.asarray(rate, dtype=np.float64)[inside, 2]
+    if yaw_rate is not None:
+        meta["yaw_rate"] = "twist.angular.z, FLU -> FRD (sign flipped)"
     meta.update({"source": source, "topic": td.topic, "t0_ns": int(t0_ns)})
-    return OdometerData(t[inside], speed[inside], dict(meta), std), meta
+    return OdometerData(t[inside], speed[inside], dict(meta), std, yaw_rate), meta
 
 
 def _baro(td: TopicData, t0_ns: int, t_end: float, source: str) -> tuple[BaroData, dict[str, Any]]:
@@ -501,12 +505,14 @@ def _mag(td: TopicData, t0_ns: int, t_end: float, source: str) -> tuple[Magnetom
 
 
 def _mounting(path: str | os.PathLike[str], imu_frame: str | None, base: str) -> tuple[Array | None, Array | None, str]:
-    """(q IMU FRD -> base FRD, lever in base FRD, note) from the bag's /tf_static chain base -> IMU frame."""
+    """(q IMU FRD -> base FRD, lever in base FRD, note) from the bag's /tf_static chain base -> IMU frame, or the
+    identity when the IMU's frame_id is the base frame itself."""
     if imu_frame is None:
         return None, None, "the IMU topic has no frame_id"
     if imu_frame == base:
-        return None, None, (f"the IMU's frame_id is the base frame {base!r}: no transform (that the IMU is aligned "
-                            "with the vehicle is only the driver's claim)")
+        return np.array([1.0, 0.0, 0.0, 0.0]), np.zeros(3), (
+            f"the IMU's frame_id is the base frame {base!r}: its values are in the vehicle's axes (REP-105), the "
+            "identity; give --imu-rotation if the driver's frame_id is wrong")
     tfs = {tr.child: tr for tr in read_static_tf(path)}
     if not tfs:
         return None, None, "no /tf_static in the bag"

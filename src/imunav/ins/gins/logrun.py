@@ -57,6 +57,9 @@ ODO_SCALE_STD = 0.1
 LEVEL_STD = math.radians(1.0)
 #: Gate rejections in a row after which an aid's update is applied anyway (a log's filter must not drift away).
 MAX_REJECTIONS = 5
+#: Largest odometer speed (m/s) and wheel yaw rate (rad/s, 0.1 deg/s) of a vehicle at rest.
+REST_SPEED = 0.02
+REST_YAW_RATE = math.radians(0.1)
 #: Smallest σ of an odometer sample, m/s (a driver's twist covariance is a guess; wheels slip and lag).
 ODO_STD_FLOOR = 0.05
 
@@ -116,9 +119,12 @@ class LogRun(Result):
     static : numpy.ndarray of bool, shape (N,)
         The samples declared at rest.
     mounting_coarse : MountingEstimate or None
-        The estimate before the filter (None when the mounting was given or taken as the identity).
+        The estimate before the filter; with the bag's mounting (``tf_static``, ``frame_id``) the levelling at
+        rest as a check of it (roll and pitch; not used); None when the mounting was given, taken as the
+        identity, or the log has no rest.
     mounting_source : str
-        ``"given"``, ``"tf_static"``, ``"estimated"`` or ``"identity"``.
+        ``"given"``, ``"tf_static"``, ``"frame_id"`` (the IMU's frame_id is the base frame), ``"estimated"`` or
+        ``"identity"``.
     initial : dict
         The initial state and how it was found.
     meta_preset : str
@@ -181,18 +187,25 @@ class LogRun(Result):
         return e0, np.sqrt(np.diag(J @ P @ J.T))
 
 
-def _static(src: NavSources) -> NDArray[np.bool_]:
-    """Rest: the odometer reads zero and the IMU is quiet, or (no odometer) the IMU and its gyro are quiet."""
+def _rest_masks(src: NavSources) -> tuple[NDArray[np.bool_], NDArray[np.bool_]]:
+    """``(still, static)`` per IMU sample.  ``still``: the odometer reads no speed and the accelerometers are quiet,
+    the specific force is gravity (the levelling's samples), though a skid-steer robot may turn on the spot there;
+    ``static``: still and not turning, the wheels' yaw rate zero when the odometer gives one (ZUPT, ZARU, the noise
+    at rest: taking a turn on the spot for rest would make its rate a gyro bias).  Without an odometer both are the
+    samples where the IMU and its gyro are quiet."""
     imu = src.imu
     try:
         quiet = static_intervals(imu, window_s=1.0, use_gyro=True).mask
     except InsufficientDataError:
         quiet = np.zeros(imu.n, dtype=bool)
     if src.odometer is None:
-        return quiet
+        return quiet, quiet
     o = src.odometer
-    spd = np.interp(imu.t, o.t, np.abs(o.speed), left=np.nan, right=np.nan)
-    return quiet & (spd < 0.02)
+    still = quiet & (np.interp(imu.t, o.t, np.abs(o.speed), left=np.nan, right=np.nan) < REST_SPEED)
+    static = still
+    if o.yaw_rate is not None:
+        static = still & (np.interp(imu.t, o.t, np.abs(o.yaw_rate), left=np.nan, right=np.nan) < REST_YAW_RATE)
+    return still, static
 
 
 def _noise_at_rest(src: NavSources, static: NDArray[np.bool_]) -> tuple[Array, Array, str]:
@@ -321,30 +334,37 @@ def run_log(src: NavSources, options: LogRunOptions | None = None) -> LogRun:
     """
     o = options or LogRunOptions()
     imu = src.imu
-    static = _static(src)
+    still, static = _rest_masks(src)
     model = presets.get(o.preset)
     wheeled = src.odometer is not None
     # -- mounting
     coarse = None
+    ba_level = float(np.max(np.abs(model.accel.bias))) if np.any(model.accel.bias) else 0.05
     if o.mounting is not None:
         q_vb = np.asarray(o.mounting, dtype=float)
         if q_vb.shape != (4,) or not np.all(np.isfinite(q_vb)) or abs(np.linalg.norm(q_vb) - 1) > 1e-6:
             raise InvalidInputError(f"mounting must be a unit quaternion (w, x, y, z); got {o.mounting!r}")
         source, mount_sd = "given", None
     elif src.imu_to_base is not None:
-        q_vb, source, mount_sd = np.asarray(src.imu_to_base, dtype=float), "tf_static", None
+        q_vb, mount_sd = np.asarray(src.imu_to_base, dtype=float), None
+        source = "frame_id" if str(src.meta.get("mounting", "")).startswith("the IMU's frame_id") else "tf_static"
     elif wheeled:
         od = src.odometer
         assert od is not None
-        ba_sd = float(np.max(np.abs(model.accel.bias))) if np.any(model.accel.bias) else 0.05
-        coarse = estimate_mounting(imu, static, speed_t=od.t, speed=od.speed, accel_bias_std=ba_sd,
+        coarse = estimate_mounting(imu, still, speed_t=od.t, speed=od.speed, accel_bias_std=ba_level,
                                    level_noise_std=LEVEL_STD)
         q_vb, source, mount_sd = coarse.q_vb, "estimated", coarse.std
     else:
         q_vb, source, mount_sd = np.array([1.0, 0.0, 0.0, 0.0]), "identity", None
+    if coarse is None and wheeled and source in ("tf_static", "frame_id"):
+        # the levelling at rest as a check of the bag's mounting (reported, not used)
+        try:
+            coarse = estimate_mounting(imu, still, accel_bias_std=ba_level, level_noise_std=LEVEL_STD)
+        except InsufficientDataError:
+            coarse = None
     C_vb = dcm_from_quat(q_vb)
     # -- initial attitude, heading and position
-    d_b, tilt_sd, i_rest = _initial_tilt(src, static)
+    d_b, tilt_sd, i_rest = _initial_tilt(src, still)
     bias0 = imu.gyro[static].mean(axis=0) if static.sum() > 10 else np.zeros(3)
     ref = np.array([0.0, 0.0, 0.0]) if src.gnss is None else src.gnss.lla[0].copy()
     initial: dict[str, Any] = {}
@@ -386,7 +406,7 @@ def run_log(src: NavSources, options: LogRunOptions | None = None) -> LogRun:
     cfg_kw: dict[str, Any] = dict(
         lever_arm=C_vb.T @ np.asarray(o.gnss_lever_arm, dtype=float),
         mounting=np.asarray(euler_from_dcm(C_vb), dtype=float), init_pos_std=pos_sd,
-        init_vel_std=0.05 if static[0] else 0.5,
+        init_vel_std=0.05 if still[0] else 0.5,
         init_att_std=(float(tilt_n[0]), float(tilt_n[1]), max(psi_sd, math.radians(0.5))),
         )
     if mount_sd is not None:
