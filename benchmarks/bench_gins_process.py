@@ -8,7 +8,8 @@ Each measurement is a fresh process, after one warm-up run (numba's cache presen
   matplotlib), reading the KF-GINS files, the filter, writing KF-GINS's text outputs and summary, and each figure
   (drawing and PNG writing).
 
-The median of ``--runs`` runs is printed (the machine may be shared).
+The median of ``--runs`` runs is printed (the machine may be shared), with the command's CPU time (user + system),
+which other loads on a shared machine disturb less than its wall time.
 
 Run:  PYTHONPATH=src python benchmarks/bench_gins_process.py [--runs 3] [--duration 1500] [--fs 100]
 """
@@ -18,6 +19,7 @@ from __future__ import annotations
 import argparse
 import json
 import os
+import resource
 import statistics
 import subprocess
 import sys
@@ -31,10 +33,14 @@ def _env() -> dict[str, str]:
     return {**os.environ, "PYTHONPATH": os.pathsep.join(filter(None, [src, os.environ.get("PYTHONPATH")]))}
 
 
-def _cli(args: list[str]) -> float:
+def _cli(args: list[str]) -> tuple[float, float]:
+    """Wall time and CPU time (user + system) of one ``imunav`` process, s."""
+    r0 = resource.getrusage(resource.RUSAGE_CHILDREN)
     t = time.perf_counter()
     subprocess.run([sys.executable, "-m", "imunav.cli.main", *args], check=True, env=_env(), capture_output=True)
-    return time.perf_counter() - t
+    wall = time.perf_counter() - t
+    r1 = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return wall, (r1.ru_utime - r0.ru_utime) + (r1.ru_stime - r0.ru_stime)
 
 
 def _phases(yaml: str, out: str) -> dict[str, float]:
@@ -88,20 +94,21 @@ def main() -> None:
         yaml = str(drive / "kf-gins.yaml")
         _cli(["gins", "run", "--config", yaml, "--out", str(Path(d) / "warm"), "--quiet"])  # numba caches warm
         for plots in ("--plots", "--no-plots"):
-            times = [_cli(["gins", "run", "--config", yaml, "--out", str(Path(d) / f"r{k}{plots}"), "--quiet", plots])
-                     for k in range(a.runs)]
-            print(f"imunav gins run {plots}: {statistics.median(times):.2f} s wall, median of {a.runs} fresh "
-                  f"processes ({', '.join(f'{x:.2f}' for x in times)})")
-        runs = []
+            runs = [_cli(["gins", "run", "--config", yaml, "--out", str(Path(d) / f"r{k}{plots}"), "--quiet", plots])
+                    for k in range(a.runs)]
+            wall, cpu = zip(*runs)
+            print(f"imunav gins run {plots}: {statistics.median(wall):.2f} s wall ({', '.join(f'{x:.2f}' for x in wall)}), "
+                  f"{statistics.median(cpu):.2f} s CPU; median of {a.runs} fresh processes")
+        phases = []
         for k in range(a.runs):
             out = Path(d) / f"ph{k}"
             p = subprocess.run([sys.executable, __file__, "--phases", yaml, str(out)], check=True, env=_env(),
                                capture_output=True, text=True)
-            runs.append(json.loads(p.stdout))
+            phases.append(json.loads(p.stdout))
     print(f"phases (fresh process, median of {a.runs}):")
-    for key in runs[0]:
-        print(f"  {key:28s} {statistics.median(r[key] for r in runs):6.2f} s")
-    print(f"  {'sum':28s} {statistics.median(sum(r.values()) for r in runs):6.2f} s")
+    for key in phases[0]:
+        print(f"  {key:28s} {statistics.median(r[key] for r in phases):6.2f} s")
+    print(f"  {'sum':28s} {statistics.median(sum(r.values()) for r in phases):6.2f} s")
 
 
 if __name__ == "__main__":
