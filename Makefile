@@ -24,14 +24,15 @@ $(STAMP_VENV):
 	$(BIN)/python -m pip install --upgrade pip
 	touch $@
 
-# what the lab needs: the library and its core dependencies (no torch, no pyarrow, no test peers).
+# what the lab and the quick tour need: the library, its core dependencies and the small pure-Python readers of
+# KF-GINS YAML, PX4 ULog and ROS bags (no torch, no pyarrow, no test peers).
 # --no-compile: Python compiles the modules the lab imports on first use instead of every module of
 # every dependency at install time (160 MB of .pyc; benchmarks/bench_install_footprint.py).
 # `imunav warmup` then compiles the numba kernels of the quick tour and writes the bytecode of the modules it
 # imports (and only those), so that no first run compiles and no start recompiles the sources where Python may
 # not write bytecode (PYTHONDONTWRITEBYTECODE=1).
 $(STAMP_RUN): pyproject.toml $(STAMP_VENV)
-	$(BIN)/python -m pip install --no-compile -e .
+	$(BIN)/python -m pip install --no-compile -e '.[yaml,px4,ros]'
 	$(BIN)/imunav warmup
 	touch $@
 
