@@ -112,4 +112,12 @@ def work_folder(root: Path, shared: Path) -> Path:
 
 #: Examples left out of the CI test (each too long for its budget), with the reason; the benchmark
 #: ``benchmarks/bench_help_examples.py`` runs them with the others, in order.  Nothing after them reads their files.
-LONG: dict[str, str] = {}
+LONG: dict[str, str] = {
+    "imunav lab --out lab-report --seed 0": "the whole lab (every step on a simulated IMU): 70 s",
+    "imunav zupt train ../shared/data/foot/pyshoe_vicon --out zupt_lstm.npz":
+        "trains the LSTM on every shared trial: over 3 min, and needs torch (the learn extra)",
+    "imunav batch simulate 3 --static 600 --out static_batch && imunav batch noise static_batch --terms N,B,K":
+        "three 600 s static records and their Allan deviations: 22 s",
+    "imunav warmup": "compiles every quick-tour kernel where none is cached (a minute) and writes bytecode into the "
+                     "install",
+}

@@ -11,6 +11,8 @@ included, in the same order.  No quick example reads a file that only a long one
 
 from __future__ import annotations
 
+import time
+
 import pytest
 from help_examples import LONG, help_examples, run_step, steps, work_folder
 from shared_data import data_path
@@ -32,12 +34,14 @@ def test_the_help_examples_run_in_order_in_an_empty_folder(tmp_path, monkeypatch
             pytest.skip(f"shared data {shared / sub} not found")
     work = work_folder(tmp_path, shared)
     monkeypatch.chdir(work)
-    ran = 0
+    ran = []
     for where, example in help_examples():
         if example in LONG:
             continue
+        t0 = time.perf_counter()
         for argv in steps(example):
             code, out = run_step(argv)
             assert code == 0, (where, example, out[-2000:])
-        ran += 1
-    assert ran >= 30
+        ran.append((time.perf_counter() - t0, example))
+    print("\n".join(f"{t:6.1f} s  {e[:100]}" for t, e in ran))  # pytest -s: what each example costs here
+    assert len(ran) >= 30

@@ -394,7 +394,8 @@ def mag(
     delimiter=',', header='mag_x,mag_y,mag_z', comments='')" && imunav calibrate mag mag.csv --out mag_cal.json
     --report mag_report --px4-params mag.params --mag-unit uT
 
-    Example: imunav calibrate mag flight.ulg --topic sensor_mag --instance 0 --out mag_cal.json
+    On a PX4 log, name the magnetometer: --topic sensor_mag --instance 0 (a flight alone seldom covers enough of the
+    sphere: turn the vehicle by hand through every orientation while it logs).
     """
 
     check_outputs([recording], [out, px4_params], folders=[report])
