@@ -120,4 +120,14 @@ LONG: dict[str, str] = {
         "three 600 s static records and their Allan deviations: 22 s",
     "imunav warmup": "compiles every quick-tour kernel where none is cached (a minute) and writes bytecode into the "
                      "install",
+    "imunav zupt benchmark ../shared/data/foot/pyshoe_vicon --limit 3 --json zupt-bench.json":
+        "three detectors on three trials with their threshold searches: 25 s",
+    "imunav noise ../shared/data/adis16405/adis16405_imu2.npz --gyro-unit deg/s --accel-unit g --json noise.json "
+    "--plot allan.png --psd-plot psd.png --kalibr imu.yaml --openvins kalibr_imu_chain.yaml --vins vins_imu.yaml":
+        "Allan deviation of a long real record: 8 s",
+    "imunav airdata thesis --runs 50 --json thesis.json": "50 Monte Carlo flights of the thesis protocol: 6 s",
+    "imunav gins run drive/imu.txt drive/gnss.txt --config drive/gins.toml --out res --truth drive/truth.nav":
+        "the filter of the example before on the same 600 s drive, configured by the TOML: 4 s",
+    "imunav attitude benchmark broad --filter madgwick_c --filter adaptive --json bench.json":
+        "two filters on every shared BROAD trial: 5 s",
 }
