@@ -55,3 +55,15 @@ def test_write_table_in_blocks_and_empty(tmp_path, monkeypatch):
     write_table(tmp_path / "b.txt", [a])
     np.testing.assert_array_equal(read_table(tmp_path / "b.txt", (3,), "test"), np.round(a, 9))
     assert write_table(tmp_path / "e.txt", [np.zeros((0, 3))]).read_bytes() == b""
+
+
+def test_read_table_takes_any_ascii_whitespace_and_names_a_ragged_line(tmp_path):
+    """Tabs, CR LF line ends, blank and indented lines read as spaces; a short line is refused by its number."""
+    from imunav.errors import FileFormatError
+
+    p = tmp_path / "t.txt"
+    p.write_bytes(b"1 2\t3\r\n\n  4\x0b5 6 \r\n\t7 8 9\n")
+    np.testing.assert_array_equal(read_table(p, (3,), "test"), [[1, 2, 3], [4, 5, 6], [7, 8, 9]])
+    p.write_bytes(b"1 2 3\n4 5\n7 8 9\n")
+    with pytest.raises(FileFormatError, match="line 2"):
+        read_table(p, (3,), "test")

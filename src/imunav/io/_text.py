@@ -110,7 +110,7 @@ def _fixed(a: NDArray[np.float64], width: int, decimals: int) -> bytes:
     field = np.maximum(width, span - start)
     cols = int(field.max()) + 1
     f = np.full((size, cols), 32, np.uint8)
-    for s in np.unique(start):
+    for s in np.flatnonzero(np.bincount(start, minlength=span)):
         r = np.flatnonzero(start == s)
         f[r, :span - s] = t[r, s:]
     sep = np.full(size, 32, np.uint8)
