@@ -21,17 +21,19 @@ STAMP_DOCS := $(VENV)/.stamp-docs
 
 $(STAMP_VENV):
 	$(PYTHON) -m venv $(VENV)
-	$(BIN)/python -m pip install --upgrade pip
+	$(BIN)/python -m pip install --upgrade --no-compile pip
 	touch $@
 
-# what the lab needs: the library and its core dependencies (no torch, no pyarrow, no test peers).
+# what the lab and the quick tour need: the library, its core dependencies and the two small pure-Python readers
+# of KF-GINS YAML (gins run --config) and PX4 ULog (no ROS bags: 17 MB with their compression libraries; no torch,
+# no pyarrow, no test peers).
 # --no-compile: Python compiles the modules the lab imports on first use instead of every module of
 # every dependency at install time (160 MB of .pyc; benchmarks/bench_install_footprint.py).
 # `imunav warmup` then compiles the numba kernels of the quick tour and writes the bytecode of the modules it
 # imports (and only those), so that no first run compiles and no start recompiles the sources where Python may
 # not write bytecode (PYTHONDONTWRITEBYTECODE=1).
 $(STAMP_RUN): pyproject.toml $(STAMP_VENV)
-	$(BIN)/python -m pip install --no-compile -e .
+	$(BIN)/python -m pip install --no-compile -e '.[yaml,px4]'
 	$(BIN)/imunav warmup
 	touch $@
 

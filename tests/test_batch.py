@@ -125,30 +125,3 @@ def test_batch_noise_recovers_white_noise(tmp_path):
             assert abs(v - m.gyro.noise_density[i]) < 4 * se
             assert est[f"accel_vrw_{a}"][0] == pytest.approx(2e-3, rel=0.1)
     assert (tmp_path / "noise" / "u0_noise.json").is_file() and (tmp_path / "noise" / "index.html").is_file()
-
-
-def test_the_batch_help_examples_run_in_order_in_an_empty_folder(tmp_path, monkeypatch):
-    """Each `imunav batch ... --help` example runs as written after the one before it (issue 26)."""
-    import re
-    import shlex
-
-    from typer.testing import CliRunner
-
-    from imunav.cli.main import app
-
-    runner = CliRunner()
-    examples = []
-    for path in ([], ["simulate"], ["calibrate"], ["noise"]):
-        text = " ".join(runner.invoke(app, ["batch", *path, "--help"], env={"COLUMNS": "200"}).output.split())
-        examples += re.findall(r"Example: (imunav batch .*?)(?: Arguments:| Options:|$)", text)
-    assert len(examples) == 4, examples
-    monkeypatch.chdir(tmp_path)
-    for example in examples:
-        for command in example.split(" && "):
-            argv = shlex.split(command)[1:]
-            if argv[:2] == ["batch", "simulate"] and "--static" in argv:
-                argv[argv.index("--static") + 1] = "120"  # the example's 600 s static record, shortened
-            argv += ["--executor", "serial", "--quiet"]  # a few units: no process pool to start
-            r = runner.invoke(app, argv)
-            assert r.exit_code in (0, 1), (command, r.output)  # 1: a unit fails the spec, said in the table
-            assert "error:" not in (r.stderr or ""), (command, r.stderr)

@@ -167,37 +167,3 @@ def test_imucal_export_round_trips_through_imucal(tmp_path):
         a, b = np.asarray(getattr(mine, k)), np.asarray(getattr(peer, k))
         assert np.max(np.abs(a - b)) <= 1e-9 * np.max(np.abs(b)), (k, a, b)
     assert np.diag(mine.K_g) == pytest.approx([1.028, 0.982, 0.998], abs=1e-3)
-
-
-def test_the_calibration_help_examples_chain_in_an_empty_folder(tmp_path, monkeypatch):
-    """simulate -> calibrate (every method) -> compensate: each --help example runs as written after the one
-    before it, in the order `imunav --help` lists the commands, in an empty folder (issue 26).  Examples on a
-    file of the user's own (a magnetometer CSV, a flight log) are the only ones left out."""
-    import re
-    import shlex
-
-    from shared_data import data_path
-
-    shared = data_path("imucal", "example_ferraris_session.csv").parents[1]
-    work = tmp_path / "work"
-    work.mkdir()
-    (tmp_path / "shared").mkdir()
-    (tmp_path / "shared" / "data").symlink_to(shared)
-    runner = CliRunner()
-    examples = []
-    for path in (["simulate"], ["calibrate"], ["calibrate", "multiposition"], ["calibrate", "ratetable"],
-                 ["calibrate", "ferraris"], ["calibrate", "multipose"], ["calibrate", "temperature"],
-                 ["calibrate", "mag"], ["compensate"]):
-        text = " ".join(runner.invoke(app, [*path, "--help"], env={"COLUMNS": "200"}).output.split())
-        examples += re.findall(r"Example(?: \([^)]*\))?: (imunav .*?)(?= Example| Arguments:| Options:|$)", text)
-    own_files = ("mag.csv", "flight.ulg")
-    run = [e for e in examples if not any(f in e for f in own_files)]
-    assert len(run) == 8 and len(examples) == 10, examples
-    monkeypatch.chdir(work)
-    for example in run:
-        for command in example.split(" && "):
-            r = runner.invoke(app, shlex.split(command)[1:])
-            assert r.exit_code == 0, (command, r.output)
-    assert {"static.npz", "static_segments.json", "cal.json", "static_cal.json", "static_cal.params",
-            "static_compensated.npz", "thermal_cal.json", "ferraris_imucal.json", "mpu_cal.json"} <= {
-        p.name for p in work.iterdir()}

@@ -61,3 +61,19 @@ def test_bytecode_is_written_for_imported_modules(tmp_path, monkeypatch):
 def test_warmup_is_listed_with_an_example():
     r = CliRunner().invoke(app, ["warmup", "--help"], env={"COLUMNS": "200"})
     assert r.exit_code == 0 and "Example: imunav warmup" in r.output
+
+
+def test_each_step_finds_the_files_of_the_step_before(monkeypatch):
+    """warmup runs its steps inside its own command: each step's outputs are in place when the step ends (not
+    deferred to the end of warmup's output transaction), so that the next step reads them."""
+    import imunav.cli.warmup as warmup
+
+    monkeypatch.setattr(warmup, "TOUR", (
+        ("simulate", ("simulate", "static", "--preset", "thesis_sim", "--duration", "20", "--fs", "50",
+                      "--out", "still.npz")),
+        ("info", ("info", "still.npz", "--json", "info.json")),
+        ("read back", lambda: warmup.io_lib.read_imu("still.npz")),
+    ))
+    r = CliRunner().invoke(app, ["warmup"])
+    assert r.exit_code == 0, r.output
+    assert "failed" not in r.output, r.output

@@ -35,7 +35,8 @@ scenarios = lazy("imunav.scenarios")
 
 
 app = typer.Typer(help="Attitude filters (Madgwick, Mahony, MEKF, UKF, adaptive, smoother, paper KFs).\n\n"
-                  "Example: imunav attitude run 05_undisturbed_slow_rotation_with_breaks_B.mat --filter madgwick_c",
+                  "Example: imunav attitude run ../shared/data/broad/05_undisturbed_slow_rotation_with_breaks_B.mat "
+                  "--filter madgwick_c",
                   no_args_is_help=True)
 
 
@@ -95,7 +96,7 @@ def run_cmd(
 ) -> None:
     """Run one filter over a whole recording and print a summary (BROAD RMSE when a reference exists).
 
-    Example: imunav attitude run 05_undisturbed_slow_rotation_with_breaks_B.mat --filter madgwick_c
+    Example: imunav attitude run ../shared/data/broad/05_undisturbed_slow_rotation_with_breaks_B.mat --filter madgwick_c
 
     Example (PX4 log; sensor_combined carries its magnetometer):
     imunav attitude run ../shared/data/px4_ulog/sample.ulg --topic sensor_combined --filter mekf

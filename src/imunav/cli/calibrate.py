@@ -388,9 +388,14 @@ def mag(
 ) -> None:
     """Hard- and soft-iron magnetometer calibration: h_cal = A (h - b).
 
-    Example: imunav calibrate mag mag.csv --out mag_cal.json --report mag_report --px4-params mag.params --mag-unit uT
+    Example (a distorted sphere of readings, µT, written first): python -c "import numpy as np; r =
+    np.random.default_rng(0); u = r.normal(size=(1500, 3)); u /= np.linalg.norm(u, axis=1)[:, None];
+    np.savetxt('mag.csv', 48 * u * [1.02, 0.94, 1.05] + [15.9, -3.7, 19.2] + r.normal(0, 0.1, u.shape),
+    delimiter=',', header='mag_x,mag_y,mag_z', comments='')" && imunav calibrate mag mag.csv --out mag_cal.json
+    --report mag_report --px4-params mag.params --mag-unit uT
 
-    Example: imunav calibrate mag flight.ulg --topic sensor_mag --instance 0 --out mag_cal.json
+    On a PX4 log, name the magnetometer: --topic sensor_mag --instance 0 (a flight alone seldom covers enough of the
+    sphere: turn the vehicle by hand through every orientation while it logs).
     """
 
     check_outputs([recording], [out, px4_params], folders=[report])

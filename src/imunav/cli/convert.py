@@ -17,8 +17,8 @@ io = lazy("imunav.io")
 _EXAMPLE = (
     "Examples:\n\n"
     "  imunav convert ../shared/data/px4_ulog/sample.ulg sample.parquet --topic sensor_combined\n\n"
-    "  imunav convert run.mcap imu.h5 --topic /imu/data --mag-topic /imu/mag\n\n"
-    "  imunav convert data.csv imu.parquet --layout euroc"
+    "  imunav convert ../shared/data/ros_bags/jackal_test2.bag jackal_imu.h5 --topic /imu/data\n\n"
+    "  imunav convert sample.parquet sample_window.csv --start 10 --end 40"
 )
 
 

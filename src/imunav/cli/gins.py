@@ -143,7 +143,8 @@ def run_cmd(
     YAML, or on IMU and GNSS files with a TOML; write KF-GINS's outputs (.nav, IMU errors, state sigma),
     summary.json and figures (a log: also track.geojson, the mounting, odometer scale and GNSS latency found).
 
-    Example: imunav gins run robot.bag --gnss-lever-arm 0,0,-0.3 --out robot-run
+    Example (a real robot's ROS 1 bag, no GNSS: dead reckoning): imunav gins run
+    ../shared/data/ros_bags/jackal_test2.bag --out jackal-run
 
     Example: imunav gins run --config drive/kf-gins.yaml --out drive/result --truth drive/truth.nav
 
@@ -252,9 +253,15 @@ def outage_cmd(
 
     Example: imunav gins outage-test --config drive/kf-gins.yaml --truth drive/truth.nav --out outage
 
-    Example: imunav gins outage-test robot.bag --gnss-lever-arm 0,0,-0.3 --converge 60 --every 120 --length 60 --shifts 0,30,60 --out outage
+    Example (a simulated robot's ROS 1 bag, its antenna 0.3 m above the IMU, the fixes removed during each outage
+    its reference): python -c "import pathlib; from imunav.sim.robot_log import simulate_robot_log, write_robot_log;
+    d = pathlib.Path('robot'); d.mkdir(exist_ok=True); write_robot_log(simulate_robot_log(1), d, formats=('ros1',
+    'kfgins'))" && imunav gins outage-test robot/robot.bag --gnss-lever-arm 0,0,-0.3 --converge 60 --every 120
+    --length 60 --shifts 0,30,60 --out robot-outage
 
-    Example: imunav gins outage-test robot.bag --gnss-lever-arm 0,0,-0.3 --truth kfgins/truth.nav --converge 60 --every 120 --length 60 --out outage2
+    Example (the same outages against the drive's truth, a KF-GINS .nav): imunav gins outage-test robot/robot.bag
+    --gnss-lever-arm 0,0,-0.3 --truth robot/kfgins/truth.nav --converge 60 --every 120 --length 60 --shifts
+    0,30,60 --out robot-outage-truth
     """
     sh = _shifts(shifts)
     if imu is not None and logs.log_kind(imu) is not None:

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import contextlib
+import contextvars
 import io
 import sys
 import tempfile
@@ -70,7 +71,16 @@ Example: imunav warmup
 
 
 def _run_step(argv: Sequence[str] | Callable[[], None]) -> str | None:
-    """Run one imunav command (or function) in-process, output swallowed; the last error line on failure."""
+    """Run one imunav command (or function) in-process, output swallowed; the last error line on failure.
+
+    Each step runs in a context of its own (:class:`contextvars.Context`), outside warmup's own output
+    transaction (:func:`imunav.files.output_transaction`: nested blocks join the outermost one), so that its
+    files are in place when it ends, for the next step to read."""
+    return contextvars.Context().run(_step, argv)
+
+
+def _step(argv: Sequence[str] | Callable[[], None]) -> str | None:
+    """The body of :func:`_run_step`."""
     if callable(argv):
         try:
             argv()

@@ -26,7 +26,8 @@ learn_lstm = lazy("imunav.learn.lstm")
 logs = lazy("imunav.io.logs")
 
 zupt_app = typer.Typer(
-    help="Foot-mounted INS with zero-velocity updates.\n\nExample: imunav zupt run trial.mat --detector shoe",
+    help=("Foot-mounted INS with zero-velocity updates.\n\n"
+          "Example: imunav zupt run ../shared/data/foot/pyshoe_vicon/2017-11-22-11-22-03.mat --detector shoe"),
     no_args_is_help=True,
 )
 
@@ -87,7 +88,7 @@ def run_cmd(
 
     Example: imunav zupt run ../shared/data/foot/pyshoe_vicon/2017-11-22-11-22-03.mat --detector shoe
 
-    Example (a foot IMU in a ROS 2 bag): imunav zupt run walk.mcap --topic /foot/imu
+    A foot IMU in a ROS bag or a PX4 log: give the log and its IMU topic (--topic, e.g. /foot/imu).
     """
 
     check_outputs([file, model], [out, json_out])

@@ -38,6 +38,7 @@ from numpy.typing import ArrayLike, NDArray
 from imunav.errors import FileFormatError, InvalidInputError, NonFiniteError, ShapeError, TimeOrderError
 from imunav.files import atomic_path
 from imunav.io._common import check_nonempty, wrap_read_errors
+from imunav.io._text import format_rows
 
 __all__ = ["GnssData", "read_gnss_text", "read_gnss_csv", "write_gnss_text", "read_table", "write_table",
            "ANGLE_UNITS", "lat_lon_radians"]
@@ -310,6 +311,9 @@ def read_table(path: str | os.PathLike[str], ncols: tuple[int, ...], what: str) 
 def write_table(path: str | os.PathLike[str], columns: list[ArrayLike], fmt: str = "%-15.9f") -> Path:
     """Write columns side by side as a space-separated text table, atomically (KF-GINS's ``%-15.9lf``).
 
+    The bytes are those of :func:`numpy.savetxt` with ``fmt`` and ``delimiter=" "``, formatted in bulk a block of
+    rows at a time (:func:`imunav.io._text.format_rows`).
+
     Parameters
     ----------
     path : str or os.PathLike
@@ -317,7 +321,7 @@ def write_table(path: str | os.PathLike[str], columns: list[ArrayLike], fmt: str
     columns : list of array_like
         The columns, each of shape (N,) or (N, k) (then k columns), same N.
     fmt : str
-        ``printf`` format of each value (:func:`numpy.savetxt`).
+        ``printf`` format of each value, with one ``%`` conversion.
 
     Returns
     -------
@@ -325,9 +329,14 @@ def write_table(path: str | os.PathLike[str], columns: list[ArrayLike], fmt: str
         ``path``.
     """
     arr = np.column_stack([np.asarray(c, dtype=float) for c in columns])
-    with atomic_path(path) as tmp:
-        np.savetxt(tmp, arr, fmt=fmt, delimiter=" ")
+    with atomic_path(path) as tmp, open(tmp, "wb") as fh:
+        for i in range(0, arr.shape[0], _ROWS_PER_BLOCK):
+            fh.write(format_rows(arr[i:i + _ROWS_PER_BLOCK], fmt))
     return Path(path)
+
+
+#: Rows formatted at once by :func:`write_table` (bounds the memory of a block).
+_ROWS_PER_BLOCK = 10000
 
 
 def lat_lon_radians(lat: Array, lon: Array, angle_unit: str, src: str) -> tuple[Array, Array]:

@@ -43,6 +43,38 @@ def _plt() -> Any:
     return plt
 
 
+#: Buckets of a long series drawn on screen: each keeps its extreme samples (:func:`_shown`).
+_BUCKETS = 2000
+
+
+def _shown(*cols: np.ndarray) -> np.ndarray | slice:
+    """Indices of the samples to draw of series longer than a figure can show: the first and last samples and, in
+    each of :data:`_BUCKETS` consecutive buckets, the samples holding the minimum and maximum of every column
+    (the line's envelope at the figure's resolution is kept; a series this short is drawn whole).
+
+    Parameters
+    ----------
+    *cols : numpy.ndarray, shape (N,)
+        The series drawn against one another or against time, same N.
+
+    Returns
+    -------
+    numpy.ndarray or slice
+        Sorted indices into the N samples (``slice(None)``: all).
+    """
+    n = cols[0].size
+    if n <= 4 * _BUCKETS:
+        return slice(None)
+    size = n // _BUCKETS
+    m = size * _BUCKETS
+    base = np.arange(_BUCKETS) * size
+    keep = [np.array([0, n - 1]), np.arange(m, n)]
+    for c in cols:
+        b = np.nan_to_num(np.asarray(c, dtype=float)[:m]).reshape(_BUCKETS, size)
+        keep += [base + b.argmin(axis=1), base + b.argmax(axis=1)]
+    return np.unique(np.concatenate(keep))
+
+
 def _track(x: GinsResult | NavTrack) -> NavTrack:
     return x if isinstance(x, NavTrack) else NavTrack(x.t, x.lla, x.vel_ned, x.q_nb)
 
@@ -70,7 +102,8 @@ def plot_track(result: GinsResult | NavTrack, gnss: GnssData | None = None, trut
     fig, ax = plt.subplots(figsize=(7, 6))
     if truth is not None:
         p = earth.lla_to_ned(truth.lla, origin)
-        ax.plot(p[:, 1], p[:, 0], "k-", lw=2.5, alpha=0.3, label="truth")
+        k = _shown(p[:, 0], p[:, 1])
+        ax.plot(p[k, 1], p[k, 0], "k-", lw=2.5, alpha=0.3, label="truth")
     if gnss is not None:
         g = earth.lla_to_ned(gnss.lla, origin)
         ax.plot(g[:, 1], g[:, 0], ".", ms=3, color="tab:orange", label=f"GNSS ({gnss.n} fixes)")
@@ -80,7 +113,8 @@ def plot_track(result: GinsResult | NavTrack, gnss: GnssData | None = None, trut
             ax.plot(g[bad, 1], g[bad, 0], "x", ms=6, color="tab:red",
                     label=f"rejected by the χ² gate ({int(bad.sum())})")
     p = earth.lla_to_ned(nav.lla, origin)
-    ax.plot(p[:, 1], p[:, 0], "-", lw=1, color="tab:blue", label="GNSS/INS")
+    k = _shown(p[:, 0], p[:, 1])
+    ax.plot(p[k, 1], p[k, 0], "-", lw=1, color="tab:blue", label="GNSS/INS")
     ax.plot(p[0, 1], p[0, 0], "go", label="start")
     ax.set_xlabel("east (m)")
     ax.set_ylabel("north (m)")
@@ -101,10 +135,14 @@ def _sigma_at(t: np.ndarray, cov_t: np.ndarray, var: np.ndarray) -> np.ndarray:
 
 def _band(ax: Any, t: np.ndarray, y: np.ndarray, tb: np.ndarray, centre: np.ndarray | float, s: np.ndarray,
           ylabel: str, label: str) -> None:
-    """One panel: ``y`` over ``t`` and the band ``centre ± 3 s`` over ``tb``."""
-    ax.plot(t, y, lw=0.8, label=label)
-    ax.plot(tb, centre + 3 * s, "r--", lw=0.7, label="±3σ")
-    ax.plot(tb, centre - 3 * s, "r--", lw=0.7)
+    """One panel: ``y`` over ``t`` and the band ``centre ± 3 s`` over ``tb`` (long series: their envelope,
+    :func:`_shown`)."""
+    k = _shown(y)
+    ax.plot(t[k], y[k], lw=0.8, label=label)
+    hi, lo = centre + 3 * s, centre - 3 * s
+    k = _shown(hi, lo)
+    ax.plot(tb[k], hi[k], "r--", lw=0.7, label="±3σ")
+    ax.plot(tb[k], lo[k], "r--", lw=0.7)
     ax.set_ylabel(ylabel)
     ax.grid(True)
 
