@@ -139,8 +139,8 @@ def run_cmd(
                                                                  "model the filter uses."),
     quiet: bool = typer.Option(False, "--quiet", "-q", help="No progress bar."),
 ) -> None:
-    """Run the GNSS/INS filter on a robot's or a drone's log (ROS 1 bag, ROS 2 bag folder, PX4 ULog), on a KF-GINS
-    YAML, or on IMU and GNSS files with a TOML; write KF-GINS's outputs (.nav, IMU errors, state sigma),
+    """Run the GNSS/INS filter on a robot's or a drone's log (ROS 1 bag, ROS 2 bag folder, PX4 ULog, or a folder of
+    KF-GINS text files with a sources.toml, run as a log), on a KF-GINS YAML, or on IMU and GNSS files with a TOML; write KF-GINS's outputs (.nav, IMU errors, state sigma),
     summary.json and figures (a log: also track.geojson, the mounting, odometer scale and GNSS latency found).
 
     Example: imunav gins run robot.bag --out robot-run
@@ -149,7 +149,7 @@ def run_cmd(
 
     Example: imunav gins run drive/imu.txt drive/gnss.txt --config drive/gins.toml --out res --truth drive/truth.nav
     """
-    if imu is not None and logs.log_kind(imu) is not None:
+    if imu is not None and navlog.is_nav_log(imu):
         if gnss is not None or config is not None or odo is not None or truth is not None or states is not None:
             raise ConfigError(f"{imu} is a log: it names its own sources; choose topics with --imu-topic / "
                               "--gnss-topic / --odo-topic / --mag-topic / --baro-topic instead of files")
@@ -252,7 +252,7 @@ def outage_cmd(
     Example: imunav gins outage-test robot.bag --converge 60 --every 120 --length 60 --shifts 0,30,60 --out outage
     """
     sh = _shifts(shifts)
-    if imu is not None and logs.log_kind(imu) is not None:
+    if imu is not None and navlog.is_nav_log(imu):
         extra = [n for n, v in (("GNSS file", gnss), ("--config", config), ("--odo", odo), ("--truth", truth),
                                 ("--preset", preset), ("--duration", duration), ("--fs", fs), ("--seed", seed),
                                 ("--rtk/--spp", rtk), ("--states", states)) if v is not None]

@@ -58,8 +58,7 @@ from imunav.files import atomic_path, jsonable, write_json
 from imunav.ins.gins.logrun import LogRunOptions, run_log
 from imunav.ins.gins.outputs import write_log_outputs
 from imunav.io import read_imu, write_imu
-from imunav.io.navlog import read_nav_sources
-from imunav.io.topics import log_kind
+from imunav.io.navlog import is_nav_log, read_nav_sources
 from imunav.lab.montecarlo import Executor, run_batch, spawn_generators
 from imunav.lab.report import check_spec, load_spec
 from imunav.lab.report.batch import write_batch_html
@@ -833,8 +832,9 @@ GINS_COLUMNS = (
 
 def find_logs(folder: str | os.PathLike[str]) -> list[Path]:
     """The logs of a folder: ROS 1 ``.bag`` files, ROS 2 bag folders (``metadata.yaml``), bare ROS 2 ``.db3`` /
-    ``.mcap`` files and PX4 ``.ulg`` files, by name (:func:`imunav.io.topics.log_kind`), sorted; hidden entries
-    and anything else (result folders, notes) are left out.  A file named like a log that is not one is listed:
+    ``.mcap`` files, PX4 ``.ulg`` files and folders of KF-GINS text files (``sources.toml``,
+    :func:`imunav.io.navlog.is_nav_log`), sorted; hidden entries and anything else (result folders, notes) are
+    left out.  A file named like a log that is not one is listed:
     its run fails with the reason.
 
     Parameters
@@ -856,7 +856,7 @@ def find_logs(folder: str | os.PathLike[str]) -> list[Path]:
     if not d.is_dir():
         raise InvalidInputError(f"log folder {d} does not exist or is not a folder")
     logs = sorted(p for p in d.iterdir() if not p.name.startswith(".")
-                  and (p.is_dir() and log_kind(p) is not None
+                  and (p.is_dir() and is_nav_log(p)
                        or p.is_file() and p.suffix.lower() in (".bag", ".db3", ".mcap", ".ulg")))
     if not logs:
         raise InvalidInputError(f"log folder {d} holds no log (ROS 1 .bag files, ROS 2 bag folders with a "
