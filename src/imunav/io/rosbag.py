@@ -217,19 +217,25 @@ def _collect(reader: Any, conns: list[Any], kind: str, source: str, topic: str) 
     odo = kind == "odometry"
     children: dict[str, int] = {}
 
-    def flush() -> None:
+    def put(rows_i: Any, rows_f: Any) -> None:
         nonlocal n, ints, flts
-        m = len(ci)
+        m = len(rows_i)
         if n + m > ints.shape[0]:  # the index under-counted: grow
             ints = np.concatenate([ints, np.empty((n + m, ints.shape[1]), np.int64)])
             flts = np.concatenate([flts, np.empty((n + m, k), np.float64)])
-        ints[n:n + m] = ci
-        flts[n:n + m] = cf
+        if m:
+            ints[n:n + m] = rows_i
+            flts[n:n + m] = rows_f
         n += m
+
+    def flush() -> None:
+        put(ci, cf)
         ci.clear()
         cf.clear()
 
-    for conn, ts, raw in reader.messages(connections=conns):
+    def one(conn: Any, ts: int, raw: Any) -> None:
+        """One message, deserialized by rosbags (every type; the IMU's fallback)."""
+        nonlocal cov_first, cov_bytes, cov_varies
         try:
             msg = deser(raw, conn.msgtype)
         except Exception as e:  # rosbags raises several types for a damaged message
@@ -249,9 +255,43 @@ def _collect(reader: Any, conns: list[Any], kind: str, source: str, topic: str) 
                 cov_bytes = [cov_first[c].tobytes() for c in cov_names]
             elif not cov_varies:  # bytes, not np.array_equal: a tenth of the time per message
                 cov_varies = [getattr(msg, c).tobytes() for c in cov_names] != cov_bytes
-        if len(ci) >= _CHUNK:
+
+    if kind == "imu":
+        # sensor_msgs/Imu has a fixed layout once its frame_id's length is known: a chunk is parsed with numpy
+        # (_imu_chunk); a chunk it cannot vouch for goes through rosbags message by message
+        pending: list[tuple[Any, int, Any]] = []
+
+        def drain() -> None:
+            nonlocal cov_first, cov_bytes, cov_varies
+            fast = _imu_chunk(pending, ros1, deser)
+            if fast is None:
+                for item in pending:
+                    one(*item)
+            else:
+                rows_i, rows_f, fids, covs = fast
+                put(rows_i, rows_f)
+                for fid, c in fids.items():
+                    frames[fid] = frames.get(fid, 0) + c
+                if not cov_first:
+                    cov_first = {c: covs[c][0].copy() for c in cov_names}
+                    cov_bytes = [cov_first[c].tobytes() for c in cov_names]
+                if not cov_varies:
+                    cov_varies = any(np.any(covs[c].view(np.uint64) != cov_first[c].view(np.uint64))
+                                     for c in cov_names)
+            pending.clear()
             flush()
-    flush()
+
+        for conn, ts, raw in reader.messages(connections=conns):
+            pending.append((conn, ts, raw))
+            if len(pending) >= _CHUNK:
+                drain()
+        drain()
+    else:
+        for conn, ts, raw in reader.messages(connections=conns):
+            one(conn, ts, raw)
+            if len(ci) >= _CHUNK:
+                flush()
+        flush()
     if n == 0:
         raise FileFormatError(f"{source}: topic {topic!r} has no messages")
     if len(frames) > 1:
@@ -267,6 +307,107 @@ def _collect(reader: Any, conns: list[Any], kind: str, source: str, topic: str) 
     info = {"frame_id": next(iter(frames)), "cov": cov_first, "cov_varies": cov_varies,
             "child_frame_id": next(iter(children)) if children else None}
     return ints[:n], flts[:n], info
+
+
+#: Byte layout of the fields of ``sensor_msgs/Imu`` after the header's ``frame_id`` (float64 throughout, 296 bytes):
+#: name -> (offset, count).
+_IMU_BODY = {"orientation": (0, 4), "orientation_covariance": (32, 9), "angular_velocity": (104, 3),
+             "angular_velocity_covariance": (128, 9), "linear_acceleration": (200, 3),
+             "linear_acceleration_covariance": (224, 9)}
+_IMU_BODY_BYTES = 296
+
+
+def _imu_chunk(items: list[tuple[Any, int, Any]], ros1: bool,
+               deser: Callable[[Any, str], Any]) -> tuple[np.ndarray, np.ndarray, dict[str, int], dict[str, np.ndarray]] | None:
+    """``sensor_msgs/Imu`` messages parsed with numpy from their raw bytes, or None when the chunk is not of the
+    fixed layout (the caller then deserializes each message).
+
+    ROS 2 (CDR, little- or big-endian, 4-byte encapsulation header): ``stamp.sec`` int32, ``stamp.nanosec``
+    uint32, ``frame_id`` (uint32 length with the NUL, the bytes), then the float64 fields aligned to 8 bytes
+    from the start of the data.  ROS 1 (little-endian, no alignment): ``seq``, ``stamp.sec``, ``stamp.nsec``
+    (uint32), ``frame_id`` (uint32 length, the bytes), the float64 fields.  Messages of one length share one
+    frame_id length, hence every offset: each length is one numpy view.  Each group is checked against rosbags'
+    own deserialization of its first message (every field, bit for bit), so that a bag whose Imu definition
+    differs falls back.
+
+    Returns
+    -------
+    tuple or None
+        ``(ints (N, 4 | 3) [sec, nanosec, receive_ns(, seq)], floats (N, 10) [gyro, accel, orientation w x y z],
+        {frame_id: count}, {covariance name: (N, 9)})`` in the order of ``items``.
+    """
+    n = len(items)
+    if n == 0:
+        return None
+    try:
+        raws = [bytes(r) for _, _, r in items]
+    except TypeError:
+        return None
+    lens = np.fromiter((len(r) for r in raws), dtype=np.int64, count=n)
+    ints = np.empty((n, 4 if ros1 else 3), dtype=np.int64)
+    flts = np.empty((n, 10), dtype=np.float64)
+    covs = {c: np.empty((n, 9), dtype=np.float64) for c in ("angular_velocity_covariance",
+                                                            "linear_acceleration_covariance",
+                                                            "orientation_covariance")}
+    fids: dict[str, int] = {}
+    ints[:, 2] = [ts for _, ts, _ in items]
+    for length in np.unique(lens).tolist():
+        idx = np.flatnonzero(lens == length)
+        buf = np.frombuffer(b"".join(raws[i] for i in idx), dtype=np.uint8).reshape(idx.size, length)
+        if ros1:
+            end, base, head, sl = "<", 0, 16, 12
+        else:
+            enc = buf[:, :4]
+            if not np.all(enc == enc[0]) or enc[0, 0] != 0 or enc[0, 1] not in (0, 1):
+                return None  # mixed or unknown encapsulation (PL_CDR, ...)
+            end, base, head, sl = ("<" if enc[0, 1] == 1 else ">"), 4, 12, 8
+
+        def col(off: int, dtype: str, k: int = 1, buf: np.ndarray = buf, end: str = end) -> np.ndarray:
+            """``k`` values of ``dtype`` ("u4", "i4", "f8") from byte ``off`` of every message, native order."""
+            w = np.dtype(dtype).itemsize * k
+            return np.ascontiguousarray(buf[:, off:off + w]).view(end + dtype).astype(dtype).reshape(-1, k)
+
+        nstr = col(base + sl, "u4")[:, 0]
+        if not np.all(nstr == nstr[0]):
+            return None
+        k = int(nstr[0])
+        o = head + k if ros1 else (head + k + 7) // 8 * 8
+        if base + o + _IMU_BODY_BYTES != length:
+            return None
+        name = buf[0, base + head:base + head + k]
+        if not np.all(buf[:, base + head:base + head + k] == name):
+            return None  # frame_ids of one length that differ: the per-message path counts them
+        fid = bytes(name).decode("utf-8", errors="replace")
+        fid = fid if ros1 else fid[:-1]  # CDR strings end with a NUL, counted in their length
+        fids[fid] = fids.get(fid, 0) + idx.size
+        body = {f: col(base + o + off, "f8", c) for f, (off, c) in _IMU_BODY.items()}
+        ints[idx, 0] = col(base + (4 if ros1 else 0), "u4" if ros1 else "i4")[:, 0]
+        ints[idx, 1] = col(base + (8 if ros1 else 4), "u4")[:, 0]
+        if ros1:
+            ints[idx, 3] = col(0, "u4")[:, 0]
+        q = body["orientation"]  # x y z w
+        flts[idx] = np.column_stack([body["angular_velocity"], body["linear_acceleration"], q[:, 3], q[:, :3]])
+        for c in covs:
+            covs[c][idx] = body[c]
+        # the group's first message as rosbags reads it: any difference and the chunk goes the slow way
+        i0 = int(idx[0])
+        conn, _, raw = items[i0]
+        try:
+            m = deser(raw, conn.msgtype)
+        except Exception:  # rosbags raises several types for a damaged message
+            return None
+        st, h = m.header.stamp, m.header
+        ref = np.array([m.angular_velocity.x, m.angular_velocity.y, m.angular_velocity.z, m.linear_acceleration.x,
+                        m.linear_acceleration.y, m.linear_acceleration.z, m.orientation.w, m.orientation.x,
+                        m.orientation.y, m.orientation.z], dtype=np.float64)
+        same = (int(ints[i0, 0]) == st.sec and int(ints[i0, 1]) == st.nanosec and h.frame_id == fid
+                and np.array_equal(ref.view(np.uint64), flts[i0].view(np.uint64))
+                and (not ros1 or int(ints[i0, 3]) == h.seq)
+                and all(np.array_equal(np.asarray(getattr(m, c), dtype=np.float64).view(np.uint64),
+                                       covs[c][i0].view(np.uint64)) for c in covs))
+        if not same:
+            return None
+    return ints, flts, fids, covs
 
 
 def _rot_cov(c: np.ndarray) -> list[float]:
