@@ -418,7 +418,23 @@ def test_gnss_pressure_and_temperature_topics(tmp_path):
         read_imu(p, topic="/imu", mag_topic="/baro")
 
 
-# ---------------------------------------------------------------- the IMU's fast path
+# ---------------------------------------------------------------- the fixed-layout fast path
+def _odom_msg(v, w, var, child):
+    def build(T, hdr):
+        V = T["geometry_msgs/msg/Vector3"]
+        cov = np.zeros(36)
+        cov[0] = var
+        pose = T["geometry_msgs/msg/PoseWithCovariance"](
+            pose=T["geometry_msgs/msg/Pose"](position=T["geometry_msgs/msg/Point"](x=1.0, y=2.0, z=3.0),
+                                             orientation=T["geometry_msgs/msg/Quaternion"](x=0.0, y=0.0, z=0.0, w=1.0)),
+            covariance=np.arange(36.0))
+        tw = T["geometry_msgs/msg/TwistWithCovariance"](twist=T["geometry_msgs/msg/Twist"](linear=V(*v), angular=V(*w)),
+                                                          covariance=cov)
+        return T["nav_msgs/msg/Odometry"](header=hdr, child_frame_id=child, pose=pose, twist=tw)
+
+    return build
+
+
 def _imu_topics(n=300):
     """IMU topics whose raw layouts differ: frame_id lengths, covariances that vary, a big-endian one."""
     rng = np.random.default_rng(4)
@@ -437,25 +453,32 @@ def _imu_topics(n=300):
     return {"/short": series(["i"] * n), "/long": series(["imu_link_of_a_longer_name"] * n, q=True, cov=True),
             "/mixed_endian": series(["imu"] * n, cov=True), "/big": series(["imu_big"] * n, q=True),
             "/two_frames": series(["imu_a", "imu_b"] * (n // 2)),
-            "/two_lengths": series(["imu", "imu_2"] * (n // 2))}
+            "/two_lengths": series(["imu", "imu_2"] * (n // 2)),
+            "/odom": [(int(s) + 3, "nav_msgs/msg/Odometry", int(s), "odom",
+                       _odom_msg(tuple(rng.standard_normal(3)), tuple(rng.standard_normal(3)), rng.random() * 0.01,
+                                 "base_link"), i + 1) for i, s in enumerate(stamps[::5])],
+            "/odom_children": [(int(s) + 3, "nav_msgs/msg/Odometry", int(s), "odom",
+                                _odom_msg((0.5, 0.0, 0.0), (0.0, 0.0, 0.1), 0.0, ("base", "base_link")[i % 2]), i + 1)
+                               for i, s in enumerate(stamps[::5])]}
 
 
 @pytest.mark.parametrize("storage", STORAGES)
-def test_imu_fast_path_is_bit_identical_to_rosbags(tmp_path, storage, monkeypatch):
-    """sensor_msgs/Imu parsed with numpy from the raw bytes (imunav.io.rosbag._imu_chunk) gives what rosbags'
-    per-message deserialization gives, bit for bit, on ROS 1 and ROS 2 (sqlite3, MCAP) bags with frame_ids of
-    several lengths, covariances that vary, big-endian CDR and a topic mixing both byte orders; a topic mixing
-    frame_ids (of one length or of two) is refused with the same message."""
+def test_fixed_layout_fast_path_is_bit_identical_to_rosbags(tmp_path, storage, monkeypatch):
+    """sensor_msgs/Imu and nav_msgs/Odometry parsed with numpy from the raw bytes (imunav.io.rosbag._fixed_chunk)
+    give what rosbags' per-message deserialization gives, bit for bit, on ROS 1 and ROS 2 (sqlite3, MCAP) bags
+    with frame_ids of several lengths, covariances that vary, big-endian CDR and a topic mixing both byte orders;
+    a topic mixing frame_ids (of one length or of two) or child frames is refused with the same message."""
     import imunav.io.rosbag as rb
 
     p = _path(tmp_path, storage)
     be = (lambda topic, i: topic == "/big" or (topic == "/mixed_endian" and i % 2 == 1)) if storage != "ros1" else None
     _write_raw(p, storage, _imu_topics(), big_endian=be)
     fast, used = {}, {}
-    chunk = rb._imu_chunk
-    for topic in ("/short", "/long", "/mixed_endian", "/big", "/two_frames", "/two_lengths"):
+    chunk = rb._fixed_chunk
+    for topic in ("/short", "/long", "/mixed_endian", "/big", "/two_frames", "/two_lengths", "/odom",
+                  "/odom_children"):
         calls = []
-        monkeypatch.setattr(rb, "_imu_chunk", lambda *a, calls=calls: calls.append(chunk(*a)) or calls[-1])
+        monkeypatch.setattr(rb, "_fixed_chunk", lambda *a, calls=calls: calls.append(chunk(*a)) or calls[-1])
         try:
             fast[topic] = read_topic(p, topic)
         except FileFormatError as e:
@@ -463,13 +486,13 @@ def test_imu_fast_path_is_bit_identical_to_rosbags(tmp_path, storage, monkeypatc
         used[topic] = all(c is not None for c in calls)
     # numpy parsed every chunk but those mixing byte orders or frame_ids of one length (rosbags reads them)
     assert used == {"/short": True, "/long": True, "/mixed_endian": storage == "ros1", "/big": True,
-                    "/two_frames": False, "/two_lengths": True}
-    monkeypatch.setattr(rb, "_imu_chunk", lambda *a: None)  # rosbags' deserialization of every message
+                    "/two_frames": False, "/two_lengths": True, "/odom": True, "/odom_children": True}
+    monkeypatch.setattr(rb, "_fixed_chunk", lambda *a: None)  # rosbags' deserialization of every message
     for topic, f in fast.items():
         if isinstance(f, str):
             with pytest.raises(FileFormatError) as e:
                 read_topic(p, topic)
-            assert str(e.value) == f and "mixes frame_ids" in f
+            assert str(e.value) == f and ("mixes frame_ids" in f or "mixes child_frame_ids" in f)
             continue
         s = read_topic(p, topic)
         assert f.values.keys() == s.values.keys() and f.meta == s.meta, topic
@@ -477,3 +500,4 @@ def test_imu_fast_path_is_bit_identical_to_rosbags(tmp_path, storage, monkeypatc
             assert f.values[k].tobytes() == s.values[k].tobytes(), (topic, k)
         assert f.t.tobytes() == s.t.tobytes() and f.t_receive.tobytes() == s.t_receive.tobytes()
     assert fast["/long"].meta["covariance"]["varies"] and "q_nb" in fast["/big"].values
+    assert "child_frame_ids" in fast["/odom_children"] and fast["/odom"].meta["child_frame_id"] == "base_link"

@@ -256,26 +256,28 @@ def _collect(reader: Any, conns: list[Any], kind: str, source: str, topic: str) 
             elif not cov_varies:  # bytes, not np.array_equal: a tenth of the time per message
                 cov_varies = [getattr(msg, c).tobytes() for c in cov_names] != cov_bytes
 
-    if kind == "imu":
-        # sensor_msgs/Imu has a fixed layout once its frame_id's length is known: a chunk is parsed with numpy
-        # (_imu_chunk); a chunk it cannot vouch for goes through rosbags message by message
+    if kind in _LAYOUTS:
+        # sensor_msgs/Imu and nav_msgs/Odometry have a fixed layout once their strings' lengths are known: a chunk
+        # is parsed with numpy (_fixed_chunk); a chunk it cannot vouch for goes through rosbags message by message
         pending: list[tuple[Any, int, Any]] = []
 
         def drain() -> None:
             nonlocal cov_first, cov_bytes, cov_varies
-            fast = _imu_chunk(pending, ros1, deser)
+            fast = _fixed_chunk(pending, ros1, deser, kind)
             if fast is None:
                 for item in pending:
                     one(*item)
             else:
-                rows_i, rows_f, fids, covs = fast
+                rows_i, rows_f, fids, kids, covs = fast
                 put(rows_i, rows_f)
                 for fid, c in fids.items():
                     frames[fid] = frames.get(fid, 0) + c
-                if not cov_first:
+                for cid, c in kids.items():
+                    children[cid] = children.get(cid, 0) + c
+                if cov_names and not cov_first:
                     cov_first = {c: covs[c][0].copy() for c in cov_names}
                     cov_bytes = [cov_first[c].tobytes() for c in cov_names]
-                if not cov_varies:
+                if cov_names and not cov_varies:
                     cov_varies = any(np.any(covs[c].view(np.uint64) != cov_first[c].view(np.uint64))
                                      for c in cov_names)
             pending.clear()
@@ -309,33 +311,51 @@ def _collect(reader: Any, conns: list[Any], kind: str, source: str, topic: str) 
     return ints[:n], flts[:n], info
 
 
-#: Byte layout of the fields of ``sensor_msgs/Imu`` after the header's ``frame_id`` (float64 throughout, 296 bytes):
-#: name -> (offset, count).
-_IMU_BODY = {"orientation": (0, 4), "orientation_covariance": (32, 9), "angular_velocity": (104, 3),
-             "angular_velocity_covariance": (128, 9), "linear_acceleration": (200, 3),
-             "linear_acceleration_covariance": (224, 9)}
-_IMU_BODY_BYTES = 296
+@dataclass(frozen=True)
+class _Layout:
+    """A message of fixed layout once its strings' lengths are known: the header (stamp, ``frame_id``), ``strings``
+    more strings, then ``doubles`` float64; ``pick`` takes the values of :data:`_FIELDS` from them (one row per
+    message), ``covs`` the covariances compared across messages (name -> first index, 9 values)."""
+
+    strings: int
+    doubles: int
+    pick: Callable[[np.ndarray], np.ndarray]
+    covs: dict[str, int]
 
 
-def _imu_chunk(items: list[tuple[Any, int, Any]], ros1: bool,
-               deser: Callable[[Any, str], Any]) -> tuple[np.ndarray, np.ndarray, dict[str, int], dict[str, np.ndarray]] | None:
-    """``sensor_msgs/Imu`` messages parsed with numpy from their raw bytes, or None when the chunk is not of the
-    fixed layout (the caller then deserializes each message).
+_LAYOUTS = {
+    # orientation x y z w (0-3), its covariance (4-12), angular_velocity (13-15), its covariance (16-24),
+    # linear_acceleration (25-27), its covariance (28-36)
+    "imu": _Layout(0, 37, lambda d: d[:, [13, 14, 15, 25, 26, 27, 3, 0, 1, 2]],
+                   {"angular_velocity_covariance": 16, "linear_acceleration_covariance": 28,
+                    "orientation_covariance": 4}),
+    # child_frame_id; pose.pose position (0-2), orientation (3-6), pose.covariance (7-42), twist.twist linear
+    # (43-45), angular (46-48), twist.covariance (49-84)
+    "odometry": _Layout(1, 85, lambda d: d[:, [43, 44, 45, 46, 47, 48, 49]], {}),
+}
+
+
+def _fixed_chunk(items: list[tuple[Any, int, Any]], ros1: bool, deser: Callable[[Any, str], Any],
+                 kind: str) -> tuple[np.ndarray, np.ndarray, dict[str, int], dict[str, int], dict[str, np.ndarray]] | None:
+    """Messages of a fixed layout (:data:`_LAYOUTS`) parsed with numpy from their raw bytes, or None when the chunk
+    is not of that layout (the caller then deserializes each message).
 
     ROS 2 (CDR, little- or big-endian, 4-byte encapsulation header): ``stamp.sec`` int32, ``stamp.nanosec``
-    uint32, ``frame_id`` (uint32 length with the NUL, the bytes), then the float64 fields aligned to 8 bytes
-    from the start of the data.  ROS 1 (little-endian, no alignment): ``seq``, ``stamp.sec``, ``stamp.nsec``
-    (uint32), ``frame_id`` (uint32 length, the bytes), the float64 fields.  Messages of one length share one
-    frame_id length, hence every offset: each length is one numpy view.  Each group is checked against rosbags'
-    own deserialization of its first message (every field, bit for bit), so that a bag whose Imu definition
-    differs falls back.
+    uint32, each string as a uint32 length (with the NUL) and its bytes, aligned to 4, then the float64 aligned
+    to 8 from the start of the data.  ROS 1 (little-endian, no alignment): ``seq``, ``stamp.sec``,
+    ``stamp.nsec`` (uint32), each string as a uint32 length and its bytes, the float64.  Messages of one length
+    whose strings have the same lengths share every offset: one numpy view each.  Each group is checked against
+    rosbags' own deserialization of its first message (stamp, strings and every value read, bit for bit), so that
+    a bag whose message definition differs falls back.
 
     Returns
     -------
     tuple or None
-        ``(ints (N, 4 | 3) [sec, nanosec, receive_ns(, seq)], floats (N, 10) [gyro, accel, orientation w x y z],
-        {frame_id: count}, {covariance name: (N, 9)})`` in the order of ``items``.
+        ``(ints (N, 4 | 3) [sec, nanosec, receive_ns(, seq)], floats (N, k) as _FIELDS extracts them,
+        {frame_id: count}, {child_frame_id: count}, {covariance name: (N, 9)})`` in the order of ``items``.
     """
+    lay = _LAYOUTS[kind]
+    extract, k, _ = _FIELDS[kind]
     n = len(items)
     if n == 0:
         return None
@@ -345,69 +365,77 @@ def _imu_chunk(items: list[tuple[Any, int, Any]], ros1: bool,
         return None
     lens = np.fromiter((len(r) for r in raws), dtype=np.int64, count=n)
     ints = np.empty((n, 4 if ros1 else 3), dtype=np.int64)
-    flts = np.empty((n, 10), dtype=np.float64)
-    covs = {c: np.empty((n, 9), dtype=np.float64) for c in ("angular_velocity_covariance",
-                                                            "linear_acceleration_covariance",
-                                                            "orientation_covariance")}
+    flts = np.empty((n, k), dtype=np.float64)
+    covs = {c: np.empty((n, 9), dtype=np.float64) for c in lay.covs}
     fids: dict[str, int] = {}
+    kids: dict[str, int] = {}
     ints[:, 2] = [ts for _, ts, _ in items]
     for length in np.unique(lens).tolist():
         idx = np.flatnonzero(lens == length)
         buf = np.frombuffer(b"".join(raws[i] for i in idx), dtype=np.uint8).reshape(idx.size, length)
         if ros1:
-            end, base, head, sl = "<", 0, 16, 12
+            end, base, pos = "<", 0, 12
         else:
             enc = buf[:, :4]
             if not np.all(enc == enc[0]) or enc[0, 0] != 0 or enc[0, 1] not in (0, 1):
                 return None  # mixed or unknown encapsulation (PL_CDR, ...)
-            end, base, head, sl = ("<" if enc[0, 1] == 1 else ">"), 4, 12, 8
+            end, base, pos = ("<" if enc[0, 1] == 1 else ">"), 4, 8
 
-        def col(off: int, dtype: str, k: int = 1, buf: np.ndarray = buf, end: str = end) -> np.ndarray:
-            """``k`` values of ``dtype`` ("u4", "i4", "f8") from byte ``off`` of every message, native order."""
-            w = np.dtype(dtype).itemsize * k
-            return np.ascontiguousarray(buf[:, off:off + w]).view(end + dtype).astype(dtype).reshape(-1, k)
+        def col(off: int, dtype: str, count: int = 1, buf: np.ndarray = buf, end: str = end) -> np.ndarray:
+            """``count`` values of ``dtype`` ("u4", "i4", "f8") from byte ``off`` of every message, native order."""
+            w = np.dtype(dtype).itemsize * count
+            if off + w > buf.shape[1]:
+                raise IndexError(off)
+            return np.ascontiguousarray(buf[:, off:off + w]).view(end + dtype).astype(dtype).reshape(-1, count)
 
-        nstr = col(base + sl, "u4")[:, 0]
-        if not np.all(nstr == nstr[0]):
+        names = []
+        try:
+            for _ in range(1 + lay.strings):  # frame_id, then the message's own strings
+                if not ros1:
+                    pos = (pos + 3) // 4 * 4
+                size = col(base + pos, "u4")[:, 0]
+                if not np.all(size == size[0]) or base + pos + 4 + int(size[0]) > length:
+                    return None
+                text = buf[:, base + pos + 4:base + pos + 4 + int(size[0])]
+                if not np.all(text == text[0]):
+                    return None  # strings of one length that differ: the per-message path counts them
+                name = bytes(text[0]).decode("utf-8", errors="replace")
+                names.append(name if ros1 else name[:-1])  # CDR strings end with a NUL, counted in their length
+                pos += 4 + int(size[0])
+            o = pos if ros1 else (pos + 7) // 8 * 8
+            if base + o + 8 * lay.doubles != length:
+                return None
+            d = col(base + o, "f8", lay.doubles)
+            ints[idx, 0] = col(base + (4 if ros1 else 0), "u4" if ros1 else "i4")[:, 0]
+            ints[idx, 1] = col(base + (8 if ros1 else 4), "u4")[:, 0]
+            if ros1:
+                ints[idx, 3] = col(0, "u4")[:, 0]
+        except IndexError:
             return None
-        k = int(nstr[0])
-        o = head + k if ros1 else (head + k + 7) // 8 * 8
-        if base + o + _IMU_BODY_BYTES != length:
-            return None
-        name = buf[0, base + head:base + head + k]
-        if not np.all(buf[:, base + head:base + head + k] == name):
-            return None  # frame_ids of one length that differ: the per-message path counts them
-        fid = bytes(name).decode("utf-8", errors="replace")
-        fid = fid if ros1 else fid[:-1]  # CDR strings end with a NUL, counted in their length
-        fids[fid] = fids.get(fid, 0) + idx.size
-        body = {f: col(base + o + off, "f8", c) for f, (off, c) in _IMU_BODY.items()}
-        ints[idx, 0] = col(base + (4 if ros1 else 0), "u4" if ros1 else "i4")[:, 0]
-        ints[idx, 1] = col(base + (8 if ros1 else 4), "u4")[:, 0]
-        if ros1:
-            ints[idx, 3] = col(0, "u4")[:, 0]
-        q = body["orientation"]  # x y z w
-        flts[idx] = np.column_stack([body["angular_velocity"], body["linear_acceleration"], q[:, 3], q[:, :3]])
-        for c in covs:
-            covs[c][idx] = body[c]
+        flts[idx] = lay.pick(d)
+        for c, j in lay.covs.items():
+            covs[c][idx] = d[:, j:j + 9]
+        fids[names[0]] = fids.get(names[0], 0) + idx.size
+        if lay.strings:
+            kids[names[1]] = kids.get(names[1], 0) + idx.size
         # the group's first message as rosbags reads it: any difference and the chunk goes the slow way
         i0 = int(idx[0])
         conn, _, raw = items[i0]
         try:
             m = deser(raw, conn.msgtype)
+            ref = np.array(extract(m), dtype=np.float64)
         except Exception:  # rosbags raises several types for a damaged message
             return None
         st, h = m.header.stamp, m.header
-        ref = np.array([m.angular_velocity.x, m.angular_velocity.y, m.angular_velocity.z, m.linear_acceleration.x,
-                        m.linear_acceleration.y, m.linear_acceleration.z, m.orientation.w, m.orientation.x,
-                        m.orientation.y, m.orientation.z], dtype=np.float64)
-        same = (int(ints[i0, 0]) == st.sec and int(ints[i0, 1]) == st.nanosec and h.frame_id == fid
-                and np.array_equal(ref.view(np.uint64), flts[i0].view(np.uint64))
+        same = (int(ints[i0, 0]) == st.sec and int(ints[i0, 1]) == st.nanosec and h.frame_id == names[0]
+                and (not lay.strings or m.child_frame_id == names[1])
+                and ref.shape == flts[i0].shape and np.array_equal(ref.view(np.uint64), flts[i0].view(np.uint64))
                 and (not ros1 or int(ints[i0, 3]) == h.seq)
                 and all(np.array_equal(np.asarray(getattr(m, c), dtype=np.float64).view(np.uint64),
                                        covs[c][i0].view(np.uint64)) for c in covs))
         if not same:
             return None
-    return ints, flts, fids, covs
+    return ints, flts, fids, kids, covs
 
 
 def _rot_cov(c: np.ndarray) -> list[float]:
