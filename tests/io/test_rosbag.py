@@ -500,4 +500,10 @@ def test_fixed_layout_fast_path_is_bit_identical_to_rosbags(tmp_path, storage, m
             assert f.values[k].tobytes() == s.values[k].tobytes(), (topic, k)
         assert f.t.tobytes() == s.t.tobytes() and f.t_receive.tobytes() == s.t_receive.tobytes()
     assert fast["/long"].meta["covariance"]["varies"] and "q_nb" in fast["/big"].values
+    ok = [t for t, f in fast.items() if not isinstance(f, str)]
+    monkeypatch.setattr(rb, "_fixed_chunk", chunk)
+    together = rb.read_topics(p, ok)  # one pass over the bag: the same topics
+    for t in ok:
+        assert together[t].meta == fast[t].meta and all(
+            together[t].values[k].tobytes() == fast[t].values[k].tobytes() for k in fast[t].values)
     assert "child_frame_ids" in fast["/odom_children"] and fast["/odom"].meta["child_frame_id"] == "base_link"

@@ -589,7 +589,13 @@ def read_nav_sources(path: str | os.PathLike[str], *, imu_topic: str | None = No
                                mag_topic=mag_topic, baro_topic=baro_topic)
     imu_info = chosen["imu"]
     assert imu_info is not None
-    imu = logs.read_log_imu(path, topic=imu_info.topic)
+    aid_topics = [info.topic for role, info in chosen.items() if role != "imu" and info is not None]
+    if log_kind(path) == "rosbag":  # one pass over the bag for every topic
+        tds = logs.read_topics(path, [imu_info.topic, *aid_topics])
+        imu = logs.imu_from_topic(tds[imu_info.topic], source)
+    else:
+        tds = {}
+        imu = logs.read_log_imu(path, topic=imu_info.topic)
     t0_ns = int(imu.meta["t0_ns"])
     t_end = float(imu.t[-1])
     topics = {"imu": SourceInfo("imu", imu_info.topic, imu_info.msgtype, imu_info.count, imu.n, _rate(imu.t))}
@@ -607,7 +613,7 @@ def read_nav_sources(path: str | os.PathLike[str], *, imu_topic: str | None = No
         if info is None:
             meta[role] = f"no {_WHAT[role]} topic in the log"
             continue
-        td = logs.read_topic(path, info.topic)
+        td = tds[info.topic] if info.topic in tds else logs.read_topic(path, info.topic)
         if role == "odometer":
             child = td.meta.get("child_frame_id")
         aids[role], meta[role] = _aid(role, td, t0_ns, t_end, source, gnss_pos_std)

@@ -65,7 +65,7 @@ from imunav.io.topics import (
 from imunav.rotation import from_convention
 from imunav.timeseries import ImuData
 
-__all__ = ["list_topics", "read_topic", "read_imu_topic", "read_static_tf", "StaticTransform", "write_bag", "KINDS",
+__all__ = ["list_topics", "read_topic", "read_topics", "read_imu_topic", "read_static_tf", "StaticTransform", "write_bag", "KINDS",
            "STORAGES"]
 
 #: Message type -> kind read by imunav.
@@ -199,8 +199,24 @@ _FIELDS: dict[str, tuple[Callable[[Any], tuple], int, tuple[str, ...]]] = {
 }
 
 
-def _collect(reader: Any, conns: list[Any], kind: str, source: str, topic: str) -> tuple[np.ndarray, np.ndarray, dict]:
-    """(stamps (N, 3) int64 [sec, nanosec, receive_ns], floats (N, k), info) of every message of ``conns``."""
+def _finish(collector: Any) -> tuple[np.ndarray, np.ndarray, dict]:
+    """The result of a :func:`_collector` fed every message."""
+    try:
+        collector.send(None)
+    except StopIteration as stop:
+        return stop.value  # type: ignore[no-any-return]
+    raise RuntimeError("a collector did not finish")  # pragma: no cover - the generator ends on None
+
+
+def _collector(reader: Any, conns: list[Any], kind: str, source: str, topic: str) -> Any:
+    """A started generator that takes the messages ``(conn, ts, raw)`` of one topic by ``send`` and, sent None,
+    ends with the result of :func:`_collect` (so that one pass over a bag feeds several topics)."""
+    gen = _collecting(reader, conns, kind, source, topic)
+    next(gen)
+    return gen
+
+
+def _collecting(reader: Any, conns: list[Any], kind: str, source: str, topic: str) -> Any:
     extract, k, cov_names = _FIELDS[kind]
     ros1 = not reader.is2
     total = sum(int(c.msgcount) for c in conns)
@@ -283,14 +299,14 @@ def _collect(reader: Any, conns: list[Any], kind: str, source: str, topic: str) 
             pending.clear()
             flush()
 
-        for conn, ts, raw in reader.messages(connections=conns):
-            pending.append((conn, ts, raw))
+        while (item := (yield)) is not None:
+            pending.append(item)
             if len(pending) >= _CHUNK:
                 drain()
         drain()
     else:
-        for conn, ts, raw in reader.messages(connections=conns):
-            one(conn, ts, raw)
+        while (item := (yield)) is not None:
+            one(*item)
             if len(ci) >= _CHUNK:
                 flush()
         flush()
@@ -536,26 +552,70 @@ def read_topic(path: str | os.PathLike[str], topic: str, *, instance: int | None
     source = os.fspath(path)
     if instance is not None:
         raise InvalidInputError(f"{source}: instance= is for PX4 ULog topics; a ROS bag chooses by topic= only")
+    return _read_topics(path, [topic], _want)[0]
+
+
+def read_topics(path: str | os.PathLike[str], topics: Sequence[str]) -> dict[str, TopicData]:
+    """Several topics of a bag in one pass over its messages (what :func:`read_topic` gives for each).
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The bag (file or ROS 2 folder).
+    topics : sequence of str
+        Topic names (each once).
+
+    Returns
+    -------
+    dict of str to TopicData
+        Topic -> its data, as :func:`read_topic` returns it.
+
+    Raises
+    ------
+    InvalidInputError
+        If a topic is absent or its message type is not one imunav reads.
+    FileFormatError
+        If a topic is empty, mixes frame ids, or a message cannot be decoded.
+    """
+    names = list(dict.fromkeys(topics))
+    return dict(zip(names, _read_topics(path, names, None), strict=True))
+
+
+def _read_topics(path: str | os.PathLike[str], wanted: Sequence[str | None],
+                 want: Iterable[str] | None) -> list[TopicData]:
+    source = os.fspath(path)
     with _Bag(path) as reader:
         topics = reader.topics
-        name = _choose(topics, topic, source, _want)
-        info = topics[name]
-        kind = KINDS.get(info.msgtype or "")
-        if kind is None:
-            raise InvalidInputError(
-                f"{source}: topic {name!r} is {info.msgtype}; imunav reads {', '.join(sorted(KINDS))}"
-            )
-        ints, flts, cinfo = _collect(reader, list(info.connections), kind, source, name)
+        chosen = []
+        for topic in wanted:
+            name = _choose(topics, topic, source, want)
+            info = topics[name]
+            kind = KINDS.get(info.msgtype or "")
+            if kind is None:
+                raise InvalidInputError(
+                    f"{source}: topic {name!r} is {info.msgtype}; imunav reads {', '.join(sorted(KINDS))}"
+                )
+            chosen.append((name, info, kind))
+        collectors = {name: _collector(reader, list(info.connections), kind, source, name)
+                      for name, info, kind in chosen}
+        conns = [c for _, info, _ in chosen for c in info.connections]
+        for item in reader.messages(connections=conns):
+            collectors[item[0].topic].send(item)
+        results = {name: _finish(c) for name, c in collectors.items()}
         is2 = reader.is2
-    stamps = ints[:, 0] * 1_000_000_000 + ints[:, 1]
-    vals, units, meta = _values(kind, flts, cinfo)
-    meta.update({"format": "rosbag2" if is2 else "rosbag1", "msgtype": info.msgtype})
-    if not is2:
-        seq = ints[:, 3]
-        ds = np.diff(seq)
-        meta["seq_gaps"] = {"gaps": int(np.sum(ds > 1)), "missing": int(np.sum(ds[ds > 1] - 1))}
-    return topic_data(name, kind, stamps, vals, units, source, receive_ns=ints[:, 2], meta=meta,
-                      duplicates="drop" if kind == "gnss" else "raise")
+    out = []
+    for name, info, kind in chosen:
+        ints, flts, cinfo = results[name]
+        stamps = ints[:, 0] * 1_000_000_000 + ints[:, 1]
+        vals, units, meta = _values(kind, flts, cinfo)
+        meta.update({"format": "rosbag2" if is2 else "rosbag1", "msgtype": info.msgtype})
+        if not is2:
+            seq = ints[:, 3]
+            ds = np.diff(seq)
+            meta["seq_gaps"] = {"gaps": int(np.sum(ds > 1)), "missing": int(np.sum(ds[ds > 1] - 1))}
+        out.append(topic_data(name, kind, stamps, vals, units, source, receive_ns=ints[:, 2], meta=meta,
+                              duplicates="drop" if kind == "gnss" else "raise"))
+    return out
 
 
 def read_imu_topic(path: str | os.PathLike[str], topic: str | None, *, instance: int | None = None) -> TopicData:
