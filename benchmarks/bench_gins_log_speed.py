@@ -145,8 +145,8 @@ def main() -> None:
         scale = 3600.0 / t["duration_s"]
         print(f"end to end (imunav gins run, {a.cores} cores): {wall:.1f} s for {t['duration_s'] / 60:.1f} min of log "
               f"(acceptance for one hour: <= 30 s{'' if math.isclose(scale, 1, rel_tol=0.02) else f'; x{scale:.2f} -> {wall * scale:.1f} s per hour'})")
-        print(f"  reading (read_nav_sources): {t['read_s']:.2f} s, of which the IMU topic {t['read_imu_topic_s']:.2f} s "
-              f"({t['samples']['imu']} messages, {t['read_imu_topic_s'] / t['samples']['imu'] * 1e6:.1f} us each)")
+        print(f"  reading (read_nav_sources): {t['read_s']:.2f} s, (the IMU topic read alone: {t['read_imu_topic_s']:.2f} s, "
+              f"{t['samples']['imu']} messages, {t['read_imu_topic_s'] / t['samples']['imu'] * 1e6:.1f} us each)")
         smooth = f" + smoother {t['smoother_s']:.2f}" if a.smoother else ""
         print(f"  run_log: {t['run_log_s']:.2f} s = rest detection {t['rest_detection_s']:.2f} + mounting "
               f"{t['mounting_s']:.2f} + filter {t['filter_s'] - t['smoother_s']:.2f}{smooth} + initial state and "

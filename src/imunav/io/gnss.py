@@ -325,9 +325,15 @@ def write_table(path: str | os.PathLike[str], columns: list[ArrayLike], fmt: str
         ``path``.
     """
     arr = np.column_stack([np.asarray(c, dtype=float) for c in columns])
-    with atomic_path(path) as tmp:
-        np.savetxt(tmp, arr, fmt=fmt, delimiter=" ")
+    row = " ".join([fmt] * arr.shape[1]) + "\n"  # what numpy.savetxt writes, formatted a block of rows at a time
+    with atomic_path(path) as tmp, open(tmp, "wb") as fh:
+        for i in range(0, arr.shape[0], _ROWS_PER_BLOCK):
+            block = arr[i:i + _ROWS_PER_BLOCK]
+            fh.write(((row * block.shape[0]) % tuple(block.ravel().tolist())).encode("latin-1"))
     return Path(path)
+
+
+_ROWS_PER_BLOCK = 20_000
 
 
 def lat_lon_radians(lat: Array, lon: Array, angle_unit: str, src: str) -> tuple[Array, Array]:
