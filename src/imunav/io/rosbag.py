@@ -79,6 +79,8 @@ KINDS = {
     "sensor_msgs/msg/Temperature": "temperature",
 }
 _CHUNK = 65536
+#: Messages of a fixed-layout topic parsed at once (their raw bytes are held meanwhile: about 3 MB for an Imu topic).
+_FIXED_CHUNK = 8192
 
 
 def _open(path: str | os.PathLike[str]) -> Any:
@@ -301,7 +303,7 @@ def _collecting(reader: Any, conns: list[Any], kind: str, source: str, topic: st
 
         while (item := (yield)) is not None:
             pending.append(item)
-            if len(pending) >= _CHUNK:
+            if len(pending) >= _FIXED_CHUNK:
                 drain()
         drain()
     else:
