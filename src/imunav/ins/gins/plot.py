@@ -69,7 +69,7 @@ def plot_track(result: GinsResult | NavTrack, gnss: GnssData | None = None, trut
     origin = nav.lla[0]
     fig, ax = plt.subplots(figsize=(7, 6))
     if truth is not None:
-        p = earth.lla_to_ned(truth.lla, origin)
+        p = earth.lla_to_ned(truth.lla[_thin(truth.lla.shape[0])], origin)
         ax.plot(p[:, 1], p[:, 0], "k-", lw=2.5, alpha=0.3, label="truth")
     if gnss is not None:
         g = earth.lla_to_ned(gnss.lla, origin)
@@ -79,7 +79,7 @@ def plot_track(result: GinsResult | NavTrack, gnss: GnssData | None = None, trut
             bad = np.isin(np.round(gnss.t, 9), np.round(rec.t[~rec.accepted], 9))
             ax.plot(g[bad, 1], g[bad, 0], "x", ms=6, color="tab:red",
                     label=f"rejected by the χ² gate ({int(bad.sum())})")
-    p = earth.lla_to_ned(nav.lla, origin)
+    p = earth.lla_to_ned(nav.lla[_thin(nav.lla.shape[0])], origin)
     ax.plot(p[:, 1], p[:, 0], "-", lw=1, color="tab:blue", label="GNSS/INS")
     ax.plot(p[0, 1], p[0, 0], "go", label="start")
     ax.set_xlabel("east (m)")
@@ -99,12 +99,26 @@ def _sigma_at(t: np.ndarray, cov_t: np.ndarray, var: np.ndarray) -> np.ndarray:
 
 
 
+#: Most points drawn per line: a figure 12 inches wide at 90 dpi has about 1,000 pixel columns, so 20,000 points
+#: are 20 per column (a one-hour log at 200 Hz is thinned to every 36th sample, its first and last kept).
+MAX_POINTS = 20_000
+
+
+def _thin(n: int) -> np.ndarray:
+    """Indices of at most about :data:`MAX_POINTS` evenly spaced samples of ``n``, the first and last included."""
+    step = max(1, -(-n // MAX_POINTS))
+    return np.unique(np.r_[np.arange(0, n, step), max(n - 1, 0)]) if n else np.zeros(0, dtype=np.intp)
+
+
 def _band(ax: Any, t: np.ndarray, y: np.ndarray, tb: np.ndarray, centre: np.ndarray | float, s: np.ndarray,
           ylabel: str, label: str) -> None:
-    """One panel: ``y`` over ``t`` and the band ``centre ± 3 s`` over ``tb``."""
-    ax.plot(t, y, lw=0.8, label=label)
-    ax.plot(tb, centre + 3 * s, "r--", lw=0.7, label="±3σ")
-    ax.plot(tb, centre - 3 * s, "r--", lw=0.7)
+    """One panel: ``y`` over ``t`` and the band ``centre ± 3 s`` over ``tb`` (each thinned by :func:`_thin`)."""
+    i = _thin(np.size(t))
+    ax.plot(np.asarray(t)[i], np.asarray(y)[i], lw=0.8, label=label)
+    j = _thin(np.size(tb))
+    c = np.asarray(centre)[j] if np.ndim(centre) else centre
+    ax.plot(np.asarray(tb)[j], c + 3 * np.asarray(s)[j], "r--", lw=0.7, label="±3σ")
+    ax.plot(np.asarray(tb)[j], c - 3 * np.asarray(s)[j], "r--", lw=0.7)
     ax.set_ylabel(ylabel)
     ax.grid(True)
 
