@@ -103,7 +103,8 @@ _GNSS_ARG = typer.Argument(None, help="GNSS file: KF-GINS text (s, lat deg, lon 
 _CONFIG_OPT = typer.Option(None, "--config", help="KF-GINS YAML (its keys and units; names the IMU and GNSS files) "
                                                   "or, with IMU GNSS, an imunav TOML (GinsConfig fields in SI, "
                                                   "preset, [init], [imu], [gnss]).")
-_ODO_OPT = typer.Option(None, "--odo", help="Odometer file: time s, forward speed m/s (two columns).")
+_ODO_OPT = typer.Option(None, "--odo", help="Odometer file: time s, forward speed m/s (two columns; a third: "
+                                                "the speed's sigma, m/s).")
 _STATES_OPT = typer.Option(None, "--states", help="15 (no scale factors) or 21 (default: the configuration's, "
                                                   "else 21).")
 

@@ -8,7 +8,8 @@ What ``imunav gins run``, ``imunav gins outage-test`` and the ``gins`` lab step 
   :func:`imunav.io.read_imu` reads (rates, SI, FRD);
 * GNSS (:func:`read_gnss_input`): the KF-GINS text file (:func:`imunav.io.gnss.read_gnss_text`) or, for a
   ``.csv``, a generic CSV (:func:`imunav.io.gnss.read_gnss_csv`, its column names in the options);
-* odometer (:func:`read_odometer`): a text file of two columns, time (s, the IMU's clock) and forward speed (m/s).
+* odometer (:func:`read_odometer`): a text file of two columns, time (s, the IMU's clock) and forward speed (m/s),
+  or three with the speed's σ (m/s).
 """
 
 from __future__ import annotations
