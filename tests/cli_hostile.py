@@ -78,6 +78,8 @@ BASELINE: dict[str, list[str]] = {
     "warmup": ["warmup", "--quiet"],  # no numeric or path option: no case runs it
     "batch noise": ["batch", "noise", "{BATCH}", "--out", "{OUT}_noise", "--executor", "serial", "--quiet",
                     "--json", "{OUT}.json"],
+    "batch gins": ["batch", "gins", "{LOGS}", "--out", "{OUT}_logs", "--executor", "serial", "--quiet", "--no-plots",
+                   "--json", "{OUT}.json"],
 }
 
 #: Violations found in code this work may not change, reported to the lead (none left: the GNSS/INS commands'
@@ -289,6 +291,7 @@ def make_fixtures(root: Path) -> dict[str, str]:
     from imunav.io import write_imu
     from imunav.lab.batch import simulate_batch
     from imunav.sim import hundred_position_profile
+    from imunav.sim.robot_log import simulate_robot_log, write_robot_log
     from imunav.timeseries import ImuData
 
     d = root / "inputs"
@@ -324,13 +327,16 @@ def make_fixtures(root: Path) -> dict[str, str]:
                    progress=False)
     r = runner.invoke(app, ["airdata", "simulate", "cruise", "--duration", "10", "--out", str(d / "flight.npz")])
     assert r.exit_code == 0, r.stderr
+    (d / "logs").mkdir(exist_ok=True)
+    if not (d / "logs" / "kfgins").exists():  # a folder of logs: a short robot drive as KF-GINS text files
+        write_robot_log(simulate_robot_log(1, distance_m=80.0), d / "logs", formats=("kfgins",))
     return {"REC": "inputs/rec.csv", "NPZ": "inputs/rec.npz", "MAG": "inputs/mag.csv",
             "SEG": "inputs/segments.json", "CAL": "inputs/cal.json", "CAL2": "inputs/cal2.json", "CAL3": "inputs/cal3.json",
             "MODEL": "inputs/model.toml", "LAB": "inputs/lab.toml", "IMU": "inputs/gins/imu.txt",
             "GNSS": "inputs/gins/gnss.txt", "GCFG": "inputs/gins/gins.toml", "TRUTH": "inputs/gins/truth.nav",
             "FOOT": "inputs/walk.csv", "FLIGHT": "inputs/flight.npz", "BREC": "inputs/batch/unit_001.npz", "BSEG": "inputs/batch/segments.json",
             "BRATE": "inputs/batch/unit_001_rate.npz", "BRSEG": "inputs/batch/rate_segments.json",
-            "DIR": "inputs/trials", "BATCH": "inputs/batch", "OUT": "out"}
+            "DIR": "inputs/trials", "BATCH": "inputs/batch", "LOGS": "inputs/logs", "OUT": "out"}
 
 
 def _snapshot(root: Path) -> dict[str, bytes | None]:

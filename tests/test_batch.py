@@ -5,6 +5,7 @@ from __future__ import annotations
 import json
 
 import numpy as np
+import pandas as pd
 import pytest
 from typer.testing import CliRunner
 
@@ -12,6 +13,7 @@ from imunav.cli.main import app
 from imunav.errors import InvalidInputError
 from imunav.lab.batch import calibrate_batch, find_units, noise_batch, simulate_batch
 from imunav.sim import ImuErrorModel, presets
+from imunav.sim.robot_log import simulate_robot_log, write_robot_log
 
 runner = CliRunner()
 
@@ -125,3 +127,55 @@ def test_batch_noise_recovers_white_noise(tmp_path):
             assert abs(v - m.gyro.noise_density[i]) < 4 * se
             assert est[f"accel_vrw_{a}"][0] == pytest.approx(2e-3, rel=0.1)
     assert (tmp_path / "noise" / "u0_noise.json").is_file() and (tmp_path / "noise" / "index.html").is_file()
+
+
+def test_batch_gins_runs_every_log_as_gins_run_does(tmp_path):
+    """A folder with two short robot drives (a ROS 1 bag and a ROS 2 bag folder) and a broken bag: one result folder
+    per log, each the outputs of `imunav gins run LOG`; the table's values are those of `gins run` on the same log
+    (its summary.json and the last row of its state sigma file); the broken log is a row with its error, exit 1."""
+    pytest.importorskip("rosbags")
+    from cli_contract import invoke
+
+    from imunav.io.kfgins import read_kfgins_nav
+
+    logs = tmp_path / "logs"
+    logs.mkdir()
+    for seed, fmt in ((1, "ros1"), (2, "ros2")):
+        d = tmp_path / f"w{seed}"
+        d.mkdir()
+        written = write_robot_log(simulate_robot_log(seed, distance_m=80.0), d, formats=(fmt,))
+        written[fmt].rename(logs / ("a.bag" if fmt == "ros1" else "b"))
+    (logs / "broken.bag").write_bytes(b"#ROSBAG V2.0\ntruncated")
+    (logs / "notes.txt").write_text("not a log")
+    r = invoke("batch", "gins", logs, "--executor", "serial", "--quiet", "--no-plots", "--smoother")
+    assert r.exit_code == 1, r.stderr  # a log failed: the batch commands' rule
+    out = logs / "gins"
+    assert sorted(p.name for p in out.iterdir() if p.is_dir()) == ["a", "b"]
+    table = pd.read_csv(out / "summary.csv")
+    assert list(table["unit"]) == ["a", "b", "broken"] and list(table["status"]) == ["ok", "ok", "error"]
+    assert "broken.bag" in table.loc[2, "error"] and "ROS bag" in table.loc[2, "error"]
+    doc = json.loads((out / "summary.json").read_text())
+    assert doc["kind"] == "gins" and doc["n_failed"] == 1 and "| broken | error |" in (out / "summary.md").read_text()
+    for i, name in enumerate(("a.bag", "b")):
+        one = tmp_path / f"run_{i}"
+        assert invoke("gins", "run", logs / name, "--out", one, "--no-plots", "--smoother", "--quiet").exit_code == 0
+        s = json.loads((one / "summary.json").read_text())
+        row = table.loc[i]
+        assert json.loads((out / row["unit"] / "summary.json").read_text())["mounting"] == s["mounting"]
+        m = s["mounting"]
+        expect = {"duration_s": s["duration_s"], "imu_samples": s["imu_samples"], "gnss_used": s["gnss_used"],
+                  "mounting_roll_deg": m["roll_deg"], "mounting_pitch_deg": m["pitch_deg"],
+                  "mounting_yaw_deg": m["yaw_deg"], "mounting_roll_std_deg": m["std_deg"][0],
+                  "mounting_pitch_std_deg": m["std_deg"][1], "mounting_yaw_std_deg": m["std_deg"][2],
+                  "odometer_scale": 1 + s["odometer_scale"]["value"], "odometer_scale_std": s["odometer_scale"]["std"],
+                  "gnss_time_offset_s": s["gnss_time_offset_s"]["value"],
+                  "gnss_time_offset_std_s": s["gnss_time_offset_s"]["std"],
+                  "gnss_rejected_share": s["gnss_rejected"]["share"]}
+        for k, v in expect.items():
+            assert row[k] == pytest.approx(v, rel=1e-12, abs=0), k  # CSV keeps repr-exact floats
+        std = np.loadtxt(one / "KF_GINS_STD.txt")[-1, 1:4]
+        np.testing.assert_allclose(row[["final_pos_std_n_m", "final_pos_std_e_m", "final_pos_std_d_m"]].to_numpy(float),
+                                   std, rtol=1e-6)  # the file's digits
+        assert row["mounting_source"] == "estimated" and "/gps/fix" in row["sources"]
+        assert read_kfgins_nav(out / row["unit"] / "KF_GINS_Navresult_smoothed.nav").t.size == s["imu_samples"]
+        assert abs(row["odometer_scale"] - 0.91) < 4 * row["odometer_scale_std"]

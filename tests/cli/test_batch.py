@@ -31,3 +31,14 @@ def test_a_dask_scheduler_that_does_not_answer_fails_fast(tmp_path):
                                  "--quiet"))
     assert "did not answer" in line and time.monotonic() - t0 < 25.0
     assert not (tmp_path / "noise").exists()
+
+
+def test_batch_gins_takes_the_executor_options_of_the_other_batches(tmp_path):
+    """batch gins: an address without the Dask executor is refused in one line before any log runs; a folder
+    without a log says what a log is."""
+    (tmp_path / "a.bag").write_bytes(b"#ROSBAG V2.0\n")
+    line = one_error_line(invoke("batch", "gins", tmp_path, "--address", "tcp://127.0.0.1:1", "--quiet"))
+    assert "--executor dask" in line and not (tmp_path / "gins").exists()
+    (tmp_path / "a.bag").unlink()
+    (tmp_path / "notes.txt").write_text("no log here")
+    assert ".bag" in one_error_line(invoke("batch", "gins", tmp_path, "--quiet"))

@@ -17,7 +17,7 @@ from shared_data import data_path
 
 from imunav import earth
 from imunav.atmosphere import isa, pressure_altitude
-from imunav.errors import FileFormatError, InvalidInputError
+from imunav.errors import ConfigError, FileFormatError, InvalidInputError
 from imunav.io.aiding import MagnetometerData
 from imunav.io.gnss import GnssData, read_gnss_text
 from imunav.io.kfgins import read_kfgins_imu
@@ -71,14 +71,46 @@ def test_robot_bag_round_trip(robot, fmt):
 
 
 def test_robot_kfgins_text_is_the_same_drive(robot):
+    """The drive's KF-GINS text folder (sources.toml) read as a log gives the bags' sources: the same stamps to the
+    nanosecond, the same fixes, speeds and sigmas bit for bit, the IMU rates within one ulp (increment = rate x
+    interval, read back as increment / interval), the same UTC origin."""
     log, out = robot
     s = read_nav_sources(out["ros1"])
-    sow0 = float(s.gps_time([0.0]).sow[0])
-    g = read_gnss_text(out["kfgins"] / "gnss.txt")
-    np.testing.assert_allclose(g.t - sow0, s.gnss.t, rtol=0, atol=2e-9)  # 9 decimals in the file
-    np.testing.assert_allclose(g.lla[:, :2], s.gnss.lla[:, :2], rtol=0, atol=1e-9 * np.pi / 180)
-    inc = read_kfgins_imu(out["kfgins"] / "imu.txt")
-    np.testing.assert_allclose(inc.t - sow0, s.imu.t, rtol=0, atol=2e-9)
+    k = read_nav_sources(out["kfgins"])
+    assert k.t0_ns == s.t0_ns and k.t0_unix == s.t0_unix and k.time_is_utc
+    for a, b in ((k.imu.t, s.imu.t), (k.gnss.t, s.gnss.t), (k.gnss.lla, s.gnss.lla), (k.gnss.pos_std, s.gnss.pos_std),
+                 (k.odometer.t, s.odometer.t), (k.odometer.speed, s.odometer.speed),
+                 (k.odometer.speed_std, s.odometer.speed_std)):
+        np.testing.assert_array_equal(a, b)
+    ulp = np.spacing(np.abs(s.imu.accel))
+    assert np.all(np.abs(k.imu.accel - s.imu.accel) <= ulp) and np.all(np.abs(k.imu.gyro - s.imu.gyro)
+                                                                        <= np.spacing(np.abs(s.imu.gyro)))
+    assert {r: (v.topic, v.used) for r, v in k.topics.items()} == {
+        "imu": ("imu.txt", log.imu.n), "gnss": ("gnss.txt", log.gnss.n), "odometer": ("odo.txt", log.odometer.t.size)}
+    assert k.gnss.meta["faults"] == s.gnss.meta["faults"] and k.imu_to_base is None  # no /tf_static in text
+    inc = read_kfgins_imu(out["kfgins"] / "imu.txt")  # still a KF-GINS file for any KF-GINS reader
+    assert inc.n == log.imu.n and read_gnss_text(out["kfgins"] / "gnss.txt").n == log.gnss.n
+
+
+def test_kfgins_text_log_refusals(robot, tmp_path):
+    """A text folder names its files in sources.toml: topic flags, unknown keys, no IMU, a bad week are refused;
+    without gps_week the time is the files' own (not UTC)."""
+    import shutil
+
+    _, out = robot
+    d = tmp_path / "text"
+    shutil.copytree(out["kfgins"], d)
+    with pytest.raises(InvalidInputError, match="--imu-topic"):
+        read_nav_sources(d, imu_topic="/imu")
+    cfg = (d / "sources.toml").read_text()
+    for text, word in ((cfg + "\nspeed = 1\n", "unknown key"), (cfg.replace('imu = "imu.txt"', ""), "imu ="),
+                       (cfg.replace("gps_week = 2314", "gps_week = -1"), "gps_week")):
+        (d / "sources.toml").write_text(text)
+        with pytest.raises(ConfigError, match=word):
+            read_nav_sources(d)
+    (d / "sources.toml").write_text(cfg.replace("gps_week = 2314", ""))
+    k = read_nav_sources(d)
+    assert not k.time_is_utc and k.gps_time([0.0]).sow[0] == pytest.approx(2 * 86400 + 9.5 * 3600 + 18, abs=1e-9)
 
 
 def test_no_static_tf_leaves_the_mounting_to_estimate(robot, tmp_path):

@@ -80,9 +80,15 @@ def _raw_writer(path, storage):
     return Writer(path, version=9, storage_plugin=StoragePlugin[storage.upper()]), ts, ts.serialize_cdr
 
 
-def _write_raw(path, storage, topics):
-    """``topics``: {topic: [(record_ns, msgtype, stamp_ns, frame_id, build(T, header)[, seq]) ...]}."""
-    writer, ts, ser = _raw_writer(path, storage)
+def _write_raw(path, storage, topics, big_endian=None):
+    """``topics``: {topic: [(record_ns, msgtype, stamp_ns, frame_id, build(T, header)[, seq]) ...]};
+    ``big_endian(topic, i)``: message i of a ROS 2 topic serialized as big-endian CDR."""
+    writer, ts, ser0 = _raw_writer(path, storage)
+    current = {"be": False}
+
+    def ser(msg, msgtype):
+        return ts.serialize_cdr(msg, msgtype, little_endian=False) if current["be"] else ser0(msg, msgtype)
+
     T = ts.types
     with writer:
         conns = {}
@@ -95,6 +101,7 @@ def _write_raw(path, storage, topics):
                 kw = {"seq": seq[0] if seq else i} if storage == "ros1" else {}
                 hdr = T["std_msgs/msg/Header"](stamp=T["builtin_interfaces/msg/Time"](sec=sec, nanosec=nsec),
                                                 frame_id=frame, **kw)
+                current["be"] = bool(big_endian and big_endian(topic, i))
                 items.append((rec, conns[topic], ser(build(T, hdr), msgtype)))
         for rec, conn, raw in sorted(items, key=lambda x: x[0]):
             writer.write(conn, rec, raw)
@@ -409,3 +416,94 @@ def test_gnss_pressure_and_temperature_topics(tmp_path):
     assert d.n == 41 and d.meta["temp_from"]["topic"] == "/temp"
     with pytest.raises(InvalidInputError, match="without mag data"):
         read_imu(p, topic="/imu", mag_topic="/baro")
+
+
+# ---------------------------------------------------------------- the fixed-layout fast path
+def _odom_msg(v, w, var, child):
+    def build(T, hdr):
+        V = T["geometry_msgs/msg/Vector3"]
+        cov = np.zeros(36)
+        cov[0] = var
+        pose = T["geometry_msgs/msg/PoseWithCovariance"](
+            pose=T["geometry_msgs/msg/Pose"](position=T["geometry_msgs/msg/Point"](x=1.0, y=2.0, z=3.0),
+                                             orientation=T["geometry_msgs/msg/Quaternion"](x=0.0, y=0.0, z=0.0, w=1.0)),
+            covariance=np.arange(36.0))
+        tw = T["geometry_msgs/msg/TwistWithCovariance"](twist=T["geometry_msgs/msg/Twist"](linear=V(*v), angular=V(*w)),
+                                                          covariance=cov)
+        return T["nav_msgs/msg/Odometry"](header=hdr, child_frame_id=child, pose=pose, twist=tw)
+
+    return build
+
+
+def _imu_topics(n=300):
+    """IMU topics whose raw layouts differ: frame_id lengths, covariances that vary, a big-endian one."""
+    rng = np.random.default_rng(4)
+    stamps = T0 + np.arange(n) * 5_000_000 + rng.integers(0, 1000, n)
+
+    def series(frames, q=False, cov=False):
+        out = []
+        for i, (s, f) in enumerate(zip(stamps, frames)):
+            g, a = rng.standard_normal(3), rng.standard_normal(3) * 9.81
+            qv = np.r_[rng.standard_normal(3) * 0.1, 1.0]
+            qv = tuple(qv / np.linalg.norm(qv)) if q else None
+            c = rng.random(9) * 1e-4 if cov and i % 7 == 3 else np.full(9, 1e-5) if cov else None
+            out.append((int(s) + 17, "sensor_msgs/msg/Imu", int(s), f, _imu_msg(tuple(g), tuple(a), qv, c), i + 1))
+        return out
+
+    return {"/short": series(["i"] * n), "/long": series(["imu_link_of_a_longer_name"] * n, q=True, cov=True),
+            "/mixed_endian": series(["imu"] * n, cov=True), "/big": series(["imu_big"] * n, q=True),
+            "/two_frames": series(["imu_a", "imu_b"] * (n // 2)),
+            "/two_lengths": series(["imu", "imu_2"] * (n // 2)),
+            "/odom": [(int(s) + 3, "nav_msgs/msg/Odometry", int(s), "odom",
+                       _odom_msg(tuple(rng.standard_normal(3)), tuple(rng.standard_normal(3)), rng.random() * 0.01,
+                                 "base_link"), i + 1) for i, s in enumerate(stamps[::5])],
+            "/odom_children": [(int(s) + 3, "nav_msgs/msg/Odometry", int(s), "odom",
+                                _odom_msg((0.5, 0.0, 0.0), (0.0, 0.0, 0.1), 0.0, ("base", "base_link")[i % 2]), i + 1)
+                               for i, s in enumerate(stamps[::5])]}
+
+
+@pytest.mark.parametrize("storage", STORAGES)
+def test_fixed_layout_fast_path_is_bit_identical_to_rosbags(tmp_path, storage, monkeypatch):
+    """sensor_msgs/Imu and nav_msgs/Odometry parsed with numpy from the raw bytes (imunav.io.rosbag._fixed_chunk)
+    give what rosbags' per-message deserialization gives, bit for bit, on ROS 1 and ROS 2 (sqlite3, MCAP) bags
+    with frame_ids of several lengths, covariances that vary, big-endian CDR and a topic mixing both byte orders;
+    a topic mixing frame_ids (of one length or of two) or child frames is refused with the same message."""
+    import imunav.io.rosbag as rb
+
+    p = _path(tmp_path, storage)
+    be = (lambda topic, i: topic == "/big" or (topic == "/mixed_endian" and i % 2 == 1)) if storage != "ros1" else None
+    _write_raw(p, storage, _imu_topics(), big_endian=be)
+    fast, used = {}, {}
+    chunk = rb._fixed_chunk
+    for topic in ("/short", "/long", "/mixed_endian", "/big", "/two_frames", "/two_lengths", "/odom",
+                  "/odom_children"):
+        calls = []
+        monkeypatch.setattr(rb, "_fixed_chunk", lambda *a, calls=calls: calls.append(chunk(*a)) or calls[-1])
+        try:
+            fast[topic] = read_topic(p, topic)
+        except FileFormatError as e:
+            fast[topic] = str(e)
+        used[topic] = all(c is not None for c in calls)
+    # numpy parsed every chunk but those mixing byte orders or frame_ids of one length (rosbags reads them)
+    assert used == {"/short": True, "/long": True, "/mixed_endian": storage == "ros1", "/big": True,
+                    "/two_frames": False, "/two_lengths": True, "/odom": True, "/odom_children": True}
+    monkeypatch.setattr(rb, "_fixed_chunk", lambda *a: None)  # rosbags' deserialization of every message
+    for topic, f in fast.items():
+        if isinstance(f, str):
+            with pytest.raises(FileFormatError) as e:
+                read_topic(p, topic)
+            assert str(e.value) == f and ("mixes frame_ids" in f or "mixes child_frame_ids" in f)
+            continue
+        s = read_topic(p, topic)
+        assert f.values.keys() == s.values.keys() and f.meta == s.meta, topic
+        for k in s.values:
+            assert f.values[k].tobytes() == s.values[k].tobytes(), (topic, k)
+        assert f.t.tobytes() == s.t.tobytes() and f.t_receive.tobytes() == s.t_receive.tobytes()
+    assert fast["/long"].meta["covariance"]["varies"] and "q_nb" in fast["/big"].values
+    ok = [t for t, f in fast.items() if not isinstance(f, str)]
+    monkeypatch.setattr(rb, "_fixed_chunk", chunk)
+    together = rb.read_topics(p, ok)  # one pass over the bag: the same topics
+    for t in ok:
+        assert together[t].meta == fast[t].meta and all(
+            together[t].values[k].tobytes() == fast[t].values[k].tobytes() for k in fast[t].values)
+    assert "child_frame_ids" in fast["/odom_children"] and fast["/odom"].meta["child_frame_id"] == "base_link"

@@ -303,7 +303,7 @@ def check_params(command_path: str, params: list[Any], values: Mapping[str, Any]
 _FILE_OUTPUTS = {"--json", "--plot", "--psd-plot", "--kalibr", "--openvins", "--vins", "--px4-params",
                  "--imucal-out", "out", "--out", "simulate --segments"}
 _INPUT_FOLDERS = {"directory", "folder"}
-_RUN_FOLDERS = {"lab --out", "batch simulate --out", "batch calibrate --out", "batch noise --out"}
+_RUN_FOLDERS = {"lab --out", "batch simulate --out", "batch calibrate --out", "batch noise --out", "batch gins --out"}
 _REPORT_FOLDERS = {"--report", "gins simulate --out", "gins run --out", "gins outage-test --out"}
 
 

@@ -1,4 +1,5 @@
-"""``imunav batch ...``: a production batch of IMUs (simulate, calibrate, noise) in parallel."""
+"""``imunav batch ...``: a production batch of IMUs (simulate, calibrate, noise) and a folder of robot or drone
+logs (gins) in parallel."""
 
 from __future__ import annotations
 
@@ -21,10 +22,11 @@ from imunav.files import check_outputs, write_json
 
 batch = lazy("imunav.lab.batch")
 catalog = lazy("imunav.lab.report.catalog")
+logrun = lazy("imunav.ins.gins.logrun")
 
 app = typer.Typer(
-    help="Process a folder of recordings (one per unit of a production batch) in parallel, "
-    "with a summary table and per-unit result files.\n\n"
+    help="Process a folder of recordings (one per unit of a production batch, or one robot / drone log each) in "
+    "parallel, with a summary table and per-unit result files.\n\n"
     "Example: imunav batch simulate 4 --out batch --fs 20 --dwell 4 && imunav batch calibrate batch",
     no_args_is_help=True,
 )
@@ -209,6 +211,88 @@ def noise_cmd(
     cols = ["gyro_arw", "gyro_bias_instability", "accel_vrw", "accel_bias_instability"]
     _print_summary(s, cols, f"batch noise: {len(s.table)} units, {s.seconds:.1f} s")
     _finish(s, json_out)
+
+
+@app.command("gins")
+def gins_cmd(
+    folder: Path = typer.Argument(..., help="Folder of logs: ROS 1 .bag files, ROS 2 bag folders, PX4 .ulg files."),
+    out: Optional[Path] = typer.Option(None, "--out", "-o", help="Result folder (default FOLDER/gins)."),
+    json_out: Optional[Path] = _JSON,
+    imu_topic: Optional[str] = typer.Option(None, "--imu-topic", help="The IMU topic of every log."),
+    gnss_topic: Optional[str] = typer.Option(None, "--gnss-topic", help="The GNSS topic of every log."),
+    odo_topic: Optional[str] = typer.Option(None, "--odo-topic", help="The wheel odometry topic of every log."),
+    mag_topic: Optional[str] = typer.Option(None, "--mag-topic", help="The magnetometer topic of every log."),
+    baro_topic: Optional[str] = typer.Option(None, "--baro-topic", help="The barometer topic of every log."),
+    imu_rotation: Optional[str] = typer.Option(None, "--imu-rotation", help="The IMU's mounting in the vehicle, "
+                                               "'qw,qx,qy,qz' or ZYX 'roll,pitch,yaw' in degrees (default: each "
+                                               "bag's /tf_static, else estimated)."),
+    gnss_lever_arm: Optional[str] = typer.Option(None, "--gnss-lever-arm", help="The GNSS antenna from the IMU, "
+                                                 "vehicle FRD, m: 'x,y,z'."),
+    preset: str = typer.Option("consumer_mems", "--preset", help="The IMU error preset whose noise model the "
+                                                                 "filter uses."),
+    smoother: bool = typer.Option(False, "--smoother", help="Also write the RTS-smoothed solution of each log."),
+    plots: bool = typer.Option(True, "--plots/--no-plots", help="Write each log's figures."),
+    executor: str = _EXEC, workers: Optional[int] = _WORKERS, address: Optional[str] = _ADDR, quiet: bool = _QUIET,
+    overwrite: bool = _OVERWRITE,
+) -> None:
+    """GNSS/INS on every log of a folder, in parallel: each as `imunav gins run LOG` (same options, the same for
+    every log), one result folder per log, and a summary table.
+
+    Writes FOLDER/gins/<log>/ (the .nav, IMU errors, state sigma, track.geojson, summary.json and figures of gins
+    run) and summary.csv, summary.json, summary.md: per log its sources, duration, mounting, odometer scale and GNSS
+    latency with their sigma, the share of fixes rejected and the final position sigma. A log that fails is a row
+    with its error. Exit status 1 when a log fails.
+
+    Example: imunav batch gins logs --no-plots
+    """
+
+    check_outputs([folder], [json_out], run_folders=[out if out is not None else folder / "gins"])
+    try:
+        opts = logrun.LogRunOptions(preset=preset, mounting=logrun.parse_rotation(imu_rotation, "--imu-rotation"),
+                                    gnss_lever_arm=logrun.parse_vector(gnss_lever_arm, "--gnss-lever-arm"),
+                                    smoother=smoother)
+        topics = {"imu_topic": imu_topic, "gnss_topic": gnss_topic, "odo_topic": odo_topic, "mag_topic": mag_topic,
+                  "baro_topic": baro_topic}
+        s = batch.gins_batch(folder, out_dir=out, topics=topics, options=opts, plots=plots, executor=executor,
+                             n_workers=workers, address=address, progress=_bar(quiet),
+                             overwrite=overwrite)  # type: ignore[arg-type]
+    except InvalidInputError as exc:
+        _fail(exc)
+    _print_gins(s, f"batch gins: {len(s.table)} logs, {s.seconds:.1f} s")
+    if json_out is not None:
+        write_json(json_out, s.to_dict())
+    typer.echo(f"summary: {s.out_dir / 'summary.csv'}, {s.out_dir / 'summary.md'}")
+    if s.n_failed:
+        raise typer.Exit(1)
+
+
+def _print_gins(summary: Any, title: str) -> None:
+    """Rich table: one row per log, the mounting, odometer scale, GNSS latency and final position sigma."""
+
+    def num(v: Any, fmt: str) -> str:
+        return "–" if v is None or (isinstance(v, float) and math.isnan(v)) else format(v, fmt)
+
+    tab = Table(title=title)
+    for c in ("log", "status", "s", "mounting r, p, y [deg] (σ)", "odometer scale (σ)", "GNSS latency [s] (σ)",
+              "rejected", "final σ N, E, D [m]"):
+        tab.add_column(escape(c), justify="left" if c in ("log", "status") else "right")
+    for r in summary.table.to_dict(orient="records"):
+        if r["status"] != "ok":
+            tab.add_row(r["unit"], "[red]ERROR[/red]", *["–"] * 6)
+            continue
+        mount = ", ".join(f"{num(r[f'mounting_{a}_deg'], '.2f')} ({num(r[f'mounting_{a}_std_deg'], '.2f')})"
+                          for a in ("roll", "pitch", "yaw"))
+        tab.add_row(r["unit"], "ok", num(r["duration_s"], ".0f"), mount,
+                    f"{num(r['odometer_scale'], '.4f')} ({num(r['odometer_scale_std'], '.4f')})",
+                    f"{num(r['gnss_time_offset_s'], '.3f')} ({num(r['gnss_time_offset_std_s'], '.3f')})",
+                    num(r["gnss_rejected_share"], ".1%"),
+                    ", ".join(num(r[f"final_pos_std_{a}_m"], ".2f") for a in "ned"))
+    con = make_console()
+    con.width = max(con.width, 150)
+    con.print(tab)
+    for r in summary.table.to_dict(orient="records"):
+        if r["status"] != "ok":
+            con.print(f"[red]{r['unit']}:[/red] {r.get('error')}", soft_wrap=True, highlight=False)
 
 
 def _finish(summary: Any, json_out: Optional[Path]) -> None:

@@ -103,7 +103,8 @@ _GNSS_ARG = typer.Argument(None, help="GNSS file: KF-GINS text (s, lat deg, lon 
 _CONFIG_OPT = typer.Option(None, "--config", help="KF-GINS YAML (its keys and units; names the IMU and GNSS files) "
                                                   "or, with IMU GNSS, an imunav TOML (GinsConfig fields in SI, "
                                                   "preset, [init], [imu], [gnss]).")
-_ODO_OPT = typer.Option(None, "--odo", help="Odometer file: time s, forward speed m/s (two columns).")
+_ODO_OPT = typer.Option(None, "--odo", help="Odometer file: time s, forward speed m/s (two columns; a third: "
+                                                "the speed's sigma, m/s).")
 _STATES_OPT = typer.Option(None, "--states", help="15 (no scale factors) or 21 (default: the configuration's, "
                                                   "else 21).")
 
@@ -139,8 +140,8 @@ def run_cmd(
                                                                  "model the filter uses."),
     quiet: bool = typer.Option(False, "--quiet", "-q", help="No progress bar."),
 ) -> None:
-    """Run the GNSS/INS filter on a robot's or a drone's log (ROS 1 bag, ROS 2 bag folder, PX4 ULog), on a KF-GINS
-    YAML, or on IMU and GNSS files with a TOML; write KF-GINS's outputs (.nav, IMU errors, state sigma),
+    """Run the GNSS/INS filter on a robot's or a drone's log (ROS 1 bag, ROS 2 bag folder, PX4 ULog, or a folder of
+    KF-GINS text files with a sources.toml, run as a log), on a KF-GINS YAML, or on IMU and GNSS files with a TOML; write KF-GINS's outputs (.nav, IMU errors, state sigma),
     summary.json and figures (a log: also track.geojson, the mounting, odometer scale and GNSS latency found).
 
     Example (a real robot's ROS 1 bag, no GNSS: dead reckoning): imunav gins run
@@ -150,7 +151,7 @@ def run_cmd(
 
     Example: imunav gins run drive/imu.txt drive/gnss.txt --config drive/gins.toml --out res --truth drive/truth.nav
     """
-    if imu is not None and logs.log_kind(imu) is not None:
+    if imu is not None and navlog.is_nav_log(imu):
         if gnss is not None or config is not None or odo is not None or truth is not None or states is not None:
             raise ConfigError(f"{imu} is a log: it names its own sources; choose topics with --imu-topic / "
                               "--gnss-topic / --odo-topic / --mag-topic / --baro-topic instead of files")
@@ -264,9 +265,10 @@ def outage_cmd(
     0,30,60 --out robot-outage-truth
     """
     sh = _shifts(shifts)
-    if imu is not None and logs.log_kind(imu) is not None:
-        extra = [n for n, v in (("GNSS file", gnss), ("--config", config), ("--odo", odo), ("--preset", preset), ("--duration", duration), ("--fs", fs), ("--seed", seed),
-                                ("--rtk/--spp", rtk), ("--states", states)) if v is not None]
+    if imu is not None and navlog.is_nav_log(imu):
+        extra = [n for n, v in (("GNSS file", gnss), ("--config", config), ("--odo", odo), ("--preset", preset),
+                                ("--duration", duration), ("--fs", fs), ("--seed", seed), ("--rtk/--spp", rtk),
+                                ("--states", states)) if v is not None]
         if extra:
             raise ConfigError(f"{imu} is a log: the fixes removed during each outage (or --truth) are the "
                               f"reference; leave out {', '.join(extra)}")

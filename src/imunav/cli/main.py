@@ -37,8 +37,8 @@ COMMANDS: dict[str, str] = {
     "gins": "Loosely coupled GNSS/INS (error-state Kalman filter) on KF-GINS files.",
     "airdata": "Air data + Doppler radar integration: wind-estimating Kalman filter, robust filtering, fault "
                "detection.",
-    "batch": "Process a folder of recordings (one per unit of a production batch) in parallel, with a summary "
-             "table and per-unit result files.",
+    "batch": "Process a folder of recordings (one per unit of a production batch, or one robot / drone log each) "
+             "in parallel, with a summary table and per-unit result files.",
     "warmup": "Compile the numba kernels of the quick-tour commands and write their bytecode, once, ahead of use.",
 }
 

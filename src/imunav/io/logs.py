@@ -71,7 +71,9 @@ __all__ = [
     "log_kind",
     "list_topics",
     "read_topic",
+    "read_topics",
     "read_log_imu",
+    "imu_from_topic",
     "ros_to_frd",
     "frd_to_ros",
     "enu_to_ned",
@@ -191,8 +193,36 @@ def read_log_imu(path: str | os.PathLike[str], *, topic: str | None = None, inst
         if name in imu.values:
             raise InvalidInputError(f"{source}: topic {imu.topic!r} already carries {name}; drop {opt}")
         imu, notes[name] = merge_onto(imu, aux, name, source)
+    return imu_from_topic(imu, source, nan_policy=nan_policy,
+                          meta={**{f"{k}_from": v for k, v in notes.items()}, **dict(meta or {})})
+
+
+def imu_from_topic(imu: TopicData, source: str, *, nan_policy: str = "raise",
+                   meta: Mapping[str, Any] | None = None) -> ImuData:
+    """The :class:`ImuData` of an IMU topic already read (what :func:`read_log_imu` returns for it).
+
+    Parameters
+    ----------
+    imu : TopicData
+        A topic with ``gyro`` and ``accel`` values (and ``mag``, ``temp`` when it carries them).
+    source : str
+        The log, for messages.
+    nan_policy : str
+        ``"raise"``, ``"drop"`` or ``"interpolate"`` (:meth:`ImuData.from_arrays`).
+    meta : mapping, optional
+        Entries added to the topic's ``meta``.
+
+    Returns
+    -------
+    ImuData
+        SI, body FRD, magnetometer in µT, ``t`` in s since ``meta["t0_ns"]``.
+
+    Raises
+    ------
+    InvalidInputError
+        If the values are not a valid recording (non-finite with ``nan_policy="raise"`` ...).
+    """
     m = dict(imu.meta)
-    m.update({f"{k}_from": v for k, v in notes.items()})
     m.update(meta or {})
     try:
         return ImuData.from_arrays(imu.t, imu.values["gyro"], imu.values["accel"], imu.values.get("mag"),
@@ -200,3 +230,24 @@ def read_log_imu(path: str | os.PathLike[str], *, topic: str | None = None, inst
                                    meta=m)
     except InvalidInputError as e:
         raise type(e)(f"{source}: topic {imu.topic!r}: {e}") from None
+
+
+def read_topics(path: str | os.PathLike[str], topics: list[str]) -> dict[str, TopicData]:
+    """Several topics of a log (:func:`read_topic` each); a ROS bag is read in one pass over its messages.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The bag or log.
+    topics : list of str
+        Topic names (PX4: ``name`` or ``name:instance``).
+
+    Returns
+    -------
+    dict of str to TopicData
+        Topic -> its data.
+    """
+    mod, kind = _module(path, f"reading {os.fspath(path)}")
+    if kind == "rosbag":
+        return rosbag.read_topics(path, topics)
+    return {t: mod.read_topic(path, t) for t in dict.fromkeys(topics)}

@@ -8,7 +8,8 @@ What ``imunav gins run``, ``imunav gins outage-test`` and the ``gins`` lab step 
   :func:`imunav.io.read_imu` reads (rates, SI, FRD);
 * GNSS (:func:`read_gnss_input`): the KF-GINS text file (:func:`imunav.io.gnss.read_gnss_text`) or, for a
   ``.csv``, a generic CSV (:func:`imunav.io.gnss.read_gnss_csv`, its column names in the options);
-* odometer (:func:`read_odometer`): a text file of two columns, time (s, the IMU's clock) and forward speed (m/s).
+* odometer (:func:`read_odometer`): a text file of two columns, time (s, the IMU's clock) and forward speed (m/s),
+  or three with the speed's σ (m/s).
 """
 
 from __future__ import annotations
@@ -132,7 +133,8 @@ def read_gnss_input(path: str | os.PathLike[str], options: dict[str, Any] | None
 
 
 def read_odometer(path: str | os.PathLike[str]) -> OdometerData:
-    """Read an odometer text file: two columns, time (s, the IMU's clock) and forward speed (m/s).
+    """Read an odometer text file: two columns, time (s, the IMU's clock) and forward speed (m/s), or three with
+    the speed's σ (m/s) of each sample.
 
     Parameters
     ----------
@@ -142,16 +144,16 @@ def read_odometer(path: str | os.PathLike[str]) -> OdometerData:
     Returns
     -------
     OdometerData
-        The wheel speeds.
+        The wheel speeds (with ``speed_std`` from a third column).
 
     Raises
     ------
     FileFormatError
-        If the file does not have 2 numeric columns.
+        If the file does not have 2 or 3 numeric columns.
     InvalidInputError
-        If the time does not strictly increase or a speed exceeds 150 m/s.
+        If the time does not strictly increase, a speed exceeds 150 m/s or a σ is not positive.
     """
-    a = read_table(path, (2,), "odometer (time s, speed m/s)")
+    a = read_table(path, (2, 3), "odometer (time s, speed m/s[, sigma m/s])")
     src = os.fspath(path)
     bad = np.flatnonzero(np.diff(a[:, 0]) <= 0)
     if bad.size:
@@ -160,4 +162,7 @@ def read_odometer(path: str | os.PathLike[str]) -> OdometerData:
     if np.max(np.abs(a[:, 1])) > 150.0:
         raise InvalidInputError(f"{src}: an odometer speed reaches {np.max(np.abs(a[:, 1])):.4g}; the column must "
                                 "be the forward speed in m/s (not km/h, not wheel ticks)")
-    return OdometerData(a[:, 0], a[:, 1], {"source": src})
+    if a.shape[1] == 3 and not np.all(a[:, 2] > 0):
+        raise InvalidInputError(f"{src}: the third column (the speed's sigma, m/s) must be > 0; row "
+                                f"{int(np.flatnonzero(~(a[:, 2] > 0))[0]) + 1} holds {a[np.flatnonzero(~(a[:, 2] > 0))[0], 2]!r}")
+    return OdometerData(a[:, 0], a[:, 1], {"source": src}, a[:, 2].copy() if a.shape[1] == 3 else None)

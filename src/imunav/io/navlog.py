@@ -1,7 +1,7 @@
 """What feeds a navigation filter, read from a robot's or a drone's own log.
 
-:func:`read_nav_sources` reads a ROS 1 bag, a ROS 2 bag (sqlite3 or MCAP) or a PX4 ULog into one
-:class:`NavSources`: the IMU (:class:`~imunav.timeseries.ImuData`), GNSS fixes
+:func:`read_nav_sources` reads a ROS 1 bag, a ROS 2 bag (sqlite3 or MCAP), a PX4 ULog or a folder of
+KF-GINS text files (:func:`read_text_sources`) into one :class:`NavSources`: the IMU (:class:`~imunav.timeseries.ImuData`), GNSS fixes
 (:class:`~imunav.io.gnss.GnssData`), wheel odometry (:class:`~imunav.io.aiding.OdometerData`),
 magnetometer (:class:`~imunav.io.aiding.MagnetometerData`) and barometer
 (:class:`~imunav.io.aiding.BaroData`), every one on the IMU's time origin (``t`` in s since
@@ -52,6 +52,22 @@ Conversions
   else ``base_link``) to the IMU's ``frame_id`` gives ``imu_to_base`` (rotation IMU FRD → base FRD) and
   ``imu_lever_base`` (the IMU's origin in the base frame, FRD, m).
 
+KF-GINS text files
+------------------
+A folder holding :data:`TEXT_LOG_CONFIG` (``sources.toml``) is a log too: the TOML names the files and the
+GPS week of their seconds of week::
+
+    gps_week = 2314        # optional: without it the time is the files' own (not UTC)
+    imu = "imu.txt"        # KF-GINS increments: s of week, dtheta x y z rad, dvel x y z m/s (body FRD)
+    gnss = "gnss.txt"      # optional: s of week, lat lon deg, h m, sigma N E D m (KF-GINS GNSS text)
+    odometer = "odo.txt"   # optional: s of week, forward speed m/s[, its sigma m/s]
+
+The stamps are the seconds of week to the nanosecond (``round(sow · 1e9)``; as UTC with the week and the
+leap seconds of the date), the IMU rates each increment over its interval (:func:`text_log_intervals`:
+the step from the sample before; the first row's, the median step), the fixes and speeds go through the
+same conversions as a bag's ``NavSatFix`` and ``Odometry`` (covariance of type DIAGONAL_KNOWN): the same
+drive as a bag and as text gives the same sources.
+
 Time
 ----
 ``t0_unix`` is the UTC time of the IMU's first stamp: ROS stamps when they are UTC (after 1980-01-06;
@@ -70,18 +86,21 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from imunav.atmosphere import G0, R_AIR, isa, pressure_altitude
-from imunav.errors import FileFormatError, InvalidInputError
+from imunav.errors import ConfigError, FileFormatError, InvalidInputError
 from imunav.io import logs
 from imunav.io.aiding import BaroData, MagnetometerData, OdometerData
-from imunav.io.gnss import GnssData
-from imunav.io.gpstime import GPS_EPOCH_UNIX, GpsTime, utc_to_gps
+from imunav.io.gnss import GnssData, lat_lon_radians, read_table
+from imunav.io.gpstime import GPS_EPOCH_UNIX, GpsTime, leap_seconds, utc_to_gps
+from imunav.io.kfgins import read_kfgins_imu
+from imunav.io.navinputs import read_odometer
 from imunav.io.rosbag import read_static_tf
-from imunav.io.topics import TopicData, TopicInfo, log_kind
+from imunav.io.topics import TopicData, TopicInfo, log_kind, topic_data
 from imunav.rotation import C_FLU_FRD, dcm_from_quat, quat_from_dcm
 from imunav.timeseries import ImuData
+from imunav.toml import read_toml
 
 __all__ = ["ROLES", "FLAGS", "SourceInfo", "NavSources", "nav_topics", "choose_nav_topics", "read_nav_sources",
-           "gnss_fixes"]
+           "gnss_fixes", "TEXT_LOG_CONFIG", "is_text_log", "is_nav_log", "read_text_sources", "text_log_intervals"]
 
 Array = NDArray[np.float64]
 
@@ -540,7 +559,8 @@ def read_nav_sources(path: str | os.PathLike[str], *, imu_topic: str | None = No
     Parameters
     ----------
     path : str or os.PathLike
-        ROS 1 ``.bag``, ROS 2 folder / ``.db3`` / ``.mcap``, or PX4 ``.ulg``.
+        ROS 1 ``.bag``, ROS 2 folder / ``.db3`` / ``.mcap``, PX4 ``.ulg``, or a folder of KF-GINS text files
+        (:func:`read_text_sources`).
     imu_topic, gnss_topic, odo_topic, mag_topic, baro_topic : str, optional
         The topic of each role; None: the only candidate (:func:`choose_nav_topics`).
     gnss_pos_std : array_like, shape (3,) or (), optional
@@ -564,11 +584,24 @@ def read_nav_sources(path: str | os.PathLike[str], *, imu_topic: str | None = No
         If ``rosbags`` / ``pyulog`` is not installed.
     """
     source = os.fspath(path)
+    if is_text_log(path):
+        named = [FLAGS[r] for r, v in (("imu", imu_topic), ("gnss", gnss_topic), ("odometer", odo_topic),
+                                       ("mag", mag_topic), ("baro", baro_topic)) if v is not None]
+        if named or base_frame is not None:
+            raise InvalidInputError(f"{source}: a folder of KF-GINS text files names its files in {TEXT_LOG_CONFIG}; "
+                                    f"leave out {', '.join(named) or 'base_frame'}")
+        return read_text_sources(path, gnss_pos_std=gnss_pos_std)
     chosen = choose_nav_topics(path, imu_topic=imu_topic, gnss_topic=gnss_topic, odo_topic=odo_topic,
                                mag_topic=mag_topic, baro_topic=baro_topic)
     imu_info = chosen["imu"]
     assert imu_info is not None
-    imu = logs.read_log_imu(path, topic=imu_info.topic)
+    aid_topics = [info.topic for role, info in chosen.items() if role != "imu" and info is not None]
+    if log_kind(path) == "rosbag":  # one pass over the bag for every topic
+        tds = logs.read_topics(path, [imu_info.topic, *aid_topics])
+        imu = logs.imu_from_topic(tds[imu_info.topic], source)
+    else:
+        tds = {}
+        imu = logs.read_log_imu(path, topic=imu_info.topic)
     t0_ns = int(imu.meta["t0_ns"])
     t_end = float(imu.t[-1])
     topics = {"imu": SourceInfo("imu", imu_info.topic, imu_info.msgtype, imu_info.count, imu.n, _rate(imu.t))}
@@ -586,26 +619,17 @@ def read_nav_sources(path: str | os.PathLike[str], *, imu_topic: str | None = No
         if info is None:
             meta[role] = f"no {_WHAT[role]} topic in the log"
             continue
-        td = logs.read_topic(path, info.topic)
+        td = tds[info.topic] if info.topic in tds else logs.read_topic(path, info.topic)
         if role == "odometer":
             child = td.meta.get("child_frame_id")
-        if role == "gnss":
-            g = gnss_fixes(td, t0_ns, pos_std=gnss_pos_std)
-            inside, cut = _span_cut(g.t, t_end, role, td.topic, source)
-            g = g.select(inside, "outside the IMU span")
-            aids[role] = g
-            meta[role] = {"faults": g.meta["faults"], "removed": g.meta.get("removed", []), **cut}
-            if log_kind(path) == "ulog" and "time_utc_us" in td.values:
-                off = _utc_offset_ns(td)
-                t0_unix = None if off is None else (t0_ns + off) * 1e-9
-                if off is not None:
-                    meta["utc_offset_ns"] = off
-                    meta["time"] = "PX4 boot time shifted to UTC by the receiver's time_utc_usec"
-            data_t = g.t
-        else:
-            data, meta[role] = {"odometer": _odometer, "mag": _mag, "baro": _baro}[role](td, t0_ns, t_end, source)
-            aids[role] = data
-            data_t = data.t
+        aids[role], meta[role] = _aid(role, td, t0_ns, t_end, source, gnss_pos_std)
+        if role == "gnss" and log_kind(path) == "ulog" and "time_utc_us" in td.values:
+            off = _utc_offset_ns(td)
+            t0_unix = None if off is None else (t0_ns + off) * 1e-9
+            if off is not None:
+                meta["utc_offset_ns"] = off
+                meta["time"] = "PX4 boot time shifted to UTC by the receiver's time_utc_usec"
+        data_t = aids[role].t
         topics[role] = SourceInfo(role, info.topic, info.msgtype, info.count, int(data_t.size), _rate(data_t))
     q_mount = lever = None
     if log_kind(path) == "rosbag":
@@ -613,6 +637,17 @@ def read_nav_sources(path: str | os.PathLike[str], *, imu_topic: str | None = No
         q_mount, lever, meta["mounting"] = _mounting(path, imu.meta.get("frame_id"), base)
     return NavSources(source, t0_ns, imu, aids["gnss"], aids["odometer"], aids["mag"], aids["baro"], topics,
                       t0_unix, q_mount, lever, meta)
+
+
+def _aid(role: str, td: TopicData, t0_ns: int, t_end: float, source: str,
+         gnss_pos_std: ArrayLike | None) -> tuple[Any, dict[str, Any]]:
+    """One aid's data from its topic, on the IMU's origin and cut to its span, and what was refused or cut."""
+    if role == "gnss":
+        g = gnss_fixes(td, t0_ns, pos_std=gnss_pos_std)
+        inside, cut = _span_cut(g.t, t_end, role, td.topic, source)
+        g = g.select(inside, "outside the IMU span")
+        return g, {"faults": g.meta["faults"], "removed": g.meta.get("removed", []), **cut}
+    return {"odometer": _odometer, "mag": _mag, "baro": _baro}[role](td, t0_ns, t_end, source)
 
 
 def _utc_offset_ns(td: TopicData) -> int | None:
@@ -623,3 +658,162 @@ def _utc_offset_ns(td: TopicData) -> int | None:
         return None
     boot_ns = int(td.meta["t0_ns"]) + np.round(td.t[ok] * 1e9).astype(np.int64)
     return int(np.median(utc[ok] * 1000 - boot_ns))
+
+
+# -- KF-GINS text files as a log -----------------------------------------------------------------
+#: The file that makes a folder of KF-GINS text files a log (module docstring).
+TEXT_LOG_CONFIG = "sources.toml"
+_TEXT_KEYS = {"gps_week", "imu", "gnss", "odometer"}
+_WEEK_NS = 604_800 * 1_000_000_000
+
+
+def is_text_log(path: str | os.PathLike[str]) -> bool:
+    """True for a folder holding :data:`TEXT_LOG_CONFIG` (a drive as KF-GINS text files).
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        Any path.
+
+    Returns
+    -------
+    bool
+        Whether :func:`read_nav_sources` reads it as KF-GINS text files.
+    """
+    return os.path.isfile(os.path.join(os.fspath(path), TEXT_LOG_CONFIG))
+
+
+def is_nav_log(path: str | os.PathLike[str]) -> bool:
+    """True for what :func:`read_nav_sources` reads: a bag, a ULog (:func:`imunav.io.topics.log_kind`) or a folder
+    of KF-GINS text files (:func:`is_text_log`).
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        Any path.
+
+    Returns
+    -------
+    bool
+        Whether the path is a log.
+    """
+    return log_kind(path) is not None or is_text_log(path)
+
+
+def text_log_intervals(t: ArrayLike) -> Array:
+    """The interval of each IMU sample of a text log, s: the step from the sample before; the first row's, the
+    median step.  The rates of the increments are ``increment / interval`` (and a writer's increments
+    ``rate · interval``, so that the two round-trip).
+
+    Parameters
+    ----------
+    t : array_like, shape (N,)
+        Strictly increasing sample times, s (N >= 2).
+
+    Returns
+    -------
+    numpy.ndarray, shape (N,)
+        The intervals, s.
+    """
+    d = np.diff(np.asarray(t, dtype=np.float64))
+    return np.concatenate([[float(np.median(d))], d])
+
+
+def _text_stamps(sow: Array, week: int | None) -> NDArray[np.int64]:
+    """Integer-ns stamps of seconds of week: UTC since 1970 with the week (GPS − leap seconds of the date), else
+    the seconds of week themselves."""
+    ns = np.round(np.asarray(sow, dtype=np.float64) * 1e9).astype(np.int64)
+    if week is None:
+        return ns
+    gps_ns = GPS_EPOCH_UNIX * 1_000_000_000 + week * _WEEK_NS + ns
+    leap = leap_seconds(gps_ns * 1e-9 - leap_seconds(gps_ns * 1e-9))
+    return gps_ns - leap * 1_000_000_000
+
+
+def read_text_sources(folder: str | os.PathLike[str], *, gnss_pos_std: ArrayLike | None = None) -> NavSources:
+    """A drive given as KF-GINS text files (module docstring), as the :class:`NavSources` of a log.
+
+    Parameters
+    ----------
+    folder : str or os.PathLike
+        The folder holding :data:`TEXT_LOG_CONFIG` and the files it names (relative to the folder).
+    gnss_pos_std : array_like, shape (3,) or (), optional
+        As in :func:`read_nav_sources` (the files' σ must be > 0 otherwise).
+
+    Returns
+    -------
+    NavSources
+        Every source on the IMU's time origin; ``topics`` names the files.
+
+    Raises
+    ------
+    ConfigError
+        If ``sources.toml`` is missing, not valid TOML, has an unknown key, no ``imu`` or a week that is not a
+        non-negative integer.
+    FileFormatError, InvalidInputError
+        From the KF-GINS readers (a file that is not KF-GINS text, time not increasing), or an aid that never
+        overlaps the IMU.
+    """
+    d = os.fspath(folder)
+    cfg_path = os.path.join(d, TEXT_LOG_CONFIG)
+    cfg = read_toml(cfg_path, "KF-GINS sources")
+    unknown = sorted(set(cfg) - _TEXT_KEYS)
+    if unknown:
+        raise ConfigError(f"{cfg_path}: unknown key(s) {unknown}; the keys are {sorted(_TEXT_KEYS)}")
+    if not isinstance(cfg.get("imu"), str):
+        raise ConfigError(f"{cfg_path}: imu = \"FILE\" (the KF-GINS IMU increments) is required")
+    week = cfg.get("gps_week")
+    if week is not None and (not isinstance(week, int) or isinstance(week, bool) or week < 0):
+        raise ConfigError(f"{cfg_path}: gps_week must be a non-negative integer (the GPS week of the files' seconds "
+                          f"of week); got {week!r}")
+    for k in ("gnss", "odometer"):
+        if k in cfg and not isinstance(cfg[k], str):
+            raise ConfigError(f"{cfg_path}: {k} must be a file name; got {cfg[k]!r}")
+    files = {k: os.path.join(d, cfg[k]) for k in ("imu", "gnss", "odometer") if k in cfg}
+    inc = read_kfgins_imu(files["imu"])
+    stamps = _text_stamps(inc.t, week)
+    imu_td = topic_data(cfg["imu"], "imu", stamps, {}, {}, d)
+    dt = text_log_intervals(imu_td.t)[:, None]
+    imu = ImuData.from_arrays(imu_td.t, inc.dtheta / dt, inc.dvel / dt,
+                              meta={**imu_td.meta, "format": "kf-gins increments",
+                                    "rates": "increment / interval (imunav.io.navlog.text_log_intervals)"})
+    t0_ns = int(imu_td.meta["t0_ns"])
+    t_end = float(imu.t[-1])
+    topics = {"imu": SourceInfo("imu", cfg["imu"], "KF-GINS IMU increments", inc.n, imu.n, _rate(imu.t))}
+    meta: dict[str, Any] = {"imu": {"time": imu_td.meta.get("time"), "frame_id": None}}
+    utc = week is not None and t0_ns * 1e-9 >= GPS_EPOCH_UNIX
+    meta["time"] = (f"GPS week {week} and the files' seconds of week, as UTC" if utc else
+                    "the files' seconds of week without a GPS week (gps_week in sources.toml): not UTC")
+    aids: dict[str, Any] = {"gnss": None, "odometer": None, "mag": None, "baro": None}
+    for role in ("gnss", "odometer"):
+        if role not in files:
+            meta[role] = f"no {_WHAT[role]} file in {TEXT_LOG_CONFIG}"
+            continue
+        td, what = _text_topic(role, files[role], cfg[role], week, d)
+        aids[role], meta[role] = _aid(role, td, t0_ns, t_end, d, gnss_pos_std)
+        if role == "odometer":
+            meta[role]["speed"] = "the odometer file's forward speed"
+        topics[role] = SourceInfo(role, cfg[role], what, td.n, int(aids[role].t.size), _rate(aids[role].t))
+    return NavSources(d, t0_ns, imu, aids["gnss"], aids["odometer"], None, None, topics,
+                      t0_ns * 1e-9 if utc else None, None, None, meta)
+
+
+def _text_topic(role: str, path: str, name: str, week: int | None, folder: str) -> tuple[TopicData, str]:
+    """A text file as the topic a bag would hold: GNSS as NavSatFix fields (status FIX, diagonal covariance
+    known), the odometer as Odometry fields (speed, its variance or 0: unknown)."""
+    if role == "gnss":
+        a = read_table(path, (7, 13), "KF-GINS GNSS")
+        lat_lon_radians(a[:, 1], a[:, 2], "deg", path)  # the unit check of the KF-GINS reader
+        n = a.shape[0]
+        std = a[:, 4:7] if a.shape[1] == 7 else a[:, 7:10]
+        vals: dict[str, Any] = {"lat_deg": a[:, 1], "lon_deg": a[:, 2], "alt_m": a[:, 3],
+                                "fix_status": np.zeros(n, dtype=np.int8),
+                                "pos_cov_enu_diag": std[:, [1, 0, 2]] ** 2, "pos_cov_type": np.full(n, 2, np.uint8)}
+        if a.shape[1] == 13:
+            vals.update(vel_ned=a[:, 4:7], speed_std=np.max(a[:, 10:13], axis=1))
+        return topic_data(name, "gnss", _text_stamps(a[:, 0], week), vals, {}, folder, duplicates="drop",
+                          meta={"msgtype": "KF-GINS GNSS text"}), "KF-GINS GNSS text"
+    o = read_odometer(path)
+    var = np.zeros(o.t.size) if o.speed_std is None else o.speed_std**2
+    return topic_data(name, "odometry", _text_stamps(o.t, week), {"speed": o.speed, "speed_var": var}, {}, folder,
+                      meta={"msgtype": "odometer text"}), "odometer text (time, speed[, sigma])"

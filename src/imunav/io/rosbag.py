@@ -65,7 +65,7 @@ from imunav.io.topics import (
 from imunav.rotation import from_convention
 from imunav.timeseries import ImuData
 
-__all__ = ["list_topics", "read_topic", "read_imu_topic", "read_static_tf", "StaticTransform", "write_bag", "KINDS",
+__all__ = ["list_topics", "read_topic", "read_topics", "read_imu_topic", "read_static_tf", "StaticTransform", "write_bag", "KINDS",
            "STORAGES"]
 
 #: Message type -> kind read by imunav.
@@ -79,6 +79,8 @@ KINDS = {
     "sensor_msgs/msg/Temperature": "temperature",
 }
 _CHUNK = 65536
+#: Messages of a fixed-layout topic parsed at once (their raw bytes are held meanwhile: about 3 MB for an Imu topic).
+_FIXED_CHUNK = 8192
 
 
 def _open(path: str | os.PathLike[str]) -> Any:
@@ -199,8 +201,24 @@ _FIELDS: dict[str, tuple[Callable[[Any], tuple], int, tuple[str, ...]]] = {
 }
 
 
-def _collect(reader: Any, conns: list[Any], kind: str, source: str, topic: str) -> tuple[np.ndarray, np.ndarray, dict]:
-    """(stamps (N, 3) int64 [sec, nanosec, receive_ns], floats (N, k), info) of every message of ``conns``."""
+def _finish(collector: Any) -> tuple[np.ndarray, np.ndarray, dict]:
+    """The result of a :func:`_collector` fed every message."""
+    try:
+        collector.send(None)
+    except StopIteration as stop:
+        return stop.value  # type: ignore[no-any-return]
+    raise RuntimeError("a collector did not finish")  # pragma: no cover - the generator ends on None
+
+
+def _collector(reader: Any, conns: list[Any], kind: str, source: str, topic: str) -> Any:
+    """A started generator that takes the messages ``(conn, ts, raw)`` of one topic by ``send`` and, sent None,
+    ends with the result of :func:`_collect` (so that one pass over a bag feeds several topics)."""
+    gen = _collecting(reader, conns, kind, source, topic)
+    next(gen)
+    return gen
+
+
+def _collecting(reader: Any, conns: list[Any], kind: str, source: str, topic: str) -> Any:
     extract, k, cov_names = _FIELDS[kind]
     ros1 = not reader.is2
     total = sum(int(c.msgcount) for c in conns)
@@ -217,19 +235,25 @@ def _collect(reader: Any, conns: list[Any], kind: str, source: str, topic: str) 
     odo = kind == "odometry"
     children: dict[str, int] = {}
 
-    def flush() -> None:
+    def put(rows_i: Any, rows_f: Any) -> None:
         nonlocal n, ints, flts
-        m = len(ci)
+        m = len(rows_i)
         if n + m > ints.shape[0]:  # the index under-counted: grow
             ints = np.concatenate([ints, np.empty((n + m, ints.shape[1]), np.int64)])
             flts = np.concatenate([flts, np.empty((n + m, k), np.float64)])
-        ints[n:n + m] = ci
-        flts[n:n + m] = cf
+        if m:
+            ints[n:n + m] = rows_i
+            flts[n:n + m] = rows_f
         n += m
+
+    def flush() -> None:
+        put(ci, cf)
         ci.clear()
         cf.clear()
 
-    for conn, ts, raw in reader.messages(connections=conns):
+    def one(conn: Any, ts: int, raw: Any) -> None:
+        """One message, deserialized by rosbags (every type; the IMU's fallback)."""
+        nonlocal cov_first, cov_bytes, cov_varies
         try:
             msg = deser(raw, conn.msgtype)
         except Exception as e:  # rosbags raises several types for a damaged message
@@ -249,9 +273,45 @@ def _collect(reader: Any, conns: list[Any], kind: str, source: str, topic: str) 
                 cov_bytes = [cov_first[c].tobytes() for c in cov_names]
             elif not cov_varies:  # bytes, not np.array_equal: a tenth of the time per message
                 cov_varies = [getattr(msg, c).tobytes() for c in cov_names] != cov_bytes
-        if len(ci) >= _CHUNK:
+
+    if kind in _LAYOUTS:
+        # sensor_msgs/Imu and nav_msgs/Odometry have a fixed layout once their strings' lengths are known: a chunk
+        # is parsed with numpy (_fixed_chunk); a chunk it cannot vouch for goes through rosbags message by message
+        pending: list[tuple[Any, int, Any]] = []
+
+        def drain() -> None:
+            nonlocal cov_first, cov_bytes, cov_varies
+            fast = _fixed_chunk(pending, ros1, deser, kind)
+            if fast is None:
+                for item in pending:
+                    one(*item)
+            else:
+                rows_i, rows_f, fids, kids, covs = fast
+                put(rows_i, rows_f)
+                for fid, c in fids.items():
+                    frames[fid] = frames.get(fid, 0) + c
+                for cid, c in kids.items():
+                    children[cid] = children.get(cid, 0) + c
+                if cov_names and not cov_first:
+                    cov_first = {c: covs[c][0].copy() for c in cov_names}
+                    cov_bytes = [cov_first[c].tobytes() for c in cov_names]
+                if cov_names and not cov_varies:
+                    cov_varies = any(np.any(covs[c].view(np.uint64) != cov_first[c].view(np.uint64))
+                                     for c in cov_names)
+            pending.clear()
             flush()
-    flush()
+
+        while (item := (yield)) is not None:
+            pending.append(item)
+            if len(pending) >= _FIXED_CHUNK:
+                drain()
+        drain()
+    else:
+        while (item := (yield)) is not None:
+            one(*item)
+            if len(ci) >= _CHUNK:
+                flush()
+        flush()
     if n == 0:
         raise FileFormatError(f"{source}: topic {topic!r} has no messages")
     if len(frames) > 1:
@@ -267,6 +327,133 @@ def _collect(reader: Any, conns: list[Any], kind: str, source: str, topic: str) 
     info = {"frame_id": next(iter(frames)), "cov": cov_first, "cov_varies": cov_varies,
             "child_frame_id": next(iter(children)) if children else None}
     return ints[:n], flts[:n], info
+
+
+@dataclass(frozen=True)
+class _Layout:
+    """A message of fixed layout once its strings' lengths are known: the header (stamp, ``frame_id``), ``strings``
+    more strings, then ``doubles`` float64; ``pick`` takes the values of :data:`_FIELDS` from them (one row per
+    message), ``covs`` the covariances compared across messages (name -> first index, 9 values)."""
+
+    strings: int
+    doubles: int
+    pick: Callable[[np.ndarray], np.ndarray]
+    covs: dict[str, int]
+
+
+_LAYOUTS = {
+    # orientation x y z w (0-3), its covariance (4-12), angular_velocity (13-15), its covariance (16-24),
+    # linear_acceleration (25-27), its covariance (28-36)
+    "imu": _Layout(0, 37, lambda d: d[:, [13, 14, 15, 25, 26, 27, 3, 0, 1, 2]],
+                   {"angular_velocity_covariance": 16, "linear_acceleration_covariance": 28,
+                    "orientation_covariance": 4}),
+    # child_frame_id; pose.pose position (0-2), orientation (3-6), pose.covariance (7-42), twist.twist linear
+    # (43-45), angular (46-48), twist.covariance (49-84)
+    "odometry": _Layout(1, 85, lambda d: d[:, [43, 44, 45, 46, 47, 48, 49]], {}),
+}
+
+
+def _fixed_chunk(items: list[tuple[Any, int, Any]], ros1: bool, deser: Callable[[Any, str], Any],
+                 kind: str) -> tuple[np.ndarray, np.ndarray, dict[str, int], dict[str, int], dict[str, np.ndarray]] | None:
+    """Messages of a fixed layout (:data:`_LAYOUTS`) parsed with numpy from their raw bytes, or None when the chunk
+    is not of that layout (the caller then deserializes each message).
+
+    ROS 2 (CDR, little- or big-endian, 4-byte encapsulation header): ``stamp.sec`` int32, ``stamp.nanosec``
+    uint32, each string as a uint32 length (with the NUL) and its bytes, aligned to 4, then the float64 aligned
+    to 8 from the start of the data.  ROS 1 (little-endian, no alignment): ``seq``, ``stamp.sec``,
+    ``stamp.nsec`` (uint32), each string as a uint32 length and its bytes, the float64.  Messages of one length
+    whose strings have the same lengths share every offset: one numpy view each.  Each group is checked against
+    rosbags' own deserialization of its first message (stamp, strings and every value read, bit for bit), so that
+    a bag whose message definition differs falls back.
+
+    Returns
+    -------
+    tuple or None
+        ``(ints (N, 4 | 3) [sec, nanosec, receive_ns(, seq)], floats (N, k) as _FIELDS extracts them,
+        {frame_id: count}, {child_frame_id: count}, {covariance name: (N, 9)})`` in the order of ``items``.
+    """
+    lay = _LAYOUTS[kind]
+    extract, k, _ = _FIELDS[kind]
+    n = len(items)
+    if n == 0:
+        return None
+    try:
+        raws = [bytes(r) for _, _, r in items]
+    except TypeError:
+        return None
+    lens = np.fromiter((len(r) for r in raws), dtype=np.int64, count=n)
+    ints = np.empty((n, 4 if ros1 else 3), dtype=np.int64)
+    flts = np.empty((n, k), dtype=np.float64)
+    covs = {c: np.empty((n, 9), dtype=np.float64) for c in lay.covs}
+    fids: dict[str, int] = {}
+    kids: dict[str, int] = {}
+    ints[:, 2] = [ts for _, ts, _ in items]
+    for length in np.unique(lens).tolist():
+        idx = np.flatnonzero(lens == length)
+        buf = np.frombuffer(b"".join(raws[i] for i in idx), dtype=np.uint8).reshape(idx.size, length)
+        if ros1:
+            end, base, pos = "<", 0, 12
+        else:
+            enc = buf[:, :4]
+            if not np.all(enc == enc[0]) or enc[0, 0] != 0 or enc[0, 1] not in (0, 1):
+                return None  # mixed or unknown encapsulation (PL_CDR, ...)
+            end, base, pos = ("<" if enc[0, 1] == 1 else ">"), 4, 8
+
+        def col(off: int, dtype: str, count: int = 1, buf: np.ndarray = buf, end: str = end) -> np.ndarray:
+            """``count`` values of ``dtype`` ("u4", "i4", "f8") from byte ``off`` of every message, native order."""
+            w = np.dtype(dtype).itemsize * count
+            if off + w > buf.shape[1]:
+                raise IndexError(off)
+            return np.ascontiguousarray(buf[:, off:off + w]).view(end + dtype).astype(dtype).reshape(-1, count)
+
+        names = []
+        try:
+            for _ in range(1 + lay.strings):  # frame_id, then the message's own strings
+                if not ros1:
+                    pos = (pos + 3) // 4 * 4
+                size = col(base + pos, "u4")[:, 0]
+                if not np.all(size == size[0]) or base + pos + 4 + int(size[0]) > length:
+                    return None
+                text = buf[:, base + pos + 4:base + pos + 4 + int(size[0])]
+                if not np.all(text == text[0]):
+                    return None  # strings of one length that differ: the per-message path counts them
+                name = bytes(text[0]).decode("utf-8", errors="replace")
+                names.append(name if ros1 else name[:-1])  # CDR strings end with a NUL, counted in their length
+                pos += 4 + int(size[0])
+            o = pos if ros1 else (pos + 7) // 8 * 8
+            if base + o + 8 * lay.doubles != length:
+                return None
+            d = col(base + o, "f8", lay.doubles)
+            ints[idx, 0] = col(base + (4 if ros1 else 0), "u4" if ros1 else "i4")[:, 0]
+            ints[idx, 1] = col(base + (8 if ros1 else 4), "u4")[:, 0]
+            if ros1:
+                ints[idx, 3] = col(0, "u4")[:, 0]
+        except IndexError:
+            return None
+        flts[idx] = lay.pick(d)
+        for c, j in lay.covs.items():
+            covs[c][idx] = d[:, j:j + 9]
+        fids[names[0]] = fids.get(names[0], 0) + idx.size
+        if lay.strings:
+            kids[names[1]] = kids.get(names[1], 0) + idx.size
+        # the group's first message as rosbags reads it: any difference and the chunk goes the slow way
+        i0 = int(idx[0])
+        conn, _, raw = items[i0]
+        try:
+            m = deser(raw, conn.msgtype)
+            ref = np.array(extract(m), dtype=np.float64)
+        except Exception:  # rosbags raises several types for a damaged message
+            return None
+        st, h = m.header.stamp, m.header
+        same = (int(ints[i0, 0]) == st.sec and int(ints[i0, 1]) == st.nanosec and h.frame_id == names[0]
+                and (not lay.strings or m.child_frame_id == names[1])
+                and ref.shape == flts[i0].shape and np.array_equal(ref.view(np.uint64), flts[i0].view(np.uint64))
+                and (not ros1 or int(ints[i0, 3]) == h.seq)
+                and all(np.array_equal(np.asarray(getattr(m, c), dtype=np.float64).view(np.uint64),
+                                       covs[c][i0].view(np.uint64)) for c in covs))
+        if not same:
+            return None
+    return ints, flts, fids, kids, covs
 
 
 def _rot_cov(c: np.ndarray) -> list[float]:
@@ -367,26 +554,70 @@ def read_topic(path: str | os.PathLike[str], topic: str, *, instance: int | None
     source = os.fspath(path)
     if instance is not None:
         raise InvalidInputError(f"{source}: instance= is for PX4 ULog topics; a ROS bag chooses by topic= only")
+    return _read_topics(path, [topic], _want)[0]
+
+
+def read_topics(path: str | os.PathLike[str], topics: Sequence[str]) -> dict[str, TopicData]:
+    """Several topics of a bag in one pass over its messages (what :func:`read_topic` gives for each).
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The bag (file or ROS 2 folder).
+    topics : sequence of str
+        Topic names (each once).
+
+    Returns
+    -------
+    dict of str to TopicData
+        Topic -> its data, as :func:`read_topic` returns it.
+
+    Raises
+    ------
+    InvalidInputError
+        If a topic is absent or its message type is not one imunav reads.
+    FileFormatError
+        If a topic is empty, mixes frame ids, or a message cannot be decoded.
+    """
+    names = list(dict.fromkeys(topics))
+    return dict(zip(names, _read_topics(path, names, None), strict=True))
+
+
+def _read_topics(path: str | os.PathLike[str], wanted: Sequence[str | None],
+                 want: Iterable[str] | None) -> list[TopicData]:
+    source = os.fspath(path)
     with _Bag(path) as reader:
         topics = reader.topics
-        name = _choose(topics, topic, source, _want)
-        info = topics[name]
-        kind = KINDS.get(info.msgtype or "")
-        if kind is None:
-            raise InvalidInputError(
-                f"{source}: topic {name!r} is {info.msgtype}; imunav reads {', '.join(sorted(KINDS))}"
-            )
-        ints, flts, cinfo = _collect(reader, list(info.connections), kind, source, name)
+        chosen = []
+        for topic in wanted:
+            name = _choose(topics, topic, source, want)
+            info = topics[name]
+            kind = KINDS.get(info.msgtype or "")
+            if kind is None:
+                raise InvalidInputError(
+                    f"{source}: topic {name!r} is {info.msgtype}; imunav reads {', '.join(sorted(KINDS))}"
+                )
+            chosen.append((name, info, kind))
+        collectors = {name: _collector(reader, list(info.connections), kind, source, name)
+                      for name, info, kind in chosen}
+        conns = [c for _, info, _ in chosen for c in info.connections]
+        for item in reader.messages(connections=conns):
+            collectors[item[0].topic].send(item)
+        results = {name: _finish(c) for name, c in collectors.items()}
         is2 = reader.is2
-    stamps = ints[:, 0] * 1_000_000_000 + ints[:, 1]
-    vals, units, meta = _values(kind, flts, cinfo)
-    meta.update({"format": "rosbag2" if is2 else "rosbag1", "msgtype": info.msgtype})
-    if not is2:
-        seq = ints[:, 3]
-        ds = np.diff(seq)
-        meta["seq_gaps"] = {"gaps": int(np.sum(ds > 1)), "missing": int(np.sum(ds[ds > 1] - 1))}
-    return topic_data(name, kind, stamps, vals, units, source, receive_ns=ints[:, 2], meta=meta,
-                      duplicates="drop" if kind == "gnss" else "raise")
+    out = []
+    for name, info, kind in chosen:
+        ints, flts, cinfo = results[name]
+        stamps = ints[:, 0] * 1_000_000_000 + ints[:, 1]
+        vals, units, meta = _values(kind, flts, cinfo)
+        meta.update({"format": "rosbag2" if is2 else "rosbag1", "msgtype": info.msgtype})
+        if not is2:
+            seq = ints[:, 3]
+            ds = np.diff(seq)
+            meta["seq_gaps"] = {"gaps": int(np.sum(ds > 1)), "missing": int(np.sum(ds[ds > 1] - 1))}
+        out.append(topic_data(name, kind, stamps, vals, units, source, receive_ns=ints[:, 2], meta=meta,
+                              duplicates="drop" if kind == "gnss" else "raise"))
+    return out
 
 
 def read_imu_topic(path: str | os.PathLike[str], topic: str | None, *, instance: int | None = None) -> TopicData:

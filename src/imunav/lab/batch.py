@@ -19,6 +19,13 @@ return a :class:`BatchSummary` (one row per unit: every parameter with its
 standard error, its error against the truth when known, pass / fail against
 an optional datasheet spec).
 
+:func:`gins_batch` does the same for a folder of robot or drone logs (ROS 1
+``.bag`` files, ROS 2 bag folders, PX4 ``.ulg`` files): each log goes through
+the pipeline of ``imunav gins run LOG`` (:func:`gins_log`), into a result
+folder of its own, and the summary table holds per log its sources, duration,
+mounting, odometer scale and GNSS latency with their σ, the share of fixes
+rejected and the final position σ.
+
 Methods of :func:`calibrate_batch`:
 
 ``multiposition``
@@ -37,7 +44,7 @@ from __future__ import annotations
 import json
 import os
 import time
-from dataclasses import dataclass, field, replace
+from dataclasses import asdict, dataclass, field, replace
 from pathlib import Path
 from typing import Any, Mapping, Sequence
 
@@ -47,8 +54,11 @@ import pandas as pd
 from imunav import calib
 from imunav.calib import ImuCalibration
 from imunav.errors import ConfigError, InvalidInputError, NotStaticError
-from imunav.files import atomic_path, write_json
+from imunav.files import atomic_path, jsonable, write_json
+from imunav.ins.gins.logrun import LogRunOptions, run_log
+from imunav.ins.gins.outputs import write_log_outputs
 from imunav.io import read_imu, write_imu
+from imunav.io.navlog import is_nav_log, read_nav_sources
 from imunav.lab.montecarlo import Executor, run_batch, spawn_generators
 from imunav.lab.report import check_spec, load_spec
 from imunav.lab.report.batch import write_batch_html
@@ -85,6 +95,10 @@ __all__ = [
     "noise_unit",
     "noise_batch",
     "CALIBRATION_METHODS",
+    "find_logs",
+    "gins_log",
+    "gins_batch",
+    "GINS_COLUMNS",
 ]
 
 RECORDING_SUFFIXES = (".npz", ".csv", ".parquet", ".h5", ".hdf5", ".mat")
@@ -800,3 +814,227 @@ def noise_batch(
         summary = _summarise("noise", [u.stem for u in units], res, limits, od, time.perf_counter() - t0)
         write_summary(summary, od, f"Batch noise identification of {Path(folder).name}")
     return summary
+
+
+# ---------------------------------------------------------------------------
+# GNSS/INS on a folder of logs
+# ---------------------------------------------------------------------------
+
+#: Columns of a GNSS/INS batch's table after ``unit``, ``status``, ``passed``, ``error`` (SI unless the name says).
+GINS_COLUMNS = (
+    "log", "sources", "duration_s", "imu_samples", "gnss_used",
+    "mounting_roll_deg", "mounting_pitch_deg", "mounting_yaw_deg",
+    "mounting_roll_std_deg", "mounting_pitch_std_deg", "mounting_yaw_std_deg", "mounting_source",
+    "odometer_scale", "odometer_scale_std", "gnss_time_offset_s", "gnss_time_offset_std_s",
+    "gnss_rejected_share", "final_pos_std_n_m", "final_pos_std_e_m", "final_pos_std_d_m",
+)
+
+
+def find_logs(folder: str | os.PathLike[str]) -> list[Path]:
+    """The logs of a folder: ROS 1 ``.bag`` files, ROS 2 bag folders (``metadata.yaml``), bare ROS 2 ``.db3`` /
+    ``.mcap`` files, PX4 ``.ulg`` files and folders of KF-GINS text files (``sources.toml``,
+    :func:`imunav.io.navlog.is_nav_log`), sorted; hidden entries and anything else (result folders, notes) are
+    left out.  A file named like a log that is not one is listed:
+    its run fails with the reason.
+
+    Parameters
+    ----------
+    folder : str or os.PathLike
+        The folder.
+
+    Returns
+    -------
+    list of pathlib.Path
+        The logs.
+
+    Raises
+    ------
+    InvalidInputError
+        If ``folder`` is not a folder or holds no log.
+    """
+    d = Path(folder)
+    if not d.is_dir():
+        raise InvalidInputError(f"log folder {d} does not exist or is not a folder")
+    logs = sorted(p for p in d.iterdir() if not p.name.startswith(".")
+                  and (p.is_dir() and is_nav_log(p)
+                       or p.is_file() and p.suffix.lower() in (".bag", ".db3", ".mcap", ".ulg")))
+    if not logs:
+        raise InvalidInputError(f"log folder {d} holds no log (ROS 1 .bag files, ROS 2 bag folders with a "
+                                "metadata.yaml, .db3 / .mcap files, PX4 .ulg files); put the logs there")
+    return logs
+
+
+def _log_names(logs: Sequence[Path]) -> list[str]:
+    """Result folder of each log: its stem, or its whole name when two logs share a stem."""
+    stems = [p.stem if p.is_file() else p.name for p in logs]
+    return [s if stems.count(s) == 1 else p.name for s, p in zip(stems, logs)]
+
+
+def gins_log(
+    log: str | os.PathLike[str],
+    *,
+    out_dir: str | os.PathLike[str],
+    topics: Mapping[str, str | None] | None = None,
+    options: LogRunOptions | None = None,
+    plots: bool = True,
+) -> dict[str, Any]:
+    """One log through the pipeline of ``imunav gins run LOG``: :func:`imunav.io.navlog.read_nav_sources`,
+    :func:`imunav.ins.gins.logrun.run_log`, :func:`imunav.ins.gins.outputs.write_log_outputs` into ``out_dir``.
+
+    Parameters
+    ----------
+    log : str or os.PathLike
+        A ROS 1 bag, a ROS 2 bag folder or a PX4 ULog.
+    out_dir : str or os.PathLike
+        The log's result folder (created).
+    topics : mapping, optional
+        Keyword arguments of :func:`~imunav.io.navlog.read_nav_sources` naming topics (``imu_topic``,
+        ``gnss_topic``, ``odo_topic``, ``mag_topic``, ``baro_topic``); None entries are chosen automatically.
+    options : LogRunOptions, optional
+        Preset, mounting, lever arms, smoother (:class:`~imunav.ins.gins.logrun.LogRunOptions`).
+    plots : bool
+        Write the figures.
+
+    Returns
+    -------
+    dict
+        ``{"unit", "log", "folder", "summary"}``: the run's ``summary.json`` content.
+    """
+    sources = read_nav_sources(log, **{k: v for k, v in dict(topics or {}).items() if v is not None})
+    run = run_log(sources, options)
+    summary = write_log_outputs(out_dir, run, sources, plots=plots)
+    return {"unit": Path(out_dir).name, "log": os.fspath(log), "folder": os.fspath(out_dir), "summary": summary}
+
+
+def _gins_row(name: str, log: Path, r: Any) -> dict[str, Any]:
+    """The table row of one log: the values of its ``summary.json`` (the odometer scale as the factor, 1 + k)."""
+    row: dict[str, Any] = {"unit": name, "status": "ok", "passed": None, "error": None, "log": str(log)}
+    if isinstance(r, BaseException):
+        row.update(status="error", passed=False, error=f"{type(r).__name__}: {r}")
+        return row
+    s = r["summary"]
+    src = s["sources"]["sources"]
+    row["sources"] = "; ".join(
+        f"{role} {v['topic']} ({v['used']}" + (f" at {v['rate_hz']:.4g} Hz)" if v["rate_hz"] else ")")
+        for role, v in src.items())
+    m = s["mounting"]
+    odo, lat = s["odometer_scale"], s["gnss_time_offset_s"]
+    rej = s["gnss_rejected"]["share"]
+    row.update({
+        "duration_s": s["duration_s"], "imu_samples": s["imu_samples"], "gnss_used": s.get("gnss_used", 0),
+        "mounting_roll_deg": m["roll_deg"], "mounting_pitch_deg": m["pitch_deg"], "mounting_yaw_deg": m["yaw_deg"],
+        "mounting_roll_std_deg": m["std_deg"][0], "mounting_pitch_std_deg": m["std_deg"][1],
+        "mounting_yaw_std_deg": m["std_deg"][2], "mounting_source": m["source"],
+        "odometer_scale": None if odo is None else 1.0 + odo["value"],
+        "odometer_scale_std": None if odo is None else odo["std"],
+        "gnss_time_offset_s": None if lat is None else lat["value"],
+        "gnss_time_offset_std_s": None if lat is None else lat["std"],
+        "gnss_rejected_share": rej,
+        "final_pos_std_n_m": s["final_position_std_m"][0], "final_pos_std_e_m": s["final_position_std_m"][1],
+        "final_pos_std_d_m": s["final_position_std_m"][2],
+    })
+    return row
+
+
+def _markdown_table(table: pd.DataFrame, title: str) -> str:
+    """``summary.md``: the table in Markdown, numbers to 6 significant digits, empty cells for missing values."""
+    cols = [c for c in table.columns if c != "passed"]
+
+    def cell(v: Any) -> str:
+        if v is None or (isinstance(v, float) and not np.isfinite(v)):
+            return ""
+        if isinstance(v, (float, np.floating)):
+            return f"{v:.6g}"
+        return str(v).replace("|", "\\|")
+
+    lines = [f"# {title}", "", "| " + " | ".join(cols) + " |", "|" + "---|" * len(cols)]
+    lines += ["| " + " | ".join(cell(r[c]) for c in cols) + " |" for r in table.to_dict(orient="records")]
+    return "\n".join(lines) + "\n"
+
+
+def gins_batch(
+    folder: str | os.PathLike[str],
+    *,
+    out_dir: str | os.PathLike[str] | None = None,
+    topics: Mapping[str, str | None] | None = None,
+    options: LogRunOptions | None = None,
+    plots: bool = True,
+    executor: Executor = "processes",
+    n_workers: int | None = None,
+    address: str | None = None,
+    progress: bool = False,
+    overwrite: bool = False,
+) -> BatchSummary:
+    """GNSS/INS on every log of a folder (:func:`find_logs`), in parallel, as ``imunav gins run LOG`` on each.
+
+    Writes one result folder per log (``<out_dir>/<log stem>/``: the ``.nav``, IMU errors, state σ,
+    ``track.geojson``, ``summary.json`` and figures of :func:`gins_log`) and ``summary.csv``, ``summary.json``
+    and ``summary.md`` (one row per log, columns ``unit``, ``status``, ``passed`` (always None: no spec),
+    ``error`` and :data:`GINS_COLUMNS`).  A log that fails (not a log, no IMU topic, too short ...) is a row
+    with its error; the others are still processed.  ``out_dir`` is a run folder (:mod:`imunav.lab.runfolder`;
+    ``overwrite`` clears a previous one).
+
+    Parameters
+    ----------
+    folder : str or os.PathLike
+        The folder of logs.
+    out_dir : str or os.PathLike, optional
+        Output run folder (default ``<folder>/gins``).
+    topics : mapping, optional
+        The topics, as in :func:`gins_log` (the same for every log).
+    options : LogRunOptions, optional
+        As in :func:`gins_log` (the same for every log).
+    plots : bool
+        Write each log's figures.
+    executor : {"serial", "processes", "dask"}
+        Where the logs are processed (:func:`imunav.lab.montecarlo.run_batch`).
+    n_workers : int, optional
+        Worker processes (default: number of cores).
+    address : str, optional
+        Dask scheduler address (Dask executor only; None: a local cluster).
+    progress : bool
+        Show a progress bar.
+    overwrite : bool
+        Clear a previous run in ``out_dir`` instead of refusing.
+
+    Returns
+    -------
+    BatchSummary
+        ``kind`` ``"gins"``, one row per log; ``units`` holds each log's ``summary.json`` content (or its error).
+
+    Raises
+    ------
+    InvalidInputError
+        If ``folder`` holds no log.
+    """
+    logs = find_logs(folder)
+    names = _log_names(logs)
+    od = Path(out_dir) if out_dir is not None else Path(folder) / "gins"
+    opts = options or LogRunOptions()
+    params = {"folder": str(folder), "topics": {k: v for k, v in dict(topics or {}).items() if v is not None},
+              "options": jsonable(asdict(opts)), "plots": bool(plots)}
+    with RunFolder(od, "batch-gins", parameters=params, overwrite=overwrite,
+                   inputs=[p for p in logs if p.is_file()]):
+        t0 = time.perf_counter()
+        items = [(str(p), str(od / n)) for p, n in zip(logs, names)]
+        out = run_batch(_gins_item, items, executor=executor, n_workers=n_workers, address=address,
+                        progress=progress, description="gins", topics=dict(topics or {}), options=opts,
+                        plots=bool(plots))
+        rows = [_gins_row(n, p, r) for n, p, r in zip(names, logs, out)]
+        table = pd.DataFrame(rows, columns=["unit", "status", "passed", "error", *GINS_COLUMNS])
+        table = table.astype(object).where(pd.notna(table), None)
+        units = {n: (r["summary"] if not isinstance(r, BaseException) else {"error": f"{type(r).__name__}: {r}"})
+                 for n, r in zip(names, out)}
+        summary = BatchSummary("gins", table, units, {}, od, time.perf_counter() - t0)
+        with atomic_path(od / "summary.csv") as tmp:
+            table.to_csv(tmp, index=False)
+        write_json(od / "summary.json", summary.to_dict())
+        with atomic_path(od / "summary.md") as tmp:
+            tmp.write_text(_markdown_table(table, f"GNSS/INS on the logs of {Path(folder).name}"), encoding="utf-8")
+    return summary
+
+
+def _gins_item(item: tuple[str, str], **kw: Any) -> dict[str, Any]:
+    """:func:`gins_log` on one ``(log, result folder)`` pair (the form :func:`run_batch` passes)."""
+    return gins_log(item[0], out_dir=item[1], **kw)
+

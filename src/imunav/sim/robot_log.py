@@ -32,10 +32,12 @@ from numpy.typing import NDArray
 
 from imunav import earth
 from imunav.errors import InvalidInputError
+from imunav.files import atomic_path
 from imunav.io.aiding import OdometerData
-from imunav.io.gnss import GnssData, write_gnss_text, write_table
+from imunav.io.gnss import GnssData, write_table
 from imunav.io.gpstime import utc_to_gps
-from imunav.io.kfgins import ImuIncrements, NavTrack, write_kfgins_imu, write_kfgins_nav
+from imunav.io.kfgins import NavTrack, write_kfgins_nav
+from imunav.io.navlog import TEXT_LOG_CONFIG, text_log_intervals
 from imunav.io.rosbag import StaticTransform, write_bag
 from imunav.rotation import C_FLU_FRD, euler_from_quat, quat_from_dcm, quat_multiply
 from imunav.sim import presets
@@ -296,9 +298,12 @@ def write_robot_log(log: RobotLog, folder: str | os.PathLike[str], *, formats: t
     Bags: ``/imu/data`` (``sensor_msgs/Imu``, frame ``imu_link``), ``/odom`` (``nav_msgs/Odometry``,
     ``odom`` → ``base_link``), ``/gps/fix`` (``sensor_msgs/NavSatFix``, frame ``gps``); with ``static_tf``
     also ``/tf_static`` ``base_link`` → ``imu_link`` (the mounting; without it the mounting must be
-    estimated).  KF-GINS text (time: GPS seconds of week of the UTC stamps): ``imu.txt`` (increments,
-    trapezoid of the 30 Hz samples), ``gnss.txt`` (the fixes with their σ), ``odo.txt`` (time, speed) and
-    ``truth.nav`` (the vehicle truth).
+    estimated).  KF-GINS text (time: GPS seconds of week of the bags' stamps; every value written
+    repr-exact): ``imu.txt`` (increments: each 30 Hz sample times its interval,
+    :func:`imunav.io.navlog.text_log_intervals`), ``gnss.txt`` (the fixes with their σ), ``odo.txt`` (time,
+    speed, σ), ``truth.nav`` (the vehicle truth) and ``sources.toml`` (the files and the GPS week): a log of
+    its own for :func:`imunav.io.navlog.read_nav_sources` and ``imunav gins run``, the same sources as the
+    bags.
 
     Parameters
     ----------
@@ -346,21 +351,39 @@ def write_robot_log(log: RobotLog, folder: str | os.PathLike[str], *, formats: t
 
 
 def _write_kfgins(log: RobotLog, folder: Path) -> Path:
+    """The KF-GINS text files of the drive (:func:`write_robot_log`), a log for
+    :func:`imunav.io.navlog.read_nav_sources`: the stamps the bags hold, as GPS seconds of week written
+    repr-exact, the IMU as increments ``rate · interval`` (:func:`imunav.io.navlog.text_log_intervals`), the
+    fixes and speeds with their σ, and ``sources.toml`` naming them with the GPS week."""
     if folder.exists():
         raise InvalidInputError(f"{folder} exists; outputs never overwrite - choose another folder")
     folder.mkdir()
     t0_ns = log.truth.t0_ns
+    exact = "%.17g"  # repr-exact doubles
+
+    def stamps(t: Array) -> NDArray[np.int64]:  # the bags' header stamps (imunav.io.rosbag.write_bag)
+        return t0_ns + np.round(np.asarray(t, dtype=np.float64) * 1e9).astype(np.int64)
 
     def sow(t: Array) -> Array:
-        return utc_to_gps(t, t0_ns).sow
+        return utc_to_gps((stamps(t) - t0_ns) * 1e-9, t0_ns).sow
 
-    inc = ImuIncrements.from_imu_data(log.imu)
-    write_kfgins_imu(folder / "imu.txt", ImuIncrements(sow(inc.t), inc.dtheta, inc.dvel, inc.dt, inc.meta))
+    imu = log.imu
+    s_imu = stamps(imu.t)
+    dt = text_log_intervals((s_imu - s_imu[0]) * 1e-9)[:, None]  # the reader's intervals, from the same stamps
+    write_table(folder / "imu.txt", [sow(imu.t), imu.gyro * dt, imu.accel * dt], fmt=exact)
     g = log.gnss
-    write_gnss_text(folder / "gnss.txt", GnssData(sow(g.t), g.lla, g.pos_std, meta=dict(g.meta)))
-    write_table(folder / "odo.txt", [sow(log.odometer.t), log.odometer.speed])
+    write_table(folder / "gnss.txt", [sow(g.t), np.degrees(g.lla[:, :2]), g.lla[:, 2], g.pos_std], fmt=exact)
+    o = log.odometer
+    write_table(folder / "odo.txt", [sow(o.t), o.speed] + ([] if o.speed_std is None else [o.speed_std]), fmt=exact)
     nav = log.truth.nav_track()
     week = int(utc_to_gps([0.0], t0_ns).week[0])
     write_kfgins_nav(folder / "truth.nav", NavTrack(sow(nav.t), nav.lla, nav.vel_ned, nav.q_nb, week, nav.meta))
+    with atomic_path(folder / TEXT_LOG_CONFIG) as tmp:
+        tmp.write_text(
+            "# The simulated robot's drive as KF-GINS text files: imunav gins run FOLDER --out DIR runs it as a log\n"
+            "# (imunav.io.navlog.read_text_sources; the same sources as the drive's ROS bags)\n"
+            f"gps_week = {week}  # of the files' seconds of week (UTC stamps + the date's leap seconds)\n"
+            'imu = "imu.txt"  # s of week, dtheta x y z (rad), dvel x y z (m/s): rate x interval, IMU frame FRD\n'
+            'gnss = "gnss.txt"  # s of week, lat lon (deg), h (m), sigma N E D (m)\n'
+            'odometer = "odo.txt"  # s of week, forward speed (m/s), its sigma (m/s)\n', encoding="utf-8")
     return folder
-

@@ -140,6 +140,41 @@ def test_ros1_and_ros2_bags_give_the_same_trajectory(robot):
     np.testing.assert_allclose(b.q_nb, a.q_nb, rtol=0, atol=1e-12)
 
 
+def test_kfgins_text_files_give_the_bags_trajectory(robot):
+    """The same drive as KF-GINS text files (write_robot_log's "kfgins" folder: sources.toml, repr-exact values) run
+    as a log through `imunav gins run FOLDER`: the trajectory of the ROS 1 bag's run to 1e-9 m (the IMU rates come
+    back from the increments within one ulp; a latitude's ulp is 0.7 nm), the same mounting, odometer scale and
+    latency, and the same .nav file."""
+    log, d, s_bag = robot
+    (d / "text").mkdir()
+    text = write_robot_log(log, d / "text", formats=("kfgins",))["kfgins"]
+    r = invoke("gins", "run", text, "--out", d / "run_text", "--no-plots", "--quiet")
+    assert r.exit_code == 0, r.stderr
+    s_text = json.loads((d / "run_text" / "summary.json").read_text())
+    for key in ("mounting", "odometer_scale", "gnss_time_offset_s", "gnss_rejected"):
+        assert _close(s_text[key], s_bag[key]), (key, s_text[key], s_bag[key])
+    assert s_text["t0_unix"] == s_bag["t0_unix"] and s_text["sources"]["sources"]["imu"]["topic"] == "imu.txt"
+    a, b = (read_kfgins_nav(p / "KF_GINS_Navresult.nav") for p in (d / "run", d / "run_text"))
+    assert a.week == b.week and np.array_equal(a.t, b.t)
+    np.testing.assert_allclose(b.lla[:, :2], a.lla[:, :2], rtol=0, atol=2e-9 * math.pi / 180)  # the file's digits
+    ra = run_log(read_nav_sources(d / "robot.bag")).result
+    rt = run_log(read_nav_sources(text)).result
+    np.testing.assert_array_equal(rt.t, ra.t)
+    np.testing.assert_allclose(lla_to_ned(rt.lla, ra.lla[0]), lla_to_ned(ra.lla, ra.lla[0]), rtol=0, atol=1e-9)
+    np.testing.assert_allclose(rt.q_nb, ra.q_nb, rtol=0, atol=1e-12)
+
+
+def _close(x, y):
+    """Nested summary values equal to 1e-9 (relative) / 1e-12 (absolute)."""
+    if isinstance(x, dict):
+        return x.keys() == y.keys() and all(_close(x[k], y[k]) for k in x)
+    if isinstance(x, list):
+        return len(x) == len(y) and all(_close(u, v) for u, v in zip(x, y))
+    if isinstance(x, float) and isinstance(y, float):
+        return abs(x - y) <= 1e-12 + 1e-9 * abs(y)
+    return x == y
+
+
 @pytest.mark.data
 def test_jackal_bag_dead_reckoning():
     """The real Jackal (IMU + wheel odometry, no GNSS, a clock from boot).  Its IMU's frame_id is base_link: the

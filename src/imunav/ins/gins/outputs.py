@@ -329,7 +329,9 @@ def log_summary(run: LogRun, sources: NavSources) -> dict[str, Any]:
         (roll, pitch, yaw of the IMU in the vehicle, deg, with σ; its source: given, tf_static, estimated or
         identity; the coarse estimate before the filter); ``odometer_scale`` (reading / true speed − 1, with σ);
         ``gnss_time_offset_s`` (the receiver's latency, with σ); ``gnss_rejected`` (share of the fixes the
-        reader refused or the χ² gate rejected, and why); ``initial`` (how the initial state was found).
+        reader refused or the χ² gate rejected, and why); ``initial`` (how the initial state was found);
+        ``duration_s`` (the IMU's span, s) and ``final_position_std_m`` (σ north, east, down of the last
+        position, m).
     """
     res = run.result
     lay = run.state_layout()
@@ -366,6 +368,8 @@ def log_summary(run: LogRun, sources: NavSources) -> dict[str, Any]:
         "gnss_rejected": {"share": (n_gate + n_refused) / total if total else None, "by_gate": n_gate,
                           "by_reader": refused, "fixes": total},
         "initial": run.initial,
+        "duration_s": float(sources.imu.t[-1] - sources.imu.t[0]),
+        "final_position_std_m": sd[int(lay[LAY.pos]):int(lay[LAY.pos]) + 3].tolist(),
     }
 
 

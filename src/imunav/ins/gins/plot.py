@@ -132,7 +132,6 @@ def _sigma_at(t: np.ndarray, cov_t: np.ndarray, var: np.ndarray) -> np.ndarray:
     return np.column_stack([np.interp(t, cov_t, sd[:, j]) for j in range(sd.shape[1])])
 
 
-
 def _band(ax: Any, t: np.ndarray, y: np.ndarray, tb: np.ndarray, centre: np.ndarray | float, s: np.ndarray,
           ylabel: str, label: str) -> None:
     """One panel: ``y`` over ``t`` and the band ``centre ± 3 s`` over ``tb`` (long series: their envelope,
