@@ -243,7 +243,11 @@ def gins_cmd(
     latency with their sigma, the share of fixes rejected and the final position sigma. A log that fails is a row
     with its error. Exit status 1 when a log fails.
 
-    Example: imunav batch gins logs --no-plots
+    Example (two short simulated robot drives, a ROS 1 and a ROS 2 bag, their antennas 0.3 m above the IMU):
+    python -c "import pathlib; from imunav.sim.robot_log import simulate_robot_log, write_robot_log; d =
+    pathlib.Path('logs'); d.mkdir(exist_ok=True); write_robot_log(simulate_robot_log(1, distance_m=80.0), d,
+    formats=('ros1',)); write_robot_log(simulate_robot_log(2, distance_m=80.0), d, formats=('ros2',))" && imunav
+    batch gins logs --gnss-lever-arm 0,0,-0.3 --no-plots
     """
 
     check_outputs([folder], [json_out], run_folders=[out if out is not None else folder / "gins"])
