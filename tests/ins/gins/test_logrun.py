@@ -148,7 +148,7 @@ def test_kfgins_text_files_give_the_bags_trajectory(robot):
     log, d, s_bag = robot
     (d / "text").mkdir()
     text = write_robot_log(log, d / "text", formats=("kfgins",))["kfgins"]
-    r = invoke("gins", "run", text, "--out", d / "run_text", "--no-plots", "--quiet")
+    r = invoke("gins", "run", text, "--gnss-lever-arm", "0,0,-0.3", "--out", d / "run_text", "--no-plots", "--quiet")
     assert r.exit_code == 0, r.stderr
     s_text = json.loads((d / "run_text" / "summary.json").read_text())
     for key in ("mounting", "odometer_scale", "gnss_time_offset_s", "gnss_rejected"):
@@ -157,8 +157,9 @@ def test_kfgins_text_files_give_the_bags_trajectory(robot):
     a, b = (read_kfgins_nav(p / "KF_GINS_Navresult.nav") for p in (d / "run", d / "run_text"))
     assert a.week == b.week and np.array_equal(a.t, b.t)
     np.testing.assert_allclose(b.lla[:, :2], a.lla[:, :2], rtol=0, atol=2e-9 * math.pi / 180)  # the file's digits
-    ra = run_log(read_nav_sources(d / "robot.bag")).result
-    rt = run_log(read_nav_sources(text)).result
+    o = LogRunOptions(gnss_lever_arm=(0.0, 0.0, -0.3))
+    ra = run_log(read_nav_sources(d / "robot.bag"), o).result
+    rt = run_log(read_nav_sources(text), o).result
     np.testing.assert_array_equal(rt.t, ra.t)
     np.testing.assert_allclose(lla_to_ned(rt.lla, ra.lla[0]), lla_to_ned(ra.lla, ra.lla[0]), rtol=0, atol=1e-9)
     np.testing.assert_allclose(rt.q_nb, ra.q_nb, rtol=0, atol=1e-12)
