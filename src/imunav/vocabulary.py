@@ -15,13 +15,13 @@ below ends in ``_s`` (``hold_s``, ``zaru_min_s``).
 from __future__ import annotations
 
 import dataclasses
-from typing import NamedTuple
 
 __all__ = ["NamingRule", "NAMING_TABLE", "FORBIDDEN_WORDS", "UNIT_SUFFIXES", "RENAMED_FIELDS", "check_field_name",
            "check_config_class", "renamed_hint"]
 
 
-class NamingRule(NamedTuple):
+@dataclasses.dataclass(frozen=True)
+class NamingRule:
     """One row of the naming table.
 
     Attributes

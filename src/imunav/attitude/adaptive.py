@@ -21,21 +21,21 @@ Most are fixed a priori from the physics of the sensors and the motion, as in
 VQF (Laidig & Seel, Information Fusion 91, 2023), and were *not* tuned on any
 recording:
 
-============================  ===========  =====================================================
-parameter                     value        reason
-============================  ===========  =====================================================
-``rest_lpf_time_constant``              0.5 s        rest test smoothing (a still hand holds ~0.5 s)
-``rest_gyro_threshold``                 2 °/s        gyro deviation at rest: noise, not motion
-``rest_accel_threshold``                  0.5 m/s²     accelerometer deviation at rest
-``lpf_gyro_threshold``                 2 °/s        largest plausible MEMS gyro bias
-``rest_time``                 1.5 s        time still before the bias is measured
-``mag_lpf_time_constant``               0.05 s       smooths field noise before the disturbance test
-``mag_norm_threshold``              10 %         field-norm change that marks a disturbance
-``mag_dip_threshold``               10°          dip change: above tilt errors during fast motion
-``mag_min_undisturbed``       0.5 s        a disturbance's chance passes are never used
-``mag_bias``                  True         heading updates estimate the vertical gyro bias
-``accel_lpf_time_constant``               3 s          translational accelerations average out
-============================  ===========  =====================================================
+===========================  ========  ================================================
+parameter                    value     reason
+===========================  ========  ================================================
+``rest_lpf_time_constant``   0.5 s     rest test smoothing (a still hand holds ~0.5 s)
+``rest_gyro_threshold``      2 °/s     gyro deviation at rest: noise, not motion
+``rest_accel_threshold``     0.5 m/s²  accelerometer deviation at rest
+``lpf_gyro_threshold``       2 °/s     largest plausible MEMS gyro bias
+``rest_time``                1.5 s     time still before the bias is measured
+``mag_lpf_time_constant``    0.05 s    smooths field noise before the disturbance test
+``mag_norm_threshold``       10 %      field-norm change that marks a disturbance
+``mag_dip_threshold``        10°       dip change: above tilt errors during fast motion
+``mag_min_undisturbed``      0.5 s     a disturbance's chance passes are never used
+``mag_bias``                 True      heading updates estimate the vertical gyro bias
+``accel_lpf_time_constant``  3 s       translational accelerations average out
+===========================  ========  ================================================
 
 The accelerometer and magnetometer enter through the time constants of the
 corrections they make (``tilt_time_constant``, ``heading_time_constant``; VQF's 3 s and 9 s are in the
