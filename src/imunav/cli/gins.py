@@ -243,7 +243,8 @@ def outage_cmd(
     states: Optional[int] = _STATES_OPT,
     gnss_lever_arm: Optional[str] = typer.Option(None, "--gnss-lever-arm", help="With a log: the GNSS antenna from "
                                                                                 "the IMU, vehicle FRD, m: 'x,y,z'."),
-    plots: bool = typer.Option(True, "--plots/--no-plots", help="Write the outage drift figure."),
+    plots: bool = typer.Option(True, "--plots/--no-plots", help="Write the outage drift figure (not with a log: "
+                                                                "its outage.json holds every outage)."),
     quiet: bool = typer.Option(False, "--quiet", "-q", help="No progress bar."),
 ) -> None:
     """The KF-GINS paper's outage protocol: after convergence a GNSS outage every period, one run per start shift;
@@ -287,9 +288,14 @@ def outage_cmd(
         ratio, dr = rms["ratio_to_dead_reckoning"], rms["dead_reckoning_end_m"]
         dr_text = "no odometer" if dr is None else f"odometry dead reckoning {dr:.3f} m (ratio {ratio:.2f})"
         noise = rms["reference_noise_m"]
+
+        def above(key: str) -> str:
+            v = rms[key]
+            return "within the noise" if v is None else f"{v:.3f} m"
+
         floor = "" if not noise or dr is None else (
-            f"; less the fixes' own noise ({noise:.2f} m): {rms['end_above_noise_m']:.3f} m vs "
-            f"{rms['dead_reckoning_above_noise_m']:.3f} m (ratio {rms['ratio_above_noise']:.2f})")
+            f"; less the fixes' own noise ({noise:.2f} m): {above('end_above_noise_m')} vs "
+            f"{above('dead_reckoning_above_noise_m')}")
         typer.echo(f"{rms['n_outages']} outages of {length:g} s against the {rms['reference']}: RMS horizontal "
                    f"error at their end {rms['end_m']:.3f} m, largest {rms['max_m']:.3f} m; {dr_text}{floor}; "
                    f"{100 * rms['contained_3sigma']:.0f} % inside the predicted 3 sigma -> {json_path}")

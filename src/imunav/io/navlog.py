@@ -494,7 +494,11 @@ def _odometer(td: TopicData, t0_ns: int, t_end: float, source: str) -> tuple[Odo
                                 "geometry_msgs/TwistStamped")
     rate = td.values.get("rate_frd")
     yaw_rate = None if rate is None else np.asarray(rate, dtype=np.float64)[inside, 2]
-    if yaw_rate is not None:
+    if yaw_rate is not None and not np.all(np.isfinite(yaw_rate)):
+        meta["yaw_rate"] = (f"not used: twist.angular.z is not finite on {int((~np.isfinite(yaw_rate)).sum())} "
+                            "messages (rest is then found from the speed alone)")
+        yaw_rate = None
+    elif yaw_rate is not None:
         meta["yaw_rate"] = "twist.angular.z, FLU -> FRD (sign flipped)"
     meta.update({"source": source, "topic": td.topic, "t0_ns": int(t0_ns)})
     return OdometerData(t[inside], speed[inside], dict(meta), std, yaw_rate), meta

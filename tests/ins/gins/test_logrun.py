@@ -19,12 +19,12 @@ from cli_contract import invoke, one_error_line
 from shared_data import data_path
 
 from imunav.earth import lla_to_ned
-from imunav.ins.gins.logrun import LogRunOptions, run_log
+from imunav.ins.gins.logrun import LogRunOptions, log_outage_test, run_log
 from imunav.io.aiding import OdometerData
 from imunav.io.kfgins import read_kfgins_nav, write_kfgins_nav
 from imunav.io.logs import TopicData
 from imunav.io.navlog import read_nav_sources
-from imunav.io.rosbag import write_bag
+from imunav.io.rosbag import StaticTransform, write_bag
 from imunav.rotation import dcm_from_quat, euler_from_quat
 from imunav.sim.robot_log import simulate_robot_log, write_robot_log
 
@@ -92,42 +92,38 @@ def test_track_is_within_half_a_metre_and_the_jumps_are_rejected(robot):
     assert s["gnss_rejected"]["by_gate"] == int(np.sum(~accepted))
 
 
-def test_outage_test_without_truth_against_the_removed_fixes(robot):
-    """60 s outages every 120 s after 60 s (shifts 0, 30, 60 s), the removed fixes as the reference: RMS of the
-    end-of-outage horizontal error <= 3 m, every outage inside its predicted 3 sigma (the fixes' own sigma
-    included), better than the wheel-odometry dead reckoning started from the filter's state.  The error includes
-    the reference fixes' own noise (sigma 0.8 m per axis: 1.13 m horizontal RMS), which the report states and
-    removes (sqrt(RMS^2 - 1.13^2))."""
+def test_outage_test_against_the_removed_fixes_and_against_the_truth(robot):
+    """60 s outages every 120 s after 60 s (shifts 0, 30, 60 s).  Against the drive's truth (``--truth``, the
+    KF-GINS .nav of the vehicle on GPS time): RMS of the end-of-outage horizontal error <= 3 m and <= 0.3 x that of
+    the wheel-odometry dead reckoning (odometer as read, gyro heading from the filter's state at the outage's start),
+    every outage inside its 3 sigma.  Against the removed fixes (no truth), every outage inside its 3 sigma with the
+    fixes' own sigma, and the mean squared end error is the truth's plus the fixes' noise (0.8 m per axis: 1.13 m
+    horizontal RMS): within three standard errors of that noise's mean square over the K outages
+    (sigma_ref^2 / sqrt(K), its square being exponential), which a 1.5 m bias (a lever arm left out) would leave."""
     _, d, _ = robot
-    r = invoke("gins", "outage-test", d / "robot.bag", "--gnss-lever-arm", "0,0,-0.3", "--converge", "60", "--every", "120", "--length", "60",
-               "--shifts", "0,30,60", "--out", d / "outage", "--quiet")
+    common = ("--gnss-lever-arm", "0,0,-0.3", "--converge", "60", "--every", "120", "--length", "60", "--shifts",
+              "0,30,60", "--quiet")
+    r = invoke("gins", "outage-test", d / "robot.bag", *common, "--truth", d / "kfgins" / "truth.nav", "--out",
+               d / "outage_truth")
+    assert r.exit_code == 0, r.stderr
+    t = json.loads((d / "outage_truth" / "outage.json").read_text())["rms"]
+    print(f"outages against the truth: end RMS {t['end_m']:.3f} m, dead reckoning "
+          f"{t['dead_reckoning_end_m']:.3f} m, ratio {t['ratio_to_dead_reckoning']:.3f}")
+    assert t["reference"] == "truth" and t["reference_noise_m"] == 0.0 and t["n_outages"] >= 9
+    assert t["end_m"] <= 3.0 and t["ratio_to_dead_reckoning"] <= 0.3 and t["contained_3sigma"] >= 0.9
+    assert t["end_above_noise_m"] == t["end_m"]
+    r = invoke("gins", "outage-test", d / "robot.bag", *common, "--out", d / "outage")
     assert r.exit_code == 0, r.stderr
     doc = json.loads((d / "outage" / "outage.json").read_text())
-    rms = doc["rms"]
-    print(f"outages against the fixes: end RMS {rms['end_m']:.3f} m, dead reckoning {rms['dead_reckoning_end_m']:.3f}"
-          f" m, ratio {rms['ratio_to_dead_reckoning']:.2f}; above the fixes' noise {rms['end_above_noise_m']:.3f} m"
-          f" vs {rms['dead_reckoning_above_noise_m']:.3f} m, ratio {rms['ratio_above_noise']:.2f}")
-    assert rms["reference"] == "removed fixes" and rms["reference_noise_m"] == pytest.approx(0.8 * math.sqrt(2))
-    assert rms["n_outages"] >= 9 and rms["end_m"] <= 3.0 and rms["contained_3sigma"] == 1.0
-    assert rms["ratio_to_dead_reckoning"] < 1.0 and rms["ratio_above_noise"] < rms["ratio_to_dead_reckoning"]
-    assert rms["end_above_noise_m"] == pytest.approx(math.sqrt(max(rms["end_m"] ** 2 - rms["reference_noise_m"] ** 2, 0.0)))
+    f = doc["rms"]
+    noise, k = f["reference_noise_m"], f["n_outages"]
+    print(f"outages against the fixes: end RMS {f['end_m']:.3f} m (noise {noise:.2f} m), dead reckoning "
+          f"{f['dead_reckoning_end_m']:.3f} m, ratio {f['ratio_to_dead_reckoning']:.2f}; above the noise "
+          f"{f['end_above_noise_m']} m")
+    assert f["reference"] == "removed fixes" and noise == pytest.approx(0.8 * math.sqrt(2)) and k == t["n_outages"]
+    assert f["end_m"] <= 3.0 and f["contained_3sigma"] == 1.0 and f["ratio_to_dead_reckoning"] < 1.0
+    assert abs(f["end_m"] ** 2 - noise**2 - t["end_m"] ** 2) < 3 * noise**2 / math.sqrt(k)
     assert all(o["fixes"] >= 100 for o in doc["outages"])
-
-
-def test_outage_test_against_the_truth(robot):
-    """The same protocol against the drive's truth (``--truth``, the KF-GINS .nav of the vehicle on GPS time):
-    RMS of the end-of-outage horizontal error <= 3 m and <= 0.3x that of the wheel-odometry dead reckoning (odometer
-    as read, gyro heading from the filter's state at the outage's start), every outage inside its 3 sigma."""
-    log, d, _ = robot
-    r = invoke("gins", "outage-test", d / "robot.bag", "--gnss-lever-arm", "0,0,-0.3", "--truth",
-               d / "kfgins" / "truth.nav", "--converge", "60",
-               "--every", "120", "--length", "60", "--shifts", "0,30,60", "--out", d / "outage_truth", "--quiet")
-    assert r.exit_code == 0, r.stderr
-    rms = json.loads((d / "outage_truth" / "outage.json").read_text())["rms"]
-    print(f"outages against the truth: end RMS {rms['end_m']:.3f} m, dead reckoning "
-          f"{rms['dead_reckoning_end_m']:.3f} m, ratio {rms['ratio_to_dead_reckoning']:.3f}")
-    assert rms["reference"] == "truth" and rms["reference_noise_m"] == 0.0 and rms["n_outages"] >= 9
-    assert rms["end_m"] <= 3.0 and rms["ratio_to_dead_reckoning"] <= 0.3 and rms["contained_3sigma"] >= 0.9
 
 
 def test_ros1_and_ros2_bags_give_the_same_trajectory(robot):
@@ -282,3 +278,60 @@ def test_rotation_flag_accepts_euler_degrees_and_unit_quaternions(tmp_path):
     q = parse_rotation("90,0,90")
     np.testing.assert_allclose(np.degrees(euler_from_quat(q)), [90, 0, 90], atol=1e-9)
     np.testing.assert_allclose(parse_rotation("0.5,0.5,0.5,0.5"), [0.5, 0.5, 0.5, 0.5])
+
+
+def test_a_bag_mounting_that_the_levelling_contradicts(tmp_path):
+    """The IMU of the simulated robot sits rolled by about 90 deg.  A bag whose Imu frame_id claims the base frame is
+    not taken at its word: the levelling at rest contradicts it, the mounting is estimated and the run says why.
+    A /tf_static that claims the identity is refused in one line (exit 2), naming --imu-rotation."""
+    log = simulate_robot_log(1, distance_m=200.0)
+    topics = {"/imu/data": log.imu, "/odom": log.odometer, "/gps/fix": log.gnss}
+    write_bag(tmp_path / "fid.bag", topics, storage="ros1", frame_ids={"/imu/data": "base_link", "/gps/fix": "gps"})
+    run = run_log(read_nav_sources(tmp_path / "fid.bag"), LogRunOptions(gnss_lever_arm=(0.0, 0.0, -0.3)))
+    assert run.mounting_source == "estimated" and "levelling at rest reads" in run.initial["mounting"]
+    e, sd = run.mounting_euler()
+    err = np.degrees(np.remainder(e - np.radians(log.truth.mounting_euler_deg) + np.pi, 2 * np.pi) - np.pi)
+    assert np.all(np.abs(err) < 3 * np.degrees(sd)), err
+    tf = [StaticTransform("base_link", "imu_link", np.array([1.0, 0.0, 0.0, 0.0]), np.zeros(3))]
+    write_bag(tmp_path / "tf.bag", topics, storage="ros1", frame_ids={"/imu/data": "imu_link", "/gps/fix": "gps"},
+              static_tf=tf)
+    line = one_error_line(invoke("gins", "run", tmp_path / "tf.bag", "--out", tmp_path / "o"))
+    assert "tf_static" in line and "--imu-rotation" in line and not (tmp_path / "o").exists()
+
+
+def test_outage_test_against_fixes_accounts_for_the_lever_arm(tmp_path):
+    """An antenna 1.5 m ahead of the IMU: the removed fixes hold the antenna, the run's position is the IMU's.  With
+    the lever arm added the end error against the fixes is that of a 0.3 m filter error under 1.13 m of fix noise
+    (RMS about 1.2 m over 10 outages); without it, 1.5 m more would put it near 1.9 m."""
+    log = simulate_robot_log(1, gnss_lever_arm_base=(1.5, 0.0, -0.3))
+    write_robot_log(log, tmp_path, formats=("ros1",))
+    rep = log_outage_test(read_nav_sources(tmp_path / "robot.bag"), LogRunOptions(gnss_lever_arm=(1.5, 0.0, -0.3)))
+    rms = rep.rms()
+    print(f"lever 1.5 m: end RMS {rms['end_m']:.3f} m against the fixes")
+    assert rms["n_outages"] >= 9 and rms["end_m"] < 1.6 and rms["contained_3sigma"] == 1.0
+
+
+def test_outage_test_refuses_a_truth_that_covers_no_outage(robot, tmp_path):
+    """A truth of three rows (or one) covers no outage: one line, exit 2, nothing written."""
+    _, d, _ = robot
+    lines = (d / "kfgins" / "truth.nav").read_text().splitlines()
+    for n in (3, 1):
+        (tmp_path / f"t{n}.nav").write_text("\n".join(lines[:n]) + "\n")
+        line = one_error_line(invoke("gins", "outage-test", d / "robot.bag", "--truth", tmp_path / f"t{n}.nav",
+                                     "--converge", "60", "--every", "120", "--length", "60", "--shifts", "0",
+                                     "--out", tmp_path / f"o{n}"))
+        assert ("covers none" in line) if n == 3 else ("2" in line and "row" in line)
+        assert not (tmp_path / f"o{n}").exists()
+
+
+def test_without_an_odometer_steady_driving_is_not_rest(tmp_path):
+    """A log with IMU and GNSS only: a vehicle gliding at 1 m/s has a quiet IMU, but its fixes move; the samples
+    declared at rest are (almost) only those where it stands: under 10 % of the moving ones (near the stops, where
+    5 s of travel at the ramp's speed is within 3 sigma of two fixes), where the quiet IMU alone declares 75 %."""
+    log = simulate_robot_log(1, distance_m=200.0)
+    write_bag(tmp_path / "nodo.bag", {"/imu/data": log.imu, "/gps/fix": log.gnss}, storage="ros1")
+    run = run_log(read_nav_sources(tmp_path / "nodo.bag"))
+    tr = log.truth.trajectory
+    moving = np.hypot(tr.vel_ned[:, 0], tr.vel_ned[:, 1]) > 0.5
+    print(f"declared at rest while moving: {run.static[moving].mean():.3f}")
+    assert run.static[moving].mean() < 0.1 and run.static[~moving].mean() > 0.3

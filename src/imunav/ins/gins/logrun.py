@@ -37,7 +37,6 @@ from imunav.ins.gins.filter import GinsFilter, kernel_setup
 from imunav.ins.gins.layout import LAY
 from imunav.ins.gins.mounting import MountingEstimate, _levelling, estimate_mounting
 from imunav.ins.gins.result import GinsResult
-from imunav.io.aiding import OdometerData
 from imunav.io.kfgins import NavTrack
 from imunav.io.navlog import NavSources
 from imunav.results import Result
@@ -57,6 +56,9 @@ ODO_SCALE_STD = 0.1
 LEVEL_STD = math.radians(1.0)
 #: Gate rejections in a row after which an aid's update is applied anyway (a log's filter must not drift away).
 MAX_REJECTIONS = 5
+#: A bag's mounting (tf_static, frame_id) is contradicted when the levelling at rest differs from its roll or pitch
+#: by more than 3σ plus this, rad.
+MOUNT_CHECK_MARGIN = math.radians(2.0)
 #: Largest odometer speed (m/s) and wheel yaw rate (rad/s, 0.1 deg/s) of a vehicle at rest.
 REST_SPEED = 0.02
 REST_YAW_RATE = math.radians(0.1)
@@ -187,19 +189,45 @@ class LogRun(Result):
         return e0, np.sqrt(np.diag(J @ P @ J.T))
 
 
+def _gnss_moving(src: NavSources) -> NDArray[np.bool_]:
+    """IMU samples where the GNSS shows the vehicle moving: its velocity above 0.3 m/s, or (fixes without velocity)
+    its position more than 3σ (and 1 m) from where it was 5 s before or will be 5 s after; all false without
+    GNSS.  A vehicle gliding at a steady speed has a quiet IMU: only its fixes tell that it does not stand."""
+    imu = src.imu
+    g = src.gnss
+    if g is None or g.n < 2:
+        return np.zeros(imu.n, dtype=bool)
+    if g.vel_ned is not None and np.all(np.isfinite(g.vel_ned[:, :2])):
+        fast = np.hypot(g.vel_ned[:, 0], g.vel_ned[:, 1]) > 0.3
+    else:
+        ne = lla_to_ned(g.lla, g.lla[0])[:, :2]
+        sd = np.hypot(g.pos_std[:, 0], g.pos_std[:, 1])
+        fast = np.zeros(g.n, dtype=bool)
+        for lag in (-5.0, 5.0):
+            j = np.clip(np.searchsorted(g.t, g.t + lag), 0, g.n - 1)
+            far = np.hypot(*(ne[j] - ne).T) > np.maximum(3.0 * np.hypot(sd, sd[j]), 1.0)
+            fast |= far & (np.abs(g.t[j] - g.t - lag) < 1.0)
+    # each fix speaks for the IMU samples nearest to it
+    k = np.clip(np.searchsorted(g.t, imu.t), 1, g.n - 1)
+    k = np.where(np.abs(g.t[k - 1] - imu.t) < np.abs(g.t[k] - imu.t), k - 1, k)
+    return fast[k] & (imu.t >= g.t[0] - 1.0) & (imu.t <= g.t[-1] + 1.0)
+
+
 def _rest_masks(src: NavSources) -> tuple[NDArray[np.bool_], NDArray[np.bool_]]:
     """``(still, static)`` per IMU sample.  ``still``: the odometer reads no speed and the accelerometers are quiet,
     the specific force is gravity (the levelling's samples), though a skid-steer robot may turn on the spot there;
     ``static``: still and not turning, the wheels' yaw rate zero when the odometer gives one (ZUPT, ZARU, the noise
     at rest: taking a turn on the spot for rest would make its rate a gyro bias).  Without an odometer both are the
-    samples where the IMU and its gyro are quiet."""
+    samples where the IMU and its gyro are quiet and the GNSS does not show the vehicle moving
+    (:func:`_gnss_moving`)."""
     imu = src.imu
     try:
         quiet = static_intervals(imu, window_s=1.0, use_gyro=True).mask
     except InsufficientDataError:
         quiet = np.zeros(imu.n, dtype=bool)
     if src.odometer is None:
-        return quiet, quiet
+        moving = _gnss_moving(src)
+        return quiet & ~moving, quiet & ~moving
     o = src.odometer
     still = quiet & (np.interp(imu.t, o.t, np.abs(o.speed), left=np.nan, right=np.nan) < REST_SPEED)
     static = still
@@ -340,34 +368,48 @@ def run_log(src: NavSources, options: LogRunOptions | None = None) -> LogRun:
     # -- mounting
     coarse = None
     ba_level = float(np.max(np.abs(model.accel.bias))) if np.any(model.accel.bias) else 0.05
+    q_vb, source, mount_sd = np.array([1.0, 0.0, 0.0, 0.0]), "identity", None
+    mount_note = None
     if o.mounting is not None:
         q_vb = np.asarray(o.mounting, dtype=float)
         if q_vb.shape != (4,) or not np.all(np.isfinite(q_vb)) or abs(np.linalg.norm(q_vb) - 1) > 1e-6:
             raise InvalidInputError(f"mounting must be a unit quaternion (w, x, y, z); got {o.mounting!r}")
-        source, mount_sd = "given", None
+        source = "given"
     elif src.imu_to_base is not None:
-        q_vb, mount_sd = np.asarray(src.imu_to_base, dtype=float), None
+        q_vb = np.asarray(src.imu_to_base, dtype=float)
         source = "frame_id" if str(src.meta.get("mounting", "")).startswith("the IMU's frame_id") else "tf_static"
-    elif wheeled:
+        if wheeled:
+            # the levelling at rest as a check of the bag's mounting (reported; a contradiction is not ignored)
+            try:
+                coarse = estimate_mounting(imu, still, accel_bias_std=ba_level, level_noise_std=LEVEL_STD)
+            except InsufficientDataError:
+                coarse = None
+            if coarse is not None:
+                used = np.asarray(euler_from_dcm(dcm_from_quat(q_vb)), dtype=float)[:2]
+                off = np.abs(np.remainder(coarse.euler[:2] - used + math.pi, 2 * math.pi) - math.pi)
+                if np.any(off > 3.0 * coarse.std[:2] + MOUNT_CHECK_MARGIN):
+                    if source == "tf_static":
+                        raise InvalidInputError(
+                            f"{src.source}: the bag's /tf_static mounting has roll, pitch "
+                            f"{np.degrees(used).round(2).tolist()} deg but the accelerometers at rest read "
+                            f"{np.degrees(coarse.euler[:2]).round(2).tolist()} +- "
+                            f"{np.degrees(coarse.std[:2]).round(2).tolist()} deg: give --imu-rotation")
+                    # a frame_id is only the driver's claim: estimate the mounting instead
+                    mount_note = (f"the IMU's frame_id claims the base frame, but the levelling at rest reads roll, "
+                                  f"pitch {np.degrees(coarse.euler[:2]).round(2).tolist()} deg: estimated instead")
+                    source, coarse = "estimated_frame_id_contradicted", None
+    if source in ("identity", "estimated_frame_id_contradicted") and wheeled:
         od = src.odometer
         assert od is not None
         coarse = estimate_mounting(imu, still, speed_t=od.t, speed=od.speed, accel_bias_std=ba_level,
                                    level_noise_std=LEVEL_STD)
         q_vb, source, mount_sd = coarse.q_vb, "estimated", coarse.std
-    else:
-        q_vb, source, mount_sd = np.array([1.0, 0.0, 0.0, 0.0]), "identity", None
-    if coarse is None and wheeled and source in ("tf_static", "frame_id"):
-        # the levelling at rest as a check of the bag's mounting (reported, not used)
-        try:
-            coarse = estimate_mounting(imu, still, accel_bias_std=ba_level, level_noise_std=LEVEL_STD)
-        except InsufficientDataError:
-            coarse = None
     C_vb = dcm_from_quat(q_vb)
     # -- initial attitude, heading and position
     d_b, tilt_sd, i_rest = _initial_tilt(src, still)
     bias0 = imu.gyro[static].mean(axis=0) if static.sum() > 10 else np.zeros(3)
     ref = np.array([0.0, 0.0, 0.0]) if src.gnss is None else src.gnss.lla[0].copy()
-    initial: dict[str, Any] = {}
+    initial: dict[str, Any] = {} if mount_note is None else {"mounting": mount_note}
     if wheeled and src.gnss is not None:
         p_dr = _dead_reckoning(src, C_vb, bias0)
         psi0, T, psi_sd, used = _fit_heading(src, p_dr, ref)
@@ -437,7 +479,7 @@ def run_log(src: NavSources, options: LogRunOptions | None = None) -> LogRun:
     cfg = GinsConfig.from_preset(o.preset, **cfg_kw)
     odo = src.odometer
     if odo is not None and odo.speed_std is not None:
-        odo = OdometerData(odo.t, odo.speed, odo.meta, np.maximum(odo.speed_std, ODO_STD_FLOOR))
+        odo = dataclasses.replace(odo, speed_std=np.maximum(odo.speed_std, ODO_STD_FLOOR))
     res = GinsFilter(cfg).run(imu, src.gnss, lla0=lla0, vel0=np.zeros(3), q0=q0, odometer=odo,
                               static=static, baro=None, smoother=o.smoother)
     return LogRun(res, cfg, static, coarse, source, initial, o.preset)
@@ -556,9 +598,12 @@ class LogOutageReport(Result):
         """RMS over the outages of the end and largest errors, the dead reckoning's end error and their ratio.
 
         Against removed fixes, each end error holds the fix's own noise: ``E[e²] = e_true² + σ_ref²`` with
-        ``σ_ref`` = ``reference_noise_m``, a floor that no filter goes under; ``end_above_noise_m`` and
-        ``dead_reckoning_above_noise_m`` remove it (``√max(RMS² − σ_ref², 0)``) and ``ratio_above_noise`` is
-        their ratio.  With a truth the two pairs are equal.
+        ``σ_ref`` = ``reference_noise_m`` (the fixes' stated σ, N and E together), a floor that no filter goes
+        under.  ``end_above_noise_m`` and ``dead_reckoning_above_noise_m`` remove it, ``√(RMS² − σ_ref²)``, and
+        ``ratio_above_noise`` is their ratio; each is null when ``RMS² − σ_ref²`` is under two standard errors of
+        the noise's own mean square over the K outages, ``2 σ_ref² / √K`` (a fix's horizontal noise squared is
+        exponential with mean σ_ref² for Gaussian N and E errors): the difference is then the noise's own
+        scatter, not the filter's error.  With a truth the two pairs equal the raw ones.
 
         Returns
         -------
@@ -571,13 +616,20 @@ class LogOutageReport(Result):
             x = x[np.isfinite(x)]
             return float(np.sqrt(np.mean(x**2))) if x.size else None
 
-        def above(x: float | None) -> float | None:
-            return None if x is None else math.sqrt(max(x * x - noise * noise, 0.0))
-
+        n_out = int(self.end_m.size)
         noise = float(self.meta.get("reference_noise_m", 0.0))
+        se = 2.0 * noise**2 / math.sqrt(max(n_out, 1))
+
+        def above(x: float | None) -> float | None:
+            if x is None:
+                return None
+            if noise == 0.0:
+                return x
+            return math.sqrt(x * x - noise * noise) if x * x - noise * noise > se else None
+
         e, d = r(self.end_m), r(self.dead_reckoning_end_m)
         ea, da = above(e), above(d)
-        return {"n_outages": int(self.end_m.size), "reference": self.meta.get("reference", "removed fixes"),
+        return {"n_outages": n_out, "reference": self.meta.get("reference", "removed fixes"),
                 "reference_noise_m": noise, "end_m": e, "max_m": r(self.max_m), "dead_reckoning_end_m": d,
                 "ratio_to_dead_reckoning": (e / d) if (e is not None and d) else None,
                 "end_above_noise_m": ea, "dead_reckoning_above_noise_m": da,
@@ -615,7 +667,10 @@ def truth_on_sources(truth: NavTrack, src: NavSources) -> NavTrack:
     """
     g0 = src.gps_time([0.0])
     t = (int(truth.week) - int(g0.week[0])) * 604800.0 + np.asarray(truth.t, dtype=float) - float(g0.sow[0])
-    if t.size < 2 or t[-1] < src.imu.t[0] or t[0] > src.imu.t[-1]:
+    if t.size < 2:
+        raise InvalidInputError(f"the truth ({truth.meta.get('source', 'given')}) has {t.size} row(s); it needs at "
+                                "least 2 to be interpolated")
+    if t[-1] < src.imu.t[0] or t[0] > src.imu.t[-1]:
         raise InvalidInputError(f"the truth ({truth.meta.get('source', 'given')}, week {truth.week}, "
                                 f"{truth.t[0]:.3f}-{truth.t[-1]:.3f} s of week) does not overlap {src.source} "
                                 f"(week {int(g0.week[0])}, from {float(g0.sow[0]):.3f} s of week): give the truth "
@@ -677,6 +732,7 @@ def log_outage_test(src: NavSources, options: LogRunOptions | None = None, *, co
         good &= ~np.isin(src.gnss.t, t_bad)
     t0, t1 = float(src.imu.t[0]), float(src.imu.t[-1])
     outs, end, mx, cont, dr, nfix, ref_var = [], [], [], [], [], [], []
+    skipped = 0  # outages without a reference point (no good fix in them, or outside the truth)
     total = len(shifts_s) + 1
     if progress is not None:
         progress(1, total)
@@ -696,19 +752,25 @@ def log_outage_test(src: NavSources, options: LogRunOptions | None = None, *, co
             if ref_truth is None:
                 idx = np.flatnonzero((src.gnss.t >= s) & (src.gnss.t < s + d) & good)
                 if idx.size == 0:
+                    skipped += 1
                     continue
                 tf = src.gnss.t[idx] - tau  # the fixes hold the antenna at their stamp less the latency
                 lla = np.column_stack([np.interp(tf, res.t, res.lla[:, j]) for j in range(3)])
                 ref_lla, fix_var = src.gnss.lla[idx], np.sum(src.gnss.pos_std[idx, :2] ** 2, axis=1)
+                # ... and the run's lla is the IMU's: add the lever arm, turned to NED
+                ks = np.clip(np.searchsorted(res.t, tf), 0, res.t.size - 1)
+                ant = (dcm_from_quat(res.q_nb[ks]) @ np.asarray(run.config.lever_arm, dtype=float))[:, :2]
             else:
                 tf = res.t[(res.t >= max(s, ref_truth.t[0])) & (res.t < min(s + d, ref_truth.t[-1]))]
                 if tf.size == 0:
+                    skipped += 1
                     continue
                 lla = np.column_stack([np.interp(tf, res.t, res.lla[:, j]) for j in range(3)])
                 ref_lla = np.column_stack([np.interp(tf, ref_truth.t, ref_truth.lla[:, j]) for j in range(3)])
                 fix_var = np.zeros(tf.size)
+                ant = np.zeros((tf.size, 2))  # the truth is the IMU's position
             ref = ref_lla[0]
-            e = _horizontal(lla, ref) - _horizontal(ref_lla, ref)
+            e = _horizontal(lla, ref) + ant - _horizontal(ref_lla, ref)
             err = np.hypot(e[:, 0], e[:, 1])
             j = np.clip(np.searchsorted(res.cov_t, tf), 0, res.cov_t.size - 1)
             var = res.cov_diag[j, 0] + res.cov_diag[j, 1] + fix_var
@@ -725,14 +787,19 @@ def log_outage_test(src: NavSources, options: LogRunOptions | None = None, *, co
                 p = _dead_reckoning(src, C_vb, res.gyro_bias[i0], psi0=math.atan2(C_nv[1, 0], C_nv[0, 0]),
                                     i0=i0, i1=i1)
                 start = _horizontal(res.lla[i0:i0 + 1], ref)[0]
-                dr.append(float(np.hypot(*(start + p[-1] - _horizontal(ref_lla[-1:], ref)[0]))))
+                dr.append(float(np.hypot(*(start + p[-1] + ant[-1] - _horizontal(ref_lla[-1:], ref)[0]))))
             else:
                 dr.append(math.nan)
         if progress is not None:
             progress(k + 2, total)
+    if not outs:
+        raise InvalidInputError(f"{src.source}: no outage has a reference point ("
+                                f"{'no good fix inside any outage' if ref_truth is None else 'the truth covers none'}"
+                                "): give a truth that spans the outages, or a longer log")
     return LogOutageReport(outs, np.array(end), np.array(mx), np.array(cont, dtype=bool), np.array(dr),
                            np.array(nfix, dtype=np.int64),
                            {"converge_s": converge_s, "every_s": every_s, "length_s": length_s,
                             "shifts_s": list(shifts_s), "t0_s": t0, "faulty_fixes": int(np.sum(~good)),
                             "reference": "removed fixes" if ref_truth is None else "truth",
-                            "reference_noise_m": math.sqrt(float(np.mean(ref_var))) if ref_var else 0.0})
+                            "reference_noise_m": math.sqrt(float(np.mean(ref_var))) if ref_var else 0.0,
+                            "skipped_outages": skipped})
