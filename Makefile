@@ -32,23 +32,17 @@ $(STAMP_VENV):
 # `imunav warmup` then compiles the numba kernels of the quick tour and writes the bytecode of the modules it
 # imports (and only those), so that no first run compiles and no start recompiles the sources where Python may
 # not write bytecode (PYTHONDONTWRITEBYTECODE=1).
-# pip and setuptools are removed at the end (23 MB: the venv stays under 600 MB with its caches); `make test`,
-# `make docs` or `.venv/bin/python -m ensurepip` bring pip back from Python's own bundled wheel, offline.
 $(STAMP_RUN): pyproject.toml $(STAMP_VENV)
-	$(BIN)/python -m ensurepip
 	$(BIN)/python -m pip install --no-compile -e '.[yaml,px4]'
 	$(BIN)/imunav warmup
-	$(BIN)/python -m pip uninstall -y -q pip setuptools
 	touch $@
 
 $(STAMP_TEST): pyproject.toml $(STAMP_VENV)
-	$(BIN)/python -m ensurepip
 	$(BIN)/python -m pip install '$(TORCH)'
 	$(BIN)/python -m pip install -e '.[test,learn,dask]'
 	touch $@ $(STAMP_RUN) $(STAMP_DOCS)
 
 $(STAMP_DOCS): pyproject.toml $(STAMP_VENV)
-	$(BIN)/python -m ensurepip
 	$(BIN)/python -m pip install -e '.[docs]'
 	touch $@ $(STAMP_RUN)
 
