@@ -29,16 +29,16 @@ import json
 import tempfile
 import time
 from pathlib import Path
+from types import SimpleNamespace
 
 import numpy as np
 from scipy.stats import chi2
 
-from imunav.earth import dlla_to_ned
 from imunav.ins.gins import GinsConfig
 from imunav.ins.gins.logrun import LogRunOptions, run_log
-from imunav.ins.gins.truth import matched_errors, nees_blocks
+from imunav.ins.gins.truth import matched_errors, navigation_errors, nees_blocks
 from imunav.io.navlog import read_nav_sources
-from imunav.rotation import quat_conjugate, quat_multiply, rotvec_from_quat
+from imunav.rotation import quat_multiply
 from imunav.sim.robot_log import simulate_robot_log, write_robot_log
 
 LEVER = (0.0, 0.0, -0.3)
@@ -60,8 +60,9 @@ def drive(seed: int, truth: str, folder: Path) -> dict:
     k = np.searchsorted(r.cov_t, at, side="right") - 1  # the last covariance record at or before each epoch
     it = np.searchsorted(tr.t, r.cov_t[k] - 1e-9)
     ir = np.searchsorted(r.t, r.cov_t[k] - 1e-9)
-    e = np.hstack([dlla_to_ned(tr.pos_lla[it] - r.lla[ir], tr.pos_lla[it]), tr.vel_ned[it] - r.vel_ned[ir],
-                   rotvec_from_quat(quat_multiply(q_imu[it], quat_conjugate(r.q_nb[ir])))])
+    truth_imu = SimpleNamespace(pos_lla=tr.pos_lla[it], vel_ned=tr.vel_ned[it], q_nb=q_imu[it])
+    est = SimpleNamespace(lla=r.lla[ir], vel_ned=r.vel_ned[ir], q_nb=r.q_nb[ir])
+    e = navigation_errors(truth_imu, np.arange(k.size), est)
     nis = {a: (r.aids[a].nis / r.aids[a].dof)[r.aids[a].accepted.astype(bool)] for a in AIDS if a in r.aids}
     euler, sd = run.mounting_euler()
     err = np.degrees(euler) - np.asarray(log.truth.mounting_euler_deg)

@@ -641,6 +641,11 @@ def _horizontal(lla: Array, ref: Array) -> Array:
     return lla_to_ned(lla, ref)[:, :2]
 
 
+def _rows_at(t: Array, tp: Array, x: Array) -> Array:
+    """The columns of ``x`` (rows at times ``tp``) linearly interpolated to ``t``."""
+    return np.column_stack([np.interp(t, tp, x[:, j]) for j in range(x.shape[1])])
+
+
 def truth_on_sources(truth: NavTrack, src: NavSources) -> NavTrack:
     """A truth's times moved onto the sources' time axis (s since the IMU's first stamp).
 
@@ -755,7 +760,6 @@ def log_outage_test(src: NavSources, options: LogRunOptions | None = None, *, co
                     skipped += 1
                     continue
                 tf = src.gnss.t[idx] - tau  # the fixes hold the antenna at their stamp less the latency
-                lla = np.column_stack([np.interp(tf, res.t, res.lla[:, j]) for j in range(3)])
                 ref_lla, fix_var = src.gnss.lla[idx], np.sum(src.gnss.pos_std[idx, :2] ** 2, axis=1)
                 # ... and the run's lla is the IMU's: add the lever arm, turned to NED
                 ks = np.clip(np.searchsorted(res.t, tf), 0, res.t.size - 1)
@@ -765,12 +769,11 @@ def log_outage_test(src: NavSources, options: LogRunOptions | None = None, *, co
                 if tf.size == 0:
                     skipped += 1
                     continue
-                lla = np.column_stack([np.interp(tf, res.t, res.lla[:, j]) for j in range(3)])
-                ref_lla = np.column_stack([np.interp(tf, ref_truth.t, ref_truth.lla[:, j]) for j in range(3)])
+                ref_lla = _rows_at(tf, ref_truth.t, ref_truth.lla)
                 fix_var = np.zeros(tf.size)
                 ant = np.zeros((tf.size, 2))  # the truth is the IMU's position
             ref = ref_lla[0]
-            e = _horizontal(lla, ref) + ant - _horizontal(ref_lla, ref)
+            e = _horizontal(_rows_at(tf, res.t, res.lla), ref) + ant - _horizontal(ref_lla, ref)
             err = np.hypot(e[:, 0], e[:, 1])
             j = np.clip(np.searchsorted(res.cov_t, tf), 0, res.cov_t.size - 1)
             var = res.cov_diag[j, 0] + res.cov_diag[j, 1] + fix_var
