@@ -118,6 +118,29 @@ def test_each_aiding_model_has_its_own_nis_record(drive):
     assert np.array_equal(~np.isnan(rest_nhc.zupt_nis), used & static)
 
 
+def test_nhc_interval_applies_the_constraint_once_per_interval(drive):
+    """With ``nhc_interval_s`` the NHC is applied at the first sample of each interval since the start (0.7 s: off
+    the 0.2 s covariance grid, so those samples become covariance epochs), only while the vehicle moves; the
+    odometer stays at every step; an interval that is not > 0 is refused."""
+    truth, imu = drive
+    g = simulate_gnss(truth, rng=7)
+    odo = simulate_odometer(truth, lever_arm=WHEEL, noise_std=0.05, rng=8)
+    static = np.linalg.norm(truth.vel_ned, axis=1) < 1e-9
+    kw = dict(odo_lever_arm=WHEEL, nhc_noise_std=0.1)
+    every = GinsFilter(GinsConfig.from_preset("mems_adis16465", **kw)).run(imu, g, **_start(truth), odometer=odo,
+                                                                           static=static)
+    spaced = GinsFilter(GinsConfig.from_preset("mems_adis16465", nhc_interval_s=0.7, **kw)).run(
+        imu, g, **_start(truth), odometer=odo, static=static)
+    b = np.floor((truth.t - truth.t[0]) / 0.7 + 1e-9)
+    first = np.r_[False, b[1:] != b[:-1]]
+    np.testing.assert_array_equal(~np.isnan(spaced.nhc_nis), first & ~static)
+    assert np.count_nonzero(~np.isnan(every.nhc_nis)) > 3 * np.count_nonzero(~np.isnan(spaced.nhc_nis))
+    assert np.count_nonzero(~np.isnan(spaced.odo_nis)) >= np.count_nonzero(~np.isnan(every.odo_nis))
+    for bad in (0.0, -1.0, float("nan")):
+        with pytest.raises(InvalidInputError, match="nhc_interval_s"):
+            GinsConfig.from_preset("mems_adis16465", nhc_interval_s=bad)
+
+
 def test_bad_inputs_are_refused(drive):
     truth, imu = drive
     g = simulate_gnss(truth, rng=6)
@@ -183,17 +206,20 @@ def test_zupt_zaru_and_barometer_updates(drive):
     assert still < 0.05 and np.abs(plain.vel_ned[: 20 * 50]).max() > 2 * still
 
 
-def test_step_by_step_equals_run(drive):
+@pytest.mark.parametrize("nhc_interval", [None, 0.6])
+def test_step_by_step_equals_run(drive, nhc_interval):
     """GinsFilter.step over the increments, with each fix handed to the step whose interval holds it, the
-    wheel speed at each sample and the NHC, reproduces GinsFilter.run (same kernel, carried state) to 1e-9
-    on a 60 s drive: position (rad / m), velocity, attitude, IMU errors and the final covariance."""
+    wheel speed at each sample and the NHC (at every covariance step, or every 0.6 s: 30 samples, on the 0.2 s grid,
+    so that the last sample stays a covariance step as :meth:`run` makes it), reproduces GinsFilter.run (same kernel, carried state) to 1e-9 on a 60 s drive: position (rad / m), velocity,
+    attitude, IMU errors and the final covariance."""
     truth, imu = drive
     n = 3001  # 60 s at 50 Hz: the last sample is a covariance step (0.2 s = 10 samples)
     inc = ImuIncrements.from_imu_data(imu, 50.0)
     inc = ImuIncrements(inc.t[:n], inc.dtheta[:n], inc.dvel[:n], inc.dt[:n])
     g = simulate_gnss(truth, lever_arm=LEVER, t_offset=0.0073, rng=7).within(inc.t[0], inc.t[-1])
     odo = simulate_odometer(truth, lever_arm=WHEEL, scale_factor=0.005, noise_std=0.05, rng=8)
-    cfg = GinsConfig.from_preset("mems_adis16465", lever_arm=LEVER, nhc_noise_std=0.1, odo_lever_arm=WHEEL)
+    cfg = GinsConfig.from_preset("mems_adis16465", lever_arm=LEVER, nhc_noise_std=0.1, odo_lever_arm=WHEEL,
+                                 nhc_interval_s=nhc_interval)
     f = GinsFilter(cfg)
     ref = f.run(inc, g, **_start(truth), odometer=odo)
     f.reset(**_start(truth), t0=inc.t[0], fs=50.0, odometer=True, dtheta0=inc.dtheta[0], dvel0=inc.dvel[0])

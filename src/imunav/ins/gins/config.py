@@ -103,6 +103,13 @@ class GinsConfig:
         suspension velocity of the body in motion; None: off.  Not applied while ``static`` says the vehicle
         stands still: the ZUPT constrains the same velocity then (with ``zupt_noise_std``), and the one velocity
         used twice as two independent measurements would make the filter overconfident.
+    nhc_interval_s : float or None
+        Time between NHC updates, s (> 0): the constraint is applied at the first sample of each interval of
+        this length (counted from the run's start) while the vehicle moves; None: at every covariance step.  The
+        side slip and suspension velocity that ``nhc_noise_std`` stands for are correlated over the better part of
+        a second; applied at every 0.2 s step as independent measurements they would be counted several times
+        over, and the heading pulled towards the slip (on simulated robot loops with slip σ 0.05 m/s and σ 0.8 m
+        fixes: a heading bias of about +0.5° in left loops, −0.5° in right ones, gone at 1 s).
     zupt_noise_std : float
         σ of the zero-velocity update applied while ``static`` says the vehicle stands still, m/s: the body's
         vibration at rest, e.g. engine idle (> 0).
@@ -175,6 +182,7 @@ class GinsConfig:
     odo_noise_std: float = 0.05
     odo_scale_std: float = 0.01
     nhc_noise_std: float | None = None
+    nhc_interval_s: float | None = None
     zupt_noise_std: float = 0.01
     zaru_noise_std: float = 1e-4
     baro_noise_std: float = 2.0
@@ -221,6 +229,8 @@ class GinsConfig:
                                                      and 0 < self.level_noise_std < 1.0):
             raise InvalidInputError(f"GinsConfig.level_noise_std must be in (0, 1) rad or None; "
                                     f"got {self.level_noise_std!r}")
+        if self.nhc_interval_s is not None and not (np.isfinite(self.nhc_interval_s) and self.nhc_interval_s > 0):
+            raise InvalidInputError(f"GinsConfig.nhc_interval_s must be > 0 s or None; got {self.nhc_interval_s!r}")
         if self.gnss_delay_std is not None and not (np.isfinite(self.gnss_delay_std) and self.gnss_delay_std > 0):
             raise InvalidInputError(f"GinsConfig.gnss_delay_std must be > 0 s or None; got {self.gnss_delay_std!r}")
         if self.dual_antenna_baseline is not None:

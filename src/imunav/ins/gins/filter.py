@@ -468,6 +468,7 @@ class GinsFilter:
         self._prm, self._lay, sd0 = kernel_setup(self.config, float(fs), odometer)
         self.P = np.diag(sd0**2)
         self.t = float(t0)
+        self._t0 = self.t  # the origin of the NHC's intervals (GinsConfig.nhc_interval_s)
         self._carry = np.zeros(N_CARRY)
         self._carry_n = np.zeros(N_CARRY_N, dtype=np.int64)
         self._carry[CARRY.t_cov] = self.t
@@ -542,7 +543,7 @@ class GinsFilter:
             mag[1] = _vec3_input(mag_field, "mag_field")
         tt = np.array([self.t, t])
         timed = self._timed(gnss, sl)
-        sampled = self._sampled(2, odo if self._odometer else None, np.array([False, bool(static)]), baro, mag)
+        sampled = self._sampled(tt, odo if self._odometer else None, np.array([False, bool(static)]), baro, mag)
         log, _ = self._kernel(tt, dth, dv, timed, sampled, 0, False, False)
         self.t = t
         nis = np.full((sl.stop - sl.start, 2), np.nan)
@@ -574,26 +575,35 @@ class GinsFilter:
         packed, src = tm.pack()
         return packed, packed.kind, src
 
-    def _sampled(self, n: int, odo: Array | None, static: Array, baro: Array, mag: Array,
+    def _sampled(self, t: Array, odo: Array | None, static: Array, baro: Array, mag: Array,
                  odo_var: Array | None = None) -> kernels.SampledInput:
-        """The aids on the IMU grid: odometer (speed, variance) and NHC while moving, ZUPT + ZARU while static,
-        barometer and magnetometer where they have a sample (which forces a covariance epoch there); the levelling
-        at rest once per rest interval, at its middle sample (a covariance epoch there): the slope of one stop is
-        one measurement, however long the vehicle stands."""
+        """The aids on the IMU grid ``t``: odometer (speed, variance) and NHC while moving, ZUPT + ZARU while
+        static, barometer and magnetometer where they have a sample (which forces a covariance epoch there); the
+        levelling at rest once per rest interval, at its middle sample (a covariance epoch there): the slope of one
+        stop is one measurement, however long the vehicle stands.  With ``nhc_interval_s`` the NHC is applied at
+        the first sample of each interval since the run's start (a covariance epoch there), on :meth:`run`'s
+        grid and :meth:`step`'s alike."""
         c = self.config
+        n = t.size
         cols: dict[str, Array] = {}
         moving = np.where(static, np.nan, 0.0)
         if odo is not None:
             v0 = c.odo_noise_std**2
             var = np.full(n, v0) if odo_var is None else np.where(np.isnan(odo_var), v0, odo_var)
             cols["odometer"] = np.column_stack([odo + moving, var])
+        force = np.zeros(n, dtype=bool)
         if c.nhc_noise_std is not None:
-            cols["nhc"] = moving
+            if c.nhc_interval_s is None:
+                cols["nhc"] = moving
+            else:
+                b = np.floor((t - self._t0) / c.nhc_interval_s + 1e-9)
+                first = np.r_[False, b[1:] != b[:-1]]
+                cols["nhc"] = np.where(first, moving, np.nan)
+                force |= first & ~static
         if static.any():
             rest = np.where(static, 0.0, np.nan)
             cols["zupt"] = rest
             cols["zaru"] = rest
-        force = np.zeros(n, dtype=bool)
         if static.any() and c.level_noise_std is not None:
             edges = np.flatnonzero(np.diff(np.r_[0, static.astype(np.int8), 0]))
             mid = (edges[0::2] + edges[1::2] - 1) // 2
@@ -701,7 +711,7 @@ class GinsFilter:
         c = self.config
         use_vel = c.use_gnss_velocity and g is not None and g.vel_ned is not None
         timed = self._timed(g, slice(0, ng), dual_antenna, float(t[0]), float(t[-1]))
-        sampled = self._sampled(n, odo, st, hb, mg, odo_var)
+        sampled = self._sampled(t, odo, st, hb, mg, odo_var)
         nrec = (n // int(self._lay[LAY.cov_step]) + ng + 3 + int(np.count_nonzero(sampled.force))) if smoother else 0
         log, (o, m, r) = self._kernel(t, dth, dv, timed, sampled, nrec, True, True)
         self.t = float(t[-1])
