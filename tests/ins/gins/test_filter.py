@@ -120,8 +120,9 @@ def test_each_aiding_model_has_its_own_nis_record(drive):
 
 def test_nhc_interval_applies_the_constraint_once_per_interval(drive):
     """With ``nhc_interval_s`` the NHC is applied at the first sample of each interval since the start (0.7 s: off
-    the 0.2 s covariance grid, so those samples become covariance epochs), only while the vehicle moves; the
-    odometer stays at every step; an interval that is not > 0 is refused."""
+    the 0.2 s covariance grid, so those samples become covariance epochs), only while the vehicle moves and GNSS
+    fixes arrive; in an outage at every covariance step again; the odometer stays at every step; an interval that
+    is not > 0 is refused."""
     truth, imu = drive
     g = simulate_gnss(truth, rng=7)
     odo = simulate_odometer(truth, lever_arm=WHEEL, noise_std=0.05, rng=8)
@@ -136,6 +137,14 @@ def test_nhc_interval_applies_the_constraint_once_per_interval(drive):
     np.testing.assert_array_equal(~np.isnan(spaced.nhc_nis), first & ~static)
     assert np.count_nonzero(~np.isnan(every.nhc_nis)) > 3 * np.count_nonzero(~np.isnan(spaced.nhc_nis))
     assert np.count_nonzero(~np.isnan(spaced.odo_nis)) >= np.count_nonzero(~np.isnan(every.odo_nis))
+    # a 30 s GNSS outage: 1.4 s (two intervals) after its last fix the NHC is back at every 0.2 s step
+    t_a, t_b = 100.0, 130.0
+    cut = GinsFilter(GinsConfig.from_preset("mems_adis16465", nhc_interval_s=0.7, **kw)).run(
+        imu, g.select((g.t <= t_a) | (g.t >= t_b), "outage"), **_start(truth), odometer=odo, static=static)
+    inside = (truth.t > t_a + 1.5) & (truth.t < t_b) & ~static
+    used = ~np.isnan(cut.nhc_nis)
+    assert inside.sum() > 20 * 50 and abs(np.count_nonzero(used & inside) - inside.sum() / 10) <= 2  # 5 Hz of 50 Hz
+    np.testing.assert_array_equal(used[truth.t < t_a], (first & ~static)[truth.t < t_a])
     for bad in (0.0, -1.0, float("nan")):
         with pytest.raises(InvalidInputError, match="nhc_interval_s"):
             GinsConfig.from_preset("mems_adis16465", nhc_interval_s=bad)

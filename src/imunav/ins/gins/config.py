@@ -104,12 +104,13 @@ class GinsConfig:
         stands still: the ZUPT constrains the same velocity then (with ``zupt_noise_std``), and the one velocity
         used twice as two independent measurements would make the filter overconfident.
     nhc_interval_s : float or None
-        Time between NHC updates, s (> 0): the constraint is applied at the first sample of each interval of
-        this length (counted from the run's start) while the vehicle moves; None: at every covariance step.  The
-        side slip and suspension velocity that ``nhc_noise_std`` stands for are correlated over the better part of
-        a second; applied at every 0.2 s step as independent measurements they would be counted several times
-        over, and the heading pulled towards the slip (on simulated robot loops with slip σ 0.05 m/s and σ 0.8 m
-        fixes: a heading bias of about +0.5° in left loops, −0.5° in right ones, gone at 1 s).
+        Time between NHC updates while GNSS fixes arrive, s (> 0): the constraint is applied at the first sample of
+        each interval of this length (counted from the run's start) while the vehicle moves and the last fix is at
+        most two intervals old, at every covariance step in a GNSS outage or without GNSS (it is then all that
+        holds the lateral velocity); None: at every covariance step throughout.  Applied at every 0.2 s step while
+        fixes arrive, the NHC pulls the heading towards the side slip that ``nhc_noise_std`` stands for, and the
+        fixes pull it back: on simulated robot loops (ideal IMU, σ 0.8 m fixes, slip σ 0.05 m/s, the NHC's) a
+        heading bias of about +0.5° in left loops and −0.5° in right ones, none with exact fixes, gone at 1 s.
     zupt_noise_std : float
         σ of the zero-velocity update applied while ``static`` says the vehicle stands still, m/s: the body's
         vibration at rest, e.g. engine idle (> 0).

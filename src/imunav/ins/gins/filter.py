@@ -469,6 +469,7 @@ class GinsFilter:
         self.P = np.diag(sd0**2)
         self.t = float(t0)
         self._t0 = self.t  # the origin of the NHC's intervals (GinsConfig.nhc_interval_s)
+        self._last_fix = -math.inf  # the stamp of the last GNSS fix handed to step()
         self._carry = np.zeros(N_CARRY)
         self._carry_n = np.zeros(N_CARRY_N, dtype=np.int64)
         self._carry[CARRY.t_cov] = self.t
@@ -543,7 +544,10 @@ class GinsFilter:
             mag[1] = _vec3_input(mag_field, "mag_field")
         tt = np.array([self.t, t])
         timed = self._timed(gnss, sl)
-        sampled = self._sampled(tt, odo if self._odometer else None, np.array([False, bool(static)]), baro, mag)
+        if gnss is not None and sl.stop > sl.start:
+            self._last_fix = float(gnss.t[sl.stop - 1])
+        sampled = self._sampled(tt, odo if self._odometer else None, np.array([False, bool(static)]), baro, mag,
+                                fix_age=tt - self._last_fix)
         log, _ = self._kernel(tt, dth, dv, timed, sampled, 0, False, False)
         self.t = t
         nis = np.full((sl.stop - sl.start, 2), np.nan)
@@ -576,13 +580,14 @@ class GinsFilter:
         return packed, packed.kind, src
 
     def _sampled(self, t: Array, odo: Array | None, static: Array, baro: Array, mag: Array,
-                 odo_var: Array | None = None) -> kernels.SampledInput:
+                 odo_var: Array | None = None, fix_age: Array | None = None) -> kernels.SampledInput:
         """The aids on the IMU grid ``t``: odometer (speed, variance) and NHC while moving, ZUPT + ZARU while
         static, barometer and magnetometer where they have a sample (which forces a covariance epoch there); the
         levelling at rest once per rest interval, at its middle sample (a covariance epoch there): the slope of one
         stop is one measurement, however long the vehicle stands.  With ``nhc_interval_s`` the NHC is applied at
-        the first sample of each interval since the run's start (a covariance epoch there), on :meth:`run`'s
-        grid and :meth:`step`'s alike."""
+        the first sample of each interval since the run's start (a covariance epoch there) while GNSS fixes arrive
+        (``fix_age``, the age of the last fix at each sample, at most two intervals), at every covariance step
+        otherwise; on :meth:`run`'s grid and :meth:`step`'s alike."""
         c = self.config
         n = t.size
         cols: dict[str, Array] = {}
@@ -598,8 +603,9 @@ class GinsFilter:
             else:
                 b = np.floor((t - self._t0) / c.nhc_interval_s + 1e-9)
                 first = np.r_[False, b[1:] != b[:-1]]
-                cols["nhc"] = np.where(first, moving, np.nan)
-                force |= first & ~static
+                fixes = np.zeros(n, dtype=bool) if fix_age is None else fix_age <= 2.0 * c.nhc_interval_s
+                cols["nhc"] = np.where(first | ~fixes, moving, np.nan)
+                force |= first & fixes & ~static
         if static.any():
             rest = np.where(static, 0.0, np.nan)
             cols["zupt"] = rest
@@ -711,7 +717,11 @@ class GinsFilter:
         c = self.config
         use_vel = c.use_gnss_velocity and g is not None and g.vel_ned is not None
         timed = self._timed(g, slice(0, ng), dual_antenna, float(t[0]), float(t[-1]))
-        sampled = self._sampled(t, odo, st, hb, mg, odo_var)
+        age = None
+        if g is not None and g.n:
+            last = np.searchsorted(g.t, t, side="right") - 1
+            age = np.where(last >= 0, t - g.t[np.maximum(last, 0)], np.inf)
+        sampled = self._sampled(t, odo, st, hb, mg, odo_var, fix_age=age)
         nrec = (n // int(self._lay[LAY.cov_step]) + ng + 3 + int(np.count_nonzero(sampled.force))) if smoother else 0
         log, (o, m, r) = self._kernel(t, dth, dv, timed, sampled, nrec, True, True)
         self.t = float(t[-1])

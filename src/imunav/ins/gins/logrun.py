@@ -62,12 +62,12 @@ MOUNT_CHECK_MARGIN = math.radians(2.0)
 #: Largest odometer speed (m/s) and wheel yaw rate (rad/s, 0.1 deg/s) of a vehicle at rest.
 REST_SPEED = 0.02
 REST_YAW_RATE = math.radians(0.1)
-#: Time between NHC updates with GNSS, s (GinsConfig.nhc_interval_s).  Applied at every 0.2 s covariance step, the
-#: NHC pulls the heading towards the side slip while the fixes correct it: on simulated robot loops with slip σ
-#: 0.05 m/s (white on a 0.4 s grid) and σ 0.8 m fixes the heading is biased by +0.5° in left loops and −0.5° in
-#: right ones (ideal IMU, the slip's σ matched), and gone at 1 s.  Without GNSS the NHC is all that holds the lateral
-#: velocity, and it is applied at every step (on the real Jackal bag, 1 s brings the dead reckoning's end from
-#: 2.3 m to 8.3 m off robot_localization's).
+#: Time between NHC updates while GNSS fixes arrive, s (GinsConfig.nhc_interval_s).  Applied at every 0.2 s
+#: covariance step, the NHC pulls the heading towards the side slip while the fixes correct it: on simulated robot
+#: loops with slip σ 0.05 m/s (white on a 0.4 s grid) and σ 0.8 m fixes the heading is biased by +0.5° in left loops
+#: and −0.5° in right ones (ideal IMU, the slip's σ matched), and gone at 1 s.  In an outage or without GNSS the NHC
+#: is all that holds the lateral velocity, and the filter applies it at every step (on the real Jackal bag, 1 s
+#: brings the dead reckoning's end from 2.3 m to 8.3 m off robot_localization's).
 NHC_INTERVAL = 1.0
 #: The configuration fields of the gyro's errors (the initial heading's σ takes them from the preset and overrides).
 _GYRO_FIELDS = ("gyro_bias_std", "gyro_scale_std", "init_gyro_scale_std")
@@ -503,7 +503,7 @@ def run_log(src: NavSources, options: LogRunOptions | None = None) -> LogRun:
         if o.estimate_odo_lever_arm:
             cfg_kw["odo_lever_arm_std"] = 0.3
     if (o.nhc if o.nhc is not None else wheeled):
-        cfg_kw.update(nhc_noise_std=o.nhc_std, nhc_interval_s=NHC_INTERVAL if src.gnss is not None else None)
+        cfg_kw.update(nhc_noise_std=o.nhc_std, nhc_interval_s=NHC_INTERVAL)
     if src.gnss is not None:
         cfg_kw["gnss_delay_std"] = GNSS_DELAY_STD
     cfg_kw["gate_max_rejections"] = MAX_REJECTIONS
