@@ -62,6 +62,8 @@ MOUNT_CHECK_MARGIN = math.radians(2.0)
 #: Largest odometer speed (m/s) and wheel yaw rate (rad/s, 0.1 deg/s) of a vehicle at rest.
 REST_SPEED = 0.02
 REST_YAW_RATE = math.radians(0.1)
+#: Window of the odometer's mean speed and yaw rate that the rest test reads, s (centred on each sample).
+REST_WINDOW_S = 1.0
 #: Time between NHC updates while GNSS fixes arrive, s (GinsConfig.nhc_interval_s).  Applied at every 0.2 s
 #: covariance step, the NHC pulls the heading towards the side slip while the fixes correct it: on simulated robot
 #: loops with slip σ 0.05 m/s (white on a 0.4 s grid) and σ 0.8 m fixes the heading is biased by +0.5° in left loops
@@ -238,11 +240,25 @@ def _rest_masks(src: NavSources) -> tuple[NDArray[np.bool_], NDArray[np.bool_]]:
         moving = _gnss_moving(src)
         return quiet & ~moving, quiet & ~moving
     o = src.odometer
-    still = quiet & (np.interp(imu.t, o.t, np.abs(o.speed), left=np.nan, right=np.nan) < REST_SPEED)
+    sd = np.zeros(o.t.size) if o.speed_std is None else np.asarray(o.speed_std, dtype=float) * np.ones(o.t.size)
+    speed, n = _window_mean(o.t, o.speed, REST_WINDOW_S / 2.0)
+    # the mean speed over the window is zero within twice its noise: a per-sample test would take the samples whose
+    # noise happens to be small for rest, and leave the odometer only its large errors at rest (NIS 1.3)
+    limit = REST_SPEED + 2.0 * np.sqrt(_window_mean(o.t, sd**2, REST_WINDOW_S / 2.0)[0] / n)
+    still = quiet & (np.interp(imu.t, o.t, np.abs(speed) - limit, left=np.nan, right=np.nan) < 0.0)
     static = still
     if o.yaw_rate is not None:
-        static = still & (np.interp(imu.t, o.t, np.abs(o.yaw_rate), left=np.nan, right=np.nan) < REST_YAW_RATE)
+        rate, _ = _window_mean(o.t, o.yaw_rate, REST_WINDOW_S / 2.0)
+        static = still & (np.interp(imu.t, o.t, np.abs(rate), left=np.nan, right=np.nan) < REST_YAW_RATE)
     return still, static
+
+
+def _window_mean(t: Array, x: Array, half: float) -> tuple[Array, Array]:
+    """The mean of ``x`` over the samples within ``±half`` s of each stamp ``t``, and their count."""
+    c = np.r_[0.0, np.cumsum(x)]
+    a = np.searchsorted(t, t - half, side="left")
+    b = np.searchsorted(t, t + half, side="right")
+    return (c[b] - c[a]) / (b - a), (b - a).astype(float)
 
 
 def _noise_at_rest(src: NavSources, static: NDArray[np.bool_]) -> tuple[Array, Array, str]:
