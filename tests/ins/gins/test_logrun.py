@@ -235,6 +235,12 @@ def test_rest_is_the_odometers_mean_speed_not_each_noisy_sample(tmp_path, noise)
           f"{speed[run.static].max():.3f} m/s")
     assert inner.sum() > 500 and run.static[inner].mean() > 0.99
     assert speed[run.static].max() < 0.02 + 2.0 * noise / math.sqrt(10.0)
+    # a placeholder covariance (σ 1000 m/s) does not make a smoothly cruising robot rest: the test caps σ at 0.1
+    src = read_nav_sources(tmp_path / "robot.bag")
+    o = src.odometer
+    huge = run_log(dataclasses.replace(src, odometer=dataclasses.replace(o, speed_std=np.full(o.t.size, 1e3))),
+                   LogRunOptions(gnss_lever_arm=(0.0, 0.0, -0.3)))
+    assert speed[huge.static].max() < 0.02 + 2.0 * 0.1 / math.sqrt(10.0)
 
 
 @pytest.mark.data

@@ -62,8 +62,10 @@ MOUNT_CHECK_MARGIN = math.radians(2.0)
 #: Largest odometer speed (m/s) and wheel yaw rate (rad/s, 0.1 deg/s) of a vehicle at rest.
 REST_SPEED = 0.02
 REST_YAW_RATE = math.radians(0.1)
-#: Window of the odometer's mean speed and yaw rate that the rest test reads, s (centred on each sample).
+#: Window of the odometer's mean speed and yaw rate that the rest test reads, s (centred on each sample), and the
+#: largest σ of an odometer sample it takes from the log (m/s).
 REST_WINDOW_S = 1.0
+REST_NOISE_MAX = 0.1
 #: Time between NHC updates while GNSS fixes arrive, s (GinsConfig.nhc_interval_s).  Applied at every 0.2 s
 #: covariance step, the NHC pulls the heading towards the side slip while the fixes correct it: on simulated robot
 #: loops with slip σ 0.05 m/s (white on a 0.4 s grid) and σ 0.8 m fixes the heading is biased by +0.5° in left loops
@@ -240,7 +242,9 @@ def _rest_masks(src: NavSources) -> tuple[NDArray[np.bool_], NDArray[np.bool_]]:
         moving = _gnss_moving(src)
         return quiet & ~moving, quiet & ~moving
     o = src.odometer
-    sd = np.zeros(o.t.size) if o.speed_std is None else np.asarray(o.speed_std, dtype=float) * np.ones(o.t.size)
+    # a driver's placeholder covariance (1e3, 1e6) must not widen the test until a cruising vehicle reads as rest
+    sd = (np.zeros(o.t.size) if o.speed_std is None else
+          np.minimum(np.asarray(o.speed_std, dtype=float) * np.ones(o.t.size), REST_NOISE_MAX))
     speed, n = _window_mean(o.t, o.speed, REST_WINDOW_S / 2.0)
     # the mean speed over the window is zero within twice its noise: a per-sample test would take the samples whose
     # noise happens to be small for rest, and leave the odometer only its large errors at rest (NIS 1.3)
