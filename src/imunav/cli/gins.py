@@ -48,10 +48,16 @@ def register(app: typer.Typer) -> None:
     app.add_typer(gins_app, name="gins")
 
 
-def _run_filter(inputs: GinsInputs, setup: GinsSetup, *, smoother: bool = False) -> GinsResult:
+def _run_filter(inputs: GinsInputs, setup: GinsSetup, *, smoother: bool = False, quiet: bool = False) -> GinsResult:
     """The one call of the GNSS/INS filter in the command line (through :func:`imunav.ins.gins.setup.run_setup`,
-    which the lab step calls too)."""
-    return gins_setup.run_setup(inputs.imu, inputs.gnss, setup, odometer=inputs.odometer, smoother=smoother)
+    which the lab step calls too), with a bar over its samples (and the smoother's) on a terminal."""
+    with progress(_PASS_LABEL[smoother], quiet=quiet) as report:
+        return gins_setup.run_setup(inputs.imu, inputs.gnss, setup, odometer=inputs.odometer, smoother=smoother,
+                                    progress=report)
+
+
+#: The bar of the filter's pass over the samples (the smoother's pass counts as many).
+_PASS_LABEL = {False: "gins run: filter (samples)", True: "gins run: filter, then smoother (samples)"}
 
 
 def _say_no_matplotlib(plots: bool) -> None:
@@ -162,14 +168,15 @@ def run_cmd(
         opts = logrun.LogRunOptions(preset=preset, mounting=logrun.parse_rotation(imu_rotation, "--imu-rotation"),
                                     gnss_lever_arm=logrun.parse_vector(gnss_lever_arm, "--gnss-lever-arm"),
                                     smoother=smoother)
-        with progress("gins run: read / filter / write", quiet=quiet, total=3) as report:
+        with progress("gins run: reading the log", quiet=quiet, total=1) as report:
             sources = navlog.read_nav_sources(imu, imu_topic=imu_topic, gnss_topic=gnss_topic, odo_topic=odo_topic,
                                               mag_topic=mag_topic, baro_topic=baro_topic)
-            report(1, 3)
-            run = logrun.run_log(sources, opts)
-            report(2, 3)
+            report(1, 1)
+        with progress(_PASS_LABEL[smoother], quiet=quiet) as report:
+            run = logrun.run_log(sources, opts, progress=report)
+        with progress("gins run: writing", quiet=quiet, total=1) as report:
             summary = outputs.write_log_outputs(out, run, sources, plots=plots)
-            report(3, 3)
+            report(1, 1)
         _say_no_matplotlib(plots)
         m = summary["mounting"]
         line = (f"{summary['imu_samples']} IMU samples, {summary.get('gnss_used', 0)} GNSS fixes used -> {out}; "
@@ -193,9 +200,7 @@ def run_cmd(
         raise ConfigError("give --out DIR, the folder for the results")
     outs = outputs.run_output_paths(folder, smoother=smoother, plots=plots, truth=ref is not None)
     check_outputs([*inputs.paths.values(), truth], outs.values())
-    with progress("gins run: filter", quiet=quiet, total=1) as report:
-        res = _run_filter(inputs, setup, smoother=smoother)
-        report(1, 1)
+    res = _run_filter(inputs, setup, smoother=smoother, quiet=quiet)
     summary = outputs.write_run_outputs(
         folder, res, setup, gnss=inputs.gnss, truth=ref, plots=plots,
         extra={"config": str(config) if config is not None else None,

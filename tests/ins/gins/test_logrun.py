@@ -366,3 +366,22 @@ def test_without_an_odometer_steady_driving_is_not_rest(tmp_path):
     moving = np.hypot(tr.vel_ned[:, 0], tr.vel_ned[:, 1]) > 0.5
     print(f"declared at rest while moving: {run.static[moving].mean():.3f}")
     assert run.static[moving].mean() < 0.1 and run.static[~moving].mean() > 0.3
+
+
+def test_run_log_reports_progress_over_the_filter_and_smoother_passes(tmp_path, monkeypatch):
+    """``run_log(progress=...)`` hears of the filter's pass chunk by chunk and of the smoother's at its end (the
+    command line's bar): increasing counts ending at twice the samples, and the same trajectory as without it."""
+    from imunav.ins.gins import filter as gins_filter
+
+    write_robot_log(simulate_robot_log(4, distance_m=160.0), tmp_path, formats=("ros1",))
+    src = read_nav_sources(tmp_path / "robot.bag")
+    o = LogRunOptions(gnss_lever_arm=(0.0, 0.0, -0.3), smoother=True)
+    plain = run_log(src, o).result
+    monkeypatch.setattr(gins_filter, "PROGRESS_CHUNK", 1000)
+    seen = []
+    res = run_log(src, o, progress=lambda done, total: seen.append((done, total))).result
+    n = src.imu.n
+    assert len(seen) >= n // 1000 and seen[-1] == (2 * n, 2 * n)
+    assert all(b[0] > a[0] and b[1] == 2 * n for a, b in zip(seen, seen[1:]))
+    np.testing.assert_array_equal(res.lla, plain.lla)
+    np.testing.assert_array_equal(res.smoothed.lla, plain.smoothed.lla)

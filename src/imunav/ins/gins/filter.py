@@ -30,6 +30,7 @@ True
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -284,6 +285,10 @@ def _per_sample(n: int, rec: AidRecord | None) -> Array:
         a[rec.sample] = rec.nis
     return a
 
+
+#: IMU samples per kernel call when :meth:`GinsFilter.run` reports progress (about 5 min at 200 Hz; one call is some
+#: 20 ms of the filter).
+PROGRESS_CHUNK = 65536
 
 #: GinsResult's per-sample NIS fields: field prefix -> (an aid of the sampled group, the aid whose own NIS it is or
 #: None for the group's joint statistic)
@@ -626,8 +631,13 @@ class GinsFilter:
         return _sampled(n, cols, force | has_baro | has_mag)
 
     def _kernel(self, t: Array, dth: Array, dv: Array, timed: tuple[kernels.TimedInput, Any, Any],
-                sampled: kernels.SampledInput, nrec: int, first: bool, final: bool) -> tuple[_Log, Any]:
-        """One call of the kernel from the current state over ``t`` (the state at t[0]), in place."""
+                sampled: kernels.SampledInput, nrec: int, first: bool, final: bool,
+                progress: Callable[[int, int], None] | None = None) -> tuple[_Log, Any]:
+        """The kernel from the current state over ``t`` (the state at t[0]), in place.
+
+        With ``progress`` the samples go through in chunks of :data:`PROGRESS_CHUNK`, ``progress(done, n)`` after
+        each: one kernel carries its state (nominal, covariance, clock) from call to call, and each chunk writes
+        into its own slice of the one set of outputs, so the result is the one of a single call, bit for bit."""
         packed, kind, src = timed
         n, nx = t.size, self.P.shape[0]
         cs = int(self._lay[LAY.cov_step])
@@ -636,14 +646,41 @@ class GinsFilter:
         nlog = packed.t.size + (mmax + packed.t.size) * len(aids.SAMPLED)
         o = _output(n, nx, mmax, nlog, nrec)
         c = np.ascontiguousarray
-        m, r, L = kernels.gins_run(kernels.ImuInput(c(t), c(dth), c(dv)), packed, sampled, self._xs, self.P,
-                                   self._carry, self._carry_n, self._prm, self._lay, o, first, final)
+        t, dth, dv = c(t), c(dth), c(dv)
+        if progress is None or n <= PROGRESS_CHUNK:
+            m, r, L = kernels.gins_run(kernels.ImuInput(t, dth, dv), packed, sampled, self._xs, self.P,
+                                       self._carry, self._carry_n, self._prm, self._lay, o, first, final)
+            if progress is not None:
+                progress(n, n)
+            return _split_log(o, L, kind, src, sampled), (o, m, r)
+        m = r = L = 0
+        a = 0  # each chunk starts at the last sample of the one before (its state)
+        while a < n - 1:
+            b = min(a + PROGRESS_CHUNK, n - 1)
+            sl = slice(a, b + 1)
+            part = sampled._replace(z=sampled.z[sl], force=sampled.force[sl])
+            # smoother records: a chunk's record 0 is the previous chunk's last epoch (not rewritten, first=False)
+            r0 = max(r - 1, 0)
+            view = o._replace(xs=o.xs[sl], cov_t=o.cov_t[m:], cov_diag=o.cov_diag[m:], cov_nav=o.cov_nav[m:],
+                              log_t=o.log_t[L:], log_k=o.log_k[L:], log_src=o.log_src[L:], log_rows=o.log_rows[L:],
+                              log_ok=o.log_ok[L:], log_nis=o.log_nis[L:], log_blk=o.log_blk[L:],
+                              **{f: getattr(o, f)[r0:] for f in ("rec_t", "rec_phi", "rec_ppri", "rec_ppost",
+                                                                  "rec_inj", "rec_state")})
+            dm, dr, dL = kernels.gins_run(kernels.ImuInput(t[sl], dth[sl], dv[sl]), packed, part, self._xs, self.P,
+                                          self._carry, self._carry_n, self._prm, self._lay, view, first and a == 0,
+                                          final and b == n - 1)
+            o.log_k[L:L + dL] += a  # the kernel logs its own sample index
+            m, L = m + dm, L + dL
+            r = r0 + dr if nrec else 0
+            a = b
+            progress(b + 1, n)
         return _split_log(o, L, kind, src, sampled), (o, m, r)
 
     def run(self, imu: ImuData | ImuIncrements, gnss: GnssData | None, *, lla0: ArrayLike, vel0: ArrayLike,
             q0: ArrayLike, imu_errors0: ArrayLike | None = None, odometer: OdometerData | None = None,
             smoother: bool = False, static: ArrayLike | None = None, baro: BaroData | None = None,
-            mag: MagnetometerData | None = None, dual_antenna: DualAntennaData | None = None) -> GinsResult:
+            mag: MagnetometerData | None = None, dual_antenna: DualAntennaData | None = None,
+            progress: Callable[[int, int], None] | None = None) -> GinsResult:
         """Run the filter forward over the IMU recording (from a :meth:`reset` at its first sample).
 
         Parameters
@@ -677,6 +714,10 @@ class GinsFilter:
         dual_antenna : DualAntennaData, optional
             Baseline heading and pitch of a dual-antenna GNSS receiver at its own time stamps (needs
             ``config.dual_antenna_baseline``); those outside the IMU span or at its first sample are not used.
+        progress : callable, optional
+            ``progress(done, total)`` as the filter goes through the samples (every :data:`PROGRESS_CHUNK` of
+            them; the result is the same bit for bit), and once more after the smoother: ``total`` is the number of
+            samples, twice that with ``smoother`` (the smoother's pass counts as many).
 
         Returns
         -------
@@ -723,7 +764,9 @@ class GinsFilter:
             age = np.where(last >= 0, t - g.t[np.maximum(last, 0)], np.inf)
         sampled = self._sampled(t, odo, st, hb, mg, odo_var, fix_age=age)
         nrec = (n // int(self._lay[LAY.cov_step]) + ng + 3 + int(np.count_nonzero(sampled.force))) if smoother else 0
-        log, (o, m, r) = self._kernel(t, dth, dv, timed, sampled, nrec, True, True)
+        total = 2 * n if smoother else n
+        log, (o, m, r) = self._kernel(t, dth, dv, timed, sampled, nrec, True, True,
+                                      None if progress is None else (lambda done, _n: progress(done, total)))
         self.t = float(t[-1])
         self._prev = np.vstack([imu.dtheta[-1], imu.dvel[-1]]) if isinstance(imu, ImuIncrements) else np.zeros((2, 3))
         smoothed = None
@@ -731,6 +774,8 @@ class GinsFilter:
             smoothed = rts_smooth(t, o.xs[:, NOM.lla:NOM.lla + 3], o.xs[:, NOM.vel:NOM.vel + 3],
                                   o.xs[:, NOM.q:NOM.q + 4], o.rec_t[:r], o.rec_phi[:r], o.rec_ppri[:r],
                                   o.rec_ppost[:r], o.rec_inj[:r], o.rec_state[:r])
+            if progress is not None:
+                progress(total, total)
         nis = np.full((ng, 2), np.nan)
         acc = np.zeros((ng, 2), dtype=bool)
         for col, name in enumerate(aids.TIMED[:2]):

@@ -24,6 +24,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -394,7 +395,8 @@ def _heading_fit_std(src: NavSources, C_vb: Array, bias: Array, sd_fit: float, t
     return math.sqrt(sd_fit**2 + ((sk * turned) ** 2 + (sb * span) ** 2) / 4.0)
 
 
-def run_log(src: NavSources, options: LogRunOptions | None = None) -> LogRun:
+def run_log(src: NavSources, options: LogRunOptions | None = None, *,
+            progress: Callable[[int, int], None] | None = None) -> LogRun:
     """Run the GNSS/INS filter on a log's navigation sources (module docstring).
 
     Parameters
@@ -403,6 +405,8 @@ def run_log(src: NavSources, options: LogRunOptions | None = None) -> LogRun:
         From :func:`imunav.io.navlog.read_nav_sources`.
     options : LogRunOptions, optional
         Preset, mounting, lever arms, NHC, smoother, configuration overrides.
+    progress : callable, optional
+        ``progress(done, total)`` as the filter and the smoother go (:meth:`GinsFilter.run`).
 
     Returns
     -------
@@ -539,7 +543,7 @@ def run_log(src: NavSources, options: LogRunOptions | None = None) -> LogRun:
     if odo is not None and odo.speed_std is not None:
         odo = dataclasses.replace(odo, speed_std=np.maximum(odo.speed_std, ODO_STD_FLOOR))
     res = GinsFilter(cfg).run(imu, src.gnss, lla0=lla0, vel0=np.zeros(3), q0=q0, odometer=odo,
-                              static=static, baro=None, smoother=o.smoother)
+                              static=static, baro=None, smoother=o.smoother, progress=progress)
     return LogRun(res, cfg, static, coarse, source, initial, o.preset)
 
 

@@ -44,6 +44,7 @@ from __future__ import annotations
 
 import dataclasses
 import os
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -473,7 +474,8 @@ def simulate_drive(duration_s: float = 600.0, *, preset: str = "mems_adis16465",
 
 
 def run_setup(imu: ImuData | ImuIncrements, gnss: GnssData, setup: GinsSetup, *,
-              odometer: OdometerData | None = None, smoother: bool = False) -> GinsResult:
+              odometer: OdometerData | None = None, smoother: bool = False,
+              progress: Callable[[int, int], None] | None = None) -> GinsResult:
     """Run the GNSS/INS filter with a :class:`GinsSetup` (the one call of the filter by the command line and
     the lab step).
 
@@ -489,6 +491,8 @@ def run_setup(imu: ImuData | ImuIncrements, gnss: GnssData, setup: GinsSetup, *,
         Wheel speeds.
     smoother : bool
         Also run the RTS smoother.
+    progress : callable, optional
+        ``progress(done, total)`` as the filter and the smoother go (:meth:`GinsFilter.run`).
 
     Returns
     -------
@@ -503,7 +507,8 @@ def run_setup(imu: ImuData | ImuIncrements, gnss: GnssData, setup: GinsSetup, *,
     if not setup.has_init:
         raise ConfigError(f"{setup.source}: no initial state; give [init] (lla_deg, vel_ned, euler_deg) or a truth")
     return GinsFilter(setup.config).run(imu, gnss, lla0=setup.lla0, vel0=setup.vel0, q0=setup.q0,
-                                        imu_errors0=setup.imu_errors0, odometer=odometer, smoother=smoother)
+                                        imu_errors0=setup.imu_errors0, odometer=odometer, smoother=smoother,
+                                        progress=progress)
 
 
 def track_rmse(nav: NavTrack, truth: NavTrack) -> dict[str, Any]:
