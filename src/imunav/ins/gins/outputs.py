@@ -15,15 +15,13 @@ import importlib.util
 import os
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from numpy.typing import NDArray
 
 from imunav.files import atomic_path, write_json
 from imunav.ins.gins.layout import LAY
-from imunav.ins.gins.logrun import LogOutageReport, LogRun
-from imunav.ins.gins.outage import OutageReport
 from imunav.ins.gins.plot import FIGURE_NAMES, write_gins_figures
 from imunav.ins.gins.result import GinsResult
 from imunav.ins.gins.setup import GinsSetup, SimulatedDrive, track_rmse
@@ -39,9 +37,13 @@ from imunav.io.kfgins import (
     write_kfgins_nav,
     write_kfgins_std,
 )
-from imunav.io.navlog import NavSources
 from imunav.rotation import euler_from_quat, quat_conjugate, quat_multiply
 from imunav.toml import toml_text
+
+if TYPE_CHECKING:  # the log and outage runs' types: `gins run --config` writes its outputs without reading a log
+    from imunav.ins.gins.logrun import LogOutageReport, LogRun
+    from imunav.ins.gins.outage import OutageReport
+    from imunav.io.navlog import NavSources
 
 __all__ = ["DRIVE_FILES", "LOG_FILES", "RUN_FILES", "log_outage_document", "log_summary", "outage_document", "run_output_paths",
            "run_summary", "track_geojson", "write_log_outputs", "write_run_outputs", "write_simulated_drive"]

@@ -13,16 +13,18 @@ from __future__ import annotations
 
 import os
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from imunav import earth
 from imunav.files import atomic_path
 from imunav.ins.gins import GinsResult
-from imunav.ins.gins.outage import OutageReport
 from imunav.io.gnss import GnssData
 from imunav.io.kfgins import DPH, MGAL, PPM, NavTrack
+
+if TYPE_CHECKING:
+    from imunav.ins.gins.outage import OutageReport
 
 __all__ = ["plot_track", "plot_errors", "plot_imu_errors", "plot_outage_drift", "write_gins_figures",
            "FIGURE_NAMES"]
