@@ -67,7 +67,7 @@ def _percent(a: NDArray[np.float64], fmt: str) -> bytes:
     return ((row * a.shape[0]) % tuple(a.ravel().tolist())).encode("latin-1")
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def _fixed_into(x: NDArray[np.float64], ncols: int, width: int, decimals: int,
                 out: NDArray[np.uint8]) -> int:  # pragma: no cover - numba
     """Write ``%-W.Df`` of every value of ``x`` (finite, ``|x| < 2^52 / 10^D``) into ``out``, a space after each

@@ -11,8 +11,10 @@
 
 from __future__ import annotations
 
+import contextvars
 import importlib.util
 import os
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -229,10 +231,16 @@ def write_run_outputs(folder: str | os.PathLike[str], res: GinsResult, setup: Gi
         The summary written (:func:`run_summary` plus ``extra`` and ``figures``).
     """
     names = run_output_paths(folder, smoother=res.smoothed is not None, plots=False)
-    _write_kfgins_files(names, res, setup.config.n_states, res.t, 0)
-    summary = {**(extra or {}), **run_summary(res, setup, truth=truth)}
-    if plots:
-        summary["figures"] = [p.name for p in write_figures(folder, result=res, gnss=gnss, truth=truth)]
+    # The text files (tens of MB for a long drive) are written by a second thread while this one draws the
+    # figures: their formatter (numba, without the GIL) and the file writes run beside matplotlib.  The thread
+    # runs in a copy of this context, so that its files join the command's output transaction.
+    with ThreadPoolExecutor(max_workers=1) as pool:
+        text = pool.submit(contextvars.copy_context().run, _write_kfgins_files, names, res, setup.config.n_states,
+                           res.t, 0)
+        summary = {**(extra or {}), **run_summary(res, setup, truth=truth)}
+        if plots:
+            summary["figures"] = [p.name for p in write_figures(folder, result=res, gnss=gnss, truth=truth)]
+        text.result()
     write_json(names["summary"], summary)
     return summary
 
