@@ -19,14 +19,18 @@ STAMP_DOCS := $(VENV)/.stamp-docs
 
 .PHONY: setup run test docs bench clean browser
 
+# Python 3.11's venv also brings setuptools 65 (8 MB, with its bytecode): nothing imports it at run time, and pip
+# builds packages (this one included: pyproject's build-system) in an isolated environment with the setuptools they
+# ask for, so the venv keeps pip and drops setuptools, as Python >= 3.12's venvs come.
 $(STAMP_VENV):
 	$(PYTHON) -m venv $(VENV)
 	$(BIN)/python -m pip install --upgrade --no-compile pip
+	$(BIN)/python -m pip uninstall -y -q setuptools
 	touch $@
 
 # what the lab and the quick tour need: the library, its core dependencies and the two small pure-Python readers
-# of KF-GINS YAML (gins run --config) and PX4 ULog (no ROS bags: 17 MB with their compression libraries; no torch,
-# no pyarrow, no test peers).
+# of KF-GINS YAML (gins run --config) and PX4 ULog (no ROS bags: 17 MB with their compression libraries; no h5py
+# for HDF5 / MAT v7.3 files, 17 MB; no PyWavelets; no torch, no pyarrow, no test peers).
 # --no-compile: Python compiles the modules the lab imports on first use instead of every module of
 # every dependency at install time (160 MB of .pyc; benchmarks/bench_install_footprint.py).
 # `imunav warmup` then compiles the numba kernels of the quick tour and writes the bytecode of the modules it

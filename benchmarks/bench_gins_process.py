@@ -1,7 +1,9 @@
 """The whole ``imunav gins run --config kf-gins.yaml`` process on a simulated 1,500 s, 100 Hz KF-GINS drive
 (issue 26: at most 3 s warm on 2 cores, figures included).
 
-Each measurement is a fresh process, after one warm-up run (numba's cache present):
+Each measurement is a fresh process, after one warm-up run: numba's cache present, and the bytecode of the modules
+the command imports written (the warm-up runs without ``PYTHONDONTWRITEBYTECODE``), as ``imunav warmup`` leaves an
+install; the measured runs keep the caller's environment:
 
 * the command itself (``python -m imunav.cli.main gins run --config ... --quiet``), with and without figures;
 * its phases, timed inside a fresh process that does what the command does: imports (the CLI, the library,
@@ -33,11 +35,15 @@ def _env() -> dict[str, str]:
     return {**os.environ, "PYTHONPATH": os.pathsep.join(filter(None, [src, os.environ.get("PYTHONPATH")]))}
 
 
-def _cli(args: list[str]) -> tuple[float, float]:
-    """Wall time and CPU time (user + system) of one ``imunav`` process, s."""
+def _cli(args: list[str], *, bytecode: bool = False) -> tuple[float, float]:
+    """Wall time and CPU time (user + system) of one ``imunav`` process, s; ``bytecode``: the process may write
+    the bytecode of what it imports (``PYTHONDONTWRITEBYTECODE`` removed)."""
+    env = _env()
+    if bytecode:
+        env.pop("PYTHONDONTWRITEBYTECODE", None)
     r0 = resource.getrusage(resource.RUSAGE_CHILDREN)
     t = time.perf_counter()
-    subprocess.run([sys.executable, "-m", "imunav.cli.main", *args], check=True, env=_env(), capture_output=True)
+    subprocess.run([sys.executable, "-m", "imunav.cli.main", *args], check=True, env=env, capture_output=True)
     wall = time.perf_counter() - t
     r1 = resource.getrusage(resource.RUSAGE_CHILDREN)
     return wall, (r1.ru_utime - r0.ru_utime) + (r1.ru_stime - r0.ru_stime)
@@ -92,7 +98,8 @@ def main() -> None:
         drive = Path(d) / "drive"
         _cli(["gins", "simulate", "--out", str(drive), "--duration", str(a.duration), "--fs", str(a.fs), "--seed", "1"])
         yaml = str(drive / "kf-gins.yaml")
-        _cli(["gins", "run", "--config", yaml, "--out", str(Path(d) / "warm"), "--quiet"])  # numba caches warm
+        # numba's cache and the bytecode of what the command imports, as `imunav warmup` leaves them
+        _cli(["gins", "run", "--config", yaml, "--out", str(Path(d) / "warm"), "--quiet"], bytecode=True)
         for plots in ("--plots", "--no-plots"):
             runs = [_cli(["gins", "run", "--config", yaml, "--out", str(Path(d) / f"r{k}{plots}"), "--quiet", plots])
                     for k in range(a.runs)]

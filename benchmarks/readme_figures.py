@@ -135,10 +135,13 @@ FIGURES: tuple[Figure, ...] = (
     ),
     Figure(
         "install_footprint",
-        "a fresh venv with `pip install --no-compile .` is 550 MB, 586 MB after a first lab run (target < 600 MB; "
-        "no torch, no pyarrow in it)",
-        "{python} benchmarks/bench_install_footprint.py", 5.0,
-        note="needs network access to PyPI (creates a fresh venv)",
+        "a venv of 555 MB (no torch, no pyarrow, no h5py, no setuptools in it) and 28 MB of numba caches and bytecode "
+        "that `imunav warmup` writes next to the sources, 583 MB in all (target < 600 MB)",
+        "{python} benchmarks/bench_install_footprint.py --make-run", 8.0,
+        values={"venv MB": 555, "caches MB": 28, "total MB": 583},
+        patterns={"venv MB": r"venv (\d+) MB \+", "caches MB": r"sources (\d+) MB =", "total MB": r"= (\d+) MB \("},
+        tol={"venv MB": 3, "caches MB": 2, "total MB": 4},
+        note="needs the package registry or a warm pip cache (a fresh clone, `make run` with PYTHONDONTWRITEBYTECODE=1)",
     ),
     Figure(
         "ulog_px4_agreement",

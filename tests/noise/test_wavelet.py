@@ -96,3 +96,16 @@ def test_bad_inputs():
         wavelet_denoise(np.ones(64), wavelet="nope")
     with pytest.raises(InvalidInputError, match="MAPE"):
         compare_hybrid(np.ones(256), np.zeros(256), 10.0, 1.0, 0.1)
+
+
+def test_without_pywavelets_names_the_extra(monkeypatch):
+    """PyWavelets is the `wavelet` extra: imunav.noise imports without it and the wavelet functions say what to
+    install."""
+    import sys
+
+    from imunav.errors import MissingDependencyError
+
+    for k in [k for k in sys.modules if k == "pywt" or k.startswith("pywt.")]:
+        monkeypatch.setitem(sys.modules, k, None)
+    with pytest.raises(MissingDependencyError, match=r"pip install 'imunav\[wavelet\]'"):
+        wavelet_denoise(np.zeros(256), 100.0)

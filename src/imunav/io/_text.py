@@ -2,19 +2,21 @@
 value.
 
 :func:`format_rows` formats a 2-D array as ``numpy.savetxt(..., fmt=fmt, delimiter=" ")`` would.  A left-aligned
-fixed-point format ``%-W.Df`` (KF-GINS's ``%-15.9lf``; 1 ≤ D ≤ 9) is formatted with integer arithmetic on whole
-arrays: each value is rounded to D decimals exactly as ``printf`` rounds (the exact binary value, ties to even: the
-product ``|x|·10^D`` is carried exactly as a sum of two doubles), its digits are cut out column by column, and the
-fields are packed left-aligned, space-padded to W, with a space between values and a newline after each row.
+fixed-point format ``%-W.Df`` (KF-GINS's ``%-15.9lf``; 1 ≤ D ≤ 9) is formatted with integer arithmetic in one
+compiled loop (numba): each value is rounded to D decimals exactly as ``printf`` rounds (the exact binary value, ties
+to even: the product ``|x|·10^D`` is carried exactly as a sum of two doubles), its digits are written into one byte
+buffer, left-aligned, space-padded to W, with a space between values and a newline after each row.
 Rows holding a value the integer path cannot carry (NaN, ±inf, ``|x| ≥ 2^52 / 10^D``) and every other format go
 through Python's ``%`` operator, one joined template per block of rows.
 """
 
 from __future__ import annotations
 
+import math
 import re
 
 import numpy as np
+from numba import njit
 from numpy.typing import NDArray
 
 __all__ = ["format_rows"]
@@ -65,55 +67,66 @@ def _percent(a: NDArray[np.float64], fmt: str) -> bytes:
     return ((row * a.shape[0]) % tuple(a.ravel().tolist())).encode("latin-1")
 
 
-def _rounded(x: NDArray[np.float64], scale: float) -> NDArray[np.int64]:
-    """``x · scale`` rounded to an integer as ``printf`` rounds the exact product (ties to even), for ``x ≥ 0``,
-    ``x · scale < 2^52`` and ``scale = 10^D`` (D ≤ 9: 21 significant bits, so that Dekker's product is exact)."""
-    p = x * scale
-    hi = x * _SPLIT
-    hi = hi - (hi - x)
-    err = (hi * scale - p) + (x - hi) * scale  # x · scale = p + err exactly
-    n = np.rint(p)
-    d = p - n  # exact: |d| ≤ 1/2 and p < 2^52
-    n += ((d == 0.5) & (err > 0)).astype(float) - ((d == -0.5) & (err < 0)).astype(float)
-    return n.astype(np.int64)
+@njit(cache=True, nogil=True)
+def _fixed_into(x: NDArray[np.float64], ncols: int, width: int, decimals: int,
+                out: NDArray[np.uint8]) -> int:  # pragma: no cover - numba
+    """Write ``%-W.Df`` of every value of ``x`` (finite, ``|x| < 2^52 / 10^D``) into ``out``, a space after each
+    value and a newline after every ``ncols`` values; returns the bytes written.
 
-
-def _digits(t: NDArray[np.uint8], v: NDArray[np.int64], first: int, count: int) -> None:
-    """Write the ``count`` last decimal digits of ``v`` (ASCII) into the columns ``first ...`` of ``t``."""
-    v = v.astype(np.uint64 if count > 9 else np.uint32)
-    for k in range(count):
-        q = v // 10
-        t[:, first + count - 1 - k] = v - q * 10 + 48
-        v = q
+    Each value is rounded as ``printf`` rounds the exact product ``|x| · 10^D`` (ties to even): Dekker's split
+    carries the product exactly as ``p + err`` (``10^D`` has at most 21 significant bits for D ≤ 9)."""
+    scale = 10.0 ** decimals
+    unit = np.int64(10) ** decimals
+    digits = np.empty(24, np.uint8)
+    pos = 0
+    for i in range(x.size):
+        v = x[i]
+        neg = math.copysign(1.0, v) < 0.0  # printf writes the sign of -0.0 and of negatives that round to 0
+        a = abs(v)
+        p = a * scale
+        hi = a * _SPLIT
+        hi = hi - (hi - a)
+        err = (hi * scale - p) + (a - hi) * scale  # a · scale = p + err exactly
+        n = np.rint(p)
+        d = p - n  # exact: |d| ≤ 1/2 and p < 2^52
+        if d == 0.5 and err > 0:
+            n += 1.0
+        elif d == -0.5 and err < 0:
+            n -= 1.0
+        r = np.int64(n)
+        whole, frac = r // unit, r % unit
+        start = pos
+        if neg:
+            out[pos] = 45
+            pos += 1
+        nd = 0
+        while True:
+            digits[nd] = 48 + whole % 10
+            whole //= 10
+            nd += 1
+            if whole == 0:
+                break
+        for k in range(nd - 1, -1, -1):
+            out[pos] = digits[k]
+            pos += 1
+        out[pos] = 46
+        pos += 1
+        for k in range(decimals - 1, -1, -1):
+            out[pos + k] = 48 + frac % 10
+            frac //= 10
+        pos += decimals
+        while pos - start < width:
+            out[pos] = 32
+            pos += 1
+        out[pos] = 10 if (i + 1) % ncols == 0 else 32
+        pos += 1
+    return pos
 
 
 def _fixed(a: NDArray[np.float64], width: int, decimals: int) -> bytes:
     """``%-W.Df`` of finite values below ``2^52 / 10^D`` (see the module docstring), row after row."""
-    x = a.ravel()
-    size = x.size
-    neg = np.signbit(x)  # printf writes the sign of -0.0 and of negatives that round to 0
-    n = _rounded(np.abs(x), 10.0**decimals)
-    whole, frac = np.divmod(n, 10**decimals)
-    k = 16 - decimals  # integer digits: |x| < 2^52 / 10^D < 10^k
-    span = 2 + k + decimals  # sign slot, k integer digits, the point, D decimals
-    t = np.empty((size, span), np.uint8)
-    t[:, 0] = 32
-    _digits(t, whole, 1, k)
-    t[:, k + 1] = 46
-    _digits(t, frac, k + 2, decimals)
-    nd = np.ones(size, np.int64)  # integer digits written (at least one)
-    for j in range(1, k):
-        nd += whole >= 10**j
-    rows = np.flatnonzero(neg)
-    t[rows, k - nd[rows]] = 45
-    start = k + 1 - nd - neg
-    field = np.maximum(width, span - start)
-    cols = int(field.max()) + 1
-    f = np.full((size, cols), 32, np.uint8)
-    for s in np.flatnonzero(np.bincount(start, minlength=span)):
-        r = np.flatnonzero(start == s)
-        f[r, :span - s] = t[r, s:]
-    sep = np.full(size, 32, np.uint8)
-    sep[a.shape[1] - 1::a.shape[1]] = 10
-    f[np.arange(size), field] = sep
-    return f[np.arange(cols) <= field[:, None]].tobytes()
+    # a field holds the sign, at most 16 - D integer digits (|x| < 2^52 / 10^D < 10^(16 - D)), the point and D
+    # decimals, or W characters; one separator after it
+    out = np.empty(a.size * (max(width, 18) + 1), np.uint8)
+    n = _fixed_into(a.ravel(), a.shape[1], width, decimals, out)
+    return out[:n].tobytes()

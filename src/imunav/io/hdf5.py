@@ -1,4 +1,4 @@
-"""HDF5 recordings (h5py).
+"""HDF5 recordings (h5py, the ``hdf5`` extra: ``pip install 'imunav[hdf5]'``).
 
 Layout written (inside ``group``, default the root): datasets ``t`` (N,),
 ``gyro`` (N, 3), ``accel`` (N, 3), optional ``mag`` (N, 3) and ``temp`` (N,),
@@ -18,12 +18,11 @@ import json
 import os
 from collections.abc import Mapping
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
-import h5py
 import numpy as np
 
-from imunav.errors import FileFormatError
+from imunav.errors import FileFormatError, MissingDependencyError
 from imunav.files import atomic_path
 from imunav.io._common import (
     SI_UNITS,
@@ -37,7 +36,35 @@ from imunav.io._common import (
 )
 from imunav.timeseries import ImuData
 
+if TYPE_CHECKING:
+    import h5py
+
 __all__ = ["read_hdf5", "write_hdf5"]
+
+
+def load_h5py(feature: str) -> Any:
+    """The ``h5py`` module; h5py (17 MB with its HDF5 library) is the ``hdf5`` extra, kept out of the core install.
+
+    Parameters
+    ----------
+    feature : str
+        What needs it, for the message (e.g. ``"Reading and writing HDF5 files"``).
+
+    Returns
+    -------
+    module
+        ``h5py``.
+
+    Raises
+    ------
+    MissingDependencyError
+        If h5py is not installed (the message names the extra).
+    """
+    try:
+        import h5py  # optional: the `hdf5` extra
+    except ImportError as exc:
+        raise MissingDependencyError("h5py", "hdf5", feature) from exc
+    return h5py
 
 
 def _text(v: Any) -> Any:
@@ -48,9 +75,10 @@ def _text(v: Any) -> Any:
 
 def _datasets(group: h5py.Group) -> list[str]:
     names: list[str] = []
+    dataset = load_h5py("Reading HDF5 files").Dataset
 
     def visit(name: str, obj: Any) -> None:
-        if isinstance(obj, h5py.Dataset):
+        if isinstance(obj, dataset):
             names.append(name)
 
     group.visititems(visit)
@@ -109,6 +137,7 @@ def read_hdf5(
         From the validation of the values.
     """
     source = check_nonempty(path)
+    h5py = load_h5py("Reading HDF5 files")
     with wrap_read_errors(source, "HDF5"):
         fh = h5py.File(source, "r")
     with fh, wrap_read_errors(source, "HDF5"):
@@ -160,6 +189,7 @@ def write_hdf5(
     units = dict(SI_UNITS)
     if data.mag is not None:
         units["mag"] = data.mag_unit
+    h5py = load_h5py("Writing HDF5 files")
     with atomic_path(path) as tmp:
         with h5py.File(tmp, "w") as fh:
             g = fh.require_group(group)

@@ -1,4 +1,4 @@
-"""MATLAB MAT-files: version 5 (scipy.io) and version 7.3 (HDF5, h5py).
+"""MATLAB MAT-files: version 5 (scipy.io) and version 7.3 (HDF5: h5py, the ``hdf5`` extra).
 
 Variables written: ``t`` (N×1), ``gyro``, ``accel`` (N×3), optional ``mag``
 (N×3) and ``temp`` (N×1), all double SI, plus the char variables
@@ -29,7 +29,6 @@ from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
-import h5py
 import numpy as np
 import scipy.io
 
@@ -44,6 +43,7 @@ from imunav.io._common import (
     parse_header,
     wrap_read_errors,
 )
+from imunav.io.hdf5 import load_h5py
 from imunav.timeseries import ImuData
 
 __all__ = ["read_mat", "write_mat", "mat_version"]
@@ -107,6 +107,7 @@ def _read_v5(source: str) -> tuple[dict[str, Any], dict[str, Any]]:
 def _read_v73(source: str) -> tuple[dict[str, Any], dict[str, Any]]:
     numeric: dict[str, Any] = {}
     strings: dict[str, Any] = {}
+    h5py = load_h5py("Reading MAT v7.3 files")
     with wrap_read_errors(source, "MAT v7.3 (HDF5)"):
         with h5py.File(source, "r") as fh:
             for name, obj in fh.items():
@@ -222,6 +223,7 @@ def _v73_header() -> bytes:
 
 
 def _write_v73(data: ImuData, tmp: Path) -> None:
+    h5py = load_h5py("Writing MAT v7.3 files")
     with h5py.File(tmp, "w", userblock_size=512, libver="earliest") as fh:
         for name, a in _mat_vars(data).items():
             ds = fh.create_dataset(name, data=np.ascontiguousarray(np.asarray(a, dtype=np.float64).T))

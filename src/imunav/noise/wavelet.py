@@ -1,4 +1,5 @@
-"""Wavelet denoising (PyWavelets) and the hybrid DWT + Kalman bias estimator.
+"""Wavelet denoising (PyWavelets, the ``wavelet`` extra: ``pip install 'imunav[wavelet]'``) and the hybrid DWT + Kalman
+bias estimator.
 
 The hybrid estimator is that of Y. Günhan, *Ataletsel ölçüm birimi hatalarının belirlenmesi ve
 düzeltilmesi* (Detection and compensation of IMU errors), MSc thesis, Hacettepe University, 2014, §4.2.
@@ -31,18 +32,22 @@ from dataclasses import dataclass
 from typing import Any, Literal
 
 import numpy as np
-import pywt
 from numba import njit
 from numpy.typing import ArrayLike, NDArray
 
-from imunav.errors import InsufficientDataError, InvalidInputError, NonFiniteError, ShapeError
+from imunav.errors import InsufficientDataError, InvalidInputError, MissingDependencyError, NonFiniteError, ShapeError
 from imunav.noise.allan import check_rows_are_samples
 from imunav.results import Result
 
 __all__ = ["wavelet_denoise", "mad_sigma", "default_level", "bias_kalman", "HybridComparison", "compare_hybrid"]
 
 
-def _pywt():
+def _pywt() -> Any:
+    """The ``pywt`` module; PyWavelets is the ``wavelet`` extra (only the functions of this module use it)."""
+    try:
+        import pywt  # optional: the `wavelet` extra
+    except ImportError as exc:
+        raise MissingDependencyError("PyWavelets", "wavelet", "Wavelet denoising") from exc
     return pywt
 
 

@@ -36,3 +36,36 @@ def test_a_long_track_is_drawn_by_its_extremes():
         assert (x.min(), x.max(), y.min(), y.max()) == (p[:, 1].min(), p[:, 1].max(), p[:, 0].min(), p[:, 0].max())
     finally:
         plt.close(fig)
+
+
+def test_fixed_margins_hold_every_label():
+    """The figures place their axes at fixed margins (no tight_layout, which draws a figure twice): on a short
+    21-state run with a truth, every panel with its tick labels, axis labels and title lies inside the figure,
+    clear of the other panels and of the figure's title."""
+    import matplotlib.pyplot as plt
+
+    from imunav.ins.gins import GinsConfig, GinsFilter
+    from imunav.ins.gins.plot import plot_errors, plot_imu_errors, plot_track
+    from imunav.sim import presets, simulate_imu
+    from imunav.sim.gnss import simulate_gnss
+    from imunav.sim.vehicle import demo_drive, vehicle_trajectory
+
+    truth = vehicle_trajectory(demo_drive(120), fs=50, origin_lla=(np.radians(30.44), np.radians(114.47), 20.0))
+    imu = simulate_imu(truth, presets.get("mems_adis16465"), rng=1)
+    gnss = simulate_gnss(truth, rng=2)
+    res = GinsFilter(GinsConfig.from_preset("mems_adis16465")).run(
+        imu, gnss, lla0=truth.pos_lla[0], vel0=truth.vel_ned[0], q0=truth.q_nb[0])
+    ref = NavTrack(truth.t, truth.pos_lla, truth.vel_ned, truth.q_nb)
+    for fig in (plot_errors(res, ref), plot_imu_errors(res), plot_track(res, gnss, ref)):
+        try:
+            fig.canvas.draw()
+            r = fig.canvas.get_renderer()
+            boxes = [ax.get_tightbbox(r) for ax in fig.axes]
+            assert len(boxes) in (1, 9, 12)
+            for i, b in enumerate(boxes):
+                assert b.x0 >= 0 and b.y0 >= 0 and b.x1 <= fig.bbox.width and b.y1 <= fig.bbox.height, (i, b)
+                assert not any(b.overlaps(o) for o in boxes[i + 1:]), i
+                if fig._suptitle is not None:
+                    assert not b.overlaps(fig._suptitle.get_window_extent(r)), i
+        finally:
+            plt.close(fig)

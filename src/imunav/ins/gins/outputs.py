@@ -11,19 +11,19 @@
 
 from __future__ import annotations
 
+import contextvars
 import importlib.util
 import os
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from numpy.typing import NDArray
 
 from imunav.files import atomic_path, write_json
 from imunav.ins.gins.layout import LAY
-from imunav.ins.gins.logrun import LogOutageReport, LogRun
-from imunav.ins.gins.outage import OutageReport
 from imunav.ins.gins.plot import FIGURE_NAMES, write_gins_figures
 from imunav.ins.gins.result import GinsResult
 from imunav.ins.gins.setup import GinsSetup, SimulatedDrive, track_rmse
@@ -39,9 +39,13 @@ from imunav.io.kfgins import (
     write_kfgins_nav,
     write_kfgins_std,
 )
-from imunav.io.navlog import NavSources
 from imunav.rotation import euler_from_quat, quat_conjugate, quat_multiply
 from imunav.toml import toml_text
+
+if TYPE_CHECKING:  # the log and outage runs' types: `gins run --config` writes its outputs without reading a log
+    from imunav.ins.gins.logrun import LogOutageReport, LogRun
+    from imunav.ins.gins.outage import OutageReport
+    from imunav.io.navlog import NavSources
 
 __all__ = ["DRIVE_FILES", "LOG_FILES", "RUN_FILES", "log_outage_document", "log_summary", "outage_document", "run_output_paths",
            "run_summary", "track_geojson", "write_log_outputs", "write_run_outputs", "write_simulated_drive"]
@@ -227,10 +231,16 @@ def write_run_outputs(folder: str | os.PathLike[str], res: GinsResult, setup: Gi
         The summary written (:func:`run_summary` plus ``extra`` and ``figures``).
     """
     names = run_output_paths(folder, smoother=res.smoothed is not None, plots=False)
-    _write_kfgins_files(names, res, setup.config.n_states, res.t, 0)
-    summary = {**(extra or {}), **run_summary(res, setup, truth=truth)}
-    if plots:
-        summary["figures"] = [p.name for p in write_figures(folder, result=res, gnss=gnss, truth=truth)]
+    # The text files (tens of MB for a long drive) are written by a second thread while this one draws the
+    # figures: their formatter (numba, without the GIL) and the file writes run beside matplotlib.  The thread
+    # runs in a copy of this context, so that its files join the command's output transaction.
+    with ThreadPoolExecutor(max_workers=1) as pool:
+        text = pool.submit(contextvars.copy_context().run, _write_kfgins_files, names, res, setup.config.n_states,
+                           res.t, 0)
+        summary = {**(extra or {}), **run_summary(res, setup, truth=truth)}
+        if plots:
+            summary["figures"] = [p.name for p in write_figures(folder, result=res, gnss=gnss, truth=truth)]
+        text.result()
     write_json(names["summary"], summary)
     return summary
 
