@@ -48,7 +48,8 @@ LAYERS: list[tuple[str, tuple[str, ...]]] = [
 
 #: Top-level packages that may be imported inside a function: optional extras, or matplotlib, which
 #: only drawing needs (``import imunav`` and ``imunav --help`` must not load it).
-OPTIONAL_IMPORTS = frozenset({"torch", "dask", "distributed", "matplotlib", "rosbags", "pyulog", "pyarrow", "yaml"})
+OPTIONAL_IMPORTS = frozenset({"torch", "dask", "distributed", "matplotlib", "rosbags", "pyulog", "pyarrow", "yaml",
+                              "h5py", "pywt"})  # the hdf5 and wavelet extras
 
 
 @dataclass(frozen=True)
