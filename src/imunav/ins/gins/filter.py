@@ -647,16 +647,11 @@ class GinsFilter:
         o = _output(n, nx, mmax, nlog, nrec)
         c = np.ascontiguousarray
         t, dth, dv = c(t), c(dth), c(dv)
-        if progress is None or n <= PROGRESS_CHUNK:
-            m, r, L = kernels.gins_run(kernels.ImuInput(t, dth, dv), packed, sampled, self._xs, self.P,
-                                       self._carry, self._carry_n, self._prm, self._lay, o, first, final)
-            if progress is not None:
-                progress(n, n)
-            return _split_log(o, L, kind, src, sampled), (o, m, r)
+        chunk = n if progress is None else PROGRESS_CHUNK  # without a report: one call over every sample
         m = r = L = 0
         a = 0  # each chunk starts at the last sample of the one before (its state)
         while a < n - 1:
-            b = min(a + PROGRESS_CHUNK, n - 1)
+            b = min(a + chunk, n - 1)
             sl = slice(a, b + 1)
             part = sampled._replace(z=sampled.z[sl], force=sampled.force[sl])
             # smoother records: a chunk's record 0 is the previous chunk's last epoch (not rewritten, first=False)
@@ -673,7 +668,8 @@ class GinsFilter:
             m, L = m + dm, L + dL
             r = r0 + dr if nrec else 0
             a = b
-            progress(b + 1, n)
+            if progress is not None:
+                progress(b + 1, n)
         return _split_log(o, L, kind, src, sampled), (o, m, r)
 
     def run(self, imu: ImuData | ImuIncrements, gnss: GnssData | None, *, lla0: ArrayLike, vel0: ArrayLike,
