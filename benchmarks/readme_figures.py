@@ -286,9 +286,9 @@ FIGURES: tuple[Figure, ...] = (
     ),
     Figure(
         "gins_log_speed",
-        "runs through `imunav gins run` in 15.5 s of CPU time, 14.9 s wall on 2 cores",
+        "runs through `imunav gins run` in 16.1 s of CPU time, 16.2 s wall on 2 cores",
         "{python} benchmarks/bench_gins_log_speed.py", 2.0,
-        values={"CPU s": 15.5, "wall s": 14.9},
+        values={"CPU s": 16.1, "wall s": 16.2},
         patterns={"CPU s": r"s wall, ([\d.]+) s CPU", "wall s": r"2 cores\): ([\d.]+) s wall"},
         info=("CPU s", "wall s"),
         note="one-hour ROS 2 bag (714,383 IMU messages); CPU time (user + system) of the command, machine-dependent; "
