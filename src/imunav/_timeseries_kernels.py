@@ -160,3 +160,64 @@ def moving_average(x, L):
         b = min(n, i + h1)
         out[i] = (c[b] - c[a]) / (b - a)
     return out
+
+
+#: An interval's neighbouring step enters its quadrature when within this factor of the interval's own step (IMU
+#: jitter); a longer or shorter one (a gap, a burst) leaves that side out.
+STEP_RATIO = 1.5
+
+
+@njit(cache=True)
+def _step_ok(a, b):
+    """Whether steps ``a`` and ``b`` (> 0) are within :data:`STEP_RATIO` of each other."""
+    return a > 0.0 and b > 0.0 and a <= STEP_RATIO * b and b <= STEP_RATIO * a
+
+
+@njit(cache=True)
+def interval_integrals(t, x):
+    """Integrals of point samples over each interval: row k holds ``∫ x dt`` over ``[t_{k−1}, t_k]``, row 0 zero.
+
+    The integral of the polynomial through the interval's two samples and one more on each side (a cubic,
+    fourth order: the rule ``h (−x_{k−2} + 13 x_{k−1} + 13 x_k − x_{k+1}) / 24`` on a uniform grid), a quadratic
+    where one side has no sample or a step more than :data:`STEP_RATIO` from the interval's own (the first and
+    last intervals, gaps), the trapezoid where neither side qualifies.  Any spacing: the polynomial's integral is
+    the 2-point Gauss–Legendre sum ``h/2 (p(c − h/(2√3)) + p(c + h/(2√3)))``, exact to degree 3 (Abramowitz &
+    Stegun 1964, 25.4.29), with ``p`` the Lagrange interpolant of the chosen samples.  A sinusoid of ``x = ω h``
+    rad per step integrates to ``1 − 11 x⁴ / 720`` of its amplitude in the interior, the trapezoid's
+    ``(x/2) cot(x/2) ≈ 1 − x² / 12``: at 30 Hz and 2.6 Hz, 0.02 % against 2.5 %.  On a uniform grid the weights
+    of a sample two or more steps from an end add up to ``h`` over its four intervals, as in the trapezoid: white
+    noise integrates to the same random walk.
+    """
+    n = t.shape[0]
+    m = x.shape[1]
+    out = np.zeros((n, m))
+    g = 0.5 / np.sqrt(3.0)
+    nodes = np.empty(4)
+    idx = np.empty(4, dtype=np.int64)
+    for k in range(1, n):
+        h = t[k] - t[k - 1]
+        c = 0
+        if k >= 2 and _step_ok(t[k - 1] - t[k - 2], h):
+            idx[c] = k - 2
+            c += 1
+        idx[c] = k - 1
+        idx[c + 1] = k
+        c += 2
+        if k + 1 < n and _step_ok(t[k + 1] - t[k], h):
+            idx[c] = k + 1
+            c += 1
+        for i in range(c):
+            nodes[i] = t[idx[i]] - t[k - 1]  # local time: the interval is [0, h]
+        for j in range(c):
+            w = 0.0
+            for s in range(2):
+                u = h * (0.5 - g) if s == 0 else h * (0.5 + g)
+                basis = 1.0
+                for i in range(c):
+                    if i != j:
+                        basis *= (u - nodes[i]) / (nodes[j] - nodes[i])
+                w += basis
+            w *= 0.5 * h
+            for col in range(m):
+                out[k, col] += w * x[idx[j], col]
+    return out

@@ -7,6 +7,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
+from imunav._timeseries_kernels import interval_integrals
 from imunav.filters._core import ATT_MID, ATT_START, strapdown_step_local, strapdown_step_ned
 
 # --------------------------------------------------------------------------
@@ -30,23 +31,24 @@ def increments(t, gyr, acc, corrected):
 
     Without ``corrected`` the rate of sample k is held over interval k (first
     order, the thesis / pyshoe convention); with ``corrected`` the point
-    samples are integrated by the trapezoid rule and the two-sample coning and sculling corrections (Savage,
+    samples are integrated by the cubic through the interval's samples and one more on each side
+    (:func:`imunav._timeseries_kernels.interval_integrals`: fourth order; the trapezoid's second order shrinks a
+    2.6 Hz sinusoid sampled at 30 Hz by 2.5 %) and the two-sample coning and sculling corrections (Savage,
     *Strapdown Analytics* §7; Groves 2013 §5.5.4) use the previous interval:
     dth_k += dth_{k-1} x dth_k / 12,
     dv_k  += dth_k x dv_k / 2 + (dth_{k-1} x dv_k + dv_{k-1} x dth_k) / 12.
     Row 0 is zero.
     """
     n = t.shape[0]
-    dth = np.zeros((n, 3))
-    dv = np.zeros((n, 3))
-    for k in range(1, n):
-        h = t[k] - t[k - 1]
-        for j in range(3):
-            if corrected:
-                # point samples: trapezoid over the interval (second order)
-                dth[k, j] = 0.5 * (gyr[k - 1, j] + gyr[k, j]) * h
-                dv[k, j] = 0.5 * (acc[k - 1, j] + acc[k, j]) * h
-            else:
+    if corrected:
+        dth = interval_integrals(t, gyr)
+        dv = interval_integrals(t, acc)
+    else:
+        dth = np.zeros((n, 3))
+        dv = np.zeros((n, 3))
+        for k in range(1, n):
+            h = t[k] - t[k - 1]
+            for j in range(3):
                 dth[k, j] = gyr[k, j] * h
                 dv[k, j] = acc[k, j] * h
     if not corrected:

@@ -19,7 +19,8 @@
       lat, lon, h from the mean velocity and the radii R_N, R_E.
 
 The increments ``Δθ_k, Δv_k`` over ``[t_{k-1}, t_k]`` come from the rates held
-over each interval, optionally with the two-sample coning and sculling
+over each interval, or (``corrected``, the default) from the integral of the cubic through the
+interval's point samples and one more on each side, with the two-sample coning and sculling
 corrections (:func:`coning_sculling_increments`).
 """
 
@@ -104,10 +105,15 @@ def _v3(x: ArrayLike, name: str) -> Array:
 def coning_sculling_increments(data: Any, corrected: bool = True) -> tuple[Array, Array]:
     """Angle (rad) and velocity (m/s) increments, row k over ``[t_{k-1}, t_k]``.
 
-    With ``corrected`` the two-sample coning term ``Δθ_{k-1} × Δθ_k / 12``,
-    the rotation term ``Δθ_k × Δv_k / 2`` and the sculling term
-    ``(Δθ_{k-1} × Δv_k + Δv_{k-1} × Δθ_k) / 12`` are added (Savage 1998;
-    Groves 2013 eqs. 5.97-5.98).  Row 0 is zero.
+    Without ``corrected`` the rate of sample k is held over interval k (first order).  With ``corrected`` the
+    point samples are integrated by the cubic through the interval's two samples and one more on each side,
+    ``h (−x_{k−2} + 13 x_{k−1} + 13 x_k − x_{k+1}) / 24`` on a uniform grid (fourth order; a quadratic at the
+    ends and beside a gap, any spacing: 2-point Gauss–Legendre on the Lagrange interpolant, Abramowitz & Stegun
+    1964, 25.4.29; a sinusoid of ``x = ω h`` rad per step keeps ``1 − 11 x⁴ / 720`` of its amplitude where the
+    trapezoid keeps ``(x/2) cot(x/2) ≈ 1 − x² / 12``: 99.87 % against 97.5 % at 2.6 Hz sampled at 30 Hz), and
+    the two-sample coning term ``Δθ_{k-1} × Δθ_k / 12``, the rotation term ``Δθ_k × Δv_k / 2`` and the sculling
+    term ``(Δθ_{k-1} × Δv_k + Δv_{k-1} × Δθ_k) / 12`` are added (Savage 1998; Groves 2013 eqs. 5.97-5.98).
+    Row 0 is zero.
 
     Parameters
     ----------

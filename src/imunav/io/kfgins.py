@@ -31,6 +31,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from imunav import earth
+from imunav._timeseries_kernels import interval_integrals
 from imunav.errors import ConfigError, InvalidInputError, MissingDependencyError, ShapeError, TimeOrderError
 from imunav.files import atomic_path
 from imunav.io.gnss import lat_lon_radians, read_table, write_table
@@ -128,7 +129,9 @@ class ImuIncrements:
 
     @classmethod
     def from_imu_data(cls, imu: ImuData, rate_hz: float | None = None) -> ImuIncrements:
-        """Increments of point-sampled rates by the trapezoid rule (row 0 over ``1 / rate_hz`` at its own rate).
+        """Increments of point-sampled rates: each interval's integral of the cubic through its samples and one
+        more on each side (:func:`imunav.ins.strapdown.coning_sculling_increments`' rule, before its coning and
+        sculling terms; a quadratic at the ends and beside gaps), row 0 over ``1 / rate_hz`` at its own rate.
 
         Parameters
         ----------
@@ -140,7 +143,8 @@ class ImuIncrements:
         Returns
         -------
         ImuIncrements
-            Row k > 0: ``(x_{k-1} + x_k) / 2 · (t_k − t_{k-1})``; row 0: ``x_0 / rate_hz``.
+            Row k > 0: ``∫ x dt`` over ``[t_{k-1}, t_k]`` (``h (−x_{k−2} + 13 x_{k−1} + 13 x_k − x_{k+1}) / 24``
+            on a uniform grid); row 0: ``x_0 / rate_hz``.
 
         Raises
         ------
@@ -154,9 +158,9 @@ class ImuIncrements:
         dt = np.concatenate([[1.0 / rate], np.diff(t)])
         dth = np.empty((t.size, 3))
         dv = np.empty((t.size, 3))
+        dth[1:] = interval_integrals(t, np.ascontiguousarray(imu.gyro, dtype=np.float64))[1:]
+        dv[1:] = interval_integrals(t, np.ascontiguousarray(imu.accel, dtype=np.float64))[1:]
         dth[0], dv[0] = imu.gyro[0] * dt[0], imu.accel[0] * dt[0]
-        dth[1:] = 0.5 * (imu.gyro[1:] + imu.gyro[:-1]) * dt[1:, None]
-        dv[1:] = 0.5 * (imu.accel[1:] + imu.accel[:-1]) * dt[1:, None]
         return cls(t, dth, dv, dt, {"rate_hz": rate, "source": imu.meta.get("source", "ImuData")})
 
 
