@@ -135,8 +135,8 @@ def test_kernel_layouts_are_contiguous_and_follow_their_tuples():
     # the 15 / 21 / 22-state layouts: blocks back to back in STATE_BLOCKS order, absent ones -1
     for scale, odo, nx in ((False, False, 15), (True, False, 21), (True, True, 22), (False, True, 16)):
         cfg = GinsConfig(gyro_noise_density=1e-3, accel_noise_density=1e-2, gyro_bias_std=1e-4, accel_bias_std=1e-3, scale_factors=scale)
-        prm, lay, sd = kernel_setup(cfg, 100.0, odo)
-        assert lay[LAY.nx] == nx == sd.size
+        prm, lay, P0 = kernel_setup(cfg, 100.0, odo)
+        assert lay[LAY.nx] == nx == P0.shape[0] and np.array_equal(P0, np.diag(np.diag(P0)))
         i = 0
         for block, size in STATE_BLOCKS:
             if lay[getattr(LAY, block)] >= 0:
@@ -150,3 +150,15 @@ def test_kernel_layouts_are_contiguous_and_follow_their_tuples():
     assert set(aids.TIMED) | {a for g in aids.SAMPLED for a in g} == set(aids.AID_NAMES)
     assert aids.N_AIDS + len(aids.SAMPLED) <= layout.MAX_SOURCES  # a rejection counter per update source
     assert max(len(g) for g in aids.SAMPLED) <= layout.MAX_GROUP
+    # a constant plus a Gauss-Markov bias: the two Gauss-Markov blocks last, correlated with the whole biases
+    cfg = GinsConfig(gyro_noise_density=1e-3, accel_noise_density=1e-2, gyro_bias_std=1e-4, accel_bias_std=1e-3,
+                     init_gyro_bias_std=1e-2, init_accel_bias_std=1e-1, bias_model="constant_and_gauss_markov")
+    _, lay, P0 = kernel_setup(cfg, 100.0, True)
+    assert lay[LAY.nx] == 28 and lay[LAY.gyro_bias_gm] == 22 and lay[LAY.accel_bias_gm] == 25
+    for whole, part, gm, init in ((LAY.gyro_bias, LAY.gyro_bias_gm, 1e-4, 1e-2),
+                                   (LAY.accel_bias, LAY.accel_bias_gm, 1e-3, 1e-1)):
+        i, k = lay[whole], lay[part]
+        np.testing.assert_allclose(np.diag(P0)[i:i + 3], init**2)
+        np.testing.assert_allclose(np.diag(P0)[k:k + 3], gm**2)
+        np.testing.assert_allclose(np.diag(P0[i:i + 3, k:k + 3]), gm**2)
+    assert np.linalg.eigvalsh(P0).min() > 0

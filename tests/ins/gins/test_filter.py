@@ -15,6 +15,7 @@ from imunav.sim import presets, simulate_imu
 from imunav.sim.error_model import GaussMarkov, ImuErrorModel, TriadErrors
 from imunav.sim.gnss import simulate_gnss, simulate_magnetometer
 from imunav.sim.vehicle import OdometerData, demo_drive, simulate_baro, simulate_odometer, vehicle_trajectory
+from imunav.timeseries import ImuData
 from imunav.units import DEG
 
 ORIGIN = (30.44 * DEG, 114.47 * DEG, 20.0)
@@ -343,3 +344,32 @@ def test_progress_goes_through_chunks_with_the_same_result_bit_for_bit(drive, mo
     for a in plain.aids:
         np.testing.assert_array_equal(chunked.aids[a].sample, plain.aids[a].sample, err_msg=a)
         np.testing.assert_array_equal(chunked.aids[a].nis, plain.aids[a].nis, err_msg=a)
+
+
+@pytest.mark.parametrize("model", ["constant_and_gauss_markov", "gauss_markov"])
+def test_bias_variance_without_aiding_follows_its_model(model):
+    """A still IMU, no aid, 500 s = 5 T: the filter's variance of each whole bias is its closed form.  A random
+    constant plus a stationary Gauss-Markov part keeps var(c) + var(g) = init^2 at every time (the two-block model:
+    d/dt P_bb = -2 P_bg / T + q = 0 with P_bg = P_gg = sigma_GM^2, q = 2 sigma_GM^2 / T); a Gauss-Markov bias decays
+    from init^2 to sigma_GM^2, sigma_GM^2 + (init^2 - sigma_GM^2) exp(-2 t / T).  A random walk of the Gauss-Markov's
+    noise (the earlier form) grows by 2 sigma_GM^2 t / T: for the accelerometer 9e-4 + 1e-4 * 10 m^2/s^4 at 500 s,
+    twice the closed form."""
+    T, gm_g, gm_a, init_g, init_a = 100.0, 1e-4, 1e-2, 1e-3, 3e-2
+    cfg = GinsConfig(gyro_noise_density=1e-4, accel_noise_density=1e-3, gyro_bias_std=gm_g, accel_bias_std=gm_a,
+                     init_gyro_bias_std=init_g, init_accel_bias_std=init_a, corr_time=T, scale_factors=False,
+                     bias_model=model, gate_alpha=0.0)
+    lat, h = 0.5, 100.0
+    g = float(earth.normal_gravity(lat, h))
+    t = np.arange(0.0, 500.0 + 1e-9, 0.01)
+    gyro = np.tile([earth.OMEGA_E * np.cos(lat), 0.0, -earth.OMEGA_E * np.sin(lat)], (t.size, 1))
+    res = GinsFilter(cfg).run(ImuData(t, gyro, np.tile([0.0, 0.0, -g], (t.size, 1))), None,
+                              lla0=np.array([lat, 0.2, h]), vel0=np.zeros(3), q0=np.array([1.0, 0.0, 0.0, 0.0]))
+    i = 9  # the gyro biases, then the accelerometer's (pos, vel, att first)
+    tk = res.cov_t - res.cov_t[0]
+    for j0, gm, init in ((i, gm_g, init_g), (i + 3, gm_a, init_a)):
+        if model == "gauss_markov":
+            want = gm**2 + (init**2 - gm**2) * np.exp(-2 * tk / T)
+        else:
+            want = np.full(tk.size, init**2)
+        for j in range(3):
+            np.testing.assert_allclose(res.cov_diag[:, j0 + j], want, rtol=1e-3)

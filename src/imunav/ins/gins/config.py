@@ -66,10 +66,13 @@ class GinsConfig:
     bias_model : str
         ``"gauss_markov"`` (default, KF-GINS's model): each bias error state is a first-order Gauss–Markov
         process of ``corr_time``; its initial variance decays to the stationary one within a few ``T``.
-        ``"constant_and_gauss_markov"``: the biases are a random constant (the turn-on bias, of σ
-        ``init_*_bias_std``) plus the Gauss–Markov instability, as a real IMU's are; the bias error states are
-        propagated as random walks driven by the Gauss–Markov's noise (density ``√(2σ²/T)``), so that the
-        filter does not forget the constant part and grow overconfident in the biases and the tilt.
+        ``"constant_and_gauss_markov"``: each bias is a random constant (the turn-on bias) plus the Gauss–Markov
+        instability, as a real IMU's is, together of initial σ ``init_*_bias_std``; the filter carries the
+        Gauss–Markov parts as six more states beside the whole biases, ``δḃ = δġ = −δg / T + w`` (Maybeck 1979,
+        §4.11, shaping filters), so that it neither forgets the constant part (the Gauss–Markov model's
+        overconfidence in the biases and the tilt) nor lets the bias wander like a random walk of the
+        Gauss–Markov's noise density (``√(2σ²/T)``, unbounded: NHC NIS 0.969 and odometer 0.988 on 30 robot
+        drives with that approximation, 0.99x with the two states).
     scale_factors : bool
         True: 21 states; False: 15 (no scale-factor states).
     init_pos_std, init_vel_std, init_att_std : float or array_like, shape (3,)

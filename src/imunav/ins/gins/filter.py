@@ -106,11 +106,13 @@ def _state_blocks(c: GinsConfig, odometer: bool) -> tuple[str, ...]:
     for block, sd in (("mount", c.mounting_std), ("odo_lever", c.odo_lever_arm_std), ("gnss_delay", c.gnss_delay_std)):
         if sd is not None:
             use.add(block)
+    if c.bias_model == "constant_and_gauss_markov":
+        use |= {"gyro_bias_gm", "accel_bias_gm"}
     return tuple(name for name, _ in STATE_BLOCKS if name in use)
 
 
 def kernel_setup(c: GinsConfig, fs: float, odometer: bool) -> tuple[Array, NDArray[np.int64], Array]:
-    """The kernel's core and aid parameters ``prm``, its integer layout ``lay`` and the initial σ of each state.
+    """The kernel's core and aid parameters ``prm``, its integer layout ``lay`` and the initial error covariance.
 
     ``lay`` holds the first index of each state block (−1 when not estimated), the state size, the covariance step
     in samples, then the offset of each aid's parameter block in ``prm`` (``lay[N_LAY + kind]``).
@@ -130,8 +132,10 @@ def kernel_setup(c: GinsConfig, fs: float, odometer: bool) -> tuple[Array, NDArr
         Core parameters (layout ``PRM``) followed by each aid's block.
     lay : numpy.ndarray of int
         The integer layout.
-    sd0 : numpy.ndarray
-        Initial σ of the error states, in state order.
+    P0 : numpy.ndarray, shape (n, n)
+        Initial error covariance, in state order: diagonal, except that a bias made of a random constant and a
+        Gauss–Markov part (``bias_model="constant_and_gauss_markov"``) has its whole bias (initial σ
+        ``init_*_bias_std``) correlated with its Gauss–Markov part (σ ``*_bias_std``): ``cov(c + g, g) = σ_g²``.
     """
     sizes = dict(STATE_BLOCKS)
     lay = np.full(N_LAY + aids.N_AIDS, -1, dtype=np.int64)
@@ -139,7 +143,8 @@ def kernel_setup(c: GinsConfig, fs: float, odometer: bool) -> tuple[Array, NDArr
                            "gyro_bias": c.init_gyro_bias_std, "accel_bias": c.init_accel_bias_std,
                            "gyro_scale": c.init_gyro_scale_std, "accel_scale": c.init_accel_scale_std,
                            "odo_scale": [c.odo_scale_std], "mount": c.mounting_std, "odo_lever": c.odo_lever_arm_std,
-                           "gnss_delay": [c.gnss_delay_std]}
+                           "gnss_delay": [c.gnss_delay_std], "gyro_bias_gm": c.gyro_bias_std,
+                           "accel_bias_gm": c.accel_bias_std}
     nx = 0
     sd = []
     for name in _state_blocks(c, odometer):
@@ -161,8 +166,7 @@ def kernel_setup(c: GinsConfig, fs: float, odometer: bool) -> tuple[Array, NDArr
         n = sizes[name]
         q0, t0 = getattr(PRM, name + "_q"), getattr(PRM, name + "_t")
         prm[q0:q0 + n] = 2.0 * np.asarray(sdv) ** 2 / tc
-        # a bias with a constant part: F = -1/inf = 0 (a random walk driven by the Gauss-Markov's noise)
-        prm[t0:t0 + n] = np.inf if (c.bias_model != "gauss_markov" and name in ("gyro_bias", "accel_bias")) else tc
+        prm[t0:t0 + n] = tc
     for dof in range(1, MAX_ROWS + 1):
         prm[PRM.gate + dof - 1] = float(chi2_ppf(1 - c.gate_alpha, dof)) if c.gate_alpha > 0 else 1e300
     blocks = [prm]
@@ -172,7 +176,14 @@ def kernel_setup(c: GinsConfig, fs: float, odometer: bool) -> tuple[Array, NDArr
         p = np.asarray(model.params(c), dtype=float)
         blocks.append(p)
         off += p.size
-    return np.concatenate(blocks), lay, np.concatenate(sd)
+    P0 = np.diag(np.concatenate(sd) ** 2)
+    for whole, part in (("gyro_bias", "gyro_bias_gm"), ("accel_bias", "accel_bias_gm")):
+        i, k = lay[getattr(LAY, whole)], lay[getattr(LAY, part)]
+        if k >= 0:  # cov(c + g, g) = var g, at most var(c + g) (positive semi-definite)
+            v = np.minimum(P0[i + np.arange(3), i + np.arange(3)], P0[k + np.arange(3), k + np.arange(3)])
+            P0[i + np.arange(3), k + np.arange(3)] = v
+            P0[k + np.arange(3), i + np.arange(3)] = v
+    return np.concatenate(blocks), lay, P0
 
 
 class _Timed:
@@ -470,8 +481,7 @@ class GinsFilter:
         if not (np.isfinite(fs) and fs > 0):
             raise InvalidInputError(f"GinsFilter.reset: fs must be > 0 Hz; got {fs!r}")
         self._xs = _initial_state(lla0, vel0, q0, imu_errors0, self.config)
-        self._prm, self._lay, sd0 = kernel_setup(self.config, float(fs), odometer)
-        self.P = np.diag(sd0**2)
+        self._prm, self._lay, self.P = kernel_setup(self.config, float(fs), odometer)
         self.t = float(t0)
         self._t0 = self.t  # the origin of the NHC's intervals (GinsConfig.nhc_interval_s)
         self._last_fix = -math.inf  # the stamp of the last GNSS fix handed to step()

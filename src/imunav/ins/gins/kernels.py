@@ -91,11 +91,20 @@ def _system(xs, fb, wb, prm, lay, F, Q):
     F[ia + 1, iv] = 1.0 / (RN + alt)
     F[ia + 2, iv + 1] = math.tan(lat) / (RE + alt)
     write_mat3(C, F, ia, ibg, -1.0, ones)
-    for j in range(3):
-        F[ibg + j, ibg + j] = -1.0 / prm[PRM.gyro_bias_t + j]
-        F[iba + j, iba + j] = -1.0 / prm[PRM.accel_bias_t + j]
-        Q[ibg + j, ibg + j] = prm[PRM.gyro_bias_q + j]
-        Q[iba + j, iba + j] = prm[PRM.accel_bias_q + j]
+    for ib, ig, t0, q0 in ((ibg, lay[LAY.gyro_bias_gm], PRM.gyro_bias_t, PRM.gyro_bias_q),
+                           (iba, lay[LAY.accel_bias_gm], PRM.accel_bias_t, PRM.accel_bias_q)):
+        for j in range(3):
+            a = -1.0 / prm[t0 + j]
+            q = prm[q0 + j]
+            Q[ib + j, ib + j] = q
+            if ig < 0:  # the bias a Gauss–Markov process: δḃ = −δb / T + w
+                F[ib + j, ib + j] = a
+            else:  # a constant c plus a Gauss–Markov g, the whole b = c + g: δḃ = δġ = −δg / T + w
+                F[ib + j, ig + j] = a
+                F[ig + j, ig + j] = a
+                Q[ig + j, ig + j] = q
+                Q[ib + j, ig + j] = q
+                Q[ig + j, ib + j] = q
     io = lay[LAY.odo_scale]
     if io >= 0:
         F[io, io] = -1.0 / prm[PRM.odo_scale_t]

@@ -32,6 +32,10 @@ STATE_BLOCKS = (
     ("mount", 3),  # μ: IMU mounting error, vehicle frame (C_vb = exp([μ×]) Ĉ_vb), rad, optional
     ("odo_lever", 3),  # δl: wheel contact point from the IMU, body FRD, m, optional
     ("gnss_delay", 1),  # δτ: GNSS receiver latency (stamp − true time of the fix), s, optional
+    # the Gauss–Markov parts of the biases when each bias is a random constant plus one (bias_model
+    # "constant_and_gauss_markov"): δg_g rad/s, δg_a m/s², optional; the bias blocks above hold the whole bias
+    ("gyro_bias_gm", 3),
+    ("accel_bias_gm", 3),
 )
 #: Blocks every configuration estimates.
 REQUIRED_BLOCKS = ("pos", "vel", "att", "gyro_bias", "accel_bias")
