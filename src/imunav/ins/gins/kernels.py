@@ -15,6 +15,11 @@ position rows dropped, the vertical gravity gradient kept)::
     φ̇  = −[ω_in×] φ − δω_en(δv) − Ĉ δb_g − Ĉ diag(ω^b) δs_g − Ĉ w_g
     δḃ = −δb / T + w_b  (σ² 2/T),   δṡ = −δs / T + w_s
 
+With a bias made of a random constant and a Gauss–Markov part (``bias_model="constant_and_gauss_markov"``) the
+bias blocks hold the whole bias and two more blocks its Gauss–Markov part ``δg`` (Maybeck 1979, §4.11)::
+
+    δḃ = δġ = −δg / T + w_b,   cov(w_b into δb, δg) = the same σ² 2/T
+
 The nominal state is integrated per IMU sample by :func:`imunav.filters._core.strapdown_step_ned`; the covariance
 every ``cov_step`` samples, at each timed aid's stamp and at each sample that carries a forcing sampled aid
 (barometer, magnetometer) by :func:`imunav.filters._core_gins.propagate_cov_series`.  Timed measurements between
