@@ -95,7 +95,7 @@ def test_increments_integrate_cubics_exactly_on_a_jittered_grid():
 
 
 def test_increments_keep_a_sinusoid_at_30_hz():
-    """A 2.6 Hz sinusoid sampled at 30 Hz (x = 2 pi f h = 0.545 rad per step): its velocity increments equal the
+    """A 2.6 Hz sinusoid sampled at 30 Hz (x = 2 pi f h = 0.545 rad per step): its angle increments equal the
     exact ones within 11 x^4 / 720 = 0.13 % of their amplitude (the cubic rule's error), where the trapezoid's
     (x/2) cot(x/2) shrinks them by 2.5 %."""
     f, fs = 2.6, 30.0
