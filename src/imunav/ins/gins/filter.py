@@ -176,13 +176,13 @@ def kernel_setup(c: GinsConfig, fs: float, odometer: bool) -> tuple[Array, NDArr
         p = np.asarray(model.params(c), dtype=float)
         blocks.append(p)
         off += p.size
-    P0 = np.diag(np.concatenate(sd) ** 2)
+    var0 = np.concatenate(sd) ** 2
+    P0 = np.diag(var0)
+    j = np.arange(3)
     for whole, part in (("gyro_bias", "gyro_bias_gm"), ("accel_bias", "accel_bias_gm")):
         i, k = lay[getattr(LAY, whole)], lay[getattr(LAY, part)]
         if k >= 0:  # cov(c + g, g) = var g, at most var(c + g) (positive semi-definite)
-            v = np.minimum(P0[i + np.arange(3), i + np.arange(3)], P0[k + np.arange(3), k + np.arange(3)])
-            P0[i + np.arange(3), k + np.arange(3)] = v
-            P0[k + np.arange(3), i + np.arange(3)] = v
+            P0[i + j, k + j] = P0[k + j, i + j] = np.minimum(var0[i:i + 3], var0[k:k + 3])
     return np.concatenate(blocks), lay, P0
 
 

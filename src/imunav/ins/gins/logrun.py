@@ -346,7 +346,7 @@ def _fit_heading(src: NavSources, p_dr: Array, lla_ref: Array) -> tuple[float, A
     assert g is not None
     imu = src.imu
     ned = lla_to_ned(g.lla, lla_ref)[:, :2]
-    pd = np.column_stack([np.interp(g.t, imu.t, p_dr[:, 0]), np.interp(g.t, imu.t, p_dr[:, 1])])
+    pd = _rows_at(g.t, imu.t, p_dr[:, :2])
     travel = np.r_[0.0, np.cumsum(np.hypot(*np.diff(pd, axis=0).T))]
     end = int(np.searchsorted(travel, max(30.0, 0.25 * travel[-1]))) + 1
     use = np.zeros(g.n, dtype=bool)
