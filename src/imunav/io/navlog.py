@@ -79,7 +79,6 @@ robots whose clock starts at boot are not), PX4 boot time shifted by the GNSS re
 from __future__ import annotations
 
 import os
-from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
@@ -90,9 +89,11 @@ from imunav.errors import ConfigError, FileFormatError, InvalidInputError
 from imunav.io import logs
 from imunav.io.aiding import BaroData, MagnetometerData, OdometerData
 from imunav.io.gnss import GnssData, lat_lon_radians, read_table
-from imunav.io.gpstime import GPS_EPOCH_UNIX, GpsTime, leap_seconds, utc_to_gps
+from imunav.io.gpstime import GPS_EPOCH_UNIX, leap_seconds
+from imunav.io.comma2k19 import is_comma2k19_segment, read_comma2k19
 from imunav.io.kfgins import read_kfgins_imu
 from imunav.io.navinputs import read_odometer
+from imunav.io.navsources import NavSources, SourceInfo
 from imunav.io.rosbag import read_static_tf
 from imunav.io.topics import TopicData, TopicInfo, log_kind, topic_data
 from imunav.rotation import C_FLU_FRD, dcm_from_quat, quat_from_dcm
@@ -118,133 +119,6 @@ _ROS = {"imu": (("sensor_msgs/msg/Imu",),), "gnss": (("sensor_msgs/msg/NavSatFix
 _ULOG = {"imu": (("sensor_combined",), ("vehicle_imu",)), "gnss": (("vehicle_gps_position",), ("sensor_gps",)),
          "odometer": (), "mag": (("vehicle_magnetometer",), ("sensor_mag",)),
          "baro": (("vehicle_air_data",), ("sensor_baro",))}
-
-
-@dataclass(frozen=True)
-class SourceInfo:
-    """One topic feeding the filter.
-
-    Attributes
-    ----------
-    role : str
-        ``imu``, ``gnss``, ``odometer``, ``mag`` or ``baro``.
-    topic : str
-        Topic name (PX4: ``name`` or ``name:instance``).
-    msgtype : str
-        Message type (PX4: the topic name).
-    count : int
-        Messages in the log.
-    used : int
-        Samples kept (after the faults refused and the cut to the IMU span).
-    rate_hz : float or None
-        Mean rate of the messages kept, Hz.
-    """
-
-    role: str
-    topic: str
-    msgtype: str
-    count: int
-    used: int
-    rate_hz: float | None
-
-    def to_dict(self) -> dict[str, Any]:
-        """JSON-ready dict.
-
-        Returns
-        -------
-        dict
-            The attributes by name.
-        """
-        return {k: getattr(self, k) for k in self.__dataclass_fields__}
-
-
-@dataclass(frozen=True)
-class NavSources:
-    """Everything a log holds for a navigation filter, on the IMU's time origin.
-
-    Attributes
-    ----------
-    source : str
-        The log.
-    t0_ns : int
-        The IMU's first stamp on the log's clock, ns (since 1970 for UTC stamps, since boot otherwise);
-        every ``t`` below is in s since it.
-    imu : ImuData
-        Body FRD, SI.
-    gnss, odometer, mag, baro : GnssData, OdometerData, MagnetometerData, BaroData, or None
-        The aids, None when the log has no such topic.
-    topics : dict of str to SourceInfo
-        The topic used for each role present.
-    t0_unix : float or None
-        UTC of ``t0_ns``, s since 1970 (None when the log's clock is not UTC and no receiver gives UTC).
-    imu_to_base : numpy.ndarray, shape (4,), or None
-        Rotation from the IMU's FRD frame to the vehicle base's FRD frame, Hamilton scalar-first, from the
-        bag's ``/tf_static`` (None without one).
-    imu_lever_base : numpy.ndarray, shape (3,), or None
-        The IMU's origin in the base frame, FRD, m (with ``imu_to_base``).
-    meta : dict
-        Per role: faults counted, samples cut, notes (``"gnss": "no GNSS topic in the log"`` ...).
-    """
-
-    source: str
-    t0_ns: int
-    imu: ImuData
-    gnss: GnssData | None
-    odometer: OdometerData | None
-    mag: MagnetometerData | None
-    baro: BaroData | None
-    topics: dict[str, SourceInfo]
-    t0_unix: float | None = None
-    imu_to_base: Array | None = None
-    imu_lever_base: Array | None = None
-    meta: dict[str, Any] = field(default_factory=dict)
-
-    @property
-    def utc_t0_ns(self) -> int:
-        """UTC of ``t0_ns`` in integer ns since 1970 (``t0_ns`` itself for UTC stamps; PX4: shifted by the
-        receiver's offset, to the ns); raises when the time is not UTC."""
-        if self.t0_unix is None:
-            raise InvalidInputError(f"{self.source}: the log's time is not UTC")
-        return int(self.meta.get("utc_offset_ns", 0)) + self.t0_ns
-
-    @property
-    def time_is_utc(self) -> bool:
-        """True when the stamps are UTC (``t0_unix`` known and after 1980-01-06)."""
-        return self.t0_unix is not None and self.t0_unix >= GPS_EPOCH_UNIX
-
-    def gps_time(self, t: ArrayLike) -> GpsTime:
-        """GPS week and seconds of week of times ``t`` (s since ``t0_ns``).
-
-        Parameters
-        ----------
-        t : array_like, shape (N,)
-            Times on the sources' origin, s.
-
-        Returns
-        -------
-        GpsTime
-            With ``is_utc`` False (week 0, ``sow`` the log's own time ``t0_ns·1e-9 + t``) when the stamps
-            are not UTC.
-        """
-        ta = np.atleast_1d(np.asarray(t, dtype=np.float64))
-        if not self.time_is_utc:
-            return GpsTime(np.zeros(ta.size, dtype=np.int64), self.t0_ns * 1e-9 + ta, 0, False)
-        return utc_to_gps(ta, self.utc_t0_ns)
-
-    def to_dict(self) -> dict[str, Any]:
-        """What a run's summary reports about its inputs (JSON-ready).
-
-        Returns
-        -------
-        dict
-            ``source``, ``t0_unix``, ``time_is_utc``, ``sources`` (per role: topic, type, count, used,
-            rate), ``imu_to_base``, ``imu_lever_base`` and the per-role ``meta``.
-        """
-        return {"source": self.source, "t0_unix": self.t0_unix, "time_is_utc": self.time_is_utc,
-                "sources": {k: v.to_dict() for k, v in self.topics.items()},
-                "imu_to_base": None if self.imu_to_base is None else self.imu_to_base.tolist(),
-                "imu_lever_base": None if self.imu_lever_base is None else self.imu_lever_base.tolist(),
-                "meta": self.meta}
 
 
 # -- topic choice --------------------------------------------------------------------------------
@@ -557,20 +431,24 @@ def _mounting(path: str | os.PathLike[str], imu_frame: str | None, base: str) ->
 # -- the reader ----------------------------------------------------------------------------------
 def read_nav_sources(path: str | os.PathLike[str], *, imu_topic: str | None = None, gnss_topic: str | None = None,
                      odo_topic: str | None = None, mag_topic: str | None = None, baro_topic: str | None = None,
-                     gnss_pos_std: ArrayLike | None = None, base_frame: str | None = None) -> NavSources:
-    """Read what feeds a navigation filter from a ROS bag or a PX4 ULog (module docstring).
+                     gnss_pos_std: ArrayLike | None = None, base_frame: str | None = None,
+                     gyro: str | None = None) -> NavSources:
+    """Read what feeds a navigation filter from a ROS bag, a PX4 ULog, a folder of KF-GINS text files or a
+    comma2k19 segment (module docstring).
 
     Parameters
     ----------
     path : str or os.PathLike
         ROS 1 ``.bag``, ROS 2 folder / ``.db3`` / ``.mcap``, PX4 ``.ulg``, or a folder of KF-GINS text files
-        (:func:`read_text_sources`).
+        (:func:`read_text_sources`), or a comma2k19 segment folder (:func:`imunav.io.comma2k19.read_comma2k19`).
     imu_topic, gnss_topic, odo_topic, mag_topic, baro_topic : str, optional
         The topic of each role; None: the only candidate (:func:`choose_nav_topics`).
     gnss_pos_std : array_like, shape (3,) or (), optional
         σ (m, north, east, down) given to GNSS fixes without a usable covariance; None: they are refused.
     base_frame : str, optional
         The vehicle frame of ``/tf_static`` (default: the odometry's child frame, else ``base_link``).
+    gyro : {"calibrated", "raw"}, optional
+        A comma2k19 segment's gyro (default calibrated); refused for other logs, whose IMU topic says.
 
     Returns
     -------
@@ -588,9 +466,17 @@ def read_nav_sources(path: str | os.PathLike[str], *, imu_topic: str | None = No
         If ``rosbags`` / ``pyulog`` is not installed.
     """
     source = os.fspath(path)
+    named = [FLAGS[r] for r, v in (("imu", imu_topic), ("gnss", gnss_topic), ("odometer", odo_topic),
+                                   ("mag", mag_topic), ("baro", baro_topic)) if v is not None]
+    if is_comma2k19_segment(path):
+        if named or base_frame is not None:
+            raise InvalidInputError(f"{source}: a comma2k19 segment has one sensor of each kind; leave out "
+                                    f"{', '.join(named) or 'base_frame'} (--gyro chooses the calibrated or raw gyro)")
+        return read_comma2k19(path, gyro=gyro or "calibrated", gnss_pos_std=gnss_pos_std)
+    if gyro is not None:
+        raise InvalidInputError(f"{source}: --gyro chooses a comma2k19 segment's gyro; this log's IMU topic is "
+                                "chosen with --imu-topic")
     if is_text_log(path):
-        named = [FLAGS[r] for r, v in (("imu", imu_topic), ("gnss", gnss_topic), ("odometer", odo_topic),
-                                       ("mag", mag_topic), ("baro", baro_topic)) if v is not None]
         if named or base_frame is not None:
             raise InvalidInputError(f"{source}: a folder of KF-GINS text files names its files in {TEXT_LOG_CONFIG}; "
                                     f"leave out {', '.join(named) or 'base_frame'}")
@@ -688,8 +574,9 @@ def is_text_log(path: str | os.PathLike[str]) -> bool:
 
 
 def is_nav_log(path: str | os.PathLike[str]) -> bool:
-    """True for what :func:`read_nav_sources` reads: a bag, a ULog (:func:`imunav.io.topics.log_kind`) or a folder
-    of KF-GINS text files (:func:`is_text_log`).
+    """True for what :func:`read_nav_sources` reads: a bag, a ULog (:func:`imunav.io.topics.log_kind`), a folder
+    of KF-GINS text files (:func:`is_text_log`) or a comma2k19 segment
+    (:func:`imunav.io.comma2k19.is_comma2k19_segment`).
 
     Parameters
     ----------
@@ -701,7 +588,7 @@ def is_nav_log(path: str | os.PathLike[str]) -> bool:
     bool
         Whether the path is a log.
     """
-    return log_kind(path) is not None or is_text_log(path)
+    return log_kind(path) is not None or is_text_log(path) or is_comma2k19_segment(path)
 
 
 def text_log_intervals(t: ArrayLike) -> Array:

@@ -291,8 +291,11 @@ def _noise_at_rest(src: NavSources, static: NDArray[np.bool_]) -> tuple[Array, A
                                "and the preset's is used)")
 
 
-def _initial_tilt(src: NavSources, static: NDArray[np.bool_]) -> tuple[Array, float, int]:
-    """The down direction in IMU axes at the start (the first rest, else the first second) and its σ (rad)."""
+def _initial_tilt(src: NavSources, static: NDArray[np.bool_], C_vb: Array) -> tuple[Array, float, int]:
+    """The down direction in IMU axes at the start and its σ (rad): the mean specific force of the first rest
+    (σ 0.5°), else of the first second less the vehicle's own acceleration ``(dv/dt, v ω_z, 0)`` from the odometer
+    (a car that starts moving: 0.2 m/s² of acceleration is a tilt of 1.2°; σ 2°), else of the first second as it
+    is (σ 5°)."""
     imu = src.imu
     fs = 1.0 / float(np.median(np.diff(imu.t)))
     idx = np.flatnonzero(static[: int(60 * fs)])
@@ -304,7 +307,35 @@ def _initial_tilt(src: NavSources, static: NDArray[np.bool_]) -> tuple[Array, fl
         run = np.arange(min(imu.n, max(2, int(fs))))
         f = imu.accel[run].mean(axis=0)
         sd = math.radians(5.0)
+        o = src.odometer
+        if o is not None and o.t[0] <= imu.t[run[0]] + 1.0 and o.t.size > 2:
+            t = imu.t[run]
+            h = 0.25
+            v = np.interp(t, o.t, o.speed)
+            a_x = (np.interp(t + h, o.t, o.speed) - np.interp(t - h, o.t, o.speed)) / (2 * h)
+            w_z = (imu.gyro[run] @ C_vb.T)[:, 2]
+            a_v = np.column_stack([a_x, v * w_z, np.zeros(run.size)])
+            f = (imu.accel[run] - a_v @ C_vb).mean(axis=0)
+            sd = math.radians(2.0)
     return -f / np.linalg.norm(f), sd, int(run[-1])
+
+
+def _initial_velocity(src: NavSources, still: NDArray[np.bool_], C_nv: Array, psi_sd: float) -> tuple[Array, float]:
+    """The NED velocity at the first IMU sample and its σ (m/s): zero (σ 0.05) at rest; moving, the odometer's
+    speed along the vehicle's initial axis ``C_nv e_x`` (σ the speed's error and the heading's, at least 0.5), else
+    the first GNSS velocity within 1 s (σ 0.5); else zero with σ 0.5 (a car that starts moving at 8 m/s must not
+    start standing still: the filter took 20 s to recover and its latency state absorbed the error)."""
+    t0 = float(src.imu.t[0])
+    if still[0]:
+        return np.zeros(3), 0.05
+    o = src.odometer
+    if o is not None and o.t[0] <= t0 + 0.5:
+        v = float(np.interp(t0, o.t, o.speed))
+        return C_nv @ np.array([v, 0.0, 0.0]), max(0.5, abs(v) * psi_sd)
+    g = src.gnss
+    if g is not None and g.vel_ned is not None and g.t[0] <= t0 + 1.0 and np.all(np.isfinite(g.vel_ned[0])):
+        return np.asarray(g.vel_ned[0], dtype=float).copy(), 0.5
+    return np.zeros(3), 0.5
 
 
 def _mag_heading(src: NavSources, d_b: Array, C_vb: Array) -> float:
@@ -470,7 +501,7 @@ def run_log(src: NavSources, options: LogRunOptions | None = None, *,
         q_vb, source, mount_sd = coarse.q_vb, "estimated", coarse.std
     C_vb = dcm_from_quat(q_vb)
     # -- initial attitude, heading and position
-    d_b, tilt_sd, i_rest = _initial_tilt(src, still)
+    d_b, tilt_sd, i_rest = _initial_tilt(src, still, C_vb)
     bias0 = imu.gyro[static].mean(axis=0) if static.sum() > 10 else np.zeros(3)
     ref = np.array([0.0, 0.0, 0.0]) if src.gnss is None else src.gnss.lla[0].copy()
     initial: dict[str, Any] = {} if mount_note is None else {"mounting": mount_note}
@@ -502,6 +533,7 @@ def run_log(src: NavSources, options: LogRunOptions | None = None, *,
                      [0.0, 0.0, 1.0]]) @ _levelling(g_v)
     q0 = quat_from_dcm(C_nv @ C_vb)
     lla0 = ned_to_lla(pos0[None, :], ref)[0] if src.gnss is not None else ref
+    vel0, vel_sd = _initial_velocity(src, still, C_nv, psi_sd)
     initial.update(lla0=lla0.tolist(), heading_deg=math.degrees(psi0), heading_std_deg=math.degrees(psi_sd))
     # -- configuration
     # the levelling reads the accelerometer bias as tilt: φ_N ≈ b_E / g, φ_E ≈ −b_N / g (Groves 2013, §5.6.2), so
@@ -514,7 +546,7 @@ def run_log(src: NavSources, options: LogRunOptions | None = None, *,
     cfg_kw: dict[str, Any] = dict(
         lever_arm=C_vb.T @ np.asarray(o.gnss_lever_arm, dtype=float),
         mounting=np.asarray(euler_from_dcm(C_vb), dtype=float), init_pos_std=pos_sd,
-        init_vel_std=0.05 if still[0] else 0.5,
+        init_vel_std=vel_sd,
         init_att_std=(float(tilt_n[0]), float(tilt_n[1]), max(psi_sd, math.radians(0.5))),
         )
     if mount_sd is not None:
@@ -546,7 +578,7 @@ def run_log(src: NavSources, options: LogRunOptions | None = None, *,
     odo = src.odometer
     if odo is not None and odo.speed_std is not None:
         odo = dataclasses.replace(odo, speed_std=np.maximum(odo.speed_std, ODO_STD_FLOOR))
-    res = GinsFilter(cfg).run(imu, src.gnss, lla0=lla0, vel0=np.zeros(3), q0=q0, odometer=odo,
+    res = GinsFilter(cfg).run(imu, src.gnss, lla0=lla0, vel0=vel0, q0=q0, odometer=odo,
                               static=static, baro=None, smoother=o.smoother, progress=progress)
     return LogRun(res, cfg, static, coarse, source, initial, o.preset)
 

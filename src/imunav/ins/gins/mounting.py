@@ -16,6 +16,13 @@ al. 2010):
    low-passed by the same moving mean).  Its σ is that of the mean of ``chunks`` independent stretches of the drive
    (batch means): the residuals are correlated in time, so a per-sample σ would be too small.
 
+**Levelling while driving.**  A car on a highway may never stand still.  With less than one second at rest and a
+speed, the gravity direction comes from the moving samples instead: the specific force less the vehicle's own
+acceleration, ``f − C_bv (dv/dt, v ω_z, 0)`` (the mounting's yaw from step 2, the two steps iterated twice),
+averaged over the drive.  The road's mean grade and crossfall over the drive are then part of the tilt's error
+(σ ``drive_level_std``, 2° by default: the mean of a highway's grade over a minute), which the filter's NHC
+narrows for the pitch.
+
 ``C_vb = R_z(ψ) C_Lb``.  The GNSS/INS filter takes it as its initial mounting with these σ and refines it
 (``GinsConfig.mounting_std``): the NHC and the odometer observe pitch and yaw, the levelling at rest
 (``level_noise_std``) the roll.
@@ -89,7 +96,7 @@ def _moving_mean(x: Array, w: int) -> Array:
 def estimate_mounting(imu: ImuData, static: ArrayLike, *, speed_t: ArrayLike | None = None,
                       speed: ArrayLike | None = None, accel_bias_std: float = 0.0,
                       level_noise_std: float = math.radians(1.0), window_s: float = 1.0, chunks: int = 10,
-                      min_accel: float = 0.05) -> MountingEstimate:
+                      min_accel: float = 0.05, drive_level_std: float = math.radians(2.0)) -> MountingEstimate:
     """The IMU's mounting in a wheeled vehicle from its rest and its accelerations (module docstring).
 
     Parameters
@@ -111,6 +118,9 @@ def estimate_mounting(imu: ImuData, static: ArrayLike, *, speed_t: ArrayLike | N
         Batches of the yaw's batch-means σ (>= 3).
     min_accel : float
         Samples whose horizontal acceleration is below this (m/s²) are left out of the yaw fit.
+    drive_level_std : float
+        σ of the road's mean slope over the drive, rad, when the levelling is done while driving (less than 1 s at
+        rest, a speed given).
 
     Returns
     -------
@@ -120,7 +130,8 @@ def estimate_mounting(imu: ImuData, static: ArrayLike, *, speed_t: ArrayLike | N
     Raises
     ------
     InsufficientDataError
-        With fewer than one second at rest, or (with a speed) too little acceleration to see the yaw.
+        With fewer than one second at rest and no speed, or (with a speed) too little acceleration to see the
+        yaw.
     InvalidInputError
         If the speed does not overlap the IMU, or an option is out of range.
     ShapeError
@@ -132,48 +143,87 @@ def estimate_mounting(imu: ImuData, static: ArrayLike, *, speed_t: ArrayLike | N
     if not (chunks >= 3 and window_s > 0 and accel_bias_std >= 0 and level_noise_std >= 0):
         raise InvalidInputError("estimate_mounting: chunks >= 3, window_s > 0, accel_bias_std and level_noise_std >= 0")
     fs = 1.0 / float(np.median(np.diff(imu.t)))
-    if st.sum() < fs:
+    driving = bool(st.sum() < fs)
+    if driving and speed is None:
         raise InsufficientDataError(f"estimate_mounting: {int(st.sum())} samples at rest ({st.sum() / fs:.2f} s); "
-                                    "the levelling needs at least 1 s standing still (or give the mounting)")
-    f_rest = imu.accel[st].mean(axis=0)
-    g = float(np.linalg.norm(f_rest))
-    C_Lb = _levelling(-f_rest / g)
-    tilt_sd = math.sqrt(level_noise_std**2 + (accel_bias_std / g) ** 2 + float(np.mean(imu.accel[st].var(axis=0))) /
-                        (g**2 * st.sum()))
-    psi, psi_sd, nmov, batches = 0.0, math.pi, 0, []
-    if speed is not None:
-        ts = np.asarray(speed_t, dtype=float)
-        vs = np.asarray(speed, dtype=float)
-        inside = (imu.t >= ts[0]) & (imu.t <= ts[-1])
-        if ts.size < 2 or not inside.any():
-            raise InvalidInputError("estimate_mounting: the speed does not overlap the IMU")
-        w = max(1, int(round(window_s * fs)))
-        v = _moving_mean(np.interp(imu.t, ts, vs), w)
-        fL = _moving_mean(imu.accel @ C_Lb.T, w)
-        wz = _moving_mean(imu.gyro @ C_Lb.T, w)[:, 2]
-        ax = np.gradient(v, imu.t)
-        ay = v * wz
-        use = inside & ~st & (np.hypot(ax, ay) > min_accel)
-        nmov = int(use.sum())
-        if nmov < chunks * w:
-            raise InsufficientDataError(f"estimate_mounting: {nmov} moving samples with more than {min_accel} m/s² "
-                                        "of acceleration; the yaw needs turns and speed changes (or give the mounting)")
-        cross = fL[:, 0] * ay - fL[:, 1] * ax
-        dot = fL[:, 0] * ax + fL[:, 1] * ay
-        psi = math.atan2(cross[use].sum(), dot[use].sum())
-        idx = np.flatnonzero(use)
-        wts, dev = [], []
-        for part in np.array_split(idx, chunks):
-            b = math.atan2(cross[part].sum(), dot[part].sum())
-            batches.append(b)
-            dev.append(math.remainder(b - psi, 2 * math.pi))
-            wts.append(float((ax[part] ** 2 + ay[part] ** 2).sum()))
-        wa, da = np.array(wts), np.array(dev)
-        psi_sd = math.sqrt(float(np.sum(wa * da**2) / np.sum(wa)) / (chunks - 1))
+                                    "the levelling needs at least 1 s standing still, or the vehicle's speed to "
+                                    "level while driving (or give the mounting)")
+    if not driving:
+        f_rest = imu.accel[st].mean(axis=0)
+        g = float(np.linalg.norm(f_rest))
+        C_Lb = _levelling(-f_rest / g)
+        tilt_sd = math.sqrt(level_noise_std**2 + (accel_bias_std / g) ** 2 +
+                            float(np.mean(imu.accel[st].var(axis=0))) / (g**2 * st.sum()))
+        psi, psi_sd, nmov, batches = 0.0, math.pi, 0, []
+        if speed is not None:
+            psi, psi_sd, nmov, batches, _ = _yaw_fit(imu, st, C_Lb, speed_t, speed, fs, window_s, chunks, min_accel)
+    else:
+        # the mean specific force of the moving samples holds the vehicle's mean acceleration: take it out with the
+        # mounting found so far, twice
+        ts, vs = np.asarray(speed_t, dtype=float), np.asarray(speed, dtype=float)
+        C_Lb = _levelling(-imu.accel.mean(axis=0) / np.linalg.norm(imu.accel.mean(axis=0)))
+        for _ in range(3):
+            psi, psi_sd, nmov, batches, kin = _yaw_fit(imu, st, C_Lb, ts, vs, fs, window_s, chunks, min_accel)
+            Cz = np.array([[math.cos(psi), -math.sin(psi), 0.0], [math.sin(psi), math.cos(psi), 0.0],
+                           [0.0, 0.0, 1.0]])
+            C_vb = Cz @ C_Lb
+            f_rest = (imu.accel[kin.inside] - kin.acc_v[kin.inside] @ C_vb).mean(axis=0)
+            C_Lb = _levelling(-f_rest / np.linalg.norm(f_rest))
+        g = float(np.linalg.norm(f_rest))
+        tilt_sd = math.sqrt(drive_level_std**2 + (accel_bias_std / g) ** 2)
     Cz = np.array([[math.cos(psi), -math.sin(psi), 0.0], [math.sin(psi), math.cos(psi), 0.0], [0.0, 0.0, 1.0]])
     C_vb = Cz @ C_Lb
     return MountingEstimate(quat_from_dcm(C_vb), np.asarray(euler_from_dcm(C_vb), dtype=float),
                             np.array([tilt_sd, tilt_sd, psi_sd]), int(st.sum()), nmov,
-                            {"gravity_at_rest": f_rest.tolist(), "yaw_batches": batches,
-                             "method": "levelling at rest + yaw from the vehicle's accelerations"
+                            {"gravity_at_rest" if not driving else "gravity_while_driving": f_rest.tolist(),
+                             "yaw_batches": batches,
+                             "method": ("levelling while driving (no rest: the specific force less the vehicle's "
+                                        "acceleration, averaged over the drive) + yaw from the vehicle's "
+                                        "accelerations") if driving else
+                             "levelling at rest + yaw from the vehicle's accelerations"
                              if speed is not None else "levelling at rest (no speed: yaw unknown)"})
+
+
+@dataclass(frozen=True)
+class _Kinematics:
+    """The vehicle's own acceleration ``(dv/dt, v ω_z, 0)`` in its axes at each IMU sample, and where the speed
+    covers the IMU."""
+
+    acc_v: Array
+    inside: NDArray[np.bool_]
+
+
+def _yaw_fit(imu: ImuData, st: NDArray[np.bool_], C_Lb: Array, speed_t: ArrayLike, speed: ArrayLike, fs: float,
+             window_s: float, chunks: int, min_accel: float) -> tuple[float, float, int, list[float], _Kinematics]:
+    """Step 2 of the module docstring: the mounting's yaw ψ in the levelled frame ``C_Lb``, its batch-means σ, the
+    moving samples used, each batch's yaw, and the vehicle's kinematic acceleration."""
+    ts = np.asarray(speed_t, dtype=float)
+    vs = np.asarray(speed, dtype=float)
+    inside = (imu.t >= ts[0]) & (imu.t <= ts[-1])
+    if ts.size < 2 or not inside.any():
+        raise InvalidInputError("estimate_mounting: the speed does not overlap the IMU")
+    w = max(1, int(round(window_s * fs)))
+    v = _moving_mean(np.interp(imu.t, ts, vs), w)
+    fL = _moving_mean(imu.accel @ C_Lb.T, w)
+    wz = _moving_mean(imu.gyro @ C_Lb.T, w)[:, 2]
+    ax = np.gradient(v, imu.t)
+    ay = v * wz
+    use = inside & ~st & (np.hypot(ax, ay) > min_accel)
+    nmov = int(use.sum())
+    if nmov < chunks * w:
+        raise InsufficientDataError(f"estimate_mounting: {nmov} moving samples with more than {min_accel} m/s² "
+                                    "of acceleration; the yaw needs turns and speed changes (or give the mounting)")
+    cross = fL[:, 0] * ay - fL[:, 1] * ax
+    dot = fL[:, 0] * ax + fL[:, 1] * ay
+    psi = math.atan2(cross[use].sum(), dot[use].sum())
+    idx = np.flatnonzero(use)
+    wts, dev, batches = [], [], []
+    for part in np.array_split(idx, chunks):
+        b = math.atan2(cross[part].sum(), dot[part].sum())
+        batches.append(b)
+        dev.append(math.remainder(b - psi, 2 * math.pi))
+        wts.append(float((ax[part] ** 2 + ay[part] ** 2).sum()))
+    wa, da = np.array(wts), np.array(dev)
+    psi_sd = math.sqrt(float(np.sum(wa * da**2) / np.sum(wa)) / (chunks - 1))
+    acc_v = np.column_stack([ax, ay, np.zeros_like(ax)])
+    return psi, psi_sd, nmov, batches, _Kinematics(acc_v, inside & ~st)
