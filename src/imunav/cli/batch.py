@@ -17,7 +17,7 @@ from imunav.cli._console import make_console
 from imunav.cli._errors import fail
 from imunav.cli._lazy import lazy
 from imunav.cli._progress import shows_progress
-from imunav.errors import InvalidInputError
+from imunav.errors import ConfigError, InvalidInputError
 from imunav.files import check_outputs, write_json
 
 batch = lazy("imunav.lab.batch")
@@ -230,7 +230,10 @@ def gins_cmd(
                                                  "vehicle FRD, m: 'x,y,z'."),
     preset: str = typer.Option("consumer_mems", "--preset", help="The IMU error preset whose noise model the "
                                                                  "filter uses."),
-    smoother: bool = typer.Option(False, "--smoother", help="Also write the RTS-smoothed solution of each log."),
+    smoother: bool = typer.Option(False, "--smoother", help="The RTS-smoothed trajectory of each log (the default; "
+                                                            "kept for earlier command lines)."),
+    forward_only: bool = typer.Option(False, "--forward-only", help="The forward filter's trajectory only (real "
+                                                                    "time), without the smoother."),
     plots: bool = typer.Option(True, "--plots/--no-plots", help="Write each log's figures."),
     executor: str = _EXEC, workers: Optional[int] = _WORKERS, address: Optional[str] = _ADDR, quiet: bool = _QUIET,
     overwrite: bool = _OVERWRITE,
@@ -251,10 +254,12 @@ def gins_cmd(
     """
 
     check_outputs([folder], [json_out], run_folders=[out if out is not None else folder / "gins"])
+    if smoother and forward_only:
+        _fail(ConfigError("--forward-only and --smoother contradict each other; the smoother is the default"))
     try:
         opts = logrun.LogRunOptions(preset=preset, mounting=logrun.parse_rotation(imu_rotation, "--imu-rotation"),
                                     gnss_lever_arm=logrun.parse_vector(gnss_lever_arm, "--gnss-lever-arm"),
-                                    smoother=smoother)
+                                    smoother=not forward_only)
         topics = {"imu_topic": imu_topic, "gnss_topic": gnss_topic, "odo_topic": odo_topic, "mag_topic": mag_topic,
                   "baro_topic": baro_topic}
         s = batch.gins_batch(folder, out_dir=out, topics=topics, options=opts, plots=plots, executor=executor,

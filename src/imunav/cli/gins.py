@@ -32,6 +32,7 @@ gins_setup = lazy("imunav.ins.gins.setup")
 kfgins = lazy("imunav.io.kfgins")
 logs = lazy("imunav.io.logs")
 navlog = lazy("imunav.io.navlog")
+comma2k19 = lazy("imunav.io.comma2k19")
 sim = lazy("imunav.sim")
 
 gins_app = typer.Typer(
@@ -113,6 +114,40 @@ _ODO_OPT = typer.Option(None, "--odo", help="Odometer file: time s, forward spee
                                                 "the speed's sigma, m/s).")
 _STATES_OPT = typer.Option(None, "--states", help="15 (no scale factors) or 21 (default: the configuration's, "
                                                   "else 21).")
+# the options of a log's sources, shared by `run` and `outage-test`
+_IMU_TOPIC_OPT = typer.Option(None, "--imu-topic", help="With a log: the IMU topic (sensor_msgs/Imu, PX4 "
+                                                        "sensor_combined).")
+_GNSS_TOPIC_OPT = typer.Option(None, "--gnss-topic", help="With a log: the GNSS topic (NavSatFix, PX4 "
+                                                          "vehicle_gps_position / sensor_gps).")
+_ODO_TOPIC_OPT = typer.Option(None, "--odo-topic", help="With a log: the wheel odometry topic (nav_msgs/Odometry, "
+                                                        "TwistStamped).")
+_MAG_TOPIC_OPT = typer.Option(None, "--mag-topic", help="With a log: the magnetometer topic.")
+_BARO_TOPIC_OPT = typer.Option(None, "--baro-topic", help="With a log: the barometer topic.")
+_GYRO_OPT = typer.Option(None, "--gyro", help="With a comma2k19 segment: 'calibrated' (Android's bias-corrected "
+                                              "gyro, the default) or 'raw'.")
+_ROTATION_OPT = typer.Option(None, "--imu-rotation", help="With a log: the IMU's mounting in the vehicle, "
+                                                          "'qw,qx,qy,qz' or ZYX 'roll,pitch,yaw' in degrees (default: "
+                                                          "the bag's /tf_static, else estimated).")
+_LEVER_OPT = typer.Option(None, "--gnss-lever-arm", help="With a log: the GNSS antenna from the IMU, vehicle FRD, "
+                                                         "m: 'x,y,z'.")
+_PRESET_LOG_OPT = typer.Option("consumer_mems", "--preset", help="With a log: the IMU error preset whose noise "
+                                                                 "model the filter uses.")
+
+
+def _log_sources(path: Path, *, imu_topic: Optional[str], gnss_topic: Optional[str], odo_topic: Optional[str],
+                 mag_topic: Optional[str], baro_topic: Optional[str], gyro: Optional[str]) -> "navlog.NavSources":
+    """A log's sources with the topics (or, for a comma2k19 segment, the gyro) the options choose."""
+    return navlog.read_nav_sources(path, imu_topic=imu_topic, gnss_topic=gnss_topic, odo_topic=odo_topic,
+                                   mag_topic=mag_topic, baro_topic=baro_topic, gyro=gyro)
+
+
+def _log_truth(path: Optional[Path]) -> "NavTrack | None":
+    """A reference for a log's run: a KF-GINS ``.nav`` file, or a comma2k19 segment folder (its fused pose)."""
+    if path is None:
+        return None
+    if comma2k19.is_comma2k19_segment(path):
+        return comma2k19.read_comma2k19_pose(path)
+    return kfgins.read_kfgins_nav(path)
 
 
 @gins_app.command("run")
@@ -122,28 +157,25 @@ def run_cmd(
     config: Optional[Path] = _CONFIG_OPT,
     odo: Optional[Path] = _ODO_OPT,
     out: Optional[Path] = typer.Option(None, "--out", help="Output folder (default with a YAML: its outputpath)."),
-    truth: Optional[Path] = typer.Option(None, "--truth", help="Truth .nav file (KF-GINS format): RMSE in "
+    truth: Optional[Path] = typer.Option(None, "--truth", help="Truth .nav file (KF-GINS format), or with a log a "
+                                                               "comma2k19 segment (its fused pose): RMSE in "
                                                                "summary.json, error figure; the initial state when "
                                                                "the TOML has no [init]."),
-    smoother: bool = typer.Option(False, "--smoother", help="Also write the RTS-smoothed solution (*_smoothed.nav)."),
+    smoother: bool = typer.Option(False, "--smoother", help="Also write the RTS-smoothed solution (*_smoothed.nav); "
+                                                            "a log's run has it by default (--forward-only)."),
     states: Optional[int] = _STATES_OPT,
     plots: bool = typer.Option(True, "--plots/--no-plots", help="Write the figures (track, errors, IMU errors)."),
-    imu_topic: Optional[str] = typer.Option(None, "--imu-topic", help="With a log: the IMU topic (sensor_msgs/Imu, "
-                                                                      "PX4 sensor_combined)."),
-    gnss_topic: Optional[str] = typer.Option(None, "--gnss-topic", help="With a log: the GNSS topic (NavSatFix, PX4 "
-                                                                        "vehicle_gps_position / sensor_gps)."),
-    odo_topic: Optional[str] = typer.Option(None, "--odo-topic", help="With a log: the wheel odometry topic "
-                                                                      "(nav_msgs/Odometry, TwistStamped)."),
-    mag_topic: Optional[str] = typer.Option(None, "--mag-topic", help="With a log: the magnetometer topic."),
-    baro_topic: Optional[str] = typer.Option(None, "--baro-topic", help="With a log: the barometer topic."),
-    imu_rotation: Optional[str] = typer.Option(None, "--imu-rotation", help="With a log: the IMU's mounting in the "
-                                                                            "vehicle, 'qw,qx,qy,qz' or ZYX 'roll,pitch,"
-                                                                            "yaw' in degrees (default: the bag's "
-                                                                            "/tf_static, else estimated)."),
-    gnss_lever_arm: Optional[str] = typer.Option(None, "--gnss-lever-arm", help="With a log: the GNSS antenna from "
-                                                                                "the IMU, vehicle FRD, m: 'x,y,z'."),
-    preset: str = typer.Option("consumer_mems", "--preset", help="With a log: the IMU error preset whose noise "
-                                                                 "model the filter uses."),
+    imu_topic: Optional[str] = _IMU_TOPIC_OPT,
+    gnss_topic: Optional[str] = _GNSS_TOPIC_OPT,
+    odo_topic: Optional[str] = _ODO_TOPIC_OPT,
+    mag_topic: Optional[str] = _MAG_TOPIC_OPT,
+    baro_topic: Optional[str] = _BARO_TOPIC_OPT,
+    gyro: Optional[str] = _GYRO_OPT,
+    imu_rotation: Optional[str] = _ROTATION_OPT,
+    gnss_lever_arm: Optional[str] = _LEVER_OPT,
+    preset: str = _PRESET_LOG_OPT,
+    forward_only: bool = typer.Option(False, "--forward-only", help="With a log: the forward filter's trajectory "
+                                                                    "only (real time), without the smoother."),
     quiet: bool = typer.Option(False, "--quiet", "-q", help="No progress bar."),
 ) -> None:
     """Run the GNSS/INS filter on a robot's or a drone's log (ROS 1 bag, ROS 2 bag folder, PX4 ULog, or a folder of
@@ -153,29 +185,37 @@ def run_cmd(
     Example (a real robot's ROS 1 bag, no GNSS: dead reckoning): imunav gins run
     ../shared/data/ros_bags/jackal_test2.bag --out jackal-run
 
+    Example (a real car: a comma2k19 segment, against comma's fused pose): imunav gins run
+    ../shared/data/comma2k19/example1 --truth ../shared/data/comma2k19/example1 --out car
+
     Example: imunav gins run --config drive/kf-gins.yaml --out drive/result --truth drive/truth.nav
 
     Example: imunav gins run drive/imu.txt drive/gnss.txt --config drive/gins.toml --out res --truth drive/truth.nav
     """
     if imu is not None and navlog.is_nav_log(imu):
-        if gnss is not None or config is not None or odo is not None or truth is not None or states is not None:
+        if gnss is not None or config is not None or odo is not None or states is not None:
             raise ConfigError(f"{imu} is a log: it names its own sources; choose topics with --imu-topic / "
                               "--gnss-topic / --odo-topic / --mag-topic / --baro-topic instead of files")
         if out is None:
             raise ConfigError("give --out DIR, the folder for the results")
-        outs = [*outputs.run_output_paths(out, smoother=smoother, plots=plots).values(), out / outputs.LOG_FILES["geojson"]]
-        check_outputs([imu], outs)
+        if forward_only and smoother:
+            raise ConfigError("--forward-only and --smoother contradict each other; a log's run has the smoother "
+                              "by default")
+        outs = outputs.log_output_paths(out, smoother=not forward_only, plots=plots, truth=truth is not None)
+        check_outputs([p for p in (imu, truth) if p is not None], outs.values())
         opts = logrun.LogRunOptions(preset=preset, mounting=logrun.parse_rotation(imu_rotation, "--imu-rotation"),
                                     gnss_lever_arm=logrun.parse_vector(gnss_lever_arm, "--gnss-lever-arm"),
-                                    smoother=smoother)
+                                    smoother=not forward_only)
         with progress("gins run: reading the log", quiet=quiet, total=1) as report:
-            sources = navlog.read_nav_sources(imu, imu_topic=imu_topic, gnss_topic=gnss_topic, odo_topic=odo_topic,
-                                              mag_topic=mag_topic, baro_topic=baro_topic)
+            sources = _log_sources(imu, imu_topic=imu_topic, gnss_topic=gnss_topic, odo_topic=odo_topic,
+                                   mag_topic=mag_topic, baro_topic=baro_topic, gyro=gyro)
+            ref = _log_truth(truth)
             report(1, 1)
-        with progress(_PASS_LABEL[smoother], quiet=quiet) as report:
+        with progress(_PASS_LABEL[not forward_only], quiet=quiet) as report:
             run = logrun.run_log(sources, opts, progress=report)
+        ref_run = None if ref is None else logrun.truth_on_sources(ref, sources).at(run.result.t)
         with progress("gins run: writing", quiet=quiet, total=1) as report:
-            summary = outputs.write_log_outputs(out, run, sources, plots=plots)
+            summary = outputs.write_log_outputs(out, run, sources, plots=plots, truth=ref_run)
             report(1, 1)
         _say_no_matplotlib(plots)
         m = summary["mounting"]
@@ -185,12 +225,19 @@ def run_cmd(
         if summary["odometer_scale"] is not None:
             line += f"; odometer scale {1 + summary['odometer_scale']['value']:.4f}"
         if summary["gnss_time_offset_s"] is not None:
-            line += f"; GNSS latency {summary['gnss_time_offset_s']['value']:.3f} s"
+            lat = summary["gnss_time_offset_s"]
+            line += f"; GNSS latency {lat['value']:.3f} +- {lat['std']:.3f} s"
+        if "rmse" in summary:
+            line += ("; horizontal RMSE against the truth " +
+                     f"{float(np.hypot(*summary['rmse']['pos_ned_m'][:2])):.3f} m")
         typer.echo(line)
+        typer.echo(f"honesty: {summary['honesty']['verdict']}")
         return
     rot_opts = [k for k, v in (("--imu-topic", imu_topic), ("--gnss-topic", gnss_topic), ("--odo-topic", odo_topic),
-                               ("--mag-topic", mag_topic), ("--baro-topic", baro_topic),
+                               ("--mag-topic", mag_topic), ("--baro-topic", baro_topic), ("--gyro", gyro),
                                ("--imu-rotation", imu_rotation), ("--gnss-lever-arm", gnss_lever_arm)) if v is not None]
+    if forward_only:
+        rot_opts.append("--forward-only")
     if rot_opts:
         raise ConfigError(f"{', '.join(rot_opts)} go with a log (a .bag, a ROS 2 bag folder or a .ulg); the files of "
                           "this run name their own inputs")
@@ -232,10 +279,16 @@ def outage_cmd(
     odo: Optional[Path] = _ODO_OPT,
     truth: Optional[Path] = typer.Option(None, "--truth", help="Truth .nav file on the IMU stamps (required with "
                                                                "files; with a log, the reference instead of the "
-                                                               "removed fixes)."),
+                                                               "removed fixes: a .nav, or a comma2k19 segment's "
+                                                               "fused pose)."),
+    truth_std: float = typer.Option(0.0, "--truth-std", help="With a log and --truth: the reference's own horizontal "
+                                                             "sigma, m, added to the predicted sigma (a peer's pose "
+                                                             "is not survey truth)."),
     out: Path = typer.Option(..., "--out", help="Output folder: outage.json and the drift figure."),
     preset: Optional[str] = typer.Option(None, "--preset", help="Without files: simulate a drive with this IMU "
-                                                                "preset (default navigation_a15)."),
+                                                                "preset (default navigation_a15); with a log: the "
+                                                                "IMU preset of the filter's noise model "
+                                                                "(consumer_mems)."),
     duration: Optional[float] = typer.Option(None, "--duration", help="Simulated drive length, s [default: 1200]."),
     fs: Optional[float] = typer.Option(None, "--fs", help="Simulated IMU rate, Hz [default: 100]."),
     seed: Optional[int] = typer.Option(None, "--seed", help="Seed of the simulated drive [default: 1]."),
@@ -246,8 +299,14 @@ def outage_cmd(
     length: float = typer.Option(60.0, "--length", help="Outage length, s."),
     shifts: str = typer.Option("0,60,120", "--shifts", help="Start shifts of the first outage, s (one run each)."),
     states: Optional[int] = _STATES_OPT,
-    gnss_lever_arm: Optional[str] = typer.Option(None, "--gnss-lever-arm", help="With a log: the GNSS antenna from "
-                                                                                "the IMU, vehicle FRD, m: 'x,y,z'."),
+    gnss_lever_arm: Optional[str] = _LEVER_OPT,
+    imu_topic: Optional[str] = _IMU_TOPIC_OPT,
+    gnss_topic: Optional[str] = _GNSS_TOPIC_OPT,
+    odo_topic: Optional[str] = _ODO_TOPIC_OPT,
+    mag_topic: Optional[str] = _MAG_TOPIC_OPT,
+    baro_topic: Optional[str] = _BARO_TOPIC_OPT,
+    gyro: Optional[str] = _GYRO_OPT,
+    imu_rotation: Optional[str] = _ROTATION_OPT,
     plots: bool = typer.Option(True, "--plots/--no-plots", help="Write the outage drift figure (not with a log: "
                                                                 "its outage.json holds every outage)."),
     quiet: bool = typer.Option(False, "--quiet", "-q", help="No progress bar."),
@@ -269,24 +328,35 @@ def outage_cmd(
     Example (the same outages against the drive's truth, a KF-GINS .nav): imunav gins outage-test robot/robot.bag
     --gnss-lever-arm 0,0,-0.3 --truth robot/kfgins/truth.nav --converge 60 --every 120 --length 60 --shifts
     0,30,60 --out robot-outage-truth
+
+    Example (a real car, 10 s outages against comma's fused pose, its own sigma 0.5 m): imunav gins outage-test
+    ../shared/data/comma2k19/example1 --truth ../shared/data/comma2k19/example1 --truth-std 0.5 --converge 20
+    --every 15 --length 10 --shifts 0,5,10 --out car-outage
     """
     sh = _shifts(shifts)
     if imu is not None and navlog.is_nav_log(imu):
-        extra = [n for n, v in (("GNSS file", gnss), ("--config", config), ("--odo", odo), ("--preset", preset),
+        extra = [n for n, v in (("GNSS file", gnss), ("--config", config), ("--odo", odo),
                                 ("--duration", duration), ("--fs", fs), ("--seed", seed), ("--rtk/--spp", rtk),
                                 ("--states", states)) if v is not None]
         if extra:
             raise ConfigError(f"{imu} is a log: the fixes removed during each outage (or --truth) are the "
                               f"reference; leave out {', '.join(extra)}")
+        if truth_std < 0 or not np.isfinite(truth_std):
+            raise ConfigError(f"--truth-std {truth_std}: the reference's sigma is >= 0 m")
+        if truth_std > 0 and truth is None:
+            raise ConfigError("--truth-std is the sigma of the --truth reference; give --truth")
         json_path = out / OUTAGE_NAME
         check_outputs([p for p in (imu, truth) if p is not None], [json_path])
-        sources = navlog.read_nav_sources(imu)
-        ref = kfgins.read_kfgins_nav(truth) if truth is not None else None
+        sources = _log_sources(imu, imu_topic=imu_topic, gnss_topic=gnss_topic, odo_topic=odo_topic,
+                               mag_topic=mag_topic, baro_topic=baro_topic, gyro=gyro)
+        ref = _log_truth(truth)
         with progress("gins outage-test: the run with every fix, then one per shift", quiet=quiet,
                       total=len(sh) + 1) as report:
-            opts = logrun.LogRunOptions(gnss_lever_arm=logrun.parse_vector(gnss_lever_arm, "--gnss-lever-arm"))
+            opts = logrun.LogRunOptions(preset=preset or "consumer_mems",
+                                        mounting=logrun.parse_rotation(imu_rotation, "--imu-rotation"),
+                                        gnss_lever_arm=logrun.parse_vector(gnss_lever_arm, "--gnss-lever-arm"))
             rep = logrun.log_outage_test(sources, opts, converge_s=converge, every_s=every, length_s=length,
-                                         shifts_s=sh, truth=ref, progress=report)
+                                         shifts_s=sh, truth=ref, truth_std=truth_std, progress=report)
         doc = outputs.log_outage_document(rep, source=str(imu))
         write_json(json_path, doc)
         rms = doc["rms"]
@@ -298,16 +368,24 @@ def outage_cmd(
             v = rms[key]
             return "within the noise" if v is None else f"{v:.3f} m"
 
+        whose = "the fixes'" if rms["reference"] == "removed fixes" else "the reference's"
         floor = "" if not noise or dr is None else (
-            f"; less the fixes' own noise ({noise:.2f} m): {above('end_above_noise_m')} vs "
+            f"; less {whose} own noise ({noise:.2f} m): {above('end_above_noise_m')} vs "
             f"{above('dead_reckoning_above_noise_m')}")
         typer.echo(f"{rms['n_outages']} outages of {length:g} s against the {rms['reference']}: RMS horizontal "
                    f"error at their end {rms['end_m']:.3f} m, largest {rms['max_m']:.3f} m; {dr_text}{floor}; "
-                   f"{100 * rms['contained_3sigma']:.0f} % inside the predicted 3 sigma -> {json_path}")
+                   f"{100 * rms['contained_3sigma']:.0f} % inside the predicted 3 sigma (largest normalised error "
+                   f"{rms['normalised_max']:.2f}) -> {json_path}")
         return
-    if gnss_lever_arm is not None:
-        raise ConfigError("--gnss-lever-arm goes with a log (a .bag, a ROS 2 bag folder or a .ulg); files and the "
-                          "simulated drive name their own lever arm")
+    log_only = [k for k, v in (("--gnss-lever-arm", gnss_lever_arm), ("--imu-topic", imu_topic),
+                               ("--gnss-topic", gnss_topic), ("--odo-topic", odo_topic), ("--mag-topic", mag_topic),
+                               ("--baro-topic", baro_topic), ("--gyro", gyro), ("--imu-rotation", imu_rotation))
+                if v is not None]
+    if truth_std != 0.0:
+        log_only.append("--truth-std")
+    if log_only:
+        raise ConfigError(f"{', '.join(log_only)} go(es) with a log (a .bag, a ROS 2 bag folder, a .ulg, a "
+                          "comma2k19 segment); files and the simulated drive name their own sources")
     files = imu is not None or gnss is not None or config is not None
     if files and preset is not None:
         raise ConfigError("--preset simulates a drive; give either --preset or files (IMU GNSS --config, or a "

@@ -36,7 +36,7 @@ from imunav.errors import ConfigError, InvalidInputError, MissingDependencyError
 from imunav.files import atomic_path
 from imunav.io.gnss import lat_lon_radians, read_table, write_table
 from imunav.results import EulerMixin
-from imunav.rotation import quat_from_euler
+from imunav.rotation import quat_from_euler, quat_interp
 from imunav.timeseries import ImuData
 from imunav.units import DEG, HOUR
 
@@ -287,6 +287,41 @@ class NavTrack(EulerMixin):
             if np.shape(getattr(self, name)) != (n, w):
                 raise ShapeError(f"NavTrack.{name} must have shape ({n}, {w}); got {np.shape(getattr(self, name))}")
 
+
+    def at(self, t: ArrayLike) -> NavTrack:
+        """The track at times ``t`` inside its span: position and velocity interpolated linearly, the attitude by
+        slerp (:func:`imunav.rotation.quat_interp`); times outside the span are left out.  A reference at 20 Hz
+        (comma2k19's pose) is compared with a run at the IMU's stamps this way.
+
+        Parameters
+        ----------
+        t : array_like, shape (M,)
+            Increasing times, s (this track's clock).
+
+        Returns
+        -------
+        NavTrack
+            At the times of ``t`` within ``[self.t[0], self.t[-1]]``.
+
+        Raises
+        ------
+        InvalidInputError
+            If no time of ``t`` lies in the span, or the track has fewer than 2 rows.
+        """
+        tq = np.asarray(t, dtype=float)
+        if self.t.size < 2:
+            raise InvalidInputError(f"{self.meta.get('source', 'the track')}: {self.t.size} row(s); interpolation "
+                                    "needs 2")
+        tq = tq[(tq >= self.t[0]) & (tq <= self.t[-1])]
+        if tq.size == 0:
+            raise InvalidInputError(f"{self.meta.get('source', 'the track')} ({self.t[0]:.3f}..{self.t[-1]:.3f} s) "
+                                    "covers none of the times asked for")
+
+        def lin(x: Array) -> Array:
+            return np.column_stack([np.interp(tq, self.t, x[:, j]) for j in range(x.shape[1])])
+
+        return NavTrack(tq, lin(self.lla), lin(self.vel_ned), quat_interp(self.t, self.q_nb, tq), self.week,
+                        dict(self.meta))
 
     def difference(self, truth: NavTrack, *, tol_s: float = 1e-6) -> tuple[Array, Array, Array, Array]:
         """Errors of this track against ``truth`` at their common time stamps.

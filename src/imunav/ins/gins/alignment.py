@@ -9,6 +9,9 @@
 * :func:`motion_alignment`: for a land vehicle that cannot gyrocompass, heading and pitch from the GNSS velocity
   once the speed exceeds ``min_speed`` (the non-holonomic vehicle moves along its body x axis), roll zero;
   the filter starts at that fix (Groves 2013, §14.4.1).
+* :func:`gyro_bias_in_motion`: a vehicle that never stands still reads its gyro bias over the drive: the mean
+  rate is the bias plus the attitude's change over the span, whose roll and pitch return and whose heading change
+  the GNSS course gives.
 * :func:`fine_alignment`: after a static coarse alignment, the GNSS/INS filter itself over the static period
   (zero-velocity and zero-angular-rate updates, the known position) refines the attitude and estimates the IMU
   biases, and reports the attitude σ of its covariance (Groves 2013, §14.2.2: "fine alignment" by Kalman
@@ -25,7 +28,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from imunav.attitude.alignment import align
-from imunav.earth import OMEGA_E
+from imunav.earth import OMEGA_E, lla_to_ned
 from imunav.errors import InsufficientDataError, InvalidInputError, ShapeError
 from imunav.ins.gins import GinsConfig, GinsFilter
 from imunav.io.gnss import GnssData
@@ -34,7 +37,8 @@ from imunav.results import EulerMixin
 from imunav.rotation import quat_from_euler
 from imunav.timeseries import ImuData
 
-__all__ = ["Alignment", "static_alignment", "motion_alignment", "fine_alignment"]
+__all__ = ["Alignment", "static_alignment", "motion_alignment", "gnss_course", "gyro_bias_in_motion",
+           "fine_alignment"]
 
 Array = NDArray[np.float64]
 
@@ -184,6 +188,93 @@ def motion_alignment(gnss: GnssData, *, min_speed: float = 5.0, t_start: float |
     cross = np.hypot(gnss.vel_std[k, 0] * math.sin(yaw), gnss.vel_std[k, 1] * math.cos(yaw))
     sd = float(np.hypot(cross, slip_std) / sp[k])
     return Alignment(float(gnss.t[k]), np.asarray(q), sd, "GNSS velocity (track)", gnss.lla[k].copy(), v[k].copy())
+
+
+def gnss_course(gnss: GnssData, *, min_speed: float = 3.0, baseline_s: float = 1.0) -> tuple[Array, Array]:
+    """The vehicle's course over ground from its fixes, unwrapped: ``ψ = atan2(ΔE, ΔN)`` between fixes
+    ``baseline_s`` apart, where the speed over that baseline is at least ``min_speed``.
+
+    Parameters
+    ----------
+    gnss : GnssData
+        The fixes.
+    min_speed : float
+        Slowest speed whose displacement defines a course, m/s (a fix's noise over a short baseline does not).
+    baseline_s : float
+        Time between the two fixes of a course, s.
+
+    Returns
+    -------
+    t : numpy.ndarray, shape (K,)
+        Midpoint times of the courses, s.
+    course : numpy.ndarray, shape (K,)
+        Course, rad, unwrapped (continuous over the drive).
+    """
+    ne = lla_to_ned(gnss.lla, gnss.lla[0])[:, :2]
+    j = np.searchsorted(gnss.t, gnss.t + baseline_s)
+    ok = j < gnss.n
+    i = np.flatnonzero(ok)
+    j = j[ok]
+    d = ne[j] - ne[i]
+    dt = gnss.t[j] - gnss.t[i]
+    fast = np.hypot(d[:, 0], d[:, 1]) >= min_speed * dt
+    i, j, d = i[fast], j[fast], d[fast]
+    return 0.5 * (gnss.t[i] + gnss.t[j]), np.unwrap(np.arctan2(d[:, 1], d[:, 0]))
+
+
+def gyro_bias_in_motion(imu: ImuData, gnss: GnssData, *, tilt_change_std: float = math.radians(3.0),
+                        course_std: float = math.radians(1.0), min_span_s: float = 20.0) -> tuple[Array, Array]:
+    """The gyro bias of a vehicle that never stands still, from its mean rate and its course change.
+
+    Over a span ``[t_a, t_b]`` the mean body rate is the bias plus the attitude's mean rate of change: a road
+    vehicle's roll and pitch end about where they began, and its heading changes as its course (side slip is
+    small), so with ``d_b`` the down direction in IMU axes (the mean specific force)::
+
+        b ≈ mean(ω̃) − d_b (ψ_b − ψ_a) / (t_b − t_a)
+
+    (Earth and transport rates, 1e-4 rad/s, are left in the bias).  σ per axis: the roll and pitch change
+    ``tilt_change_std`` and the two courses' error ``√2 course_std`` over the span.
+
+    Parameters
+    ----------
+    imu : ImuData
+        The IMU as recorded.
+    gnss : GnssData
+        The fixes (the course from their displacement, :func:`gnss_course`).
+    tilt_change_std : float
+        σ of the vehicle's roll and pitch change between the span's ends, rad.
+    course_std : float
+        σ of a course at the span's ends (fix noise over the baseline, side slip), rad.
+    min_span_s : float
+        Shortest span between the first and the last course, s.
+
+    Returns
+    -------
+    bias : numpy.ndarray, shape (3,)
+        Gyro bias, IMU axes, rad/s.
+    std : numpy.ndarray, shape (3,)
+        Its σ, rad/s.
+
+    Raises
+    ------
+    InsufficientDataError
+        If the courses span less than ``min_span_s``.
+    """
+    tc, course = gnss_course(gnss)
+    inside = (tc >= imu.t[0]) & (tc <= imu.t[-1])
+    tc, course = tc[inside], course[inside]
+    if tc.size < 2 or tc[-1] - tc[0] < min_span_s:
+        raise InsufficientDataError(f"gyro_bias_in_motion: the GNSS course spans {0 if tc.size < 2 else tc[-1] - tc[0]:.1f} "
+                                    f"s of the IMU; it needs {min_span_s:g} s of driving above 3 m/s")
+    a, b = int(np.searchsorted(imu.t, tc[0])), int(np.searchsorted(imu.t, tc[-1]))
+    span = float(imu.t[b] - imu.t[a])
+    f = imu.accel[a:b].mean(axis=0)
+    d_b = -f / np.linalg.norm(f)
+    rate = (course[-1] - course[0]) / (tc[-1] - tc[0])
+    dt = np.diff(imu.t[a:b + 1])
+    mean_w = (imu.gyro[a:b] * dt[:, None]).sum(axis=0) / dt.sum()
+    sd = math.hypot(tilt_change_std, math.sqrt(2.0) * course_std) / span
+    return mean_w - d_b * rate, np.full(3, sd)
 
 
 def fine_alignment(imu: ImuData | ImuIncrements, lla: Any, coarse: Alignment, config: GinsConfig, *,

@@ -150,6 +150,20 @@ class GinsConfig:
         GNSS receiver latency, s: a fix stamped ``t`` is the position at ``t − gnss_delay`` (|value| < 1 s).
     gnss_delay_std : float or None
         Initial σ of the latency state, s (> 0); None: not estimated.  A random constant.
+    gnss_bias_std : array_like, shape (3,), or None
+        σ of the GNSS fixes' error correlated in time (multipath, atmosphere), north, east, down, m (> 0): a
+        first-order Gauss–Markov state of correlation time ``gnss_bias_corr_time`` that the fixes hold besides their
+        white noise (Groves 2013, §9.4.2); None: the fixes' errors are white.
+    gnss_bias_corr_time : float
+        Its correlation time, s (> 0).
+    gnss_noise_adaptive : bool
+        Scale the fixes' reported covariance by a factor estimated from their innovations (covariance matching,
+        ``kernels._adapt_gnss_noise``), bounded by ``gnss_noise_scale_bounds``; the factor reached is in
+        ``GinsResult.gnss_noise_scale``.
+    gnss_noise_window : float
+        Fixes the adaptive factor averages over (its forgetting weight is the inverse), >= 1.
+    gnss_noise_scale_bounds : tuple of float
+        Lowest and highest factor on the reported covariance (0 < low <= 1 <= high).
     dual_antenna_baseline : array_like, shape (3,), or None
         Dual-antenna GNSS heading: the secondary antenna from the primary, body FRD, m (at least 1 cm); needed
         to use :class:`~imunav.ins.gins.aids.dual_antenna.DualAntennaData`.
@@ -202,9 +216,25 @@ class GinsConfig:
     gnss_delay: float = 0.0
     gnss_delay_std: float | None = None
     bias_model: str = "gauss_markov"
+    gnss_bias_std: ArrayLike | None = None
+    gnss_bias_corr_time: float = 60.0
+    gnss_noise_adaptive: bool = False
+    gnss_noise_window: float = 30.0
+    gnss_noise_scale_bounds: tuple[float, float] = (0.01, 100.0)
 
     def __post_init__(self) -> None:
         s = object.__setattr__
+        if self.gnss_bias_std is not None:
+            s(self, "gnss_bias_std", _v3(self.gnss_bias_std, "gnss_bias_std", positive=True))
+        if not (np.isfinite(self.gnss_bias_corr_time) and self.gnss_bias_corr_time > 0):
+            raise InvalidInputError(f"GinsConfig.gnss_bias_corr_time must be > 0 s; got {self.gnss_bias_corr_time!r}")
+        if not (np.isfinite(self.gnss_noise_window) and self.gnss_noise_window >= 1):
+            raise InvalidInputError(f"GinsConfig.gnss_noise_window must be >= 1 fix; got {self.gnss_noise_window!r}")
+        lo_hi = tuple(float(x) for x in np.ravel(self.gnss_noise_scale_bounds))
+        if len(lo_hi) != 2 or not (0 < lo_hi[0] <= 1.0 <= lo_hi[1] < np.inf):
+            raise InvalidInputError(f"GinsConfig.gnss_noise_scale_bounds must be (low, high) with 0 < low <= 1 <= "
+                                    f"high; got {self.gnss_noise_scale_bounds!r}")
+        s(self, "gnss_noise_scale_bounds", lo_hi)
         if self.bias_model not in BIAS_MODELS:
             raise InvalidInputError(f"GinsConfig.bias_model must be one of {', '.join(BIAS_MODELS)}; "
                                     f"got {self.bias_model!r}")

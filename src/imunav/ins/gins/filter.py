@@ -95,6 +95,7 @@ def _initial_state(lla0: ArrayLike, vel0: ArrayLike, q0: ArrayLike, imu_errors0:
     xs[NOM.q_vb:NOM.q_vb + 4] = quat_from_euler(config.mounting)
     xs[NOM.odo_lever:NOM.odo_lever + 3] = config.odo_lever_arm
     xs[NOM.gnss_delay] = config.gnss_delay
+    xs[NOM.gnss_r_scale] = 1.0
     return xs
 
 
@@ -103,7 +104,8 @@ def _state_blocks(c: GinsConfig, odometer: bool) -> tuple[str, ...]:
     use = set(REQUIRED_BLOCKS) | ({"gyro_scale", "accel_scale"} if c.scale_factors else set())
     if odometer:
         use.add("odo_scale")
-    for block, sd in (("mount", c.mounting_std), ("odo_lever", c.odo_lever_arm_std), ("gnss_delay", c.gnss_delay_std)):
+    for block, sd in (("mount", c.mounting_std), ("odo_lever", c.odo_lever_arm_std), ("gnss_delay", c.gnss_delay_std),
+                      ("gnss_bias", c.gnss_bias_std)):
         if sd is not None:
             use.add(block)
     if c.bias_model == "constant_and_gauss_markov":
@@ -144,7 +146,7 @@ def kernel_setup(c: GinsConfig, fs: float, odometer: bool) -> tuple[Array, NDArr
                            "gyro_scale": c.init_gyro_scale_std, "accel_scale": c.init_accel_scale_std,
                            "odo_scale": [c.odo_scale_std], "mount": c.mounting_std, "odo_lever": c.odo_lever_arm_std,
                            "gnss_delay": [c.gnss_delay_std], "gyro_bias_gm": c.gyro_bias_std,
-                           "accel_bias_gm": c.accel_bias_std}
+                           "accel_bias_gm": c.accel_bias_std, "gnss_bias": c.gnss_bias_std}
     nx = 0
     sd = []
     for name in _state_blocks(c, odometer):
@@ -167,6 +169,12 @@ def kernel_setup(c: GinsConfig, fs: float, odometer: bool) -> tuple[Array, NDArr
         q0, t0 = getattr(PRM, name + "_q"), getattr(PRM, name + "_t")
         prm[q0:q0 + n] = 2.0 * np.asarray(sdv) ** 2 / tc
         prm[t0:t0 + n] = tc
+    if c.gnss_bias_std is not None:
+        prm[PRM.gnss_bias_q:PRM.gnss_bias_q + 3] = 2.0 * np.asarray(c.gnss_bias_std) ** 2 / c.gnss_bias_corr_time
+        prm[PRM.gnss_bias_t] = c.gnss_bias_corr_time
+    if c.gnss_noise_adaptive:
+        prm[PRM.gnss_adapt] = 1.0 / c.gnss_noise_window
+        prm[PRM.gnss_adapt + 1:PRM.gnss_adapt + 3] = c.gnss_noise_scale_bounds
     for dof in range(1, MAX_ROWS + 1):
         prm[PRM.gate + dof - 1] = float(chi2_ppf(1 - c.gate_alpha, dof)) if c.gate_alpha > 0 else 1e300
     blocks = [prm]
@@ -801,6 +809,7 @@ class GinsFilter:
                           acc, veh.t, veh.nis, veh.dof, veh.accepted, c, meta, smoothed,
                           aids=log.aids, q_vb=xs[:, NOM.q_vb:NOM.q_vb + 4],
                           odo_lever_arm=col3(NOM.odo_lever), gnss_delay=xs[:, NOM.gnss_delay],
+                          gnss_bias=col3(NOM.gnss_bias), gnss_noise_scale=xs[:, NOM.gnss_r_scale],
                           **{f"{name}_nis": _sample_nis(log, name, n) for name in _SAMPLE_NIS})
 
 

@@ -49,7 +49,7 @@ from imunav.filters._core import (
     strapdown_step_ned,
 )
 from imunav.filters._core_gins import inject_position_lla, propagate_cov_series, write_mat3, write_skew
-from imunav.ins.gins.aids import N_AIDS, ROWS, WIDTH, evaluate
+from imunav.ins.gins.aids import AID, N_AIDS, ROWS, WIDTH, evaluate
 from imunav.ins.gins.layout import CARRY, CARRY_N, CTX, LAY, MAX_GROUP, MAX_WIDTH, N_CTX, N_LAY, NOM, PRM
 
 #: IMU increments: times (N,), Δθ (N, 3) rad, Δv (N, 3) m/s; row k covers [t[k-1], t[k]].
@@ -110,6 +110,11 @@ def _system(xs, fb, wb, prm, lay, F, Q):
                 Q[ig + j, ig + j] = q
                 Q[ib + j, ig + j] = q
                 Q[ig + j, ib + j] = q
+    ig = lay[LAY.gnss_bias]
+    if ig >= 0:  # the fixes' correlated error: δḃ = −δb / T + w
+        for j in range(3):
+            F[ig + j, ig + j] = -1.0 / prm[PRM.gnss_bias_t]
+            Q[ig + j, ig + j] = prm[PRM.gnss_bias_q + j]
     io = lay[LAY.odo_scale]
     if io >= 0:
         F[io, io] = -1.0 / prm[PRM.odo_scale_t]
@@ -141,7 +146,8 @@ def _system(xs, fb, wb, prm, lay, F, Q):
 # (state block, nominal offset) of the additive sensor-error blocks
 _ADDITIVE = ((LAY.gyro_bias, NOM.gyro_bias, 3), (LAY.accel_bias, NOM.accel_bias, 3),
              (LAY.gyro_scale, NOM.gyro_scale, 3), (LAY.accel_scale, NOM.accel_scale, 3),
-             (LAY.odo_scale, NOM.odo_scale, 1), (LAY.odo_lever, NOM.odo_lever, 3), (LAY.gnss_delay, NOM.gnss_delay, 1))
+             (LAY.odo_scale, NOM.odo_scale, 1), (LAY.odo_lever, NOM.odo_lever, 3), (LAY.gnss_delay, NOM.gnss_delay, 1),
+             (LAY.gnss_bias, NOM.gnss_bias, 3))
 
 
 @njit(cache=True)
@@ -200,10 +206,39 @@ def _update(kinds, n_models, zs, rs, xs, ctx, P, prm, lay, acc_dx, blk, force):
         row += w
     ok, d = chi2_gate(nu, S0, prm[PRM.gate + m - 1])
     if ok or force:
+        if kinds[0] == _GNSS_POS and prm[PRM.gnss_adapt] > 0.0:
+            _adapt_gnss_noise(xs, nu, S0, R, prm)
         dx = np.zeros(nx)
         joseph_update(P, dx, H, R, nu, np.empty(m), np.empty((m, m)))
         _inject(dx, xs, lay, acc_dx)
     return m, ok, d
+
+
+_GNSS_POS = AID.gnss_position
+
+
+@njit(cache=True)
+def _adapt_gnss_noise(xs, nu, S0, R, prm):
+    """Covariance matching of the fixes' white noise (Mehra 1972; Mohamed & Schwarz 1999, "Adaptive Kalman
+    filtering for INS/GPS", J. Geodesy 73): ``E[ν νᵀ] = H P⁻ Hᵀ + s R_rep``, so one fix's estimate of the factor is
+    ``ŝ = (νᵀν − tr(H P⁻ Hᵀ)) / tr(R_rep)``; the kernel keeps ``s ← (1 − w) s + w ŝ`` with ``w = max(w₀, 1 / k)``
+    at the k-th fix (the plain mean of the first ``1 / w₀`` fixes, then forgetting with weight ``w₀``: the reported
+    σ is only a prior, and a car at 20 m/s must not wait for the average to forget it), bounded to ``[s_min, s_max]`` (a receiver's σ is neither ten times too
+    large nor ten times too small without other evidence), in the nominal ``gnss_r_scale``: the next fix's ``R``.
+    """
+    s = xs[NOM.gnss_r_scale]
+    tr_r = 0.0
+    tr_hph = 0.0
+    vv = 0.0
+    for j in range(nu.shape[0]):
+        tr_r += R[j, j] / s
+        tr_hph += S0[j, j] - R[j, j]
+        vv += nu[j] * nu[j]
+    k = xs[NOM.gnss_r_count] + 1.0
+    xs[NOM.gnss_r_count] = k
+    w = max(prm[PRM.gnss_adapt], 1.0 / k)
+    s_new = (1.0 - w) * s + w * (vv - tr_hph) / tr_r
+    xs[NOM.gnss_r_scale] = min(max(s_new, prm[PRM.gnss_adapt + 1]), prm[PRM.gnss_adapt + 2])
 
 
 @njit(cache=True)

@@ -36,6 +36,9 @@ STATE_BLOCKS = (
     # "constant_and_gauss_markov"): δg_g rad/s, δg_a m/s², optional; the bias blocks above hold the whole bias
     ("gyro_bias_gm", 3),
     ("accel_bias_gm", 3),
+    # the GNSS fixes' error correlated in time (multipath, atmosphere), NED, m: a first-order Gauss–Markov process
+    # that the position fixes hold besides their white noise, optional
+    ("gnss_bias", 3),
 )
 #: Blocks every configuration estimates.
 REQUIRED_BLOCKS = ("pos", "vel", "att", "gyro_bias", "accel_bias")
@@ -48,10 +51,13 @@ LAY, N_LAY = named_layout("GinsLayout", tuple((name, 1) for name, _ in STATE_BLO
 
 #: ``xs`` (float): nominal navigation state and sensor errors.
 #: ``q_vb``: the IMU's attitude in the vehicle frame (IMU FRD -> vehicle FRD, scalar first); ``odo_lever``: the wheel
-#: contact point from the IMU, body FRD, m; ``gnss_delay``: the GNSS latency, s.
+#: contact point from the IMU, body FRD, m; ``gnss_delay``: the GNSS latency, s; ``gnss_bias``: the fixes' correlated
+#: error, NED, m; ``gnss_r_scale``: the factor on the fixes' reported covariance that the adaptive noise estimate
+#: has reached (1 without it), ``gnss_r_count`` the fixes it has averaged.
 NOM, N_NOM = named_layout("GinsNominal", (("lla", 3), ("vel", 3), ("q", 4), ("gyro_bias", 3), ("accel_bias", 3),
                                           ("gyro_scale", 3), ("accel_scale", 3), ("odo_scale", 1), ("q_vb", 4),
-                                          ("odo_lever", 3), ("gnss_delay", 1)))
+                                          ("odo_lever", 3), ("gnss_delay", 1), ("gnss_bias", 3),
+                                          ("gnss_r_scale", 1), ("gnss_r_count", 1)))
 #: the sensor errors of ``xs`` (GinsFilter.imu_errors: 13 values)
 N_SENSOR_ERRORS = NOM.odo_scale + 1 - NOM.gyro_bias
 
@@ -59,11 +65,13 @@ N_SENSOR_ERRORS = NOM.odo_scale + 1 - NOM.gyro_bias
 MAX_ROWS = 9
 
 #: ``prm`` (float): core parameters.  ``*_q``: driving-noise PSD 2σ²/T of a Gauss–Markov state; ``*_t``: its
-#: correlation time, s; ``gate``: χ²(m) thresholds, ``prm[PRM.gate + m − 1]``.
+#: correlation time, s; ``gnss_adapt``: the adaptive GNSS noise's forgetting weight per fix (0: off) and its lowest
+#: and highest factor on the reported covariance; ``gate``: χ²(m) thresholds, ``prm[PRM.gate + m − 1]``.
 PRM, N_PRM = named_layout("GinsParams", (
     ("omega_e", 1), ("gyro_noise_density", 3), ("accel_noise_density", 3),
     ("gyro_bias_q", 3), ("accel_bias_q", 3), ("gyro_scale_q", 3), ("accel_scale_q", 3), ("odo_scale_q", 1),
     ("gyro_bias_t", 3), ("accel_bias_t", 3), ("gyro_scale_t", 3), ("accel_scale_t", 3), ("odo_scale_t", 1),
+    ("gnss_bias_q", 3), ("gnss_bias_t", 1), ("gnss_adapt", 3),
     ("gate", MAX_ROWS),
 ))
 

@@ -33,6 +33,7 @@ from numpy.typing import NDArray
 
 from imunav.earth import lla_to_ned, ned_to_lla, normal_gravity
 from imunav.errors import InsufficientDataError, InvalidInputError
+from imunav.ins.gins.alignment import gyro_bias_in_motion
 from imunav.ins.gins.config import GinsConfig
 from imunav.ins.gins.filter import GinsFilter, kernel_setup
 from imunav.ins.gins.layout import LAY
@@ -103,7 +104,8 @@ class LogRunOptions:
     nhc_std : float
         σ of the NHC, m/s.
     smoother : bool
-        Also run the RTS smoother.
+        Also run the RTS smoother (the default: an offline run's best trajectory is the smoothed one; False: the
+        forward filter alone, as in real time).
     gnss_pos_std : float or None
         σ of a fix whose covariance the log does not give, m.
     overrides : dict
@@ -117,7 +119,7 @@ class LogRunOptions:
     estimate_odo_lever_arm: bool = False
     nhc: bool | None = None
     nhc_std: float = 0.05
-    smoother: bool = False
+    smoother: bool = True
     gnss_pos_std: float | None = None
     overrides: dict[str, Any] = field(default_factory=dict)
 
@@ -291,7 +293,25 @@ def _noise_at_rest(src: NavSources, static: NDArray[np.bool_]) -> tuple[Array, A
                                "and the preset's is used)")
 
 
-def _initial_tilt(src: NavSources, static: NDArray[np.bool_], C_vb: Array) -> tuple[Array, float, int]:
+def _initial_gyro_bias(src: NavSources, static: NDArray[np.bool_]) -> tuple[Array, Array | None, str]:
+    """The gyro bias before the filter: the mean rate at rest; a log that never rests (10 samples) and has GNSS,
+    the mean rate over the drive less its course change (:func:`imunav.ins.gins.alignment.gyro_bias_in_motion`),
+    with its σ (the filter then starts from it); else zero.  Returns (bias rad/s, σ or None, how)."""
+    imu = src.imu
+    if static.sum() > 10:
+        return imu.gyro[static].mean(axis=0), None, "mean rate at rest"
+    if src.gnss is not None:
+        try:
+            b, sd = gyro_bias_in_motion(imu, src.gnss)
+        except InsufficientDataError as exc:
+            return np.zeros(3), None, f"zero ({exc})"
+        return b, sd, (f"mean rate over the drive less the GNSS course change (no rest), sigma "
+                       f"{math.degrees(float(sd[0])):.3f} deg/s")
+    return np.zeros(3), None, "zero (no rest, no GNSS)"
+
+
+def _initial_tilt(src: NavSources, static: NDArray[np.bool_], C_vb: Array,
+                  bias: Array) -> tuple[Array, float, int]:
     """The down direction in IMU axes at the start and its σ (rad): the mean specific force of the first rest
     (σ 0.5°), else of the first second less the vehicle's own acceleration ``(dv/dt, v ω_z, 0)`` from the odometer
     (a car that starts moving: 0.2 m/s² of acceleration is a tilt of 1.2°; σ 2°), else of the first second as it
@@ -313,7 +333,7 @@ def _initial_tilt(src: NavSources, static: NDArray[np.bool_], C_vb: Array) -> tu
             h = 0.25
             v = np.interp(t, o.t, o.speed)
             a_x = (np.interp(t + h, o.t, o.speed) - np.interp(t - h, o.t, o.speed)) / (2 * h)
-            w_z = (imu.gyro[run] @ C_vb.T)[:, 2]
+            w_z = ((imu.gyro[run] - bias) @ C_vb.T)[:, 2]
             a_v = np.column_stack([a_x, v * w_z, np.zeros(run.size)])
             f = (imu.accel[run] - a_v @ C_vb).mean(axis=0)
             sd = math.radians(2.0)
@@ -458,6 +478,7 @@ def run_log(src: NavSources, options: LogRunOptions | None = None, *,
     o = options or LogRunOptions()
     imu = src.imu
     still, static = _rest_masks(src)
+    bias0, bias0_sd, bias_note = _initial_gyro_bias(src, static)
     model = presets.get(o.preset)
     wheeled = src.odometer is not None
     # -- mounting
@@ -497,14 +518,15 @@ def run_log(src: NavSources, options: LogRunOptions | None = None, *,
         od = src.odometer
         assert od is not None
         coarse = estimate_mounting(imu, still, speed_t=od.t, speed=od.speed, accel_bias_std=ba_level,
-                                   level_noise_std=LEVEL_STD)
+                                   level_noise_std=LEVEL_STD, gyro_bias=bias0)
         q_vb, source, mount_sd = coarse.q_vb, "estimated", coarse.std
     C_vb = dcm_from_quat(q_vb)
     # -- initial attitude, heading and position
-    d_b, tilt_sd, i_rest = _initial_tilt(src, still, C_vb)
-    bias0 = imu.gyro[static].mean(axis=0) if static.sum() > 10 else np.zeros(3)
+    d_b, tilt_sd, i_rest = _initial_tilt(src, still, C_vb, bias0)
     ref = np.array([0.0, 0.0, 0.0]) if src.gnss is None else src.gnss.lla[0].copy()
-    initial: dict[str, Any] = {} if mount_note is None else {"mounting": mount_note}
+    initial: dict[str, Any] = {"gyro_bias": bias_note}
+    if mount_note is not None:
+        initial["mounting"] = mount_note
     if wheeled and src.gnss is not None:
         p_dr = _dead_reckoning(src, C_vb, bias0)
         psi0, T, psi_fit, used, t_fit = _fit_heading(src, p_dr, ref)
@@ -556,16 +578,19 @@ def run_log(src: NavSources, options: LogRunOptions | None = None, *,
         if lever_v is None:
             lever_v = (-np.asarray(src.imu_lever_base, dtype=float) if src.imu_lever_base is not None
                        else np.zeros(3))
-        # without GNSS nothing measures the odometer's scale: it is taken as 1 (a state of negligible σ)
+        # without GNSS nothing measures the odometer's scale: it stays at 1 with its prior σ, which the position's
+        # σ then carries (a dead reckoning that reported 1.0000 ± 0.0000 claimed a certainty it did not have)
         cfg_kw.update(odo_lever_arm=C_vb.T @ np.asarray(lever_v, dtype=float),
-                      odo_scale_std=ODO_SCALE_STD if src.gnss is not None else 1e-6, odo_scale_corr_time=np.inf,
+                      odo_scale_std=ODO_SCALE_STD, odo_scale_corr_time=np.inf,
                       odo_noise_std=ODO_STD_FLOOR)
         if o.estimate_odo_lever_arm:
             cfg_kw["odo_lever_arm_std"] = 0.3
     if (o.nhc if o.nhc is not None else wheeled):
         cfg_kw.update(nhc_noise_std=o.nhc_std, nhc_interval_s=NHC_INTERVAL)
     if src.gnss is not None:
-        cfg_kw["gnss_delay_std"] = GNSS_DELAY_STD
+        # the fixes' reported σ is a prior: the filter scales it to what their innovations show (a u-blox without an
+        # accuracy field, a driver's constant covariance, a receiver that under- or over-states it)
+        cfg_kw.update(gnss_delay_std=GNSS_DELAY_STD, gnss_noise_adaptive=True)
     cfg_kw["gate_max_rejections"] = MAX_REJECTIONS
     cfg_kw["bias_model"] = "constant_and_gauss_markov"  # a log's IMU: a turn-on bias that does not decay
     gyro_nd, accel_nd, noise_note = _noise_at_rest(src, static)
@@ -578,7 +603,11 @@ def run_log(src: NavSources, options: LogRunOptions | None = None, *,
     odo = src.odometer
     if odo is not None and odo.speed_std is not None:
         odo = dataclasses.replace(odo, speed_std=np.maximum(odo.speed_std, ODO_STD_FLOOR))
-    res = GinsFilter(cfg).run(imu, src.gnss, lla0=lla0, vel0=vel0, q0=q0, odometer=odo,
+    e0 = None
+    if bias0_sd is not None:  # no rest: the filter starts from the bias read over the drive
+        e0 = np.zeros(12)
+        e0[:3] = bias0
+    res = GinsFilter(cfg).run(imu, src.gnss, lla0=lla0, vel0=vel0, q0=q0, odometer=odo, imu_errors0=e0,
                               static=static, baro=None, smoother=o.smoother, progress=progress)
     return LogRun(res, cfg, static, coarse, source, initial, o.preset)
 
@@ -679,6 +708,9 @@ class LogOutageReport(Result):
     fixes : numpy.ndarray of int, shape (K,)
         Reference points in each outage: the fixes the run with every fix did not reject as faulty, or the IMU
         samples compared with the truth.
+    normalised : numpy.ndarray, shape (K,)
+        Largest normalised horizontal error of each outage, ``|e| / √(σ_N² + σ_E² + σ_ref²)`` over its reference
+        points (containment is ``normalised <= 3``).
     meta : dict
         The protocol; ``reference`` (``"removed fixes"`` or ``"truth"``) and ``reference_noise_m`` (RMS
         horizontal σ of the reference points: √(mean(σ_N² + σ_E²)) of the fixes, 0 for a truth).
@@ -690,6 +722,7 @@ class LogOutageReport(Result):
     contained: NDArray[np.bool_]
     dead_reckoning_end_m: Array
     fixes: NDArray[np.int64]
+    normalised: Array
     meta: dict[str, Any] = field(default_factory=dict)
 
     def rms(self) -> dict[str, Any]:
@@ -732,7 +765,8 @@ class LogOutageReport(Result):
                 "ratio_to_dead_reckoning": (e / d) if (e is not None and d) else None,
                 "end_above_noise_m": ea, "dead_reckoning_above_noise_m": da,
                 "ratio_above_noise": (ea / da) if (ea is not None and da) else None,
-                "contained_3sigma": float(np.mean(self.contained)) if self.contained.size else None}
+                "contained_3sigma": float(np.mean(self.contained)) if self.contained.size else None,
+                "normalised_max": float(np.max(self.normalised)) if self.normalised.size else None}
 
 
 def _horizontal(lla: Array, ref: Array) -> Array:
@@ -783,7 +817,8 @@ def truth_on_sources(truth: NavTrack, src: NavSources) -> NavTrack:
 
 def log_outage_test(src: NavSources, options: LogRunOptions | None = None, *, converge_s: float = 60.0,
                     every_s: float = 120.0, length_s: float = 60.0, shifts_s: tuple[float, ...] = (0.0, 30.0, 60.0),
-                    truth: NavTrack | None = None, progress: Any = None) -> LogOutageReport:
+                    truth: NavTrack | None = None, truth_std: float = 0.0,
+                    progress: Any = None) -> LogOutageReport:
     """GNSS outages on a log: the fixes removed during each outage are the reference, or a truth when given.
 
     One :func:`run_log` with every fix tells which fixes are faulty (rejected by the gate); then, per shift, the
@@ -794,7 +829,9 @@ def log_outage_test(src: NavSources, options: LogRunOptions | None = None, *, co
     outage's start: what the filter adds to the odometer.
 
     The removed fixes carry their own noise, ``E[e²] = e_true² + σ_fix²`` at each: a floor the report states
-    (:meth:`LogOutageReport.rms`), which a truth does not have.
+    (:meth:`LogOutageReport.rms`); a truth that is a peer's estimate (comma2k19's pose) has its own,
+    ``truth_std``.  The runs are the forward filter's (``options.smoother`` is ignored): an outage tests what the
+    filter predicts with no fix, not what a smoother recovers from the fixes after it.
 
     Parameters
     ----------
@@ -810,6 +847,9 @@ def log_outage_test(src: NavSources, options: LogRunOptions | None = None, *, co
         Shifts of the first outage, s; one run per shift.
     truth : NavTrack, optional
         Reference trajectory of the IMU's position (KF-GINS ``.nav`` time convention, :func:`truth_on_sources`).
+    truth_std : float
+        σ of the truth's horizontal position (√(σ_N² + σ_E²), m, >= 0), added to the predicted σ for the
+        containment.
     progress : callable, optional
         ``progress(done, total)`` after each run.
 
@@ -826,7 +866,9 @@ def log_outage_test(src: NavSources, options: LogRunOptions | None = None, *, co
     if src.gnss is None:
         raise InvalidInputError(f"{src.source}: the outage test removes GNSS fixes; the log has none")
     ref_truth = truth_on_sources(truth, src) if truth is not None else None
-    o = options or LogRunOptions()
+    if not (math.isfinite(truth_std) and truth_std >= 0):
+        raise InvalidInputError(f"truth_std must be >= 0 m; got {truth_std!r}")
+    o = dataclasses.replace(options or LogRunOptions(), smoother=False)
     full = run_log(src, o)
     rec = full.result.aids.get("gnss_position")
     good = np.ones(src.gnss.n, dtype=bool)
@@ -834,7 +876,7 @@ def log_outage_test(src: NavSources, options: LogRunOptions | None = None, *, co
         t_bad = rec.t[~rec.accepted]
         good &= ~np.isin(src.gnss.t, t_bad)
     t0, t1 = float(src.imu.t[0]), float(src.imu.t[-1])
-    outs, end, mx, cont, dr, nfix, ref_var = [], [], [], [], [], [], []
+    outs, end, mx, cont, dr, nfix, ref_var, nmax = [], [], [], [], [], [], [], []
     skipped = 0  # outages without a reference point (no good fix in them, or outside the truth)
     total = len(shifts_s) + 1
     if progress is not None:
@@ -868,7 +910,7 @@ def log_outage_test(src: NavSources, options: LogRunOptions | None = None, *, co
                     skipped += 1
                     continue
                 ref_lla = _rows_at(tf, ref_truth.t, ref_truth.lla)
-                fix_var = np.zeros(tf.size)
+                fix_var = np.full(tf.size, truth_std**2)
                 ant = np.zeros((tf.size, 2))  # the truth is the IMU's position
             ref = ref_lla[0]
             e = _horizontal(_rows_at(tf, res.t, res.lla), ref) + ant - _horizontal(ref_lla, ref)
@@ -879,6 +921,7 @@ def log_outage_test(src: NavSources, options: LogRunOptions | None = None, *, co
             end.append(float(err[-1]))
             mx.append(float(err.max()))
             cont.append(bool(np.all(err <= 3.0 * np.sqrt(var))))
+            nmax.append(float(np.max(err / np.sqrt(var))))
             nfix.append(int(tf.size))
             ref_var.append(float(fix_var[-1]))
             if src.odometer is not None:
@@ -898,7 +941,7 @@ def log_outage_test(src: NavSources, options: LogRunOptions | None = None, *, co
                                 f"{'no good fix inside any outage' if ref_truth is None else 'the truth covers none'}"
                                 "): give a truth that spans the outages, or a longer log")
     return LogOutageReport(outs, np.array(end), np.array(mx), np.array(cont, dtype=bool), np.array(dr),
-                           np.array(nfix, dtype=np.int64),
+                           np.array(nfix, dtype=np.int64), np.array(nmax),
                            {"converge_s": converge_s, "every_s": every_s, "length_s": length_s,
                             "shifts_s": list(shifts_s), "t0_s": t0, "faulty_fixes": int(np.sum(~good)),
                             "reference": "removed fixes" if ref_truth is None else "truth",

@@ -12,7 +12,9 @@
 from __future__ import annotations
 
 import contextvars
+import dataclasses
 import importlib.util
+import math
 import os
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
@@ -27,6 +29,7 @@ from imunav.ins.gins.layout import LAY
 from imunav.ins.gins.plot import FIGURE_NAMES, write_gins_figures
 from imunav.ins.gins.result import GinsResult
 from imunav.ins.gins.setup import GinsSetup, SimulatedDrive, track_rmse
+from imunav.ins.gins.smoother import Separation, forward_backward_separation
 from imunav.io.gnss import GnssData, write_gnss_text
 from imunav.io.kfgins import (
     ImuIncrements,
@@ -47,8 +50,9 @@ if TYPE_CHECKING:  # the log and outage runs' types: `gins run --config` writes 
     from imunav.ins.gins.outage import OutageReport
     from imunav.io.navlog import NavSources
 
-__all__ = ["DRIVE_FILES", "LOG_FILES", "RUN_FILES", "log_outage_document", "log_summary", "outage_document", "run_output_paths",
-           "run_summary", "track_geojson", "write_log_outputs", "write_run_outputs", "write_simulated_drive"]
+__all__ = ["DRIVE_FILES", "HONESTY_LIMITS", "LOG_FILES", "RUN_FILES", "honesty", "log_outage_document",
+           "log_output_paths", "log_summary", "outage_document", "run_output_paths", "run_summary", "self_calibration",
+           "track_geojson", "write_log_outputs", "write_run_outputs", "write_simulated_drive"]
 
 #: Files of a simulated drive (key -> name in its folder).
 DRIVE_FILES = {"imu": "imu.txt", "gnss": "gnss.txt", "truth": "truth.nav", "yaml": "kf-gins.yaml",
@@ -156,20 +160,22 @@ def run_summary(res: GinsResult, setup: Any, *, truth: NavTrack | None = None) -
 
 def _write_kfgins_files(names: dict[str, Path], res: GinsResult, n_states: int, t_nav: NDArray[np.float64],
                         week: int, q_vb: NDArray[np.float64] | None = None) -> None:
-    """KF-GINS's ``.nav`` (and the smoothed one), IMU-error and state-σ files of a run, with the time column
-    ``t_nav`` (one per IMU sample; the σ rows at the covariance epochs interpolated on it) and GPS ``week``.
+    """KF-GINS's ``.nav`` (and the smoothed one, when ``names`` has ``smoothed``), IMU-error (when ``names`` has
+    ``err``) and state-σ files of a run, with the time column ``t_nav`` (one per IMU sample; the σ rows at the
+    covariance epochs interpolated on it) and GPS ``week``.
     With ``q_vb`` (the IMU's mounting per sample) the ``.nav`` attitude is the vehicle's, ``q_nb ⊗ q_vbᵀ``.  The
     σ file holds the filter's own 15 or 21 states (a 15-state filter's scale-factor σ written 0)."""
     def attitude(q_nb: NDArray[np.float64]) -> NDArray[np.float64]:
         return q_nb if q_vb is None else quat_multiply(q_nb, quat_conjugate(q_vb))
 
     write_kfgins_nav(names["nav"], NavTrack(t_nav, res.lla, res.vel_ned, attitude(res.q_nb), week))
-    write_kfgins_imu_errors(names["err"], t_nav, res.gyro_bias, res.accel_bias, res.gyro_scale, res.accel_scale)
+    if "err" in names:
+        write_kfgins_imu_errors(names["err"], t_nav, res.gyro_bias, res.accel_bias, res.gyro_scale, res.accel_scale)
     sd = np.sqrt(np.pad(res.cov_diag[:, :n_states], ((0, 0), (0, 21 - n_states))))
     t_cov = res.cov_t if t_nav is res.t else np.interp(res.cov_t, res.t, t_nav)
     write_kfgins_std(names["std"], t_cov, sd[:, 0:3], sd[:, 3:6], sd[:, 6:9], sd[:, 9:12], sd[:, 12:15],
                      sd[:, 15:18], sd[:, 18:21])
-    if res.smoothed is not None:
+    if res.smoothed is not None and "smoothed" in names:
         s = res.smoothed
         write_kfgins_nav(names["smoothed"], NavTrack(t_nav, s.lla, s.vel_ned, attitude(s.q_nb), week))
 
@@ -307,21 +313,165 @@ def log_outage_document(rep: LogOutageReport, *, source: str) -> dict[str, Any]:
     dict
         ``source``, ``protocol``, ``rms`` (:meth:`LogOutageReport.rms`: the reference, its own noise, the end and
         largest horizontal errors, the odometry dead reckoning's and their ratios) and ``outages`` (start and
-        length s, end and largest horizontal error m, inside the predicted 3σ, the dead reckoning's end error m,
-        reference points).
+        length s, end and largest horizontal error m, inside the predicted 3σ, the largest normalised error, the
+        dead reckoning's end error m, reference points).
     """
     return {"source": source, "protocol": rep.meta, "rms": rep.rms(),
             "outages": [{"start_s": s0, "length_s": d, "end_m": e, "max_m": m, "inside_3sigma": bool(c),
+                         "normalised_max": float(z),
                          "dead_reckoning_end_m": None if not np.isfinite(r) else float(r), "fixes": int(n)}
-                        for (s0, d), e, m, c, r, n in zip(rep.outages, rep.end_m, rep.max_m, rep.contained,
-                                                          rep.dead_reckoning_end_m, rep.fixes)]}
+                        for (s0, d), e, m, c, z, r, n in zip(rep.outages, rep.end_m, rep.max_m, rep.contained,
+                                                             rep.normalised, rep.dead_reckoning_end_m, rep.fixes)]}
 
 
-#: Files of a run on a log (besides :data:`RUN_FILES`).
-LOG_FILES = {"geojson": "track.geojson"}
+#: Files of a run on a log besides :data:`RUN_FILES` (whose ``.nav`` and σ file hold the trajectory the run
+#: recommends: the smoothed one by default): the track as GeoJSON, and the forward filter's ``.nav`` and σ file.
+LOG_FILES = {"geojson": "track.geojson", "forward": "KF_GINS_Navresult_forward.nav",
+             "std_forward": "KF_GINS_STD_forward.txt"}
 
 
-def log_summary(run: LogRun, sources: NavSources) -> dict[str, Any]:
+def log_output_paths(folder: str | os.PathLike[str], *, smoother: bool = True, plots: bool = True,
+                     truth: bool = False) -> dict[str, Path]:
+    """The files :func:`write_log_outputs` writes into ``folder`` (to check them before a run).
+
+    Parameters
+    ----------
+    folder : str or os.PathLike
+        The output folder.
+    smoother : bool
+        The run has the smoother: the forward filter's ``.nav`` and σ file beside the recommended ones, and the
+        separation figure.
+    plots : bool
+        With the figures.
+    truth : bool
+        A truth is given (the error figure).
+
+    Returns
+    -------
+    dict of str to pathlib.Path
+        Key (:data:`RUN_FILES`, :data:`LOG_FILES` keys, figure names) -> path.
+    """
+    out = Path(folder)
+    paths = {k: out / RUN_FILES[k] for k in ("nav", "err", "std", "summary")}
+    paths["geojson"] = out / LOG_FILES["geojson"]
+    if smoother:
+        paths.update({k: out / LOG_FILES[k] for k in ("forward", "std_forward")})
+    if plots:
+        figs = ("track", "imu_errors") + (("errors",) if truth else ()) + (("separation",) if smoother else ())
+        paths.update({k: out / FIGURE_NAMES[k] for k in figs})
+    return paths
+
+
+def _recommended(res: GinsResult) -> GinsResult:
+    """The run as the smoother recommends it: the smoothed position, velocity and attitude, and their smoothed σ in
+    the navigation block of the covariance records (the sensor errors' σ stay the forward filter's)."""
+    s = res.smoothed
+    assert s is not None
+    cd = res.cov_diag.copy()
+    k = np.clip(np.searchsorted(s.cov_t, res.cov_t), 0, s.cov_t.size - 1)
+    same = np.abs(s.cov_t[k] - res.cov_t) < 1e-9
+    cd[same, :9] = np.diagonal(s.cov_nav[k[same]], axis1=1, axis2=2)
+    cn = res.cov_nav.copy()
+    cn[same] = s.cov_nav[k[same]]
+    return dataclasses.replace(res, lla=s.lla, vel_ned=s.vel_ned, q_nb=s.q_nb, cov_diag=cd, cov_nav=cn,
+                               smoothed=None)
+
+
+#: The honesty checks of a run on a log (:func:`honesty`): the mean GNSS NIS over its degrees of freedom, the share
+#: of fixes rejected, the mean normalised forward–backward separation over its 2 degrees of freedom, beyond which the
+#: summary says the trajectory cannot be trusted.
+HONESTY_LIMITS = {"gnss_nis_ratio": 2.0, "rejected_share": 0.1, "separation_d2_ratio": 2.0}
+
+
+def honesty(run: LogRun, separation: Separation | None = None) -> dict[str, Any]:
+    """What the log's own statistics say of its trajectory, in words: the one truth-free verdict of a run.
+
+    Checks (:data:`HONESTY_LIMITS`): the GNSS position NIS (mean over the accepted fixes, χ²(3) for a consistent
+    filter), the share of fixes the gate rejected, the adaptive noise factor pinned at a bound (the fixes are
+    noisier or cleaner than any factor allowed explains), and the forward–backward separation ``d²`` (χ²(2)).
+
+    Parameters
+    ----------
+    run : LogRun
+        The run.
+    separation : Separation, optional
+        Its forward–backward separation (with the smoother).
+
+    Returns
+    -------
+    dict
+        ``trustworthy`` (bool), ``verdict`` (a sentence), ``reasons`` (one sentence per failed check), ``checks``
+        (the figures).
+    """
+    res = run.result
+    reasons: list[str] = []
+    checks: dict[str, Any] = {}
+    rec = res.aids.get("gnss_position")
+    if rec is not None and rec.t.size:
+        ok = rec.accepted & np.isfinite(rec.nis)
+        mean_nis = float(np.mean(rec.nis[ok])) if ok.any() else None
+        share = float(np.mean(~rec.accepted))
+        checks.update(gnss_nis_mean=mean_nis, gnss_nis_dof=3, gnss_rejected_share=share)
+        if mean_nis is not None and mean_nis > HONESTY_LIMITS["gnss_nis_ratio"] * 3:
+            reasons.append(f"the GNSS fixes lie further from the track than its sigma says (mean NIS {mean_nis:.1f} "
+                           "for 3 degrees of freedom)")
+        if share > HONESTY_LIMITS["rejected_share"]:
+            reasons.append(f"the gate rejected {100 * share:.0f} % of the fixes")
+        cfg = run.config
+        if cfg.gnss_noise_adaptive and res.gnss_noise_scale is not None:
+            sc = float(res.gnss_noise_scale[-1])
+            lo, hi = cfg.gnss_noise_scale_bounds
+            checks.update(gnss_sigma_factor=math.sqrt(sc))
+            if sc >= hi * (1 - 1e-9):
+                reasons.append(f"the fixes scatter more than {math.sqrt(hi):.0f} times their reported sigma")
+    if separation is not None:
+        d2 = separation.summary()["mean_d2"]
+        checks.update(separation_mean_d2=d2, separation_dof=2)
+        if d2 is not None and d2 > HONESTY_LIMITS["separation_d2_ratio"] * 2:
+            reasons.append(f"the forward filter and the smoother part by more than their sigma allows (mean d2 "
+                           f"{d2:.1f} for 2 degrees of freedom): the forward filter was overconfident")
+    verdict = ("the log's own statistics are consistent with the reported sigma" if not reasons else
+               "the trajectory and its sigma cannot be trusted: " + "; ".join(reasons))
+    return {"trustworthy": not reasons, "verdict": verdict, "reasons": reasons, "checks": checks}
+
+
+def self_calibration(run: LogRun) -> dict[str, Any]:
+    """Which self-calibration states the drive observed: each one's prior σ, final σ and their ratio, and
+    ``observable`` when the drive halved its σ (``"weak"`` when it took off at least a tenth, ``false`` when the
+    prior stands: the value is then the prior's, not a measurement).
+
+    Parameters
+    ----------
+    run : LogRun
+        The run.
+
+    Returns
+    -------
+    dict
+        Per state (``mount_roll``, ``mount_pitch``, ``mount_yaw``, ``odometer_scale``, ``gnss_latency``,
+        ``odo_lever_x`` ...): ``prior_std``, ``std``, ``ratio``, ``observable``; SI units (rad, s, m).
+    """
+    lay = run.state_layout()
+    res = run.result
+    out: dict[str, Any] = {}
+    names = {"mount": ("mount_roll", "mount_pitch", "mount_yaw"), "odo_scale": ("odometer_scale",),
+             "gnss_delay": ("gnss_latency",), "odo_lever": ("odo_lever_x", "odo_lever_y", "odo_lever_z"),
+             "gnss_bias": ("gnss_bias_n", "gnss_bias_e", "gnss_bias_d")}
+    for block, labels in names.items():
+        i = int(lay[getattr(LAY, block)])
+        if i < 0:
+            continue
+        for j, label in enumerate(labels):
+            p0 = float(np.sqrt(res.cov_diag[0, i + j]))
+            p1 = float(np.sqrt(res.cov_diag[-1, i + j]))
+            ratio = p1 / p0 if p0 > 0 else None
+            obs: bool | str = bool(ratio is not None and ratio < 0.5) or ("weak" if ratio is not None and ratio < 0.9
+                                                                           else False)
+            out[label] = {"prior_std": p0, "std": p1, "ratio": ratio, "observable": obs}
+    return out
+
+
+def log_summary(run: LogRun, sources: NavSources, separation: Separation | None = None) -> dict[str, Any]:
     """What a run on a log found: the one definition of its ``summary.json`` keys beyond :func:`run_summary`.
 
     Parameters
@@ -330,11 +480,15 @@ def log_summary(run: LogRun, sources: NavSources) -> dict[str, Any]:
         From :func:`imunav.ins.gins.logrun.run_log`.
     sources : NavSources
         The log's sources.
+    separation : Separation, optional
+        The forward–backward separation of a run with the smoother.
 
     Returns
     -------
     dict
-        ``t0_unix`` (UTC of the first row, s since 1970; null when the log's clock is not UTC) and ``time_note``;
+        ``trajectory`` (which track the ``.nav`` holds), ``honesty`` (:func:`honesty`), ``self_calibration``
+        (:func:`self_calibration`), ``gnss_noise`` (the adaptive factor on the fixes' reported σ), ``separation``
+        (:meth:`~imunav.ins.gins.smoother.Separation.summary`, null without the smoother); ``t0_unix`` (UTC of the first row, s since 1970; null when the log's clock is not UTC) and ``time_note``;
         ``sources`` (per role: topic, type, count, rate, what the reader refused); ``static_share``; ``mounting``
         (roll, pitch, yaw of the IMU in the vehicle, deg, with σ; its source: given, tf_static, estimated or
         identity; the coarse estimate before the filter); ``odometer_scale`` (reading / true speed − 1, with σ);
@@ -380,7 +534,26 @@ def log_summary(run: LogRun, sources: NavSources) -> dict[str, Any]:
         "initial": run.initial,
         "duration_s": float(sources.imu.t[-1] - sources.imu.t[0]),
         "final_position_std_m": sd[int(lay[LAY.pos]):int(lay[LAY.pos]) + 3].tolist(),
+        "trajectory": ("RTS-smoothed (forward filter and backward pass over the whole log): the .nav and the sigma "
+                       "file; the forward filter's in *_forward" if res.smoothed is not None else
+                       "forward filter (real time)"),
+        "honesty": honesty(run, separation),
+        "self_calibration": self_calibration(run),
+        "gnss_noise": _gnss_noise(run) if sources.gnss is not None else None,
+        "separation": separation.summary() if separation is not None else None,
     }
+
+
+def _gnss_noise(run: LogRun) -> dict[str, Any]:
+    """The adaptive factor on the fixes' reported covariance at the end of the run, as a factor on their σ."""
+    res, cfg = run.result, run.config
+    if not cfg.gnss_noise_adaptive or res.gnss_noise_scale is None:
+        return {"adaptive": False}
+    sc = float(res.gnss_noise_scale[-1])
+    lo, hi = cfg.gnss_noise_scale_bounds
+    return {"adaptive": True, "sigma_factor": math.sqrt(sc), "sigma_factor_bounds": [math.sqrt(lo), math.sqrt(hi)],
+            "at_bound": bool(sc <= lo * (1 + 1e-9) or sc >= hi * (1 - 1e-9)),
+            "method": "covariance matching of the position innovations (imunav.ins.gins.kernels._adapt_gnss_noise)"}
 
 
 def track_geojson(res: GinsResult, gnss: GnssData | None, *, every_s: float = 1.0) -> dict[str, Any]:
@@ -422,10 +595,12 @@ def track_geojson(res: GinsResult, gnss: GnssData | None, *, every_s: float = 1.
 
 
 def write_log_outputs(folder: str | os.PathLike[str], run: LogRun, sources: NavSources, *,
-                      plots: bool = True) -> dict[str, Any]:
-    """Write a run on a log: KF-GINS's ``.nav`` (the vehicle's attitude, GPS week and seconds of week from the
-    log's UTC stamps), IMU errors, state σ, the smoothed ``.nav``, ``track.geojson``, the figures and
-    ``summary.json`` (:func:`run_summary` and :func:`log_summary`).
+                      plots: bool = True, truth: NavTrack | None = None) -> dict[str, Any]:
+    """Write a run on a log: KF-GINS's ``.nav`` and σ file of the trajectory the run recommends (the smoothed one
+    when the run has the smoother, :func:`log_output_paths`; the vehicle's attitude, GPS week and seconds of week
+    from the log's UTC stamps), the forward filter's beside them, the IMU errors, ``track.geojson``, the figures
+    (the separation of the forward filter and the smoother among them) and ``summary.json`` (:func:`run_summary`
+    and :func:`log_summary`).
 
     Parameters
     ----------
@@ -437,6 +612,9 @@ def write_log_outputs(folder: str | os.PathLike[str], run: LogRun, sources: NavS
         The log's sources.
     plots : bool
         Write the figures.
+    truth : NavTrack, optional
+        A reference on the sources' time axis (:func:`imunav.ins.gins.logrun.truth_on_sources`): RMSE of the
+        recommended and the forward tracks in the summary, and the error figure.
 
     Returns
     -------
@@ -448,15 +626,25 @@ def write_log_outputs(folder: str | os.PathLike[str], run: LogRun, sources: NavS
     gt = sources.gps_time(res.t)
     week = int(gt.week[0]) if gt.week.size else 0
     sow = np.asarray(gt.sow, dtype=float) + (np.asarray(gt.week, dtype=float) - week) * 604800.0
-
-    names = run_output_paths(out, smoother=res.smoothed is not None, plots=False)
-    _write_kfgins_files(names, res, run.config.n_states, sow, week, q_vb=res.q_vb)
-    write_json(out / LOG_FILES["geojson"], track_geojson(res, sources.gnss))
-    summary = {"log": sources.source, **run_summary(res, _LogSetup(run.config)), **log_summary(run, sources),
+    sep = forward_backward_separation(res) if res.smoothed is not None else None
+    names = log_output_paths(out, smoother=sep is not None, plots=False)
+    forward = dataclasses.replace(res, smoothed=None)
+    best = _recommended(res) if sep is not None else forward
+    _write_kfgins_files({k: names[k] for k in ("nav", "err", "std")}, best, run.config.n_states, sow, week,
+                        q_vb=res.q_vb)
+    if sep is not None:
+        _write_kfgins_files({"nav": names["forward"], "std": names["std_forward"]}, forward, run.config.n_states,
+                            sow, week, q_vb=res.q_vb)
+    write_json(names["geojson"], track_geojson(best, sources.gnss))
+    summary = {"log": sources.source, **run_summary(best, _LogSetup(run.config), truth=truth),
+               **log_summary(run, sources, sep),
                "frames": "position of the IMU, attitude of the vehicle (IMU attitude composed with its mounting)"}
+    if truth is not None and sep is not None:
+        summary["rmse_forward"] = track_rmse(NavTrack(res.t, res.lla, res.vel_ned, res.q_nb), truth)
     if plots:
-        summary["figures"] = [p.name for p in write_figures(out, result=res, gnss=sources.gnss)]
-    write_json(out / RUN_FILES["summary"], summary)
+        summary["figures"] = [p.name for p in write_figures(out, result=best, gnss=sources.gnss, truth=truth,
+                                                            separation=sep)]
+    write_json(names["summary"], summary)
     return summary
 
 

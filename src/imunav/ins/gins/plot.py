@@ -25,13 +25,14 @@ from imunav.io.kfgins import DPH, MGAL, PPM, NavTrack
 
 if TYPE_CHECKING:
     from imunav.ins.gins.outage import OutageReport
+    from imunav.ins.gins.smoother import Separation
 
-__all__ = ["plot_track", "plot_errors", "plot_imu_errors", "plot_outage_drift", "write_gins_figures",
-           "FIGURE_NAMES"]
+__all__ = ["plot_track", "plot_errors", "plot_imu_errors", "plot_outage_drift", "plot_separation",
+           "write_gins_figures", "FIGURE_NAMES"]
 
 #: File names written by :func:`write_gins_figures`, by figure.
 FIGURE_NAMES = {"track": "gins_track.png", "errors": "gins_errors.png", "imu_errors": "gins_imu_errors.png",
-                "outage": "gins_outage_drift.png"}
+                "outage": "gins_outage_drift.png", "separation": "gins_separation.png"}
 
 
 def _plt() -> Any:
@@ -286,9 +287,44 @@ def plot_outage_drift(report: OutageReport) -> Any:
     return fig
 
 
+def plot_separation(sep: Separation) -> Any:
+    """The forward filter against the smoother, per covariance epoch: the horizontal separation (m) with the ±3σ
+    that ``P_f − P_s`` predicts for it, and its normalised square ``d²`` against the χ²(2) 99 % line — a figure of
+    the run's honesty that needs no truth (:class:`~imunav.ins.gins.smoother.Separation`).
+
+    Parameters
+    ----------
+    sep : Separation
+        From :func:`~imunav.ins.gins.smoother.forward_backward_separation`.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        The figure (not shown; save it with ``fig.savefig``).
+    """
+    plt = _plt()
+    fig, axs = plt.subplots(2, 1, figsize=(10, 6), sharex=True, squeeze=False)
+    t0 = float(sep.t[0]) if sep.t.size else 0.0
+    t = sep.t - t0
+    _band(axs[0, 0], t, sep.horizontal_m, t, 0.0, sep.sigma_m, "forward − smoothed, horizontal (m)",
+          "separation")
+    ax = axs[1, 0]
+    k = _shown(np.nan_to_num(sep.d2))
+    ax.semilogy(t[k], np.maximum(sep.d2[k], 1e-3), lw=0.8, label="d² (2 dof)")
+    ax.axhline(9.21, color="r", ls="--", lw=0.7, label="χ²(2) 99 %")
+    mean = sep.summary()["mean_d2"]
+    if mean is not None:
+        ax.axhline(mean, color="k", lw=0.7, label=f"mean {mean:.2f} (2 if honest)")
+    ax.set_ylabel("normalised separation d²")
+    ax.grid(True)
+    ax.legend(loc="upper right")
+    return _finish(fig, axs, t0, "Forward filter against the smoother (no truth needed)")
+
+
 def write_gins_figures(folder: str | os.PathLike[str], result: GinsResult | None = None, *,
                        gnss: GnssData | None = None, truth: NavTrack | None = None,
-                       outage: OutageReport | None = None) -> list[Path]:
+                       outage: OutageReport | None = None, separation: Separation | None = None,
+                       track: NavTrack | None = None) -> list[Path]:
     """Draw the figures that the inputs allow and write them as PNG files into ``folder``, atomically.
 
     Parameters
@@ -303,6 +339,11 @@ def write_gins_figures(folder: str | os.PathLike[str], result: GinsResult | None
         The reference.
     outage : OutageReport, optional
         The outage protocol's drift.
+    separation : Separation, optional
+        The forward filter against the smoother (:func:`plot_separation`).
+    track : NavTrack, optional
+        The trajectory the run recommends (the smoothed one), drawn and compared with ``truth`` instead of the
+        forward filter's.
 
     Returns
     -------
@@ -314,10 +355,12 @@ def write_gins_figures(folder: str | os.PathLike[str], result: GinsResult | None
     out.mkdir(parents=True, exist_ok=True)
     makers: list[tuple[str, Any]] = []
     if result is not None:
-        makers.append(("track", lambda: plot_track(result, gnss, truth)))
+        makers.append(("track", lambda: plot_track(result if track is None else track, gnss, truth)))
         if truth is not None:
             makers.append(("errors", lambda: plot_errors(result, truth)))
         makers.append(("imu_errors", lambda: plot_imu_errors(result)))
+    if separation is not None and separation.t.size:
+        makers.append(("separation", lambda: plot_separation(separation)))
     if outage is not None and outage.contained.size:
         makers.append(("outage", lambda: plot_outage_drift(outage)))
     written = []

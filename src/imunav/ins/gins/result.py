@@ -112,6 +112,11 @@ class GinsResult(EulerMixin, Result):
         Wheel contact point from the IMU, body FRD, m.
     gnss_delay : numpy.ndarray, shape (N,), or None
         GNSS receiver latency, s.
+    gnss_bias : numpy.ndarray, shape (N, 3), or None
+        The GNSS fixes' correlated error the filter estimated (``GinsConfig.gnss_bias_std``), NED, m.
+    gnss_noise_scale : numpy.ndarray, shape (N,), or None
+        The factor on the fixes' reported covariance that the adaptive noise estimate had reached
+        (``GinsConfig.gnss_noise_adaptive``; 1 without it).
     aids : dict of str to AidRecord
         Every update of each aid model of :mod:`imunav.ins.gins.aids` that was applied, by aid name
         (``gnss_position``, ``gnss_velocity``, ``odometer``, ``nhc``, ``zupt``, ``zaru``, ``baro``,
@@ -151,6 +156,8 @@ class GinsResult(EulerMixin, Result):
     q_vb: Array | None = None
     odo_lever_arm: Array | None = None
     gnss_delay: Array | None = None
+    gnss_bias: Array | None = None
+    gnss_noise_scale: Array | None = None
 
     def gnss_summary(self) -> dict[str, Any]:
         """How the GNSS fixes were used: one definition for the CLI summary and the lab step.

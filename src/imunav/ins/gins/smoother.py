@@ -1,13 +1,19 @@
 """Rauch–Tung–Striebel smoothing of the GNSS/INS feedback filter (from the records of
-:func:`imunav.ins.gins.kernels.gins_run`)."""
+:func:`imunav.ins.gins.kernels.gins_run`), and the forward–backward separation that measures, without a truth,
+whether the forward filter's σ held (:func:`forward_backward_separation`)."""
 
 from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 
-from imunav.earth import ned_to_dlla
-from imunav.ins.gins.result import SmoothedTrack
+from imunav.earth import dlla_to_ned, ned_to_dlla
+from imunav.errors import InvalidInputError
+from imunav.ins.gins.result import GinsResult, SmoothedTrack
+from imunav.results import Result
 from imunav.rotation import quat_from_rotvec, quat_multiply, quat_normalize
 
 Array = NDArray[np.float64]
@@ -64,3 +70,83 @@ def rts_smooth(t: Array, lla: Array, vel: Array, q: Array, rec_t: Array, phi: Ar
     out_lla = lla + ned_to_dlla(corr[:, 0:3], lla)
     out_q = quat_multiply(quat_from_rotvec(corr[:, 6:9]), q)
     return SmoothedTrack(t, out_lla, vel + corr[:, 3:6], quat_normalize(out_q), rec_t.copy(), Ps)
+
+
+@dataclass(frozen=True)
+class Separation(Result):
+    """How far the forward filter and the RTS smoother part, epoch by epoch: a quality figure that needs no truth.
+
+    For the RTS smoother the smoothed error is uncorrelated with everything the data determine, so the difference
+    between the forward and the smoothed estimates has the covariance ``P_f − P_s`` (Rauch, Tung & Striebel
+    1965; Gelb 1974, §5.4): the normalised separation ``d² = Δᵀ (P_f − P_s)⁻¹ Δ`` of the horizontal position is
+    χ²(2) at each epoch when the filter's model holds, larger when the forward filter was confident and wrong.
+
+    Attributes
+    ----------
+    t : numpy.ndarray, shape (M,)
+        The covariance epochs, s.
+    horizontal_m : numpy.ndarray, shape (M,)
+        Horizontal distance between the forward and the smoothed positions, m.
+    d2 : numpy.ndarray, shape (M,)
+        The normalised separation of the horizontal position (2 dof); NaN where ``P_f − P_s`` is not positive
+        definite (the epochs where the smoother adds nothing: the last one, rounding).
+    sigma_m : numpy.ndarray, shape (M,)
+        ``√tr(P_f − P_s)`` of the horizontal position: the separation's expected size, m.
+    """
+
+    t: Array
+    horizontal_m: Array
+    d2: Array
+    sigma_m: Array
+
+    def summary(self) -> dict[str, Any]:
+        """RMS and largest separation, m, and the mean of ``d²`` with its χ² band.
+
+        Returns
+        -------
+        dict
+            ``rms_m``, ``max_m``, ``mean_d2`` (2 for a consistent filter; null without a usable epoch), ``dof``
+            (2) and ``epochs``.
+        """
+        ok = np.isfinite(self.d2)
+        return {"rms_m": float(np.sqrt(np.mean(self.horizontal_m**2))) if self.t.size else None,
+                "max_m": float(np.max(self.horizontal_m)) if self.t.size else None,
+                "mean_d2": float(np.mean(self.d2[ok])) if ok.any() else None, "dof": 2, "epochs": int(ok.sum())}
+
+
+def forward_backward_separation(res: GinsResult) -> Separation:
+    """The separation of a run's forward filter and its smoother (:class:`Separation`) at the covariance epochs.
+
+    Parameters
+    ----------
+    res : GinsResult
+        A run with ``smoothed`` (``GinsFilter.run(..., smoother=True)``).
+
+    Returns
+    -------
+    Separation
+        At the epochs common to the forward covariance records and the smoother's.
+
+    Raises
+    ------
+    InvalidInputError
+        If the run has no smoothed track.
+    """
+    s = res.smoothed
+    if s is None:
+        raise InvalidInputError("forward_backward_separation needs a run with the smoother (smoother=True)")
+    k = np.clip(np.searchsorted(res.cov_t, s.cov_t), 0, res.cov_t.size - 1)
+    same = np.abs(res.cov_t[k] - s.cov_t) < 1e-9
+    k, js = k[same], np.flatnonzero(same)
+    i = np.clip(np.searchsorted(res.t, s.cov_t[js]), 0, res.t.size - 1)
+    ref = res.lla[i]
+    delta = dlla_to_ned(s.lla[i] - ref, ref)[:, :2]  # smoothed − forward, N E m
+    D = res.cov_nav[k, :2, :2] - s.cov_nav[js, :2, :2]
+    det = D[:, 0, 0] * D[:, 1, 1] - D[:, 0, 1] * D[:, 1, 0]
+    pos = (D[:, 0, 0] > 0) & (det > 1e-12 * np.maximum(D[:, 0, 0] * D[:, 1, 1], 1e-30))
+    d2 = np.full(js.size, np.nan)
+    a, b, c = D[pos, 0, 0], D[pos, 0, 1], D[pos, 1, 1]
+    x, y = delta[pos, 0], delta[pos, 1]
+    d2[pos] = (c * x * x - 2 * b * x * y + a * y * y) / det[pos]
+    return Separation(s.cov_t[js], np.hypot(delta[:, 0], delta[:, 1]), d2,
+                      np.sqrt(np.maximum(D[:, 0, 0] + D[:, 1, 1], 0.0)))

@@ -7,6 +7,11 @@ metres along N, E, D is (Groves 2013, §14.3.1, eq. 14.124 in this sign conventi
     ν = ( (φ_f − φ̂)(R_N + ĥ),  (λ_f − λ̂)(R_E + ĥ) cos φ̂,  −(h_f − ĥ) ) − Ĉ l + v̂ τ̂
     H = [ I  −τ̂ I  −[Ĉl ×]  0 …  −v̂ (on δτ) ],     R = the fix's NED position covariance (m²).
 
+``b`` is the fixes' error correlated in time (multipath, atmosphere; Groves 2013, §9.4.2 and §14.3.1): a fix is
+``r_ant + b + w`` with ``w`` white; with the ``gnss_bias`` block the innovation also takes out the estimate ``b̂``
+and ``H`` has ``I`` on ``δb``.  ``R`` is the reported covariance times the adaptive factor the kernel keeps
+(nominal ``gnss_r_scale``, 1 without adaptation).
+
 ``τ`` is the receiver's latency: a fix stamped ``t`` holds the position of ``t − τ``, ``r(t − τ) ≈ r(t) − v τ``
 (first order in τ, the velocity of the antenna taken as the IMU's; nominal state ``gnss_delay``, a state when the
 error state has the ``gnss_delay`` block).
@@ -78,6 +83,12 @@ def rows(xs, ctx, z, r, p, lay, H, R, nu, row):
     nu[row] = (z[0] - lla[0]) * (RN + lla[2]) - la[0]
     nu[row + 1] = (z[1] - lla[1]) * (RE + lla[2]) * math.cos(lla[0]) - la[1]
     nu[row + 2] = -(z[2] - lla[2]) - la[2]
+    ib = lay[LAY.gnss_bias]
+    if ib >= 0:
+        for j in range(3):
+            nu[row + j] -= xs[NOM.gnss_bias + j]
+            H[row + j, ib + j] = 1.0
+    sc = xs[NOM.gnss_r_scale]
     tau = xs[NOM.gnss_delay]
     idl = lay[LAY.gnss_delay]
     iv = lay[LAY.vel]
@@ -91,5 +102,5 @@ def rows(xs, ctx, z, r, p, lay, H, R, nu, row):
     for j in range(3):
         H[row + j, ip + j] = 1.0
         for i in range(3):
-            R[row + j, row + i] = r[j, i]
+            R[row + j, row + i] = sc * r[j, i]
     write_skew(la, H, row, lay[LAY.att], -1.0)
