@@ -284,6 +284,38 @@ def joseph_update_gain(P, dx, H, R, nu, innov_out, S_out, K_out):
     -------
     nis : float, ``ν'ᵀ S⁻¹ ν'``.
     """
+    return _joseph(P, dx, H, R, nu, innov_out, S_out, K_out, np.zeros(0, dtype=np.bool_))
+
+
+@njit(cache=True)
+def joseph_update_consider(P, dx, H, R, nu, innov_out, S_out, K_out, consider):
+    """:func:`joseph_update_gain` with Schmidt consider states: the gain rows of the states flagged in ``consider``
+    are zero, so that those states are never updated while their uncertainty and its correlations still reach the
+    others (the Schmidt-Kalman filter: Schmidt 1966, "Application of state-space methods to navigation problems",
+    Advances in Control Systems 3).  The Joseph form holds for any gain, so ``P ← (I − K H) P (I − K H)ᵀ + K R Kᵀ`` is the consider covariance.
+
+    Parameters
+    ----------
+    P : (n, n) covariance, updated in place.
+    dx : (n,) error-state estimate, updated in place (consider states unchanged).
+    H : (m, n) measurement matrix.
+    R : (m, m) measurement covariance.
+    nu : (m,) innovation at the nominal state.
+    innov_out : (m,) receives ``ν'``.
+    S_out : (m, m) receives ``S``.
+    K_out : (n, m) receives the gain applied (zero rows for consider states).
+    consider : (n,) bool, the consider states.
+
+    Returns
+    -------
+    nis : float, ``ν'ᵀ S⁻¹ ν'``.
+    """
+    return _joseph(P, dx, H, R, nu, innov_out, S_out, K_out, consider)
+
+
+@njit(cache=True)
+def _joseph(P, dx, H, R, nu, innov_out, S_out, K_out, consider):
+    """The Joseph update of :func:`joseph_update_gain`; gain rows zeroed where ``consider`` (empty: none)."""
     n = P.shape[0]
     m = H.shape[0]
     PHt = np.empty((n, m))
@@ -306,6 +338,10 @@ def joseph_update_gain(P, dx, H, R, nu, innov_out, S_out, K_out):
     Si = np.empty((m, m))
     inv_small(S_out, Si)
     K_out[:, :] = PHt @ Si
+    for i in range(consider.shape[0]):
+        if consider[i]:
+            for j in range(m):
+                K_out[i, j] = 0.0
     out = 0.0
     for i in range(m):
         for j in range(m):

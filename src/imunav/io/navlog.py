@@ -88,9 +88,9 @@ from imunav.atmosphere import G0, R_AIR, isa, pressure_altitude
 from imunav.errors import ConfigError, FileFormatError, InvalidInputError
 from imunav.io import logs
 from imunav.io.aiding import BaroData, MagnetometerData, OdometerData
+from imunav.io.comma2k19 import is_comma2k19_segment, read_comma2k19
 from imunav.io.gnss import GnssData, lat_lon_radians, read_table
 from imunav.io.gpstime import GPS_EPOCH_UNIX, leap_seconds
-from imunav.io.comma2k19 import is_comma2k19_segment, read_comma2k19
 from imunav.io.kfgins import read_kfgins_imu
 from imunav.io.navinputs import read_odometer
 from imunav.io.navsources import NavSources, SourceInfo

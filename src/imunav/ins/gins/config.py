@@ -40,6 +40,9 @@ def _v3(x: ArrayLike, name: str, *, positive: bool = False, nonneg: bool = False
 
 #: The bias models of :attr:`GinsConfig.bias_model`.
 BIAS_MODELS = ("gauss_markov", "constant_and_gauss_markov")
+#: The state blocks that may be held as Schmidt consider states (``GinsConfig.consider_states``): the vehicle's and
+#: the receiver's self-calibration, not the navigation state or the IMU errors.
+CONSIDER_BLOCKS = ("odo_scale", "mount", "odo_lever", "gnss_delay", "gnss_bias")
 
 
 @dataclass(frozen=True)
@@ -164,6 +167,11 @@ class GinsConfig:
         Fixes the adaptive factor averages over (its forgetting weight is the inverse), >= 1.
     gnss_noise_scale_bounds : tuple of float
         Lowest and highest factor on the reported covariance (0 < low <= 1 <= high).
+    consider_states : tuple of str
+        State blocks held as Schmidt consider states (``"odo_scale"``, ``"mount"``, ``"odo_lever"``,
+        ``"gnss_delay"``, ``"gnss_bias"``): their prior σ and correlations reach the other states' covariance, but no
+        update moves them (what a drive cannot observe, e.g. the odometer scale without GNSS, stays at its prior
+        instead of being "estimated" from the INS's own drift).
     dual_antenna_baseline : array_like, shape (3,), or None
         Dual-antenna GNSS heading: the secondary antenna from the primary, body FRD, m (at least 1 cm); needed
         to use :class:`~imunav.ins.gins.aids.dual_antenna.DualAntennaData`.
@@ -221,9 +229,16 @@ class GinsConfig:
     gnss_noise_adaptive: bool = False
     gnss_noise_window: float = 30.0
     gnss_noise_scale_bounds: tuple[float, float] = (0.01, 100.0)
+    consider_states: tuple[str, ...] = ()
 
     def __post_init__(self) -> None:
         s = object.__setattr__
+        cons = (self.consider_states,) if isinstance(self.consider_states, str) else tuple(self.consider_states)
+        bad = [c for c in cons if c not in CONSIDER_BLOCKS]
+        if bad:
+            raise InvalidInputError(f"GinsConfig.consider_states: {bad} cannot be consider states; choose among "
+                                    f"{list(CONSIDER_BLOCKS)}")
+        s(self, "consider_states", cons)
         if self.gnss_bias_std is not None:
             s(self, "gnss_bias_std", _v3(self.gnss_bias_std, "gnss_bias_std", positive=True))
         if not (np.isfinite(self.gnss_bias_corr_time) and self.gnss_bias_corr_time > 0):

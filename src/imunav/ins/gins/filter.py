@@ -156,6 +156,8 @@ def kernel_setup(c: GinsConfig, fs: float, odometer: bool) -> tuple[Array, NDArr
     lay[LAY.nx] = nx
     lay[LAY.cov_step] = max(1, int(round(c.cov_interval_s * fs)))
     lay[LAY.max_rejections] = c.gate_max_rejections
+    names = [name for name, _ in STATE_BLOCKS]
+    lay[LAY.consider] = sum(1 << names.index(b) for b in c.consider_states if lay[getattr(LAY, b)] >= 0)
     prm = np.zeros(N_PRM)
     prm[PRM.omega_e] = OMEGA_E
     prm[PRM.gyro_noise_density:PRM.gyro_noise_density + 3] = c.gyro_noise_density

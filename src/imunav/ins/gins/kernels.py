@@ -45,12 +45,25 @@ from imunav.filters._core import (
     inject_additive,
     inject_attitude_global,
     joseph_update,
+    joseph_update_consider,
     nis,
     strapdown_step_ned,
 )
 from imunav.filters._core_gins import inject_position_lla, propagate_cov_series, write_mat3, write_skew
 from imunav.ins.gins.aids import AID, N_AIDS, ROWS, WIDTH, evaluate
-from imunav.ins.gins.layout import CARRY, CARRY_N, CTX, LAY, MAX_GROUP, MAX_WIDTH, N_CTX, N_LAY, NOM, PRM
+from imunav.ins.gins.layout import (
+    CARRY,
+    CARRY_N,
+    CTX,
+    LAY,
+    MAX_GROUP,
+    MAX_WIDTH,
+    N_CTX,
+    N_LAY,
+    NOM,
+    PRM,
+    STATE_BLOCKS,
+)
 
 #: IMU increments: times (N,), Δθ (N, 3) rad, Δv (N, 3) m/s; row k covers [t[k-1], t[k]].
 ImuInput = namedtuple("ImuInput", ("t", "dtheta", "dvel"))
@@ -209,9 +222,29 @@ def _update(kinds, n_models, zs, rs, xs, ctx, P, prm, lay, acc_dx, blk, force):
         if kinds[0] == _GNSS_POS and prm[PRM.gnss_adapt] > 0.0:
             _adapt_gnss_noise(xs, nu, S0, R, prm)
         dx = np.zeros(nx)
-        joseph_update(P, dx, H, R, nu, np.empty(m), np.empty((m, m)))
+        if lay[LAY.consider] == 0:
+            joseph_update(P, dx, H, R, nu, np.empty(m), np.empty((m, m)))
+        else:
+            joseph_update_consider(P, dx, H, R, nu, np.empty(m), np.empty((m, m)), np.empty((nx, m)),
+                                   _consider_mask(lay, nx))
         _inject(dx, xs, lay, acc_dx)
     return m, ok, d
+
+
+@njit(cache=True)
+def _consider_mask(lay, nx):
+    """The states of the consider blocks (bit mask ``lay[LAY.consider]`` over :data:`STATE_BLOCKS`)."""
+    mask = np.zeros(nx, dtype=np.bool_)
+    for b in range(len(_BLOCK_LAY)):
+        if (lay[LAY.consider] >> b) & 1 and lay[_BLOCK_LAY[b]] >= 0:
+            for j in range(_BLOCK_SIZE[b]):
+                mask[lay[_BLOCK_LAY[b]] + j] = True
+    return mask
+
+
+# the LAY field and the size of each block of STATE_BLOCKS, in order (compile-time constants)
+_BLOCK_LAY = tuple(getattr(LAY, name) for name, _ in STATE_BLOCKS)
+_BLOCK_SIZE = tuple(n for _, n in STATE_BLOCKS)
 
 
 _GNSS_POS = AID.gnss_position
@@ -340,6 +373,10 @@ def _propagate(xs, carry, t_now, P, prm, lay, F, Q, wb, fb, out, r):
             fb[j] = carry[CARRY.sum_f + j] / dtc
         _system(xs, fb, wb, prm, lay, F, Q)
         Phi = propagate_cov_series(P, F, Q, dtc)
+        if lay[LAY.gnss_bias] >= 0:  # the fixes' correlated error is predicted to decay as its model says
+            a = math.exp(-dtc / prm[PRM.gnss_bias_t])
+            for j in range(3):
+                xs[NOM.gnss_bias + j] *= a
         if out.rec_t.shape[0] > 0 and r + 1 < out.rec_t.shape[0]:
             r += 1
             out.rec_phi[r] = Phi

@@ -44,10 +44,12 @@ STATE_BLOCKS = (
 REQUIRED_BLOCKS = ("pos", "vel", "att", "gyro_bias", "accel_bias")
 
 #: ``lay`` (int64): first index of each state block (−1: not estimated), the error-state size, samples per
-#: covariance step, the gate rejections in a row after which an update is forced (0: never); the aid models'
-#: parameter offsets follow (``lay[N_LAY + kind]``).
+#: covariance step, the gate rejections in a row after which an update is forced (0: never), the Schmidt consider
+#: blocks as a bit mask (bit i: block i of :data:`STATE_BLOCKS`; 0: none); the aid models' parameter offsets follow
+#: (``lay[N_LAY + kind]``).
 LAY, N_LAY = named_layout("GinsLayout", tuple((name, 1) for name, _ in STATE_BLOCKS) + (("nx", 1), ("cov_step", 1),
-                                                                                      ("max_rejections", 1)))
+                                                                                      ("max_rejections", 1),
+                                                                                      ("consider", 1)))
 
 #: ``xs`` (float): nominal navigation state and sensor errors.
 #: ``q_vb``: the IMU's attitude in the vehicle frame (IMU FRD -> vehicle FRD, scalar first); ``odo_lever``: the wheel

@@ -77,6 +77,9 @@ REST_NOISE_MAX = 0.1
 NHC_INTERVAL = 1.0
 #: The configuration fields of the gyro's errors (the initial heading's σ takes them from the preset and overrides).
 _GYRO_FIELDS = ("gyro_bias_std", "gyro_scale_std", "init_gyro_scale_std")
+#: σ of a mounting that a bag claims (an IMU frame_id equal to the base frame, a /tf_static), rad per axis, carried as
+#: consider states when no GNSS can check it.
+CLAIMED_MOUNT_STD = math.radians(1.0)
 #: Smallest σ of an odometer sample, m/s (a driver's twist covariance is a guess; wheels slip and lag).
 ODO_STD_FLOOR = 0.05
 
@@ -573,6 +576,9 @@ def run_log(src: NavSources, options: LogRunOptions | None = None, *,
         )
     if mount_sd is not None:
         cfg_kw.update(mounting_std=np.maximum(mount_sd, math.radians(0.05)), level_noise_std=LEVEL_STD)
+    elif wheeled and src.gnss is None and source in ("frame_id", "tf_static"):
+        # a driver's claim of the mounting: without GNSS nothing checks it, so its error is carried, not estimated
+        cfg_kw.update(mounting_std=np.full(3, CLAIMED_MOUNT_STD))
     if wheeled:
         lever_v = o.odo_lever_arm
         if lever_v is None:
@@ -591,6 +597,12 @@ def run_log(src: NavSources, options: LogRunOptions | None = None, *,
         # the fixes' reported σ is a prior: the filter scales it to what their innovations show (a u-blox without an
         # accuracy field, a driver's constant covariance, a receiver that under- or over-states it)
         cfg_kw.update(gnss_delay_std=GNSS_DELAY_STD, gnss_noise_adaptive=True)
+    if src.gnss is None:
+        # what only GNSS would observe (the odometer's scale, the mounting) keeps its prior σ as Schmidt consider
+        # states: the INS's own drift must not "calibrate" it (the Jackal's scale went to 1.61 ± 0.009 that way),
+        # and the position's σ carries it
+        cfg_kw["consider_states"] = tuple(b for b in ("odo_scale", "mount", "odo_lever")
+                                          if b != "odo_lever" or o.estimate_odo_lever_arm)
     cfg_kw["gate_max_rejections"] = MAX_REJECTIONS
     cfg_kw["bias_model"] = "constant_and_gauss_markov"  # a log's IMU: a turn-on bias that does not decay
     gyro_nd, accel_nd, noise_note = _noise_at_rest(src, static)
