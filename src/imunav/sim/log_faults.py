@@ -191,7 +191,8 @@ def warmup_temperature(t: ArrayLike, rise_c: float, tau_s: float, start_c: float
 
 def imu_stamps(t: ArrayLike, jitter_s: float, rng: np.random.Generator) -> Array:
     """Stamps of samples taken at ``t`` with a white jitter: ``t_k + e_k``, ``e_k ~ N(0, σ²)`` cut at ±0.4 of
-    the smallest sample interval (the stamps stay increasing), ``e_0 = 0`` (the log's origin is the first sample).
+    the smallest sample interval (the stamps stay increasing), ``e_0 = e_{N−1} = 0`` (the log spans the drive: its
+    origin is the first sample, and the aids up to the last sample lie inside it).
 
     Parameters
     ----------
@@ -212,7 +213,7 @@ def imu_stamps(t: ArrayLike, jitter_s: float, rng: np.random.Generator) -> Array
         return tt.copy()
     cut = 0.4 * float(np.min(np.diff(tt)))
     e = np.clip(jitter_s * rng.standard_normal(tt.size), -cut, cut)
-    e[0] = 0.0
+    e[0] = e[-1] = 0.0
     return tt + e
 
 
