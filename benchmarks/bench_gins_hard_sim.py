@@ -11,14 +11,35 @@ Printed: the mean NEES of position, velocity and attitude (epochs every 10 s fro
 truth; Bar-Shalom, Li & Kirubarajan 2001, §5.4) with the two-sided 95 % band of chi²(3 R K)/(R K) for the mean
 of the R drives' K epochs taken as independent (a generous band: epochs 10 s apart are correlated), the mean
 NIS / dof of every aid over its accepted updates with its chi² 95 % band, the share of updates rejected, and the
-outage test: per drive, one run without the fixes of seeded outages of 10-60 s (robot; 10-30 s for the car),
-the first 60 s after the start and each ``gap`` after the end of the one before; at each outage's end (its last
+outage test: per drive, one run without the fixes of seeded outages of 10-60 s, the first 60 s after the start
+and each 60 s (robot) or 30 s (car) after the end of the one before; at each outage's end (its last
 IMU sample without a fix) the horizontal error against the truth and whether it lies inside the predicted 3σ
 (``|e| <= 3 √(P_NN + P_EE)``, the criterion of :func:`imunav.ins.gins.logrun.log_outage_test`).  A consistent
 filter has its NEES and NIS inside the bands and 90-99 % of outage ends inside 3σ.
 
-Run: ``python benchmarks/bench_gins_hard_sim.py --scenario robot --drives 30 --first-seed 0`` (about 10 s per robot
-drive, 5 s per car drive, on one core); importable: :func:`drive` and :func:`report` score one drive and a set.
+Today's filter (main at 8c8bfc6), seeds 0-29, ``--faults on`` / ``--faults off`` (the drives and terrain kept):
+
+============================  ======================  ==================  ======================  ===================
+figure (95 % band)            robot, faults on        robot, faults off   car, faults on          car, faults off
+============================  ======================  ==================  ======================  ===================
+NEES pos / vel / att (2.9-3.1)  348 / 25 / 116          2.5 / 2.7 / 141     1255 / 208 / 952        1129 / 197 / 1034
+NIS/dof GNSS (0.99-1.01)      2.76 (4.3 % rejected)   0.99                1.57 (9.9 % rejected)   1.89
+NIS/dof NHC, odometer         0.88, 0.81              0.18, 0.21          2.54, 3.66 (32 % rej.)  2.28, 3.31 (34 %)
+outage ends inside 3σ         17 % of 140             100 % of 140        11 % of 91              20 % of 91
+end error RMS / predicted σ   2.39 m / 0.37 m         0.35 m / 0.40 m     18.1 m / 1.56 m         10.5 m / 1.48 m
+============================  ======================  ==================  ======================  ===================
+
+The hard robot has the real Husky bag's symptoms (GNSS NIS 8.3 for 3 degrees of freedom there 8.9; outage ends
+mostly outside their 3σ) and without the faults the same rough drives are consistent but for the attitude NEES,
+which is as high on the plain robot with the ``consumer_mems`` preset (README: 139).  The car fails with and
+without the faults: the log run starts every log at rest (``vel0`` zero with σ 0.5 m/s, the levelling of the mean
+acceleration, the heading fitted to a dead reckoning whose gyro has an unmeasured turn-on bias), which a car already
+at 12-25 m/s breaks; the simulation is not the cause (the filter started from the true state on the faults-off car
+gives a GNSS NIS of 1.02-1.05 per dof and no rejection).  The car's figures measure the faults only once the log run
+can start in motion.
+
+Run: ``python benchmarks/bench_gins_hard_sim.py --scenario robot --drives 30 --first-seed 0`` (about 3 s per robot
+drive and 1.5-4 s per car drive on one core); importable: :func:`drive` and :func:`report` score one drive and a set.
 """
 
 from __future__ import annotations
@@ -42,7 +63,7 @@ from imunav.sim.log_faults import LogFaults
 from imunav.sim.robot_log import RobotLog
 
 #: Per scenario: outage lengths (s), the gap after each outage (s).
-OUTAGES = {"robot": ((10.0, 60.0), 60.0), "car": ((10.0, 30.0), 30.0)}
+OUTAGES = {"robot": ((10.0, 60.0), 60.0), "car": ((10.0, 60.0), 30.0)}
 CONVERGE_S = 60.0
 
 

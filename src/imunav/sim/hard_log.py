@@ -8,7 +8,8 @@ on: GNSS errors correlated over 30 s (σ 1.5 m horizontal beside the robot's whi
 jitter; wheels that slide in turns, over-read there, change radius, are quantised to 1 cm/s and 50 ms late.
 Its fixes' reported σ (0.4 × 1.7 = 0.68 m horizontal), their scatter about the truth (1.7 m per axis) and the
 NIS they give a filter that believes them resemble the real Husky bag of issue 33 (reported 0.8-1.1 m, 2.2 m
-RMS residual, NIS 8.9 for 3 degrees of freedom).
+RMS residual, NIS 8.9 for 3 degrees of freedom; today's log run gives 8.3 on 30 hard robots:
+``benchmarks/bench_gins_hard_sim.py``).
 
 :func:`simulate_hard_car_log` is a car on a highway that never stops (8-30 m/s, a few minutes): a phone-class IMU
 (the ``consumer_mems`` preset: an MPU-6050-class part, like a phone's) at 100 Hz roughly aligned with the car
