@@ -19,17 +19,17 @@ filter has its NEES and NIS inside the bands and 90-99 % of outage ends inside 3
 
 Today's filter (main at 8c8bfc6), seeds 0-29, ``--faults on`` / ``--faults off`` (the drives and terrain kept):
 
-============================  ======================  ==================  ======================  ===================
-figure (95 % band)            robot, faults on        robot, faults off   car, faults on          car, faults off
-============================  ======================  ==================  ======================  ===================
-NEES pos / vel / att (2.9-3.1)  348 / 25 / 116          2.5 / 2.7 / 141     1255 / 208 / 952        1129 / 197 / 1034
-NIS/dof GNSS (0.99-1.01)      2.76 (4.3 % rejected)   0.99                1.57 (9.9 % rejected)   1.89
-NIS/dof NHC, odometer         0.88, 0.81              0.18, 0.21          2.54, 3.66 (32 % rej.)  2.28, 3.31 (34 %)
-outage ends inside 3σ         17 % of 140             100 % of 140        11 % of 91              20 % of 91
-end error RMS / predicted σ   2.39 m / 0.37 m         0.35 m / 0.40 m     18.1 m / 1.56 m         10.5 m / 1.48 m
-============================  ======================  ==================  ======================  ===================
+===============================  ======================  ==================  ======================  ===================
+figure (95 % band)               robot, faults on        robot, faults off   car, faults on          car, faults off
+===============================  ======================  ==================  ======================  ===================
+NEES pos / vel / att (2.9-3.1)   348 / 25 / 116          2.5 / 2.7 / 141     1255 / 208 / 952        1129 / 197 / 1034
+NIS/dof GNSS (0.99-1.01)         2.76 (4.3 % rejected)   0.99                1.57 (9.9 % rejected)   1.89
+NIS/dof NHC, odometer            0.88, 0.81              0.18, 0.21          2.54, 3.66 (32 % rej.)  2.28, 3.31 (34 %)
+outage ends inside 3σ            17 % of 140             100 % of 140        11 % of 91              20 % of 91
+end error RMS / predicted σ      2.39 m / 0.37 m         0.35 m / 0.40 m     18.1 m / 1.56 m         10.5 m / 1.48 m
+===============================  ======================  ==================  ======================  ===================
 
-The hard robot has the real Husky bag's symptoms (GNSS NIS 8.3 for 3 degrees of freedom there 8.9; outage ends
+The hard robot has the real Husky bag's symptoms (GNSS NIS 8.3 for 3 degrees of freedom, the bag's 8.9; outage ends
 mostly outside their 3σ) and without the faults the same rough drives are consistent but for the attitude NEES,
 which is as high on the plain robot with the ``consumer_mems`` preset (README: 139).  The car fails with and
 without the faults: the log run starts every log at rest (``vel0`` zero with σ 0.5 m/s, the levelling of the mean
