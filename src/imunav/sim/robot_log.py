@@ -37,19 +37,31 @@ from imunav.io.aiding import OdometerData
 from imunav.io.gnss import GnssData, write_table
 from imunav.io.gpstime import utc_to_gps
 from imunav.io.kfgins import NavTrack, write_kfgins_nav
-from imunav.io.navlog import TEXT_LOG_CONFIG, text_log_intervals
+from imunav.io.navlog import TEXT_LOG_CONFIG, NavSources, SourceInfo, text_log_intervals
 from imunav.io.rosbag import StaticTransform, write_bag
 from imunav.rotation import C_FLU_FRD, euler_from_quat, quat_from_dcm, quat_multiply
 from imunav.sim import presets
 from imunav.sim.error_model import ImuErrorModel, simulate_imu
 from imunav.sim.gnss import simulate_gnss
+from imunav.sim.log_faults import LogFaults, gnss_faults, imu_stamps, warmup_temperature
 from imunav.sim.trajectory import Trajectory
-from imunav.sim.vehicle import Maneuver, simulate_odometer, speed_change, stop, straight, turn, vehicle_trajectory
+from imunav.sim.vehicle import (
+    Maneuver,
+    bank,
+    bump,
+    hill,
+    simulate_odometer,
+    speed_change,
+    stop,
+    straight,
+    turn,
+    vehicle_trajectory,
+)
 from imunav.timeseries import ImuData
 from imunav.units import DEG
 
-__all__ = ["RobotLogTruth", "RobotLog", "robot_loops", "simulate_robot_log", "write_robot_log",
-           "C_BASE_IMU", "ROBOT_T0_NS"]
+__all__ = ["RobotLogTruth", "RobotLog", "robot_loops", "simulate_robot_log", "simulate_vehicle_log",
+           "write_robot_log", "C_BASE_IMU", "ROBOT_T0_NS"]
 
 Array = NDArray[np.float64]
 
@@ -60,8 +72,15 @@ C_BASE_IMU = np.array([[0.0, 0.0, 1.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]])
 ROBOT_T0_NS = 1_715_679_000 * 1_000_000_000
 
 
-def robot_loops(distance_m: float = 400.0, *, speed: float = 1.0) -> list[Maneuver]:
+def robot_loops(distance_m: float = 400.0, *, speed: float = 1.0, bank_deg: float = 0.0, grade_deg: float = 0.0,
+                bump_deg: float = 0.0) -> list[Maneuver]:
     """Rectangular loops (20 m × 10 m, left turns of 90°) at ``speed`` with a 5 s stop after each, from rest.
+
+    Rough ground (each off by default): the first long side crosses a slope of ``bank_deg`` roll
+    (:func:`~imunav.sim.vehicle.bank`, 3 s ramps), the second climbs ``grade_deg`` over its first half and
+    descends it over its second (:func:`~imunav.sim.vehicle.hill`, 3 s ramps: each loop ends at the height it
+    began), the middle of the first short side drives over a 1 s :func:`~imunav.sim.vehicle.bump` of
+    ``bump_deg`` pitch and half that roll.
 
     Parameters
     ----------
@@ -69,6 +88,8 @@ def robot_loops(distance_m: float = 400.0, *, speed: float = 1.0) -> list[Maneuv
         Approximate distance driven, m (at least one loop, about 80 m).
     speed : float
         Cruise speed, m/s (> 0).
+    bank_deg, grade_deg, bump_deg : float
+        Roll of the slope, grade of the hill and peak pitch of the bump, degrees (0: flat).
 
     Returns
     -------
@@ -86,6 +107,14 @@ def robot_loops(distance_m: float = 400.0, *, speed: float = 1.0) -> list[Maneuv
     side = (20.0 / speed, 10.0 / speed)
     loop = [straight(side[0]), turn(90.0, turn_s), straight(side[1]), turn(90.0, turn_s), straight(side[0]),
             turn(90.0, turn_s), straight(side[1]), turn(90.0, turn_s)]
+    if bank_deg:
+        loop[0] = bank(bank_deg, side[0], min(3.0, side[0] / 2))
+    if bump_deg:
+        loop[2:3] = [straight((side[1] - 1.0) / 2), bump(bump_deg, bump_deg / 2, 1.0), straight((side[1] - 1.0) / 2)]
+    if grade_deg:
+        i = len(loop) - 4  # the second long side
+        ramp = min(3.0, side[0] / 4)
+        loop[i:i + 1] = [hill(grade_deg, side[0] / 2, ramp), hill(-grade_deg, side[0] / 2, ramp)]
     loop_m = speed * sum(m.duration_s for m in loop)
     n = int(round(distance_m / loop_m))
     if n < 1:
@@ -129,6 +158,11 @@ class RobotLogTruth:
         UTC of t = 0, ns since 1970.
     meta : dict
         Seed, IMU model, noise levels.
+    faults : dict
+        The :class:`~imunav.sim.log_faults.LogFaults` switches (``"switches"``) and what they realised: the
+        IMU's temperature (``imu_temp_c``, °C per sample), its stamps' errors (``imu_stamp_error_s``), the
+        fixes' rest offsets, repeats and true σ (:func:`~imunav.sim.log_faults.gnss_faults`); empty without
+        faults.
     """
 
     trajectory: Trajectory
@@ -143,6 +177,7 @@ class RobotLogTruth:
     gnss_outlier_offset_ned: Array
     t0_ns: int
     meta: dict[str, Any] = field(default_factory=dict)
+    faults: dict[str, Any] = field(default_factory=dict)
 
     def nav_track(self) -> NavTrack:
         """The vehicle truth as a :class:`~imunav.io.kfgins.NavTrack` on the sources' time origin (t = 0 at the
@@ -180,6 +215,29 @@ class RobotLog:
     odometer: OdometerData
     truth: RobotLogTruth
 
+    @property
+    def sources(self) -> NavSources:
+        """The streams as :func:`imunav.ins.gins.logrun.run_log` takes a log's (what
+        :func:`imunav.io.navlog.read_nav_sources` reads from :func:`write_robot_log`'s bag without
+        ``/tf_static``, to the ns of its stamps), without writing the bag.
+
+        Returns
+        -------
+        NavSources
+            IMU, GNSS and odometer on the IMU's time origin (UTC ``truth.t0_ns``), no mounting.
+        """
+        t0 = int(self.truth.t0_ns)
+        roles = (("imu", "/imu/data", "sensor_msgs/msg/Imu", self.imu.t),
+                 ("gnss", "/gps/fix", "sensor_msgs/msg/NavSatFix", self.gnss.t),
+                 ("odometer", "/odom", "nav_msgs/msg/Odometry", self.odometer.t))
+        topics = {r: SourceInfo(r, topic, mt, int(t.size), int(t.size),
+                                float((t.size - 1) / (t[-1] - t[0])) if t.size > 1 else None)
+                  for r, topic, mt, t in roles}
+        meta = {"time": "header stamps in UTC", "mounting": "no /tf_static in the bag",
+                "simulation": str(self.imu.meta.get("source", "imunav.sim.robot_log"))}
+        return NavSources(str(self.imu.meta.get("source", "imunav.sim.robot_log")), t0, self.imu, self.gnss,
+                          self.odometer, None, None, topics, t0 * 1e-9, None, None, meta)
+
 
 def _imu_trajectory(base: Trajectory, c_base_imu: Array) -> Trajectory:
     """The truth of a sensor frame rotated by ``c_base_imu`` from the base frame, at the base origin."""
@@ -198,7 +256,8 @@ def simulate_robot_log(seed: int = 0, *, distance_m: float = 400.0, speed: float
                        origin_lla: tuple[float, float, float] = (48.137 * DEG, 11.575 * DEG, 520.0),
                        t0_ns: int = ROBOT_T0_NS, imu_model: str | ImuErrorModel = "consumer_mems",
                        slip_std: tuple[float, float] = (0.0, 0.0), idle_vibration_std: float = 0.0,
-                       vibration_band_hz: tuple[float, float] = (0.1, 2.6)) -> RobotLog:
+                       vibration_band_hz: tuple[float, float] = (0.1, 2.6),
+                       faults: LogFaults | None = None) -> RobotLog:
     """The robot scenario (module docstring), seeded.
 
     Parameters
@@ -241,6 +300,9 @@ def simulate_robot_log(seed: int = 0, *, distance_m: float = 400.0, speed: float
         below the 30 Hz IMU's Nyquist frequency for the mechanization's fourth-order integration of point samples
         (a sinusoid of f Hz comes out ``1 − 11 x⁴ / 720``, ``x = 2π f / 30``, times its amplitude: 0.13 % small at
         2.6 Hz; the trapezoid's ``(x/2) cot(x/2)``, 2.5 % small, left the NHC's NIS 2 % under 1 over 30 drives).
+    faults : LogFaults, optional
+        What real logs add (:mod:`imunav.sim.log_faults`); None: none, the drive as before they existed, to the
+        bit.
 
     Returns
     -------
@@ -252,24 +314,124 @@ def simulate_robot_log(seed: int = 0, *, distance_m: float = 400.0, speed: float
     InvalidInputError
         If a rate or σ is out of range (from the simulators).
     """
+    return simulate_vehicle_log(
+        seed, robot_loops(distance_m, speed=speed), imu_rate_hz=imu_rate_hz, odometer_rate_hz=odometer_rate_hz,
+        odometer_scale=odometer_scale, odometer_noise_std=odometer_noise_std, gnss_rate_hz=gnss_rate_hz,
+        gnss_std_m=gnss_std_m, gnss_latency_s=gnss_latency_s, outlier_fraction=outlier_fraction,
+        outlier_range_m=outlier_range_m, gnss_lever_arm_base=gnss_lever_arm_base, origin_lla=origin_lla, t0_ns=t0_ns,
+        imu_model=imu_model, slip_std=slip_std, idle_vibration_std=idle_vibration_std,
+        vibration_band_hz=vibration_band_hz, faults=faults)
+
+
+def simulate_vehicle_log(seed: int, maneuvers: list[Maneuver], *, imu_rate_hz: float = 30.0,
+                         odometer_rate_hz: float = 10.0, odometer_scale: float = 0.91,
+                         odometer_noise_std: float = 0.02, gnss_rate_hz: float = 2.5,
+                         gnss_std_m: float | tuple[float, float, float] = 0.8, gnss_latency_s: float = 0.15,
+                         outlier_fraction: float = 0.02, outlier_range_m: tuple[float, float] = (10.0, 30.0),
+                         gnss_lever_arm_base: tuple[float, float, float] = (0.0, 0.0, -0.3),
+                         origin_lla: tuple[float, float, float] = (48.137 * DEG, 11.575 * DEG, 520.0),
+                         t0_ns: int = ROBOT_T0_NS, imu_model: str | ImuErrorModel = "consumer_mems",
+                         slip_std: tuple[float, float] = (0.0, 0.0), idle_vibration_std: float = 0.0,
+                         vibration_band_hz: tuple[float, float] = (0.1, 2.6), heading0_deg: float = 30.0,
+                         speed0: float = 0.0, c_base_imu: Array = C_BASE_IMU, faults: LogFaults | None = None,
+                         source: str = "imunav.sim.robot_log") -> RobotLog:
+    """A wheeled vehicle's log (IMU, wheel speed, GNSS) on any drive, seeded: :func:`simulate_robot_log` on its
+    loops, :func:`imunav.sim.hard_log.simulate_hard_car_log` on a highway.
+
+    Parameters
+    ----------
+    seed : int
+        Seed of every random draw.
+    maneuvers : list of Maneuver
+        The drive (:func:`~imunav.sim.vehicle.vehicle_trajectory`).
+    imu_rate_hz, odometer_rate_hz, gnss_rate_hz : float
+        Rates, Hz (the odometer's and the GNSS's at most the IMU's).
+    odometer_scale : float
+        Odometer reading / true forward speed.
+    odometer_noise_std : float
+        White noise σ of each odometer sample, m/s (also written as its covariance).
+    gnss_std_m : float or tuple of float
+        White position noise σ (north, east, down, or one for all), m.
+    gnss_latency_s : float
+        Age of each fix at its stamp, s.
+    outlier_fraction : float
+        Share of the fixes that jump.
+    outlier_range_m : tuple of float
+        Horizontal jump size, uniform in this range, m, in a uniform direction.
+    gnss_lever_arm_base : tuple of float
+        Antenna from the vehicle origin, vehicle FRD, m.
+    origin_lla : tuple of float
+        Start position (lat rad, lon rad, ellipsoidal height m).
+    t0_ns : int
+        UTC of the first IMU stamp, ns since 1970.
+    imu_model : str or ImuErrorModel
+        The IMU's errors (a preset name or a model).
+    slip_std : tuple of float
+        σ of the base's white lateral and vertical velocity in motion, m/s.
+    idle_vibration_std : float
+        σ of the base's velocity during the stops, m/s.
+    vibration_band_hz : tuple of float
+        Band of both perturbations, Hz.
+    heading0_deg : float
+        Initial heading, degrees from north.
+    speed0 : float
+        Initial speed, m/s (a drive that never stops starts moving).
+    c_base_imu : numpy.ndarray, shape (3, 3)
+        The reader's IMU frame in the vehicle's FRD frame (columns: IMU axes), a rotation.
+    faults : LogFaults, optional
+        What real logs add (:mod:`imunav.sim.log_faults`); None: none.
+    source : str
+        The name the IMU's ``meta["source"]`` and the sources carry.
+
+    Returns
+    -------
+    RobotLog
+        The streams and the truth (``truth.faults``: what the faults realised).
+
+    Raises
+    ------
+    InvalidInputError
+        If a rate, σ or fault is out of range (from the simulators).
+    """
     rng = np.random.default_rng(seed)
     seeds = rng.integers(0, 2**63 - 1, size=4)
     vib = int(rng.integers(0, 2**63 - 1))  # drawn after the others: the drive without perturbations is unchanged
-    base = vehicle_trajectory(robot_loops(distance_m, speed=speed), fs=imu_rate_hz, origin_lla=origin_lla,
-                              heading0_deg=30.0, slip_std=slip_std, idle_vibration_std=idle_vibration_std,
-                              vibration_band_hz=vibration_band_hz, rng=vib)
+    f = faults if faults is not None else LogFaults()
+    rf = np.random.default_rng(int(rng.integers(0, 2**63 - 1)))  # the faults' draws, after every earlier one
+    base = vehicle_trajectory(maneuvers, fs=imu_rate_hz, origin_lla=origin_lla, heading0_deg=heading0_deg,
+                              speed0=speed0, slip_std=slip_std, idle_vibration_std=idle_vibration_std,
+                              vibration_band_hz=vibration_band_hz, rng=vib, turn_slip=f.turn_slip)
     model = presets.get(imu_model) if isinstance(imu_model, str) else imu_model
-    imu = simulate_imu(_imu_trajectory(base, C_BASE_IMU), model, rng=int(seeds[0]))
+    c_bi = np.asarray(c_base_imu, dtype=np.float64)
+    rec: dict[str, Any] = {} if faults is None else {"switches": f.to_dict()}
+    temp = None
+    if f.imu_temp_rise_c != 0:
+        temp = warmup_temperature(base.t, f.imu_temp_rise_c, f.imu_temp_tau_s, model.temp_ref_c)
+        rec["imu_temp_c"] = temp
+    imu = simulate_imu(_imu_trajectory(base, c_bi), model, rng=int(seeds[0]), temp_c=temp)
     assert isinstance(imu, ImuData)
-    imu = ImuData(imu.t, imu.gyro, imu.accel, meta={"t0_ns": int(t0_ns), "source": "imunav.sim.robot_log",
-                                                     "frame": "IMU (reader's FRD flip of x right, y up, z backward)"})
+    t_imu = imu.t
+    if f.imu_stamp_jitter_s > 0:
+        t_imu = imu_stamps(imu.t, f.imu_stamp_jitter_s, rf)
+        rec["imu_stamp_error_s"] = t_imu - imu.t
+    imu = ImuData(t_imu, imu.gyro, imu.accel, meta={"t0_ns": int(t0_ns), "source": source,
+                                                    "frame": "IMU (reader's FRD flip of the sensor axes)"})
     odo = simulate_odometer(base, scale_factor=odometer_scale - 1.0, noise_std=odometer_noise_std,
-                            rate_hz=odometer_rate_hz, rng=int(seeds[1]))
+                            rate_hz=odometer_rate_hz, rng=int(seeds[1]), latency_s=f.odometer_latency_s,
+                            scale_change=f.odometer_scale_change, scale_change_tau_s=f.odometer_scale_tau_s,
+                            turn_overread=f.odometer_turn_overread, resolution=f.odometer_resolution)
     odo = OdometerData(odo.t, odo.speed, {**odo.meta, "t0_ns": int(t0_ns)},
                        np.full(odo.t.size, float(odometer_noise_std)))
     lever = np.asarray(gnss_lever_arm_base, dtype=np.float64)
-    g = simulate_gnss(base, rate_hz=gnss_rate_hz, pos_noise=(gnss_std_m,) * 3, vel_noise=None,
-                      latency_s=gnss_latency_s, lever_arm=lever, rng=int(seeds[2]))
+    std = (gnss_std_m,) * 3 if np.ndim(gnss_std_m) == 0 else tuple(gnss_std_m)  # type: ignore[arg-type]
+    corr = {} if not any(f.gnss_corr_sigma_m) else {"pos_corr_sigma": f.gnss_corr_sigma_m,
+                                                      "pos_corr_tau": f.gnss_corr_tau_s}
+    g = simulate_gnss(base, rate_hz=gnss_rate_hz, pos_noise=std, vel_noise=None,
+                      latency_s=gnss_latency_s, lever_arm=lever, rng=int(seeds[2]), **corr)
+    if faults is not None:
+        speed = np.interp(g.t - gnss_latency_s, base.t, np.linalg.norm(base.vel_ned, axis=1))
+        g, realised = gnss_faults(g, speed, f, rf)
+        rec.update(realised)
     r3 = np.random.default_rng(int(seeds[3]))
     k = int(round(outlier_fraction * g.n))
     idx = np.sort(r3.choice(g.n, size=k, replace=False)) if k else np.zeros(0, dtype=np.intp)
@@ -281,14 +443,14 @@ def simulate_robot_log(seed: int = 0, *, distance_m: float = 400.0, speed: float
     outlier[idx] = True
     lla = g.lla + earth.ned_to_dlla(off, g.lla)
     gnss = GnssData(g.t, lla, g.pos_std, meta={**g.meta, "t0_ns": int(t0_ns), "outliers": int(k)})
-    c_sensor_flu = C_FLU_FRD @ C_BASE_IMU @ C_FLU_FRD  # raw sensor axes in the vehicle's FLU frame
-    q_bi = quat_from_dcm(C_BASE_IMU)
+    c_sensor_flu = C_FLU_FRD @ c_bi @ C_FLU_FRD  # raw sensor axes in the vehicle's FLU frame
+    q_bi = quat_from_dcm(c_bi)
     e = np.degrees(euler_from_quat(q_bi))
     truth = RobotLogTruth(base, q_bi, (float(e[0]), float(e[1]), float(e[2])), c_sensor_flu, float(odometer_scale),
                           float(odometer_noise_std), float(gnss_latency_s), lever, outlier, off, int(t0_ns),
                           {"seed": int(seed), "imu_model": model.name, "slip_std": list(slip_std),
                            "idle_vibration_std": float(idle_vibration_std), "imu_rate_hz": float(imu_rate_hz),
-                           "gnss_std_m": float(gnss_std_m), "outlier_range_m": list(outlier_range_m)})
+                           "gnss_std_m": float(np.max(std)), "outlier_range_m": list(outlier_range_m)}, rec)
     return RobotLog(imu, gnss, odo, truth)
 
 

@@ -1,7 +1,8 @@
 """Land-vehicle trajectories (truth for GNSS/INS) and the vehicle's own sensors.
 
 A drive is a list of manoeuvres: :func:`straight`, :func:`speed_change`,
-:func:`turn`, :func:`stop` and :func:`hill`.  :func:`vehicle_trajectory` turns
+:func:`turn`, :func:`stop`, :func:`hill` and, for rough terrain, :func:`bank` (a
+side slope: roll) and :func:`bump`.  :func:`vehicle_trajectory` turns
 it into a :class:`~imunav.sim.trajectory.Trajectory` on the WGS84 ellipsoid
 (geodetic position, NED velocity, ``q_nb``, and the *exact* body rate
 ``ω_nb^b`` and NED acceleration ``v̇^n``), so that
@@ -11,10 +12,14 @@ transport rate.
 
 Vehicle model: the body x axis points along the velocity (no side slip, no
 vertical body velocity: the non-holonomic constraint holds exactly), roll is
-zero, pitch is the road grade γ and yaw the heading ψ::
+the side slope φ (zero without :func:`bank` / :func:`bump`), pitch is the road
+grade γ and yaw the heading ψ::
 
     v^n = s (cos γ cos ψ, cos γ sin ψ, −sin γ),
-    ω_nb^b = (−ψ̇ sin γ, γ̇, ψ̇ cos γ)          (ZYX Euler rates at zero roll).
+    ω_nb^b = (φ̇ − ψ̇ sin γ, γ̇ cos φ + ψ̇ sin φ cos γ, −γ̇ sin φ + ψ̇ cos φ cos γ)
+
+(ZYX Euler rates, Groves 2013 eq. 2.58 inverted; roll about the body x axis
+leaves ``v^n`` unchanged).
 
 Optionally (``slip_std``, ``idle_vibration_std`` of :func:`vehicle_trajectory`)
 the body of a real car also moves sideways and vertically while it drives (side
@@ -49,7 +54,7 @@ from numpy.typing import ArrayLike, NDArray
 from imunav import earth
 from imunav.errors import InvalidInputError, ShapeError
 from imunav.io.aiding import BaroData, OdometerData
-from imunav.rotation import dcm_from_quat, quat_from_euler
+from imunav.rotation import dcm_from_euler, dcm_from_quat, quat_from_euler
 from imunav.sim.trajectory import Trajectory, body_rate_from_attitude
 from imunav.units import DEG
 
@@ -60,6 +65,8 @@ __all__ = [
     "turn",
     "stop",
     "hill",
+    "bank",
+    "bump",
     "vehicle_trajectory",
     "demo_drive",
     "OdometerData",
@@ -78,7 +85,7 @@ class Maneuver:
 
     Parameters
     ----------
-    kind : {"straight", "speed", "turn", "stop", "hill"}
+    kind : {"straight", "speed", "turn", "stop", "hill", "bank", "bump"}
         What the manoeuvre does.
     duration_s : float
         Length, s (> 0).
@@ -87,9 +94,14 @@ class Maneuver:
     dheading : float
         Heading change, rad (kind ``"turn"``; positive turns right, towards east from north).
     grade : float
-        Road grade reached, rad (kind ``"hill"``; positive climbs; ``|grade| < 45°``).
+        Road grade reached, rad (kind ``"hill"``; positive climbs; ``|grade| < 45°``), or the bump's peak pitch
+        (kind ``"bump"``).
     ramp_s : float
-        Time to reach the grade and to come back, s (kind ``"hill"``; in ``(0, duration_s / 2]``).
+        Time to reach the grade (roll) and to come back, s (kinds ``"hill"`` and ``"bank"``; in
+        ``(0, duration_s / 2]``).
+    roll : float
+        Side slope reached, rad (kind ``"bank"``; positive: right side down; ``|roll| < 30°``), or the bump's
+        peak roll (kind ``"bump"``).
 
     Raises
     ------
@@ -104,13 +116,15 @@ class Maneuver:
     dheading: float = 0.0
     grade: float = 0.0
     ramp_s: float = 0.0
+    roll: float = 0.0
 
     def __post_init__(self) -> None:
-        if self.kind not in ("straight", "speed", "turn", "stop", "hill"):
-            raise InvalidInputError(f"Maneuver.kind {self.kind!r} is unknown; use straight, speed, turn, stop or hill")
+        if self.kind not in ("straight", "speed", "turn", "stop", "hill", "bank", "bump"):
+            raise InvalidInputError(f"Maneuver.kind {self.kind!r} is unknown; use straight, speed, turn, stop, hill, "
+                                    "bank or bump")
         if not (math.isfinite(self.duration_s) and self.duration_s > 0):
             raise InvalidInputError(f"{self.kind}: duration_s must be a positive number of seconds; got {self.duration_s!r}")
-        for name in ("to_speed", "dheading", "grade", "ramp_s"):
+        for name in ("to_speed", "dheading", "grade", "ramp_s", "roll"):
             if not math.isfinite(getattr(self, name)):
                 raise InvalidInputError(f"{self.kind}: {name} must be finite; got {getattr(self, name)!r}")
         if self.kind == "hill":
@@ -120,6 +134,13 @@ class Maneuver:
                 raise InvalidInputError(
                     f"hill: ramp_s must be in (0, duration_s/2] = (0, {self.duration_s / 2:g}] s; got {self.ramp_s!r}"
                 )
+        if self.kind in ("bank", "bump"):
+            if abs(self.roll) >= math.radians(30) or abs(self.grade) >= math.radians(30):
+                raise InvalidInputError(f"{self.kind}: roll and pitch must stay under 30 deg; got "
+                                        f"{math.degrees(self.roll):.3g}, {math.degrees(self.grade):.3g} deg")
+            if self.kind == "bank" and not (0 < self.ramp_s <= self.duration_s / 2):
+                raise InvalidInputError(
+                    f"bank: ramp_s must be in (0, duration_s/2] = (0, {self.duration_s / 2:g}] s; got {self.ramp_s!r}")
 
 
 def straight(duration_s: float) -> Maneuver:
@@ -216,6 +237,48 @@ def hill(grade_deg: float, duration_s: float, ramp_s: float = 5.0) -> Maneuver:
     return Maneuver("hill", float(duration_s), grade=float(grade_deg) * DEG, ramp_s=float(ramp_s))
 
 
+def bank(roll_deg: float, duration_s: float, ramp_s: float = 3.0) -> Maneuver:
+    """Drive across a side slope: the roll rises to ``roll_deg`` over ``ramp_s``, holds, and returns to level
+    over the last ``ramp_s`` of ``duration_s`` (a cambered road, a field's slope; heading and speed unchanged).
+
+    Parameters
+    ----------
+    roll_deg : float
+        Roll held, degrees (``|roll_deg| < 30``; positive: the right side lower).
+    duration_s : float
+        Length of the whole manoeuvre, s (> 0).
+    ramp_s : float
+        Time to reach the roll, and to come back to level, s (in ``(0, duration_s / 2]``).
+
+    Returns
+    -------
+    Maneuver
+        A ``"bank"`` manoeuvre (``roll`` in rad).
+    """
+    return Maneuver("bank", float(duration_s), roll=float(roll_deg) * DEG, ramp_s=float(ramp_s))
+
+
+def bump(pitch_deg: float, roll_deg: float = 0.0, duration_s: float = 1.0) -> Maneuver:
+    """Drive over a bump: pitch (and roll, one wheel higher) swing to ``+peak``, through ``−peak`` and back to level
+    in ``duration_s``, Hann-shaped rates (pulses of a quarter, a half and a quarter of the duration, areas
+    ``+p, −2p, +p``): the vehicle rises and comes back to its height, a short, sharp attitude change that
+    excites the IMU beyond the slow manoeuvres.
+
+    Parameters
+    ----------
+    pitch_deg, roll_deg : float
+        Peak pitch and roll, degrees (each ``< 30`` in size).
+    duration_s : float
+        Length, s (> 0).
+
+    Returns
+    -------
+    Maneuver
+        A ``"bump"`` manoeuvre (``grade``, ``roll`` in rad).
+    """
+    return Maneuver("bump", float(duration_s), grade=float(pitch_deg) * DEG, roll=float(roll_deg) * DEG)
+
+
 # ---------------------------------------------------------------------------
 # Hann pulses: rate A/T (1 - cos 2πu) on [t0, t0 + T], area A
 # ---------------------------------------------------------------------------
@@ -245,10 +308,11 @@ class _Signal:
         return self.x0 + x + np.cumsum(jump)[:-1], xd, xdd
 
 
-def _plan(maneuvers: Sequence[Maneuver], speed0: float) -> tuple[_Signal, _Signal, _Signal, float]:
+def _plan(maneuvers: Sequence[Maneuver], speed0: float) -> tuple[_Signal, _Signal, _Signal, _Signal, float]:
     speed = _Signal(speed0)
     heading = _Signal(0.0)
     grade = _Signal(0.0)
+    roll = _Signal(0.0)
     t = 0.0
     s_now = speed0
     for i, m in enumerate(maneuvers):
@@ -269,8 +333,18 @@ def _plan(maneuvers: Sequence[Maneuver], speed0: float) -> tuple[_Signal, _Signa
                 raise InvalidInputError(f"maneuvers[{i}]: a hill at standstill cannot change height; drive first")
             grade.pulses.append((t, m.ramp_s, m.grade))
             grade.pulses.append((t + m.duration_s - m.ramp_s, m.ramp_s, -m.grade))
+        elif m.kind in ("bank", "bump"):
+            if s_now == 0.0:
+                raise InvalidInputError(f"maneuvers[{i}]: a {m.kind} at standstill; drive first")
+            if m.kind == "bank":
+                roll.pulses += [(t, m.ramp_s, m.roll), (t + m.duration_s - m.ramp_s, m.ramp_s, -m.roll)]
+            else:
+                q = m.duration_s / 4.0
+                for sig, peak in ((grade, m.grade), (roll, m.roll)):
+                    if peak != 0.0:
+                        sig.pulses += [(t, q, peak), (t + q, 2.0 * q, -2.0 * peak), (t + 3.0 * q, q, peak)]
         t += m.duration_s
-    return speed, heading, grade, t
+    return speed, heading, grade, roll, t
 
 
 def _simpson_cumulative(f: Array, dt: float) -> Array:
@@ -383,6 +457,7 @@ def vehicle_trajectory(
     idle_vibration_std: float = 0.0,
     vibration_band_hz: ArrayLike = (0.5, 10.5),
     rng: Any = None,
+    turn_slip: float = 0.0,
 ) -> Trajectory:
     """Truth trajectory of a drive, sampled at the IMU rate.
 
@@ -413,6 +488,13 @@ def vehicle_trajectory(
     rng : numpy.random.Generator or int, optional
         Random generator or seed.
         Draws the perturbations' frequencies and phases (unused when both are off).
+    turn_slip : float
+        Side slip in turns, rad of body slip angle per m/s² of lateral acceleration (>= 0; default none): the
+        body's lateral velocity ``δv_y = −k s · s ψ̇`` (the velocity points outside the turn, the nose inside),
+        the steady-state cornering of the linear single-track (bicycle) model, whose body slip angle at speed
+        grows with the lateral acceleration (Gillespie, *Fundamentals of Vehicle Dynamics*, SAE 1992, ch. 6;
+        about 0.002-0.005 rad per m/s² for a car; a skid-steered robot slides far more).  Unlike
+        ``slip_std`` it is not white: the non-holonomic constraint is biased through every turn.
 
     Returns
     -------
@@ -424,8 +506,8 @@ def vehicle_trajectory(
     InvalidInputError
         If ``maneuvers`` is empty or holds something else than a :class:`Maneuver`, ``fs`` or ``speed0``
         is not valid, the origin latitude is beyond ±85° (likely degrees), the drive reaches a
-        negative speed, stops while moving, or climbs a hill at standstill, or a perturbation σ or the
-        band is out of range.
+        negative speed, stops while moving, or climbs a hill (bank, bump) at standstill, or a perturbation
+        σ, the band or ``turn_slip`` is out of range.
     ShapeError
         If ``origin_lla`` is not a finite 3-vector.
 
@@ -471,14 +553,18 @@ def vehicle_trajectory(
     if abs(o[0]) > math.radians(85):
         raise InvalidInputError(f"origin latitude {math.degrees(o[0]):.4g} deg: give it in radians, within +-85 deg")
     slip, idle, band = _check_perturbation(slip_std, idle_vibration_std, vibration_band_hz, float(fs))
-    speed, heading, grade, total = _plan(maneuvers, float(speed0))
+    if not (math.isfinite(turn_slip) and turn_slip >= 0):
+        raise InvalidInputError(f"turn_slip must be >= 0 rad per m/s^2, finite; got {turn_slip!r}")
+    speed, heading, grade, roll, total = _plan(maneuvers, float(speed0))
     heading.x0 = float(heading0_deg) * DEG
     dt = 1.0 / float(fs)
     n = int(math.floor(total * fs + 1e-9)) + 1
     th = np.arange(2 * n - 1) * (dt / 2.0)  # grid and mid points
     s, sd, _ = speed.eval(th)
-    psi, psid, _ = heading.eval(th)
+    psi, psid, psidd = heading.eval(th)
     gam, gamd, _ = grade.eval(th)
+    rolled = bool(roll.pulses)
+    phi, phid, _ = roll.eval(th)
     if np.any(s < -1e-9):
         raise InvalidInputError("the drive reaches a negative speed; check the speed_change targets")
     s = np.maximum(s, 0.0)
@@ -489,11 +575,25 @@ def vehicle_trajectory(
         sd * cg * sp - s * (sg * gamd * sp - cg * cp * psid),
         -sd * sg - s * cg * gamd,
     ], axis=1)
-    if np.any(slip > 0) or idle > 0:
-        dvb, dvb_dot = _body_velocity_perturbation(maneuvers, total, th, dt / 2.0, slip, idle, band, rng)
-        c_nb = np.stack([np.stack([cg * cp, cg * sp, -sg], axis=1), np.stack([-sp, cp, np.zeros_like(sp)], axis=1),
-                         np.stack([sg * cp, sg * sp, cg], axis=1)], axis=2)  # columns: body x, y, z in NED
-        w_h = np.stack([-psid * sg, gamd, psid * cg], axis=1)
+    if rolled:
+        cf, sf = np.cos(phi), np.sin(phi)
+        w_all = np.stack([phid - psid * sg, gamd * cf + psid * sf * cg, -gamd * sf + psid * cf * cg], axis=1)
+    else:
+        w_all = np.stack([-psid * sg, gamd, psid * cg], axis=1)
+    if np.any(slip > 0) or idle > 0 or turn_slip > 0:
+        if np.any(slip > 0) or idle > 0:
+            dvb, dvb_dot = _body_velocity_perturbation(maneuvers, total, th, dt / 2.0, slip, idle, band, rng)
+        else:
+            dvb, dvb_dot = np.zeros((th.size, 3)), np.zeros((th.size, 3))
+        if turn_slip > 0:  # δv_y = −k s² ψ̇ and its derivative
+            dvb[:, 1] -= turn_slip * s * s * psid
+            dvb_dot[:, 1] -= turn_slip * (2.0 * s * sd * psid + s * s * psidd)
+        if rolled:
+            c_nb = dcm_from_euler(phi, gam, psi)
+        else:
+            c_nb = np.stack([np.stack([cg * cp, cg * sp, -sg], axis=1), np.stack([-sp, cp, np.zeros_like(sp)], axis=1),
+                             np.stack([sg * cp, sg * sp, cg], axis=1)], axis=2)  # columns: body x, y, z in NED
+        w_h = w_all
         vel = vel + np.einsum("nij,nj->ni", c_nb, dvb)
         acc = acc + np.einsum("nij,nj->ni", c_nb, np.cross(w_h, dvb) + dvb_dot)
     # geodetic position: h first, then latitude by fixed-point iteration (R_N depends weakly on lat), then lon
@@ -509,8 +609,8 @@ def vehicle_trajectory(
     lon = o[1] + _simpson_cumulative(lon_rate, dt)
     g = slice(0, None, 2)
     lla = np.stack([lat[g], lon, h], axis=1)
-    q = quat_from_euler(np.zeros(n), gam[g], psi[g])
-    w = np.stack([-psid[g] * sg[g], gamd[g], psid[g] * cg[g]], axis=1)
+    q = quat_from_euler(phi[g] if rolled else np.zeros(n), gam[g], psi[g])
+    w = w_all[g]
     t = float(t0) + np.arange(n) * dt
     return Trajectory(t, q, vel_ned=vel[g], pos_lla=lla, omega_nb_b=w, accel_ned=acc[g])
 
@@ -683,8 +783,22 @@ def simulate_odometer(
     noise_std: float = 0.0,
     rate_hz: float | None = None,
     rng: Any = None,
+    latency_s: float = 0.0,
+    scale_change: float = 0.0,
+    scale_change_tau_s: float = 300.0,
+    turn_overread: float = 0.0,
+    resolution: float = 0.0,
 ) -> OdometerData:
     """Wheel speed: forward body velocity at the wheel, ``(1 + k) (C_bn v^n + ω_eb^b × l)_x + w``.
+
+    What real wheels add (each off by default; the odometer's errors in Groves 2013, §6.3): the reading
+    stamped ``t`` holds the speed at ``t − latency_s`` (CAN and driver delays, linearly interpolated between
+    truth samples); the scale drifts as the tyre warms and its pressure
+    and load change, ``(1 + k)(1 + Δ (1 − e^{−t/T}))`` with ``Δ = scale_change`` (a relative radius change
+    −Δ) and ``T = scale_change_tau_s``; the wheels slip and the track scrubs in turns (skid steering,
+    differential slip), reading ``(1 + c |ω_z|)`` times more with ``c = turn_overread`` s/rad; and the value
+    is quantised, ``q round(x / q)`` with ``q = resolution`` (an encoder's counts over the sample interval, a
+    CAN signal's least bit).
 
     With the body-velocity perturbations of :func:`vehicle_trajectory`, the side slip and suspension velocity
     are perpendicular to the body x axis: in motion the reading is the forward speed as without them.  At rest
@@ -706,6 +820,16 @@ def simulate_odometer(
         Output rate, Hz, at most the truth rate (default: every truth sample).
     rng : numpy.random.Generator or int, optional
         Random generator or seed.
+    latency_s : float
+        Age of each reading at its stamp, s (>= 0; the first readings hold the first truth sample's speed).
+    scale_change : float
+        Δ, the relative scale change reached after a few ``scale_change_tau_s`` (finite, > −1).
+    scale_change_tau_s : float
+        Its time constant T, s (> 0).
+    turn_overread : float
+        c, the over-reading per rad/s of yaw rate, s/rad (>= 0).
+    resolution : float
+        q, the quantum of the readings, m/s (>= 0; 0: none).
 
     Returns
     -------
@@ -715,17 +839,37 @@ def simulate_odometer(
     Raises
     ------
     InvalidInputError
-        If ``noise_std`` is negative or not finite, or ``scale_factor`` is not finite.
+        If ``noise_std``, ``latency_s``, ``turn_overread`` or ``resolution`` is negative or not finite,
+        ``scale_factor`` is not finite, ``scale_change`` is not above −1 or ``scale_change_tau_s`` is not > 0.
     """
     if not (math.isfinite(noise_std) and noise_std >= 0) or not math.isfinite(scale_factor):
         raise InvalidInputError(f"noise_std must be >= 0 m/s and scale_factor finite; got {noise_std!r}, {scale_factor!r}")
+    for name, x in (("latency_s", latency_s), ("turn_overread", turn_overread), ("resolution", resolution)):
+        if not (math.isfinite(x) and x >= 0):
+            raise InvalidInputError(f"simulate_odometer: {name} must be >= 0, finite; got {x!r}")
+    if not (math.isfinite(scale_change) and scale_change > -1.0 and scale_change_tau_s > 0):
+        raise InvalidInputError(f"simulate_odometer: scale_change must be > -1 and scale_change_tau_s > 0 s; got "
+                                f"{scale_change!r}, {scale_change_tau_s!r}")
     g = np.random.default_rng(rng)
     idx = _decimate(truth, rate_hz)
-    v = lever_arm_velocity_body(truth, lever_arm)[idx, 0]
-    speed = (1.0 + scale_factor) * v + noise_std * g.standard_normal(idx.size)
+    t = truth.t[idx].copy()
     meta = {"lever_arm": list(map(float, _lever(lever_arm, "lever_arm"))), "scale_factor": float(scale_factor),
             "noise_std": float(noise_std)}
-    return OdometerData(truth.t[idx].copy(), speed, meta)
+    if latency_s == 0 and scale_change == 0 and turn_overread == 0 and resolution == 0:
+        v = lever_arm_velocity_body(truth, lever_arm)[idx, 0]
+        speed = (1.0 + scale_factor) * v + noise_std * g.standard_normal(idx.size)
+        return OdometerData(t, speed, meta)
+    ts = t - latency_s  # the instants the readings hold
+    v = np.interp(ts, truth.t, lever_arm_velocity_body(truth, lever_arm)[:, 0])
+    wz = np.interp(ts, truth.t, omega_eb_b(truth)[:, 2])
+    k = (1.0 + scale_factor) * (1.0 + scale_change * -np.expm1(-(t - truth.t[0]) / scale_change_tau_s))
+    speed = k * (1.0 + turn_overread * np.abs(wz)) * v + noise_std * g.standard_normal(idx.size)
+    if resolution > 0:
+        speed = resolution * np.round(speed / resolution)
+    meta.update({"latency_s": float(latency_s), "scale_change": float(scale_change),
+                 "scale_change_tau_s": float(scale_change_tau_s), "turn_overread": float(turn_overread),
+                 "resolution": float(resolution)})
+    return OdometerData(t, speed, meta)
 
 
 def simulate_baro(
