@@ -73,11 +73,15 @@ def simulate(scenario: str, seed: int, faults: bool = True) -> RobotLog:
     return simulate_hard_robot_log(seed, **kw) if scenario == "robot" else simulate_hard_car_log(seed, **kw)
 
 
-def options(scenario: str, log: RobotLog, **overrides: Any) -> LogRunOptions:
-    """Today's defaults with the true antenna lever arm; the car also with its true mounting (module docstring)."""
-    kw: dict[str, Any] = {"gnss_lever_arm": tuple(log.truth.gnss_lever_arm_base)}
-    if scenario == "car":
+def options(scenario: str, log: RobotLog, *, true_mounting: bool = False, config: dict[str, Any] | None = None,
+            **overrides: Any) -> LogRunOptions:
+    """The log run's defaults with the true antenna lever arm; with ``true_mounting`` the true mounting (what the
+    car needed before the log run could level while driving); ``config``: GinsConfig overrides."""
+    kw: dict[str, Any] = {"gnss_lever_arm": tuple(log.truth.gnss_lever_arm_base), "smoother": False}
+    if true_mounting:
         kw["mounting"] = log.truth.q_base_imu
+    if config:
+        kw["overrides"] = dict(config)
     return LogRunOptions(**{**kw, **overrides})
 
 
@@ -131,10 +135,12 @@ def outage_ends(log: RobotLog, opts: LogRunOptions, plan: list[tuple[float, floa
     return {"err_m": np.array(err), "sd_m": np.array(sd), "lengths_s": np.array([d for _, d in plan])}
 
 
-def drive(scenario: str, seed: int, faults: bool = True) -> dict[str, Any]:
-    """One drive: :func:`nav_scores` of the full run and :func:`outage_ends` of the outage run."""
+def drive(scenario: str, seed: int, faults: bool = True, *, true_mounting: bool = False,
+          config: dict[str, Any] | None = None) -> dict[str, Any]:
+    """One drive: :func:`nav_scores` of the full run (the forward filter) and :func:`outage_ends` of the outage
+    run."""
     log = simulate(scenario, seed, faults)
-    opts = options(scenario, log)
+    opts = options(scenario, log, true_mounting=true_mounting, config=config)
     out = nav_scores(log, run_log(log.sources, opts))
     lengths, gap = OUTAGES[scenario]
     plan = outage_plan(float(log.imu.t[-1]), lengths, gap, np.random.default_rng([seed, 7]))
@@ -175,10 +181,14 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
     ap.add_argument("--first-seed", type=int, default=0)
     ap.add_argument("--scenario", choices=("robot", "car"), default="robot")
     ap.add_argument("--faults", choices=("on", "off"), default="on")
+    ap.add_argument("--true-mounting", action="store_true", help="give the run the true mounting")
+    ap.add_argument("--config", default=None, help="GinsConfig overrides as JSON, e.g. '{\"gnss_bias_std\": 1}'")
     a = ap.parse_args(argv)
+    cfg = json.loads(a.config) if a.config else None
     t0 = time.perf_counter()
-    runs = [drive(a.scenario, s, a.faults == "on") for s in range(a.first_seed, a.first_seed + a.drives)]
-    rep = {"scenario": a.scenario, "faults": a.faults, "first_seed": a.first_seed, **report(runs),
+    runs = [drive(a.scenario, s, a.faults == "on", true_mounting=a.true_mounting, config=cfg)
+            for s in range(a.first_seed, a.first_seed + a.drives)]
+    rep = {"scenario": a.scenario, "faults": a.faults, "first_seed": a.first_seed, "config": cfg, **report(runs),
            "seconds": round(time.perf_counter() - t0, 1)}
     print(json.dumps(rep, indent=1))
     return rep

@@ -84,7 +84,8 @@ def test_mounting_levelled_while_driving(car):
 
 def test_log_run_that_starts_moving(car):
     """``run_log`` with defaults: it starts at the odometer's speed (not at rest), finds the latency within 3σ of
-    0.08 s, its mounting within 3σ, and the smoothed track within 0.3 m RMS of the truth."""
+    0.08 s, its mounting within 3σ, and the smoothed track within 0.4 m RMS of the truth (fixes of σ 0.3 m reported
+    as 0.6 m), inside its own σ."""
     src, base, _ = car
     run = run_log(src, LogRunOptions())
     res = run.result
@@ -100,5 +101,10 @@ def test_log_run_that_starts_moving(car):
     j = np.clip(j, 0, tb.size - 1)
     s = res.smoothed
     err = lla_to_ned(s.lla, base.pos_lla[j][0]) - lla_to_ned(base.pos_lla[j], base.pos_lla[j][0])
-    assert float(np.sqrt(np.mean(np.sum(err[:, :2] ** 2, axis=1)))) < 0.3
+    assert float(np.sqrt(np.mean(np.sum(err[:, :2] ** 2, axis=1)))) < 0.4
+    # the smoothed σ is honest: the horizontal error's normalised square averages its 2 dof (measured 0.9 and 1.9;
+    # a σ off by 1.5 either way moves a mean of 2 to 0.9 or 4.5)
+    k = np.clip(np.searchsorted(s.cov_t, res.t), 0, s.cov_t.size - 1)
+    d2 = np.einsum("ni,nij,nj->n", err[:, :2], np.linalg.inv(s.cov_nav[k, :2, :2]), err[:, :2])
+    assert 0.5 <= float(d2.mean()) <= 3.0
     assert run.initial["gyro_bias"].startswith("mean rate over the drive")

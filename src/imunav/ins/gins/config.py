@@ -167,6 +167,9 @@ class GinsConfig:
         Fixes the adaptive factor averages over (its forgetting weight is the inverse), >= 1.
     gnss_noise_scale_bounds : tuple of float
         Lowest and highest factor on the reported covariance (0 < low <= 1 <= high).
+    gnss_noise_prior_fixes : float
+        How many fixes the reported σ counts as in the adaptive factor's mean (>= 1): the first fixes, whose
+        innovations hold the initial position's error, cannot drive it to a bound alone.
     consider_states : tuple of str
         State blocks held as Schmidt consider states (``"odo_scale"``, ``"mount"``, ``"odo_lever"``,
         ``"gnss_delay"``, ``"gnss_bias"``): their prior σ and correlations reach the other states' covariance, but no
@@ -229,6 +232,7 @@ class GinsConfig:
     gnss_noise_adaptive: bool = False
     gnss_noise_window: float = 30.0
     gnss_noise_scale_bounds: tuple[float, float] = (0.01, 100.0)
+    gnss_noise_prior_fixes: float = 10.0
     consider_states: tuple[str, ...] = ()
 
     def __post_init__(self) -> None:
@@ -245,6 +249,9 @@ class GinsConfig:
             raise InvalidInputError(f"GinsConfig.gnss_bias_corr_time must be > 0 s; got {self.gnss_bias_corr_time!r}")
         if not (np.isfinite(self.gnss_noise_window) and self.gnss_noise_window >= 1):
             raise InvalidInputError(f"GinsConfig.gnss_noise_window must be >= 1 fix; got {self.gnss_noise_window!r}")
+        if not (np.isfinite(self.gnss_noise_prior_fixes) and self.gnss_noise_prior_fixes >= 1):
+            raise InvalidInputError(f"GinsConfig.gnss_noise_prior_fixes must be >= 1; got "
+                                    f"{self.gnss_noise_prior_fixes!r}")
         lo_hi = tuple(float(x) for x in np.ravel(self.gnss_noise_scale_bounds))
         if len(lo_hi) != 2 or not (0 < lo_hi[0] <= 1.0 <= lo_hi[1] < np.inf):
             raise InvalidInputError(f"GinsConfig.gnss_noise_scale_bounds must be (low, high) with 0 < low <= 1 <= "

@@ -255,8 +255,10 @@ def _adapt_gnss_noise(xs, nu, S0, R, prm):
     """Covariance matching of the fixes' white noise (Mehra 1972; Mohamed & Schwarz 1999, "Adaptive Kalman
     filtering for INS/GPS", J. Geodesy 73): ``E[ν νᵀ] = H P⁻ Hᵀ + s R_rep``, so one fix's estimate of the factor is
     ``ŝ = (νᵀν − tr(H P⁻ Hᵀ)) / tr(R_rep)``; the kernel keeps ``s ← (1 − w) s + w ŝ`` with ``w = max(w₀, 1 / k)``
-    at the k-th fix (the plain mean of the first ``1 / w₀`` fixes, then forgetting with weight ``w₀``: the reported
-    σ is only a prior, and a car at 20 m/s must not wait for the average to forget it), bounded to ``[s_min, s_max]`` (a receiver's σ is neither ten times too
+    at the k-th fix counting the reported σ as ``gnss_noise_prior_fixes`` (the plain mean with that prior until
+    ``1 / w₀`` fixes, then forgetting with weight ``w₀``: the reported σ is only a prior, and a car at 20 m/s must
+    not wait for the average to forget it, but the first fixes, whose innovations hold the initial position's
+    error, must not drive it to a bound alone), bounded to ``[s_min, s_max]`` (a receiver's σ is neither ten times too
     large nor ten times too small without other evidence), in the nominal ``gnss_r_scale``: the next fix's ``R``.
     """
     s = xs[NOM.gnss_r_scale]

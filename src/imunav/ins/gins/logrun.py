@@ -47,11 +47,19 @@ from imunav.sim import presets
 from imunav.sim.gnss import outage_schedule
 from imunav.timeseries import static_intervals
 
-__all__ = ["LogOutageReport", "LogRun", "LogRunOptions", "log_outage_test", "parse_rotation", "parse_vector", "run_log",
-           "truth_on_sources"]
+__all__ = ["LogOutageReport", "LogRun", "LogRunOptions", "gnss_correlated_std", "log_outage_test", "parse_rotation",
+           "parse_vector", "run_log", "truth_on_sources"]
 
 Array = NDArray[np.float64]
 
+#: Correlation time of the fixes' correlated error (s; multipath and atmosphere: 10-100 s, Groves 2013 §9.4.2) and
+#: the smallest σ its identification gives (m).
+GNSS_BIAS_TAU = 60.0
+GNSS_BIAS_MIN_STD = 0.1
+#: Lag of the residuals' autocovariance that measures the correlated error, s, and the factor on its σ for what the
+#: first pass followed (:func:`gnss_correlated_std`; chosen on the hard robot and car drives 100-107).
+GNSS_CORR_LAG_S = 2.0
+GNSS_BIAS_SCATTER_FACTOR = 2.0
 #: Default σ of the GNSS latency state (s), the odometer scale (dimensionless) and the vehicle's slope at rest (rad).
 GNSS_DELAY_STD = 0.2
 ODO_SCALE_STD = 0.1
@@ -619,10 +627,80 @@ def run_log(src: NavSources, options: LogRunOptions | None = None, *,
     if bias0_sd is not None:  # no rest: the filter starts from the bias read over the drive
         e0 = np.zeros(12)
         e0[:3] = bias0
-    res = GinsFilter(cfg).run(imu, src.gnss, lla0=lla0, vel0=vel0, q0=q0, odometer=odo, imu_errors0=e0,
-                              static=static, baro=None, smoother=o.smoother, progress=progress)
+    def run(c: GinsConfig, smoother: bool, report: Callable[[int, int], None] | None) -> GinsResult:
+        return GinsFilter(c).run(imu, src.gnss, lla0=lla0, vel0=vel0, q0=q0, odometer=odo, imu_errors0=e0,
+                                 static=static, baro=None, smoother=smoother, progress=report)
+
+    if src.gnss is not None and cfg.gnss_bias_std is None and "gnss_bias_std" not in o.overrides:
+        # the fixes' error correlated in time: its σ from the memory of their residuals about a first pass without
+        # it (gnss_correlated_std); none for white fixes
+        first = run(cfg, False, None)
+        sig = gnss_correlated_std(first, src.gnss, cfg.lever_arm)
+        cfg = dataclasses.replace(cfg, gnss_bias_std=sig, gnss_bias_corr_time=GNSS_BIAS_TAU)
+        initial["gnss_errors"] = (f"correlated error sigma N E D {np.round(sig, 3).tolist()} m, "
+                                  f"{GNSS_BIAS_TAU:g} s: the autocorrelation of the fixes' residuals about a first "
+                                  "pass")
+    res = run(cfg, o.smoother, progress)
     return LogRun(res, cfg, static, coarse, source, initial, o.preset)
 
+
+def gnss_correlated_std(first: GinsResult, gnss: Any, lever_arm: Any) -> Array:
+    """σ north, east, down of the fixes' correlated error, from the residuals of a first pass that treats them as
+    white: ``k √(max(0, C(L)) e^{L/T})`` per axis, where ``C(L)`` is the residuals' autocovariance at the lag
+    ``L`` (:data:`GNSS_CORR_LAG_S`, at least two fix intervals), ``T`` = :data:`GNSS_BIAS_TAU` and ``k`` =
+    :data:`GNSS_BIAS_SCATTER_FACTOR`; an autocorrelation within two standard errors of zero (``2 / √n``) counts as
+    none; at least :data:`GNSS_BIAS_MIN_STD`.  The fixes before the first pass settles (its horizontal position σ
+    within twice its median over the drive) are left out: their residuals hold the initial error.
+
+    White fixes leave residuals without memory: a first-order Gauss–Markov error of σ_c and correlation time T
+    leaves ``C(L) ≈ σ_c² e^{−L/T}`` (Brown & Hwang 2012, §2.9), less what the first pass followed (hence
+    ``k``).  The residual of fix k is ``z_k − (r̂(t_k − τ̂) + Ĉ l)`` on the accepted fixes, those beyond five
+    median absolute deviations of their axis left out.
+
+    Parameters
+    ----------
+    first : GinsResult
+        The first pass (adaptive GNSS noise on, no ``gnss_bias`` state).
+    gnss : GnssData
+        The fixes it used.
+    lever_arm : array_like, shape (3,)
+        The antenna from the IMU, body FRD, m (the first pass's ``lever_arm``).
+
+    Returns
+    -------
+    numpy.ndarray, shape (3,)
+        σ north, east, down, m.
+    """
+    rec = first.aids.get("gnss_position")
+    tau = float(first.gnss_delay[-1]) if first.gnss_delay is not None else 0.0
+    ok = np.ones(gnss.n, dtype=bool)
+    if rec is not None and rec.t.size == gnss.n:
+        ok = np.asarray(rec.accepted, dtype=bool)
+    # the first pass's start (its position σ above twice the drive's median) holds its own transient, not the fixes'
+    sd = np.sqrt(first.cov_diag[:, 0] + first.cov_diag[:, 1])
+    settled = first.cov_t[int(np.argmax(sd <= 2.0 * np.median(sd)))]
+    ok &= gnss.t >= settled
+    t = gnss.t[ok]
+    i = np.clip(np.searchsorted(first.t, t - tau), 0, first.t.size - 1)
+    ant = np.einsum("nij,j->ni", dcm_from_quat(first.q_nb[i]), np.asarray(lever_arm, dtype=float))
+    r = lla_to_ned(gnss.lla[ok], gnss.lla[0]) - lla_to_ned(first.lla[i], gnss.lla[0]) - ant
+    dev = np.abs(r - np.median(r, axis=0))
+    keep = np.all(dev <= 5.0 * 1.4826 * np.maximum(np.median(dev, axis=0), 1e-6), axis=1)
+    t, r = t[keep], r[keep] - r[keep].mean(axis=0)
+    if t.size < 10:
+        return np.full(3, GNSS_BIAS_MIN_STD)
+    lag = max(GNSS_CORR_LAG_S, 2.0 * float(np.median(np.diff(t))))
+    j = np.searchsorted(t, t + lag)
+    pair = j < t.size
+    k, j = np.flatnonzero(pair), j[pair]
+    near = np.abs(t[j] - t[k] - lag) < 0.5 * lag
+    k, j = k[near], j[near]
+    if k.size < 10:
+        return np.full(3, GNSS_BIAS_MIN_STD)
+    c0 = np.mean(r**2, axis=0)
+    c = np.mean(r[k] * r[j], axis=0)
+    c = np.where(c > 2.0 * c0 / math.sqrt(k.size), c, 0.0)
+    return np.maximum(GNSS_BIAS_SCATTER_FACTOR * np.sqrt(c * math.exp(lag / GNSS_BIAS_TAU)), GNSS_BIAS_MIN_STD)
 
 
 def parse_rotation(text: str | None, flag: str = "--imu-rotation") -> Array | None:
