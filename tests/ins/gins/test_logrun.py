@@ -51,7 +51,8 @@ def _angle_errors_deg(q_est, q_true):
 
 def test_mounting_odometer_scale_and_latency_are_found(robot):
     """Mounting within 1 deg (roll, pitch) and 2 deg (yaw) of the truth and inside its reported 3 sigma; odometer
-    scale within 0.5 % of the truth (9 % short); GNSS latency inside its 3 sigma of the truth (0.15 s)."""
+    scale within 0.5 % of the truth (9 % short); GNSS latency inside its 3 sigma of the truth (0.15 s), that sigma
+    at most 50 ms."""
     log, _, s = robot
     tr = log.truth
     m = s["mounting"]
@@ -67,7 +68,9 @@ def test_mounting_odometer_scale_and_latency_are_found(robot):
     assert abs((1 + k["value"]) / tr.odometer_scale - 1) < 0.005 and abs(1 + k["value"] - tr.odometer_scale) < 3 * k["std"]
     lat = s["gnss_time_offset_s"]
     print(f"GNSS latency {lat['value']:.4f} +- {lat['std']:.4f} s (truth {tr.gnss_latency_s})")
-    assert abs(lat["value"] - tr.gnss_latency_s) < 3 * lat["std"]
+    # issue 33: inside 3σ of a reported σ <= 50 ms (the Cramér-Rao bound of this scenario is 24 ms: 20 ms of error
+    # is beyond any estimator, benchmarks/bench_gins_latency_bound.py)
+    assert abs(lat["value"] - tr.gnss_latency_s) < 3 * lat["std"] and lat["std"] <= 0.05
 
 
 def test_track_is_within_half_a_metre_and_the_jumps_are_rejected(robot):
@@ -369,8 +372,9 @@ def test_without_an_odometer_steady_driving_is_not_rest(tmp_path):
 
 
 def test_run_log_reports_progress_over_the_filter_and_smoother_passes(tmp_path, monkeypatch):
-    """``run_log(progress=...)`` hears of the filter's pass chunk by chunk and of the smoother's at its end (the
-    command line's bar): increasing counts ending at twice the samples, and the same trajectory as without it."""
+    """``run_log(progress=...)`` hears of the first pass (the fixes' correlated error), the filter's pass chunk by
+    chunk and of the smoother's at its end (the command line's bar): increasing counts ending at three times the
+    samples, one total throughout, and the same trajectory as without it."""
     from imunav.ins.gins import filter as gins_filter
 
     write_robot_log(simulate_robot_log(4, distance_m=160.0), tmp_path, formats=("ros1",))
@@ -381,7 +385,7 @@ def test_run_log_reports_progress_over_the_filter_and_smoother_passes(tmp_path, 
     seen = []
     res = run_log(src, o, progress=lambda done, total: seen.append((done, total))).result
     n = src.imu.n
-    assert len(seen) >= n // 1000 and seen[-1] == (2 * n, 2 * n)
-    assert all(b[0] > a[0] and b[1] == 2 * n for a, b in zip(seen, seen[1:]))
+    assert len(seen) >= 2 * n // 1000 and seen[-1] == (3 * n, 3 * n)
+    assert all(b[0] > a[0] and b[1] == 3 * n for a, b in zip(seen, seen[1:]))
     np.testing.assert_array_equal(res.lla, plain.lla)
     np.testing.assert_array_equal(res.smoothed.lla, plain.smoothed.lla)

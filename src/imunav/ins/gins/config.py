@@ -230,7 +230,7 @@ class GinsConfig:
     gnss_bias_std: ArrayLike | None = None
     gnss_bias_corr_time: float = 60.0
     gnss_noise_adaptive: bool = False
-    gnss_noise_window: float = 30.0
+    gnss_noise_window: float = 100.0
     gnss_noise_scale_bounds: tuple[float, float] = (0.01, 100.0)
     gnss_noise_prior_fixes: float = 10.0
     consider_states: tuple[str, ...] = ()

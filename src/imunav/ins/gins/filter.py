@@ -96,7 +96,8 @@ def _initial_state(lla0: ArrayLike, vel0: ArrayLike, q0: ArrayLike, imu_errors0:
     xs[NOM.odo_lever:NOM.odo_lever + 3] = config.odo_lever_arm
     xs[NOM.gnss_delay] = config.gnss_delay
     xs[NOM.gnss_r_scale] = 1.0
-    xs[NOM.gnss_r_count] = config.gnss_noise_prior_fixes - 1.0  # the reported σ counts as that many fixes
+    xs[NOM.gnss_r_est] = 1.0
+    xs[NOM.gnss_r_weight] = config.gnss_noise_prior_fixes * 3.0 / 2.0  # that many fixes of variance 2 / 3
     return xs
 
 

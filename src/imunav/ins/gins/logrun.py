@@ -627,20 +627,26 @@ def run_log(src: NavSources, options: LogRunOptions | None = None, *,
     if bias0_sd is not None:  # no rest: the filter starts from the bias read over the drive
         e0 = np.zeros(12)
         e0[:3] = bias0
+
     def run(c: GinsConfig, smoother: bool, report: Callable[[int, int], None] | None) -> GinsResult:
         return GinsFilter(c).run(imu, src.gnss, lla0=lla0, vel0=vel0, q0=q0, odometer=odo, imu_errors0=e0,
                                  static=static, baro=None, smoother=smoother, progress=report)
 
-    if src.gnss is not None and cfg.gnss_bias_std is None and "gnss_bias_std" not in o.overrides:
+    two = src.gnss is not None and cfg.gnss_bias_std is None and "gnss_bias_std" not in o.overrides
+    # one bar over both passes: the first pass's samples, then the second's (and its smoother's)
+    first_n = imu.n if two else 0
+    rest_n = imu.n * (1 + int(o.smoother))
+    if two:
         # the fixes' error correlated in time: its σ from the memory of their residuals about a first pass without
         # it (gnss_correlated_std); none for white fixes
-        first = run(cfg, False, None)
+        first = run(cfg, False, None if progress is None else (lambda done, total: progress(done, total + rest_n)))
         sig = gnss_correlated_std(first, src.gnss, cfg.lever_arm)
         cfg = dataclasses.replace(cfg, gnss_bias_std=sig, gnss_bias_corr_time=GNSS_BIAS_TAU)
         initial["gnss_errors"] = (f"correlated error sigma N E D {np.round(sig, 3).tolist()} m, "
                                   f"{GNSS_BIAS_TAU:g} s: the autocorrelation of the fixes' residuals about a first "
                                   "pass")
-    res = run(cfg, o.smoother, progress)
+    res = run(cfg, o.smoother, None if progress is None else
+              (lambda done, total: progress(first_n + done, first_n + total)))
     return LogRun(res, cfg, static, coarse, source, initial, o.preset)
 
 
