@@ -16,11 +16,11 @@ from imunav.rotation import dcm_from_quat, quat_normalize
 #: central-difference step per state block (SI): large enough that rounding of the innovation (a position of
 #: ~6e6 m in radians: ~1e-9 m) stays far below the Jacobian's entries, small enough that the curvature is negligible
 EPS = {"pos": 1e-2, "vel": 1e-3, "att": 1e-4, "gyro_bias": 1e-6, "accel_bias": 1e-4, "gyro_scale": 1e-4,
-       "accel_scale": 1e-4, "odo_scale": 1e-4, "mount": 1e-4, "odo_lever": 1e-3, "gnss_delay": 1e-4}
+       "accel_scale": 1e-4, "odo_scale": 1e-4, "mount": 1e-4, "odo_lever": 1e-3, "gnss_delay": 1e-4, "gnss_bias": 1e-2}
 
 
 BASELINE = (1.2, -0.4, 0.15)
-VEHICLE_BLOCKS = {"mounting_std": 0.01, "odo_lever_arm_std": 0.1, "gnss_delay_std": 0.05}
+VEHICLE_BLOCKS = {"mounting_std": 0.01, "odo_lever_arm_std": 0.1, "gnss_delay_std": 0.05, "gnss_bias_std": 0.5}
 
 
 def _state(rng):
@@ -36,6 +36,8 @@ def _state(rng):
     xs[NOM.q_vb:NOM.q_vb + 4] = quat_normalize(rng.normal(size=4))
     xs[NOM.odo_lever:NOM.odo_lever + 3] = (-0.5, 0.6, 0.4)
     xs[NOM.gnss_delay] = 0.12
+    xs[NOM.gnss_bias:NOM.gnss_bias + 3] = (0.3, -0.2, 0.5)
+    xs[NOM.gnss_r_scale] = 1.3  # the adaptive factor on the reported covariance
     return xs
 
 
@@ -85,7 +87,8 @@ def _rows(kind, xs, ctx, z, r, prm, lay):
 def test_every_aid_jacobian_is_the_derivative_of_its_innovation(name, scale_factors, rng):
     """``H[:, j] = −∂ν/∂δx_j`` with ``x̂ ⊕ δx`` the filter's own injection (errors are true − estimate); a sign or
     factor error in any column errs by the size of that column, far above the tolerance.  Every state block
-    present (21 states and the vehicle blocks: mounting, wheel lever arm, GNSS latency), or 15 + odometer scale."""
+    present (21 states and the vehicle blocks: mounting, wheel lever arm, GNSS latency, the fixes' correlated
+    error), or 15 + odometer scale."""
     cfg = GinsConfig(gyro_noise_density=1e-3, accel_noise_density=1e-2, gyro_bias_std=1e-4, accel_bias_std=1e-3, nhc_noise_std=0.1,
                      lever_arm=(0.4, -0.3, -1.2), odo_lever_arm=(-0.5, 0.6, 0.4), scale_factors=scale_factors,
                      declination=0.1, dual_antenna_baseline=BASELINE, level_noise_std=0.03,

@@ -293,9 +293,15 @@ def test_log_refusals(tmp_path):
     line = one_error_line(invoke("gins", "run", tmp_path / "good.bag", "--out", tmp_path / "o", "--imu-rotation",
                                  "10,20"))
     assert "--imu-rotation" in line
-    line = one_error_line(invoke("gins", "outage-test", tmp_path / "good.bag", "--preset", "navigation_a15",
+    line = one_error_line(invoke("gins", "outage-test", tmp_path / "good.bag", "--seed", "3",
                                  "--out", tmp_path / "o2"))
-    assert "--preset" in line and not (tmp_path / "o2").exists()
+    assert "--seed" in line and not (tmp_path / "o2").exists()
+    line = one_error_line(invoke("gins", "outage-test", tmp_path / "good.bag", "--truth-std", "0.5",
+                                 "--out", tmp_path / "o2"))
+    assert "--truth" in line and not (tmp_path / "o2").exists()
+    line = one_error_line(invoke("gins", "run", tmp_path / "good.bag", "--forward-only", "--smoother",
+                                 "--out", tmp_path / "o2"))
+    assert "--forward-only" in line and not (tmp_path / "o2").exists()
     nav = log.truth.nav_track()  # on its own seconds, week 0: not the log's GPS time
     write_kfgins_nav(tmp_path / "truth.nav", nav)
     line = one_error_line(invoke("gins", "outage-test", tmp_path / "good.bag", "--truth", tmp_path / "truth.nav",
