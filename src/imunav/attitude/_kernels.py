@@ -835,10 +835,11 @@ def mekf_core(q, b, P, st, gyr, acc, mag, k, dt, p, out_phi, W, dx, H, PH):
 
 
 @njit(cache=True, error_model="numpy", fastmath={"contract"}, nogil=True)
-def _mekf_loop(q, b, P, gyr, acc, mag, dt, p, qs, bs, pd, flags, nis, dof):
-    """The MEKF over a recording without storing covariances: rows of ``qs``, ``bs``, ``pd``, ``flags``, ``nis``,
-    ``dof`` written in place (a loop of its own: with no array bound or allocated inside it, it runs on scalars
-    and the fixed scratch only)."""
+def _mekf_loop(q, b, P, gyr, acc, mag, dt, p, out):
+    """The MEKF over a recording without storing covariances: the rows of ``out = (qs, bs, pd, flags, nis, dof)``
+    written in place (a loop of its own: with no array bound or allocated inside it, it runs on scalars and the
+    fixed scratch only)."""
+    qs, bs, pd, flags, nis, dof = out
     st = np.zeros(N_STATE)
     phi = np.empty((6, 6))
     W = np.empty((6, 6))
@@ -859,8 +860,11 @@ def _mekf_loop(q, b, P, gyr, acc, mag, dt, p, qs, bs, pd, flags, nis, dof):
 
 
 @njit(cache=True, error_model="numpy", fastmath={"contract"}, nogil=True)
-def _mekf_loop_store(q, b, P, P0, gyr, acc, mag, dt, p, qs, bs, pd, flags, nis, dof, Pu, Pp, Ph):
-    """:func:`_mekf_loop` that also stores P after update, P predicted and Φ of every sample (for the smoother)."""
+def _mekf_loop_store(q, b, P, P0, gyr, acc, mag, dt, p, out, stored):
+    """:func:`_mekf_loop` that also stores P after update, P predicted and Φ of every sample (for the smoother):
+    ``stored = (Pu, Pp, Ph)``, each (N, 6, 6)."""
+    qs, bs, pd, flags, nis, dof = out
+    Pu, Pp, Ph = stored
     st = np.zeros(N_STATE)
     phi = np.empty((6, 6))
     W = np.empty((6, 6))
@@ -912,9 +916,9 @@ def mekf_run(q0, b0, P0, gyr, acc, mag, dt, p, store):
     b = b0.copy()
     P = P0.copy()
     if store:
-        _mekf_loop_store(q, b, P, P0, gyr, acc, mag, dt, p, qs, bs, pd, flags, nis, dof, Pu, Pp, Ph)
+        _mekf_loop_store(q, b, P, P0, gyr, acc, mag, dt, p, (qs, bs, pd, flags, nis, dof), (Pu, Pp, Ph))
     else:
-        _mekf_loop(q, b, P, gyr, acc, mag, dt, p, qs, bs, pd, flags, nis, dof)
+        _mekf_loop(q, b, P, gyr, acc, mag, dt, p, (qs, bs, pd, flags, nis, dof))
     return qs, bs, pd, flags, nis, dof, Pu, Pp, Ph
 
 
