@@ -14,7 +14,7 @@ from dataclasses import replace
 import numpy as np
 import pytest
 from _mekf_frozen import mekf_run_frozen
-from builders import MAG_NED, rotating_imu
+from builders import disturbed_imu
 from shared_data import data_path
 
 from imunav.attitude import _kernels as _k
@@ -22,7 +22,6 @@ from imunav.attitude._base import initial_q, prepare
 from imunav.attitude.adaptive import ADAPTIVE_DEFAULTS, AdaptiveMEKF
 from imunav.attitude.mekf import MEKF, MekfConfig
 from imunav.attitude.smoother import Smoother
-from imunav.rotation import quat_conjugate, quat_from_euler, quat_rotate
 from imunav.timeseries import ImuData
 
 CONFIGS = {
@@ -36,20 +35,7 @@ CONFIGS = {
 
 
 def _recording():
-    """10 s at rest, then 30 s of rotation with a field disturbance (x1.6, 3 s) and an acceleration bump (1 s)."""
-    fs = 100.0
-    q0 = quat_from_euler(0.2, -0.1, 1.0)
-    moving, _ = rotating_imu(7, duration=30.0, fs=fs, q0=q0)
-    r = np.random.default_rng(8)
-    ns = int(10 * fs)
-    qc = np.tile(quat_conjugate(q0), (ns, 1))
-    acc = np.vstack([quat_rotate(qc, np.tile([0, 0, -9.81], (ns, 1))) + r.normal(0, 0.05, (ns, 3)), moving.accel])
-    mag = np.vstack([quat_rotate(qc, np.tile(MAG_NED, (ns, 1))) + r.normal(0, 0.3, (ns, 3)), moving.mag])
-    gyr = np.vstack([np.array([0.01, -0.02, 0.015]) + r.normal(0, 0.002, (ns, 3)), moving.gyro])
-    n = gyr.shape[0]
-    mag[int(20 * fs):int(23 * fs)] *= 1.6
-    acc[int(30 * fs):int(31 * fs), 0] += 3.0
-    return ImuData(t=np.arange(n) / fs, gyro=gyr, accel=acc, mag=mag)
+    return disturbed_imu()[0]
 
 
 def _compare(data, cfg, use_mag, store=False):
