@@ -21,6 +21,7 @@ default was tuned on (e.g. the other BROAD trials of the dataset's
 ``data_mat/`` folder), beside both peers.
 
 Run:  python benchmarks/bench_attitude_broad.py [DIR] [--holdout DIR] [--workers 2] [--json out.json]
+      [--figures DIR] [--no-groups]
 """
 
 from __future__ import annotations
@@ -29,14 +30,17 @@ import argparse
 import json
 import math
 import sys
+import textwrap
 import time
 from pathlib import Path
 
 import numpy as np
 
-from imunav.attitude.adaptive import ADAPTIVE_GRID
+from imunav.attitude.adaptive import ADAPTIVE_GRID, AdaptiveMEKF
 from imunav.attitude.benchmark import cv_grid_search, evaluate
-from imunav.attitude.metrics import attitude_rmse
+from imunav.attitude.metrics import attitude_rmse, error_angles
+from imunav.attitude.plot import plot_rejections, save
+from imunav.attitude.rejections import rejection_summary
 from imunav.attitude.smoother import SMOOTHER_GRID
 from imunav.io.broad import broad_trials, from_enu, load_broad
 from imunav.io.datasets import shared_data_path
@@ -107,6 +111,25 @@ def trial_group(name: str) -> str:
     raise ValueError(f"BROAD trial {name!r} is in no group of {sorted(GROUPS)}")
 
 
+def rejection_report(files, figures: str | None) -> dict:
+    """Per trial, what the shipped adaptive filter rejected and when, beside its error (summary line; figure)."""
+    print("\nwhat the adaptive filter (shipped defaults) rejected, per trial (error: total RMS, all samples with "
+          "a reference):")
+    out = {}
+    for f in files:
+        tr = load_broad(f)
+        r = AdaptiveMEKF().run(tr.imu)
+        ang = error_angles(r.q_nb, tr.q_ref_nb)
+        s = rejection_summary(r, ang, name=tr.name)
+        print("  " + s.line())
+        out[tr.name] = s.to_dict()
+        if figures:
+            fig = plot_rejections(r, ang, title=textwrap.fill(s.line(), 130))
+            save(fig, Path(figures) / f"rejections_{tr.name}.png")
+            fig.clf()
+    return out
+
+
 def group_report(files, names, workers, oof9=None) -> dict:
     """Out-of-fold error per group and overall, 9D (total RMSE) and 6D (inclination RMSE), beside the peers.
 
@@ -158,6 +181,7 @@ def main() -> None:
     ap.add_argument("--filters", default=",".join(GRIDS), help="comma-separated imunav filters")
     ap.add_argument("--json", default=None)
     ap.add_argument("--no-groups", action="store_true", help="skip the per-group 9D / 6D report (issue 34)")
+    ap.add_argument("--figures", default=None, help="folder for one rejection figure per trial (PNG)")
     args = ap.parse_args()
     d = Path(args.dir) if args.dir else shared_data_path("broad")
     if d is None:
@@ -218,6 +242,7 @@ def main() -> None:
         print(f"madgwick original_c vs published: max |diff| {max(diffs):.2e} deg over {len(diffs)} trials -> "
               f"{_verdict(max(diffs) <= 0.1)}")
     out["acceptance"] = acc
+    out["rejections"] = rejection_report(files, args.figures)
     if not args.no_groups:
         oof9 = {k: rows[k][1] for k in ("adaptive", "smoother") if k in rows}
         out["groups"] = group_report(files, names, args.workers, oof9)
