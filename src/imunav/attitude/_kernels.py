@@ -19,6 +19,7 @@ import numpy as np
 from numba import njit
 
 from imunav._rotation_kernels import (
+    dcm_from_quat_t,
     qconj_1,
     qexp_1,
     qexp_t,
@@ -510,15 +511,7 @@ def _heading_update(P, dx, qw, qx, qy, qz, tan_dip, r, psi, PH, V, with_bias):
     ``P −= (u uᵀ − v vᵀ) / s`` with ``u = P hᵀ``, ``v = Tᵀ c``: a rank-two update, and ``dx = (u − v) ψ / s``.
     ``PH`` and ``V`` (6) are scratch.  Returns the NIS term.
     """
-    c00 = 1.0 - 2.0 * (qy * qy + qz * qz)
-    c01 = 2.0 * (qx * qy - qw * qz)
-    c02 = 2.0 * (qx * qz + qw * qy)
-    c10 = 2.0 * (qx * qy + qw * qz)
-    c11 = 1.0 - 2.0 * (qx * qx + qz * qz)
-    c12 = 2.0 * (qy * qz - qw * qx)
-    c20 = 2.0 * (qx * qz - qw * qy)
-    c21 = 2.0 * (qy * qz + qw * qx)
-    c22 = 1.0 - 2.0 * (qx * qx + qy * qy)
+    c00, c01, c02, c10, c11, c12, c20, c21, c22 = dcm_from_quat_t(qw, qx, qy, qz)
     h0 = -c20 + tan_dip * c00
     h1 = -c21 + tan_dip * c01
     h2 = -c22 + tan_dip * c02
@@ -637,15 +630,8 @@ def mekf_core(q, b, P, st, gyr, acc, mag, k, dt, p, out_phi, W, dx, H, PH):
     e0, e1, e2, e3 = qexp_t(w0 * dt, w1 * dt, w2 * dt)
     # δθ_k+1 = exp(-[ω]dt) δθ_k - dt δb, with exp(-[ω]dt) = C(e)ᵀ, the transposed DCM of the increment e
     # (the same rotation as Rodrigues' formula, from the quaternion's sine and cosine)
-    out_phi[0, 0] = 1.0 - 2.0 * (e2 * e2 + e3 * e3)
-    out_phi[1, 0] = 2.0 * (e1 * e2 - e0 * e3)
-    out_phi[2, 0] = 2.0 * (e1 * e3 + e0 * e2)
-    out_phi[0, 1] = 2.0 * (e1 * e2 + e0 * e3)
-    out_phi[1, 1] = 1.0 - 2.0 * (e1 * e1 + e3 * e3)
-    out_phi[2, 1] = 2.0 * (e2 * e3 - e0 * e1)
-    out_phi[0, 2] = 2.0 * (e1 * e3 - e0 * e2)
-    out_phi[1, 2] = 2.0 * (e2 * e3 + e0 * e1)
-    out_phi[2, 2] = 1.0 - 2.0 * (e1 * e1 + e2 * e2)
+    (out_phi[0, 0], out_phi[1, 0], out_phi[2, 0], out_phi[0, 1], out_phi[1, 1], out_phi[2, 1],
+     out_phi[0, 2], out_phi[1, 2], out_phi[2, 2]) = dcm_from_quat_t(e0, e1, e2, e3)  # fmt: skip
     t0, t1, t2, t3 = qmul_t(q[0], q[1], q[2], q[3], e0, e1, e2, e3)
     qw, qx, qy, qz = qnormalize_t(t0, t1, t2, t3)
     # gyro noise grows with the rate (scale-factor and misalignment errors of an
@@ -834,43 +820,39 @@ def mekf_core(q, b, P, st, gyr, acc, mag, k, dt, p, out_phi, W, dx, H, PH):
     q[3] = qz
 
 
+@njit(cache=True, inline="always")
+def _store_row(out, k, q, b, P, st):
+    """Row ``k`` of the outputs ``out = (qs, bs, pd, flags, nis, dof)`` from the state after sample ``k``."""
+    qs, bs, pd, flags, nis, dof = out
+    for i in range(4):
+        qs[k, i] = q[i]
+    for i in range(3):
+        bs[k, i] = b[i]
+    for i in range(6):
+        pd[k, i] = P[i, i]
+    flags[k] = int(st[S_FLAGS])
+    nis[k] = st[S_NIS]
+    dof[k] = st[S_DOF]
+
+
 @njit(cache=True, error_model="numpy", fastmath={"contract"}, nogil=True)
-def _mekf_loop(q, b, P, gyr, acc, mag, dt, p, out):
+def _mekf_loop(q, b, P, gyr, acc, mag, dt, p, out, scratch):
     """The MEKF over a recording without storing covariances: the rows of ``out = (qs, bs, pd, flags, nis, dof)``
     written in place (a loop of its own: with no array bound or allocated inside it, it runs on scalars and the
-    fixed scratch only)."""
-    qs, bs, pd, flags, nis, dof = out
-    st = np.zeros(N_STATE)
-    phi = np.empty((6, 6))
-    W = np.empty((6, 6))
-    dx = np.zeros(6)
-    H = np.empty(6)
-    PH = np.empty(6)
+    fixed scratch only).  ``scratch = (st, phi, W, dx, H, PH)``: the adaptive state and :func:`mekf_core`'s buffers.
+    """
+    st, phi, W, dx, H, PH = scratch
     for k in range(gyr.shape[0]):
         mekf_core(q, b, P, st, gyr, acc, mag, k, dt[k], p, phi, W, dx, H, PH)
-        for i in range(4):
-            qs[k, i] = q[i]
-        for i in range(3):
-            bs[k, i] = b[i]
-        for i in range(6):
-            pd[k, i] = P[i, i]
-        flags[k] = int(st[S_FLAGS])
-        nis[k] = st[S_NIS]
-        dof[k] = st[S_DOF]
+        _store_row(out, k, q, b, P, st)
 
 
 @njit(cache=True, error_model="numpy", fastmath={"contract"}, nogil=True)
-def _mekf_loop_store(q, b, P, P0, gyr, acc, mag, dt, p, out, stored):
+def _mekf_loop_store(q, b, P, P0, gyr, acc, mag, dt, p, out, scratch, stored):
     """:func:`_mekf_loop` that also stores P after update, P predicted and Φ of every sample (for the smoother):
     ``stored = (Pu, Pp, Ph)``, each (N, 6, 6)."""
-    qs, bs, pd, flags, nis, dof = out
     Pu, Pp, Ph = stored
-    st = np.zeros(N_STATE)
-    phi = np.empty((6, 6))
-    W = np.empty((6, 6))
-    dx = np.zeros(6)
-    H = np.empty(6)
-    PH = np.empty(6)
+    st, phi, W, dx, H, PH = scratch
     Q = np.zeros((6, 6))
     for k in range(gyr.shape[0]):
         mekf_core(q, b, P, st, gyr, acc, mag, k, dt[k], p, phi, W, dx, H, PH)
@@ -883,15 +865,7 @@ def _mekf_loop_store(q, b, P, P0, gyr, acc, mag, dt, p, out, stored):
             Q[3 + i, 3 + i] = p[P_GYRO_BIAS_RANDOM_WALK] * p[P_GYRO_BIAS_RANDOM_WALK] * dt[k]
         Pp[k] = phi @ Pprev @ phi.T + Q
         Pu[k] = P
-        for i in range(4):
-            qs[k, i] = q[i]
-        for i in range(3):
-            bs[k, i] = b[i]
-        for i in range(6):
-            pd[k, i] = P[i, i]
-        flags[k] = int(st[S_FLAGS])
-        nis[k] = st[S_NIS]
-        dof[k] = st[S_DOF]
+        _store_row(out, k, q, b, P, st)
 
 
 @njit(cache=True, nogil=True)
@@ -915,10 +889,11 @@ def mekf_run(q0, b0, P0, gyr, acc, mag, dt, p, store):
     q = q0.copy()
     b = b0.copy()
     P = P0.copy()
+    scratch = (np.zeros(N_STATE), np.empty((6, 6)), np.empty((6, 6)), np.zeros(6), np.empty(6), np.empty(6))
     if store:
-        _mekf_loop_store(q, b, P, P0, gyr, acc, mag, dt, p, (qs, bs, pd, flags, nis, dof), (Pu, Pp, Ph))
+        _mekf_loop_store(q, b, P, P0, gyr, acc, mag, dt, p, (qs, bs, pd, flags, nis, dof), scratch, (Pu, Pp, Ph))
     else:
-        _mekf_loop(q, b, P, gyr, acc, mag, dt, p, (qs, bs, pd, flags, nis, dof))
+        _mekf_loop(q, b, P, gyr, acc, mag, dt, p, (qs, bs, pd, flags, nis, dof), scratch)
     return qs, bs, pd, flags, nis, dof, Pu, Pp, Ph
 
 
