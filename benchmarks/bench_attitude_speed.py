@@ -1,10 +1,16 @@
 """Speed of imunav's attitude filters on a BROAD trial, side by side with
-ahrs (pure Python) and vqf (C++ core), in one run.
+ahrs (pure Python) and vqf (C++ core), in one run; and the batch mode over all shared trials.
 
-Acceptance: Mahony and Madgwick <= 2 µs/sample, MEKF <= 10 µs/sample, each
->= 50x faster than the ahrs counterpart; ratio to vqf printed.
+Single thread, CPU time of this process (``time.process_time``), the minimum over ``--repeat`` runs taken in
+turn with vqf's (so that the load of a shared machine falls on both alike), whole ``run()`` calls (input checks
+and result building included) against vqf's ``updateBatch``.
 
-Run:  python benchmarks/bench_attitude_speed.py [--trial NAME] [--ahrs-samples 3000]
+Acceptance (issue 34): the MEKF and the adaptive MEKF <= 1.0 x vqf's µs per sample; (issue 12) Mahony and
+Madgwick <= 2 µs/sample, each >= 50x faster than the ahrs counterpart.  The batch mode
+(``MEKF.run_many``, threads: the kernel releases the GIL) is timed over the shared BROAD trials with 1 and 2
+workers (wall time: the figure a user waiting for a fleet's logs sees).
+
+Run:  python benchmarks/bench_attitude_speed.py [--trial NAME] [--ahrs-samples 3000] [--repeat 25]
 """
 
 from __future__ import annotations
@@ -36,6 +42,7 @@ def main() -> None:
     ap = argparse.ArgumentParser()
     ap.add_argument("--trial", default="05_undisturbed_slow_rotation_with_breaks_B")
     ap.add_argument("--ahrs-samples", type=int, default=3000, help="samples timed for the slow ahrs filters")
+    ap.add_argument("--repeat", type=int, default=25, help="timed runs of each fast filter (minimum kept)")
     args = ap.parse_args()
     path = shared_data_path("broad", f"{args.trial}.mat")
     if path is None:
@@ -52,9 +59,19 @@ def main() -> None:
         "mekf": MEKF(),
         "adaptive": AdaptiveMEKF(),
     }
+    from vqf import VQF
+
+    gg, aa, mm = (np.ascontiguousarray(x) for x in (g, a, m))
     for f in imu.values():  # compile
         f.run(d.slice(0, 100))
-    us = {k: best_of(lambda f=f: f.run(d)) / n * 1e6 for k, f in imu.items()}
+    runs = {k: (lambda f=f: f.run(d)) for k, f in imu.items()}
+    runs["vqf"] = lambda: VQF(dt).updateBatch(gg, aa, mm)
+    best = {k: np.inf for k in runs}
+    for _ in range(args.repeat):  # in turn, so that a burst of load on a shared machine hits every filter alike
+        for k, fn in runs.items():
+            best[k] = min(best[k], best_of(fn, 1))
+    us = {k: best[k] / n * 1e6 for k in imu}
+    vqf_us = best["vqf"] / n * 1e6
 
     import ahrs.filters as af
 
@@ -76,21 +93,46 @@ def main() -> None:
     }
     ahrs_us["adaptive"] = ahrs_us["mekf"]
 
-    from vqf import VQF
-
-    gg, aa, mm = (np.ascontiguousarray(x) for x in (g, a, m))
-    vqf_us = best_of(lambda: VQF(dt).updateBatch(gg, aa, mm)) / n * 1e6
-
     limits = {"madgwick": 2.0, "mahony": 2.0, "mekf": 10.0, "adaptive": 10.0}
     print(f"BROAD trial {args.trial}: {n} samples; ahrs timed on {k} samples")
     print(f"{'filter':10s} {'imunav us/sa':>12s} {'limit':>6s} {'ahrs us/sa':>11s} {'x faster':>9s} "
           f"{'vqf us/sa':>9s} {'imunav/vqf':>10s}  verdict")
     for key in imu:
         ok = us[key] <= limits[key] and ahrs_us[key] / us[key] >= 50
+        if key in ("mekf", "adaptive"):  # issue 34: at or under vqf's C++
+            ok = ok and us[key] <= vqf_us
         print(f"{key:10s} {us[key]:12.2f} {limits[key]:6.1f} {ahrs_us[key]:11.1f} {ahrs_us[key] / us[key]:9.0f} "
               f"{vqf_us:9.2f} {us[key] / vqf_us:10.2f}  {'met' if ok else 'NOT met'}")
-    print("(ahrs counterpart of mekf/adaptive: ahrs.filters.EKF)")
-    report("bench_attitude_speed", {**{f"{k} us/sample": v for k, v in us.items()}, "vqf us/sample": vqf_us}, times=[f"{k} us/sample" for k in [*us, "vqf"]])
+    print("(ahrs counterpart of mekf/adaptive: ahrs.filters.EKF; mekf and adaptive also need <= 1.0 x vqf)")
+    batch = _batch()
+    report("bench_attitude_speed", {**{f"{k} us/sample": v for k, v in us.items()}, "vqf us/sample": vqf_us},
+           times=[f"{k} us/sample" for k in [*us, "vqf"]])
+    if batch:
+        print(batch)
+
+
+def _batch() -> str:
+    """Batch mode over the shared BROAD trials: wall time of ``AdaptiveMEKF.run_many`` with 1 and 2 workers."""
+    from imunav.io.broad import broad_trials
+
+    d = shared_data_path("broad")
+    if d is None:
+        return ""
+    recs = [load_broad(f).imu for f in broad_trials(d)]
+    n = sum(r.n for r in recs)
+    f = AdaptiveMEKF()
+    f.run_many(recs[:1], workers=1)
+    wall = {}
+    for w in (1, 2):
+        best = np.inf
+        for _ in range(3):
+            t0 = time.perf_counter()
+            f.run_many(recs, workers=w)
+            best = min(best, time.perf_counter() - t0)
+        wall[w] = best
+    return (f"batch (AdaptiveMEKF.run_many) over {len(recs)} BROAD trials, {n} samples: 1 worker {wall[1]:.3f} s "
+            f"({wall[1] / n * 1e6:.3f} us/sample), 2 workers {wall[2]:.3f} s ({wall[2] / n * 1e6:.3f} us/sample), "
+            f"speed-up {wall[1] / wall[2]:.2f} x (wall time, machine shared)")
 
 
 if __name__ == "__main__":

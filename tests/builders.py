@@ -87,6 +87,32 @@ def rotating_imu(rng, *, duration=60.0, fs=100.0, rate_amp=0.6, bias=(0.01, -0.0
     return ImuData(t=t, gyro=gyr, accel=fb, mag=mb), q
 
 
+#: the disturbances of disturbed_imu: field x1.6 over [20, 23) s, +3 m/s² on x over [30, 31) s
+DISTURBED_FIELD_S = (20.0, 23.0)
+DISTURBED_ACCEL_S = (30.0, 31.0)
+
+
+def disturbed_imu(fs=100.0):
+    """10 s at rest, then 30 s of rotation (rotating_imu, seed 7) with a field disturbance and an acceleration bump.
+
+    Returns ImuData and the true q_nb (N, 4); the disturbances are :data:`DISTURBED_FIELD_S` and
+    :data:`DISTURBED_ACCEL_S`.
+    """
+    q0 = quat_from_euler(0.2, -0.1, 1.0)
+    moving, q_mov = rotating_imu(7, duration=30.0, fs=fs, q0=q0)
+    r = np.random.default_rng(8)
+    ns = int(10 * fs)
+    qc = np.tile(quat_conjugate(q0), (ns, 1))
+    acc = np.vstack([quat_rotate(qc, np.tile([0, 0, -G_ROTATING], (ns, 1))) + r.normal(0, 0.05, (ns, 3)),
+                     moving.accel])
+    mag = np.vstack([quat_rotate(qc, np.tile(MAG_NED, (ns, 1))) + r.normal(0, 0.3, (ns, 3)), moving.mag])
+    gyr = np.vstack([np.array([0.01, -0.02, 0.015]) + r.normal(0, 0.002, (ns, 3)), moving.gyro])
+    n = gyr.shape[0]
+    mag[int(DISTURBED_FIELD_S[0] * fs):int(DISTURBED_FIELD_S[1] * fs)] *= 1.6
+    acc[int(DISTURBED_ACCEL_S[0] * fs):int(DISTURBED_ACCEL_S[1] * fs), 0] += 3.0
+    return ImuData(t=np.arange(n) / fs, gyro=gyr, accel=acc, mag=mag), np.vstack([np.tile(q0, (ns, 1)), q_mov])
+
+
 def angle_err_deg(q_est, q_true):
     """Angle of the rotation between two attitudes, deg, per row."""
     d = quat_multiply(quat_conjugate(q_true), q_est)

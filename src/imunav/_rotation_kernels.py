@@ -168,19 +168,19 @@ def qlog_1(q):
     return out
 
 
+@njit(cache=True, inline="always")
+def dcm_from_quat_t(w, x, y, z):
+    """DCM of unit quaternion (w, x, y, z) on scalars, row by row (C00, C01, C02, C10, …, C22; no allocation)."""
+    return (1.0 - 2.0 * (y * y + z * z), 2.0 * (x * y - w * z), 2.0 * (x * z + w * y),
+            2.0 * (x * y + w * z), 1.0 - 2.0 * (x * x + z * z), 2.0 * (y * z - w * x),
+            2.0 * (x * z - w * y), 2.0 * (y * z + w * x), 1.0 - 2.0 * (x * x + y * y))  # fmt: skip
+
+
 @njit(cache=True)
 def dcm_from_quat_1(q):
-    w, x, y, z = q[0], q[1], q[2], q[3]
     C = np.empty((3, 3))
-    C[0, 0] = 1.0 - 2.0 * (y * y + z * z)
-    C[0, 1] = 2.0 * (x * y - w * z)
-    C[0, 2] = 2.0 * (x * z + w * y)
-    C[1, 0] = 2.0 * (x * y + w * z)
-    C[1, 1] = 1.0 - 2.0 * (x * x + z * z)
-    C[1, 2] = 2.0 * (y * z - w * x)
-    C[2, 0] = 2.0 * (x * z - w * y)
-    C[2, 1] = 2.0 * (y * z + w * x)
-    C[2, 2] = 1.0 - 2.0 * (x * x + y * y)
+    (C[0, 0], C[0, 1], C[0, 2], C[1, 0], C[1, 1], C[1, 2],
+     C[2, 0], C[2, 1], C[2, 2]) = dcm_from_quat_t(q[0], q[1], q[2], q[3])  # fmt: skip
     return C
 
 

@@ -8,6 +8,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from imunav.attitude._kernels import first_rate_over
 from imunav.attitude.alignment import align
 from imunav.errors import InvalidInputError, NonFiniteError, ShapeError
 from imunav.timeseries import ImuData
@@ -37,12 +38,10 @@ def prepare(data: ImuData, use_mag: bool | None) -> tuple[Array, Array, Array, A
     if use_mag and not has_mag:
         raise InvalidInputError("use_mag=True but the recording has no magnetometer; pass use_mag=False (6D)")
     m = np.ascontiguousarray(data.mag, dtype=np.float64) if has_mag else np.zeros_like(a)
-    wn = np.abs(g).max(axis=1)
-    wn = np.where(wn <= MAX_RATE, np.linalg.norm(np.minimum(np.abs(g), MAX_RATE), axis=1), wn)
-    if np.any(wn > MAX_RATE):
-        k = int(np.argmax(wn > MAX_RATE))
+    k, wk = first_rate_over(g, MAX_RATE)
+    if k >= 0:
         raise InvalidInputError(
-            f"gyro rate |ω| = {wn[k]:.3g} rad/s at sample {k} (t = {t[k]:.6g} s) exceeds {MAX_RATE:g} rad/s, beyond "
+            f"gyro rate |ω| = {wk:.3g} rad/s at sample {k} (t = {t[k]:.6g} s) exceeds {MAX_RATE:g} rad/s, beyond "
             "any gyro; the samples are not in rad/s (give the file's unit) or are corrupt"
         )
     dt = np.empty_like(t)
@@ -94,8 +93,8 @@ def step_dt(dt: float) -> float:
 def gyro3(gyro: ArrayLike) -> Array:
     """A gyro sample as a finite 3-vector whose norm is at most :data:`MAX_RATE`."""
     g = vec3(gyro, "gyro")
-    n = float(np.linalg.norm(g)) if np.abs(g).max() <= MAX_RATE else float(np.abs(g).max())
-    if n > MAX_RATE:
+    k, n = first_rate_over(g.reshape(1, 3), MAX_RATE)
+    if k >= 0:
         raise InvalidInputError(
             f"gyro rate |ω| = {n:.3g} rad/s exceeds {MAX_RATE:g} rad/s, beyond any gyro; the samples are not in rad/s "
             "(convert deg/s with imunav.units) or are corrupt"

@@ -19,8 +19,7 @@ import numpy as np
 from numba import njit
 
 from imunav._rotation_kernels import (
-    dcm_exp_into,
-    dcm_from_quat_1,
+    dcm_from_quat_t,
     qconj_1,
     qexp_1,
     qexp_t,
@@ -35,8 +34,6 @@ from imunav.filters._core import (
     inject_attitude_local,
     inv_spd_cholesky,
     quat_normalize,
-    reset_attitude_cov,
-    scalar_update,
     sigma_offsets,
     unscented_cov,
     unscented_mean,
@@ -53,6 +50,26 @@ from imunav.filters._core_models import gravity_direction_row, gyro_rest_row
 def _norm3(v):
     """Euclidean norm of a 3-vector."""
     return math.sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2])
+
+
+@njit(cache=True)
+def first_rate_over(gyr, max_rate):
+    """First sample whose rate exceeds ``max_rate``: ``(k, |ω_k|)``, or ``(-1, 0.0)`` when none does.
+
+    A row whose largest component exceeds ``max_rate`` reports that component (its norm could overflow);
+    otherwise the row's Euclidean norm is compared.  One pass, no temporary arrays.
+    """
+    for k in range(gyr.shape[0]):
+        x = abs(gyr[k, 0])
+        y = abs(gyr[k, 1])
+        z = abs(gyr[k, 2])
+        big = max(x, max(y, z))
+        if big > max_rate:
+            return k, big
+        nrm = math.sqrt(x * x + y * y + z * z)
+        if nrm > max_rate:
+            return k, nrm
+    return -1, 0.0
 
 
 # ---------------------------------------------------------------------------
@@ -353,11 +370,14 @@ MEKF_STATE = (
     ("mag_lp_init", 1),  # their init flag
     ("undisturbed", 1),  # s since the field was last disturbed
     ("att_q", 1),  # attitude process variance of the step
+    ("lp_rest_c", 2),  # (Δt, 1 − exp(−Δt/τ)) of the rest low-pass, cached while Δt repeats
+    ("lp_acc_c", 2),  # the same for the accelerometer low-pass
+    ("lp_mag_c", 2),  # the same for the field norm / dip low-pass
 )
 (
     S_REST_TIMER, S_MAG_REF_NORM, S_MAG_REF_DIP, S_DISTURBED_TIMER, S_MAG_REF_VALID, S_F_LP, S_FLAGS, S_NIS, S_DOF,
     S_F_LP_INIT, S_GYR_LP, S_ACC_LP, S_REST_LP_INIT, S_MAG_NORM_LP, S_MAG_DIP_LP, S_MAG_LP_INIT, S_UNDISTURBED,
-    S_ATT_Q,
+    S_ATT_Q, S_LP_REST_C, S_LP_ACC_C, S_LP_MAG_C,
 ) = (sum(n for _, n in MEKF_STATE[:i]) for i in range(len(MEKF_STATE)))
 N_STATE = sum(n for _, n in MEKF_STATE)
 
@@ -367,14 +387,108 @@ I_BIAS = 3
 NX = 6
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy", fastmath={"contract"}, inline="always")
 def _lowpass(st, k, x, c, first):
     """First-order low-pass of ``x`` held in ``st[k]`` with factor c = 1 − exp(−Δt/τ); ``first`` starts it at x."""
     st[k] = x if first else st[k] + c * (x - st[k])
 
 
-@njit(cache=True)
-def _heading_update(P, dx, qw, qx, qy, qz, tan_dip, r, psi, PH, with_bias):
+@njit(cache=True, error_model="numpy", fastmath={"contract"}, inline="always")
+def _lp_factor(st, k, dt, tau):
+    """The low-pass factor ``c = 1 − exp(−Δt/τ)``, cached as ``st[k:k+2] = (Δt, c)`` while Δt repeats.
+
+    A uniformly sampled recording computes the exponential once instead of once per sample (same value).
+    """
+    if st[k] != dt:
+        st[k] = dt
+        st[k + 1] = 1.0 - math.exp(-dt / tau)
+    return st[k + 1]
+
+
+@njit(cache=True, error_model="numpy", fastmath={"contract"}, inline="always")
+def _gain6(P, dx, PH, nu, s):
+    """Tail of a scalar update on the six estimated states: ``dx += PH ν / s``, ``P −= PH PHᵀ / s``.
+
+    The six-state, fully estimated case of :func:`imunav.filters._core.scalar_update` (``n_est = 6``), on the
+    upper triangle mirrored (P stays bit-symmetric), without the generic loop bounds and branches.
+    """
+    si = 1.0 / s
+    k = nu * si
+    for i in range(6):
+        dx[i] += PH[i] * k
+    for i in range(6):
+        f = PH[i] * si
+        for j in range(i, 6):
+            v = P[i, j] - f * PH[j]
+            P[i, j] = v
+            P[j, i] = v
+
+
+@njit(cache=True, error_model="numpy", fastmath={"contract"}, inline="always")
+def _att_row_update(P, dx, h0, h1, h2, r, nu, PH):
+    """Scalar update with the row ``h = [h0, h1, h2, 0, 0, 0]`` (a measurement of the attitude error only).
+
+    Same equations as :func:`imunav.filters._core.scalar_update` (``s = h P hᵀ + r``, ``ν' = ν − h dx``,
+    ``dx += K ν'``, ``P −= P hᵀ h P / s``) with the zero entries of h skipped.  Returns ``(ν', s)``.
+    """
+    for i in range(6):
+        PH[i] = P[i, 0] * h0 + P[i, 1] * h1 + P[i, 2] * h2
+    s = r + h0 * PH[0] + h1 * PH[1] + h2 * PH[2]
+    nu = nu - (h0 * dx[0] + h1 * dx[1] + h2 * dx[2])
+    _gain6(P, dx, PH, nu, s)
+    return nu, s
+
+
+@njit(cache=True, error_model="numpy", fastmath={"contract"}, inline="always")
+def _reset6(P, d0, d1, d2):
+    """``P ← G P Gᵀ``, ``G = blockdiag(I − [a×], I₃)``, ``a = ½ δθ̂`` (Markley 2003; Solà 2017, §6.3), in place.
+
+    The closed form of :func:`imunav.filters._core.reset_attitude_cov` for the six-state MEKF: only the attitude
+    block ``A ← G₃ A G₃ᵀ`` and the cross block ``B ← G₃ B`` change.
+    """
+    a0 = 0.5 * d0
+    a1 = 0.5 * d1
+    a2 = 0.5 * d2
+    # G₃ = I − [a×] = [[1, a2, −a1], [−a2, 1, a0], [a1, −a0, 1]]
+    for j in range(3, 6):
+        p0 = P[0, j]
+        p1 = P[1, j]
+        p2 = P[2, j]
+        v0 = p0 + a2 * p1 - a1 * p2
+        v1 = p1 - a2 * p0 + a0 * p2
+        v2 = p2 + a1 * p0 - a0 * p1
+        P[0, j] = v0
+        P[j, 0] = v0
+        P[1, j] = v1
+        P[j, 1] = v1
+        P[2, j] = v2
+        P[j, 2] = v2
+    # M = G₃ A (columns), then A' = M G₃ᵀ (upper triangle, mirrored)
+    m00 = P[0, 0] + a2 * P[1, 0] - a1 * P[2, 0]
+    m01 = P[0, 1] + a2 * P[1, 1] - a1 * P[2, 1]
+    m02 = P[0, 2] + a2 * P[1, 2] - a1 * P[2, 2]
+    m10 = P[1, 0] - a2 * P[0, 0] + a0 * P[2, 0]
+    m11 = P[1, 1] - a2 * P[0, 1] + a0 * P[2, 1]
+    m12 = P[1, 2] - a2 * P[0, 2] + a0 * P[2, 2]
+    m20 = P[2, 0] + a1 * P[0, 0] - a0 * P[1, 0]
+    m21 = P[2, 1] + a1 * P[0, 1] - a0 * P[1, 1]
+    m22 = P[2, 2] + a1 * P[0, 2] - a0 * P[1, 2]
+    P[0, 0] = m00 + a2 * m01 - a1 * m02
+    v = m10 + a2 * m11 - a1 * m12
+    P[0, 1] = v
+    P[1, 0] = v
+    v = m20 + a2 * m21 - a1 * m22
+    P[0, 2] = v
+    P[2, 0] = v
+    P[1, 1] = m11 - a2 * m10 + a0 * m12
+    v = m21 - a2 * m20 + a0 * m22
+    P[1, 2] = v
+    P[2, 1] = v
+    P[2, 2] = m22 + a1 * m20 - a0 * m21
+
+
+@njit(cache=True, error_model="numpy", fastmath={"contract"}, inline="always")
+def _heading_update(P, dx, qw, qx, qy, qz, tan_dip, r, psi, PH, V, with_bias):
     """Heading-only magnetometer update with the tilt as consider states (in place).
 
     The field yaw ψ_m = atan2(n_E, n_N) of n = C_nb(q̂) m_b is computed with the
@@ -382,39 +496,69 @@ def _heading_update(P, dx, qw, qx, qy, qz, tan_dip, r, psi, PH, with_bias):
     attitude error φ = C_nb δθ and for a reference field of yaw 0 and dip δ,
         δψ_m = −φ_D + tan(δ) φ_N,
     i.e. a tilt error leaks into the measured heading by tan(dip) (the reason a
-    compass is tilt-sensitive; Groves 2013, §6.1.1).  The update uses this H in
-    the frame y = [φ_D, δb, φ_N, φ_E], with φ_N and φ_E as consider states
-    (Schmidt-Kalman: zero gain, Simon 2006, §7.5): the field never tilts the
-    estimate, and the reported covariance carries the tilt uncertainty of the
-    measured heading.  ``tan_dip`` comes from the reference field, not from the
-    current sample: a Jacobian built from the noisy sample is correlated with
-    the innovation's noise and makes the bias covariance over-confident
-    (measured: z RMS 1.46 on a static sensor).  With ``with_bias`` False the
-    bias is a consider state as well.  Returns the NIS term.
+    compass is tilt-sensitive; Groves 2013, §6.1.1).  The update uses this H,
+    h = (−C_D + tan δ C_N, 0) on the body error (C_N, C_E, C_D the rows of C_nb),
+    with φ_N and φ_E as consider states (Schmidt-Kalman: zero gain, Simon 2006,
+    §7.5): the field never tilts the estimate, and the reported covariance
+    carries the tilt uncertainty of the measured heading.  ``tan_dip`` comes from
+    the reference field, not from the current sample: a Jacobian built from the
+    noisy sample is correlated with the innovation's noise and makes the bias
+    covariance over-confident (measured: z RMS 1.46 on a static sensor).  With
+    ``with_bias`` False the bias is a consider state as well.
+
+    In the frame y = T δx = (φ_D, δb, φ_N, φ_E) (T orthogonal) the consider update is
+    ``P_y −= (PHᵧ PHᵧᵀ − c cᵀ) / s`` with ``c`` the consider part of ``PHᵧ = T P hᵀ``; back in the body frame
+    ``P −= (u uᵀ − v vᵀ) / s`` with ``u = P hᵀ``, ``v = Tᵀ c``: a rank-two update, and ``dx = (u − v) ψ / s``.
+    ``PH`` and ``V`` (6) are scratch.  Returns the NIS term.
     """
-    # rows of T: C_nb row 3 (down), identity on the bias, C_nb rows 1 and 2
-    qa = np.empty(4)
-    qa[0], qa[1], qa[2], qa[3] = qw, qx, qy, qz
-    C = dcm_from_quat_1(qa)
-    T = np.zeros((6, 6))
-    T[0, 0:3] = C[2]
-    T[4, 0:3] = C[0]
-    T[5, 0:3] = C[1]
-    for i in range(3):
-        T[1 + i, 3 + i] = 1.0
-    Py = T @ P @ T.T
-    dy = T @ dx
-    Hy = np.zeros(6)
-    Hy[0] = -1.0
-    Hy[4] = tan_dip
-    nu, s = scalar_update(Py, dy, Hy, r, psi, PH, 4 if with_bias else 1)
-    nis = nu * nu / s
-    P[:, :] = T.T @ Py @ T
-    dx[:] = T.T @ dy
-    return nis
+    c00, c01, c02, c10, c11, c12, c20, c21, c22 = dcm_from_quat_t(qw, qx, qy, qz)
+    h0 = -c20 + tan_dip * c00
+    h1 = -c21 + tan_dip * c01
+    h2 = -c22 + tan_dip * c02
+    for i in range(6):
+        PH[i] = P[i, 0] * h0 + P[i, 1] * h1 + P[i, 2] * h2
+    s = r + h0 * PH[0] + h1 * PH[1] + h2 * PH[2]
+    yd = c20 * PH[0] + c21 * PH[1] + c22 * PH[2]
+    yn = c00 * PH[0] + c01 * PH[1] + c02 * PH[2]
+    ye = c10 * PH[0] + c11 * PH[1] + c12 * PH[2]
+    # v: the consider part mapped back (tilt rows; the bias too when it is a consider state)
+    v0 = c00 * yn + c10 * ye
+    v1 = c01 * yn + c11 * ye
+    v2 = c02 * yn + c12 * ye
+    si = 1.0 / s
+    k = psi * si
+    dx[0] = c20 * yd * k
+    dx[1] = c21 * yd * k
+    dx[2] = c22 * yd * k
+    if with_bias:
+        for i in range(3, 6):
+            dx[i] = PH[i] * k
+        vb0 = 0.0
+        vb1 = 0.0
+        vb2 = 0.0
+    else:
+        for i in range(3, 6):
+            dx[i] = 0.0
+        vb0 = PH[3]
+        vb1 = PH[4]
+        vb2 = PH[5]
+    V[0] = v0
+    V[1] = v1
+    V[2] = v2
+    V[3] = vb0
+    V[4] = vb1
+    V[5] = vb2
+    for i in range(6):
+        ui = PH[i] * si
+        wi = V[i] * si
+        for j in range(i, 6):
+            val = P[i, j] - (ui * PH[j] - wi * V[j])
+            P[i, j] = val
+            P[j, i] = val
+    return psi * k
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy", fastmath={"contract"}, inline="always")
 def _mekf_predict(P, R, dt, sg2, sb2, W):
     """P ← Φ P Φᵀ + Q with Φ = [[R, −dt I], [0, I]] (block form, in place; W 6x6 scratch)."""
     # W[0:3, :] = Φ[0:3, :] P  (rows of the attitude block)
@@ -440,32 +584,54 @@ def _mekf_predict(P, R, dt, sg2, sb2, W):
         P[3 + i, 3 + i] += sb2
 
 
+@njit(cache=True, inline="always")
+def _phi_fill(phi, dt):
+    """The constant blocks of the MEKF transition ``Φ = [[R, −dt I], [0, I]]`` (R written by :func:`mekf_core`)."""
+    for i in range(3):
+        for j in range(3):
+            phi[i, 3 + j] = -dt if i == j else 0.0
+            phi[3 + i, j] = 0.0
+            phi[3 + i, 3 + j] = 1.0 if i == j else 0.0
+
+
 @njit(cache=True)
 def mekf_step(q, b, P, st, gyr, acc, mag, dt, p, out_phi):
-    """One MEKF step.  ``st`` (float64 array, len N_STATE) is the adaptive state, laid out as MEKF_STATE
-    (S_* constants); ``p`` the parameters (P_* constants).  The measurement updates are the models of
-    :mod:`imunav.filters._core_models` fed to :func:`imunav.filters._core.scalar_update`, one scalar row at a time.
-    Returns (q, b).  ``out_phi`` receives the 6x6 transition matrix.
+    """One MEKF step on single samples (the per-sample API): :func:`mekf_core` on copies of ``q`` and ``b``.
+
+    Returns the new (q, b); ``P`` and ``st`` are updated in place, ``out_phi`` receives the 6x6 transition matrix.
+    """
+    qn = q.copy()
+    bn = b.copy()
+    mekf_core(qn, bn, P, st, gyr.reshape(1, 3), acc.reshape(1, 3), mag.reshape(1, 3), 0, dt, p, out_phi,
+              np.empty((6, 6)), np.zeros(6), np.empty(6), np.empty(6))
+    _phi_fill(out_phi, dt)
+    return qn, bn
+
+
+@njit(cache=True, error_model="numpy", fastmath={"contract"}, inline="always")
+def mekf_core(q, b, P, st, gyr, acc, mag, k, dt, p, out_phi, W, dx, H, PH):
+    """One MEKF step on sample ``k`` of the (N, 3) arrays, in place on ``q``, ``b``, ``P`` and ``st``.
+
+    ``st`` (float64 array, len N_STATE) is the adaptive state, laid out as MEKF_STATE (S_* constants); ``p`` the
+    parameters (P_* constants).  The measurement updates are the models of :mod:`imunav.filters._core_models`
+    (gravity direction, zero rate) and the heading, one scalar row at a time (:func:`_att_row_update`,
+    :func:`_heading_update`).  ``out_phi`` receives the 6x6 transition matrix; ``W`` (6x6), ``dx``, ``H`` and ``PH`` (6)
+    are scratch: nothing is allocated, so a whole recording runs without touching the heap.
     """
     g = p[P_G]
     use_mag = p[P_USE_MAG] > 0.5
-    W = np.empty((6, 6))
-    dx = np.zeros(6)
-    H = np.zeros(6)
-    PH = np.empty(6)
+    gx = gyr[k, 0]
+    gy = gyr[k, 1]
+    gz = gyr[k, 2]
     # ---- predict
-    w0 = gyr[0] - b[0]
-    w1 = gyr[1] - b[1]
-    w2 = gyr[2] - b[2]
-    dcm_exp_into(W, -w0 * dt, -w1 * dt, -w2 * dt)  # δθ_k+1 = exp(-[ω]dt) δθ_k - dt δb
-    R = W[0:3, 0:3].copy()
-    for i in range(3):
-        for j in range(3):
-            out_phi[i, j] = R[i, j]
-            out_phi[i, 3 + j] = -dt if i == j else 0.0
-            out_phi[3 + i, j] = 0.0
-            out_phi[3 + i, 3 + j] = 1.0 if i == j else 0.0
+    w0 = gx - b[0]
+    w1 = gy - b[1]
+    w2 = gz - b[2]
     e0, e1, e2, e3 = qexp_t(w0 * dt, w1 * dt, w2 * dt)
+    # δθ_k+1 = exp(-[ω]dt) δθ_k - dt δb, with exp(-[ω]dt) = C(e)ᵀ, the transposed DCM of the increment e
+    # (the same rotation as Rodrigues' formula, from the quaternion's sine and cosine)
+    (out_phi[0, 0], out_phi[1, 0], out_phi[2, 0], out_phi[0, 1], out_phi[1, 1], out_phi[2, 1],
+     out_phi[0, 2], out_phi[1, 2], out_phi[2, 2]) = dcm_from_quat_t(e0, e1, e2, e3)  # fmt: skip
     t0, t1, t2, t3 = qmul_t(q[0], q[1], q[2], q[3], e0, e1, e2, e3)
     qw, qx, qy, qz = qnormalize_t(t0, t1, t2, t3)
     # gyro noise grows with the rate (scale-factor and misalignment errors of an
@@ -473,15 +639,17 @@ def mekf_step(q, b, P, st, gyr, acc, mag, dt, p, out_phi):
     wn2 = w0 * w0 + w1 * w1 + w2 * w2
     sg2 = (p[P_GYRO_NOISE_DENSITY] * p[P_GYRO_NOISE_DENSITY] + p[P_K_GYRO_RATE] * p[P_K_GYRO_RATE] * wn2) * dt
     st[S_ATT_Q] = sg2
-    _mekf_predict(P, R, dt, sg2, p[P_GYRO_BIAS_RANDOM_WALK] * p[P_GYRO_BIAS_RANDOM_WALK] * dt, W)
+    _mekf_predict(P, out_phi, dt, sg2, p[P_GYRO_BIAS_RANDOM_WALK] * p[P_GYRO_BIAS_RANDOM_WALK] * dt, W)
+    for i in range(6):
+        dx[i] = 0.0
     flags = 0
     nis = 0.0
     ndof = 0.0
     qbw, qbx, qby, qbz = qw, qx, qy, qz
     # ---- accelerometer (direction only)
-    a0, a1, a2 = acc[0], acc[1], acc[2]
+    a0, a1, a2 = acc[k, 0], acc[k, 1], acc[k, 2]
     an = math.sqrt(a0 * a0 + a1 * a1 + a2 * a2)
-    wn = math.sqrt(w0 * w0 + w1 * w1 + w2 * w2)
+    wn = math.sqrt(wn2)
     if p[P_REST_LPF_TIME_CONSTANT] > 0.0:
         # rest from the deviation of gyro and accelerometer from their low-pass
         # (time constant p[P_REST_LPF_TIME_CONSTANT]) plus a bias-size bound on the low-passed rate
@@ -489,15 +657,17 @@ def mekf_step(q, b, P, st, gyr, acc, mag, dt, p, out_phi):
         # scale and of the current bias estimate, robust to per-sample noise
         first = st[S_REST_LP_INIT] < 0.5
         st[S_REST_LP_INIT] = 1.0
-        c = 1.0 - math.exp(-dt / p[P_REST_LPF_TIME_CONSTANT])
+        c = _lp_factor(st, S_LP_REST_C, dt, p[P_REST_LPF_TIME_CONSTANT])
         dg = 0.0
         da = 0.0
         big = False
         for i in range(3):
-            _lowpass(st, S_GYR_LP + i, gyr[i], c, first)
-            _lowpass(st, S_ACC_LP + i, acc[i], c, first)
-            dg += (gyr[i] - st[S_GYR_LP + i]) ** 2
-            da += (acc[i] - st[S_ACC_LP + i]) ** 2
+            _lowpass(st, S_GYR_LP + i, gyr[k, i], c, first)
+            _lowpass(st, S_ACC_LP + i, acc[k, i], c, first)
+            eg = gyr[k, i] - st[S_GYR_LP + i]
+            ea = acc[k, i] - st[S_ACC_LP + i]
+            dg += eg * eg
+            da += ea * ea
             if abs(st[S_GYR_LP + i]) > p[P_LPF_GYRO_THRESHOLD]:
                 big = True
         if p[P_REST_GYRO_THRESHOLD] > 0.0 and dg < p[P_REST_GYRO_THRESHOLD] * p[P_REST_GYRO_THRESHOLD] and da < p[P_REST_ACCEL_THRESHOLD] * p[P_REST_ACCEL_THRESHOLD] and not big:
@@ -516,7 +686,7 @@ def mekf_step(q, b, P, st, gyr, acc, mag, dt, p, out_phi):
         f0, f1, f2 = qrot_t(qw, qx, qy, qz, a0, a1, a2)
         first = st[S_F_LP_INIT] < 0.5
         st[S_F_LP_INIT] = 1.0
-        c = 1.0 - math.exp(-dt / p[P_ACCEL_LPF_TIME_CONSTANT])
+        c = _lp_factor(st, S_LP_ACC_C, dt, p[P_ACCEL_LPF_TIME_CONSTANT])
         _lowpass(st, S_F_LP, f0, c, first)
         _lowpass(st, S_F_LP + 1, f1, c, first)
         _lowpass(st, S_F_LP + 2, f2, c, first)
@@ -527,15 +697,22 @@ def mekf_step(q, b, P, st, gyr, acc, mag, dt, p, out_phi):
         # per-sample variance: σ_a², or from the time constant τ_a of the tilt
         # correction, (τ_a σ_g)² / Δt (steady state of a random walk of density
         # σ_g seen through white noise of density τ_a σ_g: gain 1/τ_a)
-        sa2 = (p[P_TILT_TIME_CONSTANT] * p[P_GYRO_NOISE_DENSITY]) ** 2 / dt if p[P_TILT_TIME_CONSTANT] > 0.0 else p[P_ACCEL_DIRECTION_NOISE_STD] * p[P_ACCEL_DIRECTION_NOISE_STD]
-        r = sa2 * (1.0 + p[P_K_ACCEL] * (dev / 0.01) ** 2) + (p[P_K_RATE] * wn) ** 2
+        if p[P_TILT_TIME_CONSTANT] > 0.0:
+            sa = p[P_TILT_TIME_CONSTANT] * p[P_GYRO_NOISE_DENSITY]
+            sa2 = sa * sa / dt
+        else:
+            sa2 = p[P_ACCEL_DIRECTION_NOISE_STD] * p[P_ACCEL_DIRECTION_NOISE_STD]
+        dv = dev / 0.01
+        kr = p[P_K_RATE] * wn
+        r = sa2 * (1.0 + p[P_K_ACCEL] * (dv * dv)) + kr * kr
         # gravity-direction model, one scalar row at a time (H = [ĥ]x rows for the body error)
+        inv = 1.0 / an
         for i in range(3):
             a_i = a0 if i == 0 else (a1 if i == 1 else a2)
-            nu = gravity_direction_row(qw, qx, qy, qz, a_i / an, i, H)
-            nu, s = scalar_update(P, dx, H, r, nu, PH, NX)
+            nu = gravity_direction_row(qw, qx, qy, qz, a_i * inv, i, H)
+            nu, s = _att_row_update(P, dx, H[0], H[1], H[2], r, nu, PH)
             nis += nu * nu / s
-            ndof += 1.0
+        ndof += 3.0
     else:
         flags |= 1
     # ---- rest: zero-rate pseudo measurement ω_meas - b = 0 (+ noise)
@@ -543,31 +720,35 @@ def mekf_step(q, b, P, st, gyr, acc, mag, dt, p, out_phi):
         flags |= 4
         r = p[P_ZARU_NOISE_STD] * p[P_ZARU_NOISE_STD]
         for i in range(3):
-            nu = gyro_rest_row(gyr[i], b[i], i, H)
-            nu, s = scalar_update(P, dx, H, r, nu, PH, NX)
+            j = 3 + i
+            nu = gyro_rest_row(gyr[k, i], b[i], i, H) - dx[j]  # H = e_j: ν' = ν − δb_i, P hᵀ = P[:, j]
+            for l in range(6):
+                PH[l] = P[l, j]
+            s = r + PH[j]
+            _gain6(P, dx, PH, nu, s)
             nis += nu * nu / s
             ndof += 1.0
     # apply the tilt / bias correction before the heading update
-    reset_attitude_cov(P, dx, I_ATT)
+    _reset6(P, dx[0], dx[1], dx[2])
     e0, e1, e2, e3 = qexp_t(dx[0], dx[1], dx[2])
     t0, t1, t2, t3 = qmul_t(qw, qx, qy, qz, e0, e1, e2, e3)
     qw, qx, qy, qz = qnormalize_t(t0, t1, t2, t3)
-    bo = np.empty(3)
-    bo[0] = b[0] + dx[3]
-    bo[1] = b[1] + dx[4]
-    bo[2] = b[2] + dx[5]
+    b[0] += dx[3]
+    b[1] += dx[4]
+    b[2] += dx[5]
     # ---- magnetometer: heading only
     if use_mag:
-        mn = math.sqrt(mag[0] * mag[0] + mag[1] * mag[1] + mag[2] * mag[2])
+        m0, m1, m2 = mag[k, 0], mag[k, 1], mag[k, 2]
+        mn = math.sqrt(m0 * m0 + m1 * m1 + m2 * m2)
         if mn > 0.0:
-            n0, n1, n2 = qrot_t(qw, qx, qy, qz, mag[0], mag[1], mag[2])
+            n0, n1, n2 = qrot_t(qw, qx, qy, qz, m0, m1, m2)
             hh = math.sqrt(n0 * n0 + n1 * n1)
             dip = math.atan2(n2, hh)
             if p[P_MAG_LPF_TIME_CONSTANT] > 0.0:
                 # norm and dip low-passed (time constant p[P_MAG_LPF_TIME_CONSTANT]) before the disturbance test
                 first = st[S_MAG_LP_INIT] < 0.5
                 st[S_MAG_LP_INIT] = 1.0
-                c = 1.0 - math.exp(-dt / p[P_MAG_LPF_TIME_CONSTANT])
+                c = _lp_factor(st, S_LP_MAG_C, dt, p[P_MAG_LPF_TIME_CONSTANT])
                 _lowpass(st, S_MAG_NORM_LP, mn, c, first)
                 _lowpass(st, S_MAG_DIP_LP, dip, c, first)
                 mn_t = st[S_MAG_NORM_LP]
@@ -605,19 +786,27 @@ def mekf_step(q, b, P, st, gyr, acc, mag, dt, p, out_phi):
                 psi = math.atan2(n1, n0)
                 # σ_mag is field-vector noise, so the heading noise is σ_mag |m| / |m_h|;
                 # τ_mag is the time constant of the heading itself (whatever the dip)
-                sm2 = (p[P_HEADING_TIME_CONSTANT] * p[P_GYRO_NOISE_DENSITY]) ** 2 / dt if p[P_HEADING_TIME_CONSTANT] > 0.0 else (p[P_HEADING_NOISE_STD] * mn / hh) ** 2
-                r = sm2 * (1.0 + p[P_K_MAG] * ((dn / p[P_MAG_NORM_THRESHOLD]) ** 2 + (dd / p[P_MAG_DIP_THRESHOLD]) ** 2))
-                for j in range(6):
-                    dx[j] = 0.0
-                nis += _heading_update(P, dx, qw, qx, qy, qz, math.tan(st[S_MAG_REF_DIP]), r, psi, PH, p[P_MAG_BIAS] > 0.5)
+                if p[P_HEADING_TIME_CONSTANT] > 0.0:
+                    sm = p[P_HEADING_TIME_CONSTANT] * p[P_GYRO_NOISE_DENSITY]
+                    sm2 = sm * sm / dt
+                else:
+                    sm = p[P_HEADING_NOISE_STD] * mn / hh
+                    sm2 = sm * sm
+                r = sm2
+                if p[P_K_MAG] > 0.0:
+                    xn = dn / p[P_MAG_NORM_THRESHOLD]
+                    xd = dd / p[P_MAG_DIP_THRESHOLD]
+                    r = sm2 * (1.0 + p[P_K_MAG] * (xn * xn + xd * xd))
+                nis += _heading_update(P, dx, qw, qx, qy, qz, math.tan(st[S_MAG_REF_DIP]), r, psi, PH, H,
+                                       p[P_MAG_BIAS] > 0.5)
                 ndof += 1.0
-                reset_attitude_cov(P, dx, I_ATT)
+                _reset6(P, dx[0], dx[1], dx[2])
                 e0, e1, e2, e3 = qexp_t(dx[0], dx[1], dx[2])
                 t0, t1, t2, t3 = qmul_t(qw, qx, qy, qz, e0, e1, e2, e3)
                 qw, qx, qy, qz = qnormalize_t(t0, t1, t2, t3)
-                bo[0] += dx[3]
-                bo[1] += dx[4]
-                bo[2] += dx[5]
+                b[0] += dx[3]
+                b[1] += dx[4]
+                b[2] += dx[5]
     if p[P_ACCEL_LPF_TIME_CONSTANT] > 0.0:
         # rotate the low-passed nav-frame vector with the total correction q ⊗ q_before*
         d0, d1, d2, d3 = qmul_t(qw, qx, qy, qz, qbw, -qbx, -qby, -qbz)
@@ -625,17 +814,63 @@ def mekf_step(q, b, P, st, gyr, acc, mag, dt, p, out_phi):
     st[S_FLAGS] = flags
     st[S_NIS] = nis
     st[S_DOF] = ndof
-    qo = np.empty(4)
-    qo[0] = qw
-    qo[1] = qx
-    qo[2] = qy
-    qo[3] = qz
-    return qo, bo
+    q[0] = qw
+    q[1] = qx
+    q[2] = qy
+    q[3] = qz
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
+def _store_row(out, k, q, b, P, st):
+    """Row ``k`` of the outputs ``out = (qs, bs, pd, flags, nis, dof)`` from the state after sample ``k``."""
+    qs, bs, pd, flags, nis, dof = out
+    for i in range(4):
+        qs[k, i] = q[i]
+    for i in range(3):
+        bs[k, i] = b[i]
+    for i in range(6):
+        pd[k, i] = P[i, i]
+    flags[k] = int(st[S_FLAGS])
+    nis[k] = st[S_NIS]
+    dof[k] = st[S_DOF]
+
+
+@njit(cache=True, error_model="numpy", fastmath={"contract"}, nogil=True)
+def _mekf_loop(q, b, P, gyr, acc, mag, dt, p, out, scratch):
+    """The MEKF over a recording without storing covariances: the rows of ``out = (qs, bs, pd, flags, nis, dof)``
+    written in place (a loop of its own: with no array bound or allocated inside it, it runs on scalars and the
+    fixed scratch only).  ``scratch = (st, phi, W, dx, H, PH)``: the adaptive state and :func:`mekf_core`'s buffers.
+    """
+    st, phi, W, dx, H, PH = scratch
+    for k in range(gyr.shape[0]):
+        mekf_core(q, b, P, st, gyr, acc, mag, k, dt[k], p, phi, W, dx, H, PH)
+        _store_row(out, k, q, b, P, st)
+
+
+@njit(cache=True, error_model="numpy", fastmath={"contract"}, nogil=True)
+def _mekf_loop_store(q, b, P, P0, gyr, acc, mag, dt, p, out, scratch, stored):
+    """:func:`_mekf_loop` that also stores P after update, P predicted and Φ of every sample (for the smoother):
+    ``stored = (Pu, Pp, Ph)``, each (N, 6, 6)."""
+    Pu, Pp, Ph = stored
+    st, phi, W, dx, H, PH = scratch
+    Q = np.zeros((6, 6))
+    for k in range(gyr.shape[0]):
+        mekf_core(q, b, P, st, gyr, acc, mag, k, dt[k], p, phi, W, dx, H, PH)
+        _phi_fill(phi, dt[k])
+        Ph[k] = phi
+        # P predicted = Φ P_{k-1} Φ^T + Q (recompute cheaply)
+        Pprev = P0 if k == 0 else Pu[k - 1]
+        for i in range(3):
+            Q[i, i] = st[S_ATT_Q]
+            Q[3 + i, 3 + i] = p[P_GYRO_BIAS_RANDOM_WALK] * p[P_GYRO_BIAS_RANDOM_WALK] * dt[k]
+        Pp[k] = phi @ Pprev @ phi.T + Q
+        Pu[k] = P
+        _store_row(out, k, q, b, P, st)
+
+
+@njit(cache=True, nogil=True)
 def mekf_run(q0, b0, P0, gyr, acc, mag, dt, p, store):
-    """Run the MEKF over a recording.
+    """Run the MEKF over a recording (releases the GIL: recordings can run on threads side by side).
 
     Returns q (N,4), b (N,3), Pdiag (N,6), flags (N,), nis (N,), dof (N,), and
     when ``store``: P after update (N,6,6), P predicted (N,6,6), Φ (N,6,6).
@@ -654,27 +889,11 @@ def mekf_run(q0, b0, P0, gyr, acc, mag, dt, p, store):
     q = q0.copy()
     b = b0.copy()
     P = P0.copy()
-    st = np.zeros(N_STATE)
-    phi = np.empty((6, 6))
-    for k in range(n):
-        q, b = mekf_step(q, b, P, st, gyr[k], acc[k], mag[k], dt[k], p, phi)
-        if store:
-            Ph[k] = phi
-            # P predicted = Φ P_{k-1} Φ^T + Q (recompute cheaply)
-            Pprev = P0 if k == 0 else Pu[k - 1]
-            Q = np.zeros((6, 6))
-            for i in range(3):
-                Q[i, i] = st[S_ATT_Q]
-                Q[3 + i, 3 + i] = p[P_GYRO_BIAS_RANDOM_WALK] * p[P_GYRO_BIAS_RANDOM_WALK] * dt[k]
-            Pp[k] = phi @ Pprev @ phi.T + Q
-            Pu[k] = P
-        qs[k] = q
-        bs[k] = b
-        for i in range(6):
-            pd[k, i] = P[i, i]
-        flags[k] = int(st[S_FLAGS])
-        nis[k] = st[S_NIS]
-        dof[k] = st[S_DOF]
+    scratch = (np.zeros(N_STATE), np.empty((6, 6)), np.empty((6, 6)), np.zeros(6), np.empty(6), np.empty(6))
+    if store:
+        _mekf_loop_store(q, b, P, P0, gyr, acc, mag, dt, p, (qs, bs, pd, flags, nis, dof), scratch, (Pu, Pp, Ph))
+    else:
+        _mekf_loop(q, b, P, gyr, acc, mag, dt, p, (qs, bs, pd, flags, nis, dof), scratch)
     return qs, bs, pd, flags, nis, dof, Pu, Pp, Ph
 
 

@@ -324,7 +324,8 @@ def grid_search(name: str, grid: dict[str, list[Any]], trials: Iterable[str | Pa
 
 def cv_grid_search(name: str, grid: dict[str, list[Any]], trials: Iterable[str | Path], *,
                    workers: int | None = None, progress: Callable[[int, int], None] | None = None,
-                   results: list[BenchResult] | None = None) -> tuple[CvResult, list[BenchResult]]:
+                   results: list[BenchResult] | None = None, metric: str = "total_rmse_deg"
+                   ) -> tuple[CvResult, list[BenchResult]]:
     """Grid search scored by leave-one-trial-out cross-validation.
 
     Each trial is scored with the parameter set that minimises the mean total
@@ -344,25 +345,30 @@ def cv_grid_search(name: str, grid: dict[str, list[Any]], trials: Iterable[str |
         Called as ``progress(done, total)``.
     results : list of BenchResult, optional
         The grid's results when already computed (skips the runs).
+    metric : str, optional
+        The score chosen on and reported: ``"total_rmse_deg"`` (default), ``"inclination_rmse_deg"`` (6D, where
+        the heading is unobservable) or ``"heading_rmse_deg"``.
 
     Returns
     -------
     (CvResult, results)
-        ``CvResult.oof`` per trial total RMSE out of fold, ``in_sample`` that of
+        ``CvResult.oof`` per trial score (``metric``) out of fold, ``in_sample`` that of
         the overall best set; ``fold_choice`` / ``in_sample_choice`` are
         parameter dicts.  ``results`` as :func:`grid_search` (best first).
 
     Raises
     ------
     ConfigError
-        If ``results`` do not score the same trials in the same order, or the grid is empty.
+        If ``results`` do not score the same trials in the same order, the grid is empty or ``metric`` is unknown.
     """
+    if metric not in ("total_rmse_deg", "inclination_rmse_deg", "heading_rmse_deg"):
+        raise ConfigError(f"unknown metric {metric!r}; use total_rmse_deg, inclination_rmse_deg or heading_rmse_deg")
     tl = [str(t) for t in trials]
     res = results if results is not None else grid_search(name, grid, tl, workers=workers, progress=progress)
     names = [t.trial for t in res[0].trials]
     if any([t.trial for t in r.trials] != names for r in res):
         raise ConfigError("cv_grid_search: the results do not score the same trials in the same order")
-    S = np.array([[t.total_rmse_deg for t in r.trials] for r in res])
+    S = np.array([[getattr(t, metric) for t in r.trials] for r in res])
     cv = select_by_cv(S, names, items=names)
     return replace(cv, fold_choice={g: res[j].params for g, j in cv.fold_choice.items()},
                    in_sample_choice=res[cv.in_sample_choice].params), res

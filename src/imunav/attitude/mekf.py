@@ -60,6 +60,8 @@ the textbook MEKF; :class:`imunav.attitude.adaptive.AdaptiveMEKF` turns them on.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field, fields, replace
 
 import numpy as np
@@ -367,3 +369,44 @@ class MEKF:
         return AttitudeResult(t=t, q_nb=q, bias=b, cov_diag=pd, flags=flags, name=self.name,
                               params={**{f.name: getattr(self.config, f.name) for f in fields(self.config)},
                                       "use_mag": um})
+
+    def run_many(self, recordings: Sequence[ImuData], *, workers: int = 2,
+                 use_mag: bool | None = None) -> list[AttitudeResult]:
+        """Filter many recordings side by side (batch mode: a fleet's logs, a Monte Carlo study).
+
+        Each recording is filtered by a fresh filter of this configuration, exactly as :meth:`run` with the default
+        initial state would; the numba kernel releases the GIL, so ``workers`` threads use as many cores.  The state
+        of this filter (``q``, ``b``) is not changed.
+
+        Parameters
+        ----------
+        recordings : sequence of ImuData
+            The recordings (SI, body FRD).
+        workers : int, optional
+            Threads, >= 1 (default 2).
+        use_mag : bool, optional
+            As in :meth:`run`, for every recording.
+
+        Returns
+        -------
+        list of AttitudeResult
+            One result per recording, in order.
+
+        Raises
+        ------
+        ConfigError
+            If ``workers`` < 1.
+        InvalidInputError
+            As :meth:`run`, for the first recording that fails.
+        """
+        if int(workers) < 1:
+            raise ConfigError(f"workers must be >= 1, got {workers}")
+        recs = list(recordings)
+
+        def one(d: ImuData) -> AttitudeResult:
+            return type(self)(self.config).run(d, use_mag=use_mag)
+
+        if int(workers) == 1 or len(recs) < 2:
+            return [one(d) for d in recs]
+        with ThreadPoolExecutor(max_workers=int(workers)) as ex:
+            return list(ex.map(one, recs))

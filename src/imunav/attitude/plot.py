@@ -8,10 +8,11 @@ from typing import Any
 
 import numpy as np
 
+from imunav.attitude.rejections import rejected_intervals
 from imunav.attitude.result import AttitudeResult
 from imunav.files import atomic_path
 
-__all__ = ["plot_euler", "plot_errors", "plot_montecarlo_box", "save"]
+__all__ = ["plot_euler", "plot_errors", "plot_rejections", "plot_montecarlo_box", "save"]
 
 
 def _plt():
@@ -79,6 +80,56 @@ def plot_errors(t: np.ndarray, angles: Any, title: str = ""):
     ax.set_ylabel("error [deg]")
     ax.set_title(title)
     ax.legend()
+    fig.tight_layout()
+    return fig
+
+
+def plot_rejections(result: AttitudeResult, angles: Any | None = None, title: str = ""):
+    """What the filter rejected, and when, beside the reference error (one trial).
+
+    Top: the error angles against the reference (degrees; :func:`imunav.attitude.metrics.error_angles`), with the
+    intervals of rejected field shaded; bottom: the per-sample flags ``mag_disturbed``, ``acc_rejected`` and
+    ``rest`` as bars against time.  :func:`imunav.attitude.rejections.rejection_summary` gives the same as a line.
+
+    Parameters
+    ----------
+    result : AttitudeResult
+        A run of the MEKF family (its ``flags`` hold the three flags).
+    angles : ErrorAngles, optional
+        Error angles of ``result`` against a reference, one per sample (no top panel without).
+    title : str
+        Figure title (e.g. the trial and :meth:`RejectionSummary.line`).
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        The figure.
+    """
+    plt = _plt()
+    rows = 2 if angles is not None else 1
+    fig, axs = plt.subplots(rows, 1, sharex=True, figsize=(9, 2.2 + 2.3 * rows), squeeze=False,
+                            gridspec_kw={"height_ratios": [3, 1.3][:rows] if rows == 2 else [1]})
+    t = np.asarray(result.t, dtype=float)
+    names = [("mag_disturbed", "field rejected", "tab:red"), ("acc_rejected", "accel. rejected", "tab:orange"),
+             ("rest", "rest", "tab:green")]
+    if angles is not None:
+        ax = axs[0, 0]
+        for k in ("total", "heading", "inclination"):
+            ax.plot(t, np.degrees(getattr(angles, k)), lw=0.7, label=k)
+        if "mag_disturbed" in result.flags:
+            for i, (a, b) in enumerate(rejected_intervals(t, np.asarray(result.flags["mag_disturbed"], bool))):
+                ax.axvspan(a, b, color="tab:red", alpha=0.15, lw=0, label="field rejected" if i == 0 else None)
+        ax.set_ylabel("error [deg]")
+        ax.legend(loc="upper right", fontsize=8)
+    ax = axs[-1, 0]
+    for j, (k, _, col) in enumerate(names):
+        if k in result.flags:
+            for a, b in rejected_intervals(t, np.asarray(result.flags[k], bool)):
+                ax.broken_barh([(a, max(b - a, t[1] - t[0]))], (j - 0.4, 0.8), color=col)
+    ax.set_yticks(range(len(names)), [lab for _, lab, _ in names])
+    ax.set_ylim(-0.6, len(names) - 0.4)
+    ax.set_xlabel("time [s]")
+    axs[0, 0].set_title(title, fontsize=9)
     fig.tight_layout()
     return fig
 

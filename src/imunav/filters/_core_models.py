@@ -127,7 +127,7 @@ def height(p_down, h_ref_down, sigma, nu, r):
 # Attitude models (local error δθ, state [δθ, δb_g]; dense rows of length 6)
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def gravity_direction_row(qw, qx, qy, qz, a_unit, i, H):
     """Row ``i`` of the accelerometer-direction model: the unit specific force points up, ``f/|f| = C_nbᵀ (0,0,−1)``.
 
@@ -164,7 +164,7 @@ def gravity_direction_row(qw, qx, qy, qz, a_unit, i, H):
     return a_unit - h2
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def gyro_rest_row(gyr_i, b_i, i, H):
     """Row ``i`` of the rest (zero-rate) model of the attitude filters: ``ω_meas,i = b_i + n``.
 
