@@ -59,7 +59,12 @@ GNSS_BIAS_MIN_STD = 0.1
 #: Lag of the residuals' autocovariance that measures the correlated error, s, and the factor on its σ for what the
 #: first pass followed (:func:`gnss_correlated_std`; chosen on the hard robot and car drives 100-107).
 GNSS_CORR_LAG_S = 2.0
+#: Span of the log that the first pass of the identification covers, s.
+GNSS_IDENTIFY_S = 900.0
 GNSS_BIAS_SCATTER_FACTOR = 2.0
+#: σ of the odometer's scale where nothing measures it (no GNSS: a Schmidt consider state): a wheel's effective
+#: radius against its nominal one, tyre wear and pressure, 2 %.
+ODO_SCALE_PRIOR_STD = 0.02
 #: Default σ of the GNSS latency state (s), the odometer scale (dimensionless) and the vehicle's slope at rest (rad).
 GNSS_DELAY_STD = 0.2
 ODO_SCALE_STD = 0.1
@@ -351,6 +356,13 @@ def _initial_tilt(src: NavSources, static: NDArray[np.bool_], C_vb: Array,
     return -f / np.linalg.norm(f), sd, int(run[-1])
 
 
+def _cut_odometer(od: Any, t_end: float) -> Any:
+    """The odometer's samples up to ``t_end``."""
+    k = od.t <= t_end
+    cut = lambda a: None if a is None else np.asarray(a)[k]  # noqa: E731
+    return dataclasses.replace(od, t=od.t[k], speed=od.speed[k], speed_std=cut(od.speed_std), yaw_rate=cut(od.yaw_rate))
+
+
 def _initial_velocity(src: NavSources, still: NDArray[np.bool_], C_nv: Array, psi_sd: float) -> tuple[Array, float]:
     """The NED velocity at the first IMU sample and its σ (m/s): zero (σ 0.05) at rest; moving, the odometer's
     speed along the vehicle's initial axis ``C_nv e_x`` (σ the speed's error and the heading's, at least 0.5), else
@@ -592,10 +604,12 @@ def run_log(src: NavSources, options: LogRunOptions | None = None, *,
         if lever_v is None:
             lever_v = (-np.asarray(src.imu_lever_base, dtype=float) if src.imu_lever_base is not None
                        else np.zeros(3))
-        # without GNSS nothing measures the odometer's scale: it stays at 1 with its prior σ, which the position's
-        # σ then carries (a dead reckoning that reported 1.0000 ± 0.0000 claimed a certainty it did not have)
+        # without GNSS nothing measures the odometer's scale: it stays at 1 with the prior σ of a wheel's radius,
+        # which the position's σ then carries (a dead reckoning that reported 1.0000 ± 0.0000 claimed a certainty it
+        # did not have)
         cfg_kw.update(odo_lever_arm=C_vb.T @ np.asarray(lever_v, dtype=float),
-                      odo_scale_std=ODO_SCALE_STD, odo_scale_corr_time=np.inf,
+                      odo_scale_std=ODO_SCALE_STD if src.gnss is not None else ODO_SCALE_PRIOR_STD,
+                      odo_scale_corr_time=np.inf,
                       odo_noise_std=ODO_STD_FLOOR)
         if o.estimate_odo_lever_arm:
             cfg_kw["odo_lever_arm_std"] = 0.3
@@ -628,25 +642,39 @@ def run_log(src: NavSources, options: LogRunOptions | None = None, *,
         e0 = np.zeros(12)
         e0[:3] = bias0
 
-    def run(c: GinsConfig, smoother: bool, report: Callable[[int, int], None] | None) -> GinsResult:
-        return GinsFilter(c).run(imu, src.gnss, lla0=lla0, vel0=vel0, q0=q0, odometer=odo, imu_errors0=e0,
-                                 static=static, baro=None, smoother=smoother, progress=report)
+    def run(c: GinsConfig, smoother: bool, report: Callable[[int, int], None] | None, n: int) -> GinsResult:
+        """The filter over the first ``n`` IMU samples (the aids cut to them)."""
+        gn, od = src.gnss, odo
+        if n < imu.n:
+            t_end = float(imu.t[n - 1])
+            gn = None if gn is None else gn.select(gn.t <= t_end, "beyond the first pass")
+            od = None if od is None else _cut_odometer(od, t_end)
+        return GinsFilter(c).run(imu.slice(0, n), gn, lla0=lla0, vel0=vel0, q0=q0, odometer=od, imu_errors0=e0,
+                                 static=static[:n], baro=None, smoother=smoother, progress=report)
 
     two = src.gnss is not None and cfg.gnss_bias_std is None and "gnss_bias_std" not in o.overrides
-    # one bar over both passes: the first pass's samples, then the second's (and its smoother's)
-    first_n = imu.n if two else 0
+    # the first pass covers the log's first GNSS_IDENTIFY_S, and 200 fixes at least (the autocovariance's standard
+    # error is then a few percent); one bar over both passes
+    first_n = 0
+    if two:
+        g = src.gnss
+        assert g is not None
+        t_first = max(float(imu.t[0]) + GNSS_IDENTIFY_S, float(g.t[min(200, g.n - 1)]))
+        first_n = int(np.searchsorted(imu.t, t_first, side="right"))
     rest_n = imu.n * (1 + int(o.smoother))
     if two:
         # the fixes' error correlated in time: its σ from the memory of their residuals about a first pass without
         # it (gnss_correlated_std); none for white fixes
-        first = run(cfg, False, None if progress is None else (lambda done, total: progress(done, total + rest_n)))
-        sig = gnss_correlated_std(first, src.gnss, cfg.lever_arm)
+        first = run(cfg, False, None if progress is None else (lambda done, total: progress(done, total + rest_n)),
+                    first_n)
+        sig = gnss_correlated_std(first, src.gnss.select(src.gnss.t <= first.t[-1], "beyond the first pass"),
+                                  cfg.lever_arm)
         cfg = dataclasses.replace(cfg, gnss_bias_std=sig, gnss_bias_corr_time=GNSS_BIAS_TAU)
         initial["gnss_errors"] = (f"correlated error sigma N E D {np.round(sig, 3).tolist()} m, "
                                   f"{GNSS_BIAS_TAU:g} s: the autocorrelation of the fixes' residuals about a first "
                                   "pass")
     res = run(cfg, o.smoother, None if progress is None else
-              (lambda done, total: progress(first_n + done, first_n + total)))
+              (lambda done, total: progress(first_n + done, first_n + total)), imu.n)
     return LogRun(res, cfg, static, coarse, source, initial, o.preset)
 
 
