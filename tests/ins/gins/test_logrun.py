@@ -125,7 +125,10 @@ def test_outage_test_against_the_removed_fixes_and_against_the_truth(robot):
     print(f"outages against the fixes: end RMS {f['end_m']:.3f} m (noise {noise:.2f} m), dead reckoning "
           f"{f['dead_reckoning_end_m']:.3f} m, ratio {f['ratio_to_dead_reckoning']:.2f}; above the noise "
           f"{f['end_above_noise_m']} m")
-    assert f["reference"] == "removed fixes" and noise == pytest.approx(0.8 * math.sqrt(2)) and k == t["n_outages"]
+    # the fixes' noise as the run identified it: their reported 0.8 m (the adaptive factor stays 1 for a right σ)
+    # and the correlated part the identification reads in white fixes' residuals (0.13 and 0.37 m per axis here)
+    assert f["reference"] == "removed fixes" and k == t["n_outages"]
+    assert 0.8 * math.sqrt(2) <= noise <= 1.15 * 0.8 * math.sqrt(2)
     assert f["end_m"] <= 3.0 and f["contained_3sigma"] == 1.0 and f["ratio_to_dead_reckoning"] < 1.0
     assert abs(f["end_m"] ** 2 - noise**2 - t["end_m"] ** 2) < 3 * noise**2 / math.sqrt(k)
     assert all(o["fixes"] >= 100 for o in doc["outages"])

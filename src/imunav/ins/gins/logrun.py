@@ -825,7 +825,8 @@ class LogOutageReport(Result):
         Largest horizontal error against the outage's reference points, m.
     contained : numpy.ndarray of bool, shape (K,)
         Every reference point of the outage inside the predicted 3σ, inflated by the fix's own σ when the fixes
-        are the reference (``3 √(σ_N² + σ_E² + σ_fix,N² + σ_fix,E²)``).
+        are the reference (``3 √(σ_N² + σ_E² + σ_fix,N² + σ_fix,E²)``; the fix's σ as the run with every fix
+        identified it: the reported σ times the adaptive factor, and the correlated error's σ).
     dead_reckoning_end_m : numpy.ndarray, shape (K,)
         The same end error of wheel-odometry dead reckoning (odometer speed as read, gyro heading) started from
         the filter's state at the outage's start, m (NaN without an odometer).
@@ -952,7 +953,9 @@ def log_outage_test(src: NavSources, options: LogRunOptions | None = None, *, co
     Beside it, the dead reckoning of the wheel odometry as read and the gyro heading from the filter's state at the
     outage's start: what the filter adds to the odometer.
 
-    The removed fixes carry their own noise, ``E[e²] = e_true² + σ_fix²`` at each: a floor the report states
+    The removed fixes carry their own noise, ``E[e²] = e_true² + σ_fix²`` at each, with ``σ_fix`` as the run with
+    every fix identified it (the reported σ times the adaptive factor, and the correlated error's σ: a receiver that
+    understates its σ would otherwise make every filter look wrong): a floor the report states
     (:meth:`LogOutageReport.rms`); a truth that is a peer's estimate (comma2k19's pose) has its own,
     ``truth_std``.  The runs are the forward filter's (``options.smoother`` is ignored): an outage tests what the
     filter predicts with no fix, not what a smoother recovers from the fixes after it.
@@ -1000,6 +1003,10 @@ def log_outage_test(src: NavSources, options: LogRunOptions | None = None, *, co
         t_bad = rec.t[~rec.accepted]
         good &= ~np.isin(src.gnss.t, t_bad)
     t0, t1 = float(src.imu.t[0]), float(src.imu.t[-1])
+    fr = full.result
+    fix_scale = float(fr.gnss_noise_scale[-1]) if fr.gnss_noise_scale is not None else 1.0
+    gb = full.config.gnss_bias_std
+    fix_corr = 0.0 if gb is None else float(np.sum(np.asarray(gb, dtype=float)[:2] ** 2))
     outs, end, mx, cont, dr, nfix, ref_var, nmax = [], [], [], [], [], [], [], []
     skipped = 0  # outages without a reference point (no good fix in them, or outside the truth)
     total = len(shifts_s) + 1
@@ -1024,7 +1031,10 @@ def log_outage_test(src: NavSources, options: LogRunOptions | None = None, *, co
                     skipped += 1
                     continue
                 tf = src.gnss.t[idx] - tau  # the fixes hold the antenna at their stamp less the latency
-                ref_lla, fix_var = src.gnss.lla[idx], np.sum(src.gnss.pos_std[idx, :2] ** 2, axis=1)
+                # a fix's own error as the run with every fix identified it, not as the receiver claims it: the
+                # reported variance times the adaptive factor, plus the correlated error's
+                ref_lla = src.gnss.lla[idx]
+                fix_var = fix_scale * np.sum(src.gnss.pos_std[idx, :2] ** 2, axis=1) + fix_corr
                 # ... and the run's lla is the IMU's: add the lever arm, turned to NED
                 ks = np.clip(np.searchsorted(res.t, tf), 0, res.t.size - 1)
                 ant = (dcm_from_quat(res.q_nb[ks]) @ np.asarray(run.config.lever_arm, dtype=float))[:, :2]
