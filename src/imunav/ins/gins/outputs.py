@@ -437,7 +437,8 @@ def honesty(run: LogRun, separation: Separation | None = None) -> dict[str, Any]
         if d2 is not None and d2 > HONESTY_LIMITS["separation_d2_ratio"] * 2:
             reasons.append(f"the forward filter and the smoother part by more than their sigma allows (mean d2 "
                            f"{d2:.1f} for 2 degrees of freedom): the forward filter was overconfident")
-    verdict = ("the log's own statistics are consistent with the reported sigma" if not reasons else
+    verdict = ("the log's own statistics agree with the sigma the run reports (GNSS NIS, rejected fixes, "
+               "forward-backward separation)" if not reasons else
                "the trajectory and its sigma cannot be trusted: " + "; ".join(reasons))
     return {"trustworthy": not reasons, "verdict": verdict, "reasons": reasons, "checks": checks}
 
