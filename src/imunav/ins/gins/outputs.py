@@ -548,6 +548,7 @@ def log_summary(run: LogRun, sources: NavSources, separation: Separation | None 
     if run.mounting_coarse is not None:
         mount["coarse_deg"] = np.degrees(run.mounting_coarse.euler).tolist()
         mount["coarse_std_deg"] = np.degrees(run.mounting_coarse.std).tolist()
+        mount["method"] = run.mounting_coarse.meta.get("method")
     g_meta = sources.meta.get("gnss", {}) if isinstance(sources.meta.get("gnss"), dict) else {}
     rec = res.aids.get("gnss_position")
     n_gate = int(np.sum(~rec.accepted)) if rec is not None else 0
