@@ -27,7 +27,7 @@ from imunav.io.kfgins import read_kfgins_nav, write_kfgins_nav
 from imunav.io.logs import TopicData
 from imunav.io.navlog import read_nav_sources
 from imunav.io.rosbag import StaticTransform, write_bag
-from imunav.rotation import dcm_from_quat, euler_from_quat
+from imunav.rotation import dcm_from_quat, euler_from_quat, quat_from_euler, quat_multiply
 from imunav.sim.robot_log import simulate_robot_log, write_robot_log
 
 SEEDS = (1, 2)
@@ -411,3 +411,24 @@ def test_run_log_reports_progress_over_the_filter_and_smoother_passes(tmp_path, 
     assert all(b[0] > a[0] and b[1] == 3 * n for a, b in zip(seen, seen[1:]))
     np.testing.assert_array_equal(res.lla, plain.lla)
     np.testing.assert_array_equal(res.smoothed.lla, plain.smoothed.lla)
+
+
+def test_a_mounting_pulled_far_beyond_its_prior_is_held(monkeypatch):
+    """A coarse mounting 12 deg off (about the IMU's y axis) with a σ of 0.5 deg, as a levelling fooled by a model
+    error would give: the filter pulls it more than 4 prior σ and 5 deg, so the run keeps the coarse mounting as
+    consider states and says so in ``initial``."""
+    from imunav.ins.gins import logrun as lr
+
+    real = lr.estimate_mounting
+
+    def off(*args, **kw):
+        m = real(*args, **kw)
+        q = quat_multiply(m.q_vb, quat_from_euler(0.0, np.radians(12.0), 0.0))
+        return dataclasses.replace(m, q_vb=q, euler=np.asarray(euler_from_quat(q)), std=np.full(3, np.radians(0.5)))
+
+    monkeypatch.setattr(lr, "estimate_mounting", off)
+    run = run_log(simulate_robot_log(1, distance_m=160.0).sources, LogRunOptions(gnss_lever_arm=(0.0, 0.0, -0.3),
+                                                                                 smoother=False))
+    assert "mounting_held" in run.initial
+    assert "mount" in run.config.consider_states
+    np.testing.assert_allclose(run.result.q_vb[-1], run.result.q_vb[0], atol=1e-12)

@@ -69,6 +69,13 @@ ODO_SCALE_PRIOR_STD = 0.02
 GNSS_DELAY_STD = 0.2
 ODO_SCALE_STD = 0.1
 LEVEL_STD = math.radians(1.0)
+#: How far (in prior σ) a self-calibration state may move from its initial value before the run says so
+#: (:meth:`LogRun.moved_beyond_prior`), and an estimated mounting is held at its coarse value instead when it also
+#: moved more than :data:`MOUNT_HOLD_DEG`.
+MOVED_SIGMAS = 4.0
+#: ... and by more than this (deg): the levelling and the accelerations find a mounting within a degree or two, so a
+#: filter that moves it further fights a model error (the real robot's pitch went from −1.9° to −26.5°, σ 1.4°).
+MOUNT_HOLD_DEG = 5.0
 #: Gate rejections in a row after which an aid's update is applied anyway (a log's filter must not drift away).
 MAX_REJECTIONS = 5
 #: A bag's mounting (tf_static, frame_id) is contradicted when the levelling at rest differs from its roll or pitch
@@ -183,6 +190,37 @@ class LogRun(Result):
             The layout ``lay`` of the run's configuration.
         """
         return kernel_setup(self.config, 1.0, bool(self.result.meta.get("odometer", False)))[1]
+
+    def moved_beyond_prior(self) -> dict[str, Any]:
+        """The self-calibration states whose final value lies more than :data:`MOVED_SIGMAS` prior σ from the
+        initial one (mounting angles about the vehicle axes in deg, the GNSS latency in s, the odometer scale): a
+        mounting pulled 25° off by a filter fighting a model error, or a latency of half a second, is not a
+        calibration.
+
+        Returns
+        -------
+        dict
+            Per state (``mount_roll_deg`` ..., ``gnss_latency_s``, ``odometer_scale``): ``change`` and ``sigmas``
+            (the change over the prior σ); empty when every state stayed within its prior.
+        """
+        res, lay = self.result, self.state_layout()
+        out: dict[str, Any] = {}
+        im = int(lay[LAY.mount])
+        if im >= 0 and res.q_vb is not None:
+            E = dcm_from_quat(res.q_vb[-1]) @ dcm_from_quat(res.q_vb[0]).T
+            mu = np.array([E[2, 1] - E[1, 2], E[0, 2] - E[2, 0], E[1, 0] - E[0, 1]]) / 2
+            p0 = np.sqrt(res.cov_diag[0, im:im + 3])
+            for j, axis in enumerate(("roll", "pitch", "yaw")):
+                if abs(mu[j]) > MOVED_SIGMAS * p0[j]:
+                    out[f"mount_{axis}_deg"] = {"change": math.degrees(mu[j]), "sigmas": abs(mu[j]) / p0[j]}
+        for block, name, x in (("gnss_delay", "gnss_latency_s", res.gnss_delay),
+                               ("odo_scale", "odometer_scale", res.odo_scale)):
+            i = int(lay[getattr(LAY, block)])
+            if i >= 0 and x is not None:
+                d, p0 = float(x[-1] - x[0]), math.sqrt(float(res.cov_diag[0, i]))
+                if abs(d) > MOVED_SIGMAS * p0:
+                    out[name] = {"change": d, "sigmas": abs(d) / p0}
+        return out
 
     def mounting_euler(self) -> tuple[Array, Array]:
         """The final mounting as ZYX Euler angles (roll, pitch, yaw of the IMU in the vehicle) and their σ, rad.
@@ -675,7 +713,18 @@ def run_log(src: NavSources, options: LogRunOptions | None = None, *,
                                   "pass")
     res = run(cfg, o.smoother, None if progress is None else
               (lambda done, total: progress(first_n + done, first_n + total)), imu.n)
-    return LogRun(res, cfg, static, coarse, source, initial, o.preset)
+    out = LogRun(res, cfg, static, coarse, source, initial, o.preset)
+    moved = [k for k, v in out.moved_beyond_prior().items()
+             if k.startswith("mount_") and abs(v["change"]) > MOUNT_HOLD_DEG]
+    if moved and mount_sd is not None:
+        # the filter pulled an estimated mounting beyond what the levelling and the drive support (a model error,
+        # not a calibration): the coarse mounting is kept, its σ carried as consider states
+        cfg = dataclasses.replace(cfg, consider_states=tuple(dict.fromkeys((*cfg.consider_states, "mount"))))
+        initial["mounting_held"] = (f"the filter pulled the mounting ({', '.join(moved)}) beyond {MOVED_SIGMAS:g} "
+                                    f"prior sigma and {MOUNT_HOLD_DEG:g} deg: the coarse estimate is kept, its sigma "
+                                    "carried")
+        out = LogRun(run(cfg, o.smoother, None, imu.n), cfg, static, coarse, source, initial, o.preset)
+    return out
 
 
 def gnss_correlated_std(first: GinsResult, gnss: Any, lever_arm: Any) -> Array:

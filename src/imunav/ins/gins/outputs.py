@@ -42,7 +42,7 @@ from imunav.io.kfgins import (
     write_kfgins_nav,
     write_kfgins_std,
 )
-from imunav.rotation import dcm_from_quat, euler_from_quat, quat_conjugate, quat_multiply
+from imunav.rotation import euler_from_quat, quat_conjugate, quat_multiply
 from imunav.toml import toml_text
 
 if TYPE_CHECKING:  # the log and outage runs' types: `gins run --config` writes its outputs without reading a log
@@ -388,8 +388,9 @@ def honesty(run: LogRun, separation: Separation | None = None) -> dict[str, Any]
 
     Checks (:data:`HONESTY_LIMITS`): the GNSS position NIS (mean over the accepted fixes, χ²(3) for a consistent
     filter), the share of fixes the gate rejected, the adaptive noise factor pinned at its upper bound (the fixes
-    scatter more than any factor allowed explains), a self-calibration state moved more than :data:`MOVED_SIGMAS`
-    prior σ, and the forward–backward separation ``d²`` (χ²(2)).
+    scatter more than any factor allowed explains), a self-calibration state moved more than
+    :data:`~imunav.ins.gins.logrun.MOVED_SIGMAS` prior σ (:meth:`~imunav.ins.gins.logrun.LogRun.moved_beyond_prior`),
+    and the forward–backward separation ``d²`` (χ²(2)).
 
     Parameters
     ----------
@@ -425,7 +426,7 @@ def honesty(run: LogRun, separation: Separation | None = None) -> dict[str, Any]
             checks.update(gnss_sigma_factor=math.sqrt(sc))
             if sc >= hi * (1 - 1e-9):
                 reasons.append(f"the fixes scatter more than {math.sqrt(hi):.0f} times their reported sigma")
-    moved = _moved_beyond_prior(run)
+    moved = run.moved_beyond_prior()
     if moved:
         checks["moved_beyond_prior"] = moved
         reasons.append("the drive pulled " + ", ".join(f"{k} {v['change']:.3g} ({v['sigmas']:.1f} prior sigma)"
@@ -441,34 +442,6 @@ def honesty(run: LogRun, separation: Separation | None = None) -> dict[str, Any]
                "forward-backward separation)" if not reasons else
                "the trajectory and its sigma cannot be trusted: " + "; ".join(reasons))
     return {"trustworthy": not reasons, "verdict": verdict, "reasons": reasons, "checks": checks}
-
-
-#: How far (in prior σ) a self-calibration state may move from its initial value before :func:`honesty` says so.
-MOVED_SIGMAS = 4.0
-
-
-def _moved_beyond_prior(run: LogRun) -> dict[str, Any]:
-    """The self-calibration states (mounting angles in deg, latency in s, odometer scale) whose final value lies more
-    than :data:`MOVED_SIGMAS` prior σ from the initial one: a mounting pulled 25° off by a filter fighting a model
-    error, or a latency of half a second, is not a calibration."""
-    res, lay = run.result, run.state_layout()
-    out: dict[str, Any] = {}
-    im = int(lay[LAY.mount])
-    if im >= 0 and res.q_vb is not None:
-        E = dcm_from_quat(res.q_vb[-1]) @ dcm_from_quat(res.q_vb[0]).T
-        mu = np.array([E[2, 1] - E[1, 2], E[0, 2] - E[2, 0], E[1, 0] - E[0, 1]]) / 2
-        p0 = np.sqrt(res.cov_diag[0, im:im + 3])
-        for j, axis in enumerate(("roll", "pitch", "yaw")):
-            if abs(mu[j]) > MOVED_SIGMAS * p0[j]:
-                out[f"mount_{axis}_deg"] = {"change": math.degrees(mu[j]), "sigmas": abs(mu[j]) / p0[j]}
-    for block, name, x in (("gnss_delay", "gnss_latency_s", res.gnss_delay), ("odo_scale", "odometer_scale",
-                                                                             res.odo_scale)):
-        i = int(lay[getattr(LAY, block)])
-        if i >= 0 and x is not None:
-            d, p0 = float(x[-1] - x[0]), math.sqrt(float(res.cov_diag[0, i]))
-            if abs(d) > MOVED_SIGMAS * p0:
-                out[name] = {"change": d, "sigmas": abs(d) / p0}
-    return out
 
 
 def self_calibration(run: LogRun) -> dict[str, Any]:
