@@ -429,14 +429,15 @@ def check_outputs(inputs: Iterable[str | os.PathLike[str] | None],
     """The one check of a command's outputs against its inputs, done before any work.
 
     No output may equal, contain or sit inside an input of the same command, and no two outputs may be
-    the same file:
+    the same file or sit inside each other:
 
     * an output file may not be an input file, nor a file inside an input folder, nor be inside an input
       file (a path whose parent is a file);
     * an output folder (``folders``: report folders; ``run_folders``: run folders, :mod:`imunav.lab.runfolder`)
       may not be an input, nor hold an input file or folder;
-    * an output file may not sit inside a run folder (the run would list it as its own, or
-      ``--overwrite`` would remove it);
+    * no output (file, report folder or run folder) may sit inside another output of the same command:
+      a report folder's ``report.json`` would overwrite an ``--out`` given inside it, a run would list
+      the file as its own (or ``--overwrite`` would remove it);
     * each output file must be writable (:func:`check_writable`);
     * (``inputs_exist``) every input given exists: a missing input is refused before any work, even one
       the command would read last or not at all with the other options.
@@ -464,12 +465,22 @@ def check_outputs(inputs: Iterable[str | os.PathLike[str] | None],
     outs = [o for o in outputs if o is not None]
     dirs = [d for d in folders if d is not None]
     runs = [d for d in run_folders if d is not None]
-    seen: dict[Path, str | os.PathLike[str]] = {}
-    for o in [*outs, *dirs, *runs]:
-        k = _key(o)
-        if k in seen:
-            raise InvalidInputError(f"two outputs are the same path ({seen[k]} and {o}); give each its own path")
-        seen[k] = o
+    kinds = [*(("output", o) for o in outs), *(("output folder", d) for d in dirs), *(("run folder", d) for d in runs)]
+    keys = [_key(o) for _, o in kinds]
+    for i, (kind_i, o) in enumerate(kinds):
+        for j in range(i):
+            kind_j, p = kinds[j]
+            if keys[i] == keys[j]:
+                raise InvalidInputError(f"two outputs are the same path ({p} and {o}); give each its own path")
+            inner, outer = ((kind_i, o), (kind_j, p)) if _within(keys[i], keys[j]) else \
+                ((kind_j, p), (kind_i, o)) if _within(keys[j], keys[i]) else (None, None)
+            if inner is not None and outer is not None:
+                if outer[0] == "output":
+                    raise NotADirectoryError(errno.ENOTDIR, f"cannot write the {inner[0]}: {outer[1]} is another output "
+                                             "of the same command, a file, not a folder", str(inner[1]))
+                raise InvalidInputError(f"{inner[0]} {inner[1]} is inside the {outer[0]} {outer[1]} that the same "
+                                        "command writes (one would overwrite or list the other); choose a path "
+                                        "outside it")
     ins: list[tuple[Path, str | os.PathLike[str]]] = []
     for p in inputs:
         if p is not None:
@@ -485,10 +496,6 @@ def check_outputs(inputs: Iterable[str | os.PathLike[str] | None],
             if ik.is_dir() and ik in k.parents and k.exists():
                 raise InvalidInputError(f"output {o} is a file of the input folder {p}: writing it would replace "
                                         "an input; choose a path outside that folder")
-        for r in runs:
-            if _within(k, _key(r)):
-                raise InvalidInputError(f"output {o} is inside the run folder {r} that the same command writes; "
-                                        "choose a path outside it")
     for d in [*dirs, *runs]:
         dk = _key(d)
         held = [p for ik, p in ins if _within(ik, dk)]

@@ -54,7 +54,7 @@ from imunav.errors import ConfigError
 from imunav.files import atomic_path, write_json
 from imunav.io import write_imu
 from imunav.lab.report.lab import embed_png
-from imunav.lab.steps._api import LabContext, StepResult
+from imunav.lab.steps._api import LabContext, StepResult, check_samples
 from imunav.sim import (
     ImuErrorModel,
     hundred_position_profile,
@@ -93,6 +93,50 @@ def _options(ctx: LabContext) -> dict[str, Any]:
     if bad:
         raise ConfigError(f"[simulate_tests] tests: unknown test(s) {bad}; choose from {list(_TESTS)}")
     return opts
+
+
+def check(ctx: LabContext) -> list[Path]:
+    """Check the ``[simulate_tests]`` table whole, before any step runs (:func:`imunav.lab.config.parse_lab_config`).
+
+    Parameters
+    ----------
+    ctx : LabContext
+        A context holding the lab definition, ``step`` set to this step.
+
+    Returns
+    -------
+    list of pathlib.Path
+        The files the table names (the error ``model``).
+
+    Raises
+    ------
+    ConfigError
+        Naming the table and key: an unknown option or test, a value out of its domain, an unknown
+        ``preset`` or ``gravity``, a missing ``model`` file, or a test longer than the lab's sample limit.
+    """
+    opts = _options(ctx)
+    if opts["model"]:
+        model = Path(str(opts["model"]))
+        if not model.is_file():
+            raise ConfigError(f"[simulate_tests] model: the error model file {model} does not exist")
+        files = [model]
+    else:
+        files = []
+        if opts["preset"] not in presets.names():
+            raise ConfigError(f"[simulate_tests] preset: unknown IMU preset {opts['preset']!r}; known presets: "
+                              f"{', '.join(presets.names())}")
+    g = opts["gravity"]
+    if not (g in ("normal", "constant") or (isinstance(g, (int, float)) and not isinstance(g, bool) and 0 < g < 100)):
+        raise ConfigError(f"[simulate_tests] gravity must be 'normal', 'constant' or a number in (0, 100) m/s^2, "
+                          f"got {g!r}")
+    fs, move = float(opts["fs"]), float(opts["dwell_s"]) + float(opts["transition_s"])
+    lengths = {"hundred_position": ("100 x (dwell_s + transition_s) x fs", 100 * move * fs),
+               "rate_table": ("120 x (dwell_s + transition_s + remount_s) x fs",
+                              120 * (move + float(opts["remount_s"])) * fs),
+               "static_long": ("static_duration_s x fs", float(opts["static_duration_s"]) * fs)}
+    for name in opts["tests"]:
+        check_samples(f"[simulate_tests] {name}", lengths[name][0], lengths[name][1])
+    return files
 
 
 def _error_model(opts: dict[str, Any]) -> Any:

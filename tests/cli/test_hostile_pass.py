@@ -1,0 +1,123 @@
+"""Issue 36: what a hostile pass found after the no-data-loss work -- one test per cause, through the CLI and the
+public API.
+
+Two outputs of one command on the same file or inside each other's folders, an output on a file a lab
+definition names, a lab definition checked only when its step runs, raw parsing of user text, library
+functions that accept nonsense.  ``tests/cli_hostile.py`` generates the same families for every command.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+from typer.testing import CliRunner
+
+from imunav.calib import ImuCalibration
+from imunav.cli.main import app
+from imunav.io import write_imu
+from imunav.timeseries import ImuData
+
+runner = CliRunner()
+
+
+def _exit_2(r) -> str:
+    assert r.exit_code == 2, (r.exit_code, r.stdout[-500:], r.stderr[-1000:])
+    lines = r.stderr.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("error: ") and "Traceback" not in r.stderr, r.stderr
+    return lines[0]
+
+
+def _rec(n: int = 3000, fs: float = 50.0) -> ImuData:
+    rng = np.random.default_rng(1)
+    return ImuData(t=np.arange(n) / fs, gyro=rng.normal(0, 0.01, (n, 3)),
+                   accel=np.tile([0.0, 0.0, -9.80665], (n, 1)) + rng.normal(0, 0.01, (n, 3)))
+
+
+def _snapshot(root: Path) -> dict[str, bytes]:
+    return {p.relative_to(root).as_posix(): p.read_bytes() for p in sorted(root.rglob("*")) if p.is_file()}
+
+
+@pytest.fixture
+def files(tmp_path):
+    write_imu(_rec(), tmp_path / "good.npz")
+    write_imu(_rec(), tmp_path / "good.csv")
+    u = np.random.default_rng(0).normal(size=(400, 3))
+    u /= np.linalg.norm(u, axis=1, keepdims=True)
+    np.savetxt(tmp_path / "mag.csv", 50 * u, delimiter=",", header="mag_x,mag_y,mag_z", comments="")
+    for k in (1, 2, 3):
+        ImuCalibration().save(tmp_path / f"cal{k}.json")
+    return tmp_path
+
+
+# ------------------------------------------------------------------ 1. two outputs of one command, one file
+@pytest.mark.parametrize("argv", [
+    ["calibrate", "mag", "mag.csv"],
+    ["calibrate", "temperature", "cal1.json@20", "cal2.json@40", "cal3.json@60", "--orders", "1"],
+])
+def test_an_output_inside_the_report_folder_of_the_same_command_is_refused(files, monkeypatch, argv):
+    monkeypatch.chdir(files)
+    before = _snapshot(files)
+    msg = _exit_2(runner.invoke(app, [*argv, "--out", "rep/report.json", "--report", "rep"]))
+    assert "rep/report.json" in msg and "output folder rep" in msg
+    assert _snapshot(files) == before and not (files / "rep").exists()
+
+
+def test_an_output_folder_inside_another_output_folder_is_refused(tmp_path):
+    from imunav.errors import InvalidInputError
+    from imunav.files import check_outputs
+
+    with pytest.raises(InvalidInputError, match="inside the run folder"):
+        check_outputs([], [], folders=[tmp_path / "run" / "rep"], run_folders=[tmp_path / "run"])
+    with pytest.raises(OSError, match="another output"):
+        check_outputs([], [tmp_path / "a.json"], folders=[tmp_path / "a.json" / "rep"])
+
+
+def test_lab_output_on_a_recording_the_definition_names_is_refused(files, monkeypatch):
+    monkeypatch.chdir(files)
+    (files / "lab.toml").write_text('[lab]\nsteps = ["recordings"]\n[recordings.a]\npath = "good.npz"\n'
+                                    'test = "static"\n')
+    before = _snapshot(files)
+    msg = _exit_2(runner.invoke(app, ["lab", "--config", "lab.toml", "--out", "rep", "--quiet", "--json", "good.npz"]))
+    assert "good.npz" in msg and "input" in msg
+    msg = _exit_2(runner.invoke(app, ["lab", "--config", "lab.toml", "--out", ".", "--quiet"]))
+    assert "holds the input" in msg
+    assert _snapshot(files) == before and not (files / "rep").exists()
+
+
+# ------------------------------------------------------------------ 2. a lab definition checked whole first
+BAD_LABS = {
+    "unknown-unit": ('[lab]\nsteps = ["recordings"]\n[recordings.a]\npath = "good.npz"\ntest = "static"\n'
+                     'units = { gyro = "furlongs" }\n', ["[recordings.a]", "units", "furlongs"]),
+    "unit-contradicts-file": ('[lab]\nsteps = ["recordings"]\n[recordings.a]\npath = "good.npz"\ntest = "static"\n'
+                              'units = { gyro = "deg/s" }\n', ["[recordings.a]", "units", "deg/s"]),
+    "rate-contradicts-stamps": ('[lab]\nsteps = ["recordings"]\n[recordings.a]\npath = "good.csv"\ntest = "static"\n'
+                                'fs = 200.0\n', ["[recordings.a]", "fs"]),
+    "unknown-gins-preset": ('[lab]\nsteps = ["gins"]\n[gins]\npreset = "nope"\n', ["[gins]", "preset", "nope"]),
+    "unknown-preset-of-a-step-not-run": ('[lab]\nsteps = ["noise"]\n[temperature]\npreset = "nope"\n',
+                                         ["[temperature]", "preset"]),
+    "size-beyond-the-machine": ('[lab]\nsteps = ["simulate_tests"]\n[simulate_tests]\nstatic_duration_s = 1e12\n',
+                                ["[simulate_tests]", "static_duration_s"]),
+}
+
+
+@pytest.mark.parametrize("name", list(BAD_LABS))
+def test_a_bad_lab_definition_is_refused_before_the_first_step(files, monkeypatch, name):
+    text, words = BAD_LABS[name]
+    monkeypatch.chdir(files)
+    (files / "lab.toml").write_text(text)
+    msg = _exit_2(runner.invoke(app, ["lab", "--config", "lab.toml", "--out", "rep", "--quiet"]))
+    assert "lab.toml" in msg and all(w in msg for w in words), msg
+    assert not (files / "rep").exists()
+
+
+def test_the_library_checks_the_definition_whole(files):
+    from imunav.errors import ConfigError
+    from imunav.lab.runner import parse_lab_config
+
+    with pytest.raises(ConfigError, match=r"\[gins\] preset"):
+        parse_lab_config({"gins": {"preset": "nope"}})
+    cfg = parse_lab_config({"_base_dir": str(files), "recordings": {"a": {"path": "good.npz", "test": "static"}},
+                            "simulate_tests": {"model": str(files / "cal1.json")}})
+    assert {p.name for p in cfg.inputs} == {"good.npz", "cal1.json"}
