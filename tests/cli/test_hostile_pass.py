@@ -121,3 +121,64 @@ def test_the_library_checks_the_definition_whole(files):
     cfg = parse_lab_config({"_base_dir": str(files), "recordings": {"a": {"path": "good.npz", "test": "static"}},
                             "simulate_tests": {"model": str(files / "cal1.json")}})
     assert {p.name for p in cfg.inputs} == {"good.npz", "cal1.json"}
+
+
+# ------------------------------------------------------------------ 3. user text parsed in the validation layer
+def test_text_where_a_number_belongs_is_one_line_naming_the_option(files, monkeypatch):
+    import json
+
+    monkeypatch.chdir(files)
+    msg = _exit_2(runner.invoke(app, ["calibrate", "temperature", "cal1.json@20", "cal2.json@40", "cal3.json@60",
+                                      "--orders", "a", "--out", "t.json"]))
+    assert "--orders" in msg and "'a'" in msg
+    msg = _exit_2(runner.invoke(app, ["calibrate", "temperature", "cal1.json@warm", "cal2.json@40", "cal3.json@60",
+                                      "--out", "t.json"]))
+    assert "cal1.json@warm" in msg
+    (files / "bat").mkdir()
+    write_imu(_rec(), files / "bat" / "u1.csv")
+    msg = _exit_2(runner.invoke(app, ["batch", "calibrate", "bat", "--columns", "{bad", "--out", "bo", "--quiet"]))
+    assert "--columns" in msg and "JSON" in msg
+    (files / "secs.json").write_text(json.dumps({k: {"start": "a" if k == "x_p" else 0, "end": 10} for k in
+                                                 ("x_p", "x_a", "y_p", "y_a", "z_p", "z_a", "x_rot", "y_rot", "z_rot")}))
+    msg = _exit_2(runner.invoke(app, ["calibrate", "ferraris", "good.csv", "--sections", "secs.json", "--fs", "50",
+                                      "--out", "f.json"]))
+    assert "x_p" in msg and "'a'" in msg
+    assert not any((files / n).exists() for n in ("t.json", "bo", "f.json"))
+
+
+# ------------------------------------------------------------------ 8. the public API validates like the CLI
+def test_a_zero_or_non_unit_quaternion_is_no_rotation():
+    from imunav.errors import InvalidInputError
+    from imunav.rotation import dcm_from_quat, quat_rotate
+
+    with pytest.raises(InvalidInputError, match=r"q is not a unit quaternion .*rows \[0\]"):
+        dcm_from_quat([0, 0, 0, 0])
+    with pytest.raises(InvalidInputError, match=r"rows \[1\]"):
+        dcm_from_quat([[1, 0, 0, 0], [2, 0, 0, 0]])
+    with pytest.raises(InvalidInputError, match="unit quaternion"):
+        quat_rotate([0, 0, 0, 0], [1, 0, 0])
+    q = np.array([1.0, 1e-9, 0, 0])  # the drift of a propagated attitude is accepted
+    assert np.allclose(dcm_from_quat(q), np.eye(3), atol=1e-8)
+
+
+def test_allan_deviation_needs_two_differences():
+    from imunav.errors import InsufficientDataError
+    from imunav.noise import allan_deviation
+
+    with pytest.raises(InsufficientDataError, match="x: need at least 3 samples"):
+        allan_deviation([1.0, 2.0], fs=1.0)
+    with pytest.raises(InsufficientDataError, match="need at least 4 samples"):
+        allan_deviation([1.0, 2.0, 3.0], fs=1.0, kind="hadamard")
+    assert allan_deviation([1.0, 2.0, 4.0], fs=1.0).tau.tolist() == [1.0]
+
+
+def test_a_complementary_gain_beyond_one_over_dt_is_refused():
+    from imunav.attitude import Complementary
+    from imunav.errors import InvalidInputError
+
+    d = ImuData(np.arange(10) * 0.5, np.zeros((10, 3)), np.tile([0.0, 0.0, -9.8], (10, 1)))
+    with pytest.raises(InvalidInputError, match=r"k_accel=5 .* 0.5 s .* at most 1/dt = 2"):
+        Complementary(k_accel=5).run(d)
+    with pytest.raises(InvalidInputError, match="k_mag"):
+        Complementary(k_mag=50).step([0, 0, 0], [0, 0, -9.8], [1, 0, 0], 0.1)
+    assert np.allclose(Complementary(k_accel=2).run(d).q_nb[-1], [1, 0, 0, 0])

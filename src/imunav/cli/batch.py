@@ -3,7 +3,6 @@ logs (gins) in parallel."""
 
 from __future__ import annotations
 
-import json
 import math
 from pathlib import Path
 from typing import Any, Optional
@@ -14,6 +13,7 @@ from rich.markup import escape
 from rich.table import Table
 
 from imunav.cli._console import make_console
+from imunav.cli._domains import COLUMNS_EXAMPLE, parse_json
 from imunav.cli._errors import fail
 from imunav.cli._lazy import lazy
 from imunav.cli._progress import shows_progress
@@ -65,7 +65,7 @@ def _read_options(fs: Optional[float], accel_unit: Optional[str], gyro_unit: Opt
     if units:
         opts["units"] = units
     if columns:
-        opts["columns"] = json.loads(columns)
+        opts["columns"] = parse_json("--columns", columns, COLUMNS_EXAMPLE)
     return opts
 
 
