@@ -182,3 +182,100 @@ def test_a_complementary_gain_beyond_one_over_dt_is_refused():
     with pytest.raises(InvalidInputError, match="k_mag"):
         Complementary(k_mag=50).step([0, 0, 0], [0, 0, -9.8], [1, 0, 0], 0.1)
     assert np.allclose(Complementary(k_accel=2).run(d).q_nb[-1], [1, 0, 0, 0])
+
+
+# ------------------------------------------------------------------ 5. a write the file system refuses
+@pytest.mark.parametrize("out", ["o.h5", "o.npz", "o.csv"])
+def test_a_refused_write_is_one_line_for_every_format(files, out):
+    import os
+    import resource
+    import subprocess
+    import sys
+
+    def small_files():
+        resource.setrlimit(resource.RLIMIT_FSIZE, (20000, 20000))
+
+    pytest.importorskip("h5py")
+    env = dict(os.environ, PYTHONPATH=str(Path(__file__).resolve().parents[2] / "src"))
+    r = subprocess.run([sys.executable, "-m", "imunav.cli.main", "convert", "good.csv", out], cwd=files,
+                       capture_output=True, text=True, env=env, timeout=300, preexec_fn=small_files)
+    assert r.returncode == 2, r.stderr  # not -11 (SIGSEGV inside the HDF5 library)
+    lines = r.stderr.strip().splitlines()
+    assert len(lines) == 1 and out in lines[0] and "File too large" in lines[0], r.stderr
+    assert not (files / out).exists() and not list(files.glob(f".{out}*"))
+
+
+def test_hdf5_files_are_built_in_memory_and_read_back(files):
+    pytest.importorskip("h5py")
+    from imunav.io import read_imu
+    from imunav.io.mat import write_mat
+
+    rec = read_imu(files / "good.csv")
+    for name, write in (("x.h5", write_imu), ("x.mat", lambda d, p: write_mat(d, p, version="7.3"))):
+        write(rec, files / name)
+        back = read_imu(files / name)
+        assert np.array_equal(back.gyro, rec.gyro) and np.array_equal(back.t, rec.t)
+
+
+# ------------------------------------------------------------------ 7. failures said, unreadable inputs refused
+def test_a_batch_says_each_failed_item_on_stderr(files, monkeypatch):
+    monkeypatch.chdir(files)
+    r = runner.invoke(app, ["batch", "simulate", "2", "--static", "20", "--fs", "20", "--out", "b", "--executor",
+                            "serial", "--quiet"])
+    assert r.exit_code == 0, r.stderr
+    # multiposition calibration of static records: every unit fails (no segments) -> one line per unit
+    r = runner.invoke(app, ["batch", "calibrate", "b", "--out", "bc", "--executor", "serial", "--quiet"])
+    assert r.exit_code == 1
+    lines = [ln for ln in r.stderr.splitlines() if ln.startswith("error: ")]
+    assert len(lines) == 2 and all("unit_" in ln for ln in lines), r.stderr
+    msg = _exit_2(runner.invoke(app, ["batch", "noise", "b", "--terms", "X", "--out", "bn", "--executor", "serial",
+                                      "--quiet"]))
+    assert "--terms" in msg and "'X'" in msg and not (files / "bn").exists()
+
+
+def test_info_refuses_what_it_cannot_read(files, monkeypatch):
+    monkeypatch.chdir(files)
+    np.savez(files / "cplx.npz", t=np.arange(10.0), gyro=np.ones((10, 3)) * (1 + 1j), accel=np.ones((10, 3)) * 1j)
+    (files / "hdr.ulg").write_bytes(b"ULog\x01\x12\x35\x01" + bytes(8))
+    msg = _exit_2(runner.invoke(app, ["info", "cplx.npz"]))
+    assert "cplx.npz" in msg and "complex" in msg
+    msg = _exit_2(runner.invoke(app, ["info", "hdr.ulg"]))
+    assert "hdr.ulg" in msg and "no topic" in msg
+
+
+def test_an_empty_error_model_is_said_to_be_ideal(files, monkeypatch):
+    from imunav.errors import ImunavWarning
+    from imunav.sim import ImuErrorModel
+
+    monkeypatch.chdir(files)
+    (files / "empty.toml").write_text('name = "e"\n')
+    r = runner.invoke(app, ["simulate", "static", "--duration", "2", "--fs", "10", "--model", "empty.toml", "--out",
+                            "e.npz"])
+    assert r.exit_code == 0 and "warning: empty.toml" in r.stderr and "ideal" in r.stderr, r.stderr
+    with pytest.warns(ImunavWarning, match="ideal"):
+        ImuErrorModel.from_toml(files / "empty.toml")
+    (files / "m.toml").write_text('name = "m"\n[gyro]\nbias = [0.001, 0, 0]\n')
+    import warnings
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        ImuErrorModel.from_toml(files / "m.toml")
+
+
+# ------------------------------------------------------------------ 6. exports into another tool's units
+def test_px4_magnetometer_offsets_say_their_conversion_or_refuse_a_unit_that_does_not_fit(tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    u = np.random.default_rng(0).normal(size=(400, 3))
+    u /= np.linalg.norm(u, axis=1, keepdims=True)
+    np.savetxt("mag_T.csv", 48e-6 * u + [1e-5, 0, 0], delimiter=",", header="mag_x,mag_y,mag_z", comments="")
+    # tesla read as the default gauss: a field of 4.8e-5 gauss is no field on Earth
+    msg = _exit_2(runner.invoke(app, ["calibrate", "mag", "mag_T.csv", "--out", "m.json", "--px4-params", "m.params"]))
+    assert "--mag-unit" in msg and "gauss" in msg and not Path("m.json").exists()
+    r = runner.invoke(app, ["calibrate", "mag", "mag_T.csv", "--out", "m.json", "--px4-params", "m.params",
+                            "--mag-unit", "T"])
+    assert r.exit_code == 0, r.stderr
+    assert "converted" in r.stdout and "from T to PX4's gauss (x 10000)" in r.stdout
+    text = Path("m.params").read_text()
+    assert "# Converted: CAL_MAG0_{X,Y,Z}OFF" in text
+    off = float(next(ln.split("\t")[3] for ln in text.splitlines() if "\tCAL_MAG0_XOFF\t" in ln))
+    assert off == pytest.approx(0.1, abs=0.01)  # 1e-5 T = 0.1 gauss

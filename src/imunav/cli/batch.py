@@ -14,7 +14,7 @@ from rich.table import Table
 
 from imunav.cli._console import make_console
 from imunav.cli._domains import COLUMNS_EXAMPLE, parse_json
-from imunav.cli._errors import fail
+from imunav.cli._errors import fail, one_line
 from imunav.cli._lazy import lazy
 from imunav.cli._progress import shows_progress
 from imunav.errors import InvalidInputError
@@ -105,9 +105,14 @@ def _print_summary(summary: Any, families: list[str], title: str) -> None:
     con = make_console()
     con.width = max(con.width, 150)  # a wide table reads better wrapped by the terminal than squeezed
     con.print(tab)
-    for r in t.to_dict(orient="records"):
+    _failed_items(t.to_dict(orient="records"))
+
+
+def _failed_items(rows: list[dict]) -> None:
+    """One line on standard error per item that failed (the table on standard output marks it ERROR)."""
+    for r in rows:
         if r["status"] != "ok":
-            con.print(f"[red]{r['unit']}:[/red] {r.get('error')}", soft_wrap=True, highlight=False)
+            typer.echo(f"error: {r['unit']}: {one_line(str(r.get('error')))}", err=True)
 
 
 @app.command("simulate")
@@ -294,9 +299,7 @@ def _print_gins(summary: Any, title: str) -> None:
     con = make_console()
     con.width = max(con.width, 150)
     con.print(tab)
-    for r in summary.table.to_dict(orient="records"):
-        if r["status"] != "ok":
-            con.print(f"[red]{r['unit']}:[/red] {r.get('error')}", soft_wrap=True, highlight=False)
+    _failed_items(summary.table.to_dict(orient="records"))
 
 
 def _finish(summary: Any, json_out: Optional[Path]) -> None:

@@ -89,6 +89,8 @@ def _write_px4(params: Any, path: Optional[Path]) -> None:
     typer.echo(f"PX4 parameters written to {path}")
     for d in params.dropped:
         typer.echo(f"  not expressible in PX4, dropped: {d}")
+    for c in params.converted:
+        typer.echo(f"  converted: {c}")
 
 
 def _finish(result: Any, out: Path, report: Optional[Path], *, save: Any = None, px4: Optional[Path] = None) -> None:
