@@ -12,6 +12,8 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from builders import static_imu
+from test_reliability import _exit_2, _snapshot
 from typer.testing import CliRunner
 
 from imunav.calib import ImuCalibration
@@ -22,21 +24,8 @@ from imunav.timeseries import ImuData
 runner = CliRunner()
 
 
-def _exit_2(r) -> str:
-    assert r.exit_code == 2, (r.exit_code, r.stdout[-500:], r.stderr[-1000:])
-    lines = r.stderr.strip().splitlines()
-    assert len(lines) == 1 and lines[0].startswith("error: ") and "Traceback" not in r.stderr, r.stderr
-    return lines[0]
-
-
 def _rec(n: int = 3000, fs: float = 50.0) -> ImuData:
-    rng = np.random.default_rng(1)
-    return ImuData(t=np.arange(n) / fs, gyro=rng.normal(0, 0.01, (n, 3)),
-                   accel=np.tile([0.0, 0.0, -9.80665], (n, 1)) + rng.normal(0, 0.01, (n, 3)))
-
-
-def _snapshot(root: Path) -> dict[str, bytes]:
-    return {p.relative_to(root).as_posix(): p.read_bytes() for p in sorted(root.rglob("*")) if p.is_file()}
+    return static_imu(n, fs, seed=1)
 
 
 @pytest.fixture
@@ -279,3 +268,23 @@ def test_px4_magnetometer_offsets_say_their_conversion_or_refuse_a_unit_that_doe
     assert "# Converted: CAL_MAG0_{X,Y,Z}OFF" in text
     off = float(next(ln.split("\t")[3] for ln in text.splitlines() if "\tCAL_MAG0_XOFF\t" in ln))
     assert off == pytest.approx(0.1, abs=0.01)  # 1e-5 T = 0.1 gauss
+
+
+# ------------------------------------------------------------------ 4. work multiplied by an option is estimated
+def test_taus_all_is_estimated_before_work(files, monkeypatch):
+    from imunav.cli._limits import check_limits
+    from imunav.errors import ImunavWarning
+
+    monkeypatch.chdir(files)
+    # 3,000 samples (60 s at 50 Hz): 1,500 averaging times, each a GLS fit term: said before the work
+    with pytest.warns(ImunavWarning, match=r"noise --taus all: 1\.5\de\+03 averaging times .* minutes"):
+        check_limits("noise", {"file": "good.npz", "taus": "all"})
+    n = 200_000
+    write_imu(_rec(n), files / "long.npz")
+    msg = _exit_2(runner.invoke(app, ["noise", "long.npz", "--taus", "all"]))
+    assert "--taus all" in msg and "--force" in msg
+    import warnings
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        check_limits("noise", {"file": "long.npz", "taus": "octave"})  # the default grid: nothing to say

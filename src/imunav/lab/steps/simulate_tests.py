@@ -15,7 +15,7 @@ is off and gravity is the constant 9.80665 m/s² unless configured otherwise.
 
 Options (TOML table ``[simulate_tests]``)::
 
-    preset = "thesis_sim"      # or model = "path/to/model.toml"
+    preset = "thesis_sim"      # or model = "path/to/model.toml" (relative to the lab TOML)
     fs = 100.0                 # Hz (the thesis logged at 1 kHz)
     dwell_s = 30.0             # per position / rate step
     transition_s = 2.0         # moves and rate ramps
@@ -55,6 +55,7 @@ from imunav.files import atomic_path, write_json
 from imunav.io import write_imu
 from imunav.lab.report.lab import embed_png
 from imunav.lab.steps._api import LabContext, StepResult, check_samples
+from imunav.lab.steps.recordings import resolve_path
 from imunav.sim import (
     ImuErrorModel,
     hundred_position_profile,
@@ -92,6 +93,9 @@ def _options(ctx: LabContext) -> dict[str, Any]:
     bad = [t for t in opts["tests"] if t not in _TESTS]
     if bad:
         raise ConfigError(f"[simulate_tests] tests: unknown test(s) {bad}; choose from {list(_TESTS)}")
+    if opts["model"]:  # relative to the lab definition's folder, like every path of the definition
+        opts["model"] = resolve_path(str(opts["model"]), Path(str(ctx.config.get("_base_dir", "."))),
+                                     "[simulate_tests] model")
     return opts
 
 
@@ -116,10 +120,7 @@ def check(ctx: LabContext) -> list[Path]:
     """
     opts = _options(ctx)
     if opts["model"]:
-        model = Path(str(opts["model"]))
-        if not model.is_file():
-            raise ConfigError(f"[simulate_tests] model: the error model file {model} does not exist")
-        files = [model]
+        files = [opts["model"]]
     else:
         files = []
         if opts["preset"] not in presets.names():
