@@ -13,7 +13,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 from builders import static_imu
-from test_reliability import _exit_2, _snapshot
+from cli_contract import one_error_line as _exit_2
 from typer.testing import CliRunner
 
 from imunav.calib import ImuCalibration
@@ -26,6 +26,10 @@ runner = CliRunner()
 
 def _rec(n: int = 3000, fs: float = 50.0) -> ImuData:
     return static_imu(n, fs, seed=1)
+
+
+def _snapshot(root: Path) -> dict[str, bytes]:
+    return {p.relative_to(root).as_posix(): p.read_bytes() for p in sorted(root.rglob("*")) if p.is_file()}
 
 
 @pytest.fixture
