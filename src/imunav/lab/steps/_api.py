@@ -21,8 +21,9 @@ import numpy as np
 from imunav.errors import ConfigError
 from imunav.files import claim_run_file, jsonable
 from imunav.results import Result
+from imunav.sim import presets
 
-__all__ = ["StepResult", "LabContext", "MAX_SAMPLES", "check_samples"]
+__all__ = ["StepResult", "LabContext", "MAX_SAMPLES", "check_preset", "check_samples"]
 
 #: The most samples (or epochs) one lab step may simulate: about the reference machine's 24 GiB at the
 #: simulator's ~600 bytes per sample (:mod:`imunav.cli._limits`); a larger request is refused when the lab
@@ -242,6 +243,25 @@ def check_samples(where: str, what: str, n: float) -> None:
     if not (math.isfinite(n) and n <= MAX_SAMPLES):
         raise ConfigError(f"{where}: {what} = {n:.3g} samples, beyond the lab's limit of {MAX_SAMPLES:.3g} per step "
                           f"(about 24 GiB of memory); reduce it")
+
+
+def check_preset(table: str, name: Any) -> None:
+    """Refuse a ``preset`` option that names no IMU preset of :mod:`imunav.sim.presets`.
+
+    Parameters
+    ----------
+    table : str
+        The step table, for the message (``"[gins]"``).
+    name : object
+        The option's value.
+
+    Raises
+    ------
+    ConfigError
+        Naming the table, the key and the known presets.
+    """
+    if name not in presets.names():
+        raise ConfigError(f"{table} preset: unknown IMU preset {name!r}; known presets: {', '.join(presets.names())}")
 
 
 def _word(k: int | str) -> int:

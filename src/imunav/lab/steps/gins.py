@@ -38,9 +38,8 @@ from imunav.ins.gins.outputs import run_summary
 from imunav.ins.gins.plot import write_gins_figures
 from imunav.ins.gins.setup import load_inputs, run_setup, simulate_drive
 from imunav.io.kfgins import NavTrack, read_kfgins_nav
-from imunav.lab.steps._api import LabContext, StepResult, check_samples
+from imunav.lab.steps._api import LabContext, StepResult, check_preset, check_samples
 from imunav.lab.steps.recordings import resolve_path
-from imunav.sim import presets
 
 TITLE = "GNSS/INS: loosely coupled error-state filter"
 
@@ -87,8 +86,7 @@ def _checked(ctx: LabContext) -> tuple[int | None, dict[str, Path]]:
         raise ConfigError(f"[gins] {sim_keys} simulate a drive; they do not go with files {sorted(paths)}")
     if not paths:
         preset = opts.get("preset", "mems_adis16465")
-        if preset not in presets.names():
-            raise ConfigError(f"[gins] preset: unknown IMU preset {preset!r}; known presets: {', '.join(presets.names())}")
+        check_preset("[gins]", preset)
         if "seed" in opts and _int(opts, "seed", 0) < 0:
             raise ConfigError(f"[gins] seed must be a non-negative integer; got {opts['seed']!r}")
         check_samples("[gins] duration x fs", "duration x fs",

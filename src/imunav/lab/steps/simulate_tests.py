@@ -54,7 +54,7 @@ from imunav.errors import ConfigError
 from imunav.files import atomic_path, write_json
 from imunav.io import write_imu
 from imunav.lab.report.lab import embed_png
-from imunav.lab.steps._api import LabContext, StepResult, check_samples
+from imunav.lab.steps._api import LabContext, StepResult, check_preset, check_samples
 from imunav.lab.steps.recordings import resolve_path
 from imunav.sim import (
     ImuErrorModel,
@@ -123,9 +123,7 @@ def check(ctx: LabContext) -> list[Path]:
         files = [opts["model"]]
     else:
         files = []
-        if opts["preset"] not in presets.names():
-            raise ConfigError(f"[simulate_tests] preset: unknown IMU preset {opts['preset']!r}; known presets: "
-                              f"{', '.join(presets.names())}")
+        check_preset("[simulate_tests]", opts["preset"])
     g = opts["gravity"]
     if not (g in ("normal", "constant") or (isinstance(g, (int, float)) and not isinstance(g, bool) and 0 < g < 100)):
         raise ConfigError(f"[simulate_tests] gravity must be 'normal', 'constant' or a number in (0, 100) m/s^2, "

@@ -39,7 +39,7 @@ from imunav.calib import thermal_calibration
 from imunav.errors import ConfigError
 from imunav.files import atomic_path
 from imunav.lab.report.lab import embed_png
-from imunav.lab.steps._api import LabContext, StepResult, check_samples
+from imunav.lab.steps._api import LabContext, StepResult, check_preset, check_samples
 from imunav.sim import hundred_position_profile, presets, rate_table_profile, simulate_imu
 from imunav.units import DEG, G0
 
@@ -95,9 +95,7 @@ def check(ctx: LabContext) -> list[Path]:
         a thermal test longer than the lab's sample limit.
     """
     o = _options(ctx)
-    if o["preset"] not in presets.names():
-        raise ConfigError(f"[temperature] preset: unknown IMU preset {o['preset']!r}; known presets: "
-                          f"{', '.join(presets.names())}")
+    check_preset("[temperature]", o["preset"])
     n = len(o["temps_c"]) * 220 * (float(o["dwell_s"]) + float(o["transition_s"])) * float(o["fs"])
     check_samples("[temperature] temps_c", "temperatures x 220 x (dwell_s + transition_s) x fs", n)
     return []
