@@ -234,6 +234,10 @@ def test_info_refuses_what_it_cannot_read(files, monkeypatch):
     assert "cplx.npz" in msg and "complex" in msg
     msg = _exit_2(runner.invoke(app, ["info", "hdr.ulg"]))
     assert "hdr.ulg" in msg and "no topic" in msg
+    (files / "dup.csv").write_text("t,gyro_x,gyro_x,gyro_y,gyro_z,accel_x,accel_y,accel_z\n"
+                                   + "".join(f"{k / 100},0,9,0,0,0,0,-9.8\n" for k in range(5)))
+    msg = _exit_2(runner.invoke(app, ["info", "dup.csv"]))
+    assert "dup.csv" in msg and "['gyro_x'] more than once" in msg
 
 
 def test_an_empty_error_model_is_said_to_be_ideal(files, monkeypatch):
