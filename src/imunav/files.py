@@ -29,7 +29,10 @@ import errno
 import json
 import math
 import os
+import signal
+import sys
 import tempfile
+import threading
 from collections.abc import Callable, Iterable, Iterator, Mapping
 from pathlib import Path
 from typing import Any
@@ -38,8 +41,9 @@ import numpy as np
 
 from imunav.errors import FileFormatError, InvalidInputError
 
-__all__ = ["RUN_FILES", "RUN_MARKER", "atomic_path", "check_outputs", "check_writable", "claim_run_file",
-           "json_text", "jsonable", "output_transaction", "read_json", "write_json"]
+__all__ = ["RUN_FILES", "RUN_MARKER", "atomic_path", "check_interrupt", "check_outputs", "check_writable",
+           "claim_run_file", "json_text", "jsonable", "latch_interrupts", "output_transaction", "read_json",
+           "write_json"]
 
 #: The hidden marker of a run folder being written (:mod:`imunav.lab.runfolder`).
 RUN_MARKER = ".imunav-run.json"
@@ -93,6 +97,55 @@ def claim_run_file(path: str | os.PathLike[str]) -> Path | None:
     return root
 
 
+_INTERRUPT = {"pending": False}
+
+
+def _on_sigint(signum: int, frame: Any) -> None:
+    _INTERRUPT["pending"] = True
+    signal.default_int_handler(signum, frame)
+
+
+def _unraisable(hook: Callable[[Any], None]) -> Callable[[Any], None]:
+    def unraisable(u: Any) -> None:
+        if isinstance(u.exc_value, KeyboardInterrupt):
+            _INTERRUPT["pending"] = True  # swallowed where it was raised: latched, raised again at the next check
+            return
+        hook(u)
+
+    return unraisable
+
+
+def latch_interrupts() -> None:
+    """Make an interrupt (SIGINT, Ctrl-C) impossible to lose for the rest of the process.
+
+    Python raises :class:`KeyboardInterrupt` wherever the main thread is; raised inside a callback from C (a
+    ctypes callback of the numba compiler, a finaliser) it is printed as "Exception ignored" and the program
+    goes on as if nothing happened.  After this call the interrupt is also latched, and :func:`check_interrupt`
+    (called before every output is published, before a transaction commits and before a run folder gets its
+    manifest) raises it again; an interrupt swallowed that way prints nothing.  Called by the ``imunav`` command
+    (main thread only; idempotent).
+    """
+    if threading.current_thread() is not threading.main_thread():
+        return
+    _INTERRUPT["pending"] = False
+    if signal.getsignal(signal.SIGINT) is not _on_sigint:
+        signal.signal(signal.SIGINT, _on_sigint)
+        sys.unraisablehook = _unraisable(sys.unraisablehook)
+
+
+def check_interrupt() -> None:
+    """Raise :class:`KeyboardInterrupt` if an interrupt arrived and was swallowed (see :func:`latch_interrupts`).
+
+    Raises
+    ------
+    KeyboardInterrupt
+        When an interrupt is pending (it is delivered once: the latch is cleared).
+    """
+    if _INTERRUPT["pending"]:
+        _INTERRUPT["pending"] = False
+        raise KeyboardInterrupt
+
+
 class _Transaction:
     """The outputs of one command: completed temporary files waiting for the command to succeed."""
 
@@ -106,6 +159,7 @@ class _Transaction:
         self.made += list(reversed(missing))
 
     def commit(self) -> None:
+        check_interrupt()
         for tmp, target in self.pending:
             os.replace(tmp, target)
         self.pending.clear()
@@ -250,6 +304,7 @@ def atomic_path(path: str | os.PathLike[str]) -> Iterator[Path]:
         # Make sure the bytes are on disk before the rename publishes them.
         with open(tmp, "rb+") as fh:
             os.fsync(fh.fileno())
+        check_interrupt()
         if tr is not None and run is None:
             tr.pending.append((tmp, target))  # moved in when the whole command has succeeded
         else:

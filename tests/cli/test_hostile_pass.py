@@ -296,3 +296,39 @@ def test_taus_all_is_estimated_before_work(files, monkeypatch):
     with warnings.catch_warnings():
         warnings.simplefilter("error")
         check_limits("noise", {"file": "long.npz", "taus": "octave"})  # the default grid: nothing to say
+
+
+# ------------------------------------------------------------------ 9. an interrupt is never lost
+@pytest.mark.parametrize("write_after", [False, True])
+def test_an_interrupt_swallowed_in_a_callback_from_c_is_not_lost(tmp_path, monkeypatch, write_after):
+    """SIGINT during numba's compilation raises KeyboardInterrupt inside a ctypes callback of llvmlite, where
+    Python prints "Exception ignored" and goes on: the run used to finish with exit 0 and a manifest.  Latched,
+    the interrupt is raised again before the next output is published or the run folder gets its manifest."""
+    import ctypes
+    import os
+    import signal
+    import sys
+
+    from imunav.files import latch_interrupts, write_json
+    from imunav.lab.runfolder import FAILED, MANIFEST, RunFolder
+
+    old = signal.getsignal(signal.SIGINT)
+    monkeypatch.setattr(sys, "unraisablehook", sys.unraisablehook)
+
+    def swallowed() -> None:  # a callback from C, as llvmlite's object-cache notification
+        os.kill(os.getpid(), signal.SIGINT)
+        sum(range(100_000))
+
+    callback = ctypes.CFUNCTYPE(None)(swallowed)
+    run = tmp_path / "run"
+    try:
+        latch_interrupts()
+        with pytest.raises(KeyboardInterrupt), RunFolder(run, "test"):
+            write_json(run / "a.json", {"a": 1})
+            callback()  # the interrupt lands here and is swallowed
+            if write_after:
+                write_json(run / "b.json", {"b": 2})
+    finally:
+        signal.signal(signal.SIGINT, old)
+    assert not (run / MANIFEST).exists() and (run / FAILED).exists()
+    assert not (run / "a.json").exists() and not (run / "b.json").exists()
