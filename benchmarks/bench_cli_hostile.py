@@ -1,9 +1,11 @@
 """Every hostile case the CLI generates from its own options (issue 27): the full space of tests/cli_hostile.py.
 
 Runs each case of :func:`cli_hostile.generate` (every command, every option, every value derived from its
-type and declared domain, every path fault of its role) and checks the contract: exit status 2, one line on
-stderr naming the option or the file, no traceback, inputs byte-identical, nothing partial left.  Prints the
-coverage and the violations, and writes them as JSON.
+type and declared domain, every path fault of its role; and the families of issue 36: two outputs of one
+command on one path or inside each other's folders, outputs on files a configuration names, writes under a
+file-size limit in every recording format, options that multiply the work beyond the machine) and checks the
+contract: exit status 2, one line on stderr naming the option or the file, no traceback, inputs byte-identical,
+nothing partial left.  Prints the coverage, the cases per family and the violations, and writes them as JSON.
 
 Usage: PYTHONPATH=src python benchmarks/bench_cli_hostile.py [--json out.json] [--limit N]
 """
@@ -20,7 +22,7 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
 
-from cli_hostile import KNOWN, generate, make_fixtures, run_case  # noqa: E402
+from cli_hostile import KNOWN, family, generate, make_fixtures, run_case  # noqa: E402
 
 
 def main() -> int:
@@ -32,7 +34,8 @@ def main() -> int:
     if a.limit:
         cases = cases[: a.limit]
     print(f"coverage: {cov['commands']} commands, {cov['options']} options ({cov['numeric']} numeric, "
-          f"{cov['paths']} paths), {cov['cases']} cases; running {len(cases)}", flush=True)
+          f"{cov['paths']} paths), {cov['cases']} cases; running {len(cases)} "
+          f"{dict(Counter(family(c) for c in cases))}", flush=True)
     t0 = time.perf_counter()
     violations = []
     with tempfile.TemporaryDirectory() as tmp:

@@ -11,6 +11,15 @@ run folder; a report / run folder that is a file, behind a file, or holds an
 input.  Each case starts from a baseline command line (:data:`BASELINE`, valid
 files made by :func:`make_fixtures`) with ONE option changed.
 
+Issue 36 added four families: output pairs (every output on another output's
+path, every output file inside another output's folder: the files a report or
+run folder will hold), configuration-named inputs (an output on a file a
+configuration of the baseline names, :data:`CONFIGURED`), file-system limits
+(the commands that write recordings, in every format, under a file-size limit
+that refuses the write, :func:`_fsize_cases`) and option-multiplied work (every
+numeric option of a command with a limits estimator at the top of its domain,
+where the estimate is beyond the machine, :func:`_work_cases`).
+
 :func:`run_case` checks the contract: exit status 2, one line on stderr
 starting ``error:`` that names the option or the file, no traceback, every
 file of the case folder byte-identical afterwards and nothing new left in it.
@@ -234,8 +243,51 @@ def generate() -> tuple[list[Case], dict[str, int]]:
                 n_path += 1
                 for kind, value, setup in _path_values(path, flag, base):
                     cases.append(Case(path, flag, kind, _set(cmd, words, base, p, value), [flag, value], setup))
+    cases += _work_cases(commands) + _fsize_cases()
     return cases, {"commands": len(commands), "options": n_opts, "numeric": n_num, "paths": n_path,
                    "cases": len(cases)}
+
+
+def _work_cases(commands: list[tuple[str, Any]]) -> list[Case]:
+    """Work multiplied by an option: every numeric option of a command with a limits estimator
+    (:data:`imunav.cli._limits.ESTIMATORS`) set to the top of its domain, where the estimator then puts the
+    request beyond the machine; the command must refuse it before any work, naming the option."""
+    from imunav.cli._limits import ESTIMATORS, MEMORY, TIME
+
+    out = []
+    for path, cmd in commands:
+        est = ESTIMATORS.get(path)
+        if est is None:
+            continue
+        words = len(path.split())
+        argv = BASELINE[path]
+        base = dict(cmd.make_context(path, list(argv[words:]), resilient_parsing=True).params)
+        for p in cmd.params:
+            d = domain_of(path, p) if numeric(p) else None
+            if d is None or d.hi is None or p.name in ("seed", "workers"):
+                continue
+            top = d.hi if not d.hi_open else d.hi * (1 - 1e-9)
+            e = est({**base, p.name: int(top) if d.integer else top})
+            if e is not None and not (e.bytes <= MEMORY and e.seconds <= TIME):
+                v = _fmt(top, d.integer)
+                out.append(Case(path, flag_of(p), "work-beyond-limit", _set(cmd, words, argv, p, v), [flag_of(p), v]))
+    return out
+
+
+#: Commands whose baseline writes a recording larger than :data:`FSIZE_LIMIT`, and the formats they write.
+FSIZE_COMMANDS = ("convert", "compensate")
+FSIZE_FORMATS = ("csv", "npz", "h5", "parquet", "mat")
+FSIZE_LIMIT = 20000  # bytes: RLIMIT_FSIZE of the case's process (the file system refuses larger files)
+
+
+def _fsize_cases() -> list[Case]:
+    """A file system that refuses the write (a file-size limit) under every recording format."""
+    out = []
+    for path in FSIZE_COMMANDS:
+        for fmt in FSIZE_FORMATS:
+            argv = [a.replace("{OUT}.npz", "{OUT}." + fmt) for a in BASELINE[path]]
+            out.append(Case(path, "(file-size-limit)", fmt, argv, ["{OUT}." + fmt], "fsize"))
+    return out
 
 
 def _inputs_of(argv: list[str]) -> list[str]:
@@ -257,15 +309,37 @@ def _path_values(command: str, flag: str, base: list[str]) -> list[tuple[str, st
                 ("parent-is-file", "{REC}/x.json", "")]
         if inputs:
             out += [("same-as-input", inputs[0], "")]
-        runs = [a for a in base if a in ("{OUT}_lab", "{OUT}_batch", "{OUT}_cal", "{OUT}_noise")]
-        if runs and flag != "--out":
-            out += [("inside-run-folder", f"{runs[0]}/x.json", "")]
+        out += [(f"same-as-{configured[1:-1].lower()}-named-by-{cfg[1:-1].lower()}", configured, "")
+                for cfg, configured in CONFIGURED.items() if cfg in base]
     elif r in ("report-folder", "run-folder"):
         out += [("is-a-file", "a_file.txt", "touch a_file.txt"), ("parent-is-file", "{REC}/sub", "")]
         if inputs:
             out += [("holds-an-input", "inputs", "")]
         if r == "run-folder":
             out += [("foreign-files-overwrite", "foreign", "foreign foreign")]
+    if r in ("output", "report-folder", "run-folder"):
+        out += _output_pairs(command, flag, r, base)
+    return out
+
+
+#: A configuration file of the fixtures -> a file it names (an input the command reads through it).
+CONFIGURED = {"{LAB}": "{MODEL}"}
+
+
+def _output_pairs(command: str, flag: str, r: str, base: list[str]) -> list[tuple[str, str, str]]:
+    """Two outputs of one command on one path: this output on another output's path, or (an output file)
+    inside another output's folder (the files a report or run folder will hold)."""
+    out: list[tuple[str, str, str]] = []
+    for i, other in enumerate(base[:-1]):
+        value = base[i + 1]
+        if not other.startswith("--") or other == flag or not value.startswith("{OUT"):
+            continue
+        r2 = role(command, other)
+        if r2 not in ("output", "report-folder", "run-folder"):
+            continue
+        out.append((f"same-as-{other[2:]}", value, ""))
+        if r == "output" and r2 in ("report-folder", "run-folder"):
+            out.append((f"inside-{other[2:]}-folder", f"{value}/report.json", ""))
     return out
 
 
@@ -313,7 +387,7 @@ def make_fixtures(root: Path) -> dict[str, str]:
     cal.save(d / "cal2.json")
     cal.save(d / "cal3.json")
     (d / "model.toml").write_text('name = "m"\n[gyro]\nbias = [0.001, 0, 0]\n')
-    (d / "lab.toml").write_text('[lab]\ntitle = "hostile"\n')
+    (d / "lab.toml").write_text('[lab]\ntitle = "hostile"\n[simulate_tests]\nmodel = "model.toml"\n')
     r = runner.invoke(app, ["gins", "simulate", "--duration", "120", "--out", str(d / "gins")])
     assert r.exit_code == 0, r.stderr
     foot = d / "walk.csv"
@@ -370,6 +444,21 @@ def _setup(case_dir: Path, setup: str) -> None:
         (case_dir / words[1] / "notes.txt").write_text("a user's notes")
 
 
+def _run_limited(argv: list[str], work: Path) -> tuple[int, str]:
+    """(exit status, stderr) of ``imunav argv`` in a process whose files may not exceed :data:`FSIZE_LIMIT`."""
+    import resource
+    import subprocess
+    import sys
+
+    def limit() -> None:
+        resource.setrlimit(resource.RLIMIT_FSIZE, (FSIZE_LIMIT, FSIZE_LIMIT))
+
+    env = dict(os.environ, PYTHONPATH=str(Path(__file__).resolve().parents[1] / "src"))
+    r = subprocess.run([sys.executable, "-m", "imunav.cli.main", *argv], cwd=work, env=env, capture_output=True,
+                       text=True, timeout=600, preexec_fn=limit)
+    return r.returncode, r.stderr
+
+
 def run_case(case: Case, fixtures: Path, values: dict[str, str], work: Path) -> list[str]:
     """Run one case in a fresh folder (a copy of ``fixtures``) and list its contract violations.
 
@@ -395,17 +484,20 @@ def run_case(case: Case, fixtures: Path, values: dict[str, str], work: Path) -> 
     if case.kind == "foreign-files-overwrite":
         argv.append("--overwrite")
     before = _snapshot(work)
-    cwd = os.getcwd()
-    os.chdir(work)
-    try:
-        r = runner.invoke(app, argv)
-    finally:
-        os.chdir(cwd)
+    if case.setup == "fsize":
+        code, err = _run_limited(argv, work)
+    else:
+        cwd = os.getcwd()
+        os.chdir(work)
+        try:
+            r = runner.invoke(app, argv)
+        finally:
+            os.chdir(cwd)
+        code, err = r.exit_code, r.stderr
     bad = []
-    err = r.stderr
     lines = [ln for ln in err.splitlines() if ln.strip()]
-    if r.exit_code != 2:
-        bad.append(f"exit {r.exit_code}")
+    if code != 2:
+        bad.append(f"exit {code}")
     if "Traceback" in err or "internal error" in err:
         bad.append("traceback / internal error")
     if len(lines) != 1 or not lines[0].startswith("error: "):
@@ -429,9 +521,40 @@ def run_case(case: Case, fixtures: Path, values: dict[str, str], work: Path) -> 
     return bad
 
 
+def family(case: Case) -> str:
+    """The family of a case: ``numeric``, ``path``, ``output-pair`` (two outputs of one command on one path or
+    one inside the other's folder), ``configured-input`` (an output on a file a configuration names),
+    ``file-size-limit`` or ``work`` (an option that multiplies the work beyond the machine).
+
+    Parameters
+    ----------
+    case : Case
+        The case.
+
+    Returns
+    -------
+    str
+        Its family.
+    """
+    if case.setup == "fsize":
+        return "file-size-limit"
+    if case.kind == "work-beyond-limit":
+        return "work"
+    if "-named-by-" in case.kind:
+        return "configured-input"
+    if case.kind.startswith("inside-") or (case.kind.startswith("same-as-") and case.kind != "same-as-input"):
+        return "output-pair"
+    return "path" if any(a.startswith("{") for a in case.names) or case.kind in PATH_KINDS else "numeric"
+
+
+#: kinds of the path cases (values that are paths, not numbers)
+PATH_KINDS = frozenset({"missing", "folder", "fifo", "parent-is-file", "link-loop", "is-a-file", "same-as-input",
+                        "holds-an-input", "foreign-files-overwrite"})
+
+
 def sample(cases: list[Case], n: int, seed: int) -> list[Case]:
     """A seeded sample of ``n`` cases that covers every command and every option at least once when ``n``
-    allows (one case per option first, then random others).
+    allows (one case per option first, and one of each :func:`family` not among those, then random others).
 
     Parameters
     ----------
@@ -449,9 +572,13 @@ def sample(cases: list[Case], n: int, seed: int) -> list[Case]:
     """
     rnd = random.Random(seed)
     by_option: dict[tuple[str, str], list[Case]] = {}
+    by_family: dict[str, list[Case]] = {}
     for c in cases:
         by_option.setdefault((c.command, c.flag), []).append(c)
+        by_family.setdefault(family(c), []).append(c)
     first = [rnd.choice(v) for _, v in sorted(by_option.items())]
+    have = {family(c) for c in first}
+    first += [rnd.choice(v) for f, v in sorted(by_family.items()) if f not in have]
     rnd.shuffle(first)
     rest = [c for c in cases if c not in first]
     rnd.shuffle(rest)

@@ -29,7 +29,10 @@ import errno
 import json
 import math
 import os
+import signal
+import sys
 import tempfile
+import threading
 from collections.abc import Callable, Iterable, Iterator, Mapping
 from pathlib import Path
 from typing import Any
@@ -38,8 +41,9 @@ import numpy as np
 
 from imunav.errors import FileFormatError, InvalidInputError
 
-__all__ = ["RUN_FILES", "RUN_MARKER", "atomic_path", "check_outputs", "check_writable", "claim_run_file",
-           "json_text", "jsonable", "output_transaction", "read_json", "write_json"]
+__all__ = ["RUN_FILES", "RUN_MARKER", "atomic_path", "check_interrupt", "check_outputs", "check_writable",
+           "claim_run_file", "json_text", "jsonable", "latch_interrupts", "output_transaction", "read_json",
+           "write_json"]
 
 #: The hidden marker of a run folder being written (:mod:`imunav.lab.runfolder`).
 RUN_MARKER = ".imunav-run.json"
@@ -93,6 +97,55 @@ def claim_run_file(path: str | os.PathLike[str]) -> Path | None:
     return root
 
 
+_INTERRUPT = {"pending": False}
+
+
+def _on_sigint(signum: int, frame: Any) -> None:
+    _INTERRUPT["pending"] = True
+    signal.default_int_handler(signum, frame)
+
+
+def _unraisable(hook: Callable[[Any], None]) -> Callable[[Any], None]:
+    def unraisable(u: Any) -> None:
+        if isinstance(u.exc_value, KeyboardInterrupt):
+            _INTERRUPT["pending"] = True  # swallowed where it was raised: latched, raised again at the next check
+            return
+        hook(u)
+
+    return unraisable
+
+
+def latch_interrupts() -> None:
+    """Make an interrupt (SIGINT, Ctrl-C) impossible to lose for the rest of the process.
+
+    Python raises :class:`KeyboardInterrupt` wherever the main thread is; raised inside a callback from C (a
+    ctypes callback of the numba compiler, a finaliser) it is printed as "Exception ignored" and the program
+    goes on as if nothing happened.  After this call the interrupt is also latched, and :func:`check_interrupt`
+    (called before every output is published, before a transaction commits and before a run folder gets its
+    manifest) raises it again; an interrupt swallowed that way prints nothing.  Called by the ``imunav`` command
+    (main thread only; idempotent).
+    """
+    if threading.current_thread() is not threading.main_thread():
+        return
+    _INTERRUPT["pending"] = False
+    if signal.getsignal(signal.SIGINT) is not _on_sigint:
+        signal.signal(signal.SIGINT, _on_sigint)
+        sys.unraisablehook = _unraisable(sys.unraisablehook)
+
+
+def check_interrupt() -> None:
+    """Raise :class:`KeyboardInterrupt` if an interrupt arrived and was swallowed (see :func:`latch_interrupts`).
+
+    Raises
+    ------
+    KeyboardInterrupt
+        When an interrupt is pending (it is delivered once: the latch is cleared).
+    """
+    if _INTERRUPT["pending"]:
+        _INTERRUPT["pending"] = False
+        raise KeyboardInterrupt
+
+
 class _Transaction:
     """The outputs of one command: completed temporary files waiting for the command to succeed."""
 
@@ -106,6 +159,7 @@ class _Transaction:
         self.made += list(reversed(missing))
 
     def commit(self) -> None:
+        check_interrupt()
         for tmp, target in self.pending:
             os.replace(tmp, target)
         self.pending.clear()
@@ -250,6 +304,7 @@ def atomic_path(path: str | os.PathLike[str]) -> Iterator[Path]:
         # Make sure the bytes are on disk before the rename publishes them.
         with open(tmp, "rb+") as fh:
             os.fsync(fh.fileno())
+        check_interrupt()
         if tr is not None and run is None:
             tr.pending.append((tmp, target))  # moved in when the whole command has succeeded
         else:
@@ -429,14 +484,15 @@ def check_outputs(inputs: Iterable[str | os.PathLike[str] | None],
     """The one check of a command's outputs against its inputs, done before any work.
 
     No output may equal, contain or sit inside an input of the same command, and no two outputs may be
-    the same file:
+    the same file or sit inside each other:
 
     * an output file may not be an input file, nor a file inside an input folder, nor be inside an input
       file (a path whose parent is a file);
     * an output folder (``folders``: report folders; ``run_folders``: run folders, :mod:`imunav.lab.runfolder`)
       may not be an input, nor hold an input file or folder;
-    * an output file may not sit inside a run folder (the run would list it as its own, or
-      ``--overwrite`` would remove it);
+    * no output (file, report folder or run folder) may sit inside another output of the same command:
+      a report folder's ``report.json`` would overwrite an ``--out`` given inside it, a run would list
+      the file as its own (or ``--overwrite`` would remove it);
     * each output file must be writable (:func:`check_writable`);
     * (``inputs_exist``) every input given exists: a missing input is refused before any work, even one
       the command would read last or not at all with the other options.
@@ -464,12 +520,22 @@ def check_outputs(inputs: Iterable[str | os.PathLike[str] | None],
     outs = [o for o in outputs if o is not None]
     dirs = [d for d in folders if d is not None]
     runs = [d for d in run_folders if d is not None]
-    seen: dict[Path, str | os.PathLike[str]] = {}
-    for o in [*outs, *dirs, *runs]:
-        k = _key(o)
-        if k in seen:
-            raise InvalidInputError(f"two outputs are the same path ({seen[k]} and {o}); give each its own path")
-        seen[k] = o
+    kinds = [*(("output", o) for o in outs), *(("output folder", d) for d in dirs), *(("run folder", d) for d in runs)]
+    keys = [_key(o) for _, o in kinds]
+    for i, (kind_i, o) in enumerate(kinds):
+        for j in range(i):
+            kind_j, p = kinds[j]
+            if keys[i] == keys[j]:
+                raise InvalidInputError(f"two outputs are the same path ({p} and {o}); give each its own path")
+            inner, outer = ((kind_i, o), (kind_j, p)) if _within(keys[i], keys[j]) else \
+                ((kind_j, p), (kind_i, o)) if _within(keys[j], keys[i]) else (None, None)
+            if inner is not None and outer is not None:
+                if outer[0] == "output":
+                    raise NotADirectoryError(errno.ENOTDIR, f"cannot write the {inner[0]}: {outer[1]} is another output "
+                                             "of the same command, a file, not a folder", str(inner[1]))
+                raise InvalidInputError(f"{inner[0]} {inner[1]} is inside the {outer[0]} {outer[1]} that the same "
+                                        "command writes (one would overwrite or list the other); choose a path "
+                                        "outside it")
     ins: list[tuple[Path, str | os.PathLike[str]]] = []
     for p in inputs:
         if p is not None:
@@ -485,10 +551,6 @@ def check_outputs(inputs: Iterable[str | os.PathLike[str] | None],
             if ik.is_dir() and ik in k.parents and k.exists():
                 raise InvalidInputError(f"output {o} is a file of the input folder {p}: writing it would replace "
                                         "an input; choose a path outside that folder")
-        for r in runs:
-            if _within(k, _key(r)):
-                raise InvalidInputError(f"output {o} is inside the run folder {r} that the same command writes; "
-                                        "choose a path outside it")
     for d in [*dirs, *runs]:
         dk = _key(d)
         held = [p for ik, p in ins if _within(ik, dk)]

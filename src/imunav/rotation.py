@@ -100,6 +100,23 @@ def _finite(a: Array, name: str) -> None:
         )
 
 
+#: How far a quaternion's norm may be from 1 where a rotation (a unit quaternion) is required: far above the
+#: drift of a propagated attitude (~1e-12 per step, renormalised), far below any quaternion that is not one.
+UNIT_TOL = 1e-3
+
+
+def _unit(a: Array, name: str) -> Array:
+    """``a`` checked to hold rotations: finite unit quaternions (norm within :data:`UNIT_TOL` of 1)."""
+    _finite(a, name)
+    n = np.sqrt(np.einsum("ij,ij->i", a, a))
+    bad = np.flatnonzero(np.abs(n - 1.0) > UNIT_TOL)
+    if bad.size:
+        raise InvalidInputError(
+            f"{name} is not a unit quaternion (a rotation) at rows {bad[:10].tolist()} (norm {n[bad[0]]:.6g}); "
+            "give [w, x, y, z] with norm 1, e.g. through quat_normalize (a zero quaternion is no rotation)")
+    return a
+
+
 def _out(a: Array, single: bool) -> Array:
     return a[0] if single else a
 
@@ -279,9 +296,12 @@ def quat_rotate(q: ArrayLike, v: ArrayLike) -> Array:
 
     Raises
     ------
+    InvalidInputError
+        If a quaternion is not finite or not a unit quaternion (see :func:`dcm_from_quat`).
     ShapeError
         If a shape is wrong or two batches differ in length.
     """
+    _unit(_as(q, (4,), "q")[0], "q")
     return _pairwise(_k.qrot_n, q, (4,), "q", v, (3,), "v")
 
 
@@ -300,11 +320,14 @@ def dcm_from_quat(q: ArrayLike) -> Array:
 
     Raises
     ------
+    InvalidInputError
+        If a quaternion is not finite or not a unit quaternion (norm farther than ``UNIT_TOL`` from 1; the
+        rows are named).
     ShapeError
         If an input does not have the shape given above.
     """
     a, s = _as(q, (4,), "q")
-    return _out(_k.dcm_from_quat_n(a), s)
+    return _out(_k.dcm_from_quat_n(_unit(a, "q")), s)
 
 
 def quat_from_dcm(C: ArrayLike) -> Array:

@@ -53,3 +53,15 @@ def test_sample_keeps_the_contract(fixtures, tmp_path):
         if bad:
             violations[c.id] = bad
     assert not violations, "\n".join(f"{k}: {v}" for k, v in violations.items())
+
+
+def test_the_sample_covers_every_family():
+    """Issue 36: output pairs, configuration-named inputs, file-system limits and option-multiplied work are
+    generated for every command they apply to, and the CI sample runs each family."""
+    from cli_hostile import family
+
+    families = {family(c) for c in CASES}
+    assert families == {"numeric", "path", "output-pair", "configured-input", "file-size-limit", "work"}
+    assert {family(c) for c in SAMPLE} == families
+    pairs = {(c.command, c.flag) for c in CASES if family(c) == "output-pair"}
+    assert ("calibrate mag", "--out") in pairs and ("lab", "--json") in pairs and ("batch calibrate", "--json") in pairs

@@ -57,8 +57,8 @@ def _px4_mag(p, raw_gauss):
     return (raw_gauss - off) @ S.T
 
 
-def _mag(A, b):
-    return MagCalibration(b=np.asarray(b, float), A=np.asarray(A, float), field_norm=48.0, method="test")
+def _mag(A, b, field_norm=48.0):
+    return MagCalibration(b=np.asarray(b, float), A=np.asarray(A, float), field_norm=field_norm, method="test")
 
 
 def test_px4_reproduces_imunav_compensation(tmp_path):
@@ -94,7 +94,7 @@ def test_px4_drops_what_it_cannot_express(tmp_path):
     th = np.radians(5.0)
     U = np.array([[np.cos(th), -np.sin(th), 0], [np.sin(th), np.cos(th), 0], [0, 0, 1]])
     P = np.diag([1.05, 0.95, 1.0])
-    mag = _mag(U @ P, [0.1, 0.2, 0.3])  # gauss; not symmetric: a 5 deg rotation PX4 cannot hold
+    mag = _mag(U @ P, [0.1, 0.2, 0.3], 0.48)  # gauss; not symmetric: a 5 deg rotation PX4 cannot hold
     res = write_px4_params(tmp_path / "c.params", cal, mag)
     text = (tmp_path / "c.params").read_text()
     assert len(res.dropped) == 4 and all(d in text for d in res.dropped)
@@ -129,6 +129,10 @@ def test_px4_bad_input(tmp_path):
         px4_parameters(cal, accel_id=-3)
     with pytest.raises(UnitError, match="mag_unit"):
         px4_parameters(mag=_mag(np.eye(3), [0, 0, 0]), mag_unit="furlong")
+    with pytest.raises(UnitError, match="magnitude 48 gauss is outside"):  # µT data taken for gauss
+        px4_parameters(mag=_mag(np.eye(3), [0, 0, 0]), mag_unit="gauss")
+    assert px4_parameters(mag=_mag(np.eye(3), [0, 0, 0]), mag_unit="uT").converted == (
+        "CAL_MAG0_{X,Y,Z}OFF: the offsets converted from uT to PX4's gauss (x 0.01); the scales are unitless",)
     assert not list(tmp_path.iterdir())
     p = px4_parameters(cal, instance=2)
     assert set(p.values) == {f"CAL_{s}2_{a}{k}" for s, k in (("ACC", "OFF"), ("ACC", "SCALE"), ("GYRO", "OFF"))

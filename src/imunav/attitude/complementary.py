@@ -20,6 +20,7 @@ from numpy.typing import ArrayLike
 from imunav.attitude import _kernels as _k
 from imunav.attitude._base import AttitudeReset, check_positive, gyro3, initial_q, prepare, step_dt, vec3
 from imunav.attitude.result import AttitudeResult
+from imunav.errors import InvalidInputError
 from imunav.timeseries import ImuData
 
 __all__ = ["Complementary"]
@@ -46,6 +47,17 @@ class Complementary(AttitudeReset):
         check_positive(k_accel=self.k_accel, k_mag=self.k_mag)
         self.q = np.array([1.0, 0.0, 0.0, 0.0])
 
+    def _checked_step(self, dt: float) -> float:
+        """``dt`` checked against the gains: each correction turns by the fraction ``k Δt`` of its angle, which
+        beyond 1 overshoots the measured direction (and from 2 on diverges), so ``k Δt <= 1``."""
+        for name, k in (("k_accel", self.k_accel), ("k_mag", self.k_mag)):
+            if k * dt > 1.0:
+                raise InvalidInputError(
+                    f"Complementary {name}={k:g} 1/s with a time step of {dt:g} s corrects {k * dt:.3g} times the "
+                    f"angle per sample (overshoot); {name} is an inverse time constant: give at most 1/dt = "
+                    f"{1.0 / dt:.3g} 1/s (the default is {0.3 if name == 'k_accel' else 0.1})")
+        return dt
+
     def step(self, gyro: ArrayLike, accel: ArrayLike, mag: ArrayLike | None, dt: float) -> np.ndarray:
         """Process one sample: strapdown, then the tilt and heading corrections.
 
@@ -68,14 +80,16 @@ class Complementary(AttitudeReset):
         Raises
         ------
         InvalidInputError
-            If ``dt`` is not finite and positive, or the rate exceeds 1e4 rad/s (not rad/s).
+            If ``dt`` is not finite and positive, ``k_accel dt`` or ``k_mag dt`` exceeds 1 (the correction would
+            overshoot), or the rate exceeds 1e4 rad/s (not rad/s).
         ShapeError
             If a sample is not a 3-vector.
         NonFiniteError
             If a sample is not finite.
         """
+        d = self._checked_step(step_dt(dt))
         self.q = _k.complementary_step(self.q, gyro3(gyro), vec3(accel, "accel"), vec3(mag, "mag"),
-                                       step_dt(dt), float(self.k_accel), float(self.k_mag), mag is not None)
+                                       d, float(self.k_accel), float(self.k_mag), mag is not None)
         return self.q.copy()
 
     def run(self, data: ImuData, *, q0: ArrayLike | None = None, use_mag: bool | None = None) -> AttitudeResult:
@@ -99,10 +113,12 @@ class Complementary(AttitudeReset):
         Raises
         ------
         InvalidInputError
-            If ``data`` is not an ImuData with at least 2 samples, ``use_mag=True`` without a magnetometer, or a
-            rate exceeds 1e4 rad/s.
+            If ``data`` is not an ImuData with at least 2 samples, ``use_mag=True`` without a magnetometer, a
+            gain times the longest time step exceeds 1 (the correction would overshoot), or a rate exceeds
+            1e4 rad/s.
         """
         t, g, a, m, dt, um = prepare(data, use_mag)
+        self._checked_step(float(dt.max()))
         q = _k.complementary_run(initial_q(a, m, um, q0), g, a, m, dt, float(self.k_accel), float(self.k_mag), um)
         self.q = q[-1].copy()
         return AttitudeResult(t=t, q_nb=q, name=self.name,

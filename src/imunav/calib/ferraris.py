@@ -236,13 +236,29 @@ def ferraris_from_session(
     for k in FERRARIS_SECTIONS:
         if k not in section_list:
             raise InsufficientDataError(f"section list lacks {k!r}; needs {list(FERRARIS_SECTIONS)}")
-        v = section_list[k]
-        i0, i1 = (int(v["start"]), int(v["end"])) if isinstance(v, Mapping) else (int(v[0]), int(v[1]))
+        i0, i1 = _section_rows(k, section_list[k])
         if not 0 <= i0 < i1 <= len(a):
             raise InvalidInputError(f"section {k!r}: rows {i0}..{i1} outside the recording (0..{len(a)})")
         secs[k] = (a[i0:i1], g[i0:i1])
     res = ferraris(secs, fs, **kwargs)
-    res.segments["sections"] = np.array([[int(section_list[k]["start"]) if isinstance(section_list[k], Mapping) else int(section_list[k][0]),
-                                          int(section_list[k]["end"]) if isinstance(section_list[k], Mapping) else int(section_list[k][1])]
-                                         for k in FERRARIS_SECTIONS])
+    res.segments["sections"] = np.array([_section_rows(k, section_list[k]) for k in FERRARIS_SECTIONS])
     return res
+
+
+def _section_rows(name: str, v: Any) -> tuple[int, int]:
+    """(start, end) row positions of one section of an imucal section list, checked to be integers."""
+    if isinstance(v, Mapping):
+        if "start" not in v or "end" not in v:
+            raise InvalidInputError(f"section {name!r}: needs start and end row positions, e.g. "
+                                    f'{{"start": 0, "end": 500}}; got {dict(v)!r}')
+        pair = (v["start"], v["end"])
+    elif isinstance(v, (list, tuple)) and len(v) == 2:
+        pair = (v[0], v[1])
+    else:
+        raise InvalidInputError(f"section {name!r}: give {{\"start\": i0, \"end\": i1}} or [i0, i1], not {v!r}")
+    out = []
+    for key, x in zip(("start", "end"), pair):
+        if isinstance(x, bool) or not isinstance(x, (int, np.integer, float, np.floating)) or not float(x).is_integer():
+            raise InvalidInputError(f"section {name!r}: {key} {x!r} is not a row position (a whole number of rows)")
+        out.append(int(x))
+    return out[0], out[1]

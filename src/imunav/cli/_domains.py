@@ -23,6 +23,7 @@ inside an input, whatever the command itself checks later.
 
 from __future__ import annotations
 
+import json
 import math
 from collections.abc import Mapping
 from dataclasses import dataclass
@@ -31,7 +32,8 @@ from typing import Any
 from imunav.errors import InvalidInputError
 from imunav.files import check_outputs
 
-__all__ = ["DOMAINS", "Domain", "check_params", "check_paths", "domain_of", "flag_of", "path_role"]
+__all__ = ["DOMAINS", "Domain", "check_params", "check_paths", "domain_of", "flag_of", "COLUMNS_EXAMPLE", "parse_json", "parse_numbers",
+           "path_role"]
 
 
 @dataclass(frozen=True)
@@ -298,6 +300,86 @@ def check_params(command_path: str, params: list[Any], values: Mapping[str, Any]
         for x in (v if isinstance(v, (list, tuple)) else [v]):
             if not d.contains(x):
                 raise InvalidInputError(f"{flag_of(p)} {x!r}: must be {d.describe()}")
+
+
+def parse_numbers(flag: str, text: str, domain: Domain | None = None, *, count: int | None = None,
+                  example: str = "") -> list[Any]:
+    """The numbers of a comma-separated option value, each checked against ``domain``: the one parser of
+    list-valued options (``--orders 1,2,3``, ``--shifts 0,60``, ``--wind 1,2,0``, ``cal.json@25``).
+
+    Parameters
+    ----------
+    flag : str
+        The option (or argument) as the user typed it, for the message.
+    text : str
+        Its value.
+    domain : Domain, optional
+        The domain of each number (integers when ``domain.integer``); default: any finite number.
+    count : int, optional
+        How many numbers the value must have.
+    example : str, optional
+        A valid value, for the message.
+
+    Returns
+    -------
+    list of int or float
+        The numbers, in order (ints for an integer domain).
+
+    Raises
+    ------
+    InvalidInputError
+        Naming the flag and the value, when a part is not a number, is outside ``domain``, or the count is wrong.
+    """
+    d = domain or Domain()
+    hint = f" (e.g. {example})" if example else ""
+    parts = [p.strip() for p in str(text).split(",")]
+    what = f"{count} comma-separated" if count else "comma-separated"
+    out: list[Any] = []
+    for p in parts:
+        try:
+            v: Any = int(p) if d.integer else float(p)
+        except ValueError:
+            raise InvalidInputError(f"{flag} {text!r}: {p!r} is not {'an integer' if d.integer else 'a number'}; "
+                                    f"give {what} values, each {d.describe()}{hint}") from None
+        if not d.contains(v):
+            raise InvalidInputError(f"{flag} {text!r}: {p} must be {d.describe()}{hint}")
+        out.append(v)
+    if count is not None and len(out) != count:
+        raise InvalidInputError(f"{flag} {text!r}: give {what} values, not {len(out)}{hint}")
+    return out
+
+
+def parse_json(flag: str, text: str, example: str = "") -> Any:
+    """A JSON option value (``--columns '{"gyro": [...]}'``), parsed in the validation layer.
+
+    Parameters
+    ----------
+    flag : str
+        The option, for the message.
+    text : str
+        Its value.
+    example : str, optional
+        A valid value, for the message.
+
+    Returns
+    -------
+    object
+        The parsed value.
+
+    Raises
+    ------
+    InvalidInputError
+        Naming the flag, when the text is not valid JSON.
+    """
+    try:
+        return json.loads(text)
+    except json.JSONDecodeError as exc:
+        raise InvalidInputError(f"{flag} {text!r}: not valid JSON ({exc.msg} at column {exc.colno})"
+                                + (f"; write e.g. {example}" if example else "")) from None
+
+
+#: A valid ``--columns`` value, for messages.
+COLUMNS_EXAMPLE = '\'{"gyro": ["gx", "gy", "gz"], "accel": ["ax", "ay", "az"]}\''
 
 
 _FILE_OUTPUTS = {"--json", "--plot", "--psd-plot", "--kalibr", "--openvins", "--vins", "--px4-params",

@@ -42,7 +42,7 @@ from typer.core import TyperGroup
 from imunav.cli._domains import check_params, check_paths, flag_of, is_path
 from imunav.cli._limits import ESTIMATORS, check_limits
 from imunav.errors import ImunavError, ImunavWarning, InvalidInputError
-from imunav.files import output_transaction
+from imunav.files import latch_interrupts, output_transaction
 
 try:  # typer >= 0.20 carries its own copy of click (and no longer installs the click package)
     from typer import _click as click
@@ -251,6 +251,7 @@ class ImunavGroup(TyperGroup):
         return install_checks(super().get_command(ctx, cmd_name), cmd_name)
 
     def invoke(self, ctx: click.Context) -> Any:
+        latch_interrupts()  # an interrupt swallowed in a callback from C is raised again before any output
         try:
             with warnings.catch_warnings():
                 warnings.simplefilter("default", ImunavWarning)

@@ -19,11 +19,12 @@ from __future__ import annotations
 
 import math
 import os
+import warnings
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from typing import Any
 
-from imunav.errors import InvalidInputError
+from imunav.errors import ImunavWarning, InvalidInputError
 
 __all__ = ["ESTIMATORS", "Estimate", "MEMORY", "TIME", "check_limits"]
 
@@ -33,6 +34,8 @@ MACHINE_CORES = 2
 #: Refused above: the machine's memory, or 12 hours on its cores.
 MEMORY = MACHINE_MEMORY
 TIME = 12 * 3600.0
+#: Said before the work (one warning line with the estimate): a request estimated to take longer than this.
+NOTICE = 60.0
 
 
 @dataclass(frozen=True)
@@ -81,10 +84,13 @@ def _simulate(v: Mapping[str, Any]) -> Estimate | None:
     fs = float(v.get("fs") or 0)
     if prof == "static":
         seconds = float(v.get("duration") or 0)
+        span = f"--duration {seconds:.3g} s"
     else:
-        seconds = _POSITIONS.get(prof, 120) * (float(v.get("dwell") or 0) + float(v.get("transition") or 0))
+        dwell, tr = float(v.get("dwell") or 0), float(v.get("transition") or 0)
+        seconds = _POSITIONS.get(prof, 120) * (dwell + tr)
+        span = f"{_POSITIONS.get(prof, 120)} x (--dwell {dwell:.3g} + --transition {tr:.3g}) = {seconds:.3g} s"
     n = fs * seconds
-    return Estimate(f"simulate {prof}: {seconds:.3g} s at --fs {fs:g} Hz = {n:.3g} samples",
+    return Estimate(f"simulate {prof}: {span} at --fs {fs:g} Hz = {n:.3g} samples",
                     n * _SIM_BYTES, n * _SIM_SECONDS)
 
 
@@ -93,12 +99,15 @@ def _batch_simulate(v: Mapping[str, Any]) -> Estimate | None:
     fs = float(v.get("fs") or 0)
     if v.get("static"):
         seconds = float(v["static"])
+        span = f"--static {seconds:.3g} s"
     else:
         steps = 100 + (120 if v.get("rate_table") else 0)
-        seconds = steps * (float(v.get("dwell") or 0) + float(v.get("transition") or 0))
+        dwell, tr = float(v.get("dwell") or 0), float(v.get("transition") or 0)
+        seconds = steps * (dwell + tr)
+        span = f"{steps} x (--dwell {dwell:.3g} + --transition {tr:.3g}) = {seconds:.3g} s"
     n = fs * seconds
     workers = max(1, min(units, int(v.get("workers") or MACHINE_CORES)))
-    return Estimate(f"batch simulate: {units} units x {seconds:.3g} s at --fs {fs:g} Hz = {units * n:.3g} samples",
+    return Estimate(f"batch simulate: N_UNITS {units} x {span} at --fs {fs:g} Hz = {units * n:.3g} samples",
                     workers * n * _SIM_BYTES, units * n * _SIM_SECONDS / min(workers, MACHINE_CORES))
 
 
@@ -106,42 +115,65 @@ def _gins(v: Mapping[str, Any]) -> Estimate | None:
     if v.get("duration") is None or v.get("fs") is None:
         return None
     n = float(v["duration"]) * float(v["fs"])
-    return Estimate(f"{v['duration']:g} s at --fs {v['fs']:g} Hz = {n:.3g} epochs", n * _INS_BYTES, n * _INS_SECONDS)
+    return Estimate(f"--duration {v['duration']:g} s at --fs {v['fs']:g} Hz = {n:.3g} epochs", n * _INS_BYTES,
+                    n * _INS_SECONDS)
 
 
 def _attitude_mc(v: Mapping[str, Any]) -> Estimate | None:
     runs = int(v.get("runs") or 0)
     n = float(v.get("duration") or 0) * 100.0  # the paper's scenario runs at 100 Hz
     k = max(1, len([f for f in str(v.get("filters") or "x").split(",") if f.strip()]))
-    return Estimate(f"attitude montecarlo: {runs} runs x {n:.3g} samples x {k} filters",
+    return Estimate(f"attitude montecarlo: --runs {runs} x --duration {float(v.get('duration') or 0):.3g} s "
+                    f"({n:.3g} samples at 100 Hz) x {k} filters",
                     min(runs, 64) * n * _ATT_BYTES * k, runs * n * k * _ATT_SECONDS / MACHINE_CORES)
 
 
 def _airdata_simulate(v: Mapping[str, Any]) -> Estimate | None:
     n = float(v.get("duration") or 0) * (float(v.get("rate_ads") or 0) + float(v.get("rate_doppler") or 0))
-    return Estimate(f"airdata simulate: {n:.3g} samples", n * _SIM_BYTES, n * _SIM_SECONDS)
+    return Estimate(f"airdata simulate: --duration {float(v.get('duration') or 0):.3g} s x (--rate-ads + "
+                    f"--rate-doppler) = {n:.3g} samples", n * _SIM_BYTES, n * _SIM_SECONDS)
 
 
 def _airdata_runs(seconds_per_run: float) -> Callable[[Mapping[str, Any]], Estimate | None]:
     def est(v: Mapping[str, Any]) -> Estimate | None:
         runs = int(v.get("runs") or 0)
-        return Estimate(f"{runs} Monte Carlo runs", 1e6 + runs * 1e3, runs * seconds_per_run)
+        return Estimate(f"--runs {runs} Monte Carlo runs", 1e6 + runs * 1e3, runs * seconds_per_run)
 
     return est
 
 
-def _noise(v: Mapping[str, Any]) -> Estimate | None:
-    spec = str(v.get("taus") or "")
-    if not spec.startswith("log:") or not spec[4:].strip().isdigit():
-        return None
-    n_tau = int(spec[4:].strip())
+#: bytes of a recording file per sample: six float64 channels and a time stamp (binary), or ~12 characters each (text)
+_FILE_BYTES = {".csv": 7 * 12.0, ".txt": 7 * 12.0}
+_BINARY_BYTES = 7 * 8.0
+#: the GLS fit of the noise terms over n averaging times: its n x n covariance, per channel and candidate term set
+_FIT_SECONDS = 0.03  # x n_tau^1.5 (measured: 200 taus 190 s, 400 taus 525 s on a loaded 2-core machine)
+
+
+def _samples_in(path: Any) -> float:
+    """Samples of a recording file, estimated from its size (an order of magnitude; 0 when unknown)."""
     try:
-        size = os.stat(v["file"]).st_size
-    except (OSError, KeyError, TypeError):
-        size = 0
-    samples = max(size / 8.0, 1.0)  # at most one sample per 8 bytes of file
-    return Estimate(f"noise --taus {spec}: {n_tau:.3g} averaging times", n_tau * 6 * 8 * 16.0,
-                    n_tau * 6 * min(samples, 1e7) * 1e-9)
+        size = os.stat(path).st_size
+    except (OSError, TypeError, ValueError):
+        return 0.0
+    return size / _FILE_BYTES.get(os.path.splitext(str(path))[1].lower(), _BINARY_BYTES)
+
+
+def _noise(v: Mapping[str, Any]) -> Estimate | None:
+    spec = str(v.get("taus") or "octave").strip()
+    samples = _samples_in(v.get("file"))
+    half = max(samples / 2.0, 1.0)  # the largest cluster of the overlapping Allan variance
+    if spec == "all":
+        n_req = n_tau = half
+    elif spec.startswith("log:") and spec[4:].strip().isdigit():
+        n_req = float(spec[4:].strip())  # the grid is built at this size, then cut to the record
+        n_tau = min(n_req, half) if samples else n_req
+    elif spec == "decade":
+        n_req = n_tau = 3 * math.log10(half) + 1
+    else:
+        n_req = n_tau = math.log2(half) + 1
+    return Estimate(f"noise --taus {spec}: {n_req:.3g} averaging times of about {samples:.3g} samples",
+                    n_req * 6 * 8 * 16.0 + 4 * 8 * n_tau**2,
+                    n_req * 6 * min(samples, 1e7) * 1e-9 + _FIT_SECONDS * n_tau**1.5)
 
 
 #: command path -> estimator of its request (None: nothing to estimate for these options).
@@ -177,6 +209,12 @@ def check_limits(command_path: str, values: Mapping[str, Any]) -> Estimate | Non
     ------
     InvalidInputError
         With the estimate, when the request is beyond :data:`MEMORY` or :data:`TIME` and ``force`` is not set.
+
+    Warns
+    -----
+    ImunavWarning
+        With the estimate, when the request will take longer than :data:`NOTICE` (so that a long run is not
+        silent).
     """
     fn = ESTIMATORS.get(command_path)
     if fn is None:
@@ -192,4 +230,7 @@ def check_limits(command_path: str, values: Mapping[str, Any]) -> Estimate | Non
         raise InvalidInputError(
             f"{what}: about {_size(est.bytes)} of memory and {_time(est.seconds)} on the reference machine "
             f"({_size(MACHINE_MEMORY)}, {MACHINE_CORES} cores); reduce the request, or pass --force to run it anyway")
+    if est.seconds > NOTICE:
+        warnings.warn(f"{what}: about {_time(est.seconds)} on the reference machine ({_size(est.bytes)} of memory) "
+                      "before any result; reduce the request to go faster (see the option's --help)", ImunavWarning, stacklevel=2)
     return est

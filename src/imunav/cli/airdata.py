@@ -13,6 +13,7 @@ import typer
 from rich.table import Table
 
 from imunav.cli._console import make_console
+from imunav.cli._domains import Domain, parse_numbers
 from imunav.cli._errors import check_figure_path, check_suffix, fail
 from imunav.cli._lazy import lazy
 from imunav.cli._progress import progress
@@ -46,26 +47,15 @@ def _channels(text: Optional[str]) -> tuple[int, ...] | None:
     if text is None or text.strip().lower() in ("", "all"):
         return None
 
-    try:
-        ch = tuple(int(c) for c in text.split(","))
-    except ValueError as exc:
-        raise InvalidInputError(f"--channels must be 'all' or comma-separated indices 0..2, got {text!r}") from exc
-    if any(c < 0 or c > 2 for c in ch):
-        raise InvalidInputError(f"--channels must be within 0..2 (x, y, z), got {text!r}")
-    return ch
+    return tuple(parse_numbers("--channels", text, Domain(integer=True, lo=0, hi=2), example="'all' or 0,2"))
 
 
 _MAX_WIND = 150.0  # m/s
 
 
 def _vec3(text: str, name: str) -> tuple[float, float, float]:
-    try:
-        v = tuple(float(x) for x in text.split(","))
-    except ValueError as exc:
-        raise InvalidInputError(f"{name} must be three comma-separated numbers, got {text!r}") from exc
-    if len(v) != 3:
-        raise InvalidInputError(f"{name} must be three comma-separated numbers (N,E,D), got {text!r}")
-    if not all(math.isfinite(x) for x in v) or math.hypot(*v) > _MAX_WIND:
+    v = tuple(parse_numbers(name, text, count=3, example="5,-2,0 (N,E,D)"))
+    if math.hypot(*v) > _MAX_WIND:
         raise InvalidInputError(f"{name} {text}: each component must be finite and the wind at most {_MAX_WIND:g} m/s "
                                 "(the strongest jet-stream winds are about 110 m/s)")
     return v  # type: ignore[return-value]

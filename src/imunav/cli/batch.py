@@ -3,7 +3,6 @@ logs (gins) in parallel."""
 
 from __future__ import annotations
 
-import json
 import math
 from pathlib import Path
 from typing import Any, Optional
@@ -14,7 +13,8 @@ from rich.markup import escape
 from rich.table import Table
 
 from imunav.cli._console import make_console
-from imunav.cli._errors import fail
+from imunav.cli._domains import COLUMNS_EXAMPLE, parse_json
+from imunav.cli._errors import fail, one_line
 from imunav.cli._lazy import lazy
 from imunav.cli._progress import shows_progress
 from imunav.errors import ConfigError, InvalidInputError
@@ -65,7 +65,7 @@ def _read_options(fs: Optional[float], accel_unit: Optional[str], gyro_unit: Opt
     if units:
         opts["units"] = units
     if columns:
-        opts["columns"] = json.loads(columns)
+        opts["columns"] = parse_json("--columns", columns, COLUMNS_EXAMPLE)
     return opts
 
 
@@ -105,9 +105,14 @@ def _print_summary(summary: Any, families: list[str], title: str) -> None:
     con = make_console()
     con.width = max(con.width, 150)  # a wide table reads better wrapped by the terminal than squeezed
     con.print(tab)
-    for r in t.to_dict(orient="records"):
+    _failed_items(t.to_dict(orient="records"))
+
+
+def _failed_items(rows: list[dict]) -> None:
+    """One line on standard error per item that failed (the table on standard output marks it ERROR)."""
+    for r in rows:
         if r["status"] != "ok":
-            con.print(f"[red]{r['unit']}:[/red] {r.get('error')}", soft_wrap=True, highlight=False)
+            typer.echo(f"error: {r['unit']}: {one_line(str(r.get('error')))}", err=True)
 
 
 @app.command("simulate")
@@ -299,9 +304,7 @@ def _print_gins(summary: Any, title: str) -> None:
     con = make_console()
     con.width = max(con.width, 150)
     con.print(tab)
-    for r in summary.table.to_dict(orient="records"):
-        if r["status"] != "ok":
-            con.print(f"[red]{r['unit']}:[/red] {r.get('error')}", soft_wrap=True, highlight=False)
+    _failed_items(summary.table.to_dict(orient="records"))
 
 
 def _finish(summary: Any, json_out: Optional[Path]) -> None:

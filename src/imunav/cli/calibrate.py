@@ -7,7 +7,6 @@ design condition) and residual plots.
 
 from __future__ import annotations
 
-import json
 from pathlib import Path
 from typing import Any, Optional
 
@@ -17,6 +16,7 @@ from rich.markup import escape
 from rich.table import Table
 
 from imunav.cli._console import make_console
+from imunav.cli._domains import COLUMNS_EXAMPLE, DOMAINS, parse_json, parse_numbers
 from imunav.cli._lazy import lazy
 from imunav.cli._options import END, INSTANCE, LAYOUT, START, TOPIC, reader_options, window
 from imunav.errors import FileFormatError, InvalidInputError
@@ -60,11 +60,7 @@ def _read(path: Path, fs: Optional[float], accel_unit: Optional[str], gyro_unit:
 
 
 def _columns(text: str) -> Any:
-    try:
-        return json.loads(text)
-    except json.JSONDecodeError as exc:
-        raise InvalidInputError(f"--columns {text!r}: not valid JSON ({exc.msg}); write e.g. "
-                                '\'{"gyro": ["gx","gy","gz"]}\'') from None
+    return parse_json("--columns", text, COLUMNS_EXAMPLE)
 
 
 def _segments(path: Path) -> Any:
@@ -93,6 +89,8 @@ def _write_px4(params: Any, path: Optional[Path]) -> None:
     typer.echo(f"PX4 parameters written to {path}")
     for d in params.dropped:
         typer.echo(f"  not expressible in PX4, dropped: {d}")
+    for c in params.converted:
+        typer.echo(f"  converted: {c}")
 
 
 def _finish(result: Any, out: Path, report: Optional[Path], *, save: Any = None, px4: Optional[Path] = None) -> None:
@@ -332,20 +330,15 @@ def temperature(
     for item in calibrations:
         if "@" not in item:
             raise InvalidInputError(f"argument {item!r}: write each calibration as FILE@TEMP_C, e.g. cal.json@25")
-    check_outputs([c.rsplit("@", 1)[0] for c in calibrations], [out], folders=[report])
+    files = [c.rsplit("@", 1)[0] for c in calibrations]
+    temps = [parse_numbers(f"argument {c}", c.rsplit("@", 1)[1], DOMAINS["--temp-c"], count=1,
+                           example="cal.json@25")[0] for c in calibrations]
+    order_list = parse_numbers("--orders", orders, DOMAINS["--order"], example="1,2,3")
+    check_outputs(files, [out], folders=[report])
     _check_report(report)
-
-
-
-    temps, cals = [], []
-    for item in calibrations:
-        if "@" not in item:
-            raise InvalidInputError(f"argument {item!r}: write each calibration as FILE@TEMP_C, e.g. cal.json@25")
-        f, t = item.rsplit("@", 1)
-        cals.append(calib.ImuCalibration.load(f))
-        temps.append(float(t))
+    cals = [calib.ImuCalibration.load(f) for f in files]
     res = calib_temperature.thermal_calibration(
-        temps, cals, params=[p.strip() for p in params.split(",")], orders=[int(o) for o in orders.split(",")],
+        temps, cals, params=[p.strip() for p in params.split(",")], orders=order_list,
         order=order, model=model,
     )
     res.calibration.save(out)

@@ -14,9 +14,10 @@ from typing import TYPE_CHECKING, Optional
 import numpy as np
 import typer
 
+from imunav.cli._domains import Domain, parse_numbers
 from imunav.cli._lazy import lazy
 from imunav.cli._progress import progress
-from imunav.errors import ConfigError, InvalidInputError
+from imunav.errors import ConfigError
 from imunav.files import check_outputs, write_json
 
 if TYPE_CHECKING:
@@ -262,13 +263,7 @@ def run_cmd(
 
 
 def _shifts(text: str) -> tuple[float, ...]:
-    try:
-        vals = tuple(float(x) for x in text.split(",") if x.strip())
-    except ValueError:
-        raise InvalidInputError(f"--shifts {text!r}: give comma-separated seconds, e.g. 0,60,120") from None
-    if not vals or not all(np.isfinite(v) and v >= 0 for v in vals):
-        raise InvalidInputError(f"--shifts {text!r}: give one or more finite shifts >= 0 s, e.g. 0,60,120")
-    return vals
+    return tuple(parse_numbers("--shifts", text, Domain(lo=0.0, unit="s"), example="0,60,120"))
 
 
 @gins_app.command("outage-test")

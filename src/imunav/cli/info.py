@@ -13,7 +13,7 @@ from rich.table import Table
 from imunav.cli._console import make_console
 from imunav.cli._lazy import lazy
 from imunav.cli._options import END, INSTANCE, LAYOUT, MAG_TOPIC, START, TOPIC, reader_options, window
-from imunav.errors import InvalidInputError
+from imunav.errors import FileFormatError, InvalidInputError
 from imunav.files import check_outputs, write_json
 from imunav.units import DEG, G0
 
@@ -168,6 +168,9 @@ def _list_topics(console: Any, file: Path, json_out: Path | None) -> None:
 
     t0 = time.perf_counter()
     topics = logs.list_topics(file)
+    if not topics:
+        raise FileFormatError(f"{file}: the log holds no topic (no message of any sensor: only a header, or "
+                              "the recording was cut off); nothing to read")
     took = time.perf_counter() - t0
     ulog = all(ti.instance is not None for ti in topics)  # a ULog: the type is the topic name
     tab = Table(title=f"{file}: {len(topics)} topics (listed in {took:.2f} s)", title_justify="left")

@@ -16,6 +16,7 @@ from imunav.errors import InvalidInputError
 from imunav.files import check_outputs, write_json
 
 imunav_lab = lazy("imunav.lab.runner")
+imunav_config = lazy("imunav.lab.config")
 
 _HELP = """Run the lab and write a report folder (index.html, summary.md, summary.json, data/, figures/).
 
@@ -41,7 +42,10 @@ def lab(
     no_fail: bool = typer.Option(False, "--no-fail", help="Exit 0 even when a [spec] check fails (the report "
                                  "still marks it)."),
 ) -> None:
-    check_outputs([config], [json_out], run_folders=[out])
+    # the inputs are the definition and every file it names (recordings, segment tables, a step's files); parsing
+    # it checks it whole (every table, unit, rate, preset and size) before anything is written
+    inputs = imunav_config.parse_lab_config(config).inputs if config is not None and config.is_file() else [config]
+    check_outputs(inputs, [json_out], run_folders=[out])
 
     console = make_console(stderr=True)
     try:

@@ -427,6 +427,9 @@ def _as_float(x: Any, name: str, source: str) -> np.ndarray:
     a = np.asarray(x)
     if a.dtype.kind in "fiub":
         return a.astype(np.float64, copy=False)
+    if a.dtype.kind == "c":
+        raise FileFormatError(f"{source}: {name} holds complex numbers (dtype {a.dtype}); a recording holds real "
+                              "samples: write the real part (or the magnitude) as the column")
     try:
         return a.astype(np.float64)
     except (TypeError, ValueError):

@@ -375,6 +375,12 @@ def read_csv(
         sep = best if counts[best] > 0 else None
     fields = _split(header_line, sep)
     has_header = not all(_is_number(f) for f in fields)
+    if has_header:
+        names = [f.strip().strip('"') for f in fields]
+        twice = sorted({n for n in names if names.count(n) > 1 and n})
+        if twice:
+            raise FileFormatError(f"{source}: the header names column(s) {twice} more than once; which one holds the "
+                                  "data is not said: rename or remove the repeated column")
     with wrap_read_errors(source, "delimited text"):
         df = pd.read_csv(
             source,

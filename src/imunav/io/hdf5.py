@@ -14,9 +14,10 @@ file and are applied (:mod:`imunav.io._common`).
 
 from __future__ import annotations
 
+import io
 import json
 import os
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -189,17 +190,45 @@ def write_hdf5(
     units = dict(SI_UNITS)
     if data.mag is not None:
         units["mag"] = data.mag_unit
-    h5py = load_h5py("Writing HDF5 files")
+    def fill(fh: Any) -> None:
+        g = fh.require_group(group)
+        for name in ("t", "gyro", "accel", "mag", "temp"):
+            a = getattr(data, name)
+            if a is None:
+                continue
+            ds = g.create_dataset(name, data=np.ascontiguousarray(a, dtype=np.float64), compression=compression)
+            ds.attrs["unit"] = units[name]
+        g.attrs["units"] = json.dumps({k: v for k, v in units.items() if getattr(data, k) is not None})
+        g.attrs["mag_unit"] = data.mag_unit
+        g.attrs["imunav"] = header_json(data)
+
+    image = hdf5_image(fill, "Writing HDF5 files")
     with atomic_path(path) as tmp:
-        with h5py.File(tmp, "w") as fh:
-            g = fh.require_group(group)
-            for name in ("t", "gyro", "accel", "mag", "temp"):
-                a = getattr(data, name)
-                if a is None:
-                    continue
-                ds = g.create_dataset(name, data=np.ascontiguousarray(a, dtype=np.float64), compression=compression)
-                ds.attrs["unit"] = units[name]
-            g.attrs["units"] = json.dumps({k: v for k, v in units.items() if getattr(data, k) is not None})
-            g.attrs["mag_unit"] = data.mag_unit
-            g.attrs["imunav"] = header_json(data)
+        tmp.write_bytes(image)
     return Path(path)
+
+
+def hdf5_image(fill: Callable[[Any], None], feature: str, **file_options: Any) -> bytes:
+    """The bytes of an HDF5 file built in memory by ``fill(h5py.File)``: the HDF5 library never writes to the
+    file system, so a write the file system refuses (full disk, a file-size limit) is an :class:`OSError` of
+    Python's own write, not a crash inside the library.
+
+    Parameters
+    ----------
+    fill : callable
+        Called with the open (in-memory) ``h5py.File``; creates the groups and datasets.
+    feature : str
+        What needs h5py, for the message when it is not installed.
+    **file_options
+        Keywords of ``h5py.File`` (e.g. ``userblock_size``, ``libver``).
+
+    Returns
+    -------
+    bytes
+        The complete file.
+    """
+    h5py = load_h5py(feature)
+    buf = io.BytesIO()
+    with h5py.File(buf, "w", **file_options) as fh:
+        fill(fh)
+    return buf.getvalue()

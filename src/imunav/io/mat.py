@@ -43,7 +43,7 @@ from imunav.io._common import (
     parse_header,
     wrap_read_errors,
 )
-from imunav.io.hdf5 import load_h5py
+from imunav.io.hdf5 import hdf5_image, load_h5py
 from imunav.timeseries import ImuData
 
 __all__ = ["read_mat", "write_mat", "mat_version"]
@@ -223,8 +223,7 @@ def _v73_header() -> bytes:
 
 
 def _write_v73(data: ImuData, tmp: Path) -> None:
-    h5py = load_h5py("Writing MAT v7.3 files")
-    with h5py.File(tmp, "w", userblock_size=512, libver="earliest") as fh:
+    def fill(fh: Any) -> None:
         for name, a in _mat_vars(data).items():
             ds = fh.create_dataset(name, data=np.ascontiguousarray(np.asarray(a, dtype=np.float64).T))
             ds.attrs["MATLAB_class"] = np.bytes_("double")
@@ -235,8 +234,9 @@ def _write_v73(data: ImuData, tmp: Path) -> None:
             ds = fh.create_dataset(name, data=codes.reshape(-1, 1))  # MATLAB 1×L char row
             ds.attrs["MATLAB_class"] = np.bytes_("char")
             ds.attrs["MATLAB_int_decode"] = np.int32(2)
-    with open(tmp, "r+b") as fh:
-        fh.write(_v73_header())
+
+    image = hdf5_image(fill, "Writing MAT v7.3 files", userblock_size=512, libver="earliest")
+    tmp.write_bytes(_v73_header() + image[512:])
 
 
 def write_mat(data: ImuData, path: str | os.PathLike[str], *, version: str = "5") -> Path:

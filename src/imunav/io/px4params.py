@@ -78,10 +78,13 @@ class Px4Parameters:
         ``{name: value}``; floats for REAL32 parameters, ints for INT32 ones.
     dropped : tuple of str
         One sentence per term of the imunav model that PX4 has no parameter for (empty when exact).
+    converted : tuple of str
+        One sentence per quantity converted into PX4's units (e.g. the magnetometer offsets from µT to gauss).
     """
 
     values: dict[str, float | int]
     dropped: tuple[str, ...] = field(default_factory=tuple)
+    converted: tuple[str, ...] = field(default_factory=tuple)
 
     def param_type(self, name: str) -> int:
         """The MAVLink type code of parameter ``name`` (6 INT32, 9 REAL32).
@@ -109,7 +112,7 @@ class Px4Parameters:
         Returns
         -------
         str
-            Header comments (with the dropped terms) and one tab-separated row per parameter.
+            Header comments (with the conversions and the dropped terms) and one tab-separated row per parameter.
         """
 
         head = [f"# PX4 sensor calibration written by imunav {__version__}",
@@ -119,6 +122,7 @@ class Px4Parameters:
                 "#   mag S (raw - CAL_MAGn_*OFF) [gauss], S symmetric from CAL_MAGn_*SCALE and *ODIAG "
                 "(X: xy, Y: xz, Z: yz).",
                 "# CAL_*n_ROT is not written: keep the vehicle's sensor rotation."]
+        head += [f"# Converted: {c}" for c in self.converted]
         if self.dropped:
             head.append("# WARNING: not expressible in PX4, dropped:")
             head += [f"#   - {d}" for d in self.dropped]
@@ -191,11 +195,29 @@ def _imu_params(cal: ImuCalibration, n: int, out: dict[str, float | int], droppe
         dropped.append(f"gyro g-sensitivity (largest |G|: {gs:.3g} rad/s per m/s^2)")
 
 
-def _mag_params(mag: MagCalibration, unit: str, n: int, out: dict[str, float | int], dropped: list[str]) -> None:
+#: Field magnitudes (gauss) a magnetometer calibration for PX4 may have: Earth's field is 0.22-0.67 gauss
+#: (22-67 µT, IGRF); the bounds leave a factor 4 either way for disturbed sites and coils, and refuse data whose
+#: unit is off by 10 or more (µT read as gauss: x 100; tesla: x 1e-4).
+EARTH_FIELD_GAUSS = (0.05, 2.5)
+
+
+def _mag_params(mag: MagCalibration, unit: str, n: int, out: dict[str, float | int], dropped: list[str],
+                converted: list[str]) -> None:
     try:
         to_gauss = unit_factor(unit, "magnetic_field") / _GAUSS
     except UnitError as exc:
         raise UnitError(f"mag_unit: {exc}") from None
+    norm = float(mag.field_norm) * to_gauss
+    lo, hi = EARTH_FIELD_GAUSS
+    if not lo <= norm <= hi:
+        as_gauss = "" if to_gauss == 1.0 else f" = {norm:.4g} gauss"
+        raise UnitError(f"mag_unit={unit!r} (command line: --mag-unit): the calibrated field magnitude "
+                        f"{float(mag.field_norm):.4g} {unit}{as_gauss} is outside the {lo:g}-{hi:g} gauss a "
+                        "magnetometer sees on Earth (0.22-0.67 gauss); the data are in another unit: give theirs "
+                        "(gauss, uT, nT, T) for PX4's gauss offsets")
+    if to_gauss != 1.0:
+        converted.append(f"CAL_MAG{n}_{{X,Y,Z}}OFF: the offsets converted from {unit} to PX4's gauss "
+                         f"(x {to_gauss:g}); the scales are unitless")
     A = np.asarray(mag.A, float)
     # polar decomposition A = U P: P is the symmetric soft-iron matrix PX4 can hold, U a rotation
     if np.max(np.abs(A - A.T)) <= 1e-12 * np.max(np.abs(A)):  # symmetric up to rounding
@@ -250,7 +272,8 @@ def px4_parameters(imu: ImuCalibration | CalibrationResult | None = None, mag: M
         Nothing to export, a bad slot / id / priority, a temperature model, scales outside PX4's
         [0.1, 3.0], or (``strict``) terms PX4 cannot express.
     UnitError
-        Raw IMU units that are not SI, or an unknown ``mag_unit``.
+        Raw IMU units that are not SI, an unknown ``mag_unit``, or one in which the calibrated field magnitude
+        is not a field on Earth (:data:`EARTH_FIELD_GAUSS`: the data are in another unit).
     """
     if imu is None and mag is None:
         raise InvalidInputError("nothing to export: give an IMU calibration, a magnetometer calibration or both")
@@ -260,13 +283,14 @@ def px4_parameters(imu: ImuCalibration | CalibrationResult | None = None, mag: M
         raise InvalidInputError(f"priority must be 0 (disabled) to 100; got {priority!r}")
     out: dict[str, float | int] = {}
     dropped: list[str] = []
+    converted: list[str] = []
     ids: dict[str, int | None] = {}
     if imu is not None:
         cal = getattr(imu, "calibration", imu)
         _imu_params(cal, int(instance), out, dropped)
         ids["ACC"], ids["GYRO"] = _device_id(accel_id, "accel_id"), _device_id(gyro_id, "gyro_id")
     if mag is not None:
-        _mag_params(mag, mag_unit, int(instance), out, dropped)
+        _mag_params(mag, mag_unit, int(instance), out, dropped, converted)
         ids["MAG"] = _device_id(mag_id, "mag_id")
     for sensor, dev in ids.items():
         if dev is not None:
@@ -274,7 +298,7 @@ def px4_parameters(imu: ImuCalibration | CalibrationResult | None = None, mag: M
             out[f"CAL_{sensor}{instance}_PRIO"] = int(priority)
     if strict and dropped:
         raise InvalidInputError("PX4 cannot express " + "; ".join(dropped) + " (strict=True)")
-    return Px4Parameters(out, tuple(dropped))
+    return Px4Parameters(out, tuple(dropped), tuple(converted))
 
 
 def write_px4_params(path: str | os.PathLike[str], imu: ImuCalibration | CalibrationResult | None = None,

@@ -72,7 +72,7 @@ from imunav.lab.report.catalog import (
 )
 from imunav.lab.runfolder import RunFolder, trusted_files
 from imunav.noise.allan import allan_deviation
-from imunav.noise.fit import fit_noise
+from imunav.noise.fit import TERMS, fit_noise
 from imunav.noise.static import require_static
 from imunav.results import Result
 from imunav.sim import (
@@ -795,8 +795,14 @@ def noise_batch(
     ------
     NotStaticError
         If no unit's recording is static (and ``force`` is False).
+    InvalidInputError
+        If ``terms`` is empty or names an unknown term (before any unit is read).
     """
 
+    bad = [t for t in terms if t not in TERMS]
+    if bad or not terms:
+        raise InvalidInputError(f"terms: unknown term(s) {bad} (command line: --terms); choose from {', '.join(TERMS)}"
+                                if bad else f"terms is empty (command line: --terms); choose from {', '.join(TERMS)}")
     limits = _load_spec(spec)
     units, _ = _batch_files(folder)
     od = Path(out_dir) if out_dir is not None else Path(folder) / "noise"

@@ -19,6 +19,7 @@ from typing import Any
 import imunav.lab.steps as pkg
 from imunav.errors import ConfigError
 from imunav.lab.report import SpecLimit, load_spec
+from imunav.lab.steps._api import LabContext
 from imunav.lab.steps.recordings import RecordingSpec, parse_recordings
 from imunav.toml import read_toml
 
@@ -80,6 +81,8 @@ class LabConfig:
         Step name -> its option table.
     source : pathlib.Path or None
         The TOML file (None for a dict).
+    named : tuple of pathlib.Path
+        The files the step tables name (an error model, GNSS/INS inputs), found by each step's ``check``.
     """
 
     seed: int | None = None
@@ -89,6 +92,15 @@ class LabConfig:
     spec: dict[str, SpecLimit] = field(default_factory=dict)
     options: dict[str, dict[str, object]] = field(default_factory=dict)
     source: Path | None = None
+    named: tuple[Path, ...] = ()
+
+    @property
+    def inputs(self) -> list[Path]:
+        """Every file the definition names and the lab reads: the TOML file itself, each recording and its
+        segment table, and the files of the step tables (:attr:`named`).  The command line checks its outputs
+        against them before any work (:func:`imunav.files.check_outputs`)."""
+        recs = [p for r in self.recordings.values() for p in (r.path, r.segments) if p is not None]
+        return [p for p in (self.source, *recs, *self.named) if p is not None]
 
     @property
     def mode(self) -> str:
@@ -189,12 +201,30 @@ def parse_lab_config(config: str | os.PathLike[str] | Mapping[str, Any] | None) 
             spec = load_spec({"spec": cfg["spec"]})
         except ConfigError as exc:
             raise ConfigError(f"{where}: {exc}") from exc
+    options = {k: dict(v) for k, v in cfg.items() if k not in ("lab", "spec", "recordings")}
+    named = _check_steps(options, base_dir, where)
     return LabConfig(
         seed=lab.get("seed"), title=lab.get("title", "imunav lab"),
         steps=tuple(lab["steps"]) if "steps" in lab else None, recordings=recs, spec=spec,
-        options={k: dict(v) for k, v in cfg.items() if k not in ("lab", "spec", "recordings")},
-        source=path,
+        options=options, source=path, named=tuple(named),
     )
+
+
+def _check_steps(options: Mapping[str, Mapping[str, Any]], base_dir: Path, where: str) -> list[Path]:
+    """Each step table checked whole by its step's ``check(ctx)`` (when the step has one), before any step
+    runs; the files the tables name."""
+    named: list[Path] = []
+    for name, table in options.items():
+        check = getattr(importlib.import_module(f"imunav.lab.steps.{name}"), "check", None)
+        if check is None:
+            continue
+        ctx = LabContext(out_dir=Path("."), seed=0, progress=None, config={name: dict(table), "_base_dir": str(base_dir)},
+                         step=name)
+        try:
+            named += check(ctx)
+        except ConfigError as exc:
+            raise ConfigError(f"{where}: {exc}") from None
+    return named
 
 
 def _step_options(name: str) -> list[str] | None:

@@ -63,7 +63,7 @@ from typing import Any
 
 from imunav import __version__
 from imunav.errors import RunFolderError
-from imunav.files import RUN_FILES, RUN_MARKER, jsonable, read_json, write_json
+from imunav.files import RUN_FILES, RUN_MARKER, check_interrupt, jsonable, read_json, write_json
 
 __all__ = ["FAILED", "FILES", "MANIFEST", "MARKER", "Manifest", "RunFolder", "read_manifest", "trusted_files", "sha256_file"]
 
@@ -582,6 +582,12 @@ class RunFolder:
 
     def __exit__(self, et: Any, ev: Any, tb: Any) -> bool:
         if et is None:
+            try:
+                check_interrupt()  # an interrupt swallowed during the run: the run did not complete
+            except KeyboardInterrupt:
+                with contextlib.suppress(OSError, RunFolderError):
+                    self.fail("interrupted")
+                raise
             self.finish()
             return False
         # on an error or an interrupt: the files of this run go, FAILED stays (all or nothing)

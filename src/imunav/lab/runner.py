@@ -74,6 +74,7 @@ from imunav.lab.report.lab import display_parameters, embed_png, lab_markdown, w
 from imunav.lab.report.spec import check_spec
 from imunav.lab.runfolder import RunFolder
 from imunav.lab.steps._api import LabContext, StepResult, _NullProgress
+from imunav.lab.steps.recordings import LOADED, read_recordings
 from imunav.results import Result
 
 __all__ = ["STEPS", "SIMULATION_ONLY", "LabConfig", "LabContext", "StepResult", "StepRecord", "LabResult", "run_lab",
@@ -267,16 +268,19 @@ def run_lab(
         raise ConfigError("no lab step to run (the step list is empty); name steps from: " + ", ".join(known))
     out = Path(out_dir)
 
-    inputs = [typed.source] + [r.path for r in typed.recordings.values()] + [
-        r.segments for r in typed.recordings.values()]
+    inputs = typed.inputs
     params = {"config": str(typed.source) if typed.source is not None else jsonable(cfg), "steps": names,
               "title": typed.title}
+    # the recordings are read against their tables before the run folder exists: a unit, a rate or a column
+    # that contradicts the file is a ConfigError naming the table and key, and nothing is written
+    loaded = read_recordings(typed.recordings, str(typed.source or "lab configuration")) \
+        if "recordings" in names and typed.recordings else None
     with RunFolder(out, "lab", seed=seed, parameters=params, overwrite=overwrite, inputs=inputs):
-        return _run_steps(out, names, seed, cfg, typed, progress, console)
+        return _run_steps(out, names, seed, cfg, typed, progress, console, loaded)
 
 
 def _run_steps(out: Path, names: list[str], seed: int, cfg: dict, typed: LabConfig, progress: bool,
-               console: Any) -> LabResult:
+               console: Any, loaded: dict | None = None) -> LabResult:
     """The body of :func:`run_lab` inside its run folder: every step, then summary.json / .md and index.html."""
     if progress:
         prog_cm: Any = Progress(
@@ -290,6 +294,8 @@ def _run_steps(out: Path, names: list[str], seed: int, cfg: dict, typed: LabConf
     t_lab = time.perf_counter()
     with prog_cm as prog:
         ctx = LabContext(out_dir=out, seed=seed, progress=prog, config=cfg, lab=typed)
+        if loaded is not None:
+            ctx.artifacts[LOADED] = loaded
         overall = prog.add_task(f"lab ({len(names)} steps)", total=len(names))
         for name in names:
             mod = importlib.import_module(f"imunav.lab.steps.{name}")

@@ -242,10 +242,9 @@ def cluster_sizes(taus: Any, fs: float, n_phase: int, kind: str = "overlapping")
         If ``taus`` is not understood, or an explicit tau is not positive and finite or is below 1 / fs.
     """
     mmax = _max_m(kind, n_phase)
-    if mmax < 1:
+    if mmax < 1 or n_phase - 1 < _min_samples(kind):
         raise InsufficientDataError(
-            f"{n_phase - 1} samples are too few for kind={kind!r}: need at least "
-            f"{3 if kind in ('overlapping', 'standard', 'total') else 4} samples"
+            f"{n_phase - 1} samples are too few for kind={kind!r}: need at least {_min_samples(kind)} samples"
         )
     if isinstance(taus, str):
         spec = taus.lower()
@@ -280,6 +279,12 @@ def cluster_sizes(taus: Any, fs: float, n_phase: int, kind: str = "overlapping")
         ms = np.unique(ms)
     ms = ms[(ms >= 1) & (ms <= mmax)]
     return ms.astype(np.int64)
+
+
+def _min_samples(kind: str) -> int:
+    """Rate samples a statistic needs: two differences at tau0 (3 for the Allan family, 4 for the modified and
+    Hadamard family, whose differences span one more sample)."""
+    return 3 if kind in ("overlapping", "standard", "total") else 4
 
 
 def tau_grid(n_samples: int, fs: float, taus: Any = "octave", kind: str = "overlapping") -> NDArray[np.float64]:
@@ -581,9 +586,11 @@ def allan_deviation(
         raise InvalidInputError(f"x must be numeric, got dtype {a2.dtype}")
     n_rows, n_ch = a2.shape
     n = n_rows - 1 if input == "phase" else n_rows
-    if n < 2:
+    if n < _min_samples(kind):
+        need = _min_samples(kind) + (1 if input == "phase" else 0)
         raise InsufficientDataError(
-            f"need at least {3 if input == 'phase' else 2} samples (got {n_rows}) to form one Allan difference"
+            f"x: need at least {need} samples (got {n_rows}) for kind={kind!r}: two differences at the shortest "
+            "tau (one alone has one degree of freedom: the 68 % interval of the deviation spans a factor of 10)"
         )
     names = tuple(channels) if channels is not None else tuple(f"ch{i}" for i in range(n_ch))
     if len(names) != n_ch:

@@ -45,6 +45,7 @@ from __future__ import annotations
 import math
 import numbers
 import os
+import warnings
 from collections.abc import Mapping
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field, fields, replace
@@ -61,6 +62,7 @@ from imunav import units as _units
 from imunav.errors import (
     ConfigError,
     FileFormatError,
+    ImunavWarning,
     InsufficientDataError,
     InvalidInputError,
     NonFiniteError,
@@ -1024,13 +1026,22 @@ class ImuErrorModel:
             If the file does not exist.
         ConfigError
             If it is not valid TOML or its tables are invalid (the message names the file).
+
+        Warns
+        -----
+        ImunavWarning
+            When the model sets no error term (an ideal IMU), so that an empty file is not taken for a model.
         """
         p = Path(path)
         d = read_toml(p, "error-model", missing=FileFormatError)
         try:
-            return cls.from_dict(d)
+            model = cls.from_dict(d)
         except InvalidInputError as e:
             raise type(e)(f"{p}: {e}") from e
+        if model == cls(temp_ref_c=model.temp_ref_c, name=model.name, source=model.source):
+            warnings.warn(f"{p}: the error model sets no error term ([gyro] / [accel] tables are empty or absent): "
+                          "the simulated IMU is ideal", ImunavWarning, stacklevel=2)
+        return model
 
     def to_toml(self, path: str | os.PathLike[str]) -> Path:
         """Write the model as TOML (atomically: temp file, then rename).

@@ -21,8 +21,14 @@ import numpy as np
 from imunav.errors import ConfigError
 from imunav.files import claim_run_file, jsonable
 from imunav.results import Result
+from imunav.sim import presets
 
-__all__ = ["StepResult", "LabContext"]
+__all__ = ["StepResult", "LabContext", "MAX_SAMPLES", "check_preset", "check_samples"]
+
+#: The most samples (or epochs) one lab step may simulate: about the reference machine's 24 GiB at the
+#: simulator's ~600 bytes per sample (:mod:`imunav.cli._limits`); a larger request is refused when the lab
+#: definition is checked, before any step runs.
+MAX_SAMPLES = 4e7
 
 
 @dataclass(frozen=True)
@@ -215,6 +221,47 @@ class LabContext:
             yield lambda n=1: self.progress.advance(tid, n)
         finally:  # a finished task shows 100 %, also one of unknown length (total=None)
             self.progress.update(tid, total=total if total is not None else 1, completed=total if total is not None else 1)
+
+
+def check_samples(where: str, what: str, n: float) -> None:
+    """Refuse a step option set that asks for more than :data:`MAX_SAMPLES` samples.
+
+    Parameters
+    ----------
+    where : str
+        The table and keys, for the message (``"[simulate_tests] static_duration_s x fs"``).
+    what : str
+        The request in words.
+    n : float
+        How many samples it asks for.
+
+    Raises
+    ------
+    ConfigError
+        When ``n`` is beyond :data:`MAX_SAMPLES` (or not finite).
+    """
+    if not (math.isfinite(n) and n <= MAX_SAMPLES):
+        raise ConfigError(f"{where}: {what} = {n:.3g} samples, beyond the lab's limit of {MAX_SAMPLES:.3g} per step "
+                          f"(about 24 GiB of memory); reduce it")
+
+
+def check_preset(table: str, name: Any) -> None:
+    """Refuse a ``preset`` option that names no IMU preset of :mod:`imunav.sim.presets`.
+
+    Parameters
+    ----------
+    table : str
+        The step table, for the message (``"[gins]"``).
+    name : object
+        The option's value.
+
+    Raises
+    ------
+    ConfigError
+        Naming the table, the key and the known presets.
+    """
+    if name not in presets.names():
+        raise ConfigError(f"{table} preset: unknown IMU preset {name!r}; known presets: {', '.join(presets.names())}")
 
 
 def _word(k: int | str) -> int:

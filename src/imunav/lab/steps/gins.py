@@ -38,7 +38,7 @@ from imunav.ins.gins.outputs import run_summary
 from imunav.ins.gins.plot import write_gins_figures
 from imunav.ins.gins.setup import load_inputs, run_setup, simulate_drive
 from imunav.io.kfgins import NavTrack, read_kfgins_nav
-from imunav.lab.steps._api import LabContext, StepResult
+from imunav.lab.steps._api import LabContext, StepResult, check_preset, check_samples
 from imunav.lab.steps.recordings import resolve_path
 
 TITLE = "GNSS/INS: loosely coupled error-state filter"
@@ -67,6 +67,55 @@ def _positive(opts: dict[str, Any], key: str, default: float) -> float:
     return float(v)
 
 
+def _checked(ctx: LabContext) -> tuple[int | None, dict[str, Path]]:
+    """(states, the files of the table resolved), the ``[gins]`` table checked whole."""
+    opts = ctx.options
+    unknown = set(opts) - set(OPTIONS)
+    if unknown:
+        raise ConfigError(f"[gins] unknown option(s) {sorted(unknown)}; known: {', '.join(OPTIONS)}")
+    states = _int(opts, "states", 21) if "states" in opts or not any(k in opts for k in _FILES) else None
+    if states is not None and states not in (15, 21):
+        raise ConfigError(f"[gins] states must be 15 or 21; got {states!r}")
+    base = Path(str(ctx.config.get("_base_dir", ".")))
+    for k in _FILES:
+        if k in opts and not isinstance(opts[k], str):
+            raise ConfigError(f"[gins] {k} must be a file path (a string); got {opts[k]!r}")
+    paths = {k: resolve_path(str(opts[k]), base, f"[gins] {k}") for k in _FILES if k in opts}
+    sim_keys = sorted({"preset", "duration", "fs", "seed"} & set(opts))
+    if paths and sim_keys:
+        raise ConfigError(f"[gins] {sim_keys} simulate a drive; they do not go with files {sorted(paths)}")
+    if not paths:
+        preset = opts.get("preset", "mems_adis16465")
+        check_preset("[gins]", preset)
+        if "seed" in opts and _int(opts, "seed", 0) < 0:
+            raise ConfigError(f"[gins] seed must be a non-negative integer; got {opts['seed']!r}")
+        check_samples("[gins] duration x fs", "duration x fs",
+                      _positive(opts, "duration", 300.0) * _positive(opts, "fs", 100.0))
+    return states, paths
+
+
+def check(ctx: LabContext) -> list[Path]:
+    """Check the ``[gins]`` table whole, before any step runs (:func:`imunav.lab.config.parse_lab_config`).
+
+    Parameters
+    ----------
+    ctx : LabContext
+        A context holding the lab definition, ``step`` set to this step.
+
+    Returns
+    -------
+    list of pathlib.Path
+        The files the table names (config, imu, gnss, truth, odo), resolved.
+
+    Raises
+    ------
+    ConfigError
+        Naming the table and key: an unknown option, a missing file, files mixed with a simulated drive, an
+        unknown ``preset``, a value out of its domain, or a drive longer than the lab's sample limit.
+    """
+    return list(_checked(ctx)[1].values())
+
+
 def run(ctx: LabContext) -> StepResult:
     """Run the step: see the module docstring for what it computes, its options, artifacts and files.
 
@@ -87,17 +136,9 @@ def run(ctx: LabContext) -> StepResult:
         If ``[gins]`` has an unknown option, mixes files with a simulated drive, or a file is missing.
     """
     opts = ctx.options
-    unknown = set(opts) - set(OPTIONS)
-    if unknown:
-        raise ConfigError(f"[gins] unknown option(s) {sorted(unknown)}; known: {', '.join(OPTIONS)}")
-    states = _int(opts, "states", 21) if "states" in opts or not any(k in opts for k in _FILES) else None
-    base = Path(str(ctx.config.get("_base_dir", ".")))
-    paths = {k: resolve_path(str(opts[k]), base, f"[gins] {k}") for k in _FILES if k in opts}
-    sim_keys = sorted({"preset", "duration", "fs", "seed"} & set(opts))
+    states, paths = _checked(ctx)
     with ctx.task("GNSS/INS", total=2) as advance:
         if paths:
-            if sim_keys:
-                raise ConfigError(f"[gins] {sim_keys} simulate a drive; they do not go with files {sorted(paths)}")
             inputs = load_inputs(paths.get("imu"), paths.get("gnss"), paths.get("config"), odometer=paths.get("odo"),
                                  states=states)
             imu, gnss, setup, odometer = inputs.imu, inputs.gnss, inputs.setup, inputs.odometer

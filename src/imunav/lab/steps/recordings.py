@@ -46,7 +46,7 @@ from typing import Any, Mapping
 
 import numpy as np
 
-from imunav.errors import ConfigError, InvalidInputError
+from imunav.errors import ConfigError, ImunavError, InvalidInputError
 from imunav.files import atomic_path
 from imunav.io import read_imu
 from imunav.io.datasets import shared_data_dir
@@ -65,6 +65,9 @@ TITLE = "Recordings (real data) and noise of the static record"
 #: ``test`` value -> artifact name used by the analysis steps.
 TESTS = {"static": "static_long", "multiposition": "hundred_position", "rate_table": "rate_table",
          "multipose": "multipose"}
+
+#: The artifact holding the recordings :func:`read_recordings` read before the steps ran (the runner's check).
+LOADED = "recordings_read"
 
 _READ_KEYS = ("format", "columns", "units", "scales", "offsets", "fs", "t0", "delimiter", "skiprows", "nan_policy",
               "mag_unit", "topic", "instance", "mag_topic", "layout")
@@ -253,6 +256,45 @@ def _segments(path: Path) -> Any:
     return Segments.read(path)
 
 
+def read_recordings(specs: Mapping[str, RecordingSpec], where: str = "lab configuration") -> dict[str, Any]:
+    """Read every recording of a lab definition (and its segment table), cut to its part: the check of the
+    ``[recordings]`` tables against the files themselves, done before any step runs.
+
+    Parameters
+    ----------
+    specs : Mapping
+        Name -> :class:`RecordingSpec`.
+    where : str
+        The lab definition, for messages.
+
+    Returns
+    -------
+    dict
+        Name -> ``(ImuData, Segments or None)``.
+
+    Raises
+    ------
+    ConfigError
+        Naming the file, the table and the key when a recording cannot be read as the table says (an unknown
+        unit, a unit or rate that contradicts the file, a column that is not there) or its part is empty.
+    """
+    out: dict[str, Any] = {}
+    for name, sp in specs.items():
+        w = f"{where}: [recordings.{name}]"
+        try:
+            data = read_imu(sp.path, **sp.read)
+            if sp.t_start_s or sp.max_duration_s:
+                t0 = data.t[0] + sp.t_start_s
+                t1 = t0 + sp.max_duration_s if sp.max_duration_s else data.t[-1] + 1.0
+                data = data.time_slice(t0, t1)
+            seg = _segments(sp.segments) if sp.segments is not None else None
+        except (ImunavError, ValueError, OSError) as exc:
+            keys = [k for k in sp.read if k in str(exc)] or list(sp.read)
+            raise ConfigError(f"{w} ({', '.join(keys) or 'path'}): {exc}") from None
+        out[name] = (data, seg)
+    return out
+
+
 def run(ctx: LabContext) -> StepResult:
     """Run the step: see the module docstring for what it computes, its options, artifacts and files.
 
@@ -277,17 +319,14 @@ def run(ctx: LabContext) -> StepResult:
         raise ConfigError("the recordings step needs [recordings.<name>] tables in the lab definition")
     recs, profs, files, rows = {}, {}, {}, []
     sim: dict[str, Any] = {}
+    loaded = ctx.artifacts.pop(LOADED, None) or read_recordings(specs)
     with ctx.task("read recordings", total=len(specs)) as advance:
         for name, sp in specs.items():
-            data = read_imu(sp.path, **sp.read)
-            if sp.t_start_s or sp.max_duration_s:
-                t0 = data.t[0] + sp.t_start_s
-                t1 = t0 + sp.max_duration_s if sp.max_duration_s else data.t[-1] + 1.0
-                data = data.time_slice(t0, t1)
+            data, seg = loaded[name]
             recs[sp.artifact] = data
             files[sp.artifact] = sp.path
-            if sp.segments is not None:
-                profs[sp.artifact] = _segments(sp.segments)
+            if seg is not None:
+                profs[sp.artifact] = seg
             if sp.gravity is not None:
                 sim["g"] = sp.gravity
             if sp.latitude_deg is not None:

@@ -15,7 +15,7 @@ is off and gravity is the constant 9.80665 m/s² unless configured otherwise.
 
 Options (TOML table ``[simulate_tests]``)::
 
-    preset = "thesis_sim"      # or model = "path/to/model.toml"
+    preset = "thesis_sim"      # or model = "path/to/model.toml" (relative to the lab TOML)
     fs = 100.0                 # Hz (the thesis logged at 1 kHz)
     dwell_s = 30.0             # per position / rate step
     transition_s = 2.0         # moves and rate ramps
@@ -54,7 +54,8 @@ from imunav.errors import ConfigError
 from imunav.files import atomic_path, write_json
 from imunav.io import write_imu
 from imunav.lab.report.lab import embed_png
-from imunav.lab.steps._api import LabContext, StepResult
+from imunav.lab.steps._api import LabContext, StepResult, check_preset, check_samples
+from imunav.lab.steps.recordings import resolve_path
 from imunav.sim import (
     ImuErrorModel,
     hundred_position_profile,
@@ -92,7 +93,49 @@ def _options(ctx: LabContext) -> dict[str, Any]:
     bad = [t for t in opts["tests"] if t not in _TESTS]
     if bad:
         raise ConfigError(f"[simulate_tests] tests: unknown test(s) {bad}; choose from {list(_TESTS)}")
+    if opts["model"]:  # relative to the lab definition's folder, like every path of the definition
+        opts["model"] = resolve_path(str(opts["model"]), Path(str(ctx.config.get("_base_dir", "."))),
+                                     "[simulate_tests] model")
     return opts
+
+
+def check(ctx: LabContext) -> list[Path]:
+    """Check the ``[simulate_tests]`` table whole, before any step runs (:func:`imunav.lab.config.parse_lab_config`).
+
+    Parameters
+    ----------
+    ctx : LabContext
+        A context holding the lab definition, ``step`` set to this step.
+
+    Returns
+    -------
+    list of pathlib.Path
+        The files the table names (the error ``model``).
+
+    Raises
+    ------
+    ConfigError
+        Naming the table and key: an unknown option or test, a value out of its domain, an unknown
+        ``preset`` or ``gravity``, a missing ``model`` file, or a test longer than the lab's sample limit.
+    """
+    opts = _options(ctx)
+    if opts["model"]:
+        files = [opts["model"]]
+    else:
+        files = []
+        check_preset("[simulate_tests]", opts["preset"])
+    g = opts["gravity"]
+    if not (g in ("normal", "constant") or (isinstance(g, (int, float)) and not isinstance(g, bool) and 0 < g < 100)):
+        raise ConfigError(f"[simulate_tests] gravity must be 'normal', 'constant' or a number in (0, 100) m/s^2, "
+                          f"got {g!r}")
+    fs, move = float(opts["fs"]), float(opts["dwell_s"]) + float(opts["transition_s"])
+    lengths = {"hundred_position": ("100 x (dwell_s + transition_s) x fs", 100 * move * fs),
+               "rate_table": ("120 x (dwell_s + transition_s + remount_s) x fs",
+                              120 * (move + float(opts["remount_s"])) * fs),
+               "static_long": ("static_duration_s x fs", float(opts["static_duration_s"]) * fs)}
+    for name in opts["tests"]:
+        check_samples(f"[simulate_tests] {name}", lengths[name][0], lengths[name][1])
+    return files
 
 
 def _error_model(opts: dict[str, Any]) -> Any:

@@ -39,7 +39,7 @@ from imunav.calib import thermal_calibration
 from imunav.errors import ConfigError
 from imunav.files import atomic_path
 from imunav.lab.report.lab import embed_png
-from imunav.lab.steps._api import LabContext, StepResult
+from imunav.lab.steps._api import LabContext, StepResult, check_preset, check_samples
 from imunav.sim import hundred_position_profile, presets, rate_table_profile, simulate_imu
 from imunav.units import DEG, G0
 
@@ -73,6 +73,32 @@ def _options(ctx: LabContext) -> dict[str, Any]:
     if not o["orders"] or max(o["orders"]) >= len(t) - 1:
         raise ConfigError(f"[temperature] orders {o['orders']} need more than max(order) + 1 temperatures ({len(t)} given)")
     return o
+
+
+def check(ctx: LabContext) -> list[Path]:
+    """Check the ``[temperature]`` table whole, before any step runs (:func:`imunav.lab.config.parse_lab_config`).
+
+    Parameters
+    ----------
+    ctx : LabContext
+        A context holding the lab definition, ``step`` set to this step.
+
+    Returns
+    -------
+    list of pathlib.Path
+        The files the table names (none).
+
+    Raises
+    ------
+    ConfigError
+        Naming the table and key: an unknown option, a value out of its domain, an unknown ``preset``, or
+        a thermal test longer than the lab's sample limit.
+    """
+    o = _options(ctx)
+    check_preset("[temperature]", o["preset"])
+    n = len(o["temps_c"]) * 220 * (float(o["dwell_s"]) + float(o["transition_s"])) * float(o["fs"])
+    check_samples("[temperature] temps_c", "temperatures x 220 x (dwell_s + transition_s) x fs", n)
+    return []
 
 
 def _true_curve(model: Any, param: str, axis: int, temp_c: np.ndarray) -> np.ndarray:

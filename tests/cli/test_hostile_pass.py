@@ -1,0 +1,334 @@
+"""Issue 36: what a hostile pass found after the no-data-loss work -- one test per cause, through the CLI and the
+public API.
+
+Two outputs of one command on the same file or inside each other's folders, an output on a file a lab
+definition names, a lab definition checked only when its step runs, raw parsing of user text, library
+functions that accept nonsense.  ``tests/cli_hostile.py`` generates the same families for every command.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+from builders import static_imu
+from cli_contract import one_error_line as _exit_2
+from typer.testing import CliRunner
+
+from imunav.calib import ImuCalibration
+from imunav.cli.main import app
+from imunav.io import write_imu
+from imunav.timeseries import ImuData
+
+runner = CliRunner()
+
+
+def _rec(n: int = 3000, fs: float = 50.0) -> ImuData:
+    return static_imu(n, fs, seed=1)
+
+
+def _snapshot(root: Path) -> dict[str, bytes]:
+    return {p.relative_to(root).as_posix(): p.read_bytes() for p in sorted(root.rglob("*")) if p.is_file()}
+
+
+@pytest.fixture
+def files(tmp_path):
+    write_imu(_rec(), tmp_path / "good.npz")
+    write_imu(_rec(), tmp_path / "good.csv")
+    u = np.random.default_rng(0).normal(size=(400, 3))
+    u /= np.linalg.norm(u, axis=1, keepdims=True)
+    np.savetxt(tmp_path / "mag.csv", 50 * u, delimiter=",", header="mag_x,mag_y,mag_z", comments="")
+    for k in (1, 2, 3):
+        ImuCalibration().save(tmp_path / f"cal{k}.json")
+    return tmp_path
+
+
+# ------------------------------------------------------------------ 1. two outputs of one command, one file
+@pytest.mark.parametrize("argv", [
+    ["calibrate", "mag", "mag.csv"],
+    ["calibrate", "temperature", "cal1.json@20", "cal2.json@40", "cal3.json@60", "--orders", "1"],
+])
+def test_an_output_inside_the_report_folder_of_the_same_command_is_refused(files, monkeypatch, argv):
+    monkeypatch.chdir(files)
+    before = _snapshot(files)
+    msg = _exit_2(runner.invoke(app, [*argv, "--out", "rep/report.json", "--report", "rep"]))
+    assert "rep/report.json" in msg and "output folder rep" in msg
+    assert _snapshot(files) == before and not (files / "rep").exists()
+
+
+def test_an_output_folder_inside_another_output_folder_is_refused(tmp_path):
+    from imunav.errors import InvalidInputError
+    from imunav.files import check_outputs
+
+    with pytest.raises(InvalidInputError, match="inside the run folder"):
+        check_outputs([], [], folders=[tmp_path / "run" / "rep"], run_folders=[tmp_path / "run"])
+    with pytest.raises(OSError, match="another output"):
+        check_outputs([], [tmp_path / "a.json"], folders=[tmp_path / "a.json" / "rep"])
+
+
+def test_lab_output_on_a_recording_the_definition_names_is_refused(files, monkeypatch):
+    monkeypatch.chdir(files)
+    (files / "lab.toml").write_text('[lab]\nsteps = ["recordings"]\n[recordings.a]\npath = "good.npz"\n'
+                                    'test = "static"\n')
+    before = _snapshot(files)
+    msg = _exit_2(runner.invoke(app, ["lab", "--config", "lab.toml", "--out", "rep", "--quiet", "--json", "good.npz"]))
+    assert "good.npz" in msg and "input" in msg
+    msg = _exit_2(runner.invoke(app, ["lab", "--config", "lab.toml", "--out", ".", "--quiet"]))
+    assert "holds the input" in msg
+    assert _snapshot(files) == before and not (files / "rep").exists()
+
+
+# ------------------------------------------------------------------ 2. a lab definition checked whole first
+BAD_LABS = {
+    "unknown-unit": ('[lab]\nsteps = ["recordings"]\n[recordings.a]\npath = "good.npz"\ntest = "static"\n'
+                     'units = { gyro = "furlongs" }\n', ["[recordings.a]", "units", "furlongs"]),
+    "unit-contradicts-file": ('[lab]\nsteps = ["recordings"]\n[recordings.a]\npath = "good.npz"\ntest = "static"\n'
+                              'units = { gyro = "deg/s" }\n', ["[recordings.a]", "units", "deg/s"]),
+    "rate-contradicts-stamps": ('[lab]\nsteps = ["recordings"]\n[recordings.a]\npath = "good.csv"\ntest = "static"\n'
+                                'fs = 200.0\n', ["[recordings.a]", "fs"]),
+    "unknown-gins-preset": ('[lab]\nsteps = ["gins"]\n[gins]\npreset = "nope"\n', ["[gins]", "preset", "nope"]),
+    "unknown-preset-of-a-step-not-run": ('[lab]\nsteps = ["noise"]\n[temperature]\npreset = "nope"\n',
+                                         ["[temperature]", "preset"]),
+    "size-beyond-the-machine": ('[lab]\nsteps = ["simulate_tests"]\n[simulate_tests]\nstatic_duration_s = 1e12\n',
+                                ["[simulate_tests]", "static_duration_s"]),
+}
+
+
+@pytest.mark.parametrize("name", list(BAD_LABS))
+def test_a_bad_lab_definition_is_refused_before_the_first_step(files, monkeypatch, name):
+    text, words = BAD_LABS[name]
+    monkeypatch.chdir(files)
+    (files / "lab.toml").write_text(text)
+    msg = _exit_2(runner.invoke(app, ["lab", "--config", "lab.toml", "--out", "rep", "--quiet"]))
+    assert "lab.toml" in msg and all(w in msg for w in words), msg
+    assert not (files / "rep").exists()
+
+
+def test_the_library_checks_the_definition_whole(files):
+    from imunav.errors import ConfigError
+    from imunav.lab.runner import parse_lab_config
+
+    with pytest.raises(ConfigError, match=r"\[gins\] preset"):
+        parse_lab_config({"gins": {"preset": "nope"}})
+    cfg = parse_lab_config({"_base_dir": str(files), "recordings": {"a": {"path": "good.npz", "test": "static"}},
+                            "simulate_tests": {"model": str(files / "cal1.json")}})
+    assert {p.name for p in cfg.inputs} == {"good.npz", "cal1.json"}
+
+
+# ------------------------------------------------------------------ 3. user text parsed in the validation layer
+def test_text_where_a_number_belongs_is_one_line_naming_the_option(files, monkeypatch):
+    import json
+
+    monkeypatch.chdir(files)
+    msg = _exit_2(runner.invoke(app, ["calibrate", "temperature", "cal1.json@20", "cal2.json@40", "cal3.json@60",
+                                      "--orders", "a", "--out", "t.json"]))
+    assert "--orders" in msg and "'a'" in msg
+    msg = _exit_2(runner.invoke(app, ["calibrate", "temperature", "cal1.json@warm", "cal2.json@40", "cal3.json@60",
+                                      "--out", "t.json"]))
+    assert "cal1.json@warm" in msg
+    (files / "bat").mkdir()
+    write_imu(_rec(), files / "bat" / "u1.csv")
+    msg = _exit_2(runner.invoke(app, ["batch", "calibrate", "bat", "--columns", "{bad", "--out", "bo", "--quiet"]))
+    assert "--columns" in msg and "JSON" in msg
+    (files / "secs.json").write_text(json.dumps({k: {"start": "a" if k == "x_p" else 0, "end": 10} for k in
+                                                 ("x_p", "x_a", "y_p", "y_a", "z_p", "z_a", "x_rot", "y_rot", "z_rot")}))
+    msg = _exit_2(runner.invoke(app, ["calibrate", "ferraris", "good.csv", "--sections", "secs.json", "--fs", "50",
+                                      "--out", "f.json"]))
+    assert "x_p" in msg and "'a'" in msg
+    assert not any((files / n).exists() for n in ("t.json", "bo", "f.json"))
+
+
+# ------------------------------------------------------------------ 8. the public API validates like the CLI
+def test_a_zero_or_non_unit_quaternion_is_no_rotation():
+    from imunav.errors import InvalidInputError
+    from imunav.rotation import dcm_from_quat, quat_rotate
+
+    with pytest.raises(InvalidInputError, match=r"q is not a unit quaternion .*rows \[0\]"):
+        dcm_from_quat([0, 0, 0, 0])
+    with pytest.raises(InvalidInputError, match=r"rows \[1\]"):
+        dcm_from_quat([[1, 0, 0, 0], [2, 0, 0, 0]])
+    with pytest.raises(InvalidInputError, match="unit quaternion"):
+        quat_rotate([0, 0, 0, 0], [1, 0, 0])
+    q = np.array([1.0, 1e-9, 0, 0])  # the drift of a propagated attitude is accepted
+    assert np.allclose(dcm_from_quat(q), np.eye(3), atol=1e-8)
+
+
+def test_allan_deviation_needs_two_differences():
+    from imunav.errors import InsufficientDataError
+    from imunav.noise import allan_deviation
+
+    with pytest.raises(InsufficientDataError, match="x: need at least 3 samples"):
+        allan_deviation([1.0, 2.0], fs=1.0)
+    with pytest.raises(InsufficientDataError, match="need at least 4 samples"):
+        allan_deviation([1.0, 2.0, 3.0], fs=1.0, kind="hadamard")
+    assert allan_deviation([1.0, 2.0, 4.0], fs=1.0).tau.tolist() == [1.0]
+
+
+def test_a_complementary_gain_beyond_one_over_dt_is_refused():
+    from imunav.attitude import Complementary
+    from imunav.errors import InvalidInputError
+
+    d = ImuData(np.arange(10) * 0.5, np.zeros((10, 3)), np.tile([0.0, 0.0, -9.8], (10, 1)))
+    with pytest.raises(InvalidInputError, match=r"k_accel=5 .* 0.5 s .* at most 1/dt = 2"):
+        Complementary(k_accel=5).run(d)
+    with pytest.raises(InvalidInputError, match="k_mag"):
+        Complementary(k_mag=50).step([0, 0, 0], [0, 0, -9.8], [1, 0, 0], 0.1)
+    assert np.allclose(Complementary(k_accel=2).run(d).q_nb[-1], [1, 0, 0, 0])
+
+
+# ------------------------------------------------------------------ 5. a write the file system refuses
+@pytest.mark.parametrize("out", ["o.h5", "o.npz", "o.csv"])
+def test_a_refused_write_is_one_line_for_every_format(files, out):
+    import os
+    import resource
+    import subprocess
+    import sys
+
+    def small_files():
+        resource.setrlimit(resource.RLIMIT_FSIZE, (20000, 20000))
+
+    pytest.importorskip("h5py")
+    env = dict(os.environ, PYTHONPATH=str(Path(__file__).resolve().parents[2] / "src"))
+    r = subprocess.run([sys.executable, "-m", "imunav.cli.main", "convert", "good.csv", out], cwd=files,
+                       capture_output=True, text=True, env=env, timeout=300, preexec_fn=small_files)
+    assert r.returncode == 2, r.stderr  # not -11 (SIGSEGV inside the HDF5 library)
+    lines = r.stderr.strip().splitlines()
+    assert len(lines) == 1 and out in lines[0] and "File too large" in lines[0], r.stderr
+    assert not (files / out).exists() and not list(files.glob(f".{out}*"))
+
+
+def test_hdf5_files_are_built_in_memory_and_read_back(files):
+    pytest.importorskip("h5py")
+    from imunav.io import read_imu
+    from imunav.io.mat import write_mat
+
+    rec = read_imu(files / "good.csv")
+    for name, write in (("x.h5", write_imu), ("x.mat", lambda d, p: write_mat(d, p, version="7.3"))):
+        write(rec, files / name)
+        back = read_imu(files / name)
+        assert np.array_equal(back.gyro, rec.gyro) and np.array_equal(back.t, rec.t)
+
+
+# ------------------------------------------------------------------ 7. failures said, unreadable inputs refused
+def test_a_batch_says_each_failed_item_on_stderr(files, monkeypatch):
+    monkeypatch.chdir(files)
+    r = runner.invoke(app, ["batch", "simulate", "2", "--static", "20", "--fs", "20", "--out", "b", "--executor",
+                            "serial", "--quiet"])
+    assert r.exit_code == 0, r.stderr
+    # multiposition calibration of static records: every unit fails (no segments) -> one line per unit
+    r = runner.invoke(app, ["batch", "calibrate", "b", "--out", "bc", "--executor", "serial", "--quiet"])
+    assert r.exit_code == 1
+    lines = [ln for ln in r.stderr.splitlines() if ln.startswith("error: ")]
+    assert len(lines) == 2 and all("unit_" in ln for ln in lines), r.stderr
+    msg = _exit_2(runner.invoke(app, ["batch", "noise", "b", "--terms", "X", "--out", "bn", "--executor", "serial",
+                                      "--quiet"]))
+    assert "--terms" in msg and "'X'" in msg and not (files / "bn").exists()
+
+
+def test_info_refuses_what_it_cannot_read(files, monkeypatch):
+    monkeypatch.chdir(files)
+    np.savez(files / "cplx.npz", t=np.arange(10.0), gyro=np.ones((10, 3)) * (1 + 1j), accel=np.ones((10, 3)) * 1j)
+    (files / "hdr.ulg").write_bytes(b"ULog\x01\x12\x35\x01" + bytes(8))
+    msg = _exit_2(runner.invoke(app, ["info", "cplx.npz"]))
+    assert "cplx.npz" in msg and "complex" in msg
+    msg = _exit_2(runner.invoke(app, ["info", "hdr.ulg"]))
+    assert "hdr.ulg" in msg and "no topic" in msg
+    (files / "dup.csv").write_text("t,gyro_x,gyro_x,gyro_y,gyro_z,accel_x,accel_y,accel_z\n"
+                                   + "".join(f"{k / 100},0,9,0,0,0,0,-9.8\n" for k in range(5)))
+    msg = _exit_2(runner.invoke(app, ["info", "dup.csv"]))
+    assert "dup.csv" in msg and "['gyro_x'] more than once" in msg
+
+
+def test_an_empty_error_model_is_said_to_be_ideal(files, monkeypatch):
+    from imunav.errors import ImunavWarning
+    from imunav.sim import ImuErrorModel
+
+    monkeypatch.chdir(files)
+    (files / "empty.toml").write_text('name = "e"\n')
+    r = runner.invoke(app, ["simulate", "static", "--duration", "2", "--fs", "10", "--model", "empty.toml", "--out",
+                            "e.npz"])
+    assert r.exit_code == 0 and "warning: empty.toml" in r.stderr and "ideal" in r.stderr, r.stderr
+    with pytest.warns(ImunavWarning, match="ideal"):
+        ImuErrorModel.from_toml(files / "empty.toml")
+    (files / "m.toml").write_text('name = "m"\n[gyro]\nbias = [0.001, 0, 0]\n')
+    import warnings
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        ImuErrorModel.from_toml(files / "m.toml")
+
+
+# ------------------------------------------------------------------ 6. exports into another tool's units
+def test_px4_magnetometer_offsets_say_their_conversion_or_refuse_a_unit_that_does_not_fit(tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    u = np.random.default_rng(0).normal(size=(400, 3))
+    u /= np.linalg.norm(u, axis=1, keepdims=True)
+    np.savetxt("mag_T.csv", 48e-6 * u + [1e-5, 0, 0], delimiter=",", header="mag_x,mag_y,mag_z", comments="")
+    # tesla read as the default gauss: a field of 4.8e-5 gauss is no field on Earth
+    msg = _exit_2(runner.invoke(app, ["calibrate", "mag", "mag_T.csv", "--out", "m.json", "--px4-params", "m.params"]))
+    assert "--mag-unit" in msg and "gauss" in msg and not Path("m.json").exists()
+    r = runner.invoke(app, ["calibrate", "mag", "mag_T.csv", "--out", "m.json", "--px4-params", "m.params",
+                            "--mag-unit", "T"])
+    assert r.exit_code == 0, r.stderr
+    assert "converted" in r.stdout and "from T to PX4's gauss (x 10000)" in r.stdout
+    text = Path("m.params").read_text()
+    assert "# Converted: CAL_MAG0_{X,Y,Z}OFF" in text
+    off = float(next(ln.split("\t")[3] for ln in text.splitlines() if "\tCAL_MAG0_XOFF\t" in ln))
+    assert off == pytest.approx(0.1, abs=0.01)  # 1e-5 T = 0.1 gauss
+
+
+# ------------------------------------------------------------------ 4. work multiplied by an option is estimated
+def test_taus_all_is_estimated_before_work(files, monkeypatch):
+    from imunav.cli._limits import check_limits
+    from imunav.errors import ImunavWarning
+
+    monkeypatch.chdir(files)
+    # 3,000 samples (60 s at 50 Hz): 1,500 averaging times, each a GLS fit term: said before the work
+    with pytest.warns(ImunavWarning, match=r"noise --taus all: 1\.5\de\+03 averaging times .* minutes"):
+        check_limits("noise", {"file": "good.npz", "taus": "all"})
+    n = 200_000
+    write_imu(_rec(n), files / "long.npz")
+    msg = _exit_2(runner.invoke(app, ["noise", "long.npz", "--taus", "all"]))
+    assert "--taus all" in msg and "--force" in msg
+    import warnings
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        check_limits("noise", {"file": "long.npz", "taus": "octave"})  # the default grid: nothing to say
+
+
+# ------------------------------------------------------------------ 9. an interrupt is never lost
+@pytest.mark.parametrize("write_after", [False, True])
+def test_an_interrupt_swallowed_in_a_callback_from_c_is_not_lost(tmp_path, monkeypatch, write_after):
+    """SIGINT during numba's compilation raises KeyboardInterrupt inside a ctypes callback of llvmlite, where
+    Python prints "Exception ignored" and goes on: the run used to finish with exit 0 and a manifest.  Latched,
+    the interrupt is raised again before the next output is published or the run folder gets its manifest."""
+    import ctypes
+    import os
+    import signal
+    import sys
+
+    from imunav.files import latch_interrupts, write_json
+    from imunav.lab.runfolder import FAILED, MANIFEST, RunFolder
+
+    old = signal.getsignal(signal.SIGINT)
+    monkeypatch.setattr(sys, "unraisablehook", sys.unraisablehook)
+
+    def swallowed() -> None:  # a callback from C, as llvmlite's object-cache notification
+        os.kill(os.getpid(), signal.SIGINT)
+        sum(range(100_000))
+
+    callback = ctypes.CFUNCTYPE(None)(swallowed)
+    run = tmp_path / "run"
+    try:
+        latch_interrupts()
+        with pytest.raises(KeyboardInterrupt), RunFolder(run, "test"):
+            write_json(run / "a.json", {"a": 1})
+            callback()  # the interrupt lands here and is swallowed
+            if write_after:
+                write_json(run / "b.json", {"b": 2})
+    finally:
+        signal.signal(signal.SIGINT, old)
+    assert not (run / MANIFEST).exists() and (run / FAILED).exists()
+    assert not (run / "a.json").exists() and not (run / "b.json").exists()
