@@ -34,6 +34,7 @@ def test_docs_build_without_warnings(tmp_path):
     pytest.importorskip("myst_parser")
     src = tmp_path / "docs"
     shutil.copytree(ROOT / "docs", src, ignore=shutil.ignore_patterns("_build", "_generated", "generated"))
+    shutil.copy(ROOT / "CHANGELOG.md", tmp_path / "CHANGELOG.md")  # docs/changelog.md includes ../CHANGELOG.md
     (tmp_path / "lab.toml").write_text(TINY_LAB)
     env = {**os.environ, "IMUNAV_GALLERY_LAB": str(tmp_path / "lab.toml"),
            "PYTHONPATH": os.pathsep.join(p for p in (str(ROOT / "src"), os.environ.get("PYTHONPATH")) if p)}
@@ -42,6 +43,10 @@ def test_docs_build_without_warnings(tmp_path):
     assert r.returncode == 0, r.stderr[-6000:]
     assert "WARNING" not in r.stderr and "ERROR" not in r.stderr, r.stderr[-6000:]
     html = tmp_path / "html"
+    guide = sorted(p.stem for p in (ROOT / "docs" / "guide").glob("*.md"))
+    assert {"noise", "calibrate", "attitude", "zupt", "gins", "airdata", "lab", "files", "howto", "python"} <= set(guide)
+    for page in (*(f"guide/{g}.html" for g in guide), "changelog.html"):
+        assert (html / page).is_file(), page
     for page in ("index.html", "conventions.html", "gallery.html", "api/io.html",
                  "api/generated/imunav.io.px4params.html", "api/generated/imunav.noise.fit.html"):
         assert (html / page).is_file(), page
