@@ -7,7 +7,7 @@ dict of the figures the command prints, plain JSON types) and ``plot()`` (the co
 ``Figure``).  The library's own result is the wrapper's first field, for everything else.
 
 >>> import imunav
->>> rec = imunav.read("../shared/data/px4_ulog/sample.ulg")       # doctest: +SKIP
+>>> rec = imunav.read("flight.ulg")                               # doctest: +SKIP
 >>> imunav.estimate_attitude(rec, "mekf").summary()               # doctest: +SKIP
 """
 
@@ -126,6 +126,11 @@ class NoiseAnalysis:
         -------
         matplotlib.figure.Figure
             The figure.
+
+        Raises
+        ------
+        InvalidInputError
+            If the analysis has no such sensor.
         """
         if sensor not in self.allan:
             raise InvalidInputError(f"no {sensor!r} in this analysis; it has {sorted(self.allan)}")
@@ -289,6 +294,13 @@ def analyse_noise(recording: Recording | ImuData, *, sensors: tuple[str, ...] = 
     -------
     NoiseAnalysis
         ``fits`` and ``allan`` per sensor, with ``summary()`` and ``plot()``.
+
+    Raises
+    ------
+    InvalidInputError
+        If a sensor is neither ``"gyro"`` nor ``"accel"``.
+    NotStaticError
+        If the recording moved (unless ``force``).
     """
     data = _imu(recording)
     units = {"gyro": "rad/s", "accel": "m/s^2"}
@@ -329,6 +341,13 @@ def calibrate(recording: Recording | ImuData, method: str = "multipose", **optio
     -------
     Calibration
         The result with ``summary()`` and ``plot()``.
+
+    Raises
+    ------
+    InvalidInputError
+        If ``method`` is not ``"multipose"``.
+    InsufficientDataError
+        If the session has too few poses or too short an initial rest (:func:`imunav.calib.multipose`).
     """
     if method != "multipose":
         raise InvalidInputError(f"method {method!r}: imunav.calibrate does 'multipose'; the multi-position, "
