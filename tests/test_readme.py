@@ -285,7 +285,8 @@ def test_readme_reductions_listed() -> None:
     skipped = sum(bool(b.skip) for b in RUN)
     reduced = sum(bool(b.reduce) and not b.skip for b in RUN)
     print(f"\nREADME and guide: {len(BLOCKS)} fenced blocks, {len(RUN)} bash/python examples: {len(RUN) - skipped} run "
-          f"({reduced} of them reduced), {skipped} skipped; {len(BLOCKS) - len(RUN)} toml")
+          f"({reduced} of them reduced), {skipped} skipped; {sum(b.lang == 'toml' for b in BLOCKS)} toml, "
+          f"{sum(b.output for b in BLOCKS)} quoted outputs checked")
     for b in BLOCKS:
         if b.skip:
             print(f"  skipped  {b.where} ({b.lang}): {b.skip}")
