@@ -1,4 +1,7 @@
-"""The README's benchmark figures: where each comes from, and a check that they still hold.
+"""The benchmark figures of the README and the user guide: where each comes from, and a check that they still hold.
+
+The pages are the README (the front page) and ``docs/guide/*.md`` (the user
+guide); "the README" below means any of them (``documented_text``).
 
 Figures that a quick command gives are checked by ``tests/test_readme.py``
 (README examples with an ``expect`` directive) or by the test named beside
@@ -401,6 +404,12 @@ def _normalise(text: str) -> str:
     return " ".join(text.split())
 
 
+def documented_text() -> str:
+    """The README and the user guide's pages (``docs/guide/*.md``) as one text, where each figure is quoted."""
+    pages = [ROOT / "README.md", *sorted((ROOT / "docs" / "guide").glob("*.md"))]
+    return "\n".join(p.read_text(encoding="utf-8") for p in pages)
+
+
 def _command(f: Figure) -> str:
     imunav = f"{sys.executable} -m imunav.cli.main"
     return f.command.format(python=sys.executable, imunav=imunav)
@@ -451,7 +460,7 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--max-minutes", type=float, default=None,
                     help="with --check and no NAME: only the figures this quick")
     a = ap.parse_args(argv)
-    readme = _normalise((ROOT / "README.md").read_text(encoding="utf-8"))
+    readme = _normalise(documented_text())
     by_name = {f.name: f for f in FIGURES}
     if a.check is None:
         for f in FIGURES:

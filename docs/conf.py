@@ -1,7 +1,7 @@
-"""Sphinx configuration of the imunav reference site (``make docs``; README, section "Reference site").
+"""Sphinx configuration of the imunav site (``make docs``; user guide, page "Install and first run").
 
-API pages come from the numpydoc docstrings (autodoc + napoleon + autosummary), the Markdown pages
-(conventions) through myst-parser, and the gallery page from a short lab run made by ``gallery.py``
+The user guide (``guide/*.md``, one page per task) and the Markdown pages (conventions, changelog) go through
+myst-parser, the API pages come from the numpydoc docstrings (autodoc + napoleon + autosummary), and the gallery page from a short lab run made by ``gallery.py``
 before the build (cached in ``_generated/``, which is not committed).
 """
 

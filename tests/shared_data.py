@@ -22,3 +22,14 @@ def data_path(*parts: str) -> Path:
     if not p.exists():
         pytest.skip(f"shared data not found: {p} (set IMUNAV_DATA to the shared/data folder)")
     return p
+
+
+def doc_pages() -> list[Path]:
+    """The pages whose examples run in the tests and whose figures are checked: the README (the front page) and
+    the user guide (``docs/guide/*.md``)."""
+    return [ROOT / "README.md", *sorted((ROOT / "docs" / "guide").glob("*.md"))]
+
+
+def doc_text() -> str:
+    """The README and the user guide as one text: where a quoted figure must still be found."""
+    return "\n".join(p.read_text(encoding="utf-8") for p in doc_pages())

@@ -42,9 +42,14 @@ LAYERS: list[tuple[str, tuple[str, ...]]] = [
     ("noise, calib, filters", ("imunav.noise", "imunav.calib", "imunav.filters")),
     ("sim, attitude, ins, airdata, learn", ("imunav.sim", "imunav.attitude", "imunav.ins", "imunav.airdata",
                                             "imunav.learn", "imunav.scenarios")),
-    ("lab: runner, config, steps, batch, montecarlo, runfolder, report", ("imunav.lab",)),
+    ("lab: runner, config, steps, batch, montecarlo, runfolder, report; notebook", ("imunav.lab", "imunav.notebook")),
     ("cli", ("imunav.cli",)),
 ]
+
+#: The one function-level import of the package itself: the package root's lazy re-export (PEP 562 ``__getattr__``)
+#: of the notebook entry points (``imunav.read`` ...), so that ``import imunav`` gives them without loading the
+#: estimators (docs/design.md, section 1).  Not an edge of the graph: it runs only when a user asks for one.
+LAZY_REEXPORTS = frozenset({("imunav", "imunav.notebook")})
 
 #: Top-level packages that may be imported inside a function: optional extras, or matplotlib, which
 #: only drawing needs (``import imunav`` and ``imunav --help`` must not load it).
@@ -164,7 +169,7 @@ def build_graph(src: Path, package: str) -> Graph:
                     parts = target.split(".")
                     chain = [".".join(parts[:k]) for k in range(1, len(parts))] + [target]
                     for t in chain:
-                        if t != m and not m.startswith(t + "."):
+                        if t != m and not m.startswith(t + ".") and not (in_fn and (m, t) in LAZY_REEXPORTS):
                             graph.edges.append(Import(m, t, node.lineno, in_fn))
                 elif in_fn:
                     prev = lines[m][node.lineno - 2] if node.lineno >= 2 else ""

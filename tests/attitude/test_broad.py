@@ -4,11 +4,10 @@ from __future__ import annotations
 
 import json
 import re
-from pathlib import Path
 
 import numpy as np
 import pytest
-from shared_data import data_path
+from shared_data import data_path, doc_text
 
 from imunav.attitude.alignment import broad_reference_start
 from imunav.attitude.madgwick import Madgwick
@@ -94,9 +93,9 @@ def test_published_reference_runs_all_trials_1e3_deg():
     assert len(pub["madgwick"]["trials"]) == 10 and len(pub["mahony"]["trials"]) == 10
     print(f"worst |imunav - published| = {worst:.2e} deg; total RMSE: Madgwick-C {worst_total['madgwick']:.2e}, "
           f"Mahony {worst_total['mahony']:.2e} deg")
-    readme = (Path(__file__).resolve().parents[2] / "README.md").read_text(encoding="utf-8")
+    readme = doc_text()
     claim = re.search(r"total RMSE of all 10 trials within ([\d.]+)°; Mahony \(Kp 0\.74, Ki\s+0\.0012\) "
                       r"within ([\d.]+)°", readme)
-    assert claim, "the README no longer states the Madgwick-C / Mahony agreement this test checks"
+    assert claim, "the README and the guide no longer state the Madgwick-C / Mahony agreement this test checks"
     assert worst_total["madgwick"] <= float(claim.group(1)), worst_total
     assert worst_total["mahony"] <= float(claim.group(2)), worst_total

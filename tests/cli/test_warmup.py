@@ -5,10 +5,12 @@ from __future__ import annotations
 import importlib.util
 import io
 import os
+import re
 import sys
 
 import numba
 import numpy as np
+import pytest
 from numba.core import event
 from typer.testing import CliRunner
 
@@ -34,10 +36,17 @@ def test_a_compilation_is_said_once_and_recorded():
         twice(np.ones(3))  # compiled already: no event
     finally:
         event.unregister("numba:compile", watch)
-    assert stream.getvalue() == NOTICE + "\n"  # once, however many kernels
+    lines = stream.getvalue().splitlines()
+    assert lines[0] == NOTICE and lines.count(NOTICE) == 1  # once, however many kernels
+    # then one line per kernel compiled, with its seconds (issue 35: say what is compiled and for how long)
+    assert [ln.split()[1].rsplit(".", 1)[-1] for ln in lines[1:]] == ["twice", "thrice"], lines
+    assert all(re.fullmatch(r"  compiled \S+ in \d+\.\d s", ln) for ln in lines[1:]), lines
     names = [k.rsplit(".", 1)[-1] for k in watch.kernels]  # with numba's own helpers they call
     assert names[0] == "twice" and "thrice" in names
-    assert watch.seconds > 0
+    assert watch.seconds > 0 and [n.rsplit(".", 1)[-1] for n, _ in watch.top] == ["twice", "thrice"]
+    assert sum(dt for _, dt in watch.top) == pytest.approx(watch.seconds)
+    watch.report()
+    assert stream.getvalue().splitlines()[-1].startswith(f"note: compiled {len(watch.kernels)} numba kernels in ")
 
 
 def test_bytecode_is_written_for_imported_modules(tmp_path, monkeypatch):

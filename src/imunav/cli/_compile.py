@@ -4,8 +4,10 @@ that ``imunav warmup`` prints.
 imunav's kernels are compiled by numba on first use and cached on disk (``cache=True``): in the package's
 ``__pycache__`` folders where Python may write there, else in the user's cache folder (numba's own fallback,
 or ``$NUMBA_CACHE_DIR`` when set).  A first run after an install or upgrade compiles them (tens of seconds on
-two cores); :func:`watch_compilation` then says so on a terminal, once, instead of a silent wait, and
-``imunav warmup`` does the compilation ahead.
+two cores); :func:`watch_compilation` then says so on a terminal instead of a silent wait: the notice at the
+first compilation, one line per kernel as it is compiled (its name and seconds), and the total when the command
+ends; ``imunav warmup`` does the compilation ahead.  ``IMUNAV_COMPILE_REPORT=1`` prints the same on standard
+error where it is not a terminal (``benchmarks/bench_first_run.py`` reads it).
 
 This module imports numba: the CLI's lazy loader (:mod:`imunav.cli._lazy`) imports it only once a command's
 library has loaded numba.
@@ -13,6 +15,7 @@ library has loaded numba.
 
 from __future__ import annotations
 
+import atexit
 import os
 import py_compile
 import sys
@@ -22,7 +25,7 @@ from typing import Any, TextIO
 
 from numba.core import event
 
-__all__ = ["NOTICE", "CompileWatch", "watch_compilation", "write_bytecode"]
+__all__ = ["NOTICE", "REPORT_ENV", "CompileWatch", "watch_compilation", "write_bytecode"]
 
 #: the line a command prints (on a terminal) when it has to compile kernels
 NOTICE = ("note: compiling imunav's numba kernels (first run after an install or upgrade; they are cached for the "
@@ -40,6 +43,8 @@ class CompileWatch(event.Listener):
 
     def __init__(self, stream: TextIO | None = None) -> None:
         self.stream = stream
+        #: ``(kernel, seconds)`` of each top-level compilation (a kernel's callees compile inside it)
+        self.top: list[tuple[str, float]] = []
         #: ``module.function`` of every kernel compiled (cache misses), in order
         self.kernels: list[str] = []
         #: folders numba caches the compiled kernels in
@@ -49,15 +54,18 @@ class CompileWatch(event.Listener):
         self._depth = 0
         self._t0 = 0.0
         self._noticed = False
+        self._top_name = ""
 
     def on_start(self, ev: Any) -> None:
-        if self._depth == 0:
-            self._t0 = time.perf_counter()
-        self._depth += 1
         disp = (ev.data or {}).get("dispatcher")
         fn = getattr(disp, "py_func", None)
+        name = f"{fn.__module__}.{fn.__qualname__}" if fn is not None else "?"
+        if self._depth == 0:
+            self._t0 = time.perf_counter()
+            self._top_name = name
+        self._depth += 1
         if fn is not None:
-            self.kernels.append(f"{fn.__module__}.{fn.__qualname__}")
+            self.kernels.append(name)
         path = getattr(getattr(disp, "_cache", None), "_cache_path", None)
         if path:
             self.cache_dirs.add(str(path))
@@ -68,10 +76,24 @@ class CompileWatch(event.Listener):
     def on_end(self, ev: Any) -> None:
         self._depth -= 1
         if self._depth == 0:
-            self.seconds += time.perf_counter() - self._t0
+            dt = time.perf_counter() - self._t0
+            self.seconds += dt
+            self.top.append((self._top_name, dt))
+            if self.stream is not None:
+                print(f"  compiled {self._top_name.removeprefix('imunav.')} in {dt:.1f} s", file=self.stream,
+                      flush=True)
+
+    def report(self) -> None:
+        """Print the total (kernels, seconds) on the stream, when anything was compiled."""
+        if self.stream is not None and self.top:
+            print(f"note: compiled {len(self.kernels)} numba kernels in {self.seconds:.1f} s (cached for the next "
+                  "runs)", file=self.stream, flush=True)
 
 
 _WATCH: CompileWatch | None = None
+
+#: set to 1: what is compiled is said on standard error even when it is not a terminal
+REPORT_ENV = "IMUNAV_COMPILE_REPORT"
 
 
 def watch_compilation(stream: TextIO | None = None) -> CompileWatch:
@@ -90,10 +112,11 @@ def watch_compilation(stream: TextIO | None = None) -> CompileWatch:
     """
     global _WATCH
     if _WATCH is None:
-        if stream is None and sys.stderr is not None and sys.stderr.isatty():
+        if stream is None and sys.stderr is not None and (sys.stderr.isatty() or os.environ.get(REPORT_ENV) == "1"):
             stream = sys.stderr
         _WATCH = CompileWatch(stream)
         event.register("numba:compile", _WATCH)
+        atexit.register(_WATCH.report)
     return _WATCH
 
 

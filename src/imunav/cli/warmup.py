@@ -117,6 +117,7 @@ def warmup(
                     state = f"failed: {error}" if error else f"{len(watch.kernels) - n0} kernels compiled"
                     typer.echo(f"  {what:<28} {time.perf_counter() - t0:6.1f} s  {state}")
     bc = _compile.write_bytecode()
+    watch.stream = None  # the summary below says it all: no second total at exit
     typer.echo(f"warmup: {len(watch.kernels)} numba kernels compiled in {watch.seconds:.1f} s, "
                f"bytecode of {bc.written} modules written ({bc.current} already current), "
                f"{time.perf_counter() - t_all:.1f} s in all")
