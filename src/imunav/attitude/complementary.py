@@ -30,6 +30,9 @@ __all__ = ["Complementary"]
 class Complementary(AttitudeReset):
     """Complementary filter with time constants 1/k_accel and 1/k_mag [s] (module docstring).
 
+    ``run`` and ``step`` raise :class:`~imunav.errors.InvalidInputError` when a gain times the time step exceeds 1
+    (each correction turns by ``k Δt`` of its angle: beyond 1 it overshoots the measured direction).
+
     Attributes
     ----------
     k_accel : float
@@ -80,8 +83,7 @@ class Complementary(AttitudeReset):
         Raises
         ------
         InvalidInputError
-            If ``dt`` is not finite and positive, ``k_accel dt`` or ``k_mag dt`` exceeds 1 (the correction would
-            overshoot), or the rate exceeds 1e4 rad/s (not rad/s).
+            If ``dt`` is not finite and positive, or the rate exceeds 1e4 rad/s (not rad/s).
         ShapeError
             If a sample is not a 3-vector.
         NonFiniteError
@@ -113,9 +115,8 @@ class Complementary(AttitudeReset):
         Raises
         ------
         InvalidInputError
-            If ``data`` is not an ImuData with at least 2 samples, ``use_mag=True`` without a magnetometer, a
-            gain times the longest time step exceeds 1 (the correction would overshoot), or a rate exceeds
-            1e4 rad/s.
+            If ``data`` is not an ImuData with at least 2 samples, ``use_mag=True`` without a magnetometer, or a
+            rate exceeds 1e4 rad/s.
         """
         t, g, a, m, dt, um = prepare(data, use_mag)
         self._checked_step(float(dt.max()))
