@@ -45,7 +45,7 @@ def test_adaptive_factor_finds_a_reported_sigma_three_times_too_large(drives):
     lo, right = [], []
     for d in drives:
         for factor, out in ((3.0, lo), (1.0, right)):
-            res = _run(d, _with_std(d.gnss, factor), gnss_noise_adaptive=True)
+            res = _run(d, _with_std(d.gnss, factor), gnss_adaptive=True)
             out.append(float(np.mean(res.gnss_noise_scale[res.t > res.t[0] + DURATION / 2])))
     assert np.mean(lo) == pytest.approx(1 / 9, abs=0.03), lo
     assert np.mean(right) == pytest.approx(1.0, abs=0.25), right
@@ -57,7 +57,7 @@ def test_adaptive_factor_stays_within_its_bounds(drives):
     """Fixes reported 100 times too precise: the factor stops at its upper bound (10 × σ), where the run's summary
     says the fixes scatter more than any factor allowed explains."""
     d = drives[0]
-    res = _run(d, _with_std(d.gnss, 0.01), gnss_noise_adaptive=True, gnss_noise_scale_bounds=(0.01, 100.0),
+    res = _run(d, _with_std(d.gnss, 0.01), gnss_adaptive=True, gnss_adaptive_bounds=(0.01, 100.0),
                gate_max_rejections=5)
     assert res.gnss_noise_scale.max() == pytest.approx(100.0)
     assert res.gnss_noise_scale.min() >= 0.01

@@ -159,15 +159,15 @@ class GinsConfig:
         white noise (Groves 2013, §9.4.2); None: the fixes' errors are white.
     gnss_bias_corr_time : float
         Its correlation time, s (> 0).
-    gnss_noise_adaptive : bool
+    gnss_adaptive : bool
         Scale the fixes' reported covariance by a factor estimated from their innovations (covariance matching,
-        ``kernels._adapt_gnss_noise``), bounded by ``gnss_noise_scale_bounds``; the factor reached is in
+        ``kernels._adapt_gnss_noise``), bounded by ``gnss_adaptive_bounds``; the factor reached is in
         ``GinsResult.gnss_noise_scale``.
-    gnss_noise_window : float
+    gnss_adaptive_window : float
         Fixes the adaptive factor averages over (its forgetting weight is the inverse), >= 1.
-    gnss_noise_scale_bounds : tuple of float
+    gnss_adaptive_bounds : tuple of float
         Lowest and highest factor on the reported covariance (0 < low <= 1 <= high).
-    gnss_noise_prior_fixes : float
+    gnss_adaptive_prior_fixes : float
         How many fixes the reported σ counts as in the adaptive factor's mean (>= 1): the first fixes, whose
         innovations hold the initial position's error, cannot drive it to a bound alone.
     consider_states : tuple of str
@@ -229,10 +229,10 @@ class GinsConfig:
     bias_model: str = "gauss_markov"
     gnss_bias_std: ArrayLike | None = None
     gnss_bias_corr_time: float = 60.0
-    gnss_noise_adaptive: bool = False
-    gnss_noise_window: float = 100.0
-    gnss_noise_scale_bounds: tuple[float, float] = (0.01, 100.0)
-    gnss_noise_prior_fixes: float = 10.0
+    gnss_adaptive: bool = False
+    gnss_adaptive_window: float = 100.0
+    gnss_adaptive_bounds: tuple[float, float] = (0.01, 100.0)
+    gnss_adaptive_prior_fixes: float = 10.0
     consider_states: tuple[str, ...] = ()
 
     def __post_init__(self) -> None:
@@ -247,16 +247,16 @@ class GinsConfig:
             s(self, "gnss_bias_std", _v3(self.gnss_bias_std, "gnss_bias_std", positive=True))
         if not (np.isfinite(self.gnss_bias_corr_time) and self.gnss_bias_corr_time > 0):
             raise InvalidInputError(f"GinsConfig.gnss_bias_corr_time must be > 0 s; got {self.gnss_bias_corr_time!r}")
-        if not (np.isfinite(self.gnss_noise_window) and self.gnss_noise_window >= 1):
-            raise InvalidInputError(f"GinsConfig.gnss_noise_window must be >= 1 fix; got {self.gnss_noise_window!r}")
-        if not (np.isfinite(self.gnss_noise_prior_fixes) and self.gnss_noise_prior_fixes >= 1):
-            raise InvalidInputError(f"GinsConfig.gnss_noise_prior_fixes must be >= 1; got "
-                                    f"{self.gnss_noise_prior_fixes!r}")
-        lo_hi = tuple(float(x) for x in np.ravel(self.gnss_noise_scale_bounds))
+        if not (np.isfinite(self.gnss_adaptive_window) and self.gnss_adaptive_window >= 1):
+            raise InvalidInputError(f"GinsConfig.gnss_adaptive_window must be >= 1 fix; got {self.gnss_adaptive_window!r}")
+        if not (np.isfinite(self.gnss_adaptive_prior_fixes) and self.gnss_adaptive_prior_fixes >= 1):
+            raise InvalidInputError(f"GinsConfig.gnss_adaptive_prior_fixes must be >= 1; got "
+                                    f"{self.gnss_adaptive_prior_fixes!r}")
+        lo_hi = tuple(float(x) for x in np.ravel(self.gnss_adaptive_bounds))
         if len(lo_hi) != 2 or not (0 < lo_hi[0] <= 1.0 <= lo_hi[1] < np.inf):
-            raise InvalidInputError(f"GinsConfig.gnss_noise_scale_bounds must be (low, high) with 0 < low <= 1 <= "
-                                    f"high; got {self.gnss_noise_scale_bounds!r}")
-        s(self, "gnss_noise_scale_bounds", lo_hi)
+            raise InvalidInputError(f"GinsConfig.gnss_adaptive_bounds must be (low, high) with 0 < low <= 1 <= "
+                                    f"high; got {self.gnss_adaptive_bounds!r}")
+        s(self, "gnss_adaptive_bounds", lo_hi)
         if self.bias_model not in BIAS_MODELS:
             raise InvalidInputError(f"GinsConfig.bias_model must be one of {', '.join(BIAS_MODELS)}; "
                                     f"got {self.bias_model!r}")

@@ -97,7 +97,7 @@ def _initial_state(lla0: ArrayLike, vel0: ArrayLike, q0: ArrayLike, imu_errors0:
     xs[NOM.gnss_delay] = config.gnss_delay
     xs[NOM.gnss_r_scale] = 1.0
     xs[NOM.gnss_r_est] = 1.0
-    xs[NOM.gnss_r_weight] = config.gnss_noise_prior_fixes * 3.0 / 2.0  # that many fixes of variance 2 / 3
+    xs[NOM.gnss_r_weight] = config.gnss_adaptive_prior_fixes * 3.0 / 2.0  # that many fixes of variance 2 / 3
     return xs
 
 
@@ -176,9 +176,9 @@ def kernel_setup(c: GinsConfig, fs: float, odometer: bool) -> tuple[Array, NDArr
     if c.gnss_bias_std is not None:
         prm[PRM.gnss_bias_q:PRM.gnss_bias_q + 3] = 2.0 * np.asarray(c.gnss_bias_std) ** 2 / c.gnss_bias_corr_time
         prm[PRM.gnss_bias_t] = c.gnss_bias_corr_time
-    if c.gnss_noise_adaptive:
-        prm[PRM.gnss_adapt] = 1.0 / c.gnss_noise_window
-        prm[PRM.gnss_adapt + 1:PRM.gnss_adapt + 3] = c.gnss_noise_scale_bounds
+    if c.gnss_adaptive:
+        prm[PRM.gnss_adapt] = 1.0 / c.gnss_adaptive_window
+        prm[PRM.gnss_adapt + 1:PRM.gnss_adapt + 3] = c.gnss_adaptive_bounds
     for dof in range(1, MAX_ROWS + 1):
         prm[PRM.gate + dof - 1] = float(chi2_ppf(1 - c.gate_alpha, dof)) if c.gate_alpha > 0 else 1e300
     blocks = [prm]

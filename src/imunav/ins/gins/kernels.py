@@ -260,7 +260,7 @@ def _adapt_gnss_noise(xs, nu, S0, R, prm):
 
         ``W ← (1 − w₀) W + 1/v``,   ``s ← s + (1/v) / W · (ŝ − s)``,
 
-    the reported σ counting as ``gnss_noise_prior_fixes`` fixes of variance ``2 / m`` (``W₀``, ``s₀ = 1``), bounded
+    the reported σ counting as ``gnss_adaptive_prior_fixes`` fixes of variance ``2 / m`` (``W₀``, ``s₀ = 1``), bounded
     to ``[s_min, s_max]`` (nominal ``gnss_r_est``, its information ``W`` in ``gnss_r_weight``).
 
     The factor applied to the next fix's ``R`` (nominal ``gnss_r_scale``) is the estimate when it departs from 1 by

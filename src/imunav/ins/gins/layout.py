@@ -56,7 +56,7 @@ LAY, N_LAY = named_layout("GinsLayout", tuple((name, 1) for name, _ in STATE_BLO
 #: contact point from the IMU, body FRD, m; ``gnss_delay``: the GNSS latency, s; ``gnss_bias``: the fixes' correlated
 #: error, NED, m; ``gnss_r_scale``: the factor on the fixes' reported covariance that the filter applies (1 without
 #: adaptation, or while the estimate ``gnss_r_est`` is within two standard errors of 1), ``gnss_r_weight`` the
-#: estimate's information (the inverse of its variance; the reported σ counts as ``gnss_noise_prior_fixes`` fixes).
+#: estimate's information (the inverse of its variance; the reported σ counts as ``gnss_adaptive_prior_fixes`` fixes).
 NOM, N_NOM = named_layout("GinsNominal", (("lla", 3), ("vel", 3), ("q", 4), ("gyro_bias", 3), ("accel_bias", 3),
                                           ("gyro_scale", 3), ("accel_scale", 3), ("odo_scale", 1), ("q_vb", 4),
                                           ("odo_lever", 3), ("gnss_delay", 1), ("gnss_bias", 3),

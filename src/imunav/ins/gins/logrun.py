@@ -656,7 +656,7 @@ def run_log(src: NavSources, options: LogRunOptions | None = None, *,
     if src.gnss is not None:
         # the fixes' reported σ is a prior: the filter scales it to what their innovations show (a u-blox without an
         # accuracy field, a driver's constant covariance, a receiver that under- or over-states it)
-        cfg_kw.update(gnss_delay_std=GNSS_DELAY_STD, gnss_noise_adaptive=True)
+        cfg_kw.update(gnss_delay_std=GNSS_DELAY_STD, gnss_adaptive=True)
     if src.gnss is None:
         # what only GNSS would observe (the odometer's scale, the mounting) keeps its prior σ as Schmidt consider
         # states: the INS's own drift must not "calibrate" it (the Jackal's scale went to 1.61 ± 0.009 that way),

@@ -420,9 +420,9 @@ def honesty(run: LogRun, separation: Separation | None = None) -> dict[str, Any]
         if share > HONESTY_LIMITS["rejected_share"]:
             reasons.append(f"the gate rejected {100 * share:.0f} % of the fixes")
         cfg = run.config
-        if cfg.gnss_noise_adaptive and res.gnss_noise_scale is not None:
+        if cfg.gnss_adaptive and res.gnss_noise_scale is not None:
             sc = float(res.gnss_noise_scale[-1])
-            lo, hi = cfg.gnss_noise_scale_bounds
+            lo, hi = cfg.gnss_adaptive_bounds
             checks.update(gnss_sigma_factor=math.sqrt(sc))
             if sc >= hi * (1 - 1e-9):
                 reasons.append(f"the fixes scatter more than {math.sqrt(hi):.0f} times their reported sigma")
@@ -557,10 +557,10 @@ def log_summary(run: LogRun, sources: NavSources, separation: Separation | None 
 def _gnss_noise(run: LogRun) -> dict[str, Any]:
     """The adaptive factor on the fixes' reported covariance at the end of the run, as a factor on their σ."""
     res, cfg = run.result, run.config
-    if not cfg.gnss_noise_adaptive or res.gnss_noise_scale is None:
+    if not cfg.gnss_adaptive or res.gnss_noise_scale is None:
         return {"adaptive": False}
     sc = float(res.gnss_noise_scale[-1])
-    lo, hi = cfg.gnss_noise_scale_bounds
+    lo, hi = cfg.gnss_adaptive_bounds
     return {"adaptive": True, "sigma_factor": math.sqrt(sc), "sigma_factor_bounds": [math.sqrt(lo), math.sqrt(hi)],
             "at_bound": bool(sc <= lo * (1 + 1e-9) or sc >= hi * (1 - 1e-9)),
             "method": "covariance matching of the position innovations (imunav.ins.gins.kernels._adapt_gnss_noise)"}

@@ -116,7 +116,7 @@ class GinsResult(EulerMixin, Result):
         The GNSS fixes' correlated error the filter estimated (``GinsConfig.gnss_bias_std``), NED, m.
     gnss_noise_scale : numpy.ndarray, shape (N,), or None
         The factor on the fixes' reported covariance that the adaptive noise estimate had reached
-        (``GinsConfig.gnss_noise_adaptive``; 1 without it).
+        (``GinsConfig.gnss_adaptive``; 1 without it).
     aids : dict of str to AidRecord
         Every update of each aid model of :mod:`imunav.ins.gins.aids` that was applied, by aid name
         (``gnss_position``, ``gnss_velocity``, ``odometer``, ``nhc``, ``zupt``, ``zaru``, ``baro``,
