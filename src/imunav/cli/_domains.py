@@ -194,6 +194,7 @@ DOMAINS: dict[str, Domain] = {
     "--converge": _nonneg("s", 1e7),
     "--every": _pos("s", 1e7),
     "--length": _pos("s", 1e7),
+    "gins outage-test --truth-std": _nonneg("m, the reference's horizontal sigma", 1e3),
     # airdata
     "--tas": _pos("m/s", 1000.0),
     "--altitude": _real(-500.0, 30000.0, unit="m"),
