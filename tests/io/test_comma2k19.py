@@ -149,3 +149,8 @@ def test_refusals(tmp_path):
     (seg3 / "processed_log/CAN/speed/value").write_bytes(b"not numpy")
     with pytest.raises(FileFormatError, match="NumPy"):
         read_comma2k19(seg3)
+    for bad in (np.float64(3.0), np.array(["a", "b"]), np.ones(5, dtype=complex)):
+        with open(seg3 / "processed_log/CAN/speed/value", "wb") as f:
+            np.save(f, bad)
+        with pytest.raises(FileFormatError, match="real numeric"):
+            read_comma2k19(seg3)

@@ -108,6 +108,8 @@ def _load(folder: str, rel: str, what: str, width: int | None) -> tuple[Array, A
             raise FileFormatError(f"{folder}: the comma2k19 segment has no {rel}/{name} ({what})") from None
         except (ValueError, OSError) as exc:
             raise FileFormatError(f"{p}: not a NumPy array file ({exc})") from None
+        if a.ndim == 0 or not np.issubdtype(a.dtype, np.number) or np.iscomplexobj(a):
+            raise FileFormatError(f"{p}: expected a real numeric array, got {a.dtype} of shape {a.shape}")
         arrays.append(np.asarray(a, dtype=np.float64))
     t, v = arrays
     v = v.reshape(v.shape[0], -1) if v.ndim > 1 else v[:, None]
