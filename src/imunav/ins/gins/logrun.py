@@ -657,7 +657,7 @@ def run_log(src: NavSources, options: LogRunOptions | None = None, *,
         # the fixes' reported σ is a prior: the filter scales it to what their innovations show (a u-blox without an
         # accuracy field, a driver's constant covariance, a receiver that under- or over-states it)
         cfg_kw.update(gnss_delay_std=GNSS_DELAY_STD, gnss_adaptive=True)
-    if src.gnss is None:
+    else:
         # what only GNSS would observe (the odometer's scale, the mounting) keeps its prior σ as Schmidt consider
         # states: the INS's own drift must not "calibrate" it (the Jackal's scale went to 1.61 ± 0.009 that way),
         # and the position's σ carries it
@@ -687,7 +687,7 @@ def run_log(src: NavSources, options: LogRunOptions | None = None, *,
             t_end = float(imu.t[n - 1])
             gn = None if gn is None else gn.select(gn.t <= t_end, "beyond the first pass")
             od = None if od is None else _cut_odometer(od, t_end)
-        return GinsFilter(c).run(imu.slice(0, n), gn, lla0=lla0, vel0=vel0, q0=q0, odometer=od, imu_errors0=e0,
+        return GinsFilter(c).run(imu if n == imu.n else imu.slice(0, n), gn, lla0=lla0, vel0=vel0, q0=q0, odometer=od, imu_errors0=e0,
                                  static=static[:n], baro=None, smoother=smoother, progress=report)
 
     two = src.gnss is not None and cfg.gnss_bias_std is None and "gnss_bias_std" not in o.overrides
