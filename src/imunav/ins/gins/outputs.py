@@ -29,7 +29,7 @@ from imunav.ins.gins.layout import LAY
 from imunav.ins.gins.plot import FIGURE_NAMES, write_gins_figures
 from imunav.ins.gins.result import GinsResult
 from imunav.ins.gins.setup import GinsSetup, SimulatedDrive, track_rmse
-from imunav.ins.gins.smoother import Separation, forward_backward_separation
+from imunav.ins.gins.smoother import Separation, common_epochs, forward_backward_separation
 from imunav.io.gnss import GnssData, write_gnss_text
 from imunav.io.kfgins import (
     ImuIncrements,
@@ -368,11 +368,10 @@ def _recommended(res: GinsResult) -> GinsResult:
     s = res.smoothed
     assert s is not None
     cd = res.cov_diag.copy()
-    k = np.clip(np.searchsorted(s.cov_t, res.cov_t), 0, s.cov_t.size - 1)
-    same = np.abs(s.cov_t[k] - res.cov_t) < 1e-9
-    cd[same, :9] = np.diagonal(s.cov_nav[k[same]], axis1=1, axis2=2)
+    j, i = common_epochs(s.cov_t, res.cov_t)
+    cd[i, :9] = np.diagonal(s.cov_nav[j], axis1=1, axis2=2)
     cn = res.cov_nav.copy()
-    cn[same] = s.cov_nav[k[same]]
+    cn[i] = s.cov_nav[j]
     return dataclasses.replace(res, lla=s.lla, vel_ned=s.vel_ned, q_nb=s.q_nb, cov_diag=cd, cov_nav=cn,
                                smoothed=None)
 

@@ -114,6 +114,25 @@ class Separation(Result):
                 "mean_d2": float(np.mean(self.d2[ok])) if ok.any() else None, "dof": 2, "epochs": int(ok.sum())}
 
 
+def common_epochs(a: Array, b: Array) -> tuple[NDArray[np.intp], NDArray[np.intp]]:
+    """Indices ``(i, j)`` with ``a[i] == b[j]`` (to 1 ns): the covariance epochs that the forward filter's records
+    ``a`` and the smoother's ``b`` share.
+
+    Parameters
+    ----------
+    a, b : numpy.ndarray, shape (M,) and (L,)
+        Increasing epoch times, s.
+
+    Returns
+    -------
+    i, j : numpy.ndarray of int
+        The matching indices into ``a`` and ``b``.
+    """
+    i = np.clip(np.searchsorted(a, b), 0, a.size - 1)
+    same = np.abs(a[i] - b) < 1e-9
+    return i[same], np.flatnonzero(same)
+
+
 def forward_backward_separation(res: GinsResult) -> Separation:
     """The separation of a run's forward filter and its smoother (:class:`Separation`) at the covariance epochs.
 
@@ -135,9 +154,7 @@ def forward_backward_separation(res: GinsResult) -> Separation:
     s = res.smoothed
     if s is None:
         raise InvalidInputError("forward_backward_separation needs a run with the smoother (smoother=True)")
-    k = np.clip(np.searchsorted(res.cov_t, s.cov_t), 0, res.cov_t.size - 1)
-    same = np.abs(res.cov_t[k] - s.cov_t) < 1e-9
-    k, js = k[same], np.flatnonzero(same)
+    k, js = common_epochs(res.cov_t, s.cov_t)
     i = np.clip(np.searchsorted(res.t, s.cov_t[js]), 0, res.t.size - 1)
     ref = res.lla[i]
     delta = dlla_to_ned(s.lla[i] - ref, ref)[:, :2]  # smoothed − forward, N E m
