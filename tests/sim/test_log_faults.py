@@ -158,6 +158,25 @@ def test_wheels_change_radius_read_late_and_quantised():
     assert np.max(np.abs(o.speed - k * np.interp(o.t, tr.t, v))) > 0.01  # lateness shows in the ramps
 
 
+def test_terrain_moves_the_wheels_scale_as_a_gauss_markov_process():
+    # the same draws with and without the terrain: the ratio of the readings is 1 + g(t), g first-order Gauss-Markov
+    clean = simulate_robot_log(9, distance_m=200.0, faults=LogFaults())
+    rough = simulate_robot_log(9, distance_m=200.0, faults=LogFaults(odometer_terrain_std=0.1,
+                                                                     odometer_terrain_tau_s=0.5))
+    moving = np.abs(clean.odometer.speed) > 0.3
+    g = rough.odometer.speed[moving] / clean.odometer.speed[moving] - 1.0
+    t = clean.odometer.t[moving]
+    # about T / (2 tau) independent values: the sample sigma's relative standard error is 1 / sqrt(2 N_eff)
+    n_eff = (t[-1] - t[0]) / (2 * 0.5)
+    assert abs(np.std(g) / 0.1 - 1.0) < 3.0 / math.sqrt(2.0 * n_eff)
+    step = np.diff(t) < 0.15  # consecutive 10 Hz readings: correlation e^{-0.1 / 0.5}
+    rho = np.corrcoef(g[:-1][step], g[1:][step])[0, 1]
+    assert abs(rho - math.exp(-0.2)) < 0.05
+    for bad in ({"odometer_terrain_std": -0.1}, {"odometer_terrain_tau_s": 0.0}):
+        with pytest.raises(InvalidInputError, match="odometer_terrain"):
+            LogFaults(**bad)
+
+
 def test_turns_slip_sideways_and_the_wheels_over_read():
     f = LogFaults(turn_slip=0.2, odometer_turn_overread=0.3)
     log = simulate_robot_log(8, distance_m=80.0, odometer_noise_std=1e-9, faults=f)

@@ -101,6 +101,11 @@ class LogFaults:
         Quantum of the speed readings, m/s (>= 0).
     odometer_latency_s : float
         Age of each speed reading at its stamp, s (>= 0).
+    odometer_terrain_std : float
+        σ of the odometer scale's variation with the ground under the wheels, a Gauss–Markov process
+        (dimensionless, >= 0; :func:`~imunav.sim.vehicle.simulate_odometer`'s ``terrain_scale_std``).
+    odometer_terrain_tau_s : float
+        Its correlation time, s (> 0).
 
     Raises
     ------
@@ -126,6 +131,8 @@ class LogFaults:
     odometer_scale_tau_s: float = 300.0
     odometer_resolution: float = 0.0
     odometer_latency_s: float = 0.0
+    odometer_terrain_std: float = 0.0
+    odometer_terrain_tau_s: float = 20.0
 
     def __post_init__(self) -> None:
         c = np.asarray(self.gnss_corr_sigma_m, dtype=float)
@@ -133,9 +140,9 @@ class LogFaults:
             raise InvalidInputError(f"LogFaults.gnss_corr_sigma_m must be 3 sigmas >= 0 m (N, E, D); got "
                                     f"{self.gnss_corr_sigma_m!r}")
         positive = ("gnss_corr_tau_s", "gnss_std_factor", "gnss_rest_relax_s", "imu_temp_tau_s",
-                    "odometer_scale_tau_s")
+                    "odometer_scale_tau_s", "odometer_terrain_tau_s")
         nonneg = ("gnss_rest_drift_mps", "gnss_rest_jump_m", "imu_stamp_jitter_s", "turn_slip",
-                  "odometer_turn_overread", "odometer_resolution", "odometer_latency_s")
+                  "odometer_turn_overread", "odometer_resolution", "odometer_latency_s", "odometer_terrain_std")
         for f in fields(self):
             v = getattr(self, f.name)
             if f.name == "gnss_corr_sigma_m":
