@@ -36,6 +36,7 @@ from imunav.errors import InsufficientDataError, InvalidInputError
 from imunav.ins.gins.alignment import gyro_bias_in_motion
 from imunav.ins.gins.config import GinsConfig
 from imunav.ins.gins.filter import GinsFilter, kernel_setup
+from imunav.ins.gins.identify import GNSS_BIAS_TAU, gnss_correlated_std, withheld_score, withheld_windows
 from imunav.ins.gins.layout import LAY
 from imunav.ins.gins.mounting import MountingEstimate, _levelling, estimate_mounting
 from imunav.ins.gins.result import GinsResult
@@ -52,19 +53,18 @@ __all__ = ["LogOutageReport", "LogRun", "LogRunOptions", "gnss_correlated_std", 
 
 Array = NDArray[np.float64]
 
-#: Correlation time of the fixes' correlated error (s; multipath and atmosphere: 10-100 s, Groves 2013 §9.4.2) and
-#: the smallest σ its identification gives (m).
-GNSS_BIAS_TAU = 60.0
-GNSS_BIAS_MIN_STD = 0.1
-#: Lag of the residuals' autocovariance that measures the correlated error, s, and the factor on its σ for what the
-#: first pass followed (:func:`gnss_correlated_std`; chosen on the hard robot and car drives 100-107).
-GNSS_CORR_LAG_S = 2.0
 #: Span of the log that the first pass of the identification covers, s.
 GNSS_IDENTIFY_S = 900.0
-GNSS_BIAS_SCATTER_FACTOR = 2.0
 #: σ of the odometer's scale where nothing measures it (no GNSS: a Schmidt consider state): a wheel's effective
 #: radius against its nominal one, tyre wear and pressure, 2 %.
 ODO_SCALE_PRIOR_STD = 0.02
+#: Candidate wanders of the odometer's scale (σ over ODO_WANDER_TAU s; 0: constant), cross-validated on withheld
+#: fixes (:func:`_odometer_wander`), and when the cross-validation's first window starts, s after the log's start.
+ODO_WANDER = (0.0, 0.03, 0.1)
+ODO_WANDER_TAU = 30.0
+WANDER_CV_START_S = 60.0
+#: Span of the log the cross-validation runs cover, s (six withheld windows; its runs cost a fraction of a pass).
+WANDER_CV_SPAN_S = 600.0
 #: Default σ of the GNSS latency state (s), the odometer scale (dimensionless) and the vehicle's slope at rest (rad).
 GNSS_DELAY_STD = 0.2
 ODO_SCALE_STD = 0.1
@@ -680,9 +680,10 @@ def run_log(src: NavSources, options: LogRunOptions | None = None, *,
         e0 = np.zeros(12)
         e0[:3] = bias0
 
-    def run(c: GinsConfig, smoother: bool, report: Callable[[int, int], None] | None, n: int) -> GinsResult:
-        """The filter over the first ``n`` IMU samples (the aids cut to them)."""
-        gn, od = src.gnss, odo
+    def run(c: GinsConfig, smoother: bool, report: Callable[[int, int], None] | None, n: int,
+            fixes: Any = None) -> GinsResult:
+        """The filter over the first ``n`` IMU samples (the aids cut to them), on ``fixes`` if given."""
+        gn, od = (src.gnss if fixes is None else fixes), odo
         if n < imu.n:
             t_end = float(imu.t[n - 1])
             gn = None if gn is None else gn.select(gn.t <= t_end, "beyond the first pass")
@@ -711,6 +712,11 @@ def run_log(src: NavSources, options: LogRunOptions | None = None, *,
         initial["gnss_errors"] = (f"correlated error sigma N E D {np.round(sig, 3).tolist()} m, "
                                   f"{GNSS_BIAS_TAU:g} s: the autocorrelation of the fixes' residuals about a first "
                                   "pass")
+        if odo is not None and "odo_scale_corr_time" not in o.overrides:
+            # the odometer's scale wanders with the ground, the slip and the tyre, or holds: chosen by how well each
+            # model predicts fixes withheld from it (the first pass's fixes follow the wander and hide it)
+            cv_n = min(first_n, int(np.searchsorted(imu.t, float(imu.t[0]) + WANDER_CV_SPAN_S, side="right")))
+            cfg = _odometer_wander(cfg, src.gnss, first, sig, lambda c, g: run(c, False, None, cv_n, g), initial)
     res = run(cfg, o.smoother, None if progress is None else
               (lambda done, total: progress(first_n + done, first_n + total)), imu.n)
     out = LogRun(res, cfg, static, coarse, source, initial, o.preset)
@@ -727,63 +733,39 @@ def run_log(src: NavSources, options: LogRunOptions | None = None, *,
     return out
 
 
-def gnss_correlated_std(first: GinsResult, gnss: Any, lever_arm: Any) -> Array:
-    """σ north, east, down of the fixes' correlated error, from the residuals of a first pass that treats them as
-    white: ``k √(max(0, C(L)) e^{L/T})`` per axis, where ``C(L)`` is the residuals' autocovariance at the lag
-    ``L`` (:data:`GNSS_CORR_LAG_S`, at least two fix intervals), ``T`` = :data:`GNSS_BIAS_TAU` and ``k`` =
-    :data:`GNSS_BIAS_SCATTER_FACTOR`; an autocorrelation within two standard errors of zero (``2 / √n``) counts as
-    none; at least :data:`GNSS_BIAS_MIN_STD`.  The fixes before the first pass settles (its horizontal position σ
-    within twice its median over the drive) are left out: their residuals hold the initial error.
-
-    White fixes leave residuals without memory: a first-order Gauss–Markov error of σ_c and correlation time T
-    leaves ``C(L) ≈ σ_c² e^{−L/T}`` (Brown & Hwang 2012, §2.9), less what the first pass followed (hence
-    ``k``).  The residual of fix k is ``z_k − (r̂(t_k − τ̂) + Ĉ l)`` on the accepted fixes, those beyond five
-    median absolute deviations of their axis left out.
-
-    Parameters
-    ----------
-    first : GinsResult
-        The first pass (adaptive GNSS noise on, no ``gnss_bias`` state).
-    gnss : GnssData
-        The fixes it used.
-    lever_arm : array_like, shape (3,)
-        The antenna from the IMU, body FRD, m (the first pass's ``lever_arm``).
-
-    Returns
-    -------
-    numpy.ndarray, shape (3,)
-        σ north, east, down, m.
-    """
+def _odometer_wander(cfg: GinsConfig, gnss: Any, first: GinsResult, corr_std: Array,
+                     run: Callable[[GinsConfig, Any], GinsResult], notes: dict[str, Any]) -> GinsConfig:
+    """The odometer scale's wander that best predicts withheld fixes: each of :data:`ODO_WANDER` (σ over
+    :data:`ODO_WANDER_TAU`; 0: a constant scale) becomes the scale state's correlation time ``σ_k² T / σ_w²`` (the
+    prior's σ_k kept, the driving noise ``2σ_w²/T`` of the wander), and the one whose run, without the fixes of
+    :func:`~imunav.ins.gins.identify.withheld_windows`, has the best log score at them
+    (:func:`~imunav.ins.gins.identify.withheld_score`) is kept.  A cross-validation on the log's own fixes, by
+    time windows: the fixes follow a wandering scale so closely that their residuals (and the odometer's) show
+    no sign of it, but a run without them for 30 s drifts by it."""
+    g = gnss.select(gnss.t <= first.t[-1], "beyond the first pass")
+    i = np.clip(np.searchsorted(first.t, g.t), 0, first.t.size - 1)  # the runs may cover less: the score cuts
+    scale = first.gnss_noise_scale[i] if first.gnss_noise_scale is not None else np.ones(g.n)
+    fix_var = g.pos_std[:, :2] ** 2 * scale[:, None] + np.asarray(corr_std, dtype=float)[:2] ** 2
     rec = first.aids.get("gnss_position")
-    tau = float(first.gnss_delay[-1]) if first.gnss_delay is not None else 0.0
-    ok = np.ones(gnss.n, dtype=bool)
-    if rec is not None and rec.t.size == gnss.n:
-        ok = np.asarray(rec.accepted, dtype=bool)
-    # the first pass's start (its position σ above twice the drive's median) holds its own transient, not the fixes'
-    sd = np.sqrt(first.cov_diag[:, 0] + first.cov_diag[:, 1])
-    settled = first.cov_t[int(np.argmax(sd <= 2.0 * np.median(sd)))]
-    ok &= gnss.t >= settled
-    t = gnss.t[ok]
-    i = np.clip(np.searchsorted(first.t, t - tau), 0, first.t.size - 1)
-    ant = np.einsum("nij,j->ni", dcm_from_quat(first.q_nb[i]), np.asarray(lever_arm, dtype=float))
-    r = lla_to_ned(gnss.lla[ok], gnss.lla[0]) - lla_to_ned(first.lla[i], gnss.lla[0]) - ant
-    dev = np.abs(r - np.median(r, axis=0))
-    keep = np.all(dev <= 5.0 * 1.4826 * np.maximum(np.median(dev, axis=0), 1e-6), axis=1)
-    t, r = t[keep], r[keep] - r[keep].mean(axis=0)
-    if t.size < 10:
-        return np.full(3, GNSS_BIAS_MIN_STD)
-    lag = max(GNSS_CORR_LAG_S, 2.0 * float(np.median(np.diff(t))))
-    j = np.searchsorted(t, t + lag)
-    pair = j < t.size
-    k, j = np.flatnonzero(pair), j[pair]
-    near = np.abs(t[j] - t[k] - lag) < 0.5 * lag
-    k, j = k[near], j[near]
-    if k.size < 10:
-        return np.full(3, GNSS_BIAS_MIN_STD)
-    c0 = np.mean(r**2, axis=0)
-    c = np.mean(r[k] * r[j], axis=0)
-    c = np.where(c > 2.0 * c0 / math.sqrt(k.size), c, 0.0)
-    return np.maximum(GNSS_BIAS_SCATTER_FACTOR * np.sqrt(c * math.exp(lag / GNSS_BIAS_TAU)), GNSS_BIAS_MIN_STD)
+    good = np.asarray(rec.accepted, dtype=bool) if rec is not None and rec.t.size == g.n else np.ones(g.n, bool)
+    held = withheld_windows(g.t, float(first.t[0]) + WANDER_CV_START_S)
+    if np.count_nonzero(held) < 20 or np.count_nonzero(~held) < 20:
+        return cfg
+    kept = g.select(~held, "withheld by the cross-validation")
+    scores = []
+    for s_w in ODO_WANDER:
+        c = cfg if s_w == 0 else dataclasses.replace(cfg, odo_scale_corr_time=cfg.odo_scale_std**2 * ODO_WANDER_TAU
+                                                     / s_w**2)
+        scores.append(withheld_score(run(c, kept), g, held & good, cfg.lever_arm, fix_var))
+    best = int(np.nanargmin(scores)) if np.any(np.isfinite(scores)) else 0
+    s_w = ODO_WANDER[best]
+    notes["odometer_errors"] = (
+        (f"scale wanders by {s_w:g} over {ODO_WANDER_TAU:g} s" if s_w else "scale constant")
+        + " (cross-validated on withheld fixes: log scores "
+        + ", ".join(f"{w:g}: {v:.2f}" for w, v in zip(ODO_WANDER, scores)) + ")")
+    if s_w == 0:
+        return cfg
+    return dataclasses.replace(cfg, odo_scale_corr_time=cfg.odo_scale_std**2 * ODO_WANDER_TAU / s_w**2)
 
 
 def parse_rotation(text: str | None, flag: str = "--imu-rotation") -> Array | None:
