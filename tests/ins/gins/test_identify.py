@@ -3,7 +3,6 @@ that chooses the odometer scale's wander, its scoring rule, and what the choice 
 
 from __future__ import annotations
 
-import dataclasses
 import math
 from types import SimpleNamespace
 
@@ -14,11 +13,8 @@ from imunav.earth import ned_to_lla
 from imunav.ins.gins.identify import SCORE_CLIP, withheld_score, withheld_windows
 from imunav.ins.gins.logrun import LogRunOptions, log_outage_test, run_log
 from imunav.io.kfgins import NavTrack
-from imunav.sim.hard_log import HARD_ROBOT_FAULTS, simulate_hard_robot_log
+from imunav.sim.hard_log import simulate_hard_robot_log
 from imunav.sim.robot_log import simulate_robot_log
-
-#: the hard robot on ground that changes under its wheels: the odometer's scale wanders by 8 % over 20 s
-TERRAIN = dataclasses.replace(HARD_ROBOT_FAULTS, odometer_terrain_std=0.08, odometer_terrain_tau_s=20.0)
 
 
 def test_withheld_windows_alternate_30_s_out_and_60_s_in():
@@ -54,11 +50,11 @@ def test_withheld_score_is_smallest_for_the_true_sigma():
 
 @pytest.fixture(scope="module")
 def terrain_robot():
-    return simulate_hard_robot_log(0, faults=TERRAIN)
+    return simulate_hard_robot_log(0)  # its wheels' scale wanders by 8 % over 20 s
 
 
 def test_a_wandering_odometer_scale_is_found_and_a_constant_one_kept(terrain_robot):
-    """The cross-validation on withheld fixes chooses a wandering scale on the robot whose wheels meet changing
+    """The cross-validation on withheld fixes chooses a wandering scale on the hard robot, whose wheels meet changing
     ground, and the constant scale on the plain simulated robot (a tyre's scale: 9 % short, constant)."""
     rough = run_log(terrain_robot.sources, LogRunOptions(gnss_lever_arm=tuple(terrain_robot.truth.gnss_lever_arm_base)))
     note = rough.initial["odometer_errors"]

@@ -749,7 +749,9 @@ def _odometer_wander(cfg: GinsConfig, gnss: Any, first: GinsResult, corr_std: Ar
     rec = first.aids.get("gnss_position")
     good = np.asarray(rec.accepted, dtype=bool) if rec is not None and rec.t.size == g.n else np.ones(g.n, bool)
     held = withheld_windows(g.t, float(first.t[0]) + WANDER_CV_START_S)
-    if np.count_nonzero(held) < 20 or np.count_nonzero(~held) < 20:
+    if np.count_nonzero(held & good) < 20 or np.count_nonzero(~held) < 20:
+        notes["odometer_errors"] = (f"scale constant (not cross-validated: {np.count_nonzero(held & good)} fixes "
+                                    f"in withheld windows, 20 needed; the log is too short)")
         return cfg
     kept = g.select(~held, "withheld by the cross-validation")
     scores = []
