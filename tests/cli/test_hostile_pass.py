@@ -332,3 +332,30 @@ def test_an_interrupt_swallowed_in_a_callback_from_c_is_not_lost(tmp_path, monke
         signal.signal(signal.SIGINT, old)
     assert not (run / MANIFEST).exists() and (run / FAILED).exists()
     assert not (run / "a.json").exists() and not (run / "b.json").exists()
+
+
+def test_a_negative_count_scale_mirrors_the_triad_and_is_refused(tmp_path, monkeypatch):
+    """One scale for three axes that is negative mirrors them (a left-handed frame, no sensor's): refused by the
+    option's domain and by the library; a per-axis scale may still count one axis the other way."""
+    from imunav.errors import UnitError
+
+    monkeypatch.chdir(tmp_path)
+    rng = np.random.default_rng(0)
+    raw = np.column_stack([rng.normal(0, 10, (500, 5)), 16384 + rng.normal(0, 10, 500)])
+    np.savetxt("raw.csv", raw, delimiter=",", header="gx,gy,gz,ax,ay,az", comments="")
+    for flag in ("--gyro-scale", "--accel-scale"):
+        msg = _exit_2(runner.invoke(app, ["info", "raw.csv", "--fs", "50", "--gyro-unit", "counts", "--accel-unit",
+                                          "counts", "--gyro-scale", "1e-4", "--accel-scale", "6e-4", flag, "-1"]))
+        assert msg.startswith(f"error: {flag} -1") and "(0, 1e+06]" in msg
+    with pytest.raises(UnitError, match=r"gyro_scale=-0\.001: .* mirrors"):
+        ImuData.from_arrays(None, raw[:, :3], raw[:, 3:], fs=50.0, gyro_unit="counts", gyro_scale=-1e-3,
+                            accel_unit="counts", accel_scale=6e-4)
+    with pytest.raises(UnitError, match=r"scales\['mag'\]=-0\.1"):
+        from imunav.io import read_imu
+
+        np.savetxt("m.csv", np.column_stack([raw, raw[:, :3]]), delimiter=",", comments="",
+                   header="gx,gy,gz,ax,ay,az,mx,my,mz")
+        read_imu("m.csv", fs=50.0, units={"mag": "counts"}, scales={"mag": -0.1})
+    d = ImuData.from_arrays(None, raw[:, :3], raw[:, 3:], fs=50.0, gyro_unit="counts", gyro_scale=[1e-3, -1e-3, 1e-3],
+                            accel_unit="counts", accel_scale=6e-4)
+    assert np.allclose(d.gyro[:, 1], -1e-3 * raw[:, 1])
