@@ -92,6 +92,15 @@ BAD_LABS = {
                                          ["[temperature]", "preset"]),
     "size-beyond-the-machine": ('[lab]\nsteps = ["simulate_tests"]\n[simulate_tests]\nstatic_duration_s = 1e12\n',
                                 ["[simulate_tests]", "static_duration_s"]),
+    # a step whose inputs no earlier step makes: refused before the first step (was a traceback, exit 1, or a
+    # run folder left FAILED after the earlier steps ran)
+    "calibration-without-its-tests": ('[lab]\nsteps = ["calibration"]\n', ["[calibration]", "simulate_tests"]),
+    "noise-without-its-record": ('[lab]\nsteps = ["simulate_tests", "noise"]\n[simulate_tests]\n'
+                                 'tests = ["hundred_position"]\n', ["[noise]", "static_long"]),
+    "calibration-on-a-static-recording": ('[lab]\nsteps = ["recordings", "calibration"]\n[recordings.a]\n'
+                                          'path = "good.npz"\ntest = "static"\n', ["[calibration]", "rate_table"]),
+    "compensation-without-a-calibration": ('[lab]\nsteps = ["recordings", "compensation"]\n[recordings.a]\n'
+                                           'path = "good.npz"\ntest = "static"\n', ["[compensation]", "calibration"]),
 }
 
 
@@ -103,6 +112,45 @@ def test_a_bad_lab_definition_is_refused_before_the_first_step(files, monkeypatc
     msg = _exit_2(runner.invoke(app, ["lab", "--config", "lab.toml", "--out", "rep", "--quiet"]))
     assert "lab.toml" in msg and all(w in msg for w in words), msg
     assert not (files / "rep").exists()
+
+
+def test_a_step_whose_input_step_failed_is_not_run_and_each_failure_is_one_line(tmp_path, monkeypatch):
+    """A failing step is one stderr line (its traceback in the report, on stderr only with --debug); a step that
+    takes its input from it is not run on a stand-in, and says so."""
+    import json
+    import sys
+    import types
+
+    from imunav.lab import runner as lab_runner
+
+    ran = []
+
+    def boom(ctx):
+        raise RuntimeError("deliberate failure")
+
+    def after(ctx):
+        ran.append("zz_after")
+        raise AssertionError("ran without its input")
+
+    for name, fn, req in (("zz_boom", boom, None), ("zz_after", after, lambda lab, earlier: ["zz_boom"])):
+        mod = types.ModuleType(f"imunav.lab.steps.{name}")
+        mod.TITLE, mod.run = name, fn
+        if req is not None:
+            mod.requires = req
+        monkeypatch.setitem(sys.modules, f"imunav.lab.steps.{name}", mod)
+    monkeypatch.setattr(lab_runner, "available_steps", lambda: ["zz_after", "zz_boom"])
+    monkeypatch.chdir(tmp_path)
+    r = runner.invoke(app, ["lab", "--steps", "zz_boom,zz_after", "--out", "rep", "--quiet"])
+    assert r.exit_code == 1 and "Traceback" not in r.stderr, r.stderr
+    lines = r.stderr.strip().splitlines()
+    assert lines == ["error: lab step zz_boom: RuntimeError: deliberate failure (details in rep/summary.md)",
+                     "error: lab step zz_after: not run: it takes its input from the zz_boom step, which failed "
+                     "(details in rep/summary.md)"], r.stderr
+    assert ran == []
+    steps = json.loads((tmp_path / "rep" / "summary.json").read_text())["steps"]
+    assert "Traceback" in steps[0]["error"] and steps[1]["passed"] is False
+    r = runner.invoke(app, ["--debug", "lab", "--steps", "zz_boom,zz_after", "--out", "rep2", "--quiet"])
+    assert r.exit_code == 1 and "Traceback" in r.stderr
 
 
 def test_the_library_checks_the_definition_whole(files):
