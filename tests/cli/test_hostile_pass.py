@@ -346,6 +346,37 @@ def test_taus_all_is_estimated_before_work(files, monkeypatch):
         check_limits("noise", {"file": "long.npz", "taus": "octave"})  # the default grid: nothing to say
 
 
+def test_a_forced_long_request_says_its_estimate_and_moves_its_bar(files, monkeypatch):
+    """Forced past the limit, a request still says its estimate (a warning line); the noise bar moves through
+    each channel's fit (the long part of --taus all), not only between the sensors."""
+    import contextlib
+
+    from imunav.cli import noise as noise_cmd
+    from imunav.cli._limits import check_limits
+    from imunav.errors import ImunavWarning
+    from imunav.noise import allan_deviation, fit_noise
+
+    monkeypatch.chdir(files)
+    write_imu(_rec(200_000), files / "long.npz")
+    with pytest.warns(ImunavWarning, match=r"noise --taus all: .* beyond its limits: running as --force asks"):
+        check_limits("noise", {"file": "long.npz", "taus": "all", "force": True})
+    calls = []
+    r = allan_deviation(_rec(600).gyro, 50.0, "octave", units="rad/s")
+    fit_noise(r, progress=lambda k, n: calls.append((k, n)))
+    assert calls == [(k, 15) for k in range(1, 16)]  # five stages of each of the three channels
+    reports = []
+
+    @contextlib.contextmanager
+    def recorder(description, *, quiet=False, total=None):
+        yield lambda done, total_: reports.append((done, total_))
+
+    monkeypatch.setattr(noise_cmd, "progress", recorder)
+    out = runner.invoke(app, ["noise", "good.npz", "--taus", "octave"])
+    assert out.exit_code == 0, out.stderr
+    done = [d for d, _ in reports]
+    assert done == list(range(1, 35)) and {t for _, t in reports[1:]} == {34}  # 2 x (Allan + 15 fit stages + PSD)
+
+
 # ------------------------------------------------------------------ 9. an interrupt is never lost
 @pytest.mark.parametrize("write_after", [False, True])
 def test_an_interrupt_swallowed_in_a_callback_from_c_is_not_lost(tmp_path, monkeypatch, write_after):

@@ -214,7 +214,7 @@ def check_limits(command_path: str, values: Mapping[str, Any]) -> Estimate | Non
     -----
     ImunavWarning
         With the estimate, when the request will take longer than :data:`NOTICE` (so that a long run is not
-        silent).
+        silent), or is beyond the limits and forced.
     """
     fn = ESTIMATORS.get(command_path)
     if fn is None:
@@ -223,10 +223,16 @@ def check_limits(command_path: str, values: Mapping[str, Any]) -> Estimate | Non
         est = fn(values)
     except (TypeError, ValueError, OverflowError):
         return None
-    if est is None or values.get("force"):
+    if est is None:
         return est
     what = est.what if est.what.startswith(command_path) else f"{command_path}: {est.what}"
-    if not (est.bytes <= MEMORY and est.seconds <= TIME) or not (math.isfinite(est.bytes) and math.isfinite(est.seconds)):
+    beyond = not (est.bytes <= MEMORY and est.seconds <= TIME) or not (math.isfinite(est.bytes) and math.isfinite(est.seconds))
+    if beyond and values.get("force"):  # run as asked, but not without a word
+        warnings.warn(f"{what}: about {_size(est.bytes)} of memory and {_time(est.seconds)} on the reference machine "
+                      f"({_size(MACHINE_MEMORY)}, {MACHINE_CORES} cores), beyond its limits: running as --force asks "
+                      "(a progress bar on a terminal; Ctrl-C stops it)", ImunavWarning, stacklevel=2)
+        return est
+    if beyond:
         raise InvalidInputError(
             f"{what}: about {_size(est.bytes)} of memory and {_time(est.seconds)} on the reference machine "
             f"({_size(MACHINE_MEMORY)}, {MACHINE_CORES} cores); reduce the request, or pass --force to run it anyway")
