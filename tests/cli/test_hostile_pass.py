@@ -202,6 +202,46 @@ def test_a_zero_or_non_unit_quaternion_is_no_rotation():
     assert np.allclose(dcm_from_quat(q), np.eye(3), atol=1e-8)
 
 
+def test_rotations_refuse_what_is_no_rotation():
+    """A zero quaternion has no inverse nor logarithm, a NaN angle no quaternion, and a matrix that is not
+    orthonormal with det +1 (ones, a mirror) no quaternion or Euler angles: each was a silent answer (or a raw
+    ZeroDivisionError)."""
+    from imunav.errors import InvalidInputError, NonFiniteError
+    from imunav.rotation import (
+        dcm_from_quat,
+        euler_from_dcm,
+        quat_from_dcm,
+        quat_from_euler,
+        quat_inverse,
+        rotvec_from_dcm,
+        rotvec_from_quat,
+    )
+
+    with pytest.raises(NonFiniteError, match="zero quaternion has no inverse"):
+        quat_inverse([0, 0, 0, 0])
+    assert np.allclose(quat_inverse([2.0, 0, 0, 0]), [0.5, 0, 0, 0])  # a non-unit one still has its inverse
+    with pytest.raises(InvalidInputError, match=r"q is not a unit quaternion .*rows \[0\]"):
+        rotvec_from_quat([0, 0, 0, 0])
+    with pytest.raises(NonFiniteError, match=r"euler .* rows \[1\]"):
+        quat_from_euler([[0, 0, 0], [np.nan, 0, 0]])
+    for C, what in ((np.ones((3, 3)), "C C\\^T - I"), (-np.eye(3), "det -1")):
+        for fn in (quat_from_dcm, euler_from_dcm, rotvec_from_dcm):
+            with pytest.raises(InvalidInputError, match=f"C is not a rotation matrix at rows \\[0\\] .*{what}"):
+                fn(C)
+    C = dcm_from_quat(quat_from_euler(0.1, -0.2, 0.3))
+    assert np.allclose(euler_from_dcm(C), [0.1, -0.2, 0.3]) and np.allclose(quat_from_dcm(C), quat_from_euler(0.1, -0.2, 0.3))
+
+
+def test_allan_deviation_refuses_text_and_complex_samples():
+    from imunav.errors import InvalidInputError
+    from imunav.noise import allan_deviation
+
+    for x in (["a", "b", "c", "d"], np.ones(10) * 1j, [1, 2, 3j, 4]):
+        with pytest.raises(InvalidInputError, match="x must hold real numbers"):
+            allan_deviation(x, fs=1.0)
+    assert allan_deviation([1, 2, 4, 3], fs=1.0).tau.tolist() == [1.0, 2.0]  # integers are samples
+
+
 def test_allan_deviation_needs_two_differences():
     from imunav.errors import InsufficientDataError
     from imunav.noise import allan_deviation
