@@ -286,6 +286,31 @@ def test_a_refused_write_is_one_line_for_every_format(files, out):
     assert not (files / out).exists() and not list(files.glob(f".{out}*"))
 
 
+def test_a_write_refused_inside_a_lab_step_ends_the_lab(files):
+    """A step whose figure the file system refuses is not a step's failure in a report that looks complete
+    (manifest, exit 1): the lab ends with one line naming the file, exit 2, FAILED."""
+    import os
+    import resource
+    import subprocess
+    import sys
+
+    from imunav.lab.runfolder import FAILED, MANIFEST
+
+    def small_files():
+        resource.setrlimit(resource.RLIMIT_FSIZE, (30000, 30000))
+
+    (files / "lab.toml").write_text('[lab]\nsteps = ["recordings"]\n[recordings.a]\npath = "good.npz"\n'
+                                    'test = "static"\n')
+    env = dict(os.environ, PYTHONPATH=str(Path(__file__).resolve().parents[2] / "src"))
+    r = subprocess.run([sys.executable, "-m", "imunav.cli.main", "lab", "--config", "lab.toml", "--out", "rep",
+                        "--quiet"], cwd=files, capture_output=True, text=True, env=env, timeout=600,
+                       preexec_fn=small_files)
+    assert r.returncode == 2, r.stderr
+    lines = r.stderr.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("error: rep/") and "File too large" in lines[0], r.stderr
+    assert (files / "rep" / FAILED).exists() and not (files / "rep" / MANIFEST).exists()
+
+
 def test_hdf5_files_are_built_in_memory_and_read_back(files):
     pytest.importorskip("h5py")
     from imunav.io import read_imu

@@ -52,6 +52,7 @@ Example
 from __future__ import annotations
 
 import contextlib
+import errno
 import importlib
 import os
 import re
@@ -294,6 +295,11 @@ def run_lab(
         return _run_steps(out, names, seed, cfg, typed, progress, console, loaded, needs)
 
 
+#: errno of a write the file system refuses (file too large, no space, quota, read-only): it ends the lab (exit 2,
+#: the run folder FAILED), as it would any command, instead of a step's failure in a report that looks complete.
+_REFUSED_WRITE = frozenset({errno.EFBIG, errno.ENOSPC, errno.EDQUOT, errno.EROFS})
+
+
 def _step_inputs(typed: LabConfig, names: list[str]) -> dict[str, list[str]]:
     """Each step's ``requires(lab, earlier)``, before any step runs: step -> the earlier steps it takes inputs
     from; a step whose inputs no earlier step gives is a ConfigError naming the definition."""
@@ -353,6 +359,10 @@ def _run_steps(out: Path, names: list[str], seed: int, cfg: dict, typed: LabConf
                 records.append(StepRecord(name, title, res, time.perf_counter() - t0))
             except ConfigError:
                 raise  # the lab is configured wrongly: a user error, not a step's result (the run folder fails)
+            except OSError as exc:
+                if exc.errno in _REFUSED_WRITE:  # the file system refused a write: the run fails, not the step
+                    raise
+                records.append(StepRecord(name, title, None, time.perf_counter() - t0, traceback.format_exc()))
             except Exception:  # a failing step is reported; the others still run
                 records.append(StepRecord(name, title, None, time.perf_counter() - t0, traceback.format_exc()))
             prog.advance(overall)
