@@ -411,6 +411,44 @@ def test_taus_all_is_estimated_before_work(files, monkeypatch):
         check_limits("noise", {"file": "long.npz", "taus": "octave"})  # the default grid: nothing to say
 
 
+def test_lstm_training_is_estimated_before_work_and_memory_is_a_limit_not_a_bug(files, monkeypatch):
+    """zupt train had no estimate: --windows-per-trial 1e9 ended in an internal error (a 313 GiB MemoryError),
+    --hidden 100000 --layers 100 ran without a word.  Refused before work, naming the options; a MemoryError
+    (a forced request) is one line and exit 2, not an internal error."""
+    import imunav.noise
+
+    monkeypatch.chdir(files)
+    (files / "trials").mkdir()
+    for extra, word in ((["--windows-per-trial", "1000000000"], "--windows-per-trial 1000000000"),
+                        (["--hidden", "100000", "--layers", "100"], "--hidden 100000"),
+                        (["--epochs", "1000000000"], "--epochs 1000000000")):
+        msg = _exit_2(runner.invoke(app, ["zupt", "train", "trials", "--out", "z.npz", *extra]))
+        assert msg.startswith("error: zupt train: 1 trials x") and word in msg and "--force" in msg, msg
+    assert not (files / "z.npz").exists()
+
+    def no_memory(*a, **k):
+        raise MemoryError("Unable to allocate 313. GiB for an array")
+
+    monkeypatch.setattr(imunav.noise, "allan_deviation", no_memory)
+    msg = _exit_2(runner.invoke(app, ["noise", "good.npz", "--json", "n.json"]))
+    assert msg == "error: out of memory (Unable to allocate 313. GiB for an array); reduce the request"
+
+
+def test_a_grid_search_is_estimated_before_work(tmp_path, monkeypatch):
+    """attitude benchmark --grid multiplies the work by the product of the grids' sizes: 10^5 parameter sets over
+    the BROAD trials ran without an estimate; refused naming the grids (a repeated name counts once)."""
+    monkeypatch.chdir(tmp_path)
+    values = ",".join(str(k) for k in range(100))
+    argv = ["attitude", "benchmark", "broad", "--filter", "madgwick", "--grid", f"beta={values}", "--grid",
+            f"nosuch={values}", "--grid", "other=1,2,3,4,5,6,7,8,9,10"]
+    msg = _exit_2(runner.invoke(app, argv))
+    assert "--grid beta (100 values) x --grid nosuch (100 values) x --grid other (10 values) = 1e+05 parameter" \
+        in msg and "--force" in msg, msg
+    r = runner.invoke(app, [*argv, "--grid", "other=1"])  # 10^4 sets: under the limit, said, then run
+    assert r.exit_code == 2 and r.stderr.startswith("warning: attitude benchmark: --grid beta (100 values)")
+    assert "hours" in r.stderr and "no parameter 'nosuch'" in r.stderr
+
+
 def test_a_forced_long_request_says_its_estimate_and_moves_its_bar(files, monkeypatch):
     """Forced past the limit, a request still says its estimate (a warning line); the noise bar moves through
     each channel's fit (the long part of --taus all), not only between the sensors."""
