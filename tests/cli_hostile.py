@@ -53,7 +53,7 @@ BASELINE: dict[str, list[str]] = {
     "convert": ["convert", "{REC}", "{OUT}.npz"],
     "noise": ["noise", "{REC}", "--json", "{OUT}.json"],
     "simulate": ["simulate", "static", "--duration", "2", "--fs", "10", "--out", "{OUT}.npz", "--model", "{MODEL}"],
-    "lab": ["lab", "--out", "{OUT}_lab", "--config", "{LAB}", "--steps", "noise", "--quiet", "--json", "{OUT}.json"],
+    "lab": ["lab", "--out", "{OUT}_lab", "--config", "{LAB}", "--steps", "simulate_tests,noise", "--quiet", "--json", "{OUT}.json"],
     "compensate": ["compensate", "{REC}", "--cal", "{CAL}", "--out", "{OUT}.npz"],
     "calibrate multiposition": ["calibrate", "multiposition", "{BREC}", "--segments", "{BSEG}", "--out",
                                 "{OUT}.json", "--report", "{OUT}_rep"],

@@ -117,6 +117,21 @@ def _unit(a: Array, name: str) -> Array:
     return a
 
 
+def _rotation(a: Array, name: str) -> Array:
+    """``a`` checked to hold rotation matrices: finite, orthonormal (``C C^T = I`` within :data:`UNIT_TOL`) and
+    proper (det +1; a reflection is no rotation)."""
+    _finite(a, name)
+    err = np.abs(np.einsum("nij,nkj->nik", a, a) - np.eye(3)).max(axis=(1, 2))
+    det = np.linalg.det(a)
+    bad = np.flatnonzero((err > UNIT_TOL) | (det <= 0))
+    if bad.size:
+        i = bad[0]
+        raise InvalidInputError(
+            f"{name} is not a rotation matrix at rows {bad[:10].tolist()} (max |C C^T - I| {err[i]:.3g}, "
+            f"det {det[i]:.6g}); give an orthonormal matrix with det +1")
+    return a
+
+
 def _out(a: Array, single: bool) -> Array:
     return a[0] if single else a
 
@@ -212,9 +227,16 @@ def quat_inverse(q: ArrayLike) -> Array:
 
     Raises
     ------
+    NonFiniteError
+        If a quaternion is not finite or zero (norm below 1e-12: it has no inverse; the rows are named).
     ShapeError
         If an input does not have the shape given above.
     """
+    b, _ = _as(q, (4,), "q")
+    _finite(b, "q")
+    n2 = np.einsum("ij,ij->i", b, b)
+    if np.any(n2 < 1e-24):
+        raise NonFiniteError(f"q: a zero quaternion has no inverse (rows {np.flatnonzero(n2 < 1e-24)[:10].tolist()})")
     a = quat_conjugate(q)
     return a / np.sum(a * a, axis=-1, keepdims=True)
 
@@ -348,13 +370,15 @@ def quat_from_dcm(C: ArrayLike) -> Array:
 
     Raises
     ------
+    InvalidInputError
+        If ``C`` is not a rotation matrix (orthonormal within 1e-3, det +1; the rows are named).
     NonFiniteError
         If ``C`` is not finite.
     ShapeError
         If ``C`` is not (3, 3) / (N, 3, 3).
     """
     a, s = _as(C, (3, 3), "C")
-    _finite(a, "C")
+    _rotation(a, "C")
     return _out(_k.quat_from_dcm_n(a), s)
 
 
@@ -392,10 +416,13 @@ def quat_from_euler(roll: ArrayLike, pitch: ArrayLike | None = None, yaw: ArrayL
 
     Raises
     ------
+    NonFiniteError
+        If an angle is not finite.
     ShapeError
         If only one of ``pitch`` / ``yaw`` is given, or the shapes do not broadcast.
     """
     e, s = _euler_args(roll, pitch, yaw)
+    _finite(e, "euler (roll, pitch, yaw)")
     return _out(_k.quat_from_euler_n(e), s)
 
 
@@ -417,10 +444,15 @@ def euler_from_dcm(C: ArrayLike) -> Array:
 
     Raises
     ------
+    InvalidInputError
+        If ``C`` is not a rotation matrix (orthonormal within 1e-3, det +1; the rows are named).
+    NonFiniteError
+        If ``C`` is not finite.
     ShapeError
         If ``C`` is not (3, 3) / (N, 3, 3).
     """
     a, s = _as(C, (3, 3), "C")
+    _rotation(a, "C")
     return _out(_k.euler_from_dcm_n(a), s)
 
 
@@ -464,6 +496,8 @@ def dcm_from_euler(roll: ArrayLike, pitch: ArrayLike | None = None, yaw: ArrayLi
 
     Raises
     ------
+    NonFiniteError
+        If an angle is not finite.
     ShapeError
         If only one of ``pitch`` / ``yaw`` is given, or the shapes do not broadcast.
     """
@@ -514,13 +548,15 @@ def rotvec_from_quat(q: ArrayLike) -> Array:
 
     Raises
     ------
+    InvalidInputError
+        If ``q`` is not a unit quaternion (norm within 1e-3 of 1; the rows are named).
     NonFiniteError
         If ``q`` is not finite.
     ShapeError
         If an input does not have the shape given above.
     """
     a, s = _as(q, (4,), "q")
-    _finite(a, "q")
+    _unit(a, "q")
     return _out(_k.qlog_n(a), s)
 
 
@@ -566,6 +602,8 @@ def rotvec_from_dcm(C: ArrayLike) -> Array:
 
     Raises
     ------
+    InvalidInputError
+        If ``C`` is not a rotation matrix (orthonormal within 1e-3, det +1; the rows are named).
     NonFiniteError
         If ``C`` is not finite.
     ShapeError

@@ -246,9 +246,10 @@ class ImuData:
         accel_unit : str
             ``"m/s^2"``, ``"g"``, ``"mg"`` or ``"counts"``.
         gyro_scale : float or array_like of shape (3,), optional
-            rad/s per count (required with ``gyro_unit="counts"``).
+            rad/s per count (required with ``gyro_unit="counts"``); one value is positive (a negative one would
+            mirror the triad), per-axis values may carry signs.
         accel_scale : float or array_like of shape (3,), optional
-            m/s² per count (required with ``accel_unit="counts"``).
+            m/s² per count (required with ``accel_unit="counts"``), signs as ``gyro_scale``.
         gyro_offset, accel_offset : float or array_like of shape (3,)
             Zero offset in counts, subtracted before scaling.
         mag_unit : str
@@ -272,6 +273,8 @@ class ImuData:
         InvalidInputError
             If ``nan_policy`` is unknown, ``t`` is None without a positive ``fs``, or both ``t`` and ``fs`` are
             given.
+        UnitError
+            If a unit is unknown, counts come without a scale, or one scale for the three axes is negative.
 
         Examples
         --------
@@ -602,7 +605,15 @@ class ImuData:
 
 
 def _vector_to_si(x, unit, quantity, scale, offset, name):
-    """``to_si`` for a triad, accepting per-axis (3,) count scales and offsets."""
+    """``to_si`` for a triad, accepting per-axis (3,) count scales and offsets.
+
+    One scale for the three axes must be positive: a negative one mirrors the triad (a left-handed frame, no
+    sensor's); a per-axis scale may carry signs (an axis the sensor counts the other way).
+    """
+    if np.ndim(scale) == 0 and scale is not None and np.isfinite(scale) and scale < 0:
+        raise UnitError(f"{name}_scale={float(scale):g}: one negative scale for the three axes mirrors the {name} "
+                        "(a left-handed frame, no sensor's); give the positive SI units per count, or a per-axis "
+                        "scale of 3 values where an axis counts the other way")
     if np.ndim(scale) == 0 and np.ndim(offset) == 0:
         return to_si(x, unit, quantity, scale=scale, offset=float(offset))
 

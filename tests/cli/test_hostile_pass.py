@@ -92,6 +92,15 @@ BAD_LABS = {
                                          ["[temperature]", "preset"]),
     "size-beyond-the-machine": ('[lab]\nsteps = ["simulate_tests"]\n[simulate_tests]\nstatic_duration_s = 1e12\n',
                                 ["[simulate_tests]", "static_duration_s"]),
+    # a step whose inputs no earlier step makes: refused before the first step (was a traceback, exit 1, or a
+    # run folder left FAILED after the earlier steps ran)
+    "calibration-without-its-tests": ('[lab]\nsteps = ["calibration"]\n', ["[calibration]", "simulate_tests"]),
+    "noise-without-its-record": ('[lab]\nsteps = ["simulate_tests", "noise"]\n[simulate_tests]\n'
+                                 'tests = ["hundred_position"]\n', ["[noise]", "static_long"]),
+    "calibration-on-a-static-recording": ('[lab]\nsteps = ["recordings", "calibration"]\n[recordings.a]\n'
+                                          'path = "good.npz"\ntest = "static"\n', ["[calibration]", "rate_table"]),
+    "compensation-without-a-calibration": ('[lab]\nsteps = ["recordings", "compensation"]\n[recordings.a]\n'
+                                           'path = "good.npz"\ntest = "static"\n', ["[compensation]", "calibration"]),
 }
 
 
@@ -103,6 +112,45 @@ def test_a_bad_lab_definition_is_refused_before_the_first_step(files, monkeypatc
     msg = _exit_2(runner.invoke(app, ["lab", "--config", "lab.toml", "--out", "rep", "--quiet"]))
     assert "lab.toml" in msg and all(w in msg for w in words), msg
     assert not (files / "rep").exists()
+
+
+def test_a_step_whose_input_step_failed_is_not_run_and_each_failure_is_one_line(tmp_path, monkeypatch):
+    """A failing step is one stderr line (its traceback in the report, on stderr only with --debug); a step that
+    takes its input from it is not run on a stand-in, and says so."""
+    import json
+    import sys
+    import types
+
+    from imunav.lab import runner as lab_runner
+
+    ran = []
+
+    def boom(ctx):
+        raise RuntimeError("deliberate failure")
+
+    def after(ctx):
+        ran.append("zz_after")
+        raise AssertionError("ran without its input")
+
+    for name, fn, req in (("zz_boom", boom, None), ("zz_after", after, lambda lab, earlier: ["zz_boom"])):
+        mod = types.ModuleType(f"imunav.lab.steps.{name}")
+        mod.TITLE, mod.run = name, fn
+        if req is not None:
+            mod.requires = req
+        monkeypatch.setitem(sys.modules, f"imunav.lab.steps.{name}", mod)
+    monkeypatch.setattr(lab_runner, "available_steps", lambda: ["zz_after", "zz_boom"])
+    monkeypatch.chdir(tmp_path)
+    r = runner.invoke(app, ["lab", "--steps", "zz_boom,zz_after", "--out", "rep", "--quiet"])
+    assert r.exit_code == 1 and "Traceback" not in r.stderr, r.stderr
+    lines = r.stderr.strip().splitlines()
+    assert lines == ["error: lab step zz_boom: RuntimeError: deliberate failure (details in rep/summary.md)",
+                     "error: lab step zz_after: not run: it takes its input from the zz_boom step, which failed "
+                     "(details in rep/summary.md)"], r.stderr
+    assert ran == []
+    steps = json.loads((tmp_path / "rep" / "summary.json").read_text())["steps"]
+    assert "Traceback" in steps[0]["error"] and steps[1]["passed"] is False
+    r = runner.invoke(app, ["--debug", "lab", "--steps", "zz_boom,zz_after", "--out", "rep2", "--quiet"])
+    assert r.exit_code == 1 and "Traceback" in r.stderr
 
 
 def test_the_library_checks_the_definition_whole(files):
@@ -154,6 +202,46 @@ def test_a_zero_or_non_unit_quaternion_is_no_rotation():
     assert np.allclose(dcm_from_quat(q), np.eye(3), atol=1e-8)
 
 
+def test_rotations_refuse_what_is_no_rotation():
+    """A zero quaternion has no inverse nor logarithm, a NaN angle no quaternion, and a matrix that is not
+    orthonormal with det +1 (ones, a mirror) no quaternion or Euler angles: each was a silent answer (or a raw
+    ZeroDivisionError)."""
+    from imunav.errors import InvalidInputError, NonFiniteError
+    from imunav.rotation import (
+        dcm_from_quat,
+        euler_from_dcm,
+        quat_from_dcm,
+        quat_from_euler,
+        quat_inverse,
+        rotvec_from_dcm,
+        rotvec_from_quat,
+    )
+
+    with pytest.raises(NonFiniteError, match="zero quaternion has no inverse"):
+        quat_inverse([0, 0, 0, 0])
+    assert np.allclose(quat_inverse([2.0, 0, 0, 0]), [0.5, 0, 0, 0])  # a non-unit one still has its inverse
+    with pytest.raises(InvalidInputError, match=r"q is not a unit quaternion .*rows \[0\]"):
+        rotvec_from_quat([0, 0, 0, 0])
+    with pytest.raises(NonFiniteError, match=r"euler .* rows \[1\]"):
+        quat_from_euler([[0, 0, 0], [np.nan, 0, 0]])
+    for C, what in ((np.ones((3, 3)), "C C\\^T - I"), (-np.eye(3), "det -1")):
+        for fn in (quat_from_dcm, euler_from_dcm, rotvec_from_dcm):
+            with pytest.raises(InvalidInputError, match=f"C is not a rotation matrix at rows \\[0\\] .*{what}"):
+                fn(C)
+    C = dcm_from_quat(quat_from_euler(0.1, -0.2, 0.3))
+    assert np.allclose(euler_from_dcm(C), [0.1, -0.2, 0.3]) and np.allclose(quat_from_dcm(C), quat_from_euler(0.1, -0.2, 0.3))
+
+
+def test_allan_deviation_refuses_text_and_complex_samples():
+    from imunav.errors import InvalidInputError
+    from imunav.noise import allan_deviation
+
+    for x in (["a", "b", "c", "d"], np.ones(10) * 1j, [1, 2, 3j, 4]):
+        with pytest.raises(InvalidInputError, match="x must hold real numbers"):
+            allan_deviation(x, fs=1.0)
+    assert allan_deviation([1, 2, 4, 3], fs=1.0).tau.tolist() == [1.0, 2.0]  # integers are samples
+
+
 def test_allan_deviation_needs_two_differences():
     from imunav.errors import InsufficientDataError
     from imunav.noise import allan_deviation
@@ -196,6 +284,31 @@ def test_a_refused_write_is_one_line_for_every_format(files, out):
     lines = r.stderr.strip().splitlines()
     assert len(lines) == 1 and out in lines[0] and "File too large" in lines[0], r.stderr
     assert not (files / out).exists() and not list(files.glob(f".{out}*"))
+
+
+def test_a_write_refused_inside_a_lab_step_ends_the_lab(files):
+    """A step whose figure the file system refuses is not a step's failure in a report that looks complete
+    (manifest, exit 1): the lab ends with one line naming the file, exit 2, FAILED."""
+    import os
+    import resource
+    import subprocess
+    import sys
+
+    from imunav.lab.runfolder import FAILED, MANIFEST
+
+    def small_files():
+        resource.setrlimit(resource.RLIMIT_FSIZE, (30000, 30000))
+
+    (files / "lab.toml").write_text('[lab]\nsteps = ["recordings"]\n[recordings.a]\npath = "good.npz"\n'
+                                    'test = "static"\n')
+    env = dict(os.environ, PYTHONPATH=str(Path(__file__).resolve().parents[2] / "src"))
+    r = subprocess.run([sys.executable, "-m", "imunav.cli.main", "lab", "--config", "lab.toml", "--out", "rep",
+                        "--quiet"], cwd=files, capture_output=True, text=True, env=env, timeout=600,
+                       preexec_fn=small_files)
+    assert r.returncode == 2, r.stderr
+    lines = r.stderr.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("error: rep/") and "File too large" in lines[0], r.stderr
+    assert (files / "rep" / FAILED).exists() and not (files / "rep" / MANIFEST).exists()
 
 
 def test_hdf5_files_are_built_in_memory_and_read_back(files):
@@ -298,6 +411,75 @@ def test_taus_all_is_estimated_before_work(files, monkeypatch):
         check_limits("noise", {"file": "long.npz", "taus": "octave"})  # the default grid: nothing to say
 
 
+def test_lstm_training_is_estimated_before_work_and_memory_is_a_limit_not_a_bug(files, monkeypatch):
+    """zupt train had no estimate: --windows-per-trial 1e9 ended in an internal error (a 313 GiB MemoryError),
+    --hidden 100000 --layers 100 ran without a word.  Refused before work, naming the options; a MemoryError
+    (a forced request) is one line and exit 2, not an internal error."""
+    import imunav.noise
+
+    monkeypatch.chdir(files)
+    (files / "trials").mkdir()
+    for extra, word in ((["--windows-per-trial", "1000000000"], "--windows-per-trial 1000000000"),
+                        (["--hidden", "100000", "--layers", "100"], "--hidden 100000"),
+                        (["--epochs", "1000000000"], "--epochs 1000000000")):
+        msg = _exit_2(runner.invoke(app, ["zupt", "train", "trials", "--out", "z.npz", *extra]))
+        assert msg.startswith("error: zupt train: 1 trials x") and word in msg and "--force" in msg, msg
+    assert not (files / "z.npz").exists()
+
+    def no_memory(*a, **k):
+        raise MemoryError("Unable to allocate 313. GiB for an array")
+
+    monkeypatch.setattr(imunav.noise, "allan_deviation", no_memory)
+    msg = _exit_2(runner.invoke(app, ["noise", "good.npz", "--json", "n.json"]))
+    assert msg == "error: out of memory (Unable to allocate 313. GiB for an array); reduce the request"
+
+
+def test_a_grid_search_is_estimated_before_work(tmp_path, monkeypatch):
+    """attitude benchmark --grid multiplies the work by the product of the grids' sizes: 10^5 parameter sets over
+    the BROAD trials ran without an estimate; refused naming the grids (a repeated name counts once)."""
+    monkeypatch.chdir(tmp_path)
+    values = ",".join(str(k) for k in range(100))
+    argv = ["attitude", "benchmark", "broad", "--filter", "madgwick", "--grid", f"beta={values}", "--grid",
+            f"nosuch={values}", "--grid", "other=1,2,3,4,5,6,7,8,9,10"]
+    msg = _exit_2(runner.invoke(app, argv))
+    assert "--grid beta (100 values) x --grid nosuch (100 values) x --grid other (10 values) = 1e+05 parameter" \
+        in msg and "--force" in msg, msg
+    r = runner.invoke(app, [*argv, "--grid", "other=1"])  # 10^4 sets: under the limit, said, then run
+    assert r.exit_code == 2 and r.stderr.startswith("warning: attitude benchmark: --grid beta (100 values)")
+    assert "hours" in r.stderr and "no parameter 'nosuch'" in r.stderr
+
+
+def test_a_forced_long_request_says_its_estimate_and_moves_its_bar(files, monkeypatch):
+    """Forced past the limit, a request still says its estimate (a warning line); the noise bar moves through
+    each channel's fit (the long part of --taus all), not only between the sensors."""
+    import contextlib
+
+    from imunav.cli import noise as noise_cmd
+    from imunav.cli._limits import check_limits
+    from imunav.errors import ImunavWarning
+    from imunav.noise import allan_deviation, fit_noise
+
+    monkeypatch.chdir(files)
+    write_imu(_rec(200_000), files / "long.npz")
+    with pytest.warns(ImunavWarning, match=r"noise --taus all: .* beyond its limits: running as --force asks"):
+        check_limits("noise", {"file": "long.npz", "taus": "all", "force": True})
+    calls = []
+    r = allan_deviation(_rec(600).gyro, 50.0, "octave", units="rad/s")
+    fit_noise(r, progress=lambda k, n: calls.append((k, n)))
+    assert calls == [(k, 15) for k in range(1, 16)]  # five stages of each of the three channels
+    reports = []
+
+    @contextlib.contextmanager
+    def recorder(description, *, quiet=False, total=None):
+        yield lambda done, total_: reports.append((done, total_))
+
+    monkeypatch.setattr(noise_cmd, "progress", recorder)
+    out = runner.invoke(app, ["noise", "good.npz", "--taus", "octave"])
+    assert out.exit_code == 0, out.stderr
+    done = [d for d, _ in reports]
+    assert done == list(range(1, 35)) and {t for _, t in reports[1:]} == {34}  # 2 x (Allan + 15 fit stages + PSD)
+
+
 # ------------------------------------------------------------------ 9. an interrupt is never lost
 @pytest.mark.parametrize("write_after", [False, True])
 def test_an_interrupt_swallowed_in_a_callback_from_c_is_not_lost(tmp_path, monkeypatch, write_after):
@@ -332,3 +514,30 @@ def test_an_interrupt_swallowed_in_a_callback_from_c_is_not_lost(tmp_path, monke
         signal.signal(signal.SIGINT, old)
     assert not (run / MANIFEST).exists() and (run / FAILED).exists()
     assert not (run / "a.json").exists() and not (run / "b.json").exists()
+
+
+def test_a_negative_count_scale_mirrors_the_triad_and_is_refused(tmp_path, monkeypatch):
+    """One scale for three axes that is negative mirrors them (a left-handed frame, no sensor's): refused by the
+    option's domain and by the library; a per-axis scale may still count one axis the other way."""
+    from imunav.errors import UnitError
+
+    monkeypatch.chdir(tmp_path)
+    rng = np.random.default_rng(0)
+    raw = np.column_stack([rng.normal(0, 10, (500, 5)), 16384 + rng.normal(0, 10, 500)])
+    np.savetxt("raw.csv", raw, delimiter=",", header="gx,gy,gz,ax,ay,az", comments="")
+    for flag in ("--gyro-scale", "--accel-scale"):
+        msg = _exit_2(runner.invoke(app, ["info", "raw.csv", "--fs", "50", "--gyro-unit", "counts", "--accel-unit",
+                                          "counts", "--gyro-scale", "1e-4", "--accel-scale", "6e-4", flag, "-1"]))
+        assert msg.startswith(f"error: {flag} -1") and "(0, 1e+06]" in msg
+    with pytest.raises(UnitError, match=r"gyro_scale=-0\.001: .* mirrors"):
+        ImuData.from_arrays(None, raw[:, :3], raw[:, 3:], fs=50.0, gyro_unit="counts", gyro_scale=-1e-3,
+                            accel_unit="counts", accel_scale=6e-4)
+    with pytest.raises(UnitError, match=r"scales\['mag'\]=-0\.1"):
+        from imunav.io import read_imu
+
+        np.savetxt("m.csv", np.column_stack([raw, raw[:, :3]]), delimiter=",", comments="",
+                   header="gx,gy,gz,ax,ay,az,mx,my,mz")
+        read_imu("m.csv", fs=50.0, units={"mag": "counts"}, scales={"mag": -0.1})
+    d = ImuData.from_arrays(None, raw[:, :3], raw[:, 3:], fs=50.0, gyro_unit="counts", gyro_scale=[1e-3, -1e-3, 1e-3],
+                            accel_unit="counts", accel_scale=6e-4)
+    assert np.allclose(d.gyro[:, 1], -1e-3 * raw[:, 1])

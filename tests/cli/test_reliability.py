@@ -55,7 +55,7 @@ def _killed_run(folder: Path, kind: str, written: list[str]) -> None:
 
 @pytest.mark.parametrize("argv", [
     ["batch", "simulate", "1", "--fs", "10", "--dwell", "2", "--no-rate-table", "--executor", "serial", "--quiet"],
-    ["lab", "--steps", "noise", "--quiet"],
+    ["lab", "--steps", "simulate_tests,noise", "--quiet"],
 ])
 def test_overwrite_of_a_killed_run_keeps_the_users_notes(tmp_path, argv):
     out = tmp_path / "killed_run"
@@ -130,15 +130,32 @@ def test_a_lab_configuration_error_leaves_no_report(tmp_path):
     assert not (out / "index.html").exists() and not (out / MANIFEST).exists() and not (out / "summary.json").exists()
 
 
-def test_a_lab_that_fails_after_writing_leaves_only_failed(tmp_path):
-    """The first step writes its recordings, the second is misconfigured: the run's files go, FAILED stays
-    (was: a complete-looking report folder with a manifest, exit 1)."""
+def test_a_lab_that_fails_after_writing_leaves_only_failed(tmp_path, monkeypatch):
+    """The first step writes its recordings, the second finds itself misconfigured as it runs: the run's files
+    go, FAILED stays (was: a complete-looking report folder with a manifest, exit 1).  (A step whose input no
+    earlier step makes, e.g. [noise] record = "nope", is now refused before the first step: nothing written.)"""
+    import types
+
+    from imunav.errors import ConfigError
+    from imunav.lab import runner as lab_runner
+
     cfg = tmp_path / "lab.toml"
     cfg.write_text('[lab]\nsteps = ["simulate_tests", "noise"]\n[simulate_tests]\nfs = 10.0\ndwell_s = 2.0\n'
                    'transition_s = 1.0\nstatic_duration_s = 20.0\ntests = ["static_long"]\nfigures = false\n'
                    '[noise]\nrecord = "nope"\n')
     out = tmp_path / "rep"
     msg = _exit_2(runner.invoke(app, ["lab", "--config", str(cfg), "--out", str(out), "--quiet"]))
+    assert "nope" in msg and not out.exists()
+
+    def misconfigured(ctx):
+        raise ConfigError("[zz_late] nope: found out while running")
+
+    mod = types.ModuleType("imunav.lab.steps.zz_late")
+    mod.TITLE, mod.run = "zz_late", misconfigured
+    monkeypatch.setitem(sys.modules, "imunav.lab.steps.zz_late", mod)
+    monkeypatch.setattr(lab_runner, "available_steps", lambda: ["simulate_tests", "zz_late"])
+    msg = _exit_2(runner.invoke(app, ["lab", "--config", str(cfg), "--out", str(out), "--quiet", "--steps",
+                                      "simulate_tests,zz_late"]))
     assert "nope" in msg
     assert sorted(p.name for p in out.iterdir() if not p.name.startswith(".")) == [FAILED]
     assert "ConfigError" in (out / FAILED).read_text()

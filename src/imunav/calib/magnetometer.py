@@ -353,6 +353,8 @@ def soft_iron_rotation_scale(h: ArrayLike, *, planar_tol: float = 0.02) -> MagCa
     V = V[:, order]
     w = w[order]
     V = V * np.sign(np.diag(V))[None, :]
+    if np.linalg.det(V) < 0:  # the axes' signs are free (A below is the same): keep R a rotation, not a mirror
+        V[:, int(np.argmin(np.abs(np.diag(V))))] *= -1.0
     R = V.T
     r = 1.0 / np.sqrt(w)  # semi-axis lengths along the principal axes
     alpha = r / r.mean()

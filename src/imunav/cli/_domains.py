@@ -128,7 +128,7 @@ _RUNS = _int(1, 10**9)
 _WORKERS = _int(1, 4096)
 _LAT = _real(-90.0, 90.0, unit="deg")
 _GRAVITY = _real(0.0, 100.0, lo_open=True, unit="m/s^2")
-_SCALE = _real(-1e6, 1e6, nonzero=True)
+_SCALE = _pos("SI units per count", 1e6)  # one scale for three axes: a negative one mirrors the triad
 _PROB = _real(0.0, 1.0, lo_open=True, hi_open=True)
 
 #: flag (or "<command path> <flag>") -> domain; see the module docstring.

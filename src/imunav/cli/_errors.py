@@ -262,6 +262,8 @@ class ImunavGroup(TyperGroup):
             raise
         except (ImunavError, OSError) as exc:
             fail(exc, ctx)
+        except MemoryError as exc:  # the machine's limit, as a refused write is the file system's (e.g. --force)
+            fail(MemoryError(f"out of memory ({_message(exc)}); reduce the request"), ctx)
         except UnicodeDecodeError as exc:  # a text input (TOML, JSON, CSV) that is not text
             fail(ValueError(f"an input file is not UTF-8 text ({exc.reason} at byte {exc.start}); "
                             "check the file given for each option"), ctx)

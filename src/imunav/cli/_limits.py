@@ -2,7 +2,8 @@
 
 A command whose options ask for far more than the machine can give (``simulate
 --duration 1e12``, ``noise --taus log:1000000000``, ``attitude montecarlo --runs
-100000000``) is refused before any work with the estimate, unless ``--force``:
+100000000``, ``attitude benchmark --grid`` of 10^5 parameter sets, ``zupt train --epochs 1000000000``) is
+refused before any work with the estimate, unless ``--force`` (then the estimate is still said, a warning line):
 
 ``error: simulate static --duration 1e+12 s at --fs 100 Hz: about 1e+14 samples, 45 PiB of memory and 16 years
 on the reference machine (24 GiB, 2 cores); reduce the request, or pass --force to run it anyway``
@@ -22,6 +23,7 @@ import os
 import warnings
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
+from pathlib import Path
 from typing import Any
 
 from imunav.errors import ImunavWarning, InvalidInputError
@@ -128,6 +130,27 @@ def _attitude_mc(v: Mapping[str, Any]) -> Estimate | None:
                     min(runs, 64) * n * _ATT_BYTES * k, runs * n * k * _ATT_SECONDS / MACHINE_CORES)
 
 
+_BROAD_BYTES = 68.0  # bytes of a BROAD trial file per sample (IMU, magnetometer, optical reference; compressed)
+_BROAD_SAMPLES = 5e5  # the shared BROAD trials (10 files, 36 MB), when the folder is not a local one
+
+
+def _attitude_benchmark(v: Mapping[str, Any]) -> Estimate | None:
+    # NAME -> number of values, a repeated NAME replacing the earlier one as in the command
+    grid = {str(g).split("=", 1)[0]: len(str(g).split("=", 1)[-1].split(",")) for g in (v.get("grid") or [])}
+    combos = math.prod(grid.values())
+    filters = 1 if grid else max(1, len(v.get("filter") or ["adaptive", "smoother"]))
+    try:
+        size = sum(p.stat().st_size for p in Path(v.get("directory") or ".").glob("*.mat"))
+    except OSError:
+        size = 0
+    n = size / _BROAD_BYTES if size else _BROAD_SAMPLES
+    workers = int(v.get("workers") or MACHINE_CORES)
+    what = " x ".join(f"--grid {name} ({k} values)" for name, k in grid.items())
+    return Estimate(f"attitude benchmark: {what + ' = ' if grid else ''}{combos:.3g} parameter set(s) x {filters} "
+                    f"filter(s) over about {n:.3g} samples", min(workers, 64) * n * _ATT_BYTES,
+                    combos * filters * n * _ATT_SECONDS / min(workers, MACHINE_CORES))
+
+
 def _airdata_simulate(v: Mapping[str, Any]) -> Estimate | None:
     n = float(v.get("duration") or 0) * (float(v.get("rate_ads") or 0) + float(v.get("rate_doppler") or 0))
     return Estimate(f"airdata simulate: --duration {float(v.get('duration') or 0):.3g} s x (--rate-ads + "
@@ -140,6 +163,32 @@ def _airdata_runs(seconds_per_run: float) -> Callable[[Mapping[str, Any]], Estim
         return Estimate(f"--runs {runs} Monte Carlo runs", 1e6 + runs * 1e3, runs * seconds_per_run)
 
     return est
+
+
+#: the LSTM's training (imunav.ins.zupt.lstm.LstmConfig defaults, and what a window holds): its cost per window step
+#: and layer is ~ hidden x (hidden + inputs) multiply-adds, forward and back
+_LSTM = {"windows_per_trial": 1000, "epochs": 3, "layers": 2, "hidden": 48, "window": 100, "inputs": 8, "batch": 64}
+_LSTM_SECONDS = 2.7e-9  # x epochs x windows x window x layers x hidden x (hidden + inputs): the defaults on 42 trials, ~3 min
+
+
+def _zupt_train(v: Mapping[str, Any]) -> Estimate | None:
+    try:
+        trials = max(1, sum(1 for _ in Path(v.get("directory") or ".").glob("*.mat")))
+    except OSError:
+        trials = 1
+    wpt, epochs, layers, hidden = (int(v.get(key) or _LSTM[key]) for key in ("windows_per_trial", "epochs", "layers",
+                                                                             "hidden"))
+    windows = trials * wpt
+    cell = layers * hidden * (hidden + _LSTM["inputs"])
+    seconds = epochs * windows * _LSTM["window"] * cell * _LSTM_SECONDS
+    if v.get("budget_s"):
+        seconds = min(seconds, float(v["budget_s"]))  # the training stops there
+    # the windows' draw (an index per window), the weights with their gradients and Adam's moments, a batch's
+    # activations kept for the backward pass
+    nbytes = windows * 16.0 + 4 * 4 * 4.0 * cell + _LSTM["batch"] * _LSTM["window"] * layers * 4 * hidden * 4.0 * 6
+    return Estimate(f"zupt train: {trials} trials x --windows-per-trial {wpt} x --epochs {epochs} windows of "
+                    f"{_LSTM['window']} samples through --layers {layers} x --hidden {hidden} LSTM units",
+                    nbytes, seconds)
 
 
 #: bytes of a recording file per sample: six float64 channels and a time stamp (binary), or ~12 characters each (text)
@@ -183,10 +232,12 @@ ESTIMATORS: dict[str, Callable[[Mapping[str, Any]], Estimate | None]] = {
     "gins simulate": _gins,
     "gins outage-test": _gins,
     "attitude montecarlo": _attitude_mc,
+    "attitude benchmark": _attitude_benchmark,
     "airdata simulate": _airdata_simulate,
     "airdata faults": _airdata_runs(2e-3),
     "airdata thesis": _airdata_runs(5e-2),
     "noise": _noise,
+    "zupt train": _zupt_train,
 }
 
 
@@ -214,7 +265,7 @@ def check_limits(command_path: str, values: Mapping[str, Any]) -> Estimate | Non
     -----
     ImunavWarning
         With the estimate, when the request will take longer than :data:`NOTICE` (so that a long run is not
-        silent).
+        silent), or is beyond the limits and forced.
     """
     fn = ESTIMATORS.get(command_path)
     if fn is None:
@@ -223,10 +274,16 @@ def check_limits(command_path: str, values: Mapping[str, Any]) -> Estimate | Non
         est = fn(values)
     except (TypeError, ValueError, OverflowError):
         return None
-    if est is None or values.get("force"):
+    if est is None:
         return est
     what = est.what if est.what.startswith(command_path) else f"{command_path}: {est.what}"
-    if not (est.bytes <= MEMORY and est.seconds <= TIME) or not (math.isfinite(est.bytes) and math.isfinite(est.seconds)):
+    beyond = not (est.bytes <= MEMORY and est.seconds <= TIME) or not (math.isfinite(est.bytes) and math.isfinite(est.seconds))
+    if beyond and values.get("force"):  # run as asked, but not without a word
+        warnings.warn(f"{what}: about {_size(est.bytes)} of memory and {_time(est.seconds)} on the reference machine "
+                      f"({_size(MACHINE_MEMORY)}, {MACHINE_CORES} cores), beyond its limits: running as --force asks "
+                      "(a progress bar on a terminal; Ctrl-C stops it)", ImunavWarning, stacklevel=2)
+        return est
+    if beyond:
         raise InvalidInputError(
             f"{what}: about {_size(est.bytes)} of memory and {_time(est.seconds)} on the reference machine "
             f"({_size(MACHINE_MEMORY)}, {MACHINE_CORES} cores); reduce the request, or pass --force to run it anyway")

@@ -10,7 +10,7 @@ from rich.markup import escape
 from rich.table import Table
 
 from imunav.cli._console import make_console
-from imunav.cli._errors import fail
+from imunav.cli._errors import _debug_wanted, fail, one_line
 from imunav.cli._lazy import lazy
 from imunav.errors import InvalidInputError
 from imunav.files import check_outputs, write_json
@@ -70,9 +70,13 @@ def lab(
         make_console().print(f"specification: {len(checks)} checks, {len(failed)} failed"
                         + (f" ({escape(', '.join(failed[:8]))}{' …' if len(failed) > 8 else ''})" if failed else ""),
                         soft_wrap=True, highlight=False)
-    for s in result.steps:
+    debug = _debug_wanted()
+    for s in result.steps:  # one line per failed step (its traceback is in the report, and here with --debug)
         if s.error:
-            console.print(f"[red]{s.name} failed:[/red]\n{escape(s.error)}", soft_wrap=True, highlight=False)
+            if debug:
+                typer.echo(s.error.rstrip(), err=True)
+            typer.echo(f"error: lab step {s.name}: {one_line(s.reason or 'failed')} (details in "
+                       f"{Path(out) / 'summary.md'})", err=True)
     if json_out is not None:
         write_json(json_out, result.to_dict())
     typer.echo(f"report: {Path(out) / 'index.html'}")

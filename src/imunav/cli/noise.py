@@ -145,21 +145,31 @@ def noise(
         if idx:
             groups.append((sensor, arr[:, idx], unit, tuple(names[i] for i in idx)))
     results: dict[str, Any] = {}
-    with progress("noise analysis", quiet=quiet, total=3 * len(groups)) as report:
+    # steps of the bar: per sensor the Allan variance, the fit's stages (the long part of --taus all: one step per
+    # channel until the first fit says how many it has), the PSD
+    channels = [arr.shape[1] for _s, arr, _u, _n in groups]
+    total = sum(2 + n for n in channels)
+    with progress("noise analysis", quiet=quiet, total=total) as report:
         done = 0
 
-        def advance() -> None:
+        def advance(k: int = 1) -> None:
             nonlocal done
-            done += 1
-            report(done, 3 * len(groups))
+            done += k
+            report(done, total)
 
         for sensor, arr, unit, names in groups:
             r = imunav_noise.allan_deviation(arr, rate, tau_spec, kind, units=unit, channels=names, t=data.t,
                                              nan_policy="segments")
             advance()
+            before, guess = done, arr.shape[1]
+
+            def fit_progress(k: int, n: int, before: int = before, guess: int = guess) -> None:
+                nonlocal total
+                total = sum(2 + c * (n // guess) for c in channels)  # the same stages per channel in every fit
+                advance(before + k - done)
+
             f = imunav_noise.fit_noise(r, terms=term_list, gauss_markov=gm, select=None if select == "none" else select,
-                          quantity=sensor)
-            advance()
+                                       quantity=sensor, progress=fit_progress)
             p = imunav_noise.psd(arr, rate, "welch", nperseg=min(arr.shape[0], 2**14), units=unit, channels=names)
             pa = imunav_noise.log_average(p, 10)
             # same band as the Allan fit: below 1/(2 tau_min), clear of the sensor's own filter

@@ -377,7 +377,10 @@ def build_imu(
         if mu is not None and mu.strip().lower() in ("counts", "count", "lsb", "raw"):
             if "mag" not in sc:
                 raise UnitError("mag declared in counts needs scales={'mag': <mag_unit per count>}")
-            mag = (np.asarray(mag, dtype=float) - of.get("mag", 0.0)) * float(sc["mag"])
+            if np.ndim(sc["mag"]) == 0 and not float(sc["mag"]) > 0:
+                raise UnitError(f"scales['mag']={sc['mag']!r}: one scale for the three axes is positive (a negative "
+                                "one mirrors the triad; zero or NaN loses it); give the field unit per count")
+            mag = (np.asarray(mag, dtype=float) - of.get("mag", 0.0)) * np.asarray(sc["mag"], dtype=float)
         elif mu is not None and mag_unit is None:
             mag_unit = mu
     tp = arrays.get("temp")

@@ -7,7 +7,12 @@ is a module ``imunav.lab.steps.<name>`` with
 * ``run(ctx: LabContext) -> StepResult``,
 * optionally ``report(section, result, ctx)`` to add its own tables and
   figures to the HTML report (default: the summary as a table, figures
-  embedded).
+  embedded),
+* optionally ``requires(lab, earlier) -> list[str]``: the earlier steps it
+  takes its inputs from, called for every step before the first one runs (a
+  :class:`~imunav.errors.ConfigError` when no earlier step gives them: the
+  lab is refused whole, nothing written).  A step whose input step failed is
+  not run (recorded as failed, with the reason).
 
 Steps share objects through ``ctx.artifacts`` (a dict); the keys written by
 each step are listed in its module docstring.  Each step's options come from
@@ -36,7 +41,7 @@ readable: every step's summary, timing, verdict, error), ``summary.md`` and
 ``figures/``), and last ``manifest.json`` (:mod:`imunav.lab.runfolder`: run id,
 seed, configuration, every file with size and SHA-256).  A folder holding
 another run is refused unless ``overwrite=True``.  A step that raises is
-recorded with its traceback and the remaining steps still run.
+recorded with its traceback and the remaining steps still run, except those that take their inputs from it.
 
 Example
 -------
@@ -47,8 +52,10 @@ Example
 from __future__ import annotations
 
 import contextlib
+import errno
 import importlib
 import os
+import re
 import time
 import traceback
 from dataclasses import dataclass, field, replace
@@ -96,7 +103,7 @@ class StepRecord(Result):
     seconds : float
         Wall-clock duration of the step, s.
     error : str, optional
-        Traceback of the exception the step raised (None: it finished).
+        Traceback of the exception the step raised, or why it did not run (None: it finished).
     """
 
     name: str
@@ -108,6 +115,14 @@ class StepRecord(Result):
     @property
     def passed(self) -> bool | None:
         return False if self.error else (self.result.passed if self.result else None)
+
+    @property
+    def reason(self) -> str | None:
+        """Why the step failed, in one line: the exception's last line (None: it finished)."""
+        if not self.error:
+            return None
+        lines = [ln.strip() for ln in self.error.strip().splitlines() if ln.strip()]
+        return re.sub(r"^(?:\w+\.)+(?=\w+: )", "", lines[-1]) if lines else None  # the class without its module
 
     def to_dict(self) -> dict:
         """JSON-ready form (the record in ``summary.json``).
@@ -267,6 +282,7 @@ def run_lab(
     if not names:
         raise ConfigError("no lab step to run (the step list is empty); name steps from: " + ", ".join(known))
     out = Path(out_dir)
+    needs = _step_inputs(typed, names)
 
     inputs = typed.inputs
     params = {"config": str(typed.source) if typed.source is not None else jsonable(cfg), "steps": names,
@@ -276,11 +292,32 @@ def run_lab(
     loaded = read_recordings(typed.recordings, str(typed.source or "lab configuration")) \
         if "recordings" in names and typed.recordings else None
     with RunFolder(out, "lab", seed=seed, parameters=params, overwrite=overwrite, inputs=inputs):
-        return _run_steps(out, names, seed, cfg, typed, progress, console, loaded)
+        return _run_steps(out, names, seed, cfg, typed, progress, console, loaded, needs)
+
+
+#: errno of a write the file system refuses (file too large, no space, quota, read-only): it ends the lab (exit 2,
+#: the run folder FAILED), as it would any command, instead of a step's failure in a report that looks complete.
+_REFUSED_WRITE = frozenset({errno.EFBIG, errno.ENOSPC, errno.EDQUOT, errno.EROFS})
+
+
+def _step_inputs(typed: LabConfig, names: list[str]) -> dict[str, list[str]]:
+    """Each step's ``requires(lab, earlier)``, before any step runs: step -> the earlier steps it takes inputs
+    from; a step whose inputs no earlier step gives is a ConfigError naming the definition."""
+    needs: dict[str, list[str]] = {}
+    for i, name in enumerate(names):
+        requires = getattr(importlib.import_module(f"imunav.lab.steps.{name}"), "requires", None)
+        if requires is None:
+            continue
+        try:
+            needs[name] = list(requires(typed, names[:i]))
+        except ConfigError as exc:
+            where = f"{typed.source}: " if typed.source is not None else ""
+            raise ConfigError(f"{where}{exc} (steps: {', '.join(names)})") from None
+    return needs
 
 
 def _run_steps(out: Path, names: list[str], seed: int, cfg: dict, typed: LabConfig, progress: bool,
-               console: Any, loaded: dict | None = None) -> LabResult:
+               console: Any, loaded: dict | None = None, needs: Mapping[str, list[str]] | None = None) -> LabResult:
     """The body of :func:`run_lab` inside its run folder: every step, then summary.json / .md and index.html."""
     if progress:
         prog_cm: Any = Progress(
@@ -304,6 +341,13 @@ def _run_steps(out: Path, names: list[str], seed: int, cfg: dict, typed: LabConf
             prog.update(overall, description=f"lab: {title}")
             t0 = time.perf_counter()
             before = {k: id(v) for k, v in ctx.artifacts.items()}
+            failed = [r.name for r in records if r.error and r.name in (needs or {}).get(name, [])]
+            if failed:  # its inputs are missing: not run on a stand-in
+                which = f"the {failed[0]} step, which" if len(failed) == 1 else \
+                    f"the {', '.join(failed[:-1])} and {failed[-1]} steps, which"
+                records.append(StepRecord(name, title, None, 0.0, f"not run: it takes its input from {which} failed"))
+                prog.advance(overall)
+                continue
             try:
                 res = mod.run(ctx)
                 if not isinstance(res, StepResult):
@@ -315,6 +359,10 @@ def _run_steps(out: Path, names: list[str], seed: int, cfg: dict, typed: LabConf
                 records.append(StepRecord(name, title, res, time.perf_counter() - t0))
             except ConfigError:
                 raise  # the lab is configured wrongly: a user error, not a step's result (the run folder fails)
+            except OSError as exc:
+                if exc.errno in _REFUSED_WRITE:  # the file system refused a write: the run fails, not the step
+                    raise
+                records.append(StepRecord(name, title, None, time.perf_counter() - t0, traceback.format_exc()))
             except Exception:  # a failing step is reported; the others still run
                 records.append(StepRecord(name, title, None, time.perf_counter() - t0, traceback.format_exc()))
             prog.advance(overall)

@@ -550,8 +550,8 @@ def allan_deviation(
     ------
     InvalidInputError
         If ``input``, ``nan_policy``, ``kind`` or ``taus`` is not understood, ``fs`` is not positive, ``ci``
-        is outside (0, 1), ``x`` is not numeric, ``t`` is not strictly increasing, or (``nan_policy="raise"``)
-        the time stamps have a gap.
+        is outside (0, 1), ``x`` is not real numbers (text, complex), ``t`` is not strictly increasing, or
+        (``nan_policy="raise"``) the time stamps have a gap.
     ShapeError
         If ``x`` is not (N,) / (N, C) or looks transposed, or ``t`` / ``channels`` do not match it.
     NonFiniteError
@@ -576,14 +576,14 @@ def allan_deviation(
         raise InvalidInputError(f"fs must be a positive finite sample rate in Hz, got {fs!r}")
     if not 0.0 < ci < 1.0:
         raise InvalidInputError(f"ci must be a probability in (0, 1), got {ci!r}")
-    arr = x if isinstance(x, np.ndarray) else np.asarray(x, dtype=float)
+    arr = x if isinstance(x, np.ndarray) else np.asarray(x)  # its own dtype: text or complex numbers are refused
     one_d = arr.ndim == 1
     if arr.ndim not in (1, 2):
         raise ShapeError(f"x must be (N,) or (N, C), got shape {arr.shape}")
     a2 = arr[:, None] if one_d else arr
     check_rows_are_samples(a2.shape, "x")
-    if not np.issubdtype(a2.dtype, np.number):
-        raise InvalidInputError(f"x must be numeric, got dtype {a2.dtype}")
+    if not np.issubdtype(a2.dtype, np.number) or np.iscomplexobj(a2):
+        raise InvalidInputError(f"x must hold real numbers (a sensor's samples), got dtype {a2.dtype}")
     n_rows, n_ch = a2.shape
     n = n_rows - 1 if input == "phase" else n_rows
     if n < _min_samples(kind):

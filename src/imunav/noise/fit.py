@@ -48,7 +48,7 @@ from __future__ import annotations
 
 import itertools
 import math
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -393,8 +393,15 @@ def _design(tau: np.ndarray, names: list[str], Ts: list[float | None]) -> np.nda
     return np.column_stack([avar_term("GM" if nm.startswith("GM") else nm, tau, T) for nm, T in zip(names, Ts)])
 
 
-def _fit_channel(tau, m, A, edf, n_phase, fs, names, Ts0, select, overlapping, n_iter=3):
-    """GLS-NNLS for one channel; returns dict of theta, cov_theta, chosen mask, Ts, chi2."""
+#: Stages of one channel's fit (its covariance is rebuilt in each): the reweighting passes, the term selection and
+#: the final refinement; what ``fit_noise(progress=)`` counts.
+_N_ITER = 3
+_STAGES = _N_ITER + 2
+
+
+def _fit_channel(tau, m, A, edf, n_phase, fs, names, Ts0, select, overlapping, n_iter=_N_ITER, tick=lambda: None):
+    """GLS-NNLS for one channel; returns dict of theta, cov_theta, chosen mask, Ts, chi2 (``tick()`` after each of
+    its :data:`_STAGES` stages)."""
     nT = A.size
     Ts = list(Ts0)
     gm_idx = [i for i, nm in enumerate(names) if nm.startswith("GM")]
@@ -423,6 +430,7 @@ def _fit_channel(tau, m, A, edf, n_phase, fs, names, Ts0, select, overlapping, n
                 Ts[gi] = float(math.exp(r.x))
         th, _, _ = solve(range(len(names)), Ts, Crel, model)
         model = np.maximum(_design(tau, names, Ts) @ th, 1e-300)
+        tick()
 
     # term selection on the final covariance
     Crel = _cov_rel(tau, m, n_phase, names, Ts, th, fs, model, edf, overlapping)
@@ -442,6 +450,7 @@ def _fit_channel(tau, m, A, edf, n_phase, fs, names, Ts0, select, overlapping, n
         if best is None or crit < best[0] - 1e-9:
             best = (crit, cols, t_, chi)
     _, cols, t_, chi = best
+    tick()
     thf = np.zeros(len(names))
     thf[cols] = t_
     # final refinement of the selected model's weights
@@ -479,6 +488,7 @@ def _fit_channel(tau, m, A, edf, n_phase, fs, names, Ts0, select, overlapping, n
         for j, gi in enumerate(gk):
             v = cj[nk + j, nk + j]
             se_logT[gi] = math.sqrt(v) if v > 0 else float("nan")
+    tick()
     return thf, covth, np.array([c in keep for c in range(len(names))]), Ts, chi, se_logT
 
 
@@ -519,6 +529,7 @@ def fit_noise(
     min_edf: float = 1.0,
     slopes: bool = True,
     auto_tau_min: bool = True,
+    progress: Callable[[int, int], None] | None = None,
 ) -> NoiseFit:
     """Identify IEEE-952 (and Gauss-Markov) noise terms from an Allan result.
 
@@ -551,6 +562,10 @@ def fit_noise(
         at 10 ms).  A leading point is dropped while its standardized
         residual exceeds 5 and chi^2/dof exceeds 3 (at most a third of the
         points); ``tau_min`` reports where each channel's fit starts.
+    progress : callable, optional
+        ``progress(done, total)`` after each stage of each channel's fit (five per channel: the covariance of
+        the Allan variances is rebuilt in each, a cost that grows with the square of the number of cluster
+        times): a long fit (``taus="all"``) can show its progress.
 
     Returns
     -------
@@ -605,6 +620,14 @@ def fit_noise(
     tau_min = np.zeros(n_ch)
     z = 1.959963984540054
     n_used = 0
+    done = 0
+
+    def tick() -> None:
+        nonlocal done
+        done += 1
+        if progress is not None:
+            progress(done, n_ch * _STAGES)
+
     for c in range(n_ch):
         ok = np.isfinite(adev[:, c]) & (adev[:, c] > 0) & np.isfinite(edf_all[:, c]) & (edf_all[:, c] >= min_edf)
         if tau_range is not None:
@@ -627,7 +650,7 @@ def fit_noise(
             Ts0.append(float(np.exp(np.log(tau[0]) + (j + 1) / (gauss_markov + 1) * np.log(tau[-1] / tau[0]))))
         th, covth, keep, Ts, chi, se_logT = _fit_channel(
             tau, result.m[ok], A, edf, result.n_samples + 1, result.fs, names, Ts0, select,
-            result.kind == "overlapping",
+            result.kind == "overlapping", tick=tick,
         )
         chi2[c] = chi
         k = 0

@@ -23,12 +23,15 @@ from imunav.files import claim_run_file, jsonable
 from imunav.results import Result
 from imunav.sim import presets
 
-__all__ = ["StepResult", "LabContext", "MAX_SAMPLES", "check_preset", "check_samples"]
+__all__ = ["StepResult", "LabContext", "MAX_SAMPLES", "SIMULATED_TESTS", "check_preset", "check_samples",
+           "recordings_before"]
 
 #: The most samples (or epochs) one lab step may simulate: about the reference machine's 24 GiB at the
 #: simulator's ~600 bytes per sample (:mod:`imunav.cli._limits`); a larger request is refused when the lab
 #: definition is checked, before any step runs.
 MAX_SAMPLES = 4e7
+#: The recordings the ``simulate_tests`` step makes (its ``tests`` option chooses among them; all by default).
+SIMULATED_TESTS = ("hundred_position", "rate_table", "static_long")
 
 
 @dataclass(frozen=True)
@@ -262,6 +265,32 @@ def check_preset(table: str, name: Any) -> None:
     """
     if name not in presets.names():
         raise ConfigError(f"{table} preset: unknown IMU preset {name!r}; known presets: {', '.join(presets.names())}")
+
+
+def recordings_before(lab: Any, earlier: Iterable[str]) -> dict[str, str]:
+    """The recordings the steps before a step will have left, and which step leaves each.
+
+    Parameters
+    ----------
+    lab : imunav.lab.config.LabConfig
+        The typed lab definition.
+    earlier : iterable of str
+        The steps that run before it, in order.
+
+    Returns
+    -------
+    dict
+        Recording artifact name (``"hundred_position"``, ``"rate_table"``, ``"static_long"``, ``"multipose"``)
+        -> the step that makes it (``simulate_tests`` with its ``tests``, or ``recordings`` with its tables).
+    """
+    made: dict[str, str] = {}
+    for step in earlier:
+        if step == "simulate_tests":
+            tests = dict(getattr(lab, "options", {}) or {}).get("simulate_tests", {}).get("tests", SIMULATED_TESTS)
+            made.update({t: step for t in tests})
+        elif step == "recordings":
+            made.update({spec.artifact: step for spec in (getattr(lab, "recordings", {}) or {}).values()})
+    return made
 
 
 def _word(k: int | str) -> int:

@@ -29,6 +29,7 @@ Artifacts set: ``"attitude"``: {filter: RMSE dict}.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from typing import Any
 
 import numpy as np
@@ -60,6 +61,25 @@ def _truth(rng: np.random.Generator, n: int, fs: float):
     w_step = np.vstack([w[1:], w[-1:]])
     q = integrate_rate(quat_from_euler(0.1, -0.2, 0.5), t, w_step, method="zoh")
     return t, w, q
+
+
+def requires(lab: Any, earlier: Sequence[str]) -> list[str]:
+    """The earlier steps this step takes its inputs from (the true error model, the calibration), when they run.
+
+    Parameters
+    ----------
+    lab : imunav.lab.config.LabConfig
+        The typed lab definition.
+    earlier : sequence of str
+        The steps that run before this one.
+
+    Returns
+    -------
+    list of str
+        Those of ``simulate_tests``, ``calibration`` and ``compensation`` that run before it: when one of them
+        fails, this step does not run on a stand-in (the preset model, the raw IMU) as if it had not been asked.
+    """
+    return [s for s in ("simulate_tests", "calibration", "compensation") if s in earlier]
 
 
 def run(ctx: LabContext) -> StepResult:

@@ -28,6 +28,7 @@ and at least 90 % of the 27 parameters lie within their reported 3σ.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from typing import Any
 
 import numpy as np
@@ -43,9 +44,9 @@ from imunav.calib import (
 )
 from imunav.calib.model import parameter_names
 from imunav.calib.plot import plot_residuals, save_figure
-from imunav.errors import InsufficientDataError
+from imunav.errors import ConfigError, InsufficientDataError
 from imunav.files import write_json
-from imunav.lab.steps._api import LabContext, StepResult
+from imunav.lab.steps._api import LabContext, StepResult, recordings_before
 from imunav.units import DEG, G0
 
 TITLE = "Deterministic calibration (100-position + 120-step tests)"
@@ -75,6 +76,35 @@ def _rows(est: Any, truth: Any, stderr: dict, success: dict) -> list[dict]:
                 "success_%": float(success["per_parameter"][key][i]),
             })
     return rows
+
+
+def requires(lab: Any, earlier: Sequence[str]) -> list[str]:
+    """The earlier steps this step takes its inputs from, checked before the lab runs.
+
+    Parameters
+    ----------
+    lab : imunav.lab.config.LabConfig
+        The typed lab definition.
+    earlier : sequence of str
+        The steps that run before this one.
+
+    Returns
+    -------
+    list of str
+        ``simulate_tests`` (the two test recordings and the true error model).
+
+    Raises
+    ------
+    ConfigError
+        When no earlier ``simulate_tests`` step makes the ``hundred_position`` and ``rate_table`` recordings.
+    """
+    made = recordings_before(lab, earlier)
+    missing = [t for t in ("hundred_position", "rate_table") if made.get(t) != "simulate_tests"]
+    if missing:
+        raise ConfigError(f"[calibration] needs the {' and '.join(repr(t) for t in missing)} recording(s) and the "
+                          "true error model from the simulate_tests step: run simulate_tests before calibration, "
+                          "with them in its tests")
+    return ["simulate_tests"]
 
 
 def run(ctx: LabContext) -> StepResult:

@@ -37,6 +37,7 @@ residual tables) and ``calibration`` when the step estimated it.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
@@ -48,7 +49,7 @@ from imunav.errors import ConfigError
 from imunav.files import atomic_path
 from imunav.lab.report.catalog import calibration_estimates
 from imunav.lab.report.lab import display_parameters, embed_png
-from imunav.lab.steps._api import LabContext, StepResult
+from imunav.lab.steps._api import LabContext, StepResult, recordings_before
 from imunav.sim import ideal_imu, multiposition_profile, rate_table_profile, simulate_imu
 from imunav.timeseries import static_intervals
 from imunav.units import DEG, G0
@@ -278,6 +279,40 @@ def _real(ctx: LabContext, cal: Any, unit: str | None) -> dict[str, Any]:
                          "|ω| raw (deg/h)": float(np.linalg.norm(d.gyro[a:b].mean(axis=0)) / DEG * 3600),
                          "|ω| compensated (deg/h)": float(np.linalg.norm(w_c[a:b].mean(axis=0)) / DEG * 3600)})
     return {"rows": rows}
+
+
+def requires(lab: Any, earlier: Sequence[str]) -> list[str]:
+    """The earlier steps this step takes its inputs from, checked before the lab runs (the order of
+    :func:`estimate_calibration`).
+
+    Parameters
+    ----------
+    lab : imunav.lab.config.LabConfig
+        The typed lab definition.
+    earlier : sequence of str
+        The steps that run before this one.
+
+    Returns
+    -------
+    list of str
+        The ``calibration`` step when it runs before; else the step that makes the recordings the calibration is
+        estimated from; with the virtual IMU also ``simulate_tests`` (its true model checks the residuals).
+
+    Raises
+    ------
+    ConfigError
+        When there will be no calibration and no recording to estimate one from.
+    """
+    made = recordings_before(lab, earlier)
+    truth = ["simulate_tests"] if "simulate_tests" in earlier else []
+    if "calibration" in earlier:
+        return ["calibration", *truth]
+    for test in ("hundred_position", "multipose"):
+        if test in made:
+            return sorted({made[test], made.get("rate_table", made[test]), *truth})
+    raise ConfigError(
+        "[compensation] needs a calibration: run the calibration step before it, or give a multiposition test "
+        "(with its segments) or a multipose session in [recordings]")
 
 
 def run(ctx: LabContext) -> StepResult:

@@ -26,6 +26,7 @@ Files: ``figures/noise_allan_gyro.png``, ``figures/noise_allan_accel.png``,
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from typing import Any
 
 import numpy as np
@@ -33,7 +34,7 @@ import numpy as np
 from imunav._quantiles import norm_ppf
 from imunav.errors import ConfigError
 from imunav.files import atomic_path, write_json
-from imunav.lab.steps._api import LabContext, StepResult
+from imunav.lab.steps._api import LabContext, StepResult, recordings_before
 from imunav.noise import allan_deviation, compare_psd_allan, fit_noise, fit_psd, log_average, psd
 from imunav.noise.ar import fit_gauss_markov
 from imunav.noise.plot import plot_allan
@@ -46,6 +47,33 @@ TITLE = "Noise identification of the static record (Allan GLS fit, PSD, AR(1))"
 
 _DEFAULTS: dict[str, Any] = {"record": "static_long", "terms": ["N", "B", "K"], "gauss_markov": 1,
                              "decimate_s": 1.0}
+
+
+def requires(lab: Any, earlier: Sequence[str]) -> list[str]:
+    """The earlier steps this step takes its inputs from, checked before the lab runs.
+
+    Parameters
+    ----------
+    lab : imunav.lab.config.LabConfig
+        The typed lab definition.
+    earlier : sequence of str
+        The steps that run before this one.
+
+    Returns
+    -------
+    list of str
+        ``simulate_tests`` (the record and the true error model).
+
+    Raises
+    ------
+    ConfigError
+        When no earlier ``simulate_tests`` step makes the record (``[noise] record``) and the true model.
+    """
+    record = dict(lab.options.get("noise", {})).get("record", _DEFAULTS["record"])
+    if "simulate_tests" not in earlier or recordings_before(lab, earlier).get(record) != "simulate_tests":
+        raise ConfigError(f"[noise] needs the '{record}' recording and the true error model from the "
+                          f"simulate_tests step: run simulate_tests before noise, with '{record}' in its tests")
+    return ["simulate_tests"]
 
 
 def run(ctx: LabContext) -> StepResult:

@@ -40,6 +40,7 @@ Segments table, when given), ``recording_specs`` (test name ->
 from __future__ import annotations
 
 import json
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Mapping
@@ -293,6 +294,31 @@ def read_recordings(specs: Mapping[str, RecordingSpec], where: str = "lab config
             raise ConfigError(f"{w} ({', '.join(keys) or 'path'}): {exc}") from None
         out[name] = (data, seg)
     return out
+
+
+def requires(lab: Any, earlier: Sequence[str]) -> list[str]:
+    """Checked before the lab runs: the step reads the definition's ``[recordings.<name>]`` tables.
+
+    Parameters
+    ----------
+    lab : imunav.lab.config.LabConfig
+        The typed lab definition.
+    earlier : sequence of str
+        The steps that run before this one (none of them is an input).
+
+    Returns
+    -------
+    list of str
+        Empty: the step takes no input from another step.
+
+    Raises
+    ------
+    ConfigError
+        If the definition has no ``[recordings.<name>]`` table.
+    """
+    if not getattr(lab, "recordings", None):
+        raise ConfigError("the recordings step needs [recordings.<name>] tables in the lab definition")
+    return []
 
 
 def run(ctx: LabContext) -> StepResult:

@@ -54,7 +54,7 @@ from imunav.errors import ConfigError
 from imunav.files import atomic_path, write_json
 from imunav.io import write_imu
 from imunav.lab.report.lab import embed_png
-from imunav.lab.steps._api import LabContext, StepResult, check_preset, check_samples
+from imunav.lab.steps._api import SIMULATED_TESTS, LabContext, StepResult, check_preset, check_samples
 from imunav.lab.steps.recordings import resolve_path
 from imunav.sim import (
     ImuErrorModel,
@@ -69,7 +69,7 @@ from imunav.units import DEG, G0
 
 TITLE = "Simulated calibration tests (virtual IMU)"
 
-_TESTS = ("hundred_position", "rate_table", "static_long")
+_TESTS = SIMULATED_TESTS
 _DEFAULTS: dict[str, Any] = {
     "preset": "thesis_sim",
     "model": None,
