@@ -106,7 +106,7 @@ def run_cmd(
     imunav attitude run ../shared/data/px4_ulog/sample.ulg --topic sensor_combined --filter mekf
 
     Example (the filter's noise from the sensor's own, identified on the trial's first 25 s at rest):
-    imunav noise ../shared/data/broad/05_undisturbed_slow_rotation_with_breaks_B.mat --end 25 --force --profile
+    imunav noise ../shared/data/broad/05_undisturbed_slow_rotation_with_breaks_B.mat --end 25 --profile
     broad05.toml && imunav attitude run 05_undisturbed_slow_rotation_with_breaks_B.mat --noise broad05.toml
     """
 

@@ -33,7 +33,7 @@ _EXAMPLE = (
     "  imunav noise ../shared/data/adis16405/adis16405_imu2.npz --gyro-unit deg/s --accel-unit g "
     "--json noise.json --plot allan.png --psd-plot psd.png --kalibr imu.yaml --openvins kalibr_imu_chain.yaml "
     "--vins vins_imu.yaml\n\n"
-    "  imunav noise ../shared/data/broad/05_undisturbed_slow_rotation_with_breaks_B.mat --end 25 --force "
+    "  imunav noise ../shared/data/broad/05_undisturbed_slow_rotation_with_breaks_B.mat --end 25 "
     "--profile broad05.toml"
 )
 _CH = ("gx", "gy", "gz", "ax", "ay", "az")
