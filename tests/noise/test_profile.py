@@ -7,14 +7,16 @@ import math
 
 import numpy as np
 import pytest
+from shared_data import data_path
 
 from imunav.attitude.adaptive import ADAPTIVE_DEFAULTS
 from imunav.attitude.gravity_kf import GravityKfConfig
 from imunav.attitude.mekf import MekfConfig
 from imunav.attitude.ukf import UkfConfig
 from imunav.errors import ConfigError, InvalidInputError
-from imunav.ins import ZuptConfig
+from imunav.ins import ZuptConfig, ZuptFilter, error_2d
 from imunav.ins.gins import GinsConfig
+from imunav.io.foot import read_pyshoe_mat
 from imunav.noise import NoiseProfile, NoiseTerm, SensorNoise, allan_deviation, fit_noise, read_noise_profile
 
 NAN = float("nan")
@@ -196,3 +198,30 @@ def test_a_config_refuses_a_profile_without_its_sensor():
         GinsConfig.from_noise_profile(p)
     with pytest.raises(InvalidInputError, match="fs"):
         MekfConfig.from_noise_profile(p, fs=float("nan"))
+
+
+@pytest.mark.data
+@pytest.mark.parametrize("trial", ["2017-11-22-11-22-03", "2017-11-22-11-22-46", "2017-11-22-11-23-25"])
+def test_a_foot_trials_first_stance_profile_reaches_the_zupt_ins(trial):
+    """The profile of a foot trial's first stance (1.8-3.1 s standing before the walk; N and K, the stance is too
+    short for B) gives the ZUPT INS per-sample σ in rad/s and m/s² at the trial's 200 Hz: against the σ of the
+    raw samples' first differences / √2 (white noise, independent of the Allan fit), gyro 0.82-1.23, accelerometer
+    0.93-1.67 (a standing foot is not a bench: it sways).  A unit slip (deg, g, a missing √fs) is a factor 10 or
+    more.  The INS run with it ends where the pyshoe defaults do (2-D error 0.033 / 0.050 / 0.023 m against
+    0.029 / 0.048 / 0.025 m)."""
+    tr = read_pyshoe_mat(data_path("foot", "pyshoe_vicon", f"{trial}.mat"))
+    zv = tr.labels["shoe"].astype(bool)
+    n = int(np.argmax(~zv))
+    fs = tr.imu.fs
+    fits = {s: fit_noise(allan_deviation(x[:n], fs, units=u), terms=("N", "K"), quantity=s)
+            for s, x, u in (("gyro", tr.imu.gyro, "rad/s"), ("accel", tr.imu.accel, "m/s^2"))}
+    p = NoiseProfile.from_fits(fs=fs, duration_s=n / fs, source=f"{trial} first stance", **fits)
+    z = ZuptConfig.from_noise_profile(p)
+    diff_g = float(np.max(np.std(np.diff(tr.imu.gyro[:n], axis=0), axis=0))) / math.sqrt(2)
+    diff_a = float(np.max(np.std(np.diff(tr.imu.accel[:n], axis=0), axis=0))) / math.sqrt(2)
+    assert 0.75 < z.gyro_noise_std / diff_g < 1.35
+    assert 0.85 < z.accel_noise_std / diff_a < 1.8
+    np.testing.assert_array_equal(GinsConfig.from_noise_profile(p).gyro_noise_density, p.gyro.noise_density.value)
+    e_default = error_2d(ZuptFilter(ZuptConfig()).run(tr.imu, zv).position, tr.position)
+    e_profile = error_2d(ZuptFilter(z).run(tr.imu, zv).position, tr.position)
+    assert e_profile < 1.3 * e_default
