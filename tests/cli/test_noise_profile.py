@@ -63,6 +63,10 @@ def test_attitude_run_with_a_profile_of_the_trials_rest(tmp_path):
     p = read_noise_profile(prof)
     assert p.fs == pytest.approx(2000 / 7, rel=1e-9) and p.duration_s == pytest.approx(25.0, abs=0.01)
     assert "[:25 s]" in p.source
+    # the trial's magnetometer (µT) comes along: about 0.07 µT/√Hz on each axis
+    assert p.sensors() == ("gyro", "accel", "mag") and p.mag.unit == "uT"
+    assert p.mag.units()["noise_density"] == "uT/sqrt(Hz)"
+    assert np.all((p.mag.noise_density.value > 0.03) & (p.mag.noise_density.value < 0.15))
     # a MEMS gyro at rest: N about 1e-4 rad/s/√Hz (0.3 °/√h) on every axis
     assert np.all((p.gyro.noise_density.value > 5e-5) & (p.gyro.noise_density.value < 2e-4))
     out = tmp_path / "run.json"

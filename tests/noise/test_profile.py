@@ -69,6 +69,15 @@ def test_round_trip_is_exact(tmp_path, rng, suffix):
 
 def test_hand_profile_round_trip_both_formats(tmp_path):
     p = hand_profile()
+    with_mag = NoiseProfile(fs=p.fs, duration_s=p.duration_s, gyro=p.gyro, accel=p.accel, source="with a magnetometer",
+                            mag=SensorNoise("uT", NoiseTerm([0.07, 0.08, 0.06], [1e-3] * 3, [True] * 3),
+                                            NoiseTerm([0.1, 0.0, 0.0], [0.02, NAN, NAN], [True, False, False]),
+                                            NoiseTerm([0.02] * 3, [NAN] * 3, [False] * 3)))
+    assert read_noise_profile(with_mag.write(tmp_path / "m.toml")) == with_mag
+    assert 'unit = "uT/sqrt(s)"' in (tmp_path / "m.toml").read_text()
+    with pytest.raises(InvalidInputError, match="mag is in uT"):
+        NoiseProfile(fs=1.0, duration_s=1.0, mag=SensorNoise("a.u.", p.gyro.noise_density, p.gyro.bias_instability,
+                                                             p.gyro.bias_random_walk))
     assert read_noise_profile(p.write(tmp_path / "a.toml")) == p
     assert read_noise_profile(p.write(tmp_path / "a.json")) == p
     with pytest.raises(InvalidInputError, match=r"\.toml or \.json"):

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 from pathlib import Path
 from typing import Any
 
@@ -14,7 +15,7 @@ from imunav.cli._errors import check_figure_path, check_suffix
 from imunav.cli._lazy import lazy
 from imunav.cli._options import END, INSTANCE, LAYOUT, START, TOPIC, reader_options, window
 from imunav.cli._progress import progress
-from imunav.errors import InvalidInputError
+from imunav.errors import ConvergenceError, InvalidInputError
 from imunav.files import atomic_path, check_outputs, write_json
 from imunav.units import to_display
 
@@ -69,6 +70,25 @@ def _curve_fits(r: Any) -> dict[str, Any]:
         except (InvalidInputError, ValueError, RuntimeError) as e:  # too few tau points, LM failure
             out[name] = {"error": str(e)}
     return out
+
+
+def _with_mag(prof: Any, data: Any, rate: float, tau_spec: Any, kind: str, terms: tuple[str, ...], select: str,
+              console: Any) -> Any:
+    """The profile with the magnetometer's terms added (the same Allan fit), or as it is, saying why not."""
+    if data.mag_unit not in noise_profile.SENSORS["mag"]:
+        console.print(f"magnetometer in {data.mag_unit!r}: not in the profile (it takes "
+                      f"{', '.join(noise_profile.SENSORS['mag'])})")
+        return prof
+    try:
+        r = imunav_noise.allan_deviation(data.mag, rate, tau_spec, kind, units=data.mag_unit,
+                                         channels=("mx", "my", "mz"), t=data.t, nan_policy="segments")
+        f = imunav_noise.fit_noise(r, terms=terms, select=None if select == "none" else select)
+        mag = noise_profile.NoiseProfile.from_fits(fs=prof.fs, duration_s=prof.duration_s, mag=f,
+                                                   mag_unit=data.mag_unit).mag
+    except (InvalidInputError, ConvergenceError) as exc:
+        console.print(f"magnetometer: not in the profile ({exc})")
+        return prof
+    return dataclasses.replace(prof, mag=mag)
 
 
 def noise(
@@ -246,6 +266,8 @@ def noise(
         where = str(file) + ("" if start is None and end is None else
                              f" [{'' if start is None else f'{start:g}'}:{'' if end is None else f'{end:g}'} s]")
         prof = noise_profile.NoiseProfile.from_fits(fs=rate, duration_s=span, source=where, **fits)
+        if data.mag is not None:  # the magnetometer too, when the record has one in a field unit
+            prof = _with_mag(prof, data, rate, tau_spec, kind, term_list, select, console)
         prof.write(profile_out)
         console.print(f"noise profile ({', '.join(prof.sensors())}) written to {profile_out}")
     if wanted:
