@@ -63,6 +63,7 @@ def test_attitude_run_with_a_profile_of_the_trials_rest(tmp_path):
     p = read_noise_profile(prof)
     assert p.fs == pytest.approx(2000 / 7, rel=1e-9) and p.duration_s == pytest.approx(25.0, abs=0.01)
     assert "[:25 s]" in p.source
+    assert read_noise_profile(p.write(tmp_path / "rest.json")) == p  # and back through JSON, exactly
     # the trial's magnetometer (µT) comes along: about 0.07 µT/√Hz on each axis
     assert p.sensors() == ("gyro", "accel", "mag") and p.mag.unit == "uT"
     assert p.mag.units()["noise_density"] == "uT/sqrt(Hz)"
@@ -98,6 +99,8 @@ def test_adis16405_profile_reaches_zupt_and_gins_in_their_units(tmp_path):
     r = invoke("noise", src, "--gyro-unit", "deg/s", "--accel-unit", "g", "--end", 2000, "--profile", prof, "-q")
     assert r.exit_code == 0, r.output
     p = read_noise_profile(prof)
+    assert read_noise_profile(p.write(tmp_path / "adis.toml")) == p  # and back through TOML, exactly
+    assert p.gyro.noise_density.identified.all() and np.all(p.gyro.noise_density.se < 0.01 * p.gyro.noise_density.value)
     d = np.load(src)
     n = 200_000  # the 2000 s the profile saw
     n_gyro = adis_welch_density(np.deg2rad(d["gyro"][:n]), 100.0)  # rad/s/√Hz
