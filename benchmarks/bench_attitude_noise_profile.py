@@ -17,7 +17,7 @@ samples:
 
 Printed per trial and overall, 9D and 6D: the BROAD total RMSE (9D) / inclination RMSE (6D) over the movement
 samples, and the attitude NEES against the optical reference: ``e = log(q̂* ⊗ q_ref)`` (the body-frame error of the
-MEKF's error state) over the attitude block of the covariance diagonal, mean over the scored samples (χ²(3): 3 for
+MEKF's error state) over the attitude block of the covariance diagonal (:func:`imunav.filters.nees`), mean over the scored samples (χ²(3): 3 for
 an honest σ; 6D: the two horizontal components, χ²(2): 2), and the share of samples under the χ² 95 % quantile
 (0.95 for an honest σ).  The 9D error holds the optical frame's heading offset from magnetic north, which no
 filter models; the 6D NEES is free of it.
@@ -35,6 +35,7 @@ from dataclasses import replace
 
 import numpy as np
 
+from imunav import filters
 from imunav.attitude.adaptive import ADAPTIVE_DEFAULTS, AdaptiveMEKF
 from imunav.attitude.mekf import MekfConfig
 from imunav.attitude.metrics import attitude_rmse
@@ -69,14 +70,13 @@ def score(tr, i0: int, cfg: MekfConfig, use_mag: bool) -> dict:
     e = rotvec_from_quat(quat_multiply(quat_conjugate(res.q_nb[ok]), ref[ok]))  # body-frame error, q_ref = q̂ ⊗ δq
     var = res.cov_diag[ok, :3]
     if use_mag:
-        nees, dof = np.sum(e**2 / var, axis=1), 3
+        nees, dof = filters.nees(e, np.einsum("ni,ij->nij", var, np.eye(3))), 3
     else:  # inclination: the error about the two horizontal nav axes (body error rotated to NED)
         en = quat_rotate(res.q_nb[ok], e)
         # the body-frame covariance (its diagonal) rotated alike; its horizontal block
         C = dcm_from_quat(res.q_nb[ok])
         Pn = np.einsum("nij,nj,nkj->nik", C, var, C)[:, :2, :2]
-        sol = np.linalg.solve(Pn, en[:, :2, None])[..., 0]
-        nees, dof = np.einsum("ni,ni->n", en[:, :2], sol), 2
+        nees, dof = filters.nees(en[:, :2], Pn), 2
     return {"rmse_deg": r.total_rmse_deg if use_mag else r.inclination_rmse_deg,
             "nees_mean": float(np.mean(nees)), "nees_dof": dof,
             "in_95": float(np.mean(nees < CHI2_95[dof])), "cpu_s": cpu}
