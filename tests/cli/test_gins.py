@@ -13,6 +13,7 @@ from imunav.cli.main import app
 from imunav.io import write_imu
 from imunav.io.gnss import read_gnss_text, read_table
 from imunav.io.kfgins import DPH, MGAL, PPM, load_kfgins_config, read_kfgins_imu, read_kfgins_nav
+from imunav.noise import NoiseProfile, NoiseTerm, SensorNoise
 from imunav.sim import Trajectory
 from imunav.sim.vehicle import simulate_odometer
 from imunav.timeseries import ImuData
@@ -255,3 +256,22 @@ def test_outage_test_on_files(drive, tmp_path):
     doc = json.loads((tmp_path / "outage.json").read_text())
     assert doc["rms"]["n_outages"] == 2 and doc["source"].endswith("kf-gins.yaml")  # starts at 60 and 120 s
     assert all(np.isfinite(o["horizontal_m"]) and o["horizontal_m"] > 0 for o in doc["outages"])
+
+
+def test_run_with_a_noise_profile(drive, tmp_path):
+    """--noise replaces the configuration's per-axis noise densities (rad/s/√Hz, m/s²/√Hz: continuous time, no rate)."""
+    nan = [float("nan")] * 3
+
+    def sensor(unit, n, b, k):
+        return SensorNoise(unit, NoiseTerm(n, nan, [True] * 3), NoiseTerm(b, nan, [True] * 3),
+                           NoiseTerm(k, nan, [True] * 3))
+
+    prof = NoiseProfile(fs=100.0, duration_s=3600.0,
+                        gyro=sensor("rad/s", [1e-3, 2e-3, 3e-3], [1e-5] * 3, [1e-6] * 3),
+                        accel=sensor("m/s^2", [0.01, 0.02, 0.03], [1e-3] * 3, [1e-5] * 3)).write(tmp_path / "p.toml")
+    r = CliRunner().invoke(app, ["gins", "run", "--config", str(drive / "kf-gins.yaml"), "--out", str(tmp_path / "res"),
+                                 "--no-plots", "--quiet", "--noise", str(prof)])
+    _ok(r)
+    line = next(ln for ln in r.stdout.splitlines() if ln.startswith("noise from"))
+    assert "gyro_noise_density 0.001 0.002 0.003 rad/s/sqrt(Hz)" in line
+    assert "accel_noise_density 0.01 0.02 0.03 m/s^2/sqrt(Hz)" in line

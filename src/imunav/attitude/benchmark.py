@@ -30,10 +30,11 @@ from imunav.attitude.metrics import attitude_rmse
 from imunav.crossval import CvResult, select_by_cv
 from imunav.errors import ConfigError
 from imunav.io.broad import load_broad
+from imunav.noise.profile import NoiseProfile
 from imunav.results import Result
 from imunav.vocabulary import renamed_hint
 
-__all__ = ["FILTERS", "REALTIME", "make_filter", "evaluate", "grid_search", "cv_grid_search", "TrialScore",
+__all__ = ["FILTERS", "REALTIME", "NOISE_FILTERS", "make_filter", "noise_parameters", "evaluate", "grid_search", "cv_grid_search", "TrialScore",
            "BenchResult", "reference_start"]
 
 REALTIME = ("madgwick", "madgwick_c", "mahony", "complementary", "mekf", "adaptive", "ukf")
@@ -85,6 +86,50 @@ def make_filter(name: str, params: dict[str, Any] | None = None) -> Any:
     except TypeError as exc:
         raise ConfigError(f"bad parameter for filter {name!r}: {exc}") from exc
     raise ConfigError(f"unknown filter {name!r}; choose one of {', '.join(FILTERS)}")
+
+
+#: The filters whose configuration takes noise parameters (:func:`noise_parameters`).
+NOISE_FILTERS = ("mekf", "adaptive", "smoother", "ukf")
+
+
+def noise_parameters(name: str, profile: NoiseProfile, fs: float | None = None,
+                     combine: str = "max") -> dict[str, float]:
+    """The parameters of filter ``name`` that a noise profile sets (``--noise`` of ``imunav attitude run``).
+
+    The filter's default configuration goes through its ``from_noise_profile``
+    (:meth:`~imunav.attitude.mekf.MekfConfig.from_noise_profile` for the MEKF, the adaptive MEKF and the smoother,
+    :meth:`~imunav.attitude.ukf.UkfConfig.from_noise_profile` for the UKF); the fields it changed come back as
+    :func:`make_filter` overrides.
+
+    Parameters
+    ----------
+    name : str
+        A filter of :data:`NOISE_FILTERS`.
+    profile : NoiseProfile
+        The sensor's noise profile.
+    fs : float, optional
+        Sample rate of the recording the filter will run on, Hz (default the profile's).
+    combine : {"max", "mean"}
+        One value for the three axes.
+
+    Returns
+    -------
+    dict
+        Field name -> value (SI), e.g. ``gyro_noise_density``.
+
+    Raises
+    ------
+    ConfigError
+        If the filter takes no noise parameters, or the profile lacks a sensor it needs.
+    """
+    bases = {"mekf": lambda: mekf.MekfConfig(), "adaptive": lambda: adaptive.ADAPTIVE_DEFAULTS,
+             "smoother": lambda: smoother.SMOOTHER_DEFAULTS, "ukf": lambda: ukf.UkfConfig()}
+    if name not in bases:
+        raise ConfigError(f"filter {name!r} takes no noise parameters (fixed gains); a noise profile drives "
+                          f"{', '.join(NOISE_FILTERS)}")
+    base = bases[name]()
+    cfg = type(base).from_noise_profile(profile, base=base, fs=fs, combine=combine)
+    return {f.name: getattr(cfg, f.name) for f in fields(cfg) if getattr(cfg, f.name) != getattr(base, f.name)}
 
 
 def filter_parameters(name: str) -> dict[str, Any]:

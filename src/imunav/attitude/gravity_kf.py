@@ -37,7 +37,7 @@ Fixes of the paper's text (its OCR'd equations are garbled in places) made expli
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field, fields
+from dataclasses import dataclass, field, fields, replace
 from typing import Literal
 
 import numpy as np
@@ -47,6 +47,7 @@ from imunav.attitude import _gravity_kernels as _gk
 from imunav.attitude._base import gyro3, prepare, step_dt, vec3
 from imunav.attitude.result import AttitudeResult
 from imunav.errors import ConfigError, ShapeError
+from imunav.noise.profile import NoiseProfile
 from imunav.rotation import quat_from_euler
 from imunav.timeseries import ImuData
 from imunav.units import DEFAULT_GRAVITY
@@ -123,6 +124,45 @@ class GravityKfConfig:
                 raise ConfigError(f"GravityKfConfig.{f.name} must be finite and >= 0, got {v}")
         if self.bias_window < 1:
             raise ConfigError("bias_window must be >= 1 sample")
+
+    @classmethod
+    def from_noise_profile(cls, profile: NoiseProfile, *, base: GravityKfConfig | None = None,
+                           fs: float | None = None, combine: str = "max") -> GravityKfConfig:
+        """The configuration ``base`` with the sensor's own noise from a :class:`~imunav.noise.NoiseProfile`.
+
+        This filter takes per-sample standard deviations: ``gyro_noise_std`` = N_g √fs (rad/s) and
+        ``accel_noise_std`` = N_a √fs (m/s²), white noise of density N sampled at fs (IEEE Std 952-1997, C.1);
+        ``gyro_bias_random_walk`` = K_g (rad/s/√s) for the Javed bias filter.
+
+        Parameters
+        ----------
+        profile : NoiseProfile
+            The sensor's profile; it must hold the gyro and the accelerometer.
+        base : GravityKfConfig, optional
+            The configuration to start from (default :class:`GravityKfConfig`).
+        fs : float, optional
+            Sample rate the filter will run at, Hz (default the profile's).
+        combine : {"max", "mean"}
+            One value for the three axes: the largest (default) or the mean.
+
+        Returns
+        -------
+        GravityKfConfig
+            The configuration.
+
+        Raises
+        ------
+        ConfigError
+            If the profile lacks the gyro or the accelerometer.
+        InvalidInputError
+            If ``fs`` or ``combine`` is invalid.
+        """
+        cfg = cls() if base is None else base
+        gyro = profile.sensor("gyro", "GravityKfConfig.from_noise_profile")
+        profile.sensor("accel", "GravityKfConfig.from_noise_profile")
+        return replace(cfg, gyro_noise_std=profile.noise_std("gyro", fs, combine),
+                       accel_noise_std=profile.noise_std("accel", fs, combine),
+                       gyro_bias_random_walk=gyro.bias_random_walk.combined(combine))
 
     def vector(self) -> np.ndarray:
         """Packed parameter array of the kernel.

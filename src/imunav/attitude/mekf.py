@@ -71,6 +71,7 @@ from imunav.attitude import _kernels as _k
 from imunav.attitude._base import check_q0, gyro3, initial_q, prepare, step_dt, vec3
 from imunav.attitude.result import AttitudeResult
 from imunav.errors import ConfigError
+from imunav.noise.profile import NoiseProfile
 from imunav.timeseries import ImuData
 from imunav.units import DEFAULT_GRAVITY
 
@@ -186,6 +187,58 @@ class MekfConfig:
                 raise ConfigError(f"MekfConfig.{f.name} must be finite and >= 0, got {v}")
         if self.g <= 0:
             raise ConfigError(f"MekfConfig.g must be > 0, got {self.g}")
+
+    @classmethod
+    def from_noise_profile(cls, profile: NoiseProfile, *, base: MekfConfig | None = None, fs: float | None = None,
+                           combine: str = "max") -> MekfConfig:
+        """The configuration ``base`` with the sensor's own noise from a :class:`~imunav.noise.NoiseProfile`.
+
+        The fields that stand for the sensor's noise are replaced, each in its own unit:
+
+        * ``gyro_noise_density`` = N_g, the gyro white-noise density, rad/s/√Hz (continuous time, as here);
+        * ``gyro_bias_random_walk`` = K_g, the gyro rate random walk, rad/s/√s;
+        * ``zaru_noise_std`` = N_g √fs, the per-sample σ of the raw rate that the zero-rate pseudo-measurement
+          reads at rest (white noise of density N sampled at fs; IEEE Std 952-1997, C.1), rad/s;
+        * ``accel_direction_noise_std`` = N_a √fs / g, the accelerometer's per-sample white noise as noise of the
+          gravity direction (a unit vector), when the profile has the accelerometer.
+
+        The others keep ``base``'s values.  With ``tilt_time_constant`` > 0 (the adaptive filter's defaults) the
+        accelerometer enters through that correction time constant, whose variance ``(τ_a σ_g)² / Δt`` models the
+        motion's accelerations, not the sensor's noise, and ``accel_direction_noise_std`` is not used; likewise
+        the heading (a magnetometer's disturbances dwarf its noise).
+
+        Parameters
+        ----------
+        profile : NoiseProfile
+            The sensor's profile (``imunav noise REC --profile OUT.toml``); it must hold the gyro.
+        base : MekfConfig, optional
+            The configuration to start from (default :class:`MekfConfig`; the adaptive filter's is
+            :data:`imunav.attitude.adaptive.ADAPTIVE_DEFAULTS`).
+        fs : float, optional
+            Sample rate the filter will run at, Hz (default the profile's): the per-sample σ depend on it.
+        combine : {"max", "mean"}
+            One value for the three axes: the largest (default) or the mean.
+
+        Returns
+        -------
+        MekfConfig
+            The configuration.
+
+        Raises
+        ------
+        ConfigError
+            If the profile has no gyro.
+        InvalidInputError
+            If ``fs`` or ``combine`` is invalid.
+        """
+        cfg = cls() if base is None else base
+        gyro = profile.sensor("gyro", "MekfConfig.from_noise_profile")
+        kw = {"gyro_noise_density": gyro.noise_density.combined(combine),
+              "gyro_bias_random_walk": gyro.bias_random_walk.combined(combine),
+              "zaru_noise_std": profile.noise_std("gyro", fs, combine)}
+        if profile.accel is not None:
+            kw["accel_direction_noise_std"] = profile.noise_std("accel", fs, combine) / cfg.g
+        return replace(cfg, **kw)
 
     def vector(self) -> np.ndarray:
         """Packed parameter array of the kernel: the fields named in ``_kernels.MEKF_PARAMS``, in that order.

@@ -15,7 +15,7 @@ when not given).
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field, fields
+from dataclasses import dataclass, field, fields, replace
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -24,6 +24,7 @@ from imunav.attitude import _kernels as _k
 from imunav.attitude._base import check_q0, gyro3, initial_q, prepare, step_dt, vec3
 from imunav.attitude.result import AttitudeResult
 from imunav.errors import ConfigError
+from imunav.noise.profile import NoiseProfile
 from imunav.rotation import quat_rotate
 from imunav.timeseries import ImuData
 from imunav.units import DEFAULT_GRAVITY
@@ -88,6 +89,47 @@ class UkfConfig:
                 raise ConfigError(f"UkfConfig.{f.name} must be finite and >= 0, got {v}")
         if self.alpha <= 0:
             raise ConfigError("UkfConfig.alpha must be > 0")
+
+    @classmethod
+    def from_noise_profile(cls, profile: NoiseProfile, *, base: UkfConfig | None = None, fs: float | None = None,
+                           combine: str = "max") -> UkfConfig:
+        """The configuration ``base`` with the sensor's own noise from a :class:`~imunav.noise.NoiseProfile`.
+
+        ``gyro_noise_density`` = N_g (rad/s/√Hz), ``gyro_bias_random_walk`` = K_g (rad/s/√s) and, when the profile
+        has the accelerometer, ``accel_direction_noise_std`` = N_a √fs / g, its per-sample white noise (IEEE Std
+        952-1997, C.1: σ = N √fs) as noise of the gravity direction (a unit vector).  The magnetometer's direction
+        noise keeps ``base``'s value (disturbances of the field dwarf the sensor's noise).
+
+        Parameters
+        ----------
+        profile : NoiseProfile
+            The sensor's profile; it must hold the gyro.
+        base : UkfConfig, optional
+            The configuration to start from (default :class:`UkfConfig`).
+        fs : float, optional
+            Sample rate the filter will run at, Hz (default the profile's).
+        combine : {"max", "mean"}
+            One value for the three axes: the largest (default) or the mean.
+
+        Returns
+        -------
+        UkfConfig
+            The configuration.
+
+        Raises
+        ------
+        ConfigError
+            If the profile has no gyro.
+        InvalidInputError
+            If ``fs`` or ``combine`` is invalid.
+        """
+        cfg = cls() if base is None else base
+        gyro = profile.sensor("gyro", "UkfConfig.from_noise_profile")
+        kw = {"gyro_noise_density": gyro.noise_density.combined(combine),
+              "gyro_bias_random_walk": gyro.bias_random_walk.combined(combine)}
+        if profile.accel is not None:
+            kw["accel_direction_noise_std"] = profile.noise_std("accel", fs, combine) / cfg.g
+        return replace(cfg, **kw)
 
     def vector(self, use_mag: bool) -> np.ndarray:
         """Packed parameter array of the kernel.

@@ -384,7 +384,8 @@ COLUMNS_EXAMPLE = '\'{"gyro": ["gx", "gy", "gz"], "accel": ["ax", "ay", "az"]}\'
 
 
 _FILE_OUTPUTS = {"--json", "--plot", "--psd-plot", "--kalibr", "--openvins", "--vins", "--px4-params",
-                 "--imucal-out", "out", "--out", "simulate --segments"}
+                 "--imucal-out", "out", "--out", "simulate --segments",
+                 "noise --profile"}
 _INPUT_FOLDERS = {"directory", "folder"}
 _RUN_FOLDERS = {"lab --out", "batch simulate --out", "batch calibrate --out", "batch noise --out", "batch gins --out"}
 _REPORT_FOLDERS = {"--report", "gins simulate --out", "gins run --out", "gins outage-test --out"}

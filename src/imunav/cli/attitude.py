@@ -27,6 +27,7 @@ datasets = lazy("imunav.io.datasets")
 io = lazy("imunav.io")
 logs = lazy("imunav.io.logs")
 metrics = lazy("imunav.attitude.metrics")
+noise_profile = lazy("imunav.noise.profile")
 montecarlo = lazy("imunav.lab.montecarlo")
 px4 = lazy("imunav.attitude.px4")
 rotation = lazy("imunav.rotation")
@@ -87,6 +88,9 @@ def run_cmd(
     param: Optional[list[str]] = typer.Option(None, "--param", "-p", help="Parameter override NAME=VALUE."),
     no_mag: bool = typer.Option(False, "--no-mag", help="6D: ignore the magnetometer."),
     json_out: Optional[Path] = typer.Option(None, "--json", help="Write the result (quaternions, flags) as JSON."),
+    noise: Optional[Path] = typer.Option(None, "--noise", help="Noise profile of the sensor (imunav noise --profile): "
+                                         "the filter's gyro noise density, bias random walk and per-sample noise "
+                                         "from it (mekf, adaptive, smoother, ukf; --param still wins)."),
     topic: Optional[str] = TOPIC,
     instance: Optional[int] = INSTANCE,
     mag_topic: Optional[str] = MAG_TOPIC,
@@ -100,14 +104,25 @@ def run_cmd(
 
     Example (PX4 log; sensor_combined carries its magnetometer):
     imunav attitude run ../shared/data/px4_ulog/sample.ulg --topic sensor_combined --filter mekf
+
+    Example (the filter's noise from the sensor's own, identified on the trial's first 25 s at rest):
+    imunav noise ../shared/data/broad/05_undisturbed_slow_rotation_with_breaks_B.mat --end 25 --profile
+    broad05.toml && imunav attitude run 05_undisturbed_slow_rotation_with_breaks_B.mat --noise broad05.toml
     """
 
-    check_outputs([file], [json_out], inputs_exist=False)  # a BROAD trial name is looked up in the shared data
+    check_outputs([file, noise], [json_out], inputs_exist=False)  # a BROAD trial name is looked up in the shared data
 
     con = make_console()
 
     file = _resolve(file, False)
-    f = benchmark.make_filter(filter, _parse_params(param))
+    params = _parse_params(param)
+    f = benchmark.make_filter(filter, params)
+    prof = None
+    if noise is not None:
+        prof = noise_profile.read_noise_profile(noise)
+        if filter not in benchmark.NOISE_FILTERS:
+            raise ConfigError(f"--noise: filter {filter!r} takes no noise parameters (fixed gains); use one of "
+                              f"{', '.join(benchmark.NOISE_FILTERS)}")
     ref = None
     opts = reader_options(topic=topic, instance=instance, mag_topic=mag_topic, layout=layout)
     if file.suffix.lower() == ".mat" and not opts:
@@ -134,6 +149,11 @@ def run_cmd(
             ref, mask = ref[i0:i0 + cut.n], mask[i0:i0 + cut.n]
         data = cut
     kw: dict[str, Any] = {"use_mag": False if no_mag else None}
+    if prof is not None:  # the profile's fields at this recording's rate; --param overrides them
+        from_profile = benchmark.noise_parameters(filter, prof, fs=float(data.fs))
+        f = benchmark.make_filter(filter, {**from_profile, **params})
+        con.print(f"noise from {noise}: " + ", ".join(f"{k} = {v:.4g}" for k, v in from_profile.items()
+                                                      if k not in params))
 
     if ref is not None and benchmark.reference_start(filter) and not no_mag:
         # start like the BROAD reference runs (first accelerometer / magnetometer sample)

@@ -7,6 +7,7 @@ protocol, :mod:`imunav.ins.gins.outage`).  The filter is called from one place, 
 
 from __future__ import annotations
 
+import dataclasses
 import importlib.util
 from pathlib import Path
 from typing import TYPE_CHECKING, Optional
@@ -25,7 +26,9 @@ if TYPE_CHECKING:
     from imunav.ins.gins.setup import GinsInputs, GinsSetup
     from imunav.io.kfgins import NavTrack
 
+gins_config = lazy("imunav.ins.gins.config")
 logrun = lazy("imunav.ins.gins.logrun")
+noise_profile = lazy("imunav.noise.profile")
 outage = lazy("imunav.ins.gins.outage")
 outputs = lazy("imunav.ins.gins.outputs")
 gins_plot = lazy("imunav.ins.gins.plot")
@@ -177,6 +180,9 @@ def run_cmd(
     preset: str = _PRESET_LOG_OPT,
     forward_only: bool = typer.Option(False, "--forward-only", help="With a log: the forward filter's trajectory "
                                                                     "only (real time), without the smoother."),
+    noise: Optional[Path] = typer.Option(None, "--noise", help="Noise profile of the IMU (imunav noise --profile): "
+                                         "per-axis noise densities and the bias Gauss-Markov sigma from it, in place "
+                                         "of the configuration's or the preset's."),
     quiet: bool = typer.Option(False, "--quiet", "-q", help="No progress bar."),
 ) -> None:
     """Run the GNSS/INS filter on a robot's or a drone's log (ROS 1 bag, ROS 2 bag folder, PX4 ULog, or a folder of
@@ -203,10 +209,15 @@ def run_cmd(
             raise ConfigError("--forward-only and --smoother contradict each other; a log's run has the smoother "
                               "by default")
         outs = outputs.log_output_paths(out, smoother=not forward_only, plots=plots, truth=truth is not None)
-        check_outputs([p for p in (imu, truth) if p is not None], outs.values())
+        check_outputs([p for p in (imu, truth, noise) if p is not None], outs.values())
+        overrides = {}
+        if noise is not None:  # the profile's noise densities and bias sigma replace the preset's
+            base = gins_config.GinsConfig.from_preset(preset)
+            cfg = gins_config.GinsConfig.from_noise_profile(noise_profile.read_noise_profile(noise), base=base)
+            overrides = {k: getattr(cfg, k) for k in _NOISE_FIELDS}
         opts = logrun.LogRunOptions(preset=preset, mounting=logrun.parse_rotation(imu_rotation, "--imu-rotation"),
                                     gnss_lever_arm=logrun.parse_vector(gnss_lever_arm, "--gnss-lever-arm"),
-                                    smoother=not forward_only)
+                                    smoother=not forward_only, overrides=overrides)
         with progress("gins run: reading the log", quiet=quiet, total=1) as report:
             sources = _log_sources(imu, imu_topic=imu_topic, gnss_topic=gnss_topic, odo_topic=odo_topic,
                                    mag_topic=mag_topic, baro_topic=baro_topic, gyro=gyro)
@@ -242,12 +253,19 @@ def run_cmd(
     if rot_opts:
         raise ConfigError(f"{', '.join(rot_opts)} go with a log (a .bag, a ROS 2 bag folder or a .ulg); the files of "
                           "this run name their own inputs")
+    prof = noise_profile.read_noise_profile(noise) if noise is not None else None
     inputs, setup, ref = _inputs(imu, gnss, config, odo, truth, states)
     folder = out if out is not None else inputs.output_path
     if folder is None:
         raise ConfigError("give --out DIR, the folder for the results")
     outs = outputs.run_output_paths(folder, smoother=smoother, plots=plots, truth=ref is not None)
-    check_outputs([*inputs.paths.values(), truth], outs.values())
+    check_outputs([*inputs.paths.values(), truth, noise], outs.values())
+    if prof is not None:  # the profile's noise densities and bias sigma replace the configuration's
+        cfg = gins_config.GinsConfig.from_noise_profile(prof, base=setup.config)
+        setup = dataclasses.replace(setup, config=cfg)
+        typer.echo(f"noise from {noise}: gyro_noise_density {' '.join(f'{v:.3g}' for v in cfg.gyro_noise_density)} "
+                   f"rad/s/sqrt(Hz), accel_noise_density {' '.join(f'{v:.3g}' for v in cfg.accel_noise_density)} "
+                   f"m/s^2/sqrt(Hz), corr_time {cfg.corr_time:g} s")
     res = _run_filter(inputs, setup, smoother=smoother, quiet=quiet)
     summary = outputs.write_run_outputs(
         folder, res, setup, gnss=inputs.gnss, truth=ref, plots=plots,
@@ -260,6 +278,10 @@ def run_cmd(
     if "rmse" in summary:
         line += "; position RMSE N E D " + " ".join(f"{x:.3f}" for x in summary["rmse"]["pos_ned_m"]) + " m"
     typer.echo(line)
+
+
+#: The GinsConfig fields a noise profile sets (:meth:`~imunav.ins.gins.config.GinsConfig.from_noise_profile`).
+_NOISE_FIELDS = ("gyro_noise_density", "accel_noise_density", "gyro_bias_std", "accel_bias_std")
 
 
 def _shifts(text: str) -> tuple[float, ...]:

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 from pathlib import Path
 from typing import Any
 
@@ -10,11 +11,11 @@ from rich.markup import escape
 from rich.table import Table
 
 from imunav.cli._console import make_console
-from imunav.cli._errors import check_figure_path
+from imunav.cli._errors import check_figure_path, check_suffix
 from imunav.cli._lazy import lazy
 from imunav.cli._options import END, INSTANCE, LAYOUT, START, TOPIC, reader_options, window
 from imunav.cli._progress import progress
-from imunav.errors import InvalidInputError
+from imunav.errors import ConvergenceError, InvalidInputError
 from imunav.files import atomic_path, check_outputs, write_json
 from imunav.units import to_display
 
@@ -24,6 +25,7 @@ io = lazy("imunav.io")
 kalibr = lazy("imunav.io.kalibr")
 noise_plot = lazy("imunav.noise.plot")
 openvins = lazy("imunav.io.openvins")
+noise_profile = lazy("imunav.noise.profile")
 static = lazy("imunav.noise.static")
 vins = lazy("imunav.io.vins")
 
@@ -31,7 +33,9 @@ _EXAMPLE = (
     "Example:\n\n"
     "  imunav noise ../shared/data/adis16405/adis16405_imu2.npz --gyro-unit deg/s --accel-unit g "
     "--json noise.json --plot allan.png --psd-plot psd.png --kalibr imu.yaml --openvins kalibr_imu_chain.yaml "
-    "--vins vins_imu.yaml"
+    "--vins vins_imu.yaml\n\n"
+    "  imunav noise ../shared/data/broad/05_undisturbed_slow_rotation_with_breaks_B.mat --end 25 "
+    "--profile broad05.toml"
 )
 _CH = ("gx", "gy", "gz", "ax", "ay", "az")
 
@@ -68,6 +72,25 @@ def _curve_fits(r: Any) -> dict[str, Any]:
     return out
 
 
+def _with_mag(prof: Any, data: Any, rate: float, tau_spec: Any, kind: str, terms: tuple[str, ...], select: str,
+              console: Any) -> Any:
+    """The profile with the magnetometer's terms added (the same Allan fit), or as it is, saying why not."""
+    if data.mag_unit not in noise_profile.SENSORS["mag"]:
+        console.print(f"magnetometer in {data.mag_unit!r}: not in the profile (it takes "
+                      f"{', '.join(noise_profile.SENSORS['mag'])})")
+        return prof
+    try:
+        r = imunav_noise.allan_deviation(data.mag, rate, tau_spec, kind, units=data.mag_unit,
+                                         channels=("mx", "my", "mz"), t=data.t, nan_policy="segments")
+        f = imunav_noise.fit_noise(r, terms=terms, select=None if select == "none" else select)
+        mag = noise_profile.NoiseProfile.from_fits(fs=prof.fs, duration_s=prof.duration_s, mag=f,
+                                                   mag_unit=data.mag_unit).mag
+    except (InvalidInputError, ConvergenceError) as exc:
+        console.print(f"magnetometer: not in the profile ({exc})")
+        return prof
+    return dataclasses.replace(prof, mag=mag)
+
+
 def noise(
     file: Path = typer.Argument(..., help="Static recording: .csv/.txt, .parquet, .h5, .mat, .npz, ROS bag or PX4 .ulg."),
     channels: str = typer.Option(",".join(_CH), "--channels", help="Comma-separated subset of gx,gy,gz,ax,ay,az."),
@@ -79,6 +102,10 @@ def noise(
     openvins_out: Path | None = typer.Option(None, "--openvins", help="OpenVINS kalibr_imu_chain.yaml (IMU noise)."),
     vins_out: Path | None = typer.Option(None, "--vins", help="VINS-Fusion IMU block: acc_n, gyr_n, acc_w, gyr_w, "
                                          "g_norm (identified values, not inflated)."),
+    profile_out: Path | None = typer.Option(None, "--profile", help="Noise profile of the sensor (.toml or .json): "
+                                            "white noise, bias instability and random walk per axis with standard "
+                                            "errors, SI; the filters take it with --noise (needs all three axes of "
+                                            "a sensor)."),
     kind: str = typer.Option("overlapping", "--kind", help="overlapping, standard or total (the fit needs these)."),
     taus: str = typer.Option("octave", "--taus", help="octave, decade, all, or log:N."),
     terms: str = typer.Option("N,B,K,R", "--terms", help="Candidate terms among Q,N,B,K,R (Q, angle/velocity "
@@ -110,7 +137,8 @@ def noise(
 
     console = make_console()
     exports = {"Kalibr imu.yaml": kalibr_out, "OpenVINS IMU file": openvins_out, "VINS-Fusion IMU block": vins_out}
-    check_outputs([file], [json_out, plot, psd_plot, *exports.values()])
+    check_outputs([file], [json_out, plot, psd_plot, profile_out, *exports.values()])
+    check_suffix(profile_out, "--profile", (".toml", ".json"), "the noise profile")
     check_figure_path(plot, "--plot")
     check_figure_path(psd_plot, "--psd-plot")
     tau_spec = _taus(taus)
@@ -122,6 +150,13 @@ def noise(
     if wanted and not (set(chans) & set(_CH[:3]) and set(chans) & set(_CH[3:])):
         raise InvalidInputError(f"{', '.join(wanted)}: needs both gyro and accel channels; add them to --channels")
     term_list = tuple(t.strip().upper() for t in terms.split(",") if t.strip())
+    if profile_out is not None:
+        whole = [s for s, names in (("gyro", _CH[:3]), ("accel", _CH[3:])) if set(names) <= set(chans)]
+        if not whole:
+            raise InvalidInputError("--profile: needs the three axes of a sensor (gx,gy,gz and/or ax,ay,az) in "
+                                    "--channels")
+        if "N" not in term_list:
+            raise InvalidInputError("--profile: the white noise N is part of a profile; add N to --terms")
     if select not in ("bic", "aic", "none"):
         raise InvalidInputError(f"--select {select!r}: use bic, aic or none")
     opts = reader_options(units={k: v for k, v in (("gyro", gyro_unit), ("accel", accel_unit)) if v}, fs=fs,
@@ -236,6 +271,15 @@ def noise(
                 with atomic_path(target) as tmp:
                     fig.savefig(tmp, dpi=110, format=target.suffix.lstrip(".") or "png")
                 console.print(f"figure written to {target}")
+    if profile_out is not None:
+        fits = {s: results[s][1] for s in whole}
+        where = str(file) + ("" if start is None and end is None else
+                             f" [{'' if start is None else f'{start:g}'}:{'' if end is None else f'{end:g}'} s]")
+        prof = noise_profile.NoiseProfile.from_fits(fs=rate, duration_s=span, source=where, **fits)
+        if data.mag is not None:  # the magnetometer too, when the record has one in a field unit
+            prof = _with_mag(prof, data, rate, tau_spec, kind, term_list, select, console)
+        prof.write(profile_out)
+        console.print(f"noise profile ({', '.join(prof.sensors())}) written to {profile_out}")
     if wanted:
         fg, fa = results["gyro"][1], results["accel"][1]
         writers = (lambda p: kalibr.write_kalibr_yaml(p, fg, fa, rate), lambda p: openvins.write_openvins_yaml(p, fg, fa, rate),

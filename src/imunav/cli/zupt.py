@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 from pathlib import Path
 from typing import Any, Optional
 
@@ -24,6 +25,7 @@ io = lazy("imunav.io")
 learn = lazy("imunav.learn")
 learn_lstm = lazy("imunav.learn.lstm")
 logs = lazy("imunav.io.logs")
+noise_profile = lazy("imunav.noise.profile")
 
 zupt_app = typer.Typer(
     help=("Foot-mounted INS with zero-velocity updates.\n\n"
@@ -76,7 +78,11 @@ def run_cmd(
     heading_hold: bool = typer.Option(False, help="No rotation about the vertical during each stance."),
     level_floor: bool = typer.Option(False, help="Flat-floor constraint: every stance at the initial height (not for stairs or ramps)."),
     margin_s: float = typer.Option(0.0, help="Shrink each detected stance by this many seconds at both ends."),
-    accel_noise_std: float = typer.Option(0.5, help="Accelerometer noise per sample, m/s^2."),
+    accel_noise_std: Optional[float] = typer.Option(None, help="Accelerometer noise per sample, m/s^2 (default 0.5, "
+                                                    "pyshoe's; with --noise the sensor's, unless given)."),
+    noise: Optional[Path] = typer.Option(None, "--noise", help="Noise profile of the foot IMU (imunav noise "
+                                         "--profile): per-sample accelerometer and gyro noise at this recording's "
+                                         "rate and the bias random walks from it."),
     model: Optional[Path] = typer.Option(None, help="LSTM model file (default: the shipped one)."),
     out: Optional[Path] = typer.Option(None, help="Write the trajectory (t, position, velocity, quaternion, zv) to .npz."),
     json_out: Optional[Path] = typer.Option(None, "--json", help="Write the summary as JSON."),
@@ -91,11 +97,12 @@ def run_cmd(
     A foot IMU in a ROS bag or a PX4 log: give the log and its IMU topic (--topic, e.g. /foot/imu).
     """
 
-    check_outputs([file, model], [out, json_out])
+    check_outputs([file, model, noise], [out, json_out])
 
     check_suffix(out, "--out", (".npz",), "the trajectory (NumPy archive)")
 
     try:
+        prof = noise_profile.read_noise_profile(noise) if noise is not None else None
         trial = load_foot_file(file, **reader_options(topic=topic, instance=instance, layout=layout))
         guard = None
         if detector.startswith("labels:"):
@@ -112,9 +119,15 @@ def run_cmd(
             guard = det_res.params.get("guard")
         xio_like = trial.position is None
         cfg = ins.ZuptConfig(states=states, zaru=zaru, zaru_min_s=zaru_min_s, heading_hold=heading_hold,
-                         level_floor=level_floor, accel_noise_std=accel_noise_std,
+                         level_floor=level_floor, accel_noise_std=0.5 if accel_noise_std is None else accel_noise_std,
                          alignment="first_stance" if xio_like else "samples",
                          **({"g": None} if xio_like else {}))  # else ZuptConfig's default, pyshoe's gravity
+        if prof is not None:  # the sensor's noise at this recording's rate; an explicit --accel-noise-std wins
+            cfg = ins.ZuptConfig.from_noise_profile(prof, base=cfg, fs=float(trial.imu.fs))
+            if accel_noise_std is not None:
+                cfg = dataclasses.replace(cfg, accel_noise_std=accel_noise_std)
+            typer.echo(f"noise from {noise}: accel_noise_std {cfg.accel_noise_std:.4g} m/s^2, gyro_noise_std "
+                       f"{cfg.gyro_noise_std:.4g} rad/s per sample at {float(trial.imu.fs):.6g} Hz")
         res = ins.ZuptFilter(cfg).run(trial.imu, zv)
     except ImunavError as exc:
         _fail(exc)

@@ -8,7 +8,7 @@ a KF-GINS YAML's configuration, :meth:`GinsConfig.from_preset` one matched to an
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Any
 
 import numpy as np
@@ -16,6 +16,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from imunav.errors import InvalidInputError, ShapeError
 from imunav.io.kfgins import KfGinsConfig
+from imunav.noise.profile import NoiseProfile
 from imunav.sim import presets
 
 __all__ = ["BIAS_MODELS", "GinsConfig", "STATE_NAMES"]
@@ -353,6 +354,65 @@ class GinsConfig:
         )
         kw.update(overrides)
         return cls(**kw)
+
+    @classmethod
+    def from_noise_profile(cls, profile: NoiseProfile, *, base: GinsConfig | None = None,
+                           corr_time: float | None = None, **overrides: Any) -> GinsConfig:
+        """The configuration with the sensor's own noise from a :class:`~imunav.noise.NoiseProfile`, per axis.
+
+        * ``gyro_noise_density`` = N_g (rad/s/√Hz), ``accel_noise_density`` = N_a (m/s²/√Hz): continuous-time
+          densities, as this filter takes them (no sample rate enters);
+        * ``gyro_bias_std``, ``accel_bias_std``: the stationary σ of the first-order Gauss–Markov bias states of
+          correlation time T = ``corr_time``, ``σ² = B² + K² T / 2``: the bias wanders by about its
+          instability B, and for times short against T the Gauss–Markov process is a random walk of density
+          ``√(2σ²/T)`` ≥ K, the sensor's bias random walk (Maybeck 1979, §4.11; El-Sheimy, Hou, Niu, IEEE
+          Trans. Instrum. Meas. 57(1), 2008).
+
+        A profile says nothing of the turn-on bias nor of the scale factors: the initial bias σ
+        (``init_*_bias_std``) and the scale σ keep ``base``'s values (without ``base``, the Gauss–Markov σ and
+        the defaults of :class:`GinsConfig`); give the turn-on bias from the data sheet in ``overrides``.
+
+        Parameters
+        ----------
+        profile : NoiseProfile
+            The sensor's profile; it must hold the gyro and the accelerometer.
+        base : GinsConfig, optional
+            The configuration to start from (e.g. the one of a KF-GINS YAML or of ``imunav gins run``'s TOML).
+        corr_time : float, optional
+            Correlation time T of the bias states, s (default ``base.corr_time``, else 3600 s).
+        **overrides
+            Any field of :class:`GinsConfig`, replacing the value derived from the profile.
+
+        Returns
+        -------
+        GinsConfig
+            The configuration.
+
+        Raises
+        ------
+        ConfigError
+            If the profile lacks the gyro or the accelerometer.
+        InvalidInputError
+            If ``corr_time`` is not > 0, or a field is out of range (as :class:`GinsConfig`).
+        """
+        gyro = profile.sensor("gyro", "GinsConfig.from_noise_profile")
+        accel = profile.sensor("accel", "GinsConfig.from_noise_profile")
+        T = float(corr_time if corr_time is not None else (base.corr_time if base is not None else 3600.0))
+        if not T > 0:
+            raise InvalidInputError(f"corr_time must be > 0 s (inf: random constants); got {corr_time!r}")
+
+        def gm_std(sensor: Any) -> Array:
+            k2 = sensor.bias_random_walk.value**2
+            walk = np.zeros(3) if np.isinf(T) else k2 * T / 2.0
+            return np.maximum(np.sqrt(sensor.bias_instability.value**2 + walk), 1e-12)
+
+        kw: dict[str, Any] = dict(
+            gyro_noise_density=gyro.noise_density.value.copy(), accel_noise_density=accel.noise_density.value.copy(),
+            gyro_bias_std=gm_std(gyro), accel_bias_std=gm_std(accel), corr_time=T)
+        kw.update(overrides)
+        if base is None:
+            return cls(**kw)
+        return replace(base, **kw)
 
     @classmethod
     def from_preset(cls, name: str, *, white_below_s: float = 100.0, **overrides: Any) -> GinsConfig:

@@ -38,7 +38,7 @@ stance (or of the first ``align_samples`` samples), yaw = ``init_yaw``:
 from __future__ import annotations
 
 import math
-from dataclasses import asdict, dataclass, field
+from dataclasses import asdict, dataclass, field, replace
 from typing import Any, Literal
 
 import numpy as np
@@ -55,6 +55,7 @@ from imunav.errors import (
 )
 from imunav.ins.zupt import kernels as _k
 from imunav.ins.zupt.statistics import G_PYSHOE
+from imunav.noise.profile import NoiseProfile
 from imunav.results import EulerMixin, Result
 from imunav.rotation import quat_from_euler
 
@@ -177,6 +178,53 @@ class ZuptConfig:
             raise ConfigError(f"zaru_min_s must be finite and >= 0; got {self.zaru_min_s!r}")
         if self.align_samples < 1:
             raise ConfigError(f"align_samples must be >= 1; got {self.align_samples}")
+
+    @classmethod
+    def from_noise_profile(cls, profile: NoiseProfile, *, base: ZuptConfig | None = None, fs: float | None = None,
+                           combine: str = "max") -> ZuptConfig:
+        """The configuration ``base`` with the sensor's own noise from a :class:`~imunav.noise.NoiseProfile`.
+
+        The ZUPT INS takes per-sample standard deviations (the OpenShoe / pyshoe convention, module docstring:
+        ``Q_d = diag(0, σ_a² Δt², σ_g² Δt², K_a² Δt, K_g² Δt)``), so
+
+        * ``accel_noise_std`` = N_a √fs (m/s²) and ``gyro_noise_std`` = N_g √fs (rad/s): white noise of density N
+          sampled at fs (IEEE Std 952-1997, C.1), whose velocity / angle variance over Δt = 1/fs is then N² Δt;
+        * ``accel_bias_random_walk`` = K_a (m/s²/√s), ``gyro_bias_random_walk`` = K_g (rad/s/√s).
+
+        The published pyshoe values (0.5 m/s², 0.5 °/s per sample) are far above a foot IMU's own noise: they
+        also cover the impacts and the model errors of walking.  A profile gives the sensor's part only, the floor
+        under which these σ should not go.
+
+        Parameters
+        ----------
+        profile : NoiseProfile
+            The sensor's profile; it must hold the gyro and the accelerometer.
+        base : ZuptConfig, optional
+            The configuration to start from (default :class:`ZuptConfig`).
+        fs : float, optional
+            Sample rate the filter will run at, Hz (default the profile's).
+        combine : {"max", "mean"}
+            One value for the three axes: the largest (default) or the mean.
+
+        Returns
+        -------
+        ZuptConfig
+            The configuration.
+
+        Raises
+        ------
+        ConfigError
+            If the profile lacks the gyro or the accelerometer.
+        InvalidInputError
+            If ``fs`` or ``combine`` is invalid.
+        """
+        cfg = cls() if base is None else base
+        gyro = profile.sensor("gyro", "ZuptConfig.from_noise_profile")
+        accel = profile.sensor("accel", "ZuptConfig.from_noise_profile")
+        return replace(cfg, accel_noise_std=profile.noise_std("accel", fs, combine),
+                       gyro_noise_std=profile.noise_std("gyro", fs, combine),
+                       accel_bias_random_walk=accel.bias_random_walk.combined(combine),
+                       gyro_bias_random_walk=gyro.bias_random_walk.combined(combine))
 
     def to_dict(self) -> dict[str, Any]:
         """The settings as a plain dict.
