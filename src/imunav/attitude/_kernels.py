@@ -426,20 +426,38 @@ def _qnormalize_fast(a0, a1, a2, a3):
 
 
 @njit(cache=True, error_model="numpy", fastmath={"contract"}, inline="always")
+def _atan2_small(y, x):
+    """``math.atan2(y, x)`` to rounding; for x > 0 and |y| < 0.05 x (a heading innovation once the filter has
+    converged) the series ``atan z = z − z³/3 + … + z¹⁷/17``, z = y / x (the first term left out is under 1e-22 z)."""
+    if x > 0.0 and abs(y) < 0.05 * x:
+        z = y / x
+        u = z * z
+        return z * (1.0 + u * (-1.0 / 3.0 + u * (0.2 + u * (-1.0 / 7.0 + u * (1.0 / 9.0 + u * (-1.0 / 11.0 + u * (
+            1.0 / 13.0 + u * (-1.0 / 15.0 + u * (1.0 / 17.0)))))))))
+    return math.atan2(y, x)
+
+
+@njit(cache=True, error_model="numpy", fastmath={"contract"}, inline="always")
 def _lowpass(st, k, x, c, first):
     """First-order low-pass of ``x`` held in ``st[k]`` with factor c = 1 − exp(−Δt/τ); ``first`` starts it at x."""
     st[k] = x if first else st[k] + c * (x - st[k])
 
 
 @njit(cache=True, error_model="numpy", fastmath={"contract"}, inline="always")
-def _lp_factor(st, k, dt, tau):
-    """The low-pass factor ``c = 1 − exp(−Δt/τ)``, cached as ``st[k:k+2] = (Δt, c)`` while Δt repeats.
+def _lp_factor(st, k, dt, tau, inv_tau):
+    """The low-pass factor ``c = 1 − exp(−Δt/τ)``, cached as ``st[k:k+2] = (Δt₀, c₀)`` while Δt repeats.
 
-    A uniformly sampled recording computes the exponential once instead of once per sample (same value).
+    A uniformly sampled recording computes the exponential once instead of once per sample.  Time steps taken from
+    rounded time stamps differ from the cached one by a few ulp of the time (ε, |ε| < 1e-9 Δt₀): then
+    ``c = c₀ + ε (1 − c₀) / τ``, exact to rounding (the term left out, ε² / (2τ²), is below 1e-20 c).
     """
-    if st[k] != dt:
-        st[k] = dt
-        st[k + 1] = 1.0 - math.exp(-dt / tau)
+    eps = dt - st[k]
+    if eps == 0.0:
+        return st[k + 1]
+    if abs(eps) < 1e-9 * st[k]:
+        return st[k + 1] + eps * (1.0 - st[k + 1]) * inv_tau
+    st[k] = dt
+    st[k + 1] = 1.0 - math.exp(-dt / tau)
     return st[k + 1]
 
 
@@ -641,13 +659,17 @@ def mekf_step(q, b, P, st, gyr, acc, mag, dt, p, out_phi):
 
 @njit(cache=True, error_model="numpy", fastmath={"contract"}, nogil=True)
 def mekf_core(q, b, P, st, gyr, acc, mag, dts, k0, k1, p, out_phi, W, dx, H, PH, qs, bs, pd, flg, nis_o, dof_o):
-    """One MEKF step on sample ``k`` of the (N, 3) arrays, in place on ``q``, ``b``, ``P`` and ``st``.
+    """MEKF steps on samples ``k0 … k1 − 1`` of the (N, 3) arrays, in place on ``q``, ``b``, ``P`` and ``st``; row k of
+    the outputs ``qs, bs, pd, flg, nis_o, dof_o`` receives the state after sample k.
 
-    ``st`` (float64 array, len N_STATE) is the adaptive state, laid out as MEKF_STATE (S_* constants); ``p`` the
-    parameters (P_* constants).  The measurement updates are the models of :mod:`imunav.filters._core_models`
-    (gravity direction, zero rate) and the heading, one scalar row at a time (:func:`_att_row_update`,
-    :func:`_heading_update`).  ``out_phi`` receives the 6x6 transition matrix; ``W`` (6x6), ``dx``, ``H`` and ``PH`` (6)
-    are scratch: nothing is allocated, so a whole recording runs without touching the heap.
+    ``dts`` holds the time steps (Δt of sample k is ``dts[k]``).  ``st`` (float64 array, len N_STATE) is the adaptive
+    state, laid out as MEKF_STATE (S_* constants); ``p`` the parameters (P_* constants).  The measurement updates are
+    the models of :mod:`imunav.filters._core_models` (gravity direction, zero rate) and the heading, one scalar row at a
+    time (:func:`_att_row_update`, :func:`_heading_update`).  ``out_phi`` receives the 6x6 transition matrix; ``W``
+    (6x6), ``dx``, ``H`` and ``PH`` (6) are scratch: nothing is allocated, so a whole recording runs without touching
+    the heap.  The loop over the samples is here, not in the caller, so that the arrays are bound once (an inlined
+    call per sample took and dropped a reference to each of them, atomic operations that cost as much as the
+    filter's arithmetic), and what the parameters fix is computed once.
     """
     qw, qx, qy, qz = q[0], q[1], q[2], q[3]
     # constants of the recording, out of the loop
@@ -672,6 +694,10 @@ def mekf_core(q, b, P, st, gyr, acc, mag, dts, k0, k1, p, out_phi, W, dx, H, PH,
     sm_tc2 = sm_tc * sm_tc
     zaru2 = p[P_ZARU_NOISE_STD] * p[P_ZARU_NOISE_STD]
     mag_bias = 1.0 if p[P_MAG_BIAS] > 0.5 else 0.0
+    inv_tau_rest = 1.0 / p[P_REST_LPF_TIME_CONSTANT] if rest_lpf else 0.0
+    inv_tau_acc = 1.0 / p[P_ACCEL_LPF_TIME_CONSTANT] if acc_lpf else 0.0
+    inv_tau_mag = 1.0 / p[P_MAG_LPF_TIME_CONSTANT] if p[P_MAG_LPF_TIME_CONSTANT] > 0.0 else 0.0
+    inv_tau_ref = 1.0 / p[P_MAG_REF_TIME_CONSTANT] if p[P_MAG_REF_TIME_CONSTANT] > 0.0 else 0.0
     dt_prev = -1.0
     inv_dt = 0.0
     for k in range(k0, k1):
@@ -715,7 +741,7 @@ def mekf_core(q, b, P, st, gyr, acc, mag, dts, k0, k1, p, out_phi, W, dx, H, PH,
             # scale and of the current bias estimate, robust to per-sample noise
             first = st[S_REST_LP_INIT] < 0.5
             st[S_REST_LP_INIT] = 1.0
-            c = _lp_factor(st, S_LP_REST_C, dt, p[P_REST_LPF_TIME_CONSTANT])
+            c = _lp_factor(st, S_LP_REST_C, dt, p[P_REST_LPF_TIME_CONSTANT], inv_tau_rest)
             dg = 0.0
             da = 0.0
             big = False
@@ -744,7 +770,7 @@ def mekf_core(q, b, P, st, gyr, acc, mag, dts, k0, k1, p, out_phi, W, dx, H, PH,
             f0, f1, f2 = qrot_t(qw, qx, qy, qz, a0, a1, a2)
             first = st[S_F_LP_INIT] < 0.5
             st[S_F_LP_INIT] = 1.0
-            c = _lp_factor(st, S_LP_ACC_C, dt, p[P_ACCEL_LPF_TIME_CONSTANT])
+            c = _lp_factor(st, S_LP_ACC_C, dt, p[P_ACCEL_LPF_TIME_CONSTANT], inv_tau_acc)
             _lowpass(st, S_F_LP, f0, c, first)
             _lowpass(st, S_F_LP + 1, f1, c, first)
             _lowpass(st, S_F_LP + 2, f2, c, first)
@@ -802,7 +828,7 @@ def mekf_core(q, b, P, st, gyr, acc, mag, dts, k0, k1, p, out_phi, W, dx, H, PH,
                     # norm and dip low-passed (time constant p[P_MAG_LPF_TIME_CONSTANT]) before the disturbance test
                     first = st[S_MAG_LP_INIT] < 0.5
                     st[S_MAG_LP_INIT] = 1.0
-                    c = _lp_factor(st, S_LP_MAG_C, dt, p[P_MAG_LPF_TIME_CONSTANT])
+                    c = _lp_factor(st, S_LP_MAG_C, dt, p[P_MAG_LPF_TIME_CONSTANT], inv_tau_mag)
                     _lowpass(st, S_MAG_NORM_LP, mn, c, first)
                     _lowpass(st, S_MAG_DIP_LP, dip, c, first)
                     mn_t = st[S_MAG_NORM_LP]
@@ -831,13 +857,13 @@ def mekf_core(q, b, P, st, gyr, acc, mag, dts, k0, k1, p, out_phi, W, dx, H, PH,
                 else:
                     st[S_DISTURBED_TIMER] = 0.0
                     if p[P_MAG_REF_TIME_CONSTANT] > 0.0:
-                        c = dt / p[P_MAG_REF_TIME_CONSTANT]
+                        c = dt * inv_tau_ref
                         st[S_MAG_REF_NORM] += c * (mn_t - st[S_MAG_REF_NORM])
                         st[S_MAG_REF_DIP] += c * (dip_t - st[S_MAG_REF_DIP])
                 # used only after p[P_MAG_MIN_UNDISTURBED] s of continuous undisturbed field: the few
                 # samples of a disturbance that happen to pass the test are not used
                 if not disturbed and st[S_UNDISTURBED] >= p[P_MAG_MIN_UNDISTURBED] and hh > 1e-9 * mn:
-                    psi = math.atan2(n1, n0)
+                    psi = _atan2_small(n1, n0)
                     # σ_mag is field-vector noise, so the heading noise is σ_mag |m| / |m_h|;
                     # τ_mag is the time constant of the heading itself (whatever the dip)
                     if head_tc:
@@ -880,21 +906,6 @@ def mekf_core(q, b, P, st, gyr, acc, mag, dts, k0, k1, p, out_phi, W, dx, H, PH,
         flg[k] = flags
         nis_o[k] = nis
         dof_o[k] = ndof
-
-
-@njit(cache=True, inline="always")
-def _store_row(out, k, q, b, P, st):
-    """Row ``k`` of the outputs ``out = (qs, bs, pd, flags, nis, dof)`` from the state after sample ``k``."""
-    qs, bs, pd, flags, nis, dof = out
-    for i in range(4):
-        qs[k, i] = q[i]
-    for i in range(3):
-        bs[k, i] = b[i]
-    for i in range(6):
-        pd[k, i] = P[i, i]
-    flags[k] = int(st[S_FLAGS])
-    nis[k] = st[S_NIS]
-    dof[k] = st[S_DOF]
 
 
 @njit(cache=True, error_model="numpy", fastmath={"contract"}, nogil=True)
