@@ -372,11 +372,12 @@ MEKF_STATE = (
     ("lp_rest_c", 2),  # (Δt, 1 − exp(−Δt/τ)) of the rest low-pass, cached while Δt repeats
     ("lp_acc_c", 2),  # the same for the accelerometer low-pass
     ("lp_mag_c", 2),  # the same for the field norm / dip low-pass
+    ("tan_dip", 2),  # (δ₀, tan δ₀): the tangent of the reference dip, kept while the reference moves little
 )
 (
     S_REST_TIMER, S_MAG_REF_NORM, S_MAG_REF_DIP, S_DISTURBED_TIMER, S_MAG_REF_VALID, S_F_LP, S_FLAGS, S_NIS, S_DOF,
     S_F_LP_INIT, S_GYR_LP, S_ACC_LP, S_REST_LP_INIT, S_MAG_NORM_LP, S_MAG_DIP_LP, S_MAG_LP_INIT, S_UNDISTURBED,
-    S_ATT_Q, S_LP_REST_C, S_LP_ACC_C, S_LP_MAG_C,
+    S_ATT_Q, S_LP_REST_C, S_LP_ACC_C, S_LP_MAG_C, S_TAN_DIP,
 ) = (sum(n for _, n in MEKF_STATE[:i]) for i in range(len(MEKF_STATE)))
 N_STATE = sum(n for _, n in MEKF_STATE)
 
@@ -423,6 +424,25 @@ def _qnormalize_fast(a0, a1, a2, a3):
     else:
         f = 1.0 / math.sqrt(n2)
     return a0 * f, a1 * f, a2 * f, a3 * f
+
+
+@njit(cache=True, error_model="numpy", fastmath={"contract"}, inline="always")
+def _tan_cached(st, k, x):
+    """``math.tan(x)`` to rounding, with ``st[k:k+2] = (x₀, tan x₀)`` kept while |x − x₀| < 1e-5.
+
+    Near x₀ (the reference dip of the heading update, which the slow tracking moves by a few 1e-7 rad a sample)
+    ``tan(x₀ + d) = T + d u (1 + d T + d² (1 + 3T²) / 3)``, T = tan x₀, u = 1 + T²: the first term left out is
+    below 1e-18 for |d| < 1e-5 and |x₀| < 1.4 rad (dip under 80°).  A zeroed state is a valid start (tan 0 = 0).
+    """
+    d = x - st[k]
+    if abs(d) < 1e-5 and abs(x) < 1.4:
+        T = st[k + 1]
+        u = 1.0 + T * T
+        return T + d * u * (1.0 + d * (T + d * (1.0 + 3.0 * T * T) * (1.0 / 3.0)))
+    t = math.tan(x)
+    st[k] = x
+    st[k + 1] = t
+    return t
 
 
 @njit(cache=True, error_model="numpy", fastmath={"contract"}, inline="always")
@@ -876,7 +896,7 @@ def mekf_core(q, b, P, st, gyr, acc, mag, dts, k0, k1, p, out_phi, W, dx, H, PH,
                         xn = dn / p[P_MAG_NORM_THRESHOLD]
                         xd = dd / p[P_MAG_DIP_THRESHOLD]
                         r = sm2 * (1.0 + p[P_K_MAG] * (xn * xn + xd * xd))
-                    nis += _heading_update(P, dx, qw, qx, qy, qz, math.tan(st[S_MAG_REF_DIP]), r, psi, PH, H,
+                    nis += _heading_update(P, dx, qw, qx, qy, qz, _tan_cached(st, S_TAN_DIP, st[S_MAG_REF_DIP]), r, psi, PH, H,
                                            mag_bias)
                     ndof += 1.0
                     _reset6(P, dx[0], dx[1], dx[2])
