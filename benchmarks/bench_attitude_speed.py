@@ -10,6 +10,13 @@ Madgwick <= 2 µs/sample, each >= 50x faster than the ahrs counterpart.  The bat
 (``MEKF.run_many``, threads: the kernel releases the GIL) is timed over the shared BROAD trials with 1 and 2
 workers (wall time: the figure a user waiting for a fleet's logs sees).
 
+Measured (issue 34, ``--repeat 40``, the shared 2-core development machine under load; µs per sample, ratio to
+vqf's 0.48 in the same run): trial 05 MEKF 0.34 (0.71 x), adaptive MEKF 0.43 (0.88 x), Madgwick 0.21, Mahony 0.19;
+trial 07 (fast rotation) MEKF 0.34 (0.71 x), adaptive 0.41 (0.86 x); trial 32 (magnet) at the previous commit
+MEKF 0.38 (0.78 x), adaptive 0.42 (0.85 x).  Before the kernel's loop moved inside ``mekf_core``: MEKF 0.51
+(1.02 x), adaptive 0.58 (1.16 x).  The batch figures are wall time and show no speed-up while other jobs hold both
+cores.
+
 Run:  python benchmarks/bench_attitude_speed.py [--trial NAME] [--ahrs-samples 3000] [--repeat 25]
 """
 

@@ -22,7 +22,6 @@ from imunav._rotation_kernels import (
     dcm_from_quat_t,
     qconj_1,
     qexp_1,
-    qexp_t,
     qlog_1,
     qmul_1,
     qmul_t,
@@ -373,11 +372,12 @@ MEKF_STATE = (
     ("lp_rest_c", 2),  # (Δt, 1 − exp(−Δt/τ)) of the rest low-pass, cached while Δt repeats
     ("lp_acc_c", 2),  # the same for the accelerometer low-pass
     ("lp_mag_c", 2),  # the same for the field norm / dip low-pass
+    ("tan_dip", 2),  # (δ₀, tan δ₀): the tangent of the reference dip, kept while the reference moves little
 )
 (
     S_REST_TIMER, S_MAG_REF_NORM, S_MAG_REF_DIP, S_DISTURBED_TIMER, S_MAG_REF_VALID, S_F_LP, S_FLAGS, S_NIS, S_DOF,
     S_F_LP_INIT, S_GYR_LP, S_ACC_LP, S_REST_LP_INIT, S_MAG_NORM_LP, S_MAG_DIP_LP, S_MAG_LP_INIT, S_UNDISTURBED,
-    S_ATT_Q, S_LP_REST_C, S_LP_ACC_C, S_LP_MAG_C,
+    S_ATT_Q, S_LP_REST_C, S_LP_ACC_C, S_LP_MAG_C, S_TAN_DIP,
 ) = (sum(n for _, n in MEKF_STATE[:i]) for i in range(len(MEKF_STATE)))
 N_STATE = sum(n for _, n in MEKF_STATE)
 
@@ -387,6 +387,76 @@ I_BIAS = 3
 NX = 6
 
 
+#: Taylor coefficients of cos(θ/2) and sin(θ/2)/θ in powers of θ² (to θ¹⁰: below θ = 0.05 the first term left out is
+#: under 1e-27, far below the rounding of a double)
+_C1, _C2, _C3, _C4, _C5 = -1.0 / 8.0, 1.0 / 384.0, -1.0 / 46080.0, 1.0 / 10321920.0, -1.0 / 3715891200.0
+_S1, _S2, _S3, _S4, _S5 = -1.0 / 48.0, 1.0 / 3840.0, -1.0 / 645120.0, 1.0 / 185794560.0, -1.0 / 81749606400.0
+_SERIES_TH2 = 0.05 * 0.05
+
+
+@njit(cache=True, error_model="numpy", fastmath={"contract"}, inline="always")
+def _qexp_fast(r0, r1, r2):
+    """:func:`imunav._rotation_kernels.qexp_t` (``[cos(θ/2), sin(θ/2) r/θ]``, θ = |r|) to rounding, cheaper.
+
+    Below θ = 0.05 rad (every gyro increment of a sensor sampled at 100 Hz or faster turning under 5 rad/s, and every
+    correction) the sine and cosine are their Taylor polynomials in θ², exact to rounding: no square root, no division,
+    no call to the maths library.
+    """
+    th2 = r0 * r0 + r1 * r1 + r2 * r2
+    if th2 < _SERIES_TH2:
+        c = 1.0 + th2 * (_C1 + th2 * (_C2 + th2 * (_C3 + th2 * (_C4 + th2 * _C5))))
+        s = 0.5 + th2 * (_S1 + th2 * (_S2 + th2 * (_S3 + th2 * (_S4 + th2 * _S5))))
+    else:
+        th = math.sqrt(th2)
+        c = math.cos(0.5 * th)
+        s = math.sin(0.5 * th) / th
+    return c, s * r0, s * r1, s * r2
+
+
+@njit(cache=True, error_model="numpy", fastmath={"contract"}, inline="always")
+def _qnormalize_fast(a0, a1, a2, a3):
+    """:func:`imunav._rotation_kernels.qnormalize_t` to rounding: near unit norm (|n² − 1| < 1e-9, the product of two
+    unit quaternions) ``1/√n² = 1.5 − n²/2`` to within 4e-19 (the next term, 3 (n² − 1)² / 8), without the square root
+    and the division."""
+    n2 = a0 * a0 + a1 * a1 + a2 * a2 + a3 * a3
+    if abs(n2 - 1.0) < 1e-9:
+        f = 1.5 - 0.5 * n2
+    else:
+        f = 1.0 / math.sqrt(n2)
+    return a0 * f, a1 * f, a2 * f, a3 * f
+
+
+@njit(cache=True, error_model="numpy", fastmath={"contract"}, inline="always")
+def _tan_cached(st, k, x):
+    """``math.tan(x)`` to rounding, with ``st[k:k+2] = (x₀, tan x₀)`` kept while |x − x₀| < 1e-5.
+
+    Near x₀ (the reference dip of the heading update, which the slow tracking moves by a few 1e-7 rad a sample)
+    ``tan(x₀ + d) = T + d u (1 + d T + d² (1 + 3T²) / 3)``, T = tan x₀, u = 1 + T²: the first term left out is
+    below 1e-18 for |d| < 1e-5 and |x₀| < 1.4 rad (dip under 80°).  A zeroed state is a valid start (tan 0 = 0).
+    """
+    d = x - st[k]
+    if abs(d) < 1e-5 and abs(x) < 1.4:
+        T = st[k + 1]
+        u = 1.0 + T * T
+        return T + d * u * (1.0 + d * (T + d * (1.0 + 3.0 * T * T) * (1.0 / 3.0)))
+    t = math.tan(x)
+    st[k] = x
+    st[k + 1] = t
+    return t
+
+
+@njit(cache=True, error_model="numpy", fastmath={"contract"}, inline="always")
+def _atan2_small(y, x):
+    """``math.atan2(y, x)`` to rounding; for x > 0 and |y| < 0.05 x (a heading innovation once the filter has
+    converged) the series ``atan z = z − z³/3 + … + z¹⁷/17``, z = y / x (the first term left out is under 1e-22 z)."""
+    if x > 0.0 and abs(y) < 0.05 * x:
+        z = y / x
+        u = z * z
+        return z * (1.0 + u * (-1.0 / 3.0 + u * (0.2 + u * (-1.0 / 7.0 + u * (1.0 / 9.0 + u * (-1.0 / 11.0 + u * (
+            1.0 / 13.0 + u * (-1.0 / 15.0 + u * (1.0 / 17.0)))))))))
+    return math.atan2(y, x)
+
+
 @njit(cache=True, error_model="numpy", fastmath={"contract"}, inline="always")
 def _lowpass(st, k, x, c, first):
     """First-order low-pass of ``x`` held in ``st[k]`` with factor c = 1 − exp(−Δt/τ); ``first`` starts it at x."""
@@ -394,14 +464,20 @@ def _lowpass(st, k, x, c, first):
 
 
 @njit(cache=True, error_model="numpy", fastmath={"contract"}, inline="always")
-def _lp_factor(st, k, dt, tau):
-    """The low-pass factor ``c = 1 − exp(−Δt/τ)``, cached as ``st[k:k+2] = (Δt, c)`` while Δt repeats.
+def _lp_factor(st, k, dt, tau, inv_tau):
+    """The low-pass factor ``c = 1 − exp(−Δt/τ)``, cached as ``st[k:k+2] = (Δt₀, c₀)`` while Δt repeats.
 
-    A uniformly sampled recording computes the exponential once instead of once per sample (same value).
+    A uniformly sampled recording computes the exponential once instead of once per sample.  Time steps taken from
+    rounded time stamps differ from the cached one by a few ulp of the time (ε, |ε| < 1e-9 Δt₀): then
+    ``c = c₀ + ε (1 − c₀) / τ``, exact to rounding (the term left out, ε² / (2τ²), is below 1e-20 c).
     """
-    if st[k] != dt:
-        st[k] = dt
-        st[k + 1] = 1.0 - math.exp(-dt / tau)
+    eps = dt - st[k]
+    if eps == 0.0:
+        return st[k + 1]
+    if abs(eps) < 1e-9 * st[k]:
+        return st[k + 1] + eps * (1.0 - st[k + 1]) * inv_tau
+    st[k] = dt
+    st[k + 1] = 1.0 - math.exp(-dt / tau)
     return st[k + 1]
 
 
@@ -422,6 +498,7 @@ def _gain6(P, dx, PH, nu, s):
             v = P[i, j] - f * PH[j]
             P[i, j] = v
             P[j, i] = v
+    return si
 
 
 @njit(cache=True, error_model="numpy", fastmath={"contract"}, inline="always")
@@ -429,14 +506,13 @@ def _att_row_update(P, dx, h0, h1, h2, r, nu, PH):
     """Scalar update with the row ``h = [h0, h1, h2, 0, 0, 0]`` (a measurement of the attitude error only).
 
     Same equations as :func:`imunav.filters._core.scalar_update` (``s = h P hᵀ + r``, ``ν' = ν − h dx``,
-    ``dx += K ν'``, ``P −= P hᵀ h P / s``) with the zero entries of h skipped.  Returns ``(ν', s)``.
+    ``dx += K ν'``, ``P −= P hᵀ h P / s``) with the zero entries of h skipped.  Returns ``(ν', 1/s)``.
     """
     for i in range(6):
         PH[i] = P[i, 0] * h0 + P[i, 1] * h1 + P[i, 2] * h2
     s = r + h0 * PH[0] + h1 * PH[1] + h2 * PH[2]
     nu = nu - (h0 * dx[0] + h1 * dx[1] + h2 * dx[2])
-    _gain6(P, dx, PH, nu, s)
-    return nu, s
+    return nu, _gain6(P, dx, PH, nu, s)
 
 
 @njit(cache=True, error_model="numpy", fastmath={"contract"}, inline="always")
@@ -530,24 +606,16 @@ def _heading_update(P, dx, qw, qx, qy, qz, tan_dip, r, psi, PH, V, with_bias):
     dx[0] = c20 * yd * k
     dx[1] = c21 * yd * k
     dx[2] = c22 * yd * k
-    if with_bias:
-        for i in range(3, 6):
-            dx[i] = PH[i] * k
-        vb0 = 0.0
-        vb1 = 0.0
-        vb2 = 0.0
-    else:
-        for i in range(3, 6):
-            dx[i] = 0.0
-        vb0 = PH[3]
-        vb1 = PH[4]
-        vb2 = PH[5]
+    # with_bias 1.0 / 0.0, without a branch: the bias rows estimated (gain PH k, nothing in v) or considered (no
+    # gain, the whole of PH in v); x·1 and x·0 are exact, so both give what the two branches gave
+    kb = k * with_bias
+    cb = 1.0 - with_bias
     V[0] = v0
     V[1] = v1
     V[2] = v2
-    V[3] = vb0
-    V[4] = vb1
-    V[5] = vb2
+    for i in range(3, 6):
+        dx[i] = PH[i] * kb
+        V[i] = PH[i] * cb
     for i in range(6):
         ui = PH[i] * si
         wi = V[i] * si
@@ -602,237 +670,262 @@ def mekf_step(q, b, P, st, gyr, acc, mag, dt, p, out_phi):
     """
     qn = q.copy()
     bn = b.copy()
-    mekf_core(qn, bn, P, st, gyr.reshape(1, 3), acc.reshape(1, 3), mag.reshape(1, 3), 0, dt, p, out_phi,
-              np.empty((6, 6)), np.zeros(6), np.empty(6), np.empty(6))
+    mekf_core(qn, bn, P, st, gyr.reshape(1, 3), acc.reshape(1, 3), mag.reshape(1, 3), np.full(1, dt), 0, 1, p, out_phi,
+              np.empty((6, 6)), np.zeros(6), np.empty(6), np.empty(6), np.empty((1, 4)), np.empty((1, 3)),
+              np.empty((1, 6)), np.empty(1, np.int64), np.empty(1), np.empty(1))
     _phi_fill(out_phi, dt)
     return qn, bn
 
 
-@njit(cache=True, error_model="numpy", fastmath={"contract"}, inline="always")
-def mekf_core(q, b, P, st, gyr, acc, mag, k, dt, p, out_phi, W, dx, H, PH):
-    """One MEKF step on sample ``k`` of the (N, 3) arrays, in place on ``q``, ``b``, ``P`` and ``st``.
+@njit(cache=True, error_model="numpy", fastmath={"contract"}, nogil=True)
+def mekf_core(q, b, P, st, gyr, acc, mag, dts, k0, k1, p, out_phi, W, dx, H, PH, qs, bs, pd, flg, nis_o, dof_o):
+    """MEKF steps on samples ``k0 … k1 − 1`` of the (N, 3) arrays, in place on ``q``, ``b``, ``P`` and ``st``; row k of
+    the outputs ``qs, bs, pd, flg, nis_o, dof_o`` receives the state after sample k.
 
-    ``st`` (float64 array, len N_STATE) is the adaptive state, laid out as MEKF_STATE (S_* constants); ``p`` the
-    parameters (P_* constants).  The measurement updates are the models of :mod:`imunav.filters._core_models`
-    (gravity direction, zero rate) and the heading, one scalar row at a time (:func:`_att_row_update`,
-    :func:`_heading_update`).  ``out_phi`` receives the 6x6 transition matrix; ``W`` (6x6), ``dx``, ``H`` and ``PH`` (6)
-    are scratch: nothing is allocated, so a whole recording runs without touching the heap.
+    ``dts`` holds the time steps (Δt of sample k is ``dts[k]``).  ``st`` (float64 array, len N_STATE) is the adaptive
+    state, laid out as MEKF_STATE (S_* constants); ``p`` the parameters (P_* constants).  The measurement updates are
+    the models of :mod:`imunav.filters._core_models` (gravity direction, zero rate) and the heading, one scalar row at a
+    time (:func:`_att_row_update`, :func:`_heading_update`).  ``out_phi`` receives the 6x6 transition matrix; ``W``
+    (6x6), ``dx``, ``H`` and ``PH`` (6) are scratch: nothing is allocated, so a whole recording runs without touching
+    the heap.  The loop over the samples is here, not in the caller, so that the arrays are bound once (an inlined
+    call per sample took and dropped a reference to each of them, atomic operations that cost as much as the
+    filter's arithmetic), and what the parameters fix is computed once.
     """
+    qw, qx, qy, qz = q[0], q[1], q[2], q[3]
+    # constants of the recording, out of the loop
     g = p[P_G]
+    inv_g = 1.0 / g
     use_mag = p[P_USE_MAG] > 0.5
-    gx = gyr[k, 0]
-    gy = gyr[k, 1]
-    gz = gyr[k, 2]
-    # ---- predict
-    w0 = gx - b[0]
-    w1 = gy - b[1]
-    w2 = gz - b[2]
-    e0, e1, e2, e3 = qexp_t(w0 * dt, w1 * dt, w2 * dt)
-    # δθ_k+1 = exp(-[ω]dt) δθ_k - dt δb, with exp(-[ω]dt) = C(e)ᵀ, the transposed DCM of the increment e
-    # (the same rotation as Rodrigues' formula, from the quaternion's sine and cosine)
-    (out_phi[0, 0], out_phi[1, 0], out_phi[2, 0], out_phi[0, 1], out_phi[1, 1], out_phi[2, 1],
-     out_phi[0, 2], out_phi[1, 2], out_phi[2, 2]) = dcm_from_quat_t(e0, e1, e2, e3)  # fmt: skip
-    t0, t1, t2, t3 = qmul_t(q[0], q[1], q[2], q[3], e0, e1, e2, e3)
-    qw, qx, qy, qz = qnormalize_t(t0, t1, t2, t3)
-    # gyro noise grows with the rate (scale-factor and misalignment errors of an
-    # uncalibrated gyro act in proportion to |ω|): σ² = σ_g² + (k_ω |ω̄|)²
-    wn2 = w0 * w0 + w1 * w1 + w2 * w2
-    sg2 = (p[P_GYRO_NOISE_DENSITY] * p[P_GYRO_NOISE_DENSITY] + p[P_K_GYRO_RATE] * p[P_K_GYRO_RATE] * wn2) * dt
-    st[S_ATT_Q] = sg2
-    _mekf_predict(P, out_phi, dt, sg2, p[P_GYRO_BIAS_RANDOM_WALK] * p[P_GYRO_BIAS_RANDOM_WALK] * dt, W)
-    for i in range(6):
-        dx[i] = 0.0
-    flags = 0
-    nis = 0.0
-    ndof = 0.0
-    qbw, qbx, qby, qbz = qw, qx, qy, qz
-    # ---- accelerometer (direction only)
-    a0, a1, a2 = acc[k, 0], acc[k, 1], acc[k, 2]
-    an = math.sqrt(a0 * a0 + a1 * a1 + a2 * a2)
-    wn = math.sqrt(wn2)
-    if p[P_REST_LPF_TIME_CONSTANT] > 0.0:
-        # rest from the deviation of gyro and accelerometer from their low-pass
-        # (time constant p[P_REST_LPF_TIME_CONSTANT]) plus a bias-size bound on the low-passed rate
-        # (Laidig & Seel 2023, §4.2): independent of the accelerometer's
-        # scale and of the current bias estimate, robust to per-sample noise
-        first = st[S_REST_LP_INIT] < 0.5
-        st[S_REST_LP_INIT] = 1.0
-        c = _lp_factor(st, S_LP_REST_C, dt, p[P_REST_LPF_TIME_CONSTANT])
-        dg = 0.0
-        da = 0.0
-        big = False
-        for i in range(3):
-            _lowpass(st, S_GYR_LP + i, gyr[k, i], c, first)
-            _lowpass(st, S_ACC_LP + i, acc[k, i], c, first)
-            eg = gyr[k, i] - st[S_GYR_LP + i]
-            ea = acc[k, i] - st[S_ACC_LP + i]
-            dg += eg * eg
-            da += ea * ea
-            if abs(st[S_GYR_LP + i]) > p[P_LPF_GYRO_THRESHOLD]:
-                big = True
-        if p[P_REST_GYRO_THRESHOLD] > 0.0 and dg < p[P_REST_GYRO_THRESHOLD] * p[P_REST_GYRO_THRESHOLD] and da < p[P_REST_ACCEL_THRESHOLD] * p[P_REST_ACCEL_THRESHOLD] and not big:
+    sg2_0 = p[P_GYRO_NOISE_DENSITY] * p[P_GYRO_NOISE_DENSITY]
+    kg2 = p[P_K_GYRO_RATE] * p[P_K_GYRO_RATE]
+    sb2_0 = p[P_GYRO_BIAS_RANDOM_WALK] * p[P_GYRO_BIAS_RANDOM_WALK]
+    rest_on = p[P_REST_GYRO_THRESHOLD] > 0.0
+    rest_lpf = p[P_REST_LPF_TIME_CONSTANT] > 0.0
+    rest_g2 = p[P_REST_GYRO_THRESHOLD] * p[P_REST_GYRO_THRESHOLD]
+    rest_a2 = p[P_REST_ACCEL_THRESHOLD] * p[P_REST_ACCEL_THRESHOLD]
+    acc_lpf = p[P_ACCEL_LPF_TIME_CONSTANT] > 0.0
+    tilt_tc = p[P_TILT_TIME_CONSTANT] > 0.0
+    sa_tc = p[P_TILT_TIME_CONSTANT] * p[P_GYRO_NOISE_DENSITY]
+    sa_tc2 = sa_tc * sa_tc
+    sa_fix2 = p[P_ACCEL_DIRECTION_NOISE_STD] * p[P_ACCEL_DIRECTION_NOISE_STD]
+    k_rate_on = p[P_K_RATE] > 0.0
+    head_tc = p[P_HEADING_TIME_CONSTANT] > 0.0
+    sm_tc = p[P_HEADING_TIME_CONSTANT] * p[P_GYRO_NOISE_DENSITY]
+    sm_tc2 = sm_tc * sm_tc
+    zaru2 = p[P_ZARU_NOISE_STD] * p[P_ZARU_NOISE_STD]
+    mag_bias = 1.0 if p[P_MAG_BIAS] > 0.5 else 0.0
+    inv_tau_rest = 1.0 / p[P_REST_LPF_TIME_CONSTANT] if rest_lpf else 0.0
+    inv_tau_acc = 1.0 / p[P_ACCEL_LPF_TIME_CONSTANT] if acc_lpf else 0.0
+    inv_tau_mag = 1.0 / p[P_MAG_LPF_TIME_CONSTANT] if p[P_MAG_LPF_TIME_CONSTANT] > 0.0 else 0.0
+    inv_tau_ref = 1.0 / p[P_MAG_REF_TIME_CONSTANT] if p[P_MAG_REF_TIME_CONSTANT] > 0.0 else 0.0
+    dt_prev = -1.0
+    inv_dt = 0.0
+    for k in range(k0, k1):
+        dt = dts[k]
+        if dt != dt_prev:  # 1/Δt once while Δt repeats
+            dt_prev = dt
+            inv_dt = 1.0 / dt
+        gx = gyr[k, 0]
+        gy = gyr[k, 1]
+        gz = gyr[k, 2]
+        # ---- predict
+        w0 = gx - b[0]
+        w1 = gy - b[1]
+        w2 = gz - b[2]
+        e0, e1, e2, e3 = _qexp_fast(w0 * dt, w1 * dt, w2 * dt)
+        # δθ_k+1 = exp(-[ω]dt) δθ_k - dt δb, with exp(-[ω]dt) = C(e)ᵀ, the transposed DCM of the increment e
+        # (the same rotation as Rodrigues' formula, from the quaternion's sine and cosine)
+        (out_phi[0, 0], out_phi[1, 0], out_phi[2, 0], out_phi[0, 1], out_phi[1, 1], out_phi[2, 1],
+         out_phi[0, 2], out_phi[1, 2], out_phi[2, 2]) = dcm_from_quat_t(e0, e1, e2, e3)  # fmt: skip
+        t0, t1, t2, t3 = qmul_t(qw, qx, qy, qz, e0, e1, e2, e3)
+        qw, qx, qy, qz = _qnormalize_fast(t0, t1, t2, t3)
+        # gyro noise grows with the rate (scale-factor and misalignment errors of an
+        # uncalibrated gyro act in proportion to |ω|): σ² = σ_g² + (k_ω |ω̄|)²
+        wn2 = w0 * w0 + w1 * w1 + w2 * w2
+        sg2 = (sg2_0 + kg2 * wn2) * dt
+        st[S_ATT_Q] = sg2
+        _mekf_predict(P, out_phi, dt, sg2, sb2_0 * dt, W)
+        for i in range(6):
+            dx[i] = 0.0
+        flags = 0
+        nis = 0.0
+        ndof = 0.0
+        qbw, qbx, qby, qbz = qw, qx, qy, qz
+        # ---- accelerometer (direction only)
+        a0, a1, a2 = acc[k, 0], acc[k, 1], acc[k, 2]
+        an = math.sqrt(a0 * a0 + a1 * a1 + a2 * a2)
+        if rest_lpf:
+            # rest from the deviation of gyro and accelerometer from their low-pass
+            # (time constant p[P_REST_LPF_TIME_CONSTANT]) plus a bias-size bound on the low-passed rate
+            # (Laidig & Seel 2023, §4.2): independent of the accelerometer's
+            # scale and of the current bias estimate, robust to per-sample noise
+            first = st[S_REST_LP_INIT] < 0.5
+            st[S_REST_LP_INIT] = 1.0
+            c = _lp_factor(st, S_LP_REST_C, dt, p[P_REST_LPF_TIME_CONSTANT], inv_tau_rest)
+            dg = 0.0
+            da = 0.0
+            big = False
+            for i in range(3):
+                _lowpass(st, S_GYR_LP + i, gyr[k, i], c, first)
+                _lowpass(st, S_ACC_LP + i, acc[k, i], c, first)
+                eg = gyr[k, i] - st[S_GYR_LP + i]
+                ea = acc[k, i] - st[S_ACC_LP + i]
+                dg += eg * eg
+                da += ea * ea
+                if abs(st[S_GYR_LP + i]) > p[P_LPF_GYRO_THRESHOLD]:
+                    big = True
+            if rest_on and dg < rest_g2 and da < rest_a2 and not big:
+                st[S_REST_TIMER] += dt
+            else:
+                st[S_REST_TIMER] = 0.0
+        elif rest_on and math.sqrt(wn2) < p[P_REST_GYRO_THRESHOLD] and abs(an - g) < p[P_REST_ACCEL_THRESHOLD]:
             st[S_REST_TIMER] += dt
         else:
             st[S_REST_TIMER] = 0.0
-    elif p[P_REST_GYRO_THRESHOLD] > 0.0 and wn < p[P_REST_GYRO_THRESHOLD] and abs(an - g) < p[P_REST_ACCEL_THRESHOLD]:
-        st[S_REST_TIMER] += dt
-    else:
-        st[S_REST_TIMER] = 0.0
-    if p[P_ACCEL_LPF_TIME_CONSTANT] > 0.0:
-        # low-pass of the specific force in the nav frame; the stored vector is
-        # rotated with every correction below, so this is the low-pass in the
-        # gyro-integrated frame: translational accelerations average out
-        # because velocity stays bounded (cf. Laidig & Seel 2023, §4.1)
-        f0, f1, f2 = qrot_t(qw, qx, qy, qz, a0, a1, a2)
-        first = st[S_F_LP_INIT] < 0.5
-        st[S_F_LP_INIT] = 1.0
-        c = _lp_factor(st, S_LP_ACC_C, dt, p[P_ACCEL_LPF_TIME_CONSTANT])
-        _lowpass(st, S_F_LP, f0, c, first)
-        _lowpass(st, S_F_LP + 1, f1, c, first)
-        _lowpass(st, S_F_LP + 2, f2, c, first)
-        a0, a1, a2 = qrot_t(qw, -qx, -qy, -qz, st[S_F_LP], st[S_F_LP + 1], st[S_F_LP + 2])
-        an = math.sqrt(a0 * a0 + a1 * a1 + a2 * a2)
-    dev = abs(an - g) / g
-    if an > 0.0 and dev < p[P_ACCEL_REJECT_THRESHOLD]:
-        # per-sample variance: σ_a², or from the time constant τ_a of the tilt
-        # correction, (τ_a σ_g)² / Δt (steady state of a random walk of density
-        # σ_g seen through white noise of density τ_a σ_g: gain 1/τ_a)
-        if p[P_TILT_TIME_CONSTANT] > 0.0:
-            sa = p[P_TILT_TIME_CONSTANT] * p[P_GYRO_NOISE_DENSITY]
-            sa2 = sa * sa / dt
+        if acc_lpf:
+            # low-pass of the specific force in the nav frame; the stored vector is
+            # rotated with every correction below, so this is the low-pass in the
+            # gyro-integrated frame: translational accelerations average out
+            # because velocity stays bounded (cf. Laidig & Seel 2023, §4.1)
+            f0, f1, f2 = qrot_t(qw, qx, qy, qz, a0, a1, a2)
+            first = st[S_F_LP_INIT] < 0.5
+            st[S_F_LP_INIT] = 1.0
+            c = _lp_factor(st, S_LP_ACC_C, dt, p[P_ACCEL_LPF_TIME_CONSTANT], inv_tau_acc)
+            _lowpass(st, S_F_LP, f0, c, first)
+            _lowpass(st, S_F_LP + 1, f1, c, first)
+            _lowpass(st, S_F_LP + 2, f2, c, first)
+            a0, a1, a2 = qrot_t(qw, -qx, -qy, -qz, st[S_F_LP], st[S_F_LP + 1], st[S_F_LP + 2])
+            an = math.sqrt(a0 * a0 + a1 * a1 + a2 * a2)
+        dev = abs(an - g) * inv_g
+        if an > 0.0 and dev < p[P_ACCEL_REJECT_THRESHOLD]:
+            # per-sample variance: σ_a², or from the time constant τ_a of the tilt
+            # correction, (τ_a σ_g)² / Δt (steady state of a random walk of density
+            # σ_g seen through white noise of density τ_a σ_g: gain 1/τ_a)
+            sa2 = sa_tc2 * inv_dt if tilt_tc else sa_fix2
+            dv = dev * 100.0  # in units of 0.01 g
+            kr = p[P_K_RATE] * math.sqrt(wn2) if k_rate_on else 0.0
+            r = sa2 * (1.0 + p[P_K_ACCEL] * (dv * dv)) + kr * kr
+            # gravity-direction model, one scalar row at a time (H = [ĥ]x rows for the body error)
+            inv = 1.0 / an
+            for i in range(3):
+                a_i = a0 if i == 0 else (a1 if i == 1 else a2)
+                nu = gravity_direction_row(qw, qx, qy, qz, a_i * inv, i, H)
+                nu, si = _att_row_update(P, dx, H[0], H[1], H[2], r, nu, PH)
+                nis += nu * nu * si
+            ndof += 3.0
         else:
-            sa2 = p[P_ACCEL_DIRECTION_NOISE_STD] * p[P_ACCEL_DIRECTION_NOISE_STD]
-        dv = dev / 0.01
-        kr = p[P_K_RATE] * wn
-        r = sa2 * (1.0 + p[P_K_ACCEL] * (dv * dv)) + kr * kr
-        # gravity-direction model, one scalar row at a time (H = [ĥ]x rows for the body error)
-        inv = 1.0 / an
-        for i in range(3):
-            a_i = a0 if i == 0 else (a1 if i == 1 else a2)
-            nu = gravity_direction_row(qw, qx, qy, qz, a_i * inv, i, H)
-            nu, s = _att_row_update(P, dx, H[0], H[1], H[2], r, nu, PH)
-            nis += nu * nu / s
-        ndof += 3.0
-    else:
-        flags |= 1
-    # ---- rest: zero-rate pseudo measurement ω_meas - b = 0 (+ noise)
-    if p[P_REST_GYRO_THRESHOLD] > 0.0 and st[S_REST_TIMER] >= p[P_REST_TIME]:
-        flags |= 4
-        r = p[P_ZARU_NOISE_STD] * p[P_ZARU_NOISE_STD]
-        for i in range(3):
-            j = 3 + i
-            nu = gyro_rest_row(gyr[k, i], b[i], i, H) - dx[j]  # H = e_j: ν' = ν − δb_i, P hᵀ = P[:, j]
-            for l in range(6):
-                PH[l] = P[l, j]
-            s = r + PH[j]
-            _gain6(P, dx, PH, nu, s)
-            nis += nu * nu / s
-            ndof += 1.0
-    # apply the tilt / bias correction before the heading update
-    _reset6(P, dx[0], dx[1], dx[2])
-    e0, e1, e2, e3 = qexp_t(dx[0], dx[1], dx[2])
-    t0, t1, t2, t3 = qmul_t(qw, qx, qy, qz, e0, e1, e2, e3)
-    qw, qx, qy, qz = qnormalize_t(t0, t1, t2, t3)
-    b[0] += dx[3]
-    b[1] += dx[4]
-    b[2] += dx[5]
-    # ---- magnetometer: heading only
-    if use_mag:
-        m0, m1, m2 = mag[k, 0], mag[k, 1], mag[k, 2]
-        mn = math.sqrt(m0 * m0 + m1 * m1 + m2 * m2)
-        if mn > 0.0:
-            n0, n1, n2 = qrot_t(qw, qx, qy, qz, m0, m1, m2)
-            hh = math.sqrt(n0 * n0 + n1 * n1)
-            dip = math.atan2(n2, hh)
-            if p[P_MAG_LPF_TIME_CONSTANT] > 0.0:
-                # norm and dip low-passed (time constant p[P_MAG_LPF_TIME_CONSTANT]) before the disturbance test
-                first = st[S_MAG_LP_INIT] < 0.5
-                st[S_MAG_LP_INIT] = 1.0
-                c = _lp_factor(st, S_LP_MAG_C, dt, p[P_MAG_LPF_TIME_CONSTANT])
-                _lowpass(st, S_MAG_NORM_LP, mn, c, first)
-                _lowpass(st, S_MAG_DIP_LP, dip, c, first)
-                mn_t = st[S_MAG_NORM_LP]
-                dip_t = st[S_MAG_DIP_LP]
-            else:
-                mn_t = mn
-                dip_t = dip
-            if st[S_MAG_REF_VALID] < 0.5:
-                st[S_MAG_REF_NORM] = mn_t
-                st[S_MAG_REF_DIP] = dip_t
-                st[S_MAG_REF_VALID] = 1.0
-            dn = (mn_t - st[S_MAG_REF_NORM]) / st[S_MAG_REF_NORM]
-            dd = dip_t - st[S_MAG_REF_DIP]
-            disturbed = abs(dn) > p[P_MAG_NORM_THRESHOLD] or abs(dd) > p[P_MAG_DIP_THRESHOLD]
-            if disturbed:
-                st[S_UNDISTURBED] = 0.0
-            else:
-                st[S_UNDISTURBED] += dt
-            if disturbed:
-                st[S_DISTURBED_TIMER] += dt
-                flags |= 2
-                if p[P_MAG_REF_TIME] > 0.0 and st[S_DISTURBED_TIMER] > p[P_MAG_REF_TIME]:
+            flags |= 1
+        # ---- rest: zero-rate pseudo measurement ω_meas - b = 0 (+ noise)
+        if rest_on and st[S_REST_TIMER] >= p[P_REST_TIME]:
+            flags |= 4
+            r = zaru2
+            for i in range(3):
+                j = 3 + i
+                nu = gyro_rest_row(gyr[k, i], b[i], i, H) - dx[j]  # H = e_j: ν' = ν − δb_i, P hᵀ = P[:, j]
+                for l in range(6):
+                    PH[l] = P[l, j]
+                s = r + PH[j]
+                si = _gain6(P, dx, PH, nu, s)
+                nis += nu * nu * si
+                ndof += 1.0
+        # apply the tilt / bias correction before the heading update
+        _reset6(P, dx[0], dx[1], dx[2])
+        e0, e1, e2, e3 = _qexp_fast(dx[0], dx[1], dx[2])
+        t0, t1, t2, t3 = qmul_t(qw, qx, qy, qz, e0, e1, e2, e3)
+        qw, qx, qy, qz = _qnormalize_fast(t0, t1, t2, t3)
+        b[0] += dx[3]
+        b[1] += dx[4]
+        b[2] += dx[5]
+        # ---- magnetometer: heading only
+        if use_mag:
+            m0, m1, m2 = mag[k, 0], mag[k, 1], mag[k, 2]
+            mn = math.sqrt(m0 * m0 + m1 * m1 + m2 * m2)
+            if mn > 0.0:
+                n0, n1, n2 = qrot_t(qw, qx, qy, qz, m0, m1, m2)
+                hh = math.sqrt(n0 * n0 + n1 * n1)
+                dip = math.atan2(n2, hh)
+                if p[P_MAG_LPF_TIME_CONSTANT] > 0.0:
+                    # norm and dip low-passed (time constant p[P_MAG_LPF_TIME_CONSTANT]) before the disturbance test
+                    first = st[S_MAG_LP_INIT] < 0.5
+                    st[S_MAG_LP_INIT] = 1.0
+                    c = _lp_factor(st, S_LP_MAG_C, dt, p[P_MAG_LPF_TIME_CONSTANT], inv_tau_mag)
+                    _lowpass(st, S_MAG_NORM_LP, mn, c, first)
+                    _lowpass(st, S_MAG_DIP_LP, dip, c, first)
+                    mn_t = st[S_MAG_NORM_LP]
+                    dip_t = st[S_MAG_DIP_LP]
+                else:
+                    mn_t = mn
+                    dip_t = dip
+                if st[S_MAG_REF_VALID] < 0.5:
                     st[S_MAG_REF_NORM] = mn_t
                     st[S_MAG_REF_DIP] = dip_t
-                    st[S_DISTURBED_TIMER] = 0.0
-            else:
-                st[S_DISTURBED_TIMER] = 0.0
-                if p[P_MAG_REF_TIME_CONSTANT] > 0.0:
-                    c = dt / p[P_MAG_REF_TIME_CONSTANT]
-                    st[S_MAG_REF_NORM] += c * (mn_t - st[S_MAG_REF_NORM])
-                    st[S_MAG_REF_DIP] += c * (dip_t - st[S_MAG_REF_DIP])
-            # used only after p[P_MAG_MIN_UNDISTURBED] s of continuous undisturbed field: the few
-            # samples of a disturbance that happen to pass the test are not used
-            if not disturbed and st[S_UNDISTURBED] >= p[P_MAG_MIN_UNDISTURBED] and hh > 1e-9 * mn:
-                psi = math.atan2(n1, n0)
-                # σ_mag is field-vector noise, so the heading noise is σ_mag |m| / |m_h|;
-                # τ_mag is the time constant of the heading itself (whatever the dip)
-                if p[P_HEADING_TIME_CONSTANT] > 0.0:
-                    sm = p[P_HEADING_TIME_CONSTANT] * p[P_GYRO_NOISE_DENSITY]
-                    sm2 = sm * sm / dt
+                    st[S_MAG_REF_VALID] = 1.0
+                dn = (mn_t - st[S_MAG_REF_NORM]) / st[S_MAG_REF_NORM]
+                dd = dip_t - st[S_MAG_REF_DIP]
+                disturbed = abs(dn) > p[P_MAG_NORM_THRESHOLD] or abs(dd) > p[P_MAG_DIP_THRESHOLD]
+                if disturbed:
+                    st[S_UNDISTURBED] = 0.0
                 else:
-                    sm = p[P_HEADING_NOISE_STD] * mn / hh
-                    sm2 = sm * sm
-                r = sm2
-                if p[P_K_MAG] > 0.0:
-                    xn = dn / p[P_MAG_NORM_THRESHOLD]
-                    xd = dd / p[P_MAG_DIP_THRESHOLD]
-                    r = sm2 * (1.0 + p[P_K_MAG] * (xn * xn + xd * xd))
-                nis += _heading_update(P, dx, qw, qx, qy, qz, math.tan(st[S_MAG_REF_DIP]), r, psi, PH, H,
-                                       p[P_MAG_BIAS] > 0.5)
-                ndof += 1.0
-                _reset6(P, dx[0], dx[1], dx[2])
-                e0, e1, e2, e3 = qexp_t(dx[0], dx[1], dx[2])
-                t0, t1, t2, t3 = qmul_t(qw, qx, qy, qz, e0, e1, e2, e3)
-                qw, qx, qy, qz = qnormalize_t(t0, t1, t2, t3)
-                b[0] += dx[3]
-                b[1] += dx[4]
-                b[2] += dx[5]
-    if p[P_ACCEL_LPF_TIME_CONSTANT] > 0.0:
-        # rotate the low-passed nav-frame vector with the total correction q ⊗ q_before*
-        d0, d1, d2, d3 = qmul_t(qw, qx, qy, qz, qbw, -qbx, -qby, -qbz)
-        st[S_F_LP], st[S_F_LP + 1], st[S_F_LP + 2] = qrot_t(d0, d1, d2, d3, st[S_F_LP], st[S_F_LP + 1], st[S_F_LP + 2])
-    st[S_FLAGS] = flags
-    st[S_NIS] = nis
-    st[S_DOF] = ndof
-    q[0] = qw
-    q[1] = qx
-    q[2] = qy
-    q[3] = qz
-
-
-@njit(cache=True, inline="always")
-def _store_row(out, k, q, b, P, st):
-    """Row ``k`` of the outputs ``out = (qs, bs, pd, flags, nis, dof)`` from the state after sample ``k``."""
-    qs, bs, pd, flags, nis, dof = out
-    for i in range(4):
-        qs[k, i] = q[i]
-    for i in range(3):
-        bs[k, i] = b[i]
-    for i in range(6):
-        pd[k, i] = P[i, i]
-    flags[k] = int(st[S_FLAGS])
-    nis[k] = st[S_NIS]
-    dof[k] = st[S_DOF]
+                    st[S_UNDISTURBED] += dt
+                if disturbed:
+                    st[S_DISTURBED_TIMER] += dt
+                    flags |= 2
+                    if p[P_MAG_REF_TIME] > 0.0 and st[S_DISTURBED_TIMER] > p[P_MAG_REF_TIME]:
+                        st[S_MAG_REF_NORM] = mn_t
+                        st[S_MAG_REF_DIP] = dip_t
+                        st[S_DISTURBED_TIMER] = 0.0
+                else:
+                    st[S_DISTURBED_TIMER] = 0.0
+                    if p[P_MAG_REF_TIME_CONSTANT] > 0.0:
+                        c = dt * inv_tau_ref
+                        st[S_MAG_REF_NORM] += c * (mn_t - st[S_MAG_REF_NORM])
+                        st[S_MAG_REF_DIP] += c * (dip_t - st[S_MAG_REF_DIP])
+                # used only after p[P_MAG_MIN_UNDISTURBED] s of continuous undisturbed field: the few
+                # samples of a disturbance that happen to pass the test are not used
+                if not disturbed and st[S_UNDISTURBED] >= p[P_MAG_MIN_UNDISTURBED] and hh > 1e-9 * mn:
+                    psi = _atan2_small(n1, n0)
+                    # σ_mag is field-vector noise, so the heading noise is σ_mag |m| / |m_h|;
+                    # τ_mag is the time constant of the heading itself (whatever the dip)
+                    if head_tc:
+                        sm2 = sm_tc2 * inv_dt
+                    else:
+                        sm = p[P_HEADING_NOISE_STD] * mn / hh
+                        sm2 = sm * sm
+                    r = sm2
+                    if p[P_K_MAG] > 0.0:
+                        xn = dn / p[P_MAG_NORM_THRESHOLD]
+                        xd = dd / p[P_MAG_DIP_THRESHOLD]
+                        r = sm2 * (1.0 + p[P_K_MAG] * (xn * xn + xd * xd))
+                    nis += _heading_update(P, dx, qw, qx, qy, qz, _tan_cached(st, S_TAN_DIP, st[S_MAG_REF_DIP]), r, psi, PH, H,
+                                           mag_bias)
+                    ndof += 1.0
+                    _reset6(P, dx[0], dx[1], dx[2])
+                    e0, e1, e2, e3 = _qexp_fast(dx[0], dx[1], dx[2])
+                    t0, t1, t2, t3 = qmul_t(qw, qx, qy, qz, e0, e1, e2, e3)
+                    qw, qx, qy, qz = _qnormalize_fast(t0, t1, t2, t3)
+                    b[0] += dx[3]
+                    b[1] += dx[4]
+                    b[2] += dx[5]
+        if acc_lpf:
+            # rotate the low-passed nav-frame vector with the total correction q ⊗ q_before*
+            d0, d1, d2, d3 = qmul_t(qw, qx, qy, qz, qbw, -qbx, -qby, -qbz)
+            st[S_F_LP], st[S_F_LP + 1], st[S_F_LP + 2] = qrot_t(d0, d1, d2, d3, st[S_F_LP], st[S_F_LP + 1], st[S_F_LP + 2])
+        st[S_FLAGS] = flags
+        st[S_NIS] = nis
+        st[S_DOF] = ndof
+        q[0] = qw
+        q[1] = qx
+        q[2] = qy
+        q[3] = qz
+        for i in range(4):
+            qs[k, i] = q[i]
+        for i in range(3):
+            bs[k, i] = b[i]
+        for i in range(6):
+            pd[k, i] = P[i, i]
+        flg[k] = flags
+        nis_o[k] = nis
+        dof_o[k] = ndof
 
 
 @njit(cache=True, error_model="numpy", fastmath={"contract"}, nogil=True)
@@ -842,9 +935,8 @@ def _mekf_loop(q, b, P, gyr, acc, mag, dt, p, out, scratch):
     fixed scratch only).  ``scratch = (st, phi, W, dx, H, PH)``: the adaptive state and :func:`mekf_core`'s buffers.
     """
     st, phi, W, dx, H, PH = scratch
-    for k in range(gyr.shape[0]):
-        mekf_core(q, b, P, st, gyr, acc, mag, k, dt[k], p, phi, W, dx, H, PH)
-        _store_row(out, k, q, b, P, st)
+    qs, bs, pd, flags, nis, dof = out
+    mekf_core(q, b, P, st, gyr, acc, mag, dt, 0, gyr.shape[0], p, phi, W, dx, H, PH, qs, bs, pd, flags, nis, dof)
 
 
 @njit(cache=True, error_model="numpy", fastmath={"contract"}, nogil=True)
@@ -854,8 +946,9 @@ def _mekf_loop_store(q, b, P, P0, gyr, acc, mag, dt, p, out, scratch, stored):
     Pu, Pp, Ph = stored
     st, phi, W, dx, H, PH = scratch
     Q = np.zeros((6, 6))
+    qs, bs, pd, flags, nis, dof = out
     for k in range(gyr.shape[0]):
-        mekf_core(q, b, P, st, gyr, acc, mag, k, dt[k], p, phi, W, dx, H, PH)
+        mekf_core(q, b, P, st, gyr, acc, mag, dt, k, k + 1, p, phi, W, dx, H, PH, qs, bs, pd, flags, nis, dof)
         _phi_fill(phi, dt[k])
         Ph[k] = phi
         # P predicted = Φ P_{k-1} Φ^T + Q (recompute cheaply)
@@ -865,7 +958,6 @@ def _mekf_loop_store(q, b, P, P0, gyr, acc, mag, dt, p, out, scratch, stored):
             Q[3 + i, 3 + i] = p[P_GYRO_BIAS_RANDOM_WALK] * p[P_GYRO_BIAS_RANDOM_WALK] * dt[k]
         Pp[k] = phi @ Pprev @ phi.T + Q
         Pu[k] = P
-        _store_row(out, k, q, b, P, st)
 
 
 @njit(cache=True, nogil=True)
