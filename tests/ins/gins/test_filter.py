@@ -8,6 +8,7 @@ import pytest
 from imunav import earth
 from imunav.errors import InvalidInputError
 from imunav.ins.gins import GinsConfig, GinsFilter
+from imunav.ins.gins.config import misalignment_std
 from imunav.ins.gins.outage import outage_test
 from imunav.io.kfgins import ImuIncrements
 from imunav.rotation import quat_conjugate, quat_from_rotvec, quat_multiply, rotvec_from_quat
@@ -373,3 +374,31 @@ def test_bias_variance_without_aiding_follows_its_model(model):
             want = np.full(tk.size, init**2)
         for j in range(3):
             np.testing.assert_allclose(res.cov_diag[:, j0 + j], want, rtol=1e-3)
+
+
+def test_the_accelerometers_misalignment_tilt_reaches_the_reported_covariance(drive):
+    """``accel_misalignment_std`` adds its variance to the north and east attitude errors of every covariance
+    record, forward and smoothed, and nothing else: the estimate is the same to the bit.  ``misalignment_std`` is
+    the RMS of a preset's off-diagonal accelerometer misalignment (what a log run takes); ``from_preset`` leaves
+    it at 0."""
+    truth, imu = drive
+    m = presets.get("consumer_mems").accel.scale_misalignment
+    off = m[~np.eye(3, dtype=bool)]
+    sd = misalignment_std(m)
+    assert sd == pytest.approx(np.sqrt(np.mean(off[off != 0] ** 2)), rel=1e-12) and 0.1 * DEG < sd < 0.3 * DEG
+    assert misalignment_std(np.eye(3)) == 0.0 and GinsConfig.from_preset("consumer_mems").accel_misalignment_std == 0
+    g = simulate_gnss(truth, rng=7).within(0.0, 120.0)
+    short = ImuData(imu.t[:6001], imu.gyro[:6001], imu.accel[:6001])
+    a, b = (GinsFilter(GinsConfig.from_preset("mems_adis16465", accel_misalignment_std=s)).run(
+        short, g, **_start(truth), smoother=True) for s in (0.0, 0.2 * DEG))
+    np.testing.assert_array_equal(a.lla, b.lla)
+    expect = np.zeros((9, 9))
+    expect[6, 6] = expect[7, 7] = (0.2 * DEG) ** 2
+    np.testing.assert_allclose(b.cov_nav - a.cov_nav, np.broadcast_to(expect, a.cov_nav.shape), rtol=0, atol=1e-15)
+    np.testing.assert_allclose((b.cov_diag - a.cov_diag)[:, :9], np.broadcast_to(np.diag(expect), (a.cov_t.size, 9)),
+                               rtol=0, atol=1e-15)
+    np.testing.assert_array_equal((b.cov_diag - a.cov_diag)[:, 9:], 0.0)
+    np.testing.assert_allclose(b.smoothed.cov_nav - a.smoothed.cov_nav, np.broadcast_to(
+        expect, a.smoothed.cov_nav.shape), rtol=0, atol=1e-15)
+    with pytest.raises(InvalidInputError, match="accel_misalignment_std"):
+        GinsConfig.from_preset("consumer_mems", accel_misalignment_std=-1e-3)

@@ -26,11 +26,13 @@ import pytest
 from scipy.stats import chi2
 
 from imunav.ins.gins import GinsConfig
+from imunav.ins.gins.config import misalignment_std
 from imunav.ins.gins.layout import LAY
 from imunav.ins.gins.logrun import LogRunOptions, run_log
 from imunav.ins.gins.truth import matched_errors, navigation_errors, nees_blocks
 from imunav.io.navlog import read_nav_sources
 from imunav.rotation import quat_multiply
+from imunav.sim import presets
 from imunav.sim.robot_log import simulate_robot_log, write_robot_log
 
 DRIVES = 8
@@ -43,7 +45,9 @@ AIDS = {a: (dof, (1 - 3 * sd / np.sqrt(DRIVES), 1 + 3 * sd / np.sqrt(DRIVES))) f
 @pytest.fixture(scope="module")
 def runs(tmp_path_factory):
     out = []
-    cfg = GinsConfig.from_preset("consumer_mems")
+    # the accelerometers' misalignment that the log run carries in its attitude σ is drawn too
+    cfg = GinsConfig.from_preset("consumer_mems", accel_misalignment_std=misalignment_std(
+        presets.get("consumer_mems").accel.scale_misalignment))
     for seed in range(300, 300 + DRIVES):
         model = matched_errors(cfg, np.random.default_rng(seed)).model
         log = simulate_robot_log(seed, imu_model=model, slip_std=(0.05, 0.05),
@@ -92,6 +96,7 @@ def test_latency_and_mounting_inside_their_3_sigma(runs):
     """The GNSS latency (truth 0.15 s) and the mounting (each axis) inside the reported 3σ on every drive."""
     for log, run in runs:
         r = run.result
+        assert run.config.accel_misalignment_std == misalignment_std(presets.get("consumer_mems").accel.scale_misalignment)
         i = int(run.state_layout()[LAY.gnss_delay])
         sd = float(np.sqrt(r.cov_diag[-1, i]))
         assert abs(float(r.gnss_delay[-1]) - log.truth.gnss_latency_s) < 3 * sd, (float(r.gnss_delay[-1]), sd)

@@ -46,6 +46,26 @@ BIAS_MODELS = ("gauss_markov", "constant_and_gauss_markov")
 CONSIDER_BLOCKS = ("odo_scale", "mount", "odo_lever", "gnss_delay", "gnss_bias")
 
 
+def misalignment_std(m: ArrayLike) -> float:
+    """σ of a triad's axis misalignment: the RMS of the off-diagonal elements of its scale-misalignment matrix
+    (``M = I + diag(s) + off``, rad for small angles), those that are not zero (0 when all are).
+
+    Parameters
+    ----------
+    m : array_like, shape (3, 3)
+        The scale-misalignment matrix.
+
+    Returns
+    -------
+    float
+        The σ, rad.
+    """
+    a = np.asarray(m, dtype=float)
+    off = a[~np.eye(3, dtype=bool)]
+    off = off[off != 0]
+    return float(np.sqrt(np.mean(off**2))) if off.size else 0.0
+
+
 @dataclass(frozen=True)
 class GinsConfig:
     """Configuration of :class:`GinsFilter`, SI units.
@@ -130,6 +150,16 @@ class GinsConfig:
     scale_corr_time : float or None
         Correlation time of the IMU scale-factor states, s (> 0; ``inf``: random constants, no process
         noise; None: ``corr_time``, as KF-GINS).
+    accel_misalignment_std : float
+        σ of each off-diagonal element of the accelerometer triad's scale-misalignment matrix, rad (>= 0; 0: none).
+        Not a state: the accelerometers' axes are off the IMU's nominal ones by that much, so the roll and pitch
+        the filter levels to are off by it too (a tilt of ``m_yz`` about x and ``m_xz`` about y for a level IMU,
+        Groves 2013, §4.4.2), and nothing the filter measures tells it apart.  The reported covariance
+        (``GinsResult.cov_nav``, ``cov_diag``, the smoothed track's) adds ``σ²`` to the north and east attitude
+        errors: a consumer MEMS triad's 0.2° is ten times the σ the filter reaches on its own.  A log run
+        (:func:`imunav.ins.gins.logrun.run_log`: a real IMU whose axes nobody calibrated) takes it from its preset
+        (:func:`misalignment_std`); a run on a calibrated IMU, or one whose accelerometer biases are free to absorb
+        the tilt (a static alignment), leaves it at 0.
     declination : float
         Magnetic declination, rad (east positive), for the magnetometer heading.
     mag_heading_noise_std : float
@@ -217,6 +247,7 @@ class GinsConfig:
     zaru_noise_std: float = 1e-4
     baro_noise_std: float = 2.0
     scale_corr_time: float | None = None
+    accel_misalignment_std: float = 0.0
     declination: float = 0.0
     mag_heading_noise_std: float = 0.02
     dual_antenna_baseline: ArrayLike | None = None
@@ -307,6 +338,9 @@ class GinsConfig:
                                     f"{self.gate_max_rejections!r}")
         if not (0 <= self.gate_alpha < 1):
             raise InvalidInputError(f"GinsConfig.gate_alpha must be in [0, 1); got {self.gate_alpha!r}")
+        if not (np.isfinite(self.accel_misalignment_std) and self.accel_misalignment_std >= 0):
+            raise InvalidInputError(f"GinsConfig.accel_misalignment_std must be >= 0 rad, finite; got "
+                                    f"{self.accel_misalignment_std!r}")
         if self.scale_corr_time is not None and not (self.scale_corr_time > 0):
             raise InvalidInputError(f"GinsConfig.scale_corr_time must be > 0 s (inf: constant) or None; "
                                     f"got {self.scale_corr_time!r}")

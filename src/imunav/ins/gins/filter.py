@@ -29,6 +29,7 @@ True
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from collections.abc import Callable
 from dataclasses import dataclass, field
@@ -794,6 +795,13 @@ class GinsFilter:
                                   o.rec_ppost[:r], o.rec_inj[:r], o.rec_state[:r])
             if progress is not None:
                 progress(total, total)
+        cov_diag, cov_nav = o.cov_diag[:m], o.cov_nav[:m]
+        if c.accel_misalignment_std > 0:  # the tilt of the accelerometers' axes, which no state holds
+            cov_diag, cov_nav = unmodelled_tilt(cov_diag, c.accel_misalignment_std), unmodelled_tilt(
+                cov_nav, c.accel_misalignment_std)
+            if smoothed is not None:
+                smoothed = dataclasses.replace(smoothed, cov_nav=unmodelled_tilt(smoothed.cov_nav,
+                                                                                 c.accel_misalignment_std))
         nis = np.full((ng, 2), np.nan)
         acc = np.zeros((ng, 2), dtype=bool)
         for col, name in enumerate(aids.TIMED[:2]):
@@ -808,7 +816,7 @@ class GinsFilter:
         col3 = lambda a: xs[:, a:a + 3]  # noqa: E731  (views of the kernel's output, no copies)
         return GinsResult(t, col3(NOM.lla), col3(NOM.vel), xs[:, NOM.q:NOM.q + 4],
                           col3(NOM.gyro_bias), col3(NOM.accel_bias), col3(NOM.gyro_scale), col3(NOM.accel_scale),
-                          xs[:, NOM.odo_scale], o.cov_t[:m], o.cov_diag[:m], o.cov_nav[:m],
+                          xs[:, NOM.odo_scale], o.cov_t[:m], cov_diag, cov_nav,
                           np.zeros(0) if g is None else g.t.copy(), nis,
                           acc, veh.t, veh.nis, veh.dof, veh.accepted, c, meta, smoothed,
                           aids=log.aids, q_vb=xs[:, NOM.q_vb:NOM.q_vb + 4],
@@ -822,6 +830,33 @@ def _sample_nis(log: _Log, name: str, n: int) -> Array:
     member, aid = _SAMPLE_NIS[name]
     group = next(g for g in aids.SAMPLED if member in g)
     return _per_sample(n, log.groups.get(group) if aid is None else log.aids.get(aid))
+
+
+def unmodelled_tilt(cov: Array, std: float) -> Array:
+    """A copy of covariance records with ``std²`` added to the north and east attitude errors (entries 6 and 7 of
+    the navigation states): an error of roll and pitch that no state holds, as the tilt an accelerometer triad's
+    axis misalignment leaves (``GinsConfig.accel_misalignment_std``).  Horizontal and isotropic, so the same in
+    every heading.
+
+    Parameters
+    ----------
+    cov : numpy.ndarray, shape (M, n) or (M, n, n)
+        Variances (``cov_diag``) or covariances (``cov_nav``), n >= 8, the attitude errors at 6:9.
+    std : float
+        σ of the tilt per horizontal axis, rad.
+
+    Returns
+    -------
+    numpy.ndarray
+        The records with the tilt's variance added.
+    """
+    out = np.array(cov, dtype=float, copy=True)
+    for a in (6, 7):
+        if out.ndim == 2:
+            out[:, a] += std**2
+        else:
+            out[:, a, a] += std**2
+    return out
 
 
 def _diag(var: Array) -> Array:

@@ -34,7 +34,7 @@ from numpy.typing import NDArray
 from imunav.earth import lla_to_ned, ned_to_lla, normal_gravity
 from imunav.errors import InsufficientDataError, InvalidInputError
 from imunav.ins.gins.alignment import gyro_bias_in_motion
-from imunav.ins.gins.config import GinsConfig
+from imunav.ins.gins.config import GinsConfig, misalignment_std
 from imunav.ins.gins.filter import GinsFilter, kernel_setup
 from imunav.ins.gins.identify import GNSS_BIAS_TAU, gnss_correlated_std, withheld_score, withheld_windows
 from imunav.ins.gins.layout import LAY
@@ -226,7 +226,7 @@ class LogRun(Result):
         """The final mounting as ZYX Euler angles (roll, pitch, yaw of the IMU in the vehicle) and their σ, rad.
 
         The σ maps the filter's mounting-error covariance (small rotations about the vehicle axes), plus the
-        preset's accelerometer axis misalignment (which the filter does not model: the accelerometers' own axes
+        accelerometer axis misalignment (``GinsConfig.accel_misalignment_std``) (which the filter does not model: the accelerometers' own axes
         are off the IMU's nominal ones by that much), through the Jacobian of the Euler angles; zero where the
         mounting was not estimated.
 
@@ -243,9 +243,7 @@ class LogRun(Result):
         im = int(self.state_layout()[LAY.mount])
         if im < 0:
             return e0, np.zeros(3)
-        m = presets.get(self.meta_preset).accel.scale_misalignment
-        off = m - np.diag(np.diag(m))
-        mis = float(np.sqrt(np.mean(off[off != 0] ** 2))) if np.any(off) else 0.0
+        mis = self.config.accel_misalignment_std
         P = np.diag(res.cov_diag[-1, im:im + 3] + mis**2)
         J = np.zeros((3, 3))
         h = 1e-6
@@ -631,6 +629,8 @@ def run_log(src: NavSources, options: LogRunOptions | None = None, *,
         mounting=np.asarray(euler_from_dcm(C_vb), dtype=float), init_pos_std=pos_sd,
         init_vel_std=vel_sd,
         init_att_std=(float(tilt_n[0]), float(tilt_n[1]), max(psi_sd, math.radians(0.5))),
+        # a real IMU's accelerometer axes, which nobody calibrated: the tilt they leave is in the reported σ
+        accel_misalignment_std=misalignment_std(model.accel.scale_misalignment),
         )
     if mount_sd is not None:
         cfg_kw.update(mounting_std=np.maximum(mount_sd, math.radians(0.05)), level_noise_std=LEVEL_STD)

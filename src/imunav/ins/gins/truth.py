@@ -11,15 +11,20 @@ is, per axis:
 * scale-factor errors that are random constants of the initial σ (the presets' scale factors are constants,
   ``scale_corr_time = inf``);
 * an initial position, velocity and attitude error drawn from ``init_pos_std``, ``init_vel_std`` and
-  ``init_att_std`` (attitude: φ about N, E, D with ``C = exp([φ×]) Ĉ``).
+  ``init_att_std`` (attitude: φ about N, E, D with ``C = exp([φ×]) Ĉ``);
+* the accelerometer axes' misalignment, random constants of σ ``accel_misalignment_std`` off the diagonal of the
+  scale-misalignment matrix (no state holds it: the filter adds the tilt it leaves to its reported covariance);
+  drawn from a child of the generator (:meth:`numpy.random.Generator.spawn`), so the other draws are those of a
+  configuration without it.
 
-The presets' flicker noise, misalignment and g-sensitivity are not in the filter's model; a run on
+The presets' flicker noise, gyro misalignment and g-sensitivity are not in the filter's model; a run on
 ``simulate_imu(truth, presets.get(name))`` measures robustness, one on :func:`matched_errors` consistency,
 with :func:`navigation_errors` and :func:`nees_blocks`.
 """
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass
 from typing import Any
 
@@ -74,7 +79,7 @@ def matched_errors(cfg: GinsConfig, rng: np.random.Generator) -> MatchedErrors:
     cfg : GinsConfig
         The filter's configuration.
     rng : numpy.random.Generator
-        Draws the constants (gyro, then accel: bias, then scale factors).  The Gauss–Markov and white noise
+        Draws the constants (gyro, then accel: bias, then scale factors; the misalignment from a child).  The Gauss–Markov and white noise
         sequences are drawn by :func:`imunav.sim.apply_errors` from its own ``rng``.
 
     Returns
@@ -101,6 +106,9 @@ def matched_errors(cfg: GinsConfig, rng: np.random.Generator) -> MatchedErrors:
                       rng)
     acc, sa = _triad(cfg.accel_noise_density, cfg.accel_bias_std, cfg.init_accel_bias_std, cfg.init_accel_scale_std, cfg.corr_time,
                      rng)
+    if cfg.accel_misalignment_std > 0:
+        off = cfg.accel_misalignment_std * rng.spawn(1)[0].standard_normal((3, 3))
+        acc = dataclasses.replace(acc, scale_misalignment=acc.scale_misalignment + off * (1.0 - np.eye(3)))
     return MatchedErrors(ImuErrorModel(gyro=gyro, accel=acc, name="matched to the filter"), sg, sa)
 
 
