@@ -24,8 +24,9 @@ The nominal state is integrated per IMU sample by :func:`imunav.filters._core.st
 every ``cov_step`` samples, at each timed aid's stamp and at each sample that carries a forcing sampled aid
 (barometer, magnetometer) by :func:`imunav.filters._core_gins.propagate_cov_series`.  Timed measurements between
 two IMU samples split the increments at their own stamps.  Every update is one call of the aid models of
-:mod:`imunav.ins.gins.aids` (through :func:`~imunav.ins.gins.aids.evaluate`), then
-:func:`imunav.filters._core.chi2_gate` on the stacked innovation, :func:`imunav.filters._core.joseph_update` and
+:mod:`imunav.ins.gins.aids` (through :func:`~imunav.ins.gins.aids.evaluate_used`, which compiles the models of the
+aids a run uses only), then
+:func:`imunav.filters._core.chi2_gate` on the stacked innovation, :func:`imunav.filters._core.joseph_update_consider` and
 the injection of the error estimate into the nominal state.
 """
 
@@ -44,13 +45,12 @@ from imunav.filters._core import (
     chi2_gate,
     inject_additive,
     inject_attitude_global,
-    joseph_update,
     joseph_update_consider,
     nis,
     strapdown_step_ned,
 )
 from imunav.filters._core_gins import inject_position_lla, propagate_cov_series, write_mat3, write_skew
-from imunav.ins.gins.aids import AID, N_AIDS, ROWS, WIDTH, evaluate
+from imunav.ins.gins.aids import AID, N_AIDS, ROWS, WIDTH, evaluate_used
 from imunav.ins.gins.layout import (
     CARRY,
     CARRY_N,
@@ -169,7 +169,7 @@ def _inject(dx, xs, lay, acc_dx):
     lla = xs[NOM.lla:NOM.lla + 3]
     inject_position_lla(lla, dx, lay[LAY.pos])
     v = xs[NOM.vel:NOM.vel + 3]
-    inject_additive(v, dx, lay[LAY.vel], 3)
+    inject_additive(v, dx, lay[LAY.vel], np.int64(3))
     qn = inject_attitude_global(xs[NOM.q:NOM.q + 4], dx, lay[LAY.att])
     for j in range(4):
         xs[NOM.q + j] = qn[j]
@@ -189,44 +189,45 @@ def _inject(dx, xs, lay, acc_dx):
 
 
 @njit(cache=True)
-def _update(kinds, n_models, zs, rs, xs, ctx, P, prm, lay, acc_dx, blk, force):
+def _update(kinds, n_models, zs, rs, xs, ctx, P, prm, lay, acc_dx, blk, force, use):
     """One (joint) update of ``n_models`` aid models: stack their rows, gate the whole, Joseph update, inject.
 
     ``kinds[i]``, ``zs[i]``, ``rs[i]``: kind, measurement and covariance of model i.  ``blk[i]`` receives the NIS of
     model i's rows alone (the marginal of the joint innovation, χ²(rows) for a consistent filter; record only;
     NaN past ``n_models``).  ``force``: apply the update whatever the gate says (after too many rejections in a
-    row).  Returns (rows, accepted by the gate, NIS).
+    row).  ``use``: the aid set of the run (:func:`imunav.ins.gins.aids.used`).  Returns (rows, accepted by the
+    gate, NIS).
     """
     nx = P.shape[0]
-    m = 0
+    m = np.int64(0)
     for i in range(n_models):
         m += ROWS[kinds[i]]
     H = np.zeros((m, nx))
     R = np.zeros((m, m))
     nu = np.empty(m)
-    row = 0
+    row = np.int64(0)
     for i in range(n_models):
         k = kinds[i]
         # zs[i], rs[i]: the padded measurement and covariance buffers of model i
-        evaluate(k, xs, ctx, zs[i], rs[i], prm[lay[N_LAY + k]:], lay, H, R, nu, row)
+        evaluate_used(use, k, xs, ctx, zs[i], rs[i], prm[lay[N_LAY + k]:], lay, H, R, nu, row)
         row += ROWS[k]
     S0 = H @ P @ H.T + R
     blk[:] = np.nan
-    row = 0
+    row = np.int64(0)
     for i in range(n_models):
         w = ROWS[kinds[i]]
-        blk[i] = nis(nu[row:row + w], S0[row:row + w, row:row + w])
+        # a C-contiguous copy of the block: the one compilation of nis (C layout) that chi2_gate below uses
+        blk[i] = nis(nu[row:row + w], S0[row:row + w, row:row + w].copy())
         row += w
     ok, d = chi2_gate(nu, S0, prm[PRM.gate + m - 1])
     if ok or force:
         if kinds[0] == _GNSS_POS and prm[PRM.gnss_adapt] > 0.0:
             _adapt_gnss_noise(xs, nu, S0, R, prm)
         dx = np.zeros(nx)
-        if lay[LAY.consider] == 0:
-            joseph_update(P, dx, H, R, nu, np.empty(m), np.empty((m, m)))
-        else:
-            joseph_update_consider(P, dx, H, R, nu, np.empty(m), np.empty((m, m)), np.empty((nx, m)),
-                                   _consider_mask(lay, nx))
+        # one update kernel for both cases (an empty mask zeroes no gain row: joseph_update's arithmetic), so that a
+        # first run compiles one Joseph update, not two
+        joseph_update_consider(P, dx, H, R, nu, np.empty(m), np.empty((m, m)), np.empty((nx, m)),
+                               _consider_mask(lay, nx))
         _inject(dx, xs, lay, acc_dx)
     return m, ok, d
 
@@ -398,7 +399,7 @@ def _propagate(xs, carry, t_now, P, prm, lay, F, Q, wb, fb, out, r):
 
 
 @njit(cache=True)
-def gins_run(imu, timed, sampled, xs, P, carry, carry_n, prm, lay, out, first, final):
+def gins_run(imu, timed, sampled, xs, P, carry, carry_n, prm, lay, out, first, final, use):
     """Filter over the IMU samples 1..N-1 (row k: increments over [t[k-1], t[k]]), from the state at t[0].
 
     ``xs`` (nominal state, layout ``NOM``), ``P`` and ``carry`` / ``carry_n`` (covariance clock) are the state at
@@ -407,7 +408,8 @@ def gins_run(imu, timed, sampled, xs, P, carry, carry_n, prm, lay, out, first, f
     (covariance, smoother); ``final``: propagate the covariance at the last sample whatever the clock says.
     Inputs and outputs: :data:`ImuInput`, :data:`TimedInput`, :data:`SampledInput`, :data:`KernelOutput` (smoother
     records of length R > 0 ask for them: per covariance epoch r the transition Φ_r into r, the prior and
-    posterior covariances, the error injected at r and the posterior nominal state).
+    posterior covariances, the error injected at r and the posterior nominal state).  ``use``: the aids the call may
+    apply (:func:`imunav.ins.gins.aids.used`; its type is the set, and the kernel compiles the rows of those aids only).
 
     Returns the numbers of covariance records, smoother epochs and update-log rows written.
     """
@@ -438,13 +440,15 @@ def gins_run(imu, timed, sampled, xs, P, carry, carry_n, prm, lay, out, first, f
     ne = timed.t.shape[0]
     while ei < ne and timed.t[ei] <= t[0]:
         ei += 1  # measurements before the first sample have no state to update (the wrapper trims them)
-    m = 0
-    L = 0
+    # counters start as int64, not as the literal 0: numba would otherwise compile every kernel they are passed to
+    # once more, for the literal (issue 35: a first run compiles each kernel once)
+    m = np.int64(0)
+    L = np.int64(0)
     if first:
         m = _record_cov(out, m, t[0], P)
     acc_dx = np.zeros(nx)
     rec = out.rec_t.shape[0] > 0
-    r = 0
+    r = np.int64(0)
     if rec and first:
         _rec_post(out, r, t[0], P, xs, acc_dx)
     for k in range(1, n):
@@ -483,7 +487,8 @@ def gins_run(imu, timed, sampled, xs, P, carry, carry_n, prm, lay, out, first, f
                 for j in range(3):
                     rs[0, i, j] = timed.r[ei, i, j]
             src = kinds[0]
-            mm, ok, d = _update(kinds, 1, zs, rs, xs, ctx, P, prm, lay, acc_dx, blk, _forced(carry_n, lay, src))
+            mm, ok, d = _update(kinds, np.int64(1), zs, rs, xs, ctx, P, prm, lay, acc_dx, blk, _forced(carry_n, lay, src),
+                                use)
             _count(carry_n, src, ok)
             L = _log(out, L, te, k, ei, mm, ok, d, blk)
             if rec:
@@ -528,7 +533,7 @@ def gins_run(imu, timed, sampled, xs, P, carry, carry_n, prm, lay, out, first, f
                 if nm > 0:
                     src = N_AIDS + g
                     mm, ok, d = _update(kinds, nm, zs, rs, xs, ctx, P, prm, lay, acc_dx, blk,
-                                        _forced(carry_n, lay, src))
+                                        _forced(carry_n, lay, src), use)
                     _count(carry_n, src, ok)
                     # each model's own NIS at its slot position in the group
                     blk_slot[:] = np.nan

@@ -48,10 +48,10 @@ def wheel_velocity(xs, ctx, lay, Hw):
         for j in range(3):
             Hv[i, iv + j] = C[j, i]
     Vx = np.zeros((3, 3))
-    write_skew(v, Vx, 0, 0, 1.0)
+    write_skew(v, Vx, np.int64(0), np.int64(0), 1.0)
     CtV = C.T @ Vx
     Lx = np.zeros((3, 3))
-    write_skew(lever, Lx, 0, 0, 1.0)
+    write_skew(lever, Lx, np.int64(0), np.int64(0), 1.0)
     ia = lay[LAY.att]
     ib = lay[LAY.gyro_bias]
     isg = lay[LAY.gyro_scale]
