@@ -342,16 +342,34 @@ def _step(xs, dth, dv, h, lay, om, wb, fb, work):
     vn = work[10:13]
     llan = work[13:16]
     strapdown_step_ned(q, v, lla, dthc, dvc, h, om, ATT_START, qn, vn, llan)
-    q[:] = qn
-    v[:] = vn
-    lla[:] = llan
+    for j in range(4):  # element by element here and below: a row assignment compiles numba's shape-error message
+        q[j] = qn[j]
+    for j in range(3):
+        v[j] = vn[j]
+        lla[j] = llan[j]
+
+
+@njit(cache=True, inline="always")
+def _copy1(dst, src):
+    """``dst[:] = src`` element by element (a slice assignment compiles numba's shape-error message: seconds of a
+    first run; issue 35)."""
+    for i in range(src.shape[0]):
+        dst[i] = src[i]
+
+
+@njit(cache=True, inline="always")
+def _copy2(dst, src):
+    """``dst[:, :] = src`` element by element (:func:`_copy1`)."""
+    for i in range(src.shape[0]):
+        for j in range(src.shape[1]):
+            dst[i, j] = src[i, j]
 
 
 @njit(cache=True)
 def _rec_post(out, r, tr, P, xs, acc_dx):
     """Smoother record of epoch r after its updates: time, posterior P, injected error (added), nominal state."""
     out.rec_t[r] = tr
-    out.rec_ppost[r] = P
+    _copy2(out.rec_ppost[r], P)
     for j in range(acc_dx.shape[0]):
         out.rec_inj[r, j] += acc_dx[j]
         acc_dx[j] = 0.0
@@ -393,8 +411,8 @@ def _propagate(xs, carry, t_now, P, prm, lay, F, Q, wb, fb, out, r):
                 xs[NOM.gnss_bias + j] *= a
         if out.rec_t.shape[0] > 0 and r + 1 < out.rec_t.shape[0]:
             r += 1
-            out.rec_phi[r] = Phi
-            out.rec_ppri[r] = P
+            _copy2(out.rec_phi[r], Phi)
+            _copy2(out.rec_ppri[r], P)
     return r
 
 
@@ -435,7 +453,7 @@ def gins_run(imu, timed, sampled, xs, P, carry, carry_n, prm, lay, out, first, f
     om = prm[PRM.omega_e]
     cov_step = lay[LAY.cov_step]
     n_slots = sampled.kind.shape[0]
-    out.xs[0] = xs
+    _copy1(out.xs[0], xs)
     ei = 0
     ne = timed.t.shape[0]
     while ei < ne and timed.t[ei] <= t[0]:
@@ -546,5 +564,5 @@ def gins_run(imu, timed, sampled, xs, P, carry, carry_n, prm, lay, out, first, f
             if rec:
                 _rec_post(out, r, t[k], P, xs, acc_dx)
             m = _record_cov(out, m, t[k], P)
-        out.xs[k] = xs
+        _copy1(out.xs[k], xs)
     return m, (r + 1 if rec else 0), L
