@@ -147,6 +147,21 @@ FIGURES: tuple[Figure, ...] = (
         note="needs the package registry or a warm pip cache (a fresh clone, `make run` with PYTHONDONTWRITEBYTECODE=1)",
     ),
     Figure(
+        "first_run_wheel",
+        "| `imunav gins run jackal_test2.bag` (ROS bag, odometer, no GNSS) | 71.4 s CPU | 36.6 s CPU | 3.5 s CPU | | "
+        "`imunav attitude run sample.ulg --filter mekf` (PX4 ULog) | 43.1 s CPU | 12.9 s CPU | 1.8 s CPU |",
+        "{python} benchmarks/bench_first_run.py --wheel", 4.0,
+        values={"gins first CPU s": 36.6, "gins warm CPU s": 3.5, "attitude first CPU s": 12.9,
+                "attitude warm CPU s": 1.8},
+        patterns={"gins first CPU s": r"gins run jackal_test2\.bag\s+[\d.]+\s+([\d.]+)",
+                  "gins warm CPU s": r"gins run jackal_test2\.bag\s+[\d.]+\s+[\d.]+\s+[\d.]+\s+([\d.]+)",
+                  "attitude first CPU s": r"attitude run sample\.ulg\s+[\d.]+\s+([\d.]+)",
+                  "attitude warm CPU s": r"attitude run sample\.ulg\s+[\d.]+\s+[\d.]+\s+[\d.]+\s+([\d.]+)"},
+        info=("gins first CPU s", "gins warm CPU s", "attitude first CPU s", "attitude warm CPU s"),
+        note="issue 35; the 'before' column: the same command on the tree before the first-run work (19d2b2a), same "
+             "machine and load; timings are machine-dependent",
+    ),
+    Figure(
         "ulog_px4_agreement",
         "agrees with PX4's onboard `vehicle_attitude` after 10 s to 0.02° / 0.04° / 0.22° RMS in roll / pitch / yaw",
         "{python} -m pytest tests/io/test_ulog.py -q -s", 1.0,
