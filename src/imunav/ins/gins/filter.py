@@ -672,6 +672,8 @@ class GinsFilter:
         c = np.ascontiguousarray
         t, dth, dv = c(t), c(dth), c(dv)
         chunk = n if progress is None else PROGRESS_CHUNK  # without a report: one call over every sample
+        # a run without timed measurements hands the kernel None: numba compiles no timed update (step: every aid)
+        tin = None if use is not aids.ALL and packed.t.size == 0 else packed
         m = r = L = 0
         a = 0  # each chunk starts at the last sample of the one before (its state)
         while a < n - 1:
@@ -685,7 +687,7 @@ class GinsFilter:
                               log_ok=o.log_ok[L:], log_nis=o.log_nis[L:], log_blk=o.log_blk[L:],
                               **{f: getattr(o, f)[r0:] for f in ("rec_t", "rec_phi", "rec_ppri", "rec_ppost",
                                                                   "rec_inj", "rec_state")})
-            dm, dr, dL = kernels.gins_run(kernels.ImuInput(t[sl], dth[sl], dv[sl]), packed, part, self._xs, self.P,
+            dm, dr, dL = kernels.gins_run(kernels.ImuInput(t[sl], dth[sl], dv[sl]), tin, part, self._xs, self.P,
                                           self._carry, self._carry_n, self._prm, self._lay, view, first and a == 0,
                                           final and b == n - 1, use)
             o.log_k[L:L + dL] += a  # the kernel logs its own sample index

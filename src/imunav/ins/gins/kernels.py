@@ -424,7 +424,8 @@ def gins_run(imu, timed, sampled, xs, P, carry, carry_n, prm, lay, out, first, f
     t[0] and are updated in place, so that consecutive calls continue one filter
     (:meth:`imunav.ins.gins.GinsFilter.step` calls it with N = 2).  ``first``: write the records of t[0]
     (covariance, smoother); ``final``: propagate the covariance at the last sample whatever the clock says.
-    Inputs and outputs: :data:`ImuInput`, :data:`TimedInput`, :data:`SampledInput`, :data:`KernelOutput` (smoother
+    Inputs and outputs: :data:`ImuInput`, :data:`TimedInput` (or None: no timed aid, whose updates numba then does
+    not compile), :data:`SampledInput`, :data:`KernelOutput` (smoother
     records of length R > 0 ask for them: per covariance epoch r the transition Φ_r into r, the prior and
     posterior covariances, the error injected at r and the posterior nominal state).  ``use``: the aids the call may
     apply (:func:`imunav.ins.gins.aids.used`; its type is the set, and the kernel compiles the rows of those aids only).
@@ -454,10 +455,12 @@ def gins_run(imu, timed, sampled, xs, P, carry, carry_n, prm, lay, out, first, f
     cov_step = lay[LAY.cov_step]
     n_slots = sampled.kind.shape[0]
     _copy1(out.xs[0], xs)
-    ei = 0
-    ne = timed.t.shape[0]
-    while ei < ne and timed.t[ei] <= t[0]:
-        ei += 1  # measurements before the first sample have no state to update (the wrapper trims them)
+    ei = np.int64(0)
+    ne = np.int64(0)
+    if timed is not None:  # None (no timed aid): numba drops the timed updates from what it compiles
+        ne = timed.t.shape[0]
+        while ei < ne and timed.t[ei] <= t[0]:
+            ei += 1  # measurements before the first sample have no state to update (the wrapper trims them)
     # counters start as int64, not as the literal 0: numba would otherwise compile every kernel they are passed to
     # once more, for the literal (issue 35: a first run compiles each kernel once)
     m = np.int64(0)
@@ -475,43 +478,44 @@ def gins_run(imu, timed, sampled, xs, P, carry, carry_n, prm, lay, out, first, f
             rem_th[j] = imu.dtheta[k, j]
             rem_v[j] = imu.dvel[k, j]
         # timed measurements inside (t[k-1], t[k]]: integrate to their stamp, propagate P, update
-        while ei < ne and timed.t[ei] <= t[k]:
-            te = timed.t[ei]
-            hh = te - t_cur
-            if hh > 0.0:
-                frac = hh / (t[k] - t_cur)
+        if timed is not None:
+            while ei < ne and timed.t[ei] <= t[k]:
+                te = timed.t[ei]
+                hh = te - t_cur
+                if hh > 0.0:
+                    frac = hh / (t[k] - t_cur)
+                    for j in range(3):
+                        pth[j] = frac * rem_th[j]
+                        pv[j] = frac * rem_v[j]
+                        rem_th[j] -= pth[j]
+                        rem_v[j] -= pv[j]
+                    _step(xs, pth, pv, hh, lay, om, wb, fb, work)
+                    for j in range(3):
+                        carry[CARRY.sum_w + j] += wb[j] * hh
+                        carry[CARRY.sum_f + j] += fb[j] * hh
+                    t_cur = te
+                if t_cur - carry[CARRY.t_cov] > 0.0:
+                    r = _propagate(xs, carry, t_cur, P, prm, lay, F, Q, wb, fb, out, r)
+                    carry[CARRY.t_cov] = t_cur
+                    for j in range(3):
+                        carry[CARRY.sum_w + j] = 0.0
+                        carry[CARRY.sum_f + j] = 0.0
+                    carry_n[CARRY_N.n_cov] = 0
                 for j in range(3):
-                    pth[j] = frac * rem_th[j]
-                    pv[j] = frac * rem_v[j]
-                    rem_th[j] -= pth[j]
-                    rem_v[j] -= pv[j]
-                _step(xs, pth, pv, hh, lay, om, wb, fb, work)
-                for j in range(3):
-                    carry[CARRY.sum_w + j] += wb[j] * hh
-                    carry[CARRY.sum_f + j] += fb[j] * hh
-                t_cur = te
-            if t_cur - carry[CARRY.t_cov] > 0.0:
-                r = _propagate(xs, carry, t_cur, P, prm, lay, F, Q, wb, fb, out, r)
-                carry[CARRY.t_cov] = t_cur
-                for j in range(3):
-                    carry[CARRY.sum_w + j] = 0.0
-                    carry[CARRY.sum_f + j] = 0.0
-                carry_n[CARRY_N.n_cov] = 0
-            for j in range(3):
-                ctx[CTX.w_mean + j] = wb[j]
-            kinds[0] = timed.kind[ei]
-            for i in range(3):
-                zs[0, i] = timed.z[ei, i]
-                for j in range(3):
-                    rs[0, i, j] = timed.r[ei, i, j]
-            src = kinds[0]
-            mm, ok, d = _update(kinds, np.int64(1), zs, rs, xs, ctx, P, prm, lay, acc_dx, blk, _forced(carry_n, lay, src),
-                                use)
-            _count(carry_n, src, ok)
-            L = _log(out, L, te, k, ei, mm, ok, d, blk)
-            if rec:
-                _rec_post(out, r, t_cur, P, xs, acc_dx)
-            ei += 1
+                    ctx[CTX.w_mean + j] = wb[j]
+                kinds[0] = timed.kind[ei]
+                for i in range(3):
+                    zs[0, i] = timed.z[ei, i]
+                    for j in range(3):
+                        rs[0, i, j] = timed.r[ei, i, j]
+                src = kinds[0]
+                mm, ok, d = _update(kinds, np.int64(1), zs, rs, xs, ctx, P, prm, lay, acc_dx, blk,
+                                    _forced(carry_n, lay, src), use)
+                _count(carry_n, src, ok)
+                L = _log(out, L, te, k, ei, mm, ok, d, blk)
+                if rec:
+                    _rec_post(out, r, t_cur, P, xs, acc_dx)
+                ei += 1
         hh = t[k] - t_cur
         if hh > 0.0:
             _step(xs, rem_th, rem_v, hh, lay, om, wb, fb, work)
