@@ -148,16 +148,15 @@ FIGURES: tuple[Figure, ...] = (
     ),
     Figure(
         "first_run_wheel",
-        "| `imunav gins run jackal_test2.bag` (ROS bag, odometer, no GNSS) | 71.4 s CPU | 36.6 s CPU | 3.5 s CPU | | "
-        "`imunav attitude run sample.ulg --filter mekf` (PX4 ULog) | 43.1 s CPU | 12.9 s CPU | 1.8 s CPU |",
+        "| `imunav gins run jackal_test2.bag` (ROS bag, odometer, no GNSS) | 79.0 s | 46.7 s | 5.0 s | | "
+        "`imunav attitude run sample.ulg --filter mekf` (PX4 ULog) | 46.6 s | 15.6 s | 2.5 s |",
         "{python} benchmarks/bench_first_run.py --wheel", 4.0,
-        values={"gins first CPU s": 36.6, "gins warm CPU s": 3.5, "attitude first CPU s": 12.9,
-                "attitude warm CPU s": 1.8},
-        patterns={"gins first CPU s": r"gins run jackal_test2\.bag\s+[\d.]+\s+([\d.]+)",
-                  "gins warm CPU s": r"gins run jackal_test2\.bag\s+[\d.]+\s+[\d.]+\s+[\d.]+\s+([\d.]+)",
-                  "attitude first CPU s": r"attitude run sample\.ulg\s+[\d.]+\s+([\d.]+)",
-                  "attitude warm CPU s": r"attitude run sample\.ulg\s+[\d.]+\s+[\d.]+\s+[\d.]+\s+([\d.]+)"},
-        info=("gins first CPU s", "gins warm CPU s", "attitude first CPU s", "attitude warm CPU s"),
+        values={"gins first s": 46.7, "gins warm s": 5.0, "attitude first s": 15.6, "attitude warm s": 2.5},
+        patterns={"gins first s": r"gins run jackal_test2\.bag\s+([\d.]+)",
+                  "gins warm s": r"gins run jackal_test2\.bag\s+[\d.]+\s+[\d.]+\s+([\d.]+)",
+                  "attitude first s": r"attitude run sample\.ulg\s+([\d.]+)",
+                  "attitude warm s": r"attitude run sample\.ulg\s+[\d.]+\s+[\d.]+\s+([\d.]+)"},
+        info=("gins first s", "gins warm s", "attitude first s", "attitude warm s"),
         note="issue 35; the 'before' column: the same command on the tree before the first-run work (19d2b2a), same "
              "machine and load; timings are machine-dependent",
     ),
