@@ -147,6 +147,20 @@ FIGURES: tuple[Figure, ...] = (
         note="needs the package registry or a warm pip cache (a fresh clone, `make run` with PYTHONDONTWRITEBYTECODE=1)",
     ),
     Figure(
+        "first_run_wheel",
+        "| `imunav gins run jackal_test2.bag` (ROS bag, odometer, no GNSS) | 79.0 s | 46.7 s | 5.0 s | | "
+        "`imunav attitude run sample.ulg --filter mekf` (PX4 ULog) | 46.6 s | 15.6 s | 2.5 s |",
+        "{python} benchmarks/bench_first_run.py --wheel", 4.0,
+        values={"gins first s": 46.7, "gins warm s": 5.0, "attitude first s": 15.6, "attitude warm s": 2.5},
+        patterns={"gins first s": r"gins run jackal_test2\.bag\s+([\d.]+)",
+                  "gins warm s": r"gins run jackal_test2\.bag\s+[\d.]+\s+[\d.]+\s+([\d.]+)",
+                  "attitude first s": r"attitude run sample\.ulg\s+([\d.]+)",
+                  "attitude warm s": r"attitude run sample\.ulg\s+[\d.]+\s+[\d.]+\s+([\d.]+)"},
+        info=("gins first s", "gins warm s", "attitude first s", "attitude warm s"),
+        note="issue 35; the 'before' column: the same command on the tree before the first-run work (19d2b2a), same "
+             "machine and load; timings are machine-dependent",
+    ),
+    Figure(
         "ulog_px4_agreement",
         "agrees with PX4's onboard `vehicle_attitude` after 10 s to 0.02° / 0.04° / 0.22° RMS in roll / pitch / yaw",
         "{python} -m pytest tests/io/test_ulog.py -q -s", 1.0,

@@ -216,9 +216,12 @@ def quat_from_dcm_1(C):
         out[2] = (C[1, 2] + C[2, 1]) / s
         out[3] = 0.25 * s
     if _needs_flip(out[0], out[1], out[2], out[3]):
-        out = -out
+        for j in range(4):
+            out[j] = -out[j]
     n = math.sqrt(out[0] ** 2 + out[1] ** 2 + out[2] ** 2 + out[3] ** 2)
-    return out / n
+    for j in range(4):  # element by element: no array expression to compile
+        out[j] /= n
+    return out
 
 
 @njit(cache=True)
@@ -263,12 +266,20 @@ def euler_from_dcm_1(C):
 
 
 # ---- batch kernels --------------------------------------------------------
+@njit(cache=True, inline="always")
+def _row(out, i, x):
+    """``out[i] = x`` element by element: numba compiles a row assignment with its shape check and error message
+    (seconds of compilation in every process that compiles one; issue 35, a first run), a loop without."""
+    for j in range(x.shape[0]):
+        out[i, j] = x[j]
+
+
 @njit(cache=True)
 def qmul_n(p, q):
     n = max(p.shape[0], q.shape[0])
     out = np.empty((n, 4))
     for i in range(n):
-        out[i] = qmul_1(p[i if p.shape[0] > 1 else 0], q[i if q.shape[0] > 1 else 0])
+        _row(out, i, qmul_1(p[i if p.shape[0] > 1 else 0], q[i if q.shape[0] > 1 else 0]))
     return out
 
 
@@ -277,7 +288,7 @@ def qrot_n(q, v):
     n = max(q.shape[0], v.shape[0])
     out = np.empty((n, 3))
     for i in range(n):
-        out[i] = qrot_1(q[i if q.shape[0] > 1 else 0], v[i if v.shape[0] > 1 else 0])
+        _row(out, i, qrot_1(q[i if q.shape[0] > 1 else 0], v[i if v.shape[0] > 1 else 0]))
     return out
 
 
@@ -285,7 +296,7 @@ def qrot_n(q, v):
 def qexp_n(r):
     out = np.empty((r.shape[0], 4))
     for i in range(r.shape[0]):
-        out[i] = qexp_1(r[i])
+        _row(out, i, qexp_1(r[i]))
     return out
 
 
@@ -293,7 +304,7 @@ def qexp_n(r):
 def qlog_n(q):
     out = np.empty((q.shape[0], 3))
     for i in range(q.shape[0]):
-        out[i] = qlog_1(q[i])
+        _row(out, i, qlog_1(q[i]))
     return out
 
 
@@ -301,7 +312,8 @@ def qlog_n(q):
 def dcm_from_quat_n(q):
     out = np.empty((q.shape[0], 3, 3))
     for i in range(q.shape[0]):
-        out[i] = dcm_from_quat_1(q[i])
+        (out[i, 0, 0], out[i, 0, 1], out[i, 0, 2], out[i, 1, 0], out[i, 1, 1], out[i, 1, 2],
+         out[i, 2, 0], out[i, 2, 1], out[i, 2, 2]) = dcm_from_quat_t(q[i, 0], q[i, 1], q[i, 2], q[i, 3])  # fmt: skip
     return out
 
 
@@ -309,7 +321,7 @@ def dcm_from_quat_n(q):
 def quat_from_dcm_n(C):
     out = np.empty((C.shape[0], 4))
     for i in range(C.shape[0]):
-        out[i] = quat_from_dcm_1(C[i])
+        _row(out, i, quat_from_dcm_1(C[i]))
     return out
 
 
@@ -317,7 +329,7 @@ def quat_from_dcm_n(C):
 def quat_from_euler_n(e):
     out = np.empty((e.shape[0], 4))
     for i in range(e.shape[0]):
-        out[i] = quat_from_euler_1(e[i, 0], e[i, 1], e[i, 2])
+        _row(out, i, quat_from_euler_1(e[i, 0], e[i, 1], e[i, 2]))
     return out
 
 
@@ -325,7 +337,7 @@ def quat_from_euler_n(e):
 def euler_from_dcm_n(C):
     out = np.empty((C.shape[0], 3))
     for i in range(C.shape[0]):
-        out[i] = euler_from_dcm_1(C[i])
+        _row(out, i, euler_from_dcm_1(C[i]))
     return out
 
 

@@ -960,32 +960,53 @@ def _mekf_loop_store(q, b, P, P0, gyr, acc, mag, dt, p, out, scratch, stored):
         Pu[k] = P
 
 
-@njit(cache=True, nogil=True)
 def mekf_run(q0, b0, P0, gyr, acc, mag, dt, p, store):
     """Run the MEKF over a recording (releases the GIL: recordings can run on threads side by side).
 
     Returns q (N,4), b (N,3), Pdiag (N,6), flags (N,), nis (N,), dof (N,), and
-    when ``store``: P after update (N,6,6), P predicted (N,6,6), Φ (N,6,6).
+    when ``store``: P after update (N,6,6), P predicted (N,6,6), Φ (N,6,6) (else three (1,6,6) placeholders).
+
+    Two kernels, one per value of ``store`` (:func:`_mekf_run_store`, :func:`_mekf_run_plain`): a run compiles
+    only the loop it uses, half the compilation of one kernel holding both loops (issue 35, a first run).
     """
-    n = gyr.shape[0]
-    qs = np.empty((n, 4))
-    bs = np.empty((n, 3))
-    pd = np.empty((n, 6))
-    flags = np.zeros(n, np.int64)
-    nis = np.zeros(n)
-    dof = np.zeros(n)
-    m = n if store else 1
-    Pu = np.empty((m, 6, 6))
-    Pp = np.empty((m, 6, 6))
-    Ph = np.empty((m, 6, 6))
+    if store:
+        return _mekf_run_store(q0, b0, P0, gyr, acc, mag, dt, p)
+    return _mekf_run_plain(q0, b0, P0, gyr, acc, mag, dt, p)
+
+
+@njit(cache=True, nogil=True)
+def _mekf_outputs(n, m):
+    """The outputs of :func:`mekf_run` for ``n`` samples (``m`` stored covariances: n or 1)."""
+    return (np.empty((n, 4)), np.empty((n, 3)), np.empty((n, 6)), np.zeros(n, np.int64), np.zeros(n), np.zeros(n),
+            np.empty((m, 6, 6)), np.empty((m, 6, 6)), np.empty((m, 6, 6)))
+
+
+@njit(cache=True, nogil=True)
+def _mekf_scratch():
+    """The adaptive state and :func:`mekf_core`'s buffers, ``(st, phi, W, dx, H, PH)``."""
+    return np.zeros(N_STATE), np.empty((6, 6)), np.empty((6, 6)), np.zeros(6), np.empty(6), np.empty(6)
+
+
+@njit(cache=True, nogil=True)
+def _mekf_run_plain(q0, b0, P0, gyr, acc, mag, dt, p):
+    """:func:`mekf_run` without stored covariances."""
+    qs, bs, pd, flags, nis, dof, Pu, Pp, Ph = _mekf_outputs(gyr.shape[0], 1)
     q = q0.copy()
     b = b0.copy()
     P = P0.copy()
-    scratch = (np.zeros(N_STATE), np.empty((6, 6)), np.empty((6, 6)), np.zeros(6), np.empty(6), np.empty(6))
-    if store:
-        _mekf_loop_store(q, b, P, P0, gyr, acc, mag, dt, p, (qs, bs, pd, flags, nis, dof), scratch, (Pu, Pp, Ph))
-    else:
-        _mekf_loop(q, b, P, gyr, acc, mag, dt, p, (qs, bs, pd, flags, nis, dof), scratch)
+    _mekf_loop(q, b, P, gyr, acc, mag, dt, p, (qs, bs, pd, flags, nis, dof), _mekf_scratch())
+    return qs, bs, pd, flags, nis, dof, Pu, Pp, Ph
+
+
+@njit(cache=True, nogil=True)
+def _mekf_run_store(q0, b0, P0, gyr, acc, mag, dt, p):
+    """:func:`mekf_run` with the covariances stored for the smoother."""
+    qs, bs, pd, flags, nis, dof, Pu, Pp, Ph = _mekf_outputs(gyr.shape[0], gyr.shape[0])
+    q = q0.copy()
+    b = b0.copy()
+    P = P0.copy()
+    _mekf_loop_store(q, b, P, P0, gyr, acc, mag, dt, p, (qs, bs, pd, flags, nis, dof), _mekf_scratch(),
+                     (Pu, Pp, Ph))
     return qs, bs, pd, flags, nis, dof, Pu, Pp, Ph
 
 

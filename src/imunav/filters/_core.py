@@ -337,7 +337,10 @@ def _joseph(P, dx, H, R, nu, innov_out, S_out, K_out, consider):
             S_out[i, j] = acc
     Si = np.empty((m, m))
     inv_small(S_out, Si)
-    K_out[:, :] = PHt @ Si
+    PS = PHt @ Si
+    for i in range(n):  # element by element: a slice assignment compiles numba's shape-error message
+        for j in range(m):
+            K_out[i, j] = PS[i, j]
     for i in range(consider.shape[0]):
         if consider[i]:
             for j in range(m):

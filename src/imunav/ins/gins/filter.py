@@ -655,12 +655,14 @@ class GinsFilter:
 
     def _kernel(self, t: Array, dth: Array, dv: Array, timed: tuple[kernels.TimedInput, Any, Any],
                 sampled: kernels.SampledInput, nrec: int, first: bool, final: bool,
-                progress: Callable[[int, int], None] | None = None) -> tuple[_Log, Any]:
+                progress: Callable[[int, int], None] | None = None, use: tuple = aids.ALL) -> tuple[_Log, Any]:
         """The kernel from the current state over ``t`` (the state at t[0]), in place.
 
         With ``progress`` the samples go through in chunks of :data:`PROGRESS_CHUNK`, ``progress(done, n)`` after
         each: one kernel carries its state (nominal, covariance, clock) from call to call, and each chunk writes
-        into its own slice of the one set of outputs, so the result is the one of a single call, bit for bit."""
+        into its own slice of the one set of outputs, so the result is the one of a single call, bit for bit.
+        ``use``: the aids the kernel may apply (:func:`imunav.ins.gins.aids.used`; the kernel is compiled once per
+        set, with those aids' models only): every aid by default (:meth:`step`), those of its inputs for :meth:`run`."""
         packed, kind, src = timed
         n, nx = t.size, self.P.shape[0]
         cs = int(self._lay[LAY.cov_step])
@@ -671,6 +673,8 @@ class GinsFilter:
         c = np.ascontiguousarray
         t, dth, dv = c(t), c(dth), c(dv)
         chunk = n if progress is None else PROGRESS_CHUNK  # without a report: one call over every sample
+        # a run without timed measurements hands the kernel None: numba compiles no timed update (step: every aid)
+        tin = None if use is not aids.ALL and packed.t.size == 0 else packed
         m = r = L = 0
         a = 0  # each chunk starts at the last sample of the one before (its state)
         while a < n - 1:
@@ -684,9 +688,9 @@ class GinsFilter:
                               log_ok=o.log_ok[L:], log_nis=o.log_nis[L:], log_blk=o.log_blk[L:],
                               **{f: getattr(o, f)[r0:] for f in ("rec_t", "rec_phi", "rec_ppri", "rec_ppost",
                                                                   "rec_inj", "rec_state")})
-            dm, dr, dL = kernels.gins_run(kernels.ImuInput(t[sl], dth[sl], dv[sl]), packed, part, self._xs, self.P,
+            dm, dr, dL = kernels.gins_run(kernels.ImuInput(t[sl], dth[sl], dv[sl]), tin, part, self._xs, self.P,
                                           self._carry, self._carry_n, self._prm, self._lay, view, first and a == 0,
-                                          final and b == n - 1)
+                                          final and b == n - 1, use)
             o.log_k[L:L + dL] += a  # the kernel logs its own sample index
             m, L = m + dm, L + dL
             r = r0 + dr if nrec else 0
@@ -784,8 +788,10 @@ class GinsFilter:
         sampled = self._sampled(t, odo, st, hb, mg, odo_var, fix_age=age)
         nrec = (n // int(self._lay[LAY.cov_step]) + ng + 3 + int(np.count_nonzero(sampled.force))) if smoother else 0
         total = 2 * n if smoother else n
+        # the kernel compiled for the aids of these inputs only (a run without GNSS compiles no GNSS update)
+        use = aids.used(np.r_[timed[1], sampled.kind])
         log, (o, m, r) = self._kernel(t, dth, dv, timed, sampled, nrec, True, True,
-                                      None if progress is None else (lambda done, _n: progress(done, total)))
+                                      None if progress is None else (lambda done, _n: progress(done, total)), use)
         self.t = float(t[-1])
         self._prev = np.vstack([imu.dtheta[-1], imu.dvel[-1]]) if isinstance(imu, ImuIncrements) else np.zeros((2, 3))
         smoothed = None

@@ -24,8 +24,9 @@ The nominal state is integrated per IMU sample by :func:`imunav.filters._core.st
 every ``cov_step`` samples, at each timed aid's stamp and at each sample that carries a forcing sampled aid
 (barometer, magnetometer) by :func:`imunav.filters._core_gins.propagate_cov_series`.  Timed measurements between
 two IMU samples split the increments at their own stamps.  Every update is one call of the aid models of
-:mod:`imunav.ins.gins.aids` (through :func:`~imunav.ins.gins.aids.evaluate`), then
-:func:`imunav.filters._core.chi2_gate` on the stacked innovation, :func:`imunav.filters._core.joseph_update` and
+:mod:`imunav.ins.gins.aids` (through :func:`~imunav.ins.gins.aids.evaluate_used`, which compiles the models of the
+aids a run uses only), then
+:func:`imunav.filters._core.chi2_gate` on the stacked innovation, :func:`imunav.filters._core.joseph_update_consider` and
 the injection of the error estimate into the nominal state.
 """
 
@@ -44,13 +45,12 @@ from imunav.filters._core import (
     chi2_gate,
     inject_additive,
     inject_attitude_global,
-    joseph_update,
     joseph_update_consider,
     nis,
     strapdown_step_ned,
 )
 from imunav.filters._core_gins import inject_position_lla, propagate_cov_series, write_mat3, write_skew
-from imunav.ins.gins.aids import AID, N_AIDS, ROWS, WIDTH, evaluate
+from imunav.ins.gins.aids import AID, N_AIDS, ROWS, WIDTH, evaluate_used
 from imunav.ins.gins.layout import (
     CARRY,
     CARRY_N,
@@ -169,7 +169,7 @@ def _inject(dx, xs, lay, acc_dx):
     lla = xs[NOM.lla:NOM.lla + 3]
     inject_position_lla(lla, dx, lay[LAY.pos])
     v = xs[NOM.vel:NOM.vel + 3]
-    inject_additive(v, dx, lay[LAY.vel], 3)
+    inject_additive(v, dx, lay[LAY.vel], np.int64(3))
     qn = inject_attitude_global(xs[NOM.q:NOM.q + 4], dx, lay[LAY.att])
     for j in range(4):
         xs[NOM.q + j] = qn[j]
@@ -189,44 +189,45 @@ def _inject(dx, xs, lay, acc_dx):
 
 
 @njit(cache=True)
-def _update(kinds, n_models, zs, rs, xs, ctx, P, prm, lay, acc_dx, blk, force):
+def _update(kinds, n_models, zs, rs, xs, ctx, P, prm, lay, acc_dx, blk, force, use):
     """One (joint) update of ``n_models`` aid models: stack their rows, gate the whole, Joseph update, inject.
 
     ``kinds[i]``, ``zs[i]``, ``rs[i]``: kind, measurement and covariance of model i.  ``blk[i]`` receives the NIS of
     model i's rows alone (the marginal of the joint innovation, χ²(rows) for a consistent filter; record only;
     NaN past ``n_models``).  ``force``: apply the update whatever the gate says (after too many rejections in a
-    row).  Returns (rows, accepted by the gate, NIS).
+    row).  ``use``: the aid set of the run (:func:`imunav.ins.gins.aids.used`).  Returns (rows, accepted by the
+    gate, NIS).
     """
     nx = P.shape[0]
-    m = 0
+    m = np.int64(0)
     for i in range(n_models):
         m += ROWS[kinds[i]]
     H = np.zeros((m, nx))
     R = np.zeros((m, m))
     nu = np.empty(m)
-    row = 0
+    row = np.int64(0)
     for i in range(n_models):
         k = kinds[i]
         # zs[i], rs[i]: the padded measurement and covariance buffers of model i
-        evaluate(k, xs, ctx, zs[i], rs[i], prm[lay[N_LAY + k]:], lay, H, R, nu, row)
+        evaluate_used(use, k, xs, ctx, zs[i], rs[i], prm[lay[N_LAY + k]:], lay, H, R, nu, row)
         row += ROWS[k]
     S0 = H @ P @ H.T + R
     blk[:] = np.nan
-    row = 0
+    row = np.int64(0)
     for i in range(n_models):
         w = ROWS[kinds[i]]
-        blk[i] = nis(nu[row:row + w], S0[row:row + w, row:row + w])
+        # a C-contiguous copy of the block: the one compilation of nis (C layout) that chi2_gate below uses
+        blk[i] = nis(nu[row:row + w], S0[row:row + w, row:row + w].copy())
         row += w
     ok, d = chi2_gate(nu, S0, prm[PRM.gate + m - 1])
     if ok or force:
         if kinds[0] == _GNSS_POS and prm[PRM.gnss_adapt] > 0.0:
             _adapt_gnss_noise(xs, nu, S0, R, prm)
         dx = np.zeros(nx)
-        if lay[LAY.consider] == 0:
-            joseph_update(P, dx, H, R, nu, np.empty(m), np.empty((m, m)))
-        else:
-            joseph_update_consider(P, dx, H, R, nu, np.empty(m), np.empty((m, m)), np.empty((nx, m)),
-                                   _consider_mask(lay, nx))
+        # one update kernel for both cases (an empty mask zeroes no gain row: joseph_update's arithmetic), so that a
+        # first run compiles one Joseph update, not two
+        joseph_update_consider(P, dx, H, R, nu, np.empty(m), np.empty((m, m)), np.empty((nx, m)),
+                               _consider_mask(lay, nx))
         _inject(dx, xs, lay, acc_dx)
     return m, ok, d
 
@@ -341,16 +342,34 @@ def _step(xs, dth, dv, h, lay, om, wb, fb, work):
     vn = work[10:13]
     llan = work[13:16]
     strapdown_step_ned(q, v, lla, dthc, dvc, h, om, ATT_START, qn, vn, llan)
-    q[:] = qn
-    v[:] = vn
-    lla[:] = llan
+    for j in range(4):  # element by element here and below: a row assignment compiles numba's shape-error message
+        q[j] = qn[j]
+    for j in range(3):
+        v[j] = vn[j]
+        lla[j] = llan[j]
+
+
+@njit(cache=True, inline="always")
+def _copy1(dst, src):
+    """``dst[:] = src`` element by element (a slice assignment compiles numba's shape-error message: seconds of a
+    first run; issue 35)."""
+    for i in range(src.shape[0]):
+        dst[i] = src[i]
+
+
+@njit(cache=True, inline="always")
+def _copy2(dst, src):
+    """``dst[:, :] = src`` element by element (:func:`_copy1`)."""
+    for i in range(src.shape[0]):
+        for j in range(src.shape[1]):
+            dst[i, j] = src[i, j]
 
 
 @njit(cache=True)
 def _rec_post(out, r, tr, P, xs, acc_dx):
     """Smoother record of epoch r after its updates: time, posterior P, injected error (added), nominal state."""
     out.rec_t[r] = tr
-    out.rec_ppost[r] = P
+    _copy2(out.rec_ppost[r], P)
     for j in range(acc_dx.shape[0]):
         out.rec_inj[r, j] += acc_dx[j]
         acc_dx[j] = 0.0
@@ -392,22 +411,24 @@ def _propagate(xs, carry, t_now, P, prm, lay, F, Q, wb, fb, out, r):
                 xs[NOM.gnss_bias + j] *= a
         if out.rec_t.shape[0] > 0 and r + 1 < out.rec_t.shape[0]:
             r += 1
-            out.rec_phi[r] = Phi
-            out.rec_ppri[r] = P
+            _copy2(out.rec_phi[r], Phi)
+            _copy2(out.rec_ppri[r], P)
     return r
 
 
 @njit(cache=True)
-def gins_run(imu, timed, sampled, xs, P, carry, carry_n, prm, lay, out, first, final):
+def gins_run(imu, timed, sampled, xs, P, carry, carry_n, prm, lay, out, first, final, use):
     """Filter over the IMU samples 1..N-1 (row k: increments over [t[k-1], t[k]]), from the state at t[0].
 
     ``xs`` (nominal state, layout ``NOM``), ``P`` and ``carry`` / ``carry_n`` (covariance clock) are the state at
     t[0] and are updated in place, so that consecutive calls continue one filter
     (:meth:`imunav.ins.gins.GinsFilter.step` calls it with N = 2).  ``first``: write the records of t[0]
     (covariance, smoother); ``final``: propagate the covariance at the last sample whatever the clock says.
-    Inputs and outputs: :data:`ImuInput`, :data:`TimedInput`, :data:`SampledInput`, :data:`KernelOutput` (smoother
+    Inputs and outputs: :data:`ImuInput`, :data:`TimedInput` (or None: no timed aid, whose updates numba then does
+    not compile), :data:`SampledInput`, :data:`KernelOutput` (smoother
     records of length R > 0 ask for them: per covariance epoch r the transition Φ_r into r, the prior and
-    posterior covariances, the error injected at r and the posterior nominal state).
+    posterior covariances, the error injected at r and the posterior nominal state).  ``use``: the aids the call may
+    apply (:func:`imunav.ins.gins.aids.used`; its type is the set, and the kernel compiles the rows of those aids only).
 
     Returns the numbers of covariance records, smoother epochs and update-log rows written.
     """
@@ -433,18 +454,22 @@ def gins_run(imu, timed, sampled, xs, P, carry, carry_n, prm, lay, out, first, f
     om = prm[PRM.omega_e]
     cov_step = lay[LAY.cov_step]
     n_slots = sampled.kind.shape[0]
-    out.xs[0] = xs
-    ei = 0
-    ne = timed.t.shape[0]
-    while ei < ne and timed.t[ei] <= t[0]:
-        ei += 1  # measurements before the first sample have no state to update (the wrapper trims them)
-    m = 0
-    L = 0
+    _copy1(out.xs[0], xs)
+    ei = np.int64(0)
+    ne = np.int64(0)
+    if timed is not None:  # None (no timed aid): numba drops the timed updates from what it compiles
+        ne = timed.t.shape[0]
+        while ei < ne and timed.t[ei] <= t[0]:
+            ei += 1  # measurements before the first sample have no state to update (the wrapper trims them)
+    # counters start as int64, not as the literal 0: numba would otherwise compile every kernel they are passed to
+    # once more, for the literal (issue 35: a first run compiles each kernel once)
+    m = np.int64(0)
+    L = np.int64(0)
     if first:
         m = _record_cov(out, m, t[0], P)
     acc_dx = np.zeros(nx)
     rec = out.rec_t.shape[0] > 0
-    r = 0
+    r = np.int64(0)
     if rec and first:
         _rec_post(out, r, t[0], P, xs, acc_dx)
     for k in range(1, n):
@@ -453,42 +478,44 @@ def gins_run(imu, timed, sampled, xs, P, carry, carry_n, prm, lay, out, first, f
             rem_th[j] = imu.dtheta[k, j]
             rem_v[j] = imu.dvel[k, j]
         # timed measurements inside (t[k-1], t[k]]: integrate to their stamp, propagate P, update
-        while ei < ne and timed.t[ei] <= t[k]:
-            te = timed.t[ei]
-            hh = te - t_cur
-            if hh > 0.0:
-                frac = hh / (t[k] - t_cur)
+        if timed is not None:
+            while ei < ne and timed.t[ei] <= t[k]:
+                te = timed.t[ei]
+                hh = te - t_cur
+                if hh > 0.0:
+                    frac = hh / (t[k] - t_cur)
+                    for j in range(3):
+                        pth[j] = frac * rem_th[j]
+                        pv[j] = frac * rem_v[j]
+                        rem_th[j] -= pth[j]
+                        rem_v[j] -= pv[j]
+                    _step(xs, pth, pv, hh, lay, om, wb, fb, work)
+                    for j in range(3):
+                        carry[CARRY.sum_w + j] += wb[j] * hh
+                        carry[CARRY.sum_f + j] += fb[j] * hh
+                    t_cur = te
+                if t_cur - carry[CARRY.t_cov] > 0.0:
+                    r = _propagate(xs, carry, t_cur, P, prm, lay, F, Q, wb, fb, out, r)
+                    carry[CARRY.t_cov] = t_cur
+                    for j in range(3):
+                        carry[CARRY.sum_w + j] = 0.0
+                        carry[CARRY.sum_f + j] = 0.0
+                    carry_n[CARRY_N.n_cov] = 0
                 for j in range(3):
-                    pth[j] = frac * rem_th[j]
-                    pv[j] = frac * rem_v[j]
-                    rem_th[j] -= pth[j]
-                    rem_v[j] -= pv[j]
-                _step(xs, pth, pv, hh, lay, om, wb, fb, work)
-                for j in range(3):
-                    carry[CARRY.sum_w + j] += wb[j] * hh
-                    carry[CARRY.sum_f + j] += fb[j] * hh
-                t_cur = te
-            if t_cur - carry[CARRY.t_cov] > 0.0:
-                r = _propagate(xs, carry, t_cur, P, prm, lay, F, Q, wb, fb, out, r)
-                carry[CARRY.t_cov] = t_cur
-                for j in range(3):
-                    carry[CARRY.sum_w + j] = 0.0
-                    carry[CARRY.sum_f + j] = 0.0
-                carry_n[CARRY_N.n_cov] = 0
-            for j in range(3):
-                ctx[CTX.w_mean + j] = wb[j]
-            kinds[0] = timed.kind[ei]
-            for i in range(3):
-                zs[0, i] = timed.z[ei, i]
-                for j in range(3):
-                    rs[0, i, j] = timed.r[ei, i, j]
-            src = kinds[0]
-            mm, ok, d = _update(kinds, 1, zs, rs, xs, ctx, P, prm, lay, acc_dx, blk, _forced(carry_n, lay, src))
-            _count(carry_n, src, ok)
-            L = _log(out, L, te, k, ei, mm, ok, d, blk)
-            if rec:
-                _rec_post(out, r, t_cur, P, xs, acc_dx)
-            ei += 1
+                    ctx[CTX.w_mean + j] = wb[j]
+                kinds[0] = timed.kind[ei]
+                for i in range(3):
+                    zs[0, i] = timed.z[ei, i]
+                    for j in range(3):
+                        rs[0, i, j] = timed.r[ei, i, j]
+                src = kinds[0]
+                mm, ok, d = _update(kinds, np.int64(1), zs, rs, xs, ctx, P, prm, lay, acc_dx, blk,
+                                    _forced(carry_n, lay, src), use)
+                _count(carry_n, src, ok)
+                L = _log(out, L, te, k, ei, mm, ok, d, blk)
+                if rec:
+                    _rec_post(out, r, t_cur, P, xs, acc_dx)
+                ei += 1
         hh = t[k] - t_cur
         if hh > 0.0:
             _step(xs, rem_th, rem_v, hh, lay, om, wb, fb, work)
@@ -528,7 +555,7 @@ def gins_run(imu, timed, sampled, xs, P, carry, carry_n, prm, lay, out, first, f
                 if nm > 0:
                     src = N_AIDS + g
                     mm, ok, d = _update(kinds, nm, zs, rs, xs, ctx, P, prm, lay, acc_dx, blk,
-                                        _forced(carry_n, lay, src))
+                                        _forced(carry_n, lay, src), use)
                     _count(carry_n, src, ok)
                     # each model's own NIS at its slot position in the group
                     blk_slot[:] = np.nan
@@ -541,5 +568,5 @@ def gins_run(imu, timed, sampled, xs, P, carry, carry_n, prm, lay, out, first, f
             if rec:
                 _rec_post(out, r, t[k], P, xs, acc_dx)
             m = _record_cov(out, m, t[k], P)
-        out.xs[k] = xs
+        _copy1(out.xs[k], xs)
     return m, (r + 1 if rec else 0), L

@@ -48,10 +48,10 @@ def wheel_velocity(xs, ctx, lay, Hw):
         for j in range(3):
             Hv[i, iv + j] = C[j, i]
     Vx = np.zeros((3, 3))
-    write_skew(v, Vx, 0, 0, 1.0)
+    write_skew(v, Vx, np.int64(0), np.int64(0), 1.0)
     CtV = C.T @ Vx
     Lx = np.zeros((3, 3))
-    write_skew(lever, Lx, 0, 0, 1.0)
+    write_skew(lever, Lx, np.int64(0), np.int64(0), 1.0)
     ia = lay[LAY.att]
     ib = lay[LAY.gyro_bias]
     isg = lay[LAY.gyro_scale]
@@ -63,11 +63,14 @@ def wheel_velocity(xs, ctx, lay, Hw):
             if isg >= 0:
                 Hv[i, isg + j] = Lx[i, j] * wb[j]
     if il >= 0:
-        write_skew(wb, Hv, 0, il, 1.0)
+        write_skew(wb, Hv, np.int64(0), il, 1.0)
     Cvb = dcm_from_quat_1(xs[NOM.q_vb:NOM.q_vb + 4])
     w = Cvb @ u
-    Hw[:, :] = Cvb @ Hv
+    CH = Cvb @ Hv
+    for i in range(Hw.shape[0]):  # element by element: a slice assignment compiles numba's shape-error message
+        for j in range(Hw.shape[1]):
+            Hw[i, j] = CH[i, j]
     im = lay[LAY.mount]
     if im >= 0:
-        write_skew(w, Hw, 0, im, -1.0)
+        write_skew(w, Hw, np.int64(0), im, -1.0)
     return w

@@ -79,7 +79,7 @@ def rows(xs, ctx, z, r, p, lay, H, R, nu, row):
             R[row + j, row + i] = r[j, i]
     write_skew(a, H, row, lay[LAY.att], -1.0)
     Lx = np.zeros((3, 3))
-    write_skew(lever, Lx, 0, 0, 1.0)
+    write_skew(lever, Lx, np.int64(0), np.int64(0), 1.0)
     CL = C @ Lx
     ib = lay[LAY.gyro_bias]
     isg = lay[LAY.gyro_scale]
