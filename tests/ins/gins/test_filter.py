@@ -9,12 +9,14 @@ from imunav import earth
 from imunav.errors import InvalidInputError
 from imunav.ins.gins import GinsConfig, GinsFilter
 from imunav.ins.gins.config import misalignment_std
+from imunav.ins.gins.logrun import LogRunOptions, run_log
 from imunav.ins.gins.outage import outage_test
 from imunav.io.kfgins import ImuIncrements
 from imunav.rotation import quat_conjugate, quat_from_rotvec, quat_multiply, rotvec_from_quat
 from imunav.sim import presets, simulate_imu
 from imunav.sim.error_model import GaussMarkov, ImuErrorModel, TriadErrors
 from imunav.sim.gnss import simulate_gnss, simulate_magnetometer
+from imunav.sim.robot_log import simulate_robot_log
 from imunav.sim.vehicle import OdometerData, demo_drive, simulate_baro, simulate_odometer, vehicle_trajectory
 from imunav.timeseries import ImuData
 from imunav.units import DEG
@@ -402,3 +404,6 @@ def test_the_accelerometers_misalignment_tilt_reaches_the_reported_covariance(dr
         expect, a.smoothed.cov_nav.shape), rtol=0, atol=1e-15)
     with pytest.raises(InvalidInputError, match="accel_misalignment_std"):
         GinsConfig.from_preset("consumer_mems", accel_misalignment_std=-1e-3)
+    # a log run (a real IMU whose axes nobody calibrated) takes its preset's
+    log = simulate_robot_log(3, distance_m=80.0)
+    assert run_log(log.sources, LogRunOptions()).config.accel_misalignment_std == sd

@@ -226,7 +226,7 @@ class LogRun(Result):
         """The final mounting as ZYX Euler angles (roll, pitch, yaw of the IMU in the vehicle) and their σ, rad.
 
         The σ maps the filter's mounting-error covariance (small rotations about the vehicle axes), plus the
-        accelerometer axis misalignment (``GinsConfig.accel_misalignment_std``) (which the filter does not model: the accelerometers' own axes
+        preset's accelerometer axis misalignment (:func:`~imunav.ins.gins.config.misalignment_std`) (which the filter does not model: the accelerometers' own axes
         are off the IMU's nominal ones by that much), through the Jacobian of the Euler angles; zero where the
         mounting was not estimated.
 
@@ -243,7 +243,7 @@ class LogRun(Result):
         im = int(self.state_layout()[LAY.mount])
         if im < 0:
             return e0, np.zeros(3)
-        mis = self.config.accel_misalignment_std
+        mis = misalignment_std(presets.get(self.meta_preset).accel.scale_misalignment)
         P = np.diag(res.cov_diag[-1, im:im + 3] + mis**2)
         J = np.zeros((3, 3))
         h = 1e-6
