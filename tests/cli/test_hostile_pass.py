@@ -265,6 +265,20 @@ def test_a_complementary_gain_beyond_one_over_dt_is_refused():
     assert np.allclose(Complementary(k_accel=2).run(d).q_nb[-1], [1, 0, 0, 0])
 
 
+def test_a_madgwick_gain_and_a_ukf_field_reference_that_are_no_physics_are_refused():
+    from imunav.attitude import UKF, Madgwick
+    from imunav.errors import InvalidInputError, NonFiniteError
+
+    with pytest.raises(InvalidInputError, match="Madgwick.beta must be <= 10000"):
+        Madgwick(beta=1e300)
+    with pytest.raises(NonFiniteError, match="UKF.mag_ref_ned"):
+        UKF(mag_ref_ned=[np.nan, 0.0, 0.0])
+    with pytest.raises(InvalidInputError, match="non-zero"):
+        UKF(mag_ref_ned=[0.0, 0.0, 0.0])
+    assert Madgwick(beta=0.1).beta == 0.1 and np.allclose(UKF(mag_ref_ned=[20.0, 0.0, 45.0]).mag_ref_ned,
+                                                          [20.0, 0.0, 45.0])
+
+
 # ------------------------------------------------------------------ 5. a write the file system refuses
 @pytest.mark.parametrize("out", ["o.h5", "o.npz", "o.csv"])
 def test_a_refused_write_is_one_line_for_every_format(files, out):

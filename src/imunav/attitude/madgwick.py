@@ -26,8 +26,9 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from imunav.attitude import _kernels as _k
-from imunav.attitude._base import AttitudeReset, check_positive, gyro3, initial_q, prepare, step_dt, vec3
+from imunav.attitude._base import MAX_RATE, AttitudeReset, check_positive, gyro3, initial_q, prepare, step_dt, vec3
 from imunav.attitude.result import AttitudeResult
+from imunav.errors import InvalidInputError
 from imunav.timeseries import ImuData
 
 __all__ = ["Madgwick"]
@@ -40,7 +41,7 @@ class Madgwick(AttitudeReset):
     Attributes
     ----------
     beta : float
-        Gradient-step gain β, rad/s.
+        Gradient-step gain β, rad/s (0 … 1e4: the gyro's error rate).
     original_c : bool
         Reproduce the original C implementation's half-size field reference (see the module docstring).
     """
@@ -50,6 +51,8 @@ class Madgwick(AttitudeReset):
 
     def __post_init__(self) -> None:
         check_positive(beta=self.beta)
+        if self.beta > MAX_RATE:  # β is the gyro's error rate: beyond any gyro's range it is no gain
+            raise InvalidInputError(f"Madgwick.beta must be <= {MAX_RATE:g} rad/s (a gyro error rate); got {self.beta!r}")
         self.q = np.array([1.0, 0.0, 0.0, 0.0])
 
     @property

@@ -23,7 +23,7 @@ from numpy.typing import ArrayLike
 from imunav.attitude import _kernels as _k
 from imunav.attitude._base import check_q0, gyro3, initial_q, prepare, step_dt, vec3
 from imunav.attitude.result import AttitudeResult
-from imunav.errors import ConfigError
+from imunav.errors import ConfigError, InvalidInputError
 from imunav.noise.profile import NoiseProfile
 from imunav.rotation import quat_rotate
 from imunav.timeseries import ImuData
@@ -171,8 +171,17 @@ class UKF:
     config : UkfConfig
         The tuning.
     mag_ref_ned : numpy.ndarray, shape (3,), or None
-        Reference field direction in NED (normalised); None: learned from the first sample in :meth:`run`,
-        north in :meth:`step`.
+        Reference field direction in NED (normalised; finite and non-zero); None: learned from the first sample in
+        :meth:`run`, north in :meth:`step`.
+
+    Raises
+    ------
+    ShapeError
+        If ``mag_ref_ned`` is not a 3-vector.
+    NonFiniteError
+        If it is not finite.
+    InvalidInputError
+        If it is zero.
     """
 
     config: UkfConfig = field(default_factory=UkfConfig)
@@ -181,6 +190,11 @@ class UKF:
     name = "ukf"
 
     def __post_init__(self) -> None:
+        if self.mag_ref_ned is not None:
+            m = vec3(self.mag_ref_ned, "UKF.mag_ref_ned")
+            if not np.linalg.norm(m) > 0:
+                raise InvalidInputError("UKF.mag_ref_ned must be a non-zero field direction (NED); got zero")
+            self.mag_ref_ned = m
         self.q = np.array([1.0, 0.0, 0.0, 0.0])
         self.b = np.zeros(3)
         self.P = self.config.P0()
