@@ -671,16 +671,17 @@ def mekf_step(q, b, P, st, gyr, acc, mag, dt, p, out_phi):
     qn = q.copy()
     bn = b.copy()
     mekf_core(qn, bn, P, st, gyr.reshape(1, 3), acc.reshape(1, 3), mag.reshape(1, 3), np.full(1, dt), 0, 1, p, out_phi,
-              np.empty((6, 6)), np.zeros(6), np.empty(6), np.empty(6), np.empty((1, 4)), np.empty((1, 3)),
-              np.empty((1, 6)), np.empty(1, np.int64), np.empty(1), np.empty(1))
+              (np.empty((6, 6)), np.zeros(6), np.empty(6), np.empty(6)),
+              (np.empty((1, 4)), np.empty((1, 3)), np.empty((1, 6)), np.empty(1, np.int64), np.empty(1), np.empty(1)))
     _phi_fill(out_phi, dt)
     return qn, bn
 
 
 @njit(cache=True, error_model="numpy", fastmath={"contract"}, nogil=True)
-def mekf_core(q, b, P, st, gyr, acc, mag, dts, k0, k1, p, out_phi, W, dx, H, PH, qs, bs, pd, flg, nis_o, dof_o):
+def mekf_core(q, b, P, st, gyr, acc, mag, dts, k0, k1, p, out_phi, scratch, out):
     """MEKF steps on samples ``k0 … k1 − 1`` of the (N, 3) arrays, in place on ``q``, ``b``, ``P`` and ``st``; row k of
-    the outputs ``qs, bs, pd, flg, nis_o, dof_o`` receives the state after sample k.
+    the outputs ``out = (qs, bs, pd, flg, nis_o, dof_o)`` receives the state after sample k; ``scratch = (W, dx, H,
+    PH)`` (tuples: 15 arguments at most, ``tests/test_kernel_signatures.py``).
 
     ``dts`` holds the time steps (Δt of sample k is ``dts[k]``).  ``st`` (float64 array, len N_STATE) is the adaptive
     state, laid out as MEKF_STATE (S_* constants); ``p`` the parameters (P_* constants).  The measurement updates are
@@ -691,6 +692,8 @@ def mekf_core(q, b, P, st, gyr, acc, mag, dts, k0, k1, p, out_phi, W, dx, H, PH,
     call per sample took and dropped a reference to each of them, atomic operations that cost as much as the
     filter's arithmetic), and what the parameters fix is computed once.
     """
+    W, dx, H, PH = scratch
+    qs, bs, pd, flg, nis_o, dof_o = out
     qw, qx, qy, qz = q[0], q[1], q[2], q[3]
     # constants of the recording, out of the loop
     g = p[P_G]
@@ -935,8 +938,7 @@ def _mekf_loop(q, b, P, gyr, acc, mag, dt, p, out, scratch):
     fixed scratch only).  ``scratch = (st, phi, W, dx, H, PH)``: the adaptive state and :func:`mekf_core`'s buffers.
     """
     st, phi, W, dx, H, PH = scratch
-    qs, bs, pd, flags, nis, dof = out
-    mekf_core(q, b, P, st, gyr, acc, mag, dt, 0, gyr.shape[0], p, phi, W, dx, H, PH, qs, bs, pd, flags, nis, dof)
+    mekf_core(q, b, P, st, gyr, acc, mag, dt, 0, gyr.shape[0], p, phi, (W, dx, H, PH), out)
 
 
 @njit(cache=True, error_model="numpy", fastmath={"contract"}, nogil=True)
@@ -946,9 +948,8 @@ def _mekf_loop_store(q, b, P, P0, gyr, acc, mag, dt, p, out, scratch, stored):
     Pu, Pp, Ph = stored
     st, phi, W, dx, H, PH = scratch
     Q = np.zeros((6, 6))
-    qs, bs, pd, flags, nis, dof = out
     for k in range(gyr.shape[0]):
-        mekf_core(q, b, P, st, gyr, acc, mag, dt, k, k + 1, p, phi, W, dx, H, PH, qs, bs, pd, flags, nis, dof)
+        mekf_core(q, b, P, st, gyr, acc, mag, dt, k, k + 1, p, phi, (W, dx, H, PH), out)
         _phi_fill(phi, dt[k])
         Ph[k] = phi
         # P predicted = Φ P_{k-1} Φ^T + Q (recompute cheaply)

@@ -20,7 +20,7 @@ import time
 from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass, fields, replace
 from pathlib import Path
-from typing import Any, Callable, Iterable
+from typing import TYPE_CHECKING, Any, Callable, Iterable
 
 import numpy as np
 
@@ -30,9 +30,11 @@ from imunav.attitude.metrics import attitude_rmse
 from imunav.crossval import CvResult, select_by_cv
 from imunav.errors import ConfigError
 from imunav.io.broad import load_broad
-from imunav.noise.profile import NoiseProfile
 from imunav.results import Result
 from imunav.vocabulary import renamed_hint
+
+if TYPE_CHECKING:  # the noise package imports scipy.stats: a configuration does not need it
+    from imunav.noise.profile import NoiseProfile
 
 __all__ = ["FILTERS", "REALTIME", "NOISE_FILTERS", "make_filter", "noise_parameters", "evaluate", "grid_search", "cv_grid_search", "TrialScore",
            "BenchResult", "reference_start"]

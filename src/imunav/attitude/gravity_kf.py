@@ -38,7 +38,7 @@ Fixes of the paper's text (its OCR'd equations are garbled in places) made expli
 from __future__ import annotations
 
 from dataclasses import dataclass, field, fields, replace
-from typing import Literal
+from typing import TYPE_CHECKING, Literal
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -47,10 +47,12 @@ from imunav.attitude import _gravity_kernels as _gk
 from imunav.attitude._base import gyro3, prepare, step_dt, vec3
 from imunav.attitude.result import AttitudeResult
 from imunav.errors import ConfigError, ShapeError
-from imunav.noise.profile import NoiseProfile
 from imunav.rotation import quat_from_euler
 from imunav.timeseries import ImuData
 from imunav.units import DEFAULT_GRAVITY
+
+if TYPE_CHECKING:  # the noise package imports scipy.stats: a configuration does not need it
+    from imunav.noise.profile import NoiseProfile
 
 __all__ = ["GravityKfConfig", "GravityKF", "LeeKF", "JavedKF", "ProposedKF", "roll_pitch_from_x",
            "process_noise"]

@@ -16,6 +16,7 @@ when not given).
 from __future__ import annotations
 
 from dataclasses import dataclass, field, fields, replace
+from typing import TYPE_CHECKING
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -24,10 +25,12 @@ from imunav.attitude import _kernels as _k
 from imunav.attitude._base import check_q0, gyro3, initial_q, prepare, step_dt, vec3
 from imunav.attitude.result import AttitudeResult
 from imunav.errors import ConfigError, InvalidInputError
-from imunav.noise.profile import NoiseProfile
 from imunav.rotation import quat_rotate
 from imunav.timeseries import ImuData
 from imunav.units import DEFAULT_GRAVITY
+
+if TYPE_CHECKING:  # the noise package imports scipy.stats: a configuration does not need it
+    from imunav.noise.profile import NoiseProfile
 
 __all__ = ["UkfConfig", "UKF"]
 

@@ -9,15 +9,17 @@ a KF-GINS YAML's configuration, :meth:`GinsConfig.from_preset` one matched to an
 from __future__ import annotations
 
 from dataclasses import dataclass, replace
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from imunav.errors import InvalidInputError, ShapeError
 from imunav.io.kfgins import KfGinsConfig
-from imunav.noise.profile import NoiseProfile
 from imunav.sim import presets
+
+if TYPE_CHECKING:  # the noise package imports scipy.stats: a configuration does not need it
+    from imunav.noise.profile import NoiseProfile
 
 __all__ = ["BIAS_MODELS", "GinsConfig", "STATE_NAMES"]
 

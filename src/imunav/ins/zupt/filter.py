@@ -39,7 +39,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import asdict, dataclass, field, replace
-from typing import Any, Literal
+from typing import TYPE_CHECKING, Any, Literal
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -55,9 +55,11 @@ from imunav.errors import (
 )
 from imunav.ins.zupt import kernels as _k
 from imunav.ins.zupt.statistics import G_PYSHOE
-from imunav.noise.profile import NoiseProfile
 from imunav.results import EulerMixin, Result
 from imunav.rotation import quat_from_euler
+
+if TYPE_CHECKING:  # the noise package imports scipy.stats: a configuration does not need it
+    from imunav.noise.profile import NoiseProfile
 
 __all__ = ["ZuptConfig", "ZuptFilter", "ZuptResult", "ZuptState", "align_from_accel", "first_stance", "long_stances"]
 

@@ -115,7 +115,27 @@ ALL = used(range(N_AIDS))
 
 def evaluate_used(use, kind, xs, ctx, z, r, p, lay, H, R, nu, row):
     """:func:`evaluate` for the aids of ``use`` (:func:`used`) only, in numba code; a kind outside ``use`` writes
-    nothing (the kernel is never handed one)."""
+    nothing (the kernel is never handed one).
+
+    Parameters
+    ----------
+    use : tuple
+        The aid set (:func:`used`): ``True`` at the kinds the kernel applies, ``None`` elsewhere.
+    kind : int
+        The aid whose rows to write (:data:`AID`).
+    xs, ctx, z, r, p, lay : numpy.ndarray
+        Nominal state, sample context, measurement, its variances, the aid's parameters and the state layout (the
+        module docstring).
+    H, R, nu : numpy.ndarray
+        The measurement matrix, noise covariance and innovation, written at ``row``.
+    row : int
+        First row to write.
+
+    Raises
+    ------
+    NotImplementedError
+        Called from Python: it exists for numba code (its implementation is :func:`_dispatch`'s).
+    """
     raise NotImplementedError("evaluate_used is for numba code; call evaluate")
 
 
