@@ -677,6 +677,19 @@ def mekf_step(q, b, P, st, gyr, acc, mag, dt, p, out_phi):
     return qn, bn
 
 
+@njit(cache=True, error_model="numpy", fastmath={"contract"}, inline="always")
+def _inject(P, dx, b, qw, qx, qy, qz):
+    """Apply the error-state correction ``dx`` (tilt, bias): the covariance reset (:func:`_reset6`), ``q ⊗ exp(δθ)``
+    normalised and ``b += δb``; returns the new quaternion's components."""
+    _reset6(P, dx[0], dx[1], dx[2])
+    e0, e1, e2, e3 = _qexp_fast(dx[0], dx[1], dx[2])
+    t0, t1, t2, t3 = qmul_t(qw, qx, qy, qz, e0, e1, e2, e3)
+    b[0] += dx[3]
+    b[1] += dx[4]
+    b[2] += dx[5]
+    return _qnormalize_fast(t0, t1, t2, t3)
+
+
 @njit(cache=True, error_model="numpy", fastmath={"contract"}, nogil=True)
 def mekf_core(q, b, P, st, gyr, acc, mag, dts, k0, k1, p, out_phi, scratch, out):
     """MEKF steps on samples ``k0 … k1 − 1`` of the (N, 3) arrays, in place on ``q``, ``b``, ``P`` and ``st``; row k of
@@ -832,13 +845,7 @@ def mekf_core(q, b, P, st, gyr, acc, mag, dts, k0, k1, p, out_phi, scratch, out)
                 nis += nu * nu * si
                 ndof += 1.0
         # apply the tilt / bias correction before the heading update
-        _reset6(P, dx[0], dx[1], dx[2])
-        e0, e1, e2, e3 = _qexp_fast(dx[0], dx[1], dx[2])
-        t0, t1, t2, t3 = qmul_t(qw, qx, qy, qz, e0, e1, e2, e3)
-        qw, qx, qy, qz = _qnormalize_fast(t0, t1, t2, t3)
-        b[0] += dx[3]
-        b[1] += dx[4]
-        b[2] += dx[5]
+        qw, qx, qy, qz = _inject(P, dx, b, qw, qx, qy, qz)
         # ---- magnetometer: heading only
         if use_mag:
             m0, m1, m2 = mag[k, 0], mag[k, 1], mag[k, 2]
@@ -902,13 +909,7 @@ def mekf_core(q, b, P, st, gyr, acc, mag, dts, k0, k1, p, out_phi, scratch, out)
                     nis += _heading_update(P, dx, qw, qx, qy, qz, _tan_cached(st, S_TAN_DIP, st[S_MAG_REF_DIP]), r, psi, PH, H,
                                            mag_bias)
                     ndof += 1.0
-                    _reset6(P, dx[0], dx[1], dx[2])
-                    e0, e1, e2, e3 = _qexp_fast(dx[0], dx[1], dx[2])
-                    t0, t1, t2, t3 = qmul_t(qw, qx, qy, qz, e0, e1, e2, e3)
-                    qw, qx, qy, qz = _qnormalize_fast(t0, t1, t2, t3)
-                    b[0] += dx[3]
-                    b[1] += dx[4]
-                    b[2] += dx[5]
+                    qw, qx, qy, qz = _inject(P, dx, b, qw, qx, qy, qz)
         if acc_lpf:
             # rotate the low-passed nav-frame vector with the total correction q ⊗ q_before*
             d0, d1, d2, d3 = qmul_t(qw, qx, qy, qz, qbw, -qbx, -qby, -qbz)
