@@ -97,11 +97,12 @@ def claim_run_file(path: str | os.PathLike[str]) -> Path | None:
     return root
 
 
-_INTERRUPT = {"pending": False}
+_INTERRUPT = {"pending": False, "seen": False}
 
 
 def _on_sigint(signum: int, frame: Any) -> None:
     _INTERRUPT["pending"] = True
+    _INTERRUPT["seen"] = True
     signal.default_int_handler(signum, frame)
 
 
@@ -109,6 +110,10 @@ def _unraisable(hook: Callable[[Any], None]) -> Callable[[Any], None]:
     def unraisable(u: Any) -> None:
         if isinstance(u.exc_value, KeyboardInterrupt):
             _INTERRUPT["pending"] = True  # swallowed where it was raised: latched, raised again at the next check
+            return
+        if _INTERRUPT["seen"]:
+            # the aftermath of an interrupt that landed inside a constructor from C (llvmlite's PassBuilder,
+            # whose finaliser then meets a half-built object): the run is ending with its one-line message
             return
         hook(u)
 
@@ -128,6 +133,7 @@ def latch_interrupts() -> None:
     if threading.current_thread() is not threading.main_thread():
         return
     _INTERRUPT["pending"] = False
+    _INTERRUPT["seen"] = False
     if signal.getsignal(signal.SIGINT) is not _on_sigint:
         signal.signal(signal.SIGINT, _on_sigint)
         sys.unraisablehook = _unraisable(sys.unraisablehook)
