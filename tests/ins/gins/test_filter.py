@@ -407,3 +407,20 @@ def test_the_accelerometers_misalignment_tilt_reaches_the_reported_covariance(dr
     # a log run (a real IMU whose axes nobody calibrated) takes its preset's
     log = simulate_robot_log(3, distance_m=80.0)
     assert run_log(log.sources, LogRunOptions()).config.accel_misalignment_std == sd
+    # with wheel aids (here the NHC) the velocity is measured in the body's axes, and the tilt turns it:
+    # δv = φ × v adds [v×] Σ [v×]ᵀ to the velocity and −[v×] Σ to its covariance with the attitude
+    a, b = (GinsFilter(GinsConfig.from_preset("mems_adis16465", accel_misalignment_std=s, nhc_noise_std=0.5)).run(
+        short, g, **_start(truth), smoother=True) for s in (0.0, 0.2 * DEG))
+    np.testing.assert_array_equal(a.vel_ned, b.vel_ned)
+    for cov_t, t_grid, vel, da in ((a.cov_t, a.t, a.vel_ned, b.cov_nav - a.cov_nav),
+                                   (a.smoothed.cov_t, a.smoothed.t, a.smoothed.vel_ned,
+                                    b.smoothed.cov_nav - a.smoothed.cov_nav)):
+        v = vel[np.clip(np.searchsorted(t_grid, cov_t), 0, t_grid.size - 1)]
+        s2 = (0.2 * DEG) ** 2
+        # φ = (φ_N, φ_E, 0): δv = (φ_E v_D, −φ_N v_D, φ_N v_E − φ_E v_N)
+        J = np.zeros((v.shape[0], 3, 2))
+        J[:, 0, 1], J[:, 1, 0], J[:, 2, 0], J[:, 2, 1] = v[:, 2], -v[:, 2], v[:, 1], -v[:, 0]
+        np.testing.assert_allclose(da[:, 3:6, 3:6], s2 * J @ np.transpose(J, (0, 2, 1)), rtol=1e-9, atol=1e-15)
+        np.testing.assert_allclose(da[:, 3:6, 6:8], s2 * J, rtol=1e-9, atol=1e-15)
+        np.testing.assert_allclose(da[:, 6:8, 6:8], np.broadcast_to(s2 * np.eye(2), (v.shape[0], 2, 2)), atol=1e-15)
+        assert np.abs(da[:, :3]).max() == 0 and np.abs(da[:, 3:6, 8]).max() < 1e-15

@@ -803,11 +803,15 @@ class GinsFilter:
                 progress(total, total)
         cov_diag, cov_nav = o.cov_diag[:m], o.cov_nav[:m]
         if c.accel_misalignment_std > 0:  # the tilt of the accelerometers' axes, which no state holds
-            cov_diag, cov_nav = unmodelled_tilt(cov_diag, c.accel_misalignment_std), unmodelled_tilt(
-                cov_nav, c.accel_misalignment_std)
+            # the wheels measure the velocity in the body's axes: the tilt turns it (a car at 20 m/s, 0.2°: 7 cm/s)
+            wheels = odometer is not None or c.nhc_noise_std is not None
+            s_t = c.accel_misalignment_std
+            vel_m = o.xs[np.clip(np.searchsorted(t, o.cov_t[:m]), 0, n - 1), NOM.vel:NOM.vel + 3] if wheels else None
+            cov_diag, cov_nav = unmodelled_tilt(cov_diag, s_t, vel_m), unmodelled_tilt(cov_nav, s_t, vel_m)
             if smoothed is not None:
-                smoothed = dataclasses.replace(smoothed, cov_nav=unmodelled_tilt(smoothed.cov_nav,
-                                                                                 c.accel_misalignment_std))
+                k = np.clip(np.searchsorted(smoothed.t, smoothed.cov_t), 0, smoothed.t.size - 1)
+                smoothed = dataclasses.replace(smoothed, cov_nav=unmodelled_tilt(
+                    smoothed.cov_nav, s_t, smoothed.vel_ned[k] if wheels else None))
         nis = np.full((ng, 2), np.nan)
         acc = np.zeros((ng, 2), dtype=bool)
         for col, name in enumerate(aids.TIMED[:2]):
@@ -838,18 +842,24 @@ def _sample_nis(log: _Log, name: str, n: int) -> Array:
     return _per_sample(n, log.groups.get(group) if aid is None else log.aids.get(aid))
 
 
-def unmodelled_tilt(cov: Array, std: float) -> Array:
-    """A copy of covariance records with ``std²`` added to the north and east attitude errors (entries 6 and 7 of
-    the navigation states): an error of roll and pitch that no state holds, as the tilt an accelerometer triad's
-    axis misalignment leaves (``GinsConfig.accel_misalignment_std``).  Horizontal and isotropic, so the same in
-    every heading.
+def unmodelled_tilt(cov: Array, std: float, vel: Array | None = None) -> Array:
+    """A copy of covariance records with an error of roll and pitch that no state holds, as the tilt an
+    accelerometer triad's axis misalignment leaves (``GinsConfig.accel_misalignment_std``): ``std²`` added to the
+    north and east attitude errors (entries 6 and 7 of the navigation states); horizontal and isotropic, so the
+    same in every heading.  With ``vel``, the velocity that wheel aids (odometer, NHC) measure in the body's axes
+    is turned by the same tilt, ``δv = φ × v = −[v×] φ``: ``[v×] Σ_φ [v×]ᵀ`` is added to the velocity block
+    (entries 3:6) and ``−[v×] Σ_φ`` to its covariance with the attitude, ``Σ_φ = diag(std², std², 0)`` (a
+    consider parameter's contribution, Brown & Hwang 2012, §7.6).
 
     Parameters
     ----------
     cov : numpy.ndarray, shape (M, n) or (M, n, n)
-        Variances (``cov_diag``) or covariances (``cov_nav``), n >= 8, the attitude errors at 6:9.
+        Variances (``cov_diag``) or covariances (``cov_nav``), n >= 9, the velocity errors at 3:6 and the attitude
+        errors at 6:9.
     std : float
         σ of the tilt per horizontal axis, rad.
+    vel : numpy.ndarray, shape (M, 3), or None
+        The NED velocity at each record, m/s (None: the velocity does not come from the body's axes).
 
     Returns
     -------
@@ -862,6 +872,21 @@ def unmodelled_tilt(cov: Array, std: float) -> Array:
             out[:, a] += std**2
         else:
             out[:, a, a] += std**2
+    if vel is None:
+        return out
+    v = np.asarray(vel, dtype=float)
+    vx = np.zeros((v.shape[0], 3, 3))
+    vx[:, 0, 1], vx[:, 0, 2], vx[:, 1, 2] = -v[:, 2], v[:, 1], -v[:, 0]
+    vx -= np.transpose(vx, (0, 2, 1))
+    S = np.diag([std**2, std**2, 0.0])
+    cross = -vx @ S  # cov(δv, φ)
+    vv = cross @ np.transpose(-vx, (0, 2, 1))  # [v×] Σ [v×]ᵀ
+    if out.ndim == 2:
+        out[:, 3:6] += np.einsum("kii->ki", vv)
+    else:
+        out[:, 3:6, 3:6] += vv
+        out[:, 3:6, 6:9] += cross
+        out[:, 6:9, 3:6] += np.transpose(cross, (0, 2, 1))
     return out
 
 
