@@ -379,8 +379,8 @@ def test_bias_variance_without_aiding_follows_its_model(model):
 
 
 def test_the_accelerometers_misalignment_tilt_reaches_the_reported_covariance(drive):
-    """``accel_misalignment_std`` adds its variance to the north and east attitude errors of every covariance
-    record, forward and smoothed, and nothing else: the estimate is the same to the bit.  ``misalignment_std`` is
+    """``accel_misalignment_std`` adds its variance to the attitude errors of every covariance record, forward and
+    smoothed, and (with wheel aids) the velocity it turns, and nothing else: the estimate is the same to the bit.  ``misalignment_std`` is
     the RMS of a preset's off-diagonal accelerometer misalignment (what a log run takes); ``from_preset`` leaves
     it at 0."""
     truth, imu = drive
@@ -395,7 +395,7 @@ def test_the_accelerometers_misalignment_tilt_reaches_the_reported_covariance(dr
         short, g, **_start(truth), smoother=True) for s in (0.0, 0.2 * DEG))
     np.testing.assert_array_equal(a.lla, b.lla)
     expect = np.zeros((9, 9))
-    expect[6, 6] = expect[7, 7] = (0.2 * DEG) ** 2
+    expect[6, 6] = expect[7, 7] = expect[8, 8] = (0.2 * DEG) ** 2
     np.testing.assert_allclose(b.cov_nav - a.cov_nav, np.broadcast_to(expect, a.cov_nav.shape), rtol=0, atol=1e-15)
     np.testing.assert_allclose((b.cov_diag - a.cov_diag)[:, :9], np.broadcast_to(np.diag(expect), (a.cov_t.size, 9)),
                                rtol=0, atol=1e-15)
@@ -407,7 +407,7 @@ def test_the_accelerometers_misalignment_tilt_reaches_the_reported_covariance(dr
     # a log run (a real IMU whose axes nobody calibrated) takes its preset's
     log = simulate_robot_log(3, distance_m=80.0)
     assert run_log(log.sources, LogRunOptions()).config.accel_misalignment_std == sd
-    # with wheel aids (here the NHC) the velocity is measured in the body's axes, and the tilt turns it:
+    # with wheel aids (here the NHC) the velocity is measured in the body's axes, and the misalignment turns it:
     # δv = φ × v adds [v×] Σ [v×]ᵀ to the velocity and −[v×] Σ to its covariance with the attitude
     a, b = (GinsFilter(GinsConfig.from_preset("mems_adis16465", accel_misalignment_std=s, nhc_noise_std=0.5)).run(
         short, g, **_start(truth), smoother=True) for s in (0.0, 0.2 * DEG))
@@ -417,10 +417,11 @@ def test_the_accelerometers_misalignment_tilt_reaches_the_reported_covariance(dr
                                     b.smoothed.cov_nav - a.smoothed.cov_nav)):
         v = vel[np.clip(np.searchsorted(t_grid, cov_t), 0, t_grid.size - 1)]
         s2 = (0.2 * DEG) ** 2
-        # φ = (φ_N, φ_E, 0): δv = (φ_E v_D, −φ_N v_D, φ_N v_E − φ_E v_N)
-        J = np.zeros((v.shape[0], 3, 2))
-        J[:, 0, 1], J[:, 1, 0], J[:, 2, 0], J[:, 2, 1] = v[:, 2], -v[:, 2], v[:, 1], -v[:, 0]
+        # δv = φ × v = J φ with J = −[v×]
+        J = np.zeros((v.shape[0], 3, 3))
+        J[:, 0, 1], J[:, 0, 2], J[:, 1, 2] = v[:, 2], -v[:, 1], v[:, 0]
+        J -= np.transpose(J, (0, 2, 1))
         np.testing.assert_allclose(da[:, 3:6, 3:6], s2 * J @ np.transpose(J, (0, 2, 1)), rtol=1e-9, atol=1e-15)
-        np.testing.assert_allclose(da[:, 3:6, 6:8], s2 * J, rtol=1e-9, atol=1e-15)
-        np.testing.assert_allclose(da[:, 6:8, 6:8], np.broadcast_to(s2 * np.eye(2), (v.shape[0], 2, 2)), atol=1e-15)
-        assert np.abs(da[:, :3]).max() == 0 and np.abs(da[:, 3:6, 8]).max() < 1e-15
+        np.testing.assert_allclose(da[:, 3:6, 6:9], s2 * J, rtol=1e-9, atol=1e-15)
+        np.testing.assert_allclose(da[:, 6:9, 6:9], np.broadcast_to(s2 * np.eye(3), (v.shape[0], 3, 3)), atol=1e-15)
+        assert np.abs(da[:, :3]).max() == 0

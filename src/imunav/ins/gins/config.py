@@ -154,14 +154,17 @@ class GinsConfig:
         noise; None: ``corr_time``, as KF-GINS).
     accel_misalignment_std : float
         σ of each off-diagonal element of the accelerometer triad's scale-misalignment matrix, rad (>= 0; 0: none).
-        Not a state: the accelerometers' axes are off the IMU's nominal ones by that much, so the roll and pitch
-        the filter levels to are off by it too (a tilt of ``m_yz`` about x and ``m_xz`` about y for a level IMU,
-        Groves 2013, §4.4.2), and nothing the filter measures tells it apart.  The reported covariance
-        (``GinsResult.cov_nav``, ``cov_diag``, the smoothed track's) adds ``σ²`` to the north and east attitude
-        errors: a consumer MEMS triad's 0.2° is ten times the σ the filter reaches on its own.  A log run
-        (:func:`imunav.ins.gins.logrun.run_log`: a real IMU whose axes nobody calibrated) takes it from its preset
-        (:func:`misalignment_std`); a run on a calibrated IMU, or one whose accelerometer biases are free to absorb
-        the tilt (a static alignment), leaves it at 0.
+        Not a state: the accelerometers' axes are off the IMU's nominal ones by that much, so the attitude the
+        filter finds by matching the specific force to gravity (roll, pitch: a tilt of ``m_yz`` about x and
+        ``m_xz`` about y for a level IMU) and to the accelerations its aids show (heading) is off by it too
+        (Groves 2013, §4.4.2), and nothing the filter measures tells it apart.  The reported covariance
+        (``GinsResult.cov_nav``, ``cov_diag``, the smoothed track's) adds ``σ²`` to each attitude error, and
+        with wheel aids (odometer, NHC: a velocity measured in the body's axes) the velocity that rotation turns
+        (:func:`imunav.ins.gins.filter.unmodelled_misalignment`): a consumer MEMS triad's 0.2° is ten times the
+        roll and pitch σ the filter reaches on its own.  A log run (:func:`imunav.ins.gins.logrun.run_log`: a
+        real IMU whose axes nobody calibrated) takes it from its preset (:func:`misalignment_std`); a run on a
+        calibrated IMU, or one whose accelerometer biases are free to absorb the tilt (a static alignment),
+        leaves it at 0.
     declination : float
         Magnetic declination, rad (east positive), for the magnetometer heading.
     mag_heading_noise_std : float

@@ -802,15 +802,15 @@ class GinsFilter:
             if progress is not None:
                 progress(total, total)
         cov_diag, cov_nav = o.cov_diag[:m], o.cov_nav[:m]
-        if c.accel_misalignment_std > 0:  # the tilt of the accelerometers' axes, which no state holds
-            # the wheels measure the velocity in the body's axes: the tilt turns it (a car at 20 m/s, 0.2°: 7 cm/s)
+        if c.accel_misalignment_std > 0:  # the accelerometers' axes off the IMU's, which no state holds
+            # the wheels measure the velocity in the body's axes: the misalignment turns it
             wheels = odometer is not None or c.nhc_noise_std is not None
             s_t = c.accel_misalignment_std
             vel_m = o.xs[np.clip(np.searchsorted(t, o.cov_t[:m]), 0, n - 1), NOM.vel:NOM.vel + 3] if wheels else None
-            cov_diag, cov_nav = unmodelled_tilt(cov_diag, s_t, vel_m), unmodelled_tilt(cov_nav, s_t, vel_m)
+            cov_diag, cov_nav = unmodelled_misalignment(cov_diag, s_t, vel_m), unmodelled_misalignment(cov_nav, s_t, vel_m)
             if smoothed is not None:
                 k = np.clip(np.searchsorted(smoothed.t, smoothed.cov_t), 0, smoothed.t.size - 1)
-                smoothed = dataclasses.replace(smoothed, cov_nav=unmodelled_tilt(
+                smoothed = dataclasses.replace(smoothed, cov_nav=unmodelled_misalignment(
                     smoothed.cov_nav, s_t, smoothed.vel_ned[k] if wheels else None))
         nis = np.full((ng, 2), np.nan)
         acc = np.zeros((ng, 2), dtype=bool)
@@ -842,14 +842,16 @@ def _sample_nis(log: _Log, name: str, n: int) -> Array:
     return _per_sample(n, log.groups.get(group) if aid is None else log.aids.get(aid))
 
 
-def unmodelled_tilt(cov: Array, std: float, vel: Array | None = None) -> Array:
-    """A copy of covariance records with an error of roll and pitch that no state holds, as the tilt an
-    accelerometer triad's axis misalignment leaves (``GinsConfig.accel_misalignment_std``): ``std²`` added to the
-    north and east attitude errors (entries 6 and 7 of the navigation states); horizontal and isotropic, so the
-    same in every heading.  With ``vel``, the velocity that wheel aids (odometer, NHC) measure in the body's axes
-    is turned by the same tilt, ``δv = φ × v = −[v×] φ``: ``[v×] Σ_φ [v×]ᵀ`` is added to the velocity block
-    (entries 3:6) and ``−[v×] Σ_φ`` to its covariance with the attitude, ``Σ_φ = diag(std², std², 0)`` (a
-    consider parameter's contribution, Brown & Hwang 2012, §7.6).
+def unmodelled_misalignment(cov: Array, std: float, vel: Array | None = None) -> Array:
+    """A copy of covariance records with an attitude error that no state holds: the rotation an accelerometer
+    triad's axis misalignment leaves (``GinsConfig.accel_misalignment_std``).  The filter finds its attitude by
+    matching the measured specific force to gravity (roll, pitch) and to the accelerations the aids show (heading):
+    axes off by ``σ`` turn all three by about that much, and nothing it measures tells the turn apart
+    (Groves 2013, §4.4.2, §14.2.1).  ``Σ_φ = σ² I`` is added to the attitude errors (entries 6:9 of the
+    navigation states).  With ``vel``, the velocity that wheel aids (odometer, NHC) measure in the body's axes is
+    turned by the same rotation, ``δv = φ × v = −[v×] φ``: ``[v×] Σ_φ [v×]ᵀ`` is added to the velocity block
+    (entries 3:6) and ``−[v×] Σ_φ`` to its covariance with the attitude (a consider parameter's contribution,
+    Brown & Hwang 2012, §7.6; a car at 20 m/s and 0.2°: 7 cm/s).
 
     Parameters
     ----------
@@ -857,17 +859,17 @@ def unmodelled_tilt(cov: Array, std: float, vel: Array | None = None) -> Array:
         Variances (``cov_diag``) or covariances (``cov_nav``), n >= 9, the velocity errors at 3:6 and the attitude
         errors at 6:9.
     std : float
-        σ of the tilt per horizontal axis, rad.
+        σ of the rotation per axis, rad.
     vel : numpy.ndarray, shape (M, 3), or None
         The NED velocity at each record, m/s (None: the velocity does not come from the body's axes).
 
     Returns
     -------
     numpy.ndarray
-        The records with the tilt's variance added.
+        The records with the misalignment's variance added.
     """
     out = np.array(cov, dtype=float, copy=True)
-    for a in (6, 7):
+    for a in (6, 7, 8):
         if out.ndim == 2:
             out[:, a] += std**2
         else:
@@ -878,9 +880,8 @@ def unmodelled_tilt(cov: Array, std: float, vel: Array | None = None) -> Array:
     vx = np.zeros((v.shape[0], 3, 3))
     vx[:, 0, 1], vx[:, 0, 2], vx[:, 1, 2] = -v[:, 2], v[:, 1], -v[:, 0]
     vx -= np.transpose(vx, (0, 2, 1))
-    S = np.diag([std**2, std**2, 0.0])
-    cross = -vx @ S  # cov(δv, φ)
-    vv = cross @ np.transpose(-vx, (0, 2, 1))  # [v×] Σ [v×]ᵀ
+    cross = -(std**2) * vx  # cov(δv, φ) = −[v×] Σ_φ
+    vv = (std**2) * vx @ np.transpose(vx, (0, 2, 1))  # [v×] Σ_φ [v×]ᵀ
     if out.ndim == 2:
         out[:, 3:6] += np.einsum("kii->ki", vv)
     else:

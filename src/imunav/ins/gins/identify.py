@@ -25,7 +25,7 @@ from imunav.earth import lla_to_ned
 from imunav.ins.gins.result import GinsResult
 from imunav.rotation import dcm_from_quat
 
-__all__ = ["GNSS_BIAS_MIN_STD", "GNSS_BIAS_SCATTER_FACTOR", "GNSS_BIAS_TAU", "GNSS_CORR_LAG_S", "SCORE_CLIP", "WITHHELD_GAP_S",
+__all__ = ["GNSS_BIAS_MIN_STD", "GNSS_BIAS_SCATTER_FACTOR", "GNSS_BIAS_TAU", "GNSS_CORR_LAG_S", "MEAN_KEPT_MIN", "SCORE_CLIP", "WITHHELD_GAP_S",
            "WITHHELD_S", "fix_residuals", "gnss_correlated_std",
            "withheld_score", "withheld_windows"]
 
@@ -39,6 +39,9 @@ GNSS_BIAS_MIN_STD = 0.1
 #: first pass followed (:func:`gnss_correlated_std`; chosen on the hard robot and car drives 100-107).
 GNSS_CORR_LAG_S = 2.0
 GNSS_BIAS_SCATTER_FACTOR = 2.0
+#: Smallest share of the correlated error's variance that :func:`gnss_correlated_std` takes its residuals about
+#: their mean to keep (a log of a few correlation times or less keeps almost none of it).
+MEAN_KEPT_MIN = 0.1
 #: Cross-validation of a process model on the fixes (:func:`withheld_windows`): each window withholds the fixes
 #: of this many seconds, then this many seconds of fixes follow.
 WITHHELD_S = 30.0
@@ -147,14 +150,18 @@ def withheld_score(res: GinsResult, gnss: Any, withheld: Any, lever_arm: Any, fi
 
 def gnss_correlated_std(first: GinsResult, gnss: Any, lever_arm: Any) -> Array:
     """σ north, east, down of the fixes' correlated error, from the residuals of a first pass that treats them as
-    white: ``k √(max(0, C(L)) e^{L/T})`` per axis, where ``C(L)`` is the residuals' autocovariance at the lag
-    ``L`` (:data:`GNSS_CORR_LAG_S`, at least two fix intervals), ``T`` = :data:`GNSS_BIAS_TAU` and ``k`` =
-    :data:`GNSS_BIAS_SCATTER_FACTOR`; an autocorrelation within two standard errors of zero (``2 / √n``) counts as
-    none; at least :data:`GNSS_BIAS_MIN_STD`.  The fixes before the first pass settles (its horizontal position σ
+    white: ``k √(max(0, C(L)) / (e^{−L/T} − v(W)))`` per axis, where ``C(L)`` is the residuals' autocovariance at
+    the lag ``L`` (:data:`GNSS_CORR_LAG_S`, at least two fix intervals) about their mean over the ``W`` seconds
+    they span, ``T`` = :data:`GNSS_BIAS_TAU`, ``v(W) = 2 (T/W) (1 − (T/W)(1 − e^{−W/T}))`` the variance of that
+    mean over σ_c² (the mean taken out holds part of the slow error: without it a 4-minute drive reads its
+    correlated error 20 % low, a one-minute one 50 %; the denominator is kept above :data:`MEAN_KEPT_MIN`) and
+    ``k`` = :data:`GNSS_BIAS_SCATTER_FACTOR`; an autocorrelation within two standard errors of zero (``2 / √n``)
+    counts as none; at least :data:`GNSS_BIAS_MIN_STD`.  The fixes before the first pass settles (its horizontal position σ
     within twice its median over the drive) are left out: their residuals hold the initial error.
 
     White fixes leave residuals without memory: a first-order Gauss–Markov error of σ_c and correlation time T
-    leaves ``C(L) ≈ σ_c² e^{−L/T}`` (Brown & Hwang 2012, §2.9), less what the first pass followed (hence
+    leaves ``C(L) ≈ σ_c² e^{−L/T}`` (Brown & Hwang 2012, §2.9), less the variance of the mean taken out (the
+    bias of a sample autocovariance, Priestley 1981, §5.3.2) and less what the first pass followed (hence
     ``k``).  The residual of fix k is ``z_k − (r̂(t_k − τ̂) + Ĉ l)`` on the accepted fixes, those beyond five
     median absolute deviations of their axis left out.
 
@@ -193,4 +200,8 @@ def gnss_correlated_std(first: GinsResult, gnss: Any, lever_arm: Any) -> Array:
         return np.full(3, GNSS_BIAS_MIN_STD)
     c0 = np.mean(r**2, axis=0)
     c = _significant(np.mean(r[k] * r[j], axis=0), c0, k.size)
-    return np.maximum(GNSS_BIAS_SCATTER_FACTOR * np.sqrt(c * math.exp(lag / GNSS_BIAS_TAU)), GNSS_BIAS_MIN_STD)
+    # the residuals' own mean, taken out over the W seconds they span, holds part of the slow error: the sample
+    # autocovariance lacks the variance of that mean, 2 σ_c² (T/W) (1 − (T/W)(1 − e^{−W/T}))
+    w = max(float(t[-1] - t[0]), lag) / GNSS_BIAS_TAU
+    kept = max(math.exp(-lag / GNSS_BIAS_TAU) - 2.0 / w * (1.0 - (1.0 - math.exp(-w)) / w), MEAN_KEPT_MIN)
+    return np.maximum(GNSS_BIAS_SCATTER_FACTOR * np.sqrt(c / kept), GNSS_BIAS_MIN_STD)
