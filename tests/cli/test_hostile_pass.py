@@ -587,3 +587,28 @@ def test_a_negative_count_scale_mirrors_the_triad_and_is_refused(tmp_path, monke
     d = ImuData.from_arrays(None, raw[:, :3], raw[:, 3:], fs=50.0, gyro_unit="counts", gyro_scale=[1e-3, -1e-3, 1e-3],
                             accel_unit="counts", accel_scale=6e-4)
     assert np.allclose(d.gyro[:, 1], -1e-3 * raw[:, 1])
+
+
+# ------------------------------------------------------------------ leftovers of the second pass
+@pytest.mark.parametrize("outputpath", [".", "imu.txt", "..", "kf-gins.yaml"])
+def test_a_kfgins_outputpath_follows_the_rule_of_out(tmp_path, monkeypatch, outputpath):
+    """A KF-GINS YAML's ``outputpath`` is the output folder as ``--out`` is: ``"."`` (the YAML's own folder)
+    wrote KF-GINS's outputs beside the IMU, GNSS and YAML files that ``--out`` there refuses; now refused the
+    same way, naming the YAML and its key, before anything is written."""
+    monkeypatch.chdir(tmp_path)
+    r = runner.invoke(app, ["gins", "simulate", "--out", "d", "--duration", "120", "--fs", "10", "--seed", "3"])
+    assert r.exit_code == 0, r.output
+    yaml = Path("d/kf-gins.yaml")
+    yaml.write_text(yaml.read_text().replace('outputpath: "result"', f'outputpath: "{outputpath}"'))
+    before = _snapshot(tmp_path)
+    msg = _exit_2(runner.invoke(app, ["gins", "run", "--config", "d/kf-gins.yaml", "--no-plots"]))
+    assert msg.startswith("error: d/kf-gins.yaml, key 'outputpath': the output folder") and "--out DIR" in msg, msg
+    assert ("holds the inputs" if outputpath in (".", "..") else "is the input") in msg
+    assert _snapshot(tmp_path) == before
+    # --out there is refused by the same rule; a folder of its own is written
+    assert "holds the input" in _exit_2(runner.invoke(app, ["gins", "run", "--config", "d/kf-gins.yaml", "--out", "d",
+                                                            "--no-plots"]))
+    yaml.write_text(yaml.read_text().replace(f'outputpath: "{outputpath}"', 'outputpath: "res"'))
+    r = runner.invoke(app, ["gins", "run", "--config", "d/kf-gins.yaml", "--no-plots"])
+    assert r.exit_code == 0, r.output
+    assert Path("d/res/KF_GINS_Navresult.nav").is_file()
