@@ -612,3 +612,55 @@ def test_a_kfgins_outputpath_follows_the_rule_of_out(tmp_path, monkeypatch, outp
     r = runner.invoke(app, ["gins", "run", "--config", "d/kf-gins.yaml", "--no-plots"])
     assert r.exit_code == 0, r.output
     assert Path("d/res/KF_GINS_Navresult.nav").is_file()
+
+
+def test_a_numba_cache_the_file_system_refuses_is_named_with_its_fix(files, tmp_path):
+    """numba writes its cache of compiled kernels on first use; a write the file system refused there (a file-size
+    limit) ended as ``error: File too large``, naming no file: now the cache file and what to do."""
+    import os
+    import resource
+    import subprocess
+    import sys
+
+    def small_files():
+        resource.setrlimit(resource.RLIMIT_FSIZE, (1024, 1024))
+
+    cache = tmp_path / "numba-cache"  # empty: numba compiles and writes there first (it takes NUMBA_CACHE_DIR first)
+    env = dict(os.environ, PYTHONPATH=str(Path(__file__).resolve().parents[2] / "src"), NUMBA_CACHE_DIR=str(cache))
+    env.pop("IMUNAV_DEBUG", None)
+    argv = [sys.executable, "-m", "imunav.cli.main", "info", "good.csv"]
+    r = subprocess.run(argv, cwd=files, capture_output=True, text=True, env=env, timeout=300, preexec_fn=small_files)
+    assert r.returncode == 2, r.stderr
+    lines = r.stderr.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith(f"error: numba could not write its cache of imunav's compiled "
+                                                   f"kernels, {cache}{os.sep}"), r.stderr
+    assert "(File too large)" in lines[0] and "ulimit -f" in lines[0] and "imunav warmup" in lines[0]
+    r = subprocess.run([*argv[:3], "--debug", *argv[3:]], cwd=files, capture_output=True, text=True, env=env,
+                       timeout=300, preexec_fn=small_files)
+    assert r.returncode == 2 and "Traceback" in r.stderr and "numba/core/caching.py" in r.stderr, r.stderr
+
+
+def test_no_writable_numba_cache_folder_is_a_user_error_naming_the_folders(files, monkeypatch):
+    """Where numba may write none of its cache folders (a read-only install, no writable home) it raises a
+    RuntimeError at the first import of a kernel module: an internal error ("this is a bug"); now one line naming
+    the folders tried and NUMBA_CACHE_DIR, exit 2, the traceback with --debug."""
+    import imunav.io
+
+    monkeypatch.chdir(files)
+    monkeypatch.delenv("NUMBA_CACHE_DIR", raising=False)
+    monkeypatch.delenv("IMUNAV_DEBUG", raising=False)
+    src = str(Path(imunav.io.__file__).parent / "_text.py")
+
+    def no_locator(*a, **k):
+        raise RuntimeError(f"cannot cache function '_fixed_into': no locator available for file '{src}'")
+
+    monkeypatch.setattr(imunav.io, "read_imu", no_locator)
+    msg = _exit_2(runner.invoke(app, ["info", "good.csv"]))
+    assert msg.startswith(f"error: numba cannot cache imunav's compiled kernels (of {src}): none of its cache "
+                          f"folders can be written ({Path(src).parent / '__pycache__'}, "), msg
+    assert msg.endswith("set NUMBA_CACHE_DIR to a folder you may write (e.g. export NUMBA_CACHE_DIR=/tmp/numba-cache)")
+    r = runner.invoke(app, ["--debug", "info", "good.csv"])
+    assert r.exit_code == 2 and "Traceback" in r.stderr and "no locator available" in r.stderr
+    # a RuntimeError of another origin is still an internal error
+    monkeypatch.setattr(imunav.io, "read_imu", lambda *a, **k: (_ for _ in ()).throw(RuntimeError("boom")))
+    assert "internal error: RuntimeError: boom" in _exit_2(runner.invoke(app, ["info", "good.csv"]), 1)
