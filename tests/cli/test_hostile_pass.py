@@ -664,3 +664,58 @@ def test_no_writable_numba_cache_folder_is_a_user_error_naming_the_folders(files
     # a RuntimeError of another origin is still an internal error
     monkeypatch.setattr(imunav.io, "read_imu", lambda *a, **k: (_ for _ in ()).throw(RuntimeError("boom")))
     assert "internal error: RuntimeError: boom" in _exit_2(runner.invoke(app, ["info", "good.csv"]), 1)
+
+
+def _torch_errors():
+    torch = pytest.importorskip("torch")
+    errs = [MemoryError("Unable to allocate 12. GiB"),
+            RuntimeError("CUDA out of memory. Tried to allocate 2.00 GiB (GPU 0; 15.78 GiB total capacity)"),
+            RuntimeError("[enforce fail at alloc_cpu.cpp:117] data. DefaultCPUAllocator: not enough memory: you "
+                         "tried to allocate 8589934592 bytes.")]
+    for t in (getattr(torch, "OutOfMemoryError", None), getattr(torch.cuda, "OutOfMemoryError", None)):
+        if isinstance(t, type):
+            errs.append(t("CUDA out of memory. Tried to allocate 20.00 MiB"))
+    return torch, errs
+
+
+def test_lstm_training_out_of_memory_is_a_limit_not_a_bug(tmp_path, monkeypatch):
+    """``zupt train --force`` whose training torch cannot allocate (``torch.OutOfMemoryError``, or the
+    ``RuntimeError`` "CUDA out of memory" / "not enough memory" of older torch) ended as "internal error ... this is a
+    bug": now a MemoryError from ``train_lstm`` that says what the training held and what to reduce, and on the
+    command line one line, exit 2, no model written.  Another RuntimeError of torch is still a bug."""
+    import scipy.io
+
+    import imunav.learn
+    from imunav.learn import LstmConfig, train_lstm
+    from imunav.sim.gait import simulate_gait
+
+    torch, errs = _torch_errors()
+    monkeypatch.chdir(tmp_path)
+    sim = simulate_gait("walk", 4, rng=1, error_model=None)
+    (tmp_path / "trials").mkdir()
+    imu = np.column_stack([sim.imu.accel, sim.imu.gyro])
+    scipy.io.savemat(tmp_path / "trials" / "t.mat", {"imu": imu, "ts": sim.imu.t, "gt": np.zeros((sim.imu.n, 3)),
+                                                     "zv_shoe_opt": sim.stance.astype(float)})
+    monkeypatch.setattr(imunav.learn, "best_labels", lambda tr, *a, **k: (tr.labels["shoe"], "shoe", 0.1))
+    argv = ["zupt", "train", "trials", "--out", "z.npz", "--shoe-threshold", "1e7", "--epochs", "1",
+            "--windows-per-trial", "2", "--layers", "1", "--hidden", "4", "--force"]
+    for err in errs:
+        def oom(*a, _err=err, **k):
+            raise _err
+
+        monkeypatch.setattr(torch.nn.LSTM, "forward", oom)
+        msg = _exit_2(runner.invoke(app, argv))
+        assert msg.startswith("error: training the LSTM ran out of memory (") and "internal error" not in msg, msg
+        assert "1 x 4 LSTM units" in msg and "reduce the model (--hidden / --layers)" in msg, msg
+        assert not (tmp_path / "z.npz").exists()
+        with pytest.raises(MemoryError, match=r"LstmConfig\.hidden / layers; command line: --hidden / --layers"):
+            train_lstm([sim.imu], [sim.stance], LstmConfig(layers=1, hidden=4, epochs=1, windows_per_trial=2))
+    r = runner.invoke(app, ["--debug", *argv])
+    assert r.exit_code == 2 and "Traceback" in r.stderr and "in oom" in r.stderr
+
+    def bug(*a, **k):
+        raise RuntimeError("input.size(-1) must be equal to input_size")
+
+    monkeypatch.setattr(torch.nn.LSTM, "forward", bug)
+    assert "internal error: RuntimeError" in _exit_2(runner.invoke(app, argv), 1)
+    monkeypatch.undo()

@@ -340,7 +340,10 @@ class ImunavGroup(TyperGroup):
         except (ImunavError, OSError) as exc:
             fail(numba_cache_failure(exc) or exc, ctx)
         except MemoryError as exc:  # the machine's limit, as a refused write is the file system's (e.g. --force)
-            fail(MemoryError(f"out of memory ({_message(exc)}); reduce the request"), ctx)
+            said = command_line_words(_message(exc))
+            short = MemoryError(said if "out of memory" in said else f"out of memory ({said}); reduce the request")
+            short.__cause__ = exc  # --debug shows where
+            fail(short, ctx)
         except UnicodeDecodeError as exc:  # a text input (TOML, JSON, CSV) that is not text
             fail(ValueError(f"an input file is not UTF-8 text ({exc.reason} at byte {exc.start}); "
                             "check the file given for each option"), ctx)
