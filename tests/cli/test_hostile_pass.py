@@ -719,3 +719,62 @@ def test_lstm_training_out_of_memory_is_a_limit_not_a_bug(tmp_path, monkeypatch)
     monkeypatch.setattr(torch.nn.LSTM, "forward", bug)
     assert "internal error: RuntimeError" in _exit_2(runner.invoke(app, argv), 1)
     monkeypatch.undo()
+
+
+def _profile(gyro_n: float):
+    from imunav.noise import NoiseProfile, NoiseTerm, SensorNoise
+
+    nan = float("nan")
+
+    def sensor(unit, n):
+        return SensorNoise(unit, NoiseTerm([n] * 3, [nan] * 3, [True] * 3), NoiseTerm([0.0] * 3, [nan] * 3, [False] * 3),
+                           NoiseTerm([1e-5] * 3, [nan] * 3, [False] * 3))
+
+    return NoiseProfile(fs=10.0, duration_s=600.0, gyro=sensor("rad/s", gyro_n), accel=sensor("m/s^2", 1e-3))
+
+
+def test_a_filter_whose_numbers_overflow_is_refused_not_written(tmp_path, monkeypatch):
+    """A noise far outside any sensor's (a hand-edited profile's 1e300 rad/s/sqrt(Hz)) overflows the filters:
+    ``attitude run`` said "q has non-finite values ...; remove or interpolate them first" (about the input), and
+    ``gins run`` exited 0 with NaN sigma files, every GNSS fix rejected.  Both now say the filter diverged and
+    what it was given, exit 2, nothing written."""
+    monkeypatch.chdir(tmp_path)
+    write_imu(_rec(600), tmp_path / "good.npz")
+    _profile(1e300).write(tmp_path / "huge.toml")
+    for extra, given in ((["--param", "gyro_noise_density=1e300"], "--param gyro_noise_density=1e+300"),
+                         (["--noise", "huge.toml"], "--noise huge.toml")):
+        msg = _exit_2(runner.invoke(app, ["attitude", "run", "good.npz", "--filter", "mekf", "--json", "a.json",
+                                          *extra]))
+        assert msg.startswith("error: mekf diverged: its attitude is not finite from sample ") and given in msg, msg
+    r = runner.invoke(app, ["gins", "simulate", "--out", "d", "--duration", "120", "--fs", "10", "--seed", "3"])
+    assert r.exit_code == 0, r.output
+    msg = _exit_2(runner.invoke(app, ["gins", "run", "--config", "d/kf-gins.yaml", "--out", "o", "--no-plots",
+                                      "--noise", "huge.toml"]))
+    assert msg.startswith("error: GinsFilter.run diverged: its covariance is not finite from t = ") and \
+        "gyro_noise_density 1e+300" in msg, msg
+    assert not (tmp_path / "o").exists() and not (tmp_path / "a.json").exists()
+    _profile(1e-3).write(tmp_path / "fine.toml")  # the same run with a sensor's noise
+    r = runner.invoke(app, ["gins", "run", "--config", "d/kf-gins.yaml", "--out", "o", "--no-plots", "--noise",
+                            "fine.toml"])
+    assert r.exit_code == 0, r.output
+
+
+@pytest.mark.parametrize("extra, words", [
+    (["--shifts", "0,0"], "shifts_s repeats 0 s (--shifts)"),
+    (["--every", "60", "--shifts", "0,60"], "shifts_s 60 s is outside [0, every_s = 60 s) (--shifts, --every)"),
+    (["--every", "20", "--length", "30"], "need every_s > length_s > 0 (--every > --length > 0); got every_s=20"),
+])
+def test_an_outage_protocol_that_counts_outages_twice_is_refused(tmp_path, extra, words):
+    """``gins outage-test --shifts 0,0`` ran the same outages twice and reported 4/4 inside 3 sigma for two
+    outages; a shift of a period or more repeats a shorter one's windows.  Refused before any work (also
+    through the API: outage_test)."""
+    from imunav.errors import InvalidInputError
+    from imunav.ins.gins.outage import check_protocol
+
+    msg = _exit_2(runner.invoke(app, ["gins", "outage-test", "--out", str(tmp_path / "o"), "--converge", "30",
+                                      "--length", "10", *extra]))
+    assert words in msg, msg
+    assert not (tmp_path / "o").exists()
+    with pytest.raises(InvalidInputError, match="repeats 5"):
+        check_protocol(15.0, 10.0, (0.0, 5.0, 5.0))
+    check_protocol(15.0, 10.0, (0.0, 5.0, 10.0))  # the car example of the guide

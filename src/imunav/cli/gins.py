@@ -359,6 +359,7 @@ def outage_cmd(
     --every 15 --length 10 --shifts 0,5,10 --out car-outage
     """
     sh = _shifts(shifts)
+    outage.check_protocol(every, length, sh)  # before any reading: a log's run takes the same protocol
     if imu is not None and navlog.is_nav_log(imu):
         extra = [n for n, v in (("GNSS file", gnss), ("--config", config), ("--odo", odo),
                                 ("--duration", duration), ("--fs", fs), ("--seed", seed), ("--rtk/--spp", rtk),
