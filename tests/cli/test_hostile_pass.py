@@ -778,3 +778,19 @@ def test_an_outage_protocol_that_counts_outages_twice_is_refused(tmp_path, extra
     with pytest.raises(InvalidInputError, match="repeats 5"):
         check_protocol(15.0, 10.0, (0.0, 5.0, 5.0))
     check_protocol(15.0, 10.0, (0.0, 5.0, 10.0))  # the car example of the guide
+
+
+def test_a_recording_of_unknown_format_is_refused_in_command_line_words(tmp_path):
+    """``info`` on a folder (a comma2k19 segment) or an unknown suffix said "pass format= one of [...]", the
+    library's keyword: now the flag, and what a folder is."""
+    from imunav.errors import InvalidInputError
+    from imunav.io import read_imu
+
+    (tmp_path / "seg").mkdir()
+    msg = _exit_2(runner.invoke(app, ["info", str(tmp_path / "seg")]))
+    assert "from a folder that is not a ROS 2 bag" in msg and "give --format NAME, NAME one of csv" in msg, msg
+    assert "format=" not in msg
+    (tmp_path / "r.foo").write_text("1,2,3\n")
+    assert "give --format NAME" in _exit_2(runner.invoke(app, ["info", str(tmp_path / "r.foo")]))
+    with pytest.raises(InvalidInputError, match=r"give format=NAME \(command line: --format NAME\)"):
+        read_imu(tmp_path / "r.foo")
