@@ -117,6 +117,7 @@ def _unraisable(hook: Callable[[Any], None]) -> Callable[[Any], None]:
             return
         hook(u)
 
+    unraisable._imunav_latch = True  # type: ignore[attr-defined]
     return unraisable
 
 
@@ -136,6 +137,7 @@ def latch_interrupts() -> None:
     _INTERRUPT["seen"] = False
     if signal.getsignal(signal.SIGINT) is not _on_sigint:
         signal.signal(signal.SIGINT, _on_sigint)
+    if not getattr(sys.unraisablehook, "_imunav_latch", False):  # a hook set since (a test, an embedding program)
         sys.unraisablehook = _unraisable(sys.unraisablehook)
 
 

@@ -587,3 +587,210 @@ def test_a_negative_count_scale_mirrors_the_triad_and_is_refused(tmp_path, monke
     d = ImuData.from_arrays(None, raw[:, :3], raw[:, 3:], fs=50.0, gyro_unit="counts", gyro_scale=[1e-3, -1e-3, 1e-3],
                             accel_unit="counts", accel_scale=6e-4)
     assert np.allclose(d.gyro[:, 1], -1e-3 * raw[:, 1])
+
+
+# ------------------------------------------------------------------ leftovers of the second pass
+@pytest.mark.parametrize("outputpath", [".", "imu.txt", "..", "kf-gins.yaml"])
+def test_a_kfgins_outputpath_follows_the_rule_of_out(tmp_path, monkeypatch, outputpath):
+    """A KF-GINS YAML's ``outputpath`` is the output folder as ``--out`` is: ``"."`` (the YAML's own folder)
+    wrote KF-GINS's outputs beside the IMU, GNSS and YAML files that ``--out`` there refuses; now refused the
+    same way, naming the YAML and its key, before anything is written."""
+    monkeypatch.chdir(tmp_path)
+    r = runner.invoke(app, ["gins", "simulate", "--out", "d", "--duration", "120", "--fs", "10", "--seed", "3"])
+    assert r.exit_code == 0, r.output
+    yaml = Path("d/kf-gins.yaml")
+    yaml.write_text(yaml.read_text().replace('outputpath: "result"', f'outputpath: "{outputpath}"'))
+    before = _snapshot(tmp_path)
+    msg = _exit_2(runner.invoke(app, ["gins", "run", "--config", "d/kf-gins.yaml", "--no-plots"]))
+    assert msg.startswith("error: d/kf-gins.yaml, key 'outputpath': the output folder") and "--out DIR" in msg, msg
+    assert ("holds the inputs" if outputpath in (".", "..") else "is the input") in msg
+    assert _snapshot(tmp_path) == before
+    # --out there is refused by the same rule; a folder of its own is written
+    assert "holds the input" in _exit_2(runner.invoke(app, ["gins", "run", "--config", "d/kf-gins.yaml", "--out", "d",
+                                                            "--no-plots"]))
+    yaml.write_text(yaml.read_text().replace(f'outputpath: "{outputpath}"', 'outputpath: "res"'))
+    r = runner.invoke(app, ["gins", "run", "--config", "d/kf-gins.yaml", "--no-plots"])
+    assert r.exit_code == 0, r.output
+    assert Path("d/res/KF_GINS_Navresult.nav").is_file()
+
+
+def test_a_numba_cache_the_file_system_refuses_is_named_with_its_fix(files, tmp_path):
+    """numba writes its cache of compiled kernels on first use; a write the file system refused there (a file-size
+    limit) ended as ``error: File too large``, naming no file: now the cache file and what to do."""
+    import os
+    import resource
+    import subprocess
+    import sys
+
+    def small_files():
+        resource.setrlimit(resource.RLIMIT_FSIZE, (1024, 1024))
+
+    cache = tmp_path / "numba-cache"  # empty: numba compiles and writes there first (it takes NUMBA_CACHE_DIR first)
+    env = dict(os.environ, PYTHONPATH=str(Path(__file__).resolve().parents[2] / "src"), NUMBA_CACHE_DIR=str(cache))
+    env.pop("IMUNAV_DEBUG", None)
+    argv = [sys.executable, "-m", "imunav.cli.main", "info", "good.csv"]
+    r = subprocess.run(argv, cwd=files, capture_output=True, text=True, env=env, timeout=300, preexec_fn=small_files)
+    assert r.returncode == 2, r.stderr
+    lines = r.stderr.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith(f"error: numba could not write its cache of imunav's compiled "
+                                                   f"kernels, {cache}{os.sep}"), r.stderr
+    assert "(File too large)" in lines[0] and "ulimit -f" in lines[0] and "imunav warmup" in lines[0]
+    r = subprocess.run([*argv[:3], "--debug", *argv[3:]], cwd=files, capture_output=True, text=True, env=env,
+                       timeout=300, preexec_fn=small_files)
+    assert r.returncode == 2 and "Traceback" in r.stderr and "numba/core/caching.py" in r.stderr, r.stderr
+
+
+def test_no_writable_numba_cache_folder_is_a_user_error_naming_the_folders(files, monkeypatch):
+    """Where numba may write none of its cache folders (a read-only install, no writable home) it raises a
+    RuntimeError at the first import of a kernel module: an internal error ("this is a bug"); now one line naming
+    the folders tried and NUMBA_CACHE_DIR, exit 2, the traceback with --debug."""
+    import imunav.io
+
+    monkeypatch.chdir(files)
+    monkeypatch.delenv("NUMBA_CACHE_DIR", raising=False)
+    monkeypatch.delenv("IMUNAV_DEBUG", raising=False)
+    src = str(Path(imunav.io.__file__).parent / "_text.py")
+
+    def no_locator(*a, **k):
+        raise RuntimeError(f"cannot cache function '_fixed_into': no locator available for file '{src}'")
+
+    monkeypatch.setattr(imunav.io, "read_imu", no_locator)
+    msg = _exit_2(runner.invoke(app, ["info", "good.csv"]))
+    assert msg.startswith(f"error: numba cannot cache imunav's compiled kernels (of {src}): none of its cache "
+                          f"folders can be written ({Path(src).parent / '__pycache__'}, "), msg
+    assert msg.endswith("set NUMBA_CACHE_DIR to a folder you may write (e.g. export NUMBA_CACHE_DIR=/tmp/numba-cache)")
+    r = runner.invoke(app, ["--debug", "info", "good.csv"])
+    assert r.exit_code == 2 and "Traceback" in r.stderr and "no locator available" in r.stderr
+    # a RuntimeError of another origin is still an internal error
+    monkeypatch.setattr(imunav.io, "read_imu", lambda *a, **k: (_ for _ in ()).throw(RuntimeError("boom")))
+    assert "internal error: RuntimeError: boom" in _exit_2(runner.invoke(app, ["info", "good.csv"]), 1)
+
+
+def _torch_errors():
+    torch = pytest.importorskip("torch")
+    errs = [MemoryError("Unable to allocate 12. GiB"),
+            RuntimeError("CUDA out of memory. Tried to allocate 2.00 GiB (GPU 0; 15.78 GiB total capacity)"),
+            RuntimeError("[enforce fail at alloc_cpu.cpp:117] data. DefaultCPUAllocator: not enough memory: you "
+                         "tried to allocate 8589934592 bytes.")]
+    for t in (getattr(torch, "OutOfMemoryError", None), getattr(torch.cuda, "OutOfMemoryError", None)):
+        if isinstance(t, type):
+            errs.append(t("CUDA out of memory. Tried to allocate 20.00 MiB"))
+    return torch, errs
+
+
+def test_lstm_training_out_of_memory_is_a_limit_not_a_bug(tmp_path, monkeypatch):
+    """``zupt train --force`` whose training torch cannot allocate (``torch.OutOfMemoryError``, or the
+    ``RuntimeError`` "CUDA out of memory" / "not enough memory" of older torch) ended as "internal error ... this is a
+    bug": now a MemoryError from ``train_lstm`` that says what the training held and what to reduce, and on the
+    command line one line, exit 2, no model written.  Another RuntimeError of torch is still a bug."""
+    import scipy.io
+
+    import imunav.learn
+    from imunav.learn import LstmConfig, train_lstm
+    from imunav.sim.gait import simulate_gait
+
+    torch, errs = _torch_errors()
+    monkeypatch.chdir(tmp_path)
+    sim = simulate_gait("walk", 4, rng=1, error_model=None)
+    (tmp_path / "trials").mkdir()
+    imu = np.column_stack([sim.imu.accel, sim.imu.gyro])
+    scipy.io.savemat(tmp_path / "trials" / "t.mat", {"imu": imu, "ts": sim.imu.t, "gt": np.zeros((sim.imu.n, 3)),
+                                                     "zv_shoe_opt": sim.stance.astype(float)})
+    monkeypatch.setattr(imunav.learn, "best_labels", lambda tr, *a, **k: (tr.labels["shoe"], "shoe", 0.1))
+    argv = ["zupt", "train", "trials", "--out", "z.npz", "--shoe-threshold", "1e7", "--epochs", "1",
+            "--windows-per-trial", "2", "--layers", "1", "--hidden", "4", "--force"]
+    for err in errs:
+        def oom(*a, _err=err, **k):
+            raise _err
+
+        monkeypatch.setattr(torch.nn.LSTM, "forward", oom)
+        msg = _exit_2(runner.invoke(app, argv))
+        assert msg.startswith("error: training the LSTM ran out of memory (") and "internal error" not in msg, msg
+        assert "1 x 4 LSTM units" in msg and "reduce the model (--hidden / --layers)" in msg, msg
+        assert not (tmp_path / "z.npz").exists()
+        with pytest.raises(MemoryError, match=r"LstmConfig\.hidden / layers; command line: --hidden / --layers"):
+            train_lstm([sim.imu], [sim.stance], LstmConfig(layers=1, hidden=4, epochs=1, windows_per_trial=2))
+    r = runner.invoke(app, ["--debug", *argv])
+    assert r.exit_code == 2 and "Traceback" in r.stderr and "in oom" in r.stderr
+
+    def bug(*a, **k):
+        raise RuntimeError("input.size(-1) must be equal to input_size")
+
+    monkeypatch.setattr(torch.nn.LSTM, "forward", bug)
+    assert "internal error: RuntimeError" in _exit_2(runner.invoke(app, argv), 1)
+    monkeypatch.undo()
+
+
+def _profile(gyro_n: float):
+    from imunav.noise import NoiseProfile, NoiseTerm, SensorNoise
+
+    nan = float("nan")
+
+    def sensor(unit, n):
+        return SensorNoise(unit, NoiseTerm([n] * 3, [nan] * 3, [True] * 3), NoiseTerm([0.0] * 3, [nan] * 3, [False] * 3),
+                           NoiseTerm([1e-5] * 3, [nan] * 3, [False] * 3))
+
+    return NoiseProfile(fs=10.0, duration_s=600.0, gyro=sensor("rad/s", gyro_n), accel=sensor("m/s^2", 1e-3))
+
+
+def test_a_filter_whose_numbers_overflow_is_refused_not_written(tmp_path, monkeypatch):
+    """A noise far outside any sensor's (a hand-edited profile's 1e300 rad/s/sqrt(Hz)) overflows the filters:
+    ``attitude run`` said "q has non-finite values ...; remove or interpolate them first" (about the input), and
+    ``gins run`` exited 0 with NaN sigma files, every GNSS fix rejected.  Both now say the filter diverged and
+    what it was given, exit 2, nothing written."""
+    monkeypatch.chdir(tmp_path)
+    write_imu(_rec(600), tmp_path / "good.npz")
+    _profile(1e300).write(tmp_path / "huge.toml")
+    for extra, given in ((["--param", "gyro_noise_density=1e300"], "--param gyro_noise_density=1e+300"),
+                         (["--noise", "huge.toml"], "--noise huge.toml")):
+        msg = _exit_2(runner.invoke(app, ["attitude", "run", "good.npz", "--filter", "mekf", "--json", "a.json",
+                                          *extra]))
+        assert msg.startswith("error: mekf diverged: its attitude is not finite from sample ") and given in msg, msg
+    r = runner.invoke(app, ["gins", "simulate", "--out", "d", "--duration", "120", "--fs", "10", "--seed", "3"])
+    assert r.exit_code == 0, r.output
+    msg = _exit_2(runner.invoke(app, ["gins", "run", "--config", "d/kf-gins.yaml", "--out", "o", "--no-plots",
+                                      "--noise", "huge.toml"]))
+    assert msg.startswith("error: GinsFilter.run diverged: its covariance is not finite from t = ") and \
+        "gyro_noise_density 1e+300" in msg, msg
+    assert not (tmp_path / "o").exists() and not (tmp_path / "a.json").exists()
+    _profile(1e-3).write(tmp_path / "fine.toml")  # the same run with a sensor's noise
+    r = runner.invoke(app, ["gins", "run", "--config", "d/kf-gins.yaml", "--out", "o", "--no-plots", "--noise",
+                            "fine.toml"])
+    assert r.exit_code == 0, r.output
+
+
+@pytest.mark.parametrize("extra, words", [
+    (["--shifts", "0,0"], "shifts_s repeats 0 s (--shifts)"),
+    (["--every", "60", "--shifts", "0,60"], "shifts_s 60 s is outside [0, every_s = 60 s) (--shifts, --every)"),
+    (["--every", "20", "--length", "30"], "need every_s > length_s > 0 (--every > --length > 0); got every_s=20"),
+])
+def test_an_outage_protocol_that_counts_outages_twice_is_refused(tmp_path, extra, words):
+    """``gins outage-test --shifts 0,0`` ran the same outages twice and reported 4/4 inside 3 sigma for two
+    outages; a shift of a period or more repeats a shorter one's windows.  Refused before any work (also
+    through the API: outage_test)."""
+    from imunav.errors import InvalidInputError
+    from imunav.ins.gins.outage import check_protocol
+
+    msg = _exit_2(runner.invoke(app, ["gins", "outage-test", "--out", str(tmp_path / "o"), "--converge", "30",
+                                      "--length", "10", *extra]))
+    assert words in msg, msg
+    assert not (tmp_path / "o").exists()
+    with pytest.raises(InvalidInputError, match="repeats 5"):
+        check_protocol(15.0, 10.0, (0.0, 5.0, 5.0))
+    check_protocol(15.0, 10.0, (0.0, 5.0, 10.0))  # the car example of the guide
+
+
+def test_a_recording_of_unknown_format_is_refused_in_command_line_words(tmp_path):
+    """``info`` on a folder (a comma2k19 segment) or an unknown suffix said "pass format= one of [...]", the
+    library's keyword: now the flag, and what a folder is."""
+    from imunav.errors import InvalidInputError
+    from imunav.io import read_imu
+
+    (tmp_path / "seg").mkdir()
+    msg = _exit_2(runner.invoke(app, ["info", str(tmp_path / "seg")]))
+    assert "from a folder that is not a ROS 2 bag" in msg and "give --format NAME, NAME one of csv" in msg, msg
+    assert "format=" not in msg
+    (tmp_path / "r.foo").write_text("1,2,3\n")
+    assert "give --format NAME" in _exit_2(runner.invoke(app, ["info", str(tmp_path / "r.foo")]))
+    with pytest.raises(InvalidInputError, match=r"give format=NAME \(command line: --format NAME\)"):
+        read_imu(tmp_path / "r.foo")

@@ -154,3 +154,37 @@ def test_refusals(tmp_path):
             np.save(f, bad)
         with pytest.raises(FileFormatError, match="real numeric"):
             read_comma2k19(seg3)
+
+
+@pytest.mark.parametrize("damage", ["missing", "empty", "truncated", "pickled"])
+@pytest.mark.parametrize("rel", ["processed_log/IMU/accelerometer/t", "processed_log/IMU/gyro/value",
+                                 "processed_log/GNSS/live_gnss_ublox/t", "global_pose/frame_times",
+                                 "global_pose/frame_gps_times", "global_pose/frame_positions"])
+def test_a_damaged_file_of_a_segment_is_named(tmp_path, rel, damage):
+    """Every file of a segment, missing or damaged, is named: an empty file (EOFError), a truncated or pickled one
+    in global_pose ended in an internal error, a missing accelerometer/t in "not a ROS bag nor a PX4 ULog"."""
+    from typer.testing import CliRunner
+
+    from imunav.cli.main import app
+
+    seg = _synthetic(tmp_path / "seg")
+    p = seg / rel
+    if damage == "missing":
+        p.unlink()
+    elif damage == "empty":
+        p.write_bytes(b"")
+    elif damage == "truncated":
+        p.write_bytes(p.read_bytes()[:-40])
+    else:
+        with open(p, "wb") as f:
+            np.save(f, np.array([{"a": 1}], dtype=object), allow_pickle=True)
+    assert is_comma2k19_segment(seg)
+    read = read_comma2k19_pose if rel in ("global_pose/frame_positions",) else read_comma2k19
+    with pytest.raises(FileFormatError) as e:
+        read(seg)
+    msg = str(e.value)
+    assert (f"{seg}: the comma2k19 segment has no {rel}" if damage == "missing" else f"{p}: not a NumPy array "
+            "file") in msg, msg
+    r = CliRunner().invoke(app, ["gins", "run", str(seg), "--out", str(tmp_path / "o"), "--truth", str(seg)])
+    assert r.exit_code == 2 and len(r.stderr.strip().splitlines()) == 1 and rel in r.stderr, r.stderr
+    assert not (tmp_path / "o").exists()

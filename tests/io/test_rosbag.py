@@ -507,3 +507,34 @@ def test_fixed_layout_fast_path_is_bit_identical_to_rosbags(tmp_path, storage, m
         assert together[t].meta == fast[t].meta and all(
             together[t].values[k].tobytes() == fast[t].values[k].tobytes() for k in fast[t].values)
     assert "child_frame_ids" in fast["/odom_children"] and fast["/odom"].meta["child_frame_id"] == "base_link"
+
+
+def test_a_damaged_chunk_of_a_bag_is_named(tmp_path):
+    """A bz2 chunk whose bytes were damaged (the index intact) ended in ``error: Invalid data stream``, naming no
+    file: rosbags' error while reading the records is now a FileFormatError naming the bag, through the CLI too."""
+    from rosbags.rosbag1 import Writer
+    from rosbags.typesys import Stores, get_typestore
+
+    ts = get_typestore(Stores.ROS1_NOETIC)
+    T = ts.types
+    path = tmp_path / "rec.bag"
+    writer = Writer(path)
+    writer.set_compression(Writer.CompressionFormat.BZ2)
+    with writer:
+        conn = writer.add_connection("/imu", "sensor_msgs/msg/Imu", typestore=ts)
+        for i in range(3000):
+            stamp = T0 + i * 5_000_000
+            hdr = T["std_msgs/msg/Header"](seq=i, stamp=T["builtin_interfaces/msg/Time"](
+                sec=stamp // 1_000_000_000, nanosec=stamp % 1_000_000_000), frame_id="imu")
+            msg = _imu_msg([0.01 * np.sin(i), 0.0, 0.0], [0.0, 0.0, 9.81])(T, hdr)
+            writer.write(conn, stamp, ts.serialize_ros1(msg, "sensor_msgs/msg/Imu"))
+    assert read_imu(path).n == 3000
+    raw = bytearray(path.read_bytes())
+    mid = len(raw) // 2
+    raw[mid:mid + 2000] = bytes(2000)
+    path.write_bytes(raw)
+    with pytest.raises(FileFormatError, match=r"rec\.bag: a record of the bag cannot be read \(OSError: Invalid data "
+                                              r"stream\); the bag is damaged"):
+        read_imu(path)
+    r = runner.invoke(app, ["info", str(path), "--topic", "/imu"])
+    assert r.exit_code == 2 and len(r.stderr.strip().splitlines()) == 1 and "rec.bag: a record" in r.stderr, r.stderr

@@ -102,13 +102,18 @@ def _doc(tmp_path, edit) -> str:
     (lambda d: d.update(fs=0), ["fs", "> 0"]),
     (lambda d: d.pop("format"), ["lacks format"]),
     (lambda d: d["gyro"].pop("bias_random_walk"), ["lacks gyro.bias_random_walk"]),
+    # the white noise the filters take: a profile holds it on every axis (from_fits refuses one without it)
+    (lambda d: d["gyro"]["noise_density"].update(identified=[True, False, True]),
+     ["gyro.noise_density is not identified (or 0) on axis y"]),
+    (lambda d: d["accel"]["noise_density"].update(value=[0.0, 1e-3, 0.0]),
+     ["accel.noise_density is not identified (or 0) on axis x, z"]),
 ])
 def test_bad_profile_is_refused_naming_file_and_key(tmp_path, edit, words):
     path = _doc(tmp_path, edit)
     with pytest.raises(ConfigError) as e:
         read_noise_profile(path)
     msg = str(e.value)
-    assert msg.startswith(path)
+    assert msg.startswith(path) and msg.count(path) == 1, msg  # fs = 0 named the file twice
     for w in words:
         assert w in msg, msg
 

@@ -10,6 +10,9 @@ as paths (:func:`install_checks`), and turns
 * an :class:`imunav.errors.ImunavError` or an :class:`OSError` (input or output
   file missing, unreadable, not writable, a folder where a file is expected)
   into ONE line on stderr, ``error: <message>``, and exit status 2;
+* numba's cache of compiled kernels that cannot be written (no writable
+  folder, a write the file system refuses) into one line naming the file or the
+  folders and the fix (:func:`numba_cache_failure`), exit status 2;
 * any other exception (a bug) into one line saying how to report it, and exit
   status 1.
 
@@ -58,7 +61,8 @@ _PASS_THROUGH = tuple({e for e in (typer.Exit, typer.Abort, getattr(typer, "Type
                                    getattr(getattr(click, "exceptions", None), "Exit", None)) if e is not None})
 _ABORTS = tuple({e for e in (typer.Abort, getattr(click, "Abort", None)) if e is not None})
 
-__all__ = ["ImunavGroup", "check_figure_path", "check_suffix", "fail", "install_checks", "one_line"]
+__all__ = ["ImunavGroup", "check_figure_path", "check_suffix", "fail", "install_checks", "numba_cache_failure",
+           "one_line"]
 
 REPORT_TO = "the imunav issue tracker"
 
@@ -115,6 +119,79 @@ def _message(exc: BaseException) -> str:
     if isinstance(exc, OSError) and exc.filename is not None and str(exc.filename) not in msg:
         msg = f"{exc.filename}: {msg}"
     return one_line(msg)
+
+
+#: numba's message when no cache folder can be written (numba.core.caching._CacheImpl, stable since numba 0.22)
+_NO_CACHE_LOCATOR = re.compile(r"cannot cache function '([^']*)': no locator available for file '([^']*)'")
+_NUMBA_CACHING = os.path.join("numba", "core", "caching.py")
+#: what to do when numba cannot write a cache file, by errno
+_CACHE_FIX = {
+    errno.EFBIG: "raise the file-size limit (ulimit -f unlimited), or compile the kernels once without it "
+                 "(imunav warmup) so that later runs only read the cache",
+    errno.ENOSPC: "free space there, or set NUMBA_CACHE_DIR to a folder on a disk with room",
+    errno.EDQUOT: "free space there, or set NUMBA_CACHE_DIR to a folder on a disk with room",
+}
+
+
+def _user_cache_dir() -> str:
+    """numba's user-wide cache folder (its fallback where the package's ``__pycache__`` cannot be written)."""
+    try:
+        from numba.misc.appdirs import AppDirs  # only called once numba itself raised
+    except ImportError:  # pragma: no cover - numba is a dependency
+        return "~/.cache/numba"
+    return str(AppDirs(appname="numba", appauthor=False).user_cache_dir)
+
+
+def numba_cache_failure(exc: BaseException) -> OSError | None:
+    """A failure of numba's on-disk cache of compiled kernels as a user error: which file or folder, and the fix.
+
+    numba caches imunav's kernels (``@njit(cache=True)``) next to the sources, else in the user's cache folder,
+    else in ``$NUMBA_CACHE_DIR``.  Where no folder can be written it raises a ``RuntimeError`` at import (an
+    internal error for the command line), and a write the file system refuses (a file-size limit, a full disk)
+    is an ``OSError`` without a file name ("File too large").
+
+    Parameters
+    ----------
+    exc : BaseException
+        The exception a command ended with.
+
+    Returns
+    -------
+    OSError or None
+        One line naming the cache file or the folders tried and how to fix it, with ``exc`` as its cause (shown
+        by ``--debug``); None when ``exc`` did not come from numba's cache.
+    """
+    msg: str | None = None
+    if isinstance(exc, RuntimeError):
+        m = _NO_CACHE_LOCATOR.search(str(exc))
+        if m is not None:
+            src = Path(m.group(2))
+            tried = [str(src.parent / "__pycache__"), _user_cache_dir()]
+            if os.environ.get("NUMBA_CACHE_DIR"):
+                tried.insert(0, f"NUMBA_CACHE_DIR={os.environ['NUMBA_CACHE_DIR']}")
+            msg = (f"numba cannot cache imunav's compiled kernels (of {src}): none of its cache folders can be "
+                   f"written ({', '.join(tried)}); set NUMBA_CACHE_DIR to a folder you may write "
+                   "(e.g. export NUMBA_CACHE_DIR=/tmp/numba-cache)")
+    elif isinstance(exc, OSError):
+        path = None
+        tb = exc.__traceback__
+        while tb is not None:  # the innermost frame of numba's cache that names the file it was writing
+            f = tb.tb_frame
+            if f.f_code.co_filename.endswith(_NUMBA_CACHING):
+                loc = f.f_locals
+                named = next((loc[k] for k in ("filepath", "path") if isinstance(loc.get(k), str)), None)
+                path = named or getattr(loc.get("self"), "_cache_path", None) or path
+            tb = tb.tb_next
+        if path is not None:
+            why = exc.strerror or str(exc) or type(exc).__name__
+            fix = _CACHE_FIX.get(exc.errno or 0, "set NUMBA_CACHE_DIR to a folder you may write "
+                                                 "(e.g. export NUMBA_CACHE_DIR=/tmp/numba-cache)")
+            msg = f"numba could not write its cache of imunav's compiled kernels, {path} ({why}): {fix}"
+    if msg is None:
+        return None
+    out = OSError(msg)
+    out.__cause__ = exc
+    return out
 
 
 def _debug_wanted(ctx: click.Context | None = None) -> bool:
@@ -261,13 +338,19 @@ class ImunavGroup(TyperGroup):
         except (*_PASS_THROUGH, KeyboardInterrupt, SystemExit):  # usage errors are reported by main()
             raise
         except (ImunavError, OSError) as exc:
-            fail(exc, ctx)
+            fail(numba_cache_failure(exc) or exc, ctx)
         except MemoryError as exc:  # the machine's limit, as a refused write is the file system's (e.g. --force)
-            fail(MemoryError(f"out of memory ({_message(exc)}); reduce the request"), ctx)
+            said = command_line_words(_message(exc))
+            short = MemoryError(said if "out of memory" in said else f"out of memory ({said}); reduce the request")
+            short.__cause__ = exc  # --debug shows where
+            fail(short, ctx)
         except UnicodeDecodeError as exc:  # a text input (TOML, JSON, CSV) that is not text
             fail(ValueError(f"an input file is not UTF-8 text ({exc.reason} at byte {exc.start}); "
                             "check the file given for each option"), ctx)
         except Exception as exc:  # noqa: BLE001  (a bug: say how to report it)
+            cache = numba_cache_failure(exc)  # numba finds no cache folder it may write: the machine's, not a bug
+            if cache is not None:
+                fail(cache, ctx)
             debug = _debug_wanted(ctx)
             if debug:
                 traceback.print_exception(type(exc), exc, exc.__traceback__, file=sys.stderr)

@@ -16,7 +16,7 @@ from imunav.cli._console import make_console
 from imunav.cli._errors import check_figure_path
 from imunav.cli._lazy import lazy
 from imunav.cli._options import END, INSTANCE, LAYOUT, MAG_TOPIC, START, TOPIC, reader_options, window
-from imunav.errors import ConfigError
+from imunav.errors import ConfigError, ConvergenceError
 from imunav.files import check_outputs, write_json
 
 alignment = lazy("imunav.attitude.alignment")
@@ -160,6 +160,14 @@ def run_cmd(
 
         kw["q0"] = alignment.broad_reference_start(data.accel[0], data.mag[0])
     res = f.run(data, **kw)
+    bad = ~np.isfinite(res.q_nb).all(axis=1)
+    if bad.any():  # a noise or gain far out of range (a profile's 1e300) makes the filter's numbers overflow
+        k = int(np.argmax(bad))
+        given = [f"--param {k_}={v}" for k_, v in params.items()] + ([f"--noise {noise}"] if prof is not None else [])
+        raise ConvergenceError(f"{res.name} diverged: its attitude is not finite from sample {k} (t = "
+                               f"{res.t[k] - res.t[0]:.6g} s) on; check what it was given"
+                               + (f" ({', '.join(given)})" if given else "") + ": a noise or gain far outside "
+                               "the sensor's range")
 
     q_final = res.q_nb
     decl = None

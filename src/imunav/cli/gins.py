@@ -18,7 +18,7 @@ import typer
 from imunav.cli._domains import Domain, parse_numbers
 from imunav.cli._lazy import lazy
 from imunav.cli._progress import progress
-from imunav.errors import ConfigError
+from imunav.errors import ConfigError, InvalidInputError
 from imunav.files import check_outputs, write_json
 
 if TYPE_CHECKING:
@@ -259,7 +259,15 @@ def run_cmd(
     if folder is None:
         raise ConfigError("give --out DIR, the folder for the results")
     outs = outputs.run_output_paths(folder, smoother=smoother, plots=plots, truth=ref is not None)
-    check_outputs([*inputs.paths.values(), truth, noise], outs.values())
+    ins = [*inputs.paths.values(), truth, noise]
+    try:  # the folder as `--out` is checked (a report folder): it may not be or hold an input, wherever it is named
+        check_outputs(ins, [], folders=[folder])
+    except InvalidInputError as exc:
+        if out is not None:
+            raise
+        raise ConfigError(f"{config}, key 'outputpath': {exc} (set outputpath to a folder of its own, e.g. "
+                          "outputpath: \"result\", or give --out DIR)") from None
+    check_outputs(ins, outs.values())
     if prof is not None:  # the profile's noise densities and bias sigma replace the configuration's
         cfg = gins_config.GinsConfig.from_noise_profile(prof, base=setup.config)
         setup = dataclasses.replace(setup, config=cfg)
@@ -351,6 +359,7 @@ def outage_cmd(
     --every 15 --length 10 --shifts 0,5,10 --out car-outage
     """
     sh = _shifts(shifts)
+    outage.check_protocol(every, length, sh)  # before any reading: a log's run takes the same protocol
     if imu is not None and navlog.is_nav_log(imu):
         extra = [n for n, v in (("GNSS file", gnss), ("--config", config), ("--odo", odo),
                                 ("--duration", duration), ("--fs", fs), ("--seed", seed), ("--rtk/--spp", rtk),

@@ -81,7 +81,8 @@ _CLOCK_FIT_TOL = 1e-3
 
 
 def is_comma2k19_segment(path: str | os.PathLike[str]) -> bool:
-    """True for a comma2k19 segment folder (module docstring): it holds ``processed_log/IMU/accelerometer/t``.
+    """True for a comma2k19 segment folder (module docstring): it holds the folder ``processed_log/IMU`` (its
+    files are then read, and one that is missing or damaged is named).
 
     Parameters
     ----------
@@ -93,24 +94,31 @@ def is_comma2k19_segment(path: str | os.PathLike[str]) -> bool:
     bool
         Whether :func:`read_comma2k19` reads it.
     """
-    return os.path.isfile(os.path.join(os.fspath(path), _IMU, "accelerometer", "t"))
+    return os.path.isdir(os.path.join(os.fspath(path), _IMU))
+
+
+def _npy(folder: str, rel: str, what: str = "") -> Array:
+    """One array file of a segment (``.npy`` content, no suffix) as float64, or a FileFormatError naming it: missing,
+    empty, truncated, not NumPy, pickled objects, not real numbers."""
+    p = os.path.join(folder, rel)
+    try:
+        a = np.load(p, allow_pickle=False)
+    except FileNotFoundError:
+        raise FileFormatError(f"{folder}: the comma2k19 segment has no {rel}" + (f" ({what})" if what else "")) \
+            from None
+    except (ValueError, OSError, EOFError) as exc:  # EOFError: an empty file
+        raise FileFormatError(f"{p}: not a NumPy array file ({exc or type(exc).__name__}); the segment's file is "
+                              "damaged or incomplete: copy it again") from None
+    if not isinstance(a, np.ndarray) or a.ndim == 0 or not np.issubdtype(a.dtype, np.number) or np.iscomplexobj(a):
+        raise FileFormatError(f"{p}: expected a real numeric array, got {getattr(a, 'dtype', type(a).__name__)} of "
+                              f"shape {getattr(a, 'shape', ())}")
+    return np.asarray(a, dtype=np.float64)
 
 
 def _load(folder: str, rel: str, what: str, width: int | None) -> tuple[Array, Array]:
     """A sensor folder's ``t`` and ``value`` arrays, checked: finite, increasing stamps, one row per stamp."""
     base = os.path.join(folder, rel)
-    arrays = []
-    for name in ("t", "value"):
-        p = os.path.join(base, name)
-        try:
-            a = np.load(p, allow_pickle=False)
-        except FileNotFoundError:
-            raise FileFormatError(f"{folder}: the comma2k19 segment has no {rel}/{name} ({what})") from None
-        except (ValueError, OSError) as exc:
-            raise FileFormatError(f"{p}: not a NumPy array file ({exc})") from None
-        if a.ndim == 0 or not np.issubdtype(a.dtype, np.number) or np.iscomplexobj(a):
-            raise FileFormatError(f"{p}: expected a real numeric array, got {a.dtype} of shape {a.shape}")
-        arrays.append(np.asarray(a, dtype=np.float64))
+    arrays = [_npy(folder, f"{rel}/{name}", what) for name in ("t", "value")]
     t, v = arrays
     v = v.reshape(v.shape[0], -1) if v.ndim > 1 else v[:, None]
     if t.ndim != 1 or v.shape[0] != t.size or t.size < 2:
@@ -128,19 +136,12 @@ def _load(folder: str, rel: str, what: str, width: int | None) -> tuple[Array, A
 
 def _frame_times(folder: str) -> Array:
     """``global_pose/frame_times`` (a single array, no ``t`` / ``value`` pair)."""
-    p = os.path.join(folder, _POSE, "frame_times")
-    try:
-        return np.asarray(np.load(p, allow_pickle=False), dtype=np.float64).ravel()
-    except FileNotFoundError:
-        raise FileFormatError(f"{folder}: the comma2k19 segment has no {_POSE}/frame_times") from None
+    return _npy(folder, f"{_POSE}/frame_times").ravel()
 
 
 def _pose_array(folder: str, name: str, width: int, n: int) -> Array:
     p = os.path.join(folder, _POSE, name)
-    try:
-        a = np.asarray(np.load(p, allow_pickle=False), dtype=np.float64)
-    except FileNotFoundError:
-        raise FileFormatError(f"{folder}: the comma2k19 segment has no {_POSE}/{name}") from None
+    a = _npy(folder, f"{_POSE}/{name}")
     if a.shape != (n, width) or not np.all(np.isfinite(a)):
         raise FileFormatError(f"{p}: expected {n} finite rows of {width}; got shape {a.shape}")
     return a

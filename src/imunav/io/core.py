@@ -80,9 +80,12 @@ def format_from_suffix(path: str | os.PathLike[str], format: str | None = None) 
         return kind
     suffix = Path(path).suffix.lower()
     if suffix not in _SUFFIXES:
+        what = ("a folder that is not a ROS 2 bag (no metadata.yaml; a comma2k19 segment is read by gins run)"
+                if os.path.isdir(path) else f"its suffix {suffix!r}")
         raise InvalidInputError(
-            f"cannot tell the format of {os.fspath(path)!r} from its suffix {suffix!r}; known suffixes "
-            f"{sorted(_SUFFIXES) + ['.bag', '.db3', '.mcap', '.ulg']}; pass format= one of {list(FORMATS)}"
+            f"cannot tell the format of {os.fspath(path)!r} from {what}; known suffixes "
+            f"{sorted(_SUFFIXES) + ['.bag', '.db3', '.mcap', '.ulg']}; give format=NAME (command line: --format "
+            f"NAME), NAME one of {', '.join(FORMATS)}"
         )
     return _SUFFIXES[suffix]
 

@@ -49,7 +49,7 @@ from typing import Any
 
 import numpy as np
 
-from imunav.errors import FileFormatError, InvalidInputError
+from imunav.errors import FileFormatError, ImunavError, InvalidInputError
 from imunav.io.aiding import MagnetometerData, OdometerData
 from imunav.io.gnss import GnssData
 from imunav.io.topics import (
@@ -117,8 +117,18 @@ class _Bag:
             ) from None
         return self.reader
 
-    def __exit__(self, *exc: Any) -> bool:
+    def __exit__(self, typ: Any, exc: Any, tb: Any) -> bool:
         self.reader.close()
+        if isinstance(exc, Exception) and not isinstance(exc, (ImunavError, FileNotFoundError, PermissionError)):
+            frames = []
+            while tb is not None:
+                frames.append(tb.tb_frame.f_code.co_filename)
+                tb = tb.tb_next
+            if any(f"{os.sep}rosbags{os.sep}" in f for f in frames):  # rosbags reading a record: a damaged bag
+                raise FileFormatError(
+                    f"{self.source}: a record of the bag cannot be read ({type(exc).__name__}: {exc}); the bag is "
+                    "damaged (a chunk that does not decompress or a message that does not decode): copy or record "
+                    "it again") from exc
         return False
 
 

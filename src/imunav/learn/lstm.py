@@ -44,8 +44,10 @@ The SHOE threshold is chosen on the training trials
 
 from __future__ import annotations
 
+import contextlib
+import re
 import time
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -304,6 +306,31 @@ def require_torch() -> Any:
     return torch
 
 
+#: torch's messages of an allocation it could not make (CPU: DefaultCPUAllocator "not enough memory"; CUDA: "out of
+#: memory"), for torch versions whose OutOfMemoryError is a plain RuntimeError
+_TORCH_OOM = re.compile(r"out of memory|not enough memory|DefaultCPUAllocator|[Uu]nable to allocate")
+
+
+@contextlib.contextmanager
+def _torch_memory(torch: Any, cfg: LstmConfig) -> Iterator[None]:
+    """Turn torch running out of memory (``torch.OutOfMemoryError``, a ``RuntimeError`` saying so, a
+    ``MemoryError``) into a :class:`MemoryError` that says what the training held and what to reduce."""
+    ooms = tuple(t for t in (getattr(torch, "OutOfMemoryError", None),
+                             getattr(getattr(torch, "cuda", None), "OutOfMemoryError", None)) if isinstance(t, type))
+    try:
+        yield
+    except (MemoryError, RuntimeError) as exc:
+        if not (isinstance(exc, MemoryError) or (ooms and isinstance(exc, ooms)) or _TORCH_OOM.search(str(exc))):
+            raise
+        said = " ".join(str(exc).split())
+        said = (said[:160] + " ...") if len(said) > 160 else said or type(exc).__name__
+        raise MemoryError(
+            f"training the LSTM ran out of memory ({said}) with batches of {cfg.batch_size} windows of {cfg.window} "
+            f"samples through {cfg.layers} x {cfg.hidden} LSTM units: the weights, their gradients and a batch's "
+            f"activations grow with layers x hidden; reduce the model (LstmConfig.hidden / layers; command line: "
+            f"--hidden / --layers) or the batch (LstmConfig.batch_size / window), or free memory") from exc
+
+
 def train_lstm(trials: Sequence[Any], labels: Sequence[Any], config: LstmConfig | None = None, *,
                progress: Callable[[int, int, float], None] | None = None,
                threads: int | None = 1) -> tuple[LstmDetector, TrainingReport]:
@@ -339,6 +366,8 @@ def train_lstm(trials: Sequence[Any], labels: Sequence[Any], config: LstmConfig 
         If there are no trials, not one label array per trial, or a trial is shorter than the window.
     ShapeError
         If a label array does not have one flag per sample.
+    MemoryError
+        If torch runs out of memory (``torch.OutOfMemoryError`` or its ``RuntimeError``), saying what to reduce.
     """
     cfg = LstmConfig() if config is None else config
     torch = require_torch()
@@ -363,68 +392,69 @@ def train_lstm(trials: Sequence[Any], labels: Sequence[Any], config: LstmConfig 
     torch.manual_seed(cfg.seed)
     if threads:
         torch.set_num_threads(int(threads))
-    net = torch.nn.LSTM(nin, cfg.hidden, cfg.layers, batch_first=True)
-    fc = torch.nn.Linear(cfg.hidden, 2)
-    params = list(net.parameters()) + list(fc.parameters())
-    opt = torch.optim.Adam(params, lr=cfg.lr)
-    per_epoch = cfg.windows_per_trial * len(X)
-    total_batches = cfg.epochs * int(np.ceil(per_epoch / cfg.batch_size))
-    sched = torch.optim.lr_scheduler.OneCycleLR(opt, max_lr=cfg.lr, total_steps=max(total_batches, 2))
-    # class weights (moving, stationary): > 1 favours recall of the stance, whose misses are
-    # the costly error of a ZUPT INS (unbounded drift)
-    cw = torch.tensor([1.0, float(cfg.stance_weight)])
-    t0 = time.perf_counter()
-    losses = []
-    done = 0
-    stopped = False
-    lens = np.array([x.shape[0] for x in X])
-    correct = 0
-    counted = 0
-    for _ in range(cfg.epochs):
-        trial_idx = np.repeat(np.arange(len(X)), cfg.windows_per_trial)
-        rng.shuffle(trial_idx)
-        for b0 in range(0, trial_idx.size, cfg.batch_size):
-            ti = trial_idx[b0:b0 + cfg.batch_size]
-            if warp:
-                sp = np.where(rng.random(ti.size) < cfg.warp_fraction,
-                              rng.uniform(cfg.speed[0], cfg.speed[1], ti.size), 1.0)
-                # a warped window needs (window - 1) * speed + 1 source samples
-                sp = np.minimum(sp, (lens[ti] - 1) / (cfg.window - 1))
-                span = (cfg.window - 1) * sp
-                starts = rng.uniform(0.0, 1.0, ti.size) * (lens[ti] - 1 - span)
-                xb = np.empty((ti.size, cfg.window, 6))
-                yb = np.empty((ti.size, cfg.window), bool)
-                for k, (i, s0, f) in enumerate(zip(ti, starts, sp)):
-                    xb[k], u = time_warp(X[i], G[i], f, s0, cfg.window)
-                    yb[k] = Y[i][np.minimum(np.rint(u).astype(np.int64), lens[i] - 1)]
-            else:
-                starts = rng.integers(0, lens[ti] - cfg.window + 1)
-                xb = np.stack([X[i][s:s + cfg.window] for i, s in zip(ti, starts)])
-                yb = np.stack([Y[i][s:s + cfg.window] for i, s in zip(ti, starts)])
-            xb = (_derived(augment(xb, cfg, rng), cfg.features) - mean) / std
-            xt = torch.as_tensor(xb, dtype=torch.float32)
-            yt = torch.as_tensor(yb[:, cfg.burn_in:].astype(np.int64))
-            out, _ = net(xt)
-            logits = fc(out[:, cfg.burn_in:])
-            loss = torch.nn.functional.cross_entropy(logits.reshape(-1, 2), yt.reshape(-1), weight=cw)
-            opt.zero_grad()
-            loss.backward()
-            torch.nn.utils.clip_grad_norm_(params, 1.0)
-            opt.step()
-            sched.step()
-            done += 1
-            losses.append(loss.item())
-            with torch.no_grad():
-                pred = torch.softmax(logits, -1)[..., 1] > cfg.threshold
-                correct += int((pred == yt.bool()).sum())
-                counted += int(yt.numel())
-            if progress is not None:
-                progress(done, total_batches, losses[-1])
-            if cfg.time_budget_s is not None and time.perf_counter() - t0 > cfg.time_budget_s:
-                stopped = True
+    with _torch_memory(torch, cfg):
+        net = torch.nn.LSTM(nin, cfg.hidden, cfg.layers, batch_first=True)
+        fc = torch.nn.Linear(cfg.hidden, 2)
+        params = list(net.parameters()) + list(fc.parameters())
+        opt = torch.optim.Adam(params, lr=cfg.lr)
+        per_epoch = cfg.windows_per_trial * len(X)
+        total_batches = cfg.epochs * int(np.ceil(per_epoch / cfg.batch_size))
+        sched = torch.optim.lr_scheduler.OneCycleLR(opt, max_lr=cfg.lr, total_steps=max(total_batches, 2))
+        # class weights (moving, stationary): > 1 favours recall of the stance, whose misses are
+        # the costly error of a ZUPT INS (unbounded drift)
+        cw = torch.tensor([1.0, float(cfg.stance_weight)])
+        t0 = time.perf_counter()
+        losses = []
+        done = 0
+        stopped = False
+        lens = np.array([x.shape[0] for x in X])
+        correct = 0
+        counted = 0
+        for _ in range(cfg.epochs):
+            trial_idx = np.repeat(np.arange(len(X)), cfg.windows_per_trial)
+            rng.shuffle(trial_idx)
+            for b0 in range(0, trial_idx.size, cfg.batch_size):
+                ti = trial_idx[b0:b0 + cfg.batch_size]
+                if warp:
+                    sp = np.where(rng.random(ti.size) < cfg.warp_fraction,
+                                  rng.uniform(cfg.speed[0], cfg.speed[1], ti.size), 1.0)
+                    # a warped window needs (window - 1) * speed + 1 source samples
+                    sp = np.minimum(sp, (lens[ti] - 1) / (cfg.window - 1))
+                    span = (cfg.window - 1) * sp
+                    starts = rng.uniform(0.0, 1.0, ti.size) * (lens[ti] - 1 - span)
+                    xb = np.empty((ti.size, cfg.window, 6))
+                    yb = np.empty((ti.size, cfg.window), bool)
+                    for k, (i, s0, f) in enumerate(zip(ti, starts, sp)):
+                        xb[k], u = time_warp(X[i], G[i], f, s0, cfg.window)
+                        yb[k] = Y[i][np.minimum(np.rint(u).astype(np.int64), lens[i] - 1)]
+                else:
+                    starts = rng.integers(0, lens[ti] - cfg.window + 1)
+                    xb = np.stack([X[i][s:s + cfg.window] for i, s in zip(ti, starts)])
+                    yb = np.stack([Y[i][s:s + cfg.window] for i, s in zip(ti, starts)])
+                xb = (_derived(augment(xb, cfg, rng), cfg.features) - mean) / std
+                xt = torch.as_tensor(xb, dtype=torch.float32)
+                yt = torch.as_tensor(yb[:, cfg.burn_in:].astype(np.int64))
+                out, _ = net(xt)
+                logits = fc(out[:, cfg.burn_in:])
+                loss = torch.nn.functional.cross_entropy(logits.reshape(-1, 2), yt.reshape(-1), weight=cw)
+                opt.zero_grad()
+                loss.backward()
+                torch.nn.utils.clip_grad_norm_(params, 1.0)
+                opt.step()
+                sched.step()
+                done += 1
+                losses.append(loss.item())
+                with torch.no_grad():
+                    pred = torch.softmax(logits, -1)[..., 1] > cfg.threshold
+                    correct += int((pred == yt.bool()).sum())
+                    counted += int(yt.numel())
+                if progress is not None:
+                    progress(done, total_batches, losses[-1])
+                if cfg.time_budget_s is not None and time.perf_counter() - t0 > cfg.time_budget_s:
+                    stopped = True
+                    break
+            if stopped:
                 break
-        if stopped:
-            break
     sd = net.state_dict()
     weights = []
     for l in range(cfg.layers):

@@ -433,6 +433,8 @@ class NoiseProfile(Result):
             return cls(fs=_number(d["fs"], where, "fs", positive=True),
                        duration_s=_number(d["duration_s"], where, "duration_s", positive=True),
                        source=src, **sensors)
+        except ConfigError:  # _number's: it names the file already
+            raise
         except InvalidInputError as exc:
             raise ConfigError(f"{where}: {exc}") from None
 
@@ -557,6 +559,11 @@ def _sensor_from(d: Any, s: str, where: str) -> SensorNoise:
             else:
                 arrays[k] = np.array([_number(x, where, f"{tab}.{k}[{i}]", allow_nan=k == "se")
                                       for i, x in enumerate(v)])
+        if t == "noise_density" and not (arrays["identified"].all() and (arrays["value"] > 0).all()):
+            axes = [a for a, ok in zip("xyz", arrays["identified"] & (arrays["value"] > 0)) if not ok]
+            raise ConfigError(f"{where}: {tab} is not identified (or 0) on axis {', '.join(axes)}: a noise profile "
+                              "holds the white noise of every axis (NoiseProfile.from_fits refuses one without it); "
+                              "identify it again on a longer static record (imunav noise REC --profile OUT.toml)")
         terms[t] = NoiseTerm(arrays["value"], arrays["se"], arrays["identified"])
     return SensorNoise(unit, **terms)
 

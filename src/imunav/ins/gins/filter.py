@@ -40,7 +40,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from imunav._quantiles import chi2_ppf
 from imunav.earth import OMEGA_E
-from imunav.errors import InvalidInputError, NonFiniteError, ShapeError
+from imunav.errors import ConvergenceError, InvalidInputError, NonFiniteError, ShapeError
 from imunav.ins.gins import aids, kernels
 from imunav.ins.gins.config import GinsConfig
 from imunav.ins.gins.layout import (
@@ -396,6 +396,22 @@ def _vec3_input(x: ArrayLike, name: str) -> Array:
     if a.shape != (3,) or not np.all(np.isfinite(a)):
         raise ShapeError(f"GinsFilter: {name} must be a finite 3-vector; got {x!r}")
     return a
+
+
+def _check_finite(t: np.ndarray, xs: np.ndarray, cov_t: np.ndarray, cov_diag: np.ndarray, c: GinsConfig) -> None:
+    """Raise :class:`ConvergenceError` where the filter's state or covariance stopped being finite (a run that
+    overflowed: every later fix is rejected and the σ written are NaN, a solution that only looks complete)."""
+    bad_cov = ~np.isfinite(cov_diag).all(axis=1)
+    bad_x = ~np.isfinite(xs).all(axis=1)
+    if not (bad_cov.any() or bad_x.any()):
+        return
+    when = min(float(cov_t[np.argmax(bad_cov)]) if bad_cov.any() else np.inf,
+               float(t[np.argmax(bad_x)]) if bad_x.any() else np.inf)
+    noise = ", ".join(f"{k} {np.max(np.atleast_1d(getattr(c, k))):.3g}" for k in
+                      ("gyro_noise_density", "accel_noise_density", "gyro_bias_std", "accel_bias_std"))
+    raise ConvergenceError(f"GinsFilter.run diverged: its {'covariance' if bad_cov.any() else 'state'} is not finite "
+                           f"from t = {when - float(t[0]):.6g} s after the first sample on; a noise or initial sigma "
+                           f"of the configuration is far outside any IMU's (largest: {noise})")
 
 
 class GinsFilter:
@@ -755,6 +771,9 @@ class GinsFilter:
             no GNSS fix inside the IMU span).
         ShapeError
             If ``vel0``, ``imu_errors0`` or ``static`` has the wrong shape.
+        ConvergenceError
+            If the covariance or the state is not finite (a noise or initial σ far outside any IMU's, e.g. a
+            noise profile's 1e300: the numbers overflow; the filter would reject every fix and write NaN σ).
         """
         t, dth, dv = _increments(imu)
         if t.size < 2:
@@ -802,6 +821,7 @@ class GinsFilter:
             if progress is not None:
                 progress(total, total)
         cov_diag, cov_nav = o.cov_diag[:m], o.cov_nav[:m]
+        _check_finite(t, o.xs, o.cov_t[:m], cov_diag, c)
         if c.accel_misalignment_std > 0:  # the accelerometers' axes off the IMU's, which no state holds
             # the wheels measure the velocity in the body's axes: the misalignment turns it
             wheels = odometer is not None or c.nhc_noise_std is not None

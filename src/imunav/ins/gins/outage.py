@@ -9,6 +9,7 @@ filter's predicted 3σ contained (per axis N, E, D at the worst epoch of each ax
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -24,7 +25,7 @@ from imunav.rotation import euler_from_quat
 from imunav.sim.gnss import outage_schedule
 from imunav.timeseries import ImuData
 
-__all__ = ["OutageReport", "outage_test", "outage_drift"]
+__all__ = ["OutageReport", "check_protocol", "outage_test", "outage_drift"]
 
 Array = NDArray[np.float64]
 
@@ -137,6 +138,42 @@ def outage_drift(res: GinsResult, truth: Any, outages: list[tuple[float, float]]
     return OutageReport(list(outages), arr["h"], arr["v"], arr["d3"], arr["r"], arr["p"], arr["y"], arr["c"] > 0.5)
 
 
+def check_protocol(every_s: float, length_s: float, shifts_s: Sequence[float]) -> None:
+    """Check the outage protocol's settings before any run.
+
+    Each shift is one filter run whose outages are the period's windows from ``converge_s + shift`` on; a shift
+    repeated, or one ``every_s`` (or more) after another, removes the same windows again and counts the same
+    outages twice in the RMS and the containment share.
+
+    Parameters
+    ----------
+    every_s, length_s : float
+        Outage period and length, s.
+    shifts_s : sequence of float
+        Shifts of the first outage, s.
+
+    Raises
+    ------
+    InvalidInputError
+        Unless ``every_s > length_s > 0``, and the shifts are distinct, >= 0 and < ``every_s``.
+    """
+    if not (np.isfinite(every_s) and np.isfinite(length_s) and every_s > length_s > 0):
+        raise InvalidInputError(f"need every_s > length_s > 0 (the outage period and length; command line: --every > "
+                                f"--length > 0); got every_s={every_s:g}, length_s={length_s:g}")
+    sh = [float(x) for x in shifts_s]
+    if not sh:
+        raise InvalidInputError("shifts_s is empty (the shifts; command line: --shifts); give at least one shift, e.g. 0")
+    bad = [x for x in sh if not (np.isfinite(x) and 0 <= x < every_s)]
+    if bad:
+        raise InvalidInputError(f"shifts_s {bad[0]:g} s is outside [0, every_s = {every_s:g} s) (the shifts and "
+                                "period; command line: --shifts, --every): a shift of a period or more removes the windows of a shorter "
+                                "one again and counts its outages twice")
+    dup = sorted({x for x in sh if sh.count(x) > 1})
+    if dup:
+        raise InvalidInputError(f"shifts_s repeats {', '.join(f'{x:g}' for x in dup)} s (the shifts; command line: --shifts): "
+                                "the same outages would be counted twice; give each shift once")
+
+
 def outage_test(imu: ImuData, gnss: GnssData, config: GinsConfig, truth: Any, *, lla0: Any, vel0: Any, q0: Any,
                 converge_s: float = 300.0, every_s: float = 180.0, length_s: float = 60.0,
                 shifts_s: tuple[float, ...] = (0.0, 60.0, 120.0), odometer: Any = None,
@@ -168,8 +205,10 @@ def outage_test(imu: ImuData, gnss: GnssData, config: GinsConfig, truth: Any, *,
     Raises
     ------
     InvalidInputError
-        If no outage fits in the recording after the convergence time for a shift.
+        If no outage fits in the recording after the convergence time for a shift, or the settings fail
+        :func:`check_protocol`.
     """
+    check_protocol(every_s, length_s, shifts_s)
     t0, t1 = float(imu.t[0]), float(imu.t[-1])
     reports = []
     for i, sh in enumerate(shifts_s):
