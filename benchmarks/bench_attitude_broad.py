@@ -16,6 +16,10 @@ motion: tapping, vibration; magnetic: magnets, office) and overall, 9D (total
 RMSE) and 6D (inclination RMSE), out of fold: the real-time filter <= 0.90 x vqf
 overall and <= 1.0 x in each group, the smoother <= 0.70 x offline VQF.
 
+The smoother's grid (``SMOOTHER_GRID``, issue 34) holds its gyro-bias random walk, accelerometer low-pass and tilt
+time constant beside the field test: its out-of-fold figure is the one to quote, the in-sample one only shows the
+gap.
+
 ``--holdout DIR`` also scores the shipped parameters on trials that no imunav
 default was tuned on (e.g. the other BROAD trials of the dataset's
 ``data_mat/`` folder), beside both peers.
@@ -61,6 +65,7 @@ GRIDS = {
 #: trials.  The smoother changed since (its own defaults, issue 12); the adaptive filter did not.
 BEFORE_A308974 = {"adaptive out of fold": 1.96, "smoother out of fold": 1.95,
                   "hold-out adaptive": 2.18, "hold-out smoother": 1.82}
+
 
 
 def _before_after(acc: dict, holdout: dict | None) -> None:
@@ -233,7 +238,12 @@ def main() -> None:
         acc["smoother_oof_ratio_vs_offline_vqf"] = r
         acc["smoother_oof_mean_deg"] = float(oof.mean())
         print(f"smoother out of fold: {oof.mean():.3f} vs offline VQF {vo_a.mean():.3f} deg = {r:.3f} x "
-              f"(need <= 0.85: {_verdict(r <= 0.85)}); in sample {ins.mean():.3f} ({ins.mean() / vo_a.mean():.3f} x)")
+              f"(need <= 0.85: {_verdict(r <= 0.85)}; issue 34 <= 0.70: {_verdict(r <= 0.70)}); in sample "
+              f"{ins.mean():.3f} ({ins.mean() / vo_a.mean():.3f} x; only to show the gap)")
+        cvs = out["filters"]["smoother"]["cv"]["fold_choice"]
+        for k in ("gyro_bias_random_walk", "accel_lpf_time_constant", "tilt_time_constant"):
+            vals, counts = np.unique([c[k] for c in cvs.values()], return_counts=True)
+            print(f"  folds chose {k}: " + ", ".join(f"{v:g} x{c}" for v, c in zip(vals, counts)))
     pub_path = d / "published_rmse.json"
     if pub_path.exists() and "madgwick_c" in rows:
         pub = json.loads(pub_path.read_text())["madgwick"]["trials"]
