@@ -778,6 +778,12 @@ def test_an_outage_protocol_that_counts_outages_twice_is_refused(tmp_path, extra
     with pytest.raises(InvalidInputError, match="repeats 5"):
         check_protocol(15.0, 10.0, (0.0, 5.0, 5.0))
     check_protocol(15.0, 10.0, (0.0, 5.0, 10.0))  # the car example of the guide
+    from imunav.ins.gins.logrun import log_outage_test
+    from imunav.sim.robot_log import simulate_robot_log
+
+    with pytest.raises(InvalidInputError, match="repeats 0"):  # the log run's outage test too, before any run
+        log_outage_test(simulate_robot_log(3, distance_m=80.0).sources, every_s=60.0, length_s=10.0,
+                        shifts_s=(0.0, 0.0))
 
 
 def test_a_recording_of_unknown_format_is_refused_in_command_line_words(tmp_path):

@@ -39,6 +39,7 @@ from imunav.ins.gins.filter import GinsFilter, kernel_setup
 from imunav.ins.gins.identify import GNSS_BIAS_TAU, gnss_correlated_std, withheld_score, withheld_windows
 from imunav.ins.gins.layout import LAY
 from imunav.ins.gins.mounting import MountingEstimate, _levelling, estimate_mounting
+from imunav.ins.gins.outage import check_protocol
 from imunav.ins.gins.result import GinsResult
 from imunav.io.kfgins import NavTrack
 from imunav.io.navlog import NavSources
@@ -1021,8 +1022,10 @@ def log_outage_test(src: NavSources, options: LogRunOptions | None = None, *, co
     Raises
     ------
     InvalidInputError
-        Without GNSS, when no outage fits after the convergence time, or when the truth does not overlap the log.
+        Without GNSS, when no outage fits after the convergence time, when the truth does not overlap the log, or
+        when the protocol counts outages twice (:func:`~imunav.ins.gins.outage.check_protocol`).
     """
+    check_protocol(every_s, length_s, shifts_s)
     if src.gnss is None:
         raise InvalidInputError(f"{src.source}: the outage test removes GNSS fixes; the log has none")
     ref_truth = truth_on_sources(truth, src) if truth is not None else None
