@@ -101,10 +101,17 @@ def _system(xs, fb, wb, prm, lay, F, Q):
     for j in range(3):
         F[ip + j, iv + j] = 1.0
     F[iv + 2, ip + 2] = 2.0 * g / (math.sqrt(RN * RE) + alt)
+    # 2 ω_ie + ω_en and ω_in = ω_ie + ω_en element by element (array expressions compile broadcasting loops into every
+    # caller's machine code: issue 35, a first run)
+    w2 = np.empty(3)
+    w_in = np.empty(3)
+    for j in range(3):
+        w2[j] = 2.0 * w_ie[j] + w_en[j]
+        w_in[j] = w_ie[j] + w_en[j]
     write_skew(fn, F, iv, ia, -1.0)
-    write_skew(2.0 * w_ie + w_en, F, iv, iv, -1.0)
+    write_skew(w2, F, iv, iv, -1.0)
     write_mat3(C, F, iv, iba, -1.0, ones)
-    write_skew(w_ie + w_en, F, ia, ia, -1.0)
+    write_skew(w_in, F, ia, ia, -1.0)
     F[ia, iv + 1] = -1.0 / (RE + alt)
     F[ia + 1, iv] = 1.0 / (RN + alt)
     F[ia + 2, iv + 1] = math.tan(lat) / (RE + alt)
@@ -211,7 +218,10 @@ def _update(kinds, n_models, zs, rs, xs, ctx, P, prm, lay, acc_dx, blk, force, u
         # zs[i], rs[i]: the padded measurement and covariance buffers of model i
         evaluate_used(use, k, xs, ctx, zs[i], rs[i], prm[lay[N_LAY + k]:], lay, H, R, nu, row)
         row += ROWS[k]
-    S0 = H @ P @ H.T + R
+    S0 = H @ P @ H.T
+    for i in range(m):  # + R element by element (no array expression: issue 35)
+        for j in range(m):
+            S0[i, j] += R[i, j]
     blk[:] = np.nan
     row = np.int64(0)
     for i in range(n_models):
