@@ -242,7 +242,7 @@ def _update(kinds, n_models, zs, rs, xs, ctx, P, prm, lay, acc_dx, blk, force, u
     return m, ok, d
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _consider_mask(lay, nx):
     """The states of the consider blocks (bit mask ``lay[LAY.consider]`` over :data:`STATE_BLOCKS`)."""
     mask = np.zeros(nx, dtype=np.bool_)
@@ -261,7 +261,7 @@ _BLOCK_SIZE = tuple(n for _, n in STATE_BLOCKS)
 _GNSS_POS = AID.gnss_position
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _adapt_gnss_noise(xs, nu, S0, R, prm):
     """Covariance matching of the fixes' white noise (Mehra 1972; Mohamed & Schwarz 1999, "Adaptive Kalman
     filtering for INS/GPS", J. Geodesy 73): ``E[ν νᵀ] = H P⁻ Hᵀ + s R_rep``, so one fix's estimate of the factor is
@@ -298,7 +298,7 @@ def _adapt_gnss_noise(xs, nu, S0, R, prm):
     xs[NOM.gnss_r_scale] = est if abs(est - 1.0) > 2.0 / math.sqrt(W) else 1.0
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _forced(carry_n, lay, src):
     """After ``lay[LAY.max_rejections]`` (> 0) gate rejections in a row of one source (a timed aid kind, or
     ``N_AIDS + group``), its next update is applied whatever the gate says: a filter that has drifted off would
@@ -307,13 +307,13 @@ def _forced(carry_n, lay, src):
     return mx > 0 and carry_n[CARRY_N.rejections + src] >= mx
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _count(carry_n, src, ok):
     """Count the gate rejections in a row of a source (reset by an acceptance)."""
     carry_n[CARRY_N.rejections + src] = 0 if ok else carry_n[CARRY_N.rejections + src] + 1
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _log(out, L, t, k, src, m, ok, d, blk):
     """Append one row to the update log when there is room; returns the new count."""
     if L < out.log_t.shape[0]:
@@ -390,7 +390,7 @@ def _rec_post(out, r, tr, P, xs, acc_dx):
         out.rec_state[r, 6 + j] = xs[NOM.q + j]
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _record_cov(out, m, tk, P):
     """Write covariance record m (time, diagonal, navigation block) when there is room; returns the new count."""
     if m < out.cov_t.shape[0]:
