@@ -933,19 +933,10 @@ def mekf_core(q, b, P, st, gyr, acc, mag, dts, k0, k1, p, out_phi, scratch, out)
 
 
 @njit(cache=True, error_model="numpy", fastmath={"contract"}, nogil=True)
-def _mekf_loop(q, b, P, gyr, acc, mag, dt, p, out, scratch):
-    """The MEKF over a recording without storing covariances: the rows of ``out = (qs, bs, pd, flags, nis, dof)``
-    written in place (a loop of its own: with no array bound or allocated inside it, it runs on scalars and the
-    fixed scratch only).  ``scratch = (st, phi, W, dx, H, PH)``: the adaptive state and :func:`mekf_core`'s buffers.
-    """
-    st, phi, W, dx, H, PH = scratch
-    mekf_core(q, b, P, st, gyr, acc, mag, dt, 0, gyr.shape[0], p, phi, (W, dx, H, PH), out)
-
-
-@njit(cache=True, error_model="numpy", fastmath={"contract"}, nogil=True)
 def _mekf_loop_store(q, b, P, P0, gyr, acc, mag, dt, p, out, scratch, stored):
-    """:func:`_mekf_loop` that also stores P after update, P predicted and Φ of every sample (for the smoother):
-    ``stored = (Pu, Pp, Ph)``, each (N, 6, 6)."""
+    """The MEKF over a recording that also stores P after update, P predicted and Φ of every sample (for the
+    smoother): the rows of ``out = (qs, bs, pd, flags, nis, dof)`` written in place, ``scratch = (st, phi, W, dx, H,
+    PH)`` (the adaptive state and :func:`mekf_core`'s buffers), ``stored = (Pu, Pp, Ph)``, each (N, 6, 6)."""
     Pu, Pp, Ph = stored
     st, phi, W, dx, H, PH = scratch
     Q = np.zeros((6, 6))
@@ -976,14 +967,14 @@ def mekf_run(q0, b0, P0, gyr, acc, mag, dt, p, store):
     return _mekf_run_plain(q0, b0, P0, gyr, acc, mag, dt, p)
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, inline="always")
 def _mekf_outputs(n, m):
     """The outputs of :func:`mekf_run` for ``n`` samples (``m`` stored covariances: n or 1)."""
     return (np.empty((n, 4)), np.empty((n, 3)), np.empty((n, 6)), np.zeros(n, np.int64), np.zeros(n), np.zeros(n),
             np.empty((m, 6, 6)), np.empty((m, 6, 6)), np.empty((m, 6, 6)))
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, inline="always")
 def _mekf_scratch():
     """The adaptive state and :func:`mekf_core`'s buffers, ``(st, phi, W, dx, H, PH)``."""
     return np.zeros(N_STATE), np.empty((6, 6)), np.empty((6, 6)), np.zeros(6), np.empty(6), np.empty(6)
@@ -996,7 +987,10 @@ def _mekf_run_plain(q0, b0, P0, gyr, acc, mag, dt, p):
     q = q0.copy()
     b = b0.copy()
     P = P0.copy()
-    _mekf_loop(q, b, P, gyr, acc, mag, dt, p, (qs, bs, pd, flags, nis, dof), _mekf_scratch())
+    # mekf_core called here, not through _mekf_loop: each kernel layer compiles the machine code of its callees again
+    # (issue 35, a first run)
+    st, phi, W, dx, H, PH = _mekf_scratch()
+    mekf_core(q, b, P, st, gyr, acc, mag, dt, 0, gyr.shape[0], p, phi, (W, dx, H, PH), (qs, bs, pd, flags, nis, dof))
     return qs, bs, pd, flags, nis, dof, Pu, Pp, Ph
 
 

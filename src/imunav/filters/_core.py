@@ -287,7 +287,7 @@ def joseph_update_gain(P, dx, H, R, nu, innov_out, S_out, K_out):
     return _joseph(P, dx, H, R, nu, innov_out, S_out, K_out, np.zeros(0, dtype=np.bool_))
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def joseph_update_consider(P, dx, H, R, nu, innov_out, S_out, K_out, consider):
     """:func:`joseph_update_gain` with Schmidt consider states: the gain rows of the states flagged in ``consider``
     are zero, so that those states are never updated while their uncertainty and its correlations still reach the
@@ -354,11 +354,18 @@ def _joseph(P, dx, H, R, nu, innov_out, S_out, K_out, consider):
         for j in range(m):
             acc += K_out[i, j] * innov_out[j]
         dx[i] += acc
-    A = np.eye(n) - K_out @ H
-    Pn = A @ P @ A.T + K_out @ R @ K_out.T
+    # I − K H and the sum below element by element, not as array expressions: the same arithmetic in a fraction of
+    # the machine code (numba's array expressions compile broadcasting loops, and every kernel that calls this one
+    # compiles its code again: issue 35, a first run)
+    A = K_out @ H
     for i in range(n):
         for j in range(n):
-            P[i, j] = 0.5 * (Pn[i, j] + Pn[j, i])
+            A[i, j] = (1.0 if i == j else 0.0) - A[i, j]
+    APA = A @ P @ A.T
+    KRK = K_out @ R @ K_out.T
+    for i in range(n):
+        for j in range(n):
+            P[i, j] = 0.5 * ((APA[i, j] + KRK[i, j]) + (APA[j, i] + KRK[j, i]))
     return out
 
 

@@ -65,14 +65,28 @@ def propagate_cov_series(P, F, Q, dt):
     -------
     Phi : (n, n) the transition matrix used.
     """
+    # element loops, not array expressions: the same arithmetic, element by element and in the same order, in a
+    # fraction of the machine code (numba's array expressions compile broadcasting loops; every kernel that calls
+    # this one compiles its code again: issue 35, a first run)
     n = P.shape[0]
-    A = F * dt
-    Phi = np.eye(n) + A + 0.5 * (A @ A)
-    PhiT = np.ascontiguousarray(Phi.T)
-    Pn = Phi @ P @ PhiT + 0.5 * dt * (Phi @ Q @ PhiT + Q)
+    A = np.empty((n, n))
+    for i in range(n):
+        for j in range(n):
+            A[i, j] = F[i, j] * dt
+    AA = A @ A
+    Phi = np.empty((n, n))
+    PhiT = np.empty((n, n))
+    for i in range(n):
+        for j in range(n):
+            v = ((1.0 if i == j else 0.0) + A[i, j]) + 0.5 * AA[i, j]
+            Phi[i, j] = v
+            PhiT[j, i] = v
+    PP = Phi @ P @ PhiT
+    QQ = Phi @ Q @ PhiT
+    h = 0.5 * dt
     for i in range(n):
         for j in range(i, n):
-            v = 0.5 * (Pn[i, j] + Pn[j, i])
+            v = 0.5 * ((PP[i, j] + h * (QQ[i, j] + Q[i, j])) + (PP[j, i] + h * (QQ[j, i] + Q[j, i])))
             P[i, j] = v
             P[j, i] = v
     return Phi

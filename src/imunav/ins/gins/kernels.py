@@ -101,10 +101,17 @@ def _system(xs, fb, wb, prm, lay, F, Q):
     for j in range(3):
         F[ip + j, iv + j] = 1.0
     F[iv + 2, ip + 2] = 2.0 * g / (math.sqrt(RN * RE) + alt)
+    # 2 ω_ie + ω_en and ω_in = ω_ie + ω_en element by element (array expressions compile broadcasting loops into every
+    # caller's machine code: issue 35, a first run)
+    w2 = np.empty(3)
+    w_in = np.empty(3)
+    for j in range(3):
+        w2[j] = 2.0 * w_ie[j] + w_en[j]
+        w_in[j] = w_ie[j] + w_en[j]
     write_skew(fn, F, iv, ia, -1.0)
-    write_skew(2.0 * w_ie + w_en, F, iv, iv, -1.0)
+    write_skew(w2, F, iv, iv, -1.0)
     write_mat3(C, F, iv, iba, -1.0, ones)
-    write_skew(w_ie + w_en, F, ia, ia, -1.0)
+    write_skew(w_in, F, ia, ia, -1.0)
     F[ia, iv + 1] = -1.0 / (RE + alt)
     F[ia + 1, iv] = 1.0 / (RN + alt)
     F[ia + 2, iv + 1] = math.tan(lat) / (RE + alt)
@@ -211,7 +218,10 @@ def _update(kinds, n_models, zs, rs, xs, ctx, P, prm, lay, acc_dx, blk, force, u
         # zs[i], rs[i]: the padded measurement and covariance buffers of model i
         evaluate_used(use, k, xs, ctx, zs[i], rs[i], prm[lay[N_LAY + k]:], lay, H, R, nu, row)
         row += ROWS[k]
-    S0 = H @ P @ H.T + R
+    S0 = H @ P @ H.T
+    for i in range(m):  # + R element by element (no array expression: issue 35)
+        for j in range(m):
+            S0[i, j] += R[i, j]
     blk[:] = np.nan
     row = np.int64(0)
     for i in range(n_models):
@@ -232,7 +242,7 @@ def _update(kinds, n_models, zs, rs, xs, ctx, P, prm, lay, acc_dx, blk, force, u
     return m, ok, d
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _consider_mask(lay, nx):
     """The states of the consider blocks (bit mask ``lay[LAY.consider]`` over :data:`STATE_BLOCKS`)."""
     mask = np.zeros(nx, dtype=np.bool_)
@@ -251,7 +261,7 @@ _BLOCK_SIZE = tuple(n for _, n in STATE_BLOCKS)
 _GNSS_POS = AID.gnss_position
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _adapt_gnss_noise(xs, nu, S0, R, prm):
     """Covariance matching of the fixes' white noise (Mehra 1972; Mohamed & Schwarz 1999, "Adaptive Kalman
     filtering for INS/GPS", J. Geodesy 73): ``E[ν νᵀ] = H P⁻ Hᵀ + s R_rep``, so one fix's estimate of the factor is
@@ -288,7 +298,7 @@ def _adapt_gnss_noise(xs, nu, S0, R, prm):
     xs[NOM.gnss_r_scale] = est if abs(est - 1.0) > 2.0 / math.sqrt(W) else 1.0
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _forced(carry_n, lay, src):
     """After ``lay[LAY.max_rejections]`` (> 0) gate rejections in a row of one source (a timed aid kind, or
     ``N_AIDS + group``), its next update is applied whatever the gate says: a filter that has drifted off would
@@ -297,13 +307,13 @@ def _forced(carry_n, lay, src):
     return mx > 0 and carry_n[CARRY_N.rejections + src] >= mx
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _count(carry_n, src, ok):
     """Count the gate rejections in a row of a source (reset by an acceptance)."""
     carry_n[CARRY_N.rejections + src] = 0 if ok else carry_n[CARRY_N.rejections + src] + 1
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _log(out, L, t, k, src, m, ok, d, blk):
     """Append one row to the update log when there is room; returns the new count."""
     if L < out.log_t.shape[0]:
@@ -380,7 +390,7 @@ def _rec_post(out, r, tr, P, xs, acc_dx):
         out.rec_state[r, 6 + j] = xs[NOM.q + j]
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _record_cov(out, m, tk, P):
     """Write covariance record m (time, diagonal, navigation block) when there is room; returns the new count."""
     if m < out.cov_t.shape[0]:

@@ -41,7 +41,10 @@ def wheel_velocity(xs, ctx, lay, Hw):
     v = xs[NOM.vel:NOM.vel + 3]
     lever = xs[NOM.odo_lever:NOM.odo_lever + 3]
     wb = ctx[CTX.w_sample:CTX.w_sample + 3]
-    u = C.T @ v + cross3(wb, lever)
+    u = C.T @ v
+    cw = cross3(wb, lever)
+    for i in range(3):  # + element by element (no array expression: issue 35, a first run)
+        u[i] += cw[i]
     Hv = np.zeros((3, nx))
     iv = lay[LAY.vel]
     for i in range(3):
