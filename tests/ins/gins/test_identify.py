@@ -108,7 +108,7 @@ def _gm_fixes(seed: int, duration_s: float, sigma: float, tau: float = GNSS_BIAS
     lla0 = np.array([0.8, 0.2, 100.0])
     fixes = GnssData(t, ned_to_lla(e, lla0), np.full((t.size, 3), 0.1))
     first = SimpleNamespace(aids={}, t=t, lla=np.tile(lla0, (t.size, 1)), q_nb=np.tile([1.0, 0.0, 0.0, 0.0], (t.size, 1)),
-                            gnss_delay=None, cov_t=t, cov_diag=np.ones((t.size, 15)))
+                            gnss_delay=None, cov_t=t, cov_diag=np.zeros((t.size, 15)))
     return first, fixes
 
 
