@@ -64,7 +64,7 @@ browser:
 
 test: $(STAMP_TEST) browser
 	$(BIN)/python -m ruff check .
-	$(BIN)/python -m pytest -n 2 --dist loadgroup -q
+	$(BIN)/python -m pytest -n 2 --dist loadgroup -q --durations=25
 
 # API reference + gallery into docs/_build/html, warnings as errors.  The gallery's figures come
 # from a shortened lab run that docs/conf.py starts (docs/gallery.py, docs/gallery_lab.toml), kept

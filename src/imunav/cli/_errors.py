@@ -135,11 +135,12 @@ _CACHE_FIX = {
 
 def _user_cache_dir() -> str:
     """numba's user-wide cache folder (its fallback where the package's ``__pycache__`` cannot be written)."""
-    try:
-        from numba.misc.appdirs import AppDirs  # only called once numba itself raised
-    except ImportError:  # pragma: no cover - numba is a dependency
-        return "~/.cache/numba"
-    return str(AppDirs(appname="numba", appauthor=False).user_cache_dir)
+    # only called once numba itself raised: its caching module has loaded appdirs (no import here, so that the
+    # command line's start stays free of numba)
+    appdirs = sys.modules.get("numba.misc.appdirs")
+    if appdirs is None:
+        return os.path.join(os.environ.get("XDG_CACHE_HOME") or os.path.expanduser("~/.cache"), "numba")
+    return str(appdirs.AppDirs(appname="numba", appauthor=False).user_cache_dir)
 
 
 def numba_cache_failure(exc: BaseException) -> OSError | None:
