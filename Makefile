@@ -41,9 +41,13 @@ $(STAMP_RUN): pyproject.toml $(STAMP_VENV)
 	$(BIN)/imunav warmup
 	touch $@
 
+# The test install also runs `imunav warmup` (as `make run`'s does): the quick tour's numba kernels are compiled
+# once, here, instead of once in each of the test workers that first needs them (the suite's two workers each
+# compiled the attitude and GNSS/INS kernels: minutes of CI), and a later `make run` finds them compiled.
 $(STAMP_TEST): pyproject.toml $(STAMP_VENV)
 	$(BIN)/python -m pip install '$(TORCH)'
 	$(BIN)/python -m pip install -e '.[test,learn,dask]'
+	$(BIN)/imunav warmup --quiet
 	touch $@ $(STAMP_RUN) $(STAMP_DOCS)
 
 $(STAMP_DOCS): pyproject.toml $(STAMP_VENV)

@@ -36,7 +36,8 @@ static_duration_s = 20.0
 """
 
 
-pytestmark = pytest.mark.slow
+# one worker builds the site once for the module (two workers built it twice: a minute of CI)
+pytestmark = [pytest.mark.slow, pytest.mark.xdist_group("docs")]
 
 
 @pytest.fixture(scope="module")

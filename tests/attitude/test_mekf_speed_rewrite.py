@@ -24,6 +24,10 @@ from imunav.attitude.mekf import MEKF, MekfConfig
 from imunav.attitude.smoother import Smoother
 from imunav.timeseries import ImuData
 
+# one worker runs the module: the frozen kernel (a test-only numba kernel, about 15 s to compile) is compiled once,
+# not by both workers at once
+pytestmark = pytest.mark.xdist_group("frozen_mekf")
+
 CONFIGS = {
     "mekf": MekfConfig(),
     "adaptive": ADAPTIVE_DEFAULTS,
