@@ -21,7 +21,7 @@ from shared_data import data_path
 from imunav.earth import lla_to_ned
 from imunav.ins.gins.layout import LAY
 from imunav.ins.gins.logrun import LogRunOptions, log_outage_test, run_log
-from imunav.ins.gins.outputs import self_calibration
+from imunav.ins.gins.outputs import honesty, self_calibration
 from imunav.io.aiding import OdometerData
 from imunav.io.kfgins import read_kfgins_nav, write_kfgins_nav
 from imunav.io.logs import TopicData
@@ -432,3 +432,23 @@ def test_a_mounting_pulled_far_beyond_its_prior_is_held(monkeypatch):
     assert "mounting_held" in run.initial
     assert "mount" in run.config.consider_states
     np.testing.assert_allclose(run.result.q_vb[-1], run.result.q_vb[0], atol=1e-12)
+
+
+def test_an_odometer_that_understates_its_sigma_is_named_in_the_verdict():
+    """The real Jackal bag's symptom reproduced in simulation: wheel odometry whose reported σ (0.05 m/s) is five
+    times smaller than its real noise (0.25 m/s) makes the odometer's NIS far above its one degree of freedom; the
+    honesty verdict names the odometer and says why, where the same drive with its σ reported right does not."""
+    log = simulate_robot_log(2, distance_m=160.0, odometer_noise_std=0.25)
+    opts = LogRunOptions(gnss_lever_arm=(0.0, 0.0, -0.3))
+    src = log.sources
+    right = honesty(run_log(src, opts))
+    o = src.odometer
+    low = dataclasses.replace(src, odometer=dataclasses.replace(o, speed_std=np.full(o.t.size, 0.05)))
+    wrong = honesty(run_log(low, opts))
+    print(f"odometer NIS: sigma right {right['checks']['odometer_nis_mean']:.2f}, five times too small "
+          f"{wrong['checks']['odometer_nis_mean']:.2f} (rejected {wrong['checks']['odometer_rejected_share']:.2f})")
+    assert right["checks"]["odometer_nis_dof"] == 1
+    assert right["checks"]["odometer_nis_mean"] < 1.5 and not any("odometer" in r for r in right["reasons"])
+    assert not wrong["trustworthy"]
+    named = [r for r in wrong["reasons"] if r.startswith("the odometer disagrees with the IMU")]
+    assert len(named) == 1 and ("mean NIS" in named[0] or "the gate rejected" in named[0]), wrong["reasons"]

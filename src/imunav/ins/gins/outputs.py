@@ -379,7 +379,14 @@ def _recommended(res: GinsResult) -> GinsResult:
 #: The honesty checks of a run on a log (:func:`honesty`): the mean GNSS NIS over its degrees of freedom, the share
 #: of fixes rejected, the mean normalised forward–backward separation over its 2 degrees of freedom, beyond which the
 #: summary says the trajectory cannot be trusted.
-HONESTY_LIMITS = {"gnss_nis_ratio": 2.0, "rejected_share": 0.1, "separation_d2_ratio": 2.0}
+HONESTY_LIMITS = {"gnss_nis_ratio": 2.0, "rejected_share": 0.1, "separation_d2_ratio": 2.0, "aid_nis_ratio": 2.0}
+
+#: How the verdict names an aid of ``GinsResult.aids`` (the GNSS position has its own checks).
+_AID_WORDS = {"odometer": "the odometer", "nhc": "the non-holonomic constraint (no side or vertical slip)",
+              "zupt": "the zero-velocity updates", "zaru": "the zero-rate updates",
+              "vehicle_level": "the vehicle's levelling at rest", "gnss_velocity": "the GNSS velocity",
+              "dual_antenna": "the dual-antenna heading", "baro": "the barometer",
+              "mag_heading": "the magnetometer's heading"}
 
 
 def honesty(run: LogRun, separation: Separation | None = None) -> dict[str, Any]:
@@ -387,7 +394,10 @@ def honesty(run: LogRun, separation: Separation | None = None) -> dict[str, Any]
 
     Checks (:data:`HONESTY_LIMITS`): the GNSS position NIS (mean over the accepted fixes, χ²(3) for a consistent
     filter), the share of fixes the gate rejected, the adaptive noise factor pinned at its upper bound (the fixes
-    scatter more than any factor allowed explains), a self-calibration state moved more than
+    scatter more than any factor allowed explains), the same two for every other aid (odometer, NHC, ZUPT ...: its
+    mean NIS over the accepted updates against its degrees of freedom, and the share the gate rejected; a real
+    robot's wheel odometry whose reported σ is far too small, or a skid-steer turn the model does not know, shows
+    there before anywhere else), a self-calibration state moved more than
     :data:`~imunav.ins.gins.logrun.MOVED_SIGMAS` prior σ (:meth:`~imunav.ins.gins.logrun.LogRun.moved_beyond_prior`),
     and the forward–backward separation ``d²`` (χ²(2)).
 
@@ -425,6 +435,23 @@ def honesty(run: LogRun, separation: Separation | None = None) -> dict[str, Any]
             checks.update(gnss_sigma_factor=math.sqrt(sc))
             if sc >= hi * (1 - 1e-9):
                 reasons.append(f"the fixes scatter more than {math.sqrt(hi):.0f} times their reported sigma")
+    for name, rec in res.aids.items():
+        if name == "gnss_position" or not rec.t.size:
+            continue
+        ok = rec.accepted & np.isfinite(rec.nis)
+        dof = int(rec.dof[0])
+        mean_nis = float(np.mean(rec.nis[ok])) if ok.any() else None
+        share = float(np.mean(~rec.accepted))
+        checks.update({f"{name}_nis_mean": mean_nis, f"{name}_nis_dof": dof, f"{name}_rejected_share": share})
+        bad = []
+        if mean_nis is not None and mean_nis > HONESTY_LIMITS["aid_nis_ratio"] * dof:
+            bad.append(f"mean NIS {mean_nis:.1f} for {dof} degree{'s' if dof > 1 else ''} of freedom")
+        if share > HONESTY_LIMITS["rejected_share"]:
+            bad.append(f"the gate rejected {100 * share:.0f} % of its updates")
+        if bad:
+            reasons.append(f"{_AID_WORDS.get(name, name)} disagrees with the IMU more than its sigma allows "
+                           f"({'; '.join(bad)}): its sigma is too small, or the vehicle does what the model does not "
+                           "(wheel slip, a skid-steer turn)")
     moved = run.moved_beyond_prior()
     if moved:
         checks["moved_beyond_prior"] = moved
@@ -438,7 +465,7 @@ def honesty(run: LogRun, separation: Separation | None = None) -> dict[str, Any]
             reasons.append(f"the forward filter and the smoother part by more than their sigma allows (mean d2 "
                            f"{d2:.1f} for 2 degrees of freedom): the forward filter was overconfident")
     verdict = ("the log's own statistics agree with the sigma the run reports (GNSS NIS, rejected fixes, "
-               "forward-backward separation)" if not reasons else
+               "every aid's NIS, forward-backward separation)" if not reasons else
                "the trajectory and its sigma cannot be trusted: " + "; ".join(reasons))
     return {"trustworthy": not reasons, "verdict": verdict, "reasons": reasons, "checks": checks}
 
