@@ -387,6 +387,15 @@ I_BIAS = 3
 NX = 6
 
 
+# Inlining (issue 35, a first run): ``inline="always"`` inlines at numba's level, copying the helper's IR into every
+# call site, where it is type-checked and lowered once per site; ``forceinline=True`` (a numba target option: LLVM's
+# alwaysinline) compiles the helper once and lets LLVM inline that copy, to the same machine code.  The helpers called
+# from several places use the latter (_qexp_fast, _gain6, _inject: 40 % less compilation of the MEKF kernel with the
+# Python-side allocation of mekf_run, the same results bit for bit and the same speed, measured).  It changes
+# rounding where a helper's arithmetic fuses with its caller's (fused multiply-adds across the call: _qnormalize_fast,
+# _att_row_update and the quaternion helpers of imunav._rotation_kernels, measured), which stay inline="always";
+# _lp_factor too (its index argument is a literal: one compiled copy per call site).
+
 #: Taylor coefficients of cos(θ/2) and sin(θ/2)/θ in powers of θ² (to θ¹⁰: below θ = 0.05 the first term left out is
 #: under 1e-27, far below the rounding of a double)
 _C1, _C2, _C3, _C4, _C5 = -1.0 / 8.0, 1.0 / 384.0, -1.0 / 46080.0, 1.0 / 10321920.0, -1.0 / 3715891200.0
@@ -394,7 +403,7 @@ _S1, _S2, _S3, _S4, _S5 = -1.0 / 48.0, 1.0 / 3840.0, -1.0 / 645120.0, 1.0 / 1857
 _SERIES_TH2 = 0.05 * 0.05
 
 
-@njit(cache=True, error_model="numpy", fastmath={"contract"}, inline="always")
+@njit(cache=True, error_model="numpy", fastmath={"contract"}, forceinline=True)
 def _qexp_fast(r0, r1, r2):
     """:func:`imunav._rotation_kernels.qexp_t` (``[cos(θ/2), sin(θ/2) r/θ]``, θ = |r|) to rounding, cheaper.
 
@@ -481,7 +490,7 @@ def _lp_factor(st, k, dt, tau, inv_tau):
     return st[k + 1]
 
 
-@njit(cache=True, error_model="numpy", fastmath={"contract"}, inline="always")
+@njit(cache=True, error_model="numpy", fastmath={"contract"}, forceinline=True)
 def _gain6(P, dx, PH, nu, s):
     """Tail of a scalar update on the six estimated states: ``dx += PH ν / s``, ``P −= PH PHᵀ / s``.
 
@@ -677,7 +686,7 @@ def mekf_step(q, b, P, st, gyr, acc, mag, dt, p, out_phi):
     return qn, bn
 
 
-@njit(cache=True, error_model="numpy", fastmath={"contract"}, inline="always")
+@njit(cache=True, error_model="numpy", fastmath={"contract"}, forceinline=True)
 def _inject(P, dx, b, qw, qx, qy, qz):
     """Apply the error-state correction ``dx`` (tilt, bias): the covariance reset (:func:`_reset6`), ``q ⊗ exp(δθ)``
     normalised and ``b += δb``; returns the new quaternion's components."""
@@ -953,18 +962,39 @@ def _mekf_loop_store(q, b, P, P0, gyr, acc, mag, dt, p, out, scratch, stored):
         Pu[k] = P
 
 
+def _readonly(x):
+    """``x`` as a read-only C-contiguous float64 array (a view where it already is one).
+
+    The kernels' inputs pass through here so that one compiled specialization serves every caller: numba compiles a
+    kernel again for each combination of writable / read-only, C / non-contiguous arrays it is given (a ULog's
+    read-only columns, a writable array of ``imunav warmup``'s recording), and the MEKF's compilation is the first
+    run's largest cost (issue 35).
+    """
+    v = np.ascontiguousarray(x, dtype=np.float64).view()
+    v.flags.writeable = False
+    return v
+
+
 def mekf_run(q0, b0, P0, gyr, acc, mag, dt, p, store):
     """Run the MEKF over a recording (releases the GIL: recordings can run on threads side by side).
 
     Returns q (N,4), b (N,3), Pdiag (N,6), flags (N,), nis (N,), dof (N,), and
     when ``store``: P after update (N,6,6), P predicted (N,6,6), Φ (N,6,6) (else three (1,6,6) placeholders).
 
-    Two kernels, one per value of ``store`` (:func:`_mekf_run_store`, :func:`_mekf_run_plain`): a run compiles
-    only the loop it uses, half the compilation of one kernel holding both loops (issue 35, a first run).
+    Without ``store`` the outputs and buffers are allocated here and :func:`mekf_core` is the only kernel compiled (a
+    kernel around it compiled the machine code of ``mekf_core`` again, issue 35, a first run); with ``store``,
+    :func:`_mekf_run_store`.  The inputs pass through :func:`_readonly`: one specialization of each kernel.
     """
+    gyr, acc, mag, dt, p = (_readonly(x) for x in (gyr, acc, mag, dt, p))
     if store:
         return _mekf_run_store(q0, b0, P0, gyr, acc, mag, dt, p)
-    return _mekf_run_plain(q0, b0, P0, gyr, acc, mag, dt, p)
+    n = gyr.shape[0]
+    out = (np.empty((n, 4)), np.empty((n, 3)), np.empty((n, 6)), np.zeros(n, np.int64), np.zeros(n), np.zeros(n))
+    # the state: writable copies (the caller's q0, b0, P0 stay as given)
+    q, b, P = (np.array(x, dtype=np.float64, order="C") for x in (q0, b0, P0))
+    mekf_core(q, b, P, np.zeros(N_STATE), gyr, acc, mag, dt, 0, n, p, np.empty((6, 6)),
+              (np.empty((6, 6)), np.zeros(6), np.empty(6), np.empty(6)), out)
+    return (*out, np.empty((1, 6, 6)), np.empty((1, 6, 6)), np.empty((1, 6, 6)))
 
 
 @njit(cache=True, nogil=True, inline="always")
@@ -978,20 +1008,6 @@ def _mekf_outputs(n, m):
 def _mekf_scratch():
     """The adaptive state and :func:`mekf_core`'s buffers, ``(st, phi, W, dx, H, PH)``."""
     return np.zeros(N_STATE), np.empty((6, 6)), np.empty((6, 6)), np.zeros(6), np.empty(6), np.empty(6)
-
-
-@njit(cache=True, nogil=True)
-def _mekf_run_plain(q0, b0, P0, gyr, acc, mag, dt, p):
-    """:func:`mekf_run` without stored covariances."""
-    qs, bs, pd, flags, nis, dof, Pu, Pp, Ph = _mekf_outputs(gyr.shape[0], 1)
-    q = q0.copy()
-    b = b0.copy()
-    P = P0.copy()
-    # mekf_core called here, not through _mekf_loop: each kernel layer compiles the machine code of its callees again
-    # (issue 35, a first run)
-    st, phi, W, dx, H, PH = _mekf_scratch()
-    mekf_core(q, b, P, st, gyr, acc, mag, dt, 0, gyr.shape[0], p, phi, (W, dx, H, PH), (qs, bs, pd, flags, nis, dof))
-    return qs, bs, pd, flags, nis, dof, Pu, Pp, Ph
 
 
 @njit(cache=True, nogil=True)
