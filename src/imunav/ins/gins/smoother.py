@@ -61,12 +61,16 @@ def rts_smooth(t: Array, lla: Array, vel: Array, q: Array, rec_t: Array, phi: Ar
         ds[r] = A @ (ds[r + 1] + inj[r + 1])
         Pn = ppost[r] + A @ (Pn - ppri[r + 1]) @ A.T
         Ps[r] = Pn[:9, :9]
-    before = ds + inj  # relative to the prior nominal at each epoch (before its injection)
+    # only the navigation block (position, velocity, attitude: the error state's first 9 entries) is applied to the
+    # trajectory: interpolating it alone writes 9 of the n columns per IMU sample (a one-hour log at 200 Hz with 37
+    # states: 0.2 GB of temporaries instead of 1 GB), each element the same sum as over all of them
+    nav = ds[:, :9]
+    before = nav + inj[:, :9]  # relative to the prior nominal at each epoch (before its injection)
     i = np.clip(np.searchsorted(rec_t, t, side="right") - 1, 0, M - 1)
     j = np.minimum(i + 1, M - 1)
     span = rec_t[j] - rec_t[i]
     w = np.where(span > 0, (t - rec_t[i]) / np.where(span > 0, span, 1.0), 0.0)[:, None]
-    corr = (1 - w) * ds[i] + w * before[j]
+    corr = (1 - w) * nav[i] + w * before[j]
     out_lla = lla + ned_to_dlla(corr[:, 0:3], lla)
     out_q = quat_multiply(quat_from_rotvec(corr[:, 6:9]), q)
     return SmoothedTrack(t, out_lla, vel + corr[:, 3:6], quat_normalize(out_q), rec_t.copy(), Ps)
