@@ -144,8 +144,12 @@ def main() -> None:
         load1 = os.getloadavg()[0]
         if r.returncode != 0:
             raise SystemExit(f"imunav gins run failed: {r.stderr.strip()}")
+        # the phases without the command line's process settings would not be its phases: numpy without transparent
+        # huge pages, as `imunav` sets it (imunav.cli.main._no_hugepages; with them the filter's first writes of its
+        # records took 12 s more of system time on this project's VMs)
         r2 = subprocess.run(_pinned([py, "-c", _PHASES, str(bag), str(work / "phases"), "1" if a.smoother else "0"],
-                                    a.cores), env=_env(), capture_output=True, text=True)
+                                    a.cores), env={**_env(), "NUMPY_MADVISE_HUGEPAGE": "0"}, capture_output=True,
+                            text=True)
         if r2.returncode != 0:
             raise SystemExit(f"phases failed: {r2.stderr.strip()}")
         t = json.loads(r2.stdout.strip().splitlines()[-1])

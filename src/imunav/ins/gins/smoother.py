@@ -18,6 +18,9 @@ from imunav.rotation import quat_from_rotvec, quat_multiply, quat_normalize
 
 Array = NDArray[np.float64]
 
+#: Epochs whose smoother gains are solved in one stacked call (:func:`rts_smooth`).
+_GAIN_BLOCK = 256
+
 
 def rts_smooth(t: Array, lla: Array, vel: Array, q: Array, rec_t: Array, phi: Array, ppri: Array, ppost: Array,
          inj: Array, state: Array) -> SmoothedTrack:
@@ -56,17 +59,28 @@ def rts_smooth(t: Array, lla: Array, vel: Array, q: Array, rec_t: Array, phi: Ar
     Ps = np.empty((M, 9, 9))
     Pn = ppost[M - 1].copy()
     Ps[M - 1] = Pn[:9, :9]
-    for r in range(M - 2, -1, -1):
-        A = np.linalg.solve(ppri[r + 1].T, (ppost[r] @ phi[r + 1].T).T).T
-        ds[r] = A @ (ds[r + 1] + inj[r + 1])
-        Pn = ppost[r] + A @ (Pn - ppri[r + 1]) @ A.T
-        Ps[r] = Pn[:9, :9]
-    before = ds + inj  # relative to the prior nominal at each epoch (before its injection)
+    # the gains A_r need no recursion: a block of epochs at a time, one stacked product and one stacked solve (the
+    # same BLAS / LAPACK call per epoch as one by one, so the same numbers; numpy's overhead once per block: 1.5 s
+    # of a one-hour log's 34,000 epochs)
+    for hi in range(M - 1, 0, -_GAIN_BLOCK):
+        lo = max(hi - _GAIN_BLOCK, 0)  # epochs lo .. hi - 1
+        rhs = (ppost[lo:hi] @ phi[lo + 1:hi + 1].transpose(0, 2, 1)).transpose(0, 2, 1)
+        gains = np.linalg.solve(ppri[lo + 1:hi + 1].transpose(0, 2, 1), rhs).transpose(0, 2, 1)
+        for r in range(hi - 1, lo - 1, -1):
+            A = gains[r - lo]
+            ds[r] = A @ (ds[r + 1] + inj[r + 1])
+            Pn = ppost[r] + A @ (Pn - ppri[r + 1]) @ A.T
+            Ps[r] = Pn[:9, :9]
+    # only the navigation block (position, velocity, attitude: the error state's first 9 entries) is applied to the
+    # trajectory: interpolating it alone writes 9 of the n columns per IMU sample (a one-hour log at 200 Hz with 37
+    # states: 0.2 GB of temporaries instead of 1 GB), each element the same sum as over all of them
+    nav = ds[:, :9]
+    before = nav + inj[:, :9]  # relative to the prior nominal at each epoch (before its injection)
     i = np.clip(np.searchsorted(rec_t, t, side="right") - 1, 0, M - 1)
     j = np.minimum(i + 1, M - 1)
     span = rec_t[j] - rec_t[i]
     w = np.where(span > 0, (t - rec_t[i]) / np.where(span > 0, span, 1.0), 0.0)[:, None]
-    corr = (1 - w) * ds[i] + w * before[j]
+    corr = (1 - w) * nav[i] + w * before[j]
     out_lla = lla + ned_to_dlla(corr[:, 0:3], lla)
     out_q = quat_multiply(quat_from_rotvec(corr[:, 6:9]), q)
     return SmoothedTrack(t, out_lla, vel + corr[:, 3:6], quat_normalize(out_q), rec_t.copy(), Ps)
