@@ -12,6 +12,11 @@ import re
 import pytest
 from shared_data import ROOT, data_path  # noqa: E402,F401  (re-exported for old imports)
 
+try:  # pytest >= 9: a node's id is structured (see _suffix_group)
+    from _pytest.nodeid import coerce_node_id
+except ImportError:
+    coerce_node_id = None
+
 
 @pytest.fixture
 def rng():
@@ -39,6 +44,26 @@ def pytest_collection_modifyitems(config, items):
         text = getattr(block, "text", "")
         if "test_gins" in item.nodeid or "ins/gins/" in item.nodeid or re.search(r"\bgins\b|GinsFilter|lab_gins", text):
             item.add_marker(pytest.mark.xdist_group(GINS_GROUP))
+    if getattr(config.option, "loadgroup", False):  # an xdist worker under --dist loadgroup
+        for item in items:
+            _suffix_group(item)
+
+
+def _suffix_group(item) -> None:
+    """What pytest-xdist's own hook does for ``--dist loadgroup`` (``NODEID@group``, the scheduler's work unit),
+    done here because under pytest >= 9 the node id lives in ``item._id`` and xdist 3.8 still writes
+    ``item._nodeid``, which nothing reads: every ``xdist_group`` was silently ignored (the docs site was built by
+    both workers, the GNSS/INS kernels compiled by both)."""
+    names = sorted({str(m.args[0] if m.args else m.kwargs.get("name", "default"))
+                    for m in item.iter_markers("xdist_group")})
+    if not names or "@" in item.nodeid.rsplit("]", 1)[-1]:
+        return
+    new = f"{item.nodeid}@{'_'.join(names)}"
+    if coerce_node_id is not None and hasattr(item, "_id"):
+        item._id = coerce_node_id(new)
+        assert item.nodeid == new, (item.nodeid, new)
+    else:
+        item._nodeid = new
 
 
 def pytest_configure(config):
