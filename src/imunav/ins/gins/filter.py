@@ -66,7 +66,7 @@ from imunav.io.aiding import BaroData, MagnetometerData, OdometerData
 from imunav.io.gnss import GnssData
 from imunav.io.gnss_heading import DualAntennaData
 from imunav.io.kfgins import ImuIncrements
-from imunav.rotation import quat_from_euler, quat_normalize
+from imunav.rotation import quat_from_euler, quat_normalize, skew
 from imunav.timeseries import ImuData
 
 __all__ = ["GinsFilter"]
@@ -896,10 +896,7 @@ def unmodelled_misalignment(cov: Array, std: float, vel: Array | None = None) ->
             out[:, a, a] += std**2
     if vel is None:
         return out
-    v = np.asarray(vel, dtype=float)
-    vx = np.zeros((v.shape[0], 3, 3))
-    vx[:, 0, 1], vx[:, 0, 2], vx[:, 1, 2] = -v[:, 2], v[:, 1], -v[:, 0]
-    vx -= np.transpose(vx, (0, 2, 1))
+    vx = skew(np.asarray(vel, dtype=float).reshape(-1, 3))
     cross = -(std**2) * vx  # cov(δv, φ) = −[v×] Σ_φ
     vv = (std**2) * vx @ np.transpose(vx, (0, 2, 1))  # [v×] Σ_φ [v×]ᵀ
     if out.ndim == 2:

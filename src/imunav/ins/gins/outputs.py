@@ -27,7 +27,7 @@ from numpy.typing import NDArray
 from imunav.files import atomic_path, write_json
 from imunav.ins.gins.layout import LAY
 from imunav.ins.gins.plot import FIGURE_NAMES, write_gins_figures
-from imunav.ins.gins.result import GinsResult
+from imunav.ins.gins.result import AidRecord, GinsResult
 from imunav.ins.gins.setup import GinsSetup, SimulatedDrive, track_rmse
 from imunav.ins.gins.smoother import Separation, common_epochs, forward_backward_separation
 from imunav.io.gnss import GnssData, write_gnss_text
@@ -389,6 +389,13 @@ _AID_WORDS = {"odometer": "the odometer", "nhc": "the non-holonomic constraint (
               "mag_heading": "the magnetometer's heading"}
 
 
+def _accepted_nis(rec: AidRecord) -> tuple[float | None, int, float]:
+    """An aid's mean NIS over the updates the gate accepted (None when none), its degrees of freedom and the share
+    of its updates the gate rejected (:func:`honesty`'s figures of one aid)."""
+    ok = rec.accepted & np.isfinite(rec.nis)
+    return (float(np.mean(rec.nis[ok])) if ok.any() else None, int(rec.dof[0]), float(np.mean(~rec.accepted)))
+
+
 def honesty(run: LogRun, separation: Separation | None = None) -> dict[str, Any]:
     """What the log's own statistics say of its trajectory, in words: the one truth-free verdict of a run.
 
@@ -419,9 +426,7 @@ def honesty(run: LogRun, separation: Separation | None = None) -> dict[str, Any]
     checks: dict[str, Any] = {}
     rec = res.aids.get("gnss_position")
     if rec is not None and rec.t.size:
-        ok = rec.accepted & np.isfinite(rec.nis)
-        mean_nis = float(np.mean(rec.nis[ok])) if ok.any() else None
-        share = float(np.mean(~rec.accepted))
+        mean_nis, _, share = _accepted_nis(rec)
         checks.update(gnss_nis_mean=mean_nis, gnss_nis_dof=3, gnss_rejected_share=share)
         if mean_nis is not None and mean_nis > HONESTY_LIMITS["gnss_nis_ratio"] * 3:
             reasons.append(f"the GNSS fixes lie further from the track than its sigma says (mean NIS {mean_nis:.1f} "
@@ -438,10 +443,7 @@ def honesty(run: LogRun, separation: Separation | None = None) -> dict[str, Any]
     for name, rec in res.aids.items():
         if name == "gnss_position" or not rec.t.size:
             continue
-        ok = rec.accepted & np.isfinite(rec.nis)
-        dof = int(rec.dof[0])
-        mean_nis = float(np.mean(rec.nis[ok])) if ok.any() else None
-        share = float(np.mean(~rec.accepted))
+        mean_nis, dof, share = _accepted_nis(rec)
         checks.update({f"{name}_nis_mean": mean_nis, f"{name}_nis_dof": dof, f"{name}_rejected_share": share})
         bad = []
         if mean_nis is not None and mean_nis > HONESTY_LIMITS["aid_nis_ratio"] * dof:
