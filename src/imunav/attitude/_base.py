@@ -10,7 +10,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from imunav.attitude._kernels import first_rate_over
 from imunav.attitude.alignment import align
-from imunav.errors import InvalidInputError, NonFiniteError, ShapeError
+from imunav.errors import ConvergenceError, InvalidInputError, NonFiniteError, ShapeError
 from imunav.timeseries import ImuData
 
 Array = NDArray[np.float64]
@@ -112,6 +112,50 @@ def initial_q(acc: Array, mag: Array, use_mag: bool, q0: ArrayLike | None) -> Ar
     if q0 is not None:
         return check_q0(q0)
     return align(acc[0], mag[0] if use_mag else None)
+
+
+def check_finite_result(name: str, t: Array, q: Array, cov: Array | None, params: dict[str, Any]) -> None:
+    """Refuse a run whose numbers overflowed: :class:`ConvergenceError` from the first sample that is not finite.
+
+    A noise, gain or initial σ far outside any sensor's range (a hand-edited ``1e300``) makes the filter's
+    arithmetic overflow; its quaternions (or covariance) are then NaN, and a caller would otherwise get them
+    silently.  The message names the filter, the sample and its time, and the parameter of largest magnitude (the
+    gates, whose ``1e9`` means "off", left aside) as the likely culprit.
+
+    Parameters
+    ----------
+    name : str
+        The filter's name.
+    t : numpy.ndarray, shape (N,)
+        Time stamps, s.
+    q : numpy.ndarray, shape (N, 4)
+        The attitude at every sample.
+    cov : numpy.ndarray, shape (N, k), or None
+        The covariance diagonal at every sample.
+    params : dict
+        The filter's parameters.
+
+    Raises
+    ------
+    ConvergenceError
+        If ``q`` or ``cov`` holds a value that is not finite.
+    """
+    what = "attitude"
+    bad = ~np.isfinite(q).all(axis=1)
+    if not bad.any() and cov is not None:
+        bad = ~np.isfinite(cov).all(axis=1)
+        what = "covariance"
+    if not bad.any():
+        return
+    k = int(np.argmax(bad))
+    num = {p: float(v) for p, v in params.items()
+           if isinstance(v, (int, float)) and not isinstance(v, bool) and "threshold" not in p}
+    big = max(num, key=lambda p: abs(num[p]) if np.isfinite(num[p]) else -1.0) if num else None
+    hint = f" (largest: {big} = {num[big]:g})" if big is not None else ""
+    raise ConvergenceError(
+        f"{name} diverged: its {what} is not finite from sample {k} (t = {t[k] - t[0]:.6g} s) on; check its "
+        f"parameters{hint}: a noise, gain or initial sigma far outside the sensor's range makes its numbers "
+        "overflow; give them in SI units (rad, rad/s, s)")
 
 
 def params_dict(obj: Any) -> dict[str, Any]:

@@ -17,8 +17,9 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from imunav.attitude import _kernels as _k
-from imunav.attitude._base import check_positive, check_q0, gyro3, initial_q, prepare, step_dt, vec3
+from imunav.attitude._base import MAX_RATE, check_positive, check_q0, gyro3, initial_q, prepare, step_dt, vec3
 from imunav.attitude.result import AttitudeResult
+from imunav.errors import InvalidInputError
 from imunav.timeseries import ImuData
 
 __all__ = ["Mahony"]
@@ -34,6 +35,11 @@ class Mahony:
         Proportional gain k_p, rad/s.
     ki : float
         Integral (gyro-bias) gain k_i, rad/s².
+
+    Raises
+    ------
+    InvalidInputError
+        If a gain is negative, not finite or above 1e4 (beyond any gyro's rate: the filter's numbers overflow).
     """
 
     kp: float = 1.0
@@ -43,6 +49,10 @@ class Mahony:
 
     def __post_init__(self) -> None:
         check_positive(kp=self.kp, ki=self.ki)
+        for k, v, unit in (("kp", self.kp, "rad/s"), ("ki", self.ki, "rad/s²")):
+            if v > MAX_RATE:  # a correction rate beyond any gyro's range: its arithmetic overflows
+                raise InvalidInputError(f"Mahony.{k} must be <= {MAX_RATE:g} {unit} (a gain on the attitude error); "
+                                        f"got {v!r}")
         self.q = np.array([1.0, 0.0, 0.0, 0.0])
         self.integral = np.zeros(3)
 

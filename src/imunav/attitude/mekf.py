@@ -69,7 +69,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from imunav.attitude import _kernels as _k
-from imunav.attitude._base import check_q0, gyro3, initial_q, prepare, step_dt, vec3
+from imunav.attitude._base import check_finite_result, check_q0, gyro3, initial_q, prepare, step_dt, vec3
 from imunav.attitude.result import AttitudeResult
 from imunav.errors import ConfigError
 from imunav.timeseries import ImuData
@@ -150,7 +150,7 @@ class MekfConfig:
     Raises
     ------
     ConfigError
-        If a value is negative or not finite, or ``g`` is not positive.
+        If a value is negative or not finite, ``g`` is not positive, or the square of an initial σ overflows.
     """
 
     gyro_noise_density: float = 0.005  # rad/s/√Hz
@@ -190,6 +190,11 @@ class MekfConfig:
                 raise ConfigError(f"MekfConfig.{f.name} must be finite and >= 0, got {v}")
         if self.g <= 0:
             raise ConfigError(f"MekfConfig.g must be > 0, got {self.g}")
+        for name in ("init_att_std", "init_gyro_bias_std"):
+            v = getattr(self, name)
+            if not np.isfinite(float(v) * float(v)):  # P0 holds the squares
+                raise ConfigError(f"MekfConfig.{name} = {v!r}: its square, the initial variance, overflows; give a "
+                                  "standard deviation in SI (rad, rad/s), e.g. 0.1")
 
     @classmethod
     def from_noise_profile(cls, profile: NoiseProfile, *, base: MekfConfig | None = None, fs: float | None = None,
@@ -416,15 +421,18 @@ class MEKF:
         InvalidInputError
             If ``data`` is not an ImuData with at least 2 samples, ``use_mag=True`` without a magnetometer, or a
             rate exceeds 1e4 rad/s.
+        ConvergenceError
+            If the filter's numbers overflow (a noise or initial σ far outside any sensor's range): the sample from
+            which its attitude or covariance is not finite.
         """
         t, _, _, um, _, _, _, (q, b, pd, fl, nis, dof, *_rest) = self._run(data, q0, bias0, use_mag, False)
+        params = {**{f.name: getattr(self.config, f.name) for f in fields(self.config)}, "use_mag": um}
+        check_finite_result(self.name, t, q, pd, params)
         self.q, self.b = q[-1].copy(), b[-1].copy()
         flags = {k: (fl & v) > 0 for k, v in FLAG_NAMES.items()}
         flags["nis"] = nis
         flags["nis_dof"] = dof
-        return AttitudeResult(t=t, q_nb=q, bias=b, cov_diag=pd, flags=flags, name=self.name,
-                              params={**{f.name: getattr(self.config, f.name) for f in fields(self.config)},
-                                      "use_mag": um})
+        return AttitudeResult(t=t, q_nb=q, bias=b, cov_diag=pd, flags=flags, name=self.name, params=params)
 
     def run_many(self, recordings: Sequence[ImuData], *, workers: int = 2,
                  use_mag: bool | None = None) -> list[AttitudeResult]:

@@ -53,6 +53,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from imunav.attitude import _kernels as _k
+from imunav.attitude._base import check_finite_result
 from imunav.attitude.adaptive import ADAPTIVE_DEFAULTS
 from imunav.attitude.mekf import FLAG_NAMES, MEKF, MekfConfig
 from imunav.attitude.result import AttitudeResult
@@ -125,12 +126,16 @@ class Smoother:
         InvalidInputError
             If ``data`` is not an ImuData with at least 2 samples, ``use_mag=True`` without a magnetometer, or a
             rate exceeds 1e4 rad/s.
+        ConvergenceError
+            If the filter's numbers overflow (a noise or initial σ far outside any sensor's range): the sample from
+            which its attitude or covariance is not finite.
         """
         f = MEKF(self.config)
         t, g, dt, um, q_init, b0, P0, out = f._run(data, q0, bias0, use_mag, True)
-        qf, bf, _, fl, _, _, Pu, Pp, Ph = out
+        qf, bf, pf, fl, _, _, Pu, Pp, Ph = out
+        params = {**{f_.name: getattr(self.config, f_.name) for f_ in fields(self.config)}, "use_mag": um}
+        check_finite_result(self.name, t, qf, pf, params)  # the forward pass: RTS on NaN would only spread them
         qs, bs, pd = _k.rts_smooth(qf, bf, Pu, Pp, Ph, g, dt, P0, q_init, b0)
         flags = {k: (fl & v) > 0 for k, v in FLAG_NAMES.items()}
-        return AttitudeResult(t=t, q_nb=qs, bias=bs, cov_diag=pd, flags=flags, name=self.name,
-                              params={**{f_.name: getattr(self.config, f_.name) for f_ in fields(self.config)},
-                                      "use_mag": um})
+        check_finite_result(self.name, t, qs, pd, params)
+        return AttitudeResult(t=t, q_nb=qs, bias=bs, cov_diag=pd, flags=flags, name=self.name, params=params)

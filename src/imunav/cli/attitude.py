@@ -159,11 +159,16 @@ def run_cmd(
         # start like the BROAD reference runs (first accelerometer / magnetometer sample)
 
         kw["q0"] = alignment.broad_reference_start(data.accel[0], data.mag[0])
-    res = f.run(data, **kw)
+    given = [f"--param {k_}={v}" for k_, v in params.items()] + ([f"--noise {noise}"] if prof is not None else [])
+    try:
+        res = f.run(data, **kw)
+    except ConvergenceError as exc:  # the Kalman filters refuse their own overflow; say what the command gave them
+        if not given:
+            raise
+        raise ConvergenceError(f"{exc}; it was given {', '.join(given)}") from None
     bad = ~np.isfinite(res.q_nb).all(axis=1)
-    if bad.any():  # a noise or gain far out of range (a profile's 1e300) makes the filter's numbers overflow
+    if bad.any():  # the filters that do not check themselves: a gain far out of range makes their numbers overflow
         k = int(np.argmax(bad))
-        given = [f"--param {k_}={v}" for k_, v in params.items()] + ([f"--noise {noise}"] if prof is not None else [])
         raise ConvergenceError(f"{res.name} diverged: its attitude is not finite from sample {k} (t = "
                                f"{res.t[k] - res.t[0]:.6g} s) on; check what it was given"
                                + (f" ({', '.join(given)})" if given else "") + ": a noise or gain far outside "
