@@ -61,7 +61,7 @@ GNSS_IDENTIFY_S = 900.0
 ODO_SCALE_PRIOR_STD = 0.02
 #: Candidate wanders of the odometer's scale (σ over ODO_WANDER_TAU s; 0: constant), cross-validated on withheld
 #: fixes (:func:`_odometer_wander`), and when the cross-validation's first window starts, s after the log's start.
-ODO_WANDER = (0.0, 0.03, 0.1)
+ODO_WANDER = (0.0, 0.03, 0.05, 0.1)
 ODO_WANDER_TAU = 30.0
 WANDER_CV_START_S = 60.0
 #: Span of the log the cross-validation runs cover, s (six withheld windows; its runs cost a fraction of a pass).
