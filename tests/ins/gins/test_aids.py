@@ -16,7 +16,8 @@ from imunav.rotation import dcm_from_quat, quat_normalize
 #: central-difference step per state block (SI): large enough that rounding of the innovation (a position of
 #: ~6e6 m in radians: ~1e-9 m) stays far below the Jacobian's entries, small enough that the curvature is negligible
 EPS = {"pos": 1e-2, "vel": 1e-3, "att": 1e-4, "gyro_bias": 1e-6, "accel_bias": 1e-4, "gyro_scale": 1e-4,
-       "accel_scale": 1e-4, "odo_scale": 1e-4, "mount": 1e-4, "odo_lever": 1e-3, "gnss_delay": 1e-4, "gnss_bias": 1e-2}
+       "accel_scale": 1e-4, "odo_scale": 1e-4, "mount": 1e-4, "odo_lever": 1e-3, "gnss_delay": 1e-4, "gnss_bias": 1e-2,
+       "odo_turn": 1e-4}
 
 
 BASELINE = (1.2, -0.4, 0.15)
@@ -38,6 +39,7 @@ def _state(rng):
     xs[NOM.gnss_delay] = 0.12
     xs[NOM.gnss_bias:NOM.gnss_bias + 3] = (0.3, -0.2, 0.5)
     xs[NOM.gnss_r_scale] = 1.3  # the adaptive factor on the reported covariance
+    xs[NOM.odo_turn] = 0.15  # the odometer's over-reading in turns, s/rad
     return xs
 
 
@@ -136,7 +138,8 @@ def test_kernel_layouts_are_contiguous_and_follow_their_tuples():
         assert starts == sorted(starts) and starts[0] == 0 and starts[-1] < n, type(lay).__name__
     assert layout.LAY._fields[:len(STATE_BLOCKS)] == tuple(b for b, _ in STATE_BLOCKS)
     # the 15 / 21 / 22-state layouts: blocks back to back in STATE_BLOCKS order, absent ones -1
-    for scale, odo, nx in ((False, False, 15), (True, False, 21), (True, True, 22), (False, True, 16)):
+    # (with the odometer: its scale and its over-reading in turns)
+    for scale, odo, nx in ((False, False, 15), (True, False, 21), (True, True, 23), (False, True, 17)):
         cfg = GinsConfig(gyro_noise_density=1e-3, accel_noise_density=1e-2, gyro_bias_std=1e-4, accel_bias_std=1e-3, scale_factors=scale)
         prm, lay, P0 = kernel_setup(cfg, 100.0, odo)
         assert lay[LAY.nx] == nx == P0.shape[0] and np.array_equal(P0, np.diag(np.diag(P0)))
@@ -157,7 +160,7 @@ def test_kernel_layouts_are_contiguous_and_follow_their_tuples():
     cfg = GinsConfig(gyro_noise_density=1e-3, accel_noise_density=1e-2, gyro_bias_std=1e-4, accel_bias_std=1e-3,
                      init_gyro_bias_std=1e-2, init_accel_bias_std=1e-1, bias_model="constant_and_gauss_markov")
     _, lay, P0 = kernel_setup(cfg, 100.0, True)
-    assert lay[LAY.nx] == 28 and lay[LAY.gyro_bias_gm] == 22 and lay[LAY.accel_bias_gm] == 25
+    assert lay[LAY.nx] == 29 and lay[LAY.gyro_bias_gm] == 22 and lay[LAY.accel_bias_gm] == 25
     for whole, part, gm, init in ((LAY.gyro_bias, LAY.gyro_bias_gm, 1e-4, 1e-2),
                                    (LAY.accel_bias, LAY.accel_bias_gm, 1e-3, 1e-1)):
         i, k = lay[whole], lay[part]

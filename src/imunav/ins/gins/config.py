@@ -45,7 +45,7 @@ def _v3(x: ArrayLike, name: str, *, positive: bool = False, nonneg: bool = False
 BIAS_MODELS = ("gauss_markov", "constant_and_gauss_markov")
 #: The state blocks that may be held as Schmidt consider states (``GinsConfig.consider_states``): the vehicle's and
 #: the receiver's self-calibration, not the navigation state or the IMU errors.
-CONSIDER_BLOCKS = ("odo_scale", "mount", "odo_lever", "gnss_delay", "gnss_bias")
+CONSIDER_BLOCKS = ("odo_scale", "odo_turn", "mount", "odo_lever", "gnss_delay", "gnss_bias")
 
 
 def misalignment_std(m: ArrayLike) -> float:
@@ -127,6 +127,14 @@ class GinsConfig:
         ``static`` says the vehicle stands still (the ZUPT holds the velocity then; a wheel encoder reads 0).
     odo_scale_std : float
         σ of the odometer scale-factor state (Gauss–Markov with ``corr_time``), dimensionless (> 0).
+    odo_turn_std : float or None
+        Prior σ of the odometer's over-reading in turns ``c`` (a random constant, initial value 0), s/rad: the
+        odometer reads ``(1 + k)(1 + c |ω_z|)`` times the forward speed, ``ω_z`` the vehicle's yaw rate (the wheels of
+        a skid-steer vehicle slip in its turns and read more than the body moves; :mod:`imunav.ins.gins.aids.odometer`);
+        None: not estimated (``c = 0``).  The default 0.3 s/rad covers a skid-steer robot's over-reading (0.3 s/rad in
+        :data:`imunav.sim.hard_log.HARD_ROBOT_FAULTS`); a car's averaged wheel speeds over-read little (second order
+        in the steering angle), which the fixes then show.  Without GNSS the log run holds it as a consider state:
+        its prior σ reaches the position's σ in turns.
     nhc_noise_std : float or None
         σ of the non-holonomic constraint (zero lateral and vertical wheel velocity), m/s: the side slip and
         suspension velocity of the body in motion; None: off.  Not applied while ``static`` says the vehicle
@@ -207,7 +215,7 @@ class GinsConfig:
         How many fixes the reported σ counts as in the adaptive factor's mean (>= 1): the first fixes, whose
         innovations hold the initial position's error, cannot drive it to a bound alone.
     consider_states : tuple of str
-        State blocks held as Schmidt consider states (``"odo_scale"``, ``"mount"``, ``"odo_lever"``,
+        State blocks held as Schmidt consider states (``"odo_scale"``, ``"odo_turn"``, ``"mount"``, ``"odo_lever"``,
         ``"gnss_delay"``, ``"gnss_bias"``): their prior σ and correlations reach the other states' covariance, but no
         update moves them (what a drive cannot observe, e.g. the odometer scale without GNSS, stays at its prior
         instead of being "estimated" from the INS's own drift).
@@ -246,6 +254,7 @@ class GinsConfig:
     odo_lever_arm: ArrayLike = (0.0, 0.0, 0.0)
     odo_noise_std: float = 0.05
     odo_scale_std: float = 0.01
+    odo_turn_std: float | None = 0.3
     nhc_noise_std: float | None = None
     nhc_interval_s: float | None = None
     zupt_noise_std: float = 0.01
@@ -324,6 +333,8 @@ class GinsConfig:
                                     f"got {self.level_noise_std!r}")
         if self.nhc_interval_s is not None and not (np.isfinite(self.nhc_interval_s) and self.nhc_interval_s > 0):
             raise InvalidInputError(f"GinsConfig.nhc_interval_s must be > 0 s or None; got {self.nhc_interval_s!r}")
+        if self.odo_turn_std is not None and not (np.isfinite(self.odo_turn_std) and self.odo_turn_std > 0):
+            raise InvalidInputError(f"GinsConfig.odo_turn_std must be > 0 s/rad or None; got {self.odo_turn_std!r}")
         if self.gnss_delay_std is not None and not (np.isfinite(self.gnss_delay_std) and self.gnss_delay_std > 0):
             raise InvalidInputError(f"GinsConfig.gnss_delay_std must be > 0 s or None; got {self.gnss_delay_std!r}")
         if self.dual_antenna_baseline is not None:

@@ -107,6 +107,8 @@ def _state_blocks(c: GinsConfig, odometer: bool) -> tuple[str, ...]:
     use = set(REQUIRED_BLOCKS) | ({"gyro_scale", "accel_scale"} if c.scale_factors else set())
     if odometer:
         use.add("odo_scale")
+        if c.odo_turn_std is not None:
+            use.add("odo_turn")
     for block, sd in (("mount", c.mounting_std), ("odo_lever", c.odo_lever_arm_std), ("gnss_delay", c.gnss_delay_std),
                       ("gnss_bias", c.gnss_bias_std)):
         if sd is not None:
@@ -149,7 +151,8 @@ def kernel_setup(c: GinsConfig, fs: float, odometer: bool) -> tuple[Array, NDArr
                            "gyro_scale": c.init_gyro_scale_std, "accel_scale": c.init_accel_scale_std,
                            "odo_scale": [c.odo_scale_std], "mount": c.mounting_std, "odo_lever": c.odo_lever_arm_std,
                            "gnss_delay": [c.gnss_delay_std], "gyro_bias_gm": c.gyro_bias_std,
-                           "accel_bias_gm": c.accel_bias_std, "gnss_bias": c.gnss_bias_std}
+                           "accel_bias_gm": c.accel_bias_std, "gnss_bias": c.gnss_bias_std,
+                           "odo_turn": [c.odo_turn_std]}
     nx = 0
     sd = []
     for name in _state_blocks(c, odometer):
@@ -852,6 +855,7 @@ class GinsFilter:
                           aids=log.aids, q_vb=xs[:, NOM.q_vb:NOM.q_vb + 4],
                           odo_lever_arm=col3(NOM.odo_lever), gnss_delay=xs[:, NOM.gnss_delay],
                           gnss_bias=col3(NOM.gnss_bias), gnss_noise_scale=xs[:, NOM.gnss_r_scale],
+                          odo_turn=xs[:, NOM.odo_turn],
                           **{f"{name}_nis": _sample_nis(log, name, n) for name in _SAMPLE_NIS})
 
 

@@ -39,6 +39,9 @@ STATE_BLOCKS = (
     # the GNSS fixes' error correlated in time (multipath, atmosphere), NED, m: a first-order Gauss–Markov process
     # that the position fixes hold besides their white noise, optional
     ("gnss_bias", 3),
+    # the odometer's over-reading in turns, per rad/s of the vehicle's yaw rate (skid-steer wheels slip, outer wheels
+    # of a steered axle run wider), s/rad, optional
+    ("odo_turn", 1),
 )
 #: Blocks every configuration estimates.
 REQUIRED_BLOCKS = ("pos", "vel", "att", "gyro_bias", "accel_bias")
@@ -56,12 +59,13 @@ LAY, N_LAY = named_layout("GinsLayout", tuple((name, 1) for name, _ in STATE_BLO
 #: contact point from the IMU, body FRD, m; ``gnss_delay``: the GNSS latency, s; ``gnss_bias``: the fixes' correlated
 #: error, NED, m; ``gnss_r_scale``: the factor on the fixes' reported covariance that the filter applies (1 without
 #: adaptation, or while the estimate ``gnss_r_est`` is within two standard errors of 1), ``gnss_r_weight`` the
-#: estimate's information (the inverse of its variance; the reported σ counts as ``gnss_adaptive_prior_fixes`` fixes).
+#: estimate's information (the inverse of its variance; the reported σ counts as ``gnss_adaptive_prior_fixes`` fixes);
+#: ``odo_turn``: the odometer's over-reading per rad/s of yaw rate, s/rad.
 NOM, N_NOM = named_layout("GinsNominal", (("lla", 3), ("vel", 3), ("q", 4), ("gyro_bias", 3), ("accel_bias", 3),
                                           ("gyro_scale", 3), ("accel_scale", 3), ("odo_scale", 1), ("q_vb", 4),
                                           ("odo_lever", 3), ("gnss_delay", 1), ("gnss_bias", 3),
                                           ("gnss_r_scale", 1), ("gnss_r_est", 1),
-                                          ("gnss_r_weight", 1)))
+                                          ("gnss_r_weight", 1), ("odo_turn", 1)))
 #: the sensor errors of ``xs`` (GinsFilter.imu_errors: 13 values)
 N_SENSOR_ERRORS = NOM.odo_scale + 1 - NOM.gyro_bias
 

@@ -61,7 +61,7 @@ GNSS_IDENTIFY_S = 900.0
 ODO_SCALE_PRIOR_STD = 0.02
 #: Candidate wanders of the odometer's scale (σ over ODO_WANDER_TAU s; 0: constant), cross-validated on withheld
 #: fixes (:func:`_odometer_wander`), and when the cross-validation's first window starts, s after the log's start.
-ODO_WANDER = (0.0, 0.03, 0.1)
+ODO_WANDER = (0.0, 0.03, 0.05, 0.1)
 ODO_WANDER_TAU = 30.0
 WANDER_CV_START_S = 60.0
 #: Span of the log the cross-validation runs cover, s (six withheld windows; its runs cost a fraction of a pass).
@@ -215,7 +215,8 @@ class LogRun(Result):
                 if abs(mu[j]) > MOVED_SIGMAS * p0[j]:
                     out[f"mount_{axis}_deg"] = {"change": math.degrees(mu[j]), "sigmas": abs(mu[j]) / p0[j]}
         for block, name, x in (("gnss_delay", "gnss_latency_s", res.gnss_delay),
-                               ("odo_scale", "odometer_scale", res.odo_scale)):
+                               ("odo_scale", "odometer_scale", res.odo_scale),
+                               ("odo_turn", "odometer_turn_overread_s_per_rad", res.odo_turn)):
             i = int(lay[getattr(LAY, block)])
             if i >= 0 and x is not None:
                 d, p0 = float(x[-1] - x[0]), math.sqrt(float(res.cov_diag[0, i]))
@@ -659,10 +660,10 @@ def run_log(src: NavSources, options: LogRunOptions | None = None, *,
         # accuracy field, a driver's constant covariance, a receiver that under- or over-states it)
         cfg_kw.update(gnss_delay_std=GNSS_DELAY_STD, gnss_adaptive=True)
     else:
-        # what only GNSS would observe (the odometer's scale, the mounting) keeps its prior σ as Schmidt consider
-        # states: the INS's own drift must not "calibrate" it (the Jackal's scale went to 1.61 ± 0.009 that way),
-        # and the position's σ carries it
-        cfg_kw["consider_states"] = tuple(b for b in ("odo_scale", "mount", "odo_lever")
+        # what only GNSS would observe (the odometer's scale and over-reading in turns, the mounting) keeps its prior
+        # σ as Schmidt consider states: the INS's own drift must not "calibrate" it (the Jackal's scale went to 1.61 ±
+        # 0.009 that way), and the position's σ carries it
+        cfg_kw["consider_states"] = tuple(b for b in ("odo_scale", "odo_turn", "mount", "odo_lever")
                                           if b != "odo_lever" or o.estimate_odo_lever_arm)
     cfg_kw["gate_max_rejections"] = MAX_REJECTIONS
     cfg_kw["bias_model"] = "constant_and_gauss_markov"  # a log's IMU: a turn-on bias that does not decay

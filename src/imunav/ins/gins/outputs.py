@@ -485,14 +485,14 @@ def self_calibration(run: LogRun) -> dict[str, Any]:
     Returns
     -------
     dict
-        Per state (``mount_roll``, ``mount_pitch``, ``mount_yaw``, ``odometer_scale``, ``gnss_latency``,
-        ``odo_lever_x`` ...): ``prior_std``, ``std``, ``ratio``, ``observable``; SI units (rad, s, m).
+        Per state (``mount_roll``, ``mount_pitch``, ``mount_yaw``, ``odometer_scale``, ``odometer_turn_overread``,
+        ``gnss_latency``, ``odo_lever_x`` ...): ``prior_std``, ``std``, ``ratio``, ``observable``; SI units (rad, s, m).
     """
     lay = run.state_layout()
     res = run.result
     out: dict[str, Any] = {}
     names = {"mount": ("mount_roll", "mount_pitch", "mount_yaw"), "odo_scale": ("odometer_scale",),
-             "gnss_delay": ("gnss_latency",), "odo_lever": ("odo_lever_x", "odo_lever_y", "odo_lever_z"),
+             "odo_turn": ("odometer_turn_overread",), "gnss_delay": ("gnss_latency",), "odo_lever": ("odo_lever_x", "odo_lever_y", "odo_lever_z"),
              "gnss_bias": ("gnss_bias_n", "gnss_bias_e", "gnss_bias_d")}
     for block, labels in names.items():
         i = int(lay[getattr(LAY, block)])
@@ -529,6 +529,8 @@ def log_summary(run: LogRun, sources: NavSources, separation: Separation | None 
         ``sources`` (per role: topic, type, count, rate, what the reader refused); ``static_share``; ``mounting``
         (roll, pitch, yaw of the IMU in the vehicle, deg, with σ; its source: given, tf_static, estimated or
         identity; the coarse estimate before the filter); ``odometer_scale`` (reading / true speed − 1, with σ);
+        ``odometer_turn_overread`` (the over-reading per rad/s of yaw rate, s/rad, with σ; ``estimated`` false when
+        the configuration has no such state);
         ``gnss_time_offset_s`` (the receiver's latency, with σ); ``gnss_rejected`` (share of the fixes the
         reader refused or the χ² gate rejected, and why); ``initial`` (how the initial state was found);
         ``duration_s`` (the IMU's span, s) and ``final_position_std_m`` (σ north, east, down of the last
@@ -566,6 +568,8 @@ def log_summary(run: LogRun, sources: NavSources, separation: Separation | None 
         "static_share": float(np.mean(run.static)),
         "mounting": mount,
         "odometer_scale": state("odo_scale", res.odo_scale[-1]) if sources.odometer is not None else None,
+        "odometer_turn_overread": (state("odo_turn", res.odo_turn[-1] if res.odo_turn is not None else 0.0)
+                                   if sources.odometer is not None else None),
         "gnss_time_offset_s": state("gnss_delay", res.gnss_delay[-1]) if sources.gnss is not None else None,
         "gnss_rejected": {"share": (n_gate + n_refused) / total if total else None, "by_gate": n_gate,
                           "by_reader": refused, "fixes": total},

@@ -117,6 +117,9 @@ class GinsResult(EulerMixin, Result):
     gnss_noise_scale : numpy.ndarray, shape (N,), or None
         The factor on the fixes' reported covariance that the adaptive noise estimate had reached
         (``GinsConfig.gnss_adaptive``; 1 without it).
+    odo_turn : numpy.ndarray, shape (N,), or None
+        The odometer's over-reading per rad/s of yaw rate (``GinsConfig.odo_turn_std``), s/rad; 0 where it was
+        not estimated.
     aids : dict of str to AidRecord
         Every update of each aid model of :mod:`imunav.ins.gins.aids` that was applied, by aid name
         (``gnss_position``, ``gnss_velocity``, ``odometer``, ``nhc``, ``zupt``, ``zaru``, ``baro``,
@@ -158,6 +161,7 @@ class GinsResult(EulerMixin, Result):
     gnss_delay: Array | None = None
     gnss_bias: Array | None = None
     gnss_noise_scale: Array | None = None
+    odo_turn: Array | None = None
 
     def gnss_summary(self) -> dict[str, Any]:
         """How the GNSS fixes were used: one definition for the CLI summary and the lab step.

@@ -1,10 +1,16 @@
-"""Odometer aid: the forward speed of the wheel contact point, with a scale-factor state.
+"""Odometer aid: the forward speed of the wheel contact point, with scale-factor and turn over-reading states.
 
-The odometer reads ``(1 + k) w_x`` (``w``: the wheel contact point's velocity in the vehicle frame, :mod:`._wheel`;
-``k``: the scale-factor error, estimated when the error state has the ``odo_scale`` block), so (Groves 2013,
-§16.3.1)::
+The odometer reads ``(1 + k)(1 + c |ω_z|) w_x`` (``w``: the wheel contact point's velocity in the vehicle frame,
+:mod:`._wheel`; ``k``: the scale-factor error, estimated when the error state has the ``odo_scale`` block; ``c``:
+the over-reading per rad/s of the vehicle's yaw rate ``ω_z = (Ĉ_vb ω)_z``, s/rad, estimated when it has the
+``odo_turn`` block: the wheels of a skid-steer vehicle slip in its turns and read more than the body moves, Mandow
+et al. 2007; the outer wheels of a steered axle run a wider arc, Groves 2013, §16.3.1), so with ``g = 1 + ĉ |ω_z|``
+(Groves 2013, §16.3.1 for the scale factor)::
 
-    ν = s − (1 + k̂) ŵ_x,   H = (1 + k̂) ∂w_x/∂δx  (+ ŵ_x on δk),   R = σ_s².
+    ν = s − (1 + k̂) g ŵ_x,   H = (1 + k̂) g ∂w_x/∂δx  (+ g ŵ_x on δk, + (1 + k̂) |ω_z| ŵ_x on δc),   R = σ_s².
+
+``|ω_z|`` depends on the gyro's bias and scale and on the mounting too; those columns are small unless ``ĉ`` is
+large, and are kept so that ``H`` is the derivative of ``ν``.
 
 Measurement ``z``: speed (m/s) and its variance ((m/s)²), one pair per IMU sample; applied at the covariance
 epochs while the vehicle moves (a wheel encoder reads 0 while the body idles: the ZUPT holds the velocity then).
@@ -17,9 +23,10 @@ from typing import Any
 import numpy as np
 from numba import njit
 
+from imunav._rotation_kernels import dcm_from_quat_1
 from imunav.filters._layout import named_layout
 from imunav.ins.gins.aids._wheel import wheel_velocity
-from imunav.ins.gins.layout import LAY, NOM
+from imunav.ins.gins.layout import CTX, LAY, NOM
 
 NAME = "odometer"
 ROWS = 1
@@ -64,9 +71,32 @@ def rows(xs, ctx, z, r, p, lay, H, R, nu, row):
     vw = wheel_velocity(xs, ctx, lay, Hv)
     io = lay[LAY.odo_scale]
     k = xs[NOM.odo_scale] if io >= 0 else 0.0
+    ic = lay[LAY.odo_turn]
+    c = xs[NOM.odo_turn]
+    wv = np.zeros(3)  # the rate in the vehicle frame, C_vb ω
+    if ic >= 0:
+        Cvb = dcm_from_quat_1(xs[NOM.q_vb:NOM.q_vb + 4])
+        for i in range(3):
+            for j in range(3):
+                wv[i] += Cvb[i, j] * ctx[CTX.w_sample + j]
+    wz = abs(wv[2])
+    g = 1.0 + c * wz
     for j in range(nx):
-        H[row, j] = (1.0 + k) * Hv[0, j]
+        H[row, j] = (1.0 + k) * g * Hv[0, j]
     if io >= 0:
-        H[row, io] = vw[0]
-    nu[row] = z[0] - (1.0 + k) * vw[0]
+        H[row, io] = g * vw[0]
+    if ic >= 0:
+        H[row, ic] = (1.0 + k) * wz * vw[0]
+        # |ω_z| through the gyro's bias and scale (∂ω/∂δb_g = −1, ∂ω/∂δs_g = −diag ω) and the mounting
+        # (∂(C_vb ω)/∂μ = −[(Ĉ_vb ω)×]): small unless the over-reading is large, kept so that H is the derivative
+        a = (1.0 + k) * vw[0] * c * (1.0 if wv[2] >= 0.0 else -1.0)
+        ib, isg, im = lay[LAY.gyro_bias], lay[LAY.gyro_scale], lay[LAY.mount]
+        for j in range(3):
+            H[row, ib + j] -= a * Cvb[2, j]
+            if isg >= 0:
+                H[row, isg + j] -= a * Cvb[2, j] * ctx[CTX.w_sample + j]
+        if im >= 0:
+            H[row, im] += a * wv[1]
+            H[row, im + 1] -= a * wv[0]
+    nu[row] = z[0] - (1.0 + k) * g * vw[0]
     R[row, row] = z[1]
