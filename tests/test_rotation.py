@@ -250,3 +250,15 @@ def test_frame_constants_are_the_quaternions_of_their_matrices():
     matrices bit for bit."""
     np.testing.assert_array_equal(R.Q_ENU_NED, R.quat_from_dcm(R.C_ENU_NED))
     np.testing.assert_array_equal(R.Q_FRD_FLU, R.quat_from_dcm(R.C_FLU_FRD.T))
+
+
+def test_quat_from_dcm_takes_each_of_shepperds_pivots():
+    """The four branches of Shepperd's method (largest of trace, C00, C11, C22; the first of equal ones): the
+    identity and the half turns about x, y and z give their quaternions exactly, and a half turn about (x + y)/√2
+    (C00 = C11 = 0, the largest) the x pivot, to rounding."""
+    for C, q in ((np.eye(3), [1, 0, 0, 0]), (np.diag([1.0, -1, -1]), [0, 1, 0, 0]),
+                 (np.diag([-1.0, 1, -1]), [0, 0, 1, 0]), (np.diag([-1.0, -1, 1]), [0, 0, 0, 1])):
+        np.testing.assert_array_equal(R.quat_from_dcm(C), q)
+    C = np.array([[0.0, 1, 0], [1, 0, 0], [0, 0, -1]])
+    np.testing.assert_allclose(R.quat_from_dcm(C), [0, math.sqrt(0.5), math.sqrt(0.5), 0], rtol=0, atol=2e-16)
+    np.testing.assert_array_equal(R.quat_from_dcm(np.stack([C, np.eye(3)]))[0], R.quat_from_dcm(C))

@@ -136,7 +136,7 @@ def dcm_exp_into(R, r0, r1, r2):
     R[2, 1] = a * r0 + b * r1 * r2
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _needs_flip(w, x, y, z):
     """True if -q is the canonical representative: w > 0, or at w == 0 the
     first non-zero vector component positive (makes log(q) == log(-q) at pi)."""
@@ -149,22 +149,25 @@ def _needs_flip(w, x, y, z):
     return z < 0.0
 
 
-@njit(cache=True)
-def qlog_1(q):
-    """Rotation vector (rad) of unit q, angle in [0, pi] (q and -q give the same)."""
-    w, x, y, z = q[0], q[1], q[2], q[3]
+@njit(cache=True, inline="always")
+def qlog_t(w, x, y, z):
+    """Rotation vector (rad) of unit (w, x, y, z) on scalars, angle in [0, pi] (q and -q give the same)."""
     if _needs_flip(w, x, y, z):
         w, x, y, z = -w, -x, -y, -z
     nv = math.sqrt(x * x + y * y + z * z)
-    out = np.empty(3)
     if nv < _SMALL * 0.5:
         # theta = 2 atan2(nv, w) ~ 2 nv / w (1 - nv^2 / (3 w^2))
         k = 2.0 / w * (1.0 - nv * nv / (3.0 * w * w))
     else:
         k = 2.0 * math.atan2(nv, w) / nv
-    out[0] = k * x
-    out[1] = k * y
-    out[2] = k * z
+    return k * x, k * y, k * z
+
+
+@njit(cache=True)
+def qlog_1(q):
+    """Rotation vector (rad) of unit q, angle in [0, pi] (q and -q give the same)."""
+    out = np.empty(3)
+    out[0], out[1], out[2] = qlog_t(q[0], q[1], q[2], q[3])
     return out
 
 
@@ -184,62 +187,96 @@ def dcm_from_quat_1(q):
     return C
 
 
+@njit(cache=True, inline="always")
+def _argmax4(a0, a1, a2, a3):
+    """``np.argmax([a0, a1, a2, a3])`` (the first largest; the first NaN if any) without building an array:
+    ``np.array`` and ``np.argmax`` are a second of compilation (issue 35, a first run)."""
+    if a0 != a0:
+        return 0
+    i = 0
+    m = a0
+    if a1 != a1:
+        return 1
+    if a1 > m:
+        i = 1
+        m = a1
+    if a2 != a2:
+        return 2
+    if a2 > m:
+        i = 2
+        m = a2
+    if a3 != a3:
+        return 3
+    if a3 > m:
+        i = 3
+    return i
+
+
+@njit(cache=True, inline="always")
+def quat_from_dcm_t(C):
+    """Shepperd's method: pick the largest of 4w^2, 4x^2, 4y^2, 4z^2; the unit quaternion's components."""
+    tr = C[0, 0] + C[1, 1] + C[2, 2]
+    i = _argmax4(tr, C[0, 0], C[1, 1], C[2, 2])
+    if i == 0:
+        s = 2.0 * math.sqrt(1.0 + tr)
+        o0 = 0.25 * s
+        o1 = (C[2, 1] - C[1, 2]) / s
+        o2 = (C[0, 2] - C[2, 0]) / s
+        o3 = (C[1, 0] - C[0, 1]) / s
+    elif i == 1:
+        s = 2.0 * math.sqrt(max(1.0 + C[0, 0] - C[1, 1] - C[2, 2], 0.0))
+        o0 = (C[2, 1] - C[1, 2]) / s
+        o1 = 0.25 * s
+        o2 = (C[0, 1] + C[1, 0]) / s
+        o3 = (C[0, 2] + C[2, 0]) / s
+    elif i == 2:
+        s = 2.0 * math.sqrt(max(1.0 - C[0, 0] + C[1, 1] - C[2, 2], 0.0))
+        o0 = (C[0, 2] - C[2, 0]) / s
+        o1 = (C[0, 1] + C[1, 0]) / s
+        o2 = 0.25 * s
+        o3 = (C[1, 2] + C[2, 1]) / s
+    else:
+        s = 2.0 * math.sqrt(max(1.0 - C[0, 0] - C[1, 1] + C[2, 2], 0.0))
+        o0 = (C[1, 0] - C[0, 1]) / s
+        o1 = (C[0, 2] + C[2, 0]) / s
+        o2 = (C[1, 2] + C[2, 1]) / s
+        o3 = 0.25 * s
+    if _needs_flip(o0, o1, o2, o3):
+        o0, o1, o2, o3 = -o0, -o1, -o2, -o3
+    n = math.sqrt(o0 ** 2 + o1 ** 2 + o2 ** 2 + o3 ** 2)
+    return o0 / n, o1 / n, o2 / n, o3 / n
+
+
 @njit(cache=True)
 def quat_from_dcm_1(C):
     """Shepperd's method: pick the largest of 4w^2, 4x^2, 4y^2, 4z^2."""
-    tr = C[0, 0] + C[1, 1] + C[2, 2]
     out = np.empty(4)
-    a = np.array([tr, C[0, 0], C[1, 1], C[2, 2]])
-    i = np.argmax(a)
-    if i == 0:
-        s = 2.0 * math.sqrt(1.0 + tr)
-        out[0] = 0.25 * s
-        out[1] = (C[2, 1] - C[1, 2]) / s
-        out[2] = (C[0, 2] - C[2, 0]) / s
-        out[3] = (C[1, 0] - C[0, 1]) / s
-    elif i == 1:
-        s = 2.0 * math.sqrt(max(1.0 + C[0, 0] - C[1, 1] - C[2, 2], 0.0))
-        out[0] = (C[2, 1] - C[1, 2]) / s
-        out[1] = 0.25 * s
-        out[2] = (C[0, 1] + C[1, 0]) / s
-        out[3] = (C[0, 2] + C[2, 0]) / s
-    elif i == 2:
-        s = 2.0 * math.sqrt(max(1.0 - C[0, 0] + C[1, 1] - C[2, 2], 0.0))
-        out[0] = (C[0, 2] - C[2, 0]) / s
-        out[1] = (C[0, 1] + C[1, 0]) / s
-        out[2] = 0.25 * s
-        out[3] = (C[1, 2] + C[2, 1]) / s
-    else:
-        s = 2.0 * math.sqrt(max(1.0 - C[0, 0] - C[1, 1] + C[2, 2], 0.0))
-        out[0] = (C[1, 0] - C[0, 1]) / s
-        out[1] = (C[0, 2] + C[2, 0]) / s
-        out[2] = (C[1, 2] + C[2, 1]) / s
-        out[3] = 0.25 * s
-    if _needs_flip(out[0], out[1], out[2], out[3]):
-        for j in range(4):
-            out[j] = -out[j]
-    n = math.sqrt(out[0] ** 2 + out[1] ** 2 + out[2] ** 2 + out[3] ** 2)
-    for j in range(4):  # element by element: no array expression to compile
-        out[j] /= n
+    out[0], out[1], out[2], out[3] = quat_from_dcm_t(C)
     return out
+
+
+@njit(cache=True, inline="always")
+def quat_from_euler_t(roll, pitch, yaw):
+    """ZYX: q = qz(yaw) ⊗ qy(pitch) ⊗ qx(roll), on scalars."""
+    cr, sr = math.cos(0.5 * roll), math.sin(0.5 * roll)
+    cp, sp = math.cos(0.5 * pitch), math.sin(0.5 * pitch)
+    cy, sy = math.cos(0.5 * yaw), math.sin(0.5 * yaw)
+    return (cr * cp * cy + sr * sp * sy,
+            sr * cp * cy - cr * sp * sy,
+            cr * sp * cy + sr * cp * sy,
+            cr * cp * sy - sr * sp * cy)  # fmt: skip
 
 
 @njit(cache=True)
 def quat_from_euler_1(roll, pitch, yaw):
     """ZYX: q = qz(yaw) ⊗ qy(pitch) ⊗ qx(roll)."""
-    cr, sr = math.cos(0.5 * roll), math.sin(0.5 * roll)
-    cp, sp = math.cos(0.5 * pitch), math.sin(0.5 * pitch)
-    cy, sy = math.cos(0.5 * yaw), math.sin(0.5 * yaw)
     out = np.empty(4)
-    out[0] = cr * cp * cy + sr * sp * sy
-    out[1] = sr * cp * cy - cr * sp * sy
-    out[2] = cr * sp * cy + sr * cp * sy
-    out[3] = cr * cp * sy - sr * sp * cy
+    out[0], out[1], out[2], out[3] = quat_from_euler_t(roll, pitch, yaw)
     return out
 
 
-@njit(cache=True)
-def euler_from_dcm_1(C):
+@njit(cache=True, inline="always")
+def euler_from_dcm_t(C):
     """(roll, pitch, yaw) of C_nb = Rz(yaw) Ry(pitch) Rx(roll).
 
     Pitch and yaw come from the first column (body x axis in nav).  Roll is
@@ -251,35 +288,38 @@ def euler_from_dcm_1(C):
     exact gimbal lock (cos pitch < 1e-12) yaw carries the whole rotation
     about the vertical and roll is 0.
     """
-    out = np.empty(3)
     cp = math.sqrt(C[0, 0] * C[0, 0] + C[1, 0] * C[1, 0])
-    out[1] = math.atan2(-C[2, 0], cp)
+    pitch = math.atan2(-C[2, 0], cp)
     if cp > 1e-12:
         y = math.atan2(C[1, 0], C[0, 0])
     else:
         # C = Rz(yaw) Ry(+-90 deg): C[0,1] = -sin(yaw), C[1,1] = cos(yaw) when roll = 0
         y = math.atan2(-C[0, 1], C[1, 1])
     sy, cy = math.sin(y), math.cos(y)
-    out[2] = y
-    out[0] = math.atan2(sy * C[0, 2] - cy * C[1, 2], -sy * C[0, 1] + cy * C[1, 1])
+    return math.atan2(sy * C[0, 2] - cy * C[1, 2], -sy * C[0, 1] + cy * C[1, 1]), pitch, y
+
+
+@njit(cache=True)
+def euler_from_dcm_1(C):
+    """(roll, pitch, yaw) of C_nb = Rz(yaw) Ry(pitch) Rx(roll) (:func:`euler_from_dcm_t`)."""
+    out = np.empty(3)
+    out[0], out[1], out[2] = euler_from_dcm_t(C)
     return out
 
 
 # ---- batch kernels --------------------------------------------------------
-@njit(cache=True, inline="always")
-def _row(out, i, x):
-    """``out[i] = x`` element by element: numba compiles a row assignment with its shape check and error message
-    (seconds of compilation in every process that compiles one; issue 35, a first run), a loop without."""
-    for j in range(x.shape[0]):
-        out[i, j] = x[j]
-
-
+# Each writes its rows from the scalar forms (``*_t``, inlined) rather than calling the ``*_1`` kernels: a call to
+# another kernel compiles that kernel too, and a row assignment compiles its shape check and error message, seconds
+# of compilation in every process that compiles these (issue 35, a first run); the arithmetic is the same.
 @njit(cache=True)
 def qmul_n(p, q):
     n = max(p.shape[0], q.shape[0])
     out = np.empty((n, 4))
     for i in range(n):
-        _row(out, i, qmul_1(p[i if p.shape[0] > 1 else 0], q[i if q.shape[0] > 1 else 0]))
+        a = i if p.shape[0] > 1 else 0
+        b = i if q.shape[0] > 1 else 0
+        out[i, 0], out[i, 1], out[i, 2], out[i, 3] = qmul_t(p[a, 0], p[a, 1], p[a, 2], p[a, 3],
+                                                            q[b, 0], q[b, 1], q[b, 2], q[b, 3])
     return out
 
 
@@ -288,7 +328,9 @@ def qrot_n(q, v):
     n = max(q.shape[0], v.shape[0])
     out = np.empty((n, 3))
     for i in range(n):
-        _row(out, i, qrot_1(q[i if q.shape[0] > 1 else 0], v[i if v.shape[0] > 1 else 0]))
+        a = i if q.shape[0] > 1 else 0
+        b = i if v.shape[0] > 1 else 0
+        out[i, 0], out[i, 1], out[i, 2] = qrot_t(q[a, 0], q[a, 1], q[a, 2], q[a, 3], v[b, 0], v[b, 1], v[b, 2])
     return out
 
 
@@ -296,7 +338,7 @@ def qrot_n(q, v):
 def qexp_n(r):
     out = np.empty((r.shape[0], 4))
     for i in range(r.shape[0]):
-        _row(out, i, qexp_1(r[i]))
+        out[i, 0], out[i, 1], out[i, 2], out[i, 3] = qexp_t(r[i, 0], r[i, 1], r[i, 2])
     return out
 
 
@@ -304,7 +346,7 @@ def qexp_n(r):
 def qlog_n(q):
     out = np.empty((q.shape[0], 3))
     for i in range(q.shape[0]):
-        _row(out, i, qlog_1(q[i]))
+        out[i, 0], out[i, 1], out[i, 2] = qlog_t(q[i, 0], q[i, 1], q[i, 2], q[i, 3])
     return out
 
 
@@ -321,7 +363,7 @@ def dcm_from_quat_n(q):
 def quat_from_dcm_n(C):
     out = np.empty((C.shape[0], 4))
     for i in range(C.shape[0]):
-        _row(out, i, quat_from_dcm_1(C[i]))
+        out[i, 0], out[i, 1], out[i, 2], out[i, 3] = quat_from_dcm_t(C[i])
     return out
 
 
@@ -329,7 +371,7 @@ def quat_from_dcm_n(C):
 def quat_from_euler_n(e):
     out = np.empty((e.shape[0], 4))
     for i in range(e.shape[0]):
-        _row(out, i, quat_from_euler_1(e[i, 0], e[i, 1], e[i, 2]))
+        out[i, 0], out[i, 1], out[i, 2], out[i, 3] = quat_from_euler_t(e[i, 0], e[i, 1], e[i, 2])
     return out
 
 
@@ -337,7 +379,7 @@ def quat_from_euler_n(e):
 def euler_from_dcm_n(C):
     out = np.empty((C.shape[0], 3))
     for i in range(C.shape[0]):
-        _row(out, i, euler_from_dcm_1(C[i]))
+        out[i, 0], out[i, 1], out[i, 2] = euler_from_dcm_t(C[i])
     return out
 
 

@@ -31,7 +31,7 @@ def moving_var_cols(x: np.ndarray, w: int) -> np.ndarray:
     return out
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")  # inlined: not a second kernel to compile (issue 35, a first run)
 def _moving_var_add(x: np.ndarray, w: int, out: np.ndarray) -> None:
     m = out.shape[0]
     refresh = 64 * w

@@ -150,10 +150,13 @@ def _split(topic: str, instance: int | None, source: str) -> tuple[str, int | No
     return topic, instance
 
 
-def _dataset(path: str | os.PathLike[str], topic: str, instance: int | None) -> tuple[Any, Any]:
+def _dataset(path: str | os.PathLike[str], topic: str, instance: int | None, ulog: Any = None) -> tuple[Any, Any]:
+    """The parsed log and the dataset of ``topic`` (instance ``instance``); ``ulog``: the log already parsed with
+    that topic among its names (not parsed a second time)."""
     source = os.fspath(path)
     name, inst = _split(topic, instance, source)
-    ulog = _load(path, [name])
+    if ulog is None:
+        ulog = _load(path, [name])
     found = [d for d in ulog.data_list if d.name == name]
     if not found:
         names = sorted({d.name for d in _load(path, None).data_list})
@@ -339,9 +342,11 @@ def read_imu_topic(path: str | os.PathLike[str], topic: str | None, *, instance:
         If the log has no IMU topic at all, or a gyro / accel pair cannot be matched in time.
     """
     source = os.fspath(path)
+    parsed = None
     if topic is None:
         topic = "sensor_combined"
-        names = {d.name for d in _load(path, list(IMU_TOPICS)).data_list}
+        parsed = _load(path, list(IMU_TOPICS))
+        names = {d.name for d in parsed.data_list}
         if "sensor_combined" not in names:
             if not names:
                 raise FileFormatError(f"{source}: this log has no IMU data (none of {', '.join(IMU_TOPICS)})")
@@ -366,7 +371,9 @@ def read_imu_topic(path: str | os.PathLike[str], topic: str | None, *, instance:
             imu, _ = merge_onto(imu, a, "temp", source)
         imu.meta["accel_from"] = note
         return imu
-    return read_topic(path, name, instance=inst)
+    # the default topic from the log parsed above (parsing it again for the one topic took as long: issue 35)
+    ulog, d = _dataset(path, name, inst, parsed)
+    return _read(ulog, d, source)
 
 
 #: Ground-truth topics of PX4's simulator, read by :func:`read_px4_groundtruth`.
