@@ -436,7 +436,8 @@ class GinsFilter:
         Time of the current state, s (after :meth:`reset` / :meth:`step` / :meth:`run`); the state itself is in
         the properties :attr:`lla`, :attr:`vel_ned`, :attr:`q_nb`, :attr:`imu_errors` and :attr:`mounting`.
     P : numpy.ndarray, shape (n, n)
-        Current error-state covariance (:data:`~imunav.ins.gins.STATE_NAMES`, then the odometer scale).
+        Current error-state covariance (:data:`~imunav.ins.gins.STATE_NAMES`, then the odometer scale and, with
+        ``GinsConfig.odo_turn_std``, the odometer's over-reading in turns last).
     last_nis : dict
         NIS of the updates of the last :meth:`step`: ``gnss`` (G, 2) position / velocity, ``vehicle``,
         ``zupt``, ``baro``, ``mag``, and each model alone: ``odo``, ``nhc``, ``zupt_vel``, ``zaru`` (NaN when
@@ -498,7 +499,8 @@ class GinsFilter:
         imu_errors0 : array_like, shape (12,), optional
             Initial gyro bias (rad/s), accel bias (m/s²), gyro scale, accel scale (default zeros).
         odometer : bool
-            Add the odometer scale-factor state (to use ``odometer_speed`` in :meth:`step`).
+            Add the odometer scale-factor state, and the over-reading in turns unless ``odo_turn_std`` is None (to
+            use ``odometer_speed`` in :meth:`step`).
         dtheta0, dvel0 : array_like, shape (3,), optional
             The raw increments ending at ``t0`` (for the two-sample coning / sculling of the first step;
             default zeros).
