@@ -22,7 +22,7 @@ from shared_data import data_path
 from imunav.earth import lla_to_ned
 from imunav.ins.gins.layout import LAY
 from imunav.ins.gins.logrun import LogRunOptions, log_outage_test, run_log
-from imunav.ins.gins.outputs import honesty, self_calibration
+from imunav.ins.gins.outputs import honesty, log_summary, self_calibration
 from imunav.ins.gins.truth import navigation_errors, nees_blocks
 from imunav.io.aiding import OdometerData
 from imunav.io.kfgins import read_kfgins_nav, write_kfgins_nav
@@ -215,6 +215,10 @@ def test_jackal_bag_dead_reckoning():
     assert res.odo_scale[-1] == 0.0 and math.sqrt(res.cov_diag[-1, io]) == pytest.approx(0.02, rel=1e-9)
     sc = self_calibration(run)
     assert sc["odometer_scale"]["observable"] is False and sc["mount_yaw"]["observable"] is False
+    it = int(lay[LAY.odo_turn])  # the over-reading in turns too, at its prior 0 ± 0.3 s/rad
+    assert res.odo_turn[-1] == 0.0 and math.sqrt(res.cov_diag[-1, it]) == pytest.approx(0.3, rel=1e-9)
+    summary = log_summary(run, src)
+    assert summary["odometer_scale"]["estimated"] is False and summary["odometer_turn_overread"]["estimated"] is False
     assert float(np.sqrt(res.cov_diag[-1, 0] + res.cov_diag[-1, 1])) > 0.4
     assert np.max(np.abs(res.vel_ned)) < 3.0  # the Jackal drives at up to 2 m/s
     assert set(src.topics) == {"imu", "odometer"} and not src.time_is_utc

@@ -486,13 +486,15 @@ def self_calibration(run: LogRun) -> dict[str, Any]:
     -------
     dict
         Per state (``mount_roll``, ``mount_pitch``, ``mount_yaw``, ``odometer_scale``, ``odometer_turn_overread``,
-        ``gnss_latency``, ``odo_lever_x`` ...): ``prior_std``, ``std``, ``ratio``, ``observable``; SI units (rad, s, m).
+        ``gnss_latency``, ``odo_lever_x`` ...): ``prior_std``, ``std``, ``ratio``, ``observable``; SI units (rad, s,
+        m).
     """
     lay = run.state_layout()
     res = run.result
     out: dict[str, Any] = {}
     names = {"mount": ("mount_roll", "mount_pitch", "mount_yaw"), "odo_scale": ("odometer_scale",),
-             "odo_turn": ("odometer_turn_overread",), "gnss_delay": ("gnss_latency",), "odo_lever": ("odo_lever_x", "odo_lever_y", "odo_lever_z"),
+             "odo_turn": ("odometer_turn_overread",), "gnss_delay": ("gnss_latency",),
+             "odo_lever": ("odo_lever_x", "odo_lever_y", "odo_lever_z"),
              "gnss_bias": ("gnss_bias_n", "gnss_bias_e", "gnss_bias_d")}
     for block, labels in names.items():
         i = int(lay[getattr(LAY, block)])
@@ -529,8 +531,9 @@ def log_summary(run: LogRun, sources: NavSources, separation: Separation | None 
         ``sources`` (per role: topic, type, count, rate, what the reader refused); ``static_share``; ``mounting``
         (roll, pitch, yaw of the IMU in the vehicle, deg, with σ; its source: given, tf_static, estimated or
         identity; the coarse estimate before the filter); ``odometer_scale`` (reading / true speed − 1, with σ);
-        ``odometer_turn_overread`` (the over-reading per rad/s of yaw rate, s/rad, with σ; ``estimated`` false when
-        the configuration has no such state);
+        ``odometer_turn_overread`` (the over-reading per rad/s of yaw rate, s/rad, with σ); in each of these three,
+        ``estimated`` is false when the configuration has no such state or holds it at its prior (a Schmidt consider
+        state: the odometer's without GNSS);
         ``gnss_time_offset_s`` (the receiver's latency, with σ); ``gnss_rejected`` (share of the fixes the
         reader refused or the χ² gate rejected, and why); ``initial`` (how the initial state was found);
         ``duration_s`` (the IMU's span, s) and ``final_position_std_m`` (σ north, east, down of the last
@@ -542,7 +545,8 @@ def log_summary(run: LogRun, sources: NavSources, separation: Separation | None 
 
     def state(block: str, value: float) -> dict[str, Any]:
         i = int(lay[getattr(LAY, block)])
-        return {"value": float(value), "std": float(sd[i]) if i >= 0 else None, "estimated": i >= 0}
+        return {"value": float(value), "std": float(sd[i]) if i >= 0 else None,
+                "estimated": i >= 0 and block not in run.config.consider_states}
 
     e, esd = run.mounting_euler()
     mount = {"roll_deg": float(np.degrees(e[0])), "pitch_deg": float(np.degrees(e[1])),
