@@ -22,7 +22,7 @@ from shared_data import data_path
 from imunav.earth import lla_to_ned
 from imunav.ins.gins.layout import LAY
 from imunav.ins.gins.logrun import LogRunOptions, log_outage_test, run_log
-from imunav.ins.gins.outputs import honesty, log_summary, self_calibration
+from imunav.ins.gins.outputs import honesty, log_summary, run_summary, self_calibration
 from imunav.ins.gins.truth import navigation_errors, nees_blocks
 from imunav.io.aiding import OdometerData
 from imunav.io.kfgins import read_kfgins_nav, write_kfgins_nav
@@ -193,9 +193,9 @@ def test_jackal_bag_dead_reckoning():
     regression value for its EKF on this bag ((1.0206, 3.4292) m in its odom frame, FLU; a peer's output, not a
     truth; in-sample: the rest test and the frame_id rule were written while running this bag), where the wheel
     odometry's own pose ends 24 m away; the sources named, the time columns flagged as not UTC.  With the odometer's
-    scale held at 1 ± 2 % (it was 1 ± 0, 2.3 m from robot_localization's) the end is 3.5 m from it: the end moves by
-    metres with the scale's prior, a dead reckoning this bag does not pin down (its forward-backward separation says
-    so)."""
+    scale held at 1 ± 2 % (it was 1 ± 0, 2.3 m from robot_localization's) the end was 3.5 m from it, and 2.0 m with
+    the over-reading in turns held at 0 ± 0.3 s/rad too: the end moves by metres with the priors, a dead reckoning
+    this bag does not pin down (its forward-backward separation says so)."""
     p = data_path("ros_bags/jackal_test2.bag")
     src = read_nav_sources(p)
     run = run_log(src)
@@ -452,7 +452,11 @@ def test_an_odometer_that_understates_its_sigma_is_named_in_the_verdict():
     right = honesty(run_log(src, opts))
     o = src.odometer
     low = dataclasses.replace(src, odometer=dataclasses.replace(o, speed_std=np.full(o.t.size, 0.05)))
-    wrong = honesty(run_log(low, opts))
+    low_run = run_log(low, opts)
+    wrong = honesty(low_run)
+    # summary.json's aids block gives the same accepted-update figure beside the mean over every update
+    odo = run_summary(low_run.result, low_run)["aids"]["odometer"]
+    assert odo["nis_mean_accepted"] == wrong["checks"]["odometer_nis_mean"] < odo["nis_mean"]
     print(f"odometer NIS: sigma right {right['checks']['odometer_nis_mean']:.2f}, five times too small "
           f"{wrong['checks']['odometer_nis_mean']:.2f} (rejected {wrong['checks']['odometer_rejected_share']:.2f})")
     assert right["checks"]["odometer_nis_dof"] == 1

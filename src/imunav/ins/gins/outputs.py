@@ -139,13 +139,16 @@ def run_summary(res: GinsResult, setup: Any, *, truth: NavTrack | None = None) -
     -------
     dict
         ``states``, ``imu_samples``, the GNSS use of :meth:`GinsResult.gnss_summary`, ``gnss_removed`` (fixes left
-        out and why), ``aids`` (per aid: updates, mean NIS, accepted share; null when none) and, with a truth,
+        out and why), ``aids`` (per aid: updates; ``nis_mean`` over every update, the rejected ones included, and
+        ``nis_mean_accepted`` over those the gate accepted, the figure of :func:`honesty`; dof; accepted share; null
+        when none) and, with a truth,
         ``rmse`` (and ``rmse_smoothed``) of :func:`~imunav.ins.gins.setup.track_rmse`.
     """
     aids = {}
     for name, rec in res.aids.items():
         ok = np.isfinite(rec.nis)
         aids[name] = {"updates": int(rec.t.size), "nis_mean": float(np.mean(rec.nis[ok])) if ok.any() else None,
+                      "nis_mean_accepted": _accepted_nis(rec)[0] if rec.t.size else None,
                       "dof": int(rec.dof[0]) if rec.dof.size else None,
                       "accepted_share": float(np.mean(rec.accepted)) if rec.t.size else None}
     out: dict[str, Any] = {"states": setup.config.n_states, "imu_samples": int(res.t.size), **res.gnss_summary(),
