@@ -161,6 +161,8 @@ def check_finite_result(name: str, t: Array, q: Array, cov: Array | None, params
 
 
 def params_dict(obj: Any) -> dict[str, Any]:
+    """A filter configuration's fields and values (a dataclass's fields; ``asdict`` otherwise), the ``params`` of
+    its :class:`~imunav.attitude.result.AttitudeResult`."""
     try:
         return {f.name: getattr(obj, f.name) for f in fields(obj)}
     except TypeError:

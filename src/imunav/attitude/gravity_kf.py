@@ -44,7 +44,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from imunav.attitude import _gravity_kernels as _gk
-from imunav.attitude._base import gyro3, prepare, step_dt, vec3
+from imunav.attitude._base import gyro3, params_dict, prepare, step_dt, vec3
 from imunav.attitude.result import AttitudeResult
 from imunav.errors import ConfigError, ShapeError
 from imunav.rotation import quat_from_euler
@@ -347,8 +347,7 @@ class GravityKF:
         q = quat_from_euler(rp[:, 0], rp[:, 1], np.zeros(len(rp)))
         return AttitudeResult(t=t, q_nb=q, bias=bb if self.kind == "javed" else None, name=self.name,
                               flags={"x": xs, "alpha": al.astype(bool), "S": S, "a_plus": ap},
-                              params={"kind": self.kind, **{f.name: getattr(self.config, f.name)
-                                                            for f in fields(self.config)}})
+                              params={"kind": self.kind, **params_dict(self.config)})
 
 
 def LeeKF(config: GravityKfConfig | None = None, **kw) -> GravityKF:  # noqa: N802

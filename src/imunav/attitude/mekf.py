@@ -69,7 +69,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from imunav.attitude import _kernels as _k
-from imunav.attitude._base import check_finite_result, check_q0, gyro3, initial_q, prepare, step_dt, vec3
+from imunav.attitude._base import check_finite_result, check_q0, gyro3, initial_q, params_dict, prepare, step_dt, vec3
 from imunav.attitude.result import AttitudeResult
 from imunav.errors import ConfigError
 from imunav.timeseries import ImuData
@@ -426,7 +426,7 @@ class MEKF:
             which its attitude or covariance is not finite.
         """
         t, _, _, um, _, _, _, (q, b, pd, fl, nis, dof, *_rest) = self._run(data, q0, bias0, use_mag, False)
-        params = {**{f.name: getattr(self.config, f.name) for f in fields(self.config)}, "use_mag": um}
+        params = {**params_dict(self.config), "use_mag": um}
         check_finite_result(self.name, t, q, pd, params)
         self.q, self.b = q[-1].copy(), b[-1].copy()
         flags = {k: (fl & v) > 0 for k, v in FLAG_NAMES.items()}

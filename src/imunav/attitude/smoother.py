@@ -47,13 +47,13 @@ real-time filter's.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field, fields, replace
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 from numpy.typing import ArrayLike
 
 from imunav.attitude import _kernels as _k
-from imunav.attitude._base import check_finite_result
+from imunav.attitude._base import check_finite_result, params_dict
 from imunav.attitude.adaptive import ADAPTIVE_DEFAULTS
 from imunav.attitude.mekf import FLAG_NAMES, MEKF, MekfConfig
 from imunav.attitude.result import AttitudeResult
@@ -133,7 +133,7 @@ class Smoother:
         f = MEKF(self.config)
         t, g, dt, um, q_init, b0, P0, out = f._run(data, q0, bias0, use_mag, True)
         qf, bf, pf, fl, _, _, Pu, Pp, Ph = out
-        params = {**{f_.name: getattr(self.config, f_.name) for f_ in fields(self.config)}, "use_mag": um}
+        params = {**params_dict(self.config), "use_mag": um}
         check_finite_result(self.name, t, qf, pf, params)  # the forward pass: RTS on NaN would only spread them
         qs, bs, pd = _k.rts_smooth(qf, bf, Pu, Pp, Ph, g, dt, P0, q_init, b0)
         flags = {k: (fl & v) > 0 for k, v in FLAG_NAMES.items()}

@@ -22,7 +22,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from imunav.attitude import _kernels as _k
-from imunav.attitude._base import check_finite_result, check_q0, gyro3, initial_q, prepare, step_dt, vec3
+from imunav.attitude._base import check_finite_result, check_q0, gyro3, initial_q, params_dict, prepare, step_dt, vec3
 from imunav.attitude.result import AttitudeResult
 from imunav.errors import ConfigError, InvalidInputError
 from imunav.rotation import quat_rotate
@@ -304,7 +304,7 @@ class UKF:
             ref = self._ref()
         qs, bs, pd, Pa, nis, dof = _k.ukf_run(q_init, vec3(bias0, "bias0"), pr.P0(), g, a, m, dt, pr.vector(um),
                                               pr.alpha, pr.beta, pr.kappa, ref)
-        params = {**{f.name: getattr(pr, f.name) for f in fields(pr)}, "use_mag": um}
+        params = {**params_dict(pr), "use_mag": um}
         check_finite_result(self.name, t, qs, pd, params)
         self.q, self.b, self.P = qs[-1].copy(), bs[-1].copy(), Pa[-1].copy()
         return AttitudeResult(t=t, q_nb=qs, bias=bs, cov_diag=pd, flags={"nis": nis, "nis_dof": dof},
