@@ -10,7 +10,9 @@ import numpy as np
 import pytest
 from scipy.signal import lfilter
 
-from imunav.earth import ned_to_lla
+from imunav.earth import lla_to_ned, ned_to_lla
+from imunav.errors import InvalidInputError
+from imunav.ins.gins import GinsConfig, GinsFilter
 from imunav.ins.gins.identify import (
     GNSS_BIAS_SCATTER_FACTOR,
     GNSS_BIAS_TAU,
@@ -20,10 +22,15 @@ from imunav.ins.gins.identify import (
     withheld_windows,
 )
 from imunav.ins.gins.logrun import LogRunOptions, log_outage_test, run_log
+from imunav.ins.gins.result import AidRecord
 from imunav.io.gnss import GnssData
 from imunav.io.kfgins import NavTrack
+from imunav.sim import presets, simulate_imu
+from imunav.sim.gnss import simulate_gnss
 from imunav.sim.hard_log import simulate_hard_robot_log
 from imunav.sim.robot_log import simulate_robot_log
+from imunav.sim.vehicle import demo_drive, vehicle_trajectory
+from imunav.units import DEG
 
 
 def test_withheld_windows_alternate_30_s_out_and_60_s_in():
@@ -36,25 +43,58 @@ def test_withheld_windows_alternate_30_s_out_and_60_s_in():
 
 
 def test_withheld_score_is_smallest_for_the_true_sigma():
-    """The log score ``ln det Σ + eᵀΣ⁻¹e`` is proper: at errors drawn with the σ of a run, a run that claims a σ 1.5
-    times too large or too small scores worse by ``2 (ln c + 1/c − 1)`` per fix (``c = 1.5²`` or ``1/1.5²``:
-    0.51 and 0.49 per fix, 40 standard errors of the mean over 4000 fixes)."""
+    """The log score ``ln det S + νᵀS⁻¹ν`` is proper: at innovations drawn with the covariance S of a run, a run that
+    claims S 1.5 times too large or too small scores worse by ``3 (ln c + 1/c − 1)`` per fix (3 degrees of freedom,
+    ``c = 1.5`` or ``1/1.5``: 0.22 and 0.28 per fix, about 20 standard errors of the mean over 4000 fixes)."""
     rng = np.random.default_rng(1)
-    n, p_var, r_var = 4000, 0.5**2, 0.8**2
-    lla0 = np.array([0.8, 0.2, 100.0])
-    e = rng.normal(0.0, math.sqrt(p_var + r_var), size=(n, 2))
-    t = np.arange(n) * 0.4
-    fixes = SimpleNamespace(t=t, lla=ned_to_lla(np.column_stack([e, np.zeros(n)]), lla0))
+    n = 4000
+    S = np.array([[0.9, 0.2, 0.0], [0.2, 0.6, 0.1], [0.0, 0.1, 2.0]])
+    nu = rng.multivariate_normal(np.zeros(3), S, size=n)
+    d = np.einsum("ni,ij,nj->n", nu, np.linalg.inv(S), nu)
     scores = {}
-    for c in (1.0, 1.5**2, 1.5**-2):
-        res = SimpleNamespace(t=t, lla=np.tile(lla0, (n, 1)), q_nb=np.tile([1.0, 0.0, 0.0, 0.0], (n, 1)),
-                              gnss_delay=None, cov_t=t, cov_diag=np.tile([c * p_var, c * p_var, 1.0], (n, 1)))
-        scores[c] = withheld_score(res, fixes, np.ones(n, bool), np.zeros(3), np.full((n, 2), c * r_var))
-    for c in (1.5**2, 1.5**-2):
-        # the clip at SCORE_CLIP takes almost nothing from a chi-square(1) at these scales
-        expected = 2.0 * (math.log(c) + 1.0 / c - 1.0)
-        assert abs(scores[c] - scores[1.0] - expected) < 0.1 * expected, (c, scores)
+    for c in (1.0, 1.5, 1 / 1.5):
+        rec = AidRecord(np.arange(n) * 0.4, d / c, np.full(n, 3), np.ones(n, bool), np.arange(n),
+                        np.full(n, np.log(np.linalg.det(c * S))))
+        scores[c] = withheld_score(SimpleNamespace(aids={"gnss_position_withheld": rec}))
+    for c in (1.5, 1 / 1.5):
+        # the clip at SCORE_CLIP per degree of freedom takes almost nothing from a chi-square(3) at these scales
+        expected = 3.0 * (math.log(c) + 1.0 / c - 1.0)
+        assert abs(scores[c] - scores[1.0] - expected) < 0.15 * expected, (c, scores)
     assert SCORE_CLIP == 25.0
+    assert math.isnan(withheld_score(SimpleNamespace(aids={})))
+
+
+def test_withheld_fixes_are_predicted_and_not_used():
+    """``GinsFilter.run(gnss_withheld=…)`` scores fixes without using them: the track is the one of the run on the
+    kept fixes alone (within the 1 mm that the covariance epochs at the withheld stamps change), and on a drive the
+    filter models exactly (the MEMS preset simulated and filtered; windows of 30 s withheld every 90 s) the
+    predictive NIS of the withheld fixes averages 2.59 over three seeds for 3 degrees of freedom (the filter is a
+    little conservative here, as its applied fixes show): a σ claimed 1.5 times too small (4.0) or too large
+    (1.7) falls outside the bounds."""
+    truth = vehicle_trajectory(demo_drive(900), fs=50, origin_lla=(30.44 * DEG, 114.47 * DEG, 20.0))
+    imu = simulate_imu(truth, presets.get("mems_adis16465"), rng=1)
+    cfg = GinsConfig.from_preset("mems_adis16465", use_gnss_velocity=False)
+    start = dict(lla0=truth.pos_lla[0], vel0=truth.vel_ned[0], q0=truth.q_nb[0])
+    means = []
+    for seed in (7, 8, 9):
+        g = simulate_gnss(truth, rng=seed, vel_noise=None)
+        held = withheld_windows(g.t, 100.0)
+        kept, out = g.select(~held), g.select(held)
+        a = GinsFilter(cfg).run(imu, kept, **start, gnss_withheld=out)
+        w = a.aids["gnss_position_withheld"]
+        assert w.t.size == out.n and np.all(np.isfinite(w.logdet)) and np.all(w.dof == 3)
+        assert "gnss_position_withheld" not in GinsFilter(cfg).run(imu, kept, **start).aids
+        if seed == 7:
+            b = GinsFilter(cfg).run(imu, kept, **start)
+            ref = truth.pos_lla[0]
+            assert np.abs(lla_to_ned(a.lla, ref) - lla_to_ned(b.lla, ref)).max() < 2e-3
+            # (the fix at the first IMU sample is the initial state's: not applied)
+            assert a.aids["gnss_position"].t.size == b.aids["gnss_position"].t.size == kept.n - 1
+        means.append(float(w.nis.mean()))
+    print("withheld NIS means", np.round(means, 2))
+    assert 2.0 < np.mean(means) < 3.3, means
+    with pytest.raises(InvalidInputError, match="gnss_withheld"):
+        GinsFilter(cfg).run(imu, kept, **start, gnss_withheld=np.zeros(3))
 
 
 @pytest.fixture(scope="module")
@@ -81,8 +121,9 @@ def test_a_wandering_odometer_scale_is_found_and_a_constant_one_kept(terrain_rob
 
 def test_the_wander_keeps_the_outages_inside_their_3_sigma(terrain_robot):
     """60 s outages every 120 s after 60 s (shifts 0, 30, 60 s) against the truth: with the wander the
-    cross-validation chose, every outage stays inside its predicted 3σ throughout; with the scale taken as
-    constant (as before the cross-validation), some do not (the odometer's wander read as exact over a minute)."""
+    cross-validation chose, at least 9 of 10 outages stay inside their predicted 3σ throughout (the 90-99 % a
+    consistent filter gives; measured 9 of 10, ends 2.1 m RMS); with the scale taken as constant (as before the
+    cross-validation), 3 of 10 (ends 6.7 m: the odometer's wander read as exact over a minute)."""
     lever = tuple(terrain_robot.truth.gnss_lever_arm_base)
     nav = terrain_robot.truth.nav_track()
     gps = terrain_robot.sources.gps_time(nav.t)  # the .nav convention: GPS week and seconds of week
@@ -92,8 +133,9 @@ def test_the_wander_keeps_the_outages_inside_their_3_sigma(terrain_robot):
         rep = log_outage_test(terrain_robot.sources, LogRunOptions(gnss_lever_arm=lever, overrides=ov), truth=truth)
         out[name] = rep.rms()
         print(name, {k: out[name][k] for k in ("end_m", "contained_3sigma", "n_outages")})
-    assert out["chosen"]["contained_3sigma"] == 1.0 and out["chosen"]["n_outages"] >= 9
-    assert out["constant"]["contained_3sigma"] < 0.8
+    assert out["chosen"]["contained_3sigma"] >= 0.9 and out["chosen"]["n_outages"] >= 9
+    assert out["constant"]["contained_3sigma"] < 0.5
+    assert out["chosen"]["end_m"] < 0.5 * out["constant"]["end_m"]
 
 
 def _gm_fixes(seed: int, duration_s: float, sigma: float, tau: float = GNSS_BIAS_TAU, fs: float = 10.0):

@@ -208,9 +208,11 @@ class _Timed:
     def __init__(self) -> None:
         self.parts: list[tuple[int, Array, Array, Array, NDArray[np.int64]]] = []
 
-    def add(self, name: str, t: Array, z: Array, r: Array, source: NDArray[np.int64] | None = None) -> None:
+    def add(self, name: str, t: Array, z: Array, r: Array, source: NDArray[np.int64] | None = None,
+            withheld: bool = False) -> None:
         """Measurements of the aid ``name`` at times ``t``: ``z`` (k, w <= 3), covariance ``r`` (k, w, w);
-        ``source``: the index of each in its input (default 0..k-1)."""
+        ``source``: the index of each in its input (default 0..k-1); ``withheld``: scored, not applied (kind
+        ``−1 − k`` in the kernel's input)."""
         k = t.size
         zz = np.zeros((k, 3))
         rr = np.zeros((k, 3, 3))
@@ -218,7 +220,8 @@ class _Timed:
         zz[:, :w] = z
         rr[:, :w, :w] = r
         src = np.arange(k, dtype=np.int64) if source is None else source
-        self.parts.append((getattr(aids.AID, name), np.asarray(t, dtype=float), zz, rr, src))
+        kind = int(getattr(aids.AID, name))
+        self.parts.append((-1 - kind if withheld else kind, np.asarray(t, dtype=float), zz, rr, src))
 
     def pack(self) -> tuple[kernels.TimedInput, NDArray[np.int64]]:
         """The kernel input (stable time order: measurements at one stamp in the order they were added) and the
@@ -262,7 +265,7 @@ def _output(n: int, nx: int, mmax: int, nlog: int, nrec: int) -> kernels.KernelO
         xs=np.empty((n, N_NOM)), cov_t=np.empty(mmax), cov_diag=np.empty((mmax, nx)), cov_nav=np.empty((mmax, 9, 9)),
         log_t=np.empty(nlog), log_k=np.empty(nlog, dtype=np.int64), log_src=np.empty(nlog, dtype=np.int64),
         log_rows=np.empty(nlog, dtype=np.int64), log_ok=np.empty(nlog, dtype=np.bool_), log_nis=np.empty(nlog),
-        log_blk=np.empty((nlog, MAX_GROUP)), rec_t=np.zeros(nrec), rec_phi=np.zeros((nrec, nx, nx)),
+        log_blk=np.empty((nlog, MAX_GROUP)), log_lds=np.empty(nlog), rec_t=np.zeros(nrec), rec_phi=np.zeros((nrec, nx, nx)),
         rec_ppri=np.zeros((nrec, nx, nx)), rec_ppost=np.zeros((nrec, nx, nx)), rec_inj=np.zeros((nrec, nx)),
         rec_state=np.zeros((nrec, 10)))
 
@@ -287,10 +290,15 @@ def _split_log(o: kernels.KernelOutput, nlog: int, timed_kind: NDArray[np.int64]
     timed = src >= 0
     kind_t = np.where(timed, timed_kind[np.where(timed, src, 0)] if timed_kind.size else -1, -1)
     for name in aids.TIMED:
-        sel = timed & (kind_t == getattr(aids.AID, name))
+        a = getattr(aids.AID, name)
+        sel = timed & (kind_t == a)
         if sel.any():
             out.aids[name] = AidRecord(t[sel], d[sel], rows[sel], ok[sel], k[sel])
             out.timed_index[name] = timed_src[src[sel]]
+        sel = timed & (kind_t == -1 - a)  # withheld: scored, not applied
+        if sel.any():
+            out.aids[f"{name}_withheld"] = AidRecord(t[sel], d[sel], rows[sel], ok[sel], k[sel],
+                                                     o.log_lds[:nlog][sel])
     for g, names in enumerate(aids.SAMPLED):
         sel = src == -1 - g
         if not sel.any():
@@ -608,10 +616,14 @@ class GinsFilter:
         self.last_nis.update({name: float(_sample_nis(log, name, 2)[1]) for name in _SAMPLE_NIS})
 
     def _timed(self, g: GnssData | None, sl: slice, dual: DualAntennaData | None = None, t0: float = 0.0,
-               t1: float = 0.0) -> tuple[kernels.TimedInput, NDArray[np.int64], NDArray[np.int64]]:
-        """The GNSS fixes ``g[sl]`` (position, then velocity when configured and given) and the dual-antenna
-        epochs inside ``(t0, t1]`` as timed aid measurements, their kinds and their indices in their inputs."""
+               t1: float = 0.0, withheld: GnssData | None = None
+               ) -> tuple[kernels.TimedInput, NDArray[np.int64], NDArray[np.int64]]:
+        """The GNSS fixes ``g[sl]`` (position, then velocity when configured and given), the dual-antenna
+        epochs inside ``(t0, t1]`` and the ``withheld`` fixes' positions (scored, not applied) as timed aid
+        measurements, their kinds and their indices in their inputs."""
         tm = _Timed()
+        if withheld is not None and withheld.n:
+            tm.add("gnss_position", withheld.t, withheld.lla, _diag(withheld.pos_std ** 2), withheld=True)
         if g is not None and sl.stop > sl.start:
             tm.add("gnss_position", g.t[sl], g.lla[sl], _diag(g.pos_std[sl] ** 2))
             if self.config.use_gnss_velocity and g.vel_ned is not None:
@@ -707,6 +719,7 @@ class GinsFilter:
             view = o._replace(xs=o.xs[sl], cov_t=o.cov_t[m:], cov_diag=o.cov_diag[m:], cov_nav=o.cov_nav[m:],
                               log_t=o.log_t[L:], log_k=o.log_k[L:], log_src=o.log_src[L:], log_rows=o.log_rows[L:],
                               log_ok=o.log_ok[L:], log_nis=o.log_nis[L:], log_blk=o.log_blk[L:],
+                              log_lds=o.log_lds[L:],
                               **{f: getattr(o, f)[r0:] for f in ("rec_t", "rec_phi", "rec_ppri", "rec_ppost",
                                                                   "rec_inj", "rec_state")})
             dm, dr, dL = kernels.gins_run(kernels.ImuInput(t[sl], dth[sl], dv[sl]), tin, part, self._xs, self.P,
@@ -724,7 +737,7 @@ class GinsFilter:
             q0: ArrayLike, imu_errors0: ArrayLike | None = None, odometer: OdometerData | None = None,
             smoother: bool = False, static: ArrayLike | None = None, baro: BaroData | None = None,
             mag: MagnetometerData | None = None, dual_antenna: DualAntennaData | None = None,
-            progress: Callable[[int, int], None] | None = None) -> GinsResult:
+            progress: Callable[[int, int], None] | None = None, gnss_withheld: GnssData | None = None) -> GinsResult:
         """Run the filter forward over the IMU recording (from a :meth:`reset` at its first sample).
 
         Parameters
@@ -762,6 +775,12 @@ class GinsFilter:
             ``progress(done, total)`` as the filter goes through the samples (every :data:`PROGRESS_CHUNK` of
             them; the result is the same bit for bit), and once more after the smoother: ``total`` is the number of
             samples, twice that with ``smoother`` (the smoother's pass counts as many).
+        gnss_withheld : GnssData, optional
+            Fixes the run predicts without using them (a cross-validation on withheld fixes): at each one inside
+            the IMU span the filter computes the position innovation ``ν`` and its covariance ``S = H P Hᵀ + R``
+            as for a fix it applies (the correlated error's estimate, the latency, the adaptive factor of ``R``
+            included) and records its NIS and ``ln det S`` in ``aids['gnss_position_withheld']``
+            (:class:`~imunav.ins.gins.result.AidRecord`); the state and covariance are not updated.
 
         Returns
         -------
@@ -804,7 +823,13 @@ class GinsFilter:
                    imu_errors0=imu_errors0, odometer=odometer is not None)
         c = self.config
         use_vel = c.use_gnss_velocity and g is not None and g.vel_ned is not None
-        timed = self._timed(g, slice(0, ng), dual_antenna, float(t[0]), float(t[-1]))
+        gw = None
+        if gnss_withheld is not None:
+            if not isinstance(gnss_withheld, GnssData):
+                raise InvalidInputError(f"gnss_withheld must be a GnssData; got {type(gnss_withheld).__name__}")
+            gw = gnss_withheld.within(float(t[0]), float(t[-1]))
+            gw = gw.select(gw.t > t[0], "at the first IMU sample")
+        timed = self._timed(g, slice(0, ng), dual_antenna, float(t[0]), float(t[-1]), gw)
         age = None
         if g is not None and g.n:
             last = np.searchsorted(g.t, t, side="right") - 1

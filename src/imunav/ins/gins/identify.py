@@ -27,7 +27,7 @@ from imunav.rotation import dcm_from_quat
 
 __all__ = ["GNSS_BIAS_MIN_STD", "GNSS_BIAS_SCATTER_FACTOR", "GNSS_BIAS_TAU", "GNSS_CORR_LAG_S", "MEAN_KEPT_MIN", "SCORE_CLIP", "WITHHELD_GAP_S",
            "WITHHELD_S", "fix_residuals", "gnss_correlated_std",
-           "withheld_score", "withheld_windows"]
+           "withheld_score", "withheld_terms", "withheld_windows"]
 
 Array = NDArray[np.float64]
 
@@ -113,39 +113,51 @@ def withheld_windows(t: Array, start: float, length: float = WITHHELD_S, gap: fl
     return (t >= start) & (u < length)
 
 
-def withheld_score(res: GinsResult, gnss: Any, withheld: Any, lever_arm: Any, fix_var: Array) -> float:
-    """The log score of a run's horizontal position at the fixes it did not use: the mean over them of
-    ``ln det Σ + eᵀ Σ⁻¹ e`` with ``e`` the horizontal residual (:func:`fix_residuals`) and ``Σ = P_h + R_h`` the
-    run's horizontal position covariance plus the fixes' own (diagonal), a proper scoring rule (Gneiting &
-    Raftery 2007): smaller is better, and it punishes a σ too small as much as an error too large.  Each squared
-    normalised error is cut at :data:`SCORE_CLIP` (a fix that jumped tens of metres, which the gate would have
+def withheld_score(res: GinsResult) -> float:
+    """The log score of a run at the fixes it predicted without using them (``GinsFilter.run(gnss_withheld=…)``):
+    the mean over them of ``ln det S + νᵀ S⁻¹ ν``, with ``ν`` the position innovation and ``S = H P Hᵀ + R`` its
+    covariance as the filter computes them for a fix it applies (its estimate of the fixes' correlated error, the
+    latency and the adaptive factor of ``R`` included).  That is twice the negative log predictive density up to a
+    constant, a proper scoring rule (Gneiting & Raftery 2007): smaller is better, and it punishes a σ too small as
+    much as an error too large.  The filter's own ``S`` carries the covariance between its position and its
+    correlated-error estimate that the last fixes before a window leave, which a score adding the fixes'
+    correlated variance to the position's would ignore.  Each NIS is cut at
+    :data:`SCORE_CLIP` per degree of freedom (a fix that jumped tens of metres, which the gate would have
     rejected, must not decide the choice: the cut is Huber's robust loss in its simplest form).
 
     Parameters
     ----------
     res : GinsResult
-        A run without the withheld fixes.
-    gnss : GnssData
-        All the fixes.
-    withheld : array_like of bool, shape (G,)
-        The fixes the run did not use.
-    lever_arm : array_like, shape (3,)
-        The antenna from the IMU, body FRD, m.
-    fix_var : numpy.ndarray, shape (G, 2)
-        Variance of each fix's error north and east, m² (white and correlated parts).
+        A run with withheld fixes (its ``aids['gnss_position_withheld']``).
 
     Returns
     -------
     float
         The mean score (NaN without withheld fixes inside the run).
     """
-    w = np.asarray(withheld, dtype=bool) & (gnss.t <= res.t[-1])
-    if not np.any(w):
-        return float("nan")
-    e = fix_residuals(res, gnss, w, lever_arm)[:, :2]
-    k = np.clip(np.searchsorted(res.cov_t, gnss.t[w], side="right") - 1, 0, res.cov_t.size - 1)
-    var = res.cov_diag[k, :2] + np.asarray(fix_var, dtype=float)[w]
-    return float(np.mean(np.sum(np.log(var) + np.minimum(e**2 / var, SCORE_CLIP), axis=1)))
+    terms = withheld_terms(res)[1]
+    return float(np.mean(terms)) if terms.size else float("nan")
+
+
+def withheld_terms(res: GinsResult) -> tuple[Array, Array]:
+    """Each withheld fix's term of :func:`withheld_score`: ``ln det S + min(νᵀ S⁻¹ ν, SCORE_CLIP · dof)``.
+
+    Parameters
+    ----------
+    res : GinsResult
+        A run with withheld fixes (its ``aids['gnss_position_withheld']``).
+
+    Returns
+    -------
+    t : numpy.ndarray, shape (W,)
+        Times of the withheld fixes, s (empty without them).
+    terms : numpy.ndarray, shape (W,)
+        Their terms.
+    """
+    rec = res.aids.get("gnss_position_withheld")
+    if rec is None or rec.t.size == 0 or rec.logdet is None:
+        return np.zeros(0), np.zeros(0)
+    return np.asarray(rec.t, dtype=float), rec.logdet + np.minimum(rec.nis, SCORE_CLIP * rec.dof)
 
 
 def gnss_correlated_std(first: GinsResult, gnss: Any, lever_arm: Any) -> Array:

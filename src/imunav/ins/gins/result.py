@@ -34,6 +34,10 @@ class AidRecord(Result):
         Whether the update passed its χ² gate (in a joint update, the gate of the whole).
     sample : numpy.ndarray of int, shape (U,)
         Index of the IMU sample at (or, for a timed aid, ending the interval holding) the update.
+    logdet : numpy.ndarray, shape (U,), or None
+        For withheld measurements (``GinsResult.aids['<aid>_withheld']``: scored, never applied; ``accepted`` is
+        then what the gate would have said): ``ln det S`` of each one's innovation covariance, so that
+        ``nis + logdet`` is its negative log predictive density up to ``dof · ln 2π``.  None for applied updates.
     """
 
     t: Array
@@ -41,6 +45,7 @@ class AidRecord(Result):
     dof: Array
     accepted: Array
     sample: Array
+    logdet: Array | None = None
 
     @classmethod
     def empty(cls) -> AidRecord:

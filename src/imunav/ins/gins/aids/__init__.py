@@ -98,14 +98,15 @@ def used(kinds) -> tuple:
     Parameters
     ----------
     kinds : iterable of int
-        The kinds of the aids the call may apply (timed and sampled); ``range(N_AIDS)``: every aid.
+        The kinds of the aids the call may apply (timed and sampled; ``−1 − k`` for a withheld measurement of aid
+        ``k``, which needs its rows too); ``range(N_AIDS)``: every aid.
 
     Returns
     -------
     tuple
         ``N_AIDS`` items, ``True`` or ``None``.
     """
-    on = {int(k) for k in kinds}
+    on = {int(k) if k >= 0 else -1 - int(k) for k in kinds}
     return tuple(True if k in on else None for k in range(N_AIDS))
 
 
