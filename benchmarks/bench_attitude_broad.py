@@ -20,12 +20,17 @@ The smoother's grid (``SMOOTHER_GRID``, issue 34) holds its gyro-bias random wal
 time constant beside the field test: its out-of-fold figure is the one to quote, the in-sample one only shows the
 gap.
 
+The per-group report also scores the shipped defaults (in sample: the 9D defaults were chosen on these trials, the
+6D ones, :data:`imunav.attitude.adaptive.ADAPTIVE_DEFAULTS_6D`, by the 6D folds) beside the out-of-fold figure, and
+the 6D figures of the commit before the 6D defaults (``BEFORE_6D``).  ``--dims 6D --groups-only`` runs only the 6D
+report (about a minute on two cores).
+
 ``--holdout DIR`` also scores the shipped parameters on trials that no imunav
 default was tuned on (e.g. the other BROAD trials of the dataset's
 ``data_mat/`` folder), beside both peers.
 
 Run:  python benchmarks/bench_attitude_broad.py [DIR] [--holdout DIR] [--workers 2] [--json out.json]
-      [--figures DIR] [--no-groups]
+      [--figures DIR] [--no-groups] [--dims 9D,6D] [--groups-only]
 """
 
 from __future__ import annotations
@@ -66,6 +71,12 @@ GRIDS = {
 BEFORE_A308974 = {"adaptive out of fold": 1.96, "smoother out of fold": 1.95,
                   "hold-out adaptive": 2.18, "hold-out smoother": 1.82}
 
+
+
+#: 6D (inclination RMSE) ratios to vqf at 6eba0b1, before ADAPTIVE_DEFAULTS_6D: the shipped (9D) defaults run
+#: without magnetometer, in sample, and the out-of-fold figure (the same grid and folds as now)
+BEFORE_6D = {"shipped": {"undisturbed": 1.052, "motion": 0.937, "magnetic": 1.112, "overall": 1.051},
+             "out of fold": {"undisturbed": 1.010, "motion": 0.991, "magnetic": 1.036, "overall": 1.015}}
 
 
 def _before_after(acc: dict, holdout: dict | None) -> None:
@@ -135,7 +146,7 @@ def rejection_report(files, figures: str | None) -> dict:
     return out
 
 
-def group_report(files, names, workers, oof9=None) -> dict:
+def group_report(files, names, workers, oof9=None, dims=("9D", "6D")) -> dict:
     """Out-of-fold error per group and overall, 9D (total RMSE) and 6D (inclination RMSE), beside the peers.
 
     The real-time filter and the smoother are tuned by leave-one-trial-out CV on the score of the mode (6D: the
@@ -146,7 +157,12 @@ def group_report(files, names, workers, oof9=None) -> dict:
     tilt_grid = {k: ADAPTIVE_GRID[k] for k in ("gyro_noise_density", "tilt_time_constant")}
     out: dict = {}
     for dim, metric, col in (("9D", "total_rmse_deg", 1), ("6D", "inclination_rmse_deg", 3)):
+        if dim not in dims:
+            continue
         vq = np.array([r[col] for r in vqf_scores(files, dim=dim)])
+        # the shipped defaults (in 6D: ADAPTIVE_DEFAULTS_6D, which AdaptiveMEKF runs without a magnetometer)
+        shipped = np.array([getattr(t, metric) for t in
+                            evaluate("adaptive", None if dim == "9D" else {"use_mag": False}, files).trials])
         vo = np.array([r[col] for r in vqf_scores(files, offline=True, dim=dim)])
         oof = {}
         for name, grid in (("adaptive", ADAPTIVE_GRID), ("smoother", SMOOTHER_GRID)):
@@ -159,21 +175,29 @@ def group_report(files, names, workers, oof9=None) -> dict:
         what = "total" if dim == "9D" else "inclination"
         print(f"\n{dim}: out-of-fold {what} RMSE [deg] per group (leave one trial out; peers with their defaults)")
         print(f"{'group':12s} {'trials':>6s} {'imunav':>7s} {'vqf':>7s} {'ratio':>6s} {'smooth':>7s} {'offVQF':>7s} "
-              f"{'ratio':>6s}")
+              f"{'ratio':>6s}  {'shipped':>7s} {'ratio':>6s} (in sample)")
         rows = {}
         for gname in [*GROUPS, "overall"]:
             sel = np.ones(len(names), bool) if gname == "overall" else grp == gname
             if not sel.any():
                 continue
             a, v, sm, o = oof["adaptive"][sel].mean(), vq[sel].mean(), oof["smoother"][sel].mean(), vo[sel].mean()
+            sh = shipped[sel].mean()
             rows[gname] = {"imunav": a, "vqf": v, "ratio": a / v, "smoother": sm, "offline_vqf": o,
-                           "smoother_ratio": sm / o, "trials": int(sel.sum())}
-            print(f"{gname:12s} {int(sel.sum()):6d} {a:7.3f} {v:7.3f} {a / v:6.3f} {sm:7.3f} {o:7.3f} {sm / o:6.3f}")
+                           "smoother_ratio": sm / o, "trials": int(sel.sum()), "shipped_in_sample": sh,
+                           "shipped_ratio": sh / v}
+            print(f"{gname:12s} {int(sel.sum()):6d} {a:7.3f} {v:7.3f} {a / v:6.3f} {sm:7.3f} {o:7.3f} {sm / o:6.3f}  "
+                  f"{sh:7.3f} {sh / v:6.3f}")
         ok_all = rows["overall"]["ratio"] <= 0.90
         ok_grp = all(r["ratio"] <= 1.0 for k, r in rows.items() if k != "overall")
         ok_sm = rows["overall"]["smoother_ratio"] <= 0.70
         print(f"{dim}: overall <= 0.90 x vqf: {_verdict(ok_all)}; each group <= 1.0 x vqf: {_verdict(ok_grp)}; "
               f"smoother <= 0.70 x offline VQF: {_verdict(ok_sm)}")
+        if dim == "6D":
+            print("6D ratio to vqf, before (6eba0b1, shipped = the 9D defaults) -> now:")
+            for what, key in (("shipped, in sample", "shipped_ratio"), ("out of fold", "ratio")):
+                b = BEFORE_6D["shipped" if key == "shipped_ratio" else "out of fold"]
+                print(f"  {what:19s} " + "  ".join(f"{g} {b[g]:.3f} -> {rows[g][key]:.3f}" for g in rows))
         out[dim] = rows
     return out
 
@@ -187,7 +211,13 @@ def main() -> None:
     ap.add_argument("--json", default=None)
     ap.add_argument("--no-groups", action="store_true", help="skip the per-group 9D / 6D report (issue 34)")
     ap.add_argument("--figures", default=None, help="folder for one rejection figure per trial (PNG)")
+    ap.add_argument("--dims", default="9D,6D", help="per-group report: 9D, 6D or both (comma-separated)")
+    ap.add_argument("--groups-only", action="store_true",
+                    help="only the per-group report (skips the per-trial table, the rejections and the hold-out)")
     args = ap.parse_args()
+    dims = tuple(x.strip().upper() for x in args.dims.split(","))
+    if not set(dims) <= {"9D", "6D"}:
+        ap.error(f"--dims takes 9D, 6D or 9D,6D, got {args.dims!r}")
     d = Path(args.dir) if args.dir else shared_data_path("broad")
     if d is None:
         print("BROAD data not found (set IMUNAV_DATA); nothing to do")
@@ -195,6 +225,12 @@ def main() -> None:
     files = broad_trials(d)
     names = [f.stem for f in files]
     t0 = time.perf_counter()
+    if args.groups_only:
+        out = {"trials": names, "groups": group_report(files, names, args.workers, dims=dims)}
+        print(f"\ntotal {time.perf_counter() - t0:.0f} s")
+        if args.json:
+            Path(args.json).write_text(json.dumps(out, indent=1, default=float))
+        return
     vq = {r[0]: r[1] for r in vqf_scores(files)}
     vo = {r[0]: r[1] for r in vqf_scores(files, offline=True)}
     vq_a = np.array([vq[n] for n in names])
@@ -255,7 +291,7 @@ def main() -> None:
     out["rejections"] = rejection_report(files, args.figures)
     if not args.no_groups:
         oof9 = {k: rows[k][1] for k in ("adaptive", "smoother") if k in rows}
-        out["groups"] = group_report(files, names, args.workers, oof9)
+        out["groups"] = group_report(files, names, args.workers, oof9, dims=dims)
 
     if args.holdout:
         hf = broad_trials(args.holdout)

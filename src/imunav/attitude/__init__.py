@@ -6,7 +6,7 @@ whole recording) and, except the offline smoother, a per-sample ``step(gyro,
 accel, mag, dt)``.  Quaternions are ``q_nb`` (body -> NED), Hamilton, scalar first.
 """
 
-from imunav.attitude.adaptive import ADAPTIVE_DEFAULTS, AdaptiveMEKF
+from imunav.attitude.adaptive import ADAPTIVE_DEFAULTS, ADAPTIVE_DEFAULTS_6D, AdaptiveMEKF
 from imunav.attitude.alignment import align, broad_reference_start, tilt_from_accel
 from imunav.attitude.complementary import Complementary
 from imunav.attitude.gravity_kf import GravityKF, GravityKfConfig, JavedKF, LeeKF, ProposedKF
@@ -19,7 +19,7 @@ from imunav.attitude.smoother import SMOOTHER_DEFAULTS, Smoother
 from imunav.attitude.ukf import UKF, UkfConfig
 
 __all__ = [
-    "ADAPTIVE_DEFAULTS", "AdaptiveMEKF", "AttitudeResult", "Complementary", "GravityKF", "GravityKfConfig",
+    "ADAPTIVE_DEFAULTS", "ADAPTIVE_DEFAULTS_6D", "AdaptiveMEKF", "AttitudeResult", "Complementary", "GravityKF", "GravityKfConfig",
     "JavedKF", "LeeKF", "MEKF", "Madgwick", "Mahony", "MekfConfig", "ProposedKF", "SMOOTHER_DEFAULTS", "Smoother", "UKF", "UkfConfig",
     "align", "attitude_rmse", "broad_reference_start", "error_angles", "euler_rmse", "tilt_from_accel",
 ]

@@ -374,18 +374,36 @@ class MEKF:
         NonFiniteError
             If a sample is not finite.
         """
-        p = self.config.vector()
+        p = self.effective_config(mag is not None and self.config.use_mag).vector()
         if mag is None:
             p[_k.P_USE_MAG] = 0.0
         self.q, self.b = _k.mekf_step(self.q, self.b, self.P, self._st, gyro3(gyro), vec3(accel, "accel"),
                                       vec3(mag, "mag"), step_dt(dt), p, self._phi)
         return self.q.copy()
 
+    def effective_config(self, use_mag: bool) -> MekfConfig:
+        """The configuration a run uses, with (``use_mag`` True) or without the magnetometer: ``config``.
+
+        :class:`~imunav.attitude.adaptive.AdaptiveMEKF` overrides it: its shipped defaults differ without a
+        magnetometer.
+
+        Parameters
+        ----------
+        use_mag : bool
+            Whether the run uses the magnetometer (9D).
+
+        Returns
+        -------
+        MekfConfig
+            The configuration.
+        """
+        return self.config
+
     def _run(self, data: ImuData, q0: ArrayLike | None, bias0: ArrayLike | None, use_mag: bool | None,
              store: bool):
-        prm = self.config
-        um_req = prm.use_mag if use_mag is None else use_mag
+        um_req = self.config.use_mag if use_mag is None else use_mag
         t, g, a, m, dt, um = prepare(data, um_req and data.mag is not None if use_mag is None else use_mag)
+        prm = self.effective_config(um)
         p = prm.vector()
         p[_k.P_USE_MAG] = 1.0 if um else 0.0
         q_init = initial_q(a, m, um, q0)
@@ -426,7 +444,7 @@ class MEKF:
             which its attitude or covariance is not finite.
         """
         t, _, _, um, _, _, _, (q, b, pd, fl, nis, dof, *_rest) = self._run(data, q0, bias0, use_mag, False)
-        params = {**params_dict(self.config), "use_mag": um}
+        params = {**params_dict(self.effective_config(um)), "use_mag": um}
         check_finite_result(self.name, t, q, pd, params)
         self.q, self.b = q[-1].copy(), b[-1].copy()
         flags = {k: (fl & v) > 0 for k, v in FLAG_NAMES.items()}
