@@ -25,14 +25,14 @@ __all__ = ["FORMATS", "format_from_suffix", "read_imu", "write_imu", "from_dataf
            "shared_data_dir", "shared_data_path"]
 
 #: the names loaded on first access by :func:`__getattr__`, and their module
-LAZY = {"FORMATS": "core", "format_from_suffix": "core", "read_imu": "core", "write_imu": "core",
+_LAZY = {"FORMATS": "core", "format_from_suffix": "core", "read_imu": "core", "write_imu": "core",
         "from_dataframe": "dataframe", "to_dataframe": "dataframe"}
 
 
 def __getattr__(name: str) -> Any:
-    """The names of :data:`LAZY` on first access (PEP 562); one of the package's lazy re-exports, allowed by
+    """The names of ``_LAZY`` on first access (PEP 562); one of the package's lazy re-exports, allowed by
     ``tests/test_import_graph.py`` (``LAZY_REEXPORTS``) and ``docs/design.md`` (section 1)."""
-    where = LAZY.get(name)
+    where = _LAZY.get(name)
     if where == "core":
         from imunav.io import core as module  # lazy re-export: loads every format's reader
     elif where == "dataframe":
@@ -45,4 +45,4 @@ def __getattr__(name: str) -> Any:
 
 
 def __dir__() -> list[str]:
-    return sorted({*globals(), *LAZY})
+    return sorted({*globals(), *_LAZY})
