@@ -17,6 +17,15 @@ source tree; its dependencies are this interpreter's, through a ``.pth`` path) a
 ``imunav warmup``: the first and the warm ``imunav gins run`` on the shared Jackal bag and ``imunav attitude run``
 on the shared PX4 ULog, and what each first run compiled, kernel by kernel (the lines the command prints on a
 terminal, ``IMUNAV_COMPILE_REPORT=1``).  Bars: first ``gins run`` <= 30 s, first ``attitude run`` <= 10 s.
+The commands compile at the command line's LLVM level (``imunav.cli.main.NUMBA_OPT_LEVEL``, 2) unless
+``NUMBA_OPT`` is set in the environment this script runs in.
+
+Measured (the shared 2-core machine, two other sessions' jobs on it; wall s, CPU s in brackets): before level 2
+and the lazy ``imunav.io`` (6eba0b1), first ``gins run`` 34.6 (28.5) at load 1.5, 34.7 (26.9) / 30.6 (29.4) /
+36.3 (33.4) / 35.8 (34.2) at load 3.2-4.0; first ``attitude run`` 8.9, 6.6, 7.4, 9.4, 9.4.  After: ``gins run``
+24.8 (21.5) at load 1.8 (6eba0b1 with NUMBA_OPT=2), 25.0 (23.9) / 35.8 (34.6) / 37.1 (35.2) / 37.2 (35.3) at load 3.1-4.0; ``attitude
+run`` 5.2, 5.9, 8.6, 7.8, 9.6.  The first ``gins run`` meets its bar on a lightly loaded machine only: its
+kernel ``gins_run`` alone compiles in 15-18 s at load 1.5-1.8 and in 25-32 s at load 3-4.
 
 Usage:  python benchmarks/bench_first_run.py [--skip-cold] [--wheel]
 """

@@ -49,7 +49,10 @@ LAYERS: list[tuple[str, tuple[str, ...]]] = [
 #: The one function-level import of the package itself: the package root's lazy re-export (PEP 562 ``__getattr__``)
 #: of the notebook entry points (``imunav.read`` ...), so that ``import imunav`` gives them without loading the
 #: estimators (docs/design.md, section 1).  Not an edge of the graph: it runs only when a user asks for one.
-LAZY_REEXPORTS = frozenset({("imunav", "imunav.notebook")})
+LAZY_REEXPORTS = frozenset({("imunav", "imunav.notebook"),
+                            # imunav.io's readers and writers (issue 35): importing one reader (imunav.io.ulog) loads
+                            # neither pandas nor scipy.io; the names resolve through the __init__'s TYPE_CHECKING block
+                            ("imunav.io", "imunav.io.core"), ("imunav.io", "imunav.io.dataframe")})
 
 #: Top-level packages that may be imported inside a function: optional extras, or matplotlib, which
 #: only drawing needs (``import imunav`` and ``imunav --help`` must not load it).
@@ -123,7 +126,10 @@ def build_graph(src: Path, package: str) -> Graph:
     reexports: dict[str, dict[str, str]] = {}
     for pkg in packages:
         table: dict[str, str] = {}
-        for node in trees[pkg].body:
+        # the lazy re-exports (LAZY_REEXPORTS) name their definitions under `if TYPE_CHECKING:`
+        body = [n for node in trees[pkg].body
+                for n in (node.body if isinstance(node, ast.If) and _is_type_checking(node) else [node])]
+        for node in body:
             if isinstance(node, ast.ImportFrom):
                 base = absolute(pkg, node)
                 for a in node.names:
@@ -310,6 +316,8 @@ def test_graph_sees_the_package(graph):
         Import(e.source, e.target, 0, e.in_function) for e in graph.edges}
     # a name imported from a package resolves to the module that defines it
     assert any(e.source == "imunav.cli.zupt" and e.target == "imunav.ins.zupt.filter" for e in graph.edges)
+    # ... also a lazy re-export (imunav.io's PEP 562 __getattr__): lab.batch's `from imunav.io import read_imu`
+    assert any(e.source == "imunav.lab.batch" and e.target == "imunav.io.core" for e in graph.edges)
 
 
 def test_no_import_cycles(graph):

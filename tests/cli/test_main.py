@@ -73,6 +73,26 @@ def test_help_lists_the_commands_without_importing_them():
     assert r.stdout.strip() == "[]"
 
 
+def test_the_command_line_compiles_at_its_numba_opt_level_unless_the_user_set_one():
+    """The command line has numba compile at LLVM level 2 (issue 35: a shorter first run, the same results and
+    speed): set before numba is imported, a level the user set is kept."""
+    from imunav.cli.main import NUMBA_OPT_LEVEL
+
+    code = ("import os, sys\n"
+            "import imunav.cli.main\n"
+            "assert 'numba' not in sys.modules\n"
+            "from numba.core import config\n"
+            "print(os.environ['NUMBA_OPT'], int(config.OPT))\n")
+    base = {k: v for k, v in os.environ.items() if k != "NUMBA_OPT"}
+    base["PYTHONPATH"] = os.pathsep.join(p for p in (str(ROOT / "src"), os.environ.get("PYTHONPATH")) if p)
+    assert NUMBA_OPT_LEVEL == "2"
+    for given, want in ((None, "2 2"), ("3", "3 3"), ("0", "0 0")):
+        env = base if given is None else {**base, "NUMBA_OPT": given}
+        r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=env, timeout=120)
+        assert r.returncode == 0, r.stderr
+        assert r.stdout.strip() == want, (given, r.stdout)
+
+
 def test_the_listed_summary_is_the_first_sentence_of_each_commands_help():
     group = get_command(app)
     assert list(group.commands) == list(COMMANDS)

@@ -49,6 +49,32 @@ def test_a_compilation_is_said_once_and_recorded():
     assert stream.getvalue().splitlines()[-1].startswith(f"note: compiled {len(watch.kernels)} numba kernels in ")
 
 
+def test_on_a_terminal_the_kernel_is_named_while_it_compiles():
+    """A terminal sees "compiling NAME ..." during a kernel's compilation (gins_run: 15 s), then the same line
+    completed with its seconds; a pipe gets the completed lines only (the test above)."""
+
+    class Terminal(io.StringIO):
+        def isatty(self):
+            return True
+
+    stream = Terminal()
+    watch = CompileWatch(stream)
+
+    @numba.njit(cache=False)
+    def halve(x):
+        return 0.5 * x
+
+    event.register("numba:compile", watch)
+    try:
+        assert halve(4.0) == 2.0
+    finally:
+        event.unregister("numba:compile", watch)
+    text = stream.getvalue()
+    assert text.startswith(NOTICE + "\n")
+    shown = text.removeprefix(NOTICE + "\n")
+    assert re.fullmatch(r"  compiling \S+halve \.\.\.\r  compiled \S+halve in \d+\.\d s\n", shown), repr(shown)
+
+
 def test_bytecode_is_written_for_imported_modules(tmp_path, monkeypatch):
     """What PYTHONDONTWRITEBYTECODE=1 prevents at import, write_bytecode writes, where Python then reads it."""
     src = tmp_path / "fh_warm_mod.py"

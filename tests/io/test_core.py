@@ -3,6 +3,9 @@
 from __future__ import annotations
 
 import os
+import subprocess
+import sys
+from pathlib import Path
 
 import h5py
 import numpy as np
@@ -376,3 +379,25 @@ def test_fs_contradicting_the_time_column_is_an_error(tmp_path):
         read_imu(p, fs=50.0)
     assert read_imu(p, fs=100.0).n == 3000  # agreeing: accepted
     assert "fs=50" in one_error_line(invoke("info", p, "--fs", "50"))
+
+
+def test_importing_one_reader_loads_neither_pandas_nor_scipy_io():
+    """imunav.io's readers and writers load on first use (issue 35): importing the log readers (what a first
+    `attitude run` on a PX4 log needs) loads neither pandas (the CSV reader's) nor scipy.io (the MAT reader's),
+    and `from imunav.io import read_imu` / `imunav.io.to_dataframe` still give the functions."""
+    code = ("import sys\n"
+            "import imunav.io.logs, imunav.io.ulog, imunav.io.rosbag\n"
+            "print(sorted(m for m in ('pandas', 'scipy.io', 'imunav.io.core') if m in sys.modules))\n"
+            "import imunav.io as io\n"
+            "from imunav.io import read_imu, FORMATS\n"
+            "print(read_imu.__module__, io.to_dataframe.__module__, 'csv' in FORMATS, 'pandas' in sys.modules)\n"
+            "try:\n"
+            "    io.no_such_name\n"
+            "except AttributeError as e:\n"
+            "    print(e)\n")
+    src = str(Path(__file__).resolve().parents[2] / "src")
+    env = {**os.environ, "PYTHONPATH": os.pathsep.join(p for p in (src, os.environ.get("PYTHONPATH")) if p)}
+    r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=env, timeout=120)
+    assert r.returncode == 0, r.stderr
+    assert r.stdout.splitlines() == ["[]", "imunav.io.core imunav.io.dataframe True True",
+                                     "module 'imunav.io' has no attribute 'no_such_name'"], r.stdout

@@ -5,8 +5,8 @@ imunav's kernels are compiled by numba on first use and cached on disk (``cache=
 ``__pycache__`` folders where Python may write there, else in the user's cache folder (numba's own fallback,
 or ``$NUMBA_CACHE_DIR`` when set).  A first run after an install or upgrade compiles them (tens of seconds on
 two cores); :func:`watch_compilation` then says so on a terminal instead of a silent wait: the notice at the
-first compilation, one line per kernel as it is compiled (its name and seconds), and the total when the command
-ends; ``imunav warmup`` does the compilation ahead.  ``IMUNAV_COMPILE_REPORT=1`` prints the same on standard
+first compilation, one line per kernel as it is compiled (on a terminal its name while it compiles, then its
+seconds: ``gins_run`` alone takes 15 s), and the total when the command ends; ``imunav warmup`` does the compilation ahead.  ``IMUNAV_COMPILE_REPORT=1`` prints the same on standard
 error where it is not a terminal (``benchmarks/bench_first_run.py`` reads it).
 
 This module imports numba: the CLI's lazy loader (:mod:`imunav.cli._lazy`) imports it only once a command's
@@ -55,6 +55,8 @@ class CompileWatch(event.Listener):
         self._t0 = 0.0
         self._noticed = False
         self._top_name = ""
+        #: a terminal: the kernel's name is shown while it compiles, its line completed when it is done
+        self._live = stream is not None and bool(getattr(stream, "isatty", lambda: False)())
 
     def on_start(self, ev: Any) -> None:
         disp = (ev.data or {}).get("dispatcher")
@@ -72,6 +74,8 @@ class CompileWatch(event.Listener):
         if self.stream is not None and not self._noticed:
             self._noticed = True
             print(NOTICE, file=self.stream, flush=True)
+        if self._live and self._depth == 1:
+            print(f"  compiling {name.removeprefix('imunav.')} ...", end="", file=self.stream, flush=True)
 
     def on_end(self, ev: Any) -> None:
         self._depth -= 1
@@ -80,8 +84,8 @@ class CompileWatch(event.Listener):
             self.seconds += dt
             self.top.append((self._top_name, dt))
             if self.stream is not None:
-                print(f"  compiled {self._top_name.removeprefix('imunav.')} in {dt:.1f} s", file=self.stream,
-                      flush=True)
+                print(("\r" if self._live else "") + f"  compiled {self._top_name.removeprefix('imunav.')} in "
+                      f"{dt:.1f} s", file=self.stream, flush=True)
 
     def report(self) -> None:
         """Print the total (kernels, seconds) on the stream, when anything was compiled."""

@@ -10,6 +10,11 @@ from typing import Any
 
 import typer
 
+from imunav.cli._lazy import lazy
+
+io = lazy("imunav.io")
+logs = lazy("imunav.io.logs")
+
 #: ``--topic``: the topic of a ROS bag or PX4 ULog.
 TOPIC = typer.Option(None, "--topic", help="ROS bag / PX4 ULog: the IMU topic (`imunav info FILE` lists them).")
 #: ``--instance``: the PX4 multi_id of the topic.
@@ -61,3 +66,26 @@ def window(data: Any, start: float | None, end: float | None) -> Any:
     if start is None and end is None:
         return data
     return data.window(start, end)
+
+
+def read_recording(path: Any, **opts: Any) -> Any:
+    """:func:`imunav.io.read_imu` of ``path`` with the options of :func:`reader_options`; a ROS bag or PX4 ULog
+    (without ``layout``) read by :func:`imunav.io.logs.read_log_imu`, which is what ``read_imu`` calls for them,
+    so that the readers of the other formats, and with them pandas and scipy.io, are not loaded (0.5-0.9 s of a
+    first ``imunav attitude run`` on a PX4 log; issue 35).
+
+    Parameters
+    ----------
+    path : path-like
+        The recording.
+    **opts
+        Reader options (:func:`reader_options`).
+
+    Returns
+    -------
+    imunav.timeseries.ImuData
+        The recording, as :func:`imunav.io.read_imu` gives it.
+    """
+    if "layout" not in opts and logs.log_kind(path) is not None:
+        return logs.read_log_imu(path, **opts)
+    return io.read_imu(path, **opts)

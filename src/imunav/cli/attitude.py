@@ -15,7 +15,7 @@ from rich.table import Table
 from imunav.cli._console import make_console
 from imunav.cli._errors import check_figure_path
 from imunav.cli._lazy import lazy
-from imunav.cli._options import END, INSTANCE, LAYOUT, MAG_TOPIC, START, TOPIC, reader_options, window
+from imunav.cli._options import END, INSTANCE, LAYOUT, MAG_TOPIC, START, TOPIC, read_recording, reader_options, window
 from imunav.errors import ConfigError, ConvergenceError
 from imunav.files import check_outputs, write_json
 
@@ -24,7 +24,6 @@ attitude_plot = lazy("imunav.attitude.plot")
 benchmark = lazy("imunav.attitude.benchmark")
 broad = lazy("imunav.io.broad")
 datasets = lazy("imunav.io.datasets")
-io = lazy("imunav.io")
 logs = lazy("imunav.io.logs")
 metrics = lazy("imunav.attitude.metrics")
 noise_profile = lazy("imunav.noise.profile")
@@ -129,14 +128,14 @@ def run_cmd(
         tr = broad.load_broad(file)
         data, ref, mask = tr.imu, tr.q_ref_nb, tr.movement
     else:
-        data = io.read_imu(file, **opts)
+        data = read_recording(file, **opts)
     px4_log = logs.log_kind(file) == "ulog"
     px4_out: dict[str, Any] = {}
     if px4_log and not no_mag and mag_topic is None:
         # the magnetometer topic that holds data (sensor_combined of newer logs carries none)
         mt = px4.magnetometer_topic(file, data)
         if mt is not None:
-            data = io.read_imu(file, **{**opts, "mag_topic": mt})
+            data = read_recording(file, **{**opts, "mag_topic": mt})
             con.print(f"magnetometer: {mt}, interpolated onto the IMU stamps on the log's clock (--mag-topic to "
                       "choose another)")
         px4_out["mag_topic"] = mt if mt is not None else ("in the IMU topic" if data.mag is not None else None)

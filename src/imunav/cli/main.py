@@ -65,6 +65,31 @@ def _no_hugepages() -> None:
 
 _no_hugepages()
 
+#: LLVM optimisation level of the numba kernels a command compiles (``NUMBA_OPT``; numba's default is 3)
+NUMBA_OPT_LEVEL = "2"
+
+
+def _numba_opt_level() -> None:
+    """Have numba compile the kernels of a command at LLVM level :data:`NUMBA_OPT_LEVEL` instead of its default 3,
+    unless the user set ``NUMBA_OPT`` (kept; child processes inherit the choice).
+
+    Set before numba is imported (a command imports it with its library, :mod:`imunav.cli._lazy`); numba reads the
+    variable at import and again at each compilation.  Measured on the shared 2-core machine (issue 35; the
+    command line, a fresh numba cache each, load 1.5-1.8): the first ``imunav gins run`` on the Jackal bag 26.7 s
+    at level 3 -> 23.6 s at level 2 (``gins_run`` 16.9 -> 15.7 s; level 1 saves nothing more; level 0 compiles in
+    19 s but its warm run takes 17.8 s against 2.8), the first ``attitude run`` on the PX4 sample unchanged
+    (``mekf_core`` 4.2-4.4 s at either level).  The speed of the compiled kernels is unchanged: the one-hour bag
+    (benchmarks/bench_gins_log_speed.py) 23.0 -> 24.0 s wall, 23.0 -> 21.2 s CPU (filter 3.20 -> 3.03 s); the
+    MEKF 0.71 -> 0.72 and the adaptive MEKF 0.88 -> 0.90 x vqf's time per sample
+    (benchmarks/bench_attitude_speed.py, means of five runs each, spread +-0.04).  The outputs of
+    ``gins run --smoother`` and ``attitude run`` are bit-identical: without fast-math reassociation the
+    optimisation level changes no rounding.  numba's cache does not record the level: a kernel compiled by a
+    command serves a library call, and the other way round."""
+    os.environ.setdefault("NUMBA_OPT", NUMBA_OPT_LEVEL)
+
+
+_numba_opt_level()
+
 
 class _Group(LazyGroup):
     summaries = COMMANDS
