@@ -27,7 +27,7 @@ from imunav.rotation import dcm_from_quat
 
 __all__ = ["GNSS_BIAS_MIN_STD", "GNSS_BIAS_SCATTER_FACTOR", "GNSS_BIAS_TAU", "GNSS_CORR_LAG_S", "MEAN_KEPT_MIN", "SCORE_CLIP", "WITHHELD_GAP_S",
            "WITHHELD_S", "fix_residuals", "gnss_correlated_std",
-           "withheld_score", "withheld_terms", "withheld_windows"]
+           "withheld_score", "withheld_windows"]
 
 Array = NDArray[np.float64]
 
@@ -135,29 +135,10 @@ def withheld_score(res: GinsResult) -> float:
     float
         The mean score (NaN without withheld fixes inside the run).
     """
-    terms = withheld_terms(res)[1]
-    return float(np.mean(terms)) if terms.size else float("nan")
-
-
-def withheld_terms(res: GinsResult) -> tuple[Array, Array]:
-    """Each withheld fix's term of :func:`withheld_score`: ``ln det S + min(νᵀ S⁻¹ ν, SCORE_CLIP · dof)``.
-
-    Parameters
-    ----------
-    res : GinsResult
-        A run with withheld fixes (its ``aids['gnss_position_withheld']``).
-
-    Returns
-    -------
-    t : numpy.ndarray, shape (W,)
-        Times of the withheld fixes, s (empty without them).
-    terms : numpy.ndarray, shape (W,)
-        Their terms.
-    """
     rec = res.aids.get("gnss_position_withheld")
     if rec is None or rec.t.size == 0 or rec.logdet is None:
-        return np.zeros(0), np.zeros(0)
-    return np.asarray(rec.t, dtype=float), rec.logdet + np.minimum(rec.nis, SCORE_CLIP * rec.dof)
+        return float("nan")
+    return float(np.mean(rec.logdet + np.minimum(rec.nis, SCORE_CLIP * rec.dof)))
 
 
 def gnss_correlated_std(first: GinsResult, gnss: Any, lever_arm: Any) -> Array:
