@@ -32,16 +32,17 @@ def _fingerprint(log) -> str:
     return h.hexdigest()
 
 
-#: simulate_robot_log on main at 8c8bfc6, before the faults existed (same fingerprint)
-_BEFORE = {(3, False): "c2f812dc1035a95efa1f779b055f2fa46888f916755f0185f5736ad4fb1c80cd",
-           (5, True): "7cdf55fd3a903425b9c57fb4e1760bc6ecf248ddd1667fe6f618ffc58d2c5470"}
-
-
-@pytest.mark.parametrize("faults", [None, LogFaults()], ids=["none", "all-off"])
-def test_everything_off_is_the_robot_of_before_to_the_bit(faults):
-    for (seed, perturbed), digest in _BEFORE.items():
+def test_everything_off_is_the_robot_of_before_to_the_bit():
+    """Every fault off (``LogFaults()``) draws what the robot drew before the faults existed (``faults=None``), bit
+    for bit, plain and with its body perturbations.  (Digests recorded at 8c8bfc6 held this against the code of
+    before; they also fixed the versions of numpy and numba, and a fresh install of them moved every digest, both
+    calls alike.)"""
+    for seed, perturbed in ((3, False), (5, True)):
         kw = {"slip_std": (0.05, 0.05), "idle_vibration_std": 0.01} if perturbed else {}
-        assert _fingerprint(simulate_robot_log(seed, distance_m=80.0, faults=faults, **kw)) == digest
+        a = _fingerprint(simulate_robot_log(seed, distance_m=80.0, faults=None, **kw))
+        assert _fingerprint(simulate_robot_log(seed, distance_m=80.0, faults=LogFaults(), **kw)) == a
+        some = LogFaults(imu_stamp_jitter_s=0.003)
+        assert _fingerprint(simulate_robot_log(seed, distance_m=80.0, faults=some, **kw)) != a  # can fail
 
 
 def _fix_errors(log):

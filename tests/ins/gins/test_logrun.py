@@ -170,7 +170,8 @@ def test_kfgins_text_files_give_the_bags_trajectory(robot):
     rt = run_log(read_nav_sources(text), o).result
     np.testing.assert_array_equal(rt.t, ra.t)
     np.testing.assert_allclose(lla_to_ned(rt.lla, ra.lla[0]), lla_to_ned(ra.lla, ra.lla[0]), rtol=0, atol=1e-9)
-    np.testing.assert_allclose(rt.q_nb, ra.q_nb, rtol=0, atol=1e-12)  # measured 6e-14: the same one-ulp inputs
+    # the same one-ulp inputs: measured 1.2e-12 on seed 2 since the process model's cross-validation, 6e-14 before
+    np.testing.assert_allclose(rt.q_nb, ra.q_nb, rtol=0, atol=5e-12)
 
 
 def _close(x, y):
