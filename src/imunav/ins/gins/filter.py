@@ -265,7 +265,7 @@ def _output(n: int, nx: int, mmax: int, nlog: int, nrec: int) -> kernels.KernelO
         xs=np.empty((n, N_NOM)), cov_t=np.empty(mmax), cov_diag=np.empty((mmax, nx)), cov_nav=np.empty((mmax, 9, 9)),
         log_t=np.empty(nlog), log_k=np.empty(nlog, dtype=np.int64), log_src=np.empty(nlog, dtype=np.int64),
         log_rows=np.empty(nlog, dtype=np.int64), log_ok=np.empty(nlog, dtype=np.bool_), log_nis=np.empty(nlog),
-        log_blk=np.empty((nlog, MAX_GROUP)), log_lds=np.empty(nlog), rec_t=np.zeros(nrec), rec_phi=np.zeros((nrec, nx, nx)),
+        log_blk=np.empty((nlog, MAX_GROUP)), log_lds=np.full(nlog, np.nan), rec_t=np.zeros(nrec), rec_phi=np.zeros((nrec, nx, nx)),
         rec_ppri=np.zeros((nrec, nx, nx)), rec_ppost=np.zeros((nrec, nx, nx)), rec_inj=np.zeros((nrec, nx)),
         rec_state=np.zeros((nrec, 10)))
 

@@ -43,6 +43,7 @@ from imunav.earth import radii_gravity_1
 from imunav.filters._core import (
     ATT_START,
     chi2_gate,
+    cholesky_small,
     inject_additive,
     inject_attitude_global,
     joseph_update_consider,
@@ -69,15 +70,15 @@ from imunav.ins.gins.layout import (
 ImuInput = namedtuple("ImuInput", ("t", "dtheta", "dvel"))
 #: Timed aid measurements in time order: stamp (E,), aid kind (E,) int64, z (E, 3), covariance r (E, 3, 3).  A kind
 #: ``−1 − k`` marks a withheld measurement of aid ``k``: its innovation is computed and logged (NIS, ln det S), the
-#: state is not updated (a cross-validation's predictive check).
+#: state is not updated (a cross-validation's predictive check, :func:`_withheld`).
 TimedInput = namedtuple("TimedInput", ("t", "kind", "z", "r"))
 #: Sampled aids: columns z (N, W) on the IMU grid (NaN: no measurement), force (N,) bool (a covariance epoch at that
 #: sample), and per slot s: aid kind, first column, joint-update group (slots of one group are consecutive).
 SampledInput = namedtuple("SampledInput", ("z", "force", "kind", "col", "group"))
 #: Outputs: per-sample nominal state ``xs`` (N, N_NOM); covariance records (time, diagonal, 9×9 navigation block);
 #: the update log (time, IMU sample, source: timed index >= 0 or −1 − group, rows, accepted, NIS, each model's NIS
-#: alone, ln det S of a withheld measurement's innovation covariance, NaN for the others); the smoother records (time, Φ into the epoch, prior and posterior P, injected error, posterior nominal
-#: state lat, lon, h, v, q).
+#: alone; ``log_lds``: ln det S of a withheld measurement's innovation covariance, NaN for the others); the smoother
+#: records (time, Φ into the epoch, prior and posterior P, injected error, posterior nominal state lat, lon, h, v, q).
 KernelOutput = namedtuple("KernelOutput", (
     "xs", "cov_t", "cov_diag", "cov_nav", "log_t", "log_k", "log_src", "log_rows", "log_ok", "log_nis", "log_blk",
     "log_lds", "rec_t", "rec_phi", "rec_ppri", "rec_ppost", "rec_inj", "rec_state"))
@@ -198,16 +199,14 @@ def _inject(dx, xs, lay, acc_dx):
 
 
 @njit(cache=True)
-def _update(kinds, n_models, zs, rs, xs, ctx, P, prm, lay, acc_dx, blk, force, use, apply):
+def _update(kinds, n_models, zs, rs, xs, ctx, P, prm, lay, acc_dx, blk, force, use):
     """One (joint) update of ``n_models`` aid models: stack their rows, gate the whole, Joseph update, inject.
 
     ``kinds[i]``, ``zs[i]``, ``rs[i]``: kind, measurement and covariance of model i.  ``blk[i]`` receives the NIS of
     model i's rows alone (the marginal of the joint innovation, χ²(rows) for a consistent filter; record only;
     NaN past ``n_models``).  ``force``: apply the update whatever the gate says (after too many rejections in a
-    row).  ``use``: the aid set of the run (:func:`imunav.ins.gins.aids.used`).  ``apply``: False for a withheld
-    measurement, whose innovation is only scored.  Returns (rows, accepted by the gate, NIS, ``ln det S`` for a
-    withheld measurement and NaN otherwise), with ``S = H P Hᵀ + R`` the innovation covariance: the measurement's
-    predictive density is ``N(ν; 0, S)`` (Bar-Shalom et al. 2001, §5.2.3).
+    row).  ``use``: the aid set of the run (:func:`imunav.ins.gins.aids.used`).  Returns (rows, accepted by the
+    gate, NIS).
     """
     nx = P.shape[0]
     m = np.int64(0)
@@ -234,13 +233,6 @@ def _update(kinds, n_models, zs, rs, xs, ctx, P, prm, lay, acc_dx, blk, force, u
         blk[i] = nis(nu[row:row + w], S0[row:row + w, row:row + w].copy())
         row += w
     ok, d = chi2_gate(nu, S0, prm[PRM.gate + m - 1])
-    lds = np.nan
-    if not apply:
-        Lc = np.linalg.cholesky(S0)
-        lds = 0.0
-        for i in range(m):
-            lds += 2.0 * math.log(Lc[i, i])
-        return m, ok, d, lds
     if ok or force:
         if kinds[0] == _GNSS_POS and prm[PRM.gnss_adapt] > 0.0:
             _adapt_gnss_noise(xs, nu, S0, R, prm)
@@ -250,7 +242,30 @@ def _update(kinds, n_models, zs, rs, xs, ctx, P, prm, lay, acc_dx, blk, force, u
         joseph_update_consider(P, dx, H, R, nu, np.empty(m), np.empty((m, m)), np.empty((nx, m)),
                                _consider_mask(lay, nx))
         _inject(dx, xs, lay, acc_dx)
-    return m, ok, d, lds
+    return m, ok, d
+
+
+@njit(cache=True)
+def _withheld(kinds, zs, rs, xs, ctx, P, prm, lay, use):
+    """A withheld measurement of aid ``kinds[0]`` (``zs[0]``, ``rs[0]``): its innovation ``ν`` and covariance
+    ``S = H P Hᵀ + R`` as :func:`_update` computes them, the state and covariance untouched.  Returns (rows, NIS
+    ``νᵀ S⁻¹ ν``, ``ln det S``): the measurement's predictive density is ``N(ν; 0, S)`` (Bar-Shalom et al. 2001,
+    §5.2.3), which a cross-validation scores (:func:`imunav.ins.gins.identify.withheld_score`)."""
+    k = kinds[0]
+    m = ROWS[k]
+    H = np.zeros((m, P.shape[0]))
+    R = np.zeros((m, m))
+    nu = np.empty(m)
+    evaluate_used(use, k, xs, ctx, zs[0], rs[0], prm[lay[N_LAY + k]:], lay, H, R, nu, np.int64(0))
+    S = H @ P @ H.T
+    for i in range(m):
+        for j in range(m):
+            S[i, j] += R[i, j]
+    Lc = cholesky_small(S)
+    lds = 0.0
+    for i in range(m):
+        lds += 2.0 * math.log(Lc[i, i])
+    return m, nis(nu, S), lds
 
 
 @njit(cache=True, inline="always")
@@ -325,7 +340,7 @@ def _count(carry_n, src, ok):
 
 
 @njit(cache=True, inline="always")
-def _log(out, L, t, k, src, m, ok, d, blk, lds):
+def _log(out, L, t, k, src, m, ok, d, blk):
     """Append one row to the update log when there is room; returns the new count."""
     if L < out.log_t.shape[0]:
         out.log_t[L] = t
@@ -334,7 +349,6 @@ def _log(out, L, t, k, src, m, ok, d, blk, lds):
         out.log_rows[L] = m
         out.log_ok[L] = ok
         out.log_nis[L] = d
-        out.log_lds[L] = lds
         for i in range(blk.shape[0]):
             out.log_blk[L, i] = blk[i]
         return L + 1
@@ -526,19 +540,24 @@ def gins_run(imu, timed, sampled, xs, P, carry, carry_n, prm, lay, out, first, f
                 for j in range(3):
                     ctx[CTX.w_mean + j] = wb[j]
                 src = timed.kind[ei]
-                withheld = src < 0  # −1 − kind: scored, not applied
-                if withheld:
-                    src = -1 - src
-                kinds[0] = src
+                kinds[0] = src if src >= 0 else -1 - src  # −1 − kind: withheld, scored and not applied
                 for i in range(3):
                     zs[0, i] = timed.z[ei, i]
                     for j in range(3):
                         rs[0, i, j] = timed.r[ei, i, j]
-                mm, ok, d, lds = _update(kinds, np.int64(1), zs, rs, xs, ctx, P, prm, lay, acc_dx, blk,
-                                         _forced(carry_n, lay, src), use, not withheld)
-                if not withheld:
+                if src < 0:
+                    mm, d, lds = _withheld(kinds, zs, rs, xs, ctx, P, prm, lay, use)
+                    blk[:] = np.nan
+                    blk[0] = d
+                    L0 = L
+                    L = _log(out, L, te, k, ei, mm, d <= prm[PRM.gate + mm - 1], d, blk)
+                    if L > L0:
+                        out.log_lds[L0] = lds
+                else:
+                    mm, ok, d = _update(kinds, np.int64(1), zs, rs, xs, ctx, P, prm, lay, acc_dx, blk,
+                                        _forced(carry_n, lay, src), use)
                     _count(carry_n, src, ok)
-                L = _log(out, L, te, k, ei, mm, ok, d, blk, lds)
+                    L = _log(out, L, te, k, ei, mm, ok, d, blk)
                 if rec:
                     _rec_post(out, r, t_cur, P, xs, acc_dx)
                 ei += 1
@@ -580,14 +599,14 @@ def gins_run(imu, timed, sampled, xs, P, carry, carry_n, prm, lay, out, first, f
                     s += 1
                 if nm > 0:
                     src = N_AIDS + g
-                    mm, ok, d, lds = _update(kinds, nm, zs, rs, xs, ctx, P, prm, lay, acc_dx, blk,
-                                             _forced(carry_n, lay, src), use, True)
+                    mm, ok, d = _update(kinds, nm, zs, rs, xs, ctx, P, prm, lay, acc_dx, blk,
+                                        _forced(carry_n, lay, src), use)
                     _count(carry_n, src, ok)
                     # each model's own NIS at its slot position in the group
                     blk_slot[:] = np.nan
                     for i in range(nm):
                         blk_slot[slot[i]] = blk[i]
-                    L = _log(out, L, t[k], k, -1 - g, mm, ok, d, blk_slot, lds)
+                    L = _log(out, L, t[k], k, -1 - g, mm, ok, d, blk_slot)
             for j in range(3):
                 carry[CARRY.sum_raw + j] = 0.0
             carry[CARRY.t_raw] = t[k]
