@@ -7,7 +7,9 @@ on: GNSS errors correlated over 30 s (σ 1.5 m horizontal beside the robot's whi
 0.4 of the truth, drifts and jumps while it stands, repeated fixes; an IMU warming by 15 °C with 3 ms stamp
 jitter; wheels that slide in turns, over-read there, change radius, are quantised to 1 cm/s and 50 ms late, and
 meet changing ground (their scale wandering by 8 % over 20 s: the real bag's wheel odometry with the gyro heading
-ended its 60 s outages 15.8 m off, a quarter of the distance driven).
+ended its 60 s outages 15.8 m off, a quarter of the distance driven), and spin or lock for 2 s about every 30 s
+(a reading off by σ 0.5 m/s then: the real Jackal bag's wheels read 1.98 m/s for 3 s while its IMU shows the body
+decelerating).
 Its fixes' reported σ (0.4 × 1.7 = 0.68 m horizontal), their scatter about the truth (1.7 m per axis) and the
 NIS they give a filter that believes them resemble the real Husky bag of issue 33 (reported 0.8-1.1 m, 2.2 m
 RMS residual, NIS 8.9 for 3 degrees of freedom; today's log run gives 8.3 on 30 hard robots:
@@ -44,7 +46,8 @@ HARD_ROBOT_FAULTS = LogFaults(
     gnss_rest_jump_m=3.0, gnss_rest_jump_prob=0.5, gnss_rest_relax_s=10.0, gnss_repeat_prob=0.05, gnss_repeat_max=3,
     imu_temp_rise_c=15.0, imu_temp_tau_s=300.0, imu_stamp_jitter_s=0.003, turn_slip=0.2, odometer_turn_overread=0.3,
     odometer_scale_change=-0.02, odometer_scale_tau_s=200.0, odometer_resolution=0.01, odometer_latency_s=0.05,
-    odometer_terrain_std=0.08, odometer_terrain_tau_s=20.0)
+    odometer_terrain_std=0.08, odometer_terrain_tau_s=20.0, odometer_slip_std=0.5, odometer_slip_every_s=30.0,
+    odometer_slip_s=2.0)
 #: The hard car's faults (module docstring); the car never stands, so the faults at rest never act.
 HARD_CAR_FAULTS = LogFaults(
     gnss_corr_sigma_m=(0.8, 0.8, 1.5), gnss_corr_tau_s=60.0, gnss_std_factor=0.5, gnss_repeat_prob=0.03,

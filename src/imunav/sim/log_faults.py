@@ -36,7 +36,9 @@ the model's temperature polynomials; the stamps carry a white jitter of σ ``imu
 stamps messages on arrival through USB or a serial link).
 
 Wheels (:func:`~imunav.sim.vehicle.vehicle_trajectory` ``turn_slip``, :func:`~imunav.sim.vehicle.simulate_odometer`):
-side slip in turns, over-reading in turns, a tyre radius that changes, quantised and late readings.
+side slip in turns, over-reading in turns, a tyre radius that changes, quantised and late readings, and bursts of
+wheel spin or lock (:func:`~imunav.sim.vehicle.wheel_slip_bursts`: a skid-steer robot on loose ground; the real
+Jackal bag's wheels read 1.98 m/s for 3 s while its IMU shows the body decelerating).
 
 Every realised fault is recorded (the ``faults`` dict of :class:`~imunav.sim.robot_log.RobotLogTruth`).
 """
@@ -106,6 +108,13 @@ class LogFaults:
         (dimensionless, >= 0; :func:`~imunav.sim.vehicle.simulate_odometer`'s ``terrain_scale_std``).
     odometer_terrain_tau_s : float
         Its correlation time, s (> 0).
+    odometer_slip_std : float
+        σ of the speed reading's error during a burst of wheel spin or lock, m/s (>= 0; 0: none;
+        :func:`~imunav.sim.vehicle.wheel_slip_bursts`).
+    odometer_slip_every_s : float
+        Mean interval between the bursts' starts, s (> 0).
+    odometer_slip_s : float
+        Length of each burst, s (> 0).
 
     Raises
     ------
@@ -133,6 +142,9 @@ class LogFaults:
     odometer_latency_s: float = 0.0
     odometer_terrain_std: float = 0.0
     odometer_terrain_tau_s: float = 20.0
+    odometer_slip_std: float = 0.0
+    odometer_slip_every_s: float = 30.0
+    odometer_slip_s: float = 2.0
 
     def __post_init__(self) -> None:
         c = np.asarray(self.gnss_corr_sigma_m, dtype=float)
@@ -140,9 +152,10 @@ class LogFaults:
             raise InvalidInputError(f"LogFaults.gnss_corr_sigma_m must be 3 sigmas >= 0 m (N, E, D); got "
                                     f"{self.gnss_corr_sigma_m!r}")
         positive = ("gnss_corr_tau_s", "gnss_std_factor", "gnss_rest_relax_s", "imu_temp_tau_s",
-                    "odometer_scale_tau_s", "odometer_terrain_tau_s")
+                    "odometer_scale_tau_s", "odometer_terrain_tau_s", "odometer_slip_every_s", "odometer_slip_s")
         nonneg = ("gnss_rest_drift_mps", "gnss_rest_jump_m", "imu_stamp_jitter_s", "turn_slip",
-                  "odometer_turn_overread", "odometer_resolution", "odometer_latency_s", "odometer_terrain_std")
+                  "odometer_turn_overread", "odometer_resolution", "odometer_latency_s", "odometer_terrain_std",
+                  "odometer_slip_std")
         for f in fields(self):
             v = getattr(self, f.name)
             if f.name == "gnss_corr_sigma_m":

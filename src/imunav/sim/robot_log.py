@@ -420,7 +420,9 @@ def simulate_vehicle_log(seed: int, maneuvers: list[Maneuver], *, imu_rate_hz: f
                             rate_hz=odometer_rate_hz, rng=int(seeds[1]), latency_s=f.odometer_latency_s,
                             scale_change=f.odometer_scale_change, scale_change_tau_s=f.odometer_scale_tau_s,
                             turn_overread=f.odometer_turn_overread, resolution=f.odometer_resolution,
-                            terrain_scale_std=f.odometer_terrain_std, terrain_scale_tau_s=f.odometer_terrain_tau_s)
+                            terrain_scale_std=f.odometer_terrain_std, terrain_scale_tau_s=f.odometer_terrain_tau_s,
+                            slip_std=f.odometer_slip_std, slip_every_s=f.odometer_slip_every_s,
+                            slip_s=f.odometer_slip_s)
     odo = OdometerData(odo.t, odo.speed, {**odo.meta, "t0_ns": int(t0_ns)},
                        np.full(odo.t.size, float(odometer_noise_std)))
     lever = np.asarray(gnss_lever_arm_base, dtype=np.float64)

@@ -74,6 +74,7 @@ __all__ = [
     "simulate_odometer",
     "simulate_baro",
     "gauss_markov_sequence",
+    "wheel_slip_bursts",
 ]
 
 Array = NDArray[np.float64]
@@ -790,6 +791,9 @@ def simulate_odometer(
     resolution: float = 0.0,
     terrain_scale_std: float = 0.0,
     terrain_scale_tau_s: float = 20.0,
+    slip_std: float = 0.0,
+    slip_every_s: float = 30.0,
+    slip_s: float = 2.0,
 ) -> OdometerData:
     """Wheel speed: forward body velocity at the wheel, ``(1 + k) (C_bn v^n + ω_eb^b × l)_x + w``.
 
@@ -804,7 +808,12 @@ def simulate_odometer(
     a first-order Gauss–Markov process of σ ``terrain_scale_std`` and correlation time ``terrain_scale_tau_s``
     (grass, gravel and asphalt give a skid-steered robot effective wheel radii that differ by 5-15 %: the
     slip ratios measured by Mandow et al. 2007, "Experimental kinematics for wheeled skid-steer mobile
-    robots", IROS, and the reason Clearpath's Husky driver scales its track width by 1.5-1.9).
+    robots", IROS, and the reason Clearpath's Husky driver scales its track width by 1.5-1.9); and the wheels spin
+    or lock for a while, a burst of ``slip_s`` seconds, starting at the instants of a Poisson process of mean
+    interval ``slip_every_s``, in which the reading is off by a constant drawn from ``N(0, slip_std²)`` (on the
+    real Jackal bag of ``shared/data/ros_bags`` the wheels read 1.98 m/s for 3 s while the IMU shows the body
+    decelerating at 1-1.6 m/s², then 0.12 m/s for 2 s while the body still moves; the wheel speed there changes
+    twice as fast as the body's: a skid-steer robot on loose ground, driven by a joystick's steps).
 
     With the body-velocity perturbations of :func:`vehicle_trajectory`, the side slip and suspension velocity
     are perpendicular to the body x axis: in motion the reading is the forward speed as without them.  At rest
@@ -840,6 +849,12 @@ def simulate_odometer(
         σ of the terrain's Gauss–Markov scale variation ``g`` (dimensionless, >= 0; 0: none).
     terrain_scale_tau_s : float
         Its correlation time, s (> 0).
+    slip_std : float
+        σ of the reading's error during a burst of wheel spin or lock, m/s (>= 0; 0: none).
+    slip_every_s : float
+        Mean interval between the bursts' starts, s (> 0).
+    slip_s : float
+        Length of each burst, s (> 0).
 
     Returns
     -------
@@ -849,27 +864,29 @@ def simulate_odometer(
     Raises
     ------
     InvalidInputError
-        If ``noise_std``, ``latency_s``, ``turn_overread``, ``resolution`` or ``terrain_scale_std`` is negative
-        or not finite, ``scale_factor`` is not finite, ``scale_change`` is not above −1 or ``scale_change_tau_s``
-        or ``terrain_scale_tau_s`` is not > 0.
+        If ``noise_std``, ``latency_s``, ``turn_overread``, ``resolution``, ``terrain_scale_std`` or ``slip_std``
+        is negative or not finite, ``scale_factor`` is not finite, ``scale_change`` is not above −1 or
+        ``scale_change_tau_s``, ``terrain_scale_tau_s``, ``slip_every_s`` or ``slip_s`` is not > 0.
     """
     if not (math.isfinite(noise_std) and noise_std >= 0) or not math.isfinite(scale_factor):
         raise InvalidInputError(f"noise_std must be >= 0 m/s and scale_factor finite; got {noise_std!r}, {scale_factor!r}")
     for name, x in (("latency_s", latency_s), ("turn_overread", turn_overread), ("resolution", resolution),
-                    ("terrain_scale_std", terrain_scale_std)):
+                    ("terrain_scale_std", terrain_scale_std), ("slip_std", slip_std)):
         if not (math.isfinite(x) and x >= 0):
             raise InvalidInputError(f"simulate_odometer: {name} must be >= 0, finite; got {x!r}")
     if not (math.isfinite(scale_change) and scale_change > -1.0 and scale_change_tau_s > 0):
         raise InvalidInputError(f"simulate_odometer: scale_change must be > -1 and scale_change_tau_s > 0 s; got "
                                 f"{scale_change!r}, {scale_change_tau_s!r}")
-    if not (math.isfinite(terrain_scale_tau_s) and terrain_scale_tau_s > 0):
-        raise InvalidInputError(f"simulate_odometer: terrain_scale_tau_s must be > 0 s; got {terrain_scale_tau_s!r}")
+    for name, x in (("terrain_scale_tau_s", terrain_scale_tau_s), ("slip_every_s", slip_every_s), ("slip_s", slip_s)):
+        if not (math.isfinite(x) and x > 0):
+            raise InvalidInputError(f"simulate_odometer: {name} must be > 0 s; got {x!r}")
     g = np.random.default_rng(rng)
     idx = _decimate(truth, rate_hz)
     t = truth.t[idx].copy()
     meta = {"lever_arm": list(map(float, _lever(lever_arm, "lever_arm"))), "scale_factor": float(scale_factor),
             "noise_std": float(noise_std)}
-    if latency_s == 0 and scale_change == 0 and turn_overread == 0 and resolution == 0 and terrain_scale_std == 0:
+    if (latency_s == 0 and scale_change == 0 and turn_overread == 0 and resolution == 0 and terrain_scale_std == 0
+            and slip_std == 0):
         v = lever_arm_velocity_body(truth, lever_arm)[idx, 0]
         speed = (1.0 + scale_factor) * v + noise_std * g.standard_normal(idx.size)
         return OdometerData(t, speed, meta)
@@ -880,13 +897,48 @@ def simulate_odometer(
     speed = k * (1.0 + turn_overread * np.abs(wz)) * v + noise_std * g.standard_normal(idx.size)
     if terrain_scale_std > 0:  # drawn after the white noise: a log without it keeps its noise
         speed = speed * (1.0 + gauss_markov_sequence(t, terrain_scale_std, terrain_scale_tau_s, g))
+    if slip_std > 0:  # drawn after the others too
+        speed = speed + wheel_slip_bursts(t, slip_std, slip_every_s, slip_s, g)
     if resolution > 0:
         speed = resolution * np.round(speed / resolution)
     meta.update({"latency_s": float(latency_s), "scale_change": float(scale_change),
                  "scale_change_tau_s": float(scale_change_tau_s), "turn_overread": float(turn_overread),
                  "resolution": float(resolution), "terrain_scale_std": float(terrain_scale_std),
-                 "terrain_scale_tau_s": float(terrain_scale_tau_s)})
+                 "terrain_scale_tau_s": float(terrain_scale_tau_s), "slip_std": float(slip_std),
+                 "slip_every_s": float(slip_every_s), "slip_s": float(slip_s)})
     return OdometerData(t, speed, meta)
+
+
+def wheel_slip_bursts(t: Array, std: float, every_s: float, length_s: float, rng: Any = None) -> Array:
+    """The wheel speed's error of bursts of spin or lock: zero, but for ``length_s`` seconds after each instant of
+    a Poisson process of mean interval ``every_s`` over ``t``, a constant drawn from ``N(0, std²)`` (overlapping
+    bursts add).
+
+    Parameters
+    ----------
+    t : numpy.ndarray, shape (N,)
+        Stamps of the readings, s, increasing.
+    std : float
+        σ of a burst's error, m/s (>= 0).
+    every_s : float
+        Mean interval between the bursts' starts, s (> 0).
+    length_s : float
+        Length of each burst, s (> 0).
+    rng : numpy.random.Generator or int, optional
+        Random generator or seed.
+
+    Returns
+    -------
+    numpy.ndarray, shape (N,)
+        The error of each reading, m/s.
+    """
+    g = np.random.default_rng(rng)
+    span = float(t[-1] - t[0]) if t.size else 0.0
+    starts = t[0] + np.sort(g.uniform(0.0, span, g.poisson(span / every_s))) if t.size else np.zeros(0)
+    err = np.zeros(t.size)
+    for s0, e in zip(starts, std * g.standard_normal(starts.size)):
+        err[(t >= s0) & (t < s0 + length_s)] += e
+    return err
 
 
 def simulate_baro(

@@ -40,6 +40,8 @@ def _state(rng):
     xs[NOM.gnss_bias:NOM.gnss_bias + 3] = (0.3, -0.2, 0.5)
     xs[NOM.gnss_r_scale] = 1.3  # the adaptive factor on the reported covariance
     xs[NOM.odo_turn] = 0.15  # the odometer's over-reading in turns, s/rad
+    xs[NOM.odo_r_scale] = 2.0  # the adaptive factors on the odometer's and the NHC's covariance
+    xs[NOM.nhc_r_scale] = 0.7
     return xs
 
 
@@ -127,6 +129,12 @@ def test_every_aid_jacobian_is_the_derivative_of_its_innovation(name, scale_fact
     neglected = {"gnss_velocity": 2 * OMEGA_E * np.linalg.norm(cfg.lever_arm)}.get(name, 0.0)
     np.testing.assert_allclose(H, J, rtol=2 * s_max + 1e-4, atol=neglected + 1e-6 * np.abs(H).max())
     assert np.all(np.abs(H).max(axis=1) > 0)
+    # the adaptive factors scale the covariance of their own aid only (GinsConfig.wheel_adaptive, gnss_adaptive)
+    nominal = {"odometer": lambda: np.diag([z[1]]), "nhc": lambda: np.eye(2) * cfg.nhc_noise_std**2,
+               "gnss_position": lambda: r}
+    if name in nominal:
+        factor = {"odometer": NOM.odo_r_scale, "nhc": NOM.nhc_r_scale, "gnss_position": NOM.gnss_r_scale}[name]
+        np.testing.assert_allclose(R, xs[factor] * nominal[name](), rtol=1e-12)
 
 
 def test_kernel_layouts_are_contiguous_and_follow_their_tuples():

@@ -205,7 +205,7 @@ class GinsConfig:
         Its correlation time, s (> 0).
     gnss_adaptive : bool
         Scale the fixes' reported covariance by a factor estimated from their innovations (covariance matching,
-        ``kernels._adapt_gnss_noise``), bounded by ``gnss_adaptive_bounds``; the factor reached is in
+        ``kernels._adapt_noise``), bounded by ``gnss_adaptive_bounds``; the factor reached is in
         ``GinsResult.gnss_noise_scale``.
     gnss_adaptive_window : float
         Fixes the adaptive factor averages over (its forgetting weight is the inverse), >= 1.
@@ -214,6 +214,18 @@ class GinsConfig:
     gnss_adaptive_prior_fixes : float
         How many fixes the reported σ counts as in the adaptive factor's mean (>= 1): the first fixes, whose
         innovations hold the initial position's error, cannot drive it to a bound alone.
+    wheel_adaptive : bool
+        Scale the odometer's speed variance and the NHC's, each by its own factor estimated from its innovations,
+        as ``gnss_adaptive`` does the fixes' (``kernels._adapt_noise``), bounded by ``wheel_adaptive_bounds``; the
+        factors reached are in ``GinsResult.odo_noise_scale`` and ``nhc_noise_scale``.  A real wheel's
+        errors are not a constant white noise: a skid-steer robot's wheels spin up and lock ahead of the body
+        (the Jackal bag's wheel speed changes twice as fast as the IMU says the body does) and scrub in turns.
+    wheel_adaptive_window : float
+        Updates each factor averages over (its forgetting weight is the inverse), >= 1.
+    wheel_adaptive_bounds : tuple of float
+        Lowest and highest factor on each wheel aid's covariance (0 < low <= 1 <= high).
+    wheel_adaptive_prior_updates : float
+        How many updates the configured σ counts as in the factor's mean (>= 1).
     consider_states : tuple of str
         State blocks held as Schmidt consider states (``"odo_scale"``, ``"odo_turn"``, ``"mount"``, ``"odo_lever"``,
         ``"gnss_delay"``, ``"gnss_bias"``): their prior σ and correlations reach the other states' covariance, but no
@@ -279,6 +291,10 @@ class GinsConfig:
     gnss_adaptive_window: float = 100.0
     gnss_adaptive_bounds: tuple[float, float] = (0.01, 100.0)
     gnss_adaptive_prior_fixes: float = 10.0
+    wheel_adaptive: bool = False
+    wheel_adaptive_window: float = 25.0
+    wheel_adaptive_bounds: tuple[float, float] = (1.0, 400.0)
+    wheel_adaptive_prior_updates: float = 10.0
     consider_states: tuple[str, ...] = ()
 
     def __post_init__(self) -> None:
@@ -293,16 +309,19 @@ class GinsConfig:
             s(self, "gnss_bias_std", _v3(self.gnss_bias_std, "gnss_bias_std", positive=True))
         if not (np.isfinite(self.gnss_bias_corr_time) and self.gnss_bias_corr_time > 0):
             raise InvalidInputError(f"GinsConfig.gnss_bias_corr_time must be > 0 s; got {self.gnss_bias_corr_time!r}")
-        if not (np.isfinite(self.gnss_adaptive_window) and self.gnss_adaptive_window >= 1):
-            raise InvalidInputError(f"GinsConfig.gnss_adaptive_window must be >= 1 fix; got {self.gnss_adaptive_window!r}")
-        if not (np.isfinite(self.gnss_adaptive_prior_fixes) and self.gnss_adaptive_prior_fixes >= 1):
-            raise InvalidInputError(f"GinsConfig.gnss_adaptive_prior_fixes must be >= 1; got "
-                                    f"{self.gnss_adaptive_prior_fixes!r}")
-        lo_hi = tuple(float(x) for x in np.ravel(self.gnss_adaptive_bounds))
-        if len(lo_hi) != 2 or not (0 < lo_hi[0] <= 1.0 <= lo_hi[1] < np.inf):
-            raise InvalidInputError(f"GinsConfig.gnss_adaptive_bounds must be (low, high) with 0 < low <= 1 <= "
-                                    f"high; got {self.gnss_adaptive_bounds!r}")
-        s(self, "gnss_adaptive_bounds", lo_hi)
+        for aid, unit, prior in (("gnss", "fix", "gnss_adaptive_prior_fixes"),
+                                 ("wheel", "update", "wheel_adaptive_prior_updates")):
+            window = getattr(self, f"{aid}_adaptive_window")
+            if not (np.isfinite(window) and window >= 1):
+                raise InvalidInputError(f"GinsConfig.{aid}_adaptive_window must be >= 1 {unit}; got {window!r}")
+            if not (np.isfinite(getattr(self, prior)) and getattr(self, prior) >= 1):
+                raise InvalidInputError(f"GinsConfig.{prior} must be >= 1; got {getattr(self, prior)!r}")
+            bounds = getattr(self, f"{aid}_adaptive_bounds")
+            lo_hi = tuple(float(x) for x in np.ravel(bounds))
+            if len(lo_hi) != 2 or not (0 < lo_hi[0] <= 1.0 <= lo_hi[1] < np.inf):
+                raise InvalidInputError(f"GinsConfig.{aid}_adaptive_bounds must be (low, high) with 0 < low <= 1 <= "
+                                        f"high; got {bounds!r}")
+            s(self, f"{aid}_adaptive_bounds", lo_hi)
         if self.bias_model not in BIAS_MODELS:
             raise InvalidInputError(f"GinsConfig.bias_model must be one of {', '.join(BIAS_MODELS)}; "
                                     f"got {self.bias_model!r}")

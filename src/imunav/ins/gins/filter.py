@@ -99,6 +99,8 @@ def _initial_state(lla0: ArrayLike, vel0: ArrayLike, q0: ArrayLike, imu_errors0:
     xs[NOM.gnss_r_scale] = 1.0
     xs[NOM.gnss_r_est] = 1.0
     xs[NOM.gnss_r_weight] = config.gnss_adaptive_prior_fixes * 3.0 / 2.0  # that many fixes of variance 2 / 3
+    for nom, rows in ((NOM.odo_r_scale, 1), (NOM.nhc_r_scale, 2)):
+        xs[nom:nom + 3] = 1.0, 1.0, config.wheel_adaptive_prior_updates * rows / 2.0
     return xs
 
 
@@ -183,6 +185,9 @@ def kernel_setup(c: GinsConfig, fs: float, odometer: bool) -> tuple[Array, NDArr
     if c.gnss_adaptive:
         prm[PRM.gnss_adapt] = 1.0 / c.gnss_adaptive_window
         prm[PRM.gnss_adapt + 1:PRM.gnss_adapt + 3] = c.gnss_adaptive_bounds
+    if c.wheel_adaptive:
+        prm[PRM.wheel_adapt] = 1.0 / c.wheel_adaptive_window
+        prm[PRM.wheel_adapt + 1:PRM.wheel_adapt + 3] = c.wheel_adaptive_bounds
     for dof in range(1, MAX_ROWS + 1):
         prm[PRM.gate + dof - 1] = float(chi2_ppf(1 - c.gate_alpha, dof)) if c.gate_alpha > 0 else 1e300
     blocks = [prm]
@@ -882,6 +887,7 @@ class GinsFilter:
                           aids=log.aids, q_vb=xs[:, NOM.q_vb:NOM.q_vb + 4],
                           odo_lever_arm=col3(NOM.odo_lever), gnss_delay=xs[:, NOM.gnss_delay],
                           gnss_bias=col3(NOM.gnss_bias), gnss_noise_scale=xs[:, NOM.gnss_r_scale],
+                          odo_noise_scale=xs[:, NOM.odo_r_scale], nhc_noise_scale=xs[:, NOM.nhc_r_scale],
                           odo_turn=xs[:, NOM.odo_turn],
                           **{f"{name}_nis": _sample_nis(log, name, n) for name in _SAMPLE_NIS})
 

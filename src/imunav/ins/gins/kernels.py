@@ -235,7 +235,26 @@ def _update(kinds, n_models, zs, rs, xs, ctx, P, prm, lay, acc_dx, blk, force, u
     ok, d = chi2_gate(nu, S0, prm[PRM.gate + m - 1])
     if ok or force:
         if kinds[0] == _GNSS_POS and prm[PRM.gnss_adapt] > 0.0:
-            _adapt_gnss_noise(xs, nu, S0, R, prm)
+            _adapt_noise(xs, nu, S0, R, prm, NOM.gnss_r_scale, PRM.gnss_adapt)
+        elif prm[PRM.wheel_adapt] > 0.0:
+            row = np.int64(0)
+            for i in range(n_models):  # each wheel aid's factor from its own rows
+                w = ROWS[kinds[i]]
+                if kinds[i] == _ODO or kinds[i] == _NHC:
+                    _adapt_noise(xs, nu[row:row + w], S0[row:row + w, row:row + w], R[row:row + w, row:row + w], prm,
+                                 NOM.odo_r_scale if kinds[i] == _ODO else NOM.nhc_r_scale, PRM.wheel_adapt)
+                row += w
+        if not ok and kinds[0] != _GNSS_POS:
+            # forced after a run of rejections: the innovation's covariance scaled by λ = d / threshold, so that it
+            # sits on the gate (R̃ = R + (λ − 1) S, S̃ = λ S; Chang 2014, "Robust Kalman filtering based on Mahalanobis
+            # distance as outlier judging criterion", J. Geodesy 88): the filter moves towards the measurement by
+            # what its own P allows, not onto it (a wheel spinning for 3 s, forced in at its σ, took the velocity
+            # 1.4 m/s off with a σ of 0.04 m/s).  A forced fix keeps its σ: the fixes' adaptive factor learns a
+            # receiver's understated σ from it (at S̃ = λ S the filter's own P dominates S and the factor never moves)
+            lam = d / prm[PRM.gate + m - 1]
+            for i in range(m):
+                for j in range(m):
+                    R[i, j] += (lam - 1.0) * S0[i, j]
         dx = np.zeros(nx)
         # one update kernel for both cases (an empty mask zeroes no gain row: joseph_update's arithmetic), so that a
         # first run compiles one Joseph update, not two
@@ -285,43 +304,47 @@ _BLOCK_SIZE = tuple(n for _, n in STATE_BLOCKS)
 
 
 _GNSS_POS = AID.gnss_position
+_ODO = AID.odometer
+_NHC = AID.nhc
 
 
 @njit(cache=True, inline="always")
-def _adapt_gnss_noise(xs, nu, S0, R, prm):
-    """Covariance matching of the fixes' white noise (Mehra 1972; Mohamed & Schwarz 1999, "Adaptive Kalman
-    filtering for INS/GPS", J. Geodesy 73): ``E[ν νᵀ] = H P⁻ Hᵀ + s R_rep``, so one fix's estimate of the factor is
-    ``ŝ = (νᵀν − tr(H P⁻ Hᵀ)) / tr(R_rep)``, of variance ``v = 2 Σ S_jj² / tr(R_rep)²`` (Gaussian ν, diagonal
+def _adapt_noise(xs, nu, S0, R, prm, nom, pa):
+    """Covariance matching of an aid's white noise (Mehra 1972; Mohamed & Schwarz 1999, "Adaptive Kalman
+    filtering for INS/GPS", J. Geodesy 73): ``E[ν νᵀ] = H P⁻ Hᵀ + s R_rep``, so one update's estimate of the factor
+    is ``ŝ = (νᵀν − tr(H P⁻ Hᵀ)) / tr(R_rep)``, of variance ``v = 2 Σ S_jj² / tr(R_rep)²`` (Gaussian ν, diagonal
     terms): large while the filter's own uncertainty ``H P⁻ Hᵀ`` dominates, as at the start.  The kernel keeps the
     inverse-variance weighted mean with forgetting,
 
         ``W ← (1 − w₀) W + 1/v``,   ``s ← s + (1/v) / W · (ŝ − s)``,
 
-    the reported σ counting as ``gnss_adaptive_prior_fixes`` fixes of variance ``2 / m`` (``W₀``, ``s₀ = 1``), bounded
-    to ``[s_min, s_max]`` (nominal ``gnss_r_est``, its information ``W`` in ``gnss_r_weight``).
+    the reported σ counting as a number of prior updates of variance ``2 / m`` (``W₀``, ``s₀ = 1``), bounded to
+    ``[s_min, s_max]``.  ``nom``: the offset in ``xs`` of the factor applied, the estimate and its information (the
+    GNSS fixes' ``NOM.gnss_r_scale``, the odometer's ``NOM.odo_r_scale``, the NHC's ``NOM.nhc_r_scale``); ``pa``: the offset in ``prm`` of
+    ``(w₀, s_min, s_max)``.
 
-    The factor applied to the next fix's ``R`` (nominal ``gnss_r_scale``) is the estimate when it departs from 1 by
-    more than two standard errors ``2 / √W``, else 1: a receiver whose σ is right keeps it exactly.  A noisy factor
-    about 1, or one driven by the first innovations (which hold the initial position's error), made the robot drives'
-    GNSS NIS 1.013 -> 1.036.
+    The factor applied to the next update's ``R`` is the estimate when it departs from 1 by more than two standard
+    errors ``2 / √W``, else 1: an aid whose σ is right keeps it exactly.  A noisy factor about 1, or one driven by
+    the first innovations (which hold the initial position's error), made the robot drives' GNSS NIS
+    1.013 -> 1.036.
     """
     tr_r = 0.0
     v = 0.0
     vv = 0.0
     tr_hph = 0.0
-    s_used = xs[NOM.gnss_r_scale]
+    s_used = xs[nom]
     for j in range(nu.shape[0]):
         tr_r += R[j, j] / s_used
         tr_hph += S0[j, j] - R[j, j]
         vv += nu[j] * nu[j]
         v += 2.0 * S0[j, j] * S0[j, j]
     v /= tr_r * tr_r
-    W = (1.0 - prm[PRM.gnss_adapt]) * xs[NOM.gnss_r_weight] + 1.0 / v
-    xs[NOM.gnss_r_weight] = W
-    est = xs[NOM.gnss_r_est] + (1.0 / v) / W * ((vv - tr_hph) / tr_r - xs[NOM.gnss_r_est])
-    est = min(max(est, prm[PRM.gnss_adapt + 1]), prm[PRM.gnss_adapt + 2])
-    xs[NOM.gnss_r_est] = est
-    xs[NOM.gnss_r_scale] = est if abs(est - 1.0) > 2.0 / math.sqrt(W) else 1.0
+    W = (1.0 - prm[pa]) * xs[nom + 2] + 1.0 / v
+    xs[nom + 2] = W
+    est = xs[nom + 1] + (1.0 / v) / W * ((vv - tr_hph) / tr_r - xs[nom + 1])
+    est = min(max(est, prm[pa + 1]), prm[pa + 2])
+    xs[nom + 1] = est
+    xs[nom] = est if abs(est - 1.0) > 2.0 / math.sqrt(W) else 1.0
 
 
 @njit(cache=True, inline="always")

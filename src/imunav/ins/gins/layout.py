@@ -60,12 +60,15 @@ LAY, N_LAY = named_layout("GinsLayout", tuple((name, 1) for name, _ in STATE_BLO
 #: error, NED, m; ``gnss_r_scale``: the factor on the fixes' reported covariance that the filter applies (1 without
 #: adaptation, or while the estimate ``gnss_r_est`` is within two standard errors of 1), ``gnss_r_weight`` the
 #: estimate's information (the inverse of its variance; the reported σ counts as ``gnss_adaptive_prior_fixes`` fixes);
-#: ``odo_turn``: the odometer's over-reading per rad/s of yaw rate, s/rad.
+#: ``odo_turn``: the odometer's over-reading per rad/s of yaw rate, s/rad; ``odo_r_*``, ``nhc_r_*``: the same three for the
+#: odometer's and the NHC's covariance (``GinsConfig.wheel_adaptive``).
 NOM, N_NOM = named_layout("GinsNominal", (("lla", 3), ("vel", 3), ("q", 4), ("gyro_bias", 3), ("accel_bias", 3),
                                           ("gyro_scale", 3), ("accel_scale", 3), ("odo_scale", 1), ("q_vb", 4),
                                           ("odo_lever", 3), ("gnss_delay", 1), ("gnss_bias", 3),
                                           ("gnss_r_scale", 1), ("gnss_r_est", 1),
-                                          ("gnss_r_weight", 1), ("odo_turn", 1)))
+                                          ("gnss_r_weight", 1), ("odo_turn", 1),
+                                          ("odo_r_scale", 1), ("odo_r_est", 1), ("odo_r_weight", 1),
+                                          ("nhc_r_scale", 1), ("nhc_r_est", 1), ("nhc_r_weight", 1)))
 #: the sensor errors of ``xs`` (GinsFilter.imu_errors: 13 values)
 N_SENSOR_ERRORS = NOM.odo_scale + 1 - NOM.gyro_bias
 
@@ -74,12 +77,13 @@ MAX_ROWS = 9
 
 #: ``prm`` (float): core parameters.  ``*_q``: driving-noise PSD 2σ²/T of a Gauss–Markov state; ``*_t``: its
 #: correlation time, s; ``gnss_adapt``: the adaptive GNSS noise's forgetting weight per fix (0: off) and its lowest
-#: and highest factor on the reported covariance; ``gate``: χ²(m) thresholds, ``prm[PRM.gate + m − 1]``.
+#: and highest factor on the reported covariance; ``wheel_adapt``: the same for the wheel aids (odometer and NHC, per
+#: update); ``gate``: χ²(m) thresholds, ``prm[PRM.gate + m − 1]``.
 PRM, N_PRM = named_layout("GinsParams", (
     ("omega_e", 1), ("gyro_noise_density", 3), ("accel_noise_density", 3),
     ("gyro_bias_q", 3), ("accel_bias_q", 3), ("gyro_scale_q", 3), ("accel_scale_q", 3), ("odo_scale_q", 1),
     ("gyro_bias_t", 3), ("accel_bias_t", 3), ("gyro_scale_t", 3), ("accel_scale_t", 3), ("odo_scale_t", 1),
-    ("gnss_bias_q", 3), ("gnss_bias_t", 1), ("gnss_adapt", 3),
+    ("gnss_bias_q", 3), ("gnss_bias_t", 1), ("gnss_adapt", 3), ("wheel_adapt", 3),
     ("gate", MAX_ROWS),
 ))
 

@@ -653,7 +653,7 @@ def run_log(src: NavSources, options: LogRunOptions | None = None, *,
         cfg_kw.update(odo_lever_arm=C_vb.T @ np.asarray(lever_v, dtype=float),
                       odo_scale_std=ODO_SCALE_STD if src.gnss is not None else ODO_SCALE_PRIOR_STD,
                       odo_scale_corr_time=np.inf,
-                      odo_noise_std=ODO_STD_FLOOR)
+                      odo_noise_std=ODO_STD_FLOOR, wheel_adaptive=True)
         if o.estimate_odo_lever_arm:
             cfg_kw["odo_lever_arm_std"] = 0.3
     if (o.nhc if o.nhc is not None else wheeled):

@@ -529,7 +529,8 @@ def log_summary(run: LogRun, sources: NavSources, separation: Separation | None 
     -------
     dict
         ``trajectory`` (which track the ``.nav`` holds), ``honesty`` (:func:`honesty`), ``self_calibration``
-        (:func:`self_calibration`), ``gnss_noise`` (the adaptive factor on the fixes' reported σ), ``separation``
+        (:func:`self_calibration`), ``gnss_noise`` (the adaptive factor on the fixes' reported σ), ``wheel_noise``
+        (the odometer's and the NHC's factors on their σ, null without wheels), ``separation``
         (:meth:`~imunav.ins.gins.smoother.Separation.summary`, null without the smoother); ``t0_unix`` (UTC of the first row, s since 1970; null when the log's clock is not UTC) and ``time_note``;
         ``sources`` (per role: topic, type, count, rate, what the reader refused); ``static_share``; ``mounting``
         (roll, pitch, yaw of the IMU in the vehicle, deg, with σ; its source: given, tf_static, estimated or
@@ -589,8 +590,19 @@ def log_summary(run: LogRun, sources: NavSources, separation: Separation | None 
         "honesty": honesty(run, separation),
         "self_calibration": self_calibration(run),
         "gnss_noise": _gnss_noise(run) if sources.gnss is not None else None,
+        "wheel_noise": _wheel_noise(run),
         "separation": separation.summary() if separation is not None else None,
     }
+
+
+def _noise_factor(scale: NDArray[np.float64], bounds: tuple[float, float], method: str) -> dict[str, Any]:
+    """An adaptive factor on an aid's covariance (its series over the run), as a factor on its σ: at the end, its
+    largest, its bounds and whether it ended at one."""
+    sc = float(scale[-1])
+    lo, hi = bounds
+    return {"adaptive": True, "sigma_factor": math.sqrt(sc), "sigma_factor_max": math.sqrt(float(np.max(scale))),
+            "sigma_factor_bounds": [math.sqrt(lo), math.sqrt(hi)],
+            "at_bound": bool(sc <= lo * (1 + 1e-9) or sc >= hi * (1 - 1e-9)), "method": method}
 
 
 def _gnss_noise(run: LogRun) -> dict[str, Any]:
@@ -598,11 +610,21 @@ def _gnss_noise(run: LogRun) -> dict[str, Any]:
     res, cfg = run.result, run.config
     if not cfg.gnss_adaptive or res.gnss_noise_scale is None:
         return {"adaptive": False}
-    sc = float(res.gnss_noise_scale[-1])
-    lo, hi = cfg.gnss_adaptive_bounds
-    return {"adaptive": True, "sigma_factor": math.sqrt(sc), "sigma_factor_bounds": [math.sqrt(lo), math.sqrt(hi)],
-            "at_bound": bool(sc <= lo * (1 + 1e-9) or sc >= hi * (1 - 1e-9)),
-            "method": "covariance matching of the position innovations (imunav.ins.gins.kernels._adapt_gnss_noise)"}
+    return _noise_factor(res.gnss_noise_scale, cfg.gnss_adaptive_bounds, "covariance matching of the position "
+                         "innovations (imunav.ins.gins.kernels._adapt_noise)")
+
+
+def _wheel_noise(run: LogRun) -> dict[str, Any] | None:
+    """The adaptive factors on the odometer's and the NHC's σ (None without wheels)."""
+    res, cfg = run.result, run.config
+    used = {name: getattr(res, f"{key}_noise_scale") for name, key in (("odometer", "odo"), ("nhc", "nhc"))
+            if res.aids.get(name) is not None and res.aids[name].t.size}
+    if not used:
+        return None
+    if not cfg.wheel_adaptive:
+        return {name: {"adaptive": False} for name in used}
+    return {name: _noise_factor(sc, cfg.wheel_adaptive_bounds, f"covariance matching of the {name}'s innovations "
+                                "(imunav.ins.gins.kernels._adapt_noise)") for name, sc in used.items()}
 
 
 def track_geojson(res: GinsResult, gnss: GnssData | None, *, every_s: float = 1.0) -> dict[str, Any]:

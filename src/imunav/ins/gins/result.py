@@ -122,6 +122,9 @@ class GinsResult(EulerMixin, Result):
     gnss_noise_scale : numpy.ndarray, shape (N,), or None
         The factor on the fixes' reported covariance that the adaptive noise estimate had reached
         (``GinsConfig.gnss_adaptive``; 1 without it).
+    odo_noise_scale, nhc_noise_scale : numpy.ndarray, shape (N,), or None
+        The factors on the odometer's and the NHC's covariance that their adaptive noise estimates had reached
+        (``GinsConfig.wheel_adaptive``; 1 without it).
     odo_turn : numpy.ndarray, shape (N,), or None
         The odometer's over-reading per rad/s of yaw rate (``GinsConfig.odo_turn_std``), s/rad; 0 where it was
         not estimated.
@@ -167,6 +170,8 @@ class GinsResult(EulerMixin, Result):
     gnss_bias: Array | None = None
     gnss_noise_scale: Array | None = None
     odo_turn: Array | None = None
+    odo_noise_scale: Array | None = None
+    nhc_noise_scale: Array | None = None
 
     def gnss_summary(self) -> dict[str, Any]:
         """How the GNSS fixes were used: one definition for the CLI summary and the lab step.

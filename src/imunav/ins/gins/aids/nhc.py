@@ -18,7 +18,7 @@ from numba import njit
 
 from imunav.filters._layout import named_layout
 from imunav.ins.gins.aids._wheel import wheel_velocity
-from imunav.ins.gins.layout import LAY
+from imunav.ins.gins.layout import LAY, NOM
 
 NAME = "nhc"
 ROWS = 2
@@ -67,4 +67,4 @@ def rows(xs, ctx, z, r, p, lay, H, R, nu, row):
         for j in range(nx):
             H[row + a, j] = Hv[1 + a, j]
         nu[row + a] = -vw[1 + a]
-        R[row + a, row + a] = p[PARAMS.var]
+        R[row + a, row + a] = p[PARAMS.var] * xs[NOM.nhc_r_scale]  # the adaptive factor (1 without)

@@ -99,4 +99,4 @@ def rows(xs, ctx, z, r, p, lay, H, R, nu, row):
             H[row, im] += a * wv[1]
             H[row, im + 1] -= a * wv[0]
     nu[row] = z[0] - (1.0 + k) * g * vw[0]
-    R[row, row] = z[1]
+    R[row, row] = z[1] * xs[NOM.odo_r_scale]  # the adaptive factor (1 without adaptation)
