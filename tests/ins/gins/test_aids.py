@@ -17,11 +17,12 @@ from imunav.rotation import dcm_from_quat, quat_normalize
 #: ~6e6 m in radians: ~1e-9 m) stays far below the Jacobian's entries, small enough that the curvature is negligible
 EPS = {"pos": 1e-2, "vel": 1e-3, "att": 1e-4, "gyro_bias": 1e-6, "accel_bias": 1e-4, "gyro_scale": 1e-4,
        "accel_scale": 1e-4, "odo_scale": 1e-4, "mount": 1e-4, "odo_lever": 1e-3, "gnss_delay": 1e-4, "gnss_bias": 1e-2,
-       "odo_turn": 1e-4}
+       "odo_turn": 1e-4, "side_slip": 1e-4}
 
 
 BASELINE = (1.2, -0.4, 0.15)
-VEHICLE_BLOCKS = {"mounting_std": 0.01, "odo_lever_arm_std": 0.1, "gnss_delay_std": 0.05, "gnss_bias_std": 0.5}
+VEHICLE_BLOCKS = {"mounting_std": 0.01, "odo_lever_arm_std": 0.1, "gnss_delay_std": 0.05, "gnss_bias_std": 0.5,
+                  "side_slip_std": 0.1}
 
 
 def _state(rng):
@@ -40,6 +41,7 @@ def _state(rng):
     xs[NOM.gnss_bias:NOM.gnss_bias + 3] = (0.3, -0.2, 0.5)
     xs[NOM.gnss_r_scale] = 1.3  # the adaptive factor on the reported covariance
     xs[NOM.odo_turn] = 0.15  # the odometer's over-reading in turns, s/rad
+    xs[NOM.side_slip] = 0.08  # the side slip per m/s² of lateral acceleration, rad/(m/s²)
     xs[NOM.odo_r_scale] = 2.0  # the adaptive factors on the odometer's and the NHC's covariance
     xs[NOM.nhc_r_scale] = 0.7
     return xs
@@ -102,7 +104,7 @@ def test_every_aid_jacobian_is_the_derivative_of_its_innovation(name, scale_fact
     xs = _state(rng)
     if not scale_factors:  # a 15-state filter treats the scale factors as zero
         xs[NOM.gyro_scale:NOM.accel_scale + 3] = 0.0
-    assert (lay[LAY.mount] >= 0) == scale_factors
+    assert (lay[LAY.mount] >= 0) == scale_factors == (lay[LAY.side_slip] >= 0)
     w_raw = rng.normal(0, 0.3, 3)
     z, r = _measurement(name, rng, xs)
     nu0, H, R = _rows(kind, xs, _context(xs, w_raw), z, r, prm, lay)

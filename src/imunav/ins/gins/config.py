@@ -45,7 +45,7 @@ def _v3(x: ArrayLike, name: str, *, positive: bool = False, nonneg: bool = False
 BIAS_MODELS = ("gauss_markov", "constant_and_gauss_markov")
 #: The state blocks that may be held as Schmidt consider states (``GinsConfig.consider_states``): the vehicle's and
 #: the receiver's self-calibration, not the navigation state or the IMU errors.
-CONSIDER_BLOCKS = ("odo_scale", "odo_turn", "mount", "odo_lever", "gnss_delay", "gnss_bias")
+CONSIDER_BLOCKS = ("odo_scale", "odo_turn", "mount", "odo_lever", "gnss_delay", "gnss_bias", "side_slip")
 
 
 def misalignment_std(m: ArrayLike) -> float:
@@ -135,6 +135,14 @@ class GinsConfig:
         :data:`imunav.sim.hard_log.HARD_ROBOT_FAULTS`); a car's averaged wheel speeds over-read little (second order
         in the steering angle), which the fixes then show.  Without GNSS the log run holds it as a consider state:
         its prior σ reaches the position's σ in turns.
+    side_slip_std : float or None
+        Prior σ of the vehicle's side slip in turns ``β`` (a random constant, initial value 0), rad per m/s² of
+        lateral acceleration: the NHC's lateral row holds ``v_y = −β v_x² ω_z`` instead of 0 (a linear tyre's slip
+        angle is proportional to the lateral acceleration ``v_x ω_z``: Gillespie 1992, *Fundamentals of Vehicle
+        Dynamics*, ch. 6; a skid-steer robot's body slides outward in its turns: Mandow et al. 2007);
+        :mod:`imunav.ins.gins.aids.nhc`); None: not estimated (``β = 0``), and without the NHC it is never.  A robot
+        that always turns the same way otherwise takes the slip as a mounting yaw (the hard robot's mounting erred by
+        2° in yaw with a σ of 0.4°, and its GNSS latency moved by 0.1-0.3 s).
     nhc_noise_std : float or None
         σ of the non-holonomic constraint (zero lateral and vertical wheel velocity), m/s: the side slip and
         suspension velocity of the body in motion; None: off.  Not applied while ``static`` says the vehicle
@@ -267,6 +275,7 @@ class GinsConfig:
     odo_noise_std: float = 0.05
     odo_scale_std: float = 0.01
     odo_turn_std: float | None = 0.3
+    side_slip_std: float | None = None
     nhc_noise_std: float | None = None
     nhc_interval_s: float | None = None
     zupt_noise_std: float = 0.01
@@ -354,6 +363,9 @@ class GinsConfig:
             raise InvalidInputError(f"GinsConfig.nhc_interval_s must be > 0 s or None; got {self.nhc_interval_s!r}")
         if self.odo_turn_std is not None and not (np.isfinite(self.odo_turn_std) and self.odo_turn_std > 0):
             raise InvalidInputError(f"GinsConfig.odo_turn_std must be > 0 s/rad or None; got {self.odo_turn_std!r}")
+        if self.side_slip_std is not None and not (np.isfinite(self.side_slip_std) and self.side_slip_std > 0):
+            raise InvalidInputError(f"GinsConfig.side_slip_std must be > 0 rad/(m/s^2) or None; got "
+                                    f"{self.side_slip_std!r}")
         if self.gnss_delay_std is not None and not (np.isfinite(self.gnss_delay_std) and self.gnss_delay_std > 0):
             raise InvalidInputError(f"GinsConfig.gnss_delay_std must be > 0 s or None; got {self.gnss_delay_std!r}")
         if self.dual_antenna_baseline is not None:

@@ -111,6 +111,8 @@ def _state_blocks(c: GinsConfig, odometer: bool) -> tuple[str, ...]:
         use.add("odo_scale")
         if c.odo_turn_std is not None:
             use.add("odo_turn")
+    if c.side_slip_std is not None and c.nhc_noise_std is not None:
+        use.add("side_slip")
     for block, sd in (("mount", c.mounting_std), ("odo_lever", c.odo_lever_arm_std), ("gnss_delay", c.gnss_delay_std),
                       ("gnss_bias", c.gnss_bias_std)):
         if sd is not None:
@@ -154,7 +156,7 @@ def kernel_setup(c: GinsConfig, fs: float, odometer: bool) -> tuple[Array, NDArr
                            "odo_scale": [c.odo_scale_std], "mount": c.mounting_std, "odo_lever": c.odo_lever_arm_std,
                            "gnss_delay": [c.gnss_delay_std], "gyro_bias_gm": c.gyro_bias_std,
                            "accel_bias_gm": c.accel_bias_std, "gnss_bias": c.gnss_bias_std,
-                           "odo_turn": [c.odo_turn_std]}
+                           "odo_turn": [c.odo_turn_std], "side_slip": [c.side_slip_std]}
     nx = 0
     sd = []
     for name in _state_blocks(c, odometer):
@@ -888,7 +890,7 @@ class GinsFilter:
                           odo_lever_arm=col3(NOM.odo_lever), gnss_delay=xs[:, NOM.gnss_delay],
                           gnss_bias=col3(NOM.gnss_bias), gnss_noise_scale=xs[:, NOM.gnss_r_scale],
                           odo_noise_scale=xs[:, NOM.odo_r_scale], nhc_noise_scale=xs[:, NOM.nhc_r_scale],
-                          odo_turn=xs[:, NOM.odo_turn],
+                          odo_turn=xs[:, NOM.odo_turn], side_slip=xs[:, NOM.side_slip],
                           **{f"{name}_nis": _sample_nis(log, name, n) for name in _SAMPLE_NIS})
 
 

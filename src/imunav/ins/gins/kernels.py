@@ -170,7 +170,8 @@ def _system(xs, fb, wb, prm, lay, F, Q):
 _ADDITIVE = ((LAY.gyro_bias, NOM.gyro_bias, 3), (LAY.accel_bias, NOM.accel_bias, 3),
              (LAY.gyro_scale, NOM.gyro_scale, 3), (LAY.accel_scale, NOM.accel_scale, 3),
              (LAY.odo_scale, NOM.odo_scale, 1), (LAY.odo_lever, NOM.odo_lever, 3), (LAY.gnss_delay, NOM.gnss_delay, 1),
-             (LAY.gnss_bias, NOM.gnss_bias, 3), (LAY.odo_turn, NOM.odo_turn, 1))
+             (LAY.gnss_bias, NOM.gnss_bias, 3), (LAY.odo_turn, NOM.odo_turn, 1),
+             (LAY.side_slip, NOM.side_slip, 1))
 
 
 @njit(cache=True)

@@ -42,6 +42,9 @@ STATE_BLOCKS = (
     # the odometer's over-reading in turns, per rad/s of the vehicle's yaw rate (skid-steer wheels slip, outer wheels
     # of a steered axle run wider), s/rad, optional
     ("odo_turn", 1),
+    # the vehicle's side slip in turns: its lateral velocity −β v_x² ω_z (slip angle β times the lateral acceleration
+    # v_x ω_z, a linear tyre's), rad per m/s², optional
+    ("side_slip", 1),
 )
 #: Blocks every configuration estimates.
 REQUIRED_BLOCKS = ("pos", "vel", "att", "gyro_bias", "accel_bias")
@@ -61,14 +64,16 @@ LAY, N_LAY = named_layout("GinsLayout", tuple((name, 1) for name, _ in STATE_BLO
 #: adaptation, or while the estimate ``gnss_r_est`` is within two standard errors of 1), ``gnss_r_weight`` the
 #: estimate's information (the inverse of its variance; the reported σ counts as ``gnss_adaptive_prior_fixes`` fixes);
 #: ``odo_turn``: the odometer's over-reading per rad/s of yaw rate, s/rad; ``odo_r_*``, ``nhc_r_*``: the same three for the
-#: odometer's and the NHC's covariance (``GinsConfig.wheel_adaptive``).
+#: odometer's and the NHC's covariance (``GinsConfig.wheel_adaptive``); ``side_slip``: the vehicle's side slip per
+#: m/s² of lateral acceleration, rad/(m/s²).
 NOM, N_NOM = named_layout("GinsNominal", (("lla", 3), ("vel", 3), ("q", 4), ("gyro_bias", 3), ("accel_bias", 3),
                                           ("gyro_scale", 3), ("accel_scale", 3), ("odo_scale", 1), ("q_vb", 4),
                                           ("odo_lever", 3), ("gnss_delay", 1), ("gnss_bias", 3),
                                           ("gnss_r_scale", 1), ("gnss_r_est", 1),
                                           ("gnss_r_weight", 1), ("odo_turn", 1),
                                           ("odo_r_scale", 1), ("odo_r_est", 1), ("odo_r_weight", 1),
-                                          ("nhc_r_scale", 1), ("nhc_r_est", 1), ("nhc_r_weight", 1)))
+                                          ("nhc_r_scale", 1), ("nhc_r_est", 1), ("nhc_r_weight", 1),
+                                          ("side_slip", 1)))
 #: the sensor errors of ``xs`` (GinsFilter.imu_errors: 13 values)
 N_SENSOR_ERRORS = NOM.odo_scale + 1 - NOM.gyro_bias
 

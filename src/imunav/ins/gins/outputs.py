@@ -496,7 +496,7 @@ def self_calibration(run: LogRun) -> dict[str, Any]:
     res = run.result
     out: dict[str, Any] = {}
     names = {"mount": ("mount_roll", "mount_pitch", "mount_yaw"), "odo_scale": ("odometer_scale",),
-             "odo_turn": ("odometer_turn_overread",), "gnss_delay": ("gnss_latency",),
+             "odo_turn": ("odometer_turn_overread",), "side_slip": ("side_slip",), "gnss_delay": ("gnss_latency",),
              "odo_lever": ("odo_lever_x", "odo_lever_y", "odo_lever_z"),
              "gnss_bias": ("gnss_bias_n", "gnss_bias_e", "gnss_bias_d")}
     for block, labels in names.items():
@@ -535,7 +535,8 @@ def log_summary(run: LogRun, sources: NavSources, separation: Separation | None 
         ``sources`` (per role: topic, type, count, rate, what the reader refused); ``static_share``; ``mounting``
         (roll, pitch, yaw of the IMU in the vehicle, deg, with σ; its source: given, tf_static, estimated or
         identity; the coarse estimate before the filter); ``odometer_scale`` (reading / true speed − 1, with σ);
-        ``odometer_turn_overread`` (the over-reading per rad/s of yaw rate, s/rad, with σ); in each of these three,
+        ``odometer_turn_overread`` (the over-reading per rad/s of yaw rate, s/rad, with σ); ``side_slip`` (the
+        vehicle's slip angle per m/s² of lateral acceleration, rad/(m/s²), with σ; null without it); in each of these,
         ``estimated`` is false when the configuration has no such state or holds it at its prior (a Schmidt consider
         state: the odometer's without GNSS);
         ``gnss_time_offset_s`` (the receiver's latency, with σ); ``gnss_rejected`` (share of the fixes the
@@ -578,6 +579,8 @@ def log_summary(run: LogRun, sources: NavSources, separation: Separation | None 
         "odometer_scale": state("odo_scale", res.odo_scale[-1]) if sources.odometer is not None else None,
         "odometer_turn_overread": (state("odo_turn", res.odo_turn[-1] if res.odo_turn is not None else 0.0)
                                    if sources.odometer is not None else None),
+        "side_slip": (state("side_slip", res.side_slip[-1])
+                      if res.side_slip is not None and int(lay[LAY.side_slip]) >= 0 else None),
         "gnss_time_offset_s": state("gnss_delay", res.gnss_delay[-1]) if sources.gnss is not None else None,
         "gnss_rejected": {"share": (n_gate + n_refused) / total if total else None, "by_gate": n_gate,
                           "by_reader": refused, "fixes": total},

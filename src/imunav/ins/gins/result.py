@@ -122,6 +122,9 @@ class GinsResult(EulerMixin, Result):
     gnss_noise_scale : numpy.ndarray, shape (N,), or None
         The factor on the fixes' reported covariance that the adaptive noise estimate had reached
         (``GinsConfig.gnss_adaptive``; 1 without it).
+    side_slip : numpy.ndarray, shape (N,), or None
+        The vehicle's side slip per m/s² of lateral acceleration (``GinsConfig.side_slip_std``), rad/(m/s²): its
+        lateral velocity is ``−β v_x² ω_z``; 0 where it was not estimated.
     odo_noise_scale, nhc_noise_scale : numpy.ndarray, shape (N,), or None
         The factors on the odometer's and the NHC's covariance that their adaptive noise estimates had reached
         (``GinsConfig.wheel_adaptive``; 1 without it).
@@ -171,6 +174,7 @@ class GinsResult(EulerMixin, Result):
     gnss_noise_scale: Array | None = None
     odo_turn: Array | None = None
     odo_noise_scale: Array | None = None
+    side_slip: Array | None = None
     nhc_noise_scale: Array | None = None
 
     def gnss_summary(self) -> dict[str, Any]:

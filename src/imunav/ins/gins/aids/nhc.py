@@ -3,6 +3,10 @@
 ``0 = w_y + n``, ``0 = w_z + n`` (``w``: the contact point's velocity in the vehicle frame, :mod:`._wheel`), so
 ``ν = −ŵ_(y,z)``, ``H = ∂w_(y,z)/∂δx``,
 ``R = σ² I`` with σ the body's side slip and suspension velocity in motion (Niu et al. 2007; Groves 2013, §16.3.2).
+With the side-slip state (``GinsConfig.side_slip_std``) the lateral row holds ``w_y = −β w_x² ω_z`` instead: the
+slip angle of a linear tyre, or of a skid-steer robot's body, grows with the lateral acceleration ``w_x ω_z``
+(``ω_z`` the vehicle's yaw rate ``(C_vb ω)_z``), so ``ν_y = −ŵ_y − β̂ ŵ_x² ω_z`` and ``H_y`` gains
+``ŵ_x² ω_z`` for ``β`` and the terms through ``w_x``, the gyro's bias and scale and the mounting.
 Applied at the covariance epochs while the vehicle moves: at rest the ZUPT constrains the same velocity, and using
 it twice as two independent measurements would make the filter overconfident.
 
@@ -16,9 +20,10 @@ from typing import Any
 import numpy as np
 from numba import njit
 
+from imunav._rotation_kernels import dcm_from_quat_1
 from imunav.filters._layout import named_layout
 from imunav.ins.gins.aids._wheel import wheel_velocity
-from imunav.ins.gins.layout import LAY, NOM
+from imunav.ins.gins.layout import CTX, LAY, NOM
 
 NAME = "nhc"
 ROWS = 2
@@ -68,3 +73,27 @@ def rows(xs, ctx, z, r, p, lay, H, R, nu, row):
             H[row + a, j] = Hv[1 + a, j]
         nu[row + a] = -vw[1 + a]
         R[row + a, row + a] = p[PARAMS.var] * xs[NOM.nhc_r_scale]  # the adaptive factor (1 without)
+    i_s = lay[LAY.side_slip]
+    if i_s >= 0:  # the lateral row holds v_y + β v_x² ω_z = 0: a slip angle β times the lateral acceleration
+        beta = xs[NOM.side_slip]
+        Cvb = dcm_from_quat_1(xs[NOM.q_vb:NOM.q_vb + 4])
+        wv = np.zeros(3)  # the rate in the vehicle frame, C_vb ω
+        for i in range(3):
+            for j in range(3):
+                wv[i] += Cvb[i, j] * ctx[CTX.w_sample + j]
+        vx = vw[0]
+        nu[row] -= beta * vx * vx * wv[2]
+        H[row, i_s] += vx * vx * wv[2]
+        for j in range(nx):  # through v_x
+            H[row, j] += 2.0 * beta * vx * wv[2] * Hv[0, j]
+        # through ω_z: the gyro's bias and scale (∂ω/∂δb_g = −1, ∂ω/∂δs_g = −diag ω) and the mounting
+        # (∂(C_vb ω)/∂μ = −[(Ĉ_vb ω)×]), as the odometer's over-reading in turns
+        c = beta * vx * vx
+        ib, isg, im = lay[LAY.gyro_bias], lay[LAY.gyro_scale], lay[LAY.mount]
+        for j in range(3):
+            H[row, ib + j] -= c * Cvb[2, j]
+            if isg >= 0:
+                H[row, isg + j] -= c * Cvb[2, j] * ctx[CTX.w_sample + j]
+        if im >= 0:
+            H[row, im] += c * wv[1]
+            H[row, im + 1] -= c * wv[0]
