@@ -191,17 +191,16 @@ def test_jackal_bag_dead_reckoning():
     """The real Jackal (IMU + wheel odometry, no GNSS, a clock from boot).  Its IMU's frame_id is base_link: the
     mounting is the identity (REP-105), with the levelling at rest reported beside it as a check (roll and pitch
     with sigma).  It turns on the spot at the start (zero speed, the wheels' yaw rate and the gyro at -2 deg/s):
-    not a rest, so that turn does not become a gyro bias.  The dead reckoning ends 9.0 m from robot_localization's
+    not a rest, so that turn does not become a gyro bias.  The dead reckoning ends 5.8 m from robot_localization's
     regression value for its EKF on this bag ((1.0206, 3.4292) m in its odom frame, FLU; a peer's output, not a
     truth, that trusts the wheels' speed at their driver's σ of 0.03 m/s; in-sample: the rest test and the frame_id
     rule were written while running this bag), where the wheel odometry's own pose ends 24 m away; the sources
-    named, the time columns flagged as not UTC.  With the odometer's σ at the driver's (floored at 0.05 m/s) and
-    its forced updates at that σ, as before, the end was 2.0 m from it; with the odometer's adaptive factor over
-    100 updates instead of 25, 1.2 m: the end moves by metres with how much the wheels are trusted, a dead
-    reckoning this bag does not pin down.  Its wheels spin and lock (1.98 m/s for 3 s while the IMU shows the body
-    decelerating): with the adaptive factor (σ × 11.8 at the end) the gate rejects 3.6 % of the odometer's
-    updates (31 % before) and the forward-backward separation is 67 for 2 degrees of freedom (572 before), and the
-    verdict still says the trajectory cannot be trusted."""
+    named, the time columns flagged as not UTC.  With the odometer's σ at the driver's (floored at 0.05 m/s), its
+    forced updates at that σ and no side slip, as before, the end was 2.0 m from it: the end moves by metres with
+    how much the wheels are trusted, a dead reckoning this bag does not pin down.  Its wheels spin and lock (1.98
+    m/s for 3 s while the IMU shows the body decelerating): with the adaptive factor (σ × 16 at the end) the gate
+    rejects 8.5 % of the odometer's updates (31 % before) and the forward-backward separation is 76 for 2 degrees
+    of freedom (572 before), and the verdict still says the trajectory cannot be trusted."""
     p = data_path("ros_bags/jackal_test2.bag")
     src = read_nav_sources(p)
     run = run_log(src)
@@ -213,11 +212,11 @@ def test_jackal_bag_dead_reckoning():
     ned = lla_to_ned(res.lla, res.lla[0])
     d = math.hypot(ned[-1, 0] - 1.0206, ned[-1, 1] + 3.4292)  # FLU (x, y) -> NED (x, -y) at heading 0
     print(f"Jackal: end {ned[-1, :2].round(2)} m, {d:.2f} m from robot_localization's")
-    assert d < 12.0
+    assert d < 8.0
     sep = forward_backward_separation(res) if res.smoothed is not None else None
     verdict = honesty(run, sep)
     assert not verdict["trustworthy"]
-    assert verdict["checks"]["odometer_rejected_share"] <= 0.05 and verdict["checks"]["separation_mean_d2"] < 100.0
+    assert verdict["checks"]["odometer_rejected_share"] <= 0.1 and verdict["checks"]["separation_mean_d2"] < 100.0
     # issue 33: nothing measures the odometer's scale or the claimed mounting without GNSS: both keep their prior σ
     # (Schmidt consider states) and the position's σ carries them; the summary says they were not observed
     lay = run.state_layout()
