@@ -77,3 +77,30 @@ def wheel_velocity(xs, ctx, lay, Hw):
     if im >= 0:
         write_skew(w, Hw, np.int64(0), im, -1.0)
     return w
+
+
+@njit(cache=True)
+def vehicle_rate(xs, ctx):
+    """The compensated rate of the current IMU sample in the vehicle frame ``C_vb ω`` (rad/s; its z: the vehicle's
+    yaw rate) and ``Ĉ_vb``."""
+    Cvb = dcm_from_quat_1(xs[NOM.q_vb:NOM.q_vb + 4])
+    wv = np.zeros(3)
+    for i in range(3):
+        for j in range(3):
+            wv[i] += Cvb[i, j] * ctx[CTX.w_sample + j]
+    return wv, Cvb
+
+
+@njit(cache=True)
+def add_yaw_rate_rows(a, wv, Cvb, ctx, lay, H, row):
+    """``H[row] += a ∂ω_z/∂δx`` for the vehicle's yaw rate ``ω_z = (C_vb ω)_z`` (``wv``, ``Cvb``: from
+    :func:`vehicle_rate`): through the gyro's bias and scale (``∂ω/∂δb_g = −1``, ``∂ω/∂δs_g = −diag ω``) and the
+    mounting (``∂(C_vb ω)/∂μ = −[(Ĉ_vb ω)×]``)."""
+    ib, isg, im = lay[LAY.gyro_bias], lay[LAY.gyro_scale], lay[LAY.mount]
+    for j in range(3):
+        H[row, ib + j] -= a * Cvb[2, j]
+        if isg >= 0:
+            H[row, isg + j] -= a * Cvb[2, j] * ctx[CTX.w_sample + j]
+    if im >= 0:
+        H[row, im] += a * wv[1]
+        H[row, im + 1] -= a * wv[0]

@@ -20,10 +20,9 @@ from typing import Any
 import numpy as np
 from numba import njit
 
-from imunav._rotation_kernels import dcm_from_quat_1
 from imunav.filters._layout import named_layout
-from imunav.ins.gins.aids._wheel import wheel_velocity
-from imunav.ins.gins.layout import CTX, LAY, NOM
+from imunav.ins.gins.aids._wheel import add_yaw_rate_rows, vehicle_rate, wheel_velocity
+from imunav.ins.gins.layout import LAY, NOM
 
 NAME = "nhc"
 ROWS = 2
@@ -76,24 +75,10 @@ def rows(xs, ctx, z, r, p, lay, H, R, nu, row):
     i_s = lay[LAY.side_slip]
     if i_s >= 0:  # the lateral row holds v_y + β v_x² ω_z = 0: a slip angle β times the lateral acceleration
         beta = xs[NOM.side_slip]
-        Cvb = dcm_from_quat_1(xs[NOM.q_vb:NOM.q_vb + 4])
-        wv = np.zeros(3)  # the rate in the vehicle frame, C_vb ω
-        for i in range(3):
-            for j in range(3):
-                wv[i] += Cvb[i, j] * ctx[CTX.w_sample + j]
+        wv, Cvb = vehicle_rate(xs, ctx)  # the rate in the vehicle frame, C_vb ω
         vx = vw[0]
         nu[row] -= beta * vx * vx * wv[2]
         H[row, i_s] += vx * vx * wv[2]
         for j in range(nx):  # through v_x
             H[row, j] += 2.0 * beta * vx * wv[2] * Hv[0, j]
-        # through ω_z: the gyro's bias and scale (∂ω/∂δb_g = −1, ∂ω/∂δs_g = −diag ω) and the mounting
-        # (∂(C_vb ω)/∂μ = −[(Ĉ_vb ω)×]), as the odometer's over-reading in turns
-        c = beta * vx * vx
-        ib, isg, im = lay[LAY.gyro_bias], lay[LAY.gyro_scale], lay[LAY.mount]
-        for j in range(3):
-            H[row, ib + j] -= c * Cvb[2, j]
-            if isg >= 0:
-                H[row, isg + j] -= c * Cvb[2, j] * ctx[CTX.w_sample + j]
-        if im >= 0:
-            H[row, im] += c * wv[1]
-            H[row, im + 1] -= c * wv[0]
+        add_yaw_rate_rows(beta * vx * vx, wv, Cvb, ctx, lay, H, row)  # through ω_z

@@ -23,10 +23,9 @@ from typing import Any
 import numpy as np
 from numba import njit
 
-from imunav._rotation_kernels import dcm_from_quat_1
 from imunav.filters._layout import named_layout
-from imunav.ins.gins.aids._wheel import wheel_velocity
-from imunav.ins.gins.layout import CTX, LAY, NOM
+from imunav.ins.gins.aids._wheel import add_yaw_rate_rows, vehicle_rate, wheel_velocity
+from imunav.ins.gins.layout import LAY, NOM
 
 NAME = "odometer"
 ROWS = 1
@@ -73,13 +72,8 @@ def rows(xs, ctx, z, r, p, lay, H, R, nu, row):
     k = xs[NOM.odo_scale] if io >= 0 else 0.0
     ic = lay[LAY.odo_turn]
     c = xs[NOM.odo_turn]
-    wv = np.zeros(3)  # the rate in the vehicle frame, C_vb ω
-    if ic >= 0:
-        Cvb = dcm_from_quat_1(xs[NOM.q_vb:NOM.q_vb + 4])
-        for i in range(3):
-            for j in range(3):
-                wv[i] += Cvb[i, j] * ctx[CTX.w_sample + j]
-    wz = abs(wv[2])
+    wv, Cvb = vehicle_rate(xs, ctx)  # the rate in the vehicle frame, C_vb ω
+    wz = abs(wv[2]) if ic >= 0 else 0.0
     g = 1.0 + c * wz
     for j in range(nx):
         H[row, j] = (1.0 + k) * g * Hv[0, j]
@@ -87,16 +81,8 @@ def rows(xs, ctx, z, r, p, lay, H, R, nu, row):
         H[row, io] = g * vw[0]
     if ic >= 0:
         H[row, ic] = (1.0 + k) * wz * vw[0]
-        # |ω_z| through the gyro's bias and scale (∂ω/∂δb_g = −1, ∂ω/∂δs_g = −diag ω) and the mounting
-        # (∂(C_vb ω)/∂μ = −[(Ĉ_vb ω)×]): small unless the over-reading is large, kept so that H is the derivative
-        a = (1.0 + k) * vw[0] * c * (1.0 if wv[2] >= 0.0 else -1.0)
-        ib, isg, im = lay[LAY.gyro_bias], lay[LAY.gyro_scale], lay[LAY.mount]
-        for j in range(3):
-            H[row, ib + j] -= a * Cvb[2, j]
-            if isg >= 0:
-                H[row, isg + j] -= a * Cvb[2, j] * ctx[CTX.w_sample + j]
-        if im >= 0:
-            H[row, im] += a * wv[1]
-            H[row, im + 1] -= a * wv[0]
+        # |ω_z| through the gyro's bias and scale and the mounting: small unless the over-reading is large, kept so
+        # that H is the derivative
+        add_yaw_rate_rows((1.0 + k) * vw[0] * c * (1.0 if wv[2] >= 0.0 else -1.0), wv, Cvb, ctx, lay, H, row)
     nu[row] = z[0] - (1.0 + k) * g * vw[0]
     R[row, row] = z[1] * xs[NOM.odo_r_scale]  # the adaptive factor (1 without adaptation)
