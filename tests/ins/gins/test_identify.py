@@ -122,8 +122,9 @@ def test_a_wandering_odometer_scale_is_found_and_a_constant_one_kept(terrain_rob
 def test_the_wander_keeps_the_outages_inside_their_3_sigma(terrain_robot):
     """60 s outages every 120 s after 60 s (shifts 0, 30, 60 s) against the truth: with the wander the
     cross-validation chose, at least 9 of 10 outages stay inside their predicted 3σ throughout (the 90-99 % a
-    consistent filter gives; measured 9 of 10, ends 2.1 m RMS); with the scale taken as constant (as before the
-    cross-validation), 3 of 10 (ends 6.7 m: the odometer's wander read as exact over a minute)."""
+    consistent filter gives; measured 10 of 10, ends 2.2 m RMS); with the scale taken as constant (as before the
+    cross-validation), at most 6 of 10 (measured 5, ends 4.8 m: the odometer's wander read as exact over a minute;
+    3 of 10 and 6.7 m before the wheel aids' adaptive σ and the side-slip state)."""
     lever = tuple(terrain_robot.truth.gnss_lever_arm_base)
     nav = terrain_robot.truth.nav_track()
     gps = terrain_robot.sources.gps_time(nav.t)  # the .nav convention: GPS week and seconds of week
@@ -134,8 +135,8 @@ def test_the_wander_keeps_the_outages_inside_their_3_sigma(terrain_robot):
         out[name] = rep.rms()
         print(name, {k: out[name][k] for k in ("end_m", "contained_3sigma", "n_outages")})
     assert out["chosen"]["contained_3sigma"] >= 0.9 and out["chosen"]["n_outages"] >= 9
-    assert out["constant"]["contained_3sigma"] < 0.5
-    assert out["chosen"]["end_m"] < 0.5 * out["constant"]["end_m"]
+    assert out["constant"]["contained_3sigma"] <= 0.6
+    assert out["chosen"]["end_m"] < 0.6 * out["constant"]["end_m"]
 
 
 def _gm_fixes(seed: int, duration_s: float, sigma: float, tau: float = GNSS_BIAS_TAU, fs: float = 10.0):
