@@ -321,8 +321,8 @@ def _adapt_noise(xs, nu, S0, R, prm, nom, pa):
 
     the reported σ counting as a number of prior updates of variance ``2 / m`` (``W₀``, ``s₀ = 1``), bounded to
     ``[s_min, s_max]``.  ``nom``: the offset in ``xs`` of the factor applied, the estimate and its information (the
-    GNSS fixes' ``NOM.gnss_r_scale``, the odometer's ``NOM.odo_r_scale``, the NHC's ``NOM.nhc_r_scale``); ``pa``: the offset in ``prm`` of
-    ``(w₀, s_min, s_max)``.
+    GNSS fixes' ``NOM.gnss_r_scale``, the odometer's ``NOM.odo_r_scale``, the NHC's ``NOM.nhc_r_scale``); ``pa``:
+    the offset in ``prm`` of ``(w₀, s_min, s_max)``.
 
     The factor applied to the next update's ``R`` is the estimate when it departs from 1 by more than two standard
     errors ``2 / √W``, else 1: an aid whose σ is right keeps it exactly.  A noisy factor about 1, or one driven by

@@ -16,8 +16,11 @@ trajectory with its uncertainty out, the IMU mounting, the odometer scale and th
    frame of the dead reckoning (heading 0 at the start, position (0, 0)).
 4. **Filter.**  :class:`~imunav.ins.gins.GinsFilter` with the IMU preset's noise model (its white-noise densities
    raised to what the log's rests show, vibration included), the odometer's scale
-   factor as a state, the NHC for a wheeled vehicle, the GNSS latency as a state, the χ² gates (jumps of tens of
-   metres are rejected and counted), and optionally the RTS smoother.
+   factor as a state, the NHC for a wheeled vehicle with the vehicle's side slip in turns as a state
+   (:data:`SIDE_SLIP_STD`), the odometer's and the NHC's σ adapted to their innovations (wheels spin, lock and
+   slide), the GNSS latency as a state, the χ² gates (jumps of tens of metres are rejected and counted; an update
+   forced after :data:`MAX_REJECTIONS` rejections in a row is applied at the gate's edge), and optionally the RTS
+   smoother.
 """
 
 from __future__ import annotations
@@ -71,6 +74,8 @@ WANDER_CV_START_S = 60.0
 WANDER_CV_SPAN_S = 600.0
 #: Default σ of the GNSS latency state (s), the odometer scale (dimensionless) and the vehicle's slope at rest (rad).
 GNSS_DELAY_STD = 0.2
+ODO_SCALE_STD = 0.1
+LEVEL_STD = math.radians(1.0)
 #: Prior σ of the vehicle's side slip per m/s² of lateral acceleration, rad/(m/s²) (``GinsConfig.side_slip_std``),
 #: of a slow vehicle (a skid-steer robot's body slides outward in its turns: the hard robot's 0.2) and of a road
 #: vehicle (a linear tyre's ``m / 2C_α``, a few thousandths: Gillespie 1992, ch. 6), told apart by the 95th
@@ -78,8 +83,6 @@ GNSS_DELAY_STD = 0.2
 #: large, let β take the heading's error: hard car attitude NEES 5.4 -> 11.5.
 SIDE_SLIP_STD = (0.2, 0.01)
 SIDE_SLIP_FAST_MPS = 5.0
-ODO_SCALE_STD = 0.1
-LEVEL_STD = math.radians(1.0)
 #: How far (in prior σ) a self-calibration state may move from its initial value before the run says so
 #: (:meth:`LogRun.moved_beyond_prior`), and an estimated mounting is held at its coarse value instead when it also
 #: moved more than :data:`MOUNT_HOLD_DEG`.
