@@ -10,25 +10,18 @@ from dataclasses import replace
 
 import numpy as np
 import pytest
+from broad_peers import vqf_errors
 from shared_data import data_path
 
 from imunav.attitude.adaptive import ADAPTIVE_DEFAULTS, ADAPTIVE_GRID
 from imunav.attitude.benchmark import cv_grid_search
-from imunav.attitude.metrics import attitude_rmse
-from imunav.io.broad import broad_trials, from_enu, load_broad
+from imunav.io.broad import broad_trials
 
 pytestmark = [pytest.mark.slow, pytest.mark.data]
 
 
 def _vqf(files):
-    vqf = pytest.importorskip("vqf")
-    out = []
-    for f in files:
-        tr = load_broad(f)
-        g, a, m = (np.ascontiguousarray(x) for x in (tr.imu.gyro, tr.imu.accel, tr.imu.mag))
-        q = from_enu(vqf.VQF(1.0 / tr.fs).updateBatch(g, a, m)["quat9D"])
-        out.append(attitude_rmse(q, tr.q_ref_nb, tr.movement).total_rmse_deg)
-    return np.array(out)
+    return np.array([e.total_rmse_deg for e in vqf_errors(files, "9D")])
 
 
 def test_adaptive_out_of_fold_beats_vqf_and_defaults_come_from_the_grid():
